@@ -1,0 +1,37 @@
+#include "core/display.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace arena {
+
+float acesFilmic(float x) {
+  x = std::max(x, 0.0f);
+  const float a = 2.51f, b = 0.03f, c = 2.43f, d = 0.59f, e = 0.14f;
+  return std::clamp((x * (a * x + b)) / (x * (c * x + d) + e), 0.0f, 1.0f);
+}
+
+float srgbEncode(float v) {
+  v = std::clamp(v, 0.0f, 1.0f);
+  return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
+}
+
+DisplayTransform DisplayTransform::fromReference(const Image& ref) {
+  double sum = 0;
+  for (size_t i = 0; i < ref.pixelCount(); ++i)
+    sum += luminance(ref.plane(0)[i], ref.plane(1)[i], ref.plane(2)[i]);
+  double mean = sum / double(std::max<size_t>(1, ref.pixelCount()));
+  DisplayTransform t;
+  t.exposure = mean > 1e-6 ? float(0.18 / mean) : 1.0f;
+  return t;
+}
+
+float DisplayTransform::apply(float linear) const { return srgbEncode(acesFilmic(linear * exposure)); }
+
+Image DisplayTransform::apply(const Image& rgb) const {
+  Image out(rgb.width(), rgb.height(), rgb.channels());
+  for (size_t i = 0; i < rgb.raw().size(); ++i) out.raw()[i] = apply(rgb.raw()[i]);
+  return out;
+}
+
+}  // namespace arena

@@ -1,0 +1,21 @@
+#pragma once
+// The one display transform used everywhere an image is shown or a display-referred metric (PSNR,
+// SSIM, LDR-FLIP, tPSNR) is computed: exposure -> ACES filmic curve (Narkowicz 2015 fit) -> clamp
+// to [0, 1] -> sRGB encoding. The exposure comes from the *reference* so every method of a scene is
+// shown and measured through the same transform.
+#include "core/image.hpp"
+
+namespace arena {
+
+struct DisplayTransform {
+  float exposure = 1.0f;  // linear scale applied before the curve
+  // Exposure mapping the reference's mean luminance (over pixels) to 0.18 (middle grey).
+  static DisplayTransform fromReference(const Image& referenceRgb);
+  float apply(float linear) const;  // one channel
+  Image apply(const Image& linearRgb) const;
+};
+
+float acesFilmic(float x);     // Narkowicz 2015, input already exposed
+float srgbEncode(float linear);  // IEC 61966-2-1
+
+}  // namespace arena

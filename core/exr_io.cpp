@@ -1,0 +1,128 @@
+#include "core/exr_io.hpp"
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <ImfStringAttribute.h>
+#include <ImfThreading.h>
+#include <half.h>
+
+#include "core/atomic_file.hpp"
+#include "core/error.hpp"
+
+namespace arena {
+
+namespace fs = std::filesystem;
+
+void LayerSet::set(const std::string& name, Image image) {
+  if (!layers_.empty() && (image.width() != width() || image.height() != height()))
+    throw Error("layer '" + name + "': size differs from the other layers");
+  layers_[name] = std::move(image);
+}
+
+const Image& LayerSet::get(const std::string& name, const std::string& context) const {
+  auto it = layers_.find(name);
+  if (it == layers_.end())
+    throw Error((context.empty() ? "" : context + ": ") + "missing channel '" + name + "'");
+  return it->second;
+}
+
+Image& LayerSet::get(const std::string& name, const std::string& context) {
+  return const_cast<Image&>(static_cast<const LayerSet*>(this)->get(name, context));
+}
+
+int LayerSet::width() const { return layers_.empty() ? 0 : layers_.begin()->second.width(); }
+int LayerSet::height() const { return layers_.empty() ? 0 : layers_.begin()->second.height(); }
+
+void writeExr(const fs::path& path, const LayerSet& layers, const std::vector<LayerSpec>& specs,
+              const ExrAttributes& attributes) {
+  const int w = layers.width(), h = layers.height();
+  if (w <= 0 || h <= 0) throw Error(path.string() + ": nothing to write");
+  // Half layers need a converted copy that outlives the write.
+  std::vector<std::vector<half>> halfPlanes;
+  Imf::Header header(w, h);
+  header.compression() = Imf::ZIP_COMPRESSION;
+  for (const auto& [k, v] : attributes) header.insert(k, Imf::StringAttribute(v));
+  Imf::FrameBuffer fb;
+  for (const LayerSpec& spec : specs) {
+    const Image& img = layers.get(spec.name, path.string());
+    if (img.channels() != spec.channels())
+      throw Error(path.string() + ": layer '" + spec.name + "' has " + std::to_string(img.channels()) +
+                  " channels, expected " + std::to_string(spec.channels()));
+    for (int c = 0; c < spec.channels(); ++c) {
+      const std::string name = spec.channelName(c);
+      if (spec.half) {
+        auto& hp = halfPlanes.emplace_back(img.pixelCount());
+        const float* src = img.plane(c);
+        for (size_t i = 0; i < hp.size(); ++i) hp[i] = half(src[i]);
+        header.channels().insert(name, Imf::Channel(Imf::HALF));
+        fb.insert(name, Imf::Slice(Imf::HALF, reinterpret_cast<char*>(hp.data()), sizeof(half),
+                                   sizeof(half) * size_t(w)));
+      } else {
+        header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+        fb.insert(name, Imf::Slice(Imf::FLOAT, const_cast<char*>(reinterpret_cast<const char*>(img.plane(c))),
+                                   sizeof(float), sizeof(float) * size_t(w)));
+      }
+    }
+  }
+  writeAtomically(path, [&](const fs::path& tmp) {
+    Imf::OutputFile file(tmp.c_str(), header, 1);
+    file.setFrameBuffer(fb);
+    file.writePixels(h);
+  });
+}
+
+static ExrAttributes attributesOf(const Imf::Header& header) {
+  ExrAttributes out;
+  for (auto it = header.begin(); it != header.end(); ++it) {
+    if (auto* s = dynamic_cast<const Imf::StringAttribute*>(&it.attribute())) out[it.name()] = s->value();
+  }
+  return out;
+}
+
+ExrContents readExr(const fs::path& path, const std::vector<LayerSpec>& specs) {
+  if (!fs::exists(path)) throw Error(path.string() + ": file does not exist");
+  ExrContents out;
+  try {
+    Imf::InputFile file(path.c_str(), 1);
+    const Imath::Box2i dw = file.header().dataWindow();
+    const int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
+    out.attributes = attributesOf(file.header());
+    Imf::FrameBuffer fb;
+    for (const LayerSpec& spec : specs) {
+      if (spec.topLevel) continue;  // a viewer-facing copy of a named layer
+      Image img(w, h, spec.channels());
+      for (int c = 0; c < spec.channels(); ++c) {
+        const std::string name = spec.channelName(c);
+        if (!file.header().channels().findChannel(name))
+          throw Error(path.string() + ": missing channel '" + name + "'");
+        // Origin shifted so a data window that does not start at 0 still lands at (0,0).
+        char* base = reinterpret_cast<char*>(img.plane(c)) -
+                     (ptrdiff_t(dw.min.x) + ptrdiff_t(dw.min.y) * w) * ptrdiff_t(sizeof(float));
+        fb.insert(name, Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * size_t(w)));
+      }
+      out.layers.set(spec.name, std::move(img));
+    }
+    file.setFrameBuffer(fb);
+    if (!file.isComplete()) throw Error(path.string() + ": file is truncated (incomplete pixel data)");
+    file.readPixels(dw.min.y, dw.max.y);
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw Error(path.string() + ": not a readable OpenEXR file (" + e.what() + ")");
+  }
+  return out;
+}
+
+ExrAttributes readExrAttributes(const fs::path& path) {
+  try {
+    Imf::InputFile file(path.c_str(), 1);
+    return attributesOf(file.header());
+  } catch (const std::exception& e) {
+    throw Error(path.string() + ": not a readable OpenEXR file (" + e.what() + ")");
+  }
+}
+
+}  // namespace arena

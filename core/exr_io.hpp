@@ -1,0 +1,57 @@
+#pragma once
+// Multi-channel OpenEXR files with named layers ("diffuse" -> diffuse.R/G/B), planar float in
+// memory, half or float on disk per layer, and string attributes for provenance (cache hash,
+// frame index) so a foreign or stale file is recognised.
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "core/image.hpp"
+
+namespace arena {
+
+struct LayerSpec {
+  std::string name;                   // "diffuse"
+  std::vector<std::string> suffixes;  // {"R","G","B"}; empty = a single channel named `name`
+  bool half = false;                  // stored as 16-bit half on disk
+  bool topLevel = false;              // channels named by suffix only ("R"), for standard viewers
+  int channels() const { return suffixes.empty() ? 1 : int(suffixes.size()); }
+  std::string channelName(int c) const {
+    if (suffixes.empty()) return name;
+    return topLevel ? suffixes[size_t(c)] : name + "." + suffixes[size_t(c)];
+  }
+};
+
+// A set of named layers of equal size.
+class LayerSet {
+ public:
+  void set(const std::string& name, Image image);
+  bool has(const std::string& name) const { return layers_.count(name) != 0; }
+  // Throws an error naming the layer (and `context`, e.g. the file) when it is missing.
+  const Image& get(const std::string& name, const std::string& context = "") const;
+  Image& get(const std::string& name, const std::string& context = "");
+  const std::map<std::string, Image>& all() const { return layers_; }
+  int width() const;
+  int height() const;
+
+ private:
+  std::map<std::string, Image> layers_;
+};
+
+using ExrAttributes = std::map<std::string, std::string>;
+
+// Writes the layers named in `specs` atomically (temporary file + rename).
+void writeExr(const std::filesystem::path& path, const LayerSet& layers,
+              const std::vector<LayerSpec>& specs, const ExrAttributes& attributes = {});
+
+struct ExrContents {
+  LayerSet layers;
+  ExrAttributes attributes;
+};
+// Reads the given layers; a missing channel, a size mismatch or an unreadable/truncated file is
+// an Error naming the file and the channel.
+ExrContents readExr(const std::filesystem::path& path, const std::vector<LayerSpec>& specs);
+ExrAttributes readExrAttributes(const std::filesystem::path& path);
+
+}  // namespace arena

@@ -1,0 +1,48 @@
+#pragma once
+// Planar float images: one contiguous plane per channel, so loops over pixels vectorise and a
+// single channel can be handed to a filter without copying (pbrt/OIDN name channels by meaning;
+// the names live in core/sequence_format.hpp).
+#include <cstddef>
+#include <span>
+#include <vector>
+
+namespace arena {
+
+class Image {
+ public:
+  Image() = default;
+  Image(int width, int height, int channels, float fill = 0.0f);
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+  int channels() const { return channels_; }
+  size_t pixelCount() const { return size_t(width_) * size_t(height_); }
+  bool empty() const { return pixelCount() == 0 || channels_ == 0; }
+  bool sameShape(const Image& other) const {
+    return width_ == other.width_ && height_ == other.height_ && channels_ == other.channels_;
+  }
+
+  float* plane(int c) { return data_.data() + size_t(c) * pixelCount(); }
+  const float* plane(int c) const { return data_.data() + size_t(c) * pixelCount(); }
+  std::span<float> planeSpan(int c) { return {plane(c), pixelCount()}; }
+  std::span<const float> planeSpan(int c) const { return {plane(c), pixelCount()}; }
+
+  float& at(int x, int y, int c = 0) { return plane(c)[size_t(y) * width_ + x]; }
+  float at(int x, int y, int c = 0) const { return plane(c)[size_t(y) * width_ + x]; }
+  // Clamp-to-edge access, used by filters whose footprint leaves the image.
+  float atClamped(int x, int y, int c = 0) const;
+
+  std::vector<float>& raw() { return data_; }
+  const std::vector<float>& raw() const { return data_; }
+  void fill(float value);
+
+ private:
+  int width_ = 0, height_ = 0, channels_ = 0;
+  std::vector<float> data_;
+};
+
+// Rec.709 luminance of a planar RGB image (channels 0..2).
+Image luminance(const Image& rgb);
+inline float luminance(float r, float g, float b) { return 0.2126f * r + 0.7152f * g + 0.0722f * b; }
+
+}  // namespace arena

@@ -1,0 +1,58 @@
+#pragma once
+// Strict JSON reading for configuration files (scenes, run configs): every access knows its JSON
+// path, wrong types and missing keys are errors naming the file and path, and keys that nobody
+// read are errors too (pbrt's ReportUnused) -- a typo must not silently fall back to a default.
+#include <glm/vec3.hpp>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace arena {
+
+class JsonReader {
+ public:
+  JsonReader(const nlohmann::json& node, std::string file, std::string path = "$");
+
+  const std::string& file() const { return file_; }
+  const std::string& path() const { return path_; }
+  const nlohmann::json& node() const { return node_; }
+  bool has(const std::string& key) const;
+
+  // Object members; `required*` throws if absent, `optional*` returns the fallback.
+  JsonReader child(const std::string& key);
+  std::optional<JsonReader> optionalChild(const std::string& key);
+  std::vector<JsonReader> requiredArray(const std::string& key);
+  std::vector<JsonReader> optionalArray(const std::string& key);
+  std::vector<std::string> memberNames();  // marks nothing as read
+
+  double number(const std::string& key);
+  double number(const std::string& key, double fallback);
+  int integer(const std::string& key);
+  int integer(const std::string& key, int fallback);
+  bool boolean(const std::string& key, bool fallback);
+  std::string string(const std::string& key);
+  std::string string(const std::string& key, const std::string& fallback);
+  glm::vec3 vec3(const std::string& key);
+  glm::vec3 vec3(const std::string& key, glm::vec3 fallback);
+  std::vector<double> numbers(const std::string& key, size_t count);
+
+  // Throws for every member of this object that no accessor read.
+  void rejectUnread() const;
+  [[noreturn]] void fail(const std::string& key, const std::string& expected) const;
+
+ private:
+  const nlohmann::json& member(const std::string& key, const char* expected);
+  std::string where(const std::string& key) const;
+
+  const nlohmann::json& node_;
+  std::string file_;
+  std::string path_;
+  std::set<std::string> read_;
+};
+
+std::string jsonTypeName(const nlohmann::json& j);
+nlohmann::json parseJsonFile(const std::string& file);
+
+}  // namespace arena

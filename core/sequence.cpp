@@ -1,0 +1,157 @@
+#include "core/sequence.hpp"
+
+#include <cstdio>
+
+#include "core/atomic_file.hpp"
+#include "core/error.hpp"
+#include "core/json_reader.hpp"
+
+namespace arena {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace channels {
+const std::vector<LayerSpec>& frameLayers() {
+  static const std::vector<LayerSpec> specs = {
+      {"diffuse", {"R", "G", "B"}, false},     // demodulated diffuse radiance, 1 spp
+      {"specular", {"R", "G", "B"}, false},    // demodulated specular radiance, 1 spp
+      {"emission", {"R", "G", "B"}, false},    // emitted radiance at the primary hit (sky included)
+      {"color", {"R", "G", "B"}, false},       // albedo*diffuse + specAlbedo*specular + emission
+      {"color", {"R", "G", "B"}, false, true}, // the same as plain R,G,B, so any EXR viewer shows it
+      {"albedo", {"R", "G", "B"}, false},      // diffuse albedo, (1 - metallic) * base colour
+      {"specAlbedo", {"R", "G", "B"}, false},  // GGX directional albedo (Karis 2014 approximation)
+      {"normal", {"X", "Y", "Z"}, true},       // world-space shading normal
+      {"position", {"X", "Y", "Z"}, false},    // world-space position
+      {"depth", {"Z"}, false},                 // linear view depth; 0 for sky
+      {"roughness", {}, true},                 // perceptual roughness
+      {"meshId", {}, false},                   // object/light index; -1 for sky
+      {"materialId", {}, false},               // material index; -1 for sky and lights
+      {"motion", {"X", "Y"}, false},           // pixel offset to this point in the previous frame
+      {"specHitDist", {}, false},              // length of the mirror-reflected ray (1e6 on miss)
+  };
+  return specs;
+}
+const std::vector<LayerSpec>& referenceLayers() {
+  static const std::vector<LayerSpec> specs = {
+      {"color", {"R", "G", "B"}, false},       {"color", {"R", "G", "B"}, false, true},
+      {"diffuse", {"R", "G", "B"}, false},
+      {"specular", {"R", "G", "B"}, false},    {"colorVar", {"R", "G", "B"}, false},
+      {"diffuseVar", {"R", "G", "B"}, false},  {"specularVar", {"R", "G", "B"}, false},
+  };
+  return specs;
+}
+const std::vector<LayerSpec>& gradientLayers() {
+  // pixel: current-frame pixel of the forward-projected sample; lumNew: re-shaded at frame t with
+  // frame t-1's random numbers; lumOld: frame t-1's 1-spp luminance; valid: 1 or 0.
+  static const std::vector<LayerSpec> specs = {
+      {"gradient", {"pixelX", "pixelY", "lumNew", "lumOld", "valid"}, false},
+  };
+  return specs;
+}
+}  // namespace channels
+
+json cameraToJson(const CameraState& c) {
+  auto v = [](glm::vec3 x) { return json::array({x.x, x.y, x.z}); };
+  json m = json::array();
+  glm::mat4 view = c.view(), proj = c.projection();
+  json jv = json::array(), jp = json::array();
+  for (int i = 0; i < 4; ++i)
+    for (int k = 0; k < 4; ++k) {
+      jv.push_back(view[i][k]);
+      jp.push_back(proj[i][k]);
+    }
+  return {{"eye", v(c.eye)}, {"forward", v(c.forward)}, {"right", v(c.right)}, {"up", v(c.up)},
+          {"tanHalfFovY", c.tanHalfFovY}, {"width", c.width}, {"height", c.height},
+          {"view", jv}, {"projection", jp}};
+}
+
+CameraState cameraFromJson(const json& j) {
+  auto v = [](const json& a) { return glm::vec3(a[0].get<float>(), a[1].get<float>(), a[2].get<float>()); };
+  CameraState c;
+  c.eye = v(j.at("eye"));
+  c.forward = v(j.at("forward"));
+  c.right = v(j.at("right"));
+  c.up = v(j.at("up"));
+  c.tanHalfFovY = j.at("tanHalfFovY").get<float>();
+  c.width = j.at("width").get<int>();
+  c.height = j.at("height").get<int>();
+  c.aspect = float(c.width) / float(c.height);
+  return c;
+}
+
+json SequenceInfo::toJson() const {
+  json cams = json::array();
+  for (auto& c : cameras) cams.push_back(cameraToJson(c));
+  json evs = json::array();
+  for (auto& e : events) evs.push_back({{"frame", e.frame}, {"kind", e.kind}, {"what", e.what}});
+  return {{"format", kSequenceFormatVersion}, {"complete", true}, {"scene", scene},
+          {"purpose", purpose}, {"hash", hash}, {"width", width}, {"height", height},
+          {"frames", frames}, {"referenceOfFrame", referenceOfFrame}, {"referenceSpp", referenceSpp},
+          {"cameras", cams}, {"events", evs}, {"settings", settings},
+          {"gradientStratum", kGradientStratum}};
+}
+
+SequenceInfo SequenceInfo::fromJson(const json& j, const std::string& file) {
+  try {
+    if (j.value("format", 0) != kSequenceFormatVersion)
+      throw Error(file + ": sequence format " + std::to_string(j.value("format", 0)) + ", expected " +
+                  std::to_string(kSequenceFormatVersion) + " (re-render with `arena render`)");
+    if (!j.value("complete", false)) throw Error(file + ": sequence is incomplete (render interrupted?)");
+    SequenceInfo s;
+    s.scene = j.at("scene").get<std::string>();
+    s.purpose = j.value("purpose", "");
+    s.hash = j.at("hash").get<std::string>();
+    s.width = j.at("width").get<int>();
+    s.height = j.at("height").get<int>();
+    s.frames = j.at("frames").get<int>();
+    s.referenceOfFrame = j.at("referenceOfFrame").get<std::vector<int>>();
+    s.referenceSpp = j.at("referenceSpp").get<std::vector<int>>();
+    for (auto& c : j.at("cameras")) s.cameras.push_back(cameraFromJson(c));
+    for (auto& e : j.at("events"))
+      s.events.push_back({e.at("frame").get<int>(), e.at("kind").get<std::string>(), e.value("what", "")});
+    s.settings = j.value("settings", json::object());
+    if (int(s.referenceOfFrame.size()) != s.frames || int(s.cameras.size()) != s.frames)
+      throw Error(file + ": per-frame lists do not match the frame count");
+    return s;
+  } catch (const json::exception& e) {
+    throw Error(file + ": malformed sequence description: " + e.what());
+  }
+}
+
+static std::string numbered(const char* prefix, int n, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%s_%0*d.exr", prefix, digits, n);
+  return buf;
+}
+
+fs::path Sequence::framePath(const fs::path& dir, int t) { return dir / numbered("frame", t, 4); }
+fs::path Sequence::referencePath(const fs::path& dir, int r) { return dir / numbered("reference", r, 3); }
+fs::path Sequence::gradientPath(const fs::path& dir, int t) { return dir / numbered("gradients", t, 4); }
+
+Sequence Sequence::open(const fs::path& dir) {
+  fs::path file = dir / "sequence.json";
+  if (!fs::exists(file)) throw Error(dir.string() + ": not a rendered sequence (no sequence.json)");
+  Sequence s;
+  s.dir_ = dir;
+  s.info_ = SequenceInfo::fromJson(parseJsonFile(file.string()), file.string());
+  return s;
+}
+
+LayerSet Sequence::frame(int t) const {
+  if (t < 0 || t >= info_.frames) throw Error(dir_.string() + ": frame " + std::to_string(t) + " out of range");
+  return readExr(framePath(dir_, t), channels::frameLayers()).layers;
+}
+
+LayerSet Sequence::reference(int t) const {
+  if (t < 0 || t >= info_.frames) throw Error(dir_.string() + ": frame " + std::to_string(t) + " out of range");
+  return readExr(referencePath(dir_, info_.referenceOfFrame[t]), channels::referenceLayers()).layers;
+}
+
+LayerSet Sequence::gradients(int t) const {
+  if (t < 1 || t >= info_.frames)
+    throw Error(dir_.string() + ": gradient samples exist for frames 1.." + std::to_string(info_.frames - 1));
+  return readExr(gradientPath(dir_, t), channels::gradientLayers()).layers;
+}
+
+}  // namespace arena

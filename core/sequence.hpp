@@ -1,0 +1,70 @@
+#pragma once
+// A rendered sequence as the cache stores it and every downstream stage reads it: one
+// multi-channel EXR per frame, A-SVGF gradient samples per frame at stratum resolution, one EXR
+// per distinct reference, and sequence.json (scene, settings, frame -> reference map, events,
+// cameras). The channel layout is defined here once, for the writer (tracer) and the readers.
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "core/camera.hpp"
+#include "core/exr_io.hpp"
+
+namespace arena {
+
+namespace channels {
+// Per-frame layers (noise-free G-buffer of the primary hit through the pixel centre + 1-spp signals).
+const std::vector<LayerSpec>& frameLayers();
+// Reference layers: converged means and the per-pixel variance of each mean.
+const std::vector<LayerSpec>& referenceLayers();
+// Gradient samples (A-SVGF), one texel per 3x3 stratum.
+const std::vector<LayerSpec>& gradientLayers();
+}  // namespace channels
+
+constexpr int kGradientStratum = 3;
+constexpr int kSequenceFormatVersion = 1;
+
+struct SequenceEvent {
+  int frame = 0;
+  std::string kind, what;
+};
+
+struct SequenceInfo {
+  std::string scene, purpose, hash;
+  int width = 0, height = 0, frames = 0;
+  std::vector<int> referenceOfFrame;   // frame -> reference index
+  std::vector<int> referenceSpp;       // per reference: samples actually used
+  std::vector<CameraState> cameras;    // per frame
+  std::vector<SequenceEvent> events;
+  nlohmann::json settings;             // what produced the pixels (preset, spp, bounces, ...)
+
+  nlohmann::json toJson() const;
+  static SequenceInfo fromJson(const nlohmann::json& j, const std::string& file);
+};
+
+nlohmann::json cameraToJson(const CameraState& c);
+CameraState cameraFromJson(const nlohmann::json& j);
+
+class Sequence {
+ public:
+  // Opens a complete cached sequence; throws naming the directory when it is missing/incomplete.
+  static Sequence open(const std::filesystem::path& dir);
+
+  const SequenceInfo& info() const { return info_; }
+  const std::filesystem::path& dir() const { return dir_; }
+
+  LayerSet frame(int t) const;
+  LayerSet reference(int t) const;  // the reference of frame t
+  LayerSet gradients(int t) const;  // frame t >= 1
+
+  static std::filesystem::path framePath(const std::filesystem::path& dir, int t);
+  static std::filesystem::path referencePath(const std::filesystem::path& dir, int r);
+  static std::filesystem::path gradientPath(const std::filesystem::path& dir, int t);
+
+ private:
+  std::filesystem::path dir_;
+  SequenceInfo info_;
+};
+
+}  // namespace arena
