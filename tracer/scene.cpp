@@ -1,0 +1,239 @@
+#include "tracer/scene.hpp"
+
+#include <algorithm>
+#include <filesystem>
+#include <glm/gtc/matrix_transform.hpp>
+#include <map>
+
+#include "core/atomic_file.hpp"
+#include "core/error.hpp"
+#include "core/hash.hpp"
+#include "core/json_reader.hpp"
+
+namespace arena {
+
+namespace fs = std::filesystem;
+
+glm::mat4 Transform::matrix() const {
+  glm::mat4 m = glm::translate(glm::mat4(1.0f), translate);
+  m = glm::rotate(m, glm::radians(rotateDegrees.z), glm::vec3(0, 0, 1));
+  m = glm::rotate(m, glm::radians(rotateDegrees.y), glm::vec3(0, 1, 0));
+  m = glm::rotate(m, glm::radians(rotateDegrees.x), glm::vec3(1, 0, 0));
+  return glm::scale(m, scale);
+}
+
+Transform lerp(const Transform& a, const Transform& b, float s) {
+  return {glm::mix(a.translate, b.translate, s), glm::mix(a.rotateDegrees, b.rotateDegrees, s),
+          glm::mix(a.scale, b.scale, s)};
+}
+
+CameraKey lerp(const CameraKey& a, const CameraKey& b, float s) {
+  return {glm::mix(a.eye, b.eye, s), glm::mix(a.target, b.target, s), glm::mix(a.up, b.up, s),
+          glm::mix(a.fovYDegrees, b.fovYDegrees, s)};
+}
+
+LightValue lerp(const LightValue& a, const LightValue& b, float s) {
+  return {glm::mix(a.intensity, b.intensity, s), glm::mix(a.color, b.color, s)};
+}
+
+namespace {
+
+void requireNonNegative(JsonReader& r, const std::string& key, glm::vec3 v) {
+  if (v.x < 0 || v.y < 0 || v.z < 0) r.fail(key, "expected non-negative values");
+}
+
+float numberIn(JsonReader& r, const std::string& key, double fallback, double lo, double hi) {
+  double v = r.number(key, fallback);
+  if (v < lo || v > hi)
+    r.fail(key, "expected a value in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " +
+                    std::to_string(v));
+  return float(v);
+}
+
+// Reads "keys": [{frame, step?, ...fields}], each key inheriting unspecified fields from the
+// previous one. `readValue` reads the fields into a value that starts as the previous key's.
+template <class T, class ReadValue>
+Track<T> readTrack(JsonReader& parent, const std::string& key, int frames, T initial, ReadValue readValue) {
+  Track<T> track;
+  T current = initial;
+  for (JsonReader& k : parent.requiredArray(key)) {
+    typename Track<T>::Key out;
+    out.frame = k.integer("frame");
+    out.step = k.boolean("step", false);
+    if (out.frame < 0 || out.frame >= frames)
+      k.fail("frame", "expected a frame in [0, " + std::to_string(frames - 1) + "] (the sequence has " +
+                          std::to_string(frames) + " frames), got " + std::to_string(out.frame));
+    if (!track.keys.empty() && out.frame <= track.keys.back().frame)
+      k.fail("frame", "keyframes must be strictly increasing in frame");
+    readValue(k, current);
+    out.value = current;
+    track.keys.push_back(out);
+    k.rejectUnread();
+  }
+  if (track.keys.empty()) parent.fail(key, "expected at least one keyframe");
+  return track;
+}
+
+void readTransform(JsonReader& k, Transform& t) {
+  t.translate = k.vec3("translate", t.translate);
+  t.rotateDegrees = k.vec3("rotate", t.rotateDegrees);
+  t.scale = k.vec3("scale", t.scale);
+}
+
+Shape readShape(JsonReader& r, bool allowMesh) {
+  std::string s = r.string("shape");
+  if (s == "quad") return Shape::Quad;
+  if (s == "sphere") return Shape::Sphere;
+  if (allowMesh && s == "box") return Shape::Box;
+  if (allowMesh && s == "mesh") return Shape::Mesh;
+  r.fail("shape", allowMesh ? "expected one of quad, box, sphere, mesh; got '" + s + "'"
+                            : "expected quad or sphere for a light; got '" + s + "'");
+}
+
+}  // namespace
+
+Scene loadScene(const std::string& path) {
+  const nlohmann::json doc = parseJsonFile(path);
+  if (!doc.is_object()) throw Error(path + ": $: expected a JSON object at the top level");
+  JsonReader root(doc, path);
+  Scene scene;
+  scene.file = path;
+  scene.name = fs::path(path).stem().string();
+  scene.purpose = root.string("purpose");
+  auto res = root.numbers("resolution", 2);
+  if (res[0] < 1 || res[1] < 1 || res[0] != int(res[0]) || res[1] != int(res[1]) || res[0] > 16384 ||
+      res[1] > 16384)
+    root.fail("resolution", "expected two positive integers [width, height] up to 16384");
+  scene.width = int(res[0]);
+  scene.height = int(res[1]);
+  scene.frames = root.integer("frames");
+  if (scene.frames < 1 || scene.frames > 100000) root.fail("frames", "expected a positive frame count");
+  int seed = root.integer("seed", 1);
+  if (seed < 0) root.fail("seed", "expected a non-negative integer");
+  scene.seed = uint32_t(seed);
+  scene.maxBounces = root.integer("max_bounces", 4);
+  if (scene.maxBounces < 1 || scene.maxBounces > 64) root.fail("max_bounces", "expected an integer in [1, 64]");
+
+  if (auto sky = root.optionalChild("sky")) {
+    glm::vec3 c = sky->vec3("color", glm::vec3(0.0f));
+    scene.skyTop = sky->vec3("top", c);
+    scene.skyBottom = sky->vec3("bottom", c);
+    requireNonNegative(*sky, "top", scene.skyTop);
+    requireNonNegative(*sky, "bottom", scene.skyBottom);
+    sky->rejectUnread();
+  }
+
+  JsonReader cam = root.child("camera");
+  scene.camera = readTrack<CameraKey>(cam, "keys", scene.frames, CameraKey{}, [](JsonReader& k, CameraKey& c) {
+    c.eye = k.vec3("eye", c.eye);
+    c.target = k.vec3("target", c.target);
+    c.up = k.vec3("up", c.up);
+    c.fovYDegrees = numberIn(k, "fov", c.fovYDegrees, 1.0, 170.0);
+    if (glm::length(c.target - c.eye) < 1e-6f) k.fail("target", "expected a target different from the eye");
+  });
+  cam.rejectUnread();
+
+  std::map<std::string, int> materialIndex;
+  JsonReader mats = root.child("materials");
+  for (const std::string& name : mats.memberNames()) {
+    JsonReader m = mats.child(name);
+    Material mat;
+    mat.name = name;
+    mat.albedo = m.vec3("albedo", mat.albedo);
+    if (auto chk = m.optionalChild("checker")) {
+      mat.checker = true;
+      mat.checkerAlbedo = chk->vec3("albedo");
+      mat.checkerScale = numberIn(*chk, "scale", mat.checkerScale, 1e-3, 1e4);
+      chk->rejectUnread();
+    }
+    mat.roughness = numberIn(m, "roughness", mat.roughness, 0.0, 1.0);
+    mat.metallic = numberIn(m, "metallic", mat.metallic, 0.0, 1.0);
+    mat.specular = numberIn(m, "specular", mat.specular, 0.0, 1.0);
+    mat.emission = m.vec3("emission", mat.emission);
+    requireNonNegative(m, "albedo", mat.albedo);
+    requireNonNegative(m, "emission", mat.emission);
+    if (glm::any(glm::greaterThan(mat.albedo, glm::vec3(1.0f)))) m.fail("albedo", "expected values in [0, 1]");
+    m.rejectUnread();
+    materialIndex[name] = int(scene.materials.size());
+    scene.materials.push_back(mat);
+  }
+
+  const fs::path sceneDir = fs::path(path).parent_path();
+  Hasher hasher;
+  hasher.add(doc.dump());
+  for (JsonReader& o : root.requiredArray("objects")) {
+    Object obj;
+    obj.name = o.string("name");
+    obj.shape = readShape(o, true);
+    if (obj.shape == Shape::Mesh) {
+      obj.meshFile = (sceneDir / o.string("file")).string();
+      if (!fs::exists(obj.meshFile)) o.fail("file", "mesh file not found: " + obj.meshFile);
+      hasher.add(readText(obj.meshFile));
+    }
+    std::string m = o.string("material");
+    auto it = materialIndex.find(m);
+    if (it == materialIndex.end()) o.fail("material", "unknown material '" + m + "' (not in $.materials)");
+    obj.material = it->second;
+    obj.transform = readTrack<Transform>(o, "keys", scene.frames, Transform{}, readTransform);
+    o.rejectUnread();
+    scene.objects.push_back(std::move(obj));
+  }
+  for (JsonReader& l : root.optionalArray("lights")) {
+    Light light;
+    light.name = l.string("name");
+    light.shape = readShape(l, false);
+    struct LightKey {
+      Transform t;
+      LightValue v;
+    };
+    auto track = readTrack<LightKey>(l, "keys", scene.frames, LightKey{}, [](JsonReader& k, LightKey& v) {
+      readTransform(k, v.t);
+      v.v.intensity = numberIn(k, "intensity", v.v.intensity, 0.0, 1e9);
+      v.v.color = k.vec3("color", v.v.color);
+      requireNonNegative(k, "color", v.v.color);
+    });
+    for (auto& key : track.keys) {
+      light.transform.keys.push_back({key.frame, key.step, key.value.t});
+      light.emission.keys.push_back({key.frame, key.step, key.value.v});
+    }
+    l.rejectUnread();
+    scene.lights.push_back(std::move(light));
+  }
+  auto knownName = [&](const std::string& n) {
+    return std::any_of(scene.objects.begin(), scene.objects.end(), [&](auto& o) { return o.name == n; }) ||
+           std::any_of(scene.lights.begin(), scene.lights.end(), [&](auto& l) { return l.name == n; });
+  };
+  for (JsonReader& e : root.optionalArray("events")) {
+    SceneEvent ev;
+    ev.frame = e.integer("frame");
+    ev.kind = e.string("kind");
+    ev.what = e.string("what", "");
+    if (ev.frame < 0 || ev.frame >= scene.frames)
+      e.fail("frame", "expected a frame in [0, " + std::to_string(scene.frames - 1) + "]");
+    static const char* kinds[] = {"light_off", "light_on", "light_change", "object_moves", "camera_cut"};
+    if (std::none_of(std::begin(kinds), std::end(kinds), [&](const char* k) { return ev.kind == k; }))
+      e.fail("kind", "expected one of light_off, light_on, light_change, object_moves, camera_cut; got '" +
+                         ev.kind + "'");
+    if (!ev.what.empty() && !knownName(ev.what))
+      e.fail("what", "no object or light is named '" + ev.what + "'");
+    e.rejectUnread();
+    scene.events.push_back(ev);
+  }
+  root.rejectUnread();
+  if (scene.objects.empty() && scene.lights.empty()) root.fail("objects", "expected at least one object or light");
+  scene.contentHash = hasher.hex();
+  return scene;
+}
+
+std::string defaultScenesDir() { return std::string(ARENA_SOURCE_DIR) + "/scenes"; }
+
+std::vector<std::string> listSceneFiles(const std::string& scenesDir) {
+  std::vector<std::string> out;
+  if (!fs::is_directory(scenesDir)) throw Error(scenesDir + ": scenes directory not found");
+  for (auto& e : fs::directory_iterator(scenesDir))
+    if (e.path().extension() == ".json") out.push_back(e.path().string());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+}  // namespace arena

@@ -1,0 +1,116 @@
+#pragma once
+// The scene description: a small JSON format that models no more than the failure-provoking scenes
+// need (see scenes/*.json). Parsing is strict: unknown fields, wrong types, dangling material
+// names and keyframes beyond the sequence are errors naming the file and JSON path.
+#include <glm/glm.hpp>
+#include <string>
+#include <vector>
+
+namespace arena {
+
+// A keyframed value. Keys are strictly increasing in frame; values interpolate linearly, and a key
+// with "step": true switches instantly at its frame (holding the previous value until then).
+template <class T>
+struct Track {
+  struct Key {
+    int frame = 0;
+    bool step = false;
+    T value{};
+  };
+  std::vector<Key> keys;
+
+  T at(float frame) const {
+    if (keys.empty()) return T{};
+    if (frame <= float(keys.front().frame)) return keys.front().value;
+    for (size_t i = 0; i + 1 < keys.size(); ++i) {
+      const Key& a = keys[i];
+      const Key& b = keys[i + 1];
+      if (frame < float(b.frame)) {
+        if (b.step) return a.value;
+        float s = (frame - float(a.frame)) / float(b.frame - a.frame);
+        return lerp(a.value, b.value, s);
+      }
+    }
+    return keys.back().value;
+  }
+};
+
+struct Transform {
+  glm::vec3 translate{0.0f};
+  glm::vec3 rotateDegrees{0.0f};  // applied X, then Y, then Z
+  glm::vec3 scale{1.0f};
+  glm::mat4 matrix() const;
+};
+Transform lerp(const Transform& a, const Transform& b, float s);
+
+struct CameraKey {
+  glm::vec3 eye{0, 0, 5}, target{0}, up{0, 1, 0};
+  float fovYDegrees = 45.0f;
+};
+CameraKey lerp(const CameraKey& a, const CameraKey& b, float s);
+
+struct LightValue {
+  float intensity = 1.0f;
+  glm::vec3 color{1.0f};
+};
+LightValue lerp(const LightValue& a, const LightValue& b, float s);
+
+struct Material {
+  std::string name;
+  glm::vec3 albedo{0.8f};
+  bool checker = false;  // procedural checker in object space: albedo / checkerAlbedo
+  glm::vec3 checkerAlbedo{0.2f};
+  float checkerScale = 4.0f;  // cells per object-space unit
+  float roughness = 1.0f;     // perceptual; GGX alpha = roughness^2
+  float metallic = 0.0f;
+  float specular = 0.04f;     // dielectric F0 (0 gives a pure Lambert surface)
+  glm::vec3 emission{0.0f};   // emitted radiance
+};
+
+enum class Shape { Quad, Box, Sphere, Mesh };
+
+struct Object {
+  std::string name;
+  Shape shape = Shape::Quad;
+  std::string meshFile;  // Shape::Mesh: absolute path of an OBJ file
+  int material = 0;
+  Track<Transform> transform;
+};
+
+// Area lights are one-sided quads (emitting along their +Y axis) or spheres; their radiance is
+// colour * intensity and they are sampled by next-event estimation.
+struct Light {
+  std::string name;
+  Shape shape = Shape::Quad;
+  Track<Transform> transform;
+  Track<LightValue> emission;
+};
+
+struct SceneEvent {
+  int frame = 0;
+  std::string kind;  // light_off, light_on, light_change, object_moves, camera_cut, ...
+  std::string what;  // name of the light/object concerned
+};
+
+struct Scene {
+  std::string name;     // file stem
+  std::string file;     // path it was loaded from
+  std::string purpose;  // one sentence: the failure this scene provokes
+  int width = 320, height = 180, frames = 32;
+  uint32_t seed = 1;
+  int maxBounces = 4;
+  glm::vec3 skyTop{0.0f}, skyBottom{0.0f};
+  Track<CameraKey> camera;
+  std::vector<Material> materials;
+  std::vector<Object> objects;
+  std::vector<Light> lights;
+  std::vector<SceneEvent> events;
+  std::string contentHash;  // scene file bytes + referenced mesh files
+};
+
+Scene loadScene(const std::string& path);
+// Scenes shipped in scenes/ (sorted by name).
+std::vector<std::string> listSceneFiles(const std::string& scenesDir);
+std::string defaultScenesDir();
+
+}  // namespace arena

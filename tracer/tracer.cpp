@@ -1,0 +1,383 @@
+#include "tracer/tracer.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "core/error.hpp"
+#include "core/image.hpp"
+
+namespace arena {
+
+namespace {
+
+constexpr float kPi = 3.14159265358979f;
+constexpr float kInf = std::numeric_limits<float>::infinity();
+// Random dimensions used at each path vertex (8 per vertex, fixed order).
+enum Dim : uint32_t { kLightSelect, kLightTriangle, kLightU, kLightV, kLobe, kDirU, kDirV, kRoulette, kDimsPerVertex };
+
+float lum(glm::vec3 c) { return luminance(c.x, c.y, c.z); }
+float maxComponent(glm::vec3 c) { return std::max(c.x, std::max(c.y, c.z)); }
+
+void orthonormalBasis(glm::vec3 n, glm::vec3& t, glm::vec3& b) {
+  // Duff et al. 2017, "Building an Orthonormal Basis, Revisited".
+  float sign = std::copysign(1.0f, n.z);
+  float a = -1.0f / (sign + n.z);
+  float bb = n.x * n.y * a;
+  t = glm::vec3(1.0f + sign * n.x * n.x * a, sign * bb, -sign * n.x);
+  b = glm::vec3(bb, sign + n.y * n.y * a, -n.y);
+}
+
+glm::vec3 offsetOrigin(glm::vec3 p, glm::vec3 n) {
+  float scale = 1e-4f * (1.0f + maxComponent(glm::abs(p)));
+  return p + n * scale;
+}
+
+// A surface oriented towards the viewer: both normals on the side of wo.
+struct Oriented {
+  glm::vec3 n, ng;
+};
+Oriented orient(const SurfaceHit& s, glm::vec3 wo) {
+  Oriented o{s.shadingNormal, s.geometricNormal};
+  if (glm::dot(o.ng, wo) < 0) {
+    o.ng = -o.ng;
+    o.n = -o.n;
+  }
+  if (glm::dot(o.n, wo) <= 1e-4f) o.n = o.ng;  // interpolated normal facing away at a silhouette
+  return o;
+}
+
+struct Lobes {
+  glm::vec3 diffuse{0}, specular{0};  // BRDF values f_d, f_s
+  float pdf = 0;                      // mixture pdf of the sampling strategy (solid angle)
+};
+
+// Mixture sampling weights: specular lobe chosen in proportion to its Fresnel-weighted albedo.
+float specularProbability(const SurfaceHit& s, float NoV) {
+  float d = lum(s.diffuseAlbedo());
+  float sp = lum(specularAlbedo(s.f0(), s.roughness, NoV));
+  if (d + sp <= 0) return 0;
+  return std::clamp(sp / (d + sp), d > 0 ? 0.1f : 1.0f, sp > 0 ? 0.9f : 0.0f);
+}
+
+float ggxAlpha(float roughness) { return std::max(roughness * roughness, 1e-3f); }
+
+Lobes evaluate(const SurfaceHit& s, glm::vec3 n, glm::vec3 wo, glm::vec3 wi, float pSpec) {
+  Lobes out;
+  float NoL = glm::dot(n, wi), NoV = glm::dot(n, wo);
+  if (NoL <= 0 || NoV <= 0) return out;
+  out.diffuse = s.diffuseAlbedo() / kPi;
+  float pdfDiffuse = NoL / kPi, pdfSpecular = 0;
+  glm::vec3 f0 = s.f0();
+  if (maxComponent(f0) > 0) {
+    glm::vec3 h = glm::normalize(wo + wi);
+    float NoH = std::max(glm::dot(n, h), 0.0f), VoH = std::max(glm::dot(wo, h), 1e-6f);
+    float a = ggxAlpha(s.roughness), a2 = a * a;
+    float dd = NoH * NoH * (a2 - 1.0f) + 1.0f;
+    float D = a2 / (kPi * dd * dd);
+    auto G1 = [&](float x) { return 2.0f * x / (x + std::sqrt(a2 + (1.0f - a2) * x * x)); };
+    glm::vec3 F = f0 + (1.0f - f0) * std::pow(1.0f - VoH, 5.0f);
+    out.specular = D * G1(NoV) * G1(NoL) * F / (4.0f * NoL * NoV);
+    pdfSpecular = D * NoH / (4.0f * VoH);
+  }
+  out.pdf = pSpec * pdfSpecular + (1.0f - pSpec) * pdfDiffuse;
+  return out;
+}
+
+bool sampleDirection(const SurfaceHit& s, glm::vec3 n, glm::vec3 wo, float pSpec, float uLobe, float u1,
+                     float u2, glm::vec3& wi) {
+  glm::vec3 t, b;
+  orthonormalBasis(n, t, b);
+  if (uLobe < pSpec) {  // GGX distribution of normals, D(h) cos(h)
+    float a = ggxAlpha(s.roughness);
+    float phi = 2.0f * kPi * u1;
+    float cosTheta = std::sqrt((1.0f - u2) / (1.0f + (a * a - 1.0f) * u2));
+    float sinTheta = std::sqrt(std::max(0.0f, 1.0f - cosTheta * cosTheta));
+    glm::vec3 h = glm::normalize(t * (sinTheta * std::cos(phi)) + b * (sinTheta * std::sin(phi)) + n * cosTheta);
+    wi = 2.0f * glm::dot(wo, h) * h - wo;
+  } else {  // cosine-weighted hemisphere
+    float r = std::sqrt(u1), phi = 2.0f * kPi * u2;
+    wi = t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * std::sqrt(std::max(0.0f, 1.0f - u1));
+  }
+  return glm::dot(wi, n) > 0;
+}
+
+}  // namespace
+
+glm::vec3 specularAlbedo(glm::vec3 f0, float roughness, float NoV) {
+  const glm::vec4 c0(-1.0f, -0.0275f, -0.572f, 0.022f), c1(1.0f, 0.0425f, 1.04f, -0.04f);
+  glm::vec4 r = roughness * c0 + c1;
+  float a004 = std::min(r.x * r.x, std::exp2(-9.28f * std::max(NoV, 0.0f))) * r.x + r.y;
+  glm::vec2 ab = glm::vec2(-1.04f, 1.04f) * a004 + glm::vec2(r.z, r.w);
+  return glm::max(f0 * ab.x + ab.y, glm::vec3(0.0f));
+}
+
+EmbreeDevice::EmbreeDevice() {
+  device_ = rtcNewDevice("verbose=0");
+  if (!device_) throw Error("Embree: cannot create a device (error " + std::to_string(rtcGetDeviceError(nullptr)) + ")");
+}
+EmbreeDevice::~EmbreeDevice() { rtcReleaseDevice(device_); }
+
+FrameScene::FrameScene(const EmbreeDevice& device, const Scene& scene, const std::vector<MeshData>& meshes,
+                       const SceneState& state)
+    : scene_(scene), state_(state) {
+  rtcScene_ = rtcNewScene(device.get());
+  rtcSetSceneBuildQuality(rtcScene_, RTC_BUILD_QUALITY_HIGH);
+  const size_t count = scene.objects.size() + scene.lights.size();
+  if (meshes.size() != count || state.toWorld.size() != count) throw Error("FrameScene: mesh/state count mismatch");
+  geometries_.resize(count);
+  for (size_t id = 0; id < count; ++id) {
+    Geometry& g = geometries_[id];
+    g.local = &meshes[id];
+    const glm::mat4& m = state.toWorld[id];
+    const glm::mat3 normalMatrix = glm::transpose(glm::inverse(glm::mat3(m)));
+    for (size_t i = 0; i < g.local->positions.size(); ++i) {
+      g.positions.push_back(glm::vec3(m * glm::vec4(g.local->positions[i], 1.0f)));
+      g.normals.push_back(glm::normalize(normalMatrix * g.local->normals[i]));
+    }
+    if (id < scene.objects.size()) {
+      g.materialId = scene.objects[id].material;
+    } else {
+      g.lightIndex = int(id - scene.objects.size());
+      const LightValue& lv = state.lights[size_t(g.lightIndex)];
+      g.lightRadiance = lv.color * lv.intensity;
+      for (const glm::uvec3& tri : g.local->triangles) {
+        glm::vec3 e1 = g.positions[tri.y] - g.positions[tri.x], e2 = g.positions[tri.z] - g.positions[tri.x];
+        g.area += 0.5f * glm::length(glm::cross(e1, e2));
+        g.areaCdf.push_back(g.area);
+      }
+      if (maxComponent(g.lightRadiance) > 0 && g.area > 0) activeLights_.push_back(int(id));
+    }
+    RTCGeometry geom = rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                          3 * sizeof(float), g.positions.size()));
+    for (size_t i = 0; i < g.positions.size(); ++i) {
+      v[3 * i] = g.positions[i].x;
+      v[3 * i + 1] = g.positions[i].y;
+      v[3 * i + 2] = g.positions[i].z;
+    }
+    auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                               3 * sizeof(unsigned), g.local->triangles.size()));
+    std::memcpy(idx, g.local->triangles.data(), g.local->triangles.size() * 3 * sizeof(unsigned));
+    rtcCommitGeometry(geom);
+    rtcAttachGeometryByID(rtcScene_, geom, unsigned(id));
+    rtcReleaseGeometry(geom);
+  }
+  rtcCommitScene(rtcScene_);
+}
+
+FrameScene::~FrameScene() { rtcReleaseScene(rtcScene_); }
+
+bool FrameScene::intersect(glm::vec3 o, glm::vec3 d, float tmax, SurfaceHit& hit, float& t, bool coherent) const {
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  if (coherent) ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  RTCRayHit rh;
+  rh.ray.org_x = o.x, rh.ray.org_y = o.y, rh.ray.org_z = o.z;
+  rh.ray.dir_x = d.x, rh.ray.dir_y = d.y, rh.ray.dir_z = d.z;
+  rh.ray.tnear = 0.0f;
+  rh.ray.tfar = tmax;
+  rh.ray.time = 0.0f;
+  rh.ray.mask = 0xFFFFFFFFu;  // Debian's Embree has ray masks on: a zero mask misses everything
+  rh.ray.id = 0;
+  rh.ray.flags = 0;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(rtcScene_, &ctx, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+  hit.meshId = int(rh.hit.geomID);
+  hit.primId = int(rh.hit.primID);
+  hit.u = rh.hit.u;
+  hit.v = rh.hit.v;
+  t = rh.ray.tfar;
+  return true;
+}
+
+bool FrameScene::occluded(glm::vec3 o, glm::vec3 d, float tmax) const {
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  RTCRay ray;
+  ray.org_x = o.x, ray.org_y = o.y, ray.org_z = o.z;
+  ray.dir_x = d.x, ray.dir_y = d.y, ray.dir_z = d.z;
+  ray.tnear = 0.0f;
+  ray.tfar = tmax;
+  ray.time = 0.0f;
+  ray.mask = 0xFFFFFFFFu;
+  ray.id = 0;
+  ray.flags = 0;
+  rtcOccluded1(rtcScene_, &ctx, &ray);
+  return ray.tfar < 0.0f;
+}
+
+glm::vec3 FrameScene::positionOf(int meshId, int primId, float u, float v) const {
+  const Geometry& g = geometries_[size_t(meshId)];
+  const glm::uvec3 tri = g.local->triangles[size_t(primId)];
+  return (1.0f - u - v) * g.positions[tri.x] + u * g.positions[tri.y] + v * g.positions[tri.z];
+}
+
+SurfaceHit FrameScene::surface(int meshId, int primId, float u, float v) const {
+  SurfaceHit s;
+  s.meshId = meshId;
+  s.primId = primId;
+  s.u = u;
+  s.v = v;
+  const Geometry& g = geometries_[size_t(meshId)];
+  const glm::uvec3 tri = g.local->triangles[size_t(primId)];
+  const float w = 1.0f - u - v;
+  s.position = w * g.positions[tri.x] + u * g.positions[tri.y] + v * g.positions[tri.z];
+  glm::vec3 ng = glm::cross(g.positions[tri.y] - g.positions[tri.x], g.positions[tri.z] - g.positions[tri.x]);
+  s.geometricNormal = glm::normalize(ng);
+  glm::vec3 ns = w * g.normals[tri.x] + u * g.normals[tri.y] + v * g.normals[tri.z];
+  s.shadingNormal = glm::length(ns) > 0 ? glm::normalize(ns) : s.geometricNormal;
+  if (g.lightIndex >= 0) {
+    s.lightIndex = g.lightIndex;
+    s.emission = g.lightRadiance;
+    s.baseColor = glm::vec3(0.0f);
+    s.specularF0 = 0.0f;
+    return s;
+  }
+  const Material& m = scene_.materials[size_t(g.materialId)];
+  s.materialId = g.materialId;
+  s.baseColor = m.albedo;
+  if (m.checker) {  // object-space checker, so the pattern moves with the object
+    glm::vec3 lp = w * g.local->positions[tri.x] + u * g.local->positions[tri.y] + v * g.local->positions[tri.z];
+    glm::ivec3 cell = glm::ivec3(glm::floor(lp * m.checkerScale + 1e-4f));
+    if (((cell.x + cell.y + cell.z) & 1) != 0) s.baseColor = m.checkerAlbedo;
+  }
+  s.roughness = m.roughness;
+  s.metallic = m.metallic;
+  s.specularF0 = m.specular;
+  s.emission = m.emission;
+  return s;
+}
+
+glm::vec3 FrameScene::sky(glm::vec3 dir) const {
+  return glm::mix(scene_.skyBottom, scene_.skyTop, 0.5f * (dir.y + 1.0f));
+}
+
+glm::vec3 FrameScene::sampleLight(const SurfaceHit& at, const Sampler& s, uint32_t dim, glm::vec3& wi,
+                                  float& dist, float& pdf) const {
+  pdf = 0;
+  if (activeLights_.empty()) return glm::vec3(0);
+  const size_t n = activeLights_.size();
+  const size_t li = std::min(size_t(s.get(dim + kLightSelect) * float(n)), n - 1);
+  const Geometry& g = geometries_[size_t(activeLights_[li])];
+  // Triangle in proportion to its area, then a uniform point on it.
+  float target = s.get(dim + kLightTriangle) * g.area;
+  size_t ti = size_t(std::lower_bound(g.areaCdf.begin(), g.areaCdf.end(), target) - g.areaCdf.begin());
+  ti = std::min(ti, g.areaCdf.size() - 1);
+  const glm::uvec3 tri = g.local->triangles[ti];
+  float su = std::sqrt(s.get(dim + kLightU)), b1 = 1.0f - su, b2 = s.get(dim + kLightV) * su;
+  glm::vec3 p0 = g.positions[tri.x], p1 = g.positions[tri.y], p2 = g.positions[tri.z];
+  glm::vec3 lp = (1.0f - b1 - b2) * p0 + b1 * p1 + b2 * p2;
+  glm::vec3 ln = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+  glm::vec3 d = lp - at.position;
+  float dist2 = glm::dot(d, d);
+  dist = std::sqrt(dist2);
+  if (dist <= 0) return glm::vec3(0);
+  wi = d / dist;
+  float cosLight = glm::dot(ln, -wi);
+  if (cosLight <= 0) return glm::vec3(0);  // one-sided emitters
+  pdf = dist2 / (cosLight * g.area * float(n));
+  return g.lightRadiance;
+}
+
+float FrameScene::lightPdf(const SurfaceHit& lightHit, glm::vec3 from) const {
+  if (lightHit.lightIndex < 0 || activeLights_.empty()) return 0;
+  const Geometry& g = geometries_[size_t(lightHit.meshId)];
+  if (maxComponent(g.lightRadiance) <= 0) return 0;
+  glm::vec3 d = from - lightHit.position;
+  float dist2 = glm::dot(d, d);
+  float cosLight = glm::dot(lightHit.geometricNormal, d / std::sqrt(dist2));
+  if (cosLight <= 0) return 0;
+  return dist2 / (cosLight * g.area * float(activeLights_.size()));
+}
+
+FrameScene::Radiance FrameScene::shade(const SurfaceHit& primary, glm::vec3 wo, const Sampler& sampler,
+                                       RayCounts& counts) const {
+  Radiance out;
+  counts.paths++;
+  if (primary.lightIndex >= 0) return out;  // emitters do not reflect
+  // Next-event estimation at a vertex, MIS-weighted against BSDF sampling (power heuristic).
+  auto nextEvent = [&](const SurfaceHit& s, const Oriented& o, glm::vec3 w, float pSpec, uint32_t dim,
+                       glm::vec3& diffuse, glm::vec3& specular) {
+    glm::vec3 wi;
+    float dist, pdfLight;
+    glm::vec3 le = sampleLight(s, sampler, dim, wi, dist, pdfLight);
+    if (pdfLight <= 0 || glm::dot(wi, o.ng) <= 0) return;
+    Lobes f = evaluate(s, o.n, w, wi, pSpec);
+    if (f.pdf <= 0 && maxComponent(f.diffuse + f.specular) <= 0) return;
+    counts.rays++;
+    glm::vec3 origin = offsetOrigin(s.position, o.ng);
+    if (occluded(origin, wi, dist * (1.0f - 1e-3f))) return;
+    float weight = pdfLight * pdfLight / (pdfLight * pdfLight + f.pdf * f.pdf);
+    float cosine = glm::dot(o.n, wi);
+    diffuse += f.diffuse * le * (cosine * weight / pdfLight);
+    specular += f.specular * le * (cosine * weight / pdfLight);
+  };
+
+  // Vertex 0: split direct light and the continuation between the diffuse and specular signals.
+  Oriented o0 = orient(primary, wo);
+  const float pSpec0 = specularProbability(primary, glm::dot(o0.n, wo));
+  if (pSpec0 <= 0 && maxComponent(primary.diffuseAlbedo()) <= 0) return out;
+  nextEvent(primary, o0, wo, pSpec0, 0, out.diffuse, out.specular);
+  glm::vec3 wi;
+  if (!sampleDirection(primary, o0.n, wo, pSpec0, sampler.get(kLobe), sampler.get(kDirU), sampler.get(kDirV), wi) ||
+      glm::dot(wi, o0.ng) <= 0)
+    return out;
+  Lobes f0 = evaluate(primary, o0.n, wo, wi, pSpec0);
+  if (f0.pdf <= 0) return out;
+  const float cos0 = glm::dot(o0.n, wi);
+  const glm::vec3 weightDiffuse = f0.diffuse * (cos0 / f0.pdf), weightSpecular = f0.specular * (cos0 / f0.pdf);
+
+  // Radiance arriving along wi from the rest of the path.
+  glm::vec3 incoming(0), throughput(1);
+  glm::vec3 origin = offsetOrigin(primary.position, o0.ng), dir = wi;
+  float prevPdf = f0.pdf;
+  for (int depth = 1; depth <= scene_.maxBounces; ++depth) {
+    SurfaceHit h;
+    float t;
+    counts.rays++;
+    if (!intersect(origin, dir, kInf, h, t)) {
+      incoming += throughput * sky(dir);
+      break;
+    }
+    SurfaceHit s = surface(h.meshId, h.primId, h.u, h.v);
+    if (maxComponent(s.emission) > 0 && glm::dot(s.geometricNormal, -dir) > 0) {
+      float pl = lightPdf(s, origin);
+      float weight = pl > 0 ? prevPdf * prevPdf / (prevPdf * prevPdf + pl * pl) : 1.0f;
+      incoming += throughput * s.emission * weight;
+    }
+    if (depth == scene_.maxBounces || s.lightIndex >= 0) break;
+    const uint32_t dim = uint32_t(depth) * kDimsPerVertex;
+    glm::vec3 w = -dir;
+    Oriented o = orient(s, w);
+    float pSpec = specularProbability(s, glm::dot(o.n, w));
+    if (pSpec <= 0 && maxComponent(s.diffuseAlbedo()) <= 0) break;
+    glm::vec3 direct(0);
+    nextEvent(s, o, w, pSpec, dim, direct, direct);
+    incoming += throughput * direct;
+    glm::vec3 next;
+    if (!sampleDirection(s, o.n, w, pSpec, sampler.get(dim + kLobe), sampler.get(dim + kDirU),
+                         sampler.get(dim + kDirV), next) ||
+        glm::dot(next, o.ng) <= 0)
+      break;
+    Lobes f = evaluate(s, o.n, w, next, pSpec);
+    if (f.pdf <= 0) break;
+    throughput *= (f.diffuse + f.specular) * (glm::dot(o.n, next) / f.pdf);
+    if (depth >= 2) {  // Russian roulette after two bounces
+      float q = std::clamp(maxComponent(throughput), 0.05f, 0.95f);
+      if (sampler.get(dim + kRoulette) >= q) break;
+      throughput /= q;
+    }
+    origin = offsetOrigin(s.position, o.ng);
+    dir = next;
+    prevPdf = f.pdf;
+  }
+  out.diffuse += weightDiffuse * incoming;
+  out.specular += weightSpecular * incoming;
+  return out;
+}
+
+}  // namespace arena

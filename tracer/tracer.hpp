@@ -1,0 +1,103 @@
+#pragma once
+// The Embree path tracer: pinhole primary rays through pixel centres (a noise-free G-buffer, as
+// SVGF assumes), next-event estimation with MIS, Lambert diffuse + GGX specular, Russian roulette.
+// The first vertex splits its contribution into a diffuse and a specular signal so denoisers can
+// filter them separately.
+#include <embree3/rtcore.h>
+
+#include <atomic>
+#include <memory>
+#include <vector>
+
+#include "tracer/sampler.hpp"
+#include "tracer/scene.hpp"
+#include "tracer/scene_state.hpp"
+
+namespace arena {
+
+// Embree device; one per process is enough.
+class EmbreeDevice {
+ public:
+  EmbreeDevice();
+  ~EmbreeDevice();
+  EmbreeDevice(const EmbreeDevice&) = delete;
+  EmbreeDevice& operator=(const EmbreeDevice&) = delete;
+  RTCDevice get() const { return device_; }
+
+ private:
+  RTCDevice device_;
+};
+
+// Everything a shading routine knows about a surface point.
+struct SurfaceHit {
+  int meshId = -1, primId = -1;
+  float u = 0, v = 0;
+  glm::vec3 position{0}, geometricNormal{0, 1, 0}, shadingNormal{0, 1, 0};
+  int materialId = -1;  // -1 for lights
+  int lightIndex = -1;  // >= 0 when the surface is a scene light
+  glm::vec3 baseColor{0}, emission{0};
+  float roughness = 1, metallic = 0, specularF0 = 0.04f;
+
+  glm::vec3 diffuseAlbedo() const { return baseColor * (1.0f - metallic); }
+  glm::vec3 f0() const { return glm::mix(glm::vec3(specularF0), baseColor, metallic); }
+};
+
+// Specular albedo used for demodulation: the GGX directional albedo, Karis' analytic fit of the
+// pre-integrated split-sum term ("Physically Based Shading on Mobile", 2014). Ours: any smooth,
+// strictly positive estimate works for demodulation; this one tracks roughness and view angle.
+glm::vec3 specularAlbedo(glm::vec3 f0, float roughness, float NoV);
+
+struct RayCounts {
+  uint64_t rays = 0, paths = 0;
+};
+
+// One animation state built into an Embree scene.
+class FrameScene {
+ public:
+  FrameScene(const EmbreeDevice& device, const Scene& scene, const std::vector<MeshData>& meshes,
+             const SceneState& state);
+  ~FrameScene();
+  FrameScene(const FrameScene&) = delete;
+  FrameScene& operator=(const FrameScene&) = delete;
+
+  const SceneState& state() const { return state_; }
+  const Scene& scene() const { return scene_; }
+
+  // Closest hit; fills meshId/primId/u/v and returns true on a hit.
+  bool intersect(glm::vec3 origin, glm::vec3 dir, float tmax, SurfaceHit& hit, float& t, bool coherent = false) const;
+  bool occluded(glm::vec3 origin, glm::vec3 dir, float tmax) const;
+  // Surface attributes from (mesh, primitive, barycentrics): a pure function of the state, so
+  // a point is shaded bit-identically whichever way it was found (ray or forward projection).
+  SurfaceHit surface(int meshId, int primId, float u, float v) const;
+  // World position of (mesh, primitive, barycentrics) in this state.
+  glm::vec3 positionOf(int meshId, int primId, float u, float v) const;
+  glm::vec3 sky(glm::vec3 dir) const;
+
+  struct Radiance {
+    glm::vec3 diffuse{0}, specular{0};  // radiance reflected by the first vertex, not demodulated
+  };
+  // One path sample starting at the primary surface `hit` seen from direction wo (towards the eye).
+  // Emission of `hit` itself is not included (it is the emission channel).
+  Radiance shade(const SurfaceHit& hit, glm::vec3 wo, const Sampler& sampler, RayCounts& counts) const;
+
+ private:
+  struct Geometry {
+    std::vector<glm::vec3> positions, normals;
+    const MeshData* local = nullptr;
+    int materialId = -1, lightIndex = -1;
+    glm::vec3 lightRadiance{0};
+    std::vector<float> areaCdf;  // lights: cumulative triangle areas
+    float area = 0;
+  };
+  glm::vec3 sampleLight(const SurfaceHit& at, const Sampler& s, uint32_t dim, glm::vec3& wi,
+                        float& dist, float& pdfSolidAngle) const;
+  float lightPdf(const SurfaceHit& lightHit, glm::vec3 from) const;
+
+  const Scene& scene_;
+  SceneState state_;
+  RTCScene rtcScene_ = nullptr;
+  std::vector<Geometry> geometries_;
+  std::vector<int> activeLights_;  // meshIds of lights with non-zero radiance
+};
+
+}  // namespace arena
