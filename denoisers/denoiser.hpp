@@ -1,0 +1,107 @@
+#pragma once
+// The one interface every denoiser implements (OIDN's filter: set up, then execute per frame).
+// A denoiser filters one *signal* -- demodulated diffuse or specular radiance -- frame by frame and
+// keeps its own history; the harness runs one instance per signal and remodulates
+// (albedo * diffuse + specAlbedo * specular + emission).
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/camera.hpp"
+#include "core/exr_io.hpp"
+#include "core/image.hpp"
+#include "denoisers/params.hpp"
+
+namespace arena {
+
+enum class SignalKind { Diffuse, Specular };
+const char* signalName(SignalKind kind);  // "diffuse" / "specular": also the frame layer's name
+
+// Per-frame state shared by every denoiser (NRD's CommonSettings).
+struct FrameContext {
+  int frameIndex = 0;
+  int width = 0, height = 0;
+  CameraState camera, previousCamera;
+  bool reset = false;  // history must be discarded (first frame, camera cut)
+};
+
+// Inputs by name. `signal` is the noisy demodulated RGB signal to filter; `frame` holds the
+// sequence's layers for this frame (depth, normal, position, motion, meshId, roughness,
+// specHitDist, albedo, ... -- see core/sequence.hpp); `gradients` the A-SVGF gradient samples
+// (nullptr on frame 0 or when the denoiser does not ask for them).
+struct DenoiserInputs {
+  const Image& signal;
+  const LayerSet& frame;
+  const LayerSet* gradients = nullptr;
+};
+
+// Wall time and neighbour fetches of one pass in the last frame.
+struct PassStats {
+  std::string name;
+  double milliseconds = 0;
+  double tapsPerPixel = 0;  // neighbour fetches per pixel (the talk's "fetch / pixel")
+};
+
+class Denoiser {
+ public:
+  virtual ~Denoiser() = default;
+  // Layers of the sequence frame this denoiser reads; the harness checks them before running.
+  virtual std::vector<std::string> requiredChannels() const = 0;
+  virtual bool needsGradients() const { return false; }
+  // Allocates every buffer (history included) for this resolution; not timed.
+  virtual void setup(int width, int height) = 0;
+  // Clears the history (camera cut).
+  virtual void reset() = 0;
+  // Filters ctx.frameIndex's signal into `output` (already allocated: width x height x 3).
+  virtual void denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& output) = 0;
+
+  const std::vector<PassStats>& lastPasses() const { return passes_; }
+  void clearPassStats() { passes_.clear(); }
+
+ protected:
+  // Times one pass: `ScopedPass pass(this, "atrous 1", 25);` records wall time on destruction.
+  class ScopedPass {
+   public:
+    ScopedPass(Denoiser* owner, std::string name, double tapsPerPixel)
+        : owner_(owner), name_(std::move(name)), taps_(tapsPerPixel), start_(std::chrono::steady_clock::now()) {}
+    ~ScopedPass() {
+      double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_).count();
+      owner_->passes_.push_back({name_, ms, taps_});
+    }
+    void setTaps(double taps) { taps_ = taps; }
+    ScopedPass(const ScopedPass&) = delete;
+    ScopedPass& operator=(const ScopedPass&) = delete;
+
+   private:
+    Denoiser* owner_;
+    std::string name_;
+    double taps_;
+    std::chrono::steady_clock::time_point start_;
+  };
+
+  std::vector<PassStats> passes_;
+};
+
+// The registry: a name -> factory + typed parameter schema.
+struct DenoiserInfo {
+  std::string name;
+  std::string description;  // one line: what it is and its source
+  ParamSchema schema;
+  std::function<std::unique_ptr<Denoiser>(const ParamSet&, SignalKind)> create;
+};
+
+class DenoiserRegistry {
+ public:
+  static const DenoiserRegistry& instance();
+  // Throws an Error listing the registered names when `name` is unknown.
+  const DenoiserInfo& find(const std::string& name) const;
+  std::vector<std::string> names() const;  // in registration order
+  void add(DenoiserInfo info);
+
+ private:
+  std::vector<DenoiserInfo> infos_;
+};
+
+}  // namespace arena

@@ -1,0 +1,131 @@
+#include "denoisers/params.hpp"
+
+#include <cmath>
+#include <sstream>
+
+#include "core/error.hpp"
+
+namespace arena {
+
+ParamSpec ParamSpec::boolean(std::string name, bool def, std::string meaning) {
+  return {std::move(name), Type::Bool, def ? 1.0 : 0.0, 0, 1, {}, std::move(meaning)};
+}
+ParamSpec ParamSpec::integer(std::string name, int def, int min, int max, std::string meaning) {
+  return {std::move(name), Type::Int, double(def), double(min), double(max), {}, std::move(meaning)};
+}
+ParamSpec ParamSpec::real(std::string name, double def, double min, double max, std::string meaning) {
+  return {std::move(name), Type::Float, def, min, max, {}, std::move(meaning)};
+}
+ParamSpec ParamSpec::choice(std::string name, std::string def, std::vector<std::string> choices, std::string meaning) {
+  double index = 0;
+  for (size_t i = 0; i < choices.size(); ++i)
+    if (choices[i] == def) index = double(i);
+  return {std::move(name), Type::Choice, index, 0, 0, std::move(choices), std::move(meaning)};
+}
+
+static std::string formatNumber(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+std::string ParamSpec::describe() const {
+  std::string out = name + " (";
+  switch (type) {
+    case Type::Bool:
+      out += "bool, default " + std::string(defaultValue != 0 ? "true" : "false");
+      break;
+    case Type::Int:
+    case Type::Float:
+      out += std::string(type == Type::Int ? "int" : "float") + ", default " + formatNumber(defaultValue) +
+             ", range [" + formatNumber(min) + ", " + formatNumber(max) + "]";
+      break;
+    case Type::Choice: {
+      out += "one of";
+      for (auto& c : choices) out += " " + c;
+      out += ", default " + choices[size_t(defaultValue)];
+      break;
+    }
+  }
+  return out + "): " + meaning;
+}
+
+const ParamSet::Value& ParamSet::find(const std::string& name) const {
+  auto it = values_.find(name);
+  if (it == values_.end()) throw Error("parameter '" + name + "' is not in this parameter set");
+  return it->second;
+}
+bool ParamSet::getBool(const std::string& name) const { return std::get<bool>(find(name)); }
+int ParamSet::getInt(const std::string& name) const { return std::get<int>(find(name)); }
+float ParamSet::getFloat(const std::string& name) const { return float(std::get<double>(find(name))); }
+const std::string& ParamSet::getChoice(const std::string& name) const { return std::get<std::string>(find(name)); }
+
+nlohmann::json ParamSet::toJson() const {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& [k, v] : values_) std::visit([&](const auto& x) { j[k] = x; }, v);
+  return j;
+}
+
+const ParamSpec* ParamSchema::find(const std::string& name) const {
+  for (const ParamSpec& s : specs_)
+    if (s.name == name) return &s;
+  return nullptr;
+}
+
+ParamSet ParamSchema::resolve(const std::map<std::string, std::string>& overrides, const std::string& owner) const {
+  ParamSet out;
+  for (const ParamSpec& s : specs_) {
+    switch (s.type) {
+      case ParamSpec::Type::Bool: out.set(s.name, s.defaultValue != 0); break;
+      case ParamSpec::Type::Int: out.set(s.name, int(s.defaultValue)); break;
+      case ParamSpec::Type::Float: out.set(s.name, s.defaultValue); break;
+      case ParamSpec::Type::Choice: out.set(s.name, s.choices[size_t(s.defaultValue)]); break;
+    }
+  }
+  for (const auto& [name, text] : overrides) {
+    const ParamSpec* s = find(name);
+    if (!s) {
+      std::string valid;
+      for (const ParamSpec& p : specs_) valid += "\n  " + owner + "." + p.describe();
+      if (specs_.empty()) valid = " (none: it has no parameters)";
+      throw Error(owner + ": unknown parameter '" + name + "'; valid parameters:" + valid);
+    }
+    auto bad = [&](const std::string& expected) {
+      throw Error(owner + "." + name + "=" + text + ": expected " + expected + " (" + s->describe() + ")");
+    };
+    switch (s->type) {
+      case ParamSpec::Type::Bool:
+        if (text == "true" || text == "1" || text == "on") out.set(name, true);
+        else if (text == "false" || text == "0" || text == "off") out.set(name, false);
+        else bad("true or false");
+        break;
+      case ParamSpec::Type::Int:
+      case ParamSpec::Type::Float: {
+        size_t used = 0;
+        double v = 0;
+        try {
+          v = std::stod(text, &used);
+        } catch (...) {
+          used = 0;
+        }
+        if (used != text.size() || text.empty() || !std::isfinite(v)) bad("a number");
+        if (s->type == ParamSpec::Type::Int && v != std::floor(v)) bad("an integer");
+        if (v < s->min || v > s->max)
+          bad("a value in [" + formatNumber(s->min) + ", " + formatNumber(s->max) + "]");
+        if (s->type == ParamSpec::Type::Int) out.set(name, int(v));
+        else out.set(name, v);
+        break;
+      }
+      case ParamSpec::Type::Choice: {
+        bool ok = false;
+        for (auto& c : s->choices) ok = ok || c == text;
+        if (!ok) bad("one of the listed choices");
+        out.set(name, text);
+        break;
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace arena

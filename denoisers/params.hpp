@@ -1,0 +1,60 @@
+#pragma once
+// Typed parameter schemas (pbrt's ParameterDictionary, NRD's commented settings): every tunable of
+// a denoiser has a name, type, default, valid range and a one-line meaning. Unknown names and
+// out-of-range values are errors that list what is valid -- a typo in a sweep must not silently
+// benchmark the defaults. The resolved set is recorded with every result.
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace arena {
+
+struct ParamSpec {
+  enum class Type { Bool, Int, Float, Choice };
+  std::string name;     // "iterations", "edge.depth", "sigmaL"
+  Type type = Type::Float;
+  double defaultValue = 0;  // Bool: 0/1; Choice: index into choices
+  double min = 0, max = 0;  // inclusive range for Int/Float
+  std::vector<std::string> choices;
+  std::string meaning;  // one line, with the source of the default ("SVGF paper", "Falcor")
+
+  static ParamSpec boolean(std::string name, bool def, std::string meaning);
+  static ParamSpec integer(std::string name, int def, int min, int max, std::string meaning);
+  static ParamSpec real(std::string name, double def, double min, double max, std::string meaning);
+  static ParamSpec choice(std::string name, std::string def, std::vector<std::string> choices, std::string meaning);
+  std::string describe() const;  // "iterations (int, default 5, range [1, 8]): meaning"
+};
+
+class ParamSet {
+ public:
+  using Value = std::variant<bool, int, double, std::string>;
+  bool getBool(const std::string& name) const;
+  int getInt(const std::string& name) const;
+  float getFloat(const std::string& name) const;
+  const std::string& getChoice(const std::string& name) const;
+  void set(const std::string& name, Value v) { values_[name] = std::move(v); }
+  const std::map<std::string, Value>& values() const { return values_; }
+  nlohmann::json toJson() const;
+
+ private:
+  const Value& find(const std::string& name) const;
+  std::map<std::string, Value> values_;
+};
+
+class ParamSchema {
+ public:
+  ParamSchema() = default;
+  explicit ParamSchema(std::vector<ParamSpec> specs) : specs_(std::move(specs)) {}
+  const std::vector<ParamSpec>& specs() const { return specs_; }
+  const ParamSpec* find(const std::string& name) const;
+  // Defaults overridden by `overrides` (name -> text value, as from `--param svgf.sigmaL=4` or
+  // JSON). `owner` names the denoiser in error messages.
+  ParamSet resolve(const std::map<std::string, std::string>& overrides, const std::string& owner) const;
+
+ private:
+  std::vector<ParamSpec> specs_;
+};
+
+}  // namespace arena

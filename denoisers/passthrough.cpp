@@ -1,0 +1,27 @@
+// `passthrough`: the noisy 1-spp input, unfiltered -- the fast, inaccurate end of every chart.
+#include "denoisers/denoiser.hpp"
+#include "denoisers/variants.hpp"
+
+namespace arena {
+
+namespace {
+
+class Passthrough final : public Denoiser {
+ public:
+  std::vector<std::string> requiredChannels() const override { return {}; }
+  void setup(int, int) override {}
+  void reset() override {}
+  void denoise(const FrameContext&, const DenoiserInputs& in, Image& output) override {
+    ScopedPass pass(this, "copy", 0);
+    output.raw() = in.signal.raw();
+  }
+};
+
+}  // namespace
+
+DenoiserInfo passthroughInfo() {
+  return {"passthrough", "The noisy 1-spp input, unfiltered (baseline)", ParamSchema{},
+          [](const ParamSet&, SignalKind) { return std::make_unique<Passthrough>(); }};
+}
+
+}  // namespace arena
