@@ -1,0 +1,12 @@
+#pragma once
+// Each subcommand of `arena` registers itself on the CLI11 app; main.cpp only dispatches.
+#include <CLI/CLI.hpp>
+
+namespace arena::cli {
+
+void addScenesCommand(CLI::App& app);
+void addRenderCommand(CLI::App& app);
+void addBenchCommand(CLI::App& app);
+void addStudyCommand(CLI::App& app);
+
+}  // namespace arena::cli

@@ -1,0 +1,27 @@
+#include "harness/image_files.hpp"
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/atomic_file.hpp"
+#include "core/error.hpp"
+
+namespace arena {
+
+void writePng(const std::filesystem::path& path, const Image& display) {
+  const int w = display.width(), h = display.height();
+  cv::Mat mat(h, w, display.channels() == 1 ? CV_8UC1 : CV_8UC3);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      auto q = [&](int c) { return uint8_t(std::clamp(display.at(x, y, c), 0.0f, 1.0f) * 255.0f + 0.5f); };
+      if (display.channels() == 1) {
+        mat.at<uint8_t>(y, x) = q(0);
+      } else {  // OpenCV stores BGR
+        mat.at<cv::Vec3b>(y, x) = cv::Vec3b(q(2), q(1), q(0));
+      }
+    }
+  writeAtomically(path, [&](const std::filesystem::path& tmp) {
+    if (!cv::imwrite(tmp.string(), mat)) throw Error(path.string() + ": cannot write PNG");
+  });
+}
+
+}  // namespace arena

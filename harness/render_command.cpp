@@ -1,0 +1,64 @@
+// `arena scenes` and `arena render`.
+#include <iomanip>
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "core/display.hpp"
+#include "core/error.hpp"
+#include "core/sequence.hpp"
+#include "harness/image_files.hpp"
+#include "harness/commands.hpp"
+#include "harness/scene_selection.hpp"
+#include "tracer/render.hpp"
+
+namespace arena::cli {
+
+void addScenesCommand(CLI::App& app) {
+  auto* cmd = app.add_subcommand("scenes", "List the scenes with their purpose");
+  auto dir = std::make_shared<std::string>(defaultScenesDir());
+  auto json = std::make_shared<bool>(false);
+  cmd->add_option("--scenes-dir", *dir, "Directory of scene files");
+  cmd->add_flag("--json", *json, "Machine-readable output");
+  cmd->callback([dir, json] {
+    nlohmann::json out = nlohmann::json::array();
+    for (const std::string& file : listSceneFiles(*dir)) {
+      Scene s = loadScene(file);
+      out.push_back({{"name", s.name}, {"purpose", s.purpose}, {"resolution", {s.width, s.height}},
+                     {"frames", s.frames}, {"file", file}});
+    }
+    if (*json) {
+      std::cout << out.dump(2) << "\n";
+      return;
+    }
+    for (auto& s : out)
+      std::cout << std::left << std::setw(22) << s["name"].get<std::string>() << s["purpose"].get<std::string>() << "\n";
+  });
+}
+
+void addRenderCommand(CLI::App& app) {
+  auto* cmd = app.add_subcommand("render", "Render scenes into the sequence cache (resumes; re-renders stale files)");
+  auto opt = std::make_shared<RenderOptions>();
+  auto names = std::make_shared<std::string>("all");
+  auto previews = std::make_shared<bool>(false);
+  cmd->add_flag("--previews", *previews, "Also write preview PNGs (noisy frame and reference, first and last frame)");
+  cmd->add_option("scenes", *names, "Scene names or files, comma-separated, or 'all'")->default_val("all");
+  addRenderOptions(cmd, *opt);
+  cmd->callback([opt, names, previews] {
+    for (const Scene& scene : selectScenes(*names, opt->scenesDir)) {
+      auto dir = renderSequence(scene, opt->settings(), opt->cacheDir,
+                                [](const std::string& line) { std::cout << line << std::endl; });
+      std::cout << scene.name << ": " << dir.string() << std::endl;
+      if (!*previews) continue;
+      Sequence seq = Sequence::open(dir);
+      for (int t : {0, seq.info().frames - 1}) {
+        LayerSet ref = seq.reference(t);
+        DisplayTransform display = DisplayTransform::fromReference(ref.get("color"));
+        std::string n = std::to_string(t);
+        writePng(dir / ("preview_noisy_" + n + ".png"), display.apply(seq.frame(t).get("color")));
+        writePng(dir / ("preview_reference_" + n + ".png"), display.apply(ref.get("color")));
+      }
+    }
+  });
+}
+
+}  // namespace arena::cli
