@@ -1,0 +1,145 @@
+// The sequence cache: atomic writes, resume, stale-hash invalidation, corrupted-file detection,
+// readability by standard tools.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/atomic_file.hpp"
+#include "core/error.hpp"
+#include "core/sequence.hpp"
+#include "tests/test_util.hpp"
+#include "tracer/render.hpp"
+
+namespace arena {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Log {
+  std::vector<std::string> lines;
+  ProgressFn fn() {
+    return [this](const std::string& l) { lines.push_back(l); };
+  }
+  int count(const std::string& needle) const {
+    int n = 0;
+    for (auto& l : lines) n += l.find(needle) != std::string::npos;
+    return n;
+  }
+};
+
+TEST(Cache, AtomicWriteLeavesNothingWhenInterrupted) {
+  auto dir = test::freshDir("atomic");
+  auto target = dir / "file.txt";
+  EXPECT_THROW(writeAtomically(target, [](const fs::path& tmp) {
+                 std::ofstream(tmp) << "half";
+                 throw Error("interrupted");
+               }),
+               Error);
+  EXPECT_FALSE(fs::exists(target));
+  EXPECT_TRUE(fs::is_empty(dir)) << "temporary file left behind";
+  writeTextAtomically(target, "whole");
+  EXPECT_EQ(readText(target), "whole");
+}
+
+class CacheRender : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    cache = test::freshDir("cache_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    scene = test::shippedScene("light_switch");
+    settings = test::tinySettings(24, 14, 14, 4);
+  }
+  fs::path cache;
+  Scene scene;
+  RenderSettings settings;
+};
+
+TEST_F(CacheRender, WritesAReadableSequenceAndSharesReferences) {
+  Log log;
+  auto dir = renderSequence(scene, settings, cache, log.fn());
+  Sequence seq = Sequence::open(dir);
+  EXPECT_EQ(seq.info().frames, 14);
+  EXPECT_EQ(seq.info().width, 24);
+  // The light goes off at frame 12: two distinct animation states, two references.
+  EXPECT_EQ(seq.info().referenceOfFrame[0], 0);
+  EXPECT_EQ(seq.info().referenceOfFrame[11], 0);
+  EXPECT_EQ(seq.info().referenceOfFrame[12], 1);
+  EXPECT_EQ(log.count("reference"), 2);
+  EXPECT_EQ(seq.info().events.size(), 1u);  // light_on at 24 lies beyond the 14 rendered frames
+  LayerSet f = seq.frame(3);
+  for (auto& spec : channels::frameLayers()) EXPECT_TRUE(f.has(spec.name)) << spec.name;
+  LayerSet ref = seq.reference(12);
+  EXPECT_TRUE(ref.has("colorVar"));
+  EXPECT_EQ(seq.gradients(1).get("gradient").width(), 8);
+  // Standard tools: OpenCV reads the plain RGB channels of a frame.
+  setenv("OPENCV_IO_ENABLE_OPENEXR", "1", 1);
+  cv::Mat m = cv::imread(Sequence::framePath(dir, 3).string(), cv::IMREAD_UNCHANGED);
+  ASSERT_FALSE(m.empty());
+  EXPECT_EQ(m.cols, 24);
+  EXPECT_NEAR(m.at<cv::Vec3f>(7, 12)[2], f.get("color").at(12, 7, 0), 1e-6);
+  if (fs::exists("/usr/bin/exrheader")) {
+    std::string cmd = "/usr/bin/exrheader " + Sequence::framePath(dir, 3).string() + " > /dev/null";
+    EXPECT_EQ(std::system(cmd.c_str()), 0);
+  }
+}
+
+TEST_F(CacheRender, RerunReusesEverything) {
+  auto dir = renderSequence(scene, settings, cache, nullptr);
+  Log log;
+  EXPECT_EQ(renderSequence(scene, settings, cache, log.fn()), dir);
+  EXPECT_EQ(log.lines.size(), 0u) << log.lines.front();
+}
+
+TEST_F(CacheRender, TruncatedAndForeignFilesAreDetectedAndRerendered) {
+  auto dir = renderSequence(scene, settings, cache, nullptr);
+  const auto f5 = Sequence::framePath(dir, 5), f6 = Sequence::framePath(dir, 6);
+  const auto originalSize = fs::file_size(f5);
+  fs::resize_file(f5, originalSize / 2);     // an interrupted copy
+  fs::copy_file(Sequence::framePath(dir, 2), f6, fs::copy_options::overwrite_existing);  // foreign
+  std::ofstream(Sequence::referencePath(dir, 1), std::ios::trunc) << "not an exr";
+  Log log;
+  renderSequence(scene, settings, cache, log.fn());
+  EXPECT_EQ(log.count("re-rendering frame_0005.exr"), 1);
+  EXPECT_EQ(log.count("re-rendering frame_0006.exr"), 1);
+  EXPECT_EQ(log.count("re-rendering reference_001.exr"), 1);
+  EXPECT_EQ(log.count("(foreign or stale)"), 1);
+  EXPECT_EQ(fs::file_size(f5), originalSize);
+  Sequence seq = Sequence::open(dir);
+  EXPECT_NO_THROW(seq.frame(5));
+  EXPECT_NO_THROW(seq.reference(13));
+}
+
+TEST_F(CacheRender, ChangingAnySettingChangesTheHash) {
+  auto dir = sequenceDir(scene, settings, cache);
+  RenderSettings other = settings;
+  other.referenceSpp = 8;
+  EXPECT_NE(sequenceDir(scene, other, cache), dir);
+  other = settings;
+  other.maxBounces = 2;
+  EXPECT_NE(sequenceDir(scene, other, cache), dir);
+  Scene edited = scene;
+  edited.contentHash = "changed";
+  EXPECT_NE(sequenceDir(edited, settings, cache), dir);
+}
+
+TEST_F(CacheRender, ReadingAMissingOrIncompleteSequenceIsAClearError) {
+  try {
+    Sequence::open(cache / "nothing-here");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no sequence.json"), std::string::npos);
+  }
+  auto dir = renderSequence(scene, settings, cache, nullptr);
+  fs::resize_file(Sequence::framePath(dir, 4), 100);
+  try {
+    Sequence::open(dir).frame(4);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("frame_0004.exr"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace arena

@@ -1,0 +1,157 @@
+// The tracer: analytic convergence, determinism, A-SVGF seed reuse, motion vectors.
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "core/sequence.hpp"
+#include "tests/test_util.hpp"
+#include "tracer/render.hpp"
+
+namespace arena {
+namespace {
+
+// A closed room whose six inward-facing walls all emit E and reflect with Lambert albedo a (no
+// specular). With B bounces the radiance everywhere is E * (1 + a + ... + a^B) (a geometric
+// series; the infinite-bounce limit is E / (1 - a)): a furnace test with a known answer.
+std::string furnaceScene(float albedo, float emission, int bounces) {
+  char buf[2048];
+  std::snprintf(buf, sizeof buf, R"({
+    "purpose": "furnace", "resolution": [24, 16], "frames": 1, "max_bounces": %d,
+    "camera": {"keys": [{"frame": 0, "eye": [0.1, 1.0, 0.4], "target": [0, 0.8, -1], "fov": 80}]},
+    "materials": {"w": {"albedo": [%g, %g, %g], "specular": 0, "emission": [%g, %g, %g]}},
+    "objects": [
+      {"name": "floor", "shape": "quad", "material": "w", "keys": [{"frame": 0, "scale": [2, 1, 2]}]},
+      {"name": "ceiling", "shape": "quad", "material": "w", "keys": [{"frame": 0, "translate": [0, 2, 0], "rotate": [180, 0, 0], "scale": [2, 1, 2]}]},
+      {"name": "back", "shape": "quad", "material": "w", "keys": [{"frame": 0, "translate": [0, 1, -1], "rotate": [90, 0, 0], "scale": [2, 1, 2]}]},
+      {"name": "front", "shape": "quad", "material": "w", "keys": [{"frame": 0, "translate": [0, 1, 1], "rotate": [-90, 0, 0], "scale": [2, 1, 2]}]},
+      {"name": "left", "shape": "quad", "material": "w", "keys": [{"frame": 0, "translate": [-1, 1, 0], "rotate": [0, 0, -90], "scale": [2, 1, 2]}]},
+      {"name": "right", "shape": "quad", "material": "w", "keys": [{"frame": 0, "translate": [1, 1, 0], "rotate": [0, 0, 90], "scale": [2, 1, 2]}]}
+    ]})",
+                bounces, albedo, albedo, albedo, emission, emission, emission);
+  auto dir = test::freshDir("furnace");
+  auto path = dir / "furnace.json";
+  std::ofstream(path) << buf;
+  return path.string();
+}
+
+double meanOf(const Image& img, int c) {
+  double s = 0;
+  for (size_t i = 0; i < img.pixelCount(); ++i) s += img.plane(c)[i];
+  return s / double(img.pixelCount());
+}
+
+TEST(Tracer, FurnaceConvergesToTheGeometricSeries) {
+  const float a = 0.5f, e = 0.5f;
+  double previous = 0;
+  for (int bounces : {1, 3, 6}) {
+    Scene scene = loadScene(furnaceScene(a, e, bounces));
+    SequenceRenderer r(scene, test::tinySettings(24, 16, 1, 256));
+    int spp = 0;
+    RayCounts counts;
+    LayerSet ref = r.renderReference(0, spp, counts);
+    const double expected = e * (1.0 - std::pow(a, bounces + 1)) / (1.0 - a);
+    const double got = meanOf(ref.get("color"), 1);
+    // 24*16 px * 256 spp: the mean's standard error is well below 1%; tolerance 2%.
+    EXPECT_NEAR(got, expected, 0.02 * expected) << bounces << " bounces";
+    // Energy never grows past the infinite-bounce limit, and more bounces add energy.
+    EXPECT_LT(got, e / (1.0 - a) * 1.02);
+    EXPECT_GT(got, previous);
+    previous = got;
+  }
+}
+
+TEST(Tracer, FramesAreBitIdenticalAtAnyThreadCount) {
+  Scene scene = test::shippedScene("moving_object");
+  auto render = [&](int threads) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
+    SequenceRenderer r(scene, test::tinySettings(40, 24, 12, 4));
+    return r.renderFrame(10);
+  };
+  auto one = render(1), two = render(2);
+  for (const auto& [name, img] : one.frame.all())
+    EXPECT_EQ(img.raw(), two.frame.get(name).raw()) << "layer " << name;
+  EXPECT_EQ(one.gradients.get("gradient").raw(), two.gradients.get("gradient").raw());
+}
+
+TEST(Tracer, GradientSamplesReproduceTheStaticPastExactly) {
+  Scene scene = test::shippedScene("cornell_static");
+  SequenceRenderer r(scene, test::tinySettings(48, 27, 3, 4));
+  auto f = r.renderFrame(2);
+  const Image& g = f.gradients.get("gradient");
+  EXPECT_EQ(g.width(), 16);
+  EXPECT_EQ(g.height(), 9);
+  int valid = 0;
+  for (int y = 0; y < g.height(); ++y)
+    for (int x = 0; x < g.width(); ++x) {
+      if (g.at(x, y, 4) == 0) continue;
+      ++valid;
+      EXPECT_EQ(g.at(x, y, 2), g.at(x, y, 3)) << "stratum " << x << "," << y;  // exactly, not nearly
+      // The sample lands in the stratum it is stored in.
+      EXPECT_EQ(int(g.at(x, y, 0)) / 3, x);
+      EXPECT_EQ(int(g.at(x, y, 1)) / 3, y);
+    }
+  EXPECT_GT(valid, g.width() * g.height() / 2);
+}
+
+TEST(Tracer, GradientSamplesSeeTheLightSwitchOff) {
+  Scene scene = test::shippedScene("light_switch");
+  SequenceRenderer r(scene, test::tinySettings(48, 27, 36, 4));
+  const Image& g = r.renderFrame(12).gradients.get("gradient");  // the ceiling light goes off at 12
+  int valid = 0, darker = 0;
+  for (int y = 0; y < g.height(); ++y)
+    for (int x = 0; x < g.width(); ++x) {
+      if (g.at(x, y, 4) == 0) continue;
+      ++valid;
+      if (g.at(x, y, 2) < g.at(x, y, 3)) ++darker;
+    }
+  ASSERT_GT(valid, 10);
+  // Nearly every surface lost light; a few samples were black in both frames.
+  EXPECT_GT(double(darker) / valid, 0.8) << darker << "/" << valid;
+}
+
+// Nearest-pixel lookup of a previous-frame layer at the motion-compensated position.
+glm::vec3 previousAt(const Image& img, glm::vec2 p) {
+  int x = std::clamp(int(std::floor(p.x)), 0, img.width() - 1), y = std::clamp(int(std::floor(p.y)), 0, img.height() - 1);
+  return {img.at(x, y, 0), img.at(x, y, 1), img.at(x, y, 2)};
+}
+
+// Warping frame t-1's position buffer with `motion` lands on the same surface point, moved by the
+// object's own motion between the frames; checked for camera motion and for object motion.
+void checkMotion(const std::string& sceneName, int t, int movingMesh) {
+  Scene scene = test::shippedScene(sceneName);
+  const int w = 64, h = 36;
+  SequenceRenderer r(scene, test::tinySettings(w, h, scene.frames, 4));
+  auto prev = r.renderFrame(t - 1).frame;
+  auto cur = r.renderFrame(t).frame;
+  SceneState sPrev = evaluateState(scene, t - 1, w, h), sCur = evaluateState(scene, t, w, h);
+  const Image &pos = cur.get("position"), &mot = cur.get("motion"), &id = cur.get("meshId"), &depth = cur.get("depth");
+  int checked = 0, good = 0, movingChecked = 0;
+  for (int y = 1; y < h - 1; ++y)
+    for (int x = 1; x < w - 1; ++x) {
+      int mesh = int(id.at(x, y));
+      if (mesh < 0) continue;
+      glm::vec2 p(x + 0.5f + mot.at(x, y, 0), y + 0.5f + mot.at(x, y, 1));
+      if (p.x < 1 || p.y < 1 || p.x >= w - 1 || p.y >= h - 1) continue;
+      if (int(prev.get("meshId").at(int(p.x), int(p.y))) != mesh) continue;  // disoccluded
+      glm::vec3 now(pos.at(x, y, 0), pos.at(x, y, 1), pos.at(x, y, 2));
+      glm::vec3 expected = glm::vec3(sPrev.toWorld[size_t(mesh)] * glm::inverse(sCur.toWorld[size_t(mesh)]) * glm::vec4(now, 1));
+      // One pixel's footprint at this depth: the nearest-pixel lookup is at most ~0.7 px off.
+      float footprint = depth.at(x, y) * 2.0f * sCur.camera.tanHalfFovY / float(h);
+      ++checked;
+      if (mesh == movingMesh) ++movingChecked;
+      if (glm::length(previousAt(prev.get("position"), p) - expected) < 1.5f * footprint) ++good;
+    }
+  ASSERT_GT(checked, w * h / 3);
+  if (movingMesh >= 0) {
+    EXPECT_GT(movingChecked, 20);
+  }
+  EXPECT_GT(double(good) / checked, 0.97) << good << "/" << checked;
+}
+
+TEST(Tracer, MotionVectorsFollowTheCamera) { checkMotion("camera_pan_occluder", 12, -1); }
+TEST(Tracer, MotionVectorsFollowMovingObjects) { checkMotion("moving_object", 14, 2); }
+
+}  // namespace
+}  // namespace arena
