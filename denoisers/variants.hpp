@@ -1,0 +1,16 @@
+#pragma once
+// The registered variants, in the order charts list them. Each variant's .cpp defines its
+// `xxxInfo()`; adding a denoiser means adding one line here and one in builtinDenoisers().
+#include <vector>
+
+#include "denoisers/denoiser.hpp"
+
+namespace arena {
+
+DenoiserInfo passthroughInfo();
+
+inline std::vector<DenoiserInfo> builtinDenoisers() {
+  return {passthroughInfo()};
+}
+
+}  // namespace arena
