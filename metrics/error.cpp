@@ -1,0 +1,173 @@
+#include "metrics/error.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <vector>
+
+#include "core/error.hpp"
+
+namespace arena {
+
+namespace {
+
+void requireSameShape(const Image& a, const Image& b, const char* what) {
+  if (a.width() != b.width() || a.height() != b.height() || a.channels() != b.channels())
+    throw Error(std::string(what) + ": images differ in size or channels (" + std::to_string(a.width()) + "x" +
+                std::to_string(a.height()) + "x" + std::to_string(a.channels()) + " vs " + std::to_string(b.width()) +
+                "x" + std::to_string(b.height()) + "x" + std::to_string(b.channels()) + ")");
+  if (a.empty()) throw Error(std::string(what) + ": empty image");
+}
+
+// Sums a per-row quantity in a fixed order so results do not depend on thread scheduling.
+template <class RowFn>
+double deterministicSum(int height, const RowFn& row) {
+  std::vector<double> rows(size_t(height), 0.0);
+  tbb::parallel_for(0, height, [&](int y) { rows[size_t(y)] = row(y); });
+  double s = 0;
+  for (double r : rows) s += r;
+  return s;
+}
+
+}  // namespace
+
+Image luminanceOf(const Image& rgb) { return luminance(rgb); }
+
+ErrorStats linearError(const Image& d, const Image& r, const Image* var, const Image* mask, double eps) {
+  requireSameShape(d, r, "relMSE");
+  if (var) requireSameShape(*var, r, "relMSE reference variance");
+  const int w = d.width(), c = d.channels();
+  std::vector<double> counts(size_t(d.height()), 0.0);
+  double sq = 0, rel = 0, relCorr = 0;
+  std::vector<double> rowSq(size_t(d.height())), rowRel(size_t(d.height())), rowCorr(size_t(d.height()));
+  tbb::parallel_for(0, d.height(), [&](int y) {
+    double s = 0, rl = 0, rc = 0, n = 0;
+    for (int x = 0; x < w; ++x) {
+      if (mask && mask->at(x, y) == 0) continue;
+      n += c;
+      for (int ch = 0; ch < c; ++ch) {
+        double diff = double(d.at(x, y, ch)) - double(r.at(x, y, ch));
+        double rr = double(r.at(x, y, ch));
+        double denom = rr * rr + eps;
+        s += diff * diff;
+        rl += diff * diff / denom;
+        rc += (diff * diff - (var ? double(var->at(x, y, ch)) : 0.0)) / denom;
+      }
+    }
+    rowSq[size_t(y)] = s;
+    rowRel[size_t(y)] = rl;
+    rowCorr[size_t(y)] = rc;
+    counts[size_t(y)] = n;
+  });
+  double n = 0;
+  for (int y = 0; y < d.height(); ++y) {
+    sq += rowSq[size_t(y)];
+    rel += rowRel[size_t(y)];
+    relCorr += rowCorr[size_t(y)];
+    n += counts[size_t(y)];
+  }
+  ErrorStats out;
+  if (n == 0) return out;
+  out.mse = sq / n;
+  out.rmse = std::sqrt(out.mse);
+  out.relMse = rel / n;
+  out.relMseCorrected = relCorr / n;
+  return out;
+}
+
+double referenceRelMse(const Image& r, const Image& var, const Image* mask, double eps) {
+  requireSameShape(r, var, "reference relMSE");
+  const int w = r.width(), c = r.channels();
+  std::vector<double> counts(size_t(r.height()), 0.0);
+  double total = deterministicSum(r.height(), [&](int y) {
+    double s = 0, n = 0;
+    for (int x = 0; x < w; ++x) {
+      if (mask && mask->at(x, y) == 0) continue;
+      n += c;
+      for (int ch = 0; ch < c; ++ch) {
+        double rr = r.at(x, y, ch);
+        s += double(var.at(x, y, ch)) / (rr * rr + eps);
+      }
+    }
+    counts[size_t(y)] = n;
+    return s;
+  });
+  double n = 0;
+  for (double k : counts) n += k;
+  return n > 0 ? total / n : 0.0;
+}
+
+double meanSquaredError(const Image& a, const Image& b) {
+  requireSameShape(a, b, "MSE");
+  const int w = a.width(), c = a.channels();
+  double total = deterministicSum(a.height(), [&](int y) {
+    double s = 0;
+    for (int ch = 0; ch < c; ++ch)
+      for (int x = 0; x < w; ++x) {
+        double diff = double(a.at(x, y, ch)) - double(b.at(x, y, ch));
+        s += diff * diff;
+      }
+    return s;
+  });
+  return total / double(a.pixelCount() * size_t(c));
+}
+
+double psnrFromMse(double mse) {
+  if (mse <= 0) return kPsnrCapDb;
+  return std::min(kPsnrCapDb, 10.0 * std::log10(1.0 / mse));
+}
+
+double ssim(const Image& a, const Image& b) {
+  requireSameShape(a, b, "SSIM");
+  const Image la = a.channels() >= 3 ? luminance(a) : a;
+  const Image lb = b.channels() >= 3 ? luminance(b) : b;
+  const int w = la.width(), h = la.height();
+  constexpr int kRadius = 5;  // 11x11 window
+  constexpr double kSigma = 1.5, C1 = 0.01 * 0.01, C2 = 0.03 * 0.03;
+  double kernel[2 * kRadius + 1], ksum = 0;
+  for (int i = -kRadius; i <= kRadius; ++i) ksum += kernel[i + kRadius] = std::exp(-i * i / (2 * kSigma * kSigma));
+  for (double& k : kernel) k /= ksum;
+  // Separable Gaussian of x, y, x^2, y^2, xy; horizontal pass then vertical, clamped borders.
+  auto blur = [&](const std::vector<double>& src) {
+    std::vector<double> tmp(src.size()), out(src.size());
+    tbb::parallel_for(0, h, [&](int y) {
+      for (int x = 0; x < w; ++x) {
+        double s = 0;
+        for (int i = -kRadius; i <= kRadius; ++i) s += kernel[i + kRadius] * src[size_t(y) * w + std::clamp(x + i, 0, w - 1)];
+        tmp[size_t(y) * w + x] = s;
+      }
+    });
+    tbb::parallel_for(0, h, [&](int y) {
+      for (int x = 0; x < w; ++x) {
+        double s = 0;
+        for (int i = -kRadius; i <= kRadius; ++i) s += kernel[i + kRadius] * tmp[size_t(std::clamp(y + i, 0, h - 1)) * w + x];
+        out[size_t(y) * w + x] = s;
+      }
+    });
+    return out;
+  };
+  const size_t n = la.pixelCount();
+  std::vector<double> x(n), y(n), xx(n), yy(n), xy(n);
+  for (size_t i = 0; i < n; ++i) {
+    x[i] = la.plane(0)[i];
+    y[i] = lb.plane(0)[i];
+    xx[i] = x[i] * x[i];
+    yy[i] = y[i] * y[i];
+    xy[i] = x[i] * y[i];
+  }
+  auto mx = blur(x), my = blur(y), sxx = blur(xx), syy = blur(yy), sxy = blur(xy);
+  // Window centres whose 11x11 window lies inside the image (Wang's "valid" region); tiny images
+  // fall back to every pixel.
+  const bool valid = w > 2 * kRadius && h > 2 * kRadius;
+  const int x0 = valid ? kRadius : 0, y0 = valid ? kRadius : 0, x1 = valid ? w - kRadius : w, y1 = valid ? h - kRadius : h;
+  double total = 0;
+  for (int py = y0; py < y1; ++py)
+    for (int px = x0; px < x1; ++px) {
+      size_t i = size_t(py) * w + px;
+      double vx = sxx[i] - mx[i] * mx[i], vy = syy[i] - my[i] * my[i], cxy = sxy[i] - mx[i] * my[i];
+      total += ((2 * mx[i] * my[i] + C1) * (2 * cxy + C2)) / ((mx[i] * mx[i] + my[i] * my[i] + C1) * (vx + vy + C2));
+    }
+  return total / double((x1 - x0) * (y1 - y0));
+}
+
+}  // namespace arena

@@ -1,0 +1,31 @@
+#pragma once
+// FLIP image difference evaluator (NVIDIA), implemented from the published definitions:
+//   [1] Andersson, Nilsson, Akenine-Möller, Oskarsson, Åström, Fairchild,
+//       "FLIP: A Difference Evaluator for Alternating Images", HPG 2020 (LDR-FLIP).
+//   [2] Andersson, Nilsson, Shirley, Akenine-Möller,
+//       "Visualizing Errors in Rendered High Dynamic Range Images", Eurographics 2021 short
+//       paper (HDR-FLIP).
+// FLIP approximates the difference a viewer perceives when flipping between the two images at a
+// given viewing distance (pixels per degree of visual angle); 67 ppd corresponds to a 0.7 m wide
+// 4K monitor seen from 0.7 m, the papers' default.
+#include "core/image.hpp"
+
+namespace arena {
+
+struct FlipResult {
+  double mean = 0;  // mean of the per-pixel FLIP map, in [0, 1]
+  Image map;        // width x height x 1, per-pixel FLIP value in [0, 1]
+};
+
+// LDR-FLIP: inputs are display-referred sRGB-encoded RGB images in [0,1] (exactly 3 planar
+// channels). Values outside [0,1] are clamped (a display cannot show them); NaN counts as 0.
+// Throws arena::Error when either image is empty, the shapes differ, an image does not have 3
+// channels, or pixelsPerDegree is not a positive finite number.
+FlipResult ldrFlip(const Image& reference, const Image& test, double pixelsPerDegree = 67.0);
+
+// HDR-FLIP: inputs are linear (scene-referred) HDR RGB, 3 planar channels. The exposure range is
+// derived from the reference, each exposure is tonemapped with the ACES fit used by FLIP, and the
+// result is the per-pixel maximum of LDR-FLIP over the exposures. Same errors as ldrFlip.
+FlipResult hdrFlip(const Image& reference, const Image& test, double pixelsPerDegree = 67.0);
+
+}  // namespace arena

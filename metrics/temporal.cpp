@@ -1,0 +1,96 @@
+#include "metrics/temporal.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <vector>
+
+#include "core/error.hpp"
+#include "metrics/error.hpp"
+
+namespace arena {
+
+namespace {
+void requireShapes(std::initializer_list<const Image*> images, const char* what) {
+  const Image* first = *images.begin();
+  for (const Image* i : images)
+    if (!i->sameShape(*first) || i->empty()) throw Error(std::string(what) + ": images differ in size or are empty");
+}
+}  // namespace
+
+double temporalRelativeMae(const Image& d, const Image& dPrev, const Image& r, const Image& rPrev, double eps) {
+  requireShapes({&d, &dPrev, &r, &rPrev}, "tRMAE");
+  const int w = d.width(), c = d.channels();
+  std::vector<double> rows(size_t(d.height()));
+  tbb::parallel_for(0, d.height(), [&](int y) {
+    double s = 0;
+    for (int ch = 0; ch < c; ++ch)
+      for (int x = 0; x < w; ++x) {
+        double dd = double(d.at(x, y, ch)) - dPrev.at(x, y, ch);
+        double dr = double(r.at(x, y, ch)) - rPrev.at(x, y, ch);
+        s += std::abs(dd - dr) / (std::abs(dr) + eps);
+      }
+    rows[size_t(y)] = s;
+  });
+  double total = 0;
+  for (double v : rows) total += v;
+  return total / double(d.pixelCount() * size_t(c));
+}
+
+double temporalPsnr(const Image& d, const Image& dPrev, const Image& r, const Image& rPrev) {
+  requireShapes({&d, &dPrev, &r, &rPrev}, "tPSNR");
+  Image dd(d.width(), d.height(), d.channels()), dr(d.width(), d.height(), d.channels());
+  for (size_t i = 0; i < d.raw().size(); ++i) {
+    dd.raw()[i] = d.raw()[i] - dPrev.raw()[i];
+    dr.raw()[i] = r.raw()[i] - rPrev.raw()[i];
+  }
+  return psnrFromMse(meanSquaredError(dd, dr));
+}
+
+WarpedFlicker warpedFlicker(const Image& e, const Image& ePrev, const LayerSet& g, const LayerSet& gPrev,
+                            const ConsistencyThresholds& thresholds) {
+  requireShapes({&e, &ePrev}, "warped flicker");
+  const Image &depth = g.get("depth", "warped flicker"), &normal = g.get("normal", "warped flicker"),
+              &meshId = g.get("meshId", "warped flicker"), &motion = g.get("motion", "warped flicker");
+  const Image &pDepth = gPrev.get("depth", "warped flicker"), &pNormal = gPrev.get("normal", "warped flicker"),
+              &pMesh = gPrev.get("meshId", "warped flicker");
+  const int w = e.width(), h = e.height(), c = e.channels();
+  std::vector<double> rowSum(static_cast<size_t>(h)), rowCount(static_cast<size_t>(h));
+  tbb::parallel_for(0, h, [&](int y) {
+    double s = 0, n = 0;
+    for (int x = 0; x < w; ++x) {
+      if (meshId.at(x, y) < 0) continue;
+      // Previous-frame continuous position, relative to pixel centres.
+      float px = float(x) + motion.at(x, y, 0), py = float(y) + motion.at(x, y, 1);
+      int x0 = int(std::floor(px)), y0 = int(std::floor(py));
+      float fx = px - float(x0), fy = py - float(y0);
+      if (x0 < 0 || y0 < 0 || x0 + 1 >= w || y0 + 1 >= h) continue;
+      SurfaceSample cur = surfaceAt(depth, normal, meshId, x, y);
+      SurfaceDerivatives der = surfaceDerivatives(depth, normal, meshId, x, y);
+      bool ok = true;
+      for (int k = 0; k < 4 && ok; ++k)
+        ok = consistent(cur, der, surfaceAt(pDepth, pNormal, pMesh, x0 + (k & 1), y0 + (k >> 1)), thresholds);
+      if (!ok) continue;
+      n += 1;
+      for (int ch = 0; ch < c; ++ch) {
+        double warped = (1 - fx) * (1 - fy) * ePrev.at(x0, y0, ch) + fx * (1 - fy) * ePrev.at(x0 + 1, y0, ch) +
+                        (1 - fx) * fy * ePrev.at(x0, y0 + 1, ch) + fx * fy * ePrev.at(x0 + 1, y0 + 1, ch);
+        double diff = double(e.at(x, y, ch)) - warped;
+        s += diff * diff / c;
+      }
+    }
+    rowSum[size_t(y)] = s;
+    rowCount[size_t(y)] = n;
+  });
+  double s = 0, n = 0;
+  for (int y = 0; y < h; ++y) {
+    s += rowSum[size_t(y)];
+    n += rowCount[size_t(y)];
+  }
+  WarpedFlicker out;
+  out.validFraction = n / double(size_t(w) * size_t(h));
+  out.value = n > 0 ? std::sqrt(s / n) : 0.0;
+  return out;
+}
+
+}  // namespace arena
