@@ -77,7 +77,8 @@ Lobes evaluate(const SurfaceHit& s, glm::vec3 n, glm::vec3 wo, glm::vec3 wi, flo
     float dd = NoH * NoH * (a2 - 1.0f) + 1.0f;
     float D = a2 / (kPi * dd * dd);
     auto G1 = [&](float x) { return 2.0f * x / (x + std::sqrt(a2 + (1.0f - a2) * x * x)); };
-    glm::vec3 F = f0 + (1.0f - f0) * std::pow(1.0f - VoH, 5.0f);
+    const float m = 1.0f - VoH, m2 = m * m;
+    glm::vec3 F = f0 + (1.0f - f0) * (m2 * m2 * m);  // Schlick
     out.specular = D * G1(NoV) * G1(NoL) * F / (4.0f * NoL * NoV);
     pdfSpecular = D * NoH / (4.0f * VoH);
   }
@@ -135,6 +136,10 @@ FrameScene::FrameScene(const EmbreeDevice& device, const Scene& scene, const std
     for (size_t i = 0; i < g.local->positions.size(); ++i) {
       g.positions.push_back(glm::vec3(m * glm::vec4(g.local->positions[i], 1.0f)));
       g.normals.push_back(glm::normalize(normalMatrix * g.local->normals[i]));
+    }
+    for (const glm::uvec3& tri : g.local->triangles) {
+      glm::vec3 n = glm::cross(g.positions[tri.y] - g.positions[tri.x], g.positions[tri.z] - g.positions[tri.x]);
+      g.faceNormals.push_back(glm::length(n) > 0 ? glm::normalize(n) : glm::vec3(0, 1, 0));
     }
     if (id < scene.objects.size()) {
       g.materialId = scene.objects[id].material;
@@ -226,8 +231,7 @@ SurfaceHit FrameScene::surface(int meshId, int primId, float u, float v) const {
   const glm::uvec3 tri = g.local->triangles[size_t(primId)];
   const float w = 1.0f - u - v;
   s.position = w * g.positions[tri.x] + u * g.positions[tri.y] + v * g.positions[tri.z];
-  glm::vec3 ng = glm::cross(g.positions[tri.y] - g.positions[tri.x], g.positions[tri.z] - g.positions[tri.x]);
-  s.geometricNormal = glm::normalize(ng);
+  s.geometricNormal = g.faceNormals[size_t(primId)];
   glm::vec3 ns = w * g.normals[tri.x] + u * g.normals[tri.y] + v * g.normals[tri.z];
   s.shadingNormal = glm::length(ns) > 0 ? glm::normalize(ns) : s.geometricNormal;
   if (g.lightIndex >= 0) {

@@ -83,6 +83,7 @@ class FrameScene {
  private:
   struct Geometry {
     std::vector<glm::vec3> positions, normals;
+    std::vector<glm::vec3> faceNormals;  // per triangle, world space
     const MeshData* local = nullptr;
     int materialId = -1, lightIndex = -1;
     glm::vec3 lightRadiance{0};
