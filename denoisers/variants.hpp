@@ -8,9 +8,12 @@
 namespace arena {
 
 DenoiserInfo passthroughInfo();
+DenoiserInfo temporalInfo();
+DenoiserInfo eawInfo();
+DenoiserInfo svgfInfo();
 
 inline std::vector<DenoiserInfo> builtinDenoisers() {
-  return {passthroughInfo()};
+  return {passthroughInfo(), temporalInfo(), eawInfo(), svgfInfo()};
 }
 
 }  // namespace arena

@@ -8,5 +8,6 @@ void addScenesCommand(CLI::App& app);
 void addRenderCommand(CLI::App& app);
 void addBenchCommand(CLI::App& app);
 void addStudyCommand(CLI::App& app);
+void addRunCommands(CLI::App& app);
 
 }  // namespace arena::cli

@@ -11,9 +11,12 @@ int main(int argc, char** argv) {
   arena::cli::addScenesCommand(app);
   arena::cli::addRenderCommand(app);
   arena::cli::addStudyCommand(app);
+  arena::cli::addRunCommands(app);
   arena::cli::addBenchCommand(app);
   try {
     app.parse(argc, argv);
+  } catch (const CLI::RuntimeError& e) {
+    return e.get_exit_code();
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   } catch (const arena::Error& e) {

@@ -1,0 +1,68 @@
+#pragma once
+// The noise-free G-buffer a filter guides itself with: read-only views of the frame's planes, the
+// copy of the previous frame's depth/normal/meshId that SVGF keeps in its history (SVGF §4: "our
+// history buffer holds ... the depth, normals and mesh ids of the previous frame"), and the
+// screen-space derivatives that reprojection (fwidth) and the depth edge-stopping term need.
+#include <array>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "core/exr_io.hpp"
+#include "core/image.hpp"
+
+namespace arena {
+
+// Planes of one frame's G-buffer, or nullptr where a layer was not requested and is absent.
+// Layer names and meanings are those of core/sequence.hpp.
+struct GBufferView {
+  int width = 0, height = 0;
+  const float* depth = nullptr;            // linear view depth; 0 for sky
+  std::array<const float*, 3> normal{};    // world shading normal, facing the viewer
+  const float* meshId = nullptr;           // object index; -1 for sky
+  std::array<const float*, 2> motion{};    // previous-frame position minus pixel centre, pixels
+  std::array<const float*, 3> position{};  // world position
+
+  // Views `frame`'s layers. Every layer in `required` must be present with the expected channel
+  // count (an Error names `owner` and the layer); the others are viewed when present.
+  static GBufferView fromFrame(const LayerSet& frame, const std::vector<std::string>& required,
+                               const std::string& owner);
+
+  size_t pixelCount() const { return size_t(width) * size_t(height); }
+  // Sky pixels carry no surface: filters never gather from them nor reproject them.
+  bool isSky(size_t i) const { return meshId != nullptr && meshId[i] < 0.0f; }
+  float normalDot(size_t p, size_t q) const {
+    return normal[0][p] * normal[0][q] + normal[1][p] * normal[1][q] + normal[2][p] * normal[2][q];
+  }
+};
+
+// The previous frame's depth, normal and meshId, copied without allocation after setup().
+class GBufferHistory {
+ public:
+  void setup(int width, int height);
+  void store(const GBufferView& current);
+  GBufferView view() const;
+
+ private:
+  Image depth_, normal_, meshId_;
+};
+
+// Channels of the image computeGeometryDerivatives() fills.
+enum GeometryDerivative : int {
+  kDepthDx = 0,       // dz/dx, signed, view depth per pixel
+  kDepthDy = 1,       // dz/dy
+  kNormalFwidth = 2,  // length(|dn/dx| + |dn/dy|), Falcor's fwidth of the normal
+  kGeometryDerivativeChannels = 3,
+};
+
+// Screen-space derivatives of depth and normal (the CPU counterpart of ddx/ddy). Each direction
+// takes the one-sided difference to a neighbour on the same mesh, the smaller of the two when both
+// exist, so a silhouette never lends its depth jump to the surface beside it (hardware ddx would
+// across a 2x2 quad). Needs depth, normal and meshId; sky pixels get 0.
+void computeGeometryDerivatives(const GBufferView& gbuffer, Image& derivatives);
+
+inline float depthFwidth(const Image& derivatives, size_t i) {
+  return std::abs(derivatives.plane(kDepthDx)[i]) + std::abs(derivatives.plane(kDepthDy)[i]);
+}
+
+}  // namespace arena

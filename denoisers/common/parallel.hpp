@@ -1,0 +1,36 @@
+#pragma once
+// Pixel loops run row-parallel with oneTBB, the CPU stand-in for a compute dispatch. Rows are the
+// unit of work so each body walks contiguous memory in every plane.
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <cstdint>
+#include <numeric>
+#include <vector>
+
+namespace arena {
+
+// Calls rowBody(y) for every row 0..height-1, rows spread over the TBB workers.
+template <class RowBody>
+void parallelRows(int height, RowBody&& rowBody) {
+  tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
+    for (int y = rows.begin(); y < rows.end(); ++y) rowBody(y);
+  });
+}
+
+// Neighbour fetches counted per row (no atomics, no per-frame allocation), so a pass whose
+// footprint varies per pixel (3x3 fallback, spatial variance) can report its average fetch count.
+class RowTapCounter {
+ public:
+  void setup(int height) { rows_.assign(size_t(height), 0); }
+  void set(int y, int64_t taps) { rows_[size_t(y)] = taps; }
+  double perPixel(size_t pixelCount) const {
+    if (pixelCount == 0) return 0.0;
+    return double(std::accumulate(rows_.begin(), rows_.end(), int64_t(0))) / double(pixelCount);
+  }
+
+ private:
+  std::vector<int64_t> rows_;
+};
+
+}  // namespace arena

@@ -1,0 +1,86 @@
+#pragma once
+// Motion-vector reprojection with per-tap consistency tests (SVGF §4.1, Falcor's SVGFReproject):
+// decided once per frame into a compact per-pixel record, then applied to every history image
+// (colour, moments, history length) so they all share one decision.
+#include <cstdint>
+#include <vector>
+
+#include "core/camera.hpp"
+#include "core/image.hpp"
+#include "denoisers/common/gbuffer.hpp"
+#include "denoisers/common/parallel.hpp"
+#include "denoisers/params.hpp"
+
+namespace arena {
+
+struct ReprojectionSettings {
+  // [0; inf) Falcor: a tap is rejected when |z_prev - z| / (fwidth(z) + 1e-2) > 10.
+  float depthThreshold = 10.0f;
+  // [0; inf) Falcor: a tap is rejected when distance(n, n_prev) / (fwidth(n) + 1e-2) > 16.
+  float normalThreshold = 16.0f;
+  // (0; 1] Falcor: the surviving bilinear weight must sum to at least 0.01.
+  float minWeightSum = 0.01f;
+  // SVGF §4.1: "if no tap is consistent, try a larger 3x3 filter to find thin geometry".
+  bool fallback3x3 = true;
+};
+
+// The thresholds as parameters ("depthThreshold", "normalThreshold"), shared by every variant
+// that reprojects, and their resolved values.
+std::vector<ParamSpec> reprojectionParamSpecs();
+ReprojectionSettings reprojectionSettings(const ParamSet& params);
+
+enum class ReprojectionFootprint : uint8_t {
+  Disoccluded = 0,  // no consistent tap: the history is discarded
+  Bilinear2x2 = 1,  // taps (x0 + k % 2, y0 + k / 2), k = 0..3, bilinear weights renormalised
+  Box3x3 = 2,       // taps (x0 + k % 3, y0 + k / 3), k = 0..8, consistent taps averaged
+};
+
+// Where one pixel's history comes from in the previous frame (28 bytes).
+struct ReprojectionRecord {
+  int32_t x0 = 0, y0 = 0;  // top-left tap of the footprint, previous-frame pixels
+  uint16_t mask = 0;       // bit k: tap k passed every test and is read
+  ReprojectionFootprint footprint = ReprojectionFootprint::Disoccluded;
+  float weights[4] = {0, 0, 0, 0};  // 2x2: normalised weight of tap k; 3x3: weights[0] = 1/count
+};
+
+class Reprojection {
+ public:
+  void setup(int width, int height);
+
+  // Decides every pixel's history taps. `current`: depth, normal, meshId, motion (position
+  // optional); `derivatives` from computeGeometryDerivatives(current); `previous`: the previous
+  // frame's depth, normal, meshId. When both cameras and the position layer are given, the
+  // depth test compares with the depth this surface point had in the previous view,
+  //   z + previousCamera.viewDepth(x) - camera.viewDepth(x),
+  // the quantity Falcor tests (its G-buffer stores the previous clip-space depth); without them
+  // it compares with the current depth, which a camera moving along its axis breaks.
+  void compute(const GBufferView& current, const Image& derivatives, const GBufferView& previous,
+               const ReprojectionSettings& settings, const CameraState* camera = nullptr,
+               const CameraState* previousCamera = nullptr);
+  // First frame or camera cut: every pixel is a disocclusion.
+  void invalidateAll();
+
+  bool valid(size_t i) const { return records_[i].footprint != ReprojectionFootprint::Disoccluded; }
+  const ReprojectionRecord& record(size_t i) const { return records_[i]; }
+
+  // The history value of pixel i from one plane of a previous-frame image; 0 when disoccluded.
+  float sample(size_t i, const float* historyPlane) const;
+  // Every channel of `history` resampled into `out` (same shape); `fillDisoccluded` elsewhere.
+  void resample(const Image& history, Image& out, float fillDisoccluded = 0.0f) const;
+
+  // Previous-frame taps tested per pixel in the last compute() (4, plus 9 where the 3x3 ran).
+  double testedTapsPerPixel() const { return testedTaps_.perPixel(records_.size()); }
+  // Taps one resample reads per pixel, averaged over the image.
+  double readTapsPerPixel() const { return readTaps_.perPixel(records_.size()); }
+  double validFraction() const;
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+
+ private:
+  int width_ = 0, height_ = 0;
+  std::vector<ReprojectionRecord> records_;
+  RowTapCounter testedTaps_, readTaps_;
+};
+
+}  // namespace arena

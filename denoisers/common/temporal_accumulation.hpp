@@ -1,0 +1,69 @@
+#pragma once
+// Temporal accumulation: an exponential moving average of the signal with its reprojected history
+// (SVGF eq. in §4.1: C'_i = alpha C_i + (1 - alpha) C'_{i-1}), the history length h counting
+// consecutive successful reprojections, and alpha = max(alphaMin, 1/h) so a young history is a
+// plain running mean (Falcor; NRD ReLAX uses the same form).
+#include <algorithm>
+
+#include "core/image.hpp"
+#include "denoisers/common/parallel.hpp"
+#include "denoisers/common/reprojection.hpp"
+
+namespace arena {
+
+// h = reprojected h + 1, capped at maxHistory; h = 1 on disocclusion (the history is discarded).
+inline float nextHistoryLength(bool reprojected, float reprojectedLength, float maxHistory) {
+  return reprojected ? std::min(reprojectedLength + 1.0f, maxHistory) : 1.0f;
+}
+
+// alpha = max(alphaMin, 1/h). alphaMin may be per pixel: A-SVGF's adaptive alpha
+// (Schied 2018 eq. 15, alpha_i = (1 - lambda) alpha + lambda) enters here.
+inline float blendAlpha(float historyLength, float alphaMin) {
+  return std::max(alphaMin, 1.0f / std::max(historyLength, 1.0f));
+}
+
+// historyLength (1 channel) = nextHistoryLength of the resampled previousHistoryLength.
+void updateHistoryLength(const Reprojection& reprojection, const Image& previousHistoryLength,
+                         float maxHistory, Image& historyLength);
+
+// The lower bound of alpha: one value everywhere, raised per pixel by an optional image. A-SVGF
+// passes its alpha_i = (1 - lambda) alpha + lambda (>= alpha) there; the same image can raise the
+// moments' floor, max(momentsAlpha, alpha_i), as Q2RTX's anti-lag does.
+struct AccumulationAlpha {
+  float alphaMin = 0.2f;            // SVGF paper 0.2; Falcor 0.05
+  const Image* perPixel = nullptr;  // plane 0: per-pixel floor; alpha = max(alphaMin, it, 1/h)
+  float at(size_t i) const {
+    return perPixel ? std::max(alphaMin, perPixel->plane(0)[i]) : alphaMin;
+  }
+};
+
+// The EMA itself, for any number of channels: out(c) = current(i, c) on disocclusion, else
+// alpha current(i, c) + (1 - alpha) history(c) with alpha = blendAlpha(h, alpha.at(i)).
+// `current(i, c)` is a callable so derived signals (luminance moments) need no scratch image.
+template <class CurrentValue>
+void blendWithHistory(const Reprojection& reprojection, int channels, CurrentValue&& current,
+                      const Image& history, const Image& historyLength,
+                      const AccumulationAlpha& alpha, Image& out) {
+  const int w = out.width();
+  const float* length = historyLength.plane(0);
+  parallelRows(out.height(), [&](int y) {
+    for (int x = 0; x < w; ++x) {
+      const size_t i = size_t(y) * size_t(w) + size_t(x);
+      if (!reprojection.valid(i)) {
+        for (int c = 0; c < channels; ++c) out.plane(c)[i] = current(i, c);
+        continue;
+      }
+      const float a = blendAlpha(length[i], alpha.at(i));
+      for (int c = 0; c < channels; ++c)
+        out.plane(c)[i] = a * current(i, c) + (1.0f - a) * reprojection.sample(i, history.plane(c));
+    }
+  });
+}
+
+// Colour accumulation: accumulated = EMA(current, reprojected history); all images planar and of
+// equal size, `historyLength` already updated for this frame.
+void accumulateTemporally(const Reprojection& reprojection, const Image& current,
+                          const Image& history, const Image& historyLength,
+                          const AccumulationAlpha& alpha, Image& accumulated);
+
+}  // namespace arena

@@ -1,0 +1,40 @@
+#pragma once
+// Per-pixel luminance variance (SVGF §4.2): the first and second moments of luminance are
+// accumulated over time with the colour's reprojection, Var = max(0, mu2 - mu1^2); where fewer
+// than 4 frames have been accumulated the variance is estimated spatially instead, by a 7x7
+// bilateral filter of the moments (weights as in Falcor's SVGFFilterMoments).
+#include "core/image.hpp"
+#include "denoisers/common/gbuffer.hpp"
+#include "denoisers/common/parallel.hpp"
+#include "denoisers/common/reprojection.hpp"
+#include "denoisers/common/temporal_accumulation.hpp"
+
+namespace arena {
+
+// moments (2 channels: mu1, mu2 of luminance) = EMA of (l, l^2) of `signal` with the reprojected
+// momentsHistory; alpha = max(alpha.at(i), 1/h) as for the colour (SVGF: moments alpha 0.2).
+void accumulateMoments(const Reprojection& reprojection, const Image& signal,
+                       const Image& momentsHistory, const Image& historyLength,
+                       const AccumulationAlpha& alpha, Image& moments);
+
+struct VarianceSettings {
+  float minHistory = 4.0f;  // SVGF §4.2: spatial estimate while fewer than 4 frames accumulated
+  int radius = 3;           // SVGF §4.2: 7x7
+  // Spatial weight, Falcor: exp(-|l(p)-l(q)| / phiColor - |z(p)-z(q)| / (phiDepth max|grad z|
+  // |p-q|)) * max(0, n(p).n(q))^phiNormal. The paper names only depth and normal; Falcor adds
+  // the (unscaled) luminance term.
+  float phiColor = 10.0f;    // Falcor gPhiColor 10
+  float phiNormal = 128.0f;  // Falcor gPhiNormal 128
+  float phiDepth = 3.0f;     // Falcor: 3 x depth gradient
+  // Falcor: "boost" the spatial estimate of a young history, var *= 4 / h.
+  bool boostYoungHistory = true;
+};
+
+// variance (1 channel) from `moments` where h >= minHistory, else the spatial estimate around p
+// over `moments` and the luminance of `color` (the accumulated colour). Sky pixels get 0.
+// Returns the neighbour taps read per pixel (49 where the spatial estimate ran).
+double estimateVariance(const Image& moments, const Image& historyLength, const Image& color,
+                        const GBufferView& gbuffer, const Image& derivatives,
+                        const VarianceSettings& settings, Image& variance, RowTapCounter& taps);
+
+}  // namespace arena

@@ -1,0 +1,72 @@
+#pragma once
+// SVGF, Spatiotemporal Variance-Guided Filtering (Schied et al. 2017; seed 003), as a class whose
+// stages A-SVGF (Schied et al. 2018) reuses: it derives from Svgf and supplies a per-pixel
+// temporal alpha through adaptiveAlpha(), computed after the reprojection of the frame.
+#include <string>
+#include <vector>
+
+#include "denoisers/common/atrous.hpp"
+#include "denoisers/common/gbuffer.hpp"
+#include "denoisers/common/reprojection.hpp"
+#include "denoisers/common/temporal_accumulation.hpp"
+#include "denoisers/common/variance.hpp"
+#include "denoisers/denoiser.hpp"
+
+namespace arena {
+
+struct SvgfSettings {
+  ReprojectionSettings reprojection;
+  float alpha = 0.2f;         // colour EMA floor (SVGF paper 0.2; Falcor 0.05)
+  float momentsAlpha = 0.2f;  // moments EMA floor (SVGF paper and Falcor 0.2)
+  float maxHistory = 32.0f;   // history length cap (Falcor 32)
+  VarianceSettings variance;
+  int iterations = 5;   // à-trous iterations (SVGF paper 5; Falcor 4)
+  int feedbackTap = 1;  // iteration whose output becomes the colour history; 0 = accumulated colour
+  AtrousSettings atrous;
+};
+
+// SVGF's parameters (A-SVGF appends its own to these) and their resolved values; an Error names
+// `owner` when feedbackTap exceeds iterations.
+std::vector<ParamSpec> svgfParamSpecs();
+SvgfSettings svgfSettings(const ParamSet& params, const std::string& owner);
+
+class Svgf : public Denoiser {
+ public:
+  explicit Svgf(const SvgfSettings& settings, std::string name = "svgf");
+
+  std::vector<std::string> requiredChannels() const override;
+  void setup(int width, int height) override;
+  void reset() override;
+  // The paper's pipeline, top to bottom (see svgf.cpp).
+  void denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& output) override;
+
+ protected:
+  // A-SVGF's hook: called once per frame after reprojection() and before accumulation; returns an
+  // image (plane 0) raising the EMA floor per pixel, alpha = max(settings alpha, it, 1/h), for
+  // colour and moments alike, or nullptr for plain SVGF.
+  virtual const Image* adaptiveAlpha(const FrameContext&, const DenoiserInputs&) { return nullptr; }
+
+  // The stages, each one timed pass, in paper order.
+  void computeDerivatives();                                      // ddx/ddy of depth, normal
+  void reproject(const FrameContext& ctx);                        // §4.1 consistency tests
+  void accumulate(const DenoiserInputs& in, const Image* alpha);  // §4.1 colour, §4.2 moments
+  void estimateVariance();                                        // §4.2 temporal / 7x7 spatial
+  void filterWavelet(Image& output);                              // §4.3 à-trous + feedback
+  void storeHistory();                                            // history for frame i + 1
+
+  SvgfSettings settings_;
+  std::string name_;
+  GBufferView gbuffer_;  // this frame's guides (valid during denoise())
+  Image derivatives_;
+  Reprojection reprojection_;
+  GBufferHistory previousGBuffer_;
+  bool hasHistory_ = false;
+  // History (persist across frames; reset() discards them).
+  Image colorHistory_, momentsHistory_, previousHistoryLength_;
+  // Per-frame (transient) buffers.
+  Image accumulated_, moments_, historyLength_, variance_, filteredVariance_;
+  Image colorPingPong_[2], variancePingPong_[2];
+  RowTapCounter varianceTaps_;
+};
+
+}  // namespace arena
