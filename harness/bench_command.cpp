@@ -9,10 +9,18 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "core/atomic_file.hpp"
 #include "core/env_info.hpp"
+#include <cmath>
+#include <map>
 #include "core/error.hpp"
 #include "harness/commands.hpp"
+#include "harness/denoise_run.hpp"
 #include "tracer/render.hpp"
+
+#include <opencv2/imgproc.hpp>
+#include <algorithm>
+#include <random>
 
 namespace arena::cli {
 
@@ -38,6 +46,34 @@ double embreePathtracerMrays(int size, std::string& note) {
   pclose(p);
   if (mrays == 0) note = "could not parse pathtracer output";
   return mrays;
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+double p95(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[std::min(v.size() - 1, size_t(std::ceil(0.95 * double(v.size()))) - 1)];
+}
+
+// One "bilateral unit" (BU): the median time of cv::bilateralFilter(src, dst, 5, 0.1, 2.0) on a
+// 1280x720 CV_32FC3 image, measured in the same process and sitting as the denoisers, so ratios
+// stay comparable across noisy machines.
+double bilateralUnitMs(int width, int height, int repetitions) {
+  cv::Mat src(height, width, CV_32FC3), dst;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) src.at<cv::Vec3f>(y, x) = cv::Vec3f(u(rng), u(rng), u(rng));
+  cv::bilateralFilter(src, dst, 5, 0.1, 2.0);  // warm-up
+  std::vector<double> ms;
+  for (int i = 0; i < repetitions; ++i) {
+    auto t0 = std::chrono::steady_clock::now();
+    cv::bilateralFilter(src, dst, 5, 0.1, 2.0);
+    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  }
+  return median(ms);
 }
 
 }  // namespace
@@ -93,12 +129,108 @@ void addBenchCommand(CLI::App& app) {
         std::printf("embree pathtracer: not measured (%s)\n", note.c_str());
       }
     }
-    if (!o->json.empty()) {
-      FILE* f = std::fopen(o->json.c_str(), "w");
-      if (!f) throw Error(o->json + ": cannot write");
-      std::fputs(out.dump(2).c_str(), f);
-      std::fclose(f);
+    if (!o->json.empty()) writeTextAtomically(o->json, out.dump(2));
+  });
+
+  auto* denoise = bench->add_subcommand("denoise", "Denoiser cost at 1280x720: ms/frame and bilateral units (BU)");
+  struct DenoiseOptions {
+    std::string denoisers = "all", scene = defaultScenesDir() + "/cornell_static.json", json, resolution = "1280x720";
+    int frames = 20, warmup = 5, inputs = 3;
+    std::vector<std::string> params;
+  };
+  auto d = std::make_shared<DenoiseOptions>();
+  denoise->add_option("--denoisers", d->denoisers, "Comma-separated names or 'all'")->default_val("all");
+  denoise->add_option("--param", d->params, "DENOISER.NAME=VALUE, repeatable");
+  denoise->add_option("--scene", d->scene, "Scene file whose frames feed the denoisers");
+  denoise->add_option("--resolution", d->resolution, "WIDTHxHEIGHT")->default_val("1280x720");
+  denoise->add_option("--frames", d->frames, "Timed frames per denoiser")->default_val(20);
+  denoise->add_option("--warmup", d->warmup, "Untimed frames first")->default_val(5);
+  denoise->add_option("--inputs", d->inputs, "Distinct rendered input frames, cycled")->default_val(3);
+  denoise->add_option("--json", d->json, "Write results to this JSON file");
+  denoise->callback([d] {
+    int w = 0, h = 0;
+    if (std::sscanf(d->resolution.c_str(), "%dx%d", &w, &h) != 2 || w < 1 || h < 1)
+      throw Error("--resolution: expected WIDTHxHEIGHT, got '" + d->resolution + "'");
+    Scene scene = loadScene(d->scene);
+    RenderSettings settings;
+    settings.width = w;
+    settings.height = h;
+    settings.frames = std::max(1, d->inputs);
+    SequenceRenderer renderer(scene, settings);
+    std::vector<LayerSet> inputs, inputGradients;
+    std::printf("rendering %d input frame(s) of %s at %dx%d...\n", settings.frames, scene.name.c_str(), w, h);
+    for (int t = 0; t < settings.frames; ++t) {
+      auto r = renderer.renderFrame(t);
+      inputs.push_back(std::move(r.frame));
+      inputGradients.push_back(std::move(r.gradients));  // empty for frame 0
     }
+    const double bu = bilateralUnitMs(1280, 720, 15);
+    std::printf("1 BU = cv::bilateralFilter(5, 0.1, 2.0) on 1280x720 CV_32FC3 = %.2f ms\n", bu);
+    auto params = parseParamAssignments(d->params);
+    std::vector<std::string> names;
+    if (d->denoisers == "all") names = DenoiserRegistry::instance().names();
+    else
+      for (size_t a = 0, b; a <= d->denoisers.size(); a = b + 1) {
+        b = d->denoisers.find(',', a);
+        if (b == std::string::npos) b = d->denoisers.size();
+        if (b > a) names.push_back(d->denoisers.substr(a, b - a));
+      }
+    nlohmann::json out = {{"resolution", {w, h}}, {"bilateralUnitMs", bu}, {"frames", d->frames},
+                          {"warmup", d->warmup}, {"environment", environmentInfo()}, {"denoisers", nlohmann::json::array()}};
+    for (const std::string& name : names) {
+      const DenoiserInfo& info = DenoiserRegistry::instance().find(name);
+      ParamSet ps = info.schema.resolve(params[name], name);
+      std::vector<std::unique_ptr<Denoiser>> instances;
+      instances.push_back(info.create(ps, SignalKind::Diffuse));
+      instances.push_back(info.create(ps, SignalKind::Specular));
+      for (auto& inst : instances) inst->setup(w, h);
+      Image outImage(w, h, 3), signal;
+      std::vector<double> total;
+      std::map<std::string, std::vector<double>> passMs;
+      std::map<std::string, double> passTaps;
+      std::vector<std::string> passOrder;
+      for (int f = 0; f < d->warmup + d->frames; ++f) {
+        const LayerSet& frame = inputs[size_t(f) % inputs.size()];
+        const bool grads = instances[0]->needsGradients() && f > 0 && inputs.size() > 1;
+        const LayerSet& gradients = inputGradients[std::max<size_t>(1, size_t(f) % inputs.size()) % inputs.size()];
+        FrameContext ctx;
+        ctx.frameIndex = f;
+        ctx.width = w;
+        ctx.height = h;
+        ctx.reset = f == 0;
+        double frameMs = 0;
+        for (size_t k = 0; k < instances.size(); ++k) {
+          const SignalKind kind = k == 0 ? SignalKind::Diffuse : SignalKind::Specular;
+          signal = frame.get(signalName(kind));
+          DenoiserInputs in{signal, frame, grads ? &gradients : nullptr};
+          instances[k]->clearPassStats();
+          auto t0 = std::chrono::steady_clock::now();
+          instances[k]->denoise(ctx, in, outImage);
+          frameMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+          if (f < d->warmup) continue;
+          for (const PassStats& p : instances[k]->lastPasses()) {
+            std::string pn = std::string(signalName(kind)) + "/" + p.name;
+            if (!passMs.count(pn)) passOrder.push_back(pn);
+            passMs[pn].push_back(p.milliseconds);
+            passTaps[pn] = p.tapsPerPixel;
+          }
+        }
+        if (f >= d->warmup) total.push_back(frameMs);
+      }
+      nlohmann::json passes = nlohmann::json::array();
+      for (const std::string& pn : passOrder)
+        passes.push_back({{"name", pn}, {"msMedian", median(passMs[pn])}, {"bu", median(passMs[pn]) / bu},
+                          {"tapsPerPixel", passTaps[pn]}});
+      nlohmann::json row = {{"name", name}, {"params", ps.toJson()}, {"msMedian", median(total)}, {"msP95", p95(total)},
+                            {"bu", median(total) / bu}, {"passes", passes}};
+      std::printf("%-14s %8.2f ms/frame (p95 %.2f)  %5.2f BU\n", name.c_str(), median(total), p95(total),
+                  median(total) / bu);
+      for (const auto& p : passes)
+        std::printf("    %-34s %8.2f ms  %5.2f BU  %5.1f taps/px\n", p["name"].get<std::string>().c_str(),
+                    p["msMedian"].get<double>(), p["bu"].get<double>(), p["tapsPerPixel"].get<double>());
+      out["denoisers"].push_back(row);
+    }
+    if (!d->json.empty()) writeTextAtomically(d->json, out.dump(2));
   });
 }
 

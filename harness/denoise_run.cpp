@@ -1,0 +1,125 @@
+#include "harness/denoise_run.hpp"
+
+#include <chrono>
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.hpp"
+
+namespace arena {
+
+std::map<std::string, std::map<std::string, std::string>> parseParamAssignments(const std::vector<std::string>& items) {
+  std::map<std::string, std::map<std::string, std::string>> out;
+  const auto& registry = DenoiserRegistry::instance();
+  for (const std::string& item : items) {
+    size_t eq = item.find('='), dot = item.find('.');
+    if (eq == std::string::npos || dot == std::string::npos || dot > eq)
+      throw Error("--param '" + item + "': expected DENOISER.NAME=VALUE, e.g. svgf.sigmaL=4");
+    std::string denoiser = item.substr(0, dot);
+    registry.find(denoiser);  // throws, listing the registered names
+    out[denoiser][item.substr(dot + 1, eq - dot - 1)] = item.substr(eq + 1);
+  }
+  return out;
+}
+
+std::string defaultLabel(const DenoiserRequest& r) {
+  if (r.params.empty()) return r.name;
+  std::string s = r.name + "[";
+  bool first = true;
+  for (const auto& [k, v] : r.params) {
+    s += (first ? "" : ",") + k + "=" + v;
+    first = false;
+  }
+  return s + "]";
+}
+
+long sanitize(Image& image) {
+  long count = 0;
+  for (float& v : image.raw())
+    if (!std::isfinite(v)) {
+      v = 0.0f;
+      ++count;
+    }
+  return count;
+}
+
+DenoiseRun::DenoiseRun(const DenoiserRequest& request, const Sequence& sequence)
+    : sequence_(sequence), request_(request) {
+  const DenoiserInfo& info = DenoiserRegistry::instance().find(request.name);
+  params_ = info.schema.resolve(request.params, request.name);
+  diffuse_ = info.create(params_, SignalKind::Diffuse);
+  specular_ = info.create(params_, SignalKind::Specular);
+  std::vector<std::string> missing;
+  std::vector<std::string> known;
+  for (const LayerSpec& spec : channels::frameLayers()) known.push_back(spec.name);
+  for (const std::string& c : diffuse_->requiredChannels())
+    if (std::find(known.begin(), known.end(), c) == known.end()) missing.push_back(c);
+  if (!missing.empty()) {
+    std::string list;
+    for (auto& m : missing) list += " '" + m + "'";
+    throw Error(request.name + " needs channel(s)" + list + " that sequence " + sequence.dir().string() +
+                " does not provide (re-render it with a tracer that writes them)");
+  }
+  needsGradients_ = diffuse_->needsGradients();
+  diffuse_->setup(sequence.info().width, sequence.info().height);
+  specular_->setup(sequence.info().width, sequence.info().height);
+}
+
+void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
+                     const std::function<void(const DenoisedFrame&)>& onFrame) {
+  const SequenceInfo& info = sequence_.info();
+  const int w = info.width, h = info.height;
+  DenoisedFrame out;
+  out.diffuse = Image(w, h, 3);
+  out.specular = Image(w, h, 3);
+  out.color = Image(w, h, 3);
+  Image signal;
+  for (int t = 0; t < info.frames; ++t) {
+    const LayerSet& frame = frameOf(t);
+    for (const std::string& c : diffuse_->requiredChannels()) frame.get(c, sequence_.dir().string() + " frame " + std::to_string(t));
+    LayerSet gradients;
+    if (needsGradients_ && t > 0) gradients = sequence_.gradients(t);
+    FrameContext ctx;
+    ctx.frameIndex = t;
+    ctx.width = w;
+    ctx.height = h;
+    ctx.camera = info.cameras[size_t(t)];
+    ctx.previousCamera = info.cameras[size_t(std::max(t - 1, 0))];
+    ctx.reset = t == 0;
+    for (const SequenceEvent& e : info.events) ctx.reset = ctx.reset || (e.kind == "camera_cut" && e.frame == t);
+    if (ctx.reset && t > 0) {
+      diffuse_->reset();
+      specular_->reset();
+    }
+    out.frame = t;
+    out.passes.clear();
+    out.sanitized = 0;
+    out.milliseconds = 0;
+    for (SignalKind kind : {SignalKind::Diffuse, SignalKind::Specular}) {
+      Denoiser& d = kind == SignalKind::Diffuse ? *diffuse_ : *specular_;
+      Image& result = kind == SignalKind::Diffuse ? out.diffuse : out.specular;
+      signal = frame.get(signalName(kind));
+      out.sanitized += sanitize(signal);
+      DenoiserInputs in{signal, frame, needsGradients_ && t > 0 ? &gradients : nullptr};
+      d.clearPassStats();
+      auto start = std::chrono::steady_clock::now();
+      d.denoise(ctx, in, result);
+      out.milliseconds += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+      for (float v : result.raw())
+        if (!std::isfinite(v))
+          throw Error(request_.name + " produced a non-finite value on the " + signalName(kind) + " signal at frame " +
+                      std::to_string(t));
+      for (PassStats p : d.lastPasses()) {
+        p.name = std::string(signalName(kind)) + "/" + p.name;
+        out.passes.push_back(p);
+      }
+    }
+    const Image &albedo = frame.get("albedo"), &specAlbedo = frame.get("specAlbedo"), &emission = frame.get("emission");
+    for (size_t i = 0; i < out.color.raw().size(); ++i)
+      out.color.raw()[i] = albedo.raw()[i] * out.diffuse.raw()[i] + specAlbedo.raw()[i] * out.specular.raw()[i] +
+                           emission.raw()[i];
+    onFrame(out);
+  }
+}
+
+}  // namespace arena

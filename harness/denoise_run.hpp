@@ -1,0 +1,55 @@
+#pragma once
+// Runs one registered denoiser over a cached sequence: one instance per signal (diffuse,
+// specular), inputs sanitised (NaN/Inf -> 0, counted), outputs remodulated
+// (albedo * diffuse + specAlbedo * specular + emission), per-pass timings collected. Set-up and
+// allocation happen before the first timed frame; file I/O is never timed.
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/sequence.hpp"
+#include "denoisers/denoiser.hpp"
+
+namespace arena {
+
+struct DenoiserRequest {
+  std::string name;                           // registry name
+  std::map<std::string, std::string> params;  // overrides, without the "name." prefix
+  std::string label;                          // how results and charts name this setting
+};
+
+// "svgf.sigmaL=4" style assignments, grouped by denoiser; unknown denoiser prefixes are errors.
+std::map<std::string, std::map<std::string, std::string>> parseParamAssignments(const std::vector<std::string>& items);
+std::string defaultLabel(const DenoiserRequest& r);
+
+struct DenoisedFrame {
+  int frame = 0;
+  Image color, diffuse, specular;  // remodulated colour and the two filtered signals
+  double milliseconds = 0;         // wall time of the denoise calls (both signals)
+  std::vector<PassStats> passes;   // "diffuse/<pass>", "specular/<pass>"
+  long sanitized = 0;              // NaN/Inf input values replaced by 0
+};
+
+class DenoiseRun {
+ public:
+  // Resolves parameters (errors list the valid names), checks the sequence has every channel the
+  // denoiser declares, creates and sets up both instances.
+  DenoiseRun(const DenoiserRequest& request, const Sequence& sequence);
+  const ParamSet& params() const { return params_; }
+  // Denoises frames 0..n-1 in order; `frame(t)` supplies the sequence frame's layers.
+  void run(const std::function<const LayerSet&(int)>& frame, const std::function<void(const DenoisedFrame&)>& onFrame);
+
+ private:
+  const Sequence& sequence_;
+  DenoiserRequest request_;
+  ParamSet params_;
+  std::unique_ptr<Denoiser> diffuse_, specular_;
+  bool needsGradients_ = false;
+};
+
+// Replaces NaN/Inf by 0 in place; returns how many were replaced.
+long sanitize(Image& image);
+
+}  // namespace arena

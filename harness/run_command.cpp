@@ -1,0 +1,219 @@
+// `arena run`, `arena sweep`, `arena merge`, `arena compare`, `arena denoisers`.
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "harness/commands.hpp"
+#include "harness/compare.hpp"
+#include "harness/results.hpp"
+#include "harness/run_matrix.hpp"
+#include "harness/scene_selection.hpp"
+
+namespace arena::cli {
+
+namespace {
+
+using nlohmann::json;
+
+std::vector<std::string> splitList(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream in(s);
+  for (std::string item; std::getline(in, item, ',');)
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+struct MatrixOptions {
+  RenderOptions render;
+  std::string scenes = "all", out, shard = "0/1", flip = "all", keepFrames = "auto";
+  std::vector<std::string> params;
+  bool noBaselines = false;
+  int warmup = 8;
+};
+
+void addMatrixOptions(CLI::App* cmd, MatrixOptions& o) {
+  cmd->add_option("--scenes,--scene", o.scenes, "Scene names, comma-separated, or 'all'")->default_val("all");
+  cmd->add_option("--out", o.out, "Run directory, e.g. runs/today")->required();
+  cmd->add_option("--param", o.params, "DENOISER.NAME=VALUE, repeatable (e.g. svgf.sigmaL=8)");
+  cmd->add_option("--shard", o.shard, "Run only the deterministic slice i/n of the pairs (see `arena merge`)");
+  cmd->add_option("--flip", o.flip, "FLIP metrics: none, ldr, or all (LDR and HDR)")
+      ->check(CLI::IsMember({"none", "ldr", "all"}));
+  cmd->add_option("--keep-frames", o.keepFrames, "Images kept: auto, all, chosen, none")
+      ->check(CLI::IsMember({"auto", "all", "chosen", "none"}));
+  cmd->add_option("--warmup", o.warmup, "Frames excluded from summaries (metrics.md W)")->default_val(8);
+  cmd->add_flag("--no-baselines", o.noBaselines, "Do not add passthrough and temporal for context");
+  addRenderOptions(cmd, o.render);
+}
+
+RunConfig configFrom(const MatrixOptions& o) {
+  RunConfig c;
+  c.out = o.out;
+  c.name = std::filesystem::path(o.out).filename().string();
+  c.cache = o.render.cacheDir;
+  c.render = o.render.settings();
+  c.scenes = selectScenes(o.scenes, o.render.scenesDir);
+  c.baselines = !o.noBaselines;
+  c.warmup = o.warmup;
+  c.flip = o.flip;
+  c.keepFrames = o.keepFrames;
+  std::tie(c.shardIndex, c.shardCount) = parseShard(o.shard);
+  c.progress = [](const std::string& line) { std::cout << line << std::endl; };
+  return c;
+}
+
+void finish(const json& results, const std::string& out) {
+  std::cout << "results: " << out << "/results.json (and results.db)\n";
+  std::cout << std::left << std::setw(22) << "scene" << std::setw(34) << "denoiser" << std::right << std::setw(12)
+            << "relMSE" << std::setw(10) << "ms" << "\n";
+  for (const json& p : results["pairs"]) {
+    std::cout << std::left << std::setw(22) << p["scene"].get<std::string>() << std::setw(34) << p["label"].get<std::string>();
+    if (p["status"] == "ok")
+      std::cout << std::right << std::setw(12) << std::setprecision(4) << p["summary"]["relMse"]["mean"].get<double>()
+                << std::setw(10) << std::setprecision(3) << p["timing"]["msMedian"].get<double>() << "\n";
+    else
+      std::cout << "  FAILED\n";
+  }
+  auto failed = failedPairs(results);
+  if (!failed.empty()) {
+    std::cerr << failed.size() << " pair(s) failed:\n";
+    for (auto& f : failed) std::cerr << "  " << f << "\n";
+    throw CLI::RuntimeError(1);
+  }
+}
+
+}  // namespace
+
+void addRunCommands(CLI::App& app) {
+  {
+    auto* cmd = app.add_subcommand("run", "Run denoisers x scenes, compute every metric, store results");
+    auto o = std::make_shared<MatrixOptions>();
+    auto names = std::make_shared<std::string>("all");
+    cmd->add_option("--denoisers,--denoiser", *names, "Registered names, comma-separated, or 'all'")->default_val("all");
+    addMatrixOptions(cmd, *o);
+    cmd->callback([o, names] {
+      RunConfig c = configFrom(*o);
+      auto params = parseParamAssignments(o->params);
+      std::vector<std::string> list = *names == "all" ? DenoiserRegistry::instance().names() : splitList(*names);
+      for (auto& [denoiser, kv] : params)
+        if (std::find(list.begin(), list.end(), denoiser) == list.end())
+          throw Error("--param " + denoiser + ".*: " + denoiser + " is not among the denoisers of this run");
+      for (const std::string& n : list) {
+        DenoiserRegistry::instance().find(n);
+        c.denoisers.push_back({n, params[n], ""});
+      }
+      finish(runMatrix(c), o->out);
+    });
+  }
+  {
+    auto* cmd = app.add_subcommand("sweep", "Run a parameter grid of one denoiser (ablations) into one run");
+    auto o = std::make_shared<MatrixOptions>();
+    auto denoiser = std::make_shared<std::string>();
+    auto grids = std::make_shared<std::vector<std::string>>();
+    cmd->add_option("--denoiser", *denoiser, "The denoiser to sweep")->required();
+    cmd->add_option("--grid", *grids, "NAME=[v1,v2,...], repeatable; the run covers the Cartesian product")->required();
+    addMatrixOptions(cmd, *o);
+    cmd->callback([o, denoiser, grids] {
+      RunConfig c = configFrom(*o);
+      const DenoiserInfo& info = DenoiserRegistry::instance().find(*denoiser);
+      auto fixed = parseParamAssignments(o->params)[*denoiser];
+      std::vector<std::pair<std::string, std::vector<std::string>>> axes;
+      for (const std::string& g : *grids) {
+        size_t eq = g.find('=');
+        if (eq == std::string::npos || g.size() < eq + 3 || g[eq + 1] != '[' || g.back() != ']')
+          throw Error("--grid '" + g + "': expected NAME=[v1,v2,...]");
+        std::string name = g.substr(0, eq);
+        if (name.rfind(*denoiser + ".", 0) == 0) name = name.substr(denoiser->size() + 1);
+        if (!info.schema.find(name)) info.schema.resolve({{name, ""}}, *denoiser);  // throws, listing names
+        axes.push_back({name, splitList(g.substr(eq + 2, g.size() - eq - 3))});
+        if (axes.back().second.empty()) throw Error("--grid '" + g + "': no values");
+      }
+      std::vector<std::map<std::string, std::string>> settings = {fixed};
+      for (auto& [name, values] : axes) {
+        std::vector<std::map<std::string, std::string>> next;
+        for (auto& s : settings)
+          for (auto& v : values) {
+            auto t = s;
+            t[name] = v;
+            next.push_back(t);
+          }
+        settings = next;
+      }
+      json grid = json::object();
+      for (auto& [name, values] : axes) grid[name] = values;
+      for (auto& s : settings) c.denoisers.push_back({*denoiser, s, ""});
+      json results = runMatrix(c);
+      results["sweep"] = {{"denoiser", *denoiser}, {"grid", grid}, {"fixed", fixed}};
+      saveResults(o->out, results);
+      finish(results, o->out);
+    });
+  }
+  {
+    auto* cmd = app.add_subcommand("merge", "Combine shard runs (--shard i/n) into one run");
+    auto runs = std::make_shared<std::vector<std::string>>();
+    auto out = std::make_shared<std::string>();
+    cmd->add_option("runs", *runs, "Shard run directories")->required();
+    cmd->add_option("--out", *out, "Merged run directory")->required();
+    cmd->callback([runs, out] {
+      std::vector<std::filesystem::path> paths(runs->begin(), runs->end());
+      finish(mergeRuns(paths, *out), *out);
+    });
+  }
+  {
+    auto* cmd = app.add_subcommand("compare", "Compare two runs; exit 1 when a metric regresses beyond its tolerance");
+    auto a = std::make_shared<std::string>(), b = std::make_shared<std::string>();
+    auto metrics = std::make_shared<std::vector<std::string>>();
+    auto tol = std::make_shared<std::string>("2%");
+    auto asJson = std::make_shared<bool>(false);
+    cmd->add_option("baseline", *a, "Baseline run directory")->required();
+    cmd->add_option("candidate", *b, "Candidate run directory")->required();
+    cmd->add_option("--metric", *metrics, "Metric(s) to gate on (default: relMse ldrFlip hdrFlip ssim tRmae)");
+    cmd->add_option("--tolerance", *tol, "Allowed relative change in the worse direction, e.g. 2%")->default_val("2%");
+    cmd->add_flag("--json", *asJson, "Machine-readable output");
+    cmd->callback([=] {
+      std::vector<Tolerance> tols;
+      double t = parseTolerance(*tol);
+      for (auto& m : *metrics) tols.push_back({m, t});
+      if (tols.empty())
+        for (const char* m : {"relMse", "ldrFlip", "hdrFlip", "ssim", "tRmae"}) tols.push_back({m, t});
+      auto rows = compareRuns(loadResults(*a), loadResults(*b), tols);
+      if (*asJson) {
+        std::cout << comparisonJson(rows).dump(2) << "\n";
+      } else {
+        std::cout << std::left << std::setw(22) << "scene" << std::setw(34) << "denoiser" << std::setw(16) << "metric"
+                  << std::right << std::setw(12) << "baseline" << std::setw(12) << "candidate" << std::setw(9)
+                  << "change" << "  verdict\n";
+        for (auto& r : rows)
+          std::cout << std::left << std::setw(22) << r.scene << std::setw(34) << r.label << std::setw(16) << r.metric
+                    << std::right << std::setw(12) << std::setprecision(4) << r.baseline << std::setw(12) << r.candidate
+                    << std::setw(8) << std::fixed << std::setprecision(1) << r.change * 100 << "%"
+                    << std::defaultfloat << "  " << r.verdict << "\n";
+      }
+      if (anyRegression(rows)) throw CLI::RuntimeError(1);
+    });
+  }
+  {
+    auto* cmd = app.add_subcommand("denoisers", "List the registered denoisers and their parameters");
+    auto asJson = std::make_shared<bool>(false);
+    cmd->add_flag("--json", *asJson, "Machine-readable output");
+    cmd->callback([asJson] {
+      json out = json::array();
+      for (const std::string& n : DenoiserRegistry::instance().names()) {
+        const DenoiserInfo& info = DenoiserRegistry::instance().find(n);
+        json params = json::array();
+        for (const ParamSpec& p : info.schema.specs()) params.push_back(p.describe());
+        out.push_back({{"name", n}, {"description", info.description}, {"parameters", params}});
+      }
+      if (*asJson) {
+        std::cout << out.dump(2) << "\n";
+        return;
+      }
+      for (auto& d : out) {
+        std::cout << d["name"].get<std::string>() << ": " << d["description"].get<std::string>() << "\n";
+        for (auto& p : d["parameters"]) std::cout << "    " << p.get<std::string>() << "\n";
+      }
+    });
+  }
+}
+
+}  // namespace arena::cli

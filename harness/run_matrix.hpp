@@ -1,0 +1,38 @@
+#pragma once
+// The run matrix: scenes x denoisers. Renders missing sequences, runs every pair, computes every
+// metric of ../shared/docs/metrics.md per frame, summarises after warm-up, and writes
+// <out>/results.json, appends <out>/results.db, and keeps images of chosen frames for the report.
+// A failing pair is recorded with its error and does not lose the others.
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "harness/denoise_run.hpp"
+#include "tracer/render.hpp"
+
+namespace arena {
+
+struct RunConfig {
+  std::string name;
+  std::filesystem::path out, cache = "cache";
+  RenderSettings render;
+  std::vector<Scene> scenes;
+  std::vector<DenoiserRequest> denoisers;
+  bool baselines = true;          // add passthrough (noisy input) and temporal for context
+  int warmup = 8;                 // metrics.md: summaries over frames t >= W
+  std::string flip = "all";       // none | ldr | all (LDR + HDR)
+  std::string keepFrames = "auto";  // auto (all for a single pair, else chosen) | all | chosen | none
+  int shardIndex = 0, shardCount = 1;
+  ProgressFn progress;
+};
+
+// Returns the results document (also written to disk). Check `failedPairs(results)`.
+nlohmann::json runMatrix(const RunConfig& config);
+std::vector<std::string> failedPairs(const nlohmann::json& results);
+// "i/n" -> (i, n), 0 <= i < n.
+std::pair<int, int> parseShard(const std::string& text);
+// Combines shard runs into one run directory (results.json, results.db, images).
+nlohmann::json mergeRuns(const std::vector<std::filesystem::path>& runs, const std::filesystem::path& out);
+
+}  // namespace arena

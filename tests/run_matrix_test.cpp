@@ -1,0 +1,185 @@
+// The run matrix end to end on tiny sequences: results, SQLite, compare as a CI gate, sweeps,
+// shards and merge, determinism, and clear errors on bad input.
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "core/error.hpp"
+#include "harness/compare.hpp"
+#include "harness/results.hpp"
+#include "harness/run_matrix.hpp"
+#include "tests/test_util.hpp"
+
+namespace arena {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+fs::path sharedCache() {
+  static fs::path dir = test::freshDir("matrix_cache");
+  return dir;
+}
+
+RunConfig tinyRun(const std::string& name, std::vector<DenoiserRequest> denoisers) {
+  RunConfig c;
+  c.name = name;
+  c.out = test::freshDir("run_" + name);
+  c.cache = sharedCache();
+  c.render = test::tinySettings(40, 24, 14, 32);
+  c.scenes = {test::shippedScene("cornell_static"), test::shippedScene("light_switch")};
+  c.denoisers = std::move(denoisers);
+  c.warmup = 4;
+  c.flip = "ldr";
+  c.keepFrames = "chosen";
+  return c;
+}
+
+const json& pairOf(const json& results, const std::string& scene, const std::string& label) {
+  for (const json& p : results["pairs"])
+    if (p["scene"] == scene && p["label"] == label) return p;
+  throw Error("no pair " + label + " on " + scene);
+}
+
+double mean(const json& pair, const char* metric) { return pair["summary"][metric]["mean"].get<double>(); }
+
+TEST(RunMatrix, TwoScenesThreeDenoisersWithEveryMetric) {
+  RunConfig c = tinyRun("matrix", {{"svgf", {}, ""}});
+  json r = runMatrix(c);
+  ASSERT_EQ(r["pairs"].size(), 6u);  // passthrough and temporal added as baselines
+  EXPECT_TRUE(failedPairs(r).empty());
+  for (const json& p : r["pairs"]) {
+    ASSERT_EQ(p["status"], "ok") << p.dump();
+    ASSERT_EQ(p["frames"].size(), 14u);
+    for (const char* m : {"relMse", "relMseCorrected", "psnr", "ssim", "ldrFlip", "tRmae", "tPsnr", "warpedFlicker",
+                          "effectiveSpp", "ms"})
+      EXPECT_TRUE(p["summary"].contains(m)) << m;
+    EXPECT_GT(p["timing"]["msPerMegapixel"].get<double>(), 0.0);
+  }
+  // Context: denoising beats the noisy input; the noisy input's effective spp is 1.
+  const json& noisy = pairOf(r, "cornell_static", "passthrough");
+  const json& svgf = pairOf(r, "cornell_static", "svgf");
+  EXPECT_LT(mean(svgf, "relMse"), mean(noisy, "relMse") / 3);
+  EXPECT_NEAR(pairOf(r, "light_switch", "passthrough")["summary"]["effectiveSpp"]["median"].get<double>(), 1.0, 0.05);
+  // Ghosting on the light switch: the light goes off at frame 12 (on again at 24, beyond 14 frames).
+  const json& ghost = pairOf(r, "light_switch", "svgf")["ghosting"];
+  ASSERT_EQ(ghost.size(), 1u);
+  EXPECT_EQ(ghost[0]["eventFrame"], 12);
+  EXPECT_GT(ghost[0]["maskFraction"].get<double>(), 0.3);
+  EXPECT_GT(ghost[0]["signedBias"].get<double>(), 0.0);  // stale light lingers after switch-off
+  // Results on disk: JSON and SQLite with one row per pair.
+  json onDisk = loadResults(c.out);
+  EXPECT_EQ(onDisk["pairs"].size(), 6u);
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open((c.out / "results.db").c_str(), &db), SQLITE_OK);
+  sqlite3_stmt* st = nullptr;
+  sqlite3_prepare_v2(db, "SELECT COUNT(*) FROM summaries WHERE metric = 'relMse'", -1, &st, nullptr);
+  ASSERT_EQ(sqlite3_step(st), SQLITE_ROW);
+  EXPECT_EQ(sqlite3_column_int(st, 0), 6);
+  sqlite3_finalize(st);
+  sqlite3_close(db);
+  EXPECT_TRUE(fs::exists(c.out / "images" / "cornell_static" / "svgf"));
+}
+
+TEST(RunMatrix, CompareGatesARegressionAndPassesAnIdenticalRerun) {
+  RunConfig a = tinyRun("baseline", {{"svgf", {}, "svgf"}});
+  a.scenes.resize(1);
+  a.baselines = false;
+  json base = runMatrix(a);
+  RunConfig b = a;
+  b.out = test::freshDir("run_rerun");
+  json rerun = runMatrix(b);
+  // Determinism: error metrics identical (times may differ).
+  for (const char* m : {"relMse", "ssim", "ldrFlip", "tRmae", "warpedFlicker"})
+    EXPECT_EQ(mean(base["pairs"][0], m), mean(rerun["pairs"][0], m)) << m;
+  EXPECT_FALSE(anyRegression(compareRuns(base, rerun, {})));
+  // A deliberately worse setting under the same label: no spatial filtering at all.
+  RunConfig w = a;
+  w.out = test::freshDir("run_worse");
+  w.denoisers = {{"svgf", {{"iterations", "0"}, {"feedbackTap", "0"}, {"alpha", "1"}}, "svgf"}};
+  json worse = runMatrix(w);
+  auto rows = compareRuns(base, worse, {{"relMse", 0.02}});
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].verdict, "regressed");
+  EXPECT_TRUE(anyRegression(rows));
+  EXPECT_GT(rows[0].change, 0.5);
+}
+
+TEST(RunMatrix, ShardsMergeIntoTheFullRun) {
+  RunConfig full = tinyRun("shards", {{"eaw", {}, ""}});
+  full.scenes.resize(1);
+  full.flip = "none";
+  std::vector<fs::path> parts;
+  size_t pairs = 0;
+  for (int i = 0; i < 2; ++i) {
+    RunConfig s = full;
+    s.shardIndex = i;
+    s.shardCount = 2;
+    s.out = test::freshDir("run_shard" + std::to_string(i));
+    pairs += runMatrix(s)["pairs"].size();
+    parts.push_back(s.out);
+  }
+  EXPECT_EQ(pairs, 3u);
+  fs::path merged = test::freshDir("run_merged");
+  json m = mergeRuns(parts, merged);
+  EXPECT_EQ(m["pairs"].size(), 3u);
+  EXPECT_NO_THROW(loadResults(merged));
+  EXPECT_THROW(mergeRuns({parts[0], parts[0]}, test::freshDir("run_dup")), Error);
+}
+
+TEST(RunMatrix, AFailingPairIsReportedAndTheOthersKept) {
+  RunConfig c = tinyRun("failing", {{"svgf", {}, ""}});
+  c.scenes.resize(1);
+  c.scenes.push_back(test::shippedScene("cornell_static"));
+  c.scenes.back().name = "broken";
+  c.scenes.back().width = 0;  // not renderable
+  c.render.width = 0;         // use each scene's own resolution...
+  c.render.height = 0;
+  c.scenes.front().width = 40;
+  c.scenes.front().height = 24;
+  json r = runMatrix(c);
+  auto failed = failedPairs(r);
+  EXPECT_EQ(failed.size(), 3u);
+  EXPECT_EQ(pairOf(r, "cornell_static", "svgf")["status"], "ok");
+  EXPECT_NE(failed[0].find("broken"), std::string::npos);
+}
+
+TEST(RunMatrix, BadInputIsAClearError) {
+  RunConfig c = tinyRun("bad", {{"svgf", {{"sigmaLL", "4"}}, ""}});
+  try {
+    runMatrix(c);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown parameter 'sigmaLL'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("svgf.sigmaL"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(loadResults(test::freshDir("run_missing-run")), Error);
+  fs::path other = test::freshDir("run_other-schema");
+  std::ofstream(other / "results.json") << R"({"kind": "arena-run", "schema": 99})";
+  try {
+    loadResults(other);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("schema version 99"), std::string::npos);
+  }
+  EXPECT_THROW(parseShard("2/2"), Error);
+  // A sequence frame that lacks a channel the denoiser reads.
+  Sequence seq = Sequence::open(renderSequence(test::shippedScene("cornell_static"), c.render, c.cache, nullptr));
+  DenoiseRun run({"svgf", {}, "svgf"}, seq);
+  LayerSet partial;
+  const LayerSet full = seq.frame(0);
+  for (const auto& [name, img] : full.all())
+    if (name != "motion") partial.set(name, img);
+  try {
+    run.run([&](int) -> const LayerSet& { return partial; }, [](const DenoisedFrame&) {});
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("missing channel 'motion'"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(compareRuns(json{{"pairs", json::array()}}, json{{"pairs", json::array()}}, {{"flipp", 0.02}}), Error);
+}
+
+}  // namespace
+}  // namespace arena
