@@ -9,5 +9,6 @@ void addRenderCommand(CLI::App& app);
 void addBenchCommand(CLI::App& app);
 void addStudyCommand(CLI::App& app);
 void addRunCommands(CLI::App& app);
+void addReportCommand(CLI::App& app);
 
 }  // namespace arena::cli

@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
   arena::cli::addStudyCommand(app);
   arena::cli::addRunCommands(app);
   arena::cli::addBenchCommand(app);
+  arena::cli::addReportCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::RuntimeError& e) {

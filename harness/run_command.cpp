@@ -5,8 +5,8 @@
 
 #include "core/error.hpp"
 #include "harness/commands.hpp"
-#include "harness/compare.hpp"
-#include "harness/results.hpp"
+#include "metrics/compare.hpp"
+#include "metrics/results.hpp"
 #include "harness/run_matrix.hpp"
 #include "harness/scene_selection.hpp"
 

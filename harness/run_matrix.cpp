@@ -10,7 +10,7 @@
 #include "core/env_info.hpp"
 #include "core/error.hpp"
 #include "harness/image_files.hpp"
-#include "harness/results.hpp"
+#include "metrics/results.hpp"
 #include "metrics/error.hpp"
 #include "metrics/flip.hpp"
 #include "metrics/ghosting.hpp"

@@ -7,6 +7,9 @@ cd "$(dirname "$0")/.."
 packages=(build-essential cmake libembree-dev libopenexr-dev libopencv-dev libbenchmark-dev libglm-dev
           nlohmann-json3-dev libtbb-dev libgtest-dev libcli11-dev libsqlite3-dev libtinyobjloader-dev
           openexr embree-tools ${ARENA_EXTRA_PACKAGES:-})
+# `arena report` copies Vega's browser builds from reports/node_modules, installed with npm.
+command -v node >/dev/null 2>&1 || packages+=(nodejs)
+command -v npm >/dev/null 2>&1 || packages+=(npm)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -17,6 +20,14 @@ if [ ${#missing[@]} -gt 0 ]; then
   [ "$(id -u)" -ne 0 ] && SUDO="sudo"
   $SUDO apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+# The report's npm packages (Vega, Vega-Lite, vega-embed; playwright-core for the browser test),
+# exactly as locked; again only when package-lock.json is newer than the installed tree.
+if [ ! -d reports/node_modules ] || [ reports/package-lock.json -nt reports/node_modules ]; then
+  echo "setup: npm ci in reports/"
+  (cd reports && npm ci --no-audit --no-fund)
+  touch reports/node_modules
 fi
 
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null

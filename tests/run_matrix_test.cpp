@@ -7,8 +7,8 @@
 #include <fstream>
 
 #include "core/error.hpp"
-#include "harness/compare.hpp"
-#include "harness/results.hpp"
+#include "metrics/compare.hpp"
+#include "metrics/results.hpp"
 #include "harness/run_matrix.hpp"
 #include "tests/test_util.hpp"
 

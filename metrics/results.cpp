@@ -1,4 +1,4 @@
-#include "harness/results.hpp"
+#include "metrics/results.hpp"
 
 #include <sqlite3.h>
 

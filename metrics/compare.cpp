@@ -1,10 +1,10 @@
-#include "harness/compare.hpp"
+#include "metrics/compare.hpp"
 
 #include <cmath>
 #include <map>
 
 #include "core/error.hpp"
-#include "harness/results.hpp"
+#include "metrics/results.hpp"
 
 namespace arena {
 

@@ -1,0 +1,44 @@
+#pragma once
+// `arena report`: a static HTML dashboard built from a run's results.json (and, optionally, a
+// baseline run's). Reports only read results: nothing here includes a denoiser or the tracer.
+//
+// The page opens from disk (file://) with no server and no network, so the data travels as a
+// script (data.js sets window.ARENA_DATA) instead of a fetch(), and the charting library (Vega,
+// Vega-Lite, vega-embed from reports/node_modules) is copied next to index.html.
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace arena {
+
+struct ReportOptions {
+  std::filesystem::path run;       // the run directory to report
+  std::filesystem::path baseline;  // optional: a run to compare against (regression view)
+  std::filesystem::path out;       // where index.html and its files go
+  // The page's static files and the npm packages with the browser builds; the defaults are the
+  // source tree's, tests point them elsewhere.
+  std::filesystem::path webDir = defaultWebDir();
+  std::filesystem::path nodeModulesDir = defaultNodeModulesDir();
+
+  static std::filesystem::path defaultWebDir();
+  static std::filesystem::path defaultNodeModulesDir();
+};
+
+struct ReportSummary {
+  std::filesystem::path index;  // <out>/index.html
+  size_t pairs = 0, failedPairs = 0, imagesCopied = 0;
+};
+
+// The document embedded as data.js. `runDir` is where the run's images are looked up (only images
+// that exist are offered to the viewer); `baseline` may be null. Pure apart from those look-ups.
+nlohmann::json reportData(const nlohmann::json& results, const std::filesystem::path& runDir,
+                          const nlohmann::json* baseline);
+
+// Loads the run (and baseline) through loadResults, so a missing run or another schema version is
+// an arena::Error; a missing charting library is an Error that says to run scripts/setup.sh.
+ReportSummary writeReport(const ReportOptions& options);
+
+// The section ids index.html must contain, in page order (the tests check them).
+const std::vector<std::string>& reportSectionIds();
+
+}  // namespace arena
