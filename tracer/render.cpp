@@ -73,7 +73,7 @@ RenderSettings RenderSettings::fromPreset(const std::string& name) {
   if (name == "quick") {
     s.referenceSpp = 1024;
     s.referenceMinSpp = 64;
-    s.referenceRelError = 0.02;
+    s.referenceRelError = 0.03;  // reference relMSE <= 9e-4, ~10-40x below the denoisers' errors
   } else if (name == "paper") {
     s.width = 1280;
     s.height = 720;
