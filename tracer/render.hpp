@@ -24,7 +24,7 @@ struct RenderSettings {
   double referenceRelError = 0;  // > 0: stop when the reference's estimated relMSE <= this^2
   int maxBounces = 0;          // 0: the scene's own
 
-  // Presets: quick (the scene's resolution, 1024 spp references with adaptive stopping) and paper
+  // Presets: quick (the scene's resolution, references of 64-512 spp with adaptive stopping) and paper
   // (1280x720, 4096 spp references).
   static RenderSettings fromPreset(const std::string& name);
   // The settings that change pixels, for the cache hash and sequence.json.
