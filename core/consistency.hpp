@@ -5,6 +5,7 @@
 // normal (SVGF sec. 4.1; Falcor's SVGF thresholds).
 #include <glm/glm.hpp>
 
+#include "core/camera.hpp"
 #include "core/image.hpp"
 
 namespace arena {
@@ -32,6 +33,18 @@ inline SurfaceSample surfaceAt(const Image& depth, const Image& normal, const Im
   return {depth.at(x, y), {normal.at(x, y, 0), normal.at(x, y, 1), normal.at(x, y, 2)}, int(meshId.at(x, y))};
 }
 
+// The view depth that the surface point at world position `world`, seen now at view depth `depth`,
+// had from the previous camera: z + previousCamera.viewDepth(x) - camera.viewDepth(x). A camera
+// moving along its axis changes every depth, so a previous-frame tap must be compared with this,
+// not with the current depth (Falcor's G-buffer stores the previous clip-space depth for the same
+// reason). Callers that know both cameras and the position pass it as `current.depth` below; the
+// others (a still camera, or no position layer) pass the current depth.
+inline float previousViewDepth(float depth, glm::vec3 world, const CameraState& camera,
+                               const CameraState& previousCamera) {
+  return depth + (previousCamera.viewDepth(world) - camera.viewDepth(world));
+}
+
+// `current.depth` is the depth the previous frame should show there (see previousViewDepth).
 inline bool consistent(const SurfaceSample& current, const SurfaceDerivatives& d, const SurfaceSample& previous,
                        const ConsistencyThresholds& t = {}) {
   if (current.meshId < 0 || current.meshId != previous.meshId) return false;

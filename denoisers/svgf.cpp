@@ -50,7 +50,9 @@ void Svgf::denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& out
   gbuffer_ = GBufferView::fromFrame(in.frame, requiredChannels(), name_);
   computeDerivatives();
   reproject(ctx);
-  accumulate(in, adaptiveAlpha(ctx, in));
+  const Image* alpha = adaptiveAlpha(ctx, in);
+  accumulate(in, alpha);
+  correctAccumulation(ctx, in, alpha);
   estimateVariance();
   filterWavelet(output);
   storeHistory();
@@ -75,11 +77,11 @@ void Svgf::reproject(const FrameContext& ctx) {
 void Svgf::accumulate(const DenoiserInputs& in, const Image* alpha) {
   // Colour, moments and history length are resampled by the same reprojection decision.
   ScopedPass pass(this, "temporal accumulation", 3 * reprojection_.readTapsPerPixel());
-  updateHistoryLength(reprojection_, previousHistoryLength_, settings_.maxHistory, historyLength_);
-  accumulateTemporally(reprojection_, in.signal, colorHistory_, historyLength_,
-                       {settings_.alpha, alpha}, accumulated_);
-  accumulateMoments(reprojection_, in.signal, momentsHistory_, historyLength_,
-                    {settings_.momentsAlpha, alpha}, moments_);
+  // One sweep for the three (updateHistoryLength, accumulateTemporally, accumulateMoments).
+  accumulateColorAndMoments(reprojection_, previousHistoryLength_, settings_.maxHistory, in.signal,
+                            colorHistory_, momentsHistory_, {settings_.alpha, alpha},
+                            {settings_.momentsAlpha, alpha}, historyLength_, accumulated_,
+                            moments_);
 }
 
 void Svgf::estimateVariance() {

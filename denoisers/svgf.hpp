@@ -45,6 +45,11 @@ class Svgf : public Denoiser {
   // image (plane 0) raising the EMA floor per pixel, alpha = max(settings alpha, it, 1/h), for
   // colour and moments alike, or nullptr for plain SVGF.
   virtual const Image* adaptiveAlpha(const FrameContext&, const DenoiserInputs&) { return nullptr; }
+  // SLGF's hook: called once per frame right after accumulate() (with the alpha image it used) and
+  // before estimateVariance(); may rewrite accumulated_, moments_ and historyLength_, e.g. re-blend
+  // a corrected reprojected history (colorHistory_ / momentsHistory_ still hold frame i - 1's
+  // history here). Does nothing by default, so plain SVGF is unchanged.
+  virtual void correctAccumulation(const FrameContext&, const DenoiserInputs&, const Image*) {}
 
   // The stages, each one timed pass, in paper order.
   void computeDerivatives();                                      // ddx/ddy of depth, normal

@@ -59,10 +59,10 @@ class TemporalAccumulation final : public Denoiser {
     {
       // Disocclusions (and sky, never reprojected) get alpha = 1: the input passes through.
       ScopedPass pass(this, "accumulate", 2 * reprojection_.readTapsPerPixel());
-      updateHistoryLength(reprojection_, previousHistoryLength_, settings_.maxHistory,
-                          historyLength_);
-      accumulateTemporally(reprojection_, in.signal, colorHistory_, historyLength_,
-                           {settings_.alphaMin, nullptr}, output);
+      // updateHistoryLength and accumulateTemporally in one sweep.
+      accumulateWithHistoryLength(reprojection_, previousHistoryLength_, settings_.maxHistory,
+                                  in.signal, colorHistory_, {settings_.alphaMin, nullptr},
+                                  historyLength_, output);
     }
     {
       ScopedPass pass(this, "store history", 0);

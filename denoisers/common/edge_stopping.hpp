@@ -223,7 +223,7 @@ class EdgeStopping {
         // not in floats); n.n' <= 1e-30 gives weight 0 via an exponent past the cut-off.
         const int32_t bits = std::bit_cast<int32_t>(dot);
         const float cosine = std::bit_cast<float>(std::min(std::max(bits, kTiny), kOne));
-        e[x] += (bits < kTiny ? 1e30f : 0.0f) - sigmaN * logPositive(cosine);
+        e[x] += selectFloat(bits < kTiny, 1e30f, 0.0f) - sigmaN * logPositive(cosine);
       }
     }
     for (int x = xBegin; x < xEnd; ++x) weights[x] = expNonPositive(-e[x]);

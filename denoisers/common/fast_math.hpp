@@ -13,6 +13,15 @@ namespace arena {
 // operation can become conditional: a float clamp or std::floor ahead of arithmetic defeats it,
 // hence the integer-domain clamp and the truncation-based floor below.
 
+// condition ? ifTrue : ifFalse on the bit patterns. GCC does not if-convert a float ?: whose
+// operands come out of floating-point arithmetic (either could trap), and then does not vectorise
+// the loop; an integer select it does.
+inline float selectFloat(bool condition, float ifTrue, float ifFalse) {
+  const int32_t mask = -int32_t(condition);
+  return std::bit_cast<float>((std::bit_cast<int32_t>(ifTrue) & mask) |
+                              (std::bit_cast<int32_t>(ifFalse) & ~mask));
+}
+
 // e^x for x <= 0 (the sign of x is ignored: e^-|x|; NaN gives 0): 2^(x log2 e) split into
 // 2^integer (exponent bits) times 2^fraction (Taylor series of e^u, u = fraction * ln 2 in
 // [0, ln 2), to degree 8: truncation error < 1e-7; the float product x log2 e adds up to about
@@ -35,7 +44,8 @@ inline float expNonPositive(float x) {
                                                                           u * (1.0f / 40320))))))));
   // 2^whole from the exponent bits; 0 once 2^whole would be denormal.
   const float scale = std::bit_cast<float>(int32_t(std::max(whole + 127, 0) << 23));
-  return std::min(p * scale, 1.0f);
+  const float value = p * scale;
+  return selectFloat(1.0f < value, 1.0f, value);  // min(value, 1), if-converted in any loop
 }
 
 // ln x for normal positive x: x = m 2^e with m in [sqrt(1/2), sqrt(2)), ln m = 2 atanh(s),
@@ -43,8 +53,10 @@ inline float expNonPositive(float x) {
 inline float logPositive(float x) {
   const int32_t bits = std::bit_cast<int32_t>(x);
   const int32_t mantissaBits = bits & 0x007FFFFF;
-  const int32_t high = mantissaBits > 0x003504F3 ? 1 : 0;  // mantissa above sqrt(2): halve it
-  const float m = std::bit_cast<float>(mantissaBits | (high ? 0x3F000000 : 0x3F800000));
+  // Mantissa above sqrt(2): halve it (m exponent 0x3F000000 instead of 0x3F800000). Sign-bit
+  // arithmetic rather than ?: so that GCC if-converts it inside bigger loops too.
+  const int32_t high = ((0x003504F3 - mantissaBits) >> 31) & 1;
+  const float m = std::bit_cast<float>(mantissaBits | (0x3F800000 - (high << 23)));
   const float e = float(((bits >> 23) & 255) - 127 + high);
   const float s = (m - 1.0f) / (m + 1.0f), s2 = s * s;
   const float series =

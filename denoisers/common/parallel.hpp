@@ -3,6 +3,7 @@
 // unit of work so each body walks contiguous memory in every plane.
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <xmmintrin.h>
 
 #include <cstdint>
 #include <numeric>
@@ -10,10 +11,30 @@
 
 namespace arena {
 
-// Calls rowBody(y) for every row 0..height-1, rows spread over the TBB workers.
+// Denormals flushed to zero (FTZ) and read as zero (DAZ) while a pixel loop runs, the previous
+// mode restored after. Two reasons: the tracer leaves FTZ/DAZ on in the TBB workers it ran on
+// (Embree asks for it) and not on the others, so without a fixed mode a filter's result would
+// depend on which thread ran which row, breaking bit-identical reruns; and filter weights decay
+// towards 0 (w^2 Var, c^128), where each denormal costs a ~100-cycle microcode assist.
+class DenormalsAreZeroScope {
+ public:
+  DenormalsAreZeroScope() : saved_(_mm_getcsr()) {
+    _mm_setcsr(saved_ | kFlushZero | kDenormalsZero);
+  }
+  ~DenormalsAreZeroScope() { _mm_setcsr(saved_); }
+  DenormalsAreZeroScope(const DenormalsAreZeroScope&) = delete;
+  DenormalsAreZeroScope& operator=(const DenormalsAreZeroScope&) = delete;
+
+ private:
+  static constexpr unsigned kFlushZero = 0x8000, kDenormalsZero = 0x0040;  // MXCSR bits 15, 6
+  unsigned saved_;
+};
+
+// Calls rowBody(y) for every row 0..height-1, rows spread over the TBB workers, denormals zero.
 template <class RowBody>
 void parallelRows(int height, RowBody&& rowBody) {
   tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
+    const DenormalsAreZeroScope denormalsAreZero;
     for (int y = rows.begin(); y < rows.end(); ++y) rowBody(y);
   });
 }

@@ -4,6 +4,7 @@
 #include <bit>
 #include <cmath>
 
+#include "core/consistency.hpp"
 #include "core/error.hpp"
 
 namespace arena {
@@ -52,8 +53,9 @@ void Reprojection::compute(const GBufferView& current, const Image& derivatives,
     throw Error("reprojection: needs the depth, normal, meshId and motion layers");
   const bool correctDepth = camera && previousCamera && current.position[0];
   const int w = width_, h = height_;
-  // Falcor's +1e-2 keeps a flat, camera-facing surface (fwidth = 0) from rejecting rounding noise.
-  constexpr float kFwidthBias = 1e-2f;
+  // Falcor's +1e-2 keeps a flat, camera-facing surface (fwidth = 0) from rejecting rounding noise;
+  // core/consistency.hpp adds it.
+  const ConsistencyThresholds thresholds{settings.depthThreshold, settings.normalThreshold};
 
   parallelRows(h, [&](int y) {
     int64_t tested = 0, read = 0;
@@ -69,28 +71,28 @@ void Reprojection::compute(const GBufferView& current, const Image& derivatives,
       if (!std::isfinite(px) || !std::isfinite(py) || std::abs(px) > 1e7f || std::abs(py) > 1e7f)
         continue;
 
-      const float id = current.meshId[p];
-      float expectedDepth = current.depth[p];
+      // This pixel's surface as the previous frame should show it (the depth camera-corrected).
+      SurfaceSample surface{current.depth[p],
+                            {current.normal[0][p], current.normal[1][p], current.normal[2][p]},
+                            int(current.meshId[p])};
       if (correctDepth) {
-        glm::vec3 world(current.position[0][p], current.position[1][p], current.position[2][p]);
-        expectedDepth += previousCamera->viewDepth(world) - camera->viewDepth(world);
+        const glm::vec3 world(current.position[0][p], current.position[1][p],
+                              current.position[2][p]);
+        surface.depth = previousViewDepth(surface.depth, world, *camera, *previousCamera);
       }
-      const float depthScale = 1.0f / (depthFwidth(derivatives, p) + kFwidthBias);
-      const float normalScale = 1.0f / (derivatives.plane(kNormalFwidth)[p] + kFwidthBias);
+      const SurfaceDerivatives fwidth{depthFwidth(derivatives, p),
+                                      derivatives.plane(kNormalFwidth)[p]};
 
-      // SVGF §4.1: each tap is tested separately for depth, normal and mesh id.
-      auto consistent = [&](int qx, int qy) {
+      // SVGF §4.1: each tap is tested separately for depth, normal and mesh id, by the one
+      // definition the metrics use too (core/consistency.hpp).
+      auto consistentTap = [&](int qx, int qy) {
         if (qx < 0 || qy < 0 || qx >= w || qy >= h) return false;  // off-screen
         const size_t q = size_t(qy) * size_t(w) + size_t(qx);
-        if (previous.meshId[q] != id) return false;
-        if (std::abs(previous.depth[q] - expectedDepth) * depthScale > settings.depthThreshold)
-          return false;
-        float d2 = 0;
-        for (size_t c = 0; c < 3; ++c) {
-          float d = current.normal[c][p] - previous.normal[c][q];
-          d2 += d * d;
-        }
-        return std::sqrt(d2) * normalScale <= settings.normalThreshold;
+        const SurfaceSample tap{
+            previous.depth[q],
+            {previous.normal[0][q], previous.normal[1][q], previous.normal[2][q]},
+            int(previous.meshId[q])};
+        return consistent(surface, fwidth, tap, thresholds);
       };
 
       const float fx = px - 0.5f, fy = py - 0.5f;
@@ -101,7 +103,7 @@ void Reprojection::compute(const GBufferView& current, const Image& derivatives,
       tested += 4;
       for (int k = 0; k < 4; ++k) {
         // A zero-weight tap is never read, so an exact integer shift reads exactly one pixel.
-        if (bilinear[k] > 0.0f && consistent(x0 + k % 2, y0 + k / 2)) {
+        if (bilinear[k] > 0.0f && consistentTap(x0 + k % 2, y0 + k / 2)) {
           rec.mask |= uint16_t(1u << k);
           weightSum += bilinear[k];
         }
@@ -122,7 +124,7 @@ void Reprojection::compute(const GBufferView& current, const Image& derivatives,
       const int cx = int(std::floor(px)), cy = int(std::floor(py));
       tested += 9;
       for (int k = 0; k < 9; ++k)
-        if (consistent(cx - 1 + k % 3, cy - 1 + k / 3)) rec.mask |= uint16_t(1u << k);
+        if (consistentTap(cx - 1 + k % 3, cy - 1 + k / 3)) rec.mask |= uint16_t(1u << k);
       const int count = std::popcount(rec.mask);
       if (count == 0) continue;  // disocclusion
       rec.footprint = ReprojectionFootprint::Box3x3;
@@ -137,23 +139,7 @@ void Reprojection::compute(const GBufferView& current, const Image& derivatives,
 }
 
 float Reprojection::sample(size_t i, const float* plane) const {
-  const ReprojectionRecord& rec = records_[i];
-  const size_t w = size_t(width_);
-  float sum = 0;
-  switch (rec.footprint) {
-    case ReprojectionFootprint::Disoccluded:
-      return 0.0f;
-    case ReprojectionFootprint::Bilinear2x2:
-      for (int k = 0; k < 4; ++k)
-        if ((rec.mask >> k) & 1u)
-          sum += rec.weights[k] * plane[size_t(rec.y0 + k / 2) * w + size_t(rec.x0 + k % 2)];
-      return sum;
-    case ReprojectionFootprint::Box3x3:
-      for (int k = 0; k < 9; ++k)
-        if ((rec.mask >> k) & 1u) sum += plane[size_t(rec.y0 + k / 3) * w + size_t(rec.x0 + k % 3)];
-      return sum * rec.weights[0];
-  }
-  return 0.0f;
+  return HistoryTaps(records_[i], width_).apply(plane);
 }
 
 void Reprojection::resample(const Image& history, Image& out, float fillDisoccluded) const {
@@ -161,10 +147,13 @@ void Reprojection::resample(const Image& history, Image& out, float fillDisocclu
     throw Error("reprojection: resample() images must match the reprojection size and each other");
   parallelRows(height_, [&](int y) {
     for (int x = 0; x < width_; ++x) {
-      size_t i = size_t(y) * size_t(width_) + size_t(x);
-      bool ok = valid(i);
-      for (int c = 0; c < history.channels(); ++c)
-        out.plane(c)[i] = ok ? sample(i, history.plane(c)) : fillDisoccluded;
+      const size_t i = size_t(y) * size_t(width_) + size_t(x);
+      if (!valid(i)) {
+        for (int c = 0; c < history.channels(); ++c) out.plane(c)[i] = fillDisoccluded;
+        continue;
+      }
+      const HistoryTaps taps(records_[i], width_);
+      for (int c = 0; c < history.channels(); ++c) out.plane(c)[i] = taps.apply(history.plane(c));
     }
   });
 }

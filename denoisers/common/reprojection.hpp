@@ -43,6 +43,48 @@ struct ReprojectionRecord {
   float weights[4] = {0, 0, 0, 0};  // 2x2: normalised weight of tap k; 3x3: weights[0] = 1/count
 };
 
+// One pixel's history taps as (index, weight) pairs, decoded once from its record and then
+// applied to any number of previous-frame planes (accumulation reads colour, moments and history
+// length through the same taps). apply() rounds exactly as Reprojection::sample().
+struct HistoryTaps {
+  int count = 0;              // taps read; 0 when disoccluded (apply() gives 0)
+  bool average = false;       // Box3x3: the taps are summed, then scaled by 1/count
+  float averageScale = 0.0f;  // 1/count for Box3x3
+  size_t index[9];            // only the first `count` are set
+  float weight[4];            // Bilinear2x2: each tap's normalised weight
+
+  HistoryTaps(const ReprojectionRecord& record, int width) {
+    const size_t w = size_t(width);
+    switch (record.footprint) {
+      case ReprojectionFootprint::Disoccluded:
+        return;
+      case ReprojectionFootprint::Bilinear2x2:
+        for (int k = 0; k < 4; ++k)
+          if ((record.mask >> k) & 1u) {
+            index[count] = size_t(record.y0 + k / 2) * w + size_t(record.x0 + k % 2);
+            weight[count++] = record.weights[k];
+          }
+        return;
+      case ReprojectionFootprint::Box3x3:
+        average = true;
+        averageScale = record.weights[0];
+        for (int k = 0; k < 9; ++k)
+          if ((record.mask >> k) & 1u)
+            index[count++] = size_t(record.y0 + k / 3) * w + size_t(record.x0 + k % 3);
+        return;
+    }
+  }
+  float apply(const float* plane) const {
+    float sum = 0;
+    if (average) {
+      for (int k = 0; k < count; ++k) sum += plane[index[k]];
+      return sum * averageScale;
+    }
+    for (int k = 0; k < count; ++k) sum += weight[k] * plane[index[k]];
+    return sum;
+  }
+};
+
 class Reprojection {
  public:
   void setup(int width, int height);

@@ -53,9 +53,11 @@ void blendWithHistory(const Reprojection& reprojection, int channels, CurrentVal
         for (int c = 0; c < channels; ++c) out.plane(c)[i] = current(i, c);
         continue;
       }
+      // The taps are decoded once and read for every channel.
+      const HistoryTaps taps(reprojection.record(i), reprojection.width());
       const float a = blendAlpha(length[i], alpha.at(i));
       for (int c = 0; c < channels; ++c)
-        out.plane(c)[i] = a * current(i, c) + (1.0f - a) * reprojection.sample(i, history.plane(c));
+        out.plane(c)[i] = a * current(i, c) + (1.0f - a) * taps.apply(history.plane(c));
     }
   });
 }
@@ -65,5 +67,13 @@ void blendWithHistory(const Reprojection& reprojection, int channels, CurrentVal
 void accumulateTemporally(const Reprojection& reprojection, const Image& current,
                           const Image& history, const Image& historyLength,
                           const AccumulationAlpha& alpha, Image& accumulated);
+
+// updateHistoryLength then accumulateTemporally in one sweep that decodes each pixel's history
+// taps once; the results are exactly those of the two calls.
+void accumulateWithHistoryLength(const Reprojection& reprojection,
+                                 const Image& previousHistoryLength, float maxHistory,
+                                 const Image& current, const Image& history,
+                                 const AccumulationAlpha& alpha, Image& historyLength,
+                                 Image& accumulated);
 
 }  // namespace arena

@@ -17,6 +17,14 @@ void accumulateMoments(const Reprojection& reprojection, const Image& signal,
                        const Image& momentsHistory, const Image& historyLength,
                        const AccumulationAlpha& alpha, Image& moments);
 
+// updateHistoryLength, accumulateTemporally (colour) and accumulateMoments in one sweep that
+// decodes each pixel's history taps once; the results are exactly those of the three calls.
+void accumulateColorAndMoments(const Reprojection& reprojection, const Image& previousHistoryLength,
+                               float maxHistory, const Image& signal, const Image& colorHistory,
+                               const Image& momentsHistory, const AccumulationAlpha& colorAlpha,
+                               const AccumulationAlpha& momentsAlpha, Image& historyLength,
+                               Image& accumulated, Image& moments);
+
 struct VarianceSettings {
   float minHistory = 4.0f;  // SVGF §4.2: spatial estimate while fewer than 4 frames accumulated
   int radius = 3;           // SVGF §4.2: 7x7
