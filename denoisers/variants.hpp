@@ -11,9 +11,14 @@ DenoiserInfo passthroughInfo();
 DenoiserInfo temporalInfo();
 DenoiserInfo eawInfo();
 DenoiserInfo svgfInfo();
+DenoiserInfo asvgfInfo();
+DenoiserInfo slgfInfo();
+DenoiserInfo reblurInfo();
+DenoiserInfo hybridInfo();
 
 inline std::vector<DenoiserInfo> builtinDenoisers() {
-  return {passthroughInfo(), temporalInfo(), eawInfo(), svgfInfo()};
+  return {passthroughInfo(), temporalInfo(), eawInfo(), svgfInfo(), asvgfInfo(), slgfInfo(),
+          reblurInfo(), hybridInfo()};
 }
 
 }  // namespace arena

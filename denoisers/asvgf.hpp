@@ -1,0 +1,84 @@
+#pragma once
+// A-SVGF, adaptive spatiotemporal variance-guided filtering (Schied et al. 2018, "Gradient
+// Estimation for Real-Time Adaptive Temporal Filtering"; seed 001). SVGF whose temporal alpha is
+// raised per pixel by a temporal gradient: Svgf's pipeline unchanged, plus the gradient
+// reconstruction this class supplies through Svgf::adaptiveAlpha(). See asvgf.cpp.
+#include <string>
+#include <vector>
+
+#include "denoisers/svgf.hpp"
+
+namespace arena {
+
+// Where the gradient is normalised (A-SVGF eq. 14 vs Q2RTX's asvgf_gradient_img).
+enum class GradientNormalisation {
+  // Paper: filter delta and Delta separately, lambda = min(1, |delta^| / Delta^) afterwards;
+  // empty strata count as zero in both and cancel in the ratio.
+  Paper,
+  // Q2RTX: each sample's ratio (|delta| / Delta)^2 first ("make small changes less
+  // significant"), then the ratios are filtered; empty strata count as ratio 0 and dilute it.
+  Q2rtx,
+};
+
+struct AsvgfSettings {
+  SvgfSettings svgf;  // alpha is A-SVGF's base alpha (eq. 15), momentsAlpha the moments' floor
+  // Gradient reconstruction (A-SVGF §3.4) at stratum resolution.
+  int gradientIterations = 5;  // paper: 5 joint-bilateral à-trous iterations (k = 0..4)
+  bool gradientDepth = true, gradientNormal = true, gradientLuminance = true;
+  float gradientSigmaZ = 1.0f;    // eq. 10 sigma_z (paper values as SVGF: 1)
+  float gradientSigmaN = 128.0f;  // eq. 9 sigma_n (128)
+  float gradientSigmaL = 4.0f;    // eq. 11 sigma_l (4)
+  float depthEpsilon = 1e-3f;     // eq. 10's guard, relative to z(p) (as the shared depth term)
+  GradientNormalisation normalisation = GradientNormalisation::Paper;
+  float antilagGain = 1.0f;  // lambda multiplier: 1 in the paper; Q2RTX flt_antilag_hf
+  bool max3x3 = true;        // §3.5: the max alpha over the 3x3 neighbouring strata
+  // Q2RTX asvgf_temporal: shorten the history with the anti-lag factor,
+  // h' = (h - 1)(1 - lambda)^10 + 1, so a rejected history restarts 1/h and the spatial variance.
+  bool shortenHistory = false;
+};
+
+std::vector<ParamSpec> asvgfParamSpecs();
+AsvgfSettings asvgfSettings(const ParamSet& params);
+
+class Asvgf final : public Svgf {
+ public:
+  explicit Asvgf(const AsvgfSettings& settings);
+
+  // SVGF's guides plus "color": the gradient samples are luminances of the remodulated colour,
+  // so the per-stratum luminance guide (§3.4) is taken from the same colour.
+  std::vector<std::string> requiredChannels() const override;
+  bool needsGradients() const override { return true; }
+  void setup(int width, int height) override;
+
+  // Of the last frame, at stratum resolution (ceil(w/3) x ceil(h/3)); zero when the frame had no
+  // gradients. Plane 0: delta^, plane 1: Delta^ (paper) or the filtered ratio (Q2RTX), after
+  // the last iteration.
+  const Image& lastGradient() const { return gradient_[resultIndex_]; }
+  // lambda per stratum after the optional 3x3 max (eq. 14, §3.5).
+  const Image& lastLambda() const { return lambda_; }
+
+ protected:
+  const Image* adaptiveAlpha(const FrameContext& ctx, const DenoiserInputs& in) override;
+  void correctAccumulation(const FrameContext& ctx, const DenoiserInputs& in,
+                           const Image* alpha) override;
+
+ private:
+  void buildStrata(const DenoiserInputs& in);
+  void filterGradients();
+  void computeAlpha();
+
+  AsvgfSettings asvgf_;
+  int strataWidth_ = 0, strataHeight_ = 0;
+  bool adapted_ = false;  // this frame's alpha came from gradients
+  // Per stratum: the pixel whose G-buffer guides it (-1: only sky), its guides
+  // (z, dz/dx, dz/dy, n, pixel x, y), and the filter state (delta, Delta, l, Var(l)) ping-pong.
+  std::vector<int> guidePixel_;
+  Image guide_;
+  Image gradient_[2];
+  int resultIndex_ = 0;  // which of gradient_ holds the last iteration's output
+  Image blurredVariance_;
+  Image stratumLambda_, lambda_;
+  Image alpha_;  // per pixel, handed to Svgf
+};
+
+}  // namespace arena

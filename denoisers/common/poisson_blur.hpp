@@ -1,0 +1,72 @@
+#pragma once
+// Poisson-disk blur (ReBLUR, Zhadan GTC 2020 / NRD; the CEDEC 2021 talk p. "4.1.2"): a fixed set
+// of 8 taps inside a disk of a given radius, rotated by a per-frame angle so that temporal
+// accumulation sees different taps every frame ("サンプル点に回転のようなランダマイズ処理を
+// 適用することで有効なサンプル数を増やす"). The weights are NRD's kind -- geometry only, no
+// luminance: plane distance, normal, and for the specular signal hit distance and roughness.
+// The same weights drive any sparse gather (ReBLUR's stride-14 history fix), see SurfaceWeights.
+#include <array>
+#include <cmath>
+
+#include "core/image.hpp"
+#include "denoisers/common/gbuffer.hpp"
+
+namespace arena {
+
+// The guides the weights read; roughness and hitDistance only for the specular terms.
+struct SurfaceGuide {
+  const GBufferView& gbuffer;          // depth, normal, position, meshId
+  const float* roughness = nullptr;    // perceptual roughness
+  const float* hitDistance = nullptr;  // specHitDist (1e6 on miss)
+};
+
+struct SurfaceWeightSettings {
+  // Plane distance (NRD's geometry weight): exp(-|n(p).(x(q) - x(p))| / (planeSigma z(p))), a
+  // neighbour off the tangent plane of p by planeSigma of the view depth weighs 1/e.
+  bool planeDistance = true;
+  float planeSigma = 0.02f;  // (0; inf) ours (NRD compares with a fraction of the frustum size)
+  // Normal: max(0, n(p).n(q))^normalPower (NRD limits the lobe angle instead).
+  bool normal = true;
+  float normalPower = 32.0f;  // [0; inf) ours: 10 degrees -> 0.61
+  // Specular: hit distance, exp(-|h(p) - h(q)| / (hitSigma (min(h(p), 1e4) + z(p)))).
+  bool hitDistance = false;
+  float hitSigma = 0.3f;  // (0; inf) ours
+  // Specular: roughness, exp(-|r(p) - r(q)| / roughnessSigma).
+  bool roughness = false;
+  float roughnessSigma = 0.1f;  // (0; inf) ours
+};
+
+// w(p, q) in [0, 1]; 0 for sky q. Built per frame; references the guide's planes.
+class SurfaceWeights {
+ public:
+  SurfaceWeights(const SurfaceWeightSettings& settings, const SurfaceGuide& guide);
+  float operator()(size_t p, size_t q) const;
+
+ private:
+  SurfaceWeightSettings s_;
+  GBufferView g_;
+  const float* roughness_;
+  const float* hitDistance_;
+};
+
+struct PoissonBlurSettings {
+  float radius = 30.0f;  // pixels (NRD blurRadius 30 at its defaults)
+  SurfaceWeightSettings weights;
+};
+
+// The 8 unit-disk taps (a Vogel / golden-angle spiral: the talk notes any pattern with
+// Poisson-like spacing serves, e.g. AMD's Halton points), rotated by poissonRotation(frame).
+constexpr int kPoissonTaps = 8;
+std::array<std::array<float, 2>, kPoissonTaps> poissonDisk(float rotation);
+// Deterministic per-frame rotation: frame * golden angle, mod 2 pi.
+float poissonRotation(int frameIndex);
+
+// out(p) = sum_q w(p, q) in(q) / sum_q w(p, q) over p and its 8 rotated disk taps (nearest
+// pixel), radius settings.radius * radiusScale(p) (radiusScale: optional 1-channel image). Taps
+// off the image or in the sky are dropped; sky pixels pass through. Any channel count; out must
+// not alias in.
+void poissonDiskBlur(const Image& in, const SurfaceGuide& guide,
+                     const PoissonBlurSettings& settings, float rotation, const Image* radiusScale,
+                     Image& out);
+
+}  // namespace arena

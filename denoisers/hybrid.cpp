@@ -1,0 +1,520 @@
+// `hybrid`: the CEDEC 2021 talk's denoiser (seed 000, section 5.1 "デノイザーの処理フロー"):
+//   0. (CAPCOM ablation) optionally move into Reinhard-compressed space,
+//   1. metadata, gathered once: depth/normal derivatives and every pixel's specular lobe,
+//   2. disocclusion pass: reprojection consistency (on screen, mesh id, depth, normal) writes the
+//      mask and the history length h; optionally the mask is blurred where the region grows,
+//   3. pre-spatial: one 3x3 à-trous over the signal and its second moment (variance clipping's
+//      box and the disocclusion fill), optionally a 2-level mip chain for a wider fill,
+//   4. temporal: motion or hit-point reprojection chosen by roughness (specular), EMA with
+//      alpha = 1/h, h <= 24; variance clipping of the history to the pre-spatial mu +- k sigma;
+//      disoccluded pixels take the pre-spatial value; the luminance threshold replaces the
+//      accumulated value by the pre-filtered one where they differ by more than tau; (CAPCOM)
+//      a temporal luminance rejection against a stabilised one-frame result; the temporal result
+//      is the history (the post-spatial result is not recurrent),
+//   5. post-spatial: 3 à-trous iterations (3x3, spacing 1, 2, 4), a 3x3 median before the first
+//      (fireflies; never fed back), optionally a mip level bilaterally upsampled,
+//   6. optionally a light second EMA as the temporal stabiliser (the talk leaves it to TAA).
+// Edge-stopping everywhere: world position, specular lobe, luminance, mesh id (each switchable).
+// With every optional stage off it is temporal accumulation followed by à-trous.
+#include "denoisers/hybrid.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.hpp"
+#include "denoisers/common/median.hpp"
+#include "denoisers/variants.hpp"
+
+namespace arena {
+
+namespace {
+void copyImage(const Image& from, Image& to) {
+  std::copy(from.raw().begin(), from.raw().end(), to.raw().begin());
+}
+float lumaAt(const Image& image, size_t i) {
+  return luminance(image.plane(0)[i], image.plane(1)[i], image.plane(2)[i]);
+}
+}  // namespace
+
+Hybrid::Hybrid(const HybridSettings& settings, SignalKind kind) : s_(settings), kind_(kind) {}
+
+std::vector<std::string> Hybrid::requiredChannels() const {
+  std::vector<std::string> channels = {"depth", "normal", "meshId", "motion", "position"};
+  if (kind_ == SignalKind::Specular) {
+    channels.push_back("roughness");
+    channels.push_back("specHitDist");
+  }
+  return channels;
+}
+
+void Hybrid::setup(int width, int height) {
+  derivatives_ = Image(width, height, kGeometryDerivativeChannels);
+  lobes_ = Image(width, height, kSpecularLobeChannels);
+  surface_.setup(width, height);
+  virtual_.setup(width, height);
+  previousGBuffer_.setup(width, height);
+  preMips_.setup(width, height, s_.preMipLevels, 3);
+  postMips_.setup(width, height, s_.postMipLevels, 3);
+  for (Image* image :
+       {&colorHistory_, &oneFrameHistory_, &stabilizerHistory_, &signal_, &preSpatial_,
+        &preMoments_, &preWide_, &temporal_, &oneFrame_, &median_, &atrous_[0], &atrous_[1],
+        &atrous_[2], &post_, &reprojectedStabilizer_, &stabilized_})
+    *image = Image(width, height, 3);
+  for (Image* image : {&lengthHistory_, &mask_, &blurredMask_, &historyLength_, &variance_,
+                       &filteredVariance_, &levels_})
+    *image = Image(width, height, 1);
+  momentsHistory_ = Image(width, height, 2);
+  moments_ = Image(width, height, 2);
+  taps_.setup(height);
+  hasHistory_ = false;
+}
+
+void Hybrid::reset() {
+  hasHistory_ = false;
+}
+
+void Hybrid::denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& output) {
+  if (ctx.reset) reset();
+  gbuffer_ = GBufferView::fromFrame(in.frame, requiredChannels(), "hybrid");
+  roughness_ =
+      kind_ == SignalKind::Specular ? in.frame.get("roughness", "hybrid").plane(0) : nullptr;
+  hitDistance_ =
+      kind_ == SignalKind::Specular ? in.frame.get("specHitDist", "hybrid").plane(0) : nullptr;
+  toFilterSpace(in.signal);
+  metadata(ctx);
+  disocclusion(ctx);
+  preSpatial();
+  temporal();
+  postSpatial();
+  stabilize();
+  fromFilterSpace(output);
+  storeHistory();
+}
+
+// ---- 0. Filter space. CAPCOM (seed 004, "Removing Reinhard Curves"): filtering a Reinhard-
+// compressed signal ghosts under exposure changes; linear is their fix. reinhard = true filters
+// y = c / (1 + L(c)) and expands the result with c = y / (1 - L(y)) -- the ablation.
+void Hybrid::toFilterSpace(const Image& signal) {
+  ScopedPass pass(this, "filter space", 0);
+  if (!s_.reinhard) {
+    copyImage(signal, signal_);
+    return;
+  }
+  for (size_t i = 0; i < signal.pixelCount(); ++i) {
+    const float scale = 1.0f / (1.0f + std::max(lumaAt(signal, i), 0.0f));
+    for (int c = 0; c < 3; ++c) signal_.plane(c)[i] = signal.plane(c)[i] * scale;
+  }
+}
+
+// ---- 1. Metadata (the talk's "Metadata" pass: depth, normal, motion, roughness, id organised
+// once): screen-space derivatives for the consistency tests and every pixel's specular lobe.
+void Hybrid::metadata(const FrameContext& ctx) {
+  ScopedPass pass(this, "metadata", 4);
+  computeGeometryDerivatives(gbuffer_, derivatives_);
+  if (s_.edgeLobe)
+    computeSpecularLobes(gbuffer_, roughness_, ctx.camera, kind_ == SignalKind::Specular, s_.lobe,
+                         lobes_);
+}
+
+int Hybrid::historySource(size_t i) const {
+  // The talk: "lerp(UV_motion, UV_hitpt, roughness > threshold)" -- a switch, not a blend;
+  // hit point for smooth surfaces ("スムースな鏡面反射では Hit Point Reprojection を使います").
+  if (useVirtual_ && roughness_[i] < s_.hitPointRoughness) return virtual_.valid(i) ? 2 : 0;
+  return surface_.valid(i) ? 1 : 0;
+}
+
+float Hybrid::historySample(size_t i, const float* plane) const {
+  switch (historySource(i)) {
+    case 1:
+      return surface_.sample(i, plane);
+    case 2:
+      return virtual_.sample(i, plane);
+    default:
+      return 0.0f;
+  }
+}
+
+// ---- 2. Disocclusion (the talk p. "4.2.4"): "bSuccess = in screen && depth && normal && id";
+// mask = !bSuccess, h = bSuccess ? min(h + 1, MAX) : 1. The optional blur spreads the mask only
+// outwards ("領域の広がる方向にのみ"): mask' = max(mask, 3x3 mean), a soft border for the fill.
+void Hybrid::disocclusion(const FrameContext& ctx) {
+  ScopedPass pass(this, "disocclusion", 4);
+  useVirtual_ = kind_ == SignalKind::Specular && s_.hitPointReprojection;
+  if (hasHistory_) {
+    const GBufferView previous = previousGBuffer_.view();
+    surface_.compute(gbuffer_, derivatives_, previous, s_.reprojection, &ctx.camera,
+                     &ctx.previousCamera);
+    if (useVirtual_)
+      virtual_.compute(gbuffer_, hitDistance_, ctx.camera, ctx.previousCamera, previous,
+                       s_.hitPoint);
+  } else {
+    surface_.invalidateAll();
+    virtual_.invalidateAll();
+  }
+  const float maxHistory = float(s_.maxHistory);
+  for (size_t i = 0; i < gbuffer_.pixelCount(); ++i) {
+    const bool valid = historySource(i) != 0;
+    mask_.plane(0)[i] = valid ? 0.0f : 1.0f;
+    historyLength_.plane(0)[i] =
+        valid ? std::min(historySample(i, lengthHistory_.plane(0)) + 1.0f, maxHistory) : 1.0f;
+  }
+  copyImage(mask_, blurredMask_);
+  if (!s_.maskBlur) return;
+  const int w = gbuffer_.width, h = gbuffer_.height;
+  parallelRows(h, [&](int y) {
+    for (int x = 0; x < w; ++x) {
+      const size_t p = size_t(y) * size_t(w) + size_t(x);
+      float sum = 0;
+      int count = 0;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int qx = x + dx, qy = y + dy;
+          if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+          const size_t q = size_t(qy) * size_t(w) + size_t(qx);
+          if (gbuffer_.isSky(q)) continue;
+          sum += mask_.plane(0)[q];
+          ++count;
+        }
+      if (count > 0) blurredMask_.plane(0)[p] = std::max(mask_.plane(0)[p], sum / float(count));
+    }
+  });
+  pass.setTaps(13);
+}
+
+bool Hybrid::usesPreSpatial() const {
+  return s_.disocclusionFill || s_.varianceClip || s_.lumaThreshold || s_.capcomRejection;
+}
+
+namespace {
+AtrousSettings hybridAtrous(const HybridSettings& s, bool luminance) {
+  AtrousSettings a;
+  a.kernel = AtrousKernel::Compact3x3;  // the talk's 3x3 à-trous (9 fetches per iteration)
+  EdgeStoppingSettings& e = a.edges;
+  e.depth = false;  // the talk: 3D position stands in for depth ("3次元の空間位置は深度項の代わり")
+  e.normal = false;  // ... and the specular lobe for the normal
+  e.color = false;
+  e.position = s.edgePosition;
+  e.sigmaX = s.sigmaX;
+  e.luminance = luminance && s.edgeLuminance;
+  e.sigmaL = s.sigmaL;
+  e.id = s.edgeId;
+  return a;
+}
+}  // namespace
+
+// ---- 3. Pre-spatial (à-trous x1 over the signal and its second moment, p. "5.1": "事前 Spatial
+// Accumulation ... Disocclusion補完 / Variance Clipping"); the luminance term is off here: no
+// variance exists yet. Optional mip chain: a wider estimate for the fill and the luminance
+// threshold, level MaxMipLevel * roughness for the specular signal (p. "5.1").
+void Hybrid::preSpatial() {
+  if (!usesPreSpatial()) return;
+  {
+    ScopedPass pass(this, "pre-spatial à-trous x1", 9);
+    Image& squared = preWide_;  // scratch: the second moment's input
+    for (size_t k = 0; k < signal_.raw().size(); ++k)
+      squared.raw()[k] = signal_.raw()[k] * signal_.raw()[k];
+    const AtrousGuide guide{gbuffer_, &derivatives_, nullptr};
+    lobeAtrousIteration(0, hybridAtrous(s_, false), guide,
+                        {s_.edgeLobe ? &lobes_ : nullptr, s_.lobeBeta}, signal_, preSpatial_,
+                        &squared, &preMoments_);
+  }
+  ScopedPass pass(this, "pre-spatial mip", s_.preMip ? 4 : 0);
+  if (!s_.preMip) {
+    copyImage(preSpatial_, preWide_);
+    return;
+  }
+  preMips_.build(preSpatial_, gbuffer_);
+  const float maxLevel = float(preMips_.levels());
+  for (size_t i = 0; i < gbuffer_.pixelCount(); ++i)
+    levels_.plane(0)[i] = roughness_ ? maxLevel * roughness_[i] : maxLevel;
+  preMips_.upsample(preMips_.levels(), &levels_, gbuffer_, {}, preWide_);
+}
+
+// ---- 4. Temporal accumulation (p. "4.2"): X = alpha x + (1 - alpha) X_prev, alpha = 1/h.
+void Hybrid::temporal() {
+  ScopedPass pass(this, "temporal", useVirtual_ ? 8 : 4);
+  const int w = gbuffer_.width;
+  const HistoryClampMode clipMode = s_.clipMode;
+  parallelRows(gbuffer_.height, [&](int y) {
+    for (int x = 0; x < w; ++x) {
+      const size_t i = size_t(y) * size_t(w) + size_t(x);
+      float current[3], history[3], result[3];
+      for (int c = 0; c < 3; ++c) current[c] = signal_.plane(c)[i];
+      const float l = luminance(current[0], current[1], current[2]);
+      const bool valid = historySource(i) != 0;
+      float h = historyLength_.plane(0)[i];
+      float pre[3] = {0, 0, 0}, wide[3] = {0, 0, 0};
+      if (usesPreSpatial())
+        for (int c = 0; c < 3; ++c) {
+          pre[c] = preSpatial_.plane(c)[i];
+          wide[c] = preWide_.plane(c)[i];
+        }
+      // CAPCOM's one-frame estimate, stabilised by a 2-frame EMA of the pre-filtered signal.
+      if (s_.capcomRejection)
+        for (int c = 0; c < 3; ++c)
+          oneFrame_.plane(c)[i] =
+              valid ? 0.5f * pre[c] + 0.5f * historySample(i, oneFrameHistory_.plane(c)) : pre[c];
+      if (valid) {
+        for (int c = 0; c < 3; ++c) history[c] = historySample(i, colorHistory_.plane(c));
+        if (s_.varianceClip && !gbuffer_.isSky(i)) {
+          // Variance clipping (Salvi 2016; the talk p. "4.2.3"): the box is the pre-spatial
+          // mu +- k sigma, sigma^2 = E[x^2] - E[x]^2 per channel. Clip moves the history toward
+          // mu (the box centre, so the segment always enters the box).
+          float lo[3], hi[3];
+          for (int c = 0; c < 3; ++c) {
+            const float sigma =
+                std::sqrt(std::max(0.0f, preMoments_.plane(c)[i] - pre[c] * pre[c]));
+            lo[c] = pre[c] - s_.clipGamma * sigma;
+            hi[c] = pre[c] + s_.clipGamma * sigma;
+          }
+          if (clipMode == HistoryClampMode::Clip)
+            clipToBox(history, pre, lo, hi, 3);
+          else
+            clampToBox(history, lo, hi, 3);
+        }
+        if (s_.capcomRejection) {
+          // CAPCOM (seed 004, "Temporal Luminance Rejection": "安定化した1フレームの結果は、履歴を
+          // 修正するために使用されます"): where the history's luminance strays from the stabilised
+          // one-frame result by more than tau (relative), pull it there and shorten h.
+          float s[3] = {oneFrame_.plane(0)[i], oneFrame_.plane(1)[i], oneFrame_.plane(2)[i]};
+          const float lh = luminance(history[0], history[1], history[2]),
+                      ls = luminance(s[0], s[1], s[2]);
+          const float d = std::abs(lh - ls) / std::max({lh, ls, 1e-6f});
+          const float rho =
+              std::clamp((d - s_.capcomTau) / std::max(s_.capcomTau, 1e-6f), 0.0f, 1.0f);
+          for (int c = 0; c < 3; ++c) history[c] += rho * (s[c] - history[c]);
+          h = std::max(1.0f, h * (1.0f - rho));
+          historyLength_.plane(0)[i] = h;
+        }
+        const float alpha = 1.0f / std::max(h, 1.0f);
+        for (int c = 0; c < 3; ++c) result[c] = alpha * current[c] + (1.0f - alpha) * history[c];
+        for (int m = 0; m < 2; ++m) {
+          const float value = m == 0 ? l : l * l;
+          moments_.plane(m)[i] =
+              alpha * value + (1.0f - alpha) * historySample(i, momentsHistory_.plane(m));
+        }
+      } else {
+        for (int c = 0; c < 3; ++c) result[c] = current[c];
+        moments_.plane(0)[i] = l;
+        moments_.plane(1)[i] = l * l;
+      }
+      // Disocclusion fill (p. "4.2.4"): X' = X (1 - beta) + g(x) beta, beta = the (blurred) mask.
+      if (s_.disocclusionFill) {
+        const float beta = blurredMask_.plane(0)[i];
+        for (int c = 0; c < 3; ++c) result[c] = result[c] * (1.0f - beta) + wide[c] * beta;
+      }
+      // Luminance threshold (p. "4.2.5"): "luminanceDiff = abs(Luma(filtered) - Luma(accumulated));
+      // resultColor = lerp(accumulated, filtered, luminanceDiff > threshold)". Ours is relative
+      // to the larger of the two: the talk's absolute tau depends on exposure.
+      if (s_.lumaThreshold && !gbuffer_.isSky(i)) {
+        const float lf = luminance(wide[0], wide[1], wide[2]);
+        const float la = luminance(result[0], result[1], result[2]);
+        if (std::abs(lf - la) > s_.lumaTau * std::max({lf, la, 1e-6f}))
+          for (int c = 0; c < 3; ++c) result[c] = wide[c];
+      }
+      for (int c = 0; c < 3; ++c) temporal_.plane(c)[i] = result[c];
+      // Luminance variance for the edge-stopping term: temporal from the moments once h >= 4,
+      // the pre-spatial (spatial) estimate before (the talk p. "4.1.5").
+      float variance =
+          std::max(0.0f, moments_.plane(1)[i] - moments_.plane(0)[i] * moments_.plane(0)[i]);
+      if (h < 4.0f && usesPreSpatial()) {
+        variance = 0;
+        constexpr float kLuma[3] = {0.2126f, 0.7152f, 0.0722f};
+        for (int c = 0; c < 3; ++c)
+          variance +=
+              kLuma[c] * kLuma[c] * std::max(0.0f, preMoments_.plane(c)[i] - pre[c] * pre[c]);
+      }
+      variance_.plane(0)[i] = variance;
+    }
+  });
+}
+
+// ---- 5. Post-spatial (p. "5.1": "A-Trous x3", median in the first pass for fireflies, optional
+// mip + upsampling). Its result is never fed back.
+void Hybrid::postSpatial() {
+  const Image* input = &temporal_;
+  if (s_.median) {
+    ScopedPass pass(this, "post-spatial median", 9);
+    median3x3(temporal_, &gbuffer_, median_);
+    input = &median_;
+  }
+  if (s_.edgeLuminance) {
+    ScopedPass pass(this, "variance prefilter", 9);
+    prefilterVariance3x3(variance_, gbuffer_, filteredVariance_);
+  }
+  const AtrousGuide guide{gbuffer_, &derivatives_, &filteredVariance_};
+  const AtrousSettings settings = hybridAtrous(s_, true);
+  const LobeTerm lobe{s_.edgeLobe ? &lobes_ : nullptr, s_.lobeBeta};
+  for (int i = 0; i < s_.postIterations; ++i) {
+    ScopedPass pass(this, "post-spatial à-trous " + std::to_string(i + 1), 9);
+    lobeAtrousIteration(i, settings, guide, lobe, *input, atrous_[i]);
+    input = &atrous_[i];
+  }
+  ScopedPass pass(this, "post-spatial mip + upsample", s_.postMip ? 4 : 0);
+  if (!s_.postMip) {
+    copyImage(*input, post_);
+    return;
+  }
+  postMips_.build(*input, gbuffer_);
+  const float maxLevel = float(postMips_.levels());
+  for (size_t i = 0; i < gbuffer_.pixelCount(); ++i)
+    levels_.plane(0)[i] = roughness_ ? maxLevel * roughness_[i] : maxLevel;
+  postMips_.upsample(postMips_.levels(), &levels_, gbuffer_, {}, post_);
+}
+
+// ---- 6. Temporal stabiliser (p. "4.3.1": "追加で軽い Temporal Accumulation を行って時間的な安定性
+// を上げる"): a second EMA with a large alpha over the stabiliser's own reprojected history,
+// clamped to the 3x3 box of the post-spatial result (TAA-style) so it cannot ghost.
+void Hybrid::stabilize() {
+  ScopedPass pass(this, "stabilizer", s_.stabilizer ? 9 : 0);
+  if (!s_.stabilizer) {
+    copyImage(post_, stabilized_);
+    return;
+  }
+  for (size_t i = 0; i < gbuffer_.pixelCount(); ++i)
+    for (int c = 0; c < 3; ++c)
+      reprojectedStabilizer_.plane(c)[i] =
+          historySource(i) != 0 ? historySample(i, stabilizerHistory_.plane(c)) : post_.plane(c)[i];
+  clampHistory(reprojectedStabilizer_, post_, &gbuffer_, {HistoryClampMode::Clamp, 1, 1.0f},
+               reprojectedStabilizer_, taps_);
+  const float a = s_.stabilizerAlpha;
+  for (size_t k = 0; k < post_.raw().size(); ++k)
+    stabilized_.raw()[k] = a * post_.raw()[k] + (1.0f - a) * reprojectedStabilizer_.raw()[k];
+}
+
+void Hybrid::fromFilterSpace(Image& output) {
+  ScopedPass pass(this, "output space", 0);
+  if (!s_.reinhard) {
+    copyImage(stabilized_, output);
+    return;
+  }
+  for (size_t i = 0; i < output.pixelCount(); ++i) {
+    const float scale = 1.0f / std::max(1.0f - lumaAt(stabilized_, i), 1e-6f);
+    for (int c = 0; c < 3; ++c) output.plane(c)[i] = stabilized_.plane(c)[i] * scale;
+  }
+}
+
+void Hybrid::storeHistory() {
+  ScopedPass pass(this, "store history", 0);
+  copyImage(temporal_, colorHistory_);  // the temporal result is the history (p. "5.1")
+  copyImage(historyLength_, lengthHistory_);
+  copyImage(moments_, momentsHistory_);
+  if (s_.capcomRejection) copyImage(oneFrame_, oneFrameHistory_);
+  if (s_.stabilizer) copyImage(stabilized_, stabilizerHistory_);
+  previousGBuffer_.store(gbuffer_);
+  hasHistory_ = true;
+}
+
+std::vector<std::pair<std::string, const Image*>> Hybrid::passOutputs() const {
+  return {{"filter space", &signal_},    {"disocclusion mask", &blurredMask_},
+          {"pre-spatial", &preSpatial_}, {"pre-spatial wide", &preWide_},
+          {"temporal", &temporal_},      {"median", &median_},
+          {"post-spatial", &post_},      {"stabilizer", &stabilized_}};
+}
+
+std::vector<ParamSpec> hybridParamSpecs() {
+  std::vector<ParamSpec> specs = {
+      ParamSpec::boolean("edge.position", true, "world-position stopping term (the talk)"),
+      ParamSpec::boolean("edge.lobe", true,
+                         "specular-lobe stopping term (Tokuyoshi 2016; the talk)"),
+      ParamSpec::boolean("edge.luminance", true, "variance-scaled luminance term (SVGF; the talk)"),
+      ParamSpec::boolean("edge.id", true, "mesh-id term: poster vs wall (the talk)"),
+      ParamSpec::real("sigmaX", 0.05, 1e-9, 1e9,
+                      "position term exp(-|dx|^2/sigmaX), world units^2 (ours)"),
+      ParamSpec::real("lobeBeta", 1, 0, 1e4,
+                      "exponent on the lobe similarity (the talk's beta; 1 = Tokuyoshi)"),
+      ParamSpec::real("lobeDiffuseSharpness", 64, 0, 1e6,
+                      "diffuse signal: SG sharpness of the normal lobe (ours)"),
+      ParamSpec::real("sigmaL", 4, 0, 1e6, "luminance term sigma_l (SVGF 4)"),
+      ParamSpec::boolean("maskBlur", true,
+                         "disocclusion: grow and soften the mask by a 3x3 mean (the talk)"),
+      ParamSpec::boolean("preMip", false,
+                         "pre-spatial: 2-level mip chain for the fill (the talk, optional)"),
+      ParamSpec::integer("preMipLevels", 2, 1, 8, "pre-spatial mip levels (the talk: Mip Gen x2)"),
+      ParamSpec::boolean("hitPoint", true,
+                         "specular: hit-point reprojection below hitPointRoughness (the talk)"),
+      ParamSpec::real("hitPointRoughness", 0.3, 0, 1,
+                      "roughness threshold of hit-point reprojection (ours)"),
+      ParamSpec::integer("maxHistory", 24, 1, 4096, "cap of h, alpha = 1/h (the talk: 24-30)"),
+      ParamSpec::boolean("disocclusionFill", true,
+                         "disoccluded pixels take the pre-spatial value (the talk)"),
+      ParamSpec::boolean("varianceClip", true,
+                         "clip the history to the pre-spatial mu +- k sigma (the talk)"),
+      ParamSpec::choice("clipMode", "clip", {"clip", "clamp"},
+                        "variance box: clip (talk) or per-channel clamp"),
+      ParamSpec::real("clipGamma", 1.5, 0, 100,
+                      "variance box half-width k in sigma (ours; Salvi 1..2)"),
+      ParamSpec::boolean("lumaThreshold", true,
+                         "use the pre-filtered value where its luminance differs from the "
+                         "accumulated one by more than lumaTau (the talk)"),
+      ParamSpec::real("lumaTau", 0.8, 0, 1e6,
+                      "luminance threshold, relative to the larger luminance (ours)"),
+      ParamSpec::boolean("capcomRejection", false,
+                         "temporal luminance rejection against a stabilised one-frame result "
+                         "(CAPCOM RE ENGINE)"),
+      ParamSpec::real("capcomTau", 0.5, 1e-6, 1e6, "CAPCOM rejection threshold, relative (ours)"),
+      ParamSpec::integer("postIterations", 3, 0, 3,
+                         "post-spatial 3x3 à-trous iterations (the talk 3)"),
+      ParamSpec::boolean("median", true,
+                         "3x3 median before the first post iteration (the talk; not fed back)"),
+      ParamSpec::boolean("postMip", false,
+                         "post-spatial: mip + bilateral upsample (the talk, optional)"),
+      ParamSpec::integer("postMipLevels", 2, 1, 8, "post-spatial mip levels (ours)"),
+      ParamSpec::boolean("stabilizer", false, "light second EMA (the talk: TAA as stabiliser)"),
+      ParamSpec::real("stabilizerAlpha", 0.5, 0, 1,
+                      "stabiliser blend weight of the new frame (ours)"),
+      ParamSpec::choice("space", "linear", {"linear", "reinhard"},
+                        "filter in linear or Reinhard-compressed space (CAPCOM ablation)"),
+  };
+  for (ParamSpec& s : reprojectionParamSpecs()) specs.push_back(std::move(s));
+  return specs;
+}
+
+HybridSettings hybridSettings(const ParamSet& p) {
+  HybridSettings s;
+  s.reprojection = reprojectionSettings(p);
+  s.edgePosition = p.getBool("edge.position");
+  s.edgeLobe = p.getBool("edge.lobe");
+  s.edgeLuminance = p.getBool("edge.luminance");
+  s.edgeId = p.getBool("edge.id");
+  s.sigmaX = p.getFloat("sigmaX");
+  s.lobeBeta = p.getFloat("lobeBeta");
+  s.lobe.diffuseSharpness = p.getFloat("lobeDiffuseSharpness");
+  s.sigmaL = p.getFloat("sigmaL");
+  s.maskBlur = p.getBool("maskBlur");
+  s.preMip = p.getBool("preMip");
+  s.preMipLevels = p.getInt("preMipLevels");
+  s.hitPointReprojection = p.getBool("hitPoint");
+  s.hitPointRoughness = p.getFloat("hitPointRoughness");
+  s.maxHistory = p.getInt("maxHistory");
+  s.disocclusionFill = p.getBool("disocclusionFill");
+  s.varianceClip = p.getBool("varianceClip");
+  s.clipMode =
+      p.getChoice("clipMode") == "clamp" ? HistoryClampMode::Clamp : HistoryClampMode::Clip;
+  s.clipGamma = p.getFloat("clipGamma");
+  s.lumaThreshold = p.getBool("lumaThreshold");
+  s.lumaTau = p.getFloat("lumaTau");
+  s.capcomRejection = p.getBool("capcomRejection");
+  s.capcomTau = p.getFloat("capcomTau");
+  s.postIterations = p.getInt("postIterations");
+  s.median = p.getBool("median");
+  s.postMip = p.getBool("postMip");
+  s.postMipLevels = p.getInt("postMipLevels");
+  s.stabilizer = p.getBool("stabilizer");
+  s.stabilizerAlpha = p.getFloat("stabilizerAlpha");
+  s.reinhard = p.getChoice("space") == "reinhard";
+  return s;
+}
+
+DenoiserInfo hybridInfo() {
+  return {
+      "hybrid",
+      "The CEDEC 2021 talk's denoiser: disocclusion mask, pre-spatial à-trous, motion/hit-point "
+      "accumulation with variance clipping and a luminance threshold, à-trous x3 with a median "
+      "(Silicon Studio 2021; CAPCOM ablations)",
+      ParamSchema(hybridParamSpecs()), [](const ParamSet& params, SignalKind kind) {
+        return std::make_unique<Hybrid>(hybridSettings(params), kind);
+      }};
+}
+
+}  // namespace arena

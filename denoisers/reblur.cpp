@@ -1,0 +1,457 @@
+// `reblur`: recurrent blur (Zhadan, GTC 2020 "Fast Denoising with Self Stabilizing Recurrent
+// Blurs"; NVIDIA NRD's REBLUR; the CEDEC 2021 talk p. "3.4" and p. "4.1.2"). Per frame:
+//   1. pre-blur: an 8-tap Poisson disk rotated every frame (geometry weights only),
+//   2. temporal accumulation with an accumulated-frame counter N (max 30) and a fast history
+//      (max 6 frames) kept for clamping; the specular signal blends hit-point (virtual)
+//      reprojection with surface motion by roughness,
+//   3. history fix while N < 3: a wide sparse reconstruction (5x5 taps at stride 14, NRD; or the
+//      2020 version's mip chain), then anti-firefly (clamped to the 3x3 neighbours' range),
+//   4. blur with radius max(minRadius, maxRadius sqrt(1 / (1 + N))), then post-blur at twice it,
+//   5. the post-blurred result becomes the history (recurrent; `recurrent=false` stores the
+//      temporal result instead),
+//   6. temporal stabilisation with anti-lag: the stabilised history is clamped to the fast
+//      history's mu +- 2 sigma, and N shortens by how far it had to move:
+//      N' = N / (1 + d N / 3), d = |h - hc| / max(h, hc) (luminance).
+// No luminance-variance stopping anywhere (NRD: plane distance, normal/lobe, hit distance).
+// Re-modulation is the harness's.
+#include "denoisers/reblur.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.hpp"
+#include "denoisers/variants.hpp"
+
+namespace arena {
+
+namespace {
+float smoothstep(float edge0, float edge1, float x) {
+  const float t = std::clamp((x - edge0) / std::max(edge1 - edge0, 1e-12f), 0.0f, 1.0f);
+  return t * t * (3.0f - 2.0f * t);
+}
+void copyImage(const Image& from, Image& to) {
+  std::copy(from.raw().begin(), from.raw().end(), to.raw().begin());
+}
+}  // namespace
+
+Reblur::Reblur(const ReblurSettings& settings, SignalKind kind) : s_(settings), kind_(kind) {}
+
+std::vector<std::string> Reblur::requiredChannels() const {
+  std::vector<std::string> channels = {"depth", "normal", "meshId", "motion", "position"};
+  if (kind_ == SignalKind::Specular) {
+    channels.push_back("roughness");
+    channels.push_back("specHitDist");
+  }
+  return channels;
+}
+
+void Reblur::setup(int width, int height) {
+  derivatives_ = Image(width, height, kGeometryDerivativeChannels);
+  surface_.setup(width, height);
+  virtual_.setup(width, height);
+  virtualAmount_ = Image(width, height, 1);
+  previousGBuffer_.setup(width, height);
+  mips_.setup(width, height, std::max(1, s_.historyFixFrames), 3);
+  for (Image* image : {&slowHistory_, &fastHistory_, &stabilizedHistory_, &preBlurred_, &temporal_,
+                       &fast_, &fixed_, &fireflyFree_, &blurred_, &postBlurred_, &stabilized_})
+    *image = Image(width, height, 3);
+  for (Image* image :
+       {&accumulatedFramesHistory_, &accumulatedFrames_, &previousFrames_, &radiusScale_})
+    *image = Image(width, height, 1);
+  taps_.setup(height);
+  pixelScale_ = s_.radiusResolution > 0.0f ? float(height) / s_.radiusResolution : 1.0f;
+  hasHistory_ = false;
+}
+
+void Reblur::reset() {
+  hasHistory_ = false;
+}
+
+void Reblur::denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& output) {
+  if (ctx.reset) reset();
+  gbuffer_ = GBufferView::fromFrame(in.frame, requiredChannels(), "reblur");
+  roughness_ =
+      kind_ == SignalKind::Specular ? in.frame.get("roughness", "reblur").plane(0) : nullptr;
+  hitDistance_ =
+      kind_ == SignalKind::Specular ? in.frame.get("specHitDist", "reblur").plane(0) : nullptr;
+  reproject(ctx);
+  preBlurPass(in, ctx.frameIndex);
+  temporalAccumulation();
+  historyFixPass();
+  antiFireflyPass();
+  blurPasses(ctx.frameIndex);
+  storeRecurrentHistory();
+  stabilize(output);
+  storeHistory();
+}
+
+// ---- 0. Reprojection: surface motion (SVGF-style per-tap tests), and the virtual point for the
+// specular signal (NRD "virtual motion"; the talk's hit-point reprojection).
+void Reblur::reproject(const FrameContext& ctx) {
+  ScopedPass pass(this, "reproject", 4);
+  useVirtual_ = kind_ == SignalKind::Specular && s_.hitPointReprojection;
+  if (!hasHistory_) {
+    surface_.invalidateAll();
+    virtual_.invalidateAll();
+    return;
+  }
+  computeGeometryDerivatives(gbuffer_, derivatives_);
+  const GBufferView previous = previousGBuffer_.view();
+  surface_.compute(gbuffer_, derivatives_, previous, s_.reprojection, &ctx.camera,
+                   &ctx.previousCamera);
+  if (!useVirtual_) return;
+  virtual_.compute(gbuffer_, hitDistance_, ctx.camera, ctx.previousCamera, previous, s_.hitPoint);
+  // NRD trusts the virtual history more the smoother the surface (its "spec magic curve");
+  // ours: 1 - smoothstep(0, hitPointRoughness, roughness).
+  float* amount = virtualAmount_.plane(0);
+  for (size_t i = 0; i < gbuffer_.pixelCount(); ++i)
+    amount[i] = 1.0f - smoothstep(0.0f, s_.hitPointRoughness, roughness_[i]);
+  pass.setTaps(8);
+}
+
+bool Reblur::historyValid(size_t i) const {
+  return surface_.valid(i) || (useVirtual_ && virtual_.valid(i));
+}
+
+float Reblur::historySample(size_t i, const float* plane) const {
+  const bool surfaceOk = surface_.valid(i);
+  if (!useVirtual_ || !virtual_.valid(i)) return surfaceOk ? surface_.sample(i, plane) : 0.0f;
+  if (!surfaceOk) return virtual_.sample(i, plane);
+  const float a = virtualAmount_.plane(0)[i];
+  return a * virtual_.sample(i, plane) + (1.0f - a) * surface_.sample(i, plane);
+}
+
+// ---- 1. Pre-blur (NRD prepass): Poisson disk, fixed radius, rotated per frame.
+void Reblur::preBlurPass(const DenoiserInputs& in, int frameIndex) {
+  ScopedPass pass(this, "pre-blur", s_.preBlur ? kPoissonTaps : 0);
+  if (!s_.preBlur) {
+    copyImage(in.signal, preBlurred_);
+    return;
+  }
+  PoissonBlurSettings blur{s_.preBlurRadius * pixelScale_, s_.weights};
+  poissonDiskBlur(in.signal, {gbuffer_, roughness_, hitDistance_}, blur,
+                  poissonRotation(frameIndex), nullptr, preBlurred_);
+}
+
+// ---- 2. Temporal accumulation: alpha = 1 / (1 + N_prev), N = min(N_prev + 1, 30); the fast
+// history uses N capped at 6 (NRD maxFastAccumulatedFrameNum).
+void Reblur::temporalAccumulation() {
+  ScopedPass pass(this, "temporal accumulation", useVirtual_ ? 8 : 4);
+  const int w = gbuffer_.width;
+  const float maxFrames = float(s_.maxAccumulatedFrames),
+              maxFast = float(s_.maxFastAccumulatedFrames);
+  parallelRows(gbuffer_.height, [&](int y) {
+    for (int x = 0; x < w; ++x) {
+      const size_t i = size_t(y) * size_t(w) + size_t(x);
+      const bool valid = historyValid(i) && !gbuffer_.isSky(i);
+      // Resampled counts may be fractional (bilinear); N_prev = 0 on disocclusion.
+      const float previous =
+          valid ? std::min(historySample(i, accumulatedFramesHistory_.plane(0)), maxFrames) : 0.0f;
+      const float alpha = 1.0f / (1.0f + previous);
+      const float alphaFast = 1.0f / (1.0f + std::min(previous, maxFast));
+      for (int c = 0; c < 3; ++c) {
+        const float current = preBlurred_.plane(c)[i];
+        const float slow = valid ? historySample(i, slowHistory_.plane(c)) : current;
+        const float fastValue = valid ? historySample(i, fastHistory_.plane(c)) : current;
+        temporal_.plane(c)[i] = alpha * current + (1.0f - alpha) * slow;
+        fast_.plane(c)[i] = alphaFast * current + (1.0f - alphaFast) * fastValue;
+      }
+      previousFrames_.plane(0)[i] = previous;
+      accumulatedFrames_.plane(0)[i] = std::min(previous + 1.0f, maxFrames);
+    }
+  });
+}
+
+// ---- 3. History fix (NRD HistoryFix) for young histories, N_prev < historyFixFrames: a 5x5
+// sparse gather whose stride shrinks as the history grows, 14 (F - N_prev) / F: 14, 9.3 and
+// 4.7 px for N_prev = 0, 1, 2; or the 2020 version's mip chain, level F - N_prev.
+void Reblur::historyFixPass() {
+  ScopedPass pass(this, "history fix", 0);
+  copyImage(temporal_, fixed_);
+  if (s_.historyFix == ReblurHistoryFix::Off || s_.historyFixFrames <= 0) return;
+  const int w = gbuffer_.width, h = gbuffer_.height;
+  const float frames = float(s_.historyFixFrames);
+  const float* previous = previousFrames_.plane(0);
+  if (s_.historyFix == ReblurHistoryFix::Mip) {
+    mips_.build(temporal_, gbuffer_);
+    for (size_t i = 0; i < gbuffer_.pixelCount(); ++i)
+      radiusScale_.plane(0)[i] = previous[i] < frames ? frames - std::floor(previous[i]) : 0.0f;
+    mips_.upsample(mips_.levels(), &radiusScale_, gbuffer_, {}, fixed_);
+    pass.setTaps(4);
+    return;
+  }
+  const SurfaceWeights weight(s_.weights, {gbuffer_, roughness_, hitDistance_});
+  parallelRows(h, [&](int y) {
+    int64_t fetched = 0;
+    for (int x = 0; x < w; ++x) {
+      const size_t p = size_t(y) * size_t(w) + size_t(x);
+      if (gbuffer_.isSky(p) || previous[p] >= frames) continue;
+      const float stride =
+          std::max(1.0f, s_.historyFixStride * pixelScale_ * (frames - previous[p]) / frames);
+      float sum[3] = {temporal_.plane(0)[p], temporal_.plane(1)[p], temporal_.plane(2)[p]};
+      float weightSum = 1.0f;
+      for (int j = -2; j <= 2; ++j)
+        for (int i = -2; i <= 2; ++i) {
+          if (i == 0 && j == 0) continue;
+          const int qx = x + int(std::lround(float(i) * stride)),
+                    qy = y + int(std::lround(float(j) * stride));
+          if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+          const size_t q = size_t(qy) * size_t(w) + size_t(qx);
+          const float wq = weight(p, q);
+          ++fetched;
+          if (wq <= 0.0f) continue;
+          for (int c = 0; c < 3; ++c) sum[c] += wq * temporal_.plane(c)[q];
+          weightSum += wq;
+        }
+      for (int c = 0; c < 3; ++c) fixed_.plane(c)[p] = sum[c] / weightSum;
+    }
+    taps_.set(y, fetched);
+  });
+  pass.setTaps(taps_.perPixel(gbuffer_.pixelCount()));
+}
+
+// ---- 3b. Anti-firefly (NRD enableAntiFirefly, in its history-fix pass): every channel is
+// clamped to the [min, max] of its 3x3 non-sky neighbours, the centre excluded, so a lone
+// outlier cannot survive into the blur (and the result stays inside the inputs' range).
+void Reblur::antiFireflyPass() {
+  ScopedPass pass(this, "anti-firefly", s_.antiFirefly ? 8 : 0);
+  copyImage(fixed_, fireflyFree_);
+  if (!s_.antiFirefly) return;
+  const int w = gbuffer_.width, h = gbuffer_.height;
+  parallelRows(h, [&](int y) {
+    for (int x = 0; x < w; ++x) {
+      const size_t p = size_t(y) * size_t(w) + size_t(x);
+      if (gbuffer_.isSky(p)) continue;
+      float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
+      int count = 0;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int qx = x + dx, qy = y + dy;
+          if ((dx == 0 && dy == 0) || qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+          const size_t q = size_t(qy) * size_t(w) + size_t(qx);
+          if (gbuffer_.isSky(q)) continue;
+          for (int c = 0; c < 3; ++c) {
+            lo[c] = std::min(lo[c], fixed_.plane(c)[q]);
+            hi[c] = std::max(hi[c], fixed_.plane(c)[q]);
+          }
+          ++count;
+        }
+      if (count == 0) continue;
+      for (int c = 0; c < 3; ++c)
+        fireflyFree_.plane(c)[p] = std::clamp(fixed_.plane(c)[p], lo[c], hi[c]);
+    }
+  });
+}
+
+// ---- 4. Blur and post-blur: radius max(minRadius, maxRadius sqrt(1 / (1 + N))) -- wide while
+// the history is young, shrinking as it converges; the post-blur doubles it. The specular
+// radius also shrinks with roughness (NRD scales it by a roughness factor; ours: sqrt(r)).
+void Reblur::blurPasses(int frameIndex) {
+  const float* frames = accumulatedFrames_.plane(0);
+  const float maxRadius = s_.maxBlurRadius * pixelScale_;
+  const float floor = s_.minBlurRadius * pixelScale_ / std::max(maxRadius, 1e-6f);
+  for (size_t i = 0; i < gbuffer_.pixelCount(); ++i) {
+    float scale = std::sqrt(1.0f / (1.0f + frames[i]));
+    if (roughness_) scale *= std::sqrt(std::clamp(roughness_[i], 0.0f, 1.0f));
+    radiusScale_.plane(0)[i] = std::max(scale, floor);
+  }
+  const SurfaceGuide guide{gbuffer_, roughness_, hitDistance_};
+  // Rotations differ between the passes so they do not reuse the same directions.
+  {
+    ScopedPass pass(this, "blur", s_.blur ? kPoissonTaps : 0);
+    if (s_.blur)
+      poissonDiskBlur(fireflyFree_, guide, {maxRadius, s_.weights},
+                      poissonRotation(2 * frameIndex + 1), &radiusScale_, blurred_);
+    else
+      copyImage(fireflyFree_, blurred_);
+  }
+  ScopedPass pass(this, "post-blur", s_.postBlur ? kPoissonTaps : 0);
+  if (s_.postBlur)
+    poissonDiskBlur(blurred_, guide, {2.0f * maxRadius, s_.weights},
+                    poissonRotation(2 * frameIndex + 2), &radiusScale_, postBlurred_);
+  else
+    copyImage(blurred_, postBlurred_);
+}
+
+// ---- 5. Recurrence: the post-blurred result is next frame's history, so the spatial samples
+// accumulate over time (GTC 2020; the talk p. "4.3.1": recur a *small* blur, shrink it with N).
+void Reblur::storeRecurrentHistory() {
+  ScopedPass pass(this, "store history", 0);
+  copyImage(s_.recurrent ? postBlurred_ : temporal_, slowHistory_);
+  copyImage(fast_, fastHistory_);
+}
+
+// ---- 6. Temporal stabilisation with anti-lag (NRD TemporalStabilization): the stabilised
+// history is clamped to mu +- sigmaScale sigma of the fast history's 3x3 neighbourhood; how far
+// it moved, d = |L(h) - L(hc)| / max(L(h), L(hc)), shortens N: N' = N / (1 + d N / 3). The
+// output blends with 1 / (1 + N'), and N' is what the next frame reprojects (anti-lag).
+void Reblur::stabilize(Image& output) {
+  ScopedPass pass(this, "stabilization", s_.stabilization ? 9 : 0);
+  if (!s_.stabilization) {
+    copyImage(postBlurred_, stabilized_);
+    copyImage(stabilized_, output);
+    return;
+  }
+  const int w = gbuffer_.width, h = gbuffer_.height;
+  const float k = s_.antilagSigmaScale;
+  parallelRows(h, [&](int y) {
+    for (int x = 0; x < w; ++x) {
+      const size_t p = size_t(y) * size_t(w) + size_t(x);
+      float current[3] = {postBlurred_.plane(0)[p], postBlurred_.plane(1)[p],
+                          postBlurred_.plane(2)[p]};
+      if (gbuffer_.isSky(p) || !historyValid(p)) {
+        for (int c = 0; c < 3; ++c) stabilized_.plane(c)[p] = current[c];
+        continue;
+      }
+      float sum[3] = {0, 0, 0}, sumSq[3] = {0, 0, 0};
+      int count = 0;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int qx = x + dx, qy = y + dy;
+          if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+          const size_t q = size_t(qy) * size_t(w) + size_t(qx);
+          if (gbuffer_.isSky(q)) continue;
+          for (int c = 0; c < 3; ++c) {
+            const float v = fast_.plane(c)[q];
+            sum[c] += v;
+            sumSq[c] += v * v;
+          }
+          ++count;
+        }
+      float history[3], clamped[3];
+      for (int c = 0; c < 3; ++c) {
+        history[c] = historySample(p, stabilizedHistory_.plane(c));
+        const float mean = sum[c] / float(count);
+        const float sigma = std::sqrt(std::max(0.0f, sumSq[c] / float(count) - mean * mean));
+        clamped[c] = std::clamp(history[c], mean - k * sigma, mean + k * sigma);
+      }
+      float n = accumulatedFrames_.plane(0)[p];
+      if (s_.antiLag) {
+        const float lh = luminance(history[0], history[1], history[2]);
+        const float lc = luminance(clamped[0], clamped[1], clamped[2]);
+        const float d = std::abs(lh - lc) / std::max({lh, lc, 1e-6f});
+        n = n / (1.0f + d * n / 3.0f);
+        accumulatedFrames_.plane(0)[p] = n;
+      }
+      const float alpha = 1.0f / (1.0f + n);
+      for (int c = 0; c < 3; ++c)
+        stabilized_.plane(c)[p] = alpha * current[c] + (1.0f - alpha) * clamped[c];
+    }
+  });
+  copyImage(stabilized_, output);
+}
+
+void Reblur::storeHistory() {
+  ScopedPass pass(this, "store guides", 0);
+  copyImage(stabilized_, stabilizedHistory_);
+  std::swap(accumulatedFrames_, accumulatedFramesHistory_);
+  previousGBuffer_.store(gbuffer_);
+  hasHistory_ = true;
+}
+
+std::vector<std::pair<std::string, const Image*>> Reblur::passOutputs() const {
+  return {{"pre-blur", &preBlurred_},      {"temporal", &temporal_},
+          {"fast history", &fast_},        {"history fix", &fixed_},
+          {"anti-firefly", &fireflyFree_}, {"blur", &blurred_},
+          {"post-blur", &postBlurred_},    {"history", &slowHistory_},
+          {"stabilization", &stabilized_}};
+}
+
+std::vector<ParamSpec> reblurParamSpecs() {
+  std::vector<ParamSpec> specs = {
+      ParamSpec::boolean("preBlur", true, "pass 1: 8-tap Poisson pre-blur (NRD prepass)"),
+      ParamSpec::real("preBlurRadius", 30, 0, 500,
+                      "pre-blur radius, px (NRD diffusePrepassBlurRadius 30; specular 50)"),
+      ParamSpec::integer("maxAccumulatedFrames", 30, 1, 1000,
+                         "cap of the accumulated-frame counter N (NRD maxAccumulatedFrameNum 30)"),
+      ParamSpec::integer("maxFastAccumulatedFrames", 6, 1, 1000,
+                         "cap of the fast history used for clamping (NRD "
+                         "maxFastAccumulatedFrameNum 6)"),
+      ParamSpec::boolean("hitPoint", true,
+                         "specular: blend hit-point (virtual) reprojection with surface motion by "
+                         "roughness (NRD virtual motion; the talk)"),
+      ParamSpec::real("hitPointRoughness", 0.6, 0.0, 1.0,
+                      "specular: virtual-history weight 1 - smoothstep(0, this, roughness) (ours)"),
+      ParamSpec::choice("historyFix", "sparse", {"sparse", "mip", "off"},
+                        "pass 3 for N < historyFixFrames: 5x5 taps at stride 14 (NRD) or the mip "
+                        "chain (ReBLUR 2020), or off"),
+      ParamSpec::integer("historyFixFrames", 3, 0, 16, "history fix while N < this (NRD 3)"),
+      ParamSpec::real(
+          "historyFixStride", 14, 1, 100,
+          "history-fix tap stride at N = 0, px (NRD historyFixStrideBetweenSamples 14)"),
+      ParamSpec::boolean("antiFirefly", true,
+                         "clamp luminance to the 3x3 neighbours' range (NRD enableAntiFirefly)"),
+      ParamSpec::boolean("blur", true, "pass 4: Poisson blur"),
+      ParamSpec::boolean("postBlur", true, "pass 4: Poisson post-blur at twice the radius"),
+      ParamSpec::real("minBlurRadius", 1, 0, 500, "blur radius floor, px (NRD minBlurRadius 1)"),
+      ParamSpec::real("maxBlurRadius", 30, 0, 500,
+                      "blur radius at N = 0 is this sqrt(1/(1+N)), px (NRD maxBlurRadius 30)"),
+      ParamSpec::boolean("recurrent", true,
+                         "pass 5: the post-blurred result is the history (false: the temporal "
+                         "result)"),
+      ParamSpec::boolean("stabilization", true, "pass 6: temporal stabilisation"),
+      ParamSpec::boolean("antiLag", true,
+                         "pass 6: shorten N by the clamp distance, N' = N / (1 + d N / 3)"),
+      ParamSpec::real("antilagSigmaScale", 2, 0, 100,
+                      "stabilised history clamped to the fast history's mu +- this sigma (NRD 2)"),
+      ParamSpec::real(
+          "radiusResolution", 1080, 0, 100000,
+          "radii (min too) and stride are px at this image height, scaled to the actual height "
+          "(ours; NRD tunes for ~1080p); 0 = as given"),
+      ParamSpec::real("planeSigma", 0.02, 1e-6, 10,
+                      "plane-distance weight scale, fraction of view depth (ours)"),
+      ParamSpec::real("normalPower", 32, 0, 1e4, "normal weight max(0, n.n')^this (ours)"),
+      ParamSpec::real("hitSigma", 0.3, 1e-6, 100,
+                      "specular hit-distance weight scale, fraction of (h + z) (ours)"),
+      ParamSpec::real("roughnessSigma", 0.1, 1e-6, 10, "specular roughness weight scale (ours)"),
+  };
+  for (ParamSpec& s : reprojectionParamSpecs()) specs.push_back(std::move(s));
+  return specs;
+}
+
+ReblurSettings reblurSettings(const ParamSet& params) {
+  ReblurSettings s;
+  s.reprojection = reprojectionSettings(params);
+  s.preBlur = params.getBool("preBlur");
+  s.preBlurRadius = params.getFloat("preBlurRadius");
+  s.maxAccumulatedFrames = params.getInt("maxAccumulatedFrames");
+  s.maxFastAccumulatedFrames = params.getInt("maxFastAccumulatedFrames");
+  s.hitPointReprojection = params.getBool("hitPoint");
+  s.hitPointRoughness = params.getFloat("hitPointRoughness");
+  const std::string& fix = params.getChoice("historyFix");
+  s.historyFix = fix == "off"   ? ReblurHistoryFix::Off
+                 : fix == "mip" ? ReblurHistoryFix::Mip
+                                : ReblurHistoryFix::Sparse;
+  s.historyFixFrames = params.getInt("historyFixFrames");
+  s.historyFixStride = params.getFloat("historyFixStride");
+  s.antiFirefly = params.getBool("antiFirefly");
+  s.blur = params.getBool("blur");
+  s.postBlur = params.getBool("postBlur");
+  s.minBlurRadius = params.getFloat("minBlurRadius");
+  s.maxBlurRadius = params.getFloat("maxBlurRadius");
+  s.recurrent = params.getBool("recurrent");
+  s.stabilization = params.getBool("stabilization");
+  s.antiLag = params.getBool("antiLag");
+  s.antilagSigmaScale = params.getFloat("antilagSigmaScale");
+  s.radiusResolution = params.getFloat("radiusResolution");
+  s.weights.planeSigma = params.getFloat("planeSigma");
+  s.weights.normalPower = params.getFloat("normalPower");
+  s.weights.hitSigma = params.getFloat("hitSigma");
+  s.weights.roughnessSigma = params.getFloat("roughnessSigma");
+  return s;
+}
+
+DenoiserInfo reblurInfo() {
+  return {"reblur",
+          "Recurrent blur: Poisson pre-blur, accumulation with a frame counter, history fix, "
+          "shrinking blur + post-blur fed back as history, anti-lag stabilisation (Zhadan 2020; "
+          "NRD REBLUR)",
+          ParamSchema(reblurParamSpecs()), [](const ParamSet& params, SignalKind kind) {
+            ReblurSettings s = reblurSettings(params);
+            // Specular weights add hit distance and roughness (NRD); diffuse uses geometry only.
+            s.weights.hitDistance = s.weights.roughness = kind == SignalKind::Specular;
+            return std::make_unique<Reblur>(s, kind);
+          }};
+}
+
+}  // namespace arena

@@ -1,0 +1,101 @@
+#pragma once
+// ReBLUR, recurrent blur (Zhadan, "Fast Denoising with Self Stabilizing Recurrent Blurs", GTC
+// 2020; NVIDIA NRD's REBLUR). The pipeline is in reblur.cpp, top to bottom; this header exposes
+// the class so tests can look at every pass's output.
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "denoisers/common/gbuffer.hpp"
+#include "denoisers/common/hit_point_reprojection.hpp"
+#include "denoisers/common/mip_chain.hpp"
+#include "denoisers/common/parallel.hpp"
+#include "denoisers/common/poisson_blur.hpp"
+#include "denoisers/common/reprojection.hpp"
+#include "denoisers/denoiser.hpp"
+
+namespace arena {
+
+enum class ReblurHistoryFix { Off, Sparse, Mip };
+
+struct ReblurSettings {
+  ReprojectionSettings reprojection;
+  HitPointReprojectionSettings hitPoint;
+  SurfaceWeightSettings weights;  // plane distance, normal (+ hit distance, roughness: specular)
+  bool preBlur = true;
+  float preBlurRadius = 30.0f;       // NRD diffusePrepassBlurRadius 30 (specular 50)
+  int maxAccumulatedFrames = 30;     // NRD maxAccumulatedFrameNum 30
+  int maxFastAccumulatedFrames = 6;  // NRD maxFastAccumulatedFrameNum 6
+  bool hitPointReprojection = true;  // specular only
+  float hitPointRoughness = 0.6f;    // virtual amount = 1 - smoothstep(0, this, roughness) (ours)
+  ReblurHistoryFix historyFix = ReblurHistoryFix::Sparse;
+  int historyFixFrames = 3;        // NRD historyFixFrameNum 3
+  float historyFixStride = 14.0f;  // NRD historyFixStrideBetweenSamples 14
+  bool antiFirefly = true;         // NRD enableAntiFirefly (on here, as the brief asks)
+  bool blur = true, postBlur = true;
+  float minBlurRadius = 1.0f;   // NRD minBlurRadius 1
+  float maxBlurRadius = 30.0f;  // NRD maxBlurRadius 30
+  bool recurrent = true;        // the post-blurred result is the history (the "R" of ReBLUR)
+  bool stabilization = true;
+  bool antiLag = true;
+  float antilagSigmaScale = 2.0f;  // NRD antilag sigmaScale 2
+  // The radii and the stride above are pixels at this image height and scale with the actual
+  // height (ours: NRD's defaults are tuned for ~1080p; at 144 px a 30 px disk is a fifth of the
+  // screen). 0: use them as given. minBlurRadius scales too: the recurrent loop re-blurs the
+  // history every frame, so even the floor diffuses over ~maxAccumulatedFrames frames.
+  float radiusResolution = 1080.0f;
+};
+
+std::vector<ParamSpec> reblurParamSpecs();
+ReblurSettings reblurSettings(const ParamSet& params);
+
+class Reblur : public Denoiser {
+ public:
+  Reblur(const ReblurSettings& settings, SignalKind kind);
+  std::vector<std::string> requiredChannels() const override;
+  void setup(int width, int height) override;
+  void reset() override;
+  void denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& output) override;
+
+  // Every pass's output of the last frame, in pipeline order (for tests and debugging).
+  std::vector<std::pair<std::string, const Image*>> passOutputs() const;
+
+ private:
+  void reproject(const FrameContext& ctx);
+  void preBlurPass(const DenoiserInputs& in, int frameIndex);
+  void temporalAccumulation();
+  void historyFixPass();
+  void antiFireflyPass();
+  void blurPasses(int frameIndex);
+  void storeRecurrentHistory();
+  void stabilize(Image& output);
+  void storeHistory();
+
+  // History of pixel i from one plane of a previous-frame image: surface motion, or for the
+  // specular signal a roughness-weighted blend with the hit-point reprojection.
+  bool historyValid(size_t i) const;
+  float historySample(size_t i, const float* plane) const;
+
+  ReblurSettings s_;
+  SignalKind kind_;
+  float pixelScale_ = 1.0f;  // height / radiusResolution
+  GBufferView gbuffer_;
+  const float* roughness_ = nullptr;
+  const float* hitDistance_ = nullptr;
+  Image derivatives_;
+  Reprojection surface_;
+  HitPointReprojection virtual_;
+  bool useVirtual_ = false;
+  Image virtualAmount_;  // per pixel: weight of the hit-point history (specular)
+  GBufferHistory previousGBuffer_;
+  MipChain mips_;
+  bool hasHistory_ = false;
+  // History (persistent).
+  Image slowHistory_, fastHistory_, accumulatedFramesHistory_, stabilizedHistory_;
+  // Per frame.
+  Image preBlurred_, temporal_, fast_, accumulatedFrames_, previousFrames_, fixed_, fireflyFree_,
+      blurred_, postBlurred_, radiusScale_, stabilized_;
+  RowTapCounter taps_;
+};
+
+}  // namespace arena
