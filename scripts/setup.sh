@@ -31,4 +31,5 @@ if [ ! -d reports/node_modules ] || [ reports/package-lock.json -nt reports/node
 fi
 
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build -j"$(nproc)"
+# ARENA_TARGETS narrows the build (the study needs only `arena`; the tests need everything).
+cmake --build build -j"$(nproc)" --target ${ARENA_TARGETS:-all}

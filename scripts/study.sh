@@ -2,5 +2,5 @@
 # The main job: install what is missing, build, then run the default study.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh
+ARENA_TARGETS=arena bash scripts/setup.sh
 exec build/arena study "$@"
