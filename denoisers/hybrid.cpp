@@ -28,9 +28,6 @@
 namespace arena {
 
 namespace {
-void copyImage(const Image& from, Image& to) {
-  std::copy(from.raw().begin(), from.raw().end(), to.raw().begin());
-}
 float lumaAt(const Image& image, size_t i) {
   return luminance(image.plane(0)[i], image.plane(1)[i], image.plane(2)[i]);
 }
@@ -97,7 +94,7 @@ void Hybrid::denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& o
 void Hybrid::toFilterSpace(const Image& signal) {
   ScopedPass pass(this, "filter space", 0);
   if (!s_.reinhard) {
-    copyImage(signal, signal_);
+    signal_.raw() = signal.raw();
     return;
   }
   for (size_t i = 0; i < signal.pixelCount(); ++i) {
@@ -158,7 +155,7 @@ void Hybrid::disocclusion(const FrameContext& ctx) {
     historyLength_.plane(0)[i] =
         valid ? std::min(historySample(i, lengthHistory_.plane(0)) + 1.0f, maxHistory) : 1.0f;
   }
-  copyImage(mask_, blurredMask_);
+  blurredMask_.raw() = mask_.raw();
   if (!s_.maskBlur) return;
   const int w = gbuffer_.width, h = gbuffer_.height;
   parallelRows(h, [&](int y) {
@@ -166,15 +163,10 @@ void Hybrid::disocclusion(const FrameContext& ctx) {
       const size_t p = size_t(y) * size_t(w) + size_t(x);
       float sum = 0;
       int count = 0;
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int qx = x + dx, qy = y + dy;
-          if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
-          const size_t q = size_t(qy) * size_t(w) + size_t(qx);
-          if (gbuffer_.isSky(q)) continue;
-          sum += mask_.plane(0)[q];
-          ++count;
-        }
+      forEachNeighbour3x3(x, y, w, h, &gbuffer_, false, [&](size_t q) {
+        sum += mask_.plane(0)[q];
+        ++count;
+      });
       if (count > 0) blurredMask_.plane(0)[p] = std::max(mask_.plane(0)[p], sum / float(count));
     }
   });
@@ -220,7 +212,7 @@ void Hybrid::preSpatial() {
   }
   ScopedPass pass(this, "pre-spatial mip", s_.preMip ? 4 : 0);
   if (!s_.preMip) {
-    copyImage(preSpatial_, preWide_);
+    preWide_.raw() = preSpatial_.raw();
     return;
   }
   preMips_.build(preSpatial_, gbuffer_);
@@ -352,7 +344,7 @@ void Hybrid::postSpatial() {
   }
   ScopedPass pass(this, "post-spatial mip + upsample", s_.postMip ? 4 : 0);
   if (!s_.postMip) {
-    copyImage(*input, post_);
+    post_.raw() = input->raw();
     return;
   }
   postMips_.build(*input, gbuffer_);
@@ -368,7 +360,7 @@ void Hybrid::postSpatial() {
 void Hybrid::stabilize() {
   ScopedPass pass(this, "stabilizer", s_.stabilizer ? 9 : 0);
   if (!s_.stabilizer) {
-    copyImage(post_, stabilized_);
+    stabilized_.raw() = post_.raw();
     return;
   }
   for (size_t i = 0; i < gbuffer_.pixelCount(); ++i)
@@ -385,7 +377,7 @@ void Hybrid::stabilize() {
 void Hybrid::fromFilterSpace(Image& output) {
   ScopedPass pass(this, "output space", 0);
   if (!s_.reinhard) {
-    copyImage(stabilized_, output);
+    output.raw() = stabilized_.raw();
     return;
   }
   for (size_t i = 0; i < output.pixelCount(); ++i) {
@@ -396,11 +388,11 @@ void Hybrid::fromFilterSpace(Image& output) {
 
 void Hybrid::storeHistory() {
   ScopedPass pass(this, "store history", 0);
-  copyImage(temporal_, colorHistory_);  // the temporal result is the history (p. "5.1")
-  copyImage(historyLength_, lengthHistory_);
-  copyImage(moments_, momentsHistory_);
-  if (s_.capcomRejection) copyImage(oneFrame_, oneFrameHistory_);
-  if (s_.stabilizer) copyImage(stabilized_, stabilizerHistory_);
+  colorHistory_.raw() = temporal_.raw();  // the temporal result is the history (p. "5.1")
+  lengthHistory_.raw() = historyLength_.raw();
+  momentsHistory_.raw() = moments_.raw();
+  if (s_.capcomRejection) oneFrameHistory_.raw() = oneFrame_.raw();
+  if (s_.stabilizer) stabilizerHistory_.raw() = stabilized_.raw();
   previousGBuffer_.store(gbuffer_);
   hasHistory_ = true;
 }

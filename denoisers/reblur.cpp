@@ -29,9 +29,6 @@ float smoothstep(float edge0, float edge1, float x) {
   const float t = std::clamp((x - edge0) / std::max(edge1 - edge0, 1e-12f), 0.0f, 1.0f);
   return t * t * (3.0f - 2.0f * t);
 }
-void copyImage(const Image& from, Image& to) {
-  std::copy(from.raw().begin(), from.raw().end(), to.raw().begin());
-}
 }  // namespace
 
 Reblur::Reblur(const ReblurSettings& settings, SignalKind kind) : s_(settings), kind_(kind) {}
@@ -125,7 +122,7 @@ float Reblur::historySample(size_t i, const float* plane) const {
 void Reblur::preBlurPass(const DenoiserInputs& in, int frameIndex) {
   ScopedPass pass(this, "pre-blur", s_.preBlur ? kPoissonTaps : 0);
   if (!s_.preBlur) {
-    copyImage(in.signal, preBlurred_);
+    preBlurred_.raw() = in.signal.raw();
     return;
   }
   PoissonBlurSettings blur{s_.preBlurRadius * pixelScale_, s_.weights};
@@ -167,7 +164,7 @@ void Reblur::temporalAccumulation() {
 // 4.7 px for N_prev = 0, 1, 2; or the 2020 version's mip chain, level F - N_prev.
 void Reblur::historyFixPass() {
   ScopedPass pass(this, "history fix", 0);
-  copyImage(temporal_, fixed_);
+  fixed_.raw() = temporal_.raw();
   if (s_.historyFix == ReblurHistoryFix::Off || s_.historyFixFrames <= 0) return;
   const int w = gbuffer_.width, h = gbuffer_.height;
   const float frames = float(s_.historyFixFrames);
@@ -215,7 +212,7 @@ void Reblur::historyFixPass() {
 // outlier cannot survive into the blur (and the result stays inside the inputs' range).
 void Reblur::antiFireflyPass() {
   ScopedPass pass(this, "anti-firefly", s_.antiFirefly ? 8 : 0);
-  copyImage(fixed_, fireflyFree_);
+  fireflyFree_.raw() = fixed_.raw();
   if (!s_.antiFirefly) return;
   const int w = gbuffer_.width, h = gbuffer_.height;
   parallelRows(h, [&](int y) {
@@ -224,18 +221,13 @@ void Reblur::antiFireflyPass() {
       if (gbuffer_.isSky(p)) continue;
       float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
       int count = 0;
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int qx = x + dx, qy = y + dy;
-          if ((dx == 0 && dy == 0) || qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
-          const size_t q = size_t(qy) * size_t(w) + size_t(qx);
-          if (gbuffer_.isSky(q)) continue;
-          for (int c = 0; c < 3; ++c) {
-            lo[c] = std::min(lo[c], fixed_.plane(c)[q]);
-            hi[c] = std::max(hi[c], fixed_.plane(c)[q]);
-          }
-          ++count;
+      forEachNeighbour3x3(x, y, w, h, &gbuffer_, true, [&](size_t q) {
+        for (int c = 0; c < 3; ++c) {
+          lo[c] = std::min(lo[c], fixed_.plane(c)[q]);
+          hi[c] = std::max(hi[c], fixed_.plane(c)[q]);
         }
+        ++count;
+      });
       if (count == 0) continue;
       for (int c = 0; c < 3; ++c)
         fireflyFree_.plane(c)[p] = std::clamp(fixed_.plane(c)[p], lo[c], hi[c]);
@@ -263,22 +255,22 @@ void Reblur::blurPasses(int frameIndex) {
       poissonDiskBlur(fireflyFree_, guide, {maxRadius, s_.weights},
                       poissonRotation(2 * frameIndex + 1), &radiusScale_, blurred_);
     else
-      copyImage(fireflyFree_, blurred_);
+      blurred_.raw() = fireflyFree_.raw();
   }
   ScopedPass pass(this, "post-blur", s_.postBlur ? kPoissonTaps : 0);
   if (s_.postBlur)
     poissonDiskBlur(blurred_, guide, {2.0f * maxRadius, s_.weights},
                     poissonRotation(2 * frameIndex + 2), &radiusScale_, postBlurred_);
   else
-    copyImage(blurred_, postBlurred_);
+    postBlurred_.raw() = blurred_.raw();
 }
 
 // ---- 5. Recurrence: the post-blurred result is next frame's history, so the spatial samples
 // accumulate over time (GTC 2020; the talk p. "4.3.1": recur a *small* blur, shrink it with N).
 void Reblur::storeRecurrentHistory() {
   ScopedPass pass(this, "store history", 0);
-  copyImage(s_.recurrent ? postBlurred_ : temporal_, slowHistory_);
-  copyImage(fast_, fastHistory_);
+  slowHistory_.raw() = s_.recurrent ? postBlurred_.raw() : temporal_.raw();  // recurrent: the blurred result
+  fastHistory_.raw() = fast_.raw();
 }
 
 // ---- 6. Temporal stabilisation with anti-lag (NRD TemporalStabilization): the stabilised
@@ -288,8 +280,8 @@ void Reblur::storeRecurrentHistory() {
 void Reblur::stabilize(Image& output) {
   ScopedPass pass(this, "stabilization", s_.stabilization ? 9 : 0);
   if (!s_.stabilization) {
-    copyImage(postBlurred_, stabilized_);
-    copyImage(stabilized_, output);
+    stabilized_.raw() = postBlurred_.raw();
+    output.raw() = stabilized_.raw();
     return;
   }
   const int w = gbuffer_.width, h = gbuffer_.height;
@@ -305,19 +297,14 @@ void Reblur::stabilize(Image& output) {
       }
       float sum[3] = {0, 0, 0}, sumSq[3] = {0, 0, 0};
       int count = 0;
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int qx = x + dx, qy = y + dy;
-          if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
-          const size_t q = size_t(qy) * size_t(w) + size_t(qx);
-          if (gbuffer_.isSky(q)) continue;
-          for (int c = 0; c < 3; ++c) {
-            const float v = fast_.plane(c)[q];
-            sum[c] += v;
-            sumSq[c] += v * v;
-          }
-          ++count;
+      forEachNeighbour3x3(x, y, w, h, &gbuffer_, false, [&](size_t q) {
+        for (int c = 0; c < 3; ++c) {
+          const float v = fast_.plane(c)[q];
+          sum[c] += v;
+          sumSq[c] += v * v;
         }
+        ++count;
+      });
       float history[3], clamped[3];
       for (int c = 0; c < 3; ++c) {
         history[c] = historySample(p, stabilizedHistory_.plane(c));
@@ -338,12 +325,12 @@ void Reblur::stabilize(Image& output) {
         stabilized_.plane(c)[p] = alpha * current[c] + (1.0f - alpha) * clamped[c];
     }
   });
-  copyImage(stabilized_, output);
+  output.raw() = stabilized_.raw();
 }
 
 void Reblur::storeHistory() {
   ScopedPass pass(this, "store guides", 0);
-  copyImage(stabilized_, stabilizedHistory_);
+  stabilizedHistory_.raw() = stabilized_.raw();
   std::swap(accumulatedFrames_, accumulatedFramesHistory_);
   previousGBuffer_.store(gbuffer_);
   hasHistory_ = true;

@@ -65,4 +65,21 @@ inline float depthFwidth(const Image& derivatives, size_t i) {
   return std::abs(derivatives.plane(kDepthDx)[i]) + std::abs(derivatives.plane(kDepthDy)[i]);
 }
 
+// Calls visit(q) for every pixel q of the 3x3 neighbourhood of (x, y) (row-major, centre
+// included unless `skipCentre`) that lies inside the w x h image and is not sky in `skyMask`
+// (nullptr: no sky test). The one neighbourhood walk of the median, mask blur, anti-firefly and
+// stabilisation passes.
+template <class Visit>
+inline void forEachNeighbour3x3(int x, int y, int w, int h, const GBufferView* skyMask, bool skipCentre,
+                                Visit&& visit) {
+  for (int dy = -1; dy <= 1; ++dy)
+    for (int dx = -1; dx <= 1; ++dx) {
+      const int qx = x + dx, qy = y + dy;
+      if ((skipCentre && dx == 0 && dy == 0) || qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+      const size_t q = size_t(qy) * size_t(w) + size_t(qx);
+      if (skyMask && skyMask->isSky(q)) continue;
+      visit(q);
+    }
+}
+
 }  // namespace arena

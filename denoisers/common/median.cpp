@@ -20,14 +20,7 @@ double median3x3(const Image& in, const GBufferView* g, Image& out) {
       }
       size_t taps[9];
       int count = 0;
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int qx = x + dx, qy = y + dy;
-          if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
-          const size_t q = size_t(qy) * size_t(w) + size_t(qx);
-          if (g && g->isSky(q)) continue;
-          taps[count++] = q;
-        }
+      forEachNeighbour3x3(x, y, w, h, g, false, [&](size_t q) { taps[count++] = q; });
       for (int c = 0; c < in.channels(); ++c) {
         float values[9];
         for (int k = 0; k < count; ++k) values[k] = in.plane(c)[taps[k]];
