@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <unistd.h>
 
 #include "core/error.hpp"
 #include "tracer/scene.hpp"
@@ -12,8 +13,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// One file per test and process: ctest runs tests in parallel processes.
 std::string writeScene(const std::string& name, const std::string& text) {
-  fs::path dir = fs::temp_directory_path() / "arena_scene_test";
+  fs::path dir = fs::temp_directory_path() / ("arena_scene_test_" + std::to_string(getpid()));
   fs::create_directories(dir);
   fs::path p = dir / (name + ".json");
   std::ofstream(p) << text;
@@ -34,7 +36,7 @@ const char* kMinimal = R"({
 
 std::string errorOf(const std::string& text) {
   try {
-    loadScene(writeScene("bad", text));
+    loadScene(writeScene(std::string("bad_") + ::testing::UnitTest::GetInstance()->current_test_info()->name(), text));
   } catch (const Error& e) {
     return e.what();
   }
@@ -79,7 +81,7 @@ TEST(Scene, LinearKeyframesInterpolate) {
 
 TEST(Scene, MalformedJsonNamesTheFile) {
   std::string e = errorOf("{ \"purpose\": ");
-  EXPECT_NE(e.find("bad.json"), std::string::npos) << e;
+  EXPECT_NE(e.find("bad_MalformedJsonNamesTheFile.json"), std::string::npos) << e;
   EXPECT_NE(e.find("malformed JSON"), std::string::npos) << e;
 }
 
