@@ -43,6 +43,13 @@ void atrousIteration(int iteration, const AtrousSettings& settings, const Atrous
                      float colorSigma, const Image& colorIn, Image& colorOut,
                      const Image* varianceIn = nullptr, Image* varianceOut = nullptr);
 
+// The pixel kernel runs on sixteen AVX-512 lanes where the CPU has them (F, VL, BW, DQ), on eight
+// AVX2 lanes otherwise (or when the environment sets ARENA_NO_AVX512); both give the same bits.
+// allowAtrousAvx512(false) forces the AVX2 path
+// (for tests and comparisons) and returns the previous setting.
+bool atrousUsesAvx512();
+bool allowAtrousAvx512(bool allow);
+
 // g3x3 of SVGF eq. 5: the variance blurred by a 3x3 Gaussian (1/4, 1/2, 1/4)^2, sky taps and
 // off-image taps dropped and the rest renormalised. Used only to drive the luminance weight;
 // the variance propagated to the next iteration stays unfiltered (SVGF §4.4).
