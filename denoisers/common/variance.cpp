@@ -77,17 +77,24 @@ void accumulateColorAndMoments(const Reprojection& reprojection, const Image& pr
 
 namespace {
 
-// Per-thread row buffers of the spatial estimate, grown on first use (no allocation per frame).
+// Per-thread buffers of the spatial estimate, one entry per young pixel of a row (packed), grown
+// on first use (no allocation per frame).
 struct SpatialVarianceScratch {
-  std::vector<float> centreLuminance, neighbourLuminance, depthDenominator, weight;
+  std::vector<int> young;  // x of the row's young pixels
+  // Centre guides, and one tap's neighbour values gathered beside them.
+  std::vector<float> z, depthDenominator, centreLuminance, n0, n1, n2;
+  std::vector<float> zq, luminanceQ, n0q, n1q, n2q, meshIdQ, mu1q, mu2q, weight;
   std::vector<double> m1, m2, weightSum;
   std::vector<int32_t> fetched;
 };
 SpatialVarianceScratch& spatialScratch(int width) {
   thread_local SpatialVarianceScratch scratch;
-  if (scratch.weight.size() < size_t(width)) {
-    for (auto* buffer : {&scratch.centreLuminance, &scratch.neighbourLuminance,
-                         &scratch.depthDenominator, &scratch.weight})
+  if (scratch.young.size() < size_t(width)) {
+    scratch.young.assign(size_t(width), 0);
+    for (auto* buffer : {&scratch.z, &scratch.depthDenominator, &scratch.centreLuminance,
+                         &scratch.n0, &scratch.n1, &scratch.n2, &scratch.zq, &scratch.luminanceQ,
+                         &scratch.n0q, &scratch.n1q, &scratch.n2q, &scratch.meshIdQ, &scratch.mu1q,
+                         &scratch.mu2q, &scratch.weight})
       buffer->assign(size_t(width), 0.0f);
     for (auto* buffer : {&scratch.m1, &scratch.m2, &scratch.weightSum})
       buffer->assign(size_t(width), 0.0);
@@ -147,8 +154,9 @@ double estimateVariance(const Image& moments, const Image& historyLength, const 
   const float phiColor = std::max(settings.phiColor, 1e-30f);
   parallelRows(h, [&](int y) {
     const size_t rowStart = size_t(y) * size_t(w);
-    // Temporal estimate where the history is long enough (SVGF §4.2); the span of the others.
-    int spanBegin = w, spanEnd = 0;
+    SpatialVarianceScratch& row = spatialScratch(w);
+    // Temporal estimate where the history is long enough (SVGF §4.2); the others are young.
+    int count = 0;
     for (int x = 0; x < w; ++x) {
       const size_t p = rowStart + size_t(x);
       if (g.isSky(p)) {
@@ -156,78 +164,89 @@ double estimateVariance(const Image& moments, const Image& historyLength, const 
       } else if (length[p] >= settings.minHistory) {
         out[p] = std::max(0.0f, mu2[p] - mu1[p] * mu1[p]);
       } else {
-        spanBegin = std::min(spanBegin, x);
-        spanEnd = x + 1;
+        row.young[size_t(count++)] = x;
       }
     }
-    if (spanBegin >= spanEnd) {
+    if (count == 0) {
       taps.set(y, 0);
       return;
     }
 
-    // Spatial estimate: bilateral 7x7 average of the moments (Falcor SVGFFilterMoments), one tap
-    // at a time across [spanBegin, spanEnd), taps in the order of a per-pixel dy, dx loop so
+    // Spatial estimate: bilateral 7x7 average of the moments (Falcor SVGFFilterMoments). The young
+    // pixels are packed (they are sparse after a correction or a disocclusion, dense only on the
+    // first frames), and every tap gathers their neighbours beside them, so each sweep below is
+    // one vectorised loop over the young pixels, taps in the order of a per-pixel dy, dx loop so
     // every pixel's sums round as that loop's would. Double sums: mu2 - mu1^2 cancels
     // catastrophically on a flat signal, and 49 float sums would leave a rounding "variance" the
     // luminance term then trusts.
-    SpatialVarianceScratch& row = spatialScratch(w);
-    for (int x = spanBegin; x < spanEnd; ++x) {
-      const size_t p = rowStart + size_t(x);
-      row.centreLuminance[size_t(x)] = lum(p);
+    for (int k = 0; k < count; ++k) {
+      const size_t p = rowStart + size_t(row.young[size_t(k)]);
+      row.z[size_t(k)] = g.depth[p];
+      row.centreLuminance[size_t(k)] = lum(p);
       const float depthScale = settings.phiDepth * std::max(std::abs(dzdx[p]), std::abs(dzdy[p]));
-      row.depthDenominator[size_t(x)] = std::max(depthScale, 1e-8f);  // Falcor's 1e-8 floor
-      row.m1[size_t(x)] = row.m2[size_t(x)] = row.weightSum[size_t(x)] = 0.0;
-      row.fetched[size_t(x)] = 0;
+      row.depthDenominator[size_t(k)] = std::max(depthScale, 1e-8f);  // Falcor's 1e-8 floor
+      row.n0[size_t(k)] = g.normal[0][p];
+      row.n1[size_t(k)] = g.normal[1][p];
+      row.n2[size_t(k)] = g.normal[2][p];
+      row.m1[size_t(k)] = row.m2[size_t(k)] = row.weightSum[size_t(k)] = 0.0;
+      row.fetched[size_t(k)] = 0;
     }
-    float* weight = row.weight.data();
+    const auto tapWeights =
+        settings.phiNormal != 0.0f ? &spatialTapWeights<true> : &spatialTapWeights<false>;
     for (int dy = -r; dy <= r; ++dy) {
       const int qy = y + dy;
       if (qy < 0 || qy >= h) continue;
       const size_t qRow = size_t(qy) * size_t(w);
-      float* lq = row.neighbourLuminance.data();
-      for (int x = std::max(0, spanBegin - r); x < std::min(w, spanEnd + r); ++x)
-        lq[x] = lum(qRow + size_t(x));
       for (int dx = -r; dx <= r; ++dx) {
-        const int xBegin = std::max(spanBegin, -dx), xEnd = std::min(spanEnd, w - dx);
-        if (xBegin >= xEnd) continue;
-        const std::ptrdiff_t shift = std::ptrdiff_t(dy) * w + dx;
-        const float* idq = g.meshId + rowStart + shift;
-        if (dx == 0 && dy == 0) {
-          for (int x = xBegin; x < xEnd; ++x) weight[x] = 1.0f;  // the centre
-        } else {
-          const float offset = std::sqrt(float(dx * dx + dy * dy));
-          const auto tapWeights =
-              settings.phiNormal != 0.0f ? &spatialTapWeights<true> : &spatialTapWeights<false>;
-          tapWeights(g.depth + rowStart, g.depth + rowStart + shift, row.depthDenominator.data(),
-                     row.centreLuminance.data(), lq + dx, g.normal[0] + rowStart,
-                     g.normal[1] + rowStart, g.normal[2] + rowStart, g.normal[0] + rowStart + shift,
-                     g.normal[1] + rowStart + shift, g.normal[2] + rowStart + shift, idq, offset,
-                     phiColor, settings.phiNormal, weight, xBegin, xEnd);
+        // Gather; a neighbour off the image reads as sky (it then adds exactly +0, as a skipped
+        // tap would).
+        for (int k = 0; k < count; ++k) {
+          const int qx = row.young[size_t(k)] + dx;
+          const bool inside = qx >= 0 && qx < w;
+          const size_t q = qRow + size_t(std::clamp(qx, 0, w - 1));
+          row.zq[size_t(k)] = g.depth[q];
+          row.luminanceQ[size_t(k)] = lum(q);
+          row.n0q[size_t(k)] = g.normal[0][q];
+          row.n1q[size_t(k)] = g.normal[1][q];
+          row.n2q[size_t(k)] = g.normal[2][q];
+          row.meshIdQ[size_t(k)] = inside ? g.meshId[q] : -1.0f;
+          row.mu1q[size_t(k)] = mu1[q];
+          row.mu2q[size_t(k)] = mu2[q];
         }
-        const float* mu1q = mu1 + rowStart + shift;
-        const float* mu2q = mu2 + rowStart + shift;
+        float* weight = row.weight.data();
+        if (dx == 0 && dy == 0) {
+          std::fill(weight, weight + count, 1.0f);  // the centre
+        } else {
+          tapWeights(row.z.data(), row.zq.data(), row.depthDenominator.data(),
+                     row.centreLuminance.data(), row.luminanceQ.data(), row.n0.data(),
+                     row.n1.data(), row.n2.data(), row.n0q.data(), row.n1q.data(), row.n2q.data(),
+                     row.meshIdQ.data(), std::sqrt(float(dx * dx + dy * dy)), phiColor,
+                     settings.phiNormal, weight, 0, count);
+        }
+        const float* idq = row.meshIdQ.data();
+        const float* mu1q = row.mu1q.data();
+        const float* mu2q = row.mu2q.data();
         double* m1 = row.m1.data();
         double* m2 = row.m2.data();
         double* weightSum = row.weightSum.data();
         int32_t* fetched = row.fetched.data();
-        for (int x = xBegin; x < xEnd; ++x) {
+        for (int k = 0; k < count; ++k) {
           // Sky neighbours are not read: they add exactly +0 (selected on the bits, so a non-finite
           // sky moment cannot leak in and the loop still vectorises).
-          const bool sky = idq[x] < 0.0f;
-          fetched[x] += sky ? 0 : 1;
-          m1[x] += double(selectFloat(sky, 0.0f, weight[x] * mu1q[x]));
-          m2[x] += double(selectFloat(sky, 0.0f, weight[x] * mu2q[x]));
-          weightSum[x] += double(selectFloat(sky, 0.0f, weight[x]));
+          const bool sky = idq[k] < 0.0f;
+          fetched[k] += sky ? 0 : 1;
+          m1[k] += double(selectFloat(sky, 0.0f, weight[k] * mu1q[k]));
+          m2[k] += double(selectFloat(sky, 0.0f, weight[k] * mu2q[k]));
+          weightSum[k] += double(selectFloat(sky, 0.0f, weight[k]));
         }
       }
     }
     int64_t fetchedInRow = 0;
-    for (int x = spanBegin; x < spanEnd; ++x) {
-      const size_t p = rowStart + size_t(x);
-      if (g.isSky(p) || length[p] >= settings.minHistory) continue;  // decided above
-      fetchedInRow += row.fetched[size_t(x)];
-      const double m1 = row.m1[size_t(x)] / row.weightSum[size_t(x)];  // the centre always counts
-      const double m2 = row.m2[size_t(x)] / row.weightSum[size_t(x)];
+    for (int k = 0; k < count; ++k) {
+      const size_t p = rowStart + size_t(row.young[size_t(k)]);
+      fetchedInRow += row.fetched[size_t(k)];
+      const double m1 = row.m1[size_t(k)] / row.weightSum[size_t(k)];  // the centre always counts
+      const double m2 = row.m2[size_t(k)] / row.weightSum[size_t(k)];
       float v = float(std::max(0.0, m2 - m1 * m1));
       if (settings.boostYoungHistory) v *= settings.minHistory / std::max(length[p], 1.0f);
       out[p] = v;
