@@ -205,10 +205,10 @@ void Hybrid::preSpatial() {
     Image& squared = preWide_;  // scratch: the second moment's input
     for (size_t k = 0; k < signal_.raw().size(); ++k)
       squared.raw()[k] = signal_.raw()[k] * signal_.raw()[k];
-    const AtrousGuide guide{gbuffer_, &derivatives_, nullptr};
-    lobeAtrousIteration(0, hybridAtrous(s_, false), guide,
-                        {s_.edgeLobe ? &lobes_ : nullptr, s_.lobeBeta}, signal_, preSpatial_,
-                        &squared, &preMoments_);
+    const AtrousGuide guide{gbuffer_, &derivatives_, nullptr, s_.edgeLobe ? &lobes_ : nullptr,
+                            s_.lobeBeta};
+    atrousIterationWithMoments(0, hybridAtrous(s_, false), guide, 1.0f, signal_, preSpatial_,
+                               squared, preMoments_);
   }
   ScopedPass pass(this, "pre-spatial mip", s_.preMip ? 4 : 0);
   if (!s_.preMip) {
@@ -334,12 +334,12 @@ void Hybrid::postSpatial() {
     ScopedPass pass(this, "variance prefilter", 9);
     prefilterVariance3x3(variance_, gbuffer_, filteredVariance_);
   }
-  const AtrousGuide guide{gbuffer_, &derivatives_, &filteredVariance_};
+  const AtrousGuide guide{gbuffer_, &derivatives_, &filteredVariance_,
+                          s_.edgeLobe ? &lobes_ : nullptr, s_.lobeBeta};
   const AtrousSettings settings = hybridAtrous(s_, true);
-  const LobeTerm lobe{s_.edgeLobe ? &lobes_ : nullptr, s_.lobeBeta};
   for (int i = 0; i < s_.postIterations; ++i) {
     ScopedPass pass(this, "post-spatial à-trous " + std::to_string(i + 1), 9);
-    lobeAtrousIteration(i, settings, guide, lobe, *input, atrous_[i]);
+    atrousIteration(i, settings, guide, 1.0f, *input, atrous_[i]);
     input = &atrous_[i];
   }
   ScopedPass pass(this, "post-spatial mip + upsample", s_.postMip ? 4 : 0);

@@ -11,7 +11,6 @@
 #include "denoisers/common/gbuffer.hpp"
 #include "denoisers/common/history_clamp.hpp"
 #include "denoisers/common/hit_point_reprojection.hpp"
-#include "denoisers/common/lobe_atrous.hpp"
 #include "denoisers/common/mip_chain.hpp"
 #include "denoisers/common/parallel.hpp"
 #include "denoisers/common/reprojection.hpp"

@@ -91,16 +91,20 @@ int atrousTapCount(AtrousKernel kernel) {
   return int(kernelTaps(kernel).size());
 }
 
-void atrousIteration(int iteration, const AtrousSettings& settings, const AtrousGuide& guide,
+namespace {
+
+// One iteration with what it carries (atrous_kernel.hpp's Carry).
+void filterIteration(int iteration, const AtrousSettings& settings, const AtrousGuide& guide,
                      float colorSigma, const Image& colorIn, Image& colorOut,
-                     const Image* varianceIn, Image* varianceOut) {
+                     atrous_detail::Carry carry, const Image* carryIn, Image* carryOut) {
   const GBufferView& g = guide.gbuffer;
   const int w = colorIn.width(), h = colorIn.height();
   if (colorIn.channels() != 3 || !colorOut.sameShape(colorIn) || g.width != w || g.height != h)
     throw Error("à-trous: colour in/out must be 3-channel images of the G-buffer's size");
-  if ((varianceIn == nullptr) != (varianceOut == nullptr))
-    throw Error("à-trous: variance propagation needs both a variance input and output");
   if (iteration < 0 || iteration > 24) throw Error("à-trous: iteration out of range [0, 24]");
+  if (guide.lobes && (guide.lobes->width() != w || guide.lobes->height() != h ||
+                      guide.lobes->channels() != kSpecularLobeChannels))
+    throw Error("à-trous: the lobe image must have 4 channels and the G-buffer's size");
 
   const EdgeStoppingSettings& s = settings.edges;
   // Checks that every enabled term has its guides (throws otherwise); the kernel evaluates its
@@ -120,8 +124,13 @@ void atrousIteration(int iteration, const AtrousSettings& settings, const Atrous
     it.color[c] = colorIn.plane(c);
     it.out[c] = colorOut.plane(c);
   }
-  it.varianceIn = varianceIn ? varianceIn->plane(0) : nullptr;
-  it.varianceOut = varianceOut ? varianceOut->plane(0) : nullptr;
+  if (carryIn) {
+    it.carryCount = carryIn->channels();
+    for (int c = 0; c < it.carryCount; ++c) {
+      it.carryIn[c] = carryIn->plane(c);
+      it.carryOut[c] = carryOut->plane(c);
+    }
+  }
   if (s.depth) {
     it.z = g.depth;
     it.dzdx = guide.derivatives->plane(kDepthDx);
@@ -160,13 +169,42 @@ void atrousIteration(int iteration, const AtrousSettings& settings, const Atrous
   }
   it.meshId = g.meshId ? g.meshId : scratchPlane(zeroIds, pixels).data();
   it.idTerm = s.id;
+  if (guide.lobes) {
+    for (int c = 0; c < kSpecularLobeChannels; ++c) it.lobes[c] = guide.lobes->plane(c);
+    it.lobeBeta = guide.lobeBeta;
+  }
 
-  const bool variance = varianceIn != nullptr;
   const atrous_detail::FilterRowFunction filterRow =
       atrousUsesAvx512()
-          ? atrous_detail::selectFilterRowAvx512(s.depth, s.luminance, normalTerm, variance)
-          : atrous_detail::selectFilterRow<Lanes8>(s.depth, s.luminance, normalTerm, variance);
+          ? atrous_detail::selectFilterRowAvx512(s.depth, s.luminance, normalTerm, carry)
+          : atrous_detail::selectFilterRow<Lanes8>(s.depth, s.luminance, normalTerm, carry);
   parallelRows(h, [&](int y) { filterRow(it, y); });
+}
+
+}  // namespace
+
+void atrousIteration(int iteration, const AtrousSettings& settings, const AtrousGuide& guide,
+                     float colorSigma, const Image& colorIn, Image& colorOut,
+                     const Image* varianceIn, Image* varianceOut) {
+  if ((varianceIn == nullptr) != (varianceOut == nullptr))
+    throw Error("à-trous: variance propagation needs both a variance input and output");
+  if (varianceIn && (varianceIn->channels() != 1 || !varianceOut->sameShape(*varianceIn) ||
+                     varianceIn->width() != colorIn.width() ||
+                     varianceIn->height() != colorIn.height()))
+    throw Error("à-trous: the variance in/out must be 1-channel images of the colour's size");
+  filterIteration(iteration, settings, guide, colorSigma, colorIn, colorOut,
+                  varianceIn ? atrous_detail::Carry::Variance : atrous_detail::Carry::None,
+                  varianceIn, varianceOut);
+}
+
+void atrousIterationWithMoments(int iteration, const AtrousSettings& settings,
+                                const AtrousGuide& guide, float colorSigma, const Image& colorIn,
+                                Image& colorOut, const Image& momentsIn, Image& momentsOut) {
+  if (momentsIn.channels() < 1 || momentsIn.channels() > 4 || !momentsOut.sameShape(momentsIn) ||
+      momentsIn.width() != colorIn.width() || momentsIn.height() != colorIn.height())
+    throw Error("à-trous: moments in/out must be equal images of 1 to 4 channels, the colour's size");
+  filterIteration(iteration, settings, guide, colorSigma, colorIn, colorOut,
+                  atrous_detail::Carry::Plain, &momentsIn, &momentsOut);
 }
 
 bool atrousUsesAvx512() {

@@ -27,11 +27,15 @@ struct AtrousSettings {
 };
 
 // Guides of one frame. `derivatives` (computeGeometryDerivatives) is needed by the depth term,
-// `luminanceVariance` (prefilterVariance3x3 of the variance) by the luminance term.
+// `luminanceVariance` (prefilterVariance3x3 of the variance) by the luminance term. `lobes`
+// (computeSpecularLobes) turns on the specular-lobe similarity (Tokuyoshi 2016; the CEDEC 2021
+// talk's edge-stopping term, p. "4.1.4"), raised to `lobeBeta`, as one more factor of w(p, q).
 struct AtrousGuide {
   const GBufferView& gbuffer;
   const Image* derivatives = nullptr;
   const Image* luminanceVariance = nullptr;
+  const Image* lobes = nullptr;
+  float lobeBeta = 1.0f;
 };
 
 int atrousTapCount(AtrousKernel kernel);  // 25 or 9: neighbour fetches per pixel
@@ -42,6 +46,13 @@ int atrousTapCount(AtrousKernel kernel);  // 25 or 9: neighbour fetches per pixe
 void atrousIteration(int iteration, const AtrousSettings& settings, const AtrousGuide& guide,
                      float colorSigma, const Image& colorIn, Image& colorOut,
                      const Image* varianceIn = nullptr, Image* varianceOut = nullptr);
+
+// The same iteration, carrying `momentsIn` (1 to 4 channels) through the colour's own weights into
+// `momentsOut` (the talk's pre-spatial pass filters the signal and its second moment together,
+// p. "4.2.3": "1次モーメントのフィルタカラー / 2次モーメント").
+void atrousIterationWithMoments(int iteration, const AtrousSettings& settings,
+                                const AtrousGuide& guide, float colorSigma, const Image& colorIn,
+                                Image& colorOut, const Image& momentsIn, Image& momentsOut);
 
 // The pixel kernel runs on sixteen AVX-512 lanes where the CPU has them (F, VL, BW, DQ), on eight
 // AVX2 lanes otherwise (or when the environment sets ARENA_NO_AVX512); both give the same bits.

@@ -10,8 +10,8 @@
 namespace arena::atrous_detail {
 
 FilterRowFunction selectFilterRowAvx512(bool depth, bool luminance, NormalTerm normal,
-                                        bool variance) {
-  return selectFilterRow<Lanes16>(depth, luminance, normal, variance);
+                                        Carry carry) {
+  return selectFilterRow<Lanes16>(depth, luminance, normal, carry);
 }
 
 }  // namespace arena::atrous_detail

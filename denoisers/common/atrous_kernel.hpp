@@ -11,6 +11,7 @@
 #include <cstdint>
 
 #include "denoisers/common/fast_math.hpp"
+#include "denoisers/common/specular_lobe.hpp"
 
 namespace arena::atrous_detail {
 
@@ -26,8 +27,12 @@ enum class NormalTerm {
   CosinePowerOfTwo,  // sigmaN = 2^k: n.n' squared k times (exact powers, no log), times the exp
 };
 
+// What is filtered alongside the colour: nothing; SVGF's variance (1 channel, squared weights);
+// or up to 4 channels with the colour's own weights (the talk's second moment).
+enum class Carry { None, Variance, Plain };
+
 // Squared-distance terms |a(p) - a(q)|^2 / sigma over three planes each: position, colour and the
-// Gaussian normal form, in this order (the order EdgeStopping::rowWeights sums them in).
+// Gaussian normal form, in this order (the order EdgeStopping::weight sums them in).
 struct DistanceTerm {
   const float* planes[3];
   float inverseSigma;
@@ -39,9 +44,11 @@ struct Iteration {
   const KernelTap* taps;  // centre first
   int tapCount;
   const float* color[3];
-  const float* varianceIn;  // nullptr: no variance propagation
   float* out[3];
-  float* varianceOut;
+  // The carried channels (Carry::Variance: carryCount = 1).
+  const float* carryIn[4];
+  float* carryOut[4];
+  int carryCount;
   // Depth, SVGF eq. 3.
   const float *z, *dzdx, *dzdy;
   float sigmaZ, depthEpsilon;
@@ -58,6 +65,9 @@ struct Iteration {
   // with the id term, never across meshes.
   const float* meshId;
   bool idTerm;
+  // Specular-lobe similarity (specular_lobe.hpp): the lobe image's 4 planes; nullptr = off.
+  const float* lobes[4];
+  float lobeBeta;
 };
 
 constexpr int32_t kTinyBits = 0x0DA24260, kOneBits = 0x3F800000;  // bits of 1e-30f and 1.0f
@@ -81,7 +91,7 @@ inline void store(float* p, F value, IntLanes<F> mask) {
 // drops them. The weights are EdgeStopping::weight's w(p, q) up to float rounding (a distance term
 // multiplies by 1/sigma once, not per channel; a power-of-two sigmaN squares the cosine instead of
 // exp(sigmaN log(cosine)); products are fused into the sums).
-template <class F, bool Depth, bool Luminance, NormalTerm Normal, bool Variance, bool Border>
+template <class F, bool Depth, bool Luminance, NormalTerm Normal, Carry Carried, bool Border>
 inline void filterBlock(const Iteration& it, int y, int x0) {
   using I = IntLanes<F>;
   const int w = it.width;
@@ -94,8 +104,13 @@ inline void filterBlock(const Iteration& it, int y, int x0) {
   const F id = load<F, Border>(it.meshId + p, inRow);
   F sum[3];
   for (int c = 0; c < 3; ++c) sum[c] = h0 * load<F, Border>(it.color[c] + p, inRow);
-  F weightSum = F{} + h0, varianceSum{};
-  if constexpr (Variance) varianceSum = (h0 * h0) * load<F, Border>(it.varianceIn + p, inRow);
+  F weightSum = F{} + h0;
+  F carrySum[4] = {};
+  if constexpr (Carried == Carry::Variance)
+    carrySum[0] = (h0 * h0) * load<F, Border>(it.carryIn[0] + p, inRow);
+  if constexpr (Carried == Carry::Plain)
+    for (int c = 0; c < 4; ++c)
+      if (c < it.carryCount) carrySum[c] = h0 * load<F, Border>(it.carryIn[c] + p, inRow);
   F z{}, dzdx{}, dzdy{}, depthEpsilon{};
   if constexpr (Depth) {
     z = load<F, Border>(it.z + p, inRow);
@@ -113,6 +128,10 @@ inline void filterBlock(const Iteration& it, int y, int x0) {
   F n[3] = {};
   if constexpr (Normal != NormalTerm::None)
     for (int c = 0; c < 3; ++c) n[c] = load<F, Border>(it.normal[c] + p, inRow);
+  const bool lobe = it.lobes[0] != nullptr;
+  F lobeCentre[4] = {};
+  if (lobe)
+    for (int c = 0; c < 4; ++c) lobeCentre[c] = load<F, Border>(it.lobes[c] + p, inRow);
 
   for (int k = 1; k < it.tapCount; ++k) {
     const KernelTap& tap = it.taps[k];
@@ -157,6 +176,12 @@ inline void filterBlock(const Iteration& it, int y, int x0) {
       if constexpr (Normal == NormalTerm::CosineLog)
         e += selectFloat(backFacing, F{} + kNeverExponent, F{}) - it.sigmaN * logPositive(cosine);
     }
+    if (lobe) {  // s^beta = exp(beta log s), inside the one exp
+      F lobeQ[4];
+      for (int c = 0; c < 4; ++c) lobeQ[c] = load<F, Border>(it.lobes[c] + q, inImage);
+      e -= it.lobeBeta * logLobeSimilarity(lobeCentre[0], lobeCentre[1], lobeCentre[2],
+                                           lobeCentre[3], lobeQ[0], lobeQ[1], lobeQ[2], lobeQ[3]);
+    }
     {  // never gather from the sky; with the id term, never across meshes
       const F idq = load<F, Border>(it.meshId + q, inImage);
       const I keep = (idq >= 0.0f) & (it.idTerm ? (id == idq) : I{} - 1);
@@ -174,9 +199,14 @@ inline void filterBlock(const Iteration& it, int y, int x0) {
     for (int c = 0; c < 3; ++c)
       sum[c] = fusedMultiplyAdd(weight, load<F, Border>(it.color[c] + q, inImage), sum[c]);
     weightSum += weight;
-    if constexpr (Variance)
-      varianceSum = fusedMultiplyAdd(weight * weight, load<F, Border>(it.varianceIn + q, inImage),
-                                     varianceSum);
+    if constexpr (Carried == Carry::Variance)
+      carrySum[0] = fusedMultiplyAdd(weight * weight, load<F, Border>(it.carryIn[0] + q, inImage),
+                                     carrySum[0]);
+    if constexpr (Carried == Carry::Plain)
+      for (int c = 0; c < 4; ++c)
+        if (c < it.carryCount)
+          carrySum[c] =
+              fusedMultiplyAdd(weight, load<F, Border>(it.carryIn[c] + q, inImage), carrySum[c]);
   }
 
   // Normalise; sky passes through. The centre tap always contributes h0 > 0, so the weight sum
@@ -187,24 +217,26 @@ inline void filterBlock(const Iteration& it, int y, int x0) {
     const F in = load<F, Border>(it.color[c] + p, inRow);
     store<F, Border>(it.out[c] + p, selectFloat(sky, in, sum[c] * inverse), inRow);
   }
-  if constexpr (Variance) {
-    const F in = load<F, Border>(it.varianceIn + p, inRow);
-    store<F, Border>(it.varianceOut + p, selectFloat(sky, in, varianceSum * inverse * inverse),
-                     inRow);
+  for (int c = 0; c < 4; ++c) {
+    if (Carried == Carry::None || c >= it.carryCount) break;
+    const F in = load<F, Border>(it.carryIn[c] + p, inRow);
+    const F normalised = Carried == Carry::Variance ? carrySum[c] * inverse * inverse
+                                                    : carrySum[c] * inverse;
+    store<F, Border>(it.carryOut[c] + p, selectFloat(sky, in, normalised), inRow);
   }
 }
 
 // One row in blocks of `lanes` pixels; the blocks whose taps can leave the image take the masked
 // path.
-template <class F, bool Depth, bool Luminance, NormalTerm Normal, bool Variance>
+template <class F, bool Depth, bool Luminance, NormalTerm Normal, Carry Carried>
 void filterRow(const Iteration& it, int y) {
   constexpr int kLanes = int(sizeof(F) / sizeof(float));
   const int reach = it.radius * it.step;
   for (int x0 = 0; x0 < it.width; x0 += kLanes) {
     if (x0 < reach || x0 + kLanes + reach > it.width)
-      filterBlock<F, Depth, Luminance, Normal, Variance, true>(it, y, x0);
+      filterBlock<F, Depth, Luminance, Normal, Carried, true>(it, y, x0);
     else
-      filterBlock<F, Depth, Luminance, Normal, Variance, false>(it, y, x0);
+      filterBlock<F, Depth, Luminance, Normal, Carried, false>(it, y, x0);
   }
 }
 
@@ -212,34 +244,41 @@ using FilterRowFunction = void (*)(const Iteration&, int);
 
 // The instantiation for this iteration's terms, chosen once per iteration.
 template <class F, bool Depth, bool Luminance, NormalTerm Normal>
-FilterRowFunction selectFilterRow(bool variance) {
-  return variance ? &filterRow<F, Depth, Luminance, Normal, true>
-                  : &filterRow<F, Depth, Luminance, Normal, false>;
+FilterRowFunction selectFilterRow(Carry carry) {
+  switch (carry) {
+    case Carry::None:
+      return &filterRow<F, Depth, Luminance, Normal, Carry::None>;
+    case Carry::Variance:
+      return &filterRow<F, Depth, Luminance, Normal, Carry::Variance>;
+    case Carry::Plain:
+      break;
+  }
+  return &filterRow<F, Depth, Luminance, Normal, Carry::Plain>;
 }
 template <class F, bool Depth, bool Luminance>
-FilterRowFunction selectFilterRow(NormalTerm normal, bool variance) {
+FilterRowFunction selectFilterRow(NormalTerm normal, Carry carry) {
   switch (normal) {
     case NormalTerm::None:
-      return selectFilterRow<F, Depth, Luminance, NormalTerm::None>(variance);
+      return selectFilterRow<F, Depth, Luminance, NormalTerm::None>(carry);
     case NormalTerm::CosineLog:
-      return selectFilterRow<F, Depth, Luminance, NormalTerm::CosineLog>(variance);
+      return selectFilterRow<F, Depth, Luminance, NormalTerm::CosineLog>(carry);
     case NormalTerm::CosinePowerOfTwo:
       break;
   }
-  return selectFilterRow<F, Depth, Luminance, NormalTerm::CosinePowerOfTwo>(variance);
+  return selectFilterRow<F, Depth, Luminance, NormalTerm::CosinePowerOfTwo>(carry);
 }
 template <class F>
-FilterRowFunction selectFilterRow(bool depth, bool luminance, NormalTerm normal, bool variance) {
+FilterRowFunction selectFilterRow(bool depth, bool luminance, NormalTerm normal, Carry carry) {
   if (depth)
-    return luminance ? selectFilterRow<F, true, true>(normal, variance)
-                     : selectFilterRow<F, true, false>(normal, variance);
-  return luminance ? selectFilterRow<F, false, true>(normal, variance)
-                   : selectFilterRow<F, false, false>(normal, variance);
+    return luminance ? selectFilterRow<F, true, true>(normal, carry)
+                     : selectFilterRow<F, true, false>(normal, carry);
+  return luminance ? selectFilterRow<F, false, true>(normal, carry)
+                   : selectFilterRow<F, false, false>(normal, carry);
 }
 
 // The AVX-512 (Lanes16) instantiation, defined in atrous_avx512.cpp; callable only where the CPU
 // has AVX-512 F, VL, BW and DQ.
 FilterRowFunction selectFilterRowAvx512(bool depth, bool luminance, NormalTerm normal,
-                                        bool variance);
+                                        Carry carry);
 
 }  // namespace arena::atrous_detail

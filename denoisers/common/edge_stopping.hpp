@@ -1,9 +1,9 @@
 #pragma once
 // Edge-stopping functions w(p, q) for joint-bilateral filters (the table in docs/algorithms.md):
 // each term switchable and tunable, the weight their product, in [0, 1], 1 at the centre.
-// Room left for the terms other variants will add here, next to these: the specular-lobe
-// similarity (Tokuyoshi 2016; the talk), and, as separate footprints over the same weights,
-// a Poisson-disk gather (ReBLUR), a 3x3 median (firefly pass) and mip-level bilateral upsampling.
+// EdgeStopping::weight is the per-tap reference form; the à-trous kernel (atrous_kernel.hpp)
+// evaluates the same terms register-blocked, plus the specular-lobe similarity
+// (specular_lobe.hpp).
 #include <algorithm>
 #include <array>
 #include <bit>
@@ -155,82 +155,6 @@ class EdgeStopping {
       }
     }
     return expNonPositive(-exponent);
-  }
-
-  // Row form of weight(), for filters that sweep one tap offset across a row at a time, so the
-  // loops vectorise across x: for p = (x, y), x in [xBegin, xEnd), and q = p + (offsetX,
-  // offsetY), all q inside the image, writes w(p, q) to weights[x]. `centreLuminance` and
-  // `centreInverseDenominator` (indexed by x) come from prepareRow(y, ...). Sky neighbours are
-  // not excluded here (the caller does it).
-  void prepareRow(int y, float* centreLuminance, float* centreInverseDenominator) const {
-    if (!s_.luminance) return;
-    const size_t row = size_t(y) * size_t(g_.width);
-    for (int x = 0; x < g_.width; ++x) {
-      const Centre c = centre(row + size_t(x));
-      centreLuminance[x] = c.luminance;
-      centreInverseDenominator[x] = c.inverseLuminanceDenominator;
-    }
-  }
-  void rowWeights(int y, int xBegin, int xEnd, int offsetX, int offsetY,
-                  const float* centreLuminance, const float* centreInverseDenominator,
-                  float* weights) const {
-    if (offsetX == 0 && offsetY == 0) {
-      std::fill(weights + xBegin, weights + xEnd, 1.0f);
-      return;
-    }
-    const size_t row = size_t(y) * size_t(g_.width);
-    const std::ptrdiff_t shift = std::ptrdiff_t(offsetY) * g_.width + offsetX;
-    float* e = weights;  // the exponent first, in place
-    std::fill(e + xBegin, e + xEnd, 0.0f);
-    if (s_.depth) {
-      const float* z = g_.depth + row;
-      const float* zq = z + shift;
-      const float* dx = derivatives_->plane(kDepthDx) + row;
-      const float* dy = derivatives_->plane(kDepthDy) + row;
-      const float ox = s_.sigmaZ * float(offsetX), oy = s_.sigmaZ * float(offsetY);
-      for (int x = xBegin; x < xEnd; ++x)
-        e[x] += std::abs(z[x] - zq[x]) /
-                (std::abs(dx[x] * ox + dy[x] * oy) + s_.depthEpsilon * std::abs(z[x]) + 1e-30f);
-    }
-    if (s_.luminance) {
-      const float* r = color_.plane(0) + row + shift;
-      const float* gr = color_.plane(1) + row + shift;
-      const float* b = color_.plane(2) + row + shift;
-      for (int x = xBegin; x < xEnd; ++x)
-        e[x] += std::abs(centreLuminance[x] - arena::luminance(r[x], gr[x], b[x])) *
-                centreInverseDenominator[x];
-    }
-    auto addDistance = [&](const std::array<const float*, 3>& planes, float inverseSigma) {
-      for (size_t c = 0; c < 3; ++c) {
-        const float* a = planes[c] + row;
-        const float* aq = a + shift;
-        for (int x = xBegin; x < xEnd; ++x) e[x] += (a[x] - aq[x]) * (a[x] - aq[x]) * inverseSigma;
-      }
-    };
-    if (s_.position) addDistance(g_.position, inverseSigmaX_);
-    if (s_.color) {
-      addDistance({color_.plane(0), color_.plane(1), color_.plane(2)}, inverseColorSigma_);
-    }
-    if (s_.normal && s_.normalForm == NormalWeightForm::GaussianDistance)
-      addDistance(g_.normal, inverseSigmaN_);
-    if (s_.normal && s_.normalForm == NormalWeightForm::CosinePower && s_.sigmaN != 0.0f) {
-      const float *nx = g_.normal[0] + row, *ny = g_.normal[1] + row, *nz = g_.normal[2] + row;
-      const float sigmaN = s_.sigmaN;
-      constexpr int32_t kTiny = 0x0DA24260, kOne = 0x3F800000;  // bits of 1e-30f and 1.0f
-      for (int x = xBegin; x < xEnd; ++x) {
-        const float dot = nx[x] * nx[x + shift] + ny[x] * ny[x + shift] + nz[x] * nz[x + shift];
-        // min(n.n', 1) clamped below at 1e-30 on the bit pattern (see fast_math.hpp on why
-        // not in floats); n.n' <= 1e-30 gives weight 0 via an exponent past the cut-off.
-        const int32_t bits = std::bit_cast<int32_t>(dot);
-        const float cosine = std::bit_cast<float>(std::min(std::max(bits, kTiny), kOne));
-        e[x] += selectFloat(bits < kTiny, 1e30f, 0.0f) - sigmaN * logPositive(cosine);
-      }
-    }
-    for (int x = xBegin; x < xEnd; ++x) weights[x] = expNonPositive(-e[x]);
-    if (s_.id) {
-      const float* id = g_.meshId + row;
-      for (int x = xBegin; x < xEnd; ++x) weights[x] = id[x] == id[x + shift] ? weights[x] : 0.0f;
-    }
   }
 
  private:

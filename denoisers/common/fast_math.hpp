@@ -64,6 +64,7 @@ inline Lanes8 selectFloat(LaneMask8 mask, Lanes8 ifTrue, Lanes8 ifFalse) {
   return floatFromBits((bitsOf(ifTrue) & mask) | (bitsOf(ifFalse) & ~mask));
 }
 inline float absFloat(float x) { return std::abs(x); }
+inline float sqrtLanes(float x) { return std::sqrt(x); }
 inline Lanes8 absFloat(Lanes8 x) { return floatFromBits(bitsOf(x) & 0x7FFFFFFF); }
 
 // Eight consecutive floats; the masked forms read and write only the lanes whose mask is set (no
@@ -142,6 +143,16 @@ inline LaneMask16 laneIndex(Lanes16) {
   return LaneMask16{0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15};
 }
 #endif
+
+// min / max per lane (either operand when they compare equal or unordered).
+template <class F>
+inline F minFloat(F a, F b) {
+  return selectFloat(b < a, b, a);
+}
+template <class F>
+inline F maxFloat(F a, F b) {
+  return selectFloat(a < b, b, a);
+}
 
 // e^x for x <= 0 (the sign of x is ignored: e^-|x|; NaN gives 0): 2^(x log2 e) split into
 // 2^n (exponent bits, n the nearest integer) times 2^f = e^u, u = f ln 2 in [-0.35, 0.35], a

@@ -55,16 +55,16 @@ void computeSpecularLobes(const GBufferView& gbuffer, const float* roughness,
                           const CameraState& camera, bool specular,
                           const SpecularLobeSettings& settings, Image& lobes);
 
-// log of the normalised SG product integral (<= 0), for lobes a and b. beta * this is the
-// exponent of the talk's beta-sharpened weight.
-inline float logLobeSimilarity(float ax, float ay, float az, float la, float bx, float by, float bz,
-                               float lb) {
-  const float mx = la * ax + lb * bx, my = la * ay + lb * by, mz = la * az + lb * bz;
-  const float lm = std::max(std::sqrt(mx * mx + my * my + mz * mz), 1e-12f);
-  const float ratio = 2.0f * std::sqrt(la * lb) / lm;
+// log of the normalised SG product integral (<= 0), for lobes a and b; F is float or a lane type
+// of fast_math.hpp. beta * this is the exponent of the talk's beta-sharpened weight.
+template <class F>
+inline F logLobeSimilarity(F ax, F ay, F az, F la, F bx, F by, F bz, F lb) {
+  const F mx = la * ax + lb * bx, my = la * ay + lb * by, mz = la * az + lb * bz;
+  const F lm = maxFloat(sqrtLanes(mx * mx + my * my + mz * mz), F{} + 1e-12f);
+  const F ratio = 2.0f * sqrtLanes(la * lb) / lm;
   // log(ratio) + (lm - la - lb), clamped at 0 (s <= 1; the dropped e^(-2l) terms can push the
   // approximation a hair above 1 for very wide lobes).
-  return std::min(0.0f, logPositive(std::max(ratio, 1e-30f)) + (lm - la - lb));
+  return minFloat(F{}, logPositive(maxFloat(ratio, F{} + 1e-30f)) + (lm - la - lb));
 }
 
 // s^beta for pixels p and q of a lobe image.
