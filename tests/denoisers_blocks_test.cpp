@@ -2,6 +2,7 @@
 // G-buffers of odd sizes, built here (no files).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -11,6 +12,7 @@
 #include "denoisers/common/fast_math.hpp"
 #include "denoisers/common/gbuffer.hpp"
 #include "denoisers/common/history_clamp.hpp"
+#include "denoisers/common/median.hpp"
 #include "denoisers/common/reprojection.hpp"
 #include "denoisers/common/temporal_accumulation.hpp"
 #include "denoisers/common/variance.hpp"
@@ -436,6 +438,50 @@ TEST(DenoiserBlocksAtrous, SixteenAndEightLaneKernelsGiveTheSameBits) {
       EXPECT_EQ(wide.raw(), narrow.raw()) << "iteration " << iteration;
       EXPECT_EQ(wideVariance.raw(), narrowVariance.raw()) << "iteration " << iteration;
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Median
+
+// The lower median of p's in-image, non-sky 3x3 neighbours, by sorting.
+float referenceMedian(const Image& in, const GBufferView* g, int x, int y, int c) {
+  std::vector<float> values;
+  forEachNeighbour3x3(x, y, in.width(), in.height(), g, false,
+                      [&](size_t q) { values.push_back(in.plane(c)[q]); });
+  std::sort(values.begin(), values.end());
+  return values[(values.size() - 1) / 2];
+}
+
+TEST(DenoiserBlocksMedian, IsTheLowerMedianOfWhatIsThere) {
+  const int w = 29, h = 7;  // a partial last block of lanes, and every border case
+  SyntheticGBuffer g(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      if (hashUniform(99, x, y) < 0.3f) g.meshId.at(x, y) = -1.0f;  // scattered sky
+  const Image in = randomImage(w, h, 3, 17, 0.0f, 5.0f);
+  for (bool withSky : {true, false}) {
+    const GBufferView view = g.view();
+    const GBufferView* guide = withSky ? &view : nullptr;
+    Image out(w, h, 3);
+    median3x3(in, guide, out);
+    for (int c = 0; c < 3; ++c)
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          const bool sky = withSky && g.meshId.at(x, y) < 0.0f;
+          ASSERT_EQ(out.at(x, y, c), sky ? in.at(x, y, c) : referenceMedian(in, guide, x, y, c))
+              << x << "," << y << " channel " << c << (withSky ? " with sky" : "");
+        }
+  }
+}
+
+TEST(DenoiserBlocksMedian, RemovesAFireflyAndKeepsAConstant) {
+  const int w = 11, h = 9;
+  Image in(w, h, 3, 0.5f), out(w, h, 3);
+  median3x3(in, nullptr, out);
+  EXPECT_EQ(out.raw(), in.raw());
+  in.at(5, 4, 1) = 1e4f;
+  median3x3(in, nullptr, out);
+  EXPECT_EQ(out.at(5, 4, 1), 0.5f);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -1,32 +1,77 @@
 #include "denoisers/common/median.hpp"
 
-#include <algorithm>
+#include <limits>
 
 #include "core/error.hpp"
+#include "denoisers/common/fast_math.hpp"
 #include "denoisers/common/parallel.hpp"
 
 namespace arena {
+
+namespace {
+
+// Orders a pair: a <= b afterwards.
+inline void sortPair(Lanes8& a, Lanes8& b) {
+  const Lanes8 low = minFloat(a, b);
+  b = maxFloat(a, b);
+  a = low;
+}
+
+// The median of nine values per lane, in p[4], by the 19-comparison exchange network of Paeth's
+// "Median finding on a 3x3 grid" (Graphics Gems, 1990).
+inline Lanes8 medianOfNine(Lanes8 p[9]) {
+  constexpr int kPairs[19][2] = {{1, 2}, {4, 5}, {7, 8}, {0, 1}, {3, 4}, {6, 7}, {1, 2},
+                                 {4, 5}, {7, 8}, {0, 3}, {5, 8}, {4, 7}, {3, 6}, {1, 4},
+                                 {2, 5}, {4, 7}, {4, 2}, {6, 4}, {4, 2}};
+  for (const auto& pair : kPairs) sortPair(p[pair[0]], p[pair[1]]);
+  return p[4];
+}
+
+}  // namespace
 
 double median3x3(const Image& in, const GBufferView* g, Image& out) {
   const int w = in.width(), h = in.height();
   if (!out.sameShape(in) || &in == &out)
     throw Error("median 3x3: in/out must be distinct, equal-shaped images");
+  if (g && (g->width != w || g->height != h))
+    throw Error("median 3x3: the G-buffer's size differs from the image's");
+  const float* meshId = g ? g->meshId : nullptr;
+  constexpr float kInfinity = std::numeric_limits<float>::infinity();
+  // Eight pixels at a time. A tap off the image or in the sky is missing; with k of the nine
+  // missing, ceil(k/2) are replaced by -inf and the rest by +inf (in tap order), so the fifth of
+  // the nine is the lower median of the values that are there: index 4 - ceil(k/2) =
+  // (count - 1) / 2 of the count = 9 - k present.
   parallelRows(h, [&](int y) {
-    for (int x = 0; x < w; ++x) {
-      const size_t p = size_t(y) * size_t(w) + size_t(x);
-      if (g && g->isSky(p)) {
-        for (int c = 0; c < in.channels(); ++c) out.plane(c)[p] = in.plane(c)[p];
-        continue;
+    for (int x0 = 0; x0 < w; x0 += 8) {
+      const size_t p = size_t(y) * size_t(w) + size_t(x0);
+      const LaneMask8 x = laneIndex(Lanes8{}) + x0;
+      const LaneMask8 inRow = x < w;
+      LaneMask8 present[9];
+      size_t offset[9];
+      LaneMask8 missing{};
+      for (int j = 0; j < 9; ++j) {
+        const int dx = j % 3 - 1, dy = j / 3 - 1;
+        const bool rowInside = y + dy >= 0 && y + dy < h;
+        offset[j] = p + size_t(std::ptrdiff_t(dy) * w + dx);
+        present[j] = inRow & (x + dx >= 0) & (x + dx < w) & (rowInside ? LaneMask8{} - 1 : LaneMask8{});
+        if (meshId) present[j] &= loadLanes(meshId + offset[j], present[j]) >= 0.0f;
+        missing -= present[j] == 0;  // comparisons give -1
       }
-      size_t taps[9];
-      int count = 0;
-      forEachNeighbour3x3(x, y, w, h, g, false, [&](size_t q) { taps[count++] = q; });
+      const LaneMask8 lowPads = (missing + 1) >> 1;
+      Lanes8 pad[9];
+      LaneMask8 missingBefore{};
+      for (int j = 0; j < 9; ++j) {
+        pad[j] = selectFloat(missingBefore < lowPads, Lanes8{} - kInfinity, Lanes8{} + kInfinity);
+        missingBefore -= present[j] == 0;
+      }
+      const LaneMask8 sky = present[4] == 0;  // the centre (inside the row) is missing: sky
       for (int c = 0; c < in.channels(); ++c) {
-        float values[9];
-        for (int k = 0; k < count; ++k) values[k] = in.plane(c)[taps[k]];
-        // Lower median for an even count (a value that exists, never an average of two).
-        std::nth_element(values, values + (count - 1) / 2, values + count);
-        out.plane(c)[p] = values[(count - 1) / 2];
+        const float* plane = in.plane(c);
+        Lanes8 values[9];
+        for (int j = 0; j < 9; ++j)
+          values[j] = selectFloat(present[j], loadLanes(plane + offset[j], present[j]), pad[j]);
+        const Lanes8 median = medianOfNine(values);
+        storeLanes(out.plane(c) + p, selectFloat(sky, loadLanes(plane + p, inRow), median), inRow);
       }
     }
   });
