@@ -93,6 +93,12 @@ inline Lanes8 fusedMultiplyAdd(Lanes8 a, Lanes8 b, Lanes8 c) {
                                                   reinterpret_cast<__m256>(c)));
 }
 
+// base[index] per lane where mask is set, 0 elsewhere (no fault on masked-out lanes).
+inline Lanes8 gatherLanes(const float* base, LaneMask8 index, LaneMask8 mask) {
+  return reinterpret_cast<Lanes8>(_mm256_mask_i32gather_ps(
+      _mm256_setzero_ps(), base, reinterpret_cast<__m256i>(index), reinterpret_cast<__m256>(mask),
+      4));
+}
 inline Lanes8 sqrtLanes(Lanes8 x) {
   return reinterpret_cast<Lanes8>(_mm256_sqrt_ps(reinterpret_cast<__m256>(x)));
 }

@@ -27,25 +27,21 @@ SurfaceWeights::SurfaceWeights(const SurfaceWeightSettings& settings, const Surf
     throw Error("surface weights: the roughness term needs roughness");
 }
 
+SurfacePoint<float> SurfaceWeights::point(size_t i) const {
+  SurfacePoint<float> point{};
+  for (size_t c = 0; c < 3; ++c) {
+    point.position[c] = g_.position[0] ? g_.position[c][i] : 0.0f;
+    point.normal[c] = g_.normal[0] ? g_.normal[c][i] : 0.0f;
+  }
+  point.depth = g_.depth ? g_.depth[i] : 0.0f;
+  point.hitDistance = hitDistance_ ? hitDistance_[i] : 0.0f;
+  point.roughness = roughness_ ? roughness_[i] : 0.0f;
+  return point;
+}
+
 float SurfaceWeights::operator()(size_t p, size_t q) const {
   if (g_.isSky(q)) return 0.0f;
-  float exponent = 0.0f;
-  if (s_.planeDistance) {
-    float d = 0.0f;
-    for (size_t c = 0; c < 3; ++c) d += g_.normal[c][p] * (g_.position[c][q] - g_.position[c][p]);
-    exponent += std::abs(d) / (s_.planeSigma * std::abs(g_.depth[p]) + 1e-20f);
-  }
-  if (s_.hitDistance) {
-    const float hp = std::min(hitDistance_[p], 1e4f), hq = std::min(hitDistance_[q], 1e4f);
-    exponent += std::abs(hp - hq) / (s_.hitSigma * (hp + std::abs(g_.depth[p])) + 1e-20f);
-  }
-  if (s_.roughness) exponent += std::abs(roughness_[p] - roughness_[q]) / s_.roughnessSigma;
-  float w = expNonPositive(-exponent);
-  if (s_.normal && s_.normalPower != 0.0f) {
-    const float cosine = std::min(g_.normalDot(p, q), 1.0f);
-    w = cosine <= 1e-30f ? 0.0f : w * expNonPositive(s_.normalPower * logPositive(cosine));
-  }
-  return w;
+  return surfaceWeight(s_, point(p), point(q));
 }
 
 std::array<std::array<float, 2>, kPoissonTaps> poissonDisk(float rotation) {
@@ -63,6 +59,45 @@ float poissonRotation(int frameIndex) {
   return std::fmod(float(frameIndex) * kGoldenAngle, 2.0f * std::numbers::pi_v<float>);
 }
 
+namespace {
+
+// The guides of eight pixels that surfaceWeight() reads for the enabled terms (the neighbour's
+// normal only for the normal term, its depth never): at consecutive indices from i (mask: the
+// lanes to read), or gathered at per-lane indices.
+struct SurfaceLanes {
+  const SurfaceGuide& guide;
+  const SurfaceWeightSettings& s;
+  SurfacePoint<Lanes8> load(size_t i, LaneMask8 mask) const {
+    return read(true, [&](const float* plane) { return loadLanes(plane + i, mask); });
+  }
+  SurfacePoint<Lanes8> gather(LaneMask8 index, LaneMask8 mask) const {
+    return read(false, [&](const float* plane) { return gatherLanes(plane, index, mask); });
+  }
+  template <class Read>
+  SurfacePoint<Lanes8> read(bool centre, Read&& planeLanes) const {
+    const GBufferView& g = guide.gbuffer;
+    SurfacePoint<Lanes8> point{};
+    const bool normal = s.normal && s.normalPower != 0.0f;
+    for (size_t c = 0; c < 3; ++c) {
+      if (s.planeDistance) point.position[c] = planeLanes(g.position[c]);
+      if (normal || (centre && s.planeDistance)) point.normal[c] = planeLanes(g.normal[c]);
+    }
+    if (centre && (s.planeDistance || s.hitDistance)) point.depth = planeLanes(g.depth);
+    if (s.hitDistance) point.hitDistance = planeLanes(guide.hitDistance);
+    if (s.roughness) point.roughness = planeLanes(guide.roughness);
+    return point;
+  }
+};
+
+// std::lround per lane (half away from zero), exactly: the fraction after truncation is exact.
+inline LaneMask8 roundToNearestInt(Lanes8 v) {
+  const LaneMask8 whole = truncateToInt(v);
+  const Lanes8 fraction = v - toFloat(whole);
+  return whole + ((fraction >= 0.5f) & 1) - ((fraction <= -0.5f) & 1);
+}
+
+}  // namespace
+
 void poissonDiskBlur(const Image& in, const SurfaceGuide& guide,
                      const PoissonBlurSettings& settings, float rotation, const Image* radiusScale,
                      Image& out) {
@@ -70,32 +105,44 @@ void poissonDiskBlur(const Image& in, const SurfaceGuide& guide,
   const int w = in.width(), h = in.height(), channels = in.channels();
   if (!out.sameShape(in) || g.width != w || g.height != h || channels > 8 || &in == &out)
     throw Error("Poisson blur: in/out must be distinct images of the G-buffer's size");
-  const SurfaceWeights weight(settings.weights, guide);
+  const SurfaceWeights checked(settings.weights, guide);  // throws where a guide is missing
   const auto disk = poissonDisk(rotation);
   const float* scale = radiusScale ? radiusScale->plane(0) : nullptr;
+  const SurfaceLanes surface{guide, settings.weights};
+  // Eight pixels at a time; a tap's neighbours are gathered (the disk's offsets scale with each
+  // pixel's radius). Dropped taps -- off the image, onto p itself, into the sky -- weigh 0.
   parallelRows(h, [&](int y) {
-    for (int x = 0; x < w; ++x) {
-      const size_t p = size_t(y) * size_t(w) + size_t(x);
-      float sum[8];
-      for (int c = 0; c < channels; ++c) sum[c] = in.plane(c)[p];
-      if (g.isSky(p)) {
-        for (int c = 0; c < channels; ++c) out.plane(c)[p] = sum[c];
-        continue;
-      }
-      float weightSum = 1.0f;  // the centre
-      const float radius = settings.radius * (scale ? scale[p] : 1.0f);
+    for (int x0 = 0; x0 < w; x0 += 8) {
+      const size_t p = size_t(y) * size_t(w) + size_t(x0);
+      const LaneMask8 x = laneIndex(Lanes8{}) + x0;
+      const LaneMask8 inRow = x < w;
+      const LaneMask8 sky =
+          g.meshId ? inRow & (loadLanes(g.meshId + p, inRow) < 0.0f) : LaneMask8{};
+      const LaneMask8 surfacePixel = inRow & ~sky;
+      Lanes8 sum[8];
+      for (int c = 0; c < channels; ++c) sum[c] = loadLanes(in.plane(c) + p, inRow);
+      Lanes8 weightSum = Lanes8{} + 1.0f;  // the centre
+      const Lanes8 radius = settings.radius * (scale ? loadLanes(scale + p, inRow) : Lanes8{} + 1.0f);
+      const SurfacePoint<Lanes8> centre = surface.load(p, inRow);
       for (const auto& tap : disk) {
-        const int qx = x + int(std::lround(tap[0] * radius));
-        const int qy = y + int(std::lround(tap[1] * radius));
-        if (qx < 0 || qy < 0 || qx >= w || qy >= h || (qx == x && qy == y)) continue;
-        const size_t q = size_t(qy) * size_t(w) + size_t(qx);
-        const float wq = weight(p, q);
-        if (wq <= 0.0f) continue;
-        for (int c = 0; c < channels; ++c) sum[c] += wq * in.plane(c)[q];
-        weightSum += wq;
+        const LaneMask8 dx = roundToNearestInt(tap[0] * radius);
+        const LaneMask8 dy = roundToNearestInt(tap[1] * radius);
+        const LaneMask8 qx = x + dx, qy = y + dy;
+        LaneMask8 use = surfacePixel & (qx >= 0) & (qx < w) & (qy >= 0) & (qy < h) &
+                        ((dx != 0) | (dy != 0));
+        const LaneMask8 q = qy * w + qx;
+        if (g.meshId) use &= gatherLanes(g.meshId, q, use) >= 0.0f;
+        const Lanes8 weight =
+            selectFloat(use, surfaceWeight(settings.weights, centre, surface.gather(q, use)),
+                        Lanes8{});
+        for (int c = 0; c < channels; ++c) sum[c] += weight * gatherLanes(in.plane(c), q, use);
+        weightSum += weight;
       }
-      const float inverse = 1.0f / weightSum;
-      for (int c = 0; c < channels; ++c) out.plane(c)[p] = sum[c] * inverse;
+      const Lanes8 inverse = 1.0f / weightSum;
+      for (int c = 0; c < channels; ++c) {
+        const Lanes8 result = selectFloat(sky, loadLanes(in.plane(c) + p, inRow), sum[c] * inverse);
+        storeLanes(out.plane(c) + p, result, inRow);
+      }
     }
   });
 }

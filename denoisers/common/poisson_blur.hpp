@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include "core/image.hpp"
+#include "denoisers/common/fast_math.hpp"
 #include "denoisers/common/gbuffer.hpp"
 
 namespace arena {
@@ -36,11 +37,46 @@ struct SurfaceWeightSettings {
   float roughnessSigma = 0.1f;  // (0; inf) ours
 };
 
+// The guides of one pixel as the weights read them; F is float or a lane type of fast_math.hpp.
+template <class F>
+struct SurfacePoint {
+  F position[3], normal[3];
+  F depth, hitDistance, roughness;
+};
+
+// w(p, q) of two surface points (neither in the sky), written once for scalar and lane code:
+// the exponential terms summed into one exp, times the normal's cosine power.
+template <class F>
+inline F surfaceWeight(const SurfaceWeightSettings& s, const SurfacePoint<F>& p,
+                       const SurfacePoint<F>& q) {
+  F exponent{};
+  if (s.planeDistance) {
+    F d{};
+    for (int c = 0; c < 3; ++c) d += p.normal[c] * (q.position[c] - p.position[c]);
+    exponent += absFloat(d) / (s.planeSigma * absFloat(p.depth) + 1e-20f);
+  }
+  if (s.hitDistance) {
+    const F hp = minFloat(p.hitDistance, F{} + 1e4f), hq = minFloat(q.hitDistance, F{} + 1e4f);
+    exponent += absFloat(hp - hq) / (s.hitSigma * (hp + absFloat(p.depth)) + 1e-20f);
+  }
+  if (s.roughness) exponent += absFloat(p.roughness - q.roughness) / s.roughnessSigma;
+  F w = expNonPositive(-exponent);
+  if (s.normal && s.normalPower != 0.0f) {
+    F cosine = p.normal[0] * q.normal[0] + p.normal[1] * q.normal[1] + p.normal[2] * q.normal[2];
+    cosine = minFloat(cosine, F{} + 1.0f);
+    const auto facing = F{} + 1e-30f < cosine;  // else weight 0
+    const F power = expNonPositive(s.normalPower * logPositive(maxFloat(cosine, F{} + 1e-30f)));
+    w = selectFloat(facing, w * power, F{});
+  }
+  return w;
+}
+
 // w(p, q) in [0, 1]; 0 for sky q. Built per frame; references the guide's planes.
 class SurfaceWeights {
  public:
   SurfaceWeights(const SurfaceWeightSettings& settings, const SurfaceGuide& guide);
   float operator()(size_t p, size_t q) const;
+  SurfacePoint<float> point(size_t i) const;
 
  private:
   SurfaceWeightSettings s_;
