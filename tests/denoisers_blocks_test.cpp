@@ -13,6 +13,7 @@
 #include "denoisers/common/gbuffer.hpp"
 #include "denoisers/common/history_clamp.hpp"
 #include "denoisers/common/median.hpp"
+#include "denoisers/common/poisson_blur.hpp"
 #include "denoisers/common/reprojection.hpp"
 #include "denoisers/common/temporal_accumulation.hpp"
 #include "denoisers/common/variance.hpp"
@@ -482,6 +483,59 @@ TEST(DenoiserBlocksMedian, RemovesAFireflyAndKeepsAConstant) {
   in.at(5, 4, 1) = 1e4f;
   median3x3(in, nullptr, out);
   EXPECT_EQ(out.at(5, 4, 1), 0.5f);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Poisson-disk blur
+
+TEST(DenoiserBlocksPoisson, MatchesThePerPixelGatherWithEveryTerm) {
+  const int w = 37, h = 19;
+  SyntheticGBuffer g(w, h);  // a camera-facing plane, slightly bumpy normals, some sky
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      g.normal.at(x, y, 0) = 0.1f * (hashUniform(30, x, y) - 0.5f);
+      g.normal.at(x, y, 2) = std::sqrt(1.0f - g.normal.at(x, y, 0) * g.normal.at(x, y, 0));
+      if (hashUniform(31, x, y) < 0.1f) g.meshId.at(x, y) = -1.0f;
+    }
+  const Image roughness = randomImage(w, h, 1, 12, 0.3f, 0.32f);
+  const Image hitDistance = randomImage(w, h, 1, 13, 1.0f, 1.1f);
+  const Image radiusScale = randomImage(w, h, 1, 14, 0.2f, 1.0f);
+  const Image in = randomImage(w, h, 4, 15, 0.0f, 3.0f);
+  const GBufferView view = g.view();
+  const SurfaceGuide guide{view, roughness.plane(0), hitDistance.plane(0)};
+  PoissonBlurSettings settings;
+  settings.radius = 9.0f;
+  settings.weights.hitDistance = settings.weights.roughness = true;
+  const float rotation = poissonRotation(3);
+  Image out(w, h, 4);
+  poissonDiskBlur(in, guide, settings, rotation, &radiusScale, out);
+
+  const SurfaceWeights weight(settings.weights, guide);
+  const auto disk = poissonDisk(rotation);
+  int blurred = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t p = size_t(y) * size_t(w) + size_t(x);
+      double sum[4], weightSum = 1.0;
+      for (int c = 0; c < 4; ++c) sum[c] = in.plane(c)[p];
+      if (!view.isSky(p)) {
+        const float radius = settings.radius * radiusScale.plane(0)[p];
+        for (const auto& tap : disk) {
+          const int qx = x + int(std::lround(tap[0] * radius));
+          const int qy = y + int(std::lround(tap[1] * radius));
+          if (qx < 0 || qy < 0 || qx >= w || qy >= h || (qx == x && qy == y)) continue;
+          const size_t q = size_t(qy) * size_t(w) + size_t(qx);
+          const double wq = weight(p, q);
+          for (int c = 0; c < 4; ++c) sum[c] += wq * in.plane(c)[q];
+          weightSum += wq;
+        }
+      }
+      blurred += weightSum > 1.5 ? 1 : 0;
+      for (int c = 0; c < 4; ++c)
+        ASSERT_NEAR(out.plane(c)[p], sum[c] / weightSum, 1e-5 * (1.0 + sum[c] / weightSum))
+            << x << "," << y << " channel " << c;
+    }
+  EXPECT_GT(blurred, w * h / 4);  // the weights let a good share of the taps through
 }
 
 // ---------------------------------------------------------------------------------------------
