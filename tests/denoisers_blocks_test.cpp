@@ -442,6 +442,53 @@ TEST(DenoiserBlocksAtrous, SixteenAndEightLaneKernelsGiveTheSameBits) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Geometry derivatives
+
+TEST(DenoiserBlocksDerivatives, SmallerOneSidedDifferenceOnTheSameMesh) {
+  const int w = 21, h = 6;  // a partial last block, mesh borders, sky
+  SyntheticGBuffer g(w, h);
+  g.makeVaried(8);
+  g.meshId.at(4, 3) = 2.0f;  // a one-pixel mesh: no neighbour counts, derivatives 0
+  const Image d = g.derivatives();
+  const GBufferView v = g.view();
+  struct Difference {
+    bool exists = false;
+    float dz = 0, dn[3] = {0, 0, 0};
+  };
+  auto difference = [&](int x, int y, int qx, int qy, float sign) {
+    Difference r;
+    if (qx < 0 || qy < 0 || qx >= w || qy >= h || g.meshId.at(qx, qy) != g.meshId.at(x, y)) return r;
+    r.exists = true;
+    r.dz = sign * (g.depth.at(qx, qy) - g.depth.at(x, y));
+    for (int c = 0; c < 3; ++c) r.dn[c] = sign * (g.normal.at(qx, qy, c) - g.normal.at(x, y, c));
+    return r;
+  };
+  auto size = [](const Difference& r) {
+    return std::abs(r.dz) + std::sqrt(r.dn[0] * r.dn[0] + r.dn[1] * r.dn[1] + r.dn[2] * r.dn[2]);
+  };
+  auto smaller = [&](const Difference& a, const Difference& b) {
+    if (!a.exists) return b;
+    if (!b.exists) return a;
+    return size(a) <= size(b) ? a : b;
+  };
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const bool sky = v.isSky(size_t(y) * size_t(w) + size_t(x));
+      const Difference dx = smaller(difference(x, y, x + 1, y, 1.0f), difference(x, y, x - 1, y, -1.0f));
+      const Difference dy = smaller(difference(x, y, x, y + 1, 1.0f), difference(x, y, x, y - 1, -1.0f));
+      float f[3];
+      for (int c = 0; c < 3; ++c) f[c] = std::abs(dx.dn[c]) + std::abs(dy.dn[c]);
+      const float fwidth = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+      EXPECT_EQ(d.at(x, y, kDepthDx), sky ? 0.0f : dx.dz) << x << "," << y;
+      EXPECT_EQ(d.at(x, y, kDepthDy), sky ? 0.0f : dy.dz) << x << "," << y;
+      EXPECT_EQ(d.at(x, y, kNormalFwidth), sky ? 0.0f : fwidth) << x << "," << y;
+    }
+  EXPECT_EQ(d.at(4, 3, kDepthDx), 0.0f);
+  EXPECT_NEAR(d.at(10, 3, kDepthDx), 0.05f, 1e-6f);  // the depth ramp, seen from inside a mesh
+  EXPECT_NEAR(d.at(10, 3, kDepthDy), 0.02f, 1e-6f);
+}
+
+// ---------------------------------------------------------------------------------------------
 // Median
 
 // The lower median of p's in-image, non-sky 3x3 neighbours, by sorting.

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "denoisers/common/fast_math.hpp"
 #include "denoisers/common/parallel.hpp"
 
 namespace arena {
@@ -83,48 +84,68 @@ void computeGeometryDerivatives(const GBufferView& g, Image& derivatives) {
   if (!g.depth || !g.normal[0] || !g.meshId)
     throw Error("computeGeometryDerivatives: needs the depth, normal and meshId layers");
   const int w = g.width, h = g.height;
+  if (derivatives.width() != w || derivatives.height() != h ||
+      derivatives.channels() != kGeometryDerivativeChannels)
+    throw Error("computeGeometryDerivatives: the output must be 3 channels of the G-buffer's size");
   float* dzdx = derivatives.plane(kDepthDx);
   float* dzdy = derivatives.plane(kDepthDy);
   float* normalFwidth = derivatives.plane(kNormalFwidth);
 
-  // One-sided differences of depth and normal from p towards q (q = p +- step); a neighbour off
-  // the image, in the sky or on another mesh does not count.
+  // One-sided differences of depth and normal from p towards q (q = p +- step), eight pixels at
+  // a time; a neighbour off the image, in the sky or on another mesh does not exist.
   struct Difference {
-    bool exists = false;
-    float dz = 0, dn[3] = {0, 0, 0};
-    float normalLength() const { return std::sqrt(dn[0] * dn[0] + dn[1] * dn[1] + dn[2] * dn[2]); }
+    LaneMask8 exists;
+    Lanes8 dz, dn[3];
+    Lanes8 size() const {  // |dz| + |dn|, what "smaller" compares
+      return absFloat(dz) + sqrtLanes(dn[0] * dn[0] + dn[1] * dn[1] + dn[2] * dn[2]);
+    }
   };
-  auto difference = [&](size_t p, size_t q, float sign) {
+  struct Centre {
+    size_t p;
+    LaneMask8 inRow;
+    Lanes8 id, z, n[3];
+  };
+  auto difference = [&](const Centre& c, std::ptrdiff_t step, LaneMask8 inside, float sign) {
     Difference d;
-    if (g.meshId[q] != g.meshId[p]) return d;
-    d.exists = true;
-    d.dz = sign * (g.depth[q] - g.depth[p]);
-    for (size_t c = 0; c < 3; ++c) d.dn[c] = sign * (g.normal[c][q] - g.normal[c][p]);
+    const size_t q = c.p + size_t(step);
+    d.exists = inside & (loadLanes(g.meshId + q, inside) == c.id);
+    d.dz = selectFloat(d.exists, sign * (loadLanes(g.depth + q, inside) - c.z), Lanes8{});
+    for (size_t k = 0; k < 3; ++k)
+      d.dn[k] = selectFloat(d.exists, sign * (loadLanes(g.normal[k] + q, inside) - c.n[k]), Lanes8{});
     return d;
   };
+  // The smaller of the two that exist (the forward one on a tie); zero where neither does.
   auto smaller = [](const Difference& a, const Difference& b) {
-    if (!a.exists) return b;
-    if (!b.exists) return a;
-    return std::abs(a.dz) + a.normalLength() <= std::abs(b.dz) + b.normalLength() ? a : b;
+    const LaneMask8 useA = a.exists & (~b.exists | (a.size() <= b.size()));
+    Difference d;
+    d.exists = a.exists | b.exists;
+    d.dz = selectFloat(useA, a.dz, b.dz);
+    for (size_t k = 0; k < 3; ++k) d.dn[k] = selectFloat(useA, a.dn[k], b.dn[k]);
+    return d;
   };
 
   parallelRows(h, [&](int y) {
-    for (int x = 0; x < w; ++x) {
-      size_t p = size_t(y) * size_t(w) + size_t(x);
-      if (g.isSky(p)) {
-        dzdx[p] = dzdy[p] = normalFwidth[p] = 0.0f;
-        continue;
-      }
-      Difference none;
-      Difference dx = smaller(x + 1 < w ? difference(p, p + 1, 1.0f) : none,
-                              x > 0 ? difference(p, p - 1, -1.0f) : none);
-      Difference dy = smaller(y + 1 < h ? difference(p, p + size_t(w), 1.0f) : none,
-                              y > 0 ? difference(p, p - size_t(w), -1.0f) : none);
-      dzdx[p] = dx.dz;
-      dzdy[p] = dy.dz;
-      float f[3];
-      for (size_t c = 0; c < 3; ++c) f[c] = std::abs(dx.dn[c]) + std::abs(dy.dn[c]);
-      normalFwidth[p] = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+    const LaneMask8 all = LaneMask8{} - 1;
+    for (int x0 = 0; x0 < w; x0 += 8) {
+      Centre c;
+      c.p = size_t(y) * size_t(w) + size_t(x0);
+      const LaneMask8 x = laneIndex(Lanes8{}) + x0;
+      c.inRow = x < w;
+      c.id = loadLanes(g.meshId + c.p, c.inRow);
+      c.z = loadLanes(g.depth + c.p, c.inRow);
+      for (size_t k = 0; k < 3; ++k) c.n[k] = loadLanes(g.normal[k] + c.p, c.inRow);
+      const Difference dx = smaller(difference(c, 1, c.inRow & (x + 1 < w), 1.0f),
+                                    difference(c, -1, c.inRow & (x > 0), -1.0f));
+      const Difference dy =
+          smaller(difference(c, w, c.inRow & (y + 1 < h ? all : LaneMask8{}), 1.0f),
+                  difference(c, -w, c.inRow & (y > 0 ? all : LaneMask8{}), -1.0f));
+      const LaneMask8 sky = c.id < 0.0f;
+      Lanes8 f[3];
+      for (size_t k = 0; k < 3; ++k) f[k] = absFloat(dx.dn[k]) + absFloat(dy.dn[k]);
+      const Lanes8 fwidth = sqrtLanes(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+      storeLanes(dzdx + c.p, selectFloat(sky, Lanes8{}, dx.dz), c.inRow);
+      storeLanes(dzdy + c.p, selectFloat(sky, Lanes8{}, dy.dz), c.inRow);
+      storeLanes(normalFwidth + c.p, selectFloat(sky, Lanes8{}, fwidth), c.inRow);
     }
   });
 }
