@@ -67,8 +67,8 @@ namespace {
 struct SurfaceLanes {
   const SurfaceGuide& guide;
   const SurfaceWeightSettings& s;
-  SurfacePoint<Lanes8> load(size_t i, LaneMask8 mask) const {
-    return read(true, [&](const float* plane) { return loadLanes(plane + i, mask); });
+  SurfacePoint<Lanes8> load(size_t i, LaneMask8 mask, bool centre) const {
+    return read(centre, [&](const float* plane) { return loadLanes(plane + i, mask); });
   }
   SurfacePoint<Lanes8> gather(LaneMask8 index, LaneMask8 mask) const {
     return read(false, [&](const float* plane) { return gatherLanes(plane, index, mask); });
@@ -123,7 +123,7 @@ void poissonDiskBlur(const Image& in, const SurfaceGuide& guide,
       for (int c = 0; c < channels; ++c) sum[c] = loadLanes(in.plane(c) + p, inRow);
       Lanes8 weightSum = Lanes8{} + 1.0f;  // the centre
       const Lanes8 radius = settings.radius * (scale ? loadLanes(scale + p, inRow) : Lanes8{} + 1.0f);
-      const SurfacePoint<Lanes8> centre = surface.load(p, inRow);
+      const SurfacePoint<Lanes8> centre = surface.load(p, inRow, true);
       for (const auto& tap : disk) {
         const LaneMask8 dx = roundToNearestInt(tap[0] * radius);
         const LaneMask8 dy = roundToNearestInt(tap[1] * radius);
@@ -131,11 +131,18 @@ void poissonDiskBlur(const Image& in, const SurfaceGuide& guide,
         LaneMask8 use = surfacePixel & (qx >= 0) & (qx < w) & (qy >= 0) & (qy < h) &
                         ((dx != 0) | (dy != 0));
         const LaneMask8 q = qy * w + qx;
-        if (g.meshId) use &= gatherLanes(g.meshId, q, use) >= 0.0f;
-        const Lanes8 weight =
-            selectFloat(use, surfaceWeight(settings.weights, centre, surface.gather(q, use)),
-                        Lanes8{});
-        for (int c = 0; c < channels; ++c) sum[c] += weight * gatherLanes(in.plane(c), q, use);
+        // Where every lane has the same offset (a uniform radius: a converged history, one
+        // roughness), the neighbours are consecutive and load without a gather; same values.
+        const bool uniform = allLanes((dx == dx[0]) & (dy == dy[0]));
+        const size_t q0 = p + size_t(std::ptrdiff_t(dy[0]) * w + dx[0]);
+        auto neighbour = [&](const float* plane) {
+          return uniform ? loadLanes(plane + q0, use) : gatherLanes(plane, q, use);
+        };
+        if (g.meshId) use &= neighbour(g.meshId) >= 0.0f;
+        const SurfacePoint<Lanes8> other =
+            uniform ? surface.load(q0, use, false) : surface.gather(q, use);
+        const Lanes8 weight = selectFloat(use, surfaceWeight(settings.weights, centre, other), Lanes8{});
+        for (int c = 0; c < channels; ++c) sum[c] += weight * neighbour(in.plane(c));
         weightSum += weight;
       }
       const Lanes8 inverse = 1.0f / weightSum;

@@ -45,7 +45,7 @@ struct SurfacePoint {
 };
 
 // w(p, q) of two surface points (neither in the sky), written once for scalar and lane code:
-// the exponential terms summed into one exp, times the normal's cosine power.
+// the exponential terms and the normal's cosine power summed into one exp.
 template <class F>
 inline F surfaceWeight(const SurfaceWeightSettings& s, const SurfacePoint<F>& p,
                        const SurfacePoint<F>& q) {
@@ -60,15 +60,13 @@ inline F surfaceWeight(const SurfaceWeightSettings& s, const SurfacePoint<F>& p,
     exponent += absFloat(hp - hq) / (s.hitSigma * (hp + absFloat(p.depth)) + 1e-20f);
   }
   if (s.roughness) exponent += absFloat(p.roughness - q.roughness) / s.roughnessSigma;
-  F w = expNonPositive(-exponent);
-  if (s.normal && s.normalPower != 0.0f) {
-    F cosine = p.normal[0] * q.normal[0] + p.normal[1] * q.normal[1] + p.normal[2] * q.normal[2];
-    cosine = minFloat(cosine, F{} + 1.0f);
-    const auto facing = F{} + 1e-30f < cosine;  // else weight 0
-    const F power = expNonPositive(s.normalPower * logPositive(maxFloat(cosine, F{} + 1e-30f)));
-    w = selectFloat(facing, w * power, F{});
-  }
-  return w;
+  if (!s.normal || s.normalPower == 0.0f) return expNonPositive(-exponent);
+  // cosine^normalPower as exp(normalPower log(cosine)), inside the same exp; 0 facing away.
+  F cosine = p.normal[0] * q.normal[0] + p.normal[1] * q.normal[1] + p.normal[2] * q.normal[2];
+  cosine = minFloat(cosine, F{} + 1.0f);
+  const auto facing = F{} + 1e-30f < cosine;
+  exponent -= s.normalPower * logPositive(maxFloat(cosine, F{} + 1e-30f));
+  return selectFloat(facing, expNonPositive(-exponent), F{});
 }
 
 // w(p, q) in [0, 1]; 0 for sky q. Built per frame; references the guide's planes.
