@@ -40,7 +40,7 @@
 
 #include "core/error.hpp"
 #include "core/sequence.hpp"
-#include "denoisers/common/fast_math.hpp"
+#include "core/fast_math.hpp"
 #include "denoisers/common/parallel.hpp"
 #include "denoisers/variants.hpp"
 
@@ -247,7 +247,7 @@ void Asvgf::filterGradients() {
                 if (dot <= 0.0f) continue;  // facing away: max(0, n.n')^sigma_n = 0
                 exponent -= sigmaN * logPositive(std::min(dot, 1.0f));
               }
-              weight = expNonPositive(-exponent);  // fast_math.hpp: ~1e-7 relative
+              weight = expNonPositive(-exponent);  // core/fast_math.hpp: ~1e-7 relative
             }
             sumDelta += weight * in.plane(kDelta)[q];
             sumNormaliser += weight * in.plane(kNormaliser)[q];

@@ -3,13 +3,16 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
+#include <limits>
 #include <cmath>
 #include <cstdint>
 #include <vector>
 
+#include "core/consistency.hpp"
 #include "denoisers/common/atrous.hpp"
 #include "denoisers/common/edge_stopping.hpp"
-#include "denoisers/common/fast_math.hpp"
+#include "core/fast_math.hpp"
 #include "denoisers/common/gbuffer.hpp"
 #include "denoisers/common/history_clamp.hpp"
 #include "denoisers/common/median.hpp"
@@ -684,6 +687,95 @@ TEST(DenoiserBlocksReprojection, InconsistentTapsAreRejectedPerTap) {
   EXPECT_NEAR(reprojection.sample(size_t(4 * w + 5), history.plane(0)), 5.0f, 1e-6f);  // (4+6)/2
   reprojection.invalidateAll();
   EXPECT_EQ(reprojection.validFraction(), 0.0);
+}
+
+// The per-pixel definition of compute() (SVGF §4.1): 2x2 bilinear taps each tested by
+// consistent(), renormalised when their weight sum reaches minWeightSum, else the 3x3 box.
+ReprojectionRecord referenceRecord(const SyntheticGBuffer& cur, const SyntheticGBuffer& prev,
+                                   const Image& derivatives, const ReprojectionSettings& settings,
+                                   int x, int y) {
+  const int w = cur.w, h = cur.h;
+  ReprojectionRecord rec;
+  if (cur.meshId.at(x, y) < 0.0f) return rec;
+  const float px = float(x) + 0.5f + cur.motion.at(x, y, 0);
+  const float py = float(y) + 0.5f + cur.motion.at(x, y, 1);
+  const SurfaceSample surface = surfaceAt(cur.depth, cur.normal, cur.meshId, x, y);
+  const size_t p = size_t(y) * size_t(w) + size_t(x);
+  const SurfaceDerivatives fwidth{depthFwidth(derivatives, p), derivatives.plane(kNormalFwidth)[p]};
+  auto ok = [&](int qx, int qy) {
+    return qx >= 0 && qy >= 0 && qx < w && qy < h &&
+           consistent(surface, fwidth, surfaceAt(prev.depth, prev.normal, prev.meshId, qx, qy),
+                      ConsistencyThresholds{settings.depthThreshold, settings.normalThreshold});
+  };
+  const float fx = px - 0.5f, fy = py - 0.5f;
+  const int x0 = int(std::floor(fx)), y0 = int(std::floor(fy));
+  const float tx = fx - float(x0), ty = fy - float(y0);
+  const float bilinear[4] = {(1 - tx) * (1 - ty), tx * (1 - ty), (1 - tx) * ty, tx * ty};
+  float sum = 0;
+  for (int k = 0; k < 4; ++k)
+    if (bilinear[k] > 0.0f && ok(x0 + k % 2, y0 + k / 2)) {
+      rec.mask |= uint16_t(1u << k);
+      sum += bilinear[k];
+    }
+  if (sum >= settings.minWeightSum) {
+    rec.footprint = ReprojectionFootprint::Bilinear2x2;
+    rec.x0 = x0;
+    rec.y0 = y0;
+    for (int k = 0; k < 4; ++k) rec.weights[k] = (rec.mask >> k) & 1u ? bilinear[k] / sum : 0.0f;
+    return rec;
+  }
+  rec.mask = 0;
+  const int cx = int(std::floor(px)), cy = int(std::floor(py));
+  for (int k = 0; k < 9; ++k)
+    if (ok(cx - 1 + k % 3, cy - 1 + k / 3)) rec.mask |= uint16_t(1u << k);
+  if (rec.mask == 0) return rec;
+  rec.footprint = ReprojectionFootprint::Box3x3;
+  rec.x0 = cx - 1;
+  rec.y0 = cy - 1;
+  rec.weights[0] = 1.0f / float(std::popcount(rec.mask));
+  return rec;
+}
+
+TEST(DenoiserBlocksReprojection, MatchesThePerPixelDefinitionUnderRandomMotion) {
+  const int w = 45, h = 13;
+  SyntheticGBuffer cur(w, h), prev(w, h);
+  cur.makeVaried(21);
+  prev.makeVaried(21);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      // Fractional and integer motion, some of it off-screen; depth steps and a turned normal in
+      // the previous frame; one non-finite motion vector.
+      const bool integer = hashUniform(40, x, y) < 0.2f;
+      cur.motion.at(x, y, 0) = integer ? std::round(6.0f * hashUniform(41, x, y) - 3.0f)
+                                       : 6.0f * hashUniform(41, x, y) - 3.0f;
+      cur.motion.at(x, y, 1) = 4.0f * hashUniform(42, x, y) - 2.0f;
+      if (hashUniform(43, x, y) < 0.15f) prev.depth.at(x, y) += 0.5f;
+      if (hashUniform(44, x, y) < 0.1f) {
+        prev.normal.at(x, y, 0) = 1.0f;
+        prev.normal.at(x, y, 2) = 0.0f;
+      }
+    }
+  cur.motion.at(7, 5, 0) = std::numeric_limits<float>::quiet_NaN();
+  const Image derivatives = cur.derivatives();
+  ReprojectionSettings settings;
+  Reprojection reprojection;
+  reprojection.setup(w, h);
+  reprojection.compute(cur.view(), derivatives, prev.view(), settings);
+  int box = 0, bilinear = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const ReprojectionRecord& got = reprojection.record(size_t(y) * size_t(w) + size_t(x));
+      const ReprojectionRecord want = referenceRecord(cur, prev, derivatives, settings, x, y);
+      ASSERT_EQ(got.footprint, want.footprint) << x << "," << y;
+      ASSERT_EQ(got.mask, want.mask) << x << "," << y;
+      if (want.footprint == ReprojectionFootprint::Disoccluded) continue;
+      ASSERT_EQ(got.x0, want.x0) << x << "," << y;
+      ASSERT_EQ(got.y0, want.y0) << x << "," << y;
+      for (int k = 0; k < 4; ++k) ASSERT_EQ(got.weights[k], want.weights[k]) << x << "," << y;
+      (want.footprint == ReprojectionFootprint::Box3x3 ? box : bilinear) += 1;
+    }
+  EXPECT_GT(box, 0);  // every path was exercised
+  EXPECT_GT(bilinear, w * h / 4);
 }
 
 // ---------------------------------------------------------------------------------------------

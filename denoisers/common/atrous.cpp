@@ -11,7 +11,7 @@
 
 #include "core/error.hpp"
 #include "denoisers/common/atrous_kernel.hpp"
-#include "denoisers/common/fast_math.hpp"
+#include "core/fast_math.hpp"
 #include "denoisers/common/parallel.hpp"
 
 namespace arena {

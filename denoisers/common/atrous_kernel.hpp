@@ -10,7 +10,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "denoisers/common/fast_math.hpp"
+#include "core/fast_math.hpp"
 #include "denoisers/common/specular_lobe.hpp"
 
 namespace arena::atrous_detail {
@@ -168,7 +168,7 @@ inline void filterBlock(const Iteration& it, int y, int x0) {
       F dot = n[0] * load<F, Border>(it.normal[0] + q, inImage);
       dot = fusedMultiplyAdd(n[1], load<F, Border>(it.normal[1] + q, inImage), dot);
       dot = fusedMultiplyAdd(n[2], load<F, Border>(it.normal[2] + q, inImage), dot);
-      // min(n.n', 1) clamped below at 1e-30 on the bit pattern (see fast_math.hpp on why not in
+      // min(n.n', 1) clamped below at 1e-30 on the bit pattern (see core/fast_math.hpp on why not in
       // floats); n.n' <= 1e-30 gives weight 0.
       const I bits = bitsOf(dot);
       backFacing = bits < kTinyBits;

@@ -13,7 +13,7 @@
 
 #include "core/error.hpp"
 #include "core/image.hpp"
-#include "denoisers/common/fast_math.hpp"
+#include "core/fast_math.hpp"
 #include "denoisers/common/gbuffer.hpp"
 
 namespace arena {
@@ -123,7 +123,7 @@ class EdgeStopping {
   // Product of the enabled terms for neighbour q at pixel offset (offsetX, offsetY) from p.
   // The exponential terms are summed in one exponent and the cosine power enters as
   // sigmaN log(n.n'), so a tap costs one exp (and one log) however many terms are on; both are
-  // the polynomial versions of fast_math.hpp. Equal to the product of the functions above to
+  // the polynomial versions of core/fast_math.hpp. Equal to the product of the functions above to
   // about 1e-6 relative.
   float weight(const Centre& p, size_t q, int offsetX, int offsetY) const {
     if (q == p.index) return 1.0f;

@@ -3,7 +3,7 @@
 #include <limits>
 
 #include "core/error.hpp"
-#include "denoisers/common/fast_math.hpp"
+#include "core/fast_math.hpp"
 #include "denoisers/common/parallel.hpp"
 
 namespace arena {

@@ -4,7 +4,7 @@
 #include <numbers>
 
 #include "core/error.hpp"
-#include "denoisers/common/fast_math.hpp"
+#include "core/fast_math.hpp"
 #include "denoisers/common/parallel.hpp"
 
 namespace arena {

@@ -9,7 +9,7 @@
 #include <cmath>
 
 #include "core/image.hpp"
-#include "denoisers/common/fast_math.hpp"
+#include "core/fast_math.hpp"
 #include "denoisers/common/gbuffer.hpp"
 
 namespace arena {
@@ -37,7 +37,7 @@ struct SurfaceWeightSettings {
   float roughnessSigma = 0.1f;  // (0; inf) ours
 };
 
-// The guides of one pixel as the weights read them; F is float or a lane type of fast_math.hpp.
+// The guides of one pixel as the weights read them; F is float or a lane type of core/fast_math.hpp.
 template <class F>
 struct SurfacePoint {
   F position[3], normal[3];

@@ -6,6 +6,7 @@
 
 #include "core/consistency.hpp"
 #include "core/error.hpp"
+#include "core/fast_math.hpp"
 
 namespace arena {
 
@@ -57,81 +58,103 @@ void Reprojection::compute(const GBufferView& current, const Image& derivatives,
   // core/consistency.hpp adds it.
   const ConsistencyThresholds thresholds{settings.depthThreshold, settings.normalThreshold};
 
+  // The 2x2 test runs eight pixels at a time (gathered previous-frame taps); the per-pixel records
+  // and the rare 3x3 fallback are then written lane by lane.
   parallelRows(h, [&](int y) {
     int64_t tested = 0, read = 0;
-    for (int x = 0; x < w; ++x) {
-      const size_t p = size_t(y) * size_t(w) + size_t(x);
-      ReprojectionRecord& rec = records_[p];
-      rec = ReprojectionRecord{};
-      if (current.isSky(p)) continue;
-
+    for (int xBlock = 0; xBlock < w; xBlock += 8) {
+      const size_t p = size_t(y) * size_t(w) + size_t(xBlock);
+      const LaneMask8 x = laneIndex(Lanes8{}) + xBlock;
+      const LaneMask8 inRow = x < w;
+      const Lanes8 id = loadLanes(current.meshId + p, inRow);
       // Continuous previous-frame position; its bilinear taps surround (px - 0.5, py - 0.5).
-      const float px = float(x) + 0.5f + current.motion[0][p];
-      const float py = float(y) + 0.5f + current.motion[1][p];
-      if (!std::isfinite(px) || !std::isfinite(py) || std::abs(px) > 1e7f || std::abs(py) > 1e7f)
-        continue;
+      const Lanes8 px = (toFloat(x) + 0.5f) + loadLanes(current.motion[0] + p, inRow);
+      const Lanes8 py = (float(y) + 0.5f) + loadLanes(current.motion[1] + p, inRow);
+      // Not the sky, and a finite position on the way (NaN compares false).
+      const LaneMask8 surface = inRow & (id >= 0.0f);
+      const LaneMask8 ok = surface & (absFloat(px) <= 1e7f) & (absFloat(py) <= 1e7f);
 
       // This pixel's surface as the previous frame should show it (the depth camera-corrected).
-      SurfaceSample surface{current.depth[p],
-                            {current.normal[0][p], current.normal[1][p], current.normal[2][p]},
-                            int(current.meshId[p])};
+      Lanes8 depth = loadLanes(current.depth + p, inRow);
+      Lanes8 normal[3];
+      for (size_t c = 0; c < 3; ++c) normal[c] = loadLanes(current.normal[c] + p, inRow);
       if (correctDepth) {
-        const glm::vec3 world(current.position[0][p], current.position[1][p],
-                              current.position[2][p]);
-        surface.depth = previousViewDepth(surface.depth, world, *camera, *previousCamera);
+        Lanes8 world[3];
+        for (size_t c = 0; c < 3; ++c) world[c] = loadLanes(current.position[c] + p, inRow);
+        depth = previousViewDepth(depth, world, *camera, *previousCamera);
       }
-      const SurfaceDerivatives fwidth{depthFwidth(derivatives, p),
-                                      derivatives.plane(kNormalFwidth)[p]};
+      const Lanes8 fwidthDepth = absFloat(loadLanes(derivatives.plane(kDepthDx) + p, inRow)) +
+                                 absFloat(loadLanes(derivatives.plane(kDepthDy) + p, inRow));
+      const Lanes8 fwidthNormal = loadLanes(derivatives.plane(kNormalFwidth) + p, inRow);
 
       // SVGF §4.1: each tap is tested separately for depth, normal and mesh id, by the one
-      // definition the metrics use too (core/consistency.hpp).
-      auto consistentTap = [&](int qx, int qy) {
-        if (qx < 0 || qy < 0 || qx >= w || qy >= h) return false;  // off-screen
-        const size_t q = size_t(qy) * size_t(w) + size_t(qx);
-        const SurfaceSample tap{
-            previous.depth[q],
-            {previous.normal[0][q], previous.normal[1][q], previous.normal[2][q]},
-            int(previous.meshId[q])};
-        return consistent(surface, fwidth, tap, thresholds);
-      };
-
-      const float fx = px - 0.5f, fy = py - 0.5f;
-      const int x0 = int(std::floor(fx)), y0 = int(std::floor(fy));
-      const float tx = fx - float(x0), ty = fy - float(y0);
-      const float bilinear[4] = {(1 - tx) * (1 - ty), tx * (1 - ty), (1 - tx) * ty, tx * ty};
-      float weightSum = 0;
-      tested += 4;
+      // definition the metrics use too (core/consistency.hpp). A zero-weight tap is never read,
+      // so an exact integer shift reads exactly one pixel.
+      const Lanes8 fx = px - 0.5f, fy = py - 0.5f;
+      const Lanes8 floorX = floorLanes(fx), floorY = floorLanes(fy);
+      const LaneMask8 x0 = truncateToInt(selectFloat(ok, floorX, Lanes8{}));
+      const LaneMask8 y0 = truncateToInt(selectFloat(ok, floorY, Lanes8{}));
+      const Lanes8 tx = fx - floorX, ty = fy - floorY;
+      const Lanes8 bilinear[4] = {(1 - tx) * (1 - ty), tx * (1 - ty), (1 - tx) * ty, tx * ty};
+      Lanes8 weightSum{};
+      LaneMask8 passed[4];
       for (int k = 0; k < 4; ++k) {
-        // A zero-weight tap is never read, so an exact integer shift reads exactly one pixel.
-        if (bilinear[k] > 0.0f && consistentTap(x0 + k % 2, y0 + k / 2)) {
-          rec.mask |= uint16_t(1u << k);
-          weightSum += bilinear[k];
-        }
+        const LaneMask8 qx = x0 + k % 2, qy = y0 + k / 2;
+        const LaneMask8 inside =
+            ok & (bilinear[k] > 0.0f) & (qx >= 0) & (qy >= 0) & (qx < w) & (qy < h);
+        const LaneMask8 q = qy * w + qx;
+        Lanes8 previousNormal[3];
+        for (size_t c = 0; c < 3; ++c) previousNormal[c] = gatherLanes(previous.normal[c], q, inside);
+        passed[k] = inside & consistent(depth, normal, id, fwidthDepth, fwidthNormal,
+                                        gatherLanes(previous.depth, q, inside), previousNormal,
+                                        gatherLanes(previous.meshId, q, inside), thresholds);
+        weightSum += selectFloat(passed[k], bilinear[k], Lanes8{});
       }
-      if (weightSum >= settings.minWeightSum) {
-        rec.footprint = ReprojectionFootprint::Bilinear2x2;
-        rec.x0 = x0;
-        rec.y0 = y0;
-        for (int k = 0; k < 4; ++k)
-          rec.weights[k] = (rec.mask >> k) & 1u ? bilinear[k] / weightSum : 0.0f;
-        read += std::popcount(rec.mask);
-        continue;
-      }
-      rec.mask = 0;
-      if (!settings.fallback3x3) continue;
 
-      // 3x3 around the pixel that contains the reprojected position; consistent taps averaged.
-      const int cx = int(std::floor(px)), cy = int(std::floor(py));
-      tested += 9;
-      for (int k = 0; k < 9; ++k)
-        if (consistentTap(cx - 1 + k % 3, cy - 1 + k / 3)) rec.mask |= uint16_t(1u << k);
-      const int count = std::popcount(rec.mask);
-      if (count == 0) continue;  // disocclusion
-      rec.footprint = ReprojectionFootprint::Box3x3;
-      rec.x0 = cx - 1;
-      rec.y0 = cy - 1;
-      rec.weights[0] = 1.0f / float(count);
-      read += count;
+      for (int lane = 0; lane < 8 && xBlock + lane < w; ++lane) {
+        ReprojectionRecord& rec = records_[p + size_t(lane)];
+        rec = ReprojectionRecord{};
+        if (!ok[lane]) continue;
+        tested += 4;
+        if (weightSum[lane] >= settings.minWeightSum) {
+          rec.footprint = ReprojectionFootprint::Bilinear2x2;
+          rec.x0 = x0[lane];
+          rec.y0 = y0[lane];
+          for (int k = 0; k < 4; ++k)
+            if (passed[k][lane]) {
+              rec.mask |= uint16_t(1u << k);
+              rec.weights[k] = bilinear[k][lane] / weightSum[lane];
+            }
+          read += std::popcount(rec.mask);
+          continue;
+        }
+        if (!settings.fallback3x3) continue;
+
+        // 3x3 around the pixel that contains the reprojected position; consistent taps averaged.
+        const SurfaceSample surfaceSample{depth[lane],
+                                          {normal[0][lane], normal[1][lane], normal[2][lane]},
+                                          int(id[lane])};
+        const SurfaceDerivatives fwidth{fwidthDepth[lane], fwidthNormal[lane]};
+        const int cx = int(std::floor(px[lane])), cy = int(std::floor(py[lane]));
+        tested += 9;
+        for (int k = 0; k < 9; ++k) {
+          const int qx = cx - 1 + k % 3, qy = cy - 1 + k / 3;
+          if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;  // off-screen
+          const size_t q = size_t(qy) * size_t(w) + size_t(qx);
+          const SurfaceSample tap{
+              previous.depth[q],
+              {previous.normal[0][q], previous.normal[1][q], previous.normal[2][q]},
+              int(previous.meshId[q])};
+          if (consistent(surfaceSample, fwidth, tap, thresholds)) rec.mask |= uint16_t(1u << k);
+        }
+        const int count = std::popcount(rec.mask);
+        if (count == 0) continue;  // disocclusion
+        rec.footprint = ReprojectionFootprint::Box3x3;
+        rec.x0 = cx - 1;
+        rec.y0 = cy - 1;
+        rec.weights[0] = 1.0f / float(count);
+        read += count;
+      }
     }
     testedTaps_.set(y, tested);
     readTaps_.set(y, read);

@@ -14,7 +14,7 @@
 
 #include "core/camera.hpp"
 #include "core/image.hpp"
-#include "denoisers/common/fast_math.hpp"
+#include "core/fast_math.hpp"
 #include "denoisers/common/gbuffer.hpp"
 
 namespace arena {
@@ -56,7 +56,7 @@ void computeSpecularLobes(const GBufferView& gbuffer, const float* roughness,
                           const SpecularLobeSettings& settings, Image& lobes);
 
 // log of the normalised SG product integral (<= 0), for lobes a and b; F is float or a lane type
-// of fast_math.hpp. beta * this is the exponent of the talk's beta-sharpened weight.
+// of core/fast_math.hpp. beta * this is the exponent of the talk's beta-sharpened weight.
 template <class F>
 inline F logLobeSimilarity(F ax, F ay, F az, F la, F bx, F by, F bz, F lb) {
   const F mx = la * ax + lb * bx, my = la * ay + lb * by, mz = la * az + lb * bz;

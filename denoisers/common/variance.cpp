@@ -8,7 +8,7 @@
 
 #include "core/error.hpp"
 #include "denoisers/common/edge_stopping.hpp"
-#include "denoisers/common/fast_math.hpp"
+#include "core/fast_math.hpp"
 
 namespace arena {
 
@@ -106,7 +106,7 @@ SpatialVarianceScratch& spatialScratch(int width) {
 constexpr int32_t kTinyBits = 0x0DA24260, kOneBits = 0x3F800000;  // bits of 1e-30f and 1.0f
 
 // The bilateral weight of one tap (dx, dy) != (0, 0) for x in [xBegin, xEnd), as one vectorised
-// sweep: exp(-wl - wz) max(0, n.n')^phiNormal with both exponentials in one (fast_math.hpp);
+// sweep: exp(-wl - wz) max(0, n.n')^phiNormal with both exponentials in one (core/fast_math.hpp);
 // 0 for sky neighbours. Normal = false when phiNormal = 0: pow(clamp(n.n', 0, 1), 0) = 1 even
 // where n.n' <= 0.
 template <bool Normal>

@@ -106,6 +106,9 @@ inline Lanes8 gatherLanes(const float* base, LaneMask8 index, LaneMask8 mask) {
 inline Lanes8 sqrtLanes(Lanes8 x) {
   return reinterpret_cast<Lanes8>(_mm256_sqrt_ps(reinterpret_cast<__m256>(x)));
 }
+inline Lanes8 floorLanes(Lanes8 x) {
+  return reinterpret_cast<Lanes8>(_mm256_floor_ps(reinterpret_cast<__m256>(x)));
+}
 inline LaneMask8 laneIndex(Lanes8) { return LaneMask8{0, 1, 2, 3, 4, 5, 6, 7}; }
 
 #ifdef __AVX512F__
