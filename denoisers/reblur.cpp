@@ -106,16 +106,16 @@ void Reblur::reproject(const FrameContext& ctx) {
   pass.setTaps(8);
 }
 
-bool Reblur::historyValid(size_t i) const {
-  return surface_.valid(i) || (useVirtual_ && virtual_.valid(i));
-}
-
-float Reblur::historySample(size_t i, const float* plane) const {
-  const bool surfaceOk = surface_.valid(i);
-  if (!useVirtual_ || !virtual_.valid(i)) return surfaceOk ? surface_.sample(i, plane) : 0.0f;
-  if (!surfaceOk) return virtual_.sample(i, plane);
-  const float a = virtualAmount_.plane(0)[i];
-  return a * virtual_.sample(i, plane) + (1.0f - a) * surface_.sample(i, plane);
+Reblur::PixelHistory Reblur::history(size_t i) const {
+  PixelHistory h;
+  h.surfaceValid = surface_.valid(i);
+  if (h.surfaceValid) h.surface = HistoryTaps(surface_.record(i), surface_.width());
+  h.hitPointValid = useVirtual_ && virtual_.valid(i);
+  if (h.hitPointValid) {
+    h.hitPoint = virtual_.taps(i);
+    h.hitPointAmount = virtualAmount_.plane(0)[i];
+  }
+  return h;
 }
 
 // ---- 1. Pre-blur (NRD prepass): Poisson disk, fixed radius, rotated per frame.
@@ -140,16 +140,17 @@ void Reblur::temporalAccumulation() {
   parallelRows(gbuffer_.height, [&](int y) {
     for (int x = 0; x < w; ++x) {
       const size_t i = size_t(y) * size_t(w) + size_t(x);
-      const bool valid = historyValid(i) && !gbuffer_.isSky(i);
+      const PixelHistory history = this->history(i);
+      const bool valid = history.valid() && !gbuffer_.isSky(i);
       // Resampled counts may be fractional (bilinear); N_prev = 0 on disocclusion.
       const float previous =
-          valid ? std::min(historySample(i, accumulatedFramesHistory_.plane(0)), maxFrames) : 0.0f;
+          valid ? std::min(history.apply(accumulatedFramesHistory_.plane(0)), maxFrames) : 0.0f;
       const float alpha = 1.0f / (1.0f + previous);
       const float alphaFast = 1.0f / (1.0f + std::min(previous, maxFast));
       for (int c = 0; c < 3; ++c) {
         const float current = preBlurred_.plane(c)[i];
-        const float slow = valid ? historySample(i, slowHistory_.plane(c)) : current;
-        const float fastValue = valid ? historySample(i, fastHistory_.plane(c)) : current;
+        const float slow = valid ? history.apply(slowHistory_.plane(c)) : current;
+        const float fastValue = valid ? history.apply(fastHistory_.plane(c)) : current;
         temporal_.plane(c)[i] = alpha * current + (1.0f - alpha) * slow;
         fast_.plane(c)[i] = alphaFast * current + (1.0f - alphaFast) * fastValue;
       }
@@ -216,21 +217,26 @@ void Reblur::antiFireflyPass() {
   if (!s_.antiFirefly) return;
   const int w = gbuffer_.width, h = gbuffer_.height;
   parallelRows(h, [&](int y) {
-    for (int x = 0; x < w; ++x) {
-      const size_t p = size_t(y) * size_t(w) + size_t(x);
-      if (gbuffer_.isSky(p)) continue;
-      float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
-      int count = 0;
-      forEachNeighbour3x3(x, y, w, h, &gbuffer_, true, [&](size_t q) {
-        for (int c = 0; c < 3; ++c) {
-          lo[c] = std::min(lo[c], fixed_.plane(c)[q]);
-          hi[c] = std::max(hi[c], fixed_.plane(c)[q]);
+    for (int x0 = 0; x0 < w; x0 += 8) {  // eight pixels at a time
+      const Neighbourhood3x3Lanes n(x0, y, w, h, gbuffer_.meshId);
+      Lanes8 count{};
+      for (int j = 0; j < 9; ++j)
+        if (j != 4) count += selectFloat(n.present[j], Lanes8{} + 1.0f, Lanes8{});
+      // Surface pixels (present centre) with at least one neighbour; the others keep fixed_.
+      const LaneMask8 clampHere = n.present[4] & (count > 0.0f);
+      for (int c = 0; c < 3; ++c) {
+        const float* plane = fixed_.plane(c);
+        Lanes8 lo = Lanes8{} + 1e30f, hi = Lanes8{} - 1e30f;
+        for (int j = 0; j < 9; ++j) {
+          if (j == 4) continue;
+          const Lanes8 v = loadLanes(plane + n.offset[j], n.present[j]);
+          lo = selectFloat(n.present[j], minFloat(lo, v), lo);
+          hi = selectFloat(n.present[j], maxFloat(hi, v), hi);
         }
-        ++count;
-      });
-      if (count == 0) continue;
-      for (int c = 0; c < 3; ++c)
-        fireflyFree_.plane(c)[p] = std::clamp(fixed_.plane(c)[p], lo[c], hi[c]);
+        const Lanes8 centre = loadLanes(plane + n.p, n.inRow);
+        const Lanes8 clamped = selectFloat(centre < lo, lo, selectFloat(hi < centre, hi, centre));
+        storeLanes(fireflyFree_.plane(c) + n.p, selectFloat(clampHere, clamped, centre), n.inRow);
+      }
     }
   });
 }
@@ -287,42 +293,50 @@ void Reblur::stabilize(Image& output) {
   const int w = gbuffer_.width, h = gbuffer_.height;
   const float k = s_.antilagSigmaScale;
   parallelRows(h, [&](int y) {
-    for (int x = 0; x < w; ++x) {
-      const size_t p = size_t(y) * size_t(w) + size_t(x);
-      float current[3] = {postBlurred_.plane(0)[p], postBlurred_.plane(1)[p],
-                          postBlurred_.plane(2)[p]};
-      if (gbuffer_.isSky(p) || !historyValid(p)) {
-        for (int c = 0; c < 3; ++c) stabilized_.plane(c)[p] = current[c];
-        continue;
-      }
-      float sum[3] = {0, 0, 0}, sumSq[3] = {0, 0, 0};
-      int count = 0;
-      forEachNeighbour3x3(x, y, w, h, &gbuffer_, false, [&](size_t q) {
-        for (int c = 0; c < 3; ++c) {
-          const float v = fast_.plane(c)[q];
-          sum[c] += v;
-          sumSq[c] += v * v;
-        }
-        ++count;
-      });
-      float history[3], clamped[3];
+    for (int x0 = 0; x0 < w; x0 += 8) {
+      // The fast history's mean and sigma over the 3x3 non-sky neighbourhood, eight pixels at a
+      // time (taps in row-major order; a missing tap adds 0).
+      const Neighbourhood3x3Lanes n(x0, y, w, h, gbuffer_.meshId);
+      Lanes8 count{}, mean[3], sigma[3];
+      for (int j = 0; j < 9; ++j) count += selectFloat(n.present[j], Lanes8{} + 1.0f, Lanes8{});
       for (int c = 0; c < 3; ++c) {
-        history[c] = historySample(p, stabilizedHistory_.plane(c));
-        const float mean = sum[c] / float(count);
-        const float sigma = std::sqrt(std::max(0.0f, sumSq[c] / float(count) - mean * mean));
-        clamped[c] = std::clamp(history[c], mean - k * sigma, mean + k * sigma);
+        Lanes8 sum{}, sumSq{};
+        for (int j = 0; j < 9; ++j) {
+          const Lanes8 v = loadLanes(fast_.plane(c) + n.offset[j], n.present[j]);
+          sum += v;
+          sumSq += v * v;
+        }
+        mean[c] = sum / count;
+        sigma[c] = sqrtLanes(maxFloat(Lanes8{}, sumSq / count - mean[c] * mean[c]));
       }
-      float n = accumulatedFrames_.plane(0)[p];
-      if (s_.antiLag) {
-        const float lh = luminance(history[0], history[1], history[2]);
-        const float lc = luminance(clamped[0], clamped[1], clamped[2]);
-        const float d = std::abs(lh - lc) / std::max({lh, lc, 1e-6f});
-        n = n / (1.0f + d * n / 3.0f);
-        accumulatedFrames_.plane(0)[p] = n;
+      // The rest per pixel: its history taps.
+      for (int lane = 0; lane < 8 && x0 + lane < w; ++lane) {
+        const size_t p = n.p + size_t(lane);
+        const PixelHistory history = this->history(p);
+        float current[3] = {postBlurred_.plane(0)[p], postBlurred_.plane(1)[p],
+                            postBlurred_.plane(2)[p]};
+        if (!n.present[4][lane] || !history.valid()) {  // sky, or no history
+          for (int c = 0; c < 3; ++c) stabilized_.plane(c)[p] = current[c];
+          continue;
+        }
+        float previous[3], clamped[3];
+        for (int c = 0; c < 3; ++c) {
+          previous[c] = history.apply(stabilizedHistory_.plane(c));
+          clamped[c] = std::clamp(previous[c], mean[c][lane] - k * sigma[c][lane],
+                                  mean[c][lane] + k * sigma[c][lane]);
+        }
+        float frames = accumulatedFrames_.plane(0)[p];
+        if (s_.antiLag) {
+          const float lh = luminance(previous[0], previous[1], previous[2]);
+          const float lc = luminance(clamped[0], clamped[1], clamped[2]);
+          const float d = std::abs(lh - lc) / std::max({lh, lc, 1e-6f});
+          frames = frames / (1.0f + d * frames / 3.0f);
+          accumulatedFrames_.plane(0)[p] = frames;
+        }
+        const float alpha = 1.0f / (1.0f + frames);
+        for (int c = 0; c < 3; ++c)
+          stabilized_.plane(c)[p] = alpha * current[c] + (1.0f - alpha) * clamped[c];
       }
-      const float alpha = 1.0f / (1.0f + n);
-      for (int c = 0; c < 3; ++c)
-        stabilized_.plane(c)[p] = alpha * current[c] + (1.0f - alpha) * clamped[c];
     }
   });
   output.raw() = stabilized_.raw();

@@ -73,8 +73,20 @@ class Reblur : public Denoiser {
 
   // History of pixel i from one plane of a previous-frame image: surface motion, or for the
   // specular signal a roughness-weighted blend with the hit-point reprojection.
-  bool historyValid(size_t i) const;
-  float historySample(size_t i, const float* plane) const;
+  // Pixel i's history, its taps decoded once and read from several planes: the surface taps, and
+  // for the specular signal the hit-point taps, blended by virtualAmount_ where both are valid.
+  struct PixelHistory {
+    HistoryTaps surface, hitPoint;
+    bool surfaceValid = false, hitPointValid = false;
+    float hitPointAmount = 0.0f;
+    bool valid() const { return surfaceValid || hitPointValid; }
+    float apply(const float* plane) const {  // 0 when invalid
+      if (!hitPointValid) return surfaceValid ? surface.apply(plane) : 0.0f;
+      if (!surfaceValid) return hitPoint.apply(plane);
+      return hitPointAmount * hitPoint.apply(plane) + (1.0f - hitPointAmount) * surface.apply(plane);
+    }
+  };
+  PixelHistory history(size_t i) const;
 
   ReblurSettings s_;
   SignalKind kind_;

@@ -5,10 +5,12 @@
 // screen-space derivatives that reprojection (fwidth) and the depth edge-stopping term need.
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <string>
 #include <vector>
 
 #include "core/exr_io.hpp"
+#include "core/fast_math.hpp"
 #include "core/image.hpp"
 
 namespace arena {
@@ -81,5 +83,29 @@ inline void forEachNeighbour3x3(int x, int y, int w, int h, const GBufferView* s
       visit(q);
     }
 }
+
+// The same neighbourhood for eight pixels (x0 .. x0 + 7, y) at once: for tap j (row-major, the
+// centre is j = 4) the index of lane 0's neighbour and the lanes whose neighbour lies inside the
+// image and is not sky in `meshId` (nullptr: no sky test; lanes past the row's end have none).
+// Loads at offset[j] masked by present[j] read the neighbours of the median, anti-firefly and
+// stabilisation passes' lane loops.
+struct Neighbourhood3x3Lanes {
+  size_t p;  // index of lane 0's pixel
+  LaneMask8 inRow;
+  size_t offset[9];
+  LaneMask8 present[9];
+  Neighbourhood3x3Lanes(int x0, int y, int w, int h, const float* meshId) {
+    p = size_t(y) * size_t(w) + size_t(x0);
+    const LaneMask8 x = laneIndex(Lanes8{}) + x0;
+    inRow = x < w;
+    for (int j = 0; j < 9; ++j) {
+      const int dx = j % 3 - 1, dy = j / 3 - 1;
+      const bool rowInside = y + dy >= 0 && y + dy < h;
+      offset[j] = p + size_t(std::ptrdiff_t(dy) * w + dx);
+      present[j] = inRow & (x + dx >= 0) & (x + dx < w) & (rowInside ? LaneMask8{} - 1 : LaneMask8{});
+      if (meshId) present[j] &= loadLanes(meshId + offset[j], present[j]) >= 0.0f;
+    }
+  }
+};
 
 }  // namespace arena

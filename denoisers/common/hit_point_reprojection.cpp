@@ -89,13 +89,18 @@ void HitPointReprojection::compute(const GBufferView& current, const float* hitD
 }
 
 float HitPointReprojection::sample(size_t i, const float* plane) const {
+  return taps(i).apply(plane);
+}
+
+HistoryTaps HitPointReprojection::taps(size_t i) const {
   const Record& rec = records_[i];
-  float sum = 0;
+  HistoryTaps taps;
   for (int k = 0; k < 4; ++k)
-    if ((rec.mask >> k) & 1u)
-      sum +=
-          rec.weights[k] * plane[size_t(rec.y0 + k / 2) * size_t(width_) + size_t(rec.x0 + k % 2)];
-  return sum;
+    if ((rec.mask >> k) & 1u) {
+      taps.index[taps.count] = size_t(rec.y0 + k / 2) * size_t(width_) + size_t(rec.x0 + k % 2);
+      taps.weight[taps.count++] = rec.weights[k];
+    }
+  return taps;
 }
 
 double HitPointReprojection::validFraction() const {

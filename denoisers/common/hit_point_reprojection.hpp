@@ -18,6 +18,7 @@
 #include "core/image.hpp"
 #include "denoisers/common/gbuffer.hpp"
 #include "denoisers/common/parallel.hpp"
+#include "denoisers/common/reprojection.hpp"
 
 namespace arena {
 
@@ -47,6 +48,8 @@ class HitPointReprojection {
   bool valid(size_t i) const { return records_[i].mask != 0; }
   // The history value of pixel i from one plane of a previous-frame image; 0 when invalid.
   float sample(size_t i, const float* historyPlane) const;
+  // Pixel i's taps decoded once, for several planes; apply() rounds exactly as sample().
+  HistoryTaps taps(size_t i) const;
   // Continuous previous-frame pixel position of pixel i's virtual point (valid or not).
   float previousX(size_t i) const { return records_[i].px; }
   float previousY(size_t i) const { return records_[i].py; }

@@ -43,20 +43,13 @@ double median3x3(const Image& in, const GBufferView* g, Image& out) {
   // (count - 1) / 2 of the count = 9 - k present.
   parallelRows(h, [&](int y) {
     for (int x0 = 0; x0 < w; x0 += 8) {
-      const size_t p = size_t(y) * size_t(w) + size_t(x0);
-      const LaneMask8 x = laneIndex(Lanes8{}) + x0;
-      const LaneMask8 inRow = x < w;
-      LaneMask8 present[9];
-      size_t offset[9];
+      const Neighbourhood3x3Lanes n(x0, y, w, h, meshId);
+      const size_t p = n.p;
+      const LaneMask8 inRow = n.inRow;
+      const LaneMask8* present = n.present;
+      const size_t* offset = n.offset;
       LaneMask8 missing{};
-      for (int j = 0; j < 9; ++j) {
-        const int dx = j % 3 - 1, dy = j / 3 - 1;
-        const bool rowInside = y + dy >= 0 && y + dy < h;
-        offset[j] = p + size_t(std::ptrdiff_t(dy) * w + dx);
-        present[j] = inRow & (x + dx >= 0) & (x + dx < w) & (rowInside ? LaneMask8{} - 1 : LaneMask8{});
-        if (meshId) present[j] &= loadLanes(meshId + offset[j], present[j]) >= 0.0f;
-        missing -= present[j] == 0;  // comparisons give -1
-      }
+      for (int j = 0; j < 9; ++j) missing -= present[j] == 0;  // comparisons give -1
       const LaneMask8 lowPads = (missing + 1) >> 1;
       Lanes8 pad[9];
       LaneMask8 missingBefore{};

@@ -53,6 +53,7 @@ struct HistoryTaps {
   size_t index[9];            // only the first `count` are set
   float weight[4];            // Bilinear2x2: each tap's normalised weight
 
+  HistoryTaps() = default;  // no taps: apply() gives 0
   HistoryTaps(const ReprojectionRecord& record, int width) {
     const size_t w = size_t(width);
     switch (record.footprint) {
