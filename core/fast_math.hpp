@@ -97,6 +97,10 @@ inline Lanes8 fusedMultiplyAdd(Lanes8 a, Lanes8 b, Lanes8 c) {
 inline bool allLanes(LaneMask8 mask) {
   return _mm256_movemask_ps(reinterpret_cast<__m256>(mask)) == 0xFF;
 }
+// Whether any lane of the mask is set.
+inline bool anyLane(LaneMask8 mask) {
+  return _mm256_movemask_ps(reinterpret_cast<__m256>(mask)) != 0;
+}
 // base[index] per lane where mask is set, 0 elsewhere (no fault on masked-out lanes).
 inline Lanes8 gatherLanes(const float* base, LaneMask8 index, LaneMask8 mask) {
   return reinterpret_cast<Lanes8>(_mm256_mask_i32gather_ps(

@@ -43,6 +43,10 @@ class Image {
 
 // Rec.709 luminance of a planar RGB image (channels 0..2).
 Image luminance(const Image& rgb);
-inline float luminance(float r, float g, float b) { return 0.2126f * r + 0.7152f * g + 0.0722f * b; }
+// Of one pixel, or of several at once (F: float or a lane type of core/fast_math.hpp).
+template <class F>
+inline F luminance(F r, F g, F b) {
+  return 0.2126f * r + 0.7152f * g + 0.0722f * b;
+}
 
 }  // namespace arena

@@ -106,14 +106,12 @@ void Reblur::reproject(const FrameContext& ctx) {
   pass.setTaps(8);
 }
 
-Reblur::PixelHistory Reblur::history(size_t i) const {
-  PixelHistory h;
-  h.surfaceValid = surface_.valid(i);
-  if (h.surfaceValid) h.surface = HistoryTaps(surface_.record(i), surface_.width());
-  h.hitPointValid = useVirtual_ && virtual_.valid(i);
-  if (h.hitPointValid) {
-    h.hitPoint = virtual_.taps(i);
-    h.hitPointAmount = virtualAmount_.plane(0)[i];
+Reblur::HistoryBlock Reblur::history(size_t i, int count) const {
+  HistoryBlock h;
+  h.surface = surface_.lanes(i, count);
+  if (useVirtual_) {
+    h.hitPoint = virtual_.lanes(i, count);
+    h.hitPointAmount = loadLanes(virtualAmount_.plane(0) + i, laneIndex(Lanes8{}) < count);
   }
   return h;
 }
@@ -138,24 +136,29 @@ void Reblur::temporalAccumulation() {
   const float maxFrames = float(s_.maxAccumulatedFrames),
               maxFast = float(s_.maxFastAccumulatedFrames);
   parallelRows(gbuffer_.height, [&](int y) {
-    for (int x = 0; x < w; ++x) {
-      const size_t i = size_t(y) * size_t(w) + size_t(x);
-      const PixelHistory history = this->history(i);
-      const bool valid = history.valid() && !gbuffer_.isSky(i);
+    for (int x0 = 0; x0 < w; x0 += 8) {  // eight pixels at a time
+      const size_t i = size_t(y) * size_t(w) + size_t(x0);
+      const int count = std::min(8, w - x0);
+      const LaneMask8 inRow = laneIndex(Lanes8{}) < count;
+      const HistoryBlock history = this->history(i, count);
+      LaneMask8 valid = history.valid() & inRow;
+      if (gbuffer_.meshId) valid &= loadLanes(gbuffer_.meshId + i, inRow) >= 0.0f;  // not sky
       // Resampled counts may be fractional (bilinear); N_prev = 0 on disocclusion.
-      const float previous =
-          valid ? std::min(history.apply(accumulatedFramesHistory_.plane(0)), maxFrames) : 0.0f;
-      const float alpha = 1.0f / (1.0f + previous);
-      const float alphaFast = 1.0f / (1.0f + std::min(previous, maxFast));
+      const Lanes8 previous = selectFloat(
+          valid, minFloat(history.apply(accumulatedFramesHistory_.plane(0)), Lanes8{} + maxFrames),
+          Lanes8{});
+      const Lanes8 alpha = 1.0f / (1.0f + previous);
+      const Lanes8 alphaFast = 1.0f / (1.0f + minFloat(previous, Lanes8{} + maxFast));
       for (int c = 0; c < 3; ++c) {
-        const float current = preBlurred_.plane(c)[i];
-        const float slow = valid ? history.apply(slowHistory_.plane(c)) : current;
-        const float fastValue = valid ? history.apply(fastHistory_.plane(c)) : current;
-        temporal_.plane(c)[i] = alpha * current + (1.0f - alpha) * slow;
-        fast_.plane(c)[i] = alphaFast * current + (1.0f - alphaFast) * fastValue;
+        const Lanes8 current = loadLanes(preBlurred_.plane(c) + i, inRow);
+        const Lanes8 slow = selectFloat(valid, history.apply(slowHistory_.plane(c)), current);
+        const Lanes8 fastValue = selectFloat(valid, history.apply(fastHistory_.plane(c)), current);
+        storeLanes(temporal_.plane(c) + i, alpha * current + (1.0f - alpha) * slow, inRow);
+        storeLanes(fast_.plane(c) + i, alphaFast * current + (1.0f - alphaFast) * fastValue, inRow);
       }
-      previousFrames_.plane(0)[i] = previous;
-      accumulatedFrames_.plane(0)[i] = std::min(previous + 1.0f, maxFrames);
+      storeLanes(previousFrames_.plane(0) + i, previous, inRow);
+      storeLanes(accumulatedFrames_.plane(0) + i, minFloat(previous + 1.0f, Lanes8{} + maxFrames),
+                 inRow);
     }
   });
 }
@@ -309,33 +312,30 @@ void Reblur::stabilize(Image& output) {
         mean[c] = sum / count;
         sigma[c] = sqrtLanes(maxFloat(Lanes8{}, sumSq / count - mean[c] * mean[c]));
       }
-      // The rest per pixel: its history taps.
-      for (int lane = 0; lane < 8 && x0 + lane < w; ++lane) {
-        const size_t p = n.p + size_t(lane);
-        const PixelHistory history = this->history(p);
-        float current[3] = {postBlurred_.plane(0)[p], postBlurred_.plane(1)[p],
-                            postBlurred_.plane(2)[p]};
-        if (!n.present[4][lane] || !history.valid()) {  // sky, or no history
-          for (int c = 0; c < 3; ++c) stabilized_.plane(c)[p] = current[c];
-          continue;
-        }
-        float previous[3], clamped[3];
-        for (int c = 0; c < 3; ++c) {
-          previous[c] = history.apply(stabilizedHistory_.plane(c));
-          clamped[c] = std::clamp(previous[c], mean[c][lane] - k * sigma[c][lane],
-                                  mean[c][lane] + k * sigma[c][lane]);
-        }
-        float frames = accumulatedFrames_.plane(0)[p];
-        if (s_.antiLag) {
-          const float lh = luminance(previous[0], previous[1], previous[2]);
-          const float lc = luminance(clamped[0], clamped[1], clamped[2]);
-          const float d = std::abs(lh - lc) / std::max({lh, lc, 1e-6f});
-          frames = frames / (1.0f + d * frames / 3.0f);
-          accumulatedFrames_.plane(0)[p] = frames;
-        }
-        const float alpha = 1.0f / (1.0f + frames);
-        for (int c = 0; c < 3; ++c)
-          stabilized_.plane(c)[p] = alpha * current[c] + (1.0f - alpha) * clamped[c];
+      // Clamp the history into mu +- k sigma, shorten N by how far it moved, blend.
+      const HistoryBlock history = this->history(n.p, std::min(8, w - x0));
+      const LaneMask8 stabilizeHere = n.present[4] & history.valid();  // a surface with history
+      Lanes8 current[3], previous[3], clamped[3];
+      for (int c = 0; c < 3; ++c) {
+        current[c] = loadLanes(postBlurred_.plane(c) + n.p, n.inRow);
+        previous[c] = history.apply(stabilizedHistory_.plane(c));
+        const Lanes8 lo = mean[c] - k * sigma[c], hi = mean[c] + k * sigma[c];
+        clamped[c] = selectFloat(previous[c] < lo, lo, selectFloat(hi < previous[c], hi, previous[c]));
+      }
+      float* accumulated = accumulatedFrames_.plane(0) + n.p;
+      Lanes8 frames = loadLanes(accumulated, n.inRow);
+      if (s_.antiLag) {
+        const Lanes8 lh = luminance(previous[0], previous[1], previous[2]);
+        const Lanes8 lc = luminance(clamped[0], clamped[1], clamped[2]);
+        const Lanes8 d = absFloat(lh - lc) / maxFloat(maxFloat(lh, lc), Lanes8{} + 1e-6f);
+        frames = frames / (1.0f + d * frames / 3.0f);
+        storeLanes(accumulated, frames, stabilizeHere);
+      }
+      const Lanes8 alpha = 1.0f / (1.0f + frames);
+      for (int c = 0; c < 3; ++c) {
+        const Lanes8 blended = alpha * current[c] + (1.0f - alpha) * clamped[c];
+        storeLanes(stabilized_.plane(c) + n.p, selectFloat(stabilizeHere, blended, current[c]),
+                   n.inRow);
       }
     }
   });

@@ -73,20 +73,25 @@ class Reblur : public Denoiser {
 
   // History of pixel i from one plane of a previous-frame image: surface motion, or for the
   // specular signal a roughness-weighted blend with the hit-point reprojection.
-  // Pixel i's history, its taps decoded once and read from several planes: the surface taps, and
-  // for the specular signal the hit-point taps, blended by virtualAmount_ where both are valid.
-  struct PixelHistory {
-    HistoryTaps surface, hitPoint;
-    bool surfaceValid = false, hitPointValid = false;
-    float hitPointAmount = 0.0f;
-    bool valid() const { return surfaceValid || hitPointValid; }
-    float apply(const float* plane) const {  // 0 when invalid
-      if (!hitPointValid) return surfaceValid ? surface.apply(plane) : 0.0f;
-      if (!surfaceValid) return hitPoint.apply(plane);
-      return hitPointAmount * hitPoint.apply(plane) + (1.0f - hitPointAmount) * surface.apply(plane);
+  // Eight consecutive pixels' history, their taps decoded once and read from several planes: the
+  // surface taps, and for the specular signal the hit-point taps, blended by virtualAmount_ where
+  // both are valid; 0 where neither is.
+  struct HistoryBlock {
+    HistoryLanes surface, hitPoint;
+    Lanes8 hitPointAmount{};
+    LaneMask8 valid() const { return surface.valid | hitPoint.valid; }
+    Lanes8 apply(const float* plane) const {
+      const Lanes8 fromSurface = surface.apply(plane);
+      if (!anyLane(hitPoint.valid)) return fromSurface;
+      const Lanes8 fromHitPoint = hitPoint.apply(plane);
+      const Lanes8 both =
+          hitPointAmount * fromHitPoint + (1.0f - hitPointAmount) * fromSurface;
+      return selectFloat(hitPoint.valid, selectFloat(surface.valid, both, fromHitPoint),
+                         fromSurface);
     }
   };
-  PixelHistory history(size_t i) const;
+  // Pixels i .. i + count - 1 (count <= 8).
+  HistoryBlock history(size_t i, int count) const;
 
   ReblurSettings s_;
   SignalKind kind_;

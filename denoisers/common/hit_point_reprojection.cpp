@@ -92,6 +92,16 @@ float HitPointReprojection::sample(size_t i, const float* plane) const {
   return taps(i).apply(plane);
 }
 
+HistoryLanes HitPointReprojection::lanes(size_t i, int count) const {
+  HistoryLanes lanes;
+  lanes.width = width_;
+  for (int lane = 0; lane < count; ++lane) {
+    const Record& rec = records_[i + size_t(lane)];
+    if (rec.mask != 0) lanes.setBilinear(lane, rec.x0, rec.y0, rec.mask, rec.weights);
+  }
+  return lanes;
+}
+
 HistoryTaps HitPointReprojection::taps(size_t i) const {
   const Record& rec = records_[i];
   HistoryTaps taps;

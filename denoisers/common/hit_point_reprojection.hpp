@@ -50,6 +50,8 @@ class HitPointReprojection {
   float sample(size_t i, const float* historyPlane) const;
   // Pixel i's taps decoded once, for several planes; apply() rounds exactly as sample().
   HistoryTaps taps(size_t i) const;
+  // Pixels i .. i + count - 1 (count <= 8) as lanes.
+  HistoryLanes lanes(size_t i, int count) const;
   // Continuous previous-frame pixel position of pixel i's virtual point (valid or not).
   float previousX(size_t i) const { return records_[i].px; }
   float previousY(size_t i) const { return records_[i].py; }

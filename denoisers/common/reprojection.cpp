@@ -161,6 +161,21 @@ void Reprojection::compute(const GBufferView& current, const Image& derivatives,
   });
 }
 
+HistoryLanes Reprojection::lanes(size_t i, int count) const {
+  HistoryLanes lanes;
+  lanes.width = width_;
+  for (int lane = 0; lane < count; ++lane) {
+    const ReprojectionRecord& rec = records_[i + size_t(lane)];
+    if (rec.footprint == ReprojectionFootprint::Bilinear2x2) {
+      lanes.setBilinear(lane, rec.x0, rec.y0, rec.mask, rec.weights);
+    } else if (rec.footprint == ReprojectionFootprint::Box3x3) {
+      lanes.valid[lane] = lanes.box[lane] = -1;
+      lanes.boxRecords = &records_[i];
+    }
+  }
+  return lanes;
+}
+
 float Reprojection::sample(size_t i, const float* plane) const {
   return HistoryTaps(records_[i], width_).apply(plane);
 }

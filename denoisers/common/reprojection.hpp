@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/camera.hpp"
+#include "core/fast_math.hpp"
 #include "core/image.hpp"
 #include "denoisers/common/gbuffer.hpp"
 #include "denoisers/common/parallel.hpp"
@@ -86,6 +87,37 @@ struct HistoryTaps {
   }
 };
 
+// Eight consecutive pixels' history taps, decoded once and applied to several planes eight lanes
+// at a time (gathers); per lane, apply() rounds exactly as HistoryTaps::apply(). The 2x2
+// footprints are read in lanes; a lane with the 3x3 box (rare: thin geometry) is read through
+// its HistoryTaps.
+struct HistoryLanes {
+  LaneMask8 valid{}, box{};
+  LaneMask8 index[4]{}, use[4]{};
+  Lanes8 weight[4]{};
+  const ReprojectionRecord* boxRecords = nullptr;  // lane 0's record, when some lane is a box
+  int width = 0;
+
+  // Lane `lane` reads the 2x2 taps (x0 + k % 2, y0 + k / 2) whose bit k is set in `mask`.
+  void setBilinear(int lane, int x0, int y0, unsigned mask, const float weights[4]) {
+    valid[lane] = -1;
+    for (int k = 0; k < 4; ++k) {
+      if (!((mask >> k) & 1u)) continue;
+      use[k][lane] = -1;
+      index[k][lane] = (y0 + k / 2) * width + x0 + k % 2;
+      weight[k][lane] = weights[k];
+    }
+  }
+  Lanes8 apply(const float* plane) const {
+    Lanes8 sum{};
+    for (int k = 0; k < 4; ++k) sum += weight[k] * gatherLanes(plane, index[k], use[k]);
+    if (boxRecords)
+      for (int lane = 0; lane < 8; ++lane)
+        if (box[lane]) sum[lane] = HistoryTaps(boxRecords[lane], width).apply(plane);
+    return sum;
+  }
+};
+
 class Reprojection {
  public:
   void setup(int width, int height);
@@ -106,6 +138,8 @@ class Reprojection {
   bool valid(size_t i) const { return records_[i].footprint != ReprojectionFootprint::Disoccluded; }
   const ReprojectionRecord& record(size_t i) const { return records_[i]; }
 
+  // Pixels i .. i + count - 1 (count <= 8) as lanes.
+  HistoryLanes lanes(size_t i, int count) const;
   // The history value of pixel i from one plane of a previous-frame image; 0 when disoccluded.
   float sample(size_t i, const float* historyPlane) const;
   // Every channel of `history` resampled into `out` (same shape); `fillDisoccluded` elsewhere.
