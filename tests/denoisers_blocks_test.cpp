@@ -776,6 +776,17 @@ TEST(DenoiserBlocksReprojection, MatchesThePerPixelDefinitionUnderRandomMotion) 
     }
   EXPECT_GT(box, 0);  // every path was exercised
   EXPECT_GT(bilinear, w * h / 4);
+  // Eight pixels at a time (HistoryLanes) read exactly what sample() reads, box lanes included.
+  const Image history = randomImage(w, h, 1, 46, 0.0f, 10.0f);
+  for (int y = 0; y < h; ++y)
+    for (int x0 = 0; x0 < w; x0 += 8) {
+      const size_t i = size_t(y) * size_t(w) + size_t(x0);
+      const int count = std::min(8, w - x0);
+      const Lanes8 lanes = reprojection.lanes(i, count).apply(history.plane(0));
+      for (int lane = 0; lane < count; ++lane)
+        ASSERT_EQ(lanes[lane], reprojection.sample(i + size_t(lane), history.plane(0)))
+            << x0 + lane << "," << y;
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
