@@ -152,6 +152,12 @@ inline Lanes16 fusedMultiplyAdd(Lanes16 a, Lanes16 b, Lanes16 c) {
                                                    reinterpret_cast<__m512>(b),
                                                    reinterpret_cast<__m512>(c)));
 }
+inline Lanes16 gatherLanes(const float* base, LaneMask16 index, LaneMask16 mask) {
+  return reinterpret_cast<Lanes16>(_mm512_mask_i32gather_ps(
+      _mm512_setzero_ps(), predicate(mask), reinterpret_cast<__m512i>(index), base, 4));
+}
+inline bool allLanes(LaneMask16 mask) { return predicate(mask) == 0xFFFF; }
+inline bool anyLane(LaneMask16 mask) { return predicate(mask) != 0; }
 inline Lanes16 sqrtLanes(Lanes16 x) {
   // The maskz form: GCC 12's _mm512_sqrt_ps trips -Wmaybe-uninitialized inside its own header.
   return reinterpret_cast<Lanes16>(_mm512_maskz_sqrt_ps(0xFFFF, reinterpret_cast<__m512>(x)));

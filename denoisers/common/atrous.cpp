@@ -2,17 +2,16 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <cstdlib>
 #include <vector>
 
 #include "core/error.hpp"
 #include "denoisers/common/atrous_kernel.hpp"
 #include "core/fast_math.hpp"
 #include "denoisers/common/parallel.hpp"
+#include "denoisers/common/simd.hpp"
 
 namespace arena {
 
@@ -55,15 +54,6 @@ int powerOfTwoExponent(float sigmaN) {
   return m == 0.5f ? k - 1 : -1;
 }
 
-// The CPU has every AVX-512 subset the sixteen-lane kernel uses, and ARENA_NO_AVX512 is unset
-// (setting it runs the AVX2 kernel, e.g. to time what a machine without AVX-512 would).
-bool cpuHasAvx512() {
-  static const bool has = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
-                          __builtin_cpu_supports("avx512bw") &&
-                          __builtin_cpu_supports("avx512dq") && !std::getenv("ARENA_NO_AVX512");
-  return has;
-}
-std::atomic<bool> allowAvx512{true};
 
 // Per-thread buffers of whole images (the filtered image's luminance, a zero id plane), grown on
 // first use and reused by every later iteration and frame: no allocation per frame.
@@ -175,7 +165,7 @@ void filterIteration(int iteration, const AtrousSettings& settings, const Atrous
   }
 
   const atrous_detail::FilterRowFunction filterRow =
-      atrousUsesAvx512()
+      simdUsesAvx512()
           ? atrous_detail::selectFilterRowAvx512(s.depth, s.luminance, normalTerm, carry)
           : atrous_detail::selectFilterRow<Lanes8>(s.depth, s.luminance, normalTerm, carry);
   parallelRows(h, [&](int y) { filterRow(it, y); });
@@ -205,13 +195,6 @@ void atrousIterationWithMoments(int iteration, const AtrousSettings& settings,
     throw Error("à-trous: moments in/out must be equal images of 1 to 4 channels, the colour's size");
   filterIteration(iteration, settings, guide, colorSigma, colorIn, colorOut,
                   atrous_detail::Carry::Plain, &momentsIn, &momentsOut);
-}
-
-bool atrousUsesAvx512() {
-  return allowAvx512 && cpuHasAvx512();
-}
-bool allowAtrousAvx512(bool allow) {
-  return allowAvx512.exchange(allow);
 }
 
 void prefilterVariance3x3(const Image& variance, const GBufferView& g, Image& filtered) {

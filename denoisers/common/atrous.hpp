@@ -54,12 +54,7 @@ void atrousIterationWithMoments(int iteration, const AtrousSettings& settings,
                                 const AtrousGuide& guide, float colorSigma, const Image& colorIn,
                                 Image& colorOut, const Image& momentsIn, Image& momentsOut);
 
-// The pixel kernel runs on sixteen AVX-512 lanes where the CPU has them (F, VL, BW, DQ), on eight
-// AVX2 lanes otherwise (or when the environment sets ARENA_NO_AVX512); both give the same bits.
-// allowAtrousAvx512(false) forces the AVX2 path
-// (for tests and comparisons) and returns the previous setting.
-bool atrousUsesAvx512();
-bool allowAtrousAvx512(bool allow);
+// The pixel kernel has an AVX2 and an AVX-512 build (simd.hpp).
 
 // g3x3 of SVGF eq. 5: the variance blurred by a 3x3 Gaussian (1/4, 1/2, 1/4)^2, sky taps and
 // off-image taps dropped and the rest renormalised. Used only to drive the luminance weight;

@@ -1,10 +1,10 @@
 #pragma once
 // The à-trous iteration's pixel kernel (atrous.hpp), register-blocked and written once over a
 // lane type: Lanes8 (AVX2, the build's baseline, atrous.cpp) or Lanes16 (AVX-512, its own
-// translation unit atrous_avx512.cpp, chosen at run time when the CPU has it). Both run the same
+// translation unit simd_avx512.cpp, chosen at run time when the CPU has it). Both run the same
 // IEEE operations lane by lane, so a pixel gets the same bits on either machine (tested).
 //
-// Internal to atrous.cpp and atrous_avx512.cpp. The kernel touches no standard-library template
+// Internal to atrous.cpp and simd_avx512.cpp. The kernel touches no standard-library template
 // (plain arrays, raw pointers): a template instantiated in both translation units would be
 // compiled for AVX-512 in one of them and the linker could keep that copy for both.
 #include <cstddef>
@@ -276,7 +276,7 @@ FilterRowFunction selectFilterRow(bool depth, bool luminance, NormalTerm normal,
                    : selectFilterRow<F, false, false>(normal, carry);
 }
 
-// The AVX-512 (Lanes16) instantiation, defined in atrous_avx512.cpp; callable only where the CPU
+// The AVX-512 (Lanes16) instantiation, defined in simd_avx512.cpp; callable only where the CPU
 // has AVX-512 F, VL, BW and DQ.
 FilterRowFunction selectFilterRowAvx512(bool depth, bool luminance, NormalTerm normal,
                                         Carry carry);

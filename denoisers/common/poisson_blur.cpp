@@ -5,6 +5,8 @@
 
 #include "core/error.hpp"
 #include "core/fast_math.hpp"
+#include "denoisers/common/poisson_blur_kernel.hpp"
+#include "denoisers/common/simd.hpp"
 #include "denoisers/common/parallel.hpp"
 
 namespace arena {
@@ -41,7 +43,7 @@ SurfacePoint<float> SurfaceWeights::point(size_t i) const {
 
 float SurfaceWeights::operator()(size_t p, size_t q) const {
   if (g_.isSky(q)) return 0.0f;
-  return surfaceWeight(s_, point(p), point(q));
+  return surfaceWeight(s_, surfaceCentre(s_, point(p)), point(q));
 }
 
 std::array<std::array<float, 2>, kPoissonTaps> poissonDisk(float rotation) {
@@ -59,99 +61,40 @@ float poissonRotation(int frameIndex) {
   return std::fmod(float(frameIndex) * kGoldenAngle, 2.0f * std::numbers::pi_v<float>);
 }
 
-namespace {
-
-// The guides of eight pixels that surfaceWeight() reads for the enabled terms (the neighbour's
-// normal only for the normal term, its depth never): at consecutive indices from i (mask: the
-// lanes to read), or gathered at per-lane indices.
-struct SurfaceLanes {
-  const SurfaceGuide& guide;
-  const SurfaceWeightSettings& s;
-  SurfacePoint<Lanes8> load(size_t i, LaneMask8 mask, bool centre) const {
-    return read(centre, [&](const float* plane) { return loadLanes(plane + i, mask); });
-  }
-  SurfacePoint<Lanes8> gather(LaneMask8 index, LaneMask8 mask) const {
-    return read(false, [&](const float* plane) { return gatherLanes(plane, index, mask); });
-  }
-  template <class Read>
-  SurfacePoint<Lanes8> read(bool centre, Read&& planeLanes) const {
-    const GBufferView& g = guide.gbuffer;
-    SurfacePoint<Lanes8> point{};
-    const bool normal = s.normal && s.normalPower != 0.0f;
-    for (size_t c = 0; c < 3; ++c) {
-      if (s.planeDistance) point.position[c] = planeLanes(g.position[c]);
-      if (normal || (centre && s.planeDistance)) point.normal[c] = planeLanes(g.normal[c]);
-    }
-    if (centre && (s.planeDistance || s.hitDistance)) point.depth = planeLanes(g.depth);
-    if (s.hitDistance) point.hitDistance = planeLanes(guide.hitDistance);
-    if (s.roughness) point.roughness = planeLanes(guide.roughness);
-    return point;
-  }
-};
-
-// std::lround per lane (half away from zero), exactly: the fraction after truncation is exact.
-inline LaneMask8 roundToNearestInt(Lanes8 v) {
-  const LaneMask8 whole = truncateToInt(v);
-  const Lanes8 fraction = v - toFloat(whole);
-  return whole + ((fraction >= 0.5f) & 1) - ((fraction <= -0.5f) & 1);
-}
-
-}  // namespace
-
 void poissonDiskBlur(const Image& in, const SurfaceGuide& guide,
                      const PoissonBlurSettings& settings, float rotation, const Image* radiusScale,
                      Image& out) {
   const GBufferView& g = guide.gbuffer;
   const int w = in.width(), h = in.height(), channels = in.channels();
-  if (!out.sameShape(in) || g.width != w || g.height != h || channels > 8 || &in == &out)
-    throw Error("Poisson blur: in/out must be distinct images of the G-buffer's size");
+  if (!out.sameShape(in) || g.width != w || g.height != h || channels > poisson_detail::kMaxChannels ||
+      &in == &out)
+    throw Error("Poisson blur: in/out must be distinct images of the G-buffer's size, <= 8 channels");
   const SurfaceWeights checked(settings.weights, guide);  // throws where a guide is missing
+  poisson_detail::Blur b{};
+  b.width = w;
+  b.height = h;
+  b.channels = channels;
+  for (int c = 0; c < channels; ++c) {
+    b.in[c] = in.plane(c);
+    b.out[c] = out.plane(c);
+  }
+  b.meshId = g.meshId;
+  b.scale = radiusScale ? radiusScale->plane(0) : nullptr;
+  b.radius = settings.radius;
   const auto disk = poissonDisk(rotation);
-  const float* scale = radiusScale ? radiusScale->plane(0) : nullptr;
-  const SurfaceLanes surface{guide, settings.weights};
-  // Eight pixels at a time; a tap's neighbours are gathered (the disk's offsets scale with each
-  // pixel's radius). Dropped taps -- off the image, onto p itself, into the sky -- weigh 0.
-  parallelRows(h, [&](int y) {
-    for (int x0 = 0; x0 < w; x0 += 8) {
-      const size_t p = size_t(y) * size_t(w) + size_t(x0);
-      const LaneMask8 x = laneIndex(Lanes8{}) + x0;
-      const LaneMask8 inRow = x < w;
-      const LaneMask8 sky =
-          g.meshId ? inRow & (loadLanes(g.meshId + p, inRow) < 0.0f) : LaneMask8{};
-      const LaneMask8 surfacePixel = inRow & ~sky;
-      Lanes8 sum[8];
-      for (int c = 0; c < channels; ++c) sum[c] = loadLanes(in.plane(c) + p, inRow);
-      Lanes8 weightSum = Lanes8{} + 1.0f;  // the centre
-      const Lanes8 radius = settings.radius * (scale ? loadLanes(scale + p, inRow) : Lanes8{} + 1.0f);
-      const SurfacePoint<Lanes8> centre = surface.load(p, inRow, true);
-      for (const auto& tap : disk) {
-        const LaneMask8 dx = roundToNearestInt(tap[0] * radius);
-        const LaneMask8 dy = roundToNearestInt(tap[1] * radius);
-        const LaneMask8 qx = x + dx, qy = y + dy;
-        LaneMask8 use = surfacePixel & (qx >= 0) & (qx < w) & (qy >= 0) & (qy < h) &
-                        ((dx != 0) | (dy != 0));
-        const LaneMask8 q = qy * w + qx;
-        // Where every lane has the same offset (a uniform radius: a converged history, one
-        // roughness), the neighbours are consecutive and load without a gather; same values.
-        const bool uniform = allLanes((dx == dx[0]) & (dy == dy[0]));
-        const size_t q0 = p + size_t(std::ptrdiff_t(dy[0]) * w + dx[0]);
-        auto neighbour = [&](const float* plane) {
-          return uniform ? loadLanes(plane + q0, use) : gatherLanes(plane, q, use);
-        };
-        if (g.meshId) use &= neighbour(g.meshId) >= 0.0f;
-        const SurfacePoint<Lanes8> other =
-            uniform ? surface.load(q0, use, false) : surface.gather(q, use);
-        const Lanes8 weight = selectFloat(use, surfaceWeight(settings.weights, centre, other), Lanes8{});
-        for (int c = 0; c < channels; ++c) sum[c] += weight * neighbour(in.plane(c));
-        weightSum += weight;
-      }
-      const Lanes8 inverse = 1.0f / weightSum;
-      for (int c = 0; c < channels; ++c) {
-        const Lanes8 result = selectFloat(sky, loadLanes(in.plane(c) + p, inRow), sum[c] * inverse);
-        storeLanes(out.plane(c) + p, result, inRow);
-      }
-    }
-  });
+  for (int t = 0; t < kPoissonTaps; ++t)
+    for (int k = 0; k < 2; ++k) b.disk[t][k] = disk[size_t(t)][size_t(k)];
+  b.weights = settings.weights;
+  for (size_t c = 0; c < 3; ++c) {
+    b.position[c] = g.position[c];
+    b.normal[c] = g.normal[c];
+  }
+  b.depth = g.depth;
+  b.hitDistance = guide.hitDistance;
+  b.roughness = guide.roughness;
+  const poisson_detail::BlurRowFunction blurRow =
+      simdUsesAvx512() ? poisson_detail::blurRowAvx512() : &poisson_detail::blurRow<Lanes8>;
+  parallelRows(h, [&](int y) { blurRow(b, y); });
 }
 
 }  // namespace arena

@@ -44,25 +44,43 @@ struct SurfacePoint {
   F depth, hitDistance, roughness;
 };
 
-// w(p, q) of two surface points (neither in the sky), written once for scalar and lane code:
-// the exponential terms and the normal's cosine power summed into one exp.
+// p's side of the weights, computed once per pixel: its guides and the terms' inverse scales.
 template <class F>
-inline F surfaceWeight(const SurfaceWeightSettings& s, const SurfacePoint<F>& p,
+struct SurfaceCentre {
+  SurfacePoint<F> point;
+  F inversePlaneScale{}, hitDistance{}, inverseHitScale{};
+};
+template <class F>
+inline SurfaceCentre<F> surfaceCentre(const SurfaceWeightSettings& s, const SurfacePoint<F>& p) {
+  SurfaceCentre<F> c;
+  c.point = p;
+  if (s.planeDistance) c.inversePlaneScale = 1.0f / (s.planeSigma * absFloat(p.depth) + 1e-20f);
+  if (s.hitDistance) {
+    c.hitDistance = minFloat(p.hitDistance, F{} + 1e4f);
+    c.inverseHitScale = 1.0f / (s.hitSigma * (c.hitDistance + absFloat(p.depth)) + 1e-20f);
+  }
+  return c;
+}
+
+// w(p, q) for a surface neighbour q of p (neither in the sky), written once for scalar and lane
+// code: the exponential terms and the normal's cosine power summed into one exp.
+template <class F>
+inline F surfaceWeight(const SurfaceWeightSettings& s, const SurfaceCentre<F>& p,
                        const SurfacePoint<F>& q) {
   F exponent{};
   if (s.planeDistance) {
     F d{};
-    for (int c = 0; c < 3; ++c) d += p.normal[c] * (q.position[c] - p.position[c]);
-    exponent += absFloat(d) / (s.planeSigma * absFloat(p.depth) + 1e-20f);
+    for (int c = 0; c < 3; ++c) d += p.point.normal[c] * (q.position[c] - p.point.position[c]);
+    exponent += absFloat(d) * p.inversePlaneScale;
   }
-  if (s.hitDistance) {
-    const F hp = minFloat(p.hitDistance, F{} + 1e4f), hq = minFloat(q.hitDistance, F{} + 1e4f);
-    exponent += absFloat(hp - hq) / (s.hitSigma * (hp + absFloat(p.depth)) + 1e-20f);
-  }
-  if (s.roughness) exponent += absFloat(p.roughness - q.roughness) / s.roughnessSigma;
+  if (s.hitDistance)
+    exponent += absFloat(p.hitDistance - minFloat(q.hitDistance, F{} + 1e4f)) * p.inverseHitScale;
+  if (s.roughness)
+    exponent += absFloat(p.point.roughness - q.roughness) * (1.0f / s.roughnessSigma);
   if (!s.normal || s.normalPower == 0.0f) return expNonPositive(-exponent);
   // cosine^normalPower as exp(normalPower log(cosine)), inside the same exp; 0 facing away.
-  F cosine = p.normal[0] * q.normal[0] + p.normal[1] * q.normal[1] + p.normal[2] * q.normal[2];
+  const SurfacePoint<F>& c = p.point;
+  F cosine = c.normal[0] * q.normal[0] + c.normal[1] * q.normal[1] + c.normal[2] * q.normal[2];
   cosine = minFloat(cosine, F{} + 1.0f);
   const auto facing = F{} + 1e-30f < cosine;
   exponent -= s.normalPower * logPositive(maxFloat(cosine, F{} + 1e-30f));
