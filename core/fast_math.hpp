@@ -107,6 +107,11 @@ inline Lanes8 gatherLanes(const float* base, LaneMask8 index, LaneMask8 mask) {
       _mm256_setzero_ps(), base, reinterpret_cast<__m256i>(index), reinterpret_cast<__m256>(mask),
       4));
 }
+inline LaneMask8 gatherIntLanes(const int32_t* base, LaneMask8 index, LaneMask8 mask) {
+  return reinterpret_cast<LaneMask8>(_mm256_mask_i32gather_epi32(
+      _mm256_setzero_si256(), base, reinterpret_cast<__m256i>(index),
+      reinterpret_cast<__m256i>(mask), 4));
+}
 inline Lanes8 sqrtLanes(Lanes8 x) {
   return reinterpret_cast<Lanes8>(_mm256_sqrt_ps(reinterpret_cast<__m256>(x)));
 }

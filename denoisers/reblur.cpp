@@ -77,8 +77,8 @@ void Reblur::denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& o
   historyFixPass();
   antiFireflyPass();
   blurPasses(ctx.frameIndex);
-  storeRecurrentHistory();
   stabilize(output);
+  storeRecurrentHistory();
   storeHistory();
 }
 
@@ -168,12 +168,13 @@ void Reblur::temporalAccumulation() {
 // 4.7 px for N_prev = 0, 1, 2; or the 2020 version's mip chain, level F - N_prev.
 void Reblur::historyFixPass() {
   ScopedPass pass(this, "history fix", 0);
-  fixed_.raw() = temporal_.raw();
+  historyFixed_ = &temporal_;  // unchanged unless some history is young
   if (s_.historyFix == ReblurHistoryFix::Off || s_.historyFixFrames <= 0) return;
   const int w = gbuffer_.width, h = gbuffer_.height;
   const float frames = float(s_.historyFixFrames);
   const float* previous = previousFrames_.plane(0);
   if (s_.historyFix == ReblurHistoryFix::Mip) {
+    historyFixed_ = &fixed_;
     mips_.build(temporal_, gbuffer_);
     for (size_t i = 0; i < gbuffer_.pixelCount(); ++i)
       radiusScale_.plane(0)[i] = previous[i] < frames ? frames - std::floor(previous[i]) : 0.0f;
@@ -181,8 +182,16 @@ void Reblur::historyFixPass() {
     pass.setTaps(4);
     return;
   }
+  int64_t young = 0;  // surface pixels with N_prev < F
+  for (size_t i = 0; i < gbuffer_.pixelCount(); ++i)
+    young += (previous[i] < frames) & (gbuffer_.meshId[i] >= 0.0f);
+  if (young == 0) return;
+  historyFixed_ = &fixed_;
   const SurfaceWeights weight(s_.weights, {gbuffer_, roughness_, hitDistance_});
   parallelRows(h, [&](int y) {
+    const size_t row = size_t(y) * size_t(w);
+    for (int c = 0; c < 3; ++c)  // the old histories as they are
+      std::copy_n(temporal_.plane(c) + row, w, fixed_.plane(c) + row);
     int64_t fetched = 0;
     for (int x = 0; x < w; ++x) {
       const size_t p = size_t(y) * size_t(w) + size_t(x);
@@ -216,8 +225,10 @@ void Reblur::historyFixPass() {
 // outlier cannot survive into the blur (and the result stays inside the inputs' range).
 void Reblur::antiFireflyPass() {
   ScopedPass pass(this, "anti-firefly", s_.antiFirefly ? 8 : 0);
-  fireflyFree_.raw() = fixed_.raw();
-  if (!s_.antiFirefly) return;
+  if (!s_.antiFirefly) {
+    fireflyFree_.raw() = historyFixed_->raw();
+    return;
+  }
   const int w = gbuffer_.width, h = gbuffer_.height;
   parallelRows(h, [&](int y) {
     for (int x0 = 0; x0 < w; x0 += 8) {  // eight pixels at a time
@@ -225,10 +236,10 @@ void Reblur::antiFireflyPass() {
       Lanes8 count{};
       for (int j = 0; j < 9; ++j)
         if (j != 4) count += selectFloat(n.present[j], Lanes8{} + 1.0f, Lanes8{});
-      // Surface pixels (present centre) with at least one neighbour; the others keep fixed_.
+      // Surface pixels (present centre) with at least one neighbour; the others keep their value.
       const LaneMask8 clampHere = n.present[4] & (count > 0.0f);
       for (int c = 0; c < 3; ++c) {
-        const float* plane = fixed_.plane(c);
+        const float* plane = historyFixed_->plane(c);
         Lanes8 lo = Lanes8{} + 1e30f, hi = Lanes8{} - 1e30f;
         for (int j = 0; j < 9; ++j) {
           if (j == 4) continue;
@@ -276,10 +287,12 @@ void Reblur::blurPasses(int frameIndex) {
 
 // ---- 5. Recurrence: the post-blurred result is next frame's history, so the spatial samples
 // accumulate over time (GTC 2020; the talk p. "4.3.1": recur a *small* blur, shrink it with N).
+// (After stabilisation, which reads this frame's post-blurred and fast images: they become the
+// histories by a swap, no copy; every pass rewrites its whole image next frame.)
 void Reblur::storeRecurrentHistory() {
   ScopedPass pass(this, "store history", 0);
-  slowHistory_.raw() = s_.recurrent ? postBlurred_.raw() : temporal_.raw();  // recurrent: the blurred result
-  fastHistory_.raw() = fast_.raw();
+  std::swap(slowHistory_, s_.recurrent ? postBlurred_ : temporal_);  // recurrent: the blurred result
+  std::swap(fastHistory_, fast_);
 }
 
 // ---- 6. Temporal stabilisation with anti-lag (NRD TemporalStabilization): the stabilised
@@ -334,28 +347,35 @@ void Reblur::stabilize(Image& output) {
       const Lanes8 alpha = 1.0f / (1.0f + frames);
       for (int c = 0; c < 3; ++c) {
         const Lanes8 blended = alpha * current[c] + (1.0f - alpha) * clamped[c];
-        storeLanes(stabilized_.plane(c) + n.p, selectFloat(stabilizeHere, blended, current[c]),
-                   n.inRow);
+        const Lanes8 result = selectFloat(stabilizeHere, blended, current[c]);
+        storeLanes(stabilized_.plane(c) + n.p, result, n.inRow);
+        storeLanes(output.plane(c) + n.p, result, n.inRow);
       }
     }
   });
-  output.raw() = stabilized_.raw();
 }
 
 void Reblur::storeHistory() {
   ScopedPass pass(this, "store guides", 0);
-  stabilizedHistory_.raw() = stabilized_.raw();
+  std::swap(stabilizedHistory_, stabilized_);
   std::swap(accumulatedFrames_, accumulatedFramesHistory_);
   previousGBuffer_.store(gbuffer_);
   hasHistory_ = true;
 }
 
 std::vector<std::pair<std::string, const Image*>> Reblur::passOutputs() const {
-  return {{"pre-blur", &preBlurred_},      {"temporal", &temporal_},
-          {"fast history", &fast_},        {"history fix", &fixed_},
-          {"anti-firefly", &fireflyFree_}, {"blur", &blurred_},
-          {"post-blur", &postBlurred_},    {"history", &slowHistory_},
-          {"stabilization", &stabilized_}};
+  // After a frame the post-blurred (or, non-recurrent, the temporal) image, the fast image and
+  // the stabilised image live in their history buffers (swapped in, see storeRecurrentHistory).
+  const Image* temporal = s_.recurrent ? &temporal_ : &slowHistory_;
+  return {{"pre-blur", &preBlurred_},
+          {"temporal", temporal},
+          {"fast history", &fastHistory_},
+          {"history fix", historyFixed_ == &temporal_ ? temporal : historyFixed_},
+          {"anti-firefly", &fireflyFree_},
+          {"blur", &blurred_},
+          {"post-blur", s_.recurrent ? &slowHistory_ : &postBlurred_},
+          {"history", &slowHistory_},
+          {"stabilization", &stabilizedHistory_}};
 }
 
 std::vector<ParamSpec> reblurParamSpecs() {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 
 #include "core/error.hpp"
 
@@ -93,12 +94,16 @@ float HitPointReprojection::sample(size_t i, const float* plane) const {
 }
 
 HistoryLanes HitPointReprojection::lanes(size_t i, int count) const {
+  static_assert(sizeof(Record) == 9 * sizeof(int32_t) && offsetof(Record, mask) == 8 &&
+                    offsetof(Record, weights) == 20,
+                "HistoryLanes gathers the record's fields as int32 words");
   HistoryLanes lanes;
   lanes.width = width_;
-  for (int lane = 0; lane < count; ++lane) {
-    const Record& rec = records_[i + size_t(lane)];
-    if (rec.mask != 0) lanes.setBilinear(lane, rec.x0, rec.y0, rec.mask, rec.weights);
-  }
+  const LaneMask8 inRow = laneIndex(Lanes8{}) < count;
+  const LaneMask8 mask =
+      gatherIntLanes(reinterpret_cast<const int32_t*>(&records_[i]), laneIndex(Lanes8{}) * 9 + 2,
+                     inRow) & 0xFF;
+  lanes.gatherBilinear(&records_[i], 9, 8, 5, inRow & (mask != 0));
   return lanes;
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstddef>
 
 #include "core/consistency.hpp"
 #include "core/error.hpp"
@@ -162,16 +163,24 @@ void Reprojection::compute(const GBufferView& current, const Image& derivatives,
 }
 
 HistoryLanes Reprojection::lanes(size_t i, int count) const {
+  static_assert(sizeof(ReprojectionRecord) == 7 * sizeof(int32_t) &&
+                    offsetof(ReprojectionRecord, mask) == 8 &&
+                    offsetof(ReprojectionRecord, footprint) == 10 &&
+                    offsetof(ReprojectionRecord, weights) == 12,
+                "HistoryLanes gathers the record's fields as int32 words");
   HistoryLanes lanes;
   lanes.width = width_;
-  for (int lane = 0; lane < count; ++lane) {
-    const ReprojectionRecord& rec = records_[i + size_t(lane)];
-    if (rec.footprint == ReprojectionFootprint::Bilinear2x2) {
-      lanes.setBilinear(lane, rec.x0, rec.y0, rec.mask, rec.weights);
-    } else if (rec.footprint == ReprojectionFootprint::Box3x3) {
-      lanes.valid[lane] = lanes.box[lane] = -1;
-      lanes.boxRecords = &records_[i];
-    }
+  const LaneMask8 inRow = laneIndex(Lanes8{}) < count;
+  // The footprint is the third byte of word 2 (mask in the low 16 bits).
+  const LaneMask8 footprint =
+      (gatherIntLanes(reinterpret_cast<const int32_t*>(&records_[i]), laneIndex(Lanes8{}) * 7 + 2,
+                      inRow) >> 16) & 0xFF;
+  lanes.gatherBilinear(&records_[i], 7, 16, 3,
+                       inRow & (footprint == int(ReprojectionFootprint::Bilinear2x2)));
+  lanes.box = inRow & (footprint == int(ReprojectionFootprint::Box3x3));
+  if (anyLane(lanes.box)) {
+    lanes.valid |= lanes.box;
+    lanes.boxRecords = &records_[i];
   }
   return lanes;
 }

@@ -98,14 +98,23 @@ struct HistoryLanes {
   const ReprojectionRecord* boxRecords = nullptr;  // lane 0's record, when some lane is a box
   int width = 0;
 
-  // Lane `lane` reads the 2x2 taps (x0 + k % 2, y0 + k / 2) whose bit k is set in `mask`.
-  void setBilinear(int lane, int x0, int y0, unsigned mask, const float weights[4]) {
-    valid[lane] = -1;
+  // The 2x2 footprints of eight consecutive records (of either reprojection), read with gathers:
+  // each record is `stride` int32 with x0, y0 at fields 0 and 1, the tap mask in the low
+  // `maskBits` of field 2, the four weights from field `weightsField`; `bilinear` says which
+  // lanes have the 2x2 footprint (lanes past the row's end must not).
+  void gatherBilinear(const void* records, int stride, int maskBits, int weightsField,
+                      LaneMask8 bilinear) {
+    const int32_t* fields = static_cast<const int32_t*>(records);
+    const LaneMask8 record = laneIndex(Lanes8{}) * stride;
+    const LaneMask8 x0 = gatherIntLanes(fields, record, bilinear);
+    const LaneMask8 y0 = gatherIntLanes(fields, record + 1, bilinear);
+    const LaneMask8 mask = gatherIntLanes(fields, record + 2, bilinear) & ((1 << maskBits) - 1);
+    valid |= bilinear;
     for (int k = 0; k < 4; ++k) {
-      if (!((mask >> k) & 1u)) continue;
-      use[k][lane] = -1;
-      index[k][lane] = (y0 + k / 2) * width + x0 + k % 2;
-      weight[k][lane] = weights[k];
+      use[k] = bilinear & (((mask >> k) & 1) != 0);
+      index[k] = (y0 + k / 2) * width + x0 + k % 2;
+      weight[k] = gatherLanes(reinterpret_cast<const float*>(fields), record + weightsField + k,
+                              use[k]);
     }
   }
   Lanes8 apply(const float* plane) const {
