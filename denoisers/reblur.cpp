@@ -101,8 +101,11 @@ void Reblur::reproject(const FrameContext& ctx) {
   // NRD trusts the virtual history more the smoother the surface (its "spec magic curve");
   // ours: 1 - smoothstep(0, hitPointRoughness, roughness).
   float* amount = virtualAmount_.plane(0);
-  for (size_t i = 0; i < gbuffer_.pixelCount(); ++i)
-    amount[i] = 1.0f - smoothstep(0.0f, s_.hitPointRoughness, roughness_[i]);
+  const int w = gbuffer_.width;
+  parallelRows(gbuffer_.height, [&](int y) {
+    for (size_t i = size_t(y) * size_t(w); i < size_t(y + 1) * size_t(w); ++i)
+      amount[i] = 1.0f - smoothstep(0.0f, s_.hitPointRoughness, roughness_[i]);
+  });
   pass.setTaps(8);
 }
 
@@ -262,15 +265,23 @@ void Reblur::blurPasses(int frameIndex) {
   const float* frames = accumulatedFrames_.plane(0);
   const float maxRadius = s_.maxBlurRadius * pixelScale_;
   const float floor = s_.minBlurRadius * pixelScale_ / std::max(maxRadius, 1e-6f);
-  for (size_t i = 0; i < gbuffer_.pixelCount(); ++i) {
-    float scale = std::sqrt(1.0f / (1.0f + frames[i]));
-    if (roughness_) scale *= std::sqrt(std::clamp(roughness_[i], 0.0f, 1.0f));
-    radiusScale_.plane(0)[i] = std::max(scale, floor);
-  }
   const SurfaceGuide guide{gbuffer_, roughness_, hitDistance_};
   // Rotations differ between the passes so they do not reuse the same directions.
   {
     ScopedPass pass(this, "blur", s_.blur ? kPoissonTaps : 0);
+    const int w = gbuffer_.width;
+    float* scale = radiusScale_.plane(0);
+    parallelRows(gbuffer_.height, [&](int y) {
+      for (int x0 = 0; x0 < w; x0 += 8) {  // eight pixels at a time
+        const size_t i = size_t(y) * size_t(w) + size_t(x0);
+        const LaneMask8 inRow = laneIndex(Lanes8{}) + x0 < w;
+        Lanes8 s = sqrtLanes(1.0f / (1.0f + loadLanes(frames + i, inRow)));
+        if (roughness_)
+          s *= sqrtLanes(minFloat(maxFloat(loadLanes(roughness_ + i, inRow), Lanes8{}),
+                                  Lanes8{} + 1.0f));
+        storeLanes(scale + i, maxFloat(s, Lanes8{} + floor), inRow);
+      }
+    });
     if (s_.blur)
       poissonDiskBlur(fireflyFree_, guide, {maxRadius, s_.weights},
                       poissonRotation(2 * frameIndex + 1), &radiusScale_, blurred_);
