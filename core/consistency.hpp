@@ -1,8 +1,8 @@
 #pragma once
 // The reprojection consistency test, defined once for everyone who follows a surface from one
-// frame to the previous: the denoisers' reprojection and the warped-flicker metric. A previous-frame
-// tap is consistent with the current pixel when it shows the same mesh at a consistent depth and
-// normal (SVGF sec. 4.1; Falcor's SVGF thresholds).
+// frame to the previous: the denoisers' reprojection and the warped-flicker metric. A
+// previous-frame tap is consistent with the current pixel when it shows the same mesh at a
+// consistent depth and normal (SVGF sec. 4.1; Falcor's SVGF thresholds).
 #include <glm/glm.hpp>
 
 #include "core/camera.hpp"
@@ -23,15 +23,19 @@ struct ConsistencyThresholds {
 struct SurfaceDerivatives {
   float depth = 0, normal = 0;
 };
-SurfaceDerivatives surfaceDerivatives(const Image& depth, const Image& normal, const Image& meshId, int x, int y);
+SurfaceDerivatives surfaceDerivatives(const Image& depth, const Image& normal, const Image& meshId,
+                                      int x, int y);
 
 struct SurfaceSample {
   float depth;
   glm::vec3 normal;
   int meshId;
 };
-inline SurfaceSample surfaceAt(const Image& depth, const Image& normal, const Image& meshId, int x, int y) {
-  return {depth.at(x, y), {normal.at(x, y, 0), normal.at(x, y, 1), normal.at(x, y, 2)}, int(meshId.at(x, y))};
+inline SurfaceSample surfaceAt(const Image& depth, const Image& normal, const Image& meshId, int x,
+                               int y) {
+  return {depth.at(x, y),
+          {normal.at(x, y, 0), normal.at(x, y, 1), normal.at(x, y, 2)},
+          int(meshId.at(x, y))};
 }
 
 // The definitions, over a lane type F of core/fast_math.hpp (float for one pixel): the same
@@ -40,7 +44,8 @@ inline SurfaceSample surfaceAt(const Image& depth, const Image& normal, const Im
 // camera.viewDepth(world): (world - eye) . forward.
 template <class F>
 inline F viewDepth(const F world[3], const CameraState& camera) {
-  return (world[0] - camera.eye.x) * camera.forward.x + (world[1] - camera.eye.y) * camera.forward.y +
+  return (world[0] - camera.eye.x) * camera.forward.x +
+         (world[1] - camera.eye.y) * camera.forward.y +
          (world[2] - camera.eye.z) * camera.forward.z;
 }
 template <class F>
@@ -78,8 +83,8 @@ inline float previousViewDepth(float depth, glm::vec3 world, const CameraState& 
 }
 
 // `current.depth` is the depth the previous frame should show there (see previousViewDepth).
-inline bool consistent(const SurfaceSample& current, const SurfaceDerivatives& d, const SurfaceSample& previous,
-                       const ConsistencyThresholds& t = {}) {
+inline bool consistent(const SurfaceSample& current, const SurfaceDerivatives& d,
+                       const SurfaceSample& previous, const ConsistencyThresholds& t = {}) {
   const float currentNormal[3] = {current.normal.x, current.normal.y, current.normal.z};
   const float previousNormal[3] = {previous.normal.x, previous.normal.y, previous.normal.z};
   return consistent(current.depth, currentNormal, float(current.meshId), d.depth, d.normal,

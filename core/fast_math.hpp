@@ -34,18 +34,42 @@ struct LaneTraits<Lanes8> {
 template <class F>
 using IntLanes = typename LaneTraits<F>::Int;
 
-inline int32_t bitsOf(float x) { return std::bit_cast<int32_t>(x); }
-inline LaneMask8 bitsOf(Lanes8 x) { return reinterpret_cast<LaneMask8>(x); }
-inline float floatFromBits(int32_t x) { return std::bit_cast<float>(x); }
-inline Lanes8 floatFromBits(LaneMask8 x) { return reinterpret_cast<Lanes8>(x); }
-inline int32_t truncateToInt(float x) { return int32_t(x); }
-inline LaneMask8 truncateToInt(Lanes8 x) { return __builtin_convertvector(x, LaneMask8); }
-inline float toFloat(int32_t x) { return float(x); }
-inline Lanes8 toFloat(LaneMask8 x) { return __builtin_convertvector(x, Lanes8); }
-inline int32_t minInt(int32_t a, int32_t b) { return std::min(a, b); }
-inline LaneMask8 minInt(LaneMask8 a, LaneMask8 b) { return a < b ? a : b; }
-inline int32_t maxInt(int32_t a, int32_t b) { return std::max(a, b); }
-inline LaneMask8 maxInt(LaneMask8 a, LaneMask8 b) { return a > b ? a : b; }
+inline int32_t bitsOf(float x) {
+  return std::bit_cast<int32_t>(x);
+}
+inline LaneMask8 bitsOf(Lanes8 x) {
+  return reinterpret_cast<LaneMask8>(x);
+}
+inline float floatFromBits(int32_t x) {
+  return std::bit_cast<float>(x);
+}
+inline Lanes8 floatFromBits(LaneMask8 x) {
+  return reinterpret_cast<Lanes8>(x);
+}
+inline int32_t truncateToInt(float x) {
+  return int32_t(x);
+}
+inline LaneMask8 truncateToInt(Lanes8 x) {
+  return __builtin_convertvector(x, LaneMask8);
+}
+inline float toFloat(int32_t x) {
+  return float(x);
+}
+inline Lanes8 toFloat(LaneMask8 x) {
+  return __builtin_convertvector(x, Lanes8);
+}
+inline int32_t minInt(int32_t a, int32_t b) {
+  return std::min(a, b);
+}
+inline LaneMask8 minInt(LaneMask8 a, LaneMask8 b) {
+  return a < b ? a : b;
+}
+inline int32_t maxInt(int32_t a, int32_t b) {
+  return std::max(a, b);
+}
+inline LaneMask8 maxInt(LaneMask8 a, LaneMask8 b) {
+  return a > b ? a : b;
+}
 
 // GCC (without -fno-trapping-math) vectorises a loop over these only if no floating-point
 // operation can become conditional: a float clamp or std::floor ahead of arithmetic defeats it,
@@ -63,9 +87,15 @@ inline float selectFloat(bool condition, float ifTrue, float ifFalse) {
 inline Lanes8 selectFloat(LaneMask8 mask, Lanes8 ifTrue, Lanes8 ifFalse) {
   return floatFromBits((bitsOf(ifTrue) & mask) | (bitsOf(ifFalse) & ~mask));
 }
-inline float absFloat(float x) { return std::abs(x); }
-inline float sqrtLanes(float x) { return std::sqrt(x); }
-inline Lanes8 absFloat(Lanes8 x) { return floatFromBits(bitsOf(x) & 0x7FFFFFFF); }
+inline float absFloat(float x) {
+  return std::abs(x);
+}
+inline float sqrtLanes(float x) {
+  return std::sqrt(x);
+}
+inline Lanes8 absFloat(Lanes8 x) {
+  return floatFromBits(bitsOf(x) & 0x7FFFFFFF);
+}
 
 // Eight consecutive floats; the masked forms read and write only the lanes whose mask is set (no
 // fault on the others, which may lie outside the image).
@@ -78,7 +108,9 @@ inline Lanes8 loadLanes(const float* p, Lanes8) {
 inline Lanes8 loadLanes(const float* p, LaneMask8 mask) {
   return reinterpret_cast<Lanes8>(_mm256_maskload_ps(p, reinterpret_cast<__m256i>(mask)));
 }
-inline void storeLanes(float* p, Lanes8 v) { std::memcpy(p, &v, sizeof v); }
+inline void storeLanes(float* p, Lanes8 v) {
+  std::memcpy(p, &v, sizeof v);
+}
 inline void storeLanes(float* p, Lanes8 v, LaneMask8 mask) {
   _mm256_maskstore_ps(p, reinterpret_cast<__m256i>(mask), reinterpret_cast<__m256>(v));
 }
@@ -86,11 +118,12 @@ inline void storeLanes(float* p, Lanes8 v, LaneMask8 mask) {
 // a b + c rounded once, per lane. Written out (the build has -ffp-contract=off, so the compiler
 // never fuses on its own, which made results depend on how a loop was peeled): every caller gets
 // the same rounding on every lane, scalar or vector.
-inline float fusedMultiplyAdd(float a, float b, float c) { return __builtin_fmaf(a, b, c); }
+inline float fusedMultiplyAdd(float a, float b, float c) {
+  return __builtin_fmaf(a, b, c);
+}
 inline Lanes8 fusedMultiplyAdd(Lanes8 a, Lanes8 b, Lanes8 c) {
-  return reinterpret_cast<Lanes8>(_mm256_fmadd_ps(reinterpret_cast<__m256>(a),
-                                                  reinterpret_cast<__m256>(b),
-                                                  reinterpret_cast<__m256>(c)));
+  return reinterpret_cast<Lanes8>(_mm256_fmadd_ps(
+      reinterpret_cast<__m256>(a), reinterpret_cast<__m256>(b), reinterpret_cast<__m256>(c)));
 }
 
 // Whether every lane of the mask is set.
@@ -103,14 +136,14 @@ inline bool anyLane(LaneMask8 mask) {
 }
 // base[index] per lane where mask is set, 0 elsewhere (no fault on masked-out lanes).
 inline Lanes8 gatherLanes(const float* base, LaneMask8 index, LaneMask8 mask) {
-  return reinterpret_cast<Lanes8>(_mm256_mask_i32gather_ps(
-      _mm256_setzero_ps(), base, reinterpret_cast<__m256i>(index), reinterpret_cast<__m256>(mask),
-      4));
+  return reinterpret_cast<Lanes8>(_mm256_mask_i32gather_ps(_mm256_setzero_ps(), base,
+                                                           reinterpret_cast<__m256i>(index),
+                                                           reinterpret_cast<__m256>(mask), 4));
 }
 inline LaneMask8 gatherIntLanes(const int32_t* base, LaneMask8 index, LaneMask8 mask) {
-  return reinterpret_cast<LaneMask8>(_mm256_mask_i32gather_epi32(
-      _mm256_setzero_si256(), base, reinterpret_cast<__m256i>(index),
-      reinterpret_cast<__m256i>(mask), 4));
+  return reinterpret_cast<LaneMask8>(
+      _mm256_mask_i32gather_epi32(_mm256_setzero_si256(), base, reinterpret_cast<__m256i>(index),
+                                  reinterpret_cast<__m256i>(mask), 4));
 }
 inline Lanes8 sqrtLanes(Lanes8 x) {
   return reinterpret_cast<Lanes8>(_mm256_sqrt_ps(reinterpret_cast<__m256>(x)));
@@ -118,7 +151,9 @@ inline Lanes8 sqrtLanes(Lanes8 x) {
 inline Lanes8 floorLanes(Lanes8 x) {
   return reinterpret_cast<Lanes8>(_mm256_floor_ps(reinterpret_cast<__m256>(x)));
 }
-inline LaneMask8 laneIndex(Lanes8) { return LaneMask8{0, 1, 2, 3, 4, 5, 6, 7}; }
+inline LaneMask8 laneIndex(Lanes8) {
+  return LaneMask8{0, 1, 2, 3, 4, 5, 6, 7};
+}
 
 #ifdef __AVX512F__
 // Sixteen lanes, for the translation units built for AVX-512 (chosen at run time, see
@@ -129,16 +164,30 @@ template <>
 struct LaneTraits<Lanes16> {
   using Int = LaneMask16;
 };
-inline LaneMask16 bitsOf(Lanes16 x) { return reinterpret_cast<LaneMask16>(x); }
-inline Lanes16 floatFromBits(LaneMask16 x) { return reinterpret_cast<Lanes16>(x); }
-inline LaneMask16 truncateToInt(Lanes16 x) { return __builtin_convertvector(x, LaneMask16); }
-inline Lanes16 toFloat(LaneMask16 x) { return __builtin_convertvector(x, Lanes16); }
-inline LaneMask16 minInt(LaneMask16 a, LaneMask16 b) { return a < b ? a : b; }
-inline LaneMask16 maxInt(LaneMask16 a, LaneMask16 b) { return a > b ? a : b; }
+inline LaneMask16 bitsOf(Lanes16 x) {
+  return reinterpret_cast<LaneMask16>(x);
+}
+inline Lanes16 floatFromBits(LaneMask16 x) {
+  return reinterpret_cast<Lanes16>(x);
+}
+inline LaneMask16 truncateToInt(Lanes16 x) {
+  return __builtin_convertvector(x, LaneMask16);
+}
+inline Lanes16 toFloat(LaneMask16 x) {
+  return __builtin_convertvector(x, Lanes16);
+}
+inline LaneMask16 minInt(LaneMask16 a, LaneMask16 b) {
+  return a < b ? a : b;
+}
+inline LaneMask16 maxInt(LaneMask16 a, LaneMask16 b) {
+  return a > b ? a : b;
+}
 inline Lanes16 selectFloat(LaneMask16 mask, Lanes16 ifTrue, Lanes16 ifFalse) {
   return floatFromBits((bitsOf(ifTrue) & mask) | (bitsOf(ifFalse) & ~mask));
 }
-inline Lanes16 absFloat(Lanes16 x) { return floatFromBits(bitsOf(x) & 0x7FFFFFFF); }
+inline Lanes16 absFloat(Lanes16 x) {
+  return floatFromBits(bitsOf(x) & 0x7FFFFFFF);
+}
 inline __mmask16 predicate(LaneMask16 mask) {
   return _mm512_movepi32_mask(reinterpret_cast<__m512i>(mask));
 }
@@ -148,21 +197,26 @@ inline Lanes16 loadLanes(const float* p, Lanes16) {
 inline Lanes16 loadLanes(const float* p, LaneMask16 mask) {
   return reinterpret_cast<Lanes16>(_mm512_maskz_loadu_ps(predicate(mask), p));
 }
-inline void storeLanes(float* p, Lanes16 v) { _mm512_storeu_ps(p, reinterpret_cast<__m512>(v)); }
+inline void storeLanes(float* p, Lanes16 v) {
+  _mm512_storeu_ps(p, reinterpret_cast<__m512>(v));
+}
 inline void storeLanes(float* p, Lanes16 v, LaneMask16 mask) {
   _mm512_mask_storeu_ps(p, predicate(mask), reinterpret_cast<__m512>(v));
 }
 inline Lanes16 fusedMultiplyAdd(Lanes16 a, Lanes16 b, Lanes16 c) {
-  return reinterpret_cast<Lanes16>(_mm512_fmadd_ps(reinterpret_cast<__m512>(a),
-                                                   reinterpret_cast<__m512>(b),
-                                                   reinterpret_cast<__m512>(c)));
+  return reinterpret_cast<Lanes16>(_mm512_fmadd_ps(
+      reinterpret_cast<__m512>(a), reinterpret_cast<__m512>(b), reinterpret_cast<__m512>(c)));
 }
 inline Lanes16 gatherLanes(const float* base, LaneMask16 index, LaneMask16 mask) {
   return reinterpret_cast<Lanes16>(_mm512_mask_i32gather_ps(
       _mm512_setzero_ps(), predicate(mask), reinterpret_cast<__m512i>(index), base, 4));
 }
-inline bool allLanes(LaneMask16 mask) { return predicate(mask) == 0xFFFF; }
-inline bool anyLane(LaneMask16 mask) { return predicate(mask) != 0; }
+inline bool allLanes(LaneMask16 mask) {
+  return predicate(mask) == 0xFFFF;
+}
+inline bool anyLane(LaneMask16 mask) {
+  return predicate(mask) != 0;
+}
 inline Lanes16 sqrtLanes(Lanes16 x) {
   // The maskz form: GCC 12's _mm512_sqrt_ps trips -Wmaybe-uninitialized inside its own header.
   return reinterpret_cast<Lanes16>(_mm512_maskz_sqrt_ps(0xFFFF, reinterpret_cast<__m512>(x)));

@@ -39,8 +39,8 @@
 #include <cmath>
 
 #include "core/error.hpp"
-#include "core/sequence.hpp"
 #include "core/fast_math.hpp"
+#include "core/sequence.hpp"
 #include "denoisers/common/parallel.hpp"
 #include "denoisers/variants.hpp"
 

@@ -277,8 +277,8 @@ void Reblur::blurPasses(int frameIndex) {
         const LaneMask8 inRow = laneIndex(Lanes8{}) + x0 < w;
         Lanes8 s = sqrtLanes(1.0f / (1.0f + loadLanes(frames + i, inRow)));
         if (roughness_)
-          s *= sqrtLanes(minFloat(maxFloat(loadLanes(roughness_ + i, inRow), Lanes8{}),
-                                  Lanes8{} + 1.0f));
+          s *= sqrtLanes(
+              minFloat(maxFloat(loadLanes(roughness_ + i, inRow), Lanes8{}), Lanes8{} + 1.0f));
         storeLanes(scale + i, maxFloat(s, Lanes8{} + floor), inRow);
       }
     });
@@ -302,7 +302,8 @@ void Reblur::blurPasses(int frameIndex) {
 // histories by a swap, no copy; every pass rewrites its whole image next frame.)
 void Reblur::storeRecurrentHistory() {
   ScopedPass pass(this, "store history", 0);
-  std::swap(slowHistory_, s_.recurrent ? postBlurred_ : temporal_);  // recurrent: the blurred result
+  std::swap(slowHistory_,
+            s_.recurrent ? postBlurred_ : temporal_);  // recurrent: the blurred result
   std::swap(fastHistory_, fast_);
 }
 
@@ -344,7 +345,8 @@ void Reblur::stabilize(Image& output) {
         current[c] = loadLanes(postBlurred_.plane(c) + n.p, n.inRow);
         previous[c] = history.apply(stabilizedHistory_.plane(c));
         const Lanes8 lo = mean[c] - k * sigma[c], hi = mean[c] + k * sigma[c];
-        clamped[c] = selectFloat(previous[c] < lo, lo, selectFloat(hi < previous[c], hi, previous[c]));
+        clamped[c] =
+            selectFloat(previous[c] < lo, lo, selectFloat(hi < previous[c], hi, previous[c]));
       }
       float* accumulated = accumulatedFrames_.plane(0) + n.p;
       Lanes8 frames = loadLanes(accumulated, n.inRow);

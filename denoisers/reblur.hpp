@@ -84,8 +84,7 @@ class Reblur : public Denoiser {
       const Lanes8 fromSurface = surface.apply(plane);
       if (!anyLane(hitPoint.valid)) return fromSurface;
       const Lanes8 fromHitPoint = hitPoint.apply(plane);
-      const Lanes8 both =
-          hitPointAmount * fromHitPoint + (1.0f - hitPointAmount) * fromSurface;
+      const Lanes8 both = hitPointAmount * fromHitPoint + (1.0f - hitPointAmount) * fromSurface;
       return selectFloat(hitPoint.valid, selectFloat(surface.valid, both, fromHitPoint),
                          fromSurface);
     }

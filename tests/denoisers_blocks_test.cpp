@@ -4,15 +4,15 @@
 
 #include <algorithm>
 #include <bit>
-#include <limits>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "core/consistency.hpp"
+#include "core/fast_math.hpp"
 #include "denoisers/common/atrous.hpp"
 #include "denoisers/common/edge_stopping.hpp"
-#include "core/fast_math.hpp"
 #include "denoisers/common/gbuffer.hpp"
 #include "denoisers/common/history_clamp.hpp"
 #include "denoisers/common/median.hpp"
@@ -363,9 +363,9 @@ Image directAtrous(int iteration, const AtrousSettings& settings, const GBufferV
   const int w = in.width(), h = in.height(), step = 1 << iteration;
   const EdgeStopping edges(settings.edges, g, &derivatives, in, &luminanceVariance, colorSigma);
   const int r = settings.kernel == AtrousKernel::B3Spline5x5 ? 2 : 1;
-  const std::vector<double> k1 = r == 2 ? std::vector<double>{1 / 16.0, 1 / 4.0, 3 / 8.0, 1 / 4.0,
-                                                              1 / 16.0}
-                                        : std::vector<double>{2 / 3.0, 1.0, 2 / 3.0};
+  const std::vector<double> k1 =
+      r == 2 ? std::vector<double>{1 / 16.0, 1 / 4.0, 3 / 8.0, 1 / 4.0, 1 / 16.0}
+             : std::vector<double>{2 / 3.0, 1.0, 2 / 3.0};
   Image out(w, h, 3);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
@@ -461,7 +461,8 @@ TEST(DenoiserBlocksDerivatives, SmallerOneSidedDifferenceOnTheSameMesh) {
   };
   auto difference = [&](int x, int y, int qx, int qy, float sign) {
     Difference r;
-    if (qx < 0 || qy < 0 || qx >= w || qy >= h || g.meshId.at(qx, qy) != g.meshId.at(x, y)) return r;
+    if (qx < 0 || qy < 0 || qx >= w || qy >= h || g.meshId.at(qx, qy) != g.meshId.at(x, y))
+      return r;
     r.exists = true;
     r.dz = sign * (g.depth.at(qx, qy) - g.depth.at(x, y));
     for (int c = 0; c < 3; ++c) r.dn[c] = sign * (g.normal.at(qx, qy, c) - g.normal.at(x, y, c));
@@ -478,8 +479,10 @@ TEST(DenoiserBlocksDerivatives, SmallerOneSidedDifferenceOnTheSameMesh) {
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const bool sky = v.isSky(size_t(y) * size_t(w) + size_t(x));
-      const Difference dx = smaller(difference(x, y, x + 1, y, 1.0f), difference(x, y, x - 1, y, -1.0f));
-      const Difference dy = smaller(difference(x, y, x, y + 1, 1.0f), difference(x, y, x, y - 1, -1.0f));
+      const Difference dx =
+          smaller(difference(x, y, x + 1, y, 1.0f), difference(x, y, x - 1, y, -1.0f));
+      const Difference dy =
+          smaller(difference(x, y, x, y + 1, 1.0f), difference(x, y, x, y - 1, -1.0f));
       float f[3];
       for (int c = 0; c < 3; ++c) f[c] = std::abs(dx.dn[c]) + std::abs(dy.dn[c]);
       const float fwidth = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
@@ -587,7 +590,7 @@ TEST(DenoiserBlocksPoisson, MatchesThePerPixelGatherWithEveryTerm) {
             << x << "," << y << " channel " << c;
     }
   EXPECT_GT(blurred, w * h / 4);  // the weights let a good share of the taps through
-  if (simdUsesAvx512()) {  // and the 8-lane build gives the same bits as the 16-lane one
+  if (simdUsesAvx512()) {         // and the 8-lane build gives the same bits as the 16-lane one
     Image narrow(w, h, 4);
     const bool previous = allowAvx512(false);
     poissonDiskBlur(in, guide, settings, rotation, &radiusScale, narrow);

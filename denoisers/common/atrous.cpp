@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "core/error.hpp"
-#include "denoisers/common/atrous_kernel.hpp"
 #include "core/fast_math.hpp"
+#include "denoisers/common/atrous_kernel.hpp"
 #include "denoisers/common/parallel.hpp"
 #include "denoisers/common/simd.hpp"
 
@@ -53,7 +53,6 @@ int powerOfTwoExponent(float sigmaN) {
   const float m = std::frexp(sigmaN, &k);  // sigmaN = m 2^k, m in [0.5, 1)
   return m == 0.5f ? k - 1 : -1;
 }
-
 
 // Per-thread buffers of whole images (the filtered image's luminance, a zero id plane), grown on
 // first use and reused by every later iteration and frame: no allocation per frame.
@@ -149,7 +148,8 @@ void filterIteration(int iteration, const AtrousSettings& settings, const Atrous
   };
   if (s.position) addDistance(g.position, s.sigmaX);
   if (s.color) addDistance({it.color[0], it.color[1], it.color[2]}, colorSigma);
-  if (s.normal && s.normalForm == NormalWeightForm::GaussianDistance) addDistance(g.normal, s.sigmaN);
+  if (s.normal && s.normalForm == NormalWeightForm::GaussianDistance)
+    addDistance(g.normal, s.sigmaN);
   NormalTerm normalTerm = NormalTerm::None;
   if (s.normal && s.normalForm == NormalWeightForm::CosinePower && s.sigmaN != 0.0f) {
     it.squarings = powerOfTwoExponent(s.sigmaN);
@@ -178,9 +178,9 @@ void atrousIteration(int iteration, const AtrousSettings& settings, const Atrous
                      const Image* varianceIn, Image* varianceOut) {
   if ((varianceIn == nullptr) != (varianceOut == nullptr))
     throw Error("à-trous: variance propagation needs both a variance input and output");
-  if (varianceIn && (varianceIn->channels() != 1 || !varianceOut->sameShape(*varianceIn) ||
-                     varianceIn->width() != colorIn.width() ||
-                     varianceIn->height() != colorIn.height()))
+  if (varianceIn &&
+      (varianceIn->channels() != 1 || !varianceOut->sameShape(*varianceIn) ||
+       varianceIn->width() != colorIn.width() || varianceIn->height() != colorIn.height()))
     throw Error("à-trous: the variance in/out must be 1-channel images of the colour's size");
   filterIteration(iteration, settings, guide, colorSigma, colorIn, colorOut,
                   varianceIn ? atrous_detail::Carry::Variance : atrous_detail::Carry::None,
@@ -192,7 +192,8 @@ void atrousIterationWithMoments(int iteration, const AtrousSettings& settings,
                                 Image& colorOut, const Image& momentsIn, Image& momentsOut) {
   if (momentsIn.channels() < 1 || momentsIn.channels() > 4 || !momentsOut.sameShape(momentsIn) ||
       momentsIn.width() != colorIn.width() || momentsIn.height() != colorIn.height())
-    throw Error("à-trous: moments in/out must be equal images of 1 to 4 channels, the colour's size");
+    throw Error(
+        "à-trous: moments in/out must be equal images of 1 to 4 channels, the colour's size");
   filterIteration(iteration, settings, guide, colorSigma, colorIn, colorOut,
                   atrous_detail::Carry::Plain, &momentsIn, &momentsOut);
 }

@@ -76,13 +76,17 @@ constexpr float kNeverExponent = 1e30f;  // exp(-1e30) is exactly 0 in expNonPos
 // Loads a block of pixels from p; at the image border only the lanes in `mask`.
 template <class F, bool Border>
 inline F load(const float* p, IntLanes<F> mask) {
-  if constexpr (Border) return loadLanes(p, mask);
-  else return loadLanes(p, F{});
+  if constexpr (Border)
+    return loadLanes(p, mask);
+  else
+    return loadLanes(p, F{});
 }
 template <class F, bool Border>
 inline void store(float* p, F value, IntLanes<F> mask) {
-  if constexpr (Border) storeLanes(p, value, mask);
-  else storeLanes(p, value);
+  if constexpr (Border)
+    storeLanes(p, value, mask);
+  else
+    storeLanes(p, value);
 }
 
 // Filters the pixels x0 .. x0 + lanes - 1 of row y: every kernel tap accumulated into sums held in
@@ -168,8 +172,8 @@ inline void filterBlock(const Iteration& it, int y, int x0) {
       F dot = n[0] * load<F, Border>(it.normal[0] + q, inImage);
       dot = fusedMultiplyAdd(n[1], load<F, Border>(it.normal[1] + q, inImage), dot);
       dot = fusedMultiplyAdd(n[2], load<F, Border>(it.normal[2] + q, inImage), dot);
-      // min(n.n', 1) clamped below at 1e-30 on the bit pattern (see core/fast_math.hpp on why not in
-      // floats); n.n' <= 1e-30 gives weight 0.
+      // min(n.n', 1) clamped below at 1e-30 on the bit pattern (see core/fast_math.hpp on why not
+      // in floats); n.n' <= 1e-30 gives weight 0.
       const I bits = bitsOf(dot);
       backFacing = bits < kTinyBits;
       cosine = floatFromBits(minInt(maxInt(bits, I{} + kTinyBits), I{} + kOneBits));
@@ -220,8 +224,8 @@ inline void filterBlock(const Iteration& it, int y, int x0) {
   for (int c = 0; c < 4; ++c) {
     if (Carried == Carry::None || c >= it.carryCount) break;
     const F in = load<F, Border>(it.carryIn[c] + p, inRow);
-    const F normalised = Carried == Carry::Variance ? carrySum[c] * inverse * inverse
-                                                    : carrySum[c] * inverse;
+    const F normalised =
+        Carried == Carry::Variance ? carrySum[c] * inverse * inverse : carrySum[c] * inverse;
     store<F, Border>(it.carryOut[c] + p, selectFloat(sky, in, normalised), inRow);
   }
 }
@@ -278,7 +282,6 @@ FilterRowFunction selectFilterRow(bool depth, bool luminance, NormalTerm normal,
 
 // The AVX-512 (Lanes16) instantiation, defined in simd_avx512.cpp; callable only where the CPU
 // has AVX-512 F, VL, BW and DQ.
-FilterRowFunction selectFilterRowAvx512(bool depth, bool luminance, NormalTerm normal,
-                                        Carry carry);
+FilterRowFunction selectFilterRowAvx512(bool depth, bool luminance, NormalTerm normal, Carry carry);
 
 }  // namespace arena::atrous_detail

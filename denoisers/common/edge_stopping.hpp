@@ -12,8 +12,8 @@
 #include <cstdint>
 
 #include "core/error.hpp"
-#include "core/image.hpp"
 #include "core/fast_math.hpp"
+#include "core/image.hpp"
 #include "denoisers/common/gbuffer.hpp"
 
 namespace arena {

@@ -111,7 +111,8 @@ void computeGeometryDerivatives(const GBufferView& g, Image& derivatives) {
     d.exists = inside & (loadLanes(g.meshId + q, inside) == c.id);
     d.dz = selectFloat(d.exists, sign * (loadLanes(g.depth + q, inside) - c.z), Lanes8{});
     for (size_t k = 0; k < 3; ++k)
-      d.dn[k] = selectFloat(d.exists, sign * (loadLanes(g.normal[k] + q, inside) - c.n[k]), Lanes8{});
+      d.dn[k] =
+          selectFloat(d.exists, sign * (loadLanes(g.normal[k] + q, inside) - c.n[k]), Lanes8{});
     return d;
   };
   // The smaller of the two that exist (the forward one on a tie); zero where neither does.

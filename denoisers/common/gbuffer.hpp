@@ -72,8 +72,8 @@ inline float depthFwidth(const Image& derivatives, size_t i) {
 // (nullptr: no sky test). The one neighbourhood walk of the median, mask blur, anti-firefly and
 // stabilisation passes.
 template <class Visit>
-inline void forEachNeighbour3x3(int x, int y, int w, int h, const GBufferView* skyMask, bool skipCentre,
-                                Visit&& visit) {
+inline void forEachNeighbour3x3(int x, int y, int w, int h, const GBufferView* skyMask,
+                                bool skipCentre, Visit&& visit) {
   for (int dy = -1; dy <= 1; ++dy)
     for (int dx = -1; dx <= 1; ++dx) {
       const int qx = x + dx, qy = y + dy;
@@ -102,7 +102,8 @@ struct Neighbourhood3x3Lanes {
       const int dx = j % 3 - 1, dy = j / 3 - 1;
       const bool rowInside = y + dy >= 0 && y + dy < h;
       offset[j] = p + size_t(std::ptrdiff_t(dy) * w + dx);
-      present[j] = inRow & (x + dx >= 0) & (x + dx < w) & (rowInside ? LaneMask8{} - 1 : LaneMask8{});
+      present[j] =
+          inRow & (x + dx >= 0) & (x + dx < w) & (rowInside ? LaneMask8{} - 1 : LaneMask8{});
       if (meshId) present[j] &= loadLanes(meshId + offset[j], present[j]) >= 0.0f;
     }
   }

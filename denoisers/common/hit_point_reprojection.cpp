@@ -100,9 +100,9 @@ HistoryLanes HitPointReprojection::lanes(size_t i, int count) const {
   HistoryLanes lanes;
   lanes.width = width_;
   const LaneMask8 inRow = laneIndex(Lanes8{}) < count;
-  const LaneMask8 mask =
-      gatherIntLanes(reinterpret_cast<const int32_t*>(&records_[i]), laneIndex(Lanes8{}) * 9 + 2,
-                     inRow) & 0xFF;
+  const LaneMask8 mask = gatherIntLanes(reinterpret_cast<const int32_t*>(&records_[i]),
+                                        laneIndex(Lanes8{}) * 9 + 2, inRow) &
+                         0xFF;
   lanes.gatherBilinear(&records_[i], 9, 8, 5, inRow & (mask != 0));
   return lanes;
 }

@@ -5,9 +5,9 @@
 
 #include "core/error.hpp"
 #include "core/fast_math.hpp"
+#include "denoisers/common/parallel.hpp"
 #include "denoisers/common/poisson_blur_kernel.hpp"
 #include "denoisers/common/simd.hpp"
-#include "denoisers/common/parallel.hpp"
 
 namespace arena {
 
@@ -66,9 +66,10 @@ void poissonDiskBlur(const Image& in, const SurfaceGuide& guide,
                      Image& out) {
   const GBufferView& g = guide.gbuffer;
   const int w = in.width(), h = in.height(), channels = in.channels();
-  if (!out.sameShape(in) || g.width != w || g.height != h || channels > poisson_detail::kMaxChannels ||
-      &in == &out)
-    throw Error("Poisson blur: in/out must be distinct images of the G-buffer's size, <= 8 channels");
+  if (!out.sameShape(in) || g.width != w || g.height != h ||
+      channels > poisson_detail::kMaxChannels || &in == &out)
+    throw Error(
+        "Poisson blur: in/out must be distinct images of the G-buffer's size, <= 8 channels");
   const SurfaceWeights checked(settings.weights, guide);  // throws where a guide is missing
   poisson_detail::Blur b{};
   b.width = w;

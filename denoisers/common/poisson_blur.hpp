@@ -8,8 +8,8 @@
 #include <array>
 #include <cmath>
 
-#include "core/image.hpp"
 #include "core/fast_math.hpp"
+#include "core/image.hpp"
 #include "denoisers/common/gbuffer.hpp"
 
 namespace arena {
@@ -37,7 +37,8 @@ struct SurfaceWeightSettings {
   float roughnessSigma = 0.1f;  // (0; inf) ours
 };
 
-// The guides of one pixel as the weights read them; F is float or a lane type of core/fast_math.hpp.
+// The guides of one pixel as the weights read them; F is float or a lane type of
+// core/fast_math.hpp.
 template <class F>
 struct SurfacePoint {
   F position[3], normal[3];

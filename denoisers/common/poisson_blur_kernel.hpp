@@ -71,7 +71,8 @@ void blurRow(const Blur& b, int y) {
     F weightSum = F{} + 1.0f;  // the centre
     const F radius = b.radius * (b.scale ? loadLanes(b.scale + p, inRow) : F{} + 1.0f);
     const SurfaceCentre<F> centre = surfaceCentre(
-        b.weights, readSurface<F>(b, true, [&](const float* plane) { return loadLanes(plane + p, inRow); }));
+        b.weights,
+        readSurface<F>(b, true, [&](const float* plane) { return loadLanes(plane + p, inRow); }));
     for (int t = 0; t < kPoissonTaps; ++t) {
       const I dx = roundToNearestInt(b.disk[t][0] * radius);
       const I dy = roundToNearestInt(b.disk[t][1] * radius);
@@ -84,8 +85,8 @@ void blurRow(const Blur& b, int y) {
         return uniform ? loadLanes(plane + q0, use) : gatherLanes(plane, q, use);
       };
       if (b.meshId) use &= neighbour(b.meshId) >= 0.0f;
-      const F weight =
-          selectFloat(use, surfaceWeight(b.weights, centre, readSurface<F>(b, false, neighbour)), F{});
+      const F weight = selectFloat(
+          use, surfaceWeight(b.weights, centre, readSurface<F>(b, false, neighbour)), F{});
       for (int c = 0; c < b.channels; ++c) sum[c] += weight * neighbour(b.in[c]);
       weightSum += weight;
     }

@@ -105,7 +105,8 @@ void Reprojection::compute(const GBufferView& current, const Image& derivatives,
             ok & (bilinear[k] > 0.0f) & (qx >= 0) & (qy >= 0) & (qx < w) & (qy < h);
         const LaneMask8 q = qy * w + qx;
         Lanes8 previousNormal[3];
-        for (size_t c = 0; c < 3; ++c) previousNormal[c] = gatherLanes(previous.normal[c], q, inside);
+        for (size_t c = 0; c < 3; ++c)
+          previousNormal[c] = gatherLanes(previous.normal[c], q, inside);
         passed[k] = inside & consistent(depth, normal, id, fwidthDepth, fwidthNormal,
                                         gatherLanes(previous.depth, q, inside), previousNormal,
                                         gatherLanes(previous.meshId, q, inside), thresholds);
@@ -132,9 +133,8 @@ void Reprojection::compute(const GBufferView& current, const Image& derivatives,
         if (!settings.fallback3x3) continue;
 
         // 3x3 around the pixel that contains the reprojected position; consistent taps averaged.
-        const SurfaceSample surfaceSample{depth[lane],
-                                          {normal[0][lane], normal[1][lane], normal[2][lane]},
-                                          int(id[lane])};
+        const SurfaceSample surfaceSample{
+            depth[lane], {normal[0][lane], normal[1][lane], normal[2][lane]}, int(id[lane])};
         const SurfaceDerivatives fwidth{fwidthDepth[lane], fwidthNormal[lane]};
         const int cx = int(std::floor(px[lane])), cy = int(std::floor(py[lane]));
         tested += 9;
@@ -172,9 +172,10 @@ HistoryLanes Reprojection::lanes(size_t i, int count) const {
   lanes.width = width_;
   const LaneMask8 inRow = laneIndex(Lanes8{}) < count;
   // The footprint is the third byte of word 2 (mask in the low 16 bits).
-  const LaneMask8 footprint =
-      (gatherIntLanes(reinterpret_cast<const int32_t*>(&records_[i]), laneIndex(Lanes8{}) * 7 + 2,
-                      inRow) >> 16) & 0xFF;
+  const LaneMask8 footprint = (gatherIntLanes(reinterpret_cast<const int32_t*>(&records_[i]),
+                                              laneIndex(Lanes8{}) * 7 + 2, inRow) >>
+                               16) &
+                              0xFF;
   lanes.gatherBilinear(&records_[i], 7, 16, 3,
                        inRow & (footprint == int(ReprojectionFootprint::Bilinear2x2)));
   lanes.box = inRow & (footprint == int(ReprojectionFootprint::Box3x3));

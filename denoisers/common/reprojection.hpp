@@ -113,8 +113,8 @@ struct HistoryLanes {
     for (int k = 0; k < 4; ++k) {
       use[k] = bilinear & (((mask >> k) & 1) != 0);
       index[k] = (y0 + k / 2) * width + x0 + k % 2;
-      weight[k] = gatherLanes(reinterpret_cast<const float*>(fields), record + weightsField + k,
-                              use[k]);
+      weight[k] =
+          gatherLanes(reinterpret_cast<const float*>(fields), record + weightsField + k, use[k]);
     }
   }
   Lanes8 apply(const float* plane) const {

@@ -13,8 +13,8 @@
 #include <cmath>
 
 #include "core/camera.hpp"
-#include "core/image.hpp"
 #include "core/fast_math.hpp"
+#include "core/image.hpp"
 #include "denoisers/common/gbuffer.hpp"
 
 namespace arena {

@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "core/error.hpp"
-#include "denoisers/common/edge_stopping.hpp"
 #include "core/fast_math.hpp"
+#include "denoisers/common/edge_stopping.hpp"
 
 namespace arena {
 
@@ -91,10 +91,10 @@ SpatialVarianceScratch& spatialScratch(int width) {
   thread_local SpatialVarianceScratch scratch;
   if (scratch.young.size() < size_t(width)) {
     scratch.young.assign(size_t(width), 0);
-    for (auto* buffer : {&scratch.z, &scratch.depthDenominator, &scratch.centreLuminance,
-                         &scratch.n0, &scratch.n1, &scratch.n2, &scratch.zq, &scratch.luminanceQ,
-                         &scratch.n0q, &scratch.n1q, &scratch.n2q, &scratch.meshIdQ, &scratch.mu1q,
-                         &scratch.mu2q, &scratch.weight})
+    for (auto* buffer :
+         {&scratch.z, &scratch.depthDenominator, &scratch.centreLuminance, &scratch.n0, &scratch.n1,
+          &scratch.n2, &scratch.zq, &scratch.luminanceQ, &scratch.n0q, &scratch.n1q, &scratch.n2q,
+          &scratch.meshIdQ, &scratch.mu1q, &scratch.mu2q, &scratch.weight})
       buffer->assign(size_t(width), 0.0f);
     for (auto* buffer : {&scratch.m1, &scratch.m2, &scratch.weightSum})
       buffer->assign(size_t(width), 0.0);
