@@ -47,30 +47,38 @@ void accumulateColorAndMoments(const Reprojection& reprojection, const Image& pr
   const float *mu1History = momentsHistory.plane(0), *mu2History = momentsHistory.plane(1);
   float* length = historyLength.plane(0);
   float *mu1 = moments.plane(0), *mu2 = moments.plane(1);
+  // Eight pixels at a time; per lane the operations of updateHistoryLength, accumulateTemporally
+  // and accumulateMoments (a disoccluded lane restarts from the current value).
+  auto alphaFloor = [](const AccumulationAlpha& alpha, size_t i, LaneMask8 inRow) {
+    const Lanes8 floor = Lanes8{} + alpha.alphaMin;
+    return alpha.perPixel ? maxFloat(floor, loadLanes(alpha.perPixel->plane(0) + i, inRow)) : floor;
+  };
+  auto blendAlphaLanes = [](Lanes8 h, Lanes8 alphaMin) {  // blendAlpha()
+    return maxFloat(alphaMin, 1.0f / maxFloat(h, Lanes8{} + 1.0f));
+  };
   parallelRows(signal.height(), [&](int y) {
-    for (int x = 0; x < w; ++x) {
-      const size_t i = size_t(y) * size_t(w) + size_t(x);
-      const float r = signalPlane[0][i], g = signalPlane[1][i], b = signalPlane[2][i];
-      const float l = luminance(r, g, b);
-      if (!reprojection.valid(i)) {  // disocclusion: the history is discarded
-        length[i] = nextHistoryLength(false, 0.0f, maxHistory);
-        accumulatedPlane[0][i] = r;
-        accumulatedPlane[1][i] = g;
-        accumulatedPlane[2][i] = b;
-        mu1[i] = l;
-        mu2[i] = l * l;
-        continue;
+    for (int x0 = 0; x0 < w; x0 += 8) {
+      const size_t i = size_t(y) * size_t(w) + size_t(x0);
+      const int count = std::min(8, w - x0);
+      const LaneMask8 inRow = laneIndex(Lanes8{}) < count;
+      const HistoryLanes taps = reprojection.lanes(i, count);
+      Lanes8 current[3];
+      for (int c = 0; c < 3; ++c) current[c] = loadLanes(signalPlane[c] + i, inRow);
+      const Lanes8 l = luminance(current[0], current[1], current[2]);
+      const Lanes8 h = selectFloat(
+          taps.valid, minFloat(taps.apply(previousLength) + 1.0f, Lanes8{} + maxHistory),
+          Lanes8{} + 1.0f);  // nextHistoryLength()
+      storeLanes(length + i, h, inRow);
+      const Lanes8 a = blendAlphaLanes(h, alphaFloor(colorAlpha, i, inRow));
+      for (int c = 0; c < 3; ++c) {
+        const Lanes8 blended = a * current[c] + (1.0f - a) * taps.apply(colorHistoryPlane[c]);
+        storeLanes(accumulatedPlane[c] + i, selectFloat(taps.valid, blended, current[c]), inRow);
       }
-      const HistoryTaps taps(reprojection.record(i), reprojection.width());
-      const float h = nextHistoryLength(true, taps.apply(previousLength), maxHistory);
-      length[i] = h;
-      const float a = blendAlpha(h, colorAlpha.at(i));
-      for (int c = 0; c < 3; ++c)
-        accumulatedPlane[c][i] =
-            a * signalPlane[c][i] + (1.0f - a) * taps.apply(colorHistoryPlane[c]);
-      const float am = blendAlpha(h, momentsAlpha.at(i));
-      mu1[i] = am * l + (1.0f - am) * taps.apply(mu1History);
-      mu2[i] = am * (l * l) + (1.0f - am) * taps.apply(mu2History);
+      const Lanes8 am = blendAlphaLanes(h, alphaFloor(momentsAlpha, i, inRow));
+      const Lanes8 m1 = am * l + (1.0f - am) * taps.apply(mu1History);
+      const Lanes8 m2 = am * (l * l) + (1.0f - am) * taps.apply(mu2History);
+      storeLanes(mu1 + i, selectFloat(taps.valid, m1, l), inRow);
+      storeLanes(mu2 + i, selectFloat(taps.valid, m2, l * l), inRow);
     }
   });
 }
