@@ -787,6 +787,26 @@ TEST(DenoiserBlocksReprojection, MatchesThePerPixelDefinitionUnderRandomMotion) 
     }
   EXPECT_GT(box, 0);  // every path was exercised
   EXPECT_GT(bilinear, w * h / 4);
+  // The fused accumulation (eight pixels at a time) equals the three separate passes exactly.
+  {
+    const Image signal = randomImage(w, h, 3, 50, 0.0f, 4.0f);
+    const Image colorHistory = randomImage(w, h, 3, 51, 0.0f, 4.0f);
+    const Image momentsHistory = randomImage(w, h, 2, 52, 0.0f, 4.0f);
+    const Image previousLength = randomImage(w, h, 1, 53, 1.0f, 40.0f);
+    const Image perPixelAlpha = randomImage(w, h, 1, 54, 0.0f, 0.6f);
+    const AccumulationAlpha colorAlpha{0.2f, &perPixelAlpha}, momentsAlpha{0.2f, nullptr};
+    Image length(w, h, 1), accumulated(w, h, 3), moments(w, h, 2);
+    accumulateColorAndMoments(reprojection, previousLength, 32.0f, signal, colorHistory,
+                              momentsHistory, colorAlpha, momentsAlpha, length, accumulated,
+                              moments);
+    Image length2(w, h, 1), accumulated2(w, h, 3), moments2(w, h, 2);
+    updateHistoryLength(reprojection, previousLength, 32.0f, length2);
+    accumulateTemporally(reprojection, signal, colorHistory, length2, colorAlpha, accumulated2);
+    accumulateMoments(reprojection, signal, momentsHistory, length2, momentsAlpha, moments2);
+    EXPECT_EQ(length.raw(), length2.raw());
+    EXPECT_EQ(accumulated.raw(), accumulated2.raw());
+    EXPECT_EQ(moments.raw(), moments2.raw());
+  }
   // Eight pixels at a time (HistoryLanes) read exactly what sample() reads, box lanes included.
   const Image history = randomImage(w, h, 1, 46, 0.0f, 10.0f);
   for (int y = 0; y < h; ++y)
