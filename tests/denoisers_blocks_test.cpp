@@ -937,6 +937,34 @@ TEST(DenoiserBlocksTemporal, VarianceOfNoiseMatchesItsSpread) {
   }
 }
 
+TEST(DenoiserBlocksTemporal, SpatialVarianceOfAYoungPixelDoesNotDependOnItsNeighboursAge) {
+  // All pixels young (one run per row, read in place) and a scattered few (gathered): each young
+  // pixel's spatial estimate is the same, bit for bit; the old pixels keep the temporal one.
+  const int w = 37, h = 11;
+  SyntheticGBuffer g(w, h);
+  g.makeVaried(13);  // two meshes, a sky corner, varied normals and depth
+  const Image derivatives = g.derivatives();
+  const Image moments = randomImage(w, h, 2, 60, 0.0f, 2.0f);
+  const Image color = randomImage(w, h, 3, 61, 0.0f, 2.0f);
+  Image allYoung(w, h, 1, 1.0f), scattered(w, h, 1, 10.0f);
+  for (int i = 0; i < w * h; ++i)
+    if (hashUniform(62, uint32_t(i)) < 0.2f) scattered.plane(0)[i] = 2.0f;
+  RowTapCounter taps;
+  taps.setup(h);
+  const VarianceSettings settings;
+  Image dense(w, h, 1), sparse(w, h, 1);
+  estimateVariance(moments, allYoung, color, g.view(), derivatives, settings, dense, taps);
+  estimateVariance(moments, scattered, color, g.view(), derivatives, settings, sparse, taps);
+  int young = 0;
+  for (int i = 0; i < w * h; ++i) {
+    if (scattered.plane(0)[i] != 2.0f || g.view().isSky(size_t(i))) continue;
+    ++young;
+    // The boost scales by minHistory / h: 4/1 for the dense case, 4/2 for the scattered one.
+    ASSERT_EQ(sparse.plane(0)[i] * 2.0f, dense.plane(0)[i]) << i;
+  }
+  EXPECT_GT(young, w * h / 10);
+}
+
 // ---------------------------------------------------------------------------------------------
 // History clamp / clip
 

@@ -92,6 +92,7 @@ struct SpatialVarianceScratch {
   // Centre guides, and one tap's neighbour values gathered beside them.
   std::vector<float> z, depthDenominator, centreLuminance, n0, n1, n2;
   std::vector<float> zq, luminanceQ, n0q, n1q, n2q, meshIdQ, mu1q, mu2q, weight;
+  std::vector<float> rowLuminance;  // a neighbour row's luminance, indexed by x (runs)
   std::vector<double> m1, m2, weightSum;
   std::vector<int32_t> fetched;
 };
@@ -102,7 +103,7 @@ SpatialVarianceScratch& spatialScratch(int width) {
     for (auto* buffer :
          {&scratch.z, &scratch.depthDenominator, &scratch.centreLuminance, &scratch.n0, &scratch.n1,
           &scratch.n2, &scratch.zq, &scratch.luminanceQ, &scratch.n0q, &scratch.n1q, &scratch.n2q,
-          &scratch.meshIdQ, &scratch.mu1q, &scratch.mu2q, &scratch.weight})
+          &scratch.meshIdQ, &scratch.mu1q, &scratch.mu2q, &scratch.weight, &scratch.rowLuminance})
       buffer->assign(size_t(width), 0.0f);
     for (auto* buffer : {&scratch.m1, &scratch.m2, &scratch.weightSum})
       buffer->assign(size_t(width), 0.0);
@@ -201,44 +202,75 @@ double estimateVariance(const Image& moments, const Image& historyLength, const 
     }
     const auto tapWeights =
         settings.phiNormal != 0.0f ? &spatialTapWeights<true> : &spatialTapWeights<false>;
+    // A single run of young pixels (the first frames, a large disocclusion) reads its neighbours
+    // in place, the image rows offset by the tap; scattered ones are gathered.
+    const int first = row.young[0];
+    const bool run = row.young[size_t(count - 1)] - first == count - 1;
     for (int dy = -r; dy <= r; ++dy) {
       const int qy = y + dy;
       if (qy < 0 || qy >= h) continue;
       const size_t qRow = size_t(qy) * size_t(w);
+      if (run)  // this row's luminance once, not once per tap
+        for (int x = std::max(0, first - r); x < std::min(w, first + count + r); ++x)
+          row.rowLuminance[size_t(x)] = lum(qRow + size_t(x));
       for (int dx = -r; dx <= r; ++dx) {
-        // Gather; a neighbour off the image reads as sky (it then adds exactly +0, as a skipped
-        // tap would).
-        for (int k = 0; k < count; ++k) {
-          const int qx = row.young[size_t(k)] + dx;
-          const bool inside = qx >= 0 && qx < w;
-          const size_t q = qRow + size_t(std::clamp(qx, 0, w - 1));
-          row.zq[size_t(k)] = g.depth[q];
-          row.luminanceQ[size_t(k)] = lum(q);
-          row.n0q[size_t(k)] = g.normal[0][q];
-          row.n1q[size_t(k)] = g.normal[1][q];
-          row.n2q[size_t(k)] = g.normal[2][q];
-          row.meshIdQ[size_t(k)] = inside ? g.meshId[q] : -1.0f;
-          row.mu1q[size_t(k)] = mu1[q];
-          row.mu2q[size_t(k)] = mu2[q];
+        // The young pixels k in [kBegin, kEnd) whose neighbour lies inside the row; in a gather,
+        // a neighbour off the image reads as sky (it then adds exactly +0, as a skipped tap
+        // would).
+        int kBegin = 0, kEnd = count;
+        const float *zq, *luminanceQ, *n0q, *n1q, *n2q, *idq, *mu1q, *mu2q;
+        if (run) {
+          kBegin = std::max(0, -dx - first);
+          kEnd = std::min(count, w - dx - first);
+          if (kBegin >= kEnd) continue;
+          // Pointers such that [k] is the neighbour of young pixel k (read for k in range only).
+          const std::ptrdiff_t offset = std::ptrdiff_t(first) + dx;
+          auto at = [&](const float* plane) { return plane + std::ptrdiff_t(qRow) + offset; };
+          zq = at(g.depth);
+          luminanceQ = row.rowLuminance.data() + offset;
+          n0q = at(g.normal[0]);
+          n1q = at(g.normal[1]);
+          n2q = at(g.normal[2]);
+          idq = at(g.meshId);
+          mu1q = at(mu1);
+          mu2q = at(mu2);
+        } else {
+          for (int k = 0; k < count; ++k) {
+            const int qx = row.young[size_t(k)] + dx;
+            const bool inside = qx >= 0 && qx < w;
+            const size_t q = qRow + size_t(std::clamp(qx, 0, w - 1));
+            row.zq[size_t(k)] = g.depth[q];
+            row.luminanceQ[size_t(k)] = lum(q);
+            row.n0q[size_t(k)] = g.normal[0][q];
+            row.n1q[size_t(k)] = g.normal[1][q];
+            row.n2q[size_t(k)] = g.normal[2][q];
+            row.meshIdQ[size_t(k)] = inside ? g.meshId[q] : -1.0f;
+            row.mu1q[size_t(k)] = mu1[q];
+            row.mu2q[size_t(k)] = mu2[q];
+          }
+          zq = row.zq.data();
+          luminanceQ = row.luminanceQ.data();
+          n0q = row.n0q.data();
+          n1q = row.n1q.data();
+          n2q = row.n2q.data();
+          idq = row.meshIdQ.data();
+          mu1q = row.mu1q.data();
+          mu2q = row.mu2q.data();
         }
         float* weight = row.weight.data();
         if (dx == 0 && dy == 0) {
-          std::fill(weight, weight + count, 1.0f);  // the centre
+          std::fill(weight + kBegin, weight + kEnd, 1.0f);  // the centre
         } else {
-          tapWeights(row.z.data(), row.zq.data(), row.depthDenominator.data(),
-                     row.centreLuminance.data(), row.luminanceQ.data(), row.n0.data(),
-                     row.n1.data(), row.n2.data(), row.n0q.data(), row.n1q.data(), row.n2q.data(),
-                     row.meshIdQ.data(), std::sqrt(float(dx * dx + dy * dy)), phiColor,
-                     settings.phiNormal, weight, 0, count);
+          tapWeights(row.z.data(), zq, row.depthDenominator.data(), row.centreLuminance.data(),
+                     luminanceQ, row.n0.data(), row.n1.data(), row.n2.data(), n0q, n1q, n2q, idq,
+                     std::sqrt(float(dx * dx + dy * dy)), phiColor, settings.phiNormal, weight,
+                     kBegin, kEnd);
         }
-        const float* idq = row.meshIdQ.data();
-        const float* mu1q = row.mu1q.data();
-        const float* mu2q = row.mu2q.data();
         double* m1 = row.m1.data();
         double* m2 = row.m2.data();
         double* weightSum = row.weightSum.data();
         int32_t* fetched = row.fetched.data();
-        for (int k = 0; k < count; ++k) {
+        for (int k = kBegin; k < kEnd; ++k) {
           // Sky neighbours are not read: they add exactly +0 (selected on the bits, so a non-finite
           // sky moment cannot leak in and the loop still vectorises).
           const bool sky = idq[k] < 0.0f;
