@@ -108,6 +108,11 @@ inline Lanes8 loadLanes(const float* p, Lanes8) {
 inline Lanes8 loadLanes(const float* p, LaneMask8 mask) {
   return reinterpret_cast<Lanes8>(_mm256_maskload_ps(p, reinterpret_cast<__m256i>(mask)));
 }
+// Eight int32 values where mask is set, 0 elsewhere.
+inline LaneMask8 loadIntLanes(const int32_t* p, LaneMask8 mask) {
+  return reinterpret_cast<LaneMask8>(
+      _mm256_maskload_epi32(reinterpret_cast<const int*>(p), reinterpret_cast<__m256i>(mask)));
+}
 inline void storeLanes(float* p, Lanes8 v) {
   std::memcpy(p, &v, sizeof v);
 }

@@ -200,67 +200,81 @@ void Asvgf::filterGradients() {
       });
     }
     const int step = 1 << k;
+    const int32_t* guidePixel = guidePixel_.data();
+    const float* z = guide_.plane(kZ);
+    const float* pixelX = guide_.plane(kPixelX);
+    const float* pixelY = guide_.plane(kPixelY);
+    const float* luminance = in.plane(kLuminance);
+    const bool normalTerm = asvgf_.gradientNormal && sigmaN != 0.0f;
+    // Eight strata at a time, the taps in the order of the per-stratum loop (dy, then dx), so the
+    // sums round as that loop's would; a dropped tap adds exactly 0.
     parallelRows(sh, [&](int sy) {
-      for (int sx = 0; sx < sw; ++sx) {
-        const size_t p = size_t(sy) * size_t(sw) + size_t(sx);
-        if (guidePixel_[p] < 0) {
-          for (int c = 0; c < kStateChannels; ++c) out.plane(c)[p] = in.plane(c)[p];
-          continue;
-        }
-        const float zp = guide_.plane(kZ)[p], dzdx = guide_.plane(kDzDx)[p];
-        const float dzdy = guide_.plane(kDzDy)[p];
-        const float xp = guide_.plane(kPixelX)[p], yp = guide_.plane(kPixelY)[p];
-        const float lp = in.plane(kLuminance)[p];
-        const float inverseLuminanceDenominator =
-            1.0f /
-            (sigmaL * std::sqrt(std::max(0.0f, blurredVariance_.plane(0)[p])) + kLuminanceEpsilon);
+      for (int x0 = 0; x0 < sw; x0 += 8) {
+        const size_t p = size_t(sy) * size_t(sw) + size_t(x0);
+        const LaneMask8 x = laneIndex(Lanes8{}) + x0;
+        const LaneMask8 inRow = x < sw;
+        const LaneMask8 centreValid = inRow & (loadIntLanes(guidePixel + p, inRow) >= 0);
+        const Lanes8 zp = loadLanes(z + p, inRow);
+        const Lanes8 dzdx = loadLanes(guide_.plane(kDzDx) + p, inRow);
+        const Lanes8 dzdy = loadLanes(guide_.plane(kDzDy) + p, inRow);
+        const Lanes8 xp = loadLanes(pixelX + p, inRow), yp = loadLanes(pixelY + p, inRow);
+        const Lanes8 lp = loadLanes(luminance + p, inRow);
+        const Lanes8 deviation =
+            sqrtLanes(maxFloat(Lanes8{}, loadLanes(blurredVariance_.plane(0) + p, inRow)));
+        const Lanes8 inverseLuminanceDenominator = 1.0f / (sigmaL * deviation + kLuminanceEpsilon);
         // eq. 10's guard (1e-30: 0/0 where the depth is 0).
-        const float depthEpsilon = asvgf_.depthEpsilon * std::abs(zp) + 1e-30f;
-        float sumDelta = 0, sumNormaliser = 0, sumLuminance = 0, sumVariance = 0, sumWeight = 0;
+        const Lanes8 depthEpsilon = asvgf_.depthEpsilon * absFloat(zp) + 1e-30f;
+        Lanes8 n[3];
+        for (int c = 0; c < 3; ++c) n[c] = loadLanes(guide_.plane(kNx + c) + p, inRow);
+        Lanes8 sumDelta{}, sumNormaliser{}, sumLuminance{}, sumVariance{}, sumWeight{};
         // eq. 7/12: h^(k) a 3x3 box with taps 2^k strata apart, explicitly renormalised.
         for (int dy = -1; dy <= 1; ++dy) {
           const int qy = sy + dy * step;
           if (qy < 0 || qy >= sh) continue;
           for (int dx = -1; dx <= 1; ++dx) {
-            const int qx = sx + dx * step;
-            if (qx < 0 || qx >= sw) continue;
-            const size_t q = size_t(qy) * size_t(sw) + size_t(qx);
-            if (guidePixel_[q] < 0) continue;
-            float weight = 1.0f;  // the centre
-            if (q != p) {
-              // eq. 8: w = w_z w_n w_l as one exponential: the exponents of eqs. 10 and 11 summed,
-              // eq. 9's power as sigma_n log(n(p).n(q)). eq. 10's offset p - q is in pixels
-              // between the two strata's guide pixels.
-              float exponent = 0.0f;
+            const size_t q = p + size_t(std::ptrdiff_t(dy * step) * sw + dx * step);
+            LaneMask8 use = centreValid & (x + dx * step >= 0) & (x + dx * step < sw);
+            use &= loadIntLanes(guidePixel + q, use) >= 0;
+            Lanes8 weight = Lanes8{} + 1.0f;  // the centre
+            if (dx != 0 || dy != 0) {
+              // eq. 8: w = w_z w_n w_l as one exponential: the exponents of eqs. 10 and 11
+              // summed, eq. 9's power as sigma_n log(n(p).n(q)). eq. 10's offset p - q is in
+              // pixels between the two strata's guide pixels.
+              Lanes8 exponent{};
               if (asvgf_.gradientDepth) {
-                const float offsetX = guide_.plane(kPixelX)[q] - xp;
-                const float offsetY = guide_.plane(kPixelY)[q] - yp;
-                exponent += std::abs(zp - guide_.plane(kZ)[q]) /
-                            (sigmaZ * std::abs(dzdx * offsetX + dzdy * offsetY) + depthEpsilon);
+                const Lanes8 offsetX = loadLanes(pixelX + q, use) - xp;
+                const Lanes8 offsetY = loadLanes(pixelY + q, use) - yp;
+                exponent += absFloat(zp - loadLanes(z + q, use)) /
+                            (sigmaZ * absFloat(dzdx * offsetX + dzdy * offsetY) + depthEpsilon);
               }
               if (asvgf_.gradientLuminance)
-                exponent += std::abs(lp - in.plane(kLuminance)[q]) * inverseLuminanceDenominator;
-              if (asvgf_.gradientNormal && sigmaN != 0.0f) {
-                float dot = 0;
-                for (int c = 0; c < 3; ++c)
-                  dot += guide_.plane(kNx + c)[p] * guide_.plane(kNx + c)[q];
-                if (dot <= 0.0f) continue;  // facing away: max(0, n.n')^sigma_n = 0
-                exponent -= sigmaN * logPositive(std::min(dot, 1.0f));
+                exponent +=
+                    absFloat(lp - loadLanes(luminance + q, use)) * inverseLuminanceDenominator;
+              if (normalTerm) {
+                Lanes8 dot{};
+                for (int c = 0; c < 3; ++c) dot += n[c] * loadLanes(guide_.plane(kNx + c) + q, use);
+                use &= dot > 0.0f;  // facing away: max(0, n.n')^sigma_n = 0
+                exponent -= sigmaN * logPositive(minFloat(maxFloat(dot, Lanes8{} + 1e-30f),
+                                                          Lanes8{} + 1.0f));
               }
               weight = expNonPositive(-exponent);  // core/fast_math.hpp: ~1e-7 relative
             }
-            sumDelta += weight * in.plane(kDelta)[q];
-            sumNormaliser += weight * in.plane(kNormaliser)[q];
-            sumLuminance += weight * in.plane(kLuminance)[q];
-            sumVariance += weight * weight * in.plane(kVariance)[q];
+            weight = selectFloat(use, weight, Lanes8{});
+            sumDelta += weight * loadLanes(in.plane(kDelta) + q, use);
+            sumNormaliser += weight * loadLanes(in.plane(kNormaliser) + q, use);
+            sumLuminance += weight * loadLanes(luminance + q, use);
+            sumVariance += weight * weight * loadLanes(in.plane(kVariance) + q, use);
             sumWeight += weight;
           }
         }
-        const float inverse = 1.0f / sumWeight;  // the centre counts: sumWeight >= 1
-        out.plane(kDelta)[p] = sumDelta * inverse;
-        out.plane(kNormaliser)[p] = sumNormaliser * inverse;
-        out.plane(kLuminance)[p] = sumLuminance * inverse;
-        out.plane(kVariance)[p] = sumVariance * inverse * inverse;
+        const Lanes8 inverse = 1.0f / sumWeight;  // the centre counts: sumWeight >= 1
+        const Lanes8 results[kStateChannels] = {sumDelta * inverse, sumNormaliser * inverse,
+                                                sumLuminance * inverse,
+                                                sumVariance * inverse * inverse};
+        for (int c = 0; c < kStateChannels; ++c)  // a stratum without a guide passes through
+          storeLanes(out.plane(c) + p,
+                     selectFloat(centreValid, results[c], loadLanes(in.plane(c) + p, inRow)),
+                     inRow);
       }
     });
     source = 1 - source;
