@@ -4,9 +4,11 @@
 // accuracy on a known domain, which a short polynomial gives at a fraction of the cost.
 //
 // Each function is written once over a "lane" type: a plain float (scalar code, and loops GCC
-// vectorises itself) or Lanes8, eight floats in one AVX2 register for the register-blocked
-// filter kernels. Both run the same IEEE operations in the same order, so a pixel gets the same
-// bits whichever path filtered it (the build has -ffp-contract=off: no fused multiply-adds).
+// vectorises itself), Lanes8 (eight floats in one AVX2 register) or Lanes16 (AVX-512), for the
+// filter kernels that work on blocks of pixels. All run the same IEEE operations in the same
+// order, so a pixel gets the same bits whichever path filtered it. The build has
+// -ffp-contract=off: the compiler never fuses a multiply-add on its own; fusedMultiplyAdd() is
+// the explicit one, the same on every path.
 #include <immintrin.h>
 
 #include <algorithm>
@@ -161,8 +163,9 @@ inline LaneMask8 laneIndex(Lanes8) {
 }
 
 #ifdef __AVX512F__
-// Sixteen lanes, for the translation units built for AVX-512 (chosen at run time, see
-// atrous_kernel.hpp): the same operations, so the same bits per lane as Lanes8.
+// Sixteen lanes, for the translation unit built for AVX-512 (denoisers/common/simd_avx512.cpp,
+// chosen at run time, see denoisers/common/simd.hpp): the same operations, so the same bits per
+// lane as Lanes8.
 using Lanes16 = float __attribute__((vector_size(64)));
 using LaneMask16 = int32_t __attribute__((vector_size(64)));
 template <>
