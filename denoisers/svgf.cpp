@@ -11,6 +11,7 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "denoisers/common/parallel.hpp"
 #include "denoisers/variants.hpp"
 
 namespace arena {
@@ -94,10 +95,10 @@ void Svgf::filterWavelet(Image& output) {
   const int iterations = settings_.iterations;
   if (settings_.feedbackTap == 0) {
     ScopedPass pass(this, "feedback", 0);
-    std::copy(accumulated_.raw().begin(), accumulated_.raw().end(), colorHistory_.raw().begin());
+    parallelCopy(accumulated_.raw().data(), accumulated_.raw().size(), colorHistory_.raw().data());
   }
   if (iterations == 0) {
-    std::copy(accumulated_.raw().begin(), accumulated_.raw().end(), output.raw().begin());
+    parallelCopy(accumulated_.raw().data(), accumulated_.raw().size(), output.raw().data());
     return;
   }
   const AtrousGuide guide{gbuffer_, &derivatives_, &filteredVariance_};
@@ -117,7 +118,7 @@ void Svgf::filterWavelet(Image& output) {
     atrousIteration(i, settings_.atrous, guide, settings_.atrous.edges.sigmaColor, *color, colorOut,
                     variance, &varianceOut);
     if (i + 1 == settings_.feedbackTap)  // §4.3: this iteration's output is the colour history
-      std::copy(colorOut.raw().begin(), colorOut.raw().end(), colorHistory_.raw().begin());
+      parallelCopy(colorOut.raw().data(), colorOut.raw().size(), colorHistory_.raw().data());
     color = &colorOut;
     variance = &varianceOut;
   }

@@ -65,9 +65,9 @@ void GBufferHistory::store(const GBufferView& current) {
                 std::to_string(current.height) + " but setup() was for " +
                 std::to_string(depth_.width()) + "x" + std::to_string(depth_.height()));
   size_t n = current.pixelCount();
-  std::copy_n(current.depth, n, depth_.plane(0));
-  std::copy_n(current.meshId, n, meshId_.plane(0));
-  for (int c = 0; c < 3; ++c) std::copy_n(current.normal[size_t(c)], n, normal_.plane(c));
+  parallelCopy(current.depth, n, depth_.plane(0));
+  parallelCopy(current.meshId, n, meshId_.plane(0));
+  for (int c = 0; c < 3; ++c) parallelCopy(current.normal[size_t(c)], n, normal_.plane(c));
 }
 
 GBufferView GBufferHistory::view() const {

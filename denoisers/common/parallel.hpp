@@ -5,6 +5,8 @@
 #include <tbb/parallel_for.h>
 #include <xmmintrin.h>
 
+#include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <numeric>
 #include <vector>
@@ -37,6 +39,15 @@ void parallelRows(int height, RowBody&& rowBody) {
     const DenormalsAreZeroScope denormalsAreZero;
     for (int y = rows.begin(); y < rows.end(); ++y) rowBody(y);
   });
+}
+
+// dst[i] = src[i] for i < count, split across the TBB workers: a full-image copy is memory-bound,
+// and one core does not use the whole bandwidth (history stores copy several planes per frame).
+inline void parallelCopy(const float* src, size_t count, float* dst) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, count, size_t(1) << 16),
+                    [&](const tbb::blocked_range<size_t>& r) {
+                      std::copy(src + r.begin(), src + r.end(), dst + r.begin());
+                    });
 }
 
 // Neighbour fetches counted per row (no atomics, no per-frame allocation), so a pass whose
