@@ -55,7 +55,6 @@ void Reblur::setup(int width, int height) {
   for (Image* image :
        {&accumulatedFramesHistory_, &accumulatedFrames_, &previousFrames_, &radiusScale_})
     *image = Image(width, height, 1);
-  taps_.setup(height);
   pixelScale_ = s_.radiusResolution > 0.0f ? float(height) / s_.radiusResolution : 1.0f;
   hasHistory_ = false;
 }
@@ -185,42 +184,32 @@ void Reblur::historyFixPass() {
     pass.setTaps(4);
     return;
   }
+  // The sparse 5x5 grid as a sparse blur: a young surface pixel's radius is its stride, every
+  // other pixel's 0 (it then passes through unchanged).
+  float* stride = radiusScale_.plane(0);
+  parallelRows(h, [&](int y) {
+    for (size_t i = size_t(y) * size_t(w); i < size_t(y + 1) * size_t(w); ++i) {
+      const bool young = previous[i] < frames && gbuffer_.meshId[i] >= 0.0f;
+      stride[i] =
+          young
+              ? std::max(1.0f, s_.historyFixStride * pixelScale_ * (frames - previous[i]) / frames)
+              : 0.0f;
+    }
+  });
   int64_t young = 0;  // surface pixels with N_prev < F
-  for (size_t i = 0; i < gbuffer_.pixelCount(); ++i)
-    young += (previous[i] < frames) & (gbuffer_.meshId[i] >= 0.0f);
+  for (size_t i = 0; i < gbuffer_.pixelCount(); ++i) young += stride[i] > 0.0f;
   if (young == 0) return;
   historyFixed_ = &fixed_;
-  const SurfaceWeights weight(s_.weights, {gbuffer_, roughness_, hitDistance_});
-  parallelRows(h, [&](int y) {
-    const size_t row = size_t(y) * size_t(w);
-    for (int c = 0; c < 3; ++c)  // the old histories as they are
-      std::copy_n(temporal_.plane(c) + row, w, fixed_.plane(c) + row);
-    int64_t fetched = 0;
-    for (int x = 0; x < w; ++x) {
-      const size_t p = size_t(y) * size_t(w) + size_t(x);
-      if (gbuffer_.isSky(p) || previous[p] >= frames) continue;
-      const float stride =
-          std::max(1.0f, s_.historyFixStride * pixelScale_ * (frames - previous[p]) / frames);
-      float sum[3] = {temporal_.plane(0)[p], temporal_.plane(1)[p], temporal_.plane(2)[p]};
-      float weightSum = 1.0f;
-      for (int j = -2; j <= 2; ++j)
-        for (int i = -2; i <= 2; ++i) {
-          if (i == 0 && j == 0) continue;
-          const int qx = x + int(std::lround(float(i) * stride)),
-                    qy = y + int(std::lround(float(j) * stride));
-          if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
-          const size_t q = size_t(qy) * size_t(w) + size_t(qx);
-          const float wq = weight(p, q);
-          ++fetched;
-          if (wq <= 0.0f) continue;
-          for (int c = 0; c < 3; ++c) sum[c] += wq * temporal_.plane(c)[q];
-          weightSum += wq;
-        }
-      for (int c = 0; c < 3; ++c) fixed_.plane(c)[p] = sum[c] / weightSum;
-    }
-    taps_.set(y, fetched);
-  });
-  pass.setTaps(taps_.perPixel(gbuffer_.pixelCount()));
+  static const std::vector<std::array<float, 2>> grid = [] {
+    std::vector<std::array<float, 2>> taps;
+    for (int j = -2; j <= 2; ++j)
+      for (int i = -2; i <= 2; ++i)
+        if (i != 0 || j != 0) taps.push_back({float(i), float(j)});
+    return taps;
+  }();
+  sparseBlur(temporal_, {gbuffer_, roughness_, hitDistance_}, s_.weights, grid.data(),
+             int(grid.size()), 1.0f, &radiusScale_, fixed_, /*mostlyIdle=*/true);
+  pass.setTaps(double(grid.size()) * double(young) / double(gbuffer_.pixelCount()));
 }
 
 // ---- 3b. Anti-firefly (NRD enableAntiFirefly, in its history-fix pass): every channel is

@@ -112,7 +112,6 @@ class Reblur : public Denoiser {
   Image preBlurred_, temporal_, fast_, accumulatedFrames_, previousFrames_, fixed_, fireflyFree_,
       blurred_, postBlurred_, radiusScale_, stabilized_;
   const Image* historyFixed_ = &temporal_;  // the history fix's result: fixed_, or temporal_
-  RowTapCounter taps_;
 };
 
 }  // namespace arena

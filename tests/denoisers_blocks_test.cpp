@@ -590,7 +590,27 @@ TEST(DenoiserBlocksPoisson, MatchesThePerPixelGatherWithEveryTerm) {
             << x << "," << y << " channel " << c;
     }
   EXPECT_GT(blurred, w * h / 4);  // the weights let a good share of the taps through
-  if (simdUsesAvx512()) {         // and the 8-lane build gives the same bits as the 16-lane one
+  {  // a pixel whose radius scale is 0 passes through; skipping idle blocks changes nothing
+    Image sparseScale = radiusScale;
+    for (int i = 0; i < w * h; ++i)
+      if (hashUniform(16, uint32_t(i)) < 0.9f) sparseScale.plane(0)[i] = 0.0f;
+    Image dense(w, h, 4), skipping(w, h, 4);
+    sparseBlur(in, guide, settings.weights, disk.data(), kPoissonTaps, settings.radius,
+               &sparseScale, dense, false);
+    sparseBlur(in, guide, settings.weights, disk.data(), kPoissonTaps, settings.radius,
+               &sparseScale, skipping, true);
+    EXPECT_EQ(dense.raw(), skipping.raw());
+    int changed = 0;
+    for (int i = 0; i < w * h; ++i)
+      for (int c = 0; c < 4; ++c) {
+        if (sparseScale.plane(0)[i] == 0.0f)
+          ASSERT_EQ(dense.plane(c)[i], in.plane(c)[i]) << i;
+        else
+          changed += dense.plane(c)[i] != in.plane(c)[i];
+      }
+    EXPECT_GT(changed, 0);
+  }
+  if (simdUsesAvx512()) {  // and the 8-lane build gives the same bits as the 16-lane one
     Image narrow(w, h, 4);
     const bool previous = allowAvx512(false);
     poissonDiskBlur(in, guide, settings, rotation, &radiusScale, narrow);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <numbers>
+#include <string>
 
 #include "core/error.hpp"
 #include "core/fast_math.hpp"
@@ -61,16 +62,21 @@ float poissonRotation(int frameIndex) {
   return std::fmod(float(frameIndex) * kGoldenAngle, 2.0f * std::numbers::pi_v<float>);
 }
 
-void poissonDiskBlur(const Image& in, const SurfaceGuide& guide,
-                     const PoissonBlurSettings& settings, float rotation, const Image* radiusScale,
-                     Image& out) {
+void sparseBlur(const Image& in, const SurfaceGuide& guide, const SurfaceWeightSettings& weights,
+                const std::array<float, 2>* taps, int tapCount, float radius,
+                const Image* radiusScale, Image& out, bool mostlyIdle) {
   const GBufferView& g = guide.gbuffer;
   const int w = in.width(), h = in.height(), channels = in.channels();
   if (!out.sameShape(in) || g.width != w || g.height != h ||
       channels > poisson_detail::kMaxChannels || &in == &out)
     throw Error(
-        "Poisson blur: in/out must be distinct images of the G-buffer's size, <= 8 channels");
-  const SurfaceWeights checked(settings.weights, guide);  // throws where a guide is missing
+        "sparse blur: in/out must be distinct images of the G-buffer's size, <= 8 channels");
+  if (tapCount < 0 || tapCount > kMaxSparseTaps)
+    throw Error("sparse blur: " + std::to_string(tapCount) + " taps, at most " +
+                std::to_string(kMaxSparseTaps));
+  if (radiusScale && (radiusScale->width() != w || radiusScale->height() != h))
+    throw Error("sparse blur: the radius scale must have the image's size");
+  const SurfaceWeights checked(weights, guide);  // throws where a guide is missing
   poisson_detail::Blur b{};
   b.width = w;
   b.height = h;
@@ -81,11 +87,11 @@ void poissonDiskBlur(const Image& in, const SurfaceGuide& guide,
   }
   b.meshId = g.meshId;
   b.scale = radiusScale ? radiusScale->plane(0) : nullptr;
-  b.radius = settings.radius;
-  const auto disk = poissonDisk(rotation);
-  for (int t = 0; t < kPoissonTaps; ++t)
-    for (int k = 0; k < 2; ++k) b.disk[t][k] = disk[size_t(t)][size_t(k)];
-  b.weights = settings.weights;
+  b.radius = radius;
+  b.tapCount = tapCount;
+  for (int t = 0; t < tapCount; ++t)
+    for (int k = 0; k < 2; ++k) b.taps[t][k] = taps[t][size_t(k)];
+  b.weights = weights;
   for (size_t c = 0; c < 3; ++c) {
     b.position[c] = g.position[c];
     b.normal[c] = g.normal[c];
@@ -94,8 +100,17 @@ void poissonDiskBlur(const Image& in, const SurfaceGuide& guide,
   b.hitDistance = guide.hitDistance;
   b.roughness = guide.roughness;
   const poisson_detail::BlurRowFunction blurRow =
-      simdUsesAvx512() ? poisson_detail::blurRowAvx512() : &poisson_detail::blurRow<Lanes8>;
+      simdUsesAvx512() ? poisson_detail::selectBlurRowAvx512(tapCount, mostlyIdle)
+                       : poisson_detail::selectBlurRow<Lanes8>(tapCount, mostlyIdle);
   parallelRows(h, [&](int y) { blurRow(b, y); });
+}
+
+void poissonDiskBlur(const Image& in, const SurfaceGuide& guide,
+                     const PoissonBlurSettings& settings, float rotation, const Image* radiusScale,
+                     Image& out) {
+  const auto disk = poissonDisk(rotation);
+  sparseBlur(in, guide, settings.weights, disk.data(), kPoissonTaps, settings.radius, radiusScale,
+             out, false);
 }
 
 }  // namespace arena

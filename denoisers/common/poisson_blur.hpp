@@ -114,10 +114,19 @@ std::array<std::array<float, 2>, kPoissonTaps> poissonDisk(float rotation);
 // Deterministic per-frame rotation: frame * golden angle, mod 2 pi.
 float poissonRotation(int frameIndex);
 
-// out(p) = sum_q w(p, q) in(q) / sum_q w(p, q) over p and its 8 rotated disk taps (nearest
-// pixel), radius settings.radius * radiusScale(p) (radiusScale: optional 1-channel image). Taps
-// off the image or in the sky are dropped; sky pixels pass through. Any channel count; out must
-// not alias in.
+// The sparse gather underneath: out(p) = sum_q w(p, q) in(q) / sum_q w(p, q) over p and its taps
+// q = p + round(tap * radius * radiusScale(p)) (nearest pixel; radiusScale: optional 1-channel
+// image). Taps off the image, onto p itself or in the sky are dropped, so a pixel whose scale is 0
+// passes through unchanged; sky pixels pass through. Up to kMaxSparseTaps taps, at most 8
+// channels; out must not alias in. `mostlyIdle`: most pixels have scale 0 (a pass over a few
+// young histories); blocks with nothing to gather are then skipped -- the same result.
+constexpr int kMaxSparseTaps = 24;
+void sparseBlur(const Image& in, const SurfaceGuide& guide, const SurfaceWeightSettings& weights,
+                const std::array<float, 2>* taps, int tapCount, float radius,
+                const Image* radiusScale, Image& out, bool mostlyIdle);
+
+// The Poisson-disk blur: sparseBlur over the 8 disk taps rotated by `rotation`, radius
+// settings.radius.
 void poissonDiskBlur(const Image& in, const SurfaceGuide& guide,
                      const PoissonBlurSettings& settings, float rotation, const Image* radiusScale,
                      Image& out);

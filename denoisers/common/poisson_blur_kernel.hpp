@@ -21,7 +21,8 @@ struct Blur {
   const float* meshId;  // nullptr: no sky
   const float* scale;   // per-pixel radius scale, nullptr: 1
   float radius;
-  float disk[kPoissonTaps][2];
+  float taps[kMaxSparseTaps][2];  // in units of the radius
+  int tapCount;
   SurfaceWeightSettings weights;
   const float *position[3], *normal[3], *depth, *hitDistance, *roughness;
 };
@@ -55,7 +56,11 @@ inline SurfacePoint<F> readSurface(const Blur& b, bool centre, Read&& planeLanes
 // with each pixel's radius), or loaded consecutively where every lane's offset agrees (a uniform
 // radius: a converged history, one roughness) -- the same values. Dropped taps -- off the image,
 // onto p itself, into the sky -- weigh 0.
-template <class F>
+// Taps > 0: exactly that many taps, known at compile time (the 8-tap disk, the 24-tap history-fix
+// grid: unrolled); 0: b.tapCount. SkipIdle: blocks without a pixel to gather for (radius 0 or
+// sky) are copied through without evaluating their taps (a separate instantiation: the check
+// slows the dense blur's loop by half, measured).
+template <class F, int Taps, bool SkipIdle>
 void blurRow(const Blur& b, int y) {
   using I = IntLanes<F>;
   constexpr int kLanes = int(sizeof(F) / sizeof(float));
@@ -70,12 +75,20 @@ void blurRow(const Blur& b, int y) {
     for (int c = 0; c < b.channels; ++c) sum[c] = loadLanes(b.in[c] + p, inRow);
     F weightSum = F{} + 1.0f;  // the centre
     const F radius = b.radius * (b.scale ? loadLanes(b.scale + p, inRow) : F{} + 1.0f);
+    if constexpr (SkipIdle) {
+      if (!anyLane(surfacePixel & (radius > 0.0f))) {  // nothing to gather: pass through
+        for (int c = 0; c < b.channels; ++c) storeLanes(b.out[c] + p, sum[c], inRow);
+        continue;
+      }
+    }
+
     const SurfaceCentre<F> centre = surfaceCentre(
         b.weights,
         readSurface<F>(b, true, [&](const float* plane) { return loadLanes(plane + p, inRow); }));
-    for (int t = 0; t < kPoissonTaps; ++t) {
-      const I dx = roundToNearestInt(b.disk[t][0] * radius);
-      const I dy = roundToNearestInt(b.disk[t][1] * radius);
+    const int tapCount = Taps > 0 ? Taps : b.tapCount;
+    for (int t = 0; t < tapCount; ++t) {
+      const I dx = roundToNearestInt(b.taps[t][0] * radius);
+      const I dy = roundToNearestInt(b.taps[t][1] * radius);
       const I qx = x + dx, qy = y + dy;
       I use = surfacePixel & (qx >= 0) & (qx < w) & (qy >= 0) & (qy < h) & ((dx != 0) | (dy != 0));
       const I q = qy * w + qx;
@@ -98,7 +111,21 @@ void blurRow(const Blur& b, int y) {
 }
 
 using BlurRowFunction = void (*)(const Blur&, int);
+template <class F, bool SkipIdle>
+BlurRowFunction selectBlurRow(int tapCount) {
+  switch (tapCount) {
+    case kPoissonTaps:
+      return &blurRow<F, kPoissonTaps, SkipIdle>;
+    case kMaxSparseTaps:
+      return &blurRow<F, kMaxSparseTaps, SkipIdle>;
+  }
+  return &blurRow<F, 0, SkipIdle>;
+}
+template <class F>
+BlurRowFunction selectBlurRow(int tapCount, bool skipIdle) {
+  return skipIdle ? selectBlurRow<F, true>(tapCount) : selectBlurRow<F, false>(tapCount);
+}
 // The sixteen-lane row, defined in simd_avx512.cpp; callable only where the CPU has AVX-512.
-BlurRowFunction blurRowAvx512();
+BlurRowFunction selectBlurRowAvx512(int tapCount, bool skipIdle);
 
 }  // namespace arena::poisson_detail

@@ -18,8 +18,8 @@ FilterRowFunction selectFilterRowAvx512(bool depth, bool luminance, NormalTerm n
 }  // namespace atrous_detail
 
 namespace poisson_detail {
-BlurRowFunction blurRowAvx512() {
-  return &blurRow<Lanes16>;
+BlurRowFunction selectBlurRowAvx512(int tapCount, bool skipIdle) {
+  return selectBlurRow<Lanes16>(tapCount, skipIdle);
 }
 }  // namespace poisson_detail
 
