@@ -58,8 +58,7 @@ ParamSchema eawSchema() {
   return ParamSchema({
       ParamSpec::integer("iterations", 5, 1, 10,
                          "à-trous iterations; 5 reach about 65x65 px (Dammertz 2010: 5)"),
-      ParamSpec::choice("kernel", "5x5", {"5x5", "3x3"},
-                        "à-trous kernel: 5x5 B3 spline (paper) or the compact 3x3 (AMD/talk)"),
+      atrousKernelParamSpec(),
       ParamSpec::real("sigmaColor", 2.0, 1e-6, 1e6,
                       "colour sigma_rt of exp(-|c(p)-c(q)|^2/sigma_rt) at iteration 0, halved "
                       "every iteration (ours: demodulated radiance differences of ~1.4 weigh 1/e)"),
@@ -86,8 +85,7 @@ DenoiserInfo eawInfo() {
           eawSchema(), [](const ParamSet& params, SignalKind) {
             EawSettings s;
             s.iterations = params.getInt("iterations");
-            s.atrous.kernel = params.getChoice("kernel") == "3x3" ? AtrousKernel::Compact3x3
-                                                                  : AtrousKernel::B3Spline5x5;
+            s.atrous.kernel = atrousKernelParam(params);
             EdgeStoppingSettings& e = s.atrous.edges;
             e.depth = false;
             e.luminance = false;

@@ -388,11 +388,11 @@ void Hybrid::fromFilterSpace(Image& output) {
 
 void Hybrid::storeHistory() {
   ScopedPass pass(this, "store history", 0);
-  colorHistory_.raw() = temporal_.raw();  // the temporal result is the history (p. "5.1")
-  lengthHistory_.raw() = historyLength_.raw();
-  momentsHistory_.raw() = moments_.raw();
-  if (s_.capcomRejection) oneFrameHistory_.raw() = oneFrame_.raw();
-  if (s_.stabilizer) stabilizerHistory_.raw() = stabilized_.raw();
+  parallelCopy(temporal_, colorHistory_);  // the temporal result is the history (p. "5.1")
+  parallelCopy(historyLength_, lengthHistory_);
+  parallelCopy(moments_, momentsHistory_);
+  if (s_.capcomRejection) parallelCopy(oneFrame_, oneFrameHistory_);
+  if (s_.stabilizer) parallelCopy(stabilized_, stabilizerHistory_);
   previousGBuffer_.store(gbuffer_);
   hasHistory_ = true;
 }

@@ -55,6 +55,7 @@ void Reblur::setup(int width, int height) {
   for (Image* image :
        {&accumulatedFramesHistory_, &accumulatedFrames_, &previousFrames_, &radiusScale_})
     *image = Image(width, height, 1);
+  youngPerRow_.setup(height);
   pixelScale_ = s_.radiusResolution > 0.0f ? float(height) / s_.radiusResolution : 1.0f;
   hasHistory_ = false;
 }
@@ -188,17 +189,19 @@ void Reblur::historyFixPass() {
   // other pixel's 0 (it then passes through unchanged).
   float* stride = radiusScale_.plane(0);
   parallelRows(h, [&](int y) {
+    int64_t young = 0;  // surface pixels with N_prev < F in this row
     for (size_t i = size_t(y) * size_t(w); i < size_t(y + 1) * size_t(w); ++i) {
-      const bool young = previous[i] < frames && gbuffer_.meshId[i] >= 0.0f;
+      const bool isYoung = previous[i] < frames && gbuffer_.meshId[i] >= 0.0f;
+      young += isYoung;
       stride[i] =
-          young
+          isYoung
               ? std::max(1.0f, s_.historyFixStride * pixelScale_ * (frames - previous[i]) / frames)
               : 0.0f;
     }
+    youngPerRow_.set(y, young);
   });
-  int64_t young = 0;  // surface pixels with N_prev < F
-  for (size_t i = 0; i < gbuffer_.pixelCount(); ++i) young += stride[i] > 0.0f;
-  if (young == 0) return;
+  const double youngFraction = youngPerRow_.perPixel(gbuffer_.pixelCount());
+  if (youngFraction == 0.0) return;
   historyFixed_ = &fixed_;
   static const std::vector<std::array<float, 2>> grid = [] {
     std::vector<std::array<float, 2>> taps;
@@ -209,7 +212,7 @@ void Reblur::historyFixPass() {
   }();
   sparseBlur(temporal_, {gbuffer_, roughness_, hitDistance_}, s_.weights, grid.data(),
              int(grid.size()), 1.0f, &radiusScale_, fixed_, /*mostlyIdle=*/true);
-  pass.setTaps(double(grid.size()) * double(young) / double(gbuffer_.pixelCount()));
+  pass.setTaps(double(grid.size()) * youngFraction);
 }
 
 // ---- 3b. Anti-firefly (NRD enableAntiFirefly, in its history-fix pass): every channel is

@@ -112,6 +112,7 @@ class Reblur : public Denoiser {
   Image preBlurred_, temporal_, fast_, accumulatedFrames_, previousFrames_, fixed_, fireflyFree_,
       blurred_, postBlurred_, radiusScale_, stabilized_;
   const Image* historyFixed_ = &temporal_;  // the history fix's result: fixed_, or temporal_
+  RowTapCounter youngPerRow_;               // the history fix's young pixels, counted per row
 };
 
 }  // namespace arena

@@ -95,10 +95,10 @@ void Svgf::filterWavelet(Image& output) {
   const int iterations = settings_.iterations;
   if (settings_.feedbackTap == 0) {
     ScopedPass pass(this, "feedback", 0);
-    parallelCopy(accumulated_.raw().data(), accumulated_.raw().size(), colorHistory_.raw().data());
+    parallelCopy(accumulated_, colorHistory_);
   }
   if (iterations == 0) {
-    parallelCopy(accumulated_.raw().data(), accumulated_.raw().size(), output.raw().data());
+    parallelCopy(accumulated_, output);
     return;
   }
   const AtrousGuide guide{gbuffer_, &derivatives_, &filteredVariance_};
@@ -118,7 +118,7 @@ void Svgf::filterWavelet(Image& output) {
     atrousIteration(i, settings_.atrous, guide, settings_.atrous.edges.sigmaColor, *color, colorOut,
                     variance, &varianceOut);
     if (i + 1 == settings_.feedbackTap)  // §4.3: this iteration's output is the colour history
-      parallelCopy(colorOut.raw().data(), colorOut.raw().size(), colorHistory_.raw().data());
+      parallelCopy(colorOut, colorHistory_);
     color = &colorOut;
     variance = &varianceOut;
   }
@@ -136,8 +136,7 @@ std::vector<ParamSpec> svgfParamSpecs() {
   std::vector<ParamSpec> specs = {
       ParamSpec::integer("iterations", 5, 0, 10,
                          "à-trous iterations (SVGF paper 5, about 65x65 px; Falcor 4)"),
-      ParamSpec::choice("kernel", "5x5", {"5x5", "3x3"},
-                        "à-trous kernel: 5x5 B3 spline (paper) or the compact 3x3 (AMD/talk)"),
+      atrousKernelParamSpec(),
       ParamSpec::real("alpha", 0.2, 0.0, 1.0,
                       "colour blend floor, alpha = max(alpha, 1/h) (SVGF paper 0.2; Falcor 0.05)"),
       ParamSpec::real("momentsAlpha", 0.2, 0.0, 1.0,
@@ -177,8 +176,7 @@ SvgfSettings svgfSettings(const ParamSet& params, const std::string& owner) {
     throw Error(owner + ".feedbackTap=" + std::to_string(s.feedbackTap) + " exceeds " + owner +
                 ".iterations=" + std::to_string(s.iterations) +
                 "; use a feedbackTap in [0, iterations] (0 = no spatial feedback)");
-  s.atrous.kernel =
-      params.getChoice("kernel") == "3x3" ? AtrousKernel::Compact3x3 : AtrousKernel::B3Spline5x5;
+  s.atrous.kernel = atrousKernelParam(params);
   s.alpha = params.getFloat("alpha");
   s.momentsAlpha = params.getFloat("momentsAlpha");
   s.maxHistory = float(params.getInt("maxHistory"));

@@ -4,6 +4,7 @@
 #include <algorithm>
 
 #include "denoisers/common/gbuffer.hpp"
+#include "denoisers/common/parallel.hpp"
 #include "denoisers/common/reprojection.hpp"
 #include "denoisers/common/temporal_accumulation.hpp"
 #include "denoisers/denoiser.hpp"
@@ -66,7 +67,7 @@ class TemporalAccumulation final : public Denoiser {
     }
     {
       ScopedPass pass(this, "store history", 0);
-      std::copy(output.raw().begin(), output.raw().end(), colorHistory_.raw().begin());
+      parallelCopy(output, colorHistory_);
       previousGBuffer_.store(gbuffer);
       std::swap(historyLength_, previousHistoryLength_);
       hasHistory_ = true;

@@ -232,17 +232,6 @@ std::unique_ptr<Denoiser> create(const std::string& name,
   return info.create(info.schema.resolve(overrides, name), SignalKind::Diffuse);
 }
 
-FrameContext context(int t, int w, int h) {
-  FrameContext ctx;
-  ctx.frameIndex = t;
-  ctx.width = w;
-  ctx.height = h;
-  ctx.camera = CameraState::lookAt({0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 45.0f, w, h);
-  ctx.previousCamera = ctx.camera;
-  ctx.reset = t == 0;
-  return ctx;
-}
-
 void expectConstantOut(const std::string& name, const std::map<std::string, std::string>& params,
                        bool withGradients) {
   const int w = 23, h = 17;
@@ -255,7 +244,7 @@ void expectConstantOut(const std::string& name, const std::map<std::string, std:
   for (int c = 0; c < 3; ++c) std::fill_n(signal.plane(c), w * h, 0.4f + 0.2f * float(c));
   for (int t = 0; t < 6; ++t) {
     Image output(w, h, 3, -1.0f);
-    denoiser->denoise(context(t, w, h),
+    denoiser->denoise(test::stillCameraContext(t, w, h),
                       {signal, frame, withGradients && t > 0 ? &gradients : nullptr}, output);
     for (size_t i = 0; i < output.raw().size(); ++i)
       ASSERT_NEAR(output.raw()[i], signal.raw()[i], 1e-5f) << name << " frame " << t;
@@ -288,8 +277,9 @@ TEST(AsvgfVariant, GradientSamplesRaiseAlphaWhereTheLightChanged) {
     auto d = create(name, params);
     d->setup(w, h);
     Image output(w, h, 3);
-    for (int t = 0; t < 8; ++t) d->denoise(context(t, w, h), {lit, before, nullptr}, output);
-    d->denoise(context(8, w, h), {halved, after, &gradients}, output);
+    for (int t = 0; t < 8; ++t)
+      d->denoise(test::stillCameraContext(t, w, h), {lit, before, nullptr}, output);
+    d->denoise(test::stillCameraContext(8, w, h), {halved, after, &gradients}, output);
     return output;
   };
   const Image svgf = run("svgf"), asvgf = run("asvgf");
@@ -316,8 +306,9 @@ TEST(SlgfVariant, DarkenedHistoryIsCorrectedAtOnce) {
     auto d = create(name);
     d->setup(w, h);
     Image output(w, h, 3);
-    for (int t = 0; t < 8; ++t) d->denoise(context(t, w, h), {lit, frame, nullptr}, output);
-    d->denoise(context(8, w, h), {dark, frame, nullptr}, output);
+    for (int t = 0; t < 8; ++t)
+      d->denoise(test::stillCameraContext(t, w, h), {lit, frame, nullptr}, output);
+    d->denoise(test::stillCameraContext(8, w, h), {dark, frame, nullptr}, output);
     return output.at(w / 2, h / 2, 1);
   };
   EXPECT_GT(run("svgf"), 0.7f);

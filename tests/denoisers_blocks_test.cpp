@@ -21,17 +21,12 @@
 #include "denoisers/common/simd.hpp"
 #include "denoisers/common/temporal_accumulation.hpp"
 #include "denoisers/common/variance.hpp"
+#include "tests/test_util.hpp"
 
 namespace arena {
 namespace {
 
-// Deterministic noise in [0, 1) (PCG hash), identical on every platform.
-float hashUniform(uint32_t a, uint32_t b = 0, uint32_t c = 0) {
-  uint32_t v = a * 747796405u + b * 2891336453u + c * 277803737u + 12345u;
-  v = ((v >> ((v >> 28u) + 4u)) ^ v) * 277803737u;
-  v = (v >> 22u) ^ v;
-  return float(v >> 8) / float(1u << 24);
-}
+using test::hashUniform;
 
 Image randomImage(int w, int h, int channels, uint32_t seed, float lo = 0.0f, float hi = 1.0f) {
   Image image(w, h, channels);

@@ -11,16 +11,12 @@
 #include "core/error.hpp"
 #include "core/sequence.hpp"
 #include "denoisers/denoiser.hpp"
+#include "tests/test_util.hpp"
 
 namespace arena {
 namespace {
 
-float hashUniform(uint32_t a, uint32_t b = 0, uint32_t c = 0) {
-  uint32_t v = a * 747796405u + b * 2891336453u + c * 277803737u + 12345u;
-  v = ((v >> ((v >> 28u) + 4u)) ^ v) * 277803737u;
-  v = (v >> 22u) ^ v;
-  return float(v >> 8) / float(1u << 24);
-}
+using test::hashUniform;
 
 // Every frame layer of core/sequence.hpp for a camera-facing plane at depth 2 (normal +Z,
 // mesh 0, zero motion); `skyColumns` leftmost columns are sky.
@@ -47,17 +43,6 @@ LayerSet planeFrame(int w, int h, int skyColumns = 0) {
       position.at(x, y, 2) = -2.0f;
     }
   return frame;
-}
-
-FrameContext context(int t, int w, int h) {
-  FrameContext ctx;
-  ctx.frameIndex = t;
-  ctx.width = w;
-  ctx.height = h;
-  ctx.camera = CameraState::lookAt({0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 45.0f, w, h);
-  ctx.previousCamera = ctx.camera;
-  ctx.reset = t == 0;
-  return ctx;
 }
 
 std::unique_ptr<Denoiser> create(const std::string& name,
@@ -104,7 +89,7 @@ TEST(DenoiserVariants, ConstantSignalStaysConstantOverFrames) {
     for (int t = 0; t < 5; ++t) {
       Image output(w, h, 3, -1.0f);
       denoiser->clearPassStats();
-      denoiser->denoise(context(t, w, h), {signal, frame, nullptr}, output);
+      denoiser->denoise(test::stillCameraContext(t, w, h), {signal, frame, nullptr}, output);
       for (size_t i = 0; i < output.raw().size(); ++i)
         ASSERT_NEAR(output.raw()[i], signal.raw()[i], 1e-5f) << name << " frame " << t;
       ASSERT_FALSE(denoiser->lastPasses().empty()) << name;
@@ -129,7 +114,8 @@ TEST(DenoiserVariants, TinyAndOddSizesRun) {
         Image clean(size.w, size.h, 3, 0.5f);
         Image signal = noisy(clean, uint32_t(t));
         Image output(size.w, size.h, 3, -1.0f);
-        denoiser->denoise(context(t, size.w, size.h), {signal, frame, nullptr}, output);
+        denoiser->denoise(test::stillCameraContext(t, size.w, size.h), {signal, frame, nullptr},
+                          output);
         for (float v : output.raw()) {
           ASSERT_TRUE(std::isfinite(v)) << name << " " << size.w << "x" << size.h;
           ASSERT_GE(v, 0.0f) << name;
@@ -140,7 +126,7 @@ TEST(DenoiserVariants, TinyAndOddSizesRun) {
         // 1x1: nothing to gather spatially; temporal variants average the three frames.
         Image signal(1, 1, 3, 0.25f), output(1, 1, 3);
         denoiser->reset();
-        denoiser->denoise(context(1, 1, 1), {signal, frame, nullptr}, output);
+        denoiser->denoise(test::stillCameraContext(1, 1, 1), {signal, frame, nullptr}, output);
         EXPECT_NEAR(output.at(0, 0, 0), 0.25f, 1e-6f) << name << " after reset";
       }
     }
@@ -191,7 +177,7 @@ TEST(DenoiserVariants, EveryVariantDeclaresOnlyFrameLayers) {
   auto svgf = create("svgf");
   svgf->setup(5, 5);
   try {
-    svgf->denoise(context(0, 5, 5), {signal, partial, nullptr}, output);
+    svgf->denoise(test::stillCameraContext(0, 5, 5), {signal, partial, nullptr}, output);
     ADD_FAILURE() << "missing meshId accepted";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("meshId"), std::string::npos) << e.what();
@@ -220,7 +206,7 @@ TEST(TemporalVariant, ErrorFallsFrameByFrameOnStaticInput) {
   Image output(w, h, 3);
   for (int t = 0; t < 12; ++t) {
     Image signal = noisy(clean, uint32_t(t));
-    temporal->denoise(context(t, w, h), {signal, frame, nullptr}, output);
+    temporal->denoise(test::stillCameraContext(t, w, h), {signal, frame, nullptr}, output);
     double error = meanSquaredError(output, clean);
     if (t == 0) first = error;
     EXPECT_LT(error, previous) << "frame " << t;
@@ -252,7 +238,7 @@ TEST(TemporalVariant, FollowsMotionVectors) {
           signal.at(x, y, c) = clean.at(x, y, c) * 2.0f *
                                hashUniform(uint32_t(t), uint32_t(u * 1000 + y), uint32_t(c));
         }
-    temporal->denoise(context(t, w, h), {signal, frame, nullptr}, output);
+    temporal->denoise(test::stillCameraContext(t, w, h), {signal, frame, nullptr}, output);
     // Error over the columns that have been on screen since frame 0 (x < w - t).
     double sum = 0;
     int n = 0;
@@ -280,7 +266,7 @@ TEST(SvgfVariant, TenfoldLowerErrorAfterEightFramesOnNoisyPlane) {
   double inputError = 0, outputError = 0;
   for (int t = 0; t < 8; ++t) {
     Image signal = noisy(clean, uint32_t(100 + t));
-    svgf->denoise(context(t, w, h), {signal, frame, nullptr}, output);
+    svgf->denoise(test::stillCameraContext(t, w, h), {signal, frame, nullptr}, output);
     inputError = meanSquaredError(signal, clean);
     outputError = meanSquaredError(output, clean);
   }
@@ -333,7 +319,7 @@ TEST(SvgfVariant, IdTermKeepsCoplanarPosterSeparate) {
     Image output(w, h, 3);
     for (int t = 0; t < 6; ++t) {
       Image signal = noisy(clean, uint32_t(200 + t));
-      svgf->denoise(context(t, w, h), {signal, frame, nullptr}, output);
+      svgf->denoise(test::stillCameraContext(t, w, h), {signal, frame, nullptr}, output);
     }
     double sum = 0;
     int n = 0;
@@ -364,7 +350,7 @@ TEST(EawVariant, ReducesNoiseAndKeepsPositionEdges) {
   auto eaw = create("eaw");
   eaw->setup(w, h);
   Image signal = noisy(clean, 7), output(w, h, 3);
-  eaw->denoise(context(0, w, h), {signal, frame, nullptr}, output);
+  eaw->denoise(test::stillCameraContext(0, w, h), {signal, frame, nullptr}, output);
   const double reduction = meanSquaredError(signal, clean) / meanSquaredError(output, clean);
   std::printf("eaw: MSE %.1fx lower than the input\n", reduction);
   EXPECT_GT(reduction, 4.0);

@@ -80,6 +80,15 @@ int atrousTapCount(AtrousKernel kernel) {
   return int(kernelTaps(kernel).size());
 }
 
+ParamSpec atrousKernelParamSpec() {
+  return ParamSpec::choice("kernel", "5x5", {"5x5", "3x3"},
+                           "à-trous kernel: 5x5 B3 spline (paper) or the compact 3x3 (AMD/talk)");
+}
+
+AtrousKernel atrousKernelParam(const ParamSet& params) {
+  return params.getChoice("kernel") == "3x3" ? AtrousKernel::Compact3x3 : AtrousKernel::B3Spline5x5;
+}
+
 namespace {
 
 // One iteration with what it carries (atrous_kernel.hpp's Carry).

@@ -11,6 +11,9 @@
 #include <numeric>
 #include <vector>
 
+#include "core/error.hpp"
+#include "core/image.hpp"
+
 namespace arena {
 
 // Denormals flushed to zero (FTZ) and read as zero (DAZ) while a pixel loop runs, the previous
@@ -48,6 +51,12 @@ inline void parallelCopy(const float* src, size_t count, float* dst) {
                     [&](const tbb::blocked_range<size_t>& r) {
                       std::copy(src + r.begin(), src + r.end(), dst + r.begin());
                     });
+}
+
+// `to` = `from` (same shape), every plane copied as above.
+inline void parallelCopy(const Image& from, Image& to) {
+  if (!to.sameShape(from)) throw Error("parallelCopy: the images differ in shape");
+  parallelCopy(from.raw().data(), from.raw().size(), to.raw().data());
 }
 
 // Neighbour fetches counted per row (no atomics, no per-frame allocation), so a pass whose

@@ -4,7 +4,7 @@
 // accumulation sees different taps every frame ("サンプル点に回転のようなランダマイズ処理を
 // 適用することで有効なサンプル数を増やす"). The weights are NRD's kind -- geometry only, no
 // luminance: plane distance, normal, and for the specular signal hit distance and roughness.
-// The same weights drive any sparse gather (ReBLUR's stride-14 history fix), see SurfaceWeights.
+// The same weights drive any sparse gather (ReBLUR's stride-14 history fix), see sparseBlur.
 #include <array>
 #include <cmath>
 
@@ -88,7 +88,9 @@ inline F surfaceWeight(const SurfaceWeightSettings& s, const SurfaceCentre<F>& p
   return selectFloat(facing, expNonPositive(-exponent), F{});
 }
 
-// w(p, q) in [0, 1]; 0 for sky q. Built per frame; references the guide's planes.
+// w(p, q) in [0, 1] for one pair of pixels, 0 for sky q: the per-pixel form of what sparseBlur
+// evaluates in lanes (the reference the tests compare with); its constructor checks that the
+// enabled terms have their guides. References the guide's planes.
 class SurfaceWeights {
  public:
   SurfaceWeights(const SurfaceWeightSettings& settings, const SurfaceGuide& guide);
