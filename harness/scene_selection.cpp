@@ -30,6 +30,9 @@ RenderSettings RenderOptions::settings() const {
   if (referenceRelError >= 0) s.referenceRelError = referenceRelError;
   if (maxBounces < 0) throw Error("--max-bounces: expected a positive count");
   s.maxBounces = maxBounces;
+  if (inputSeed < 0 || inputSeed > 0xffffffffll)
+    throw Error("--input-seed " + std::to_string(inputSeed) + ": expected 0 to 4294967295");
+  s.inputSeed = uint32_t(inputSeed);
   return s;
 }
 
@@ -42,6 +45,9 @@ void addRenderOptions(CLI::App* cmd, RenderOptions& o) {
   cmd->add_option("--ref-rel-error", o.referenceRelError,
                   "Adaptive stopping: stop a reference when its estimated relative error is below this (0: off)");
   cmd->add_option("--max-bounces", o.maxBounces, "Override the scene's maximum path length");
+  cmd->add_option("--input-seed", o.inputSeed,
+                  "Another noise realisation of the 1-spp input (0: the scene's seed); references are unchanged")
+      ->default_val(0);
   cmd->add_option("--cache", o.cacheDir, "Sequence cache directory")->default_val("cache");
   cmd->add_option("--scenes-dir", o.scenesDir, "Directory of scene files");
 }

@@ -16,6 +16,7 @@ struct RenderOptions {
   int referenceSpp = 0;
   double referenceRelError = -1;
   int maxBounces = 0;
+  long long inputSeed = 0;
   std::string cacheDir = "cache";
   std::string scenesDir = defaultScenesDir();
   RenderSettings settings() const;

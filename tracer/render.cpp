@@ -89,11 +89,13 @@ RenderSettings RenderSettings::fromPreset(const std::string& name) {
 }
 
 json RenderSettings::pixelSettings(const Scene& scene) const {
-  return {{"width", resolvedWidth(scene)}, {"height", resolvedHeight(scene)}, {"frames", resolvedFrames(scene)},
+  json px = {{"width", resolvedWidth(scene)}, {"height", resolvedHeight(scene)}, {"frames", resolvedFrames(scene)},
           {"referenceSpp", referenceSpp}, {"referenceMinSpp", referenceMinSpp},
           {"referenceRelError", referenceRelError},
           {"maxBounces", maxBounces > 0 ? maxBounces : scene.maxBounces}, {"tracerVersion", kTracerVersion},
           {"preset", preset}};
+  if (inputSeed != 0) px["inputSeed"] = inputSeed;  // absent by default: existing caches keep their hash
+  return px;
 }
 
 std::string sequenceHash(const Scene& scene, const RenderSettings& settings) {
@@ -118,6 +120,11 @@ SequenceRenderer::SequenceRenderer(const Scene& scene, const RenderSettings& set
 }
 
 SequenceRenderer::~SequenceRenderer() = default;
+
+uint32_t SequenceRenderer::frameSeed() const {
+  if (settings_.inputSeed == 0) return scene_.seed;
+  return uint32_t(Hasher().add(std::to_string(scene_.seed)).add(std::to_string(settings_.inputSeed)).value());
+}
 
 uint64_t SequenceRenderer::stateHash(int t) const { return evaluateState(scene_, t, width_, height_).hash(); }
 
@@ -191,7 +198,7 @@ SequenceRenderer::FrameResult SequenceRenderer::renderFrame(int t) {
         glm::vec3 o = s.position + s.geometricNormal * ng * 1e-4f * (1.0f + glm::length(s.position));
         specHitDist.at(x, y) = cur.intersect(o, r, std::numeric_limits<float>::infinity(), mh, tm) ? tm : kMissHitDist;
       }
-      const Sampler sampler(scene_.seed, uint32_t(t), uint32_t(y * w + x), 0);
+      const Sampler sampler(frameSeed(), uint32_t(t), uint32_t(y * w + x), 0);
       const PixelShade px = shadePixel(cur, s, cam.eye, sampler, counts);
       // Demodulation (SVGF; Falcor divides by max(albedo, 0.001)).
       put3(diffuse, x, y, px.radiance.diffuse / glm::max(diffAlb, glm::vec3(1e-3f)));
@@ -237,7 +244,7 @@ SequenceRenderer::FrameResult SequenceRenderer::renderFrame(int t) {
     RayCounts& counts = stratumCounts[size_t(sy)];
     for (int sx = 0; sx < sw; ++sx) {
       const int stratum = sy * sw + sx;
-      const Sampler pick(scene_.seed, uint32_t(t - 1), uint32_t(stratum), kStratumPickSample);
+      const Sampler pick(frameSeed(), uint32_t(t - 1), uint32_t(stratum), kStratumPickSample);
       const int spanX = std::min(S, w - sx * S), spanY = std::min(S, h - sy * S);
       const int px = sx * S + std::min(int(pick.get(0) * float(spanX)), spanX - 1);
       const int py = sy * S + std::min(int(pick.get(1) * float(spanY)), spanY - 1);
@@ -254,7 +261,7 @@ SequenceRenderer::FrameResult SequenceRenderer::renderFrame(int t) {
       const float dist = glm::length(toPoint);
       counts.rays++;
       if (cur.occluded(cam.eye, toPoint / dist, dist * (1.0f - 1e-4f))) continue;  // hidden at frame t
-      const Sampler previousNumbers(scene_.seed, uint32_t(t - 1), uint32_t(py * w + px), 0);
+      const Sampler previousNumbers(frameSeed(), uint32_t(t - 1), uint32_t(py * w + px), 0);
       const SurfaceHit sPrev = prev.surface(hit.meshId, hit.primId, hit.u, hit.v);
       const SurfaceHit sNow = cur.surface(hit.meshId, hit.primId, hit.u, hit.v);
       Candidate& c = candidates[size_t(stratum)];

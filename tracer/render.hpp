@@ -23,6 +23,10 @@ struct RenderSettings {
   int referenceMinSpp = 64;    // adaptive stopping never stops before this
   double referenceRelError = 0;  // > 0: stop when the reference's estimated relMSE <= this^2
   int maxBounces = 0;          // 0: the scene's own
+  // 0: the scene's seed. Otherwise the 1-spp frames and gradient samples are another noise
+  // realisation of the same sequence (`arena run --seeds K`, compare's noise test); references do
+  // not depend on it.
+  uint32_t inputSeed = 0;
 
   // Presets: quick (the scene's resolution, references of 64-512 spp with adaptive stopping) and paper
   // (1280x720, 4096 spp references).
@@ -63,6 +67,8 @@ class SequenceRenderer {
  private:
   Scene scene_;  // a copy, with settings (bounces) applied
   RenderSettings settings_;
+  // The seed of the 1-spp frame and gradient samples (RenderSettings::inputSeed).
+  uint32_t frameSeed() const;
   int width_, height_, frames_;
   EmbreeDevice device_;
   std::vector<MeshData> meshes_;
