@@ -118,6 +118,20 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
     for (size_t i = 0; i < out.color.raw().size(); ++i)
       out.color.raw()[i] = albedo.raw()[i] * out.diffuse.raw()[i] + specAlbedo.raw()[i] * out.specular.raw()[i] +
                            emission.raw()[i];
+    // The filtered signals are finite (checked above), so a non-finite colour comes from the cache's
+    // remodulation layers: fail the pair naming them rather than score NaN as a perfect frame.
+    long bad = 0;
+    for (float v : out.color.raw()) bad += !std::isfinite(v);
+    if (bad) {
+      std::string layers;
+      for (const char* name : {"albedo", "specAlbedo", "emission"}) {
+        long n = 0;
+        for (float v : frame.get(name).raw()) n += !std::isfinite(v);
+        if (n) layers += std::string(layers.empty() ? "" : ", ") + name + " x" + std::to_string(n);
+      }
+      throw Error("frame " + std::to_string(t) + ": the remodulated colour has " + std::to_string(bad) +
+                  " non-finite values (non-finite input layers: " + (layers.empty() ? "none; overflow" : layers) + ")");
+    }
     onFrame(out);
   }
 }

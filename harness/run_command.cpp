@@ -1,4 +1,5 @@
 // `arena run`, `arena sweep`, `arena merge`, `arena compare`, `arena denoisers`.
+#include <cmath>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
@@ -30,6 +31,7 @@ struct MatrixOptions {
   std::vector<std::string> params;
   bool noBaselines = false;
   int warmup = 8;
+  int seeds = 1;
 };
 
 void addMatrixOptions(CLI::App* cmd, MatrixOptions& o) {
@@ -43,6 +45,10 @@ void addMatrixOptions(CLI::App* cmd, MatrixOptions& o) {
       ->check(CLI::IsMember({"auto", "all", "chosen", "none"}));
   cmd->add_option("--warmup", o.warmup, "Frames excluded from summaries (metrics.md W)")->default_val(8);
   cmd->add_flag("--no-baselines", o.noBaselines, "Do not add passthrough and temporal for context");
+  cmd->add_option("--seeds", o.seeds,
+                  "Input seeds per scene: > 1 also renders K-1 more noise realisations and reports each "
+                  "pair's error split into bias^2 and variance")
+      ->default_val(1);
   addRenderOptions(cmd, o.render);
 }
 
@@ -55,6 +61,7 @@ RunConfig configFrom(const MatrixOptions& o) {
   c.scenes = selectScenes(o.scenes, o.render.scenesDir);
   c.baselines = !o.noBaselines;
   c.warmup = o.warmup;
+  c.seeds = o.seeds;
   c.flip = o.flip;
   c.keepFrames = o.keepFrames;
   std::tie(c.shardIndex, c.shardCount) = parseShard(o.shard);
@@ -165,29 +172,43 @@ void addRunCommands(CLI::App& app) {
     auto metrics = std::make_shared<std::vector<std::string>>();
     auto tol = std::make_shared<std::string>("2%");
     auto asJson = std::make_shared<bool>(false);
+    auto confidence = std::make_shared<std::string>("95%");
     cmd->add_option("baseline", *a, "Baseline run directory")->required();
     cmd->add_option("candidate", *b, "Candidate run directory")->required();
     cmd->add_option("--metric", *metrics, "Metric(s) to gate on (default: relMse ldrFlip hdrFlip ssim tRmae)");
     cmd->add_option("--tolerance", *tol, "Allowed relative change in the worse direction, e.g. 2%")->default_val("2%");
-    cmd->add_flag("--json", *asJson, "Machine-readable output");
+    cmd->add_option("--confidence", *confidence,
+                    "A change regresses only when its paired bootstrap interval at this level excludes zero")
+        ->default_val("95%");
+    cmd->add_flag("--json", *asJson, "Machine-readable output")->default_str("off");
     cmd->callback([=] {
       std::vector<Tolerance> tols;
       double t = parseTolerance(*tol);
+      BootstrapConfig bc;
+      bc.confidence = parseConfidence(*confidence);
       for (auto& m : *metrics) tols.push_back({m, t});
       if (tols.empty())
         for (const char* m : {"relMse", "ldrFlip", "hdrFlip", "ssim", "tRmae"}) tols.push_back({m, t});
-      auto rows = compareRuns(loadResults(*a), loadResults(*b), tols);
+      auto rows = compareRuns(loadResults(*a), loadResults(*b), tols, bc);
       if (*asJson) {
         std::cout << comparisonJson(rows).dump(2) << "\n";
       } else {
-        std::cout << std::left << std::setw(22) << "scene" << std::setw(34) << "denoiser" << std::setw(16) << "metric"
+        std::cout << "regressed = worse by more than the tolerance AND the paired " << bc.confidence * 100
+                  << "% interval of the change excludes zero\n";
+        std::cout << std::left << std::setw(22) << "scene" << std::setw(30) << "denoiser" << std::setw(16) << "metric"
                   << std::right << std::setw(12) << "baseline" << std::setw(12) << "candidate" << std::setw(9)
-                  << "change" << "  verdict\n";
+                  << "change" << std::setw(22) << "interval" << "  verdict\n";
+        auto pct = [](double v) {
+          char buf[32];
+          std::snprintf(buf, sizeof buf, "%+.1f%%", v * 100);
+          return std::string(std::isfinite(v) ? buf : "-");
+        };
         for (auto& r : rows)
-          std::cout << std::left << std::setw(22) << r.scene << std::setw(34) << r.label << std::setw(16) << r.metric
+          std::cout << std::left << std::setw(22) << r.scene << std::setw(30) << r.label << std::setw(16) << r.metric
                     << std::right << std::setw(12) << std::setprecision(4) << r.baseline << std::setw(12) << r.candidate
-                    << std::setw(8) << std::fixed << std::setprecision(1) << r.change * 100 << "%"
-                    << std::defaultfloat << "  " << r.verdict << "\n";
+                    << std::setw(9) << pct(r.change) << std::setw(22)
+                    << (r.changeCi.valid() ? "[" + pct(r.changeCi.lo) + ", " + pct(r.changeCi.hi) + "]" : "-")
+                    << "  " << r.verdict << (r.note.empty() ? "" : " (" + r.note + ")") << "\n";
       }
       if (anyRegression(rows)) throw CLI::RuntimeError(1);
     });

@@ -4,16 +4,19 @@
 #include <chrono>
 #include <cmath>
 #include <ctime>
+#include <random>
 #include <set>
 
 #include "core/display.hpp"
 #include "core/env_info.hpp"
 #include "core/error.hpp"
+#include "core/hash.hpp"
 #include "harness/image_files.hpp"
 #include "metrics/results.hpp"
 #include "metrics/error.hpp"
 #include "metrics/flip.hpp"
 #include "metrics/ghosting.hpp"
+#include "metrics/statistics.hpp"
 #include "metrics/summary.hpp"
 #include "metrics/temporal.hpp"
 
@@ -75,6 +78,10 @@ struct SceneData {
   };
   std::vector<Event> events;
   std::vector<int> chosenFrames;
+  // Non-finite values in the cache's inputs, per "file kind: layer.channel" (reported, never silent).
+  std::map<std::string, long> nonFinite;
+  // Each metric's own floor: the metric between a reference-noise-only image and the reference.
+  nlohmann::json floors = nlohmann::json::object();
   const LayerSet& reference(int t) const { return references[size_t(sequence.info().referenceOfFrame[size_t(t)])]; }
   const Image& referenceDisplayAt(int t) const {
     return referenceDisplay[size_t(sequence.info().referenceOfFrame[size_t(t)])];
@@ -89,14 +96,60 @@ int meshIdOf(const Scene& scene, const std::string& name) {
   return -1;
 }
 
-SceneData loadScene(const Scene& scene, const fs::path& dir, int warmup) {
-  SceneData s{Sequence::open(dir), {}, {}, {}, {}, {}, {}, {}, {}};
+// Counts non-finite values per layer.channel into `counts` under "kind: layer.c".
+void countNonFinite(const LayerSet& layers, const std::string& kind, std::map<std::string, long>& counts) {
+  for (const auto& [name, image] : layers.all())
+    for (int c = 0; c < image.channels(); ++c) {
+      long n = 0;
+      const float* plane = image.plane(c);
+      for (size_t i = 0; i < image.pixelCount(); ++i) n += !std::isfinite(plane[i]);
+      if (n) counts[kind + ": " + name + "." + std::to_string(c)] += n;
+    }
+}
+
+std::string describeCounts(const std::map<std::string, long>& counts) {
+  std::string out;
+  for (const auto& [where, n] : counts) out += (out.empty() ? "" : ", ") + where + " x" + std::to_string(n);
+  return out;
+}
+
+// An image with the reference's own noise and nothing else: an independent half-sample estimate
+// when the cache has one (colorHalf: r_hat - half = (other half - half) / 2 has exactly Var(r_hat)),
+// else r_hat plus Gaussian noise of the stored variance of the mean (the CLT's approximation,
+// deterministic per scene). A perfect method would score this against the reference.
+Image referenceNoiseImage(const LayerSet& ref, const std::string& seedName) {
+  if (ref.has("colorHalf")) return ref.get("colorHalf");
+  const Image &r = ref.get("color"), &var = ref.get("colorVar");
+  Image out = r;
+  std::mt19937_64 rng(Hasher().add("arena-floor").add(seedName).value());
+  auto uniform = [&] { return (double(rng() >> 11) + 0.5) * 0x1.0p-53; };
+  for (size_t i = 0; i < out.raw().size(); ++i) {
+    const double z = std::sqrt(-2 * std::log(uniform())) * std::cos(2 * M_PI * uniform());  // Box-Muller
+    out.raw()[i] = float(r.raw()[i] + std::sqrt(std::max(0.0f, var.raw()[i])) * z);
+  }
+  return out;
+}
+
+SceneData loadScene(const Scene& scene, const fs::path& dir, int warmup, const std::string& flip) {
+  SceneData s{Sequence::open(dir), {}, {}, {}, {}, {}, {}, {}, {}, {}, nlohmann::json::object()};
   const SequenceInfo& info = s.sequence.info();
-  for (int t = 0; t < info.frames; ++t) s.frames.push_back(s.sequence.frame(t));
+  for (int t = 0; t < info.frames; ++t) {
+    s.frames.push_back(s.sequence.frame(t));
+    countNonFinite(s.frames.back(), "frame " + std::to_string(t), s.nonFinite);
+    if (t > 0) countNonFinite(s.sequence.gradients(t), "gradients " + std::to_string(t), s.nonFinite);
+  }
   int refs = 0;
   for (int r : info.referenceOfFrame) refs = std::max(refs, r + 1);
-  for (int r = 0; r < refs; ++r)
+  for (int r = 0; r < refs; ++r) {
     s.references.push_back(readExr(Sequence::referencePath(dir, r), channels::referenceLayers()).layers);
+    std::map<std::string, long> bad;
+    countNonFinite(s.references.back(), Sequence::referencePath(dir, r).string(), bad);
+    // A non-finite reference cannot rank anything: every metric against it would be NaN or a
+    // fake perfect score. The scene fails, naming the file and the channels.
+    if (!bad.empty())
+      throw Error("scene " + info.scene + ": the reference has non-finite values (" + describeCounts(bad) +
+                  "); check the scene's emitters and materials (a value beyond float range becomes Inf)");
+  }
   s.display = DisplayTransform::fromReference(s.reference(0).get("color"));
   for (const LayerSet& r : s.references) s.referenceDisplay.push_back(s.display.apply(r.get("color")));
   for (int t = 0; t < info.frames; ++t) {
@@ -135,6 +188,32 @@ SceneData loadScene(const Scene& scene, const fs::path& dir, int warmup) {
     for (int t : {e.frame, e.frame + 2})
       if (t < info.frames) chosen.insert(t);
   s.chosenFrames.assign(chosen.begin(), chosen.end());
+  // Metric floors, per distinct reference used after the warm-up, then averaged over those frames.
+  std::map<std::string, std::vector<double>> floorFrames;
+  std::map<int, std::map<std::string, double>> perReference;
+  for (int t = std::max(warmup, 0); t < info.frames; ++t) {
+    const int r = info.referenceOfFrame[size_t(t)];
+    if (!perReference.count(r)) {
+      const LayerSet& ref = s.references[size_t(r)];
+      const Image noise = referenceNoiseImage(ref, info.scene + "#" + std::to_string(r));
+      const Image& color = ref.get("color");
+      const Image noiseDisp = s.display.apply(noise);
+      auto& f = perReference[r];
+      f["relMse"] = linearError(noise, color, nullptr).relMse;
+      f["psnr"] = psnrFromMse(meanSquaredError(noiseDisp, s.referenceDisplay[size_t(r)]));
+      f["ssim"] = ssim(noiseDisp, s.referenceDisplay[size_t(r)]);
+      if (flip != "none") f["ldrFlip"] = ldrFlip(s.referenceDisplay[size_t(r)], noiseDisp).mean;
+      if (flip == "all") f["hdrFlip"] = hdrFlip(color, noise).mean;
+    }
+    for (const auto& [name, v] : perReference[r]) floorFrames[name].push_back(v);
+  }
+  for (const auto& [name, v] : floorFrames) {
+    double sum = 0;
+    for (double x : v) sum += x;
+    s.floors[name] = sum / double(v.size());
+  }
+  s.floors["source"] = s.references.front().has("colorHalf") ? "independent half-sample reference"
+                                                             : "reference plus Gaussian noise of its variance";
   return s;
 }
 
@@ -155,7 +234,7 @@ json timingJson(const std::vector<std::vector<PassStats>>& passesPerFrame, const
   Summary total = summarize(ms, std::min(warmup, int(ms.size()) - 1));
   double taps = 0;
   for (const json& p : passes) taps += p["tapsPerPixel"].get<double>();
-  return {{"msMedian", total.median}, {"msP95", total.p95}, {"msMean", total.mean},
+  return {{"msMedian", total.median}, {"msP5", total.p5}, {"msP95", total.p95}, {"msMean", total.mean},
           {"msPerMegapixel", total.median / (double(width) * height * 1e-6)}, {"tapsPerPixel", taps},
           {"passes", passes}};
 }
@@ -166,7 +245,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   DenoiseRun run(req, sd.sequence);
   const int w = info.width, h = info.height;
   json frames = json::array();
-  std::map<std::string, std::vector<double>> series;
+  PairSeries series(info.frames, cfg.warmup);
   std::vector<std::vector<PassStats>> passes;
   std::vector<std::vector<double>> eventCurves(sd.events.size()), eventBias(sd.events.size());
   Image prevColor, prevDisplay, prevError;
@@ -179,44 +258,54 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
             const Image &r = ref.get("color"), &var = ref.get("colorVar");
             const Image& rDisp = sd.referenceDisplayAt(t);
             json m = {{"frame", t}};
-            ErrorStats e = linearError(f.color, r, &var);
+            // Each metric with the tile sums behind it (metrics/statistics.hpp: the bootstrap's blocks).
+            auto put = [&](const char* name, double value, TileSums tiles, FrameTransform g) {
+              m[name] = std::isfinite(value) ? json(value) : json(nullptr);
+              series.record(name, t, value, std::move(tiles), g);
+            };
+            ErrorTiles et;
+            ErrorStats e = linearError(f.color, r, &var, nullptr, kRelMseEpsilon, &et);
             Image disp = sd.display.apply(f.color);
-            m["relMse"] = e.relMse;
-            m["relMseCorrected"] = e.relMseCorrected;
-            m["mse"] = e.mse;
-            m["rmse"] = e.rmse;
-            m["psnr"] = psnrFromMse(meanSquaredError(disp, rDisp));
-            m["ssim"] = ssim(disp, rDisp);
+            put("relMse", e.relMse, std::move(et.relMse), FrameTransform::Mean);
+            put("relMseCorrected", e.relMseCorrected, std::move(et.relMseCorrected), FrameTransform::Mean);
+            put("mse", e.mse, et.mse, FrameTransform::Mean);
+            put("rmse", e.rmse, std::move(et.mse), FrameTransform::Sqrt);
+            TileSums tiles;
+            const double psnr = psnrFromMse(meanSquaredError(disp, rDisp, &tiles));
+            put("psnr", psnr, std::move(tiles), FrameTransform::Psnr);
+            const double ssimValue = ssim(disp, rDisp, &tiles);
+            put("ssim", ssimValue, std::move(tiles), FrameTransform::Mean);
             FlipResult ldr;
             if (cfg.flip != "none") {
               ldr = ldrFlip(rDisp, disp);
-              m["ldrFlip"] = ldr.mean;
+              put("ldrFlip", ldr.mean, tileSumsOfMap(ldr.map.raw(), w, h), FrameTransform::Mean);
             }
-            if (cfg.flip == "all") m["hdrFlip"] = hdrFlip(r, f.color).mean;
+            if (cfg.flip == "all") {
+              FlipResult hdr = hdrFlip(r, f.color);
+              put("hdrFlip", hdr.mean, tileSumsOfMap(hdr.map.raw(), w, h), FrameTransform::Mean);
+            }
             Image err(w, h, 3);
             for (size_t i = 0; i < err.raw().size(); ++i) err.raw()[i] = f.color.raw()[i] - r.raw()[i];
             if (t > 0) {
               const LayerSet& refPrev = sd.reference(t - 1);
-              m["tRmae"] = temporalRelativeMae(f.color, prevColor, r, refPrev.get("color"));
-              m["tPsnr"] = temporalPsnr(disp, prevDisplay, rDisp, sd.referenceDisplayAt(t - 1));
-              WarpedFlicker wf = warpedFlicker(err, prevError, sd.frames[size_t(t)], sd.frames[size_t(t - 1)]);
-              m["warpedFlicker"] = wf.value;
+              const double trmae = temporalRelativeMae(f.color, prevColor, r, refPrev.get("color"), 0.01, &tiles);
+              put("tRmae", trmae, std::move(tiles), FrameTransform::Mean);
+              const double tpsnr = temporalPsnr(disp, prevDisplay, rDisp, sd.referenceDisplayAt(t - 1), &tiles);
+              put("tPsnr", tpsnr, std::move(tiles), FrameTransform::Psnr);
+              WarpedFlicker wf = warpedFlicker(err, prevError, sd.frames[size_t(t)], sd.frames[size_t(t - 1)], {}, &tiles);
+              // No consistent pixel (a cut, a full disocclusion): warped flicker is undefined there.
+              if (wf.validFraction > 0) put("warpedFlicker", wf.value, std::move(tiles), FrameTransform::Sqrt);
               m["warpedValid"] = wf.validFraction;
             }
             // Effective spp (ours): 1-spp relMSE falls as 1/spp, so spp_eff = relMSE(noisy) / relMSE(method);
             // the reference-corrected values when both are positive.
             double noisyCorr = sd.noisyRelMse[size_t(t)] - sd.referenceRelMse[size_t(t)];
             bool corrected = noisyCorr > 0 && e.relMseCorrected > 0;
-            m["effectiveSpp"] = corrected ? noisyCorr / e.relMseCorrected
-                                          : sd.noisyRelMse[size_t(t)] / std::max(e.relMse, 1e-12);
-            m["ms"] = f.milliseconds;
-            m["referenceRelMse"] = sd.referenceRelMse[size_t(t)];
-            for (auto it = m.begin(); it != m.end(); ++it) {
-              if (it.key() == "frame") continue;
-              std::vector<double>& s = series[it.key()];
-              s.resize(size_t(info.frames), NAN);
-              s[size_t(t)] = it.value().get<double>();
-            }
+            const double spp = corrected ? noisyCorr / e.relMseCorrected
+                                         : sd.noisyRelMse[size_t(t)] / std::max(e.relMse, 1e-12);
+            put("effectiveSpp", spp, {}, FrameTransform::Mean);
+            put("ms", f.milliseconds, {}, FrameTransform::Mean);
+            put("referenceRelMse", sd.referenceRelMse[size_t(t)], {}, FrameTransform::Mean);
             for (size_t k = 0; k < sd.events.size(); ++k) {
               const auto& ev = sd.events[k];
               if (t < ev.begin || t > ev.end) continue;
@@ -249,8 +338,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
             prevDisplay = std::move(disp);
             prevError = std::move(err);
           });
-  json summary = json::object();
-  for (auto& [name, v] : series) summary[name] = summarize(v, cfg.warmup).toJson();
+  json summary = series.summaries(sd.sequence.info().scene);
   json ghosting = json::array();
   for (size_t k = 0; k < sd.events.size(); ++k) {
     const auto& ev = sd.events[k];
@@ -265,15 +353,74 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   }
   json warnings = json::array();
   double refFloor = summarize(sd.referenceRelMse, cfg.warmup).mean;
-  if (summary.contains("relMse") && summary["relMse"]["mean"].get<double>() < 10.0 * refFloor)
+  for (auto it = summary.begin(); it != summary.end(); ++it)
+    if (it.value().contains("absent")) warnings.push_back(it.key() + " has no summary: " + it.value()["absent"].get<std::string>());
+  if (summary.contains("relMse") && summary["relMse"].contains("mean") &&
+      summary["relMse"]["mean"].get<double>() < 10.0 * refFloor)
     warnings.push_back("relMSE is within 10x of the reference's own noise floor (" + std::to_string(refFloor) +
                        "): the ranking on raw relMSE is unreliable; use relMseCorrected or a better reference");
+  // Perceptual metrics cannot be corrected for reference noise: warn within 2x of their own floor.
+  for (const char* name : {"ldrFlip", "hdrFlip", "ssim"}) {
+    if (!sd.floors.contains(name) || !summary.contains(name) || !summary[name].contains("mean")) continue;
+    const bool higherIsBetter = std::string(name) == "ssim";
+    const double floor = sd.floors[name], value = summary[name]["mean"];
+    const double err = higherIsBetter ? 1 - value : value, floorErr = higherIsBetter ? 1 - floor : floor;
+    if (err < 2 * floorErr)
+      warnings.push_back(std::string(name) + " " + std::to_string(value) + " is within 2x of the reference's own floor (" +
+                         std::to_string(floor) + "): the reference's noise, not the method, dominates it");
+  }
   if (sanitized > 0) warnings.push_back(std::to_string(sanitized) + " NaN/Inf input values were replaced by 0");
   return {{"scene", info.scene}, {"denoiser", req.name}, {"label", req.label}, {"params", run.params().toJson()},
           {"status", "ok"}, {"frames", frames}, {"summary", summary},
-          {"timing", timingJson(passes, series["ms"], cfg.warmup, w, h)}, {"ghosting", ghosting},
+          {"timing", timingJson(passes, series.values("ms"), cfg.warmup, w, h)}, {"ghosting", ghosting},
+          {"tiles", series.tilesJson()},
           {"warnings", warnings}, {"sanitizedInputs", sanitized},
           {"images", {{"dir", fs::relative(imageDir, cfg.out).string()}, {"all", keepAll && keepImages}}}};
+}
+
+// Another noise realisation of a scene's input, with its frames in memory.
+struct SeedSequence {
+  uint32_t inputSeed = 0;
+  Sequence sequence;
+  std::vector<LayerSet> frames;
+};
+
+// The bias^2 / variance split of a pair's error over the scene's input seeds (metrics/error.hpp):
+// the denoiser runs on every seed's sequence from a reset history; per frame, the K outputs give
+// bias^2 (error of their mean) and variance (their spread), summarised like every metric.
+json biasVarianceOf(const RunConfig& cfg, const SceneData& sd, const std::vector<SeedSequence>& seeds,
+                    const DenoiserRequest& req) {
+  const SequenceInfo& info = sd.sequence.info();
+  std::vector<std::vector<Image>> outputs(size_t(info.frames));
+  auto collect = [&](const Sequence& sequence, const std::vector<LayerSet>& frames) {
+    DenoiseRun run(req, sequence);
+    run.run([&](int t) -> const LayerSet& { return frames[size_t(t)]; },
+            [&](const DenoisedFrame& f) { outputs[size_t(f.frame)].push_back(f.color); });
+  };
+  collect(sd.sequence, sd.frames);
+  json inputSeeds = json::array({cfg.render.inputSeed});
+  for (const SeedSequence& s : seeds) {
+    if (s.sequence.info().frames != info.frames) throw Error("bias/variance: seed sequences differ in frame count");
+    collect(s.sequence, s.frames);
+    inputSeeds.push_back(s.inputSeed);
+  }
+  PairSeries series(info.frames, cfg.warmup);
+  json frames = json::array();
+  for (int t = 0; t < info.frames; ++t) {
+    std::vector<const Image*> out;
+    for (const Image& i : outputs[size_t(t)]) out.push_back(&i);
+    const LayerSet& ref = sd.reference(t);
+    BiasVarianceTiles tiles;
+    const BiasVariance bv = biasVariance(out, ref.get("color"), &ref.get("colorVar"), kRelMseEpsilon, &tiles);
+    series.record("bias2", t, bv.bias2, {}, FrameTransform::Mean);
+    series.record("bias2Corrected", t, bv.bias2Corrected, std::move(tiles.bias2Corrected), FrameTransform::Mean);
+    series.record("variance", t, bv.variance, std::move(tiles.variance), FrameTransform::Mean);
+    frames.push_back({{"frame", t}, {"bias2", bv.bias2}, {"bias2Corrected", bv.bias2Corrected}, {"variance", bv.variance}});
+  }
+  return {{"seeds", int(seeds.size()) + 1}, {"inputSeeds", inputSeeds},
+          {"definition", "relMSE units: bias2 + variance = mean relMSE over the seeds; bias2Corrected subtracts "
+                         "the reference's own noise term"},
+          {"frames", frames}, {"summary", series.summaries(info.scene)}};
 }
 
 std::string clock(double s) {
@@ -304,6 +451,7 @@ std::vector<std::string> failedPairs(const json& results) {
 json runMatrix(const RunConfig& cfg) {
   if (cfg.out.empty()) throw Error("run: --out is required");
   if (cfg.scenes.empty()) throw Error("run: no scenes");
+  if (cfg.seeds < 1 || cfg.seeds > 64) throw Error("run: --seeds " + std::to_string(cfg.seeds) + ": expected 1 to 64");
   std::vector<DenoiserRequest> denoisers;
   auto add = [&](DenoiserRequest r) {
     if (r.label.empty()) r.label = defaultLabel(r);
@@ -327,6 +475,7 @@ json runMatrix(const RunConfig& cfg) {
                   {"environment", environmentInfo()},
                   {"settings", {{"render", cfg.render.pixelSettings(cfg.scenes.front())},
                                 {"preset", cfg.render.preset}, {"warmup", cfg.warmup}, {"flip", cfg.flip},
+                                {"seeds", cfg.seeds},
                                 {"relMseEpsilon", kRelMseEpsilon},
                                 {"display", "exposure from the scene's first reference (mean luminance -> 0.18), "
                                             "ACES filmic (Narkowicz 2015), clamp, sRGB"},
@@ -352,10 +501,19 @@ json runMatrix(const RunConfig& cfg) {
     if (mine.empty()) continue;
     fs::path dir;
     std::unique_ptr<SceneData> sd;
+    std::vector<SeedSequence> seedSequences;
     std::string sceneError;
     try {
       dir = renderSequence(scene, cfg.render, cfg.cache, cfg.progress);
-      sd = std::make_unique<SceneData>(loadScene(scene, dir, cfg.warmup));
+      sd = std::make_unique<SceneData>(loadScene(scene, dir, cfg.warmup, cfg.flip));
+      for (int k = 1; k < cfg.seeds; ++k) {
+        RenderSettings seeded = cfg.render;
+        seeded.inputSeed = cfg.render.inputSeed + uint32_t(k);
+        const fs::path seedDir = renderSequence(scene, seeded, cfg.cache, cfg.progress);
+        SeedSequence s{seeded.inputSeed, Sequence::open(seedDir), {}};
+        for (int t = 0; t < s.sequence.info().frames; ++t) s.frames.push_back(s.sequence.frame(t));
+        seedSequences.push_back(std::move(s));
+      }
     } catch (const std::exception& e) {
       sceneError = e.what();
     }
@@ -374,7 +532,8 @@ json runMatrix(const RunConfig& cfg) {
           {"height", info.height}, {"frames", info.frames}, {"events", events},
           {"referenceSpp", info.referenceSpp}, {"referenceRelMse", sd->referenceRelMse},
           {"noisyRelMse", sd->noisyRelMse}, {"exposure", sd->display.exposure},
-          {"chosenFrames", sd->chosenFrames}, {"images", fs::relative(sceneImages, cfg.out).string()}};
+          {"chosenFrames", sd->chosenFrames}, {"images", fs::relative(sceneImages, cfg.out).string()},
+          {"floors", sd->floors}, {"nonFiniteInputs", sd->nonFinite}};
     }
     for (const DenoiserRequest* r : mine) {
       auto t0 = std::chrono::steady_clock::now();
@@ -382,6 +541,7 @@ json runMatrix(const RunConfig& cfg) {
       try {
         if (!sd) throw Error("scene " + scene.name + " could not be prepared: " + sceneError);
         pair = runPair(cfg, *sd, *r, cfg.out / "images" / scene.name / safeName(r->label), keepAll);
+        if (!seedSequences.empty()) pair["biasVariance"] = biasVarianceOf(cfg, *sd, seedSequences, *r);
       } catch (const std::exception& e) {
         pair = {{"scene", scene.name}, {"denoiser", r->name}, {"label", r->label}, {"params", json::object()},
                 {"status", "failed"}, {"error", e.what()}};
@@ -398,17 +558,31 @@ json runMatrix(const RunConfig& cfg) {
       if (pair["status"] != "ok") say("  error: " + pair["error"].get<std::string>());
     }
   }
+  results["statistics"] = analyseRun(results);
   saveResults(cfg.out, results);
   appendToDatabase(cfg.out / "results.db", results);
   return results;
 }
 
 json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
+  fs::create_directories(out);
   if (runs.empty()) throw Error("merge: no runs given");
   json merged;
   std::set<std::string> seen;
+  // A gate must not pass on a partial study: every shard i/n of one n, each exactly once.
+  std::map<int, std::string> shards;
+  int shardCount = 0;
   for (const fs::path& run : runs) {
     json r = loadResults(run);
+    const std::string shard = r["settings"].value("shard", "");
+    if (shard == "merged") throw Error(run.string() + ": already a merged run; merge the shards it came from");
+    const auto [i, n] = parseShard(shard);
+    if (shardCount && n != shardCount)
+      throw Error(run.string() + ": shard " + shard + " is of another split than " + shards.begin()->second + "'s /" +
+                  std::to_string(shardCount));
+    shardCount = n;
+    if (!shards.emplace(i, run.string()).second)
+      throw Error(run.string() + ": shard " + shard + " is already given by " + shards[i]);
     if (merged.is_null()) {
       merged = r;
       merged["pairs"] = json::array();
@@ -428,9 +602,15 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
                     " appears in two shards");
       merged["pairs"].push_back(p);
     }
+  }
+  std::string missing;
+  for (int i = 0; i < shardCount; ++i)
+    if (!shards.count(i)) missing += (missing.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(shardCount);
+  if (!missing.empty()) throw Error("merge: incomplete shard set, missing " + missing + "; nothing was written");
+  for (const fs::path& run : runs)
     if (fs::exists(run / "images"))
       fs::copy(run / "images", out / "images", fs::copy_options::recursive | fs::copy_options::skip_existing);
-  }
+  merged["statistics"] = analyseRun(merged);
   saveResults(out, merged);
   appendToDatabase(out / "results.db", merged);
   return merged;

@@ -24,6 +24,9 @@ struct RunConfig {
   std::string flip = "all";       // none | ldr | all (LDR + HDR)
   std::string keepFrames = "auto";  // auto (all for a single pair, else chosen) | all | chosen | none
   int shardIndex = 0, shardCount = 1;
+  // > 1: every scene is also rendered with input seeds 1..K-1 (the references are the same) and each
+  // pair reports the bias^2 / variance split of its error over the K outputs.
+  int seeds = 1;
   ProgressFn progress;
 };
 

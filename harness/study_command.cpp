@@ -5,6 +5,7 @@
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <sstream>
 
 #include "harness/commands.hpp"
 #include "harness/run_matrix.hpp"
@@ -17,38 +18,44 @@ namespace {
 
 using nlohmann::json;
 
-// Mean over scenes of each denoiser's per-scene means; ranked by relMSE (lower first).
+std::string interval(const json& ci, int precision) {
+  if (!ci.is_array()) return "-";
+  std::ostringstream o;
+  o << std::setprecision(precision) << "[" << ci[0].get<double>() << ", " << ci[1].get<double>() << "]";
+  return o.str();
+}
+
+std::string tiedList(const json& m) {
+  std::string s;
+  for (const json& t : m["tiedWith"]) s += (s.empty() ? "" : ", ") + t.get<std::string>();
+  return s.empty() ? "" : "tied with " + s;
+}
+
+// The study's ranking with ties (metrics/statistics.hpp): per scene on relMSE, then overall on the
+// per-scene normalised score. Methods whose difference is not resolved at 95% share "tied with".
 void printRanking(const json& results) {
-  struct Row {
-    double relMse = 0, flip = 0, ms = 0;
-    int scenes = 0, flipScenes = 0;
-  };
-  std::map<std::string, Row> rows;
-  for (const json& p : results["pairs"]) {
-    if (p["status"] != "ok") continue;
-    Row& r = rows[p["label"].get<std::string>()];
-    r.relMse += p["summary"]["relMse"]["mean"].get<double>();
-    r.ms += p["timing"]["msMedian"].get<double>();
-    if (p["summary"].contains("ldrFlip")) {
-      r.flip += p["summary"]["ldrFlip"]["mean"].get<double>();
-      ++r.flipScenes;
-    }
-    ++r.scenes;
+  if (!results.contains("statistics")) return;
+  const json& st = results["statistics"];
+  std::cout << "\nranking on relMSE with 95% intervals (" << st.value("method", "") << ")\n";
+  for (auto it = st["scenes"].begin(); it != st["scenes"].end(); ++it) {
+    const json& s = it.value();
+    std::cout << "\n" << it.key() << ": " << s["resolvedPairs"] << " of " << s["totalPairs"]
+              << " pairwise differences resolved\n";
+    for (const json& m : s["ranking"])
+      std::cout << "  " << std::left << std::setw(4) << m["rank"].get<int>() << std::setw(26)
+                << m["label"].get<std::string>() << std::right << std::setw(11) << std::setprecision(4)
+                << m["mean"].get<double>() << "  " << std::left << std::setw(24) << interval(m["ci95"], 3)
+                << tiedList(m) << "\n";
   }
-  std::vector<std::pair<std::string, Row>> sorted(rows.begin(), rows.end());
-  std::sort(sorted.begin(), sorted.end(),
-            [](auto& a, auto& b) { return a.second.relMse / a.second.scenes < b.second.relMse / b.second.scenes; });
-  std::cout << "\nranking (mean over scenes, frames after warm-up):\n"
-            << std::left << std::setw(6) << "rank" << std::setw(28) << "denoiser" << std::right << std::setw(12)
-            << "relMSE" << std::setw(12) << "LDR-FLIP" << std::setw(12) << "ms/frame" << std::setw(8) << "scenes"
-            << "\n";
-  int rank = 1;
-  for (auto& [label, r] : sorted) {
-    std::cout << std::left << std::setw(6) << rank++ << std::setw(28) << label << std::right << std::fixed
-              << std::setprecision(4) << std::setw(12) << r.relMse / r.scenes << std::setw(12)
-              << (r.flipScenes ? r.flip / r.flipScenes : 0.0) << std::setprecision(2) << std::setw(12)
-              << r.ms / r.scenes << std::setw(8) << r.scenes << std::defaultfloat << "\n";
-  }
+  if (!st.contains("overall")) return;
+  const json& o = st["overall"];
+  std::cout << "\noverall: " << o["normalisation"].get<std::string>() << " (lower is better)\n";
+  for (const json& m : o["ranking"])
+    std::cout << "  " << std::left << std::setw(4) << m["rank"].get<int>() << std::setw(26)
+              << m["label"].get<std::string>() << std::right << std::setw(11) << std::setprecision(4)
+              << m["score"].get<double>() << "  " << std::left << std::setw(24) << interval(m["ci95"], 3)
+              << tiedList(m) << "\n";
+  if (o.contains("excluded")) std::cout << "  not ranked overall: " << o["excluded"].get<std::string>() << "\n";
 }
 
 }  // namespace

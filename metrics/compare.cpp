@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <map>
+#include <set>
 
 #include "core/error.hpp"
 #include "metrics/results.hpp"
@@ -10,22 +11,49 @@ namespace arena {
 
 using nlohmann::json;
 
-double parseTolerance(const std::string& text) {
+namespace {
+
+double parseFraction(const std::string& text, const char* option, const char* expected) {
+  double v = kUndefined;
   try {
     size_t used = 0;
-    double v = std::stod(text, &used);
-    if (used == text.size() - 1 && text.back() == '%') v /= 100.0;
-    else if (used != text.size()) throw Error("");
-    if (v < 0) throw Error("");
-    return v;
+    v = std::stod(text, &used);
+    if (used == text.size() - 1 && text.back() == '%')
+      v /= 100.0;
+    else if (used != text.size())
+      v = kUndefined;
   } catch (...) {
-    throw Error("--tolerance '" + text + "': expected a non-negative number or percentage, e.g. 2% or 0.02");
   }
+  if (!std::isfinite(v) || v < 0)
+    throw Error(std::string(option) + " '" + text + "': expected " + expected);
+  return v;
 }
 
-std::vector<ComparisonRow> compareRuns(const json& base, const json& cand, std::vector<Tolerance> tolerances) {
+std::string key(const json& p) {
+  return p.value("scene", "") + "\n" + p.value("label", "");
+}
+
+}  // namespace
+
+double parseTolerance(const std::string& text) {
+  return parseFraction(text, "--tolerance",
+                       "a finite non-negative number or percentage, e.g. 2% or 0.02");
+}
+
+double parseConfidence(const std::string& text) {
+  const double v =
+      parseFraction(text, "--confidence", "a level in (0, 1) or a percentage, e.g. 95% or 0.95");
+  if (!(v > 0 && v < 1))
+    throw Error("--confidence '" + text + "': expected a level in (0, 1), e.g. 95% or 0.95");
+  return v;
+}
+
+std::vector<ComparisonRow> compareRuns(const json& base, const json& cand,
+                                       std::vector<Tolerance> tolerances,
+                                       const BootstrapConfig& cfg) {
   if (tolerances.empty())
-    for (const char* m : {"relMse", "ldrFlip", "hdrFlip", "ssim", "tRmae"}) tolerances.push_back({m, 0.02});
+    for (const char* m : {"relMse", "ldrFlip", "hdrFlip", "ssim", "tRmae"})
+      tolerances.push_back({m, 0.02});
   for (Tolerance& t : tolerances) {
     if (t.metric == "flip") t.metric = "ldrFlip";
     if (!findMetric(t.metric)) {
@@ -33,54 +61,143 @@ std::vector<ComparisonRow> compareRuns(const json& base, const json& cand, std::
       for (const MetricInfo& m : metricCatalog()) names += std::string(" ") + m.name;
       throw Error("compare: unknown metric '" + t.metric + "'; known:" + names);
     }
+    if (!std::isfinite(t.relative) || t.relative < 0)
+      throw Error("compare: tolerance of " + t.metric + " must be finite and non-negative");
   }
-  std::map<std::string, const json*> basePairs;
-  for (const json& p : base["pairs"]) basePairs[p["scene"].get<std::string>() + "\n" + p["label"].get<std::string>()] = &p;
+  for (const json* r : {&base, &cand})
+    if (!r->contains("pairs") || !(*r)["pairs"].is_array())
+      throw Error("compare: a run has no pairs array");
+  std::map<std::string, const json*> candPairs;
+  std::set<std::string> baseScenes, candScenes;
+  for (const json& p : cand["pairs"])
+    candPairs[key(p)] = &p, candScenes.insert(p.value("scene", ""));
+  for (const json& p : base["pairs"]) baseScenes.insert(p.value("scene", ""));
+  bool shared = false;
+  for (const std::string& s : baseScenes) shared |= candScenes.count(s) > 0;
+  if (!shared) throw Error("compare: the two runs share no scene; nothing can be compared");
+
   std::vector<ComparisonRow> rows;
-  for (const json& p : cand["pairs"]) {
-    const std::string scene = p["scene"], label = p["label"];
-    auto it = basePairs.find(scene + "\n" + label);
-    if (it == basePairs.end()) continue;
-    const json& b = *it->second;
+  std::set<std::string> baseKeys;
+  for (const json& b : base["pairs"]) {
+    baseKeys.insert(key(b));
+    const std::string scene = b.value("scene", ""), label = b.value("label", "");
+    auto it = candPairs.find(key(b));
+    if (it == candPairs.end()) {
+      rows.push_back({scene,
+                      label,
+                      "*",
+                      kUndefined,
+                      kUndefined,
+                      kUndefined,
+                      {},
+                      0,
+                      "missing",
+                      "pair not in the candidate run"});
+      continue;
+    }
+    const json& c = *it->second;
+    if (c.value("status", "") != "ok") {
+      rows.push_back({scene,
+                      label,
+                      "*",
+                      kUndefined,
+                      kUndefined,
+                      kUndefined,
+                      {},
+                      0,
+                      "failed",
+                      c.value("error", "")});
+      continue;
+    }
+    if (b.value("status", "") != "ok") continue;  // nothing to hold the candidate to
     for (const Tolerance& t : tolerances) {
-      ComparisonRow row{scene, label, t.metric, 0, 0, 0, t.relative, "ok"};
-      const bool bOk = b["status"] == "ok" && b["summary"].contains(t.metric);
-      const bool cOk = p["status"] == "ok" && p["summary"].contains(t.metric);
+      ComparisonRow row{scene,      label, t.metric,   kUndefined, kUndefined,
+                        kUndefined, {},    t.relative, "ok",       ""};
+      auto has = [&](const json& p) {
+        return p["summary"].contains(t.metric) && p["summary"][t.metric].contains("mean");
+      };
+      const bool bOk = has(b), cOk = has(c);
       if (!bOk && !cOk) continue;  // e.g. FLIP switched off in both runs
       if (!cOk) {
-        row.verdict = "regressed";  // the candidate lost a result the baseline had (a failed pair)
+        row.verdict = "missing";
+        row.note = c["summary"].contains(t.metric) ? c["summary"][t.metric].value("absent", "")
+                                                   : "not computed";
         rows.push_back(row);
         continue;
       }
       if (!bOk) {
-        row.verdict = "missing";
+        row.verdict = "new";
         rows.push_back(row);
         continue;
       }
       row.baseline = b["summary"][t.metric]["mean"];
-      row.candidate = p["summary"][t.metric]["mean"];
-      row.change = (row.candidate - row.baseline) / std::max(std::abs(row.baseline), 1e-12);
+      row.candidate = c["summary"][t.metric]["mean"];
+      const double scale = std::max(std::abs(row.baseline), 1e-12);
+      row.change = (row.candidate - row.baseline) / scale;
       const bool lowerIsBetter = findMetric(t.metric)->lowerIsBetter;
       const double worse = lowerIsBetter ? row.change : -row.change;
-      if (worse > t.relative) row.verdict = "regressed";
-      else if (-worse > t.relative) row.verdict = "improved";
+      // Paired over the frames and tiles both runs have, seeded by the scene like the run's own.
+      bool resolvedWorse = false, resolvedBetter = false;
+      if (b.contains("tiles") && c.contains("tiles") && b["tiles"].contains(t.metric) &&
+          c["tiles"].contains(t.metric)) {
+        const PairedDifference d =
+            pairedDifference(MetricTiles::fromJson(c["tiles"][t.metric]),
+                             MetricTiles::fromJson(b["tiles"][t.metric]), scene, cfg);
+        if (d.ci.valid()) {
+          row.changeCi = {d.ci.lo / scale, d.ci.hi / scale};
+          const bool above = d.ci.lo > 0, below = d.ci.hi < 0;
+          resolvedWorse = lowerIsBetter ? above : below;
+          resolvedBetter = lowerIsBetter ? below : above;
+        } else {
+          row.note = "no interval (too few frames)";
+        }
+      } else {
+        row.note = "no tile data for a paired interval";
+      }
+      if (worse > t.relative)
+        row.verdict = resolvedWorse ? "regressed" : "unresolved";
+      else if (-worse > t.relative)
+        row.verdict = resolvedBetter ? "improved" : "unresolved";
+      if (row.verdict == "unresolved" && row.note.empty())
+        row.note = "beyond tolerance but within noise";
       rows.push_back(row);
     }
   }
+  for (const json& c : cand["pairs"])
+    if (!baseKeys.count(key(c)))
+      rows.push_back({c.value("scene", ""),
+                      c.value("label", ""),
+                      "*",
+                      kUndefined,
+                      kUndefined,
+                      kUndefined,
+                      {},
+                      0,
+                      "new",
+                      "pair not in the baseline run"});
   return rows;
 }
 
 json comparisonJson(const std::vector<ComparisonRow>& rows) {
+  auto num = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
   json out = json::array();
   for (const ComparisonRow& r : rows)
-    out.push_back({{"scene", r.scene}, {"label", r.label}, {"metric", r.metric}, {"baseline", r.baseline},
-                   {"candidate", r.candidate}, {"change", r.change}, {"tolerance", r.tolerance}, {"verdict", r.verdict}});
+    out.push_back({{"scene", r.scene},
+                   {"label", r.label},
+                   {"metric", r.metric},
+                   {"baseline", num(r.baseline)},
+                   {"candidate", num(r.candidate)},
+                   {"change", num(r.change)},
+                   {"changeCi95", r.changeCi.toJson()},
+                   {"tolerance", r.tolerance},
+                   {"verdict", r.verdict},
+                   {"note", r.note}});
   return out;
 }
 
 bool anyRegression(const std::vector<ComparisonRow>& rows) {
   for (const ComparisonRow& r : rows)
-    if (r.verdict == "regressed") return true;
+    if (r.verdict == "regressed" || r.verdict == "missing" || r.verdict == "failed") return true;
   return false;
 }
 

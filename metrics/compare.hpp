@@ -1,10 +1,17 @@
 #pragma once
 // `arena compare`: differences between two runs per scene x denoiser, with tolerance verdicts.
 // A metric regresses when it moved in its worse direction by more than its tolerance (relative to
-// the baseline's value); the command exits 1 then, so it can gate a merge in CI.
+// the baseline's value) *and* the move is resolved at the chosen confidence: the paired bootstrap
+// interval of (candidate - baseline) over the same frames and tiles (metrics/statistics.hpp) lies
+// entirely on the worse side of zero. A rerun with another input seed moves every number a little;
+// that noise is not a regression. The command exits 1 on a regression and on anything it cannot
+// compare (a pair or metric the baseline had and the candidate lacks, no scene in common), so it
+// can gate a merge in CI.
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
+
+#include "metrics/statistics.hpp"
 
 namespace arena {
 
@@ -15,17 +22,28 @@ struct Tolerance {
 
 struct ComparisonRow {
   std::string scene, label, metric;
-  double baseline = 0, candidate = 0, change = 0;  // change: (candidate - baseline) / |baseline|
+  double baseline = kUndefined, candidate = kUndefined;
+  double change = kUndefined;  // (candidate - baseline) / |baseline|
+  Interval changeCi;           // the paired interval of the change, same scale
   double tolerance = 0;
-  std::string verdict;  // "ok", "improved", "regressed", "missing"
+  // "ok", "improved", "regressed", "unresolved" (beyond tolerance, within noise), "missing" (the
+  // candidate lacks what the baseline had: fails the gate), "failed" (the candidate's pair failed),
+  // "new" (only the candidate has it).
+  std::string verdict;
+  std::string note;
 };
 
 // Defaults when `tolerances` is empty: relMse, ldrFlip, hdrFlip, ssim, tRmae at 2%.
-std::vector<ComparisonRow> compareRuns(const nlohmann::json& baseline, const nlohmann::json& candidate,
-                                       std::vector<Tolerance> tolerances);
-// "2%" -> 0.02, "0.02" -> 0.02.
+std::vector<ComparisonRow> compareRuns(const nlohmann::json& baseline,
+                                       const nlohmann::json& candidate,
+                                       std::vector<Tolerance> tolerances,
+                                       const BootstrapConfig& cfg = {});
+// "2%" -> 0.02, "0.02" -> 0.02; negative, NaN or infinite values are errors.
 double parseTolerance(const std::string& text);
+// "95%" or "0.95" -> 0.95; must lie in (0, 1).
+double parseConfidence(const std::string& text);
 nlohmann::json comparisonJson(const std::vector<ComparisonRow>& rows);
+// True when the gate must fail: a regression, a failed pair, or something missing.
 bool anyRegression(const std::vector<ComparisonRow>& rows);
 
 }  // namespace arena

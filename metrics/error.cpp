@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <cmath>
+#include <optional>
 #include <vector>
 
 #include "core/error.hpp"
@@ -33,10 +34,13 @@ double deterministicSum(int height, const RowFn& row) {
 
 Image luminanceOf(const Image& rgb) { return luminance(rgb); }
 
-ErrorStats linearError(const Image& d, const Image& r, const Image* var, const Image* mask, double eps) {
+ErrorStats linearError(const Image& d, const Image& r, const Image* var, const Image* mask, double eps,
+                       ErrorTiles* tiles) {
   requireSameShape(d, r, "relMSE");
   if (var) requireSameShape(*var, r, "relMSE reference variance");
   const int w = d.width(), c = d.channels();
+  std::optional<TileAccumulator> tSq, tRel, tCorr;
+  if (tiles) tSq.emplace(w, d.height()), tRel.emplace(w, d.height()), tCorr.emplace(w, d.height());
   std::vector<double> counts(size_t(d.height()), 0.0);
   double sq = 0, rel = 0, relCorr = 0;
   std::vector<double> rowSq(size_t(d.height())), rowRel(size_t(d.height())), rowCorr(size_t(d.height()));
@@ -45,14 +49,17 @@ ErrorStats linearError(const Image& d, const Image& r, const Image* var, const I
     for (int x = 0; x < w; ++x) {
       if (mask && mask->at(x, y) == 0) continue;
       n += c;
+      double ps = 0, pl = 0, pc = 0;
       for (int ch = 0; ch < c; ++ch) {
         double diff = double(d.at(x, y, ch)) - double(r.at(x, y, ch));
         double rr = double(r.at(x, y, ch));
         double denom = rr * rr + eps;
-        s += diff * diff;
-        rl += diff * diff / denom;
-        rc += (diff * diff - (var ? double(var->at(x, y, ch)) : 0.0)) / denom;
+        ps += diff * diff;
+        pl += diff * diff / denom;
+        pc += (diff * diff - (var ? double(var->at(x, y, ch)) : 0.0)) / denom;
       }
+      s += ps, rl += pl, rc += pc;
+      if (tiles) tSq->add(x, y, ps, c), tRel->add(x, y, pl, c), tCorr->add(x, y, pc, c);
     }
     rowSq[size_t(y)] = s;
     rowRel[size_t(y)] = rl;
@@ -66,12 +73,53 @@ ErrorStats linearError(const Image& d, const Image& r, const Image* var, const I
     relCorr += rowCorr[size_t(y)];
     n += counts[size_t(y)];
   }
+  if (tiles) *tiles = {tRel->finish(), tCorr->finish(), tSq->finish()};
   ErrorStats out;
   if (n == 0) return out;
   out.mse = sq / n;
   out.rmse = std::sqrt(out.mse);
   out.relMse = rel / n;
   out.relMseCorrected = relCorr / n;
+  return out;
+}
+
+BiasVariance biasVariance(const std::vector<const Image*>& outputs, const Image& r, const Image* var, double eps,
+                          BiasVarianceTiles* tiles) {
+  if (outputs.size() < 2) throw Error("bias/variance: needs the outputs of at least 2 input seeds");
+  for (const Image* d : outputs) requireSameShape(*d, r, "bias/variance");
+  if (var) requireSameShape(*var, r, "bias/variance reference variance");
+  const int w = r.width(), h = r.height(), c = r.channels();
+  const double k = double(outputs.size());
+  const size_t rows = static_cast<size_t>(h);
+  std::vector<double> rowBias(rows), rowCorr(rows), rowVar(rows);
+  std::optional<TileAccumulator> tBias, tVar;
+  if (tiles) tBias.emplace(w, h), tVar.emplace(w, h);
+  tbb::parallel_for(0, h, [&](int y) {
+    double b = 0, bc = 0, v = 0;
+    for (int x = 0; x < w; ++x) {
+      double pb = 0, pc = 0, pv = 0;
+      for (int ch = 0; ch < c; ++ch) {
+        double mean = 0;
+        for (const Image* d : outputs) mean += d->at(x, y, ch);
+        mean /= k;
+        double spread = 0;
+        for (const Image* d : outputs) spread += (d->at(x, y, ch) - mean) * (d->at(x, y, ch) - mean);
+        // Unbiased: s^2 = spread / (K - 1); (dbar - r)^2 overestimates bias^2 by s^2 / K.
+        const double rr = r.at(x, y, ch), denom = rr * rr + eps, diff = mean - rr, s2 = spread / (k - 1);
+        pb += (diff * diff - s2 / k) / denom;
+        pc += (diff * diff - s2 / k - (var ? double(var->at(x, y, ch)) : 0.0)) / denom;
+        pv += s2 / denom;
+      }
+      b += pb, bc += pc, v += pv;
+      if (tiles) tBias->add(x, y, pc, c), tVar->add(x, y, pv, c);
+    }
+    rowBias[size_t(y)] = b, rowCorr[size_t(y)] = bc, rowVar[size_t(y)] = v;
+  });
+  BiasVariance out;
+  for (int y = 0; y < h; ++y) out.bias2 += rowBias[size_t(y)], out.bias2Corrected += rowCorr[size_t(y)], out.variance += rowVar[size_t(y)];
+  const double n = double(r.pixelCount()) * c;
+  out.bias2 /= n, out.bias2Corrected /= n, out.variance /= n;
+  if (tiles) *tiles = {tBias->finish(), tVar->finish()};
   return out;
 }
 
@@ -97,27 +145,35 @@ double referenceRelMse(const Image& r, const Image& var, const Image* mask, doub
   return n > 0 ? total / n : 0.0;
 }
 
-double meanSquaredError(const Image& a, const Image& b) {
+double meanSquaredError(const Image& a, const Image& b, TileSums* tiles) {
   requireSameShape(a, b, "MSE");
   const int w = a.width(), c = a.channels();
+  std::optional<TileAccumulator> acc;
+  if (tiles) acc.emplace(w, a.height());
   double total = deterministicSum(a.height(), [&](int y) {
     double s = 0;
-    for (int ch = 0; ch < c; ++ch)
-      for (int x = 0; x < w; ++x) {
+    for (int x = 0; x < w; ++x) {
+      double p = 0;
+      for (int ch = 0; ch < c; ++ch) {
         double diff = double(a.at(x, y, ch)) - double(b.at(x, y, ch));
-        s += diff * diff;
+        p += diff * diff;
       }
+      s += p;
+      if (acc) acc->add(x, y, p, c);
+    }
     return s;
   });
+  if (tiles) *tiles = acc->finish();
   return total / double(a.pixelCount() * size_t(c));
 }
 
 double psnrFromMse(double mse) {
+  if (std::isnan(mse)) return mse;  // no data is no score, never the cap
   if (mse <= 0) return kPsnrCapDb;
   return std::min(kPsnrCapDb, 10.0 * std::log10(1.0 / mse));
 }
 
-double ssim(const Image& a, const Image& b) {
+double ssim(const Image& a, const Image& b, TileSums* tiles) {
   requireSameShape(a, b, "SSIM");
   const Image la = a.channels() >= 3 ? luminance(a) : a;
   const Image lb = b.channels() >= 3 ? luminance(b) : b;
@@ -161,12 +217,18 @@ double ssim(const Image& a, const Image& b) {
   const bool valid = w > 2 * kRadius && h > 2 * kRadius;
   const int x0 = valid ? kRadius : 0, y0 = valid ? kRadius : 0, x1 = valid ? w - kRadius : w, y1 = valid ? h - kRadius : h;
   double total = 0;
+  std::optional<TileAccumulator> acc;
+  if (tiles) acc.emplace(w, h);
   for (int py = y0; py < y1; ++py)
     for (int px = x0; px < x1; ++px) {
       size_t i = size_t(py) * w + px;
       double vx = sxx[i] - mx[i] * mx[i], vy = syy[i] - my[i] * my[i], cxy = sxy[i] - mx[i] * my[i];
-      total += ((2 * mx[i] * my[i] + C1) * (2 * cxy + C2)) / ((mx[i] * mx[i] + my[i] * my[i] + C1) * (vx + vy + C2));
+      const double v =
+          ((2 * mx[i] * my[i] + C1) * (2 * cxy + C2)) / ((mx[i] * mx[i] + my[i] * my[i] + C1) * (vx + vy + C2));
+      total += v;
+      if (acc) acc->add(px, py, v, 1);
     }
+  if (tiles) *tiles = acc->finish();
   return total / double((x1 - x0) * (y1 - y0));
 }
 

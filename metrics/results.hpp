@@ -7,7 +7,8 @@
 
 namespace arena {
 
-constexpr int kResultsSchemaVersion = 1;
+// 2: summaries carry ci95 or absent; pairs carry tiles; results carry statistics and scene floors.
+constexpr int kResultsSchemaVersion = 2;
 
 // Reads <run>/results.json; a missing run or another schema version is an Error saying so.
 nlohmann::json loadResults(const std::filesystem::path& runDir);

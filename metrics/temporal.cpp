@@ -3,6 +3,8 @@
 #include <tbb/parallel_for.h>
 
 #include <cmath>
+#include <limits>
+#include <optional>
 #include <vector>
 
 #include "core/error.hpp"
@@ -18,37 +20,45 @@ void requireShapes(std::initializer_list<const Image*> images, const char* what)
 }
 }  // namespace
 
-double temporalRelativeMae(const Image& d, const Image& dPrev, const Image& r, const Image& rPrev, double eps) {
+double temporalRelativeMae(const Image& d, const Image& dPrev, const Image& r, const Image& rPrev, double eps,
+                           TileSums* tiles) {
   requireShapes({&d, &dPrev, &r, &rPrev}, "tRMAE");
   const int w = d.width(), c = d.channels();
   std::vector<double> rows(size_t(d.height()));
+  std::optional<TileAccumulator> acc;
+  if (tiles) acc.emplace(w, d.height());
   tbb::parallel_for(0, d.height(), [&](int y) {
     double s = 0;
-    for (int ch = 0; ch < c; ++ch)
-      for (int x = 0; x < w; ++x) {
+    for (int x = 0; x < w; ++x) {
+      double p = 0;
+      for (int ch = 0; ch < c; ++ch) {
         double dd = double(d.at(x, y, ch)) - dPrev.at(x, y, ch);
         double dr = double(r.at(x, y, ch)) - rPrev.at(x, y, ch);
-        s += std::abs(dd - dr) / (std::abs(dr) + eps);
+        p += std::abs(dd - dr) / (std::abs(dr) + eps);
       }
+      s += p;
+      if (acc) acc->add(x, y, p, c);
+    }
     rows[size_t(y)] = s;
   });
+  if (tiles) *tiles = acc->finish();
   double total = 0;
   for (double v : rows) total += v;
   return total / double(d.pixelCount() * size_t(c));
 }
 
-double temporalPsnr(const Image& d, const Image& dPrev, const Image& r, const Image& rPrev) {
+double temporalPsnr(const Image& d, const Image& dPrev, const Image& r, const Image& rPrev, TileSums* tiles) {
   requireShapes({&d, &dPrev, &r, &rPrev}, "tPSNR");
   Image dd(d.width(), d.height(), d.channels()), dr(d.width(), d.height(), d.channels());
   for (size_t i = 0; i < d.raw().size(); ++i) {
     dd.raw()[i] = d.raw()[i] - dPrev.raw()[i];
     dr.raw()[i] = r.raw()[i] - rPrev.raw()[i];
   }
-  return psnrFromMse(meanSquaredError(dd, dr));
+  return psnrFromMse(meanSquaredError(dd, dr, tiles));
 }
 
 WarpedFlicker warpedFlicker(const Image& e, const Image& ePrev, const LayerSet& g, const LayerSet& gPrev,
-                            const ConsistencyThresholds& thresholds) {
+                            const ConsistencyThresholds& thresholds, TileSums* tiles) {
   requireShapes({&e, &ePrev}, "warped flicker");
   const Image &depth = g.get("depth", "warped flicker"), &normal = g.get("normal", "warped flicker"),
               &meshId = g.get("meshId", "warped flicker"), &motion = g.get("motion", "warped flicker");
@@ -56,6 +66,8 @@ WarpedFlicker warpedFlicker(const Image& e, const Image& ePrev, const LayerSet& 
               &pMesh = gPrev.get("meshId", "warped flicker");
   const int w = e.width(), h = e.height(), c = e.channels();
   std::vector<double> rowSum(static_cast<size_t>(h)), rowCount(static_cast<size_t>(h));
+  std::optional<TileAccumulator> acc;
+  if (tiles) acc.emplace(w, h);
   tbb::parallel_for(0, h, [&](int y) {
     double s = 0, n = 0;
     for (int x = 0; x < w; ++x) {
@@ -72,12 +84,15 @@ WarpedFlicker warpedFlicker(const Image& e, const Image& ePrev, const LayerSet& 
         ok = consistent(cur, der, surfaceAt(pDepth, pNormal, pMesh, x0 + (k & 1), y0 + (k >> 1)), thresholds);
       if (!ok) continue;
       n += 1;
+      double p = 0;
       for (int ch = 0; ch < c; ++ch) {
         double warped = (1 - fx) * (1 - fy) * ePrev.at(x0, y0, ch) + fx * (1 - fy) * ePrev.at(x0 + 1, y0, ch) +
                         (1 - fx) * fy * ePrev.at(x0, y0 + 1, ch) + fx * fy * ePrev.at(x0 + 1, y0 + 1, ch);
         double diff = double(e.at(x, y, ch)) - warped;
-        s += diff * diff / c;
+        p += diff * diff / c;
       }
+      s += p;
+      if (acc) acc->add(x, y, p, 1);
     }
     rowSum[size_t(y)] = s;
     rowCount[size_t(y)] = n;
@@ -87,9 +102,10 @@ WarpedFlicker warpedFlicker(const Image& e, const Image& ePrev, const LayerSet& 
     s += rowSum[size_t(y)];
     n += rowCount[size_t(y)];
   }
+  if (tiles) *tiles = acc->finish();
   WarpedFlicker out;
   out.validFraction = n / double(size_t(w) * size_t(h));
-  out.value = n > 0 ? std::sqrt(s / n) : 0.0;
+  out.value = n > 0 ? std::sqrt(s / n) : std::numeric_limits<double>::quiet_NaN();  // no valid pixel: undefined
   return out;
 }
 

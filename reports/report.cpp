@@ -408,7 +408,8 @@ json reportData(const json& results, const fs::path& runDir, const json* baselin
       const json* c = findPair(results, row);
       const std::string metric = row["metric"];
       auto meanOf = [&](const json* p) -> json {
-        if (!p || !isOk(*p) || !(*p)["summary"].contains(metric)) return nullptr;
+        if (!p || !isOk(*p) || !(*p)["summary"].contains(metric) || !(*p)["summary"][metric].contains("mean"))
+          return nullptr;
         return (*p)["summary"][metric]["mean"];
       };
       if (meanOf(c).is_null()) {

@@ -9,6 +9,7 @@
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "metrics/results.hpp"
+#include "metrics/statistics.hpp"
 #include "reports/pareto.hpp"
 #include "tests/test_util.hpp"
 
@@ -254,6 +255,18 @@ TEST(Report, BaselineGivesCompareVerdicts) {
   json base = fixtureRun();
   json cand = fixtureRun();
   cand["pairs"][1]["summary"]["relMse"]["mean"] = 0.06;  // svgf[a=0] on static: +20% relMSE
+  // The gate needs the per-tile data to resolve the change: 12 frames x 16 tiles around each mean.
+  auto tiles = [](double mean) {
+    MetricTiles m;
+    for (int f = 0; f < 12; ++f) {
+      TileSums t;
+      for (int k = 0; k < 16; ++k) t.sum.push_back(mean * (1 + 0.01 * ((f * 16 + k) % 5 - 2))), t.count.push_back(1);
+      m.add(f, std::move(t));
+    }
+    return m.toJson();
+  };
+  base["pairs"][1]["tiles"]["relMse"] = tiles(0.05);
+  cand["pairs"][1]["tiles"]["relMse"] = tiles(0.06);
   const json data = reportData(cand, test::freshDir("report_regression"), &base);
   ASSERT_TRUE(data["regression"].is_object());
   EXPECT_TRUE(data["regression"]["anyRegression"].get<bool>());

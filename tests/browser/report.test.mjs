@@ -186,7 +186,7 @@ function syntheticRun(nScenes, nLabels, nFrames) {
                    warnings: [], images: { dir: `images/${name}/denoiser_${l}`, all: false } });
     }
   }
-  return { schema: 1, kind: 'arena-run', name: 'synthetic', created: '2025-01-01T00:00:00Z', environment: {},
+  return { schema: 2, kind: 'arena-run', name: 'synthetic', created: '2025-01-01T00:00:00Z', environment: {},
            settings: { warmup: 8, flip: 'ldr', relMseEpsilon: 0.01 }, scenes, pairs };
 }
 

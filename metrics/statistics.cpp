@@ -1,0 +1,572 @@
+#include "metrics/statistics.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <set>
+
+#include "core/error.hpp"
+#include "core/hash.hpp"
+#include "metrics/error.hpp"
+
+namespace arena {
+
+using nlohmann::json;
+
+const char* transformName(FrameTransform t) {
+  switch (t) {
+    case FrameTransform::Mean:
+      return "mean";
+    case FrameTransform::Sqrt:
+      return "sqrt";
+    case FrameTransform::Psnr:
+      return "psnr";
+  }
+  return "mean";
+}
+
+FrameTransform parseTransform(const std::string& name) {
+  if (name == "mean") return FrameTransform::Mean;
+  if (name == "sqrt") return FrameTransform::Sqrt;
+  if (name == "psnr") return FrameTransform::Psnr;
+  throw Error("tile data: unknown frame transform '" + name + "' (expected mean, sqrt or psnr)");
+}
+
+namespace {
+
+double applyTransform(FrameTransform t, double mean) {
+  switch (t) {
+    case FrameTransform::Mean:
+      return mean;
+    case FrameTransform::Sqrt:
+      return std::sqrt(std::max(mean, 0.0));
+    case FrameTransform::Psnr:
+      return psnrFromMse(mean);
+  }
+  return mean;
+}
+
+// Float32 arrays as base64 keep the tile data of a run a few hundred kB instead of megabytes of
+// 17-digit JSON numbers; float precision is ample for resampling.
+constexpr char kBase64[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+
+std::string encodeFloats(const std::vector<float>& v) {
+  std::string bytes(v.size() * 4, '\0');
+  if (!v.empty()) std::memcpy(bytes.data(), v.data(), bytes.size());  // x86-64: little-endian
+  std::string out;
+  out.reserve((bytes.size() + 2) / 3 * 4);
+  for (size_t i = 0; i < bytes.size(); i += 3) {
+    uint32_t n = uint32_t(uint8_t(bytes[i])) << 16;
+    if (i + 1 < bytes.size()) n |= uint32_t(uint8_t(bytes[i + 1])) << 8;
+    if (i + 2 < bytes.size()) n |= uint32_t(uint8_t(bytes[i + 2]));
+    out += kBase64[(n >> 18) & 63];
+    out += kBase64[(n >> 12) & 63];
+    out += i + 1 < bytes.size() ? kBase64[(n >> 6) & 63] : '=';
+    out += i + 2 < bytes.size() ? kBase64[n & 63] : '=';
+  }
+  return out;
+}
+
+std::vector<float> decodeFloats(const std::string& text, size_t expected, const char* what) {
+  auto value = [](char c) -> int {
+    const char* p = std::strchr(kBase64, c);
+    return c != '\0' && p ? int(p - kBase64) : -1;
+  };
+  if (text.size() % 4 != 0)
+    throw Error(std::string("tile data: ") + what + " is not base64 (length not a multiple of 4)");
+  std::string bytes;
+  for (size_t i = 0; i < text.size(); i += 4) {
+    int v[4];
+    for (int k = 0; k < 4; ++k) {
+      v[k] = text[i + size_t(k)] == '=' ? 0 : value(text[i + size_t(k)]);
+      if (v[k] < 0) throw Error(std::string("tile data: ") + what + " is not base64");
+    }
+    const uint32_t n =
+        uint32_t(v[0]) << 18 | uint32_t(v[1]) << 12 | uint32_t(v[2]) << 6 | uint32_t(v[3]);
+    bytes += char((n >> 16) & 255);
+    if (text[i + 2] != '=') bytes += char((n >> 8) & 255);
+    if (text[i + 3] != '=') bytes += char(n & 255);
+  }
+  if (bytes.size() != expected * 4)
+    throw Error(std::string("tile data: ") + what + " holds " + std::to_string(bytes.size() / 4) +
+                " values, expected " + std::to_string(expected));
+  std::vector<float> out(expected);
+  if (expected) std::memcpy(out.data(), bytes.data(), bytes.size());
+  return out;
+}
+
+// Value of one row under a tile draw (all tiles when `tiles` is null); NaN when the drawn tiles
+// hold no data (e.g. no valid warped pixel).
+double rowValue(const MetricTiles& m, size_t row, const std::vector<int>* tiles) {
+  const TileSums& t = m.rows[row];
+  double s = 0, n = 0;
+  if (!tiles || t.sum.size() == 1) {
+    s = t.totalSum();
+    n = t.totalCount();
+  } else {
+    for (int k : *tiles) {
+      s += t.sum[size_t(k)];
+      n += t.count[size_t(k)];
+    }
+  }
+  return n > 0 ? applyTransform(m.transform, s / n) : kUndefined;
+}
+
+double meanOfFinite(const std::vector<double>& v) {
+  double s = 0;
+  int n = 0;
+  for (double x : v)
+    if (std::isfinite(x)) s += x, ++n;
+  return n ? s / n : kUndefined;
+}
+
+uint64_t seedOf(const std::string& name) {
+  return Hasher().add("arena-bootstrap").add(name).value();
+}
+
+}  // namespace
+
+void MetricTiles::add(int frame, TileSums tiles) {
+  if (!rows.empty() && tiles.sum.size() != rows.front().sum.size())
+    throw Error("tile data: frame " + std::to_string(frame) + " has another tile count");
+  frames.push_back(frame);
+  rows.push_back(std::move(tiles));
+}
+
+void MetricTiles::addScalar(int frame, double value) {
+  add(frame, TileSums{{value}, {1.0}});
+}
+
+std::vector<double> MetricTiles::frameValues() const {
+  std::vector<double> v;
+  for (size_t r = 0; r < rows.size(); ++r) v.push_back(rowValue(*this, r, nullptr));
+  return v;
+}
+
+double MetricTiles::mean() const {
+  return meanOfFinite(frameValues());
+}
+
+MetricTiles MetricTiles::restrictedTo(const std::vector<int>& wanted) const {
+  MetricTiles out;
+  out.transform = transform;
+  for (int f : wanted) {
+    auto it = std::find(frames.begin(), frames.end(), f);
+    if (it == frames.end()) throw Error("tile data: frame " + std::to_string(f) + " is missing");
+    out.add(f, rows[size_t(it - frames.begin())]);
+  }
+  return out;
+}
+
+json MetricTiles::toJson() const {
+  std::vector<float> sums, counts;
+  // Most metrics count the same pixels every frame: then one row of counts is stored.
+  bool sameCounts = true;
+  for (const TileSums& t : rows) sameCounts &= t.count == rows.front().count;
+  for (const TileSums& t : rows) {
+    for (double v : t.sum) sums.push_back(float(v));
+    if (!sameCounts || counts.empty())
+      for (double v : t.count) counts.push_back(float(v));
+  }
+  json j = {{"transform", transformName(transform)},
+            {"frames", frames},
+            {"tiles", tileCount()},
+            {"sum", encodeFloats(sums)},
+            {"count", encodeFloats(counts)}};
+  if (sameCounts && !rows.empty()) j["countPerFrame"] = false;
+  return j;
+}
+
+MetricTiles MetricTiles::fromJson(const json& j) {
+  if (!j.is_object() || !j.contains("frames") || !j.contains("tiles") || !j.contains("sum") ||
+      !j.contains("count"))
+    throw Error("tile data: expected an object with transform, frames, tiles, sum and count");
+  MetricTiles m;
+  m.transform = parseTransform(j.value("transform", "mean"));
+  const std::vector<int> frames = j["frames"].get<std::vector<int>>();
+  const int tiles = j["tiles"].get<int>();
+  if (tiles < 0 || tiles > 1 << 16)
+    throw Error("tile data: tile count " + std::to_string(tiles) + " out of range");
+  const size_t n = frames.size() * size_t(tiles);
+  const std::vector<float> sums = decodeFloats(j["sum"].get<std::string>(), n, "sum");
+  const bool perFrame = j.value("countPerFrame", true);
+  const std::vector<float> counts = decodeFloats(
+      j["count"].get<std::string>(), perFrame ? n : (frames.empty() ? 0 : size_t(tiles)), "count");
+  for (size_t r = 0; r < frames.size(); ++r) {
+    TileSums t;
+    for (int k = 0; k < tiles; ++k) {
+      t.sum.push_back(sums[r * size_t(tiles) + size_t(k)]);
+      t.count.push_back(counts[(perFrame ? r * size_t(tiles) : 0) + size_t(k)]);
+    }
+    m.add(frames[r], std::move(t));
+  }
+  return m;
+}
+
+json Interval::toJson() const {
+  if (!valid()) return nullptr;
+  return json::array({lo, hi});
+}
+
+ResamplingPlan::ResamplingPlan(int frames, int tiles, const std::string& seedName,
+                               const BootstrapConfig& cfg) {
+  if (frames < 1 || tiles < 1 || cfg.replicates < 1) return;
+  blockLength_ = std::clamp(int(std::lround(std::cbrt(double(frames)))), 1, frames);
+  std::mt19937_64 rng(seedOf(seedName));
+  // Integer draws by rejection-free modulo of 64-bit values: the bias (< 2^-50) is irrelevant here,
+  // and unlike std::uniform_int_distribution the sequence is the same in every standard library.
+  auto draw = [&](int n) { return int(rng() % uint64_t(n)); };
+  const int starts = frames - blockLength_ + 1;
+  for (int b = 0; b < cfg.replicates; ++b) {
+    std::vector<int> rows;
+    while (int(rows.size()) < frames) {
+      const int s = draw(starts);
+      for (int k = 0; k < blockLength_ && int(rows.size()) < frames; ++k) rows.push_back(s + k);
+    }
+    std::vector<int> picks(static_cast<size_t>(tiles));
+    for (int& p : picks) p = draw(tiles);
+    frameRows_.push_back(std::move(rows));
+    tiles_.push_back(std::move(picks));
+  }
+}
+
+std::vector<double> replicateValues(const MetricTiles& m, const ResamplingPlan& plan) {
+  std::vector<double> out(size_t(plan.replicates()), kUndefined);
+  for (int b = 0; b < plan.replicates(); ++b) {
+    double s = 0;
+    int n = 0;
+    for (int row : plan.frameRows(b)) {
+      if (size_t(row) >= m.rows.size())
+        throw Error("bootstrap: plan and tile data disagree on the frame count");
+      const double v = rowValue(m, size_t(row), &plan.tiles(b));
+      if (std::isfinite(v)) s += v, ++n;
+    }
+    if (n) out[size_t(b)] = s / n;
+  }
+  return out;
+}
+
+Interval percentileInterval(std::vector<double> v, double confidence) {
+  v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
+  if (v.size() < 20 || !(confidence > 0 && confidence < 1)) return {};
+  std::sort(v.begin(), v.end());
+  auto quantile = [&](double q) {
+    const double pos = q * double(v.size() - 1);
+    const size_t lo = size_t(std::floor(pos)), hi = std::min(lo + 1, v.size() - 1);
+    return v[lo] + (pos - double(lo)) * (v[hi] - v[lo]);
+  };
+  const double tail = (1 - confidence) / 2;
+  return {quantile(tail), quantile(1 - tail)};
+}
+
+Interval meanInterval(const MetricTiles& m, const std::string& seedName,
+                      const BootstrapConfig& cfg) {
+  if (m.empty()) return {};
+  const ResamplingPlan plan(int(m.frames.size()), std::max(cfg.grid.count(), m.tileCount()),
+                            seedName, cfg);
+  if (m.tileCount() != 1 && m.tileCount() != cfg.grid.count())
+    throw Error("bootstrap: tile data has " + std::to_string(m.tileCount()) + " tiles, the grid " +
+                std::to_string(cfg.grid.count()));
+  return percentileInterval(replicateValues(m, plan), cfg.confidence);
+}
+
+std::vector<int> commonFrames(const std::vector<const MetricTiles*>& series) {
+  if (series.empty()) return {};
+  std::set<int> common(series.front()->frames.begin(), series.front()->frames.end());
+  for (const MetricTiles* s : series) {
+    std::set<int> mine(s->frames.begin(), s->frames.end()), keep;
+    std::set_intersection(common.begin(), common.end(), mine.begin(), mine.end(),
+                          std::inserter(keep, keep.end()));
+    common = std::move(keep);
+  }
+  return {common.begin(), common.end()};
+}
+
+namespace {
+
+// Replicates of several series over their common frames, with one plan.
+std::vector<std::vector<double>> pairedReplicates(const std::vector<const MetricTiles*>& series,
+                                                  const std::vector<int>& frames,
+                                                  const std::string& seedName,
+                                                  const BootstrapConfig& cfg,
+                                                  std::vector<double>* means) {
+  int tiles = 1;
+  for (const MetricTiles* s : series) tiles = std::max(tiles, s->tileCount());
+  for (const MetricTiles* s : series)
+    if (s->tileCount() != 1 && s->tileCount() != tiles)
+      throw Error("bootstrap: the series being compared have different tile grids");
+  const ResamplingPlan plan(int(frames.size()), tiles, seedName, cfg);
+  std::vector<std::vector<double>> out;
+  for (const MetricTiles* s : series) {
+    MetricTiles aligned = s->restrictedTo(frames);
+    if (means) means->push_back(aligned.mean());
+    out.push_back(replicateValues(aligned, plan));
+  }
+  return out;
+}
+
+std::vector<double> difference(const std::vector<double>& a, const std::vector<double>& b) {
+  std::vector<double> d(a.size());
+  for (size_t i = 0; i < a.size(); ++i) d[i] = a[i] - b[i];
+  return d;
+}
+
+}  // namespace
+
+PairedDifference pairedDifference(const MetricTiles& a, const MetricTiles& b,
+                                  const std::string& seedName, const BootstrapConfig& cfg) {
+  const std::vector<int> frames = commonFrames({&a, &b});
+  if (frames.empty()) return {};
+  std::vector<double> means;
+  auto reps = pairedReplicates({&a, &b}, frames, seedName, cfg, &means);
+  return {means[0] - means[1], percentileInterval(difference(reps[0], reps[1]), cfg.confidence)};
+}
+
+namespace {
+
+// rank = 1 + number of methods resolved better; ties = not resolved either way.
+void assignRanks(std::vector<RankedMethod>& methods, const std::vector<std::vector<bool>>& better,
+                 const std::vector<std::vector<bool>>& resolved) {
+  for (size_t i = 0; i < methods.size(); ++i) {
+    methods[i].rank = 1;
+    for (size_t j = 0; j < methods.size(); ++j) {
+      if (i == j) continue;
+      if (resolved[i][j] && better[j][i]) ++methods[i].rank;
+      if (!resolved[i][j]) methods[i].tiedWith.push_back(methods[j].label);
+    }
+  }
+}
+
+void sortRanking(std::vector<RankedMethod>& methods, bool lowerIsBetter) {
+  std::stable_sort(methods.begin(), methods.end(),
+                   [&](const RankedMethod& a, const RankedMethod& b) {
+                     if (a.rank != b.rank) return a.rank < b.rank;
+                     return lowerIsBetter ? a.value < b.value : a.value > b.value;
+                   });
+}
+
+json rankingJson(const std::vector<RankedMethod>& ranking, const char* valueName) {
+  json out = json::array();
+  for (const RankedMethod& m : ranking)
+    out.push_back({{"label", m.label},
+                   {"rank", m.rank},
+                   {valueName, m.value},
+                   {"ci95", m.ci.toJson()},
+                   {"tiedWith", m.tiedWith}});
+  return out;
+}
+
+}  // namespace
+
+SceneRanking rankScene(const std::string& metric, bool lowerIsBetter,
+                       const std::vector<std::pair<std::string, const MetricTiles*>>& methods,
+                       const std::string& seedName, const BootstrapConfig& cfg) {
+  SceneRanking out;
+  out.metric = metric;
+  std::vector<const MetricTiles*> series;
+  std::vector<std::string> labels;
+  for (const auto& [label, m] : methods) {
+    if (!m || m->empty()) {
+      out.excluded += (out.excluded.empty() ? "" : "; ") + label + ": no " + metric + " data";
+      continue;
+    }
+    labels.push_back(label);
+    series.push_back(m);
+  }
+  const std::vector<int> frames = commonFrames(series);
+  if (series.empty() || frames.empty()) return out;
+  std::vector<double> means;
+  const auto reps = pairedReplicates(series, frames, seedName, cfg, &means);
+  const size_t n = series.size();
+  std::vector<std::vector<bool>> better(n, std::vector<bool>(n, false)),
+      resolved(n, std::vector<bool>(n, false));
+  for (size_t i = 0; i < n; ++i) {
+    out.ranking.push_back(
+        {labels[i], 0, means[i], percentileInterval(reps[i], cfg.confidence), {}});
+    out.replicates[labels[i]] = reps[i];
+  }
+  for (size_t i = 0; i < n; ++i)
+    for (size_t j = i + 1; j < n; ++j) {
+      SceneRanking::Pair p{
+          labels[i],
+          labels[j],
+          {means[i] - means[j], percentileInterval(difference(reps[i], reps[j]), cfg.confidence)}};
+      const bool r = p.d.resolved();
+      resolved[i][j] = resolved[j][i] = r;
+      better[i][j] = lowerIsBetter ? p.d.diff < 0 : p.d.diff > 0;
+      better[j][i] = !better[i][j];
+      out.resolvedPairs += r;
+      out.pairs.push_back(std::move(p));
+    }
+  assignRanks(out.ranking, better, resolved);
+  sortRanking(out.ranking, lowerIsBetter);
+  return out;
+}
+
+json SceneRanking::toJson() const {
+  json p = json::array();
+  for (const Pair& x : pairs)
+    p.push_back({{"a", x.a},
+                 {"b", x.b},
+                 {"diff", x.d.diff},
+                 {"ci95", x.d.ci.toJson()},
+                 {"resolved", x.d.resolved()}});
+  json j = {{"metric", metric},
+            {"ranking", rankingJson(ranking, "mean")},
+            {"pairs", p},
+            {"resolvedPairs", resolvedPairs},
+            {"totalPairs", int(pairs.size())}};
+  if (!excluded.empty()) j["excluded"] = excluded;
+  return j;
+}
+
+OverallRanking rankOverall(const std::vector<const SceneRanking*>& scenes,
+                           const std::string& preferredBaseline, bool lowerIsBetter,
+                           double confidence) {
+  OverallRanking out;
+  if (scenes.empty()) return out;
+  // Methods ranked on every scene with a positive value (the log ratio needs one).
+  std::vector<std::string> labels;
+  for (const RankedMethod& m : scenes.front()->ranking) labels.push_back(m.label);
+  std::sort(labels.begin(), labels.end());
+  std::vector<std::string> kept;
+  for (const std::string& label : labels) {
+    std::string why;
+    for (const SceneRanking* s : scenes) {
+      auto it = std::find_if(s->ranking.begin(), s->ranking.end(),
+                             [&](const RankedMethod& m) { return m.label == label; });
+      if (it == s->ranking.end())
+        why = "not ranked on every scene";
+      else if (!(it->value > 0))
+        why = "value <= 0 on a scene";
+    }
+    if (why.empty())
+      kept.push_back(label);
+    else
+      out.excluded += (out.excluded.empty() ? "" : "; ") + label + ": " + why;
+  }
+  if (kept.empty()) return out;
+  out.baseline = std::find(kept.begin(), kept.end(), preferredBaseline) != kept.end()
+                     ? preferredBaseline
+                     : kept.front();
+  out.normalisation = "geometric mean over " + std::to_string(scenes.size()) + " scenes of " +
+                      scenes.front()->metric + " / " + scenes.front()->metric + "(" + out.baseline +
+                      ")";
+  auto valueOn = [](const SceneRanking* s, const std::string& label) {
+    for (const RankedMethod& m : s->ranking)
+      if (m.label == label) return m.value;
+    return kUndefined;
+  };
+  // Per method: the mean over scenes of log(value / baseline), point and replicates.
+  const size_t reps = scenes.front()->replicates.at(kept.front()).size();
+  std::vector<double> logScore(kept.size(), 0.0);
+  std::vector<std::vector<double>> logReps(kept.size(), std::vector<double>(reps, 0.0));
+  for (size_t i = 0; i < kept.size(); ++i)
+    for (const SceneRanking* s : scenes) {
+      logScore[i] +=
+          std::log(valueOn(s, kept[i]) / valueOn(s, out.baseline)) / double(scenes.size());
+      const auto& a = s->replicates.at(kept[i]);
+      const auto& b = s->replicates.at(out.baseline);
+      for (size_t r = 0; r < reps && r < a.size(); ++r)
+        logReps[i][r] += std::log(a[r] / b[r]) / double(scenes.size());
+    }
+  const size_t n = kept.size();
+  std::vector<std::vector<bool>> better(n, std::vector<bool>(n, false)),
+      resolved(n, std::vector<bool>(n, false));
+  for (size_t i = 0; i < n; ++i) {
+    std::vector<double> expReps(reps);
+    for (size_t r = 0; r < reps; ++r) expReps[r] = std::exp(logReps[i][r]);
+    out.ranking.push_back(
+        {kept[i], 0, std::exp(logScore[i]), percentileInterval(expReps, confidence), {}});
+  }
+  for (size_t i = 0; i < n; ++i)
+    for (size_t j = i + 1; j < n; ++j) {
+      const Interval ci = percentileInterval(difference(logReps[i], logReps[j]), confidence);
+      resolved[i][j] = resolved[j][i] = ci.valid() && !ci.containsZero();
+      better[i][j] = lowerIsBetter ? logScore[i] < logScore[j] : logScore[i] > logScore[j];
+      better[j][i] = !better[i][j];
+    }
+  assignRanks(out.ranking, better, resolved);
+  sortRanking(out.ranking, lowerIsBetter);
+  return out;
+}
+
+json OverallRanking::toJson() const {
+  json j = {{"normalisation", normalisation},
+            {"baseline", baseline},
+            {"ranking", rankingJson(ranking, "score")}};
+  if (!excluded.empty()) j["excluded"] = excluded;
+  return j;
+}
+
+}  // namespace arena
+
+namespace arena {
+
+json analyseRun(const json& results, const BootstrapConfig& cfg) {
+  struct MetricChoice {
+    const char* name;
+    bool lowerIsBetter;
+  };
+  // relMSE ranks (paired differences of raw and corrected relMSE are the same: the correction
+  // subtracts the same reference term from every method); the others are reported beside it.
+  const MetricChoice kMetrics[] = {{"relMse", true}, {"ldrFlip", true}, {"hdrFlip", true},
+                                   {"ssim", false},  {"tRmae", true},   {"warpedFlicker", true}};
+  std::map<std::string, std::vector<std::pair<std::string, std::map<std::string, MetricTiles>>>>
+      byScene;
+  if (!results.contains("pairs") || !results["pairs"].is_array())
+    throw Error("statistics: results have no pairs array");
+  for (const json& p : results["pairs"]) {
+    if (p.value("status", "") != "ok") continue;
+    std::map<std::string, MetricTiles> tiles;
+    if (p.contains("tiles"))
+      for (auto it = p["tiles"].begin(); it != p["tiles"].end(); ++it)
+        tiles[it.key()] = MetricTiles::fromJson(it.value());
+    byScene[p.value("scene", "")].push_back({p.value("label", ""), std::move(tiles)});
+  }
+  json scenes = json::object();
+  std::vector<SceneRanking> relMseRankings;
+  relMseRankings.reserve(byScene.size());
+  for (const auto& [scene, pairs] : byScene) {
+    json sceneJson;
+    for (const MetricChoice& m : kMetrics) {
+      std::vector<std::pair<std::string, const MetricTiles*>> methods;
+      bool any = false;
+      for (const auto& [label, tiles] : pairs) {
+        auto it = tiles.find(m.name);
+        methods.push_back({label, it == tiles.end() ? nullptr : &it->second});
+        any |= it != tiles.end();
+      }
+      if (!any) continue;
+      SceneRanking r = rankScene(m.name, m.lowerIsBetter, methods, scene, cfg);
+      if (std::string(m.name) == "relMse") {
+        sceneJson = r.toJson();
+        sceneJson["byMetric"] = json::object();
+        relMseRankings.push_back(std::move(r));
+      } else if (sceneJson.is_object()) {
+        sceneJson["byMetric"][m.name] = r.toJson();
+      }
+    }
+    if (sceneJson.is_object()) scenes[scene] = sceneJson;
+  }
+  std::vector<const SceneRanking*> ranked;
+  for (const SceneRanking& r : relMseRankings)
+    if (!r.ranking.empty()) ranked.push_back(&r);
+  json out = {
+      {"method",
+       "crossed bootstrap: moving blocks of round(n^(1/3)) frames x " +
+           std::to_string(cfg.grid.cols) + "x" + std::to_string(cfg.grid.rows) + " image tiles, " +
+           std::to_string(cfg.replicates) +
+           " replicates, percentile intervals; one plan per scene, so differences are paired"},
+      {"confidence", cfg.confidence},
+      {"replicates", cfg.replicates},
+      {"tileGrid", {cfg.grid.cols, cfg.grid.rows}},
+      {"rankedOn", "relMse"},
+      {"scenes", scenes}};
+  if (!ranked.empty())
+    out["overall"] = rankOverall(ranked, "temporal", true, cfg.confidence).toJson();
+  return out;
+}
+
+}  // namespace arena

@@ -1,0 +1,158 @@
+#pragma once
+// Uncertainty of every summary (../shared/docs/metrics.md, "Uncertainty"): 95% intervals, paired
+// differences between methods and ranks with ties.
+//
+// Method: a crossed ("pigeonhole", Owen 2007) bootstrap. Frames are resampled in moving blocks of
+// consecutive frames (block length round(n^(1/3)), the usual rate for the moving-block bootstrap,
+// Künsch 1989), because errors persist through a denoiser's history; independently, the image's
+// tiles (metrics/tiles.hpp) are resampled with replacement, because filter footprints correlate
+// neighbouring pixels. A replicate's value is the summary recomputed from the chosen frames and
+// tiles; intervals are the percentile interval of the replicates. The crossed bootstrap counts
+// frame-to-frame and tile-to-tile variation both, so it is conservative (intervals too wide rather
+// than too narrow) when content varies between tiles: a "tie" means "not resolved by this
+// sequence", never "equal".
+//
+// Every pair of a scene is resampled with the same plan (the same frames and tiles in replicate b),
+// so differences are paired: content that is hard for every method cancels, and so does the
+// reference's own noise, which adds the same Var(r_hat) term to every method's expected squared
+// error. Paired differences of relMSE are therefore unbiased even against a noisy reference.
+#include <cstdint>
+#include <limits>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "metrics/tiles.hpp"
+
+namespace arena {
+
+constexpr double kUndefined = std::numeric_limits<double>::quiet_NaN();
+
+// How a frame's value follows from the mean of its tiles: the metric itself (relMSE, SSIM, FLIP,
+// tRMAE), its square root (RMSE, warped flicker) or 10 log10(1 / x) capped like PSNR (PSNR, tPSNR
+// from a display MSE).
+enum class FrameTransform { Mean, Sqrt, Psnr };
+const char* transformName(FrameTransform t);
+FrameTransform parseTransform(const std::string& name);
+
+// One metric of one pair after warm-up: a row per frame, each with its tile sums. Metrics without
+// a spatial decomposition (time, effective spp) have one tile per frame.
+struct MetricTiles {
+  FrameTransform transform = FrameTransform::Mean;
+  std::vector<int> frames;
+  std::vector<TileSums> rows;
+  void add(int frame, TileSums tiles);
+  void addScalar(int frame, double value);
+  bool empty() const { return frames.empty(); }
+  int tileCount() const { return rows.empty() ? 0 : int(rows.front().sum.size()); }
+  // The frame values (transform of each row's total) and their mean: the summary's point estimate.
+  std::vector<double> frameValues() const;
+  double mean() const;
+  // Rows kept only for the given frames (in that order); frames missing here are an error.
+  MetricTiles restrictedTo(const std::vector<int>& frames) const;
+  nlohmann::json toJson() const;  // compact: frames, transform, float32 sums and counts in base64
+  static MetricTiles fromJson(const nlohmann::json& j);
+};
+
+struct Interval {
+  double lo = kUndefined, hi = kUndefined;
+  bool valid() const { return lo == lo && hi == hi; }
+  bool containsZero() const { return valid() && lo <= 0 && hi >= 0; }
+  nlohmann::json toJson() const;
+};
+
+struct BootstrapConfig {
+  int replicates = 1000;
+  double confidence = 0.95;
+  TileGrid grid;
+};
+
+// Replicate b uses frameRows(b) (indices into the aligned frame list, n of them) and tiles(b)
+// (tile indices, one draw per tile of the grid). Seeded from a name (the scene's), so reruns are
+// identical and every pair of the scene shares the plan.
+class ResamplingPlan {
+ public:
+  ResamplingPlan(int frames, int tiles, const std::string& seedName,
+                 const BootstrapConfig& cfg = {});
+  int replicates() const { return int(frameRows_.size()); }
+  int blockLength() const { return blockLength_; }
+  const std::vector<int>& frameRows(int b) const { return frameRows_[size_t(b)]; }
+  const std::vector<int>& tiles(int b) const { return tiles_[size_t(b)]; }
+
+ private:
+  int blockLength_ = 1;
+  std::vector<std::vector<int>> frameRows_, tiles_;
+};
+
+// The metric recomputed under each replicate of the plan (NaN where no tile had data).
+std::vector<double> replicateValues(const MetricTiles& m, const ResamplingPlan& plan);
+// Percentile interval of replicate values (NaN replicates dropped; fewer than 20 finite: invalid).
+Interval percentileInterval(std::vector<double> replicates, double confidence);
+// The interval of one metric's summary mean.
+Interval meanInterval(const MetricTiles& m, const std::string& seedName,
+                      const BootstrapConfig& cfg = {});
+
+// a - b on the frames both have, with its interval.
+struct PairedDifference {
+  double diff = kUndefined;
+  Interval ci;
+  bool resolved() const { return ci.valid() && !ci.containsZero(); }
+};
+PairedDifference pairedDifference(const MetricTiles& a, const MetricTiles& b,
+                                  const std::string& seedName, const BootstrapConfig& cfg = {});
+
+// Frames present in every series (sorted).
+std::vector<int> commonFrames(const std::vector<const MetricTiles*>& series);
+
+// Ranks with ties for the methods of one scene on one metric. rank = 1 + the number of methods
+// resolved better; tiedWith = the methods whose difference is not resolved.
+struct RankedMethod {
+  std::string label;
+  int rank = 0;
+  double value = kUndefined;  // the summary mean on the common frames
+  Interval ci;
+  std::vector<std::string> tiedWith;
+};
+struct SceneRanking {
+  std::string metric;
+  std::vector<RankedMethod> ranking;  // best first
+  struct Pair {
+    std::string a, b;
+    PairedDifference d;
+  };
+  std::vector<Pair> pairs;
+  int resolvedPairs = 0;
+  std::map<std::string, std::vector<double>> replicates;  // per label, for the overall ranking
+  std::string excluded;                                   // methods left out, and why
+  nlohmann::json toJson() const;
+};
+SceneRanking rankScene(const std::string& metric, bool lowerIsBetter,
+                       const std::vector<std::pair<std::string, const MetricTiles*>>& methods,
+                       const std::string& seedName, const BootstrapConfig& cfg = {});
+
+// Across scenes: each method's score is the geometric mean over scenes of its ratio to a baseline's
+// value on that scene, so no scene dominates by its scale. (The ordering does not depend on which
+// baseline: the geometric mean of ratios is the ratio of geometric means.) Differences are the
+// mean over scenes of log ratios, with intervals from the scenes' replicates.
+struct OverallRanking {
+  std::string normalisation, baseline;
+  std::vector<RankedMethod> ranking;  // value = score
+  std::string excluded;
+  nlohmann::json toJson() const;
+};
+OverallRanking rankOverall(const std::vector<const SceneRanking*>& scenes,
+                           const std::string& preferredBaseline, bool lowerIsBetter,
+                           double confidence = 0.95);
+
+}  // namespace arena
+
+namespace arena {
+
+// The statistics block of a run (results.json "statistics"): per scene the ranking with ties and
+// every paired difference on relMSE (and, under byMetric, on the other gated metrics), and the
+// overall ranking across scenes. Reads each ok pair's "tiles"; a pair without them is excluded
+// and named.
+nlohmann::json analyseRun(const nlohmann::json& results, const BootstrapConfig& cfg = {});
+
+}  // namespace arena

@@ -1,0 +1,439 @@
+// Uncertainty (metrics/statistics.hpp): tile sums, the crossed block bootstrap's coverage on
+// synthetic data with a known difference, ranks with ties, the per-scene normalised overall
+// ranking, absent summaries, the statistical regression gate and shard completeness.
+#include "metrics/statistics.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <random>
+
+#include "core/error.hpp"
+#include "core/exr_io.hpp"
+#include "core/sequence.hpp"
+#include "harness/run_matrix.hpp"
+#include "metrics/compare.hpp"
+#include "metrics/error.hpp"
+#include "metrics/results.hpp"
+#include "metrics/summary.hpp"
+#include "tests/test_util.hpp"
+
+namespace arena {
+namespace {
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+Image noiseImage(int w, int h, uint32_t seed, float scale) {
+  Image img(w, h, 3);
+  for (int c = 0; c < 3; ++c)
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        img.at(x, y, c) = 0.5f + scale * (test::hashUniform(seed, uint32_t(y * w + x), c) - 0.5f);
+  return img;
+}
+
+TEST(Tiles, TileSumsAddUpToTheFrameValue) {
+  const Image d = noiseImage(37, 23, 1, 0.4f), r = noiseImage(37, 23, 2, 0.1f),
+              var = noiseImage(37, 23, 3, 0.01f);
+  ErrorTiles t;
+  const ErrorStats e = linearError(d, r, &var, nullptr, kRelMseEpsilon, &t);
+  ASSERT_EQ(t.relMse.sum.size(), 16u);
+  EXPECT_DOUBLE_EQ(t.relMse.totalCount(), 37.0 * 23 * 3);
+  EXPECT_NEAR(t.relMse.totalSum() / t.relMse.totalCount(), e.relMse, 1e-12);
+  EXPECT_NEAR(t.relMseCorrected.totalSum() / t.relMseCorrected.totalCount(), e.relMseCorrected,
+              1e-12);
+  EXPECT_NEAR(t.mse.totalSum() / t.mse.totalCount(), e.mse, 1e-12);
+  TileSums s;
+  const double v = ssim(d, r, &s);
+  EXPECT_NEAR(s.totalSum() / s.totalCount(), v, 1e-12);
+  // Every tile holds data and tiles partition the image.
+  for (double c : t.mse.count) EXPECT_GT(c, 0);
+}
+
+MetricTiles syntheticSeries(int frames, int tiles, double offset, std::mt19937_64& rng,
+                            const std::vector<double>& shared) {
+  std::normal_distribution<double> noise(0.0, 1.0);
+  MetricTiles m;
+  for (int f = 0; f < frames; ++f) {
+    TileSums t;
+    for (int k = 0; k < tiles; ++k) {
+      t.sum.push_back(shared[size_t(f * tiles + k)] + offset + 0.3 * noise(rng));
+      t.count.push_back(1.0);
+    }
+    m.add(f, std::move(t));
+  }
+  return m;
+}
+
+// Content shared by the methods: a slow AR(1) drift over frames (rho 0.7) plus a fixed effect per
+// tile; each method adds its own independent noise per frame and tile.
+std::vector<double> sharedContent(int frames, int tiles, std::mt19937_64& rng) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::vector<double> tileEffect(static_cast<size_t>(tiles)), out;
+  for (double& e : tileEffect) e = 2.0 + 0.5 * n(rng);
+  double drift = 0;
+  for (int f = 0; f < frames; ++f) {
+    drift = 0.7 * drift + 0.3 * n(rng);
+    for (int k = 0; k < tiles; ++k) out.push_back(tileEffect[size_t(k)] + drift);
+  }
+  return out;
+}
+
+// Trial set: 200 independent sequences of 28 frames x 16 tiles; method B = method A + 0.15 in
+// expectation, each with its own noise (sd 0.3 per cell). The 95% paired interval must cover the
+// true difference in at least 93% of the trials.
+TEST(Bootstrap, PairedIntervalCoversAKnownDifference) {
+  std::mt19937_64 rng(2026);
+  const double delta = 0.15;
+  int covered = 0, resolved = 0;
+  BootstrapConfig cfg;
+  cfg.replicates = 400;
+  for (int trial = 0; trial < 200; ++trial) {
+    const auto shared = sharedContent(28, 16, rng);
+    const MetricTiles a = syntheticSeries(28, 16, 0.0, rng, shared);
+    const MetricTiles b = syntheticSeries(28, 16, delta, rng, shared);
+    const PairedDifference d = pairedDifference(b, a, "trial" + std::to_string(trial), cfg);
+    ASSERT_TRUE(d.ci.valid());
+    covered += d.ci.lo <= delta && delta <= d.ci.hi;
+    resolved += d.resolved();
+  }
+  std::cout << "coverage " << covered << "/200, resolved " << resolved << "/200\n";
+  EXPECT_GE(covered, 186);   // 93%
+  EXPECT_GE(resolved, 150);  // the difference is 0.5 noise sd: mostly resolved, not always
+}
+
+TEST(Bootstrap, IdenticalMethodsAreTiedAndAClearWinnerIsResolved) {
+  std::mt19937_64 rng(7);
+  const auto shared = sharedContent(20, 16, rng);
+  const MetricTiles a = syntheticSeries(20, 16, 0.0, rng, shared);
+  const MetricTiles worse = syntheticSeries(20, 16, 1.0, rng, shared);
+  SceneRanking r = rankScene("relMse", true, {{"a", &a}, {"copy", &a}, {"worse", &worse}}, "scene");
+  ASSERT_EQ(r.ranking.size(), 3u);
+  EXPECT_EQ(r.ranking[0].rank, 1);
+  EXPECT_EQ(r.ranking[1].rank, 1);
+  EXPECT_EQ(r.ranking[2].label, "worse");
+  EXPECT_EQ(r.ranking[2].rank, 3);
+  EXPECT_EQ(r.ranking[0].tiedWith.size(), 1u);
+  EXPECT_EQ(r.resolvedPairs, 2);
+  ASSERT_TRUE(r.ranking[0].ci.valid());
+  EXPECT_LE(r.ranking[0].ci.lo, r.ranking[0].value);
+  EXPECT_GE(r.ranking[0].ci.hi, r.ranking[0].value);
+  // Reruns are identical (fixed seed per scene).
+  SceneRanking again =
+      rankScene("relMse", true, {{"a", &a}, {"copy", &a}, {"worse", &worse}}, "scene");
+  EXPECT_EQ(again.ranking[0].ci.lo, r.ranking[0].ci.lo);
+}
+
+MetricTiles constantSeries(double value, int frames = 12) {
+  MetricTiles m;
+  std::mt19937_64 rng(uint64_t(value * 1e6));
+  std::normal_distribution<double> n(0.0, 0.01 * value);
+  for (int f = 0; f < frames; ++f) {
+    TileSums t;
+    for (int k = 0; k < 16; ++k) t.sum.push_back(value + n(rng)), t.count.push_back(1);
+    m.add(f, std::move(t));
+  }
+  return m;
+}
+
+// One scene 1000x the scale of the other must not decide the overall ranking: method x is 2x
+// better than y on the small scene and 1.1x worse on the large one; by the mean relMSE y would win,
+// by the geometric mean of ratios x does.
+TEST(Bootstrap, OverallRankingIsPerSceneNormalised) {
+  const MetricTiles xs = constantSeries(0.001), ys = constantSeries(0.002),
+                    ts = constantSeries(0.004);
+  const MetricTiles xl = constantSeries(1.1), yl = constantSeries(1.0), tl = constantSeries(2.0);
+  SceneRanking small =
+      rankScene("relMse", true, {{"x", &xs}, {"y", &ys}, {"temporal", &ts}}, "small");
+  SceneRanking large =
+      rankScene("relMse", true, {{"x", &xl}, {"y", &yl}, {"temporal", &tl}}, "large");
+  OverallRanking o = rankOverall({&small, &large}, "temporal", true);
+  ASSERT_EQ(o.ranking.size(), 3u);
+  EXPECT_EQ(o.ranking[0].label, "x");
+  EXPECT_NEAR(o.ranking[0].value, std::sqrt(0.25 * 0.55), 0.01);
+  EXPECT_EQ(o.baseline, "temporal");
+  EXPECT_NE(o.normalisation.find("geometric mean"), std::string::npos);
+}
+
+TEST(Bootstrap, TileDataSurvivesJson) {
+  std::mt19937_64 rng(3);
+  const auto shared = sharedContent(9, 16, rng);
+  MetricTiles m = syntheticSeries(9, 16, 0.0, rng, shared);
+  m.transform = FrameTransform::Psnr;
+  const MetricTiles back = MetricTiles::fromJson(json::parse(m.toJson().dump()));
+  EXPECT_EQ(back.frames, m.frames);
+  EXPECT_EQ(back.transform, FrameTransform::Psnr);
+  EXPECT_NEAR(back.rows[3].sum[5], m.rows[3].sum[5], 1e-6 * std::abs(m.rows[3].sum[5]));
+  json bad = m.toJson();
+  bad["sum"] = "AAAA";
+  EXPECT_THROW(MetricTiles::fromJson(bad), Error);
+}
+
+TEST(Summaries, NoDataIsAbsentNeverPerfect) {
+  PairSeries few(4, 8);  // fewer frames than the warm-up
+  for (int t = 0; t < 4; ++t) few.record("relMse", t, 0.01, {}, FrameTransform::Mean);
+  json s = few.summaries("scene");
+  EXPECT_FALSE(s["relMse"].contains("mean"));
+  EXPECT_NE(s["relMse"]["absent"].get<std::string>().find("warm-up"), std::string::npos);
+
+  PairSeries nan(12, 2);
+  for (int t = 0; t < 12; ++t) nan.record("ssim", t, t == 7 ? NAN : 0.9, {}, FrameTransform::Mean);
+  s = nan.summaries("scene");
+  EXPECT_FALSE(s["ssim"].contains("mean"));
+  EXPECT_EQ(s["ssim"]["nonFinite"], 1);
+
+  PairSeries fine(12, 2);
+  for (int t = 0; t < 12; ++t) fine.record("ms", t, 10.0 + t % 3, {}, FrameTransform::Mean);
+  s = fine.summaries("scene");
+  ASSERT_TRUE(s["ms"]["ci95"].is_array());
+  EXPECT_LE(s["ms"]["ci95"][0].get<double>(), s["ms"]["mean"].get<double>());
+  EXPECT_GE(s["ms"]["ci95"][1].get<double>(), s["ms"]["mean"].get<double>());
+}
+
+// A results document with one scene and the given labels' relMSE tile data.
+json syntheticRun(const std::map<std::string, MetricTiles>& methods,
+                  const std::string& scene = "s") {
+  json r = {
+      {"schema", kResultsSchemaVersion}, {"kind", "arena-run"},        {"name", "synthetic"},
+      {"environment", json::object()},   {"settings", json::object()}, {"pairs", json::array()}};
+  for (const auto& [label, m] : methods)
+    r["pairs"].push_back({{"scene", scene},
+                          {"label", label},
+                          {"denoiser", label},
+                          {"status", "ok"},
+                          {"params", json::object()},
+                          {"frames", json::array()},
+                          {"summary", {{"relMse", {{"mean", m.mean()}}}}},
+                          {"tiles", {{"relMse", m.toJson()}}}});
+  return r;
+}
+
+TEST(CompareGate, NoiseIsNotARegressionAndARealWorseningIs) {
+  std::mt19937_64 rng(11);
+  const auto shared = sharedContent(20, 16, rng);
+  const MetricTiles base = syntheticSeries(20, 16, 0.0, rng, shared);
+  const MetricTiles rerun = syntheticSeries(20, 16, 0.0, rng, shared);  // another noise realisation
+  const MetricTiles worse = syntheticSeries(20, 16, 0.4, rng, shared);  // ~+20%
+  const std::vector<Tolerance> tol = {{"relMse", 0.01}};
+  auto rows = compareRuns(syntheticRun({{"m", base}}), syntheticRun({{"m", rerun}}), tol);
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_NE(rows[0].verdict, "regressed") << rows[0].change;
+  EXPECT_FALSE(anyRegression(rows));
+  rows = compareRuns(syntheticRun({{"m", base}}), syntheticRun({{"m", worse}}), tol);
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].verdict, "regressed");
+  EXPECT_GT(rows[0].changeCi.lo, 0.0);
+  EXPECT_TRUE(anyRegression(rows));
+}
+
+TEST(CompareGate, FailsOnWhatItCannotCompare) {
+  const MetricTiles m = constantSeries(0.01);
+  const std::vector<Tolerance> tol = {{"relMse", 0.02}};
+  // The candidate lost a denoiser: the gate fails and names it.
+  auto rows = compareRuns(syntheticRun({{"a", m}, {"b", m}}), syntheticRun({{"a", m}}), tol);
+  EXPECT_TRUE(anyRegression(rows));
+  bool named = false;
+  for (auto& r : rows) named |= r.label == "b" && r.verdict == "missing";
+  EXPECT_TRUE(named);
+  // No scene in common.
+  EXPECT_THROW(compareRuns(syntheticRun({{"a", m}}, "s1"), syntheticRun({{"a", m}}, "s2"), tol),
+               Error);
+  // A tolerance that can never fail is refused.
+  EXPECT_THROW(parseTolerance("nan"), Error);
+  EXPECT_THROW(parseTolerance("inf"), Error);
+  EXPECT_THROW(parseTolerance("-1%"), Error);
+  EXPECT_THROW(parseConfidence("1.5"), Error);
+  EXPECT_DOUBLE_EQ(parseConfidence("90%"), 0.9);
+  // A metric the baseline had and the candidate reports absent fails too.
+  json cand = syntheticRun({{"a", m}});
+  cand["pairs"][0]["summary"]["relMse"] = {{"frames", 0}, {"absent", "no frame after the warm-up"}};
+  rows = compareRuns(syntheticRun({{"a", m}}), cand, tol);
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].verdict, "missing");
+}
+
+TEST(MergeGate, AnIncompleteShardSetIsAnError) {
+  const fs::path root = test::freshDir("merge_gate");
+  auto shard = [&](const std::string& name, const std::string& which) {
+    json r = syntheticRun({{"a", constantSeries(0.01)}}, name);
+    r["settings"]["shard"] = which;
+    r["scenes"] = json::object();
+    saveResults(root / name, r);
+    return root / name;
+  };
+  const fs::path s0 = shard("s0", "0/3"), s2 = shard("s2", "2/3"), s1 = shard("s1", "1/3"),
+                 again = shard("again", "0/3");
+  try {
+    mergeRuns({s0, s2}, root / "merged");
+    FAIL() << "an incomplete shard set merged";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("missing 1/3"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(root / "merged" / "results.json"));
+  EXPECT_THROW(mergeRuns({s0, again, s1, s2}, root / "merged"), Error);
+  json merged = mergeRuns({s0, s1, s2}, root / "new" / "merged");  // --out created when missing
+  EXPECT_EQ(merged["pairs"].size(), 3u);
+  EXPECT_TRUE(merged["statistics"]["scenes"].contains("s1"));
+}
+
+// End to end on a tiny sequence: every summary has an interval around its mean, the run carries
+// its statistics, and the gate tells another input seed (noise) from a worse filter.
+const json& pairOfLabel(const json& results, const std::string& label) {
+  for (const json& p : results["pairs"])
+    if (p["label"] == label) return p;
+  throw Error("no pair " + label);
+}
+
+TEST(StatisticsEndToEnd, IntervalsRankingsAndAQuietGate) {
+  const fs::path cache = test::freshDir("stats_cache");
+  auto run = [&](const std::string& name, uint32_t inputSeed,
+                 std::map<std::string, std::string> temporal) {
+    RunConfig c;
+    c.name = name;
+    c.out = test::freshDir("stats_" + name);
+    c.cache = cache;
+    c.render = test::tinySettings(48, 27, 14, 32);
+    c.render.inputSeed = inputSeed;
+    c.scenes = {test::shippedScene("cornell_static")};
+    c.denoisers = {{"svgf", {}, ""}, {"temporal", std::move(temporal), "temporal"}};
+    c.baselines = false;
+    c.warmup = 4;
+    c.flip = "none";
+    c.keepFrames = "none";
+    return runMatrix(c);
+  };
+  const json base = run("base", 0, {});
+  ASSERT_TRUE(failedPairs(base).empty());
+  for (const json& p : base["pairs"])
+    for (const char* m : {"relMse", "psnr", "ssim", "tRmae", "ms"}) {
+      const json& s = p["summary"][m];
+      ASSERT_TRUE(s["ci95"].is_array()) << m;
+      EXPECT_LE(s["ci95"][0].get<double>(), s["mean"].get<double>() + 1e-12) << m;
+      EXPECT_GE(s["ci95"][1].get<double>(), s["mean"].get<double>() - 1e-12) << m;
+    }
+  const json& scene = base["statistics"]["scenes"]["cornell_static"];
+  EXPECT_EQ(scene["totalPairs"], 1);
+  EXPECT_LE(scene["ranking"][0]["mean"].get<double>(), scene["ranking"][1]["mean"].get<double>());
+  EXPECT_TRUE(base["scenes"]["cornell_static"]["floors"].contains("ssim"));
+
+  const json reseeded = run("reseeded", 7, {});
+  const json worse =
+      run("worse", 0, {{"maxHistory", "3"}});  // a running mean of 3 frames: far noisier
+  const std::vector<Tolerance> tol = {{"relMse", 0.02}};
+  auto rows = compareRuns(base, reseeded, tol);
+  for (const auto& r : rows) EXPECT_NE(r.verdict, "regressed") << r.label << " " << r.change;
+  EXPECT_NE(pairOfLabel(base, "svgf")["summary"]["relMse"]["mean"],
+            pairOfLabel(reseeded, "svgf")["summary"]["relMse"]["mean"]);
+  rows = compareRuns(base, worse, tol);
+  bool flagged = false;
+  for (const auto& r : rows) {
+    flagged |= r.label == "temporal" && r.verdict == "regressed";
+    if (r.label == "svgf") EXPECT_EQ(r.verdict, "ok");  // unchanged: identical numbers
+  }
+  EXPECT_TRUE(flagged);
+}
+
+}  // namespace
+}  // namespace arena
+
+namespace arena {
+namespace {
+
+TEST(BiasVarianceSplit, AddsUpToTheMeanRelMseAndSeparatesTheTerms) {
+  const Image r = noiseImage(20, 12, 1, 0.2f);
+  std::vector<Image> outs;
+  for (uint32_t k = 0; k < 4; ++k) {
+    Image d = noiseImage(20, 12, 10 + k, 0.3f);  // noise around 0.5
+    for (float& v : d.raw()) v += 0.1f;          // plus a constant bias
+    outs.push_back(d);
+  }
+  std::vector<const Image*> ptrs;
+  double meanRel = 0;
+  for (const Image& d : outs) ptrs.push_back(&d), meanRel += linearError(d, r, nullptr).relMse / 4;
+  const BiasVariance bv = biasVariance(ptrs, r, nullptr);
+  EXPECT_NEAR(bv.bias2 + bv.variance, meanRel, 1e-9);
+  EXPECT_GT(bv.variance, 0);
+  // Identical outputs: no variance, all bias.
+  const BiasVariance same = biasVariance({&outs[0], &outs[0]}, r, nullptr);
+  EXPECT_DOUBLE_EQ(same.variance, 0.0);
+  EXPECT_NEAR(same.bias2, linearError(outs[0], r, nullptr).relMse, 1e-12);
+  EXPECT_THROW(biasVariance({&outs[0]}, r, nullptr), Error);
+}
+
+// End to end: the noisy input is unbiased (its error is all variance); a spatial filter trades
+// variance for bias.
+TEST(BiasVarianceSplit, ThreeInputSeedsOnATinySequence) {
+  RunConfig c;
+  c.name = "seeds";
+  c.out = test::freshDir("stats_seeds");
+  c.cache = test::freshDir("stats_seeds_cache");
+  c.render = test::tinySettings(40, 24, 10, 64);
+  c.scenes = {test::shippedScene("cornell_static")};
+  c.denoisers = {{"eaw", {}, ""}};
+  c.warmup = 2;
+  c.flip = "none";
+  c.keepFrames = "none";
+  c.seeds = 3;
+  const json r = runMatrix(c);
+  ASSERT_TRUE(failedPairs(r).empty());
+  auto split = [&](const std::string& label, const char* term) {
+    for (const json& p : r["pairs"])
+      if (p["label"] == label) return p["biasVariance"]["summary"][term]["mean"].get<double>();
+    throw Error("no pair " + label);
+  };
+  EXPECT_LT(std::abs(split("passthrough", "bias2Corrected")),
+            0.1 * split("passthrough", "variance"));
+  EXPECT_LT(split("eaw", "variance"), 0.5 * split("passthrough", "variance"));
+  EXPECT_GT(split("eaw", "bias2Corrected") / split("eaw", "variance"),
+            split("passthrough", "bias2Corrected") / split("passthrough", "variance"));
+}
+
+}  // namespace
+}  // namespace arena
+
+namespace arena {
+namespace {
+
+// Rewrites one layer of a cached EXR (keeping its attributes, so the cache still trusts it) with a
+// non-finite value at one pixel.
+void poison(const fs::path& file, const std::vector<LayerSpec>& specs, const std::string& layer) {
+  ExrContents c = readExr(file, specs);
+  c.layers.get(layer).at(3, 2, 0) = std::numeric_limits<float>::quiet_NaN();
+  writeExr(file, c.layers, specs, c.attributes);
+}
+
+// No fake perfect score from non-finite data: a NaN in a frame's albedo fails the pair naming the
+// layer; a NaN in the reference fails the scene naming the file; inputs are counted per channel.
+TEST(NonFiniteData, IsNamedAndNeverScored) {
+  RunConfig c;
+  c.name = "nan";
+  c.cache = test::freshDir("stats_nan_cache");
+  c.render = test::tinySettings(24, 16, 6, 8);
+  c.scenes = {test::shippedScene("cornell_static")};
+  c.denoisers = {{"temporal", {}, ""}};
+  c.baselines = false;
+  c.warmup = 1;
+  c.flip = "none";
+  c.keepFrames = "none";
+  c.out = test::freshDir("stats_nan_ok");
+  const fs::path dir = sequenceDir(c.scenes[0], c.render, c.cache);
+  ASSERT_TRUE(failedPairs(runMatrix(c)).empty());
+  poison(Sequence::framePath(dir, 3), channels::frameLayers(), "albedo");
+  c.out = test::freshDir("stats_nan_albedo");
+  json r = runMatrix(c);
+  ASSERT_EQ(failedPairs(r).size(), 1u);
+  EXPECT_NE(failedPairs(r)[0].find("albedo x1"), std::string::npos) << failedPairs(r)[0];
+  EXPECT_EQ(r["scenes"]["cornell_static"]["nonFiniteInputs"]["frame 3: albedo.0"], 1);
+  poison(Sequence::referencePath(dir, 0), channels::referenceLayers(), "color");
+  c.out = test::freshDir("stats_nan_reference");
+  r = runMatrix(c);
+  ASSERT_EQ(failedPairs(r).size(), 1u);
+  EXPECT_NE(failedPairs(r)[0].find("reference has non-finite values"), std::string::npos)
+      << failedPairs(r)[0];
+}
+
+}  // namespace
+}  // namespace arena
