@@ -41,6 +41,7 @@
 #include "core/error.hpp"
 #include "core/fast_math.hpp"
 #include "core/sequence.hpp"
+#include "denoisers/common/footprint.hpp"
 #include "denoisers/common/parallel.hpp"
 #include "denoisers/variants.hpp"
 
@@ -171,6 +172,9 @@ void Asvgf::filterGradients() {
   const float sigmaL = asvgf_.gradientSigmaL;
   const int sw = strataWidth_, sh = strataHeight_;
   for (int k = 0; k < asvgf_.gradientIterations; ++k) {
+    // Taps 2^k strata apart, or the footprint policy's step (footprint.hpp; 0: skipped).
+    const int step = atrousStep(k, settings_.atrous.footprintScale);
+    if (step == 0) continue;
     // Taps per full-resolution pixel: 9 per stratum, a ninth of the pixels' count.
     ScopedPass pass(this, "gradient atrous " + std::to_string(k + 1),
                     asvgf_.gradientLuminance ? 2.0 : 1.0);
@@ -199,7 +203,6 @@ void Asvgf::filterGradients() {
         }
       });
     }
-    const int step = 1 << k;
     const int32_t* guidePixel = guidePixel_.data();
     const float* z = guide_.plane(kZ);
     const float* pixelX = guide_.plane(kPixelX);

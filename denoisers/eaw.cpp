@@ -3,10 +3,12 @@
 // normal and world-position stopping; the colour sigma is halved every iteration so later, wider
 // iterations smooth only small illumination differences. Each iteration filters the previous
 // one's output (the paper keeps only the coarsest level c_N and drops the detail coefficients).
+#include <algorithm>
 #include <cmath>
 #include <string>
 
 #include "denoisers/common/atrous.hpp"
+#include "denoisers/common/footprint.hpp"
 #include "denoisers/common/gbuffer.hpp"
 #include "denoisers/denoiser.hpp"
 #include "denoisers/variants.hpp"
@@ -17,7 +19,9 @@ namespace {
 
 struct EawSettings {
   int iterations = 5;
+  bool normalPerStep = true;  // seed 002's code: the normal distance divided by stepwidth^2
   AtrousSettings atrous;
+  Footprint footprint;
 };
 
 class EdgeAvoidingAtrous final : public Denoiser {
@@ -29,6 +33,7 @@ class EdgeAvoidingAtrous final : public Denoiser {
   }
 
   void setup(int width, int height) override {
+    settings_.atrous.footprintScale = settings_.footprint.scale(height);
     for (Image& image : pingPong_) image = Image(width, height, 3);
   }
 
@@ -44,7 +49,14 @@ class EdgeAvoidingAtrous final : public Denoiser {
       Image& target = i + 1 == settings_.iterations ? output : pingPong_[size_t(i % 2)];
       // Dammertz §2.2: sigma_rt^i = 2^-i sigma_rt. (Seed 002's code multiplies by 2^i instead.)
       const float colorSigma = std::ldexp(settings_.atrous.edges.sigmaColor, -i);
-      atrousIteration(i, settings_.atrous, guide, colorSigma, *source, target);
+      // Seed 002's shader divides the squared normal distance by stepwidth^2 (the normal term
+      // loosens as the taps spread); sigma_n x step^2 is the same weight.
+      AtrousSettings iteration = settings_.atrous;
+      if (settings_.normalPerStep) {
+        const float step = float(atrousStep(i, settings_.atrous.footprintScale));
+        iteration.edges.sigmaN *= std::max(step, 1.0f) * std::max(step, 1.0f);
+      }
+      atrousIteration(i, iteration, guide, colorSigma, *source, target);
       source = &target;
     }
   }
@@ -55,7 +67,7 @@ class EdgeAvoidingAtrous final : public Denoiser {
 };
 
 ParamSchema eawSchema() {
-  return ParamSchema({
+  std::vector<ParamSpec> specs = {
       ParamSpec::integer("iterations", 5, 1, 10,
                          "à-trous iterations; 5 reach about 65x65 px (Dammertz 2010: 5)"),
       atrousKernelParamSpec(),
@@ -68,12 +80,17 @@ ParamSchema eawSchema() {
       ParamSpec::real("sigmaPosition", 0.05, 1e-9, 1e9,
                       "position sigma_x of exp(-|x(p)-x(q)|^2/sigma_x), world units squared "
                       "(ours, for metre-scale scenes)"),
+      ParamSpec::boolean("normalPerStep", true,
+                         "normal distance divided by stepwidth^2 each iteration (seed 002's "
+                         "Dammertz code; false: one sigma for every iteration)"),
       ParamSpec::boolean("edge.color", true, "colour stopping term (Dammertz)"),
       ParamSpec::boolean("edge.normal", true, "normal stopping term (Dammertz)"),
       ParamSpec::boolean("edge.position", true, "world-position stopping term (Dammertz)"),
       ParamSpec::boolean("edge.id", false,
                          "mesh-id stopping term (not in the paper; seed 002's code has it)"),
-  });
+  };
+  for (ParamSpec& s : footprintParamSpecs()) specs.push_back(std::move(s));
+  return ParamSchema(specs);
 }
 
 }  // namespace
@@ -85,7 +102,9 @@ DenoiserInfo eawInfo() {
           eawSchema(), [](const ParamSet& params, SignalKind) {
             EawSettings s;
             s.iterations = params.getInt("iterations");
+            s.normalPerStep = params.getBool("normalPerStep");
             s.atrous.kernel = atrousKernelParam(params);
+            s.footprint = footprintParam(params);
             EdgeStoppingSettings& e = s.atrous.edges;
             e.depth = false;
             e.luminance = false;

@@ -71,6 +71,7 @@ class Slgf final : public Svgf {
 
   void setup(int width, int height) override {
     Svgf::setup(width, height);
+    estimator_.footprintScale = settings_.atrous.footprintScale;
     for (Image& image : estimate_) image = Image(width, height, 3);
     for (Image& image : colorMoments_) image = Image(width, height, 3);
     for (Image& image : meanVariance_) image = Image(width, height, 1);

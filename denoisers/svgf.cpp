@@ -25,6 +25,7 @@ std::vector<std::string> Svgf::requiredChannels() const {
 }
 
 void Svgf::setup(int width, int height) {
+  settings_.atrous.footprintScale = settings_.footprint.scale(height);
   derivatives_ = Image(width, height, kGeometryDerivativeChannels);
   reprojection_.setup(width, height);
   previousGBuffer_.setup(width, height);
@@ -145,8 +146,9 @@ std::vector<ParamSpec> svgfParamSpecs() {
                          "history length cap; bounds 1/h from below (Falcor 32; with alpha 0.2 "
                          "only h < 5 matters)"),
       ParamSpec::integer("feedbackTap", 1, 0, 10,
-                         "à-trous iteration whose output is next frame's colour history; 0 = the "
-                         "accumulated colour, no spatial feedback (SVGF paper and Falcor 1)"),
+                         "à-trous iteration (1-based) whose output is next frame's colour "
+                         "history; 0 = the accumulated colour (SVGF paper: 1, the first; Falcor's "
+                         "0-based mFeedbackTap = 1 is its second iteration, 2 here)"),
       ParamSpec::real("sigmaZ", 1.0, 0.0, 1e6, "depth stopping sigma_z, SVGF eq. 3 (paper 1)"),
       ParamSpec::real("sigmaN", 128.0, 0.0, 1e4,
                       "normal stopping exponent sigma_n, SVGF eq. 4 (paper and Falcor 128)"),
@@ -164,6 +166,7 @@ std::vector<ParamSpec> svgfParamSpecs() {
       ParamSpec::boolean("edge.position", false, "world-position term (Dammertz 2010)"),
   };
   for (ParamSpec& s : reprojectionParamSpecs()) specs.push_back(std::move(s));
+  for (ParamSpec& s : footprintParamSpecs()) specs.push_back(std::move(s));
   return specs;
 }
 
@@ -177,6 +180,7 @@ SvgfSettings svgfSettings(const ParamSet& params, const std::string& owner) {
                 ".iterations=" + std::to_string(s.iterations) +
                 "; use a feedbackTap in [0, iterations] (0 = no spatial feedback)");
   s.atrous.kernel = atrousKernelParam(params);
+  s.footprint = footprintParam(params);
   s.alpha = params.getFloat("alpha");
   s.momentsAlpha = params.getFloat("momentsAlpha");
   s.maxHistory = float(params.getInt("maxHistory"));

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "denoisers/common/atrous.hpp"
+#include "denoisers/common/footprint.hpp"
 #include "denoisers/common/gbuffer.hpp"
 #include "denoisers/common/reprojection.hpp"
 #include "denoisers/common/temporal_accumulation.hpp"
@@ -21,8 +22,9 @@ struct SvgfSettings {
   float maxHistory = 32.0f;   // history length cap (Falcor 32)
   VarianceSettings variance;
   int iterations = 5;   // à-trous iterations (SVGF paper 5; Falcor 4)
-  int feedbackTap = 1;  // iteration whose output becomes the colour history; 0 = accumulated colour
+  int feedbackTap = 1;  // 1-based iteration feeding the history (paper 1; Falcor's 0-based 1 = 2)
   AtrousSettings atrous;
+  Footprint footprint;  // footprint.hpp: the à-trous steps at this resolution
 };
 
 // SVGF's parameters (A-SVGF appends its own to these) and their resolved values; an Error names

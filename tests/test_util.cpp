@@ -2,6 +2,8 @@
 
 #include <unistd.h>
 
+#include "core/sequence.hpp"
+
 namespace arena::test {
 
 std::filesystem::path freshDir(const std::string& name) {
@@ -44,6 +46,33 @@ FrameContext stillCameraContext(int t, int w, int h) {
   ctx.previousCamera = ctx.camera;
   ctx.reset = t == 0;
   return ctx;
+}
+
+LayerSet planeFrame(int w, int h, float spacing) {
+  LayerSet frame;
+  for (const LayerSpec& spec : channels::frameLayers())
+    frame.set(spec.name, Image(w, h, spec.channels()));
+  frame.get("albedo").fill(1.0f);
+  frame.get("color").fill(0.5f);
+  frame.get("depth").fill(2.0f);
+  frame.get("roughness").fill(0.5f);
+  frame.get("specHitDist").fill(1e6f);
+  frame.get("specHitDistMirror").fill(1e6f);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      frame.get("normal").at(x, y, 2) = 1.0f;
+      frame.get("position").at(x, y, 0) = spacing * float(x);
+      frame.get("position").at(x, y, 1) = -spacing * float(y);
+      frame.get("position").at(x, y, 2) = -2.0f;
+    }
+  return frame;
+}
+
+std::unique_ptr<Denoiser> createDenoiser(const std::string& name,
+                                         const std::map<std::string, std::string>& params,
+                                         SignalKind kind) {
+  const DenoiserInfo& info = DenoiserRegistry::instance().find(name);
+  return info.create(info.schema.resolve(params, name), kind);
 }
 
 }  // namespace arena::test

@@ -3,6 +3,8 @@
 // deterministic noise and frame contexts.
 #include <cstdint>
 #include <filesystem>
+#include <map>
+#include <memory>
 #include <string>
 
 #include "denoisers/denoiser.hpp"
@@ -23,5 +25,15 @@ float hashUniform(uint32_t a, uint32_t b = 0, uint32_t c = 0);
 // Frame t of a w x h sequence seen by a still camera at the origin looking down -Z (45 degrees);
 // frame 0 resets the history.
 FrameContext stillCameraContext(int t, int w, int h);
+
+// Every frame layer of core/sequence.hpp for a flat camera-facing plane at depth 2 (normal +Z,
+// mesh 0, zero motion, albedo 1, roughness 0.5, colour 0.5, hit distances 1e6), `spacing` world
+// units between neighbouring pixels.
+LayerSet planeFrame(int w, int h, float spacing = 0.01f);
+
+// A registered denoiser with `params` overriding its defaults.
+std::unique_ptr<Denoiser> createDenoiser(const std::string& name,
+                                         const std::map<std::string, std::string>& params = {},
+                                         SignalKind kind = SignalKind::Diffuse);
 
 }  // namespace arena::test

@@ -10,6 +10,7 @@
 #include "core/error.hpp"
 #include "core/fast_math.hpp"
 #include "denoisers/common/atrous_kernel.hpp"
+#include "denoisers/common/footprint.hpp"
 #include "denoisers/common/parallel.hpp"
 #include "denoisers/common/simd.hpp"
 
@@ -100,6 +101,12 @@ void filterIteration(int iteration, const AtrousSettings& settings, const Atrous
   if (colorIn.channels() != 3 || !colorOut.sameShape(colorIn) || g.width != w || g.height != h)
     throw Error("à-trous: colour in/out must be 3-channel images of the G-buffer's size");
   if (iteration < 0 || iteration > 24) throw Error("à-trous: iteration out of range [0, 24]");
+  const int step = atrousStep(iteration, settings.footprintScale);
+  if (step == 0) {  // footprint.hpp: an iteration scaled below half a pixel is skipped
+    parallelCopy(colorIn, colorOut);
+    if (carryIn) parallelCopy(*carryIn, *carryOut);
+    return;
+  }
   if (guide.lobes && (guide.lobes->width() != w || guide.lobes->height() != h ||
                       guide.lobes->channels() != kSpecularLobeChannels))
     throw Error("à-trous: the lobe image must have 4 channels and the G-buffer's size");
@@ -114,7 +121,7 @@ void filterIteration(int iteration, const AtrousSettings& settings, const Atrous
   const std::vector<KernelTap>& taps = kernelTaps(settings.kernel);
   it.width = w;
   it.height = h;
-  it.step = 1 << iteration;
+  it.step = step;
   it.radius = kernelRadius(settings.kernel);
   it.taps = taps.data();
   it.tapCount = int(taps.size());

@@ -25,6 +25,9 @@ enum class AtrousKernel {
 struct AtrousSettings {
   AtrousKernel kernel = AtrousKernel::B3Spline5x5;
   EdgeStoppingSettings edges;
+  // footprint.hpp: iteration i's taps are atrousStep(i, footprintScale) px apart (2^i at 1); an
+  // iteration whose step is 0 is the identity (colour and carried channels copied).
+  float footprintScale = 1.0f;
 };
 
 // Guides of one frame. `derivatives` (computeGeometryDerivatives) is needed by the depth term,

@@ -1,0 +1,42 @@
+#pragma once
+// One footprint policy for every spatial filter (issue 15, item 1), chosen here and recorded with
+// every result through each variant's parameters `footprint` and `footprintHeight`:
+//   - native (the default): every pixel constant is used as published -- à-trous taps 2^i px
+//     apart, ReBLUR's Poisson radii and history-fix stride in px -- at whatever resolution the
+//     sequence has. This is what the reference implementations do (Falcor SVGFPass, Q2RTX,
+//     NRD take their radii in pixels of the image they filter).
+//   - scaled: the constants are pixels at `footprintHeight` (1080: the resolution NRD and the
+//     SVGF paper tune for) and shrink or grow with the image height h by s = h / footprintHeight,
+//     so a quick 256x144 run filters the same fraction of the screen as a 1080p run would:
+//     Poisson radii and strides are multiplied by s, à-trous iteration i takes taps
+//     round(2^i s) px apart and is skipped (the identity) where that rounds to 0 -- except the
+//     first iteration, which always runs with step 1 so a filter never vanishes. The variance of
+//     the cascade, sum_i step_i^2, follows s^2 sum_i 4^i to within a few per cent.
+// Data flows one way: a denoiser reads its scale once in setup(); nothing else knows the policy.
+#include <string>
+#include <vector>
+
+#include "denoisers/params.hpp"
+
+namespace arena {
+
+enum class FootprintPolicy { Native, Scaled };
+
+struct Footprint {
+  FootprintPolicy policy = FootprintPolicy::Native;
+  float referenceHeight = 1080.0f;
+  // Pixels per published pixel at this image height: 1 (native) or height / referenceHeight.
+  float scale(int height) const;
+};
+
+// The step in pixels of à-trous iteration `iteration` (0-based; 2^iteration published pixels)
+// under scale s: 2^iteration exactly when s = 1, else round(2^iteration s), 0 meaning "skip", and
+// never 0 for the first iteration.
+int atrousStep(int iteration, float scale);
+
+// `footprint` (native | scaled) and `footprintHeight`: appended to every spatial variant's schema;
+// the default policy is defined once, in footprint.cpp.
+std::vector<ParamSpec> footprintParamSpecs();
+Footprint footprintParam(const ParamSet& params);
+
+}  // namespace arena
