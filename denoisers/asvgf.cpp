@@ -27,8 +27,14 @@
 //     use this file's joint-bilateral weights; Q2RTX's own gradient filter stops on luminance
 //     only, and its final exposure/gamma remapping of the gradient is not reproduced.
 //   - gradient.gain is Q2RTX's flt_antilag_hf (the paper has none: 1).
-//   - gradient.shortenHistory is Q2RTX's h' = h (1 - lambda)^10 + 1: a rejected history restarts
-//     the 1/h ramp and SVGF's spatial variance estimate (the paper only raises alpha).
+//   - gradient.shortenHistory (default on) is Q2RTX's order: the reprojected length is shortened,
+//     h = h_prev (1 - lambda)^10 + 1, before alpha = lerp(max(alpha, 1/h), 1, lambda) is fixed, so
+//     a rejected history restarts the 1/h ramp and SVGF's spatial variance estimate. Off is the
+//     paper literally (only alpha raised): where lambda = 1 the moments are the pixel's own
+//     (l, l^2), the variance is 0 and the luminance term stops the à-trous exactly where fresh
+//     1-spp noise enters (issue 15, item 2).
+//   - Q2RTX's current moments are a 3x3 spatial estimate (depth/normal weighted); ours stay the
+//     pixel's own (SVGF), so that A-SVGF equals SVGF wherever lambda = 0.
 //   - Q2RTX's minimum alphas (colour 0.02, moments 0.01; algorithms.md quotes 0.02-0.075) are
 //     SVGF's `alpha` and `momentsAlpha` here; the defaults stay at the SVGF paper's 0.2.
 //   - Q2RTX drops the 3x3 max and disables gradients on reflections; we keep the max
@@ -84,18 +90,18 @@ void Asvgf::setup(int width, int height) {
   alpha_ = Image(width, height, 1);
 }
 
-const Image* Asvgf::adaptiveAlpha(const FrameContext&, const DenoiserInputs& in) {
-  adapted_ = false;
+Svgf::AdaptiveAlpha Asvgf::adaptiveAlpha(const FrameContext&, const DenoiserInputs& in) {
   if (!hasHistory_ || in.gradients == nullptr) {
     // No history to keep or no samples to judge it by: plain SVGF.
     lambda_.fill(0.0f);
-    return nullptr;
+    return {};
   }
   buildStrata(in);
   filterGradients();
   computeAlpha();
-  adapted_ = true;
-  return &alpha_;
+  AdaptiveAlpha alpha;
+  (asvgf_.shortenHistory ? alpha.antilag : alpha.floor) = &alpha_;
+  return alpha;
 }
 
 void Asvgf::buildStrata(const DenoiserInputs& in) {
@@ -318,30 +324,18 @@ void Asvgf::computeAlpha() {
           }
       lambda_.at(sx, sy) = lambda;
     }
-  // eq. 15 per pixel from its stratum. Where lambda = 0 the image holds 0, leaving Svgf's floors
-  // (alpha for colour, momentsAlpha for moments) exactly as in plain SVGF.
+  // Per pixel from its stratum: Q2RTX's order hands lambda itself to the accumulation (h
+  // shortened, then alpha lerped towards 1); the paper's eq. 15 the floor alpha_i. Where
+  // lambda = 0 both leave Svgf's floors (alpha for colour, momentsAlpha for moments) exactly as
+  // in plain SVGF.
   const float base = settings_.alpha;
+  const bool q2rtxOrder = asvgf_.shortenHistory;
   const int w = alpha_.width();
   parallelRows(alpha_.height(), [&](int y) {
     for (int x = 0; x < w; ++x) {
       const float lambda = lambda_.at(x / S, y / S);
-      alpha_.at(x, y) = lambda > 0.0f ? (1.0f - lambda) * base + lambda : 0.0f;
-    }
-  });
-}
-
-void Asvgf::correctAccumulation(const FrameContext&, const DenoiserInputs&, const Image*) {
-  if (!adapted_ || !asvgf_.shortenHistory) return;
-  ScopedPass pass(this, "gradient history shortening", 0);
-  // Q2RTX asvgf_temporal: hist_len = h_prev (1 - antilag)^10 + 1 (our h already counts this frame).
-  const int w = historyLength_.width();
-  float* length = historyLength_.plane(0);
-  parallelRows(historyLength_.height(), [&](int y) {
-    for (int x = 0; x < w; ++x) {
-      const size_t i = size_t(y) * size_t(w) + size_t(x);
-      const float lambda = lambda_.at(x / S, y / S);
-      if (lambda > 0.0f && reprojection_.valid(i))
-        length[i] = (length[i] - 1.0f) * std::pow(1.0f - lambda, 10.0f) + 1.0f;
+      alpha_.at(x, y) =
+          q2rtxOrder ? lambda : (lambda > 0.0f ? (1.0f - lambda) * base + lambda : 0.0f);
     }
   });
 }
@@ -375,9 +369,11 @@ std::vector<ParamSpec> asvgfParamSpecs() {
                       "lambda = min(1, gain * ratio) (paper 1; Q2RTX flt_antilag_hf)"),
       ParamSpec::boolean("gradient.max3x3", true,
                          "alpha_i = max over the 3x3 neighbouring strata (A-SVGF §3.5)"),
-      ParamSpec::boolean("gradient.shortenHistory", false,
-                         "Q2RTX: h' = (h - 1)(1 - lambda)^10 + 1, restarting 1/h and the spatial "
-                         "variance where the history was rejected (not in the paper)"),
+      ParamSpec::boolean(
+          "gradient.shortenHistory", true,
+          "Q2RTX order: h = h_prev (1 - lambda)^10 + 1 first, then alpha = "
+          "lerp(max(alpha, 1/h), 1, lambda), restarting 1/h and the spatial variance "
+          "where the history was rejected; false = the paper's eq. 15 literally"),
   };
   specs.insert(specs.end(), own.begin(), own.end());
   return specs;

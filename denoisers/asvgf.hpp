@@ -32,9 +32,12 @@ struct AsvgfSettings {
   GradientNormalisation normalisation = GradientNormalisation::Paper;
   float antilagGain = 1.0f;  // lambda multiplier: 1 in the paper; Q2RTX flt_antilag_hf
   bool max3x3 = true;        // §3.5: the max alpha over the 3x3 neighbouring strata
-  // Q2RTX asvgf_temporal: shorten the history with the anti-lag factor,
-  // h' = (h - 1)(1 - lambda)^10 + 1, so a rejected history restarts 1/h and the spatial variance.
-  bool shortenHistory = false;
+  // Q2RTX asvgf_temporal's order (default): the reprojected history length is shortened first,
+  // h = h_prev (1 - lambda)^10 + 1, then alpha = lerp(max(alpha, 1/h), 1, lambda) -- a rejected
+  // history restarts 1/h and SVGF's spatial variance estimate. false: the paper literally,
+  // alpha = max((1 - lambda) alpha + lambda, 1/h) with h unchanged, whose moments then hold the
+  // pixel's own (l, l^2) where lambda = 1 and the variance collapses to 0 (issue 15, item 2).
+  bool shortenHistory = true;
 };
 
 std::vector<ParamSpec> asvgfParamSpecs();
@@ -58,9 +61,7 @@ class Asvgf final : public Svgf {
   const Image& lastLambda() const { return lambda_; }
 
  protected:
-  const Image* adaptiveAlpha(const FrameContext& ctx, const DenoiserInputs& in) override;
-  void correctAccumulation(const FrameContext& ctx, const DenoiserInputs& in,
-                           const Image* alpha) override;
+  AdaptiveAlpha adaptiveAlpha(const FrameContext& ctx, const DenoiserInputs& in) override;
 
  private:
   void buildStrata(const DenoiserInputs& in);
@@ -69,7 +70,6 @@ class Asvgf final : public Svgf {
 
   AsvgfSettings asvgf_;
   int strataWidth_ = 0, strataHeight_ = 0;
-  bool adapted_ = false;  // this frame's alpha came from gradients
   // Per stratum: the pixel whose G-buffer guides it (-1: only sky), its guides
   // (z, dz/dx, dz/dy, n, pixel x, y), and the filter state (delta, Delta, l, Var(l)) ping-pong.
   std::vector<int> guidePixel_;
@@ -78,7 +78,7 @@ class Asvgf final : public Svgf {
   int resultIndex_ = 0;  // which of gradient_ holds the last iteration's output
   Image blurredVariance_;
   Image stratumLambda_, lambda_;
-  Image alpha_;  // per pixel, handed to Svgf
+  Image alpha_;  // per pixel, handed to Svgf: alpha_i (paper) or lambda (Q2RTX order)
 };
 
 }  // namespace arena

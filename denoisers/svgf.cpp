@@ -52,9 +52,9 @@ void Svgf::denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& out
   gbuffer_ = GBufferView::fromFrame(in.frame, requiredChannels(), name_);
   computeDerivatives();
   reproject(ctx);
-  const Image* alpha = adaptiveAlpha(ctx, in);
+  const AdaptiveAlpha alpha = adaptiveAlpha(ctx, in);
   accumulate(in, alpha);
-  correctAccumulation(ctx, in, alpha);
+  correctAccumulation(ctx, in, alpha.floor);
   estimateVariance();
   filterWavelet(output);
   storeHistory();
@@ -76,14 +76,14 @@ void Svgf::reproject(const FrameContext& ctx) {
   pass.setTaps(reprojection_.testedTapsPerPixel());
 }
 
-void Svgf::accumulate(const DenoiserInputs& in, const Image* alpha) {
+void Svgf::accumulate(const DenoiserInputs& in, const AdaptiveAlpha& alpha) {
   // Colour, moments and history length are resampled by the same reprojection decision.
   ScopedPass pass(this, "temporal accumulation", 3 * reprojection_.readTapsPerPixel());
   // One sweep for the three (updateHistoryLength, accumulateTemporally, accumulateMoments).
-  accumulateColorAndMoments(reprojection_, previousHistoryLength_, settings_.maxHistory, in.signal,
-                            colorHistory_, momentsHistory_, {settings_.alpha, alpha},
-                            {settings_.momentsAlpha, alpha}, historyLength_, accumulated_,
-                            moments_);
+  accumulateColorAndMoments(
+      reprojection_, previousHistoryLength_, settings_.maxHistory, in.signal, colorHistory_,
+      momentsHistory_, {settings_.alpha, alpha.floor, alpha.antilag},
+      {settings_.momentsAlpha, alpha.floor, alpha.antilag}, historyLength_, accumulated_, moments_);
 }
 
 void Svgf::estimateVariance() {

@@ -42,11 +42,21 @@ class Svgf : public Denoiser {
   // The paper's pipeline, top to bottom (see svgf.cpp).
   void denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& output) override;
 
+  // Of the last frame (for tests): the luminance variance the à-trous started from, and h.
+  const Image& lastVariance() const { return variance_; }
+  const Image& lastHistoryLength() const { return previousHistoryLength_; }
+
  protected:
-  // A-SVGF's hook: called once per frame after reprojection() and before accumulation; returns an
-  // image (plane 0) raising the EMA floor per pixel, alpha = max(settings alpha, it, 1/h), for
-  // colour and moments alike, or nullptr for plain SVGF.
-  virtual const Image* adaptiveAlpha(const FrameContext&, const DenoiserInputs&) { return nullptr; }
+  // A-SVGF's hook: called once per frame after reprojection() and before accumulation; returns
+  // per-pixel images (plane 0) for colour and moments alike, or nullptrs for plain SVGF: `floor`
+  // raises the EMA floor, alpha = max(settings alpha, it, 1/h) (A-SVGF eq. 15 literally);
+  // `antilag` is Q2RTX's lambda, shortening h before alpha = lerp(max(alpha, 1/h), 1, lambda)
+  // (temporal_accumulation.hpp).
+  struct AdaptiveAlpha {
+    const Image* floor = nullptr;
+    const Image* antilag = nullptr;
+  };
+  virtual AdaptiveAlpha adaptiveAlpha(const FrameContext&, const DenoiserInputs&) { return {}; }
   // SLGF's hook: called once per frame right after accumulate() (with the alpha image it used) and
   // before estimateVariance(); may rewrite accumulated_, moments_ and historyLength_, e.g. re-blend
   // a corrected reprojected history (colorHistory_ / momentsHistory_ still hold frame i - 1's
@@ -54,12 +64,12 @@ class Svgf : public Denoiser {
   virtual void correctAccumulation(const FrameContext&, const DenoiserInputs&, const Image*) {}
 
   // The stages, each one timed pass, in paper order.
-  void computeDerivatives();                                      // ddx/ddy of depth, normal
-  void reproject(const FrameContext& ctx);                        // §4.1 consistency tests
-  void accumulate(const DenoiserInputs& in, const Image* alpha);  // §4.1 colour, §4.2 moments
-  void estimateVariance();                                        // §4.2 temporal / 7x7 spatial
-  void filterWavelet(Image& output);                              // §4.3 à-trous + feedback
-  void storeHistory();                                            // history for frame i + 1
+  void computeDerivatives();                // ddx/ddy of depth, normal
+  void reproject(const FrameContext& ctx);  // §4.1 consistency tests
+  void accumulate(const DenoiserInputs& in, const AdaptiveAlpha& alpha);  // §4.1, §4.2
+  void estimateVariance();            // §4.2 temporal / 7x7 spatial
+  void filterWavelet(Image& output);  // §4.3 à-trous + feedback
+  void storeHistory();                // history for frame i + 1
 
   SvgfSettings settings_;
   std::string name_;

@@ -273,7 +273,11 @@ TEST(AsvgfVariant, GradientSamplesRaiseAlphaWhereTheLightChanged) {
   auto run = [&](const std::string& name) {
     // Temporal part only (no à-trous), so the blend weights show in the output directly.
     std::map<std::string, std::string> params = {{"iterations", "0"}, {"feedbackTap", "0"}};
-    if (name == "asvgf") params["gradient.max3x3"] = "false";
+    if (name == "asvgf") {
+      params["gradient.max3x3"] = "false";
+      params["gradient.shortenHistory"] =
+          "false";  // eq. 15 literally (Q2RTX's order: fidelity_test)
+    }
     auto d = create(name, params);
     d->setup(w, h);
     Image output(w, h, 3);

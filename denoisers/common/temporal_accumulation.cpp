@@ -51,7 +51,7 @@ void accumulateWithHistoryLength(const Reprojection& reprojection,
       const HistoryTaps taps(reprojection.record(i), reprojection.width());
       const float h = nextHistoryLength(true, taps.apply(previous), maxHistory);
       length[i] = h;
-      const float a = blendAlpha(h, alpha.at(i));
+      const float a = alpha.blend(i, h);
       for (int c = 0; c < channels; ++c)
         accumulated.plane(c)[i] =
             a * current.plane(c)[i] + (1.0f - a) * taps.apply(history.plane(c));

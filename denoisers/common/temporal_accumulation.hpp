@@ -27,15 +27,33 @@ void updateHistoryLength(const Reprojection& reprojection, const Image& previous
                          float maxHistory, Image& historyLength);
 
 // The lower bound of alpha: one value everywhere, raised per pixel by an optional image. A-SVGF
-// passes its alpha_i = (1 - lambda) alpha + lambda (>= alpha) there; the same image can raise the
-// moments' floor, max(momentsAlpha, alpha_i), as Q2RTX's anti-lag does.
+// (gradient.shortenHistory=false, the paper literally) passes its alpha_i = (1 - lambda) alpha +
+// lambda (>= alpha) there; the same image can raise the moments' floor, max(momentsAlpha, alpha_i).
+// `antilag` is Q2RTX's order instead (asvgf_temporal): a per-pixel lambda that first shortens the
+// history, h = min(h_prev (1 - lambda)^10 + 1, max) (accumulateColorAndMoments only), and then
+// pulls alpha towards 1, alpha = lerp(max(alphaMin, 1/h), 1, lambda).
 struct AccumulationAlpha {
   float alphaMin = 0.2f;            // SVGF paper 0.2; Falcor 0.05
   const Image* perPixel = nullptr;  // plane 0: per-pixel floor; alpha = max(alphaMin, it, 1/h)
+  const Image* antilag = nullptr;   // plane 0: Q2RTX's lambda (see above)
   float at(size_t i) const {
     return perPixel ? std::max(alphaMin, perPixel->plane(0)[i]) : alphaMin;
   }
+  // The blend weight of pixel i with history length h.
+  float blend(size_t i, float h) const {
+    const float a = blendAlpha(h, at(i));
+    if (!antilag) return a;
+    const float lambda = antilag->plane(0)[i];
+    return a + lambda * (1.0f - a);
+  }
 };
+
+// Q2RTX's history shortening, (1 - lambda)^10, by squarings (F: float or a lane type).
+template <class F>
+inline F antilagHistoryScale(F lambda) {
+  const F keep = 1.0f - lambda, k2 = keep * keep, k4 = k2 * k2, k8 = k4 * k4;
+  return k8 * k2;
+}
 
 // The EMA itself, for any number of channels: out(c) = current(i, c) on disocclusion, else
 // alpha current(i, c) + (1 - alpha) history(c) with alpha = blendAlpha(h, alpha.at(i)).
@@ -55,7 +73,7 @@ void blendWithHistory(const Reprojection& reprojection, int channels, CurrentVal
       }
       // The taps are decoded once and read for every channel.
       const HistoryTaps taps(reprojection.record(i), reprojection.width());
-      const float a = blendAlpha(length[i], alpha.at(i));
+      const float a = alpha.blend(i, length[i]);
       for (int c = 0; c < channels; ++c)
         out.plane(c)[i] = a * current(i, c) + (1.0f - a) * taps.apply(history.plane(c));
     }

@@ -53,9 +53,14 @@ void accumulateColorAndMoments(const Reprojection& reprojection, const Image& pr
     const Lanes8 floor = Lanes8{} + alpha.alphaMin;
     return alpha.perPixel ? maxFloat(floor, loadLanes(alpha.perPixel->plane(0) + i, inRow)) : floor;
   };
-  auto blendAlphaLanes = [](Lanes8 h, Lanes8 alphaMin) {  // blendAlpha()
-    return maxFloat(alphaMin, 1.0f / maxFloat(h, Lanes8{} + 1.0f));
+  auto blendAlphaLanes = [](const AccumulationAlpha& alpha, Lanes8 h, Lanes8 alphaMin, size_t i,
+                            LaneMask8 inRow) {  // AccumulationAlpha::blend()
+    const Lanes8 a = maxFloat(alphaMin, 1.0f / maxFloat(h, Lanes8{} + 1.0f));
+    if (!alpha.antilag) return a;
+    return a + loadLanes(alpha.antilag->plane(0) + i, inRow) * (1.0f - a);
   };
+  // Q2RTX shortens the reprojected length before alpha is fixed (temporal_accumulation.hpp).
+  const float* antilag = colorAlpha.antilag ? colorAlpha.antilag->plane(0) : nullptr;
   parallelRows(signal.height(), [&](int y) {
     for (int x0 = 0; x0 < w; x0 += 8) {
       const size_t i = size_t(y) * size_t(w) + size_t(x0);
@@ -65,16 +70,19 @@ void accumulateColorAndMoments(const Reprojection& reprojection, const Image& pr
       Lanes8 current[3];
       for (int c = 0; c < 3; ++c) current[c] = loadLanes(signalPlane[c] + i, inRow);
       const Lanes8 l = luminance(current[0], current[1], current[2]);
-      const Lanes8 h = selectFloat(
-          taps.valid, minFloat(taps.apply(previousLength) + 1.0f, Lanes8{} + maxHistory),
-          Lanes8{} + 1.0f);  // nextHistoryLength()
+      Lanes8 reprojectedLength = taps.apply(previousLength);
+      if (antilag) reprojectedLength *= antilagHistoryScale(loadLanes(antilag + i, inRow));
+      const Lanes8 h =
+          selectFloat(taps.valid, minFloat(reprojectedLength + 1.0f, Lanes8{} + maxHistory),
+                      Lanes8{} + 1.0f);  // nextHistoryLength()
       storeLanes(length + i, h, inRow);
-      const Lanes8 a = blendAlphaLanes(h, alphaFloor(colorAlpha, i, inRow));
+      const Lanes8 a = blendAlphaLanes(colorAlpha, h, alphaFloor(colorAlpha, i, inRow), i, inRow);
       for (int c = 0; c < 3; ++c) {
         const Lanes8 blended = a * current[c] + (1.0f - a) * taps.apply(colorHistoryPlane[c]);
         storeLanes(accumulatedPlane[c] + i, selectFloat(taps.valid, blended, current[c]), inRow);
       }
-      const Lanes8 am = blendAlphaLanes(h, alphaFloor(momentsAlpha, i, inRow));
+      const Lanes8 am =
+          blendAlphaLanes(momentsAlpha, h, alphaFloor(momentsAlpha, i, inRow), i, inRow);
       const Lanes8 m1 = am * l + (1.0f - am) * taps.apply(mu1History);
       const Lanes8 m2 = am * (l * l) + (1.0f - am) * taps.apply(mu2History);
       storeLanes(mu1 + i, selectFloat(taps.valid, m1, l), inRow);
