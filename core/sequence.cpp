@@ -28,7 +28,8 @@ const std::vector<LayerSpec>& frameLayers() {
       {"meshId", {}, false},                   // object/light index; -1 for sky
       {"materialId", {}, false},               // material index; -1 for sky and lights
       {"motion", {"X", "Y"}, false},           // pixel offset to this point in the previous frame
-      {"specHitDist", {}, false},              // length of the mirror-reflected ray (1e6 on miss)
+      {"specHitDist", {}, false},              // the 1-spp sample's first ray length (1e6 on miss)
+      {"specHitDistMirror", {}, false},        // oracle: the noise-free mirror ray's (1e6 on miss)
   };
   return specs;
 }

@@ -22,7 +22,7 @@ using nlohmann::json;
 
 namespace {
 
-constexpr int kTracerVersion = 1;  // bump when a change alters pixels: invalidates every cache
+constexpr int kTracerVersion = 2;  // bump when a change alters pixels: invalidates every cache
 constexpr float kMissHitDist = 1e6f;
 constexpr uint32_t kStratumPickSample = 0xFFFFF;  // sample index reserved for stratum picks
 
@@ -145,7 +145,8 @@ SequenceRenderer::FrameResult SequenceRenderer::renderFrame(int t) {
   const int w = width_, h = height_;
   Image diffuse(w, h, 3), specular(w, h, 3), emission(w, h, 3), color(w, h, 3), albedo(w, h, 3),
       specAlbedo(w, h, 3), normal(w, h, 3), position(w, h, 3), depth(w, h, 1), roughness(w, h, 1),
-      meshId(w, h, 1, -1.0f), materialId(w, h, 1, -1.0f), motion(w, h, 2), specHitDist(w, h, 1);
+      meshId(w, h, 1, -1.0f), materialId(w, h, 1, -1.0f), motion(w, h, 2), specHitDist(w, h, 1),
+      specHitDistMirror(w, h, 1);
   std::vector<RayCounts> rowCounts(static_cast<size_t>(h));
   auto put2 = [](Image& img, int x, int y, glm::vec2 v) {
     img.at(x, y, 0) = v.x;
@@ -189,17 +190,20 @@ SequenceRenderer::FrameResult SequenceRenderer::renderFrame(int t) {
       const glm::vec3 specAlb = s.lightIndex >= 0 ? glm::vec3(0) : specularAlbedo(s.f0(), s.roughness, NoV);
       put3(albedo, x, y, diffAlb);
       put3(specAlbedo, x, y, specAlb);
-      if (s.lightIndex < 0) {  // the mirror ray's length, for hit-point reprojection
+      if (s.lightIndex < 0) {  // the noise-free mirror ray's length: the oracle channel
         glm::vec3 r = 2.0f * glm::dot(wo, n) * n - wo;
         SurfaceHit mh;
         float tm;
         counts.rays++;
         float ng = glm::dot(s.geometricNormal, wo) < 0 ? -1.0f : 1.0f;
         glm::vec3 o = s.position + s.geometricNormal * ng * 1e-4f * (1.0f + glm::length(s.position));
-        specHitDist.at(x, y) = cur.intersect(o, r, std::numeric_limits<float>::infinity(), mh, tm) ? tm : kMissHitDist;
+        specHitDistMirror.at(x, y) =
+            cur.intersect(o, r, std::numeric_limits<float>::infinity(), mh, tm) ? tm : kMissHitDist;
       }
       const Sampler sampler(frameSeed(), uint32_t(t), uint32_t(y * w + x), 0);
       const PixelShade px = shadePixel(cur, s, cam.eye, sampler, counts);
+      // What a real-time tracer has: the 1-spp sample's own hit distance (noisy).
+      if (s.lightIndex < 0) specHitDist.at(x, y) = std::min(px.radiance.hitDistance, kMissHitDist);
       // Demodulation (SVGF; Falcor divides by max(albedo, 0.001)).
       put3(diffuse, x, y, px.radiance.diffuse / glm::max(diffAlb, glm::vec3(1e-3f)));
       put3(specular, x, y, px.radiance.specular / glm::max(specAlb, glm::vec3(1e-3f)));
@@ -227,6 +231,7 @@ SequenceRenderer::FrameResult SequenceRenderer::renderFrame(int t) {
   result.frame.set("materialId", std::move(materialId));
   result.frame.set("motion", std::move(motion));
   result.frame.set("specHitDist", std::move(specHitDist));
+  result.frame.set("specHitDistMirror", std::move(specHitDistMirror));
   if (t == 0) return result;
 
   // A-SVGF gradient samples (Schied et al. 2018, sec. 4): one previous-frame pixel per 3x3

@@ -343,7 +343,9 @@ FrameScene::Radiance FrameScene::shade(const SurfaceHit& primary, glm::vec3 wo, 
     SurfaceHit h;
     float t;
     counts.rays++;
-    if (!intersect(origin, dir, kInf, h, t)) {
+    const bool hitSomething = intersect(origin, dir, kInf, h, t);
+    if (depth == 1) out.hitDistance = hitSomething ? t : kInf;
+    if (!hitSomething) {
       incoming += throughput * sky(dir);
       break;
     }

@@ -75,6 +75,9 @@ class FrameScene {
 
   struct Radiance {
     glm::vec3 diffuse{0}, specular{0};  // radiance reflected by the first vertex, not demodulated
+    // Length of this sample's first continuation ray (the lobe it sampled; the talk stores the
+    // traced sample's length, NRD reads it): infinity on a miss, 0 where no ray left the surface.
+    float hitDistance = 0;
   };
   // One path sample starting at the primary surface `hit` seen from direction wo (towards the eye).
   // Emission of `hit` itself is not included (it is the emission channel).
