@@ -4,9 +4,10 @@
 //   2. temporal accumulation with an accumulated-frame counter N (max 30) and a fast history
 //      (max 6 frames) kept for clamping; the specular signal blends hit-point (virtual)
 //      reprojection with surface motion by roughness,
-//   3. history fix while N < 3: a wide sparse reconstruction (5x5 taps at stride 14, NRD; or the
-//      2020 version's mip chain), then anti-firefly (clamped to the 3x3 neighbours' range),
-//   4. blur with radius max(minRadius, maxRadius sqrt(1 / (1 + N))), then post-blur at twice it,
+//   3. history fix while N < 3: a wide sparse reconstruction (NRD v4: 20 taps of a 5x5 grid at
+//      stride 14 / (2 + N); or the 2020 version's mip chain), then anti-firefly (luminance
+//      clamped to the 3x3 neighbours' range) and the fast-history clamp of the recurrent signal,
+//   4. blur with radius max(minRadius, maxRadius / (1 + N_prev)) (NRD), then post-blur at twice it,
 //   5. the post-blurred result becomes the history (recurrent; `recurrent=false` stores the
 //      temporal result instead),
 //   6. temporal stabilisation with anti-lag: the stabilised history is clamped to the fast
@@ -37,7 +38,7 @@ std::vector<std::string> Reblur::requiredChannels() const {
   std::vector<std::string> channels = {"depth", "normal", "meshId", "motion", "position"};
   if (kind_ == SignalKind::Specular) {
     channels.push_back("roughness");
-    channels.push_back("specHitDist");
+    channels.push_back(s_.hitDistanceChannel);
   }
   return channels;
 }
@@ -56,7 +57,7 @@ void Reblur::setup(int width, int height) {
        {&accumulatedFramesHistory_, &accumulatedFrames_, &previousFrames_, &radiusScale_})
     *image = Image(width, height, 1);
   youngPerRow_.setup(height);
-  pixelScale_ = s_.radiusResolution > 0.0f ? float(height) / s_.radiusResolution : 1.0f;
+  pixelScale_ = s_.footprint.scale(height);
   hasHistory_ = false;
 }
 
@@ -69,8 +70,9 @@ void Reblur::denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& o
   gbuffer_ = GBufferView::fromFrame(in.frame, requiredChannels(), "reblur");
   roughness_ =
       kind_ == SignalKind::Specular ? in.frame.get("roughness", "reblur").plane(0) : nullptr;
-  hitDistance_ =
-      kind_ == SignalKind::Specular ? in.frame.get("specHitDist", "reblur").plane(0) : nullptr;
+  hitDistance_ = kind_ == SignalKind::Specular
+                     ? in.frame.get(s_.hitDistanceChannel, "reblur").plane(0)
+                     : nullptr;
   reproject(ctx);
   preBlurPass(in, ctx.frameIndex);
   temporalAccumulation();
@@ -126,7 +128,9 @@ void Reblur::preBlurPass(const DenoiserInputs& in, int frameIndex) {
     preBlurred_.raw() = in.signal.raw();
     return;
   }
-  PoissonBlurSettings blur{s_.preBlurRadius * pixelScale_, s_.weights};
+  // NRD: diffusePrepassBlurRadius 30, specularPrepassBlurRadius 50.
+  const float radius = kind_ == SignalKind::Specular ? s_.specularPreBlurRadius : s_.preBlurRadius;
+  PoissonBlurSettings blur{radius * pixelScale_, s_.weights};
   poissonDiskBlur(in.signal, {gbuffer_, roughness_, hitDistance_}, blur,
                   poissonRotation(frameIndex), nullptr, preBlurred_);
 }
@@ -166,9 +170,12 @@ void Reblur::temporalAccumulation() {
   });
 }
 
-// ---- 3. History fix (NRD HistoryFix) for young histories, N_prev < historyFixFrames: a 5x5
-// sparse gather whose stride shrinks as the history grows, 14 (F - N_prev) / F: 14, 9.3 and
-// 4.7 px for N_prev = 0, 1, 2; or the 2020 version's mip chain, level F - N_prev.
+// ---- 3. History fix (NRD v4 HistoryFix) for young histories, N_prev < historyFixFrames: the
+// 5x5 sparse grid without its corners (20 taps) whose stride shrinks as the history grows,
+// 14 / (2 + N_prev): 7, 4.7 and 3.5 px for N_prev = 0, 1, 2 (`historyFixShape=ours`: all 24
+// taps at 14 (F - N_prev) / F); or the 2020 version's mip chain, level F - N_prev. NRD also
+// smooths N over 3x3 and weights taps by geometry, normal, roughness and hit distance; ours uses
+// the blur's weights.
 void Reblur::historyFixPass() {
   ScopedPass pass(this, "history fix", 0);
   historyFixed_ = &temporal_;  // unchanged unless some history is young
@@ -193,68 +200,110 @@ void Reblur::historyFixPass() {
     for (size_t i = size_t(y) * size_t(w); i < size_t(y + 1) * size_t(w); ++i) {
       const bool isYoung = previous[i] < frames && gbuffer_.meshId[i] >= 0.0f;
       young += isYoung;
-      stride[i] =
-          isYoung
-              ? std::max(1.0f, s_.historyFixStride * pixelScale_ * (frames - previous[i]) / frames)
-              : 0.0f;
+      const float shape =
+          s_.historyFixNrd ? 1.0f / (2.0f + previous[i]) : (frames - previous[i]) / frames;
+      stride[i] = isYoung ? std::max(1.0f, s_.historyFixStride * pixelScale_ * shape) : 0.0f;
     }
     youngPerRow_.set(y, young);
   });
   const double youngFraction = youngPerRow_.perPixel(gbuffer_.pixelCount());
   if (youngFraction == 0.0) return;
   historyFixed_ = &fixed_;
-  static const std::vector<std::array<float, 2>> grid = [] {
+  auto makeGrid = [](bool corners) {
     std::vector<std::array<float, 2>> taps;
     for (int j = -2; j <= 2; ++j)
       for (int i = -2; i <= 2; ++i)
-        if (i != 0 || j != 0) taps.push_back({float(i), float(j)});
+        if ((i != 0 || j != 0) && (corners || std::abs(i) + std::abs(j) != 4))
+          taps.push_back({float(i), float(j)});
     return taps;
-  }();
+  };
+  static const std::vector<std::array<float, 2>> nrdGrid = makeGrid(false),
+                                                 fullGrid = makeGrid(true);
+  const std::vector<std::array<float, 2>>& grid = s_.historyFixNrd ? nrdGrid : fullGrid;
   sparseBlur(temporal_, {gbuffer_, roughness_, hitDistance_}, s_.weights, grid.data(),
              int(grid.size()), 1.0f, &radiusScale_, fixed_, /*mostlyIdle=*/true);
   pass.setTaps(double(grid.size()) * youngFraction);
 }
 
-// ---- 3b. Anti-firefly (NRD enableAntiFirefly, in its history-fix pass): every channel is
-// clamped to the [min, max] of its 3x3 non-sky neighbours, the centre excluded, so a lone
-// outlier cannot survive into the blur (and the result stays inside the inputs' range).
+// ---- 3b. Anti-firefly and the fast-history clamp (NRD v4 REBLUR_HistoryFix, after the
+// reconstruction). Both act on luminance and rescale the colour (NRD's ChangeLuma):
+//   - anti-firefly (NRD enableAntiFirefly): the luminance is clamped to the [min, max] of its 3x3
+//     non-sky neighbours' luminances, the centre excluded, so a lone outlier cannot survive into
+//     the blur (NRD clamps to m1 +- sigma of a wider ring of the fast history; ours is the
+//     neighbour range of the signal itself);
+//   - fast-history clamp (NRD: "clamp slow main history to responsive fast history"): the
+//     luminance is clamped to [min(mu - k sigma, c), max(mu + k sigma, c)] of the fast history's
+//     3x3 luminances (c its centre, k = antilagSigmaScale, NRD fastHistoryClampingSigmaScale 2),
+//     blended back by 1 / (1 + N_prev): a young history takes the clamp fully, an old one barely.
 void Reblur::antiFireflyPass() {
-  ScopedPass pass(this, "anti-firefly", s_.antiFirefly ? 8 : 0);
-  if (!s_.antiFirefly) {
+  ScopedPass pass(this, "anti-firefly", s_.antiFirefly || s_.fastHistoryClamp ? 17 : 0);
+  if (!s_.antiFirefly && !s_.fastHistoryClamp) {
     fireflyFree_.raw() = historyFixed_->raw();
     return;
   }
   const int w = gbuffer_.width, h = gbuffer_.height;
+  const float k = s_.antilagSigmaScale;
+  const float* previous = previousFrames_.plane(0);
   parallelRows(h, [&](int y) {
     for (int x0 = 0; x0 < w; x0 += 8) {  // eight pixels at a time
       const Neighbourhood3x3Lanes n(x0, y, w, h, gbuffer_.meshId);
+      Lanes8 centre[3];
+      for (int c = 0; c < 3; ++c) centre[c] = loadLanes(historyFixed_->plane(c) + n.p, n.inRow);
+      const Lanes8 l = luminance(centre[0], centre[1], centre[2]);
+      Lanes8 target = l;
       Lanes8 count{};
-      for (int j = 0; j < 9; ++j)
-        if (j != 4) count += selectFloat(n.present[j], Lanes8{} + 1.0f, Lanes8{});
-      // Surface pixels (present centre) with at least one neighbour; the others keep their value.
-      const LaneMask8 clampHere = n.present[4] & (count > 0.0f);
-      for (int c = 0; c < 3; ++c) {
-        const float* plane = historyFixed_->plane(c);
+      for (int j = 0; j < 9; ++j) count += selectFloat(n.present[j], Lanes8{} + 1.0f, Lanes8{});
+      if (s_.antiFirefly) {
         Lanes8 lo = Lanes8{} + 1e30f, hi = Lanes8{} - 1e30f;
         for (int j = 0; j < 9; ++j) {
           if (j == 4) continue;
-          const Lanes8 v = loadLanes(plane + n.offset[j], n.present[j]);
+          const Lanes8 v =
+              luminance(loadLanes(historyFixed_->plane(0) + n.offset[j], n.present[j]),
+                        loadLanes(historyFixed_->plane(1) + n.offset[j], n.present[j]),
+                        loadLanes(historyFixed_->plane(2) + n.offset[j], n.present[j]));
           lo = selectFloat(n.present[j], minFloat(lo, v), lo);
           hi = selectFloat(n.present[j], maxFloat(hi, v), hi);
         }
-        const Lanes8 centre = loadLanes(plane + n.p, n.inRow);
-        const Lanes8 clamped = selectFloat(centre < lo, lo, selectFloat(hi < centre, hi, centre));
-        storeLanes(fireflyFree_.plane(c) + n.p, selectFloat(clampHere, clamped, centre), n.inRow);
+        // Surface pixels (present centre) with at least one neighbour; the others keep theirs.
+        const LaneMask8 clampHere = n.present[4] & (count > 1.0f);
+        target = selectFloat(clampHere, minFloat(maxFloat(target, lo), hi), target);
       }
+      if (s_.fastHistoryClamp) {
+        Lanes8 sum{}, sumSquares{}, fastCentre{};
+        for (int j = 0; j < 9; ++j) {
+          const Lanes8 v = luminance(loadLanes(fast_.plane(0) + n.offset[j], n.present[j]),
+                                     loadLanes(fast_.plane(1) + n.offset[j], n.present[j]),
+                                     loadLanes(fast_.plane(2) + n.offset[j], n.present[j]));
+          sum += v;
+          sumSquares += v * v;
+          if (j == 4) fastCentre = v;
+        }
+        const Lanes8 inverseCount = 1.0f / maxFloat(count, Lanes8{} + 1.0f);
+        const Lanes8 mean = sum * inverseCount;
+        const Lanes8 sigma =
+            k * sqrtLanes(maxFloat(Lanes8{}, sumSquares * inverseCount - mean * mean));
+        const Lanes8 lo = minFloat(mean - sigma, fastCentre),
+                     hi = maxFloat(mean + sigma, fastCentre);
+        const Lanes8 clamped = minFloat(maxFloat(target, lo), hi);
+        const Lanes8 young = 1.0f / (1.0f + loadLanes(previous + n.p, n.inRow));
+        target = selectFloat(n.present[4], clamped + young * (target - clamped), target);
+      }
+      // ChangeLuma: the colour scaled to the target luminance (a black pixel stays black).
+      const Lanes8 scale =
+          selectFloat(l > 1e-12f, target / maxFloat(l, Lanes8{} + 1e-12f), Lanes8{} + 1.0f);
+      for (int c = 0; c < 3; ++c)
+        storeLanes(fireflyFree_.plane(c) + n.p, centre[c] * scale, n.inRow);
     }
   });
 }
 
-// ---- 4. Blur and post-blur: radius max(minRadius, maxRadius sqrt(1 / (1 + N))) -- wide while
-// the history is young, shrinking as it converges; the post-blur doubles it. The specular
+// ---- 4. Blur and post-blur: radius max(minRadius, maxRadius / (1 + N_prev)) (NRD; or
+// radiusFalloff=sqrt) -- wide while the history is young, shrinking as it converges; the
+// post-blur doubles it. The specular
 // radius also shrinks with roughness (NRD scales it by a roughness factor; ours: sqrt(r)).
 void Reblur::blurPasses(int frameIndex) {
   const float* frames = accumulatedFrames_.plane(0);
+  const float* previousFrames = previousFrames_.plane(0);
   const float maxRadius = s_.maxBlurRadius * pixelScale_;
   const float floor = s_.minBlurRadius * pixelScale_ / std::max(maxRadius, 1e-6f);
   const SurfaceGuide guide{gbuffer_, roughness_, hitDistance_};
@@ -267,7 +316,10 @@ void Reblur::blurPasses(int frameIndex) {
       for (int x0 = 0; x0 < w; x0 += 8) {  // eight pixels at a time
         const size_t i = size_t(y) * size_t(w) + size_t(x0);
         const LaneMask8 inRow = laneIndex(Lanes8{}) + x0 < w;
-        Lanes8 s = sqrtLanes(1.0f / (1.0f + loadLanes(frames + i, inRow)));
+        // NRD: 1 / (1 + N_prev), the counter before this frame's increment; ours (radiusFalloff
+        // =sqrt): sqrt(1 / (1 + N)) of the incremented counter.
+        Lanes8 s = s_.radiusNrd ? 1.0f / (1.0f + loadLanes(previousFrames + i, inRow))
+                                : sqrtLanes(1.0f / (1.0f + loadLanes(frames + i, inRow)));
         if (roughness_)
           s *= sqrtLanes(
               minFloat(maxFloat(loadLanes(roughness_ + i, inRow), Lanes8{}), Lanes8{} + 1.0f));
@@ -346,7 +398,9 @@ void Reblur::stabilize(Image& output) {
         const Lanes8 lh = luminance(previous[0], previous[1], previous[2]);
         const Lanes8 lc = luminance(clamped[0], clamped[1], clamped[2]);
         const Lanes8 d = absFloat(lh - lc) / maxFloat(maxFloat(lh, lc), Lanes8{} + 1e-6f);
-        frames = frames / (1.0f + d * frames / 3.0f);
+        // NRD never lets anti-lag push a history below the history-fix threshold it had reached.
+        const Lanes8 floorFrames = minFloat(frames, Lanes8{} + float(s_.historyFixFrames));
+        frames = maxFloat(frames / (1.0f + d * frames / 3.0f), floorFrames);
         storeLanes(accumulated, frames, stabilizeHere);
       }
       const Lanes8 alpha = 1.0f / (1.0f + frames);
@@ -387,7 +441,9 @@ std::vector<ParamSpec> reblurParamSpecs() {
   std::vector<ParamSpec> specs = {
       ParamSpec::boolean("preBlur", true, "pass 1: 8-tap Poisson pre-blur (NRD prepass)"),
       ParamSpec::real("preBlurRadius", 30, 0, 500,
-                      "pre-blur radius, px (NRD diffusePrepassBlurRadius 30; specular 50)"),
+                      "diffuse pre-blur radius, px (NRD diffusePrepassBlurRadius 30)"),
+      ParamSpec::real("specularPreBlurRadius", 50, 0, 500,
+                      "specular pre-blur radius, px (NRD specularPrepassBlurRadius 50)"),
       ParamSpec::integer("maxAccumulatedFrames", 30, 1, 1000,
                          "cap of the accumulated-frame counter N (NRD maxAccumulatedFrameNum 30)"),
       ParamSpec::integer("maxFastAccumulatedFrames", 6, 1, 1000,
@@ -396,17 +452,30 @@ std::vector<ParamSpec> reblurParamSpecs() {
       ParamSpec::boolean("hitPoint", true,
                          "specular: blend hit-point (virtual) reprojection with surface motion by "
                          "roughness (NRD virtual motion; the talk)"),
+      ParamSpec::choice("hitDistance", "sampled", {"sampled", "mirror"},
+                        "specular hit distance: the 1-spp sample's own ray length (what a real "
+                        "tracer has; the talk, NRD) or the noise-free mirror ray (an oracle)"),
       ParamSpec::real("hitPointRoughness", 0.6, 0.0, 1.0,
                       "specular: virtual-history weight 1 - smoothstep(0, this, roughness) (ours)"),
       ParamSpec::choice("historyFix", "sparse", {"sparse", "mip", "off"},
                         "pass 3 for N < historyFixFrames: 5x5 taps at stride 14 (NRD) or the mip "
                         "chain (ReBLUR 2020), or off"),
       ParamSpec::integer("historyFixFrames", 3, 0, 16, "history fix while N < this (NRD 3)"),
+      ParamSpec::choice("historyFixShape", "nrd", {"nrd", "ours"},
+                        "history-fix grid: NRD v4's 20 taps (5x5 without corners) at stride "
+                        "historyFixStride / (2 + N), or all 24 at historyFixStride (F - N) / F"),
+      ParamSpec::choice("radiusFalloff", "nrd", {"nrd", "sqrt"},
+                        "blur radius scale: NRD's 1 / (1 + N_prev) or sqrt(1 / (1 + N)) of the "
+                        "incremented counter (the first version here)"),
       ParamSpec::real(
           "historyFixStride", 14, 1, 100,
           "history-fix tap stride at N = 0, px (NRD historyFixStrideBetweenSamples 14)"),
       ParamSpec::boolean("antiFirefly", true,
-                         "clamp luminance to the 3x3 neighbours' range (NRD enableAntiFirefly)"),
+                         "clamp the luminance to its 3x3 neighbours' luminance range, colour "
+                         "rescaled (NRD enableAntiFirefly; NRD's range is m1 +- sigma of a ring)"),
+      ParamSpec::boolean("fastHistoryClamp", true,
+                         "clamp the recurrent history's luminance to the fast history's 3x3 "
+                         "mu +- antilagSigmaScale sigma, weight 1 - 1/(1+N) (NRD HistoryFix)"),
       ParamSpec::boolean("blur", true, "pass 4: Poisson blur"),
       ParamSpec::boolean("postBlur", true, "pass 4: Poisson post-blur at twice the radius"),
       ParamSpec::real("minBlurRadius", 1, 0, 500, "blur radius floor, px (NRD minBlurRadius 1)"),
@@ -420,10 +489,6 @@ std::vector<ParamSpec> reblurParamSpecs() {
                          "pass 6: shorten N by the clamp distance, N' = N / (1 + d N / 3)"),
       ParamSpec::real("antilagSigmaScale", 2, 0, 100,
                       "stabilised history clamped to the fast history's mu +- this sigma (NRD 2)"),
-      ParamSpec::real(
-          "radiusResolution", 1080, 0, 100000,
-          "radii (min too) and stride are px at this image height, scaled to the actual height "
-          "(ours; NRD tunes for ~1080p); 0 = as given"),
       ParamSpec::real("planeSigma", 0.02, 1e-6, 10,
                       "plane-distance weight scale, fraction of view depth (ours)"),
       ParamSpec::real("normalPower", 32, 0, 1e4, "normal weight max(0, n.n')^this (ours)"),
@@ -432,6 +497,7 @@ std::vector<ParamSpec> reblurParamSpecs() {
       ParamSpec::real("roughnessSigma", 0.1, 1e-6, 10, "specular roughness weight scale (ours)"),
   };
   for (ParamSpec& s : reprojectionParamSpecs()) specs.push_back(std::move(s));
+  for (ParamSpec& s : footprintParamSpecs()) specs.push_back(std::move(s));
   return specs;
 }
 
@@ -440,16 +506,22 @@ ReblurSettings reblurSettings(const ParamSet& params) {
   s.reprojection = reprojectionSettings(params);
   s.preBlur = params.getBool("preBlur");
   s.preBlurRadius = params.getFloat("preBlurRadius");
+  s.specularPreBlurRadius = params.getFloat("specularPreBlurRadius");
+  s.fastHistoryClamp = params.getBool("fastHistoryClamp");
   s.maxAccumulatedFrames = params.getInt("maxAccumulatedFrames");
   s.maxFastAccumulatedFrames = params.getInt("maxFastAccumulatedFrames");
   s.hitPointReprojection = params.getBool("hitPoint");
   s.hitPointRoughness = params.getFloat("hitPointRoughness");
+  s.hitDistanceChannel =
+      params.getChoice("hitDistance") == "mirror" ? "specHitDistMirror" : "specHitDist";
   const std::string& fix = params.getChoice("historyFix");
   s.historyFix = fix == "off"   ? ReblurHistoryFix::Off
                  : fix == "mip" ? ReblurHistoryFix::Mip
                                 : ReblurHistoryFix::Sparse;
   s.historyFixFrames = params.getInt("historyFixFrames");
   s.historyFixStride = params.getFloat("historyFixStride");
+  s.historyFixNrd = params.getChoice("historyFixShape") == "nrd";
+  s.radiusNrd = params.getChoice("radiusFalloff") == "nrd";
   s.antiFirefly = params.getBool("antiFirefly");
   s.blur = params.getBool("blur");
   s.postBlur = params.getBool("postBlur");
@@ -459,7 +531,7 @@ ReblurSettings reblurSettings(const ParamSet& params) {
   s.stabilization = params.getBool("stabilization");
   s.antiLag = params.getBool("antiLag");
   s.antilagSigmaScale = params.getFloat("antilagSigmaScale");
-  s.radiusResolution = params.getFloat("radiusResolution");
+  s.footprint = footprintParam(params);
   s.weights.planeSigma = params.getFloat("planeSigma");
   s.weights.normalPower = params.getFloat("normalPower");
   s.weights.hitSigma = params.getFloat("hitSigma");

@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include "denoisers/common/footprint.hpp"
 #include "denoisers/common/gbuffer.hpp"
 #include "denoisers/common/hit_point_reprojection.hpp"
 #include "denoisers/common/mip_chain.hpp"
@@ -23,15 +24,22 @@ struct ReblurSettings {
   HitPointReprojectionSettings hitPoint;
   SurfaceWeightSettings weights;  // plane distance, normal (+ hit distance, roughness: specular)
   bool preBlur = true;
-  float preBlurRadius = 30.0f;       // NRD diffusePrepassBlurRadius 30 (specular 50)
-  int maxAccumulatedFrames = 30;     // NRD maxAccumulatedFrameNum 30
-  int maxFastAccumulatedFrames = 6;  // NRD maxFastAccumulatedFrameNum 6
-  bool hitPointReprojection = true;  // specular only
-  float hitPointRoughness = 0.6f;    // virtual amount = 1 - smoothstep(0, this, roughness) (ours)
+  float preBlurRadius = 30.0f;          // NRD diffusePrepassBlurRadius 30
+  float specularPreBlurRadius = 50.0f;  // NRD specularPrepassBlurRadius 50
+  int maxAccumulatedFrames = 30;        // NRD maxAccumulatedFrameNum 30
+  int maxFastAccumulatedFrames = 6;     // NRD maxFastAccumulatedFrameNum 6
+  bool hitPointReprojection = true;     // specular only
+  // The specular hit distance the guides read: the 1-spp sample's ("specHitDist", what a real
+  // tracer has) or the noise-free mirror ray's oracle ("specHitDistMirror").
+  std::string hitDistanceChannel = "specHitDist";
+  float hitPointRoughness = 0.6f;  // virtual amount = 1 - smoothstep(0, this, roughness) (ours)
   ReblurHistoryFix historyFix = ReblurHistoryFix::Sparse;
   int historyFixFrames = 3;        // NRD historyFixFrameNum 3
   float historyFixStride = 14.0f;  // NRD historyFixStrideBetweenSamples 14
+  bool historyFixNrd = true;       // NRD v4: 20 taps at stride / (2 + N); false: 24 at (F - N) / F
+  bool radiusNrd = true;           // NRD: radius 1 / (1 + N_prev); false: sqrt(1 / (1 + N))
   bool antiFirefly = true;         // NRD enableAntiFirefly (on here, as the brief asks)
+  bool fastHistoryClamp = true;    // NRD HistoryFix: the recurrent history clamped to the fast one
   bool blur = true, postBlur = true;
   float minBlurRadius = 1.0f;   // NRD minBlurRadius 1
   float maxBlurRadius = 30.0f;  // NRD maxBlurRadius 30
@@ -39,11 +47,9 @@ struct ReblurSettings {
   bool stabilization = true;
   bool antiLag = true;
   float antilagSigmaScale = 2.0f;  // NRD antilag sigmaScale 2
-  // The radii and the stride above are pixels at this image height and scale with the actual
-  // height (ours: NRD's defaults are tuned for ~1080p; at 144 px a 30 px disk is a fifth of the
-  // screen). 0: use them as given. minBlurRadius scales too: the recurrent loop re-blurs the
-  // history every frame, so even the floor diffuses over ~maxAccumulatedFrames frames.
-  float radiusResolution = 1080.0f;
+  // The radii and the stride above, minBlurRadius included, follow the one footprint policy of
+  // every denoiser (footprint.hpp): pixels as given (native) or pixels at a reference height.
+  Footprint footprint;
 };
 
 std::vector<ParamSpec> reblurParamSpecs();
@@ -94,7 +100,7 @@ class Reblur : public Denoiser {
 
   ReblurSettings s_;
   SignalKind kind_;
-  float pixelScale_ = 1.0f;  // height / radiusResolution
+  float pixelScale_ = 1.0f;  // footprint.hpp: pixels per published pixel
   GBufferView gbuffer_;
   const float* roughness_ = nullptr;
   const float* hitDistance_ = nullptr;
