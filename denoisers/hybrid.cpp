@@ -39,12 +39,13 @@ std::vector<std::string> Hybrid::requiredChannels() const {
   std::vector<std::string> channels = {"depth", "normal", "meshId", "motion", "position"};
   if (kind_ == SignalKind::Specular) {
     channels.push_back("roughness");
-    channels.push_back("specHitDist");
+    channels.push_back(s_.hitDistanceChannel);
   }
   return channels;
 }
 
 void Hybrid::setup(int width, int height) {
+  footprintScale_ = s_.footprint.scale(height);
   derivatives_ = Image(width, height, kGeometryDerivativeChannels);
   lobes_ = Image(width, height, kSpecularLobeChannels);
   surface_.setup(width, height);
@@ -52,15 +53,16 @@ void Hybrid::setup(int width, int height) {
   previousGBuffer_.setup(width, height);
   preMips_.setup(width, height, s_.preMipLevels, 3);
   postMips_.setup(width, height, s_.postMipLevels, 3);
-  for (Image* image :
-       {&colorHistory_, &oneFrameHistory_, &stabilizerHistory_, &signal_, &preSpatial_,
-        &preMoments_, &preWide_, &temporal_, &oneFrame_, &median_, &atrous_[0], &atrous_[1],
-        &atrous_[2], &post_, &reprojectedStabilizer_, &stabilized_})
+  for (Image* image : {&colorHistory_, &oneFrameHistory_, &stabilizerHistory_, &signal_,
+                       &preSpatial_, &preWide_, &temporal_, &oneFrame_, &median_, &atrous_[0],
+                       &atrous_[1], &atrous_[2], &post_, &reprojectedStabilizer_, &stabilized_})
     *image = Image(width, height, 3);
   for (Image* image : {&lengthHistory_, &mask_, &blurredMask_, &historyLength_, &variance_,
-                       &filteredVariance_, &levels_})
+                       &filteredVariance_, &levels_, &variancePingPong_[0], &variancePingPong_[1]})
     *image = Image(width, height, 1);
   momentsHistory_ = Image(width, height, 2);
+  preSquared_ = Image(width, height, 4);
+  preMoments_ = Image(width, height, 4);
   moments_ = Image(width, height, 2);
   taps_.setup(height);
   hasHistory_ = false;
@@ -75,8 +77,9 @@ void Hybrid::denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& o
   gbuffer_ = GBufferView::fromFrame(in.frame, requiredChannels(), "hybrid");
   roughness_ =
       kind_ == SignalKind::Specular ? in.frame.get("roughness", "hybrid").plane(0) : nullptr;
-  hitDistance_ =
-      kind_ == SignalKind::Specular ? in.frame.get("specHitDist", "hybrid").plane(0) : nullptr;
+  hitDistance_ = kind_ == SignalKind::Specular
+                     ? in.frame.get(s_.hitDistanceChannel, "hybrid").plane(0)
+                     : nullptr;
   toFilterSpace(in.signal);
   metadata(ctx);
   disocclusion(ctx);
@@ -116,7 +119,9 @@ void Hybrid::metadata(const FrameContext& ctx) {
 int Hybrid::historySource(size_t i) const {
   // The talk: "lerp(UV_motion, UV_hitpt, roughness > threshold)" -- a switch, not a blend;
   // hit point for smooth surfaces ("スムースな鏡面反射では Hit Point Reprojection を使います").
-  if (useVirtual_ && roughness_[i] < s_.hitPointRoughness) return virtual_.valid(i) ? 2 : 0;
+  // A failed hit-point reprojection falls back to surface motion where that is valid (as ReBLUR
+  // here and NRD do): only a pixel neither finds is disoccluded (issue 15, item 6).
+  if (useVirtual_ && roughness_[i] < s_.hitPointRoughness && virtual_.valid(i)) return 2;
   return surface_.valid(i) ? 1 : 0;
 }
 
@@ -173,13 +178,18 @@ void Hybrid::disocclusion(const FrameContext& ctx) {
   pass.setTaps(13);
 }
 
+bool Hybrid::usesMedian() const {
+  return s_.median && (kind_ == SignalKind::Specular || s_.medianBothSignals);
+}
+
 bool Hybrid::usesPreSpatial() const {
   return s_.disocclusionFill || s_.varianceClip || s_.lumaThreshold || s_.capcomRejection;
 }
 
 namespace {
-AtrousSettings hybridAtrous(const HybridSettings& s, bool luminance) {
+AtrousSettings hybridAtrous(const HybridSettings& s, bool luminance, float footprintScale) {
   AtrousSettings a;
+  a.footprintScale = footprintScale;
   a.kernel = AtrousKernel::Compact3x3;  // the talk's 3x3 à-trous (9 fetches per iteration)
   EdgeStoppingSettings& e = a.edges;
   e.depth = false;  // the talk: 3D position stands in for depth ("3次元の空間位置は深度項の代わり")
@@ -202,13 +212,16 @@ void Hybrid::preSpatial() {
   if (!usesPreSpatial()) return;
   {
     ScopedPass pass(this, "pre-spatial à-trous x1", 9);
-    Image& squared = preWide_;  // scratch: the second moment's input
-    for (size_t k = 0; k < signal_.raw().size(); ++k)
-      squared.raw()[k] = signal_.raw()[k] * signal_.raw()[k];
+    for (size_t i = 0; i < signal_.pixelCount(); ++i) {
+      for (int c = 0; c < 3; ++c)
+        preSquared_.plane(c)[i] = signal_.plane(c)[i] * signal_.plane(c)[i];
+      const float l = lumaAt(signal_, i);
+      preSquared_.plane(3)[i] = l * l;
+    }
     const AtrousGuide guide{gbuffer_, &derivatives_, nullptr, s_.edgeLobe ? &lobes_ : nullptr,
                             s_.lobeBeta};
-    atrousIterationWithMoments(0, hybridAtrous(s_, false), guide, 1.0f, signal_, preSpatial_,
-                               squared, preMoments_);
+    atrousIterationWithMoments(0, hybridAtrous(s_, false, footprintScale_), guide, 1.0f, signal_,
+                               preSpatial_, preSquared_, preMoments_);
   }
   ScopedPass pass(this, "pre-spatial mip", s_.preMip ? 4 : 0);
   if (!s_.preMip) {
@@ -296,13 +309,32 @@ void Hybrid::temporal() {
         for (int c = 0; c < 3; ++c) result[c] = result[c] * (1.0f - beta) + wide[c] * beta;
       }
       // Luminance threshold (p. "4.2.5"): "luminanceDiff = abs(Luma(filtered) - Luma(accumulated));
-      // resultColor = lerp(accumulated, filtered, luminanceDiff > threshold)". Ours is relative
-      // to the larger of the two: the talk's absolute tau depends on exposure.
+      // resultColor = lerp(accumulated, filtered, luminanceDiff > threshold)". The talk's tau is
+      // absolute (it depends on exposure). Ours, by default, is in units of the local luminance
+      // sigma: the larger of the pre-spatial spread (E[l^2] - E[l]^2 of its 3x3) and the
+      // history's temporal spread (its moments, before this frame) -- one frame of 3x3 samples
+      // cannot tell a switched-off light from a neighbourhood whose sparse samples all missed,
+      // the history's spread can. `lumaMode=relative` keeps |lf - la| > tau max(lf, la). Where
+      // it fires the pre-filtered value is a one-frame history: h restarts at 1.
       if (s_.lumaThreshold && !gbuffer_.isSky(i)) {
         const float lf = luminance(wide[0], wide[1], wide[2]);
         const float la = luminance(result[0], result[1], result[2]);
-        if (std::abs(lf - la) > s_.lumaTau * std::max({lf, la, 1e-6f}))
+        float threshold = s_.lumaTau * std::max({lf, la, 1e-6f});
+        if (!s_.lumaRelative) {
+          const float lp = luminance(pre[0], pre[1], pre[2]);
+          float spread = std::max(0.0f, preMoments_.plane(3)[i] - lp * lp);
+          if (valid) {
+            const float m1 = historySample(i, momentsHistory_.plane(0));
+            spread = std::max(spread, historySample(i, momentsHistory_.plane(1)) - m1 * m1);
+          }
+          // (1 % of the luminance at least: a noise-free region must not fire on rounding.)
+          threshold = std::max(s_.lumaSigma * std::sqrt(spread), 0.01f * std::max(lf, la));
+        }
+        if (std::abs(lf - la) > threshold) {
           for (int c = 0; c < 3; ++c) result[c] = wide[c];
+          h = 1.0f;
+          historyLength_.plane(0)[i] = h;
+        }
       }
       for (int c = 0; c < 3; ++c) temporal_.plane(c)[i] = result[c];
       // Luminance variance for the edge-stopping term: temporal from the moments once h >= 4,
@@ -310,11 +342,9 @@ void Hybrid::temporal() {
       float variance =
           std::max(0.0f, moments_.plane(1)[i] - moments_.plane(0)[i] * moments_.plane(0)[i]);
       if (h < 4.0f && usesPreSpatial()) {
-        variance = 0;
-        constexpr float kLuma[3] = {0.2126f, 0.7152f, 0.0722f};
-        for (int c = 0; c < 3; ++c)
-          variance +=
-              kLuma[c] * kLuma[c] * std::max(0.0f, preMoments_.plane(c)[i] - pre[c] * pre[c]);
+        // E[l^2] - E[l]^2 of the pre-spatial taps: the channels' covariance included.
+        const float lp = luminance(pre[0], pre[1], pre[2]);
+        variance = std::max(0.0f, preMoments_.plane(3)[i] - lp * lp);
       }
       variance_.plane(0)[i] = variance;
     }
@@ -325,21 +355,30 @@ void Hybrid::temporal() {
 // mip + upsampling). Its result is never fed back.
 void Hybrid::postSpatial() {
   const Image* input = &temporal_;
-  if (s_.median) {
+  if (usesMedian()) {
     ScopedPass pass(this, "post-spatial median", 9);
-    median3x3(temporal_, &gbuffer_, median_);
+    median3x3(temporal_, &gbuffer_, median_, s_.medianEdgeAware);
     input = &median_;
-  }
-  if (s_.edgeLuminance) {
-    ScopedPass pass(this, "variance prefilter", 9);
-    prefilterVariance3x3(variance_, gbuffer_, filteredVariance_);
   }
   const AtrousGuide guide{gbuffer_, &derivatives_, &filteredVariance_,
                           s_.edgeLobe ? &lobes_ : nullptr, s_.lobeBeta};
-  const AtrousSettings settings = hybridAtrous(s_, true);
+  const AtrousSettings settings = hybridAtrous(s_, true, footprintScale_);
+  // The luminance term's variance: propagated through every iteration with squared weights (SVGF
+  // §4.3, the default) or the temporal stage's variance for all three (`postVariance=fixed`, the
+  // first version here: later iterations then over-estimate the noise of an already filtered
+  // signal and blur more).
+  const bool propagate = s_.edgeLuminance && s_.propagateVariance;
+  const Image* variance = &variance_;
   for (int i = 0; i < s_.postIterations; ++i) {
+    if (s_.edgeLuminance && (i == 0 || propagate)) {
+      ScopedPass pass(this, "variance prefilter " + std::to_string(i + 1), 9);
+      prefilterVariance3x3(*variance, gbuffer_, filteredVariance_);
+    }
     ScopedPass pass(this, "post-spatial à-trous " + std::to_string(i + 1), 9);
-    atrousIteration(i, settings, guide, 1.0f, *input, atrous_[i]);
+    Image* varianceOut = propagate ? &variancePingPong_[size_t(i % 2)] : nullptr;
+    atrousIteration(i, settings, guide, 1.0f, *input, atrous_[i], propagate ? variance : nullptr,
+                    varianceOut);
+    if (propagate) variance = varianceOut;
     input = &atrous_[i];
   }
   ScopedPass pass(this, "post-spatial mip + upsample", s_.postMip ? 4 : 0);
@@ -398,10 +437,15 @@ void Hybrid::storeHistory() {
 }
 
 std::vector<std::pair<std::string, const Image*>> Hybrid::passOutputs() const {
-  return {{"filter space", &signal_},    {"disocclusion mask", &blurredMask_},
-          {"pre-spatial", &preSpatial_}, {"pre-spatial wide", &preWide_},
-          {"temporal", &temporal_},      {"median", &median_},
-          {"post-spatial", &post_},      {"stabilizer", &stabilized_}};
+  std::vector<std::pair<std::string, const Image*>> out = {{"filter space", &signal_},
+                                                           {"disocclusion mask", &blurredMask_},
+                                                           {"pre-spatial", &preSpatial_},
+                                                           {"pre-spatial wide", &preWide_},
+                                                           {"temporal", &temporal_}};
+  if (usesMedian()) out.push_back({"median", &median_});
+  out.push_back({"post-spatial", &post_});
+  out.push_back({"stabilizer", &stabilized_});
+  return out;
 }
 
 std::vector<ParamSpec> hybridParamSpecs() {
@@ -425,6 +469,9 @@ std::vector<ParamSpec> hybridParamSpecs() {
       ParamSpec::integer("preMipLevels", 2, 1, 8, "pre-spatial mip levels (the talk: Mip Gen x2)"),
       ParamSpec::boolean("hitPoint", true,
                          "specular: hit-point reprojection below hitPointRoughness (the talk)"),
+      ParamSpec::choice("hitDistance", "sampled", {"sampled", "mirror"},
+                        "specular hit distance: the 1-spp sample's own ray length (what a real "
+                        "tracer has; the talk, NRD) or the noise-free mirror ray (an oracle)"),
       ParamSpec::real("hitPointRoughness", 0.3, 0, 1,
                       "roughness threshold of hit-point reprojection (ours)"),
       ParamSpec::integer("maxHistory", 24, 1, 4096, "cap of h, alpha = 1/h (the talk: 24-30)"),
@@ -439,8 +486,13 @@ std::vector<ParamSpec> hybridParamSpecs() {
       ParamSpec::boolean("lumaThreshold", true,
                          "use the pre-filtered value where its luminance differs from the "
                          "accumulated one by more than lumaTau (the talk)"),
+      ParamSpec::choice("lumaMode", "sigma", {"sigma", "relative"},
+                        "luminance threshold: |lf - la| > lumaSigma x local luminance sigma "
+                        "(ours, noise-aware) or > lumaTau x max(lf, la) (relative)"),
+      ParamSpec::real("lumaSigma", 2, 0, 1e6,
+                      "lumaMode=sigma: threshold in local luminance sigmas (ours)"),
       ParamSpec::real("lumaTau", 0.8, 0, 1e6,
-                      "luminance threshold, relative to the larger luminance (ours)"),
+                      "lumaMode=relative: threshold relative to the larger luminance (ours)"),
       ParamSpec::boolean("capcomRejection", false,
                          "temporal luminance rejection against a stabilised one-frame result "
                          "(CAPCOM RE ENGINE)"),
@@ -449,6 +501,14 @@ std::vector<ParamSpec> hybridParamSpecs() {
                          "post-spatial 3x3 à-trous iterations (the talk 3)"),
       ParamSpec::boolean("median", true,
                          "3x3 median before the first post iteration (the talk; not fed back)"),
+      ParamSpec::choice("postVariance", "propagate", {"propagate", "fixed"},
+                        "post-spatial luminance term: variance propagated with squared weights "
+                        "(SVGF §4.3) or the temporal variance for every iteration"),
+      ParamSpec::choice("medianSignals", "specular", {"specular", "both"},
+                        "signals the median runs on (the talk: optional, for specular fireflies)"),
+      ParamSpec::boolean("medianEdgeAware", true,
+                         "median over same-mesh, similar-normal neighbours only (ours: a 1-px "
+                         "feature keeps its value)"),
       ParamSpec::boolean("postMip", false,
                          "post-spatial: mip + bilateral upsample (the talk, optional)"),
       ParamSpec::integer("postMipLevels", 2, 1, 8, "post-spatial mip levels (ours)"),
@@ -459,6 +519,7 @@ std::vector<ParamSpec> hybridParamSpecs() {
                         "filter in linear or Reinhard-compressed space (CAPCOM ablation)"),
   };
   for (ParamSpec& s : reprojectionParamSpecs()) specs.push_back(std::move(s));
+  for (ParamSpec& s : footprintParamSpecs()) specs.push_back(std::move(s));
   return specs;
 }
 
@@ -478,6 +539,8 @@ HybridSettings hybridSettings(const ParamSet& p) {
   s.preMipLevels = p.getInt("preMipLevels");
   s.hitPointReprojection = p.getBool("hitPoint");
   s.hitPointRoughness = p.getFloat("hitPointRoughness");
+  s.hitDistanceChannel =
+      p.getChoice("hitDistance") == "mirror" ? "specHitDistMirror" : "specHitDist";
   s.maxHistory = p.getInt("maxHistory");
   s.disocclusionFill = p.getBool("disocclusionFill");
   s.varianceClip = p.getBool("varianceClip");
@@ -486,15 +549,21 @@ HybridSettings hybridSettings(const ParamSet& p) {
   s.clipGamma = p.getFloat("clipGamma");
   s.lumaThreshold = p.getBool("lumaThreshold");
   s.lumaTau = p.getFloat("lumaTau");
+  s.lumaRelative = p.getChoice("lumaMode") == "relative";
+  s.lumaSigma = p.getFloat("lumaSigma");
   s.capcomRejection = p.getBool("capcomRejection");
   s.capcomTau = p.getFloat("capcomTau");
   s.postIterations = p.getInt("postIterations");
   s.median = p.getBool("median");
+  s.medianBothSignals = p.getChoice("medianSignals") == "both";
+  s.medianEdgeAware = p.getBool("medianEdgeAware");
+  s.propagateVariance = p.getChoice("postVariance") == "propagate";
   s.postMip = p.getBool("postMip");
   s.postMipLevels = p.getInt("postMipLevels");
   s.stabilizer = p.getBool("stabilizer");
   s.stabilizerAlpha = p.getFloat("stabilizerAlpha");
   s.reinhard = p.getChoice("space") == "reinhard";
+  s.footprint = footprintParam(p);
   return s;
 }
 

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "denoisers/common/atrous.hpp"
+#include "denoisers/common/footprint.hpp"
 #include "denoisers/common/gbuffer.hpp"
 #include "denoisers/common/history_clamp.hpp"
 #include "denoisers/common/hit_point_reprojection.hpp"
@@ -35,6 +36,9 @@ struct HybridSettings {
   int preMipLevels = 2;
   // 4. Temporal.
   bool hitPointReprojection = true;
+  // The specular hit distance read: the 1-spp sample's ("specHitDist") or the mirror oracle's
+  // ("specHitDistMirror").
+  std::string hitDistanceChannel = "specHitDist";
   float hitPointRoughness = 0.3f;  // specular: hit-point reprojection below this roughness (ours)
   int maxHistory = 24;             // the talk: h capped at 24-30
   bool disocclusionFill = true;
@@ -42,12 +46,19 @@ struct HybridSettings {
   HistoryClampMode clipMode = HistoryClampMode::Clip;
   float clipGamma = 1.5f;  // box half-width in sigma (ours; Salvi: 1..2)
   bool lumaThreshold = true;
-  float lumaTau = 0.8f;  // relative (ours)
+  // Where the threshold fires, in units of the local luminance sigma (default) or relative to the
+  // larger luminance (the first version here; fires on noise alone for sparse 1-spp signals).
+  bool lumaRelative = false;
+  float lumaSigma = 2.0f;  // ours: sigma units (see hybrid.cpp)
+  float lumaTau = 0.8f;    // relative (ours)
   bool capcomRejection = false;
   float capcomTau = 0.5f;  // relative (ours)
   // 5. Post-spatial.
   int postIterations = 3;
+  bool propagateVariance = true;  // SVGF §4.3 through the post à-trous
   bool median = true;
+  bool medianBothSignals = false;  // the talk: an option against specular fireflies
+  bool medianEdgeAware = true;     // ours: never across meshes or creases (thin features survive)
   bool postMip = false;
   int postMipLevels = 2;
   // 6. Stabiliser.
@@ -55,6 +66,7 @@ struct HybridSettings {
   float stabilizerAlpha = 0.5f;
   // CAPCOM: filter in Reinhard-compressed space instead of linear.
   bool reinhard = false;
+  Footprint footprint;  // footprint.hpp: the à-trous steps at this resolution
 };
 
 std::vector<ParamSpec> hybridParamSpecs();
@@ -69,6 +81,8 @@ class Hybrid : public Denoiser {
   void denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& output) override;
 
   std::vector<std::pair<std::string, const Image*>> passOutputs() const;
+  // The history length h of the last frame (1 where it was disoccluded or the threshold fired).
+  const Image& lastHistoryLength() const { return lengthHistory_; }
 
  private:
   void toFilterSpace(const Image& signal);
@@ -85,9 +99,11 @@ class Hybrid : public Denoiser {
   int historySource(size_t i) const;
   float historySample(size_t i, const float* plane) const;
   bool usesPreSpatial() const;
+  bool usesMedian() const;
 
   HybridSettings s_;
   SignalKind kind_;
+  float footprintScale_ = 1.0f;
   GBufferView gbuffer_;
   const float* roughness_ = nullptr;
   const float* hitDistance_ = nullptr;
@@ -101,9 +117,12 @@ class Hybrid : public Denoiser {
   // History (persistent).
   Image colorHistory_, lengthHistory_, momentsHistory_, oneFrameHistory_, stabilizerHistory_;
   // Per frame.
+  // preSquared_/preMoments_: r^2, g^2, b^2 and the luminance's own l^2 (its variance keeps the
+  // channels' covariance).
+  Image preSquared_;
   Image signal_, mask_, blurredMask_, historyLength_, preSpatial_, preMoments_, preWide_, levels_,
-      temporal_, moments_, variance_, filteredVariance_, oneFrame_, median_, atrous_[3], post_,
-      reprojectedStabilizer_, stabilized_;
+      temporal_, moments_, variance_, filteredVariance_, variancePingPong_[2], oneFrame_, median_,
+      atrous_[3], post_, reprojectedStabilizer_, stabilized_;
   RowTapCounter taps_;
 };
 

@@ -29,13 +29,16 @@ inline Lanes8 medianOfNine(Lanes8 p[9]) {
 
 }  // namespace
 
-double median3x3(const Image& in, const GBufferView* g, Image& out) {
+double median3x3(const Image& in, const GBufferView* g, Image& out, bool edgeAware) {
   const int w = in.width(), h = in.height();
   if (!out.sameShape(in) || &in == &out)
     throw Error("median 3x3: in/out must be distinct, equal-shaped images");
   if (g && (g->width != w || g->height != h))
     throw Error("median 3x3: the G-buffer's size differs from the image's");
   const float* meshId = g ? g->meshId : nullptr;
+  if (edgeAware && (!meshId || !g->normal[0] || !g->normal[1] || !g->normal[2]))
+    throw Error("median 3x3: the edge-aware median needs the G-buffer's meshId and normal");
+  constexpr float kMinNormalCosine = 0.8f;
   constexpr float kInfinity = std::numeric_limits<float>::infinity();
   // Eight pixels at a time. A tap off the image or in the sky is missing; with k of the nine
   // missing, ceil(k/2) are replaced by -inf and the rest by +inf (in tap order), so the fifth of
@@ -46,8 +49,22 @@ double median3x3(const Image& in, const GBufferView* g, Image& out) {
       const Neighbourhood3x3Lanes n(x0, y, w, h, meshId);
       const size_t p = n.p;
       const LaneMask8 inRow = n.inRow;
-      const LaneMask8* present = n.present;
+      LaneMask8 present[9];
+      for (int j = 0; j < 9; ++j) present[j] = n.present[j];
       const size_t* offset = n.offset;
+      if (edgeAware) {  // same mesh and a similar normal, or missing
+        const Lanes8 id = loadLanes(meshId + p, inRow);
+        Lanes8 normal[3];
+        for (int c = 0; c < 3; ++c) normal[c] = loadLanes(g->normal[size_t(c)] + p, inRow);
+        for (int j = 0; j < 9; ++j) {
+          if (j == 4) continue;
+          Lanes8 cosine{};
+          for (int c = 0; c < 3; ++c)
+            cosine += normal[c] * loadLanes(g->normal[size_t(c)] + offset[j], present[j]);
+          present[j] &=
+              (loadLanes(meshId + offset[j], present[j]) == id) & (cosine >= kMinNormalCosine);
+        }
+      }
       LaneMask8 missing{};
       for (int j = 0; j < 9; ++j) missing -= present[j] == 0;  // comparisons give -1
       const LaneMask8 lowPads = (missing + 1) >> 1;

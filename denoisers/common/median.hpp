@@ -10,6 +10,9 @@
 namespace arena {
 
 // out must not alias in; gbuffer may be nullptr (no sky). Returns taps read per pixel (<= 9).
-double median3x3(const Image& in, const GBufferView* gbuffer, Image& out);
+// `edgeAware` (needs the gbuffer's meshId and normal): a neighbour of another mesh, or whose
+// normal differs from p's by more than ~37 degrees (n.n' < 0.8), counts as missing too, so a thin
+// feature one pixel wide keeps its own value instead of the background's (issue 15, item 8).
+double median3x3(const Image& in, const GBufferView* gbuffer, Image& out, bool edgeAware = false);
 
 }  // namespace arena
