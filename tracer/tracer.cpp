@@ -152,7 +152,11 @@ FrameScene::FrameScene(const EmbreeDevice& device, const Scene& scene, const std
         g.area += 0.5f * glm::length(glm::cross(e1, e2));
         g.areaCdf.push_back(g.area);
       }
-      if (maxComponent(g.lightRadiance) > 0 && g.area > 0) activeLights_.push_back(int(id));
+      // Every light with an area is selectable, switched off or not (A-SVGF §3.3): a gradient
+      // sample re-shaded with the previous frame's random numbers must pick the same light, or a
+      // light switching anywhere changes every pixel's light choice and fakes a gradient where
+      // nothing changed. A light with zero radiance contributes 0 (its pdf is 0 below).
+      if (g.area > 0) selectableLights_.push_back(int(id));
     }
     RTCGeometry geom = rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
     auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
@@ -263,10 +267,10 @@ glm::vec3 FrameScene::sky(glm::vec3 dir) const {
 glm::vec3 FrameScene::sampleLight(const SurfaceHit& at, const Sampler& s, uint32_t dim, glm::vec3& wi,
                                   float& dist, float& pdf) const {
   pdf = 0;
-  if (activeLights_.empty()) return glm::vec3(0);
-  const size_t n = activeLights_.size();
+  if (selectableLights_.empty()) return glm::vec3(0);
+  const size_t n = selectableLights_.size();
   const size_t li = std::min(size_t(s.get(dim + kLightSelect) * float(n)), n - 1);
-  const Geometry& g = geometries_[size_t(activeLights_[li])];
+  const Geometry& g = geometries_[size_t(selectableLights_[li])];
   // Triangle in proportion to its area, then a uniform point on it.
   float target = s.get(dim + kLightTriangle) * g.area;
   size_t ti = size_t(std::lower_bound(g.areaCdf.begin(), g.areaCdf.end(), target) - g.areaCdf.begin());
@@ -283,19 +287,20 @@ glm::vec3 FrameScene::sampleLight(const SurfaceHit& at, const Sampler& s, uint32
   wi = d / dist;
   float cosLight = glm::dot(ln, -wi);
   if (cosLight <= 0) return glm::vec3(0);  // one-sided emitters
+  if (maxComponent(g.lightRadiance) <= 0) return glm::vec3(0);  // switched off: pdf stays 0
   pdf = dist2 / (cosLight * g.area * float(n));
   return g.lightRadiance;
 }
 
 float FrameScene::lightPdf(const SurfaceHit& lightHit, glm::vec3 from) const {
-  if (lightHit.lightIndex < 0 || activeLights_.empty()) return 0;
+  if (lightHit.lightIndex < 0 || selectableLights_.empty()) return 0;
   const Geometry& g = geometries_[size_t(lightHit.meshId)];
   if (maxComponent(g.lightRadiance) <= 0) return 0;
   glm::vec3 d = from - lightHit.position;
   float dist2 = glm::dot(d, d);
   float cosLight = glm::dot(lightHit.geometricNormal, d / std::sqrt(dist2));
   if (cosLight <= 0) return 0;
-  return dist2 / (cosLight * g.area * float(activeLights_.size()));
+  return dist2 / (cosLight * g.area * float(selectableLights_.size()));
 }
 
 FrameScene::Radiance FrameScene::shade(const SurfaceHit& primary, glm::vec3 wo, const Sampler& sampler,

@@ -101,7 +101,7 @@ class FrameScene {
   SceneState state_;
   RTCScene rtcScene_ = nullptr;
   std::vector<Geometry> geometries_;
-  std::vector<int> activeLights_;  // meshIds of lights with non-zero radiance
+  std::vector<int> selectableLights_;  // meshIds of lights with an area (radiance 0 included)
 };
 
 }  // namespace arena
