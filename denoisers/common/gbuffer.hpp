@@ -3,6 +3,7 @@
 // copy of the previous frame's depth/normal/meshId that SVGF keeps in its history (SVGF §4: "our
 // history buffer holds ... the depth, normals and mesh ids of the previous frame"), and the
 // screen-space derivatives that reprojection (fwidth) and the depth edge-stopping term need.
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -63,8 +64,11 @@ enum GeometryDerivative : int {
 // across a 2x2 quad). Needs depth, normal and meshId; sky pixels get 0.
 void computeGeometryDerivatives(const GBufferView& gbuffer, Image& derivatives);
 
+// The depth derivative the reprojection tests use: Falcor's max(|dz/dx|, |dz/dy|)
+// (SVGFPackLinearZAndNormal), not HLSL fwidth's sum.
 inline float depthFwidth(const Image& derivatives, size_t i) {
-  return std::abs(derivatives.plane(kDepthDx)[i]) + std::abs(derivatives.plane(kDepthDy)[i]);
+  return std::max(std::abs(derivatives.plane(kDepthDx)[i]),
+                  std::abs(derivatives.plane(kDepthDy)[i]));
 }
 
 // Calls visit(q) for every pixel q of the 3x3 neighbourhood of (x, y) (row-major, centre

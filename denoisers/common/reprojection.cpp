@@ -84,8 +84,11 @@ void Reprojection::compute(const GBufferView& current, const Image& derivatives,
         for (size_t c = 0; c < 3; ++c) world[c] = loadLanes(current.position[c] + p, inRow);
         depth = previousViewDepth(depth, world, *camera, *previousCamera);
       }
-      const Lanes8 fwidthDepth = absFloat(loadLanes(derivatives.plane(kDepthDx) + p, inRow)) +
-                                 absFloat(loadLanes(derivatives.plane(kDepthDy) + p, inRow));
+      // Falcor's depth derivative: max(|dz/dx|, |dz/dy|) (SVGFPackLinearZAndNormal), not HLSL's
+      // fwidth sum (issue 15, item 12).
+      const Lanes8 fwidthDepth =
+          maxFloat(absFloat(loadLanes(derivatives.plane(kDepthDx) + p, inRow)),
+                   absFloat(loadLanes(derivatives.plane(kDepthDy) + p, inRow)));
       const Lanes8 fwidthNormal = loadLanes(derivatives.plane(kNormalFwidth) + p, inRow);
 
       // SVGF §4.1: each tap is tested separately for depth, normal and mesh id, by the one
