@@ -53,9 +53,11 @@ void Reblur::setup(int width, int height) {
   for (Image* image : {&slowHistory_, &fastHistory_, &stabilizedHistory_, &preBlurred_, &temporal_,
                        &fast_, &fixed_, &fireflyFree_, &blurred_, &postBlurred_, &stabilized_})
     *image = Image(width, height, 3);
-  for (Image* image :
-       {&accumulatedFramesHistory_, &accumulatedFrames_, &previousFrames_, &radiusScale_})
+  for (Image* image : {&accumulatedFramesHistory_, &accumulatedFrames_, &previousFrames_,
+                       &radiusScale_, &blurredHitDistance_})
     *image = Image(width, height, 1);
+  preBlurIn_ = Image(width, height, 4);
+  preBlurOut_ = Image(width, height, 4);
   youngPerRow_.setup(height);
   pixelScale_ = s_.footprint.scale(height);
   hasHistory_ = false;
@@ -75,6 +77,7 @@ void Reblur::denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& o
                      : nullptr;
   reproject(ctx);
   preBlurPass(in, ctx.frameIndex);
+  reprojectVirtual(ctx);
   temporalAccumulation();
   historyFixPass();
   antiFireflyPass();
@@ -84,8 +87,9 @@ void Reblur::denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& o
   storeHistory();
 }
 
-// ---- 0. Reprojection: surface motion (SVGF-style per-tap tests), and the virtual point for the
-// specular signal (NRD "virtual motion"; the talk's hit-point reprojection).
+// ---- 0. Reprojection: surface motion (SVGF-style per-tap tests); the virtual point of the
+// specular signal follows the pre-blur (reprojectVirtual), as NRD computes its virtual motion in
+// the temporal accumulation from the pre-pass's hit distance.
 void Reblur::reproject(const FrameContext& ctx) {
   ScopedPass pass(this, "reproject", 4);
   useVirtual_ = kind_ == SignalKind::Specular && s_.hitPointReprojection;
@@ -95,11 +99,17 @@ void Reblur::reproject(const FrameContext& ctx) {
     return;
   }
   computeGeometryDerivatives(gbuffer_, derivatives_);
-  const GBufferView previous = previousGBuffer_.view();
-  surface_.compute(gbuffer_, derivatives_, previous, s_.reprojection, &ctx.camera,
+  surface_.compute(gbuffer_, derivatives_, previousGBuffer_.view(), s_.reprojection, &ctx.camera,
                    &ctx.previousCamera);
-  if (!useVirtual_) return;
-  virtual_.compute(gbuffer_, hitDistance_, ctx.camera, ctx.previousCamera, previous, s_.hitPoint);
+}
+
+// ---- 1b. Virtual (hit-point) reprojection of the specular signal (NRD "virtual motion"; the
+// talk's hit-point reprojection), from the pre-blurred hit distance when the pre-blur carries it.
+void Reblur::reprojectVirtual(const FrameContext& ctx) {
+  ScopedPass pass(this, "virtual reprojection", useVirtual_ && hasHistory_ ? 4 : 0);
+  if (!useVirtual_ || !hasHistory_) return;
+  virtual_.compute(gbuffer_, hitDistance_, ctx.camera, ctx.previousCamera, previousGBuffer_.view(),
+                   s_.hitPoint);
   // NRD trusts the virtual history more the smoother the surface (its "spec magic curve");
   // ours: 1 - smoothstep(0, hitPointRoughness, roughness).
   float* amount = virtualAmount_.plane(0);
@@ -131,8 +141,27 @@ void Reblur::preBlurPass(const DenoiserInputs& in, int frameIndex) {
   // NRD: diffusePrepassBlurRadius 30, specularPrepassBlurRadius 50.
   const float radius = kind_ == SignalKind::Specular ? s_.specularPreBlurRadius : s_.preBlurRadius;
   PoissonBlurSettings blur{radius * pixelScale_, s_.weights};
-  poissonDiskBlur(in.signal, {gbuffer_, roughness_, hitDistance_}, blur,
-                  poissonRotation(frameIndex), nullptr, preBlurred_);
+  if (!hitDistance_ || !s_.hitDistancePreBlur) {
+    poissonDiskBlur(in.signal, {gbuffer_, roughness_, hitDistance_}, blur,
+                    poissonRotation(frameIndex), nullptr, preBlurred_);
+    return;
+  }
+  // Specular: the hit distance rides along as a fourth channel (NRD's pre-pass blurs it with the
+  // radiance), misses capped at 1e4 like the weights cap them; every later pass -- the virtual
+  // reprojection and the weights -- reads the blurred distance, not the 1-spp sample's.
+  const size_t pixels = gbuffer_.pixelCount();
+  parallelCopy(in.signal.raw().data(), 3 * pixels, preBlurIn_.raw().data());
+  float* distance = preBlurIn_.plane(3);
+  parallelRows(gbuffer_.height, [&](int y) {
+    const size_t w = size_t(gbuffer_.width);
+    for (size_t i = size_t(y) * w; i < size_t(y + 1) * w; ++i)
+      distance[i] = std::min(hitDistance_[i], 1e4f);
+  });
+  poissonDiskBlur(preBlurIn_, {gbuffer_, roughness_, hitDistance_}, blur,
+                  poissonRotation(frameIndex), nullptr, preBlurOut_);
+  parallelCopy(preBlurOut_.raw().data(), 3 * pixels, preBlurred_.raw().data());
+  parallelCopy(preBlurOut_.plane(3), pixels, blurredHitDistance_.plane(0));
+  hitDistance_ = blurredHitDistance_.plane(0);
 }
 
 // ---- 2. Temporal accumulation: alpha = 1 / (1 + N_prev), N = min(N_prev + 1, 30); the fast
@@ -455,6 +484,9 @@ std::vector<ParamSpec> reblurParamSpecs() {
       ParamSpec::choice("hitDistance", "sampled", {"sampled", "mirror"},
                         "specular hit distance: the 1-spp sample's own ray length (what a real "
                         "tracer has; the talk, NRD) or the noise-free mirror ray (an oracle)"),
+      ParamSpec::boolean("hitDistancePreBlur", true,
+                         "specular: the pre-blur filters the hit distance too, and every later "
+                         "pass reads the blurred one (NRD pre-pass)"),
       ParamSpec::real("hitPointRoughness", 0.6, 0.0, 1.0,
                       "specular: virtual-history weight 1 - smoothstep(0, this, roughness) (ours)"),
       ParamSpec::choice("historyFix", "sparse", {"sparse", "mip", "off"},
@@ -512,6 +544,7 @@ ReblurSettings reblurSettings(const ParamSet& params) {
   s.maxFastAccumulatedFrames = params.getInt("maxFastAccumulatedFrames");
   s.hitPointReprojection = params.getBool("hitPoint");
   s.hitPointRoughness = params.getFloat("hitPointRoughness");
+  s.hitDistancePreBlur = params.getBool("hitDistancePreBlur");
   s.hitDistanceChannel =
       params.getChoice("hitDistance") == "mirror" ? "specHitDistMirror" : "specHitDist";
   const std::string& fix = params.getChoice("historyFix");

@@ -32,6 +32,7 @@ struct ReblurSettings {
   // The specular hit distance the guides read: the 1-spp sample's ("specHitDist", what a real
   // tracer has) or the noise-free mirror ray's oracle ("specHitDistMirror").
   std::string hitDistanceChannel = "specHitDist";
+  bool hitDistancePreBlur = true;  // NRD pre-pass: the hit distance blurred with the radiance
   float hitPointRoughness = 0.6f;  // virtual amount = 1 - smoothstep(0, this, roughness) (ours)
   ReblurHistoryFix historyFix = ReblurHistoryFix::Sparse;
   int historyFixFrames = 3;        // NRD historyFixFrameNum 3
@@ -69,6 +70,7 @@ class Reblur : public Denoiser {
  private:
   void reproject(const FrameContext& ctx);
   void preBlurPass(const DenoiserInputs& in, int frameIndex);
+  void reprojectVirtual(const FrameContext& ctx);
   void temporalAccumulation();
   void historyFixPass();
   void antiFireflyPass();
@@ -117,6 +119,7 @@ class Reblur : public Denoiser {
   // Per frame.
   Image preBlurred_, temporal_, fast_, accumulatedFrames_, previousFrames_, fixed_, fireflyFree_,
       blurred_, postBlurred_, radiusScale_, stabilized_;
+  Image preBlurIn_, preBlurOut_, blurredHitDistance_;  // specular pre-blur with the hit distance
   const Image* historyFixed_ = &temporal_;  // the history fix's result: fixed_, or temporal_
   RowTapCounter youngPerRow_;               // the history fix's young pixels, counted per row
 };
