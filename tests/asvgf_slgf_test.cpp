@@ -189,21 +189,7 @@ TEST(SlgfVariant, RespondsFasterThanSvgfToLightChanges) {
 // Contracts on a synthetic camera-facing plane, with the adaptive paths switched on.
 
 LayerSet planeFrame(int w, int h) {
-  LayerSet frame;
-  for (const LayerSpec& spec : channels::frameLayers())
-    frame.set(spec.name, Image(w, h, spec.channels()));
-  frame.get("albedo").fill(1.0f);
-  frame.get("color").fill(0.5f);
-  frame.get("depth").fill(2.0f);
-  frame.get("specHitDist").fill(1e6f);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      frame.get("normal").at(x, y, 2) = 1.0f;
-      frame.get("position").at(x, y, 0) = 0.01f * float(x);
-      frame.get("position").at(x, y, 1) = -0.01f * float(y);
-      frame.get("position").at(x, y, 2) = -2.0f;
-    }
-  return frame;
+  return test::planeFrame(w, h);
 }
 
 // A gradient sample in every stratum: lumOld everywhere, lumNew left of column `split`
