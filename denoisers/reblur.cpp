@@ -527,6 +527,9 @@ std::vector<ParamSpec> reblurParamSpecs() {
       ParamSpec::real("hitSigma", 0.3, 1e-6, 100,
                       "specular hit-distance weight scale, fraction of (h + z) (ours)"),
       ParamSpec::real("roughnessSigma", 0.1, 1e-6, 10, "specular roughness weight scale (ours)"),
+      ParamSpec::real("minHitWeight", 0.1, 0, 1,
+                      "floor of the specular hit-distance weight (NRD minHitDistanceWeight 0.1; "
+                      "0 = none, the first version)"),
   };
   for (ParamSpec& s : reprojectionParamSpecs()) specs.push_back(std::move(s));
   for (ParamSpec& s : footprintParamSpecs()) specs.push_back(std::move(s));
@@ -569,6 +572,7 @@ ReblurSettings reblurSettings(const ParamSet& params) {
   s.weights.normalPower = params.getFloat("normalPower");
   s.weights.hitSigma = params.getFloat("hitSigma");
   s.weights.roughnessSigma = params.getFloat("roughnessSigma");
+  s.weights.minHitWeight = params.getFloat("minHitWeight");
   return s;
 }
 

@@ -29,9 +29,14 @@ struct SurfaceWeightSettings {
   // Normal: max(0, n(p).n(q))^normalPower (NRD limits the lobe angle instead).
   bool normal = true;
   float normalPower = 32.0f;  // [0; inf) ours: 10 degrees -> 0.61
-  // Specular: hit distance, exp(-|h(p) - h(q)| / (hitSigma (min(h(p), 1e4) + z(p)))).
+  // Specular: hit distance, max(exp(-|h(p) - h(q)| / (hitSigma (min(h(p), 1e4) + z(p)))),
+  // minHitWeight). The floor is NRD's minHitDistanceWeight (0.1): without it the noise-free mirror
+  // distance's cliff between a reflected miss (1e6) and a near hit split a glossy sphere into
+  // regions that never exchanged samples -- the sharp-edged dark patch of issue 15, item 14.
   bool hitDistance = false;
-  float hitSigma = 0.3f;  // (0; inf) ours
+  float hitSigma = 0.3f;      // (0; inf) ours
+  float minHitWeight = 0.1f;  // [0; 1] NRD minHitDistanceWeight 0.1
+  float maxHitExponent() const { return minHitWeight > 0.0f ? -std::log(minHitWeight) : 1e30f; }
   // Specular: roughness, exp(-|r(p) - r(q)| / roughnessSigma).
   bool roughness = false;
   float roughnessSigma = 0.1f;  // (0; inf) ours
@@ -50,6 +55,7 @@ template <class F>
 struct SurfaceCentre {
   SurfacePoint<F> point;
   F inversePlaneScale{}, hitDistance{}, inverseHitScale{};
+  float maxHitExponent = 1e30f;  // -log(minHitWeight)
 };
 template <class F>
 inline SurfaceCentre<F> surfaceCentre(const SurfaceWeightSettings& s, const SurfacePoint<F>& p) {
@@ -59,6 +65,7 @@ inline SurfaceCentre<F> surfaceCentre(const SurfaceWeightSettings& s, const Surf
   if (s.hitDistance) {
     c.hitDistance = minFloat(p.hitDistance, F{} + 1e4f);
     c.inverseHitScale = 1.0f / (s.hitSigma * (c.hitDistance + absFloat(p.depth)) + 1e-20f);
+    c.maxHitExponent = s.maxHitExponent();
   }
   return c;
 }
@@ -74,8 +81,10 @@ inline F surfaceWeight(const SurfaceWeightSettings& s, const SurfaceCentre<F>& p
     for (int c = 0; c < 3; ++c) d += p.point.normal[c] * (q.position[c] - p.point.position[c]);
     exponent += absFloat(d) * p.inversePlaneScale;
   }
-  if (s.hitDistance)
-    exponent += absFloat(p.hitDistance - minFloat(q.hitDistance, F{} + 1e4f)) * p.inverseHitScale;
+  if (s.hitDistance)  // exp(-min(x, -log(floor))) = max(exp(-x), floor): the floor costs no exp
+    exponent +=
+        minFloat(absFloat(p.hitDistance - minFloat(q.hitDistance, F{} + 1e4f)) * p.inverseHitScale,
+                 F{} + p.maxHitExponent);
   if (s.roughness)
     exponent += absFloat(p.point.roughness - q.roughness) * (1.0f / s.roughnessSigma);
   if (!s.normal || s.normalPower == 0.0f) return expNonPositive(-exponent);
