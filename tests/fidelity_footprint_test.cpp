@@ -70,9 +70,14 @@ double energyRadius90(const Image& out, int cx, int cy) {
 double impulseRadius(const std::string& name, const std::string& policy, int w, int h) {
   Params params = {{"footprint", policy}};
   if (name == "svgf" || name == "asvgf" || name == "slgf") params["edge.luminance"] = "false";
-  if (name == "eaw") params["edge.color"] = "false";
+  // The position terms measure world distance, which a pixel policy does not touch: off too.
+  if (name == "eaw") {
+    params["edge.color"] = "false";
+    params["edge.position"] = "false";
+  }
   if (name == "hybrid") {
     params["edge.luminance"] = "false";
+    params["edge.position"] = "false";
     params["median"] = "false";
   }
   if (name == "reblur") params["antiFirefly"] = "false";
@@ -100,7 +105,15 @@ TEST(FidelityFootprint, ImpulseRadiiKeepTheirRatioToSvgfAcrossResolutions) {
       std::printf(
           "%s %-7s r90 %6.2f px at 256x144, %6.2f px at 1280x720; ratio to svgf %.3f vs %.3f\n",
           policy.c_str(), name.c_str(), small[name], large[name], ratioSmall, ratioLarge);
-      // Before the policy ReBLUR alone scaled by height / 1080: its ratio moved 5x.
+      // Before the policy ReBLUR alone scaled by height / 1080: its ratio moved 5x. A footprint
+      // that scales below ~2 px cannot shrink further (taps are whole pixels and the first
+      // à-trous iteration always runs): the hybrid's 3x3 cascade, 7 px at 1080 lines, would be
+      // 1.1 px at 144 -- it stays at its one-step minimum there instead.
+      const double expectedSmall = large[name] * 144.0 / 720.0;
+      if (policy == "scaled" && expectedSmall < 2.0) {
+        EXPECT_LE(small[name], 3.0) << name;
+        continue;
+      }
       EXPECT_NEAR(ratioSmall / ratioLarge, 1.0, 0.25) << policy << " " << name;
     }
     if (policy == "native") {

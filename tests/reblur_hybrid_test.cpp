@@ -151,12 +151,20 @@ TEST(ReblurVariant, ConstantSignalIsConstantAfterEveryPassAndFrame) {
   expectConstantThroughEveryPass<Reblur>("reblur", {{"historyFix", "mip"}, {"recurrent", "false"}});
 }
 
+// At 64x36 the native footprint (NRD's 30-60 px radii) covers the whole image and ReBLUR, with no
+// luminance stopping, blurs the room's lighting gradients away (relMSE 0.048 against the noisy
+// 0.185 when measured for issue 15); its claims are checked at the footprint it is tuned for,
+// radii scaled from 1080 lines (footprint.hpp), as the first version here ran by default.
+const std::map<std::string, std::string> kReblurScaled = {{"footprint", "scaled"}};
+
 TEST(ReblurVariant, CornellStaticTenfoldBelowTheNoisyInput) {
   const Loaded& l = loaded("cornell_static", 24);
   const int warmup = 8;
   const double noisy = noisyRelMse(l, "color", warmup);
-  const double reblur = meanRelMse(l, denoise(l, "reblur"), "color", warmup);
-  std::printf("cornell_static relMSE: noisy %.4f, reblur %.5f\n", noisy, reblur);
+  const double reblur = meanRelMse(l, denoise(l, "reblur", kReblurScaled), "color", warmup);
+  const double native = meanRelMse(l, denoise(l, "reblur"), "color", warmup);
+  std::printf("cornell_static relMSE: noisy %.4f, reblur %.5f (scaled), %.5f (native)\n", noisy,
+              reblur, native);
   EXPECT_LT(reblur, noisy / 10.0);
 }
 
@@ -167,9 +175,9 @@ TEST(ReblurVariant, CornellStaticTenfoldBelowTheNoisyInput) {
 TEST(ReblurVariant, RecurrenceLowersTheErrorWhereNoiseDominates) {
   const Loaded& l = loaded("hard_light", 16);
   const int warmup = 4;
-  const double recurrent = meanRelMse(l, denoise(l, "reblur"), "color", warmup);
-  const double plain =
-      meanRelMse(l, denoise(l, "reblur", {{"recurrent", "false"}}), "color", warmup);
+  const double recurrent = meanRelMse(l, denoise(l, "reblur", kReblurScaled), "color", warmup);
+  const double plain = meanRelMse(
+      l, denoise(l, "reblur", {{"recurrent", "false"}, {"footprint", "scaled"}}), "color", warmup);
   std::printf("hard_light relMSE: reblur %.5f, reblur[recurrent=false] %.5f\n", recurrent, plain);
   EXPECT_GT(plain, recurrent * 1.2);
 }
@@ -340,8 +348,13 @@ TEST(HybridVariant, LuminanceThresholdShortensTheResponseToALightSwitch) {
   // Variance clipping alone already removes this lag at 64x36 (response 2 frames with or without
   // the threshold), so the threshold is measured with clipping off: the talk presents it as the
   // answer to lighting changes that reprojection cannot see (p. "4.2.5").
+  // The talk's threshold, relative (lumaMode=relative). The noise-aware default (lumaMode=sigma,
+  // issue 15 item 4) does not fire here: the lit room's 1-spp luminance spread exceeds half the
+  // light it loses (response 6 vs 6 frames, ghost energy 1.43 vs 1.46 when measured).
   c.denoisers = {
-      {"hybrid", {{"lumaThreshold", "true"}, {"varianceClip", "false"}}, "threshold"},
+      {"hybrid",
+       {{"lumaThreshold", "true"}, {"lumaMode", "relative"}, {"varianceClip", "false"}},
+       "threshold"},
       {"hybrid", {{"lumaThreshold", "false"}, {"varianceClip", "false"}}, "noThreshold"}};
   c.baselines = false;
   c.warmup = 4;
@@ -380,7 +393,10 @@ double pixelErrorP95(const Loaded& l, const std::vector<DenoisedFrame>& run, int
 
 TEST(HybridVariant, MedianFirstPassLowersTheP95ErrorUnderHardLight) {
   const Loaded& l = loaded("hard_light", 16);
-  const double withMedian = pixelErrorP95(l, denoise(l, "hybrid", {{"median", "true"}}), 4);
+  // Both signals (medianSignals=both): the default runs it on the specular signal only (the talk:
+  // an option against specular fireflies), where hard_light's p95 moves by 0.2 %.
+  const double withMedian =
+      pixelErrorP95(l, denoise(l, "hybrid", {{"median", "true"}, {"medianSignals", "both"}}), 4);
   const double without = pixelErrorP95(l, denoise(l, "hybrid", {{"median", "false"}}), 4);
   std::printf("hard_light per-pixel relative error p95: median %.5f, no median %.5f\n", withMedian,
               without);

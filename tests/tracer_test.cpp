@@ -99,16 +99,20 @@ TEST(Tracer, GradientSamplesSeeTheLightSwitchOff) {
   Scene scene = test::shippedScene("light_switch");
   SequenceRenderer r(scene, test::tinySettings(48, 27, 36, 4));
   const Image& g = r.renderFrame(12).gradients.get("gradient");  // the ceiling light goes off at 12
-  int valid = 0, darker = 0;
+  int valid = 0, darker = 0, brighter = 0;
   for (int y = 0; y < g.height(); ++y)
     for (int x = 0; x < g.width(); ++x) {
       if (g.at(x, y, 4) == 0) continue;
       ++valid;
       if (g.at(x, y, 2) < g.at(x, y, 3)) ++darker;
+      if (g.at(x, y, 2) > g.at(x, y, 3)) ++brighter;
     }
   ASSERT_GT(valid, 10);
-  // Nearly every surface lost light; a few samples were black in both frames.
-  EXPECT_GT(double(darker) / valid, 0.8) << darker << "/" << valid;
+  // Most surfaces lost light. A sample whose next-event light was the lamp and whose path never
+  // met the ceiling light is unchanged (the light selection keeps switched-off lights, issue 15:
+  // 70 % darker at 48x27), and none can gain light.
+  EXPECT_GT(double(darker) / valid, 0.5) << darker << "/" << valid;
+  EXPECT_EQ(brighter, 0);
 }
 
 // Nearest-pixel lookup of a previous-frame layer at the motion-compensated position.
