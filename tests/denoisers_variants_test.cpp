@@ -122,11 +122,15 @@ TEST(DenoiserVariants, TinyAndOddSizesRun) {
           // A convex combination of inputs in [0, 1) -- except ReBLUR's, whose anti-firefly and
           // fast-history clamps rescale the colour to a clamped luminance (NRD's ChangeLuma):
           // there the luminance stays a convex combination, a channel need not.
-          if (name != "reblur") ASSERT_LE(v, 1.0f) << name;
+          if (name != "reblur") {
+            ASSERT_LE(v, 1.0f) << name;
+          }
         }
-        if (name == "reblur")
-          for (size_t i = 0; i < output.pixelCount(); ++i)
+        if (name == "reblur") {
+          for (size_t i = 0; i < output.pixelCount(); ++i) {
             ASSERT_LE(luminance(output.plane(0)[i], output.plane(1)[i], output.plane(2)[i]), 1.0f);
+          }
+        }
       }
       if (size.w == 1 && size.h == 1) {
         // 1x1: nothing to gather spatially; temporal variants average the three frames.
