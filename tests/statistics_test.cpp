@@ -89,6 +89,7 @@ TEST(Bootstrap, PairedIntervalCoversAKnownDifference) {
   std::mt19937_64 rng(2026);
   const double delta = 0.15;
   int covered = 0, resolved = 0;
+  double halfWidth = 0;
   BootstrapConfig cfg;
   cfg.replicates = 400;
   for (int trial = 0; trial < 200; ++trial) {
@@ -98,9 +99,13 @@ TEST(Bootstrap, PairedIntervalCoversAKnownDifference) {
     const PairedDifference d = pairedDifference(b, a, "trial" + std::to_string(trial), cfg);
     ASSERT_TRUE(d.ci.valid());
     covered += d.ci.lo <= delta && delta <= d.ci.hi;
+    halfWidth += (d.ci.hi - d.ci.lo) / 2 / 200;
     resolved += d.resolved();
   }
-  std::cout << "coverage " << covered << "/200, resolved " << resolved << "/200\n";
+  // The ideal half-width: 1.96 x the difference's standard error, sqrt(2) 0.3 / sqrt(28 x 16).
+  std::cout << "coverage " << covered << "/200, resolved " << resolved << "/200, mean half-width "
+            << halfWidth << " (ideal " << 1.96 * std::sqrt(2.0) * 0.3 / std::sqrt(28.0 * 16)
+            << ")\n";
   EXPECT_GE(covered, 186);   // 93%
   EXPECT_GE(resolved, 150);  // the difference is 0.5 noise sd: mostly resolved, not always
 }
