@@ -39,6 +39,7 @@ const std::vector<LayerSpec>& referenceLayers() {
       {"diffuse", {"R", "G", "B"}, false},
       {"specular", {"R", "G", "B"}, false},    {"colorVar", {"R", "G", "B"}, false},
       {"diffuseVar", {"R", "G", "B"}, false},  {"specularVar", {"R", "G", "B"}, false},
+      {"colorHalf", {"R", "G", "B"}, false},  // mean of an independent half of the samples
   };
   return specs;
 }
@@ -90,7 +91,8 @@ json SequenceInfo::toJson() const {
           {"purpose", purpose}, {"hash", hash}, {"width", width}, {"height", height},
           {"frames", frames}, {"referenceOfFrame", referenceOfFrame}, {"referenceSpp", referenceSpp},
           {"cameras", cams}, {"events", evs}, {"settings", settings},
-          {"gradientStratum", kGradientStratum}};
+          {"gradientStratum", kGradientStratum}, {"referenceEstimatedRelMse", referenceEstimatedRelMse},
+          {"referenceCapped", referenceCapped}};
 }
 
 SequenceInfo SequenceInfo::fromJson(const json& j, const std::string& file) {
@@ -112,6 +114,8 @@ SequenceInfo SequenceInfo::fromJson(const json& j, const std::string& file) {
     for (auto& e : j.at("events"))
       s.events.push_back({e.at("frame").get<int>(), e.at("kind").get<std::string>(), e.value("what", "")});
     s.settings = j.value("settings", json::object());
+    s.referenceEstimatedRelMse = j.value("referenceEstimatedRelMse", std::vector<double>(s.referenceSpp.size(), 0.0));
+    s.referenceCapped = j.value("referenceCapped", std::vector<bool>(s.referenceSpp.size(), false));
     if (int(s.referenceOfFrame.size()) != s.frames || int(s.cameras.size()) != s.frames)
       throw Error(file + ": per-frame lists do not match the frame count");
     return s;

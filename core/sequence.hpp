@@ -35,6 +35,8 @@ struct SequenceInfo {
   int width = 0, height = 0, frames = 0;
   std::vector<int> referenceOfFrame;   // frame -> reference index
   std::vector<int> referenceSpp;       // per reference: samples actually used
+  std::vector<double> referenceEstimatedRelMse;  // per reference: its own estimated relMSE (0: unknown)
+  std::vector<bool> referenceCapped;   // per reference: stopped at the sample cap above its target
   std::vector<CameraState> cameras;    // per frame
   std::vector<SequenceEvent> events;
   nlohmann::json settings;             // what produced the pixels (preset, spp, bounces, ...)

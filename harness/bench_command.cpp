@@ -79,8 +79,9 @@ double bilateralUnitMs(int width, int height, int repetitions) {
 }  // namespace
 
 void addBenchCommand(CLI::App& app) {
-  auto* bench = app.add_subcommand("bench", "Benchmarks (tracer; denoise)");
+  auto* bench = app.add_subcommand("bench", "Benchmarks (tracer; denoise; reference)");
   bench->require_subcommand(1);
+  addBenchReferenceCommand(bench);
   auto* tracer = bench->add_subcommand("tracer", "Tracer throughput: Mrays/s and Mpaths/s, Cornell box, 1 spp");
   struct Options {
     int size = 512, frames = 20, warmup = 3;

@@ -6,9 +6,11 @@ namespace arena::cli {
 
 void addScenesCommand(CLI::App& app);
 void addRenderCommand(CLI::App& app);
+void addRefineCommand(CLI::App& app);
 void addBenchCommand(CLI::App& app);
 void addStudyCommand(CLI::App& app);
 void addRunCommands(CLI::App& app);
 void addReportCommand(CLI::App& app);
+void addBenchReferenceCommand(CLI::App* bench);  // `arena bench reference`, under `arena bench`
 
 }  // namespace arena::cli

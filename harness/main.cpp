@@ -10,6 +10,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   arena::cli::addScenesCommand(app);
   arena::cli::addRenderCommand(app);
+  arena::cli::addRefineCommand(app);
   arena::cli::addStudyCommand(app);
   arena::cli::addRunCommands(app);
   arena::cli::addBenchCommand(app);

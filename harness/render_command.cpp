@@ -8,6 +8,7 @@
 #include "core/sequence.hpp"
 #include "harness/image_files.hpp"
 #include "harness/commands.hpp"
+#include "harness/run_matrix.hpp"
 #include "harness/scene_selection.hpp"
 #include "tracer/render.hpp"
 
@@ -40,15 +41,22 @@ void addRenderCommand(CLI::App& app) {
   auto opt = std::make_shared<RenderOptions>();
   auto names = std::make_shared<std::string>("all");
   auto previews = std::make_shared<bool>(false);
+  auto shardText = std::make_shared<std::string>("0/1");
   cmd->add_flag("--previews", *previews, "Also write preview PNGs (noisy frame and reference, first and last frame)");
+  cmd->add_option("--shard", *shardText,
+                  "Render only the deterministic slice i/n of the work (frames x reference replicates); a render "
+                  "without --shard afterwards merges the slices exactly");
   cmd->add_option("scenes", *names, "Scene names or files, comma-separated, or 'all'")->default_val("all");
   addRenderOptions(cmd, *opt);
-  cmd->callback([opt, names, previews] {
+  cmd->callback([opt, names, previews, shardText] {
+    Shard shard;
+    std::tie(shard.index, shard.count) = parseShard(*shardText);
     for (const Scene& scene : selectScenes(*names, opt->scenesDir)) {
-      auto dir = renderSequence(scene, opt->settings(), opt->cacheDir,
-                                [](const std::string& line) { std::cout << line << std::endl; });
+      auto dir = renderSequence(
+          scene, opt->settings(), opt->cacheDir, [](const std::string& line) { std::cout << line << std::endl; },
+          shard);
       std::cout << scene.name << ": " << dir.string() << std::endl;
-      if (!*previews) continue;
+      if (!*previews || shard.count > 1) continue;
       Sequence seq = Sequence::open(dir);
       for (int t : {0, seq.info().frames - 1}) {
         LayerSet ref = seq.reference(t);
@@ -57,6 +65,31 @@ void addRenderCommand(CLI::App& app) {
         writePng(dir / ("preview_noisy_" + n + ".png"), display.apply(seq.frame(t).get("color")));
         writePng(dir / ("preview_reference_" + n + ".png"), display.apply(ref.get("color")));
       }
+    }
+  });
+}
+
+void addRefineCommand(CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "refine", "Add samples to cached references until their estimated relMSE meets --target (bit-identical to "
+                "rendering with that target in one go)");
+  auto opt = std::make_shared<RenderOptions>();
+  auto names = std::make_shared<std::string>("all");
+  auto target = std::make_shared<double>(0);
+  auto maxSpp = std::make_shared<int>(4096);
+  cmd->add_option("scenes", *names, "Scene names or files, comma-separated, or 'all'")->default_val("all");
+  cmd->add_option("--target", *target, "Target relMSE of each reference (e.g. 1e-5)")
+      ->required()
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--max-spp", *maxSpp, "Never go past this many samples per pixel")
+      ->default_val(4096)
+      ->check(CLI::Range(1, 1 << 20));
+  addRenderOptions(cmd, *opt);
+  cmd->callback([opt, names, target, maxSpp] {
+    for (const Scene& scene : selectScenes(*names, opt->scenesDir)) {
+      auto dir = refineSequence(scene, opt->settings(), opt->cacheDir, *target, *maxSpp,
+                                [](const std::string& line) { std::cout << line << std::endl; });
+      std::cout << scene.name << ": " << dir.string() << std::endl;
     }
   });
 }

@@ -33,6 +33,7 @@ RenderSettings RenderOptions::settings() const {
   if (inputSeed < 0 || inputSeed > 0xffffffffll)
     throw Error("--input-seed " + std::to_string(inputSeed) + ": expected 0 to 4294967295");
   s.inputSeed = uint32_t(inputSeed);
+  s.referenceSampler = referenceSampler;
   return s;
 }
 
@@ -48,6 +49,9 @@ void addRenderOptions(CLI::App* cmd, RenderOptions& o) {
   cmd->add_option("--input-seed", o.inputSeed,
                   "Another noise realisation of the 1-spp input (0: the scene's seed); references are unchanged")
       ->default_val(0);
+  cmd->add_option("--ref-sampler", o.referenceSampler,
+                  "References' sampler: sobol (Owen-scrambled, default) or independent (1-spp frames: always independent)")
+      ->check(CLI::IsMember({"sobol", "independent"}));
   cmd->add_option("--cache", o.cacheDir, "Sequence cache directory")->default_val("cache");
   cmd->add_option("--scenes-dir", o.scenesDir, "Directory of scene files");
 }

@@ -17,6 +17,7 @@ struct RenderOptions {
   double referenceRelError = -1;
   int maxBounces = 0;
   long long inputSeed = 0;
+  std::string referenceSampler = "sobol";
   std::string cacheDir = "cache";
   std::string scenesDir = defaultScenesDir();
   RenderSettings settings() const;

@@ -48,9 +48,7 @@ TEST(Tracer, FurnaceConvergesToTheGeometricSeries) {
   for (int bounces : {1, 3, 6}) {
     Scene scene = loadScene(furnaceScene(a, e, bounces));
     SequenceRenderer r(scene, test::tinySettings(24, 16, 1, 256));
-    int spp = 0;
-    RayCounts counts;
-    LayerSet ref = r.renderReference(0, spp, counts);
+    LayerSet ref = r.renderReference(0).layers;
     const double expected = e * (1.0 - std::pow(a, bounces + 1)) / (1.0 - a);
     const double got = meanOf(ref.get("color"), 1);
     // 24*16 px * 256 spp: the mean's standard error is well below 1%; tolerance 2%.

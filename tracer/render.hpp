@@ -27,6 +27,13 @@ struct RenderSettings {
   // realisation of the same sequence (`arena run --seeds K`, compare's noise test); references do
   // not depend on it.
   uint32_t inputSeed = 0;
+  // The references' sampler: "sobol" (padded Owen-scrambled Sobol, tracer/sampler.hpp) or
+  // "independent" (the frames' hash sampler); the 1-spp frames always use the independent one.
+  std::string referenceSampler = "sobol";
+  // Independent randomisations per reference: the variance of the mean is estimated from the
+  // spread of their means (honest for QMC, whose per-sample variance overstates its error). The
+  // sample count is a multiple of this (rounded up).
+  int referenceReplicates = 8;
 
   // Presets: quick (the scene's resolution, references of 64-512 spp with adaptive stopping) and paper
   // (1280x720, 4096 spp references).
@@ -41,6 +48,33 @@ struct RenderSettings {
 std::string sequenceHash(const Scene& scene, const RenderSettings& settings);
 std::filesystem::path sequenceDir(const Scene& scene, const RenderSettings& settings,
                                   const std::filesystem::path& cacheRoot);
+
+// What a reference needs to be extended: per pixel and replicate, the sums of (colour, diffuse,
+// specular) x RGB over that replicate's samples 0..perReplicate-1, accumulated in sample order (so
+// extending n -> 2n gives the same bits as rendering 2n at once).
+struct ReferenceSums {
+  static constexpr int kValues = 9;
+  int width = 0, height = 0, replicates = 0, perReplicate = 0;
+  int firstReplicate = 0;  // these are replicates firstReplicate.. (a shard may hold a slice)
+  std::vector<double> sum;  // [(pixel * replicates + r) * kValues + j]
+  int spp() const { return replicates * perReplicate; }
+};
+// Means (color, diffuse, specular), the variance of each mean from the spread of the replicate
+// means, Var = sum_r (m_r - m)^2 / (K (K - 1)), and colorHalf (the mean of replicates 0..K/2-1).
+LayerSet referenceLayersFromSums(const ReferenceSums& sums);
+// The reference's relMSE as metrics.md estimates it: mean over pixels and colour channels of
+// Var(mean) / (mean^2 + 0.01), with the replicate variance above.
+double estimatedReferenceRelMse(const ReferenceSums& sums);
+
+// A rendered reference and whether it met its target.
+struct ReferenceResult {
+  LayerSet layers;
+  int spp = 0;
+  double estimatedRelMse = 0;  // estimatedReferenceRelMse
+  double targetRelMse = 0;     // referenceRelError^2; 0 when there is no target
+  bool capped = false;         // stopped at the sample cap with its estimate above the target
+  RayCounts counts;
+};
 
 // Renders one scene frame by frame, keeping the Embree scenes of the current and previous frame.
 class SequenceRenderer {
@@ -59,8 +93,17 @@ class SequenceRenderer {
     RayCounts counts;
   };
   FrameResult renderFrame(int t);
-  // A reference for the animation state of frame t; `spp` receives the samples used.
-  LayerSet renderReference(int t, int& spp, RayCounts& counts);
+  // A reference for the animation state of frame t: samples per replicate double from
+  // referenceMinSpp / K until the estimated relMSE meets the target or referenceSpp is reached.
+  ReferenceResult renderReference(int t);
+  // Adds samples to `sums` (of frame t's state) until each replicate has `perReplicate` samples;
+  // a fresh `sums` (replicates 0) is sized from the settings.
+  void extendReference(int t, ReferenceSums& sums, int perReplicate, RayCounts& counts);
+  // Doubles the samples per replicate of `sums` (from referenceMinSpp / K when empty) until the
+  // estimated relMSE <= targetRelMse (0: none) or maxSpp; renderReference is this from empty sums.
+  // Continuing from a stop of the same schedule gives the same bits as one uninterrupted run.
+  ReferenceResult continueReference(int t, ReferenceSums& sums, double targetRelMse, int maxSpp);
+  int referenceReplicates() const;
   uint64_t stateHash(int t) const;
   const FrameScene& frameScene(int t);
 
@@ -75,10 +118,42 @@ class SequenceRenderer {
   std::map<int, std::unique_ptr<FrameScene>> cache_;
 };
 
+// The cache keeps each reference's sums beside its EXR (reference_NNN.sums: a magic, a JSON header
+// with the sequence hash, index and sizes, then the doubles), so `arena refine` can extend it.
+std::filesystem::path referenceSumsPath(const std::filesystem::path& dir, int r);
+void writeReferenceSums(const std::filesystem::path& path, const ReferenceSums& sums, const std::string& hash,
+                        int index);
+// Throws naming the file and what is wrong (missing, foreign, truncated, malformed header).
+ReferenceSums readReferenceSums(const std::filesystem::path& path, const std::string& hash, int index);
+// A shard's slice of a fixed-count reference: one replicate (reference_NNN.replicate_KK.sums).
+std::filesystem::path replicateSumsPath(const std::filesystem::path& dir, int r, int replicate);
+// Slices holding replicates 0.., in order, as one ReferenceSums (exact: a copy).
+ReferenceSums interleaveReplicates(const std::vector<ReferenceSums>& parts);
+
+// A deterministic slice of a render's work (`arena render --shard i/n`): work unit u belongs to
+// shard u mod n. Units: frame t is unit t (frame and gradients); then per reference either one unit
+// (adaptive references: the stopping rule needs every replicate) or, with a fixed sample count
+// (--ref-rel-error 0), one unit per replicate. A shard writes its units' files and no
+// sequence.json; an unsharded render of the same settings afterwards merges (exactly: replicate
+// sums are concatenated, not re-added) and renders anything still missing.
+struct Shard {
+  int index = 0, count = 1;
+  bool owns(int unit) const { return unit % count == index; }
+};
+
 using ProgressFn = std::function<void(const std::string& line)>;
 
 // Renders (or resumes) the sequence into <cacheRoot>/<scene>-<hash>/ and returns that directory.
 std::filesystem::path renderSequence(const Scene& scene, const RenderSettings& settings,
-                                     const std::filesystem::path& cacheRoot, const ProgressFn& progress);
+                                     const std::filesystem::path& cacheRoot, const ProgressFn& progress,
+                                     const Shard& shard = {});
+
+// `arena refine`: extends every reference of the already rendered sequence (scene, settings) whose
+// estimated relMSE is above targetRelMse, doubling its samples per replicate until it meets the
+// target or maxSpp, and rewrites its files and sequence.json. Bit-identical to rendering with that
+// target in one go (the same doubling schedule over the same samples).
+std::filesystem::path refineSequence(const Scene& scene, const RenderSettings& settings,
+                                     const std::filesystem::path& cacheRoot, double targetRelMse, int maxSpp,
+                                     const ProgressFn& progress);
 
 }  // namespace arena

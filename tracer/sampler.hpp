@@ -1,8 +1,23 @@
 #pragma once
 // Counter-based random numbers: every number a pixel uses is a pure function of
-// (scene seed, frame, pixel, sample, dimension), so frames are bit-identical at any thread count and
-// A-SVGF's gradient samples can re-shade a pixel with the previous frame's exact random numbers.
+// (scene seed, frame, pixel, sample, dimension), so frames are bit-identical at any thread count
+// and A-SVGF's gradient samples can re-shade a pixel with the previous frame's exact random
+// numbers.
+//
+// Two kinds share one interface (get for one dimension, get2 for a pair):
+// - independent: a hash per (key, dimension); the 1-spp frames and gradient samples always use it.
+// - Owen-scrambled Sobol, for references only: a padded Sobol sampler after Burley 2020
+//   ("Practical Hash-based Owen Scrambling", JCGT 9(4)) and pbrt-v4's PaddedSobolSampler. Each
+//   dimension pair (and each lone dimension) takes the first two Sobol dimensions (one), with the
+//   sample index shuffled by a nested uniform (Owen) scramble seeded per (pixel, replicate,
+//   dimension) and the coordinates Owen-scrambled with independent seeds. Shuffling the index in
+//   reversed-bit order keeps every power-of-two prefix a (0,m,2)-net (the net only looks at the
+//   top m bits of each coordinate, which depend only on the index's low m bits), so any 2^m samples
+//   of one replicate are stratified, and different dimensions are decorrelated ("padding").
+//   A replicate number selects an independent randomisation: K replicates of n samples each give
+//   K independent, unbiased estimates whose spread is an honest error estimate of their mean.
 #include <cstdint>
+#include <glm/vec2.hpp>
 
 namespace arena {
 
@@ -12,21 +27,104 @@ inline uint64_t mix64(uint64_t z) {  // splitmix64 finaliser (Steele et al. 2014
   return z ^ (z >> 31);
 }
 
+namespace sobol {
+
+inline uint32_t reverseBits(uint32_t x) {
+  x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
+  x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
+  x = ((x >> 4) & 0x0F0F0F0Fu) | ((x & 0x0F0F0F0Fu) << 4);
+  x = ((x >> 8) & 0x00FF00FFu) | ((x & 0x00FF00FFu) << 8);
+  return (x >> 16) | (x << 16);
+}
+
+// Burley 2020, sec. 3: a Laine-Karras style hash in which each bit depends only on itself and
+// lower bits; applied to bit-reversed values it is a nested uniform (Owen) scramble.
+inline uint32_t laineKarrasPermutation(uint32_t x, uint32_t seed) {
+  x += seed;
+  x ^= x * 0x6c50b47cu;
+  x ^= x * 0xb82f1e52u;
+  x ^= x * 0xc7afe638u;
+  x ^= x * 0x8d22f6e6u;
+  return x;
+}
+inline uint32_t nestedUniformScramble(uint32_t x, uint32_t seed) {
+  return reverseBits(laineKarrasPermutation(reverseBits(x), seed));
+}
+
+// Sobol dimension 1 (primitive polynomial x + 1, m_1 = 1: m_k = 2 m_{k-1} xor m_{k-1}, Bratley &
+// Fox 1988; Joe & Kuo 2008's first entry). Column k is v_k = m_k / 2^k as a 32-bit fraction.
+struct Dimension1 {
+  uint32_t v[32];
+  constexpr Dimension1() : v{} {
+    uint32_t m = 1;
+    for (int k = 1; k <= 32; ++k) {
+      v[k - 1] = m << (32 - k);
+      m = (m << 1) ^ m;
+    }
+  }
+};
+inline constexpr Dimension1 kDimension1{};
+
+// Sobol dimension 0 is the van der Corput sequence (the identity matrix): the reversed index.
+inline uint32_t dimension0(uint32_t index) {
+  return reverseBits(index);
+}
+inline uint32_t dimension1(uint32_t index) {
+  uint32_t x = 0;
+  for (int k = 0; index; ++k, index >>= 1)
+    if (index & 1u) x ^= kDimension1.v[k];
+  return x;
+}
+
+inline float toUnitFloat(uint32_t x) {
+  return float(x >> 8) * (1.0f / 16777216.0f);
+}
+
+}  // namespace sobol
+
+enum class SamplerKind : uint8_t { Independent, OwenSobol };
+
 class Sampler {
  public:
+  // Independent numbers for sample `sample` of a pixel.
   Sampler(uint32_t seed, uint32_t frame, uint32_t pixel, uint32_t sample) {
     key_ = mix64(mix64(mix64(uint64_t(seed) + 0x9e3779b97f4a7c15ull) ^ frame) ^
                  ((uint64_t(pixel) << 20) ^ uint64_t(sample)));
   }
+  // Sample `index` of randomisation `replicate` of the padded Owen-scrambled Sobol sequence of a
+  // pixel. Samples of one replicate are stratified together; replicates are independent.
+  static Sampler owenSobol(uint32_t seed, uint32_t frame, uint32_t pixel, uint32_t replicate, uint32_t index) {
+    Sampler s(0, 0, 0, 0);
+    s.kind_ = SamplerKind::OwenSobol;
+    s.key_ = mix64(mix64(mix64(mix64(uint64_t(seed) ^ 0x50b01d5a3c1e2f47ull) ^ frame) ^ pixel) ^ replicate);
+    s.index_ = index;
+    return s;
+  }
+
+  SamplerKind kind() const { return kind_; }
   // Uniform in [0, 1) for dimension `dim`.
   float get(uint32_t dim) const {
-    uint64_t h = mix64(key_ ^ (uint64_t(dim) * 0x9e3779b97f4a7c15ull));
-    return float(h >> 40) * (1.0f / 16777216.0f);
+    if (kind_ == SamplerKind::Independent) return sobol::toUnitFloat(uint32_t(hash(dim) >> 32));
+    const uint64_t h = hash(dim);
+    const uint32_t i = sobol::nestedUniformScramble(index_, uint32_t(h));
+    return sobol::toUnitFloat(sobol::nestedUniformScramble(sobol::dimension0(i), uint32_t(h >> 32)));
+  }
+  // Uniform in [0, 1)^2 for dimensions (dim, dim + 1); stratified jointly by the Sobol sampler.
+  glm::vec2 get2(uint32_t dim) const {
+    if (kind_ == SamplerKind::Independent) return {get(dim), get(dim + 1)};
+    const uint64_t h = hash(dim), h2 = mix64(h);
+    const uint32_t i = sobol::nestedUniformScramble(index_, uint32_t(h));
+    return {sobol::toUnitFloat(sobol::nestedUniformScramble(sobol::dimension0(i), uint32_t(h >> 32))),
+            sobol::toUnitFloat(sobol::nestedUniformScramble(sobol::dimension1(i), uint32_t(h2)))};
   }
   uint64_t key() const { return key_; }
 
  private:
-  uint64_t key_;
+  uint64_t hash(uint32_t dim) const { return mix64(key_ ^ (uint64_t(dim) * 0x9e3779b97f4a7c15ull)); }
+
+  uint64_t key_ = 0;
+  uint32_t index_ = 0;
+  SamplerKind kind_ = SamplerKind::Independent;
 };
 
 }  // namespace arena

@@ -14,7 +14,10 @@ namespace {
 
 constexpr float kPi = 3.14159265358979f;
 constexpr float kInf = std::numeric_limits<float>::infinity();
-// Random dimensions used at each path vertex (8 per vertex, fixed order).
+// Random dimensions used at each path vertex (8 per vertex, fixed order): vertex v (0 = the primary
+// hit, v = bounce) uses dimensions 8v + Dim. The light point (kLightU, kLightV) and the scattered
+// direction (kDirU, kDirV) are drawn as pairs (Sampler::get2), which the reference sampler
+// stratifies jointly (a 2D Sobol net); light selection, triangle, lobe and roulette are 1D Sobol.
 enum Dim : uint32_t { kLightSelect, kLightTriangle, kLightU, kLightV, kLobe, kDirU, kDirV, kRoulette, kDimsPerVertex };
 
 float lum(glm::vec3 c) { return luminance(c.x, c.y, c.z); }
@@ -276,7 +279,8 @@ glm::vec3 FrameScene::sampleLight(const SurfaceHit& at, const Sampler& s, uint32
   size_t ti = size_t(std::lower_bound(g.areaCdf.begin(), g.areaCdf.end(), target) - g.areaCdf.begin());
   ti = std::min(ti, g.areaCdf.size() - 1);
   const glm::uvec3 tri = g.local->triangles[ti];
-  float su = std::sqrt(s.get(dim + kLightU)), b1 = 1.0f - su, b2 = s.get(dim + kLightV) * su;
+  const glm::vec2 uv = s.get2(dim + kLightU);
+  float su = std::sqrt(uv.x), b1 = 1.0f - su, b2 = uv.y * su;
   glm::vec3 p0 = g.positions[tri.x], p1 = g.positions[tri.y], p2 = g.positions[tri.z];
   glm::vec3 lp = (1.0f - b1 - b2) * p0 + b1 * p1 + b2 * p2;
   glm::vec3 ln = glm::normalize(glm::cross(p1 - p0, p2 - p0));
@@ -332,7 +336,8 @@ FrameScene::Radiance FrameScene::shade(const SurfaceHit& primary, glm::vec3 wo, 
   if (pSpec0 <= 0 && maxComponent(primary.diffuseAlbedo()) <= 0) return out;
   nextEvent(primary, o0, wo, pSpec0, 0, out.diffuse, out.specular);
   glm::vec3 wi;
-  if (!sampleDirection(primary, o0.n, wo, pSpec0, sampler.get(kLobe), sampler.get(kDirU), sampler.get(kDirV), wi) ||
+  const glm::vec2 dir0 = sampler.get2(kDirU);
+  if (!sampleDirection(primary, o0.n, wo, pSpec0, sampler.get(kLobe), dir0.x, dir0.y, wi) ||
       glm::dot(wi, o0.ng) <= 0)
     return out;
   Lobes f0 = evaluate(primary, o0.n, wo, wi, pSpec0);
@@ -370,8 +375,8 @@ FrameScene::Radiance FrameScene::shade(const SurfaceHit& primary, glm::vec3 wo, 
     nextEvent(s, o, w, pSpec, dim, direct, direct);
     incoming += throughput * direct;
     glm::vec3 next;
-    if (!sampleDirection(s, o.n, w, pSpec, sampler.get(dim + kLobe), sampler.get(dim + kDirU),
-                         sampler.get(dim + kDirV), next) ||
+    const glm::vec2 dirU = sampler.get2(dim + kDirU);
+    if (!sampleDirection(s, o.n, w, pSpec, sampler.get(dim + kLobe), dirU.x, dirU.y, next) ||
         glm::dot(next, o.ng) <= 0)
       break;
     Lobes f = evaluate(s, o.n, w, next, pSpec);

@@ -1,0 +1,116 @@
+// `arena bench reference`: how fast each reference sampler converges. In one process, per scene:
+// a "gold" reference (Owen-scrambled Sobol, `--gold-factor` times the samples), then the
+// independent and the Sobol sampler at the same sample count, each timed; the true relMSE of each
+// against the gold, minus the gold's own estimated noise term (metrics.md's correction). The
+// gain is the ratio of relMSE x seconds (independent / sobol): the relMSE ratio at equal wall time
+// for an estimator whose error falls as 1/time (true of the independent sampler; Sobol's falls
+// faster, so this understates its gain at longer times).
+#include <chrono>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "core/atomic_file.hpp"
+#include "core/env_info.hpp"
+#include "core/error.hpp"
+#include "harness/commands.hpp"
+#include "harness/scene_selection.hpp"
+#include "metrics/error.hpp"
+#include "tracer/render.hpp"
+
+namespace arena::cli {
+
+namespace {
+
+struct Measured {
+  double seconds = 0, relMse = 0, estimatedRelMse = 0;
+};
+
+Measured measure(const Scene& scene, RenderSettings settings, const std::string& sampler, int frame, int spp,
+                 const LayerSet& gold) {
+  settings.referenceSampler = sampler;
+  SequenceRenderer renderer(scene, settings);
+  ReferenceSums sums;
+  RayCounts counts;
+  const int perReplicate = std::max(1, spp / renderer.referenceReplicates());
+  renderer.frameScene(frame);  // the Embree build is not part of a sampler's time
+  const auto t0 = std::chrono::steady_clock::now();
+  renderer.extendReference(frame, sums, perReplicate, counts);
+  Measured m;
+  m.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const LayerSet ref = referenceLayersFromSums(sums);
+  m.relMse = linearError(ref.get("color"), gold.get("color"), &gold.get("colorVar")).relMseCorrected;
+  m.estimatedRelMse = estimatedReferenceRelMse(sums);
+  return m;
+}
+
+}  // namespace
+
+void addBenchReferenceCommand(CLI::App* bench) {
+  auto* cmd = bench->add_subcommand("reference",
+                                    "Reference samplers: true relMSE against a long gold render at "
+                                    "equal time, independent vs sobol");
+  struct Options {
+    std::string scenes = "cornell_static,camera_pan_occluder", resolution = "128x72", json;
+    std::string scenesDir = defaultScenesDir();
+    int spp = 128, goldFactor = 32, frame = 0;
+  };
+  auto o = std::make_shared<Options>();
+  cmd->add_option("--scenes", o->scenes, "Scenes, comma-separated, or 'all'");
+  cmd->add_option("--resolution", o->resolution, "Resolution, WIDTHxHEIGHT");
+  cmd->add_option("--spp", o->spp, "Samples per pixel of the compared references")->check(CLI::Range(8, 1 << 16));
+  cmd->add_option("--gold-factor", o->goldFactor, "The gold reference has this many times the samples")
+      ->check(CLI::Range(4, 1024));
+  cmd->add_option("--frame", o->frame, "Frame whose state is rendered")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--scenes-dir", o->scenesDir, "Directory of scene files");
+  cmd->add_option("--json", o->json, "Write results to this JSON file");
+  cmd->callback([o] {
+    RenderOptions ro;
+    ro.resolution = o->resolution;
+    RenderSettings settings = ro.settings();
+    nlohmann::json out = {{"resolution", o->resolution},
+                          {"spp", o->spp},
+                          {"goldFactor", o->goldFactor},
+                          {"scenes", nlohmann::json::array()},
+                          {"environment", environmentInfo()}};
+    for (const Scene& scene : selectScenes(o->scenes, o->scenesDir)) {
+      if (o->frame >= scene.frames)
+        throw Error("--frame " + std::to_string(o->frame) + ": scene " + scene.name + " has " +
+                    std::to_string(scene.frames) + " frames");
+      RenderSettings goldSettings = settings;
+      goldSettings.referenceSampler = "sobol";
+      SequenceRenderer goldRenderer(scene, goldSettings);
+      ReferenceSums goldSums;
+      RayCounts counts;
+      const auto g0 = std::chrono::steady_clock::now();
+      goldRenderer.extendReference(o->frame, goldSums,
+                                   std::max(1, o->spp * o->goldFactor / goldRenderer.referenceReplicates()), counts);
+      const double goldSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - g0).count();
+      const LayerSet gold = referenceLayersFromSums(goldSums);
+      const double goldNoise = estimatedReferenceRelMse(goldSums);
+      const Measured ind = measure(scene, settings, "independent", o->frame, o->spp, gold);
+      const Measured sob = measure(scene, settings, "sobol", o->frame, o->spp, gold);
+      const double gain = (ind.relMse * ind.seconds) / std::max(sob.relMse * sob.seconds, 1e-300);
+      std::printf(
+          "%-22s %d spp: independent relMSE %.3e in %.2f s (est. %.3e) | sobol relMSE %.3e in %.2f "
+          "s (est. %.3e) | "
+          "gold %d spp in %.1f s, own noise %.1e | gain %.1fx\n",
+          scene.name.c_str(), goldSums.replicates * std::max(1, o->spp / goldSums.replicates), ind.relMse, ind.seconds,
+          ind.estimatedRelMse, sob.relMse, sob.seconds, sob.estimatedRelMse, goldSums.spp(), goldSeconds, goldNoise,
+          gain);
+      std::fflush(stdout);
+      out["scenes"].push_back(
+          {{"scene", scene.name},
+           {"independent",
+            {{"relMse", ind.relMse}, {"seconds", ind.seconds}, {"estimatedRelMse", ind.estimatedRelMse}}},
+           {"sobol", {{"relMse", sob.relMse}, {"seconds", sob.seconds}, {"estimatedRelMse", sob.estimatedRelMse}}},
+           {"goldSpp", goldSums.spp()},
+           {"goldSeconds", goldSeconds},
+           {"goldRelMse", goldNoise},
+           {"gain", gain}});
+    }
+    if (!o->json.empty()) writeTextAtomically(o->json, out.dump(2));
+  });
+}
+
+}  // namespace arena::cli

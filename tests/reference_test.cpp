@@ -1,0 +1,285 @@
+// References: the Owen-scrambled Sobol sampler's stratification, honest replicate variance,
+// refinement and thread-count determinism, the cap warning and its record in sequence.json.
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "core/atomic_file.hpp"
+#include "core/error.hpp"
+#include "core/json_reader.hpp"
+#include "core/sequence.hpp"
+#include "metrics/error.hpp"
+#include "tests/test_util.hpp"
+#include "tracer/render.hpp"
+#include "tracer/sampler.hpp"
+
+namespace arena {
+namespace {
+
+TEST(Sobol, UnscrambledDimensionsAreTheKnownSequences) {
+  // Joe & Kuo's dimension 2 in index order (not Gray-code order): x_i = xor of v_k over i's set bits.
+  const double expected1[8] = {0, 0.5, 0.75, 0.25, 0.625, 0.125, 0.375, 0.875};
+  const double expected0[8] = {0, 0.5, 0.25, 0.75, 0.125, 0.625, 0.375, 0.875};  // van der Corput
+  for (uint32_t i = 0; i < 8; ++i) {
+    EXPECT_DOUBLE_EQ(sobol::dimension1(i) * 0x1p-32, expected1[i]) << i;
+    EXPECT_DOUBLE_EQ(sobol::dimension0(i) * 0x1p-32, expected0[i]) << i;
+  }
+}
+
+TEST(Sobol, ScramblingIsABijectionOnEveryPrefix) {
+  // A nested uniform scramble maps [k 2^m, (k+1) 2^m) / 2^32 intervals onto such intervals.
+  std::set<uint32_t> top;
+  for (uint32_t i = 0; i < 256; ++i) top.insert(sobol::nestedUniformScramble(i << 24, 12345u) >> 24);
+  EXPECT_EQ(top.size(), 256u);
+}
+
+// Every power-of-two prefix of one replicate is a (0,m,2)-net in each dimension pair and
+// stratified in each lone dimension, whatever the pixel, replicate and dimension.
+TEST(Sobol, EveryPrefixOfAReplicateIsA02Net) {
+  for (uint32_t pixel : {0u, 977u}) {
+    for (uint32_t replicate : {0u, 5u}) {
+      for (uint32_t dim : {0u, 2u, 13u}) {
+        for (int m = 1; m <= 8; ++m) {
+          const uint32_t n = 1u << m;
+          for (int a = 0; a <= m; ++a) {
+            std::set<std::pair<int, int>> cells;
+            std::set<int> strata;
+            for (uint32_t k = 0; k < n; ++k) {
+              const Sampler s = Sampler::owenSobol(7, 3, pixel, replicate, k);
+              const glm::vec2 u = s.get2(dim);
+              ASSERT_TRUE(u.x >= 0 && u.x < 1 && u.y >= 0 && u.y < 1);
+              cells.insert({int(u.x * float(1 << a)), int(u.y * float(1 << (m - a)))});
+              strata.insert(int(s.get(dim + 2) * float(n)));
+            }
+            EXPECT_EQ(cells.size(), n) << "pixel " << pixel << " replicate " << replicate << " dim " << dim << " m "
+                                       << m << " a " << a;
+            EXPECT_EQ(strata.size(), n) << "1D, dim " << dim + 2 << " m " << m;
+          }
+        }
+      }
+    }
+  }
+}
+
+TEST(Sobol, ReplicatesAndPixelsAreDecorrelated) {
+  // Different replicates (and pixels) must not repeat each other's points.
+  const glm::vec2 a = Sampler::owenSobol(1, 0, 10, 0, 3).get2(2);
+  EXPECT_NE(a, Sampler::owenSobol(1, 0, 10, 1, 3).get2(2));
+  EXPECT_NE(a, Sampler::owenSobol(1, 0, 11, 0, 3).get2(2));
+  EXPECT_NE(a, Sampler::owenSobol(1, 0, 10, 0, 3).get2(5));
+  // The independent sampler's pair is exactly its two single dimensions (frames are unchanged).
+  const Sampler ind(1, 0, 10, 3);
+  EXPECT_EQ(ind.get2(5), glm::vec2(ind.get(5), ind.get(6)));
+}
+
+RenderSettings referenceSettings(const std::string& sampler, int spp) {
+  RenderSettings s = test::tinySettings(32, 18, 1, spp);
+  s.referenceSampler = sampler;
+  return s;
+}
+
+// Mean over pixels and channels of ((a - b)^2 - varB) / (b^2 + eps): a's error against b,
+// corrected for b's own noise.
+double trueRelMse(const LayerSet& a, const LayerSet& gold) {
+  return linearError(a.get("color"), gold.get("color"), &gold.get("colorVar")).relMseCorrected;
+}
+
+// The replicate variance predicts the measured error of the mean (Sobol, where the per-sample
+// variance would overstate it): cornell_static at 32x18, 64 spp (8 replicates of 8) against a
+// gold of 16x the samples. Tolerance: the measured/predicted ratio within [0.7, 1.4] (the
+// estimate averages 1728 values of 7 degrees of freedom each; the measurement is one draw).
+TEST(Reference, ReplicateVariancePredictsTheTrueError) {
+  const Scene scene = test::shippedScene("cornell_static");
+  RayCounts counts;
+  SequenceRenderer goldRenderer(scene, referenceSettings("sobol", 1024));
+  ReferenceSums goldSums;
+  goldRenderer.extendReference(0, goldSums, 128, counts);
+  const LayerSet gold = referenceLayersFromSums(goldSums);
+  for (const std::string sampler : {"sobol", "independent"}) {
+    SequenceRenderer r(scene, referenceSettings(sampler, 64));
+    const ReferenceResult ref = r.renderReference(0);
+    ASSERT_EQ(ref.spp, 64);
+    const double predicted = ref.estimatedRelMse, measured = trueRelMse(ref.layers, gold);
+    EXPECT_NEAR(predicted, referenceRelMse(ref.layers.get("color"), ref.layers.get("colorVar")), 1e-3 * predicted);
+    EXPECT_GT(measured / predicted, 0.7) << sampler << ": predicted " << predicted << " measured " << measured;
+    EXPECT_LT(measured / predicted, 1.4) << sampler << ": predicted " << predicted << " measured " << measured;
+  }
+}
+
+// At 32 samples per replicate (256 spp) the Sobol reference's (honest) error is below the
+// independent one's. Measured: see `arena bench reference` for the size of the gain.
+TEST(Reference, SobolBeatsIndependentAtEqualSamples) {
+  const Scene scene = test::shippedScene("cornell_static");
+  SequenceRenderer sobol(scene, referenceSettings("sobol", 256)),
+      independent(scene, referenceSettings("independent", 256));
+  const double s = sobol.renderReference(0).estimatedRelMse, i = independent.renderReference(0).estimatedRelMse;
+  EXPECT_LT(s, i) << "sobol " << s << " independent " << i;
+}
+
+TEST(Reference, ExtendingGivesTheSameBitsAsRenderingAtOnce) {
+  const Scene scene = test::shippedScene("moving_object");
+  SequenceRenderer r(scene, referenceSettings("sobol", 32));
+  RayCounts counts;
+  ReferenceSums once, extended;
+  r.extendReference(0, once, 4, counts);
+  r.extendReference(0, extended, 1, counts);
+  r.extendReference(0, extended, 3, counts);
+  r.extendReference(0, extended, 4, counts);
+  EXPECT_EQ(once.sum, extended.sum);
+  EXPECT_EQ(once.spp(), 32);
+}
+
+TEST(Reference, BitIdenticalAtAnyThreadCount) {
+  const Scene scene = test::shippedScene("moving_object");
+  for (const std::string sampler : {"sobol", "independent"}) {
+    auto render = [&](int threads) {
+      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
+      SequenceRenderer r(scene, referenceSettings(sampler, 16));
+      return r.renderReference(0);
+    };
+    const ReferenceResult one = render(1), two = render(2);
+    for (const auto& [name, img] : one.layers.all())
+      EXPECT_EQ(img.raw(), two.layers.get(name).raw()) << sampler << " layer " << name;
+    EXPECT_EQ(one.estimatedRelMse, two.estimatedRelMse);
+  }
+}
+
+TEST(Reference, LayersHoldReplicateMeansVarianceAndHalf) {
+  const Scene scene = test::shippedScene("cornell_static");
+  SequenceRenderer r(scene, referenceSettings("sobol", 16));
+  ReferenceSums sums;
+  RayCounts counts;
+  r.extendReference(0, sums, 2, counts);
+  ASSERT_EQ(sums.replicates, 8);
+  const LayerSet layers = referenceLayersFromSums(sums);
+  const size_t pixel = 9 * 32 + 16;
+  double means[8], total = 0, half = 0;
+  for (int k = 0; k < 8; ++k) {
+    means[k] = sums.sum[(pixel * 8 + size_t(k)) * ReferenceSums::kValues + 1] / 2.0;  // colour G
+    total += means[k];
+    if (k < 4) half += means[k];
+  }
+  const double mean = total / 8;
+  double ss = 0;
+  for (double m : means) ss += (m - mean) * (m - mean);
+  EXPECT_FLOAT_EQ(layers.get("color").plane(1)[pixel], float(mean));
+  EXPECT_FLOAT_EQ(layers.get("colorVar").plane(1)[pixel], float(ss / (8 * 7)));
+  EXPECT_FLOAT_EQ(layers.get("colorHalf").plane(1)[pixel], float(half / 4));
+  EXPECT_NE(layers.get("colorHalf").raw(), layers.get("color").raw());
+}
+
+TEST(Reference, CappedReferencesSayItAndSequenceJsonRecordsIt) {
+  const auto cache = test::freshDir("reference_capped");
+  RenderSettings s = referenceSettings("sobol", 16);
+  s.referenceMinSpp = 8;
+  s.referenceRelError = 1e-5;  // unreachable at 16 spp
+  std::vector<std::string> lines;
+  const auto dir =
+      renderSequence(test::shippedScene("cornell_static"), s, cache, [&](const std::string& l) { lines.push_back(l); });
+  bool warned = false;
+  for (const std::string& l : lines)
+    warned |= l.find("WARNING: reference 0 stopped at its cap of 16 spp") != std::string::npos;
+  EXPECT_TRUE(warned);
+  const SequenceInfo info = Sequence::open(dir).info();
+  ASSERT_EQ(info.referenceCapped.size(), 1u);
+  EXPECT_TRUE(info.referenceCapped[0]);
+  EXPECT_GT(info.referenceEstimatedRelMse[0], 1e-10);
+  EXPECT_EQ(info.referenceSpp[0], 16);
+  // A reachable target stops early and is not capped.
+  s.referenceRelError = 10;
+  s.referenceSpp = 64;
+  const SequenceInfo loose =
+      Sequence::open(renderSequence(test::shippedScene("cornell_static"), s, cache, nullptr)).info();
+  EXPECT_FALSE(loose.referenceCapped[0]);
+  EXPECT_EQ(loose.referenceSpp[0], 8);
+}
+
+// `arena refine`: a loosely rendered sequence refined to a strict target holds the same bits as
+// one rendered with the strict target from the start.
+TEST(Reference, RefiningGivesTheSameBitsAsRenderingTheTargetAtOnce) {
+  const auto cache = test::freshDir("reference_refine");
+  const Scene scene = test::shippedScene("cornell_static");
+  RenderSettings loose = referenceSettings("sobol", 256);
+  loose.width = 24;
+  loose.height = 14;
+  loose.referenceMinSpp = 16;
+  loose.referenceRelError = 1;  // met at the first step: 16 spp
+  RenderSettings strict = loose;
+  strict.referenceRelError = 0.01;  // relMSE 1e-4
+  const auto looseDir = renderSequence(scene, loose, cache, nullptr);
+  ASSERT_EQ(Sequence::open(looseDir).info().referenceSpp[0], 16);
+  refineSequence(scene, loose, cache, strict.referenceRelError * strict.referenceRelError, 256, nullptr);
+  const auto strictDir = renderSequence(scene, strict, cache, nullptr);
+  const SequenceInfo a = Sequence::open(looseDir).info(), b = Sequence::open(strictDir).info();
+  EXPECT_GT(a.referenceSpp[0], 16);
+  EXPECT_EQ(a.referenceSpp, b.referenceSpp);
+  EXPECT_EQ(a.referenceEstimatedRelMse, b.referenceEstimatedRelMse);
+  EXPECT_EQ(a.referenceCapped, b.referenceCapped);
+  const LayerSet ra = Sequence::open(looseDir).reference(0), rb = Sequence::open(strictDir).reference(0);
+  for (const auto& [name, img] : rb.all()) EXPECT_EQ(ra.get(name).raw(), img.raw()) << name;
+  // The sums file names what is wrong with a foreign one.
+  try {
+    readReferenceSums(referenceSumsPath(looseDir, 0), b.hash, 0);
+    FAIL() << "accepted sums of another sequence";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("reference_000.sums"), std::string::npos) << e.what();
+  }
+}
+
+std::string fileBytes(const std::filesystem::path& p) { return readText(p); }
+
+// `arena render --shard i/n`: three shards and the merging render give the same files as one
+// unsharded render, with a fixed sample count (replicate units) and with a target (reference units).
+TEST(Reference, ThreeShardsMergeToTheUnshardedFilesBitForBit) {
+  const Scene scene = test::shippedScene("camera_pan_occluder");
+  for (const double relError : {0.0, 0.05}) {
+    RenderSettings s = test::tinySettings(24, 14, 4, 32);
+    s.referenceMinSpp = 16;
+    s.referenceRelError = relError;
+    const auto sharded = test::freshDir("reference_shards"), whole = test::freshDir("reference_whole");
+    for (int i = 0; i < 3; ++i) {
+      const auto dir = renderSequence(scene, s, sharded, nullptr, Shard{i, 3});
+      EXPECT_FALSE(std::filesystem::exists(dir / "sequence.json")) << "a shard wrote sequence.json";
+    }
+    if (relError == 0) {
+      EXPECT_TRUE(std::filesystem::exists(replicateSumsPath(sequenceDir(scene, s, sharded), 0, 7)));
+    }
+    std::vector<std::string> lines;
+    const auto a = renderSequence(scene, s, sharded, [&](const std::string& l) { lines.push_back(l); });
+    for (const std::string& l : lines)
+      EXPECT_EQ(l.find("frame"), std::string::npos) << "the merge re-rendered: " << l;
+    const auto b = renderSequence(scene, s, whole, nullptr);
+    std::vector<std::string> names;
+    for (const auto& e : std::filesystem::directory_iterator(b)) names.push_back(e.path().filename().string());
+    std::vector<std::string> namesA;
+    for (const auto& e : std::filesystem::directory_iterator(a)) namesA.push_back(e.path().filename().string());
+    std::sort(names.begin(), names.end());
+    std::sort(namesA.begin(), namesA.end());
+    EXPECT_EQ(names, namesA);
+    EXPECT_GT(names.size(), 8u);
+    for (const std::string& n : names) EXPECT_EQ(fileBytes(a / n), fileBytes(b / n)) << n << " rel error " << relError;
+  }
+  EXPECT_THROW(renderSequence(scene, test::tinySettings(24, 14, 4, 32), test::freshDir("bad_shard"), nullptr,
+                              Shard{3, 3}),
+               Error);
+}
+
+TEST(Reference, BadSamplerSettingsAreErrorsNamingTheValue) {
+  const Scene scene = test::shippedScene("cornell_static");
+  RenderSettings s = referenceSettings("halton", 16);
+  try {
+    SequenceRenderer r(scene, s);
+    FAIL() << "accepted an unknown sampler";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("'halton'"), std::string::npos) << e.what();
+  }
+  s.referenceSampler = "sobol";
+  s.referenceReplicates = 1;
+  EXPECT_THROW(SequenceRenderer(scene, s), Error);
+}
+
+}  // namespace
+}  // namespace arena
