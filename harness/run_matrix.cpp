@@ -359,6 +359,15 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
       summary["relMse"]["mean"].get<double>() < 10.0 * refFloor)
     warnings.push_back("relMSE is within 10x of the reference's own noise floor (" + std::to_string(refFloor) +
                        "): the ranking on raw relMSE is unreliable; use relMseCorrected or a better reference");
+  {  // issue 13: a reference that stopped at its sample cap above its target
+    const std::vector<bool>& cappedReferences = sd.sequence.info().referenceCapped;
+    int capped = 0;
+    for (bool c : cappedReferences) capped += c;
+    if (capped > 0)
+      warnings.push_back(std::to_string(capped) + " of " + std::to_string(cappedReferences.size()) +
+                         " reference(s) stopped at the sample cap above their target relMSE (see sequence.json "
+                         "referenceEstimatedRelMse; `arena refine` can extend them)");
+  }
   // Perceptual metrics cannot be corrected for reference noise: warn within 2x of their own floor.
   for (const char* name : {"ldrFlip", "hdrFlip", "ssim"}) {
     if (!sd.floors.contains(name) || !summary.contains(name) || !summary[name].contains("mean")) continue;
@@ -531,6 +540,7 @@ json runMatrix(const RunConfig& cfg) {
           {"purpose", scene.purpose}, {"sequence", dir.string()}, {"hash", info.hash}, {"width", info.width},
           {"height", info.height}, {"frames", info.frames}, {"events", events},
           {"referenceSpp", info.referenceSpp}, {"referenceRelMse", sd->referenceRelMse},
+          {"referenceCapped", info.referenceCapped}, {"referenceEstimatedRelMse", info.referenceEstimatedRelMse},
           {"noisyRelMse", sd->noisyRelMse}, {"exposure", sd->display.exposure},
           {"chosenFrames", sd->chosenFrames}, {"images", fs::relative(sceneImages, cfg.out).string()},
           {"floors", sd->floors}, {"nonFiniteInputs", sd->nonFinite}};

@@ -30,11 +30,10 @@ inline uint64_t mix64(uint64_t z) {  // splitmix64 finaliser (Steele et al. 2014
 namespace sobol {
 
 inline uint32_t reverseBits(uint32_t x) {
+  x = __builtin_bswap32(x);  // bytes, then bits within each byte
   x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
   x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
-  x = ((x >> 4) & 0x0F0F0F0Fu) | ((x & 0x0F0F0F0Fu) << 4);
-  x = ((x >> 8) & 0x00FF00FFu) | ((x & 0x00FF00FFu) << 8);
-  return (x >> 16) | (x << 16);
+  return ((x >> 4) & 0x0F0F0F0Fu) | ((x & 0x0F0F0F0Fu) << 4);
 }
 
 // Burley 2020, sec. 3: a Laine-Karras style hash in which each bit depends only on itself and
@@ -53,14 +52,21 @@ inline uint32_t nestedUniformScramble(uint32_t x, uint32_t seed) {
 
 // Sobol dimension 1 (primitive polynomial x + 1, m_1 = 1: m_k = 2 m_{k-1} xor m_{k-1}, Bratley &
 // Fox 1988; Joe & Kuo 2008's first entry). Column k is v_k = m_k / 2^k as a 32-bit fraction.
+// The product of the generator matrix with an index, byte by byte: byteTable[b][x] is the xor of
+// the columns 8b..8b+7 selected by the bits of x.
 struct Dimension1 {
   uint32_t v[32];
-  constexpr Dimension1() : v{} {
+  uint32_t byteTable[4][256];
+  constexpr Dimension1() : v{}, byteTable{} {
     uint32_t m = 1;
     for (int k = 1; k <= 32; ++k) {
       v[k - 1] = m << (32 - k);
       m = (m << 1) ^ m;
     }
+    for (int b = 0; b < 4; ++b)
+      for (int x = 0; x < 256; ++x)
+        for (int k = 0; k < 8; ++k)
+          if (x & (1 << k)) byteTable[b][x] ^= v[8 * b + k];
   }
 };
 inline constexpr Dimension1 kDimension1{};
@@ -70,10 +76,8 @@ inline uint32_t dimension0(uint32_t index) {
   return reverseBits(index);
 }
 inline uint32_t dimension1(uint32_t index) {
-  uint32_t x = 0;
-  for (int k = 0; index; ++k, index >>= 1)
-    if (index & 1u) x ^= kDimension1.v[k];
-  return x;
+  return kDimension1.byteTable[0][index & 0xFF] ^ kDimension1.byteTable[1][(index >> 8) & 0xFF] ^
+         kDimension1.byteTable[2][(index >> 16) & 0xFF] ^ kDimension1.byteTable[3][index >> 24];
 }
 
 inline float toUnitFloat(uint32_t x) {

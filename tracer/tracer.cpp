@@ -14,10 +14,13 @@ namespace {
 
 constexpr float kPi = 3.14159265358979f;
 constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr float kOneMinusEpsilon = 0x1.fffffep-1f;
 // Random dimensions used at each path vertex (8 per vertex, fixed order): vertex v (0 = the primary
 // hit, v = bounce) uses dimensions 8v + Dim. The light point (kLightU, kLightV) and the scattered
 // direction (kDirU, kDirV) are drawn as pairs (Sampler::get2), which the reference sampler
-// stratifies jointly (a 2D Sobol net); light selection, triangle, lobe and roulette are 1D Sobol.
+// stratifies jointly (a 2D Sobol net); it derives the light, triangle and lobe choices from the
+// pairs' first coordinates (rescaled, see sampleLight and reuseForLobe), so kLightSelect,
+// kLightTriangle and kLobe go unused there; roulette is 1D Sobol.
 enum Dim : uint32_t { kLightSelect, kLightTriangle, kLightU, kLightV, kLobe, kDirU, kDirV, kRoulette, kDimsPerVertex };
 
 float lum(glm::vec3 c) { return luminance(c.x, c.y, c.z); }
@@ -87,6 +90,16 @@ Lobes evaluate(const SurfaceHit& s, glm::vec3 n, glm::vec3 wo, glm::vec3 wi, flo
   }
   out.pdf = pSpec * pdfSpecular + (1.0f - pSpec) * pdfDiffuse;
   return out;
+}
+
+// The lobe choice for the reference sampler: the pair's first coordinate picks the lobe and is
+// rescaled to [0, 1) within it (as for the light choice in sampleLight), keeping the pair stratified.
+void reuseForLobe(float pSpec, float& uLobe, float& u1) {
+  uLobe = u1;
+  if (u1 < pSpec)
+    u1 = std::min(u1 / pSpec, kOneMinusEpsilon);
+  else
+    u1 = std::min((u1 - pSpec) / (1.0f - pSpec), kOneMinusEpsilon);
 }
 
 bool sampleDirection(const SurfaceHit& s, glm::vec3 n, glm::vec3 wo, float pSpec, float uLobe, float u1,
@@ -272,14 +285,24 @@ glm::vec3 FrameScene::sampleLight(const SurfaceHit& at, const Sampler& s, uint32
   pdf = 0;
   if (selectableLights_.empty()) return glm::vec3(0);
   const size_t n = selectableLights_.size();
-  const size_t li = std::min(size_t(s.get(dim + kLightSelect) * float(n)), n - 1);
+  glm::vec2 uv = s.get2(dim + kLightU);
+  // The reference sampler reuses the pair's first coordinate for the discrete choices (light, then
+  // triangle), rescaled to [0, 1) within the chosen interval, so the pair's 2D stratification carries
+  // over to the point on the chosen light instead of being split at random between lights and
+  // triangles. The frames' independent sampler keeps its own dimensions (frames are unchanged).
+  const bool reuse = s.kind() == SamplerKind::OwenSobol;
+  float uSelect = reuse ? uv.x * float(n) : s.get(dim + kLightSelect) * float(n);
+  const size_t li = std::min(size_t(uSelect), n - 1);
   const Geometry& g = geometries_[size_t(selectableLights_[li])];
   // Triangle in proportion to its area, then a uniform point on it.
-  float target = s.get(dim + kLightTriangle) * g.area;
+  float target = (reuse ? std::min(uSelect - float(li), kOneMinusEpsilon) : s.get(dim + kLightTriangle)) * g.area;
   size_t ti = size_t(std::lower_bound(g.areaCdf.begin(), g.areaCdf.end(), target) - g.areaCdf.begin());
   ti = std::min(ti, g.areaCdf.size() - 1);
+  if (reuse) {
+    const float lo = ti > 0 ? g.areaCdf[ti - 1] : 0.0f, width = g.areaCdf[ti] - lo;
+    uv.x = width > 0 ? std::clamp((target - lo) / width, 0.0f, kOneMinusEpsilon) : 0.0f;
+  }
   const glm::uvec3 tri = g.local->triangles[ti];
-  const glm::vec2 uv = s.get2(dim + kLightU);
   float su = std::sqrt(uv.x), b1 = 1.0f - su, b2 = uv.y * su;
   glm::vec3 p0 = g.positions[tri.x], p1 = g.positions[tri.y], p2 = g.positions[tri.z];
   glm::vec3 lp = (1.0f - b1 - b2) * p0 + b1 * p1 + b2 * p2;
@@ -336,8 +359,13 @@ FrameScene::Radiance FrameScene::shade(const SurfaceHit& primary, glm::vec3 wo, 
   if (pSpec0 <= 0 && maxComponent(primary.diffuseAlbedo()) <= 0) return out;
   nextEvent(primary, o0, wo, pSpec0, 0, out.diffuse, out.specular);
   glm::vec3 wi;
-  const glm::vec2 dir0 = sampler.get2(kDirU);
-  if (!sampleDirection(primary, o0.n, wo, pSpec0, sampler.get(kLobe), dir0.x, dir0.y, wi) ||
+  glm::vec2 dir0 = sampler.get2(kDirU);
+  float lobe0 = 0;
+  if (sampler.kind() == SamplerKind::OwenSobol)
+    reuseForLobe(pSpec0, lobe0, dir0.x);
+  else
+    lobe0 = sampler.get(kLobe);
+  if (!sampleDirection(primary, o0.n, wo, pSpec0, lobe0, dir0.x, dir0.y, wi) ||
       glm::dot(wi, o0.ng) <= 0)
     return out;
   Lobes f0 = evaluate(primary, o0.n, wo, wi, pSpec0);
@@ -375,8 +403,13 @@ FrameScene::Radiance FrameScene::shade(const SurfaceHit& primary, glm::vec3 wo, 
     nextEvent(s, o, w, pSpec, dim, direct, direct);
     incoming += throughput * direct;
     glm::vec3 next;
-    const glm::vec2 dirU = sampler.get2(dim + kDirU);
-    if (!sampleDirection(s, o.n, w, pSpec, sampler.get(dim + kLobe), dirU.x, dirU.y, next) ||
+    glm::vec2 dirU = sampler.get2(dim + kDirU);
+    float lobe = 0;
+    if (sampler.kind() == SamplerKind::OwenSobol)
+      reuseForLobe(pSpec, lobe, dirU.x);
+    else
+      lobe = sampler.get(dim + kLobe);
+    if (!sampleDirection(s, o.n, w, pSpec, lobe, dirU.x, dirU.y, next) ||
         glm::dot(next, o.ng) <= 0)
       break;
     Lobes f = evaluate(s, o.n, w, next, pSpec);
