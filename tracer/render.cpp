@@ -24,7 +24,7 @@ using nlohmann::json;
 
 namespace {
 
-constexpr int kTracerVersion = 2;  // bump when a change alters pixels: invalidates every cache
+constexpr int kTracerVersion = 3;  // bump when a change alters pixels: invalidates every cache
 constexpr float kMissHitDist = 1e6f;
 constexpr uint32_t kStratumPickSample = 0xFFFFF;  // sample index reserved for stratum picks
 
