@@ -2,6 +2,8 @@
 #include <iostream>
 
 #include "harness/commands.hpp"
+#include "metrics/compare.hpp"
+#include "reports/history.hpp"
 #include "reports/report.hpp"
 
 namespace arena::cli {
@@ -23,6 +25,34 @@ void addReportCommand(CLI::App& app) {
     std::cout << "report: " << s.index.string() << " (" << s.pairs << " pairs";
     if (s.failedPairs) std::cout << ", " << s.failedPairs << " failed: shown in the report";
     std::cout << ", " << s.imagesCopied << " images)\n";
+  });
+
+  auto* hist = app.add_subcommand(
+      "history",
+      "Build a regression dashboard (index.html) from many runs: results.db files or "
+      "run directories, ordered by creation time");
+  auto inputs = std::make_shared<std::vector<std::string>>();
+  auto histOut = std::make_shared<std::string>();
+  auto metrics = std::make_shared<std::vector<std::string>>();
+  auto tol = std::make_shared<std::string>("2%");
+  hist->add_option("inputs", *inputs, "results.db files and/or run directories")->required();
+  hist->add_option("--out", *histOut, "Output directory for index.html and its files")->required();
+  hist->add_option("--metric", *metrics,
+                   "Metric(s) the gate checks, as for `arena compare` (default: its defaults)");
+  hist->add_option("--tolerance", *tol, "Allowed relative change, as for `arena compare`")
+      ->default_val("2%");
+  hist->callback([=] {
+    HistoryOptions h;
+    h.inputs.assign(inputs->begin(), inputs->end());
+    h.out = *histOut;
+    const double t = parseTolerance(*tol);
+    for (const std::string& m : *metrics) h.tolerances.push_back({m, t});
+    if (h.tolerances.empty())
+      for (const char* m : {"relMse", "ldrFlip", "hdrFlip", "ssim", "tRmae"})
+        h.tolerances.push_back({m, t});
+    const HistorySummary s = writeHistory(h);
+    std::cout << "history: " << s.index.string() << " (" << s.runs << " runs, " << s.flags
+              << " regression(s) `arena compare` would flag)\n";
   });
 }
 

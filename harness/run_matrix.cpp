@@ -14,6 +14,7 @@
 #include "harness/image_files.hpp"
 #include "metrics/results.hpp"
 #include "metrics/error.hpp"
+#include "metrics/error_maps.hpp"
 #include "metrics/flip.hpp"
 #include "metrics/ghosting.hpp"
 #include "metrics/statistics.hpp"
@@ -45,22 +46,6 @@ std::string frameName(const char* prefix, int t) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%s_%04d.png", prefix, t);
   return buf;
-}
-
-// A per-pixel relative-error map for eyes: mean over channels of (d - r)^2 / (r^2 + eps), mapped
-// through x / (1 + x) into [0, 1).
-Image relativeErrorMap(const Image& d, const Image& r) {
-  Image m(d.width(), d.height(), 1);
-  for (size_t i = 0; i < d.pixelCount(); ++i) {
-    double s = 0;
-    for (int c = 0; c < 3; ++c) {
-      double diff = double(d.plane(c)[i]) - r.plane(c)[i];
-      s += diff * diff / (double(r.plane(c)[i]) * r.plane(c)[i] + kRelMseEpsilon);
-    }
-    s /= 3;
-    m.plane(0)[i] = float(s / (1 + s));
-  }
-  return m;
 }
 
 // Everything about a scene that every pair shares: frames, references, display transform, masks.
@@ -319,7 +304,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
             const bool chosen = std::find(sd.chosenFrames.begin(), sd.chosenFrames.end(), t) != sd.chosenFrames.end();
             if (keepImages && (keepAll || chosen)) {
               writePng(imageDir / frameName("frame", t), disp);
-              if (cfg.flip != "none") writePng(imageDir / frameName("flip", t), ldr.map);
+              if (cfg.flip != "none") writePng(imageDir / frameName("flip", t), applyColorMap(ldr.map, magmaColorMap()));
               writePng(imageDir / frameName("relerr", t), relativeErrorMap(f.color, r));
               if (keepAll) {
                 LayerSet out;

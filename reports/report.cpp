@@ -2,13 +2,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <map>
+#include <opencv2/imgcodecs.hpp>
 #include <set>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "metrics/compare.hpp"
+#include "metrics/error_maps.hpp"
 #include "metrics/results.hpp"
 #include "reports/pareto.hpp"
 
@@ -36,7 +39,10 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // The page's static files, copied as they are.
-const char* const kWebFiles[] = {"index.html", "app.js", "style.css"};
+// app.js is split by view (style.md); shared.js holds the helpers every view uses, once.
+const char* const kWebFiles[] = {"index.html",    "style.css",   "shared.js", "speed.js",
+                                 "over_time.js",  "ghosting.js", "tables.js", "images.js",
+                                 "regression.js", "app.js"};
 // Browser (UMD) builds that index.html loads with <script>, from reports/node_modules.
 const char* const kVendorFiles[] = {"vega/build/vega.min.js", "vega-lite/build/vega-lite.min.js",
                                     "vega-embed/build/vega-embed.min.js"};
@@ -99,26 +105,34 @@ json seriesColumns(const json& frames) {
   return cols;
 }
 
-// The value, p5 and p95 of an error axis from a pair's summary; null when the pair lacks it.
+// The value of an error axis from a pair's summary and its bar: the 95% interval of the mean
+// (results schema: summary.<metric>.ci95) when the run has one, else the p5-p95 spread over frames
+// (older runs). Null when the pair lacks the metric.
 json axisValue(const json& pair, const ErrorAxis& axis) {
   if (!isOk(pair) || !pair.contains("summary") || !pair["summary"].contains(axis.source))
     return nullptr;
   const json& s = pair["summary"][axis.source];
   double mean = s.value("mean", kNaN), p5 = s.value("p5", kNaN), p95 = s.value("p95", kNaN);
-  if (axis.complement) {  // 1 - x reverses the order: the low percentile of SSIM is the high one of
-                          // 1-SSIM
+  const bool hasCi = s.contains("ci95") && s["ci95"].is_array() && s["ci95"].size() == 2 &&
+                     s["ci95"][0].is_number() && s["ci95"][1].is_number();
+  double lo = hasCi ? s["ci95"][0].get<double>() : p5,
+         hi = hasCi ? s["ci95"][1].get<double>() : p95;
+  if (axis.complement) {  // 1 - x reverses the order: the low end of SSIM is the high one of 1-SSIM
     mean = 1 - mean;
-    std::swap(p5, p95);
-    p5 = 1 - p5;
-    p95 = 1 - p95;
+    std::swap(p5, p95), std::swap(lo, hi);
+    p5 = 1 - p5, p95 = 1 - p95, lo = 1 - lo, hi = 1 - hi;
   }
   if (!std::isfinite(mean)) return nullptr;
-  return {{"error", mean}, {"p5", p5}, {"p95", p95}};
+  return {{"error", mean}, {"p5", p5}, {"p95", p95},
+          {"lo", lo},      {"hi", hi}, {"interval", hasCi ? "ci95" : "p5-p95"}};
 }
 
-double msOf(const json& pair) {
+double timingOf(const json& pair, const char* key) {
   if (!pair.contains("timing")) return kNaN;
-  return pair["timing"].value("msMedian", kNaN);
+  return pair["timing"].value(key, kNaN);
+}
+double msOf(const json& pair) {
+  return timingOf(pair, "msMedian");
 }
 
 // One point per label with its error bars, and the labels on the Pareto front (time x error).
@@ -133,63 +147,198 @@ json speedScope(const std::vector<json>& points, bool needsComplete) {
   return {{"points", points}, {"front", front}};
 }
 
+// A pair's point on the chart: error with its bar, time with its p5-p95 bar, and the parameters.
+json speedPoint(const json& pair, const ErrorAxis& axis) {
+  json v = axisValue(pair, axis);
+  const double ms = msOf(pair);
+  if (v.is_null() || !std::isfinite(ms)) return nullptr;
+  v["label"] = pair["label"];
+  v["params"] = pair.value("params", json::object());
+  v["ms"] = ms;
+  const double lo = timingOf(pair, "msP5"), hi = timingOf(pair, "msP95");
+  v["msLo"] = std::isfinite(lo) ? json(lo) : json(nullptr);  // msP5: results schema 2
+  v["msHi"] = std::isfinite(hi) ? json(hi) : json(nullptr);
+  return v;
+}
+
+}  // namespace
+
+// The per-scene normalised aggregate (see report.hpp).
+json normalisedAggregate(const std::vector<std::string>& scenes,
+                         const std::vector<std::string>& labels,
+                         const std::function<json(const std::string&, const std::string&)>& value) {
+  // The baseline: passthrough (the noisy input) when it has every scene, else the first label
+  // that has every scene.
+  auto complete = [&](const std::string& label) {
+    for (const std::string& s : scenes) {
+      const json v = value(s, label);
+      if (v.is_null() || !(v["error"].get<double>() > 0)) return false;
+    }
+    return !scenes.empty();
+  };
+  std::string baseline;
+  if (std::find(labels.begin(), labels.end(), "passthrough") != labels.end() &&
+      complete("passthrough"))
+    baseline = "passthrough";
+  for (const std::string& l : labels)
+    if (baseline.empty() && complete(l)) baseline = l;
+  if (baseline.empty()) return nullptr;
+  std::vector<json> points;
+  for (const std::string& label : labels) {
+    double logE = 0, logLo = 0, logHi = 0, ms = 0, msLo = 0, msHi = 0;
+    size_t n = 0, nLo = 0, nHi = 0;
+    json params;
+    for (const std::string& scene : scenes) {
+      const json v = value(scene, label), b = value(scene, baseline);
+      if (v.is_null() || !(v["error"].get<double>() > 0)) continue;
+      const double base = b["error"].get<double>();
+      logE += std::log(v["error"].get<double>() / base);
+      // Bars: the same normalisation applied to each scene's interval ends. This treats the
+      // scenes' intervals as moving together, so it is wider than the interval of the aggregate.
+      logLo += std::log(std::max(v["lo"].get<double>(), 1e-30) / base);
+      logHi += std::log(std::max(v["hi"].get<double>(), 1e-30) / base);
+      ms += v["ms"].get<double>();
+      if (v["msLo"].is_number()) msLo += v["msLo"].get<double>(), ++nLo;
+      if (v["msHi"].is_number()) msHi += v["msHi"].get<double>(), ++nHi;
+      params = v["params"];
+      ++n;
+    }
+    if (n == 0) continue;
+    const double k = double(n);
+    points.push_back({{"label", label},
+                      {"params", params},
+                      {"error", std::exp(logE / k)},
+                      {"lo", std::exp(logLo / k)},
+                      {"hi", std::exp(logHi / k)},
+                      {"ms", ms / k},
+                      {"msLo", nLo == n ? json(msLo / k) : json(nullptr)},
+                      {"msHi", nHi == n ? json(msHi / k) : json(nullptr)},
+                      {"scenes", n}});
+  }
+  for (json& p : points) p["complete"] = p["scenes"].get<size_t>() == scenes.size();
+  json scope = speedScope(points, true);
+  scope["baseline"] = baseline;
+  scope["sceneCount"] = scenes.size();
+  return scope;
+}
+
+namespace {
+
 json speedData(const json& results, const std::vector<std::string>& scenes,
                const std::vector<std::string>& labels) {
   json out = json::object();
   json perScene = json::object();
+  std::map<std::string, std::map<std::string, std::map<std::string, json>>> byAxis;
+  for (const json& pair : results["pairs"])
+    for (const ErrorAxis& axis : kErrorAxes) {
+      json v = speedPoint(pair, axis);
+      if (!v.is_null())
+        byAxis[axis.key][pair["scene"].get<std::string>()][pair["label"].get<std::string>()] = v;
+    }
   for (const std::string& scene : scenes) {
-    json byAxis = json::object();
+    json axes = json::object();
     for (const ErrorAxis& axis : kErrorAxes) {
       std::vector<json> points;
-      for (const json& pair : results["pairs"]) {
-        if (pair["scene"] != scene) continue;
-        json v = axisValue(pair, axis);
-        const double ms = msOf(pair);
-        if (v.is_null() || !std::isfinite(ms)) continue;
-        v["label"] = pair["label"];
-        v["ms"] = ms;
-        points.push_back(v);
-      }
-      if (!points.empty()) byAxis[axis.key] = speedScope(points, false);
+      for (const std::string& label : labels)
+        if (byAxis[axis.key][scene].count(label)) points.push_back(byAxis[axis.key][scene][label]);
+      if (!points.empty()) axes[axis.key] = speedScope(points, false);
     }
-    perScene[scene] = byAxis;
+    perScene[scene] = axes;
   }
   out["scenes"] = perScene;
-  // All scenes: each label's mean over scenes of its per-scene mean (and of p5, p95, ms). A label
-  // missing from some scene (failed there) is drawn but kept off the front: its average covers
-  // different, fewer scenes, so it is not comparable.
+  // All scenes: the geometric mean over scenes of each label's error divided by the baseline's
+  // on that scene, so no scene's scale dominates (a plain mean of relMSE is mostly the hardest
+  // scene's). Scenes with no measured pair are left out of the aggregate.
   json all = json::object();
   for (const ErrorAxis& axis : kErrorAxes) {
-    std::vector<json> points;
-    size_t maxScenes = 0;
-    for (const std::string& label : labels) {
-      double e = 0, p5 = 0, p95 = 0, ms = 0;
-      size_t n = 0;
-      for (const json& pair : results["pairs"]) {
-        if (pair["label"] != label) continue;
-        json v = axisValue(pair, axis);
-        const double t = msOf(pair);
-        if (v.is_null() || !std::isfinite(t)) continue;
-        e += v["error"].get<double>();
-        p5 += v["p5"].get<double>();
-        p95 += v["p95"].get<double>();
-        ms += t;
-        ++n;
-      }
-      if (n == 0) continue;
-      maxScenes = std::max(maxScenes, n);
-      const double k = double(n);
-      points.push_back({{"label", label},
-                        {"error", e / k},
-                        {"p5", p5 / k},
-                        {"p95", p95 / k},
-                        {"ms", ms / k},
-                        {"scenes", n}});
-    }
-    for (json& p : points) p["complete"] = p["scenes"].get<size_t>() == maxScenes;
-    if (!points.empty()) all[axis.key] = speedScope(points, true);
+    std::vector<std::string> measured;
+    for (const std::string& s : scenes)
+      if (byAxis[axis.key].count(s)) measured.push_back(s);
+    auto& table = byAxis[axis.key];
+    json scope = normalisedAggregate(measured, labels,
+                                     [&](const std::string& s, const std::string& l) -> json {
+                                       auto it = table[s].find(l);
+                                       return it == table[s].end() ? json(nullptr) : it->second;
+                                     });
+    if (scope.is_null()) continue;
+    scope["normalisation"] = std::string("geometric mean over scenes of ") + axis.title + " ÷ " +
+                             scope["baseline"].get<std::string>() + "'s " + axis.title;
+    scope["source"] = "report";
+    all[axis.key] = scope;
+  }
+  // The run's own overall ranking (metrics/statistics) names its normalisation and has proper
+  // intervals: when present it replaces the report's relMSE aggregate.
+  const json overall = results.value("statistics", json::object()).value("overall", json());
+  if (overall.is_object() && overall.contains("ranking") && all.contains("relMse")) {
+    json& scope = all["relMse"];
+    for (json& p : scope["points"])
+      for (const json& r : overall["ranking"])
+        if (r.value("label", "") == p["label"] && r.contains("score") && r["score"].is_number()) {
+          p["error"] = r["score"];
+          if (r.contains("ci95") && r["ci95"].is_array() && r["ci95"].size() == 2)
+            p["lo"] = r["ci95"][0], p["hi"] = r["ci95"][1];
+        }
+    std::vector<json> points(scope["points"].begin(), scope["points"].end());
+    const json again = speedScope(points, true);
+    scope["points"] = again["points"];
+    scope["front"] = again["front"];
+    scope["normalisation"] = overall.value("normalisation", "the run's overall score");
+    scope["source"] = "statistics";
   }
   out["all"] = all;
+  return out;
+}
+
+// The rankings the tables show: the run's own (metrics/statistics: ranks with ties from paired
+// differences) when present; else, for older runs, ranks by mean relMSE with ties unknown.
+json rankingData(const json& results, const std::vector<std::string>& scenes, const json& speed) {
+  const json stats = results.value("statistics", json::object());
+  json out = {{"scenes", json::object()}, {"overall", nullptr}};
+  const json statScenes = stats.value("scenes", json::object());
+  for (const std::string& scene : scenes) {
+    if (statScenes.contains(scene) && statScenes[scene].contains("ranking")) {
+      json r = statScenes[scene];
+      r["tiesKnown"] = true;
+      r.erase("pairs");  // every pair's difference: the ranking's tiedWith already says enough
+      out["scenes"][scene] = r;
+      continue;
+    }
+    std::vector<std::pair<double, std::string>> order;
+    for (const json& pair : results["pairs"])
+      if (pair["scene"] == scene && isOk(pair) && pair["summary"].contains("relMse"))
+        order.push_back(
+            {pair["summary"]["relMse"].value("mean", kNaN), pair["label"].get<std::string>()});
+    if (order.empty()) continue;
+    std::stable_sort(order.begin(), order.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    json ranking = json::array();
+    for (size_t i = 0; i < order.size(); ++i)
+      ranking.push_back({{"label", order[i].second},
+                         {"rank", i + 1},
+                         {"mean", order[i].first},
+                         {"tiedWith", json::array()}});
+    out["scenes"][scene] = {{"metric", "relMse"}, {"ranking", ranking}, {"tiesKnown", false}};
+  }
+  if (stats.contains("overall") && stats["overall"].contains("ranking")) {
+    out["overall"] = stats["overall"];
+    out["overall"]["tiesKnown"] = true;
+  } else if (speed["all"].contains("relMse")) {
+    const json& scope = speed["all"]["relMse"];
+    std::vector<json> points;
+    for (const json& p : scope["points"])
+      if (p.value("complete", false)) points.push_back(p);
+    std::stable_sort(points.begin(), points.end(), [](const json& a, const json& b) {
+      return a["error"].get<double>() < b["error"].get<double>();
+    });
+    json ranking = json::array();
+    for (size_t i = 0; i < points.size(); ++i)
+      ranking.push_back({{"label", points[i]["label"]},
+                         {"rank", i + 1},
+                         {"score", points[i]["error"]},
+                         {"tiedWith", json::array()}});
+    out["overall"] = {
+        {"normalisation", scope["normalisation"]}, {"ranking", ranking}, {"tiesKnown", false}};
+  }
   return out;
 }
 
@@ -268,19 +417,39 @@ json ablationData(const json& results) {
           {"rows", rows}};
 }
 
+// The frame number of a kept image named <prefix>_NNNN.png, or -1.
+int keptFrame(const std::string& file, const std::string& prefix) {
+  if (file.size() != prefix.size() + 9 || file.rfind(prefix + "_", 0) != 0 ||
+      file.substr(file.size() - 4) != ".png")
+    return -1;
+  const std::string digits = file.substr(prefix.size() + 1, 4);
+  if (!std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; }))
+    return -1;
+  return std::stoi(digits);
+}
+
 // The image viewer's panels for a scene: only files that exist, so the page never shows a broken
-// image (a failed pair, or a run with --flip none or --keep-frames none, has fewer).
+// image (a failed pair, or a run with --flip none or --keep-frames none, has fewer). Frames: every
+// frame some image was kept for (`--keep-frames all` keeps them all), with the auto-chosen ones
+// and the scene's event frames marked.
 json viewerData(const json& results, const std::string& scene, const json& sceneInfo,
                 const fs::path& runDir) {
-  json frames = sceneInfo.value("chosenFrames", json::array());
   const std::string sceneDir = sceneInfo.value("images", "images/" + scene);
+  std::set<int> kept;
   json panels = json::array();
   auto add = [&](const std::string& kind, const json& label, const std::string& title,
                  const std::string& dir, const char* prefix) {
     json srcs = json::object();
-    for (const json& t : frames) {
-      const std::string rel = dir + "/" + frameFile(prefix, t.get<int>());
-      if (fs::exists(runDir / rel)) srcs[std::to_string(t.get<int>())] = rel;
+    std::error_code ec;
+    std::vector<int> frames;
+    for (const auto& e : fs::directory_iterator(runDir / dir, ec)) {
+      const int t = keptFrame(e.path().filename().string(), prefix);
+      if (t >= 0) frames.push_back(t);
+    }
+    std::sort(frames.begin(), frames.end());
+    for (int t : frames) {
+      srcs[std::to_string(t)] = dir + "/" + frameFile(prefix, t);
+      kept.insert(t);
     }
     if (!srcs.empty())
       panels.push_back({{"kind", kind}, {"label", label}, {"title", title}, {"srcs", srcs}});
@@ -295,7 +464,44 @@ json viewerData(const json& results, const std::string& scene, const json& scene
     add("flip", label, label + " · LDR-FLIP", dir, "flip");
     add("relerr", label, label + " · rel. error", dir, "relerr");
   }
+  json frames = json::array();
+  const json chosen = sceneInfo.value("chosenFrames", json::array());
+  for (int t : kept) {
+    json f = {{"frame", t}, {"chosen", std::find(chosen.begin(), chosen.end(), t) != chosen.end()}};
+    json events = json::array();
+    for (const json& e : sceneInfo.value("events", json::array()))
+      if (e.value("frame", -1) == t)
+        events.push_back(e.value("kind", std::string("event")) +
+                         (e.contains("what") ? " " + e["what"].get<std::string>() : ""));
+    if (!events.empty()) f["events"] = events;
+    frames.push_back(f);
+  }
   return {{"frames", frames}, {"panels", panels}};
+}
+
+// The colour maps of the kept error maps and their scales, for the page's legends (the stops
+// live once, in metrics/error_maps).
+json colorMapData() {
+  auto stops = [](const ColorMap& m) {
+    json out = json::array();
+    for (const auto& c : m.stops) out.push_back({c[0], c[1], c[2]});
+    return out;
+  };
+  return {
+      {"flip",
+       {{"name", magmaColorMap().name},
+        {"stops", stops(magmaColorMap())},
+        {"min", 0},
+        {"max", 1},
+        {"scale", "linear"},
+        {"title", "LDR-FLIP per pixel (0 = no perceived difference, 1 = largest)"}}},
+      {"relerr",
+       {{"name", viridisColorMap().name},
+        {"stops", stops(viridisColorMap())},
+        {"min", std::pow(10.0, kRelErrorMapLog10Min)},
+        {"max", std::pow(10.0, kRelErrorMapLog10Max)},
+        {"scale", "log"},
+        {"title", "relative squared error (d − r)² / (r² + 0.01) per pixel, mean of R, G, B"}}}};
 }
 
 // Everything a pair row needs in the page, without the per-pass timings (the table shows totals).
@@ -312,6 +518,7 @@ json pairData(const json& pair) {
   p["summary"] = pair.value("summary", json::object());
   const json timing = pair.value("timing", json::object());
   p["timing"] = {{"msMedian", timing.value("msMedian", kNaN)},
+                 {"msP5", timing.value("msP5", kNaN)},
                  {"msP95", timing.value("msP95", kNaN)},
                  {"msPerMegapixel", timing.value("msPerMegapixel", kNaN)},
                  {"tapsPerPixel", timing.value("tapsPerPixel", kNaN)},
@@ -346,7 +553,7 @@ json reportData(const json& results, const fs::path& runDir, const json* baselin
     if (sceneInfos.contains(name)) {
       const json& info = sceneInfos[name];
       for (const char* k : {"purpose", "width", "height", "frames", "events", "chosenFrames",
-                            "referenceRelMse", "noisyRelMse", "referenceSpp", "exposure"})
+                            "referenceRelMse", "noisyRelMse", "referenceSpp", "exposure", "floors"})
         if (info.contains(k)) s[k] = info[k];
       s["noiseFloor"] = noiseFloor(info, warmup);
       s["viewer"] = viewerData(results, name, info, runDir);
@@ -377,6 +584,7 @@ json reportData(const json& results, const fs::path& runDir, const json* baselin
           {{"key", a.key}, {"title", a.title}, {"source", a.source}, {"complement", a.complement}});
   }
 
+  const json speed = speedData(results, sceneNames, labels);
   json data = {{"generator", "arena report"},
                {"run",
                 {{"name", results.value("name", "")},
@@ -390,7 +598,9 @@ json reportData(const json& results, const fs::path& runDir, const json* baselin
                {"labels", labels},
                {"pairs", pairs},
                {"failures", failures},
-               {"speed", speedData(results, sceneNames, labels)},
+               {"speed", speed},
+               {"rankings", rankingData(results, sceneNames, speed)},
+               {"colorMaps", colorMapData()},
                {"ablation", ablationData(results)},
                {"regression", nullptr}};
   if (baseline) {
@@ -453,30 +663,163 @@ size_t copyImages(const fs::path& runDir, const fs::path& out) {
   return n;
 }
 
+// An 8-bit PNG as interleaved RGB bytes (empty when it cannot be read).
+std::vector<uint8_t> readRgb(const fs::path& file, int& width, int& height) {
+  const cv::Mat bgr = cv::imread(file.string(), cv::IMREAD_COLOR);
+  if (bgr.empty() || bgr.depth() != CV_8U) return {};
+  width = bgr.cols, height = bgr.rows;
+  std::vector<uint8_t> rgb(size_t(width) * size_t(height) * 3);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const cv::Vec3b& p = bgr.at<cv::Vec3b>(y, x);
+      uint8_t* q = &rgb[(size_t(y) * size_t(width) + size_t(x)) * 3];
+      q[0] = p[2], q[1] = p[1], q[2] = p[0];
+    }
+  return rgb;
+}
+
+// 4 significant digits: the crop table shows 3, and data files stay small.
+double short4(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4g", v);
+  return std::strtod(buf, nullptr);
+}
+
+// Per-tile means of a per-pixel value (tile x tile pixels; edge tiles are smaller).
+struct TileGrid {
+  int width, height, tile, cols, rows;
+  TileGrid(int w, int h)
+      : width(w),
+        height(h),
+        tile(std::max(8, (std::max(w, h) + 47) / 48)),
+        cols((w + tile - 1) / tile),
+        rows((h + tile - 1) / tile) {}
+  template <class PixelValue>
+  json means(PixelValue value) const {
+    std::vector<double> sum(size_t(cols) * size_t(rows), 0.0);
+    std::vector<int> n(sum.size(), 0);
+    for (int y = 0; y < height; ++y)
+      for (int x = 0; x < width; ++x) {
+        const size_t k = size_t(y / tile) * size_t(cols) + size_t(x / tile);
+        sum[k] += value(size_t(y) * size_t(width) + size_t(x));
+        ++n[k];
+      }
+    json out = json::array();
+    for (size_t k = 0; k < sum.size(); ++k) out.push_back(short4(sum[k] / n[k]));
+    return out;
+  }
+  json counts() const {
+    json out = json::array();
+    for (int r = 0; r < rows; ++r)
+      for (int c = 0; c < cols; ++c)
+        out.push_back(std::min(tile, width - c * tile) * std::min(tile, height - r * tile));
+    return out;
+  }
+};
+
+// The crop measurements: for each kept frame of a scene, per-tile means computed from the kept
+// 8-bit images (so what the page can measure is what it shows): the display images' squared
+// error against the reference PNG (-> PSNR), the LDR-FLIP value decoded from the magma map, and
+// the relative squared error decoded from the relative-error map. Written as one script per
+// frame (tiles/...js, loaded when the user marks a region); returns the scene's index of them.
+json writeCropTiles(const json& viewer, const fs::path& runDir, const fs::path& out,
+                    const std::string& stem) {
+  const json& panels = viewer["panels"];
+  const json* reference = nullptr;
+  for (const json& p : panels)
+    if (p["kind"] == "reference") reference = &p;
+  if (!reference) return nullptr;
+  json files = json::object();
+  json grid;
+  for (auto it = (*reference)["srcs"].begin(); it != (*reference)["srcs"].end(); ++it) {
+    int w = 0, h = 0;
+    const std::vector<uint8_t> ref = readRgb(runDir / it.value().get<std::string>(), w, h);
+    if (ref.empty()) continue;
+    const TileGrid g(w, h);
+    json byPanel = json::object();
+    for (const json& p : panels) {
+      if (!p["srcs"].contains(it.key()) || p["kind"] == "reference") continue;
+      int pw = 0, ph = 0;
+      const std::vector<uint8_t> img =
+          readRgb(runDir / p["srcs"][it.key()].get<std::string>(), pw, ph);
+      if (img.empty() || pw != w || ph != h) continue;
+      const std::string key = p["label"].is_string() ? p["label"].get<std::string>() : "noisy";
+      const std::string kind = p["kind"];
+      if (kind == "output" || kind == "noisy") {
+        byPanel[key]["sqerr"] = g.means([&](size_t i) {
+          double s = 0;
+          for (size_t c = 0; c < 3; ++c) {
+            const double d = (double(img[3 * i + c]) - ref[3 * i + c]) / 255.0;
+            s += d * d;
+          }
+          return s / 3;
+        });
+      } else if (kind == "flip") {
+        const std::vector<float> v = decodeColorMap(img, magmaColorMap());
+        byPanel[key]["flip"] = g.means([&](size_t i) { return double(v[i]); });
+      } else if (kind == "relerr") {
+        const std::vector<float> v = decodeColorMap(img, viridisColorMap());
+        byPanel[key]["relerr"] = g.means([&](size_t i) { return relativeErrorOfMapValue(v[i]); });
+      }
+    }
+    grid = {{"tile", g.tile}, {"cols", g.cols}, {"rows", g.rows},
+            {"width", w},     {"height", h},    {"counts", g.counts()}};
+    const std::string rel = "tiles/" + stem + "_f" + it.key() + ".js";
+    fs::create_directories(out / "tiles");
+    json payload = grid;
+    payload["panels"] = byPanel;
+    writeTextAtomically(out / rel,
+                        "// Generated by `arena report`: per-tile means for crops.\n"
+                        "(window.ARENA_TILES = window.ARENA_TILES || {})[" +
+                            json(rel).dump() + "] = " + payload.dump() + ";\n");
+    files[it.key()] = rel;
+  }
+  if (files.empty()) return nullptr;
+  return {{"files", files}, {"tile", grid["tile"]}};
+}
+
 }  // namespace
+
+void checkPageAssets(const fs::path& webDir, const fs::path& nodeModulesDir,
+                     const std::vector<PageFile>& files) {
+  for (const PageFile& f : files)
+    if (!fs::exists(webDir / f.source))
+      throw Error("report: " + (webDir / f.source).string() +
+                  " is missing (the page's static files live in reports/web)");
+  for (const char* f : kVendorFiles)
+    if (!fs::exists(nodeModulesDir / f))
+      throw Error("report: the charting library is not installed (" +
+                  (nodeModulesDir / f).string() +
+                  " is missing); run scripts/setup.sh, which runs `npm ci` in reports/");
+}
+
+void copyPageAssets(const fs::path& webDir, const fs::path& nodeModulesDir,
+                    const std::vector<PageFile>& files, const fs::path& out) {
+  fs::create_directories(out);
+  for (const PageFile& f : files)
+    fs::copy_file(webDir / f.source, out / f.target, fs::copy_options::overwrite_existing);
+  for (const char* f : kVendorFiles)
+    fs::copy_file(nodeModulesDir / f, out / fs::path(f).filename(),
+                  fs::copy_options::overwrite_existing);
+}
 
 ReportSummary writeReport(const ReportOptions& o) {
   if (o.out.empty()) throw Error("report: --out is required");
   const json results = loadResults(o.run);
   json baseline;
   if (!o.baseline.empty()) baseline = loadResults(o.baseline);
-  for (const char* f : kWebFiles)
-    if (!fs::exists(o.webDir / f))
-      throw Error("report: " + (o.webDir / f).string() +
-                  " is missing (the page's static files live in reports/web)");
-  for (const char* f : kVendorFiles)
-    if (!fs::exists(o.nodeModulesDir / f))
-      throw Error("report: the charting library is not installed (" +
-                  (o.nodeModulesDir / f).string() +
-                  " is missing); run scripts/setup.sh, which runs `npm ci` in reports/");
-
-  const json data = reportData(results, o.run, o.baseline.empty() ? nullptr : &baseline);
+  std::vector<PageFile> files;
+  for (const char* f : kWebFiles) files.push_back({f, f});
+  checkPageAssets(o.webDir, o.nodeModulesDir, files);
+  json data = reportData(results, o.run, o.baseline.empty() ? nullptr : &baseline);
   fs::create_directories(o.out);
-  for (const char* f : kWebFiles)
-    fs::copy_file(o.webDir / f, o.out / f, fs::copy_options::overwrite_existing);
-  for (const char* f : kVendorFiles)
-    fs::copy_file(o.nodeModulesDir / f, o.out / fs::path(f).filename(),
-                  fs::copy_options::overwrite_existing);
+  for (size_t i = 0; i < data["scenes"].size(); ++i) {
+    json& scene = data["scenes"][i];
+    if (scene.contains("viewer"))
+      scene["viewer"]["crops"] =
+          writeCropTiles(scene["viewer"], o.run, o.out, "s" + std::to_string(i));
+  }
+  copyPageAssets(o.webDir, o.nodeModulesDir, files, o.out);
   ReportSummary summary;
   summary.imagesCopied = copyImages(o.run, o.out);
   // Written last and atomically: a page whose data.js exists is complete.

@@ -6,8 +6,10 @@
 // script (data.js sets window.ARENA_DATA) instead of a fetch(), and the charting library (Vega,
 // Vega-Lite, vega-embed from reports/node_modules) is copied next to index.html.
 #include <filesystem>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 namespace arena {
 
@@ -37,6 +39,30 @@ nlohmann::json reportData(const nlohmann::json& results, const std::filesystem::
 // Loads the run (and baseline) through loadResults, so a missing run or another schema version is
 // an arena::Error; a missing charting library is an Error that says to run scripts/setup.sh.
 ReportSummary writeReport(const ReportOptions& options);
+
+// The speed chart's "all scenes" aggregate, so that no scene's scale dominates: for each label,
+// the geometric mean over `scenes` of its error divided by the baseline's error on that scene.
+// The baseline is passthrough (the noisy input) when it has every scene, else the first label
+// that has every scene. value(scene, label) returns the point ({error, lo, hi, ms, msLo, msHi,
+// params}) or null. Returns {points: [{label, error, lo, hi, ms, msLo, msHi, scenes, complete}],
+// front, baseline, sceneCount}; null when no label has every scene. Labels missing a scene are
+// kept (complete: false) but off the front.
+nlohmann::json normalisedAggregate(
+    const std::vector<std::string>& scenes, const std::vector<std::string>& labels,
+    const std::function<nlohmann::json(const std::string&, const std::string&)>& value);
+
+// The page's files: checkPageAssets throws an Error naming a missing static file (webDir) or a
+// missing charting library (nodeModulesDir: run scripts/setup.sh); copyPageAssets copies both
+// into `out`. Shared by `arena report` and `arena history`.
+struct PageFile {
+  std::string source, target;  // names in webDir and in out
+};
+void checkPageAssets(const std::filesystem::path& webDir,
+                     const std::filesystem::path& nodeModulesDir,
+                     const std::vector<PageFile>& files);
+void copyPageAssets(const std::filesystem::path& webDir,
+                    const std::filesystem::path& nodeModulesDir, const std::vector<PageFile>& files,
+                    const std::filesystem::path& out);
 
 // The section ids index.html must contain, in page order (the tests check them).
 const std::vector<std::string>& reportSectionIds();

@@ -4,10 +4,14 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
+#include <map>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "harness/image_files.hpp"
+#include "metrics/error_maps.hpp"
 #include "metrics/results.hpp"
 #include "metrics/statistics.hpp"
 #include "reports/pareto.hpp"
@@ -91,16 +95,19 @@ json okPair(const std::string& scene, const std::string& denoiser, const std::st
 json fixtureRun() {
   json scenes = json::object();
   for (const char* s : {"static", "switch"})
-    scenes[s] = {{"purpose", "test"},
-                 {"width", 4},
-                 {"height", 2},
-                 {"frames", 6},
-                 {"events", json::array()},
-                 {"chosenFrames", {2, 5}},
-                 {"images", std::string("images/") + s},
-                 // Frames before warm-up (W = 2) carry a large value that must not enter the floor.
-                 {"referenceRelMse", {9.0, 9.0, 0.001, 0.001, 0.003, 0.003}},
-                 {"noisyRelMse", {1, 1, 1, 1, 1, 1}}};
+    scenes[s] = {
+        {"purpose", "test"},
+        {"width", 4},
+        {"height", 2},
+        {"frames", 6},
+        {"events", std::string(s) == "switch"
+                       ? json::array({{{"frame", 5}, {"kind", "light_off"}, {"what", "lamp"}}})
+                       : json::array()},
+        {"chosenFrames", {2, 5}},
+        {"images", std::string("images/") + s},
+        // Frames before warm-up (W = 2) carry a large value that must not enter the floor.
+        {"referenceRelMse", {9.0, 9.0, 0.001, 0.001, 0.003, 0.003}},
+        {"noisyRelMse", {1, 1, 1, 1, 1, 1}}};
   json pairs = json::array();
   pairs.push_back(okPair("static", "passthrough", "passthrough", json::object(), 0.5, 0.01));
   pairs.push_back(okPair("static", "svgf", "svgf[a=0]", {{"a", 0}, {"b", true}}, 0.05, 4.0));
@@ -211,8 +218,21 @@ TEST(Report, DataHasFrontNoiseFloorViewerAndAblation) {
     }
   }
   for (const json& l : all["front"]) EXPECT_NE(l, "svgf[a=0]");
-  // Passthrough over both scenes: mean of 0.5 and 0.6.
-  EXPECT_NEAR(all["points"][0]["error"].get<double>(), 0.55, 1e-12);
+  // All scenes is normalised per scene by passthrough (the baseline, complete on both scenes):
+  // its own score is 1, svgf[a=1] (only on "static") 0.04 / 0.5.
+  EXPECT_EQ(all["baseline"], "passthrough");
+  EXPECT_NEAR(all["points"][0]["error"].get<double>(), 1.0, 1e-12);
+  for (const json& p : all["points"])
+    if (p["label"] == "svgf[a=1]") EXPECT_NEAR(p["error"].get<double>(), 0.08, 1e-12);
+  EXPECT_NE(all["normalisation"].get<std::string>().find("geometric mean over scenes"),
+            std::string::npos);
+  // No intervals in this run: the bars are p5-p95 and the rankings say ties are unknown.
+  EXPECT_EQ(st["points"][0]["interval"], "p5-p95");
+  EXPECT_FALSE(data["rankings"]["scenes"]["static"]["tiesKnown"].get<bool>());
+  EXPECT_EQ(data["rankings"]["scenes"]["static"]["ranking"][0]["label"], "svgf[a=1]");
+  EXPECT_EQ(data["rankings"]["scenes"]["static"]["ranking"][3]["rank"], 4);
+  EXPECT_EQ(data["rankings"]["overall"]["ranking"][0]["label"],
+            "passthrough");  // the only complete one
 
   // Noise floor: frames t >= W = 2 only.
   EXPECT_NEAR(data["scenes"][0]["noiseFloor"]["mean"].get<double>(), 0.002, 1e-12);
@@ -227,6 +247,13 @@ TEST(Report, DataHasFrontNoiseFloorViewerAndAblation) {
       EXPECT_FALSE(p["srcs"].contains("5"));
     }
   EXPECT_TRUE(sawOutput);
+  // Frames: every kept one (2 and 5), marked chosen; the event frame says so.
+  const json& frames = data["scenes"][1]["viewer"]["frames"];
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[1]["frame"], 5);
+  EXPECT_TRUE(frames[1]["chosen"].get<bool>());
+  EXPECT_EQ(frames[1]["events"], json({"light_off lamp"}));
+  EXPECT_FALSE(frames[0].contains("events"));
 
   // Ablation: a=1 vs a=0 with b=true on "static": relMSE 0.04 - 0.05; b=false vs true with a=1:
   // 0.06 - 0.04 (a=0,b=false does not exist, so one match).
@@ -278,6 +305,134 @@ TEST(Report, BaselineGivesCompareVerdicts) {
       EXPECT_NEAR(r["change"].get<double>(), 0.2, 1e-9);
     }
   EXPECT_TRUE(found);
+}
+
+TEST(Report, AllScenesAggregateIsScaleFree) {
+  // Two scenes whose errors differ 100x: a plain mean would be the hard scene's ranking. The
+  // geometric mean of ratios to passthrough gives each label its per-scene ratio, whatever the
+  // scale.
+  const std::map<std::string, std::map<std::string, double>> e = {
+      {"easy", {{"passthrough", 2}, {"a", 1}, {"b", 0.5}}},
+      {"hard", {{"passthrough", 200}, {"a", 25}, {"b", 100}}}};
+  auto value = [&](const std::string& s, const std::string& l) -> json {
+    if (s == "hard" && l == "c") return nullptr;
+    const double v = l == "c" ? 0.1 : e.at(s).at(l);
+    return {{"error", v},  {"lo", 0.9 * v}, {"hi", 1.1 * v},           {"ms", 1.0},
+            {"msLo", 0.5}, {"msHi", 2.0},   {"params", json::object()}};
+  };
+  const json scope = normalisedAggregate({"easy", "hard"}, {"a", "b", "c", "passthrough"}, value);
+  ASSERT_FALSE(scope.is_null());
+  EXPECT_EQ(scope["baseline"], "passthrough");
+  std::map<std::string, json> byLabel;
+  for (const json& p : scope["points"]) byLabel[p["label"]] = p;
+  EXPECT_NEAR(byLabel["a"]["error"].get<double>(), std::sqrt(0.5 * 0.125), 1e-12);
+  EXPECT_NEAR(byLabel["b"]["error"].get<double>(), std::sqrt(0.25 * 0.5), 1e-12);
+  EXPECT_NEAR(byLabel["passthrough"]["error"].get<double>(), 1.0, 1e-12);
+  EXPECT_NEAR(byLabel["a"]["lo"].get<double>(), 0.9 * std::sqrt(0.5 * 0.125), 1e-12);
+  EXPECT_NEAR(byLabel["a"]["msLo"].get<double>(), 0.5, 1e-12);
+  // c has one scene: drawn, not complete, off the front.
+  EXPECT_FALSE(byLabel["c"]["complete"].get<bool>());
+  for (const json& l : scope["front"]) EXPECT_NE(l, "c");
+  // Without passthrough the first complete label is the baseline.
+  EXPECT_EQ(normalisedAggregate({"easy", "hard"}, {"c", "b", "a"}, value)["baseline"], "b");
+  EXPECT_TRUE(normalisedAggregate({"easy", "hard"}, {"c"}, value).is_null());
+}
+
+TEST(Report, IntervalsAndTheRunsOwnRankingsAreUsedWhenPresent) {
+  json run = fixtureRun();
+  for (json& p : run["pairs"]) {
+    if (p["status"] != "ok") continue;
+    const double m = p["summary"]["relMse"]["mean"];
+    p["summary"]["relMse"]["ci95"] = {0.95 * m, 1.05 * m};
+    const double ssim = p["summary"]["ssim"]["mean"];
+    p["summary"]["ssim"]["ci95"] = {ssim - 0.01, ssim + 0.02};
+    p["timing"]["msP5"] = 0.5 * p["timing"]["msMedian"].get<double>();
+  }
+  run["statistics"] = {
+    {"scenes",
+     {{"static",
+       {{"metric", "relMse"},
+        {"ranking",
+         {{{"label", "svgf[a=1]"}, {"rank", 1}, {"mean", 0.04}, {"tiedWith", {"svgf[a=0]"}}},
+          {{"label", "svgf[a=0]"}, {"rank", 1}, {"mean", 0.05}, {"tiedWith", {"svgf[a=1]"}}}}},
+        {"pairs", json::array()},
+        {"resolvedPairs", 5},
+        {"totalPairs", 6}}}}},
+    {"overall",
+     {{"normalisation", "geometric mean of relMSE ratios to passthrough"},
+      {"ranking",
+       {{{"label", "passthrough"},
+         {"rank", 1},
+         {"score", 0.7},
+         {"ci95", {0.6, 0.8}},
+         {"tiedWith", json::array()}}}}}}
+  }
+};
+const json data = reportData(run, test::freshDir("report_stats"), nullptr);
+const json& p = data["speed"]["scenes"]["static"]["relMse"]["points"][1];  // svgf[a=0], 0.05
+EXPECT_EQ(p["interval"], "ci95");
+EXPECT_NEAR(p["lo"].get<double>(), 0.0475, 1e-12);
+EXPECT_NEAR(p["msLo"].get<double>(), 2.0, 1e-12);
+// 1 - SSIM: the interval flips with the axis.
+const json& d = data["speed"]["scenes"]["static"]["dssim"]["points"][0];
+EXPECT_NEAR(d["lo"].get<double>(), 1 - 0.92, 1e-12);
+EXPECT_NEAR(d["hi"].get<double>(), 1 - 0.89, 1e-12);
+// The run's own overall score replaces the report's aggregate, named as the run names it.
+const json& all = data["speed"]["all"]["relMse"];
+EXPECT_EQ(all["source"], "statistics");
+EXPECT_EQ(all["normalisation"], "geometric mean of relMSE ratios to passthrough");
+EXPECT_NEAR(all["points"][0]["error"].get<double>(), 0.7, 1e-12);
+EXPECT_NEAR(all["points"][0]["hi"].get<double>(), 0.8, 1e-12);
+// Rankings pass through with their ties; a scene without statistics falls back to means.
+const json& r = data["rankings"]["scenes"]["static"];
+EXPECT_TRUE(r["tiesKnown"].get<bool>());
+EXPECT_EQ(r["ranking"][1]["tiedWith"], json({"svgf[a=1]"}));
+EXPECT_EQ(r["resolvedPairs"], 5);
+EXPECT_FALSE(data["rankings"]["scenes"]["switch"]["tiesKnown"].get<bool>());
+EXPECT_TRUE(data["rankings"]["overall"]["tiesKnown"].get<bool>());
+// Summaries keep their intervals for the tables; timing keeps msP5.
+EXPECT_TRUE(data["pairs"][1]["summary"]["relMse"].contains("ci95"));
+EXPECT_NEAR(data["pairs"][1]["timing"]["msP5"].get<double>(), 2.0, 1e-12);
+}
+
+TEST(Report, CropTilesComeFromTheKeptImages) {
+  // A 20x10 frame: the output equals the reference on the left, is 25/255 brighter from x = 16
+  // (the third column of 8-pixel tiles); the FLIP map is magma of 0.2 everywhere.
+  json run = fixtureRun();
+  const fs::path dir = writeFixtureRun("report_tiles", run);
+  run["scenes"]["static"]["width"] = 20;
+  run["scenes"]["static"]["height"] = 10;
+  saveResults(dir, run);
+  const fs::path sd = dir / "images/static";
+  Image ref(20, 10, 3, 128.0f / 255.0f), out = ref, noisy = ref, flip(20, 10, 1, 0.2f);
+  for (int y = 0; y < 10; ++y)
+    for (int x = 16; x < 20; ++x)
+      for (int c = 0; c < 3; ++c) out.at(x, y, c) = 153.0f / 255.0f;
+  writePng(sd / "reference_0002.png", ref);
+  writePng(sd / "noisy_0002.png", noisy);
+  writePng(sd / "svgf[a=0]/frame_0002.png", out);
+  writePng(sd / "svgf[a=0]/flip_0002.png", applyColorMap(flip, magmaColorMap()));
+  std::filesystem::remove(sd / "svgf[a=0]/relerr_0002.png");
+  ReportOptions o;
+  o.run = dir;
+  o.out = test::freshDir("report_tiles_out");
+  o.nodeModulesDir = fakeNodeModules("report_tiles_modules");
+  writeReport(o);
+  const std::string js = readText(o.out / "tiles/s0_f2.js");
+  const json t = json::parse(js.substr(js.find("] = ") + 4, js.rfind(';') - js.find("] = ") - 4));
+  EXPECT_EQ(t["tile"], 8);
+  EXPECT_EQ(t["cols"], 3);
+  EXPECT_EQ(t["rows"], 2);
+  EXPECT_EQ(t["counts"], json({64, 64, 32, 16, 16, 8}));
+  const json& sq = t["panels"]["svgf[a=0]"]["sqerr"];
+  const double d = 25.0 / 255.0;
+  EXPECT_NEAR(sq[0].get<double>(), 0.0, 1e-12);
+  EXPECT_NEAR(sq[2].get<double>(), d * d, 1e-6);  // x 16..19: all changed
+  EXPECT_NEAR(t["panels"]["svgf[a=0]"]["flip"][4].get<double>(), 0.2, 1.0 / 255.0);
+  EXPECT_NEAR(t["panels"]["noisy"]["sqerr"][5].get<double>(), 0.0, 1e-12);
+  // Frame 5 has no real reference image (the fixture's stand-in is not a PNG): no tiles for it.
+  const std::string data = readText(o.out / "data.js");
+  EXPECT_NE(data.find("\"crops\":{\"files\":{\"2\":\"tiles/s0_f2.js\"}"), std::string::npos);
 }
 
 // ---------------------------------------------------------------- bad input

@@ -1,8 +1,12 @@
-// Browser test of `arena report`: headless Chromium (Debian's, /usr/bin/chromium) driven by
-// playwright-core opens the generated report from disk (file://, no server) and checks what a
-// person would: the charts drew the expected marks, the image viewer loads, zooms every panel and
-// follows the frame selector, a failed pair is shown, and nothing logs an error. Run with
-// `node --test` (ctest: browser_report); needs ARENA_BINARY (the built `arena`) and reports/node_modules.
+// Browser test of `arena report` and `arena history`: headless Chromium (Debian's,
+// /usr/bin/chromium) driven by playwright-core opens the generated pages from disk (file://, no
+// server) and checks what a person would: the charts drew the expected marks (log axis, error and
+// time bars, small multiples, the named all-scenes aggregate), hover and click on a point work,
+// the rankings mark ties, the summary table fits 1400 px, the A/B viewer splits and flips, a marked
+// region is measured, every kept frame is offered with its events marked, the history dashboard
+// marks the regressing run, and nothing logs an error. Screenshots go to tests/artifacts/. Run
+// with `node --test` (ctest: browser_report); needs ARENA_BINARY (the built `arena`) and
+// reports/node_modules.
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
@@ -83,23 +87,62 @@ after(async () => {
   if (work) fs.rmSync(work, { recursive: true, force: true });
 });
 
-test('report of a real tiny run: charts, image viewer, failure, regression, no errors', async () => {
+// PNG colour type (byte 25 of the file): 0 grey, 2 RGB. OpenCV writes a 3-channel image as RGB.
+const pngColorType = (file) => fs.readFileSync(file)[25];
+
+// The tiny runs every test can use: `run` keeps every frame's images, `base` differs in svgf.
+let tiny;
+function tinyRuns() {
+  if (tiny) return tiny;
   const run = path.join(work, 'run');
   const base = path.join(work, 'base');
-  tinyRun(run);
+  tinyRun(run, ['--keep-frames', 'all']);
   tinyRun(base, ['--denoisers', 'passthrough,temporal,eaw,svgf', '--param', 'svgf.sigmaL=8']);
+  const schema = JSON.parse(fs.readFileSync(path.join(run, 'results.json'), 'utf8')).schema;
+  tiny = { run, base, schema };
+  return tiny;
+}
+
+const shot = async (target, name) => {
+  fs.mkdirSync(ARTIFACTS, { recursive: true });
+  await target.screenshot({ path: path.join(ARTIFACTS, name) });
+};
+
+test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, failure, regression', async () => {
+  const { run, base } = tinyRuns();
   const results = failOnePair(run, 'light_switch', 'eaw');
   const out = path.join(work, 'report');
   const said = arena('report', run, '--baseline', base, '--out', out);
   assert.match(said, /1 failed/);
+  // FLIP maps are written in colour (magma), not grey.
+  const flipPng = path.join(run, 'images', 'cornell_static', 'svgf', 'flip_0008.png');
+  assert.ok(fs.existsSync(flipPng), flipPng);
+  assert.equal(pngColorType(flipPng), 2, 'FLIP map is an RGB (colour-mapped) PNG');
 
   const { page, problems } = await openReport(out);
   for (const id of ['speed', 'over-time', 'ghosting', 'tables', 'images', 'regression'])
     assert.equal(await page.locator(`section#${id}`).count(), 1, `section ${id}`);
 
-  // (1) All scenes: one point per label that has a result somewhere.
+  // (1) All scenes: one point per label that has a result somewhere, on a log error axis, each
+  // with an error bar; the aggregate is named on the chart.
   const labels = [...new Set(results.pairs.filter((p) => p.status === 'ok').map((p) => p.label))];
   assert.equal(await speedPoints(page), labels.length);
+  assert.equal(await page.evaluate(() => window.arenaReport.arena.views.speed.scale('y').type), 'log');
+  assert.equal(await page.locator('#speed-chart g.errorbars_marks line').count(), labels.length, 'one error bar per point');
+  const withP5 = results.pairs.filter((p) => p.status === 'ok' && p.timing && Number.isFinite(p.timing.msP5)).length;
+  if (withP5) assert.ok((await page.locator('#speed-chart g.timebars_marks line').count()) >= 1, 'time bars drawn (msP5 recorded)');
+  assert.match(await page.locator('#speed-chart svg').textContent(), /All scenes: geometric mean over scenes of|All scenes: .+/);
+  assert.match(await page.locator('#speed-chart svg').textContent(), /÷ passthrough/);
+  await page.uncheck('#speed-log');
+  await page.waitForFunction(() => window.arenaReport.arena.views.speed && window.arenaReport.arena.views.speed.scale('y').type === 'linear');
+  await page.check('#speed-log');
+  await page.waitForFunction(() => window.arenaReport.arena.views.speed && window.arenaReport.arena.views.speed.scale('y').type === 'log');
+
+  // Hover shows the point's parameters.
+  await page.locator('#speed-chart g.points_marks path').first().hover({ force: true });
+  await page.waitForSelector('#vg-tooltip-element.visible', { timeout: 5000 });
+  assert.match(await page.locator('#vg-tooltip-element').innerText(), /parameters/);
+
   // One scene: one point per successful pair there (eaw failed on light_switch).
   const okHere = results.pairs.filter((p) => p.scene === 'light_switch' && p.status === 'ok').length;
   await page.selectOption('#speed-scene', 'light_switch');
@@ -107,18 +150,120 @@ test('report of a real tiny run: charts, image viewer, failure, regression, no e
   assert.equal(await speedPoints(page), okHere);
   assert.ok((await page.locator('#speed-front b').count()) >= 1, 'the Pareto front names its members');
 
+  // Small multiples: one panel per scene, each with its points.
+  await page.selectOption('#speed-layout', 'multiples');
+  await page.waitForFunction(() => document.querySelectorAll('#speed-chart .multiple g.points_marks').length === 2);
+  assert.equal(await page.locator('#speed-chart .multiple').count(), 2);
+  assert.equal(await page.locator('#speed-chart .multiple[data-scene="light_switch"] g.points_marks path').count(), okHere);
+  await shot(page.locator('#speed'), 'speed-multiples.png');
+  await page.selectOption('#speed-layout', 'single');
+  await page.waitForFunction((k) => document.querySelector('#speed-chart g.points_marks')?.querySelectorAll('path').length === k, okHere);
+  await shot(page.locator('#speed'), 'speed.png');
+
+  // Clicking a point selects that denoiser (and the point's scene) in the viewer and over time.
+  const svgfPoint = await page.evaluate(() => {
+    const paths = [...document.querySelectorAll('#speed-chart g.points_marks path')];
+    const i = paths.findIndex((p) => (p.getAttribute('aria-label') || '').includes('label: svgf;'));
+    return i;
+  });
+  assert.ok(svgfPoint >= 0, 'svgf has a point on light_switch');
+  await page.locator('#speed-chart g.points_marks path').nth(svgfPoint).click({ force: true });
+  await page.waitForFunction(() => window.arenaReport.arena.state.selected === 'svgf');
+  assert.equal(await page.evaluate(() => window.arenaReport.arena.state.scene), 'light_switch');
+  await page.waitForFunction(() => /svgf/.test(document.getElementById('ab-tag-a').textContent));
+  // Over time: the other lines fade.
+  await page.waitForFunction(() => [...document.querySelectorAll('#time-error-chart g.mark-line.role-mark path')].some((p) => Number(p.getAttribute('opacity') ?? 1) < 0.5));
+  assert.match(await page.locator('#selection').innerText(), /svgf/);
+
   // (2) Over time on light_switch: one line per successful pair, and the event is marked.
-  await page.selectOption('#scene-select', 'light_switch');
   await page.waitForFunction((n) => document.querySelectorAll('#time-error-chart g.mark-line.role-mark path').length === n, okHere);
   assert.ok((await page.locator('#time-error-chart g.mark-rule.role-mark line').count()) >= 1, 'event rule drawn');
   assert.ok((await page.locator('#ghosting-body table tbody tr').count()) === okHere, 'ghosting table: one row per pair');
 
-  // (3) The failed pair is shown (banner and table row), the others are reported.
+  // (3) Tables: rankings (scene and overall), the failed pair, intervals, and a table that fits.
+  assert.equal(await page.locator('#rankings table.ranking-table').count(), 2, 'scene and overall rankings');
+  assert.equal(await page.locator('#rankings table.ranking-table').first().locator('tbody tr').count(), okHere);
   assert.match(await page.locator('#failures').innerText(), /injected failure/);
   assert.equal(await page.locator('#summary-table tr.failed').count(), 1);
-  assert.equal(await page.locator('#summary-table tbody tr:not(.failed):not(.reference-row)').count(), okHere);
+  assert.equal(await page.locator('#summary-table tbody tr[data-label]').count(), okHere);
+  const fits = () => page.$eval('#summary-wrap', (w) => ({ scroll: w.scrollWidth, client: w.clientWidth }));
+  let f = await fits();
+  assert.ok(f.scroll <= f.client, `summary table fits 1400 px: ${f.scroll} > ${f.client}`);
+  // Column picker: a metric's columns go and come back; p95 columns appear.
+  const groups = () => page.$$eval('#summary-table th.group', (t) => t.map((x) => x.textContent));
+  assert.ok((await groups()).some((g) => g.startsWith('ssim')));
+  await page.locator('#column-picker input[data-column="ssim"]').uncheck({ force: true });
+  assert.ok(!(await groups()).some((g) => g.startsWith('ssim')), 'ssim column removed');
+  await page.locator('#column-picker input[data-column="ssim"]').check({ force: true });
+  assert.ok((await groups()).some((g) => g.startsWith('ssim')));
+  const headers = () => page.$$eval('#summary-table thead tr:nth-child(2) th', (t) => t.map((x) => x.textContent));
+  const before = (await headers()).filter((h) => h === 'p95').length;
+  await page.locator('#column-picker input[data-column="p95"]').check({ force: true });
+  assert.ok((await headers()).filter((h) => h === 'p95').length > before, 'p95 columns added');
+  await page.locator('#column-picker input[data-column="p95"]').uncheck({ force: true });
+  await shot(page.locator('#tables'), 'tables.png');
 
-  // (4) Image viewer: every panel's image loads (lazy: bring each into view first).
+  // (4) Images on light_switch: every kept frame is offered, the event frame is marked.
+  const frameOptions = await page.$$eval('#frame-select option', (o) => o.map((x) => ({ v: x.value, event: x.dataset.event === 'true', text: x.textContent })));
+  assert.equal(frameOptions.length, FRAMES, 'every kept frame (--keep-frames all)');
+  const events = results.scenes.light_switch.events.map((e) => String(e.frame));
+  assert.ok(events.length >= 1);
+  for (const o of frameOptions) assert.equal(o.event, events.includes(o.v), `frame ${o.v} event mark`);
+  await page.selectOption('#frame-select', events[0]);
+
+  // A/B: noisy input vs reference; both load; the split slider moves the split; F flips.
+  const optionIndex = (sel, text) => page.$eval(sel, (s, t) => [...s.options].find((o) => o.text === t).value, text);
+  await page.selectOption('#ab-a', await optionIndex('#ab-a', 'noisy input'));
+  await page.selectOption('#ab-b', await optionIndex('#ab-b', 'reference'));
+  await page.locator('#ab-view').scrollIntoViewIfNeeded();
+  for (const side of ['a', 'b'])
+    await page.waitForFunction((s) => { const i = document.getElementById(`ab-img-${s}`); return i.complete && i.naturalWidth > 0; }, side);
+  await page.locator('#ab-split').fill('30');
+  assert.equal(await page.$eval('#ab-view', (v) => v.style.getPropertyValue('--split')), '30%');
+  await shot(page.locator('#ab-section'), 'ab-split.png');
+  await page.selectOption('#ab-mode', 'flip');
+  await page.locator('#ab-view').click();
+  await page.keyboard.press('f');
+  assert.ok(await page.$eval('#ab-view', (v) => v.classList.contains('show-b')), 'F shows B');
+  assert.equal(await page.$eval('#ab-tag-b', (t) => getComputedStyle(t).display !== 'none'), true);
+  await page.keyboard.press('f');
+  assert.ok(!(await page.$eval('#ab-view', (v) => v.classList.contains('show-b'))), 'F again shows A');
+  // A FLIP map on A, with the magma legend.
+  await page.selectOption('#ab-a', await optionIndex('#ab-a', 'svgf · LDR-FLIP'));
+  await page.waitForFunction(() => { const i = document.getElementById('ab-img-a'); return /flip_\d{4}\.png$/.test(i.src) && i.complete && i.naturalWidth > 0; });
+  assert.match(await page.$eval('.legend[data-map="flip"] .legend-bar', (b) => b.style.background), /rgb\(0, 0, 4\)/);
+  assert.equal(await page.locator('.legend[data-map="relerr"] .legend-ticks span').count(), 6, 'relative-error legend: 1e-4 .. 1e1');
+  await shot(page.locator('#ab-section'), 'ab-flip-magma.png');
+  await page.selectOption('#ab-mode', 'split');
+
+  // Crop: mark the whole frame; its FLIP equals the frame's LDR-FLIP (from the 8-bit map).
+  await page.click('#crop-mode');
+  const box = await page.locator('#ab-view').boundingBox();
+  await page.mouse.move(box.x + 1, box.y + 1);
+  await page.mouse.down();
+  await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2, { steps: 3 });
+  await page.mouse.move(box.x + box.width - 1, box.y + box.height - 1, { steps: 3 });
+  await page.mouse.up();
+  await page.waitForSelector('#crop-result table tbody tr');
+  const cropRows = await page.$$eval('#crop-result table tbody tr', (rows) => rows.map((r) => [r.dataset.label, ...[...r.cells].slice(1).map((c) => Number(c.textContent))]));
+  const svgfRow = cropRows.find((r) => r[0] === 'svgf');
+  const svgfPair = results.pairs.find((p) => p.scene === 'light_switch' && p.label === 'svgf');
+  const frameIndex = svgfPair.frames.findIndex((x) => x.frame === Number(events[0]));
+  const ldr = svgfPair.frames[frameIndex].ldrFlip;
+  assert.ok(Math.abs(svgfRow[2] - ldr) < 0.01, `crop of the whole frame: FLIP ${svgfRow[2]} vs the frame's ${ldr}`);
+  const noisyRow = cropRows.find((r) => r[0] === 'noisy');
+  assert.ok(noisyRow && cropRows.some((r) => r[0] !== 'noisy' && r[1] > noisyRow[1]), 'some denoiser beats the noisy input on PSNR in the crop');
+  // A smaller region: fewer pixels, a drawn rectangle.
+  await page.mouse.move(box.x + box.width * 0.2, box.y + box.height * 0.2);
+  await page.mouse.down();
+  await page.mouse.move(box.x + box.width * 0.5, box.y + box.height * 0.6, { steps: 3 });
+  await page.mouse.up();
+  await page.waitForFunction(() => /Region x 0–48, y 0–27/.test(document.getElementById('crop-result').textContent) === false);
+  assert.ok(await page.$eval('#crop-rect', (r) => !r.hidden && parseFloat(r.style.width) < 60));
+  await shot(page.locator('#ab-section'), 'crop.png');
+  await page.click('#crop-mode');
+
+  // The grid on cornell_static: every panel's image loads (lazy: bring each into view first).
   await page.selectOption('#scene-select', 'cornell_static');
   const imgs = page.locator('#viewer .viewport img');
   const n = await imgs.count();
@@ -130,21 +275,22 @@ test('report of a real tiny run: charts, image viewer, failure, regression, no e
       return img.complete && img.naturalWidth > 0;
     }, i);
   }
-  const transforms = () => page.$$eval('#viewer .viewport img', (list) => list.map((img) => img.style.transform));
+  // Synchronised zoom: every panel and the A/B view follow one wheel.
+  const transforms = () => page.$$eval('#images [data-zoom]', (list) => list.map((e) => e.style.transform));
   const before0 = await transforms();
   await page.locator('#viewer .viewport').first().scrollIntoViewIfNeeded();
-  const box = await page.locator('#viewer .viewport').first().boundingBox();
-  await page.mouse.move(box.x + box.width * 0.3, box.y + box.height * 0.4);
+  const vbox = await page.locator('#viewer .viewport').first().boundingBox();
+  await page.mouse.move(vbox.x + vbox.width * 0.3, vbox.y + vbox.height * 0.4);
   await page.mouse.wheel(0, -400);
   await page.waitForFunction(() => /scale\((?!1\.0000\))/.test(document.querySelector('#viewer .viewport img').style.transform));
   const after0 = await transforms();
-  after0.forEach((t, i) => assert.notEqual(t, before0[i], `panel ${i} did not zoom`));
-  assert.equal(new Set(after0).size, 1, 'every panel shows the same zoom');
+  after0.forEach((t, i) => assert.notEqual(t, before0[i], `image ${i} did not zoom`));
+  assert.equal(new Set(after0).size, 1, 'every image shows the same zoom');
 
   // Frame selector: a different frame changes every image's source, and the new images load.
   const srcBefore = await page.locator('#viewer .viewport img').first().getAttribute('src');
   const frames = await page.$$eval('#frame-select option', (o) => o.map((x) => x.value));
-  assert.ok(frames.length >= 2, 'chosen frames to select');
+  assert.equal(frames.length, FRAMES);
   await page.selectOption('#frame-select', frames[frames.length - 1]);
   const srcAfter = await page.locator('#viewer .viewport img').first().getAttribute('src');
   assert.notEqual(srcAfter, srcBefore);
@@ -155,8 +301,8 @@ test('report of a real tiny run: charts, image viewer, failure, regression, no e
   // (5) Regression view from the baseline: svgf's sigmaL differs, so rows exist with verdicts.
   assert.ok((await page.locator('#regression-body table tbody tr').count()) >= 1, 'regression rows');
 
-  fs.mkdirSync(ARTIFACTS, { recursive: true });
   await page.evaluate(() => window.scrollTo(0, 0));
+  await shot(page, 'report-top.png');
   await page.screenshot({ path: path.join(ARTIFACTS, 'report.png'), fullPage: true });
   assert.deepEqual(problems, []);
   await page.close();
@@ -176,18 +322,26 @@ function syntheticRun(nScenes, nLabels, nFrames) {
       const frames = [];
       for (let t = 0; t < nFrames; ++t)
         frames.push({ frame: t, relMse: 0.01 * (l + 1) * (1 + 0.1 * Math.sin(t)), ldrFlip: 0.05 + 0.01 * l, ssim: 0.9 - 0.01 * l, tRmae: 0.1 * (l + 1), ms: 1 + l });
-      const st = (v) => ({ mean: v, median: v, p5: v * 0.8, p95: v * 1.2, frames: nFrames - 8 });
+      const st = (v) => ({ mean: v, median: v, p5: v * 0.8, p95: v * 1.2, frames: nFrames - 8, ci95: [v * 0.97, v * 1.03] });
       pairs.push({ scene: name, denoiser: `d${l}`, label: `denoiser_${l}`, params: {}, status: 'ok', frames,
                    summary: { relMse: st(0.01 * (l + 1)), ldrFlip: st(0.05 + 0.01 * l), ssim: st(0.9 - 0.01 * l), tRmae: st(0.1 * (l + 1)), ms: st(1 + l) },
-                   timing: { msMedian: 1 + l + 0.1 * s, msP95: 2 + l, msPerMegapixel: 100, tapsPerPixel: 25, passes: [] },
+                   timing: { msMedian: 1 + l + 0.1 * s, msP5: 0.8 + l, msP95: 2 + l, msPerMegapixel: 100, tapsPerPixel: 25, passes: [] },
                    ghosting: [{ eventFrame: 50, kind: 'light_off', what: 'lamp', windowBegin: 45, windowEnd: 99,
                                 curve: Array.from({ length: 55 }, (_, i) => 0.01 + 0.5 * Math.exp(-i / (l + 1))),
                                 steadyState: 0.01, peakExcess: 0.5, responseFrames: l + 1, ghostEnergy: 0.3 * l, signedBias: 0.1, maskFraction: 0.4 }],
                    warnings: [], images: { dir: `images/${name}/denoiser_${l}`, all: false } });
     }
   }
-  return { schema: 2, kind: 'arena-run', name: 'synthetic', created: '2025-01-01T00:00:00Z', environment: {},
-           settings: { warmup: 8, flip: 'ldr', relMseEpsilon: 0.01 }, scenes, pairs };
+  // The results schema's statistics: on every scene denoiser_1 and denoiser_2 are tied (their
+  // difference is not resolved), the others resolved; overall the same.
+  const ranking = (valueKey) => Array.from({ length: nLabels }, (_, l) => ({
+    label: `denoiser_${l}`, rank: l === 2 ? 2 : l + 1, [valueKey]: 0.01 * (l + 1), ci95: [0.0097 * (l + 1), 0.0103 * (l + 1)],
+    tiedWith: l === 1 ? ['denoiser_2'] : l === 2 ? ['denoiser_1'] : [] }));
+  const statistics = { scenes: {}, overall: { normalisation: 'geometric mean of relMSE ratios to denoiser_0', ranking: ranking('score') } };
+  for (const name of Object.keys(scenes))
+    statistics.scenes[name] = { metric: 'relMse', ranking: ranking('mean'), pairs: [], resolvedPairs: nLabels * (nLabels - 1) / 2 - 1, totalPairs: nLabels * (nLabels - 1) / 2 };
+  return { schema: tinyRuns().schema, kind: 'arena-run', name: 'synthetic', created: '2025-01-01T00:00:00Z', environment: {},
+           settings: { warmup: 8, flip: 'ldr', relMseEpsilon: 0.01 }, scenes, pairs, statistics };
 }
 
 test('10 denoisers x 10 scenes x 100 frames stays light', async () => {
@@ -198,6 +352,22 @@ test('10 denoisers x 10 scenes x 100 frames stays light', async () => {
   arena('report', run, '--out', out);
   const { page, problems } = await openReport(out);
   assert.equal(await speedPoints(page), 10);
+  // Intervals as error bars and p5-p95 time bars on every point.
+  assert.equal(await page.locator('#speed-chart g.errorbars_marks line').count(), 10);
+  assert.equal(await page.locator('#speed-chart g.timebars_marks line').count(), 10);
+  // The run's own overall score (statistics.overall) is what the all-scenes chart shows, named.
+  assert.match(await page.locator('#speed-chart svg').textContent(), /geometric mean of relMSE ratios to denoiser_0/);
+  // Ties in the rankings: denoiser_1 and denoiser_2 marked tied (rank "2="), the rest resolved.
+  for (const table of ['#rankings .ranking-table >> nth=0', '#rankings .ranking-table >> nth=1']) {
+    const tied = await page.locator(`${table} >> tbody tr[data-tied="true"]`).evaluateAll((rows) => rows.map((r) => [r.dataset.label, r.cells[0].textContent]));
+    assert.deepEqual(tied, [['denoiser_1', '2='], ['denoiser_2', '2=']]);
+  }
+  assert.match(await page.locator('#rankings').innerText(), /44 of 45 pairs resolved/);
+  // Intervals under the means in the summary table.
+  assert.match(await page.locator('#summary-table tbody tr[data-label="denoiser_0"]').innerText(), /\[0\.0097, 0\.0103\]/);
+  const fits = await page.$eval('#summary-wrap', (w) => w.scrollWidth <= w.clientWidth);
+  assert.ok(fits, 'summary table fits 1400 px');
+  await shot(page.locator('#tables'), 'tables-ties.png');
   // Only the selected scene's lines: 10, not 100.
   assert.equal(await page.locator('#time-error-chart g.mark-line.role-mark path').count(), 10);
   const domSize = await page.evaluate(() => document.getElementsByTagName('*').length);
@@ -205,6 +375,81 @@ test('10 denoisers x 10 scenes x 100 frames stays light', async () => {
   await page.selectOption('#scene-select', 'scene_7');
   await page.waitForFunction(() => document.getElementById('scene-purpose').textContent.startsWith('scene_7'));
   assert.equal(await page.locator('#time-error-chart g.mark-line.role-mark path').count(), 10);
+  assert.deepEqual(problems, []);
+  await page.close();
+});
+
+// A synthetic history of 50 runs (one per commit): 2 scenes x 3 denoisers, values wobbling by
+// ±0.5% (under compare's 2% tolerance); at run 30 svgf's relMSE on scene_b rises 15% and stays.
+function historyRuns(dir, schema) {
+  const runs = [];
+  for (let i = 0; i < 50; ++i) {
+    const wobble = (k) => 1 + 0.005 * Math.sin(1.7 * i + k);
+    const pairs = [];
+    for (const [si, scene] of ['scene_a', 'scene_b'].entries())
+      for (const [li, label] of ['passthrough', 'temporal', 'svgf'].entries()) {
+        const k = 3 * si + li;
+        const regress = label === 'svgf' && scene === 'scene_b' && i >= 30 ? 1.15 : 1;
+        const st = (v) => ({ mean: v, median: v, p5: 0.8 * v, p95: 1.2 * v, frames: 8, ci95: [0.998 * v, 1.002 * v] });
+        pairs.push({ scene, denoiser: label, label, params: {}, status: 'ok', frames: [],
+                     summary: { relMse: st(0.01 * (li + 1) * (si + 1) * wobble(k) * regress), ldrFlip: st(0.05 * (li + 1) * wobble(k + 1)),
+                                ssim: st(0.9 - 0.01 * li * wobble(k + 2)), tRmae: st(0.2 * (li + 1) * wobble(k + 3)), ms: st((li + 1) * 2 * wobble(k + 4)) },
+                     timing: { msMedian: (li + 1) * 2, msP95: (li + 1) * 2.5 } });
+      }
+    const created = new Date(Date.UTC(2025, 0, 1, 0, i)).toISOString().replace('.000', '');
+    const run = path.join(dir, `run_${String(i).padStart(2, '0')}`);
+    fs.mkdirSync(run, { recursive: true });
+    fs.writeFileSync(path.join(run, 'results.json'), JSON.stringify({ schema, kind: 'arena-run', name: `ci-${i}`, created,
+      environment: { git_commit: `c0ffee${String(i).padStart(2, '0')}` }, settings: { warmup: 2 }, scenes: {}, pairs }));
+    runs.push(run);
+  }
+  return runs;
+}
+
+test('history dashboard: 50 runs, the regressing one is marked, and the page stays fast', async () => {
+  const dir = path.join(work, 'history-runs');
+  const runs = historyRuns(dir, tinyRuns().schema);
+  const out = path.join(work, 'history');
+  // Given newest first: the dashboard orders runs by creation time itself.
+  const said = arena('history', ...runs.slice().reverse(), '--out', out);
+  assert.match(said, /50 runs, 1 regression/);
+  // `arena compare` on the same two runs fails too (the dashboard marks what the gate does).
+  assert.throws(() => arena('compare', runs[29], runs[30]), (e) => e.status === 1);
+
+  const page = await context.newPage();
+  const problems = [];
+  page.on('console', (m) => { if (m.type() === 'error') problems.push(`console error: ${m.text()}`); });
+  page.on('pageerror', (e) => problems.push(`page error: ${e.message}`));
+  page.on('request', (r) => { if (!/^(file|data|blob):/.test(r.url())) problems.push(`network request: ${r.url()}`); });
+  const t0 = Date.now();
+  await page.goto(pathToFileURL(path.join(out, 'index.html')).href);
+  await page.waitForSelector('body[data-ready]', { timeout: 30000 });
+  const wall = Date.now() - t0;
+  assert.equal(await page.evaluate(() => document.body.dataset.ready), 'true', problems.join('\n'));
+  const loadMs = await page.evaluate(() => window.Arena.loadMs);
+  console.log(`history dashboard (50 runs x 2 scenes x 3 denoisers x 5 metrics): ready ${loadMs.toFixed(0)} ms after navigation (${wall} ms wall in the test)`);
+  assert.ok(loadMs < 3000, `history page took ${loadMs} ms`);
+
+  // The flag: run 30, its commit, svgf on scene_b, relMSE; and only that.
+  const flags = await page.$$eval('#flags tr.flag', (rows) => rows.map((r) => ({ ...r.dataset, commit: r.cells[1].textContent })));
+  assert.deepEqual(flags, [{ run: '30', scene: 'scene_b', label: 'svgf', metric: 'relMse', commit: 'c0ffee30' }]);
+  // The page opens on the flagged series: one chart per metric, the flagged point ringed on relMSE only.
+  assert.equal(await page.$eval('#history-scene', (s) => s.value), 'scene_b');
+  assert.equal(await page.$eval('#history-label', (s) => s.value), 'svgf');
+  assert.equal(await page.locator('#history-charts .chart').count(), 5);
+  assert.equal(await page.locator('#history-charts .chart[data-metric="relMse"] g.flagged_marks path').count(), 1);
+  assert.equal(await page.locator('#history-charts .chart[data-metric="relMse"] g.values_marks path').count(), 1, 'one line');
+  assert.equal(await page.locator('#history-charts .chart[data-metric="ldrFlip"] g.flagged_marks path').count(), 0);
+  assert.ok((await page.locator('#history-charts .chart[data-metric="relMse"] g.band_marks path').count()) >= 1, 'tolerance band');
+  await shot(page, 'history.png');
+  // Another series: nothing flagged there.
+  await page.selectOption('#history-label', 'temporal');
+  await page.waitForFunction(() => document.querySelectorAll('#history-charts .chart[data-metric="relMse"] g.values_marks').length === 1);
+  assert.equal(await page.locator('#history-charts g.flagged_marks path').count(), 0);
+  // A flag row brings its series back.
+  await page.click('#flags tr.flag');
+  await page.waitForFunction(() => document.getElementById('history-label').value === 'svgf');
+  assert.match(await page.locator('#load-time').innerText(), /Page ready \d+ ms/);
   assert.deepEqual(problems, []);
   await page.close();
 });

@@ -1,0 +1,40 @@
+#pragma once
+// `arena history`: a regression dashboard built from many runs (one per commit, say): per scene,
+// denoiser and metric, the value against commit with the tolerance band `arena compare` gates
+// with, and the runs where `arena compare` against the run before would have failed marked.
+// Like the report, it only reads results and opens from disk with no server.
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "metrics/compare.hpp"
+
+namespace arena {
+
+// Runs from run directories (results.json) and results databases (results.db, every run it
+// holds), ordered by creation time (ties keep the input order). A database run carries what the
+// database stores: its pairs' status and summaries (no per-frame data). Anything else is an Error
+// naming the path.
+std::vector<nlohmann::json> loadHistory(const std::vector<std::filesystem::path>& inputs);
+
+// The dashboard's data: runs [{name, created, commit}], per scene x label x metric the values (and
+// intervals where the runs have them) per run, the tolerance of each gated metric, and `flags`:
+// every row compareRuns(run i-1, run i, tolerances) calls "regressed", with the run index i.
+// Empty `tolerances`: compare's defaults.
+nlohmann::json historyData(const std::vector<nlohmann::json>& runs,
+                           const std::vector<Tolerance>& tolerances);
+
+struct HistoryOptions {
+  std::vector<std::filesystem::path> inputs;
+  std::filesystem::path out;
+  std::vector<Tolerance> tolerances;
+  std::filesystem::path webDir, nodeModulesDir;  // empty: the report's defaults
+};
+struct HistorySummary {
+  std::filesystem::path index;
+  size_t runs = 0, flags = 0;
+};
+HistorySummary writeHistory(const HistoryOptions& options);
+
+}  // namespace arena

@@ -1,0 +1,135 @@
+// Regression dashboard (`arena history`): for a chosen scene and denoiser, each metric and the
+// time against commit, with the tolerance band and the runs `arena compare` flags; and the list of
+// every flag. Data: window.ARENA_HISTORY (reports/history.cpp).
+'use strict';
+
+(() => {
+  const A = window.Arena;
+  const { $, el, fmt, pct } = A;
+  const H = window.ARENA_HISTORY;
+  const state = { scene: null, label: null };
+
+  const runText = (i) => {
+    const r = H.runs[i];
+    return `#${i} ${r.commit || '(no commit)'}${r.created ? ` · ${r.created}` : ''}`;
+  };
+
+  function renderInfo() {
+    const n = H.runs.length;
+    $('history-info').textContent = n
+      ? `${n} runs, ${runText(0)} → ${runText(n - 1)} · ${H.flags.length} flagged comparison(s)`
+      : 'No runs.';
+  }
+
+  function renderFlags() {
+    const box = $('flags');
+    if (!H.flags.length) {
+      box.replaceChildren(el('p', { class: 'empty', text: 'No run would have failed the gate.' }));
+      return;
+    }
+    box.replaceChildren(el('table', { class: 'data flags-table' },
+      el('thead', {}, el('tr', {}, ['run', 'commit', 'scene', 'denoiser / setting', 'metric', 'previous', 'this run', 'change', 'tolerance']
+        .map((t, i) => el('th', { class: i < 5 ? 'first' : null, text: t })))),
+      el('tbody', {}, H.flags.map((f) => {
+        const tr = el('tr', { class: 'flag', 'data-run': String(f.run), 'data-scene': f.scene, 'data-label': f.label, 'data-metric': f.metric },
+          el('td', { class: 'first', text: `#${f.run}` }), el('td', { class: 'first', text: H.runs[f.run].commit || '–' }),
+          el('td', { class: 'first', text: f.scene }), el('td', { class: 'first', text: f.label }), el('td', { class: 'first', text: f.metric }),
+          el('td', { text: fmt(f.baseline) }), el('td', { text: fmt(f.candidate) }), el('td', { class: 'verdict-regressed', text: pct(f.change) }),
+          el('td', { text: `±${(100 * f.tolerance).toFixed(1)}%` }));
+        tr.addEventListener('click', () => choose(f.scene, f.label));
+        return tr;
+      }))));
+  }
+
+  function setupControls() {
+    const sceneSel = $('history-scene');
+    for (const s of Object.keys(H.series).sort()) sceneSel.append(el('option', { value: s, text: s }));
+    sceneSel.addEventListener('change', () => choose(sceneSel.value, null));
+    $('history-label').addEventListener('change', (e) => choose(state.scene, e.target.value));
+    $('history-log').addEventListener('change', () => renderCharts());
+  }
+
+  function choose(scene, label) {
+    state.scene = scene;
+    const labels = Object.keys(H.series[scene] || {});
+    state.label = label && labels.includes(label) ? label : labels[0] || null;
+    $('history-scene').value = scene;
+    $('history-label').replaceChildren(...labels.map((l) => el('option', { value: l, text: l })));
+    $('history-label').value = state.label;
+    return renderCharts();
+  }
+
+  function metricChart(metric, s) {
+    const flagged = new Set(H.flags.filter((f) => f.scene === state.scene && f.label === state.label && f.metric === metric.name).map((f) => f.run));
+    const rows = [];
+    s.value.forEach((v, i) => {
+      if (v === null) return;
+      const ci = s.ci95 && s.ci95[i];
+      rows.push({ run: i, commit: H.runs[i].commit || '', created: H.runs[i].created || '', value: v,
+                  lo: ci ? ci[0] : null, hi: ci ? ci[1] : null, flagged: flagged.has(i) });
+    });
+    // The gate's band: previous value x (1 +- tolerance), relative to |previous| as compare has it.
+    const band = [];
+    if (metric.tolerance !== null) {
+      for (let i = 1; i < s.value.length; ++i) {
+        const p = s.value[i - 1];
+        if (p === null) continue;
+        band.push({ run: i, bandLo: p - Math.abs(p) * metric.tolerance, bandHi: p + Math.abs(p) * metric.tolerance });
+      }
+    }
+    const log = $('history-log').checked && rows.every((r) => r.value > 0) && band.every((b) => b.bandLo > 0);
+    const x = { field: 'run', type: 'quantitative', title: 'run (oldest → newest)', scale: { nice: false, domain: [0, Math.max(1, H.runs.length - 1)] }, axis: { tickMinStep: 1, format: 'd' } };
+    const y = { field: 'value', type: 'quantitative', title: `${metric.name} ${metric.lowerIsBetter ? '↓' : '↑'}`, scale: log ? { type: 'log' } : { zero: false } };
+    const withCi = rows.filter((r) => r.lo !== null && r.hi !== null);
+    return A.baseSpec({
+      width: 560,
+      height: 170,
+      title: { text: `${metric.name}${metric.tolerance !== null ? ` (gate ±${(100 * metric.tolerance).toFixed(1)}%)` : ' (not gated)'}`, anchor: 'start', fontSize: 12 },
+      layer: [
+        { name: 'band', data: { values: band }, mark: { type: 'area', color: '#2f6fd0', opacity: 0.15, interpolate: 'step' },
+          encoding: { x, y: { field: 'bandLo', type: 'quantitative' }, y2: { field: 'bandHi' } } },
+        { name: 'intervals', data: { values: withCi }, mark: { type: 'rule', color: '#7a8599' },
+          encoding: { x, y: { field: 'lo', type: 'quantitative' }, y2: { field: 'hi' } } },
+        { name: 'values', data: { values: rows }, mark: { type: 'line', color: '#1d2330', point: { size: 18, color: '#1d2330' }, strokeWidth: 1.2 },
+          encoding: { x, y, tooltip: [{ field: 'run', title: 'run' }, { field: 'commit' }, { field: 'created' }, { field: 'value', title: metric.name, format: '.4~g' }] } },
+        { name: 'flagged', data: { values: rows.filter((r) => r.flagged) }, mark: { type: 'point', shape: 'circle', size: 160, color: '#b3261e', strokeWidth: 2.5, filled: false },
+          encoding: { x, y, tooltip: [{ field: 'run' }, { field: 'commit' }, { field: 'value', title: metric.name, format: '.4~g' }] } },
+      ],
+    });
+  }
+
+  async function renderCharts() {
+    const box = $('history-charts');
+    for (const name of Object.keys(A.views)) A.dropChart(name);
+    box.replaceChildren();
+    const series = (H.series[state.scene] || {})[state.label] || {};
+    const renders = [];
+    for (const m of H.metrics) {
+      if (!series[m.name]) continue;
+      const holder = el('div', { class: 'chart', 'data-metric': m.name });
+      box.append(holder);
+      renders.push(A.embedChart(`history:${m.name}`, holder, metricChart(m, series[m.name])));
+    }
+    await Promise.all(renders);
+  }
+
+  async function main() {
+    if (!H) {
+      document.querySelector('main').prepend(el('p', { class: 'failures', text: 'history-data.js is missing: regenerate with `arena history`.' }));
+      return;
+    }
+    renderInfo();
+    renderFlags();
+    setupControls();
+    // Start on the first flagged series, else the first one.
+    const first = H.flags[0] || { scene: Object.keys(H.series).sort()[0], label: null };
+    if (first.scene) await choose(first.scene, first.label);
+  }
+
+  window.arenaHistory = {
+    state,
+    ready: A.start(main).then(() => {
+      $('load-time').textContent = `Page ready ${A.loadMs.toFixed(0)} ms after navigation.`;
+    }),
+  };
+})();

@@ -1,0 +1,170 @@
+// Speed vs accuracy: one chart (a scene, or all scenes through the per-scene normalised
+// aggregate) or small multiples (one panel per scene). Error bars: the metric's 95% interval when
+// the run has one (else p5-p95 over frames); time bars: p5-p95 of the per-frame time. Hover shows
+// a point's parameters; clicking it selects that denoiser in the image viewer and over-time charts.
+'use strict';
+
+(() => {
+  const A = window.Arena;
+  const { $, el } = A;
+
+  A.setupSpeed = function setupSpeed() {
+    const { D, state } = A;
+    const sceneSel = $('speed-scene');
+    sceneSel.append(el('option', { value: '__all__', text: 'all scenes (normalised)' }));
+    for (const s of D.scenes) sceneSel.append(el('option', { value: s.name, text: s.name }));
+    sceneSel.value = state.speedScene;
+    sceneSel.addEventListener('change', () => {
+      state.speedScene = sceneSel.value;
+      A.renderSpeed();
+    });
+    const metricSel = $('speed-metric');
+    for (const a of D.errorAxes) metricSel.append(el('option', { value: a.key, text: a.title }));
+    metricSel.value = state.speedAxis;
+    metricSel.addEventListener('change', () => {
+      state.speedAxis = metricSel.value;
+      A.renderSpeed();
+    });
+    $('speed-log').addEventListener('change', () => A.renderSpeed());
+    $('speed-layout').addEventListener('change', () => A.renderSpeed());
+  };
+
+  // The points of a scope, ready to draw: a log axis cannot show 0 ms or a zero error, so such
+  // points are listed under the chart instead.
+  function drawable(data, logError) {
+    const points = data.points.map((p) => ({
+      ...p,
+      complete: p.complete !== false,
+      onFront: data.front.includes(p.label),
+      selected: p.label === A.state.selected,
+      paramText: Object.keys(p.params || {}).length ? Object.entries(p.params).map(([k, v]) => `${k}=${JSON.stringify(v)}`).join(', ') : '(defaults)',
+      msLo: p.msLo ?? null,
+      msHi: p.msHi ?? null,
+    }));
+    const ok = (p) => p.ms > 0 && (!logError || p.error > 0);
+    const drawn = points.filter(ok);
+    // Bars may reach 0 on a log axis (an interval that includes 0): clip them to the smallest point.
+    if (logError) {
+      const floor = Math.min(...drawn.map((p) => p.error)) / 10;
+      for (const p of drawn) p.lo = Math.max(p.lo ?? p.error, floor);
+    }
+    const front = data.front.map((l) => drawn.find((p) => p.label === l)).filter(Boolean).sort((a, b) => a.ms - b.ms);
+    return { drawn, front, hidden: points.filter((p) => !ok(p)).map((p) => p.label) };
+  }
+
+  function chartSpec({ drawn, front }, axis, yTitle, logError, small, title) {
+    const x = { field: 'ms', type: 'quantitative', scale: { type: 'log' }, title: small ? 'ms (median)' : 'ms per frame (median; bars p5–p95; log scale)' };
+    const y = { field: 'error', type: 'quantitative', title: yTitle, scale: logError ? { type: 'log' } : { zero: false } };
+    const color = { field: 'label', type: 'nominal', scale: A.colorScale, title: 'denoiser / setting', legend: small ? null : {} };
+    const tooltip = [
+      { field: 'label', title: 'label' },
+      { field: 'paramText', title: 'parameters' },
+      { field: 'ms', title: 'ms (median)', format: '.3~g' },
+      { field: 'msLo', title: 'ms p5', format: '.3~g' },
+      { field: 'msHi', title: 'ms p95', format: '.3~g' },
+      { field: 'error', title: yTitle, format: '.4~g' },
+      { field: 'lo', title: 'bar low', format: '.4~g' },
+      { field: 'hi', title: 'bar high', format: '.4~g' },
+    ].concat(drawn.some((p) => p.scenes !== undefined) ? [{ field: 'scenes', title: 'scenes' }] : []);
+    const withTime = drawn.filter((p) => p.msLo !== null && p.msHi !== null);
+    return A.baseSpec({
+      width: small ? 300 : 760,
+      height: small ? 200 : 400,
+      title: title ? { text: title, fontSize: small ? 12 : 13, anchor: 'start' } : undefined,
+      data: { values: drawn },
+      layer: [
+        { name: 'errorbars', mark: { type: 'rule', strokeWidth: 1.5 },
+          encoding: { x, y: { field: 'lo', type: 'quantitative' }, y2: { field: 'hi' }, color } },
+        { name: 'timebars', data: { values: withTime }, mark: { type: 'rule', strokeWidth: 1.5, opacity: 0.6 },
+          encoding: { x: { ...x, field: 'msLo' }, x2: { field: 'msHi' }, y, color } },
+        { name: 'front', data: { values: front }, mark: { type: 'line', color: '#555', strokeDash: [5, 3], strokeWidth: 1.5 },
+          encoding: { x, y, order: { field: 'ms', type: 'quantitative' } } },
+        { name: 'points', mark: { type: 'point', filled: true, size: small ? 70 : 110, strokeWidth: 2, cursor: 'pointer' },
+          encoding: { x, y, tooltip, color,
+                      fillOpacity: { condition: { test: 'datum.complete', value: 1 }, value: 0 },
+                      strokeWidth: { condition: { test: 'datum.selected', value: 4 }, value: 2 } } },
+        // The front's members are named on the chart; the others by the legend and the tooltip
+        // (naming every point would pile labels up where settings cluster, as in sweeps).
+        { name: 'names', transform: [{ filter: 'datum.onFront || datum.selected' }],
+          mark: { type: 'text', align: 'left', dx: 8, dy: -8, fontSize: small ? 10 : 11, fontWeight: 'bold', color: '#1d2330' },
+          encoding: { x, y, text: { field: 'label' } } },
+      ],
+    });
+  }
+
+  // Clicking a point selects its denoiser everywhere (images, over time); its scene too when the
+  // point belongs to one.
+  function onClick(view, scene) {
+    if (!view) return;
+    view.addEventListener('click', (event, item) => {
+      const datum = item && item.datum;
+      if (datum && typeof datum.label === 'string' && datum.error !== undefined) A.select(datum.label, scene);
+    });
+  }
+
+  const noteFor = (all, data, axis, logError) => {
+    const bars = all
+      ? (data.source === 'statistics'
+        ? 'Bars: the run\'s 95% interval of the overall score.'
+        : 'Bars: the same normalisation applied to each scene\'s interval ends (wider than the aggregate\'s own interval).')
+      : (data.points.some((p) => p.interval === 'ci95') ? 'Error bars: 95% interval of the mean (block bootstrap).' : 'Error bars: p5–p95 across frames after warm-up (this run has no intervals).');
+    return `${bars} Time bars: p5–p95 of the per-frame time where the run records them. ` +
+      `${logError ? 'Log error axis. ' : ''}${axis && axis.key === 'relMse' ? 'relMSE raw (not reference-corrected). ' : ''}` +
+      'Hover a point for its parameters; click it to select that denoiser in Images and Over time.';
+  };
+
+  A.renderSpeed = async function renderSpeed() {
+    const { D, state } = A;
+    const axis = D.errorAxes.find((a) => a.key === state.speedAxis);
+    const logError = $('speed-log').checked;
+    const multiples = $('speed-layout').value === 'multiples';
+    const chart = $('speed-chart');
+    $('speed-scene').disabled = multiples;
+    for (const name of Object.keys(A.views)) if (name.startsWith('speed')) A.dropChart(name);
+    chart.replaceChildren();
+    chart.classList.toggle('multiples', multiples);
+    if (!axis) {
+      chart.append(el('p', { class: 'empty', text: 'No error metric was measured.' }));
+      return;
+    }
+    if (multiples) {
+      $('speed-note').textContent = noteFor(false, { points: [] }, axis, logError) + ' One panel per scene, each on its own scale.';
+      const renders = [];
+      for (const s of D.scenes) {
+        const data = (D.speed.scenes[s.name] || {})[state.speedAxis];
+        const holder = el('div', { class: 'multiple', 'data-scene': s.name });
+        chart.append(holder);
+        if (!data || !data.points.length) {
+          holder.append(el('p', { class: 'empty', text: `${s.name}: no measured pair.` }));
+          continue;
+        }
+        const d = drawable(data, logError);
+        renders.push(A.embedChart(`speed:${s.name}`, holder, chartSpec(d, axis, axis.title, logError, true, s.name)).then((v) => onClick(v, s.name)));
+      }
+      $('speed-front').textContent = 'Dashed: each scene\'s Pareto front.';
+      await Promise.all(renders);
+      return;
+    }
+    const all = state.speedScene === '__all__';
+    const data = (all ? D.speed.all : D.speed.scenes[state.speedScene] || {})[state.speedAxis];
+    if (!data || !data.points.length) {
+      chart.append(el('p', { class: 'empty', text: 'No measured pair for this choice.' }));
+      $('speed-front').textContent = '';
+      $('speed-note').textContent = '';
+      return;
+    }
+    $('speed-note').textContent = noteFor(all, data, axis, logError) +
+      (all ? ' Hollow points did not complete every scene and are kept off the front.' : '');
+    const d = drawable(data, logError);
+    // The aggregate is named on the chart itself, not only in the note.
+    const yTitle = all ? `${axis.title} ÷ ${data.baseline} (geo. mean over ${data.sceneCount} scenes)` : axis.title;
+    const title = all ? `All scenes: ${data.normalisation}` : `${state.speedScene}: ${axis.title}`;
+    $('speed-front').replaceChildren(
+      'Pareto front (fastest first): ',
+      ...d.front.flatMap((p, i) => [i ? ' → ' : '', el('b', { text: p.label })]),
+      d.hidden.length ? ` · not drawn (0 on a log axis): ${d.hidden.join(', ')}` : '',
+    );
+    const view = await A.embedChart('speed', chart, chartSpec(d, axis, yTitle, logError, false, title));
+    onClick(view, all ? null : state.speedScene);
+  };
+})();

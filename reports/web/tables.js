@@ -1,0 +1,204 @@
+// Tables: the rankings with ties (per scene and overall), the summary table with intervals and a
+// column picker (the default columns fit a 1400 px window without a horizontal scrollbar), the
+// pairs' warnings and a sweep's ablation.
+'use strict';
+
+(() => {
+  const A = window.Arena;
+  const { $, el, fmt, pct } = A;
+
+  const TIMING_COLUMNS = [
+    { key: 'msMedian', title: 'ms median', default: true },
+    { key: 'msP95', title: 'ms p95', default: true },
+    { key: 'msP5', title: 'ms p5', default: false },
+    { key: 'msPerMegapixel', title: 'ms/MP', default: false },
+    { key: 'tapsPerPixel', title: 'taps/px', default: false },
+  ];
+  // Shown unless the user picks otherwise: the metrics a choice is usually made on.
+  const DEFAULT_METRICS = ['relMse', 'relMseCorrected', 'ldrFlip', 'hdrFlip', 'ssim', 'tRmae', 'warpedFlicker'];
+
+  // Catalog metrics that some pair of the run summarises; ms is shown with the timing columns.
+  const tableMetrics = () => A.D.metrics.filter((m) => m.name !== 'ms' && A.D.pairs.some((p) => p.summary && p.summary[m.name]));
+
+  A.setupTables = function setupTables() {
+    const picker = $('column-picker');
+    const chosen = (A.state.columns = new Set());
+    const box = (id, text, on, title) => {
+      if (on) chosen.add(id);
+      const input = el('input', { type: 'checkbox', 'data-column': id, checked: on });
+      input.addEventListener('change', () => {
+        if (input.checked) chosen.add(id);
+        else chosen.delete(id);
+        A.renderTables();
+      });
+      return el('label', { title }, input, ` ${text}`);
+    };
+    picker.append(
+      el('span', { class: 'picker-group' }, el('b', { text: 'Metrics: ' }),
+        tableMetrics().map((m) => box(m.name, m.name, DEFAULT_METRICS.includes(m.name), m.meaning))),
+      el('span', { class: 'picker-group' }, el('b', { text: 'Time: ' }),
+        TIMING_COLUMNS.map((t) => box(t.key, t.title, t.default))),
+      el('span', { class: 'picker-group' }, el('b', { text: 'Show: ' }),
+        box('ci95', '95% intervals', true, 'the interval of each mean, under it'),
+        box('p95', 'p95 over frames', false, 'a column with each metric\'s 95th percentile over frames')),
+    );
+  };
+
+  // Tie groups of a ranking: labels connected through tiedWith share a group (index by label).
+  function tieGroups(ranking) {
+    const group = {};
+    let next = 0;
+    for (const r of ranking) {
+      if (group[r.label] !== undefined) continue;
+      const stack = [r.label];
+      group[r.label] = next;
+      while (stack.length) {
+        const l = stack.pop();
+        const row = ranking.find((x) => x.label === l);
+        for (const t of (row && row.tiedWith) || []) if (group[t] === undefined) { group[t] = next; stack.push(t); }
+      }
+      ++next;
+    }
+    return group;
+  }
+
+  function rankingTable(title, R, valueTitle, valueKey) {
+    if (!R || !R.ranking || !R.ranking.length) return null;
+    const groups = tieGroups(R.ranking);
+    const sizes = {};
+    for (const g of Object.values(groups)) sizes[g] = (sizes[g] || 0) + 1;
+    const rows = R.ranking.map((r) => {
+      const tied = (r.tiedWith || []).length > 0;
+      const g = groups[r.label];
+      return el('tr', { class: `${tied ? 'tied' : ''} ${g % 2 ? 'band' : ''}`.trim() || null, 'data-label': r.label, 'data-tied': tied ? 'true' : null },
+        el('td', { class: 'rank', text: `${r.rank}${tied ? '=' : ''}` }),
+        el('td', { class: 'first', text: r.label }),
+        el('td', { text: fmt(r[valueKey]) }),
+        el('td', { class: 'ci', text: A.interval(r.ci95) || '–' }),
+        el('td', { class: 'left', text: tied ? `tied with ${r.tiedWith.join(', ')}` : R.tiesKnown ? 'resolved' : '' }));
+    });
+    const resolved = R.totalPairs ? ` · ${R.resolvedPairs} of ${R.totalPairs} pairs resolved at 95%` : '';
+    const how = R.tiesKnown
+      ? `Tied (=): the difference to another method is not resolved at 95% (paired).${resolved}`
+      : 'This run has no paired statistics (older results): ranked by mean, ties unknown.';
+    return el('div', { class: 'ranking' },
+      el('h3', { text: title }),
+      el('p', { class: 'note', text: how }),
+      el('table', { class: 'data ranking-table' },
+        el('thead', {}, el('tr', {}, el('th', { text: 'rank' }), el('th', { class: 'first', text: 'denoiser / setting' }),
+          el('th', { text: valueTitle }), el('th', { text: '95% interval' }), el('th', { class: 'first', text: 'ties' }))),
+        el('tbody', {}, rows)));
+  }
+
+  function renderRankings() {
+    const R = A.D.rankings || { scenes: {} };
+    const scene = R.scenes[A.state.scene];
+    const overall = R.overall;
+    $('rankings').replaceChildren(...[
+      rankingTable(`Ranking on ${A.state.scene}${scene ? ` (${scene.metric || 'relMse'})` : ''}`, scene, `mean ${scene ? scene.metric || 'relMse' : ''}`, 'mean'),
+      overall && rankingTable(`Overall ranking (${overall.normalisation || 'normalised over scenes'})`, overall, 'score', 'score'),
+    ].filter(Boolean));
+  }
+
+  A.renderTables = function renderTables() {
+    renderRankings();
+    const table = $('summary-table');
+    const scene = A.sceneByName[A.state.scene];
+    const pairs = A.pairsOf(A.state.scene);
+    const on = A.state.columns;
+    const withCi = on.has('ci95');
+    // Columns: {group, title, lower, get(pair) -> number, ci(pair) -> [lo, hi]}.
+    const cols = [];
+    for (const m of tableMetrics()) {
+      if (!on.has(m.name)) continue;
+      const s = (p) => (p.summary && p.summary[m.name]) || null;
+      cols.push({ group: m.name, title: 'mean', lower: m.lowerIsBetter, meaning: m.meaning,
+                  get: (p) => (s(p) ? s(p).mean : null), ci: (p) => (s(p) ? s(p).ci95 : null), floor: m.name });
+      if (on.has('p95')) cols.push({ group: m.name, title: 'p95', lower: m.lowerIsBetter, get: (p) => (s(p) ? s(p).p95 : null) });
+    }
+    for (const t of TIMING_COLUMNS)
+      if (on.has(t.key)) cols.push({ group: 'time', title: t.title, lower: true, get: (p) => (p.timing ? p.timing[t.key] : null) });
+    const ok = pairs.filter(A.isOk);
+    const best = cols.map((c) => {
+      const vals = ok.map(c.get).filter((v) => Number.isFinite(v));
+      return vals.length > 1 ? (c.lower ? Math.min(...vals) : Math.max(...vals)) : null;
+    });
+    const groups = [];
+    for (const c of cols) {
+      if (groups.length && groups[groups.length - 1].name === c.group) groups[groups.length - 1].span++;
+      else groups.push({ name: c.group, span: 1, meaning: c.meaning, lower: c.lower });
+    }
+    const start = (i) => (i === 0 || cols[i - 1].group !== cols[i].group ? 'group-start' : '');
+    const ranking = ((A.D.rankings || { scenes: {} }).scenes[A.state.scene] || {}).ranking || [];
+    const rankOf = Object.fromEntries(ranking.map((r) => [r.label, `${r.rank}${(r.tiedWith || []).length ? '=' : ''}`]));
+    const head = el('thead', {},
+      el('tr', {}, el('th', { rowspan: 2, text: 'rank' }), el('th', { class: 'first', rowspan: 2, text: 'denoiser / setting' }),
+        groups.map((g) => el('th', { class: 'group', colspan: g.span, title: g.meaning ? `${g.meaning} (${g.lower ? 'lower' : 'higher'} is better)` : null,
+          text: g.name === 'time' ? 'time' : `${g.name} ${g.lower ? '↓' : '↑'}` }))),
+      el('tr', {}, cols.map((c, i) => el('th', { class: start(i) || null, text: c.title }))));
+
+    const rows = [];
+    // The reference's own floors beside the metrics they bound: relMSE's noise floor, and each
+    // metric between two independent half-sample references (results: scenes.<scene>.floors).
+    const floors = { ...((scene && scene.floors) || {}) };
+    if (scene && scene.noiseFloor && floors.relMse === undefined) floors.relMse = scene.noiseFloor.mean;
+    if (Object.keys(floors).length) {
+      rows.push(el('tr', { class: 'reference-row' }, el('td', {}), el('td', { class: 'first', text: 'reference noise floor' }),
+        cols.map((c, i) => {
+          const v = c.floor && c.title === 'mean' ? floors[c.floor] : undefined;
+          return el('td', { class: start(i) || null, text: v === undefined || v === null ? '' : fmt(v) });
+        })));
+    }
+    for (const p of pairs) {
+      if (!A.isOk(p)) {
+        rows.push(el('tr', { class: 'failed' }, el('td', {}), el('td', { class: 'first', text: `${p.label} (${p.status})` }),
+          el('td', { class: 'left', colspan: cols.length, text: p.error })));
+        continue;
+      }
+      rows.push(el('tr', { 'data-label': p.label, class: p.label === A.state.selected ? 'selected' : null },
+        el('td', { class: 'rank', text: rankOf[p.label] || '' }),
+        el('td', { class: 'first', title: JSON.stringify(p.params), text: p.label }),
+        cols.map((c, i) => {
+          const v = c.get(p);
+          const classes = [start(i), best[i] !== null && v === best[i] ? 'best' : ''].join(' ').trim();
+          const ci = withCi && c.ci ? A.interval(c.ci(p)) : '';
+          return el('td', { class: classes || null }, fmt(v), ci ? el('span', { class: 'ci', text: ci }) : null);
+        })));
+    }
+    table.replaceChildren(head, el('tbody', {}, rows));
+
+    const warnings = pairs.filter((p) => p.warnings && p.warnings.length);
+    $('warnings').replaceChildren(...(warnings.length ? [el('h3', { text: 'Warnings' }),
+      el('ul', { class: 'warnings' }, warnings.flatMap((p) => p.warnings.map((w) => el('li', {}, el('b', { text: `${p.label}: ` }), w))))] : []));
+    renderAblation();
+  };
+
+  // Sweep runs: each grid parameter's values against its first value (e.g. an edge-stopping term
+  // off vs on), as the mean change of every metric over matching settings.
+  function renderAblation() {
+    const box = $('ablation');
+    box.replaceChildren();
+    const AB = A.D.ablation;
+    if (!AB) return;
+    const rows = AB.rows.filter((r) => r.scene === A.state.scene || r.scene === null);
+    box.append(el('h3', { text: `Ablation of ${AB.denoiser} (sweep)` }),
+      el('p', { class: 'note', text: 'Δ = mean over matching settings of (metric with the value − metric with the first value), other grid parameters held equal; relative change in brackets. Green: better, red: worse.' }));
+    if (!rows.length) {
+      box.append(el('p', { class: 'empty', text: 'No grid parameter has two values with matching pairs.' }));
+      return;
+    }
+    const metrics = A.D.metrics.filter((m) => rows.some((r) => r.delta[m.name] !== undefined));
+    box.append(el('div', { class: 'table-wrap' }, el('table', { class: 'data ablation-table' },
+      el('thead', {}, el('tr', {}, el('th', { class: 'first', text: 'parameter' }), el('th', { text: 'value vs first' }),
+        el('th', { text: 'scene' }), el('th', { text: 'pairs' }), metrics.map((m) => el('th', { text: `Δ ${m.name}` })))),
+      el('tbody', {}, rows.map((r) => el('tr', {},
+        el('td', { class: 'first', text: r.parameter }), el('td', { text: `${r.value} vs ${r.versus}` }),
+        el('td', { text: r.scene === null ? 'all scenes' : r.scene }), el('td', { text: r.matched }),
+        metrics.map((m) => {
+          const d = r.delta[m.name];
+          if (d === undefined) return el('td', { text: '–' });
+          const better = m.lowerIsBetter ? d < 0 : d > 0;
+          return el('td', { class: d === 0 ? null : better ? 'better' : 'worse', text: `${fmt(d)} (${pct(r.relative[m.name])})` });
+        })))))));
+  }
+})();

@@ -1,0 +1,150 @@
+// `arena history`: runs from run directories and results databases, ordered by time; the flags
+// are exactly the rows `arena compare` calls regressed; the dashboard's files; bad input.
+#include "reports/history.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "core/atomic_file.hpp"
+#include "core/error.hpp"
+#include "metrics/results.hpp"
+#include "tests/test_util.hpp"
+
+namespace arena {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+json stat(double v) {
+  return {{"mean", v}, {"median", v}, {"p5", 0.9 * v}, {"p95", 1.1 * v}, {"frames", 4}};
+}
+
+// Run i of a history: svgf's relMSE on "s" wobbles by 0.5% and jumps 10% from run `jump` on.
+json historyRun(int i, int jump) {
+  const double wobble = 1 + 0.005 * ((i % 3) - 1);
+  const double relMse = 0.02 * wobble * (i >= jump ? 1.10 : 1.0);
+  json pairs = json::array();
+  for (const char* label : {"passthrough", "svgf"}) {
+    const bool svgf = std::string(label) == "svgf";
+    pairs.push_back({{"scene", "s"},
+                     {"denoiser", label},
+                     {"label", label},
+                     {"params", json::object()},
+                     {"status", "ok"},
+                     {"frames", json::array()},
+                     {"summary",
+                      {{"relMse", stat(svgf ? relMse : 0.5)},
+                       {"ssim", stat(svgf ? 0.9 : 0.5)},
+                       {"ms", stat(svgf ? 3.0 : 0.01)}}}});
+  }
+  char created[32];
+  std::snprintf(created, sizeof created, "2025-01-01T00:%02d:00Z", i);
+  return {{"schema", kResultsSchemaVersion},
+          {"kind", "arena-run"},
+          {"name", "run" + std::to_string(i)},
+          {"created", created},
+          {"environment", {{"git_commit", "abc" + std::to_string(i)}}},
+          {"settings", json::object()},
+          {"scenes", json::object()},
+          {"pairs", pairs}};
+}
+
+TEST(History, FlagsExactlyWhatCompareFlags) {
+  std::vector<json> runs;
+  for (int i = 0; i < 8; ++i) runs.push_back(historyRun(i, 5));
+  const json data = historyData(runs, {{"relMse", 0.02}, {"ssim", 0.02}});
+  ASSERT_EQ(data["runs"].size(), 8u);
+  EXPECT_EQ(data["runs"][5]["commit"], "abc5");
+  ASSERT_EQ(data["flags"].size(), 1u) << data["flags"].dump();
+  EXPECT_EQ(data["flags"][0]["run"], 5);
+  EXPECT_EQ(data["flags"][0]["label"], "svgf");
+  EXPECT_EQ(data["flags"][0]["metric"], "relMse");
+  EXPECT_GT(data["flags"][0]["change"].get<double>(), 0.05);
+  // The same verdict as compare on that pair of runs, and none on the others.
+  for (size_t i = 1; i < runs.size(); ++i)
+    EXPECT_EQ(anyRegression(compareRuns(runs[i - 1], runs[i], {{"relMse", 0.02}, {"ssim", 0.02}})),
+              i == 5)
+        << i;
+  // Series per scene x label x metric, one slot per run; gated metrics carry their tolerance.
+  const json& v = data["series"]["s"]["svgf"]["relMse"]["value"];
+  ASSERT_EQ(v.size(), 8u);
+  EXPECT_NEAR(v[7].get<double>(), 0.02 * 1.1 * (1 + 0.005 * ((7 % 3) - 1)), 1e-12);
+  for (const json& m : data["metrics"]) {
+    if (m["name"] == "relMse") EXPECT_NEAR(m["tolerance"].get<double>(), 0.02, 1e-12);
+    if (m["name"] == "ms") EXPECT_TRUE(m["tolerance"].is_null());
+  }
+}
+
+TEST(History, ReadsRunDirectoriesAndDatabasesInTimeOrder) {
+  const fs::path dir = test::freshDir("history_inputs");
+  // Runs 0..3 in a database (appended out of order), 4 and 5 as run directories.
+  const fs::path db = dir / "results.db";
+  for (int i : {1, 0, 3, 2}) appendToDatabase(db, historyRun(i, 3));
+  std::vector<fs::path> inputs = {dir / "r5", db, dir / "r4"};
+  for (int i : {4, 5}) saveResults(dir / ("r" + std::to_string(i)), historyRun(i, 3));
+  const std::vector<json> runs = loadHistory(inputs);
+  ASSERT_EQ(runs.size(), 6u);
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(runs[size_t(i)]["name"], "run" + std::to_string(i));
+  // A database run has its pairs' summaries and commit.
+  EXPECT_EQ(runs[0]["environment"]["git_commit"], "abc0");
+  bool found = false;
+  for (const json& p : runs[2]["pairs"])
+    if (p["label"] == "svgf") {
+      found = true;
+      EXPECT_NEAR(p["summary"]["relMse"]["mean"].get<double>(),
+                  historyRun(2, 3)["pairs"][1]["summary"]["relMse"]["mean"].get<double>(), 1e-15);
+    }
+  EXPECT_TRUE(found);
+  // The jump at run 3 is flagged whichever container held the runs.
+  const json data = historyData(runs, {{"relMse", 0.02}});
+  ASSERT_EQ(data["flags"].size(), 1u);
+  EXPECT_EQ(data["flags"][0]["run"], 3);
+}
+
+TEST(History, BadInputNamesThePath) {
+  const fs::path dir = test::freshDir("history_bad");
+  try {
+    loadHistory({dir / "nope"});
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find((dir / "nope").string()), std::string::npos) << e.what();
+  }
+  std::ofstream(dir / "notes.txt") << "not a database";
+  try {
+    loadHistory({dir / "notes.txt"});
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("notes.txt"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(loadHistory({}), Error);
+}
+
+TEST(History, WritesTheDashboard) {
+  const fs::path dir = test::freshDir("history_page");
+  std::vector<fs::path> inputs;
+  for (int i = 0; i < 4; ++i) {
+    inputs.push_back(dir / ("r" + std::to_string(i)));
+    saveResults(inputs.back(), historyRun(i, 2));
+  }
+  HistoryOptions o;
+  o.inputs = inputs;
+  o.out = dir / "out";
+  o.nodeModulesDir = dir / "modules";
+  for (const char* f : {"vega/build/vega.min.js", "vega-lite/build/vega-lite.min.js",
+                        "vega-embed/build/vega-embed.min.js"}) {
+    fs::create_directories((o.nodeModulesDir / f).parent_path());
+    std::ofstream(o.nodeModulesDir / f) << "// stand-in\n";
+  }
+  const HistorySummary s = writeHistory(o);
+  EXPECT_EQ(s.runs, 4u);
+  EXPECT_EQ(s.flags, 1u);
+  for (const char* f :
+       {"index.html", "history.js", "shared.js", "style.css", "history-data.js", "vega.min.js"})
+    EXPECT_TRUE(fs::exists(o.out / f)) << f;
+  EXPECT_NE(readText(o.out / "index.html").find("history.js"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace arena
