@@ -51,7 +51,7 @@ void addReportCommand(CLI::App& app) {
       for (const char* m : {"relMse", "ldrFlip", "hdrFlip", "ssim", "tRmae"})
         h.tolerances.push_back({m, t});
     const HistorySummary s = writeHistory(h);
-    std::cout << "history: " << s.index.string() << " (" << s.runs << " runs, " << s.flags
+    std::cout << "history: " << s.index.string() << " (" << s.runs << " runs, " << s.failing
               << " regression(s) `arena compare` would flag)\n";
   });
 }

@@ -19,9 +19,10 @@ namespace arena {
 std::vector<nlohmann::json> loadHistory(const std::vector<std::filesystem::path>& inputs);
 
 // The dashboard's data: runs [{name, created, commit}], per scene x label x metric the values (and
-// intervals where the runs have them) per run, the tolerance of each gated metric, and `flags`:
-// every row compareRuns(run i-1, run i, tolerances) calls "regressed", with the run index i.
-// Empty `tolerances`: compare's defaults.
+// intervals where the runs have them) per run, the tolerance of each gated metric, and `changes`:
+// every row of compareRuns(run i-1, run i, tolerances) whose verdict is not "ok", with the run
+// index i and `fails` = anyRegression({row}) (the gate's own rule, not restated here); `failing`
+// counts those. Empty `tolerances`: compare's defaults.
 nlohmann::json historyData(const std::vector<nlohmann::json>& runs,
                            const std::vector<Tolerance>& tolerances);
 
@@ -33,7 +34,7 @@ struct HistoryOptions {
 };
 struct HistorySummary {
   std::filesystem::path index;
-  size_t runs = 0, flags = 0;
+  size_t runs = 0, failing = 0;  // failing: comparisons that fail the gate
 };
 HistorySummary writeHistory(const HistoryOptions& options);
 

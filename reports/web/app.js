@@ -38,7 +38,7 @@
       if (scene && scene !== A.state.scene) {
         A.state.scene = scene;
         $('scene-select').value = scene;
-        return renderScene();
+        return Promise.all([renderScene(), A.renderSpeed()]);
       }
       for (const fn of listeners) fn(label);
       return Promise.all([A.renderOverTime(), A.renderSpeed()]).then(() => A.renderTables());

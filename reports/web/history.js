@@ -13,29 +13,34 @@
     const r = H.runs[i];
     return `#${i} ${r.commit || '(no commit)'}${r.created ? ` · ${r.created}` : ''}`;
   };
+  // Comparisons that fail the gate (compare's own rule, decided in reports/history.cpp), and the
+  // other verdicts worth seeing (beyond tolerance but unresolved, improved, ...).
+  const flags = H.changes.filter((c) => c.fails);
+  const appliesTo = (c, metric) => c.metric === metric || c.metric === '*';
 
   function renderInfo() {
     const n = H.runs.length;
     $('history-info').textContent = n
-      ? `${n} runs, ${runText(0)} → ${runText(n - 1)} · ${H.flags.length} flagged comparison(s)`
+      ? `${n} runs, ${runText(0)} → ${runText(n - 1)} · ${flags.length} comparison(s) fail the gate, ${H.changes.length - flags.length} other change(s) beyond tolerance`
       : 'No runs.';
   }
 
   function renderFlags() {
     const box = $('flags');
-    if (!H.flags.length) {
+    if (!flags.length) {
       box.replaceChildren(el('p', { class: 'empty', text: 'No run would have failed the gate.' }));
       return;
     }
     box.replaceChildren(el('table', { class: 'data flags-table' },
-      el('thead', {}, el('tr', {}, ['run', 'commit', 'scene', 'denoiser / setting', 'metric', 'previous', 'this run', 'change', 'tolerance']
-        .map((t, i) => el('th', { class: i < 5 ? 'first' : null, text: t })))),
-      el('tbody', {}, H.flags.map((f) => {
+      el('thead', {}, el('tr', {}, ['run', 'commit', 'scene', 'denoiser / setting', 'metric', 'previous', 'this run', 'change', 'tolerance', 'verdict', 'note']
+        .map((t, i) => el('th', { class: i < 5 || i > 8 ? 'first' : null, text: t })))),
+      el('tbody', {}, flags.map((f) => {
         const tr = el('tr', { class: 'flag', 'data-run': String(f.run), 'data-scene': f.scene, 'data-label': f.label, 'data-metric': f.metric },
           el('td', { class: 'first', text: `#${f.run}` }), el('td', { class: 'first', text: H.runs[f.run].commit || '–' }),
           el('td', { class: 'first', text: f.scene }), el('td', { class: 'first', text: f.label }), el('td', { class: 'first', text: f.metric }),
           el('td', { text: fmt(f.baseline) }), el('td', { text: fmt(f.candidate) }), el('td', { class: 'verdict-regressed', text: pct(f.change) }),
-          el('td', { text: `±${(100 * f.tolerance).toFixed(1)}%` }));
+          el('td', { text: `±${(100 * f.tolerance).toFixed(1)}%` }), el('td', { class: 'first verdict-regressed', text: f.verdict }),
+          el('td', { class: 'left', text: f.note || '' }));
         tr.addEventListener('click', () => choose(f.scene, f.label));
         return tr;
       }))));
@@ -60,13 +65,16 @@
   }
 
   function metricChart(metric, s) {
-    const flagged = new Set(H.flags.filter((f) => f.scene === state.scene && f.label === state.label && f.metric === metric.name).map((f) => f.run));
+    const here = H.changes.filter((c) => c.scene === state.scene && c.label === state.label && appliesTo(c, metric.name));
+    const flagged = new Set(here.filter((c) => c.fails).map((c) => c.run));
+    const verdictAt = Object.fromEntries(here.map((c) => [c.run, c.verdict]));
     const rows = [];
     s.value.forEach((v, i) => {
       if (v === null) return;
       const ci = s.ci95 && s.ci95[i];
       rows.push({ run: i, commit: H.runs[i].commit || '', created: H.runs[i].created || '', value: v,
-                  lo: ci ? ci[0] : null, hi: ci ? ci[1] : null, flagged: flagged.has(i) });
+                  lo: ci ? ci[0] : null, hi: ci ? ci[1] : null, flagged: flagged.has(i),
+                  other: !flagged.has(i) && verdictAt[i] !== undefined && verdictAt[i] !== 'improved', verdict: verdictAt[i] || 'ok' });
     });
     // The gate's band: previous value x (1 +- tolerance), relative to |previous| as compare has it.
     const band = [];
@@ -90,8 +98,12 @@
           encoding: { x, y: { field: 'bandLo', type: 'quantitative' }, y2: { field: 'bandHi' } } },
         { name: 'intervals', data: { values: withCi }, mark: { type: 'rule', color: '#7a8599' },
           encoding: { x, y: { field: 'lo', type: 'quantitative' }, y2: { field: 'hi' } } },
-        { name: 'values', data: { values: rows }, mark: { type: 'line', color: '#1d2330', point: { size: 18, color: '#1d2330' }, strokeWidth: 1.2 },
+        { name: 'values', data: { values: rows }, mark: { type: 'line', color: '#1d2330', strokeWidth: 1.2 }, encoding: { x, y } },
+        { name: 'points', data: { values: rows }, mark: { type: 'point', filled: true, size: 18, color: '#1d2330' },
           encoding: { x, y, tooltip: [{ field: 'run', title: 'run' }, { field: 'commit' }, { field: 'created' }, { field: 'value', title: metric.name, format: '.4~g' }] } },
+        // Beyond tolerance without failing the gate (e.g. not resolved at the confidence): orange.
+        { name: 'unresolved', data: { values: rows.filter((r) => r.other) }, mark: { type: 'point', shape: 'circle', size: 120, color: '#d9822b', strokeWidth: 2, filled: false },
+          encoding: { x, y, tooltip: [{ field: 'run' }, { field: 'commit' }, { field: 'verdict' }, { field: 'value', title: metric.name, format: '.4~g' }] } },
         { name: 'flagged', data: { values: rows.filter((r) => r.flagged) }, mark: { type: 'point', shape: 'circle', size: 160, color: '#b3261e', strokeWidth: 2.5, filled: false },
           encoding: { x, y, tooltip: [{ field: 'run' }, { field: 'commit' }, { field: 'value', title: metric.name, format: '.4~g' }] } },
       ],
@@ -122,7 +134,7 @@
     renderFlags();
     setupControls();
     // Start on the first flagged series, else the first one.
-    const first = H.flags[0] || { scene: Object.keys(H.series).sort()[0], label: null };
+    const first = flags[0] || { scene: Object.keys(H.series).sort()[0], label: null };
     if (first.scene) await choose(first.scene, first.label);
   }
 

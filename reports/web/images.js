@@ -224,7 +224,7 @@
   }
 
   function setCrop(crop, measure = true) {
-    viewer.crop = crop && crop.u1 - crop.u0 > 0 && crop.v1 - crop.v0 > 0 ? crop : crop && measure ? null : crop;
+    viewer.crop = crop;
     const r = $('crop-rect');
     r.hidden = !viewer.crop;
     if (viewer.crop) {

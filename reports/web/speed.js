@@ -98,7 +98,8 @@
     if (!view) return;
     view.addEventListener('click', (event, item) => {
       const datum = item && item.datum;
-      if (datum && typeof datum.label === 'string' && datum.error !== undefined) A.select(datum.label, scene);
+      // Deferred: selecting re-renders this very chart, which must not be finalized inside its handler.
+      if (datum && typeof datum.label === 'string' && datum.error !== undefined) setTimeout(() => A.select(datum.label, scene), 0);
     });
   }
 
@@ -157,7 +158,8 @@
       (all ? ' Hollow points did not complete every scene and are kept off the front.' : '');
     const d = drawable(data, logError);
     // The aggregate is named on the chart itself, not only in the note.
-    const yTitle = all ? `${axis.title} ÷ ${data.baseline} (geo. mean over ${data.sceneCount} scenes)` : axis.title;
+    const yTitle = !all ? axis.title : data.source === 'statistics' ? `${axis.title}: overall score (see title)`
+      : `${axis.title} ÷ ${data.baseline} (geo. mean over ${data.sceneCount} scenes)`;
     const title = all ? `All scenes: ${data.normalisation}` : `${state.speedScene}: ${axis.title}`;
     $('speed-front').replaceChildren(
       'Pareto front (fastest first): ',
