@@ -297,9 +297,10 @@ json rankingData(const json& results, const std::vector<std::string>& scenes, co
   const json statScenes = stats.value("scenes", json::object());
   for (const std::string& scene : scenes) {
     if (statScenes.contains(scene) && statScenes[scene].contains("ranking")) {
-      json r = statScenes[scene];
-      r["tiesKnown"] = true;
-      r.erase("pairs");  // every pair's difference: the ranking's tiedWith already says enough
+      // The ranking and its counts; every pair's difference is left out (tiedWith says enough).
+      json r = {{"tiesKnown", true}};
+      for (const char* k : {"metric", "ranking", "resolvedPairs", "totalPairs", "excluded"})
+        if (statScenes[scene].contains(k)) r[k] = statScenes[scene][k];
       out["scenes"][scene] = r;
       continue;
     }

@@ -223,7 +223,9 @@ TEST(Report, DataHasFrontNoiseFloorViewerAndAblation) {
   EXPECT_EQ(all["baseline"], "passthrough");
   EXPECT_NEAR(all["points"][0]["error"].get<double>(), 1.0, 1e-12);
   for (const json& p : all["points"])
-    if (p["label"] == "svgf[a=1]") EXPECT_NEAR(p["error"].get<double>(), 0.08, 1e-12);
+    if (p["label"] == "svgf[a=1]") {
+      EXPECT_NEAR(p["error"].get<double>(), 0.08, 1e-12);
+    }
   EXPECT_NE(all["normalisation"].get<std::string>().find("geometric mean over scenes"),
             std::string::npos);
   // No intervals in this run: the bars are p5-p95 and the rankings say ties are unknown.
@@ -348,51 +350,38 @@ TEST(Report, IntervalsAndTheRunsOwnRankingsAreUsedWhenPresent) {
     p["summary"]["ssim"]["ci95"] = {ssim - 0.01, ssim + 0.02};
     p["timing"]["msP5"] = 0.5 * p["timing"]["msMedian"].get<double>();
   }
-  run["statistics"] = {
-    {"scenes",
-     {{"static",
-       {{"metric", "relMse"},
-        {"ranking",
-         {{{"label", "svgf[a=1]"}, {"rank", 1}, {"mean", 0.04}, {"tiedWith", {"svgf[a=0]"}}},
-          {{"label", "svgf[a=0]"}, {"rank", 1}, {"mean", 0.05}, {"tiedWith", {"svgf[a=1]"}}}}},
-        {"pairs", json::array()},
-        {"resolvedPairs", 5},
-        {"totalPairs", 6}}}}},
-    {"overall",
-     {{"normalisation", "geometric mean of relMSE ratios to passthrough"},
-      {"ranking",
-       {{{"label", "passthrough"},
-         {"rank", 1},
-         {"score", 0.7},
-         {"ci95", {0.6, 0.8}},
-         {"tiedWith", json::array()}}}}}}
-  }
-};
-const json data = reportData(run, test::freshDir("report_stats"), nullptr);
-const json& p = data["speed"]["scenes"]["static"]["relMse"]["points"][1];  // svgf[a=0], 0.05
-EXPECT_EQ(p["interval"], "ci95");
-EXPECT_NEAR(p["lo"].get<double>(), 0.0475, 1e-12);
-EXPECT_NEAR(p["msLo"].get<double>(), 2.0, 1e-12);
-// 1 - SSIM: the interval flips with the axis.
-const json& d = data["speed"]["scenes"]["static"]["dssim"]["points"][0];
-EXPECT_NEAR(d["lo"].get<double>(), 1 - 0.92, 1e-12);
-EXPECT_NEAR(d["hi"].get<double>(), 1 - 0.89, 1e-12);
-// The run's own overall score replaces the report's aggregate, named as the run names it.
-const json& all = data["speed"]["all"]["relMse"];
-EXPECT_EQ(all["source"], "statistics");
-EXPECT_EQ(all["normalisation"], "geometric mean of relMSE ratios to passthrough");
-EXPECT_NEAR(all["points"][0]["error"].get<double>(), 0.7, 1e-12);
-EXPECT_NEAR(all["points"][0]["hi"].get<double>(), 0.8, 1e-12);
-// Rankings pass through with their ties; a scene without statistics falls back to means.
-const json& r = data["rankings"]["scenes"]["static"];
-EXPECT_TRUE(r["tiesKnown"].get<bool>());
-EXPECT_EQ(r["ranking"][1]["tiedWith"], json({"svgf[a=1]"}));
-EXPECT_EQ(r["resolvedPairs"], 5);
-EXPECT_FALSE(data["rankings"]["scenes"]["switch"]["tiesKnown"].get<bool>());
-EXPECT_TRUE(data["rankings"]["overall"]["tiesKnown"].get<bool>());
-// Summaries keep their intervals for the tables; timing keeps msP5.
-EXPECT_TRUE(data["pairs"][1]["summary"]["relMse"].contains("ci95"));
-EXPECT_NEAR(data["pairs"][1]["timing"]["msP5"].get<double>(), 2.0, 1e-12);
+  run["statistics"] = json::parse(R"({
+    "scenes": {"static": {"metric": "relMse",
+      "ranking": [{"label": "svgf[a=1]", "rank": 1, "mean": 0.04, "tiedWith": ["svgf[a=0]"]},
+                  {"label": "svgf[a=0]", "rank": 1, "mean": 0.05, "tiedWith": ["svgf[a=1]"]}],
+      "pairs": [], "resolvedPairs": 5, "totalPairs": 6}},
+    "overall": {"normalisation": "geometric mean of relMSE ratios to passthrough",
+      "ranking": [{"label": "passthrough", "rank": 1, "score": 0.7, "ci95": [0.6, 0.8], "tiedWith": []}]}})");
+  const json data = reportData(run, test::freshDir("report_stats"), nullptr);
+  const json& p = data["speed"]["scenes"]["static"]["relMse"]["points"][1];  // svgf[a=0], 0.05
+  EXPECT_EQ(p["interval"], "ci95");
+  EXPECT_NEAR(p["lo"].get<double>(), 0.0475, 1e-12);
+  EXPECT_NEAR(p["msLo"].get<double>(), 2.0, 1e-12);
+  // 1 - SSIM: the interval flips with the axis.
+  const json& d = data["speed"]["scenes"]["static"]["dssim"]["points"][0];
+  EXPECT_NEAR(d["lo"].get<double>(), 1 - 0.92, 1e-12);
+  EXPECT_NEAR(d["hi"].get<double>(), 1 - 0.89, 1e-12);
+  // The run's own overall score replaces the report's aggregate, named as the run names it.
+  const json& all = data["speed"]["all"]["relMse"];
+  EXPECT_EQ(all["source"], "statistics");
+  EXPECT_EQ(all["normalisation"], "geometric mean of relMSE ratios to passthrough");
+  EXPECT_NEAR(all["points"][0]["error"].get<double>(), 0.7, 1e-12);
+  EXPECT_NEAR(all["points"][0]["hi"].get<double>(), 0.8, 1e-12);
+  // Rankings pass through with their ties; a scene without statistics falls back to means.
+  const json& r = data["rankings"]["scenes"]["static"];
+  EXPECT_TRUE(r["tiesKnown"].get<bool>());
+  EXPECT_EQ(r["ranking"][1]["tiedWith"], json({"svgf[a=1]"}));
+  EXPECT_EQ(r["resolvedPairs"], 5);
+  EXPECT_FALSE(data["rankings"]["scenes"]["switch"]["tiesKnown"].get<bool>());
+  EXPECT_TRUE(data["rankings"]["overall"]["tiesKnown"].get<bool>());
+  // Summaries keep their intervals for the tables; timing keeps msP5.
+  EXPECT_TRUE(data["pairs"][1]["summary"]["relMse"].contains("ci95"));
+  EXPECT_NEAR(data["pairs"][1]["timing"]["msP5"].get<double>(), 2.0, 1e-12);
 }
 
 TEST(Report, CropTilesComeFromTheKeptImages) {

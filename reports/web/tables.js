@@ -81,9 +81,10 @@
     const how = R.tiesKnown
       ? `Tied (=): the difference to another method is not resolved at 95% (paired).${resolved}`
       : 'This run has no paired statistics (older results): ranked by mean, ties unknown.';
+    const excluded = R.excluded ? ` Left out: ${R.excluded}.` : '';
     return el('div', { class: 'ranking' },
       el('h3', { text: title }),
-      el('p', { class: 'note', text: how }),
+      el('p', { class: 'note', text: how + excluded }),
       el('table', { class: 'data ranking-table' },
         el('thead', {}, el('tr', {}, el('th', { text: 'rank' }), el('th', { class: 'first', text: 'denoiser / setting' }),
           el('th', { text: valueTitle }), el('th', { text: '95% interval' }), el('th', { class: 'first', text: 'ties' }))),

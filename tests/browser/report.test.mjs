@@ -133,7 +133,7 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
   if (withP5) assert.ok((await page.locator('#speed-chart g.timebars_marks line').count()) >= 1, 'time bars drawn (msP5 recorded)');
   const named = (results.statistics && results.statistics.overall && results.statistics.overall.normalisation) ||
     'geometric mean over scenes of relMSE ÷ passthrough\'s relMSE';
-  assert.ok((await page.locator('#speed-chart svg').textContent()).includes(`All scenes: ${named}`), `the chart names its aggregate: ${named}`);
+  assert.ok((await page.locator('#speed-chart svg.marks').textContent()).includes(`All scenes: ${named}`), `the chart names its aggregate: ${named}`);
   await page.uncheck('#speed-log');
   await page.waitForFunction(() => window.arenaReport.arena.views.speed && window.arenaReport.arena.views.speed.scale('y').type === 'linear');
   await page.check('#speed-log');
@@ -191,15 +191,16 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
   // Column picker: a metric's columns go and come back; p95 columns appear.
   const groups = () => page.$$eval('#summary-table th.group', (t) => t.map((x) => x.textContent));
   assert.ok((await groups()).some((g) => g.startsWith('ssim')));
-  await page.locator('#column-picker input[data-column="ssim"]').uncheck({ force: true });
+  await page.click('details.column-picker summary');
+  await page.locator('#column-picker input[data-column="ssim"]').uncheck();
   assert.ok(!(await groups()).some((g) => g.startsWith('ssim')), 'ssim column removed');
-  await page.locator('#column-picker input[data-column="ssim"]').check({ force: true });
+  await page.locator('#column-picker input[data-column="ssim"]').check();
   assert.ok((await groups()).some((g) => g.startsWith('ssim')));
   const headers = () => page.$$eval('#summary-table thead tr:nth-child(2) th', (t) => t.map((x) => x.textContent));
   const before = (await headers()).filter((h) => h === 'p95').length;
-  await page.locator('#column-picker input[data-column="p95"]').check({ force: true });
+  await page.locator('#column-picker input[data-column="p95"]').check();
   assert.ok((await headers()).filter((h) => h === 'p95').length > before, 'p95 columns added');
-  await page.locator('#column-picker input[data-column="p95"]').uncheck({ force: true });
+  await page.locator('#column-picker input[data-column="p95"]').uncheck();
   await shot(page.locator('#tables'), 'tables.png');
 
   // (4) Images on light_switch: every kept frame is offered, the event frame is marked.
@@ -355,7 +356,7 @@ test('10 denoisers x 10 scenes x 100 frames stays light', async () => {
   assert.equal(await page.locator('#speed-chart g.errorbars_marks line').count(), 10);
   assert.equal(await page.locator('#speed-chart g.timebars_marks line').count(), 10);
   // The run's own overall score (statistics.overall) is what the all-scenes chart shows, named.
-  assert.match(await page.locator('#speed-chart svg').textContent(), /geometric mean of relMSE ratios to denoiser_0/);
+  assert.match(await page.locator('#speed-chart svg.marks').textContent(), /geometric mean of relMSE ratios to denoiser_0/);
   // Ties in the rankings: denoiser_1 and denoiser_2 marked tied (rank "2="), the rest resolved.
   for (const table of ['#rankings .ranking-table >> nth=0', '#rankings .ranking-table >> nth=1']) {
     const tied = await page.locator(`${table} >> tbody tr[data-tied="true"]`).evaluateAll((rows) => rows.map((r) => [r.dataset.label, r.cells[0].textContent]));
