@@ -4,8 +4,10 @@
 // keeps its own history; the harness runs one instance per signal and remodulates
 // (albedo * diffuse + specAlbedo * specular + emission).
 #include <chrono>
+#include <deque>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,8 +18,14 @@
 
 namespace arena {
 
-enum class SignalKind { Diffuse, Specular };
-const char* signalName(SignalKind kind);  // "diffuse" / "specular": also the frame layer's name
+// Color: the remodulated colour, for denoisers that declare SignalMode::Color (external ones).
+enum class SignalKind { Diffuse, Specular, Color };
+// "diffuse" / "specular" / "color": also the frame layer's name.
+const char* signalName(SignalKind kind);
+
+// What one instance filters. Demodulated: one instance per diffuse and specular signal, and the
+// harness remodulates. Color: one instance on the frame's colour; its output is the final image.
+enum class SignalMode { Demodulated, Color };
 
 // Per-frame state shared by every denoiser (NRD's CommonSettings).
 struct FrameContext {
@@ -57,6 +65,10 @@ class Denoiser {
   // Filters ctx.frameIndex's signal into `output` (already allocated: width x height x 3).
   virtual void denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& output) = 0;
 
+  // The compute time of the last frame as the denoiser measured it itself (an external process
+  // reports its own); nullopt means the harness's wall clock around denoise() is its time.
+  virtual std::optional<double> reportedMilliseconds() const { return std::nullopt; }
+
   const std::vector<PassStats>& lastPasses() const { return passes_; }
   void clearPassStats() { passes_.clear(); }
 
@@ -90,6 +102,8 @@ struct DenoiserInfo {
   std::string description;  // one line: what it is and its source
   ParamSchema schema;
   std::function<std::unique_ptr<Denoiser>(const ParamSet&, SignalKind)> create;
+  SignalMode signals = SignalMode::Demodulated;
+  std::string origin;  // where it came from: empty for built-ins, else the manifest or library
 };
 
 class DenoiserRegistry {
@@ -99,9 +113,14 @@ class DenoiserRegistry {
   const DenoiserInfo& find(const std::string& name) const;
   std::vector<std::string> names() const;  // in registration order
   void add(DenoiserInfo info);
+  // Resolves one `--denoisers` entry: a registered name, "ext:MANIFEST" (a manifest file, a
+  // directory holding manifest.json, or a name searched on ARENA_DENOISER_PATH) or
+  // "plugin:LIBRARY". External ones are loaded once and registered under their own name, which
+  // is returned (denoisers/external/loader.cpp).
+  static std::string resolve(const std::string& entry);
 
  private:
-  std::vector<DenoiserInfo> infos_;
+  std::deque<DenoiserInfo> infos_;  // a deque: references stay valid as external ones are added
 };
 
 }  // namespace arena

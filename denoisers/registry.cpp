@@ -2,20 +2,56 @@
 
 #include "core/error.hpp"
 #include "denoisers/denoiser.hpp"
+#include "denoisers/external/loader.hpp"
 #include "denoisers/variants.hpp"
 
 namespace arena {
 
-const char* signalName(SignalKind kind) { return kind == SignalKind::Diffuse ? "diffuse" : "specular"; }
+const char* signalName(SignalKind kind) {
+  switch (kind) {
+    case SignalKind::Diffuse:
+      return "diffuse";
+    case SignalKind::Specular:
+      return "specular";
+    case SignalKind::Color:
+      return "color";
+  }
+  return "?";
+}
 
-const DenoiserRegistry& DenoiserRegistry::instance() {
+namespace {
+DenoiserRegistry& globalRegistry() {
   // Explicit list (static-initialiser registration is dropped by the linker in static libraries).
-  static const DenoiserRegistry registry = [] {
+  static DenoiserRegistry registry = [] {
     DenoiserRegistry r;
     for (auto& info : builtinDenoisers()) r.add(std::move(info));
     return r;
   }();
   return registry;
+}
+}  // namespace
+
+const DenoiserRegistry& DenoiserRegistry::instance() {
+  return globalRegistry();
+}
+
+std::string DenoiserRegistry::resolve(const std::string& entry) {
+  if (!isExternalEntry(entry)) {
+    instance().find(entry);  // throws, listing the registered names
+    return entry;
+  }
+  DenoiserInfo info = loadExternalDenoiser(entry);
+  DenoiserRegistry& registry = globalRegistry();
+  for (const DenoiserInfo& known : registry.infos_)
+    if (known.name == info.name) {
+      if (known.origin == info.origin) return info.name;  // loaded before
+      throw Error(entry + ": its name '" + info.name + "' is already taken by " +
+                  (known.origin.empty() ? "a built-in denoiser" : known.origin) +
+                  "; rename it in its manifest or library");
+    }
+  std::string name = info.name;
+  registry.add(std::move(info));
+  return name;
 }
 
 void DenoiserRegistry::add(DenoiserInfo info) {

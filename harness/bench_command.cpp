@@ -137,10 +137,12 @@ void addBenchCommand(CLI::App& app) {
   struct DenoiseOptions {
     std::string denoisers = "all", scene = defaultScenesDir() + "/cornell_static.json", json, resolution = "1280x720";
     int frames = 20, warmup = 5, inputs = 3;
-    std::vector<std::string> params;
+    std::vector<std::string> params, plugins;
   };
   auto d = std::make_shared<DenoiseOptions>();
-  denoise->add_option("--denoisers", d->denoisers, "Comma-separated names or 'all'")->default_val("all");
+  denoise->add_option("--denoisers", d->denoisers, "Comma-separated names (ext:MANIFEST, plugin:LIBRARY too) or 'all'")
+      ->default_val("all");
+  denoise->add_option("--plugin", d->plugins, "A C plugin library (include/arena_plugin.h) to time too, repeatable");
   denoise->add_option("--param", d->params, "DENOISER.NAME=VALUE, repeatable");
   denoise->add_option("--scene", d->scene, "Scene file whose frames feed the denoisers");
   denoise->add_option("--resolution", d->resolution, "WIDTHxHEIGHT")->default_val("1280x720");
@@ -167,7 +169,6 @@ void addBenchCommand(CLI::App& app) {
     }
     const double bu = bilateralUnitMs(1280, 720, 15);
     std::printf("1 BU = cv::bilateralFilter(5, 0.1, 2.0) on 1280x720 CV_32FC3 = %.2f ms\n", bu);
-    auto params = parseParamAssignments(d->params);
     std::vector<std::string> names;
     if (d->denoisers == "all") names = DenoiserRegistry::instance().names();
     else
@@ -176,14 +177,19 @@ void addBenchCommand(CLI::App& app) {
         if (b == std::string::npos) b = d->denoisers.size();
         if (b > a) names.push_back(d->denoisers.substr(a, b - a));
       }
+    for (const std::string& library : d->plugins) names.push_back("plugin:" + library);
+    for (std::string& n : names) n = DenoiserRegistry::resolve(n);  // loads external ones
+    auto params = parseParamAssignments(d->params);
     nlohmann::json out = {{"resolution", {w, h}}, {"bilateralUnitMs", bu}, {"frames", d->frames},
                           {"warmup", d->warmup}, {"environment", environmentInfo()}, {"denoisers", nlohmann::json::array()}};
     for (const std::string& name : names) {
       const DenoiserInfo& info = DenoiserRegistry::instance().find(name);
       ParamSet ps = info.schema.resolve(params[name], name);
       std::vector<std::unique_ptr<Denoiser>> instances;
-      instances.push_back(info.create(ps, SignalKind::Diffuse));
-      instances.push_back(info.create(ps, SignalKind::Specular));
+      const std::vector<SignalKind> kinds = info.signals == SignalMode::Color
+                                                ? std::vector<SignalKind>{SignalKind::Color}
+                                                : std::vector<SignalKind>{SignalKind::Diffuse, SignalKind::Specular};
+      for (SignalKind kind : kinds) instances.push_back(info.create(ps, kind));
       for (auto& inst : instances) inst->setup(w, h);
       Image outImage(w, h, 3), signal;
       std::vector<double> total;
@@ -201,13 +207,15 @@ void addBenchCommand(CLI::App& app) {
         ctx.reset = f == 0;
         double frameMs = 0;
         for (size_t k = 0; k < instances.size(); ++k) {
-          const SignalKind kind = k == 0 ? SignalKind::Diffuse : SignalKind::Specular;
+          const SignalKind kind = kinds[k];
           signal = frame.get(signalName(kind));
           DenoiserInputs in{signal, frame, grads ? &gradients : nullptr};
           instances[k]->clearPassStats();
           auto t0 = std::chrono::steady_clock::now();
           instances[k]->denoise(ctx, in, outImage);
-          frameMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+          const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+          // An external process's own compute time; the wall clock (transfer included) otherwise.
+          frameMs += instances[k]->reportedMilliseconds().value_or(wall);
           if (f < d->warmup) continue;
           for (const PassStats& p : instances[k]->lastPasses()) {
             std::string pn = std::string(signalName(kind)) + "/" + p.name;

@@ -44,15 +44,19 @@ long sanitize(Image& image) {
 }
 
 DenoiseRun::DenoiseRun(const DenoiserRequest& request, const Sequence& sequence)
-    : sequence_(sequence), request_(request) {
-  const DenoiserInfo& info = DenoiserRegistry::instance().find(request.name);
-  params_ = info.schema.resolve(request.params, request.name);
-  diffuse_ = info.create(params_, SignalKind::Diffuse);
-  specular_ = info.create(params_, SignalKind::Specular);
+    : sequence_(sequence), request_(request), info_(DenoiserRegistry::instance().find(request.name)) {
+  params_ = info_.schema.resolve(request.params, request.name);
+  if (info_.signals == SignalMode::Color) {
+    instances_.emplace_back(SignalKind::Color, info_.create(params_, SignalKind::Color));
+  } else {
+    instances_.emplace_back(SignalKind::Diffuse, info_.create(params_, SignalKind::Diffuse));
+    instances_.emplace_back(SignalKind::Specular, info_.create(params_, SignalKind::Specular));
+  }
+  Denoiser& first = *instances_.front().second;
   std::vector<std::string> missing;
   std::vector<std::string> known;
   for (const LayerSpec& spec : channels::frameLayers()) known.push_back(spec.name);
-  for (const std::string& c : diffuse_->requiredChannels())
+  for (const std::string& c : first.requiredChannels())
     if (std::find(known.begin(), known.end(), c) == known.end()) missing.push_back(c);
   if (!missing.empty()) {
     std::string list;
@@ -60,23 +64,25 @@ DenoiseRun::DenoiseRun(const DenoiserRequest& request, const Sequence& sequence)
     throw Error(request.name + " needs channel(s)" + list + " that sequence " + sequence.dir().string() +
                 " does not provide (re-render it with a tracer that writes them)");
   }
-  needsGradients_ = diffuse_->needsGradients();
-  diffuse_->setup(sequence.info().width, sequence.info().height);
-  specular_->setup(sequence.info().width, sequence.info().height);
+  needsGradients_ = first.needsGradients();
+  for (auto& [kind, d] : instances_) d->setup(sequence.info().width, sequence.info().height);
 }
 
 void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
                      const std::function<void(const DenoisedFrame&)>& onFrame) {
   const SequenceInfo& info = sequence_.info();
   const int w = info.width, h = info.height;
+  const bool colorOnly = info_.signals == SignalMode::Color;
   DenoisedFrame out;
-  out.diffuse = Image(w, h, 3);
-  out.specular = Image(w, h, 3);
+  if (!colorOnly) {
+    out.diffuse = Image(w, h, 3);
+    out.specular = Image(w, h, 3);
+  }
   out.color = Image(w, h, 3);
   Image signal;
   for (int t = 0; t < info.frames; ++t) {
     const LayerSet& frame = frameOf(t);
-    for (const std::string& c : diffuse_->requiredChannels()) frame.get(c, sequence_.dir().string() + " frame " + std::to_string(t));
+    for (const std::string& c : instances_.front().second->requiredChannels()) frame.get(c, sequence_.dir().string() + " frame " + std::to_string(t));
     LayerSet gradients;
     if (needsGradients_ && t > 0) gradients = sequence_.gradients(t);
     FrameContext ctx;
@@ -87,24 +93,28 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
     ctx.previousCamera = info.cameras[size_t(std::max(t - 1, 0))];
     ctx.reset = t == 0;
     for (const SequenceEvent& e : info.events) ctx.reset = ctx.reset || (e.kind == "camera_cut" && e.frame == t);
-    if (ctx.reset && t > 0) {
-      diffuse_->reset();
-      specular_->reset();
-    }
+    if (ctx.reset && t > 0)
+      for (auto& [kind, d] : instances_) d->reset();
     out.frame = t;
     out.passes.clear();
     out.sanitized = 0;
     out.milliseconds = 0;
-    for (SignalKind kind : {SignalKind::Diffuse, SignalKind::Specular}) {
-      Denoiser& d = kind == SignalKind::Diffuse ? *diffuse_ : *specular_;
-      Image& result = kind == SignalKind::Diffuse ? out.diffuse : out.specular;
+    out.wallMilliseconds = 0;
+    out.selfTimed = false;
+    for (auto& [kind, instance] : instances_) {
+      Denoiser& d = *instance;
+      Image& result = kind == SignalKind::Color ? out.color : kind == SignalKind::Diffuse ? out.diffuse : out.specular;
       signal = frame.get(signalName(kind));
       out.sanitized += sanitize(signal);
       DenoiserInputs in{signal, frame, needsGradients_ && t > 0 ? &gradients : nullptr};
       d.clearPassStats();
       auto start = std::chrono::steady_clock::now();
       d.denoise(ctx, in, result);
-      out.milliseconds += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+      const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+      const std::optional<double> reported = d.reportedMilliseconds();
+      out.wallMilliseconds += wall;
+      out.milliseconds += reported.value_or(wall);
+      out.selfTimed = reported.has_value();
       for (float v : result.raw())
         if (!std::isfinite(v))
           throw Error(request_.name + " produced a non-finite value on the " + signalName(kind) + " signal at frame " +
@@ -113,6 +123,10 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
         p.name = std::string(signalName(kind)) + "/" + p.name;
         out.passes.push_back(p);
       }
+    }
+    if (colorOnly) {  // the denoiser's output is the final colour: nothing to remodulate
+      onFrame(out);
+      continue;
     }
     const Image &albedo = frame.get("albedo"), &specAlbedo = frame.get("specAlbedo"), &emission = frame.get("emission");
     for (size_t i = 0; i < out.color.raw().size(); ++i)

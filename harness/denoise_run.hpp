@@ -26,8 +26,12 @@ std::string defaultLabel(const DenoiserRequest& r);
 
 struct DenoisedFrame {
   int frame = 0;
-  Image color, diffuse, specular;  // remodulated colour and the two filtered signals
-  double milliseconds = 0;         // wall time of the denoise calls (both signals)
+  Image color, diffuse, specular;  // remodulated colour and the two filtered signals (a colour
+                                   // denoiser leaves diffuse and specular empty)
+  double milliseconds = 0;         // the denoiser's time (both signals): the harness's wall clock,
+                                   // or what an external process reported (selfTimed)
+  double wallMilliseconds = 0;     // the harness's wall clock around the calls, transfer included
+  bool selfTimed = false;          // milliseconds were reported by the denoiser itself
   std::vector<PassStats> passes;   // "diffuse/<pass>", "specular/<pass>"
   long sanitized = 0;              // NaN/Inf input values replaced by 0
 };
@@ -38,14 +42,16 @@ class DenoiseRun {
   // denoiser declares, creates and sets up both instances.
   DenoiseRun(const DenoiserRequest& request, const Sequence& sequence);
   const ParamSet& params() const { return params_; }
+  const DenoiserInfo& info() const { return info_; }
   // Denoises frames 0..n-1 in order; `frame(t)` supplies the sequence frame's layers.
   void run(const std::function<const LayerSet&(int)>& frame, const std::function<void(const DenoisedFrame&)>& onFrame);
 
  private:
   const Sequence& sequence_;
   DenoiserRequest request_;
+  const DenoiserInfo& info_;
   ParamSet params_;
-  std::unique_ptr<Denoiser> diffuse_, specular_;
+  std::vector<std::pair<SignalKind, std::unique_ptr<Denoiser>>> instances_;  // one per signal
   bool needsGradients_ = false;
 };
 

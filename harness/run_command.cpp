@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "core/error.hpp"
+#include "denoisers/external/loader.hpp"
 #include "harness/commands.hpp"
 #include "metrics/compare.hpp"
 #include "metrics/results.hpp"
@@ -96,12 +97,18 @@ void addRunCommands(CLI::App& app) {
     auto* cmd = app.add_subcommand("run", "Run denoisers x scenes, compute every metric, store results");
     auto o = std::make_shared<MatrixOptions>();
     auto names = std::make_shared<std::string>("all");
-    cmd->add_option("--denoisers,--denoiser", *names, "Registered names, comma-separated, or 'all'")->default_val("all");
+    auto plugins = std::make_shared<std::vector<std::string>>();
+    cmd->add_option("--denoisers,--denoiser", *names,
+                    "Registered names, ext:MANIFEST, plugin:LIBRARY.so, comma-separated, or 'all'")
+        ->default_val("all");
+    cmd->add_option("--plugin", *plugins, "A C plugin library (include/arena_plugin.h) to run too, repeatable");
     addMatrixOptions(cmd, *o);
-    cmd->callback([o, names] {
+    cmd->callback([o, names, plugins] {
       RunConfig c = configFrom(*o);
-      auto params = parseParamAssignments(o->params);
       std::vector<std::string> list = *names == "all" ? DenoiserRegistry::instance().names() : splitList(*names);
+      for (const std::string& library : *plugins) list.push_back("plugin:" + library);
+      for (std::string& n : list) n = DenoiserRegistry::resolve(n);  // loads external ones
+      auto params = parseParamAssignments(o->params);
       for (auto& [denoiser, kv] : params)
         if (std::find(list.begin(), list.end(), denoiser) == list.end())
           throw Error("--param " + denoiser + ".*: " + denoiser + " is not among the denoisers of this run");
@@ -122,6 +129,7 @@ void addRunCommands(CLI::App& app) {
     addMatrixOptions(cmd, *o);
     cmd->callback([o, denoiser, grids] {
       RunConfig c = configFrom(*o);
+      *denoiser = DenoiserRegistry::resolve(*denoiser);  // ext:MANIFEST or plugin:LIBRARY too
       const DenoiserInfo& info = DenoiserRegistry::instance().find(*denoiser);
       auto fixed = parseParamAssignments(o->params)[*denoiser];
       std::vector<std::pair<std::string, std::vector<std::string>>> axes;
@@ -214,16 +222,20 @@ void addRunCommands(CLI::App& app) {
     });
   }
   {
-    auto* cmd = app.add_subcommand("denoisers", "List the registered denoisers and their parameters");
+    auto* cmd = app.add_subcommand("denoisers",
+                                   "List the registered denoisers (and the manifests on ARENA_DENOISER_PATH) "
+                                   "and their parameters");
     auto asJson = std::make_shared<bool>(false);
     cmd->add_flag("--json", *asJson, "Machine-readable output");
     cmd->callback([asJson] {
+      for (const auto& manifest : manifestsOnSearchPath()) DenoiserRegistry::resolve("ext:" + manifest.string());
       json out = json::array();
       for (const std::string& n : DenoiserRegistry::instance().names()) {
         const DenoiserInfo& info = DenoiserRegistry::instance().find(n);
         json params = json::array();
         for (const ParamSpec& p : info.schema.specs()) params.push_back(p.describe());
         out.push_back({{"name", n}, {"description", info.description}, {"parameters", params}});
+        if (!info.origin.empty()) out.back()["origin"] = info.origin;
       }
       if (*asJson) {
         std::cout << out.dump(2) << "\n";

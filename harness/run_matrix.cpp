@@ -231,6 +231,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   const int w = info.width, h = info.height;
   json frames = json::array();
   PairSeries series(info.frames, cfg.warmup);
+  bool selfTimed = false;
   std::vector<std::vector<PassStats>> passes;
   std::vector<std::vector<double>> eventCurves(sd.events.size()), eventBias(sd.events.size());
   Image prevColor, prevDisplay, prevError;
@@ -290,6 +291,10 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
                                          : sd.noisyRelMse[size_t(t)] / std::max(e.relMse, 1e-12);
             put("effectiveSpp", spp, {}, FrameTransform::Mean);
             put("ms", f.milliseconds, {}, FrameTransform::Mean);
+            if (f.selfTimed) {  // an external process timed itself; the harness's clock beside it
+              put("msWall", f.wallMilliseconds, {}, FrameTransform::Mean);
+              selfTimed = true;
+            }
             put("referenceRelMse", sd.referenceRelMse[size_t(t)], {}, FrameTransform::Mean);
             for (size_t k = 0; k < sd.events.size(); ++k) {
               const auto& ev = sd.events[k];
@@ -309,13 +314,16 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
               if (keepAll) {
                 LayerSet out;
                 out.set("color", f.color);
-                out.set("diffuse", f.diffuse);
-                out.set("specular", f.specular);
+                std::vector<LayerSpec> specs = {{"color", {"R", "G", "B"}}, {"color", {"R", "G", "B"}, false, true}};
+                for (const char* signal : {"diffuse", "specular"}) {
+                  const Image& image = std::string(signal) == "diffuse" ? f.diffuse : f.specular;
+                  if (image.empty()) continue;  // a colour denoiser has no separate signals
+                  out.set(signal, image);
+                  specs.push_back({signal, {"R", "G", "B"}});
+                }
                 char name[64];
                 std::snprintf(name, sizeof name, "frame_%04d.exr", t);
-                writeExr(imageDir / name, out,
-                         {{"color", {"R", "G", "B"}}, {"color", {"R", "G", "B"}, false, true},
-                          {"diffuse", {"R", "G", "B"}}, {"specular", {"R", "G", "B"}}},
+                writeExr(imageDir / name, out, specs,
                          {{"arena.denoiser", req.name}, {"arena.params", run.params().toJson().dump()}});
               }
             }
@@ -364,12 +372,20 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
                          std::to_string(floor) + "): the reference's noise, not the method, dominates it");
   }
   if (sanitized > 0) warnings.push_back(std::to_string(sanitized) + " NaN/Inf input values were replaced by 0");
-  return {{"scene", info.scene}, {"denoiser", req.name}, {"label", req.label}, {"params", run.params().toJson()},
-          {"status", "ok"}, {"frames", frames}, {"summary", summary},
-          {"timing", timingJson(passes, series.values("ms"), cfg.warmup, w, h)}, {"ghosting", ghosting},
-          {"tiles", series.tilesJson()},
-          {"warnings", warnings}, {"sanitizedInputs", sanitized},
-          {"images", {{"dir", fs::relative(imageDir, cfg.out).string()}, {"all", keepAll && keepImages}}}};
+  json timing = timingJson(passes, series.values("ms"), cfg.warmup, w, h);
+  // External processes time themselves: "ms" is what they reported, "msWall" the harness's clock
+  // around the exchange (transfer included). Built-ins and plugins: the harness's clock.
+  timing["msSource"] = selfTimed ? "reported by the process" : "harness wall clock";
+  if (selfTimed) timing["msWallMedian"] = summarize(series.values("msWall"), cfg.warmup).median;
+  json pair = {{"scene", info.scene}, {"denoiser", req.name}, {"label", req.label}, {"params", run.params().toJson()},
+               {"status", "ok"}, {"frames", frames}, {"summary", summary},
+               {"timing", timing}, {"ghosting", ghosting},
+               {"tiles", series.tilesJson()},
+               {"warnings", warnings}, {"sanitizedInputs", sanitized},
+               {"images", {{"dir", fs::relative(imageDir, cfg.out).string()}, {"all", keepAll && keepImages}}}};
+  if (!run.info().origin.empty()) pair["origin"] = run.info().origin;
+  if (run.info().signals == SignalMode::Color) pair["signals"] = "color";
+  return pair;
 }
 
 // Another noise realisation of a scene's input, with its frames in memory.

@@ -1,0 +1,107 @@
+#include "denoisers/external/loader.hpp"
+
+#include <algorithm>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "denoisers/external/manifest.hpp"
+#include "denoisers/external/plugin_denoiser.hpp"
+#include "denoisers/external/process_denoiser.hpp"
+
+namespace arena {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr const char* kManifestPrefix = "ext:";
+constexpr const char* kPluginPrefix = "plugin:";
+
+std::vector<fs::path> searchPath() {
+  std::vector<fs::path> dirs;
+  const char* env = std::getenv("ARENA_DENOISER_PATH");
+  std::stringstream in(env ? env : "");
+  for (std::string dir; std::getline(in, dir, ':');)
+    if (!dir.empty()) dirs.push_back(dir);
+  return dirs;
+}
+
+fs::path findManifest(const std::string& what) {
+  const fs::path p(what);
+  if (fs::is_regular_file(p)) return p;
+  if (fs::is_directory(p)) return p / "manifest.json";
+  const bool isName = what.find('/') == std::string::npos && p.extension() != ".json";
+  std::string message = "ext:" + what + ": no manifest there";
+  if (isName) {
+    std::string tried;
+    for (const fs::path& dir : searchPath())
+      for (const fs::path& candidate : {dir / (what + ".json"), dir / what / "manifest.json"}) {
+        if (fs::is_regular_file(candidate)) return candidate;
+        tried += ' ';
+        tried += candidate.string();
+      }
+    message +=
+        tried.empty() ? " (and ARENA_DENOISER_PATH is empty)" : "; searched ARENA_DENOISER_PATH:";
+    message += tried;
+  }
+  message +=
+      "; expected a manifest file, a folder with manifest.json, or a name on ARENA_DENOISER_PATH";
+  throw Error(message);
+}
+
+DenoiserInfo processDenoiserInfo(ExternalManifest manifest) {
+  auto shared = std::make_shared<const ExternalManifest>(std::move(manifest));
+  DenoiserInfo info;
+  info.name = shared->name;
+  info.description = shared->description;
+  info.schema = shared->schema;
+  info.signals = shared->signals;
+  info.origin = "external process " + shared->file.string();
+  info.create = [shared](const ParamSet& params, SignalKind kind) {
+    return std::make_unique<ExternalProcessDenoiser>(shared, params, kind);
+  };
+  return info;
+}
+
+}  // namespace
+
+bool isExternalEntry(const std::string& entry) {
+  return entry.rfind(kManifestPrefix, 0) == 0 || entry.rfind(kPluginPrefix, 0) == 0;
+}
+
+DenoiserInfo loadExternalDenoiser(const std::string& entry) {
+  if (entry.rfind(kPluginPrefix, 0) == 0)
+    return loadPluginDenoiser(entry.substr(std::strlen(kPluginPrefix)));
+  if (entry.rfind(kManifestPrefix, 0) != 0)
+    throw Error("'" + entry +
+                "' is not an external denoiser (expected ext:MANIFEST or plugin:LIBRARY)");
+  ExternalManifest manifest =
+      readManifest(findManifest(entry.substr(std::strlen(kManifestPrefix))));
+  if (manifest.library.empty()) return processDenoiserInfo(std::move(manifest));
+  DenoiserInfo info = loadPluginDenoiser(manifest.library);
+  if (info.name != manifest.name)
+    throw Error(manifest.file.string() + ": $.name '" + manifest.name +
+                "' differs from the name '" + info.name + "' that the library " +
+                manifest.library.string() + " gives itself");
+  if (!manifest.description.empty()) info.description = manifest.description;
+  return info;
+}
+
+std::vector<fs::path> manifestsOnSearchPath() {
+  std::vector<fs::path> found;
+  for (const fs::path& dir : searchPath()) {
+    if (!fs::is_directory(dir)) continue;
+    for (const fs::directory_entry& e : fs::directory_iterator(dir)) {
+      if (e.is_regular_file() && e.path().extension() == ".json") found.push_back(e.path());
+      if (e.is_directory() && fs::is_regular_file(e.path() / "manifest.json"))
+        found.push_back(e.path() / "manifest.json");
+    }
+  }
+  std::sort(found.begin(), found.end());
+  return found;
+}
+
+}  // namespace arena

@@ -1,0 +1,151 @@
+#include "denoisers/external/manifest.hpp"
+
+#include <algorithm>
+#include <cctype>
+
+#include "core/error.hpp"
+#include "core/json_reader.hpp"
+#include "core/sequence.hpp"
+
+namespace arena {
+
+namespace fs = std::filesystem;
+
+void checkDenoiserName(const std::string& name, const std::string& where) {
+  bool ok = !name.empty();
+  for (char c : name)
+    ok = ok && (std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-');
+  if (!ok)
+    throw Error(where + ": name '" + name +
+                "' must be non-empty and use only letters, digits, '_' and '-' (it prefixes "
+                "--param NAME.parameter=value)");
+}
+
+const LayerSpec& frameLayerSpec(const std::string& name, const std::string& where) {
+  for (const LayerSpec& spec : channels::frameLayers())
+    if (spec.name == name) return spec;
+  std::string known;
+  for (const LayerSpec& spec : channels::frameLayers()) known += " " + spec.name;
+  throw Error(where + ": unknown layer '" + name + "'; the sequence layers are:" + known);
+}
+
+namespace {
+
+std::vector<std::string> stringArray(JsonReader& r, const std::string& key, bool required) {
+  if (!r.has(key)) {
+    if (required) r.fail(key, "missing; expected an array of strings");
+    return {};
+  }
+  const nlohmann::json& j = r.node()[key];
+  if (!j.is_array()) r.fail(key, "expected an array of strings, got " + jsonTypeName(j));
+  std::vector<std::string> out;
+  for (size_t i = 0; i < j.size(); ++i) {
+    if (!j[i].is_string())
+      r.fail(key + "[" + std::to_string(i) + "]", "expected a string, got " + jsonTypeName(j[i]));
+    out.push_back(j[i].get<std::string>());
+  }
+  return out;
+}
+
+// Unknown fields are errors (a typo must not silently fall back to a default). JsonReader's own
+// check cannot see arrays of strings as read, so the manifest lists its fields here.
+void rejectUnknownFields(JsonReader& r, const std::vector<std::string>& known) {
+  for (const std::string& key : r.memberNames())
+    if (std::find(known.begin(), known.end(), key) == known.end()) {
+      std::string list;
+      for (const std::string& k : known) list += " " + k;
+      r.fail(key, "unknown field (check the spelling; the fields are" + list + ")");
+    }
+}
+
+ParamSpec readParamSpec(JsonReader& p) {
+  const std::string name = p.string("name");
+  const std::string type = p.string("type");
+  const std::string meaning = p.string("meaning", "");
+  ParamSpec spec;
+  if (type == "bool") {
+    spec = ParamSpec::boolean(name, p.boolean("default", false), meaning);
+  } else if (type == "int" || type == "float") {
+    const double min = p.number("min"), max = p.number("max");
+    const double def = p.number("default");
+    if (min > max) p.fail("min", "must not exceed max (" + std::to_string(max) + ")");
+    if (def < min || def > max) p.fail("default", "must lie in [min, max]");
+    if (type == "int") {
+      if (def != double(int(def)) || min != double(int(min)) || max != double(int(max)))
+        p.fail("default", "an int parameter needs integer default, min and max");
+      spec = ParamSpec::integer(name, int(def), int(min), int(max), meaning);
+    } else {
+      spec = ParamSpec::real(name, def, min, max, meaning);
+    }
+  } else if (type == "choice") {
+    std::vector<std::string> choices = stringArray(p, "choices", true);
+    const std::string def = p.string("default");
+    if (std::find(choices.begin(), choices.end(), def) == choices.end())
+      p.fail("default", "must be one of the choices");
+    spec = ParamSpec::choice(name, def, std::move(choices), meaning);
+  } else {
+    p.fail("type", "expected one of bool, int, float, choice; got '" + type + "'");
+  }
+  if (name.empty() || name.find_first_of("=,[] ") != std::string::npos)
+    p.fail("name", "must be non-empty without '=', ',', '[', ']' or spaces");
+  rejectUnknownFields(p, {"name", "type", "default", "min", "max", "choices", "meaning"});
+  return spec;
+}
+
+}  // namespace
+
+ExternalManifest readManifest(const fs::path& file) {
+  if (!fs::is_regular_file(file))
+    throw Error(file.string() +
+                ": no such manifest file (expected a JSON manifest, see "
+                "docs/external-denoisers.md)");
+  const nlohmann::json j = parseJsonFile(file.string());
+  if (!j.is_object())
+    throw Error(file.string() + ": expected a JSON object, got " + jsonTypeName(j));
+  JsonReader r(j, file.string());
+  ExternalManifest m;
+  m.file = fs::absolute(file).lexically_normal();
+  m.name = r.string("name");
+  checkDenoiserName(m.name, file.string() + ": $.name");
+  m.description = r.string("description", "");
+  const bool hasCommand = r.has("command"), hasLibrary = r.has("library");
+  if (hasCommand == hasLibrary)
+    r.fail("command",
+           "give exactly one of \"command\" (an external process) and \"library\" (a C "
+           "plugin)");
+  if (hasLibrary) {
+    m.library = r.string("library");
+    if (m.library.is_relative()) m.library = m.folder() / m.library;
+    rejectUnknownFields(r, {"name", "description", "library"});  // the rest is in the library
+    return m;
+  }
+  m.command = stringArray(r, "command", true);
+  if (m.command.empty() || m.command[0].empty()) r.fail("command", "must name a program to start");
+  const std::string signals = r.string("signals");
+  if (signals == "demodulated")
+    m.signals = SignalMode::Demodulated;
+  else if (signals == "color")
+    m.signals = SignalMode::Color;
+  else
+    r.fail("signals",
+           "expected \"demodulated\" (one process per diffuse and specular signal, "
+           "remodulated by the harness) or \"color\" (one process on the colour)");
+  m.channels = stringArray(r, "channels", false);
+  for (size_t i = 0; i < m.channels.size(); ++i)
+    frameLayerSpec(m.channels[i], file.string() + ": $.channels[" + std::to_string(i) + "]");
+  std::vector<ParamSpec> specs;
+  for (JsonReader& p : r.optionalArray("parameters")) {
+    specs.push_back(readParamSpec(p));
+    for (size_t k = 0; k + 1 < specs.size(); ++k)
+      if (specs[k].name == specs.back().name)
+        p.fail("name", "'" + specs.back().name + "' given twice");
+  }
+  m.schema = ParamSchema(std::move(specs));
+  m.timeoutSeconds = r.number("timeoutSeconds", 30.0);
+  if (!(m.timeoutSeconds > 0)) r.fail("timeoutSeconds", "expected a positive number of seconds");
+  rejectUnknownFields(
+      r, {"name", "description", "command", "signals", "channels", "parameters", "timeoutSeconds"});
+  return m;
+}
+
+}  // namespace arena

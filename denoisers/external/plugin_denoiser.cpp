@@ -1,0 +1,224 @@
+#include "denoisers/external/plugin_denoiser.hpp"
+
+#include <dlfcn.h>
+
+#include <algorithm>
+#include <cstring>
+
+#include "arena_plugin.h"
+#include "core/error.hpp"
+#include "denoisers/external/manifest.hpp"
+
+namespace arena {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr size_t kErrorBytes = 1024;
+
+ArenaImage viewOf(const Image& image) {
+  ArenaImage v{image.width(), image.height(), image.channels(), {}};
+  for (int c = 0; c < std::min(image.channels(), ARENA_MAX_CHANNELS); ++c)
+    v.planes[c] = image.plane(c);
+  return v;
+}
+
+ArenaCamera cameraOf(const CameraState& c) {
+  ArenaCamera a{};
+  for (int k = 0; k < 3; ++k) {
+    a.eye[k] = c.eye[k];
+    a.forward[k] = c.forward[k];
+    a.right[k] = c.right[k];
+    a.up[k] = c.up[k];
+  }
+  a.tanHalfFovY = c.tanHalfFovY;
+  a.aspect = c.aspect;
+  a.width = c.width;
+  a.height = c.height;
+  const glm::mat4 view = c.view(), projection = c.projection();
+  for (int column = 0; column < 4; ++column)
+    for (int row = 0; row < 4; ++row) {
+      a.view[column * 4 + row] = view[column][row];
+      a.projection[column * 4 + row] = projection[column][row];
+    }
+  return a;
+}
+
+ArenaSignal signalOf(SignalKind kind) {
+  switch (kind) {
+    case SignalKind::Diffuse:
+      return ARENA_SIGNAL_DIFFUSE;
+    case SignalKind::Specular:
+      return ARENA_SIGNAL_SPECULAR;
+    case SignalKind::Color:
+      return ARENA_SIGNAL_COLOR;
+  }
+  return ARENA_SIGNAL_DIFFUSE;
+}
+
+// One instance of a plugin behind the Denoiser interface.
+class PluginDenoiser final : public Denoiser {
+ public:
+  PluginDenoiser(const ArenaPlugin* plugin, std::string library, const ParamSchema& schema,
+                 const ParamSet& params, SignalKind kind)
+      : plugin_(plugin), library_(std::move(library)) {
+    // The resolved values, in schema order; the strings live in `choices_` for create().
+    std::vector<ArenaParamValue> values;
+    for (const ParamSpec& spec : schema.specs()) {
+      ArenaParamValue v{spec.name.c_str(), 0.0, nullptr};
+      switch (spec.type) {
+        case ParamSpec::Type::Bool:
+          v.number = params.getBool(spec.name) ? 1.0 : 0.0;
+          break;
+        case ParamSpec::Type::Int:
+          v.number = params.getInt(spec.name);
+          break;
+        case ParamSpec::Type::Float:
+          v.number = std::get<double>(params.values().at(spec.name));
+          break;
+        case ParamSpec::Type::Choice:
+          v.choice = params.getChoice(spec.name).c_str();
+          break;
+      }
+      values.push_back(v);
+    }
+    char error[kErrorBytes] = "";
+    instance_ =
+        plugin_->create(values.data(), int(values.size()), signalOf(kind), error, sizeof error);
+    if (!instance_) fail("create", error);
+    for (int i = 0; i < plugin_->requiredChannelCount; ++i)
+      channels_.push_back(plugin_->requiredChannels[i]);
+  }
+  ~PluginDenoiser() override {
+    if (instance_) plugin_->destroy(instance_);
+  }
+
+  std::vector<std::string> requiredChannels() const override { return channels_; }
+
+  void setup(int width, int height) override {
+    char error[kErrorBytes] = "";
+    if (plugin_->setup(instance_, width, height, error, sizeof error) != 0) fail("setup", error);
+  }
+
+  void reset() override { plugin_->reset(instance_); }
+
+  void denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& output) override {
+    ArenaFrameContext c{ctx.frameIndex,       ctx.width,
+                        ctx.height,           ctx.reset ? 1 : 0,
+                        cameraOf(ctx.camera), cameraOf(ctx.previousCamera)};
+    layers_.clear();
+    for (const std::string& name : channels_)
+      layers_.push_back({name.c_str(), viewOf(in.frame.get(name, library_))});
+    ArenaInputs inputs{viewOf(in.signal), layers_.data(), int(layers_.size())};
+    ArenaMutableImage out{output.width(), output.height(), output.channels(), {}};
+    for (int k = 0; k < std::min(output.channels(), ARENA_MAX_CHANNELS); ++k)
+      out.planes[k] = output.plane(k);
+    ArenaHost host{this, &PluginDenoiser::reportPass};
+    char error[kErrorBytes] = "";
+    if (plugin_->denoise(instance_, &c, &inputs, &out, &host, error, sizeof error) != 0)
+      fail("denoise (frame " + std::to_string(ctx.frameIndex) + ")", error);
+  }
+
+ private:
+  static void reportPass(void* context, const char* name, double milliseconds,
+                         double tapsPerPixel) {
+    static_cast<PluginDenoiser*>(context)->passes_.push_back(
+        {name ? name : "?", milliseconds, tapsPerPixel});
+  }
+  [[noreturn]] void fail(const std::string& entry, const char* error) const {
+    throw Error(std::string(plugin_->name) + " (plugin " + library_ + "): " + entry +
+                " failed: " + (error[0] ? error : "(no message)"));
+  }
+
+  const ArenaPlugin* plugin_;
+  std::string library_;
+  void* instance_ = nullptr;
+  std::vector<std::string> channels_;
+  std::vector<ArenaLayer> layers_;
+};
+
+ParamSchema schemaOf(const ArenaPlugin& p, const std::string& where) {
+  std::vector<ParamSpec> specs;
+  for (int i = 0; i < p.paramCount; ++i) {
+    const ArenaParamSpec& s = p.params[i];
+    const std::string at = where + ": parameter " + std::to_string(i);
+    if (!s.name || !*s.name) throw Error(at + " has no name");
+    const std::string meaning = s.meaning ? s.meaning : "";
+    switch (s.type) {
+      case ARENA_PARAM_BOOL:
+        specs.push_back(ParamSpec::boolean(s.name, s.defaultValue != 0, meaning));
+        break;
+      case ARENA_PARAM_INT:
+        specs.push_back(
+            ParamSpec::integer(s.name, int(s.defaultValue), int(s.min), int(s.max), meaning));
+        break;
+      case ARENA_PARAM_FLOAT:
+        specs.push_back(ParamSpec::real(s.name, s.defaultValue, s.min, s.max, meaning));
+        break;
+      case ARENA_PARAM_CHOICE: {
+        std::vector<std::string> choices;
+        for (int k = 0; k < s.choiceCount; ++k) choices.push_back(s.choices[k]);
+        const int def = int(s.defaultValue);
+        if (choices.empty() || def < 0 || def >= int(choices.size()))
+          throw Error(at + " (" + s.name +
+                      "): a choice needs choices and a default index among them");
+        specs.push_back(
+            ParamSpec::choice(s.name, choices[size_t(def)], std::move(choices), meaning));
+        break;
+      }
+      default:
+        throw Error(at + " (" + s.name + "): unknown type " + std::to_string(int(s.type)));
+    }
+    if ((s.type == ARENA_PARAM_INT || s.type == ARENA_PARAM_FLOAT) &&
+        !(s.min <= s.defaultValue && s.defaultValue <= s.max))
+      throw Error(at + " (" + s.name + "): default outside [min, max]");
+  }
+  return ParamSchema(std::move(specs));
+}
+
+}  // namespace
+
+DenoiserInfo loadPluginDenoiser(const fs::path& libraryPath) {
+  const std::string library = libraryPath.string();
+  if (!fs::exists(libraryPath)) throw Error(library + ": no such plugin library");
+  // Never unloaded: instances and thread-local state may outlive any registry entry.
+  void* handle = dlopen(fs::absolute(libraryPath).c_str(), RTLD_NOW | RTLD_LOCAL);
+  if (!handle) throw Error(library + ": cannot load the plugin: " + dlerror());
+  auto entry = reinterpret_cast<ArenaPluginEntryPoint>(dlsym(handle, ARENA_PLUGIN_ENTRY_POINT));
+  if (!entry)
+    throw Error(library + ": no '" ARENA_PLUGIN_ENTRY_POINT
+                          "' symbol; a plugin exports "
+                          "`const ArenaPlugin* arena_plugin(void)` (include/arena_plugin.h)");
+  const ArenaPlugin* plugin = entry();
+  if (!plugin) throw Error(library + ": arena_plugin() returned NULL");
+  if (plugin->abiVersion != ARENA_PLUGIN_ABI_VERSION)
+    throw Error(library + ": built against plugin ABI version " +
+                std::to_string(plugin->abiVersion) + ", but this arena speaks version " +
+                std::to_string(ARENA_PLUGIN_ABI_VERSION) +
+                "; rebuild the plugin against this arena's include/arena_plugin.h");
+  if (!plugin->name || !plugin->create || !plugin->setup || !plugin->reset || !plugin->denoise ||
+      !plugin->destroy)
+    throw Error(library +
+                ": its ArenaPlugin lacks a name or an entry point (create, setup, reset, denoise, "
+                "destroy are all required)");
+  checkDenoiserName(plugin->name, library);
+  if (plugin->signals != ARENA_SIGNALS_DEMODULATED && plugin->signals != ARENA_SIGNALS_COLOR)
+    throw Error(library + ": signals must be ARENA_SIGNALS_DEMODULATED or ARENA_SIGNALS_COLOR");
+  for (int i = 0; i < plugin->requiredChannelCount; ++i)
+    frameLayerSpec(plugin->requiredChannels[i] ? plugin->requiredChannels[i] : "",
+                   library + ": requiredChannels[" + std::to_string(i) + "]");
+  DenoiserInfo info;
+  info.name = plugin->name;
+  info.description = plugin->description ? plugin->description : "";
+  info.schema = schemaOf(*plugin, library);
+  info.signals =
+      plugin->signals == ARENA_SIGNALS_COLOR ? SignalMode::Color : SignalMode::Demodulated;
+  info.origin = "plugin " + fs::absolute(libraryPath).lexically_normal().string();
+  info.create = [plugin, library, schema = info.schema](const ParamSet& params, SignalKind kind) {
+    return std::make_unique<PluginDenoiser>(plugin, library, schema, params, kind);
+  };
+  return info;
+}
+
+}  // namespace arena

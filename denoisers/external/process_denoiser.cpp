@@ -1,0 +1,198 @@
+#include "denoisers/external/process_denoiser.hpp"
+
+#include <bit>
+#include <cmath>
+#include <cstdio>
+
+#include "core/sequence.hpp"
+
+namespace arena {
+
+static_assert(std::endian::native == std::endian::little,
+              "the frame protocol sends float32 planes little-endian, as they lie in memory");
+
+namespace {
+
+constexpr size_t kMaxHeaderBytes = size_t(1) << 20;
+
+std::string seconds(double s) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g s", s);
+  return buf;
+}
+
+}  // namespace
+
+ExternalProcessDenoiser::ExternalProcessDenoiser(std::shared_ptr<const ExternalManifest> manifest,
+                                                 const ParamSet& params, SignalKind kind)
+    : manifest_(std::move(manifest)), params_(params.toJson()), kind_(kind) {
+  const char* suffixes[] = {"R", "G", "B"};
+  for (const char* s : suffixes) planeNames_.push_back(std::string("signal.") + s);
+  for (const std::string& layer : manifest_->channels) {
+    const LayerSpec& spec = frameLayerSpec(layer, manifest_->file.string());
+    for (int c = 0; c < spec.channels(); ++c)
+      planeNames_.push_back(spec.suffixes.empty() ? layer : layer + "." + spec.suffixes[size_t(c)]);
+  }
+}
+
+ExternalProcessDenoiser::~ExternalProcessDenoiser() = default;  // Subprocess ends the process
+
+std::chrono::steady_clock::time_point ExternalProcessDenoiser::deadline() const {
+  return std::chrono::steady_clock::now() +
+         std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+             std::chrono::duration<double>(manifest_->timeoutSeconds));
+}
+
+void ExternalProcessDenoiser::fail(const std::string& what) {
+  std::string message = manifest_->name + " (" + signalName(kind_) + " process, " +
+                        manifest_->file.string() + "): " + what;
+  if (process_) {
+    std::string status = process_->exitStatus(std::chrono::milliseconds(200));
+    if (status == "still running") {
+      process_->kill();
+      status = "was killed by the harness";
+    }
+    message += "; the process " + status;
+    const std::string tail = process_->stderrTail();
+    message += tail.empty() ? "; its stderr was empty" : "; the end of its stderr:\n" + tail;
+    process_.reset();
+  }
+  throw Error(message);
+}
+
+nlohmann::json ExternalProcessDenoiser::readHeader(const std::string& expectedType) {
+  std::string line;
+  try {
+    line = process_->readLine(kMaxHeaderBytes, deadline());
+  } catch (const Subprocess::TimedOut&) {
+    fail("no " + expectedType +
+         " header within timeoutSeconds = " + seconds(manifest_->timeoutSeconds) + " (a hang?)");
+  } catch (const Error& e) {
+    fail(std::string("expected a '") + expectedType + "' header line, but " + e.what());
+  }
+  nlohmann::json header;
+  try {
+    header = nlohmann::json::parse(line);
+  } catch (const std::exception&) {
+    fail("expected a JSON '" + expectedType + "' header line, got: " + line.substr(0, 200));
+  }
+  const std::string type =
+      header.is_object() && header.contains("type") && header["type"].is_string()
+          ? header["type"].get<std::string>()
+          : "";
+  if (type == "error")
+    fail("it reported an error: " + header.value("message", std::string("(no message)")));
+  if (type != expectedType)
+    fail("expected a header with \"type\": \"" + expectedType + "\", got: " + line.substr(0, 200));
+  return header;
+}
+
+void ExternalProcessDenoiser::setup(int width, int height) {
+  process_.reset();  // a second setup() starts afresh
+  width_ = width;
+  height_ = height;
+  try {
+    process_ = std::make_unique<Subprocess>(manifest_->command, manifest_->folder());
+  } catch (const Error& e) {
+    fail(e.what());
+  }
+  const nlohmann::json setup = {{"type", "setup"},
+                                {"protocol", kExternalProtocolVersion},
+                                {"denoiser", manifest_->name},
+                                {"signal", signalName(kind_)},
+                                {"width", width},
+                                {"height", height},
+                                {"planes", planeNames_},
+                                {"params", params_}};
+  const std::string line = setup.dump() + "\n";
+  try {
+    process_->write(line.data(), line.size(), deadline());
+  } catch (const Error& e) {
+    fail(std::string("while sending the setup header: ") + e.what());
+  }
+  readHeader("ready");
+  pendingReset_ = false;
+}
+
+void ExternalProcessDenoiser::denoise(const FrameContext& ctx, const DenoiserInputs& in,
+                                      Image& output) {
+  if (!process_)
+    fail("the process is not running (a previous frame failed, or setup() was not called)");
+  computeMs_.reset();
+  std::vector<const float*> planes;
+  for (int c = 0; c < 3; ++c) planes.push_back(in.signal.plane(c));
+  for (const std::string& layer : manifest_->channels) {
+    const Image& image =
+        in.frame.get(layer, manifest_->name + " frame " + std::to_string(ctx.frameIndex));
+    for (int c = 0; c < image.channels(); ++c) planes.push_back(image.plane(c));
+  }
+  if (planes.size() != planeNames_.size())
+    fail("frame " + std::to_string(ctx.frameIndex) + " has " + std::to_string(planes.size()) +
+         " planes where the setup announced " + std::to_string(planeNames_.size()));
+  const size_t planeBytes = size_t(width_) * size_t(height_) * sizeof(float);
+  const nlohmann::json header = {{"type", "frame"},
+                                 {"frame", ctx.frameIndex},
+                                 {"reset", ctx.reset || pendingReset_},
+                                 {"camera", cameraToJson(ctx.camera)},
+                                 {"previousCamera", cameraToJson(ctx.previousCamera)},
+                                 {"bytes", planeBytes * planes.size()}};
+  pendingReset_ = false;
+  const std::string line = header.dump() + "\n";
+  const auto sendBy = deadline();
+  try {
+    process_->write(line.data(), line.size(), sendBy);
+    for (const float* p : planes) process_->write(p, planeBytes, sendBy);
+  } catch (const Subprocess::TimedOut&) {
+    fail("frame " + std::to_string(ctx.frameIndex) + " could not be sent within timeoutSeconds = " +
+         seconds(manifest_->timeoutSeconds) + " (it stopped reading its input)");
+  } catch (const Error& e) {
+    fail("frame " + std::to_string(ctx.frameIndex) + ": " + e.what());
+  }
+  const nlohmann::json result = readHeader("result");
+  auto number = [&](const char* key) -> double {
+    if (!result.contains(key) || !result[key].is_number())
+      fail("frame " + std::to_string(ctx.frameIndex) + ": the result header needs a number \"" +
+           key + "\", got: " + result.dump().substr(0, 200));
+    return result[key].get<double>();
+  };
+  if (number("frame") != ctx.frameIndex)
+    fail("answered frame " + result["frame"].dump() + " when frame " +
+         std::to_string(ctx.frameIndex) + " was sent");
+  const double w = number("width"), h = number("height"), channels = number("channels");
+  if (w != width_ || h != height_ || channels != 3)
+    fail("frame " + std::to_string(ctx.frameIndex) + ": sent a " + result["width"].dump() + "x" +
+         result["height"].dump() + "x" + result["channels"].dump() + " result; expected " +
+         std::to_string(width_) + "x" + std::to_string(height_) + "x3 (RGB planes)");
+  const double ms = number("computeMs");
+  if (!std::isfinite(ms) || ms < 0)
+    fail("frame " + std::to_string(ctx.frameIndex) + ": computeMs must be a finite number >= 0");
+  try {
+    const auto readBy = deadline();
+    for (int c = 0; c < 3; ++c) process_->read(output.plane(c), planeBytes, readBy);
+  } catch (const Subprocess::TimedOut&) {
+    fail("frame " + std::to_string(ctx.frameIndex) +
+         ": its planes did not arrive within timeoutSeconds = " +
+         seconds(manifest_->timeoutSeconds) + " (fewer bytes than 3 x " +
+         std::to_string(planeBytes) + "?)");
+  } catch (const Error& e) {
+    fail("frame " + std::to_string(ctx.frameIndex) + ": " + e.what() + " (expected 3 planes of " +
+         std::to_string(planeBytes) + " bytes after the result header)");
+  }
+  passes_.clear();
+  if (result.contains("passes")) {
+    if (!result["passes"].is_array())
+      fail("\"passes\" must be an array of {name, ms[, tapsPerPixel]}");
+    for (const nlohmann::json& p : result["passes"]) {
+      if (!p.is_object() || !p.contains("name") || !p["name"].is_string() || !p.contains("ms") ||
+          !p["ms"].is_number())
+        fail("each entry of \"passes\" needs a string \"name\" and a number \"ms\", got: " +
+             p.dump());
+      passes_.push_back(
+          {p["name"].get<std::string>(), p["ms"].get<double>(), p.value("tapsPerPixel", 0.0)});
+    }
+  }
+  // Non-finite output values fail the pair in DenoiseRun, as for every denoiser.
+  computeMs_ = ms;
+}
+
+}  // namespace arena

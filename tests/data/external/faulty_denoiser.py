@@ -1,0 +1,74 @@
+#!/usr/bin/python3
+"""A deliberately faulty external denoiser for tests/external_test.cpp: speaks the frame protocol
+(docs/external-denoisers.md) correctly until frame FAIL_AT, then misbehaves as argv[1] says:
+  exit       writes to stderr and exits with status 3
+  crash      writes to stderr and dies of SIGSEGV
+  wrong-size answers a result one pixel narrower than the frame
+  short      announces a correct result, sends half the bytes, and exits
+  nan        answers a result holding a NaN
+  hang       stops answering (sleeps)
+  error      answers {"type": "error"} with a message
+  garbage    answers a line that is not JSON
+  no-ready   hangs before answering the setup
+Plain Python (no numpy): the output is the input signal, so a correct frame is a passthrough."""
+import json
+import os
+import signal
+import struct
+import sys
+import time
+
+FAIL_AT = 1
+
+
+def main():
+    mode = sys.argv[1]
+    stdin, stdout = sys.stdin.buffer, sys.stdout.buffer
+    setup = json.loads(stdin.readline())
+    w, h, planes = setup["width"], setup["height"], len(setup["planes"])
+    if mode == "no-ready":
+        time.sleep(60)
+    stdout.write(b'{"type": "ready"}\n')
+    stdout.flush()
+    for line in stdin:
+        header = json.loads(line)
+        data = stdin.read(header["bytes"])
+        frame = header["frame"]
+        signal_bytes = data[: 3 * w * h * 4]
+        result = {"type": "result", "frame": frame, "width": w, "height": h, "channels": 3,
+                  "computeMs": 0.25}
+        if frame >= FAIL_AT:
+            if mode == "exit":
+                sys.stderr.write("faulty: cannot find model weights weights.bin\n")
+                sys.stderr.flush()
+                os._exit(3)
+            if mode == "crash":
+                sys.stderr.write("faulty: about to dereference a null pointer\n")
+                sys.stderr.flush()
+                os.kill(os.getpid(), signal.SIGSEGV)
+            if mode == "wrong-size":
+                result["width"] = w - 1
+                signal_bytes = signal_bytes[: 3 * (w - 1) * h * 4]
+            if mode == "short":
+                stdout.write((json.dumps(result) + "\n").encode() + signal_bytes[: len(signal_bytes) // 2])
+                stdout.flush()
+                os._exit(0)
+            if mode == "nan":
+                signal_bytes = struct.pack("<f", float("nan")) + signal_bytes[4:]
+            if mode == "hang":
+                time.sleep(60)
+            if mode == "error":
+                stdout.write(b'{"type": "error", "message": "out of GPU memory"}\n')
+                stdout.flush()
+                continue
+            if mode == "garbage":
+                stdout.write(b"hello from print debugging\n")
+                stdout.flush()
+                continue
+        stdout.write((json.dumps(result) + "\n").encode() + signal_bytes)
+        stdout.flush()
+    del planes
+
+
+if __name__ == "__main__":
+    main()

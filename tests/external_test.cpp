@@ -1,0 +1,353 @@
+// External denoisers (docs/external-denoisers.md): manifests, the frame protocol end to end with
+// the Python and C++ examples, the C plugin ABI with eaw behind it, and every fault of a process
+// (exit, crash, wrong size, NaN, hang, error, garbage) as a clear per-pair error.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <functional>
+
+#include "core/error.hpp"
+#include "denoisers/external/loader.hpp"
+#include "denoisers/external/manifest.hpp"
+#include "harness/denoise_run.hpp"
+#include "harness/run_matrix.hpp"
+#include "tests/test_util.hpp"
+
+namespace arena {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+constexpr int kWidth = 32, kHeight = 18, kFrames = 6;
+
+const fs::path& sequenceCache() {
+  static const fs::path cache = test::freshDir("external_cache");
+  return cache;
+}
+
+// The still-camera Cornell box, 32x18, 6 frames.
+const Sequence& tinySequence() {
+  static const Sequence sequence = Sequence::open(
+      renderSequence(test::shippedScene("cornell_static"),
+                     test::tinySettings(kWidth, kHeight, kFrames, 8), sequenceCache(), nullptr));
+  return sequence;
+}
+
+std::vector<DenoisedFrame> denoiseAll(const DenoiserRequest& request, const Sequence& seq) {
+  std::vector<LayerSet> frames;
+  for (int t = 0; t < seq.info().frames; ++t) frames.push_back(seq.frame(t));
+  DenoiseRun run(request, seq);
+  std::vector<DenoisedFrame> out;
+  run.run([&](int t) -> const LayerSet& { return frames[size_t(t)]; },
+          [&](const DenoisedFrame& f) { out.push_back(f); });
+  return out;
+}
+
+fs::path writeManifest(const std::string& dirName, const json& manifest) {
+  const fs::path dir = test::freshDir("manifests/" + dirName);
+  std::ofstream(dir / "manifest.json") << manifest.dump(2);
+  return dir / "manifest.json";
+}
+
+// A manifest running tests/data/external/faulty_denoiser.py in `mode`.
+std::string faulty(const std::string& mode, double timeoutSeconds = 10) {
+  const json m = {
+      {"name", "faulty-" + mode},
+      {"command",
+       {"/usr/bin/python3", std::string(ARENA_TEST_DATA) + "/external/faulty_denoiser.py", mode}},
+      {"signals", "demodulated"},
+      {"channels", {"meshId"}},
+      {"timeoutSeconds", timeoutSeconds}};
+  return DenoiserRegistry::resolve("ext:" + writeManifest("faulty-" + mode, m).string());
+}
+
+std::string errorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+// --- manifests: contract --------------------------------------------------------------------
+
+TEST(ExternalManifest, EveryMistakeNamesTheFileAndTheField) {
+  const json good = {{"name", "ok"}, {"command", {"/bin/cat"}}, {"signals", "demodulated"}};
+  struct Case {
+    const char* what;
+    json patch;
+    const char* expected;
+  };
+  const std::vector<Case> cases = {
+      {"bad name", {{"name", "a.b"}}, "$.name: name 'a.b' must be non-empty"},
+      {"no command", {{"command", nullptr}}, "give exactly one of \"command\""},
+      {"both", {{"library", "x.so"}}, "give exactly one of \"command\""},
+      {"signals", {{"signals", "rgb"}}, "$.signals: expected \"demodulated\""},
+      {"channel", {{"channels", {"normal", "normals"}}}, "$.channels[1]: unknown layer 'normals'"},
+      {"unknown field", {{"timeout", 3}}, "$.timeout: unknown field"},
+      {"param default",
+       {{"parameters", {{{"name", "k"}, {"type", "int"}, {"default", 9}, {"min", 0}, {"max", 4}}}}},
+       "$.parameters[0].default: must lie in [min, max]"},
+      {"param type",
+       {{"parameters", {{{"name", "k"}, {"type", "double"}, {"default", 1}}}}},
+       "$.parameters[0].type: expected one of bool, int, float, choice"},
+      {"timeout", {{"timeoutSeconds", 0}}, "$.timeoutSeconds: expected a positive number"},
+  };
+  for (const Case& c : cases) {
+    json m = good;
+    for (auto it = c.patch.begin(); it != c.patch.end(); ++it) {
+      if (it.value().is_null())
+        m.erase(it.key());
+      else
+        m[it.key()] = it.value();
+    }
+    const fs::path file = writeManifest("bad", m);
+    const std::string message = errorOf([&] { readManifest(file); });
+    EXPECT_NE(message.find(file.string()), std::string::npos) << c.what << ": " << message;
+    EXPECT_NE(message.find(c.expected), std::string::npos) << c.what << ": " << message;
+  }
+  const fs::path notJson = test::freshDir("manifests/notjson") / "manifest.json";
+  std::ofstream(notJson) << "{name: 1";
+  EXPECT_NE(errorOf([&] { readManifest(notJson); }).find(notJson.string()), std::string::npos);
+  EXPECT_NE(errorOf([] {
+              DenoiserRegistry::resolve("ext:/no/such/manifest.json");
+            }).find("no manifest there"),
+            std::string::npos);
+}
+
+TEST(ExternalManifest, ParametersUseTheTypedSchemaAndAreRecorded) {
+  const std::string name =
+      DenoiserRegistry::resolve("ext:" ARENA_EXAMPLES_SOURCE_DIR "/external/python_temporal");
+  EXPECT_EQ(name, "py-temporal");
+  // Loading the same manifest again is a no-op; a different one under a taken name is refused.
+  EXPECT_EQ(DenoiserRegistry::resolve("ext:" ARENA_EXAMPLES_SOURCE_DIR
+                                      "/external/python_temporal/manifest.json"),
+            name);
+  const json clash = {{"name", "svgf"}, {"command", {"/bin/cat"}}, {"signals", "color"}};
+  EXPECT_NE(errorOf([&] {
+              DenoiserRegistry::resolve("ext:" + writeManifest("clash", clash).string());
+            }).find("already taken by a built-in"),
+            std::string::npos);
+  const DenoiserInfo& info = DenoiserRegistry::instance().find(name);
+  EXPECT_NE(errorOf([&] {
+              info.schema.resolve({{"maxHistry", "4"}}, name);
+            }).find("unknown parameter 'maxHistry'"),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] {
+              info.schema.resolve({{"alphaMin", "2"}}, name);
+            }).find("expected a value in [0, 1]"),
+            std::string::npos);
+  const json params = info.schema.resolve({{"maxHistory", "8"}}, name).toJson();
+  EXPECT_EQ(params["maxHistory"], 8);
+  EXPECT_EQ(params["alphaMin"], 0.0);
+}
+
+TEST(ExternalManifest, NamesAreFoundOnTheSearchPath) {
+  const fs::path dir = test::freshDir("search_path");
+  fs::create_directories(dir / "viaFolder");
+  std::ofstream(dir / "viaFolder" / "manifest.json")
+      << json({{"name", "via-folder"}, {"command", {"/bin/cat"}}, {"signals", "color"}}).dump();
+  setenv("ARENA_DENOISER_PATH", ("/nonexistent:" + dir.string()).c_str(), 1);
+  EXPECT_EQ(DenoiserRegistry::resolve("ext:viaFolder"), "via-folder");
+  EXPECT_EQ(manifestsOnSearchPath().size(), 1u);
+  EXPECT_NE(errorOf([] {
+              DenoiserRegistry::resolve("ext:missing");
+            }).find("searched ARENA_DENOISER_PATH"),
+            std::string::npos);
+  unsetenv("ARENA_DENOISER_PATH");
+}
+
+// --- the protocol end to end ----------------------------------------------------------------
+
+TEST(ExternalProcess, PythonTemporalReproducesTheBuiltInOnAStillCamera) {
+  const std::string name =
+      DenoiserRegistry::resolve("ext:" ARENA_EXAMPLES_SOURCE_DIR "/external/python_temporal");
+  const Sequence& seq = tinySequence();
+  const auto builtin = denoiseAll({"temporal", {{"maxHistory", "4"}}, ""}, seq);
+  const auto external = denoiseAll({name, {{"maxHistory", "4"}}, ""}, seq);
+  ASSERT_EQ(external.size(), builtin.size());
+  double worst = 0;
+  auto compare = [&](const Image& theirs, const Image& mine) {
+    ASSERT_TRUE(mine.sameShape(theirs));
+    for (size_t i = 0; i < theirs.raw().size(); ++i)
+      worst = std::max(worst, std::abs(double(mine.raw()[i]) - theirs.raw()[i]) /
+                                  (std::abs(double(theirs.raw()[i])) + 1e-3));
+  };
+  for (size_t t = 0; t < builtin.size(); ++t) {
+    compare(builtin[t].diffuse, external[t].diffuse);
+    compare(builtin[t].specular, external[t].specular);
+    compare(builtin[t].color, external[t].color);
+    // The process timed itself; the harness's wall clock includes the transfer.
+    EXPECT_TRUE(external[t].selfTimed);
+    EXPECT_GE(external[t].wallMilliseconds, external[t].milliseconds);
+    ASSERT_EQ(external[t].passes.size(), 2u);
+    EXPECT_EQ(external[t].passes[0].name, "diffuse/reproject+accumulate");
+  }
+  // Float rounding only: the two sum the same taps in different orders.
+  EXPECT_LT(worst, 1e-4);
+  // And the accumulation did something: frame 5 differs from the noisy input.
+  EXPECT_NE(external.back().diffuse.raw(), seq.frame(kFrames - 1).get("diffuse").raw());
+}
+
+TEST(ExternalProcess, CppBoxFiltersTheFullColour) {
+  const std::string name = DenoiserRegistry::resolve("ext:" ARENA_EXAMPLES_BINARY_DIR "/cpp_box");
+  EXPECT_EQ(DenoiserRegistry::instance().find(name).signals, SignalMode::Color);
+  const Sequence& seq = tinySequence();
+  const LayerSet frame = seq.frame(2);
+  const Image& color = frame.get("color");
+  const Image& id = frame.get("meshId");
+  // radius 0 passes the colour through bit for bit: nothing remodulated on the way.
+  const auto identity = denoiseAll({name, {{"radius", "0"}}, ""}, seq);
+  EXPECT_EQ(identity[2].color.raw(), color.raw());
+  EXPECT_TRUE(identity[2].diffuse.empty());
+  const auto blurred = denoiseAll({name, {{"radius", "1"}}, ""}, seq);
+  for (auto [x, y] :
+       std::initializer_list<std::pair<int, int>>{{5, 5}, {16, 9}, {0, 0}, {31, 17}}) {
+    if (id.at(x, y) < 0) continue;
+    for (int c = 0; c < 3; ++c) {
+      double sum = 0;
+      int n = 0;
+      for (int qy = std::max(0, y - 1); qy <= std::min(kHeight - 1, y + 1); ++qy)
+        for (int qx = std::max(0, x - 1); qx <= std::min(kWidth - 1, x + 1); ++qx)
+          if (id.at(qx, qy) == id.at(x, y)) {
+            sum += color.at(qx, qy, c);
+            ++n;
+          }
+      EXPECT_NEAR(blurred[2].color.at(x, y, c), sum / n, 1e-5 * (1 + sum / n))
+          << x << "," << y << " c" << c;
+    }
+  }
+}
+
+TEST(ExternalProcess, ARunRecordsTheExternalPairBesideAFailingOne) {
+  const std::string good = DenoiserRegistry::resolve("ext:" ARENA_EXAMPLES_BINARY_DIR "/cpp_box");
+  const std::string bad = faulty("crash");
+  RunConfig c;
+  c.name = "external";
+  c.out = test::freshDir("run_external");
+  c.cache = sequenceCache();
+  c.render = test::tinySettings(kWidth, kHeight, kFrames, 8);
+  c.scenes = {test::shippedScene("cornell_static")};
+  c.denoisers = {{good, {{"radius", "2"}}, ""}, {bad, {}, ""}};
+  c.baselines = false;
+  c.warmup = 2;
+  c.flip = "none";
+  c.keepFrames = "none";
+  const json r = runMatrix(c);
+  ASSERT_EQ(r["pairs"].size(), 2u);
+  const json& ok = r["pairs"][0];
+  ASSERT_EQ(ok["status"], "ok") << ok.dump();
+  EXPECT_EQ(ok["params"]["radius"], 2);
+  EXPECT_EQ(ok["signals"], "color");
+  EXPECT_NE(ok["origin"].get<std::string>().find("cpp_box/manifest.json"), std::string::npos);
+  EXPECT_EQ(ok["timing"]["msSource"], "reported by the process");
+  EXPECT_GE(ok["timing"]["msWallMedian"].get<double>(), ok["timing"]["msMedian"].get<double>());
+  EXPECT_GT(ok["summary"]["relMse"]["mean"].get<double>(), 0.0);
+  const json& failed = r["pairs"][1];
+  EXPECT_EQ(failed["status"], "failed");
+  EXPECT_NE(failed["error"].get<std::string>().find("killed by signal 11"), std::string::npos)
+      << failed["error"];
+}
+
+// --- faults: each a clear error; the harness neither hangs nor dies ---------------------------
+
+TEST(ExternalFaults, ExitEarlyGivesTheStatusAndTheStderrTail) {
+  const std::string e = errorOf([] { denoiseAll({faulty("exit"), {}, ""}, tinySequence()); });
+  EXPECT_NE(e.find("exited with status 3"), std::string::npos) << e;
+  EXPECT_NE(e.find("cannot find model weights weights.bin"), std::string::npos) << e;
+  EXPECT_NE(e.find("diffuse process"), std::string::npos) << e;
+}
+
+TEST(ExternalFaults, ACrashNamesTheSignal) {
+  const std::string e = errorOf([] { denoiseAll({faulty("crash"), {}, ""}, tinySequence()); });
+  EXPECT_NE(e.find("killed by signal 11"), std::string::npos) << e;
+  EXPECT_NE(e.find("about to dereference a null pointer"), std::string::npos) << e;
+}
+
+TEST(ExternalFaults, AWrongSizeIsRefused) {
+  const std::string e = errorOf([] { denoiseAll({faulty("wrong-size"), {}, ""}, tinySequence()); });
+  EXPECT_NE(e.find("frame 1: sent a 31x18x3 result; expected 32x18x3"), std::string::npos) << e;
+  const std::string s = errorOf([] { denoiseAll({faulty("short"), {}, ""}, tinySequence()); });
+  EXPECT_NE(s.find("expected 3 planes of 2304 bytes"), std::string::npos) << s;
+}
+
+TEST(ExternalFaults, ANaNFailsThePair) {
+  const std::string e = errorOf([] { denoiseAll({faulty("nan"), {}, ""}, tinySequence()); });
+  EXPECT_NE(e.find("non-finite value on the diffuse signal at frame 1"), std::string::npos) << e;
+}
+
+TEST(ExternalFaults, AHangIsKilledAfterTheTimeout) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::string e = errorOf([] { denoiseAll({faulty("hang", 0.5), {}, ""}, tinySequence()); });
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_NE(e.find("no result header within timeoutSeconds = 0.5"), std::string::npos) << e;
+  EXPECT_NE(e.find("killed by the harness"), std::string::npos) << e;
+  EXPECT_LT(seconds, 8.0);  // 0.5 s for the hang; the rest is the sequence and Python starting
+  const std::string setup = errorOf([] {
+    denoiseAll({faulty("no-ready", 0.5), {}, ""}, tinySequence());
+  });
+  EXPECT_NE(setup.find("no ready header within timeoutSeconds"), std::string::npos) << setup;
+}
+
+TEST(ExternalFaults, ReportedErrorsAndGarbageAreQuoted) {
+  const std::string e = errorOf([] { denoiseAll({faulty("error"), {}, ""}, tinySequence()); });
+  EXPECT_NE(e.find("it reported an error: out of GPU memory"), std::string::npos) << e;
+  const std::string g = errorOf([] { denoiseAll({faulty("garbage"), {}, ""}, tinySequence()); });
+  EXPECT_NE(g.find("got: hello from print debugging"), std::string::npos) << g;
+}
+
+TEST(ExternalFaults, AMissingProgramIsNamed) {
+  const json m = {
+      {"name", "nobody"}, {"command", {"./no-such-program"}}, {"signals", "demodulated"}};
+  const std::string name = DenoiserRegistry::resolve("ext:" + writeManifest("nobody", m).string());
+  const std::string e = errorOf([&] { denoiseAll({name, {}, ""}, tinySequence()); });
+  EXPECT_NE(e.find("cannot start './no-such-program'"), std::string::npos) << e;
+}
+
+// --- the C plugin ABI -------------------------------------------------------------------------
+
+TEST(Plugin, EawThroughTheAbiIsIdenticalToTheBuiltIn) {
+  const std::string name = DenoiserRegistry::resolve(std::string("plugin:") + ARENA_EAW_PLUGIN);
+  EXPECT_EQ(name, "eaw-plugin");
+  // The schema came through the ABI: the same names, defaults and ranges as the built-in's.
+  const DenoiserInfo& plugin = DenoiserRegistry::instance().find(name);
+  const DenoiserInfo& builtin = DenoiserRegistry::instance().find("eaw");
+  ASSERT_EQ(plugin.schema.specs().size(), builtin.schema.specs().size());
+  for (size_t i = 0; i < plugin.schema.specs().size(); ++i)
+    EXPECT_EQ(plugin.schema.specs()[i].describe(), builtin.schema.specs()[i].describe());
+  const std::map<std::string, std::string> params = {
+      {"iterations", "3"}, {"sigmaColor", "1.5"}, {"kernel", "3x3"}};
+  const Sequence& seq = tinySequence();
+  const auto a = denoiseAll({"eaw", params, ""}, seq);
+  const auto b = denoiseAll({name, params, ""}, seq);
+  for (size_t t = 0; t < a.size(); ++t) {
+    EXPECT_EQ(a[t].color.raw(), b[t].color.raw()) << "frame " << t;
+    EXPECT_FALSE(b[t].selfTimed);  // timed by the harness, like a built-in
+    ASSERT_EQ(b[t].passes.size(), a[t].passes.size());
+    EXPECT_EQ(b[t].passes[2].name, "diffuse/atrous 3");
+  }
+  // The manifest form loads the same library.
+  EXPECT_EQ(DenoiserRegistry::resolve("ext:" ARENA_EXAMPLES_BINARY_DIR "/eaw_plugin"), name);
+}
+
+TEST(Plugin, AnotherAbiVersionIsRefused) {
+  const std::string e =
+      errorOf([] { DenoiserRegistry::resolve(std::string("plugin:") + ARENA_WRONG_ABI_PLUGIN); });
+  EXPECT_NE(e.find("built against plugin ABI version 999, but this arena speaks version 1"),
+            std::string::npos)
+      << e;
+  const std::string missing =
+      errorOf([] { DenoiserRegistry::resolve("plugin:/no/such/libfoo.so"); });
+  EXPECT_NE(missing.find("no such plugin library"), std::string::npos) << missing;
+  const std::string notPlugin =
+      errorOf([] { DenoiserRegistry::resolve(std::string("plugin:") + ARENA_BINARY); });
+  EXPECT_NE(notPlugin.find("cannot load the plugin"), std::string::npos) << notPlugin;
+}
+
+}  // namespace
+}  // namespace arena
