@@ -163,8 +163,11 @@ ParamSchema schemaOf(const ArenaPlugin& p, const std::string& where) {
         if (choices.empty() || def < 0 || def >= int(choices.size()))
           throw Error(at + " (" + s.name +
                       "): a choice needs choices and a default index among them");
+        // The default by name, taken before the choices move into the spec (argument order is
+        // unspecified: indexing the moved-from vector crashed here).
+        std::string defaultChoice = choices[size_t(def)];
         specs.push_back(
-            ParamSpec::choice(s.name, choices[size_t(def)], std::move(choices), meaning));
+            ParamSpec::choice(s.name, std::move(defaultChoice), std::move(choices), meaning));
         break;
       }
       default:
