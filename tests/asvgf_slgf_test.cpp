@@ -80,8 +80,7 @@ struct Ghost {
 Ghost ghost(const std::string& scene, const std::string& label) {
   const json& g = pairOf(scene, label)["ghosting"];
   if (g.empty()) throw Error("no ghosting event for " + label + " on " + scene);
-  return {g[0]["responseFrames"].get<int>(), g[0]["ghostEnergy"].get<double>(),
-          g[0]["peakExcess"].get<double>()};
+  return {test::responseOrWindow(g[0]), g[0]["ghostEnergy"].get<double>(), g[0]["peakExcess"].get<double>()};
 }
 
 // Mean of E_M(t) (relMSE over the changed region) from the event to the end of the window: the
@@ -106,7 +105,7 @@ void printScene(const std::string& scene) {
     std::printf(
         "%-20s %-6s relMSE %.5f  response %2d frames  ghost energy %.4f  peak excess %.4f  "
         "mask %.2f\n",
-        scene.c_str(), label, relMse(scene, label), g[0]["responseFrames"].get<int>(),
+        scene.c_str(), label, relMse(scene, label), test::responseOrWindow(g[0]),
         g[0]["ghostEnergy"].get<double>(), g[0]["peakExcess"].get<double>(),
         g[0]["maskFraction"].get<double>());
   }
