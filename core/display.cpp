@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/error.hpp"
+
 namespace arena {
 
 float acesFilmic(float x) {
@@ -26,11 +28,35 @@ DisplayTransform DisplayTransform::fromReference(const Image& ref) {
   return t;
 }
 
-float DisplayTransform::apply(float linear) const { return srgbEncode(acesFilmic(linear * exposure)); }
+float DisplayTransform::apply(float linear) const {
+  return srgbEncode(acesFilmic(linear * exposure));
+}
 
 Image DisplayTransform::apply(const Image& rgb) const {
   Image out(rgb.width(), rgb.height(), rgb.channels());
   for (size_t i = 0; i < rgb.raw().size(); ++i) out.raw()[i] = apply(rgb.raw()[i]);
+  return out;
+}
+
+ExposureMode exposureModeFromName(const std::string& name) {
+  if (name == "per-frame") return ExposureMode::PerFrame;
+  if (name == "first") return ExposureMode::First;
+  throw Error(
+      "exposure '" + name +
+      "': expected per-frame (each frame's own reference) or first (the first reference's)");
+}
+
+const char* exposureModeName(ExposureMode mode) {
+  return mode == ExposureMode::PerFrame ? "per-frame" : "first";
+}
+
+std::vector<DisplayTransform> displayTransforms(const std::vector<const Image*>& references,
+                                                ExposureMode mode) {
+  std::vector<DisplayTransform> out;
+  for (const Image* r : references)
+    out.push_back(mode == ExposureMode::First && !out.empty()
+                      ? out.front()
+                      : DisplayTransform::fromReference(*r));
   return out;
 }
 

@@ -29,6 +29,7 @@ std::vector<std::string> splitList(const std::string& s) {
 struct MatrixOptions {
   RenderOptions render;
   std::string scenes = "all", out, shard = "0/1", flip = "all", keepFrames = "auto";
+  std::string exposure = "per-frame";
   std::vector<std::string> params;
   bool noBaselines = false;
   int warmup = 8;
@@ -44,6 +45,11 @@ void addMatrixOptions(CLI::App* cmd, MatrixOptions& o) {
       ->check(CLI::IsMember({"none", "ldr", "all"}));
   cmd->add_option("--keep-frames", o.keepFrames, "Images kept: auto, all, chosen, none")
       ->check(CLI::IsMember({"auto", "all", "chosen", "none"}));
+  cmd->add_option("--exposure", o.exposure,
+                  "Display exposure (metrics.md): per-frame (each frame's own reference) or first "
+                  "(the first reference's)")
+      ->check(CLI::IsMember({"per-frame", "first"}))
+      ->default_val("per-frame");
   cmd->add_option("--warmup", o.warmup, "Frames excluded from summaries (metrics.md W)")->default_val(8);
   cmd->add_flag("--no-baselines", o.noBaselines, "Do not add passthrough and temporal for context");
   cmd->add_option("--seeds", o.seeds,
@@ -65,6 +71,7 @@ RunConfig configFrom(const MatrixOptions& o) {
   c.seeds = o.seeds;
   c.flip = o.flip;
   c.keepFrames = o.keepFrames;
+  c.exposure = o.exposure;
   std::tie(c.shardIndex, c.shardCount) = parseShard(o.shard);
   c.progress = [](const std::string& line) { std::cout << line << std::endl; };
   return c;

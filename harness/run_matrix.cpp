@@ -48,29 +48,34 @@ std::string frameName(const char* prefix, int t) {
   return buf;
 }
 
-// Everything about a scene that every pair shares: frames, references, display transform, masks.
+// Everything about a scene that every pair shares: frames, references, display transforms, masks.
 struct SceneData {
   Sequence sequence;
   std::vector<LayerSet> frames;       // per frame
   std::vector<LayerSet> references;   // per distinct reference
+  std::vector<DisplayTransform> displays;  // per distinct reference (metrics.md, "Display exposure")
   std::vector<Image> referenceDisplay;
-  DisplayTransform display;
   std::vector<double> referenceRelMse, noisyRelMse;
   struct Event {
     SequenceEvent event;
     int begin = 0, end = 0;
     std::vector<Image> masks;  // per window frame
+    size_t chromaOnlyPixels = 0;
   };
   std::vector<Event> events;
+  struct Cut {
+    int frame = 0, segmentEnd = 0;  // the new view lasts [frame, segmentEnd]
+  };
+  std::vector<Cut> cuts;
   std::vector<int> chosenFrames;
   // Non-finite values in the cache's inputs, per "file kind: layer.channel" (reported, never silent).
   std::map<std::string, long> nonFinite;
   // Each metric's own floor: the metric between a reference-noise-only image and the reference.
   nlohmann::json floors = nlohmann::json::object();
-  const LayerSet& reference(int t) const { return references[size_t(sequence.info().referenceOfFrame[size_t(t)])]; }
-  const Image& referenceDisplayAt(int t) const {
-    return referenceDisplay[size_t(sequence.info().referenceOfFrame[size_t(t)])];
-  }
+  size_t referenceIndex(int t) const { return size_t(sequence.info().referenceOfFrame[size_t(t)]); }
+  const LayerSet& reference(int t) const { return references[referenceIndex(t)]; }
+  const DisplayTransform& displayAt(int t) const { return displays[referenceIndex(t)]; }
+  const Image& referenceDisplayAt(int t) const { return referenceDisplay[referenceIndex(t)]; }
 };
 
 int meshIdOf(const Scene& scene, const std::string& name) {
@@ -115,8 +120,9 @@ Image referenceNoiseImage(const LayerSet& ref, const std::string& seedName) {
   return out;
 }
 
-SceneData loadScene(const Scene& scene, const fs::path& dir, int warmup, const std::string& flip) {
-  SceneData s{Sequence::open(dir), {}, {}, {}, {}, {}, {}, {}, {}, {}, nlohmann::json::object()};
+SceneData loadScene(const Scene& scene, const fs::path& dir, int warmup, const std::string& flip,
+                    ExposureMode exposure) {
+  SceneData s{Sequence::open(dir), {}, {}, {}, {}, {}, {}, {}, {}, {}, {}, nlohmann::json::object()};
   const SequenceInfo& info = s.sequence.info();
   for (int t = 0; t < info.frames; ++t) {
     s.frames.push_back(s.sequence.frame(t));
@@ -135,27 +141,39 @@ SceneData loadScene(const Scene& scene, const fs::path& dir, int warmup, const s
       throw Error("scene " + info.scene + ": the reference has non-finite values (" + describeCounts(bad) +
                   "); check the scene's emitters and materials (a value beyond float range becomes Inf)");
   }
-  s.display = DisplayTransform::fromReference(s.reference(0).get("color"));
-  for (const LayerSet& r : s.references) s.referenceDisplay.push_back(s.display.apply(r.get("color")));
+  std::vector<const Image*> referenceColors;
+  for (const LayerSet& r : s.references) referenceColors.push_back(&r.get("color"));
+  s.displays = displayTransforms(referenceColors, exposure);
+  for (size_t r = 0; r < s.references.size(); ++r)
+    s.referenceDisplay.push_back(s.displays[r].apply(*referenceColors[r]));
   for (int t = 0; t < info.frames; ++t) {
     const LayerSet& ref = s.reference(t);
     s.referenceRelMse.push_back(referenceRelMse(ref.get("color"), ref.get("colorVar")));
     s.noisyRelMse.push_back(linearError(s.frames[size_t(t)].get("color"), ref.get("color"), &ref.get("colorVar")).relMse);
   }
   // Ghosting windows: [t0 - 5, t0 + 60], clipped to the sequence and ended before the next event
-  // (ours: a second event would otherwise pollute the first one's steady state).
+  // (ours: a second event would otherwise pollute the first one's steady state). A camera cut's
+  // segment runs from the cut to the frame before the next event.
   GhostingConfig gc;
   std::vector<int> eventFrames;
   for (const SequenceEvent& e : info.events) eventFrames.push_back(e.frame);
+  auto endBeforeNextEvent = [&](int from, int end) {
+    for (int f : eventFrames)
+      if (f > from) end = std::min(end, f - 1);
+    return end;
+  };
   for (const SequenceEvent& e : info.events) {
-    if (e.frame < 1 || e.kind == "camera_cut") continue;
+    if (e.frame < 1) continue;
+    if (e.kind == "camera_cut") {
+      s.cuts.push_back({e.frame, endBeforeNextEvent(e.frame, info.frames - 1)});
+      continue;
+    }
     SceneData::Event ev;
     ev.event = e;
     ev.begin = std::max(0, e.frame - gc.before);
-    ev.end = std::min(info.frames - 1, e.frame + gc.after);
-    for (int f : eventFrames)
-      if (f > e.frame) ev.end = std::min(ev.end, f - 1);
-    Image base = changedRegion(s.reference(e.frame).get("color"), s.reference(e.frame - 1).get("color"), gc);
+    ev.end = endBeforeNextEvent(e.frame, std::min(info.frames - 1, e.frame + gc.after));
+    Image base = changedRegion(s.reference(e.frame).get("color"),
+                               s.reference(e.frame - 1).get("color"), gc, &ev.chromaOnlyPixels);
     const int objectId = e.kind == "object_moves" ? meshIdOf(scene, e.what) : -1;
     for (int t = ev.begin; t <= ev.end; ++t) {
       Image mask = base;
@@ -182,7 +200,7 @@ SceneData loadScene(const Scene& scene, const fs::path& dir, int warmup, const s
       const LayerSet& ref = s.references[size_t(r)];
       const Image noise = referenceNoiseImage(ref, info.scene + "#" + std::to_string(r));
       const Image& color = ref.get("color");
-      const Image noiseDisp = s.display.apply(noise);
+      const Image noiseDisp = s.displays[size_t(r)].apply(noise);
       auto& f = perReference[r];
       f["relMse"] = linearError(noise, color, nullptr).relMse;
       f["psnr"] = psnrFromMse(meanSquaredError(noiseDisp, s.referenceDisplay[size_t(r)]));
@@ -233,7 +251,9 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   PairSeries series(info.frames, cfg.warmup);
   bool selfTimed = false;
   std::vector<std::vector<PassStats>> passes;
-  std::vector<std::vector<double>> eventCurves(sd.events.size()), eventBias(sd.events.size());
+  std::vector<std::vector<double>> eventCurves(sd.events.size()), eventBias(sd.events.size()),
+      eventChroma(sd.events.size()), cutLeak(sd.cuts.size());
+  GhostingConfig gc;
   Image prevColor, prevDisplay, prevError;
   long sanitized = 0;
   const bool keepImages = cfg.keepFrames != "none";
@@ -251,7 +271,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
             };
             ErrorTiles et;
             ErrorStats e = linearError(f.color, r, &var, nullptr, kRelMseEpsilon, &et);
-            Image disp = sd.display.apply(f.color);
+            Image disp = sd.displayAt(t).apply(f.color);
             put("relMse", e.relMse, std::move(et.relMse), FrameTransform::Mean);
             put("relMseCorrected", e.relMseCorrected, std::move(et.relMseCorrected), FrameTransform::Mean);
             put("mse", e.mse, et.mse, FrameTransform::Mean);
@@ -302,6 +322,13 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
               const Image& mask = ev.masks[size_t(t - ev.begin)];
               eventCurves[k].push_back(linearError(f.color, r, &var, &mask).relMse);
               eventBias[k].push_back(signedBias(f.color, r, mask));
+              eventChroma[k].push_back(chromaticityError(f.color, r, mask));
+            }
+            for (size_t k = 0; k < sd.cuts.size(); ++k) {
+              const auto& cut = sd.cuts[k];
+              if (t >= cut.frame && t <= std::min(cut.frame + gc.recoveryFrames, cut.segmentEnd))
+                cutLeak[k].push_back(
+                    oldViewLeak(f.color, r, sd.reference(cut.frame - 1).get("color")));
             }
             passes.push_back(f.passes);
             sanitized += f.sanitized;
@@ -335,15 +362,22 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   json ghosting = json::array();
   for (size_t k = 0; k < sd.events.size(); ++k) {
     const auto& ev = sd.events[k];
-    GhostingResult g = analyseGhosting(ev.event.frame, ev.begin, eventCurves[k], eventBias[k]);
+    GhostingResult g =
+        analyseGhosting(ev.event.frame, ev.begin, eventCurves[k], eventBias[k], eventChroma[k], gc);
     double maskPixels = 0;
     for (float v : ev.masks[size_t(ev.event.frame - ev.begin)].raw()) maskPixels += v;
     g.maskFraction = maskPixels / double(size_t(w) * h);
+    g.maskChromaFraction = double(ev.chromaOnlyPixels) / double(size_t(w) * h);
     json j = g.toJson();
     j["kind"] = ev.event.kind;
     j["what"] = ev.event.what;
     ghosting.push_back(j);
   }
+  json cuts = json::array();
+  for (size_t k = 0; k < sd.cuts.size(); ++k)
+    cuts.push_back(
+        analyseCut(sd.cuts[k].frame, sd.cuts[k].segmentEnd, series.values("relMse"), cutLeak[k], gc)
+            .toJson());
   json warnings = json::array();
   double refFloor = summarize(sd.referenceRelMse, cfg.warmup).mean;
   for (auto it = summary.begin(); it != summary.end(); ++it)
@@ -379,7 +413,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   if (selfTimed) timing["msWallMedian"] = summarize(series.values("msWall"), cfg.warmup).median;
   json pair = {{"scene", info.scene}, {"denoiser", req.name}, {"label", req.label}, {"params", run.params().toJson()},
                {"status", "ok"}, {"frames", frames}, {"summary", summary},
-               {"timing", timing}, {"ghosting", ghosting},
+               {"timing", timing}, {"ghosting", ghosting}, {"cuts", cuts},
                {"tiles", series.tilesJson()},
                {"warnings", warnings}, {"sanitizedInputs", sanitized},
                {"images", {{"dir", fs::relative(imageDir, cfg.out).string()}, {"all", keepAll && keepImages}}}};
@@ -462,6 +496,7 @@ json runMatrix(const RunConfig& cfg) {
   if (cfg.out.empty()) throw Error("run: --out is required");
   if (cfg.scenes.empty()) throw Error("run: no scenes");
   if (cfg.seeds < 1 || cfg.seeds > 64) throw Error("run: --seeds " + std::to_string(cfg.seeds) + ": expected 1 to 64");
+  const ExposureMode exposure = exposureModeFromName(cfg.exposure);
   std::vector<DenoiserRequest> denoisers;
   auto add = [&](DenoiserRequest r) {
     if (r.label.empty()) r.label = defaultLabel(r);
@@ -487,8 +522,15 @@ json runMatrix(const RunConfig& cfg) {
                                 {"preset", cfg.render.preset}, {"warmup", cfg.warmup}, {"flip", cfg.flip},
                                 {"seeds", cfg.seeds},
                                 {"relMseEpsilon", kRelMseEpsilon},
-                                {"display", "exposure from the scene's first reference (mean luminance -> 0.18), "
-                                            "ACES filmic (Narkowicz 2015), clamp, sRGB"},
+                                {"exposure", exposureModeName(exposure)},
+                                {"display", std::string(exposure == ExposureMode::PerFrame
+                                                            ? "exposure from each frame's own reference"
+                                                            : "exposure from the scene's first reference") +
+                                                " (mean luminance -> 0.18), ACES filmic (Narkowicz 2015), clamp, sRGB"},
+                                {"ghosting", GhostingConfig{}.toJson()},
+                                {"oldViewLeak", "least-squares coefficient of d - r onto r(cut - 1) - r over pixels and "
+                                                "channels (linear RGB), per frame cut..cut+5; 0 = nothing of the old "
+                                                "view, 1 = all of it"},
                                 {"tRmae", "Noisebase's form without its extra division by 3"},
                                 {"flipPixelsPerDegree", 67},
                                 {"shard", std::to_string(cfg.shardIndex) + "/" + std::to_string(cfg.shardCount)}}},
@@ -515,7 +557,7 @@ json runMatrix(const RunConfig& cfg) {
     std::string sceneError;
     try {
       dir = renderSequence(scene, cfg.render, cfg.cache, cfg.progress);
-      sd = std::make_unique<SceneData>(loadScene(scene, dir, cfg.warmup, cfg.flip));
+      sd = std::make_unique<SceneData>(loadScene(scene, dir, cfg.warmup, cfg.flip, exposure));
       for (int k = 1; k < cfg.seeds; ++k) {
         RenderSettings seeded = cfg.render;
         seeded.inputSeed = cfg.render.inputSeed + uint32_t(k);
@@ -535,14 +577,17 @@ json runMatrix(const RunConfig& cfg) {
       if (cfg.keepFrames != "none")
         for (int t : sd->chosenFrames) {
           writePng(sceneImages / frameName("reference", t), sd->referenceDisplayAt(t));
-          writePng(sceneImages / frameName("noisy", t), sd->display.apply(sd->frames[size_t(t)].get("color")));
+          writePng(sceneImages / frameName("noisy", t),
+                   sd->displayAt(t).apply(sd->frames[size_t(t)].get("color")));
         }
+      std::vector<double> exposures;
+      for (int t = 0; t < info.frames; ++t) exposures.push_back(sd->displayAt(t).exposure);
       results["scenes"][scene.name] = {
           {"purpose", scene.purpose}, {"sequence", dir.string()}, {"hash", info.hash}, {"width", info.width},
           {"height", info.height}, {"frames", info.frames}, {"events", events},
           {"referenceSpp", info.referenceSpp}, {"referenceRelMse", sd->referenceRelMse},
           {"referenceCapped", info.referenceCapped}, {"referenceEstimatedRelMse", info.referenceEstimatedRelMse},
-          {"noisyRelMse", sd->noisyRelMse}, {"exposure", sd->display.exposure},
+          {"noisyRelMse", sd->noisyRelMse}, {"exposure", exposures.front()}, {"exposurePerFrame", exposures},
           {"chosenFrames", sd->chosenFrames}, {"images", fs::relative(sceneImages, cfg.out).string()},
           {"floors", sd->floors}, {"nonFiniteInputs", sd->nonFinite}};
     }

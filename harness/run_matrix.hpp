@@ -22,6 +22,7 @@ struct RunConfig {
   bool baselines = true;          // add passthrough (noisy input) and temporal for context
   int warmup = 8;                 // metrics.md: summaries over frames t >= W
   std::string flip = "all";       // none | ldr | all (LDR + HDR)
+  std::string exposure = "per-frame";  // display exposure (metrics.md): per-frame | first
   std::string keepFrames = "auto";  // auto (all for a single pair, else chosen) | all | chosen | none
   int shardIndex = 0, shardCount = 1;
   // > 1: every scene is also rendered with input seeds 1..K-1 (the references are the same) and each

@@ -68,10 +68,14 @@ void addStudyCommand(CLI::App& app) {
   auto report = std::make_shared<std::string>("report");
   auto flip = std::make_shared<std::string>("all");
   auto scenes = std::make_shared<std::string>("all");
+  auto exposure = std::make_shared<std::string>("per-frame");
   cmd->add_option("--out", *out, "Run directory")->default_val("runs/study");
   cmd->add_option("--report", *report, "Report directory (index.html)")->default_val("report");
   cmd->add_option("--flip", *flip, "FLIP metrics: none, ldr, all")->check(CLI::IsMember({"none", "ldr", "all"}));
   cmd->add_option("--scenes", *scenes, "Scenes, comma-separated, or 'all'")->default_val("all");
+  cmd->add_option("--exposure", *exposure, "Display exposure (metrics.md): per-frame or first")
+      ->check(CLI::IsMember({"per-frame", "first"}))
+      ->default_val("per-frame");
   addRenderOptions(cmd, *opt);
   cmd->callback([=] {
     const auto start = std::chrono::steady_clock::now();
@@ -83,6 +87,7 @@ void addStudyCommand(CLI::App& app) {
     c.scenes = selectScenes(*scenes, opt->scenesDir);
     for (const std::string& n : DenoiserRegistry::instance().names()) c.denoisers.push_back({n, {}, ""});
     c.flip = *flip;
+    c.exposure = *exposure;
     c.keepFrames = "chosen";
     c.progress = [](const std::string& line) { std::cout << line << std::endl; };
     json results = runMatrix(c);

@@ -1,6 +1,7 @@
 #include "metrics/ghosting.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "core/error.hpp"
@@ -8,18 +9,71 @@
 
 namespace arena {
 
-Image changedRegion(const Image& r0, const Image& rBefore, const GhostingConfig& c) {
+namespace {
+
+std::array<double, 3> chromaticity(double r, double g, double b) {
+  const double s = r + g + b;
+  if (s <= 0) return {0, 0, 0};
+  return {r / s, g / s, b / s};
+}
+
+double distance(const std::array<double, 3>& a, const std::array<double, 3>& b) {
+  return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+                   (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+// b_pre-like baseline: the median of |v| over the (up to) `count` entries before index `first`.
+double medianAbsBefore(const std::vector<double>& v, size_t first, int count) {
+  std::vector<double> pre;
+  for (size_t i = first > size_t(count) ? first - size_t(count) : 0; i < first && i < v.size(); ++i)
+    pre.push_back(std::abs(v[i]));
+  return pre.empty() ? 0.0 : percentile(pre, 50);
+}
+
+double excessSum(const std::vector<double>& v, size_t first, double baseline) {
+  double s = 0;
+  for (size_t i = first; i < v.size(); ++i) s += std::max(0.0, std::abs(v[i]) - baseline);
+  return s;
+}
+
+}  // namespace
+
+nlohmann::json GhostingConfig::toJson() const {
+  return {
+      {"tau", tau},
+      {"chromaTau", chromaTau},
+      {"chroma", "Euclidean distance of (R,G,B)/(R+G+B), pixels brighter than eps in both frames"},
+      {"eps", eps},
+      {"biasThreshold", biasThreshold},
+      {"windowBefore", before},
+      {"windowAfter", after},
+      {"steadyFrames", steadyFrames},
+      {"trailFrames", trailFrames},
+      {"cutRecoveryFrames", recoveryFrames}};
+}
+
+Image changedRegion(const Image& r0, const Image& rBefore, const GhostingConfig& c,
+                    size_t* chromaOnly) {
   if (!r0.sameShape(rBefore)) throw Error("changed region: references differ in size");
   Image mask(r0.width(), r0.height(), 1);
+  size_t added = 0;
   for (size_t i = 0; i < r0.pixelCount(); ++i) {
-    double l0 = luminance(r0.plane(0)[i], r0.plane(1)[i], r0.plane(2)[i]);
-    double l1 = luminance(rBefore.plane(0)[i], rBefore.plane(1)[i], rBefore.plane(2)[i]);
-    mask.plane(0)[i] = std::abs(l0 - l1) > c.tau * (l1 + c.eps) ? 1.0f : 0.0f;
+    const double a[3] = {r0.plane(0)[i], r0.plane(1)[i], r0.plane(2)[i]};
+    const double b[3] = {rBefore.plane(0)[i], rBefore.plane(1)[i], rBefore.plane(2)[i]};
+    const double l0 = luminance(a[0], a[1], a[2]), l1 = luminance(b[0], b[1], b[2]);
+    const bool brightness = std::abs(l0 - l1) > c.tau * (l1 + c.eps);
+    const bool colour =
+        !brightness && std::min(l0, l1) > c.eps &&
+        distance(chromaticity(a[0], a[1], a[2]), chromaticity(b[0], b[1], b[2])) > c.chromaTau;
+    mask.plane(0)[i] = brightness || colour ? 1.0f : 0.0f;
+    added += colour;
   }
+  if (chromaOnly) *chromaOnly = added;
   return mask;
 }
 
-void addTrail(Image& mask, int objectId, const std::vector<const Image*>& previous, const Image& current) {
+void addTrail(Image& mask, int objectId, const std::vector<const Image*>& previous,
+              const Image& current) {
   for (size_t i = 0; i < mask.pixelCount(); ++i) {
     if (int(current.plane(0)[i]) == objectId) continue;
     for (const Image* p : previous)
@@ -42,42 +96,141 @@ double signedBias(const Image& d, const Image& r, const Image& mask, double eps)
   return n > 0 ? s / n : 0.0;
 }
 
-GhostingResult analyseGhosting(int t0, int begin, const std::vector<double>& curve, const std::vector<double>& bias,
+double chromaticityError(const Image& d, const Image& r, const Image& mask) {
+  double sd[3] = {0, 0, 0}, sr[3] = {0, 0, 0};
+  for (size_t i = 0; i < d.pixelCount(); ++i) {
+    if (mask.plane(0)[i] == 0) continue;
+    for (int c = 0; c < 3; ++c) {
+      sd[c] += d.plane(c)[i];
+      sr[c] += r.plane(c)[i];
+    }
+  }
+  if (sr[0] + sr[1] + sr[2] <= 0) return 0.0;
+  return distance(chromaticity(sd[0], sd[1], sd[2]), chromaticity(sr[0], sr[1], sr[2]));
+}
+
+GhostingResult analyseGhosting(int t0, int begin, const std::vector<double>& curve,
+                               const std::vector<double>& bias, const std::vector<double>& chroma,
                                const GhostingConfig& c) {
+  if (bias.size() != curve.size() || (!chroma.empty() && chroma.size() != curve.size()))
+    throw Error("ghosting: the E_M, bias and chromaticity curves differ in length");
   GhostingResult g;
   g.eventFrame = t0;
   g.windowBegin = begin;
   g.windowEnd = begin + int(curve.size()) - 1;
   g.curve = curve;
   g.bias = bias;
+  g.chroma = chroma;
+  g.responseThreshold = c.biasThreshold;
   if (curve.empty()) return g;
   const size_t n = curve.size();
-  const size_t steadyFrom = n > size_t(c.steadyFrames) ? n - size_t(c.steadyFrames) : 0;
-  g.steadyState = percentile(std::vector<double>(curve.begin() + long(steadyFrom), curve.end()), 50);
   const size_t first = size_t(std::clamp(t0 - begin, 0, int(n) - 1));
-  double peak = *std::max_element(curve.begin() + long(first), curve.end());
-  g.peakExcess = peak - g.steadyState;
-  const double threshold = g.steadyState + 0.1 * g.peakExcess;
-  // The first frame after which the curve stays under the threshold for good.
-  size_t settle = n;
-  for (size_t i = n; i-- > first;) {
-    if (curve[i] > threshold) break;
-    settle = i;
-  }
-  g.responseFrames = settle == n ? int(n - first) : int(settle - first);
+  // Secondary figures on E_M.
+  const size_t steadyFrom = n > size_t(c.steadyFrames) ? n - size_t(c.steadyFrames) : 0;
+  g.steadyState =
+      percentile(std::vector<double>(curve.begin() + long(steadyFrom), curve.end()), 50);
+  g.peakExcess = *std::max_element(curve.begin() + long(first), curve.end()) - g.steadyState;
   for (size_t i = first; i < n; ++i) g.ghostEnergy += std::max(0.0, curve[i] - g.steadyState);
+  // Response: one past the last frame from t0 on whose |b_M| exceeds the threshold.
+  size_t lastAbove = n;
+  for (size_t i = first; i < n; ++i)
+    if (std::abs(bias[i]) > c.biasThreshold) lastAbove = i;
+  g.settled = lastAbove != n - 1;
+  g.responseFrames = lastAbove == n ? 0 : int(lastAbove - first) + 1;
+  g.biasPre = medianAbsBefore(bias, first, c.before);
+  g.lagEnergy = excessSum(bias, first, g.biasPre);
+  if (!chroma.empty()) {
+    g.chromaPre = medianAbsBefore(chroma, first, c.before);
+    g.chromaLagEnergy = excessSum(chroma, first, g.chromaPre);
+  }
   double b = 0;
   int k = 0;
-  for (size_t i = first; i < std::min(n, first + 5); ++i, ++k) b += i < bias.size() ? bias[i] : 0.0;
+  for (size_t i = first; i < std::min(n, first + 5); ++i, ++k) b += bias[i];
   g.signedBias = k > 0 ? b / k : 0.0;
   return g;
 }
 
 nlohmann::json GhostingResult::toJson() const {
-  return {{"eventFrame", eventFrame}, {"windowBegin", windowBegin}, {"windowEnd", windowEnd},
-          {"curve", curve}, {"bias", bias}, {"steadyState", steadyState}, {"peakExcess", peakExcess},
-          {"responseFrames", responseFrames}, {"ghostEnergy", ghostEnergy}, {"signedBias", signedBias},
-          {"maskFraction", maskFraction}};
+  nlohmann::json j = {{"eventFrame", eventFrame},
+                      {"windowBegin", windowBegin},
+                      {"windowEnd", windowEnd},
+                      {"curve", curve},
+                      {"bias", bias},
+                      {"steadyState", steadyState},
+                      {"peakExcess", peakExcess},
+                      {"ghostEnergy", ghostEnergy},
+                      {"signedBias", signedBias},
+                      {"biasPre", biasPre},
+                      {"lagEnergy", lagEnergy},
+                      {"settled", settled},
+                      {"responseThreshold", responseThreshold},
+                      {"maskFraction", maskFraction},
+                      {"maskChromaFraction", maskChromaFraction}};
+  j["responseFrames"] = settled ? nlohmann::json(responseFrames) : nlohmann::json(nullptr);
+  if (!settled) j["response"] = "never settled within the window";
+  if (!chroma.empty()) {
+    j["chromaError"] = chroma;
+    j["chromaPre"] = chromaPre;
+    j["chromaLagEnergy"] = chromaLagEnergy;
+  }
+  return j;
+}
+
+double oldViewLeak(const Image& d, const Image& r, const Image& old) {
+  if (!d.sameShape(r) || !old.sameShape(r))
+    throw Error("old-view leak: images differ in size or channels");
+  double ed = 0, dd = 0;
+  for (size_t i = 0; i < r.raw().size(); ++i) {
+    const double diff = double(old.raw()[i]) - r.raw()[i];
+    ed += (double(d.raw()[i]) - r.raw()[i]) * diff;
+    dd += diff * diff;
+  }
+  return dd > 0 ? ed / dd : 0.0;
+}
+
+CutResult analyseCut(int cut, int segmentEnd, const std::vector<double>& relMse,
+                     const std::vector<double>& leak, const GhostingConfig& c) {
+  if (cut < 0 || segmentEnd < cut || size_t(segmentEnd) >= relMse.size())
+    throw Error("camera cut at frame " + std::to_string(cut) + ": segment end " +
+                std::to_string(segmentEnd) + " outside the sequence");
+  CutResult out;
+  out.cutFrame = cut;
+  out.steadyBegin = cut + c.recoveryFrames + 1;
+  out.steadyEnd = segmentEnd;
+  std::vector<double> steady;
+  for (int t = out.steadyBegin; t <= segmentEnd; ++t) steady.push_back(relMse[size_t(t)]);
+  out.steadyState = steady.empty() ? 0.0 : percentile(steady, 50);
+  const double s = out.steadyState > 0 ? out.steadyState : NAN;
+  out.atCut = relMse[size_t(cut)] / s;
+  for (int t = cut + 1; t <= std::min(cut + c.recoveryFrames, segmentEnd); ++t) {
+    out.recoveryFrames.push_back(t);
+    out.recovery.push_back(relMse[size_t(t)] / s);
+  }
+  for (size_t k = 0; k < leak.size(); ++k) {
+    out.leakFrames.push_back(cut + int(k));
+    out.leak.push_back(leak[k]);
+    out.oldViewLeak = std::max(out.oldViewLeak, std::abs(leak[k]));
+  }
+  return out;
+}
+
+nlohmann::json CutResult::toJson() const {
+  nlohmann::json j = {{"kind", "camera_cut"},
+                      {"eventFrame", cutFrame},
+                      {"recoveryFrames", recoveryFrames},
+                      {"steadyFrames", {steadyBegin, steadyEnd}},
+                      {"leakFrames", leakFrames},
+                      {"leak", leak},
+                      {"oldViewLeak", oldViewLeak}};
+  if (steadyEnd >= steadyBegin && steadyState > 0) {
+    j["steadyState"] = steadyState;
+    j["atCut"] = atCut;
+    j["recovery"] = recovery;
+  } else {
+    j["absent"] = "no frames after frame " + std::to_string(steadyBegin - 1) +
+                  " before the segment ends: no steady state to compare with";
+  }
+  return j;
 }
 
 }  // namespace arena

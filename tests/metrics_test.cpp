@@ -128,10 +128,12 @@ TEST(Metrics, GhostingStepThatRecoversInKFrames) {
     if (t >= t0 && t < t0 + k) v = 1.0 - 0.9 * double(t - t0) / k;
     curve.push_back(v);
   }
+  // The secondary figures on E_M (metrics.md); the response is measured on the bias (0.5 here,
+  // never within 5%: not settled).
   GhostingResult g = analyseGhosting(t0, begin, curve, std::vector<double>(curve.size(), 0.5));
   EXPECT_NEAR(g.steadyState, 0.1, 1e-12);
   EXPECT_NEAR(g.peakExcess, 0.9, 1e-12);
-  EXPECT_EQ(g.responseFrames, k);
+  EXPECT_FALSE(g.settled);
   EXPECT_NEAR(g.ghostEnergy, 0.9 + 0.675 + 0.45 + 0.225, 1e-9);
   EXPECT_NEAR(g.signedBias, 0.5, 1e-12);
 }

@@ -75,4 +75,9 @@ std::unique_ptr<Denoiser> createDenoiser(const std::string& name,
   return info.create(info.schema.resolve(params, name), kind);
 }
 
+int responseOrWindow(const nlohmann::json& g) {
+  return g["responseFrames"].is_null() ? g["windowEnd"].get<int>() - g["eventFrame"].get<int>() + 1
+                                       : g["responseFrames"].get<int>();
+}
+
 }  // namespace arena::test

@@ -2,6 +2,7 @@
 // Helpers shared by the tests: temporary directories, tiny renders of shipped scenes,
 // deterministic noise and frame contexts.
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -35,5 +36,9 @@ LayerSet planeFrame(int w, int h, float spacing = 0.01f);
 std::unique_ptr<Denoiser> createDenoiser(const std::string& name,
                                          const std::map<std::string, std::string>& params = {},
                                          SignalKind kind = SignalKind::Diffuse);
+
+// A ghosting entry's response in frames (metrics.md); a bias that never settled within the window
+// (responseFrames null) counts as the window's length from the event, a lower bound of the truth.
+int responseOrWindow(const nlohmann::json& ghostingEntry);
 
 }  // namespace arena::test
