@@ -70,7 +70,9 @@ void addStudyCommand(CLI::App& app) {
   auto scenes = std::make_shared<std::string>("all");
   cmd->add_option("--out", *out, "Run directory")->default_val("runs/study");
   cmd->add_option("--report", *report, "Report directory (index.html)")->default_val("report");
-  cmd->add_option("--flip", *flip, "FLIP metrics: none, ldr, all")->check(CLI::IsMember({"none", "ldr", "all"}));
+  cmd->add_option("--flip", *flip, "FLIP metrics: none, ldr, all")
+      ->check(CLI::IsMember({"none", "ldr", "all"}))
+      ->default_val("all");
   cmd->add_option("--scenes", *scenes, "Scenes, comma-separated, or 'all'")->default_val("all");
   addRenderOptions(cmd, *opt);
   cmd->callback([=] {
@@ -81,6 +83,7 @@ void addStudyCommand(CLI::App& app) {
     c.cache = opt->cacheDir;
     c.render = opt->settings();
     c.scenes = selectScenes(*scenes, opt->scenesDir);
+    for (const Scene& s : c.scenes) requireFitsInMemory(s, c.render, true);
     for (const std::string& n : DenoiserRegistry::instance().names()) c.denoisers.push_back({n, {}, ""});
     c.flip = *flip;
     c.keepFrames = "chosen";
