@@ -1,10 +1,15 @@
 #include "core/atomic_file.hpp"
 
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
-#include <fstream>
-#include <sstream>
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <regex>
 
 #include "core/error.hpp"
 
@@ -12,37 +17,124 @@ namespace arena {
 
 namespace fs = std::filesystem;
 
-void writeAtomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
+std::string osError(const fs::path& path, const std::string& what, int errnoValue) {
+  return path.string() + ": " + what + ": " + std::strerror(errnoValue);
+}
+
+fs::path temporaryPathFor(const fs::path& path) {
   static std::atomic<unsigned> counter{0};
-  if (path.has_parent_path()) fs::create_directories(path.parent_path());
   // The extension stays last so format libraries that look at it (OpenCV) still recognise it.
-  fs::path tmp = path.parent_path() / (path.stem().string() + ".tmp" + std::to_string(getpid()) +
-                                       "_" + std::to_string(counter++) + path.extension().string());
+  return path.parent_path() / (path.stem().string() + ".tmp" + std::to_string(getpid()) + "_" +
+                               std::to_string(counter++) + path.extension().string());
+}
+
+void writeAtomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
+  if (path.has_parent_path()) {
+    std::error_code ec;
+    fs::create_directories(path.parent_path(), ec);
+    if (ec) throw Error(path.parent_path().string() + ": cannot create directory: " + ec.message());
+  }
+  const fs::path tmp = temporaryPathFor(path);
   try {
     write(tmp);
-    fs::rename(tmp, path);
+    if (std::rename(tmp.c_str(), path.c_str()) != 0)
+      throw Error(osError(path, "cannot rename " + tmp.string() + " to it", errno));
   } catch (...) {
     std::error_code ignored;
     fs::remove(tmp, ignored);
-    throw;
+    try {
+      throw;
+    } catch (const Error& e) {  // name the final path, not only the temporary
+      if (std::string(e.what()).rfind(path.string() + ":", 0) == 0) throw;
+      throw Error(path.string() + ": " + e.what());
+    } catch (
+        const std::exception& e) {  // a library's own exception (OpenEXR's Iex, std::bad_alloc)
+      throw Error(path.string() + ": cannot write: " + e.what());
+    }
   }
 }
 
-void writeTextAtomically(const fs::path& path, const std::string& text) {
-  writeAtomically(path, [&](const fs::path& tmp) {
-    std::ofstream out(tmp, std::ios::binary);
-    out << text;
-    out.close();
-    if (!out) throw Error(path.string() + ": could not write file");
-  });
+int removeStaleTemporaries(const fs::path& dir, double minAgeSeconds) {
+  // SQLite's journal of a temporary database ends in ".db-journal".
+  static const std::regex pattern(R"(.+\.tmp([0-9]+)_[0-9]+(\.[A-Za-z0-9-]+)?)");
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) return 0;
+  int removed = 0;
+  const auto now = fs::file_time_type::clock::now();
+  for (auto it = fs::directory_iterator(dir, ec); !ec && it != fs::directory_iterator();
+       it.increment(ec)) {
+    std::smatch m;
+    const std::string name = it->path().filename().string();
+    if (!std::regex_match(name, m, pattern) || !it->is_regular_file(ec)) continue;
+    const long pid = std::stol(m[1].str());
+    const bool alive = pid == getpid() || (pid > 0 && pid < (1L << 30) &&
+                                           (kill(pid_t(pid), 0) == 0 || errno != ESRCH));
+    if (alive) continue;
+    auto written = fs::last_write_time(it->path(), ec);
+    if (ec || std::chrono::duration<double>(now - written).count() < minAgeSeconds) continue;
+    std::error_code removeError;
+    if (fs::remove(it->path(), removeError)) ++removed;
+  }
+  return removed;
 }
 
-std::string readText(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path.string() + ": cannot open file");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return buffer.str();
+void writeFileBytes(const fs::path& path, const std::string& bytes) {
+  int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw Error(osError(path, "cannot create file", errno));
+  size_t done = 0;
+  while (done < bytes.size()) {
+    ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      int err = n < 0 ? errno : EIO;
+      ::close(fd);
+      throw Error(osError(path, "cannot write " + std::to_string(bytes.size()) + " bytes", err));
+    }
+    done += size_t(n);
+  }
+  if (::close(fd) != 0) throw Error(osError(path, "cannot write (close)", errno));
+}
+
+void writeTextAtomically(const fs::path& path, const std::string& text) {
+  writeAtomically(path, [&](const fs::path& tmp) { writeFileBytes(tmp, text); });
+}
+
+std::string readText(const fs::path& path, uintmax_t maxBytes) {
+  int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw Error(osError(path, "cannot open file", errno));
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) {
+    int err = errno;
+    ::close(fd);
+    throw Error(osError(path, "cannot stat file", err));
+  }
+  if (!S_ISREG(st.st_mode)) {
+    ::close(fd);
+    throw Error(path.string() +
+                ": not a regular file (a device, directory or pipe cannot be read as a document)");
+  }
+  if (uintmax_t(st.st_size) > maxBytes) {
+    ::close(fd);
+    throw Error(path.string() + ": file is " + std::to_string(st.st_size) +
+                " bytes, more than the " + std::to_string(maxBytes) +
+                "-byte limit for files arena reads whole");
+  }
+  std::string text(size_t(st.st_size), '\0');
+  size_t done = 0;
+  while (done < text.size()) {
+    ssize_t n = ::read(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      int err = errno;
+      ::close(fd);
+      throw Error(osError(path, "cannot read file", err));
+    }
+    if (n == 0) break;  // shrank while reading
+    done += size_t(n);
+  }
+  text.resize(done);
+  ::close(fd);
+  return text;
 }
 
 }  // namespace arena

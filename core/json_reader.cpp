@@ -1,6 +1,7 @@
 #include "core/json_reader.hpp"
 
 #include <cmath>
+#include <limits>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
@@ -11,7 +12,8 @@ using nlohmann::json;
 
 JsonReader::JsonReader(const json& node, std::string file, std::string path)
     : node_(node), file_(std::move(file)), path_(std::move(path)) {
-  if (!node_.is_object()) throw Error(file_ + ": " + path_ + ": expected an object, got " + jsonTypeName(node_));
+  if (!node_.is_object())
+    throw Error(file_ + ": " + path_ + ": expected an object, got " + jsonTypeName(node_));
 }
 
 std::string jsonTypeName(const json& j) {
@@ -23,8 +25,39 @@ std::string jsonTypeName(const json& j) {
   return "an object";
 }
 
-json parseJsonFile(const std::string& file) {
-  std::string text = readText(file);
+namespace {
+
+// The deepest nesting of arrays and objects in `text`, outside strings; stops counting at `limit`
+// and returns the byte offset where it was exceeded (or npos).
+size_t firstTooDeep(const std::string& text, int limit) {
+  int depth = 0;
+  bool inString = false;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (inString) {
+      if (c == '\\')
+        ++i;
+      else if (c == '"')
+        inString = false;
+    } else if (c == '"') {
+      inString = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > limit) return i;
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+  return std::string::npos;
+}
+
+}  // namespace
+
+json parseJsonText(const std::string& text, const std::string& file) {
+  size_t deep = firstTooDeep(text, kMaxJsonDepth);
+  if (deep != std::string::npos)
+    throw Error(file + ": JSON nested deeper than " + std::to_string(kMaxJsonDepth) +
+                " levels (at byte " + std::to_string(deep) +
+                "); arena documents nest a few levels");
   try {
     return json::parse(text);
   } catch (const json::parse_error& e) {
@@ -32,13 +65,21 @@ json parseJsonFile(const std::string& file) {
   }
 }
 
-std::string JsonReader::where(const std::string& key) const { return file_ + ": " + path_ + "." + key; }
+json parseJsonFile(const std::string& file) {
+  return parseJsonText(readText(file), file);
+}
+
+std::string JsonReader::where(const std::string& key) const {
+  return file_ + ": " + path_ + "." + key;
+}
 
 void JsonReader::fail(const std::string& key, const std::string& expected) const {
   throw Error(where(key) + ": " + expected);
 }
 
-bool JsonReader::has(const std::string& key) const { return node_.contains(key); }
+bool JsonReader::has(const std::string& key) const {
+  return node_.contains(key);
+}
 
 const json& JsonReader::member(const std::string& key, const char* expected) {
   if (!node_.contains(key)) fail(key, std::string("missing; expected ") + expected);
@@ -63,7 +104,8 @@ std::vector<JsonReader> JsonReader::requiredArray(const std::string& key) {
   std::vector<JsonReader> out;
   for (size_t i = 0; i < j.size(); ++i) {
     std::string p = path_ + "." + key + "[" + std::to_string(i) + "]";
-    if (!j[i].is_object()) throw Error(file_ + ": " + p + ": expected an object, got " + jsonTypeName(j[i]));
+    if (!j[i].is_object())
+      throw Error(file_ + ": " + p + ": expected an object, got " + jsonTypeName(j[i]));
     out.emplace_back(j[i], file_, p);
   }
   return out;
@@ -92,13 +134,27 @@ double JsonReader::number(const std::string& key, double fallback) {
   return has(key) ? number(key) : fallback;
 }
 
-int JsonReader::integer(const std::string& key) {
+int JsonReader::integerIn(const std::string& key, long long lo, long long hi) {
   const json& j = member(key, "an integer");
   if (!j.is_number_integer()) fail(key, "expected an integer, got " + jsonTypeName(j));
-  return j.get<int>();
+  const std::string range =
+      "an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+  // Compare in the type nlohmann stored, before any narrowing conversion.
+  if (j.is_number_unsigned()) {
+    unsigned long long v = j.get<unsigned long long>();
+    if (hi < 0 || v > static_cast<unsigned long long>(hi) ||
+        (lo > 0 && v < static_cast<unsigned long long>(lo)))
+      fail(key, "expected " + range + ", got " + std::to_string(v));
+    return int(v);
+  }
+  long long v = j.get<long long>();
+  if (v < lo || v > hi) fail(key, "expected " + range + ", got " + std::to_string(v));
+  return int(v);
 }
 
-int JsonReader::integer(const std::string& key, int fallback) { return has(key) ? integer(key) : fallback; }
+int JsonReader::integerIn(const std::string& key, int fallback, long long lo, long long hi) {
+  return has(key) ? integerIn(key, lo, hi) : fallback;
+}
 
 bool JsonReader::boolean(const std::string& key, bool fallback) {
   if (!has(key)) return fallback;
@@ -131,6 +187,9 @@ std::vector<double> JsonReader::numbers(const std::string& key, size_t count) {
 
 glm::vec3 JsonReader::vec3(const std::string& key) {
   auto v = numbers(key, 3);
+  for (double x : v)
+    if (std::abs(x) > double(std::numeric_limits<float>::max()))
+      fail(key, "expected values that fit a float (|v| <= 3.4e38), got " + std::to_string(x));
   return glm::vec3(float(v[0]), float(v[1]), float(v[2]));
 }
 
@@ -141,7 +200,8 @@ glm::vec3 JsonReader::vec3(const std::string& key, glm::vec3 fallback) {
 void JsonReader::rejectUnread() const {
   for (auto it = node_.begin(); it != node_.end(); ++it) {
     if (!read_.count(it.key()))
-      throw Error(where(it.key()) + ": unknown field (check the spelling; unknown fields are errors)");
+      throw Error(where(it.key()) +
+                  ": unknown field (check the spelling; unknown fields are errors)");
   }
 }
 

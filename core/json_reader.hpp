@@ -13,6 +13,8 @@ namespace arena {
 
 class JsonReader {
  public:
+  static constexpr long long kIntMin = -2147483648LL, kIntMax = 2147483647LL;
+
   JsonReader(const nlohmann::json& node, std::string file, std::string path = "$");
 
   const std::string& file() const { return file_; }
@@ -29,11 +31,18 @@ class JsonReader {
 
   double number(const std::string& key);
   double number(const std::string& key, double fallback);
-  int integer(const std::string& key);
-  int integer(const std::string& key, int fallback);
+  // Integers must be written as integers and lie in [lo, hi] (by default the int range): a value
+  // that would wrap (frames 4294967300) is an error naming it, never a silently different number.
+  int integer(const std::string& key) { return integerIn(key, kIntMin, kIntMax); }
+  int integer(const std::string& key, int fallback) {
+    return integerIn(key, fallback, kIntMin, kIntMax);
+  }
+  int integerIn(const std::string& key, long long lo, long long hi);
+  int integerIn(const std::string& key, int fallback, long long lo, long long hi);
   bool boolean(const std::string& key, bool fallback);
   std::string string(const std::string& key);
   std::string string(const std::string& key, const std::string& fallback);
+  // Three numbers that fit a float (1e39 would become +Inf in the tracer).
   glm::vec3 vec3(const std::string& key);
   glm::vec3 vec3(const std::string& key, glm::vec3 fallback);
   std::vector<double> numbers(const std::string& key, size_t count);
@@ -53,6 +62,13 @@ class JsonReader {
 };
 
 std::string jsonTypeName(const nlohmann::json& j);
+// Configuration and results documents nest a handful of levels; anything deeper than this is
+// rejected before parsing, so no later recursive walk (dump, hash, destructor) can exhaust the
+// stack.
+constexpr int kMaxJsonDepth = 64;
+// Parses `text` (read from `file`, named in errors); malformed or too deeply nested text is an
+// Error.
+nlohmann::json parseJsonText(const std::string& text, const std::string& file);
 nlohmann::json parseJsonFile(const std::string& file);
 
 }  // namespace arena

@@ -16,6 +16,7 @@
 #include "core/error.hpp"
 #include "harness/commands.hpp"
 #include "harness/denoise_run.hpp"
+#include "harness/scene_selection.hpp"
 #include "tracer/render.hpp"
 
 #include <opencv2/imgproc.hpp>
@@ -90,12 +91,12 @@ void addBenchCommand(CLI::App& app) {
     std::string json;
   };
   auto o = std::make_shared<Options>();
-  tracer->add_option("--size", o->size, "Square resolution")->default_val(512);
-  tracer->add_option("--frames", o->frames, "Timed frames")->default_val(20);
-  tracer->add_option("--warmup", o->warmup, "Untimed warm-up frames")->default_val(3);
+  tracer->add_option("--size", o->size, "Square resolution")->check(CLI::Range(1, kMaxSceneResolution))->default_val(512);
+  tracer->add_option("--frames", o->frames, "Timed frames")->check(CLI::Range(1, 100000))->default_val(20);
+  tracer->add_option("--warmup", o->warmup, "Untimed warm-up frames")->check(CLI::Range(0, 100000))->default_val(3);
   tracer->add_option("--scene", o->scene, "Scene file");
   tracer->add_flag("--embree", o->embree, "Also run Embree's pathtracer tutorial (embree-tools) for comparison");
-  tracer->add_option("--json", o->json, "Write results to this JSON file");
+  tracer->add_option("--json", o->json, "Write results to this JSON file")->default_str("none");
   tracer->callback([o] {
     Scene scene = loadScene(o->scene);
     RenderSettings settings;
@@ -142,18 +143,18 @@ void addBenchCommand(CLI::App& app) {
   auto d = std::make_shared<DenoiseOptions>();
   denoise->add_option("--denoisers", d->denoisers, "Comma-separated names (ext:MANIFEST, plugin:LIBRARY too) or 'all'")
       ->default_val("all");
-  denoise->add_option("--plugin", d->plugins, "A C plugin library (include/arena_plugin.h) to time too, repeatable");
-  denoise->add_option("--param", d->params, "DENOISER.NAME=VALUE, repeatable");
+  denoise->add_option("--plugin", d->plugins, "A C plugin library (include/arena_plugin.h) to time too, repeatable")->default_str("none");
+  denoise->add_option("--param", d->params, "DENOISER.NAME=VALUE, repeatable")->default_str("none: registry defaults");
   denoise->add_option("--scene", d->scene, "Scene file whose frames feed the denoisers");
   denoise->add_option("--resolution", d->resolution, "WIDTHxHEIGHT")->default_val("1280x720");
-  denoise->add_option("--frames", d->frames, "Timed frames per denoiser")->default_val(20);
-  denoise->add_option("--warmup", d->warmup, "Untimed frames first")->default_val(5);
-  denoise->add_option("--inputs", d->inputs, "Distinct rendered input frames, cycled")->default_val(3);
-  denoise->add_option("--json", d->json, "Write results to this JSON file");
+  denoise->add_option("--frames", d->frames, "Timed frames per denoiser")->check(CLI::Range(1, 100000))->default_val(20);
+  denoise->add_option("--warmup", d->warmup, "Untimed frames first")->check(CLI::Range(0, 100000))->default_val(5);
+  denoise->add_option("--inputs", d->inputs, "Distinct rendered input frames, cycled")
+      ->check(CLI::Range(1, 1000))
+      ->default_val(3);
+  denoise->add_option("--json", d->json, "Write results to this JSON file")->default_str("none");
   denoise->callback([d] {
-    int w = 0, h = 0;
-    if (std::sscanf(d->resolution.c_str(), "%dx%d", &w, &h) != 2 || w < 1 || h < 1)
-      throw Error("--resolution: expected WIDTHxHEIGHT, got '" + d->resolution + "'");
+    auto [w, h] = parseResolution("--resolution", d->resolution);
     Scene scene = loadScene(d->scene);
     RenderSettings settings;
     settings.width = w;

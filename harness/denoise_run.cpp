@@ -17,7 +17,11 @@ std::map<std::string, std::map<std::string, std::string>> parseParamAssignments(
       throw Error("--param '" + item + "': expected DENOISER.NAME=VALUE, e.g. svgf.sigmaL=4");
     std::string denoiser = item.substr(0, dot);
     registry.find(denoiser);  // throws, listing the registered names
-    out[denoiser][item.substr(dot + 1, eq - dot - 1)] = item.substr(eq + 1);
+    const std::string name = item.substr(dot + 1, eq - dot - 1);
+    auto [it, inserted] = out[denoiser].emplace(name, item.substr(eq + 1));
+    if (!inserted)
+      throw Error("--param '" + item + "': " + denoiser + "." + name + " is already set to '" + it->second +
+                  "' (give each parameter once)");
   }
   return out;
 }

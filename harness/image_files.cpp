@@ -19,9 +19,10 @@ void writePng(const std::filesystem::path& path, const Image& display) {
         mat.at<cv::Vec3b>(y, x) = cv::Vec3b(q(2), q(1), q(0));
       }
     }
-  writeAtomically(path, [&](const std::filesystem::path& tmp) {
-    if (!cv::imwrite(tmp.string(), mat)) throw Error(path.string() + ": cannot write PNG");
-  });
+  // Encoded in memory, written by writeFileBytes: a full disk is reported with the path and errno.
+  std::vector<uint8_t> png;
+  if (!cv::imencode(".png", mat, png)) throw Error(path.string() + ": cannot encode PNG");
+  writeAtomically(path, [&](const std::filesystem::path& tmp) { writeFileBytes(tmp, std::string(png.begin(), png.end())); });
 }
 
 }  // namespace arena

@@ -1,13 +1,37 @@
 // `arena`: the Denoise Arena command line. Data flows scene -> sequence -> denoiser -> metrics ->
 // report; each subcommand drives one step (or, for `study`, all of them).
+#include <cxxabi.h>
+
+#include <exception>
+#include <filesystem>
 #include <iostream>
+#include <new>
+#include <typeinfo>
 
 #include "core/error.hpp"
 #include "harness/commands.hpp"
 
+namespace {
+
+// The dynamic type of the exception in flight, demangled (std::bad_alloc, Iex_3_1::IoExc, ...).
+std::string currentExceptionType() {
+  const std::type_info* type = abi::__cxa_current_exception_type();
+  if (!type) return "unknown";
+  int status = 0;
+  char* name = abi::__cxa_demangle(type->name(), nullptr, nullptr, &status);
+  std::string out = status == 0 && name ? name : type->name();
+  std::free(name);
+  return out;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
-  CLI::App app{"Denoise Arena: real-time path-tracing denoisers side by side on identical sequences"};
+  CLI::App app{
+      "Denoise Arena: real-time path-tracing denoisers side by side on identical sequences"};
   app.require_subcommand(1);
+  // `--help` shows every option's default (subcommands copy these option defaults).
+  app.option_defaults()->always_capture_default();
   arena::cli::addScenesCommand(app);
   arena::cli::addRenderCommand(app);
   arena::cli::addRefineCommand(app);
@@ -15,6 +39,7 @@ int main(int argc, char** argv) {
   arena::cli::addRunCommands(app);
   arena::cli::addBenchCommand(app);
   arena::cli::addReportCommand(app);
+  // No input may end in abort() or an unnamed exception: everything is caught here and named.
   try {
     app.parse(argc, argv);
   } catch (const CLI::RuntimeError& e) {
@@ -24,8 +49,19 @@ int main(int argc, char** argv) {
   } catch (const arena::Error& e) {
     std::cerr << "arena: error: " << e.what() << "\n";
     return 2;
+  } catch (const std::filesystem::filesystem_error& e) {  // names the path(s) and the OS reason
+    std::cerr << "arena: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "arena: error: out of memory (std::bad_alloc); lower the resolution, frame count "
+                 "or the number "
+                 "of scenes per run\n";
+    return 3;
   } catch (const std::exception& e) {
-    std::cerr << "arena: unexpected error: " << e.what() << "\n";
+    std::cerr << "arena: unexpected error (" << currentExceptionType() << "): " << e.what() << "\n";
+    return 3;
+  } catch (...) {
+    std::cerr << "arena: unexpected error: an exception of type " << currentExceptionType() << "\n";
     return 3;
   }
   return 0;

@@ -18,7 +18,7 @@ void addScenesCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("scenes", "List the scenes with their purpose");
   auto dir = std::make_shared<std::string>(defaultScenesDir());
   auto json = std::make_shared<bool>(false);
-  cmd->add_option("--scenes-dir", *dir, "Directory of scene files");
+  cmd->add_option("--scenes-dir", *dir, "Directory of scene files")->default_str(*dir);
   cmd->add_flag("--json", *json, "Machine-readable output");
   cmd->callback([dir, json] {
     nlohmann::json out = nlohmann::json::array();
@@ -51,7 +51,9 @@ void addRenderCommand(CLI::App& app) {
   cmd->callback([opt, names, previews, shardText] {
     Shard shard;
     std::tie(shard.index, shard.count) = parseShard(*shardText);
-    for (const Scene& scene : selectScenes(*names, opt->scenesDir)) {
+    const std::vector<Scene> scenes = selectScenes(*names, opt->scenesDir);
+    for (const Scene& scene : scenes) requireFitsInMemory(scene, opt->settings(), false);
+    for (const Scene& scene : scenes) {
       auto dir = renderSequence(
           scene, opt->settings(), opt->cacheDir, [](const std::string& line) { std::cout << line << std::endl; },
           shard);

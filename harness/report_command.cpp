@@ -15,7 +15,8 @@ void addReportCommand(CLI::App& app) {
        out = std::make_shared<std::string>();
   cmd->add_option("run", *run, "Run directory (written by `arena run` or `arena sweep`)")
       ->required();
-  cmd->add_option("--baseline", *baseline, "A run to compare against: adds the regression view");
+  cmd->add_option("--baseline", *baseline, "A run to compare against: adds the regression view")
+      ->default_str("none");
   cmd->add_option("--out", *out, "Output directory for index.html and its files")->required();
   cmd->callback([o, run, baseline, out] {
     o->run = *run;

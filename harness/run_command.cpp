@@ -1,6 +1,7 @@
 // `arena run`, `arena sweep`, `arena merge`, `arena compare`, `arena denoisers`.
 #include <cmath>
 #include <iomanip>
+#include <set>
 #include <iostream>
 #include <sstream>
 
@@ -39,18 +40,24 @@ struct MatrixOptions {
 void addMatrixOptions(CLI::App* cmd, MatrixOptions& o) {
   cmd->add_option("--scenes,--scene", o.scenes, "Scene names, comma-separated, or 'all'")->default_val("all");
   cmd->add_option("--out", o.out, "Run directory, e.g. runs/today")->required();
-  cmd->add_option("--param", o.params, "DENOISER.NAME=VALUE, repeatable (e.g. svgf.sigmaL=8)");
-  cmd->add_option("--shard", o.shard, "Run only the deterministic slice i/n of the pairs (see `arena merge`)");
+  cmd->add_option("--param", o.params, "DENOISER.NAME=VALUE, repeatable (e.g. svgf.sigmaL=8)")
+      ->default_str("none: registry defaults");
+  cmd->add_option("--shard", o.shard, "Run only the deterministic slice i/n of the pairs (see `arena merge`)")
+      ->default_val("0/1");
   cmd->add_option("--flip", o.flip, "FLIP metrics: none, ldr, or all (LDR and HDR)")
-      ->check(CLI::IsMember({"none", "ldr", "all"}));
+      ->check(CLI::IsMember({"none", "ldr", "all"}))
+      ->default_val("all");
   cmd->add_option("--keep-frames", o.keepFrames, "Images kept: auto, all, chosen, none")
-      ->check(CLI::IsMember({"auto", "all", "chosen", "none"}));
+      ->check(CLI::IsMember({"auto", "all", "chosen", "none"}))
+      ->default_val("auto");
   cmd->add_option("--exposure", o.exposure,
                   "Display exposure (metrics.md): per-frame (each frame's own reference) or first "
                   "(the first reference's)")
       ->check(CLI::IsMember({"per-frame", "first"}))
       ->default_val("per-frame");
-  cmd->add_option("--warmup", o.warmup, "Frames excluded from summaries (metrics.md W)")->default_val(8);
+  cmd->add_option("--warmup", o.warmup, "Frames excluded from summaries (metrics.md W)")
+      ->check(CLI::Range(0, kMaxSceneFrames))
+      ->default_val(8);
   cmd->add_flag("--no-baselines", o.noBaselines, "Do not add passthrough and temporal for context");
   cmd->add_option("--seeds", o.seeds,
                   "Input seeds per scene: > 1 also renders K-1 more noise realisations and reports each "
@@ -66,6 +73,7 @@ RunConfig configFrom(const MatrixOptions& o) {
   c.cache = o.render.cacheDir;
   c.render = o.render.settings();
   c.scenes = selectScenes(o.scenes, o.render.scenesDir);
+  for (const Scene& s : c.scenes) requireFitsInMemory(s, c.render, true);
   c.baselines = !o.noBaselines;
   c.warmup = o.warmup;
   c.seeds = o.seeds;
@@ -138,7 +146,12 @@ void addRunCommands(CLI::App& app) {
       RunConfig c = configFrom(*o);
       *denoiser = DenoiserRegistry::resolve(*denoiser);  // ext:MANIFEST or plugin:LIBRARY too
       const DenoiserInfo& info = DenoiserRegistry::instance().find(*denoiser);
-      auto fixed = parseParamAssignments(o->params)[*denoiser];
+      auto assignments = parseParamAssignments(o->params);
+      for (auto& [other, kv] : assignments)
+        if (other != *denoiser)
+          throw Error("--param " + other + "." + kv.begin()->first + ": this sweep runs only " + *denoiser +
+                      "; --param must name " + *denoiser + ".NAME");
+      auto fixed = assignments[*denoiser];
       std::vector<std::pair<std::string, std::vector<std::string>>> axes;
       for (const std::string& g : *grids) {
         size_t eq = g.find('=');
@@ -147,8 +160,13 @@ void addRunCommands(CLI::App& app) {
         std::string name = g.substr(0, eq);
         if (name.rfind(*denoiser + ".", 0) == 0) name = name.substr(denoiser->size() + 1);
         if (!info.schema.find(name)) info.schema.resolve({{name, ""}}, *denoiser);  // throws, listing names
+        for (auto& [axis, values] : axes)
+          if (axis == name) throw Error("--grid '" + g + "': " + name + " is already an axis of this sweep");
+        if (fixed.count(name)) throw Error("--grid '" + g + "': " + name + " is also fixed by --param");
         axes.push_back({name, splitList(g.substr(eq + 2, g.size() - eq - 3))});
         if (axes.back().second.empty()) throw Error("--grid '" + g + "': no values");
+        std::set<std::string> distinct(axes.back().second.begin(), axes.back().second.end());
+        if (distinct.size() != axes.back().second.size()) throw Error("--grid '" + g + "': a value is listed twice");
       }
       std::vector<std::map<std::string, std::string>> settings = {fixed};
       for (auto& [name, values] : axes) {
@@ -190,7 +208,7 @@ void addRunCommands(CLI::App& app) {
     auto confidence = std::make_shared<std::string>("95%");
     cmd->add_option("baseline", *a, "Baseline run directory")->required();
     cmd->add_option("candidate", *b, "Candidate run directory")->required();
-    cmd->add_option("--metric", *metrics, "Metric(s) to gate on (default: relMse ldrFlip hdrFlip ssim tRmae)");
+    cmd->add_option("--metric", *metrics, "Metric(s) to gate on")->default_str("relMse ldrFlip hdrFlip ssim tRmae");
     cmd->add_option("--tolerance", *tol, "Allowed relative change in the worse direction, e.g. 2%")->default_val("2%");
     cmd->add_option("--confidence", *confidence,
                     "A change regresses only when its paired bootstrap interval at this level excludes zero")

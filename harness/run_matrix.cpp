@@ -477,10 +477,17 @@ std::string clock(double s) {
 }  // namespace
 
 std::pair<int, int> parseShard(const std::string& text) {
-  int i = -1, n = 0;
-  char slash = 0;
-  if (std::sscanf(text.c_str(), "%d%c%d", &i, &slash, &n) != 3 || slash != '/' || n < 1 || i < 0 || i >= n)
-    throw Error("--shard '" + text + "': expected i/n with 0 <= i < n, e.g. 0/4");
+  // Whole text, digits only: "0/1junk" or "1/4294967297" must not pass as something else.
+  const std::string expected = "--shard '" + text + "': expected i/n with integers 0 <= i < n <= 100000, e.g. 0/4";
+  size_t slash = text.find('/');
+  auto number = [&](const std::string& digits) {
+    if (digits.empty() || digits.size() > 6 || digits.find_first_not_of("0123456789") != std::string::npos)
+      throw Error(expected);
+    return std::stoi(digits);
+  };
+  if (slash == std::string::npos) throw Error(expected);
+  const int i = number(text.substr(0, slash)), n = number(text.substr(slash + 1));
+  if (n < 1 || n > 100000 || i >= n) throw Error(expected);
   return {i, n};
 }
 
@@ -515,7 +522,7 @@ json runMatrix(const RunConfig& cfg) {
 
   const bool keepAll = cfg.keepFrames == "all" || (cfg.keepFrames == "auto" && cfg.scenes.size() == 1 &&
                                                    denoisers.size() == (cfg.baselines ? 3u : 1u) && !cfg.denoisers.empty());
-  fs::create_directories(cfg.out);
+  checkRunOutputs(cfg.out);
   json results = {{"schema", kResultsSchemaVersion}, {"kind", "arena-run"}, {"name", cfg.name}, {"created", nowIso()},
                   {"environment", environmentInfo()},
                   {"settings", {{"render", cfg.render.pixelSettings(cfg.scenes.front())},
@@ -615,14 +622,13 @@ json runMatrix(const RunConfig& cfg) {
     }
   }
   results["statistics"] = analyseRun(results);
-  saveResults(cfg.out, results);
-  appendToDatabase(cfg.out / "results.db", results);
+  commitResults(cfg.out, results);
   return results;
 }
 
 json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
-  fs::create_directories(out);
   if (runs.empty()) throw Error("merge: no runs given");
+  checkRunOutputs(out);  // creates --out when missing
   json merged;
   std::set<std::string> seen;
   // A gate must not pass on a partial study: every shard i/n of one n, each exactly once.
@@ -667,8 +673,7 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
     if (fs::exists(run / "images"))
       fs::copy(run / "images", out / "images", fs::copy_options::recursive | fs::copy_options::skip_existing);
   merged["statistics"] = analyseRun(merged);
-  saveResults(out, merged);
-  appendToDatabase(out / "results.db", merged);
+  commitResults(out, merged);
   return merged;
 }
 

@@ -1,34 +1,48 @@
 #include "harness/scene_selection.hpp"
 
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <sstream>
 
 #include "core/error.hpp"
+#include "core/sequence.hpp"
 
 namespace arena::cli {
 
 namespace fs = std::filesystem;
 
+std::pair<int, int> parseResolution(const std::string& option, const std::string& text) {
+  const std::string expected = option + " '" + text +
+                               "': expected WIDTHxHEIGHT, two integers in [1, " +
+                               std::to_string(kMaxSceneResolution) + "]";
+  size_t x = text.find('x');
+  if (x == std::string::npos) throw Error(expected);
+  auto side = [&](const std::string& digits) {
+    if (digits.empty() || digits.size() > 6 ||
+        digits.find_first_not_of("0123456789") != std::string::npos)
+      throw Error(expected);
+    int v = std::stoi(digits);
+    if (v < 1 || v > kMaxSceneResolution) throw Error(expected);
+    return v;
+  };
+  return {side(text.substr(0, x)), side(text.substr(x + 1))};
+}
+
+// Unset overrides are 0 (or -1): the CLI checks below reject those values when given explicitly, so
+// "0" can never quietly mean "the default".
 RenderSettings RenderOptions::settings() const {
   RenderSettings s = RenderSettings::fromPreset(preset);
-  if (!resolution.empty()) {
-    int w = 0, h = 0;
-    char x = 0;
-    std::istringstream in(resolution);
-    if (!(in >> w >> x >> h) || x != 'x' || w < 1 || h < 1 || !in.eof())
-      throw Error("--resolution: expected WIDTHxHEIGHT with positive integers, got '" + resolution + "'");
-    s.width = w;
-    s.height = h;
-  }
-  if (frames < 0) throw Error("--frames: expected a positive count");
+  if (!resolution.empty())
+    std::tie(s.width, s.height) = parseResolution("--resolution", resolution);
   if (frames > 0) s.frames = frames;
-  if (referenceSpp < 0) throw Error("--ref-spp: expected a positive count");
   if (referenceSpp > 0) {
     s.referenceSpp = referenceSpp;
     s.referenceMinSpp = std::min(s.referenceMinSpp, referenceSpp);
   }
   if (referenceRelError >= 0) s.referenceRelError = referenceRelError;
-  if (maxBounces < 0) throw Error("--max-bounces: expected a positive count");
   s.maxBounces = maxBounces;
   if (inputSeed < 0 || inputSeed > 0xffffffffll)
     throw Error("--input-seed " + std::to_string(inputSeed) + ": expected 0 to 4294967295");
@@ -37,15 +51,68 @@ RenderSettings RenderOptions::settings() const {
   return s;
 }
 
+CLI::Validator finiteRange(double lo, double hi) {
+  const std::string range =
+      "[" + CLI::detail::to_string(lo) + ", " + CLI::detail::to_string(hi) + "]";
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        double v = 0;
+        if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v) || v < lo || v > hi)
+          return "value " + text + " is not a finite number in " + range;
+        return "";
+      },
+      "FLOAT in " + range);
+}
+
+void requireFitsInMemory(const Scene& scene, const RenderSettings& settings, bool wholeSequence) {
+  auto floatsPerPixel = [](const std::vector<LayerSpec>& specs) {
+    double n = 0;
+    for (const LayerSpec& l : specs) n += l.channels();
+    return n;
+  };
+  const double pixels = double(settings.resolvedWidth(scene)) * settings.resolvedHeight(scene);
+  const double frameFloats = floatsPerPixel(channels::frameLayers());
+  const double referenceFloats = floatsPerPixel(channels::referenceLayers());
+  // Rendering holds a frame, its gradients and a reference with its accumulators (about twice the
+  // layers); a run holds every frame of the sequence and its references at once.
+  double bytes = 4.0 * pixels * 2.0 *
+                 (frameFloats + referenceFloats + floatsPerPixel(channels::gradientLayers()));
+  if (wholeSequence)
+    bytes += 4.0 * pixels * settings.resolvedFrames(scene) * (frameFloats + referenceFloats);
+  const double physical = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
+  if (physical > 0 && bytes > physical) {
+    char buf[512];
+    std::snprintf(
+        buf, sizeof buf,
+        "%s: %dx%d x %d frames needs about %.1f GiB of memory, more than this machine's %.1f GiB; "
+        "lower --resolution or --frames",
+        scene.file.c_str(), settings.resolvedWidth(scene), settings.resolvedHeight(scene),
+        settings.resolvedFrames(scene), bytes / double(1u << 30), physical / double(1u << 30));
+    throw Error(buf);
+  }
+}
+
 void addRenderOptions(CLI::App* cmd, RenderOptions& o) {
-  cmd->add_option("--preset", o.preset, "quick (default; the scene's resolution) or paper (1280x720, 4096 spp)")
-      ->check(CLI::IsMember({"quick", "paper"}));
-  cmd->add_option("--resolution", o.resolution, "Override the resolution, WIDTHxHEIGHT");
-  cmd->add_option("--frames", o.frames, "Override the frame count");
-  cmd->add_option("--ref-spp", o.referenceSpp, "Maximum samples per pixel of the references");
+  cmd->add_option("--preset", o.preset,
+                  "quick (the scene's resolution) or paper (1280x720, 4096 spp)")
+      ->check(CLI::IsMember({"quick", "paper"}))
+      ->default_str("quick");
+  cmd->add_option("--resolution", o.resolution, "Override the resolution, WIDTHxHEIGHT")
+      ->default_str("the scene's; paper: 1280x720");
+  cmd->add_option("--frames", o.frames, "Override the frame count")
+      ->check(CLI::Range(1, kMaxSceneFrames))
+      ->default_str("the scene's");
+  cmd->add_option("--ref-spp", o.referenceSpp, "Maximum samples per pixel of the references")
+      ->check(CLI::Range(1, 1 << 20))
+      ->default_str("quick: 512, paper: 4096");
   cmd->add_option("--ref-rel-error", o.referenceRelError,
-                  "Adaptive stopping: stop a reference when its estimated relative error is below this (0: off)");
-  cmd->add_option("--max-bounces", o.maxBounces, "Override the scene's maximum path length");
+                  "Adaptive stopping: stop a reference when its estimated relative error is below "
+                  "this (0: off)")
+      ->check(finiteRange(0.0, 1.0))
+      ->default_str("quick: 0.03, paper: 0");
+  cmd->add_option("--max-bounces", o.maxBounces, "Override the scene's maximum path length")
+      ->check(CLI::Range(1, 64))
+      ->default_str("the scene's");
   cmd->add_option("--input-seed", o.inputSeed,
                   "Another noise realisation of the 1-spp input (0: the scene's seed); references are unchanged")
       ->default_val(0);
@@ -53,7 +120,8 @@ void addRenderOptions(CLI::App* cmd, RenderOptions& o) {
                   "References' sampler: sobol (Owen-scrambled, default) or independent (1-spp frames: always independent)")
       ->check(CLI::IsMember({"sobol", "independent"}));
   cmd->add_option("--cache", o.cacheDir, "Sequence cache directory")->default_val("cache");
-  cmd->add_option("--scenes-dir", o.scenesDir, "Directory of scene files");
+  cmd->add_option("--scenes-dir", o.scenesDir, "Directory of scene files")
+      ->default_str(o.scenesDir);
 }
 
 std::vector<Scene> selectScenes(const std::string& list, const std::string& scenesDir) {
@@ -68,10 +136,19 @@ std::vector<Scene> selectScenes(const std::string& list, const std::string& scen
     if (item.empty()) continue;
     fs::path p = item;
     if (p.extension() != ".json") p = fs::path(scenesDir) / (item + ".json");
-    if (!fs::exists(p)) throw Error("scene '" + item + "' not found (looked for " + p.string() + "; see `arena scenes`)");
+    if (!fs::exists(p))
+      throw Error("scene '" + item + "' not found (looked for " + p.string() +
+                  "; see `arena scenes`)");
     out.push_back(loadScene(p.string()));
   }
   if (out.empty()) throw Error("no scenes selected");
+  // Results, images and caches are keyed by the scene's name (its file stem): two files with one
+  // stem would overwrite each other's pairs.
+  for (size_t i = 0; i < out.size(); ++i)
+    for (size_t j = 0; j < i; ++j)
+      if (out[i].name == out[j].name)
+        throw Error("scenes " + out[j].file + " and " + out[i].file + " share the name '" +
+                    out[i].name + "' (the file stem); a run needs distinct names");
   return out;
 }
 

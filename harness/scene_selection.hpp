@@ -24,6 +24,15 @@ struct RenderOptions {
 };
 void addRenderOptions(CLI::App* cmd, RenderOptions& options);
 
+// "WxH" with both sides in [1, kMaxSceneResolution]; errors name `option` and the text.
+std::pair<int, int> parseResolution(const std::string& option, const std::string& text);
+// A CLI check: a finite number in [lo, hi] (CLI::Range lets "nan" through).
+CLI::Validator finiteRange(double lo, double hi);
+// Throws, naming the scene file, resolution and frames, when rendering it (or, with
+// `wholeSequence`, running denoisers on it: every frame is held in memory) needs more memory than
+// the machine has -- a clear error instead of std::bad_alloc halfway through.
+void requireFitsInMemory(const Scene& scene, const RenderSettings& settings, bool wholeSequence);
+
 // "all", or comma-separated scene names (looked up in scenesDir) or paths to .json files.
 std::vector<Scene> selectScenes(const std::string& list, const std::string& scenesDir);
 

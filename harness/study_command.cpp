@@ -71,7 +71,9 @@ void addStudyCommand(CLI::App& app) {
   auto exposure = std::make_shared<std::string>("per-frame");
   cmd->add_option("--out", *out, "Run directory")->default_val("runs/study");
   cmd->add_option("--report", *report, "Report directory (index.html)")->default_val("report");
-  cmd->add_option("--flip", *flip, "FLIP metrics: none, ldr, all")->check(CLI::IsMember({"none", "ldr", "all"}));
+  cmd->add_option("--flip", *flip, "FLIP metrics: none, ldr, all")
+      ->check(CLI::IsMember({"none", "ldr", "all"}))
+      ->default_val("all");
   cmd->add_option("--scenes", *scenes, "Scenes, comma-separated, or 'all'")->default_val("all");
   cmd->add_option("--exposure", *exposure, "Display exposure (metrics.md): per-frame or first")
       ->check(CLI::IsMember({"per-frame", "first"}))
@@ -85,6 +87,7 @@ void addStudyCommand(CLI::App& app) {
     c.cache = opt->cacheDir;
     c.render = opt->settings();
     c.scenes = selectScenes(*scenes, opt->scenesDir);
+    for (const Scene& s : c.scenes) requireFitsInMemory(s, c.render, true);
     for (const std::string& n : DenoiserRegistry::instance().names()) c.denoisers.push_back({n, {}, ""});
     c.flip = *flip;
     c.exposure = *exposure;

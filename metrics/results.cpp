@@ -1,8 +1,12 @@
 #include "metrics/results.hpp"
 
 #include <sqlite3.h>
+#include <unistd.h>
 
+#include <cerrno>
 #include <cmath>
+#include <cstring>
+#include <map>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
@@ -39,49 +43,158 @@ const MetricInfo* findMetric(const std::string& name) {
   return nullptr;
 }
 
+namespace {
+
+// The shape every reader of results.json (compare, merge, report) relies on, checked once on load
+// so a hand-edited or foreign document is an error naming its JSON path, never an out-of-bounds
+// read.
+void requireResultsShape(const json& j, const std::string& file) {
+  auto fail = [&](const std::string& path, const std::string& expected, const json& got) {
+    throw Error(file + ": " + path + ": expected " + expected + ", got " + jsonTypeName(got));
+  };
+  auto member = [&](const json& obj, const std::string& path, const char* key,
+                    bool (json::*is)() const noexcept, const char* expected) -> const json& {
+    static const json missing;
+    const json& v = obj.contains(key) ? obj.at(key) : missing;
+    if (!(v.*is)()) fail(path + "." + key, expected, v);
+    return v;
+  };
+  member(j, "$", "name", &json::is_string, "a string");
+  member(j, "$", "settings", &json::is_object, "an object");
+  member(j, "$", "environment", &json::is_object, "an object");
+  for (auto& [name, scene] : member(j, "$", "scenes", &json::is_object, "an object").items())
+    if (!scene.is_object()) fail("$.scenes." + name, "an object", scene);
+  const json& pairs = member(j, "$", "pairs", &json::is_array, "an array of pairs");
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    const std::string path = "$.pairs[" + std::to_string(i) + "]";
+    const json& p = pairs[i];
+    if (!p.is_object()) fail(path, "an object", p);
+    for (const char* key : {"scene", "denoiser", "label", "status"})
+      member(p, path, key, &json::is_string, "a string");
+    if (p.at("status") != "ok") {
+      member(p, path, "error", &json::is_string, "a string (the failure)");
+      continue;
+    }
+    for (auto& [metric, s] : member(p, path, "summary", &json::is_object, "an object").items())
+      if (!s.is_object()) fail(path + ".summary." + metric, "an object", s);
+    const json& frames =
+        member(p, path, "frames", &json::is_array, "an array of per-frame metrics");
+    for (size_t f = 0; f < frames.size(); ++f) {
+      if (!frames[f].is_object())
+        fail(path + ".frames[" + std::to_string(f) + "]", "an object", frames[f]);
+      member(frames[f], path + ".frames[" + std::to_string(f) + "]", "frame",
+             &json::is_number_integer, "an integer");
+    }
+    member(p, path, "params", &json::is_object, "an object");
+    if (p.contains("timing") && !p.at("timing").is_object())
+      fail(path + ".timing", "an object", p.at("timing"));
+  }
+}
+
+}  // namespace
+
 json loadResults(const fs::path& runDir) {
   fs::path file = runDir / "results.json";
   if (!fs::exists(runDir)) throw Error(runDir.string() + ": no such run directory");
-  if (!fs::exists(file)) throw Error(runDir.string() + ": not a run (no results.json); create one with `arena run`");
+  if (!fs::exists(file))
+    throw Error(runDir.string() + ": not a run (no results.json); create one with `arena run`");
   json j = parseJsonFile(file.string());
-  if (!j.is_object() || j.value("kind", "") != "arena-run")
+  if (!j.is_object() || !j.contains("kind") || j.at("kind") != "arena-run")
     throw Error(file.string() + ": not an arena results file");
-  int schema = j.value("schema", 0);
-  if (schema != kResultsSchemaVersion)
-    throw Error(file.string() + ": results schema version " + std::to_string(schema) + ", this arena reads version " +
-                std::to_string(kResultsSchemaVersion) + " (re-run with this version)");
+  if (!j.contains("schema") || j.at("schema") != kResultsSchemaVersion)
+    throw Error(file.string() + ": results schema version " +
+                (j.contains("schema") ? j.at("schema").dump() : "none") +
+                ", this arena reads version " + std::to_string(kResultsSchemaVersion) +
+                " (re-run with this version)");
+  requireResultsShape(j, file.string());
   return j;
 }
 
 void saveResults(const fs::path& runDir, const json& results) {
-  fs::create_directories(runDir);
+  std::error_code ec;
+  fs::create_directories(runDir, ec);
+  if (ec) throw Error(runDir.string() + ": cannot create run directory: " + ec.message());
   writeTextAtomically(runDir / "results.json", results.dump(1));
 }
 
 namespace {
 
+// The tables of results.db, defined once: appends create them, and checkRunOutputs compares an
+// existing database's columns against them.
+constexpr const char* kDatabaseSchema = R"(
+  CREATE TABLE IF NOT EXISTS runs (id INTEGER PRIMARY KEY, name TEXT, created TEXT, git_commit TEXT,
+               schema INTEGER, environment TEXT, settings TEXT);
+             CREATE TABLE IF NOT EXISTS pairs (run_id INTEGER, scene TEXT, denoiser TEXT, label TEXT, params TEXT,
+               status TEXT, error TEXT);
+             CREATE TABLE IF NOT EXISTS frame_metrics (run_id INTEGER, scene TEXT, label TEXT, frame INTEGER,
+               metric TEXT, value REAL);
+             CREATE TABLE IF NOT EXISTS summaries (run_id INTEGER, scene TEXT, label TEXT, metric TEXT, mean REAL,
+               median REAL, p5 REAL, p95 REAL, ci_lo REAL, ci_hi REAL, frames INTEGER, absent TEXT);
+             CREATE TABLE IF NOT EXISTS paired (run_id INTEGER, scene TEXT, metric TEXT, a TEXT, b TEXT, diff REAL,
+               ci_lo REAL, ci_hi REAL, resolved INTEGER);
+             CREATE TABLE IF NOT EXISTS rankings (run_id INTEGER, scene TEXT, metric TEXT, label TEXT, rank INTEGER,
+               value REAL, ci_lo REAL, ci_hi REAL, tied_with TEXT);)";
+
+// An open database; every error names `name` (the path the user knows) and SQLite's reason, with
+// the operating system's reason where SQLite had one (a full disk, a read-only directory).
 struct Db {
   sqlite3* db = nullptr;
-  explicit Db(const fs::path& p) {
-    if (sqlite3_open(p.c_str(), &db) != SQLITE_OK) throw Error(p.string() + ": cannot open SQLite database");
+  std::string name;
+  Db(const fs::path& p, const std::string& nameInErrors, int flags) : name(nameInErrors) {
+    if (sqlite3_open_v2(p.c_str(), &db, flags, nullptr) != SQLITE_OK)
+      fail("cannot open SQLite database");
+    sqlite3_extended_result_codes(db, 1);
   }
   ~Db() { sqlite3_close(db); }
+  Db(const Db&) = delete;
+  Db& operator=(const Db&) = delete;
+  [[noreturn]] void fail(const std::string& what) const {
+    std::string msg =
+        name + ": " + what + ": SQLite: " + (db ? sqlite3_errmsg(db) : "out of memory");
+    if (db && sqlite3_system_errno(db) != 0)
+      msg += std::string(" (") + std::strerror(sqlite3_system_errno(db)) + ")";
+    throw Error(msg);
+  }
   void exec(const std::string& sql) {
-    char* err = nullptr;
-    if (sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &err) != SQLITE_OK) {
-      std::string msg = err ? err : "?";
-      sqlite3_free(err);
-      throw Error("SQLite: " + msg);
+    if (sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr) != SQLITE_OK)
+      fail("cannot execute " + sql.substr(0, 40));
+  }
+  // table -> column names, in order.
+  std::map<std::string, std::vector<std::string>> tables() {
+    std::map<std::string, std::vector<std::string>> out;
+    std::vector<std::string> names;
+    sqlite3_stmt* s = nullptr;
+    if (sqlite3_prepare_v2(db, "SELECT name FROM sqlite_master WHERE type = 'table'", -1, &s,
+                           nullptr) != SQLITE_OK)
+      fail("cannot read the schema");
+    int rc;
+    while ((rc = sqlite3_step(s)) == SQLITE_ROW)
+      names.emplace_back(reinterpret_cast<const char*>(sqlite3_column_text(s, 0)));
+    sqlite3_finalize(s);
+    if (rc != SQLITE_DONE) fail("cannot read the schema");
+    for (const std::string& t : names) {
+      std::string sql = "PRAGMA table_info(\"" + t + "\")";
+      if (sqlite3_prepare_v2(db, sql.c_str(), -1, &s, nullptr) != SQLITE_OK)
+        fail("cannot read table " + t);
+      while ((rc = sqlite3_step(s)) == SQLITE_ROW)
+        out[t].emplace_back(reinterpret_cast<const char*>(sqlite3_column_text(s, 1)));
+      sqlite3_finalize(s);
+      if (rc != SQLITE_DONE) fail("cannot read table " + t);
     }
+    return out;
   }
 };
 
 struct Statement {
   sqlite3_stmt* s = nullptr;
-  Statement(sqlite3* db, const char* sql) {
-    if (sqlite3_prepare_v2(db, sql, -1, &s, nullptr) != SQLITE_OK) throw Error(std::string("SQLite: ") + sqlite3_errmsg(db));
+  const Db& db;
+  Statement(const Db& database, const char* sql) : db(database) {
+    if (sqlite3_prepare_v2(db.db, sql, -1, &s, nullptr) != SQLITE_OK)
+      db.fail("cannot prepare an insert");
   }
   ~Statement() { sqlite3_finalize(s); }
+  Statement(const Statement&) = delete;
+  Statement& operator=(const Statement&) = delete;
   Statement& text(int i, const std::string& v) {
     sqlite3_bind_text(s, i, v.c_str(), -1, SQLITE_TRANSIENT);
     return *this;
@@ -96,7 +209,7 @@ struct Statement {
     return *this;
   }
   void step() {
-    if (sqlite3_step(s) != SQLITE_DONE) throw Error(std::string("SQLite: ") + sqlite3_errmsg(sqlite3_db_handle(s)));
+    if (sqlite3_step(s) != SQLITE_DONE) db.fail("cannot insert a row");
     sqlite3_reset(s);
     sqlite3_clear_bindings(s);
   }
@@ -131,39 +244,32 @@ double ciBound(const json& summary, int i) {
   return summary["ci95"][size_t(i)].get<double>();
 }
 
-}  // namespace
-
-void appendToDatabase(const fs::path& dbPath, const json& r) {
-  Db db(dbPath);
-  // The database's schema follows the results schema; one of another version is never mixed in.
+// The database's schema follows the results schema; one of another version is never mixed in.
+void requireSchemaVersion(const Db& db) {
   const int version = userVersion(db.db);
   if (version != kResultsSchemaVersion && (version != 0 || hasTable(db.db, "runs")))
-    throw Error(dbPath.string() + ": a results database of schema version " + std::to_string(version) +
+    throw Error(db.name + ": a results database of schema version " + std::to_string(version) +
                 ", this arena writes version " + std::to_string(kResultsSchemaVersion) +
                 "; move it away or write the run elsewhere");
+}
+
+}  // namespace
+
+void appendToDatabase(const fs::path& dbPath, const json& r, const std::string& nameInErrors) {
+  Db db(dbPath, nameInErrors.empty() ? dbPath.string() : nameInErrors, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
+  requireSchemaVersion(db);
   db.exec("PRAGMA user_version = " + std::to_string(kResultsSchemaVersion));
-  db.exec(R"(CREATE TABLE IF NOT EXISTS runs (id INTEGER PRIMARY KEY, name TEXT, created TEXT, git_commit TEXT,
-               schema INTEGER, environment TEXT, settings TEXT);
-             CREATE TABLE IF NOT EXISTS pairs (run_id INTEGER, scene TEXT, denoiser TEXT, label TEXT, params TEXT,
-               status TEXT, error TEXT);
-             CREATE TABLE IF NOT EXISTS frame_metrics (run_id INTEGER, scene TEXT, label TEXT, frame INTEGER,
-               metric TEXT, value REAL);
-             CREATE TABLE IF NOT EXISTS summaries (run_id INTEGER, scene TEXT, label TEXT, metric TEXT, mean REAL,
-               median REAL, p5 REAL, p95 REAL, ci_lo REAL, ci_hi REAL, frames INTEGER, absent TEXT);
-             CREATE TABLE IF NOT EXISTS paired (run_id INTEGER, scene TEXT, metric TEXT, a TEXT, b TEXT, diff REAL,
-               ci_lo REAL, ci_hi REAL, resolved INTEGER);
-             CREATE TABLE IF NOT EXISTS rankings (run_id INTEGER, scene TEXT, metric TEXT, label TEXT, rank INTEGER,
-               value REAL, ci_lo REAL, ci_hi REAL, tied_with TEXT);)");
+  db.exec(kDatabaseSchema);
   db.exec("BEGIN");
-  Statement run(db.db, "INSERT INTO runs (name, created, git_commit, schema, environment, settings) VALUES (?,?,?,?,?,?)");
+  Statement run(db, "INSERT INTO runs (name, created, git_commit, schema, environment, settings) VALUES (?,?,?,?,?,?)");
   run.text(1, r.value("name", "")).text(2, r.value("created", ""))
       .text(3, r["environment"].value("git_commit", "")).integer(4, r.value("schema", 0))
       .text(5, r["environment"].dump()).text(6, r["settings"].dump())
       .step();
   const long long runId = sqlite3_last_insert_rowid(db.db);
-  Statement pair(db.db, "INSERT INTO pairs VALUES (?,?,?,?,?,?,?)");
-  Statement frame(db.db, "INSERT INTO frame_metrics VALUES (?,?,?,?,?,?)");
-  Statement summary(db.db, "INSERT INTO summaries VALUES (?,?,?,?,?,?,?,?,?,?,?,?)");
+  Statement pair(db, "INSERT INTO pairs VALUES (?,?,?,?,?,?,?)");
+  Statement frame(db, "INSERT INTO frame_metrics VALUES (?,?,?,?,?,?)");
+  Statement summary(db, "INSERT INTO summaries VALUES (?,?,?,?,?,?,?,?,?,?,?,?)");
   for (const json& p : r["pairs"]) {
     const std::string scene = p["scene"], label = p["label"];
     pair.integer(1, runId).text(2, scene).text(3, p["denoiser"]).text(4, label).text(5, p["params"].dump())
@@ -183,8 +289,8 @@ void appendToDatabase(const fs::path& dbPath, const json& r) {
     }
   }
   if (r.contains("statistics")) {
-    Statement paired(db.db, "INSERT INTO paired VALUES (?,?,?,?,?,?,?,?,?)");
-    Statement rank(db.db, "INSERT INTO rankings VALUES (?,?,?,?,?,?,?,?,?)");
+    Statement paired(db, "INSERT INTO paired VALUES (?,?,?,?,?,?,?,?,?)");
+    Statement rank(db, "INSERT INTO rankings VALUES (?,?,?,?,?,?,?,?,?)");
     auto addRanking = [&](const std::string& scene, const std::string& metric, const json& ranking, const char* value) {
       for (const json& m : ranking)
         rank.integer(1, runId).text(2, scene).text(3, metric).text(4, m["label"]).integer(5, m["rank"])
@@ -204,6 +310,96 @@ void appendToDatabase(const fs::path& dbPath, const json& r) {
       addRanking("*", r["statistics"]["rankedOn"], r["statistics"]["overall"]["ranking"], "score");
   }
   db.exec("COMMIT");
+}
+
+void checkRunOutputs(const fs::path& runDir) {
+  std::error_code ec;
+  if (fs::exists(runDir, ec) && !fs::is_directory(runDir, ec))
+    throw Error(runDir.string() + ": exists and is not a directory; --out needs a run directory");
+  fs::create_directories(runDir, ec);
+  if (ec) throw Error(runDir.string() + ": cannot create run directory: " + ec.message());
+  if (access(runDir.c_str(), W_OK) != 0)
+    throw Error(osError(runDir, "run directory is not writable", errno));
+  removeStaleTemporaries(runDir);
+
+  const fs::path jsonPath = runDir / "results.json";
+  if (fs::exists(jsonPath, ec)) {
+    json j;
+    try {
+      j = parseJsonFile(jsonPath.string());
+    } catch (const Error& e) {
+      throw Error(std::string(e.what()) +
+                  "; refusing to replace it (move it away or choose another --out)");
+    }
+    if (!j.is_object() || !j.contains("kind") || j.at("kind") != "arena-run")
+      throw Error(jsonPath.string() +
+                  ": not an arena results file; refusing to replace it (move it away or choose "
+                  "another --out)");
+  }
+
+  const fs::path dbPath = runDir / "results.db";
+  if (!fs::exists(dbPath, ec)) return;
+  Db expected(":memory:", "schema", SQLITE_OPEN_READWRITE | SQLITE_OPEN_MEMORY);
+  expected.exec(kDatabaseSchema);
+  Db existing(dbPath, dbPath.string(), SQLITE_OPEN_READONLY);
+  // quick_check reads every page: a truncated or garbage file fails here, not after the run.
+  sqlite3_stmt* s = nullptr;
+  std::string verdict;
+  if (sqlite3_prepare_v2(existing.db, "PRAGMA quick_check", -1, &s, nullptr) != SQLITE_OK)
+    existing.fail("not a usable SQLite database (garbage or truncated?)");
+  int rc = sqlite3_step(s);
+  if (rc == SQLITE_ROW) verdict = reinterpret_cast<const char*>(sqlite3_column_text(s, 0));
+  sqlite3_finalize(s);
+  if (rc != SQLITE_ROW) existing.fail("not a usable SQLite database (garbage or truncated?)");
+  if (verdict != "ok") throw Error(dbPath.string() + ": damaged SQLite database: " + verdict);
+  requireSchemaVersion(existing);
+  auto want = expected.tables(), have = existing.tables();
+  auto join = [](const std::vector<std::string>& v) {
+    std::string text;
+    for (const std::string& c : v) {
+      if (!text.empty()) text += ", ";
+      text += c;
+    }
+    return text;
+  };
+  if (have.empty()) return;  // an empty database file: the append creates the tables
+  for (auto& [table, columns] : want) {
+    auto it = have.find(table);
+    if (it == have.end() || it->second != columns)
+      throw Error(dbPath.string() + ": another schema (table " + table + " has columns (" +
+                  (it == have.end() ? std::string("missing") : join(it->second)) +
+                  "), this arena writes (" + join(columns) +
+                  ")); move it away or choose another --out");
+  }
+}
+
+void commitResults(const fs::path& runDir, const json& results) {
+  const fs::path jsonPath = runDir / "results.json", dbPath = runDir / "results.db";
+  const fs::path jsonTmp = temporaryPathFor(jsonPath), dbTmp = temporaryPathFor(dbPath);
+  auto removeTemporaries = [&] {
+    std::error_code ignored;
+    fs::remove(jsonTmp, ignored);
+    fs::remove(dbTmp, ignored);
+    fs::remove(fs::path(dbTmp.string() + "-journal"), ignored);
+  };
+  try {
+    writeFileBytes(jsonTmp, results.dump(1));
+    std::error_code ec;
+    if (fs::exists(dbPath)) {
+      fs::copy_file(dbPath, dbTmp, ec);
+      if (ec)
+        throw Error(dbPath.string() + ": cannot copy to " + dbTmp.string() + ": " + ec.message());
+    }
+    appendToDatabase(dbTmp, results, dbPath.string());
+    // Both complete: the database first, so results.json never names a run the database lacks.
+    if (std::rename(dbTmp.c_str(), dbPath.c_str()) != 0)
+      throw Error(osError(dbPath, "cannot replace", errno));
+    if (std::rename(jsonTmp.c_str(), jsonPath.c_str()) != 0)
+      throw Error(osError(jsonPath, "cannot replace", errno));
+  } catch (...) {
+    removeTemporaries();
+    throw;
+  }
 }
 
 }  // namespace arena

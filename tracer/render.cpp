@@ -692,7 +692,8 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
                 ": expected i/n with 0 <= i < n");
   const std::string hash = sequenceHash(scene, settings);
   const fs::path dir = sequenceDir(scene, settings, cacheRoot);
-  fs::create_directories(dir);
+  if (!fs::is_directory(dir)) fs::create_directories(dir);
+  removeStaleTemporaries(dir);  // of a killed render
   SequenceRenderer renderer(scene, settings);
   const int frames = renderer.frames();
   auto say = [&](const std::string& s) {
@@ -843,7 +844,14 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
         " done; `arena render` without --shard merges the shards");
     return dir;
   }
-  writeTextAtomically(infoPath, info.toJson().dump(1));
+  // A complete cache is only read: a read-only mount (or another user's cache) must stay usable.
+  const std::string infoText = info.toJson().dump(1);
+  std::string existing;
+  try {
+    existing = readText(infoPath);
+  } catch (const Error&) {
+  }
+  if (existing != infoText) writeTextAtomically(infoPath, infoText);
   return dir;
 }
 

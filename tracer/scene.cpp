@@ -1,6 +1,7 @@
 #include "tracer/scene.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <glm/gtc/matrix_transform.hpp>
 #include <map>
@@ -38,22 +39,51 @@ LightValue lerp(const LightValue& a, const LightValue& b, float s) {
 
 namespace {
 
+// Positions, rotations and scales beyond this lose every digit of float precision that the
+// tracer needs (and 1e39 is +Inf in float): far larger than any scene, small enough to be safe.
+constexpr float kMaxCoordinate = 1e6f;
+// Emitted radiance above this overflows float accumulators once multiplied by sample counts and
+// squared for variances.
+constexpr float kMaxRadiance = 1e9f;
+
 void requireNonNegative(JsonReader& r, const std::string& key, glm::vec3 v) {
   if (v.x < 0 || v.y < 0 || v.z < 0) r.fail(key, "expected non-negative values");
+}
+
+std::string vecText(glm::vec3 v) {
+  return "[" + std::to_string(v.x) + ", " + std::to_string(v.y) + ", " + std::to_string(v.z) + "]";
+}
+
+void requireBounded(JsonReader& r, const std::string& key, glm::vec3 v, float bound) {
+  if (glm::any(glm::greaterThan(glm::abs(v), glm::vec3(bound))))
+    r.fail(key, "expected values within +-" + std::to_string(bound) + ", got " + vecText(v));
+}
+
+// A camera the tracer can build a basis from: eye != target, `up` non-zero and not parallel to
+// the view direction (else the basis has a zero axis and every ray is NaN).
+std::string cameraProblem(const CameraKey& c) {
+  const glm::vec3 view = c.target - c.eye;
+  if (glm::length(view) < 1e-6f) return "target equals the eye";
+  if (glm::length(c.up) < 1e-6f) return "up is the zero vector";
+  const float sine = glm::length(glm::cross(glm::normalize(view), glm::normalize(c.up)));
+  if (!(sine > 1e-3f))
+    return "up " + vecText(c.up) + " is parallel to the view direction " + vecText(view);
+  return "";
 }
 
 float numberIn(JsonReader& r, const std::string& key, double fallback, double lo, double hi) {
   double v = r.number(key, fallback);
   if (v < lo || v > hi)
-    r.fail(key, "expected a value in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " +
-                    std::to_string(v));
+    r.fail(key, "expected a value in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                    "], got " + std::to_string(v));
   return float(v);
 }
 
 // Reads "keys": [{frame, step?, ...fields}], each key inheriting unspecified fields from the
 // previous one. `readValue` reads the fields into a value that starts as the previous key's.
 template <class T, class ReadValue>
-Track<T> readTrack(JsonReader& parent, const std::string& key, int frames, T initial, ReadValue readValue) {
+Track<T> readTrack(JsonReader& parent, const std::string& key, int frames, T initial,
+                   ReadValue readValue) {
   Track<T> track;
   T current = initial;
   for (JsonReader& k : parent.requiredArray(key)) {
@@ -61,8 +91,9 @@ Track<T> readTrack(JsonReader& parent, const std::string& key, int frames, T ini
     out.frame = k.integer("frame");
     out.step = k.boolean("step", false);
     if (out.frame < 0 || out.frame >= frames)
-      k.fail("frame", "expected a frame in [0, " + std::to_string(frames - 1) + "] (the sequence has " +
-                          std::to_string(frames) + " frames), got " + std::to_string(out.frame));
+      k.fail("frame", "expected a frame in [0, " + std::to_string(frames - 1) +
+                          "] (the sequence has " + std::to_string(frames) + " frames), got " +
+                          std::to_string(out.frame));
     if (!track.keys.empty() && out.frame <= track.keys.back().frame)
       k.fail("frame", "keyframes must be strictly increasing in frame");
     readValue(k, current);
@@ -78,6 +109,9 @@ void readTransform(JsonReader& k, Transform& t) {
   t.translate = k.vec3("translate", t.translate);
   t.rotateDegrees = k.vec3("rotate", t.rotateDegrees);
   t.scale = k.vec3("scale", t.scale);
+  requireBounded(k, "translate", t.translate, kMaxCoordinate);
+  requireBounded(k, "rotate", t.rotateDegrees, kMaxCoordinate);
+  requireBounded(k, "scale", t.scale, kMaxCoordinate);
 }
 
 Shape readShape(JsonReader& r, bool allowMesh) {
@@ -93,7 +127,11 @@ Shape readShape(JsonReader& r, bool allowMesh) {
 }  // namespace
 
 Scene loadScene(const std::string& path) {
-  const nlohmann::json doc = parseJsonFile(path);
+  return parseScene(readText(path), path);
+}
+
+Scene parseScene(const std::string& text, const std::string& path) {
+  const nlohmann::json doc = parseJsonText(text, path);
   if (!doc.is_object()) throw Error(path + ": $: expected a JSON object at the top level");
   JsonReader root(doc, path);
   Scene scene;
@@ -101,18 +139,17 @@ Scene loadScene(const std::string& path) {
   scene.name = fs::path(path).stem().string();
   scene.purpose = root.string("purpose");
   auto res = root.numbers("resolution", 2);
-  if (res[0] < 1 || res[1] < 1 || res[0] != int(res[0]) || res[1] != int(res[1]) || res[0] > 16384 ||
-      res[1] > 16384)
-    root.fail("resolution", "expected two positive integers [width, height] up to 16384");
+  // Range first: converting 1e39 to int is undefined.
+  for (double v : res)
+    if (!(v >= 1 && v <= kMaxSceneResolution) || v != std::floor(v))
+      root.fail("resolution", "expected two integers [width, height] in [1, " +
+                                  std::to_string(kMaxSceneResolution) + "], got " +
+                                  std::to_string(v));
   scene.width = int(res[0]);
   scene.height = int(res[1]);
-  scene.frames = root.integer("frames");
-  if (scene.frames < 1 || scene.frames > 100000) root.fail("frames", "expected a positive frame count");
-  int seed = root.integer("seed", 1);
-  if (seed < 0) root.fail("seed", "expected a non-negative integer");
-  scene.seed = uint32_t(seed);
-  scene.maxBounces = root.integer("max_bounces", 4);
-  if (scene.maxBounces < 1 || scene.maxBounces > 64) root.fail("max_bounces", "expected an integer in [1, 64]");
+  scene.frames = root.integerIn("frames", 1, kMaxSceneFrames);
+  scene.seed = uint32_t(root.integerIn("seed", 1, 0, JsonReader::kIntMax));
+  scene.maxBounces = root.integerIn("max_bounces", 4, 1, 64);
 
   if (auto sky = root.optionalChild("sky")) {
     glm::vec3 c = sky->vec3("color", glm::vec3(0.0f));
@@ -120,17 +157,31 @@ Scene loadScene(const std::string& path) {
     scene.skyBottom = sky->vec3("bottom", c);
     requireNonNegative(*sky, "top", scene.skyTop);
     requireNonNegative(*sky, "bottom", scene.skyBottom);
+    requireBounded(*sky, "top", scene.skyTop, kMaxRadiance);
+    requireBounded(*sky, "bottom", scene.skyBottom, kMaxRadiance);
     sky->rejectUnread();
   }
 
   JsonReader cam = root.child("camera");
-  scene.camera = readTrack<CameraKey>(cam, "keys", scene.frames, CameraKey{}, [](JsonReader& k, CameraKey& c) {
-    c.eye = k.vec3("eye", c.eye);
-    c.target = k.vec3("target", c.target);
-    c.up = k.vec3("up", c.up);
-    c.fovYDegrees = numberIn(k, "fov", c.fovYDegrees, 1.0, 170.0);
-    if (glm::length(c.target - c.eye) < 1e-6f) k.fail("target", "expected a target different from the eye");
-  });
+  scene.camera =
+      readTrack<CameraKey>(cam, "keys", scene.frames, CameraKey{}, [](JsonReader& k, CameraKey& c) {
+        c.eye = k.vec3("eye", c.eye);
+        c.target = k.vec3("target", c.target);
+        c.up = k.vec3("up", c.up);
+        c.fovYDegrees = numberIn(k, "fov", c.fovYDegrees, 1.0, 170.0);
+        requireBounded(k, "eye", c.eye, kMaxCoordinate);
+        requireBounded(k, "target", c.target, kMaxCoordinate);
+        requireBounded(k, "up", c.up, kMaxCoordinate);
+        std::string problem = cameraProblem(c);
+        if (!problem.empty()) k.fail("up", "expected a usable camera basis: " + problem);
+      });
+  // Keys can each be fine while the interpolation between them is not (up flipping through zero).
+  for (int t = 0; t < scene.frames; ++t) {
+    std::string problem = cameraProblem(scene.camera.at(float(t)));
+    if (!problem.empty())
+      cam.fail("keys", "the interpolated camera at frame " + std::to_string(t) +
+                           " is unusable: " + problem);
+  }
   cam.rejectUnread();
 
   std::map<std::string, int> materialIndex;
@@ -143,6 +194,9 @@ Scene loadScene(const std::string& path) {
     if (auto chk = m.optionalChild("checker")) {
       mat.checker = true;
       mat.checkerAlbedo = chk->vec3("albedo");
+      if (glm::any(glm::lessThan(mat.checkerAlbedo, glm::vec3(0.0f))) ||
+          glm::any(glm::greaterThan(mat.checkerAlbedo, glm::vec3(1.0f))))
+        chk->fail("albedo", "expected values in [0, 1]");
       mat.checkerScale = numberIn(*chk, "scale", mat.checkerScale, 1e-3, 1e4);
       chk->rejectUnread();
     }
@@ -152,7 +206,9 @@ Scene loadScene(const std::string& path) {
     mat.emission = m.vec3("emission", mat.emission);
     requireNonNegative(m, "albedo", mat.albedo);
     requireNonNegative(m, "emission", mat.emission);
-    if (glm::any(glm::greaterThan(mat.albedo, glm::vec3(1.0f)))) m.fail("albedo", "expected values in [0, 1]");
+    requireBounded(m, "emission", mat.emission, kMaxRadiance);
+    if (glm::any(glm::greaterThan(mat.albedo, glm::vec3(1.0f))))
+      m.fail("albedo", "expected values in [0, 1]");
     m.rejectUnread();
     materialIndex[name] = int(scene.materials.size());
     scene.materials.push_back(mat);
@@ -168,11 +224,17 @@ Scene loadScene(const std::string& path) {
     if (obj.shape == Shape::Mesh) {
       obj.meshFile = (sceneDir / o.string("file")).string();
       if (!fs::exists(obj.meshFile)) o.fail("file", "mesh file not found: " + obj.meshFile);
-      hasher.add(readText(obj.meshFile));
+      try {
+        hasher.add(readText(obj.meshFile,
+                            kMaxMeshBytes));  // a regular file of bounded size (not /dev/zero)
+      } catch (const Error& e) {
+        o.fail("file", e.what());
+      }
     }
     std::string m = o.string("material");
     auto it = materialIndex.find(m);
-    if (it == materialIndex.end()) o.fail("material", "unknown material '" + m + "' (not in $.materials)");
+    if (it == materialIndex.end())
+      o.fail("material", "unknown material '" + m + "' (not in $.materials)");
     obj.material = it->second;
     obj.transform = readTrack<Transform>(o, "keys", scene.frames, Transform{}, readTransform);
     o.rejectUnread();
@@ -186,12 +248,16 @@ Scene loadScene(const std::string& path) {
       Transform t;
       LightValue v;
     };
-    auto track = readTrack<LightKey>(l, "keys", scene.frames, LightKey{}, [](JsonReader& k, LightKey& v) {
-      readTransform(k, v.t);
-      v.v.intensity = numberIn(k, "intensity", v.v.intensity, 0.0, 1e9);
-      v.v.color = k.vec3("color", v.v.color);
-      requireNonNegative(k, "color", v.v.color);
-    });
+    auto track =
+        readTrack<LightKey>(l, "keys", scene.frames, LightKey{}, [](JsonReader& k, LightKey& v) {
+          readTransform(k, v.t);
+          v.v.intensity = numberIn(k, "intensity", v.v.intensity, 0.0, 1e9);
+          v.v.color = k.vec3("color", v.v.color);
+          requireNonNegative(k, "color", v.v.color);
+          if (v.v.intensity * std::max({v.v.color.x, v.v.color.y, v.v.color.z}) > kMaxRadiance)
+            k.fail("color",
+                   "expected intensity * color <= " + std::to_string(kMaxRadiance) + " (radiance)");
+        });
     for (auto& key : track.keys) {
       light.transform.keys.push_back({key.frame, key.step, key.value.t});
       light.emission.keys.push_back({key.frame, key.step, key.value.v});
@@ -200,8 +266,10 @@ Scene loadScene(const std::string& path) {
     scene.lights.push_back(std::move(light));
   }
   auto knownName = [&](const std::string& n) {
-    return std::any_of(scene.objects.begin(), scene.objects.end(), [&](auto& o) { return o.name == n; }) ||
-           std::any_of(scene.lights.begin(), scene.lights.end(), [&](auto& l) { return l.name == n; });
+    return std::any_of(scene.objects.begin(), scene.objects.end(),
+                       [&](auto& o) { return o.name == n; }) ||
+           std::any_of(scene.lights.begin(), scene.lights.end(),
+                       [&](auto& l) { return l.name == n; });
   };
   for (JsonReader& e : root.optionalArray("events")) {
     SceneEvent ev;
@@ -210,22 +278,28 @@ Scene loadScene(const std::string& path) {
     ev.what = e.string("what", "");
     if (ev.frame < 0 || ev.frame >= scene.frames)
       e.fail("frame", "expected a frame in [0, " + std::to_string(scene.frames - 1) + "]");
-    static const char* kinds[] = {"light_off", "light_on", "light_change", "object_moves", "camera_cut"};
-    if (std::none_of(std::begin(kinds), std::end(kinds), [&](const char* k) { return ev.kind == k; }))
-      e.fail("kind", "expected one of light_off, light_on, light_change, object_moves, camera_cut; got '" +
-                         ev.kind + "'");
+    static const char* kinds[] = {"light_off", "light_on", "light_change", "object_moves",
+                                  "camera_cut"};
+    if (std::none_of(std::begin(kinds), std::end(kinds),
+                     [&](const char* k) { return ev.kind == k; }))
+      e.fail("kind",
+             "expected one of light_off, light_on, light_change, object_moves, camera_cut; got '" +
+                 ev.kind + "'");
     if (!ev.what.empty() && !knownName(ev.what))
       e.fail("what", "no object or light is named '" + ev.what + "'");
     e.rejectUnread();
     scene.events.push_back(ev);
   }
   root.rejectUnread();
-  if (scene.objects.empty() && scene.lights.empty()) root.fail("objects", "expected at least one object or light");
+  if (scene.objects.empty() && scene.lights.empty())
+    root.fail("objects", "expected at least one object or light");
   scene.contentHash = hasher.hex();
   return scene;
 }
 
-std::string defaultScenesDir() { return std::string(ARENA_SOURCE_DIR) + "/scenes"; }
+std::string defaultScenesDir() {
+  return std::string(ARENA_SOURCE_DIR) + "/scenes";
+}
 
 std::vector<std::string> listSceneFiles(const std::string& scenesDir) {
   std::vector<std::string> out;

@@ -2,6 +2,7 @@
 // The scene description: a small JSON format that models no more than the failure-provoking scenes
 // need (see scenes/*.json). Parsing is strict: unknown fields, wrong types, dangling material
 // names and keyframes beyond the sequence are errors naming the file and JSON path.
+#include <cstdint>
 #include <glm/glm.hpp>
 #include <string>
 #include <vector>
@@ -63,8 +64,8 @@ struct Material {
   float checkerScale = 4.0f;  // cells per object-space unit
   float roughness = 1.0f;     // perceptual; GGX alpha = roughness^2
   float metallic = 0.0f;
-  float specular = 0.04f;     // dielectric F0 (0 gives a pure Lambert surface)
-  glm::vec3 emission{0.0f};   // emitted radiance
+  float specular = 0.04f;    // dielectric F0 (0 gives a pure Lambert surface)
+  glm::vec3 emission{0.0f};  // emitted radiance
 };
 
 enum class Shape { Quad, Box, Sphere, Mesh };
@@ -108,7 +109,15 @@ struct Scene {
   std::string contentHash;  // scene file bytes + referenced mesh files
 };
 
+// Limits of the format (scene files naming more are errors): per-axis resolution, frame count
+// and the size of a referenced mesh file.
+constexpr int kMaxSceneResolution = 16384;
+constexpr int kMaxSceneFrames = 100000;
+constexpr uintmax_t kMaxMeshBytes = uintmax_t(256) << 20;
+
 Scene loadScene(const std::string& path);
+// The same from the file's text; `path` names the file in errors and anchors relative mesh paths.
+Scene parseScene(const std::string& text, const std::string& path);
 // Scenes shipped in scenes/ (sorted by name).
 std::vector<std::string> listSceneFiles(const std::string& scenesDir);
 std::string defaultScenesDir();
