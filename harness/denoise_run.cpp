@@ -61,6 +61,7 @@ DenoiseRun::DenoiseRun(const DenoiserRequest& request, const Sequence& sequence)
                 " does not provide (re-render it with a tracer that writes them)");
   }
   needsGradients_ = diffuse_->needsGradients();
+  readsLowres_ = diffuse_->wantsLowres() && sequence.info().lowresFactor() > 0;
   diffuse_->setup(sequence.info().width, sequence.info().height);
   specular_->setup(sequence.info().width, sequence.info().height);
 }
@@ -79,6 +80,9 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
     for (const std::string& c : diffuse_->requiredChannels()) frame.get(c, sequence_.dir().string() + " frame " + std::to_string(t));
     LayerSet gradients;
     if (needsGradients_ && t > 0) gradients = sequence_.gradients(t);
+    LayerSet lowresLayers;
+    if (readsLowres_) lowresLayers = sequence_.lowres(t);
+    const LowresInputs lowres{lowresLayers, info.lowresFactor(), info.lowresSpp()};
     FrameContext ctx;
     ctx.frameIndex = t;
     ctx.width = w;
@@ -95,12 +99,14 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
     out.passes.clear();
     out.sanitized = 0;
     out.milliseconds = 0;
+    out.extraRaysPerPixel = 0;
     for (SignalKind kind : {SignalKind::Diffuse, SignalKind::Specular}) {
       Denoiser& d = kind == SignalKind::Diffuse ? *diffuse_ : *specular_;
       Image& result = kind == SignalKind::Diffuse ? out.diffuse : out.specular;
       signal = frame.get(signalName(kind));
       out.sanitized += sanitize(signal);
-      DenoiserInputs in{signal, frame, needsGradients_ && t > 0 ? &gradients : nullptr};
+      DenoiserInputs in{signal, frame, needsGradients_ && t > 0 ? &gradients : nullptr,
+                        readsLowres_ ? &lowres : nullptr};
       d.clearPassStats();
       auto start = std::chrono::steady_clock::now();
       d.denoise(ctx, in, result);
@@ -111,6 +117,7 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
                       std::to_string(t));
       for (PassStats p : d.lastPasses()) {
         p.name = std::string(signalName(kind)) + "/" + p.name;
+        out.extraRaysPerPixel += p.raysPerPixel;
         out.passes.push_back(p);
       }
     }

@@ -30,6 +30,7 @@ struct DenoisedFrame {
   double milliseconds = 0;         // wall time of the denoise calls (both signals)
   std::vector<PassStats> passes;   // "diffuse/<pass>", "specular/<pass>"
   long sanitized = 0;              // NaN/Inf input values replaced by 0
+  double extraRaysPerPixel = 0;    // low-resolution paths read per pixel (both signals' passes)
 };
 
 class DenoiseRun {
@@ -38,6 +39,8 @@ class DenoiseRun {
   // denoiser declares, creates and sets up both instances.
   DenoiseRun(const DenoiserRequest& request, const Sequence& sequence);
   const ParamSet& params() const { return params_; }
+  // The denoiser reads the sequence's low-resolution buffer (it wants it and the sequence has one).
+  bool readsLowres() const { return readsLowres_; }
   // Denoises frames 0..n-1 in order; `frame(t)` supplies the sequence frame's layers.
   void run(const std::function<const LayerSet&(int)>& frame, const std::function<void(const DenoisedFrame&)>& onFrame);
 
@@ -47,6 +50,7 @@ class DenoiseRun {
   ParamSet params_;
   std::unique_ptr<Denoiser> diffuse_, specular_;
   bool needsGradients_ = false;
+  bool readsLowres_ = false;
 };
 
 // Replaces NaN/Inf by 0 in place; returns how many were replaced.
