@@ -34,8 +34,9 @@
 //   h = 1, shrinking as 1/sqrt(h); smooth specular's radius further scaled by roughness /
 //   threshold (slide 31: small-scale filter below the threshold).
 // - The stabilised one-frame result (slide 29): the propagated current frame, EMA with
-//   alpha 0.5 over the previous one-frame result (stable, yet half-way to a light change in one
-//   frame); the rejection rule is the shared luminance_rejection.hpp (tau 0.5 relative).
+//   alpha 0.5 over the previous one-frame result clamped to the current moments' box (stable
+//   under noise, yet it follows a light change within the frame); the rejection rule is the
+//   shared luminance_rejection.hpp (tau 0.5 relative).
 // - "Moment based merge" of geometry and virtual motion (slide 34): each candidate history is
 //   weighted by how well its luminance fits the current moments, exp(-d^2 / 2 mergeSigma^2),
 //   d = |L(history) - L(mean)| / sigma_L.
@@ -265,13 +266,17 @@ void ReEngine::temporalFilter() {
       }
       const bool valid = valid_.plane(0)[i] != 0.0f;
       float h = nextHistoryLength(valid, historyAt(i, lengthHistory_.plane(0)), maxHistory);
-      // Slide 29: the stabilised one-frame result -- the propagated frame, lightly accumulated.
+      // Slide 29: the stabilised one-frame result -- the propagated frame, lightly accumulated
+      // over its own history clamped to the current moments (stable under noise, yet at a light
+      // change it follows within the frame, so the rejection below can act at once).
       if (s_.lumaRejection)
-        for (int c = 0; c < 3; ++c)
+        for (int c = 0; c < 3; ++c) {
+          const float previous =
+              std::clamp(historyAt(i, oneFrameHistory_.plane(c)),
+                         mean[c] - s_.clampGamma * sigma[c], mean[c] + s_.clampGamma * sigma[c]);
           oneFrame_.plane(c)[i] =
-              valid ? s_.oneFrameAlpha * mean[c] +
-                          (1.0f - s_.oneFrameAlpha) * historyAt(i, oneFrameHistory_.plane(c))
-                    : mean[c];
+              valid ? s_.oneFrameAlpha * mean[c] + (1.0f - s_.oneFrameAlpha) * previous : mean[c];
+        }
       const float l = luminance(signal_.plane(0)[i], signal_.plane(1)[i], signal_.plane(2)[i]);
       if (valid) {
         for (int c = 0; c < 3; ++c) history[c] = historyAt(i, colorHistory_.plane(c));
