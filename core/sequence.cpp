@@ -51,6 +51,15 @@ const std::vector<LayerSpec>& gradientLayers() {
   };
   return specs;
 }
+const std::vector<LayerSpec>& lowresLayers() {
+  static const std::vector<LayerSpec> specs = {
+      {"diffuse", {"R", "G", "B"}, false},    // demodulated diffuse radiance, mean of lowresSpp paths
+      {"specular", {"R", "G", "B"}, false},   // demodulated specular radiance, mean of lowresSpp paths
+      {"direction", {"X", "Y", "Z"}, false},  // luminance-weighted mean incident direction of the
+                                              // diffuse signal (length <= 1: 1 = one direction)
+  };
+  return specs;
+}
 }  // namespace channels
 
 json cameraToJson(const CameraState& c) {
@@ -133,6 +142,7 @@ static std::string numbered(const char* prefix, int n, int digits) {
 fs::path Sequence::framePath(const fs::path& dir, int t) { return dir / numbered("frame", t, 4); }
 fs::path Sequence::referencePath(const fs::path& dir, int r) { return dir / numbered("reference", r, 3); }
 fs::path Sequence::gradientPath(const fs::path& dir, int t) { return dir / numbered("gradients", t, 4); }
+fs::path Sequence::lowresPath(const fs::path& dir, int t) { return dir / numbered("lowres", t, 4); }
 
 Sequence Sequence::open(const fs::path& dir) {
   fs::path file = dir / "sequence.json";
@@ -157,6 +167,13 @@ LayerSet Sequence::gradients(int t) const {
   if (t < 1 || t >= info_.frames)
     throw Error(dir_.string() + ": gradient samples exist for frames 1.." + std::to_string(info_.frames - 1));
   return readExr(gradientPath(dir_, t), channels::gradientLayers()).layers;
+}
+
+LayerSet Sequence::lowres(int t) const {
+  if (info_.lowresFactor() <= 0)
+    throw Error(dir_.string() + ": the sequence has no low-resolution buffer (render it with --lowres-factor)");
+  if (t < 0 || t >= info_.frames) throw Error(dir_.string() + ": frame " + std::to_string(t) + " out of range");
+  return readExr(lowresPath(dir_, t), channels::lowresLayers()).layers;
 }
 
 }  // namespace arena

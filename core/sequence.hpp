@@ -20,7 +20,18 @@ const std::vector<LayerSpec>& frameLayers();
 const std::vector<LayerSpec>& referenceLayers();
 // Gradient samples (A-SVGF), one texel per 3x3 stratum.
 const std::vector<LayerSpec>& gradientLayers();
+// Optional low-resolution, many-sample buffer (CAPCOM 2023 "disocclusion rays", slides 19-21): one
+// texel per factor x factor block, shaded lowresSpp times at its anchor pixel (lowresAnchor).
+const std::vector<LayerSpec>& lowresLayers();
 }  // namespace channels
+
+// The full-resolution pixel whose primary hit a low-resolution texel shades: the block's centre
+// pixel, clamped to the image. Writer and readers share it, so the texel's G-buffer is the frame's.
+inline int lowresAnchor(int texel, int factor, int size) {
+  const int p = texel * factor + factor / 2;
+  return p < size ? p : size - 1;
+}
+inline int lowresSize(int size, int factor) { return (size + factor - 1) / factor; }
 
 constexpr int kGradientStratum = 3;
 constexpr int kSequenceFormatVersion = 1;
@@ -41,6 +52,10 @@ struct SequenceInfo {
   std::vector<SequenceEvent> events;
   nlohmann::json settings;             // what produced the pixels (preset, spp, bounces, ...)
 
+  // The low-resolution buffer's block size and samples per texel; 0 when the sequence has none.
+  int lowresFactor() const { return settings.value("lowresFactor", 0); }
+  int lowresSpp() const { return settings.value("lowresSpp", 0); }
+
   nlohmann::json toJson() const;
   static SequenceInfo fromJson(const nlohmann::json& j, const std::string& file);
 };
@@ -59,10 +74,12 @@ class Sequence {
   LayerSet frame(int t) const;
   LayerSet reference(int t) const;  // the reference of frame t
   LayerSet gradients(int t) const;  // frame t >= 1
+  LayerSet lowres(int t) const;     // only when info().lowresFactor() > 0
 
   static std::filesystem::path framePath(const std::filesystem::path& dir, int t);
   static std::filesystem::path referencePath(const std::filesystem::path& dir, int r);
   static std::filesystem::path gradientPath(const std::filesystem::path& dir, int t);
+  static std::filesystem::path lowresPath(const std::filesystem::path& dir, int t);
 
  private:
   std::filesystem::path dir_;

@@ -39,10 +39,18 @@ struct FrameContext {
 // sequence's layers for this frame (depth, normal, position, motion, meshId, roughness,
 // specHitDist, albedo, ... -- see core/sequence.hpp); `gradients` the A-SVGF gradient samples
 // (nullptr on frame 0 or when the denoiser does not ask for them).
+// The sequence's optional low-resolution, many-sample buffer (core/sequence.hpp lowresLayers():
+// texel (i, j) shades full-resolution pixel lowresAnchor(i, factor, width), ...).
+struct LowresInputs {
+  const LayerSet& layers;
+  int factor = 0, spp = 0;
+};
+
 struct DenoiserInputs {
   const Image& signal;
   const LayerSet& frame;
   const LayerSet* gradients = nullptr;
+  const LowresInputs* lowres = nullptr;  // when the denoiser wants it and the sequence has it
 };
 
 // Wall time and neighbour fetches of one pass in the last frame.
@@ -50,6 +58,9 @@ struct PassStats {
   std::string name;
   double milliseconds = 0;
   double tapsPerPixel = 0;  // neighbour fetches per pixel (the talk's "fetch / pixel")
+  // Paths per full-resolution pixel this pass read from the low-resolution buffer (texels read x
+  // their spp / pixels): the disocclusion rays a denoiser is charged for beyond the 1-spp frame.
+  double raysPerPixel = 0;
 };
 
 class Denoiser {
@@ -58,6 +69,8 @@ class Denoiser {
   // Layers of the sequence frame this denoiser reads; the harness checks them before running.
   virtual std::vector<std::string> requiredChannels() const = 0;
   virtual bool needsGradients() const { return false; }
+  // Reads the sequence's low-resolution buffer when it has one (DenoiserInputs::lowres).
+  virtual bool wantsLowres() const { return false; }
   // Allocates every buffer (history included) for this resolution; not timed.
   virtual void setup(int width, int height) = 0;
   // Clears the history (camera cut).
@@ -80,9 +93,10 @@ class Denoiser {
         : owner_(owner), name_(std::move(name)), taps_(tapsPerPixel), start_(std::chrono::steady_clock::now()) {}
     ~ScopedPass() {
       double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_).count();
-      owner_->passes_.push_back({name_, ms, taps_});
+      owner_->passes_.push_back({name_, ms, taps_, rays_});
     }
     void setTaps(double taps) { taps_ = taps; }
+    void setRays(double raysPerPixel) { rays_ = raysPerPixel; }
     ScopedPass(const ScopedPass&) = delete;
     ScopedPass& operator=(const ScopedPass&) = delete;
 
@@ -90,6 +104,7 @@ class Denoiser {
     Denoiser* owner_;
     std::string name_;
     double taps_;
+    double rays_ = 0;
     std::chrono::steady_clock::time_point start_;
   };
 

@@ -22,16 +22,12 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "denoisers/common/filter_space.hpp"
+#include "denoisers/common/luminance_rejection.hpp"
 #include "denoisers/common/median.hpp"
 #include "denoisers/variants.hpp"
 
 namespace arena {
-
-namespace {
-float lumaAt(const Image& image, size_t i) {
-  return luminance(image.plane(0)[i], image.plane(1)[i], image.plane(2)[i]);
-}
-}  // namespace
 
 Hybrid::Hybrid(const HybridSettings& settings, SignalKind kind) : s_(settings), kind_(kind) {}
 
@@ -100,10 +96,7 @@ void Hybrid::toFilterSpace(const Image& signal) {
     signal_.raw() = signal.raw();
     return;
   }
-  for (size_t i = 0; i < signal.pixelCount(); ++i) {
-    const float scale = 1.0f / (1.0f + std::max(lumaAt(signal, i), 0.0f));
-    for (int c = 0; c < 3; ++c) signal_.plane(c)[i] = signal.plane(c)[i] * scale;
-  }
+  reinhardCompress(signal, signal_);
 }
 
 // ---- 1. Metadata (the talk's "Metadata" pass: depth, normal, motion, roughness, id organised
@@ -215,7 +208,7 @@ void Hybrid::preSpatial() {
     for (size_t i = 0; i < signal_.pixelCount(); ++i) {
       for (int c = 0; c < 3; ++c)
         preSquared_.plane(c)[i] = signal_.plane(c)[i] * signal_.plane(c)[i];
-      const float l = lumaAt(signal_, i);
+      const float l = luminance(signal_.plane(0)[i], signal_.plane(1)[i], signal_.plane(2)[i]);
       preSquared_.plane(3)[i] = l * l;
     }
     const AtrousGuide guide{gbuffer_, &derivatives_, nullptr, s_.edgeLobe ? &lobes_ : nullptr,
@@ -281,13 +274,8 @@ void Hybrid::temporal() {
           // CAPCOM (seed 004, "Temporal Luminance Rejection": "安定化した1フレームの結果は、履歴を
           // 修正するために使用されます"): where the history's luminance strays from the stabilised
           // one-frame result by more than tau (relative), pull it there and shorten h.
-          float s[3] = {oneFrame_.plane(0)[i], oneFrame_.plane(1)[i], oneFrame_.plane(2)[i]};
-          const float lh = luminance(history[0], history[1], history[2]),
-                      ls = luminance(s[0], s[1], s[2]);
-          const float d = std::abs(lh - ls) / std::max({lh, ls, 1e-6f});
-          const float rho =
-              std::clamp((d - s_.capcomTau) / std::max(s_.capcomTau, 1e-6f), 0.0f, 1.0f);
-          for (int c = 0; c < 3; ++c) history[c] += rho * (s[c] - history[c]);
+          const float s[3] = {oneFrame_.plane(0)[i], oneFrame_.plane(1)[i], oneFrame_.plane(2)[i]};
+          const float rho = rejectHistoryLuminance(history, s, s_.capcomTau);
           h = std::max(1.0f, h * (1.0f - rho));
           historyLength_.plane(0)[i] = h;
         }
@@ -419,10 +407,7 @@ void Hybrid::fromFilterSpace(Image& output) {
     output.raw() = stabilized_.raw();
     return;
   }
-  for (size_t i = 0; i < output.pixelCount(); ++i) {
-    const float scale = 1.0f / std::max(1.0f - lumaAt(stabilized_, i), 1e-6f);
-    for (int c = 0; c < 3; ++c) output.plane(c)[i] = stabilized_.plane(c)[i] * scale;
-  }
+  reinhardExpand(stabilized_, output);
 }
 
 void Hybrid::storeHistory() {

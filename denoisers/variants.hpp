@@ -15,10 +15,11 @@ DenoiserInfo asvgfInfo();
 DenoiserInfo slgfInfo();
 DenoiserInfo reblurInfo();
 DenoiserInfo hybridInfo();
+DenoiserInfo reEngineInfo();
 
 inline std::vector<DenoiserInfo> builtinDenoisers() {
   return {passthroughInfo(), temporalInfo(), eawInfo(), svgfInfo(), asvgfInfo(), slgfInfo(),
-          reblurInfo(), hybridInfo()};
+          reblurInfo(), hybridInfo(), reEngineInfo()};
 }
 
 }  // namespace arena

@@ -137,7 +137,7 @@ void addBenchCommand(CLI::App& app) {
   auto* denoise = bench->add_subcommand("denoise", "Denoiser cost at 1280x720: ms/frame and bilateral units (BU)");
   struct DenoiseOptions {
     std::string denoisers = "all", scene = defaultScenesDir() + "/cornell_static.json", json, resolution = "1280x720";
-    int frames = 20, warmup = 5, inputs = 3;
+    int frames = 20, warmup = 5, inputs = 3, lowresFactor = 8, lowresSpp = 16;
     std::vector<std::string> params, plugins;
   };
   auto d = std::make_shared<DenoiseOptions>();
@@ -153,6 +153,13 @@ void addBenchCommand(CLI::App& app) {
       ->check(CLI::Range(1, 1000))
       ->default_val(3);
   denoise->add_option("--json", d->json, "Write results to this JSON file")->default_str("none");
+  denoise->add_option("--lowres-factor", d->lowresFactor,
+                      "Low-resolution buffer for denoisers that read one (0: none)")
+      ->check(CLI::Range(0, 64))
+      ->default_val(8);
+  denoise->add_option("--lowres-spp", d->lowresSpp, "Paths per low-resolution texel")
+      ->check(CLI::Range(1, 4096))
+      ->default_val(16);
   denoise->callback([d] {
     auto [w, h] = parseResolution("--resolution", d->resolution);
     Scene scene = loadScene(d->scene);
@@ -160,8 +167,10 @@ void addBenchCommand(CLI::App& app) {
     settings.width = w;
     settings.height = h;
     settings.frames = std::max(1, d->inputs);
+    settings.lowresFactor = d->lowresFactor;
+    settings.lowresSpp = d->lowresSpp;
     SequenceRenderer renderer(scene, settings);
-    std::vector<LayerSet> inputs, inputGradients;
+    std::vector<LayerSet> inputs, inputGradients, inputLowres;
     std::printf("rendering %d input frame(s) of %s at %dx%d...\n", settings.frames, scene.name.c_str(), w, h);
     for (int t = 0; t < settings.frames; ++t) {
       auto r = renderer.renderFrame(t);
@@ -181,6 +190,18 @@ void addBenchCommand(CLI::App& app) {
     for (const std::string& library : d->plugins) names.push_back("plugin:" + library);
     for (std::string& n : names) n = DenoiserRegistry::resolve(n);  // loads external ones
     auto params = parseParamAssignments(d->params);
+    bool lowres = false;
+    for (const std::string& name : names) {
+      const DenoiserInfo& info = DenoiserRegistry::instance().find(name);
+      lowres = lowres || info.create(info.schema.resolve(params[name], name), SignalKind::Diffuse)->wantsLowres();
+    }
+    if (lowres && d->lowresFactor > 0) {
+      std::printf("rendering the low-resolution buffer (1/%d, %d spp)...\n", d->lowresFactor, d->lowresSpp);
+      for (int t = 0; t < settings.frames; ++t) {
+        RayCounts counts;
+        inputLowres.push_back(renderer.renderLowres(t, counts));
+      }
+    }
     nlohmann::json out = {{"resolution", {w, h}}, {"bilateralUnitMs", bu}, {"frames", d->frames},
                           {"warmup", d->warmup}, {"environment", environmentInfo()}, {"denoisers", nlohmann::json::array()}};
     for (const std::string& name : names) {
@@ -210,7 +231,10 @@ void addBenchCommand(CLI::App& app) {
         for (size_t k = 0; k < instances.size(); ++k) {
           const SignalKind kind = kinds[k];
           signal = frame.get(signalName(kind));
-          DenoiserInputs in{signal, frame, grads ? &gradients : nullptr};
+          const bool low = instances[k]->wantsLowres() && !inputLowres.empty();
+          const LowresInputs lowInputs{low ? inputLowres[size_t(f) % inputs.size()] : frame, d->lowresFactor,
+                                       d->lowresSpp};
+          DenoiserInputs in{signal, frame, grads ? &gradients : nullptr, low ? &lowInputs : nullptr};
           instances[k]->clearPassStats();
           auto t0 = std::chrono::steady_clock::now();
           instances[k]->denoise(ctx, in, outImage);

@@ -69,6 +69,7 @@ DenoiseRun::DenoiseRun(const DenoiserRequest& request, const Sequence& sequence)
                 " does not provide (re-render it with a tracer that writes them)");
   }
   needsGradients_ = first.needsGradients();
+  readsLowres_ = first.wantsLowres() && sequence.info().lowresFactor() > 0;
   for (auto& [kind, d] : instances_) d->setup(sequence.info().width, sequence.info().height);
 }
 
@@ -89,6 +90,9 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
     for (const std::string& c : instances_.front().second->requiredChannels()) frame.get(c, sequence_.dir().string() + " frame " + std::to_string(t));
     LayerSet gradients;
     if (needsGradients_ && t > 0) gradients = sequence_.gradients(t);
+    LayerSet lowresLayers;
+    if (readsLowres_) lowresLayers = sequence_.lowres(t);
+    const LowresInputs lowres{lowresLayers, info.lowresFactor(), info.lowresSpp()};
     FrameContext ctx;
     ctx.frameIndex = t;
     ctx.width = w;
@@ -105,12 +109,14 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
     out.milliseconds = 0;
     out.wallMilliseconds = 0;
     out.selfTimed = false;
+    out.extraRaysPerPixel = 0;
     for (auto& [kind, instance] : instances_) {
       Denoiser& d = *instance;
       Image& result = kind == SignalKind::Color ? out.color : kind == SignalKind::Diffuse ? out.diffuse : out.specular;
       signal = frame.get(signalName(kind));
       out.sanitized += sanitize(signal);
-      DenoiserInputs in{signal, frame, needsGradients_ && t > 0 ? &gradients : nullptr};
+      DenoiserInputs in{signal, frame, needsGradients_ && t > 0 ? &gradients : nullptr,
+                        readsLowres_ ? &lowres : nullptr};
       d.clearPassStats();
       auto start = std::chrono::steady_clock::now();
       d.denoise(ctx, in, result);
@@ -125,6 +131,7 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
                       std::to_string(t));
       for (PassStats p : d.lastPasses()) {
         p.name = std::string(signalName(kind)) + "/" + p.name;
+        out.extraRaysPerPixel += p.raysPerPixel;
         out.passes.push_back(p);
       }
     }

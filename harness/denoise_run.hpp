@@ -34,6 +34,7 @@ struct DenoisedFrame {
   bool selfTimed = false;          // milliseconds were reported by the denoiser itself
   std::vector<PassStats> passes;   // "diffuse/<pass>", "specular/<pass>"
   long sanitized = 0;              // NaN/Inf input values replaced by 0
+  double extraRaysPerPixel = 0;    // low-resolution paths read per pixel (both signals' passes)
 };
 
 class DenoiseRun {
@@ -43,6 +44,8 @@ class DenoiseRun {
   DenoiseRun(const DenoiserRequest& request, const Sequence& sequence);
   const ParamSet& params() const { return params_; }
   const DenoiserInfo& info() const { return info_; }
+  // The denoiser reads the sequence's low-resolution buffer (it wants it and the sequence has one).
+  bool readsLowres() const { return readsLowres_; }
   // Denoises frames 0..n-1 in order; `frame(t)` supplies the sequence frame's layers.
   void run(const std::function<const LayerSet&(int)>& frame, const std::function<void(const DenoisedFrame&)>& onFrame);
 
@@ -53,6 +56,7 @@ class DenoiseRun {
   ParamSet params_;
   std::vector<std::pair<SignalKind, std::unique_ptr<Denoiser>>> instances_;  // one per signal
   bool needsGradients_ = false;
+  bool readsLowres_ = false;
 };
 
 // Replaces NaN/Inf by 0 in place; returns how many were replaced.

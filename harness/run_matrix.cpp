@@ -315,6 +315,8 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
               put("msWall", f.wallMilliseconds, {}, FrameTransform::Mean);
               selfTimed = true;
             }
+            // Disocclusion rays: low-resolution paths read per pixel (denoisers that read the buffer).
+            if (run.readsLowres()) put("extraRaysPerPixel", f.extraRaysPerPixel, {}, FrameTransform::Mean);
             put("referenceRelMse", sd.referenceRelMse[size_t(t)], {}, FrameTransform::Mean);
             for (size_t k = 0; k < sd.events.size(); ++k) {
               const auto& ev = sd.events[k];

@@ -48,6 +48,12 @@ RenderSettings RenderOptions::settings() const {
     throw Error("--input-seed " + std::to_string(inputSeed) + ": expected 0 to 4294967295");
   s.inputSeed = uint32_t(inputSeed);
   s.referenceSampler = referenceSampler;
+  if (lowresFactor < 0 || lowresFactor == 1)
+    throw Error("--lowres-factor " + std::to_string(lowresFactor) + ": expected 0 (none) or a block size >= 2");
+  if (lowresSpp < 1 || lowresSpp > 4096)
+    throw Error("--lowres-spp " + std::to_string(lowresSpp) + ": expected a count in [1, 4096]");
+  s.lowresFactor = lowresFactor;
+  s.lowresSpp = lowresSpp;
   return s;
 }
 
@@ -119,6 +125,10 @@ void addRenderOptions(CLI::App* cmd, RenderOptions& o) {
   cmd->add_option("--ref-sampler", o.referenceSampler,
                   "References' sampler: sobol (Owen-scrambled, default) or independent (1-spp frames: always independent)")
       ->check(CLI::IsMember({"sobol", "independent"}));
+  cmd->add_option("--lowres-factor", o.lowresFactor,
+                  "Also render a low-resolution, many-sample buffer per frame, one texel per FxF block "
+                  "(CAPCOM 2023 disocclusion rays; 0: none)");
+  cmd->add_option("--lowres-spp", o.lowresSpp, "Paths per low-resolution texel (default 16)");
   cmd->add_option("--cache", o.cacheDir, "Sequence cache directory")->default_val("cache");
   cmd->add_option("--scenes-dir", o.scenesDir, "Directory of scene files")
       ->default_str(o.scenesDir);

@@ -27,6 +27,7 @@ namespace {
 constexpr int kTracerVersion = 3;  // bump when a change alters pixels: invalidates every cache
 constexpr float kMissHitDist = 1e6f;
 constexpr uint32_t kStratumPickSample = 0xFFFFF;  // sample index reserved for stratum picks
+constexpr uint32_t kLowresFirstSample = 0x80000;  // low-res paths: independent of frame and reference
 
 // Embree warns about denormals; flush them in every worker (called at the top of each task).
 void flushDenormals() {
@@ -107,6 +108,10 @@ json RenderSettings::pixelSettings(const Scene& scene) const {
           {"referenceSampler", referenceSampler}, {"referenceReplicates", referenceReplicates},
           {"preset", preset}};
   if (inputSeed != 0) px["inputSeed"] = inputSeed;  // absent by default: existing caches keep their hash
+  if (lowresFactor > 0) {
+    px["lowresFactor"] = lowresFactor;
+    px["lowresSpp"] = lowresSpp;
+  }
   return px;
 }
 
@@ -126,6 +131,10 @@ SequenceRenderer::SequenceRenderer(const Scene& scene, const RenderSettings& set
   height_ = settings.resolvedHeight(scene);
   frames_ = settings.resolvedFrames(scene);
   if (width_ < 1 || height_ < 1 || frames_ < 1) throw Error("render settings: resolution and frames must be positive");
+  if (settings.lowresFactor < 0 || settings.lowresFactor == 1 || settings.lowresSpp < 1 ||
+      settings.lowresSpp > 4096)
+    throw Error("render settings: lowresFactor " + std::to_string(settings.lowresFactor) + " / lowresSpp " +
+                std::to_string(settings.lowresSpp) + ": expected factor 0 (off) or >= 2 and spp in [1, 4096]");
   if (settings.maxBounces > 0) scene_.maxBounces = settings.maxBounces;
   if (settings.referenceSampler != "sobol" && settings.referenceSampler != "independent")
     throw Error("render settings: reference sampler '" + settings.referenceSampler +
@@ -590,6 +599,63 @@ ReferenceSums readReferenceSums(const fs::path& path, const std::string& hash, i
   return sums;
 }
 
+// CAPCOM 2023 slides 19-21: "120x67, 16-64 rays" beside the 1-spp frame. Each texel re-traces its
+// anchor pixel's primary ray (so its G-buffer is the frame's) and averages lowresSpp independent
+// paths: demodulated diffuse and specular, and the diffuse signal's luminance-weighted mean incident
+// direction (slide 21: "color / average direction"). Extra input rays: they follow inputSeed.
+LayerSet SequenceRenderer::renderLowres(int t, RayCounts& total) {
+  const FrameScene& cur = frameScene(t);
+  const CameraState& cam = cur.state().camera;
+  const int f = settings_.lowresFactor, spp = settings_.lowresSpp;
+  const int lw = lowresSize(width_, f), lh = lowresSize(height_, f);
+  Image diffuse(lw, lh, 3), specular(lw, lh, 3), direction(lw, lh, 3);
+  std::vector<RayCounts> rowCounts(static_cast<size_t>(lh));
+  forEachPixelRow(lh, [&](int ly) {
+    RayCounts& counts = rowCounts[size_t(ly)];
+    const int y = lowresAnchor(ly, f, height_);
+    for (int lx = 0; lx < lw; ++lx) {
+      const int x = lowresAnchor(lx, f, width_);
+      SurfaceHit hit;
+      float tHit;
+      counts.rays++;
+      if (!cur.intersect(cam.eye, cam.rayDirection(float(x) + 0.5f, float(y) + 0.5f),
+                         std::numeric_limits<float>::infinity(), hit, tHit, true))
+        continue;  // sky: no reflected light
+      const SurfaceHit s = cur.surface(hit.meshId, hit.primId, hit.u, hit.v);
+      const glm::vec3 wo = glm::normalize(cam.eye - s.position);
+      const glm::vec3 n = glm::dot(s.geometricNormal, wo) < 0 ? -s.shadingNormal : s.shadingNormal;
+      const glm::vec3 specAlb =
+          s.lightIndex >= 0 ? glm::vec3(0) : specularAlbedo(s.f0(), s.roughness, std::max(glm::dot(n, wo), 0.0f));
+      glm::vec3 d(0), sp(0), dir(0);
+      for (int k = 0; k < spp; ++k) {
+        const Sampler sampler(frameSeed(), uint32_t(t), uint32_t(y * width_ + x), kLowresFirstSample + uint32_t(k));
+        const FrameScene::Radiance r = cur.shade(s, wo, sampler, counts);
+        d += r.diffuse;
+        sp += r.specular;
+        dir += r.diffuseDirection;
+      }
+      const float weight = lum(d);
+      const glm::vec3 meanDir = weight > 0 ? dir / weight : glm::vec3(0);
+      const glm::vec3 dMean = d / float(spp) / glm::max(s.diffuseAlbedo(), glm::vec3(1e-3f));
+      const glm::vec3 sMean = sp / float(spp) / glm::max(specAlb, glm::vec3(1e-3f));
+      for (int c = 0; c < 3; ++c) {
+        diffuse.at(lx, ly, c) = dMean[c];
+        specular.at(lx, ly, c) = sMean[c];
+        direction.at(lx, ly, c) = meanDir[c];
+      }
+    }
+  });
+  for (const RayCounts& c : rowCounts) {
+    total.rays += c.rays;
+    total.paths += c.paths;
+  }
+  LayerSet out;
+  out.set("diffuse", std::move(diffuse));
+  out.set("specular", std::move(specular));
+  out.set("direction", std::move(direction));
+  return out;
+}
+
 namespace {
 
 // A cached file is trusted only if it is a complete EXR with every expected channel, written for
@@ -748,7 +814,17 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
     const fs::path fp = Sequence::framePath(dir, t), gp = Sequence::gradientPath(dir, t);
     bool frameOk = cachedFileValid(fp, hash, "frame", t, channels::frameLayers(), why);
     bool gradOk = t == 0 || cachedFileValid(gp, hash, "gradients", t, channels::gradientLayers(), whyGrad);
-    if (frameOk && gradOk) {
+    std::string whyLow;
+    const fs::path lp = Sequence::lowresPath(dir, t);
+    bool lowOk = settings.lowresFactor <= 0 || cachedFileValid(lp, hash, "lowres", t, channels::lowresLayers(), whyLow);
+    if (frameOk && gradOk && !lowOk) {  // only the low-res buffer is missing
+      say("[" + scene.name + "] " + (fs::exists(lp) ? "re-rendering " : "rendering ") + lp.filename().string() +
+          (fs::exists(lp) ? ": " + whyLow : ""));
+      RayCounts counts;
+      writeExr(lp, renderer.renderLowres(t, counts), channels::lowresLayers(), attributes("lowres", t));
+      lowOk = true;
+    }
+    if (frameOk && gradOk && lowOk) {
       ++jobsDone;
       continue;
     }
@@ -760,6 +836,10 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
     double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     writeExr(fp, r.frame, channels::frameLayers(), attributes("frame", t));
     if (t > 0) writeExr(gp, r.gradients, channels::gradientLayers(), attributes("gradients", t));
+    if (settings.lowresFactor > 0) {
+      RayCounts counts;
+      writeExr(lp, renderer.renderLowres(t, counts), channels::lowresLayers(), attributes("lowres", t));
+    }
     report("frame " + std::to_string(t), r.counts, sec);
   }
   info.referenceSpp.assign(firstFrameOfReference.size(), 0);

@@ -34,6 +34,11 @@ struct RenderSettings {
   // spread of their means (honest for QMC, whose per-sample variance overstates its error). The
   // sample count is a multiple of this (rounded up).
   int referenceReplicates = 8;
+  // Optional low-resolution, many-sample buffer per frame (CAPCOM 2023 "disocclusion rays"):
+  // one texel per lowresFactor x lowresFactor block, lowresSpp paths each. 0: none (hashed only
+  // when on, so caches rendered without it stay valid).
+  int lowresFactor = 0;
+  int lowresSpp = 16;
 
   // Presets: quick (the scene's resolution, references of 64-512 spp with adaptive stopping) and paper
   // (1280x720, 4096 spp references).
@@ -104,6 +109,8 @@ class SequenceRenderer {
   // Continuing from a stop of the same schedule gives the same bits as one uninterrupted run.
   ReferenceResult continueReference(int t, ReferenceSums& sums, double targetRelMse, int maxSpp);
   int referenceReplicates() const;
+  // The low-resolution buffer of frame t (channels::lowresLayers()); settings.lowresFactor > 0.
+  LayerSet renderLowres(int t, RayCounts& counts);
   uint64_t stateHash(int t) const;
   const FrameScene& frameScene(int t);
 

@@ -337,7 +337,7 @@ FrameScene::Radiance FrameScene::shade(const SurfaceHit& primary, glm::vec3 wo, 
   if (primary.lightIndex >= 0) return out;  // emitters do not reflect
   // Next-event estimation at a vertex, MIS-weighted against BSDF sampling (power heuristic).
   auto nextEvent = [&](const SurfaceHit& s, const Oriented& o, glm::vec3 w, float pSpec, uint32_t dim,
-                       glm::vec3& diffuse, glm::vec3& specular) {
+                       glm::vec3& diffuse, glm::vec3& specular, glm::vec3* direction) {
     glm::vec3 wi;
     float dist, pdfLight;
     glm::vec3 le = sampleLight(s, sampler, dim, wi, dist, pdfLight);
@@ -351,13 +351,14 @@ FrameScene::Radiance FrameScene::shade(const SurfaceHit& primary, glm::vec3 wo, 
     float cosine = glm::dot(o.n, wi);
     diffuse += f.diffuse * le * (cosine * weight / pdfLight);
     specular += f.specular * le * (cosine * weight / pdfLight);
+    if (direction) *direction += wi * lum(f.diffuse * le * (cosine * weight / pdfLight));
   };
 
   // Vertex 0: split direct light and the continuation between the diffuse and specular signals.
   Oriented o0 = orient(primary, wo);
   const float pSpec0 = specularProbability(primary, glm::dot(o0.n, wo));
   if (pSpec0 <= 0 && maxComponent(primary.diffuseAlbedo()) <= 0) return out;
-  nextEvent(primary, o0, wo, pSpec0, 0, out.diffuse, out.specular);
+  nextEvent(primary, o0, wo, pSpec0, 0, out.diffuse, out.specular, &out.diffuseDirection);
   glm::vec3 wi;
   glm::vec2 dir0 = sampler.get2(kDirU);
   float lobe0 = 0;
@@ -400,7 +401,7 @@ FrameScene::Radiance FrameScene::shade(const SurfaceHit& primary, glm::vec3 wo, 
     float pSpec = specularProbability(s, glm::dot(o.n, w));
     if (pSpec <= 0 && maxComponent(s.diffuseAlbedo()) <= 0) break;
     glm::vec3 direct(0);
-    nextEvent(s, o, w, pSpec, dim, direct, direct);
+    nextEvent(s, o, w, pSpec, dim, direct, direct, nullptr);
     incoming += throughput * direct;
     glm::vec3 next;
     glm::vec2 dirU = sampler.get2(dim + kDirU);
@@ -426,6 +427,7 @@ FrameScene::Radiance FrameScene::shade(const SurfaceHit& primary, glm::vec3 wo, 
   }
   out.diffuse += weightDiffuse * incoming;
   out.specular += weightSpecular * incoming;
+  out.diffuseDirection += wi * lum(weightDiffuse * incoming);
   return out;
 }
 

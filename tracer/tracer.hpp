@@ -78,6 +78,9 @@ class FrameScene {
     // Length of this sample's first continuation ray (the lobe it sampled; the talk stores the
     // traced sample's length, NRD reads it): infinity on a miss, 0 where no ray left the surface.
     float hitDistance = 0;
+    // Sum over the diffuse signal's first-vertex contributions of luminance x incident direction
+    // (the low-resolution buffer's "average direction", CAPCOM 2023 slide 21).
+    glm::vec3 diffuseDirection{0};
   };
   // One path sample starting at the primary surface `hit` seen from direction wo (towards the eye).
   // Emission of `hit` itself is not included (it is the emission channel).
