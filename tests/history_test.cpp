@@ -71,9 +71,9 @@ TEST(History, MarksWhatCompareSaysRunByRun) {
   EXPECT_EQ(changedRuns(data, "svgf", "relMse"), std::vector<int>{5}) << data["changes"].dump();
   EXPECT_TRUE(changedRuns(data, "passthrough", "relMse").empty());
   for (const json& c : data["changes"])
-    if (c["run"] == 5 &&
-        c["metric"] == "relMse")  // run 4's wobble is 1, run 5's 1.005: 1.005 x 1.1 - 1
+    if (c["run"] == 5 && c["metric"] == "relMse") {  // run 4's wobble is 1, run 5's 1.005: 1.005 x 1.1 - 1
       EXPECT_NEAR(c["change"].get<double>(), 0.1055, 1e-9);
+    }
   // Whether the gate fails is compare's own verdict on the same two runs, run by run.
   size_t failing = 0;
   for (size_t i = 1; i < runs.size(); ++i) {
@@ -88,8 +88,12 @@ TEST(History, MarksWhatCompareSaysRunByRun) {
   ASSERT_EQ(v.size(), 8u);
   EXPECT_NEAR(v[7].get<double>(), 0.02 * 1.1 * (1 + 0.005 * ((7 % 3) - 1)), 1e-12);
   for (const json& m : data["metrics"]) {
-    if (m["name"] == "relMse") EXPECT_NEAR(m["tolerance"].get<double>(), 0.02, 1e-12);
-    if (m["name"] == "ms") EXPECT_TRUE(m["tolerance"].is_null());
+    if (m["name"] == "relMse") {
+      EXPECT_NEAR(m["tolerance"].get<double>(), 0.02, 1e-12);
+    }
+    if (m["name"] == "ms") {
+      EXPECT_TRUE(m["tolerance"].is_null());
+    }
   }
 }
 

@@ -336,7 +336,9 @@ TEST(StatisticsEndToEnd, IntervalsRankingsAndAQuietGate) {
   bool flagged = false;
   for (const auto& r : rows) {
     flagged |= r.label == "temporal" && r.verdict == "regressed";
-    if (r.label == "svgf") EXPECT_EQ(r.verdict, "ok");  // unchanged: identical numbers
+    if (r.label == "svgf") {
+      EXPECT_EQ(r.verdict, "ok");  // unchanged: identical numbers
+    }
   }
   EXPECT_TRUE(flagged);
 }
