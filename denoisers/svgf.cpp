@@ -157,7 +157,7 @@ std::vector<ParamSpec> svgfParamSpecs() {
                          "à-trous iteration (1-based) whose output is next frame's colour "
                          "history; 0 = the accumulated colour (SVGF paper: 1, the first; Falcor's "
                          "0-based mFeedbackTap = 1 is its second iteration, 2 here)"),
-      ParamSpec::choice("youngColor", "spatial", {"spatial", "accumulated"},
+      ParamSpec::choice("youngColor", "accumulated", {"spatial", "accumulated"},
                         "colour of a pixel with h < 4 entering the à-trous: the 7x7 bilateral "
                         "mean of the variance estimate (Falcor SVGFFilterMoments) or the "
                         "accumulated colour (the SVGF paper estimates only the variance)"),
