@@ -357,7 +357,9 @@ void Hybrid::postSpatial() {
   // signal and blur more).
   const bool propagate = s_.edgeLuminance && s_.propagateVariance;
   const Image* variance = &variance_;
+  lastPostVariance_ = -1;
   for (int i = 0; i < s_.postIterations; ++i) {
+    lastPostVariance_ = variance == &variance_ ? -1 : int(variance - variancePingPong_);
     if (s_.edgeLuminance && (i == 0 || propagate)) {
       ScopedPass pass(this, "variance prefilter " + std::to_string(i + 1), 9);
       prefilterVariance3x3(*variance, gbuffer_, filteredVariance_);

@@ -83,6 +83,12 @@ class Hybrid : public Denoiser {
   std::vector<std::pair<std::string, const Image*>> passOutputs() const;
   // The history length h of the last frame (1 where it was disoccluded or the threshold fired).
   const Image& lastHistoryLength() const { return lengthHistory_; }
+  // Of the last frame: the luminance variance of the temporal stage (the post à-trous' first
+  // input) and the one the last post à-trous iteration's luminance term read (propagated).
+  const Image& lastVariance() const { return variance_; }
+  const Image& lastPostVariance() const {
+    return lastPostVariance_ < 0 ? variance_ : variancePingPong_[size_t(lastPostVariance_)];
+  }
 
  private:
   void toFilterSpace(const Image& signal);
@@ -124,6 +130,7 @@ class Hybrid : public Denoiser {
       temporal_, moments_, variance_, filteredVariance_, variancePingPong_[2], oneFrame_, median_,
       atrous_[3], post_, reprojectedStabilizer_, stabilized_;
   RowTapCounter taps_;
+  int lastPostVariance_ = -1;  // -1: variance_, else the variancePingPong_ index
 };
 
 }  // namespace arena

@@ -1,7 +1,8 @@
 // `svgf`: Spatiotemporal Variance-Guided Filtering (Schied et al. 2017; seed 003). Per frame:
 //   1. reproject the history with per-tap depth/normal/mesh-id tests (§4.1),
 //   2. accumulate colour and luminance moments with an exponential moving average (§4.1, §4.2),
-//   3. estimate the luminance variance: temporal from the moments, spatial 7x7 while h < 4 (§4.2),
+//   3. estimate the luminance variance: temporal from the moments, spatial 7x7 while h < 4 (§4.2);
+//      there the colour too becomes the 7x7 bilateral mean (Falcor; `youngColor`),
 //   4. run N à-trous iterations guided by depth, normal and variance-scaled luminance, propagating
 //      the variance (§4.3, §4.4); the output of iteration `feedbackTap` becomes the colour history.
 // Re-modulation by albedo is the harness's; the paper's final TAA is not part of SVGF proper.
@@ -37,6 +38,7 @@ void Svgf::setup(int width, int height) {
   historyLength_ = Image(width, height, 1);
   variance_ = Image(width, height, 1);
   filteredVariance_ = Image(width, height, 1);
+  youngColorMean_ = settings_.spatialYoungColor ? Image(width, height, 3) : Image();
   for (Image& image : colorPingPong_) image = Image(width, height, 3);
   for (Image& image : variancePingPong_) image = Image(width, height, 1);
   varianceTaps_.setup(height);
@@ -88,8 +90,14 @@ void Svgf::accumulate(const DenoiserInputs& in, const AdaptiveAlpha& alpha) {
 
 void Svgf::estimateVariance() {
   ScopedPass pass(this, "variance", 0);
+  Image* youngColor = settings_.spatialYoungColor ? &youngColorMean_ : nullptr;
   pass.setTaps(arena::estimateVariance(moments_, historyLength_, accumulated_, gbuffer_,
-                                       derivatives_, settings_.variance, variance_, varianceTaps_));
+                                       derivatives_, settings_.variance, variance_, varianceTaps_,
+                                       youngColor));
+  // Falcor's SVGFFilterMoments hands the à-trous the filtered colour of a young history (and so,
+  // through the feedback tap, the next frame's history).
+  if (youngColor)
+    replaceYoungColor(*youngColor, historyLength_, gbuffer_, settings_.variance, accumulated_);
 }
 
 void Svgf::filterWavelet(Image& output) {
@@ -149,6 +157,10 @@ std::vector<ParamSpec> svgfParamSpecs() {
                          "à-trous iteration (1-based) whose output is next frame's colour "
                          "history; 0 = the accumulated colour (SVGF paper: 1, the first; Falcor's "
                          "0-based mFeedbackTap = 1 is its second iteration, 2 here)"),
+      ParamSpec::choice("youngColor", "accumulated", {"spatial", "accumulated"},
+                        "colour of a pixel with h < 4 entering the à-trous: the 7x7 bilateral "
+                        "mean of the variance estimate (Falcor SVGFFilterMoments) or the "
+                        "accumulated colour (the SVGF paper estimates only the variance)"),
       ParamSpec::real("sigmaZ", 1.0, 0.0, 1e6, "depth stopping sigma_z, SVGF eq. 3 (paper 1)"),
       ParamSpec::real("sigmaN", 128.0, 0.0, 1e4,
                       "normal stopping exponent sigma_n, SVGF eq. 4 (paper and Falcor 128)"),
@@ -184,6 +196,7 @@ SvgfSettings svgfSettings(const ParamSet& params, const std::string& owner) {
   s.alpha = params.getFloat("alpha");
   s.momentsAlpha = params.getFloat("momentsAlpha");
   s.maxHistory = float(params.getInt("maxHistory"));
+  s.spatialYoungColor = params.getChoice("youngColor") == "spatial";
   EdgeStoppingSettings& e = s.atrous.edges;
   e.depth = params.getBool("edge.depth");
   e.sigmaZ = params.getFloat("sigmaZ");

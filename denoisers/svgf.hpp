@@ -21,7 +21,11 @@ struct SvgfSettings {
   float momentsAlpha = 0.2f;  // moments EMA floor (SVGF paper and Falcor 0.2)
   float maxHistory = 32.0f;   // history length cap (Falcor 32)
   VarianceSettings variance;
-  int iterations = 5;   // à-trous iterations (SVGF paper 5; Falcor 4)
+  // While h < 4, the à-trous starts from the 7x7 bilateral mean of the accumulated colour (Falcor
+  // SVGFFilterMoments, the default) or from the accumulated colour itself (the SVGF paper, which
+  // estimates only the variance spatially).
+  bool spatialYoungColor = false;  // measured: the mean raises disoccluded relMSE (FIDELITY.md)
+  int iterations = 5;              // à-trous iterations (SVGF paper 5; Falcor 4)
   int feedbackTap = 1;  // 1-based iteration feeding the history (paper 1; Falcor's 0-based 1 = 2)
   AtrousSettings atrous;
   Footprint footprint;  // footprint.hpp: the à-trous steps at this resolution
@@ -67,7 +71,7 @@ class Svgf : public Denoiser {
   void computeDerivatives();                // ddx/ddy of depth, normal
   void reproject(const FrameContext& ctx);  // §4.1 consistency tests
   void accumulate(const DenoiserInputs& in, const AdaptiveAlpha& alpha);  // §4.1, §4.2
-  void estimateVariance();            // §4.2 temporal / 7x7 spatial
+  void estimateVariance();            // §4.2 temporal / 7x7 spatial (+ Falcor's young colour)
   void filterWavelet(Image& output);  // §4.3 à-trous + feedback
   void storeHistory();                // history for frame i + 1
 
@@ -81,7 +85,7 @@ class Svgf : public Denoiser {
   // History (persist across frames; reset() discards them).
   Image colorHistory_, momentsHistory_, previousHistoryLength_;
   // Per-frame (transient) buffers.
-  Image accumulated_, moments_, historyLength_, variance_, filteredVariance_;
+  Image accumulated_, moments_, historyLength_, variance_, filteredVariance_, youngColorMean_;
   Image colorPingPong_[2], variancePingPong_[2];
   RowTapCounter varianceTaps_;
 };

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -715,6 +716,27 @@ TEST(DenoiserBlocksReprojection, InconsistentTapsAreRejectedPerTap) {
   EXPECT_EQ(reprojection.validFraction(), 0.0);
 }
 
+// Issue 15, item 12: the depth test's derivative is Falcor's max(|dz/dx|, |dz/dy|)
+// (SVGFPackLinearZAndNormal), not HLSL fwidth's sum. A plane whose depth ramps 0.05 per pixel in x
+// and y (max 0.05, sum 0.1) against a previous frame shifted by dz: rejected where
+// dz / (0.05 + 0.01) > 10, i.e. dz > 0.6 (the sum would allow up to 10 (0.1 + 0.01) = 1.1).
+TEST(DenoiserBlocksReprojection, DepthTestUsesTheLargerDepthDerivative) {
+  const int w = 12, h = 9;
+  SyntheticGBuffer current(w, h), previous(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) current.depth.at(x, y) = 2.0f + 0.05f * float(x + y);
+  const Image derivatives = current.derivatives();
+  for (size_t p = 0; p < size_t(w * h); ++p)
+    ASSERT_NEAR(depthFwidth(derivatives, p), 0.05f, 1e-5f) << p;
+  Reprojection reprojection;
+  reprojection.setup(w, h);
+  for (float shift : {0.5f, 0.8f}) {
+    for (int i = 0; i < w * h; ++i) previous.depth.plane(0)[i] = current.depth.plane(0)[i] + shift;
+    reprojection.compute(current.view(), derivatives, previous.view(), ReprojectionSettings{});
+    EXPECT_EQ(reprojection.validFraction(), shift < 0.6f ? 1.0 : 0.0) << "dz " << shift;
+  }
+}
+
 // The per-pixel definition of compute() (SVGF §4.1): 2x2 bilinear taps each tested by
 // consistent(), renormalised when their weight sum reaches minWeightSum, else the 3x3 box.
 ReprojectionRecord referenceRecord(const SyntheticGBuffer& cur, const SyntheticGBuffer& prev,
@@ -978,6 +1000,83 @@ TEST(DenoiserBlocksTemporal, SpatialVarianceOfAYoungPixelDoesNotDependOnItsNeigh
     ASSERT_EQ(sparse.plane(0)[i] * 2.0f, dense.plane(0)[i]) << i;
   }
   EXPECT_GT(young, w * h / 10);
+}
+
+// Falcor SVGFFilterMoments' colour at a young pixel (x, y), written out per pixel: the 7x7 mean of
+// the colour weighted by exp(-|l(p) - l(q)| / phiColor - |z(p) - z(q)| / (phiDepth max(|dz/dx|,
+// |dz/dy|) |p - q|)) max(0, n(p).n(q))^phiNormal, sky neighbours left out, the centre weight 1.
+std::array<double, 3> falcorYoungColor(const SyntheticGBuffer& g, const Image& derivatives,
+                                       const Image& color, const VarianceSettings& s, int x,
+                                       int y) {
+  auto lum = [&](int qx, int qy) {
+    return luminance(color.at(qx, qy, 0), color.at(qx, qy, 1), color.at(qx, qy, 2));
+  };
+  const float depthScale = std::max(s.phiDepth * std::max(std::abs(derivatives.at(x, y, kDepthDx)),
+                                                          std::abs(derivatives.at(x, y, kDepthDy))),
+                                    1e-8f);
+  std::array<double, 3> sum = {0, 0, 0};
+  double weightSum = 0;
+  for (int dy = -s.radius; dy <= s.radius; ++dy)
+    for (int dx = -s.radius; dx <= s.radius; ++dx) {
+      const int qx = x + dx, qy = y + dy;
+      if (qx < 0 || qy < 0 || qx >= g.w || qy >= g.h || g.meshId.at(qx, qy) < 0) continue;
+      double weight = 1.0;
+      if (dx != 0 || dy != 0) {
+        double cosine = 0;
+        for (int c = 0; c < 3; ++c) cosine += g.normal.at(x, y, c) * g.normal.at(qx, qy, c);
+        weight = std::exp(-std::abs(lum(x, y) - lum(qx, qy)) / s.phiColor -
+                          std::abs(g.depth.at(x, y) - g.depth.at(qx, qy)) /
+                              (depthScale * std::hypot(double(dx), double(dy)))) *
+                 std::pow(std::max(0.0, cosine), double(s.phiNormal));
+      }
+      weightSum += weight;
+      for (int c = 0; c < 3; ++c) sum[size_t(c)] += weight * color.at(qx, qy, c);
+    }
+  for (double& v : sum) v /= weightSum;
+  return sum;
+}
+
+// Issue 15, item 5.
+TEST(DenoiserBlocksTemporal, YoungColourIsTheBilateralMeanOfItsNeighbours) {
+  const int w = 29, h = 17;
+  SyntheticGBuffer g(w, h);
+  g.makeVaried(17);  // two meshes, a sky corner, varied normals and depth
+  const Image derivatives = g.derivatives();
+  const Image color = randomImage(w, h, 3, 7, 0.0f, 2.0f);
+  const Image moments = randomImage(w, h, 2, 8, 0.0f, 1.0f);
+  // Young (h < 4) in a scattered 30 % (gathered) and in the whole of row 9 (read in place).
+  Image length(w, h, 1, 10.0f);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      if (y == 9 || hashUniform(9, x, y) < 0.3f) length.at(x, y) = 1.0f + float((x + y) % 3);
+  const VarianceSettings settings;
+  RowTapCounter taps;
+  taps.setup(h);
+  Image variance(w, h, 1), mean(w, h, 3, -7.0f);
+  estimateVariance(moments, length, color, g.view(), derivatives, settings, variance, taps, &mean);
+  Image replaced = color;
+  replaceYoungColor(mean, length, g.view(), settings, replaced);
+  int young = 0, movedFar = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const bool isYoung = length.at(x, y) < 4.0f && g.meshId.at(x, y) >= 0.0f;
+      if (!isYoung) {  // neither written nor replaced
+        for (int c = 0; c < 3; ++c) {
+          ASSERT_EQ(mean.at(x, y, c), -7.0f) << x << "," << y;
+          ASSERT_EQ(replaced.at(x, y, c), color.at(x, y, c)) << x << "," << y;
+        }
+        continue;
+      }
+      ++young;
+      const std::array<double, 3> want = falcorYoungColor(g, derivatives, color, settings, x, y);
+      for (int c = 0; c < 3; ++c) {
+        ASSERT_NEAR(replaced.at(x, y, c), want[size_t(c)], 2e-3 * (1.0 + want[size_t(c)]))
+            << x << "," << y << " channel " << c;
+        movedFar += std::abs(replaced.at(x, y, c) - color.at(x, y, c)) > 0.1f;
+      }
+    }
+  EXPECT_GT(young, w * h / 4);
+  EXPECT_GT(movedFar, young);  // the mean is not the pixel's own colour
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -100,8 +100,9 @@ struct SpatialVarianceScratch {
   // Centre guides, and one tap's neighbour values gathered beside them.
   std::vector<float> z, depthDenominator, centreLuminance, n0, n1, n2;
   std::vector<float> zq, luminanceQ, n0q, n1q, n2q, meshIdQ, mu1q, mu2q, weight;
+  std::vector<float> rq, gq, bq;    // the neighbours' colour (youngColorMean only)
   std::vector<float> rowLuminance;  // a neighbour row's luminance, indexed by x (runs)
-  std::vector<double> m1, m2, weightSum;
+  std::vector<double> m1, m2, weightSum, sumR, sumG, sumB;
   std::vector<int32_t> fetched;
 };
 SpatialVarianceScratch& spatialScratch(int width) {
@@ -111,9 +112,11 @@ SpatialVarianceScratch& spatialScratch(int width) {
     for (auto* buffer :
          {&scratch.z, &scratch.depthDenominator, &scratch.centreLuminance, &scratch.n0, &scratch.n1,
           &scratch.n2, &scratch.zq, &scratch.luminanceQ, &scratch.n0q, &scratch.n1q, &scratch.n2q,
-          &scratch.meshIdQ, &scratch.mu1q, &scratch.mu2q, &scratch.weight, &scratch.rowLuminance})
+          &scratch.meshIdQ, &scratch.mu1q, &scratch.mu2q, &scratch.weight, &scratch.rq, &scratch.gq,
+          &scratch.bq, &scratch.rowLuminance})
       buffer->assign(size_t(width), 0.0f);
-    for (auto* buffer : {&scratch.m1, &scratch.m2, &scratch.weightSum})
+    for (auto* buffer : {&scratch.m1, &scratch.m2, &scratch.weightSum, &scratch.sumR, &scratch.sumG,
+                         &scratch.sumB})
       buffer->assign(size_t(width), 0.0);
     scratch.fetched.assign(size_t(width), 0);
   }
@@ -153,10 +156,14 @@ void spatialTapWeights(const float* __restrict z, const float* __restrict zq,
 
 double estimateVariance(const Image& moments, const Image& historyLength, const Image& color,
                         const GBufferView& g, const Image& derivatives,
-                        const VarianceSettings& settings, Image& variance, RowTapCounter& taps) {
+                        const VarianceSettings& settings, Image& variance, RowTapCounter& taps,
+                        Image* youngColorMean) {
   const int w = moments.width(), h = moments.height();
   if (!g.depth || !g.normal[0] || !g.meshId)
     throw Error("variance: needs the depth, normal and meshId layers");
+  if (youngColorMean && (youngColorMean->channels() != 3 || !youngColorMean->sameShape(color)))
+    throw Error("variance: youngColorMean must be an RGB image of the colour's size");
+  const float* colorPlane[3] = {color.plane(0), color.plane(1), color.plane(2)};
   const float* mu1 = moments.plane(0);
   const float* mu2 = moments.plane(1);
   const float* length = historyLength.plane(0);
@@ -176,12 +183,10 @@ double estimateVariance(const Image& moments, const Image& historyLength, const 
     int count = 0;
     for (int x = 0; x < w; ++x) {
       const size_t p = rowStart + size_t(x);
-      if (g.isSky(p)) {
-        out[p] = 0.0f;
-      } else if (length[p] >= settings.minHistory) {
-        out[p] = std::max(0.0f, mu2[p] - mu1[p] * mu1[p]);
-      } else {
+      if (isYoungPixel(g, length, p, settings)) {
         row.young[size_t(count++)] = x;
+      } else {
+        out[p] = g.isSky(p) ? 0.0f : std::max(0.0f, mu2[p] - mu1[p] * mu1[p]);
       }
     }
     if (count == 0) {
@@ -206,6 +211,7 @@ double estimateVariance(const Image& moments, const Image& historyLength, const 
       row.n1[size_t(k)] = g.normal[1][p];
       row.n2[size_t(k)] = g.normal[2][p];
       row.m1[size_t(k)] = row.m2[size_t(k)] = row.weightSum[size_t(k)] = 0.0;
+      row.sumR[size_t(k)] = row.sumG[size_t(k)] = row.sumB[size_t(k)] = 0.0;
       row.fetched[size_t(k)] = 0;
     }
     const auto tapWeights =
@@ -227,6 +233,7 @@ double estimateVariance(const Image& moments, const Image& historyLength, const 
         // would).
         int kBegin = 0, kEnd = count;
         const float *zq, *luminanceQ, *n0q, *n1q, *n2q, *idq, *mu1q, *mu2q;
+        const float *rq = nullptr, *gq = nullptr, *bq = nullptr;
         if (run) {
           kBegin = std::max(0, -dx - first);
           kEnd = std::min(count, w - dx - first);
@@ -242,6 +249,11 @@ double estimateVariance(const Image& moments, const Image& historyLength, const 
           idq = at(g.meshId);
           mu1q = at(mu1);
           mu2q = at(mu2);
+          if (youngColorMean) {
+            rq = at(colorPlane[0]);
+            gq = at(colorPlane[1]);
+            bq = at(colorPlane[2]);
+          }
         } else {
           for (int k = 0; k < count; ++k) {
             const int qx = row.young[size_t(k)] + dx;
@@ -255,6 +267,17 @@ double estimateVariance(const Image& moments, const Image& historyLength, const 
             row.meshIdQ[size_t(k)] = inside ? g.meshId[q] : -1.0f;
             row.mu1q[size_t(k)] = mu1[q];
             row.mu2q[size_t(k)] = mu2[q];
+          }
+          if (youngColorMean) {
+            for (int k = 0; k < count; ++k) {
+              const size_t q = qRow + size_t(std::clamp(row.young[size_t(k)] + dx, 0, w - 1));
+              row.rq[size_t(k)] = colorPlane[0][q];
+              row.gq[size_t(k)] = colorPlane[1][q];
+              row.bq[size_t(k)] = colorPlane[2][q];
+            }
+            rq = row.rq.data();
+            gq = row.gq.data();
+            bq = row.bq.data();
           }
           zq = row.zq.data();
           luminanceQ = row.luminanceQ.data();
@@ -287,6 +310,17 @@ double estimateVariance(const Image& moments, const Image& historyLength, const 
           m2[k] += double(selectFloat(sky, 0.0f, weight[k] * mu2q[k]));
           weightSum[k] += double(selectFloat(sky, 0.0f, weight[k]));
         }
+        if (youngColorMean) {  // Falcor: the colour under the same weights
+          double* sumR = row.sumR.data();
+          double* sumG = row.sumG.data();
+          double* sumB = row.sumB.data();
+          for (int k = kBegin; k < kEnd; ++k) {
+            const bool sky = idq[k] < 0.0f;
+            sumR[k] += double(selectFloat(sky, 0.0f, weight[k] * rq[k]));
+            sumG[k] += double(selectFloat(sky, 0.0f, weight[k] * gq[k]));
+            sumB[k] += double(selectFloat(sky, 0.0f, weight[k] * bq[k]));
+          }
+        }
       }
     }
     int64_t fetchedInRow = 0;
@@ -298,10 +332,29 @@ double estimateVariance(const Image& moments, const Image& historyLength, const 
       float v = float(std::max(0.0, m2 - m1 * m1));
       if (settings.boostYoungHistory) v *= settings.minHistory / std::max(length[p], 1.0f);
       out[p] = v;
+      if (youngColorMean) {
+        const double weightSum = row.weightSum[size_t(k)];
+        youngColorMean->plane(0)[p] = float(row.sumR[size_t(k)] / weightSum);
+        youngColorMean->plane(1)[p] = float(row.sumG[size_t(k)] / weightSum);
+        youngColorMean->plane(2)[p] = float(row.sumB[size_t(k)] / weightSum);
+      }
     }
     taps.set(y, fetchedInRow);
   });
   return taps.perPixel(moments.pixelCount());
+}
+
+void replaceYoungColor(const Image& youngColorMean, const Image& historyLength,
+                       const GBufferView& g, const VarianceSettings& settings, Image& color) {
+  if (youngColorMean.channels() != 3 || color.channels() != 3 || !youngColorMean.sameShape(color))
+    throw Error("variance: replaceYoungColor expects two RGB images of one size");
+  const int w = color.width();
+  const float* length = historyLength.plane(0);
+  parallelRows(color.height(), [&](int y) {
+    for (size_t p = size_t(y) * size_t(w); p < size_t(y + 1) * size_t(w); ++p)
+      if (isYoungPixel(g, length, p, settings))
+        for (int c = 0; c < 3; ++c) color.plane(c)[p] = youngColorMean.plane(c)[p];
+  });
 }
 
 }  // namespace arena

@@ -2,7 +2,9 @@
 // Per-pixel luminance variance (SVGF §4.2): the first and second moments of luminance are
 // accumulated over time with the colour's reprojection, Var = max(0, mu2 - mu1^2); where fewer
 // than 4 frames have been accumulated the variance is estimated spatially instead, by a 7x7
-// bilateral filter of the moments (weights as in Falcor's SVGFFilterMoments).
+// bilateral filter of the moments (weights as in Falcor's SVGFFilterMoments). Falcor's pass also
+// replaces a young pixel's colour by the same bilateral mean (estimateVariance's youngColorMean and
+// replaceYoungColor below); the paper estimates only the variance spatially.
 #include "core/image.hpp"
 #include "denoisers/common/gbuffer.hpp"
 #include "denoisers/common/parallel.hpp"
@@ -38,11 +40,26 @@ struct VarianceSettings {
   bool boostYoungHistory = true;
 };
 
+// A young pixel: not sky, h < minHistory (the spatial estimate runs there).
+inline bool isYoungPixel(const GBufferView& gbuffer, const float* historyLength, size_t p,
+                         const VarianceSettings& settings) {
+  return !gbuffer.isSky(p) && historyLength[p] < settings.minHistory;
+}
+
 // variance (1 channel) from `moments` where h >= minHistory, else the spatial estimate around p
 // over `moments` and the luminance of `color` (the accumulated colour). Sky pixels get 0.
-// Returns the neighbour taps read per pixel (49 where the spatial estimate ran).
+// With `youngColorMean` (3 channels), each young pixel there receives the bilateral mean of
+// `color` under the same weights (Falcor SVGFFilterMoments filters the illumination with the
+// moments); its other pixels are not written. Returns the neighbour taps read per pixel (49 where
+// the spatial estimate ran).
 double estimateVariance(const Image& moments, const Image& historyLength, const Image& color,
                         const GBufferView& gbuffer, const Image& derivatives,
-                        const VarianceSettings& settings, Image& variance, RowTapCounter& taps);
+                        const VarianceSettings& settings, Image& variance, RowTapCounter& taps,
+                        Image* youngColorMean = nullptr);
+
+// color := youngColorMean at every young pixel (the à-trous then starts from Falcor's filtered
+// colour there); the other pixels keep theirs.
+void replaceYoungColor(const Image& youngColorMean, const Image& historyLength,
+                       const GBufferView& gbuffer, const VarianceSettings& settings, Image& color);
 
 }  // namespace arena
