@@ -62,6 +62,8 @@ json parseJsonText(const std::string& text, const std::string& file) {
     return json::parse(text);
   } catch (const json::parse_error& e) {
     throw Error(file + ": malformed JSON (byte " + std::to_string(e.byte) + "): " + e.what());
+  } catch (const json::exception& e) {  // e.g. a number beyond double range (out_of_range.406)
+    throw Error(file + ": unreadable JSON value: " + e.what());
   }
 }
 
