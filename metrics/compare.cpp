@@ -33,6 +33,17 @@ std::string key(const json& p) {
   return p.value("scene", "") + "\n" + p.value("label", "");
 }
 
+// A row about a whole pair (metric "*"): missing, failed or new; no numbers to compare.
+ComparisonRow pairRow(const json& p, const std::string& verdict, const std::string& note) {
+  ComparisonRow row;
+  row.scene = p.value("scene", "");
+  row.label = p.value("label", "");
+  row.metric = "*";
+  row.verdict = verdict;
+  row.note = note;
+  return row;
+}
+
 }  // namespace
 
 double parseTolerance(const std::string& text) {
@@ -83,30 +94,12 @@ std::vector<ComparisonRow> compareRuns(const json& base, const json& cand,
     const std::string scene = b.value("scene", ""), label = b.value("label", "");
     auto it = candPairs.find(key(b));
     if (it == candPairs.end()) {
-      rows.push_back({scene,
-                      label,
-                      "*",
-                      kUndefined,
-                      kUndefined,
-                      kUndefined,
-                      {},
-                      0,
-                      "missing",
-                      "pair not in the candidate run"});
+      rows.push_back(pairRow(b, "missing", "pair not in the candidate run"));
       continue;
     }
     const json& c = *it->second;
     if (c.value("status", "") != "ok") {
-      rows.push_back({scene,
-                      label,
-                      "*",
-                      kUndefined,
-                      kUndefined,
-                      kUndefined,
-                      {},
-                      0,
-                      "failed",
-                      c.value("error", "")});
+      rows.push_back(pairRow(b, "failed", c.value("error", "")));
       continue;
     }
     if (b.value("status", "") != "ok") continue;  // nothing to hold the candidate to
@@ -164,17 +157,7 @@ std::vector<ComparisonRow> compareRuns(const json& base, const json& cand,
     }
   }
   for (const json& c : cand["pairs"])
-    if (!baseKeys.count(key(c)))
-      rows.push_back({c.value("scene", ""),
-                      c.value("label", ""),
-                      "*",
-                      kUndefined,
-                      kUndefined,
-                      kUndefined,
-                      {},
-                      0,
-                      "new",
-                      "pair not in the baseline run"});
+    if (!baseKeys.count(key(c))) rows.push_back(pairRow(c, "new", "pair not in the baseline run"));
   return rows;
 }
 
