@@ -563,7 +563,8 @@ json reportData(const json& results, const fs::path& runDir, const json* baselin
     if (sceneInfos.contains(name)) {
       const json& info = sceneInfos[name];
       for (const char* k : {"purpose", "width", "height", "frames", "events", "chosenFrames",
-                            "referenceRelMse", "noisyRelMse", "referenceSpp", "exposure", "floors"})
+                            "referenceRelMse", "noisyRelMse", "referenceSpp", "exposure", "floors",
+                            "assets"})  // assets: credits and loader fallbacks (issue 18)
         if (info.contains(k)) s[k] = info[k];
       s["noiseFloor"] = noiseFloor(info, warmup);
       s["viewer"] = viewerData(results, name, info, runDir);
