@@ -403,7 +403,7 @@ TEST(Class5State, BadOutputsFailBeforeAnyWorkNamingTheFile) {
                    {"settings", json::object()},
                    {"pairs", json::array()}};
          for (int i = 0; i < 200; ++i)  // enough rows for several pages
-           r["pairs"].push_back({{"scene", "s" + std::to_string(i)},
+           r["pairs"].push_back({{"scene", std::string("s").append(std::to_string(i))},
                                  {"denoiser", std::string(200, 'd')},
                                  {"label", "l"},
                                  {"params", json::object()},
