@@ -1,9 +1,11 @@
 #pragma once
 // The scene parser's fuzz contract, shared by the libFuzzer target (scene_fuzzer.cpp, clang only)
-// and the deterministic mutation test that always runs (tests/robustness_test.cpp): any bytes
+// and the deterministic mutation test that always runs (tests/scene_fuzz_test.cpp): any bytes
 // either parse into a scene that passes the parser's own invariants or are rejected with an
 // arena::Error. Any other exception, a crash or a sanitizer report is a bug.
+#include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <string>
 
 #include "core/error.hpp"
@@ -12,12 +14,17 @@
 namespace arena::fuzz {
 
 // Returns true if the text parsed; throws std::logic_error if a parsed scene breaks an invariant
-// the tracer relies on. arena::Error (a clear rejection) is swallowed and returns false.
+// the tracer relies on, or a rejection does not name the file. arena::Error (a clear rejection)
+// is swallowed and returns false.
 inline bool parseSceneOrReject(const std::string& text) {
+  const std::string path = "fuzz/scene.json";
   Scene s;
   try {
-    s = parseScene(text, "fuzz/scene.json");
-  } catch (const Error&) {
+    s = parseScene(text, path);
+  } catch (const Error& e) {
+    if (std::string(e.what()).rfind(path, 0) != 0)
+      throw std::logic_error(std::string("a rejection that does not start with the file: ") +
+                             e.what());
     return false;
   }
   auto finite = [](glm::vec3 v) {
