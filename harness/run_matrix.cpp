@@ -599,6 +599,17 @@ json runMatrix(const RunConfig& cfg) {
           {"noisyRelMse", sd->noisyRelMse}, {"exposure", exposures.front()}, {"exposurePerFrame", exposures},
           {"chosenFrames", sd->chosenFrames}, {"images", fs::relative(sceneImages, cfg.out).string()},
           {"floors", sd->floors}, {"nonFiniteInputs", sd->nonFinite}};
+      // Asset scenes (issue 18): the models' credits and the loader's counted fallbacks.
+      if (!scene.credits.empty() || !scene.warnings.empty()) {
+        json credits = json::array();
+        for (const Credit& c : scene.credits)
+          credits.push_back({{"asset", c.asset},
+                             {"author", c.author},
+                             {"license", c.license},
+                             {"source", c.source}});
+        results["scenes"][scene.name]["assets"] = {{"credits", credits},
+                                                   {"warnings", scene.warnings}};
+      }
     }
     for (const DenoiserRequest* r : mine) {
       auto t0 = std::chrono::steady_clock::now();

@@ -142,7 +142,7 @@ SequenceRenderer::SequenceRenderer(const Scene& scene, const RenderSettings& set
   if (settings.referenceReplicates < 2 || settings.referenceReplicates > 64)
     throw Error("render settings: reference replicates " + std::to_string(settings.referenceReplicates) +
                 " out of range (expected 2..64)");
-  for (const Object& o : scene_.objects) meshes_.push_back(makeMesh(o.shape, o.meshFile));
+  for (const Object& o : scene_.objects) meshes_.push_back(makeMesh(o));
   for (const Light& l : scene_.lights) meshes_.push_back(makeMesh(l.shape, ""));
 }
 
@@ -765,6 +765,7 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
   auto say = [&](const std::string& s) {
     if (progress) progress(s);
   };
+  for (const std::string& w : scene.warnings) say("[" + scene.name + "] asset fallback: " + w);
 
   SequenceInfo info;
   info.scene = scene.name;
