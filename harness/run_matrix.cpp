@@ -316,7 +316,15 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
               selfTimed = true;
             }
             // Disocclusion rays: low-resolution paths read per pixel (denoisers that read the buffer).
-            if (run.readsLowres()) put("extraRaysPerPixel", f.extraRaysPerPixel, {}, FrameTransform::Mean);
+            if (run.readsLowres()) {
+              put("extraRaysPerPixel", f.extraRaysPerPixel, {}, FrameTransform::Mean);
+              // Their equivalent tracing time: the paths read at the rate the buffer rendered at on
+              // the machine that rendered it (unknown, and absent, when another machine did).
+              if (info.lowresPathsPerSecond > 0)
+                put("tracingMs", f.extraRaysPerPixel * double(info.width) * double(info.height) /
+                                     info.lowresPathsPerSecond * 1e3,
+                    {}, FrameTransform::Mean);
+            }
             put("referenceRelMse", sd.referenceRelMse[size_t(t)], {}, FrameTransform::Mean);
             for (size_t k = 0; k < sd.events.size(); ++k) {
               const auto& ev = sd.events[k];

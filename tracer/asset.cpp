@@ -250,6 +250,9 @@ struct Loader {
     if (mesh.mNumBones > 0)
       throw Error(path + ": " + meshName + " is skinned (" + std::to_string(mesh.mNumBones) +
                   " bones): skinning is not supported (only node TRS animation)");
+    if (mesh.mMaterialIndex >= out.materials.size())
+      throw Error(path + ": " + meshName + " uses material " + std::to_string(mesh.mMaterialIndex) +
+                  " of " + std::to_string(out.materials.size()));
     if (mesh.mNumAnimMeshes > 0)
       warnings.add("meshes with morph targets (the base shape is used)", 1, meshName);
     MeshData& m = out.mesh;
