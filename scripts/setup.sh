@@ -6,9 +6,10 @@ cd "$(dirname "$0")/.."
 
 # python3-numpy: the Python example denoiser (examples/external/python_temporal), run by the tests.
 # libassimp-dev: asset import (OBJ+MTL, glTF 2.0); assimp-testmodels: glTF files the tests load.
+# sweethome3d-furniture: the CC-0 furniture models of living_room and foliage_window (see below).
 packages=(build-essential cmake libembree-dev libopenexr-dev libopencv-dev libbenchmark-dev libglm-dev
           nlohmann-json3-dev libtbb-dev libgtest-dev libcli11-dev libsqlite3-dev libtinyobjloader-dev
-          openexr embree-tools python3-numpy libassimp-dev assimp-testmodels
+          openexr embree-tools python3-numpy libassimp-dev assimp-testmodels sweethome3d-furniture
           ${ARENA_EXTRA_PACKAGES:-})
 # `arena report` copies Vega's browser builds from reports/node_modules, installed with npm.
 command -v node >/dev/null 2>&1 || packages+=(nodejs)
@@ -32,6 +33,10 @@ if [ ! -d reports/node_modules ] || [ reports/package-lock.json -nt reports/node
   (cd reports && npm ci --no-audit --no-fund)
   touch reports/node_modules
 fi
+
+# The furniture models the scenes name ("assets:sweethome3d/<model>/..."), extracted from the
+# package's CC-0 archive into cache/assets/ (or $ARENA_ASSET_DIR); a no-op once they are there.
+python3 scripts/extract_assets.py
 
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
 # ARENA_TARGETS narrows the build (the study needs only `arena`; the tests need everything).

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <glm/gtc/matrix_transform.hpp>
 #include <map>
+#include <mutex>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
@@ -141,6 +142,34 @@ fs::path resolveAssetPath(const std::string& file, const fs::path& sceneDir) {
   return sceneDir / file;
 }
 
+// Imports an asset, once per process for files in the extracted-asset cache ("assets:" paths):
+// those are written once, atomically, by scripts/extract_assets.py and only read afterwards, and
+// scenes place them many times (living_room's ten tatami mats) and are parsed many times (the
+// scene mutation tests parse each shipped scene hundreds of times). The key holds the import
+// settings and the file's size and modification time. Other files are imported every time.
+std::shared_ptr<const AssetData> importAsset(const std::string& file, const fs::path& resolved,
+                                             const AssetRef& ref) {
+  if (file.rfind("assets:", 0) != 0)
+    return std::make_shared<const AssetData>(loadAsset(resolved.string(), ref));
+  std::error_code ec;
+  const auto size = fs::file_size(resolved, ec);
+  const auto stamp = fs::last_write_time(resolved, ec).time_since_epoch().count();
+  std::string key = resolved.string();
+  for (const std::string& part :
+       {std::to_string(ref.unitMeters), std::string(1, ref.upAxis), std::to_string(ref.fps),
+        std::to_string(size), std::to_string(stamp)})
+    key += "|" + part;
+  static std::mutex mutex;
+  static std::map<std::string, std::shared_ptr<const AssetData>> imported;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (auto it = imported.find(key); it != imported.end()) return it->second;
+  }
+  auto asset = std::make_shared<const AssetData>(loadAsset(resolved.string(), ref));
+  std::lock_guard<std::mutex> lock(mutex);
+  return imported.emplace(key, asset).first->second;
+}
+
 // {"name", "asset": {"file", "unitMeters", "upAxis", "fps"?}, "material"?, "keys"}: imports the
 // file, appends its materials to the scene's (named "<object>/<material>") unless "material"
 // overrides them all, and hashes every file it read.
@@ -170,7 +199,7 @@ void readAssetObject(JsonReader& o, const fs::path& sceneDir,
     a.fail("file", "asset file not found: " + resolved.string());
   }
   try {
-    obj.asset = std::make_shared<const AssetData>(loadAsset(resolved.string(), obj.assetRef));
+    obj.asset = importAsset(file, resolved, obj.assetRef);
   } catch (const Error& e) {
     a.fail("file", e.what());
   }
