@@ -271,6 +271,16 @@ TEST(AssetTextures, TexturedQuadDemodulatesToTheUntexturedDiffuseExactly) {
   EXPECT_EQ(flatFrame.get("albedo").at(w / 2, h / 2, 0), 1.0f);
 }
 
+// Sweet Home 3D's MTL files end `map_Kd` lines in tabs; the name is the file's without them.
+TEST(AssetTextures, TrailingBlanksOfAMapLineAreNotPartOfTheFileName) {
+  fs::path dir = test::freshDir("asset_tab_tex");
+  writeFile(dir / "quad.obj", quadObj("tex"));
+  writeFile(dir / "quad.mtl", "newmtl tex\nKd 1 1 1\nmap_Kd tex.png\t\t \n");
+  cv::imwrite((dir / "tex.png").string(), testTexture());
+  const Scene scene = parseIn(dir, assetScene(assetObject("quad.obj")));
+  EXPECT_TRUE(scene.materials.back().baseColorTexture) << "the texture was not found";
+}
+
 TEST(AssetTextures, MissingTextureFallsBackToTheFactorAndIsCounted) {
   fs::path dir = test::freshDir("asset_missing_tex");
   writeFile(dir / "quad.obj", quadObj("tex"));

@@ -132,6 +132,10 @@ struct Loader {
     ref.wrapV = wrap(mode[1]);
     std::string file = name.C_Str();
     std::replace(file.begin(), file.end(), '\\', '/');  // exporters on Windows
+    // Trailing blanks are the MTL line's, not the name's: Sweet Home 3D's files end `map_Kd` lines
+    // in tabs, and assimp keeps them.
+    while (!file.empty() && (file.back() == ' ' || file.back() == '\t' || file.back() == '\r'))
+      file.pop_back();
     auto key = std::make_pair(file, srgb);
     if (auto it = textureCache.find(key); it != textureCache.end()) {
       ref.image = it->second;

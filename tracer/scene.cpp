@@ -54,7 +54,10 @@ void requireNonNegative(JsonReader& r, const std::string& key, glm::vec3 v) {
 }
 
 std::string vecText(glm::vec3 v) {
-  return "[" + std::to_string(v.x) + ", " + std::to_string(v.y) + ", " + std::to_string(v.z) + "]";
+  // Appended piecewise: GCC 12 warns (-Wrestrict, a false positive) on "[" + std::string.
+  std::string text = "[";
+  text.append(std::to_string(v.x)).append(", ").append(std::to_string(v.y)).append(", ");
+  return text.append(std::to_string(v.z)).append("]");
 }
 
 void requireBounded(JsonReader& r, const std::string& key, glm::vec3 v, float bound) {
