@@ -629,15 +629,15 @@ std::vector<int> nextReferenceAllocation(const ReferenceSums& sums, int maxPer, 
       if (weight[i] > 0 && sums.tileSamples[i] < maxPer) order.push_back(i);
     auto saved = [&](size_t i) { return share[i] / (double(sums.tileSamples[i]) * pixels[i]); };
     std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return saved(a) > saved(b); });
-    double spent = 0;
-    for (size_t i = 0; i < tiles; ++i) spent += double(sums.tileSamples[i]) * pixels[i];
+    double used = 0;
+    for (size_t i = 0; i < tiles; ++i) used += double(sums.tileSamples[i]) * pixels[i];
     for (size_t k = 0; k < order.size(); ++k) {
       const size_t i = order[k];
       const int doubled = int(clamped(i, 2.0 * sums.tileSamples[i]));
       const double cost = double(doubled - sums.tileSamples[i]) * pixels[i];
-      if (k > 0 && spent + cost > reachable) break;
+      if (k > 0 && used + cost > reachable) break;
       next[i] = doubled;
-      spent += cost;
+      used += cost;
     }
   }
   return next;
