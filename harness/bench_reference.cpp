@@ -1,10 +1,13 @@
 // `arena bench reference`: how fast each reference sampler converges. In one process, per scene:
-// a "gold" reference (Owen-scrambled Sobol, `--gold-factor` times the samples), then the
-// independent and the Sobol sampler at the same sample count, each timed; the true relMSE of each
-// against the gold, minus the gold's own estimated noise term (metrics.md's correction). The
-// gain is the ratio of relMSE x seconds (independent / sobol): the relMSE ratio at equal wall time
-// for an estimator whose error falls as 1/time (true of the independent sampler; Sobol's falls
-// faster, so this understates its gain at longer times).
+// a "gold" reference (Owen-scrambled Sobol, uniform, `--gold-factor` times the samples), then at
+// about the same sample count, each timed: the independent sampler (uniform, the first version's
+// references), Sobol (uniform) and Sobol with adaptive allocation per tile (a uniform pilot of a
+// quarter of the samples, then the rounds of nextReferenceAllocation until the frame's mean reaches
+// the count). Each one's true relMSE against the gold, minus the gold's own estimated noise term
+// (metrics.md's correction). A gain is a ratio of relMSE x seconds (independent / the other): the
+// relMSE ratio at equal wall time for an estimator whose error falls as 1/time (true of the
+// independent sampler; Sobol's falls faster, so this understates its gain at longer times). The
+// line ends with the gain of the references as rendered (adaptive Sobol).
 #include <chrono>
 #include <cstdio>
 #include <nlohmann/json.hpp>
@@ -23,21 +26,34 @@ namespace arena::cli {
 namespace {
 
 struct Measured {
-  double seconds = 0, relMse = 0, estimatedRelMse = 0;
+  double seconds = 0, relMse = 0, estimatedRelMse = 0, spp = 0;
 };
 
-Measured measure(const Scene& scene, RenderSettings settings, const std::string& sampler, int frame, int spp,
-                 const LayerSet& gold) {
+Measured measure(const Scene& scene, RenderSettings settings, const std::string& sampler, bool adaptive, int frame,
+                 int spp, const LayerSet& gold) {
   settings.referenceSampler = sampler;
   SequenceRenderer renderer(scene, settings);
-  ReferenceSums sums;
   RayCounts counts;
   const int perReplicate = std::max(1, spp / renderer.referenceReplicates());
   renderer.frameScene(frame);  // the Embree build is not part of a sampler's time
   const auto t0 = std::chrono::steady_clock::now();
-  renderer.extendReference(frame, sums, perReplicate, counts);
+  ReferenceSums sums = renderer.emptyReferenceSums(0, renderer.referenceReplicates());
+  if (adaptive) {
+    renderer.extendReference(frame, sums, std::max(1, perReplicate / 4), counts);  // the pilot
+    // A tile may get up to 8x the mean count.
+    for (;;) {  // rounds double the samples; the last one is cut to the count (rounding may miss it)
+      const bool last = 2 * sums.meanSpp() >= 0.99 * perReplicate * sums.replicates;
+      const std::vector<int> next = nextReferenceAllocation(sums, 8 * perReplicate, perReplicate);
+      if (next == sums.tileSamples) break;
+      renderer.extendReference(frame, sums, next, counts);
+      if (last) break;
+    }
+  } else {
+    renderer.extendReference(frame, sums, perReplicate, counts);
+  }
   Measured m;
   m.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  m.spp = sums.meanSpp();
   const LayerSet ref = referenceLayersFromSums(sums);
   m.relMse = linearError(ref.get("color"), gold.get("color"), &gold.get("colorVar")).relMseCorrected;
   m.estimatedRelMse = estimatedReferenceRelMse(sums);
@@ -88,22 +104,34 @@ void addBenchReferenceCommand(CLI::App* bench) {
       const double goldSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - g0).count();
       const LayerSet gold = referenceLayersFromSums(goldSums);
       const double goldNoise = estimatedReferenceRelMse(goldSums);
-      const Measured ind = measure(scene, settings, "independent", o->frame, o->spp, gold);
-      const Measured sob = measure(scene, settings, "sobol", o->frame, o->spp, gold);
-      const double gain = (ind.relMse * ind.seconds) / std::max(sob.relMse * sob.seconds, 1e-300);
+      const Measured ind = measure(scene, settings, "independent", false, o->frame, o->spp, gold);
+      const Measured sob = measure(scene, settings, "sobol", false, o->frame, o->spp, gold);
+      const Measured ada = measure(scene, settings, "sobol", true, o->frame, o->spp, gold);
+      auto gainOver = [&](const Measured& m) {
+        return (ind.relMse * ind.seconds) / std::max(m.relMse * m.seconds, 1e-300);
+      };
+      const double sobolGain = gainOver(sob), gain = gainOver(ada);
       std::printf(
-          "%-22s %d spp: independent relMSE %.3e in %.2f s (est. %.3e) | sobol relMSE %.3e in %.2f "
-          "s (est. %.3e) | "
-          "gold %d spp in %.1f s, own noise %.1e | gain %.1fx\n",
+          "%-22s %d spp: independent relMSE %.3e in %.2f s (est. %.3e) | sobol %.3e in %.2f s "
+          "(est. %.3e, gain "
+          "%.1fx) | adaptive %.0f spp %.3e in %.2f s (est. %.3e) | gold %d spp in %.1f s, own "
+          "noise %.1e | gain "
+          "%.1fx\n",
           scene.name.c_str(), goldSums.replicates * std::max(1, o->spp / goldSums.replicates), ind.relMse, ind.seconds,
-          ind.estimatedRelMse, sob.relMse, sob.seconds, sob.estimatedRelMse, goldSums.spp(), goldSeconds, goldNoise,
-          gain);
+          ind.estimatedRelMse, sob.relMse, sob.seconds, sob.estimatedRelMse, sobolGain, ada.spp, ada.relMse,
+          ada.seconds, ada.estimatedRelMse, goldSums.spp(), goldSeconds, goldNoise, gain);
       std::fflush(stdout);
       out["scenes"].push_back(
           {{"scene", scene.name},
            {"independent",
             {{"relMse", ind.relMse}, {"seconds", ind.seconds}, {"estimatedRelMse", ind.estimatedRelMse}}},
            {"sobol", {{"relMse", sob.relMse}, {"seconds", sob.seconds}, {"estimatedRelMse", sob.estimatedRelMse}}},
+           {"adaptive",
+            {{"relMse", ada.relMse},
+             {"seconds", ada.seconds},
+             {"estimatedRelMse", ada.estimatedRelMse},
+             {"spp", ada.spp}}},
+           {"sobolGain", sobolGain},
            {"goldSpp", goldSums.spp()},
            {"goldSeconds", goldSeconds},
            {"goldRelMse", goldNoise},

@@ -12,6 +12,7 @@
 #include "core/error.hpp"
 #include "core/hash.hpp"
 #include "harness/image_files.hpp"
+#include "harness/reference_quality.hpp"
 #include "metrics/results.hpp"
 #include "metrics/error.hpp"
 #include "metrics/error_maps.hpp"
@@ -643,6 +644,7 @@ json runMatrix(const RunConfig& cfg) {
     }
   }
   results["statistics"] = analyseRun(results);
+  addReferenceQuality(results, cfg.warmup);
   commitResults(cfg.out, results);
   return results;
 }
@@ -694,6 +696,7 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
     if (fs::exists(run / "images"))
       fs::copy(run / "images", out / "images", fs::copy_options::recursive | fs::copy_options::skip_existing);
   merged["statistics"] = analyseRun(merged);
+  addReferenceQuality(merged, merged["settings"].value("warmup", 8));
   commitResults(out, merged);
   return merged;
 }

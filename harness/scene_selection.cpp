@@ -48,6 +48,7 @@ RenderSettings RenderOptions::settings() const {
     throw Error("--input-seed " + std::to_string(inputSeed) + ": expected 0 to 4294967295");
   s.inputSeed = uint32_t(inputSeed);
   s.referenceSampler = referenceSampler;
+  s.referenceTile = referenceTile;
   if (lowresFactor < 0 || lowresFactor == 1)
     throw Error("--lowres-factor " + std::to_string(lowresFactor) + ": expected 0 (none) or a block size >= 2");
   if (lowresSpp < 1 || lowresSpp > 4096)
@@ -115,7 +116,7 @@ void addRenderOptions(CLI::App* cmd, RenderOptions& o) {
                   "Adaptive stopping: stop a reference when its estimated relative error is below "
                   "this (0: off)")
       ->check(finiteRange(0.0, 1.0))
-      ->default_str("quick: 0.03, paper: 0");
+      ->default_str("quick: 0.01, paper: 0");
   cmd->add_option("--max-bounces", o.maxBounces, "Override the scene's maximum path length")
       ->check(CLI::Range(1, 64))
       ->default_str("the scene's");
@@ -125,6 +126,11 @@ void addRenderOptions(CLI::App* cmd, RenderOptions& o) {
   cmd->add_option("--ref-sampler", o.referenceSampler,
                   "References' sampler: sobol (Owen-scrambled, default) or independent (1-spp frames: always independent)")
       ->check(CLI::IsMember({"sobol", "independent"}));
+  cmd->add_option("--ref-tile", o.referenceTile,
+                  "Adaptive allocation of reference samples per tile of this many pixels square, "
+                  "toward --ref-rel-error (0: one tile, every pixel the same count)")
+      ->check(CLI::Range(0, 1024))
+      ->default_val(8);
   cmd->add_option("--lowres-factor", o.lowresFactor,
                   "Also render a low-resolution, many-sample buffer per frame, one texel per FxF block "
                   "(CAPCOM 2023 disocclusion rays; 0: none)");

@@ -18,6 +18,7 @@ struct RenderOptions {
   int maxBounces = 0;
   long long inputSeed = 0;
   std::string referenceSampler = "sobol";
+  int referenceTile = 8;                 // adaptive allocation tile (0: one tile, uniform)
   int lowresFactor = 0, lowresSpp = 16;  // CAPCOM 2023 low-resolution buffer (0: none)
   std::string cacheDir = "cache";
   std::string scenesDir = defaultScenesDir();

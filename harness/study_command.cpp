@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "harness/commands.hpp"
+#include "harness/reference_quality.hpp"
 #include "harness/run_matrix.hpp"
 #include "harness/scene_selection.hpp"
 #include "reports/report.hpp"
@@ -103,6 +104,10 @@ void addStudyCommand(CLI::App& app) {
     ro.out = *report;
     ReportSummary rs = writeReport(ro);
     printRanking(results);
+    // metrics.md "Reference quality": said plainly where the references are too noisy to rank.
+    std::cout << "\nreference quality (noise floor / best real denoiser's corrected relMSE, goal <= "
+              << kReferenceQualityGoal << ")\n";
+    for (const std::string& line : referenceQualityLines(results)) std::cout << "  " << line << "\n";
     double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::cout << "\nstudy finished in " << int(sec / 60) << " min " << int(sec) % 60 << " s\n"
               << "results: " << *out << "/results.json, " << *out << "/results.db\n"

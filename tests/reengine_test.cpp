@@ -379,7 +379,9 @@ TEST(ReEngine, ARunChargesTheExtraRaysAtTheRendersOwnPathRate) {
   const json& re = r["pairs"][0];
   ASSERT_EQ(re["status"], "ok") << re.dump();
   fs::path seqDir;
-  for (const auto& entry : fs::directory_iterator(c.cache)) seqDir = entry.path();
+  // The sequence with the low-res buffer (its references live in, and link to, the seedless one's).
+  for (const auto& entry : fs::directory_iterator(c.cache))
+    if (fs::exists(entry.path() / "sequence.json")) seqDir = entry.path();
   const SequenceInfo info = Sequence::open(seqDir).info();
   ASSERT_GT(info.lowresPathsPerSecond, 0.0) << "the render did not record its path rate";
   const double rays = re["summary"]["extraRaysPerPixel"]["mean"].get<double>();

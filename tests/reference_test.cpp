@@ -11,6 +11,7 @@
 #include "core/error.hpp"
 #include "core/json_reader.hpp"
 #include "core/sequence.hpp"
+#include "harness/reference_quality.hpp"
 #include "metrics/error.hpp"
 #include "tests/test_util.hpp"
 #include "tracer/render.hpp"
@@ -20,7 +21,8 @@ namespace arena {
 namespace {
 
 TEST(Sobol, UnscrambledDimensionsAreTheKnownSequences) {
-  // Joe & Kuo's dimension 2 in index order (not Gray-code order): x_i = xor of v_k over i's set bits.
+  // Joe & Kuo's dimension 2 in index order (not Gray-code order): x_i = xor of v_k over i's set
+  // bits.
   const double expected1[8] = {0, 0.5, 0.75, 0.25, 0.625, 0.125, 0.375, 0.875};
   const double expected0[8] = {0, 0.5, 0.25, 0.75, 0.125, 0.625, 0.375, 0.875};  // van der Corput
   for (uint32_t i = 0; i < 8; ++i) {
@@ -137,14 +139,85 @@ TEST(Reference, BitIdenticalAtAnyThreadCount) {
   for (const std::string sampler : {"sobol", "independent"}) {
     auto render = [&](int threads) {
       tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
-      SequenceRenderer r(scene, referenceSettings(sampler, 16));
+      RenderSettings s = referenceSettings(sampler, 256);
+      s.referenceMinSpp = 16;
+      s.referenceRelError = 0.02;  // relMSE 4e-4: a few adaptive rounds, below the cap
+      SequenceRenderer r(scene, s);
       return r.renderReference(0);
     };
     const ReferenceResult one = render(1), two = render(2);
+    if (sampler == "sobol") {
+      EXPECT_LT(one.sppMin, one.sppMax) << "the allocation should differ between tiles";
+    }
     for (const auto& [name, img] : one.layers.all())
       EXPECT_EQ(img.raw(), two.layers.get(name).raw()) << sampler << " layer " << name;
     EXPECT_EQ(one.estimatedRelMse, two.estimatedRelMse);
   }
+}
+
+// Two 8x8 tiles whose replicate means spread by a and 4a: the per-sample error of the second is
+// 16x the first's, so the Neyman allocation gives it sqrt(16) = 4x the samples per pixel.
+ReferenceSums twoTileSums(double spread0, double spread1, int n0, int n1) {
+  ReferenceSums s;
+  s.width = 16;
+  s.height = 8;
+  s.replicates = 2;
+  s.tileSize = 8;
+  s.tileSamples = {n0, n1};
+  s.sum.assign(size_t(16 * 8 * 2) * ReferenceSums::kValues, 0.0);
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 16; ++x)
+      for (int r = 0; r < 2; ++r)
+        for (int j = 0; j < ReferenceSums::kValues; ++j) {
+          const int n = x < 8 ? n0 : n1;
+          const double spread = x < 8 ? spread0 : spread1;
+          s.sum[((size_t(y) * 16 + size_t(x)) * 2 + size_t(r)) * ReferenceSums::kValues + size_t(j)] =
+              n * (1.0 + (r == 0 ? spread : -spread));
+        }
+  return s;
+}
+
+TEST(Reference, AdaptiveAllocationIsTheNeymanAllocationOfTwiceTheSamples) {
+  // Budget 2 x 4 x 128 pixel-samples: 64 n0 + 64 n1 = 1024 with n1 = 4 n0 gives n0 3.2, below its
+  // current 4; so n0 stays 4 and n1 takes the rest, 12, rounded to the power of two 16.
+  EXPECT_EQ(nextReferenceAllocation(twoTileSums(0.01, 0.04, 4, 4), 1024), (std::vector<int>{4, 16}));
+  // The cap: tile 1 stops at 8 and the rest of the budget goes to tile 0.
+  EXPECT_EQ(nextReferenceAllocation(twoTileSums(0.01, 0.04, 4, 4), 8), (std::vector<int>{8, 8}));
+  // Equal errors at equal counts: both double. Equal errors, but tile 1 reached its error with 4x
+  // the samples: its per-sample error is 4x, so it gets 2x tile 0's count: 64 n0 + 64 (2 n0) =
+  // 2 (4 + 16) 64 gives n0 13.3 and n1 26.7, rounded to 16 and 32.
+  EXPECT_EQ(nextReferenceAllocation(twoTileSums(0.02, 0.02, 4, 4), 1024), (std::vector<int>{8, 8}));
+  EXPECT_EQ(nextReferenceAllocation(twoTileSums(0.02, 0.02, 4, 16), 1024), (std::vector<int>{16, 32}));
+  // No error left where samples may go: nothing to do (the caller reports the cap).
+  EXPECT_EQ(nextReferenceAllocation(twoTileSums(0.0, 0.04, 4, 8), 8), (std::vector<int>{4, 8}));
+  EXPECT_EQ(twoTileSums(0, 0, 4, 16).meanSpp(), 2 * 10.0);
+}
+
+// Adaptive rounds on cornell_static (a lit box: bright walls, a dark ceiling corner) keep the
+// replicate variance honest (the bias of allocating from the samples already taken is invisible at
+// this tolerance) and, at about the same samples, lower the error below a uniform allocation's.
+TEST(Reference, AdaptiveAllocationLowersTheErrorAndStaysHonest) {
+  const Scene scene = test::shippedScene("cornell_static");
+  RayCounts counts;
+  RenderSettings goldSettings = referenceSettings("sobol", 1024);
+  goldSettings.referenceTile = 0;
+  SequenceRenderer goldRenderer(scene, goldSettings);
+  ReferenceSums goldSums;
+  goldRenderer.extendReference(0, goldSums, 128, counts);
+  const LayerSet gold = referenceLayersFromSums(goldSums);
+  SequenceRenderer r(scene, referenceSettings("sobol", 64));
+  ReferenceSums adaptive;
+  r.extendReference(0, adaptive, 2, counts);
+  while (adaptive.meanSpp() < 64) r.extendReference(0, adaptive, nextReferenceAllocation(adaptive, 32), counts);
+  EXPECT_LT(adaptive.meanSpp(), 100);
+  EXPECT_LT(adaptive.minPerReplicate(), adaptive.maxPerReplicate());
+  ReferenceSums uniform;
+  r.extendReference(0, uniform, int(std::ceil(adaptive.meanSpp() / 8)), counts);
+  const double predicted = estimatedReferenceRelMse(adaptive);
+  const double measured = trueRelMse(referenceLayersFromSums(adaptive), gold);
+  EXPECT_GT(measured / predicted, 0.7) << "predicted " << predicted << " measured " << measured;
+  EXPECT_LT(measured / predicted, 1.4) << "predicted " << predicted << " measured " << measured;
+  EXPECT_LT(predicted, estimatedReferenceRelMse(uniform));
 }
 
 TEST(Reference, LayersHoldReplicateMeansVarianceAndHalf) {
@@ -202,22 +275,25 @@ TEST(Reference, CappedReferencesSayItAndSequenceJsonRecordsIt) {
 TEST(Reference, RefiningGivesTheSameBitsAsRenderingTheTargetAtOnce) {
   const auto cache = test::freshDir("reference_refine");
   const Scene scene = test::shippedScene("cornell_static");
-  RenderSettings loose = referenceSettings("sobol", 256);
-  loose.width = 24;
-  loose.height = 14;
+  RenderSettings loose = referenceSettings("sobol", 1024);
   loose.referenceMinSpp = 16;
   loose.referenceRelError = 1;  // met at the first step: 16 spp
   RenderSettings strict = loose;
-  strict.referenceRelError = 0.01;  // relMSE 1e-4
+  strict.referenceRelError = 0.02;  // relMSE 4e-4: a few adaptive rounds
   const auto looseDir = renderSequence(scene, loose, cache, nullptr);
   ASSERT_EQ(Sequence::open(looseDir).info().referenceSpp[0], 16);
-  refineSequence(scene, loose, cache, strict.referenceRelError * strict.referenceRelError, 256, nullptr);
+  refineSequence(scene, loose, cache, strict.referenceRelError * strict.referenceRelError, 1024, nullptr);
+  ASSERT_EQ(Sequence::open(looseDir).info().referenceSpp.size(), 1u);
   const auto strictDir = renderSequence(scene, strict, cache, nullptr);
   const SequenceInfo a = Sequence::open(looseDir).info(), b = Sequence::open(strictDir).info();
   EXPECT_GT(a.referenceSpp[0], 16);
   EXPECT_EQ(a.referenceSpp, b.referenceSpp);
   EXPECT_EQ(a.referenceEstimatedRelMse, b.referenceEstimatedRelMse);
   EXPECT_EQ(a.referenceCapped, b.referenceCapped);
+  const ReferenceSums refined = readReferenceSums(referenceSumsPath(looseDir, 0), a.hash, 0);
+  EXPECT_LT(refined.minPerReplicate(), refined.maxPerReplicate()) << "the refinement should be adaptive";
+  EXPECT_FALSE(a.referenceCapped[0]);
+  EXPECT_EQ(refined.tileSamples, readReferenceSums(referenceSumsPath(strictDir, 0), b.hash, 0).tileSamples);
   const LayerSet ra = Sequence::open(looseDir).reference(0), rb = Sequence::open(strictDir).reference(0);
   for (const auto& [name, img] : rb.all()) EXPECT_EQ(ra.get(name).raw(), img.raw()) << name;
   // The sums file names what is wrong with a foreign one.
@@ -229,10 +305,13 @@ TEST(Reference, RefiningGivesTheSameBitsAsRenderingTheTargetAtOnce) {
   }
 }
 
-std::string fileBytes(const std::filesystem::path& p) { return readText(p); }
+std::string fileBytes(const std::filesystem::path& p) {
+  return readText(p);
+}
 
 // `arena render --shard i/n`: three shards and the merging render give the same files as one
-// unsharded render, with a fixed sample count (replicate units) and with a target (reference units).
+// unsharded render, with a fixed sample count (replicate units) and with a target (reference
+// units).
 TEST(Reference, ThreeShardsMergeToTheUnshardedFilesBitForBit) {
   const Scene scene = test::shippedScene("camera_pan_occluder");
   for (const double relError : {0.0, 0.05}) {
@@ -249,8 +328,7 @@ TEST(Reference, ThreeShardsMergeToTheUnshardedFilesBitForBit) {
     }
     std::vector<std::string> lines;
     const auto a = renderSequence(scene, s, sharded, [&](const std::string& l) { lines.push_back(l); });
-    for (const std::string& l : lines)
-      EXPECT_EQ(l.find("frame"), std::string::npos) << "the merge re-rendered: " << l;
+    for (const std::string& l : lines) EXPECT_EQ(l.find("frame"), std::string::npos) << "the merge re-rendered: " << l;
     const auto b = renderSequence(scene, s, whole, nullptr);
     std::vector<std::string> names;
     for (const auto& e : std::filesystem::directory_iterator(b)) names.push_back(e.path().filename().string());
@@ -262,9 +340,86 @@ TEST(Reference, ThreeShardsMergeToTheUnshardedFilesBitForBit) {
     EXPECT_GT(names.size(), 8u);
     for (const std::string& n : names) EXPECT_EQ(fileBytes(a / n), fileBytes(b / n)) << n << " rel error " << relError;
   }
-  EXPECT_THROW(renderSequence(scene, test::tinySettings(24, 14, 4, 32), test::freshDir("bad_shard"), nullptr,
-                              Shard{3, 3}),
-               Error);
+  EXPECT_THROW(
+      renderSequence(scene, test::tinySettings(24, 14, 4, 32), test::freshDir("bad_shard"), nullptr, Shard{3, 3}),
+      Error);
+}
+
+// References do not depend on the 1-spp input's seed: every seed's sequence links one set of
+// reference files (in the seedless settings' directory) instead of rendering its own, and a
+// refinement through any of them reaches all.
+TEST(Reference, InputSeedsShareOneReference) {
+  const auto cache = test::freshDir("reference_seeds");
+  const Scene scene = test::shippedScene("moving_object");
+  const RenderSettings base = test::tinySettings(24, 14, 3, 16);
+  RenderSettings seed7 = base, seed8 = base;
+  seed7.inputSeed = 7;
+  seed8.inputSeed = 8;
+  auto renderedReferences = [&](const RenderSettings& s, std::filesystem::path& dir) {
+    int count = 0;
+    dir = renderSequence(scene, s, cache,
+                         [&](const std::string& l) { count += l.find("] reference ") != std::string::npos; });
+    return count;
+  };
+  std::filesystem::path dir7, dirBase, dir8;
+  const int first = renderedReferences(seed7, dir7);
+  EXPECT_GT(first, 0);
+  EXPECT_EQ(renderedReferences(base, dirBase), 0) << "the seedless sequence rendered its references again";
+  EXPECT_EQ(renderedReferences(seed8, dir8), 0) << "a second input seed rendered its references again";
+  EXPECT_EQ(referenceDir(scene, seed8, cache), dirBase);
+  EXPECT_NE(dir7, dirBase);
+  const SequenceInfo info = Sequence::open(dir8).info();
+  EXPECT_EQ(int(info.referenceSpp.size()), first);
+  for (int r = 0; r < first; ++r) {
+    EXPECT_EQ(fileBytes(Sequence::referencePath(dir7, r)), fileBytes(Sequence::referencePath(dirBase, r)));
+    EXPECT_EQ(fileBytes(Sequence::referencePath(dir8, r)), fileBytes(Sequence::referencePath(dirBase, r)));
+  }
+  EXPECT_EQ(Sequence::open(dir8).info().referenceSpp, Sequence::open(dirBase).info().referenceSpp);
+  // The inputs do differ.
+  EXPECT_NE(Sequence::open(dir7).frame(1).get("color").raw(), Sequence::open(dir8).frame(1).get("color").raw());
+  // Refined through seed 8: the home's files change and every seed sees them after its next render.
+  refineSequence(scene, seed8, cache, 1e-7, 64, nullptr);
+  EXPECT_EQ(Sequence::open(dir8).info().referenceSpp[0], 64);
+  EXPECT_EQ(fileBytes(Sequence::referencePath(dir8, 0)), fileBytes(Sequence::referencePath(dirBase, 0)));
+  EXPECT_EQ(renderedReferences(seed7, dir7), 0);
+  EXPECT_EQ(Sequence::open(dir7).info().referenceSpp[0], 64);
+  EXPECT_EQ(fileBytes(Sequence::referencePath(dir7, 0)), fileBytes(Sequence::referencePath(dirBase, 0)));
+}
+
+// The study's reference-quality verdict: floor over the best real denoiser's corrected relMSE
+// (baselines excluded, frames before the warm-up ignored), with the reason when the goal is missed.
+TEST(Reference, QualityVerdictNamesTheRatioAndWhy) {
+  auto pair = [](const std::string& scene, const std::string& denoiser, double corrected) {
+    return nlohmann::json{{"scene", scene},
+                          {"denoiser", denoiser},
+                          {"label", denoiser},
+                          {"status", "ok"},
+                          {"summary", {{"relMseCorrected", {{"mean", corrected}}}}}};
+  };
+  nlohmann::json results = {
+      {"scenes",
+       {{"capped", {{"referenceRelMse", {1.0, 4e-4, 4e-4}}, {"referenceCapped", {true, false}}}},
+        {"loose", {{"referenceRelMse", {1.0, 1e-4, 1e-4}}, {"referenceCapped", {false}}}},
+        {"fine", {{"referenceRelMse", {1.0, 1e-5, 3e-5}}, {"referenceCapped", {false}}}}}},
+      {"pairs",
+       {pair("capped", "svgf", 2e-3), pair("capped", "passthrough", 1e-9), pair("loose", "asvgf", 2e-4),
+        pair("fine", "svgf", 4e-4), pair("fine", "temporal", 1e-9)}}};
+  addReferenceQuality(results, 1);
+  const nlohmann::json& capped = results["scenes"]["capped"]["referenceQuality"];
+  EXPECT_NEAR(capped["ratio"].get<double>(), 0.2, 1e-12);  // 4e-4 / 2e-3: the passthrough is no denoiser
+  EXPECT_FALSE(capped["meets"].get<bool>());
+  EXPECT_NE(capped["verdict"].get<std::string>().find("NOT MET"), std::string::npos);
+  EXPECT_NE(capped["verdict"].get<std::string>().find("1 of 2 references stopped at their sample cap"),
+            std::string::npos)
+      << capped["verdict"];
+  const std::string loose = results["scenes"]["loose"]["referenceQuality"]["verdict"];
+  EXPECT_NE(loose.find("= 0.5 > 0.1: NOT MET"), std::string::npos) << loose;
+  EXPECT_NE(loose.find("met their target, which is too loose"), std::string::npos) << loose;
+  EXPECT_NE(loose.find("--target 2e-05"), std::string::npos) << loose;
+  const nlohmann::json& fine = results["scenes"]["fine"]["referenceQuality"];
+  EXPECT_NEAR(fine["floor"].get<double>(), 2e-5, 1e-15);
+  EXPECT_TRUE(fine["meets"].get<bool>());
+  EXPECT_EQ(referenceQualityLines(results).size(), 3u);
 }
 
 TEST(Reference, BadSamplerSettingsAreErrorsNamingTheValue) {

@@ -1,10 +1,11 @@
 #include "tracer/render.hpp"
 
+#include <pmmintrin.h>
 #include <tbb/blocked_range2d.h>
 #include <tbb/parallel_for.h>
 #include <xmmintrin.h>
-#include <pmmintrin.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -35,7 +36,9 @@ void flushDenormals() {
   _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
 }
 
-float lum(glm::vec3 c) { return luminance(c.x, c.y, c.z); }
+float lum(glm::vec3 c) {
+  return luminance(c.x, c.y, c.z);
+}
 
 // The 1-spp colour of a surface seen from `eye`, exactly as a frame computes it; used both for
 // frames and for the re-shaded gradient samples so equal inputs give bit-equal luminance.
@@ -101,12 +104,18 @@ RenderSettings RenderSettings::fromPreset(const std::string& name) {
 }
 
 json RenderSettings::pixelSettings(const Scene& scene) const {
-  json px = {{"width", resolvedWidth(scene)}, {"height", resolvedHeight(scene)}, {"frames", resolvedFrames(scene)},
-          {"referenceSpp", referenceSpp}, {"referenceMinSpp", referenceMinSpp},
-          {"referenceRelError", referenceRelError},
-          {"maxBounces", maxBounces > 0 ? maxBounces : scene.maxBounces}, {"tracerVersion", kTracerVersion},
-          {"referenceSampler", referenceSampler}, {"referenceReplicates", referenceReplicates},
-          {"preset", preset}};
+  json px = {{"width", resolvedWidth(scene)},
+             {"height", resolvedHeight(scene)},
+             {"frames", resolvedFrames(scene)},
+             {"referenceSpp", referenceSpp},
+             {"referenceMinSpp", referenceMinSpp},
+             {"referenceRelError", referenceRelError},
+             {"maxBounces", maxBounces > 0 ? maxBounces : scene.maxBounces},
+             {"tracerVersion", kTracerVersion},
+             {"referenceSampler", referenceSampler},
+             {"referenceReplicates", referenceReplicates},
+             {"referenceTile", referenceTile},
+             {"preset", preset}};
   if (inputSeed != 0) px["inputSeed"] = inputSeed;  // absent by default: existing caches keep their hash
   if (lowresFactor > 0) {
     px["lowresFactor"] = lowresFactor;
@@ -125,14 +134,24 @@ fs::path sequenceDir(const Scene& scene, const RenderSettings& settings, const f
   return cacheRoot / (scene.name + "-" + sequenceHash(scene, settings).substr(0, 12));
 }
 
+RenderSettings referenceHomeSettings(RenderSettings settings) {
+  settings.inputSeed = 0;
+  settings.lowresFactor = 0;
+  settings.lowresSpp = RenderSettings().lowresSpp;
+  return settings;
+}
+
+fs::path referenceDir(const Scene& scene, const RenderSettings& settings, const fs::path& cacheRoot) {
+  return sequenceDir(scene, referenceHomeSettings(settings), cacheRoot);
+}
+
 SequenceRenderer::SequenceRenderer(const Scene& scene, const RenderSettings& settings)
     : scene_(scene), settings_(settings) {
   width_ = settings.resolvedWidth(scene);
   height_ = settings.resolvedHeight(scene);
   frames_ = settings.resolvedFrames(scene);
   if (width_ < 1 || height_ < 1 || frames_ < 1) throw Error("render settings: resolution and frames must be positive");
-  if (settings.lowresFactor < 0 || settings.lowresFactor == 1 || settings.lowresSpp < 1 ||
-      settings.lowresSpp > 4096)
+  if (settings.lowresFactor < 0 || settings.lowresFactor == 1 || settings.lowresSpp < 1 || settings.lowresSpp > 4096)
     throw Error("render settings: lowresFactor " + std::to_string(settings.lowresFactor) + " / lowresSpp " +
                 std::to_string(settings.lowresSpp) + ": expected factor 0 (off) or >= 2 and spp in [1, 4096]");
   if (settings.maxBounces > 0) scene_.maxBounces = settings.maxBounces;
@@ -142,6 +161,9 @@ SequenceRenderer::SequenceRenderer(const Scene& scene, const RenderSettings& set
   if (settings.referenceReplicates < 2 || settings.referenceReplicates > 64)
     throw Error("render settings: reference replicates " + std::to_string(settings.referenceReplicates) +
                 " out of range (expected 2..64)");
+  if (settings.referenceTile < 0 || settings.referenceTile > 1024)
+    throw Error("render settings: reference tile " + std::to_string(settings.referenceTile) +
+                " out of range (expected 0 (one tile) .. 1024 pixels)");
   for (const Object& o : scene_.objects) meshes_.push_back(makeMesh(o));
   for (const Light& l : scene_.lights) meshes_.push_back(makeMesh(l.shape, ""));
 }
@@ -153,13 +175,16 @@ uint32_t SequenceRenderer::frameSeed() const {
   return uint32_t(Hasher().add(std::to_string(scene_.seed)).add(std::to_string(settings_.inputSeed)).value());
 }
 
-uint64_t SequenceRenderer::stateHash(int t) const { return evaluateState(scene_, t, width_, height_).hash(); }
+uint64_t SequenceRenderer::stateHash(int t) const {
+  return evaluateState(scene_, t, width_, height_).hash();
+}
 
 const FrameScene& SequenceRenderer::frameScene(int t) {
   auto it = cache_.find(t);
   if (it != cache_.end()) return *it->second;
   // Keep only the frames a render still needs (current and previous).
-  for (auto i = cache_.begin(); i != cache_.end();) i = (i->first < t - 1 || i->first > t) ? cache_.erase(i) : std::next(i);
+  for (auto i = cache_.begin(); i != cache_.end();)
+    i = (i->first < t - 1 || i->first > t) ? cache_.erase(i) : std::next(i);
   auto fs = std::make_unique<FrameScene>(device_, scene_, meshes_, evaluateState(scene_, t, width_, height_));
   return *cache_.emplace(t, std::move(fs)).first->second;
 }
@@ -170,10 +195,9 @@ SequenceRenderer::FrameResult SequenceRenderer::renderFrame(int t) {
   const CameraState& cam = cur.state().camera;
   const CameraState& prevCam = prev.state().camera;
   const int w = width_, h = height_;
-  Image diffuse(w, h, 3), specular(w, h, 3), emission(w, h, 3), color(w, h, 3), albedo(w, h, 3),
-      specAlbedo(w, h, 3), normal(w, h, 3), position(w, h, 3), depth(w, h, 1), roughness(w, h, 1),
-      meshId(w, h, 1, -1.0f), materialId(w, h, 1, -1.0f), motion(w, h, 2), specHitDist(w, h, 1),
-      specHitDistMirror(w, h, 1);
+  Image diffuse(w, h, 3), specular(w, h, 3), emission(w, h, 3), color(w, h, 3), albedo(w, h, 3), specAlbedo(w, h, 3),
+      normal(w, h, 3), position(w, h, 3), depth(w, h, 1), roughness(w, h, 1), meshId(w, h, 1, -1.0f),
+      materialId(w, h, 1, -1.0f), motion(w, h, 2), specHitDist(w, h, 1), specHitDistMirror(w, h, 1);
   std::vector<RayCounts> rowCounts(static_cast<size_t>(h));
   auto put2 = [](Image& img, int x, int y, glm::vec2 v) {
     img.at(x, y, 0) = v.x;
@@ -330,60 +354,77 @@ int SequenceRenderer::referenceReplicates() const {
   return std::max(2, settings_.referenceReplicates + (settings_.referenceReplicates & 1));
 }
 
-void SequenceRenderer::extendReference(int t, ReferenceSums& sums, int perReplicate,
+ReferenceSums SequenceRenderer::emptyReferenceSums(int firstReplicate, int count) const {
+  ReferenceSums sums;
+  sums.width = width_;
+  sums.height = height_;
+  sums.replicates = count;
+  sums.firstReplicate = firstReplicate;
+  sums.tileSize = settings_.referenceTile > 0 ? settings_.referenceTile : std::max(width_, height_);
+  sums.tileSamples.assign(size_t(sums.tilesX()) * size_t(sums.tilesY()), 0);
+  sums.sum.assign(size_t(width_) * size_t(height_) * size_t(count) * ReferenceSums::kValues, 0.0);
+  return sums;
+}
+
+void SequenceRenderer::extendReference(int t, ReferenceSums& sums, int perReplicate, RayCounts& total) {
+  if (sums.replicates == 0) sums = emptyReferenceSums(0, referenceReplicates());
+  std::vector<int> target = sums.tileSamples;
+  for (int& n : target) n = std::max(n, perReplicate);
+  extendReference(t, sums, target, total);
+}
+
+void SequenceRenderer::extendReference(int t, ReferenceSums& sums, const std::vector<int>& tileTarget,
                                        RayCounts& total) {
   const FrameScene& cur = frameScene(t);
   const CameraState& cam = cur.state().camera;
   const int w = width_, h = height_;
   const size_t n = size_t(w) * size_t(h);
   constexpr int V = ReferenceSums::kValues;
-  if (sums.replicates == 0) {
-    sums.width = w;
-    sums.height = h;
-    sums.replicates = referenceReplicates();
-    sums.perReplicate = 0;
-    sums.sum.assign(n * size_t(sums.replicates) * V, 0.0);
-  }
-  if (sums.width != w || sums.height != h || sums.sum.size() != n * size_t(sums.replicates) * V)
-    throw Error("reference sums of " + std::to_string(sums.width) + "x" +
-                std::to_string(sums.height) + " do not match the render's " + std::to_string(w) +
-                "x" + std::to_string(h));
-  const int K = sums.replicates, begin = sums.perReplicate, allReplicates = referenceReplicates();
+  if (sums.replicates == 0) sums = emptyReferenceSums(0, referenceReplicates());
+  if (sums.width != w || sums.height != h || sums.sum.size() != n * size_t(sums.replicates) * V || sums.tileSize < 1 ||
+      sums.tileSamples.size() != size_t(sums.tilesX()) * size_t(sums.tilesY()) ||
+      tileTarget.size() != sums.tileSamples.size())
+    throw Error("reference sums of " + std::to_string(sums.width) + "x" + std::to_string(sums.height) + " (" +
+                std::to_string(sums.tileSamples.size()) + " tiles) do not match the render's " + std::to_string(w) +
+                "x" + std::to_string(h) + " (" + std::to_string(tileTarget.size()) + " tiles)");
+  const int K = sums.replicates, allReplicates = referenceReplicates();
   if (sums.firstReplicate < 0 || sums.firstReplicate + K > allReplicates)
     throw Error("reference sums hold replicates " + std::to_string(sums.firstReplicate) + ".." +
-                std::to_string(sums.firstReplicate + K - 1) + ", beyond the settings' " + std::to_string(allReplicates));
-  if (perReplicate <= begin) return;
+                std::to_string(sums.firstReplicate + K - 1) + ", beyond the settings' " +
+                std::to_string(allReplicates));
+  bool grows = false;
+  for (size_t i = 0; i < tileTarget.size(); ++i) grows |= tileTarget[i] > sums.tileSamples[i];
+  if (!grows) return;
   const bool sobol = settings_.referenceSampler == "sobol";
   std::vector<RayCounts> rowCounts(static_cast<size_t>(h));
   forEachPixelRow(h, [&](int y) {
     RayCounts& counts = rowCounts[size_t(y)];
     for (int x = 0; x < w; ++x) {
       const size_t i = size_t(y) * w + x;
+      const int tile = sums.tileOf(x, y), begin = sums.tileSamples[size_t(tile)];
+      const int end = std::max(begin, tileTarget[size_t(tile)]);
+      if (end == begin) continue;  // this tile keeps its samples
       // The primary hit through the pixel centre is the same for every sample (as in the frames).
       const glm::vec3 dir = cam.rayDirection(float(x) + 0.5f, float(y) + 0.5f);
       SurfaceHit hit;
       float tHit;
       counts.rays++;
-      const bool hasHit =
-          cur.intersect(cam.eye, dir, std::numeric_limits<float>::infinity(), hit, tHit, true);
+      const bool hasHit = cur.intersect(cam.eye, dir, std::numeric_limits<float>::infinity(), hit, tHit, true);
       SurfaceHit s;
       glm::vec3 demodDiffuse(0), demodSpecular(0);
       if (hasHit) {
         s = cur.surface(hit.meshId, hit.primId, hit.u, hit.v);
         const glm::vec3 wo = glm::normalize(cam.eye - s.position);
-        const glm::vec3 nrm =
-            glm::dot(s.geometricNormal, wo) < 0 ? -s.shadingNormal : s.shadingNormal;
+        const glm::vec3 nrm = glm::dot(s.geometricNormal, wo) < 0 ? -s.shadingNormal : s.shadingNormal;
         const glm::vec3 specAlb =
-            s.lightIndex >= 0
-                ? glm::vec3(0)
-                : specularAlbedo(s.f0(), s.roughness, std::max(glm::dot(nrm, wo), 0.0f));
+            s.lightIndex >= 0 ? glm::vec3(0) : specularAlbedo(s.f0(), s.roughness, std::max(glm::dot(nrm, wo), 0.0f));
         demodDiffuse = 1.0f / glm::max(s.diffuseAlbedo(), glm::vec3(1e-3f));
         demodSpecular = 1.0f / glm::max(specAlb, glm::vec3(1e-3f));
       }
       const glm::vec3 sky = hasHit ? glm::vec3(0) : cur.sky(dir);
       for (int r = 0; r < K; ++r) {
         double* acc = &sums.sum[(i * size_t(K) + size_t(r)) * V];
-        for (int k = begin; k < perReplicate; ++k) {
+        for (int k = begin; k < end; ++k) {
           glm::vec3 c = sky, d(0), sp(0);
           if (hasHit) {
             // Independent: sample ids 1.. (0 is the noisy frame's), interleaved over replicates.
@@ -402,7 +443,7 @@ void SequenceRenderer::extendReference(int t, ReferenceSums& sums, int perReplic
       }
     }
   });
-  sums.perReplicate = perReplicate;
+  for (size_t i = 0; i < tileTarget.size(); ++i) sums.tileSamples[i] = std::max(sums.tileSamples[i], tileTarget[i]);
   for (const RayCounts& c : rowCounts) {
     total.rays += c.rays;
     total.paths += c.paths;
@@ -418,7 +459,7 @@ struct ReplicateStats {
 };
 ReplicateStats replicateStats(const ReferenceSums& sums, size_t pixel, int j) {
   const int K = sums.replicates;
-  const double n = double(sums.perReplicate);
+  const double n = double(sums.samplesOfPixel(pixel));
   const double* base = &sums.sum[pixel * size_t(K) * ReferenceSums::kValues];
   double total = 0, half = 0;
   for (int r = 0; r < K; ++r) {
@@ -437,7 +478,7 @@ ReplicateStats replicateStats(const ReferenceSums& sums, size_t pixel, int j) {
 }  // namespace
 
 LayerSet referenceLayersFromSums(const ReferenceSums& sums) {
-  if (sums.perReplicate < 1 || sums.replicates < 2)
+  if (sums.tileSamples.empty() || sums.minPerReplicate() < 1 || sums.replicates < 2)
     throw Error("a reference needs >= 2 replicates of >= 1 sample");
   const int w = sums.width, h = sums.height;
   const size_t n = size_t(w) * size_t(h);
@@ -488,21 +529,118 @@ ReferenceResult SequenceRenderer::continueReference(int t, ReferenceSums& sums, 
   const int K = referenceReplicates();
   const int maxPer = std::max(1, (std::max(1, maxSpp) + K - 1) / K);
   const int minPer = std::min(std::max(1, (settings_.referenceMinSpp + K - 1) / K), maxPer);
-  int per = std::max(sums.perReplicate, minPer);
+  if (sums.replicates == 0) sums = emptyReferenceSums(0, K);
+  // Without a target every pixel gets the cap at once (the same bits as any schedule up to it).
+  std::vector<int> allocation = sums.tileSamples;
+  for (int& n : allocation) n = std::max(n, targetRelMse > 0 ? minPer : maxPer);
   for (;;) {
-    extendReference(t, sums, per, result.counts);
+    extendReference(t, sums, allocation, result.counts);
     result.estimatedRelMse = estimatedReferenceRelMse(sums);
-    if (targetRelMse > 0 && result.estimatedRelMse <= targetRelMse) break;
-    if (per >= maxPer) {
-      result.capped = targetRelMse > 0;
+    if (!(targetRelMse > 0)) break;
+    if (result.estimatedRelMse <= targetRelMse) break;
+    allocation = nextReferenceAllocation(sums, maxPer);
+    if (allocation == sums.tileSamples) {
+      result.capped = true;
       break;
     }
-    per = std::min(maxPer, per * 2);  // doubling schedule (powers of two keep Sobol's nets whole)
   }
   result.spp = sums.spp();
+  result.sppMin = sums.minPerReplicate() * sums.replicates;
+  result.sppMax = sums.maxPerReplicate() * sums.replicates;
   result.targetRelMse = targetRelMse;
   result.layers = referenceLayersFromSums(sums);
   return result;
+}
+
+int ReferenceSums::tilePixels(int tile) const {
+  const int tx = tile % tilesX(), ty = tile / tilesX();
+  return (std::min(width, (tx + 1) * tileSize) - tx * tileSize) *
+         (std::min(height, (ty + 1) * tileSize) - ty * tileSize);
+}
+
+double ReferenceSums::meanSpp() const {
+  double samples = 0;
+  for (size_t tile = 0; tile < tileSamples.size(); ++tile) samples += double(tileSamples[tile]) * tilePixels(int(tile));
+  return samples * replicates / (double(width) * double(height));
+}
+
+int ReferenceSums::minPerReplicate() const {
+  return *std::min_element(tileSamples.begin(), tileSamples.end());
+}
+int ReferenceSums::maxPerReplicate() const {
+  return *std::max_element(tileSamples.begin(), tileSamples.end());
+}
+
+std::vector<int> nextReferenceAllocation(const ReferenceSums& sums, int maxPer, double maxMeanPerReplicate) {
+  const size_t tiles = sums.tileSamples.size();
+  // Each tile's share of the estimate (before the division by the pixel and channel count), in a
+  // fixed order: the allocation is deterministic.
+  std::vector<double> share(tiles, 0.0);
+  for (int y = 0; y < sums.height; ++y)
+    for (int x = 0; x < sums.width; ++x)
+      for (int c = 0; c < 3; ++c) {
+        const ReplicateStats st = replicateStats(sums, size_t(y) * size_t(sums.width) + size_t(x), c);
+        share[size_t(sums.tileOf(x, y))] += st.varOfMean / (st.mean * st.mean + 0.01);
+      }
+  std::vector<double> weight(tiles), pixels(tiles);
+  double budget = 0, capBudget = 0;
+  bool canGrow = false;
+  for (size_t i = 0; i < tiles; ++i) {
+    pixels[i] = sums.tilePixels(int(i));
+    const int n = sums.tileSamples[i];
+    weight[i] = std::sqrt(share[i] * n / pixels[i]);  // sqrt(u_T / P_T)
+    budget += 2.0 * n * pixels[i];
+    capBudget += double(std::max(n, maxPer)) * pixels[i];
+    canGrow |= weight[i] > 0 && n < maxPer;
+  }
+  if (maxMeanPerReplicate > 0) budget = std::min(budget, maxMeanPerReplicate * double(sums.width) * sums.height);
+  if (!canGrow) return sums.tileSamples;
+  auto clamped = [&](size_t i, double n) {
+    return std::clamp(n, double(sums.tileSamples[i]), double(std::max(sums.tileSamples[i], maxPer)));
+  };
+  // The water level lambda with sum_T P_T clamp(lambda w_T) = budget (bisection: deterministic).
+  double lo = 0, hi = 1;
+  auto spent = [&](double lambda) {
+    double total = 0;
+    for (size_t i = 0; i < tiles; ++i) total += pixels[i] * clamped(i, lambda * weight[i]);
+    return total;
+  };
+  const double reachable = std::min(budget, capBudget);
+  for (int i = 0; i < 200 && spent(hi) < reachable; ++i) hi *= 2;
+  for (int i = 0; i < 100; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (spent(mid) < reachable ? lo : hi) = mid;
+  }
+  std::vector<int> next(tiles);
+  bool grew = false;
+  for (size_t i = 0; i < tiles; ++i) {
+    const double ideal = clamped(i, hi * weight[i]);
+    int pow2 = 1;
+    while (pow2 < ideal) pow2 *= 2;
+    if (double(pow2) * M_SQRT1_2 > ideal) pow2 /= 2;  // nearest power of two in log2
+    next[i] = int(clamped(i, double(std::max(pow2, 1))));
+    grew |= next[i] > sums.tileSamples[i];
+  }
+  if (!grew) {
+    // Rounding kept everything: double tiles in order of error saved per sample added (share_T /
+    // (2 n_T P_T)) while the budget lasts, and at least the first.
+    std::vector<size_t> order;
+    for (size_t i = 0; i < tiles; ++i)
+      if (weight[i] > 0 && sums.tileSamples[i] < maxPer) order.push_back(i);
+    auto saved = [&](size_t i) { return share[i] / (double(sums.tileSamples[i]) * pixels[i]); };
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return saved(a) > saved(b); });
+    double used = 0;
+    for (size_t i = 0; i < tiles; ++i) used += double(sums.tileSamples[i]) * pixels[i];
+    for (size_t k = 0; k < order.size(); ++k) {
+      const size_t i = order[k];
+      const int doubled = int(clamped(i, 2.0 * sums.tileSamples[i]));
+      const double cost = double(doubled - sums.tileSamples[i]) * pixels[i];
+      if (k > 0 && used + cost > reachable) break;
+      next[i] = doubled;
+      used += cost;
+    }
+  }
+  return next;
 }
 
 fs::path referenceSumsPath(const fs::path& dir, int r) {
@@ -520,10 +658,11 @@ ReferenceSums interleaveReplicates(const std::vector<ReferenceSums>& parts) {
   ReferenceSums out;
   out.width = parts[0].width;
   out.height = parts[0].height;
-  out.perReplicate = parts[0].perReplicate;
+  out.tileSize = parts[0].tileSize;
+  out.tileSamples = parts[0].tileSamples;
   for (const ReferenceSums& p : parts) {
-    if (p.width != out.width || p.height != out.height || p.perReplicate != out.perReplicate ||
-        p.firstReplicate != out.replicates)
+    if (p.width != out.width || p.height != out.height || p.tileSize != out.tileSize ||
+        p.tileSamples != out.tileSamples || p.firstReplicate != out.replicates)
       throw Error("replicate sums do not fit together (size, samples or replicate " + std::to_string(p.firstReplicate) +
                   " out of order)");
     out.replicates += p.replicates;
@@ -539,19 +678,22 @@ ReferenceSums interleaveReplicates(const std::vector<ReferenceSums>& parts) {
 }
 
 namespace {
-constexpr char kSumsMagic[8] = {'A', 'R', 'S', 'U', 'M', 'S', '0', '1'};
-}
+// Format 02: per-tile sample counts (01 had one count per replicate).
+constexpr char kSumsMagic[8] = {'A', 'R', 'S', 'U', 'M', 'S', '0', '2'};
+}  // namespace
 
 void writeReferenceSums(const fs::path& path, const ReferenceSums& sums, const std::string& hash, int index) {
-  const std::string header = json{{"hash", hash},
-                                  {"index", index},
-                                  {"width", sums.width},
-                                  {"height", sums.height},
-                                  {"replicates", sums.replicates},
-                                  {"firstReplicate", sums.firstReplicate},
-                                  {"perReplicate", sums.perReplicate},
-                                  {"values", ReferenceSums::kValues}}
-                                 .dump();
+  const std::string header = json{
+      {"hash", hash},
+      {"index", index},
+      {"width", sums.width},
+      {"height", sums.height},
+      {"replicates", sums.replicates},
+      {"firstReplicate", sums.firstReplicate},
+      {"tileSize", sums.tileSize},
+      {"tileSamples", sums.tileSamples},
+      {"values",
+       ReferenceSums::kValues}}.dump();
   writeAtomically(path, [&](const fs::path& tmp) {
     std::ofstream out(tmp, std::ios::binary);
     const uint32_t size = uint32_t(header.size());
@@ -565,7 +707,8 @@ void writeReferenceSums(const fs::path& path, const ReferenceSums& sums, const s
 
 ReferenceSums readReferenceSums(const fs::path& path, const std::string& hash, int index) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path.string() + ": missing (the reference cannot be extended; re-render it with `arena render`)");
+  if (!in)
+    throw Error(path.string() + ": missing (the reference cannot be extended; re-render it with `arena render`)");
   char magic[8] = {};
   uint32_t size = 0;
   in.read(magic, sizeof magic);
@@ -587,12 +730,18 @@ ReferenceSums readReferenceSums(const fs::path& path, const std::string& hash, i
     sums.height = h.at("height").get<int>();
     sums.replicates = h.at("replicates").get<int>();
     sums.firstReplicate = h.at("firstReplicate").get<int>();
-    sums.perReplicate = h.at("perReplicate").get<int>();
+    sums.tileSize = h.at("tileSize").get<int>();
+    sums.tileSamples = h.at("tileSamples").get<std::vector<int>>();
   } catch (const json::exception& e) {
     throw Error(path.string() + ": malformed header: " + e.what());
   }
-  if (sums.width < 1 || sums.height < 1 || sums.replicates < 1 || sums.perReplicate < 1 || sums.firstReplicate < 0)
-    throw Error(path.string() + ": header has an empty or invalid size (width, height, replicates, perReplicate)");
+  if (sums.width < 1 || sums.height < 1 || sums.replicates < 1 || sums.tileSize < 1 || sums.firstReplicate < 0 ||
+      sums.width > (1 << 16) || sums.height > (1 << 16) || sums.replicates > 64 ||
+      sums.tileSamples.size() != size_t(sums.tilesX()) * size_t(sums.tilesY()) || sums.minPerReplicate() < 1)
+    throw Error(path.string() +
+                ": header has an empty or invalid size (width, height, replicates, tileSize, "
+                "tileSamples: one count "
+                ">= 1 per tile)");
   sums.sum.resize(size_t(sums.width) * size_t(sums.height) * size_t(sums.replicates) * ReferenceSums::kValues);
   in.read(reinterpret_cast<char*>(sums.sum.data()), std::streamsize(sums.sum.size() * sizeof(double)));
   if (!in || in.peek() != std::ifstream::traits_type::eof()) throw Error(path.string() + ": truncated or oversized");
@@ -601,8 +750,9 @@ ReferenceSums readReferenceSums(const fs::path& path, const std::string& hash, i
 
 // CAPCOM 2023 slides 19-21: "120x67, 16-64 rays" beside the 1-spp frame. Each texel re-traces its
 // anchor pixel's primary ray (so its G-buffer is the frame's) and averages lowresSpp independent
-// paths: demodulated diffuse and specular, and the diffuse signal's luminance-weighted mean incident
-// direction (slide 21: "color / average direction"). Extra input rays: they follow inputSeed.
+// paths: demodulated diffuse and specular, and the diffuse signal's luminance-weighted mean
+// incident direction (slide 21: "color / average direction"). Extra input rays: they follow
+// inputSeed.
 LayerSet SequenceRenderer::renderLowres(int t, RayCounts& total) {
   const FrameScene& cur = frameScene(t);
   const CameraState& cam = cur.state().camera;
@@ -699,6 +849,7 @@ void writeReferenceFiles(const fs::path& dir, const std::string& hash, const std
                       {"arena.index", std::to_string(r)},
                       {"arena.scene", sceneName},
                       {"arena.spp", std::to_string(ref.spp)},
+                      {"arena.sppRange", std::to_string(ref.sppMin) + "-" + std::to_string(ref.sppMax)},
                       {"arena.estimatedRelMse", formatDouble(ref.estimatedRelMse)},
                       {"arena.capped", ref.capped ? "1" : "0"}};
   writeReferenceSums(referenceSumsPath(dir, r), sums, hash, r);
@@ -710,9 +861,22 @@ void writeReferenceFiles(const fs::path& dir, const std::string& hash, const std
 
 std::string cappedWarning(const std::string& sceneName, int r, const ReferenceResult& ref) {
   return "[" + sceneName + "] WARNING: reference " + std::to_string(r) + " stopped at its cap of " +
-         std::to_string(ref.spp) + " spp with estimated relMSE " + formatDouble(ref.estimatedRelMse, 3) +
-         " above its target " + formatDouble(ref.targetRelMse, 3) +
+         std::to_string(ref.sppMax) + " spp per pixel (mean " + std::to_string(ref.spp) + ") with estimated relMSE " +
+         formatDouble(ref.estimatedRelMse, 3) + " above its target " + formatDouble(ref.targetRelMse, 3) +
          " (raise --ref-spp, loosen --ref-rel-error, or `arena refine` it later)";
+}
+
+// Makes dir's reference r the one in its home (a hard link, or a copy where links are refused),
+// unless dir already holds those bytes (a complete cache is only read).
+void shareReference(const fs::path& home, const fs::path& dir, int r) {
+  const fs::path source = Sequence::referencePath(home, r), target = Sequence::referencePath(dir, r);
+  if (fs::exists(target) && (fs::equivalent(source, target) || readText(source) == readText(target))) return;
+  const fs::path tmp = fs::path(target).concat(".link.tmp");
+  fs::remove(tmp);
+  std::error_code linkError;
+  fs::create_hard_link(source, tmp, linkError);
+  if (linkError) fs::copy_file(source, tmp, fs::copy_options::overwrite_existing);
+  fs::rename(tmp, target);
 }
 
 }  // namespace
@@ -726,19 +890,22 @@ fs::path refineSequence(const Scene& scene, const RenderSettings& settings, cons
                 " (run `arena render` with the same options first)");
   SequenceInfo info = Sequence::open(dir).info();
   SequenceRenderer renderer(scene, settings);
-  const std::string hash = sequenceHash(scene, settings);
+  // The references (and their sums) live in their home, shared by every input seed.
+  const fs::path home = referenceDir(scene, settings, cacheRoot);
+  const std::string hash = sequenceHash(scene, referenceHomeSettings(settings));
   const int references = int(info.referenceSpp.size());
   for (int r = 0; r < references; ++r) {
     const int firstFrame =
         int(std::find(info.referenceOfFrame.begin(), info.referenceOfFrame.end(), r) - info.referenceOfFrame.begin());
     const double before = info.referenceEstimatedRelMse[size_t(r)];
     if (before > 0 && before <= targetRelMse) continue;
-    ReferenceSums sums = readReferenceSums(referenceSumsPath(dir, r), hash, r);
+    ReferenceSums sums = readReferenceSums(referenceSumsPath(home, r), hash, r);
     const auto t0 = std::chrono::steady_clock::now();
     const ReferenceResult ref = renderer.continueReference(firstFrame, sums, targetRelMse, maxSpp);
     const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const int spp = info.referenceSpp[size_t(r)];
-    writeReferenceFiles(dir, hash, scene.name, r, ref, sums, info);
+    writeReferenceFiles(home, hash, scene.name, r, ref, sums, info);
+    if (home != dir) shareReference(home, dir, r);
     if (progress) {
       progress("[" + scene.name + "] reference " + std::to_string(r) + ": " + std::to_string(spp) + " -> " +
                std::to_string(ref.spp) + " spp, est. relMSE " + formatDouble(before, 3) + " -> " +
@@ -760,6 +927,14 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
   const fs::path dir = sequenceDir(scene, settings, cacheRoot);
   if (!fs::is_directory(dir)) fs::create_directories(dir);
   removeStaleTemporaries(dir);  // of a killed render
+  // References do not depend on the input seed or the low-res buffer: they are rendered (and
+  // refined) once, in the directory of the settings without those, and linked from the others.
+  const std::string refHash = sequenceHash(scene, referenceHomeSettings(settings));
+  const fs::path refDir = referenceDir(scene, settings, cacheRoot);
+  if (refDir != dir) {
+    if (!fs::is_directory(refDir)) fs::create_directories(refDir);
+    removeStaleTemporaries(refDir);
+  }
   SequenceRenderer renderer(scene, settings);
   const int frames = renderer.frames();
   auto say = [&](const std::string& s) {
@@ -804,7 +979,9 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
     say(buf);
   };
   auto attributes = [&](const char* kind, int index) {
-    return ExrAttributes{{"arena.hash", hash}, {"arena.kind", kind}, {"arena.index", std::to_string(index)},
+    return ExrAttributes{{"arena.hash", hash},
+                         {"arena.kind", kind},
+                         {"arena.index", std::to_string(index)},
                          {"arena.scene", scene.name}};
   };
 
@@ -865,8 +1042,8 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
     for (int u = firstUnit; u < unit; ++u) mine |= shard.owns(u);
     if (!mine) continue;
     std::string why;
-    const fs::path rp = Sequence::referencePath(dir, int(r));
-    if (cachedFileValid(rp, hash, "reference", int(r), channels::referenceLayers(), why)) {
+    const fs::path rp = Sequence::referencePath(refDir, int(r));
+    if (cachedFileValid(rp, refHash, "reference", int(r), channels::referenceLayers(), why)) {
       const ExrAttributes a = readExrAttributes(rp);
       info.referenceSpp[r] = std::stoi(a.at("arena.spp"));
       info.referenceEstimatedRelMse[r] = std::stod(a.at("arena.estimatedRelMse"));
@@ -884,12 +1061,13 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
       std::vector<ReferenceSums> parts;
       for (int k = 0; k < K; ++k) {
         if (!shard.owns(firstUnit + k) && shard.count > 1) continue;
-        const fs::path slice = replicateSumsPath(dir, int(r), k);
+        const fs::path slice = replicateSumsPath(refDir, int(r), k);
         ReferenceSums part;
         if (fs::exists(slice)) {
           try {
-            part = readReferenceSums(slice, hash, int(r));
-            if (part.firstReplicate != k || part.replicates != 1 || part.perReplicate != fixedPerReplicate)
+            part = readReferenceSums(slice, refHash, int(r));
+            if (part.firstReplicate != k || part.replicates != 1 || part.minPerReplicate() != fixedPerReplicate ||
+                part.maxPerReplicate() != fixedPerReplicate)
               throw Error(slice.string() + ": holds another replicate or sample count");
           } catch (const Error& e) {
             say("[" + scene.name + "] re-rendering " + slice.filename().string() + ": " + e.what());
@@ -897,13 +1075,9 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
           }
         }
         if (part.replicates == 0) {
-          part.width = renderer.width();
-          part.height = renderer.height();
-          part.replicates = 1;
-          part.firstReplicate = k;
-          part.sum.assign(size_t(part.width) * size_t(part.height) * ReferenceSums::kValues, 0.0);
+          part = renderer.emptyReferenceSums(k, 1);
           renderer.extendReference(firstFrameOfReference[r], part, fixedPerReplicate, counts);
-          if (shard.count > 1) writeReferenceSums(slice, part, hash, int(r));
+          if (shard.count > 1) writeReferenceSums(slice, part, refHash, int(r));
         }
         parts.push_back(std::move(part));
       }
@@ -921,10 +1095,11 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
     ref.counts.rays += counts.rays;
     ref.counts.paths += counts.paths;
     double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    writeReferenceFiles(dir, hash, scene.name, int(r), ref, sums, info);
-    for (int k = 0; k < K && perReplicateUnits; ++k) fs::remove(replicateSumsPath(dir, int(r), k));
-    report("reference " + std::to_string(r) + " (" + std::to_string(ref.spp) + " spp, est. relMSE " +
-               formatDouble(ref.estimatedRelMse, 3) + ")",
+    writeReferenceFiles(refDir, refHash, scene.name, int(r), ref, sums, info);
+    for (int k = 0; k < K && perReplicateUnits; ++k) fs::remove(replicateSumsPath(refDir, int(r), k));
+    report("reference " + std::to_string(r) + " (" + std::to_string(ref.spp) + " spp, " + std::to_string(ref.sppMin) +
+               "-" + std::to_string(ref.sppMax) + " per tile, est. relMSE " + formatDouble(ref.estimatedRelMse, 3) +
+               ")",
            ref.counts, sec);
     if (ref.capped) say(cappedWarning(scene.name, int(r), ref));
   }
@@ -933,6 +1108,8 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
         " done; `arena render` without --shard merges the shards");
     return dir;
   }
+  if (refDir != dir)
+    for (size_t r = 0; r < firstFrameOfReference.size(); ++r) shareReference(refDir, dir, int(r));
   // A complete cache is only read: a read-only mount (or another user's cache) must stay usable.
   std::string existing;
   try {

@@ -17,15 +17,15 @@ namespace arena {
 
 struct RenderSettings {
   std::string preset = "quick";
-  int width = 0, height = 0;   // 0: the scene's own resolution
-  int frames = 0;              // 0: the scene's own frame count
-  int referenceSpp = 1024;     // maximum samples per pixel of a reference
-  int referenceMinSpp = 64;    // adaptive stopping never stops before this
+  int width = 0, height = 0;     // 0: the scene's own resolution
+  int frames = 0;                // 0: the scene's own frame count
+  int referenceSpp = 1024;       // maximum samples per pixel of a reference
+  int referenceMinSpp = 64;      // adaptive stopping never stops before this
   double referenceRelError = 0;  // > 0: stop when the reference's estimated relMSE <= this^2
-  int maxBounces = 0;          // 0: the scene's own
+  int maxBounces = 0;            // 0: the scene's own
   // 0: the scene's seed. Otherwise the 1-spp frames and gradient samples are another noise
   // realisation of the same sequence (`arena run --seeds K`, compare's noise test); references do
-  // not depend on it.
+  // not depend on it and are shared (referenceDir).
   uint32_t inputSeed = 0;
   // The references' sampler: "sobol" (padded Owen-scrambled Sobol, tracer/sampler.hpp) or
   // "independent" (the frames' hash sampler); the 1-spp frames always use the independent one.
@@ -34,14 +34,18 @@ struct RenderSettings {
   // spread of their means (honest for QMC, whose per-sample variance overstates its error). The
   // sample count is a multiple of this (rounded up).
   int referenceReplicates = 8;
+  // Adaptive allocation (with a target): samples go to tiles of this many pixels square, in
+  // proportion to their estimated error (nextReferenceAllocation). 0: one tile, i.e. every pixel
+  // gets the same count (the doubling schedule of issue 13's first version).
+  int referenceTile = 8;
   // Optional low-resolution, many-sample buffer per frame (CAPCOM 2023 "disocclusion rays"):
   // one texel per lowresFactor x lowresFactor block, lowresSpp paths each. 0: none (hashed only
   // when on, so caches rendered without it stay valid).
   int lowresFactor = 0;
   int lowresSpp = 16;
 
-  // Presets: quick (the scene's resolution, references of 64-512 spp with adaptive stopping) and paper
-  // (1280x720, 4096 spp references).
+  // Presets: quick (the scene's resolution, references of 64-512 spp with adaptive stopping) and
+  // paper (1280x720, 4096 spp references).
   static RenderSettings fromPreset(const std::string& name);
   // The settings that change pixels, for the cache hash and sequence.json.
   nlohmann::json pixelSettings(const Scene& scene) const;
@@ -53,20 +57,56 @@ struct RenderSettings {
 std::string sequenceHash(const Scene& scene, const RenderSettings& settings);
 std::filesystem::path sequenceDir(const Scene& scene, const RenderSettings& settings,
                                   const std::filesystem::path& cacheRoot);
+// The settings whose sequence directory is the home of the references of `settings`: the same
+// without an input seed or a low-res buffer (references depend on neither). Its hash is the one
+// reference files carry; other directories hold links to them.
+RenderSettings referenceHomeSettings(RenderSettings settings);
+std::filesystem::path referenceDir(const Scene& scene, const RenderSettings& settings,
+                                   const std::filesystem::path& cacheRoot);
 
 // What a reference needs to be extended: per pixel and replicate, the sums of (colour, diffuse,
-// specular) x RGB over that replicate's samples 0..perReplicate-1, accumulated in sample order (so
-// extending n -> 2n gives the same bits as rendering 2n at once).
+// specular) x RGB over that replicate's samples 0..n-1, accumulated in sample order (so extending
+// n -> 2n gives the same bits as rendering 2n at once). Samples are allocated per tile of
+// tileSize x tileSize pixels: every replicate of every pixel of tile T has tileSamples[T] samples
+// (equal counts across replicates keep their means identically distributed, so their spread stays
+// an honest error estimate).
 struct ReferenceSums {
   static constexpr int kValues = 9;
-  int width = 0, height = 0, replicates = 0, perReplicate = 0;
+  int width = 0, height = 0, replicates = 0;
   int firstReplicate = 0;  // these are replicates firstReplicate.. (a shard may hold a slice)
-  std::vector<double> sum;  // [(pixel * replicates + r) * kValues + j]
-  int spp() const { return replicates * perReplicate; }
+  int tileSize = 1;
+  std::vector<int> tileSamples;  // per tile, row-major: samples per replicate of its pixels
+  std::vector<double> sum;       // [(pixel * replicates + r) * kValues + j]
+
+  int tilesX() const { return (width + tileSize - 1) / tileSize; }
+  int tilesY() const { return (height + tileSize - 1) / tileSize; }
+  int tileOf(int x, int y) const { return (y / tileSize) * tilesX() + x / tileSize; }
+  int samplesOfPixel(size_t i) const {
+    return tileSamples[size_t(tileOf(int(i % size_t(width)), int(i / size_t(width))))];
+  }
+  int tilePixels(int tile) const;  // tiles at the right and bottom edges may be partial
+  // Mean samples per pixel over every replicate held (the frame's cost), rounded in spp().
+  double meanSpp() const;
+  int spp() const { return int(std::lround(meanSpp())); }
+  int minPerReplicate() const;
+  int maxPerReplicate() const;
 };
 // Means (color, diffuse, specular), the variance of each mean from the spread of the replicate
 // means, Var = sum_r (m_r - m)^2 / (K (K - 1)), and colorHalf (the mean of replicates 0..K/2-1).
 LayerSet referenceLayersFromSums(const ReferenceSums& sums);
+// The next round of the adaptive schedule: tile counts for twice the frame's samples, minimising
+// the estimated relMSE under that budget. With e_T the tile's share of the estimate at its n_T
+// samples per replicate and P_T its pixels, error ~ u_T / n with u_T = e_T n_T, so the optimum is
+// n_T proportional to sqrt(u_T / P_T) (the Neyman allocation), clamped to [n_T, maxPerReplicate]
+// and rounded to a power of two (whole Sobol nets). Tiles without estimated error keep their
+// count. Returns the current counts when no tile with error can grow. Bias: the counts depend on
+// the samples already taken, which stay in the mean; with a tile's decision resting on its 64+
+// pixels x 3 channels x K replicates, that correlation is weak (measured: `arena bench reference`
+// compares the true error against a uniform gold).
+// maxMeanPerReplicate > 0 caps the round's budget at that mean count per pixel and replicate
+// (`arena bench reference`: equal samples).
+std::vector<int> nextReferenceAllocation(const ReferenceSums& sums, int maxPerReplicate,
+                                         double maxMeanPerReplicate = 0);
 // The reference's relMSE as metrics.md estimates it: mean over pixels and colour channels of
 // Var(mean) / (mean^2 + 0.01), with the replicate variance above.
 double estimatedReferenceRelMse(const ReferenceSums& sums);
@@ -74,7 +114,8 @@ double estimatedReferenceRelMse(const ReferenceSums& sums);
 // A rendered reference and whether it met its target.
 struct ReferenceResult {
   LayerSet layers;
-  int spp = 0;
+  int spp = 0;                 // mean samples per pixel
+  int sppMin = 0, sppMax = 0;  // over the tiles
   double estimatedRelMse = 0;  // estimatedReferenceRelMse
   double targetRelMse = 0;     // referenceRelError^2; 0 when there is no target
   bool capped = false;         // stopped at the sample cap with its estimate above the target
@@ -104,9 +145,15 @@ class SequenceRenderer {
   // Adds samples to `sums` (of frame t's state) until each replicate has `perReplicate` samples;
   // a fresh `sums` (replicates 0) is sized from the settings.
   void extendReference(int t, ReferenceSums& sums, int perReplicate, RayCounts& counts);
-  // Doubles the samples per replicate of `sums` (from referenceMinSpp / K when empty) until the
-  // estimated relMSE <= targetRelMse (0: none) or maxSpp; renderReference is this from empty sums.
-  // Continuing from a stop of the same schedule gives the same bits as one uninterrupted run.
+  // The same per tile: until every pixel of tile T has tileSamples[T] samples per replicate.
+  void extendReference(int t, ReferenceSums& sums, const std::vector<int>& tileSamples, RayCounts& counts);
+  // Empty sums of replicates first..first+count-1, with the settings' tiles.
+  ReferenceSums emptyReferenceSums(int firstReplicate, int count) const;
+  // The adaptive schedule: a uniform pilot of referenceMinSpp, then rounds that each double the
+  // frame's samples, placed by nextReferenceAllocation, until the estimated relMSE <= targetRelMse
+  // or no tile may grow (maxSpp per pixel): then `capped`. Without a target (0), every pixel gets
+  // maxSpp. The rounds do not depend on the target, only where they stop does, so continuing from
+  // a stop (`arena refine`) gives the same bits as one uninterrupted run.
   ReferenceResult continueReference(int t, ReferenceSums& sums, double targetRelMse, int maxSpp);
   int referenceReplicates() const;
   // The low-resolution buffer of frame t (channels::lowresLayers()); settings.lowresFactor > 0.

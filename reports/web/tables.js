@@ -169,7 +169,11 @@
     table.replaceChildren(head, el('tbody', {}, rows));
 
     const warnings = pairs.filter((p) => p.warnings && p.warnings.length);
-    $('warnings').replaceChildren(...(warnings.length ? [el('h3', { text: 'Warnings' }),
+    // Reference quality (results: scenes.<scene>.referenceQuality): said plainly when the goal is missed.
+    const quality = scene && scene.referenceQuality;
+    const qualityNote = quality && quality.meets === false
+      ? [el('p', { class: 'reference-quality warnings', text: `Reference quality: ${quality.verdict}` })] : [];
+    $('warnings').replaceChildren(...qualityNote, ...(warnings.length ? [el('h3', { text: 'Warnings' }),
       el('ul', { class: 'warnings' }, warnings.flatMap((p) => p.warnings.map((w) => el('li', {}, el('b', { text: `${p.label}: ` }), w))))] : []));
     renderAblation();
   };
