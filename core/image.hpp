@@ -3,10 +3,31 @@
 // single channel can be handed to a filter without copying (pbrt/OIDN name channels by meaning;
 // the names live in core/sequence_format.hpp).
 #include <cstddef>
+#include <new>
 #include <span>
 #include <vector>
 
 namespace arena {
+
+// Storage of every plane: cache-line (64-byte) aligned, so a row of 16-float lanes never straddles
+// two lines and a filter's speed does not depend on where the allocator happened to put its
+// images (with glibc's heap it varied by 25% between two instances of the same denoiser: the
+// C plugin of eaw measured 1.26x the built-in on identical code until this).
+template <class T>
+struct CacheLineAllocator {
+  using value_type = T;
+  static constexpr std::align_val_t kAlignment{64};
+  CacheLineAllocator() = default;
+  template <class U>
+  CacheLineAllocator(const CacheLineAllocator<U>&) noexcept {}
+  T* allocate(size_t n) { return static_cast<T*>(::operator new(n * sizeof(T), kAlignment)); }
+  void deallocate(T* p, size_t) noexcept { ::operator delete(p, kAlignment); }
+  template <class U>
+  bool operator==(const CacheLineAllocator<U>&) const noexcept {
+    return true;
+  }
+};
+using PlaneStorage = std::vector<float, CacheLineAllocator<float>>;
 
 class Image {
  public:
@@ -32,13 +53,13 @@ class Image {
   // Clamp-to-edge access, used by filters whose footprint leaves the image.
   float atClamped(int x, int y, int c = 0) const;
 
-  std::vector<float>& raw() { return data_; }
-  const std::vector<float>& raw() const { return data_; }
+  PlaneStorage& raw() { return data_; }
+  const PlaneStorage& raw() const { return data_; }
   void fill(float value);
 
  private:
   int width_ = 0, height_ = 0, channels_ = 0;
-  std::vector<float> data_;
+  PlaneStorage data_;
 };
 
 // Rec.709 luminance of a planar RGB image (channels 0..2).

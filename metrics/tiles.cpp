@@ -43,7 +43,7 @@ TileSums TileAccumulator::finish() const {
   return out;
 }
 
-TileSums tileSumsOfMap(const std::vector<float>& map, int width, int height, TileGrid grid) {
+TileSums tileSumsOfMap(std::span<const float> map, int width, int height, TileGrid grid) {
   if (map.size() != size_t(width) * size_t(height))
     throw Error("tile sums: map size does not match the image");
   TileAccumulator acc(width, height, grid);

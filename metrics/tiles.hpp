@@ -4,6 +4,7 @@
 // tiles gives a resampled frame value without touching pixels again.
 #include <cstddef>
 #include <vector>
+#include <span>
 
 namespace arena {
 
@@ -42,6 +43,6 @@ class TileAccumulator {
 };
 
 // Tile sums of a one-channel per-pixel map (e.g. a FLIP map): value = the map, count = 1 per pixel.
-TileSums tileSumsOfMap(const std::vector<float>& map, int width, int height, TileGrid grid = {});
+TileSums tileSumsOfMap(std::span<const float> map, int width, int height, TileGrid grid = {});
 
 }  // namespace arena
