@@ -58,6 +58,61 @@ void printRanking(const json& results) {
   if (o.contains("excluded")) std::cout << "  not ranked overall: " << o["excluded"].get<std::string>() << "\n";
 }
 
+// A figure with its interval: "0.123 [0.1, 0.15]", "-" when absent; a null bound of the response
+// is "never settled" (metrics/ghosting_intervals.hpp).
+std::string figure(const json& e, const char* name) {
+  if (!e.contains(name) || !e[name].is_number())
+    return std::string(name) == "responseFrames" && e.contains("response") ? "never settled" : "-";
+  std::ostringstream o;
+  o << std::setprecision(3) << e[name].get<double>();
+  const json ci = e.value("ci95", json::object()).value(name, json());
+  if (ci.is_array()) {
+    auto bound = [](const json& b) {
+      std::ostringstream t;
+      t << std::setprecision(3);
+      if (b.is_number()) t << b.get<double>();
+      else t << "never";
+      return t.str();
+    };
+    o << " [" << bound(ci[0]) << ", " << bound(ci[1]) << "]";
+  } else {
+    o << " (no interval)";
+  }
+  return o.str();
+}
+
+// The event-window figures with their 95% intervals, per scripted event and camera cut, methods in
+// the order of their rank (lag energy, old-view leak) with ties (metrics/ghosting_intervals.hpp).
+void printEvents(const json& results) {
+  if (!results.contains("statistics")) return;
+  for (auto it = results["statistics"]["scenes"].begin(); it != results["statistics"]["scenes"].end(); ++it)
+    for (const char* kind : {"events", "cuts"})
+      for (const json& ev : it.value().value(kind, json::array())) {
+        const bool cut = std::string(kind) == "cuts";
+        const int frame = ev["eventFrame"];
+        const char* rankedOn = cut ? "oldViewLeak" : "lagEnergy";
+        const json ranking = ev["byFigure"].value(rankedOn, json::object());
+        std::cout << "\n" << it.key() << ", " << ev.value("kind", "") << " " << ev.value("what", "") << " at frame "
+                  << frame << ": ranked on " << rankedOn << " (" << ranking.value("resolvedPairs", 0) << " of "
+                  << ranking.value("totalPairs", 0) << " pairs resolved)\n";
+        for (const json& m : ranking.value("ranking", json::array())) {
+          const json* e = nullptr;
+          for (const json& p : results["pairs"])
+            if (p["scene"] == it.key() && p["label"] == m["label"])
+              for (const json& x : p.value(cut ? "cuts" : "ghosting", json::array()))
+                if (x.value("eventFrame", -1) == frame) e = &x;
+          if (!e) continue;
+          std::cout << "  " << std::left << std::setw(4) << m["rank"].get<int>() << std::setw(22)
+                    << m["label"].get<std::string>();
+          for (const char* f : cut ? std::vector<const char*>{"oldViewLeak", "atCut"}
+                                   : std::vector<const char*>{"lagEnergy", "responseFrames", "peakExcess"})
+            std::cout << f << " " << std::setw(26) << figure(*e, f) << " ";
+          std::cout << tiedList(m) << "\n";
+        }
+        if (ranking.contains("excluded")) std::cout << "  not ranked: " << ranking["excluded"].get<std::string>() << "\n";
+      }
+}
+
 }  // namespace
 
 void addStudyCommand(CLI::App& app) {
@@ -99,6 +154,7 @@ void addStudyCommand(CLI::App& app) {
     ro.out = *report;
     ReportSummary rs = writeReport(ro);
     printRanking(results);
+    printEvents(results);
     double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::cout << "\nstudy finished in " << int(sec / 60) << " min " << int(sec) % 60 << " s\n"
               << "results: " << *out << "/results.json, " << *out << "/results.db\n"
