@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <set>
 
 #include "core/error.hpp"
 
@@ -176,7 +177,6 @@ FigureReplicates ghostingReplicates(int t0, const EventTiles& tiles, const std::
       "not resampled: the chromaticity error is of the region's mean colour, whose per-tile sums "
       "are not stored";
   r.neverSettled["responseFrames"] = double(tiles.bias.frames.back() - t0 + 1);
-  r.percentile.insert("responseFrames");
   std::vector<double> curve, bias;
   resample(r, tiles.bias.tileCount(), seedName, cfg,
            [&](const std::vector<int>& draw, std::map<std::string, double>& out) {
@@ -243,12 +243,21 @@ double smallSampleWidening(double blocks, double confidence) {
 
 namespace {
 
-Interval figureInterval(const FigureReplicates& r, const std::string& f, double point,
-                        double confidence) {
+// Figures that cannot be negative: an interval reaching below 0 is cut there (the truth lies in
+// the figure's range, so cutting keeps the coverage).
+bool nonNegative(const std::string& f) {
+  return f != "signedBias" && f != "peakExcess";
+}
+
+Interval clipped(Interval iv, const std::string& f) {
+  if (iv.valid() && nonNegative(f)) iv.lo = std::max(iv.lo, 0.0), iv.hi = std::max(iv.hi, 0.0);
+  return iv;
+}
+
+Interval figureInterval(const FigureReplicates& r, const std::string& f, double confidence) {
   const auto it = r.replicates.find(f);
   if (it == r.replicates.end()) return {};
-  return r.percentile.count(f) ? percentileInterval(it->second, confidence)
-                               : basicInterval(it->second, point, confidence, r.widen);
+  return clipped(widenedInterval(it->second, confidence, r.widen), f);
 }
 
 }  // namespace
@@ -261,7 +270,11 @@ void addFigureIntervals(json& j, const FigureReplicates& r,
       absent[f] = r.absent.at(f);
       continue;
     }
-    const Interval iv = figureInterval(r, f, point.count(f) ? point.at(f) : kUndefined, confidence);
+    if (!std::isfinite(point.count(f) ? point.at(f) : kUndefined)) {
+      absent[f] = "the figure itself is undefined for this event";
+      continue;
+    }
+    const Interval iv = figureInterval(r, f, confidence);
     if (!iv.valid()) {
       absent[f] = "fewer than 20 replicates define the figure";
       continue;
@@ -333,8 +346,8 @@ json rankFigures(const std::vector<std::string>& ranked, const std::vector<std::
       replicates.push_back(reps[i].replicates.at(f));
     }
     // The same interval kind as the pair's own figures (addFigureIntervals).
-    SceneRanking r = rankReplicates(f, true, kept, values, replicates, cfg.confidence,
-                                    f != "responseFrames", widen);
+    SceneRanking r = rankReplicates(f, true, kept, values, replicates, cfg.confidence, widen);
+    for (RankedMethod& m : r.ranking) m.ci = clipped(m.ci, f);  // as the pair's own figure
     r.excluded = excluded;
     byFigure[f] = r.toJson();
   }

@@ -16,19 +16,19 @@
 // alike), recomputes the curves from the drawn tiles' sums and then the figures exactly as the run
 // did. 1000 replicates, seeded by scene and event, so reruns and `arena merge` of shards give the
 // same intervals, and every method of a scene is resampled with the same draws: differences
-// between methods are paired. Basic bootstrap intervals (2 figure - the replicates' quantiles)
-// for every figure but the response, whose first-crossing count gets the percentile interval:
-// maxima and clipped sums of noisy curves (peak excess, lag energy) come out biased upward, a
-// replicate adds that bias once more, and the basic interval subtracts it where the percentile
-// interval would double it.
+// between methods are paired. Percentile intervals, widened for the small number of tiles (below)
+// and cut at 0 for figures that cannot be negative. (Basic "reverse percentile" intervals were
+// tried: they remove a bias the noise puts into maxima and clipped sums, but at the boundary -- a
+// method with no lag, lag energy 0 -- they reflect every replicate below 0 and claim [0, 0].)
 //
 // What the interval covers: the noise realisation of the input (and of the reference) inside the
 // region, and how the lag varies from one part of the region to another -- "would this figure come
 // out the same on another region drawn like this one". What it does NOT cover: the timing and
 // kind of the event, the window and thresholds (fixed), the changed region itself (taken as
-// given), a bias the reference shares with itself, other scenes; and the part of the estimator's
-// bias the basic interval does not remove (tests/ghosting_intervals_test.cpp measures coverage of
-// the noise-free figure of a known lag). Input-seed
+// given), a bias the reference shares with itself, other scenes; and the estimator's own bias:
+// lag energy adds max(0, |noise| - b_pre) on settled frames and peak excess is a maximum, so on a
+// noisy region both sit above the noise-free figure (tests/ghosting_intervals_test.cpp measures
+// coverage of the noise-free figure of a known lag). Input-seed
 // replicates (`--seeds K`) are not used: they exist only in some runs, and an interval whose
 // meaning depends on a flag could not be compared between runs; they remain the way to check
 // these intervals on a scene (README, "Uncertainty").
@@ -39,7 +39,6 @@
 // n_k) has no interval, with that reason, never a fake one.
 #include <map>
 #include <nlohmann/json.hpp>
-#include <set>
 #include <string>
 #include <vector>
 
@@ -74,13 +73,9 @@ struct FigureReplicates {
   std::map<std::string, std::string> absent;              // figure -> why it has no interval
   // responseFrames: "never settled" enters as this value (one more than any settled response).
   std::map<std::string, double> neverSettled;
-  // Figures whose interval is the plain percentile interval (responseFrames: a first-crossing
-  // count, not a smooth function of the curves); every other figure gets the basic interval,
-  // which removes the bias that maxima and clipped sums (lag energy, peak excess) pick up from
-  // noise.
-  std::set<std::string> percentile;
   double effectiveTiles = 0;
-  // Small-sample widening of the basic intervals with G = effectiveTiles blocks:
+  // Small-sample widening of the percentile intervals (about the replicates' median) with
+  // G = effectiveTiles blocks:
   // sqrt(G / (G - 1)) t_{G-1} / z. The bootstrap's spread over G blocks is (G - 1) / G of the
   // variance it estimates, and its quantiles treat that estimate as exact, like a z interval
   // where a t interval with G - 1 degrees of freedom is due: with 16 tiles a 95% interval would

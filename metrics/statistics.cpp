@@ -269,11 +269,15 @@ Interval percentileInterval(std::vector<double> v, double confidence) {
   return {quantile(tail), quantile(1 - tail)};
 }
 
-Interval basicInterval(const std::vector<double>& replicates, double point, double confidence,
-                       double widen) {
+Interval widenedInterval(const std::vector<double>& replicates, double confidence, double widen) {
   const Interval q = percentileInterval(replicates, confidence);
-  if (!q.valid() || !std::isfinite(point)) return {};
-  return {point - widen * (q.hi - point), point + widen * (point - q.lo)};
+  if (!q.valid() || widen == 1.0) return q;
+  std::vector<double> finite;
+  for (double v : replicates)
+    if (std::isfinite(v)) finite.push_back(v);
+  std::nth_element(finite.begin(), finite.begin() + long(finite.size() / 2), finite.end());
+  const double m = finite[finite.size() / 2];
+  return {m - widen * (m - q.lo), m + widen * (q.hi - m)};
 }
 
 Interval meanInterval(const MetricTiles& m, const std::string& seedName,
@@ -404,7 +408,7 @@ SceneRanking rankReplicates(const std::string& metric, bool lowerIsBetter,
                             const std::vector<std::string>& labels,
                             const std::vector<double>& values,
                             const std::vector<std::vector<double>>& reps, double confidence,
-                            bool basic, double widen) {
+                            double widen) {
   if (values.size() != labels.size() || reps.size() != labels.size())
     throw Error("ranking on " + metric + ": labels, values and replicates differ in count");
   SceneRanking out;
@@ -413,12 +417,8 @@ SceneRanking rankReplicates(const std::string& metric, bool lowerIsBetter,
   std::vector<std::vector<bool>> better(n, std::vector<bool>(n, false)),
       resolved(n, std::vector<bool>(n, false));
   for (size_t i = 0; i < n; ++i) {
-    out.ranking.push_back({labels[i],
-                           0,
-                           values[i],
-                           basic ? basicInterval(reps[i], values[i], confidence, widen)
-                                 : percentileInterval(reps[i], confidence),
-                           {}});
+    out.ranking.push_back(
+        {labels[i], 0, values[i], widenedInterval(reps[i], confidence, widen), {}});
     out.replicates[labels[i]] = reps[i];
   }
   for (size_t i = 0; i < n; ++i)
@@ -426,9 +426,7 @@ SceneRanking rankReplicates(const std::string& metric, bool lowerIsBetter,
       SceneRanking::Pair p{labels[i],
                            labels[j],
                            {values[i] - values[j],
-                            basic ? basicInterval(difference(reps[i], reps[j]),
-                                                  values[i] - values[j], confidence, widen)
-                                  : percentileInterval(difference(reps[i], reps[j]), confidence)}};
+                            widenedInterval(difference(reps[i], reps[j]), confidence, widen)}};
       const bool r = p.d.resolved();
       resolved[i][j] = resolved[j][i] = r;
       better[i][j] = lowerIsBetter ? p.d.diff < 0 : p.d.diff > 0;

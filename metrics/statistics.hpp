@@ -92,12 +92,9 @@ class ResamplingPlan {
 std::vector<double> replicateValues(const MetricTiles& m, const ResamplingPlan& plan);
 // Percentile interval of replicate values (NaN replicates dropped; fewer than 20 finite: invalid).
 Interval percentileInterval(std::vector<double> replicates, double confidence);
-// Basic ("reverse percentile") bootstrap interval [2 point - q_hi, 2 point - q_lo] (Davison &
-// Hinkley 1997, eq. 5.6): it subtracts the bootstrap's estimate of the statistic's bias, which
-// matters for figures built from maxima and clipped sums (metrics/ghosting_intervals.hpp).
-// `widen` scales both half-widths about the point (a small-sample correction, see there).
-Interval basicInterval(const std::vector<double>& replicates, double point, double confidence,
-                       double widen = 1.0);
+// The percentile interval with both half-widths scaled by `widen` about the replicates' median
+// (a small-sample correction of the spread, metrics/ghosting_intervals.hpp); widen 1 = plain.
+Interval widenedInterval(const std::vector<double>& replicates, double confidence, double widen);
 // The interval of one metric's summary mean.
 Interval meanInterval(const MetricTiles& m, const std::string& seedName,
                       const BootstrapConfig& cfg = {});
@@ -145,7 +142,7 @@ SceneRanking rankReplicates(const std::string& metric, bool lowerIsBetter,
                             const std::vector<std::string>& labels,
                             const std::vector<double>& values,
                             const std::vector<std::vector<double>>& replicates,
-                            double confidence = 0.95, bool basic = false, double widen = 1.0);
+                            double confidence = 0.95, double widen = 1.0);
 
 // Across scenes: each method's score is the geometric mean over scenes of its ratio to a baseline's
 // value on that scene, so no scene dominates by its scale. (The ordering does not depend on which
