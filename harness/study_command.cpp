@@ -61,10 +61,13 @@ void printRanking(const json& results) {
 // A figure with its interval: "0.123 [0.1, 0.15]", "-" when absent; a null bound of the response
 // is "never settled" (metrics/ghosting_intervals.hpp).
 std::string figure(const json& e, const char* name) {
-  if (!e.contains(name) || !e[name].is_number())
-    return std::string(name) == "responseFrames" && e.contains("response") ? "never settled" : "-";
+  const bool never = std::string(name) == "responseFrames" && e.contains("response");
+  if (!never && (!e.contains(name) || !e[name].is_number())) return "-";
   std::ostringstream o;
-  o << std::setprecision(3) << e[name].get<double>();
+  if (never)
+    o << "never";
+  else
+    o << std::setprecision(3) << e[name].get<double>();
   const json ci = e.value("ci95", json::object()).value(name, json());
   if (ci.is_array()) {
     auto bound = [](const json& b) {
@@ -92,14 +95,15 @@ void printEvents(const json& results) {
         const int frame = ev["eventFrame"];
         const char* rankedOn = cut ? "oldViewLeak" : "lagEnergy";
         const json ranking = ev["byFigure"].value(rankedOn, json::object());
-        std::cout << "\n" << it.key() << ", " << ev.value("kind", "") << " " << ev.value("what", "") << " at frame "
+        const std::string what = ev.value("what", "");
+        std::cout << "\n" << it.key() << ": " << ev.value("kind", "") << (what.empty() ? "" : " " + what) << " at frame "
                   << frame << ": ranked on " << rankedOn << " (" << ranking.value("resolvedPairs", 0) << " of "
                   << ranking.value("totalPairs", 0) << " pairs resolved)\n";
         for (const json& m : ranking.value("ranking", json::array())) {
           const json* e = nullptr;
           for (const json& p : results["pairs"])
-            if (p["scene"] == it.key() && p["label"] == m["label"])
-              for (const json& x : p.value(cut ? "cuts" : "ghosting", json::array()))
+            if (p["scene"] == it.key() && p["label"] == m["label"] && p.contains(cut ? "cuts" : "ghosting"))
+              for (const json& x : p.at(cut ? "cuts" : "ghosting"))
                 if (x.value("eventFrame", -1) == frame) e = &x;
           if (!e) continue;
           std::cout << "  " << std::left << std::setw(4) << m["rank"].get<int>() << std::setw(22)
