@@ -101,7 +101,7 @@ json SequenceInfo::toJson() const {
           {"frames", frames}, {"referenceOfFrame", referenceOfFrame}, {"referenceSpp", referenceSpp},
           {"cameras", cams}, {"events", evs}, {"settings", settings},
           {"gradientStratum", kGradientStratum}, {"referenceEstimatedRelMse", referenceEstimatedRelMse},
-          {"referenceCapped", referenceCapped}};
+          {"referenceCapped", referenceCapped}, {"lowresPathsPerSecond", lowresPathsPerSecond}};
 }
 
 SequenceInfo SequenceInfo::fromJson(const json& j, const std::string& file) {
@@ -125,6 +125,7 @@ SequenceInfo SequenceInfo::fromJson(const json& j, const std::string& file) {
     s.settings = j.value("settings", json::object());
     s.referenceEstimatedRelMse = j.value("referenceEstimatedRelMse", std::vector<double>(s.referenceSpp.size(), 0.0));
     s.referenceCapped = j.value("referenceCapped", std::vector<bool>(s.referenceSpp.size(), false));
+    s.lowresPathsPerSecond = j.value("lowresPathsPerSecond", 0.0);
     if (int(s.referenceOfFrame.size()) != s.frames || int(s.cameras.size()) != s.frames)
       throw Error(file + ": per-frame lists do not match the frame count");
     return s;

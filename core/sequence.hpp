@@ -51,6 +51,9 @@ struct SequenceInfo {
   std::vector<CameraState> cameras;    // per frame
   std::vector<SequenceEvent> events;
   nlohmann::json settings;             // what produced the pixels (preset, spp, bounces, ...)
+  // Paths per second of the low-resolution buffer's render, measured on the machine that rendered
+  // it (0: unknown or no buffer). Timing metadata, not pixels: it is not part of the hash.
+  double lowresPathsPerSecond = 0;
 
   // The low-resolution buffer's block size and samples per texel; 0 when the sequence has none.
   int lowresFactor() const { return settings.value("lowresFactor", 0); }

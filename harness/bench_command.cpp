@@ -58,6 +58,26 @@ double p95(std::vector<double> v) {
   return v.empty() ? 0.0 : v[std::min(v.size() - 1, size_t(std::ceil(0.95 * double(v.size()))) - 1)];
 }
 
+// The median of the per-frame ratios a[i] / b[i] of two contenders timed on the same frames, and a
+// distribution-free 95% interval for it: the order statistics of the sorted ratios whose ranks
+// bracket the median at the binomial(n, 1/2) 2.5% and 97.5% points (normal approximation, n >= 6;
+// fewer frames give the whole range).
+struct PairedRatio {
+  double median = 0, lo = 0, hi = 0;
+};
+PairedRatio pairedRatio(const std::vector<double>& a, const std::vector<double>& b) {
+  std::vector<double> r;
+  for (size_t i = 0; i < std::min(a.size(), b.size()); ++i)
+    if (b[i] > 0) r.push_back(a[i] / b[i]);
+  if (r.empty()) return {};
+  std::sort(r.begin(), r.end());
+  const double n = double(r.size());
+  const double half = 1.96 * std::sqrt(n) / 2;
+  const size_t lo = n < 6 ? 0 : size_t(std::max(0.0, std::floor(n / 2 - half)));
+  const size_t hi = n < 6 ? r.size() - 1 : std::min(r.size() - 1, size_t(std::ceil(n / 2 + half)) - 1);
+  return {median(r), r[lo], r[hi]};
+}
+
 // One "bilateral unit" (BU): the median time of cv::bilateralFilter(src, dst, 5, 0.1, 2.0) on a
 // 1280x720 CV_32FC3 image, measured in the same process and sitting as the denoisers, so ratios
 // stay comparable across noisy machines.
@@ -204,61 +224,81 @@ void addBenchCommand(CLI::App& app) {
     }
     nlohmann::json out = {{"resolution", {w, h}}, {"bilateralUnitMs", bu}, {"frames", d->frames},
                           {"warmup", d->warmup}, {"environment", environmentInfo()}, {"denoisers", nlohmann::json::array()}};
-    for (const std::string& name : names) {
-      const DenoiserInfo& info = DenoiserRegistry::instance().find(name);
-      ParamSet ps = info.schema.resolve(params[name], name);
+    // Every contender runs on every frame, in an order rotated frame by frame, so that a change
+    // of machine load (another process, thermal state) falls on all of them alike and the
+    // per-frame ratios to the first contender are paired measurements.
+    struct Contender {
+      std::string name;
+      ParamSet params;
+      std::vector<SignalKind> kinds;
       std::vector<std::unique_ptr<Denoiser>> instances;
-      const std::vector<SignalKind> kinds = info.signals == SignalMode::Color
-                                                ? std::vector<SignalKind>{SignalKind::Color}
-                                                : std::vector<SignalKind>{SignalKind::Diffuse, SignalKind::Specular};
-      for (SignalKind kind : kinds) instances.push_back(info.create(ps, kind));
-      for (auto& inst : instances) inst->setup(w, h);
-      Image outImage(w, h, 3), signal;
       std::vector<double> total;
       std::map<std::string, std::vector<double>> passMs;
       std::map<std::string, double> passTaps;
       std::vector<std::string> passOrder;
-      for (int f = 0; f < d->warmup + d->frames; ++f) {
-        const LayerSet& frame = inputs[size_t(f) % inputs.size()];
-        const bool grads = instances[0]->needsGradients() && f > 0 && inputs.size() > 1;
-        const LayerSet& gradients = inputGradients[std::max<size_t>(1, size_t(f) % inputs.size()) % inputs.size()];
-        FrameContext ctx;
-        ctx.frameIndex = f;
-        ctx.width = w;
-        ctx.height = h;
-        ctx.reset = f == 0;
+    };
+    std::vector<Contender> contenders;
+    for (const std::string& name : names) {
+      const DenoiserInfo& info = DenoiserRegistry::instance().find(name);
+      Contender c{name, info.schema.resolve(params[name], name), {}, {}, {}, {}, {}, {}};
+      c.kinds = info.signals == SignalMode::Color ? std::vector<SignalKind>{SignalKind::Color}
+                                                  : std::vector<SignalKind>{SignalKind::Diffuse, SignalKind::Specular};
+      for (SignalKind kind : c.kinds) c.instances.push_back(info.create(c.params, kind));
+      for (auto& inst : c.instances) inst->setup(w, h);
+      contenders.push_back(std::move(c));
+    }
+    Image outImage(w, h, 3), signal;
+    for (int f = 0; f < d->warmup + d->frames; ++f) {
+      const LayerSet& frame = inputs[size_t(f) % inputs.size()];
+      const LayerSet& gradients = inputGradients[std::max<size_t>(1, size_t(f) % inputs.size()) % inputs.size()];
+      FrameContext ctx;
+      ctx.frameIndex = f;
+      ctx.width = w;
+      ctx.height = h;
+      ctx.reset = f == 0;
+      for (size_t turn = 0; turn < contenders.size(); ++turn) {
+        Contender& c = contenders[(turn + size_t(f)) % contenders.size()];
+        const bool grads = c.instances[0]->needsGradients() && f > 0 && inputs.size() > 1;
         double frameMs = 0;
-        for (size_t k = 0; k < instances.size(); ++k) {
-          const SignalKind kind = kinds[k];
+        for (size_t k = 0; k < c.instances.size(); ++k) {
+          const SignalKind kind = c.kinds[k];
           signal = frame.get(signalName(kind));
-          const bool low = instances[k]->wantsLowres() && !inputLowres.empty();
+          const bool low = c.instances[k]->wantsLowres() && !inputLowres.empty();
           const LowresInputs lowInputs{low ? inputLowres[size_t(f) % inputs.size()] : frame, d->lowresFactor,
                                        d->lowresSpp};
           DenoiserInputs in{signal, frame, grads ? &gradients : nullptr, low ? &lowInputs : nullptr};
-          instances[k]->clearPassStats();
+          c.instances[k]->clearPassStats();
           auto t0 = std::chrono::steady_clock::now();
-          instances[k]->denoise(ctx, in, outImage);
+          c.instances[k]->denoise(ctx, in, outImage);
           const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
           // An external process's own compute time; the wall clock (transfer included) otherwise.
-          frameMs += instances[k]->reportedMilliseconds().value_or(wall);
+          frameMs += c.instances[k]->reportedMilliseconds().value_or(wall);
           if (f < d->warmup) continue;
-          for (const PassStats& p : instances[k]->lastPasses()) {
+          for (const PassStats& p : c.instances[k]->lastPasses()) {
             std::string pn = std::string(signalName(kind)) + "/" + p.name;
-            if (!passMs.count(pn)) passOrder.push_back(pn);
-            passMs[pn].push_back(p.milliseconds);
-            passTaps[pn] = p.tapsPerPixel;
+            if (!c.passMs.count(pn)) c.passOrder.push_back(pn);
+            c.passMs[pn].push_back(p.milliseconds);
+            c.passTaps[pn] = p.tapsPerPixel;
           }
         }
-        if (f >= d->warmup) total.push_back(frameMs);
+        if (f >= d->warmup) c.total.push_back(frameMs);
       }
+    }
+    for (const Contender& c : contenders) {
       nlohmann::json passes = nlohmann::json::array();
-      for (const std::string& pn : passOrder)
-        passes.push_back({{"name", pn}, {"msMedian", median(passMs[pn])}, {"bu", median(passMs[pn]) / bu},
-                          {"tapsPerPixel", passTaps[pn]}});
-      nlohmann::json row = {{"name", name}, {"params", ps.toJson()}, {"msMedian", median(total)}, {"msP95", p95(total)},
-                            {"bu", median(total) / bu}, {"passes", passes}};
-      std::printf("%-14s %8.2f ms/frame (p95 %.2f)  %5.2f BU\n", name.c_str(), median(total), p95(total),
-                  median(total) / bu);
+      for (const std::string& pn : c.passOrder)
+        passes.push_back({{"name", pn}, {"msMedian", median(c.passMs.at(pn))}, {"bu", median(c.passMs.at(pn)) / bu},
+                          {"tapsPerPixel", c.passTaps.at(pn)}});
+      nlohmann::json row = {{"name", c.name}, {"params", c.params.toJson()}, {"msMedian", median(c.total)},
+                            {"msP95", p95(c.total)}, {"bu", median(c.total) / bu}, {"passes", passes}};
+      std::printf("%-14s %8.2f ms/frame (p95 %.2f)  %5.2f BU", c.name.c_str(), median(c.total), p95(c.total),
+                  median(c.total) / bu);
+      if (&c != &contenders.front()) {
+        const PairedRatio r = pairedRatio(c.total, contenders.front().total);
+        row["ratioTo"] = {{"name", contenders.front().name}, {"median", r.median}, {"ci95", {r.lo, r.hi}}};
+        std::printf("  x%.3f of %s [95%% CI %.3f, %.3f]", r.median, contenders.front().name.c_str(), r.lo, r.hi);
+      }
+      std::printf("\n");
       for (const auto& p : passes)
         std::printf("    %-34s %8.2f ms  %5.2f BU  %5.1f taps/px\n", p["name"].get<std::string>().c_str(),
                     p["msMedian"].get<double>(), p["bu"].get<double>(), p["tapsPerPixel"].get<double>());

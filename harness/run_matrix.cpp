@@ -323,7 +323,15 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
               selfTimed = true;
             }
             // Disocclusion rays: low-resolution paths read per pixel (denoisers that read the buffer).
-            if (run.readsLowres()) put("extraRaysPerPixel", f.extraRaysPerPixel, {}, FrameTransform::Mean);
+            if (run.readsLowres()) {
+              put("extraRaysPerPixel", f.extraRaysPerPixel, {}, FrameTransform::Mean);
+              // Their equivalent tracing time: the paths read at the rate the buffer rendered at on
+              // the machine that rendered it (unknown, and absent, when another machine did).
+              if (info.lowresPathsPerSecond > 0)
+                put("tracingMs", f.extraRaysPerPixel * double(info.width) * double(info.height) /
+                                     info.lowresPathsPerSecond * 1e3,
+                    {}, FrameTransform::Mean);
+            }
             put("referenceRelMse", sd.referenceRelMse[size_t(t)], {}, FrameTransform::Mean);
             for (size_t k = 0; k < sd.events.size(); ++k) {
               const auto& ev = sd.events[k];
@@ -622,6 +630,17 @@ json runMatrix(const RunConfig& cfg) {
           {"noisyRelMse", sd->noisyRelMse}, {"exposure", exposures.front()}, {"exposurePerFrame", exposures},
           {"chosenFrames", sd->chosenFrames}, {"images", fs::relative(sceneImages, cfg.out).string()},
           {"floors", sd->floors}, {"nonFiniteInputs", sd->nonFinite}};
+      // Asset scenes (issue 18): the models' credits and the loader's counted fallbacks.
+      if (!scene.credits.empty() || !scene.warnings.empty()) {
+        json credits = json::array();
+        for (const Credit& c : scene.credits)
+          credits.push_back({{"asset", c.asset},
+                             {"author", c.author},
+                             {"license", c.license},
+                             {"source", c.source}});
+        results["scenes"][scene.name]["assets"] = {{"credits", credits},
+                                                   {"warnings", scene.warnings}};
+      }
     }
     for (const DenoiserRequest* r : mine) {
       auto t0 = std::chrono::steady_clock::now();

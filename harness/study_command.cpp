@@ -137,6 +137,10 @@ void addStudyCommand(CLI::App& app) {
   cmd->add_option("--exposure", *exposure, "Display exposure (metrics.md): per-frame or first")
       ->check(CLI::IsMember({"per-frame", "first"}))
       ->default_val("per-frame");
+  // The study renders the low-resolution buffer (1/8, 16 paths per texel, the CAPCOM 2023 setting
+  // in algorithms.md), so reengine runs its disocclusion rays and is charged for them (a quarter
+  // of the 1-spp input's paths per frame); --lowres-factor 0 leaves it out.
+  opt->lowresFactor = 8;
   addRenderOptions(cmd, *opt);
   cmd->callback([=] {
     const auto start = std::chrono::steady_clock::now();

@@ -33,6 +33,8 @@ const std::vector<MetricInfo>& metricCatalog() {
       {"warpedFlicker", true, "motion-compensated flicker of the error e = d - r"},
       {"effectiveSpp", false, "samples plain accumulation would need for the same relMSE"},
       {"ms", true, "wall time of the denoiser per frame (both signals), ms"},
+      {"extraRaysPerPixel", true, "low-resolution paths read per pixel per frame (disocclusion rays)"},
+      {"tracingMs", true, "those paths' equivalent tracing time per frame at the render's own rate, ms"},
   };
   return metrics;
 }

@@ -158,6 +158,12 @@ json speedPoint(const json& pair, const ErrorAxis& axis) {
   const double lo = timingOf(pair, "msP5"), hi = timingOf(pair, "msP95");
   v["msLo"] = std::isfinite(lo) ? json(lo) : json(nullptr);  // msP5: results schema 2
   v["msHi"] = std::isfinite(hi) ? json(hi) : json(nullptr);
+  // Disocclusion rays (reengine): the paths a denoiser read from the low-resolution buffer and
+  // their equivalent tracing time, drawn as a separate bar beside its own time.
+  const json& summary = pair.contains("summary") ? pair["summary"] : json::object();
+  for (const char* key : {"tracingMs", "extraRaysPerPixel"})
+    if (summary.contains(key) && summary[key].contains("mean") && summary[key]["mean"].is_number())
+      v[key] = summary[key]["mean"];
   return v;
 }
 
@@ -185,8 +191,8 @@ json normalisedAggregate(const std::vector<std::string>& scenes,
   if (baseline.empty()) return nullptr;
   std::vector<json> points;
   for (const std::string& label : labels) {
-    double logE = 0, logLo = 0, logHi = 0, ms = 0, msLo = 0, msHi = 0;
-    size_t n = 0, nLo = 0, nHi = 0;
+    double logE = 0, logLo = 0, logHi = 0, ms = 0, msLo = 0, msHi = 0, tracing = 0;
+    size_t n = 0, nLo = 0, nHi = 0, nTracing = 0;
     json params;
     for (const std::string& scene : scenes) {
       const json v = value(scene, label), b = value(scene, baseline);
@@ -200,12 +206,13 @@ json normalisedAggregate(const std::vector<std::string>& scenes,
       ms += v["ms"].get<double>();
       if (v["msLo"].is_number()) msLo += v["msLo"].get<double>(), ++nLo;
       if (v["msHi"].is_number()) msHi += v["msHi"].get<double>(), ++nHi;
+      if (v.contains("tracingMs")) tracing += v["tracingMs"].get<double>(), ++nTracing;
       params = v["params"];
       ++n;
     }
     if (n == 0) continue;
     const double k = double(n);
-    points.push_back({{"label", label},
+    json point = {{"label", label},
                       {"params", params},
                       {"error", std::exp(logE / k)},
                       {"lo", std::exp(logLo / k)},
@@ -213,7 +220,9 @@ json normalisedAggregate(const std::vector<std::string>& scenes,
                       {"ms", ms / k},
                       {"msLo", nLo == n ? json(msLo / k) : json(nullptr)},
                       {"msHi", nHi == n ? json(msHi / k) : json(nullptr)},
-                      {"scenes", n}});
+                      {"scenes", n}};
+    if (nTracing == n) point["tracingMs"] = tracing / k;  // the mean like its time's
+    points.push_back(std::move(point));
   }
   for (json& p : points) p["complete"] = p["scenes"].get<size_t>() == scenes.size();
   json scope = speedScope(points, true);
@@ -573,7 +582,8 @@ json reportData(const json& results, const fs::path& runDir, const json* baselin
     if (sceneInfos.contains(name)) {
       const json& info = sceneInfos[name];
       for (const char* k : {"purpose", "width", "height", "frames", "events", "chosenFrames",
-                            "referenceRelMse", "noisyRelMse", "referenceSpp", "exposure", "floors"})
+                            "referenceRelMse", "noisyRelMse", "referenceSpp", "exposure", "floors",
+                            "assets"})  // assets: credits and loader fallbacks (issue 18)
         if (info.contains(k)) s[k] = info[k];
       s["noiseFloor"] = noiseFloor(info, warmup);
       s["viewer"] = viewerData(results, name, info, runDir);

@@ -5,9 +5,11 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 # python3-numpy: the Python example denoiser (examples/external/python_temporal), run by the tests.
+# libassimp-dev: asset import (OBJ+MTL, glTF 2.0); assimp-testmodels: glTF files the tests load.
 packages=(build-essential cmake libembree-dev libopenexr-dev libopencv-dev libbenchmark-dev libglm-dev
           nlohmann-json3-dev libtbb-dev libgtest-dev libcli11-dev libsqlite3-dev libtinyobjloader-dev
-          openexr embree-tools python3-numpy ${ARENA_EXTRA_PACKAGES:-})
+          openexr embree-tools python3-numpy libassimp-dev assimp-testmodels
+          ${ARENA_EXTRA_PACKAGES:-})
 # `arena report` copies Vega's browser builds from reports/node_modules, installed with npm.
 command -v node >/dev/null 2>&1 || packages+=(nodejs)
 command -v npm >/dev/null 2>&1 || packages+=(npm)

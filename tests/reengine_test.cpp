@@ -16,6 +16,8 @@
 #include "denoisers/common/lowres_upsample.hpp"
 #include "denoisers/common/reprojection.hpp"
 #include "harness/denoise_run.hpp"
+#include "harness/run_matrix.hpp"
+#include "reports/report.hpp"
 #include "tests/test_util.hpp"
 #include "tracer/render.hpp"
 
@@ -23,6 +25,7 @@ namespace arena {
 namespace {
 
 namespace fs = std::filesystem;
+using nlohmann::json;
 
 // ---- The reconstruction block on a flat, camera-facing plane.
 struct Plane {
@@ -353,6 +356,48 @@ TEST(ReEngine, DisocclusionRaysEarnTheirCostWhereHistoryIsFresh) {
     std::printf("%s: later frames %.3f extra rays/pixel on average\n", scene.c_str(), later);
     for (double rays : without.rays) EXPECT_EQ(rays, 0.0);
   }
+}
+
+TEST(ReEngine, ARunChargesTheExtraRaysAtTheRendersOwnPathRate) {
+  // The run records the paths read per pixel and their equivalent tracing time, and the report's
+  // speed points carry both; tracing time = rays/pixel x pixels / the rate sequence.json records.
+  RunConfig c;
+  c.name = "reengine_tracing";
+  c.out = test::freshDir("run_reengine_tracing");
+  c.cache = test::freshDir("run_reengine_tracing_cache");
+  c.render = test::tinySettings(48, 27, 5, 8);
+  c.render.lowresFactor = 4;
+  c.render.lowresSpp = 4;
+  c.scenes = {test::shippedScene("moving_object")};
+  c.denoisers = {{"reengine", {{"disocclusionRays", "on"}}, ""}, {"eaw", {}, ""}};
+  c.baselines = false;
+  c.warmup = 1;
+  c.flip = "none";
+  c.keepFrames = "none";
+  const json r = runMatrix(c);
+  ASSERT_EQ(r["pairs"].size(), 2u);
+  const json& re = r["pairs"][0];
+  ASSERT_EQ(re["status"], "ok") << re.dump();
+  fs::path seqDir;
+  for (const auto& entry : fs::directory_iterator(c.cache)) seqDir = entry.path();
+  const SequenceInfo info = Sequence::open(seqDir).info();
+  ASSERT_GT(info.lowresPathsPerSecond, 0.0) << "the render did not record its path rate";
+  const double rays = re["summary"]["extraRaysPerPixel"]["mean"].get<double>();
+  ASSERT_GT(rays, 0.0);
+  // The mean of per-frame charges equals the charge of the mean rays (a linear map).
+  EXPECT_NEAR(re["summary"]["tracingMs"]["mean"].get<double>(),
+              rays * 48 * 27 / info.lowresPathsPerSecond * 1e3, 1e-9 * (1 + rays));
+  // A denoiser that reads no buffer is charged nothing, and says so by not having the field.
+  EXPECT_FALSE(r["pairs"][1]["summary"].contains("tracingMs"));
+  // The report's speed point carries the bar's length.
+  const json data = reportData(r, c.out, nullptr);
+  bool found = false;
+  for (const json& p : data["speed"]["scenes"]["moving_object"]["relMse"]["points"])
+    if (p["label"] == re["label"]) {
+      found = true;
+      EXPECT_EQ(p["tracingMs"], re["summary"]["tracingMs"]["mean"]);
+    }
+  EXPECT_TRUE(found);
 }
 
 }  // namespace

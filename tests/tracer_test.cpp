@@ -7,6 +7,7 @@
 
 #include "core/sequence.hpp"
 #include "tests/test_util.hpp"
+#include "tracer/asset.hpp"
 #include "tracer/render.hpp"
 
 namespace arena {
@@ -121,8 +122,16 @@ glm::vec3 previousAt(const Image& img, glm::vec2 p) {
 
 // Warping frame t-1's position buffer with `motion` lands on the same surface point, moved by the
 // object's own motion between the frames; checked for camera motion and for object motion.
-void checkMotion(const std::string& sceneName, int t, int movingMesh) {
-  Scene scene = test::shippedScene(sceneName);
+// An asset's vertices move with their node too (the object's first mesh node stands for all: the
+// assets checked here move rigidly).
+glm::mat4 meshToWorld(const SceneState& s, int mesh, const Scene& scene) {
+  const glm::mat4& object = s.toWorld[size_t(mesh)];
+  if (size_t(mesh) >= s.nodeMatrices.size() || s.nodeMatrices[size_t(mesh)].empty()) return object;
+  const MeshData& local = scene.objects[size_t(mesh)].asset->mesh;
+  return object * s.nodeMatrices[size_t(mesh)][local.vertexNodes.front()];
+}
+
+void checkMotion(const Scene& scene, int t, int movingMesh) {
   const int w = 64, h = 36;
   SequenceRenderer r(scene, test::tinySettings(w, h, scene.frames, 4));
   auto prev = r.renderFrame(t - 1).frame;
@@ -138,7 +147,9 @@ void checkMotion(const std::string& sceneName, int t, int movingMesh) {
       if (p.x < 1 || p.y < 1 || p.x >= w - 1 || p.y >= h - 1) continue;
       if (int(prev.get("meshId").at(int(p.x), int(p.y))) != mesh) continue;  // disoccluded
       glm::vec3 now(pos.at(x, y, 0), pos.at(x, y, 1), pos.at(x, y, 2));
-      glm::vec3 expected = glm::vec3(sPrev.toWorld[size_t(mesh)] * glm::inverse(sCur.toWorld[size_t(mesh)]) * glm::vec4(now, 1));
+      glm::vec3 expected =
+          glm::vec3(meshToWorld(sPrev, mesh, scene) * glm::inverse(meshToWorld(sCur, mesh, scene)) *
+                    glm::vec4(now, 1));
       // One pixel's footprint at this depth: the nearest-pixel lookup is at most ~0.7 px off.
       float footprint = depth.at(x, y) * 2.0f * sCur.camera.tanHalfFovY / float(h);
       ++checked;
@@ -152,8 +163,30 @@ void checkMotion(const std::string& sceneName, int t, int movingMesh) {
   EXPECT_GT(double(good) / checked, 0.97) << good << "/" << checked;
 }
 
+void checkMotion(const std::string& sceneName, int t, int movingMesh) {
+  checkMotion(test::shippedScene(sceneName), t, movingMesh);
+}
+
 TEST(Tracer, MotionVectorsFollowTheCamera) { checkMotion("camera_pan_occluder", 12, -1); }
 TEST(Tracer, MotionVectorsFollowMovingObjects) { checkMotion("moving_object", 14, 2); }
+
+// A glTF node animation (tests/data/assets/animated_box.gltf: the box slides and turns) placed
+// on a floor, seen by a still camera.
+TEST(Tracer, MotionVectorsFollowAnimatedAssetNodes) {
+  const std::string box = std::string(ARENA_TEST_DATA) + "/assets/animated_box.gltf";
+  auto dir = test::freshDir("motion_asset");
+  std::ofstream(dir / "s.json") << R"({
+    "purpose": "animated asset", "resolution": [64, 36], "frames": 31, "max_bounces": 2,
+    "camera": {"keys": [{"frame": 0, "eye": [0, 2.5, 4], "target": [0, 0.3, 0], "fov": 45}]},
+    "materials": {"white": {"albedo": [0.7, 0.7, 0.7]}},
+    "objects": [
+      {"name": "floor", "shape": "quad", "material": "white", "keys": [{"frame": 0, "scale": [6, 1, 6]}]},
+      {"name": "box", "asset": {"file": ")" + box + R"(", "unitMeters": 1, "upAxis": "y", "fps": 30},
+       "keys": [{"frame": 0, "scale": [1.5, 1.5, 1.5]}]}],
+    "lights": [{"name": "l", "shape": "quad", "keys": [{"frame": 0, "translate": [0, 3, 0], "rotate": [180, 0, 0], "intensity": 5}]}]
+  })";
+  checkMotion(loadScene((dir / "s.json").string()), 15, 1);
+}
 
 }  // namespace
 }  // namespace arena

@@ -142,7 +142,7 @@ SequenceRenderer::SequenceRenderer(const Scene& scene, const RenderSettings& set
   if (settings.referenceReplicates < 2 || settings.referenceReplicates > 64)
     throw Error("render settings: reference replicates " + std::to_string(settings.referenceReplicates) +
                 " out of range (expected 2..64)");
-  for (const Object& o : scene_.objects) meshes_.push_back(makeMesh(o.shape, o.meshFile));
+  for (const Object& o : scene_.objects) meshes_.push_back(makeMesh(o));
   for (const Light& l : scene_.lights) meshes_.push_back(makeMesh(l.shape, ""));
 }
 
@@ -765,6 +765,7 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
   auto say = [&](const std::string& s) {
     if (progress) progress(s);
   };
+  for (const std::string& w : scene.warnings) say("[" + scene.name + "] asset fallback: " + w);
 
   SequenceInfo info;
   info.scene = scene.name;
@@ -807,6 +808,18 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
                          {"arena.scene", scene.name}};
   };
 
+  // The low-resolution buffer's path rate on this machine, measured where it is rendered: the run
+  // charges a denoiser that reads the buffer its equivalent tracing time (paths read / this rate).
+  double lowresPaths = 0, lowresSeconds = 0;
+  auto timedLowres = [&](int t) {
+    RayCounts counts;
+    const auto t0 = std::chrono::steady_clock::now();
+    LayerSet buffer = renderer.renderLowres(t, counts);
+    lowresSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    lowresPaths += double(counts.paths);
+    return buffer;
+  };
+
   int unit = 0;  // Shard's work units, numbered independently of what the cache holds
   for (int t = 0; t < frames; ++t) {
     if (!shard.owns(unit++)) continue;
@@ -820,8 +833,7 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
     if (frameOk && gradOk && !lowOk) {  // only the low-res buffer is missing
       say("[" + scene.name + "] " + (fs::exists(lp) ? "re-rendering " : "rendering ") + lp.filename().string() +
           (fs::exists(lp) ? ": " + whyLow : ""));
-      RayCounts counts;
-      writeExr(lp, renderer.renderLowres(t, counts), channels::lowresLayers(), attributes("lowres", t));
+      writeExr(lp, timedLowres(t), channels::lowresLayers(), attributes("lowres", t));
       lowOk = true;
     }
     if (frameOk && gradOk && lowOk) {
@@ -836,10 +848,7 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
     double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     writeExr(fp, r.frame, channels::frameLayers(), attributes("frame", t));
     if (t > 0) writeExr(gp, r.gradients, channels::gradientLayers(), attributes("gradients", t));
-    if (settings.lowresFactor > 0) {
-      RayCounts counts;
-      writeExr(lp, renderer.renderLowres(t, counts), channels::lowresLayers(), attributes("lowres", t));
-    }
+    if (settings.lowresFactor > 0) writeExr(lp, timedLowres(t), channels::lowresLayers(), attributes("lowres", t));
     report("frame " + std::to_string(t), r.counts, sec);
   }
   info.referenceSpp.assign(firstFrameOfReference.size(), 0);
@@ -925,12 +934,20 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
     return dir;
   }
   // A complete cache is only read: a read-only mount (or another user's cache) must stay usable.
-  const std::string infoText = info.toJson().dump(1);
   std::string existing;
   try {
     existing = readText(infoPath);
   } catch (const Error&) {
   }
+  if (lowresSeconds > 0 && lowresPaths > 0) {
+    info.lowresPathsPerSecond = lowresPaths / lowresSeconds;
+  } else if (!existing.empty()) {  // nothing rendered now: keep the rate measured when it was
+    try {
+      info.lowresPathsPerSecond = nlohmann::json::parse(existing).value("lowresPathsPerSecond", 0.0);
+    } catch (const nlohmann::json::exception&) {
+    }
+  }
+  const std::string infoText = info.toJson().dump(1);
   if (existing != infoText) writeTextAtomically(infoPath, infoText);
   return dir;
 }

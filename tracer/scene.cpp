@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <glm/gtc/matrix_transform.hpp>
 #include <map>
@@ -10,6 +11,7 @@
 #include "core/error.hpp"
 #include "core/hash.hpp"
 #include "core/json_reader.hpp"
+#include "tracer/asset.hpp"
 
 namespace arena {
 
@@ -124,6 +126,70 @@ Shape readShape(JsonReader& r, bool allowMesh) {
                             : "expected quad or sphere for a light; got '" + s + "'");
 }
 
+int materialOf(JsonReader& o, const std::map<std::string, int>& materialIndex,
+               const std::string& key) {
+  std::string m = o.string(key);
+  auto it = materialIndex.find(m);
+  if (it == materialIndex.end()) o.fail(key, "unknown material '" + m + "' (not in $.materials)");
+  return it->second;
+}
+
+// "assets:<path>" is in the extracted-asset cache; anything else is relative to the scene file.
+fs::path resolveAssetPath(const std::string& file, const fs::path& sceneDir) {
+  const std::string prefix = "assets:";
+  if (file.rfind(prefix, 0) == 0) return fs::path(assetCacheDir()) / file.substr(prefix.size());
+  return sceneDir / file;
+}
+
+// {"name", "asset": {"file", "unitMeters", "upAxis", "fps"?}, "material"?, "keys"}: imports the
+// file, appends its materials to the scene's (named "<object>/<material>") unless "material"
+// overrides them all, and hashes every file it read.
+void readAssetObject(JsonReader& o, const fs::path& sceneDir,
+                     const std::map<std::string, int>& materialIndex, Object& obj, Scene& scene,
+                     Hasher& hasher) {
+  obj.shape = Shape::Asset;
+  JsonReader a = o.child("asset");
+  const std::string file = a.string("file");
+  const double unit = a.number("unitMeters");
+  if (!(unit >= 1e-6 && unit <= 1e6))
+    a.fail("unitMeters",
+           "expected metres per asset unit in [1e-6, 1e6], got " + std::to_string(unit));
+  obj.assetRef.unitMeters = float(unit);
+  const std::string up = a.string("upAxis");
+  if (up != "y" && up != "z") a.fail("upAxis", "expected \"y\" or \"z\", got '" + up + "'");
+  obj.assetRef.upAxis = up[0];
+  obj.assetRef.fps = numberIn(a, "fps", 30.0, 1e-3, 1e4);
+  const fs::path resolved = resolveAssetPath(file, sceneDir);
+  obj.assetRef.file = resolved.string();
+  std::error_code ec;
+  if (!fs::exists(resolved, ec)) {
+    if (file.rfind("assets:", 0) == 0)
+      a.fail("file", "asset file not found: " + resolved.string() +
+                         " (the extracted-asset cache, $ARENA_ASSET_DIR or <repo>/cache/assets; "
+                         "run `bash scripts/setup.sh` to extract the packaged assets)");
+    a.fail("file", "asset file not found: " + resolved.string());
+  }
+  try {
+    obj.asset = std::make_shared<const AssetData>(loadAsset(resolved.string(), obj.assetRef));
+  } catch (const Error& e) {
+    a.fail("file", e.what());
+  }
+  a.rejectUnread();
+  hasher.add(obj.asset->contentHash);
+  for (const std::string& w : obj.asset->warnings)
+    scene.warnings.push_back(resolved.string() + ": " + w);
+  obj.material = -1;
+  if (o.has("material")) {
+    obj.material = materialOf(o, materialIndex, "material");
+  } else {
+    obj.assetMaterialBase = int(scene.materials.size());
+    for (Material m : obj.asset->materials) {
+      m.name = obj.name + "/" + m.name;
+      scene.materials.push_back(std::move(m));
+    }
+  }
+}
+
 }  // namespace
 
 Scene loadScene(const std::string& path) {
@@ -220,22 +286,22 @@ Scene parseScene(const std::string& text, const std::string& path) {
   for (JsonReader& o : root.requiredArray("objects")) {
     Object obj;
     obj.name = o.string("name");
-    obj.shape = readShape(o, true);
-    if (obj.shape == Shape::Mesh) {
-      obj.meshFile = (sceneDir / o.string("file")).string();
-      if (!fs::exists(obj.meshFile)) o.fail("file", "mesh file not found: " + obj.meshFile);
-      try {
-        hasher.add(readText(obj.meshFile,
-                            kMaxMeshBytes));  // a regular file of bounded size (not /dev/zero)
-      } catch (const Error& e) {
-        o.fail("file", e.what());
+    if (o.has("asset")) {
+      readAssetObject(o, sceneDir, materialIndex, obj, scene, hasher);
+    } else {
+      obj.shape = readShape(o, true);
+      if (obj.shape == Shape::Mesh) {
+        obj.meshFile = (sceneDir / o.string("file")).string();
+        if (!fs::exists(obj.meshFile)) o.fail("file", "mesh file not found: " + obj.meshFile);
+        try {
+          hasher.add(readText(obj.meshFile,
+                              kMaxMeshBytes));  // a regular file of bounded size (not /dev/zero)
+        } catch (const Error& e) {
+          o.fail("file", e.what());
+        }
       }
+      obj.material = materialOf(o, materialIndex, "material");
     }
-    std::string m = o.string("material");
-    auto it = materialIndex.find(m);
-    if (it == materialIndex.end())
-      o.fail("material", "unknown material '" + m + "' (not in $.materials)");
-    obj.material = it->second;
     obj.transform = readTrack<Transform>(o, "keys", scene.frames, Transform{}, readTransform);
     o.rejectUnread();
     scene.objects.push_back(std::move(obj));
@@ -290,11 +356,25 @@ Scene parseScene(const std::string& text, const std::string& path) {
     e.rejectUnread();
     scene.events.push_back(ev);
   }
+  for (JsonReader& c : root.optionalArray("credits")) {
+    Credit credit;
+    credit.asset = c.string("asset");
+    credit.author = c.string("author");
+    credit.license = c.string("license");
+    credit.source = c.string("source", "");
+    c.rejectUnread();
+    scene.credits.push_back(credit);
+  }
   root.rejectUnread();
   if (scene.objects.empty() && scene.lights.empty())
     root.fail("objects", "expected at least one object or light");
   scene.contentHash = hasher.hex();
   return scene;
+}
+
+std::string assetCacheDir() {
+  const char* dir = std::getenv("ARENA_ASSET_DIR");
+  return dir && *dir ? std::string(dir) : std::string(ARENA_SOURCE_DIR) + "/cache/assets";
 }
 
 std::string defaultScenesDir() {

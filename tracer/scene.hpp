@@ -4,8 +4,11 @@
 // names and keyframes beyond the sequence are errors naming the file and JSON path.
 #include <cstdint>
 #include <glm/glm.hpp>
+#include <memory>
 #include <string>
 #include <vector>
+
+#include "tracer/texture.hpp"
 
 namespace arena {
 
@@ -66,16 +69,41 @@ struct Material {
   float metallic = 0.0f;
   float specular = 0.04f;    // dielectric F0 (0 gives a pure Lambert surface)
   glm::vec3 emission{0.0f};  // emitted radiance
+  // Asset materials only (tracer/asset.hpp): the textures multiply the factors above. Base colour
+  // and emission are sRGB-decoded; metallicRoughness is linear (glTF: G = roughness, B = metallic).
+  TextureRef baseColorTexture, metallicRoughnessTexture, emissionTexture;
+  bool textured() const {
+    return bool(baseColorTexture) || bool(metallicRoughnessTexture) || bool(emissionTexture);
+  }
 };
 
-enum class Shape { Quad, Box, Sphere, Mesh };
+enum class Shape { Quad, Box, Sphere, Mesh, Asset };
+
+// An asset file placed as an object ("asset": {...} in the scene file; README "Asset objects").
+struct AssetRef {
+  std::string file;         // resolved path ("assets:x" -> $ARENA_ASSET_DIR/x)
+  float unitMeters = 1.0f;  // metres per asset unit; scene units are metres
+  char upAxis = 'y';        // the asset's up axis, 'y' or 'z'; the scene's is +Y
+  float fps = 30.0f;        // asset time t seconds plays at scene frame t * fps
+};
+struct AssetData;
 
 struct Object {
   std::string name;
   Shape shape = Shape::Quad;
   std::string meshFile;  // Shape::Mesh: absolute path of an OBJ file
+  // The material; for an asset, the override of all its materials, or -1 to use the asset's own,
+  // which are scene.materials[assetMaterialBase ..] in the asset's order.
   int material = 0;
+  AssetRef assetRef;                       // Shape::Asset
+  std::shared_ptr<const AssetData> asset;  // Shape::Asset: the imported file
+  int assetMaterialBase = 0;
   Track<Transform> transform;
+};
+
+// Where a model came from ("credits" in the scene file), carried into the run's results.
+struct Credit {
+  std::string asset, author, license, source;
 };
 
 // Area lights are one-sided quads (emitting along their +Y axis) or spheres; their radiance is
@@ -106,7 +134,11 @@ struct Scene {
   std::vector<Object> objects;
   std::vector<Light> lights;
   std::vector<SceneEvent> events;
-  std::string contentHash;  // scene file bytes + referenced mesh files
+  std::vector<Credit> credits;
+  // Documented fallbacks taken while loading assets, counted ("<file>: <what>: <count> ..."):
+  // missing textures, dropped degenerate triangles, ignored features. Recorded in the results.
+  std::vector<std::string> warnings;
+  std::string contentHash;  // scene file bytes + referenced mesh and asset files and textures
 };
 
 // Limits of the format (scene files naming more are errors): per-axis resolution, frame count
@@ -121,5 +153,8 @@ Scene parseScene(const std::string& text, const std::string& path);
 // Scenes shipped in scenes/ (sorted by name).
 std::vector<std::string> listSceneFiles(const std::string& scenesDir);
 std::string defaultScenesDir();
+// Where "assets:" paths point: $ARENA_ASSET_DIR, else <repo>/cache/assets (filled by
+// scripts/setup.sh, never committed).
+std::string assetCacheDir();
 
 }  // namespace arena

@@ -7,6 +7,7 @@
 
 #include "core/error.hpp"
 #include "core/hash.hpp"
+#include "tracer/asset.hpp"
 
 namespace arena {
 
@@ -97,7 +98,19 @@ MeshData makeMesh(Shape shape, const std::string& objFile) {
     case Shape::Mesh:
       m = loadObj(objFile);
       break;
+    case Shape::Asset:
+      throw Error("makeMesh: an asset's mesh comes from its object (makeMesh(const Object&))");
   }
+  return m;
+}
+
+MeshData makeMesh(const Object& object) {
+  if (object.shape != Shape::Asset) return makeMesh(object.shape, object.meshFile);
+  MeshData m = object.asset->mesh;
+  if (object.material >= 0)
+    m.triangleMaterials.clear();  // the override: the object's material everywhere
+  else
+    for (int& id : m.triangleMaterials) id += object.assetMaterialBase;
   return m;
 }
 
@@ -113,6 +126,8 @@ uint64_t SceneState::hash() const {
     glm::vec3 radiance = l.color * l.intensity;
     addBytes(&radiance, sizeof radiance);
   }
+  for (const auto& nodes : nodeMatrices)  // nothing for scenes without assets: hashes unchanged
+    for (const glm::mat4& m : nodes) addBytes(&m, sizeof m);
   return h.value();
 }
 
@@ -120,7 +135,13 @@ SceneState evaluateState(const Scene& scene, int frame, int width, int height) {
   SceneState s;
   CameraKey c = scene.camera.at(float(frame));
   s.camera = CameraState::lookAt(c.eye, c.target, c.up, c.fovYDegrees, width, height);
-  for (const Object& o : scene.objects) s.toWorld.push_back(o.transform.at(float(frame)).matrix());
+  for (const Object& o : scene.objects) {
+    s.toWorld.push_back(o.transform.at(float(frame)).matrix());
+    if (o.asset) {
+      s.nodeMatrices.resize(s.toWorld.size());
+      s.nodeMatrices.back() = o.asset->nodeMatrices(float(frame) / o.assetRef.fps);
+    }
+  }
   for (const Light& l : scene.lights) {
     s.toWorld.push_back(l.transform.at(float(frame)).matrix());
     s.lights.push_back(l.emission.at(float(frame)));

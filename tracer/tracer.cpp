@@ -148,10 +148,25 @@ FrameScene::FrameScene(const EmbreeDevice& device, const Scene& scene, const std
     Geometry& g = geometries_[id];
     g.local = &meshes[id];
     const glm::mat4& m = state.toWorld[id];
-    const glm::mat3 normalMatrix = glm::transpose(glm::inverse(glm::mat3(m)));
-    for (size_t i = 0; i < g.local->positions.size(); ++i) {
-      g.positions.push_back(glm::vec3(m * glm::vec4(g.local->positions[i], 1.0f)));
-      g.normals.push_back(glm::normalize(normalMatrix * g.local->normals[i]));
+    if (g.local->vertexNodes.empty()) {
+      const glm::mat3 normalMatrix = glm::transpose(glm::inverse(glm::mat3(m)));
+      for (size_t i = 0; i < g.local->positions.size(); ++i) {
+        g.positions.push_back(glm::vec3(m * glm::vec4(g.local->positions[i], 1.0f)));
+        g.normals.push_back(glm::normalize(normalMatrix * g.local->normals[i]));
+      }
+    } else {  // an asset: each vertex lies in its node's space, placed by this frame's matrices
+      const std::vector<glm::mat4>& nodes = state.nodeMatrices.at(id);
+      std::vector<glm::mat4> toWorld(nodes.size());
+      std::vector<glm::mat3> normalMatrices(nodes.size());
+      for (size_t k = 0; k < nodes.size(); ++k) {
+        toWorld[k] = m * nodes[k];
+        normalMatrices[k] = glm::transpose(glm::inverse(glm::mat3(toWorld[k])));
+      }
+      for (size_t i = 0; i < g.local->positions.size(); ++i) {
+        const uint32_t node = g.local->vertexNodes[i];
+        g.positions.push_back(glm::vec3(toWorld[node] * glm::vec4(g.local->positions[i], 1.0f)));
+        g.normals.push_back(glm::normalize(normalMatrices[node] * g.local->normals[i]));
+      }
     }
     for (const glm::uvec3& tri : g.local->triangles) {
       glm::vec3 n = glm::cross(g.positions[tri.y] - g.positions[tri.x], g.positions[tri.z] - g.positions[tri.x]);
@@ -261,8 +276,12 @@ SurfaceHit FrameScene::surface(int meshId, int primId, float u, float v) const {
     s.specularF0 = 0.0f;
     return s;
   }
-  const Material& m = scene_.materials[size_t(g.materialId)];
-  s.materialId = g.materialId;
+  // Assets carry a material per triangle; shapes (and overridden assets) one per object.
+  const int materialId = g.local->triangleMaterials.empty()
+                             ? g.materialId
+                             : g.local->triangleMaterials[size_t(primId)];
+  const Material& m = scene_.materials[size_t(materialId)];
+  s.materialId = materialId;
   s.baseColor = m.albedo;
   if (m.checker) {  // object-space checker, so the pattern moves with the object
     glm::vec3 lp = w * g.local->positions[tri.x] + u * g.local->positions[tri.y] + v * g.local->positions[tri.z];
@@ -273,6 +292,19 @@ SurfaceHit FrameScene::surface(int meshId, int primId, float u, float v) const {
   s.metallic = m.metallic;
   s.specularF0 = m.specular;
   s.emission = m.emission;
+  if (m.textured()) {  // only textured (asset) materials pay for the lookups
+    const std::vector<glm::vec2>& tc = g.local->texcoords;
+    const glm::vec2 uv =
+        tc.empty() ? glm::vec2(0.0f) : w * tc[tri.x] + u * tc[tri.y] + v * tc[tri.z];
+    if (m.baseColorTexture) s.baseColor *= glm::vec3(m.baseColorTexture.sample(uv));
+    if (m.metallicRoughnessTexture) {  // glTF 2.0: G = roughness, B = metallic (linear)
+      const glm::vec4 mr = m.metallicRoughnessTexture.sample(uv);
+      s.roughness = std::clamp(s.roughness * mr.g, 0.0f, 1.0f);
+      s.metallic = std::clamp(s.metallic * mr.b, 0.0f, 1.0f);
+    }
+    if (m.emissionTexture) s.emission *= glm::vec3(m.emissionTexture.sample(uv));
+    s.baseColor = glm::clamp(s.baseColor, 0.0f, 1.0f);
+  }
   return s;
 }
 

@@ -65,8 +65,14 @@
       { field: 'error', title: yTitle, format: '.4~g' },
       { field: 'lo', title: 'bar low', format: '.4~g' },
       { field: 'hi', title: 'bar high', format: '.4~g' },
-    ].concat(drawn.some((p) => p.scenes !== undefined) ? [{ field: 'scenes', title: 'scenes' }] : []);
+    ].concat(drawn.some((p) => p.scenes !== undefined) ? [{ field: 'scenes', title: 'scenes' }] : [])
+      .concat(drawn.some((p) => p.tracingMs !== undefined)
+        ? [{ field: 'extraRaysPerPixel', title: 'extra rays / pixel / frame', format: '.3~g' },
+          { field: 'tracingMs', title: 'their tracing, ms (equivalent)', format: '.3~g' }] : []);
     const withTime = drawn.filter((p) => p.msLo !== null && p.msHi !== null);
+    // Extra rays a denoiser asked for (disocclusion rays): a separate dashed bar from its own time
+    // to its time plus their equivalent tracing time, labelled, so the point stays the denoiser's.
+    const traced = drawn.filter((p) => p.tracingMs > 0).map((p) => ({ ...p, msTraced: p.ms + p.tracingMs }));
     return A.baseSpec({
       width: small ? 300 : 760,
       height: small ? 200 : 400,
@@ -77,6 +83,10 @@
           encoding: { x, y: { field: 'lo', type: 'quantitative' }, y2: { field: 'hi' }, color } },
         { name: 'timebars', data: { values: withTime }, mark: { type: 'rule', strokeWidth: 1.5, opacity: 0.6 },
           encoding: { x: { ...x, field: 'msLo' }, x2: { field: 'msHi' }, y, color } },
+        { name: 'tracing', data: { values: traced }, mark: { type: 'rule', strokeWidth: 3, strokeDash: [2, 2], opacity: 0.8 },
+          encoding: { x, x2: { field: 'msTraced' }, y, color, tooltip } },
+        { name: 'tracing-label', data: { values: traced }, mark: { type: 'text', align: 'left', dx: 4, dy: 10, fontSize: small ? 9 : 10, color: '#1d2330' },
+          encoding: { x: { ...x, field: 'msTraced' }, y, text: { value: '+ extra rays (tracing)' } } },
         { name: 'front', data: { values: front }, mark: { type: 'line', color: '#555', strokeDash: [5, 3], strokeWidth: 1.5 },
           encoding: { x, y, order: { field: 'ms', type: 'quantitative' } } },
         { name: 'points', mark: { type: 'point', filled: true, size: small ? 70 : 110, strokeWidth: 2, cursor: 'pointer' },
@@ -109,7 +119,10 @@
         ? 'Bars: the run\'s 95% interval of the overall score.'
         : 'Bars: the same normalisation applied to each scene\'s interval ends (wider than the aggregate\'s own interval).')
       : (data.points.some((p) => p.interval === 'ci95') ? 'Error bars: 95% interval of the mean (block bootstrap).' : 'Error bars: p5–p95 across frames after warm-up (this run has no intervals).');
-    return `${bars} Time bars: p5–p95 of the per-frame time where the run records them. ` +
+    const traced = data.points.some((p) => p.tracingMs > 0)
+      ? 'Dashed bars: a denoiser\'s extra rays (low-resolution paths it read), as the time the tracer took to trace them when the sequence was rendered, added to its own time; the point and the Pareto front use the denoiser\'s time alone. '
+      : '';
+    return `${bars} Time bars: p5–p95 of the per-frame time where the run records them. ${traced}` +
       `${logError ? 'Log error axis. ' : ''}${axis && axis.key === 'relMse' ? 'relMSE raw (not reference-corrected). ' : ''}` +
       'Hover a point for its parameters; click it to select that denoiser in Images and Over time.';
   };

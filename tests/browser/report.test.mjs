@@ -108,7 +108,7 @@ function tinyRuns() {
   if (tiny) return tiny;
   const run = path.join(work, 'run');
   const base = path.join(work, 'base');
-  tinyRun(run, ['--keep-frames', 'all']);
+  tinyRun(run, ['--keep-frames', 'all', '--lowres-factor', '4']);  // reengine's disocclusion rays
   tinyRun(base, ['--denoisers', 'passthrough,temporal,eaw,svgf', '--param', 'svgf.sigmaL=8']);
   const schema = JSON.parse(fs.readFileSync(path.join(run, 'results.json'), 'utf8')).schema;
   tiny = { run, base, schema };
@@ -143,6 +143,10 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
   assert.equal(await page.locator('#speed-chart g.errorbars_marks line').count(), labels.length, 'one error bar per point');
   const withP5 = results.pairs.filter((p) => p.status === 'ok' && p.timing && Number.isFinite(p.timing.msP5)).length;
   if (withP5) assert.ok((await page.locator('#speed-chart g.timebars_marks line').count()) >= 1, 'time bars drawn (msP5 recorded)');
+  // reengine's disocclusion rays: its equivalent tracing time is a separate, labelled bar.
+  assert.ok(results.pairs.some((p) => p.status === 'ok' && p.summary && p.summary.tracingMs), 'fixture: a pair charged for extra rays (reengine)');
+  assert.ok((await page.locator('#speed-chart g.tracing_marks line').count()) >= 1, 'tracing-cost bar drawn');
+  assert.ok((await page.locator('#speed-chart svg.marks').textContent()).includes('+ extra rays (tracing)'), 'tracing bar labelled');
   const named = (results.statistics && results.statistics.overall && results.statistics.overall.normalisation) ||
     'geometric mean over scenes of relMSE ÷ passthrough\'s relMSE';
   assert.ok((await page.locator('#speed-chart svg.marks').textContent()).includes(`All scenes: ${named}`), `the chart names its aggregate: ${named}`);
