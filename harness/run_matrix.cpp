@@ -18,6 +18,7 @@
 #include "metrics/error_maps.hpp"
 #include "metrics/flip.hpp"
 #include "metrics/ghosting.hpp"
+#include "metrics/ghosting_intervals.hpp"
 #include "metrics/statistics.hpp"
 #include "metrics/summary.hpp"
 #include "metrics/temporal.hpp"
@@ -254,6 +255,10 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   std::vector<std::vector<PassStats>> passes;
   std::vector<std::vector<double>> eventCurves(sd.events.size()), eventBias(sd.events.size()),
       eventChroma(sd.events.size()), cutLeak(sd.cuts.size());
+  // The per-tile sums behind the event and cut curves: their intervals' spatial blocks
+  // (metrics/ghosting_intervals.hpp).
+  std::vector<EventTiles> eventTiles(sd.events.size());
+  std::vector<CutTiles> cutTiles(sd.cuts.size());
   GhostingConfig gc;
   Image prevColor, prevDisplay, prevError;
   long sanitized = 0;
@@ -272,6 +277,8 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
             };
             ErrorTiles et;
             ErrorStats e = linearError(f.color, r, &var, nullptr, kRelMseEpsilon, &et);
+            for (size_t k = 0; k < sd.cuts.size(); ++k)
+              if (t >= sd.cuts[k].frame && t <= sd.cuts[k].segmentEnd) cutTiles[k].relMse.add(t, et.relMse);
             Image disp = sd.displayAt(t).apply(f.color);
             put("relMse", e.relMse, std::move(et.relMse), FrameTransform::Mean);
             put("relMseCorrected", e.relMseCorrected, std::move(et.relMseCorrected), FrameTransform::Mean);
@@ -331,15 +338,21 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
               const auto& ev = sd.events[k];
               if (t < ev.begin || t > ev.end) continue;
               const Image& mask = ev.masks[size_t(t - ev.begin)];
-              eventCurves[k].push_back(linearError(f.color, r, &var, &mask).relMse);
-              eventBias[k].push_back(signedBias(f.color, r, mask));
+              ErrorTiles inMask;
+              TileSums biasTiles;
+              eventCurves[k].push_back(linearError(f.color, r, &var, &mask, kRelMseEpsilon, &inMask).relMse);
+              eventBias[k].push_back(signedBias(f.color, r, mask, gc.eps, &biasTiles));
+              eventTiles[k].curve.add(t, std::move(inMask.relMse));
+              eventTiles[k].bias.add(t, std::move(biasTiles));
               eventChroma[k].push_back(chromaticityError(f.color, r, mask));
             }
             for (size_t k = 0; k < sd.cuts.size(); ++k) {
               const auto& cut = sd.cuts[k];
-              if (t >= cut.frame && t <= std::min(cut.frame + gc.recoveryFrames, cut.segmentEnd))
-                cutLeak[k].push_back(
-                    oldViewLeak(f.color, r, sd.reference(cut.frame - 1).get("color")));
+              if (t >= cut.frame && t <= std::min(cut.frame + gc.recoveryFrames, cut.segmentEnd)) {
+                TileSums leakTiles;
+                cutLeak[k].push_back(oldViewLeak(f.color, r, sd.reference(cut.frame - 1).get("color"), &leakTiles));
+                cutTiles[k].leak.add(t, std::move(leakTiles));
+              }
             }
             passes.push_back(f.passes);
             sanitized += f.sanitized;
@@ -382,13 +395,23 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
     json j = g.toJson();
     j["kind"] = ev.event.kind;
     j["what"] = ev.event.what;
+    const BootstrapConfig bc;
+    addFigureIntervals(j, ghostingReplicates(ev.event.frame, eventTiles[k], eventSeedName(info.scene, ev.event.frame), bc, gc),
+                       ghostingFigures(g), bc.confidence);
+    j["tiles"] = eventTiles[k].toJson();
     ghosting.push_back(j);
   }
   json cuts = json::array();
-  for (size_t k = 0; k < sd.cuts.size(); ++k)
-    cuts.push_back(
-        analyseCut(sd.cuts[k].frame, sd.cuts[k].segmentEnd, series.values("relMse"), cutLeak[k], gc)
-            .toJson());
+  for (size_t k = 0; k < sd.cuts.size(); ++k) {
+    const auto& cut = sd.cuts[k];
+    const CutResult c = analyseCut(cut.frame, cut.segmentEnd, series.values("relMse"), cutLeak[k], gc);
+    json j = c.toJson();
+    const BootstrapConfig bc;
+    addFigureIntervals(j, cutReplicates(cut.frame, cut.segmentEnd, cutTiles[k], cutSeedName(info.scene, cut.frame), bc, gc),
+                       cutFigures(c, gc), bc.confidence);
+    j["tiles"] = cutTiles[k].toJson();
+    cuts.push_back(j);
+  }
   json warnings = json::array();
   double refFloor = summarize(sd.referenceRelMse, cfg.warmup).mean;
   for (auto it = summary.begin(); it != summary.end(); ++it)

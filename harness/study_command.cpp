@@ -59,6 +59,65 @@ void printRanking(const json& results) {
   if (o.contains("excluded")) std::cout << "  not ranked overall: " << o["excluded"].get<std::string>() << "\n";
 }
 
+// A figure with its interval: "0.123 [0.1, 0.15]", "-" when absent; a null bound of the response
+// is "never settled" (metrics/ghosting_intervals.hpp).
+std::string figure(const json& e, const char* name) {
+  const bool never = std::string(name) == "responseFrames" && e.contains("response");
+  if (!never && (!e.contains(name) || !e[name].is_number())) return "-";
+  std::ostringstream o;
+  if (never)
+    o << "never";
+  else
+    o << std::setprecision(3) << e[name].get<double>();
+  const json ci = e.value("ci95", json::object()).value(name, json());
+  if (ci.is_array()) {
+    auto bound = [](const json& b) {
+      std::ostringstream t;
+      t << std::setprecision(3);
+      if (b.is_number()) t << b.get<double>();
+      else t << "never";
+      return t.str();
+    };
+    o << " [" << bound(ci[0]) << ", " << bound(ci[1]) << "]";
+  } else {
+    o << " (no interval)";
+  }
+  return o.str();
+}
+
+// The event-window figures with their 95% intervals, per scripted event and camera cut, methods in
+// the order of their rank (lag energy, old-view leak) with ties (metrics/ghosting_intervals.hpp).
+void printEvents(const json& results) {
+  if (!results.contains("statistics")) return;
+  for (auto it = results["statistics"]["scenes"].begin(); it != results["statistics"]["scenes"].end(); ++it)
+    for (const char* kind : {"events", "cuts"})
+      for (const json& ev : it.value().value(kind, json::array())) {
+        const bool cut = std::string(kind) == "cuts";
+        const int frame = ev["eventFrame"];
+        const char* rankedOn = cut ? "oldViewLeak" : "lagEnergy";
+        const json ranking = ev["byFigure"].value(rankedOn, json::object());
+        const std::string what = ev.value("what", "");
+        std::cout << "\n" << it.key() << ": " << ev.value("kind", "") << (what.empty() ? "" : " " + what) << " at frame "
+                  << frame << ": ranked on " << rankedOn << " (" << ranking.value("resolvedPairs", 0) << " of "
+                  << ranking.value("totalPairs", 0) << " pairs resolved)\n";
+        for (const json& m : ranking.value("ranking", json::array())) {
+          const json* e = nullptr;
+          for (const json& p : results["pairs"])
+            if (p["scene"] == it.key() && p["label"] == m["label"] && p.contains(cut ? "cuts" : "ghosting"))
+              for (const json& x : p.at(cut ? "cuts" : "ghosting"))
+                if (x.value("eventFrame", -1) == frame) e = &x;
+          if (!e) continue;
+          std::cout << "  " << std::left << std::setw(4) << m["rank"].get<int>() << std::setw(22)
+                    << m["label"].get<std::string>();
+          for (const char* f : cut ? std::vector<const char*>{"oldViewLeak", "atCut"}
+                                   : std::vector<const char*>{"lagEnergy", "responseFrames", "peakExcess"})
+            std::cout << f << " " << std::setw(26) << figure(*e, f) << " ";
+          std::cout << tiedList(m) << "\n";
+        }
+        if (ranking.contains("excluded")) std::cout << "  not ranked: " << ranking["excluded"].get<std::string>() << "\n";
+      }
+}
+
 }  // namespace
 
 void addStudyCommand(CLI::App& app) {
@@ -104,6 +163,7 @@ void addStudyCommand(CLI::App& app) {
     ro.out = *report;
     ReportSummary rs = writeReport(ro);
     printRanking(results);
+    printEvents(results);
     // metrics.md "Reference quality": said plainly where the references are too noisy to rank.
     std::cout << "\nreference quality (noise floor / best real denoiser's corrected relMSE, goal <= "
               << kReferenceQualityGoal << ")\n";

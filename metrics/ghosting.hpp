@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "core/image.hpp"
+#include "metrics/tiles.hpp"
 
 namespace arena {
 
@@ -32,9 +33,11 @@ Image changedRegion(const Image& referenceAtEvent, const Image& referenceBefore,
 void addTrail(Image& mask, int objectId, const std::vector<const Image*>& previousMeshIds,
               const Image& currentMeshId);
 
-// Signed luminance bias b_M in the mask: mean of (L(d) - L(r)) / (L(r) + eps).
+// Signed luminance bias b_M in the mask: mean of (L(d) - L(r)) / (L(r) + eps). With `tiles`, the
+// per-tile sums behind it (sum of the per-pixel term, count of mask pixels; the event intervals'
+// spatial blocks, metrics/ghosting_intervals.hpp).
 double signedBias(const Image& denoised, const Image& reference, const Image& mask,
-                  double eps = 0.01);
+                  double eps = 0.01, TileSums* tiles = nullptr);
 // Chromaticity error in the mask: Euclidean distance between the chromaticities (R,G,B)/(R+G+B) of
 // the mean colour over M of d and of r (a mean, so noise averages out as in b_M); 0 when M is
 // black in the reference.
@@ -67,8 +70,10 @@ GhostingResult analyseGhosting(int t0, int begin, const std::vector<double>& cur
 // Old-view leak after a camera cut (ours): the least-squares coefficient a of the error
 // e = d - r onto the pre-cut difference D = r_old - r, a = sum(e D) / sum(D D) over pixels and
 // channels (linear RGB). 0: nothing of the old view; 1: the output still shows it entirely.
-// Noise in d is uncorrelated with D and averages out. 0 when D vanishes.
-double oldViewLeak(const Image& denoised, const Image& reference, const Image& oldViewReference);
+// Noise in d is uncorrelated with D and averages out. 0 when D vanishes. With `tiles`, per tile
+// sum(e D) as the sum and sum(D D) as the count, so a tile draw's leak is sum / count.
+double oldViewLeak(const Image& denoised, const Image& reference, const Image& oldViewReference,
+                   TileSums* tiles = nullptr);
 
 struct CutResult {
   int cutFrame = 0;

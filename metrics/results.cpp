@@ -298,15 +298,24 @@ void appendToDatabase(const fs::path& dbPath, const json& r, const std::string& 
         rank.integer(1, runId).text(2, scene).text(3, metric).text(4, m["label"]).integer(5, m["rank"])
             .real(6, m[value]).real(7, ciBound(m, 0)).real(8, ciBound(m, 1)).text(9, m["tiedWith"].dump()).step();
     };
-    auto addScene = [&](const std::string& scene, const json& s) {
-      addRanking(scene, s["metric"], s["ranking"], "mean");
+    auto addScene = [&](const std::string& scene, const json& s, const std::string& metric) {
+      addRanking(scene, metric, s["ranking"], "mean");
       for (const json& x : s["pairs"])
-        paired.integer(1, runId).text(2, scene).text(3, s["metric"]).text(4, x["a"]).text(5, x["b"]).real(6, x["diff"])
+        paired.integer(1, runId).text(2, scene).text(3, metric).text(4, x["a"]).text(5, x["b"]).real(6, x["diff"])
             .real(7, ciBound(x, 0)).real(8, ciBound(x, 1)).integer(9, x["resolved"].get<bool>()).step();
     };
     for (auto it = r["statistics"]["scenes"].begin(); it != r["statistics"]["scenes"].end(); ++it) {
-      addScene(it.key(), it.value());
-      for (auto m = it.value()["byMetric"].begin(); m != it.value()["byMetric"].end(); ++m) addScene(it.key(), m.value());
+      addScene(it.key(), it.value(), it.value()["metric"]);
+      for (auto m = it.value()["byMetric"].begin(); m != it.value()["byMetric"].end(); ++m)
+        addScene(it.key(), m.value(), m.value()["metric"]);
+      // Event-window figures (metrics/ghosting_intervals): metric "ghosting@<frame>.<figure>" or
+      // "cut@<frame>.<figure>"; each method's figure and interval are its rankings row.
+      for (const char* kind : {"events", "cuts"})
+        for (const json& e : it.value().value(kind, json::array()))
+          for (auto f = e["byFigure"].begin(); f != e["byFigure"].end(); ++f)
+            addScene(it.key(), f.value(),
+                     std::string(kind == std::string("events") ? "ghosting@" : "cut@") +
+                         std::to_string(e["eventFrame"].get<int>()) + "." + f.key());
     }
     if (r["statistics"].contains("overall"))
       addRanking("*", r["statistics"]["rankedOn"], r["statistics"]["overall"]["ranking"], "score");

@@ -9,6 +9,7 @@
 #include "core/error.hpp"
 #include "core/hash.hpp"
 #include "metrics/error.hpp"
+#include "metrics/ghosting_intervals.hpp"
 
 namespace arena {
 
@@ -144,6 +145,14 @@ std::vector<double> MetricTiles::frameValues() const {
   return v;
 }
 
+double MetricTiles::valueUnder(size_t row, const std::vector<int>& tiles) const {
+  if (row >= rows.size()) throw Error("tile data: row " + std::to_string(row) + " out of range");
+  for (int k : tiles)
+    if (k < 0 || size_t(k) >= rows[row].sum.size())
+      throw Error("tile data: tile " + std::to_string(k) + " out of range");
+  return rowValue(*this, row, &tiles);
+}
+
 double MetricTiles::mean() const {
   return meanOfFinite(frameValues());
 }
@@ -260,6 +269,17 @@ Interval percentileInterval(std::vector<double> v, double confidence) {
   return {quantile(tail), quantile(1 - tail)};
 }
 
+Interval widenedInterval(const std::vector<double>& replicates, double confidence, double widen) {
+  const Interval q = percentileInterval(replicates, confidence);
+  if (!q.valid() || widen == 1.0) return q;
+  std::vector<double> finite;
+  for (double v : replicates)
+    if (std::isfinite(v)) finite.push_back(v);
+  std::nth_element(finite.begin(), finite.begin() + long(finite.size() / 2), finite.end());
+  const double m = finite[finite.size() / 2];
+  return {m - widen * (m - q.lo), m + widen * (q.hi - m)};
+}
+
 Interval meanInterval(const MetricTiles& m, const std::string& seedName,
                       const BootstrapConfig& cfg) {
   if (m.empty()) return {};
@@ -362,36 +382,51 @@ json rankingJson(const std::vector<RankedMethod>& ranking, const char* valueName
 SceneRanking rankScene(const std::string& metric, bool lowerIsBetter,
                        const std::vector<std::pair<std::string, const MetricTiles*>>& methods,
                        const std::string& seedName, const BootstrapConfig& cfg) {
-  SceneRanking out;
-  out.metric = metric;
   std::vector<const MetricTiles*> series;
-  std::vector<std::string> labels;
+  std::vector<std::string> labels, excluded;
   for (const auto& [label, m] : methods) {
     if (!m || m->empty()) {
-      out.excluded += (out.excluded.empty() ? "" : "; ") + label + ": no " + metric + " data";
+      excluded.push_back(label + ": no " + metric + " data");
       continue;
     }
     labels.push_back(label);
     series.push_back(m);
   }
   const std::vector<int> frames = commonFrames(series);
-  if (series.empty() || frames.empty()) return out;
   std::vector<double> means;
-  const auto reps = pairedReplicates(series, frames, seedName, cfg, &means);
-  const size_t n = series.size();
+  std::vector<std::vector<double>> reps;
+  if (!series.empty() && !frames.empty())
+    reps = pairedReplicates(series, frames, seedName, cfg, &means);
+  else
+    labels.clear();
+  SceneRanking out = rankReplicates(metric, lowerIsBetter, labels, means, reps, cfg.confidence);
+  for (const std::string& e : excluded) out.excluded += (out.excluded.empty() ? "" : "; ") + e;
+  return out;
+}
+
+SceneRanking rankReplicates(const std::string& metric, bool lowerIsBetter,
+                            const std::vector<std::string>& labels,
+                            const std::vector<double>& values,
+                            const std::vector<std::vector<double>>& reps, double confidence,
+                            double widen) {
+  if (values.size() != labels.size() || reps.size() != labels.size())
+    throw Error("ranking on " + metric + ": labels, values and replicates differ in count");
+  SceneRanking out;
+  out.metric = metric;
+  const size_t n = labels.size();
   std::vector<std::vector<bool>> better(n, std::vector<bool>(n, false)),
       resolved(n, std::vector<bool>(n, false));
   for (size_t i = 0; i < n; ++i) {
     out.ranking.push_back(
-        {labels[i], 0, means[i], percentileInterval(reps[i], cfg.confidence), {}});
+        {labels[i], 0, values[i], widenedInterval(reps[i], confidence, widen), {}});
     out.replicates[labels[i]] = reps[i];
   }
   for (size_t i = 0; i < n; ++i)
     for (size_t j = i + 1; j < n; ++j) {
-      SceneRanking::Pair p{
-          labels[i],
-          labels[j],
-          {means[i] - means[j], percentileInterval(difference(reps[i], reps[j]), cfg.confidence)}};
+      SceneRanking::Pair p{labels[i],
+                           labels[j],
+                           {values[i] - values[j],
+                            widenedInterval(difference(reps[i], reps[j]), confidence, widen)}};
       const bool r = p.d.resolved();
       resolved[i][j] = resolved[j][i] = r;
       better[i][j] = lowerIsBetter ? p.d.diff < 0 : p.d.diff > 0;
@@ -515,6 +550,7 @@ json analyseRun(const json& results, const BootstrapConfig& cfg) {
                                    {"ssim", false},  {"tRmae", true},   {"warpedFlicker", true}};
   std::map<std::string, std::vector<std::pair<std::string, std::map<std::string, MetricTiles>>>>
       byScene;
+  std::map<std::string, std::vector<std::pair<std::string, const json*>>> pairsOfScene;
   if (!results.contains("pairs") || !results["pairs"].is_array())
     throw Error("statistics: results have no pairs array");
   for (const json& p : results["pairs"]) {
@@ -524,6 +560,7 @@ json analyseRun(const json& results, const BootstrapConfig& cfg) {
       for (auto it = p["tiles"].begin(); it != p["tiles"].end(); ++it)
         tiles[it.key()] = MetricTiles::fromJson(it.value());
     byScene[p.value("scene", "")].push_back({p.value("label", ""), std::move(tiles)});
+    pairsOfScene[p.value("scene", "")].push_back({p.value("label", ""), &p});
   }
   json scenes = json::object();
   std::vector<SceneRanking> relMseRankings;
@@ -548,7 +585,13 @@ json analyseRun(const json& results, const BootstrapConfig& cfg) {
         sceneJson["byMetric"][m.name] = r.toJson();
       }
     }
-    if (sceneJson.is_object()) scenes[scene] = sceneJson;
+    if (sceneJson.is_object()) {
+      // The event-window figures: paired tile bootstrap per event (metrics/ghosting_intervals).
+      const json events = rankSceneEvents(pairsOfScene[scene], scene, cfg);
+      if (!events["events"].empty()) sceneJson["events"] = events["events"];
+      if (!events["cuts"].empty()) sceneJson["cuts"] = events["cuts"];
+      scenes[scene] = sceneJson;
+    }
   }
   std::vector<const SceneRanking*> ranked;
   for (const SceneRanking& r : relMseRankings)

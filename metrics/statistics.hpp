@@ -48,6 +48,9 @@ struct MetricTiles {
   int tileCount() const { return rows.empty() ? 0 : int(rows.front().sum.size()); }
   // The frame values (transform of each row's total) and their mean: the summary's point estimate.
   std::vector<double> frameValues() const;
+  // Row `row`'s value under a tile draw (tile indices, repeats allowed); NaN when the drawn tiles
+  // hold no data.
+  double valueUnder(size_t row, const std::vector<int>& tiles) const;
   double mean() const;
   // Rows kept only for the given frames (in that order); frames missing here are an error.
   MetricTiles restrictedTo(const std::vector<int>& frames) const;
@@ -89,6 +92,9 @@ class ResamplingPlan {
 std::vector<double> replicateValues(const MetricTiles& m, const ResamplingPlan& plan);
 // Percentile interval of replicate values (NaN replicates dropped; fewer than 20 finite: invalid).
 Interval percentileInterval(std::vector<double> replicates, double confidence);
+// The percentile interval with both half-widths scaled by `widen` about the replicates' median
+// (a small-sample correction of the spread, metrics/ghosting_intervals.hpp); widen 1 = plain.
+Interval widenedInterval(const std::vector<double>& replicates, double confidence, double widen);
 // The interval of one metric's summary mean.
 Interval meanInterval(const MetricTiles& m, const std::string& seedName,
                       const BootstrapConfig& cfg = {});
@@ -130,6 +136,13 @@ struct SceneRanking {
 SceneRanking rankScene(const std::string& metric, bool lowerIsBetter,
                        const std::vector<std::pair<std::string, const MetricTiles*>>& methods,
                        const std::string& seedName, const BootstrapConfig& cfg = {});
+// The same from point values and replicates already drawn with one shared plan (replicate b of
+// every method under the same resample), e.g. the event figures of metrics/ghosting_intervals.
+SceneRanking rankReplicates(const std::string& metric, bool lowerIsBetter,
+                            const std::vector<std::string>& labels,
+                            const std::vector<double>& values,
+                            const std::vector<std::vector<double>>& replicates,
+                            double confidence = 0.95, double widen = 1.0);
 
 // Across scenes: each method's score is the geometric mean over scenes of its ratio to a baseline's
 // value on that scene, so no scene dominates by its scale. (The ordering does not depend on which

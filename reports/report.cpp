@@ -310,6 +310,21 @@ json rankingData(const json& results, const std::vector<std::string>& scenes, co
       json r = {{"tiesKnown", true}};
       for (const char* k : {"metric", "ranking", "resolvedPairs", "totalPairs", "excluded"})
         if (statScenes[scene].contains(k)) r[k] = statScenes[scene][k];
+      // Events and cuts: per figure, who is ranked first with whom tied (the ghosting panel marks
+      // the best with ties, metrics/ghosting_intervals).
+      for (const char* kind : {"events", "cuts"})
+        for (const json& e : statScenes[scene].value(kind, json::array())) {
+          json figures = json::object();
+          for (auto f = e["byFigure"].begin(); f != e["byFigure"].end(); ++f) {
+            json ranks = json::array();
+            for (const json& m : f.value()["ranking"])
+              ranks.push_back({{"label", m["label"]}, {"rank", m["rank"]}, {"tiedWith", m["tiedWith"]}});
+            figures[f.key()] = {{"ranking", ranks},
+                                {"resolvedPairs", f.value()["resolvedPairs"]},
+                                {"totalPairs", f.value()["totalPairs"]}};
+          }
+          r[kind].push_back({{"eventFrame", e["eventFrame"]}, {"byFigure", figures}});
+        }
       out["scenes"][scene] = r;
       continue;
     }
@@ -534,7 +549,11 @@ json pairData(const json& pair) {
                  {"tapsPerPixel", timing.value("tapsPerPixel", kNaN)},
                  {"passes", timing.contains("passes") ? timing["passes"].size() : 0}};
   p["series"] = seriesColumns(pair.value("frames", json::array()));
-  p["ghosting"] = pair.value("ghosting", json::array());
+  // Events and cuts with their figures and intervals; the tile data behind them stays in the run.
+  for (const char* kind : {"ghosting", "cuts"}) {
+    p[kind] = pair.value(kind, json::array());
+    for (json& e : p[kind]) e.erase("tiles");
+  }
   p["warnings"] = pair.value("warnings", json::array());
   return p;
 }

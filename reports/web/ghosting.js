@@ -1,18 +1,48 @@
-// Ghosting: for each scripted event, E_M(t) around it and the lag figures (metrics.md).
+// Ghosting: for each scripted event, E_M(t) around it and the lag figures (metrics.md), each with
+// its 95% interval; camera cuts with recovery and old-view leak. "Best" marks every method ranked
+// first, ties included (statistics.scenes.<scene>.events/cuts, metrics/ghosting_intervals.hpp).
 'use strict';
 
 (() => {
   const A = window.Arena;
   const { $, el, fmt } = A;
 
+  // `rank`: the figure the run's statistics rank this column on (lower is better).
   const GHOST_COLUMNS = [
-    { key: 'responseFrames', title: 'response (frames)', better: 'lower' },
-    { key: 'ghostEnergy', title: 'ghost energy', better: 'lower' },
-    { key: 'peakExcess', title: 'peak excess', better: 'lower' },
-    { key: 'signedBias', title: 'signed bias', better: 'zero' },
-    { key: 'steadyState', title: 'E_ss', better: 'lower' },
+    { key: 'lagEnergy', title: 'lag energy', better: 'lower', rank: 'lagEnergy' },
+    { key: 'responseFrames', title: 'response (frames)', better: 'lower', rank: 'responseFrames',
+      at: (e) => (e.responseFrames === null && e.response ? 'never settled' : e.responseFrames) },
+    { key: 'ghostEnergy', title: 'ghost energy', better: 'lower', rank: 'ghostEnergy' },
+    { key: 'peakExcess', title: 'peak excess', better: 'lower', rank: 'peakExcess' },
+    { key: 'signedBias', title: 'signed bias', better: 'zero', rank: 'absSignedBias' },
+    { key: 'steadyState', title: 'E_ss' },
     { key: 'maskFraction', title: 'mask (fraction of pixels)' },
   ];
+  const CUT_COLUMNS = [
+    { key: 'atCut', title: 'at cut (÷ steady)', rank: 'atCut' },
+    ...[1, 2, 3, 4, 5].map((k) => ({ key: `recovery${k}`, title: `cut+${k}`, rank: `recovery${k}`, at: (e) => (e.recovery || [])[k - 1] })),
+    { key: 'oldViewLeak', title: 'old-view leak', rank: 'oldViewLeak' },
+  ];
+
+  // "[lo, hi]" under a figure; a null bound of the response is "never settled"; no interval: why.
+  function ciSpan(e, key) {
+    const ci = (e.ci95 || {})[key];
+    if (Array.isArray(ci)) {
+      const b = (v) => (v === null ? 'never' : A.fmt(v));
+      return el('span', { class: 'ci', text: `[${b(ci[0])}, ${b(ci[1])}]` });
+    }
+    const why = (e.ci95Absent || {})[key];
+    return why ? el('span', { class: 'ci', title: why, text: 'no interval' }) : null;
+  }
+
+  // The labels ranked first on a figure (ties included), from the run's statistics; null when the
+  // run has none (older results: best = the smallest value, ties unknown).
+  function firstRanked(kind, frame, figure) {
+    const st = ((A.D.rankings || { scenes: {} }).scenes[A.state.scene] || {})[kind] || [];
+    const ev = st.find((x) => x.eventFrame === frame);
+    const r = ev && ev.byFigure[figure];
+    return r ? new Set(r.ranking.filter((m) => m.rank === 1).map((m) => m.label)) : null;
+  }
 
   A.renderGhosting = function renderGhosting() {
     const body = $('ghosting-body');
@@ -22,7 +52,8 @@
     const scene = A.sceneByName[A.state.scene];
     const pairs = A.pairsOf(A.state.scene).filter(A.isOk);
     const nEvents = Math.max(0, ...pairs.map((p) => (p.ghosting || []).length));
-    if (!scene || nEvents === 0) {
+    const nCuts = Math.max(0, ...pairs.map((p) => (p.cuts || []).length));
+    if (!scene || nEvents + nCuts === 0) {
       body.append(el('p', { class: 'empty', text: 'This scene has no scripted event (nothing to ghost).' }));
       return Promise.resolve();
     }
@@ -57,10 +88,31 @@
       renders.push(A.embedChart(`ghost${k}`, holder, spec));
       body.append(ghostTable(withEvent, k));
     }
+    for (let k = 0; k < nCuts; ++k) {
+      const withCut = pairs.filter((p) => p.cuts && p.cuts[k]);
+      const frame = withCut[0].cuts[k].eventFrame;
+      body.append(el('h3', { text: `Camera cut at frame ${frame}: relMSE ÷ steady state after the reset, and the old view's leak` }));
+      body.append(figureTable('cut-table', CUT_COLUMNS, withCut.map((p) => [p.label, p.cuts[k]]), 'cuts', frame));
+    }
     return Promise.all(renders);
   }
 
+  function figureTable(cls, columns, rows, kind, frame) {
+    const value = (c, e) => (c.at ? c.at(e) : e[c.key]);
+    const first = {};
+    for (const c of columns) if (c.rank) first[c.key] = firstRanked(kind, frame, c.rank);
+    return el('div', { class: 'table-wrap' }, el('table', { class: `data ${cls}` },
+      el('thead', {}, el('tr', {}, el('th', { class: 'first', text: 'denoiser / setting' }), columns.map((c) => el('th', { text: c.title })))),
+      el('tbody', {}, rows.map(([label, e]) => el('tr', { 'data-label': label }, el('td', { class: 'first', text: label }),
+        columns.map((c) => el('td', { class: first[c.key] && first[c.key].has(label) ? 'best' : null }, A.fmt(value(c, e)), ciSpan(e, c.key)))))),
+    ));
+  }
+
   function ghostTable(pairs, k) {
+    const frame = pairs[0].ghosting[k].eventFrame;
+    if (pairs.some((p) => p.ghosting[k].ci95) || firstRanked('events', frame, 'lagEnergy'))
+      return figureTable('ghost-table', GHOST_COLUMNS, pairs.map((p) => [p.label, p.ghosting[k]]), 'events', frame);
+    // An older run without intervals or rankings: the smallest value is marked, ties unknown.
     const best = {};
     for (const c of GHOST_COLUMNS) {
       if (!c.better) continue;

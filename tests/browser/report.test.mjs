@@ -54,6 +54,11 @@ function failOnePair(runDir, scene, label) {
     st.ranking = st.ranking.filter((m) => m.label !== label);
     for (const m of st.ranking) m.tiedWith = m.tiedWith.filter((t) => t !== label);
     st.pairs = st.pairs.filter((x) => x.a !== label && x.b !== label);
+    for (const e of [...(st.events || []), ...(st.cuts || [])])
+      for (const r of Object.values(e.byFigure)) {
+        r.ranking = r.ranking.filter((m) => m.label !== label);
+        for (const m of r.ranking) m.tiedWith = m.tiedWith.filter((t) => t !== label);
+      }
   }
   fs.writeFileSync(file, JSON.stringify(results));
   return results;
@@ -189,6 +194,14 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
   await page.waitForFunction((n) => document.querySelectorAll('#time-error-chart g.mark-line.role-mark path').length === n, okHere);
   assert.ok((await page.locator('#time-error-chart g.mark-rule.role-mark line').count()) >= 1, 'event rule drawn');
   assert.ok((await page.locator('#ghosting-body table tbody tr').count()) === okHere, 'ghosting table: one row per pair');
+  // Every lag energy with its 95% interval (or why it has none); "best" = ranked first, ties included.
+  const lagCells = await page.$$eval('#ghosting-body table.ghost-table tbody tr', (rows) => rows.map((r) => r.cells[1].textContent));
+  assert.ok(lagCells.every((t) => /\[.+, .+\]|no interval/.test(t)), `lag energy cells: ${lagCells.join(' | ')}`);
+  const firstOnLag = results.statistics.scenes.light_switch.events[0].byFigure.lagEnergy.ranking
+    .filter((m) => m.rank === 1).map((m) => m.label).sort();
+  const markedOnLag = await page.$$eval('#ghosting-body table.ghost-table tbody tr', (rows) => rows.filter((r) => r.cells[1].classList.contains('best')).map((r) => r.dataset.label).sort());
+  assert.ok(firstOnLag.length >= 1);
+  assert.deepEqual(markedOnLag, firstOnLag);
 
   // (3) Tables: rankings (scene and overall), the failed pair, intervals, and a table that fits.
   assert.equal(await page.locator('#rankings table.ranking-table').count(), 2, 'scene and overall rankings');
@@ -340,7 +353,10 @@ function syntheticRun(nScenes, nLabels, nFrames) {
                    timing: { msMedian: 1 + l + 0.1 * s, msP5: 0.8 + l, msP95: 2 + l, msPerMegapixel: 100, tapsPerPixel: 25, passes: [] },
                    ghosting: [{ eventFrame: 50, kind: 'light_off', what: 'lamp', windowBegin: 45, windowEnd: 99,
                                 curve: Array.from({ length: 55 }, (_, i) => 0.01 + 0.5 * Math.exp(-i / (l + 1))),
-                                steadyState: 0.01, peakExcess: 0.5, responseFrames: l + 1, ghostEnergy: 0.3 * l, signedBias: 0.1, maskFraction: 0.4 }],
+                                steadyState: 0.01, peakExcess: 0.5, responseFrames: l + 1, ghostEnergy: 0.3 * l, signedBias: 0.1, maskFraction: 0.4,
+                                lagEnergy: 0.2 * l, ci95: { lagEnergy: [0.15 * l, 0.25 * l] } }],
+                   cuts: [{ kind: 'camera_cut', eventFrame: 70, atCut: 1 + l, recovery: [1, 1, 1, 1, 1], oldViewLeak: 0.01,
+                            ci95: { atCut: [0.9 + l, 1.1 + l], oldViewLeak: [0.005, 0.02] }, ci95Absent: { recovery1: 'the figure itself is undefined for this event' } }],
                    warnings: [], images: { dir: `images/${name}/denoiser_${l}`, all: false } });
     }
   }
@@ -380,6 +396,10 @@ test('10 denoisers x 10 scenes x 100 frames stays light', async () => {
   const fits = await page.$eval('#summary-wrap', (w) => w.scrollWidth <= w.clientWidth);
   assert.ok(fits, 'summary table fits 1400 px');
   await shot(page.locator('#tables'), 'tables-ties.png');
+  // The camera cut's table: one row per pair, intervals under the figures, a reason where none.
+  assert.equal(await page.locator('#ghosting-body table.cut-table tbody tr').count(), 10);
+  assert.match(await page.locator('#ghosting-body table.cut-table tbody tr[data-label="denoiser_2"]').innerText(), /\[2\.9, 3\.1\]/);
+  assert.equal(await page.locator('#ghosting-body table.cut-table span.ci[title="the figure itself is undefined for this event"]').count(), 10);
   // Only the selected scene's lines: 10, not 100.
   assert.equal(await page.locator('#time-error-chart g.mark-line.role-mark path').count(), 10);
   const domSize = await page.evaluate(() => document.getElementsByTagName('*').length);

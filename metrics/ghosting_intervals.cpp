@@ -1,0 +1,405 @@
+#include "metrics/ghosting_intervals.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <set>
+
+#include "core/error.hpp"
+
+namespace arena {
+
+using nlohmann::json;
+
+namespace {
+
+// Figures ranked between methods (lower is better); signed bias ranks by its magnitude.
+const std::vector<std::string> kRankedEventFigures = {"lagEnergy", "responseFrames", "peakExcess",
+                                                      "ghostEnergy", "absSignedBias"};
+
+// The rows of `m` must be the consecutive frames first, first + 1, ... (a window).
+void requireConsecutive(const MetricTiles& m, int first, const char* what) {
+  for (size_t i = 0; i < m.frames.size(); ++i)
+    if (m.frames[i] != first + int(i))
+      throw Error(std::string("event tile data: ") + what +
+                  " rows are not the consecutive frames from " + std::to_string(first) + " (row " +
+                  std::to_string(i) + " is frame " + std::to_string(m.frames[i]) + ")");
+}
+
+// (sum n_k)^2 / sum n_k^2 over the tiles' data counts summed over every row: how many tiles the
+// data really spreads over (1 when it sits in one tile, the tile count when spread evenly).
+double effectiveTiles(const MetricTiles& m) {
+  std::vector<double> perTile(size_t(m.tileCount()), 0.0);
+  for (const TileSums& row : m.rows)
+    for (size_t k = 0; k < row.count.size(); ++k) perTile[k] += std::abs(row.count[k]);
+  double s = 0, s2 = 0;
+  for (double n : perTile) s += n, s2 += n * n;
+  return s2 > 0 ? s * s / s2 : 0.0;
+}
+
+// One replicate's curve: each row under the draw. A row that holds data but none in the drawn
+// tiles makes the replicate undefined (returns false); a row without any data is 0, as the run's
+// own value is (an empty region's mean is reported as 0).
+bool curveUnder(const MetricTiles& m, const std::vector<int>& draw, std::vector<double>& out) {
+  out.assign(m.rows.size(), 0.0);
+  for (size_t r = 0; r < m.rows.size(); ++r) {
+    const double v = m.valueUnder(r, draw);
+    if (std::isfinite(v))
+      out[r] = v;
+    else if (m.rows[r].totalCount() != 0)
+      return false;
+  }
+  return true;
+}
+
+FigureReplicates allAbsent(std::vector<std::string> figures, const std::string& why) {
+  FigureReplicates r;
+  r.figures = std::move(figures);
+  for (const std::string& f : r.figures) r.absent[f] = why;
+  return r;
+}
+
+// The replicate loop shared by events and cuts: `figuresOf(draw, out)` fills the figures of one
+// tile draw (false: undefined under that draw); the identity draw gives the point figures, and a
+// figure undefined there has no interval.
+template <class FiguresOf>
+void resample(FigureReplicates& r, int tiles, const std::string& seedName,
+              const BootstrapConfig& cfg, const FiguresOf& figuresOf) {
+  std::vector<int> identity(static_cast<size_t>(tiles));
+  for (int k = 0; k < tiles; ++k) identity[size_t(k)] = k;
+  std::map<std::string, double> point;
+  if (!figuresOf(identity, point)) throw Error("event intervals: the full data gives no figures");
+  for (const std::string& f : r.figures)
+    if (!r.absent.count(f) && !std::isfinite(point.count(f) ? point[f] : kUndefined))
+      r.absent[f] = "the figure itself is undefined for this event";
+  r.widen = smallSampleWidening(r.effectiveTiles, cfg.confidence);
+  // Frames are not resampled (see the header): a plan over one "frame" is a plan of tile draws.
+  const ResamplingPlan plan(1, tiles, seedName, cfg);
+  std::map<std::string, double> figures;
+  for (int b = 0; b < plan.replicates(); ++b) {
+    figures.clear();
+    const bool ok = figuresOf(plan.tiles(b), figures);
+    for (const std::string& f : r.figures)
+      r.replicates[f].push_back(ok && figures.count(f) ? figures[f] : kUndefined);
+  }
+}
+
+}  // namespace
+
+json EventTiles::toJson() const {
+  return {{"curve", curve.toJson()}, {"bias", bias.toJson()}};
+}
+
+EventTiles EventTiles::fromJson(const json& j) {
+  if (!j.is_object() || !j.contains("curve") || !j.contains("bias"))
+    throw Error("event tile data: expected an object with curve and bias");
+  return {MetricTiles::fromJson(j["curve"]), MetricTiles::fromJson(j["bias"])};
+}
+
+json CutTiles::toJson() const {
+  return {{"relMse", relMse.toJson()}, {"leak", leak.toJson()}};
+}
+
+CutTiles CutTiles::fromJson(const json& j) {
+  if (!j.is_object() || !j.contains("relMse") || !j.contains("leak"))
+    throw Error("cut tile data: expected an object with relMse and leak");
+  return {MetricTiles::fromJson(j["relMse"]), MetricTiles::fromJson(j["leak"])};
+}
+
+std::vector<std::string> ghostingFigureNames() {
+  return {"lagEnergy",  "responseFrames", "peakExcess",  "ghostEnergy",
+          "signedBias", "absSignedBias",  "steadyState", "chromaLagEnergy"};
+}
+
+std::vector<std::string> cutFigureNames(const GhostingConfig& c) {
+  std::vector<std::string> out = {"atCut"};
+  for (int k = 1; k <= c.recoveryFrames; ++k) out.push_back("recovery" + std::to_string(k));
+  out.push_back("oldViewLeak");
+  return out;
+}
+
+std::map<std::string, double> ghostingFigures(const GhostingResult& g) {
+  const int fromEvent = g.windowEnd - g.eventFrame + 1;  // window frames from t0
+  return {{"lagEnergy", g.lagEnergy},
+          {"responseFrames", g.settled ? double(g.responseFrames) : double(fromEvent)},
+          {"peakExcess", g.peakExcess},
+          {"ghostEnergy", g.ghostEnergy},
+          {"signedBias", g.signedBias},
+          {"absSignedBias", std::abs(g.signedBias)},
+          {"steadyState", g.steadyState},
+          {"chromaLagEnergy", g.chroma.empty() ? kUndefined : g.chromaLagEnergy}};
+}
+
+std::map<std::string, double> cutFigures(const CutResult& c, const GhostingConfig& gc) {
+  const bool steady = c.steadyEnd >= c.steadyBegin && c.steadyState > 0;
+  std::map<std::string, double> out = {{"atCut", steady ? c.atCut : kUndefined},
+                                       {"oldViewLeak", c.oldViewLeak}};
+  for (int k = 1; k <= gc.recoveryFrames; ++k)
+    out["recovery" + std::to_string(k)] =
+        steady && size_t(k) <= c.recovery.size() ? c.recovery[size_t(k - 1)] : kUndefined;
+  return out;
+}
+
+std::string eventSeedName(const std::string& scene, int eventFrame) {
+  return scene + "#event@" + std::to_string(eventFrame);
+}
+
+std::string cutSeedName(const std::string& scene, int cutFrame) {
+  return scene + "#cut@" + std::to_string(cutFrame);
+}
+
+FigureReplicates ghostingReplicates(int t0, const EventTiles& tiles, const std::string& seedName,
+                                    const BootstrapConfig& cfg, const GhostingConfig& gc) {
+  if (tiles.curve.empty() || tiles.bias.empty())
+    return allAbsent(ghostingFigureNames(), "no per-tile data for this event");
+  if (tiles.curve.frames != tiles.bias.frames || tiles.curve.tileCount() != tiles.bias.tileCount())
+    throw Error("event tile data: the E_M and bias rows differ in frames or tiles");
+  const int begin = tiles.bias.frames.front();
+  requireConsecutive(tiles.curve, begin, "E_M");
+  if (t0 < begin || t0 > tiles.bias.frames.back())
+    throw Error("event tile data: event frame " + std::to_string(t0) + " outside the window " +
+                std::to_string(begin) + ".." + std::to_string(tiles.bias.frames.back()));
+  FigureReplicates r;
+  r.figures = ghostingFigureNames();
+  r.effectiveTiles = effectiveTiles(tiles.bias);
+  char tilesText[32];
+  std::snprintf(tilesText, sizeof tilesText, "%.1f", r.effectiveTiles);
+  if (r.effectiveTiles == 0) return allAbsent(r.figures, "the changed region is empty");
+  if (r.effectiveTiles < kMinEffectiveTiles) {
+    FigureReplicates a =
+        allAbsent(r.figures, std::string("the changed region spreads over ") + tilesText +
+                                 " effective tiles of " + std::to_string(tiles.bias.tileCount()) +
+                                 ", fewer than 4: too few spatial blocks to resample");
+    a.effectiveTiles = r.effectiveTiles;
+    return a;
+  }
+  r.absent["chromaLagEnergy"] =
+      "not resampled: the chromaticity error is of the region's mean colour, whose per-tile sums "
+      "are not stored";
+  r.neverSettled["responseFrames"] = double(tiles.bias.frames.back() - t0 + 1);
+  std::vector<double> curve, bias;
+  resample(r, tiles.bias.tileCount(), seedName, cfg,
+           [&](const std::vector<int>& draw, std::map<std::string, double>& out) {
+             if (!curveUnder(tiles.curve, draw, curve) || !curveUnder(tiles.bias, draw, bias))
+               return false;
+             out = ghostingFigures(analyseGhosting(t0, begin, curve, bias, {}, gc));
+             return true;
+           });
+  return r;
+}
+
+FigureReplicates cutReplicates(int cut, int segmentEnd, const CutTiles& tiles,
+                               const std::string& seedName, const BootstrapConfig& cfg,
+                               const GhostingConfig& gc) {
+  if (tiles.relMse.empty() || tiles.leak.empty())
+    return allAbsent(cutFigureNames(gc), "no per-tile data for this cut");
+  if (tiles.relMse.tileCount() != tiles.leak.tileCount())
+    throw Error("cut tile data: relMSE and leak rows have different tile counts");
+  requireConsecutive(tiles.relMse, cut, "relMSE");
+  requireConsecutive(tiles.leak, cut, "leak");
+  if (tiles.relMse.frames.back() != segmentEnd)
+    throw Error("cut tile data: relMSE rows end at frame " +
+                std::to_string(tiles.relMse.frames.back()) + ", the segment at " +
+                std::to_string(segmentEnd));
+  FigureReplicates r;
+  r.figures = cutFigureNames(gc);
+  r.effectiveTiles = effectiveTiles(tiles.relMse);
+  if (r.effectiveTiles < kMinEffectiveTiles) {
+    FigureReplicates a =
+        allAbsent(r.figures, "the frame spreads over fewer than 4 effective tiles");
+    a.effectiveTiles = r.effectiveTiles;
+    return a;
+  }
+  std::vector<double> rows, leak;
+  std::vector<double> relMse(size_t(segmentEnd) + 1, kUndefined);
+  resample(r, tiles.relMse.tileCount(), seedName, cfg,
+           [&](const std::vector<int>& draw, std::map<std::string, double>& out) {
+             if (!curveUnder(tiles.relMse, draw, rows) || !curveUnder(tiles.leak, draw, leak))
+               return false;
+             std::copy(rows.begin(), rows.end(), relMse.begin() + cut);
+             out = cutFigures(analyseCut(cut, segmentEnd, relMse, leak, gc), gc);
+             return true;
+           });
+  return r;
+}
+
+double smallSampleWidening(double blocks, double confidence) {
+  if (!(blocks >= 2) || !(confidence > 0 && confidence < 1)) return 1.0;
+  // z: the standard normal quantile of (1 + confidence) / 2, by bisection on erfc.
+  const double tail = (1 - confidence) / 2;
+  double lo = 0, hi = 40;
+  for (int i = 0; i < 200; ++i) {
+    const double mid = (lo + hi) / 2;
+    (0.5 * std::erfc(mid / std::sqrt(2.0)) > tail ? lo : hi) = mid;
+  }
+  const double z = (lo + hi) / 2, nu = blocks - 1;
+  // Student's t quantile by its expansion in 1 / nu (Abramowitz & Stegun 26.7.5); within 1% of
+  // the exact value from nu = 3 on, and larger blocks counts are what the intervals need.
+  const double z2 = z * z;
+  const double t = z + z * (z2 + 1) / (4 * nu) + z * ((5 * z2 + 16) * z2 + 3) / (96 * nu * nu) +
+                   z * (((3 * z2 + 19) * z2 + 17) * z2 - 15) / (384 * nu * nu * nu);
+  return std::sqrt(blocks / nu) * t / z;
+}
+
+namespace {
+
+// Figures that cannot be negative: an interval reaching below 0 is cut there (the truth lies in
+// the figure's range, so cutting keeps the coverage).
+bool nonNegative(const std::string& f) {
+  return f != "signedBias" && f != "peakExcess";
+}
+
+Interval clipped(Interval iv, const std::string& f) {
+  if (iv.valid() && nonNegative(f)) iv.lo = std::max(iv.lo, 0.0), iv.hi = std::max(iv.hi, 0.0);
+  return iv;
+}
+
+Interval figureInterval(const FigureReplicates& r, const std::string& f, double confidence) {
+  const auto it = r.replicates.find(f);
+  if (it == r.replicates.end()) return {};
+  return clipped(widenedInterval(it->second, confidence, r.widen), f);
+}
+
+}  // namespace
+
+void addFigureIntervals(json& j, const FigureReplicates& r,
+                        const std::map<std::string, double>& point, double confidence) {
+  json ci = json::object(), absent = json::object();
+  for (const std::string& f : r.figures) {
+    if (r.absent.count(f)) {
+      absent[f] = r.absent.at(f);
+      continue;
+    }
+    if (!std::isfinite(point.count(f) ? point.at(f) : kUndefined)) {
+      absent[f] = "the figure itself is undefined for this event";
+      continue;
+    }
+    const Interval iv = figureInterval(r, f, confidence);
+    if (!iv.valid()) {
+      absent[f] = "fewer than 20 replicates define the figure";
+      continue;
+    }
+    json bounds = iv.toJson();
+    if (r.neverSettled.count(f)) {  // a bound at "never settled" is no number of frames
+      const double never = r.neverSettled.at(f);
+      if (iv.lo >= never) bounds[0] = nullptr;
+      if (iv.hi >= never) bounds[1] = nullptr;
+    }
+    ci[f] = bounds;
+  }
+  j["ci95"] = ci;
+  if (!absent.empty()) j["ci95Absent"] = absent;
+  if (r.neverSettled.size())
+    j["ci95NeverSettled"] = "a null bound of responseFrames means: never settled within the window";
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f", r.effectiveTiles);
+  j["ciEffectiveTiles"] = std::stod(text);
+}
+
+namespace {
+
+// A pair's point figures from its stored event or cut JSON (the values the run reported).
+std::map<std::string, double> pointFigures(const json& j, bool cut, const GhostingConfig& gc) {
+  auto num = [&](const char* k) {
+    return j.contains(k) && j[k].is_number() ? j[k].get<double>() : kUndefined;
+  };
+  std::map<std::string, double> out;
+  if (cut) {
+    out["atCut"] = num("atCut");
+    out["oldViewLeak"] = num("oldViewLeak");
+    for (int k = 1; k <= gc.recoveryFrames; ++k) {
+      const bool has = j.contains("recovery") && j["recovery"].size() >= size_t(k);
+      out["recovery" + std::to_string(k)] =
+          has ? j["recovery"][size_t(k - 1)].get<double>() : kUndefined;
+    }
+    return out;
+  }
+  for (const char* k : {"lagEnergy", "peakExcess", "ghostEnergy", "signedBias", "steadyState"})
+    out[k] = num(k);
+  out["absSignedBias"] = std::abs(out["signedBias"]);
+  out["responseFrames"] =
+      j.value("settled", true) ? num("responseFrames") : num("windowEnd") - num("eventFrame") + 1;
+  return out;
+}
+
+json rankFigures(const std::vector<std::string>& ranked, const std::vector<std::string>& labels,
+                 const std::vector<std::map<std::string, double>>& points,
+                 const std::vector<FigureReplicates>& reps, const BootstrapConfig& cfg) {
+  json byFigure = json::object();
+  for (const std::string& f : ranked) {
+    std::vector<std::string> kept;
+    std::vector<double> values;
+    std::vector<std::vector<double>> replicates;
+    std::string excluded;
+    double widen = 1.0;  // the largest of the methods' (they share the region, so the same)
+    for (size_t i = 0; i < labels.size(); ++i) {
+      const double v = points[i].count(f) ? points[i].at(f) : kUndefined;
+      std::string why = reps[i].absent.count(f) ? reps[i].absent.at(f) : "";
+      if (why.empty() && !std::isfinite(v)) why = "no value";
+      if (!why.empty()) {
+        excluded += (excluded.empty() ? "" : "; ") + labels[i] + ": " + why;
+        continue;
+      }
+      kept.push_back(labels[i]);
+      widen = std::max(widen, reps[i].widen);
+      values.push_back(v);
+      replicates.push_back(reps[i].replicates.at(f));
+    }
+    // The same interval kind as the pair's own figures (addFigureIntervals).
+    SceneRanking r = rankReplicates(f, true, kept, values, replicates, cfg.confidence, widen);
+    for (RankedMethod& m : r.ranking) m.ci = clipped(m.ci, f);  // as the pair's own figure
+    r.excluded = excluded;
+    byFigure[f] = r.toJson();
+  }
+  return byFigure;
+}
+
+}  // namespace
+
+json rankSceneEvents(std::vector<std::pair<std::string, const json*>> pairs,
+                     const std::string& scene, const BootstrapConfig& cfg) {
+  const GhostingConfig gc;
+  // By label, so that the pairs' order (a merge of shards puts them shard by shard) changes
+  // nothing.
+  std::stable_sort(pairs.begin(), pairs.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  json out = {{"events", json::array()}, {"cuts", json::array()}};
+  for (const bool cut : {false, true}) {
+    const char* key = cut ? "cuts" : "ghosting";
+    std::set<int> frames;
+    for (const auto& [label, p] : pairs)
+      for (const json& e : p->value(key, json::array())) frames.insert(e.value("eventFrame", -1));
+    for (int frame : frames) {
+      std::vector<std::string> labels;
+      std::vector<std::map<std::string, double>> points;
+      std::vector<FigureReplicates> reps;
+      json event = {{"eventFrame", frame}};
+      for (const auto& [label, p] : pairs)
+        for (const json& e : p->value(key, json::array())) {
+          if (e.value("eventFrame", -1) != frame) continue;
+          if (!event.contains("kind")) event["kind"] = e.value("kind", cut ? "camera_cut" : "");
+          if (!cut && !event.contains("what")) event["what"] = e.value("what", "");
+          labels.push_back(label);
+          points.push_back(pointFigures(e, cut, gc));
+          if (!e.contains("tiles")) {
+            reps.push_back(allAbsent(cut ? cutFigureNames(gc) : ghostingFigureNames(),
+                                     "no per-tile data stored (an older run)"));
+          } else if (cut) {
+            const json& steady = e.value("steadyFrames", json::array({frame, frame}));
+            reps.push_back(cutReplicates(frame, steady.at(1).get<int>(),
+                                         CutTiles::fromJson(e["tiles"]), cutSeedName(scene, frame),
+                                         cfg, gc));
+          } else {
+            reps.push_back(ghostingReplicates(frame, EventTiles::fromJson(e["tiles"]),
+                                              eventSeedName(scene, frame), cfg, gc));
+          }
+        }
+      event["byFigure"] =
+          rankFigures(cut ? cutFigureNames(gc) : kRankedEventFigures, labels, points, reps, cfg);
+      out[cut ? "cuts" : "events"].push_back(event);
+    }
+  }
+  return out;
+}
+
+}  // namespace arena

@@ -1,0 +1,119 @@
+#pragma once
+// 95% intervals of the event-window figures (metrics.md, "Ghosting and lag": lag energy, response,
+// peak excess, ghost energy, signed bias, E_ss around scripted events; recovery and old-view leak
+// after camera cuts), and their paired differences and ranks with ties between methods.
+//
+// Why not the per-frame summaries' crossed bootstrap (metrics/statistics.hpp): an event figure is
+// a function of one fixed window of frames after one event (the bias curve from t0 on, a maximum,
+// a first-crossing time). Its frames are not exchangeable samples of a stationary series -- frame
+// t0 + 1 and frame t0 + 40 play different roles -- so resampling frame blocks would build curves
+// that no event can produce (a lag tail before its peak). Space is the replicated dimension: every
+// window frame's b_M(t), E_M(t), relMSE and leak is a mean over pixels, and the pixels of the
+// changed region (or of the frame, for cuts) fall into the image's 4x4 tiles (metrics/tiles.hpp,
+// the same tiles as the summaries: larger than the filter footprints that correlate neighbouring
+// pixels). A replicate draws the tiles with replacement *once for the whole window* (the same
+// draw in every frame, so each tile keeps its own trajectory through the event, noise and lag
+// alike), recomputes the curves from the drawn tiles' sums and then the figures exactly as the run
+// did. 1000 replicates, seeded by scene and event, so reruns and `arena merge` of shards give the
+// same intervals, and every method of a scene is resampled with the same draws: differences
+// between methods are paired. Percentile intervals, widened for the small number of tiles (below)
+// and cut at 0 for figures that cannot be negative. (Basic "reverse percentile" intervals were
+// tried: they remove a bias the noise puts into maxima and clipped sums, but at the boundary -- a
+// method with no lag, lag energy 0 -- they reflect every replicate below 0 and claim [0, 0].)
+//
+// What the interval covers: the noise realisation of the input (and of the reference) inside the
+// region, and how the lag varies from one part of the region to another -- "would this figure come
+// out the same on another region drawn like this one". What it does NOT cover: the timing and
+// kind of the event, the window and thresholds (fixed), the changed region itself (taken as
+// given), a bias the reference shares with itself, other scenes; and the estimator's own bias:
+// lag energy adds max(0, |noise| - b_pre) on settled frames and peak excess is a maximum, so on a
+// noisy region both sit above the noise-free figure (tests/ghosting_intervals_test.cpp measures
+// coverage of the noise-free figure of a known lag). Input-seed
+// replicates (`--seeds K`) are not used: they exist only in some runs, and an interval whose
+// meaning depends on a flag could not be compared between runs; they remain the way to check
+// these intervals on a scene (README, "Uncertainty").
+//
+// With few tiles the bootstrap has nothing to resample: a region inside one tile would give every
+// replicate the same value and a zero-width interval. An event whose region spreads over fewer
+// than kMinEffectiveTiles effective tiles ((sum n_k)^2 / sum n_k^2 over the tiles' pixel counts
+// n_k) has no interval, with that reason, never a fake one.
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "metrics/ghosting.hpp"
+#include "metrics/statistics.hpp"
+
+namespace arena {
+
+constexpr double kMinEffectiveTiles = 4.0;
+
+// The per-tile data behind one event's curves (results: pair.ghosting[k].tiles), one row per
+// window frame: E_M(t) as relMSE sums and sample counts in M, b_M(t) as sums of the per-pixel
+// relative luminance error and mask pixel counts.
+struct EventTiles {
+  MetricTiles curve, bias;
+  nlohmann::json toJson() const;
+  static EventTiles fromJson(const nlohmann::json& j);
+};
+
+// The per-tile data behind one camera cut (results: pair.cuts[k].tiles): the frame's relMSE sums
+// for every frame of the post-cut segment, and the leak's sums (sum e D, sum D D) for cut..cut+5.
+struct CutTiles {
+  MetricTiles relMse, leak;
+  nlohmann::json toJson() const;
+  static CutTiles fromJson(const nlohmann::json& j);
+};
+
+// An event's or a cut's figures, resampled.
+struct FigureReplicates {
+  std::vector<std::string> figures;                       // in display order
+  std::map<std::string, std::vector<double>> replicates;  // per figure (NaN: undefined there)
+  std::map<std::string, std::string> absent;              // figure -> why it has no interval
+  // responseFrames: "never settled" enters as this value (one more than any settled response).
+  std::map<std::string, double> neverSettled;
+  double effectiveTiles = 0;
+  // Small-sample widening of the percentile intervals (about the replicates' median) with
+  // G = effectiveTiles blocks:
+  // sqrt(G / (G - 1)) t_{G-1} / z. The bootstrap's spread over G blocks is (G - 1) / G of the
+  // variance it estimates, and its quantiles treat that estimate as exact, like a z interval
+  // where a t interval with G - 1 degrees of freedom is due: with 16 tiles a 95% interval would
+  // cover about 92% (tests/ghosting_intervals_test.cpp), widened it covers about 95%.
+  double widen = 1.0;
+};
+// The widening factor above for `blocks` (>= 2) and a two-sided confidence level.
+double smallSampleWidening(double blocks, double confidence);
+
+// Figure names: lagEnergy, responseFrames, peakExcess, ghostEnergy, signedBias, absSignedBias,
+// steadyState (events); atCut, recovery1..recoveryN (recovery at cut + k), oldViewLeak (cuts).
+std::vector<std::string> ghostingFigureNames();
+std::vector<std::string> cutFigureNames(const GhostingConfig& c = {});
+// The figures of an analysed event or cut by name (responseFrames never settled: the window's
+// frame count from t0).
+std::map<std::string, double> ghostingFigures(const GhostingResult& g);
+std::map<std::string, double> cutFigures(const CutResult& c, const GhostingConfig& gc = {});
+
+// `seedName` names the scene and the event (every method of the scene must use the same one).
+FigureReplicates ghostingReplicates(int t0, const EventTiles& tiles, const std::string& seedName,
+                                    const BootstrapConfig& cfg = {}, const GhostingConfig& gc = {});
+FigureReplicates cutReplicates(int cut, int segmentEnd, const CutTiles& tiles,
+                               const std::string& seedName, const BootstrapConfig& cfg = {},
+                               const GhostingConfig& gc = {});
+// The seed names the run uses.
+std::string eventSeedName(const std::string& scene, int eventFrame);
+std::string cutSeedName(const std::string& scene, int cutFrame);
+
+// Adds to an event's or a cut's JSON: "ci95" {figure: [lo, hi]} for every figure with an interval
+// (responseFrames' bounds null where they are "never settled") and "ci95Absent" {figure: reason}
+// for every other figure. `point`: the figures the run reported (ghostingFigures, cutFigures).
+void addFigureIntervals(nlohmann::json& j, const FigureReplicates& r,
+                        const std::map<std::string, double>& point, double confidence);
+
+// statistics.scenes.<scene>.events / .cuts: per event (matched by frame), for every figure, the
+// ranking with ties and the paired differences (as metrics/statistics' SceneRanking) over the ok
+// pairs that stored tile data. `pairs`: (label, pair JSON) of one scene.
+nlohmann::json rankSceneEvents(std::vector<std::pair<std::string, const nlohmann::json*>> pairs,
+                               const std::string& scene, const BootstrapConfig& cfg = {});
+
+}  // namespace arena

@@ -1,0 +1,302 @@
+// Intervals of the event-window figures (metrics/ghosting_intervals.hpp): coverage of a known
+// synthetic lag, determinism (same seed, same interval; shards merged = one run), and the
+// contract that a figure without data is absent with its reason, never a fake interval.
+#include "metrics/ghosting_intervals.hpp"
+
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+
+#include <cmath>
+#include <random>
+
+#include "core/error.hpp"
+#include "harness/run_matrix.hpp"
+#include "metrics/results.hpp"
+#include "tests/test_util.hpp"
+
+namespace arena {
+namespace {
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+// One synthetic event: 16 tiles of 50 mask pixels, window frames 0..35, event at t0 = 5. Tile k's
+// bias after the event is A_k 0.6^(t - t0) with A_k = 0.8 (1 + 0.25 z_k) (the lag varies over the
+// region), plus the tile mean of independent pixel noise (sd `noise` per tile and frame); E_M is
+// 0.01 + 0.5 A_k 0.7^(t - t0) with multiplicative noise. Tiles are drawn afresh every trial.
+constexpr int kTiles = 16, kFrames = 36, kT0 = 5;
+constexpr double kPixels = 50;
+
+EventTiles syntheticEvent(std::mt19937_64& rng, double noise) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::vector<double> amplitude(kTiles);
+  for (double& a : amplitude) a = 0.8 * (1 + 0.25 * n(rng));
+  EventTiles e;
+  for (int t = 0; t < kFrames; ++t) {
+    TileSums bias, curve;
+    for (int k = 0; k < kTiles; ++k) {
+      const double lag = t < kT0 ? 0.0 : amplitude[size_t(k)] * std::pow(0.6, t - kT0);
+      const double spike = t < kT0 ? 0.0 : 0.5 * amplitude[size_t(k)] * std::pow(0.7, t - kT0);
+      bias.sum.push_back(kPixels * (lag + noise * n(rng)));
+      bias.count.push_back(kPixels);
+      curve.sum.push_back(kPixels * (0.01 + spike) * std::exp(0.3 * n(rng) - 0.045));
+      curve.count.push_back(kPixels);
+    }
+    e.bias.add(t, std::move(bias));
+    e.curve.add(t, std::move(curve));
+  }
+  return e;
+}
+
+// The figures of the noise-free population (mean amplitude 0.8, no noise): the truth.
+std::map<std::string, double> truth() {
+  std::vector<double> bias, curve;
+  for (int t = 0; t < kFrames; ++t) {
+    bias.push_back(t < kT0 ? 0.0 : 0.8 * std::pow(0.6, t - kT0));
+    curve.push_back(0.01 + (t < kT0 ? 0.0 : 0.4 * std::pow(0.7, t - kT0)));
+  }
+  return ghostingFigures(analyseGhosting(kT0, 0, curve, bias));
+}
+
+std::vector<double> valuesOf(const MetricTiles& m) {
+  return m.frameValues();
+}
+
+// Trial set: 200 independent synthetic events (fresh tiles, lag and noise), 400 replicates each.
+// The 95% interval of lag energy, peak excess and signed bias must cover the noise-free figure in
+// at least 93% of the trials (binomial sd at 95% over 200 trials: 1.5%), and not always (an
+// interval that always covers could be uselessly wide: its mean width is printed beside the
+// figure's spread over trials).
+TEST(EventIntervals, CoverTheNoiseFreeFigureOfAKnownLag) {
+  std::mt19937_64 rng(14);
+  BootstrapConfig cfg;
+  cfg.replicates = 400;
+  const auto exact = truth();
+  const std::vector<std::string> checked = {"lagEnergy", "peakExcess", "signedBias"};
+  std::map<std::string, int> covered;
+  std::map<std::string, double> width, sum, sum2;
+  const int trials = 200;
+  for (int trial = 0; trial < trials; ++trial) {
+    const EventTiles e = syntheticEvent(rng, 0.04);
+    const auto point =
+        ghostingFigures(analyseGhosting(kT0, 0, valuesOf(e.curve), valuesOf(e.bias)));
+    const FigureReplicates r = ghostingReplicates(kT0, e, "trial" + std::to_string(trial), cfg);
+    json j;
+    addFigureIntervals(j, r, point, cfg.confidence);
+    for (const std::string& f : checked) {
+      ASSERT_TRUE(j["ci95"].contains(f)) << j.dump();
+      const double lo = j["ci95"][f][0], hi = j["ci95"][f][1];
+      covered[f] += lo <= exact.at(f) && exact.at(f) <= hi;
+      width[f] += (hi - lo) / trials;
+      sum[f] += point.at(f) / trials;
+      sum2[f] += point.at(f) * point.at(f) / trials;
+    }
+  }
+  for (const std::string& f : checked) {
+    const double sd = std::sqrt(std::max(0.0, sum2[f] - sum[f] * sum[f]));
+    std::printf(
+        "%-11s truth %.4f, mean estimate %.4f (sd %.4f over trials): coverage %d/%d, mean "
+        "width %.4f (2 x 1.96 sd = %.4f)\n",
+        f.c_str(), exact.at(f), sum[f], sd, covered[f], trials, width[f], 2 * 1.96 * sd);
+    EXPECT_GE(covered[f], 186) << f;  // 93%
+    EXPECT_LE(covered[f], 199) << f;
+    EXPECT_LT(width[f], 2 * 2 * 1.96 * sd) << f << ": interval much wider than the spread";
+  }
+}
+
+TEST(EventIntervals, SameSeedSameIntervalAnotherSeedAnother) {
+  std::mt19937_64 rng(3);
+  const EventTiles e = syntheticEvent(rng, 0.04);
+  const auto point = ghostingFigures(analyseGhosting(kT0, 0, valuesOf(e.curve), valuesOf(e.bias)));
+  auto intervals = [&](const std::string& seed) {
+    json j;
+    addFigureIntervals(j, ghostingReplicates(kT0, e, seed), point, 0.95);
+    return j;
+  };
+  const json a = intervals(eventSeedName("scene", kT0)), b = intervals(eventSeedName("scene", kT0));
+  EXPECT_EQ(a, b);
+  EXPECT_NE(a["ci95"]["lagEnergy"], intervals(eventSeedName("other", kT0))["ci95"]["lagEnergy"]);
+  // Through JSON (float32 tile sums in base64) the interval is the same to float precision.
+  const EventTiles back = EventTiles::fromJson(e.toJson());
+  json c;
+  addFigureIntervals(c, ghostingReplicates(kT0, back, eventSeedName("scene", kT0)), point, 0.95);
+  for (const char* f : {"lagEnergy", "peakExcess", "signedBias"})
+    for (int i = 0; i < 2; ++i)
+      EXPECT_NEAR(c["ci95"][f][i].get<double>(), a["ci95"][f][i].get<double>(),
+                  1e-5 * (1 + std::abs(a["ci95"][f][i].get<double>())))
+          << f;
+}
+
+TEST(EventIntervals, NoDataOrTooFewTilesIsAbsentWithAReason) {
+  const auto point = ghostingFigures(GhostingResult{});
+  // No tile data at all (an older run, or an event without a window).
+  json none;
+  addFigureIntervals(none, ghostingReplicates(kT0, EventTiles{}, "s"), point, 0.95);
+  EXPECT_TRUE(none["ci95"].empty());
+  for (const std::string& f : ghostingFigureNames())
+    EXPECT_EQ(none["ci95Absent"].value(f, ""), "no per-tile data for this event") << f;
+  // A changed region inside one tile: every replicate would repeat that tile -> no interval.
+  std::mt19937_64 rng(1);
+  EventTiles one = syntheticEvent(rng, 0.04);
+  for (MetricTiles* m : {&one.bias, &one.curve})
+    for (TileSums& row : m->rows)
+      for (int k = 1; k < kTiles; ++k) row.sum[size_t(k)] = 0, row.count[size_t(k)] = 0;
+  json j;
+  addFigureIntervals(j, ghostingReplicates(kT0, one, "s"), point, 0.95);
+  EXPECT_TRUE(j["ci95"].empty()) << j.dump();
+  EXPECT_NE(j["ci95Absent"]["lagEnergy"].get<std::string>().find("1.0 effective tiles"),
+            std::string::npos)
+      << j.dump();
+  // An empty changed region.
+  for (MetricTiles* m : {&one.bias, &one.curve})
+    for (TileSums& row : m->rows) row.sum[0] = 0, row.count[0] = 0;
+  json empty;
+  addFigureIntervals(empty, ghostingReplicates(kT0, one, "s"), point, 0.95);
+  EXPECT_EQ(empty["ci95Absent"].value("lagEnergy", ""), "the changed region is empty");
+  // The chromaticity lag has no per-tile data: absent with its reason, never borrowed.
+  std::mt19937_64 rng2(2);
+  json full;
+  addFigureIntervals(full, ghostingReplicates(kT0, syntheticEvent(rng2, 0.04), "s"), point, 0.95);
+  EXPECT_TRUE(full["ci95"].contains("lagEnergy"));
+  EXPECT_TRUE(full["ci95Absent"].contains("chromaLagEnergy"));
+  EXPECT_FALSE(full["ci95"].contains("chromaLagEnergy"));
+  // Inconsistent tile data is an error naming what is wrong.
+  EventTiles shifted = syntheticEvent(rng2, 0.04);
+  shifted.bias.frames[3] = 40;
+  EXPECT_THROW(ghostingReplicates(kT0, shifted, "s"), Error);
+  EXPECT_THROW(ghostingReplicates(50, syntheticEvent(rng2, 0.04), "s"), Error);
+}
+
+TEST(CutIntervals, NoSteadyStateMeansNoRecoveryInterval) {
+  // Cut at 4, segment to 9: the steady state would start at 10 -> recovery figures undefined,
+  // the leak still has an interval.
+  CutTiles c;
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (int t = 4; t <= 9; ++t) {
+    TileSums rel, leak;
+    for (int k = 0; k < kTiles; ++k) {
+      rel.sum.push_back(100 * (0.01 + 0.001 * n(rng)));
+      rel.count.push_back(100);
+      leak.sum.push_back(0.05 * n(rng));
+      leak.count.push_back(1.0);
+    }
+    c.relMse.add(t, std::move(rel));
+    c.leak.add(t, std::move(leak));
+  }
+  const FigureReplicates r = cutReplicates(4, 9, c, cutSeedName("s", 4));
+  std::map<std::string, double> point = {{"oldViewLeak", 0.01}};
+  json j;
+  addFigureIntervals(j, r, point, 0.95);
+  EXPECT_TRUE(j["ci95"].contains("oldViewLeak")) << j.dump();
+  EXPECT_TRUE(j["ci95Absent"].contains("atCut")) << j.dump();
+  EXPECT_TRUE(j["ci95Absent"].contains("recovery1"));
+}
+
+// End to end on tiny sequences with a light switched off (light_switch, frame 12) and a camera cut
+// (camera_cut, frame 8): every figure has an interval or a reason, the point lies in it, the
+// statistics rank each figure, results.db holds them, and two shards merged give exactly the
+// unsharded run's intervals and rankings.
+TEST(EventIntervalsEndToEnd, IntervalsRankingsAndShardsMergedEqualOneRun) {
+  const fs::path cache = test::freshDir("event_ci_cache");
+  auto run = [&](const std::string& name, int shard, int shards) {
+    RunConfig c;
+    c.name = "events";
+    c.out = test::freshDir("event_ci_" + name);
+    c.cache = cache;
+    c.render = test::tinySettings(40, 24, 18, 16);
+    c.scenes = {test::shippedScene("light_switch"), test::shippedScene("camera_cut")};
+    c.denoisers = {{"svgf", {}, ""}};
+    c.warmup = 4;
+    c.flip = "none";
+    c.keepFrames = "none";
+    c.shardIndex = shard;
+    c.shardCount = shards;
+    return std::make_pair(runMatrix(c), c.out);
+  };
+  const auto [whole, wholeDir] = run("whole", 0, 1);
+  ASSERT_TRUE(failedPairs(whole).empty());
+  int events = 0, cuts = 0;
+  for (const json& p : whole["pairs"]) {
+    for (const json& g : p["ghosting"]) {
+      ++events;
+      for (const std::string& f : ghostingFigureNames())
+        EXPECT_NE(g["ci95"].contains(f), g.value("ci95Absent", json::object()).contains(f))
+            << p["label"] << " " << f << ": an interval or a reason, exactly one";
+      ASSERT_TRUE(g["ci95"].contains("lagEnergy")) << g.value("ci95Absent", json()).dump();
+      EXPECT_TRUE(g.contains("tiles"));
+      EXPECT_LE(g["ci95"]["lagEnergy"][0].get<double>(), g["ci95"]["lagEnergy"][1].get<double>());
+      // The signed bias is a mean over the region: its interval brackets it.
+      const double v = g["signedBias"], lo = g["ci95"]["signedBias"][0],
+                   hi = g["ci95"]["signedBias"][1];
+      EXPECT_TRUE(lo <= v && v <= hi) << p["label"] << " " << v << " [" << lo << ", " << hi << "]";
+    }
+    for (const json& c : p["cuts"]) {
+      ++cuts;
+      ASSERT_TRUE(c["ci95"].contains("oldViewLeak")) << c.dump();
+      ASSERT_TRUE(c["ci95"].contains("recovery1")) << c.value("ci95Absent", json()).dump();
+    }
+  }
+  EXPECT_EQ(events, 3);  // passthrough, temporal, svgf on light_switch
+  EXPECT_EQ(cuts, 3);
+  const json& st = whole["statistics"]["scenes"];
+  ASSERT_EQ(st["light_switch"]["events"].size(), 1u);
+  const json& lag = st["light_switch"]["events"][0]["byFigure"]["lagEnergy"];
+  EXPECT_EQ(lag["totalPairs"], 3);
+  EXPECT_EQ(lag["ranking"].size(), 3u);
+  ASSERT_EQ(st["camera_cut"]["cuts"].size(), 1u);
+  EXPECT_EQ(st["camera_cut"]["cuts"][0]["byFigure"]["oldViewLeak"]["totalPairs"], 3);
+  // The temporal filter (history dropped at the cut, one sample) is resolved worse at cut+1 than
+  // the noisy input, whose error does not move at the cut.
+  bool temporalWorse = false;
+  for (const json& x : st["camera_cut"]["cuts"][0]["byFigure"]["recovery1"]["pairs"])
+    if ((x["a"] == "passthrough" && x["b"] == "temporal") ||
+        (x["a"] == "temporal" && x["b"] == "passthrough"))
+      temporalWorse =
+          x["resolved"].get<bool>() && (x["a"] == "temporal") == (x["diff"].get<double>() > 0);
+  EXPECT_TRUE(temporalWorse) << st["camera_cut"]["cuts"][0]["byFigure"]["recovery1"].dump();
+
+  const auto [s0, dir0] = run("shard0", 0, 2);
+  const auto [s1, dir1] = run("shard1", 1, 2);
+  const json merged = mergeRuns({dir0, dir1}, test::freshDir("event_ci_merged"));
+  auto byKey = [](const json& r) {
+    std::map<std::string, json> out;
+    for (const json& p : r["pairs"])
+      out[p["scene"].get<std::string>() + "/" + p["label"].get<std::string>()] = p;
+    return out;
+  };
+  const auto a = byKey(whole), b = byKey(merged);
+  ASSERT_EQ(a.size(), b.size());
+  for (const auto& [key, p] : a) {
+    for (const char* kind : {"ghosting", "cuts"})
+      for (size_t k = 0; k < p[kind].size(); ++k) {
+        EXPECT_EQ(p[kind][k]["ci95"], b.at(key)[kind][k]["ci95"]) << key;
+        EXPECT_EQ(p[kind][k]["tiles"], b.at(key)[kind][k]["tiles"]) << key;
+      }
+  }
+  for (const char* scene : {"light_switch", "camera_cut"})
+    for (const char* kind : {"events", "cuts"})
+      EXPECT_EQ(whole["statistics"]["scenes"][scene].value(kind, json()),
+                merged["statistics"]["scenes"][scene].value(kind, json()))
+          << scene << " " << kind;
+  // results.db: the figures' rankings and paired differences, named by event and figure.
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open_v2((wholeDir / "results.db").c_str(), &db, SQLITE_OPEN_READONLY, nullptr),
+            SQLITE_OK);
+  auto count = [&](const char* sql) {
+    sqlite3_stmt* s = nullptr;
+    int n = -1;
+    if (sqlite3_prepare_v2(db, sql, -1, &s, nullptr) == SQLITE_OK && sqlite3_step(s) == SQLITE_ROW)
+      n = sqlite3_column_int(s, 0);
+    sqlite3_finalize(s);
+    return n;
+  };
+  EXPECT_EQ(count("SELECT COUNT(*) FROM rankings WHERE metric = 'ghosting@12.lagEnergy' AND ci_lo "
+                  "IS NOT NULL"),
+            3);
+  EXPECT_EQ(count("SELECT COUNT(*) FROM paired WHERE metric = 'cut@8.oldViewLeak'"), 3);
+  sqlite3_close(db);
+}
+
+}  // namespace
+}  // namespace arena
