@@ -160,10 +160,12 @@ json speedPoint(const json& pair, const ErrorAxis& axis) {
   v["msHi"] = std::isfinite(hi) ? json(hi) : json(nullptr);
   // Disocclusion rays (reengine): the paths a denoiser read from the low-resolution buffer and
   // their equivalent tracing time, drawn as a separate bar beside its own time.
-  const json& summary = pair.contains("summary") ? pair["summary"] : json::object();
-  for (const char* key : {"tracingMs", "extraRaysPerPixel"})
-    if (summary.contains(key) && summary[key].contains("mean") && summary[key]["mean"].is_number())
-      v[key] = summary[key]["mean"];
+  if (pair.contains("summary"))
+    for (const char* key : {"tracingMs", "extraRaysPerPixel"}) {
+      const json& summary = pair["summary"];
+      if (summary.contains(key) && summary[key].contains("mean") && summary[key]["mean"].is_number())
+        v[key] = summary[key]["mean"];
+    }
   return v;
 }
 
