@@ -54,9 +54,9 @@ nlohmann::json GhostingConfig::toJson() const {
        "tile bootstrap (metrics/ghosting_intervals.hpp): the image's 4x4 tiles drawn with "
        "replacement "
        "once per replicate for the whole window (frames are not resampled), the curves and figures "
-       "recomputed, 1000 replicates, percentile intervals, seeded by scene and event; none when "
-       "the "
-       "changed region spreads over fewer than 4 effective tiles"}};
+       "recomputed (the chromaticity error from the drawn tiles' summed colours), 1000 "
+       "replicates, percentile intervals, seeded by scene and event; none when the changed "
+       "region spreads over fewer than 4 effective tiles"}};
 }
 
 Image changedRegion(const Image& r0, const Image& rBefore, const GhostingConfig& c,
