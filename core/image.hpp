@@ -29,22 +29,36 @@ struct CacheLineAllocator {
 };
 using PlaneStorage = std::vector<float, CacheLineAllocator<float>>;
 
+// An image owns its planes, or borrows them (Image::borrow): a view of planes somebody else
+// allocated, laid out the same way, so code written against Image reads them in place -- the C
+// plugin adapter (examples/plugins) hands the harness's planes to a built-in this way, zero copy.
+// Copying either kind gives an owning copy; moving a borrowed image moves the view. Assigning to
+// a borrowed image rebinds it (it does not write into the borrowed planes).
 class Image {
  public:
   Image() = default;
   Image(int width, int height, int channels, float fill = 0.0f);
+  // `channels` planes of width x height floats at data, data + w*h, ...; the caller keeps them
+  // alive (and unmoved) for the image's life.
+  static Image borrow(float* data, int width, int height, int channels);
+  Image(const Image& other);
+  Image(Image&& other) noexcept;
+  Image& operator=(const Image& other);
+  Image& operator=(Image&& other) noexcept;
+  ~Image() = default;
 
   int width() const { return width_; }
   int height() const { return height_; }
   int channels() const { return channels_; }
   size_t pixelCount() const { return size_t(width_) * size_t(height_); }
   bool empty() const { return pixelCount() == 0 || channels_ == 0; }
+  bool borrowed() const { return borrowed_; }
   bool sameShape(const Image& other) const {
     return width_ == other.width_ && height_ == other.height_ && channels_ == other.channels_;
   }
 
-  float* plane(int c) { return data_.data() + size_t(c) * pixelCount(); }
-  const float* plane(int c) const { return data_.data() + size_t(c) * pixelCount(); }
+  float* plane(int c) { return base_ + size_t(c) * pixelCount(); }
+  const float* plane(int c) const { return base_ + size_t(c) * pixelCount(); }
   std::span<float> planeSpan(int c) { return {plane(c), pixelCount()}; }
   std::span<const float> planeSpan(int c) const { return {plane(c), pixelCount()}; }
 
@@ -53,14 +67,20 @@ class Image {
   // Clamp-to-edge access, used by filters whose footprint leaves the image.
   float atClamped(int x, int y, int c = 0) const;
 
-  PlaneStorage& raw() { return data_; }
-  const PlaneStorage& raw() const { return data_; }
+  // Every plane, one after the other (channels x pixelCount values).
+  std::span<float> raw() { return {base_, pixelCount() * size_t(channels_)}; }
+  std::span<const float> raw() const { return {base_, pixelCount() * size_t(channels_)}; }
   void fill(float value);
 
  private:
   int width_ = 0, height_ = 0, channels_ = 0;
-  PlaneStorage data_;
+  bool borrowed_ = false;
+  PlaneStorage data_;      // empty when borrowed
+  float* base_ = nullptr;  // data_.data(), or the borrowed planes
 };
+
+// The pixels of two images are equal (same shape, same values; NaN differs from itself).
+bool samePixels(const Image& a, const Image& b);
 
 // Rec.709 luminance of a planar RGB image (channels 0..2).
 Image luminance(const Image& rgb);

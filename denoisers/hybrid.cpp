@@ -93,7 +93,7 @@ void Hybrid::denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& o
 void Hybrid::toFilterSpace(const Image& signal) {
   ScopedPass pass(this, "filter space", 0);
   if (!s_.reinhard) {
-    signal_.raw() = signal.raw();
+    signal_ = signal;
     return;
   }
   reinhardCompress(signal, signal_);
@@ -153,7 +153,7 @@ void Hybrid::disocclusion(const FrameContext& ctx) {
     historyLength_.plane(0)[i] =
         valid ? std::min(historySample(i, lengthHistory_.plane(0)) + 1.0f, maxHistory) : 1.0f;
   }
-  blurredMask_.raw() = mask_.raw();
+  blurredMask_ = mask_;
   if (!s_.maskBlur) return;
   const int w = gbuffer_.width, h = gbuffer_.height;
   parallelRows(h, [&](int y) {
@@ -218,7 +218,7 @@ void Hybrid::preSpatial() {
   }
   ScopedPass pass(this, "pre-spatial mip", s_.preMip ? 4 : 0);
   if (!s_.preMip) {
-    preWide_.raw() = preSpatial_.raw();
+    preWide_ = preSpatial_;
     return;
   }
   preMips_.build(preSpatial_, gbuffer_);
@@ -373,7 +373,7 @@ void Hybrid::postSpatial() {
   }
   ScopedPass pass(this, "post-spatial mip + upsample", s_.postMip ? 4 : 0);
   if (!s_.postMip) {
-    post_.raw() = input->raw();
+    post_ = *input;
     return;
   }
   postMips_.build(*input, gbuffer_);
@@ -389,7 +389,7 @@ void Hybrid::postSpatial() {
 void Hybrid::stabilize() {
   ScopedPass pass(this, "stabilizer", s_.stabilizer ? 9 : 0);
   if (!s_.stabilizer) {
-    stabilized_.raw() = post_.raw();
+    stabilized_ = post_;
     return;
   }
   for (size_t i = 0; i < gbuffer_.pixelCount(); ++i)
@@ -406,7 +406,7 @@ void Hybrid::stabilize() {
 void Hybrid::fromFilterSpace(Image& output) {
   ScopedPass pass(this, "output space", 0);
   if (!s_.reinhard) {
-    output.raw() = stabilized_.raw();
+    output = stabilized_;
     return;
   }
   reinhardExpand(stabilized_, output);

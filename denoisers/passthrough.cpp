@@ -13,7 +13,7 @@ class Passthrough final : public Denoiser {
   void reset() override {}
   void denoise(const FrameContext&, const DenoiserInputs& in, Image& output) override {
     ScopedPass pass(this, "copy", 0);
-    output.raw() = in.signal.raw();
+    output = in.signal;
   }
 };
 

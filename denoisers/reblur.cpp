@@ -135,7 +135,7 @@ Reblur::HistoryBlock Reblur::history(size_t i, int count) const {
 void Reblur::preBlurPass(const DenoiserInputs& in, int frameIndex) {
   ScopedPass pass(this, "pre-blur", s_.preBlur ? kPoissonTaps : 0);
   if (!s_.preBlur) {
-    preBlurred_.raw() = in.signal.raw();
+    preBlurred_ = in.signal;
     return;
   }
   // NRD: diffusePrepassBlurRadius 30, specularPrepassBlurRadius 50.
@@ -267,7 +267,7 @@ void Reblur::historyFixPass() {
 void Reblur::antiFireflyPass() {
   ScopedPass pass(this, "anti-firefly", s_.antiFirefly || s_.fastHistoryClamp ? 17 : 0);
   if (!s_.antiFirefly && !s_.fastHistoryClamp) {
-    fireflyFree_.raw() = historyFixed_->raw();
+    fireflyFree_ = *historyFixed_;
     return;
   }
   const int w = gbuffer_.width, h = gbuffer_.height;
@@ -359,14 +359,14 @@ void Reblur::blurPasses(int frameIndex) {
       poissonDiskBlur(fireflyFree_, guide, {maxRadius, s_.weights},
                       poissonRotation(2 * frameIndex + 1), &radiusScale_, blurred_);
     else
-      blurred_.raw() = fireflyFree_.raw();
+      blurred_ = fireflyFree_;
   }
   ScopedPass pass(this, "post-blur", s_.postBlur ? kPoissonTaps : 0);
   if (s_.postBlur)
     poissonDiskBlur(blurred_, guide, {2.0f * maxRadius, s_.weights},
                     poissonRotation(2 * frameIndex + 2), &radiusScale_, postBlurred_);
   else
-    postBlurred_.raw() = blurred_.raw();
+    postBlurred_ = blurred_;
 }
 
 // ---- 5. Recurrence: the post-blurred result is next frame's history, so the spatial samples
@@ -387,8 +387,8 @@ void Reblur::storeRecurrentHistory() {
 void Reblur::stabilize(Image& output) {
   ScopedPass pass(this, "stabilization", s_.stabilization ? 9 : 0);
   if (!s_.stabilization) {
-    stabilized_.raw() = postBlurred_.raw();
-    output.raw() = stabilized_.raw();
+    stabilized_ = postBlurred_;
+    output = stabilized_;
     return;
   }
   const int w = gbuffer_.width, h = gbuffer_.height;

@@ -232,6 +232,7 @@ void addBenchCommand(CLI::App& app) {
       ParamSet params;
       std::vector<SignalKind> kinds;
       std::vector<std::unique_ptr<Denoiser>> instances;
+      std::vector<LayerSet> staged;  // per instance: its inputs, copied in before each timed call
       std::vector<double> total;
       std::map<std::string, std::vector<double>> passMs;
       std::map<std::string, double> passTaps;
@@ -240,11 +241,12 @@ void addBenchCommand(CLI::App& app) {
     std::vector<Contender> contenders;
     for (const std::string& name : names) {
       const DenoiserInfo& info = DenoiserRegistry::instance().find(name);
-      Contender c{name, info.schema.resolve(params[name], name), {}, {}, {}, {}, {}, {}};
+      Contender c{name, info.schema.resolve(params[name], name), {}, {}, {}, {}, {}, {}, {}};
       c.kinds = info.signals == SignalMode::Color ? std::vector<SignalKind>{SignalKind::Color}
                                                   : std::vector<SignalKind>{SignalKind::Diffuse, SignalKind::Specular};
       for (SignalKind kind : c.kinds) c.instances.push_back(info.create(c.params, kind));
       for (auto& inst : c.instances) inst->setup(w, h);
+      c.staged.resize(c.instances.size());
       contenders.push_back(std::move(c));
     }
     Image outImage(w, h, 3), signal;
@@ -262,11 +264,20 @@ void addBenchCommand(CLI::App& app) {
         double frameMs = 0;
         for (size_t k = 0; k < c.instances.size(); ++k) {
           const SignalKind kind = c.kinds[k];
+          // Every contender starts from the same cache state: what it reads (the signal and its
+          // declared layers) has just been written, as by the passes that produce them in an
+          // engine. Without this the layers came cold from the cycled input pool, while a plugin
+          // that copied its inputs first read them warm -- and measured faster than its own code.
           signal = frame.get(signalName(kind));
+          LayerSet& staged = c.staged[k];  // the instance's own: only what it declared
+          for (const std::string& name : c.instances[k]->requiredChannels()) {
+            if (!staged.has(name)) staged.set(name, frame.get(name));
+            else staged.get(name) = frame.get(name);
+          }
           const bool low = c.instances[k]->wantsLowres() && !inputLowres.empty();
           const LowresInputs lowInputs{low ? inputLowres[size_t(f) % inputs.size()] : frame, d->lowresFactor,
                                        d->lowresSpp};
-          DenoiserInputs in{signal, frame, grads ? &gradients : nullptr, low ? &lowInputs : nullptr};
+          DenoiserInputs in{signal, staged, grads ? &gradients : nullptr, low ? &lowInputs : nullptr};
           c.instances[k]->clearPassStats();
           auto t0 = std::chrono::steady_clock::now();
           c.instances[k]->denoise(ctx, in, outImage);

@@ -1,5 +1,6 @@
 #include "examples/plugins/builtin_plugin.hpp"
 
+#include <algorithm>
 #include <exception>
 
 namespace arena::plugin {
@@ -33,9 +34,24 @@ CameraState cameraOf(const ArenaCamera& a) {
   return c;
 }
 
-void copyIn(const ArenaImage& view, Image& image) {
-  for (int c = 0; c < image.channels(); ++c)
-    parallelCopy(view.planes[c], image.pixelCount(), image.plane(c));
+// The harness's planes as an Image, in place when they are laid out like one (plane c at
+// planes[0] + c * width * height: the arena's own harness always hands them over so), else copied
+// into `owned`. The C ABI's inputs are const; the built-in only reads them (const Image&).
+const Image& imageOf(const ArenaImage& view, Image& owned) {
+  const size_t pixels = size_t(view.width) * size_t(view.height);
+  bool contiguous = true;
+  for (int c = 1; c < view.channels; ++c)
+    contiguous = contiguous && view.planes[c] == view.planes[0] + size_t(c) * pixels;
+  if (contiguous) {
+    owned =
+        Image::borrow(const_cast<float*>(view.planes[0]), view.width, view.height, view.channels);
+  } else {
+    if (owned.borrowed() || owned.width() != view.width || owned.height() != view.height ||
+        owned.channels() != view.channels)
+      owned = Image(view.width, view.height, view.channels);
+    for (int c = 0; c < view.channels; ++c) parallelCopy(view.planes[c], pixels, owned.plane(c));
+  }
+  return owned;
 }
 
 }  // namespace
@@ -110,18 +126,8 @@ void* BuiltinPlugin::create(const ArenaParamValue* values, int count, ArenaSigna
 }
 
 int BuiltinPlugin::setup(void* instance, int width, int height, char* error, size_t errorSize) {
-  return guarded(error, errorSize, [&] {
-    Instance& self = *static_cast<Instance*>(instance);
-    self.denoiser->setup(width, height);
-    self.signal = Image(width, height, 3);
-    self.output = Image(width, height, 3);
-    for (const std::string& name : exported_->channels_) {
-      int channels = 0;
-      for (const LayerSpec& spec : channels::frameLayers())
-        if (spec.name == name) channels = spec.channels();
-      self.frame.set(name, Image(width, height, channels));
-    }
-  });
+  return guarded(error, errorSize,
+                 [&] { static_cast<Instance*>(instance)->denoiser->setup(width, height); });
 }
 
 void BuiltinPlugin::reset(void* instance) {
@@ -133,9 +139,22 @@ int BuiltinPlugin::denoise(void* instance, const ArenaFrameContext* ctx, const A
                            size_t errorSize) {
   return guarded(error, errorSize, [&] {
     Instance& self = *static_cast<Instance*>(instance);
-    copyIn(inputs->signal, self.signal);
-    for (int i = 0; i < inputs->layerCount; ++i)
-      copyIn(inputs->layers[i].image, self.frame.get(inputs->layers[i].name));
+    const Image& signal = imageOf(inputs->signal, self.signal);
+    for (int i = 0; i < inputs->layerCount; ++i) {
+      const char* name = inputs->layers[i].name;
+      if (self.frame.has(name)) {
+        imageOf(inputs->layers[i].image, self.frame.get(name));
+      } else {
+        Image first;
+        imageOf(inputs->layers[i].image, first);
+        self.frame.set(name, std::move(first));
+      }
+    }
+    ArenaImage outputView{output->width, output->height, output->channels, {}};
+    for (int k = 0; k < output->channels && k < ARENA_MAX_CHANNELS; ++k)
+      outputView.planes[k] = output->planes[k];
+    Image& result = self.output;
+    imageOf(outputView, result);
     FrameContext c;
     c.frameIndex = ctx->frameIndex;
     c.width = ctx->width;
@@ -144,9 +163,11 @@ int BuiltinPlugin::denoise(void* instance, const ArenaFrameContext* ctx, const A
     c.camera = cameraOf(ctx->camera);
     c.previousCamera = cameraOf(ctx->previousCamera);
     self.denoiser->clearPassStats();
-    self.denoiser->denoise(c, {self.signal, self.frame, nullptr}, self.output);
-    for (int k = 0; k < 3; ++k)
-      parallelCopy(self.output.plane(k), self.output.pixelCount(), output->planes[k]);
+    self.denoiser->denoise(c, {signal, self.frame, nullptr}, result);
+    // A built-in that assigned its output (rather than writing its planes) left it elsewhere.
+    if (result.plane(0) != output->planes[0])
+      for (int k = 0; k < std::min(result.channels(), output->channels); ++k)
+        parallelCopy(result.plane(k), result.pixelCount(), output->planes[k]);
     if (host && host->reportPass)
       for (const PassStats& p : self.denoiser->lastPasses())
         host->reportPass(host->context, p.name.c_str(), p.milliseconds, p.tapsPerPixel);

@@ -1,10 +1,10 @@
 #pragma once
 // Re-exposes a built-in Denoise Arena denoiser through the C plugin ABI (include/arena_plugin.h):
 // the registry entry's schema, channels and signal mode become the C descriptor, and each ABI
-// call forwards to the C++ instance. The C ABI hands over views of the harness's planes; the
-// built-in reads arena::Image, which owns its storage, so the signal and the required layers are
-// copied in and the result copied out (parallelCopy, inside the timed call) -- the adapter's
-// whole cost over the built-in, measured in docs/external-denoisers.md.
+// call forwards to the C++ instance. The C ABI hands over views of the harness's planes and the
+// adapter hands them to the built-in as borrowed arena::Images (Image::borrow): the built-in reads
+// the signal and layers and writes the output in the harness's own planes, zero copy. (Planes not
+// laid out like an Image's are copied; so is an output the built-in assigned instead of writing.)
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -27,8 +27,8 @@ class BuiltinPlugin {
  private:
   struct Instance {
     std::unique_ptr<Denoiser> denoiser;
-    Image signal, output;
-    LayerSet frame;  // the required layers, copied from the harness's views each frame
+    Image signal, output;  // borrowed views of the harness's planes (or copies, see above)
+    LayerSet frame;        // the required layers, likewise
   };
   static void* create(const ArenaParamValue* values, int count, ArenaSignal signal, char* error,
                       size_t errorSize);
