@@ -344,7 +344,9 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
               eventBias[k].push_back(signedBias(f.color, r, mask, gc.eps, &biasTiles));
               eventTiles[k].curve.add(t, std::move(inMask.relMse));
               eventTiles[k].bias.add(t, std::move(biasTiles));
-              eventChroma[k].push_back(chromaticityError(f.color, r, mask));
+              ColourTileSums colourTiles;
+              eventChroma[k].push_back(chromaticityError(f.color, r, mask, &colourTiles));
+              eventTiles[k].addColour(t, std::move(colourTiles));
             }
             for (size_t k = 0; k < sd.cuts.size(); ++k) {
               const auto& cut = sd.cuts[k];

@@ -110,7 +110,7 @@ void printEvents(const json& results) {
           std::cout << "  " << std::left << std::setw(4) << m["rank"].get<int>() << std::setw(22)
                     << m["label"].get<std::string>();
           for (const char* f : cut ? std::vector<const char*>{"oldViewLeak", "atCut"}
-                                   : std::vector<const char*>{"lagEnergy", "responseFrames", "peakExcess"})
+                                   : std::vector<const char*>{"lagEnergy", "responseFrames", "peakExcess", "chromaLagEnergy"})
             std::cout << f << " " << std::setw(26) << figure(*e, f) << " ";
           std::cout << tiedList(m) << "\n";
         }

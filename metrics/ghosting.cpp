@@ -54,9 +54,9 @@ nlohmann::json GhostingConfig::toJson() const {
        "tile bootstrap (metrics/ghosting_intervals.hpp): the image's 4x4 tiles drawn with "
        "replacement "
        "once per replicate for the whole window (frames are not resampled), the curves and figures "
-       "recomputed, 1000 replicates, percentile intervals, seeded by scene and event; none when "
-       "the "
-       "changed region spreads over fewer than 4 effective tiles"}};
+       "recomputed (the chromaticity error from the drawn tiles' summed colours), 1000 "
+       "replicates, percentile intervals, seeded by scene and event; none when the changed "
+       "region spreads over fewer than 4 effective tiles"}};
 }
 
 Image changedRegion(const Image& r0, const Image& rBefore, const GhostingConfig& c,
@@ -107,17 +107,33 @@ double signedBias(const Image& d, const Image& r, const Image& mask, double eps,
   return n > 0 ? s / n : 0.0;
 }
 
-double chromaticityError(const Image& d, const Image& r, const Image& mask) {
-  double sd[3] = {0, 0, 0}, sr[3] = {0, 0, 0};
+double chromaticityErrorOfSums(const std::array<double, 3>& d, const std::array<double, 3>& r) {
+  if (r[0] + r[1] + r[2] <= 0) return 0.0;
+  return distance(chromaticity(d[0], d[1], d[2]), chromaticity(r[0], r[1], r[2]));
+}
+
+double chromaticityError(const Image& d, const Image& r, const Image& mask, ColourTileSums* tiles) {
+  std::array<double, 3> sd = {0, 0, 0}, sr = {0, 0, 0};
+  std::vector<TileAccumulator> acc;
+  if (tiles) acc.assign(6, TileAccumulator(d.width(), d.height()));
   for (size_t i = 0; i < d.pixelCount(); ++i) {
     if (mask.plane(0)[i] == 0) continue;
+    const int x = int(i % size_t(d.width())), y = int(i / size_t(d.width()));
     for (int c = 0; c < 3; ++c) {
-      sd[c] += d.plane(c)[i];
-      sr[c] += r.plane(c)[i];
+      sd[size_t(c)] += d.plane(c)[i];
+      sr[size_t(c)] += r.plane(c)[i];
+      if (tiles) {
+        acc[size_t(c)].add(x, y, d.plane(c)[i], 1.0);
+        acc[size_t(3 + c)].add(x, y, r.plane(c)[i], 1.0);
+      }
     }
   }
-  if (sr[0] + sr[1] + sr[2] <= 0) return 0.0;
-  return distance(chromaticity(sd[0], sd[1], sd[2]), chromaticity(sr[0], sr[1], sr[2]));
+  if (tiles)
+    for (size_t c = 0; c < 3; ++c) {
+      tiles->denoised[c] = acc[c].finish();
+      tiles->reference[c] = acc[3 + c].finish();
+    }
+  return chromaticityErrorOfSums(sd, sr);
 }
 
 GhostingResult analyseGhosting(int t0, int begin, const std::vector<double>& curve,

@@ -1,6 +1,7 @@
 #pragma once
 // Ghosting and lag around scripted events, and recovery after camera cuts (metrics.md, "Ghosting
 // and lag").
+#include <array>
 #include <nlohmann/json.hpp>
 #include <vector>
 
@@ -38,10 +39,20 @@ void addTrail(Image& mask, int objectId, const std::vector<const Image*>& previo
 // spatial blocks, metrics/ghosting_intervals.hpp).
 double signedBias(const Image& denoised, const Image& reference, const Image& mask,
                   double eps = 0.01, TileSums* tiles = nullptr);
+// Per-tile colour sums in the mask, channel by channel (R, G, B): sum = the channel's sum over the
+// tile's mask pixels, count = those pixels (the chromaticity lag's spatial blocks,
+// metrics/ghosting_intervals.hpp).
+struct ColourTileSums {
+  std::array<TileSums, 3> denoised, reference;
+};
 // Chromaticity error in the mask: Euclidean distance between the chromaticities (R,G,B)/(R+G+B) of
 // the mean colour over M of d and of r (a mean, so noise averages out as in b_M); 0 when M is
-// black in the reference.
-double chromaticityError(const Image& denoised, const Image& reference, const Image& mask);
+// black in the reference. With `tiles`, the per-tile colour sums behind it.
+double chromaticityError(const Image& denoised, const Image& reference, const Image& mask,
+                         ColourTileSums* tiles = nullptr);
+// The same from the two summed colours (or means: chromaticity does not depend on the scale).
+double chromaticityErrorOfSums(const std::array<double, 3>& denoised,
+                               const std::array<double, 3>& reference);
 
 struct GhostingResult {
   int eventFrame = 0, windowBegin = 0, windowEnd = 0;  // window [begin, end], inclusive

@@ -14,8 +14,8 @@ using nlohmann::json;
 namespace {
 
 // Figures ranked between methods (lower is better); signed bias ranks by its magnitude.
-const std::vector<std::string> kRankedEventFigures = {"lagEnergy", "responseFrames", "peakExcess",
-                                                      "ghostEnergy", "absSignedBias"};
+const std::vector<std::string> kRankedEventFigures = {
+    "lagEnergy", "responseFrames", "peakExcess", "ghostEnergy", "absSignedBias", "chromaLagEnergy"};
 
 // The rows of `m` must be the consecutive frames first, first + 1, ... (a window).
 void requireConsecutive(const MetricTiles& m, int first, const char* what) {
@@ -52,6 +52,23 @@ bool curveUnder(const MetricTiles& m, const std::vector<int>& draw, std::vector<
   return true;
 }
 
+// Why the chromaticity figures cannot be resampled from `e`'s colour sums ("" when they can):
+// none stored (older results), or rows that are not the bias rows' frames and tiles.
+std::string colourMismatch(const EventTiles& e) {
+  if (!e.hasColour())
+    return "no per-tile colour sums stored for this event (results written before they were)";
+  for (const auto* side : {&e.denoisedColour, &e.referenceColour})
+    for (size_t c = 0; c < 3; ++c)
+      if ((*side)[c].frames != e.bias.frames || (*side)[c].tileCount() != e.bias.tileCount())
+        return std::string("the ") + (side == &e.denoisedColour ? "denoised" : "reference") +
+               " colour's " + "RGB"[c] + " tile sums cover " +
+               std::to_string((*side)[c].frames.size()) + " frames x " +
+               std::to_string((*side)[c].tileCount()) + " tiles, the event's window " +
+               std::to_string(e.bias.frames.size()) + " x " + std::to_string(e.bias.tileCount()) +
+               ": not resampled";
+  return "";
+}
+
 FigureReplicates allAbsent(std::vector<std::string> figures, const std::string& why) {
   FigureReplicates r;
   r.figures = std::move(figures);
@@ -86,14 +103,52 @@ void resample(FigureReplicates& r, int tiles, const std::string& seedName,
 
 }  // namespace
 
+void EventTiles::addColour(int frame, ColourTileSums sums) {
+  for (size_t c = 0; c < 3; ++c) {
+    denoisedColour[c].add(frame, std::move(sums.denoised[c]));
+    referenceColour[c].add(frame, std::move(sums.reference[c]));
+  }
+}
+
+bool EventTiles::hasColour() const {
+  for (size_t c = 0; c < 3; ++c)
+    if (denoisedColour[c].empty() || referenceColour[c].empty()) return false;
+  return true;
+}
+
 json EventTiles::toJson() const {
-  return {{"curve", curve.toJson()}, {"bias", bias.toJson()}};
+  json j = {{"curve", curve.toJson()}, {"bias", bias.toJson()}};
+  if (hasColour()) {
+    json& colour = j["colour"];
+    for (size_t c = 0; c < 3; ++c) {
+      colour["denoised"].push_back(denoisedColour[c].toJson());
+      colour["reference"].push_back(referenceColour[c].toJson());
+    }
+  }
+  return j;
 }
 
 EventTiles EventTiles::fromJson(const json& j) {
   if (!j.is_object() || !j.contains("curve") || !j.contains("bias"))
     throw Error("event tile data: expected an object with curve and bias");
-  return {MetricTiles::fromJson(j["curve"]), MetricTiles::fromJson(j["bias"])};
+  EventTiles e{MetricTiles::fromJson(j["curve"]), MetricTiles::fromJson(j["bias"]), {}, {}};
+  if (!j.contains("colour")) return e;  // written before the colour sums were stored
+  const json& colour = j["colour"];
+  for (const char* side : {"denoised", "reference"}) {
+    const std::string field = std::string("event tile data: colour.") + side;
+    if (!colour.is_object() || !colour.contains(side) || !colour[side].is_array() ||
+        colour[side].size() != 3)
+      throw Error(field + ": expected an array of 3 channels' tile sums (R, G, B)");
+    for (size_t c = 0; c < 3; ++c) {
+      try {
+        (side == std::string("denoised") ? e.denoisedColour : e.referenceColour)[c] =
+            MetricTiles::fromJson(colour[side][c]);
+      } catch (const std::exception& x) {
+        throw Error(field + "[" + std::to_string(c) + "] (" + "RGB"[c] + "): " + x.what());
+      }
+    }
+  }
+  return e;
 }
 
 json CutTiles::toJson() const {
@@ -107,8 +162,8 @@ CutTiles CutTiles::fromJson(const json& j) {
 }
 
 std::vector<std::string> ghostingFigureNames() {
-  return {"lagEnergy",  "responseFrames", "peakExcess",  "ghostEnergy",
-          "signedBias", "absSignedBias",  "steadyState", "chromaLagEnergy"};
+  return {"lagEnergy",     "responseFrames", "peakExcess",      "ghostEnergy", "signedBias",
+          "absSignedBias", "steadyState",    "chromaLagEnergy", "chromaPre"};
 }
 
 std::vector<std::string> cutFigureNames(const GhostingConfig& c) {
@@ -127,7 +182,8 @@ std::map<std::string, double> ghostingFigures(const GhostingResult& g) {
           {"signedBias", g.signedBias},
           {"absSignedBias", std::abs(g.signedBias)},
           {"steadyState", g.steadyState},
-          {"chromaLagEnergy", g.chroma.empty() ? kUndefined : g.chromaLagEnergy}};
+          {"chromaLagEnergy", g.chroma.empty() ? kUndefined : g.chromaLagEnergy},
+          {"chromaPre", g.chroma.empty() ? kUndefined : g.chromaPre}};
 }
 
 std::map<std::string, double> cutFigures(const CutResult& c, const GhostingConfig& gc) {
@@ -173,16 +229,28 @@ FigureReplicates ghostingReplicates(int t0, const EventTiles& tiles, const std::
     a.effectiveTiles = r.effectiveTiles;
     return a;
   }
-  r.absent["chromaLagEnergy"] =
-      "not resampled: the chromaticity error is of the region's mean colour, whose per-tile sums "
-      "are not stored";
+  const std::string noColour = colourMismatch(tiles);
+  for (const char* f : {"chromaLagEnergy", "chromaPre"})
+    if (!noColour.empty()) r.absent[f] = noColour;
   r.neverSettled["responseFrames"] = double(tiles.bias.frames.back() - t0 + 1);
-  std::vector<double> curve, bias;
+  std::vector<double> curve, bias, chroma;
+  std::array<std::vector<double>, 3> d, ref;
   resample(r, tiles.bias.tileCount(), seedName, cfg,
            [&](const std::vector<int>& draw, std::map<std::string, double>& out) {
              if (!curveUnder(tiles.curve, draw, curve) || !curveUnder(tiles.bias, draw, bias))
                return false;
-             out = ghostingFigures(analyseGhosting(t0, begin, curve, bias, {}, gc));
+             chroma.clear();
+             if (noColour.empty()) {
+               // Each frame's chromaticity error from the drawn tiles' mean colours.
+               for (size_t c = 0; c < 3; ++c)
+                 if (!curveUnder(tiles.denoisedColour[c], draw, d[c]) ||
+                     !curveUnder(tiles.referenceColour[c], draw, ref[c]))
+                   return false;
+               for (size_t i = 0; i < bias.size(); ++i)
+                 chroma.push_back(chromaticityErrorOfSums({d[0][i], d[1][i], d[2][i]},
+                                                          {ref[0][i], ref[1][i], ref[2][i]}));
+             }
+             out = ghostingFigures(analyseGhosting(t0, begin, curve, bias, chroma, gc));
              return true;
            });
   return r;
@@ -314,7 +382,8 @@ std::map<std::string, double> pointFigures(const json& j, bool cut, const Ghosti
     }
     return out;
   }
-  for (const char* k : {"lagEnergy", "peakExcess", "ghostEnergy", "signedBias", "steadyState"})
+  for (const char* k : {"lagEnergy", "peakExcess", "ghostEnergy", "signedBias", "steadyState",
+                        "chromaLagEnergy", "chromaPre"})
     out[k] = num(k);
   out["absSignedBias"] = std::abs(out["signedBias"]);
   out["responseFrames"] =

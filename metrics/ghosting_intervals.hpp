@@ -14,7 +14,9 @@
 // pixels). A replicate draws the tiles with replacement *once for the whole window* (the same
 // draw in every frame, so each tile keeps its own trajectory through the event, noise and lag
 // alike), recomputes the curves from the drawn tiles' sums and then the figures exactly as the run
-// did. 1000 replicates, seeded by scene and event, so reruns and `arena merge` of shards give the
+// did. The chromaticity error is of M's summed colours (a ratio of sums, not a mean of per-pixel
+// terms), so each tile keeps its summed output and reference colour, R, G, B apart: a replicate's
+// chromaticity curve is that of the drawn tiles' sums, and chromaPre / chromaLagEnergy follow. 1000 replicates, seeded by scene and event, so reruns and `arena merge` of shards give the
 // same intervals, and every method of a scene is resampled with the same draws: differences
 // between methods are paired. Percentile intervals, widened for the small number of tiles (below)
 // and cut at 0 for figures that cannot be negative. (Basic "reverse percentile" intervals were
@@ -28,7 +30,9 @@
 // given), a bias the reference shares with itself, other scenes; and the estimator's own bias:
 // lag energy adds max(0, |noise| - b_pre) on settled frames and peak excess is a maximum, so on a
 // noisy region both sit above the noise-free figure (tests/ghosting_intervals_test.cpp measures
-// coverage of the noise-free figure of a known lag). Input-seed
+// coverage of the noise-free figure of a known lag, of brightness and of hue), and so do
+// chromaLagEnergy and chromaPre (a distance, never negative: on a settled region chromaPre is the
+// noise's own chromaticity error, and its interval covers that, not 0). Input-seed
 // replicates (`--seeds K`) are not used: they exist only in some runs, and an interval whose
 // meaning depends on a flag could not be compared between runs; they remain the way to check
 // these intervals on a scene (README, "Uncertainty").
@@ -37,6 +41,7 @@
 // replicate the same value and a zero-width interval. An event whose region spreads over fewer
 // than kMinEffectiveTiles effective tiles ((sum n_k)^2 / sum n_k^2 over the tiles' pixel counts
 // n_k) has no interval, with that reason, never a fake one.
+#include <array>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -51,9 +56,14 @@ constexpr double kMinEffectiveTiles = 4.0;
 
 // The per-tile data behind one event's curves (results: pair.ghosting[k].tiles), one row per
 // window frame: E_M(t) as relMSE sums and sample counts in M, b_M(t) as sums of the per-pixel
-// relative luminance error and mask pixel counts.
+// relative luminance error and mask pixel counts, and the chromaticity error's colour sums in M
+// (ColourTileSums per frame, channel by channel; JSON "colour": {"denoised": [R, G, B],
+// "reference": [R, G, B]}; absent in results written before it, then empty).
 struct EventTiles {
   MetricTiles curve, bias;
+  std::array<MetricTiles, 3> denoisedColour, referenceColour;
+  void addColour(int frame, ColourTileSums sums);
+  bool hasColour() const;  // all six channels hold rows
   nlohmann::json toJson() const;
   static EventTiles fromJson(const nlohmann::json& j);
 };

@@ -15,6 +15,7 @@
     { key: 'ghostEnergy', title: 'ghost energy', better: 'lower', rank: 'ghostEnergy' },
     { key: 'peakExcess', title: 'peak excess', better: 'lower', rank: 'peakExcess' },
     { key: 'signedBias', title: 'signed bias', better: 'zero', rank: 'absSignedBias' },
+    { key: 'chromaLagEnergy', title: 'chroma lag energy', better: 'lower', rank: 'chromaLagEnergy' },
     { key: 'steadyState', title: 'E_ss' },
     { key: 'maskFraction', title: 'mask (fraction of pixels)' },
   ];

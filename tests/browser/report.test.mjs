@@ -202,6 +202,11 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
   const markedOnLag = await page.$$eval('#ghosting-body table.ghost-table tbody tr', (rows) => rows.filter((r) => r.cells[1].classList.contains('best')).map((r) => r.dataset.label).sort());
   assert.ok(firstOnLag.length >= 1);
   assert.deepEqual(markedOnLag, firstOnLag);
+  // The chromaticity lag (the warm ceiling light goes, the cool lamp stays) with its interval too.
+  const chromaColumn = await page.$$eval('#ghosting-body table.ghost-table thead th', (th) => th.map((h) => h.textContent).indexOf('chroma lag energy'));
+  assert.ok(chromaColumn > 0, 'chroma lag energy column');
+  const chromaCells = await page.$$eval('#ghosting-body table.ghost-table tbody tr', (rows, c) => rows.map((r) => r.cells[c].textContent), chromaColumn);
+  assert.ok(chromaCells.every((t) => /\[.+, .+\]/.test(t)), `chroma lag energy cells: ${chromaCells.join(' | ')}`);
 
   // (3) Tables: rankings (scene and overall), the failed pair, intervals, and a table that fits.
   assert.equal(await page.locator('#rankings table.ranking-table').count(), 2, 'scene and overall rankings');
