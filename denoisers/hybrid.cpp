@@ -4,7 +4,8 @@
 //   2. disocclusion pass: reprojection consistency (on screen, mesh id, depth, normal) writes the
 //      mask and the history length h; optionally the mask is blurred where the region grows,
 //   3. pre-spatial: one 3x3 à-trous over the signal and its second moment (variance clipping's
-//      box and the disocclusion fill), optionally a 2-level mip chain for a wider fill,
+//      box and the disocclusion fill), optionally a 2-level mip chain for a wider fill and one of
+//      its moments for a wider clip box,
 //   4. temporal: motion or hit-point reprojection chosen by roughness (specular), EMA with
 //      alpha = 1/h, h <= 24; variance clipping of the history to the pre-spatial mu +- k sigma;
 //      disoccluded pixels take the pre-spatial value; the luminance threshold replaces the
@@ -49,6 +50,9 @@ void Hybrid::setup(int width, int height) {
   previousGBuffer_.setup(width, height);
   preMips_.setup(width, height, s_.preMipLevels, 3);
   postMips_.setup(width, height, s_.postMipLevels, 3);
+  clipMips_.setup(width, height, s_.clipMipLevel, 6);
+  clipBase_ = Image(width, height, 6);
+  clipWide_ = Image(width, height, 6);
   for (Image* image : {&colorHistory_, &oneFrameHistory_, &stabilizerHistory_, &signal_,
                        &preSpatial_, &preWide_, &temporal_, &oneFrame_, &median_, &atrous_[0],
                        &atrous_[1], &atrous_[2], &post_, &reprojectedStabilizer_, &stabilized_})
@@ -216,6 +220,7 @@ void Hybrid::preSpatial() {
     atrousIterationWithMoments(0, hybridAtrous(s_, false, footprintScale_), guide, 1.0f, signal_,
                                preSpatial_, preSquared_, preMoments_);
   }
+  clipMoments();
   ScopedPass pass(this, "pre-spatial mip", s_.preMip ? 4 : 0);
   if (!s_.preMip) {
     preWide_ = preSpatial_;
@@ -226,6 +231,26 @@ void Hybrid::preSpatial() {
   for (size_t i = 0; i < gbuffer_.pixelCount(); ++i)
     levels_.plane(0)[i] = roughness_ ? maxLevel * roughness_[i] : maxLevel;
   preMips_.upsample(preMips_.levels(), &levels_, gbuffer_, {}, preWide_);
+}
+
+// The variance-clipping box over a wider support (`clipSupport=mip`): the pre-spatial mean and
+// second moment, per channel, averaged over 2^L x 2^L blocks of the talk's mip chain ("必要に応じて
+// フィルタ結果の Mipmap を生成 / より強いフィルタ結果として利用する") and bilaterally upsampled.
+// Why: the 3x3 box holds nine 1-spp samples. Under sparse light (several small lights, each
+// sample picking one) they often all miss or all hit one light, so the box's mean is too dark or
+// wrongly coloured and its sigma near 0; the clip then pulls the history onto that one-frame
+// estimate every frame: a dark, blotchy cast (issue 15 item 14; denoisers/FIDELITY.md). The
+// averaged moments hold ~(2^L + 2)^2 samples. The number of samples is what the box needs, so L
+// is not scaled by the footprint policy (a 1080p frame's 3x3 box has the same nine samples).
+void Hybrid::clipMoments() {
+  ScopedPass pass(this, "clip-box mip", s_.varianceClip && s_.clipMip ? 4 : 0);
+  if (!s_.varianceClip || !s_.clipMip) return;
+  for (int c = 0; c < 3; ++c) {
+    parallelCopy(preSpatial_.plane(c), preSpatial_.pixelCount(), clipBase_.plane(c));
+    parallelCopy(preMoments_.plane(c), preMoments_.pixelCount(), clipBase_.plane(3 + c));
+  }
+  clipMips_.build(clipBase_, gbuffer_);
+  clipMips_.upsample(clipMips_.levels(), nullptr, gbuffer_, {}, clipWide_);
 }
 
 // ---- 4. Temporal accumulation (p. "4.2"): X = alpha x + (1 - alpha) X_prev, alpha = 1/h.
@@ -256,17 +281,19 @@ void Hybrid::temporal() {
         for (int c = 0; c < 3; ++c) history[c] = historySample(i, colorHistory_.plane(c));
         if (s_.varianceClip && !gbuffer_.isSky(i)) {
           // Variance clipping (Salvi 2016; the talk p. "4.2.3"): the box is the pre-spatial
-          // mu +- k sigma, sigma^2 = E[x^2] - E[x]^2 per channel. Clip moves the history toward
-          // mu (the box centre, so the segment always enters the box).
-          float lo[3], hi[3];
+          // mu +- k sigma, sigma^2 = E[x^2] - E[x]^2 per channel (of its 3x3, or of the mip
+          // average: clipMoments()). Clip moves the history toward mu (the box centre, so the
+          // segment always enters the box).
+          float mu[3], lo[3], hi[3];
           for (int c = 0; c < 3; ++c) {
-            const float sigma =
-                std::sqrt(std::max(0.0f, preMoments_.plane(c)[i] - pre[c] * pre[c]));
-            lo[c] = pre[c] - s_.clipGamma * sigma;
-            hi[c] = pre[c] + s_.clipGamma * sigma;
+            mu[c] = s_.clipMip ? clipWide_.plane(c)[i] : pre[c];
+            const float second = s_.clipMip ? clipWide_.plane(3 + c)[i] : preMoments_.plane(c)[i];
+            const float sigma = std::sqrt(std::max(0.0f, second - mu[c] * mu[c]));
+            lo[c] = mu[c] - s_.clipGamma * sigma;
+            hi[c] = mu[c] + s_.clipGamma * sigma;
           }
           if (clipMode == HistoryClampMode::Clip)
-            clipToBox(history, pre, lo, hi, 3);
+            clipToBox(history, mu, lo, hi, 3);
           else
             clampToBox(history, lo, hi, 3);
         }
@@ -466,6 +493,12 @@ std::vector<ParamSpec> hybridParamSpecs() {
                          "disoccluded pixels take the pre-spatial value (the talk)"),
       ParamSpec::boolean("varianceClip", true,
                          "clip the history to the pre-spatial mu +- k sigma (the talk)"),
+      ParamSpec::choice("clipSupport", "3x3", {"3x3", "mip"},
+                        "variance box: the pre-spatial 3x3's mean and sigma (the talk) or both "
+                        "from its moments averaged over mip level clipMipLevel (the talk's mip "
+                        "chain; less mottle under sparse light, more lag: FIDELITY.md)"),
+      ParamSpec::integer("clipMipLevel", 2, 1, 6,
+                         "clipSupport=mip: the level (2^level px blocks; ours)"),
       ParamSpec::choice("clipMode", "clip", {"clip", "clamp"},
                         "variance box: clip (talk) or per-channel clamp"),
       ParamSpec::real("clipGamma", 1.5, 0, 100,
@@ -531,6 +564,8 @@ HybridSettings hybridSettings(const ParamSet& p) {
   s.maxHistory = p.getInt("maxHistory");
   s.disocclusionFill = p.getBool("disocclusionFill");
   s.varianceClip = p.getBool("varianceClip");
+  s.clipMip = p.getChoice("clipSupport") == "mip";
+  s.clipMipLevel = p.getInt("clipMipLevel");
   s.clipMode =
       p.getChoice("clipMode") == "clamp" ? HistoryClampMode::Clamp : HistoryClampMode::Clip;
   s.clipGamma = p.getFloat("clipGamma");

@@ -43,6 +43,12 @@ struct HybridSettings {
   int maxHistory = 24;             // the talk: h capped at 24-30
   bool disocclusionFill = true;
   bool varianceClip = true;
+  // The clip box's moments: the pre-spatial 3x3's own (the talk's literal design), or with the
+  // pre-spatial mean and second moment averaged over mip level clipMipLevel of the talk's optional
+  // mip chain (2^level px blocks, bilaterally upsampled): enough 1-spp samples that the box
+  // estimates the local distribution (see hybrid.cpp): centre and sigma both from the mip.
+  bool clipMip = false;
+  int clipMipLevel = 2;
   HistoryClampMode clipMode = HistoryClampMode::Clip;
   float clipGamma = 1.5f;  // box half-width in sigma (ours; Salvi: 1..2)
   bool lumaThreshold = true;
@@ -95,6 +101,7 @@ class Hybrid : public Denoiser {
   void metadata(const FrameContext& ctx);
   void disocclusion(const FrameContext& ctx);
   void preSpatial();
+  void clipMoments();
   void temporal();
   void postSpatial();
   void stabilize();
@@ -118,14 +125,15 @@ class Hybrid : public Denoiser {
   HitPointReprojection virtual_;
   bool useVirtual_ = false;
   GBufferHistory previousGBuffer_;
-  MipChain preMips_, postMips_;
+  MipChain preMips_, postMips_, clipMips_;
   bool hasHistory_ = false;
   // History (persistent).
   Image colorHistory_, lengthHistory_, momentsHistory_, oneFrameHistory_, stabilizerHistory_;
   // Per frame.
   // preSquared_/preMoments_: r^2, g^2, b^2 and the luminance's own l^2 (its variance keeps the
   // channels' covariance).
-  Image preSquared_;
+  // clipBase_/clipWide_: the pre-spatial r, g, b, r^2, g^2, b^2 and their mip-averaged upsample.
+  Image preSquared_, clipBase_, clipWide_;
   Image signal_, mask_, blurredMask_, historyLength_, preSpatial_, preMoments_, preWide_, levels_,
       temporal_, moments_, variance_, filteredVariance_, variancePingPong_[2], oneFrame_, median_,
       atrous_[3], post_, reprojectedStabilizer_, stabilized_;

@@ -1,6 +1,6 @@
 // Issue 15, item 1: one footprint policy for every denoiser. The 90%-energy radius of each
 // denoiser's impulse response keeps its ratio to SVGF's between 256x144 and 1280x720, under the
-// default (native) and the scaled policy; the policy is a recorded parameter of every variant.
+// default (scaled) and the native policy; the policy is a recorded parameter of every variant.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -37,10 +37,11 @@ TEST(FidelityFootprint, AtrousStepsFollowTheScale) {
   }
   // The cascade's spread (sum of squared steps) within 20 % of the scaled one.
   EXPECT_NEAR(std::sqrt(variance / target), 1.0, 0.2);
-  Footprint f;
-  EXPECT_EQ(f.scale(144), 1.0f);  // native
-  f.policy = FootprintPolicy::Scaled;
+  Footprint f;  // the default policy: scaled (footprint.hpp)
+  EXPECT_EQ(f.policy, FootprintPolicy::Scaled);
   EXPECT_FLOAT_EQ(f.scale(720), 720.0f / 1080.0f);
+  f.policy = FootprintPolicy::Native;
+  EXPECT_EQ(f.scale(144), 1.0f);
 }
 
 // The radius around the impulse holding 90 % of the output's (non-negative) energy.
@@ -128,7 +129,7 @@ TEST(FidelityFootprint, ImpulseRadiiKeepTheirRatioToSvgfAcrossResolutions) {
 TEST(FidelityFootprint, PolicyIsRecordedInEverySpatialVariantsParameters) {
   for (const char* name : {"eaw", "svgf", "asvgf", "slgf", "reblur", "hybrid"}) {
     const ParamSet p = DenoiserRegistry::instance().find(name).schema.resolve({}, name);
-    EXPECT_EQ(p.getChoice("footprint"), "native") << name;
+    EXPECT_EQ(p.getChoice("footprint"), "scaled") << name;  // the default (footprint.hpp)
     EXPECT_EQ(p.getFloat("footprintHeight"), 1080.0f) << name;
     EXPECT_THROW(
         DenoiserRegistry::instance().find(name).schema.resolve({{"footprint", "wide"}}, name),

@@ -177,7 +177,9 @@ TEST(FidelityHybrid, YoungVarianceOfGreyNoiseKeepsTheChannelCovariance) {
 // third iteration reads (9/64)^2 = 0.0198 of the first one's variance. `postVariance=fixed` (the
 // first version) reads the first one's variance in every iteration.
 TEST(FidelityHybrid, PostAtrousPropagatesTheVarianceWithSquaredWeights) {
-  const Params flat = {{"sigmaL", "1e6"}, {"edge.position", "false"}};
+  // footprint=native: the three published iterations (steps 1, 2, 4 px); the default (scaled)
+  // policy skips the last two on a 48-line image, leaving nothing to propagate through.
+  const Params flat = {{"sigmaL", "1e6"}, {"edge.position", "false"}, {"footprint", "native"}};
   const GreyNoiseVariance propagated = hybridOnGreyNoise(flat);
   Params fixed = flat;
   fixed["postVariance"] = "fixed";

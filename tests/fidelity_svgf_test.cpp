@@ -155,25 +155,33 @@ MaskedError disoccludedError(const std::string& scene, const std::string& name,
   return out;
 }
 
+// The young colour was chosen (accumulated, the paper) under the native footprint policy, where
+// Falcor's spatial mean raised the disoccluded pixels' relMSE on both scenes. Under the default
+// policy (scaled, issue 15 item 1: at 54 lines one or two à-trous iterations are left) it still
+// does on moving_object (0.0114 accumulated vs 0.0289 spatial, svgf h <= 2) but halves it on
+// camera_pan_occluder (0.0050 vs 0.0022): pinned per policy, so either change is seen.
 TEST(FidelitySvgf, DisoccludedPixelErrorWithAndWithoutTheYoungColour) {
-  for (const std::string scene : {"camera_pan_occluder", "moving_object"}) {
-    for (const std::string name : {"svgf", "asvgf", "slgf"}) {
-      for (float maxLength : {2.0f, 3.0f}) {
-        const MaskedError spatial =
-            disoccludedError(scene, name, {{"youngColor", "spatial"}}, maxLength);
-        const MaskedError accumulated =
-            disoccludedError(scene, name, {{"youngColor", "accumulated"}}, maxLength);
-        std::printf(
-            "%s %s h<=%.0f pixels %ld relMSE colour/diffuse/specular: spatial %.4f %.4f %.4f, "
-            "accumulated %.4f %.4f %.4f\n",
-            scene.c_str(), name.c_str(), double(maxLength), spatial.pixels, spatial.relMse[0],
-            spatial.relMse[1], spatial.relMse[2], accumulated.relMse[0], accumulated.relMse[1],
-            accumulated.relMse[2]);
-        EXPECT_EQ(spatial.pixels, accumulated.pixels);
-        // Measured: Falcor's mean raises the colour's relMSE there (why the default is
-        // `accumulated`).
-        EXPECT_LT(accumulated.relMse[0], spatial.relMse[0]);
-        EXPECT_GT(spatial.pixels, 100);
+  for (const std::string policy : {"native", "scaled"}) {
+    for (const std::string scene : {"camera_pan_occluder", "moving_object"}) {
+      for (const std::string name : {"svgf", "asvgf", "slgf"}) {
+        for (float maxLength : {2.0f, 3.0f}) {
+          const MaskedError spatial = disoccludedError(
+              scene, name, {{"youngColor", "spatial"}, {"footprint", policy}}, maxLength);
+          const MaskedError accumulated = disoccludedError(
+              scene, name, {{"youngColor", "accumulated"}, {"footprint", policy}}, maxLength);
+          std::printf(
+              "%s %s %s h<=%.0f pixels %ld relMSE colour/diffuse/specular: spatial %.4f %.4f "
+              "%.4f, accumulated %.4f %.4f %.4f\n",
+              policy.c_str(), scene.c_str(), name.c_str(), double(maxLength), spatial.pixels,
+              spatial.relMse[0], spatial.relMse[1], spatial.relMse[2], accumulated.relMse[0],
+              accumulated.relMse[1], accumulated.relMse[2]);
+          EXPECT_EQ(spatial.pixels, accumulated.pixels);
+          EXPECT_GT(spatial.pixels, 100);
+          if (policy == "scaled" && scene == "camera_pan_occluder")
+            EXPECT_LT(spatial.relMse[0], 0.75 * accumulated.relMse[0]) << name;
+          else
+            EXPECT_LT(accumulated.relMse[0], spatial.relMse[0]) << policy << " " << scene;
+        }
       }
     }
   }

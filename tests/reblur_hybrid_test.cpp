@@ -203,9 +203,10 @@ TEST(ReblurVariant, SampledHitDistanceAgainstTheMirrorOracleOnGlossyOrbit) {
     const double sampled = meanRelMse(l, denoise(l, name), "specular", warmup);
     const double mirror =
         meanRelMse(l, denoise(l, name, {{"hitDistance", "mirror"}}), "specular", warmup);
-    std::printf("glossy_orbit specular relMSE, %s: sampled hit distance %.5f, mirror oracle %.5f "
-                "(x%.2f)\n",
-                name, sampled, mirror, sampled / mirror);
+    std::printf(
+        "glossy_orbit specular relMSE, %s: sampled hit distance %.5f, mirror oracle %.5f "
+        "(x%.2f)\n",
+        name, sampled, mirror, sampled / mirror);
     EXPECT_LT(sampled, 3.0 * mirror) << name;  // the oracle must not be what makes them work
   }
 }
@@ -239,7 +240,9 @@ TEST(HybridVariant, EveryOptionalStageOffIsTemporalAccumulationPlusAtrous) {
   const Loaded& l = loaded("glossy_orbit", 24);
   const int frames = 8;
   for (SignalKind kind : {SignalKind::Diffuse, SignalKind::Specular}) {
-    auto hybrid = create("hybrid", kind, kHybridAllOff);
+    // footprint=native: the talk's published steps 1, 2, 4 px; under the default (scaled) policy
+    // a 36-line image would skip the last two iterations and the comparison would test less.
+    auto hybrid = create("hybrid", kind, with(kHybridAllOff, {{"footprint", "native"}}));
     hybrid->setup(kWidth, kHeight);
     // The same pipeline from the shared blocks: SVGF-style reprojection, EMA with
     // alpha = 1/h (h <= 24), three 3x3 à-trous iterations with the position term only.
@@ -302,6 +305,7 @@ TEST(HybridVariant, EveryStageSwitchedOnChangesTheOutput) {
       {"hitPoint", {}, {{"hitPoint", "true"}}},
       {"varianceClip", {}, {{"varianceClip", "true"}}},
       {"clipMode", {{"varianceClip", "true"}}, {{"clipMode", "clamp"}}},
+      {"clipSupport", {{"varianceClip", "true"}, {"clipSupport", "3x3"}}, {{"clipSupport", "mip"}}},
       {"lumaThreshold", {}, {{"lumaThreshold", "true"}}},
       {"capcomRejection", {}, {{"capcomRejection", "true"}}},
       {"median", {}, {{"median", "true"}}},
@@ -355,37 +359,42 @@ TEST(HybridVariant, HitPointWithVarianceClippingBeatsMotionAloneOnGlossyReflecti
   EXPECT_LT(gHit, gMotion);
 }
 
-TEST(HybridVariant, LuminanceThresholdShortensTheResponseToALightSwitch) {
+// light_switch at 64x36, 24 frames (the light goes off at 12), hybrid configurations only.
+RunConfig lightSwitchRun(const std::string& dir, std::vector<DenoiserRequest> denoisers) {
   RunConfig c;
   c.name = "light_switch";
-  c.out = test::freshDir("run_hybrid_light_switch");
+  c.out = test::freshDir(dir);
   c.cache = cacheDir();
   c.render = test::tinySettings(kWidth, kHeight, 24, kReferenceSpp);
   c.scenes = {test::shippedScene("light_switch")};
+  c.denoisers = std::move(denoisers);
+  c.baselines = false;
+  c.warmup = 4;
+  c.flip = "none";
+  c.keepFrames = "none";
+  return c;
+}
+
+TEST(HybridVariant, LuminanceThresholdShortensTheResponseToALightSwitch) {
   // Variance clipping alone already removes this lag at 64x36 (response 2 frames with or without
   // the threshold), so the threshold is measured with clipping off: the talk presents it as the
   // answer to lighting changes that reprojection cannot see (p. "4.2.5").
   // The talk's threshold, relative (lumaMode=relative). The noise-aware default (lumaMode=sigma,
   // issue 15 item 4) does not fire here: the lit room's 1-spp luminance spread exceeds half the
   // light it loses (response 6 vs 6 frames, ghost energy 1.43 vs 1.46 when measured).
-  c.denoisers = {
-      {"hybrid",
-       {{"lumaThreshold", "true"}, {"lumaMode", "relative"}, {"varianceClip", "false"}},
-       "threshold"},
-      {"hybrid", {{"lumaThreshold", "false"}, {"varianceClip", "false"}}, "noThreshold"}};
-  c.baselines = false;
-  c.warmup = 4;
-  c.flip = "none";
-  c.keepFrames = "none";
-  const nlohmann::json r = runMatrix(c);
+  const nlohmann::json r = runMatrix(lightSwitchRun(
+      "run_hybrid_light_switch",
+      {{"hybrid",
+        {{"lumaThreshold", "true"}, {"lumaMode", "relative"}, {"varianceClip", "false"}},
+        "threshold"},
+       {"hybrid", {{"lumaThreshold", "false"}, {"varianceClip", "false"}}, "noThreshold"}}));
   ASSERT_TRUE(failedPairs(r).empty());
   std::map<std::string, nlohmann::json> ghost;
   for (const auto& p : r["pairs"]) ghost[p["label"]] = p["ghosting"][0];
   std::printf(
       "light_switch (off at 12): response %d vs %d frames, ghost energy %.3f vs %.3f (threshold on "
       "vs off)\n",
-      test::responseOrWindow(ghost["threshold"]),
-      test::responseOrWindow(ghost["noThreshold"]),
+      test::responseOrWindow(ghost["threshold"]), test::responseOrWindow(ghost["noThreshold"]),
       ghost["threshold"]["ghostEnergy"].get<double>(),
       ghost["noThreshold"]["ghostEnergy"].get<double>());
   // Where it fires h restarts (issue 15), so the "response" of a peak that is not there is the
@@ -396,6 +405,27 @@ TEST(HybridVariant, LuminanceThresholdShortensTheResponseToALightSwitch) {
                   0.05 * ghost["noThreshold"]["peakExcess"].get<double>());
   EXPECT_LT(ghost["threshold"]["ghostEnergy"].get<double>(),
             0.1 * ghost["noThreshold"]["ghostEnergy"].get<double>());
+}
+
+// What variance clipping is for, kept by the wider clip box (clipSupport=mip, issue 15 item 14):
+// when the light switches off the clipped history follows within a few frames. Light-off ghost
+// energy, measured at 64x36: 3x3 box 0.035, mip box 0.113, no clipping 1.489 (at 128x72, 128 spp:
+// 0.022, 0.056, 1.49): the mip box removes 92 % of the ghost, the 3x3 box 98 %.
+TEST(HybridVariant, MipClipBoxStillRemovesTheLightSwitchGhost) {
+  const nlohmann::json r = runMatrix(lightSwitchRun(
+      "run_hybrid_clip_support", {{"hybrid", {{"clipSupport", "3x3"}}, "box3x3"},
+                                  {"hybrid", {{"clipSupport", "mip"}}, "mip"},
+                                  {"hybrid", {{"varianceClip", "false"}}, "noClip"}}));
+  ASSERT_TRUE(failedPairs(r).empty());
+  std::map<std::string, double> ghost;
+  for (const auto& p : r["pairs"]) {
+    ASSERT_EQ(p["ghosting"][0]["kind"], "light_off");
+    ghost[p["label"]] = p["ghosting"][0]["ghostEnergy"].get<double>();
+  }
+  std::printf("light_switch, light off: ghost energy 3x3 box %.3f, mip box %.3f, no clip %.3f\n",
+              ghost["box3x3"], ghost["mip"], ghost["noClip"]);
+  EXPECT_LT(ghost["box3x3"], 0.05 * ghost["noClip"]);
+  EXPECT_LT(ghost["mip"], 0.15 * ghost["noClip"]);
 }
 
 // p95 over pixels and frames t >= warmup of the per-pixel relative squared error of the colour.

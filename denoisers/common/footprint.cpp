@@ -6,8 +6,9 @@
 namespace arena {
 
 namespace {
-// The one place the default policy is chosen (see footprint.hpp for why native).
-constexpr const char* kDefaultPolicy = "native";
+const char* policyName(FootprintPolicy policy) {
+  return policy == FootprintPolicy::Scaled ? "scaled" : "native";
+}
 constexpr double kDefaultReferenceHeight = 1080.0;
 }  // namespace
 
@@ -24,10 +25,11 @@ int atrousStep(int iteration, float scale) {
 
 std::vector<ParamSpec> footprintParamSpecs() {
   return {
-      ParamSpec::choice("footprint", kDefaultPolicy, {"native", "scaled"},
-                        "spatial footprints: native = published pixel constants at any resolution "
-                        "(Falcor, Q2RTX, NRD); scaled = pixels at footprintHeight, scaled by "
-                        "height / footprintHeight (issue 15; the same for every denoiser)"),
+      ParamSpec::choice("footprint", policyName(kDefaultFootprintPolicy), {"native", "scaled"},
+                        "spatial footprints: scaled = published pixel constants are pixels at "
+                        "footprintHeight, scaled by height / footprintHeight (keeps the screen "
+                        "extent); native = published pixel constants at any resolution (Falcor, "
+                        "Q2RTX, NRD; keeps the sample count); the same for every denoiser"),
       ParamSpec::real("footprintHeight", kDefaultReferenceHeight, 1, 100000,
                       "footprint=scaled: the image height the pixel constants are tuned for "
                       "(1080: NRD, SVGF paper)"),
