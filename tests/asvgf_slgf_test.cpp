@@ -31,8 +31,8 @@ fs::path cacheDir() {
 RenderSettings settings() {
   RenderSettings s = test::tinySettings(kWidth, kHeight, kFrames, kReferenceSpp);
   // The margins below were calibrated against 32-spp references of the independent sampler; with
-  // Sobol references moving_light_shadow's ghost-energy comparison flips (slgf 0.163 vs svgf 0.154),
-  // i.e. it is within the reference's own noise at this size (issue 13).
+  // Sobol references moving_light_shadow's ghost-energy comparison flips (slgf 0.163 vs svgf
+  // 0.154), i.e. it is within the reference's own noise at this size (issue 13).
   s.referenceSampler = "independent";
   return s;
 }
@@ -80,8 +80,8 @@ struct Ghost {
 Ghost ghost(const std::string& scene, const std::string& label) {
   const json& g = pairOf(scene, label)["ghosting"];
   if (g.empty()) throw Error("no ghosting event for " + label + " on " + scene);
-  return {test::responseOrWindow(g[0]), g[0]["ghostEnergy"].get<double>(), g[0]["peakExcess"].get<double>(),
-          g[0]["lagEnergy"].get<double>()};
+  return {test::responseOrWindow(g[0]), g[0]["ghostEnergy"].get<double>(),
+          g[0]["peakExcess"].get<double>(), g[0]["lagEnergy"].get<double>()};
 }
 
 // Mean of E_M(t) (relMSE over the changed region) from the event to the end of the window: the
@@ -120,7 +120,8 @@ TEST(AsvgfVariant, StaticSceneHasZeroGradientAndMatchesSvgf) {
   // Re-shading a static scene with the previous frame's random numbers reproduces its sample.
   int samples = 0;
   for (int t = 1; t < seq.info().frames; ++t) {
-    const Image& g = seq.gradients(t).get("gradient");
+    const LayerSet gradients = seq.gradients(t);  // by value: keep it alive while g is read
+    const Image& g = gradients.get("gradient");
     for (size_t s = 0; s < g.pixelCount(); ++s) {
       if (g.plane(4)[s] == 0.0f) continue;
       ++samples;

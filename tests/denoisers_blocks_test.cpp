@@ -755,6 +755,8 @@ ReprojectionRecord referenceRecord(const SyntheticGBuffer& cur, const SyntheticG
            consistent(surface, fwidth, surfaceAt(prev.depth, prev.normal, prev.meshId, qx, qy),
                       ConsistencyThresholds{settings.depthThreshold, settings.normalThreshold});
   };
+  // A position beyond any image (or NaN) is disoccluded, before it is converted to int.
+  if (!(std::abs(px) <= 1e7f && std::abs(py) <= 1e7f)) return rec;
   const float fx = px - 0.5f, fy = py - 0.5f;
   const int x0 = int(std::floor(fx)), y0 = int(std::floor(fy));
   const float tx = fx - float(x0), ty = fy - float(y0);

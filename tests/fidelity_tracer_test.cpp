@@ -58,7 +58,8 @@ TEST(FidelityTracer, SwitchingOffAnInvisibleLightFakesNoGradient) {
     ]})";
   Scene scene = loadScene(path.string());
   SequenceRenderer r(scene, test::tinySettings(24, 15, 3, 4));
-  const Image& g = r.renderFrame(2).gradients.get("gradient");
+  const auto rendered = r.renderFrame(2);  // kept alive while g is read
+  const Image& g = rendered.gradients.get("gradient");
   int valid = 0, differing = 0;
   for (int y = 0; y < g.height(); ++y)
     for (int x = 0; x < g.width(); ++x) {

@@ -86,7 +86,8 @@ TEST(Tracer, GradientSamplesReproduceTheStaticPastExactly) {
     for (int x = 0; x < g.width(); ++x) {
       if (g.at(x, y, 4) == 0) continue;
       ++valid;
-      EXPECT_EQ(g.at(x, y, 2), g.at(x, y, 3)) << "stratum " << x << "," << y;  // exactly, not nearly
+      EXPECT_EQ(g.at(x, y, 2), g.at(x, y, 3))
+          << "stratum " << x << "," << y;  // exactly, not nearly
       // The sample lands in the stratum it is stored in.
       EXPECT_EQ(int(g.at(x, y, 0)) / 3, x);
       EXPECT_EQ(int(g.at(x, y, 1)) / 3, y);
@@ -97,7 +98,8 @@ TEST(Tracer, GradientSamplesReproduceTheStaticPastExactly) {
 TEST(Tracer, GradientSamplesSeeTheLightSwitchOff) {
   Scene scene = test::shippedScene("light_switch");
   SequenceRenderer r(scene, test::tinySettings(48, 27, 36, 4));
-  const Image& g = r.renderFrame(12).gradients.get("gradient");  // the ceiling light goes off at 12
+  const auto rendered = r.renderFrame(12);  // the ceiling light goes off at 12
+  const Image& g = rendered.gradients.get("gradient");
   int valid = 0, darker = 0, brighter = 0;
   for (int y = 0; y < g.height(); ++y)
     for (int x = 0; x < g.width(); ++x) {
@@ -116,7 +118,8 @@ TEST(Tracer, GradientSamplesSeeTheLightSwitchOff) {
 
 // Nearest-pixel lookup of a previous-frame layer at the motion-compensated position.
 glm::vec3 previousAt(const Image& img, glm::vec2 p) {
-  int x = std::clamp(int(std::floor(p.x)), 0, img.width() - 1), y = std::clamp(int(std::floor(p.y)), 0, img.height() - 1);
+  int x = std::clamp(int(std::floor(p.x)), 0, img.width() - 1),
+      y = std::clamp(int(std::floor(p.y)), 0, img.height() - 1);
   return {img.at(x, y, 0), img.at(x, y, 1), img.at(x, y, 2)};
 }
 
@@ -137,7 +140,8 @@ void checkMotion(const Scene& scene, int t, int movingMesh) {
   auto prev = r.renderFrame(t - 1).frame;
   auto cur = r.renderFrame(t).frame;
   SceneState sPrev = evaluateState(scene, t - 1, w, h), sCur = evaluateState(scene, t, w, h);
-  const Image &pos = cur.get("position"), &mot = cur.get("motion"), &id = cur.get("meshId"), &depth = cur.get("depth");
+  const Image &pos = cur.get("position"), &mot = cur.get("motion"), &id = cur.get("meshId"),
+              &depth = cur.get("depth");
   int checked = 0, good = 0, movingChecked = 0;
   for (int y = 1; y < h - 1; ++y)
     for (int x = 1; x < w - 1; ++x) {
@@ -167,8 +171,12 @@ void checkMotion(const std::string& sceneName, int t, int movingMesh) {
   checkMotion(test::shippedScene(sceneName), t, movingMesh);
 }
 
-TEST(Tracer, MotionVectorsFollowTheCamera) { checkMotion("camera_pan_occluder", 12, -1); }
-TEST(Tracer, MotionVectorsFollowMovingObjects) { checkMotion("moving_object", 14, 2); }
+TEST(Tracer, MotionVectorsFollowTheCamera) {
+  checkMotion("camera_pan_occluder", 12, -1);
+}
+TEST(Tracer, MotionVectorsFollowMovingObjects) {
+  checkMotion("moving_object", 14, 2);
+}
 
 // A glTF node animation (tests/data/assets/animated_box.gltf: the box slides and turns) placed
 // on a floor, seen by a still camera.
@@ -181,7 +189,8 @@ TEST(Tracer, MotionVectorsFollowAnimatedAssetNodes) {
     "materials": {"white": {"albedo": [0.7, 0.7, 0.7]}},
     "objects": [
       {"name": "floor", "shape": "quad", "material": "white", "keys": [{"frame": 0, "scale": [6, 1, 6]}]},
-      {"name": "box", "asset": {"file": ")" + box + R"(", "unitMeters": 1, "upAxis": "y", "fps": 30},
+      {"name": "box", "asset": {"file": ")" +
+                                       box + R"(", "unitMeters": 1, "upAxis": "y", "fps": 30},
        "keys": [{"frame": 0, "scale": [1.5, 1.5, 1.5]}]}],
     "lights": [{"name": "l", "shape": "quad", "keys": [{"frame": 0, "translate": [0, 3, 0], "rotate": [180, 0, 0], "intensity": 5}]}]
   })";

@@ -30,7 +30,7 @@ bool readLine(std::string& line) {
 void send(const json& header, const std::vector<float>& planes = {}) {
   const std::string line = header.dump() + "\n";
   std::fwrite(line.data(), 1, line.size(), stdout);
-  std::fwrite(planes.data(), sizeof(float), planes.size(), stdout);
+  if (!planes.empty()) std::fwrite(planes.data(), sizeof(float), planes.size(), stdout);
   std::fflush(stdout);
 }
 
