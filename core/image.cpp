@@ -49,7 +49,6 @@ Image::Image(Image&& other) noexcept
 
 Image& Image::operator=(const Image& other) {
   if (this == &other) return *this;
-  if (borrowed_) data_.clear();  // never write into the planes this image only borrowed
   data_.assign(other.raw().begin(), other.raw().end());
   width_ = other.width_;
   height_ = other.height_;

@@ -339,7 +339,8 @@ TEST(Plugin, EawThroughTheAbiIsIdenticalToTheBuiltIn) {
 }
 
 // The adapter hands the harness's planes to the built-in in place (Image::borrow) when they are
-// laid out like an Image's, and copies them otherwise: both give the same output.
+// laid out like an Image's, and otherwise copies the inputs in and the output back: both give the
+// same output.
 TEST(Plugin, ScatteredPlanesGiveTheSameOutputAsContiguousOnes) {
   void* library = dlopen(ARENA_EAW_PLUGIN, RTLD_NOW | RTLD_LOCAL);
   ASSERT_NE(library, nullptr) << dlerror();
@@ -372,7 +373,13 @@ TEST(Plugin, ScatteredPlanesGiveTheSameOutputAsContiguousOnes) {
     for (const char* name : names) layers.push_back({name, view(frame.get(name), scattered)});
     const ArenaInputs inputs{view(frame.get("diffuse"), scattered), layers.data(), 3};
     Image out(kWidth, kHeight, 3, -1.0f);
-    const ArenaMutableImage output{kWidth, kHeight, 3, {out.plane(0), out.plane(1), out.plane(2)}};
+    std::vector<float> outPlanes[3];  // scattered: the output's planes apart too
+    ArenaMutableImage output{kWidth, kHeight, 3, {out.plane(0), out.plane(1), out.plane(2)}};
+    if (scattered)
+      for (int c = 0; c < 3; ++c) {
+        outPlanes[c].assign(size_t(kWidth) * kHeight, -1.0f);
+        output.planes[c] = outPlanes[c].data();
+      }
     ArenaFrameContext ctx{};
     ctx.width = kWidth;
     ctx.height = kHeight;
@@ -380,7 +387,9 @@ TEST(Plugin, ScatteredPlanesGiveTheSameOutputAsContiguousOnes) {
     ASSERT_EQ(plugin->denoise(instance, &ctx, &inputs, &output, nullptr, error, sizeof error), 0)
         << error;
     plugin->destroy(instance);
-    outputs[scattered].assign(out.raw().begin(), out.raw().end());
+    for (int c = 0; c < 3; ++c)
+      outputs[scattered].insert(outputs[scattered].end(), output.planes[c],
+                                output.planes[c] + size_t(kWidth) * kHeight);
   }
   EXPECT_EQ(outputs[0], outputs[1]);
   EXPECT_NE(outputs[0], std::vector<float>(outputs[0].size(), -1.0f));  // it wrote the output

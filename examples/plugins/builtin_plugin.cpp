@@ -34,23 +34,44 @@ CameraState cameraOf(const ArenaCamera& a) {
   return c;
 }
 
-// The harness's planes as an Image, in place when they are laid out like one (plane c at
-// planes[0] + c * width * height: the arena's own harness always hands them over so), else copied
-// into `owned`. The C ABI's inputs are const; the built-in only reads them (const Image&).
-const Image& imageOf(const ArenaImage& view, Image& owned) {
-  const size_t pixels = size_t(view.width) * size_t(view.height);
-  bool contiguous = true;
-  for (int c = 1; c < view.channels; ++c)
-    contiguous = contiguous && view.planes[c] == view.planes[0] + size_t(c) * pixels;
-  if (contiguous) {
+// The ABI's planes are laid out like an Image's when plane c is at planes[0] + c * width * height
+// (the arena's own harness always hands them over so); then the built-in works on them in place.
+template <class Float>
+bool laidOutLikeAnImage(Float* const* planes, int width, int height, int channels) {
+  const size_t pixels = size_t(width) * size_t(height);
+  for (int c = 1; c < channels; ++c)
+    if (planes[c] != planes[0] + size_t(c) * pixels) return false;
+  return true;
+}
+
+// `image` as an owning width x height x channels image, reallocated only when it is not one.
+void ensureOwned(Image& image, int width, int height, int channels) {
+  if (image.borrowed() || image.width() != width || image.height() != height ||
+      image.channels() != channels)
+    image = Image(width, height, channels);
+}
+
+// An input as an Image: the harness's planes borrowed in place, else copied into `owned`. The C
+// ABI's inputs are const; the built-in only reads them (const Image&).
+const Image& inputImage(const ArenaImage& view, Image& owned) {
+  if (laidOutLikeAnImage(view.planes, view.width, view.height, view.channels)) {
     owned =
         Image::borrow(const_cast<float*>(view.planes[0]), view.width, view.height, view.channels);
   } else {
-    if (owned.borrowed() || owned.width() != view.width || owned.height() != view.height ||
-        owned.channels() != view.channels)
-      owned = Image(view.width, view.height, view.channels);
-    for (int c = 0; c < view.channels; ++c) parallelCopy(view.planes[c], pixels, owned.plane(c));
+    ensureOwned(owned, view.width, view.height, view.channels);
+    for (int c = 0; c < view.channels; ++c)
+      parallelCopy(view.planes[c], owned.pixelCount(), owned.plane(c));
   }
+  return owned;
+}
+
+// The output as an Image: the harness's planes borrowed, else an image of its own whose result
+// denoise() copies back (nothing to copy in: the built-in writes every output pixel).
+Image& outputImage(const ArenaMutableImage& view, Image& owned) {
+  if (laidOutLikeAnImage(view.planes, view.width, view.height, view.channels))
+    owned = Image::borrow(view.planes[0], view.width, view.height, view.channels);
+  else
+    ensureOwned(owned, view.width, view.height, view.channels);
   return owned;
 }
 
@@ -139,22 +160,18 @@ int BuiltinPlugin::denoise(void* instance, const ArenaFrameContext* ctx, const A
                            size_t errorSize) {
   return guarded(error, errorSize, [&] {
     Instance& self = *static_cast<Instance*>(instance);
-    const Image& signal = imageOf(inputs->signal, self.signal);
+    const Image& signal = inputImage(inputs->signal, self.signal);
     for (int i = 0; i < inputs->layerCount; ++i) {
       const char* name = inputs->layers[i].name;
       if (self.frame.has(name)) {
-        imageOf(inputs->layers[i].image, self.frame.get(name));
+        inputImage(inputs->layers[i].image, self.frame.get(name));
       } else {
         Image first;
-        imageOf(inputs->layers[i].image, first);
+        inputImage(inputs->layers[i].image, first);
         self.frame.set(name, std::move(first));
       }
     }
-    ArenaImage outputView{output->width, output->height, output->channels, {}};
-    for (int k = 0; k < output->channels && k < ARENA_MAX_CHANNELS; ++k)
-      outputView.planes[k] = output->planes[k];
-    Image& result = self.output;
-    imageOf(outputView, result);
+    Image& result = outputImage(*output, self.output);
     FrameContext c;
     c.frameIndex = ctx->frameIndex;
     c.width = ctx->width;
