@@ -69,7 +69,7 @@ void addBenchReferenceCommand(CLI::App* bench) {
   struct Options {
     std::string scenes = "cornell_static,camera_pan_occluder", resolution = "128x72", json;
     std::string scenesDir = defaultScenesDir();
-    int spp = 128, goldFactor = 32, frame = 0;
+    int spp = 128, goldFactor = 32, frame = 0, replicates = RenderSettings().referenceReplicates;
   };
   auto o = std::make_shared<Options>();
   cmd->add_option("--scenes", o->scenes, "Scenes, comma-separated, or 'all'");
@@ -77,6 +77,9 @@ void addBenchReferenceCommand(CLI::App* bench) {
   cmd->add_option("--spp", o->spp, "Samples per pixel of the compared references")->check(CLI::Range(8, 1 << 16));
   cmd->add_option("--gold-factor", o->goldFactor, "The gold reference has this many times the samples")
       ->check(CLI::Range(4, 1024));
+  cmd->add_option("--replicates", o->replicates,
+                  "Independent randomisations of the compared references (the gold keeps the default)")
+      ->check(CLI::Range(2, 64));
   cmd->add_option("--frame", o->frame, "Frame whose state is rendered")->check(CLI::NonNegativeNumber);
   cmd->add_option("--scenes-dir", o->scenesDir, "Directory of scene files");
   cmd->add_option("--json", o->json, "Write results to this JSON file");
@@ -104,6 +107,7 @@ void addBenchReferenceCommand(CLI::App* bench) {
       const double goldSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - g0).count();
       const LayerSet gold = referenceLayersFromSums(goldSums);
       const double goldNoise = estimatedReferenceRelMse(goldSums);
+      settings.referenceReplicates = o->replicates;
       const Measured ind = measure(scene, settings, "independent", false, o->frame, o->spp, gold);
       const Measured sob = measure(scene, settings, "sobol", false, o->frame, o->spp, gold);
       const Measured ada = measure(scene, settings, "sobol", true, o->frame, o->spp, gold);
