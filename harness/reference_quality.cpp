@@ -1,7 +1,11 @@
 #include "harness/reference_quality.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <limits>
+
+#include "tracer/render.hpp"
 
 namespace arena {
 
@@ -21,7 +25,36 @@ bool isBaseline(const std::string& denoiser) {
 
 }  // namespace
 
-void addReferenceQuality(json& results, int warmup) {
+std::string renderOptionsOf(const json& render) {
+  if (!render.is_object()) return "";
+  const std::string preset = render.value("preset", "quick");
+  const RenderSettings defaults = RenderSettings::fromPreset(preset == "paper" ? "paper" : "quick");
+  std::string o;
+  auto add = [&o](const std::string& flag, const std::string& value) { o += " " + flag + " " + value; };
+  if (preset != defaults.preset) return "";  // not a preset this build knows: no command could find it
+  if (preset != "quick") add("--preset", preset);
+  if (render.value("referenceSpp", defaults.referenceSpp) != defaults.referenceSpp)
+    add("--ref-spp", std::to_string(render.value("referenceSpp", 0)));
+  const double relError = render.value("referenceRelError", defaults.referenceRelError);
+  if (relError != defaults.referenceRelError) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.17g", relError);
+    add("--ref-rel-error", buf);
+  }
+  if (render.value("referenceSampler", defaults.referenceSampler) != defaults.referenceSampler)
+    add("--ref-sampler", render.value("referenceSampler", ""));
+  if (render.value("referenceTile", defaults.referenceTile) != defaults.referenceTile)
+    add("--ref-tile", std::to_string(render.value("referenceTile", 0)));
+  if (render.value("inputSeed", 0u) != 0u) add("--input-seed", std::to_string(render.value("inputSeed", 0u)));
+  if (render.value("lowresFactor", 0) > 0) {
+    add("--lowres-factor", std::to_string(render.value("lowresFactor", 0)));
+    if (render.value("lowresSpp", defaults.lowresSpp) != defaults.lowresSpp)
+      add("--lowres-spp", std::to_string(render.value("lowresSpp", 0)));
+  }
+  return o;
+}
+
+void addReferenceQuality(json& results, int warmup, const std::map<std::string, std::string>& notes) {
   if (!results.contains("scenes")) return;
   for (auto it = results["scenes"].begin(); it != results["scenes"].end(); ++it) {
     const std::string& name = it.key();
@@ -64,17 +97,22 @@ void addReferenceQuality(json& results, int warmup) {
                           sci(kReferenceQualityGoal) + (meets ? ": met" : ": NOT MET, ");
     if (!meets) {
       const double needed = kReferenceQualityGoal * best;
+      // The command must find the run's sequences: the same settings hash (--cache, and a
+      // --resolution or --frames override, are not in the results and stay the user's to add).
+      const std::string options = renderOptionsOf(results.value("settings", json::object()).value("render", json()));
       verdict +=
           "the reference's noise must fall " + sci(ratio / kReferenceQualityGoal) + "x (to " + sci(needed) + "); ";
       if (capped > 0)
         verdict += std::to_string(capped) + " of " + std::to_string(references) +
-                   " references stopped at their sample cap (raise --ref-spp, or `arena refine " + name + " --target " +
-                   sci(needed) + " --max-spp N`)";
+                   " references stopped at their sample cap (raise --ref-spp, or `arena refine " + name + options +
+                   " --target " + sci(needed) + " --max-spp N`)";
       else
         verdict += "its references met their target, which is too loose for this scene (`arena refine " + name +
-                   " --target " + sci(needed) + "`)";
-      verdict += "; rankings here rest on the corrected relMSE, and FLIP/SSIM partly measure the reference";
+                   options + " --target " + sci(needed) + "`)";
+      verdict += ", then run again (everything else is reused); rankings here rest on the corrected relMSE, "
+                 "and FLIP/SSIM partly measure the reference";
     }
+    if (auto note = notes.find(name); note != notes.end()) verdict += " (" + note->second + ")";
     q = {{"floor", floor},
          {"bestCorrectedRelMse", best},
          {"bestLabel", bestLabel},
@@ -86,6 +124,57 @@ void addReferenceQuality(json& results, int warmup) {
          {"verdict", verdict}};
     scene["referenceQuality"] = q;
   }
+}
+
+std::vector<ReferenceRefinement> planReferenceRefinement(const json& results,
+                                                         const std::map<std::string, SequenceInfo>& sequences,
+                                                         int warmup, int maxSpp, double budget) {
+  double held = 0;  // the paths every reference holds now: the budget's unit
+  for (const auto& [name, info] : sequences)
+    for (int spp : info.referenceSpp) held += double(info.width) * info.height * spp;
+  std::vector<ReferenceRefinement> plans;
+  const json scenes = results.value("scenes", json::object());
+  for (const auto& [name, scene] : scenes.items()) {
+    const json q = scene.value("referenceQuality", json::object());
+    const auto seq = sequences.find(name);
+    if (q.value("meets", true) || !q.contains("bestCorrectedRelMse") || seq == sequences.end()) continue;
+    const SequenceInfo& info = seq->second;
+    ReferenceRefinement plan;
+    plan.scene = name;
+    plan.targetRelMse = kRefineMargin * kReferenceQualityGoal * q["bestCorrectedRelMse"].get<double>();
+    for (int r = 0; r < int(info.referenceSpp.size()); ++r) {
+      const auto& of = info.referenceOfFrame;
+      if (std::find(of.begin() + std::clamp(warmup, 0, int(of.size())), of.end(), r) == of.end()) continue;
+      const double e = r < int(info.referenceEstimatedRelMse.size()) ? info.referenceEstimatedRelMse[size_t(r)] : 0;
+      const double s = info.referenceSpp[size_t(r)];
+      if (!(e > plan.targetRelMse) || s >= maxSpp) continue;
+      const double grown = std::min(s * std::exp2(std::ceil(std::log2(e / plan.targetRelMse))), double(maxSpp));
+      plan.predictedPaths += double(info.width) * info.height * (grown - s);
+    }
+    plans.push_back(plan);
+  }
+  std::stable_sort(plans.begin(), plans.end(), [](const ReferenceRefinement& a, const ReferenceRefinement& b) {
+    return a.predictedPaths < b.predictedPaths;
+  });
+  double spent = 0;
+  for (ReferenceRefinement& plan : plans) {
+    plan.budgetNeeded = held > 0 ? (spent + plan.predictedPaths) / held : 0;
+    plan.withinBudget = plan.predictedPaths > 0 && plan.budgetNeeded <= budget;
+    if (plan.withinBudget) spent += plan.predictedPaths;
+  }
+  return plans;
+}
+
+std::string refinementNote(const ReferenceRefinement& plan, double budget) {
+  const std::string paths = sci(plan.predictedPaths / 1e6) + " Mpaths";
+  if (plan.predictedPaths <= 0)
+    return "the study could not refine it: its summarised frames' references are at the refinement cap";
+  if (plan.withinBudget)
+    return "the study refined its references toward " + sci(plan.targetRelMse) + " (predicted " + paths + ")";
+  char need[32];
+  std::snprintf(need, sizeof need, "%g", std::ceil(plan.budgetNeeded * 10) / 10);
+  return "not refined by the study: about " + paths + " more, over its refinement budget of " + sci(budget) +
+         "x the references' paths; `arena study --refine-budget " + need + "` covers it";
 }
 
 std::vector<std::string> referenceQualityLines(const json& results) {

@@ -4,9 +4,12 @@
 // best real denoiser's reference-corrected relMSE. A ratio above kReferenceQualityGoal means the
 // reference's noise is not far enough below the errors it ranks; the verdict says why (capped
 // references, or a target that was met but is too loose for this scene) and what would fix it.
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
+
+#include "core/sequence.hpp"
 
 namespace arena {
 
@@ -15,7 +18,34 @@ inline constexpr double kReferenceQualityGoal = 0.1;
 // results.scenes.<scene>.referenceQuality = {floor, bestCorrectedRelMse, bestLabel, ratio, goal,
 // meets, cappedReferences, references, verdict}; scenes without a floor or a real denoiser's
 // corrected relMSE get {verdict} only. Baselines (passthrough, temporal) are not "real" denoisers.
-void addReferenceQuality(nlohmann::json& results, int warmup);
+// notes: per scene, a sentence appended to its verdict (the study's refinement, below).
+void addReferenceQuality(nlohmann::json& results, int warmup,
+                         const std::map<std::string, std::string>& notes = {});
+// The options that make `arena render`/`refine` find a run's sequences (the same settings hash),
+// from its results.settings.render: each setting that differs from its preset's default, e.g.
+// " --lowres-factor 8" for the study; "" when nothing differs.
+std::string renderOptionsOf(const nlohmann::json& render);
+// The study's refinement of references to the goal (issue 13). A scene that misses it gets the
+// target kRefineMargin x goal x its best corrected relMSE (the margin absorbs the noise of that
+// estimate), and a prediction of the paths that refining the references of its summarised frames
+// (t >= warmup) would add: a reference of P pixels, mean s spp and estimated relMSE e > target
+// needs k = ceil(log2(e / target)) doublings (relMSE ~ 1/spp: the independent sampler's rate,
+// conservative for Sobol), i.e. P (min(s 2^k, maxSpp) - s) paths. Scenes are taken cheapest first
+// while their predictions fit in `budget` x the paths all the references already hold: a budget in
+// work, not seconds, so which scenes are refined does not depend on the machine.
+inline constexpr double kRefineMargin = 0.8;
+struct ReferenceRefinement {
+  std::string scene;
+  double targetRelMse = 0;
+  double predictedPaths = 0;  // the paths refining would add
+  double budgetNeeded = 0;    // the smallest budget that covers it, with the cheaper scenes before it
+  bool withinBudget = false;
+};
+std::vector<ReferenceRefinement> planReferenceRefinement(const nlohmann::json& results,
+                                                         const std::map<std::string, SequenceInfo>& sequences,
+                                                         int warmup, int maxSpp, double budget);
+// The sentence the verdict carries for a planned scene.
+std::string refinementNote(const ReferenceRefinement& plan, double budget);
 // One line per scene for a printed summary (the verdicts above, aligned).
 std::vector<std::string> referenceQualityLines(const nlohmann::json& results);
 

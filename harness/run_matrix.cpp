@@ -669,7 +669,7 @@ json runMatrix(const RunConfig& cfg) {
     }
   }
   results["statistics"] = analyseRun(results);
-  addReferenceQuality(results, cfg.warmup);
+  addReferenceQuality(results, cfg.warmup, cfg.referenceNotes);
   commitResults(cfg.out, results);
   return results;
 }

@@ -4,6 +4,7 @@
 // <out>/results.json, appends <out>/results.db, and keeps images of chosen frames for the report.
 // A failing pair is recorded with its error and does not lose the others.
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -28,6 +29,8 @@ struct RunConfig {
   // > 1: every scene is also rendered with input seeds 1..K-1 (the references are the same) and each
   // pair reports the bias^2 / variance split of its error over the K outputs.
   int seeds = 1;
+  // Per scene, a sentence its reference-quality verdict carries (the study's refinement).
+  std::map<std::string, std::string> referenceNotes;
   ProgressFn progress;
 };
 

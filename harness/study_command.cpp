@@ -118,6 +118,27 @@ void printEvents(const json& results) {
       }
 }
 
+// The study's second pass (issue 13): refines the references of the scenes that missed the
+// reference-quality goal, cheapest first within the budget (planReferenceRefinement), and notes on
+// each verdict what was done or what it would take. Returns whether any reference was refined.
+bool refineReferences(RunConfig& c, const json& results, double budget, int maxSpp) {
+  std::map<std::string, SequenceInfo> sequences;
+  for (const Scene& s : c.scenes) {
+    const std::filesystem::path dir = sequenceDir(s, c.render, c.cache);
+    if (std::filesystem::exists(dir / "sequence.json")) sequences.emplace(s.name, Sequence::open(dir).info());
+  }
+  bool refined = false;
+  for (const ReferenceRefinement& plan : planReferenceRefinement(results, sequences, c.warmup, maxSpp, budget)) {
+    c.referenceNotes[plan.scene] = refinementNote(plan, budget);
+    c.progress("[refine] " + plan.scene + ": " + c.referenceNotes[plan.scene]);
+    if (!plan.withinBudget) continue;
+    for (const Scene& s : c.scenes)
+      if (s.name == plan.scene) refineSequence(s, c.render, c.cache, plan.targetRelMse, maxSpp, c.progress, c.warmup);
+    refined = true;
+  }
+  return refined;
+}
+
 }  // namespace
 
 void addStudyCommand(CLI::App& app) {
@@ -129,6 +150,8 @@ void addStudyCommand(CLI::App& app) {
   auto flip = std::make_shared<std::string>("all");
   auto scenes = std::make_shared<std::string>("all");
   auto exposure = std::make_shared<std::string>("per-frame");
+  auto refineBudget = std::make_shared<double>(0.5);
+  auto refineMaxSpp = std::make_shared<int>(8192);
   cmd->add_option("--out", *out, "Run directory")->default_val("runs/study");
   cmd->add_option("--report", *report, "Report directory (index.html)")->default_val("report");
   cmd->add_option("--flip", *flip, "FLIP metrics: none, ldr, all")
@@ -138,6 +161,15 @@ void addStudyCommand(CLI::App& app) {
   cmd->add_option("--exposure", *exposure, "Display exposure (metrics.md): per-frame or first")
       ->check(CLI::IsMember({"per-frame", "first"}))
       ->default_val("per-frame");
+  cmd->add_option("--refine-budget", *refineBudget,
+                  "After the first pass, refine the references of scenes that miss the reference-quality goal "
+                  "(cheapest first) while the predicted extra paths stay within this many times the paths the "
+                  "references hold, then run again (0: off)")
+      ->check(finiteRange(0.0, 1000.0))
+      ->default_val(0.5);
+  cmd->add_option("--refine-max-spp", *refineMaxSpp, "The refinement's cap on a reference's samples per pixel")
+      ->check(CLI::Range(1, 1 << 20))
+      ->default_val(8192);
   // The study renders the low-resolution buffer (1/8, 16 paths per texel, the CAPCOM 2023 setting
   // in algorithms.md), so reengine runs its disocclusion rays and is charged for them (a quarter
   // of the 1-spp input's paths per frame); --lowres-factor 0 leaves it out.
@@ -158,6 +190,10 @@ void addStudyCommand(CLI::App& app) {
     c.keepFrames = "chosen";
     c.progress = [](const std::string& line) { std::cout << line << std::endl; };
     json results = runMatrix(c);
+    if (*refineBudget > 0 && refineReferences(c, results, *refineBudget, *refineMaxSpp)) {
+      c.progress("[refine] running the matrix again on the refined references");
+      results = runMatrix(c);
+    }
     ReportOptions ro;
     ro.run = *out;
     ro.out = *report;

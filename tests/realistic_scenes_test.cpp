@@ -22,24 +22,12 @@ using nlohmann::json;
 const std::string kScript = std::string(ARENA_SOURCE_DIR) + "/scripts/extract_assets.py";
 const std::string kArchive = "/usr/share/sweethome3d/furniture/BlendSwap-CC-0.sh3f";
 
-struct Result {
-  int status = -1;
-  std::string output;  // stdout and stderr
-};
+using Result = test::CommandResult;
 
 // Runs the script with the archive and asset cache given through its environment variables.
 Result extract(const std::string& archive, const fs::path& assetDir, const std::string& models) {
-  const std::string cmd = "ARENA_SH3F_ARCHIVE='" + archive + "' ARENA_ASSET_DIR='" +
-                          assetDir.string() + "' python3 " + kScript + " " + models + " 2>&1";
-  Result r;
-  FILE* pipe = popen(cmd.c_str(), "r");
-  if (!pipe) return r;
-  char buf[4096];
-  size_t n;
-  while ((n = fread(buf, 1, sizeof buf, pipe)) > 0) r.output.append(buf, n);
-  const int status = pclose(pipe);
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  return test::runCommand("ARENA_SH3F_ARCHIVE='" + archive + "' ARENA_ASSET_DIR='" + assetDir.string() +
+                          "' python3 " + kScript + " " + models);
 }
 
 std::vector<std::string> entries(const fs::path& dir) {

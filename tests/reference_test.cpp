@@ -403,7 +403,12 @@ TEST(Reference, QualityVerdictNamesTheRatioAndWhy) {
         {"fine", {{"referenceRelMse", {1.0, 1e-5, 3e-5}}, {"referenceCapped", {false}}}}}},
       {"pairs",
        {pair("capped", "svgf", 2e-3), pair("capped", "passthrough", 1e-9), pair("loose", "asvgf", 2e-4),
-        pair("fine", "svgf", 4e-4), pair("fine", "temporal", 1e-9)}}};
+        pair("fine", "svgf", 4e-4), pair("fine", "temporal", 1e-9)}},
+      // The study's settings: its low-res buffer is part of the sequences' hash, so the printed
+      // command must carry it or it finds nothing to refine.
+      {"settings", {{"render", RenderSettings::fromPreset("quick").pixelSettings(test::shippedScene("cornell_static"))}}}};
+  results["settings"]["render"]["lowresFactor"] = 8;
+  results["settings"]["render"]["lowresSpp"] = 16;
   addReferenceQuality(results, 1);
   const nlohmann::json& capped = results["scenes"]["capped"]["referenceQuality"];
   EXPECT_NEAR(capped["ratio"].get<double>(), 0.2, 1e-12);  // 4e-4 / 2e-3: the passthrough is no denoiser
@@ -415,11 +420,97 @@ TEST(Reference, QualityVerdictNamesTheRatioAndWhy) {
   const std::string loose = results["scenes"]["loose"]["referenceQuality"]["verdict"];
   EXPECT_NE(loose.find("= 0.5 > 0.1: NOT MET"), std::string::npos) << loose;
   EXPECT_NE(loose.find("met their target, which is too loose"), std::string::npos) << loose;
-  EXPECT_NE(loose.find("--target 2e-05"), std::string::npos) << loose;
+  EXPECT_NE(loose.find("`arena refine loose --lowres-factor 8 --target 2e-05`"), std::string::npos) << loose;
   const nlohmann::json& fine = results["scenes"]["fine"]["referenceQuality"];
   EXPECT_NEAR(fine["floor"].get<double>(), 2e-5, 1e-15);
   EXPECT_TRUE(fine["meets"].get<bool>());
   EXPECT_EQ(referenceQualityLines(results).size(), 3u);
+}
+
+// The options that find a run's sequences again: what differs from the preset, nothing more.
+TEST(Reference, RenderOptionsOfARunReproduceItsSettings) {
+  const Scene scene = test::shippedScene("cornell_static");
+  EXPECT_EQ(renderOptionsOf(RenderSettings::fromPreset("quick").pixelSettings(scene)), "");
+  EXPECT_EQ(renderOptionsOf(RenderSettings::fromPreset("paper").pixelSettings(scene)), " --preset paper");
+  RenderSettings s = RenderSettings::fromPreset("quick");
+  s.referenceSpp = 1024;
+  s.referenceRelError = 0.005;
+  s.referenceSampler = "independent";
+  s.referenceTile = 0;
+  s.inputSeed = 3;
+  s.lowresFactor = 4;
+  s.lowresSpp = 32;
+  EXPECT_EQ(renderOptionsOf(s.pixelSettings(scene)),
+            " --ref-spp 1024 --ref-rel-error 0.0050000000000000001 --ref-sampler independent --ref-tile 0 "
+            "--input-seed 3 --lowres-factor 4 --lowres-spp 32");
+  EXPECT_EQ(renderOptionsOf(nlohmann::json{{"preset", "draft"}}), "");  // unknown preset: no options
+  EXPECT_EQ(renderOptionsOf(nlohmann::json()), "");
+}
+
+// The study's refinement plan: targets with the margin, predicted paths from the doublings a
+// reference needs (capped, warm-up-only references left out), cheapest first within the budget.
+TEST(Reference, RefinementPlanTakesTheCheapestScenesWithinTheBudget) {
+  auto quality = [](bool meets, double best) {
+    return nlohmann::json{{"referenceQuality", {{"meets", meets}, {"bestCorrectedRelMse", best}}}};
+  };
+  const nlohmann::json results = {
+      {"scenes", {{"dear", quality(false, 1e-3)}, {"cheap", quality(false, 1e-3)}, {"fine", quality(true, 1e-3)}}}};
+  auto sequence = [](std::vector<int> ofFrame, std::vector<int> spp, std::vector<double> est) {
+    SequenceInfo info;
+    info.width = info.height = 10;
+    info.referenceOfFrame = std::move(ofFrame);
+    info.referenceSpp = std::move(spp);
+    info.referenceEstimatedRelMse = std::move(est);
+    return info;
+  };
+  const std::map<std::string, SequenceInfo> sequences = {
+      // 3e-4 -> 8e-5: two doublings, 100 -> 400 spp on 100 pixels.
+      {"cheap", sequence({0, 0, 0, 0}, {100}, {3e-4})},
+      // Reference 0 serves the warm-up frame only; reference 1 needs four doublings, capped at 1000.
+      {"dear", sequence({0, 1, 1, 1}, {100, 100}, {1e-2, 1e-3})},
+      {"fine", sequence({0, 0, 0, 0}, {100}, {1e-5})}};
+  const std::vector<ReferenceRefinement> plans = planReferenceRefinement(results, sequences, 1, 1000, 1.5);
+  ASSERT_EQ(plans.size(), 2u);
+  EXPECT_EQ(plans[0].scene, "cheap");
+  EXPECT_DOUBLE_EQ(plans[0].targetRelMse, kRefineMargin * kReferenceQualityGoal * 1e-3);
+  EXPECT_DOUBLE_EQ(plans[0].predictedPaths, 100.0 * 300);
+  EXPECT_DOUBLE_EQ(plans[0].budgetNeeded, 30000.0 / 40000);  // the references hold 400 spp x 100 pixels
+  EXPECT_TRUE(plans[0].withinBudget);
+  EXPECT_EQ(plans[1].scene, "dear");
+  EXPECT_DOUBLE_EQ(plans[1].predictedPaths, 100.0 * 900);
+  EXPECT_DOUBLE_EQ(plans[1].budgetNeeded, (30000.0 + 90000) / 40000);
+  EXPECT_FALSE(plans[1].withinBudget);
+  const std::string note = refinementNote(plans[1], 1.5);
+  EXPECT_NE(note.find("not refined by the study"), std::string::npos) << note;
+  EXPECT_NE(note.find("`arena study --refine-budget 3`"), std::string::npos) << note;
+  EXPECT_NE(refinementNote(plans[0], 1.5).find("refined its references toward 8e-05"), std::string::npos);
+  // A budget of 0 refines nothing; a scene without a sequence is not planned.
+  for (const ReferenceRefinement& p : planReferenceRefinement(results, sequences, 1, 1000, 0)) EXPECT_FALSE(p.withinBudget);
+  EXPECT_TRUE(planReferenceRefinement(results, {}, 1, 1000, 1).empty());
+}
+
+// End to end: a study whose references are far too noisy for its scene (16 spp) says so; with a
+// refinement budget it refines them, runs again, and its verdict says what it did.
+TEST(Reference, StudyRefinesReferencesThatMissTheGoal) {
+  const std::filesystem::path dir = test::freshDir("study_refine");
+  auto study = [&](const std::string& run, const std::string& budget) {
+    const test::CommandResult r = test::runCommand(
+        std::string(ARENA_BINARY) + " study --scenes cornell_static --resolution 32x18 --frames 10 --flip none " +
+        "--ref-spp 16 --ref-rel-error 0 --refine-max-spp 1024 --refine-budget " + budget + " --cache " +
+        (dir / "cache").string() + " --out " + (dir / run).string() + " --report " + (dir / (run + "_report")).string());
+    EXPECT_EQ(r.status, 0) << r.output;
+    return std::make_pair(r.output, parseJsonFile((dir / run / "results.json").string())["scenes"]["cornell_static"]);
+  };
+  const auto [plainOutput, plain] = study("plain", "0");
+  EXPECT_EQ(plainOutput.find("[refine]"), std::string::npos) << plainOutput;
+  EXPECT_FALSE(plain["referenceQuality"]["meets"].get<bool>()) << plain["referenceQuality"];
+  const auto [output, refined] = study("refined", "1000");
+  EXPECT_NE(output.find("[refine] cornell_static: the study refined its references toward"), std::string::npos) << output;
+  EXPECT_NE(output.find("running the matrix again"), std::string::npos) << output;
+  const nlohmann::json& q = refined["referenceQuality"];
+  EXPECT_LT(q["floor"].get<double>(), plain["referenceQuality"]["floor"].get<double>() / 4) << q;
+  EXPECT_TRUE(q["meets"].get<bool>()) << q;
+  EXPECT_NE(q["verdict"].get<std::string>().find("(the study refined its references toward"), std::string::npos) << q;
 }
 
 TEST(Reference, BadSamplerSettingsAreErrorsNamingTheValue) {

@@ -39,16 +39,8 @@ struct CliResult {
 
 // Runs `arena ARGS` through the shell (so tests can use redirections and ulimit).
 CliResult arenaCli(const std::string& args, const std::string& prefix = "") {
-  const std::string cmd = prefix + std::string(ARENA_BINARY) + " " + args + " 2>&1";
-  CliResult r;
-  FILE* pipe = popen(cmd.c_str(), "r");
-  if (!pipe) return r;
-  std::array<char, 4096> buf;
-  size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.output.append(buf.data(), n);
-  int status = pclose(pipe);
-  r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  return r;
+  const test::CommandResult r = test::runCommand(prefix + std::string(ARENA_BINARY) + " " + args);
+  return {r.status, r.output};
 }
 
 // A small valid scene; tests change one field to make it invalid.

@@ -1,10 +1,25 @@
 #include "tests/test_util.hpp"
 
+#include <sys/wait.h>
 #include <unistd.h>
+
+#include <cstdio>
 
 #include "core/sequence.hpp"
 
 namespace arena::test {
+
+CommandResult runCommand(const std::string& commandLine) {
+  CommandResult r;
+  FILE* pipe = popen((commandLine + " 2>&1").c_str(), "r");
+  if (!pipe) return r;
+  char buf[4096];
+  size_t n;
+  while ((n = fread(buf, 1, sizeof buf, pipe)) > 0) r.output.append(buf, n);
+  const int status = pclose(pipe);
+  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  return r;
+}
 
 std::filesystem::path freshDir(const std::string& name) {
   auto dir =

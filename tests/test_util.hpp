@@ -14,6 +14,13 @@
 
 namespace arena::test {
 
+// Runs a shell command line; its exit status (128 + signal when killed) and stdout + stderr.
+struct CommandResult {
+  int status = -1;
+  std::string output;
+};
+CommandResult runCommand(const std::string& commandLine);
+
 // A fresh, empty directory under the system temp dir, unique per test.
 std::filesystem::path freshDir(const std::string& name);
 Scene shippedScene(const std::string& name);

@@ -882,7 +882,7 @@ void shareReference(const fs::path& home, const fs::path& dir, int r) {
 }  // namespace
 
 fs::path refineSequence(const Scene& scene, const RenderSettings& settings, const fs::path& cacheRoot,
-                        double targetRelMse, int maxSpp, const ProgressFn& progress) {
+                        double targetRelMse, int maxSpp, const ProgressFn& progress, int fromFrame) {
   if (!(targetRelMse > 0)) throw Error("refine: --target must be a positive relMSE, got " + formatDouble(targetRelMse));
   const fs::path dir = sequenceDir(scene, settings, cacheRoot);
   if (!fs::exists(dir / "sequence.json"))
@@ -899,6 +899,9 @@ fs::path refineSequence(const Scene& scene, const RenderSettings& settings, cons
         int(std::find(info.referenceOfFrame.begin(), info.referenceOfFrame.end(), r) - info.referenceOfFrame.begin());
     const double before = info.referenceEstimatedRelMse[size_t(r)];
     if (before > 0 && before <= targetRelMse) continue;
+    if (std::find(info.referenceOfFrame.begin() + std::clamp(fromFrame, 0, int(info.referenceOfFrame.size())),
+                  info.referenceOfFrame.end(), r) == info.referenceOfFrame.end())
+      continue;  // only frames before fromFrame use it
     ReferenceSums sums = readReferenceSums(referenceSumsPath(home, r), hash, r);
     const auto t0 = std::chrono::steady_clock::now();
     const ReferenceResult ref = renderer.continueReference(firstFrame, sums, targetRelMse, maxSpp);

@@ -205,9 +205,10 @@ std::filesystem::path renderSequence(const Scene& scene, const RenderSettings& s
 // `arena refine`: extends every reference of the already rendered sequence (scene, settings) whose
 // estimated relMSE is above targetRelMse, doubling its samples per replicate until it meets the
 // target or maxSpp, and rewrites its files and sequence.json. Bit-identical to rendering with that
-// target in one go (the same doubling schedule over the same samples).
+// target in one go (the same doubling schedule over the same samples). References that only frames
+// before fromFrame use are left as they are (the study: frames before the warm-up are not summarised).
 std::filesystem::path refineSequence(const Scene& scene, const RenderSettings& settings,
                                      const std::filesystem::path& cacheRoot, double targetRelMse, int maxSpp,
-                                     const ProgressFn& progress);
+                                     const ProgressFn& progress, int fromFrame = 0);
 
 }  // namespace arena
