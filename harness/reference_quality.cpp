@@ -156,11 +156,12 @@ std::vector<ReferenceRefinement> planReferenceRefinement(const json& results,
   std::stable_sort(plans.begin(), plans.end(), [](const ReferenceRefinement& a, const ReferenceRefinement& b) {
     return a.predictedPaths < b.predictedPaths;
   });
-  double spent = 0;
+  // Cheapest first, so a budget that covers a scene covers every cheaper one too.
+  double cumulative = 0;
   for (ReferenceRefinement& plan : plans) {
-    plan.budgetNeeded = held > 0 ? (spent + plan.predictedPaths) / held : 0;
+    cumulative += plan.predictedPaths;
+    plan.budgetNeeded = held > 0 ? cumulative / held : 0;
     plan.withinBudget = plan.predictedPaths > 0 && plan.budgetNeeded <= budget;
-    if (plan.withinBudget) spent += plan.predictedPaths;
   }
   return plans;
 }

@@ -38,7 +38,7 @@ struct ReferenceRefinement {
   std::string scene;
   double targetRelMse = 0;
   double predictedPaths = 0;  // the paths refining would add
-  double budgetNeeded = 0;    // the smallest budget that covers it, with the cheaper scenes before it
+  double budgetNeeded = 0;    // the smallest budget that covers it (and every cheaper scene)
   bool withinBudget = false;
 };
 std::vector<ReferenceRefinement> planReferenceRefinement(const nlohmann::json& results,
