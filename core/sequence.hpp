@@ -3,6 +3,7 @@
 // multi-channel EXR per frame, A-SVGF gradient samples per frame at stratum resolution, one EXR
 // per distinct reference, and sequence.json (scene, settings, frame -> reference map, events,
 // cameras). The channel layout is defined here once, for the writer (tracer) and the readers.
+#include <algorithm>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -58,6 +59,11 @@ struct SequenceInfo {
   // The low-resolution buffer's block size and samples per texel; 0 when the sequence has none.
   int lowresFactor() const { return settings.value("lowresFactor", 0); }
   int lowresSpp() const { return settings.value("lowresSpp", 0); }
+  // Whether a frame t >= firstFrame uses reference r (frames before a warm-up are not summarised).
+  bool referenceUsedFrom(int r, int firstFrame) const {
+    const auto from = referenceOfFrame.begin() + std::clamp(firstFrame, 0, int(referenceOfFrame.size()));
+    return std::find(from, referenceOfFrame.end(), r) != referenceOfFrame.end();
+  }
 
   nlohmann::json toJson() const;
   static SequenceInfo fromJson(const nlohmann::json& j, const std::string& file);

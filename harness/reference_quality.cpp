@@ -143,8 +143,7 @@ std::vector<ReferenceRefinement> planReferenceRefinement(const json& results,
     plan.scene = name;
     plan.targetRelMse = kRefineMargin * kReferenceQualityGoal * q["bestCorrectedRelMse"].get<double>();
     for (int r = 0; r < int(info.referenceSpp.size()); ++r) {
-      const auto& of = info.referenceOfFrame;
-      if (std::find(of.begin() + std::clamp(warmup, 0, int(of.size())), of.end(), r) == of.end()) continue;
+      if (!info.referenceUsedFrom(r, warmup)) continue;
       const double e = r < int(info.referenceEstimatedRelMse.size()) ? info.referenceEstimatedRelMse[size_t(r)] : 0;
       const double s = info.referenceSpp[size_t(r)];
       if (!(e > plan.targetRelMse) || s >= maxSpp) continue;

@@ -670,7 +670,7 @@ json runMatrix(const RunConfig& cfg) {
   }
   results["statistics"] = analyseRun(results);
   addReferenceQuality(results, cfg.warmup, cfg.referenceNotes);
-  commitResults(cfg.out, results);
+  if (cfg.commit) commitResults(cfg.out, results);
   return results;
 }
 

@@ -31,6 +31,9 @@ struct RunConfig {
   int seeds = 1;
   // Per scene, a sentence its reference-quality verdict carries (the study's refinement).
   std::map<std::string, std::string> referenceNotes;
+  // false: return the results without writing results.json/results.db (a pass the caller may
+  // redo; it commits what it keeps with commitResults).
+  bool commit = true;
   ProgressFn progress;
 };
 

@@ -7,10 +7,12 @@
 #include <map>
 #include <sstream>
 
+#include "core/error.hpp"
 #include "harness/commands.hpp"
 #include "harness/reference_quality.hpp"
 #include "harness/run_matrix.hpp"
 #include "harness/scene_selection.hpp"
+#include "metrics/results.hpp"
 #include "reports/report.hpp"
 
 namespace arena::cli {
@@ -132,9 +134,16 @@ bool refineReferences(RunConfig& c, const json& results, double budget, int maxS
     c.referenceNotes[plan.scene] = refinementNote(plan, budget);
     c.progress("[refine] " + plan.scene + ": " + c.referenceNotes[plan.scene]);
     if (!plan.withinBudget) continue;
-    for (const Scene& s : c.scenes)
-      if (s.name == plan.scene) refineSequence(s, c.render, c.cache, plan.targetRelMse, maxSpp, c.progress, c.warmup);
-    refined = true;
+    for (const Scene& s : c.scenes) {
+      if (s.name != plan.scene) continue;
+      try {
+        refineSequence(s, c.render, c.cache, plan.targetRelMse, maxSpp, c.progress, c.warmup);
+        refined = true;
+      } catch (const Error& e) {  // e.g. a reference without its sums: the first pass's verdict stands
+        c.referenceNotes[plan.scene] = std::string("the study could not refine it: ") + e.what();
+        c.progress("[refine] " + plan.scene + ": " + c.referenceNotes[plan.scene]);
+      }
+    }
   }
   return refined;
 }
@@ -189,10 +198,19 @@ void addStudyCommand(CLI::App& app) {
     c.exposure = *exposure;
     c.keepFrames = "chosen";
     c.progress = [](const std::string& line) { std::cout << line << std::endl; };
+    // With a refinement budget the first pass is committed only if nothing gets refined, so the
+    // run directory and results.db hold one run: the one whose references were final.
+    c.commit = !(*refineBudget > 0);
     json results = runMatrix(c);
-    if (*refineBudget > 0 && refineReferences(c, results, *refineBudget, *refineMaxSpp)) {
-      c.progress("[refine] running the matrix again on the refined references");
-      results = runMatrix(c);
+    if (!c.commit) {
+      c.commit = true;
+      if (refineReferences(c, results, *refineBudget, *refineMaxSpp)) {
+        c.progress("[refine] running the matrix again on the refined references");
+        results = runMatrix(c);
+      } else {
+        addReferenceQuality(results, c.warmup, c.referenceNotes);  // the verdicts say why not
+        commitResults(c.out, results);
+      }
     }
     ReportOptions ro;
     ro.run = *out;

@@ -491,13 +491,19 @@ TEST(Reference, RefinementPlanTakesTheCheapestScenesWithinTheBudget) {
 
 // End to end: a study whose references are far too noisy for its scene (16 spp) says so; with a
 // refinement budget it refines them, runs again, and its verdict says what it did.
+// The study run of the refinement tests: cornell_static at 32x18, 10 frames, 16-spp references.
+test::CommandResult tinyStudy(const std::filesystem::path& dir, const std::string& run, const std::string& budget) {
+  return test::runCommand(std::string(ARENA_BINARY) +
+                          " study --scenes cornell_static --resolution 32x18 --frames 10 --flip none " +
+                          "--ref-spp 16 --ref-rel-error 0 --refine-max-spp 1024 --refine-budget " + budget +
+                          " --cache " + (dir / "cache").string() + " --out " + (dir / run).string() + " --report " +
+                          (dir / (run + "_report")).string());
+}
+
 TEST(Reference, StudyRefinesReferencesThatMissTheGoal) {
   const std::filesystem::path dir = test::freshDir("study_refine");
   auto study = [&](const std::string& run, const std::string& budget) {
-    const test::CommandResult r = test::runCommand(
-        std::string(ARENA_BINARY) + " study --scenes cornell_static --resolution 32x18 --frames 10 --flip none " +
-        "--ref-spp 16 --ref-rel-error 0 --refine-max-spp 1024 --refine-budget " + budget + " --cache " +
-        (dir / "cache").string() + " --out " + (dir / run).string() + " --report " + (dir / (run + "_report")).string());
+    const test::CommandResult r = tinyStudy(dir, run, budget);
     EXPECT_EQ(r.status, 0) << r.output;
     return std::make_pair(r.output, parseJsonFile((dir / run / "results.json").string())["scenes"]["cornell_static"]);
   };
@@ -511,6 +517,28 @@ TEST(Reference, StudyRefinesReferencesThatMissTheGoal) {
   EXPECT_LT(q["floor"].get<double>(), plain["referenceQuality"]["floor"].get<double>() / 4) << q;
   EXPECT_TRUE(q["meets"].get<bool>()) << q;
   EXPECT_NE(q["verdict"].get<std::string>().find("(the study refined its references toward"), std::string::npos) << q;
+  // The first pass was not committed: the run directory's database holds the final run only.
+  EXPECT_EQ(test::countRows(dir / "refined" / "results.db", "runs"), 1);
+  EXPECT_EQ(test::countRows(dir / "plain" / "results.db", "runs"), 1);
+}
+
+// A reference that cannot be refined (its sums are gone) is said so in the verdict; the study
+// still finishes with the first pass's results.
+TEST(Reference, StudySaysWhenItCannotRefine) {
+  const std::filesystem::path dir = test::freshDir("study_refine_missing");
+  ASSERT_EQ(tinyStudy(dir, "first", "0").status, 0);
+  int removed = 0;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(dir / "cache"))
+    if (e.path().extension() == ".sums") removed += int(std::filesystem::remove(e.path()));
+  ASSERT_GT(removed, 0);
+  const test::CommandResult r = tinyStudy(dir, "second", "1000");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("[refine] cornell_static: the study could not refine it: "), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("running the matrix again"), std::string::npos) << r.output;
+  const nlohmann::json q =
+      parseJsonFile((dir / "second" / "results.json").string())["scenes"]["cornell_static"]["referenceQuality"];
+  EXPECT_FALSE(q["meets"].get<bool>()) << q;
+  EXPECT_NE(q["verdict"].get<std::string>().find("(the study could not refine it: "), std::string::npos) << q;
 }
 
 TEST(Reference, BadSamplerSettingsAreErrorsNamingTheValue) {

@@ -355,19 +355,7 @@ RunConfig tinyRun(const std::string& name) {
   return c;
 }
 
-int countRows(const fs::path& db, const char* table) {
-  sqlite3* h = nullptr;
-  sqlite3_open_v2(db.c_str(), &h, SQLITE_OPEN_READONLY, nullptr);
-  sqlite3_stmt* s = nullptr;
-  int n = -1;
-  if (sqlite3_prepare_v2(h, (std::string("SELECT COUNT(*) FROM ") + table).c_str(), -1, &s,
-                         nullptr) == SQLITE_OK &&
-      sqlite3_step(s) == SQLITE_ROW)
-    n = sqlite3_column_int(s, 0);
-  sqlite3_finalize(s);
-  sqlite3_close(h);
-  return n;
-}
+using test::countRows;
 
 TEST(Class5State, BadOutputsFailBeforeAnyWorkNamingTheFile) {
   struct Case {

@@ -3,11 +3,27 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <sqlite3.h>
+
 #include <cstdio>
 
 #include "core/sequence.hpp"
 
 namespace arena::test {
+
+int countRows(const std::filesystem::path& db, const char* table) {
+  sqlite3* h = nullptr;
+  sqlite3_open_v2(db.c_str(), &h, SQLITE_OPEN_READONLY, nullptr);
+  sqlite3_stmt* s = nullptr;
+  int n = -1;
+  if (sqlite3_prepare_v2(h, (std::string("SELECT COUNT(*) FROM ") + table).c_str(), -1, &s,
+                         nullptr) == SQLITE_OK &&
+      sqlite3_step(s) == SQLITE_ROW)
+    n = sqlite3_column_int(s, 0);
+  sqlite3_finalize(s);
+  sqlite3_close(h);
+  return n;
+}
 
 CommandResult runCommand(const std::string& commandLine) {
   CommandResult r;

@@ -21,6 +21,9 @@ struct CommandResult {
 };
 CommandResult runCommand(const std::string& commandLine);
 
+// SELECT COUNT(*) FROM table in the SQLite database db; -1 when it cannot be read.
+int countRows(const std::filesystem::path& db, const char* table);
+
 // A fresh, empty directory under the system temp dir, unique per test.
 std::filesystem::path freshDir(const std::string& name);
 Scene shippedScene(const std::string& name);

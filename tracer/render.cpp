@@ -899,9 +899,7 @@ fs::path refineSequence(const Scene& scene, const RenderSettings& settings, cons
         int(std::find(info.referenceOfFrame.begin(), info.referenceOfFrame.end(), r) - info.referenceOfFrame.begin());
     const double before = info.referenceEstimatedRelMse[size_t(r)];
     if (before > 0 && before <= targetRelMse) continue;
-    if (std::find(info.referenceOfFrame.begin() + std::clamp(fromFrame, 0, int(info.referenceOfFrame.size())),
-                  info.referenceOfFrame.end(), r) == info.referenceOfFrame.end())
-      continue;  // only frames before fromFrame use it
+    if (!info.referenceUsedFrom(r, fromFrame)) continue;
     ReferenceSums sums = readReferenceSums(referenceSumsPath(home, r), hash, r);
     const auto t0 = std::chrono::steady_clock::now();
     const ReferenceResult ref = renderer.continueReference(firstFrame, sums, targetRelMse, maxSpp);
