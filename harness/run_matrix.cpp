@@ -674,6 +674,27 @@ json runMatrix(const RunConfig& cfg) {
   return results;
 }
 
+json replaceScenes(json results, const json& part, const RunConfig& cfg) {
+  std::map<std::string, json> newPairs;  // scene \n label -> pair
+  for (const json& p : part.at("pairs")) newPairs[p.at("scene").get<std::string>() + "\n" + p.at("label").get<std::string>()] = p;
+  for (auto it = part.at("scenes").begin(); it != part.at("scenes").end(); ++it) {
+    if (!results["scenes"].contains(it.key())) throw Error("replaceScenes: scene " + it.key() + " is not in the run");
+    results["scenes"][it.key()] = it.value();
+  }
+  for (json& p : results["pairs"]) {
+    const std::string scene = p.at("scene").get<std::string>();
+    if (!part["scenes"].contains(scene)) continue;
+    const auto found = newPairs.find(scene + "\n" + p.at("label").get<std::string>());
+    if (found == newPairs.end())
+      throw Error("replaceScenes: pair " + p.at("label").get<std::string>() + " on " + scene + " is missing from the part");
+    p = found->second;
+  }
+  results["statistics"] = analyseRun(results);
+  addReferenceQuality(results, cfg.warmup, cfg.referenceNotes);
+  if (cfg.commit) commitResults(cfg.out, results);
+  return results;
+}
+
 json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
   if (runs.empty()) throw Error("merge: no runs given");
   checkRunOutputs(out);  // creates --out when missing

@@ -42,6 +42,11 @@ nlohmann::json runMatrix(const RunConfig& config);
 std::vector<std::string> failedPairs(const nlohmann::json& results);
 // "i/n" -> (i, n), 0 <= i < n.
 std::pair<int, int> parseShard(const std::string& text);
+// The run `results` with the scenes of `part` (a run of the same configuration on some of its
+// scenes) in place of its own: their scene entries and pairs are replaced where they stand, then
+// the statistics and reference quality (cfg.warmup, cfg.referenceNotes) are recomputed over the
+// whole, and the result is committed to cfg.out when cfg.commit. The study's second pass.
+nlohmann::json replaceScenes(nlohmann::json results, const nlohmann::json& part, const RunConfig& cfg);
 // Combines shard runs into one run directory (results.json, results.db, images).
 nlohmann::json mergeRuns(const std::vector<std::filesystem::path>& runs, const std::filesystem::path& out);
 

@@ -122,14 +122,14 @@ void printEvents(const json& results) {
 
 // The study's second pass (issue 13): refines the references of the scenes that missed the
 // reference-quality goal, cheapest first within the budget (planReferenceRefinement), and notes on
-// each verdict what was done or what it would take. Returns whether any reference was refined.
-bool refineReferences(RunConfig& c, const json& results, double budget, int maxSpp) {
+// each verdict what was done or what it would take. Returns the scenes whose references it refined.
+std::vector<Scene> refineReferences(RunConfig& c, const json& results, double budget, int maxSpp) {
   std::map<std::string, SequenceInfo> sequences;
   for (const Scene& s : c.scenes) {
     const std::filesystem::path dir = sequenceDir(s, c.render, c.cache);
     if (std::filesystem::exists(dir / "sequence.json")) sequences.emplace(s.name, Sequence::open(dir).info());
   }
-  bool refined = false;
+  std::vector<Scene> refined;
   for (const ReferenceRefinement& plan : planReferenceRefinement(results, sequences, c.warmup, maxSpp, budget)) {
     c.referenceNotes[plan.scene] = refinementNote(plan, budget);
     c.progress("[refine] " + plan.scene + ": " + c.referenceNotes[plan.scene]);
@@ -138,7 +138,7 @@ bool refineReferences(RunConfig& c, const json& results, double budget, int maxS
       if (s.name != plan.scene) continue;
       try {
         refineSequence(s, c.render, c.cache, plan.targetRelMse, maxSpp, c.progress, c.warmup);
-        refined = true;
+        refined.push_back(s);
       } catch (const Error& e) {  // e.g. a reference without its sums: the first pass's verdict stands
         c.referenceNotes[plan.scene] = std::string("the study could not refine it: ") + e.what();
         c.progress("[refine] " + plan.scene + ": " + c.referenceNotes[plan.scene]);
@@ -203,10 +203,14 @@ void addStudyCommand(CLI::App& app) {
     c.commit = !(*refineBudget > 0);
     json results = runMatrix(c);
     if (!c.commit) {
-      c.commit = true;
-      if (refineReferences(c, results, *refineBudget, *refineMaxSpp)) {
-        c.progress("[refine] running the matrix again on the refined references");
-        results = runMatrix(c);
+      RunConfig again = c;
+      again.scenes = refineReferences(c, results, *refineBudget, *refineMaxSpp);
+      again.referenceNotes = c.referenceNotes;
+      if (!again.scenes.empty()) {
+        c.progress("[refine] running the refined scenes again");
+        const json part = runMatrix(again);
+        c.commit = true;
+        results = replaceScenes(std::move(results), part, c);
       } else {
         addReferenceQuality(results, c.warmup, c.referenceNotes);  // the verdicts say why not
         commitResults(c.out, results);

@@ -512,7 +512,7 @@ TEST(Reference, StudyRefinesReferencesThatMissTheGoal) {
   EXPECT_FALSE(plain["referenceQuality"]["meets"].get<bool>()) << plain["referenceQuality"];
   const auto [output, refined] = study("refined", "1000");
   EXPECT_NE(output.find("[refine] cornell_static: the study refined its references toward"), std::string::npos) << output;
-  EXPECT_NE(output.find("running the matrix again"), std::string::npos) << output;
+  EXPECT_NE(output.find("running the refined scenes again"), std::string::npos) << output;
   const nlohmann::json& q = refined["referenceQuality"];
   EXPECT_LT(q["floor"].get<double>(), plain["referenceQuality"]["floor"].get<double>() / 4) << q;
   EXPECT_TRUE(q["meets"].get<bool>()) << q;
@@ -534,7 +534,7 @@ TEST(Reference, StudySaysWhenItCannotRefine) {
   const test::CommandResult r = tinyStudy(dir, "second", "1000");
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("[refine] cornell_static: the study could not refine it: "), std::string::npos) << r.output;
-  EXPECT_EQ(r.output.find("running the matrix again"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("running the refined scenes again"), std::string::npos) << r.output;
   const nlohmann::json q =
       parseJsonFile((dir / "second" / "results.json").string())["scenes"]["cornell_static"]["referenceQuality"];
   EXPECT_FALSE(q["meets"].get<bool>()) << q;

@@ -129,6 +129,42 @@ TEST(RunMatrix, ShardsMergeIntoTheFullRun) {
   EXPECT_THROW(mergeRuns({parts[0], parts[0]}, test::freshDir("run_dup")), Error);
 }
 
+// The study's second pass: a run on some of the scenes replaces their entries and pairs where they
+// stand, the other scenes stay as they were, the statistics are recomputed and the whole is
+// committed once.
+TEST(RunMatrix, ReplaceScenesSwapsTheRerunScenesInPlace) {
+  RunConfig c = tinyRun("replace", {{"eaw", {}, ""}});
+  c.flip = "none";
+  c.commit = false;
+  const json first = runMatrix(c);
+  EXPECT_FALSE(fs::exists(c.out / "results.json"));  // not committed
+  RunConfig again = c;
+  again.scenes = {c.scenes[1]};
+  json part = runMatrix(again);
+  ASSERT_EQ(part["pairs"].size(), 3u);
+  for (json& p : part["pairs"]) p["marker"] = "second pass";
+  part["scenes"]["light_switch"]["marker"] = "second pass";
+  c.commit = true;
+  const json merged = replaceScenes(first, part, c);
+  ASSERT_EQ(merged["pairs"].size(), first["pairs"].size());
+  for (size_t i = 0; i < merged["pairs"].size(); ++i) {
+    const json& p = merged["pairs"][i];
+    EXPECT_EQ(p["scene"], first["pairs"][i]["scene"]);  // in place
+    EXPECT_EQ(p["label"], first["pairs"][i]["label"]);
+    if (p["scene"] == "light_switch")
+      EXPECT_EQ(p.value("marker", ""), "second pass");
+    else
+      EXPECT_EQ(p, first["pairs"][i]);
+  }
+  EXPECT_EQ(merged["scenes"]["light_switch"].value("marker", ""), "second pass");
+  EXPECT_EQ(merged["scenes"]["cornell_static"]["referenceQuality"], first["scenes"]["cornell_static"]["referenceQuality"]);
+  EXPECT_TRUE(merged.contains("statistics"));
+  EXPECT_EQ(test::countRows(c.out / "results.db", "runs"), 1);
+  json stranger = part;
+  stranger["scenes"]["nowhere"] = json::object();
+  EXPECT_THROW(replaceScenes(first, stranger, c), Error);
+}
+
 TEST(RunMatrix, AFailingPairIsReportedAndTheOthersKept) {
   RunConfig c = tinyRun("failing", {{"svgf", {}, ""}});
   c.scenes.resize(1);
