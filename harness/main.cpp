@@ -31,7 +31,7 @@ int main(int argc, char** argv) {
   // Images of a few MB are allocated and freed every frame (the tracer's 15 frame layers, the
   // denoisers' intermediates). glibc would serve each from fresh mmap pages and return them on free,
   // so every frame paid page faults (5% of `arena bench tracer` in the kernel). Serving them from
-  // the heap and keeping freed memory makes the tracer bench 9% faster; pixels are unchanged.
+  // the heap and keeping freed memory makes the tracer bench about 10% faster; pixels are unchanged.
   mallopt(M_MMAP_THRESHOLD, 64 << 20);
   mallopt(M_TRIM_THRESHOLD, 256 << 20);
   CLI::App app{

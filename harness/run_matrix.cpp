@@ -668,13 +668,17 @@ json runMatrix(const RunConfig& cfg) {
       if (pair["status"] != "ok") say("  error: " + pair["error"].get<std::string>());
     }
   }
-  results["statistics"] = analyseRun(results);
-  addReferenceQuality(results, cfg.warmup, cfg.referenceNotes);
-  if (cfg.commit) commitResults(cfg.out, results);
+  if (cfg.finish) finishRun(results, cfg);
   return results;
 }
 
-json replaceScenes(json results, const json& part, const RunConfig& cfg) {
+void finishRun(json& results, const RunConfig& cfg) {
+  results["statistics"] = analyseRun(results);
+  addReferenceQuality(results, cfg.warmup, cfg.referenceNotes);
+  commitResults(cfg.out, results);
+}
+
+json replaceScenes(json results, const json& part) {
   std::map<std::string, json> newPairs;  // scene \n label -> pair
   for (const json& p : part.at("pairs")) newPairs[p.at("scene").get<std::string>() + "\n" + p.at("label").get<std::string>()] = p;
   for (auto it = part.at("scenes").begin(); it != part.at("scenes").end(); ++it) {
@@ -689,9 +693,6 @@ json replaceScenes(json results, const json& part, const RunConfig& cfg) {
       throw Error("replaceScenes: pair " + p.at("label").get<std::string>() + " on " + scene + " is missing from the part");
     p = found->second;
   }
-  results["statistics"] = analyseRun(results);
-  addReferenceQuality(results, cfg.warmup, cfg.referenceNotes);
-  if (cfg.commit) commitResults(cfg.out, results);
   return results;
 }
 

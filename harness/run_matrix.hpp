@@ -31,22 +31,24 @@ struct RunConfig {
   int seeds = 1;
   // Per scene, a sentence its reference-quality verdict carries (the study's refinement).
   std::map<std::string, std::string> referenceNotes;
-  // false: return the results without writing results.json/results.db (a pass the caller may
-  // redo; it commits what it keeps with commitResults).
-  bool commit = true;
+  // false: return the scenes and pairs only, without statistics, verdicts or writing anything (a
+  // pass the caller may redo); the caller finishes what it keeps with finishRun.
+  bool finish = true;
   ProgressFn progress;
 };
 
 // Returns the results document (also written to disk). Check `failedPairs(results)`.
 nlohmann::json runMatrix(const RunConfig& config);
+// What ends every run: the statistics over all pairs, the reference-quality verdicts
+// (cfg.warmup, cfg.referenceNotes), and results.json + results.db committed to cfg.out.
+void finishRun(nlohmann::json& results, const RunConfig& cfg);
 std::vector<std::string> failedPairs(const nlohmann::json& results);
 // "i/n" -> (i, n), 0 <= i < n.
 std::pair<int, int> parseShard(const std::string& text);
 // The run `results` with the scenes of `part` (a run of the same configuration on some of its
-// scenes) in place of its own: their scene entries and pairs are replaced where they stand, then
-// the statistics and reference quality (cfg.warmup, cfg.referenceNotes) are recomputed over the
-// whole, and the result is committed to cfg.out when cfg.commit. The study's second pass.
-nlohmann::json replaceScenes(nlohmann::json results, const nlohmann::json& part, const RunConfig& cfg);
+// scenes) in place of its own: their scene entries and pairs are replaced where they stand (the
+// study's second pass; finishRun then analyses the whole once).
+nlohmann::json replaceScenes(nlohmann::json results, const nlohmann::json& part);
 // Combines shard runs into one run directory (results.json, results.db, images).
 nlohmann::json mergeRuns(const std::vector<std::filesystem::path>& runs, const std::filesystem::path& out);
 

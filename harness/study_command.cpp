@@ -12,7 +12,6 @@
 #include "harness/reference_quality.hpp"
 #include "harness/run_matrix.hpp"
 #include "harness/scene_selection.hpp"
-#include "metrics/results.hpp"
 #include "reports/report.hpp"
 
 namespace arena::cli {
@@ -198,23 +197,19 @@ void addStudyCommand(CLI::App& app) {
     c.exposure = *exposure;
     c.keepFrames = "chosen";
     c.progress = [](const std::string& line) { std::cout << line << std::endl; };
-    // With a refinement budget the first pass is committed only if nothing gets refined, so the
-    // run directory and results.db hold one run: the one whose references were final.
-    c.commit = !(*refineBudget > 0);
+    // With a refinement budget the first pass is finished (analysed and committed) only after the
+    // refinement, once, so the run directory and results.db hold one run: the final one.
+    c.finish = !(*refineBudget > 0);
     json results = runMatrix(c);
-    if (!c.commit) {
+    if (!c.finish) {
+      addReferenceQuality(results, c.warmup);  // the plan reads the first pass's verdicts
       RunConfig again = c;
       again.scenes = refineReferences(c, results, *refineBudget, *refineMaxSpp);
-      again.referenceNotes = c.referenceNotes;
       if (!again.scenes.empty()) {
         c.progress("[refine] running the refined scenes again");
-        const json part = runMatrix(again);
-        c.commit = true;
-        results = replaceScenes(std::move(results), part, c);
-      } else {
-        addReferenceQuality(results, c.warmup, c.referenceNotes);  // the verdicts say why not
-        commitResults(c.out, results);
+        results = replaceScenes(std::move(results), runMatrix(again));
       }
+      finishRun(results, c);
     }
     ReportOptions ro;
     ro.run = *out;

@@ -9,6 +9,7 @@
 #include "core/error.hpp"
 #include "metrics/compare.hpp"
 #include "metrics/results.hpp"
+#include "harness/reference_quality.hpp"
 #include "harness/run_matrix.hpp"
 #include "tests/test_util.hpp"
 
@@ -130,22 +131,23 @@ TEST(RunMatrix, ShardsMergeIntoTheFullRun) {
 }
 
 // The study's second pass: a run on some of the scenes replaces their entries and pairs where they
-// stand, the other scenes stay as they were, the statistics are recomputed and the whole is
-// committed once.
+// stand, the other scenes stay as they were; finishRun then analyses and commits the whole once.
 TEST(RunMatrix, ReplaceScenesSwapsTheRerunScenesInPlace) {
   RunConfig c = tinyRun("replace", {{"eaw", {}, ""}});
   c.flip = "none";
-  c.commit = false;
+  c.finish = false;
   const json first = runMatrix(c);
   EXPECT_FALSE(fs::exists(c.out / "results.json"));  // not committed
+  EXPECT_FALSE(first.contains("statistics"));         // nor analysed
   RunConfig again = c;
   again.scenes = {c.scenes[1]};
   json part = runMatrix(again);
   ASSERT_EQ(part["pairs"].size(), 3u);
   for (json& p : part["pairs"]) p["marker"] = "second pass";
   part["scenes"]["light_switch"]["marker"] = "second pass";
-  c.commit = true;
-  const json merged = replaceScenes(first, part, c);
+  c.finish = true;
+  json merged = replaceScenes(first, part);
+  finishRun(merged, c);
   ASSERT_EQ(merged["pairs"].size(), first["pairs"].size());
   for (size_t i = 0; i < merged["pairs"].size(); ++i) {
     const json& p = merged["pairs"][i];
@@ -157,12 +159,15 @@ TEST(RunMatrix, ReplaceScenesSwapsTheRerunScenesInPlace) {
       EXPECT_EQ(p, first["pairs"][i]);
   }
   EXPECT_EQ(merged["scenes"]["light_switch"].value("marker", ""), "second pass");
-  EXPECT_EQ(merged["scenes"]["cornell_static"]["referenceQuality"], first["scenes"]["cornell_static"]["referenceQuality"]);
+  json firstVerdicts = first;
+  addReferenceQuality(firstVerdicts, c.warmup);
+  EXPECT_EQ(merged["scenes"]["cornell_static"]["referenceQuality"],
+            firstVerdicts["scenes"]["cornell_static"]["referenceQuality"]);
   EXPECT_TRUE(merged.contains("statistics"));
   EXPECT_EQ(test::countRows(c.out / "results.db", "runs"), 1);
   json stranger = part;
   stranger["scenes"]["nowhere"] = json::object();
-  EXPECT_THROW(replaceScenes(first, stranger, c), Error);
+  EXPECT_THROW(replaceScenes(first, stranger), Error);
 }
 
 TEST(RunMatrix, AFailingPairIsReportedAndTheOthersKept) {
