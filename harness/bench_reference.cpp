@@ -41,9 +41,10 @@ Measured measure(const Scene& scene, RenderSettings settings, const std::string&
   if (adaptive) {
     renderer.extendReference(frame, sums, std::max(1, perReplicate / 4), counts);  // the pilot
     // A tile may get up to 8x the mean count.
-    for (;;) {  // rounds double the samples; the last one is cut to the count (rounding may miss it)
-      const bool last = 2 * sums.meanSpp() >= 0.99 * perReplicate * sums.replicates;
-      const std::vector<int> next = nextReferenceAllocation(sums, 8 * perReplicate, perReplicate);
+    for (;;) {  // the references' rounds; the last one is cut to the count (rounding may miss it)
+      const bool last = kReferenceRoundGrowth * sums.meanSpp() >= 0.99 * perReplicate * sums.replicates;
+      const std::vector<int> next =
+          nextReferenceAllocation(sums, 8 * perReplicate, kReferenceRoundGrowth, perReplicate);
       if (next == sums.tileSamples) break;
       renderer.extendReference(frame, sums, next, counts);
       if (last) break;

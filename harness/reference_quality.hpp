@@ -29,8 +29,9 @@ std::string renderOptionsOf(const nlohmann::json& render);
 // target kRefineMargin x goal x its best corrected relMSE (the margin absorbs the noise of that
 // estimate), and a prediction of the paths that refining the references of its summarised frames
 // (t >= warmup) would add: a reference of P pixels, mean s spp and estimated relMSE e > target
-// needs k = ceil(log2(e / target)) doublings (relMSE ~ 1/spp: the independent sampler's rate,
-// conservative for Sobol), i.e. P (min(s 2^k, maxSpp) - s) paths. Scenes are taken cheapest first
+// needs k = ceil(log_g(e / target)) adaptive rounds of growth g = kReferenceRoundGrowth (relMSE ~
+// 1/spp: the independent sampler's rate, conservative for Sobol), i.e. P (min(s g^k, maxSpp) - s)
+// paths. Scenes are taken cheapest first
 // while their predictions fit in `budget` x the paths all the references already hold: a budget in
 // work, not seconds, so which scenes are refined does not depend on the machine.
 inline constexpr double kRefineMargin = 0.8;

@@ -177,17 +177,23 @@ ReferenceSums twoTileSums(double spread0, double spread1, int n0, int n1) {
   return s;
 }
 
-TEST(Reference, AdaptiveAllocationIsTheNeymanAllocationOfTwiceTheSamples) {
-  // Budget 2 x 4 x 128 pixel-samples: 64 n0 + 64 n1 = 1024 with n1 = 4 n0 gives n0 3.2, below its
-  // current 4; so n0 stays 4 and n1 takes the rest, 12, rounded to the power of two 16.
-  EXPECT_EQ(nextReferenceAllocation(twoTileSums(0.01, 0.04, 4, 4), 1024), (std::vector<int>{4, 16}));
+TEST(Reference, AdaptiveAllocationIsTheNeymanAllocationOfTheRoundsSamples) {
+  // Doubling: budget 2 x 4 x 128 pixel-samples: 64 n0 + 64 n1 = 1024 with n1 = 4 n0 gives n0 3.2,
+  // below its current 4; so n0 stays 4 and n1 takes the rest, 12, rounded to the power of two 16.
+  EXPECT_EQ(nextReferenceAllocation(twoTileSums(0.01, 0.04, 4, 4), 1024, 2.0), (std::vector<int>{4, 16}));
+  // The references' rounds grow by sqrt(2): 64 n1 = 724 - 256 gives n1 7.3, rounded to 8.
+  EXPECT_EQ(nextReferenceAllocation(twoTileSums(0.01, 0.04, 4, 4), 1024), (std::vector<int>{4, 8}));
   // The cap: tile 1 stops at 8 and the rest of the budget goes to tile 0.
-  EXPECT_EQ(nextReferenceAllocation(twoTileSums(0.01, 0.04, 4, 4), 8), (std::vector<int>{8, 8}));
+  EXPECT_EQ(nextReferenceAllocation(twoTileSums(0.01, 0.04, 4, 4), 8, 2.0), (std::vector<int>{8, 8}));
   // Equal errors at equal counts: both double. Equal errors, but tile 1 reached its error with 4x
   // the samples: its per-sample error is 4x, so it gets 2x tile 0's count: 64 n0 + 64 (2 n0) =
   // 2 (4 + 16) 64 gives n0 13.3 and n1 26.7, rounded to 16 and 32.
-  EXPECT_EQ(nextReferenceAllocation(twoTileSums(0.02, 0.02, 4, 4), 1024), (std::vector<int>{8, 8}));
-  EXPECT_EQ(nextReferenceAllocation(twoTileSums(0.02, 0.02, 4, 16), 1024), (std::vector<int>{16, 32}));
+  EXPECT_EQ(nextReferenceAllocation(twoTileSums(0.02, 0.02, 4, 4), 1024, 2.0), (std::vector<int>{8, 8}));
+  EXPECT_EQ(nextReferenceAllocation(twoTileSums(0.02, 0.02, 4, 16), 1024, 2.0), (std::vector<int>{16, 32}));
+  // A round smaller than any doubling (1.25 x 512 = 640: the ideal 5 per pixel rounds down to 4)
+  // doubles the tiles that save the most per sample while the budget lasts, and at least one.
+  EXPECT_EQ(nextReferenceAllocation(twoTileSums(0.02, 0.02, 4, 4), 1024, 1.25), (std::vector<int>{8, 4}));
+  EXPECT_EQ(nextReferenceAllocation(twoTileSums(0.02, 0.021, 4, 4), 1024, 1.25), (std::vector<int>{4, 8}));
   // No error left where samples may go: nothing to do (the caller reports the cap).
   EXPECT_EQ(nextReferenceAllocation(twoTileSums(0.0, 0.04, 4, 8), 8), (std::vector<int>{4, 8}));
   EXPECT_EQ(twoTileSums(0, 0, 4, 16).meanSpp(), 2 * 10.0);
@@ -447,7 +453,7 @@ TEST(Reference, RenderOptionsOfARunReproduceItsSettings) {
   EXPECT_EQ(renderOptionsOf(nlohmann::json()), "");
 }
 
-// The study's refinement plan: targets with the margin, predicted paths from the doublings a
+// The study's refinement plan: targets with the margin, predicted paths from the rounds a
 // reference needs (capped, warm-up-only references left out), cheapest first within the budget.
 TEST(Reference, RefinementPlanTakesTheCheapestScenesWithinTheBudget) {
   auto quality = [](bool meets, double best) {
@@ -464,25 +470,26 @@ TEST(Reference, RefinementPlanTakesTheCheapestScenesWithinTheBudget) {
     return info;
   };
   const std::map<std::string, SequenceInfo> sequences = {
-      // 3e-4 -> 8e-5: two doublings, 100 -> 400 spp on 100 pixels.
-      {"cheap", sequence({0, 0, 0, 0}, {100}, {3e-4})},
-      // Reference 0 serves the warm-up frame only; reference 1 needs four doublings, capped at 1000.
+      // 1e-4 -> 8e-5: one round of sqrt(2), 100 -> 141.4 spp on 100 pixels (a doubling would be 200).
+      {"cheap", sequence({0, 0, 0, 0}, {100}, {1e-4})},
+      // Reference 0 serves the warm-up frame only; reference 1 needs eight rounds (16x), capped at 1000.
       {"dear", sequence({0, 1, 1, 1}, {100, 100}, {1e-2, 1e-3})},
       {"fine", sequence({0, 0, 0, 0}, {100}, {1e-5})}};
   const std::vector<ReferenceRefinement> plans = planReferenceRefinement(results, sequences, 1, 1000, 1.5);
   ASSERT_EQ(plans.size(), 2u);
   EXPECT_EQ(plans[0].scene, "cheap");
   EXPECT_DOUBLE_EQ(plans[0].targetRelMse, kRefineMargin * kReferenceQualityGoal * 1e-3);
-  EXPECT_DOUBLE_EQ(plans[0].predictedPaths, 100.0 * 300);
-  EXPECT_DOUBLE_EQ(plans[0].budgetNeeded, 30000.0 / 40000);  // the references hold 400 spp x 100 pixels
+  const double cheapPaths = 100.0 * (100 * std::sqrt(2.0) - 100);
+  EXPECT_DOUBLE_EQ(plans[0].predictedPaths, cheapPaths);
+  EXPECT_DOUBLE_EQ(plans[0].budgetNeeded, cheapPaths / 40000);  // the references hold 400 spp x 100 pixels
   EXPECT_TRUE(plans[0].withinBudget);
   EXPECT_EQ(plans[1].scene, "dear");
   EXPECT_DOUBLE_EQ(plans[1].predictedPaths, 100.0 * 900);
-  EXPECT_DOUBLE_EQ(plans[1].budgetNeeded, (30000.0 + 90000) / 40000);
+  EXPECT_DOUBLE_EQ(plans[1].budgetNeeded, (cheapPaths + 90000) / 40000);
   EXPECT_FALSE(plans[1].withinBudget);
   const std::string note = refinementNote(plans[1], 1.5);
   EXPECT_NE(note.find("not refined by the study"), std::string::npos) << note;
-  EXPECT_NE(note.find("`arena study --refine-budget 3`"), std::string::npos) << note;
+  EXPECT_NE(note.find("`arena study --refine-budget 2.4`"), std::string::npos) << note;
   EXPECT_NE(refinementNote(plans[0], 1.5).find("refined its references toward 8e-05"), std::string::npos);
   // A budget of 0 refines nothing; a scene without a sequence is not planned.
   for (const ReferenceRefinement& p : planReferenceRefinement(results, sequences, 1, 1000, 0)) EXPECT_FALSE(p.withinBudget);

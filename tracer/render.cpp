@@ -571,7 +571,8 @@ int ReferenceSums::maxPerReplicate() const {
   return *std::max_element(tileSamples.begin(), tileSamples.end());
 }
 
-std::vector<int> nextReferenceAllocation(const ReferenceSums& sums, int maxPer, double maxMeanPerReplicate) {
+std::vector<int> nextReferenceAllocation(const ReferenceSums& sums, int maxPer, double growth,
+                                         double maxMeanPerReplicate) {
   const size_t tiles = sums.tileSamples.size();
   // Each tile's share of the estimate (before the division by the pixel and channel count), in a
   // fixed order: the allocation is deterministic.
@@ -589,7 +590,7 @@ std::vector<int> nextReferenceAllocation(const ReferenceSums& sums, int maxPer, 
     pixels[i] = sums.tilePixels(int(i));
     const int n = sums.tileSamples[i];
     weight[i] = std::sqrt(share[i] * n / pixels[i]);  // sqrt(u_T / P_T)
-    budget += 2.0 * n * pixels[i];
+    budget += growth * n * pixels[i];
     capBudget += double(std::max(n, maxPer)) * pixels[i];
     canGrow |= weight[i] > 0 && n < maxPer;
   }

@@ -94,7 +94,13 @@ struct ReferenceSums {
 // Means (color, diffuse, specular), the variance of each mean from the spread of the replicate
 // means, Var = sum_r (m_r - m)^2 / (K (K - 1)), and colorHalf (the mean of replicates 0..K/2-1).
 LayerSet referenceLayersFromSums(const ReferenceSums& sums);
-// The next round of the adaptive schedule: tile counts for twice the frame's samples, minimising
+// How much each round of the adaptive schedule grows the frame's samples. A reference stops at the
+// first round that meets its target, so it overshoots the samples it needed by up to this factor:
+// (g - 1) / ln g on average for targets spread evenly in log, 1.44 for g = 2 (the first version's
+// doubling) and 1.21 for sqrt(2). Tile counts stay powers of two (whole Sobol nets): a round doubles
+// the tiles whose doubling lowers the estimate most, about 1 / (g - 1) rounds per doubling.
+inline constexpr double kReferenceRoundGrowth = 1.4142135623730951;
+// The next round of the adaptive schedule: tile counts for `growth` x the frame's samples, minimising
 // the estimated relMSE under that budget. With e_T the tile's share of the estimate at its n_T
 // samples per replicate and P_T its pixels, error ~ u_T / n with u_T = e_T n_T, so the optimum is
 // n_T proportional to sqrt(u_T / P_T) (the Neyman allocation), clamped to [n_T, maxPerReplicate]
@@ -106,7 +112,7 @@ LayerSet referenceLayersFromSums(const ReferenceSums& sums);
 // maxMeanPerReplicate > 0 caps the round's budget at that mean count per pixel and replicate
 // (`arena bench reference`: equal samples).
 std::vector<int> nextReferenceAllocation(const ReferenceSums& sums, int maxPerReplicate,
-                                         double maxMeanPerReplicate = 0);
+                                         double growth = kReferenceRoundGrowth, double maxMeanPerReplicate = 0);
 // The reference's relMSE as metrics.md estimates it: mean over pixels and colour channels of
 // Var(mean) / (mean^2 + 0.01), with the replicate variance above.
 double estimatedReferenceRelMse(const ReferenceSums& sums);
@@ -149,8 +155,8 @@ class SequenceRenderer {
   void extendReference(int t, ReferenceSums& sums, const std::vector<int>& tileSamples, RayCounts& counts);
   // Empty sums of replicates first..first+count-1, with the settings' tiles.
   ReferenceSums emptyReferenceSums(int firstReplicate, int count) const;
-  // The adaptive schedule: a uniform pilot of referenceMinSpp, then rounds that each double the
-  // frame's samples, placed by nextReferenceAllocation, until the estimated relMSE <= targetRelMse
+  // The adaptive schedule: a uniform pilot of referenceMinSpp, then rounds that each grow the
+  // frame's samples by kReferenceRoundGrowth, placed by nextReferenceAllocation, until the estimated relMSE <= targetRelMse
   // or no tile may grow (maxSpp per pixel): then `capped`. Without a target (0), every pixel gets
   // maxSpp. The rounds do not depend on the target, only where they stop does, so continuing from
   // a stop (`arena refine`) gives the same bits as one uninterrupted run.
@@ -203,9 +209,9 @@ std::filesystem::path renderSequence(const Scene& scene, const RenderSettings& s
                                      const Shard& shard = {});
 
 // `arena refine`: extends every reference of the already rendered sequence (scene, settings) whose
-// estimated relMSE is above targetRelMse, doubling its samples per replicate until it meets the
+// estimated relMSE is above targetRelMse, continuing its adaptive rounds until it meets the
 // target or maxSpp, and rewrites its files and sequence.json. Bit-identical to rendering with that
-// target in one go (the same doubling schedule over the same samples). References that only frames
+// target in one go (the same rounds over the same samples). References that only frames
 // before fromFrame use are left as they are (the study: frames before the warm-up are not summarised).
 std::filesystem::path refineSequence(const Scene& scene, const RenderSettings& settings,
                                      const std::filesystem::path& cacheRoot, double targetRelMse, int maxSpp,
