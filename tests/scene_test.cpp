@@ -3,9 +3,9 @@
 
 #include <filesystem>
 #include <fstream>
-#include <unistd.h>
 
 #include "core/error.hpp"
+#include "tests/test_util.hpp"
 #include "tracer/scene.hpp"
 
 namespace arena {
@@ -15,7 +15,7 @@ namespace fs = std::filesystem;
 
 // One file per test and process: ctest runs tests in parallel processes.
 std::string writeScene(const std::string& name, const std::string& text) {
-  fs::path dir = fs::temp_directory_path() / ("arena_scene_test_" + std::to_string(getpid()));
+  const fs::path dir = test::processDir() / "scenes";
   fs::create_directories(dir);
   fs::path p = dir / (name + ".json");
   std::ofstream(p) << text;

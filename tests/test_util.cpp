@@ -6,6 +6,7 @@
 #include <sqlite3.h>
 
 #include <cstdio>
+#include <cstdlib>
 
 #include "core/sequence.hpp"
 
@@ -37,9 +38,25 @@ CommandResult runCommand(const std::string& commandLine) {
   return r;
 }
 
+namespace {
+struct ProcessDir {
+  std::filesystem::path path =
+      std::filesystem::temp_directory_path() / ("arena_test_" + std::to_string(getpid()));
+  ~ProcessDir() {
+    if (std::getenv("ARENA_KEEP_TEST_DIRS")) return;
+    std::error_code ignored;  // best effort: a leftover directory must not fail a passing test
+    std::filesystem::remove_all(path, ignored);
+  }
+};
+}  // namespace
+
+const std::filesystem::path& processDir() {
+  static const ProcessDir dir;
+  return dir.path;
+}
+
 std::filesystem::path freshDir(const std::string& name) {
-  auto dir =
-      std::filesystem::temp_directory_path() / ("arena_test_" + std::to_string(getpid())) / name;
+  const auto dir = processDir() / name;
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;

@@ -24,7 +24,10 @@ CommandResult runCommand(const std::string& commandLine);
 // SELECT COUNT(*) FROM table in the SQLite database db; -1 when it cannot be read.
 int countRows(const std::filesystem::path& db, const char* table);
 
-// A fresh, empty directory under the system temp dir, unique per test.
+// This test process's directory, <temp>/arena_test_<pid>: removed with everything in it when the
+// process exits normally (ARENA_KEEP_TEST_DIRS=1 keeps it for a post-mortem).
+const std::filesystem::path& processDir();
+// A fresh, empty directory under processDir(), unique per test.
 std::filesystem::path freshDir(const std::string& name);
 Scene shippedScene(const std::string& name);
 // Tiny settings: resolution w x h, `frames` frames, `refSpp` fixed-sample references.

@@ -28,7 +28,7 @@ const CHROMIUM = process.env.CHROMIUM_PATH || '/usr/bin/chromium';
 const ARTIFACTS = path.join(repo, 'tests', 'artifacts');
 const FRAMES = 16;  // light_switch's light goes off at frame 12: the ghosting panel has an event
 
-let work, context;
+let work, userData, context;
 
 function arena(...args) {
   return execFileSync(ARENA, args, { encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] });
@@ -84,7 +84,7 @@ before(async () => {
   assert.ok(ARENA && fs.existsSync(ARENA), 'set ARENA_BINARY to the built arena executable');
   assert.ok(fs.existsSync(CHROMIUM), `${CHROMIUM} is missing: apt-get install chromium (scripts/test.sh does)`);
   work = fs.mkdtempSync(path.join(os.tmpdir(), 'arena-browser-'));
-  const userData = fs.mkdtempSync(path.join(os.tmpdir(), 'arena-chromium-'));
+  userData = fs.mkdtempSync(path.join(os.tmpdir(), 'arena-chromium-'));
   context = await chromium.launchPersistentContext(userData, {
     executablePath: CHROMIUM,
     headless: true,
@@ -97,6 +97,7 @@ before(async () => {
 after(async () => {
   if (context) await context.close();
   if (work) fs.rmSync(work, { recursive: true, force: true });
+  if (userData) fs.rmSync(userData, { recursive: true, force: true });
 });
 
 // PNG colour type (byte 25 of the file): 0 grey, 2 RGB. OpenCV writes a 3-channel image as RGB.
