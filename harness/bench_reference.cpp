@@ -1,5 +1,6 @@
 // `arena bench reference`: how fast each reference sampler converges. In one process, per scene:
-// a "gold" reference (Owen-scrambled Sobol, uniform, `--gold-factor` times the samples), then at
+// a "gold" reference (Owen-scrambled Sobol, uniform, `--gold-factor` times the samples, under
+// another seed so it shares no samples with the compared references), then at
 // about the same sample count, each timed: the independent sampler (uniform, the first version's
 // references), Sobol (uniform) and Sobol with adaptive allocation per tile (a uniform pilot of a
 // quarter of the samples, then the rounds of nextReferenceAllocation until the frame's mean reaches
@@ -99,7 +100,7 @@ void addBenchReferenceCommand(CLI::App* bench) {
                     std::to_string(scene.frames) + " frames");
       RenderSettings goldSettings = settings;
       goldSettings.referenceSampler = "sobol";
-      SequenceRenderer goldRenderer(scene, goldSettings);
+      SequenceRenderer goldRenderer(withIndependentSeed(scene), goldSettings);
       ReferenceSums goldSums;
       RayCounts counts;
       const auto g0 = std::chrono::steady_clock::now();

@@ -117,6 +117,13 @@ std::vector<int> nextReferenceAllocation(const ReferenceSums& sums, int maxPerRe
 // Var(mean) / (mean^2 + 0.01), with the replicate variance above.
 double estimatedReferenceRelMse(const ReferenceSums& sums);
 
+// The scene under another seed, so its references are an independent randomisation of the same
+// integral: what a reference is measured against (a "gold") must not share its samples. A gold of
+// N samples per pixel that contains a reference's n correlates with it: their difference's variance
+// is (1 - n/N) Var(ref), and after the gold-noise correction the measured error falls to about
+// (1 - 2n/N) of the true one (0.5 at N = 4n), which flatters the reference.
+Scene withIndependentSeed(Scene scene);
+
 // A rendered reference and whether it met its target.
 struct ReferenceResult {
   LayerSet layers;
