@@ -54,10 +54,13 @@ inline uint32_t nestedUniformScramble(uint32_t x, uint32_t seed) {
 // Fox 1988; Joe & Kuo 2008's first entry). Column k is v_k = m_k / 2^k as a 32-bit fraction.
 // The product of the generator matrix with an index, byte by byte: byteTable[b][x] is the xor of
 // the columns 8b..8b+7 selected by the bits of x.
+// reversedTable does the same for reverse(dimension1(reverse(x))) from the bytes of x: bit m of x
+// is bit 31 - m of reverse(x), which selects column v_{31-m}, whose reversal it xors in.
 struct Dimension1 {
   uint32_t v[32];
   uint32_t byteTable[4][256];
-  constexpr Dimension1() : v{}, byteTable{} {
+  uint32_t reversedTable[4][256];
+  constexpr Dimension1() : v{}, byteTable{}, reversedTable{} {
     uint32_t m = 1;
     for (int k = 1; k <= 32; ++k) {
       v[k - 1] = m << (32 - k);
@@ -66,7 +69,13 @@ struct Dimension1 {
     for (int b = 0; b < 4; ++b)
       for (int x = 0; x < 256; ++x)
         for (int k = 0; k < 8; ++k)
-          if (x & (1 << k)) byteTable[b][x] ^= v[8 * b + k];
+          if (x & (1 << k)) {
+            byteTable[b][x] ^= v[8 * b + k];
+            uint32_t column = v[31 - (8 * b + k)], reversed = 0;
+            for (int bit = 0; bit < 32; ++bit)
+              if (column & (1u << bit)) reversed |= 1u << (31 - bit);
+            reversedTable[b][x] ^= reversed;
+          }
   }
 };
 inline constexpr Dimension1 kDimension1{};
@@ -78,6 +87,11 @@ inline uint32_t dimension0(uint32_t index) {
 inline uint32_t dimension1(uint32_t index) {
   return kDimension1.byteTable[0][index & 0xFF] ^ kDimension1.byteTable[1][(index >> 8) & 0xFF] ^
          kDimension1.byteTable[2][(index >> 16) & 0xFF] ^ kDimension1.byteTable[3][index >> 24];
+}
+// reverseBits(dimension1(reverseBits(x))), without the two reversals.
+inline uint32_t reversedDimension1OfReversed(uint32_t x) {
+  return kDimension1.reversedTable[0][x & 0xFF] ^ kDimension1.reversedTable[1][(x >> 8) & 0xFF] ^
+         kDimension1.reversedTable[2][(x >> 16) & 0xFF] ^ kDimension1.reversedTable[3][x >> 24];
 }
 
 inline float toUnitFloat(uint32_t x) {
@@ -101,25 +115,31 @@ class Sampler {
     Sampler s(0, 0, 0, 0);
     s.kind_ = SamplerKind::OwenSobol;
     s.key_ = mix64(mix64(mix64(mix64(uint64_t(seed) ^ 0x50b01d5a3c1e2f47ull) ^ frame) ^ pixel) ^ replicate);
-    s.index_ = index;
+    s.reversedIndex_ = sobol::reverseBits(index);
     return s;
   }
 
   SamplerKind kind() const { return kind_; }
-  // Uniform in [0, 1) for dimension `dim`.
+  // Uniform in [0, 1) for dimension `dim`. Sobol: the value is
+  //   nestedUniformScramble(dimension0(i), h_hi) with i = nestedUniformScramble(index, h_lo),
+  // computed with the bit reversals that cancel left out: with x = laineKarras(reverse(index), h_lo),
+  // i = reverse(x) and dimension0(i) = reverse(i) = x, so the value is reverse(laineKarras(i, h_hi)).
   float get(uint32_t dim) const {
     if (kind_ == SamplerKind::Independent) return sobol::toUnitFloat(uint32_t(hash(dim) >> 32));
     const uint64_t h = hash(dim);
-    const uint32_t i = sobol::nestedUniformScramble(index_, uint32_t(h));
-    return sobol::toUnitFloat(sobol::nestedUniformScramble(sobol::dimension0(i), uint32_t(h >> 32)));
+    const uint32_t i = sobol::reverseBits(sobol::laineKarrasPermutation(reversedIndex_, uint32_t(h)));
+    return sobol::toUnitFloat(sobol::reverseBits(sobol::laineKarrasPermutation(i, uint32_t(h >> 32))));
   }
-  // Uniform in [0, 1)^2 for dimensions (dim, dim + 1); stratified jointly by the Sobol sampler.
+  // Uniform in [0, 1)^2 for dimensions (dim, dim + 1); stratified jointly by the Sobol sampler (the
+  // first coordinate as in get, the second nestedUniformScramble(dimension1(i), mix64(h)), whose
+  // inner reversal of dimension1(reverse(x)) is one table lookup).
   glm::vec2 get2(uint32_t dim) const {
     if (kind_ == SamplerKind::Independent) return {get(dim), get(dim + 1)};
     const uint64_t h = hash(dim), h2 = mix64(h);
-    const uint32_t i = sobol::nestedUniformScramble(index_, uint32_t(h));
-    return {sobol::toUnitFloat(sobol::nestedUniformScramble(sobol::dimension0(i), uint32_t(h >> 32))),
-            sobol::toUnitFloat(sobol::nestedUniformScramble(sobol::dimension1(i), uint32_t(h2)))};
+    const uint32_t x = sobol::laineKarrasPermutation(reversedIndex_, uint32_t(h)), i = sobol::reverseBits(x);
+    const uint32_t reversedD1 = sobol::reversedDimension1OfReversed(x);
+    return {sobol::toUnitFloat(sobol::reverseBits(sobol::laineKarrasPermutation(i, uint32_t(h >> 32)))),
+            sobol::toUnitFloat(sobol::reverseBits(sobol::laineKarrasPermutation(reversedD1, uint32_t(h2))))};
   }
   uint64_t key() const { return key_; }
 
@@ -127,7 +147,7 @@ class Sampler {
   uint64_t hash(uint32_t dim) const { return mix64(key_ ^ (uint64_t(dim) * 0x9e3779b97f4a7c15ull)); }
 
   uint64_t key_ = 0;
-  uint32_t index_ = 0;
+  uint32_t reversedIndex_ = 0;  // Sobol: the sample index, bit-reversed (every dimension's shuffle starts there)
   SamplerKind kind_ = SamplerKind::Independent;
 };
 
