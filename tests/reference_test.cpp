@@ -31,6 +31,27 @@ TEST(Sobol, UnscrambledDimensionsAreTheKnownSequences) {
   }
 }
 
+// The sampler computes its values without the bit reversals that cancel; they must be the values
+// of the definition (tracer/sampler.hpp): i = nestedUniformScramble(index, h_lo), then
+// nestedUniformScramble(dimension0(i), h_hi) and nestedUniformScramble(dimension1(i), mix64(h)),
+// with h = mix64(key ^ dim x the golden-ratio constant).
+TEST(Sobol, ShortcutsGiveTheDefinitionsBits) {
+  for (uint32_t x : {0u, 1u, 0x80000000u, 0xdeadbeefu, 0x12345678u, 0xffffffffu})
+    EXPECT_EQ(sobol::reversedDimension1OfReversed(x), sobol::reverseBits(sobol::dimension1(sobol::reverseBits(x)))) << x;
+  for (uint32_t pixel : {0u, 4242u})
+    for (uint32_t index : {0u, 1u, 7u, 1000u, 65535u})
+      for (uint32_t dim : {0u, 5u, 21u}) {
+        const Sampler s = Sampler::owenSobol(9, 2, pixel, 3, index);
+        const uint64_t h = mix64(s.key() ^ (uint64_t(dim) * 0x9e3779b97f4a7c15ull));
+        const uint32_t i = sobol::nestedUniformScramble(index, uint32_t(h));
+        const float u0 = sobol::toUnitFloat(sobol::nestedUniformScramble(sobol::dimension0(i), uint32_t(h >> 32)));
+        const float u1 = sobol::toUnitFloat(sobol::nestedUniformScramble(sobol::dimension1(i), uint32_t(mix64(h))));
+        EXPECT_EQ(s.get(dim), u0) << pixel << " " << index << " " << dim;
+        EXPECT_EQ(s.get2(dim).x, u0);
+        EXPECT_EQ(s.get2(dim).y, u1);
+      }
+}
+
 TEST(Sobol, ScramblingIsABijectionOnEveryPrefix) {
   // A nested uniform scramble maps [k 2^m, (k+1) 2^m) / 2^32 intervals onto such intervals.
   std::set<uint32_t> top;
