@@ -1,12 +1,15 @@
 // `arena`: the Denoise Arena command line. Data flows scene -> sequence -> denoiser -> metrics ->
 // report; each subcommand drives one step (or, for `study`, all of them).
+#include <OpenEXR/ImfThreading.h>
 #include <cxxabi.h>
 #include <malloc.h>
 
+#include <algorithm>
 #include <exception>
 #include <filesystem>
 #include <iostream>
 #include <new>
+#include <thread>
 #include <typeinfo>
 
 #include "core/error.hpp"
@@ -34,6 +37,10 @@ int main(int argc, char** argv) {
   // the heap and keeping freed memory makes the tracer bench about 10% faster; pixels are unchanged.
   mallopt(M_MMAP_THRESHOLD, 64 << 20);
   mallopt(M_TRIM_THRESHOLD, 256 << 20);
+  // OpenEXR (de)compresses one file's line blocks on its own threads when it has some; without them
+  // every cached frame's ZIP compression ran on one core while the other waited. The bytes are the
+  // same whichever thread compresses a block.
+  Imf::setGlobalThreadCount(int(std::max(1u, std::thread::hardware_concurrency())));
   CLI::App app{
       "Denoise Arena: real-time path-tracing denoisers side by side on identical sequences"};
   app.require_subcommand(1);
