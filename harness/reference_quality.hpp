@@ -31,9 +31,9 @@ std::string renderOptionsOf(const nlohmann::json& render);
 // (t >= warmup) would add: a reference of P pixels, mean s spp and estimated relMSE e > target
 // needs k = ceil(log_g(e / target)) adaptive rounds of growth g = kReferenceRoundGrowth (relMSE ~
 // 1/spp: the independent sampler's rate, conservative for Sobol), i.e. P (min(s g^k, maxSpp) - s)
-// paths. Scenes are taken cheapest first
-// while their predictions fit in `budget` x the paths all the references already hold: a budget in
-// work, not seconds, so which scenes are refined does not depend on the machine.
+// paths. Scenes are taken cheapest first while their predictions fit in `budget` x the paths all
+// the references already hold: a budget in work, not seconds, so which scenes are refined does not
+// depend on the machine.
 inline constexpr double kRefineMargin = 0.8;
 struct ReferenceRefinement {
   std::string scene;

@@ -37,7 +37,9 @@ TEST(Sobol, UnscrambledDimensionsAreTheKnownSequences) {
 // with h = mix64(key ^ dim x the golden-ratio constant).
 TEST(Sobol, ShortcutsGiveTheDefinitionsBits) {
   for (uint32_t x : {0u, 1u, 0x80000000u, 0xdeadbeefu, 0x12345678u, 0xffffffffu})
-    EXPECT_EQ(sobol::reversedDimension1OfReversed(x), sobol::reverseBits(sobol::dimension1(sobol::reverseBits(x)))) << x;
+    EXPECT_EQ(sobol::reversedDimension1OfReversed(x),
+              sobol::reverseBits(sobol::dimension1(sobol::reverseBits(x))))
+        << x;
   for (uint32_t pixel : {0u, 4242u})
     for (uint32_t index : {0u, 1u, 7u, 1000u, 65535u})
       for (uint32_t dim : {0u, 5u, 21u}) {
@@ -113,8 +115,9 @@ double trueRelMse(const LayerSet& a, const LayerSet& gold) {
 // The replicate variance predicts the measured error of the mean (Sobol, where the per-sample
 // variance would overstate it): cornell_static at 32x18, 64 spp (8 replicates of 8) against a
 // gold of 16x the samples under another seed (withIndependentSeed: a gold holding the reference's
-// own samples would flatter it by about 2 x 1/16). Tolerance: the measured/predicted ratio within [0.7, 1.4] (the
-// estimate averages 1728 values of 7 degrees of freedom each; the measurement is one draw).
+// own samples would flatter it by about 2 x 1/16). Tolerance: the measured/predicted ratio within
+// [0.7, 1.4] (the estimate averages 1728 values of 7 degrees of freedom each; the measurement is
+// one draw).
 TEST(Reference, ReplicateVariancePredictsTheTrueError) {
   const Scene scene = test::shippedScene("cornell_static");
   RayCounts counts;

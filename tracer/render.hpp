@@ -163,10 +163,11 @@ class SequenceRenderer {
   // Empty sums of replicates first..first+count-1, with the settings' tiles.
   ReferenceSums emptyReferenceSums(int firstReplicate, int count) const;
   // The adaptive schedule: a uniform pilot of referenceMinSpp, then rounds that each grow the
-  // frame's samples by kReferenceRoundGrowth, placed by nextReferenceAllocation, until the estimated relMSE <= targetRelMse
-  // or no tile may grow (maxSpp per pixel): then `capped`. Without a target (0), every pixel gets
-  // maxSpp. The rounds do not depend on the target, only where they stop does, so continuing from
-  // a stop (`arena refine`) gives the same bits as one uninterrupted run.
+  // frame's samples by kReferenceRoundGrowth, placed by nextReferenceAllocation, until the
+  // estimated relMSE <= targetRelMse or no tile may grow (maxSpp per pixel): then `capped`.
+  // Without a target (0), every pixel gets maxSpp. The rounds do not depend on the target, only
+  // where they stop does, so continuing from a stop (`arena refine`) gives the same bits as one
+  // uninterrupted run.
   ReferenceResult continueReference(int t, ReferenceSums& sums, double targetRelMse, int maxSpp);
   int referenceReplicates() const;
   // The low-resolution buffer of frame t (channels::lowresLayers()); settings.lowresFactor > 0.

@@ -29,7 +29,7 @@ inline uint64_t mix64(uint64_t z) {  // splitmix64 finaliser (Steele et al. 2014
 
 namespace sobol {
 
-inline uint32_t reverseBits(uint32_t x) {
+constexpr uint32_t reverseBits(uint32_t x) {
   x = __builtin_bswap32(x);  // bytes, then bits within each byte
   x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
   x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
@@ -71,10 +71,7 @@ struct Dimension1 {
         for (int k = 0; k < 8; ++k)
           if (x & (1 << k)) {
             byteTable[b][x] ^= v[8 * b + k];
-            uint32_t column = v[31 - (8 * b + k)], reversed = 0;
-            for (int bit = 0; bit < 32; ++bit)
-              if (column & (1u << bit)) reversed |= 1u << (31 - bit);
-            reversedTable[b][x] ^= reversed;
+            reversedTable[b][x] ^= reverseBits(v[31 - (8 * b + k)]);
           }
   }
 };
@@ -122,29 +119,35 @@ class Sampler {
   SamplerKind kind() const { return kind_; }
   // Uniform in [0, 1) for dimension `dim`. Sobol: the value is
   //   nestedUniformScramble(dimension0(i), h_hi) with i = nestedUniformScramble(index, h_lo),
-  // computed with the bit reversals that cancel left out: with x = laineKarras(reverse(index), h_lo),
-  // i = reverse(x) and dimension0(i) = reverse(i) = x, so the value is reverse(laineKarras(i, h_hi)).
+  // computed with the bit reversals that cancel left out (reversedShuffledIndex, firstCoordinate).
   float get(uint32_t dim) const {
     if (kind_ == SamplerKind::Independent) return sobol::toUnitFloat(uint32_t(hash(dim) >> 32));
     const uint64_t h = hash(dim);
-    const uint32_t i = sobol::reverseBits(sobol::laineKarrasPermutation(reversedIndex_, uint32_t(h)));
-    return sobol::toUnitFloat(sobol::reverseBits(sobol::laineKarrasPermutation(i, uint32_t(h >> 32))));
+    return firstCoordinate(reversedShuffledIndex(h), h);
   }
   // Uniform in [0, 1)^2 for dimensions (dim, dim + 1); stratified jointly by the Sobol sampler (the
   // first coordinate as in get, the second nestedUniformScramble(dimension1(i), mix64(h)), whose
-  // inner reversal of dimension1(reverse(x)) is one table lookup).
+  // inner reverse(dimension1(reverse(x))) is one table lookup).
   glm::vec2 get2(uint32_t dim) const {
     if (kind_ == SamplerKind::Independent) return {get(dim), get(dim + 1)};
-    const uint64_t h = hash(dim), h2 = mix64(h);
-    const uint32_t x = sobol::laineKarrasPermutation(reversedIndex_, uint32_t(h)), i = sobol::reverseBits(x);
-    const uint32_t reversedD1 = sobol::reversedDimension1OfReversed(x);
-    return {sobol::toUnitFloat(sobol::reverseBits(sobol::laineKarrasPermutation(i, uint32_t(h >> 32)))),
-            sobol::toUnitFloat(sobol::reverseBits(sobol::laineKarrasPermutation(reversedD1, uint32_t(h2))))};
+    const uint64_t h = hash(dim);
+    const uint32_t x = reversedShuffledIndex(h);
+    const uint32_t second = sobol::laineKarrasPermutation(sobol::reversedDimension1OfReversed(x), uint32_t(mix64(h)));
+    return {firstCoordinate(x, h), sobol::toUnitFloat(sobol::reverseBits(second))};
   }
   uint64_t key() const { return key_; }
 
  private:
   uint64_t hash(uint32_t dim) const { return mix64(key_ ^ (uint64_t(dim) * 0x9e3779b97f4a7c15ull)); }
+  // x = reverse(i), i the index under dimension hash h's nested uniform shuffle.
+  uint32_t reversedShuffledIndex(uint64_t h) const {
+    return sobol::laineKarrasPermutation(reversedIndex_, uint32_t(h));
+  }
+  // nestedUniformScramble(dimension0(i), h_hi), where dimension0(i) = reverse(i) = x.
+  static float firstCoordinate(uint32_t x, uint64_t h) {
+    const uint32_t i = sobol::reverseBits(x);
+    return sobol::toUnitFloat(sobol::reverseBits(sobol::laineKarrasPermutation(i, uint32_t(h >> 32))));
+  }
 
   uint64_t key_ = 0;
   uint32_t reversedIndex_ = 0;  // Sobol: the sample index, bit-reversed (every dimension's shuffle starts there)
