@@ -1,6 +1,7 @@
 // `arena study`: the main job. Renders the default scene suite (quick preset), runs every
 // registered denoiser on every scene, computes every metric, writes the report, and prints where
 // it is together with a short ranking table.
+#include <algorithm>
 #include <chrono>
 #include <iomanip>
 #include <iostream>
@@ -133,15 +134,14 @@ std::vector<Scene> refineReferences(RunConfig& c, const json& results, double bu
     c.referenceNotes[plan.scene] = refinementNote(plan, budget);
     c.progress("[refine] " + plan.scene + ": " + c.referenceNotes[plan.scene]);
     if (!plan.withinBudget) continue;
-    for (const Scene& s : c.scenes) {
-      if (s.name != plan.scene) continue;
-      try {
-        refineSequence(s, c.render, c.cache, plan.targetRelMse, maxSpp, c.progress, c.warmup);
-        refined.push_back(s);
-      } catch (const Error& e) {  // e.g. a reference without its sums: the first pass's verdict stands
-        c.referenceNotes[plan.scene] = std::string("the study could not refine it: ") + e.what();
-        c.progress("[refine] " + plan.scene + ": " + c.referenceNotes[plan.scene]);
-      }
+    const Scene& scene = *std::find_if(c.scenes.begin(), c.scenes.end(),  // planned from c.scenes
+                                       [&](const Scene& s) { return s.name == plan.scene; });
+    try {
+      refineSequence(scene, c.render, c.cache, plan.targetRelMse, maxSpp, c.progress, c.warmup);
+      refined.push_back(scene);
+    } catch (const Error& e) {  // e.g. a reference without its sums: the first pass's verdict stands
+      c.referenceNotes[plan.scene] = std::string("the study could not refine it: ") + e.what();
+      c.progress("[refine] " + plan.scene + ": " + c.referenceNotes[plan.scene]);
     }
   }
   return refined;

@@ -5,10 +5,8 @@
 #include <sqlite3.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
-#include <array>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -32,15 +30,11 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-struct CliResult {
-  int exitCode = -1;
-  std::string output;  // stdout and stderr
-};
+using CliResult = test::CommandResult;
 
 // Runs `arena ARGS` through the shell (so tests can use redirections and ulimit).
 CliResult arenaCli(const std::string& args, const std::string& prefix = "") {
-  const test::CommandResult r = test::runCommand(prefix + std::string(ARENA_BINARY) + " " + args);
-  return {r.status, r.output};
+  return test::runCommand(prefix + std::string(ARENA_BINARY) + " " + args);
 }
 
 // A small valid scene; tests change one field to make it invalid.
@@ -95,7 +89,7 @@ TEST(Class3Crashes, DeeplyNestedJsonIsRejectedBeforeAnyRecursiveWalk) {
   fs::path dir = test::freshDir("deep_cli");
   writeTextAtomically(dir / "deep.json", std::string(200000, '['));
   CliResult r = arenaCli("scenes --scenes-dir " + dir.string());
-  EXPECT_EQ(r.exitCode, 2) << r.output;
+  EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("deep.json: JSON nested deeper"), std::string::npos) << r.output;
 }
 
@@ -135,7 +129,7 @@ TEST(Class3Crashes, NegativeWarmupIsRejectedByTheCli) {
       "run --scenes cornell_static --denoisers passthrough --no-baselines --resolution 8x8 "
       "--frames 2 --ref-spp 1 --cache " +
       (out / "cache").string() + " --out " + (out / "run").string() + " --warmup -3");
-  EXPECT_NE(r.exitCode, 0);
+  EXPECT_NE(r.status, 0);
   EXPECT_NE(r.output.find("--warmup"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("-3"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(out / "run" / "results.json"));
@@ -171,7 +165,7 @@ TEST(Class3Crashes, ResultsOfTheWrongShapeAreErrorsNamingThePath) {
   doc.erase("pairs");
   writeTextAtomically(run / "results.json", doc.dump());
   CliResult r = arenaCli("report " + run.string() + " --out " + (run / "report").string());
-  EXPECT_EQ(r.exitCode, 2) << r.output;
+  EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("$.pairs"), std::string::npos) << r.output;
 }
 
@@ -194,7 +188,7 @@ TEST(Class3Crashes, AResolutionBeyondMemoryIsAClearErrorBeforeAllocating) {
   CliResult r =
       arenaCli("run --scenes " + file.string() + " --denoisers passthrough --frames 100000 --out " +
                (dir / "run").string() + " --cache " + (dir / "cache").string());
-  EXPECT_EQ(r.exitCode, 2) << r.output;
+  EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("GiB of memory"), std::string::npos) << r.output;
 }
 
@@ -227,7 +221,7 @@ TEST(Class4WrongValues, IntegersBeyondTheirRangeAreErrorsNotWrapped) {
   }
   // The CLI's integers are range-checked too (CLI11 rejects what does not fit an int).
   CliResult r = arenaCli("render cornell_static --frames 4294967300 --cache /nonexistent/never");
-  EXPECT_NE(r.exitCode, 0);
+  EXPECT_NE(r.status, 0);
   EXPECT_NE(r.output.find("--frames"), std::string::npos) << r.output;
 }
 
@@ -303,7 +297,7 @@ TEST(Class4WrongValues, ZeroNegativeAndMalformedCliValuesAreRejected) {
     CliResult r =
         arenaCli("render cornell_static --resolution 8x8 --ref-spp 1 --frames 1 --cache " +
                  cache.string() + " " + flags);
-    EXPECT_NE(r.exitCode, 0) << flags << "\n" << r.output;
+    EXPECT_NE(r.status, 0) << flags << "\n" << r.output;
     EXPECT_NE(r.output.find(name), std::string::npos) << flags << "\n" << r.output;
   }
   EXPECT_TRUE(fs::is_empty(cache)) << "a rejected command rendered something";
@@ -327,13 +321,13 @@ TEST(Class4WrongValues, ShardsParamsAndSweepsAreStrict) {
       (dir / "cache").string() + " --out " + (dir / "run").string();
   CliResult r =
       arenaCli("sweep --denoiser svgf --grid 'sigmaL=[2,4]' --param eaw.sigmaL=3" + common);
-  EXPECT_EQ(r.exitCode, 2) << r.output;
+  EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("this sweep runs only svgf"), std::string::npos) << r.output;
   r = arenaCli("sweep --denoiser svgf --grid 'sigmaL=[2,4]' --grid 'sigmaL=[8]'" + common);
-  EXPECT_EQ(r.exitCode, 2) << r.output;
+  EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("already an axis"), std::string::npos) << r.output;
   r = arenaCli("run --denoisers passthrough --shard 0/1junk" + common);
-  EXPECT_EQ(r.exitCode, 2) << r.output;
+  EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("--shard '0/1junk'"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir / "run" / "results.json"));
 }
@@ -529,7 +523,7 @@ TEST(Class6Help, EveryOptionShowsItsDefault) {
   int valueOptions = 0;
   for (const std::string& c : commands) {
     CliResult r = arenaCli(c + " --help");
-    ASSERT_EQ(r.exitCode, 0) << c << ": " << r.output;
+    ASSERT_EQ(r.status, 0) << c << ": " << r.output;
     std::istringstream lines(r.output);
     for (std::string line; std::getline(lines, line);) {
       if (!std::regex_match(line, valueLine)) continue;
@@ -607,7 +601,7 @@ TEST(Class7Messages, AFullDiskDuringARunNamesTheFileThroughTheCli) {
       arenaCli("render cornell_static --resolution 32x16 --frames 2 --ref-spp 2 --cache " +
                    (dir / "cache").string(),
                "trap '' XFSZ; ulimit -f 4; ");
-  EXPECT_EQ(r.exitCode, 2) << r.output;
+  EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find((dir / "cache").string()), std::string::npos) << r.output;
   EXPECT_NE(r.output.find(std::strerror(EFBIG)), std::string::npos) << r.output;
 }
