@@ -71,7 +71,7 @@ void addBenchReferenceCommand(CLI::App* bench) {
   struct Options {
     std::string scenes = "cornell_static,camera_pan_occluder", resolution = "128x72", json;
     std::string scenesDir = defaultScenesDir();
-    int spp = 128, goldFactor = 32, frame = 0, replicates = RenderSettings().referenceReplicates;
+    int spp = 128, goldFactor = 32, frame = 0, replicates = RenderSettings().referenceReplicates, maxBounces = 0;
   };
   auto o = std::make_shared<Options>();
   cmd->add_option("--scenes", o->scenes, "Scenes, comma-separated, or 'all'");
@@ -82,16 +82,22 @@ void addBenchReferenceCommand(CLI::App* bench) {
   cmd->add_option("--replicates", o->replicates,
                   "Independent randomisations of the compared references (the gold keeps the default)")
       ->check(CLI::Range(2, 64));
+  cmd->add_option("--max-bounces", o->maxBounces,
+                  "Override the scenes' maximum path length (gold included): comparing two lengths shows which "
+                  "part of the error the longer paths carry")
+      ->check(CLI::Range(1, 64));
   cmd->add_option("--frame", o->frame, "Frame whose state is rendered")->check(CLI::NonNegativeNumber);
   cmd->add_option("--scenes-dir", o->scenesDir, "Directory of scene files");
   cmd->add_option("--json", o->json, "Write results to this JSON file");
   cmd->callback([o] {
     RenderOptions ro;
     ro.resolution = o->resolution;
+    ro.maxBounces = o->maxBounces;
     RenderSettings settings = ro.settings();
     nlohmann::json out = {{"resolution", o->resolution},
                           {"spp", o->spp},
                           {"goldFactor", o->goldFactor},
+                          {"maxBounces", o->maxBounces > 0 ? nlohmann::json(o->maxBounces) : nlohmann::json("scene")},
                           {"scenes", nlohmann::json::array()},
                           {"environment", environmentInfo()}};
     for (const Scene& scene : selectScenes(o->scenes, o->scenesDir)) {

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <regex>
 #include <set>
 
 #include "core/atomic_file.hpp"
@@ -573,6 +574,26 @@ TEST(Reference, StudySaysWhenItCannotRefine) {
       parseJsonFile((dir / "second" / "results.json").string())["scenes"]["cornell_static"]["referenceQuality"];
   EXPECT_FALSE(q["meets"].get<bool>()) << q;
   EXPECT_NE(q["verdict"].get<std::string>().find("(the study could not refine it: "), std::string::npos) << q;
+}
+
+// `arena bench reference` end to end on a tiny frame: a line per scene ending in its gain, the JSON
+// beside it; --max-bounces shortens every path (the gold's too): with direct light only (one bounce)
+// a 2D-stratified integrand, on which Sobol must beat the independent sampler at equal samples.
+TEST(Reference, BenchReferencePrintsGainsAndShortensPaths) {
+  const std::filesystem::path json = test::freshDir("bench_reference") / "bench.json";
+  const test::CommandResult r =
+      test::runCommand(std::string(ARENA_BINARY) + " bench reference --scenes cornell_static --resolution 24x14 " +
+                       "--spp 32 --gold-factor 8 --max-bounces 1 --json " + json.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_TRUE(std::regex_search(r.output, std::regex("cornell_static .* gain [0-9.]+x\\n"))) << r.output;
+  const nlohmann::json out = parseJsonFile(json.string());
+  EXPECT_EQ(out["maxBounces"], 1);
+  const nlohmann::json& scene = out["scenes"][0];
+  EXPECT_LT(scene["sobol"]["relMse"].get<double>(), scene["independent"]["relMse"].get<double>() / 2) << scene;
+  const test::CommandResult bad =
+      test::runCommand(std::string(ARENA_BINARY) + " bench reference --scenes cornell_static --max-bounces 0");
+  EXPECT_NE(bad.status, 0);
+  EXPECT_NE(bad.output.find("--max-bounces"), std::string::npos) << bad.output;
 }
 
 TEST(Reference, BadSamplerSettingsAreErrorsNamingTheValue) {
