@@ -81,14 +81,16 @@ inline constexpr Dimension1 kDimension1{};
 inline uint32_t dimension0(uint32_t index) {
   return reverseBits(index);
 }
+// The xor of table[b][byte b of x] over the four bytes: a GF(2) matrix product, a byte at a time.
+inline uint32_t byteTableProduct(const uint32_t (&table)[4][256], uint32_t x) {
+  return table[0][x & 0xFF] ^ table[1][(x >> 8) & 0xFF] ^ table[2][(x >> 16) & 0xFF] ^ table[3][x >> 24];
+}
 inline uint32_t dimension1(uint32_t index) {
-  return kDimension1.byteTable[0][index & 0xFF] ^ kDimension1.byteTable[1][(index >> 8) & 0xFF] ^
-         kDimension1.byteTable[2][(index >> 16) & 0xFF] ^ kDimension1.byteTable[3][index >> 24];
+  return byteTableProduct(kDimension1.byteTable, index);
 }
 // reverseBits(dimension1(reverseBits(x))), without the two reversals.
 inline uint32_t reversedDimension1OfReversed(uint32_t x) {
-  return kDimension1.reversedTable[0][x & 0xFF] ^ kDimension1.reversedTable[1][(x >> 8) & 0xFF] ^
-         kDimension1.reversedTable[2][(x >> 16) & 0xFF] ^ kDimension1.reversedTable[3][x >> 24];
+  return byteTableProduct(kDimension1.reversedTable, x);
 }
 
 inline float toUnitFloat(uint32_t x) {
