@@ -3,7 +3,7 @@
 // SSIM, LDR-FLIP, tPSNR) is computed: exposure -> ACES filmic curve (Narkowicz 2015 fit) -> clamp
 // to [0, 1] -> sRGB encoding. The exposure comes from the *reference* so every method of a scene is
 // shown and measured through the same transform; by default each frame's own reference
-// (../shared/docs/metrics.md, "Display exposure": an ideal auto-exposure), or the first one's.
+// (docs/metrics.md, "Display exposure": an ideal auto-exposure), or the first one's.
 #include <string>
 #include <vector>
 

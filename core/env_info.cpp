@@ -1,5 +1,7 @@
 #include "core/env_info.hpp"
 
+#include <ctime>
+
 #include <array>
 #include <cstdio>
 #include <fstream>
@@ -32,6 +34,13 @@ nlohmann::json environmentInfo() {
           {"compiler", ARENA_COMPILER},
           {"flags", ARENA_CXX_FLAGS},
           {"git_commit", commandOutput("git -C '" ARENA_SOURCE_DIR "' rev-parse --short HEAD 2>/dev/null")}};
+}
+
+std::string utcTimestamp() {
+  std::time_t t = std::time(nullptr);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
+  return buf;
 }
 
 }  // namespace arena

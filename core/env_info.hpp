@@ -1,7 +1,10 @@
 #pragma once
 // The machine and build a measurement was taken on: CPU model, cores, compiler, flags, git commit.
 #include <nlohmann/json.hpp>
+#include <string>
 
 namespace arena {
 nlohmann::json environmentInfo();
+// Now, as an ISO 8601 UTC timestamp (2026-11-25T22:10:08Z): when a result was created.
+std::string utcTimestamp();
 }

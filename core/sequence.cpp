@@ -91,11 +91,40 @@ CameraState cameraFromJson(const json& j) {
   return c;
 }
 
+namespace {
+constexpr std::pair<EventKind, const char*> kEventKindNames[] = {
+    {EventKind::LightOff, "light_off"},       {EventKind::LightOn, "light_on"},
+    {EventKind::LightChange, "light_change"}, {EventKind::ObjectMoves, "object_moves"},
+    {EventKind::CameraCut, "camera_cut"}};
+}  // namespace
+
+const char* eventKindName(EventKind kind) {
+  for (const auto& [k, name] : kEventKindNames)
+    if (k == kind) return name;
+  return "unknown";
+}
+
+std::optional<EventKind> eventKindFromName(std::string_view name) {
+  for (const auto& [k, n] : kEventKindNames)
+    if (name == n) return k;
+  return std::nullopt;
+}
+
+std::string eventKindNames() {
+  std::string out;
+  for (const auto& [k, name] : kEventKindNames) out += (out.empty() ? "" : ", ") + std::string(name);
+  return out;
+}
+
 json SequenceInfo::toJson() const {
   json cams = json::array();
   for (auto& c : cameras) cams.push_back(cameraToJson(c));
   json evs = json::array();
-  for (auto& e : events) evs.push_back({{"frame", e.frame}, {"kind", e.kind}, {"what", e.what}});
+  for (auto& e : events) {
+    json ev = {{"frame", e.frame}, {"kind", eventKindName(e.kind)}, {"what", e.what}};
+    if (e.meshId >= 0) ev["meshId"] = e.meshId;
+    evs.push_back(ev);
+  }
   return {{"format", kSequenceFormatVersion}, {"complete", true}, {"scene", scene},
           {"purpose", purpose}, {"hash", hash}, {"width", width}, {"height", height},
           {"frames", frames}, {"referenceOfFrame", referenceOfFrame}, {"referenceSpp", referenceSpp},
@@ -120,8 +149,12 @@ SequenceInfo SequenceInfo::fromJson(const json& j, const std::string& file) {
     s.referenceOfFrame = j.at("referenceOfFrame").get<std::vector<int>>();
     s.referenceSpp = j.at("referenceSpp").get<std::vector<int>>();
     for (auto& c : j.at("cameras")) s.cameras.push_back(cameraFromJson(c));
-    for (auto& e : j.at("events"))
-      s.events.push_back({e.at("frame").get<int>(), e.at("kind").get<std::string>(), e.value("what", "")});
+    for (auto& e : j.at("events")) {
+      const std::string kind = e.at("kind").get<std::string>();
+      const std::optional<EventKind> k = eventKindFromName(kind);
+      if (!k) throw Error(file + ": event kind '" + kind + "': expected one of " + eventKindNames());
+      s.events.push_back({e.at("frame").get<int>(), *k, e.value("what", ""), e.value("meshId", -1)});
+    }
     s.settings = j.value("settings", json::object());
     s.referenceEstimatedRelMse = j.value("referenceEstimatedRelMse", std::vector<double>(s.referenceSpp.size(), 0.0));
     s.referenceCapped = j.value("referenceCapped", std::vector<bool>(s.referenceSpp.size(), false));

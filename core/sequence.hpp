@@ -6,7 +6,9 @@
 #include <algorithm>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/camera.hpp"
@@ -37,9 +39,22 @@ inline int lowresSize(int size, int factor) { return (size + factor - 1) / facto
 constexpr int kGradientStratum = 3;
 constexpr int kSequenceFormatVersion = 1;
 
+// What a scripted event does (a scene's "events"; the ghosting windows and cut analysis of
+// docs/metrics.md follow from it). Written in files by its name (eventKindName).
+enum class EventKind { LightOff, LightOn, LightChange, ObjectMoves, CameraCut };
+const char* eventKindName(EventKind kind);
+// The kind named `name`, or nullopt (callers say where the name came from).
+std::optional<EventKind> eventKindFromName(std::string_view name);
+// "light_off, light_on, ...": the valid names, for error messages.
+std::string eventKindNames();
+
 struct SequenceEvent {
   int frame = 0;
-  std::string kind, what;
+  EventKind kind = EventKind::LightOff;
+  std::string what;  // the light or object concerned (may be empty)
+  // The mesh id (the meshId layer's value) of the object an object_moves event concerns, written
+  // by the tracer; -1 for other kinds or when the event names no object.
+  int meshId = -1;
 };
 
 struct SequenceInfo {

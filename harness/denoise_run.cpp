@@ -100,7 +100,7 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
     ctx.camera = info.cameras[size_t(t)];
     ctx.previousCamera = info.cameras[size_t(std::max(t - 1, 0))];
     ctx.reset = t == 0;
-    for (const SequenceEvent& e : info.events) ctx.reset = ctx.reset || (e.kind == "camera_cut" && e.frame == t);
+    for (const SequenceEvent& e : info.events) ctx.reset = ctx.reset || (e.kind == EventKind::CameraCut && e.frame == t);
     if (ctx.reset && t > 0)
       for (auto& [kind, d] : instances_) d->reset();
     out.frame = t;

@@ -1,5 +1,5 @@
 #pragma once
-// Reference quality (../shared/docs/metrics.md, "Reference quality"; issue 13's goal): per scene,
+// Reference quality (docs/metrics.md, "Reference quality"; issue 13's goal): per scene,
 // the reference's own noise floor (its estimated relMSE, mean over the summarised frames) over the
 // best real denoiser's reference-corrected relMSE. A ratio above kReferenceQualityGoal means the
 // reference's noise is not far enough below the errors it ranks; the verdict says why (capped

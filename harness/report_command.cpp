@@ -2,6 +2,7 @@
 #include <iostream>
 
 #include "harness/commands.hpp"
+#include "metrics/metric_registry.hpp"
 #include "metrics/compare.hpp"
 #include "reports/history.hpp"
 #include "reports/report.hpp"
@@ -49,8 +50,8 @@ void addReportCommand(CLI::App& app) {
     const double t = parseTolerance(*tol);
     for (const std::string& m : *metrics) h.tolerances.push_back({m, t});
     if (h.tolerances.empty())
-      for (const char* m : {"relMse", "ldrFlip", "hdrFlip", "ssim", "tRmae"})
-        h.tolerances.push_back({m, t});
+      for (const MetricDefinition* m : metricCatalog())
+        if (m->gatedByDefault) h.tolerances.push_back({m->name, t});
     const HistorySummary s = writeHistory(h);
     std::cout << "history: " << s.index.string() << " (" << s.runs << " runs, " << s.failing
               << " regression(s) `arena compare` would flag)\n";

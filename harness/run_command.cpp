@@ -8,6 +8,7 @@
 #include "core/error.hpp"
 #include "denoisers/external/loader.hpp"
 #include "harness/commands.hpp"
+#include "harness/printout.hpp"
 #include "metrics/compare.hpp"
 #include "metrics/results.hpp"
 #include "harness/run_matrix.hpp"
@@ -97,6 +98,7 @@ void finish(const json& results, const std::string& out) {
     else
       std::cout << "  FAILED\n";
   }
+  printOverallRanking(std::cout, results);
   auto failed = failedPairs(results);
   if (!failed.empty()) {
     std::cerr << failed.size() << " pair(s) failed:\n";
@@ -182,9 +184,8 @@ void addRunCommands(CLI::App& app) {
       json grid = json::object();
       for (auto& [name, values] : axes) grid[name] = values;
       for (auto& s : settings) c.denoisers.push_back({*denoiser, s, ""});
+      c.annotations["sweep"] = {{"denoiser", *denoiser}, {"grid", grid}, {"fixed", fixed}};
       json results = runMatrix(c);
-      results["sweep"] = {{"denoiser", *denoiser}, {"grid", grid}, {"fixed", fixed}};
-      saveResults(o->out, results);
       finish(results, o->out);
     });
   }
@@ -208,7 +209,10 @@ void addRunCommands(CLI::App& app) {
     auto confidence = std::make_shared<std::string>("95%");
     cmd->add_option("baseline", *a, "Baseline run directory")->required();
     cmd->add_option("candidate", *b, "Candidate run directory")->required();
-    cmd->add_option("--metric", *metrics, "Metric(s) to gate on")->default_str("relMse ldrFlip hdrFlip ssim tRmae");
+    std::string gated;
+    for (const MetricDefinition* m : metricCatalog())
+      if (m->gatedByDefault) gated += (gated.empty() ? "" : " ") + m->name;
+    cmd->add_option("--metric", *metrics, "Metric(s) to gate on (`arena metrics` lists them)")->default_str(gated);
     cmd->add_option("--tolerance", *tol, "Allowed relative change in the worse direction, e.g. 2%")->default_val("2%");
     cmd->add_option("--confidence", *confidence,
                     "A change regresses only when its paired bootstrap interval at this level excludes zero")
@@ -221,7 +225,8 @@ void addRunCommands(CLI::App& app) {
       bc.confidence = parseConfidence(*confidence);
       for (auto& m : *metrics) tols.push_back({m, t});
       if (tols.empty())
-        for (const char* m : {"relMse", "ldrFlip", "hdrFlip", "ssim", "tRmae"}) tols.push_back({m, t});
+        for (const MetricDefinition* m : metricCatalog())
+          if (m->gatedByDefault) tols.push_back({m->name, t});
       auto rows = compareRuns(loadResults(*a), loadResults(*b), tols, bc);
       if (*asJson) {
         std::cout << comparisonJson(rows).dump(2) << "\n";
@@ -270,6 +275,27 @@ void addRunCommands(CLI::App& app) {
         std::cout << d["name"].get<std::string>() << ": " << d["description"].get<std::string>() << "\n";
         for (auto& p : d["parameters"]) std::cout << "    " << p.get<std::string>() << "\n";
       }
+    });
+  }
+  {
+    auto* cmd = app.add_subcommand("metrics", "List the registered metrics: unit, better direction, reference, "
+                                              "what they read, how tiles become a frame value, floor");
+    auto asJson = std::make_shared<bool>(false);
+    cmd->add_flag("--json", *asJson, "Machine-readable output");
+    cmd->callback([asJson] {
+      const json catalog = metricCatalogJson();
+      if (*asJson) {
+        std::cout << catalog.dump(2) << "\n";
+        return;
+      }
+      for (const json& m : catalog) {
+        const std::string unit = m["unit"].get<std::string>();
+        std::cout << std::left << std::setw(22) << m["name"].get<std::string>() << std::setw(8)
+                  << (m["better"].get<std::string>() == "lower" ? "lower" : "higher")
+                  << std::setw(14) << (m["needsReference"].get<bool>() ? "reference" : "no reference")
+                  << m["meaning"].get<std::string>() << (unit.empty() ? "" : " [" + unit + "]") << "\n";
+      }
+      std::cout << "(definitions: docs/metrics.md)\n";
     });
   }
 }

@@ -1,6 +1,6 @@
 #pragma once
-// The run matrix: scenes x denoisers. Renders missing sequences, runs every pair, computes every
-// metric of ../shared/docs/metrics.md per frame, summarises after warm-up, and writes
+// The run matrix: scenes x denoisers. Renders missing sequences, runs every pair, hands every
+// output frame to the evaluation stage (metrics/evaluator.hpp), and writes
 // <out>/results.json, appends <out>/results.db, and keeps images of chosen frames for the report.
 // A failing pair is recorded with its error and does not lose the others.
 #include <filesystem>
@@ -34,6 +34,9 @@ struct RunConfig {
   // false: return the scenes and pairs only, without statistics, verdicts or writing anything (a
   // pass the caller may redo); the caller finishes what it keeps with finishRun.
   bool finish = true;
+  // Entries added to the results document before it is committed (a sweep's grid), so results.json
+  // and results.db hold them from the one atomic commit.
+  nlohmann::json annotations = nlohmann::json::object();
   ProgressFn progress;
 };
 

@@ -10,6 +10,7 @@
 
 #include "core/error.hpp"
 #include "harness/commands.hpp"
+#include "harness/printout.hpp"
 #include "harness/reference_quality.hpp"
 #include "harness/run_matrix.hpp"
 #include "harness/scene_selection.hpp"
@@ -20,19 +21,6 @@ namespace arena::cli {
 namespace {
 
 using nlohmann::json;
-
-std::string interval(const json& ci, int precision) {
-  if (!ci.is_array()) return "-";
-  std::ostringstream o;
-  o << std::setprecision(precision) << "[" << ci[0].get<double>() << ", " << ci[1].get<double>() << "]";
-  return o.str();
-}
-
-std::string tiedList(const json& m) {
-  std::string s;
-  for (const json& t : m["tiedWith"]) s += (s.empty() ? "" : ", ") + t.get<std::string>();
-  return s.empty() ? "" : "tied with " + s;
-}
 
 // The study's ranking with ties (metrics/statistics.hpp): per scene on relMSE, then overall on the
 // per-scene normalised score. Methods whose difference is not resolved at 95% share "tied with".
@@ -47,18 +35,10 @@ void printRanking(const json& results) {
     for (const json& m : s["ranking"])
       std::cout << "  " << std::left << std::setw(4) << m["rank"].get<int>() << std::setw(26)
                 << m["label"].get<std::string>() << std::right << std::setw(11) << std::setprecision(4)
-                << m["mean"].get<double>() << "  " << std::left << std::setw(24) << interval(m["ci95"], 3)
-                << tiedList(m) << "\n";
+                << m["mean"].get<double>() << "  " << std::left << std::setw(24) << intervalText(m["ci95"])
+                << tiedText(m) << "\n";
   }
-  if (!st.contains("overall")) return;
-  const json& o = st["overall"];
-  std::cout << "\noverall: " << o["normalisation"].get<std::string>() << " (lower is better)\n";
-  for (const json& m : o["ranking"])
-    std::cout << "  " << std::left << std::setw(4) << m["rank"].get<int>() << std::setw(26)
-              << m["label"].get<std::string>() << std::right << std::setw(11) << std::setprecision(4)
-              << m["score"].get<double>() << "  " << std::left << std::setw(24) << interval(m["ci95"], 3)
-              << tiedList(m) << "\n";
-  if (o.contains("excluded")) std::cout << "  not ranked overall: " << o["excluded"].get<std::string>() << "\n";
+  printOverallRanking(std::cout, results);
 }
 
 // A figure with its interval: "0.123 [0.1, 0.15]", "-" when absent; a null bound of the response
@@ -114,7 +94,7 @@ void printEvents(const json& results) {
           for (const char* f : cut ? std::vector<const char*>{"oldViewLeak", "atCut"}
                                    : std::vector<const char*>{"lagEnergy", "responseFrames", "peakExcess", "chromaLagEnergy"})
             std::cout << f << " " << std::setw(26) << figure(*e, f) << " ";
-          std::cout << tiedList(m) << "\n";
+          std::cout << tiedText(m) << "\n";
         }
         if (ranking.contains("excluded")) std::cout << "  not ranked: " << ranking["excluded"].get<std::string>() << "\n";
       }

@@ -63,15 +63,11 @@ std::vector<ComparisonRow> compareRuns(const json& base, const json& cand,
                                        std::vector<Tolerance> tolerances,
                                        const BootstrapConfig& cfg) {
   if (tolerances.empty())
-    for (const char* m : {"relMse", "ldrFlip", "hdrFlip", "ssim", "tRmae"})
-      tolerances.push_back({m, 0.02});
+    for (const MetricDefinition* m : metricCatalog())
+      if (m->gatedByDefault) tolerances.push_back({m->name, 0.02});
   for (Tolerance& t : tolerances) {
     if (t.metric == "flip") t.metric = "ldrFlip";
-    if (!findMetric(t.metric)) {
-      std::string names;
-      for (const MetricInfo& m : metricCatalog()) names += std::string(" ") + m.name;
-      throw Error("compare: unknown metric '" + t.metric + "'; known:" + names);
-    }
+    requireMetric(t.metric, "compare");
     if (!std::isfinite(t.relative) || t.relative < 0)
       throw Error("compare: tolerance of " + t.metric + " must be finite and non-negative");
   }
@@ -127,7 +123,7 @@ std::vector<ComparisonRow> compareRuns(const json& base, const json& cand,
       row.candidate = c["summary"][t.metric]["mean"];
       const double scale = std::max(std::abs(row.baseline), 1e-12);
       row.change = (row.candidate - row.baseline) / scale;
-      const bool lowerIsBetter = findMetric(t.metric)->lowerIsBetter;
+      const bool lowerIsBetter = findMetric(t.metric)->lowerIsBetter();
       const double worse = lowerIsBetter ? row.change : -row.change;
       // Paired over the frames and tiles both runs have, seeded by the scene like the run's own.
       bool resolvedWorse = false, resolvedBetter = false;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "metrics/metric_registry.hpp"
 
 namespace arena {
 
@@ -230,6 +231,63 @@ double ssim(const Image& a, const Image& b, TileSums* tiles) {
     }
   if (tiles) *tiles = acc->finish();
   return total / double((x1 - x0) * (y1 - y0));
+}
+
+}  // namespace arena
+
+namespace arena {
+
+// Registered in metric_registry.cpp: the error against the reference on linear values, the
+// effective spp derived from it, and the reference's own error beside them (docs/metrics.md).
+MetricFamily linearErrorFamily() {
+  MetricFamily f;
+  f.metrics = {
+      {.name = "relMse", .floor = FloorRule::ReferenceNoise, .ranked = true, .gatedByDefault = true,
+       .description = "relative MSE vs the reference, eps 0.01 (raw)"},
+      {.name = "relMseCorrected", .description = "relMSE minus the reference's own noise term"},
+      {.name = "mse", .description = "MSE, linear"},
+      {.name = "rmse", .transform = FrameTransform::Sqrt, .description = "RMSE, linear"},
+      {.name = "effectiveSpp", .unit = "spp", .better = Better::Higher,
+       .description = "samples plain accumulation would need for the same relMSE"},
+      {.name = "referenceRelMse",
+       .description = "the reference's own estimated relMSE (the same for every method: context, not a score)"},
+  };
+  f.measure = [](const FrameView& v, const MetricOptions&, FrameRecorder& out) {
+    ErrorTiles et;
+    const ErrorStats e = linearError(*v.output, *v.reference, v.referenceVariance, nullptr, kRelMseEpsilon, &et);
+    out.put("relMse", e.relMse, std::move(et.relMse));
+    out.put("relMseCorrected", e.relMseCorrected, std::move(et.relMseCorrected));
+    out.put("mse", e.mse, et.mse);
+    out.put("rmse", e.rmse, std::move(et.mse));
+    // 1-spp relMSE falls as 1/spp, so spp_eff = relMSE(noisy) / relMSE(method); the
+    // reference-corrected values when both are positive.
+    const double noisyCorrected = v.noisyRelMse - v.referenceRelMse;
+    const bool corrected = noisyCorrected > 0 && e.relMseCorrected > 0;
+    out.put("effectiveSpp", corrected ? noisyCorrected / e.relMseCorrected : v.noisyRelMse / std::max(e.relMse, 1e-12));
+    out.put("referenceRelMse", v.referenceRelMse);
+  };
+  return f;
+}
+
+// Registered in metric_registry.cpp: PSNR and SSIM of the display image.
+MetricFamily displayErrorFamily() {
+  MetricFamily f;
+  f.metrics = {
+      {.name = "psnr", .unit = "dB", .better = Better::Higher, .reads = MetricInput::Display,
+       .transform = FrameTransform::Psnr, .floor = FloorRule::ReferenceNoise,
+       .description = "PSNR of the display image, dB (capped at 100)"},
+      {.name = "ssim", .better = Better::Higher, .reads = MetricInput::Display, .floor = FloorRule::ReferenceNoise,
+       .floorWarningFactor = 2, .perfect = 1, .ranked = true, .gatedByDefault = true,
+       .description = "SSIM of display luminance (11x11 Gaussian, sigma 1.5)"},
+  };
+  f.measure = [](const FrameView& v, const MetricOptions&, FrameRecorder& out) {
+    TileSums tiles;
+    const double psnr = psnrFromMse(meanSquaredError(*v.outputDisplay, *v.referenceDisplay, &tiles));
+    out.put("psnr", psnr, std::move(tiles));
+    const double s = ssim(*v.outputDisplay, *v.referenceDisplay, &tiles);
+    out.put("ssim", s, std::move(tiles));
+  };
+  return f;
 }
 
 }  // namespace arena

@@ -1,5 +1,5 @@
 #pragma once
-// Error of a denoised frame against its reference (../shared/docs/metrics.md, "Error against the
+// Error of a denoised frame against its reference (docs/metrics.md, "Error against the
 // reference"). Linear metrics take linear HDR RGB; display metrics take images already passed
 // through core/display.hpp's transform (exposure from the reference, ACES, sRGB).
 #include "core/image.hpp"

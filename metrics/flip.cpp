@@ -16,6 +16,8 @@
 // allocations inside the parallel loops.
 #include "metrics/flip.hpp"
 
+#include "metrics/metric_registry.hpp"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -673,6 +675,34 @@ FlipResult hdrFlip(const Image& reference, const Image& test, double pixelsPerDe
   }
   result.mean = meanOf(result.map);
   return result;
+}
+
+}  // namespace arena
+
+namespace arena {
+
+// Registered in metric_registry.cpp: LDR-FLIP of the display image and HDR-FLIP of the linear one,
+// as --flip asks (ldr: LDR only; all: both; none: neither). The LDR map is kept for the report.
+MetricFamily flipFamily() {
+  MetricFamily f;
+  f.metrics = {
+      {.name = "ldrFlip", .reads = MetricInput::Display, .floor = FloorRule::ReferenceNoise,
+       .floorWarningFactor = 2, .ranked = true, .gatedByDefault = true, .description = "mean LDR-FLIP of the display image, 67 ppd"},
+      {.name = "hdrFlip", .floor = FloorRule::ReferenceNoise, .floorWarningFactor = 2, .ranked = true, .gatedByDefault = true,
+       .description = "mean HDR-FLIP of the linear image, 67 ppd"},
+  };
+  f.enabled = [](const MetricOptions& o) { return o.flip != "none"; };
+  f.measure = [](const FrameView& v, const MetricOptions& o, FrameRecorder& out) {
+    const int w = v.output->width(), h = v.output->height();
+    FlipResult ldr = ldrFlip(*v.referenceDisplay, *v.outputDisplay);
+    out.put("ldrFlip", ldr.mean, tileSumsOfMap(ldr.map.raw(), w, h));
+    out.keepMap("ldrFlip", std::move(ldr.map));
+    if (o.flip == "all") {
+      const FlipResult hdr = hdrFlip(*v.reference, *v.output);
+      out.put("hdrFlip", hdr.mean, tileSumsOfMap(hdr.map.raw(), w, h));
+    }
+  };
+  return f;
 }
 
 }  // namespace arena

@@ -18,33 +18,6 @@ namespace arena {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-const std::vector<MetricInfo>& metricCatalog() {
-  static const std::vector<MetricInfo> metrics = {
-      {"relMse", true, "relative MSE vs the reference, eps 0.01 (raw)"},
-      {"relMseCorrected", true, "relMSE minus the reference's own noise term"},
-      {"mse", true, "MSE, linear"},
-      {"rmse", true, "RMSE, linear"},
-      {"psnr", false, "PSNR of the display image, dB (capped at 100)"},
-      {"ssim", false, "SSIM of display luminance (11x11 Gaussian, sigma 1.5)"},
-      {"ldrFlip", true, "mean LDR-FLIP of the display image, 67 ppd"},
-      {"hdrFlip", true, "mean HDR-FLIP of the linear image, 67 ppd"},
-      {"tRmae", true, "temporal relative MAE vs the reference's frame difference (no /3)"},
-      {"tPsnr", false, "temporal PSNR of display frame differences, dB"},
-      {"warpedFlicker", true, "motion-compensated flicker of the error e = d - r"},
-      {"effectiveSpp", false, "samples plain accumulation would need for the same relMSE"},
-      {"ms", true, "wall time of the denoiser per frame (both signals), ms"},
-      {"extraRaysPerPixel", true, "low-resolution paths read per pixel per frame (disocclusion rays)"},
-      {"tracingMs", true, "those paths' equivalent tracing time per frame at the render's own rate, ms"},
-  };
-  return metrics;
-}
-
-const MetricInfo* findMetric(const std::string& name) {
-  for (const MetricInfo& m : metricCatalog())
-    if (name == m.name) return &m;
-  return nullptr;
-}
-
 namespace {
 
 // The shape every reader of results.json (compare, merge, report) relies on, checked once on load
@@ -135,7 +108,9 @@ constexpr const char* kDatabaseSchema = R"(
              CREATE TABLE IF NOT EXISTS paired (run_id INTEGER, scene TEXT, metric TEXT, a TEXT, b TEXT, diff REAL,
                ci_lo REAL, ci_hi REAL, resolved INTEGER);
              CREATE TABLE IF NOT EXISTS rankings (run_id INTEGER, scene TEXT, metric TEXT, label TEXT, rank INTEGER,
-               value REAL, ci_lo REAL, ci_hi REAL, tied_with TEXT);)";
+               value REAL, ci_lo REAL, ci_hi REAL, tied_with TEXT);
+             CREATE TABLE IF NOT EXISTS metrics (run_id INTEGER, name TEXT, unit TEXT, better TEXT,
+               needs_reference INTEGER, reads TEXT, transform TEXT, ranked INTEGER, meaning TEXT);)";
 
 // An open database; every error names `name` (the path the user knows) and SQLite's reason, with
 // the operating system's reason where SQLite had one (a full disk, a read-only directory).
@@ -269,6 +244,13 @@ void appendToDatabase(const fs::path& dbPath, const json& r, const std::string& 
       .text(5, r["environment"].dump()).text(6, r["settings"].dump())
       .step();
   const long long runId = sqlite3_last_insert_rowid(db.db);
+  // The registry as this arena knew it, so a dashboard reads each metric's direction and unit from
+  // the database rather than from a list of its own.
+  Statement registered(db, "INSERT INTO metrics VALUES (?,?,?,?,?,?,?,?,?)");
+  for (const json& m : metricCatalogJson())
+    registered.integer(1, runId).text(2, m["name"]).text(3, m["unit"]).text(4, m["better"])
+        .integer(5, m["needsReference"].get<bool>()).text(6, m["reads"]).text(7, m["transform"])
+        .integer(8, m["ranked"].get<bool>()).text(9, m["meaning"]).step();
   Statement pair(db, "INSERT INTO pairs VALUES (?,?,?,?,?,?,?)");
   Statement frame(db, "INSERT INTO frame_metrics VALUES (?,?,?,?,?,?)");
   Statement summary(db, "INSERT INTO summaries VALUES (?,?,?,?,?,?,?,?,?,?,?,?)");

@@ -5,6 +5,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "metrics/metric_registry.hpp"
+
 namespace arena {
 
 // 2: summaries carry ci95 or absent; pairs carry tiles; results carry statistics and scene floors.
@@ -24,14 +26,5 @@ void checkRunOutputs(const std::filesystem::path& runDir);
 // Writes results.json and appends to results.db as one commit: both are written to temporaries
 // (the database as an appended copy) and renamed into place only when both are complete.
 void commitResults(const std::filesystem::path& runDir, const nlohmann::json& results);
-
-// Metrics every pair reports per frame, with the direction that counts as better.
-struct MetricInfo {
-  const char* name;
-  bool lowerIsBetter;
-  const char* meaning;
-};
-const std::vector<MetricInfo>& metricCatalog();
-const MetricInfo* findMetric(const std::string& name);
 
 }  // namespace arena

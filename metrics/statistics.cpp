@@ -10,6 +10,7 @@
 #include "core/hash.hpp"
 #include "metrics/error.hpp"
 #include "metrics/ghosting_intervals.hpp"
+#include "metrics/metric_registry.hpp"
 
 namespace arena {
 
@@ -540,14 +541,12 @@ json OverallRanking::toJson() const {
 namespace arena {
 
 json analyseRun(const json& results, const BootstrapConfig& cfg) {
-  struct MetricChoice {
-    const char* name;
-    bool lowerIsBetter;
-  };
-  // relMSE ranks (paired differences of raw and corrected relMSE are the same: the correction
-  // subtracts the same reference term from every method); the others are reported beside it.
-  const MetricChoice kMetrics[] = {{"relMse", true}, {"ldrFlip", true}, {"hdrFlip", true},
-                                   {"ssim", false},  {"tRmae", true},   {"warpedFlicker", true}};
+  // The registry's ranked metrics. relMSE ranks (paired differences of raw and corrected relMSE
+  // are the same: the correction subtracts the same reference term from every method); the others
+  // are reported beside it.
+  std::vector<const MetricDefinition*> rankedMetrics;
+  for (const MetricDefinition* m : metricCatalog())
+    if (m->ranked) rankedMetrics.push_back(m);
   std::map<std::string, std::vector<std::pair<std::string, std::map<std::string, MetricTiles>>>>
       byScene;
   std::map<std::string, std::vector<std::pair<std::string, const json*>>> pairsOfScene;
@@ -567,22 +566,22 @@ json analyseRun(const json& results, const BootstrapConfig& cfg) {
   relMseRankings.reserve(byScene.size());
   for (const auto& [scene, pairs] : byScene) {
     json sceneJson;
-    for (const MetricChoice& m : kMetrics) {
+    for (const MetricDefinition* m : rankedMetrics) {
       std::vector<std::pair<std::string, const MetricTiles*>> methods;
       bool any = false;
       for (const auto& [label, tiles] : pairs) {
-        auto it = tiles.find(m.name);
+        auto it = tiles.find(m->name);
         methods.push_back({label, it == tiles.end() ? nullptr : &it->second});
         any |= it != tiles.end();
       }
       if (!any) continue;
-      SceneRanking r = rankScene(m.name, m.lowerIsBetter, methods, scene, cfg);
-      if (std::string(m.name) == "relMse") {
+      SceneRanking r = rankScene(m->name, m->lowerIsBetter(), methods, scene, cfg);
+      if (m->name == "relMse") {
         sceneJson = r.toJson();
         sceneJson["byMetric"] = json::object();
         relMseRankings.push_back(std::move(r));
       } else if (sceneJson.is_object()) {
-        sceneJson["byMetric"][m.name] = r.toJson();
+        sceneJson["byMetric"][m->name] = r.toJson();
       }
     }
     if (sceneJson.is_object()) {

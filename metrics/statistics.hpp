@@ -1,5 +1,5 @@
 #pragma once
-// Uncertainty of every summary (../shared/docs/metrics.md, "Uncertainty"): 95% intervals, paired
+// Uncertainty of every summary (docs/metrics.md, "Uncertainty"): 95% intervals, paired
 // differences between methods and ranks with ties.
 //
 // Method: a crossed ("pigeonhole", Owen 2007) bootstrap. Frames are resampled in moving blocks of

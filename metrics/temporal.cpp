@@ -9,6 +9,7 @@
 
 #include "core/error.hpp"
 #include "metrics/error.hpp"
+#include "metrics/metric_registry.hpp"
 
 namespace arena {
 
@@ -107,6 +108,38 @@ WarpedFlicker warpedFlicker(const Image& e, const Image& ePrev, const LayerSet& 
   out.validFraction = n / double(size_t(w) * size_t(h));
   out.value = n > 0 ? std::sqrt(s / n) : std::numeric_limits<double>::quiet_NaN();  // no valid pixel: undefined
   return out;
+}
+
+}  // namespace arena
+
+namespace arena {
+
+// Registered in metric_registry.cpp: frame-to-frame flicker against the reference's own change.
+MetricFamily temporalFlickerFamily() {
+  MetricFamily f;
+  f.metrics = {
+      {.name = "tRmae", .ranked = true, .gatedByDefault = true,
+       .description = "temporal relative MAE vs the reference's frame difference (no /3)"},
+      {.name = "tPsnr", .unit = "dB", .better = Better::Higher, .reads = MetricInput::Display,
+       .transform = FrameTransform::Psnr, .description = "temporal PSNR of display frame differences, dB"},
+      {.name = "warpedFlicker", .transform = FrameTransform::Sqrt, .ranked = true,
+       .description = "motion-compensated flicker of the error e = d - r"},
+  };
+  f.measure = [](const FrameView& v, const MetricOptions&, FrameRecorder& out) {
+    const FrameView* p = v.previous(1);
+    if (!p) return;  // frame 0: no frame difference
+    TileSums tiles;
+    const double trmae = temporalRelativeMae(*v.output, *p->output, *v.reference, *p->reference, 0.01, &tiles);
+    out.put("tRmae", trmae, std::move(tiles));
+    const double tpsnr = temporalPsnr(*v.outputDisplay, *p->outputDisplay, *v.referenceDisplay,
+                                      *p->referenceDisplay, &tiles);
+    out.put("tPsnr", tpsnr, std::move(tiles));
+    const WarpedFlicker wf = warpedFlicker(*v.error, *p->error, *v.guides, *p->guides, {}, &tiles);
+    // No consistent pixel (a cut, a full disocclusion): warped flicker is undefined there.
+    if (wf.validFraction > 0) out.put("warpedFlicker", wf.value, std::move(tiles));
+    out.note("warpedValid", wf.validFraction);
+  };
+  return f;
 }
 
 }  // namespace arena

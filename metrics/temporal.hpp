@@ -1,5 +1,5 @@
 #pragma once
-// Temporal flicker (../shared/docs/metrics.md, "Temporal flicker"): frame-difference metrics for
+// Temporal flicker (docs/metrics.md, "Temporal flicker"): frame-difference metrics for
 // static cameras and the motion-compensated warped flicker for moving ones.
 #include "core/consistency.hpp"
 #include "core/exr_io.hpp"

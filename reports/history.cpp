@@ -205,12 +205,12 @@ json historyData(const std::vector<json>& runs, const std::vector<Tolerance>& to
       changes.push_back(change);
     }
   json metricList = json::array();
-  for (const MetricInfo& m : metricCatalog())
-    if (std::find(metrics.begin(), metrics.end(), m.name) != metrics.end())
-      metricList.push_back({{"name", m.name},
-                            {"lowerIsBetter", m.lowerIsBetter},
-                            {"meaning", m.meaning},
-                            {"tolerance", gated.contains(m.name) ? gated[m.name] : json(nullptr)}});
+  for (const MetricDefinition* m : metricCatalog())
+    if (std::find(metrics.begin(), metrics.end(), m->name) != metrics.end())
+      metricList.push_back({{"name", m->name},
+                            {"lowerIsBetter", m->lowerIsBetter()},
+                            {"meaning", m->description},
+                            {"tolerance", gated.contains(m->name) ? gated[m->name] : json(nullptr)}});
   return {{"generator", "arena history"}, {"runs", runList},
           {"metrics", metricList},        {"series", series},
           {"changes", changes},           {"failing", failing}};

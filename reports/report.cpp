@@ -384,7 +384,7 @@ json ablationData(const json& results) {
   for (const json& p : results["pairs"])
     if (p["denoiser"] == denoiser && isOk(p) && p.contains("params")) pairs.push_back(&p);
   std::vector<std::string> metrics;
-  for (const MetricInfo& m : metricCatalog()) metrics.push_back(m.name);
+  for (const MetricDefinition* m : metricCatalog()) metrics.push_back(m->name);
   json rows = json::array();
   for (auto g = sweep["grid"].begin(); g != sweep["grid"].end(); ++g) {
     const std::string name = g.key();
@@ -602,10 +602,7 @@ json reportData(const json& results, const fs::path& runDir, const json* baselin
           {{"scene", p["scene"]}, {"label", p["label"]}, {"error", p.value("error", "")}});
   }
 
-  json metrics = json::array();
-  for (const MetricInfo& m : metricCatalog())
-    metrics.push_back(
-        {{"name", m.name}, {"lowerIsBetter", m.lowerIsBetter}, {"meaning", m.meaning}});
+  const json metrics = metricCatalogJson();
   // Offer only the error axes some pair measured (FLIP is optional: --flip none | ldr).
   json axes = json::array();
   for (const ErrorAxis& a : kErrorAxes) {

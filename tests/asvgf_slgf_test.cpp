@@ -50,7 +50,7 @@ const json& matrix() {
     // number is 0. The light first moves at frame 9, so the event is placed there.
     Scene moving = test::shippedScene("moving_light_shadow");
     for (SceneEvent& e : moving.events)
-      if (e.kind == "light_change" && e.frame == 8) e.frame = 9;
+      if (e.kind == arena::EventKind::LightChange && e.frame == 8) e.frame = 9;
     c.scenes = {test::shippedScene("cornell_static"), test::shippedScene("light_switch"), moving};
     c.denoisers = {{"svgf", {}, "svgf"}, {"asvgf", {}, "asvgf"}, {"slgf", {}, "slgf"}};
     c.baselines = false;

@@ -1,4 +1,4 @@
-// The metric definitions of ../shared/docs/metrics.md that decide what a number means: the display
+// The metric definitions of docs/metrics.md that decide what a number means: the display
 // exposure per frame, SSIM on display luma, lag by signed bias (response, lag energy), the changed
 // region's chromaticity criterion, and camera cuts (history reset, recovery, old-view leak).
 // Analytic values first, then end to end on tiny renders.

@@ -1,4 +1,4 @@
-// Metrics against hand-computed values (../shared/docs/metrics.md).
+// Metrics against hand-computed values (docs/metrics.md).
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -163,7 +163,7 @@ TEST(RealisticScenes, LivingRoomShowsItsFurnitureAndTheLampSwitchesOff) {
   SKIP_WITHOUT_ASSETS("living_room");
   const Scene scene = test::shippedScene("living_room");
   ASSERT_EQ(scene.events.size(), 1u);
-  EXPECT_EQ(scene.events[0].kind, "light_off");
+  EXPECT_EQ(scene.events[0].kind, arena::EventKind::LightOff);
   EXPECT_EQ(scene.events[0].what, "lamp");
   SequenceRenderer renderer(scene, test::tinySettings(64, 36, 0, 16));
   const auto frame = renderer.renderFrame(0);

@@ -68,7 +68,7 @@ TEST(Scene, MinimalSceneParsesAndStepKeysSwitchInstantly) {
   // Unspecified fields are inherited from the previous key (the light did not move).
   EXPECT_FLOAT_EQ(s.lights[0].transform.at(3.0f).translate.y, 2.0f);
   ASSERT_EQ(s.events.size(), 1u);
-  EXPECT_EQ(s.events[0].kind, "light_off");
+  EXPECT_EQ(s.events[0].kind, arena::EventKind::LightOff);
 }
 
 TEST(Scene, LinearKeyframesInterpolate) {

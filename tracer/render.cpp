@@ -958,7 +958,8 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
   info.frames = frames;
   info.settings = settings.pixelSettings(scene);
   for (const SceneEvent& e : scene.events)
-    if (e.frame < frames) info.events.push_back({e.frame, e.kind, e.what});
+    if (e.frame < frames)
+      info.events.push_back({e.frame, e.kind, e.what, e.kind == EventKind::ObjectMoves ? scene.meshIdOf(e.what) : -1});
   // Frames with equal animation state share one reference.
   std::map<uint64_t, int> referenceOfState;
   std::vector<int> firstFrameOfReference;

@@ -372,17 +372,13 @@ Scene parseScene(const std::string& text, const std::string& path) {
   for (JsonReader& e : root.optionalArray("events")) {
     SceneEvent ev;
     ev.frame = e.integer("frame");
-    ev.kind = e.string("kind");
+    const std::string kind = e.string("kind");
     ev.what = e.string("what", "");
     if (ev.frame < 0 || ev.frame >= scene.frames)
       e.fail("frame", "expected a frame in [0, " + std::to_string(scene.frames - 1) + "]");
-    static const char* kinds[] = {"light_off", "light_on", "light_change", "object_moves",
-                                  "camera_cut"};
-    if (std::none_of(std::begin(kinds), std::end(kinds),
-                     [&](const char* k) { return ev.kind == k; }))
-      e.fail("kind",
-             "expected one of light_off, light_on, light_change, object_moves, camera_cut; got '" +
-                 ev.kind + "'");
+    const std::optional<EventKind> parsed = eventKindFromName(kind);
+    if (!parsed) e.fail("kind", "expected one of " + eventKindNames() + "; got '" + kind + "'");
+    ev.kind = *parsed;
     if (!ev.what.empty() && !knownName(ev.what))
       e.fail("what", "no object or light is named '" + ev.what + "'");
     e.rejectUnread();

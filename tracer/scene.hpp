@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/sequence.hpp"
 #include "tracer/texture.hpp"
 
 namespace arena {
@@ -117,7 +118,7 @@ struct Light {
 
 struct SceneEvent {
   int frame = 0;
-  std::string kind;  // light_off, light_on, light_change, object_moves, camera_cut, ...
+  EventKind kind = EventKind::LightOff;
   std::string what;  // name of the light/object concerned
 };
 
@@ -139,6 +140,16 @@ struct Scene {
   // missing textures, dropped degenerate triangles, ignored features. Recorded in the results.
   std::vector<std::string> warnings;
   std::string contentHash;  // scene file bytes + referenced mesh and asset files and textures
+
+  // The meshId layer's value for the object or light named `what` (objects first, then lights, in
+  // file order, as the tracer numbers them); -1 when nothing has that name.
+  int meshIdOf(const std::string& what) const {
+    for (size_t i = 0; i < objects.size(); ++i)
+      if (objects[i].name == what) return int(i);
+    for (size_t i = 0; i < lights.size(); ++i)
+      if (lights[i].name == what) return int(objects.size() + i);
+    return -1;
+  }
 };
 
 // Limits of the format (scene files naming more are errors): per-axis resolution, frame count

@@ -35,7 +35,7 @@ function arena(...args) {
 }
 
 function tinyRun(out, extra = []) {
-  arena('run', '--scenes', 'cornell_static,light_switch', '--resolution', '48x27', '--frames', String(FRAMES),
+  return arena('run', '--scenes', 'cornell_static,light_switch', '--resolution', '48x27', '--frames', String(FRAMES),
     '--ref-spp', '16', '--flip', 'ldr', '--warmup', '4', '--cache', path.join(work, 'cache'), '--out', out, ...extra);
 }
 
@@ -109,10 +109,10 @@ function tinyRuns() {
   if (tiny) return tiny;
   const run = path.join(work, 'run');
   const base = path.join(work, 'base');
-  tinyRun(run, ['--keep-frames', 'all', '--lowres-factor', '4']);  // reengine's disocclusion rays
+  const printed = tinyRun(run, ['--keep-frames', 'all', '--lowres-factor', '4']);  // reengine's disocclusion rays
   tinyRun(base, ['--denoisers', 'passthrough,temporal,eaw,svgf', '--param', 'svgf.sigmaL=8']);
   const schema = JSON.parse(fs.readFileSync(path.join(run, 'results.json'), 'utf8')).schema;
-  tiny = { run, base, schema };
+  tiny = { run, base, schema, printed };
   return tiny;
 }
 
@@ -211,6 +211,16 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
 
   // (3) Tables: rankings (scene and overall), the failed pair, intervals, and a table that fits.
   assert.equal(await page.locator('#rankings table.ranking-table').count(), 2, 'scene and overall rankings');
+  // The overall ranking is statistics' one score: the page shows exactly what `arena run` printed
+  // (rank with ties, label, score, interval), digit for digit.
+  const pageOverall = await page.locator('#rankings table.ranking-table').nth(1).locator('tbody tr').evaluateAll(
+    (rows) => rows.map((r) => [...r.querySelectorAll('td')].slice(0, 4).map((td) => td.textContent).join(' | ')));
+  const printedOverall = tinyRuns().printed.split('\n\noverall: ')[1].split('\n').slice(1)
+    .filter((l) => /^\s+\d/.test(l))
+    .map((l) => { const m = l.trim().match(/^(\d+=?)\s+(\S+)\s+(\S+)\s+(\[[^\]]*\]|–)/); return m.slice(1, 5).join(' | '); });
+  assert.ok(printedOverall.length >= 3, `the run printed its overall ranking: ${tinyRuns().printed.slice(-800)}`);
+  assert.deepEqual(pageOverall, printedOverall, 'report and printout show the same overall ranking');
+  assert.deepEqual(pageOverall.map((r) => r.split(' | ')[1]), results.statistics.overall.ranking.map((m) => m.label));
   assert.equal(await page.locator('#rankings table.ranking-table').first().locator('tbody tr').count(), okHere);
   assert.match(await page.locator('#failures').innerText(), /injected failure/);
   assert.equal(await page.locator('#summary-table tr.failed').count(), 1);

@@ -1,0 +1,109 @@
+#include <map>
+#include <set>
+
+#include "core/error.hpp"
+#include "harness/reference_quality.hpp"
+#include "harness/run_matrix.hpp"
+#include "metrics/results.hpp"
+#include "metrics/statistics.hpp"
+
+// Shard sets and the study's second pass: runs combined into one, analysed once (run_matrix.hpp).
+namespace arena {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+std::pair<int, int> parseShard(const std::string& text) {
+  // Whole text, digits only: "0/1junk" or "1/4294967297" must not pass as something else.
+  const std::string expected = "--shard '" + text + "': expected i/n with integers 0 <= i < n <= 100000, e.g. 0/4";
+  size_t slash = text.find('/');
+  auto number = [&](const std::string& digits) {
+    if (digits.empty() || digits.size() > 6 || digits.find_first_not_of("0123456789") != std::string::npos)
+      throw Error(expected);
+    return std::stoi(digits);
+  };
+  if (slash == std::string::npos) throw Error(expected);
+  const int i = number(text.substr(0, slash)), n = number(text.substr(slash + 1));
+  if (n < 1 || n > 100000 || i >= n) throw Error(expected);
+  return {i, n};
+}
+
+std::vector<std::string> failedPairs(const json& results) {
+  std::vector<std::string> out;
+  for (const json& p : results["pairs"])
+    if (p["status"] != "ok") out.push_back(p["label"].get<std::string>() + " on " + p["scene"].get<std::string>() + ": " +
+                                           p.value("error", ""));
+  return out;
+}
+
+json replaceScenes(json results, const json& part) {
+  std::map<std::string, json> newPairs;  // scene \n label -> pair
+  for (const json& p : part.at("pairs")) newPairs[p.at("scene").get<std::string>() + "\n" + p.at("label").get<std::string>()] = p;
+  for (auto it = part.at("scenes").begin(); it != part.at("scenes").end(); ++it) {
+    if (!results["scenes"].contains(it.key())) throw Error("replaceScenes: scene " + it.key() + " is not in the run");
+    results["scenes"][it.key()] = it.value();
+  }
+  for (json& p : results["pairs"]) {
+    const std::string scene = p.at("scene").get<std::string>();
+    if (!part["scenes"].contains(scene)) continue;
+    const auto found = newPairs.find(scene + "\n" + p.at("label").get<std::string>());
+    if (found == newPairs.end())
+      throw Error("replaceScenes: pair " + p.at("label").get<std::string>() + " on " + scene + " is missing from the part");
+    p = found->second;
+  }
+  return results;
+}
+
+json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
+  if (runs.empty()) throw Error("merge: no runs given");
+  checkRunOutputs(out);  // creates --out when missing
+  json merged;
+  std::set<std::string> seen;
+  // A gate must not pass on a partial study: every shard i/n of one n, each exactly once.
+  std::map<int, std::string> shards;
+  int shardCount = 0;
+  for (const fs::path& run : runs) {
+    json r = loadResults(run);
+    const std::string shard = r["settings"].value("shard", "");
+    if (shard == "merged") throw Error(run.string() + ": already a merged run; merge the shards it came from");
+    const auto [i, n] = parseShard(shard);
+    if (shardCount && n != shardCount)
+      throw Error(run.string() + ": shard " + shard + " is of another split than " + shards.begin()->second + "'s /" +
+                  std::to_string(shardCount));
+    shardCount = n;
+    if (!shards.emplace(i, run.string()).second)
+      throw Error(run.string() + ": shard " + shard + " is already given by " + shards[i]);
+    if (merged.is_null()) {
+      merged = r;
+      merged["pairs"] = json::array();
+      merged["scenes"] = json::object();
+      merged["settings"]["shard"] = "merged";
+    } else {
+      json a = merged["settings"], b = r["settings"];
+      a.erase("shard");
+      b.erase("shard");
+      if (a != b) throw Error(run.string() + ": settings differ from " + runs.front().string() + "; only shards of one run can be merged");
+    }
+    for (auto it = r["scenes"].begin(); it != r["scenes"].end(); ++it) merged["scenes"][it.key()] = it.value();
+    for (json& p : r["pairs"]) {
+      std::string key = p["scene"].get<std::string>() + "\n" + p["label"].get<std::string>();
+      if (!seen.insert(key).second)
+        throw Error(run.string() + ": pair " + p["label"].get<std::string>() + " on " + p["scene"].get<std::string>() +
+                    " appears in two shards");
+      merged["pairs"].push_back(p);
+    }
+  }
+  std::string missing;
+  for (int i = 0; i < shardCount; ++i)
+    if (!shards.count(i)) missing += (missing.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(shardCount);
+  if (!missing.empty()) throw Error("merge: incomplete shard set, missing " + missing + "; nothing was written");
+  for (const fs::path& run : runs)
+    if (fs::exists(run / "images"))
+      fs::copy(run / "images", out / "images", fs::copy_options::recursive | fs::copy_options::skip_existing);
+  merged["statistics"] = analyseRun(merged);
+  addReferenceQuality(merged, merged["settings"].value("warmup", 8));
+  commitResults(out, merged);
+  return merged;
+}
+
+}  // namespace arena

@@ -1,0 +1,524 @@
+#include "metrics/evaluator.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <random>
+#include <set>
+
+#include "core/error.hpp"
+#include "core/exr_io.hpp"
+#include "core/hash.hpp"
+#include "metrics/error.hpp"
+#include "metrics/error_maps.hpp"
+#include "metrics/ghosting_intervals.hpp"
+
+namespace arena {
+
+using nlohmann::json;
+
+namespace {
+
+// Counts non-finite values per layer.channel into `counts` under "kind: layer.c".
+void countNonFinite(const LayerSet& layers, const std::string& kind, std::map<std::string, long>& counts) {
+  for (const auto& [name, image] : layers.all())
+    for (int c = 0; c < image.channels(); ++c) {
+      long n = 0;
+      const float* plane = image.plane(c);
+      for (size_t i = 0; i < image.pixelCount(); ++i) n += !std::isfinite(plane[i]);
+      if (n) counts[kind + ": " + name + "." + std::to_string(c)] += n;
+    }
+}
+
+std::string describeCounts(const std::map<std::string, long>& counts) {
+  std::string out;
+  for (const auto& [where, n] : counts) out += (out.empty() ? "" : ", ") + where + " x" + std::to_string(n);
+  return out;
+}
+
+// An image with the reference's own noise and nothing else: an independent half-sample estimate
+// when the cache has one (colorHalf: r_hat - half = (other half - half) / 2 has exactly Var(r_hat)),
+// else r_hat plus Gaussian noise of the stored variance of the mean (the CLT's approximation,
+// deterministic per scene). A perfect method would score this against the reference.
+Image referenceNoiseImage(const LayerSet& ref, const std::string& seedName) {
+  if (ref.has("colorHalf")) return ref.get("colorHalf");
+  const Image &r = ref.get("color"), &var = ref.get("colorVar");
+  Image out = r;
+  std::mt19937_64 rng(Hasher().add("arena-floor").add(seedName).value());
+  auto uniform = [&] { return (double(rng() >> 11) + 0.5) * 0x1.0p-53; };
+  for (size_t i = 0; i < out.raw().size(); ++i) {
+    const double z = std::sqrt(-2 * std::log(uniform())) * std::cos(2 * M_PI * uniform());  // Box-Muller
+    out.raw()[i] = float(r.raw()[i] + std::sqrt(std::max(0.0f, var.raw()[i])) * z);
+  }
+  return out;
+}
+
+// The families that run on this scene: enabled under the options, and with a reference when they
+// need one.
+std::vector<const MetricFamily*> activeFamilies(const MetricOptions& options, bool hasReference) {
+  std::vector<const MetricFamily*> out;
+  for (const MetricFamily& f : metricFamilies())
+    if (f.enabled(options) && (hasReference || !f.needsReference())) out.push_back(&f);
+  return out;
+}
+
+// Keeps one frame's values, notes and maps (what a family hands the evaluation).
+class FrameValues : public FrameRecorder {
+ public:
+  struct Value {
+    double value;
+    TileSums tiles;
+  };
+  void put(const std::string& metric, double value, TileSums tiles) override {
+    requireMetric(metric, "a metric family");  // registered, so its transform and direction are known
+    values[metric] = {value, std::move(tiles)};
+  }
+  void note(const std::string& key, double value) override { notes[key] = value; }
+  void keepMap(const std::string& name, Image map) override { maps[name] = std::move(map); }
+  std::map<std::string, Value> values;
+  std::map<std::string, double> notes;
+  std::map<std::string, Image> maps;
+};
+
+// The metrics with a reference-noise floor, measured on an image that carries only the reference's
+// noise (single-frame families only: a floor has no history).
+std::map<std::string, double> floorsOf(const FrameView& noiseView, const MetricOptions& options) {
+  std::map<std::string, double> out;
+  for (const MetricFamily* f : activeFamilies(options, true)) {
+    if (std::none_of(f->metrics.begin(), f->metrics.end(),
+                     [](const MetricDefinition& m) { return m.floor == FloorRule::ReferenceNoise; }))
+      continue;
+    FrameValues values;
+    f->measure(noiseView, options, values);
+    for (const MetricDefinition& m : f->metrics)
+      if (m.floor == FloorRule::ReferenceNoise && values.values.count(m.name))
+        out[m.name] = values.values.at(m.name).value;
+  }
+  return out;
+}
+
+}  // namespace
+
+json evaluationSettings(const EvaluationOptions& options) {
+  const ExposureMode exposure = options.exposure;
+  return {{"warmup", options.warmup},
+          {"flip", options.metrics.flip},
+          {"relMseEpsilon", kRelMseEpsilon},
+          {"exposure", exposureModeName(exposure)},
+          {"display", std::string(exposure == ExposureMode::PerFrame ? "exposure from each frame's own reference"
+                                                                     : "exposure from the scene's first reference") +
+                          " (mean luminance -> 0.18), ACES filmic (Narkowicz 2015), clamp, sRGB"},
+          {"ghosting", GhostingConfig{}.toJson()},
+          {"oldViewLeak", "least-squares coefficient of d - r onto r(cut - 1) - r over pixels and "
+                          "channels (linear RGB), per frame cut..cut+5; 0 = nothing of the old "
+                          "view, 1 = all of it"},
+          {"tRmae", "Noisebase's form without its extra division by 3"},
+          {"flipPixelsPerDegree", 67}};
+}
+
+EvaluationInput readSequenceForEvaluation(const Sequence& sequence) {
+  const SequenceInfo& info = sequence.info();
+  EvaluationInput in;
+  in.name = info.scene;
+  in.referenceOfFrame = info.referenceOfFrame;
+  in.referenceCapped = info.referenceCapped;
+  in.events = info.events;
+  for (int t = 0; t < info.frames; ++t) {
+    in.frames.push_back(sequence.frame(t));
+    countNonFinite(in.frames.back(), "frame " + std::to_string(t), in.nonFinite);
+    if (t > 0) countNonFinite(sequence.gradients(t), "gradients " + std::to_string(t), in.nonFinite);
+  }
+  int refs = 0;
+  for (int r : info.referenceOfFrame) refs = std::max(refs, r + 1);
+  for (int r = 0; r < refs; ++r) {
+    const std::filesystem::path file = Sequence::referencePath(sequence.dir(), r);
+    in.references.push_back(readExr(file, channels::referenceLayers()).layers);
+    std::map<std::string, long> bad;
+    countNonFinite(in.references.back(), file.string(), bad);
+    // A non-finite reference cannot rank anything: every metric against it would be NaN or a
+    // fake perfect score. The scene fails, naming the file and the channels.
+    if (!bad.empty())
+      throw Error("scene " + info.scene + ": the reference has non-finite values (" + describeCounts(bad) +
+                  "); check the scene's emitters and materials (a value beyond float range becomes Inf)");
+  }
+  return in;
+}
+
+EvaluationScene::EvaluationScene(EvaluationInput input, EvaluationOptions options)
+    : input_(std::move(input)), options_(std::move(options)) {
+  if (input_.frames.empty()) throw Error("evaluation of " + input_.name + ": the sequence has no frames");
+  if (hasReference()) {
+    if (input_.referenceOfFrame.size() != input_.frames.size())
+      throw Error("evaluation of " + input_.name + ": " + std::to_string(input_.referenceOfFrame.size()) +
+                  " frame -> reference entries for " + std::to_string(input_.frames.size()) + " frames");
+    for (int r : input_.referenceOfFrame)
+      if (r < 0 || size_t(r) >= input_.references.size())
+        throw Error("evaluation of " + input_.name + ": frame refers to reference " + std::to_string(r) + " of " +
+                    std::to_string(input_.references.size()));
+    std::vector<const Image*> referenceColors;
+    for (const LayerSet& r : input_.references) referenceColors.push_back(&r.get("color"));
+    displays_ = displayTransforms(referenceColors, options_.exposure);
+    for (size_t r = 0; r < input_.references.size(); ++r)
+      referenceDisplay_.push_back(displays_[r].apply(*referenceColors[r]));
+    for (int t = 0; t < frames(); ++t) {
+      const LayerSet& ref = reference(t);
+      referenceRelMse_.push_back(arena::referenceRelMse(ref.get("color"), ref.get("colorVar")));
+      noisyRelMse_.push_back(
+          linearError(frame(t).get("color"), ref.get("color"), &ref.get("colorVar")).relMse);
+    }
+  } else {
+    // No reference: each frame is shown through the exposure of its own noisy input.
+    std::vector<const Image*> inputs;
+    for (const LayerSet& f : input_.frames) inputs.push_back(&f.get("color"));
+    displays_ = displayTransforms(inputs, options_.exposure);
+  }
+  for (const SequenceEvent& e : input_.events)
+    if (e.kind == EventKind::CameraCut && e.frame >= 1) cutFrames_.push_back(e.frame);
+  buildEventWindows();
+  if (hasReference()) computeFloors();
+}
+
+void EvaluationScene::buildEventWindows() {
+  // Ghosting windows: [t0 - 5, t0 + 60], clipped to the sequence and ended before the next event
+  // (ours: a second event would otherwise pollute the first one's steady state). A camera cut's
+  // segment runs from the cut to the frame before the next event.
+  const GhostingConfig gc;
+  const int last = frames() - 1;
+  auto endBeforeNextEvent = [&](int from, int end) {
+    for (const SequenceEvent& e : input_.events)
+      if (e.frame > from) end = std::min(end, e.frame - 1);
+    return end;
+  };
+  for (const SequenceEvent& e : input_.events) {
+    if (e.frame < 1) continue;
+    if (e.kind == EventKind::CameraCut) {
+      cuts_.push_back({e.frame, endBeforeNextEvent(e.frame, last)});
+      continue;
+    }
+    if (!hasReference()) continue;  // the changed region is where the reference changed
+    EventWindow ev;
+    ev.event = e;
+    ev.begin = std::max(0, e.frame - gc.before);
+    ev.end = endBeforeNextEvent(e.frame, std::min(last, e.frame + gc.after));
+    Image base = changedRegion(reference(e.frame).get("color"), reference(e.frame - 1).get("color"), gc,
+                               &ev.chromaOnlyPixels);
+    const int objectId = e.kind == EventKind::ObjectMoves ? e.meshId : -1;
+    for (int t = ev.begin; t <= ev.end; ++t) {
+      Image mask = base;
+      if (objectId >= 0) {
+        std::vector<const Image*> previous;
+        for (int k = 1; k <= gc.trailFrames && t - k >= 0; ++k) previous.push_back(&frame(t - k).get("meshId"));
+        addTrail(mask, objectId, previous, frame(t).get("meshId"));
+      }
+      ev.masks.push_back(std::move(mask));
+    }
+    events_.push_back(std::move(ev));
+  }
+}
+
+void EvaluationScene::computeFloors() {
+  // Each metric's own floor: the metric between a reference-noise-only image and the reference,
+  // per distinct reference used after the warm-up, then averaged over those frames.
+  std::map<std::string, std::vector<double>> floorFrames;
+  std::map<size_t, std::map<std::string, double>> perReference;
+  for (int t = std::max(options_.warmup, 0); t < frames(); ++t) {
+    const size_t r = referenceIndex(t);
+    if (!perReference.count(r)) {
+      const LayerSet& ref = input_.references[r];
+      const Image noise = referenceNoiseImage(ref, input_.name + "#" + std::to_string(r));
+      const Image noiseDisplay = displays_[r].apply(noise);
+      FrameView v;
+      v.frame = t;
+      v.output = &noise;
+      v.outputDisplay = &noiseDisplay;
+      v.guides = &frame(t);
+      v.reference = &ref.get("color");
+      v.referenceDisplay = &referenceDisplay_[r];
+      // The floor is the raw metric: no variance to correct with (the noise *is* the variance).
+      perReference[r] = floorsOf(v, options_.metrics);
+    }
+    for (const auto& [name, v] : perReference[r]) floorFrames[name].push_back(v);
+  }
+  for (const auto& [name, v] : floorFrames) {
+    double sum = 0;
+    for (double x : v) sum += x;
+    floors_[name] = sum / double(v.size());
+  }
+  floors_["source"] = input_.references.front().has("colorHalf") ? "independent half-sample reference"
+                                                                 : "reference plus Gaussian noise of its variance";
+}
+
+json EvaluationScene::describe() const {
+  std::vector<double> exposures;
+  for (int t = 0; t < frames(); ++t) exposures.push_back(displays_[displayIndex(t)].exposure);
+  return {{"referenceRelMse", referenceRelMse_}, {"noisyRelMse", noisyRelMse_},
+          {"exposure", exposures.front()},       {"exposurePerFrame", exposures},
+          {"floors", floors_},                   {"nonFiniteInputs", input_.nonFinite}};
+}
+
+// One stream's state: the frames before the current one (for temporal metrics), the series of
+// every metric, and the event and cut curves with their tile sums.
+struct PairEvaluation::State {
+  const EvaluationScene& scene;
+  std::vector<const MetricFamily*> families;
+  struct Kept {  // what a later frame's metrics read of an earlier one
+    Image output, display, error;
+    FrameView view;
+  };
+  std::deque<std::unique_ptr<Kept>> history;  // front = the newest
+  PairSeries series;
+  json frames = json::array();
+  int nextFrame = 0;
+  std::vector<std::vector<double>> eventCurves, eventBias, eventChroma, cutLeak;
+  // The per-tile sums behind the event and cut curves: their intervals' spatial blocks
+  // (metrics/ghosting_intervals.hpp).
+  std::vector<EventTiles> eventTiles;
+  std::vector<CutTiles> cutTiles;
+  std::map<std::string, Image> lastMaps;
+  explicit State(const EvaluationScene& s)
+      : scene(s),
+        families(activeFamilies(s.options().metrics, s.hasReference())),
+        series(s.frames(), s.options().warmup),
+        eventCurves(s.events_.size()),
+        eventBias(s.events_.size()),
+        eventChroma(s.events_.size()),
+        cutLeak(s.cuts_.size()),
+        eventTiles(s.events_.size()),
+        cutTiles(s.cuts_.size()) {}
+};
+
+PairEvaluation::PairEvaluation(const EvaluationScene& scene) : state_(std::make_unique<State>(scene)) {}
+PairEvaluation::~PairEvaluation() = default;
+
+void PairEvaluation::add(int t, const Image& output, const FrameFacts& facts) {
+  State& s = *state_;
+  const EvaluationScene& scene = s.scene;
+  if (t != s.nextFrame)
+    throw Error("evaluation of " + scene.name() + ": frame " + std::to_string(t) + " arrived, expected frame " +
+                std::to_string(s.nextFrame) + " (frames must arrive in order)");
+  if (t >= scene.frames())
+    throw Error("evaluation of " + scene.name() + ": frame " + std::to_string(t) + " beyond the sequence's " +
+                std::to_string(scene.frames()) + " frames");
+  const Image& input = scene.frame(t).get("color");
+  if (!output.sameShape(input))
+    throw Error("evaluation of " + scene.name() + ", frame " + std::to_string(t) + ": the output is " +
+                std::to_string(output.width()) + "x" + std::to_string(output.height()) + "x" +
+                std::to_string(output.channels()) + ", the sequence's colour is " + std::to_string(input.width()) +
+                "x" + std::to_string(input.height()) + "x" + std::to_string(input.channels()));
+  ++s.nextFrame;
+  auto kept = std::make_unique<State::Kept>();
+  kept->output = output;
+  kept->display = scene.display(t, output);
+  FrameView& v = kept->view;
+  v.frame = t;
+  v.output = &kept->output;
+  v.outputDisplay = &kept->display;
+  v.guides = &scene.frame(t);
+  v.facts = facts;
+  v.cutFrames = scene.cutFrames_;
+  for (const auto& h : s.history) v.history.push_back(&h->view);
+  const Image* r = nullptr;
+  if (scene.hasReference()) {
+    const LayerSet& ref = scene.reference(t);
+    r = &ref.get("color");
+    v.reference = r;
+    v.referenceVariance = &ref.get("colorVar");
+    v.referenceDisplay = &scene.referenceDisplay(t);
+    kept->error = Image(output.width(), output.height(), 3);
+    for (size_t i = 0; i < kept->error.raw().size(); ++i) kept->error.raw()[i] = output.raw()[i] - r->raw()[i];
+    v.error = &kept->error;
+    v.noisyRelMse = scene.noisyRelMse_[size_t(t)];
+    v.referenceRelMse = scene.referenceRelMse_[size_t(t)];
+  }
+
+  FrameValues values;
+  for (const MetricFamily* f : s.families) f->measure(v, scene.options().metrics, values);
+  json m = {{"frame", t}};
+  for (auto& [name, value] : values.values) {
+    m[name] = std::isfinite(value.value) ? json(value.value) : json(nullptr);
+    if (name == "relMse")
+      for (size_t k = 0; k < scene.cuts_.size(); ++k)
+        if (t >= scene.cuts_[k].frame && t <= scene.cuts_[k].segmentEnd) s.cutTiles[k].relMse.add(t, value.tiles);
+    s.series.record(name, t, value.value, std::move(value.tiles), findMetric(name)->transform);
+  }
+  for (const auto& [key, value] : values.notes) m[key] = value;
+  s.frames.push_back(m);
+  s.lastMaps = std::move(values.maps);
+
+  // The event windows: relMSE, signed bias and chromaticity error inside each event's mask.
+  const GhostingConfig gc;
+  for (size_t k = 0; k < scene.events_.size(); ++k) {
+    const auto& ev = scene.events_[k];
+    if (t < ev.begin || t > ev.end) continue;
+    const Image& mask = ev.masks[size_t(t - ev.begin)];
+    ErrorTiles inMask;
+    TileSums biasTiles;
+    s.eventCurves[k].push_back(linearError(output, *r, v.referenceVariance, &mask, kRelMseEpsilon, &inMask).relMse);
+    s.eventBias[k].push_back(signedBias(output, *r, mask, gc.eps, &biasTiles));
+    s.eventTiles[k].curve.add(t, std::move(inMask.relMse));
+    s.eventTiles[k].bias.add(t, std::move(biasTiles));
+    ColourTileSums colourTiles;
+    s.eventChroma[k].push_back(chromaticityError(output, *r, mask, &colourTiles));
+    s.eventTiles[k].addColour(t, std::move(colourTiles));
+  }
+  // Camera cuts: how much of the old view survives in the frames after the cut.
+  if (r)
+    for (size_t k = 0; k < scene.cuts_.size(); ++k) {
+      const auto& cut = scene.cuts_[k];
+      if (t >= cut.frame && t <= std::min(cut.frame + gc.recoveryFrames, cut.segmentEnd)) {
+        TileSums leakTiles;
+        s.cutLeak[k].push_back(oldViewLeak(output, *r, scene.reference(cut.frame - 1).get("color"), &leakTiles));
+        s.cutTiles[k].leak.add(t, std::move(leakTiles));
+      }
+    }
+
+  s.history.push_front(std::move(kept));
+  if (s.history.size() > size_t(kMaxMetricHistory)) s.history.pop_back();
+  // The views still kept point at frames still kept; refresh each one's own history list.
+  for (size_t i = 0; i < s.history.size(); ++i) {
+    FrameView& hv = s.history[i]->view;
+    hv.history.clear();
+    for (size_t j = i + 1; j < s.history.size(); ++j) hv.history.push_back(&s.history[j]->view);
+  }
+}
+
+FrameImages PairEvaluation::lastImages() const {
+  const State& s = *state_;
+  if (s.history.empty()) throw Error("evaluation of " + s.scene.name() + ": no frame added yet");
+  const State::Kept& k = *s.history.front();
+  FrameImages out;
+  out.display = k.display;
+  if (auto it = s.lastMaps.find("ldrFlip"); it != s.lastMaps.end()) out.flip = applyColorMap(it->second, magmaColorMap());
+  if (k.view.reference) out.relativeError = relativeErrorMap(k.output, *k.view.reference);
+  return out;
+}
+
+std::vector<double> PairEvaluation::values(const std::string& metric) const { return state_->series.values(metric); }
+
+json PairEvaluation::finish() {
+  State& s = *state_;
+  const EvaluationScene& scene = s.scene;
+  const int warmup = scene.options().warmup;
+  if (s.nextFrame != scene.frames())
+    throw Error("evaluation of " + scene.name() + ": " + std::to_string(s.nextFrame) + " of " +
+                std::to_string(scene.frames()) + " frames arrived");
+  const size_t pixels = size_t(scene.frame(0).get("color").width()) * size_t(scene.frame(0).get("color").height());
+  json summary = s.series.summaries(scene.name());
+  const GhostingConfig gc;
+  json ghosting = json::array();
+  for (size_t k = 0; k < scene.events_.size(); ++k) {
+    const auto& ev = scene.events_[k];
+    GhostingResult g =
+        analyseGhosting(ev.event.frame, ev.begin, s.eventCurves[k], s.eventBias[k], s.eventChroma[k], gc);
+    double maskPixels = 0;
+    for (float v : ev.masks[size_t(ev.event.frame - ev.begin)].raw()) maskPixels += v;
+    g.maskFraction = maskPixels / double(pixels);
+    g.maskChromaFraction = double(ev.chromaOnlyPixels) / double(pixels);
+    json j = g.toJson();
+    j["kind"] = eventKindName(ev.event.kind);
+    j["what"] = ev.event.what;
+    const BootstrapConfig bc;
+    addFigureIntervals(j,
+                       ghostingReplicates(ev.event.frame, s.eventTiles[k], eventSeedName(scene.name(), ev.event.frame),
+                                          bc, gc),
+                       ghostingFigures(g), bc.confidence);
+    j["tiles"] = s.eventTiles[k].toJson();
+    ghosting.push_back(j);
+  }
+  json cuts = json::array();
+  if (scene.hasReference())
+    for (size_t k = 0; k < scene.cuts_.size(); ++k) {
+      const auto& cut = scene.cuts_[k];
+      const CutResult c = analyseCut(cut.frame, cut.segmentEnd, s.series.values("relMse"), s.cutLeak[k], gc);
+      json j = c.toJson();
+      const BootstrapConfig bc;
+      addFigureIntervals(j,
+                         cutReplicates(cut.frame, cut.segmentEnd, s.cutTiles[k], cutSeedName(scene.name(), cut.frame),
+                                       bc, gc),
+                         cutFigures(c, gc), bc.confidence);
+      j["tiles"] = s.cutTiles[k].toJson();
+      cuts.push_back(j);
+    }
+  json warnings = json::array();
+  for (auto it = summary.begin(); it != summary.end(); ++it)
+    if (it.value().contains("absent"))
+      warnings.push_back(it.key() + " has no summary: " + it.value()["absent"].get<std::string>());
+  if (scene.hasReference()) {
+    const double refFloor = summarize(scene.referenceRelMse_, warmup).mean;
+    if (summary.contains("relMse") && summary["relMse"].contains("mean") &&
+        summary["relMse"]["mean"].get<double>() < 10.0 * refFloor)
+      warnings.push_back("relMSE is within 10x of the reference's own noise floor (" + std::to_string(refFloor) +
+                         "): the ranking on raw relMSE is unreliable; use relMseCorrected or a better reference");
+  }
+  {  // a reference that stopped at its sample cap above its target
+    int capped = 0;
+    for (bool c : scene.input_.referenceCapped) capped += c;
+    if (capped > 0)
+      warnings.push_back(std::to_string(capped) + " of " + std::to_string(scene.input_.referenceCapped.size()) +
+                         " reference(s) stopped at the sample cap above their target relMSE (see sequence.json "
+                         "referenceEstimatedRelMse; `arena refine` can extend them)");
+  }
+  // Metrics that cannot be corrected for the reference's noise (the perceptual ones): warn within
+  // their declared factor of their own floor.
+  for (const MetricDefinition* m : metricCatalog()) {
+    if (m->floorWarningFactor <= 0 || !scene.floors_.contains(m->name) || !summary.contains(m->name) ||
+        !summary[m->name].contains("mean"))
+      continue;
+    const double floor = scene.floors_[m->name], value = summary[m->name]["mean"];
+    if (std::abs(value - m->perfect) < m->floorWarningFactor * std::abs(floor - m->perfect))
+      warnings.push_back(m->name + " " + std::to_string(value) + " is within " +
+                         std::to_string(int(m->floorWarningFactor)) + "x of the reference's own floor (" +
+                         std::to_string(floor) + "): the reference's noise, not the method, dominates it");
+  }
+  return {{"frames", s.frames}, {"summary", summary},          {"ghosting", ghosting},
+          {"cuts", cuts},       {"tiles", s.series.tilesJson()}, {"warnings", warnings}};
+}
+
+json timingSummary(const std::vector<std::vector<PassTime>>& passesPerFrame, const std::vector<double>& ms, int warmup,
+                   int width, int height) {
+  json passes = json::array();
+  if (!passesPerFrame.empty()) {
+    const auto& names = passesPerFrame.back();
+    for (size_t p = 0; p < names.size(); ++p) {
+      std::vector<double> v;
+      double taps = names[p].tapsPerPixel;
+      for (const auto& f : passesPerFrame)
+        if (p < f.size() && f[p].name == names[p].name) v.push_back(f[p].milliseconds);
+      Summary s = summarize(v, std::min(warmup, int(v.size()) - 1));
+      passes.push_back({{"name", names[p].name}, {"msMedian", s.median}, {"msP95", s.p95}, {"tapsPerPixel", taps}});
+    }
+  }
+  Summary total = summarize(ms, std::min(warmup, int(ms.size()) - 1));
+  double taps = 0;
+  for (const json& p : passes) taps += p["tapsPerPixel"].get<double>();
+  return {{"msMedian", total.median}, {"msP5", total.p5}, {"msP95", total.p95}, {"msMean", total.mean},
+          {"msPerMegapixel", total.median / (double(width) * height * 1e-6)}, {"tapsPerPixel", taps},
+          {"passes", passes}};
+}
+
+json evaluateBiasVariance(const EvaluationScene& scene, const std::vector<std::vector<Image>>& outputs,
+                          const json& inputSeeds) {
+  if (!scene.hasReference()) throw Error("bias/variance of " + scene.name() + ": needs a reference");
+  if (int(outputs.size()) != scene.frames())
+    throw Error("bias/variance of " + scene.name() + ": outputs for " + std::to_string(outputs.size()) + " of " +
+                std::to_string(scene.frames()) + " frames");
+  PairSeries series(scene.frames(), scene.options().warmup);
+  json frames = json::array();
+  for (int t = 0; t < scene.frames(); ++t) {
+    std::vector<const Image*> out;
+    for (const Image& i : outputs[size_t(t)]) out.push_back(&i);
+    const LayerSet& ref = scene.reference(t);
+    BiasVarianceTiles tiles;
+    const BiasVariance bv = biasVariance(out, ref.get("color"), &ref.get("colorVar"), kRelMseEpsilon, &tiles);
+    series.record("bias2", t, bv.bias2, {}, FrameTransform::Mean);
+    series.record("bias2Corrected", t, bv.bias2Corrected, std::move(tiles.bias2Corrected), FrameTransform::Mean);
+    series.record("variance", t, bv.variance, std::move(tiles.variance), FrameTransform::Mean);
+    frames.push_back({{"frame", t}, {"bias2", bv.bias2}, {"bias2Corrected", bv.bias2Corrected}, {"variance", bv.variance}});
+  }
+  return {{"seeds", outputs.empty() ? 0 : int(outputs.front().size())}, {"inputSeeds", inputSeeds},
+          {"definition", "relMSE units: bias2 + variance = mean relMSE over the seeds; bias2Corrected subtracts "
+                         "the reference's own noise term"},
+          {"frames", frames}, {"summary", series.summaries(scene.name())}};
+}
+
+}  // namespace arena

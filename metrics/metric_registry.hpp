@@ -1,0 +1,126 @@
+#pragma once
+// The metric registry: every metric the arena reports is declared once, in the file that computes
+// it, and defined in docs/metrics.md. The catalogue (`arena metrics`), compare, statistics, the
+// SQLite schema, the report's columns and the printouts read these declarations; nothing else
+// lists metrics or says which direction is better.
+//
+// A metric family is one computation that yields one or more metrics (linearError gives relMSE,
+// its corrected form, MSE and RMSE at once). A family sees one output frame at a time through a
+// FrameView (and the frames before it through FrameView::previous) and records values with the
+// per-tile sums behind them (metrics/tiles.hpp) into a FrameRecorder. Adding a metric is one file
+// with its family function plus one line in metric_registry.cpp's list.
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/exr_io.hpp"
+#include "core/image.hpp"
+#include "metrics/statistics.hpp"
+#include "metrics/tiles.hpp"
+
+namespace arena {
+
+enum class Better { Lower, Higher };
+// What a metric reads: linear HDR values, the display image (core/display.hpp: exposure from the
+// reference, ACES, sRGB), or facts of the run (time, extra paths) rather than pixels.
+enum class MetricInput { Linear, Display, Run };
+// A metric's floor: what a perfect method would score against a reference that carries noise.
+enum class FloorRule {
+  None,            // no floor: a run fact, already corrected for the reference's noise, or no reference
+  ReferenceNoise,  // the metric of an image with the reference's own noise and nothing else
+};
+
+struct MetricDefinition {
+  std::string name;
+  std::string unit;  // "" for dimensionless
+  Better better = Better::Lower;
+  bool needsReference = true;
+  MetricInput reads = MetricInput::Linear;
+  FrameTransform transform = FrameTransform::Mean;  // how a frame's tile sums become its value
+  FloorRule floor = FloorRule::None;
+  // > 0: a summary within this factor of the floor is flagged (the reference's noise, not the
+  // method, dominates it), measured as the distance from `perfect`.
+  double floorWarningFactor = 0;
+  double perfect = 0;  // the value of an output equal to the reference (for the floor warning)
+  bool ranked = false;  // statistics ranks every scene on it with paired differences
+  bool gatedByDefault = false;  // `arena compare` checks it when no --metric is given
+  std::string description;  // one line; docs/metrics.md has the definition
+  bool lowerIsBetter() const { return better == Better::Lower; }
+  const char* betterName() const { return better == Better::Lower ? "lower" : "higher"; }
+};
+
+// Facts of one frame's run that are not pixels: the denoiser's time, and the extra paths it read.
+struct FrameFacts {
+  double milliseconds = 0;
+  std::optional<double> wallMilliseconds;   // an external process timed itself; the harness's clock
+  std::optional<double> extraRaysPerPixel;  // low-resolution paths read per pixel (readers only)
+  double lowresPathsPerSecond = 0;          // the buffer's render rate (0: unknown)
+};
+
+// What a metric family sees of one output frame. Pointers to reference images are null when the
+// sequence has no reference (a capture without one): families that need it are not asked then.
+struct FrameView {
+  int frame = 0;
+  const Image* output = nullptr;         // d_t, linear RGB
+  const Image* outputDisplay = nullptr;  // d_t through the frame's display transform
+  const LayerSet* guides = nullptr;      // the input's layers at t (noisy colour, normal, depth, motion, meshId)
+  const Image* reference = nullptr;      // r_t
+  const Image* referenceVariance = nullptr;  // Var(r_t), the variance of the reference's mean
+  const Image* referenceDisplay = nullptr;
+  const Image* error = nullptr;          // d_t - r_t
+  double noisyRelMse = kUndefined;       // relMSE of the 1-spp input against r_t
+  double referenceRelMse = kUndefined;   // the reference's own estimated relMSE
+  FrameFacts facts;
+  // The view of frame t - lag (1 <= lag <= kMaxMetricHistory), or null before the first frame.
+  const FrameView* previous(int lag) const;
+  // Whether a camera cut falls in frames t - lag + 1 .. t (the view changed within the lag).
+  bool cutWithin(int lag) const;
+
+  std::vector<const FrameView*> history;  // history[k - 1] = frame t - k
+  std::vector<int> cutFrames;
+};
+constexpr int kMaxMetricHistory = 3;
+
+// The options every family may read (the run's settings).
+struct MetricOptions {
+  std::string flip = "all";  // none | ldr | all (LDR + HDR)
+};
+
+// Where a family puts its values. Each metric's frame transform comes from its declaration.
+class FrameRecorder {
+ public:
+  virtual ~FrameRecorder() = default;
+  // A metric's value at this frame, with its tile sums (empty: a scalar per frame). A metric not
+  // put on a frame is undefined there (flicker on frame 0); a non-finite value is counted.
+  virtual void put(const std::string& metric, double value, TileSums tiles = {}) = 0;
+  // A per-frame figure kept beside the metrics in results.json (not summarised).
+  virtual void note(const std::string& key, double value) = 0;
+  // A per-pixel map of this frame kept for people (the report's FLIP image).
+  virtual void keepMap(const std::string& name, Image map) = 0;
+};
+
+struct MetricFamily {
+  std::vector<MetricDefinition> metrics;
+  // Whether the family runs under these options (e.g. FLIP only when --flip asks for it).
+  std::function<bool(const MetricOptions&)> enabled = [](const MetricOptions&) { return true; };
+  std::function<void(const FrameView&, const MetricOptions&, FrameRecorder&)> measure;
+  // Whether every metric of the family needs a reference (then it does not run without one).
+  bool needsReference() const;
+};
+
+// Every family, in registration order (metric_registry.cpp).
+const std::vector<MetricFamily>& metricFamilies();
+// Every metric, in registration order.
+std::vector<const MetricDefinition*> metricCatalog();
+// The declaration of `name`, or null.
+const MetricDefinition* findMetric(const std::string& name);
+// The declaration of `name`; an Error listing the valid names when there is none (`what` says who asked).
+const MetricDefinition& requireMetric(const std::string& name, const std::string& what);
+// The catalogue as JSON: one object per metric with every declared field.
+nlohmann::json metricCatalogJson();
+
+}  // namespace arena

@@ -1,0 +1,36 @@
+// The run's facts that are not pixels, recorded per frame like every metric so they get the same
+// summaries and intervals: the denoiser's time and the extra paths it read (docs/metrics.md, "Time").
+#include "metrics/metric_registry.hpp"
+
+namespace arena {
+
+// Registered in metric_registry.cpp.
+MetricFamily runFactsFamily() {
+  MetricFamily f;
+  f.metrics = {
+      {.name = "ms", .unit = "ms", .needsReference = false, .reads = MetricInput::Run,
+       .description = "wall time of the denoiser per frame (both signals), ms"},
+      {.name = "msWall", .unit = "ms", .needsReference = false, .reads = MetricInput::Run,
+       .description = "the harness's clock around an external process's exchange (transfer included), ms"},
+      {.name = "extraRaysPerPixel", .unit = "paths/pixel", .needsReference = false, .reads = MetricInput::Run,
+       .description = "low-resolution paths read per pixel per frame (disocclusion rays)"},
+      {.name = "tracingMs", .unit = "ms", .needsReference = false, .reads = MetricInput::Run,
+       .description = "those paths' equivalent tracing time per frame at the render's own rate, ms"},
+  };
+  f.measure = [](const FrameView& v, const MetricOptions&, FrameRecorder& out) {
+    const FrameFacts& facts = v.facts;
+    out.put("ms", facts.milliseconds);
+    // An external process timed itself ("ms"); the harness's clock around the exchange beside it.
+    if (facts.wallMilliseconds) out.put("msWall", *facts.wallMilliseconds);
+    if (!facts.extraRaysPerPixel) return;
+    out.put("extraRaysPerPixel", *facts.extraRaysPerPixel);
+    // The paths read, at the rate the buffer rendered at on the machine that rendered it (unknown,
+    // and absent, when another machine did).
+    if (facts.lowresPathsPerSecond > 0)
+      out.put("tracingMs", *facts.extraRaysPerPixel * double(v.output->width()) * double(v.output->height()) /
+                               facts.lowresPathsPerSecond * 1e3);
+  };
+  return f;
+}
+
+}  // namespace arena

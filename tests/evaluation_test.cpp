@@ -1,0 +1,197 @@
+// The evaluation stage (metrics/evaluator.hpp) and the metric registry (metrics/metric_registry.hpp):
+// the results of a run are bit-identical to those the harness computed before the stage existed
+// (a golden recorded from that code), every registered metric is declared completely and defined
+// in docs/metrics.md, and frames from anywhere -- with or without a reference -- are scored or
+// refused with a clear error.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "core/json_reader.hpp"
+#include "metrics/evaluator.hpp"
+#include "metrics/metric_registry.hpp"
+#include "tests/evaluation_golden.hpp"
+#include "tests/test_util.hpp"
+
+namespace arena {
+namespace {
+
+using nlohmann::json;
+
+// Metrics registered after the golden was recorded: the golden cannot hold them.
+const std::set<std::string> kMetricsAfterGolden = {"stabilityFine", "stabilityCoarse", "errorStabilityFine",
+                                                   "errorStabilityCoarse"};
+
+json withoutNewMetrics(json r) {
+  r.erase("metrics");  // the registry's catalogue, stored since the registry exists
+  for (json& p : r["pairs"])
+    for (const std::string& m : kMetricsAfterGolden) {
+      if (p.contains("summary")) p["summary"].erase(m);
+      if (p.contains("tiles")) p["tiles"].erase(m);
+      if (p.contains("frames"))
+        for (json& f : p["frames"]) f.erase(m);
+    }
+  return r;
+}
+
+// The first place two documents differ, as a JSON path (for a readable failure).
+std::string firstDifference(const json& a, const json& b, const std::string& path = "$") {
+  // Numbers compare by value (a parsed 0 is unsigned, a written one signed); structure by kind.
+  if (a.is_number() && b.is_number()) return a == b ? "" : path + ": " + a.dump() + " vs " + b.dump();
+  if (a.type() != b.type()) return path + ": " + a.dump().substr(0, 80) + " vs " + b.dump().substr(0, 80);
+  if (a.is_object()) {
+    for (auto it = a.begin(); it != a.end(); ++it) {
+      if (!b.contains(it.key())) return path + "." + it.key() + ": missing on the right";
+      const std::string d = firstDifference(it.value(), b[it.key()], path + "." + it.key());
+      if (!d.empty()) return d;
+    }
+    for (auto it = b.begin(); it != b.end(); ++it)
+      if (!a.contains(it.key())) return path + "." + it.key() + ": missing on the left";
+    return "";
+  }
+  if (a.is_array()) {
+    if (a.size() != b.size()) return path + ": " + std::to_string(a.size()) + " vs " + std::to_string(b.size()) + " items";
+    for (size_t i = 0; i < a.size(); ++i) {
+      const std::string d = firstDifference(a[i], b[i], path + "[" + std::to_string(i) + "]");
+      if (!d.empty()) return d;
+    }
+    return "";
+  }
+  return a == b ? "" : path + ": " + a.dump() + " vs " + b.dump();
+}
+
+TEST(Evaluation, RunResultsAreBitIdenticalToTheHarnessBeforeTheStage) {
+  // tests/data/evaluation_golden.json was written by the harness that computed every metric inline
+  // (commit 5767363), from test::goldenRunConfig: the same inputs and settings must give the same
+  // per-frame values, summaries, intervals, event figures, floors and rankings, bit for bit.
+  const json golden = parseJsonFile(std::string(ARENA_TEST_DATA) + "/evaluation_golden.json");
+  const json now = test::goldenPart(
+      withoutNewMetrics(runMatrix(test::goldenRunConfig(test::freshDir("golden_run"), test::freshDir("golden_cache")))));
+  const std::string difference = firstDifference(golden, now);
+  EXPECT_TRUE(difference.empty()) << difference;
+  // It must be able to fail: the golden holds real numbers for every pair.
+  ASSERT_EQ(golden["pairs"].size(), 15u);
+  EXPECT_GT(golden["pairs"][0]["summary"]["relMse"]["mean"].get<double>(), 0.0);
+}
+
+TEST(MetricRegistry, EveryMetricIsDeclaredOnceAndCompletely) {
+  std::set<std::string> names;
+  for (const MetricDefinition* m : metricCatalog()) {
+    EXPECT_TRUE(names.insert(m->name).second) << m->name << " is registered twice";
+    EXPECT_FALSE(m->description.empty()) << m->name;
+    EXPECT_TRUE(std::regex_match(m->name, std::regex("[a-z][A-Za-z0-9]*"))) << m->name;
+    if (m->floorWarningFactor > 0) EXPECT_EQ(m->floor, FloorRule::ReferenceNoise) << m->name;
+    if (m->gatedByDefault) EXPECT_TRUE(m->ranked) << m->name;
+  }
+  // The directions that the catalogue, compare, statistics and the report all read from here.
+  EXPECT_TRUE(requireMetric("relMse", "test").lowerIsBetter());
+  EXPECT_FALSE(requireMetric("ssim", "test").lowerIsBetter());
+  EXPECT_FALSE(requireMetric("psnr", "test").lowerIsBetter());
+  EXPECT_EQ(requireMetric("rmse", "test").transform, FrameTransform::Sqrt);
+  EXPECT_EQ(requireMetric("psnr", "test").transform, FrameTransform::Psnr);
+  EXPECT_FALSE(requireMetric("ms", "test").needsReference);
+  try {
+    requireMetric("relMSE", "compare");
+    FAIL() << "an unknown metric was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown metric 'relMSE'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("relMseCorrected"), std::string::npos) << e.what();
+  }
+  const json catalog = metricCatalogJson();
+  ASSERT_EQ(catalog.size(), metricCatalog().size());
+  for (const char* field : {"name", "unit", "better", "needsReference", "reads", "transform", "floor", "ranked", "meaning"})
+    EXPECT_TRUE(catalog[0].contains(field)) << field;
+}
+
+TEST(MetricRegistry, EveryRegisteredMetricIsDefinedInDocsMetrics) {
+  std::ifstream file(std::string(ARENA_SOURCE_DIR) + "/docs/metrics.md");
+  ASSERT_TRUE(file) << "docs/metrics.md is missing";
+  std::stringstream text;
+  text << file.rdbuf();
+  for (const MetricDefinition* m : metricCatalog())
+    EXPECT_NE(text.str().find("`" + m->name + "`"), std::string::npos)
+        << m->name << " is registered but docs/metrics.md does not define it (write it in backticks)";
+}
+
+// A sequence of `frames` flat frames (test::planeFrame) with constant colour `value`.
+EvaluationInput flatInput(int w, int h, int frames, float value, bool withReference) {
+  EvaluationInput in;
+  in.name = "flat";
+  for (int t = 0; t < frames; ++t) {
+    in.frames.push_back(test::planeFrame(w, h));
+    in.frames.back().get("color").fill(value);
+  }
+  if (withReference) {
+    LayerSet ref;
+    Image color(w, h, 3), var(w, h, 3);
+    color.fill(value);
+    var.fill(0.0f);
+    ref.set("color", color);
+    ref.set("colorVar", var);
+    in.references.push_back(ref);
+    in.referenceOfFrame.assign(size_t(frames), 0);
+    in.referenceCapped = {false};
+  }
+  return in;
+}
+
+TEST(Evaluation, WithoutAReferenceOnlyMetricsThatNeedNoneAreRecorded) {
+  EvaluationScene scene(flatInput(16, 12, 6, 0.5f, false), {2, {"all"}, ExposureMode::PerFrame});
+  PairEvaluation pair(scene);
+  Image out(16, 12, 3);
+  out.fill(0.5f);
+  for (int t = 0; t < 6; ++t) pair.add(t, out, {.milliseconds = 1.0 + t});
+  const json r = pair.finish();
+  ASSERT_FALSE(r["summary"].empty());
+  for (auto it = r["summary"].begin(); it != r["summary"].end(); ++it)
+    EXPECT_FALSE(requireMetric(it.key(), "test").needsReference) << it.key() << " was scored without a reference";
+  EXPECT_DOUBLE_EQ(r["summary"]["ms"]["mean"].get<double>(), (3.0 + 4 + 5 + 6) / 4);
+  EXPECT_TRUE(scene.floors().empty());
+  EXPECT_TRUE(pair.lastImages().relativeError.empty());
+}
+
+TEST(Evaluation, AnOutputEqualToTheReferenceScoresZeroErrorWithItsReferenceTerms) {
+  EvaluationScene scene(flatInput(16, 12, 6, 0.25f, true), {2, {"none"}, ExposureMode::PerFrame});
+  PairEvaluation pair(scene);
+  Image out(16, 12, 3);
+  out.fill(0.25f);
+  for (int t = 0; t < 6; ++t) pair.add(t, out);
+  const json r = pair.finish();
+  EXPECT_EQ(r["summary"]["relMse"]["mean"].get<double>(), 0.0);
+  EXPECT_EQ(r["summary"]["psnr"]["mean"].get<double>(), 100.0);  // the cap, not infinity
+  EXPECT_DOUBLE_EQ(r["summary"]["ssim"]["mean"].get<double>(), 1.0);
+  EXPECT_FALSE(r["summary"].contains("ldrFlip"));  // --flip none
+  EXPECT_EQ(r["frames"].size(), 6u);
+  EXPECT_FALSE(r["frames"][0].contains("tRmae"));  // no frame before frame 0
+  EXPECT_TRUE(r["frames"][1].contains("tRmae"));
+}
+
+TEST(Evaluation, FramesOutOfOrderOrOfAnotherSizeAreErrorsNamingThem) {
+  EvaluationScene scene(flatInput(8, 6, 4, 0.5f, true), {});
+  PairEvaluation pair(scene);
+  Image out(8, 6, 3), wrong(9, 6, 3);
+  pair.add(0, out);
+  EXPECT_THROW(pair.add(2, out), Error);
+  try {
+    pair.add(1, wrong);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("9x6x3"), std::string::npos) << e.what();
+  }
+  try {
+    pair.finish();  // frames 1..3 never arrived: no summary from half a sequence
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("1 of 4 frames"), std::string::npos) << e.what();
+  }
+  EvaluationInput noFrames;
+  noFrames.name = "empty";
+  EXPECT_THROW(EvaluationScene(noFrames, {}), Error);
+}
+
+}  // namespace
+}  // namespace arena
