@@ -12,6 +12,7 @@ MetricFamily flipFamily();             // flip.cpp
 MetricFamily displayErrorFamily();     // error.cpp
 MetricFamily temporalFlickerFamily();  // temporal.cpp
 MetricFamily runFactsFamily();         // run_facts.cpp
+MetricFamily multiScaleStabilityFamily();  // stability.cpp
 
 const std::vector<MetricFamily>& metricFamilies() {
   static const std::vector<MetricFamily> families = {
@@ -20,6 +21,7 @@ const std::vector<MetricFamily>& metricFamilies() {
       displayErrorFamily(),
       temporalFlickerFamily(),
       runFactsFamily(),
+      multiScaleStabilityFamily(),
   };
   return families;
 }

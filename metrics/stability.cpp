@@ -1,0 +1,182 @@
+#include "metrics/stability.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include "core/error.hpp"
+#include "metrics/metric_registry.hpp"
+
+namespace arena {
+
+namespace {
+
+// The per-channel term D of docs/metrics.md: the squared change over the squared normaliser.
+inline double stabilityTerm(double now, double before, const Image* normaliser, double reference) {
+  const double diff = now - before;
+  const double scale = normaliser ? reference : 0.5 * (now + before);
+  return diff * diff / (scale * scale + kStabilityEps);
+}
+
+double rootOfMean(const TileSums& tiles) {
+  const double n = tiles.totalCount();
+  return n > 0 ? std::sqrt(tiles.totalSum() / n) : std::numeric_limits<double>::quiet_NaN();
+}
+
+}  // namespace
+
+StabilityResult temporalStability(const StabilityInput& in, const ConsistencyThresholds& thresholds) {
+  if (!in.current || in.current->empty()) throw Error("temporal stability: no current frame");
+  const Image& x = *in.current;
+  const size_t lags = in.previous.size();
+  if (in.guides.size() != lags + 1)
+    throw Error("temporal stability: " + std::to_string(lags) + " previous frames need " + std::to_string(lags + 1) +
+                " guide layer sets, got " + std::to_string(in.guides.size()));
+  for (const Image* p : in.previous)
+    if (!p || !p->sameShape(x)) throw Error("temporal stability: a previous frame differs in size or is missing");
+  if (in.normaliser && !in.normaliser->sameShape(x))
+    throw Error("temporal stability: the normaliser differs in size from the frame");
+  const int w = x.width(), h = x.height(), c = x.channels();
+  const size_t n = size_t(w) * size_t(h);
+  // Each pixel's path back through the motion layers: its position in the frame reached so far,
+  // the nearest pixel there (whose motion and surface the next step reads), and whether every
+  // step so far was consistent.
+  std::vector<float> posX(n), posY(n);
+  std::vector<int> nearX(n), nearY(n);
+  std::vector<uint8_t> valid(n);
+  const Image& meshNow = in.guides[0]->get("meshId", "temporal stability");
+  for (int y = 0; y < h; ++y)
+    for (int px = 0; px < w; ++px) {
+      const size_t i = size_t(y) * size_t(w) + size_t(px);
+      posX[i] = float(px), posY[i] = float(y), nearX[i] = px, nearY[i] = y;
+      valid[i] = meshNow.at(px, y) >= 0;  // the sky has no surface to follow
+    }
+  std::vector<float> warped(n * size_t(c));
+  TileAccumulator fine(w, h), coarse(w, h);
+  StabilityResult out;
+  for (size_t k = 1; k <= lags; ++k) {
+    const LayerSet &a = *in.guides[k - 1], &b = *in.guides[k];
+    const Image& motion = a.get("motion", "temporal stability");
+    const Image &depthA = a.get("depth", "temporal stability"), &normalA = a.get("normal", "temporal stability"),
+                &meshA = a.get("meshId", "temporal stability");
+    const Image &depthB = b.get("depth", "temporal stability"), &normalB = b.get("normal", "temporal stability"),
+                &meshB = b.get("meshId", "temporal stability");
+    const Image& before = *in.previous[k - 1];
+    tbb::parallel_for(0, h, [&](int y) {
+      for (int px = 0; px < w; ++px) {
+        const size_t i = size_t(y) * size_t(w) + size_t(px);
+        if (!valid[i]) continue;
+        const int ax = nearX[i], ay = nearY[i];
+        const float qx = posX[i] + motion.at(ax, ay, 0), qy = posY[i] + motion.at(ax, ay, 1);
+        const int x0 = int(std::floor(qx)), y0 = int(std::floor(qy));
+        bool ok = x0 >= 0 && y0 >= 0 && x0 + 1 < w && y0 + 1 < h;
+        if (ok) {
+          const SurfaceSample surface = surfaceAt(depthA, normalA, meshA, ax, ay);
+          const SurfaceDerivatives derivatives = surfaceDerivatives(depthA, normalA, meshA, ax, ay);
+          for (int tap = 0; tap < 4 && ok; ++tap)
+            ok = consistent(surface, derivatives, surfaceAt(depthB, normalB, meshB, x0 + (tap & 1), y0 + (tap >> 1)),
+                            thresholds);
+        }
+        if (!ok) {
+          valid[i] = 0;
+          continue;
+        }
+        posX[i] = qx, posY[i] = qy;
+        nearX[i] = int(std::floor(qx + 0.5f)), nearY[i] = int(std::floor(qy + 0.5f));
+        // One bilinear resampling of frame t - k at the end of the path, so longer lags are not
+        // blurred more than the first.
+        const float fx = qx - float(x0), fy = qy - float(y0);
+        double sum = 0;
+        for (int ch = 0; ch < c; ++ch) {
+          const double value = (1 - fx) * (1 - fy) * before.at(x0, y0, ch) + fx * (1 - fy) * before.at(x0 + 1, y0, ch) +
+                               (1 - fx) * fy * before.at(x0, y0 + 1, ch) + fx * fy * before.at(x0 + 1, y0 + 1, ch);
+          warped[size_t(ch) * n + i] = float(value);
+          sum += stabilityTerm(x.at(px, y, ch), value, in.normaliser,
+                               in.normaliser ? in.normaliser->at(px, y, ch) : 0.0);
+        }
+        fine.add(px, y, sum, c);
+      }
+    });
+    if (k == 1) {
+      size_t count = 0;
+      for (uint8_t v : valid) count += v;
+      out.validFraction = double(count) / double(n);
+    }
+    // The coarse scale: 4x4 block means of the frame and of its warped predecessor, over blocks
+    // whose every pixel is valid for this lag; a block's entry goes to its top-left pixel's tile.
+    const int blocksX = w / kStabilityBlock, blocksY = h / kStabilityBlock;
+    constexpr double area = kStabilityBlock * kStabilityBlock;
+    tbb::parallel_for(0, blocksY, [&](int by) {
+      for (int bx = 0; bx < blocksX; ++bx) {
+        const int x0 = bx * kStabilityBlock, y0 = by * kStabilityBlock;
+        bool all = true;
+        for (int dy = 0; dy < kStabilityBlock && all; ++dy)
+          for (int dx = 0; dx < kStabilityBlock && all; ++dx)
+            all = valid[size_t(y0 + dy) * size_t(w) + size_t(x0 + dx)];
+        if (!all) continue;
+        double sum = 0;
+        for (int ch = 0; ch < c; ++ch) {
+          double now = 0, then = 0, reference = 0;
+          for (int dy = 0; dy < kStabilityBlock; ++dy)
+            for (int dx = 0; dx < kStabilityBlock; ++dx) {
+              const size_t i = size_t(y0 + dy) * size_t(w) + size_t(x0 + dx);
+              now += x.at(x0 + dx, y0 + dy, ch);
+              then += warped[size_t(ch) * n + i];
+              if (in.normaliser) reference += in.normaliser->at(x0 + dx, y0 + dy, ch);
+            }
+          sum += stabilityTerm(now / area, then / area, in.normaliser, reference / area);
+        }
+        coarse.add(x0, y0, sum, c);
+      }
+    });
+  }
+  out.fineTiles = fine.finish();
+  out.coarseTiles = coarse.finish();
+  out.fine = rootOfMean(out.fineTiles);
+  out.coarse = rootOfMean(out.coarseTiles);
+  return out;
+}
+
+// Registered in metric_registry.cpp. Without a reference only the output's own stability is
+// measured (a capture that has none is still scored on it).
+MetricFamily multiScaleStabilityFamily() {
+  MetricFamily f;
+  f.metrics = {
+      {.name = "stabilityFine", .needsReference = false, .transform = FrameTransform::Sqrt,
+       .description = "motion-compensated relative change of the output vs lags 1-3, full resolution (flicker)"},
+      {.name = "stabilityCoarse", .needsReference = false, .transform = FrameTransform::Sqrt,
+       .description = "the same on 4x4 block means (boiling: low-frequency change)"},
+      {.name = "errorStabilityFine", .transform = FrameTransform::Sqrt,
+       .description = "stabilityFine of the error d - r, relative to r (reference twin)"},
+      {.name = "errorStabilityCoarse", .transform = FrameTransform::Sqrt,
+       .description = "stabilityCoarse of the error d - r, relative to r (reference twin)"},
+  };
+  f.measure = [](const FrameView& v, const MetricOptions&, FrameRecorder& out) {
+    StabilityInput output{v.output, {}, {v.guides}, nullptr};
+    StabilityInput error{v.error, {}, {v.guides}, v.reference};
+    for (int lag = 1; lag <= kMaxMetricHistory; ++lag) {
+      const FrameView* p = v.previous(lag);
+      if (!p || v.cutWithin(lag)) break;  // across a camera cut there is nothing to follow
+      output.previous.push_back(p->output);
+      output.guides.push_back(p->guides);
+      error.previous.push_back(p->error);
+      error.guides.push_back(p->guides);
+    }
+    if (output.previous.empty()) return;  // frame 0 or right after a cut: undefined
+    auto put = [&](const char* name, double value, TileSums tiles) {
+      if (tiles.totalCount() > 0) out.put(name, value, std::move(tiles));  // else nothing was valid: undefined
+    };
+    StabilityResult s = temporalStability(output);
+    put("stabilityFine", s.fine, std::move(s.fineTiles));
+    put("stabilityCoarse", s.coarse, std::move(s.coarseTiles));
+    if (!v.error) return;
+    StabilityResult e = temporalStability(error);
+    put("errorStabilityFine", e.fine, std::move(e.fineTiles));
+    put("errorStabilityCoarse", e.coarse, std::move(e.coarseTiles));
+  };
+  return f;
+}
+
+}  // namespace arena

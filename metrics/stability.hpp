@@ -1,0 +1,34 @@
+#pragma once
+// Multi-scale temporal stability (docs/metrics.md, "Multi-scale temporal stability"): the
+// motion-compensated change of a frame against the frames 1, 2 and 3 before it, at full resolution
+// and on 4x4 block means, so per-pixel flicker and low-frequency boiling can be told apart. It needs
+// no reference; its twin measures the same on the error d - r.
+#include <vector>
+
+#include "core/consistency.hpp"
+#include "core/exr_io.hpp"
+#include "core/image.hpp"
+#include "metrics/tiles.hpp"
+
+namespace arena {
+
+constexpr int kStabilityBlock = 4;  // the coarse scale's block size in pixels
+constexpr double kStabilityEps = 0.01;
+
+struct StabilityInput {
+  const Image* current = nullptr;          // x_t (linear RGB)
+  std::vector<const Image*> previous;      // x_{t-1}, x_{t-2}, ... (one per lag, at most 3)
+  std::vector<const LayerSet*> guides;     // the layers of frames t, t-1, ..., t-K (K = previous.size())
+  // r_t for the error twin (x = d - r): the denominator is r^2 + eps. Null: the pair's mean.
+  const Image* normaliser = nullptr;
+};
+
+struct StabilityResult {
+  double fine = 0, coarse = 0;  // NaN when nothing was valid at that scale
+  TileSums fineTiles, coarseTiles;
+  double validFraction = 0;     // of pixels valid at lag 1
+};
+
+StabilityResult temporalStability(const StabilityInput& in, const ConsistencyThresholds& thresholds = {});
+
+}  // namespace arena
