@@ -13,6 +13,7 @@
 #include "harness/reference_quality.hpp"
 #include "harness/run_matrix.hpp"
 #include "harness/scene_selection.hpp"
+#include "metrics/summary_value.hpp"
 #include "reports/report.hpp"
 
 namespace arena::cli {
@@ -21,11 +22,17 @@ namespace {
 
 using nlohmann::json;
 
-std::string interval(const json& ci, int precision) {
-  if (!ci.is_array()) return "-";
+// A number of the statistics, "-" where it is absent (null: undefined, never a fake 0).
+std::string numberText(const json& v, int precision) {
+  if (!v.is_number()) return "-";
   std::ostringstream o;
-  o << std::setprecision(precision) << "[" << ci[0].get<double>() << ", " << ci[1].get<double>() << "]";
+  o << std::setprecision(precision) << v.get<double>();
   return o.str();
+}
+
+std::string interval(const json& ci, int precision) {
+  if (!ci.is_array() || ci.size() != 2 || !ci[0].is_number() || !ci[1].is_number()) return "-";
+  return "[" + numberText(ci[0], precision) + ", " + numberText(ci[1], precision) + "]";
 }
 
 std::string tiedList(const json& m) {
@@ -46,18 +53,18 @@ void printRanking(const json& results) {
               << " pairwise differences resolved\n";
     for (const json& m : s["ranking"])
       std::cout << "  " << std::left << std::setw(4) << m["rank"].get<int>() << std::setw(26)
-                << m["label"].get<std::string>() << std::right << std::setw(11) << std::setprecision(4)
-                << m["mean"].get<double>() << "  " << std::left << std::setw(24) << interval(m["ci95"], 3)
-                << tiedList(m) << "\n";
+                << m["label"].get<std::string>() << std::right << std::setw(11) << numberText(m.value("mean", json()), 4)
+                << "  " << std::left << std::setw(24) << interval(m.value("ci95", json()), 3) << tiedList(m) << "\n";
+    if (s.contains("excluded") && s["excluded"].is_string())
+      std::cout << "  not ranked: " << s["excluded"].get<std::string>() << "\n";
   }
   if (!st.contains("overall")) return;
   const json& o = st["overall"];
   std::cout << "\noverall: " << o["normalisation"].get<std::string>() << " (lower is better)\n";
   for (const json& m : o["ranking"])
     std::cout << "  " << std::left << std::setw(4) << m["rank"].get<int>() << std::setw(26)
-              << m["label"].get<std::string>() << std::right << std::setw(11) << std::setprecision(4)
-              << m["score"].get<double>() << "  " << std::left << std::setw(24) << interval(m["ci95"], 3)
-              << tiedList(m) << "\n";
+              << m["label"].get<std::string>() << std::right << std::setw(11) << numberText(m.value("score", json()), 4)
+              << "  " << std::left << std::setw(24) << interval(m.value("ci95", json()), 3) << tiedList(m) << "\n";
   if (o.contains("excluded")) std::cout << "  not ranked overall: " << o["excluded"].get<std::string>() << "\n";
 }
 
@@ -192,6 +199,8 @@ void addStudyCommand(CLI::App& app) {
     c.render = opt->settings();
     c.scenes = selectScenes(*scenes, opt->scenesDir);
     for (const Scene& s : c.scenes) requireFitsInMemory(s, c.render, true);
+    for (const std::string& w : shortSequenceWarnings(c.scenes, c.render, c.warmup))
+      std::cerr << "arena: warning: " << w << "\n";
     for (const std::string& n : DenoiserRegistry::instance().names()) c.denoisers.push_back({n, {}, ""});
     c.flip = *flip;
     c.exposure = *exposure;
@@ -217,6 +226,10 @@ void addStudyCommand(CLI::App& app) {
     ReportSummary rs = writeReport(ro);
     printRanking(results);
     printEvents(results);
+    // What the ranking could not use, and why (a sequence no longer than the warm-up, ...).
+    const std::vector<std::string> absent = absentSummaryLines(results, {"relMse"});
+    if (!absent.empty()) std::cout << "\nabsent summaries\n";
+    for (const std::string& line : absent) std::cout << "  " << line << "\n";
     // metrics.md "Reference quality": said plainly where the references are too noisy to rank.
     std::cout << "\nreference quality (noise floor / best real denoiser's corrected relMSE, goal <= "
               << kReferenceQualityGoal << ")\n";
