@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cctype>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
@@ -21,11 +22,31 @@ std::string osError(const fs::path& path, const std::string& what, int errnoValu
   return path.string() + ": " + what + ": " + std::strerror(errnoValue);
 }
 
+namespace {
+
+// This machine's name as it can stand in a file name ([A-Za-z0-9-], at most 32 characters).
+// Written into temporaries so that a later process on the same machine knows a dead process id
+// there means a dead writer, whatever the file's age.
+const std::string& hostTag() {
+  static const std::string tag = [] {
+    char name[256] = {};
+    std::string out;
+    if (gethostname(name, sizeof name - 1) == 0)
+      for (const char* c = name; *c && out.size() < 32; ++c)
+        if (std::isalnum(static_cast<unsigned char>(*c)) || *c == '-') out += *c;
+    return out.empty() ? std::string("host") : out;
+  }();
+  return tag;
+}
+
+}  // namespace
+
 fs::path temporaryPathFor(const fs::path& path) {
   static std::atomic<unsigned> counter{0};
   // The extension stays last so format libraries that look at it (OpenCV) still recognise it.
-  return path.parent_path() / (path.stem().string() + ".tmp" + std::to_string(getpid()) + "_" +
-                               std::to_string(counter++) + path.extension().string());
+  return path.parent_path() / (path.stem().string() + ".tmp" + std::to_string(getpid()) + "@" +
+                               hostTag() + "_" + std::to_string(counter++) +
+                               path.extension().string());
 }
 
 void writeAtomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
@@ -54,9 +75,13 @@ void writeAtomically(const fs::path& path, const std::function<void(const fs::pa
   }
 }
 
+// A temporary is "<stem>.tmp<pid>@<host>_<n><ext>". One whose process is gone is removed at any
+// age when it was written on this machine; from another machine sharing the directory (or with an
+// older name without the machine) a process id says nothing, so only `minAgeSeconds` of age does.
 int removeStaleTemporaries(const fs::path& dir, double minAgeSeconds) {
-  // SQLite's journal of a temporary database ends in ".db-journal".
-  static const std::regex pattern(R"(.+\.tmp([0-9]+)_[0-9]+(\.[A-Za-z0-9-]+)?)");
+  // SQLite's journal of a temporary database ends in ".db-journal". Names without "@host" are
+  // those of older versions: their machine is unknown.
+  static const std::regex pattern(R"(.+\.tmp([0-9]+)(@([A-Za-z0-9-]+))?_[0-9]+(\.[A-Za-z0-9-]+)?)");
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) return 0;
   int removed = 0;
@@ -70,8 +95,13 @@ int removeStaleTemporaries(const fs::path& dir, double minAgeSeconds) {
     const bool alive = pid == getpid() || (pid > 0 && pid < (1L << 30) &&
                                            (kill(pid_t(pid), 0) == 0 || errno != ESRCH));
     if (alive) continue;
+    // Written on this machine by a process that is gone: stale at any age (a killed render
+    // rerun at once must not keep it). From another machine sharing the directory (or an older
+    // name without the machine), a process id says nothing here: only its age does.
+    const bool thisMachine = m[3].matched && m[3].str() == hostTag();
     auto written = fs::last_write_time(it->path(), ec);
-    if (ec || std::chrono::duration<double>(now - written).count() < minAgeSeconds) continue;
+    if (ec || (!thisMachine && std::chrono::duration<double>(now - written).count() < minAgeSeconds))
+      continue;
     std::error_code removeError;
     if (fs::remove(it->path(), removeError)) ++removed;
   }

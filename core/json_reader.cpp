@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <map>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
@@ -50,6 +51,76 @@ size_t firstTooDeep(const std::string& text, int limit) {
   return std::string::npos;
 }
 
+// nlohmann's DOM parser, plus a check nlohmann does not make: a key given twice in one object.
+// nlohmann keeps one of the two silently, so a scene with "frames" twice would render whichever
+// it kept; here it is an error naming the object's JSON path and both members' positions.
+class DuplicateKeyCheckingParser : public nlohmann::detail::json_sax_dom_parser<json> {
+  using Base = nlohmann::detail::json_sax_dom_parser<json>;
+
+ public:
+  DuplicateKeyCheckingParser(json& result, std::string file) : Base(result), file_(std::move(file)) {}
+
+  bool start_object(std::size_t n) {
+    enterValue();
+    scopes_.push_back({true, {}, "", 0});
+    return Base::start_object(n);
+  }
+  bool key(std::string& k) {
+    Scope& s = scopes_.back();
+    ++s.members;
+    if (auto it = s.keys.find(k); it != s.keys.end())
+      throw Error(file_ + ": " + path() + ": key \"" + k + "\" is given twice (members " +
+                  std::to_string(it->second) + " and " + std::to_string(s.members) +
+                  " of this object); JSON keeps only one, so remove or rename the other");
+    s.keys.emplace(k, s.members);
+    s.key = k;
+    return Base::key(k);
+  }
+  bool end_object() {
+    scopes_.pop_back();
+    return Base::end_object();
+  }
+  bool start_array(std::size_t n) {
+    enterValue();
+    scopes_.push_back({false, {}, "", 0});
+    return Base::start_array(n);
+  }
+  bool end_array() {
+    scopes_.pop_back();
+    return Base::end_array();
+  }
+  bool null() { return enterValue(), Base::null(); }
+  bool boolean(bool v) { return enterValue(), Base::boolean(v); }
+  bool number_integer(json::number_integer_t v) { return enterValue(), Base::number_integer(v); }
+  bool number_unsigned(json::number_unsigned_t v) { return enterValue(), Base::number_unsigned(v); }
+  bool number_float(json::number_float_t v, const std::string& s) {
+    return enterValue(), Base::number_float(v, s);
+  }
+  bool string(std::string& v) { return enterValue(), Base::string(v); }
+
+ private:
+  struct Scope {
+    bool object;
+    std::map<std::string, int> keys;  // key -> its member number (1-based)
+    std::string key;                  // the member being read
+    int members;                      // objects: keys seen; arrays: elements started
+  };
+  // A value starts: in an array it is the next element.
+  void enterValue() {
+    if (!scopes_.empty() && !scopes_.back().object) ++scopes_.back().members;
+  }
+  // The JSON path of the innermost object, as JsonReader names paths ($.camera.keys[0]).
+  std::string path() const {
+    std::string p = "$";
+    for (size_t i = 0; i + 1 < scopes_.size(); ++i)
+      p += scopes_[i].object ? "." + scopes_[i].key : "[" + std::to_string(scopes_[i].members - 1) + "]";
+    return p;
+  }
+
+  std::string file_;
+  std::vector<Scope> scopes_;
+};
+
 }  // namespace
 
 json parseJsonText(const std::string& text, const std::string& file) {
@@ -59,7 +130,10 @@ json parseJsonText(const std::string& text, const std::string& file) {
                 " levels (at byte " + std::to_string(deep) +
                 "); arena documents nest a few levels");
   try {
-    return json::parse(text);
+    json result;
+    DuplicateKeyCheckingParser parser(result, file);
+    json::sax_parse(text, &parser);
+    return result;
   } catch (const json::parse_error& e) {
     throw Error(file + ": malformed JSON (byte " + std::to_string(e.byte) + "): " + e.what());
   } catch (const json::exception& e) {  // e.g. a number beyond double range (out_of_range.406)

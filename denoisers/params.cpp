@@ -1,6 +1,7 @@
 #include "denoisers/params.hpp"
 
 #include <cmath>
+#include <regex>
 #include <sstream>
 
 #include "core/error.hpp"
@@ -101,6 +102,12 @@ ParamSet ParamSchema::resolve(const std::map<std::string, std::string>& override
         break;
       case ParamSpec::Type::Int:
       case ParamSpec::Type::Float: {
+        // Decimal notation only: std::stod would also take "0x10" (as 16), " 8" and "inf", so a
+        // slip in a sweep would run a value nobody wrote.
+        static const std::regex decimal(R"([+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?)");
+        if (!std::regex_match(text, decimal))
+          bad(std::string(s->type == ParamSpec::Type::Int ? "an integer" : "a number") +
+              " in decimal notation, e.g. 8, 0.5 or 1e-3");
         size_t used = 0;
         double v = 0;
         try {
@@ -108,7 +115,7 @@ ParamSet ParamSchema::resolve(const std::map<std::string, std::string>& override
         } catch (...) {
           used = 0;
         }
-        if (used != text.size() || text.empty() || !std::isfinite(v)) bad("a number");
+        if (used != text.size() || !std::isfinite(v)) bad("a finite number");
         if (s->type == ParamSpec::Type::Int && v != std::floor(v)) bad("an integer");
         if (v < s->min || v > s->max)
           bad("a value in [" + formatNumber(s->min) + ", " + formatNumber(s->max) + "]");

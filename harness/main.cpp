@@ -59,7 +59,10 @@ int main(int argc, char** argv) {
   } catch (const CLI::RuntimeError& e) {
     return e.get_exit_code();
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // CLI11 prints the message; its own codes (105 for a failed check, 106 for a missing option,
+    // ...) would make a usage error look different from every other bad input, so all of them
+    // are the documented usage-error code 2 (README "Exit codes"). --help exits 0.
+    return app.exit(e) == 0 ? 0 : 2;
   } catch (const arena::Error& e) {
     std::cerr << "arena: error: " << e.what() << "\n";
     return 2;

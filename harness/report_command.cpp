@@ -27,6 +27,7 @@ void addReportCommand(CLI::App& app) {
     std::cout << "report: " << s.index.string() << " (" << s.pairs << " pairs";
     if (s.failedPairs) std::cout << ", " << s.failedPairs << " failed: shown in the report";
     std::cout << ", " << s.imagesCopied << " images)\n";
+    for (const std::string& line : s.absentSummaries) std::cout << "absent: " << line << "\n";
   });
 
   auto* hist = app.add_subcommand(
@@ -55,6 +56,7 @@ void addReportCommand(CLI::App& app) {
     const HistorySummary s = writeHistory(h);
     std::cout << "history: " << s.index.string() << " (" << s.runs << " runs, " << s.failing
               << " regression(s) `arena compare` would flag)\n";
+    for (const std::string& line : s.absentSummaries) std::cout << "absent: " << line << "\n";
   });
 }
 

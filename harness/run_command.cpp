@@ -1,4 +1,5 @@
 // `arena run`, `arena sweep`, `arena merge`, `arena compare`, `arena denoisers`.
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <set>
@@ -11,6 +12,7 @@
 #include "harness/printout.hpp"
 #include "metrics/compare.hpp"
 #include "metrics/results.hpp"
+#include "metrics/summary_value.hpp"
 #include "harness/run_matrix.hpp"
 #include "harness/scene_selection.hpp"
 
@@ -82,8 +84,17 @@ RunConfig configFrom(const MatrixOptions& o) {
   c.keepFrames = o.keepFrames;
   c.exposure = o.exposure;
   std::tie(c.shardIndex, c.shardCount) = parseShard(o.shard);
+  for (const std::string& w : shortSequenceWarnings(c.scenes, c.render, c.warmup))
+    std::cerr << "arena: warning: " << w << "\n";
   c.progress = [](const std::string& line) { std::cout << line << std::endl; };
   return c;
+}
+
+// `v` with `precision` significant digits, as the table shows numbers.
+std::string formatNumber(double v, int precision) {
+  std::ostringstream o;
+  o << std::setprecision(precision) << v;
+  return o.str();
 }
 
 void finish(const json& results, const std::string& out) {
@@ -92,12 +103,18 @@ void finish(const json& results, const std::string& out) {
             << "relMSE" << std::setw(10) << "ms" << "\n";
   for (const json& p : results["pairs"]) {
     std::cout << std::left << std::setw(22) << p["scene"].get<std::string>() << std::setw(34) << p["label"].get<std::string>();
-    if (p["status"] == "ok")
-      std::cout << std::right << std::setw(12) << std::setprecision(4) << p["summary"]["relMse"]["mean"].get<double>()
-                << std::setw(10) << std::setprecision(3) << p["timing"]["msMedian"].get<double>() << "\n";
-    else
+    if (p["status"] == "ok") {
+      // An ok pair can still have no relMSE summary (a sequence no longer than the warm-up): "-"
+      // here and the reason below the table.
+      const SummaryMean relMse = summaryMean(p, "relMse");
+      const json ms = p.value("timing", json::object()).value("msMedian", json());
+      std::cout << std::right << std::setw(12) << (relMse.present() ? formatNumber(relMse.mean, 4) : "-")
+                << std::setw(10) << (ms.is_number() ? formatNumber(ms.get<double>(), 3) : "-") << "\n";
+    } else {
       std::cout << "  FAILED\n";
+    }
   }
+  for (const std::string& line : absentSummaryLines(results, {"relMse"})) std::cout << line << "\n";
   printOverallRanking(std::cout, results);
   auto failed = failedPairs(results);
   if (!failed.empty()) {
@@ -123,12 +140,26 @@ void addRunCommands(CLI::App& app) {
     cmd->callback([o, names, plugins] {
       RunConfig c = configFrom(*o);
       std::vector<std::string> list = *names == "all" ? DenoiserRegistry::instance().names() : splitList(*names);
+      // '' or ',' would otherwise run only the baselines, as if the denoisers had been left out.
+      if (list.empty() || (*names != "all" && list.size() != size_t(std::count(names->begin(), names->end(), ',') + 1)))
+        throw Error("--denoisers '" + *names + "': an empty name; expected registered names (`arena denoisers`), " +
+                    "ext:MANIFEST or plugin:LIBRARY, comma-separated, or 'all'");
       for (const std::string& library : *plugins) list.push_back("plugin:" + library);
       for (std::string& n : list) n = DenoiserRegistry::resolve(n);  // loads external ones
       auto params = parseParamAssignments(o->params);
-      for (auto& [denoiser, kv] : params)
-        if (std::find(list.begin(), list.end(), denoiser) == list.end())
-          throw Error("--param " + denoiser + ".*: " + denoiser + " is not among the denoisers of this run");
+      for (auto& [denoiser, kv] : params) {
+        if (std::find(list.begin(), list.end(), denoiser) != list.end()) continue;
+        // A baseline that runs (not listed itself) takes its --param too.
+        if (c.baselines && (denoiser == "passthrough" || denoiser == "temporal")) {
+          c.baselineParams[denoiser] = kv;
+          continue;
+        }
+        std::string running;
+        for (const std::string& n : list) running += (running.empty() ? "" : ", ") + n;
+        if (c.baselines) running += ", passthrough, temporal (baselines)";
+        throw Error("--param " + denoiser + "." + kv.begin()->first + ": " + denoiser +
+                    " is not among the denoisers of this run (" + running + ")");
+      }
       for (const std::string& n : list) {
         DenoiserRegistry::instance().find(n);
         c.denoisers.push_back({n, params[n], ""});
@@ -218,6 +249,10 @@ void addRunCommands(CLI::App& app) {
                     "A change regresses only when its paired bootstrap interval at this level excludes zero")
         ->default_val("95%");
     cmd->add_flag("--json", *asJson, "Machine-readable output")->default_str("off");
+    auto allowMismatch = std::make_shared<bool>(false);
+    cmd->add_flag("--allow-settings-mismatch", *allowMismatch,
+                  "Compare runs whose settings differ (resolution, warm-up, references, ...): warn and go on "
+                  "instead of refusing");
     cmd->callback([=] {
       std::vector<Tolerance> tols;
       double t = parseTolerance(*tol);
@@ -227,7 +262,19 @@ void addRunCommands(CLI::App& app) {
       if (tols.empty())
         for (const MetricDefinition* m : metricCatalog())
           if (m->gatedByDefault) tols.push_back({m->name, t});
-      auto rows = compareRuns(loadResults(*a), loadResults(*b), tols, bc);
+      const json baseline = loadResults(*a), candidate = loadResults(*b);
+      // Numbers measured under other settings differ for that reason alone: refused unless asked.
+      const std::vector<std::string> differ = settingsDifferences(baseline, candidate);
+      if (!differ.empty()) {
+        std::string list;
+        for (const std::string& d : differ) list += "\n  " + d;
+        if (!*allowMismatch)
+          throw Error("compare: " + *a + " and " + *b + " were run with different settings (baseline vs candidate):" +
+                      list + "\ntheir numbers are not comparable; pass --allow-settings-mismatch to compare anyway");
+        std::cerr << "arena: warning: comparing runs with different settings (baseline vs candidate):" << list
+                  << "\n";
+      }
+      auto rows = compareRuns(baseline, candidate, tols, bc);
       if (*asJson) {
         std::cout << comparisonJson(rows).dump(2) << "\n";
       } else {

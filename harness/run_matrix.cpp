@@ -178,10 +178,11 @@ json runMatrix(const RunConfig& cfg) {
     DenoiserRegistry::instance().find(r.name);
     denoisers.push_back(std::move(r));
   };
-  if (cfg.baselines) {
-    add({"passthrough", {}, ""});
-    add({"temporal", {}, ""});
-  }
+  if (cfg.baselines)
+    for (const char* baseline : {"passthrough", "temporal"}) {
+      auto params = cfg.baselineParams.find(baseline);
+      add({baseline, params == cfg.baselineParams.end() ? std::map<std::string, std::string>{} : params->second, ""});
+    }
   for (const DenoiserRequest& r : cfg.denoisers) add(r);
   // Validate every parameter set before any work: a typo must fail in a second, not after an hour.
   for (const DenoiserRequest& r : denoisers) DenoiserRegistry::instance().find(r.name).schema.resolve(r.params, r.name);

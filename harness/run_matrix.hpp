@@ -21,6 +21,8 @@ struct RunConfig {
   std::vector<Scene> scenes;
   std::vector<DenoiserRequest> denoisers;
   bool baselines = true;          // add passthrough (noisy input) and temporal for context
+  // --param values for those baselines (e.g. temporal.maxHistory), by denoiser name.
+  std::map<std::string, std::map<std::string, std::string>> baselineParams;
   int warmup = 8;                 // metrics.md: summaries over frames t >= W
   std::string flip = "all";       // none | ldr | all (LDR + HDR)
   std::string exposure = "per-frame";  // display exposure (metrics.md): per-frame | first

@@ -99,6 +99,20 @@ void requireFitsInMemory(const Scene& scene, const RenderSettings& settings, boo
   }
 }
 
+std::vector<std::string> shortSequenceWarnings(const std::vector<Scene>& scenes,
+                                               const RenderSettings& settings, int warmup) {
+  std::vector<std::string> out;
+  for (const Scene& scene : scenes) {
+    const int frames = settings.resolvedFrames(scene);
+    if (frames <= warmup)
+      out.push_back(scene.file + ": the sequence has " + std::to_string(frames) +
+                    " frames and the warm-up excludes the first " + std::to_string(warmup) +
+                    ": no frame is left to summarise, every summary of this scene will be absent "
+                    "(render more frames with --frames or lower --warmup)");
+  }
+  return out;
+}
+
 void addRenderOptions(CLI::App* cmd, RenderOptions& o) {
   cmd->add_option("--preset", o.preset,
                   "quick (the scene's resolution) or paper (1280x720, 4096 spp)")

@@ -35,6 +35,12 @@ CLI::Validator finiteRange(double lo, double hi);
 // the machine has -- a clear error instead of std::bad_alloc halfway through.
 void requireFitsInMemory(const Scene& scene, const RenderSettings& settings, bool wholeSequence);
 
+// One line per scene whose sequence (as `settings` render it) has no frame after the warm-up: every
+// summary of its pairs will be absent (metrics.md W). Said before any work, so that a --frames or
+// --warmup slip costs a second, not a run.
+std::vector<std::string> shortSequenceWarnings(const std::vector<Scene>& scenes,
+                                               const RenderSettings& settings, int warmup);
+
 // "all", or comma-separated scene names (looked up in scenesDir) or paths to .json files.
 std::vector<Scene> selectScenes(const std::string& list, const std::string& scenesDir);
 

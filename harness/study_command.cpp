@@ -14,6 +14,7 @@
 #include "harness/reference_quality.hpp"
 #include "harness/run_matrix.hpp"
 #include "harness/scene_selection.hpp"
+#include "metrics/summary_value.hpp"
 #include "reports/report.hpp"
 
 namespace arena::cli {
@@ -34,9 +35,10 @@ void printRanking(const json& results) {
               << " pairwise differences resolved\n";
     for (const json& m : s["ranking"])
       std::cout << "  " << std::left << std::setw(4) << m["rank"].get<int>() << std::setw(26)
-                << m["label"].get<std::string>() << std::right << std::setw(11) << std::setprecision(4)
-                << m["mean"].get<double>() << "  " << std::left << std::setw(24) << intervalText(m["ci95"])
-                << tiedText(m) << "\n";
+                << m["label"].get<std::string>() << std::right << std::setw(11) << figureText(m.value("mean", json()))
+                << "  " << std::left << std::setw(24) << intervalText(m.value("ci95", json())) << tiedText(m) << "\n";
+    if (s.contains("excluded") && s["excluded"].is_string())
+      std::cout << "  not ranked: " << s["excluded"].get<std::string>() << "\n";
   }
   printOverallRanking(std::cout, results);
 }
@@ -172,6 +174,8 @@ void addStudyCommand(CLI::App& app) {
     c.render = opt->settings();
     c.scenes = selectScenes(*scenes, opt->scenesDir);
     for (const Scene& s : c.scenes) requireFitsInMemory(s, c.render, true);
+    for (const std::string& w : shortSequenceWarnings(c.scenes, c.render, c.warmup))
+      std::cerr << "arena: warning: " << w << "\n";
     for (const std::string& n : DenoiserRegistry::instance().names()) c.denoisers.push_back({n, {}, ""});
     c.flip = *flip;
     c.exposure = *exposure;
@@ -197,6 +201,10 @@ void addStudyCommand(CLI::App& app) {
     ReportSummary rs = writeReport(ro);
     printRanking(results);
     printEvents(results);
+    // What the ranking could not use, and why (a sequence no longer than the warm-up, ...).
+    const std::vector<std::string> absent = absentSummaryLines(results, {"relMse"});
+    if (!absent.empty()) std::cout << "\nabsent summaries\n";
+    for (const std::string& line : absent) std::cout << "  " << line << "\n";
     // metrics.md "Reference quality": said plainly where the references are too noisy to rank.
     std::cout << "\nreference quality (noise floor / best real denoiser's corrected relMSE, goal <= "
               << kReferenceQualityGoal << ")\n";

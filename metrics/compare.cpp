@@ -6,6 +6,7 @@
 
 #include "core/error.hpp"
 #include "metrics/results.hpp"
+#include "metrics/summary_value.hpp"
 
 namespace arena {
 
@@ -44,7 +45,40 @@ ComparisonRow pairRow(const json& p, const std::string& verdict, const std::stri
   return row;
 }
 
+// Appends "path: a vs b" for every leaf where a and b differ (a missing side reads "absent").
+void collectDifferences(const json& a, const json& b, const std::string& path, std::vector<std::string>& out) {
+  if (a.is_object() && b.is_object()) {
+    std::set<std::string> keys;
+    for (auto it = a.begin(); it != a.end(); ++it) keys.insert(it.key());
+    for (auto it = b.begin(); it != b.end(); ++it) keys.insert(it.key());
+    static const json absent = "absent";
+    for (const std::string& k : keys)
+      collectDifferences(a.contains(k) ? a[k] : absent, b.contains(k) ? b[k] : absent, path + "." + k, out);
+    return;
+  }
+  if (a != b) out.push_back(path + ": " + a.dump() + " vs " + b.dump());
+}
+
 }  // namespace
+
+std::vector<std::string> settingsDifferences(const json& baseline, const json& candidate) {
+  std::vector<std::string> out;
+  json a = baseline.value("settings", json::object()), b = candidate.value("settings", json::object());
+  a.erase("shard");  // which slice of the pairs a run holds, not how they were measured
+  b.erase("shard");
+  collectDifferences(a, b, "settings", out);
+  const json none = json::object();
+  const json& as = baseline.contains("scenes") ? baseline["scenes"] : none;
+  const json& bs = candidate.contains("scenes") ? candidate["scenes"] : none;
+  for (auto it = as.begin(); it != as.end(); ++it) {
+    if (!bs.contains(it.key()) || !it.value().is_object() || !bs[it.key()].is_object()) continue;
+    for (const char* field : {"width", "height", "frames"}) {
+      const json x = it.value().value(field, json()), y = bs[it.key()].value(field, json());
+      if (x != y) out.push_back("scenes." + it.key() + "." + field + ": " + x.dump() + " vs " + y.dump());
+    }
+  }
+  return out;
+}
 
 double parseTolerance(const std::string& text) {
   return parseFraction(text, "--tolerance",
@@ -102,25 +136,30 @@ std::vector<ComparisonRow> compareRuns(const json& base, const json& cand,
     for (const Tolerance& t : tolerances) {
       ComparisonRow row{scene,      label, t.metric,   kUndefined, kUndefined,
                         kUndefined, {},    t.relative, "ok",       ""};
-      auto has = [&](const json& p) {
-        return p["summary"].contains(t.metric) && p["summary"][t.metric].contains("mean");
-      };
-      const bool bOk = has(b), cOk = has(c);
-      if (!bOk && !cOk) continue;  // e.g. FLIP switched off in both runs
-      if (!cOk) {
+      const SummaryMean bm = summaryMean(b, t.metric), cm = summaryMean(c, t.metric);
+      if (!bm.computed && !cm.computed) continue;  // e.g. FLIP switched off in both runs
+      if (!cm.present() && !bm.present()) {
+        // Absent in both (a sequence no longer than the warm-up): nothing to hold the candidate
+        // to, said with both reasons rather than skipped.
+        row.verdict = "absent";
+        row.note = "baseline: " + bm.absent + "; candidate: " + cm.absent;
+        rows.push_back(row);
+        continue;
+      }
+      if (!cm.present()) {
         row.verdict = "missing";
-        row.note = c["summary"].contains(t.metric) ? c["summary"][t.metric].value("absent", "")
-                                                   : "not computed";
+        row.note = cm.absent;
         rows.push_back(row);
         continue;
       }
-      if (!bOk) {
+      if (!bm.present()) {
         row.verdict = "new";
+        row.note = "absent in the baseline: " + bm.absent;
         rows.push_back(row);
         continue;
       }
-      row.baseline = b["summary"][t.metric]["mean"];
-      row.candidate = c["summary"][t.metric]["mean"];
+      row.baseline = bm.mean;
+      row.candidate = cm.mean;
       const double scale = std::max(std::abs(row.baseline), 1e-12);
       row.change = (row.candidate - row.baseline) / scale;
       const bool lowerIsBetter = findMetric(t.metric)->lowerIsBetter();

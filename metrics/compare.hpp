@@ -28,7 +28,8 @@ struct ComparisonRow {
   double tolerance = 0;
   // "ok", "improved", "regressed", "unresolved" (beyond tolerance, within noise), "missing" (the
   // candidate lacks what the baseline had: fails the gate), "failed" (the candidate's pair failed),
-  // "new" (only the candidate has it).
+  // "new" (only the candidate has it), "absent" (neither run has a summary of it: the note gives
+  // both reasons; does not fail the gate).
   std::string verdict;
   std::string note;
 };
@@ -38,6 +39,11 @@ std::vector<ComparisonRow> compareRuns(const nlohmann::json& baseline,
                                        const nlohmann::json& candidate,
                                        std::vector<Tolerance> tolerances,
                                        const BootstrapConfig& cfg = {});
+// What two runs' settings differ in, one line each ("settings.warmup: 8 vs 2",
+// "scenes.cornell_static.width: 16 vs 32"): every field under "settings" except the shard, and the
+// resolution and frame count of each scene both runs have. Empty when they match.
+std::vector<std::string> settingsDifferences(const nlohmann::json& baseline,
+                                             const nlohmann::json& candidate);
 // "2%" -> 0.02, "0.02" -> 0.02; negative, NaN or infinite values are errors.
 double parseTolerance(const std::string& text);
 // "95%" or "0.95" -> 0.95; must lie in (0, 1).

@@ -50,8 +50,19 @@ void requireResultsShape(const json& j, const std::string& file) {
       member(p, path, "error", &json::is_string, "a string (the failure)");
       continue;
     }
-    for (auto& [metric, s] : member(p, path, "summary", &json::is_object, "an object").items())
+    // The numbers readers take as numbers (printouts, compare, report, history): a string in
+    // their place is an error naming it here, not nlohmann's type_error without a path later.
+    auto numbers = [&](const json& obj, const std::string& at, std::initializer_list<const char*> keys) {
+      for (const char* k : keys)
+        if (obj.contains(k) && !obj.at(k).is_number() && !obj.at(k).is_null())
+          fail(at + "." + k, "a number (or null)", obj.at(k));
+    };
+    for (auto& [metric, s] : member(p, path, "summary", &json::is_object, "an object").items()) {
       if (!s.is_object()) fail(path + ".summary." + metric, "an object", s);
+      numbers(s, path + ".summary." + metric, {"mean", "median", "p5", "p95", "frames"});
+    }
+    if (p.contains("timing") && p.at("timing").is_object())
+      numbers(p.at("timing"), path + ".timing", {"msMedian", "msP5", "msP95", "msMean"});
     const json& frames =
         member(p, path, "frames", &json::is_array, "an array of per-frame metrics");
     for (size_t f = 0; f < frames.size(); ++f) {

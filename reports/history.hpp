@@ -35,6 +35,7 @@ struct HistoryOptions {
 struct HistorySummary {
   std::filesystem::path index;
   size_t runs = 0, failing = 0;  // failing: comparisons that fail the gate
+  std::vector<std::string> absentSummaries;  // "<run>: <scene>: <metric> absent in N pair(s): <why>"
 };
 HistorySummary writeHistory(const HistoryOptions& options);
 

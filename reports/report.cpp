@@ -13,6 +13,7 @@
 #include "metrics/compare.hpp"
 #include "metrics/error_maps.hpp"
 #include "metrics/results.hpp"
+#include "metrics/summary_value.hpp"
 #include "reports/pareto.hpp"
 
 namespace arena {
@@ -332,9 +333,9 @@ json rankingData(const json& results, const std::vector<std::string>& scenes, co
     }
     std::vector<std::pair<double, std::string>> order;
     for (const json& pair : results["pairs"])
-      if (pair["scene"] == scene && isOk(pair) && pair["summary"].contains("relMse"))
-        order.push_back(
-            {pair["summary"]["relMse"].value("mean", kNaN), pair["label"].get<std::string>()});
+      if (pair["scene"] == scene && isOk(pair))
+        if (const SummaryMean m = summaryMean(pair, "relMse"); m.present())
+          order.push_back({m.mean, pair["label"].get<std::string>()});
     if (order.empty()) continue;
     std::stable_sort(order.begin(), order.end(),
                      [](const auto& a, const auto& b) { return a.first < b.first; });
@@ -647,19 +648,20 @@ json reportData(const json& results, const fs::path& runDir, const json* baselin
       const json* b = findPair(*baseline, row);
       const json* c = findPair(results, row);
       const std::string metric = row["metric"];
-      auto meanOf = [&](const json* p) -> json {
-        if (!p || !isOk(*p) || !(*p)["summary"].contains(metric) || !(*p)["summary"][metric].contains("mean"))
-          return nullptr;
-        return (*p)["summary"][metric]["mean"];
+      // The mean, or why there is none (an absent summary gives its own reason).
+      auto meanOf = [&](const json* p) -> SummaryMean {
+        if (!p) return {0, "not measured"};
+        if (!isOk(*p)) return {0, "failed: " + p->value("error", "")};
+        return summaryMean(*p, metric);
       };
-      if (meanOf(c).is_null()) {
+      const SummaryMean bm = meanOf(b), cm = meanOf(c);
+      if (!cm.present()) {
         row["candidate"] = nullptr;
-        row["baseline"] = meanOf(b);
-        row["note"] = c && !isOk(*c) ? "failed in this run: " + c->value("error", "")
-                                     : "not measured in this run";
-      } else if (meanOf(b).is_null()) {
+        row["baseline"] = bm.present() ? json(bm.mean) : json(nullptr);
+        row["note"] = "this run: " + cm.absent + (bm.present() ? "" : "; the baseline: " + bm.absent);
+      } else if (!bm.present()) {
         row["baseline"] = nullptr;
-        row["note"] = b && !isOk(*b) ? "failed in the baseline" : "not measured in the baseline";
+        row["note"] = "the baseline: " + bm.absent;
       }
     }
     data["regression"] = {
@@ -668,7 +670,8 @@ json reportData(const json& results, const fs::path& runDir, const json* baselin
           {"created", baseline->value("created", "")},
           {"commit", baseline->value("environment", json::object()).value("git_commit", "")}}},
         {"rows", table},
-        {"anyRegression", anyRegression(rows)}};
+        {"anyRegression", anyRegression(rows)},
+        {"settingsDiffer", settingsDifferences(*baseline, results)}};
   }
   return data;
 }
@@ -859,6 +862,7 @@ ReportSummary writeReport(const ReportOptions& o) {
   summary.index = o.out / "index.html";
   summary.pairs = data["pairs"].size();
   summary.failedPairs = data["failures"].size();
+  summary.absentSummaries = absentSummaryLines(results);
   return summary;
 }
 

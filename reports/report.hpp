@@ -29,6 +29,9 @@ struct ReportOptions {
 struct ReportSummary {
   std::filesystem::path index;  // <out>/index.html
   size_t pairs = 0, failedPairs = 0, imagesCopied = 0;
+  // The run's absent summaries with their reasons (metrics/summary_value.hpp), for the printout:
+  // the page shows them as empty cells.
+  std::vector<std::string> absentSummaries;
 };
 
 // The document embedded as data.js. `runDir` is where the run's images are looked up (only images

@@ -7,6 +7,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -20,6 +21,7 @@
 #include "harness/denoise_run.hpp"
 #include "harness/run_matrix.hpp"
 #include "harness/scene_selection.hpp"
+#include "metrics/compare.hpp"
 #include "metrics/results.hpp"
 #include "tests/test_util.hpp"
 #include "tracer/render.hpp"
@@ -604,6 +606,263 @@ TEST(Class7Messages, AFullDiskDuringARunNamesTheFileThroughTheCli) {
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find((dir / "cache").string()), std::string::npos) << r.output;
   EXPECT_NE(r.output.find(std::strerror(EFBIG)), std::string::npos) << r.output;
+}
+
+// ---- issue 30: no crash, no silent shift -----------------------------------------------------
+
+// A tiny CLI run of cornell_static into dir/NAME (cache dir/cache); extra flags appended.
+CliResult tinyCliRun(const fs::path& dir, const std::string& name, const std::string& flags) {
+  return arenaCli("run --scenes cornell_static --denoisers passthrough --no-baselines --resolution 8x8 "
+                  "--ref-spp 1 --flip none --keep-frames none --cache " +
+                  (dir / "cache").string() + " --out " + (dir / name).string() + " " + flags);
+}
+
+TEST(Issue30Absent, ARunShorterThanTheWarmupSaysWhyEveryReaderHasNoSummary) {
+  fs::path dir = test::freshDir("short_run");
+  // 3 frames, the default warm-up of 8: no frame survives it.
+  CliResult r = tinyCliRun(dir, "run", "--frames 3");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("warning: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("the sequence has 3 frames and the warm-up excludes the first 8"),
+            std::string::npos)
+      << r.output;
+  EXPECT_LT(r.output.find("warning: "), r.output.find("results: ")) << "warned after the work";
+  EXPECT_NE(r.output.find("cornell_static: relMse absent in 1 pair(s): no frame after the warm-up"),
+            std::string::npos)
+      << r.output;
+  const std::string run = (dir / "run").string();
+  r = arenaCli("compare " + run + " " + run);
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("absent"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("no frame after the warm-up"), std::string::npos) << r.output;
+  r = arenaCli("report " + run + " --baseline " + run + " --out " + (dir / "report").string());
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("absent: cornell_static: relMse absent in 1 pair(s)"), std::string::npos)
+      << r.output;
+  r = arenaCli("history " + run + " " + (dir / "run" / "results.db").string() + " --out " +
+               (dir / "history").string());
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("relMse absent in 1 pair(s): no frame after the warm-up"),
+            std::string::npos)
+      << r.output;
+}
+
+// The Error message of parsing the scene text `text`, or "" when it parsed.
+std::string sceneTextError(const std::string& text) {
+  try {
+    parseScene(text, "scenes/t.json");
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Issue30Names, CollidingNamesAndDuplicateKeysAreErrorsNamingBothPlaces) {
+  json s = minimalScene();
+  s["objects"].push_back(s["objects"][0]);
+  EXPECT_NE(sceneError(s).find("$.objects[1].name: 'floor' is already the name of $.objects[0]"),
+            std::string::npos)
+      << sceneError(s);
+  s = minimalScene();
+  s["lights"].push_back(s["lights"][0]);
+  EXPECT_NE(sceneError(s).find("$.lights[1].name: 'light' is already the name of $.lights[0]"),
+            std::string::npos)
+      << sceneError(s);
+  s = minimalScene();
+  s["lights"][0]["name"] = "floor";
+  EXPECT_NE(sceneError(s).find("$.lights[0].name: 'floor' is already the name of $.objects[0]"),
+            std::string::npos)
+      << sceneError(s);
+  // Keys given twice: nlohmann would keep one of them silently. Each case inserts a member
+  // right after `after` in the scene's text; the error names the object's path and both members.
+  struct Case {
+    std::string after, member, message;
+  };
+  const std::vector<Case> cases = {
+      {"{", "\"frames\": 7,", "scenes/t.json: $: key \"frames\" is given twice (members 1 and "},
+      {"\"materials\":{", "\"white\":{\"albedo\":[0.1,0.1,0.1]},",
+       "$.materials: key \"white\" is given twice"},
+      {"\"keys\":[{", "\"fov\":30,", "$.camera.keys[0]: key \"fov\" is given twice"},
+  };
+  for (const Case& c : cases) {
+    std::string text = minimalScene().dump();
+    text.insert(text.find(c.after) + c.after.size(), c.member);
+    EXPECT_NE(sceneTextError(text).find(c.message), std::string::npos) << sceneTextError(text);
+  }
+  EXPECT_EQ(sceneTextError(minimalScene().dump()), "");
+}
+
+TEST(Issue30Geometry, UnusableVerticesAndOverbrightAssetsAreErrorsNamingFileAndElement) {
+  fs::path dir = test::freshDir("vanishing_geometry");
+  auto meshError = [&](const std::string& obj) {
+    writeTextAtomically(dir / "m.obj", obj);
+    json s = minimalScene();
+    s["objects"].push_back({{"name", "m"},
+                            {"shape", "mesh"},
+                            {"file", "m.obj"},
+                            {"material", "white"},
+                            {"keys", json::array({{{"frame", 0}}})}});
+    return sceneError(s, (dir / "t.json").string());
+  };
+  EXPECT_EQ(meshError("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), "");
+  std::string e = meshError("v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n");
+  EXPECT_NE(e.find("$.objects[1].file"), std::string::npos) << e;
+  EXPECT_NE(e.find("m.obj:2: vertex 2: coordinate 2 is 'nan'"), std::string::npos) << e;
+  e = meshError("# a comment\nv 0 0 0\nv 1 0 0\nv 0 1e39 0\nf 1 2 3\n");
+  EXPECT_NE(e.find("m.obj:4: vertex 3: coordinate 2 is '1e39'"), std::string::npos) << e;
+  // Assets: a vertex whose triangle's cross product overflows, an emitter beyond kMaxRadiance.
+  auto assetError = [&](const std::string& obj, const std::string& mtl) {
+    writeTextAtomically(dir / "a.obj", "mtllib a.mtl\n" + obj);
+    writeTextAtomically(dir / "a.mtl", mtl);
+    json s = minimalScene();
+    s["objects"].push_back({{"name", "thing"},
+                            {"asset", {{"file", "a.obj"}, {"unitMeters", 1.0}, {"upAxis", "y"}}},
+                            {"keys", json::array({{{"frame", 0}}})}});
+    return sceneError(s, (dir / "t.json").string());
+  };
+  const std::string tri = "usemtl lamp\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  EXPECT_EQ(assetError(tri, "newmtl lamp\nKe 4 4 4\n"), "");
+  e = assetError(tri, "newmtl lamp\nKe 1e20 1e20 1e20\n");
+  EXPECT_NE(e.find("material 'lamp' emits"), std::string::npos) << e;
+  EXPECT_NE(e.find("a.obj"), std::string::npos) << e;
+  e = assetError("usemtl lamp\nv 0 0 0\nv 1e30 0 0\nv 0 1 0\nf 1 2 3\n", "newmtl lamp\nKd 1 1 1\n");
+  EXPECT_NE(e.find("has a non-finite position or one beyond +-1e18"), std::string::npos) << e;
+}
+
+TEST(Issue30Messages, AWrongTypeInResultsNamesTheFileAndThePath) {
+  fs::path dir = test::freshDir("typed_results");
+  RunConfig cfg = tinyRun("typed");
+  json r = runMatrix(cfg);
+  ASSERT_TRUE(r["pairs"][0]["summary"]["relMse"].contains("mean"));
+  r["pairs"][0]["summary"]["relMse"]["mean"] = "0.5";
+  writeTextAtomically(cfg.out / "results.json", r.dump());
+  try {
+    loadResults(cfg.out);
+    ADD_FAILURE() << "accepted a string mean";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("results.json: $.pairs[0].summary.relMse.mean: expected a "
+                                         "number (or null), got a string"),
+              std::string::npos)
+        << e.what();
+  }
+  CliResult c = arenaCli("compare " + cfg.out.string() + " " + cfg.out.string());
+  EXPECT_EQ(c.status, 2) << c.output;
+  EXPECT_NE(c.output.find("$.pairs[0].summary.relMse.mean"), std::string::npos) << c.output;
+}
+
+TEST(Issue30Messages, UsageErrorsExitTwoAndOptionsAreStrict) {
+  fs::path dir = test::freshDir("usage_errors");
+  // CLI11's own codes (105 for a failed check, 106 for a missing option, 109 for an extra
+  // argument) are the documented usage-error code.
+  for (const std::string& args :
+       {std::string("run --out x --warmup abc"), std::string("run"), std::string("scenes extra"),
+        std::string("nosuchcommand"), std::string("run --out x --flip sometimes")}) {
+    CliResult r = arenaCli(args);
+    EXPECT_EQ(r.status, 2) << args << "\n" << r.output;
+  }
+  EXPECT_EQ(arenaCli("run --help").status, 0);
+  // An empty denoiser list is not "only the baselines".
+  for (const std::string& list : {std::string("''"), std::string("svgf,"), std::string(",")}) {
+    CliResult r = arenaCli("run --scenes cornell_static --resolution 8x8 --frames 2 --ref-spp 1 --cache " +
+                           (dir / "cache").string() + " --out " + (dir / "empty").string() + " --denoisers " + list);
+    EXPECT_EQ(r.status, 2) << list << "\n" << r.output;
+    EXPECT_NE(r.output.find("an empty name"), std::string::npos) << r.output;
+  }
+  EXPECT_FALSE(fs::exists(dir / "empty" / "results.json"));
+  // A baseline that runs takes its --param; one that does not run is named as not running.
+  CliResult r = arenaCli("run --scenes cornell_static --denoisers passthrough --resolution 8x8 --ref-spp 1 "
+                         "--flip none --keep-frames none --frames 2 --warmup 1 --param temporal.maxHistory=4 "
+                         "--cache " + (dir / "cache").string() + " --out " + (dir / "baseline").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  json results = loadResults(dir / "baseline");
+  bool found = false;
+  for (const json& p : results["pairs"])
+    if (p["denoiser"] == "temporal") {
+      found = true;
+      EXPECT_EQ(p["params"]["maxHistory"], 4) << p["params"].dump();
+    }
+  EXPECT_TRUE(found);
+  r = tinyCliRun(dir, "nobaseline", "--frames 2 --param temporal.maxHistory=4");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("temporal is not among the denoisers of this run (passthrough)"),
+            std::string::npos)
+      << r.output;
+  // Hexadecimal, padded or infinite values are not decimal numbers.
+  const ParamSchema& svgf = DenoiserRegistry::instance().find("svgf").schema;
+  for (const char* bad : {"0x10", " 8", "inf", "8 ", "1e", "+"}) {
+    try {
+      svgf.resolve({{"sigmaL", bad}}, "svgf");
+      ADD_FAILURE() << "accepted sigmaL=" << bad;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string("svgf.sigmaL=") + bad +
+                                           ": expected a number in decimal notation"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  EXPECT_NO_THROW(svgf.resolve({{"sigmaL", "1e1"}}, "svgf"));
+  EXPECT_NO_THROW(svgf.resolve({{"sigmaL", "8."}}, "svgf"));
+}
+
+TEST(Issue30Compare, RunsOfOtherSettingsAreRefusedUnlessAllowed) {
+  RunConfig a = tinyRun("settings_a"), b = tinyRun("settings_b");
+  b.cache = a.cache;
+  b.warmup = 2;
+  runMatrix(a);
+  runMatrix(b);
+  const json ra = loadResults(a.out), rb = loadResults(b.out);
+  EXPECT_TRUE(settingsDifferences(ra, ra).empty());
+  const std::vector<std::string> differ = settingsDifferences(ra, rb);
+  ASSERT_EQ(differ.size(), 1u);
+  EXPECT_EQ(differ[0], "settings.warmup: 1 vs 2");
+  CliResult r = arenaCli("compare " + a.out.string() + " " + b.out.string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("were run with different settings"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("settings.warmup: 1 vs 2"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--allow-settings-mismatch"), std::string::npos) << r.output;
+  r = arenaCli("compare " + a.out.string() + " " + b.out.string() + " --allow-settings-mismatch");
+  EXPECT_NE(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("warning: comparing runs with different settings"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("verdict"), std::string::npos) << r.output;
+  // Another resolution shows per scene.
+  RunConfig c = tinyRun("settings_c");
+  c.render = test::tinySettings(8, 8, 3, 2);
+  runMatrix(c);
+  const std::vector<std::string> resolution = settingsDifferences(ra, loadResults(c.out));
+  EXPECT_NE(std::find(resolution.begin(), resolution.end(), "scenes.cornell_static.width: 16 vs 8"),
+            resolution.end());
+}
+
+TEST(Issue30Leftovers, ADeadWritersTemporaryOnThisMachineIsCleanedAtAnyAge) {
+  fs::path dir = test::freshDir("stale_tmp_host");
+  const std::string own = temporaryPathFor(dir / "x.json").filename().string();
+  const size_t at = own.find('@'), underscore = own.find('_', at);
+  ASSERT_NE(at, std::string::npos) << own;
+  const std::string host = own.substr(at + 1, underscore - at - 1);
+  const std::string dead = "999999999";
+  writeTextAtomically(dir / ("frame_0003.tmp" + dead + "@" + host + "_4.exr"), "partial");
+  writeTextAtomically(dir / ("frame_0004.tmp" + dead + "@otherhost_5.exr"), "partial");
+  EXPECT_EQ(removeStaleTemporaries(dir), 1);
+  EXPECT_FALSE(fs::exists(dir / ("frame_0003.tmp" + dead + "@" + host + "_4.exr")));
+  EXPECT_TRUE(fs::exists(dir / ("frame_0004.tmp" + dead + "@otherhost_5.exr")))
+      << "a young temporary of another machine may be a live write";
+  // A render killed mid-write and rerun at once: the rerun leaves no temporary behind.
+  fs::path cache = test::freshDir("stale_tmp_cache");
+  Scene scene = test::shippedScene("cornell_static");
+  RenderSettings settings = test::tinySettings(8, 8, 2, 1);
+  fs::path seq = renderSequence(scene, settings, cache, nullptr);
+  fs::path frame;
+  for (auto& e : fs::directory_iterator(seq))
+    if (e.path().filename().string().rfind("frame_", 0) == 0 && e.path().extension() == ".exr")
+      frame = e.path();
+  ASSERT_FALSE(frame.empty());
+  const fs::path leftover = seq / (frame.stem().string() + ".tmp" + dead + "@" + host + "_7.exr");
+  fs::copy_file(frame, leftover);
+  fs::remove(seq / "sequence.json");  // the kill came before the sequence was complete
+  renderSequence(scene, settings, cache, nullptr);
+  EXPECT_FALSE(fs::exists(leftover));
+  EXPECT_NO_THROW(Sequence::open(seq).frame(1));
 }
 
 }  // namespace

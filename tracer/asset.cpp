@@ -237,6 +237,13 @@ struct Loader {
                                 glm::vec3(mat.roughness, mat.metallic, mat.specular)};
     for (glm::vec3 v : values)
       if (!finite(v)) throw Error(path + ": material '" + mat.name + "' has a non-finite value");
+    // As the scene file's own emitters (kMaxRadiance): more would overflow the reference's
+    // variance to Inf in the cache.
+    const float emitted = std::max({mat.emission.x, mat.emission.y, mat.emission.z});
+    if (emitted > kMaxRadiance)
+      throw Error(path + ": material '" + mat.name + "' emits " + std::to_string(emitted) +
+                  "; expected emission (Ke, emissiveFactor x strength) <= " +
+                  std::to_string(kMaxRadiance));
     mat.albedo = glm::clamp(mat.albedo, 0.0f, 1.0f);
     mat.emission = glm::max(mat.emission, glm::vec3(0.0f));
     mat.roughness = std::clamp(mat.roughness, 0.0f, 1.0f);
@@ -264,10 +271,13 @@ struct Loader {
     std::vector<glm::vec3> faceNormals;  // unnormalised (twice the area)
     for (unsigned v = 0; v < mesh.mNumVertices; ++v) {
       const aiVector3D& p = mesh.mVertices[v];
-      if (!finite({p.x, p.y, p.z}))
+      // Beyond kMaxMeshCoordinate the triangle's cross product overflows and it would be
+      // dropped as "degenerate": an error, not a miscounted fallback.
+      if (!finite({p.x, p.y, p.z}) || std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) >
+                                          kMaxMeshCoordinate)
         throw Error(path + ": " + meshName + " vertex " + std::to_string(v) +
-                    " has a non-finite position (" + std::to_string(p.x) + ", " +
-                    std::to_string(p.y) + ", " + std::to_string(p.z) + ")");
+                    " has a non-finite position or one beyond +-1e18 (" + std::to_string(p.x) +
+                    ", " + std::to_string(p.y) + ", " + std::to_string(p.z) + ")");
       if (mesh.HasTextureCoords(0)) {
         const aiVector3D& t = mesh.mTextureCoords[0][v];
         if (!std::isfinite(t.x) || !std::isfinite(t.y))

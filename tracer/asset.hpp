@@ -52,6 +52,14 @@ struct AssetData {
   float durationSeconds() const;
 };
 
+// Mesh and asset vertex coordinates (object space): beyond this a triangle's edge cross product
+// (its normal and area, ~|v|^2) overflows float and the triangle would vanish from the render.
+constexpr double kMaxMeshCoordinate = 1e18;
+// Emitted radiance (the scene file's materials, lights and sky, and assets' emission) above this
+// overflows float accumulators once multiplied by sample counts and squared for the references'
+// variances.
+constexpr float kMaxRadiance = 1e9f;
+
 // Largest asset, side file (MTL, .bin) or texture file read; checked before reading.
 constexpr uintmax_t kMaxAssetBytes = uintmax_t(256) << 20;
 

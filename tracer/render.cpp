@@ -707,7 +707,8 @@ void writeReferenceSums(const fs::path& path, const ReferenceSums& sums, const s
     out.write(reinterpret_cast<const char*>(&size), sizeof size);
     out.write(header.data(), std::streamsize(header.size()));
     out.write(reinterpret_cast<const char*>(sums.sum.data()), std::streamsize(sums.sum.size() * sizeof(double)));
-    if (!out) throw Error(path.string() + ": cannot write the reference sums");
+    out.flush();  // a full disk shows here, with errno still the write's (ENOSPC, EFBIG)
+    if (!out) throw Error(osError(tmp, "cannot write the reference sums", errno ? errno : EIO));
   });
 }
 
@@ -898,6 +899,9 @@ fs::path refineSequence(const Scene& scene, const RenderSettings& settings, cons
   SequenceRenderer renderer(scene, settings);
   // The references (and their sums) live in their home, shared by every input seed.
   const fs::path home = referenceDir(scene, settings, cacheRoot);
+  // Refining rewrites both directories: what a killed refinement left there goes first.
+  removeStaleTemporaries(dir);
+  if (home != dir) removeStaleTemporaries(home);
   const std::string hash = sequenceHash(scene, referenceHomeSettings(settings));
   const int references = int(info.referenceSpp.size());
   for (int r = 0; r < references; ++r) {

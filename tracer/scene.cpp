@@ -7,6 +7,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <map>
 #include <mutex>
+#include <sstream>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
@@ -45,9 +46,6 @@ namespace {
 // Positions, rotations and scales beyond this lose every digit of float precision that the
 // tracer needs (and 1e39 is +Inf in float): far larger than any scene, small enough to be safe.
 constexpr float kMaxCoordinate = 1e6f;
-// Emitted radiance above this overflows float accumulators once multiplied by sample counts and
-// squared for variances.
-constexpr float kMaxRadiance = 1e9f;
 
 void requireNonNegative(JsonReader& r, const std::string& key, glm::vec3 v) {
   if (v.x < 0 || v.y < 0 || v.z < 0) r.fail(key, "expected non-negative values");
@@ -83,6 +81,32 @@ float numberIn(JsonReader& r, const std::string& key, double fallback, double lo
     r.fail(key, "expected a value in [" + std::to_string(lo) + ", " + std::to_string(hi) +
                     "], got " + std::to_string(v));
   return float(v);
+}
+
+// Every "v x y z" line of an OBJ file holds three numbers that fit a float within
+// kMaxMeshCoordinate. tinyobjloader reads "1e39" as +Inf and "nan" as 0 or NaN without a word,
+// and a triangle with such a corner vanishes from the render (Embree skips it).
+void requireUsableObjVertices(const std::string& text, const std::string& file) {
+  std::istringstream lines(text);
+  int lineNumber = 0, vertex = 0;
+  for (std::string line; std::getline(lines, line);) {
+    ++lineNumber;
+    std::istringstream fields(line);
+    std::string tag;
+    if (!(fields >> tag) || tag != "v") continue;
+    ++vertex;
+    for (int axis = 0; axis < 3; ++axis) {
+      std::string token;
+      fields >> token;
+      char* end = nullptr;
+      const double v = std::strtod(token.c_str(), &end);
+      if (token.empty() || *end != '\0' || !std::isfinite(v) || std::abs(v) > kMaxMeshCoordinate)
+        throw Error(file + ":" + std::to_string(lineNumber) + ": vertex " + std::to_string(vertex) +
+                    ": coordinate " + std::to_string(axis + 1) + " is '" + token +
+                    "'; expected a finite number within +-1e18 (its triangles would vanish from "
+                    "the render)");
+    }
+  }
 }
 
 // Reads "keys": [{frame, step?, ...fields}], each key inheriting unspecified fields from the
@@ -315,9 +339,19 @@ Scene parseScene(const std::string& text, const std::string& path) {
   const fs::path sceneDir = fs::path(path).parent_path();
   Hasher hasher;
   hasher.add(doc.dump());
+  // Objects and lights share one namespace: events name them ("what"), and asset materials are
+  // named "<object>/<material>"; a second use of a name would make either ambiguous.
+  std::map<std::string, std::string> namedAt;  // name -> the JSON path that first used it
+  auto claimName = [&](JsonReader& r, const std::string& name) {
+    auto [it, fresh] = namedAt.emplace(name, r.path());
+    if (!fresh)
+      r.fail("name", "'" + name + "' is already the name of " + it->second +
+                         "; objects and lights need distinct names");
+  };
   for (JsonReader& o : root.requiredArray("objects")) {
     Object obj;
     obj.name = o.string("name");
+    claimName(o, obj.name);
     if (o.has("asset")) {
       readAssetObject(o, sceneDir, materialIndex, obj, scene, hasher);
     } else {
@@ -326,8 +360,10 @@ Scene parseScene(const std::string& text, const std::string& path) {
         obj.meshFile = (sceneDir / o.string("file")).string();
         if (!fs::exists(obj.meshFile)) o.fail("file", "mesh file not found: " + obj.meshFile);
         try {
-          hasher.add(readText(obj.meshFile,
-                              kMaxMeshBytes));  // a regular file of bounded size (not /dev/zero)
+          // A regular file of bounded size (not /dev/zero).
+          const std::string mesh = readText(obj.meshFile, kMaxMeshBytes);
+          requireUsableObjVertices(mesh, obj.meshFile);
+          hasher.add(mesh);
         } catch (const Error& e) {
           o.fail("file", e.what());
         }
@@ -341,6 +377,7 @@ Scene parseScene(const std::string& text, const std::string& path) {
   for (JsonReader& l : root.optionalArray("lights")) {
     Light light;
     light.name = l.string("name");
+    claimName(l, light.name);
     light.shape = readShape(l, false);
     struct LightKey {
       Transform t;

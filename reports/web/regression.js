@@ -21,7 +21,7 @@
       el('option', { value: 'regressed', text: 'regressed only' }),
       el('option', { value: 'all', text: 'all comparisons' }));
     const tableBox = el('div', { class: 'table-wrap' });
-    const order = { regressed: 0, failed: 0, missing: 1, unresolved: 2, new: 3, improved: 4, ok: 5 };
+    const order = { regressed: 0, failed: 0, missing: 1, unresolved: 2, new: 3, improved: 4, absent: 5, ok: 6 };
     const draw = () => {
       const rows = R.rows.filter((r) => filter.value === 'all' || (filter.value === 'regressed' ? r.verdict === 'regressed' : r.verdict !== 'ok'))
         .sort((a, b) => order[a.verdict] - order[b.verdict] || Math.abs(b.change) - Math.abs(a.change));
@@ -37,12 +37,15 @@
     };
     filter.addEventListener('change', draw);
     const b = R.baseline;
-    body.replaceChildren(
+    body.replaceChildren(...[
       el('p', {}, `Baseline: ${b.name || '(unnamed)'}${b.created ? ` (${b.created}` : ''}${b.commit ? `, commit ${b.commit})` : b.created ? ')' : ''}. `,
         el('b', { class: R.anyRegression ? 'worse' : 'best', text: R.anyRegression ? '`arena compare` would fail (exit 1).' : '`arena compare` would pass.' })),
+      (R.settingsDiffer || []).length
+        ? el('p', { class: 'warnings', text: `The runs' settings differ (baseline vs this run), so their numbers are not comparable: ${R.settingsDiffer.join('; ')}. \`arena compare\` refuses this without --allow-settings-mismatch.` })
+        : null,
       el('p', { class: 'note', text: `Verdicts: ${Object.entries(counts).map(([k, n]) => `${n} ${k}`).join(', ') || 'none'}. A metric regresses when its mean moved in its worse direction by more than its tolerance, relative to the baseline.` }),
       el('div', { class: 'controls' }, el('label', {}, 'Show ', filter)),
-      tableBox);
+      tableBox].filter(Boolean));
     draw();
   }
 })();
