@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "harness/denoise_run.hpp"
-#include "tracer/render.hpp"
+#include "tracer/sequence_cache.hpp"
 
 namespace arena {
 

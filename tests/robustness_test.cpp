@@ -179,14 +179,14 @@ TEST(Class3Crashes, AResolutionBeyondMemoryIsAClearErrorBeforeAllocating) {
   Scene scene = loadScene(file.string());
   RenderSettings settings = test::tinySettings(16384, 16384, 100000, 1);
   try {
-    cli::requireFitsInMemory(scene, settings, true);
+    requireFitsInMemory(scene, settings, true);
     ADD_FAILURE() << "16384x16384 x 100000 frames fits?";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("huge.json: 16384x16384 x 100000 frames needs about"),
               std::string::npos)
         << e.what();
   }
-  EXPECT_NO_THROW(cli::requireFitsInMemory(scene, test::tinySettings(64, 32, 10, 1), true));
+  EXPECT_NO_THROW(requireFitsInMemory(scene, test::tinySettings(64, 32, 10, 1), true));
   CliResult r =
       arenaCli("run --scenes " + file.string() + " --denoisers passthrough --frames 100000 --out " +
                (dir / "run").string() + " --cache " + (dir / "cache").string());
@@ -249,7 +249,7 @@ TEST(Class4WrongValues, TwoSceneFilesWithOneStemCannotShareARun) {
   fs::path a = writeScene(dir / "a", "room", minimalScene()),
            b = writeScene(dir / "b", "room", minimalScene());
   try {
-    cli::selectScenes(a.string() + "," + b.string(), dir.string());
+    selectScenes(a.string() + "," + b.string(), dir.string());
     ADD_FAILURE() << "accepted two scenes named room";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("share the name 'room'"), std::string::npos) << e.what();

@@ -9,7 +9,7 @@
 #include <string>
 
 #include "denoisers/denoiser.hpp"
-#include "tracer/render.hpp"
+#include "tracer/sequence_cache.hpp"
 #include "tracer/scene.hpp"
 
 namespace arena::test {

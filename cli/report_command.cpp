@@ -1,7 +1,7 @@
 // `arena report`: the static HTML dashboard of a run (reports/report.hpp does the work).
 #include <iostream>
 
-#include "harness/commands.hpp"
+#include "cli/commands.hpp"
 #include "metrics/metric_registry.hpp"
 #include "metrics/compare.hpp"
 #include "reports/history.hpp"

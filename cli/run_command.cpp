@@ -8,13 +8,15 @@
 
 #include "core/error.hpp"
 #include "denoisers/external/loader.hpp"
-#include "harness/commands.hpp"
-#include "harness/printout.hpp"
+#include "cli/commands.hpp"
+#include "cli/printout.hpp"
+#include "cli/render_options.hpp"
 #include "metrics/compare.hpp"
 #include "metrics/results.hpp"
 #include "metrics/summary_value.hpp"
 #include "harness/run_matrix.hpp"
 #include "harness/scene_selection.hpp"
+#include "harness/sweep.hpp"
 
 namespace arena::cli {
 
@@ -178,44 +180,12 @@ void addRunCommands(CLI::App& app) {
     cmd->callback([o, denoiser, grids] {
       RunConfig c = configFrom(*o);
       *denoiser = DenoiserRegistry::resolve(*denoiser);  // ext:MANIFEST or plugin:LIBRARY too
-      const DenoiserInfo& info = DenoiserRegistry::instance().find(*denoiser);
       auto assignments = parseParamAssignments(o->params);
       for (auto& [other, kv] : assignments)
         if (other != *denoiser)
           throw Error("--param " + other + "." + kv.begin()->first + ": this sweep runs only " + *denoiser +
                       "; --param must name " + *denoiser + ".NAME");
-      auto fixed = assignments[*denoiser];
-      std::vector<std::pair<std::string, std::vector<std::string>>> axes;
-      for (const std::string& g : *grids) {
-        size_t eq = g.find('=');
-        if (eq == std::string::npos || g.size() < eq + 3 || g[eq + 1] != '[' || g.back() != ']')
-          throw Error("--grid '" + g + "': expected NAME=[v1,v2,...]");
-        std::string name = g.substr(0, eq);
-        if (name.rfind(*denoiser + ".", 0) == 0) name = name.substr(denoiser->size() + 1);
-        if (!info.schema.find(name)) info.schema.resolve({{name, ""}}, *denoiser);  // throws, listing names
-        for (auto& [axis, values] : axes)
-          if (axis == name) throw Error("--grid '" + g + "': " + name + " is already an axis of this sweep");
-        if (fixed.count(name)) throw Error("--grid '" + g + "': " + name + " is also fixed by --param");
-        axes.push_back({name, splitList(g.substr(eq + 2, g.size() - eq - 3))});
-        if (axes.back().second.empty()) throw Error("--grid '" + g + "': no values");
-        std::set<std::string> distinct(axes.back().second.begin(), axes.back().second.end());
-        if (distinct.size() != axes.back().second.size()) throw Error("--grid '" + g + "': a value is listed twice");
-      }
-      std::vector<std::map<std::string, std::string>> settings = {fixed};
-      for (auto& [name, values] : axes) {
-        std::vector<std::map<std::string, std::string>> next;
-        for (auto& s : settings)
-          for (auto& v : values) {
-            auto t = s;
-            t[name] = v;
-            next.push_back(t);
-          }
-        settings = next;
-      }
-      json grid = json::object();
-      for (auto& [name, values] : axes) grid[name] = values;
-      for (auto& s : settings) c.denoisers.push_back({*denoiser, s, ""});
-      c.annotations["sweep"] = {{"denoiser", *denoiser}, {"grid", grid}, {"fixed", fixed}};
+      c = sweepRun(std::move(c), *denoiser, assignments[*denoiser], *grids);
       json results = runMatrix(c);
       finish(results, o->out);
     });

@@ -13,7 +13,7 @@
 #include <typeinfo>
 
 #include "core/error.hpp"
-#include "harness/commands.hpp"
+#include "cli/commands.hpp"
 
 namespace {
 

@@ -1,10 +1,10 @@
-#include "harness/printout.hpp"
+#include "cli/printout.hpp"
 
 #include <cmath>
 #include <cstdio>
 #include <iomanip>
 
-namespace arena {
+namespace arena::cli {
 
 using nlohmann::json;
 
@@ -35,7 +35,12 @@ std::string figureText(const json& v) { return v.is_number() ? figureText(v.get<
 
 std::string intervalText(const json& ci) {
   if (!ci.is_array() || ci.size() != 2) return "–";
-  return "[" + figureText(ci[0]) + ", " + figureText(ci[1]) + "]";
+  std::string text = "[";  // appended, not "[" + string: GCC 12 warns falsely (-Wrestrict) on that
+  text += figureText(ci[0]);
+  text += ", ";
+  text += figureText(ci[1]);
+  text += "]";
+  return text;
 }
 
 std::string tiedText(const json& m) {
@@ -58,4 +63,4 @@ void printOverallRanking(std::ostream& out, const json& results) {
   if (o.contains("excluded")) out << "  not ranked overall: " << o["excluded"].get<std::string>() << "\n";
 }
 
-}  // namespace arena
+}  // namespace arena::cli

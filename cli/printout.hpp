@@ -6,7 +6,7 @@
 #include <ostream>
 #include <string>
 
-namespace arena {
+namespace arena::cli {
 
 // 4 significant digits, trailing zeros dropped; 2 decimals in exponent form below 1e-3 or from 1e5
 // ("1.23e-4"); "0" for zero and "–" for a missing value (the report's fmt).
@@ -20,4 +20,4 @@ std::string tiedText(const nlohmann::json& rankedMethod);
 // ties; and who was left out and why. Nothing when the run has none.
 void printOverallRanking(std::ostream& out, const nlohmann::json& results);
 
-}  // namespace arena
+}  // namespace arena::cli

@@ -7,10 +7,11 @@
 #include "core/error.hpp"
 #include "core/sequence.hpp"
 #include "harness/image_files.hpp"
-#include "harness/commands.hpp"
+#include "cli/commands.hpp"
+#include "cli/render_options.hpp"
 #include "harness/run_matrix.hpp"
 #include "harness/scene_selection.hpp"
-#include "tracer/render.hpp"
+#include "tracer/sequence_cache.hpp"
 
 namespace arena::cli {
 

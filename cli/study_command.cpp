@@ -9,10 +9,12 @@
 #include <sstream>
 
 #include "core/error.hpp"
-#include "harness/commands.hpp"
-#include "harness/printout.hpp"
+#include "cli/commands.hpp"
+#include "cli/printout.hpp"
+#include "cli/render_options.hpp"
 #include "harness/reference_quality.hpp"
 #include "harness/run_matrix.hpp"
+#include "harness/study.hpp"
 #include "harness/scene_selection.hpp"
 #include "metrics/summary_value.hpp"
 #include "reports/report.hpp"
@@ -102,33 +104,6 @@ void printEvents(const json& results) {
       }
 }
 
-// The study's second pass (issue 13): refines the references of the scenes that missed the
-// reference-quality goal, cheapest first within the budget (planReferenceRefinement), and notes on
-// each verdict what was done or what it would take. Returns the scenes whose references it refined.
-std::vector<Scene> refineReferences(RunConfig& c, const json& results, double budget, int maxSpp) {
-  std::map<std::string, SequenceInfo> sequences;
-  for (const Scene& s : c.scenes) {
-    const std::filesystem::path dir = sequenceDir(s, c.render, c.cache);
-    if (std::filesystem::exists(dir / "sequence.json")) sequences.emplace(s.name, Sequence::open(dir).info());
-  }
-  std::vector<Scene> refined;
-  for (const ReferenceRefinement& plan : planReferenceRefinement(results, sequences, c.warmup, maxSpp, budget)) {
-    c.referenceNotes[plan.scene] = refinementNote(plan, budget);
-    c.progress("[refine] " + plan.scene + ": " + c.referenceNotes[plan.scene]);
-    if (!plan.withinBudget) continue;
-    const Scene& scene = *std::find_if(c.scenes.begin(), c.scenes.end(),  // planned from c.scenes
-                                       [&](const Scene& s) { return s.name == plan.scene; });
-    try {
-      refineSequence(scene, c.render, c.cache, plan.targetRelMse, maxSpp, c.progress, c.warmup);
-      refined.push_back(scene);
-    } catch (const Error& e) {  // e.g. a reference without its sums: the first pass's verdict stands
-      c.referenceNotes[plan.scene] = std::string("the study could not refine it: ") + e.what();
-      c.progress("[refine] " + plan.scene + ": " + c.referenceNotes[plan.scene]);
-    }
-  }
-  return refined;
-}
-
 }  // namespace
 
 void addStudyCommand(CLI::App& app) {
@@ -167,34 +142,18 @@ void addStudyCommand(CLI::App& app) {
   addRenderOptions(cmd, *opt);
   cmd->callback([=] {
     const auto start = std::chrono::steady_clock::now();
-    RunConfig c;
-    c.name = "study";
+    StudyConfig study{studyRun(selectScenes(*scenes, opt->scenesDir), opt->settings()), *refineBudget,
+                      *refineMaxSpp};
+    RunConfig& c = study.run;
     c.out = *out;
     c.cache = opt->cacheDir;
-    c.render = opt->settings();
-    c.scenes = selectScenes(*scenes, opt->scenesDir);
+    c.flip = *flip;
+    c.exposure = *exposure;
+    c.progress = [](const std::string& line) { std::cout << line << std::endl; };
     for (const Scene& s : c.scenes) requireFitsInMemory(s, c.render, true);
     for (const std::string& w : shortSequenceWarnings(c.scenes, c.render, c.warmup))
       std::cerr << "arena: warning: " << w << "\n";
-    for (const std::string& n : DenoiserRegistry::instance().names()) c.denoisers.push_back({n, {}, ""});
-    c.flip = *flip;
-    c.exposure = *exposure;
-    c.keepFrames = "chosen";
-    c.progress = [](const std::string& line) { std::cout << line << std::endl; };
-    // With a refinement budget the first pass is finished (analysed and committed) only after the
-    // refinement, once, so the run directory and results.db hold one run: the final one.
-    c.finish = !(*refineBudget > 0);
-    json results = runMatrix(c);
-    if (!c.finish) {
-      addReferenceQuality(results, c.warmup);  // the plan reads the first pass's verdicts
-      RunConfig again = c;
-      again.scenes = refineReferences(c, results, *refineBudget, *refineMaxSpp);
-      if (!again.scenes.empty()) {
-        c.progress("[refine] running the refined scenes again");
-        results = replaceScenes(std::move(results), runMatrix(again));
-      }
-      finishRun(results, c);
-    }
+    const json results = runStudy(study);
     ReportOptions ro;
     ro.run = *out;
     ro.out = *report;

@@ -1,0 +1,91 @@
+#include "cli/render_options.hpp"
+
+#include <cmath>
+
+#include "core/error.hpp"
+#include "harness/scene_selection.hpp"
+
+namespace arena::cli {
+
+// Unset overrides are 0 (or -1): the CLI checks below reject those values when given explicitly, so
+// "0" can never quietly mean "the default".
+RenderSettings RenderOptions::settings() const {
+  RenderSettings s = RenderSettings::fromPreset(preset);
+  if (!resolution.empty())
+    std::tie(s.width, s.height) = parseResolution("--resolution", resolution);
+  if (frames > 0) s.frames = frames;
+  if (referenceSpp > 0) {
+    s.referenceSpp = referenceSpp;
+    s.referenceMinSpp = std::min(s.referenceMinSpp, referenceSpp);
+  }
+  if (referenceRelError >= 0) s.referenceRelError = referenceRelError;
+  s.maxBounces = maxBounces;
+  if (inputSeed < 0 || inputSeed > 0xffffffffll)
+    throw Error("--input-seed " + std::to_string(inputSeed) + ": expected 0 to 4294967295");
+  s.inputSeed = uint32_t(inputSeed);
+  s.referenceSampler = referenceSampler;
+  s.referenceTile = referenceTile;
+  if (lowresFactor < 0 || lowresFactor == 1)
+    throw Error("--lowres-factor " + std::to_string(lowresFactor) + ": expected 0 (none) or a block size >= 2");
+  if (lowresSpp < 1 || lowresSpp > 4096)
+    throw Error("--lowres-spp " + std::to_string(lowresSpp) + ": expected a count in [1, 4096]");
+  s.lowresFactor = lowresFactor;
+  s.lowresSpp = lowresSpp;
+  return s;
+}
+
+CLI::Validator finiteRange(double lo, double hi) {
+  const std::string range =
+      "[" + CLI::detail::to_string(lo) + ", " + CLI::detail::to_string(hi) + "]";
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        double v = 0;
+        if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v) || v < lo || v > hi)
+          return "value " + text + " is not a finite number in " + range;
+        return "";
+      },
+      "FLOAT in " + range);
+}
+
+void addRenderOptions(CLI::App* cmd, RenderOptions& o) {
+  cmd->add_option("--preset", o.preset,
+                  "quick (the scene's resolution) or paper (1280x720, 4096 spp)")
+      ->check(CLI::IsMember({"quick", "paper"}))
+      ->default_str("quick");
+  cmd->add_option("--resolution", o.resolution, "Override the resolution, WIDTHxHEIGHT")
+      ->default_str("the scene's; paper: 1280x720");
+  cmd->add_option("--frames", o.frames, "Override the frame count")
+      ->check(CLI::Range(1, kMaxSceneFrames))
+      ->default_str("the scene's");
+  cmd->add_option("--ref-spp", o.referenceSpp, "Maximum samples per pixel of the references")
+      ->check(CLI::Range(1, 1 << 20))
+      ->default_str("quick: 512, paper: 4096");
+  cmd->add_option("--ref-rel-error", o.referenceRelError,
+                  "Adaptive stopping: stop a reference when its estimated relative error is below "
+                  "this (0: off)")
+      ->check(finiteRange(0.0, 1.0))
+      ->default_str("quick: 0.01, paper: 0");
+  cmd->add_option("--max-bounces", o.maxBounces, "Override the scene's maximum path length")
+      ->check(CLI::Range(1, 64))
+      ->default_str("the scene's");
+  cmd->add_option("--input-seed", o.inputSeed,
+                  "Another noise realisation of the 1-spp input (0: the scene's seed); references are unchanged")
+      ->default_val(0);
+  cmd->add_option("--ref-sampler", o.referenceSampler,
+                  "References' sampler: sobol (Owen-scrambled, default) or independent (1-spp frames: always independent)")
+      ->check(CLI::IsMember({"sobol", "independent"}));
+  cmd->add_option("--ref-tile", o.referenceTile,
+                  "Adaptive allocation of reference samples per tile of this many pixels square, "
+                  "toward --ref-rel-error (0: one tile, every pixel the same count)")
+      ->check(CLI::Range(0, 1024))
+      ->default_val(8);
+  cmd->add_option("--lowres-factor", o.lowresFactor,
+                  "Also render a low-resolution, many-sample buffer per frame, one texel per FxF block "
+                  "(CAPCOM 2023 disocclusion rays; 0: none)");
+  cmd->add_option("--lowres-spp", o.lowresSpp, "Paths per low-resolution texel (default 16)");
+  cmd->add_option("--cache", o.cacheDir, "Sequence cache directory")->default_val("cache");
+  cmd->add_option("--scenes-dir", o.scenesDir, "Directory of scene files")
+      ->default_str(o.scenesDir);
+}
+
+}  // namespace arena::cli

@@ -1,0 +1,32 @@
+#pragma once
+// The options every rendering command shares (preset, overrides, cache location) and their CLI11
+// declarations; RenderOptions::settings() turns them into the library's RenderSettings.
+#include <CLI/CLI.hpp>
+#include <string>
+
+#include "tracer/render.hpp"
+#include "tracer/scene.hpp"
+
+namespace arena::cli {
+
+struct RenderOptions {
+  std::string preset = "quick";
+  std::string resolution;  // WxH
+  int frames = 0;
+  int referenceSpp = 0;
+  double referenceRelError = -1;
+  int maxBounces = 0;
+  long long inputSeed = 0;
+  std::string referenceSampler = "sobol";
+  int referenceTile = 8;                 // adaptive allocation tile (0: one tile, uniform)
+  int lowresFactor = 0, lowresSpp = 16;  // CAPCOM 2023 low-resolution buffer (0: none)
+  std::string cacheDir = "cache";
+  std::string scenesDir = defaultScenesDir();
+  RenderSettings settings() const;
+};
+void addRenderOptions(CLI::App* cmd, RenderOptions& options);
+
+// A CLI check: a finite number in [lo, hi] (CLI::Range lets "nan" through).
+CLI::Validator finiteRange(double lo, double hi);
+
+}  // namespace arena::cli

@@ -1,0 +1,351 @@
+#include "harness/benchmarks.hpp"
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <random>
+
+#include "core/env_info.hpp"
+#include "core/error.hpp"
+#include "harness/denoise_run.hpp"
+#include "metrics/error.hpp"
+
+namespace arena {
+
+namespace {
+
+using nlohmann::json;
+
+std::string printed(const char* format, auto... args) {
+  char buf[1024];
+  std::snprintf(buf, sizeof buf, format, args...);
+  return buf;
+}
+
+// Runs Embree's tutorial benchmark and returns its average Mrays/s (0 if unavailable).
+double embreePathtracerMrays(int size, std::string& note) {
+  const char* model = "/usr/share/doc/embree3/models/cornell_box.ecs";
+  if (!std::filesystem::exists("/usr/bin/pathtracer") || !std::filesystem::exists(model)) {
+    note = "embree-tools not installed (apt-get install embree-tools)";
+    return 0;
+  }
+  std::string cmd = std::string("/usr/bin/pathtracer -c ") + model + " --size " + std::to_string(size) + " " +
+                    std::to_string(size) + " --benchmark 10 50 2>/dev/null";
+  FILE* p = popen(cmd.c_str(), "r");
+  if (!p) return 0;
+  std::array<char, 512> line{};
+  double mrays = 0;
+  while (fgets(line.data(), int(line.size()), p)) {
+    double v;
+    if (std::sscanf(line.data(), "BENCHMARK_RENDER_MRAYPS_AVG %lf", &v) == 1) mrays = v;
+  }
+  pclose(p);
+  if (mrays == 0) note = "could not parse pathtracer output";
+  return mrays;
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+double p95(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[std::min(v.size() - 1, size_t(std::ceil(0.95 * double(v.size()))) - 1)];
+}
+
+}  // namespace
+
+PairedRatio pairedRatio(const std::vector<double>& a, const std::vector<double>& b) {
+  std::vector<double> r;
+  for (size_t i = 0; i < std::min(a.size(), b.size()); ++i)
+    if (b[i] > 0) r.push_back(a[i] / b[i]);
+  if (r.empty()) return {};
+  std::sort(r.begin(), r.end());
+  const double n = double(r.size());
+  const double half = 1.96 * std::sqrt(n) / 2;
+  const size_t lo = n < 6 ? 0 : size_t(std::max(0.0, std::floor(n / 2 - half)));
+  const size_t hi = n < 6 ? r.size() - 1 : std::min(r.size() - 1, size_t(std::ceil(n / 2 + half)) - 1);
+  return {median(r), r[lo], r[hi]};
+}
+
+double bilateralUnitMs(int width, int height, int repetitions) {
+  cv::Mat src(height, width, CV_32FC3), dst;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) src.at<cv::Vec3f>(y, x) = cv::Vec3f(u(rng), u(rng), u(rng));
+  cv::bilateralFilter(src, dst, 5, 0.1, 2.0);  // warm-up
+  std::vector<double> ms;
+  for (int i = 0; i < repetitions; ++i) {
+    auto t0 = std::chrono::steady_clock::now();
+    cv::bilateralFilter(src, dst, 5, 0.1, 2.0);
+    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  }
+  return median(ms);
+}
+
+json benchTracer(const TracerBench& b, const ProgressFn& progress) {
+  Scene scene = loadScene(b.sceneFile);
+  RenderSettings settings;
+  settings.width = settings.height = b.size;
+  settings.frames = 1;
+  SequenceRenderer renderer(scene, settings);
+  for (int i = 0; i < b.warmup; ++i) renderer.renderFrame(0);
+  RayCounts total;
+  auto t0 = std::chrono::steady_clock::now();
+  for (int i = 0; i < b.frames; ++i) {
+    auto r = renderer.renderFrame(0);
+    total.rays += r.counts.rays;
+    total.paths += r.counts.paths;
+  }
+  double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  json out = {{"scene", scene.name}, {"size", b.size}, {"frames", b.frames},
+              {"seconds", sec}, {"mrays_per_s", double(total.rays) / sec * 1e-6},
+              {"mpaths_per_s", double(total.paths) / sec * 1e-6},
+              {"rays_per_path", double(total.rays) / double(total.paths)},
+              {"ms_per_frame", sec * 1e3 / b.frames}, {"environment", environmentInfo()}};
+  progress(printed("arena tracer: %.2f Mrays/s, %.2f Mpaths/s, %.1f ms/frame at %dx%d (%.2f rays/path)",
+                   out["mrays_per_s"].get<double>(), out["mpaths_per_s"].get<double>(),
+                   out["ms_per_frame"].get<double>(), b.size, b.size, out["rays_per_path"].get<double>()));
+  if (b.embree) {
+    std::string note;
+    double e = embreePathtracerMrays(b.size, note);
+    out["embree_pathtracer_mrays_per_s"] = e;
+    if (e > 0) {
+      out["ratio_to_embree"] = out["mrays_per_s"].get<double>() / e;
+      progress(printed("embree pathtracer: %.2f Mrays/s  -> ratio %.2fx", e, out["ratio_to_embree"].get<double>()));
+    } else {
+      progress("embree pathtracer: not measured (" + note + ")");
+    }
+  }
+  return out;
+}
+
+json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
+  const int w = b.width, h = b.height;
+  Scene scene = loadScene(b.sceneFile);
+  RenderSettings settings;
+  settings.width = w;
+  settings.height = h;
+  settings.frames = std::max(1, b.inputs);
+  settings.lowresFactor = b.lowresFactor;
+  settings.lowresSpp = b.lowresSpp;
+  SequenceRenderer renderer(scene, settings);
+  std::vector<LayerSet> inputs, inputGradients, inputLowres;
+  progress(printed("rendering %d input frame(s) of %s at %dx%d...", settings.frames, scene.name.c_str(), w, h));
+  for (int t = 0; t < settings.frames; ++t) {
+    auto r = renderer.renderFrame(t);
+    inputs.push_back(std::move(r.frame));
+    inputGradients.push_back(std::move(r.gradients));  // empty for frame 0
+  }
+  const double bu = bilateralUnitMs(1280, 720, 15);
+  progress(printed("1 BU = cv::bilateralFilter(5, 0.1, 2.0) on 1280x720 CV_32FC3 = %.2f ms", bu));
+  auto params = b.params;
+  bool lowres = false;
+  for (const std::string& name : b.denoisers) {
+    const DenoiserInfo& info = DenoiserRegistry::instance().find(name);
+    lowres = lowres || info.create(info.schema.resolve(params[name], name), SignalKind::Diffuse)->wantsLowres();
+  }
+  if (lowres && b.lowresFactor > 0) {
+    progress(printed("rendering the low-resolution buffer (1/%d, %d spp)...", b.lowresFactor, b.lowresSpp));
+    for (int t = 0; t < settings.frames; ++t) {
+      RayCounts counts;
+      inputLowres.push_back(renderer.renderLowres(t, counts));
+    }
+  }
+  json out = {{"resolution", {w, h}}, {"bilateralUnitMs", bu}, {"frames", b.frames},
+              {"warmup", b.warmup}, {"environment", environmentInfo()}, {"denoisers", json::array()}};
+  // Every contender runs on every frame, in an order rotated frame by frame, so that a change
+  // of machine load (another process, thermal state) falls on all of them alike and the
+  // per-frame ratios to the first contender are paired measurements.
+  struct Contender {
+    std::string name;
+    ParamSet params;
+    std::vector<SignalKind> kinds;
+    std::vector<std::unique_ptr<Denoiser>> instances;
+    std::vector<LayerSet> staged;  // per instance: its inputs, copied in before each timed call
+    std::vector<double> total;
+    std::map<std::string, std::vector<double>> passMs;
+    std::map<std::string, double> passTaps;
+    std::vector<std::string> passOrder;
+  };
+  std::vector<Contender> contenders;
+  for (const std::string& name : b.denoisers) {
+    const DenoiserInfo& info = DenoiserRegistry::instance().find(name);
+    Contender c{name, info.schema.resolve(params[name], name), {}, {}, {}, {}, {}, {}, {}};
+    c.kinds = info.signals == SignalMode::Color ? std::vector<SignalKind>{SignalKind::Color}
+                                                : std::vector<SignalKind>{SignalKind::Diffuse, SignalKind::Specular};
+    for (SignalKind kind : c.kinds) c.instances.push_back(info.create(c.params, kind));
+    for (auto& inst : c.instances) inst->setup(w, h);
+    c.staged.resize(c.instances.size());
+    contenders.push_back(std::move(c));
+  }
+  Image outImage(w, h, 3), signal;
+  for (int f = 0; f < b.warmup + b.frames; ++f) {
+    const LayerSet& frame = inputs[size_t(f) % inputs.size()];
+    const LayerSet& gradients = inputGradients[std::max<size_t>(1, size_t(f) % inputs.size()) % inputs.size()];
+    FrameContext ctx;
+    ctx.frameIndex = f;
+    ctx.width = w;
+    ctx.height = h;
+    ctx.reset = f == 0;
+    for (size_t turn = 0; turn < contenders.size(); ++turn) {
+      Contender& c = contenders[(turn + size_t(f)) % contenders.size()];
+      const bool grads = c.instances[0]->needsGradients() && f > 0 && inputs.size() > 1;
+      double frameMs = 0;
+      for (size_t k = 0; k < c.instances.size(); ++k) {
+        const SignalKind kind = c.kinds[k];
+        // Every contender starts from the same cache state: what it reads (the signal and its
+        // declared layers) has just been written, as by the passes that produce them in an
+        // engine. Without this the layers came cold from the cycled input pool, while a plugin
+        // that copied its inputs first read them warm -- and measured faster than its own code.
+        signal = frame.get(signalName(kind));
+        LayerSet& staged = c.staged[k];  // the instance's own: only what it declared
+        for (const std::string& name : c.instances[k]->requiredChannels()) {
+          if (!staged.has(name)) staged.set(name, frame.get(name));
+          else staged.get(name) = frame.get(name);
+        }
+        const bool low = c.instances[k]->wantsLowres() && !inputLowres.empty();
+        const LowresInputs lowInputs{low ? inputLowres[size_t(f) % inputs.size()] : frame, b.lowresFactor,
+                                     b.lowresSpp};
+        DenoiserInputs in{signal, staged, grads ? &gradients : nullptr, low ? &lowInputs : nullptr};
+        c.instances[k]->clearPassStats();
+        auto t0 = std::chrono::steady_clock::now();
+        c.instances[k]->denoise(ctx, in, outImage);
+        const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        // An external process's own compute time; the wall clock (transfer included) otherwise.
+        frameMs += c.instances[k]->reportedMilliseconds().value_or(wall);
+        if (f < b.warmup) continue;
+        for (const PassStats& p : c.instances[k]->lastPasses()) {
+          std::string pn = std::string(signalName(kind)) + "/" + p.name;
+          if (!c.passMs.count(pn)) c.passOrder.push_back(pn);
+          c.passMs[pn].push_back(p.milliseconds);
+          c.passTaps[pn] = p.tapsPerPixel;
+        }
+      }
+      if (f >= b.warmup) c.total.push_back(frameMs);
+    }
+  }
+  for (const Contender& c : contenders) {
+    json passes = json::array();
+    for (const std::string& pn : c.passOrder)
+      passes.push_back({{"name", pn}, {"msMedian", median(c.passMs.at(pn))}, {"bu", median(c.passMs.at(pn)) / bu},
+                        {"tapsPerPixel", c.passTaps.at(pn)}});
+    json row = {{"name", c.name}, {"params", c.params.toJson()}, {"msMedian", median(c.total)},
+                {"msP95", p95(c.total)}, {"bu", median(c.total) / bu}, {"passes", passes}};
+    std::string line = printed("%-14s %8.2f ms/frame (p95 %.2f)  %5.2f BU", c.name.c_str(), median(c.total),
+                               p95(c.total), median(c.total) / bu);
+    if (&c != &contenders.front()) {
+      const PairedRatio r = pairedRatio(c.total, contenders.front().total);
+      row["ratioTo"] = {{"name", contenders.front().name}, {"median", r.median}, {"ci95", {r.lo, r.hi}}};
+      line += printed("  x%.3f of %s [95%% CI %.3f, %.3f]", r.median, contenders.front().name.c_str(), r.lo, r.hi);
+    }
+    progress(line);
+    for (const auto& p : passes)
+      progress(printed("    %-34s %8.2f ms  %5.2f BU  %5.1f taps/px", p["name"].get<std::string>().c_str(),
+                       p["msMedian"].get<double>(), p["bu"].get<double>(), p["tapsPerPixel"].get<double>()));
+    out["denoisers"].push_back(row);
+  }
+  return out;
+}
+
+namespace {
+
+struct Measured {
+  double seconds = 0, relMse = 0, estimatedRelMse = 0, spp = 0;
+};
+
+// One sampler's reference of `frame` at about `spp` samples, timed, and its true error against
+// the gold (the gold's own noise term subtracted).
+Measured measure(const Scene& scene, RenderSettings settings, const std::string& sampler, bool adaptive, int frame,
+                 int spp, const LayerSet& gold) {
+  settings.referenceSampler = sampler;
+  SequenceRenderer renderer(scene, settings);
+  RayCounts counts;
+  const int perReplicate = std::max(1, spp / renderer.referenceReplicates());
+  renderer.frameScene(frame);  // the Embree build is not part of a sampler's time
+  const auto t0 = std::chrono::steady_clock::now();
+  ReferenceSums sums = renderer.emptyReferenceSums(0, renderer.referenceReplicates());
+  if (adaptive) {
+    renderer.extendReference(frame, sums, std::max(1, perReplicate / 4), counts);  // the pilot
+    // A tile may get up to 8x the mean count.
+    for (;;) {  // the references' rounds; the last one is cut to the count (rounding may miss it)
+      const bool last = kReferenceRoundGrowth * sums.meanSpp() >= 0.99 * perReplicate * sums.replicates;
+      const std::vector<int> next =
+          nextReferenceAllocation(sums, 8 * perReplicate, kReferenceRoundGrowth, perReplicate);
+      if (next == sums.tileSamples) break;
+      renderer.extendReference(frame, sums, next, counts);
+      if (last) break;
+    }
+  } else {
+    renderer.extendReference(frame, sums, perReplicate, counts);
+  }
+  Measured m;
+  m.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  m.spp = sums.meanSpp();
+  const LayerSet ref = referenceLayersFromSums(sums);
+  m.relMse = linearError(ref.get("color"), gold.get("color"), &gold.get("colorVar")).relMseCorrected;
+  m.estimatedRelMse = estimatedReferenceRelMse(sums);
+  return m;
+}
+
+}  // namespace
+
+json benchReference(const ReferenceBench& b, const ProgressFn& progress) {
+  RenderSettings settings = b.settings;
+  json out = {{"resolution", std::to_string(settings.width) + "x" + std::to_string(settings.height)},
+              {"spp", b.spp},
+              {"goldFactor", b.goldFactor},
+              {"maxBounces", settings.maxBounces > 0 ? json(settings.maxBounces) : json("scene")},
+              {"scenes", json::array()},
+              {"environment", environmentInfo()}};
+  for (const Scene& scene : b.scenes) {
+    if (b.frame >= scene.frames)
+      throw Error("--frame " + std::to_string(b.frame) + ": scene " + scene.name + " has " +
+                  std::to_string(scene.frames) + " frames");
+    RenderSettings goldSettings = settings;
+    goldSettings.referenceSampler = "sobol";
+    SequenceRenderer goldRenderer(withIndependentSeed(scene), goldSettings);
+    ReferenceSums goldSums;
+    RayCounts counts;
+    const auto g0 = std::chrono::steady_clock::now();
+    goldRenderer.extendReference(b.frame, goldSums, std::max(1, b.spp * b.goldFactor / goldRenderer.referenceReplicates()),
+                                 counts);
+    const double goldSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - g0).count();
+    const LayerSet gold = referenceLayersFromSums(goldSums);
+    const double goldNoise = estimatedReferenceRelMse(goldSums);
+    settings.referenceReplicates = b.replicates;
+    const Measured ind = measure(scene, settings, "independent", false, b.frame, b.spp, gold);
+    const Measured sob = measure(scene, settings, "sobol", false, b.frame, b.spp, gold);
+    const Measured ada = measure(scene, settings, "sobol", true, b.frame, b.spp, gold);
+    auto gainOver = [&](const Measured& m) { return (ind.relMse * ind.seconds) / std::max(m.relMse * m.seconds, 1e-300); };
+    const double sobolGain = gainOver(sob), gain = gainOver(ada);
+    progress(printed("%-22s %d spp: independent relMSE %.3e in %.2f s (est. %.3e) | sobol %.3e in %.2f s "
+                     "(est. %.3e, gain %.1fx) | adaptive %.0f spp %.3e in %.2f s (est. %.3e) | gold %d spp in "
+                     "%.1f s, own noise %.1e | gain %.1fx",
+                     scene.name.c_str(), goldSums.replicates * std::max(1, b.spp / goldSums.replicates), ind.relMse,
+                     ind.seconds, ind.estimatedRelMse, sob.relMse, sob.seconds, sob.estimatedRelMse, sobolGain,
+                     ada.spp, ada.relMse, ada.seconds, ada.estimatedRelMse, goldSums.spp(), goldSeconds, goldNoise,
+                     gain));
+    out["scenes"].push_back(
+        {{"scene", scene.name},
+         {"independent", {{"relMse", ind.relMse}, {"seconds", ind.seconds}, {"estimatedRelMse", ind.estimatedRelMse}}},
+         {"sobol", {{"relMse", sob.relMse}, {"seconds", sob.seconds}, {"estimatedRelMse", sob.estimatedRelMse}}},
+         {"adaptive",
+          {{"relMse", ada.relMse}, {"seconds", ada.seconds}, {"estimatedRelMse", ada.estimatedRelMse}, {"spp", ada.spp}}},
+         {"sobolGain", sobolGain},
+         {"goldSpp", goldSums.spp()},
+         {"goldSeconds", goldSeconds},
+         {"goldRelMse", goldNoise},
+         {"gain", gain}});
+  }
+  return out;
+}
+
+}  // namespace arena

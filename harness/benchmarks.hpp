@@ -1,0 +1,56 @@
+#pragma once
+// The benchmarks behind `arena bench`: each takes its settings, measures in this process, reports
+// progress lines as it goes and returns the machine-readable result (what --json writes). Speed
+// targets live here, never in timed unit tests.
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "tracer/render.hpp"
+
+namespace arena {
+
+// `bench tracer`: Mrays/s and Mpaths/s of the 1-spp frame pass (G-buffer, mirror ray, path with
+// NEE, gradient samples) on a scene at size x size, warm-up excluded; optionally beside Embree's
+// own `pathtracer` tutorial measured in the same sitting.
+struct TracerBench {
+  std::string sceneFile;
+  int size = 512, frames = 20, warmup = 3;
+  bool embree = false;
+};
+nlohmann::json benchTracer(const TracerBench& bench, const ProgressFn& progress);
+
+// `bench denoise`: every contender on the same rendered frames, in an order rotated frame by frame;
+// median ms/frame, bilateral units, per-pass times and taps, and each contender's paired per-frame
+// time ratio to the first with a distribution-free 95% interval.
+struct DenoiseBench {
+  std::string sceneFile;
+  std::vector<std::string> denoisers;  // registry names (ext:/plugin: already resolved)
+  std::map<std::string, std::map<std::string, std::string>> params;
+  int width = 1280, height = 720, frames = 20, warmup = 5, inputs = 3, lowresFactor = 8, lowresSpp = 16;
+};
+nlohmann::json benchDenoise(const DenoiseBench& bench, const ProgressFn& progress);
+
+// `bench reference`: per scene, the true relMSE against an independent gold render of the
+// independent sampler, Sobol and adaptive Sobol at about the same sample count, each timed, and
+// their gains (relMSE x seconds ratios).
+struct ReferenceBench {
+  std::vector<Scene> scenes;
+  RenderSettings settings;  // resolution and path length
+  int spp = 128, goldFactor = 32, frame = 0, replicates = RenderSettings().referenceReplicates;
+};
+nlohmann::json benchReference(const ReferenceBench& bench, const ProgressFn& progress);
+
+// One "bilateral unit" (BU): the median time of cv::bilateralFilter(src, dst, 5, 0.1, 2.0) on a
+// width x height CV_32FC3 image, measured in this process.
+double bilateralUnitMs(int width, int height, int repetitions);
+
+// The median of the per-frame ratios a[i] / b[i] of two contenders timed on the same frames, and a
+// distribution-free 95% interval for it (order statistics at the binomial(n, 1/2) 2.5% and 97.5%
+// points, normal approximation, n >= 6; fewer frames give the whole range).
+struct PairedRatio {
+  double median = 0, lo = 0, hi = 0;
+};
+PairedRatio pairedRatio(const std::vector<double>& a, const std::vector<double>& b);
+
+}  // namespace arena

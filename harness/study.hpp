@@ -1,0 +1,26 @@
+#pragma once
+// The study: every registered denoiser on the scene suite, then -- within a work budget -- the
+// references of the scenes that missed the reference-quality goal are refined (cheapest first)
+// and those scenes run again; the whole is analysed and committed once (results.json and
+// results.db hold the final run alone). `arena study` parses its options and calls runStudy.
+#include <nlohmann/json.hpp>
+
+#include "harness/run_matrix.hpp"
+
+namespace arena {
+
+struct StudyConfig {
+  RunConfig run;              // scenes, render settings, cache, out, flip, exposure, progress
+  double refineBudget = 0.5;  // extra paths as a multiple of the references' (0: no refinement)
+  int refineMaxSpp = 8192;    // the refinement's cap on a reference's samples per pixel
+};
+
+// The default run of the study: every registered denoiser (the baselines included once), the
+// images the report needs, the given scenes and render settings.
+RunConfig studyRun(std::vector<Scene> scenes, const RenderSettings& render);
+
+// Runs the study and returns its committed results (with the reference-quality verdicts, each
+// noting what the refinement did or what it would take).
+nlohmann::json runStudy(StudyConfig config);
+
+}  // namespace arena

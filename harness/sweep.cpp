@@ -1,0 +1,59 @@
+#include "harness/sweep.hpp"
+
+#include <set>
+#include <sstream>
+
+#include "core/error.hpp"
+
+namespace arena {
+
+namespace {
+
+std::vector<std::string> splitList(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream in(s);
+  for (std::string item; std::getline(in, item, ',');)
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+}  // namespace
+
+RunConfig sweepRun(RunConfig c, const std::string& denoiser, const std::map<std::string, std::string>& fixed,
+                   const std::vector<std::string>& grids) {
+  const DenoiserInfo& info = DenoiserRegistry::instance().find(denoiser);
+  std::vector<std::pair<std::string, std::vector<std::string>>> axes;
+  for (const std::string& g : grids) {
+    size_t eq = g.find('=');
+    if (eq == std::string::npos || g.size() < eq + 3 || g[eq + 1] != '[' || g.back() != ']')
+      throw Error("--grid '" + g + "': expected NAME=[v1,v2,...]");
+    std::string name = g.substr(0, eq);
+    if (name.rfind(denoiser + ".", 0) == 0) name = name.substr(denoiser.size() + 1);
+    if (!info.schema.find(name)) info.schema.resolve({{name, ""}}, denoiser);  // throws, listing names
+    for (auto& [axis, values] : axes)
+      if (axis == name) throw Error("--grid '" + g + "': " + name + " is already an axis of this sweep");
+    if (fixed.count(name)) throw Error("--grid '" + g + "': " + name + " is also fixed by --param");
+    axes.push_back({name, splitList(g.substr(eq + 2, g.size() - eq - 3))});
+    if (axes.back().second.empty()) throw Error("--grid '" + g + "': no values");
+    std::set<std::string> distinct(axes.back().second.begin(), axes.back().second.end());
+    if (distinct.size() != axes.back().second.size()) throw Error("--grid '" + g + "': a value is listed twice");
+  }
+  std::vector<std::map<std::string, std::string>> settings = {fixed};
+  for (auto& [name, values] : axes) {
+    std::vector<std::map<std::string, std::string>> next;
+    for (auto& s : settings)
+      for (auto& v : values) {
+        auto t = s;
+        t[name] = v;
+        next.push_back(t);
+      }
+    settings = next;
+  }
+  nlohmann::json grid = nlohmann::json::object();
+  for (auto& [name, values] : axes) grid[name] = values;
+  for (auto& s : settings) c.denoisers.push_back({denoiser, s, ""});
+  c.annotations["sweep"] = {{"denoiser", denoiser}, {"grid", grid}, {"fixed", fixed}};
+  return c;
+}
+
+}  // namespace arena
