@@ -242,7 +242,7 @@ namespace arena {
 MetricFamily linearErrorFamily() {
   MetricFamily f;
   f.metrics = {
-      {.name = "relMse", .floor = FloorRule::ReferenceNoise, .ranked = true, .gatedByDefault = true,
+      {.name = "relMse", .floor = FloorRule::ReferenceNoise, .ranked = true, .gatedByDefault = true, .overall = true,
        .description = "relative MSE vs the reference, eps 0.01 (raw)"},
       {.name = "relMseCorrected", .description = "relMSE minus the reference's own noise term"},
       {.name = "mse", .description = "MSE, linear"},
@@ -279,13 +279,19 @@ MetricFamily displayErrorFamily() {
       {.name = "ssim", .better = Better::Higher, .reads = MetricInput::Display, .floor = FloorRule::ReferenceNoise,
        .floorWarningFactor = 2, .perfect = 1, .ranked = true, .gatedByDefault = true,
        .description = "SSIM of display luminance (11x11 Gaussian, sigma 1.5)"},
+      {.name = "dssim", .reads = MetricInput::Display, .overall = true,
+       .description = "1 - SSIM: SSIM as an error, lower is better (the speed chart's axis and its overall score)"},
   };
   f.measure = [](const FrameView& v, const MetricOptions&, FrameRecorder& out) {
     TileSums tiles;
     const double psnr = psnrFromMse(meanSquaredError(*v.outputDisplay, *v.referenceDisplay, &tiles));
     out.put("psnr", psnr, std::move(tiles));
     const double s = ssim(*v.outputDisplay, *v.referenceDisplay, &tiles);
+    // 1 - SSIM per tile is (windows - SSIM sum) / windows: the same blocks, the complement's sums.
+    TileSums complement = tiles;
+    for (size_t i = 0; i < complement.sum.size(); ++i) complement.sum[i] = complement.count[i] - complement.sum[i];
     out.put("ssim", s, std::move(tiles));
+    out.put("dssim", 1 - s, std::move(complement));
   };
   return f;
 }

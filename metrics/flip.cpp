@@ -687,8 +687,10 @@ MetricFamily flipFamily() {
   MetricFamily f;
   f.metrics = {
       {.name = "ldrFlip", .reads = MetricInput::Display, .floor = FloorRule::ReferenceNoise,
-       .floorWarningFactor = 2, .ranked = true, .gatedByDefault = true, .description = "mean LDR-FLIP of the display image, 67 ppd"},
+       .floorWarningFactor = 2, .ranked = true, .gatedByDefault = true, .overall = true,
+       .description = "mean LDR-FLIP of the display image, 67 ppd"},
       {.name = "hdrFlip", .floor = FloorRule::ReferenceNoise, .floorWarningFactor = 2, .ranked = true, .gatedByDefault = true,
+       .overall = true,
        .description = "mean HDR-FLIP of the linear image, 67 ppd"},
   };
   f.enabled = [](const MetricOptions& o) { return o.flip != "none"; };

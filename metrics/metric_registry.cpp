@@ -73,6 +73,7 @@ nlohmann::json metricCatalogJson() {
                    {"floor", m->floor == FloorRule::ReferenceNoise ? "reference noise" : "none"},
                    {"ranked", m->ranked},
                    {"gatedByDefault", m->gatedByDefault},
+                   {"overall", m->overall},
                    {"meaning", m->description}});
   return out;
 }

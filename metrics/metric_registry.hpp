@@ -48,6 +48,9 @@ struct MetricDefinition {
   double perfect = 0;  // the value of an output equal to the reference (for the floor warning)
   bool ranked = false;  // statistics ranks every scene on it with paired differences
   bool gatedByDefault = false;  // `arena compare` checks it when no --metric is given
+  // statistics scores every method across scenes on it (geometric mean of ratios to a baseline,
+  // with an interval): the one overall score the printout and the report's all-scenes chart show.
+  bool overall = false;
   std::string description;  // one line; docs/metrics.md has the definition
   bool lowerIsBetter() const { return better == Better::Lower; }
   const char* betterName() const { return better == Better::Lower ? "lower" : "higher"; }

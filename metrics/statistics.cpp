@@ -544,9 +544,11 @@ json analyseRun(const json& results, const BootstrapConfig& cfg) {
   // The registry's ranked metrics. relMSE ranks (paired differences of raw and corrected relMSE
   // are the same: the correction subtracts the same reference term from every method); the others
   // are reported beside it.
+  // Metrics with an overall score are ranked per scene too (the overall score combines the scenes'
+  // rankings), even when their scene rankings are not reported.
   std::vector<const MetricDefinition*> rankedMetrics;
   for (const MetricDefinition* m : metricCatalog())
-    if (m->ranked) rankedMetrics.push_back(m);
+    if (m->ranked || m->overall) rankedMetrics.push_back(m);
   std::map<std::string, std::vector<std::pair<std::string, std::map<std::string, MetricTiles>>>>
       byScene;
   std::map<std::string, std::vector<std::pair<std::string, const json*>>> pairsOfScene;
@@ -562,8 +564,7 @@ json analyseRun(const json& results, const BootstrapConfig& cfg) {
     pairsOfScene[p.value("scene", "")].push_back({p.value("label", ""), &p});
   }
   json scenes = json::object();
-  std::vector<SceneRanking> relMseRankings;
-  relMseRankings.reserve(byScene.size());
+  std::map<std::string, std::vector<SceneRanking>> overallInputs;  // metric -> its scene rankings
   for (const auto& [scene, pairs] : byScene) {
     json sceneJson;
     for (const MetricDefinition* m : rankedMetrics) {
@@ -579,10 +580,10 @@ json analyseRun(const json& results, const BootstrapConfig& cfg) {
       if (m->name == "relMse") {
         sceneJson = r.toJson();
         sceneJson["byMetric"] = json::object();
-        relMseRankings.push_back(std::move(r));
-      } else if (sceneJson.is_object()) {
+      } else if (sceneJson.is_object() && m->ranked) {
         sceneJson["byMetric"][m->name] = r.toJson();
       }
+      if (m->overall) overallInputs[m->name].push_back(std::move(r));
     }
     if (sceneJson.is_object()) {
       // The event-window figures: paired tile bootstrap per event (metrics/ghosting_intervals).
@@ -592,9 +593,6 @@ json analyseRun(const json& results, const BootstrapConfig& cfg) {
       scenes[scene] = sceneJson;
     }
   }
-  std::vector<const SceneRanking*> ranked;
-  for (const SceneRanking& r : relMseRankings)
-    if (!r.ranking.empty()) ranked.push_back(&r);
   json out = {
       {"method",
        "crossed bootstrap: moving blocks of round(n^(1/3)) frames x " +
@@ -606,8 +604,18 @@ json analyseRun(const json& results, const BootstrapConfig& cfg) {
       {"tileGrid", {cfg.grid.cols, cfg.grid.rows}},
       {"rankedOn", "relMse"},
       {"scenes", scenes}};
-  if (!ranked.empty())
-    out["overall"] = rankOverall(ranked, "temporal", true, cfg.confidence).toJson();
+  // The overall scores: relMSE's is the run's ("overall"); the other metrics that declare one
+  // ("overallByMetric") are what the report's all-scenes chart shows on their axes.
+  for (const MetricDefinition* m : rankedMetrics) {
+    if (!m->overall) continue;
+    std::vector<const SceneRanking*> ranked;
+    for (const SceneRanking& r : overallInputs[m->name])
+      if (!r.ranking.empty()) ranked.push_back(&r);
+    if (ranked.empty()) continue;
+    const json overall = rankOverall(ranked, "temporal", m->lowerIsBetter(), cfg.confidence).toJson();
+    if (m->name == "relMse") out["overall"] = overall;
+    else out["overallByMetric"][m->name] = overall;
+  }
   return out;
 }
 

@@ -53,13 +53,14 @@ const char* const kVendorFiles[] = {"vega/build/vega.min.js", "vega-lite/build/v
 struct ErrorAxis {
   const char* key;
   const char* title;
-  const char* source;  // the per-frame metric it comes from
-  bool complement;     // value = 1 - source
+  const char* source;   // the per-frame metric it comes from
+  bool complement;      // value = 1 - source
+  const char* overall;  // the registered metric whose overall score (statistics) is the all-scenes value
 };
-const ErrorAxis kErrorAxes[] = {{"relMse", "relMSE", "relMse", false},
-                                {"hdrFlip", "HDR-FLIP", "hdrFlip", false},
-                                {"ldrFlip", "LDR-FLIP", "ldrFlip", false},
-                                {"dssim", "1 − SSIM", "ssim", true}};
+const ErrorAxis kErrorAxes[] = {{"relMse", "relMSE", "relMse", false, "relMse"},
+                                {"hdrFlip", "HDR-FLIP", "hdrFlip", false, "hdrFlip"},
+                                {"ldrFlip", "LDR-FLIP", "ldrFlip", false, "ldrFlip"},
+                                {"dssim", "1 − SSIM", "ssim", true, "dssim"}};
 
 bool isOk(const json& pair) {
   return pair.value("status", "") == "ok";
@@ -172,68 +173,6 @@ json speedPoint(const json& pair, const ErrorAxis& axis) {
 
 }  // namespace
 
-// The per-scene normalised aggregate (see report.hpp).
-json normalisedAggregate(const std::vector<std::string>& scenes,
-                         const std::vector<std::string>& labels,
-                         const std::function<json(const std::string&, const std::string&)>& value) {
-  // The baseline: passthrough (the noisy input) when it has every scene, else the first label
-  // that has every scene.
-  auto complete = [&](const std::string& label) {
-    for (const std::string& s : scenes) {
-      const json v = value(s, label);
-      if (v.is_null() || !(v["error"].get<double>() > 0)) return false;
-    }
-    return !scenes.empty();
-  };
-  std::string baseline;
-  if (std::find(labels.begin(), labels.end(), "passthrough") != labels.end() &&
-      complete("passthrough"))
-    baseline = "passthrough";
-  for (const std::string& l : labels)
-    if (baseline.empty() && complete(l)) baseline = l;
-  if (baseline.empty()) return nullptr;
-  std::vector<json> points;
-  for (const std::string& label : labels) {
-    double logE = 0, logLo = 0, logHi = 0, ms = 0, msLo = 0, msHi = 0, tracing = 0;
-    size_t n = 0, nLo = 0, nHi = 0, nTracing = 0;
-    json params;
-    for (const std::string& scene : scenes) {
-      const json v = value(scene, label), b = value(scene, baseline);
-      if (v.is_null() || !(v["error"].get<double>() > 0)) continue;
-      const double base = b["error"].get<double>();
-      logE += std::log(v["error"].get<double>() / base);
-      // Bars: the same normalisation applied to each scene's interval ends. This treats the
-      // scenes' intervals as moving together, so it is wider than the interval of the aggregate.
-      logLo += std::log(std::max(v["lo"].get<double>(), 1e-30) / base);
-      logHi += std::log(std::max(v["hi"].get<double>(), 1e-30) / base);
-      ms += v["ms"].get<double>();
-      if (v["msLo"].is_number()) msLo += v["msLo"].get<double>(), ++nLo;
-      if (v["msHi"].is_number()) msHi += v["msHi"].get<double>(), ++nHi;
-      if (v.contains("tracingMs")) tracing += v["tracingMs"].get<double>(), ++nTracing;
-      params = v["params"];
-      ++n;
-    }
-    if (n == 0) continue;
-    const double k = double(n);
-    json point = {{"label", label},
-                      {"params", params},
-                      {"error", std::exp(logE / k)},
-                      {"lo", std::exp(logLo / k)},
-                      {"hi", std::exp(logHi / k)},
-                      {"ms", ms / k},
-                      {"msLo", nLo == n ? json(msLo / k) : json(nullptr)},
-                      {"msHi", nHi == n ? json(msHi / k) : json(nullptr)},
-                      {"scenes", n}};
-    if (nTracing == n) point["tracingMs"] = tracing / k;  // the mean like its time's
-    points.push_back(std::move(point));
-  }
-  for (json& p : points) p["complete"] = p["scenes"].get<size_t>() == scenes.size();
-  json scope = speedScope(points, true);
-  scope["baseline"] = baseline;
-  scope["sceneCount"] = scenes.size();
-  return scope;
-}
-
 namespace {
 
 json speedData(const json& results, const std::vector<std::string>& scenes,
@@ -258,44 +197,59 @@ json speedData(const json& results, const std::vector<std::string>& scenes,
     perScene[scene] = axes;
   }
   out["scenes"] = perScene;
-  // All scenes: the geometric mean over scenes of each label's error divided by the baseline's
-  // on that scene, so no scene's scale dominates (a plain mean of relMSE is mostly the hardest
-  // scene's). Scenes with no measured pair are left out of the aggregate.
+  // All scenes: statistics' overall score on the axis's metric (relMSE: the run's "overall"; the
+  // others: "overallByMetric"), with its interval -- the one score the printout shows too, never a
+  // second one computed here. A point's time is the label's mean over the scenes it ran on.
+  const json stats = results.value("statistics", json::object());
   json all = json::object();
   for (const ErrorAxis& axis : kErrorAxes) {
-    std::vector<std::string> measured;
-    for (const std::string& s : scenes)
-      if (byAxis[axis.key].count(s)) measured.push_back(s);
+    const json overall = std::string(axis.overall) == "relMse"
+                             ? stats.value("overall", json())
+                             : stats.value("overallByMetric", json::object()).value(axis.overall, json());
+    if (!overall.is_object() || !overall.contains("ranking")) continue;
     auto& table = byAxis[axis.key];
-    json scope = normalisedAggregate(measured, labels,
-                                     [&](const std::string& s, const std::string& l) -> json {
-                                       auto it = table[s].find(l);
-                                       return it == table[s].end() ? json(nullptr) : it->second;
-                                     });
-    if (scope.is_null()) continue;
-    scope["normalisation"] = std::string("geometric mean over scenes of ") + axis.title + " ÷ " +
-                             scope["baseline"].get<std::string>() + "'s " + axis.title;
-    scope["source"] = "report";
-    all[axis.key] = scope;
-  }
-  // The run's own overall ranking (metrics/statistics) names its normalisation and has proper
-  // intervals: when present it replaces the report's relMSE aggregate.
-  const json overall = results.value("statistics", json::object()).value("overall", json());
-  if (overall.is_object() && overall.contains("ranking") && all.contains("relMse")) {
-    json& scope = all["relMse"];
-    for (json& p : scope["points"])
-      for (const json& r : overall["ranking"])
-        if (r.value("label", "") == p["label"] && r.contains("score") && r["score"].is_number()) {
-          p["error"] = r["score"];
-          if (r.contains("ci95") && r["ci95"].is_array() && r["ci95"].size() == 2)
-            p["lo"] = r["ci95"][0], p["hi"] = r["ci95"][1];
-        }
-    std::vector<json> points(scope["points"].begin(), scope["points"].end());
-    const json again = speedScope(points, true);
-    scope["points"] = again["points"];
-    scope["front"] = again["front"];
+    std::vector<json> points;
+    for (const json& r : overall["ranking"]) {
+      const std::string label = r.value("label", "");
+      if (!r.contains("score") || !r["score"].is_number()) continue;
+      double ms = 0, msLo = 0, msHi = 0, tracing = 0;
+      size_t n = 0, nLo = 0, nHi = 0, nTracing = 0;
+      json params;
+      for (const std::string& scene : scenes) {
+        auto it = table[scene].find(label);
+        if (it == table[scene].end()) continue;
+        const json& v = it->second;
+        ms += v["ms"].get<double>();
+        if (v["msLo"].is_number()) msLo += v["msLo"].get<double>(), ++nLo;
+        if (v["msHi"].is_number()) msHi += v["msHi"].get<double>(), ++nHi;
+        if (v.contains("tracingMs")) tracing += v["tracingMs"].get<double>(), ++nTracing;
+        params = v["params"];
+        ++n;
+      }
+      if (n == 0) continue;
+      const double k = double(n), score = r["score"].get<double>();
+      const bool hasCi = r.contains("ci95") && r["ci95"].is_array() && r["ci95"].size() == 2 &&
+                         r["ci95"][0].is_number() && r["ci95"][1].is_number();
+      json point = {{"label", label},
+                    {"params", params},
+                    {"error", score},
+                    {"lo", hasCi ? r["ci95"][0] : json(score)},
+                    {"hi", hasCi ? r["ci95"][1] : json(score)},
+                    {"ms", ms / k},
+                    {"msLo", nLo == n ? json(msLo / k) : json(nullptr)},
+                    {"msHi", nHi == n ? json(msHi / k) : json(nullptr)},
+                    {"scenes", n},
+                    {"complete", n == scenes.size()}};
+      if (nTracing == n) point["tracingMs"] = tracing / k;  // the mean like its time's
+      points.push_back(std::move(point));
+    }
+    if (points.empty()) continue;
+    json scope = speedScope(points, true);
     scope["normalisation"] = overall.value("normalisation", "the run's overall score");
+    scope["baseline"] = overall.value("baseline", "");
+    scope["sceneCount"] = scenes.size();
     scope["source"] = "statistics";
+    all[axis.key] = scope;
   }
   out["all"] = all;
   return out;
@@ -303,7 +257,7 @@ json speedData(const json& results, const std::vector<std::string>& scenes,
 
 // The rankings the tables show: the run's own (metrics/statistics: ranks with ties from paired
 // differences) when present; else, for older runs, ranks by mean relMSE with ties unknown.
-json rankingData(const json& results, const std::vector<std::string>& scenes, const json& speed) {
+json rankingData(const json& results, const std::vector<std::string>& scenes) {
   const json stats = results.value("statistics", json::object());
   json out = {{"scenes", json::object()}, {"overall", nullptr}};
   const json statScenes = stats.value("scenes", json::object());
@@ -350,22 +304,6 @@ json rankingData(const json& results, const std::vector<std::string>& scenes, co
   if (stats.contains("overall") && stats["overall"].contains("ranking")) {
     out["overall"] = stats["overall"];
     out["overall"]["tiesKnown"] = true;
-  } else if (speed["all"].contains("relMse")) {
-    const json& scope = speed["all"]["relMse"];
-    std::vector<json> points;
-    for (const json& p : scope["points"])
-      if (p.value("complete", false)) points.push_back(p);
-    std::stable_sort(points.begin(), points.end(), [](const json& a, const json& b) {
-      return a["error"].get<double>() < b["error"].get<double>();
-    });
-    json ranking = json::array();
-    for (size_t i = 0; i < points.size(); ++i)
-      ranking.push_back({{"label", points[i]["label"]},
-                         {"rank", i + 1},
-                         {"score", points[i]["error"]},
-                         {"tiedWith", json::array()}});
-    out["overall"] = {
-        {"normalisation", scope["normalisation"]}, {"ranking", ranking}, {"tiesKnown", false}};
   }
   return out;
 }
@@ -374,9 +312,34 @@ std::string valueText(const json& v) {
   return v.is_string() ? v.get<std::string>() : v.dump();
 }
 
+// The paired difference a - b of `metric` on `scene` from the run's statistics (relMSE's in the
+// scene's pairs, the other ranked metrics' in byMetric), oriented a - b; null when not there.
+json pairedDifference(const json& results, const std::string& scene, const std::string& metric,
+                      const std::string& a, const std::string& b) {
+  const json st = results.value("statistics", json::object()).value("scenes", json::object()).value(scene, json());
+  if (!st.is_object()) return nullptr;
+  const json ranking = metric == "relMse" ? st : st.value("byMetric", json::object()).value(metric, json());
+  if (!ranking.is_object()) return nullptr;
+  for (const json& d : ranking.value("pairs", json::array())) {
+    const bool forward = d.value("a", "") == a && d.value("b", "") == b;
+    const bool backward = d.value("a", "") == b && d.value("b", "") == a;
+    if (!forward && !backward) continue;
+    if (!d.contains("diff") || !d["diff"].is_number()) return nullptr;
+    const double sign = forward ? 1.0 : -1.0;
+    json out = {{"diff", sign * d["diff"].get<double>()}, {"resolved", d.value("resolved", false)}};
+    const json ci = d.value("ci95", json());
+    if (ci.is_array() && ci.size() == 2 && ci[0].is_number() && ci[1].is_number())
+      out["ci95"] = forward ? ci : json::array({-ci[1].get<double>(), -ci[0].get<double>()});
+    return out;
+  }
+  return nullptr;
+}
+
 // The ablation of a sweep: for each grid parameter and each of its values after the first, the
-// change of every metric's mean against the pair that differs only in that parameter (set to the
-// first value), averaged over the other grid settings; per scene and over all scenes.
+// change of every metric against the pair that differs only in that parameter (set to the first
+// value). Per scene, a ranked metric's change is the run's paired difference (statistics: the same
+// frames and tiles, with its interval and whether it is resolved); other metrics' the difference of
+// the means. Over all scenes: the mean of the per-scene changes (no interval).
 json ablationData(const json& results) {
   if (!results.contains("sweep") || !results["sweep"].is_object()) return nullptr;
   const json& sweep = results["sweep"];
@@ -399,6 +362,7 @@ json ablationData(const json& results) {
     if (values.size() < 2) continue;
     for (size_t vi = 1; vi < values.size(); ++vi) {
       std::map<std::string, std::map<std::string, std::vector<double>>> deltas, relative;
+      std::map<std::string, std::map<std::string, json>> paired;  // scene -> metric -> difference
       std::map<std::string, size_t> matched;
       for (const json* p : pairs) {
         if ((*p)["params"][name] != values[vi]) continue;
@@ -411,11 +375,14 @@ json ablationData(const json& results) {
             ++matched[scope];
             for (const std::string& m : metrics) {
               if (!(*p)["summary"].contains(m) || !(*q)["summary"].contains(m)) continue;
-              const double a = (*p)["summary"][m].value("mean", kNaN);
               const double b = (*q)["summary"][m].value("mean", kNaN);
-              if (!std::isfinite(a) || !std::isfinite(b)) continue;
-              deltas[scope][m].push_back(a - b);
-              relative[scope][m].push_back((a - b) / std::max(std::abs(b), 1e-12));
+              const json d = pairedDifference(results, scene, m, (*p)["label"], (*q)["label"]);
+              const double a = (*p)["summary"][m].value("mean", kNaN);
+              const double delta = d.is_object() ? d["diff"].get<double>() : a - b;
+              if (!std::isfinite(delta) || !std::isfinite(b)) continue;
+              deltas[scope][m].push_back(delta);
+              relative[scope][m].push_back(delta / std::max(std::abs(b), 1e-12));
+              if (!scope.empty() && d.is_object()) paired[scope][m] = d;
             }
           }
           break;
@@ -429,13 +396,15 @@ json ablationData(const json& results) {
           d[m] = s / double(v.size());
           r[m] = sr / double(v.size());
         }
-        rows.push_back({{"parameter", name},
-                        {"value", valueText(values[vi])},
-                        {"versus", valueText(values[0])},
-                        {"scene", scope.empty() ? json(nullptr) : json(scope)},
-                        {"matched", matched[scope]},
-                        {"delta", d},
-                        {"relative", r}});
+        json row = {{"parameter", name},
+                    {"value", valueText(values[vi])},
+                    {"versus", valueText(values[0])},
+                    {"scene", scope.empty() ? json(nullptr) : json(scope)},
+                    {"matched", matched[scope]},
+                    {"delta", d},
+                    {"relative", r}};
+        if (!scope.empty() && matched[scope] == 1 && paired.count(scope)) row["paired"] = paired[scope];
+        rows.push_back(row);
       }
     }
   }
@@ -500,7 +469,7 @@ json viewerData(const json& results, const std::string& scene, const json& scene
     for (const json& e : sceneInfo.value("events", json::array()))
       if (e.value("frame", -1) == t)
         events.push_back(e.value("kind", std::string("event")) +
-                         (e.contains("what") ? " " + e["what"].get<std::string>() : ""));
+                         (e.contains("what") ? std::string(" ").append(e["what"].get<std::string>()) : ""));
     if (!events.empty()) f["events"] = events;
     frames.push_back(f);
   }
@@ -630,7 +599,7 @@ json reportData(const json& results, const fs::path& runDir, const json* baselin
                {"pairs", pairs},
                {"failures", failures},
                {"speed", speed},
-               {"rankings", rankingData(results, sceneNames, speed)},
+               {"rankings", rankingData(results, sceneNames)},
                {"colorMaps", colorMapData()},
                {"ablation", ablationData(results)},
                {"regression", nullptr}};
@@ -850,7 +819,7 @@ ReportSummary writeReport(const ReportOptions& o) {
     json& scene = data["scenes"][i];
     if (scene.contains("viewer"))
       scene["viewer"]["crops"] =
-          writeCropTiles(scene["viewer"], o.run, o.out, "s" + std::to_string(i));
+          writeCropTiles(scene["viewer"], o.run, o.out, std::string("s").append(std::to_string(i)));
   }
   copyPageAssets(o.webDir, o.nodeModulesDir, files, o.out);
   ReportSummary summary;

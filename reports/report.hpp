@@ -43,17 +43,6 @@ nlohmann::json reportData(const nlohmann::json& results, const std::filesystem::
 // an arena::Error; a missing charting library is an Error that says to run scripts/setup.sh.
 ReportSummary writeReport(const ReportOptions& options);
 
-// The speed chart's "all scenes" aggregate, so that no scene's scale dominates: for each label,
-// the geometric mean over `scenes` of its error divided by the baseline's error on that scene.
-// The baseline is passthrough (the noisy input) when it has every scene, else the first label
-// that has every scene. value(scene, label) returns the point ({error, lo, hi, ms, msLo, msHi,
-// params}) or null. Returns {points: [{label, error, lo, hi, ms, msLo, msHi, scenes, complete}],
-// front, baseline, sceneCount}; null when no label has every scene. Labels missing a scene are
-// kept (complete: false) but off the front.
-nlohmann::json normalisedAggregate(
-    const std::vector<std::string>& scenes, const std::vector<std::string>& labels,
-    const std::function<nlohmann::json(const std::string&, const std::string&)>& value);
-
 // The page's files: checkPageAssets throws an Error naming a missing static file (webDir) or a
 // missing charting library (nodeModulesDir: run scripts/setup.sh); copyPageAssets copies both
 // into `out`. Shared by `arena report` and `arena history`.

@@ -210,31 +210,15 @@ TEST(Report, DataHasFrontNoiseFloorViewerAndAblation) {
   EXPECT_NEAR(dssim["p5"].get<double>(), 1 - 0.9 * 1.3, 1e-12);
   // No HDR-FLIP in this run: the axis is not offered.
   for (const json& a : data["errorAxes"]) EXPECT_NE(a["key"], "hdrFlip");
-  // All scenes: svgf[a=0] failed on "switch", so it is drawn but kept off the front.
-  const json& all = data["speed"]["all"]["relMse"];
-  for (const json& p : all["points"]) {
-    if (p["label"] == "svgf[a=0]") {
-      EXPECT_FALSE(p["complete"].get<bool>());
-    }
-  }
-  for (const json& l : all["front"]) EXPECT_NE(l, "svgf[a=0]");
-  // All scenes is normalised per scene by passthrough (the baseline, complete on both scenes):
-  // its own score is 1, svgf[a=1] (only on "static") 0.04 / 0.5.
-  EXPECT_EQ(all["baseline"], "passthrough");
-  EXPECT_NEAR(all["points"][0]["error"].get<double>(), 1.0, 1e-12);
-  for (const json& p : all["points"])
-    if (p["label"] == "svgf[a=1]") {
-      EXPECT_NEAR(p["error"].get<double>(), 0.08, 1e-12);
-    }
-  EXPECT_NE(all["normalisation"].get<std::string>().find("geometric mean over scenes"),
-            std::string::npos);
+  // All scenes: this run has no statistics, so there is no overall score to show -- and the
+  // report makes none up (AllScenesShowStatisticsOverallScoresAndNeverASecondOne has one).
+  EXPECT_FALSE(data["speed"]["all"].contains("relMse"));
+  EXPECT_TRUE(data["rankings"]["overall"].is_null());
   // No intervals in this run: the bars are p5-p95 and the rankings say ties are unknown.
   EXPECT_EQ(st["points"][0]["interval"], "p5-p95");
   EXPECT_FALSE(data["rankings"]["scenes"]["static"]["tiesKnown"].get<bool>());
   EXPECT_EQ(data["rankings"]["scenes"]["static"]["ranking"][0]["label"], "svgf[a=1]");
   EXPECT_EQ(data["rankings"]["scenes"]["static"]["ranking"][3]["rank"], 4);
-  EXPECT_EQ(data["rankings"]["overall"]["ranking"][0]["label"],
-            "passthrough");  // the only complete one
 
   // Noise floor: frames t >= W = 2 only.
   EXPECT_NEAR(data["scenes"][0]["noiseFloor"]["mean"].get<double>(), 0.002, 1e-12);
@@ -280,6 +264,33 @@ TEST(Report, DataHasFrontNoiseFloorViewerAndAblation) {
   EXPECT_TRUE(data["regression"].is_null());
 }
 
+TEST(Report, AblationDeltasAreTheRunsPairedDifferences) {
+  // The run's statistics hold svgf[a=0] - svgf[a=1] on "static" (the opposite orientation of the
+  // ablation's a=1 vs a=0): the row takes that difference, turned round, with its interval.
+  json run = fixtureRun();
+  run["statistics"] = json::parse(R"({"scenes": {"static": {"metric": "relMse", "ranking": [],
+    "pairs": [{"a": "svgf[a=0]", "b": "svgf[a=1]", "diff": 0.0123, "ci95": [0.004, 0.02], "resolved": true},
+              {"a": "svgf[a=1,b=false]", "b": "svgf[a=1]", "diff": 0.02, "ci95": [-0.001, 0.04], "resolved": false}],
+    "byMetric": {}}}})");
+  const json data = reportData(run, test::freshDir("report_ablation_paired"), nullptr);
+  int seen = 0;
+  for (const json& r : data["ablation"]["rows"]) {
+    if (r["scene"] != "static") continue;
+    if (r["parameter"] == "a") {
+      ++seen;
+      EXPECT_NEAR(r["delta"]["relMse"].get<double>(), -0.0123, 1e-15);  // not the means' -0.01
+      EXPECT_EQ(r["paired"]["relMse"]["ci95"], json({-0.02, -0.004}));
+      EXPECT_TRUE(r["paired"]["relMse"]["resolved"].get<bool>());
+    }
+    if (r["parameter"] == "b") {
+      ++seen;
+      EXPECT_FALSE(r["paired"]["relMse"]["resolved"].get<bool>());  // drawn as a tie
+      EXPECT_FALSE(r["paired"].contains("ssim")) << "no paired difference on ssim in this run";
+    }
+  }
+  EXPECT_EQ(seen, 2);
+}
+
 TEST(Report, BaselineGivesCompareVerdicts) {
   json base = fixtureRun();
   json cand = fixtureRun();
@@ -309,35 +320,32 @@ TEST(Report, BaselineGivesCompareVerdicts) {
   EXPECT_TRUE(found);
 }
 
-TEST(Report, AllScenesAggregateIsScaleFree) {
-  // Two scenes whose errors differ 100x: a plain mean would be the hard scene's ranking. The
-  // geometric mean of ratios to passthrough gives each label its per-scene ratio, whatever the
-  // scale.
-  const std::map<std::string, std::map<std::string, double>> e = {
-      {"easy", {{"passthrough", 2}, {"a", 1}, {"b", 0.5}}},
-      {"hard", {{"passthrough", 200}, {"a", 25}, {"b", 100}}}};
-  auto value = [&](const std::string& s, const std::string& l) -> json {
-    if (s == "hard" && l == "c") return nullptr;
-    const double v = l == "c" ? 0.1 : e.at(s).at(l);
-    return {{"error", v},  {"lo", 0.9 * v}, {"hi", 1.1 * v},           {"ms", 1.0},
-            {"msLo", 0.5}, {"msHi", 2.0},   {"params", json::object()}};
-  };
-  const json scope = normalisedAggregate({"easy", "hard"}, {"a", "b", "c", "passthrough"}, value);
-  ASSERT_FALSE(scope.is_null());
-  EXPECT_EQ(scope["baseline"], "passthrough");
+TEST(Report, AllScenesShowStatisticsOverallScoresAndNeverASecondOne) {
+  // The all-scenes chart's value on every axis is statistics' overall score for that axis's
+  // metric: without one the axis has no all-scenes view (the report computes no aggregate of its
+  // own, so the page and the printout cannot disagree).
+  json run = fixtureRun();
+  run["statistics"] = json::parse(R"json({"scenes": {},
+    "overall": {"normalisation": "geometric mean over 2 scenes of relMse / relMse(passthrough)",
+      "ranking": [{"label": "passthrough", "rank": 1, "score": 1.0, "ci95": [1.0, 1.0], "tiedWith": []}]},
+    "overallByMetric": {"dssim": {"normalisation": "geometric mean over 2 scenes of dssim / dssim(passthrough)",
+      "ranking": [{"label": "svgf[a=0]", "rank": 1, "score": 0.25, "ci95": [0.2, 0.3], "tiedWith": []},
+                  {"label": "passthrough", "rank": 2, "score": 1.0, "ci95": [1.0, 1.0], "tiedWith": []}]}}})json");
+  const json data = reportData(run, test::freshDir("report_overall_axes"), nullptr);
+  const json& all = data["speed"]["all"];
+  EXPECT_TRUE(all.contains("relMse"));
+  EXPECT_FALSE(all.contains("ldrFlip")) << "no statistics score on LDR-FLIP: no all-scenes view of it";
+  EXPECT_FALSE(all.contains("hdrFlip"));
+  ASSERT_TRUE(all.contains("dssim"));
+  EXPECT_EQ(all["dssim"]["source"], "statistics");
+  EXPECT_EQ(all["dssim"]["normalisation"], "geometric mean over 2 scenes of dssim / dssim(passthrough)");
   std::map<std::string, json> byLabel;
-  for (const json& p : scope["points"]) byLabel[p["label"]] = p;
-  EXPECT_NEAR(byLabel["a"]["error"].get<double>(), std::sqrt(0.5 * 0.125), 1e-12);
-  EXPECT_NEAR(byLabel["b"]["error"].get<double>(), std::sqrt(0.25 * 0.5), 1e-12);
-  EXPECT_NEAR(byLabel["passthrough"]["error"].get<double>(), 1.0, 1e-12);
-  EXPECT_NEAR(byLabel["a"]["lo"].get<double>(), 0.9 * std::sqrt(0.5 * 0.125), 1e-12);
-  EXPECT_NEAR(byLabel["a"]["msLo"].get<double>(), 0.5, 1e-12);
-  // c has one scene: drawn, not complete, off the front.
-  EXPECT_FALSE(byLabel["c"]["complete"].get<bool>());
-  for (const json& l : scope["front"]) EXPECT_NE(l, "c");
-  // Without passthrough the first complete label is the baseline.
-  EXPECT_EQ(normalisedAggregate({"easy", "hard"}, {"c", "b", "a"}, value)["baseline"], "b");
-  EXPECT_TRUE(normalisedAggregate({"easy", "hard"}, {"c"}, value).is_null());
+  for (const json& p : all["dssim"]["points"]) byLabel[p["label"]] = p;
+  ASSERT_EQ(byLabel.size(), 2u);
+  EXPECT_EQ(byLabel["svgf[a=0]"]["error"].get<double>(), 0.25);
+  EXPECT_EQ(byLabel["svgf[a=0]"]["lo"].get<double>(), 0.2);
+  EXPECT_EQ(byLabel["svgf[a=0]"]["hi"].get<double>(), 0.3);
+  EXPECT_GT(byLabel["svgf[a=0]"]["ms"].get<double>(), 0.0);  // the label's mean time over its scenes
 }
 
 TEST(Report, IntervalsAndTheRunsOwnRankingsAreUsedWhenPresent) {

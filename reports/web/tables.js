@@ -187,7 +187,7 @@
     if (!AB) return;
     const rows = AB.rows.filter((r) => r.scene === A.state.scene || r.scene === null);
     box.append(el('h3', { text: `Ablation of ${AB.denoiser} (sweep)` }),
-      el('p', { class: 'note', text: 'Δ = mean over matching settings of (metric with the value − metric with the first value), other grid parameters held equal; relative change in brackets. Green: better, red: worse.' }));
+      el('p', { class: 'note', text: 'Δ = metric with the value − metric with the first value, other grid parameters held equal; relative change in brackets. Per scene, a ranked metric\'s Δ is the run\'s paired difference with its 95% interval: green or red only when the interval excludes 0 (else "tie"). All scenes: the mean of the per-scene Δ (no interval).' }));
     if (!rows.length) {
       box.append(el('p', { class: 'empty', text: 'No grid parameter has two values with matching pairs.' }));
       return;
@@ -203,6 +203,11 @@
           const d = r.delta[m.name];
           if (d === undefined) return el('td', { text: '–' });
           const better = m.lowerIsBetter ? d < 0 : d > 0;
+          const p = r.paired && r.paired[m.name];
+          if (p) {
+            const cls = !p.resolved ? 'tie' : better ? 'better' : 'worse';
+            return el('td', { class: cls, 'data-paired': 'true', text: `${fmt(d)} (${pct(r.relative[m.name])}) ${A.interval(p.ci95)}${p.resolved ? '' : ' tie'}` });
+          }
           return el('td', { class: d === 0 ? null : better ? 'better' : 'worse', text: `${fmt(d)} (${pct(r.relative[m.name])})` });
         })))))));
   }
