@@ -73,13 +73,7 @@ void addBenchCommand(CLI::App& app) {
     b.inputs = d->inputs;
     b.lowresFactor = d->lowresFactor;
     b.lowresSpp = d->lowresSpp;
-    if (d->denoisers == "all") b.denoisers = DenoiserRegistry::instance().names();
-    else
-      for (size_t a = 0, e; a <= d->denoisers.size(); a = e + 1) {
-        e = d->denoisers.find(',', a);
-        if (e == std::string::npos) e = d->denoisers.size();
-        if (e > a) b.denoisers.push_back(d->denoisers.substr(a, e - a));
-      }
+    b.denoisers = d->denoisers == "all" ? DenoiserRegistry::instance().names() : splitList(d->denoisers);
     for (const std::string& library : d->plugins) b.denoisers.push_back("plugin:" + library);
     for (std::string& n : b.denoisers) n = DenoiserRegistry::resolve(n);  // loads external ones
     b.params = parseParamAssignments(d->params);

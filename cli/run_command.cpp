@@ -24,14 +24,6 @@ namespace {
 
 using nlohmann::json;
 
-std::vector<std::string> splitList(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream in(s);
-  for (std::string item; std::getline(in, item, ',');)
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
-
 struct MatrixOptions {
   RenderOptions render;
   std::string scenes = "all", out, shard = "0/1", flip = "all", keepFrames = "auto";

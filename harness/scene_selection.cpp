@@ -75,16 +75,21 @@ std::vector<std::string> shortSequenceWarnings(const std::vector<Scene>& scenes,
 }
 
 
+std::vector<std::string> splitList(const std::string& list) {
+  std::vector<std::string> out;
+  std::stringstream in(list);
+  for (std::string item; std::getline(in, item, ',');)
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
 std::vector<Scene> selectScenes(const std::string& list, const std::string& scenesDir) {
   std::vector<Scene> out;
   if (list == "all") {
     for (const std::string& f : listSceneFiles(scenesDir)) out.push_back(loadScene(f));
     return out;
   }
-  std::stringstream in(list);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    if (item.empty()) continue;
+  for (const std::string& item : splitList(list)) {
     fs::path p = item;
     if (p.extension() != ".json") p = fs::path(scenesDir) / (item + ".json");
     if (!fs::exists(p))

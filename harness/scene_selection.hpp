@@ -21,6 +21,9 @@ void requireFitsInMemory(const Scene& scene, const RenderSettings& settings, boo
 std::vector<std::string> shortSequenceWarnings(const std::vector<Scene>& scenes,
                                                const RenderSettings& settings, int warmup);
 
+// The non-empty items of a comma-separated list ("a,,b" -> a, b).
+std::vector<std::string> splitList(const std::string& list);
+
 // "all", or comma-separated scene names (looked up in scenesDir) or paths to .json files.
 std::vector<Scene> selectScenes(const std::string& list, const std::string& scenesDir);
 

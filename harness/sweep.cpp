@@ -1,23 +1,12 @@
 #include "harness/sweep.hpp"
 
 #include <set>
-#include <sstream>
 
 #include "core/error.hpp"
+#include "harness/scene_selection.hpp"
 
 namespace arena {
 
-namespace {
-
-std::vector<std::string> splitList(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream in(s);
-  for (std::string item; std::getline(in, item, ',');)
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
-
-}  // namespace
 
 RunConfig sweepRun(RunConfig c, const std::string& denoiser, const std::map<std::string, std::string>& fixed,
                    const std::vector<std::string>& grids) {
