@@ -27,43 +27,50 @@ double rootOfMean(const TileSums& tiles) {
 
 }  // namespace
 
-StabilityResult temporalStability(const StabilityInput& in, const ConsistencyThresholds& thresholds) {
-  if (!in.current || in.current->empty()) throw Error("temporal stability: no current frame");
-  const Image& x = *in.current;
-  const size_t lags = in.previous.size();
-  if (in.guides.size() != lags + 1)
+std::vector<StabilityResult> temporalStability(const std::vector<StabilityInput>& signals,
+                                               const std::vector<const LayerSet*>& guides,
+                                               const ConsistencyThresholds& thresholds) {
+  if (signals.empty()) return {};
+  for (const StabilityInput& in : signals)
+    if (!in.current || in.current->empty()) throw Error("temporal stability: no current frame");
+  const Image& first = *signals.front().current;
+  const size_t lags = signals.front().previous.size();
+  if (guides.size() != lags + 1)
     throw Error("temporal stability: " + std::to_string(lags) + " previous frames need " + std::to_string(lags + 1) +
-                " guide layer sets, got " + std::to_string(in.guides.size()));
-  for (const Image* p : in.previous)
-    if (!p || !p->sameShape(x)) throw Error("temporal stability: a previous frame differs in size or is missing");
-  if (in.normaliser && !in.normaliser->sameShape(x))
-    throw Error("temporal stability: the normaliser differs in size from the frame");
-  const int w = x.width(), h = x.height(), c = x.channels();
-  const size_t n = size_t(w) * size_t(h);
+                " guide layer sets, got " + std::to_string(guides.size()));
+  for (const StabilityInput& in : signals) {
+    if (!in.current->sameShape(first) || in.previous.size() != lags)
+      throw Error("temporal stability: the signals differ in size or in their number of previous frames");
+    for (const Image* p : in.previous)
+      if (!p || !p->sameShape(first)) throw Error("temporal stability: a previous frame differs in size or is missing");
+    if (in.normaliser && !in.normaliser->sameShape(first))
+      throw Error("temporal stability: the normaliser differs in size from the frame");
+  }
+  const int w = first.width(), h = first.height(), c = first.channels();
+  const size_t n = size_t(w) * size_t(h), count = signals.size();
   // Each pixel's path back through the motion layers: its position in the frame reached so far,
   // the nearest pixel there (whose motion and surface the next step reads), and whether every
   // step so far was consistent.
   std::vector<float> posX(n), posY(n);
   std::vector<int> nearX(n), nearY(n);
   std::vector<uint8_t> valid(n);
-  const Image& meshNow = in.guides[0]->get("meshId", "temporal stability");
+  const Image& meshNow = guides[0]->get("meshId", "temporal stability");
   for (int y = 0; y < h; ++y)
     for (int px = 0; px < w; ++px) {
       const size_t i = size_t(y) * size_t(w) + size_t(px);
       posX[i] = float(px), posY[i] = float(y), nearX[i] = px, nearY[i] = y;
       valid[i] = meshNow.at(px, y) >= 0;  // the sky has no surface to follow
     }
-  std::vector<float> warped(n * size_t(c));
-  TileAccumulator fine(w, h), coarse(w, h);
-  StabilityResult out;
+  std::vector<std::vector<float>> warped(count, std::vector<float>(n * size_t(c)));
+  std::vector<TileAccumulator> fine(count, TileAccumulator(w, h)), coarse(count, TileAccumulator(w, h));
+  std::vector<StabilityResult> out(count);
   for (size_t k = 1; k <= lags; ++k) {
-    const LayerSet &a = *in.guides[k - 1], &b = *in.guides[k];
+    const LayerSet &a = *guides[k - 1], &b = *guides[k];
     const Image& motion = a.get("motion", "temporal stability");
     const Image &depthA = a.get("depth", "temporal stability"), &normalA = a.get("normal", "temporal stability"),
                 &meshA = a.get("meshId", "temporal stability");
     const Image &depthB = b.get("depth", "temporal stability"), &normalB = b.get("normal", "temporal stability"),
                 &meshB = b.get("meshId", "temporal stability");
-    const Image& before = *in.previous[k - 1];
     tbb::parallel_for(0, h, [&](int y) {
       for (int px = 0; px < w; ++px) {
         const size_t i = size_t(y) * size_t(w) + size_t(px);
@@ -88,21 +95,25 @@ StabilityResult temporalStability(const StabilityInput& in, const ConsistencyThr
         // One bilinear resampling of frame t - k at the end of the path, so longer lags are not
         // blurred more than the first.
         const float fx = qx - float(x0), fy = qy - float(y0);
-        double sum = 0;
-        for (int ch = 0; ch < c; ++ch) {
-          const double value = (1 - fx) * (1 - fy) * before.at(x0, y0, ch) + fx * (1 - fy) * before.at(x0 + 1, y0, ch) +
-                               (1 - fx) * fy * before.at(x0, y0 + 1, ch) + fx * fy * before.at(x0 + 1, y0 + 1, ch);
-          warped[size_t(ch) * n + i] = float(value);
-          sum += stabilityTerm(x.at(px, y, ch), value, in.normaliser,
-                               in.normaliser ? in.normaliser->at(px, y, ch) : 0.0);
+        for (size_t s = 0; s < count; ++s) {
+          const StabilityInput& in = signals[s];
+          const Image &x = *in.current, &before = *in.previous[k - 1];
+          double sum = 0;
+          for (int ch = 0; ch < c; ++ch) {
+            const double value = (1 - fx) * (1 - fy) * before.at(x0, y0, ch) + fx * (1 - fy) * before.at(x0 + 1, y0, ch) +
+                                 (1 - fx) * fy * before.at(x0, y0 + 1, ch) + fx * fy * before.at(x0 + 1, y0 + 1, ch);
+            warped[s][size_t(ch) * n + i] = float(value);
+            sum += stabilityTerm(x.at(px, y, ch), value, in.normaliser,
+                                 in.normaliser ? in.normaliser->at(px, y, ch) : 0.0);
+          }
+          fine[s].add(px, y, sum, c);
         }
-        fine.add(px, y, sum, c);
       }
     });
     if (k == 1) {
-      size_t count = 0;
-      for (uint8_t v : valid) count += v;
-      out.validFraction = double(count) / double(n);
+      size_t kept = 0;
+      for (uint8_t v : valid) kept += v;
+      for (StabilityResult& r : out) r.validFraction = double(kept) / double(n);
     }
     // The coarse scale: 4x4 block means of the frame and of its warped predecessor, over blocks
     // whose every pixel is valid for this lag; a block's entry goes to its top-left pixel's tile.
@@ -116,27 +127,36 @@ StabilityResult temporalStability(const StabilityInput& in, const ConsistencyThr
           for (int dx = 0; dx < kStabilityBlock && all; ++dx)
             all = valid[size_t(y0 + dy) * size_t(w) + size_t(x0 + dx)];
         if (!all) continue;
-        double sum = 0;
-        for (int ch = 0; ch < c; ++ch) {
-          double now = 0, then = 0, reference = 0;
-          for (int dy = 0; dy < kStabilityBlock; ++dy)
-            for (int dx = 0; dx < kStabilityBlock; ++dx) {
-              const size_t i = size_t(y0 + dy) * size_t(w) + size_t(x0 + dx);
-              now += x.at(x0 + dx, y0 + dy, ch);
-              then += warped[size_t(ch) * n + i];
-              if (in.normaliser) reference += in.normaliser->at(x0 + dx, y0 + dy, ch);
-            }
-          sum += stabilityTerm(now / area, then / area, in.normaliser, reference / area);
+        for (size_t s = 0; s < count; ++s) {
+          const StabilityInput& in = signals[s];
+          double sum = 0;
+          for (int ch = 0; ch < c; ++ch) {
+            double now = 0, then = 0, reference = 0;
+            for (int dy = 0; dy < kStabilityBlock; ++dy)
+              for (int dx = 0; dx < kStabilityBlock; ++dx) {
+                const size_t i = size_t(y0 + dy) * size_t(w) + size_t(x0 + dx);
+                now += in.current->at(x0 + dx, y0 + dy, ch);
+                then += warped[s][size_t(ch) * n + i];
+                if (in.normaliser) reference += in.normaliser->at(x0 + dx, y0 + dy, ch);
+              }
+            sum += stabilityTerm(now / area, then / area, in.normaliser, reference / area);
+          }
+          coarse[s].add(x0, y0, sum, c);
         }
-        coarse.add(x0, y0, sum, c);
       }
     });
   }
-  out.fineTiles = fine.finish();
-  out.coarseTiles = coarse.finish();
-  out.fine = rootOfMean(out.fineTiles);
-  out.coarse = rootOfMean(out.coarseTiles);
+  for (size_t s = 0; s < count; ++s) {
+    out[s].fineTiles = fine[s].finish();
+    out[s].coarseTiles = coarse[s].finish();
+    out[s].fine = rootOfMean(out[s].fineTiles);
+    out[s].coarse = rootOfMean(out[s].coarseTiles);
+  }
   return out;
+}
+
+StabilityResult temporalStability(const StabilityInput& in, const ConsistencyThresholds& thresholds) {
+  return temporalStability(std::vector<StabilityInput>{in}, in.guides, thresholds).front();
 }
 
 // Registered in metric_registry.cpp. Without a reference only the output's own stability is
@@ -168,13 +188,15 @@ MetricFamily multiScaleStabilityFamily() {
     auto put = [&](const char* name, double value, TileSums tiles) {
       if (tiles.totalCount() > 0) out.put(name, value, std::move(tiles));  // else nothing was valid: undefined
     };
-    StabilityResult s = temporalStability(output);
-    put("stabilityFine", s.fine, std::move(s.fineTiles));
-    put("stabilityCoarse", s.coarse, std::move(s.coarseTiles));
-    if (!v.error) return;
-    StabilityResult e = temporalStability(error);
-    put("errorStabilityFine", e.fine, std::move(e.fineTiles));
-    put("errorStabilityCoarse", e.coarse, std::move(e.coarseTiles));
+    // The output and its error follow the same paths: traced once for both.
+    std::vector<StabilityInput> signals = {output};
+    if (v.error) signals.push_back(error);
+    std::vector<StabilityResult> r = temporalStability(signals, output.guides);
+    put("stabilityFine", r[0].fine, std::move(r[0].fineTiles));
+    put("stabilityCoarse", r[0].coarse, std::move(r[0].coarseTiles));
+    if (r.size() < 2) return;
+    put("errorStabilityFine", r[1].fine, std::move(r[1].fineTiles));
+    put("errorStabilityCoarse", r[1].coarse, std::move(r[1].coarseTiles));
   };
   return f;
 }

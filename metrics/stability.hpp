@@ -31,4 +31,11 @@ struct StabilityResult {
 
 StabilityResult temporalStability(const StabilityInput& in, const ConsistencyThresholds& thresholds = {});
 
+// Several signals over the same frames and guides (the output and its error): each pixel's path
+// back through the motion layers is followed once for all of them. signals[i].guides is ignored;
+// `guides` holds frames t, t-1, ..., t-K for every signal.
+std::vector<StabilityResult> temporalStability(const std::vector<StabilityInput>& signals,
+                                               const std::vector<const LayerSet*>& guides,
+                                               const ConsistencyThresholds& thresholds = {});
+
 }  // namespace arena
