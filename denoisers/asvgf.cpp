@@ -340,70 +340,52 @@ void Asvgf::computeAlpha() {
   });
 }
 
-std::vector<ParamSpec> asvgfParamSpecs() {
-  std::vector<ParamSpec> specs = svgfParamSpecs();
-  for (ParamSpec& s : specs) {
-    if (s.name == "alpha")
-      s.meaning += "; A-SVGF eq. 15's base alpha (Q2RTX flt_min_alpha_color_hf 0.02)";
-    if (s.name == "momentsAlpha")
-      s.meaning += "; raised by the same alpha_i (Q2RTX flt_min_alpha_moments_hf 0.01)";
-  }
-  const std::vector<ParamSpec> own = {
-      ParamSpec::integer("gradient.iterations", 5, 0, 10,
-                         "joint-bilateral à-trous iterations over the 3x3 strata (A-SVGF §3.4: "
-                         "5, a 3x3 box with taps 2^k strata apart)"),
-      ParamSpec::boolean("gradient.edge.depth", true, "gradient filter depth term (A-SVGF eq. 10)"),
-      ParamSpec::boolean("gradient.edge.normal", true,
-                         "gradient filter normal term (A-SVGF eq. 9)"),
-      ParamSpec::boolean("gradient.edge.luminance", true,
-                         "gradient filter variance-scaled luminance term (A-SVGF eq. 11)"),
-      ParamSpec::real("gradient.sigmaZ", 1.0, 0.0, 1e6, "gradient filter sigma_z (A-SVGF eq. 10)"),
-      ParamSpec::real("gradient.sigmaN", 128.0, 0.0, 1e4,
-                      "gradient filter normal exponent sigma_n (A-SVGF eq. 9)"),
-      ParamSpec::real("gradient.sigmaL", 4.0, 0.0, 1e6,
-                      "gradient filter luminance sigma_l (A-SVGF eq. 11)"),
-      ParamSpec::choice("gradient.normalise", "paper", {"paper", "q2rtx"},
-                        "paper: filter delta and Delta, then lambda = |delta^|/Delta^ (eq. 14); "
-                        "q2rtx: filter the per-sample (|delta|/Delta)^2 (Q2RTX)"),
-      ParamSpec::real("gradient.gain", 1.0, 0.0, 1e3,
-                      "lambda = min(1, gain * ratio) (paper 1; Q2RTX flt_antilag_hf)"),
-      ParamSpec::boolean("gradient.max3x3", true,
-                         "alpha_i = max over the 3x3 neighbouring strata (A-SVGF §3.5)"),
-      ParamSpec::boolean(
-          "gradient.shortenHistory", true,
-          "Q2RTX order: h = h_prev (1 - lambda)^10 + 1 first, then alpha = "
-          "lerp(max(alpha, 1/h), 1, lambda), restarting 1/h and the spatial variance "
-          "where the history was rejected; false = the paper's eq. 15 literally"),
-  };
-  specs.insert(specs.end(), own.begin(), own.end());
-  return specs;
-}
-
-AsvgfSettings asvgfSettings(const ParamSet& params) {
-  AsvgfSettings s;
-  s.svgf = svgfSettings(params, "asvgf");
-  s.gradientIterations = params.getInt("gradient.iterations");
-  s.gradientDepth = params.getBool("gradient.edge.depth");
-  s.gradientNormal = params.getBool("gradient.edge.normal");
-  s.gradientLuminance = params.getBool("gradient.edge.luminance");
-  s.gradientSigmaZ = params.getFloat("gradient.sigmaZ");
-  s.gradientSigmaN = params.getFloat("gradient.sigmaN");
-  s.gradientSigmaL = params.getFloat("gradient.sigmaL");
-  s.normalisation = params.getChoice("gradient.normalise") == "q2rtx"
-                        ? GradientNormalisation::Q2rtx
-                        : GradientNormalisation::Paper;
-  s.antilagGain = params.getFloat("gradient.gain");
-  s.max3x3 = params.getBool("gradient.max3x3");
-  s.shortenHistory = params.getBool("gradient.shortenHistory");
-  return s;
+const ParamTable<AsvgfSettings>& asvgfParams() {
+  using S = AsvgfSettings;
+  static const ParamTable<S> table =
+      ParamTable<S>()
+          .include(svgfParams(), &S::svgf)
+          .extendMeaning("alpha",
+                         "; A-SVGF eq. 15's base alpha (Q2RTX flt_min_alpha_color_hf 0.02)")
+          .extendMeaning("momentsAlpha",
+                         "; raised by the same alpha_i (Q2RTX flt_min_alpha_moments_hf 0.01)")
+          .integer("gradient.iterations", &S::gradientIterations, 5, 0, 10,
+                   "joint-bilateral à-trous iterations over the 3x3 strata (A-SVGF §3.4: 5, a "
+                   "3x3 box with taps 2^k strata apart)")
+          .boolean("gradient.edge.depth", &S::gradientDepth, true,
+                   "gradient filter depth term (A-SVGF eq. 10)")
+          .boolean("gradient.edge.normal", &S::gradientNormal, true,
+                   "gradient filter normal term (A-SVGF eq. 9)")
+          .boolean("gradient.edge.luminance", &S::gradientLuminance, true,
+                   "gradient filter variance-scaled luminance term (A-SVGF eq. 11)")
+          .real("gradient.sigmaZ", &S::gradientSigmaZ, 1.0, 0.0, 1e6,
+                "gradient filter sigma_z (A-SVGF eq. 10)")
+          .real("gradient.sigmaN", &S::gradientSigmaN, 128.0, 0.0, 1e4,
+                "gradient filter normal exponent sigma_n (A-SVGF eq. 9)")
+          .real("gradient.sigmaL", &S::gradientSigmaL, 4.0, 0.0, 1e6,
+                "gradient filter luminance sigma_l (A-SVGF eq. 11)")
+          .choice(
+              "gradient.normalise", &S::normalisation, "paper",
+              {{"paper", GradientNormalisation::Paper}, {"q2rtx", GradientNormalisation::Q2rtx}},
+              "paper: filter delta and Delta, then lambda = |delta^|/Delta^ (eq. 14); q2rtx: "
+              "filter the per-sample (|delta|/Delta)^2 (Q2RTX)")
+          .real("gradient.gain", &S::antilagGain, 1.0, 0.0, 1e3,
+                "lambda = min(1, gain * ratio) (paper 1; Q2RTX flt_antilag_hf)")
+          .boolean("gradient.max3x3", &S::max3x3, true,
+                   "alpha_i = max over the 3x3 neighbouring strata (A-SVGF §3.5)")
+          .boolean("gradient.shortenHistory", &S::shortenHistory, true,
+                   "Q2RTX order: h = h_prev (1 - lambda)^10 + 1 first, then alpha = "
+                   "lerp(max(alpha, 1/h), 1, lambda), restarting 1/h and the spatial variance "
+                   "where the history was rejected; false = the paper's eq. 15 literally");
+  return table;
 }
 
 DenoiserInfo asvgfInfo() {
   return {"asvgf",
           "Adaptive SVGF: SVGF whose temporal alpha is raised by reconstructed temporal gradients "
           "(Schied et al. 2018)",
-          ParamSchema(asvgfParamSpecs()), [](const ParamSet& params, SignalKind) {
-            return std::make_unique<Asvgf>(asvgfSettings(params));
+          asvgfParams().schema(), [](const ParamSet& params, SignalKind) {
+            return std::make_unique<Asvgf>(asvgfParams().settings(params, "asvgf"));
           }};
 }
 

@@ -20,28 +20,32 @@ enum class GradientNormalisation {
   Q2rtx,
 };
 
+// The gradient fields are set from asvgfParams() (asvgf.cpp; "gradient.iterations" ->
+// gradientIterations, "gradient.edge.depth" -> gradientDepth, "gradient.normalise" ->
+// normalisation, "gradient.gain" -> antilagGain, ...), which declares each default, range and
+// meaning once.
 struct AsvgfSettings {
   SvgfSettings svgf;  // alpha is A-SVGF's base alpha (eq. 15), momentsAlpha the moments' floor
   // Gradient reconstruction (A-SVGF §3.4) at stratum resolution.
-  int gradientIterations = 5;  // paper: 5 joint-bilateral à-trous iterations (k = 0..4)
-  bool gradientDepth = true, gradientNormal = true, gradientLuminance = true;
-  float gradientSigmaZ = 1.0f;    // eq. 10 sigma_z (paper values as SVGF: 1)
-  float gradientSigmaN = 128.0f;  // eq. 9 sigma_n (128)
-  float gradientSigmaL = 4.0f;    // eq. 11 sigma_l (4)
-  float depthEpsilon = 1e-3f;     // eq. 10's guard, relative to z(p) (as the shared depth term)
-  GradientNormalisation normalisation = GradientNormalisation::Paper;
-  float antilagGain = 1.0f;  // lambda multiplier: 1 in the paper; Q2RTX flt_antilag_hf
-  bool max3x3 = true;        // §3.5: the max alpha over the 3x3 neighbouring strata
+  int gradientIterations;  // joint-bilateral à-trous iterations
+  bool gradientDepth, gradientNormal, gradientLuminance;
+  float gradientSigmaZ;        // eq. 10 sigma_z
+  float gradientSigmaN;        // eq. 9 sigma_n
+  float gradientSigmaL;        // eq. 11 sigma_l
+  float depthEpsilon = 1e-3f;  // eq. 10's guard, relative to z(p) (as the shared depth term)
+  GradientNormalisation normalisation;
+  float antilagGain;  // lambda multiplier: 1 in the paper; Q2RTX flt_antilag_hf
+  bool max3x3;        // §3.5: the max alpha over the 3x3 neighbouring strata
   // Q2RTX asvgf_temporal's order (default): the reprojected history length is shortened first,
   // h = h_prev (1 - lambda)^10 + 1, then alpha = lerp(max(alpha, 1/h), 1, lambda) -- a rejected
   // history restarts 1/h and SVGF's spatial variance estimate. false: the paper literally,
   // alpha = max((1 - lambda) alpha + lambda, 1/h) with h unchanged, whose moments then hold the
   // pixel's own (l, l^2) where lambda = 1 and the variance collapses to 0 (issue 15, item 2).
-  bool shortenHistory = true;
+  bool shortenHistory;
 };
 
-std::vector<ParamSpec> asvgfParamSpecs();
-AsvgfSettings asvgfSettings(const ParamSet& params);
+// SVGF's parameters (svgfParams()) followed by the gradient's, each bound to its field.
+const ParamTable<AsvgfSettings>& asvgfParams();
 
 class Asvgf final : public Svgf {
  public:

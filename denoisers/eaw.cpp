@@ -17,10 +17,11 @@ namespace arena {
 
 namespace {
 
+// Set from eawParams() below, which declares each default, range and meaning once.
 struct EawSettings {
-  int iterations = 5;
-  bool normalPerStep = true;  // seed 002's code: the normal distance divided by stepwidth^2
-  AtrousSettings atrous;
+  int iterations;
+  bool normalPerStep;     // seed 002's code: the normal distance divided by stepwidth^2
+  AtrousSettings atrous;  // kernel and the Dammertz terms (sigmaColor, edge.color, ...)
   Footprint footprint;
 };
 
@@ -66,31 +67,42 @@ class EdgeAvoidingAtrous final : public Denoiser {
   Image pingPong_[2];
 };
 
-ParamSchema eawSchema() {
-  std::vector<ParamSpec> specs = {
-      ParamSpec::integer("iterations", 5, 1, 10,
-                         "à-trous iterations; 5 reach about 65x65 px (Dammertz 2010: 5)"),
-      atrousKernelParamSpec(),
-      ParamSpec::real("sigmaColor", 2.0, 1e-6, 1e6,
-                      "colour sigma_rt of exp(-|c(p)-c(q)|^2/sigma_rt) at iteration 0, halved "
-                      "every iteration (ours: demodulated radiance differences of ~1.4 weigh 1/e)"),
-      ParamSpec::real("sigmaNormal", 0.1, 1e-6, 1e6,
-                      "normal sigma_n of exp(-|n(p)-n(q)|^2/sigma_n) (ours: 10 deg weighs 0.74, "
-                      "45 deg 0.003)"),
-      ParamSpec::real("sigmaPosition", 0.05, 1e-9, 1e9,
-                      "position sigma_x of exp(-|x(p)-x(q)|^2/sigma_x), world units squared "
-                      "(ours, for metre-scale scenes)"),
-      ParamSpec::boolean("normalPerStep", true,
-                         "normal distance divided by stepwidth^2 each iteration (seed 002's "
-                         "Dammertz code; false: one sigma for every iteration)"),
-      ParamSpec::boolean("edge.color", true, "colour stopping term (Dammertz)"),
-      ParamSpec::boolean("edge.normal", true, "normal stopping term (Dammertz)"),
-      ParamSpec::boolean("edge.position", true, "world-position stopping term (Dammertz)"),
-      ParamSpec::boolean("edge.id", false,
-                         "mesh-id stopping term (not in the paper; seed 002's code has it)"),
-  };
-  for (ParamSpec& s : footprintParamSpecs()) specs.push_back(std::move(s));
-  return ParamSchema(specs);
+const ParamTable<EawSettings>& eawParams() {
+  using S = EawSettings;
+  using E = EdgeStoppingSettings;
+  auto edge = [](auto field) { return member(&S::atrous, &AtrousSettings::edges, field); };
+  static const ParamTable<S> table =
+      ParamTable<S>()
+          .integer("iterations", &S::iterations, 5, 1, 10,
+                   "à-trous iterations; 5 reach about 65x65 px (Dammertz 2010: 5)")
+          .include(atrousKernelParams(), &S::atrous)
+          .real("sigmaColor", edge(&E::sigmaColor), 2.0, 1e-6, 1e6,
+                "colour sigma_rt of exp(-|c(p)-c(q)|^2/sigma_rt) at iteration 0, halved every "
+                "iteration (ours: demodulated radiance differences of ~1.4 weigh 1/e)")
+          .real("sigmaNormal", edge(&E::sigmaN), 0.1, 1e-6, 1e6,
+                "normal sigma_n of exp(-|n(p)-n(q)|^2/sigma_n) (ours: 10 deg weighs 0.74, 45 deg "
+                "0.003)")
+          .real("sigmaPosition", edge(&E::sigmaX), 0.05, 1e-9, 1e9,
+                "position sigma_x of exp(-|x(p)-x(q)|^2/sigma_x), world units squared (ours, for "
+                "metre-scale scenes)")
+          .boolean("normalPerStep", &S::normalPerStep, true,
+                   "normal distance divided by stepwidth^2 each iteration (seed 002's Dammertz "
+                   "code; false: one sigma for every iteration)")
+          .boolean("edge.color", edge(&E::color), true, "colour stopping term (Dammertz)")
+          .boolean("edge.normal", edge(&E::normal), true, "normal stopping term (Dammertz)")
+          .boolean("edge.position", edge(&E::position), true,
+                   "world-position stopping term (Dammertz)")
+          .boolean("edge.id", edge(&E::id), false,
+                   "mesh-id stopping term (not in the paper; seed 002's code has it)")
+          .include(footprintParams(), &S::footprint)
+          .fixed([](S& s) {
+            // Dammertz 2010 has no depth or luminance term; its normal term is a Gaussian of the
+            // normal distance.
+            s.atrous.edges.depth = false;
+            s.atrous.edges.luminance = false;
+            s.atrous.edges.normalForm = NormalWeightForm::GaussianDistance;
+          });
+  return table;
 }
 
 }  // namespace
@@ -99,24 +111,8 @@ DenoiserInfo eawInfo() {
   return {"eaw",
           "Edge-avoiding à-trous wavelet filter, colour/normal/position stopping, spatial only "
           "(Dammertz et al. 2010)",
-          eawSchema(), [](const ParamSet& params, SignalKind) {
-            EawSettings s;
-            s.iterations = params.getInt("iterations");
-            s.normalPerStep = params.getBool("normalPerStep");
-            s.atrous.kernel = atrousKernelParam(params);
-            s.footprint = footprintParam(params);
-            EdgeStoppingSettings& e = s.atrous.edges;
-            e.depth = false;
-            e.luminance = false;
-            e.color = params.getBool("edge.color");
-            e.sigmaColor = params.getFloat("sigmaColor");
-            e.normal = params.getBool("edge.normal");
-            e.normalForm = NormalWeightForm::GaussianDistance;
-            e.sigmaN = params.getFloat("sigmaNormal");
-            e.position = params.getBool("edge.position");
-            e.sigmaX = params.getFloat("sigmaPosition");
-            e.id = params.getBool("edge.id");
-            return std::make_unique<EdgeAvoidingAtrous>(s);
+          eawParams().schema(), [](const ParamSet& params, SignalKind) {
+            return std::make_unique<EdgeAvoidingAtrous>(eawParams().settings(params, "eaw"));
           }};
 }
 

@@ -92,11 +92,11 @@ void Hybrid::denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& o
 }
 
 // ---- 0. Filter space. CAPCOM (seed 004, "Removing Reinhard Curves"): filtering a Reinhard-
-// compressed signal ghosts under exposure changes; linear is their fix. reinhard = true filters
+// compressed signal ghosts under exposure changes; linear is their fix. space=reinhard filters
 // y = c / (1 + L(c)) and expands the result with c = y / (1 - L(y)) -- the ablation.
 void Hybrid::toFilterSpace(const Image& signal) {
   ScopedPass pass(this, "filter space", 0);
-  if (!s_.reinhard) {
+  if (s_.space == FilterSpace::Linear) {
     signal_ = signal;
     return;
   }
@@ -138,14 +138,14 @@ float Hybrid::historySample(size_t i, const float* plane) const {
 // outwards ("領域の広がる方向にのみ"): mask' = max(mask, 3x3 mean), a soft border for the fill.
 void Hybrid::disocclusion(const FrameContext& ctx) {
   ScopedPass pass(this, "disocclusion", 4);
-  useVirtual_ = kind_ == SignalKind::Specular && s_.hitPointReprojection;
+  useVirtual_ = kind_ == SignalKind::Specular && s_.hitPoint;
   if (hasHistory_) {
     const GBufferView previous = previousGBuffer_.view();
     surface_.compute(gbuffer_, derivatives_, previous, s_.reprojection, &ctx.camera,
                      &ctx.previousCamera);
     if (useVirtual_)
       virtual_.compute(gbuffer_, hitDistance_, ctx.camera, ctx.previousCamera, previous,
-                       s_.hitPoint);
+                       s_.hitPointTests);
   } else {
     surface_.invalidateAll();
     virtual_.invalidateAll();
@@ -176,7 +176,7 @@ void Hybrid::disocclusion(const FrameContext& ctx) {
 }
 
 bool Hybrid::usesMedian() const {
-  return s_.median && (kind_ == SignalKind::Specular || s_.medianBothSignals);
+  return s_.median && (kind_ == SignalKind::Specular || s_.medianSignals == MedianSignals::Both);
 }
 
 bool Hybrid::usesPreSpatial() const {
@@ -243,8 +243,9 @@ void Hybrid::preSpatial() {
 // averaged moments hold ~(2^L + 2)^2 samples. The number of samples is what the box needs, so L
 // is not scaled by the footprint policy (a 1080p frame's 3x3 box has the same nine samples).
 void Hybrid::clipMoments() {
-  ScopedPass pass(this, "clip-box mip", s_.varianceClip && s_.clipMip ? 4 : 0);
-  if (!s_.varianceClip || !s_.clipMip) return;
+  ScopedPass pass(this, "clip-box mip",
+                  s_.varianceClip && s_.clipSupport == ClipSupport::Mip ? 4 : 0);
+  if (!s_.varianceClip || s_.clipSupport != ClipSupport::Mip) return;
   for (int c = 0; c < 3; ++c) {
     parallelCopy(preSpatial_.plane(c), preSpatial_.pixelCount(), clipBase_.plane(c));
     parallelCopy(preMoments_.plane(c), preMoments_.pixelCount(), clipBase_.plane(3 + c));
@@ -286,8 +287,9 @@ void Hybrid::temporal() {
           // segment always enters the box).
           float mu[3], lo[3], hi[3];
           for (int c = 0; c < 3; ++c) {
-            mu[c] = s_.clipMip ? clipWide_.plane(c)[i] : pre[c];
-            const float second = s_.clipMip ? clipWide_.plane(3 + c)[i] : preMoments_.plane(c)[i];
+            mu[c] = s_.clipSupport == ClipSupport::Mip ? clipWide_.plane(c)[i] : pre[c];
+            const float second = s_.clipSupport == ClipSupport::Mip ? clipWide_.plane(3 + c)[i]
+                                                                    : preMoments_.plane(c)[i];
             const float sigma = std::sqrt(std::max(0.0f, second - mu[c] * mu[c]));
             lo[c] = mu[c] - s_.clipGamma * sigma;
             hi[c] = mu[c] + s_.clipGamma * sigma;
@@ -335,7 +337,7 @@ void Hybrid::temporal() {
         const float lf = luminance(wide[0], wide[1], wide[2]);
         const float la = luminance(result[0], result[1], result[2]);
         float threshold = s_.lumaTau * std::max({lf, la, 1e-6f});
-        if (!s_.lumaRelative) {
+        if (s_.lumaMode == LumaMode::Sigma) {
           const float lp = luminance(pre[0], pre[1], pre[2]);
           float spread = std::max(0.0f, preMoments_.plane(3)[i] - lp * lp);
           if (valid) {
@@ -382,7 +384,7 @@ void Hybrid::postSpatial() {
   // §4.3, the default) or the temporal stage's variance for all three (`postVariance=fixed`, the
   // first version here: later iterations then over-estimate the noise of an already filtered
   // signal and blur more).
-  const bool propagate = s_.edgeLuminance && s_.propagateVariance;
+  const bool propagate = s_.edgeLuminance && s_.postVariance == PostVariance::Propagate;
   const Image* variance = &variance_;
   lastPostVariance_ = -1;
   for (int i = 0; i < s_.postIterations; ++i) {
@@ -432,7 +434,7 @@ void Hybrid::stabilize() {
 
 void Hybrid::fromFilterSpace(Image& output) {
   ScopedPass pass(this, "output space", 0);
-  if (!s_.reinhard) {
+  if (s_.space == FilterSpace::Linear) {
     output = stabilized_;
     return;
   }
@@ -462,131 +464,96 @@ std::vector<std::pair<std::string, const Image*>> Hybrid::passOutputs() const {
   return out;
 }
 
-std::vector<ParamSpec> hybridParamSpecs() {
-  std::vector<ParamSpec> specs = {
-      ParamSpec::boolean("edge.position", true, "world-position stopping term (the talk)"),
-      ParamSpec::boolean("edge.lobe", true,
-                         "specular-lobe stopping term (Tokuyoshi 2016; the talk)"),
-      ParamSpec::boolean("edge.luminance", true, "variance-scaled luminance term (SVGF; the talk)"),
-      ParamSpec::boolean("edge.id", true, "mesh-id term: poster vs wall (the talk)"),
-      ParamSpec::real("sigmaX", 0.05, 1e-9, 1e9,
-                      "position term exp(-|dx|^2/sigmaX), world units^2 (ours)"),
-      ParamSpec::real("lobeBeta", 1, 0, 1e4,
-                      "exponent on the lobe similarity (the talk's beta; 1 = Tokuyoshi)"),
-      ParamSpec::real("lobeDiffuseSharpness", 64, 0, 1e6,
-                      "diffuse signal: SG sharpness of the normal lobe (ours)"),
-      ParamSpec::real("sigmaL", 4, 0, 1e6, "luminance term sigma_l (SVGF 4)"),
-      ParamSpec::boolean("maskBlur", true,
-                         "disocclusion: grow and soften the mask by a 3x3 mean (the talk)"),
-      ParamSpec::boolean("preMip", false,
-                         "pre-spatial: 2-level mip chain for the fill (the talk, optional)"),
-      ParamSpec::integer("preMipLevels", 2, 1, 8, "pre-spatial mip levels (the talk: Mip Gen x2)"),
-      ParamSpec::boolean("hitPoint", true,
-                         "specular: hit-point reprojection below hitPointRoughness (the talk)"),
-      ParamSpec::choice("hitDistance", "sampled", {"sampled", "mirror"},
-                        "specular hit distance: the 1-spp sample's own ray length (what a real "
-                        "tracer has; the talk, NRD) or the noise-free mirror ray (an oracle)"),
-      ParamSpec::real("hitPointRoughness", 0.3, 0, 1,
-                      "roughness threshold of hit-point reprojection (ours)"),
-      ParamSpec::integer("maxHistory", 24, 1, 4096, "cap of h, alpha = 1/h (the talk: 24-30)"),
-      ParamSpec::boolean("disocclusionFill", true,
-                         "disoccluded pixels take the pre-spatial value (the talk)"),
-      ParamSpec::boolean("varianceClip", true,
-                         "clip the history to the pre-spatial mu +- k sigma (the talk)"),
-      ParamSpec::choice("clipSupport", "3x3", {"3x3", "mip"},
-                        "variance box: the pre-spatial 3x3's mean and sigma (the talk) or both "
-                        "from its moments averaged over mip level clipMipLevel (the talk's mip "
-                        "chain; less mottle under sparse light, more lag: FIDELITY.md)"),
-      ParamSpec::integer("clipMipLevel", 2, 1, 6,
-                         "clipSupport=mip: the level (2^level px blocks; ours)"),
-      ParamSpec::choice("clipMode", "clip", {"clip", "clamp"},
-                        "variance box: clip (talk) or per-channel clamp"),
-      ParamSpec::real("clipGamma", 1.5, 0, 100,
-                      "variance box half-width k in sigma (ours; Salvi 1..2)"),
-      ParamSpec::boolean("lumaThreshold", true,
-                         "use the pre-filtered value where its luminance differs from the "
-                         "accumulated one by more than lumaTau (the talk)"),
-      ParamSpec::choice("lumaMode", "sigma", {"sigma", "relative"},
-                        "luminance threshold: |lf - la| > lumaSigma x local luminance sigma "
-                        "(ours, noise-aware) or > lumaTau x max(lf, la) (relative)"),
-      ParamSpec::real("lumaSigma", 2, 0, 1e6,
-                      "lumaMode=sigma: threshold in local luminance sigmas (ours)"),
-      ParamSpec::real("lumaTau", 0.8, 0, 1e6,
-                      "lumaMode=relative: threshold relative to the larger luminance (ours)"),
-      ParamSpec::boolean("capcomRejection", false,
-                         "temporal luminance rejection against a stabilised one-frame result "
-                         "(CAPCOM RE ENGINE)"),
-      ParamSpec::real("capcomTau", 0.5, 1e-6, 1e6, "CAPCOM rejection threshold, relative (ours)"),
-      ParamSpec::integer("postIterations", 3, 0, 3,
-                         "post-spatial 3x3 à-trous iterations (the talk 3)"),
-      ParamSpec::boolean("median", true,
-                         "3x3 median before the first post iteration (the talk; not fed back)"),
-      ParamSpec::choice("postVariance", "propagate", {"propagate", "fixed"},
-                        "post-spatial luminance term: variance propagated with squared weights "
-                        "(SVGF §4.3) or the temporal variance for every iteration"),
-      ParamSpec::choice("medianSignals", "specular", {"specular", "both"},
-                        "signals the median runs on (the talk: optional, for specular fireflies)"),
-      ParamSpec::boolean("medianEdgeAware", true,
-                         "median over same-mesh, similar-normal neighbours only (ours: a 1-px "
-                         "feature keeps its value)"),
-      ParamSpec::boolean("postMip", false,
-                         "post-spatial: mip + bilateral upsample (the talk, optional)"),
-      ParamSpec::integer("postMipLevels", 2, 1, 8, "post-spatial mip levels (ours)"),
-      ParamSpec::boolean("stabilizer", false, "light second EMA (the talk: TAA as stabiliser)"),
-      ParamSpec::real("stabilizerAlpha", 0.5, 0, 1,
-                      "stabiliser blend weight of the new frame (ours)"),
-      ParamSpec::choice("space", "linear", {"linear", "reinhard"},
-                        "filter in linear or Reinhard-compressed space (CAPCOM ablation)"),
-  };
-  for (ParamSpec& s : reprojectionParamSpecs()) specs.push_back(std::move(s));
-  for (ParamSpec& s : footprintParamSpecs()) specs.push_back(std::move(s));
-  return specs;
-}
-
-HybridSettings hybridSettings(const ParamSet& p) {
-  HybridSettings s;
-  s.reprojection = reprojectionSettings(p);
-  s.edgePosition = p.getBool("edge.position");
-  s.edgeLobe = p.getBool("edge.lobe");
-  s.edgeLuminance = p.getBool("edge.luminance");
-  s.edgeId = p.getBool("edge.id");
-  s.sigmaX = p.getFloat("sigmaX");
-  s.lobeBeta = p.getFloat("lobeBeta");
-  s.lobe.diffuseSharpness = p.getFloat("lobeDiffuseSharpness");
-  s.sigmaL = p.getFloat("sigmaL");
-  s.maskBlur = p.getBool("maskBlur");
-  s.preMip = p.getBool("preMip");
-  s.preMipLevels = p.getInt("preMipLevels");
-  s.hitPointReprojection = p.getBool("hitPoint");
-  s.hitPointRoughness = p.getFloat("hitPointRoughness");
-  s.hitDistanceChannel =
-      p.getChoice("hitDistance") == "mirror" ? "specHitDistMirror" : "specHitDist";
-  s.maxHistory = p.getInt("maxHistory");
-  s.disocclusionFill = p.getBool("disocclusionFill");
-  s.varianceClip = p.getBool("varianceClip");
-  s.clipMip = p.getChoice("clipSupport") == "mip";
-  s.clipMipLevel = p.getInt("clipMipLevel");
-  s.clipMode =
-      p.getChoice("clipMode") == "clamp" ? HistoryClampMode::Clamp : HistoryClampMode::Clip;
-  s.clipGamma = p.getFloat("clipGamma");
-  s.lumaThreshold = p.getBool("lumaThreshold");
-  s.lumaTau = p.getFloat("lumaTau");
-  s.lumaRelative = p.getChoice("lumaMode") == "relative";
-  s.lumaSigma = p.getFloat("lumaSigma");
-  s.capcomRejection = p.getBool("capcomRejection");
-  s.capcomTau = p.getFloat("capcomTau");
-  s.postIterations = p.getInt("postIterations");
-  s.median = p.getBool("median");
-  s.medianBothSignals = p.getChoice("medianSignals") == "both";
-  s.medianEdgeAware = p.getBool("medianEdgeAware");
-  s.propagateVariance = p.getChoice("postVariance") == "propagate";
-  s.postMip = p.getBool("postMip");
-  s.postMipLevels = p.getInt("postMipLevels");
-  s.stabilizer = p.getBool("stabilizer");
-  s.stabilizerAlpha = p.getFloat("stabilizerAlpha");
-  s.reinhard = p.getChoice("space") == "reinhard";
-  s.footprint = footprintParam(p);
-  return s;
+const ParamTable<HybridSettings>& hybridParams() {
+  using S = HybridSettings;
+  static const ParamTable<S> table =
+      ParamTable<S>()
+          .boolean("edge.position", &S::edgePosition, true,
+                   "world-position stopping term (the talk)")
+          .boolean("edge.lobe", &S::edgeLobe, true,
+                   "specular-lobe stopping term (Tokuyoshi 2016; the talk)")
+          .boolean("edge.luminance", &S::edgeLuminance, true,
+                   "variance-scaled luminance term (SVGF; the talk)")
+          .boolean("edge.id", &S::edgeId, true, "mesh-id term: poster vs wall (the talk)")
+          .real("sigmaX", &S::sigmaX, 0.05, 1e-9, 1e9,
+                "position term exp(-|dx|^2/sigmaX), world units^2 (ours)")
+          .real("lobeBeta", &S::lobeBeta, 1, 0, 1e4,
+                "exponent on the lobe similarity (the talk's beta; 1 = Tokuyoshi)")
+          .real("lobeDiffuseSharpness", member(&S::lobe, &SpecularLobeSettings::diffuseSharpness),
+                64, 0, 1e6, "diffuse signal: SG sharpness of the normal lobe (ours)")
+          .real("sigmaL", &S::sigmaL, 4, 0, 1e6, "luminance term sigma_l (SVGF 4)")
+          .boolean("maskBlur", &S::maskBlur, true,
+                   "disocclusion: grow and soften the mask by a 3x3 mean (the talk)")
+          .boolean("preMip", &S::preMip, false,
+                   "pre-spatial: 2-level mip chain for the fill (the talk, optional)")
+          .integer("preMipLevels", &S::preMipLevels, 2, 1, 8,
+                   "pre-spatial mip levels (the talk: Mip Gen x2)")
+          .boolean("hitPoint", &S::hitPoint, true,
+                   "specular: hit-point reprojection below hitPointRoughness (the talk)")
+          .include(hitDistanceParams(), &S::hitDistanceChannel)
+          .real("hitPointRoughness", &S::hitPointRoughness, 0.3, 0, 1,
+                "roughness threshold of hit-point reprojection (ours)")
+          .integer("maxHistory", &S::maxHistory, 24, 1, 4096,
+                   "cap of h, alpha = 1/h (the talk: 24-30)")
+          .boolean("disocclusionFill", &S::disocclusionFill, true,
+                   "disoccluded pixels take the pre-spatial value (the talk)")
+          .boolean("varianceClip", &S::varianceClip, true,
+                   "clip the history to the pre-spatial mu +- k sigma (the talk)")
+          .choice("clipSupport", &S::clipSupport, "3x3",
+                  {{"3x3", ClipSupport::Box3x3}, {"mip", ClipSupport::Mip}},
+                  "variance box: the pre-spatial 3x3's mean and sigma (the talk) or both from its "
+                  "moments averaged over mip level clipMipLevel (the talk's mip chain; less "
+                  "mottle under sparse light, more lag: FIDELITY.md)")
+          .integer("clipMipLevel", &S::clipMipLevel, 2, 1, 6,
+                   "clipSupport=mip: the level (2^level px blocks; ours)")
+          .choice("clipMode", &S::clipMode, "clip",
+                  {{"clip", HistoryClampMode::Clip}, {"clamp", HistoryClampMode::Clamp}},
+                  "variance box: clip (talk) or per-channel clamp")
+          .real("clipGamma", &S::clipGamma, 1.5, 0, 100,
+                "variance box half-width k in sigma (ours; Salvi 1..2)")
+          .boolean("lumaThreshold", &S::lumaThreshold, true,
+                   "use the pre-filtered value where its luminance differs from the accumulated "
+                   "one by more than lumaTau (the talk)")
+          .choice("lumaMode", &S::lumaMode, "sigma",
+                  {{"sigma", LumaMode::Sigma}, {"relative", LumaMode::Relative}},
+                  "luminance threshold: |lf - la| > lumaSigma x local luminance sigma (ours, "
+                  "noise-aware) or > lumaTau x max(lf, la) (relative)")
+          .real("lumaSigma", &S::lumaSigma, 2, 0, 1e6,
+                "lumaMode=sigma: threshold in local luminance sigmas (ours)")
+          .real("lumaTau", &S::lumaTau, 0.8, 0, 1e6,
+                "lumaMode=relative: threshold relative to the larger luminance (ours)")
+          .boolean("capcomRejection", &S::capcomRejection, false,
+                   "temporal luminance rejection against a stabilised one-frame result (CAPCOM "
+                   "RE ENGINE)")
+          .real("capcomTau", &S::capcomTau, 0.5, 1e-6, 1e6,
+                "CAPCOM rejection threshold, relative (ours)")
+          .integer("postIterations", &S::postIterations, 3, 0, 3,
+                   "post-spatial 3x3 à-trous iterations (the talk 3)")
+          .boolean("median", &S::median, true,
+                   "3x3 median before the first post iteration (the talk; not fed back)")
+          .choice("postVariance", &S::postVariance, "propagate",
+                  {{"propagate", PostVariance::Propagate}, {"fixed", PostVariance::Fixed}},
+                  "post-spatial luminance term: variance propagated with squared weights (SVGF "
+                  "§4.3) or the temporal variance for every iteration")
+          .choice("medianSignals", &S::medianSignals, "specular",
+                  {{"specular", MedianSignals::Specular}, {"both", MedianSignals::Both}},
+                  "signals the median runs on (the talk: optional, for specular fireflies)")
+          .boolean("medianEdgeAware", &S::medianEdgeAware, true,
+                   "median over same-mesh, similar-normal neighbours only (ours: a 1-px feature "
+                   "keeps its value)")
+          .boolean("postMip", &S::postMip, false,
+                   "post-spatial: mip + bilateral upsample (the talk, optional)")
+          .integer("postMipLevels", &S::postMipLevels, 2, 1, 8, "post-spatial mip levels (ours)")
+          .boolean("stabilizer", &S::stabilizer, false,
+                   "light second EMA (the talk: TAA as stabiliser)")
+          .real("stabilizerAlpha", &S::stabilizerAlpha, 0.5, 0, 1,
+                "stabiliser blend weight of the new frame (ours)")
+          .choice("space", &S::space, "linear",
+                  {{"linear", FilterSpace::Linear}, {"reinhard", FilterSpace::Reinhard}},
+                  "filter in linear or Reinhard-compressed space (CAPCOM ablation)")
+          .include(reprojectionParams(), &S::reprojection)
+          .include(footprintParams(), &S::footprint);
+  return table;
 }
 
 DenoiserInfo hybridInfo() {
@@ -595,8 +562,8 @@ DenoiserInfo hybridInfo() {
       "The CEDEC 2021 talk's denoiser: disocclusion mask, pre-spatial à-trous, motion/hit-point "
       "accumulation with variance clipping and a luminance threshold, à-trous x3 with a median "
       "(Silicon Studio 2021; CAPCOM ablations)",
-      ParamSchema(hybridParamSpecs()), [](const ParamSet& params, SignalKind kind) {
-        return std::make_unique<Hybrid>(hybridSettings(params), kind);
+      hybridParams().schema(), [](const ParamSet& params, SignalKind kind) {
+        return std::make_unique<Hybrid>(hybridParams().settings(params, "hybrid"), kind);
       }};
 }
 

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "denoisers/common/atrous.hpp"
+#include "denoisers/common/filter_space.hpp"
 #include "denoisers/common/footprint.hpp"
 #include "denoisers/common/gbuffer.hpp"
 #include "denoisers/common/history_clamp.hpp"
@@ -17,66 +18,75 @@
 #include "denoisers/common/reprojection.hpp"
 #include "denoisers/common/specular_lobe.hpp"
 #include "denoisers/denoiser.hpp"
+#include "denoisers/param_table.hpp"
 
 namespace arena {
 
+// The clip box's moments: the pre-spatial 3x3's own (the talk's literal design), or with the
+// pre-spatial mean and second moment averaged over mip level clipMipLevel of the talk's optional
+// mip chain (2^level px blocks, bilaterally upsampled): enough 1-spp samples that the box
+// estimates the local distribution (see hybrid.cpp): centre and sigma both from the mip.
+enum class ClipSupport { Box3x3, Mip };
+// Where the luminance threshold fires, in units of the local luminance sigma (default) or relative
+// to the larger luminance (the first version here; fires on noise alone for sparse 1-spp signals).
+enum class LumaMode { Sigma, Relative };
+// The post-spatial luminance term: the variance propagated through the à-trous (SVGF §4.3) or the
+// temporal variance at every iteration.
+enum class PostVariance { Propagate, Fixed };
+// The signals the post median runs on (the talk: an option against specular fireflies).
+enum class MedianSignals { Specular, Both };
+
+// Every field named after its parameter ("edge.position" -> edgePosition) is set from
+// hybridParams() (hybrid.cpp), which declares its default, range and meaning once.
 struct HybridSettings {
   ReprojectionSettings reprojection;
-  HitPointReprojectionSettings hitPoint;
-  SpecularLobeSettings lobe;
+  HitPointReprojectionSettings hitPointTests;  // the hit-point reprojection's consistency tests
+  SpecularLobeSettings lobe;                   // lobe.diffuseSharpness: "lobeDiffuseSharpness"
   // Edge-stopping (the talk: "3D座標 + Specular Lobe + ID + 輝度").
-  bool edgePosition = true, edgeLobe = true, edgeLuminance = true, edgeId = true;
-  float sigmaX = 0.05f;   // world units^2 (ours)
-  float lobeBeta = 1.0f;  // exponent on the SG similarity (the talk's beta; 1 = Tokuyoshi's)
-  float sigmaL = 4.0f;    // luminance term (SVGF's 4)
+  bool edgePosition, edgeLobe, edgeLuminance, edgeId;
+  float sigmaX;    // world units^2
+  float lobeBeta;  // exponent on the SG similarity (the talk's beta; 1 = Tokuyoshi's)
+  float sigmaL;    // luminance term
   // 2. Disocclusion.
-  bool maskBlur = true;
+  bool maskBlur;
   // 3. Pre-spatial.
-  bool preMip = false;
-  int preMipLevels = 2;
+  bool preMip;
+  int preMipLevels;
   // 4. Temporal.
-  bool hitPointReprojection = true;
-  // The specular hit distance read: the 1-spp sample's ("specHitDist") or the mirror oracle's
-  // ("specHitDistMirror").
-  std::string hitDistanceChannel = "specHitDist";
-  float hitPointRoughness = 0.3f;  // specular: hit-point reprojection below this roughness (ours)
-  int maxHistory = 24;             // the talk: h capped at 24-30
-  bool disocclusionFill = true;
-  bool varianceClip = true;
-  // The clip box's moments: the pre-spatial 3x3's own (the talk's literal design), or with the
-  // pre-spatial mean and second moment averaged over mip level clipMipLevel of the talk's optional
-  // mip chain (2^level px blocks, bilaterally upsampled): enough 1-spp samples that the box
-  // estimates the local distribution (see hybrid.cpp): centre and sigma both from the mip.
-  bool clipMip = false;
-  int clipMipLevel = 2;
-  HistoryClampMode clipMode = HistoryClampMode::Clip;
-  float clipGamma = 1.5f;  // box half-width in sigma (ours; Salvi: 1..2)
-  bool lumaThreshold = true;
-  // Where the threshold fires, in units of the local luminance sigma (default) or relative to the
-  // larger luminance (the first version here; fires on noise alone for sparse 1-spp signals).
-  bool lumaRelative = false;
-  float lumaSigma = 2.0f;  // ours: sigma units (see hybrid.cpp)
-  float lumaTau = 0.8f;    // relative (ours)
-  bool capcomRejection = false;
-  float capcomTau = 0.5f;  // relative (ours)
+  bool hitPoint;  // specular: hit-point reprojection below hitPointRoughness
+  // The specular hit distance read (parameter "hitDistance"): the 1-spp sample's ("specHitDist")
+  // or the mirror oracle's ("specHitDistMirror").
+  std::string hitDistanceChannel;
+  float hitPointRoughness;
+  int maxHistory;
+  bool disocclusionFill;
+  bool varianceClip;
+  ClipSupport clipSupport;
+  int clipMipLevel;
+  HistoryClampMode clipMode;
+  float clipGamma;  // box half-width in sigma
+  bool lumaThreshold;
+  LumaMode lumaMode;
+  float lumaSigma, lumaTau;
+  bool capcomRejection;
+  float capcomTau;
   // 5. Post-spatial.
-  int postIterations = 3;
-  bool propagateVariance = true;  // SVGF §4.3 through the post à-trous
-  bool median = true;
-  bool medianBothSignals = false;  // the talk: an option against specular fireflies
-  bool medianEdgeAware = true;     // ours: never across meshes or creases (thin features survive)
-  bool postMip = false;
-  int postMipLevels = 2;
+  int postIterations;
+  PostVariance postVariance;
+  bool median;
+  MedianSignals medianSignals;
+  bool medianEdgeAware;  // ours: never across meshes or creases (thin features survive)
+  bool postMip;
+  int postMipLevels;
   // 6. Stabiliser.
-  bool stabilizer = false;
-  float stabilizerAlpha = 0.5f;
-  // CAPCOM: filter in Reinhard-compressed space instead of linear.
-  bool reinhard = false;
+  bool stabilizer;
+  float stabilizerAlpha;
+  FilterSpace space;    // CAPCOM: Reinhard-compressed instead of linear
   Footprint footprint;  // footprint.hpp: the à-trous steps at this resolution
 };
 
-std::vector<ParamSpec> hybridParamSpecs();
-HybridSettings hybridSettings(const ParamSet& params);
+// The talk's parameters and the CAPCOM ablations, each bound to its field.
+const ParamTable<HybridSettings>& hybridParams();
 
 class Hybrid : public Denoiser {
  public:

@@ -92,7 +92,7 @@ void Reblur::denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& o
 // the temporal accumulation from the pre-pass's hit distance.
 void Reblur::reproject(const FrameContext& ctx) {
   ScopedPass pass(this, "reproject", 4);
-  useVirtual_ = kind_ == SignalKind::Specular && s_.hitPointReprojection;
+  useVirtual_ = kind_ == SignalKind::Specular && s_.hitPoint;
   if (!hasHistory_) {
     surface_.invalidateAll();
     virtual_.invalidateAll();
@@ -109,7 +109,7 @@ void Reblur::reprojectVirtual(const FrameContext& ctx) {
   ScopedPass pass(this, "virtual reprojection", useVirtual_ && hasHistory_ ? 4 : 0);
   if (!useVirtual_ || !hasHistory_) return;
   virtual_.compute(gbuffer_, hitDistance_, ctx.camera, ctx.previousCamera, previousGBuffer_.view(),
-                   s_.hitPoint);
+                   s_.hitPointTests);
   // NRD trusts the virtual history more the smoother the surface (its "spec magic curve");
   // ours: 1 - smoothstep(0, hitPointRoughness, roughness).
   float* amount = virtualAmount_.plane(0);
@@ -229,8 +229,9 @@ void Reblur::historyFixPass() {
     for (size_t i = size_t(y) * size_t(w); i < size_t(y + 1) * size_t(w); ++i) {
       const bool isYoung = previous[i] < frames && gbuffer_.meshId[i] >= 0.0f;
       young += isYoung;
-      const float shape =
-          s_.historyFixNrd ? 1.0f / (2.0f + previous[i]) : (frames - previous[i]) / frames;
+      const float shape = s_.historyFixShape == HistoryFixShape::Nrd
+                              ? 1.0f / (2.0f + previous[i])
+                              : (frames - previous[i]) / frames;
       stride[i] = isYoung ? std::max(1.0f, s_.historyFixStride * pixelScale_ * shape) : 0.0f;
     }
     youngPerRow_.set(y, young);
@@ -248,7 +249,8 @@ void Reblur::historyFixPass() {
   };
   static const std::vector<std::array<float, 2>> nrdGrid = makeGrid(false),
                                                  fullGrid = makeGrid(true);
-  const std::vector<std::array<float, 2>>& grid = s_.historyFixNrd ? nrdGrid : fullGrid;
+  const std::vector<std::array<float, 2>>& grid =
+      s_.historyFixShape == HistoryFixShape::Nrd ? nrdGrid : fullGrid;
   sparseBlur(temporal_, {gbuffer_, roughness_, hitDistance_}, s_.weights, grid.data(),
              int(grid.size()), 1.0f, &radiusScale_, fixed_, /*mostlyIdle=*/true);
   pass.setTaps(double(grid.size()) * youngFraction);
@@ -347,8 +349,9 @@ void Reblur::blurPasses(int frameIndex) {
         const LaneMask8 inRow = laneIndex(Lanes8{}) + x0 < w;
         // NRD: 1 / (1 + N_prev), the counter before this frame's increment; ours (radiusFalloff
         // =sqrt): sqrt(1 / (1 + N)) of the incremented counter.
-        Lanes8 s = s_.radiusNrd ? 1.0f / (1.0f + loadLanes(previousFrames + i, inRow))
-                                : sqrtLanes(1.0f / (1.0f + loadLanes(frames + i, inRow)));
+        Lanes8 s = s_.radiusFalloff == RadiusFalloff::Nrd
+                       ? 1.0f / (1.0f + loadLanes(previousFrames + i, inRow))
+                       : sqrtLanes(1.0f / (1.0f + loadLanes(frames + i, inRow)));
         if (roughness_)
           s *= sqrtLanes(
               minFloat(maxFloat(loadLanes(roughness_ + i, inRow), Lanes8{}), Lanes8{} + 1.0f));
@@ -466,114 +469,80 @@ std::vector<std::pair<std::string, const Image*>> Reblur::passOutputs() const {
           {"stabilization", &stabilizedHistory_}};
 }
 
-std::vector<ParamSpec> reblurParamSpecs() {
-  std::vector<ParamSpec> specs = {
-      ParamSpec::boolean("preBlur", true, "pass 1: 8-tap Poisson pre-blur (NRD prepass)"),
-      ParamSpec::real("preBlurRadius", 30, 0, 500,
-                      "diffuse pre-blur radius, px (NRD diffusePrepassBlurRadius 30)"),
-      ParamSpec::real("specularPreBlurRadius", 50, 0, 500,
-                      "specular pre-blur radius, px (NRD specularPrepassBlurRadius 50)"),
-      ParamSpec::integer("maxAccumulatedFrames", 30, 1, 1000,
-                         "cap of the accumulated-frame counter N (NRD maxAccumulatedFrameNum 30)"),
-      ParamSpec::integer("maxFastAccumulatedFrames", 6, 1, 1000,
-                         "cap of the fast history used for clamping (NRD "
-                         "maxFastAccumulatedFrameNum 6)"),
-      ParamSpec::boolean("hitPoint", true,
-                         "specular: blend hit-point (virtual) reprojection with surface motion by "
-                         "roughness (NRD virtual motion; the talk)"),
-      ParamSpec::choice("hitDistance", "sampled", {"sampled", "mirror"},
-                        "specular hit distance: the 1-spp sample's own ray length (what a real "
-                        "tracer has; the talk, NRD) or the noise-free mirror ray (an oracle)"),
-      ParamSpec::boolean("hitDistancePreBlur", true,
-                         "specular: the pre-blur filters the hit distance too, and every later "
-                         "pass reads the blurred one (NRD pre-pass)"),
-      ParamSpec::real("hitPointRoughness", 0.6, 0.0, 1.0,
-                      "specular: virtual-history weight 1 - smoothstep(0, this, roughness) (ours)"),
-      ParamSpec::choice("historyFix", "sparse", {"sparse", "mip", "off"},
-                        "pass 3 for N < historyFixFrames: 5x5 taps at stride 14 (NRD) or the mip "
-                        "chain (ReBLUR 2020), or off"),
-      ParamSpec::integer("historyFixFrames", 3, 0, 16, "history fix while N < this (NRD 3)"),
-      ParamSpec::choice("historyFixShape", "nrd", {"nrd", "ours"},
-                        "history-fix grid: NRD v4's 20 taps (5x5 without corners) at stride "
-                        "historyFixStride / (2 + N), or all 24 at historyFixStride (F - N) / F"),
-      ParamSpec::choice("radiusFalloff", "nrd", {"nrd", "sqrt"},
-                        "blur radius scale: NRD's 1 / (1 + N_prev) or sqrt(1 / (1 + N)) of the "
-                        "incremented counter (the first version here)"),
-      ParamSpec::real(
-          "historyFixStride", 14, 1, 100,
-          "history-fix tap stride at N = 0, px (NRD historyFixStrideBetweenSamples 14)"),
-      ParamSpec::boolean("antiFirefly", true,
-                         "clamp the luminance to its 3x3 neighbours' luminance range, colour "
-                         "rescaled (NRD enableAntiFirefly; NRD's range is m1 +- sigma of a ring)"),
-      ParamSpec::boolean("fastHistoryClamp", true,
-                         "clamp the recurrent history's luminance to the fast history's 3x3 "
-                         "mu +- antilagSigmaScale sigma, weight 1 - 1/(1+N) (NRD HistoryFix)"),
-      ParamSpec::boolean("blur", true, "pass 4: Poisson blur"),
-      ParamSpec::boolean("postBlur", true, "pass 4: Poisson post-blur at twice the radius"),
-      ParamSpec::real("minBlurRadius", 1, 0, 500, "blur radius floor, px (NRD minBlurRadius 1)"),
-      ParamSpec::real("maxBlurRadius", 30, 0, 500,
-                      "blur radius at N = 0 is this sqrt(1/(1+N)), px (NRD maxBlurRadius 30)"),
-      ParamSpec::boolean("recurrent", true,
-                         "pass 5: the post-blurred result is the history (false: the temporal "
-                         "result)"),
-      ParamSpec::boolean("stabilization", true, "pass 6: temporal stabilisation"),
-      ParamSpec::boolean("antiLag", true,
-                         "pass 6: shorten N by the clamp distance, N' = N / (1 + d N / 3)"),
-      ParamSpec::real("antilagSigmaScale", 2, 0, 100,
-                      "stabilised history clamped to the fast history's mu +- this sigma (NRD 2)"),
-      ParamSpec::real("planeSigma", 0.02, 1e-6, 10,
-                      "plane-distance weight scale, fraction of view depth (ours)"),
-      ParamSpec::real("normalPower", 32, 0, 1e4, "normal weight max(0, n.n')^this (ours)"),
-      ParamSpec::real("hitSigma", 0.3, 1e-6, 100,
-                      "specular hit-distance weight scale, fraction of (h + z) (ours)"),
-      ParamSpec::real("roughnessSigma", 0.1, 1e-6, 10, "specular roughness weight scale (ours)"),
-      ParamSpec::real("minHitWeight", 0.1, 0, 1,
-                      "floor of the specular hit-distance weight (NRD minHitDistanceWeight 0.1; "
-                      "0 = none, the first version)"),
-  };
-  for (ParamSpec& s : reprojectionParamSpecs()) specs.push_back(std::move(s));
-  for (ParamSpec& s : footprintParamSpecs()) specs.push_back(std::move(s));
-  return specs;
-}
-
-ReblurSettings reblurSettings(const ParamSet& params) {
-  ReblurSettings s;
-  s.reprojection = reprojectionSettings(params);
-  s.preBlur = params.getBool("preBlur");
-  s.preBlurRadius = params.getFloat("preBlurRadius");
-  s.specularPreBlurRadius = params.getFloat("specularPreBlurRadius");
-  s.fastHistoryClamp = params.getBool("fastHistoryClamp");
-  s.maxAccumulatedFrames = params.getInt("maxAccumulatedFrames");
-  s.maxFastAccumulatedFrames = params.getInt("maxFastAccumulatedFrames");
-  s.hitPointReprojection = params.getBool("hitPoint");
-  s.hitPointRoughness = params.getFloat("hitPointRoughness");
-  s.hitDistancePreBlur = params.getBool("hitDistancePreBlur");
-  s.hitDistanceChannel =
-      params.getChoice("hitDistance") == "mirror" ? "specHitDistMirror" : "specHitDist";
-  const std::string& fix = params.getChoice("historyFix");
-  s.historyFix = fix == "off"   ? ReblurHistoryFix::Off
-                 : fix == "mip" ? ReblurHistoryFix::Mip
-                                : ReblurHistoryFix::Sparse;
-  s.historyFixFrames = params.getInt("historyFixFrames");
-  s.historyFixStride = params.getFloat("historyFixStride");
-  s.historyFixNrd = params.getChoice("historyFixShape") == "nrd";
-  s.radiusNrd = params.getChoice("radiusFalloff") == "nrd";
-  s.antiFirefly = params.getBool("antiFirefly");
-  s.blur = params.getBool("blur");
-  s.postBlur = params.getBool("postBlur");
-  s.minBlurRadius = params.getFloat("minBlurRadius");
-  s.maxBlurRadius = params.getFloat("maxBlurRadius");
-  s.recurrent = params.getBool("recurrent");
-  s.stabilization = params.getBool("stabilization");
-  s.antiLag = params.getBool("antiLag");
-  s.antilagSigmaScale = params.getFloat("antilagSigmaScale");
-  s.footprint = footprintParam(params);
-  s.weights.planeSigma = params.getFloat("planeSigma");
-  s.weights.normalPower = params.getFloat("normalPower");
-  s.weights.hitSigma = params.getFloat("hitSigma");
-  s.weights.roughnessSigma = params.getFloat("roughnessSigma");
-  s.weights.minHitWeight = params.getFloat("minHitWeight");
-  return s;
+const ParamTable<ReblurSettings>& reblurParams() {
+  using S = ReblurSettings;
+  using W = SurfaceWeightSettings;
+  static const ParamTable<S> table =
+      ParamTable<S>()
+          .boolean("preBlur", &S::preBlur, true, "pass 1: 8-tap Poisson pre-blur (NRD prepass)")
+          .real("preBlurRadius", &S::preBlurRadius, 30, 0, 500,
+                "diffuse pre-blur radius, px (NRD diffusePrepassBlurRadius 30)")
+          .real("specularPreBlurRadius", &S::specularPreBlurRadius, 50, 0, 500,
+                "specular pre-blur radius, px (NRD specularPrepassBlurRadius 50)")
+          .integer("maxAccumulatedFrames", &S::maxAccumulatedFrames, 30, 1, 1000,
+                   "cap of the accumulated-frame counter N (NRD maxAccumulatedFrameNum 30)")
+          .integer("maxFastAccumulatedFrames", &S::maxFastAccumulatedFrames, 6, 1, 1000,
+                   "cap of the fast history used for clamping (NRD maxFastAccumulatedFrameNum 6)")
+          .boolean("hitPoint", &S::hitPoint, true,
+                   "specular: blend hit-point (virtual) reprojection with surface motion by "
+                   "roughness (NRD virtual motion; the talk)")
+          .include(hitDistanceParams(), &S::hitDistanceChannel)
+          .boolean("hitDistancePreBlur", &S::hitDistancePreBlur, true,
+                   "specular: the pre-blur filters the hit distance too, and every later pass "
+                   "reads the blurred one (NRD pre-pass)")
+          .real("hitPointRoughness", &S::hitPointRoughness, 0.6, 0.0, 1.0,
+                "specular: virtual-history weight 1 - smoothstep(0, this, roughness) (ours)")
+          .choice("historyFix", &S::historyFix, "sparse",
+                  {{"sparse", ReblurHistoryFix::Sparse},
+                   {"mip", ReblurHistoryFix::Mip},
+                   {"off", ReblurHistoryFix::Off}},
+                  "pass 3 for N < historyFixFrames: 5x5 taps at stride 14 (NRD) or the mip chain "
+                  "(ReBLUR 2020), or off")
+          .integer("historyFixFrames", &S::historyFixFrames, 3, 0, 16,
+                   "history fix while N < this (NRD 3)")
+          .choice("historyFixShape", &S::historyFixShape, "nrd",
+                  {{"nrd", HistoryFixShape::Nrd}, {"ours", HistoryFixShape::Ours}},
+                  "history-fix grid: NRD v4's 20 taps (5x5 without corners) at stride "
+                  "historyFixStride / (2 + N), or all 24 at historyFixStride (F - N) / F")
+          .choice("radiusFalloff", &S::radiusFalloff, "nrd",
+                  {{"nrd", RadiusFalloff::Nrd}, {"sqrt", RadiusFalloff::Sqrt}},
+                  "blur radius scale: NRD's 1 / (1 + N_prev) or sqrt(1 / (1 + N)) of the "
+                  "incremented counter (the first version here)")
+          .real("historyFixStride", &S::historyFixStride, 14, 1, 100,
+                "history-fix tap stride at N = 0, px (NRD historyFixStrideBetweenSamples 14)")
+          .boolean("antiFirefly", &S::antiFirefly, true,
+                   "clamp the luminance to its 3x3 neighbours' luminance range, colour rescaled "
+                   "(NRD enableAntiFirefly; NRD's range is m1 +- sigma of a ring)")
+          .boolean("fastHistoryClamp", &S::fastHistoryClamp, true,
+                   "clamp the recurrent history's luminance to the fast history's 3x3 mu +- "
+                   "antilagSigmaScale sigma, weight 1 - 1/(1+N) (NRD HistoryFix)")
+          .boolean("blur", &S::blur, true, "pass 4: Poisson blur")
+          .boolean("postBlur", &S::postBlur, true, "pass 4: Poisson post-blur at twice the radius")
+          .real("minBlurRadius", &S::minBlurRadius, 1, 0, 500,
+                "blur radius floor, px (NRD minBlurRadius 1)")
+          .real("maxBlurRadius", &S::maxBlurRadius, 30, 0, 500,
+                "blur radius at N = 0 is this sqrt(1/(1+N)), px (NRD maxBlurRadius 30)")
+          .boolean("recurrent", &S::recurrent, true,
+                   "pass 5: the post-blurred result is the history (false: the temporal result)")
+          .boolean("stabilization", &S::stabilization, true, "pass 6: temporal stabilisation")
+          .boolean("antiLag", &S::antiLag, true,
+                   "pass 6: shorten N by the clamp distance, N' = N / (1 + d N / 3)")
+          .real("antilagSigmaScale", &S::antilagSigmaScale, 2, 0, 100,
+                "stabilised history clamped to the fast history's mu +- this sigma (NRD 2)")
+          .real("planeSigma", member(&S::weights, &W::planeSigma), 0.02, 1e-6, 10,
+                "plane-distance weight scale, fraction of view depth (ours)")
+          .real("normalPower", member(&S::weights, &W::normalPower), 32, 0, 1e4,
+                "normal weight max(0, n.n')^this (ours)")
+          .real("hitSigma", member(&S::weights, &W::hitSigma), 0.3, 1e-6, 100,
+                "specular hit-distance weight scale, fraction of (h + z) (ours)")
+          .real("roughnessSigma", member(&S::weights, &W::roughnessSigma), 0.1, 1e-6, 10,
+                "specular roughness weight scale (ours)")
+          .real("minHitWeight", member(&S::weights, &W::minHitWeight), 0.1, 0, 1,
+                "floor of the specular hit-distance weight (NRD minHitDistanceWeight 0.1; 0 = "
+                "none, the first version)")
+          .include(reprojectionParams(), &S::reprojection)
+          .include(footprintParams(), &S::footprint);
+  return table;
 }
 
 DenoiserInfo reblurInfo() {
@@ -581,8 +550,8 @@ DenoiserInfo reblurInfo() {
           "Recurrent blur: Poisson pre-blur, accumulation with a frame counter, history fix, "
           "shrinking blur + post-blur fed back as history, anti-lag stabilisation (Zhadan 2020; "
           "NRD REBLUR)",
-          ParamSchema(reblurParamSpecs()), [](const ParamSet& params, SignalKind kind) {
-            ReblurSettings s = reblurSettings(params);
+          reblurParams().schema(), [](const ParamSet& params, SignalKind kind) {
+            ReblurSettings s = reblurParams().settings(params, "reblur");
             // Specular weights add hit distance and roughness (NRD); diffuse uses geometry only.
             s.weights.hitDistance = s.weights.roughness = kind == SignalKind::Specular;
             return std::make_unique<Reblur>(s, kind);

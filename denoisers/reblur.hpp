@@ -14,47 +14,51 @@
 #include "denoisers/common/poisson_blur.hpp"
 #include "denoisers/common/reprojection.hpp"
 #include "denoisers/denoiser.hpp"
+#include "denoisers/param_table.hpp"
 
 namespace arena {
 
 enum class ReblurHistoryFix { Off, Sparse, Mip };
+// The history-fix grid: NRD v4's 20 taps at stride / (2 + N), or all 24 at stride (F - N) / F.
+enum class HistoryFixShape { Nrd, Ours };
+// The blur radius scale: NRD's 1 / (1 + N_prev), or sqrt(1 / (1 + N)) of the incremented counter.
+enum class RadiusFalloff { Nrd, Sqrt };
 
+// Every field named after its parameter is set from reblurParams() (reblur.cpp), which declares
+// its default, range and meaning once (NRD's ReblurSettings names in the meanings).
 struct ReblurSettings {
   ReprojectionSettings reprojection;
-  HitPointReprojectionSettings hitPoint;
+  HitPointReprojectionSettings hitPointTests;  // the virtual reprojection's consistency tests
   SurfaceWeightSettings weights;  // plane distance, normal (+ hit distance, roughness: specular)
-  bool preBlur = true;
-  float preBlurRadius = 30.0f;          // NRD diffusePrepassBlurRadius 30
-  float specularPreBlurRadius = 50.0f;  // NRD specularPrepassBlurRadius 50
-  int maxAccumulatedFrames = 30;        // NRD maxAccumulatedFrameNum 30
-  int maxFastAccumulatedFrames = 6;     // NRD maxFastAccumulatedFrameNum 6
-  bool hitPointReprojection = true;     // specular only
-  // The specular hit distance the guides read: the 1-spp sample's ("specHitDist", what a real
-  // tracer has) or the noise-free mirror ray's oracle ("specHitDistMirror").
-  std::string hitDistanceChannel = "specHitDist";
-  bool hitDistancePreBlur = true;  // NRD pre-pass: the hit distance blurred with the radiance
-  float hitPointRoughness = 0.6f;  // virtual amount = 1 - smoothstep(0, this, roughness) (ours)
-  ReblurHistoryFix historyFix = ReblurHistoryFix::Sparse;
-  int historyFixFrames = 3;        // NRD historyFixFrameNum 3
-  float historyFixStride = 14.0f;  // NRD historyFixStrideBetweenSamples 14
-  bool historyFixNrd = true;       // NRD v4: 20 taps at stride / (2 + N); false: 24 at (F - N) / F
-  bool radiusNrd = true;           // NRD: radius 1 / (1 + N_prev); false: sqrt(1 / (1 + N))
-  bool antiFirefly = true;         // NRD enableAntiFirefly (on here, as the brief asks)
-  bool fastHistoryClamp = true;    // NRD HistoryFix: the recurrent history clamped to the fast one
-  bool blur = true, postBlur = true;
-  float minBlurRadius = 1.0f;   // NRD minBlurRadius 1
-  float maxBlurRadius = 30.0f;  // NRD maxBlurRadius 30
-  bool recurrent = true;        // the post-blurred result is the history (the "R" of ReBLUR)
-  bool stabilization = true;
-  bool antiLag = true;
-  float antilagSigmaScale = 2.0f;  // NRD antilag sigmaScale 2
+  bool preBlur;
+  float preBlurRadius, specularPreBlurRadius;
+  int maxAccumulatedFrames, maxFastAccumulatedFrames;
+  bool hitPoint;  // specular only: hit-point (virtual) reprojection
+  // The specular hit distance the guides read (parameter "hitDistance"): the 1-spp sample's
+  // ("specHitDist", what a real tracer has) or the noise-free mirror ray's oracle
+  // ("specHitDistMirror").
+  std::string hitDistanceChannel;
+  bool hitDistancePreBlur;  // NRD pre-pass: the hit distance blurred with the radiance
+  float hitPointRoughness;  // virtual amount = 1 - smoothstep(0, this, roughness)
+  ReblurHistoryFix historyFix;
+  int historyFixFrames;
+  float historyFixStride;
+  HistoryFixShape historyFixShape;
+  RadiusFalloff radiusFalloff;
+  bool antiFirefly;
+  bool fastHistoryClamp;  // NRD HistoryFix: the recurrent history clamped to the fast one
+  bool blur, postBlur;
+  float minBlurRadius, maxBlurRadius;
+  bool recurrent;  // the post-blurred result is the history (the "R" of ReBLUR)
+  bool stabilization, antiLag;
+  float antilagSigmaScale;
   // The radii and the stride above, minBlurRadius included, follow the one footprint policy of
   // every denoiser (footprint.hpp): pixels as given (native) or pixels at a reference height.
   Footprint footprint;
 };
 
-std::vector<ParamSpec> reblurParamSpecs();
-ReblurSettings reblurSettings(const ParamSet& params);
+// ReBLUR's parameters, each bound to its field.
+const ParamTable<ReblurSettings>& reblurParams();
 
 class Reblur : public Denoiser {
  public:

@@ -118,7 +118,7 @@ void ReEngine::denoise(const FrameContext& ctx, const DenoiserInputs& in, Image&
   const bool specular = kind_ == SignalKind::Specular;
   roughness_ = specular ? in.frame.get("roughness", "reengine").plane(0) : nullptr;
   hitDistance_ = specular ? in.frame.get("specHitDist", "reengine").plane(0) : nullptr;
-  if (s_.rays == ReEngineSettings::DisocclusionRays::On && in.lowres == nullptr)
+  if (s_.disocclusionRays == ReEngineSettings::DisocclusionRays::On && in.lowres == nullptr)
     throw Error(
         "reengine: disocclusionRays=on needs the sequence's low-resolution buffer; render it "
         "with --lowres-factor 8 --lowres-spp 16, or use disocclusionRays=auto or off");
@@ -130,7 +130,8 @@ void ReEngine::denoise(const FrameContext& ctx, const DenoiserInputs& in, Image&
   varianceCheck();
   spatialMerge();
   deflicker();
-  spatialUpscaling(s_.rays == ReEngineSettings::DisocclusionRays::Off ? nullptr : in.lowres);
+  spatialUpscaling(s_.disocclusionRays == ReEngineSettings::DisocclusionRays::Off ? nullptr
+                                                                                  : in.lowres);
   spatialFilter();
   fromFilterSpace(output);
   storeHistory();
@@ -140,7 +141,7 @@ void ReEngine::denoise(const FrameContext& ctx, const DenoiserInputs& in, Image&
 // and expands at the end (filter_space.hpp).
 void ReEngine::toFilterSpace(const Image& signal) {
   ScopedPass pass(this, "filter space", 0);
-  if (s_.reinhard)
+  if (s_.space == FilterSpace::Reinhard)
     reinhardCompress(signal, signal_);
   else
     parallelCopy(signal, signal_);
@@ -175,7 +176,7 @@ void ReEngine::reproject(const FrameContext& ctx) {
                      &ctx.previousCamera);
     if (useVirtual_)
       virtual_.compute(gbuffer_, hitDistance_, ctx.camera, ctx.previousCamera, previous,
-                       s_.hitPoint);
+                       s_.hitPointTests);
   } else {
     surface_.invalidateAll();
     virtual_.invalidateAll();
@@ -203,7 +204,7 @@ void ReEngine::reproject(const FrameContext& ctx) {
 
 bool ReEngine::needsMoments() const {
   return s_.propagation1 || s_.lumaRejection || s_.specularColorClamp || useVirtual_ ||
-         s_.varianceCheck || s_.rays != ReEngineSettings::DisocclusionRays::Off;
+         s_.varianceCheck || s_.disocclusionRays != ReEngineSettings::DisocclusionRays::Off;
 }
 
 // ---- 1. Spatial propagation: the Poisson-disk gather (poisson_blur.hpp) of the signal and its
@@ -442,11 +443,12 @@ void ReEngine::spatialUpscaling(const LowresInputs* lowres) {
   const Image* direction =
       diffuse ? &lowres->layers.get("direction", "reengine low-resolution buffer") : nullptr;
   Image lowColor;
-  if (s_.reinhard) {  // the buffer joins the signal in its filter space
+  if (s_.space == FilterSpace::Reinhard) {  // the buffer joins the signal in its filter space
     lowColor = Image(color.width(), color.height(), 3);
     reinhardCompress(color, lowColor);
   }
-  const LowresBuffer buffer{s_.reinhard ? lowColor : color, direction, lowres->factor, lowres->spp};
+  const LowresBuffer buffer{s_.space == FilterSpace::Reinhard ? lowColor : color, direction,
+                            lowres->factor, lowres->spp};
   upsampler_.reconstruct(buffer, gbuffer_, &propagated_, need_, s_.upsample, upscaled_,
                          confidence_);
   raysPerPixel_ = upsampler_.raysPerPixel();
@@ -481,7 +483,7 @@ void ReEngine::spatialFilter() {
 
 void ReEngine::fromFilterSpace(Image& output) {
   ScopedPass pass(this, "output space", 0);
-  if (s_.reinhard)
+  if (s_.space == FilterSpace::Reinhard)
     reinhardExpand(final_, output);
   else
     parallelCopy(final_, output);
@@ -523,117 +525,86 @@ std::vector<std::pair<std::string, const Image*>> ReEngine::passOutputs() const 
           {"low-resolution weight", &lowWeight_}};
 }
 
-std::vector<ParamSpec> reEngineParamSpecs() {
-  std::vector<ParamSpec> specs = {
-      ParamSpec::choice(
-          "space", "linear", {"linear", "reinhard"},
-          "filter in linear space (the talk's fix) or Reinhard-compressed (their old path)"),
-      ParamSpec::boolean("propagation1", true,
-                         "spatial propagation before the temporal filter (slide 28)"),
-      ParamSpec::real("propagationRadius", 16, 0, 256,
-                      "pass-1 Poisson radius at h = 1, px; / sqrt(h) (ours)"),
-      ParamSpec::real("propagation2Radius", 8, 0, 256,
-                      "pass-3 Poisson radius at h = 1, px; / sqrt(h) (ours)"),
-      ParamSpec::real("minRadius", 1, 0, 64, "smallest propagation radius, px (ours)"),
-      ParamSpec::integer("maxHistory", 32, 1, 4096, "cap of h, alpha = 1/h (ours; Falcor 32)"),
-      ParamSpec::boolean(
-          "lumaRejection", true,
-          "temporal luminance rejection from the stabilised one-frame result (slide 29)"),
-      ParamSpec::real("rejectionTau", 0.5, 1e-6, 1e6, "relative luminance gap tolerated (ours)"),
-      ParamSpec::real("oneFrameAlpha", 0.5, 0, 1,
-                      "new-frame weight of the stabilised one-frame EMA (ours)"),
-      ParamSpec::real("roughnessThreshold", 0.3, 0, 1,
-                      "specular: diffuse policy above it (slide 30: 0.3)"),
-      ParamSpec::boolean("roughAsDiffuse", true,
-                         "rough specular filtered like diffuse at the larger scale (slides 30-31)"),
-      ParamSpec::choice(
-          "specularMotion", "merge", {"merge", "geometry", "virtual"},
-          "smooth specular history: moment-based merge of geometry and planar virtual motion "
-          "(slide 34), or one of them"),
-      ParamSpec::real("mergeSigma", 1, 1e-6, 1e6,
-                      "moment-based merge: luminance fit in sigma (ours)"),
-      ParamSpec::boolean("specularColorClamp", true,
-                         "clamp smooth specular's history colour to the moments (slide 34)"),
-      ParamSpec::real("clampGamma", 1.5, 0, 100, "colour clamp box half-width in sigma (ours)"),
-      ParamSpec::boolean("propagation2", true,
-                         "spatial propagation after the temporal filter (slide 28)"),
-      ParamSpec::boolean("varianceCheck", true,
-                         "the noise of each mean sets the large scale's share (slide 28)"),
-      ParamSpec::real("varianceTarget", 0.25, 1e-6, 1e6,
-                      "relative noise that takes the large scale fully (ours)"),
-      ParamSpec::boolean("spatialMerge", true,
-                         "merge a small and a large (mip) scale (slides 28, 31)"),
-      ParamSpec::integer("mergeLevels", 3, 1, 8, "large scale: mip level (3 = 8x8) (ours)"),
-      ParamSpec::real("mergeWeight", 0.5, 0, 1,
-                      "large-scale share when the variance check is off (ours)"),
-      ParamSpec::boolean("deflicker", true, "firefly clamp + clamped light EMA (slides 26, 28)"),
-      ParamSpec::real("deflickerAlpha", 0.5, 0, 1, "deflicker EMA new-frame weight (ours)"),
-      ParamSpec::real("deflickerGamma", 1, 0, 100, "deflicker 3x3 clamp box in sigma (ours)"),
-      ParamSpec::choice(
-          "disocclusionRays", "auto", {"auto", "on", "off"},
-          "read the sequence's low-resolution buffer where h is short (slides 19-21); auto: "
-          "when the sequence has one, on: required"),
-      ParamSpec::integer("lowresMaxHistory", 4, 1, 4096,
-                         "read the low-resolution buffer where h < this (ours)"),
-      ParamSpec::real("lowresWeight", 0.9, 0, 1, "low-resolution blend weight at h = 1 (ours)"),
-      ParamSpec::boolean("lowresFeedback", true,
-                         "the low-resolution blend enters the history (ours)"),
-      ParamSpec::boolean(
-          "directionalUpscale", true,
-          "re-project low-resolution colour to each normal with L1 SH of the mean direction "
-          "(slide 21)"),
-      ParamSpec::boolean("momentClamp", true,
-                         "clamp the upscaled luminance to the full-resolution moments (slide 21)"),
-      ParamSpec::boolean("spatialFilter", true,
-                         "final 3x3 edge-aware à-trous pass (slides 28, 43)"),
-      ParamSpec::real("sigmaL", 4, 0, 1e6, "spatial filter luminance term sigma_l (SVGF 4)"),
-  };
-  for (ParamSpec& s : reprojectionParamSpecs()) specs.push_back(std::move(s));
-  return specs;
-}
-
-ReEngineSettings reEngineSettings(const ParamSet& p) {
-  ReEngineSettings s;
-  s.reprojection = reprojectionSettings(p);
-  s.reinhard = p.getChoice("space") == "reinhard";
-  s.propagation1 = p.getBool("propagation1");
-  s.propagationRadius = p.getFloat("propagationRadius");
-  s.propagation2Radius = p.getFloat("propagation2Radius");
-  s.minRadius = p.getFloat("minRadius");
-  s.maxHistory = p.getInt("maxHistory");
-  s.lumaRejection = p.getBool("lumaRejection");
-  s.rejectionTau = p.getFloat("rejectionTau");
-  s.oneFrameAlpha = p.getFloat("oneFrameAlpha");
-  s.roughnessThreshold = p.getFloat("roughnessThreshold");
-  s.roughAsDiffuse = p.getBool("roughAsDiffuse");
-  const std::string& motion = p.getChoice("specularMotion");
-  s.specularMotion = motion == "geometry"  ? ReEngineSettings::SpecularMotion::Geometry
-                     : motion == "virtual" ? ReEngineSettings::SpecularMotion::Virtual
-                                           : ReEngineSettings::SpecularMotion::Merge;
-  s.mergeSigma = p.getFloat("mergeSigma");
-  s.specularColorClamp = p.getBool("specularColorClamp");
-  s.clampGamma = p.getFloat("clampGamma");
-  s.propagation2 = p.getBool("propagation2");
-  s.varianceCheck = p.getBool("varianceCheck");
-  s.varianceTarget = p.getFloat("varianceTarget");
-  s.spatialMerge = p.getBool("spatialMerge");
-  s.mergeLevels = p.getInt("mergeLevels");
-  s.mergeWeight = p.getFloat("mergeWeight");
-  s.deflicker = p.getBool("deflicker");
-  s.deflickerAlpha = p.getFloat("deflickerAlpha");
-  s.deflickerGamma = p.getFloat("deflickerGamma");
-  const std::string& rays = p.getChoice("disocclusionRays");
-  s.rays = rays == "on"    ? ReEngineSettings::DisocclusionRays::On
-           : rays == "off" ? ReEngineSettings::DisocclusionRays::Off
-                           : ReEngineSettings::DisocclusionRays::Auto;
-  s.lowresMaxHistory = p.getInt("lowresMaxHistory");
-  s.lowresWeight = p.getFloat("lowresWeight");
-  s.lowresFeedback = p.getBool("lowresFeedback");
-  s.upsample.directional = p.getBool("directionalUpscale");
-  s.upsample.momentClamp = p.getBool("momentClamp");
-  s.spatialFilter = p.getBool("spatialFilter");
-  s.sigmaL = p.getFloat("sigmaL");
-  return s;
+const ParamTable<ReEngineSettings>& reEngineParams() {
+  using S = ReEngineSettings;
+  static const ParamTable<S> table =
+      ParamTable<S>()
+          .choice("space", &S::space, "linear",
+                  {{"linear", FilterSpace::Linear}, {"reinhard", FilterSpace::Reinhard}},
+                  "filter in linear space (the talk's fix) or Reinhard-compressed (their old "
+                  "path)")
+          .boolean("propagation1", &S::propagation1, true,
+                   "spatial propagation before the temporal filter (slide 28)")
+          .real("propagationRadius", &S::propagationRadius, 16, 0, 256,
+                "pass-1 Poisson radius at h = 1, px; / sqrt(h) (ours)")
+          .real("propagation2Radius", &S::propagation2Radius, 8, 0, 256,
+                "pass-3 Poisson radius at h = 1, px; / sqrt(h) (ours)")
+          .real("minRadius", &S::minRadius, 1, 0, 64, "smallest propagation radius, px (ours)")
+          .integer("maxHistory", &S::maxHistory, 32, 1, 4096,
+                   "cap of h, alpha = 1/h (ours; Falcor 32)")
+          .boolean("lumaRejection", &S::lumaRejection, true,
+                   "temporal luminance rejection from the stabilised one-frame result (slide 29)")
+          .real("rejectionTau", &S::rejectionTau, 0.5, 1e-6, 1e6,
+                "relative luminance gap tolerated (ours)")
+          .real("oneFrameAlpha", &S::oneFrameAlpha, 0.5, 0, 1,
+                "new-frame weight of the stabilised one-frame EMA (ours)")
+          .real("roughnessThreshold", &S::roughnessThreshold, 0.3, 0, 1,
+                "specular: diffuse policy above it (slide 30: 0.3)")
+          .boolean("roughAsDiffuse", &S::roughAsDiffuse, true,
+                   "rough specular filtered like diffuse at the larger scale (slides 30-31)")
+          .choice("specularMotion", &S::specularMotion, "merge",
+                  {{"merge", S::SpecularMotion::Merge},
+                   {"geometry", S::SpecularMotion::Geometry},
+                   {"virtual", S::SpecularMotion::Virtual}},
+                  "smooth specular history: moment-based merge of geometry and planar virtual "
+                  "motion (slide 34), or one of them")
+          .real("mergeSigma", &S::mergeSigma, 1, 1e-6, 1e6,
+                "moment-based merge: luminance fit in sigma (ours)")
+          .boolean("specularColorClamp", &S::specularColorClamp, true,
+                   "clamp smooth specular's history colour to the moments (slide 34)")
+          .real("clampGamma", &S::clampGamma, 1.5, 0, 100,
+                "colour clamp box half-width in sigma (ours)")
+          .boolean("propagation2", &S::propagation2, true,
+                   "spatial propagation after the temporal filter (slide 28)")
+          .boolean("varianceCheck", &S::varianceCheck, true,
+                   "the noise of each mean sets the large scale's share (slide 28)")
+          .real("varianceTarget", &S::varianceTarget, 0.25, 1e-6, 1e6,
+                "relative noise that takes the large scale fully (ours)")
+          .boolean("spatialMerge", &S::spatialMerge, true,
+                   "merge a small and a large (mip) scale (slides 28, 31)")
+          .integer("mergeLevels", &S::mergeLevels, 3, 1, 8,
+                   "large scale: mip level (3 = 8x8) (ours)")
+          .real("mergeWeight", &S::mergeWeight, 0.5, 0, 1,
+                "large-scale share when the variance check is off (ours)")
+          .boolean("deflicker", &S::deflicker, true,
+                   "firefly clamp + clamped light EMA (slides 26, 28)")
+          .real("deflickerAlpha", &S::deflickerAlpha, 0.5, 0, 1,
+                "deflicker EMA new-frame weight (ours)")
+          .real("deflickerGamma", &S::deflickerGamma, 1, 0, 100,
+                "deflicker 3x3 clamp box in sigma (ours)")
+          .choice("disocclusionRays", &S::disocclusionRays, "auto",
+                  {{"auto", S::DisocclusionRays::Auto},
+                   {"on", S::DisocclusionRays::On},
+                   {"off", S::DisocclusionRays::Off}},
+                  "read the sequence's low-resolution buffer where h is short (slides 19-21); "
+                  "auto: when the sequence has one, on: required")
+          .integer("lowresMaxHistory", &S::lowresMaxHistory, 4, 1, 4096,
+                   "read the low-resolution buffer where h < this (ours)")
+          .real("lowresWeight", &S::lowresWeight, 0.9, 0, 1,
+                "low-resolution blend weight at h = 1 (ours)")
+          .boolean("lowresFeedback", &S::lowresFeedback, true,
+                   "the low-resolution blend enters the history (ours)")
+          .boolean("directionalUpscale", member(&S::upsample, &LowresUpsampleSettings::directional),
+                   true,
+                   "re-project low-resolution colour to each normal with L1 SH of the mean "
+                   "direction (slide 21)")
+          .boolean("momentClamp", member(&S::upsample, &LowresUpsampleSettings::momentClamp), true,
+                   "clamp the upscaled luminance to the full-resolution moments (slide 21)")
+          .boolean("spatialFilter", &S::spatialFilter, true,
+                   "final 3x3 edge-aware à-trous pass (slides 28, 43)")
+          .real("sigmaL", &S::sigmaL, 4, 0, 1e6, "spatial filter luminance term sigma_l (SVGF 4)")
+          .include(reprojectionParams(), &S::reprojection);
+  return table;
 }
 
 DenoiserInfo reEngineInfo() {
@@ -642,8 +613,8 @@ DenoiserInfo reEngineInfo() {
       "CAPCOM RE ENGINE 2023: spatial propagation, temporal filter with luminance rejection and "
       "virtual specular motion, propagation, variance check, merge, deflicker, disocclusion-ray "
       "upscaling, spatial filter (seed 004)",
-      ParamSchema(reEngineParamSpecs()), [](const ParamSet& params, SignalKind kind) {
-        return std::make_unique<ReEngine>(reEngineSettings(params), kind);
+      reEngineParams().schema(), [](const ParamSet& params, SignalKind kind) {
+        return std::make_unique<ReEngine>(reEngineParams().settings(params, "reengine"), kind);
       }};
 }
 

@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include "denoisers/common/filter_space.hpp"
 #include "denoisers/common/gbuffer.hpp"
 #include "denoisers/common/hit_point_reprojection.hpp"
 #include "denoisers/common/lowres_upsample.hpp"
@@ -14,66 +15,71 @@
 #include "denoisers/common/poisson_blur.hpp"
 #include "denoisers/common/reprojection.hpp"
 #include "denoisers/denoiser.hpp"
+#include "denoisers/param_table.hpp"
 
 namespace arena {
 
+// Every field named after its parameter is set from reEngineParams() (reengine.cpp), which
+// declares its default, range and meaning once (with the slide it comes from).
 struct ReEngineSettings {
   ReprojectionSettings reprojection;
-  HitPointReprojectionSettings hitPoint;
-  bool reinhard = false;  // filter space: linear (the talk's fix) or Reinhard (their old path)
+  HitPointReprojectionSettings hitPointTests;  // the virtual motion's consistency tests
+  FilterSpace space;  // linear (the talk's fix) or Reinhard (their old path)
   // Geometry weights of every propagation (plane distance, normal; + hit distance and roughness
   // for the specular signal).
   SurfaceWeightSettings weights;
   // 1. Spatial propagation (before the temporal filter).
-  bool propagation1 = true;
-  float propagationRadius = 16.0f;  // pixels at h = 1, shrinking as 1/sqrt(h) (ours)
-  float minRadius = 1.0f;           // pixels (ours)
+  bool propagation1;
+  float propagationRadius;  // pixels at h = 1, shrinking as 1/sqrt(h)
+  float minRadius;          // pixels
   // 2. Temporal filter.
-  int maxHistory = 32;  // h cap, alpha = 1/h (ours; Falcor 32)
-  bool lumaRejection = true;
-  float rejectionTau = 0.5f;   // relative luminance gap tolerated (ours)
-  float oneFrameAlpha = 0.5f;  // weight of the new frame in the stabilised one-frame EMA (ours)
-  float roughnessThreshold = 0.3f;  // slide 30: "例えば0.3"
-  bool roughAsDiffuse = true;       // slides 30-31: rough specular takes the diffuse policy
+  int maxHistory;  // h cap, alpha = 1/h
+  bool lumaRejection;
+  float rejectionTau;        // relative luminance gap tolerated
+  float oneFrameAlpha;       // weight of the new frame in the stabilised one-frame EMA
+  float roughnessThreshold;  // slide 30: "例えば0.3"
+  bool roughAsDiffuse;       // slides 30-31: rough specular takes the diffuse policy
   enum class SpecularMotion { Geometry, Virtual, Merge };
-  SpecularMotion specularMotion = SpecularMotion::Merge;  // slide 34
-  float mergeSigma = 1.0f;  // moment-based merge: candidate weight exp(-d^2/2 mergeSigma^2) (ours)
-  bool specularColorClamp = true;  // slide 34: specular clamps the colour
-  float clampGamma = 1.5f;         // box half-width in sigma (ours; Salvi 1..2)
+  SpecularMotion specularMotion;  // slide 34
+  float mergeSigma;               // moment-based merge: candidate weight exp(-d^2/2 mergeSigma^2)
+  bool specularColorClamp;        // slide 34: specular clamps the colour
+  float clampGamma;               // box half-width in sigma
   // 3. Spatial propagation (after the temporal filter; its result is the history).
-  bool propagation2 = true;
-  float propagation2Radius = 8.0f;  // pixels at h = 1 (ours)
+  bool propagation2;
+  float propagation2Radius;  // pixels at h = 1
   // 4. Variance check.
-  bool varianceCheck = true;
-  float varianceTarget = 0.25f;  // relative noise of the mean that asks for the large scale (ours)
+  bool varianceCheck;
+  float varianceTarget;  // relative noise of the mean that asks for the large scale
   // 5. Spatial merge of a small and a large scale.
-  bool spatialMerge = true;
-  int mergeLevels = 3;       // large scale: mip level 3 = 8x8 (ours)
-  float mergeWeight = 0.5f;  // large-scale share where the variance check is off (ours)
+  bool spatialMerge;
+  int mergeLevels;    // large scale: mip level
+  float mergeWeight;  // large-scale share where the variance check is off
   // 6. Deflicker.
-  bool deflicker = true;
-  float deflickerAlpha = 0.5f;  // new-frame weight of the deflicker EMA (ours)
-  float deflickerGamma = 1.0f;  // its 3x3 clamp box in sigma (ours)
+  bool deflicker;
+  float deflickerAlpha;  // new-frame weight of the deflicker EMA
+  float deflickerGamma;  // its 3x3 clamp box in sigma
   // 7. Spatial upscaling of the disocclusion rays (slides 19-21).
   enum class DisocclusionRays { Auto, On, Off };
-  DisocclusionRays rays = DisocclusionRays::Auto;
-  int lowresMaxHistory = 4;    // read the low-resolution buffer where h < this (ours)
-  float lowresWeight = 0.9f;   // its blend weight at h = 1, falling linearly to 0 (ours)
-  bool lowresFeedback = true;  // the blended value enters the history (ours)
-  LowresUpsampleSettings upsample;
+  DisocclusionRays disocclusionRays;
+  int lowresMaxHistory;             // read the low-resolution buffer where h < this
+  float lowresWeight;               // its blend weight at h = 1, falling linearly to 0
+  bool lowresFeedback;              // the blended value enters the history
+  LowresUpsampleSettings upsample;  // "directionalUpscale", "momentClamp"
   // 8. Spatial filter.
-  bool spatialFilter = true;
-  float sigmaL = 4.0f;  // luminance term (SVGF 4)
+  bool spatialFilter;
+  float sigmaL;  // luminance term
 };
 
-std::vector<ParamSpec> reEngineParamSpecs();
-ReEngineSettings reEngineSettings(const ParamSet& params);
+// RE ENGINE's parameters, each bound to its field.
+const ParamTable<ReEngineSettings>& reEngineParams();
 
 class ReEngine : public Denoiser {
  public:
   ReEngine(const ReEngineSettings& settings, SignalKind kind);
   std::vector<std::string> requiredChannels() const override;
-  bool wantsLowres() const override { return s_.rays != ReEngineSettings::DisocclusionRays::Off; }
+  bool wantsLowres() const override {
+    return s_.disocclusionRays != ReEngineSettings::DisocclusionRays::Off;
+  }
   void setup(int width, int height) override;
   void reset() override;
   void denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& output) override;

@@ -46,18 +46,19 @@ namespace {
 enum class HistoryCorrection { Rescale, Clamp };
 enum class EstimatorSpread { Mean, Sample };
 
+// Set from slgfParams() below, which declares each default, range and meaning once.
 struct SlgfSettings {
   SvgfSettings svgf;
-  int estimatorIterations = 2;  // ours: 2 B3 iterations, a 13x13 px footprint
-  EstimatorSpread spread = EstimatorSpread::Mean;
+  int estimatorIterations;  // "estimator.iterations": B3 iterations of the luminance estimate
+  EstimatorSpread spread;   // "estimator.spread"
   // Box half-width in spreads. Ours 4: with the spread of the mean, k = 2 clipped converged
   // histories often enough to cost 10 % relMSE on cornell_static (1-spp luminance is skewed, so the
   // estimated spread is too small); k = 4 matches SVGF there and still corrects a switched light.
-  float k = 4.0f;
-  HistoryCorrection correction = HistoryCorrection::Rescale;
-  float alphaGain = 1.0f;  // lambda = min(1, gain * relative distance outside the box)
+  float k;
+  HistoryCorrection correction;
+  float alphaGain;  // lambda = min(1, gain * relative distance outside the box)
   // Q2RTX's anti-lag history shortening, h' = (h - 1)(1 - lambda)^10 + 1 (see asvgf.cpp).
-  bool shortenHistory = true;  // ours on: without it the first frame after a switch-on is noisy
+  bool shortenHistory;  // ours on: without it the first frame after a switch-on is noisy
 };
 
 class Slgf final : public Svgf {
@@ -220,47 +221,43 @@ class Slgf final : public Svgf {
   int source_ = 0;
 };
 
+const ParamTable<SlgfSettings>& slgfParams() {
+  using S = SlgfSettings;
+  static const ParamTable<S> table =
+      ParamTable<S>()
+          .include(svgfParams(), &S::svgf)
+          .integer("estimator.iterations", &S::estimatorIterations, 2, 1, 6,
+                   "à-trous iterations of the luminance estimate (the talk's pre-spatial pass; "
+                   "ours: 2, a 13x13 px footprint)")
+          .choice("estimator.spread", &S::spread, "mean",
+                  {{"mean", EstimatorSpread::Mean}, {"sample", EstimatorSpread::Sample}},
+                  "box half-width unit: the spread of the local mean (sample spread / "
+                  "sqrt(effective count); ours) or of the 1-spp samples (variance clipping)")
+          .real("k", &S::k, 4.0, 0.0, 100.0,
+                "history box [mu - k sigma, mu + k sigma] (ours 4 with spread=mean; variance "
+                "clipping with spread=sample uses 1..2)")
+          .choice("correction", &S::correction, "rescale",
+                  {{"rescale", HistoryCorrection::Rescale}, {"clamp", HistoryCorrection::Clamp}},
+                  "rescale: scale the history colour to the box's luminance (chroma kept); "
+                  "clamp: clamp each channel to its own box")
+          .real("alphaGain", &S::alphaGain, 1.0, 0.0, 1e3,
+                "alpha' = (1 - lambda) alpha + lambda, lambda = min(1, gain * relative distance "
+                "of the history outside the box) (ours 1)")
+          .boolean("shortenHistory", &S::shortenHistory, true,
+                   "h' = (h - 1)(1 - lambda)^10 + 1 where corrected (Q2RTX's anti-lag): restarts "
+                   "1/h and the spatial variance estimate");
+  return table;
+}
+
 }  // namespace
 
 DenoiserInfo slgfInfo() {
-  std::vector<ParamSpec> specs = svgfParamSpecs();
-  const std::vector<ParamSpec> own = {
-      ParamSpec::integer("estimator.iterations", 2, 1, 6,
-                         "à-trous iterations of the luminance estimate (the talk's pre-spatial "
-                         "pass; ours: 2, a 13x13 px footprint)"),
-      ParamSpec::choice("estimator.spread", "mean", {"mean", "sample"},
-                        "box half-width unit: the spread of the local mean (sample spread / "
-                        "sqrt(effective count); ours) or of the 1-spp samples (variance clipping)"),
-      ParamSpec::real("k", 4.0, 0.0, 100.0,
-                      "history box [mu - k sigma, mu + k sigma] (ours 4 with spread=mean; "
-                      "variance clipping with spread=sample uses 1..2)"),
-      ParamSpec::choice("correction", "rescale", {"rescale", "clamp"},
-                        "rescale: scale the history colour to the box's luminance (chroma kept); "
-                        "clamp: clamp each channel to its own box"),
-      ParamSpec::real("alphaGain", 1.0, 0.0, 1e3,
-                      "alpha' = (1 - lambda) alpha + lambda, lambda = min(1, gain * relative "
-                      "distance of the history outside the box) (ours 1)"),
-      ParamSpec::boolean("shortenHistory", true,
-                         "h' = (h - 1)(1 - lambda)^10 + 1 where corrected (Q2RTX's anti-lag): "
-                         "restarts 1/h and the spatial variance estimate"),
-  };
-  specs.insert(specs.end(), own.begin(), own.end());
   return {"slgf",
           "Spatiotemporal luminance-guided filtering (our interpretation of Luminous Engine's "
           "SLGF, CEDEC 2019/2021 talk): SVGF with the history corrected by a current-frame "
           "luminance estimate",
-          ParamSchema(specs), [](const ParamSet& params, SignalKind) {
-            SlgfSettings s;
-            s.svgf = svgfSettings(params, "slgf");
-            s.estimatorIterations = params.getInt("estimator.iterations");
-            s.spread = params.getChoice("estimator.spread") == "sample" ? EstimatorSpread::Sample
-                                                                        : EstimatorSpread::Mean;
-            s.k = params.getFloat("k");
-            s.correction = params.getChoice("correction") == "clamp" ? HistoryCorrection::Clamp
-                                                                     : HistoryCorrection::Rescale;
-            s.alphaGain = params.getFloat("alphaGain");
-            s.shortenHistory = params.getBool("shortenHistory");
-            return std::make_unique<Slgf>(s);
+          slgfParams().schema(), [](const ParamSet& params, SignalKind) {
+            return std::make_unique<Slgf>(slgfParams().settings(params, "slgf"));
           }};
 }
 

@@ -38,7 +38,7 @@ void Svgf::setup(int width, int height) {
   historyLength_ = Image(width, height, 1);
   variance_ = Image(width, height, 1);
   filteredVariance_ = Image(width, height, 1);
-  youngColorMean_ = settings_.spatialYoungColor ? Image(width, height, 3) : Image();
+  youngColorMean_ = settings_.youngColor == YoungColor::Spatial ? Image(width, height, 3) : Image();
   for (Image& image : colorPingPong_) image = Image(width, height, 3);
   for (Image& image : variancePingPong_) image = Image(width, height, 1);
   varianceTaps_.setup(height);
@@ -90,7 +90,7 @@ void Svgf::accumulate(const DenoiserInputs& in, const AdaptiveAlpha& alpha) {
 
 void Svgf::estimateVariance() {
   ScopedPass pass(this, "variance", 0);
-  Image* youngColor = settings_.spatialYoungColor ? &youngColorMean_ : nullptr;
+  Image* youngColor = settings_.youngColor == YoungColor::Spatial ? &youngColorMean_ : nullptr;
   pass.setTaps(arena::estimateVariance(moments_, historyLength_, accumulated_, gbuffer_,
                                        derivatives_, settings_.variance, variance_, varianceTaps_,
                                        youngColor));
@@ -141,83 +141,70 @@ void Svgf::storeHistory() {
   hasHistory_ = true;
 }
 
-std::vector<ParamSpec> svgfParamSpecs() {
-  std::vector<ParamSpec> specs = {
-      ParamSpec::integer("iterations", 5, 0, 10,
-                         "à-trous iterations (SVGF paper 5, about 65x65 px; Falcor 4)"),
-      atrousKernelParamSpec(),
-      ParamSpec::real("alpha", 0.2, 0.0, 1.0,
-                      "colour blend floor, alpha = max(alpha, 1/h) (SVGF paper 0.2; Falcor 0.05)"),
-      ParamSpec::real("momentsAlpha", 0.2, 0.0, 1.0,
-                      "moments blend floor (SVGF paper and Falcor 0.2)"),
-      ParamSpec::integer("maxHistory", 32, 1, 4096,
-                         "history length cap; bounds 1/h from below (Falcor 32; with alpha 0.2 "
-                         "only h < 5 matters)"),
-      ParamSpec::integer("feedbackTap", 1, 0, 10,
-                         "à-trous iteration (1-based) whose output is next frame's colour "
-                         "history; 0 = the accumulated colour (SVGF paper: 1, the first; Falcor's "
-                         "0-based mFeedbackTap = 1 is its second iteration, 2 here)"),
-      ParamSpec::choice("youngColor", "accumulated", {"spatial", "accumulated"},
-                        "colour of a pixel with h < 4 entering the à-trous: the 7x7 bilateral "
-                        "mean of the variance estimate (Falcor SVGFFilterMoments) or the "
-                        "accumulated colour (the SVGF paper estimates only the variance)"),
-      ParamSpec::real("sigmaZ", 1.0, 0.0, 1e6, "depth stopping sigma_z, SVGF eq. 3 (paper 1)"),
-      ParamSpec::real("sigmaN", 128.0, 0.0, 1e4,
-                      "normal stopping exponent sigma_n, SVGF eq. 4 (paper and Falcor 128)"),
-      ParamSpec::real("sigmaL", 4.0, 0.0, 1e6,
-                      "luminance stopping sigma_l, SVGF eq. 5 (paper 4; Falcor phiColor 10)"),
-      ParamSpec::real("sigmaX", 0.05, 1e-9, 1e9,
-                      "position stopping sigma_x, exp(-|x(p)-x(q)|^2/sigma_x), world units "
-                      "squared (ours; used with edge.position)"),
-      ParamSpec::boolean("edge.depth", true, "depth stopping term (SVGF eq. 3)"),
-      ParamSpec::boolean("edge.normal", true, "normal stopping term (SVGF eq. 4)"),
-      ParamSpec::boolean("edge.luminance", true, "variance-scaled luminance term (SVGF eq. 5)"),
-      ParamSpec::boolean("edge.id", false,
-                         "mesh-id term: never filter across meshes (the talk; separates a "
-                         "poster from the coplanar wall)"),
-      ParamSpec::boolean("edge.position", false, "world-position term (Dammertz 2010)"),
-  };
-  for (ParamSpec& s : reprojectionParamSpecs()) specs.push_back(std::move(s));
-  for (ParamSpec& s : footprintParamSpecs()) specs.push_back(std::move(s));
-  return specs;
-}
-
-SvgfSettings svgfSettings(const ParamSet& params, const std::string& owner) {
-  SvgfSettings s;
-  s.reprojection = reprojectionSettings(params);
-  s.iterations = params.getInt("iterations");
-  s.feedbackTap = params.getInt("feedbackTap");
-  if (s.feedbackTap > s.iterations)
-    throw Error(owner + ".feedbackTap=" + std::to_string(s.feedbackTap) + " exceeds " + owner +
-                ".iterations=" + std::to_string(s.iterations) +
-                "; use a feedbackTap in [0, iterations] (0 = no spatial feedback)");
-  s.atrous.kernel = atrousKernelParam(params);
-  s.footprint = footprintParam(params);
-  s.alpha = params.getFloat("alpha");
-  s.momentsAlpha = params.getFloat("momentsAlpha");
-  s.maxHistory = float(params.getInt("maxHistory"));
-  s.spatialYoungColor = params.getChoice("youngColor") == "spatial";
-  EdgeStoppingSettings& e = s.atrous.edges;
-  e.depth = params.getBool("edge.depth");
-  e.sigmaZ = params.getFloat("sigmaZ");
-  e.normal = params.getBool("edge.normal");
-  e.normalForm = NormalWeightForm::CosinePower;
-  e.sigmaN = params.getFloat("sigmaN");
-  e.luminance = params.getBool("edge.luminance");
-  e.sigmaL = params.getFloat("sigmaL");
-  e.id = params.getBool("edge.id");
-  e.position = params.getBool("edge.position");
-  e.sigmaX = params.getFloat("sigmaX");
-  e.color = false;
-  return s;
+const ParamTable<SvgfSettings>& svgfParams() {
+  using S = SvgfSettings;
+  using E = EdgeStoppingSettings;
+  auto edge = [](auto field) { return member(&S::atrous, &AtrousSettings::edges, field); };
+  static const ParamTable<S> table =
+      ParamTable<S>()
+          .integer("iterations", &S::iterations, 5, 0, 10,
+                   "à-trous iterations (SVGF paper 5, about 65x65 px; Falcor 4)")
+          .include(atrousKernelParams(), &S::atrous)
+          .real("alpha", &S::alpha, 0.2, 0.0, 1.0,
+                "colour blend floor, alpha = max(alpha, 1/h) (SVGF paper 0.2; Falcor 0.05)")
+          .real("momentsAlpha", &S::momentsAlpha, 0.2, 0.0, 1.0,
+                "moments blend floor (SVGF paper and Falcor 0.2)")
+          .integer("maxHistory", &S::maxHistory, 32, 1, 4096,
+                   "history length cap; bounds 1/h from below (Falcor 32; with alpha 0.2 only "
+                   "h < 5 matters)")
+          .integer("feedbackTap", &S::feedbackTap, 1, 0, 10,
+                   "à-trous iteration (1-based) whose output is next frame's colour history; 0 = "
+                   "the accumulated colour (SVGF paper: 1, the first; Falcor's 0-based "
+                   "mFeedbackTap = 1 is its second iteration, 2 here)")
+          .choice("youngColor", &S::youngColor, "accumulated",
+                  {{"spatial", YoungColor::Spatial}, {"accumulated", YoungColor::Accumulated}},
+                  "colour of a pixel with h < 4 entering the à-trous: the 7x7 bilateral mean of "
+                  "the variance estimate (Falcor SVGFFilterMoments) or the accumulated colour "
+                  "(the SVGF paper estimates only the variance)")
+          .real("sigmaZ", edge(&E::sigmaZ), 1.0, 0.0, 1e6,
+                "depth stopping sigma_z, SVGF eq. 3 (paper 1)")
+          .real("sigmaN", edge(&E::sigmaN), 128.0, 0.0, 1e4,
+                "normal stopping exponent sigma_n, SVGF eq. 4 (paper and Falcor 128)")
+          .real("sigmaL", edge(&E::sigmaL), 4.0, 0.0, 1e6,
+                "luminance stopping sigma_l, SVGF eq. 5 (paper 4; Falcor phiColor 10)")
+          .real("sigmaX", edge(&E::sigmaX), 0.05, 1e-9, 1e9,
+                "position stopping sigma_x, exp(-|x(p)-x(q)|^2/sigma_x), world units squared "
+                "(ours; used with edge.position)")
+          .boolean("edge.depth", edge(&E::depth), true, "depth stopping term (SVGF eq. 3)")
+          .boolean("edge.normal", edge(&E::normal), true, "normal stopping term (SVGF eq. 4)")
+          .boolean("edge.luminance", edge(&E::luminance), true,
+                   "variance-scaled luminance term (SVGF eq. 5)")
+          .boolean("edge.id", edge(&E::id), false,
+                   "mesh-id term: never filter across meshes (the talk; separates a poster from "
+                   "the coplanar wall)")
+          .boolean("edge.position", edge(&E::position), false,
+                   "world-position term (Dammertz 2010)")
+          .include(reprojectionParams(), &S::reprojection)
+          .include(footprintParams(), &S::footprint)
+          .fixed([](S& s) {
+            s.atrous.edges.normalForm = NormalWeightForm::CosinePower;  // SVGF eq. 4
+            s.atrous.edges.color = false;
+          })
+          .check([](const S& s, const std::string& owner) {
+            if (s.feedbackTap > s.iterations)
+              throw Error(owner + ".feedbackTap=" + std::to_string(s.feedbackTap) + " exceeds " +
+                          owner + ".iterations=" + std::to_string(s.iterations) +
+                          "; use a feedbackTap in [0, iterations] (0 = no spatial feedback)");
+          });
+  return table;
 }
 
 DenoiserInfo svgfInfo() {
   return {"svgf",
           "Spatiotemporal variance-guided filtering: reprojected accumulation, variance, "
           "variance-guided à-trous (Schied et al. 2017)",
-          ParamSchema(svgfParamSpecs()), [](const ParamSet& params, SignalKind) {
-            return std::make_unique<Svgf>(svgfSettings(params, "svgf"));
+          svgfParams().schema(), [](const ParamSet& params, SignalKind) {
+            return std::make_unique<Svgf>(svgfParams().settings(params, "svgf"));
           }};
 }
 

@@ -12,29 +12,33 @@
 #include "denoisers/common/temporal_accumulation.hpp"
 #include "denoisers/common/variance.hpp"
 #include "denoisers/denoiser.hpp"
+#include "denoisers/param_table.hpp"
 
 namespace arena {
 
+// While h < 4, the à-trous starts from the 7x7 bilateral mean of the accumulated colour (Falcor
+// SVGFFilterMoments) or from the accumulated colour itself (the SVGF paper, which estimates only
+// the variance spatially; the default: the mean raises disoccluded relMSE, FIDELITY.md).
+enum class YoungColor { Spatial, Accumulated };
+
+// Every field named after its parameter is set from svgfParams() (svgf.cpp), which declares its
+// default, range and meaning once; the rest are SVGF's fixed choices.
 struct SvgfSettings {
   ReprojectionSettings reprojection;
-  float alpha = 0.2f;         // colour EMA floor (SVGF paper 0.2; Falcor 0.05)
-  float momentsAlpha = 0.2f;  // moments EMA floor (SVGF paper and Falcor 0.2)
-  float maxHistory = 32.0f;   // history length cap (Falcor 32)
+  float alpha;         // colour EMA floor
+  float momentsAlpha;  // moments EMA floor
+  float maxHistory;    // history length cap
   VarianceSettings variance;
-  // While h < 4, the à-trous starts from the 7x7 bilateral mean of the accumulated colour (Falcor
-  // SVGFFilterMoments, the default) or from the accumulated colour itself (the SVGF paper, which
-  // estimates only the variance spatially).
-  bool spatialYoungColor = false;  // measured: the mean raises disoccluded relMSE (FIDELITY.md)
-  int iterations = 5;              // à-trous iterations (SVGF paper 5; Falcor 4)
-  int feedbackTap = 1;  // 1-based iteration feeding the history (paper 1; Falcor's 0-based 1 = 2)
-  AtrousSettings atrous;
-  Footprint footprint;  // footprint.hpp: the à-trous steps at this resolution
+  YoungColor youngColor;
+  int iterations;         // à-trous iterations
+  int feedbackTap;        // 1-based iteration feeding the history (0: the accumulated colour)
+  AtrousSettings atrous;  // kernel and the edge-stopping terms (sigmaZ, edge.depth, ...)
+  Footprint footprint;    // footprint.hpp: the à-trous steps at this resolution
 };
 
-// SVGF's parameters (A-SVGF appends its own to these) and their resolved values; an Error names
-// `owner` when feedbackTap exceeds iterations.
-std::vector<ParamSpec> svgfParamSpecs();
-SvgfSettings svgfSettings(const ParamSet& params, const std::string& owner);
+// SVGF's parameters, each bound to its field (A-SVGF and SLGF include them in their own tables);
+// settings() throws an Error naming the owner when feedbackTap exceeds iterations.
+const ParamTable<SvgfSettings>& svgfParams();
 
 class Svgf : public Denoiser {
  public:

@@ -14,10 +14,11 @@ namespace arena {
 
 namespace {
 
+// Set from temporalParams() below, which declares each default, range and meaning once.
 struct TemporalSettings {
   ReprojectionSettings reprojection;
-  float maxHistory = 32;
-  float alphaMin = 0;
+  float maxHistory;
+  float alphaMin;
 };
 
 class TemporalAccumulation final : public Denoiser {
@@ -83,18 +84,18 @@ class TemporalAccumulation final : public Denoiser {
   bool hasHistory_ = false;
 };
 
-ParamSchema temporalSchema() {
-  std::vector<ParamSpec> specs = {
-      ParamSpec::integer("maxHistory", 32, 1, 4096,
-                         "history length cap h_max; alpha never falls below 1/h_max (Falcor's "
-                         "cap 32)"),
-      ParamSpec::real("alphaMin", 0.0, 0.0, 1.0,
-                      "floor of the blend weight alpha = max(alphaMin, 1/h); 0 (ours) leaves "
-                      "1/maxHistory as the floor, i.e. a running mean of the last 32 frames, "
-                      "converging on a static view (Falcor 0.05, SVGF paper 0.2)"),
-  };
-  for (ParamSpec& s : reprojectionParamSpecs()) specs.push_back(std::move(s));
-  return ParamSchema(std::move(specs));
+const ParamTable<TemporalSettings>& temporalParams() {
+  using S = TemporalSettings;
+  static const ParamTable<S> table =
+      ParamTable<S>()
+          .integer("maxHistory", &S::maxHistory, 32, 1, 4096,
+                   "history length cap h_max; alpha never falls below 1/h_max (Falcor's cap 32)")
+          .real("alphaMin", &S::alphaMin, 0.0, 0.0, 1.0,
+                "floor of the blend weight alpha = max(alphaMin, 1/h); 0 (ours) leaves "
+                "1/maxHistory as the floor, i.e. a running mean of the last 32 frames, "
+                "converging on a static view (Falcor 0.05, SVGF paper 0.2)")
+          .include(reprojectionParams(), &S::reprojection);
+  return table;
 }
 
 }  // namespace
@@ -103,12 +104,9 @@ DenoiserInfo temporalInfo() {
   return {"temporal",
           "Reprojected temporal accumulation only, alpha = max(alphaMin, 1/h) (NRD REFERENCE-like "
           "baseline; Falcor/SVGF reprojection tests)",
-          temporalSchema(), [](const ParamSet& params, SignalKind) {
-            TemporalSettings s;
-            s.reprojection = reprojectionSettings(params);
-            s.maxHistory = float(params.getInt("maxHistory"));
-            s.alphaMin = params.getFloat("alphaMin");
-            return std::make_unique<TemporalAccumulation>(s);
+          temporalParams().schema(), [](const ParamSet& params, SignalKind) {
+            return std::make_unique<TemporalAccumulation>(
+                temporalParams().settings(params, "temporal"));
           }};
 }
 

@@ -625,7 +625,7 @@ TEST(DenoiserBlocksReprojection, ZeroMotionIsIdentity) {
   Image derivatives = g.derivatives();
   Reprojection reprojection;
   reprojection.setup(w, h);
-  reprojection.compute(g.view(), derivatives, g.view(), ReprojectionSettings{});
+  reprojection.compute(g.view(), derivatives, g.view(), reprojectionParams().defaults());
   Image history = randomImage(w, h, 3, 9, 0.0f, 4.0f), out(w, h, 3);
   reprojection.resample(history, out, -1.0f);
   for (int c = 0; c < 3; ++c)
@@ -652,7 +652,7 @@ TEST(DenoiserBlocksReprojection, IntegerShiftMovesTheImageExactly) {
       g.motion.plane(0)[i] = float(s.mx);
       g.motion.plane(1)[i] = float(s.my);
     }
-    ReprojectionSettings settings;
+    ReprojectionSettings settings = reprojectionParams().defaults();
     settings.fallback3x3 = false;
     Reprojection reprojection;
     reprojection.setup(w, h);
@@ -677,7 +677,7 @@ TEST(DenoiserBlocksReprojection, HalfPixelMotionAveragesTwoTaps) {
   Image derivatives = g.derivatives();
   Reprojection reprojection;
   reprojection.setup(w, h);
-  reprojection.compute(g.view(), derivatives, g.view(), ReprojectionSettings{});
+  reprojection.compute(g.view(), derivatives, g.view(), reprojectionParams().defaults());
   Image history = randomImage(w, h, 1, 2), out(w, h, 1);
   reprojection.resample(history, out);
   EXPECT_NEAR(out.at(4, 3), 0.5f * (history.at(3, 3) + history.at(4, 3)), 1e-6f);
@@ -696,7 +696,7 @@ TEST(DenoiserBlocksReprojection, InconsistentTapsAreRejectedPerTap) {
     previous.normal.at(7, y, 0) = 1.0f;
   }
   Image derivatives = current.derivatives();
-  ReprojectionSettings settings;
+  ReprojectionSettings settings = reprojectionParams().defaults();
   settings.fallback3x3 = false;
   Reprojection reprojection;
   reprojection.setup(w, h);
@@ -732,7 +732,8 @@ TEST(DenoiserBlocksReprojection, DepthTestUsesTheLargerDepthDerivative) {
   reprojection.setup(w, h);
   for (float shift : {0.5f, 0.8f}) {
     for (int i = 0; i < w * h; ++i) previous.depth.plane(0)[i] = current.depth.plane(0)[i] + shift;
-    reprojection.compute(current.view(), derivatives, previous.view(), ReprojectionSettings{});
+    reprojection.compute(current.view(), derivatives, previous.view(),
+                         reprojectionParams().defaults());
     EXPECT_EQ(reprojection.validFraction(), shift < 0.6f ? 1.0 : 0.0) << "dz " << shift;
   }
 }
@@ -807,7 +808,7 @@ TEST(DenoiserBlocksReprojection, MatchesThePerPixelDefinitionUnderRandomMotion) 
     }
   cur.motion.at(7, 5, 0) = std::numeric_limits<float>::quiet_NaN();
   const Image derivatives = cur.derivatives();
-  ReprojectionSettings settings;
+  ReprojectionSettings settings = reprojectionParams().defaults();
   Reprojection reprojection;
   reprojection.setup(w, h);
   reprojection.compute(cur.view(), derivatives, prev.view(), settings);
@@ -887,7 +888,7 @@ TEST(DenoiserBlocksTemporal, RunningMeanAndPerPixelAlphaOverride) {
     if (t == 0)
       reprojection.invalidateAll();
     else
-      reprojection.compute(g.view(), derivatives, g.view(), ReprojectionSettings{});
+      reprojection.compute(g.view(), derivatives, g.view(), reprojectionParams().defaults());
     Image current(w, h, 3, float(t + 1));
     updateHistoryLength(reprojection, previousLength, 32.0f, length);
     accumulateTemporally(reprojection, current, history, length, {0.0f, nullptr}, accumulated);
@@ -922,7 +923,7 @@ TEST(DenoiserBlocksTemporal, VarianceOfConstantSignalIsZero) {
     if (t == 0)
       reprojection.invalidateAll();
     else
-      reprojection.compute(g.view(), derivatives, g.view(), ReprojectionSettings{});
+      reprojection.compute(g.view(), derivatives, g.view(), reprojectionParams().defaults());
     updateHistoryLength(reprojection, previousLength, 32.0f, length);
     accumulateMoments(reprojection, signal, momentsHistory, length, {0.2f, nullptr}, moments);
     double fetched = estimateVariance(moments, length, signal, g.view(), derivatives,
@@ -958,7 +959,7 @@ TEST(DenoiserBlocksTemporal, VarianceOfNoiseMatchesItsSpread) {
     if (t == 0)
       reprojection.invalidateAll();
     else
-      reprojection.compute(g.view(), derivatives, g.view(), ReprojectionSettings{});
+      reprojection.compute(g.view(), derivatives, g.view(), reprojectionParams().defaults());
     Image signal(w, h, 3);
     for (int i = 0; i < w * h; ++i)
       for (int c = 0; c < 3; ++c) signal.plane(c)[i] = hashUniform(uint32_t(t), uint32_t(i), 99);

@@ -37,7 +37,7 @@ TEST(FidelityFootprint, AtrousStepsFollowTheScale) {
   }
   // The cascade's spread (sum of squared steps) within 20 % of the scaled one.
   EXPECT_NEAR(std::sqrt(variance / target), 1.0, 0.2);
-  Footprint f;  // the default policy: scaled (footprint.hpp)
+  Footprint f = footprintParams().defaults();  // the default policy: scaled (footprint.cpp)
   EXPECT_EQ(f.policy, FootprintPolicy::Scaled);
   EXPECT_FLOAT_EQ(f.scale(720), 720.0f / 1080.0f);
   f.policy = FootprintPolicy::Native;

@@ -271,8 +271,8 @@ TEST(HybridVariant, EveryOptionalStageOffIsTemporalAccumulationPlusAtrous) {
       if (t == 0)
         reprojection.invalidateAll();
       else
-        reprojection.compute(g, derivatives, previous.view(), ReprojectionSettings{}, &ctx.camera,
-                             &ctx.previousCamera);
+        reprojection.compute(g, derivatives, previous.view(), reprojectionParams().defaults(),
+                             &ctx.camera, &ctx.previousCamera);
       updateHistoryLength(reprojection, previousLength, 24.0f, length);
       accumulateTemporally(reprojection, signal, history, length, {0.0f, nullptr}, accumulated);
       const AtrousGuide guide{g, &derivatives, nullptr};

@@ -185,7 +185,7 @@ TEST(ReEngine, EverySwitchChangesTheOutput) {
   const Rendered& r = rendered("glossy_orbit", 48, 27, 5, 4, 4);
   const RunResult base = runDenoiser(r, "reengine", {});
   int switches = 0;
-  for (const ParamSpec& spec : reEngineParamSpecs()) {
+  for (const ParamSpec& spec : reEngineParams().specs()) {
     std::vector<std::string> alternatives;
     if (spec.type == ParamSpec::Type::Bool)
       alternatives = {spec.defaultValue != 0 ? "false" : "true"};
@@ -249,7 +249,8 @@ TEST(ReEngine, IdenticalInputsGiveIdenticalPassesInAnyDenormalMode) {
   for (SignalKind kind : {SignalKind::Diffuse, SignalKind::Specular}) {
     const DenoiserInfo& registered = DenoiserRegistry::instance().find("reengine");
     const ParamSet params = registered.schema.resolve({}, "reengine");
-    ReEngine a(reEngineSettings(params), kind), b(reEngineSettings(params), kind);
+    ReEngine a(reEngineParams().settings(params, "reengine"), kind),
+        b(reEngineParams().settings(params, "reengine"), kind);
     a.setup(info.width, info.height);
     b.setup(info.width, info.height);
     Image outA(info.width, info.height, 3), outB(info.width, info.height, 3);
@@ -296,8 +297,8 @@ std::vector<Image> historyAges(const Rendered& r) {
     if (t == 0)
       reprojection.invalidateAll();
     else
-      reprojection.compute(g, derivatives, previous.view(), {}, &info.cameras[size_t(t)],
-                           &info.cameras[size_t(t - 1)]);
+      reprojection.compute(g, derivatives, previous.view(), reprojectionParams().defaults(),
+                           &info.cameras[size_t(t)], &info.cameras[size_t(t - 1)]);
     Image age(info.width, info.height, 1);
     for (size_t i = 0; i < age.pixelCount(); ++i)
       age.plane(0)[i] =

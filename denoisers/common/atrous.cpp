@@ -81,13 +81,12 @@ int atrousTapCount(AtrousKernel kernel) {
   return int(kernelTaps(kernel).size());
 }
 
-ParamSpec atrousKernelParamSpec() {
-  return ParamSpec::choice("kernel", "5x5", {"5x5", "3x3"},
-                           "à-trous kernel: 5x5 B3 spline (paper) or the compact 3x3 (AMD/talk)");
-}
-
-AtrousKernel atrousKernelParam(const ParamSet& params) {
-  return params.getChoice("kernel") == "3x3" ? AtrousKernel::Compact3x3 : AtrousKernel::B3Spline5x5;
+const ParamTable<AtrousSettings>& atrousKernelParams() {
+  static const ParamTable<AtrousSettings> table = ParamTable<AtrousSettings>().choice(
+      "kernel", &AtrousSettings::kernel, "5x5",
+      {{"5x5", AtrousKernel::B3Spline5x5}, {"3x3", AtrousKernel::Compact3x3}},
+      "à-trous kernel: 5x5 B3 spline (paper) or the compact 3x3 (AMD/talk)");
+  return table;
 }
 
 namespace {

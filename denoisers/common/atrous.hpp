@@ -9,7 +9,7 @@
 #include "core/image.hpp"
 #include "denoisers/common/edge_stopping.hpp"
 #include "denoisers/common/gbuffer.hpp"
-#include "denoisers/params.hpp"
+#include "denoisers/param_table.hpp"
 
 namespace arena {
 
@@ -44,9 +44,9 @@ struct AtrousGuide {
 
 int atrousTapCount(AtrousKernel kernel);  // 25 or 9: neighbour fetches per pixel
 
-// The "kernel" parameter ("5x5" or "3x3") of every variant that lets the user pick, and its value.
-ParamSpec atrousKernelParamSpec();
-AtrousKernel atrousKernelParam(const ParamSet& params);
+// The "kernel" parameter ("5x5" or "3x3") of every variant that lets the user pick (included into
+// its table at its AtrousSettings).
+const ParamTable<AtrousSettings>& atrousKernelParams();
 
 // Iteration `iteration` (0-based, tap spacing 2^iteration) from colorIn (3 channels) into colorOut.
 // With varianceIn/varianceOut (1 channel) the luminance variance is propagated alongside.

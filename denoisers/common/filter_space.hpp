@@ -11,6 +11,9 @@
 
 namespace arena {
 
+// The space a filter works in: linear, or Reinhard-compressed y = c / (1 + L(c)) (CAPCOM).
+enum class FilterSpace { Linear, Reinhard };
+
 // out = in / (1 + max(L(in), 0)) per pixel (3 channels; out may alias in).
 inline void reinhardCompress(const Image& in, Image& out) {
   for (size_t i = 0; i < in.pixelCount(); ++i) {

@@ -5,13 +5,6 @@
 
 namespace arena {
 
-namespace {
-const char* policyName(FootprintPolicy policy) {
-  return policy == FootprintPolicy::Scaled ? "scaled" : "native";
-}
-constexpr double kDefaultReferenceHeight = 1080.0;
-}  // namespace
-
 float Footprint::scale(int height) const {
   if (policy == FootprintPolicy::Native || referenceHeight <= 0.0f) return 1.0f;
   return float(height) / referenceHeight;
@@ -23,25 +16,20 @@ int atrousStep(int iteration, float scale) {
   return iteration == 0 ? std::max(step, 1) : step;
 }
 
-std::vector<ParamSpec> footprintParamSpecs() {
-  return {
-      ParamSpec::choice("footprint", policyName(kDefaultFootprintPolicy), {"native", "scaled"},
-                        "spatial footprints: scaled = published pixel constants are pixels at "
-                        "footprintHeight, scaled by height / footprintHeight (keeps the screen "
-                        "extent); native = published pixel constants at any resolution (Falcor, "
-                        "Q2RTX, NRD; keeps the sample count); the same for every denoiser"),
-      ParamSpec::real("footprintHeight", kDefaultReferenceHeight, 1, 100000,
-                      "footprint=scaled: the image height the pixel constants are tuned for "
-                      "(1080: NRD, SVGF paper)"),
-  };
-}
-
-Footprint footprintParam(const ParamSet& params) {
-  Footprint f;
-  f.policy =
-      params.getChoice("footprint") == "scaled" ? FootprintPolicy::Scaled : FootprintPolicy::Native;
-  f.referenceHeight = params.getFloat("footprintHeight");
-  return f;
+// The default policy is chosen here, once (footprint.hpp says why scaled).
+const ParamTable<Footprint>& footprintParams() {
+  static const ParamTable<Footprint> table =
+      ParamTable<Footprint>()
+          .choice("footprint", &Footprint::policy, "scaled",
+                  {{"native", FootprintPolicy::Native}, {"scaled", FootprintPolicy::Scaled}},
+                  "spatial footprints: scaled = published pixel constants are pixels at "
+                  "footprintHeight, scaled by height / footprintHeight (keeps the screen "
+                  "extent); native = published pixel constants at any resolution (Falcor, "
+                  "Q2RTX, NRD; keeps the sample count); the same for every denoiser")
+          .real("footprintHeight", &Footprint::referenceHeight, 1080, 1, 100000,
+                "footprint=scaled: the image height the pixel constants are tuned for "
+                "(1080: NRD, SVGF paper)");
+  return table;
 }
 
 }  // namespace arena

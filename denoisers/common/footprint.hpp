@@ -24,18 +24,17 @@
 #include <string>
 #include <vector>
 
-#include "denoisers/params.hpp"
+#include "denoisers/param_table.hpp"
 
 namespace arena {
 
 enum class FootprintPolicy { Native, Scaled };
 
-// The default policy, chosen once here (the parameters' default is its name).
-inline constexpr FootprintPolicy kDefaultFootprintPolicy = FootprintPolicy::Scaled;
-
+// Parameters "footprint" (the policy; default scaled) and "footprintHeight": default, range and
+// meaning in footprintParams() (footprint.cpp), the only place they are declared.
 struct Footprint {
-  FootprintPolicy policy = kDefaultFootprintPolicy;
-  float referenceHeight = 1080.0f;
+  FootprintPolicy policy;
+  float referenceHeight;
   // Pixels per published pixel at this image height: 1 (native) or height / referenceHeight.
   float scale(int height) const;
 };
@@ -45,9 +44,8 @@ struct Footprint {
 // never 0 for the first iteration.
 int atrousStep(int iteration, float scale);
 
-// `footprint` (native | scaled) and `footprintHeight`: appended to every spatial variant's schema;
-// the default is kDefaultFootprintPolicy.
-std::vector<ParamSpec> footprintParamSpecs();
-Footprint footprintParam(const ParamSet& params);
+// `footprint` (native | scaled) and `footprintHeight`: included in every spatial variant's table;
+// footprintParams().defaults() is the default policy.
+const ParamTable<Footprint>& footprintParams();
 
 }  // namespace arena

@@ -8,6 +8,15 @@
 
 namespace arena {
 
+const ParamTable<std::string>& hitDistanceParams() {
+  static const ParamTable<std::string> table = ParamTable<std::string>().choice(
+      "hitDistance", [](std::string& channel) -> std::string& { return channel; }, "sampled",
+      {{"sampled", "specHitDist"}, {"mirror", "specHitDistMirror"}},
+      "specular hit distance: the 1-spp sample's own ray length (what a real tracer has; the "
+      "talk, NRD) or the noise-free mirror ray (an oracle)");
+  return table;
+}
+
 glm::vec3 virtualHitPoint(const CameraState& camera, glm::vec3 surface, float hitDist) {
   const glm::vec3 toSurface = surface - camera.eye;
   const float viewDistance = glm::length(toSurface);

@@ -12,6 +12,7 @@
 // tangent plane of the current surface point (the previous position rebuilt from the previous
 // camera and depth). Motion of the mirror itself is not modelled (the talk's form).
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "core/camera.hpp"
@@ -19,6 +20,7 @@
 #include "denoisers/common/gbuffer.hpp"
 #include "denoisers/common/parallel.hpp"
 #include "denoisers/common/reprojection.hpp"
+#include "denoisers/param_table.hpp"
 
 namespace arena {
 
@@ -31,6 +33,11 @@ struct HitPointReprojectionSettings {
   // Falcor-style: the consistent bilinear weight must sum to at least this.
   float minWeightSum = 0.01f;
 };
+
+// The "hitDistance" parameter (sampled | mirror) of the variants that reproject by hit point: the
+// channel their specular guides read, "specHitDist" (the 1-spp sample's ray length) or
+// "specHitDistMirror" (the noise-free mirror ray, an oracle).
+const ParamTable<std::string>& hitDistanceParams();
 
 // The virtual point of a surface point x seen from `camera` with reflected-ray length hitDist.
 glm::vec3 virtualHitPoint(const CameraState& camera, glm::vec3 surface, float hitDist);

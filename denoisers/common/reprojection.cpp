@@ -11,22 +11,17 @@
 
 namespace arena {
 
-std::vector<ParamSpec> reprojectionParamSpecs() {
-  return {
-      ParamSpec::real("depthThreshold", 10, 0, 1e6,
-                      "reprojection rejects a tap when |z_prev - z| / (fwidth(z) + 0.01) exceeds "
-                      "this (Falcor 10)"),
-      ParamSpec::real("normalThreshold", 16, 0, 1e6,
-                      "reprojection rejects a tap when |n - n_prev| / (fwidth(n) + 0.01) exceeds "
-                      "this (Falcor 16)"),
-  };
-}
-
-ReprojectionSettings reprojectionSettings(const ParamSet& params) {
-  ReprojectionSettings s;
-  s.depthThreshold = params.getFloat("depthThreshold");
-  s.normalThreshold = params.getFloat("normalThreshold");
-  return s;
+const ParamTable<ReprojectionSettings>& reprojectionParams() {
+  using S = ReprojectionSettings;
+  static const ParamTable<S> table =
+      ParamTable<S>()
+          .real("depthThreshold", &S::depthThreshold, 10, 0, 1e6,
+                "reprojection rejects a tap when |z_prev - z| / (fwidth(z) + 0.01) exceeds "
+                "this (Falcor 10)")
+          .real("normalThreshold", &S::normalThreshold, 16, 0, 1e6,
+                "reprojection rejects a tap when |n - n_prev| / (fwidth(n) + 0.01) exceeds "
+                "this (Falcor 16)");
+  return table;
 }
 
 void Reprojection::setup(int width, int height) {

@@ -10,15 +10,16 @@
 #include "core/image.hpp"
 #include "denoisers/common/gbuffer.hpp"
 #include "denoisers/common/parallel.hpp"
-#include "denoisers/params.hpp"
+#include "denoisers/param_table.hpp"
 
 namespace arena {
 
 struct ReprojectionSettings {
-  // [0; inf) Falcor: a tap is rejected when |z_prev - z| / (fwidth(z) + 1e-2) > 10.
-  float depthThreshold = 10.0f;
-  // [0; inf) Falcor: a tap is rejected when distance(n, n_prev) / (fwidth(n) + 1e-2) > 16.
-  float normalThreshold = 16.0f;
+  // Parameters "depthThreshold" and "normalThreshold": default, range and meaning in
+  // reprojectionParams() (reprojection.cpp), the only place they are declared. A bare
+  // ReprojectionSettings{} leaves them 0 (every tap rejected): a caller outside a denoiser's table
+  // starts from reprojectionParams().defaults().
+  float depthThreshold, normalThreshold;
   // (0; 1] Falcor: the surviving bilinear weight must sum to at least 0.01.
   float minWeightSum = 0.01f;
   // SVGF §4.1: "if no tap is consistent, try a larger 3x3 filter to find thin geometry".
@@ -26,9 +27,8 @@ struct ReprojectionSettings {
 };
 
 // The thresholds as parameters ("depthThreshold", "normalThreshold"), shared by every variant
-// that reprojects, and their resolved values.
-std::vector<ParamSpec> reprojectionParamSpecs();
-ReprojectionSettings reprojectionSettings(const ParamSet& params);
+// that reprojects (ParamTable::include); reprojectionParams().defaults() for a block on its own.
+const ParamTable<ReprojectionSettings>& reprojectionParams();
 
 enum class ReprojectionFootprint : uint8_t {
   Disoccluded = 0,  // no consistent tap: the history is discarded

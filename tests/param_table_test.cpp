@@ -1,0 +1,147 @@
+// denoisers/param_table.hpp: a parameter is declared once (name, field, default, range,
+// meaning) and both the schema and the settings come from that one line. These tests show the
+// bindings of every built-in table are sound and that the self-check catches a binding slip.
+#include "denoisers/param_table.hpp"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "core/error.hpp"
+#include "denoisers/asvgf.hpp"
+#include "denoisers/common/atrous.hpp"
+#include "denoisers/common/footprint.hpp"
+#include "denoisers/common/reprojection.hpp"
+#include "denoisers/hybrid.hpp"
+#include "denoisers/reblur.hpp"
+#include "denoisers/reengine.hpp"
+#include "denoisers/svgf.hpp"
+#include "denoisers/variants.hpp"
+
+namespace arena {
+namespace {
+
+template <class Settings>
+std::string problemsOf(const ParamTable<Settings>& table) {
+  std::string out;
+  for (const std::string& p : table.selfCheck()) out += "\n  " + p;
+  return out;
+}
+
+// Each parameter reaches its own field and no other, and each field holds its default: for the
+// tables with a header here, and for every registered variant through schema(), which runs the
+// same check (eaw, temporal and slgf keep their tables in their .cpp).
+TEST(ParamTable, EveryBuiltInTableBindsEachParameterToItsOwnField) {
+  EXPECT_EQ(problemsOf(reprojectionParams()), "");
+  EXPECT_EQ(problemsOf(footprintParams()), "");
+  EXPECT_EQ(problemsOf(atrousKernelParams()), "");
+  EXPECT_EQ(problemsOf(hitDistanceParams()), "");
+  EXPECT_EQ(problemsOf(svgfParams()), "");
+  EXPECT_EQ(problemsOf(asvgfParams()), "");
+  EXPECT_EQ(problemsOf(reblurParams()), "");
+  EXPECT_EQ(problemsOf(hybridParams()), "");
+  EXPECT_EQ(problemsOf(reEngineParams()), "");
+  EXPECT_NO_THROW(builtinDenoisers());
+}
+
+// The settings are the table's: its defaults, and any override, land in the named field.
+TEST(ParamTable, SettingsComeFromTheTable) {
+  const SvgfSettings d = svgfParams().defaults();
+  EXPECT_EQ(d.iterations, 5);
+  EXPECT_EQ(d.feedbackTap, 1);
+  EXPECT_FLOAT_EQ(d.alpha, 0.2f);
+  EXPECT_EQ(d.maxHistory, 32.0f);
+  EXPECT_EQ(d.youngColor, YoungColor::Accumulated);
+  EXPECT_EQ(d.atrous.kernel, AtrousKernel::B3Spline5x5);
+  EXPECT_EQ(d.atrous.edges.sigmaL, 4.0f);
+  EXPECT_EQ(d.atrous.edges.normalForm, NormalWeightForm::CosinePower);  // fixed, not a parameter
+  EXPECT_EQ(d.reprojection.depthThreshold, 10.0f);
+  EXPECT_EQ(d.footprint.policy, FootprintPolicy::Scaled);
+
+  const ParamSchema schema = svgfParams().schema();
+  const SvgfSettings s = svgfParams().settings(schema.resolve({{"youngColor", "spatial"},
+                                                               {"kernel", "3x3"},
+                                                               {"sigmaL", "2.5"},
+                                                               {"normalThreshold", "8"},
+                                                               {"footprint", "native"}},
+                                                              "svgf"),
+                                               "svgf");
+  EXPECT_EQ(s.youngColor, YoungColor::Spatial);
+  EXPECT_EQ(s.atrous.kernel, AtrousKernel::Compact3x3);
+  EXPECT_EQ(s.atrous.edges.sigmaL, 2.5f);
+  EXPECT_EQ(s.reprojection.normalThreshold, 8.0f);
+  EXPECT_EQ(s.footprint.policy, FootprintPolicy::Native);
+
+  const ReblurSettings r = reblurParams().settings(
+      reblurParams().schema().resolve(
+          {{"hitPoint", "false"}, {"historyFixShape", "ours"}, {"hitDistance", "mirror"}},
+          "reblur"),
+      "reblur");
+  EXPECT_FALSE(r.hitPoint);
+  EXPECT_EQ(r.historyFixShape, HistoryFixShape::Ours);
+  EXPECT_EQ(r.hitDistanceChannel, "specHitDistMirror");
+}
+
+// Cross-parameter rules keep their messages, naming the variant that includes the table.
+TEST(ParamTable, CrossParameterChecksNameTheOwner) {
+  for (const std::string owner : {"svgf", "asvgf"}) {
+    const ParamSchema schema = owner == "svgf" ? svgfParams().schema() : asvgfParams().schema();
+    const ParamSet params = schema.resolve({{"feedbackTap", "6"}}, owner);
+    try {
+      if (owner == "svgf")
+        svgfParams().settings(params, owner);
+      else
+        asvgfParams().settings(params, owner);
+      ADD_FAILURE() << owner << " accepted feedbackTap > iterations";
+    } catch (const Error& e) {
+      EXPECT_EQ(std::string(e.what()),
+                owner + ".feedbackTap=6 exceeds " + owner +
+                    ".iterations=5; use a feedbackTap in [0, iterations] (0 = no spatial "
+                    "feedback)");
+    }
+  }
+}
+
+// A-SVGF reuses SVGF's alpha and adds what it means there; nothing else of it is restated.
+TEST(ParamTable, IncludedParametersKeepTheirDeclaration) {
+  const ParamSchema svgfSchema = svgfParams().schema(), asvgfSchema = asvgfParams().schema();
+  const ParamSpec* svgf = svgfSchema.find("alpha");
+  const ParamSpec* asvgf = asvgfSchema.find("alpha");
+  ASSERT_TRUE(svgf && asvgf);
+  EXPECT_EQ(asvgf->meaning.rfind(svgf->meaning, 0), 0u);
+  EXPECT_NE(asvgf->meaning, svgf->meaning);
+  EXPECT_EQ(asvgf->defaultValue, svgf->defaultValue);
+}
+
+// The self-check can fail: two names on one field, a fixed setting that overrides a parameter, a
+// name declared twice.
+struct Toy {
+  float a, b;
+  bool on;
+};
+
+TEST(ParamTable, SelfCheckCatchesBindingSlips) {
+  const auto twoNamesOneField = ParamTable<Toy>()
+                                    .real("a", &Toy::a, 1, 0, 10, "a")
+                                    .real("b", &Toy::a, 2, 0, 10, "b (bound to a by mistake)");
+  EXPECT_FALSE(twoNamesOneField.selfCheck().empty());
+  EXPECT_THROW(twoNamesOneField.schema(), Error);
+
+  const auto fixedOverridesParameter =
+      ParamTable<Toy>().boolean("on", &Toy::on, true, "on").fixed([](Toy& t) { t.on = true; });
+  EXPECT_FALSE(fixedOverridesParameter.selfCheck().empty());
+
+  const auto twice =
+      ParamTable<Toy>().real("a", &Toy::a, 1, 0, 10, "a").real("a", &Toy::b, 1, 0, 10, "a again");
+  EXPECT_FALSE(twice.selfCheck().empty());
+
+  const auto sound = ParamTable<Toy>()
+                         .real("a", &Toy::a, 1, 0, 10, "a")
+                         .real("b", &Toy::b, 2, 0, 10, "b")
+                         .boolean("on", &Toy::on, false, "on");
+  EXPECT_TRUE(sound.selfCheck().empty());
+  EXPECT_EQ(sound.defaults().b, 2.0f);
+}
+
+}  // namespace
+}  // namespace arena
