@@ -37,14 +37,39 @@ std::string defaultLabel(const DenoiserRequest& r) {
   return s + "]";
 }
 
-long sanitize(Image& image) {
-  long count = 0;
-  for (float& v : image.raw())
-    if (!std::isfinite(v)) {
-      v = 0.0f;
-      ++count;
+long sanitizeInputs(LayerSet& layers, const std::vector<std::string>& names,
+                    const std::vector<LayerSpec>& specs, const std::string& prefix, NonFiniteCounts& counts) {
+  if (countNonFinite(layers, specs, prefix, counts, names) == 0) return 0;
+  long replaced = 0;
+  for (auto& [name, image] : layers.all())
+    if (names.empty() || std::find(names.begin(), names.end(), name) != names.end())
+      replaced += replaceNonFinite(layers.get(name));
+  return replaced;
+}
+
+long sanitizeGradientSamples(LayerSet& gradients, NonFiniteCounts& counts) {
+  const std::vector<LayerSpec>& specs = channels::gradientLayers();
+  if (countNonFinite(gradients, specs, "gradients: ", counts) == 0) return 0;
+  long replaced = 0;
+  for (const LayerSpec& spec : specs) {
+    if (!gradients.has(spec.name)) continue;
+    Image& samples = gradients.get(spec.name);
+    const auto valid = std::find(spec.suffixes.begin(), spec.suffixes.end(), "valid");
+    if (valid != spec.suffixes.end() && int(valid - spec.suffixes.begin()) < samples.channels()) {
+      float* validPlane = samples.plane(int(valid - spec.suffixes.begin()));
+      for (size_t i = 0; i < samples.pixelCount(); ++i)
+        for (int c = 0; c < samples.channels(); ++c)
+          if (!std::isfinite(samples.plane(c)[i])) validPlane[i] = 0.0f;
     }
-  return count;
+    replaced += replaceNonFinite(samples);
+  }
+  return replaced;
+}
+
+std::string sanitizedWarning(const NonFiniteCounts& counts) {
+  if (counts.empty()) return "";
+  return std::to_string(totalNonFinite(counts)) + " non-finite input values (" + describeNonFinite(counts) +
+         ") were replaced by 0 before the denoiser ran; its results may differ from those on clean inputs";
 }
 
 DenoiseRun::DenoiseRun(const DenoiserRequest& request, const Sequence& sequence)
@@ -57,10 +82,18 @@ DenoiseRun::DenoiseRun(const DenoiserRequest& request, const Sequence& sequence)
     instances_.emplace_back(SignalKind::Specular, info_.create(params_, SignalKind::Specular));
   }
   Denoiser& first = *instances_.front().second;
+  // What the instances read of a frame: their signals and every channel either declares (the
+  // specular instance may need more than the diffuse one, e.g. roughness).
+  for (auto& [kind, d] : instances_) {
+    std::vector<std::string> layers = d->requiredChannels();
+    layers.insert(layers.begin(), signalName(kind));
+    for (const std::string& c : layers)
+      if (std::find(readLayers_.begin(), readLayers_.end(), c) == readLayers_.end()) readLayers_.push_back(c);
+  }
   std::vector<std::string> missing;
   std::vector<std::string> known;
   for (const LayerSpec& spec : channels::frameLayers()) known.push_back(spec.name);
-  for (const std::string& c : first.requiredChannels())
+  for (const std::string& c : readLayers_)
     if (std::find(known.begin(), known.end(), c) == known.end()) missing.push_back(c);
   if (!missing.empty()) {
     std::string list;
@@ -84,14 +117,30 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
     out.specular = Image(w, h, 3);
   }
   out.color = Image(w, h, 3);
-  Image signal;
+  LayerSet sanitizedFrame;
   for (int t = 0; t < info.frames; ++t) {
-    const LayerSet& frame = frameOf(t);
-    for (const std::string& c : instances_.front().second->requiredChannels()) frame.get(c, sequence_.dir().string() + " frame " + std::to_string(t));
+    const LayerSet& cached = frameOf(t);
+    for (const std::string& c : readLayers_) cached.get(c, sequence_.dir().string() + " frame " + std::to_string(t));
+    out.sanitized.clear();
+    // The frame is shared with the evaluation (and other pairs): a sanitised copy only when the
+    // layers the denoiser reads hold a NaN/Inf, else the frame itself.
+    const LayerSet* frameForDenoiser = &cached;
+    if (countNonFinite(cached, channels::frameLayers(), "", out.sanitized, readLayers_) > 0) {
+      sanitizedFrame = cached;
+      for (const std::string& name : readLayers_) replaceNonFinite(sanitizedFrame.get(name));
+      frameForDenoiser = &sanitizedFrame;
+    }
+    const LayerSet& frame = *frameForDenoiser;
     LayerSet gradients;
-    if (needsGradients_ && t > 0) gradients = sequence_.gradients(t);
+    if (needsGradients_ && t > 0) {
+      gradients = sequence_.gradients(t);
+      sanitizeGradientSamples(gradients, out.sanitized);
+    }
     LayerSet lowresLayers;
-    if (readsLowres_) lowresLayers = sequence_.lowres(t);
+    if (readsLowres_) {
+      lowresLayers = sequence_.lowres(t);
+      sanitizeInputs(lowresLayers, {}, channels::lowresLayers(), "lowres: ", out.sanitized);
+    }
     const LowresInputs lowres{lowresLayers, info.lowresFactor(), info.lowresSpp()};
     FrameContext ctx;
     ctx.frameIndex = t;
@@ -105,7 +154,6 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
       for (auto& [kind, d] : instances_) d->reset();
     out.frame = t;
     out.passes.clear();
-    out.sanitized = 0;
     out.milliseconds = 0;
     out.wallMilliseconds = 0;
     out.selfTimed = false;
@@ -113,9 +161,7 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
     for (auto& [kind, instance] : instances_) {
       Denoiser& d = *instance;
       Image& result = kind == SignalKind::Color ? out.color : kind == SignalKind::Diffuse ? out.diffuse : out.specular;
-      signal = frame.get(signalName(kind));
-      out.sanitized += sanitize(signal);
-      DenoiserInputs in{signal, frame, needsGradients_ && t > 0 ? &gradients : nullptr,
+      DenoiserInputs in{frame.get(signalName(kind)), frame, needsGradients_ && t > 0 ? &gradients : nullptr,
                         readsLowres_ ? &lowres : nullptr};
       d.clearPassStats();
       auto start = std::chrono::steady_clock::now();
@@ -139,7 +185,9 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
       onFrame(out);
       continue;
     }
-    const Image &albedo = frame.get("albedo"), &specAlbedo = frame.get("specAlbedo"), &emission = frame.get("emission");
+    // Remodulation reads the cache's own layers: a non-finite one fails the pair below, it is not
+    // an input of the denoiser to sanitise.
+    const Image &albedo = cached.get("albedo"), &specAlbedo = cached.get("specAlbedo"), &emission = cached.get("emission");
     for (size_t i = 0; i < out.color.raw().size(); ++i)
       out.color.raw()[i] = albedo.raw()[i] * out.diffuse.raw()[i] + specAlbedo.raw()[i] * out.specular.raw()[i] +
                            emission.raw()[i];
@@ -151,7 +199,7 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
       std::string layers;
       for (const char* name : {"albedo", "specAlbedo", "emission"}) {
         long n = 0;
-        for (float v : frame.get(name).raw()) n += !std::isfinite(v);
+        for (float v : cached.get(name).raw()) n += !std::isfinite(v);
         if (n) layers += std::string(layers.empty() ? "" : ", ") + name + " x" + std::to_string(n);
       }
       throw Error("frame " + std::to_string(t) + ": the remodulated colour has " + std::to_string(bad) +

@@ -1,6 +1,6 @@
 #pragma once
 // Runs one registered denoiser over a cached sequence: one instance per signal (diffuse,
-// specular), inputs sanitised (NaN/Inf -> 0, counted), outputs remodulated
+// specular), every input it reads sanitised and counted (sanitizeInputs), outputs remodulated
 // (albedo * diffuse + specAlbedo * specular + emission), per-pass timings collected. Set-up and
 // allocation happen before the first timed frame; file I/O is never timed.
 #include <functional>
@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "core/non_finite.hpp"
 #include "core/sequence.hpp"
 #include "denoisers/denoiser.hpp"
 
@@ -33,7 +34,7 @@ struct DenoisedFrame {
   double wallMilliseconds = 0;     // the harness's wall clock around the calls, transfer included
   bool selfTimed = false;          // milliseconds were reported by the denoiser itself
   std::vector<PassStats> passes;   // "diffuse/<pass>", "specular/<pass>"
-  long sanitized = 0;              // NaN/Inf input values replaced by 0
+  NonFiniteCounts sanitized;       // NaN/Inf input values replaced by 0, per layer.channel
   double extraRaysPerPixel = 0;    // low-resolution paths read per pixel (both signals' passes)
 };
 
@@ -55,11 +56,25 @@ class DenoiseRun {
   const DenoiserInfo& info_;
   ParamSet params_;
   std::vector<std::pair<SignalKind, std::unique_ptr<Denoiser>>> instances_;  // one per signal
+  std::vector<std::string> readLayers_;  // every frame layer a denoiser instance reads
   bool needsGradients_ = false;
   bool readsLowres_ = false;
 };
 
-// Replaces NaN/Inf by 0 in place; returns how many were replaced.
-long sanitize(Image& image);
+// The one rule for non-finite inputs (docs/metrics.md, "Non-finite inputs"): every NaN/Inf in a
+// layer the denoiser reads -- its signal, its guides (normal, depth, motion, position, ...), the
+// low-resolution buffer -- becomes 0 before it runs; a gradient sample (A-SVGF) with any non-finite
+// field also becomes invalid (valid = 0): a sample that is not a number says nothing about the
+// history, and a 0 in its place would fake a full gradient and drop the history.
+// Both sanitise in place, add their counts to `counts` under `prefix + channel` ("normal.Y",
+// "gradients: gradient.lumNew") and return how many values they replaced. sanitizeInputs touches
+// the layers named in `names` only (every layer when empty).
+long sanitizeInputs(LayerSet& layers, const std::vector<std::string>& names,
+                    const std::vector<LayerSpec>& specs, const std::string& prefix, NonFiniteCounts& counts);
+long sanitizeGradientSamples(LayerSet& gradients, NonFiniteCounts& counts);
+
+// The pair's warning for what sanitizeInputs replaced: "N non-finite input values (normal.Y x30,
+// ...) were replaced by 0 before the denoiser ran"; empty when nothing was.
+std::string sanitizedWarning(const NonFiniteCounts& counts);
 
 }  // namespace arena

@@ -89,7 +89,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   DenoiseRun run(req, sd.sequence);
   PairEvaluation evaluation(sd.evaluation);
   bool selfTimed = false;
-  long sanitized = 0;
+  NonFiniteCounts sanitized;  // over every frame, warm-up included: each one shaped the history
   std::vector<std::vector<PassTime>> passes;
   std::vector<double> ms;
   const bool keepImages = cfg.keepFrames != "none";
@@ -102,7 +102,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
             facts.lowresPathsPerSecond = info.lowresPathsPerSecond;
             evaluation.add(f.frame, f.color, facts);
             selfTimed |= f.selfTimed;
-            sanitized += f.sanitized;
+            for (const auto& [channel, n] : f.sanitized) sanitized[channel] += n;
             ms.push_back(f.milliseconds);
             std::vector<PassTime>& frame = passes.emplace_back();
             for (const PassStats& p : f.passes) frame.push_back({p.name, p.milliseconds, p.tapsPerPixel});
@@ -115,14 +115,15 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   json pair = {{"scene", info.scene}, {"denoiser", req.name}, {"label", req.label}, {"params", run.params().toJson()},
                {"status", "ok"}};
   pair.update(evaluation.finish());
-  if (sanitized > 0) pair["warnings"].push_back(std::to_string(sanitized) + " NaN/Inf input values were replaced by 0");
+  // First: what the inputs were matters before what the outputs measured.
+  if (!sanitized.empty()) pair["warnings"].insert(pair["warnings"].begin(), sanitizedWarning(sanitized));
   json timing = timingSummary(passes, ms, cfg.warmup, info.width, info.height);
   // External processes time themselves: "ms" is what they reported, "msWall" the harness's clock
   // around the exchange (transfer included). Built-ins and plugins: the harness's clock.
   timing["msSource"] = selfTimed ? "reported by the process" : "harness wall clock";
   if (selfTimed) timing["msWallMedian"] = summarize(evaluation.values("msWall"), cfg.warmup).median;
   pair["timing"] = timing;
-  pair["sanitizedInputs"] = sanitized;
+  pair["sanitizedInputs"] = {{"total", totalNonFinite(sanitized)}, {"channels", sanitized}};
   pair["images"] = {{"dir", fs::relative(imageDir, cfg.out).string()}, {"all", keepAll && keepImages}};
   if (!run.info().origin.empty()) pair["origin"] = run.info().origin;
   if (run.info().signals == SignalMode::Color) pair["signals"] = "color";
@@ -280,6 +281,8 @@ json runMatrix(const RunConfig& cfg) {
                     clock(elapsed / double(pairsDone) * double(pairsMine - pairsDone)).c_str());
       say(buf);
       if (pair["status"] != "ok") say("  error: " + pair["error"].get<std::string>());
+      else if (pair["sanitizedInputs"]["total"].get<long>() > 0)
+        say("  warning: " + pair["warnings"][0].get<std::string>());
     }
   }
   if (cfg.finish) finishRun(results, cfg);

@@ -9,6 +9,8 @@
 #include "core/error.hpp"
 #include "core/exr_io.hpp"
 #include "core/hash.hpp"
+#include "core/non_finite.hpp"
+#include "core/sequence.hpp"
 #include "metrics/error.hpp"
 #include "metrics/error_maps.hpp"
 #include "metrics/ghosting_intervals.hpp"
@@ -18,23 +20,6 @@ namespace arena {
 using nlohmann::json;
 
 namespace {
-
-// Counts non-finite values per layer.channel into `counts` under "kind: layer.c".
-void countNonFinite(const LayerSet& layers, const std::string& kind, std::map<std::string, long>& counts) {
-  for (const auto& [name, image] : layers.all())
-    for (int c = 0; c < image.channels(); ++c) {
-      long n = 0;
-      const float* plane = image.plane(c);
-      for (size_t i = 0; i < image.pixelCount(); ++i) n += !std::isfinite(plane[i]);
-      if (n) counts[kind + ": " + name + "." + std::to_string(c)] += n;
-    }
-}
-
-std::string describeCounts(const std::map<std::string, long>& counts) {
-  std::string out;
-  for (const auto& [where, n] : counts) out += (out.empty() ? "" : ", ") + where + " x" + std::to_string(n);
-  return out;
-}
 
 // An image with the reference's own noise and nothing else: an independent half-sample estimate
 // when the cache has one (colorHalf: r_hat - half = (other half - half) / 2 has exactly Var(r_hat)),
@@ -125,20 +110,22 @@ EvaluationInput readSequenceForEvaluation(const Sequence& sequence) {
   in.events = info.events;
   for (int t = 0; t < info.frames; ++t) {
     in.frames.push_back(sequence.frame(t));
-    countNonFinite(in.frames.back(), "frame " + std::to_string(t), in.nonFinite);
-    if (t > 0) countNonFinite(sequence.gradients(t), "gradients " + std::to_string(t), in.nonFinite);
+    countNonFinite(in.frames.back(), channels::frameLayers(), "frame " + std::to_string(t) + ": ", in.nonFinite);
+    if (t > 0)
+      countNonFinite(sequence.gradients(t), channels::gradientLayers(), "gradients " + std::to_string(t) + ": ",
+                     in.nonFinite);
   }
   int refs = 0;
   for (int r : info.referenceOfFrame) refs = std::max(refs, r + 1);
   for (int r = 0; r < refs; ++r) {
     const std::filesystem::path file = Sequence::referencePath(sequence.dir(), r);
     in.references.push_back(readExr(file, channels::referenceLayers()).layers);
-    std::map<std::string, long> bad;
-    countNonFinite(in.references.back(), file.string(), bad);
+    NonFiniteCounts bad;
+    countNonFinite(in.references.back(), channels::referenceLayers(), file.string() + ": ", bad);
     // A non-finite reference cannot rank anything: every metric against it would be NaN or a
     // fake perfect score. The scene fails, naming the file and the channels.
     if (!bad.empty())
-      throw Error("scene " + info.scene + ": the reference has non-finite values (" + describeCounts(bad) +
+      throw Error("scene " + info.scene + ": the reference has non-finite values (" + describeNonFinite(bad) +
                   "); check the scene's emitters and materials (a value beyond float range becomes Inf)");
   }
   return in;

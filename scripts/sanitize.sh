@@ -8,6 +8,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root="$(pwd)"
+bash scripts/install_packages.sh ccache
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DARENA_SANITIZE=ON \
   -DCMAKE_CXX_COMPILER_LAUNCHER=ccache
 nice -n 19 cmake --build build-asan -j"$(nproc)"

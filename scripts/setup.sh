@@ -4,27 +4,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-# python3-numpy: the Python example denoiser (examples/external/python_temporal), run by the tests.
-# libassimp-dev: asset import (OBJ+MTL, glTF 2.0); assimp-testmodels: glTF files the tests load.
-# sweethome3d-furniture: the CC-0 furniture models of living_room and foliage_window (see below).
-packages=(build-essential cmake libembree-dev libopenexr-dev libopencv-dev libbenchmark-dev libglm-dev
-          nlohmann-json3-dev libtbb-dev libgtest-dev libcli11-dev libsqlite3-dev libtinyobjloader-dev
-          openexr embree-tools python3-numpy libassimp-dev assimp-testmodels sweethome3d-furniture
-          ${ARENA_EXTRA_PACKAGES:-})
-# `arena report` copies Vega's browser builds from reports/node_modules, installed with npm.
-command -v node >/dev/null 2>&1 || packages+=(nodejs)
-command -v npm >/dev/null 2>&1 || packages+=(npm)
-missing=()
-for p in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  echo "setup: installing ${missing[*]}"
-  SUDO=""
-  [ "$(id -u)" -ne 0 ] && SUDO="sudo"
-  $SUDO apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
-fi
+bash scripts/install_packages.sh
 
 # The report's npm packages (Vega, Vega-Lite, vega-embed; playwright-core for the browser test),
 # exactly as locked; again only when package-lock.json is newer than the installed tree.

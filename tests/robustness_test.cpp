@@ -9,14 +9,17 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <regex>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/json_reader.hpp"
+#include "core/non_finite.hpp"
 #include "core/sequence.hpp"
 #include "harness/denoise_run.hpp"
 #include "harness/run_matrix.hpp"
@@ -863,6 +866,72 @@ TEST(Issue30Leftovers, ADeadWritersTemporaryOnThisMachineIsCleanedAtAnyAge) {
   renderSequence(scene, settings, cache, nullptr);
   EXPECT_FALSE(fs::exists(leftover));
   EXPECT_NO_THROW(Sequence::open(seq).frame(1));
+}
+
+
+// Rewrites `layer` channel `channel` of a cached EXR (keeping its attributes, so the cache still
+// trusts it) with NaN at the first `count` pixels.
+void poisonLayer(const fs::path& file, const std::vector<LayerSpec>& specs, const std::string& layer, int channel,
+                 int count) {
+  ExrContents c = readExr(file, specs);
+  Image& image = c.layers.get(layer);
+  for (int i = 0; i < count; ++i) image.plane(channel)[size_t(i)] = std::numeric_limits<float>::quiet_NaN();
+  writeExr(file, c.layers, specs, c.attributes);
+}
+
+TEST(Issue30NonFinite, GuideAndGradientNaNsAreSanitisedCountedAndNamedInAWarning) {
+  // The rule itself: NaN/Inf -> 0, and a gradient sample with any non-finite field is invalid.
+  LayerSet samples;
+  Image gradient(2, 1, 5, 1.0f);
+  gradient.plane(2)[0] = std::numeric_limits<float>::infinity();  // lumNew of sample 0
+  samples.set("gradient", gradient);
+  NonFiniteCounts counts;
+  EXPECT_EQ(sanitizeGradientSamples(samples, counts), 1);
+  EXPECT_EQ(counts, (NonFiniteCounts{{"gradients: gradient.lumNew", 1}}));
+  EXPECT_EQ(samples.get("gradient").plane(2)[0], 0.0f);
+  EXPECT_EQ(samples.get("gradient").plane(4)[0], 0.0f) << "the sample is not marked invalid";
+  EXPECT_EQ(samples.get("gradient").plane(4)[1], 1.0f) << "a clean sample was touched";
+
+  // A-SVGF reads the guides and the gradient samples: NaNs in normal.Y of frame 2 and in lumNew of
+  // frame 2's gradient samples are replaced, counted per channel and named in the pair's warning.
+  RunConfig c;
+  c.name = "nonfinite";
+  c.cache = test::freshDir("nonfinite_cache");
+  c.render = test::tinySettings(24, 16, 4, 4);
+  c.scenes = {test::shippedScene("cornell_static")};
+  c.denoisers = {{"asvgf", {}, ""}};
+  c.baselines = false;
+  c.warmup = 1;
+  c.flip = "none";
+  c.keepFrames = "none";
+  c.out = test::freshDir("nonfinite_clean");
+  const fs::path dir = sequenceDir(c.scenes[0], c.render, c.cache);
+  json r = runMatrix(c);
+  ASSERT_EQ(r["pairs"].size(), 1u);
+  ASSERT_EQ(r["pairs"][0]["status"], "ok") << r["pairs"][0].dump();
+  EXPECT_EQ(r["pairs"][0]["sanitizedInputs"]["total"], 0);
+  EXPECT_TRUE(r["pairs"][0]["sanitizedInputs"]["channels"].empty());
+  for (const json& w : r["pairs"][0]["warnings"]) EXPECT_EQ(w.get<std::string>().find("non-finite"), std::string::npos) << w;
+
+  poisonLayer(Sequence::framePath(dir, 2), channels::frameLayers(), "normal", 1, 30);
+  poisonLayer(Sequence::gradientPath(dir, 2), channels::gradientLayers(), "gradient", 2, 30);
+  c.out = test::freshDir("nonfinite_poisoned");
+  r = runMatrix(c);
+  ASSERT_EQ(r["pairs"].size(), 1u);
+  const json& pair = r["pairs"][0];
+  // status ok: the harness checked every output value was finite.
+  ASSERT_EQ(pair["status"], "ok") << pair.dump();
+  EXPECT_TRUE(std::isfinite(pair["summary"]["relMse"]["mean"].get<double>()));
+  EXPECT_EQ(pair["sanitizedInputs"]["total"], 60);
+  EXPECT_EQ(pair["sanitizedInputs"]["channels"],
+            json({{"normal.Y", 30}, {"gradients: gradient.lumNew", 30}}));
+  ASSERT_FALSE(pair["warnings"].empty());
+  EXPECT_EQ(pair["warnings"][0],
+            "60 non-finite input values (gradients: gradient.lumNew x30, normal.Y x30) were replaced by 0 "
+            "before the denoiser ran; its results may differ from those on clean inputs");
+  // The scene says what its cache holds, per file and channel.
+  EXPECT_EQ(r["scenes"]["cornell_static"]["nonFiniteInputs"]["frame 2: normal.Y"], 30);
+  EXPECT_EQ(r["scenes"]["cornell_static"]["nonFiniteInputs"]["gradients 2: gradient.lumNew"], 30);
 }
 
 }  // namespace

@@ -433,7 +433,7 @@ TEST(NonFiniteData, IsNamedAndNeverScored) {
   json r = runMatrix(c);
   ASSERT_EQ(failedPairs(r).size(), 1u);
   EXPECT_NE(failedPairs(r)[0].find("albedo x1"), std::string::npos) << failedPairs(r)[0];
-  EXPECT_EQ(r["scenes"]["cornell_static"]["nonFiniteInputs"]["frame 3: albedo.0"], 1);
+  EXPECT_EQ(r["scenes"]["cornell_static"]["nonFiniteInputs"]["frame 3: albedo.R"], 1);
   poison(Sequence::referencePath(dir, 0), channels::referenceLayers(), "color");
   c.out = test::freshDir("stats_nan_reference");
   r = runMatrix(c);

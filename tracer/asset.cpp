@@ -54,9 +54,44 @@ class RecordingIOSystem : public Assimp::DefaultIOSystem {
       if (refused.empty()) refused = std::string(file) + ": not a regular file";
       return nullptr;
     }
+    if (std::string problem = mtlProblem(file); !problem.empty()) {
+      if (refused.empty()) refused = problem;
+      return nullptr;
+    }
     Assimp::IOStream* stream = DefaultIOSystem::Open(file, mode);
     if (stream) opened.insert(fs::weakly_canonical(file).string());
     return stream;
+  }
+
+ private:
+  // An MTL statement before the first "newmtl" belongs to no material, and assimp 5.2's MTL reader
+  // writes a texture statement there ("map_Kd x.png", and any line starting with m, b or r, or
+  // "disp", "norm") through a null material: a crash (found by scripts/fuzz.sh asset). Such a file
+  // is refused before assimp reads it, naming the line. Returns "" when `file` is no such MTL.
+  static std::string mtlProblem(const char* file) {
+    std::string ext = fs::path(file).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    if (ext != ".mtl") return "";
+    std::string text;
+    try {
+      text = readText(file, kMaxAssetBytes);
+    } catch (const Error&) {
+      return "";  // unreadable: assimp's own open reports it
+    }
+    int lineNumber = 0;
+    for (size_t at = 0; at < text.size();) {
+      const size_t end = std::min(text.find('\n', at), text.size());
+      const std::string line = text.substr(at, end - at);
+      at = end + 1;
+      ++lineNumber;
+      const size_t first = line.find_first_not_of(" \t\r");
+      if (first == std::string::npos || line[first] == '#') continue;
+      const std::string keyword = line.substr(first, line.find_first_of(" \t\r", first) - first);
+      if (keyword == "newmtl") return "";
+      return std::string(file) + ":" + std::to_string(lineNumber) + ": '" + keyword +
+             "' comes before any 'newmtl'; expected every MTL statement inside a material";
+    }
+    return "";
   }
 };
 
@@ -347,17 +382,25 @@ struct Loader {
     for (size_t c = first; c < m.positions.size(); ++c)
       facesAt[Key{m.positions[c]}].push_back(uint32_t((c - first) / 3));
     const float cosCrease = std::cos(glm::radians(kCreaseAngleDegrees));
+    // The face normals are twice the areas, up to ~|v|^2 (1e36 near kMaxMeshCoordinate): a mesh
+    // that large sums them relative to the largest, so the area weights cannot overflow float
+    // (any other sums them as they are).
+    float faceScale = 0.0f;
+    for (const glm::vec3& f : faceNormals)
+      faceScale = std::max({faceScale, std::abs(f.x), std::abs(f.y), std::abs(f.z)});
+    if (faceScale < 1e30f) faceScale = 1.0f;
     for (size_t c = first; c < m.positions.size(); ++c) {
       glm::vec3& n = m.normals[c];
-      if (finite(n) && glm::length(n) > 0.0f) {
-        n = glm::normalize(n);
+      const glm::vec3 fileNormal = directionOr(n, glm::vec3(0.0f));
+      if (fileNormal != glm::vec3(0.0f)) {
+        n = fileNormal;
         continue;
       }
-      const glm::vec3 own = glm::normalize(faceNormals[(c - first) / 3]);
+      const glm::vec3 own = directionOr(faceNormals[(c - first) / 3], glm::vec3(0, 1, 0));
       glm::vec3 sum(0.0f);
       for (uint32_t f : facesAt[Key{m.positions[c]}])
-        if (glm::dot(glm::normalize(faceNormals[f]), own) >= cosCrease) sum += faceNormals[f];
-      n = glm::length(sum) > 0.0f ? glm::normalize(sum) : own;
+        if (glm::dot(directionOr(faceNormals[f], own), own) >= cosCrease) sum += faceNormals[f] / faceScale;
+      n = directionOr(sum, own);
     }
   }
 
@@ -456,6 +499,29 @@ T keyAt(const std::vector<std::pair<float, T>>& keys, float t, Mix mix) {
   return keys.back().second;
 }
 
+// The matrix of every node that carries triangles, at time 0 and at every key, is finite: a
+// transform given as 1e39 (Inf in float), or scales that overflow down the hierarchy, would place
+// the triangles at infinity and they would vanish from the render.
+void requireFiniteNodeMatrices(const std::string& path, const AssetData& asset) {
+  const std::set<uint32_t> placed(asset.mesh.vertexNodes.begin(), asset.mesh.vertexNodes.end());
+  std::set<float> times = {0.0f};
+  for (const AssetNode& n : asset.nodes) {
+    for (const auto& [time, v] : n.translation) times.insert(time);
+    for (const auto& [time, v] : n.scale) times.insert(time);
+    for (const auto& [time, q] : n.rotation) times.insert(time);
+  }
+  for (float t : times) {
+    const std::vector<glm::mat4> matrices = asset.nodeMatrices(t);
+    for (uint32_t i : placed)
+      for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r)
+          if (!std::isfinite(matrices[i][c][r]))
+            throw Error(path + ": node '" + asset.nodes[i].name + "' has a non-finite transform at asset time " +
+                        std::to_string(t) + " s (a value beyond float range, or scales that overflow down " +
+                        "the hierarchy); its triangles would vanish from the render");
+  }
+}
+
 }  // namespace
 
 std::vector<glm::mat4> AssetData::nodeMatrices(float seconds) const {
@@ -521,6 +587,7 @@ AssetData loadAsset(const std::string& path, const AssetRef& ref) {
   if (out.materials.empty()) out.materials.push_back(Material{});
   loader.addNode(*scene->mRootNode, -1);
   loader.addAnimation();
+  requireFiniteNodeMatrices(path, out);
   out.stats.triangles = out.mesh.triangles.size();
   if (out.stats.degenerateTriangles > 0)
     loader.warnings.add("degenerate triangles (zero area or repeated vertices) dropped",

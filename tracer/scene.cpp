@@ -14,6 +14,7 @@
 #include "core/hash.hpp"
 #include "core/json_reader.hpp"
 #include "tracer/asset.hpp"
+#include "tracer/scene_state.hpp"
 
 namespace arena {
 
@@ -363,6 +364,9 @@ Scene parseScene(const std::string& text, const std::string& path) {
           // A regular file of bounded size (not /dev/zero).
           const std::string mesh = readText(obj.meshFile, kMaxMeshBytes);
           requireUsableObjVertices(mesh, obj.meshFile);
+          // The loader the renderer uses, now: a face it cannot read (an index out of range, a
+          // malformed "f" line) is this field's error, not a failure at the first frame.
+          makeMesh(Shape::Mesh, obj.meshFile);
           hasher.add(mesh);
         } catch (const Error& e) {
           o.fail("file", e.what());

@@ -41,14 +41,15 @@ MeshData loadObj(const std::string& file) {
           throw Error(file + ": face " + std::to_string(f / 3) + " references a missing vertex");
         p[k] = {attrib.vertices[3 * vi], attrib.vertices[3 * vi + 1], attrib.vertices[3 * vi + 2]};
       }
-      glm::vec3 fn = glm::cross(p[1] - p[0], p[2] - p[0]);
-      fn = glm::length(fn) > 0 ? glm::normalize(fn) : glm::vec3(0, 1, 0);
+      const glm::vec3 fn = directionOr(glm::cross(p[1] - p[0], p[2] - p[0]), glm::vec3(0, 1, 0));
       unsigned base = unsigned(m.positions.size());
       for (int k = 0; k < 3; ++k) {
         int ni = idx[f + k].normal_index;
         glm::vec3 n = fn;
+        // A zero or non-finite normal ("vn 0 0 0", "vn 1e39 0 0") has no direction: the face's
+        // normal is used, as for a corner without one.
         if (ni >= 0 && size_t(3 * ni + 2) < attrib.normals.size())
-          n = glm::normalize(glm::vec3(attrib.normals[3 * ni], attrib.normals[3 * ni + 1], attrib.normals[3 * ni + 2]));
+          n = directionOr({attrib.normals[3 * ni], attrib.normals[3 * ni + 1], attrib.normals[3 * ni + 2]}, fn);
         m.positions.push_back(p[k]);
         m.normals.push_back(n);
       }

@@ -1,6 +1,8 @@
 #pragma once
 // A scene evaluated at one frame: camera, object-to-world matrices, light values. Two frames with
 // equal state hashes render identical images, so they share one reference.
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <vector>
@@ -9,6 +11,19 @@
 #include "tracer/scene.hpp"
 
 namespace arena {
+
+// v / |v|, or `fallback` when v has no direction (zero or not finite). glm::normalize squares v:
+// a file normal of 1e30 or the cross product of a triangle with corners near kMaxMeshCoordinate
+// overflows and becomes 0 or NaN, so such a v is scaled by its largest component first (ordinary
+// vectors take glm::normalize's bits unchanged).
+inline glm::vec3 directionOr(glm::vec3 v, glm::vec3 fallback) {
+  if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z)) return fallback;
+  const float squared = glm::dot(v, v);
+  if (std::isfinite(squared) && squared > 0.0f) return glm::normalize(v);
+  const float largest = std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+  if (!(largest > 0.0f)) return fallback;
+  return glm::normalize(v / largest);
+}
 
 // Local-space triangle mesh of a shape. Quads lie in the XZ plane ([-0.5, 0.5]^2, front +Y); boxes
 // are the unit cube centred at 0; spheres have radius 1 (smooth shading normals).
