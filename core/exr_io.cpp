@@ -125,4 +125,18 @@ ExrAttributes readExrAttributes(const fs::path& path) {
   }
 }
 
+ExrHeader readExrHeader(const fs::path& path) {
+  if (!fs::exists(path)) throw Error(path.string() + ": file does not exist");
+  try {
+    Imf::InputFile file(path.c_str(), 1);
+    const Imath::Box2i dw = file.header().dataWindow();
+    ExrHeader out{dw.max.x - dw.min.x + 1, dw.max.y - dw.min.y + 1, {}};
+    for (auto it = file.header().channels().begin(); it != file.header().channels().end(); ++it)
+      out.channels.push_back(it.name());
+    return out;
+  } catch (const std::exception& e) {
+    throw Error(path.string() + ": not a readable OpenEXR file (" + e.what() + ")");
+  }
+}
+
 }  // namespace arena

@@ -53,5 +53,11 @@ struct ExrContents {
 // an Error naming the file and the channel.
 ExrContents readExr(const std::filesystem::path& path, const std::vector<LayerSpec>& specs);
 ExrAttributes readExrAttributes(const std::filesystem::path& path);
+// The channel names a file holds ("diffuse.R", "R", ...), and its size, without reading pixels.
+struct ExrHeader {
+  int width = 0, height = 0;
+  std::vector<std::string> channels;
+};
+ExrHeader readExrHeader(const std::filesystem::path& path);
 
 }  // namespace arena

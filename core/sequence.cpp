@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "core/atomic_file.hpp"
+#include "core/capture.hpp"
 #include "core/error.hpp"
 #include "core/json_reader.hpp"
 
@@ -167,18 +168,39 @@ SequenceInfo SequenceInfo::fromJson(const json& j, const std::string& file) {
   }
 }
 
-static std::string numbered(const char* prefix, int n, int digits) {
+std::string numberedFileName(const char* prefix, int n, int digits) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%s_%0*d.exr", prefix, digits, n);
   return buf;
 }
 
-fs::path Sequence::framePath(const fs::path& dir, int t) { return dir / numbered("frame", t, 4); }
-fs::path Sequence::referencePath(const fs::path& dir, int r) { return dir / numbered("reference", r, 3); }
-fs::path Sequence::gradientPath(const fs::path& dir, int t) { return dir / numbered("gradients", t, 4); }
-fs::path Sequence::lowresPath(const fs::path& dir, int t) { return dir / numbered("lowres", t, 4); }
+fs::path Sequence::framePath(const fs::path& dir, int t) { return dir / numberedFileName("frame", t, 4); }
+fs::path Sequence::referencePath(const fs::path& dir, int r) { return dir / numberedFileName("reference", r, 3); }
+fs::path Sequence::gradientPath(const fs::path& dir, int t) { return dir / numberedFileName("gradients", t, 4); }
+fs::path Sequence::lowresPath(const fs::path& dir, int t) { return dir / numberedFileName("lowres", t, 4); }
+
+std::vector<std::string> SequenceInfo::availableLayers() const {
+  if (!layers.empty()) return layers;
+  std::vector<std::string> all;
+  for (const LayerSpec& spec : channels::frameLayers())
+    if (!spec.topLevel) all.push_back(spec.name);
+  return all;
+}
+
+const CaptureDescription& Sequence::capture() const {
+  if (!capture_) throw Error(dir_.string() + ": not a capture");
+  return *capture_;
+}
 
 Sequence Sequence::open(const fs::path& dir) {
+  if (arena::isCapture(dir)) {
+    Sequence s;
+    s.dir_ = dir;
+    auto description = std::make_shared<CaptureDescription>(readCaptureDescription(dir));
+    s.info_ = description->info;
+    s.capture_ = std::move(description);
+    return s;
+  }
   fs::path file = dir / "sequence.json";
   if (!fs::exists(file)) throw Error(dir.string() + ": not a rendered sequence (no sequence.json)");
   Sequence s;
@@ -188,16 +210,30 @@ Sequence Sequence::open(const fs::path& dir) {
 }
 
 LayerSet Sequence::frame(int t) const {
+  if (capture_) return readCaptureFrame(*capture_, t);
   if (t < 0 || t >= info_.frames) throw Error(dir_.string() + ": frame " + std::to_string(t) + " out of range");
   return readExr(framePath(dir_, t), channels::frameLayers()).layers;
 }
 
 LayerSet Sequence::reference(int t) const {
   if (t < 0 || t >= info_.frames) throw Error(dir_.string() + ": frame " + std::to_string(t) + " out of range");
+  if (capture_) return readCaptureReference(*capture_, info_.referenceOfFrame[size_t(t)]);
   return readExr(referencePath(dir_, info_.referenceOfFrame[t]), channels::referenceLayers()).layers;
 }
 
+LayerSet Sequence::referenceByIndex(int r) const {
+  if (!info_.hasReference) throw Error(dir_.string() + ": the capture has no reference");
+  if (capture_) return readCaptureReference(*capture_, r);
+  return readExr(referencePath(dir_, r), channels::referenceLayers()).layers;
+}
+
 LayerSet Sequence::gradients(int t) const {
+  if (!info_.hasGradients)
+    throw Error(dir_.string() + ": the capture has no gradient samples (A-SVGF's re-shaded samples; docs/captures.md)");
+  if (capture_) {
+    if (t < 1 || t >= info_.frames) throw Error(dir_.string() + ": gradient samples exist for frames 1.." + std::to_string(info_.frames - 1));
+    return readExr(captureGradientPath(dir_, t), channels::gradientLayers()).layers;
+  }
   if (t < 1 || t >= info_.frames)
     throw Error(dir_.string() + ": gradient samples exist for frames 1.." + std::to_string(info_.frames - 1));
   return readExr(gradientPath(dir_, t), channels::gradientLayers()).layers;

@@ -5,6 +5,7 @@
 // cameras). The channel layout is defined here once, for the writer (tracer) and the readers.
 #include <algorithm>
 #include <filesystem>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -70,6 +71,14 @@ struct SequenceInfo {
   // Paths per second of the low-resolution buffer's render, measured on the machine that rendered
   // it (0: unknown or no buffer). Timing metadata, not pixels: it is not part of the hash.
   double lowresPathsPerSecond = 0;
+  // "tracer" (this project's cache) or "capture" (core/capture.hpp). A capture gives only some
+  // frame layers (`layers`; empty means every frame layer) and no gradient samples.
+  std::string source = "tracer";
+  std::vector<std::string> layers;
+  bool hasGradients = true;
+  bool hasReference = true;  // false: a capture without one (rankings use no-reference metrics)
+  // The frame layers a denoiser may read from this sequence.
+  std::vector<std::string> availableLayers() const;
 
   // The low-resolution buffer's block size and samples per texel; 0 when the sequence has none.
   int lowresFactor() const { return settings.value("lowresFactor", 0); }
@@ -85,18 +94,26 @@ struct SequenceInfo {
 };
 
 nlohmann::json cameraToJson(const CameraState& c);
+// "frame_0007.exr": the numbered file names of sequences and captures (prefix, index, digits).
+std::string numberedFileName(const char* prefix, int n, int digits);
 CameraState cameraFromJson(const nlohmann::json& j);
+
+struct CaptureDescription;
 
 class Sequence {
  public:
-  // Opens a complete cached sequence; throws naming the directory when it is missing/incomplete.
+  // Opens a complete cached sequence, or a capture (a folder with capture.json, core/capture.hpp);
+  // throws naming the directory when it is missing/incomplete.
   static Sequence open(const std::filesystem::path& dir);
+  bool isCapture() const { return capture_ != nullptr; }
+  const CaptureDescription& capture() const;  // only when isCapture()
 
   const SequenceInfo& info() const { return info_; }
   const std::filesystem::path& dir() const { return dir_; }
 
   LayerSet frame(int t) const;
   LayerSet reference(int t) const;  // the reference of frame t
+  LayerSet referenceByIndex(int r) const;
   LayerSet gradients(int t) const;  // frame t >= 1
   LayerSet lowres(int t) const;     // only when info().lowresFactor() > 0
 
@@ -108,6 +125,7 @@ class Sequence {
  private:
   std::filesystem::path dir_;
   SequenceInfo info_;
+  std::shared_ptr<const CaptureDescription> capture_;
 };
 
 }  // namespace arena

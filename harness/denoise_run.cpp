@@ -72,6 +72,10 @@ std::string sanitizedWarning(const NonFiniteCounts& counts) {
          ") were replaced by 0 before the denoiser ran; its results may differ from those on clean inputs";
 }
 
+std::string capturedOutputName(const std::string& entry) {
+  return entry.rfind("file:", 0) == 0 ? entry.substr(5) : std::string();
+}
+
 DenoiseRun::DenoiseRun(const DenoiserRequest& request, const Sequence& sequence)
     : sequence_(sequence), request_(request), info_(DenoiserRegistry::instance().find(request.name)) {
   params_ = info_.schema.resolve(request.params, request.name);
@@ -91,17 +95,26 @@ DenoiseRun::DenoiseRun(const DenoiserRequest& request, const Sequence& sequence)
       if (std::find(readLayers_.begin(), readLayers_.end(), c) == readLayers_.end()) readLayers_.push_back(c);
   }
   std::vector<std::string> missing;
-  std::vector<std::string> known;
-  for (const LayerSpec& spec : channels::frameLayers()) known.push_back(spec.name);
-  for (const std::string& c : readLayers_)
-    if (std::find(known.begin(), known.end(), c) == known.end()) missing.push_back(c);
+  const std::vector<std::string> known = sequence.info().availableLayers();
+  std::vector<std::string> needed = readLayers_;
+  if (info_.signals == SignalMode::Demodulated)  // remodulation reads these
+    for (const char* c : {"albedo", "specAlbedo", "emission"}) needed.push_back(c);
+  for (const std::string& c : needed)
+    if (std::find(known.begin(), known.end(), c) == known.end() &&
+        std::find(missing.begin(), missing.end(), c) == missing.end())
+      missing.push_back(c);
   if (!missing.empty()) {
     std::string list;
     for (auto& m : missing) list += " '" + m + "'";
-    throw Error(request.name + " needs channel(s)" + list + " that sequence " + sequence.dir().string() +
-                " does not provide (re-render it with a tracer that writes them)");
+    throw Error(request.name + " needs channel(s)" + list + " that " + (sequence.isCapture() ? "capture " : "sequence ") +
+                sequence.dir().string() + " does not provide" +
+                (sequence.isCapture() ? " (docs/captures.md lists the layers and their meaning)"
+                                      : " (re-render it with a tracer that writes them)"));
   }
   needsGradients_ = first.needsGradients();
+  if (needsGradients_ && !sequence.info().hasGradients)
+    throw Error(request.name + " needs gradient samples ('gradient' layer: frame t re-shaded with frame t-1's random "
+                "numbers) that " + sequence.dir().string() + " does not provide");
   readsLowres_ = first.wantsLowres() && sequence.info().lowresFactor() > 0;
   for (auto& [kind, d] : instances_) d->setup(sequence.info().width, sequence.info().height);
 }

@@ -24,6 +24,9 @@ struct DenoiserRequest {
 // "svgf.sigmaL=4" style assignments, grouped by denoiser; unknown denoiser prefixes are errors.
 std::map<std::string, std::map<std::string, std::string>> parseParamAssignments(const std::vector<std::string>& items);
 std::string defaultLabel(const DenoiserRequest& r);
+// "file:NAME" -> "NAME": a contender whose output frames are stored in a capture (a denoiser that ran
+// elsewhere, docs/captures.md); "" for every other entry.
+std::string capturedOutputName(const std::string& entry);
 
 struct DenoisedFrame {
   int frame = 0;

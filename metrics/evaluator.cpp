@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <limits>
 #include <random>
 #include <set>
 
+#include "core/capture.hpp"
 #include "core/error.hpp"
 #include "core/exr_io.hpp"
 #include "core/hash.hpp"
@@ -108,18 +110,22 @@ EvaluationInput readSequenceForEvaluation(const Sequence& sequence) {
   in.referenceOfFrame = info.referenceOfFrame;
   in.referenceCapped = info.referenceCapped;
   in.events = info.events;
+  if (sequence.isCapture())
+    in.referenceNoiseKnown = sequence.capture().referenceHasVariance || sequence.capture().referenceHasHalf;
   for (int t = 0; t < info.frames; ++t) {
     in.frames.push_back(sequence.frame(t));
     countNonFinite(in.frames.back(), channels::frameLayers(), "frame " + std::to_string(t) + ": ", in.nonFinite);
-    if (t > 0)
+    if (t > 0 && info.hasGradients)
       countNonFinite(sequence.gradients(t), channels::gradientLayers(), "gradients " + std::to_string(t) + ": ",
                      in.nonFinite);
   }
   int refs = 0;
-  for (int r : info.referenceOfFrame) refs = std::max(refs, r + 1);
+  if (info.hasReference)
+    for (int r : info.referenceOfFrame) refs = std::max(refs, r + 1);
   for (int r = 0; r < refs; ++r) {
-    const std::filesystem::path file = Sequence::referencePath(sequence.dir(), r);
-    in.references.push_back(readExr(file, channels::referenceLayers()).layers);
+    const std::filesystem::path file = sequence.isCapture() ? captureReferencePath(sequence.dir(), r)
+                                                            : Sequence::referencePath(sequence.dir(), r);
+    in.references.push_back(sequence.referenceByIndex(r));
     NonFiniteCounts bad;
     countNonFinite(in.references.back(), channels::referenceLayers(), file.string() + ": ", bad);
     // A non-finite reference cannot rank anything: every metric against it would be NaN or a
@@ -149,7 +155,8 @@ EvaluationScene::EvaluationScene(EvaluationInput input, EvaluationOptions option
       referenceDisplay_.push_back(displays_[r].apply(*referenceColors[r]));
     for (int t = 0; t < frames(); ++t) {
       const LayerSet& ref = reference(t);
-      referenceRelMse_.push_back(arena::referenceRelMse(ref.get("color"), ref.get("colorVar")));
+      referenceRelMse_.push_back(input_.referenceNoiseKnown ? arena::referenceRelMse(ref.get("color"), ref.get("colorVar"))
+                                                            : std::numeric_limits<double>::quiet_NaN());
       noisyRelMse_.push_back(
           linearError(frame(t).get("color"), ref.get("color"), &ref.get("colorVar")).relMse);
     }
@@ -162,7 +169,7 @@ EvaluationScene::EvaluationScene(EvaluationInput input, EvaluationOptions option
   for (const SequenceEvent& e : input_.events)
     if (e.kind == EventKind::CameraCut && e.frame >= 1) cutFrames_.push_back(e.frame);
   buildEventWindows();
-  if (hasReference()) computeFloors();
+  if (hasReference() && input_.referenceNoiseKnown) computeFloors();
 }
 
 void EvaluationScene::buildEventWindows() {

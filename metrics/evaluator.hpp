@@ -40,6 +40,10 @@ struct EvaluationInput {
   std::vector<LayerSet> references;   // per distinct reference (color, colorVar, colorHalf?); empty: none
   std::vector<int> referenceOfFrame;  // frame -> reference index (ignored without references)
   std::vector<bool> referenceCapped;  // per reference: stopped at its sample cap above its target
+  // false: the references carry no variance and no independent half (a capture's may not), so
+  // their noise floor is unknown: referenceRelMse is NaN (null), no metric floors, and
+  // relMseCorrected subtracts nothing.
+  bool referenceNoiseKnown = true;
   std::vector<SequenceEvent> events;
   // Non-finite values in the inputs, per "file kind: layer.channel" (reported, never silent).
   std::map<std::string, long> nonFinite;

@@ -1,0 +1,522 @@
+#include "core/capture.hpp"
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+
+#include "core/atomic_file.hpp"
+#include "core/error.hpp"
+#include "core/json_reader.hpp"
+
+namespace arena {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+// The frame layers a capture may carry (every frame layer except the viewer-facing R,G,B copy).
+std::vector<LayerSpec> captureFrameSpecs() {
+  std::vector<LayerSpec> out;
+  for (const LayerSpec& s : channels::frameLayers())
+    if (!s.topLevel) out.push_back(s);
+  return out;
+}
+
+const LayerSpec& frameSpec(const std::string& name) {
+  for (const LayerSpec& s : channels::frameLayers())
+    if (s.name == name && !s.topLevel) return s;
+  throw Error("internal: no frame layer '" + name + "'");
+}
+
+bool contains(const std::vector<std::string>& v, const std::string& s) {
+  return std::find(v.begin(), v.end(), s) != v.end();
+}
+
+// The layers of `specs` a file holds completely; a layer with some of its channels is an error
+// naming the missing ones (a half-written layer is an integration bug, never silently dropped).
+std::vector<LayerSpec> layersPresent(const fs::path& file, const ExrHeader& header, const std::vector<LayerSpec>& specs) {
+  std::vector<LayerSpec> present;
+  for (const LayerSpec& spec : specs) {
+    std::vector<std::string> missing;
+    for (int c = 0; c < spec.channels(); ++c)
+      if (!contains(header.channels, spec.channelName(c))) missing.push_back(spec.channelName(c));
+    if (missing.empty()) {
+      present.push_back(spec);
+    } else if (int(missing.size()) != spec.channels()) {
+      std::string list;
+      for (const std::string& m : missing) list += (list.empty() ? "'" : ", '") + m + "'";
+      throw Error(file.string() + ": layer '" + spec.name + "' lacks channel(s) " + list +
+                  " (a layer is given with all its channels or not at all; docs/captures.md)");
+    }
+  }
+  return present;
+}
+
+const std::vector<LayerSpec>& referenceSpecs() {
+  static const std::vector<LayerSpec> specs = {{"color", {"R", "G", "B"}, false},
+                                               {"colorVar", {"R", "G", "B"}, false},
+                                               {"colorHalf", {"R", "G", "B"}, false}};
+  return specs;
+}
+
+}  // namespace
+
+// The same names as the cache's (core/sequence.cpp): a capture folder reads like a sequence folder.
+fs::path captureFramePath(const fs::path& dir, int t) { return Sequence::framePath(dir, t); }
+fs::path captureReferencePath(const fs::path& dir, int r) { return Sequence::referencePath(dir, r); }
+fs::path captureGradientPath(const fs::path& dir, int t) { return Sequence::gradientPath(dir, t); }
+fs::path captureOutputPath(const CaptureOutput& output, int t) { return output.dir / numberedFileName("frame", t, 4); }
+
+bool isCapture(const fs::path& dir) { return fs::exists(dir / "capture.json"); }
+
+const CaptureOutput& CaptureDescription::output(const std::string& name) const {
+  auto it = outputs.find(name);
+  if (it != outputs.end()) return it->second;
+  std::string list;
+  for (const auto& [n, o] : outputs) list += (list.empty() ? "" : ", ") + n;
+  throw Error((dir / "capture.json").string() + ": no denoiser output '" + name + "' (outputs: " +
+              (list.empty() ? "none" : list) + ")");
+}
+
+CameraState cameraFromMatrices(const std::vector<double>& view, const std::vector<double>& projection,
+                               const std::vector<double>* position, int width, int height, const std::string& where) {
+  // Column-major: element (row r, column c) is m[c * 4 + r].
+  auto at = [](const std::vector<double>& m, int row, int col) { return m[size_t(col * 4 + row)]; };
+  for (double v : view)
+    if (!std::isfinite(v)) throw Error(where + ".view: a non-finite element");
+  for (double v : projection)
+    if (!std::isfinite(v)) throw Error(where + ".projection: a non-finite element");
+  CameraState c;
+  c.right = glm::vec3(float(at(view, 0, 0)), float(at(view, 0, 1)), float(at(view, 0, 2)));
+  c.up = glm::vec3(float(at(view, 1, 0)), float(at(view, 1, 1)), float(at(view, 1, 2)));
+  c.forward = -glm::vec3(float(at(view, 2, 0)), float(at(view, 2, 1)), float(at(view, 2, 2)));
+  // The rotation part must be orthonormal (a view matrix with scale or shear is not a camera).
+  const glm::dvec3 r(at(view, 0, 0), at(view, 0, 1), at(view, 0, 2)), u(at(view, 1, 0), at(view, 1, 1), at(view, 1, 2)),
+      b(at(view, 2, 0), at(view, 2, 1), at(view, 2, 2));
+  const double err = std::max({std::abs(glm::length(r) - 1), std::abs(glm::length(u) - 1), std::abs(glm::length(b) - 1),
+                               std::abs(glm::dot(r, u)), std::abs(glm::dot(r, b)), std::abs(glm::dot(u, b))});
+  if (err > 1e-3)
+    throw Error(where + ".view: the rotation is not orthonormal (deviation " + std::to_string(err) +
+                "); expected a world-to-camera matrix without scale (docs/captures.md)");
+  if (std::abs(at(view, 3, 0)) + std::abs(at(view, 3, 1)) + std::abs(at(view, 3, 2)) > 1e-6 ||
+      std::abs(at(view, 3, 3) - 1) > 1e-6)
+    throw Error(where + ".view: the last row must be (0, 0, 0, 1)");
+  const glm::dvec3 t(at(view, 0, 3), at(view, 1, 3), at(view, 2, 3));
+  const glm::dvec3 eye = -(r * t.x + u * t.y + b * t.z);
+  if (position) {
+    const glm::dvec3 p((*position)[0], (*position)[1], (*position)[2]);
+    if (glm::length(p - eye) > 1e-3 * std::max(1.0, glm::length(eye)))
+      throw Error(where + ".position: (" + std::to_string(p.x) + ", " + std::to_string(p.y) + ", " +
+                  std::to_string(p.z) + ") disagrees with the view matrix's eye (" + std::to_string(eye.x) + ", " +
+                  std::to_string(eye.y) + ", " + std::to_string(eye.z) + ")");
+    c.eye = glm::vec3(float(p.x), float(p.y), float(p.z));
+  } else {
+    c.eye = glm::vec3(eye);
+  }
+  // A symmetric perspective projection: P(1,1) = 1 / tan(fovY / 2), P(0,0) = P(1,1) / aspect.
+  const double p00 = at(projection, 0, 0), p11 = at(projection, 1, 1);
+  if (!(p11 > 0) || !(p00 > 0))
+    throw Error(where + ".projection: expected a perspective projection with positive P[0][0] and P[1][1], got " +
+                std::to_string(p00) + " and " + std::to_string(p11));
+  if (std::abs(at(projection, 0, 2)) > 1e-6 || std::abs(at(projection, 1, 2)) > 1e-6)
+    throw Error(where + ".projection: off-centre (P[0][2] = " + std::to_string(at(projection, 0, 2)) +
+                ", P[1][2] = " + std::to_string(at(projection, 1, 2)) +
+                "); give the unjittered projection and the sub-pixel offset in \"jitter\"");
+  if (std::abs(at(projection, 3, 2) + 1) > 1e-6)
+    throw Error(where + ".projection: P[3][2] = " + std::to_string(at(projection, 3, 2)) +
+                ", expected -1 (a camera looking down -Z, OpenGL clip space)");
+  const double aspect = p11 / p00, pixels = double(width) / double(height);
+  if (std::abs(aspect / pixels - 1) > 1e-3)
+    throw Error(where + ".projection: aspect " + std::to_string(aspect) + " differs from width / height " +
+                std::to_string(pixels) + " (square pixels expected)");
+  c.tanHalfFovY = float(1.0 / p11);
+  c.width = width;
+  c.height = height;
+  c.aspect = float(width) / float(height);
+  return c;
+}
+
+json captureCameraJson(const CameraState& c) {
+  // Rows of the view matrix: right, up, -forward; translation -axis . eye (in double).
+  const glm::dvec3 eye(c.eye), axes[3] = {glm::dvec3(c.right), glm::dvec3(c.up), -glm::dvec3(c.forward)};
+  double view[16] = {};
+  for (int row = 0; row < 3; ++row) {
+    for (int col = 0; col < 3; ++col) view[col * 4 + row] = axes[row][col];
+    view[3 * 4 + row] = -glm::dot(axes[row], eye);
+  }
+  view[15] = 1;
+  const double n = 0.01, f = 1000.0, tanHalf = double(c.tanHalfFovY), aspect = double(c.aspect);
+  double proj[16] = {};
+  proj[0] = 1.0 / (aspect * tanHalf);
+  proj[5] = 1.0 / tanHalf;
+  proj[10] = -(f + n) / (f - n);
+  proj[11] = -1;
+  proj[14] = -2 * f * n / (f - n);
+  return {{"view", std::vector<double>(view, view + 16)},
+          {"projection", std::vector<double>(proj, proj + 16)},
+          {"position", {double(c.eye.x), double(c.eye.y), double(c.eye.z)}}};
+}
+
+CaptureDescription readCaptureDescription(const fs::path& dir) {
+  const fs::path file = dir / "capture.json";
+  if (!fs::exists(file)) throw Error(dir.string() + ": not a capture (no capture.json; docs/captures.md)");
+  const json doc = parseJsonFile(file.string());
+  JsonReader root(doc, file.string());
+  CaptureDescription c;
+  c.dir = dir;
+  const std::string format = root.string("format");
+  if (format != kCaptureFormatName)
+    throw Error(file.string() + ": format '" + format + "', expected '" + kCaptureFormatName + "'");
+  const int version = root.integer("version");
+  if (version != kCaptureFormatVersion)
+    throw Error(file.string() + ": capture format version " + std::to_string(version) + ", this arena reads version " +
+                std::to_string(kCaptureFormatVersion));
+  SequenceInfo& info = c.info;
+  info.scene = root.string("name");
+  if (info.scene.empty() || info.scene.find_first_of("/\\ \t") != std::string::npos)
+    throw Error(file.string() + ": name '" + info.scene + "': expected a non-empty name without spaces or slashes");
+  info.purpose = root.string("purpose", "capture");
+  info.width = root.integerIn("width", 1, 16384);
+  info.height = root.integerIn("height", 1, 16384);
+  info.frames = root.integerIn("frames", 1, 100000);
+  info.source = "capture";
+  const int n = info.frames;
+  if (root.has("deltaTime")) {
+    std::vector<double> dt = root.numbers("deltaTime", size_t(n));
+    for (size_t t = 0; t < dt.size(); ++t)
+      if (!(dt[t] > 0)) throw Error(file.string() + ": deltaTime[" + std::to_string(t) + "] must be positive");
+    c.deltaTime = dt;
+    if (root.has("frameRate")) root.fail("frameRate", "either frameRate or deltaTime, not both");
+  } else {
+    const double rate = root.number("frameRate");
+    if (!(rate > 0) || !std::isfinite(rate)) root.fail("frameRate", "a positive number of frames per second");
+    c.deltaTime.assign(size_t(n), 1.0 / rate);
+  }
+  c.exposure = root.number("exposure", 1.0);
+  c.reverseZ = root.boolean("reverseZ", false);
+  c.nearPlane = root.number("near", 0.01);
+  c.farPlane = root.number("far", 1000.0);
+  c.units = root.string("units", "m");
+  if (auto source = root.optionalChild("source")) c.source = source->node();
+
+  std::vector<JsonReader> cameras = root.requiredArray("cameras");
+  if (int(cameras.size()) != n)
+    throw Error(file.string() + ": cameras has " + std::to_string(cameras.size()) + " entries, expected one per frame (" +
+                std::to_string(n) + ")");
+  for (int t = 0; t < n; ++t) {
+    JsonReader& cam = cameras[size_t(t)];
+    const std::vector<double> view = cam.numbers("view", 16), proj = cam.numbers("projection", 16);
+    std::optional<std::vector<double>> position;
+    if (cam.has("position")) position = cam.numbers("position", 3);
+    std::array<double, 2> jitter = {0, 0};
+    if (cam.has("jitter")) {
+      const std::vector<double> j = cam.numbers("jitter", 2);
+      if (std::abs(j[0]) > 1 || std::abs(j[1]) > 1) cam.fail("jitter", "a sub-pixel offset in pixels, |x|, |y| <= 1");
+      jitter = {j[0], j[1]};
+    }
+    cam.rejectUnread();
+    info.cameras.push_back(cameraFromMatrices(view, proj, position ? &*position : nullptr, info.width, info.height,
+                                              file.string() + ": cameras[" + std::to_string(t) + "]"));
+    c.jitter.push_back(jitter);
+  }
+  for (JsonReader& e : root.optionalArray("events")) {
+    const int frame = e.integerIn("frame", 0, n - 1);
+    const std::string kind = e.string("kind");
+    const std::optional<EventKind> k = eventKindFromName(kind);
+    if (!k) e.fail("kind", "one of " + eventKindNames());
+    info.events.push_back({frame, *k, e.string("what", ""), e.integer("meshId", -1)});
+    e.rejectUnread();
+  }
+  // References: reference_NNN.exr, shared by the frames that name them.
+  if (auto ref = root.optionalChild("reference")) {
+    info.referenceOfFrame.clear();
+    const std::vector<double> ofFrame = ref->numbers("ofFrame", size_t(n));  // one per frame
+    int count = 0;
+    for (size_t t = 0; t < ofFrame.size(); ++t) {
+      if (ofFrame[t] != std::floor(ofFrame[t]) || ofFrame[t] < 0 || ofFrame[t] > 100000)
+        throw Error(file.string() + ": reference.ofFrame[" + std::to_string(t) + "]: expected a reference index >= 0");
+      info.referenceOfFrame.push_back(int(ofFrame[t]));
+      count = std::max(count, info.referenceOfFrame.back() + 1);
+    }
+    if (ref->has("samples")) {
+      const std::vector<double> spp = ref->numbers("samples", size_t(count));
+      for (double s : spp) info.referenceSpp.push_back(int(s));
+    } else {
+      info.referenceSpp.assign(size_t(count), 0);
+    }
+    ref->rejectUnread();
+    info.referenceEstimatedRelMse.assign(size_t(count), 0.0);
+    info.referenceCapped.assign(size_t(count), false);
+    bool allVar = true, allHalf = true;
+    for (int r = 0; r < count; ++r) {
+      const fs::path rf = captureReferencePath(dir, r);
+      const ExrHeader h = readExrHeader(rf);
+      if (h.width != info.width || h.height != info.height)
+        throw Error(rf.string() + ": " + std::to_string(h.width) + "x" + std::to_string(h.height) + ", expected " +
+                    std::to_string(info.width) + "x" + std::to_string(info.height));
+      const std::vector<LayerSpec> present = layersPresent(rf, h, referenceSpecs());
+      auto has = [&](const char* name) {
+        return std::any_of(present.begin(), present.end(), [&](const LayerSpec& s) { return s.name == name; });
+      };
+      if (!has("color")) throw Error(rf.string() + ": missing channel 'color.R' (the reference's colour)");
+      allVar = allVar && has("colorVar");
+      allHalf = allHalf && has("colorHalf");
+    }
+    c.referenceHasVariance = allVar;
+    c.referenceHasHalf = allHalf;
+  } else {
+    info.hasReference = false;
+    info.referenceOfFrame.assign(size_t(n), 0);  // unused: the capture has no reference
+  }
+  // Denoisers that ran elsewhere.
+  if (auto outputs = root.optionalChild("outputs")) {
+    for (const std::string& name : outputs->memberNames()) {
+      JsonReader o = outputs->child(name);
+      CaptureOutput out;
+      out.name = name;
+      out.dir = dir / "outputs" / name;
+      if (o.has("milliseconds")) {
+        out.milliseconds = o.numbers("milliseconds", size_t(n));
+        for (size_t t = 0; t < out.milliseconds.size(); ++t)
+          if (!(out.milliseconds[t] >= 0) || !std::isfinite(out.milliseconds[t]))
+            throw Error(file.string() + ": outputs." + name + ".milliseconds[" + std::to_string(t) +
+                        "]: expected a finite time >= 0");
+        out.device = o.string("device");
+      } else {
+        out.device = o.string("device", "");
+      }
+      o.rejectUnread();
+      if (!fs::is_directory(out.dir))
+        throw Error(file.string() + ": outputs." + name + ": folder " + out.dir.string() + " does not exist");
+      c.outputs[name] = out;
+    }
+  }
+  root.rejectUnread();
+
+  // The layers: every frame holds the same set (checked on each read), taken from frame 0.
+  const fs::path first = captureFramePath(dir, 0);
+  const ExrHeader h = readExrHeader(first);
+  if (h.width != info.width || h.height != info.height)
+    throw Error(first.string() + ": " + std::to_string(h.width) + "x" + std::to_string(h.height) + ", expected " +
+                std::to_string(info.width) + "x" + std::to_string(info.height) + " (capture.json)");
+  for (const LayerSpec& s : layersPresent(first, h, captureFrameSpecs())) c.layers.push_back(s.name);
+  for (const char* required : {"normal", "depth", "motion"})
+    if (!contains(c.layers, required))
+      throw Error(first.string() + ": missing layer '" + std::string(required) + "' (" + frameSpec(required).channelName(0) +
+                  "...): normals, view depth and motion are required (docs/captures.md)");
+  const bool parts = contains(c.layers, "diffuse") && contains(c.layers, "specular") && contains(c.layers, "albedo") &&
+                     contains(c.layers, "specAlbedo");
+  if (!contains(c.layers, "color") && !parts)
+    throw Error(first.string() + ": no colour: give 'color' (color.R/G/B) or the demodulated 'diffuse' and "
+                "'specular' with 'albedo' and 'specAlbedo' (docs/captures.md)");
+  // Gradient samples: all frames 1.. or none.
+  info.hasGradients = info.frames > 1 && fs::exists(captureGradientPath(dir, 1));
+  for (int t = 1; t < info.frames && info.hasGradients; ++t)
+    if (!fs::exists(captureGradientPath(dir, t)))
+      throw Error(captureGradientPath(dir, t).string() + ": missing (gradients_0001.exr exists, so every frame "
+                  "from 1 needs its gradient samples)");
+  if (!contains(c.layers, "color")) c.derived.push_back("color");
+  if (parts && !contains(c.layers, "emission")) c.derived.push_back("emission");
+  if (!contains(c.layers, "position")) c.derived.push_back("position");
+  if (!contains(c.layers, "meshId")) c.derived.push_back("meshId");
+  // What a denoiser may read: the layers given, plus those derived exactly (colour, position, a
+  // zero emission when the parts are given); never the filled-in meshId.
+  for (const std::string& d : c.derived)
+    if (d != "meshId") c.layers.push_back(d);
+  info.layers = c.layers;
+  // The identity of the capture: its description and the size of every file it names.
+  std::ifstream in(file, std::ios::binary);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  uint64_t hash = 1469598103934665603ull;
+  auto mix = [&](const std::string& s) {
+    for (unsigned char ch : s) hash = (hash ^ ch) * 1099511628211ull;
+  };
+  mix(text);
+  for (int t = 0; t < n; ++t) {
+    const fs::path f = captureFramePath(dir, t);
+    if (!fs::exists(f)) throw Error(f.string() + ": frame " + std::to_string(t) + " of " + std::to_string(n) + " is missing");
+    mix(std::to_string(fs::file_size(f)));
+  }
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(hash));
+  info.hash = std::string(buf).substr(0, 12);
+  info.settings = {{"source", "capture"}, {"captureFormat", kCaptureFormatVersion}, {"capture", c.source}};
+  return c;
+}
+
+LayerSet readCaptureFrame(const CaptureDescription& c, int t) {
+  const SequenceInfo& info = c.info;
+  if (t < 0 || t >= info.frames) throw Error(c.dir.string() + ": frame " + std::to_string(t) + " out of range");
+  const fs::path file = captureFramePath(c.dir, t);
+  const ExrHeader h = readExrHeader(file);
+  if (h.width != info.width || h.height != info.height)
+    throw Error(file.string() + ": " + std::to_string(h.width) + "x" + std::to_string(h.height) + ", expected " +
+                std::to_string(info.width) + "x" + std::to_string(info.height));
+  std::vector<LayerSpec> specs;
+  for (const LayerSpec& s : captureFrameSpecs())
+    if (contains(c.layers, s.name) && !contains(c.derived, s.name)) specs.push_back(s);
+  // readExr names the file and channel when a frame lacks a layer the first frame had.
+  LayerSet layers = readExr(file, specs).layers;
+  const int w = info.width, hgt = info.height;
+  const size_t pixels = size_t(w) * size_t(hgt);
+  if (contains(c.derived, "emission")) layers.set("emission", Image(w, hgt, 3));
+  if (contains(c.derived, "color")) {
+    Image color(w, hgt, 3);
+    const Image &a = layers.get("albedo"), &d = layers.get("diffuse"), &sa = layers.get("specAlbedo"),
+                &s = layers.get("specular"), &e = layers.get("emission");
+    for (size_t i = 0; i < pixels * 3; ++i) color.raw()[i] = a.raw()[i] * d.raw()[i] + sa.raw()[i] * s.raw()[i] + e.raw()[i];
+    layers.set("color", std::move(color));
+  }
+  if (contains(c.derived, "position")) {
+    // The surface at the pixel centre: eye + dir * depth / (dir . forward); 0 where depth is 0 (sky).
+    const CameraState& cam = info.cameras[size_t(t)];
+    const Image& depth = layers.get("depth");
+    Image position(w, hgt, 3);
+    for (int y = 0; y < hgt; ++y)
+      for (int x = 0; x < w; ++x) {
+        const float z = depth.at(x, y);
+        if (!(z > 0)) continue;
+        const glm::vec3 dir = cam.rayDirection(float(x) + 0.5f, float(y) + 0.5f);
+        const glm::vec3 p = cam.eye + dir * (z / glm::dot(dir, cam.forward));
+        for (int k = 0; k < 3; ++k) position.at(x, y, k) = p[k];
+      }
+    layers.set("position", std::move(position));
+  }
+  if (contains(c.derived, "meshId")) layers.set("meshId", Image(w, hgt, 1));
+  return layers;
+}
+
+LayerSet readCaptureReference(const CaptureDescription& c, int r) {
+  const fs::path file = captureReferencePath(c.dir, r);
+  std::vector<LayerSpec> specs = {referenceSpecs()[0]};
+  if (c.referenceHasVariance) specs.push_back(referenceSpecs()[1]);
+  if (c.referenceHasHalf) specs.push_back(referenceSpecs()[2]);
+  LayerSet layers = readExr(file, specs).layers;
+  if (layers.width() != c.info.width || layers.height() != c.info.height)
+    throw Error(file.string() + ": size differs from the capture's " + std::to_string(c.info.width) + "x" +
+                std::to_string(c.info.height));
+  if (!c.referenceHasVariance) {
+    // With an independent half, (mean - half)^2 is an unbiased one-sample estimate of the mean's
+    // variance (mean - half = (other half - half) / 2); with neither, zeros and an unknown floor.
+    Image var(c.info.width, c.info.height, 3);
+    if (c.referenceHasHalf) {
+      const Image &m = layers.get("color"), &h = layers.get("colorHalf");
+      for (size_t i = 0; i < var.raw().size(); ++i) var.raw()[i] = (m.raw()[i] - h.raw()[i]) * (m.raw()[i] - h.raw()[i]);
+    }
+    layers.set("colorVar", std::move(var));
+  }
+  return layers;
+}
+
+Image readCaptureOutput(const CaptureDescription& c, const std::string& name, int t) {
+  const CaptureOutput& o = c.output(name);
+  const fs::path file = captureOutputPath(o, t);
+  LayerSet layers = readExr(file, {{"color", {"R", "G", "B"}, false}}).layers;
+  if (layers.width() != c.info.width || layers.height() != c.info.height)
+    throw Error(file.string() + ": " + std::to_string(layers.width()) + "x" + std::to_string(layers.height()) +
+                ", expected " + std::to_string(c.info.width) + "x" + std::to_string(c.info.height));
+  return std::move(layers.get("color"));
+}
+
+CaptureWriter::CaptureWriter(fs::path out) : out_(std::move(out)) {
+  if (fs::exists(out_)) throw Error(out_.string() + ": already exists; a capture is written to a new folder");
+  if (!out_.parent_path().empty()) fs::create_directories(out_.parent_path());
+  tmp_ = temporaryPathFor(out_);
+  fs::create_directories(tmp_);
+}
+
+CaptureWriter::~CaptureWriter() {
+  if (committed_) return;
+  std::error_code ec;
+  fs::remove_all(tmp_, ec);
+}
+
+void CaptureWriter::frame(int t, const LayerSet& layers) {
+  std::vector<LayerSpec> specs;
+  for (const LayerSpec& s : captureFrameSpecs())
+    if (layers.has(s.name)) specs.push_back(s);
+  if (layers.has("color")) specs.push_back({"color", {"R", "G", "B"}, false, true});  // for any EXR viewer
+  writeExr(captureFramePath(tmp_, t), layers, specs, {{"arena.capture.frame", std::to_string(t)}});
+}
+
+void CaptureWriter::reference(int r, const LayerSet& layers) {
+  std::vector<LayerSpec> specs;
+  for (const LayerSpec& s : referenceSpecs())
+    if (layers.has(s.name)) specs.push_back(s);
+  writeExr(captureReferencePath(tmp_, r), layers, specs);
+}
+
+void CaptureWriter::gradients(int t, const LayerSet& layers) {
+  writeExr(captureGradientPath(tmp_, t), layers, channels::gradientLayers());
+}
+
+void CaptureWriter::output(const std::string& name, int t, const Image& color) {
+  const CaptureOutput o{name, tmp_ / "outputs" / name, {}, ""};
+  fs::create_directories(o.dir);
+  LayerSet l;
+  l.set("color", color);
+  writeExr(captureOutputPath(o, t), l, {{"color", {"R", "G", "B"}, false}});
+}
+
+void CaptureWriter::commit(const json& description) {
+  writeAtomically(tmp_ / "capture.json", [&](const fs::path& p) {
+    std::ofstream f(p);
+    f << description.dump(1) << "\n";
+    if (!f) throw Error(p.string() + ": could not write");
+  });
+  fs::rename(tmp_, out_);
+  committed_ = true;
+}
+
+void exportCapture(const Sequence& sequence, const fs::path& out, const std::map<std::string, fs::path>& outputs) {
+  const SequenceInfo& info = sequence.info();
+  if (sequence.isCapture()) throw Error(sequence.dir().string() + ": already a capture");
+  CaptureWriter writer(out);
+  json cameras = json::array();
+  for (const CameraState& cam : info.cameras) cameras.push_back(captureCameraJson(cam));
+  json events = json::array();
+  for (const SequenceEvent& e : info.events) {
+    json ev = {{"frame", e.frame}, {"kind", eventKindName(e.kind)}, {"what", e.what}};
+    if (e.meshId >= 0) ev["meshId"] = e.meshId;
+    events.push_back(ev);
+  }
+  for (int t = 0; t < info.frames; ++t) {
+    writer.frame(t, sequence.frame(t));
+    if (t > 0 && info.hasGradients) writer.gradients(t, sequence.gradients(t));
+  }
+  int refs = 0;
+  for (int r : info.referenceOfFrame) refs = std::max(refs, r + 1);
+  for (int r = 0; r < refs; ++r) writer.reference(r, sequence.referenceByIndex(r));
+  json doc = {{"format", kCaptureFormatName},
+              {"version", kCaptureFormatVersion},
+              {"name", info.scene},
+              {"purpose", info.purpose},
+              {"width", info.width},
+              {"height", info.height},
+              {"frames", info.frames},
+              {"frameRate", 30},
+              {"units", "m"},
+              {"exposure", 1.0},
+              {"reverseZ", false},
+              {"near", 0.01},
+              {"far", 1000.0},
+              {"cameras", cameras},
+              {"events", events},
+              {"reference", {{"ofFrame", info.referenceOfFrame}, {"samples", info.referenceSpp}}},
+              {"source", {{"producer", "arena export"}, {"sequence", info.hash}, {"settings", info.settings}}}};
+  for (const auto& [name, from] : outputs) {
+    for (int t = 0; t < info.frames; ++t) {
+      const fs::path src = from / numberedFileName("frame", t, 4);
+      if (!fs::exists(src))
+        throw Error(src.string() + ": output frame " + std::to_string(t) + " of '" + name +
+                    "' is missing (`arena run --keep-frames all` writes every frame)");
+      writer.output(name, t, readExr(src, {{"color", {"R", "G", "B"}, false}}).layers.get("color"));
+    }
+    doc["outputs"][name] = json::object();
+  }
+  writer.commit(doc);
+}
+
+}  // namespace arena
