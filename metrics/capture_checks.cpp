@@ -1,0 +1,345 @@
+#include "metrics/capture_checks.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <set>
+
+#include "core/capture.hpp"
+#include "core/error.hpp"
+#include "metrics/error.hpp"
+
+namespace arena {
+
+namespace {
+
+constexpr double kSoft = std::numeric_limits<double>::infinity();
+
+bool contains(const std::vector<std::string>& v, const std::string& s) {
+  return std::find(v.begin(), v.end(), s) != v.end();
+}
+
+std::string number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4g", v);
+  return buf;
+}
+
+CaptureCheck check(std::string name, double value, double warnAbove, double failAbove, std::string unit,
+                   std::string detail) {
+  CaptureCheck c{std::move(name), value, warnAbove, failAbove, std::move(unit), std::move(detail), CheckStatus::Pass};
+  c.status = value > failAbove ? CheckStatus::Fail : value > warnAbove ? CheckStatus::Warn : CheckStatus::Pass;
+  return c;
+}
+
+// High-frequency energy of an image's log luminance: sum (l - box3(l))^2 with l = log(L + eps).
+// Edges and texture contribute to it in the input and the reference alike; noise only where there
+// is noise. In the log domain an emitter's bright edge counts like any other edge instead of
+// outweighing the noise of every dark region, so a converged reference has far less of it than a
+// noisy input, and one with as much is not converged. `eps` is shared by the two images compared.
+double highFrequencyEnergy(const Image& rgb, double eps) {
+  const Image lum = luminance(rgb);
+  const int w = lum.width(), h = lum.height();
+  Image logLum(w, h, 1);
+  for (size_t i = 0; i < lum.pixelCount(); ++i) {
+    const float v = lum.raw()[i];
+    logLum.raw()[i] = std::isfinite(v) ? float(std::log(std::max(0.0, double(v)) + eps)) : 0.0f;
+  }
+  double energy = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      double box = 0;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) box += logLum.atClamped(x + dx, y + dy);
+      const double r = logLum.at(x, y) - box / 9.0;
+      energy += r * r;
+    }
+  return energy;
+}
+
+double meanLuminance(const Image& rgb) {
+  const Image lum = luminance(rgb);
+  double sum = 0;
+  for (float v : lum.raw())
+    if (std::isfinite(v)) sum += std::max(0.0f, v);
+  return lum.pixelCount() ? sum / double(lum.pixelCount()) : 0;
+}
+
+}  // namespace
+
+const char* checkStatusName(CheckStatus s) {
+  switch (s) {
+    case CheckStatus::Pass: return "pass";
+    case CheckStatus::Warn: return "warn";
+    case CheckStatus::Fail: return "fail";
+  }
+  return "?";
+}
+
+CheckStatus CaptureValidation::status() const {
+  CheckStatus worst = CheckStatus::Pass;
+  for (const CaptureCheck& c : checks) worst = std::max(worst, c.status);
+  return worst;
+}
+
+nlohmann::json CaptureValidation::toJson() const {
+  nlohmann::json list = nlohmann::json::array();
+  auto finiteOrNull = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  for (const CaptureCheck& c : checks)
+    list.push_back({{"name", c.name}, {"value", finiteOrNull(c.value)}, {"warnAbove", finiteOrNull(c.warnAbove)},
+                    {"failAbove", finiteOrNull(c.failAbove)}, {"unit", c.unit}, {"detail", c.detail},
+                    {"status", checkStatusName(c.status)}});
+  return {{"status", checkStatusName(status())}, {"checks", list}};
+}
+
+static std::string describe(const CaptureCheck& c) {
+  const double limit = c.status == CheckStatus::Fail ? c.failAbove : c.warnAbove;
+  return c.name + " " + number(c.value) + " > " + number(limit) + (c.unit.empty() ? "" : " (" + c.unit + ")") +
+         (c.detail.empty() ? "" : ": " + c.detail);
+}
+
+std::string CaptureValidation::failures() const {
+  std::string out;
+  for (const CaptureCheck& c : checks)
+    if (c.status == CheckStatus::Fail) out += (out.empty() ? "" : "; ") + describe(c);
+  return out;
+}
+
+std::vector<std::string> CaptureValidation::warnings() const {
+  std::vector<std::string> out;
+  for (const CaptureCheck& c : checks)
+    if (c.status == CheckStatus::Warn) out.push_back(describe(c));
+  return out;
+}
+
+MotionConsistency checkMotion(const std::vector<LayerSet>& frames, const std::vector<CameraState>& cameras,
+                              const std::vector<int>& cutFrames, double tol, const std::set<int>& movingMeshes) {
+  // The conventions a capture may have slipped into, as the stored vector they predict from the
+  // expected motion e (to the previous frame) and n (to the next): name -> prediction.
+  struct Candidate {
+    const char* name;
+    bool needsNext;
+    long informative = 0, matched = 0;
+  };
+  std::vector<Candidate> candidates = {{"as specified", false},     {"sign flipped", false},
+                                       {"x flipped", false},        {"y flipped", false},
+                                       {"axes swapped", false},     {"scaled by 2", false},
+                                       {"scaled by 1/2", false},    {"in normalised units, not pixels", false},
+                                       {"pointing to the next frame", true}};
+  MotionConsistency out;
+  long off = 0;
+  double errorSum = 0;
+  auto isCut = [&](int t) { return std::find(cutFrames.begin(), cutFrames.end(), t) != cutFrames.end(); };
+  const int n = int(frames.size());
+  for (int t = 1; t < n; ++t) {
+    if (isCut(t)) continue;
+    const LayerSet& f = frames[size_t(t)];
+    const Image &depth = f.get("depth"), &motion = f.get("motion"), &mesh = f.get("meshId");
+    const CameraState &cam = cameras[size_t(t)], &prev = cameras[size_t(t - 1)];
+    const bool hasNext = t + 1 < n && !isCut(t + 1);
+    const int w = depth.width(), h = depth.height();
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const float z = depth.at(x, y);
+        if (!(z > 0) || !std::isfinite(z)) continue;
+        if (movingMeshes.count(int(mesh.at(x, y)))) continue;  // not a static surface
+        const glm::vec2 pixel(float(x) + 0.5f, float(y) + 0.5f);
+        const glm::vec3 dir = cam.rayDirection(pixel.x, pixel.y);
+        const glm::vec3 p = cam.eye + dir * (z / glm::dot(dir, cam.forward));
+        glm::vec2 pp, pn;
+        if (!prev.project(p, pp)) continue;
+        const glm::vec2 e = pp - pixel;
+        const bool next = hasNext && cameras[size_t(t + 1)].project(p, pn);
+        const glm::vec2 nx = next ? pn - pixel : glm::vec2(0);
+        const glm::vec2 m(motion.at(x, y, 0), motion.at(x, y, 1));
+        if (!std::isfinite(m.x) || !std::isfinite(m.y)) continue;  // counted by the non-finite check
+        const float err = glm::length(m - e);
+        ++out.pixels;
+        errorSum += err;
+        off += err > tol;
+        // Only motion of more than a few pixels tells conventions apart (at 0 they all agree).
+        if (glm::length(e) < 4 * tol) continue;
+        const glm::vec2 size{float(w), float(h)};
+        const glm::vec2 predictions[] = {e, -e, {-e.x, e.y}, {e.x, -e.y}, {e.y, e.x}, 2.0f * e, 0.5f * e, e / size, nx};
+        for (size_t k = 0; k < candidates.size(); ++k) {
+          if (candidates[k].needsNext && (!next || glm::length(nx + e) < 2 * tol)) continue;  // n = -e: no information
+          ++candidates[k].informative;
+          // Normalised units are a hundred times smaller: judged at a proportionally smaller tolerance.
+          const float tolerance = k == 7 ? float(tol) / std::max(size.x, size.y) : float(tol);
+          candidates[k].matched += glm::length(m - predictions[k]) <= tolerance;
+        }
+      }
+  }
+  if (out.pixels == 0) return out;
+  out.offShare = double(off) / double(out.pixels);
+  out.meanErrorPx = errorSum / double(out.pixels);
+  auto share = [](const Candidate& c) { return c.informative > 0 ? double(c.matched) / double(c.informative) : 0.0; };
+  const double asSpecified = share(candidates[0]);
+  double best = 0;
+  for (size_t k = 1; k < candidates.size(); ++k) best = std::max(best, share(candidates[k]));
+  if (asSpecified < 0.5 && best >= 0.75 && best > asSpecified + 0.25) {
+    for (size_t k = 1; k < candidates.size(); ++k)
+      if (share(candidates[k]) >= best - 0.02)
+        out.explanation += (out.explanation.empty() ? "" : " or ") + std::string(candidates[k].name);
+    out.explainedShare = best;
+  }
+  return out;
+}
+
+CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInput& input) {
+  const SequenceInfo& info = sequence.info();
+  CaptureValidation v;
+  const std::vector<std::string> derived = sequence.isCapture() ? sequence.capture().derived : std::vector<std::string>{};
+  const std::vector<std::string> given = info.availableLayers();
+  auto isGiven = [&](const std::string& layer) { return contains(given, layer) && !contains(derived, layer); };
+
+  // 1. Non-finite values, per layer and channel: guides must be finite, the colour's are counted.
+  std::map<std::string, std::map<std::string, long>> bad;  // layer -> channel -> count
+  for (const LayerSet& f : input.frames)
+    for (const LayerSpec& spec : channels::frameLayers()) {
+      if (spec.topLevel || !isGiven(spec.name) || !f.has(spec.name)) continue;
+      const Image& img = f.get(spec.name);
+      for (int c = 0; c < spec.channels(); ++c) {
+        long n = 0;
+        for (float x : img.planeSpan(c)) n += !std::isfinite(x);
+        if (n) bad[spec.name][spec.channelName(c)] += n;
+      }
+    }
+  for (const LayerSpec& spec : channels::frameLayers()) {
+    if (spec.topLevel || !isGiven(spec.name)) continue;
+    const bool colour = spec.name == "color" || spec.name == "diffuse" || spec.name == "specular" || spec.name == "emission";
+    long total = 0;
+    std::string detail;
+    for (const auto& [channel, n] : bad[spec.name]) {
+      total += n;
+      detail += (detail.empty() ? "" : ", ") + channel + " x" + std::to_string(n);
+    }
+    if (colour)
+      detail = total ? detail + " (replaced by 0 before a denoiser reads them, and counted per pair)" : "";
+    else if (total)
+      detail += " (a guide must be finite)";
+    v.checks.push_back(check("nonFinite." + spec.name, double(total), 0, colour ? kSoft : 0, "values", detail));
+  }
+
+  // 2. Ranges: unit normals, positive depth, albedos and roughness in [0, 1].
+  long surface = 0, notUnit = 0, negativeDepth = 0, depthValues = 0;
+  std::map<std::string, std::pair<long, long>> range;  // layer -> (outside, values)
+  for (const LayerSet& f : input.frames) {
+    const Image &depth = f.get("depth"), &normal = f.get("normal");
+    for (size_t i = 0; i < depth.pixelCount(); ++i) {
+      const float z = depth.raw()[i];
+      ++depthValues;
+      negativeDepth += z < 0;
+      if (!(z > 0) || !std::isfinite(z)) continue;
+      ++surface;
+      const double len = std::sqrt(double(normal.plane(0)[i]) * normal.plane(0)[i] +
+                                   double(normal.plane(1)[i]) * normal.plane(1)[i] +
+                                   double(normal.plane(2)[i]) * normal.plane(2)[i]);
+      notUnit += !(std::abs(len - 1) <= 0.02);  // half floats hold a unit vector to ~1e-3
+    }
+    for (const char* layer : {"albedo", "specAlbedo", "roughness"}) {
+      if (!isGiven(layer)) continue;
+      auto& [outside, values] = range[layer];
+      for (float x : f.get(layer).raw()) {
+        ++values;
+        outside += std::isfinite(x) && (x < -1e-3f || x > 1.001f);
+      }
+    }
+  }
+  v.checks.push_back(check("normal.unitLength", surface ? double(notUnit) / double(surface) : 0, 0, 0.01,
+                           "share of surface pixels", "normals must be unit length (| |n| - 1 | <= 0.02)"));
+  v.checks.push_back(check("depth.positive", depthValues ? double(negativeDepth) / double(depthValues) : 0, 0, 0,
+                           "share of pixels", "view depth is positive on surfaces and 0 where there is none (sky)"));
+  for (const auto& [layer, counts] : range)
+    v.checks.push_back(check(layer + ".range", counts.second ? double(counts.first) / double(counts.second) : 0, 0, 0.001,
+                             "share of values", layer + " must lie in [0, 1]"));
+
+  // 3. Motion against depth and the two cameras, on static surfaces.
+  std::vector<int> cuts;
+  std::set<int> moving;
+  for (const SequenceEvent& e : info.events) {
+    if (e.kind == EventKind::CameraCut) cuts.push_back(e.frame);
+    if (e.kind == EventKind::ObjectMoves && e.meshId >= 0) moving.insert(e.meshId);
+  }
+  if (!isGiven("meshId")) moving.clear();  // no ids to tell objects apart: every surface counts
+  if (info.frames < 2) {
+    v.checks.push_back(check("motion.consistency", 0, kSoft, kSoft, "", "one frame: nothing to check motion against"));
+  } else {
+    const MotionConsistency m = checkMotion(input.frames, info.cameras, cuts, 1.0, moving);
+    std::string detail = "mean error " + number(m.meanErrorPx) + " px over " + std::to_string(m.pixels) +
+                         " static surface pixels (motion = previous-frame pixel - this pixel, in pixels, x right, y down)";
+    if (!m.explanation.empty())
+      detail = "the motion vectors look " + m.explanation + " (" + number(m.explainedShare * 100) +
+               "% of the pixels with motion fit that); " + detail;
+    if (!isGiven("meshId") && !moving.empty()) detail += "; no meshId, so moving objects count too";
+    v.checks.push_back(check("motion.consistency", m.offShare, 0.05, 0.25, "share of pixels off by more than 1 px", detail));
+  }
+
+  // 4. Colour against its parts, when both are given.
+  if (isGiven("color") && isGiven("diffuse") && isGiven("specular") && isGiven("albedo") && isGiven("specAlbedo")) {
+    long mismatched = 0, values = 0;
+    for (const LayerSet& f : input.frames) {
+      const Image &c = f.get("color"), &a = f.get("albedo"), &d = f.get("diffuse"), &sa = f.get("specAlbedo"),
+                  &s = f.get("specular"), &e = f.get("emission");
+      for (size_t i = 0; i < c.raw().size(); ++i) {
+        const float sum = a.raw()[i] * d.raw()[i] + sa.raw()[i] * s.raw()[i] + e.raw()[i];
+        ++values;
+        mismatched += std::abs(c.raw()[i] - sum) > 1e-3f * (std::abs(c.raw()[i]) + 1e-2f);
+      }
+    }
+    v.checks.push_back(check("color.equalsParts", values ? double(mismatched) / double(values) : 0, 0.01, kSoft,
+                             "share of values",
+                             "color = albedo * diffuse + specAlbedo * specular + emission (transmission, volumes "
+                             "and other lobes end up in the difference)"));
+  }
+
+  // 5. The reference: present, less noisy than the input, its noise floor known.
+  if (input.references.empty()) {
+    v.checks.push_back(check("reference.present", 1, 0, kSoft, "",
+                             "no reference: the error metrics are absent; rankings use only the metrics that need "
+                             "none (stabilityFine, stabilityCoarse, time), labelled as such"));
+  } else {
+    double roughRatio = 0;
+    int counted = 0;
+    double inputError = 0, floorSum = 0;
+    for (size_t t = 0; t < input.frames.size(); ++t) {
+      const LayerSet& ref = input.references[size_t(input.referenceOfFrame[t])];
+      const double eps = 0.01 * meanLuminance(ref.get("color")) + 1e-6;
+      const double ri = highFrequencyEnergy(input.frames[t].get("color"), eps);
+      if (ri > 0) {
+        roughRatio += highFrequencyEnergy(ref.get("color"), eps) / ri;
+        ++counted;
+      }
+      if (input.referenceNoiseKnown) {
+        floorSum += referenceRelMse(ref.get("color"), ref.get("colorVar"));
+        inputError += linearError(input.frames[t].get("color"), ref.get("color"), &ref.get("colorVar")).relMse;
+      }
+    }
+    v.checks.push_back(check("reference.roughnessVsInput", counted ? roughRatio / counted : 0, 0.5, 1.0,
+                             "ratio of high-frequency energy, reference / input",
+                             "a converged reference is far smoother than a noisy input; above 1 it is noisier"));
+    if (input.referenceNoiseKnown) {
+      const double ratio = inputError > 0 ? floorSum / inputError : 0;
+      v.checks.push_back(check("reference.noiseVsInput", ratio, 0.1, 1.0, "reference relMSE floor / input relMSE",
+                               "reference noise floor " + number(floorSum / double(input.frames.size())) +
+                                   " (from its variance or independent half)"));
+    } else {
+      v.checks.push_back(check("reference.noiseFloorKnown", 1, 0, kSoft, "",
+                               "the reference has neither colorVar nor colorHalf: its noise floor is unknown, and "
+                               "relMseCorrected subtracts nothing"));
+    }
+  }
+
+  // 6. Jitter: built-in denoisers assume samples at pixel centres.
+  if (sequence.isCapture()) {
+    double maxJitter = 0;
+    for (const auto& j : sequence.capture().jitter) maxJitter = std::max({maxJitter, std::abs(j[0]), std::abs(j[1])});
+    v.checks.push_back(check("jitter", maxJitter, 0, kSoft, "px",
+                             maxJitter > 0 ? "jittered frames: the built-in denoisers assume samples at pixel centres"
+                                           : ""));
+  }
+  return v;
+}
+
+}  // namespace arena

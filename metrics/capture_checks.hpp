@@ -1,0 +1,60 @@
+#pragma once
+// Checked before ranked: the validation of a capture (core/capture.hpp) before any denoiser runs on
+// it. Most "denoiser bugs" in engines are integration bugs -- motion vectors with a flipped sign, a
+// NaN in a guide buffer -- so every capture is measured against what its own data implies, and
+// each check reports its measured value, its thresholds and a verdict:
+//   pass; warn (soft: the run goes on, the warning is in results.json and on the report page);
+//   fail (hard: the capture is refused with the check's name and numbers).
+// docs/captures.md lists the checks and their thresholds.
+#include <nlohmann/json.hpp>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "core/image.hpp"
+#include "core/sequence.hpp"
+#include "metrics/evaluator.hpp"
+
+namespace arena {
+
+enum class CheckStatus { Pass, Warn, Fail };
+const char* checkStatusName(CheckStatus s);
+
+struct CaptureCheck {
+  std::string name;       // "motion.consistency"
+  double value = 0;       // what was measured
+  double warnAbove = 0;   // value > warnAbove: warn
+  double failAbove = 0;   // value > failAbove: fail (infinity: a soft check)
+  std::string unit;       // "share of pixels", "px", ...
+  std::string detail;     // what it means, or what was found (e.g. "sign flipped")
+  CheckStatus status = CheckStatus::Pass;
+};
+
+struct CaptureValidation {
+  std::vector<CaptureCheck> checks;
+  CheckStatus status() const;
+  nlohmann::json toJson() const;
+  // "motion.consistency 0.93 > 0.25 (share of pixels off by more than 1 px): sign flipped; ..."
+  std::string failures() const;
+  std::vector<std::string> warnings() const;
+};
+
+// Motion vectors against the motion the depth and the two cameras imply (NRD's validation view):
+// the share of surface pixels whose stored motion is off by more than `tolerancePx`, the mean
+// error, and which convention slip explains them best (sign, axes, scale, next frame, units).
+// Frame pairs across a camera cut are skipped. Exposed for tests.
+struct MotionConsistency {
+  double offShare = 0, meanErrorPx = 0;
+  long pixels = 0;
+  std::string explanation;  // empty, or e.g. "sign flipped" when another convention fits far better
+  double explainedShare = 0;
+};
+// Pixels of the meshes in `movingMeshes` (object_moves events' meshId) are not static: skipped.
+MotionConsistency checkMotion(const std::vector<LayerSet>& frames, const std::vector<CameraState>& cameras,
+                              const std::vector<int>& cutFrames, double tolerancePx = 1.0,
+                              const std::set<int>& movingMeshes = {});
+
+// Every check of a sequence read for evaluation (frames, references) and its description.
+CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInput& input);
+
+}  // namespace arena
