@@ -11,6 +11,7 @@ void addBenchCommand(CLI::App& app);
 void addStudyCommand(CLI::App& app);
 void addRunCommands(CLI::App& app);
 void addReportCommand(CLI::App& app);
+void addCaptureCommands(CLI::App& app);  // export, import blender, validate
 void addBenchReferenceCommand(CLI::App* bench);  // `arena bench reference`, under `arena bench`
 
 }  // namespace arena::cli

@@ -53,6 +53,7 @@ int main(int argc, char** argv) {
   arena::cli::addRunCommands(app);
   arena::cli::addBenchCommand(app);
   arena::cli::addReportCommand(app);
+  arena::cli::addCaptureCommands(app);
   // No input may end in abort() or an unnamed exception: everything is caught here and named.
   try {
     app.parse(argc, argv);

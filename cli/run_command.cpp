@@ -6,6 +6,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "core/capture.hpp"
 #include "core/error.hpp"
 #include "denoisers/external/loader.hpp"
 #include "cli/commands.hpp"
@@ -29,13 +30,21 @@ struct MatrixOptions {
   std::string scenes = "all", out, shard = "0/1", flip = "all", keepFrames = "auto";
   std::string exposure = "per-frame";
   std::vector<std::string> params;
+  std::vector<std::string> captures;
+  CLI::Option* scenesOption = nullptr;
   bool noBaselines = false;
   int warmup = 8;
   int seeds = 1;
 };
 
 void addMatrixOptions(CLI::App* cmd, MatrixOptions& o) {
-  cmd->add_option("--scenes,--scene", o.scenes, "Scene names, comma-separated, or 'all'")->default_val("all");
+  o.scenesOption = cmd->add_option("--scenes,--scene", o.scenes,
+                                   "Scene names, comma-separated, or 'all' (with --capture: none unless given)")
+                       ->default_val("all");
+  cmd->add_option("--capture", o.captures,
+                  "A capture folder (capture.json + EXR frames, docs/captures.md) to validate and score like a "
+                  "scene, repeatable")
+      ->check(CLI::ExistingDirectory);
   cmd->add_option("--out", o.out, "Run directory, e.g. runs/today")->required();
   cmd->add_option("--param", o.params, "DENOISER.NAME=VALUE, repeatable (e.g. svgf.sigmaL=8)")
       ->default_str("none: registry defaults");
@@ -69,7 +78,9 @@ RunConfig configFrom(const MatrixOptions& o) {
   c.name = std::filesystem::path(o.out).filename().string();
   c.cache = o.render.cacheDir;
   c.render = o.render.settings();
-  c.scenes = selectScenes(o.scenes, o.render.scenesDir);
+  // A run on captures covers only them unless scenes are asked for too.
+  if (o.captures.empty() || o.scenesOption->count() > 0) c.scenes = selectScenes(o.scenes, o.render.scenesDir);
+  for (const std::string& capture : o.captures) c.captures.push_back(capture);
   for (const Scene& s : c.scenes) requireFitsInMemory(s, c.render, true);
   c.baselines = !o.noBaselines;
   c.warmup = o.warmup;
@@ -78,7 +89,7 @@ RunConfig configFrom(const MatrixOptions& o) {
   c.keepFrames = o.keepFrames;
   c.exposure = o.exposure;
   std::tie(c.shardIndex, c.shardCount) = parseShard(o.shard);
-  for (const std::string& w : shortSequenceWarnings(c.scenes, c.render, c.warmup))
+  for (const std::string& w : c.scenes.empty() ? std::vector<std::string>{} : shortSequenceWarnings(c.scenes, c.render, c.warmup))
     std::cerr << "arena: warning: " << w << "\n";
   c.progress = [](const std::string& line) { std::cout << line << std::endl; };
   return c;
@@ -127,7 +138,8 @@ void addRunCommands(CLI::App& app) {
     auto names = std::make_shared<std::string>("all");
     auto plugins = std::make_shared<std::vector<std::string>>();
     cmd->add_option("--denoisers,--denoiser", *names,
-                    "Registered names, ext:MANIFEST, plugin:LIBRARY.so, comma-separated, or 'all'")
+                    "Registered names, ext:MANIFEST, plugin:LIBRARY.so, file:OUTPUT (a capture's stored output), "
+                    "comma-separated, or 'all'")
         ->default_val("all");
     cmd->add_option("--plugin", *plugins, "A C plugin library (include/arena_plugin.h) to run too, repeatable");
     addMatrixOptions(cmd, *o);
@@ -139,7 +151,13 @@ void addRunCommands(CLI::App& app) {
         throw Error("--denoisers '" + *names + "': an empty name; expected registered names (`arena denoisers`), " +
                     "ext:MANIFEST or plugin:LIBRARY, comma-separated, or 'all'");
       for (const std::string& library : *plugins) list.push_back("plugin:" + library);
-      for (std::string& n : list) n = DenoiserRegistry::resolve(n);  // loads external ones
+      // 'all' on captures includes every denoiser output they store (file:NAME contenders).
+      if (*names == "all")
+        for (const auto& capture : c.captures)
+          for (const auto& [output, stored] : readCaptureDescription(capture).outputs)
+            if (std::find(list.begin(), list.end(), "file:" + output) == list.end()) list.push_back("file:" + output);
+      for (std::string& n : list)
+        if (capturedOutputName(n).empty()) n = DenoiserRegistry::resolve(n);  // loads external ones
       auto params = parseParamAssignments(o->params);
       for (auto& [denoiser, kv] : params) {
         if (std::find(list.begin(), list.end(), denoiser) != list.end()) continue;
@@ -155,7 +173,7 @@ void addRunCommands(CLI::App& app) {
                     " is not among the denoisers of this run (" + running + ")");
       }
       for (const std::string& n : list) {
-        DenoiserRegistry::instance().find(n);
+        if (capturedOutputName(n).empty()) DenoiserRegistry::instance().find(n);
         c.denoisers.push_back({n, params[n], ""});
       }
       finish(runMatrix(c), o->out);

@@ -8,6 +8,7 @@
 #include <map>
 #include <sstream>
 
+#include "core/capture.hpp"
 #include "core/error.hpp"
 #include "cli/commands.hpp"
 #include "cli/printout.hpp"
@@ -123,6 +124,11 @@ void addStudyCommand(CLI::App& app) {
       ->check(CLI::IsMember({"none", "ldr", "all"}))
       ->default_val("all");
   cmd->add_option("--scenes", *scenes, "Scenes, comma-separated, or 'all'")->default_val("all");
+  auto captures = std::make_shared<std::vector<std::string>>();
+  cmd->add_option("--capture", *captures,
+                  "A capture folder (docs/captures.md) to validate and score beside the scenes, repeatable; its "
+                  "stored outputs run as file:NAME contenders")
+      ->check(CLI::ExistingDirectory);
   cmd->add_option("--exposure", *exposure, "Display exposure (metrics.md): per-frame or first")
       ->check(CLI::IsMember({"per-frame", "first"}))
       ->default_val("per-frame");
@@ -145,6 +151,11 @@ void addStudyCommand(CLI::App& app) {
     StudyConfig study{studyRun(selectScenes(*scenes, opt->scenesDir), opt->settings()), *refineBudget,
                       *refineMaxSpp};
     RunConfig& c = study.run;
+    for (const std::string& capture : *captures) {
+      c.captures.push_back(capture);
+      for (const auto& [output, stored] : readCaptureDescription(capture).outputs)
+        c.denoisers.push_back({"file:" + output, {}, ""});
+    }
     c.out = *out;
     c.cache = opt->cacheDir;
     c.flip = *flip;

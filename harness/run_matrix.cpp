@@ -3,13 +3,16 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <set>
 
+#include "core/capture.hpp"
 #include "core/display.hpp"
 #include "core/env_info.hpp"
 #include "core/error.hpp"
 #include "harness/image_files.hpp"
 #include "harness/reference_quality.hpp"
+#include "metrics/capture_checks.hpp"
 #include "metrics/error.hpp"
 #include "metrics/evaluator.hpp"
 #include "metrics/ghosting.hpp"
@@ -53,9 +56,18 @@ std::vector<int> chooseFrames(const SequenceInfo& info, int warmup) {
   return {chosen.begin(), chosen.end()};
 }
 
-std::unique_ptr<SceneData> loadScene(const fs::path& dir, const EvaluationOptions& options) {
+// A capture is validated before anything runs on it (metrics/capture_checks.hpp): `validation`
+// receives the checks, and a hard failure refuses the scene with the checks' names and numbers.
+std::unique_ptr<SceneData> loadScene(const fs::path& dir, const EvaluationOptions& options, json* validation = nullptr) {
   Sequence sequence = Sequence::open(dir);
-  EvaluationScene evaluation(readSequenceForEvaluation(sequence), options);
+  EvaluationInput input = readSequenceForEvaluation(sequence);
+  if (sequence.isCapture()) {
+    const CaptureValidation checks = validateCapture(sequence, input);
+    if (validation) *validation = checks.toJson();
+    if (checks.status() == CheckStatus::Fail)
+      throw Error("capture " + dir.string() + " refused by its validation: " + checks.failures());
+  }
+  EvaluationScene evaluation(std::move(input), options);
   std::vector<int> chosen = chooseFrames(sequence.info(), options.warmup);
   return std::make_unique<SceneData>(SceneData{std::move(sequence), std::move(evaluation), std::move(chosen)});
 }
@@ -82,23 +94,49 @@ void writeOutputExr(const fs::path& imageDir, const DenoisedFrame& f, const Deno
   writeExr(imageDir / name, out, specs, {{"arena.denoiser", req.name}, {"arena.params", params.toJson().dump()}});
 }
 
-// Runs one denoiser over a scene and hands each output frame to the evaluation.
+// Reads the stored outputs of a denoiser that ran elsewhere (a capture's outputs/NAME) as the
+// stream of frames a built-in would hand over; their time is the one the capture recorded.
+void runCapturedOutput(const Sequence& sequence, const std::string& name,
+                       const std::function<void(const DenoisedFrame&)>& onFrame) {
+  const CaptureDescription& capture = sequence.capture();
+  const CaptureOutput& output = capture.output(name);
+  DenoisedFrame f;
+  for (int t = 0; t < sequence.info().frames; ++t) {
+    f.frame = t;
+    f.color = readCaptureOutput(capture, name, t);
+    long bad = 0;
+    for (float v : f.color.raw()) bad += !std::isfinite(v);
+    if (bad)
+      throw Error(captureOutputPath(output, t).string() + ": " + std::to_string(bad) +
+                  " non-finite colour values in the output of '" + name + "' (an output is scored as given, never repaired)");
+    f.selfTimed = !output.milliseconds.empty();
+    f.milliseconds = f.selfTimed ? output.milliseconds[size_t(t)] : std::numeric_limits<double>::quiet_NaN();
+    onFrame(f);
+  }
+}
+
+// Runs one denoiser over a scene (or reads a file: contender's stored outputs) and hands each
+// output frame to the evaluation.
 json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& req, const fs::path& imageDir,
              bool keepAll) {
   const SequenceInfo& info = sd.sequence.info();
-  DenoiseRun run(req, sd.sequence);
+  const std::string captured = capturedOutputName(req.name);
+  if (!captured.empty() && !sd.sequence.isCapture())
+    throw Error(req.name + ": scene " + info.scene + " is not a capture; file: contenders are outputs stored in a "
+                "capture's outputs/ folder (docs/captures.md)");
+  std::unique_ptr<DenoiseRun> run = captured.empty() ? std::make_unique<DenoiseRun>(req, sd.sequence) : nullptr;
+  const ParamSet params = run ? run->params() : ParamSet{};
   PairEvaluation evaluation(sd.evaluation);
   bool selfTimed = false;
   NonFiniteCounts sanitized;  // over every frame, warm-up included: each one shaped the history
   std::vector<std::vector<PassTime>> passes;
   std::vector<double> ms;
   const bool keepImages = cfg.keepFrames != "none";
-  run.run([&](int t) -> const LayerSet& { return sd.evaluation.frame(t); },
-          [&](const DenoisedFrame& f) {
+  auto onFrame = [&](const DenoisedFrame& f) {
             FrameFacts facts;
             facts.milliseconds = f.milliseconds;
-            if (f.selfTimed) facts.wallMilliseconds = f.wallMilliseconds;
-            if (run.readsLowres()) facts.extraRaysPerPixel = f.extraRaysPerPixel;
+            if (f.selfTimed && run) facts.wallMilliseconds = f.wallMilliseconds;
+            if (run && run->readsLowres()) facts.extraRaysPerPixel = f.extraRaysPerPixel;
             facts.lowresPathsPerSecond = info.lowresPathsPerSecond;
             evaluation.add(f.frame, f.color, facts);
             selfTimed |= f.selfTimed;
@@ -109,24 +147,44 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
             const bool chosen = std::find(sd.chosenFrames.begin(), sd.chosenFrames.end(), f.frame) != sd.chosenFrames.end();
             if (keepImages && (keepAll || chosen)) {
               writeFrameImages(imageDir, f.frame, evaluation.lastImages());
-              if (keepAll) writeOutputExr(imageDir, f, req, run.params());
+              if (keepAll) writeOutputExr(imageDir, f, req, params);
             }
-          });
-  json pair = {{"scene", info.scene}, {"denoiser", req.name}, {"label", req.label}, {"params", run.params().toJson()},
+          };
+  if (run)
+    run->run([&](int t) -> const LayerSet& { return sd.evaluation.frame(t); }, onFrame);
+  else
+    runCapturedOutput(sd.sequence, captured, onFrame);
+  json pair = {{"scene", info.scene}, {"denoiser", req.name}, {"label", req.label}, {"params", params.toJson()},
                {"status", "ok"}};
   pair.update(evaluation.finish());
   // First: what the inputs were matters before what the outputs measured.
   if (!sanitized.empty()) pair["warnings"].insert(pair["warnings"].begin(), sanitizedWarning(sanitized));
-  json timing = timingSummary(passes, ms, cfg.warmup, info.width, info.height);
-  // External processes time themselves: "ms" is what they reported, "msWall" the harness's clock
-  // around the exchange (transfer included). Built-ins and plugins: the harness's clock.
-  timing["msSource"] = selfTimed ? "reported by the process" : "harness wall clock";
-  if (selfTimed) timing["msWallMedian"] = summarize(evaluation.values("msWall"), cfg.warmup).median;
+  json timing;
+  if (run) {
+    timing = timingSummary(passes, ms, cfg.warmup, info.width, info.height);
+    // External processes time themselves: "ms" is what they reported, "msWall" the harness's clock
+    // around the exchange (transfer included). Built-ins and plugins: the harness's clock.
+    timing["msSource"] = selfTimed ? "reported by the process" : "harness wall clock";
+    timing["clock"] = "cpu";
+    if (selfTimed) timing["msWallMedian"] = summarize(evaluation.values("msWall"), cfg.warmup).median;
+  } else {
+    // A capture's recorded time is another device's: labelled, never mixed with the CPU times.
+    const CaptureOutput& output = sd.sequence.capture().output(captured);
+    if (selfTimed) {
+      timing = timingSummary({}, ms, cfg.warmup, info.width, info.height);
+      timing["msSource"] = "recorded in the capture (" + output.device + ")";
+      timing["clock"] = "capture";
+      timing["device"] = output.device;
+    } else {
+      timing = {{"msSource", "not recorded in the capture"}, {"clock", "none"}, {"passes", json::array()}};
+    }
+  }
   pair["timing"] = timing;
   pair["sanitizedInputs"] = {{"total", totalNonFinite(sanitized)}, {"channels", sanitized}};
   pair["images"] = {{"dir", fs::relative(imageDir, cfg.out).string()}, {"all", keepAll && keepImages}};
-  if (!run.info().origin.empty()) pair["origin"] = run.info().origin;
-  if (run.info().signals == SignalMode::Color) pair["signals"] = "color";
+  if (run && !run->info().origin.empty()) pair["origin"] = run->info().origin;
+  if (!run) pair["origin"] = (sd.sequence.dir() / "outputs" / captured).string();
+  if (!run || run->info().signals == SignalMode::Color) pair["signals"] = "color";
   return pair;
 }
 
@@ -168,7 +226,7 @@ std::string clock(double s) {
 
 json runMatrix(const RunConfig& cfg) {
   if (cfg.out.empty()) throw Error("run: --out is required");
-  if (cfg.scenes.empty()) throw Error("run: no scenes");
+  if (cfg.scenes.empty() && cfg.captures.empty()) throw Error("run: no scenes and no captures");
   if (cfg.seeds < 1 || cfg.seeds > 64) throw Error("run: --seeds " + std::to_string(cfg.seeds) + ": expected 1 to 64");
   const ExposureMode exposure = exposureModeFromName(cfg.exposure);
   std::vector<DenoiserRequest> denoisers;
@@ -176,7 +234,8 @@ json runMatrix(const RunConfig& cfg) {
     if (r.label.empty()) r.label = defaultLabel(r);
     for (auto& d : denoisers)
       if (d.label == r.label) return;
-    DenoiserRegistry::instance().find(r.name);
+    if (capturedOutputName(r.name).empty()) DenoiserRegistry::instance().find(r.name);
+    else if (cfg.captures.empty()) throw Error(r.name + ": file: contenders need a capture (--capture DIR)");
     denoisers.push_back(std::move(r));
   };
   if (cfg.baselines)
@@ -186,13 +245,32 @@ json runMatrix(const RunConfig& cfg) {
     }
   for (const DenoiserRequest& r : cfg.denoisers) add(r);
   // Validate every parameter set before any work: a typo must fail in a second, not after an hour.
-  for (const DenoiserRequest& r : denoisers) DenoiserRegistry::instance().find(r.name).schema.resolve(r.params, r.name);
+  for (const DenoiserRequest& r : denoisers)
+    if (capturedOutputName(r.name).empty()) DenoiserRegistry::instance().find(r.name).schema.resolve(r.params, r.name);
+    else if (!r.params.empty()) throw Error(r.name + ": a stored output has no parameters to set");
 
-  const bool keepAll = cfg.keepFrames == "all" || (cfg.keepFrames == "auto" && cfg.scenes.size() == 1 &&
+  // What runs: the scenes (rendered or taken from the cache), then the captures.
+  struct Source {
+    std::string name, purpose;
+    const Scene* scene = nullptr;
+    fs::path capture;
+  };
+  std::vector<Source> sources;
+  for (const Scene& scene : cfg.scenes) sources.push_back({scene.name, scene.purpose, &scene, {}});
+  for (const fs::path& capture : cfg.captures) {
+    const CaptureDescription d = readCaptureDescription(capture);
+    for (const Source& other : sources)
+      if (other.name == d.info.scene)
+        throw Error("capture " + capture.string() + ": its name '" + d.info.scene + "' is also the name of " +
+                    (other.scene ? "a scene" : "capture " + other.capture.string()) + " in this run");
+    sources.push_back({d.info.scene, d.info.purpose, nullptr, capture});
+  }
+  const bool keepAll = cfg.keepFrames == "all" || (cfg.keepFrames == "auto" && sources.size() == 1 &&
                                                    denoisers.size() == (cfg.baselines ? 3u : 1u) && !cfg.denoisers.empty());
   checkRunOutputs(cfg.out);
   const EvaluationOptions evaluation{cfg.warmup, {cfg.flip}, exposure};
-  json settings = {{"render", cfg.render.pixelSettings(cfg.scenes.front())}, {"preset", cfg.render.preset},
+  json settings = {{"render", cfg.scenes.empty() ? json::object() : cfg.render.pixelSettings(cfg.scenes.front())},
+                   {"preset", cfg.render.preset},
                    {"seeds", cfg.seeds},
                    {"shard", std::to_string(cfg.shardIndex) + "/" + std::to_string(cfg.shardCount)}};
   settings.update(evaluationSettings(evaluation));
@@ -204,14 +282,19 @@ json runMatrix(const RunConfig& cfg) {
   results["settings"]["render"].erase("height");
   results["settings"]["render"].erase("frames");
 
-  const size_t totalPairs = cfg.scenes.size() * denoisers.size();
+  if (!cfg.captures.empty()) {
+    json captures = json::array();
+    for (const fs::path& c : cfg.captures) captures.push_back(c.string());
+    results["settings"]["captures"] = captures;
+  }
+  const size_t totalPairs = sources.size() * denoisers.size();
   size_t pairIndex = 0, pairsDone = 0, pairsMine = 0;
   for (size_t k = 0; k < totalPairs; ++k) pairsMine += int(k % size_t(cfg.shardCount)) == cfg.shardIndex;
   const auto start = std::chrono::steady_clock::now();
   auto say = [&](const std::string& s) {
     if (cfg.progress) cfg.progress(s);
   };
-  for (const Scene& scene : cfg.scenes) {
+  for (const Source& source : sources) {
     std::vector<const DenoiserRequest*> mine;
     for (const DenoiserRequest& r : denoisers)
       if (int(pairIndex++ % size_t(cfg.shardCount)) == cfg.shardIndex) mine.push_back(&r);
@@ -220,10 +303,17 @@ json runMatrix(const RunConfig& cfg) {
     std::unique_ptr<SceneData> sd;
     std::vector<SeedSequence> seedSequences;
     std::string sceneError;
+    json validation;
     try {
-      dir = renderSequence(scene, cfg.render, cfg.cache, cfg.progress);
-      sd = loadScene(dir, evaluation);
-      for (int k = 1; k < cfg.seeds; ++k) {
+      if (!source.scene) {
+        dir = source.capture;
+        sd = loadScene(dir, evaluation, &validation);
+      } else {
+        dir = renderSequence(*source.scene, cfg.render, cfg.cache, cfg.progress);
+        sd = loadScene(dir, evaluation);
+      }
+      for (int k = 1; k < cfg.seeds && source.scene; ++k) {
+        const Scene& scene = *source.scene;
         RenderSettings seeded = cfg.render;
         seeded.inputSeed = cfg.render.inputSeed + uint32_t(k);
         const fs::path seedDir = renderSequence(scene, seeded, cfg.cache, cfg.progress);
@@ -234,26 +324,45 @@ json runMatrix(const RunConfig& cfg) {
     } catch (const std::exception& e) {
       sceneError = e.what();
     }
+    if (!validation.is_null()) {
+      // The capture's checks, printed and kept (also when they refused it).
+      for (const json& c : validation["checks"])
+        if (c["status"] != "pass")
+          say("  " + source.name + ": " + c["status"].get<std::string>() + ": " + c["name"].get<std::string>() + " " +
+              (c["value"].is_number() ? std::to_string(c["value"].get<double>()) : std::string("-")) + " (" +
+              c["detail"].get<std::string>() + ")");
+      results["scenes"][source.name] = {{"purpose", source.purpose}, {"source", "capture"},
+                                        {"capture", source.capture.string()}, {"validation", validation}};
+    }
     if (sd) {
       const SequenceInfo& info = sd->sequence.info();
       const EvaluationScene& ev = sd->evaluation;
-      fs::path sceneImages = cfg.out / "images" / scene.name;
+      fs::path sceneImages = cfg.out / "images" / source.name;
       json events = json::array();
       for (auto& e : info.events) events.push_back({{"frame", e.frame}, {"kind", eventKindName(e.kind)}, {"what", e.what}});
       if (cfg.keepFrames != "none")
         for (int t : sd->chosenFrames) {
-          writePng(sceneImages / frameName("reference", t), ev.referenceDisplay(t));
+          if (ev.hasReference()) writePng(sceneImages / frameName("reference", t), ev.referenceDisplay(t));
           writePng(sceneImages / frameName("noisy", t), ev.display(t, ev.frame(t).get("color")));
         }
-      json entry = {{"purpose", scene.purpose}, {"sequence", dir.string()}, {"hash", info.hash}, {"width", info.width},
+      json entry = {{"purpose", source.purpose}, {"sequence", dir.string()}, {"hash", info.hash}, {"width", info.width},
                     {"height", info.height}, {"frames", info.frames}, {"events", events},
                     {"referenceSpp", info.referenceSpp}, {"referenceCapped", info.referenceCapped},
                     {"referenceEstimatedRelMse", info.referenceEstimatedRelMse}, {"chosenFrames", sd->chosenFrames},
                     {"images", fs::relative(sceneImages, cfg.out).string()}};
       entry.update(ev.describe());
-      results["scenes"][scene.name] = entry;
+      if (!ev.hasReference()) entry["hasReference"] = false;
+      if (!source.scene) {
+        entry["source"] = "capture";
+        entry["capture"] = source.capture.string();
+        entry["validation"] = validation;
+        entry["derivedLayers"] = sd->sequence.capture().derived;
+        entry["layers"] = info.availableLayers();
+      }
+      results["scenes"][source.name] = entry;
       // Asset scenes (issue 18): the models' credits and the loader's counted fallbacks.
-      if (!scene.credits.empty() || !scene.warnings.empty()) {
+      if (source.scene && (!source.scene->credits.empty() || !source.scene->warnings.empty())) {
+        const Scene& scene = *source.scene;
         json credits = json::array();
         for (const Credit& c : scene.credits)
           credits.push_back({{"asset", c.asset}, {"author", c.author}, {"license", c.license}, {"source", c.source}});
@@ -264,11 +373,11 @@ json runMatrix(const RunConfig& cfg) {
       auto t0 = std::chrono::steady_clock::now();
       json pair;
       try {
-        if (!sd) throw Error("scene " + scene.name + " could not be prepared: " + sceneError);
-        pair = runPair(cfg, *sd, *r, cfg.out / "images" / scene.name / safeName(r->label), keepAll);
+        if (!sd) throw Error("scene " + source.name + " could not be prepared: " + sceneError);
+        pair = runPair(cfg, *sd, *r, cfg.out / "images" / source.name / safeName(r->label), keepAll);
         if (!seedSequences.empty()) pair["biasVariance"] = biasVarianceOf(cfg, *sd, seedSequences, *r);
       } catch (const std::exception& e) {
-        pair = {{"scene", scene.name}, {"denoiser", r->name}, {"label", r->label}, {"params", json::object()},
+        pair = {{"scene", source.name}, {"denoiser", r->name}, {"label", r->label}, {"params", json::object()},
                 {"status", "failed"}, {"error", e.what()}};
       }
       results["pairs"].push_back(pair);
@@ -277,7 +386,7 @@ json runMatrix(const RunConfig& cfg) {
       double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       char buf[512];
       std::snprintf(buf, sizeof buf, "[%zu/%zu] %s on %s: %s in %.1f s (ETA %s)", pairsDone, pairsMine, r->label.c_str(),
-                    scene.name.c_str(), pair["status"] == "ok" ? "done" : "FAILED", took,
+                    source.name.c_str(), pair["status"] == "ok" ? "done" : "FAILED", took,
                     clock(elapsed / double(pairsDone) * double(pairsMine - pairsDone)).c_str());
       say(buf);
       if (pair["status"] != "ok") say("  error: " + pair["error"].get<std::string>());

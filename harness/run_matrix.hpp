@@ -19,6 +19,8 @@ struct RunConfig {
   std::filesystem::path out, cache = "cache";
   RenderSettings render;
   std::vector<Scene> scenes;
+  // Captures (core/capture.hpp): sequences rendered elsewhere, validated and scored like scenes.
+  std::vector<std::filesystem::path> captures;
   std::vector<DenoiserRequest> denoisers;
   bool baselines = true;          // add passthrough (noisy input) and temporal for context
   // --param values for those baselines (e.g. temporal.maxHistory), by denoiser name.

@@ -29,9 +29,13 @@ std::vector<Scene> refineReferences(RunConfig& c, const json& results, double bu
   for (const ReferenceRefinement& plan : planReferenceRefinement(results, sequences, c.warmup, maxSpp, budget)) {
     c.referenceNotes[plan.scene] = refinementNote(plan, budget);
     say("[refine] " + plan.scene + ": " + c.referenceNotes[plan.scene]);
+    const auto found = std::find_if(c.scenes.begin(), c.scenes.end(), [&](const Scene& s) { return s.name == plan.scene; });
+    if (found == c.scenes.end()) {  // a capture: its references are what it brought
+      c.referenceNotes[plan.scene] = "a capture's references cannot be refined by the study";
+      continue;
+    }
     if (!plan.withinBudget) continue;
-    const Scene& scene = *std::find_if(c.scenes.begin(), c.scenes.end(),  // planned from c.scenes
-                                       [&](const Scene& s) { return s.name == plan.scene; });
+    const Scene& scene = *found;
     try {
       refineSequence(scene, c.render, c.cache, plan.targetRelMse, maxSpp, c.progress, c.warmup);
       refined.push_back(scene);
@@ -64,6 +68,7 @@ json runStudy(StudyConfig config) {
   if (c.finish) return results;
   addReferenceQuality(results, c.warmup);  // the plan reads the first pass's verdicts
   RunConfig again = c;
+  again.captures.clear();  // only rendered scenes are refined and run again
   again.scenes = refineReferences(c, results, config.refineBudget, config.refineMaxSpp);
   if (!again.scenes.empty()) {
     if (c.progress) c.progress("[refine] running the refined scenes again");

@@ -150,7 +150,12 @@ json speedScope(const std::vector<json>& points, bool needsComplete) {
 }
 
 // A pair's point on the chart: error with its bar, time with its p5-p95 bar, and the parameters.
+// The clock a pair's time comes from: "cpu" (this machine; built-ins, plugins, processes), "capture"
+// (another device's time recorded in a capture), "none". Only "cpu" times share the speed axis.
+std::string clockOf(const json& pair) { return pair.value("timing", json::object()).value("clock", "cpu"); }
+
 json speedPoint(const json& pair, const ErrorAxis& axis) {
+  if (clockOf(pair) != "cpu") return nullptr;
   json v = axisValue(pair, axis);
   const double ms = msOf(pair);
   if (v.is_null() || !std::isfinite(ms)) return nullptr;
@@ -197,6 +202,17 @@ json speedData(const json& results, const std::vector<std::string>& scenes,
     perScene[scene] = axes;
   }
   out["scenes"] = perScene;
+  // Contenders timed elsewhere (a capture's recorded GPU time) or not at all: named under the chart
+  // with their own clock, never drawn on the CPU axis.
+  json elsewhere = json::array();
+  for (const json& pair : results["pairs"])
+    if (isOk(pair) && clockOf(pair) != "cpu") {
+      const json& timing = pair["timing"];
+      elsewhere.push_back({{"scene", pair["scene"]}, {"label", pair["label"]},
+                           {"ms", timing.contains("msMedian") ? timing["msMedian"] : json(nullptr)},
+                           {"source", timing.value("msSource", "")}});
+    }
+  out["otherClocks"] = elsewhere;
   // All scenes: statistics' overall score on the axis's metric (relMSE: the run's "overall"; the
   // others: "overallByMetric"), with its interval -- the one score the printout shows too, never a
   // second one computed here. A point's time is the label's mean over the scenes it ran on.
@@ -555,8 +571,8 @@ json reportData(const json& results, const fs::path& runDir, const json* baselin
       const json& info = sceneInfos[name];
       for (const char* k : {"purpose", "width", "height", "frames", "events", "chosenFrames",
                             "referenceRelMse", "noisyRelMse", "referenceSpp", "exposure", "floors",
-                            "referenceQuality",
-                            "assets"})  // assets: credits and loader fallbacks (issue 18)
+                            "referenceQuality", "validation", "source", "capture", "hasReference",
+                            "derivedLayers", "assets"})  // assets: credits and loader fallbacks (issue 18)
         if (info.contains(k)) s[k] = info[k];
       s["noiseFloor"] = noiseFloor(info, warmup);
       s["viewer"] = viewerData(results, name, info, runDir);

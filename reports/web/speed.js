@@ -52,6 +52,16 @@
     return { drawn, front, hidden: points.filter((p) => !ok(p)).map((p) => p.label) };
   }
 
+  // Contenders whose time is another device's (a capture's recorded GPU time) or unknown: named
+  // with their clock, never placed on this machine's CPU axis.
+  function otherClocks(scene) {
+    const rows = (A.D.speed.otherClocks || []).filter((r) => scene === null || r.scene === scene);
+    if (!rows.length) return [];
+    const text = rows.map((r) => `${r.label}${scene === null ? ` on ${r.scene}` : ''}: ` +
+      (r.ms === null ? 'no time' : `${Number(r.ms).toPrecision(3)} ms`) + ` (${r.source})`);
+    return [` · timed on another clock, not on this CPU axis: ${text.join('; ')}`];
+  }
+
   function chartSpec({ drawn, front }, axis, yTitle, logError, small, title) {
     const x = { field: 'ms', type: 'quantitative', scale: { type: 'log' }, title: small ? 'ms (median)' : 'ms per frame (median; bars p5–p95; log scale)' };
     const y = { field: 'error', type: 'quantitative', title: yTitle, scale: logError ? { type: 'log' } : { zero: false } };
@@ -178,6 +188,7 @@
       'Pareto front (fastest first): ',
       ...d.front.flatMap((p, i) => [i ? ' → ' : '', el('b', { text: p.label })]),
       d.hidden.length ? ` · not drawn (0 on a log axis): ${d.hidden.join(', ')}` : '',
+      ...otherClocks(all ? null : state.speedScene),
     );
     const view = await A.embedChart('speed', chart, chartSpec(d, axis, yTitle, logError, false, title));
     onClick(view, all ? null : state.speedScene);

@@ -173,10 +173,26 @@
     const quality = scene && scene.referenceQuality;
     const qualityNote = quality && quality.meets === false
       ? [el('p', { class: 'reference-quality warnings', text: `Reference quality: ${quality.verdict}` })] : [];
-    $('warnings').replaceChildren(...qualityNote, ...(warnings.length ? [el('h3', { text: 'Warnings' }),
+    $('warnings').replaceChildren(...qualityNote, ...validationTable(scene), ...(warnings.length ? [el('h3', { text: 'Warnings' }),
       el('ul', { class: 'warnings' }, warnings.flatMap((p) => p.warnings.map((w) => el('li', {}, el('b', { text: `${p.label}: ` }), w))))] : []));
     renderAblation();
   };
+
+  // A capture's validation (results: scenes.<scene>.validation): every check with its measured
+  // value and thresholds, so a ranking on a capture shows what its inputs were checked for.
+  function validationTable(scene) {
+    const v = scene && scene.validation;
+    if (!v || !v.checks) return [];
+    const num = (x) => (x === null || x === undefined ? '–' : fmt(x));
+    return [el('h3', { text: `Capture validation: ${v.status}` }),
+      el('div', { class: 'table-wrap' }, el('table', { class: 'data validation-table' },
+        el('thead', {}, el('tr', {}, ['check', 'status', 'value', 'warn above', 'fail above', 'unit', 'detail']
+          .map((h, i) => el('th', { class: i === 0 ? 'first' : null, text: h })))),
+        el('tbody', {}, v.checks.map((c) => el('tr', { class: c.status === 'pass' ? null : c.status === 'fail' ? 'worse' : 'tie' },
+          el('td', { class: 'first', text: c.name }), el('td', { text: c.status }), el('td', { text: num(c.value) }),
+          el('td', { text: num(c.warnAbove) }), el('td', { text: num(c.failAbove) }), el('td', { text: c.unit }),
+          el('td', { text: c.detail })))))))];
+  }
 
   // Sweep runs: each grid parameter's values against its first value (e.g. an edge-stopping term
   // off vs on), as the mean change of every metric over matching settings.

@@ -1,0 +1,100 @@
+// `arena export`, `arena import blender`, `arena validate`: captures in and out (docs/captures.md).
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <map>
+
+#include "cli/commands.hpp"
+#include "cli/render_options.hpp"
+#include "core/capture.hpp"
+#include "core/error.hpp"
+#include "harness/blender_import.hpp"
+#include "harness/scene_selection.hpp"
+#include "metrics/capture_checks.hpp"
+#include "metrics/evaluator.hpp"
+#include "tracer/sequence_cache.hpp"
+
+namespace arena::cli {
+
+namespace {
+
+// Prints every check of a capture; returns its verdict.
+CheckStatus printValidation(const std::filesystem::path& dir) {
+  const Sequence sequence = Sequence::open(dir);
+  const EvaluationInput input = readSequenceForEvaluation(sequence);
+  const CaptureValidation v = validateCapture(sequence, input);
+  std::cout << "validation of " << dir.string() << " (" << sequence.info().scene << ", " << sequence.info().width << "x"
+            << sequence.info().height << ", " << sequence.info().frames << " frames; layers:";
+  for (const std::string& l : sequence.info().availableLayers()) std::cout << " " << l;
+  std::cout << ")\n";
+  for (const CaptureCheck& c : v.checks) {
+    std::cout << "  " << std::left << std::setw(5) << checkStatusName(c.status) << std::setw(28) << c.name << std::right
+              << std::setw(12) << std::setprecision(4) << c.value;
+    if (std::isfinite(c.failAbove)) std::cout << "  (fail above " << c.failAbove << ")";
+    else if (c.status != CheckStatus::Pass) std::cout << "  (warn above " << c.warnAbove << ")";
+    std::cout << (c.unit.empty() ? "" : "  " + c.unit) << (c.detail.empty() ? "" : "\n        " + c.detail) << "\n";
+  }
+  std::cout << "verdict: " << checkStatusName(v.status()) << "\n";
+  return v.status();
+}
+
+}  // namespace
+
+void addCaptureCommands(CLI::App& app) {
+  {
+    auto* cmd = app.add_subcommand("export", "Write a scene's cached sequence as a capture (docs/captures.md)");
+    auto opt = std::make_shared<RenderOptions>();
+    auto scene = std::make_shared<std::string>();
+    auto out = std::make_shared<std::string>();
+    auto outputs = std::make_shared<std::vector<std::string>>();
+    cmd->add_option("scene", *scene, "Scene name or file")->required();
+    cmd->add_option("--out", *out, "The capture folder to write (must not exist)")->required();
+    cmd->add_option("--output", *outputs,
+                    "NAME=DIR: store a denoiser's output frames (DIR/frame_NNNN.exr, as `arena run --keep-frames "
+                    "all` writes them) as the capture's file:NAME contender, repeatable");
+    addRenderOptions(cmd, *opt);
+    cmd->callback([=] {
+      const std::vector<Scene> scenes = selectScenes(*scene, opt->scenesDir);
+      if (scenes.size() != 1) throw Error("export: one scene at a time ('" + *scene + "' names " +
+                                          std::to_string(scenes.size()) + ")");
+      std::map<std::string, std::filesystem::path> stored;
+      for (const std::string& o : *outputs) {
+        const size_t eq = o.find('=');
+        if (eq == std::string::npos || eq == 0 || eq + 1 == o.size())
+          throw Error("--output '" + o + "': expected NAME=DIR");
+        stored[o.substr(0, eq)] = o.substr(eq + 1);
+      }
+      const auto dir = renderSequence(scenes.front(), opt->settings(), opt->cacheDir,
+                                      [](const std::string& line) { std::cout << line << std::endl; });
+      exportCapture(Sequence::open(dir), *out, stored);
+      std::cout << "capture: " << *out << "\n";
+    });
+  }
+  {
+    auto* cmd = app.add_subcommand("import", "Turn another renderer's frames into a capture");
+    cmd->require_subcommand(1);
+    auto* blender = cmd->add_subcommand(
+        "blender", "Blender Cycles frames written by scripts/blender/render_capture.py -> a capture, validated");
+    auto source = std::make_shared<std::string>();
+    auto out = std::make_shared<std::string>();
+    auto name = std::make_shared<std::string>();
+    blender->add_option("source", *source, "The folder render_capture.py wrote")->required()->check(CLI::ExistingDirectory);
+    blender->add_option("--out", *out, "The capture folder to write (must not exist)")->required();
+    blender->add_option("--name", *name, "The capture's name (default: the source folder's)");
+    blender->callback([=] {
+      importBlender(*source, *out, {*name});
+      std::cout << "capture: " << *out << "\n";
+      if (printValidation(*out) == CheckStatus::Fail) throw CLI::RuntimeError(1);
+    });
+  }
+  {
+    auto* cmd = app.add_subcommand("validate", "Check a capture before ranking on it: exit 1 when a hard check fails");
+    auto dir = std::make_shared<std::string>();
+    cmd->add_option("capture", *dir, "A capture folder")->required()->check(CLI::ExistingDirectory);
+    cmd->callback([=] {
+      if (printValidation(*dir) == CheckStatus::Fail) throw CLI::RuntimeError(1);
+    });
+  }
+}
+
+}  // namespace arena::cli

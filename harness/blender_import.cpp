@@ -1,0 +1,211 @@
+#include "harness/blender_import.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+#include "core/capture.hpp"
+#include "core/error.hpp"
+#include "core/exr_io.hpp"
+#include "core/json_reader.hpp"
+
+namespace arena {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+std::string frameFile(int t) { return numberedFileName("frame", t, 4); }
+
+// The view layer's prefix ("ViewLayer.") of a Blender multilayer EXR: the one holding Combined.R.
+std::string layerPrefix(const fs::path& file) {
+  const std::string suffix = "Combined.R";
+  for (const std::string& c : readExrHeader(file).channels)
+    if (c.size() >= suffix.size() && c.compare(c.size() - suffix.size(), suffix.size(), suffix) == 0)
+      return c.substr(0, c.size() - suffix.size());
+  throw Error(file.string() + ": no Combined pass (channel '<view layer>.Combined.R'); is it a Blender multilayer EXR?");
+}
+
+// Blender's passes of one file, by pass name ("Combined", "DiffDir", ...).
+LayerSet readPasses(const fs::path& file, const std::vector<std::pair<std::string, std::vector<std::string>>>& passes) {
+  const std::string prefix = layerPrefix(file);
+  std::vector<LayerSpec> specs;
+  for (const auto& [pass, suffixes] : passes) specs.push_back({prefix + pass, suffixes, false});
+  LayerSet read = readExr(file, specs).layers;  // names the file and the missing channel
+  LayerSet out;
+  for (const auto& [pass, suffixes] : passes) {
+    Image img = read.get(prefix + pass);
+    out.set(pass, std::move(img));
+  }
+  return out;
+}
+
+Image rgb(const Image& rgba) {  // Combined has RGBA; the capture's colour is RGB
+  Image out(rgba.width(), rgba.height(), 3);
+  for (int c = 0; c < 3; ++c) std::copy(rgba.plane(c), rgba.plane(c) + rgba.pixelCount(), out.plane(c));
+  return out;
+}
+
+Image sum(const Image& a, const Image& b) {
+  Image out = a;
+  for (size_t i = 0; i < out.raw().size(); ++i) out.raw()[i] += b.raw()[i];
+  return out;
+}
+
+const std::vector<std::pair<std::string, std::vector<std::string>>>& framePasses() {
+  static const std::vector<std::pair<std::string, std::vector<std::string>>> passes = {
+      {"Combined", {"R", "G", "B", "A"}}, {"DiffDir", {"R", "G", "B"}}, {"DiffInd", {"R", "G", "B"}},
+      {"DiffCol", {"R", "G", "B"}},       {"GlossDir", {"R", "G", "B"}}, {"GlossInd", {"R", "G", "B"}},
+      {"GlossCol", {"R", "G", "B"}},      {"Emit", {"R", "G", "B"}},     {"Env", {"R", "G", "B"}},
+      {"Normal", {"X", "Y", "Z"}},        {"Depth", {"Z"}},              {"Vector", {"X", "Y", "Z", "W"}},
+      {"IndexOB", {"X"}},                 {"IndexMA", {"X"}},            {"roughness", {"X"}}};
+  return passes;
+}
+
+}  // namespace
+
+void importBlender(const fs::path& source, const fs::path& out, const BlenderImportOptions& options) {
+  const fs::path camerasFile = source / "cameras.json";
+  if (!fs::exists(camerasFile))
+    throw Error(source.string() + ": no cameras.json (written by scripts/blender/render_capture.py)");
+  const json doc = parseJsonFile(camerasFile.string());
+  JsonReader root(doc, camerasFile.string());
+  const int width = root.integerIn("width", 1, 16384), height = root.integerIn("height", 1, 16384);
+  const int frames = root.integerIn("frames", 1, 100000);
+  const double fps = root.number("fps");
+  const double clipStart = root.number("clipStart"), clipEnd = root.number("clipEnd");
+  const std::string producer = root.string("producer");
+  const int spp = root.integer("spp"), referenceSpp = root.integer("referenceSpp");
+  // Arrays of rows: read as plain JSON (our script writes them), checked for shape and numbers.
+  const json cams = root.node().contains("cameras") ? root.node()["cameras"] : json();
+  root.optionalArray("cameras");
+  if (!cams.is_array()) throw Error(camerasFile.string() + ": $.cameras: expected an array");
+  if (int(cams.size()) != frames)
+    throw Error(camerasFile.string() + ": " + std::to_string(cams.size()) + " cameras for " + std::to_string(frames) +
+                " frames");
+  json cameras = json::array();
+  for (int t = 0; t < frames; ++t) {
+    // cameraToWorld rows; Blender's camera looks down its local -Z with +Y up, as OpenGL's does, so
+    // the view matrix is its inverse: rotation R^T, translation -R^T p.
+    double m[4][4], p[4][4];
+    for (const auto& [key, matrix] : {std::pair<const char*, double(*)[4]>{"cameraToWorld", m}, {"projection", p}}) {
+      const std::string where = camerasFile.string() + ": $.cameras[" + std::to_string(t) + "]." + key;
+      const json& rows = cams[size_t(t)].is_object() && cams[size_t(t)].contains(key) ? cams[size_t(t)][key] : json();
+      if (!rows.is_array() || rows.size() != 4) throw Error(where + ": expected 4 rows of 4 numbers");
+      for (int r = 0; r < 4; ++r) {
+        if (!rows[size_t(r)].is_array() || rows[size_t(r)].size() != 4) throw Error(where + ": expected 4 rows of 4 numbers");
+        for (int c = 0; c < 4; ++c) {
+          const json& v = rows[size_t(r)][size_t(c)];
+          if (!v.is_number() || !std::isfinite(v.get<double>()))
+            throw Error(where + "[" + std::to_string(r) + "][" + std::to_string(c) + "]: expected a finite number");
+          matrix[r][c] = v.get<double>();
+        }
+      }
+    }
+    std::vector<double> view(16, 0.0), projection(16, 0.0);
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) view[size_t(c * 4 + r)] = m[c][r];  // (R^T)[r][c] = R[c][r]
+      view[size_t(3 * 4 + r)] = -(m[0][r] * m[0][3] + m[1][r] * m[1][3] + m[2][r] * m[2][3]);
+    }
+    view[15] = 1;
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c) projection[size_t(c * 4 + r)] = p[r][c];
+    cameras.push_back({{"view", view}, {"projection", projection}, {"position", {m[0][3], m[1][3], m[2][3]}}});
+  }
+  json events = json::array();
+  for (JsonReader& e : root.optionalArray("events")) {
+    json ev = {{"frame", e.integer("frame")}, {"kind", e.string("kind")}, {"what", e.string("what", "")}};
+    if (e.has("passIndex")) ev["meshId"] = e.integer("passIndex");
+    e.rejectUnread();
+    events.push_back(ev);
+  }
+  root.rejectUnread();
+
+  CaptureWriter writer(out);
+  double emissionResidual = 0, combinedTotal = 0;
+  for (int t = 0; t < frames; ++t) {
+    const fs::path file = source / "noisy" / frameFile(t);
+    const LayerSet passes = readPasses(file, framePasses());
+    if (passes.width() != width || passes.height() != height)
+      throw Error(file.string() + ": " + std::to_string(passes.width()) + "x" + std::to_string(passes.height()) +
+                  ", expected " + std::to_string(width) + "x" + std::to_string(height) + " (cameras.json)");
+    LayerSet f;
+    const Image color = rgb(passes.get("Combined"));
+    const Image diffuse = sum(passes.get("DiffDir"), passes.get("DiffInd"));
+    const Image specular = sum(passes.get("GlossDir"), passes.get("GlossInd"));
+    const Image &albedo = passes.get("DiffCol"), &specAlbedo = passes.get("GlossCol");
+    Image emission(width, height, 3);
+    const Image emitEnv = sum(passes.get("Emit"), passes.get("Env"));
+    for (size_t i = 0; i < emission.raw().size(); ++i) {
+      emission.raw()[i] = color.raw()[i] - albedo.raw()[i] * diffuse.raw()[i] - specAlbedo.raw()[i] * specular.raw()[i];
+      emissionResidual += std::abs(double(emission.raw()[i]) - emitEnv.raw()[i]);
+      combinedTotal += std::abs(double(color.raw()[i]));
+    }
+    const Image& depthPass = passes.get("Depth");
+    const Image& vector = passes.get("Vector");
+    Image depth(width, height, 1), motion(width, height, 2), meshId(width, height, 1), materialId(width, height, 1);
+    for (size_t i = 0; i < depth.pixelCount(); ++i) {
+      const float z = depthPass.raw()[i];
+      const bool background = !(z > 0) || z >= clipEnd;  // Cycles writes 1e10 where nothing was hit
+      depth.raw()[i] = background ? 0.0f : z;
+      motion.plane(0)[i] = vector.plane(0)[i];
+      motion.plane(1)[i] = -vector.plane(1)[i];
+      meshId.raw()[i] = background ? -1.0f : passes.get("IndexOB").raw()[i];
+      materialId.raw()[i] = background ? -1.0f : passes.get("IndexMA").raw()[i];
+    }
+    f.set("color", color);
+    f.set("diffuse", diffuse);
+    f.set("specular", specular);
+    f.set("albedo", albedo);
+    f.set("specAlbedo", specAlbedo);
+    f.set("emission", std::move(emission));
+    f.set("normal", passes.get("Normal"));
+    f.set("depth", std::move(depth));
+    f.set("motion", std::move(motion));
+    f.set("roughness", passes.get("roughness"));
+    f.set("meshId", std::move(meshId));
+    f.set("materialId", std::move(materialId));
+    writer.frame(t, f);
+    // The reference: two independent halves rendered with different seeds.
+    const fs::path fa = source / "reference_a" / frameFile(t), fb = source / "reference_b" / frameFile(t);
+    const Image a = rgb(readPasses(fa, {{"Combined", {"R", "G", "B", "A"}}}).get("Combined"));
+    const Image b = rgb(readPasses(fb, {{"Combined", {"R", "G", "B", "A"}}}).get("Combined"));
+    if (a.width() != width || a.height() != height || b.width() != width || b.height() != height)
+      throw Error(fa.string() + " / " + fb.string() + ": size differs from " + std::to_string(width) + "x" +
+                  std::to_string(height));
+    LayerSet ref;
+    Image mean(width, height, 3);
+    for (size_t i = 0; i < mean.raw().size(); ++i) mean.raw()[i] = 0.5f * (a.raw()[i] + b.raw()[i]);
+    ref.set("color", std::move(mean));
+    ref.set("colorHalf", a);
+    writer.reference(t, ref);
+  }
+  std::vector<int> ofFrame(static_cast<size_t>(frames));
+  for (int t = 0; t < frames; ++t) ofFrame[size_t(t)] = t;
+  const std::string name = options.name.empty() ? fs::absolute(source).lexically_normal().filename().string() : options.name;
+  json description = {
+      {"format", kCaptureFormatName},
+      {"version", kCaptureFormatVersion},
+      {"name", name},
+      {"purpose", "Blender Cycles capture"},
+      {"width", width},
+      {"height", height},
+      {"frames", frames},
+      {"frameRate", fps},
+      {"units", "m"},
+      {"near", clipStart},
+      {"far", clipEnd},
+      {"cameras", cameras},
+      {"events", events},
+      {"reference", {{"ofFrame", ofFrame}, {"samples", std::vector<int>(size_t(frames), referenceSpp)}}},
+      {"source",
+       {{"producer", producer},
+        {"spp", spp},
+        {"importer", "arena import blender"},
+        // How much of the colour is neither the two lobes nor Emit + Env (transmission, volumes):
+        // it is kept in `emission`, so the colour stays exact.
+        {"emissionBeyondEmitEnv", combinedTotal > 0 ? emissionResidual / combinedTotal : 0.0}}}};
+  writer.commit(description);
+}
+
+}  // namespace arena
