@@ -69,6 +69,7 @@ RunConfig configFrom(const MatrixOptions& o) {
   c.name = std::filesystem::path(o.out).filename().string();
   c.cache = o.render.cacheDir;
   c.render = o.render.settings();
+  c.lowresAuto = o.render.lowresAuto();  // resolved once the denoisers are known
   c.scenes = selectScenes(o.scenes, o.render.scenesDir);
   for (const Scene& s : c.scenes) requireFitsInMemory(s, c.render, true);
   c.baselines = !o.noBaselines;
@@ -158,6 +159,7 @@ void addRunCommands(CLI::App& app) {
         DenoiserRegistry::instance().find(n);
         c.denoisers.push_back({n, params[n], ""});
       }
+      resolveAutoLowres(c);
       finish(runMatrix(c), o->out);
     });
   }
@@ -178,6 +180,7 @@ void addRunCommands(CLI::App& app) {
           throw Error("--param " + other + "." + kv.begin()->first + ": this sweep runs only " + *denoiser +
                       "; --param must name " + *denoiser + ".NAME");
       c = sweepRun(std::move(c), *denoiser, assignments[*denoiser], *grids);
+      resolveAutoLowres(c);
       json results = runMatrix(c);
       finish(results, o->out);
     });

@@ -166,6 +166,18 @@ std::string clock(double s) {
 
 }  // namespace
 
+void resolveAutoLowres(RunConfig& c) {
+  if (!c.lowresAuto) return;
+  bool reads = false;
+  for (const DenoiserRequest& r : c.denoisers) {
+    const DenoiserInfo& info = DenoiserRegistry::instance().find(r.name);
+    if (!info.origin.empty()) continue;  // external denoisers read no low-resolution buffer
+    reads = reads || info.create(info.schema.resolve(r.params, r.name), SignalKind::Diffuse)->wantsLowres();
+  }
+  c.render.lowresFactor = reads ? kAutoLowresFactor : 0;
+  c.lowresAuto = false;
+}
+
 json runMatrix(const RunConfig& cfg) {
   if (cfg.out.empty()) throw Error("run: --out is required");
   if (cfg.scenes.empty()) throw Error("run: no scenes");
