@@ -70,6 +70,9 @@ struct SequenceInfo {
   // Paths per second of the low-resolution buffer's render, measured on the machine that rendered
   // it (0: unknown or no buffer). Timing metadata, not pixels: it is not part of the hash.
   double lowresPathsPerSecond = 0;
+  // Paths per second of the 1-spp frames' render (gradient samples included), measured likewise:
+  // the rate at which A-SVGF's re-shaded gradient samples are charged.
+  double inputPathsPerSecond = 0;
 
   // The low-resolution buffer's block size and samples per texel; 0 when the sequence has none.
   int lowresFactor() const { return settings.value("lowresFactor", 0); }

@@ -98,8 +98,10 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
             FrameFacts facts;
             facts.milliseconds = f.milliseconds;
             if (f.selfTimed) facts.wallMilliseconds = f.wallMilliseconds;
-            if (run.readsLowres()) facts.extraRaysPerPixel = f.extraRaysPerPixel;
-            facts.lowresPathsPerSecond = info.lowresPathsPerSecond;
+            // Extra paths: the low-resolution buffer's (reengine) or the gradient samples'
+            // (asvgf), each at the rate it rendered at.
+            if (run.readsLowres() || run.readsGradients()) facts.extraRaysPerPixel = f.extraRaysPerPixel;
+            facts.extraPathsPerSecond = run.readsLowres() ? info.lowresPathsPerSecond : info.inputPathsPerSecond;
             evaluation.add(f.frame, f.color, facts);
             selfTimed |= f.selfTimed;
             for (const auto& [channel, n] : f.sanitized) sanitized[channel] += n;
