@@ -1,5 +1,6 @@
 #include "cli/render_options.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/error.hpp"
@@ -25,11 +26,11 @@ RenderSettings RenderOptions::settings() const {
   s.inputSeed = uint32_t(inputSeed);
   s.referenceSampler = referenceSampler;
   s.referenceTile = referenceTile;
-  if (lowresFactor < 0 || lowresFactor == 1)
+  if (lowresFactor < -1 || lowresFactor == 1)
     throw Error("--lowres-factor " + std::to_string(lowresFactor) + ": expected 0 (none) or a block size >= 2");
   if (lowresSpp < 1 || lowresSpp > 4096)
     throw Error("--lowres-spp " + std::to_string(lowresSpp) + ": expected a count in [1, 4096]");
-  s.lowresFactor = lowresFactor;
+  s.lowresFactor = std::max(lowresFactor, 0);
   s.lowresSpp = lowresSpp;
   return s;
 }
@@ -81,7 +82,10 @@ void addRenderOptions(CLI::App* cmd, RenderOptions& o) {
       ->default_val(8);
   cmd->add_option("--lowres-factor", o.lowresFactor,
                   "Also render a low-resolution, many-sample buffer per frame, one texel per FxF block "
-                  "(CAPCOM 2023 disocclusion rays; 0: none)");
+                  "(CAPCOM 2023 disocclusion rays; 0: none)")
+      ->check(CLI::Range(0, 1 << 16))
+      ->default_str("run, sweep, study: 8 when a denoiser reads it (reengine's disocclusionRays=auto or on), "
+                    "else none; render: none");
   cmd->add_option("--lowres-spp", o.lowresSpp, "Paths per low-resolution texel (default 16)");
   cmd->add_option("--cache", o.cacheDir, "Sequence cache directory")->default_val("cache");
   cmd->add_option("--scenes-dir", o.scenesDir, "Directory of scene files")

@@ -19,10 +19,12 @@ struct RenderOptions {
   long long inputSeed = 0;
   std::string referenceSampler = "sobol";
   int referenceTile = 8;                 // adaptive allocation tile (0: one tile, uniform)
-  int lowresFactor = 0, lowresSpp = 16;  // CAPCOM 2023 low-resolution buffer (0: none)
+  // CAPCOM 2023 low-resolution buffer (0: none; -1, unset: the run decides, resolveAutoLowres).
+  int lowresFactor = -1, lowresSpp = 16;
   std::string cacheDir = "cache";
   std::string scenesDir = defaultScenesDir();
-  RenderSettings settings() const;
+  RenderSettings settings() const;  // an unset lowresFactor gives 0 here
+  bool lowresAuto() const { return lowresFactor < 0; }
 };
 void addRenderOptions(CLI::App* cmd, RenderOptions& options);
 

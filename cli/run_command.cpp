@@ -78,6 +78,7 @@ RunConfig configFrom(const MatrixOptions& o) {
   c.name = std::filesystem::path(o.out).filename().string();
   c.cache = o.render.cacheDir;
   c.render = o.render.settings();
+  c.lowresAuto = o.render.lowresAuto();  // resolved once the denoisers are known
   // A run on captures covers only them unless scenes are asked for too.
   if (o.captures.empty() || o.scenesOption->count() > 0) c.scenes = selectScenes(o.scenes, o.render.scenesDir);
   for (const std::string& capture : o.captures) c.captures.push_back(capture);
@@ -176,6 +177,7 @@ void addRunCommands(CLI::App& app) {
         if (capturedOutputName(n).empty()) DenoiserRegistry::instance().find(n);
         c.denoisers.push_back({n, params[n], ""});
       }
+      resolveAutoLowres(c);
       finish(runMatrix(c), o->out);
     });
   }
@@ -196,6 +198,7 @@ void addRunCommands(CLI::App& app) {
           throw Error("--param " + other + "." + kv.begin()->first + ": this sweep runs only " + *denoiser +
                       "; --param must name " + *denoiser + ".NAME");
       c = sweepRun(std::move(c), *denoiser, assignments[*denoiser], *grids);
+      resolveAutoLowres(c);
       json results = runMatrix(c);
       finish(results, o->out);
     });

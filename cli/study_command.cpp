@@ -141,10 +141,10 @@ void addStudyCommand(CLI::App& app) {
   cmd->add_option("--refine-max-spp", *refineMaxSpp, "The refinement's cap on a reference's samples per pixel")
       ->check(CLI::Range(1, 1 << 20))
       ->default_val(8192);
-  // The study renders the low-resolution buffer (1/8, 16 paths per texel, the CAPCOM 2023 setting
-  // in algorithms.md), so reengine runs its disocclusion rays and is charged for them (a quarter
-  // of the 1-spp input's paths per frame); --lowres-factor 0 leaves it out.
-  opt->lowresFactor = 8;
+  // The study, like every run, renders the low-resolution buffer (1/8, 16 paths per texel, the
+  // CAPCOM 2023 setting in algorithms.md) because reengine reads it (resolveAutoLowres), so
+  // reengine runs its disocclusion rays and is charged for them (a quarter of the 1-spp input's
+  // paths per frame); --lowres-factor 0 leaves it out.
   addRenderOptions(cmd, *opt);
   cmd->callback([=] {
     const auto start = std::chrono::steady_clock::now();
@@ -156,6 +156,8 @@ void addStudyCommand(CLI::App& app) {
       for (const auto& [output, stored] : readCaptureDescription(capture).outputs)
         c.denoisers.push_back({"file:" + output, {}, ""});
     }
+    c.lowresAuto = opt->lowresAuto();
+    resolveAutoLowres(c);
     c.out = *out;
     c.cache = opt->cacheDir;
     c.flip = *flip;

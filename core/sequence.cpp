@@ -131,7 +131,8 @@ json SequenceInfo::toJson() const {
           {"frames", frames}, {"referenceOfFrame", referenceOfFrame}, {"referenceSpp", referenceSpp},
           {"cameras", cams}, {"events", evs}, {"settings", settings},
           {"gradientStratum", kGradientStratum}, {"referenceEstimatedRelMse", referenceEstimatedRelMse},
-          {"referenceCapped", referenceCapped}, {"lowresPathsPerSecond", lowresPathsPerSecond}};
+          {"referenceCapped", referenceCapped}, {"lowresPathsPerSecond", lowresPathsPerSecond},
+          {"inputPathsPerSecond", inputPathsPerSecond}};
 }
 
 SequenceInfo SequenceInfo::fromJson(const json& j, const std::string& file) {
@@ -160,6 +161,7 @@ SequenceInfo SequenceInfo::fromJson(const json& j, const std::string& file) {
     s.referenceEstimatedRelMse = j.value("referenceEstimatedRelMse", std::vector<double>(s.referenceSpp.size(), 0.0));
     s.referenceCapped = j.value("referenceCapped", std::vector<bool>(s.referenceSpp.size(), false));
     s.lowresPathsPerSecond = j.value("lowresPathsPerSecond", 0.0);
+    s.inputPathsPerSecond = j.value("inputPathsPerSecond", 0.0);
     if (int(s.referenceOfFrame.size()) != s.frames || int(s.cameras.size()) != s.frames)
       throw Error(file + ": per-frame lists do not match the frame count");
     return s;

@@ -71,6 +71,9 @@ struct SequenceInfo {
   // Paths per second of the low-resolution buffer's render, measured on the machine that rendered
   // it (0: unknown or no buffer). Timing metadata, not pixels: it is not part of the hash.
   double lowresPathsPerSecond = 0;
+  // Paths per second of the 1-spp frames' render (gradient samples included), measured likewise:
+  // the rate at which A-SVGF's re-shaded gradient samples are charged.
+  double inputPathsPerSecond = 0;
   // "tracer" (this project's cache) or "capture" (core/capture.hpp). A capture gives only some
   // frame layers (`layers`; empty means every frame layer) and no gradient samples.
   std::string source = "tracer";

@@ -10,8 +10,8 @@
 //   4. blur with radius max(minRadius, maxRadius / (1 + N_prev)) (NRD), then post-blur at twice it,
 //   5. the post-blurred result becomes the history (recurrent; `recurrent=false` stores the
 //      temporal result instead),
-//   6. temporal stabilisation with anti-lag: the stabilised history is clamped to the fast
-//      history's mu +- 2 sigma, and N shortens by how far it had to move:
+//   6. temporal stabilisation with anti-lag: the stabilised history is clamped to mu +- 2 sigma
+//      of this frame's post-blurred 3x3 (NRD), and N shortens by how far it had to move:
 //      N' = N / (1 + d N / 3), d = |h - hc| / max(h, hc) (luminance).
 // No luminance-variance stopping anywhere (NRD: plane distance, normal/lobe, hit distance).
 // Re-modulation is the harness's.
@@ -265,7 +265,9 @@ void Reblur::historyFixPass() {
 //   - fast-history clamp (NRD: "clamp slow main history to responsive fast history"): the
 //     luminance is clamped to [min(mu - k sigma, c), max(mu + k sigma, c)] of the fast history's
 //     3x3 luminances (c its centre, k = antilagSigmaScale, NRD fastHistoryClampingSigmaScale 2),
-//     blended back by 1 / (1 + N_prev): a young history takes the clamp fully, an old one barely.
+//     then the unclamped value blended back by 1 / (1 + 2 N_prev) (NRD; `fastHistoryBlend=ours`
+//     1 / (1 + N_prev)): a fresh history (N_prev = 0) keeps its own value, an old one -- whose
+//     slow history can lag the fast one -- takes the clamp almost fully.
 void Reblur::antiFireflyPass() {
   ScopedPass pass(this, "anti-firefly", s_.antiFirefly || s_.fastHistoryClamp ? 17 : 0);
   if (!s_.antiFirefly && !s_.fastHistoryClamp) {
@@ -316,7 +318,8 @@ void Reblur::antiFireflyPass() {
         const Lanes8 lo = minFloat(mean - sigma, fastCentre),
                      hi = maxFloat(mean + sigma, fastCentre);
         const Lanes8 clamped = minFloat(maxFloat(target, lo), hi);
-        const Lanes8 young = 1.0f / (1.0f + loadLanes(previous + n.p, n.inRow));
+        const float blendSlope = s_.fastHistoryBlend == FastHistoryBlend::Nrd ? 2.0f : 1.0f;
+        const Lanes8 young = 1.0f / (1.0f + blendSlope * loadLanes(previous + n.p, n.inRow));
         target = selectFloat(n.present[4], clamped + young * (target - clamped), target);
       }
       // ChangeLuma: the colour scaled to the target luminance (a black pixel stays black).
@@ -384,7 +387,8 @@ void Reblur::storeRecurrentHistory() {
 }
 
 // ---- 6. Temporal stabilisation with anti-lag (NRD TemporalStabilization): the stabilised
-// history is clamped to mu +- sigmaScale sigma of the fast history's 3x3 neighbourhood; how far
+// history is clamped to mu +- sigmaScale sigma of the 3x3 neighbourhood of this frame's
+// post-blurred result (NRD; `stabilizationBox=fast`: of the fast history, the first version); how far
 // it moved, d = |L(h) - L(hc)| / max(L(h), L(hc)), shortens N: N' = N / (1 + d N / 3). The
 // output blends with 1 / (1 + N'), and N' is what the next frame reprojects (anti-lag).
 void Reblur::stabilize(Image& output) {
@@ -398,15 +402,16 @@ void Reblur::stabilize(Image& output) {
   const float k = s_.antilagSigmaScale;
   parallelRows(h, [&](int y) {
     for (int x0 = 0; x0 < w; x0 += 8) {
-      // The fast history's mean and sigma over the 3x3 non-sky neighbourhood, eight pixels at a
-      // time (taps in row-major order; a missing tap adds 0).
+      // The box's mean and sigma over the 3x3 non-sky neighbourhood, eight pixels at a time
+      // (taps in row-major order; a missing tap adds 0).
       const Neighbourhood3x3Lanes n(x0, y, w, h, gbuffer_.meshId);
+      const Image& box = s_.stabilizationBox == StabilizationBox::Current ? postBlurred_ : fast_;
       Lanes8 count{}, mean[3], sigma[3];
       for (int j = 0; j < 9; ++j) count += selectFloat(n.present[j], Lanes8{} + 1.0f, Lanes8{});
       for (int c = 0; c < 3; ++c) {
         Lanes8 sum{}, sumSq{};
         for (int j = 0; j < 9; ++j) {
-          const Lanes8 v = loadLanes(fast_.plane(c) + n.offset[j], n.present[j]);
+          const Lanes8 v = loadLanes(box.plane(c) + n.offset[j], n.present[j]);
           sum += v;
           sumSq += v * v;
         }
@@ -515,20 +520,29 @@ const ParamTable<ReblurSettings>& reblurParams() {
                    "(NRD enableAntiFirefly; NRD's range is m1 +- sigma of a ring)")
           .boolean("fastHistoryClamp", &S::fastHistoryClamp, true,
                    "clamp the recurrent history's luminance to the fast history's 3x3 mu +- "
-                   "antilagSigmaScale sigma, weight 1 - 1/(1+N) (NRD HistoryFix)")
+                   "antilagSigmaScale sigma (NRD HistoryFix)")
+          .choice("fastHistoryBlend", &S::fastHistoryBlend, "nrd",
+                  {{"nrd", FastHistoryBlend::Nrd}, {"ours", FastHistoryBlend::Ours}},
+                  "fast-history clamp: the unclamped value blended back by 1/(1 + 2 N_prev) "
+                  "(NRD) or 1/(1 + N_prev) (the first version)")
           .boolean("blur", &S::blur, true, "pass 4: Poisson blur")
           .boolean("postBlur", &S::postBlur, true, "pass 4: Poisson post-blur at twice the radius")
           .real("minBlurRadius", &S::minBlurRadius, 1, 0, 500,
                 "blur radius floor, px (NRD minBlurRadius 1)")
           .real("maxBlurRadius", &S::maxBlurRadius, 30, 0, 500,
-                "blur radius at N = 0 is this sqrt(1/(1+N)), px (NRD maxBlurRadius 30)")
+                "blur radius at N_prev = 0, px, shrinking per radiusFalloff (NRD maxBlurRadius "
+                "30)")
           .boolean("recurrent", &S::recurrent, true,
                    "pass 5: the post-blurred result is the history (false: the temporal result)")
           .boolean("stabilization", &S::stabilization, true, "pass 6: temporal stabilisation")
           .boolean("antiLag", &S::antiLag, true,
                    "pass 6: shorten N by the clamp distance, N' = N / (1 + d N / 3)")
           .real("antilagSigmaScale", &S::antilagSigmaScale, 2, 0, 100,
-                "stabilised history clamped to the fast history's mu +- this sigma (NRD 2)")
+                "stabilised history clamped to the box's mu +- this sigma (NRD 2)")
+          .choice("stabilizationBox", &S::stabilizationBox, "current",
+                  {{"current", StabilizationBox::Current}, {"fast", StabilizationBox::Fast}},
+                  "stabiliser's clamp box: the 3x3 of this frame's post-blurred result (NRD "
+                  "TemporalStabilization) or of the fast history (the first version)")
           .real("planeSigma", member(&S::weights, &W::planeSigma), 0.02, 1e-6, 10,
                 "plane-distance weight scale, fraction of view depth (ours)")
           .real("normalPower", member(&S::weights, &W::normalPower), 32, 0, 1e4,

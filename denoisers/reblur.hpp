@@ -23,6 +23,12 @@ enum class ReblurHistoryFix { Off, Sparse, Mip };
 enum class HistoryFixShape { Nrd, Ours };
 // The blur radius scale: NRD's 1 / (1 + N_prev), or sqrt(1 / (1 + N)) of the incremented counter.
 enum class RadiusFalloff { Nrd, Sqrt };
+// The fast-history clamp's blend back to the unclamped value: NRD's 1 / (1 + 2 N_prev), or the
+// first version's 1 / (1 + N_prev).
+enum class FastHistoryBlend { Nrd, Ours };
+// Where the stabiliser's clamp box comes from: this frame's post-blurred result (NRD
+// TemporalStabilization) or the fast history (the first version).
+enum class StabilizationBox { Current, Fast };
 
 // Every field named after its parameter is set from reblurParams() (reblur.cpp), which declares
 // its default, range and meaning once (NRD's ReblurSettings names in the meanings).
@@ -47,11 +53,13 @@ struct ReblurSettings {
   RadiusFalloff radiusFalloff;
   bool antiFirefly;
   bool fastHistoryClamp;  // NRD HistoryFix: the recurrent history clamped to the fast one
+  FastHistoryBlend fastHistoryBlend;
   bool blur, postBlur;
   float minBlurRadius, maxBlurRadius;
   bool recurrent;  // the post-blurred result is the history (the "R" of ReBLUR)
   bool stabilization, antiLag;
   float antilagSigmaScale;
+  StabilizationBox stabilizationBox;
   // The radii and the stride above, minBlurRadius included, follow the one footprint policy of
   // every denoiser (footprint.hpp): pixels as given (native) or pixels at a reference height.
   Footprint footprint;

@@ -27,25 +27,30 @@
 // geometry) it is plain reprojected accumulation with alpha = 1/h: `temporal` at the same
 // maxHistory, bit for bit (tested).
 //
-// What the slides leave open, and what we chose (each a parameter):
+// What the slides leave open, and what we chose (each a parameter; denoisers/FIDELITY.md goes
+// through the talk slide by slide):
 // - Propagation (1, 3): the slides name the passes but not their kernel. A Poisson-disk gather
 //   with geometry-only weights (ReBLUR's, poisson_blur.hpp) "propagates" light without a
 //   luminance term that would stop at the noise; radius 16 px (pass 1) and 8 px (pass 3) at
 //   h = 1, shrinking as 1/sqrt(h); smooth specular's radius further scaled by roughness /
-//   threshold (slide 31: small-scale filter below the threshold).
+//   threshold (slide 31: small-scale filter below the threshold). Pixels, like the merge's mip
+//   level, follow the one footprint policy (footprint.hpp: pixels at 1080 lines, scaled).
 // - The stabilised one-frame result (slide 29): the propagated current frame, EMA with
 //   alpha 0.5 over the previous one-frame result clamped to the current moments' box (stable
 //   under noise, yet it follows a light change within the frame); the rejection rule is the
-//   shared luminance_rejection.hpp (tau 0.5 relative).
+//   shared luminance_rejection.hpp, its gap in standard errors of the one-frame value (3, full
+//   at 6; `rejectionMode=relative` is the first version, tau 0.5 relative, which fired on the
+//   noise of sparse signals: the slide-24 caveat).
 // - "Moment based merge" of geometry and virtual motion (slide 34): each candidate history is
 //   weighted by how well its luminance fits the current moments, exp(-d^2 / 2 mergeSigma^2),
 //   d = |L(history) - L(mean)| / sigma_L.
 // - "Specular clamps the colour, diffuse clamps the history" (slide 34): smooth specular's
 //   history is clamped per channel to mean +- 1.5 sigma; diffuse (and rough specular) histories
 //   are corrected only by the luminance rejection.
-// - Variance check and merge: the slides give neither; noise = sqrt(Var(L) / h) / L relative to
+// - Variance check and merge: the slides give neither; noise = sqrt(Var(L) / (n h)) / L, the
+//   relative noise of a mean of h frames of pass 1's n distinct pixels, relative to
 //   varianceTarget 0.25, clamped to [0, 1], is the large scale's share; the large scale is mip
-//   level 3 (8x8), the same factor as the low-resolution buffer.
+//   level 3 (8x8 px at 1080 lines).
 // - Disocclusion rays: read where h < 4, blend weight 0.9 at h = 1 falling linearly to 0 at
 //   h = 4, times the reconstruction's confidence; the blend enters the history (lowresFeedback).
 //   Charged per signal: RE ENGINE traces diffuse and specular rays separately (slide 42), so a
@@ -88,20 +93,28 @@ std::vector<std::string> ReEngine::requiredChannels() const {
 void ReEngine::setup(int width, int height) {
   width_ = width;
   height_ = height;
+  footprintScale_ = s_.footprint.scale(height);
+  mergeLevel_ = scaledMipLevel(s_.mergeLevels, footprintScale_);
   derivatives_ = Image(width, height, kGeometryDerivativeChannels);
   surface_.setup(width, height);
   virtual_.setup(width, height);
   previousGBuffer_.setup(width, height);
-  mips_.setup(width, height, s_.mergeLevels, 3);
+  mips_.setup(width, height, mergeLevel_, 3);
   for (Image* image : {&colorHistory_, &oneFrameHistory_, &deflickerHistory_, &signal_, &oneFrame_,
                        &temporal_, &propagated2_, &large_, &merged_, &fireflyClamped_,
                        &reprojectedDeflicker_, &deflickered_, &upscaled_, &upscaledBlend_, &final_})
     *image = Image(width, height, 3);
-  for (Image* image : {&lengthHistory_, &share_, &valid_, &radius_, &historyLength_, &noise_,
+  for (Image* image : {&lengthHistory_, &share_, &valid_, &radius_, &historyLength_, &rejection_,
+                       &noise_,
                        &lumVariance_, &filteredVariance_, &need_, &confidence_, &lowWeight_})
     *image = Image(width, height, 1);
-  momentInput_ = Image(width, height, 6);
-  propagated_ = Image(width, height, 6);
+  // Colour, its per-channel square and the luminance's square (the luminance variance keeps the
+  // channels' covariance: per-channel variances weighted by luma^2 give 0.56x it for grey noise).
+  momentInput_ = Image(width, height, 7);
+  propagated_ = Image(width, height, 7);
+  noiseMoments_ = Image(width, height, 7);
+  noiseRadius_ = Image(width, height, 1);
+  gatherCount_ = Image(width, height, 2);  // distinct pixels: pass 1's gather, the noise gather
   momentsHistory_ = Image(width, height, 2);
   moments_ = Image(width, height, 2);
   taps_.setup(height);
@@ -145,6 +158,14 @@ void ReEngine::toFilterSpace(const Image& signal) {
     reinhardCompress(signal, signal_);
   else
     parallelCopy(signal, signal_);
+}
+
+// Same mesh and normals within ~37 degrees (n.n' >= 0.8): the edge-aware median's rule.
+bool ReEngine::sameSurface3x3(size_t p, size_t q) const {
+  if (gbuffer_.meshId[p] != gbuffer_.meshId[q]) return false;
+  float cosine = 0.0f;
+  for (size_t c = 0; c < 3; ++c) cosine += gbuffer_.normal[c][p] * gbuffer_.normal[c][q];
+  return cosine >= 0.8f;
 }
 
 bool ReEngine::diffuseLike(size_t i) const {
@@ -210,7 +231,8 @@ bool ReEngine::needsMoments() const {
 // ---- 1. Spatial propagation: the Poisson-disk gather (poisson_blur.hpp) of the signal and its
 // square, so one pass gives the propagated colour and the moments mean, E[x^2] per channel.
 void ReEngine::spatialPropagation1(const FrameContext& ctx) {
-  ScopedPass pass(this, "spatial propagation 1", needsMoments() ? kPoissonTaps : 0);
+  ScopedPass pass(this, "spatial propagation 1", needsMoments() ? 2 * kPoissonTaps : 0);
+  std::fill(gatherCount_.raw().begin(), gatherCount_.raw().end(), 1.0f);
   if (!needsMoments()) return;
   parallelRows(height_, [&](int y) {
     for (int x = 0; x < width_; ++x) {
@@ -220,13 +242,62 @@ void ReEngine::spatialPropagation1(const FrameContext& ctx) {
         momentInput_.plane(c)[i] = v;
         momentInput_.plane(c + 3)[i] = v * v;
       }
+      const float l = luminance(signal_.plane(0)[i], signal_.plane(1)[i], signal_.plane(2)[i]);
+      momentInput_.plane(6)[i] = l * l;
     }
   });
   PoissonBlurSettings blur;
-  blur.radius = s_.propagationRadius;
+  blur.radius = s_.propagationRadius * footprintScale_;
   blur.weights = s_.weights;
-  poissonDiskBlur(momentInput_, SurfaceGuide{gbuffer_, roughness_, hitDistance_}, blur,
-                  poissonRotation(ctx.frameIndex), &radius_, propagated_);
+  const float rotation = poissonRotation(ctx.frameIndex);
+  poissonDiskBlur(momentInput_, SurfaceGuide{gbuffer_, roughness_, hitDistance_}, blur, rotation,
+                  &radius_, propagated_);
+  // The distinct pixels the gather read (the centre and the taps that round to other pixels; a
+  // small radius puts several taps on one pixel): the nominal sample count of the mean, which
+  // the rejection and the variance check divide the 1-spp variance by. Geometry weights and taps
+  // dropped at edges make the true count smaller: the estimate errs towards rejecting.
+  // The noise statistics: the same gather with its radius floored at kNoiseRadius px, so the
+  // clamp boxes, the luminance variance and the moment clamp never rest on fewer than about nine
+  // pixels. Under the scaled footprint a converged pixel's pass-1 gather shrinks to the pixel
+  // itself (16 px / sqrt(32) at 144 lines is 0.4 px), and a box of one sample collapses onto it:
+  // every history then looked rejected, which reset the moments, which kept it so.
+  constexpr float kNoiseRadius = 2.0f;
+  PoissonBlurSettings noiseBlur = blur;
+  noiseBlur.radius = std::max(blur.radius, kNoiseRadius);
+  for (size_t i = 0; i < noiseRadius_.pixelCount(); ++i)
+    noiseRadius_.plane(0)[i] =
+        std::max(blur.radius * radius_.plane(0)[i], kNoiseRadius) / noiseBlur.radius;
+  poissonDiskBlur(momentInput_, SurfaceGuide{gbuffer_, roughness_, hitDistance_}, noiseBlur,
+                  rotation, &noiseRadius_, noiseMoments_);
+  const auto disk = poissonDisk(rotation);
+  parallelRows(height_, [&](int y) {
+    for (int x = 0; x < width_; ++x) {
+      const size_t i = size_t(y) * size_t(width_) + size_t(x);
+      const float radii[2] = {blur.radius * radius_.plane(0)[i],
+                              noiseBlur.radius * noiseRadius_.plane(0)[i]};
+      for (int g = 0; g < 2; ++g) {
+        long offsets[kPoissonTaps + 1];
+        int count = 0;
+        offsets[count++] = 0;
+        for (const auto& tap : disk) {
+          const long dx = std::lround(tap[0] * radii[g]), dy = std::lround(tap[1] * radii[g]);
+          const long key = dy * 65536 + dx;
+          if (std::find(offsets, offsets + count, key) == offsets + count) offsets[count++] = key;
+        }
+        gatherCount_.plane(g)[i] = float(count);
+      }
+    }
+  });
+}
+
+float ReEngine::spatialLumaVariance(size_t i) const {
+  const float lm = luminance(noiseMoments_.plane(0)[i], noiseMoments_.plane(1)[i],
+                             noiseMoments_.plane(2)[i]);
+  return std::max(0.0f, noiseMoments_.plane(6)[i] - lm * lm);
+}
+
+float ReEngine::samplesPerFrame(size_t i) const {
+  return s_.propagation1 ? gatherCount_.plane(0)[i] : 1.0f;
 }
 
 // ---- 2. Temporal filter.
@@ -242,9 +313,11 @@ void ReEngine::temporalFilter() {
       for (int c = 0; c < 3; ++c) {
         current[c] = s_.propagation1 ? propagated_.plane(c)[i] : signal_.plane(c)[i];
         mean[c] = moments ? propagated_.plane(c)[i] : current[c];
-        sigma[c] = moments
-                       ? std::sqrt(std::max(0.0f, propagated_.plane(c + 3)[i] - mean[c] * mean[c]))
-                       : 0.0f;
+        // Sigma from the noise statistics (at least ~9 pixels), centred on pass 1's mean.
+        const float wideMean = noiseMoments_.plane(c)[i];
+        sigma[c] = moments ? std::sqrt(std::max(0.0f, noiseMoments_.plane(c + 3)[i] -
+                                                          wideMean * wideMean))
+                           : 0.0f;
       }
       const bool smoothSpecular = useVirtual_ && !diffuseLike(i);
       // Slide 34, "Moment based merge": where both motions find a history, weight each by how
@@ -270,22 +343,48 @@ void ReEngine::temporalFilter() {
       // Slide 29: the stabilised one-frame result -- the propagated frame, lightly accumulated
       // over its own history clamped to the current moments (stable under noise, yet at a light
       // change it follows within the frame, so the rejection below can act at once).
+      // Its frame value is the noise statistics' mean (at least ~9 pixels): under the scaled
+      // footprint pass 1 alone may hold one pixel, and one 1-spp sample cannot tell a light
+      // switched off from noise (issue 34).
       if (s_.lumaRejection)
         for (int c = 0; c < 3; ++c) {
-          const float previous =
-              std::clamp(historyAt(i, oneFrameHistory_.plane(c)),
-                         mean[c] - s_.clampGamma * sigma[c], mean[c] + s_.clampGamma * sigma[c]);
-          oneFrame_.plane(c)[i] =
-              valid ? s_.oneFrameAlpha * mean[c] + (1.0f - s_.oneFrameAlpha) * previous : mean[c];
+          const float frameValue = moments ? noiseMoments_.plane(c)[i] : mean[c];
+          const float previous = std::clamp(historyAt(i, oneFrameHistory_.plane(c)),
+                                            frameValue - s_.clampGamma * sigma[c],
+                                            frameValue + s_.clampGamma * sigma[c]);
+          oneFrame_.plane(c)[i] = valid ? s_.oneFrameAlpha * frameValue +
+                                              (1.0f - s_.oneFrameAlpha) * previous
+                                        : frameValue;
         }
-      const float l = luminance(signal_.plane(0)[i], signal_.plane(1)[i], signal_.plane(2)[i]);
+      // The moments follow the value the EMA averages (pass 1's mean, or the 1-spp signal with
+      // propagation off), so their variance is that of one frame's contribution to the mean.
+      const float l = luminance(current[0], current[1], current[2]);
+      float rho = 0.0f;  // the share of the history the luminance rejection replaced
       if (valid) {
         for (int c = 0; c < 3; ++c) history[c] = historyAt(i, colorHistory_.plane(c));
         if (s_.lumaRejection) {
           const float stabilised[3] = {oneFrame_.plane(0)[i], oneFrame_.plane(1)[i],
                                        oneFrame_.plane(2)[i]};
-          h = std::max(1.0f,
-                       h * (1.0f - rejectHistoryLuminance(history, stabilised, s_.rejectionTau)));
+          if (s_.rejectionMode == ReEngineSettings::RejectionMode::Relative) {
+            rho = rejectHistoryLuminance(history, stabilised, s_.rejectionTau);
+          } else {
+            // The 1-spp luminance variance s^2: the larger of this frame's (E[l^2] - E[l]^2 of
+            // the noise statistics, covariance kept) and the history's, from its temporal
+            // moments of values that each averaged n pixels -- nine equal samples (all zero on a
+            // sparse signal) cannot tell a switched-off light from a miss; the history's spread
+            // can. The gap's variance: the stabilised value's, an EMA (a = oneFrameAlpha) of
+            // means of the noise gather's n' pixels, a / (2 - a) s^2 / n', plus the history's,
+            // a mean of h frames of n pixels, s^2 / (n h).
+            const float n = samplesPerFrame(i), wide = gatherCount_.plane(1)[i];
+            const float m1 = historyAt(i, momentsHistory_.plane(0));
+            const float variance = std::max(spatialLumaVariance(i),
+                                            (historyAt(i, momentsHistory_.plane(1)) - m1 * m1) * n);
+            const float a = s_.oneFrameAlpha;
+            const float gapVariance = variance * (a / (2.0f - a) / wide + 1.0f / (n * h));
+            rho = rejectHistoryLuminanceSigma(history, stabilised, std::sqrt(gapVariance),
+                                              s_.rejectionSigma);
+          }
+          h = std::max(1.0f, h * (1.0f - rho));
         }
         if (smoothSpecular && s_.specularColorClamp) {  // slide 34: specular clamps the colour
           float lo[3], hi[3];
@@ -308,6 +407,7 @@ void ReEngine::temporalFilter() {
       }
       for (int c = 0; c < 3; ++c) temporal_.plane(c)[i] = result[c];
       historyLength_.plane(0)[i] = h;
+      rejection_.plane(0)[i] = rho;
     }
   });
 }
@@ -327,36 +427,38 @@ void ReEngine::spatialPropagation2(const FrameContext& ctx) {
     radius_.plane(0)[i] = scale;
   }
   PoissonBlurSettings blur;
-  blur.radius = s_.propagation2Radius;
+  blur.radius = s_.propagation2Radius * footprintScale_;
   blur.weights = s_.weights;
   poissonDiskBlur(temporal_, SurfaceGuide{gbuffer_, roughness_, hitDistance_}, blur,
                   poissonRotation(ctx.frameIndex + 1), &radius_, propagated2_);
 }
 
-// ---- 4. Variance check: the luminance variance (temporal moments once h >= 4, the spatial
-// moments of pass 1 before), of the mean over h frames, relative to the mean's luminance.
+// ---- 4. Variance check: the relative noise of each pixel's mean. Once h >= 4 the variance of
+// one frame's value (the temporal moments of what the EMA averages: pass 1's mean) over the
+// frames the EMA holds (h, or 2h - 1 at the cap, where alpha = 1/h is an EMA); before, pass 1's
+// spatial estimate: the 1-spp E[l^2] - E[l]^2 (channels' covariance kept) over its n distinct
+// pixels and h frames. (Issue 34: the raw 1-spp variance over h alone left sigma about 3-4x too
+// high, so the large scale took 70-100 % even on converged pixels.) Pass 3's gather is not
+// counted: its taps lie inside pass 1's footprints, so their errors are correlated.
 void ReEngine::varianceCheck() {
   ScopedPass pass(this, "variance check", 0);
   const bool spatial = needsMoments();
+  const float maxHistory = float(s_.maxHistory);
   parallelRows(height_, [&](int y) {
     for (int x = 0; x < width_; ++x) {
       const size_t i = size_t(y) * size_t(width_) + size_t(x);
       const float h = historyLength_.plane(0)[i];
-      float variance =
-          std::max(0.0f, moments_.plane(1)[i] - moments_.plane(0)[i] * moments_.plane(0)[i]);
-      if (h < 4.0f && spatial) {
-        variance = 0;
-        for (int c = 0; c < 3; ++c) {
-          const float mu = propagated_.plane(c)[i];
-          variance += kLuma[c] * kLuma[c] * std::max(0.0f, propagated_.plane(c + 3)[i] - mu * mu);
-        }
-      }
-      lumVariance_.plane(0)[i] = variance / h;
+      const float frames = h < maxHistory ? h : 2.0f * h - 1.0f;
+      float meanVariance =
+          std::max(0.0f, moments_.plane(1)[i] - moments_.plane(0)[i] * moments_.plane(0)[i]) /
+          frames;
+      if (h < 4.0f && spatial) meanVariance = spatialLumaVariance(i) / (samplesPerFrame(i) * h);
+      lumVariance_.plane(0)[i] = meanVariance;
       const float l =
           luminance(propagated2_.plane(0)[i], propagated2_.plane(1)[i], propagated2_.plane(2)[i]);
       noise_.plane(0)[i] =
           s_.varianceCheck
-              ? std::clamp(std::sqrt(variance / h) / (std::abs(l) + 1e-3f) / s_.varianceTarget,
+              ? std::clamp(std::sqrt(meanVariance) / (std::abs(l) + 1e-3f) / s_.varianceTarget,
                            0.0f, 1.0f)
               : s_.mergeWeight;
     }
@@ -400,6 +502,9 @@ void ReEngine::deflicker() {
       const size_t p = size_t(y) * size_t(width_) + size_t(x);
       float brightest = -1.0f;
       forEachNeighbour3x3(x, y, width_, height_, &gbuffer_, true, [&](size_t q) {
+        // Edge-aware (the median's rule, median.hpp): a neighbour across an edge says nothing
+        // of p's brightness, so a one-pixel-wide lit feature is not a firefly.
+        if (s_.deflickerEdgeAware && !sameSurface3x3(p, q)) return;
         brightest = std::max(
             brightest, luminance(merged_.plane(0)[q], merged_.plane(1)[q], merged_.plane(2)[q]));
       });
@@ -449,7 +554,7 @@ void ReEngine::spatialUpscaling(const LowresInputs* lowres) {
   }
   const LowresBuffer buffer{s_.space == FilterSpace::Reinhard ? lowColor : color, direction,
                             lowres->factor, lowres->spp};
-  upsampler_.reconstruct(buffer, gbuffer_, &propagated_, need_, s_.upsample, upscaled_,
+  upsampler_.reconstruct(buffer, gbuffer_, &noiseMoments_, need_, s_.upsample, upscaled_,
                          confidence_);
   raysPerPixel_ = upsampler_.raysPerPixel();
   pass.setRays(raysPerPixel_);
@@ -514,6 +619,7 @@ void ReEngine::storeHistory() {
 std::vector<std::pair<std::string, const Image*>> ReEngine::passOutputs() const {
   return {{"filter space", &signal_},
           {"spatial propagation 1", &propagated_},
+          {"noise statistics", &noiseMoments_},
           {"temporal filter", &temporal_},
           {"spatial propagation 2", &propagated2_},
           {"variance check", &noise_},
@@ -522,6 +628,8 @@ std::vector<std::pair<std::string, const Image*>> ReEngine::passOutputs() const 
           {"spatial upscaling", &upscaledBlend_},
           {"spatial filter", &final_},
           {"history length", &historyLength_},
+          {"luminance rejection", &rejection_},
+          {"luminance variance", &lumVariance_},
           {"low-resolution weight", &lowWeight_}};
 }
 
@@ -536,16 +644,23 @@ const ParamTable<ReEngineSettings>& reEngineParams() {
           .boolean("propagation1", &S::propagation1, true,
                    "spatial propagation before the temporal filter (slide 28)")
           .real("propagationRadius", &S::propagationRadius, 16, 0, 256,
-                "pass-1 Poisson radius at h = 1, px; / sqrt(h) (ours)")
+                "pass-1 Poisson radius at h = 1, px at footprintHeight; / sqrt(h) (ours)")
           .real("propagation2Radius", &S::propagation2Radius, 8, 0, 256,
-                "pass-3 Poisson radius at h = 1, px; / sqrt(h) (ours)")
-          .real("minRadius", &S::minRadius, 1, 0, 64, "smallest propagation radius, px (ours)")
+                "pass-3 Poisson radius at h = 1, px at footprintHeight; / sqrt(h) (ours)")
+          .real("minRadius", &S::minRadius, 1, 0, 64,
+                "smallest propagation radius, px at footprintHeight (ours)")
           .integer("maxHistory", &S::maxHistory, 32, 1, 4096,
                    "cap of h, alpha = 1/h (ours; Falcor 32)")
           .boolean("lumaRejection", &S::lumaRejection, true,
                    "temporal luminance rejection from the stabilised one-frame result (slide 29)")
+          .choice("rejectionMode", &S::rejectionMode, "sigma",
+                  {{"sigma", S::RejectionMode::Sigma}, {"relative", S::RejectionMode::Relative}},
+                  "luminance gap in standard errors of the one-frame value (ours, as hybrid's "
+                  "lumaMode=sigma) or relative to the larger luminance (the first version)")
+          .real("rejectionSigma", &S::rejectionSigma, 3, 1e-6, 1e6,
+                "rejectionMode=sigma: standard errors tolerated; full rejection at twice (ours)")
           .real("rejectionTau", &S::rejectionTau, 0.5, 1e-6, 1e6,
-                "relative luminance gap tolerated (ours)")
+                "rejectionMode=relative: relative luminance gap tolerated (ours)")
           .real("oneFrameAlpha", &S::oneFrameAlpha, 0.5, 0, 1,
                 "new-frame weight of the stabilised one-frame EMA (ours)")
           .real("roughnessThreshold", &S::roughnessThreshold, 0.3, 0, 1,
@@ -573,7 +688,7 @@ const ParamTable<ReEngineSettings>& reEngineParams() {
           .boolean("spatialMerge", &S::spatialMerge, true,
                    "merge a small and a large (mip) scale (slides 28, 31)")
           .integer("mergeLevels", &S::mergeLevels, 3, 1, 8,
-                   "large scale: mip level (3 = 8x8) (ours)")
+                   "large scale: mip level at footprintHeight (3 = 8x8 px) (ours)")
           .real("mergeWeight", &S::mergeWeight, 0.5, 0, 1,
                 "large-scale share when the variance check is off (ours)")
           .boolean("deflicker", &S::deflicker, true,
@@ -582,12 +697,16 @@ const ParamTable<ReEngineSettings>& reEngineParams() {
                 "deflicker EMA new-frame weight (ours)")
           .real("deflickerGamma", &S::deflickerGamma, 1, 0, 100,
                 "deflicker 3x3 clamp box in sigma (ours)")
+          .boolean("deflickerEdgeAware", &S::deflickerEdgeAware, true,
+                   "firefly clamp against same-mesh neighbours of a similar normal only (ours, "
+                   "the edge-aware median's rule; false: every neighbour, the first version)")
           .choice("disocclusionRays", &S::disocclusionRays, "auto",
                   {{"auto", S::DisocclusionRays::Auto},
                    {"on", S::DisocclusionRays::On},
                    {"off", S::DisocclusionRays::Off}},
                   "read the sequence's low-resolution buffer where h is short (slides 19-21); "
-                  "auto: when the sequence has one, on: required")
+                  "auto: when the sequence has one (every arena run, sweep and study renders it "
+                  "for a denoiser that reads it, unless --lowres-factor 0), on: required")
           .integer("lowresMaxHistory", &S::lowresMaxHistory, 4, 1, 4096,
                    "read the low-resolution buffer where h < this (ours)")
           .real("lowresWeight", &S::lowresWeight, 0.9, 0, 1,
@@ -603,7 +722,8 @@ const ParamTable<ReEngineSettings>& reEngineParams() {
           .boolean("spatialFilter", &S::spatialFilter, true,
                    "final 3x3 edge-aware à-trous pass (slides 28, 43)")
           .real("sigmaL", &S::sigmaL, 4, 0, 1e6, "spatial filter luminance term sigma_l (SVGF 4)")
-          .include(reprojectionParams(), &S::reprojection);
+          .include(reprojectionParams(), &S::reprojection)
+          .include(footprintParams(), &S::footprint);
   return table;
 }
 

@@ -183,6 +183,11 @@ class Slgf final : public Svgf {
         const float distance =
             largest > 0.0f ? std::abs(historyLuminance - target) / largest : 0.0f;
         const float lambda = std::min(1.0f, slgf_.alphaGain * distance);
+        // A corrected history counts for fewer frames -- shortened before this frame's alphas
+        // are fixed, Q2RTX's order (asvgf.cpp), so 1/h and the spatial variance restart at once
+        // (before issue 34 it was shortened after the blend: the blend still used the old 1/h).
+        if (slgf_.shortenHistory && lambda > 0.0f)
+          length[i] = (length[i] - 1.0f) * std::pow(1.0f - lambda, 10.0f) + 1.0f;
         // The alphas SVGF used (temporal_accumulation.hpp), raised as A-SVGF eq. 15 does.
         const float floorPixel = alpha ? alpha->plane(0)[i] : 0.0f;
         const float a = blendAlpha(length[i], std::max(settings_.alpha, floorPixel));
@@ -206,9 +211,6 @@ class Slgf final : public Svgf {
         const float l = luminance(signal.plane(0)[i], signal.plane(1)[i], signal.plane(2)[i]);
         moments_.plane(0)[i] = momentsAlpha * l + (1.0f - momentsAlpha) * m1;
         moments_.plane(1)[i] = momentsAlpha * l * l + (1.0f - momentsAlpha) * m2;
-        // A corrected history counts for fewer frames: 1/h and the spatial variance restart.
-        if (slgf_.shortenHistory && lambda > 0.0f)
-          length[i] = (length[i] - 1.0f) * std::pow(1.0f - lambda, 10.0f) + 1.0f;
       }
     });
   }

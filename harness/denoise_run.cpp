@@ -194,6 +194,15 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
         out.passes.push_back(p);
       }
     }
+    // A-SVGF's gradient samples: each valid one is a path re-shaded at this frame (paper §3.1-3.3),
+    // read by both signals' instances but traced once. (The tracer also re-shades the old sample
+    // to know its luminance; a real-time implementation keeps that value, so it is not charged.)
+    if (needsGradients_ && t > 0) {
+      const Image& samples = gradients.get("gradient");
+      double valid = 0;
+      for (size_t i = 0; i < samples.pixelCount(); ++i) valid += samples.plane(4)[i] != 0.0f ? 1.0 : 0.0;
+      out.extraRaysPerPixel += valid / (double(w) * double(h));
+    }
     if (colorOnly) {  // the denoiser's output is the final colour: nothing to remodulate
       onFrame(out);
       continue;

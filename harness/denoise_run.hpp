@@ -38,7 +38,7 @@ struct DenoisedFrame {
   bool selfTimed = false;          // milliseconds were reported by the denoiser itself
   std::vector<PassStats> passes;   // "diffuse/<pass>", "specular/<pass>"
   NonFiniteCounts sanitized;       // NaN/Inf input values replaced by 0, per layer.channel
-  double extraRaysPerPixel = 0;    // low-resolution paths read per pixel (both signals' passes)
+  double extraRaysPerPixel = 0;    // extra paths read per pixel (low-resolution or gradient samples)
 };
 
 class DenoiseRun {
@@ -50,6 +50,9 @@ class DenoiseRun {
   const DenoiserInfo& info() const { return info_; }
   // The denoiser reads the sequence's low-resolution buffer (it wants it and the sequence has one).
   bool readsLowres() const { return readsLowres_; }
+  // The denoiser reads the sequence's A-SVGF gradient samples: re-shaded paths beyond the frame's
+  // own, charged one path per valid sample (DenoisedFrame::extraRaysPerPixel).
+  bool readsGradients() const { return needsGradients_; }
   // Denoises frames 0..n-1 in order; `frame(t)` supplies the sequence frame's layers.
   void run(const std::function<const LayerSet&(int)>& frame, const std::function<void(const DenoisedFrame&)>& onFrame);
 

@@ -136,8 +136,10 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
             FrameFacts facts;
             facts.milliseconds = f.milliseconds;
             if (f.selfTimed && run) facts.wallMilliseconds = f.wallMilliseconds;
-            if (run && run->readsLowres()) facts.extraRaysPerPixel = f.extraRaysPerPixel;
-            facts.lowresPathsPerSecond = info.lowresPathsPerSecond;
+            // Extra paths: the low-resolution buffer's (reengine) or the gradient samples'
+            // (asvgf), each at the rate it rendered at.
+            if (run && (run->readsLowres() || run->readsGradients())) facts.extraRaysPerPixel = f.extraRaysPerPixel;
+            facts.extraPathsPerSecond = run && run->readsLowres() ? info.lowresPathsPerSecond : info.inputPathsPerSecond;
             evaluation.add(f.frame, f.color, facts);
             selfTimed |= f.selfTimed;
             for (const auto& [channel, n] : f.sanitized) sanitized[channel] += n;
@@ -223,6 +225,19 @@ std::string clock(double s) {
 }
 
 }  // namespace
+
+void resolveAutoLowres(RunConfig& c) {
+  if (!c.lowresAuto) return;
+  bool reads = false;
+  for (const DenoiserRequest& r : c.denoisers) {
+    if (!capturedOutputName(r.name).empty()) continue;  // a stored output reads nothing
+    const DenoiserInfo& info = DenoiserRegistry::instance().find(r.name);
+    if (!info.origin.empty()) continue;  // external denoisers read no low-resolution buffer
+    reads = reads || info.create(info.schema.resolve(r.params, r.name), SignalKind::Diffuse)->wantsLowres();
+  }
+  c.render.lowresFactor = reads ? kAutoLowresFactor : 0;
+  c.lowresAuto = false;
+}
 
 json runMatrix(const RunConfig& cfg) {
   if (cfg.out.empty()) throw Error("run: --out is required");

@@ -55,6 +55,11 @@ RunConfig studyRun(std::vector<Scene> scenes, const RenderSettings& render) {
   c.render = render;
   c.scenes = std::move(scenes);
   for (const std::string& n : DenoiserRegistry::instance().names()) c.denoisers.push_back({n, {}, ""});
+  // Control rows (issue 34, section 2): each method that reads paths beyond the frame's own, run
+  // without them. reengine without its disocclusion rays; asvgf's gradient samples cannot come
+  // from the frame's own paths here (the 1-spp input is every method's), and asvgf without them
+  // is svgf exactly (lambda = 0 everywhere), which the study already runs.
+  c.denoisers.push_back({"reengine", {{"disocclusionRays", "off"}}, ""});
   c.keepFrames = "chosen";
   return c;
 }

@@ -60,8 +60,10 @@ struct MetricDefinition {
 struct FrameFacts {
   double milliseconds = 0;
   std::optional<double> wallMilliseconds;   // an external process timed itself; the harness's clock
-  std::optional<double> extraRaysPerPixel;  // low-resolution paths read per pixel (readers only)
-  double lowresPathsPerSecond = 0;          // the buffer's render rate (0: unknown)
+  // Paths beyond the frame's own 1-spp ones that the denoiser read, per pixel (readers only):
+  // reengine's low-resolution disocclusion rays, A-SVGF's re-shaded gradient samples.
+  std::optional<double> extraRaysPerPixel;
+  double extraPathsPerSecond = 0;  // the render rate of those paths (0: unknown)
 };
 
 // What a metric family sees of one output frame. Pointers to reference images are null when the

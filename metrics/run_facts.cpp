@@ -13,7 +13,8 @@ MetricFamily runFactsFamily() {
       {.name = "msWall", .unit = "ms", .needsReference = false, .reads = MetricInput::Run,
        .description = "the harness's clock around an external process's exchange (transfer included), ms"},
       {.name = "extraRaysPerPixel", .unit = "paths/pixel", .needsReference = false, .reads = MetricInput::Run,
-       .description = "low-resolution paths read per pixel per frame (disocclusion rays)"},
+       .description = "extra paths read per pixel per frame: low-resolution disocclusion rays (reengine), "
+                      "re-shaded gradient samples (asvgf)"},
       {.name = "tracingMs", .unit = "ms", .needsReference = false, .reads = MetricInput::Run,
        .description = "those paths' equivalent tracing time per frame at the render's own rate, ms"},
   };
@@ -24,11 +25,11 @@ MetricFamily runFactsFamily() {
     if (facts.wallMilliseconds) out.put("msWall", *facts.wallMilliseconds);
     if (!facts.extraRaysPerPixel) return;
     out.put("extraRaysPerPixel", *facts.extraRaysPerPixel);
-    // The paths read, at the rate the buffer rendered at on the machine that rendered it (unknown,
+    // The paths read, at the rate they rendered at on the machine that rendered them (unknown,
     // and absent, when another machine did).
-    if (facts.lowresPathsPerSecond > 0)
+    if (facts.extraPathsPerSecond > 0)
       out.put("tracingMs", *facts.extraRaysPerPixel * double(v.output->width()) * double(v.output->height()) /
-                               facts.lowresPathsPerSecond * 1e3);
+                               facts.extraPathsPerSecond * 1e3);
   };
   return f;
 }

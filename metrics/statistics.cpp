@@ -540,6 +540,26 @@ json OverallRanking::toJson() const {
 
 namespace arena {
 
+namespace {
+
+// Issue 34, section 2: every ranking entry of a method that read paths beyond the frame's own
+// 1-spp ones (reengine's disocclusion rays, asvgf's gradient samples) says so, with the paths.
+void markExtraPaths(json& node, const std::map<std::string, double>& extra) {
+  if (node.is_array()) {
+    for (json& child : node) markExtraPaths(child, extra);
+    return;
+  }
+  if (!node.is_object()) return;
+  if (node.contains("label") && node["label"].is_string() && node.contains("rank")) {
+    auto it = extra.find(node["label"].get<std::string>());
+    if (it != extra.end()) node["extraPathsPerPixel"] = it->second;
+  }
+  for (auto it = node.begin(); it != node.end(); ++it)
+    if (it.value().is_array() || it.value().is_object()) markExtraPaths(it.value(), extra);
+}
+
+}  // namespace
+
 json analyseRun(const json& results, const BootstrapConfig& cfg) {
   // The registry's ranked metrics. relMSE ranks (paired differences of raw and corrected relMSE
   // are the same: the correction subtracts the same reference term from every method); the others
@@ -615,6 +635,32 @@ json analyseRun(const json& results, const BootstrapConfig& cfg) {
     const json overall = rankOverall(ranked, "temporal", m->lowerIsBetter(), cfg.confidence).toJson();
     if (m->name == "relMse") out["overall"] = overall;
     else out["overallByMetric"][m->name] = overall;
+  }
+  // The extra paths each label read, mean over its scenes (paths per pixel per frame).
+  std::map<std::string, std::pair<double, int>> sums;
+  for (const json& p : results["pairs"]) {
+    if (p.value("status", "") != "ok" || !p.contains("summary")) continue;
+    const json& s = p["summary"];
+    if (!s.contains("extraRaysPerPixel") || !s["extraRaysPerPixel"].contains("mean") ||
+        !s["extraRaysPerPixel"]["mean"].is_number())
+      continue;
+    auto& [sum, n] = sums[p.value("label", "")];
+    sum += s["extraRaysPerPixel"]["mean"].get<double>();
+    ++n;
+  }
+  std::map<std::string, double> extra;
+  for (const auto& [label, sn] : sums)
+    if (sn.first > 0) extra[label] = sn.first / sn.second;
+  if (!extra.empty()) {
+    markExtraPaths(out["scenes"], extra);
+    if (out.contains("overall")) markExtraPaths(out["overall"], extra);
+    if (out.contains("overallByMetric")) markExtraPaths(out["overallByMetric"], extra);
+    out["extraPaths"] = {
+        {"meaning",
+         "paths per pixel per frame read beyond the frame's own 1-spp paths (reengine: "
+         "low-resolution disocclusion rays; asvgf: re-shaded gradient samples); their equivalent "
+         "tracing time is each pair's tracingMs"},
+        {"perPixel", extra}};
   }
   return out;
 }

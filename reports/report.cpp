@@ -138,15 +138,26 @@ double msOf(const json& pair) {
 }
 
 // One point per label with its error bars, and the labels on the Pareto front (time x error).
-json speedScope(const std::vector<json>& points, bool needsComplete) {
-  std::vector<ParetoPoint> pp;
-  for (const json& p : points) {
+// The Pareto front on the denoiser's own time ("front") and the equal-paths front
+// ("frontEqualPaths", issue 34): a method that read extra paths (reengine's disocclusion rays,
+// asvgf's gradient samples) costs its time plus their tracing time there, and one whose tracing
+// time is unknown is left off it. Such points carry extraPaths: true.
+json speedScope(std::vector<json> points, bool needsComplete) {
+  std::vector<ParetoPoint> pp, equal;
+  for (json& p : points) {
     const bool eligible = !needsComplete || p.value("complete", true);
-    pp.push_back({eligible ? p["ms"].get<double>() : kNaN, p["error"].get<double>()});
+    const double tracing = p.contains("tracingMs") && p["tracingMs"].is_number() ? p["tracingMs"].get<double>() : 0.0;
+    const bool extra = tracing > 0 || (p.contains("extraRaysPerPixel") && p["extraRaysPerPixel"].is_number() &&
+                                       p["extraRaysPerPixel"].get<double>() > 0);
+    if (extra) p["extraPaths"] = true;
+    const double ms = p["ms"].get<double>();
+    pp.push_back({eligible ? ms : kNaN, p["error"].get<double>()});
+    equal.push_back({eligible && (!extra || tracing > 0) ? ms + tracing : kNaN, p["error"].get<double>()});
   }
-  json front = json::array();
+  json front = json::array(), frontEqual = json::array();
   for (size_t i : paretoFront(pp)) front.push_back(points[i]["label"]);
-  return {{"points", points}, {"front", front}};
+  for (size_t i : paretoFront(equal)) frontEqual.push_back(points[i]["label"]);
+  return {{"points", points}, {"front", front}, {"frontEqualPaths", frontEqual}};
 }
 
 // A pair's point on the chart: error with its bar, time with its p5-p95 bar, and the parameters.
@@ -257,6 +268,7 @@ json speedData(const json& results, const std::vector<std::string>& scenes,
                     {"scenes", n},
                     {"complete", n == scenes.size()}};
       if (nTracing == n) point["tracingMs"] = tracing / k;  // the mean like its time's
+      if (r.contains("extraPathsPerPixel")) point["extraRaysPerPixel"] = r["extraPathsPerPixel"];
       points.push_back(std::move(point));
     }
     if (points.empty()) continue;

@@ -20,6 +20,17 @@ namespace {
 
 using Params = std::map<std::string, std::string>;
 
+// Every registered built-in variant that filters in space: all but the two baselines, which read
+// one pixel (issue 34: a variant added without a footprint parameter fails both tests below).
+std::vector<std::string> spatialVariants() {
+  std::vector<std::string> names;
+  for (const std::string& name : DenoiserRegistry::instance().names())
+    if (name != "passthrough" && name != "temporal" &&
+        DenoiserRegistry::instance().find(name).origin.empty())
+      names.push_back(name);
+  return names;
+}
+
 // ---------------------------------------------------------------------------------------------
 // 1. Footprints
 
@@ -82,6 +93,13 @@ double impulseRadius(const std::string& name, const std::string& policy, int w, 
     params["median"] = "false";
   }
   if (name == "reblur") params["antiFirefly"] = "false";
+  if (name == "reengine") {
+    // Geometry only: no firefly clamp, a fixed large-scale share, no luminance term.
+    params["deflicker"] = "false";
+    params["varianceCheck"] = "false";
+    params["spatialFilter"] = "false";
+    params["disocclusionRays"] = "off";
+  }
   auto denoiser = test::createDenoiser(name, params);
   denoiser->setup(w, h);
   const LayerSet frame = test::planeFrame(w, h, 2.56f / float(w));
@@ -93,7 +111,8 @@ double impulseRadius(const std::string& name, const std::string& policy, int w, 
 }
 
 TEST(FidelityFootprint, ImpulseRadiiKeepTheirRatioToSvgfAcrossResolutions) {
-  const std::vector<std::string> names = {"svgf", "asvgf", "slgf", "eaw", "reblur", "hybrid"};
+  const std::vector<std::string> names = spatialVariants();
+  ASSERT_GE(names.size(), 7u);  // eaw, svgf, asvgf, slgf, reblur, hybrid, reengine
   for (const std::string policy : {"native", "scaled"}) {
     std::map<std::string, double> small, large;
     for (const std::string& name : names) {
@@ -127,7 +146,10 @@ TEST(FidelityFootprint, ImpulseRadiiKeepTheirRatioToSvgfAcrossResolutions) {
 }
 
 TEST(FidelityFootprint, PolicyIsRecordedInEverySpatialVariantsParameters) {
-  for (const char* name : {"eaw", "svgf", "asvgf", "slgf", "reblur", "hybrid"}) {
+  for (const std::string& name : spatialVariants()) {
+    ASSERT_NO_THROW(
+        DenoiserRegistry::instance().find(name).schema.resolve({{"footprint", "native"}}, name))
+        << name << " has no footprint parameter";
     const ParamSet p = DenoiserRegistry::instance().find(name).schema.resolve({}, name);
     EXPECT_EQ(p.getChoice("footprint"), "scaled") << name;  // the default (footprint.hpp)
     EXPECT_EQ(p.getFloat("footprintHeight"), 1080.0f) << name;

@@ -145,8 +145,10 @@ TEST(FidelityReblur, GoldSphereHasNoDarkPatch) {
   // for svgf. The region is dim in the reference and every filter bleeds some of the brighter
   // surroundings into it (mean ratios 1.25 scaled, 2.6 native, svgf 1.8 at 128x72): the floor
   // trades the patch for that bleeding, NRD's trade too.
+  // (Tolerance 2 %: since tracerVersion 4 a metal samples only its specular lobe, which moved
+  // svgf's share from below 1 % to 1.01 %; the patch is the 4-8 % above.)
   EXPECT_GT(colour[4].darkFraction, 0.04);
-  for (size_t k : {size_t(0), size_t(2), size_t(3)}) EXPECT_LT(colour[k].darkFraction, 0.01) << k;
+  for (size_t k : {size_t(0), size_t(2), size_t(3)}) EXPECT_LT(colour[k].darkFraction, 0.02) << k;
 }
 
 }  // namespace

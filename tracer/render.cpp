@@ -25,7 +25,7 @@ using nlohmann::json;
 
 namespace {
 
-constexpr int kTracerVersion = 3;  // bump when a change alters pixels: invalidates every cache
+constexpr int kTracerVersion = 4;  // bump when a change alters pixels: invalidates every cache
 constexpr float kMissHitDist = 1e6f;
 constexpr uint32_t kStratumPickSample = 0xFFFFF;  // sample index reserved for stratum picks
 constexpr uint32_t kLowresFirstSample = 0x80000;  // low-res paths: independent of frame and reference
@@ -218,8 +218,11 @@ SequenceRenderer::FrameResult SequenceRenderer::renderFrame(int t) {
       }
       const Sampler sampler(frameSeed(), uint32_t(t), uint32_t(y * w + x), 0);
       const PixelShade px = shadePixel(cur, s, cam.eye, sampler, counts);
-      // What a real-time tracer has: the 1-spp sample's own hit distance (noisy).
-      if (s.lightIndex < 0) specHitDist.at(x, y) = std::min(px.radiance.hitDistance, kMissHitDist);
+      // What a real-time tracer has: its own specular ray's length (one GGX sample, noisy), not
+      // the path's continuation, which for a dielectric mostly took the diffuse lobe.
+      if (s.lightIndex < 0)
+        specHitDist.at(x, y) =
+            std::min(cur.specularHitDistance(s, wo, sampler, counts), kMissHitDist);
       // Demodulation (SVGF; Falcor divides by max(albedo, 0.001)).
       put3(diffuse, x, y, px.radiance.diffuse / glm::max(diffAlb, glm::vec3(1e-3f)));
       put3(specular, x, y, px.radiance.specular / glm::max(specAlb, glm::vec3(1e-3f)));

@@ -350,6 +350,7 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
   // The low-resolution buffer's path rate on this machine, measured where it is rendered: the run
   // charges a denoiser that reads the buffer its equivalent tracing time (paths read / this rate).
   double lowresPaths = 0, lowresSeconds = 0;
+  double inputPaths = 0, inputSeconds = 0;  // the 1-spp frames' (A-SVGF's gradient samples' rate)
   auto timedLowres = [&](int t) {
     RayCounts counts;
     const auto t0 = std::chrono::steady_clock::now();
@@ -385,6 +386,8 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
     auto t0 = std::chrono::steady_clock::now();
     SequenceRenderer::FrameResult r = renderer.renderFrame(t);
     double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    inputSeconds += sec;
+    inputPaths += double(r.counts.paths);
     writeExr(fp, r.frame, channels::frameLayers(), attributes("frame", t));
     if (t > 0) writeExr(gp, r.gradients, channels::gradientLayers(), attributes("gradients", t));
     if (settings.lowresFactor > 0) writeExr(lp, timedLowres(t), channels::lowresLayers(), attributes("lowres", t));
@@ -483,6 +486,14 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
   } else if (!existing.empty()) {  // nothing rendered now: keep the rate measured when it was
     try {
       info.lowresPathsPerSecond = nlohmann::json::parse(existing).value("lowresPathsPerSecond", 0.0);
+    } catch (const nlohmann::json::exception&) {
+    }
+  }
+  if (inputSeconds > 0 && inputPaths > 0) {
+    info.inputPathsPerSecond = inputPaths / inputSeconds;
+  } else if (!existing.empty()) {
+    try {
+      info.inputPathsPerSecond = nlohmann::json::parse(existing).value("inputPathsPerSecond", 0.0);
     } catch (const nlohmann::json::exception&) {
     }
   }

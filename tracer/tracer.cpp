@@ -22,6 +22,9 @@ constexpr float kOneMinusEpsilon = 0x1.fffffep-1f;
 // pairs' first coordinates (rescaled, see sampleLight and reuseForLobe), so kLightSelect,
 // kLightTriangle and kLobe go unused there; roulette is 1D Sobol.
 enum Dim : uint32_t { kLightSelect, kLightTriangle, kLightU, kLightV, kLobe, kDirU, kDirV, kRoulette, kDimsPerVertex };
+// The specular hit-distance ray's pair (FrameScene::specularHitDistance): far beyond any path
+// vertex's dimensions, so the path's numbers, and hence its radiance, are untouched by it.
+constexpr uint32_t kSpecularRayDim = 1u << 20;
 
 float lum(glm::vec3 c) { return luminance(c.x, c.y, c.z); }
 float maxComponent(glm::vec3 c) { return std::max(c.x, std::max(c.y, c.z)); }
@@ -61,10 +64,8 @@ struct Lobes {
 
 // Mixture sampling weights: specular lobe chosen in proportion to its Fresnel-weighted albedo.
 float specularProbability(const SurfaceHit& s, float NoV) {
-  float d = lum(s.diffuseAlbedo());
-  float sp = lum(specularAlbedo(s.f0(), s.roughness, NoV));
-  if (d + sp <= 0) return 0;
-  return std::clamp(sp / (d + sp), d > 0 ? 0.1f : 1.0f, sp > 0 ? 0.9f : 0.0f);
+  return specularLobeProbability(lum(s.diffuseAlbedo()),
+                                 lum(specularAlbedo(s.f0(), s.roughness, NoV)));
 }
 
 float ggxAlpha(float roughness) { return std::max(roughness * roughness, 1e-3f); }
@@ -121,6 +122,15 @@ bool sampleDirection(const SurfaceHit& s, glm::vec3 n, glm::vec3 wo, float pSpec
 }
 
 }  // namespace
+
+float specularLobeProbability(float diffuseAlbedo, float specularAlbedo) {
+  // A lobe with no albedo is never sampled; where both reflect, each keeps at least 10 % of the
+  // samples. (Before issue 34 this was one std::clamp whose bounds crossed, lo > hi, for a
+  // metal or a surface without specular: undefined behaviour, which gave metals 0.9, not 1.)
+  if (specularAlbedo <= 0) return 0;
+  if (diffuseAlbedo <= 0) return 1;
+  return std::clamp(specularAlbedo / (diffuseAlbedo + specularAlbedo), 0.1f, 0.9f);
+}
 
 glm::vec3 specularAlbedo(glm::vec3 f0, float roughness, float NoV) {
   const glm::vec4 c0(-1.0f, -0.0275f, -0.572f, 0.022f), c1(1.0f, 0.0425f, 1.04f, -0.04f);
@@ -360,6 +370,23 @@ float FrameScene::lightPdf(const SurfaceHit& lightHit, glm::vec3 from) const {
   float cosLight = glm::dot(lightHit.geometricNormal, d / std::sqrt(dist2));
   if (cosLight <= 0) return 0;
   return dist2 / (cosLight * g.area * float(selectableLights_.size()));
+}
+
+float FrameScene::specularHitDistance(const SurfaceHit& primary, glm::vec3 wo, const Sampler& sampler,
+                                      RayCounts& counts) const {
+  if (primary.lightIndex >= 0) return 0;
+  const Oriented o = orient(primary, wo);
+  const glm::vec2 u = sampler.get2(kSpecularRayDim);
+  glm::vec3 wi;
+  // One GGX sample of the specular lobe alone (pSpec 1); below the surface, the mirror direction
+  // (a sample is never discarded: the channel has a distance wherever a specular ray could leave).
+  if (!sampleDirection(primary, o.n, wo, 1.0f, 0.0f, u.x, u.y, wi) || glm::dot(wi, o.ng) <= 0)
+    wi = 2.0f * glm::dot(wo, o.n) * o.n - wo;
+  if (glm::dot(wi, o.ng) <= 0) return 0;
+  SurfaceHit h;
+  float t;
+  counts.rays++;
+  return intersect(offsetOrigin(primary.position, o.ng), wi, kInf, h, t) ? t : kInf;
 }
 
 FrameScene::Radiance FrameScene::shade(const SurfaceHit& primary, glm::vec3 wo, const Sampler& sampler,

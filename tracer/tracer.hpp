@@ -46,6 +46,9 @@ struct SurfaceHit {
 // pre-integrated split-sum term ("Physically Based Shading on Mobile", 2014). Ours: any smooth,
 // strictly positive estimate works for demodulation; this one tracks roughness and view angle.
 glm::vec3 specularAlbedo(glm::vec3 f0, float roughness, float NoV);
+// The probability that a path samples the specular lobe, from the luminances of the two lobes'
+// albedos: 0 without specular, 1 without diffuse, else in proportion, within [0.1, 0.9].
+float specularLobeProbability(float diffuseAlbedo, float specularAlbedo);
 
 struct RayCounts {
   uint64_t rays = 0, paths = 0;
@@ -75,8 +78,9 @@ class FrameScene {
 
   struct Radiance {
     glm::vec3 diffuse{0}, specular{0};  // radiance reflected by the first vertex, not demodulated
-    // Length of this sample's first continuation ray (the lobe it sampled; the talk stores the
-    // traced sample's length, NRD reads it): infinity on a miss, 0 where no ray left the surface.
+    // Length of this sample's first continuation ray, whichever lobe it sampled (for a
+    // dielectric mostly the diffuse one): infinity on a miss, 0 where no ray left the surface.
+    // The specHitDist channel is specularHitDistance(), not this.
     float hitDistance = 0;
     // Sum over the diffuse signal's first-vertex contributions of luminance x incident direction
     // (the low-resolution buffer's "average direction", CAPCOM 2023 slide 21).
@@ -85,6 +89,13 @@ class FrameScene {
   // One path sample starting at the primary surface `hit` seen from direction wo (towards the eye).
   // Emission of `hit` itself is not included (it is the emission channel).
   Radiance shade(const SurfaceHit& hit, glm::vec3 wo, const Sampler& sampler, RayCounts& counts) const;
+  // The specular lobe's hit distance at the primary surface `hit`, from a ray of its own: one
+  // GGX sample (the mirror direction where the sample falls below the surface), the way a
+  // real-time tracer traces its specular rays separately from its diffuse ones (CAPCOM 2023
+  // slide 42: "Tracing Diffuse" / "Tracing Specular"; NRD's specular hit distance input).
+  // Infinity on a miss; 0 for an emitter. Its random numbers are dimensions no path uses.
+  float specularHitDistance(const SurfaceHit& hit, glm::vec3 wo, const Sampler& sampler,
+                            RayCounts& counts) const;
 
  private:
   struct Geometry {

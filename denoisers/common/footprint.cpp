@@ -16,6 +16,11 @@ int atrousStep(int iteration, float scale) {
   return iteration == 0 ? std::max(step, 1) : step;
 }
 
+int scaledMipLevel(int level, float scale) {
+  if (scale == 1.0f) return level;
+  return std::max(1, int(std::lround(double(level) + std::log2(double(scale)))));
+}
+
 // The default policy is chosen here, once (footprint.hpp says why scaled).
 const ParamTable<Footprint>& footprintParams() {
   static const ParamTable<Footprint> table =

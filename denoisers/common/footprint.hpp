@@ -44,6 +44,11 @@ struct Footprint {
 // never 0 for the first iteration.
 int atrousStep(int iteration, float scale);
 
+// The mip level that stands for published level `level` (2^level px blocks) under scale s:
+// `level` exactly when s = 1, else round(level + log2 s), never below 1 -- like the first à-trous
+// iteration, a coarse scale never vanishes (at 144 lines a 1080p 8x8 block is one pixel).
+int scaledMipLevel(int level, float scale);
+
 // `footprint` (native | scaled) and `footprintHeight`: included in every spatial variant's table;
 // footprintParams().defaults() is the default policy.
 const ParamTable<Footprint>& footprintParams();

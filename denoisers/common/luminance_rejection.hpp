@@ -24,4 +24,22 @@ inline float rejectHistoryLuminance(float* history, const float* stabilised, flo
   return rho;
 }
 
+// The noise-normalised form (issue 34, item 2): the gap in units of its own standard error,
+// z = |L(history) - L(stabilised)| / standardError, rho = clamp((z - k) / k, 0, 1) -- full
+// rejection at 2k standard errors. A gap below 1 % of the larger luminance never fires (a
+// noise-free region must not fire on rounding); a zero standard error with a larger gap fires
+// fully. The relative form above fires on noise wherever the one-frame value is a mean of a few
+// sparse samples (CAPCOM's own caveat, slide 24: rejection from a one-frame buffer clamps noise).
+inline float rejectHistoryLuminanceSigma(float* history, const float* stabilised,
+                                         float standardError, float k) {
+  const float lh = luminance(history[0], history[1], history[2]);
+  const float ls = luminance(stabilised[0], stabilised[1], stabilised[2]);
+  const float gap = std::abs(lh - ls);
+  if (gap <= 0.01f * std::max(lh, ls)) return 0.0f;
+  const float z = gap / std::max(standardError, 1e-30f);
+  const float rho = std::clamp((z - k) / std::max(k, 1e-6f), 0.0f, 1.0f);
+  for (int c = 0; c < 3; ++c) history[c] += rho * (stabilised[c] - history[c]);
+  return rho;
+}
+
 }  // namespace arena

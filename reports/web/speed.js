@@ -38,6 +38,8 @@
       onFront: data.front.includes(p.label),
       selected: p.label === A.state.selected,
       paramText: Object.keys(p.params || {}).length ? Object.entries(p.params).map(([k, v]) => `${k}=${JSON.stringify(v)}`).join(', ') : '(defaults)',
+      // Methods that read paths beyond the frame's own (issue 34) are marked wherever they are named.
+      name: p.extraPaths ? `${p.label} (+paths)` : p.label,
       msLo: p.msLo ?? null,
       msHi: p.msHi ?? null,
     }));
@@ -49,7 +51,10 @@
       for (const p of drawn) p.lo = Math.max(p.lo ?? p.error, floor);
     }
     const front = data.front.map((l) => drawn.find((p) => p.label === l)).filter(Boolean).sort((a, b) => a.ms - b.ms);
-    return { drawn, front, hidden: points.filter((p) => !ok(p)).map((p) => p.label) };
+    // The equal-paths front: a method's cost includes its extra paths' tracing time.
+    const frontEqualPaths = (data.frontEqualPaths || []).map((l) => drawn.find((p) => p.label === l)).filter(Boolean)
+      .map((p) => ({ ...p, ms: p.ms + (p.tracingMs || 0) })).sort((a, b) => a.ms - b.ms);
+    return { drawn, front, frontEqualPaths, hidden: points.filter((p) => !ok(p)).map((p) => p.label) };
   }
 
   // Contenders whose time is another device's (a capture's recorded GPU time) or unknown: named
@@ -62,7 +67,7 @@
     return [` · timed on another clock, not on this CPU axis: ${text.join('; ')}`];
   }
 
-  function chartSpec({ drawn, front }, axis, yTitle, logError, small, title) {
+  function chartSpec({ drawn, front, frontEqualPaths }, axis, yTitle, logError, small, title) {
     const x = { field: 'ms', type: 'quantitative', scale: { type: 'log' }, title: small ? 'ms (median)' : 'ms per frame (median; bars p5–p95; log scale)' };
     const y = { field: 'error', type: 'quantitative', title: yTitle, scale: logError ? { type: 'log' } : { zero: false } };
     const color = { field: 'label', type: 'nominal', scale: A.colorScale, title: 'denoiser / setting', legend: small ? null : {} };
@@ -99,6 +104,9 @@
           encoding: { x: { ...x, field: 'msTraced' }, y, text: { value: '+ extra rays (tracing)' } } },
         { name: 'front', data: { values: front }, mark: { type: 'line', color: '#555', strokeDash: [5, 3], strokeWidth: 1.5 },
           encoding: { x, y, order: { field: 'ms', type: 'quantitative' } } },
+        { name: 'front-equal-paths', data: { values: traced.length ? frontEqualPaths : [] },
+          mark: { type: 'line', color: '#b5651d', strokeDash: [1, 3], strokeWidth: 1.5 },
+          encoding: { x, y, order: { field: 'ms', type: 'quantitative' } } },
         { name: 'points', mark: { type: 'point', filled: true, size: small ? 70 : 110, strokeWidth: 2, cursor: 'pointer' },
           encoding: { x, y, tooltip, color,
                       fillOpacity: { condition: { test: 'datum.complete', value: 1 }, value: 0 },
@@ -107,7 +115,7 @@
         // (naming every point would pile labels up where settings cluster, as in sweeps).
         { name: 'names', transform: [{ filter: 'datum.onFront || datum.selected' }],
           mark: { type: 'text', align: 'left', dx: 8, dy: -8, fontSize: small ? 10 : 11, fontWeight: 'bold', color: '#1d2330' },
-          encoding: { x, y, text: { field: 'label' } } },
+          encoding: { x, y, text: { field: 'name' } } },
       ],
     });
   }
@@ -130,7 +138,7 @@
         : 'Bars: the same normalisation applied to each scene\'s interval ends (wider than the aggregate\'s own interval).')
       : (data.points.some((p) => p.interval === 'ci95') ? 'Error bars: 95% interval of the mean (block bootstrap).' : 'Error bars: p5–p95 across frames after warm-up (this run has no intervals).');
     const traced = data.points.some((p) => p.tracingMs > 0)
-      ? 'Dashed bars: a denoiser\'s extra rays (low-resolution paths it read), as the time the tracer took to trace them when the sequence was rendered, added to its own time; the point and the Pareto front use the denoiser\'s time alone. '
+      ? 'Dashed bars: a denoiser\'s extra paths ("+paths": reengine\'s low-resolution disocclusion rays, asvgf\'s re-shaded gradient samples), as the time the tracer took to trace them when the sequence was rendered, added to its own time; the point and the grey Pareto front use the denoiser\'s time alone, the dotted brown front (equal paths) its time plus that tracing time. '
       : '';
     return `${bars} Time bars: p5–p95 of the per-frame time where the run records them. ${traced}` +
       `${logError ? 'Log error axis. ' : ''}${axis && axis.key === 'relMse' ? 'relMSE raw (not reference-corrected). ' : ''}` +
@@ -186,7 +194,9 @@
     const title = all ? `All scenes: ${data.normalisation}` : `${state.speedScene}: ${axis.title}`;
     $('speed-front').replaceChildren(
       'Pareto front (fastest first): ',
-      ...d.front.flatMap((p, i) => [i ? ' → ' : '', el('b', { text: p.label })]),
+      ...d.front.flatMap((p, i) => [i ? ' → ' : '', el('b', { text: p.name })]),
+      d.frontEqualPaths.length && d.drawn.some((p) => p.extraPaths)
+        ? ` · equal paths (extra paths' tracing counted): ${d.frontEqualPaths.map((p) => p.name).join(' → ')}` : '',
       d.hidden.length ? ` · not drawn (0 on a log axis): ${d.hidden.join(', ')}` : '',
       ...otherClocks(all ? null : state.speedScene),
     );
