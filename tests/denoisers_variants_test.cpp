@@ -4,8 +4,10 @@
 // of docs/extending.md (examples/denoiser/box_denoiser.cpp, built into this test, not registered).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <fstream>
 #include <map>
 #include <string>
 
@@ -215,6 +217,24 @@ TEST(DenoiserVariants, EveryVariantDeclaresOnlyFrameLayers) {
     ADD_FAILURE() << "missing meshId accepted";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("meshId"), std::string::npos) << e.what();
+  }
+}
+
+// denoisers/FIDELITY.md says what each name means here (its source, every interpretation and
+// deviation); a variant without a section there is a name without a meaning. A section is a
+// "## " heading that names the variant in backticks (one heading may name several).
+TEST(DenoiserVariants, EveryRegisteredVariantHasAFidelitySection) {
+  std::ifstream file(std::string(ARENA_SOURCE_DIR) + "/denoisers/FIDELITY.md");
+  ASSERT_TRUE(file) << "denoisers/FIDELITY.md is missing";
+  std::vector<std::string> headings;
+  for (std::string line; std::getline(file, line);)
+    if (line.rfind("## ", 0) == 0) headings.push_back(line);
+  for (const std::string& name : DenoiserRegistry::instance().names()) {
+    const bool found = std::any_of(headings.begin(), headings.end(), [&](const std::string& h) {
+      return h.find("`" + name + "`") != std::string::npos;
+    });
+    EXPECT_TRUE(found) << name << " is registered but denoisers/FIDELITY.md has no section on it (a \"## \" "
+                       << "heading naming `" << name << "`)";
   }
 }
 
