@@ -555,7 +555,7 @@ json reportData(const json& results, const fs::path& runDir, const json* baselin
       const json& info = sceneInfos[name];
       for (const char* k : {"purpose", "width", "height", "frames", "events", "chosenFrames",
                             "referenceRelMse", "noisyRelMse", "referenceSpp", "exposure", "floors",
-                            "referenceQuality",
+                            "referenceQuality", "warnings",
                             "assets"})  // assets: credits and loader fallbacks (issue 18)
         if (info.contains(k)) s[k] = info[k];
       s["noiseFloor"] = noiseFloor(info, warmup);
