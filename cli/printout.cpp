@@ -1,8 +1,13 @@
 #include "cli/printout.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iomanip>
+#include <sstream>
+
+#include "harness/reference_quality.hpp"
+#include "metrics/summary_value.hpp"
 
 namespace arena::cli {
 
@@ -61,6 +66,173 @@ void printOverallRanking(std::ostream& out, const json& results) {
         << std::left << std::setw(24) << intervalText(m.value("ci95", json())) << tiedText(m) << "\n";
   }
   if (o.contains("excluded")) out << "  not ranked overall: " << o["excluded"].get<std::string>() << "\n";
+}
+
+namespace {
+
+// The study's ranking with ties (metrics/statistics.hpp): per scene on relMSE, then overall on the
+// per-scene normalised score. Methods whose difference is not resolved at 95% share "tied with".
+void printSceneRankings(std::ostream& out, const json& results) {
+  if (!results.contains("statistics")) return;
+  const json& st = results["statistics"];
+  out << "\nranking on relMSE with 95% intervals (" << st.value("method", "") << ")\n";
+  for (auto it = st["scenes"].begin(); it != st["scenes"].end(); ++it) {
+    const json& s = it.value();
+    out << "\n" << it.key() << ": " << s["resolvedPairs"] << " of " << s["totalPairs"]
+              << " pairwise differences resolved\n";
+    for (const json& m : s["ranking"])
+      out << "  " << std::left << std::setw(4) << m["rank"].get<int>() << std::setw(26)
+                << m["label"].get<std::string>() << std::right << std::setw(11) << figureText(m.value("mean", json()))
+                << "  " << std::left << std::setw(24) << intervalText(m.value("ci95", json())) << tiedText(m) << "\n";
+    if (s.contains("excluded") && s["excluded"].is_string())
+      out << "  not ranked: " << s["excluded"].get<std::string>() << "\n";
+  }
+}
+
+// A figure with its interval: "0.123 [0.1, 0.15]", "-" when absent; a null bound of the response
+// is "never settled" (metrics/ghosting_intervals.hpp).
+std::string figure(const json& e, const char* name) {
+  const bool never = std::string(name) == "responseFrames" && e.contains("response");
+  if (!never && (!e.contains(name) || !e[name].is_number())) return "-";
+  std::ostringstream o;
+  if (never)
+    o << "never";
+  else
+    o << std::setprecision(3) << e[name].get<double>();
+  const json ci = e.value("ci95", json::object()).value(name, json());
+  if (ci.is_array()) {
+    auto bound = [](const json& b) {
+      std::ostringstream t;
+      t << std::setprecision(3);
+      if (b.is_number()) t << b.get<double>();
+      else t << "never";
+      return t.str();
+    };
+    o << " [" << bound(ci[0]) << ", " << bound(ci[1]) << "]";
+  } else {
+    o << " (no interval)";
+  }
+  return o.str();
+}
+
+// The event-window figures with their 95% intervals, per scripted event and camera cut, methods in
+// the order of their rank (lag energy, old-view leak) with ties (metrics/ghosting_intervals.hpp).
+void printEventTables(std::ostream& out, const json& results) {
+  if (!results.contains("statistics")) return;
+  for (auto it = results["statistics"]["scenes"].begin(); it != results["statistics"]["scenes"].end(); ++it)
+    for (const char* kind : {"events", "cuts"})
+      for (const json& ev : it.value().value(kind, json::array())) {
+        const bool cut = std::string(kind) == "cuts";
+        const int frame = ev["eventFrame"];
+        const char* rankedOn = cut ? "oldViewLeak" : "lagEnergy";
+        const json ranking = ev["byFigure"].value(rankedOn, json::object());
+        const std::string what = ev.value("what", "");
+        out << "\n" << it.key() << ": " << ev.value("kind", "") << (what.empty() ? "" : " " + what) << " at frame "
+                  << frame << ": ranked on " << rankedOn << " (" << ranking.value("resolvedPairs", 0) << " of "
+                  << ranking.value("totalPairs", 0) << " pairs resolved)\n";
+        for (const json& m : ranking.value("ranking", json::array())) {
+          const json* e = nullptr;
+          for (const json& p : results["pairs"])
+            if (p["scene"] == it.key() && p["label"] == m["label"] && p.contains(cut ? "cuts" : "ghosting"))
+              for (const json& x : p.at(cut ? "cuts" : "ghosting"))
+                if (x.value("eventFrame", -1) == frame) e = &x;
+          if (!e) continue;
+          out << "  " << std::left << std::setw(4) << m["rank"].get<int>() << std::setw(22)
+                    << m["label"].get<std::string>();
+          for (const char* f : cut ? std::vector<const char*>{"oldViewLeak", "atCut"}
+                                   : std::vector<const char*>{"lagEnergy", "responseFrames", "peakExcess", "chromaLagEnergy"})
+            out << f << " " << std::setw(26) << figure(*e, f) << " ";
+          out << tiedText(m) << "\n";
+        }
+        if (ranking.contains("excluded")) out << "  not ranked: " << ranking["excluded"].get<std::string>() << "\n";
+      }
+}
+
+// One line per scene: the best method on relMSE (rank 1, first in the ranking) with its mean and
+// interval, and the methods not resolved from it -- the winner, or the tied group.
+void printSceneWinners(std::ostream& out, const json& results) {
+  const json scenes = results.value("statistics", json::object()).value("scenes", json::object());
+  if (scenes.empty()) return;
+  out << "\nper scene: the best on relMSE with its 95% interval, and the methods not resolved from it\n";
+  size_t width = 0;
+  for (auto it = scenes.begin(); it != scenes.end(); ++it) width = std::max(width, it.key().size());
+  for (auto it = scenes.begin(); it != scenes.end(); ++it) {
+    const json ranking = it.value().value("ranking", json::array());
+    out << "  " << std::left << std::setw(int(width) + 2) << it.key();
+    if (ranking.empty()) {
+      out << "not ranked" << (it.value().contains("excluded") ? ": " + it.value()["excluded"].get<std::string>() : "")
+          << "\n";
+      continue;
+    }
+    const json& best = ranking[0];
+    const std::string tied = tiedText(best);
+    out << best.value("label", "") << " " << figureText(best.value("mean", json())) << " "
+        << intervalText(best.value("ci95", json())) << (tied.empty() ? "" : "; " + tied) << "\n";
+  }
+}
+
+// The warnings that concern a scene, once per scene: results.scenes.<scene>.warnings (capped
+// references, non-finite inputs) and the asset loader's fallbacks.
+std::vector<std::string> sceneWarningLines(const json& results) {
+  std::vector<std::string> lines;
+  const json scenes = results.value("scenes", json::object());
+  for (const auto& [name, scene] : scenes.items()) {
+    for (const json& w : scene.value("warnings", json::array())) lines.push_back(name + ": " + w.get<std::string>());
+    const size_t fallbacks = scene.value("assets", json::object()).value("warnings", json::array()).size();
+    if (fallbacks > 0)
+      lines.push_back(name + ": " + std::to_string(fallbacks) + " asset loader fallback(s) (results.json scenes." + name +
+                      ".assets.warnings)");
+  }
+  return lines;
+}
+
+}  // namespace
+
+void printStudyTables(std::ostream& out, const json& results) {
+  printSceneRankings(out, results);
+  printEventTables(out, results);
+  const std::vector<std::string> absent = absentSummaryLines(results, {"relMse"});
+  if (!absent.empty()) out << "\nabsent summaries\n";
+  for (const std::string& line : absent) out << "  " << line << "\n";
+  out << "\nreference quality (noise floor / best real denoiser's corrected relMSE, goal <= " << kReferenceQualityGoal
+      << ")\n";
+  for (const std::string& line : referenceQualityLines(results)) out << "  " << line << "\n";
+}
+
+void printStudySummary(std::ostream& out, const json& results, const StudyOutputs& where) {
+  printOverallRanking(out, results);
+  printSceneWinners(out, results);
+  // docs/references.md: said plainly, once, where a scene's references are too noisy to rank it.
+  std::vector<std::string> missed;
+  const json scenes = results.value("scenes", json::object());
+  for (const auto& [name, scene] : scenes.items())
+    if (scene.contains("referenceQuality") && !scene["referenceQuality"].value("meets", false))
+      missed.push_back(scene["referenceQuality"].value("verdict", name));
+  if (!missed.empty())
+    out << "\nreference quality goal (noise floor <= " << kReferenceQualityGoal
+        << " x the best corrected relMSE) missed on " << missed.size() << " scene(s)\n";
+  for (const std::string& line : missed) out << "  " << line << "\n";
+  const std::vector<std::string> warnings = sceneWarningLines(results);
+  if (!warnings.empty()) out << "\nwarnings\n";
+  for (const std::string& line : warnings) out << "  " << line << "\n";
+  size_t pairWarnings = 0, pairsWarned = 0;
+  for (const json& p : results.value("pairs", json::array())) {
+    const size_t n = p.value("warnings", json::array()).size();
+    pairWarnings += n;
+    pairsWarned += n > 0;
+  }
+  const size_t absent = absentSummaryLines(results, {"relMse"}).size();
+  if (pairWarnings > 0 || absent > 0) {
+    out << "\n";
+    if (pairWarnings > 0)
+      out << pairWarnings << " warning(s) on " << pairsWarned << " pair(s) (floors, absent summaries, sanitised "
+          << "inputs): listed per scene in the report and in results.json pairs[].warnings\n";
+    if (absent > 0) out << "relMSE summaries are absent in " << absent << " case(s): --verbose says where and why\n";
+  }
+  out << "\nstudy finished in " << int(where.seconds / 60) << " min " << int(where.seconds) % 60 << " s "
+      << "(--verbose: every ranking, event and verdict)\n"
+      << "results: " << where.results << ", " << where.database << "\n"
+      << "report:  " << where.report << "\n";
 }
 
 }  // namespace arena::cli

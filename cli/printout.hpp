@@ -1,10 +1,12 @@
 #pragma once
 // What `arena run` and `arena study` print of a run's statistics, formatted exactly as the report
 // formats the same numbers (reports/web/shared.js fmt and interval), so the console and the page
-// can be compared digit for digit.
+// can be compared digit for digit. A library of its own (arena_printout), so that tests can hold
+// the study's summary to its one screen.
 #include <nlohmann/json.hpp>
 #include <ostream>
 #include <string>
+#include <vector>
 
 namespace arena::cli {
 
@@ -19,5 +21,21 @@ std::string tiedText(const nlohmann::json& rankedMethod);
 // The run's overall ranking (statistics.overall): rank ("=" when tied), label, score, interval,
 // ties; and who was left out and why. Nothing when the run has none.
 void printOverallRanking(std::ostream& out, const nlohmann::json& results);
+
+// Where a finished study put its outputs, and how long it took.
+struct StudyOutputs {
+  std::string results, database, report;
+  double seconds = 0;
+};
+// `arena study`'s summary, one screen (under 60 lines for the default study): the overall ranking
+// with intervals; per scene one line, the best method on relMSE with its interval and the methods
+// not resolved from it; the reference verdicts that miss the goal; each scene's warnings once
+// (results.scenes.<scene>.warnings, asset fallbacks); a count of the pairs' own warnings and absent
+// summaries; where the results and the report are. The full tables are printStudyTables'.
+void printStudySummary(std::ostream& out, const nlohmann::json& results, const StudyOutputs& where);
+// What `arena study --verbose` prints before the summary: every scene's ranking with intervals,
+// every event and camera cut with its figures and intervals, the absent summaries and every scene's
+// reference verdict.
+void printStudyTables(std::ostream& out, const nlohmann::json& results);
 
 }  // namespace arena::cli

@@ -1,23 +1,21 @@
 // `arena study`: the main job. Renders the default scene suite (quick preset), runs every
-// registered denoiser on every scene, computes every metric, writes the report, and prints where
-// it is together with a short ranking table.
-#include <algorithm>
+// registered denoiser on every scene, computes every metric, writes the report, and prints a
+// summary that fits on one screen (cli/printout.hpp); --verbose prints every step and table.
+#include <sys/ioctl.h>
+#include <unistd.h>
+
 #include <chrono>
-#include <iomanip>
+#include <cstdio>
 #include <iostream>
-#include <map>
-#include <sstream>
 
 #include "core/capture.hpp"
 #include "core/error.hpp"
 #include "cli/commands.hpp"
 #include "cli/printout.hpp"
 #include "cli/render_options.hpp"
-#include "harness/reference_quality.hpp"
 #include "harness/run_matrix.hpp"
-#include "harness/study.hpp"
 #include "harness/scene_selection.hpp"
-#include "metrics/summary_value.hpp"
+#include "harness/study.hpp"
 #include "reports/report.hpp"
 
 namespace arena::cli {
@@ -26,84 +24,45 @@ namespace {
 
 using nlohmann::json;
 
-// The study's ranking with ties (metrics/statistics.hpp): per scene on relMSE, then overall on the
-// per-scene normalised score. Methods whose difference is not resolved at 95% share "tied with".
-void printRanking(const json& results) {
-  if (!results.contains("statistics")) return;
-  const json& st = results["statistics"];
-  std::cout << "\nranking on relMSE with 95% intervals (" << st.value("method", "") << ")\n";
-  for (auto it = st["scenes"].begin(); it != st["scenes"].end(); ++it) {
-    const json& s = it.value();
-    std::cout << "\n" << it.key() << ": " << s["resolvedPairs"] << " of " << s["totalPairs"]
-              << " pairwise differences resolved\n";
-    for (const json& m : s["ranking"])
-      std::cout << "  " << std::left << std::setw(4) << m["rank"].get<int>() << std::setw(26)
-                << m["label"].get<std::string>() << std::right << std::setw(11) << figureText(m.value("mean", json()))
-                << "  " << std::left << std::setw(24) << intervalText(m.value("ci95", json())) << tiedText(m) << "\n";
-    if (s.contains("excluded") && s["excluded"].is_string())
-      std::cout << "  not ranked: " << s["excluded"].get<std::string>() << "\n";
-  }
-  printOverallRanking(std::cout, results);
-}
+// The study's progress. --verbose: every line on stdout, as `arena run` prints them. Otherwise, on
+// a terminal, one status line on stderr rewritten in place (every step, with its ETA) and cleared
+// when the study is done, so the summary is what stays on the screen; when stderr is not a
+// terminal (a log), one line per finished scene and per refinement decision.
+class StudyProgress {
+ public:
+  explicit StudyProgress(bool verbose) : verbose_(verbose), terminal_(isatty(fileno(stderr)) == 1) {}
+  ~StudyProgress() { clear(); }
+  StudyProgress(const StudyProgress&) = delete;
+  StudyProgress& operator=(const StudyProgress&) = delete;
 
-// A figure with its interval: "0.123 [0.1, 0.15]", "-" when absent; a null bound of the response
-// is "never settled" (metrics/ghosting_intervals.hpp).
-std::string figure(const json& e, const char* name) {
-  const bool never = std::string(name) == "responseFrames" && e.contains("response");
-  if (!never && (!e.contains(name) || !e[name].is_number())) return "-";
-  std::ostringstream o;
-  if (never)
-    o << "never";
-  else
-    o << std::setprecision(3) << e[name].get<double>();
-  const json ci = e.value("ci95", json::object()).value(name, json());
-  if (ci.is_array()) {
-    auto bound = [](const json& b) {
-      std::ostringstream t;
-      t << std::setprecision(3);
-      if (b.is_number()) t << b.get<double>();
-      else t << "never";
-      return t.str();
-    };
-    o << " [" << bound(ci[0]) << ", " << bound(ci[1]) << "]";
-  } else {
-    o << " (no interval)";
+  void step(const std::string& line) {
+    if (verbose_)
+      std::cout << line << std::endl;
+    else if (terminal_)
+      show(line);
   }
-  return o.str();
-}
+  void milestone(const std::string& line) {
+    if (verbose_)
+      std::cout << line << std::endl;
+    else if (terminal_)
+      show(line);
+    else
+      std::cerr << line << std::endl;
+  }
+  void clear() {
+    if (shown_) std::cerr << "\r\033[K" << std::flush;
+    shown_ = false;
+  }
 
-// The event-window figures with their 95% intervals, per scripted event and camera cut, methods in
-// the order of their rank (lag energy, old-view leak) with ties (metrics/ghosting_intervals.hpp).
-void printEvents(const json& results) {
-  if (!results.contains("statistics")) return;
-  for (auto it = results["statistics"]["scenes"].begin(); it != results["statistics"]["scenes"].end(); ++it)
-    for (const char* kind : {"events", "cuts"})
-      for (const json& ev : it.value().value(kind, json::array())) {
-        const bool cut = std::string(kind) == "cuts";
-        const int frame = ev["eventFrame"];
-        const char* rankedOn = cut ? "oldViewLeak" : "lagEnergy";
-        const json ranking = ev["byFigure"].value(rankedOn, json::object());
-        const std::string what = ev.value("what", "");
-        std::cout << "\n" << it.key() << ": " << ev.value("kind", "") << (what.empty() ? "" : " " + what) << " at frame "
-                  << frame << ": ranked on " << rankedOn << " (" << ranking.value("resolvedPairs", 0) << " of "
-                  << ranking.value("totalPairs", 0) << " pairs resolved)\n";
-        for (const json& m : ranking.value("ranking", json::array())) {
-          const json* e = nullptr;
-          for (const json& p : results["pairs"])
-            if (p["scene"] == it.key() && p["label"] == m["label"] && p.contains(cut ? "cuts" : "ghosting"))
-              for (const json& x : p.at(cut ? "cuts" : "ghosting"))
-                if (x.value("eventFrame", -1) == frame) e = &x;
-          if (!e) continue;
-          std::cout << "  " << std::left << std::setw(4) << m["rank"].get<int>() << std::setw(22)
-                    << m["label"].get<std::string>();
-          for (const char* f : cut ? std::vector<const char*>{"oldViewLeak", "atCut"}
-                                   : std::vector<const char*>{"lagEnergy", "responseFrames", "peakExcess", "chromaLagEnergy"})
-            std::cout << f << " " << std::setw(26) << figure(*e, f) << " ";
-          std::cout << tiedText(m) << "\n";
-        }
-        if (ranking.contains("excluded")) std::cout << "  not ranked: " << ranking["excluded"].get<std::string>() << "\n";
-      }
-}
+ private:
+  void show(const std::string& line) {
+    winsize size{};
+    const size_t columns = ioctl(fileno(stderr), TIOCGWINSZ, &size) == 0 && size.ws_col > 1 ? size.ws_col : 80;
+    std::cerr << "\r\033[K" << line.substr(0, columns - 1) << std::flush;
+    shown_ = true;
+  }
+  bool verbose_, terminal_, shown_ = false;
+};
 
 }  // namespace
 
@@ -118,6 +77,7 @@ void addStudyCommand(CLI::App& app) {
   auto exposure = std::make_shared<std::string>("per-frame");
   auto refineBudget = std::make_shared<double>(0.5);
   auto refineMaxSpp = std::make_shared<int>(8192);
+  auto verbose = std::make_shared<bool>(false);
   cmd->add_option("--out", *out, "Run directory")->default_val("runs/study");
   cmd->add_option("--report", *report, "Report directory (index.html)")->default_val("report");
   cmd->add_option("--flip", *flip, "FLIP metrics: none, ldr, all")
@@ -141,6 +101,9 @@ void addStudyCommand(CLI::App& app) {
   cmd->add_option("--refine-max-spp", *refineMaxSpp, "The refinement's cap on a reference's samples per pixel")
       ->check(CLI::Range(1, 1 << 20))
       ->default_val(8192);
+  cmd->add_flag("--verbose", *verbose,
+                "Print every progress line and the full tables (every scene's ranking, every event and cut with "
+                "its intervals, every reference verdict) before the summary");
   // The study, like every run, renders the low-resolution buffer (1/8, 16 paths per texel, the
   // CAPCOM 2023 setting in algorithms.md) because reengine reads it (resolveAutoLowres), so
   // reengine runs its disocclusion rays and is charged for them (a quarter of the 1-spp input's
@@ -162,7 +125,9 @@ void addStudyCommand(CLI::App& app) {
     c.cache = opt->cacheDir;
     c.flip = *flip;
     c.exposure = *exposure;
-    c.progress = [](const std::string& line) { std::cout << line << std::endl; };
+    auto progress = std::make_shared<StudyProgress>(*verbose);
+    c.progress = [progress](const std::string& line) { progress->step(line); };
+    c.milestone = [progress](const std::string& line) { progress->milestone(line); };
     for (const Scene& s : c.scenes) requireFitsInMemory(s, c.render, true);
     for (const std::string& w : shortSequenceWarnings(c.scenes, c.render, c.warmup))
       std::cerr << "arena: warning: " << w << "\n";
@@ -170,21 +135,13 @@ void addStudyCommand(CLI::App& app) {
     ReportOptions ro;
     ro.run = *out;
     ro.out = *report;
+    progress->step("writing the report");
     ReportSummary rs = writeReport(ro);
-    printRanking(results);
-    printEvents(results);
-    // What the ranking could not use, and why (a sequence no longer than the warm-up, ...).
-    const std::vector<std::string> absent = absentSummaryLines(results, {"relMse"});
-    if (!absent.empty()) std::cout << "\nabsent summaries\n";
-    for (const std::string& line : absent) std::cout << "  " << line << "\n";
-    // metrics.md "Reference quality": said plainly where the references are too noisy to rank.
-    std::cout << "\nreference quality (noise floor / best real denoiser's corrected relMSE, goal <= "
-              << kReferenceQualityGoal << ")\n";
-    for (const std::string& line : referenceQualityLines(results)) std::cout << "  " << line << "\n";
-    double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::cout << "\nstudy finished in " << int(sec / 60) << " min " << int(sec) % 60 << " s\n"
-              << "results: " << *out << "/results.json, " << *out << "/results.db\n"
-              << "report:  " << rs.index.string() << "\n";
+    progress->clear();
+    if (*verbose) printStudyTables(std::cout, results);
+    const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    printStudySummary(std::cout, results,
+                      {*out + "/results.json", *out + "/results.db", rs.index.string(), sec});
     auto failed = failedPairs(results);
     if (!failed.empty()) {
       std::cerr << failed.size() << " pair(s) failed:\n";

@@ -305,6 +305,13 @@ json runMatrix(const RunConfig& cfg) {
   const size_t totalPairs = sources.size() * denoisers.size();
   size_t pairIndex = 0, pairsDone = 0, pairsMine = 0;
   for (size_t k = 0; k < totalPairs; ++k) pairsMine += int(k % size_t(cfg.shardCount)) == cfg.shardIndex;
+  size_t scenesMine = 0, scenesDone = 0;
+  for (size_t k = 0; k < cfg.scenes.size(); ++k) {
+    bool any = false;
+    for (size_t d = 0; d < denoisers.size(); ++d)
+      any = any || int((k * denoisers.size() + d) % size_t(cfg.shardCount)) == cfg.shardIndex;
+    scenesMine += any;
+  }
   const auto start = std::chrono::steady_clock::now();
   auto say = [&](const std::string& s) {
     if (cfg.progress) cfg.progress(s);
@@ -384,6 +391,8 @@ json runMatrix(const RunConfig& cfg) {
         results["scenes"][scene.name]["assets"] = {{"credits", credits}, {"warnings", scene.warnings}};
       }
     }
+    const auto sceneStart = std::chrono::steady_clock::now();
+    size_t sceneFailures = 0;
     for (const DenoiserRequest* r : mine) {
       auto t0 = std::chrono::steady_clock::now();
       json pair;
@@ -407,6 +416,19 @@ json runMatrix(const RunConfig& cfg) {
       if (pair["status"] != "ok") say("  error: " + pair["error"].get<std::string>());
       else if (pair["sanitizedInputs"]["total"].get<long>() > 0)
         say("  warning: " + pair["warnings"][0].get<std::string>());
+      sceneFailures += pair["status"] != "ok";
+    }
+    if (cfg.milestone) {
+      ++scenesDone;
+      const auto now = std::chrono::steady_clock::now();
+      char buf[512];
+      std::snprintf(buf, sizeof buf, "[scene %zu/%zu] %s: %zu pair(s) in %.1f s%s (ETA %s)", scenesDone, scenesMine,
+                    scene.name.c_str(), mine.size(), std::chrono::duration<double>(now - sceneStart).count(),
+                    sceneFailures ? (", " + std::to_string(sceneFailures) + " FAILED").c_str() : "",
+                    clock(std::chrono::duration<double>(now - start).count() / double(pairsDone) *
+                          double(pairsMine - pairsDone))
+                        .c_str());
+      cfg.milestone(buf);
     }
   }
   if (cfg.finish) finishRun(results, cfg);

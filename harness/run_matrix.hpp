@@ -41,7 +41,10 @@ struct RunConfig {
   // Entries added to the results document before it is committed (a sweep's grid), so results.json
   // and results.db hold them from the one atomic commit.
   nlohmann::json annotations = nlohmann::json::object();
-  ProgressFn progress;
+  ProgressFn progress;  // every step: frames rendered, pairs run, warnings as they happen
+  // One line per finished scene (its pairs, their time, failures, the ETA) and per decision of the
+  // study (what it refines): the progress a log keeps when `progress` is shown only in passing.
+  ProgressFn milestone;
   // The low-resolution buffer was left to the run (no --lowres-factor): resolveAutoLowres decides.
   bool lowresAuto = false;
 };

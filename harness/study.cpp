@@ -22,8 +22,9 @@ std::vector<Scene> refineReferences(RunConfig& c, const json& results, double bu
     const std::filesystem::path dir = sequenceDir(s, c.render, c.cache);
     if (std::filesystem::exists(dir / "sequence.json")) sequences.emplace(s.name, Sequence::open(dir).info());
   }
-  auto say = [&](const std::string& line) {
-    if (c.progress) c.progress(line);
+  auto say = [&](const std::string& line) {  // the study's decisions: milestones where they are kept apart
+    if (c.milestone) c.milestone(line);
+    else if (c.progress) c.progress(line);
   };
   std::vector<Scene> refined;
   for (const ReferenceRefinement& plan : planReferenceRefinement(results, sequences, c.warmup, maxSpp, budget)) {
@@ -76,7 +77,13 @@ json runStudy(StudyConfig config) {
   again.captures.clear();  // only rendered scenes are refined and run again
   again.scenes = refineReferences(c, results, config.refineBudget, config.refineMaxSpp);
   if (!again.scenes.empty()) {
-    if (c.progress) c.progress("[refine] running the refined scenes again");
+    const std::string line =
+        "[refine] running the refined scenes again (" + std::to_string(again.scenes.size()) + " of " +
+        std::to_string(c.scenes.size()) + ")";
+    if (c.milestone)
+      c.milestone(line);
+    else if (c.progress)
+      c.progress(line);
     results = replaceScenes(std::move(results), runMatrix(again));
   }
   finishRun(results, c);

@@ -247,7 +247,26 @@ json EvaluationScene::describe() const {
   for (int t = 0; t < frames(); ++t) exposures.push_back(displays_[displayIndex(t)].exposure);
   return {{"referenceRelMse", referenceRelMse_}, {"noisyRelMse", noisyRelMse_},
           {"exposure", exposures.front()},       {"exposurePerFrame", exposures},
-          {"floors", floors_},                   {"nonFiniteInputs", input_.nonFinite}};
+          {"floors", floors_},                   {"nonFiniteInputs", input_.nonFinite},
+          {"warnings", warnings()}};
+}
+
+std::vector<std::string> EvaluationScene::warnings() const {
+  // What concerns the scene's sequence rather than one method: said once per scene, not on each
+  // of its pairs (the printout and the report list it once).
+  std::vector<std::string> out;
+  int capped = 0;
+  for (bool c : input_.referenceCapped) capped += c;
+  if (capped > 0)
+    out.push_back(std::to_string(capped) + " of " + std::to_string(input_.referenceCapped.size()) +
+                  " reference(s) stopped at the sample cap above their target relMSE (see sequence.json "
+                  "referenceEstimatedRelMse; `arena refine` can extend them)");
+  long nonFinite = 0;
+  for (const auto& [where, count] : input_.nonFinite) nonFinite += count;
+  if (nonFinite > 0)
+    out.push_back(std::to_string(nonFinite) + " non-finite value(s) in the cached inputs (scenes." + input_.name +
+                  ".nonFiniteInputs); each denoiser's reads of them were replaced by 0 (pairs[].sanitizedInputs)");
+  return out;
 }
 
 // One stream's state: the frames before the current one (for temporal metrics), the series of
@@ -443,14 +462,6 @@ json PairEvaluation::finish() {
         summary["relMse"]["mean"].get<double>() < 10.0 * refFloor)
       warnings.push_back("relMSE is within 10x of the reference's own noise floor (" + std::to_string(refFloor) +
                          "): the ranking on raw relMSE is unreliable; use relMseCorrected or a better reference");
-  }
-  {  // a reference that stopped at its sample cap above its target
-    int capped = 0;
-    for (bool c : scene.input_.referenceCapped) capped += c;
-    if (capped > 0)
-      warnings.push_back(std::to_string(capped) + " of " + std::to_string(scene.input_.referenceCapped.size()) +
-                         " reference(s) stopped at the sample cap above their target relMSE (see sequence.json "
-                         "referenceEstimatedRelMse; `arena refine` can extend them)");
   }
   // Metrics that cannot be corrected for the reference's noise (the perceptual ones): warn within
   // their declared factor of their own floor.

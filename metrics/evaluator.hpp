@@ -68,8 +68,11 @@ class EvaluationScene {
   Image display(int t, const Image& linear) const { return displays_[displayIndex(t)].apply(linear); }
   const Image& referenceDisplay(int t) const { return referenceDisplay_[referenceIndex(t)]; }
   // The results' description of the sequence: referenceRelMse and noisyRelMse per frame,
-  // exposures, floors and non-finite inputs.
+  // exposures, floors, non-finite inputs and the warnings below.
   nlohmann::json describe() const;
+  // Warnings that concern the sequence, not a method (capped references, non-finite inputs):
+  // results.scenes.<scene>.warnings, once per scene rather than on each pair.
+  std::vector<std::string> warnings() const;
   const nlohmann::json& floors() const { return floors_; }
 
  private:

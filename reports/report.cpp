@@ -583,7 +583,7 @@ json reportData(const json& results, const fs::path& runDir, const json* baselin
       const json& info = sceneInfos[name];
       for (const char* k : {"purpose", "width", "height", "frames", "events", "chosenFrames",
                             "referenceRelMse", "noisyRelMse", "referenceSpp", "exposure", "floors",
-                            "referenceQuality", "validation", "source", "capture", "hasReference",
+                            "referenceQuality", "warnings", "validation", "source", "capture", "hasReference",
                             "derivedLayers", "assets"})  // assets: credits and loader fallbacks (issue 18)
         if (info.contains(k)) s[k] = info[k];
       s["noiseFloor"] = noiseFloor(info, warmup);

@@ -1,10 +1,13 @@
 // The registered denoiser variants through the Denoiser interface: contracts every variant must
 // keep (constant in -> constant out, tiny and odd sizes, parameter errors) and the convergence
-// each one promises, on synthetic frames built here.
+// each one promises, on synthetic frames built here. The contracts also hold the worked example
+// of docs/extending.md (examples/denoiser/box_denoiser.cpp, built into this test, not registered).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <fstream>
 #include <map>
 #include <string>
 
@@ -45,10 +48,29 @@ LayerSet planeFrame(int w, int h, int skyColumns = 0) {
   return frame;
 }
 
+std::unique_ptr<Denoiser> create(const DenoiserInfo& info,
+                                 const std::map<std::string, std::string>& overrides = {}) {
+  return info.create(info.schema.resolve(overrides, info.name), SignalKind::Diffuse);
+}
+
 std::unique_ptr<Denoiser> create(const std::string& name,
                                  const std::map<std::string, std::string>& overrides = {}) {
-  const DenoiserInfo& info = DenoiserRegistry::instance().find(name);
-  return info.create(info.schema.resolve(overrides, name), SignalKind::Diffuse);
+  return create(DenoiserRegistry::instance().find(name), overrides);
+}
+
+}  // namespace
+DenoiserInfo boxInfo();  // examples/denoiser/box_denoiser.cpp
+namespace {
+
+// What the contract tests below check: every registered variant, then the worked example of
+// docs/extending.md, so the example a newcomer copies keeps the contract too.
+std::vector<const DenoiserInfo*> contractSubjects() {
+  static const DenoiserInfo example = boxInfo();
+  std::vector<const DenoiserInfo*> subjects;
+  for (const std::string& name : DenoiserRegistry::instance().names())
+    subjects.push_back(&DenoiserRegistry::instance().find(name));
+  subjects.push_back(&example);
+  return subjects;
 }
 
 double meanSquaredError(const Image& a, const Image& b) {
@@ -83,8 +105,9 @@ TEST(DenoiserVariants, ConstantSignalStaysConstantOverFrames) {
   LayerSet frame = planeFrame(w, h, 3);
   Image signal(w, h, 3);
   for (int c = 0; c < 3; ++c) std::fill_n(signal.plane(c), w * h, 0.7f + 0.3f * float(c));
-  for (const std::string& name : DenoiserRegistry::instance().names()) {
-    auto denoiser = create(name);
+  for (const DenoiserInfo* info : contractSubjects()) {
+    const std::string& name = info->name;
+    auto denoiser = create(*info);
     denoiser->setup(w, h);
     for (int t = 0; t < 5; ++t) {
       Image output(w, h, 3, -1.0f);
@@ -105,10 +128,11 @@ TEST(DenoiserVariants, TinyAndOddSizesRun) {
   struct Size {
     int w, h;
   };
-  for (const std::string& name : DenoiserRegistry::instance().names()) {
+  for (const DenoiserInfo* info : contractSubjects()) {
+    const std::string& name = info->name;
     for (Size size : {Size{1, 1}, Size{1, 7}, Size{7, 1}, Size{17, 13}}) {
       LayerSet frame = planeFrame(size.w, size.h);
-      auto denoiser = create(name);
+      auto denoiser = create(*info);
       denoiser->setup(size.w, size.h);
       for (int t = 0; t < 3; ++t) {
         Image clean(size.w, size.h, 3, 0.5f);
@@ -144,8 +168,9 @@ TEST(DenoiserVariants, TinyAndOddSizesRun) {
 }
 
 TEST(DenoiserVariants, SchemaRejectsUnknownAndOutOfRangeParameters) {
-  for (const std::string& name : DenoiserRegistry::instance().names()) {
-    const ParamSchema& schema = DenoiserRegistry::instance().find(name).schema;
+  for (const DenoiserInfo* info : contractSubjects()) {
+    const std::string& name = info->name;
+    const ParamSchema& schema = info->schema;
     try {
       schema.resolve({{"sigmaTypo", "1"}}, name);
       ADD_FAILURE() << name << " accepted an unknown parameter";
@@ -165,14 +190,15 @@ TEST(DenoiserVariants, SchemaRejectsUnknownAndOutOfRangeParameters) {
             << name << "." << spec.name << "=" << text;
       }
       // The default itself resolves and builds a working denoiser.
-      EXPECT_NO_THROW(create(name, {}));
+      EXPECT_NO_THROW(create(*info, {}));
     }
   }
 }
 
 TEST(DenoiserVariants, EveryVariantDeclaresOnlyFrameLayers) {
-  for (const std::string& name : DenoiserRegistry::instance().names()) {
-    for (const std::string& layer : create(name)->requiredChannels()) {
+  for (const DenoiserInfo* info : contractSubjects()) {
+    const std::string& name = info->name;
+    for (const std::string& layer : create(*info)->requiredChannels()) {
       bool known = false;
       for (const LayerSpec& spec : channels::frameLayers()) known = known || spec.name == layer;
       EXPECT_TRUE(known) << name << " requires unknown layer " << layer;
@@ -191,6 +217,24 @@ TEST(DenoiserVariants, EveryVariantDeclaresOnlyFrameLayers) {
     ADD_FAILURE() << "missing meshId accepted";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("meshId"), std::string::npos) << e.what();
+  }
+}
+
+// denoisers/FIDELITY.md says what each name means here (its source, every interpretation and
+// deviation); a variant without a section there is a name without a meaning. A section is a
+// "## " heading that names the variant in backticks (one heading may name several).
+TEST(DenoiserVariants, EveryRegisteredVariantHasAFidelitySection) {
+  std::ifstream file(std::string(ARENA_SOURCE_DIR) + "/denoisers/FIDELITY.md");
+  ASSERT_TRUE(file) << "denoisers/FIDELITY.md is missing";
+  std::vector<std::string> headings;
+  for (std::string line; std::getline(file, line);)
+    if (line.rfind("## ", 0) == 0) headings.push_back(line);
+  for (const std::string& name : DenoiserRegistry::instance().names()) {
+    const bool found = std::any_of(headings.begin(), headings.end(), [&](const std::string& h) {
+      return h.find("`" + name + "`") != std::string::npos;
+    });
+    EXPECT_TRUE(found) << name << " is registered but denoisers/FIDELITY.md has no section on it (a \"## \" "
+                       << "heading naming `" << name << "`)";
   }
 }
 

@@ -126,6 +126,14 @@ TEST(Scene, EventNamingNothingIsRejected) {
   EXPECT_NE(e.find("$.events[0].what"), std::string::npos) << e;
 }
 
+// docs/extending.md, "An event kind": the kinds are one list (core/sequence.cpp), which the error names.
+TEST(Scene, UnknownEventKindIsRejectedListingTheKinds) {
+  std::string e = errorOf(replaced(kMinimal, R"("kind": "light_off")", R"("kind": "light_of")"));
+  EXPECT_NE(e.find("$.events[0].kind"), std::string::npos) << e;
+  for (const char* kind : {"light_off", "light_on", "light_change", "object_moves", "camera_cut"})
+    EXPECT_NE(e.find(kind), std::string::npos) << kind << ": " << e;
+}
+
 TEST(Scene, UnorderedKeysAreRejected) {
   std::string e = errorOf(replaced(kMinimal, R"({"frame": 2, "intensity": 0)", R"({"frame": 0, "intensity": 0)"));
   EXPECT_NE(e.find("strictly increasing"), std::string::npos) << e;

@@ -173,8 +173,12 @@
     const quality = scene && scene.referenceQuality;
     const qualityNote = quality && quality.meets === false
       ? [el('p', { class: 'reference-quality warnings', text: `Reference quality: ${quality.verdict}` })] : [];
-    $('warnings').replaceChildren(...qualityNote, ...validationTable(scene), ...(warnings.length ? [el('h3', { text: 'Warnings' }),
-      el('ul', { class: 'warnings' }, warnings.flatMap((p) => p.warnings.map((w) => el('li', {}, el('b', { text: `${p.label}: ` }), w))))] : []));
+    // A warning about the scene (results: scenes.<scene>.warnings) is listed once, before the pairs' own.
+    const sceneWarnings = (scene && scene.warnings) || [];
+    const items = sceneWarnings.map((w) => el('li', {}, el('b', { text: 'scene: ' }), w))
+      .concat(warnings.flatMap((p) => p.warnings.map((w) => el('li', {}, el('b', { text: `${p.label}: ` }), w))));
+    $('warnings').replaceChildren(...qualityNote, ...validationTable(scene), ...(items.length ? [el('h3', { text: 'Warnings' }),
+      el('ul', { class: 'warnings' }, items)] : []));
     renderAblation();
   };
 

@@ -1,0 +1,69 @@
+// `box`: the worked example of docs/extending.md -- a built-in-style denoiser in one file. A box
+// filter over the (2 radius + 1)^2 window that averages only the pixels of the same mesh (a
+// crude edge-stopping term); sky pixels (meshId -1) pass through. It is not registered in the
+// arena: tests/denoisers_variants_test.cpp puts it through the same contract tests as every
+// registered variant, so the example keeps compiling and keeps the Denoiser contract. To make it
+// a built-in, copy it to denoisers/, declare boxInfo() in denoisers/variants.hpp and add it to
+// builtinDenoisers() there.
+#include <algorithm>
+
+#include "denoisers/denoiser.hpp"
+#include "denoisers/param_table.hpp"
+
+namespace arena {
+
+namespace {
+
+// Set from boxParams() below, which declares each default, range and meaning once.
+struct BoxSettings {
+  int radius;
+};
+
+class BoxDenoiser final : public Denoiser {
+ public:
+  explicit BoxDenoiser(const BoxSettings& settings) : settings_(settings) {}
+
+  // The harness checks these layers are in the sequence before the first frame.
+  std::vector<std::string> requiredChannels() const override { return {"meshId"}; }
+  void setup(int, int) override {}  // no buffers: the filter keeps no history
+  void reset() override {}
+
+  void denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& output) override {
+    const int r = settings_.radius, w = ctx.width, h = ctx.height;
+    const Image& meshId = in.frame.get("meshId");
+    ScopedPass pass(this, "box", double((2 * r + 1) * (2 * r + 1)));  // timed; taps per pixel
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const float id = meshId.at(x, y);
+        float sum[3] = {0, 0, 0}, weight = 0;
+        for (int j = std::max(0, y - r); j <= std::min(h - 1, y + r); ++j)
+          for (int i = std::max(0, x - r); i <= std::min(w - 1, x + r); ++i) {
+            if (meshId.at(i, j) != id || (id < 0 && (i != x || j != y))) continue;  // sky: itself only
+            for (int c = 0; c < 3; ++c) sum[c] += in.signal.at(i, j, c);
+            weight += 1;
+          }
+        for (int c = 0; c < 3; ++c) output.at(x, y, c) = sum[c] / weight;  // the centre always counts
+      }
+  }
+
+ private:
+  BoxSettings settings_;
+};
+
+const ParamTable<BoxSettings>& boxParams() {
+  using S = BoxSettings;
+  static const ParamTable<S> table =
+      ParamTable<S>().integer("radius", &S::radius, 2, 0, 8, "half-width of the box window, pixels");
+  return table;
+}
+
+}  // namespace
+
+DenoiserInfo boxInfo() {
+  return {"box", "Box filter within each mesh (the worked example of docs/extending.md)", boxParams().schema(),
+          [](const ParamSet& params, SignalKind) {
+            return std::make_unique<BoxDenoiser>(boxParams().settings(params, "box"));
+          }};
+}
+
+}  // namespace arena

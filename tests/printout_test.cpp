@@ -1,0 +1,132 @@
+// What `arena study` prints (cli/printout.hpp): the summary of the default study fits on one
+// screen, and a warning that concerns a scene is stored and printed once per scene, not once per
+// denoiser (issue 33). These tests count lines and occurrences; they read no numbers from the text.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cli/printout.hpp"
+#include "harness/run_matrix.hpp"
+#include "tests/test_util.hpp"
+
+namespace arena {
+namespace {
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+size_t lineCount(const std::string& text) { return size_t(std::count(text.begin(), text.end(), '\n')); }
+
+size_t occurrences(const std::string& text, const std::string& what) {
+  size_t n = 0;
+  for (size_t p = text.find(what); p != std::string::npos; p = text.find(what, p + 1)) ++n;
+  return n;
+}
+
+// A long line of the kind the harness writes (a verdict, a warning), so that wrapping is not what
+// keeps the count low.
+std::string sentence(const std::string& subject) {
+  return subject + ": " + std::string(160, 'x');
+}
+
+// The results of a default study at its worst for the printout: every shipped scene, every
+// registered denoiser, ties, two scenes missing the reference goal, a capped-reference warning on
+// every scene, asset fallbacks on two, and warnings on every pair.
+json worstDefaultStudy() {
+  std::vector<std::string> scenes;  // the suite's scene files (loading them would need the extracted assets)
+  for (const fs::directory_entry& e : fs::directory_iterator(std::string(ARENA_SOURCE_DIR) + "/scenes"))
+    if (e.path().extension() == ".json") scenes.push_back(e.path().stem().string());
+  std::sort(scenes.begin(), scenes.end());
+  const std::vector<std::string> labels = DenoiserRegistry::instance().names();
+  json results = {{"scenes", json::object()}, {"pairs", json::array()}};
+  json stScenes = json::object();
+  for (size_t i = 0; i < scenes.size(); ++i) {
+    const std::string& name = scenes[i];
+    const bool missed = i < 2;
+    results["scenes"][name] = {
+        {"referenceQuality",
+         {{"meets", !missed}, {"verdict", sentence(name) + (missed ? " goal NOT MET" : " goal met")}}},
+        {"warnings", {sentence(name + " capped references")}}};
+    if (i >= scenes.size() - 2)
+      results["scenes"][name]["assets"] = {{"warnings", {"fallback a", "fallback b", "fallback c"}}};
+    json ranking = json::array();
+    for (size_t k = 0; k < labels.size(); ++k) {
+      json tied = json::array();
+      for (size_t j = 0; j < labels.size(); ++j)
+        if (j != k && (j < 4) == (k < 4)) tied.push_back(labels[j]);
+      ranking.push_back({{"label", labels[k]}, {"rank", k < 4 ? 1 : 5}, {"mean", 1e-3 * double(k + 1)},
+                         {"ci95", {1e-3 * double(k), 1e-3 * double(k + 2)}}, {"tiedWith", tied}});
+      results["pairs"].push_back({{"scene", name}, {"label", labels[k]}, {"status", "ok"},
+                                  {"summary", {{"relMse", {{"mean", 1e-3}}}}},
+                                  {"warnings", {sentence("a floor"), sentence("another floor")}}});
+    }
+    stScenes[name] = {{"ranking", ranking}, {"resolvedPairs", 20}, {"totalPairs", 36}};
+  }
+  json overall = json::array();
+  for (size_t k = 0; k < labels.size(); ++k)
+    overall.push_back({{"label", labels[k]}, {"rank", int(k) + 1}, {"score", 0.1 * double(k + 1)},
+                       {"ci95", {0.1 * double(k), 0.1 * double(k + 2)}}, {"tiedWith", json::array()}});
+  results["statistics"] = {
+      {"scenes", stScenes},
+      {"overall", {{"normalisation", "geometric mean over scenes of relMse / relMse(temporal)"}, {"ranking", overall}}}};
+  return results;
+}
+
+TEST(StudySummary, TheDefaultStudyFitsOnOneScreen) {
+  const json results = worstDefaultStudy();
+  ASSERT_GE(results["scenes"].size(), 12u);  // the default suite: every scene in scenes/
+  std::ostringstream out;
+  cli::printStudySummary(out, results, {"runs/study/results.json", "runs/study/results.db", "report/index.html", 61});
+  const std::string text = out.str();
+  EXPECT_LE(lineCount(text), 60u) << text;
+  // Every scene has its one line and its warning once; only the missed goals are printed.
+  for (const auto& [name, scene] : results["scenes"].items()) {
+    EXPECT_EQ(occurrences(text, name + " capped references"), 1u) << name;
+    EXPECT_EQ(occurrences(text, "\n  " + name + " "), 1u) << name << ": its line among the scenes";
+  }
+  EXPECT_EQ(occurrences(text, "goal NOT MET"), 2u);
+  EXPECT_EQ(occurrences(text, "goal met"), 0u);
+  EXPECT_EQ(occurrences(text, "a floor"), 0u) << "the pairs' own warnings are counted, not listed";
+  EXPECT_EQ(occurrences(text, "report/index.html"), 1u);
+  // The full tables are longer: they are what --verbose adds.
+  std::ostringstream tables;
+  cli::printStudyTables(tables, results);
+  EXPECT_GT(lineCount(tables.str()), 100u);
+}
+
+// A scene whose references stopped at their sample cap: the warning is the scene's, stored once in
+// results.scenes.<scene>.warnings (not on each of its pairs) and printed once.
+TEST(StudySummary, AWarningAboutASceneIsStoredAndPrintedOncePerScene) {
+  RunConfig c;
+  c.name = "capped";
+  c.out = test::freshDir("printout_capped_run");
+  c.cache = test::freshDir("printout_capped_cache");
+  c.render = test::tinySettings(24, 16, 3, 8);
+  c.render.referenceMinSpp = 8;
+  c.render.referenceSpp = 16;
+  c.render.referenceRelError = 1e-5;  // unreachable at 16 spp: every reference is capped
+  c.scenes = {test::shippedScene("cornell_static")};
+  c.denoisers = {{"eaw", {}, ""}, {"svgf", {}, ""}};  // with the two baselines: four pairs
+  c.warmup = 1;
+  c.flip = "none";
+  c.keepFrames = "none";
+  const json results = runMatrix(c);
+  ASSERT_EQ(results["pairs"].size(), 4u);
+  const json sceneWarnings = results["scenes"]["cornell_static"]["warnings"];
+  ASSERT_EQ(sceneWarnings.size(), 1u) << sceneWarnings;
+  const std::string warning = sceneWarnings[0];
+  EXPECT_NE(warning.find("stopped at the sample cap"), std::string::npos) << warning;
+  for (const json& p : results["pairs"])
+    for (const json& w : p.value("warnings", json::array()))
+      EXPECT_EQ(w.get<std::string>().find("sample cap"), std::string::npos) << p["label"] << ": " << w;
+  std::ostringstream out;
+  cli::printStudySummary(out, results, {"r.json", "r.db", "index.html", 1});
+  EXPECT_EQ(occurrences(out.str(), warning), 1u) << out.str();
+}
+
+}  // namespace
+}  // namespace arena
