@@ -306,7 +306,7 @@ json runMatrix(const RunConfig& cfg) {
   size_t pairIndex = 0, pairsDone = 0, pairsMine = 0;
   for (size_t k = 0; k < totalPairs; ++k) pairsMine += int(k % size_t(cfg.shardCount)) == cfg.shardIndex;
   size_t scenesMine = 0, scenesDone = 0;
-  for (size_t k = 0; k < cfg.scenes.size(); ++k) {
+  for (size_t k = 0; k < sources.size(); ++k) {
     bool any = false;
     for (size_t d = 0; d < denoisers.size(); ++d)
       any = any || int((k * denoisers.size() + d) % size_t(cfg.shardCount)) == cfg.shardIndex;
@@ -423,7 +423,7 @@ json runMatrix(const RunConfig& cfg) {
       const auto now = std::chrono::steady_clock::now();
       char buf[512];
       std::snprintf(buf, sizeof buf, "[scene %zu/%zu] %s: %zu pair(s) in %.1f s%s (ETA %s)", scenesDone, scenesMine,
-                    scene.name.c_str(), mine.size(), std::chrono::duration<double>(now - sceneStart).count(),
+                    source.name.c_str(), mine.size(), std::chrono::duration<double>(now - sceneStart).count(),
                     sceneFailures ? (", " + std::to_string(sceneFailures) + " FAILED").c_str() : "",
                     clock(std::chrono::duration<double>(now - start).count() / double(pairsDone) *
                           double(pairsMine - pairsDone))
