@@ -44,7 +44,7 @@ void addMatrixOptions(CLI::App* cmd, MatrixOptions& o) {
   cmd->add_option("--capture", o.captures,
                   "A capture folder (capture.json + EXR frames, docs/captures.md) to validate and score like a "
                   "scene, repeatable")
-      ->check(CLI::ExistingDirectory);
+      ->default_str("none");
   cmd->add_option("--out", o.out, "Run directory, e.g. runs/today")->required();
   cmd->add_option("--param", o.params, "DENOISER.NAME=VALUE, repeatable (e.g. svgf.sigmaL=8)")
       ->default_str("none: registry defaults");

@@ -88,7 +88,7 @@ void addStudyCommand(CLI::App& app) {
   cmd->add_option("--capture", *captures,
                   "A capture folder (docs/captures.md) to validate and score beside the scenes, repeatable; its "
                   "stored outputs run as file:NAME contenders")
-      ->check(CLI::ExistingDirectory);
+      ->default_str("none");
   cmd->add_option("--exposure", *exposure, "Display exposure (metrics.md): per-frame or first")
       ->check(CLI::IsMember({"per-frame", "first"}))
       ->default_val("per-frame");

@@ -195,7 +195,7 @@
         el('tbody', {}, v.checks.map((c) => el('tr', { class: c.status === 'pass' ? null : c.status === 'fail' ? 'worse' : 'tie' },
           el('td', { class: 'first', text: c.name }), el('td', { text: c.status }), el('td', { text: num(c.value) }),
           el('td', { text: num(c.warnAbove) }), el('td', { text: num(c.failAbove) }), el('td', { text: c.unit }),
-          el('td', { text: c.detail })))))))];
+          el('td', { text: c.detail }))))))];
   }
 
   // Sweep runs: each grid parameter's values against its first value (e.g. an edge-stopping term
