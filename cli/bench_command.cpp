@@ -7,6 +7,7 @@
 #include "core/atomic_file.hpp"
 #include "harness/benchmarks.hpp"
 #include "harness/denoise_run.hpp"
+#include "harness/gpu_cost.hpp"
 #include "harness/scene_selection.hpp"
 
 namespace arena::cli {
@@ -16,7 +17,7 @@ void printLine(const std::string& line) { std::cout << line << std::endl; }
 }  // namespace
 
 void addBenchCommand(CLI::App& app) {
-  auto* bench = app.add_subcommand("bench", "Benchmarks (tracer; denoise; reference)");
+  auto* bench = app.add_subcommand("bench", "Benchmarks (tracer; denoise; reference; gpu-model)");
   bench->require_subcommand(1);
   addBenchReferenceCommand(bench);
   auto* tracer = bench->add_subcommand("tracer", "Tracer throughput: Mrays/s and Mpaths/s, Cornell box, 1 spp");
@@ -79,6 +80,39 @@ void addBenchCommand(CLI::App& app) {
     b.params = parseParamAssignments(d->params);
     const nlohmann::json out = benchDenoise(b, printLine);
     if (!d->json.empty()) writeTextAtomically(d->json, out.dump(2));
+  });
+
+  auto* gpuModel = bench->add_subcommand(
+      "gpu-model",
+      "Predicted GPU ms per pass from counted traffic, validated against published timings "
+      "(docs/gpu-cost.md); memory per denoiser");
+  struct GpuModelOptions {
+    std::string denoisers = "all", scene = defaultScenesDir() + "/cornell_static.json", json,
+                resolution = "1920x1080", device = "TITAN RTX";
+    int frames = 5;
+  };
+  auto g = std::make_shared<GpuModelOptions>();
+  gpuModel->add_option("--denoisers", g->denoisers, "Comma-separated built-ins for the per-denoiser and memory tables, or 'all'")
+      ->default_val("all");
+  gpuModel->add_option("--scene", g->scene, "Scene file whose frames feed the denoisers");
+  gpuModel->add_option("--resolution", g->resolution, "WIDTHxHEIGHT of the per-denoiser and memory tables")
+      ->default_val("1920x1080");
+  gpuModel->add_option("--device", g->device, "Device of the per-denoiser table: TITAN RTX, RTX 4080, PS5")
+      ->default_val("TITAN RTX");
+  gpuModel->add_option("--frames", g->frames,
+                       "Frames per run; the last is counted (5: SVGF-family histories reach h >= 4)")
+      ->check(CLI::Range(2, 100))
+      ->default_val(5);
+  gpuModel->add_option("--json", g->json, "Write results to this JSON file")->default_str("none");
+  gpuModel->callback([g] {
+    GpuModelBench b;
+    std::tie(b.width, b.height) = parseResolution("--resolution", g->resolution);
+    b.sceneFile = g->scene;
+    b.device = g->device;
+    b.frames = g->frames;
+    b.denoisers = g->denoisers == "all" ? DenoiserRegistry::instance().names() : splitList(g->denoisers);
+    const nlohmann::json out = benchGpuModel(b, printLine);
+    if (!g->json.empty()) writeTextAtomically(g->json, out.dump(2));
   });
 }
 

@@ -117,6 +117,14 @@ void Asvgf::buildStrata(const DenoiserInputs& in) {
   const int w = gbuffer_.width, h = gbuffer_.height;
   const bool q2rtx = asvgf_.normalisation == GradientNormalisation::Q2rtx;
   Image& state = gradient_[0];
+  if (gpu::recording()) {  // one thread per stratum: its 3x3 pixels' colour and its sample
+    using namespace gpu_buffers;
+    gpu::dispatch(strataWidth_, strataHeight_);
+    gpu::read(kColor, w, h, S * S);
+    gpu::read(kMeshId, w, h, S * S);
+    gpu::read(kGradients, strataWidth_, strataHeight_, 1);
+    gpu::write(kGradientImage, strataWidth_, strataHeight_);
+  }
   parallelRows(strataHeight_, [&](int sy) {
     for (int sx = 0; sx < strataWidth_; ++sx) {
       const size_t s = size_t(sy) * size_t(strataWidth_) + size_t(sx);
@@ -186,6 +194,14 @@ void Asvgf::filterGradients() {
                     asvgf_.gradientLuminance ? 2.0 : 1.0);
     const Image& in = gradient_[source];
     Image& out = gradient_[1 - source];
+    if (gpu::recording()) {  // 3x3 strata, guided by the stratum pixels' depth and normal
+      using namespace gpu_buffers;
+      gpu::dispatch(sw, sh);
+      gpu::read(kGradientImage, sw, sh, asvgf_.gradientLuminance ? 18 : 9);
+      gpu::read(kDepth, sw, sh, 9);  // only one pixel per stratum is read
+      gpu::read(kNormal, sw, sh, 9);
+      gpu::write(kGradientImage, sw, sh);
+    }
     const float* variance = in.plane(kVariance);
     if (asvgf_.gradientLuminance) {
       // eq. 11: g3x3, the variance blurred by a 3x3 Gaussian, drives the luminance weight only.
@@ -297,6 +313,12 @@ void Asvgf::computeAlpha() {
   const int sw = strataWidth_, sh = strataHeight_;
   const bool q2rtx = asvgf_.normalisation == GradientNormalisation::Q2rtx;
   const float gain = asvgf_.antilagGain;
+  if (gpu::recording()) {  // lambda per stratum (max over its 3x3), alpha per pixel
+    using namespace gpu_buffers;
+    gpu::dispatch(gbuffer_.width, gbuffer_.height);
+    gpu::read(kGradientImage, sw, sh, asvgf_.max3x3 ? 9 : 1);
+    gpu::write(kAlpha, gbuffer_.width, gbuffer_.height);
+  }
   for (size_t s = 0; s < guidePixel_.size(); ++s) {
     float lambda = 0.0f;
     if (guidePixel_[s] >= 0) {

@@ -14,6 +14,7 @@
 #include "core/camera.hpp"
 #include "core/exr_io.hpp"
 #include "core/image.hpp"
+#include "denoisers/common/gpu_traffic.hpp"
 #include "denoisers/params.hpp"
 
 namespace arena {
@@ -61,6 +62,9 @@ struct PassStats {
   // Paths per full-resolution pixel this pass read from the low-resolution buffer (texels read x
   // their spp / pixels): the disocclusion rays a denoiser is charged for beyond the 1-spp frame.
   double raysPerPixel = 0;
+  // What a GPU implementation of the pass would move (common/gpu_traffic.hpp), counted by the
+  // shared blocks while the pass ran; empty for a pass a GPU does not dispatch (a history swap).
+  PassTraffic traffic;
 };
 
 class Denoiser {
@@ -86,14 +90,16 @@ class Denoiser {
   void clearPassStats() { passes_.clear(); }
 
  protected:
-  // Times one pass: `ScopedPass pass(this, "atrous 1", 25);` records wall time on destruction.
+  // Times one pass: `ScopedPass pass(this, "atrous 1", 25);` records wall time on destruction,
+  // and the GPU traffic the shared blocks report while it lives.
   class ScopedPass {
    public:
     ScopedPass(Denoiser* owner, std::string name, double tapsPerPixel)
-        : owner_(owner), name_(std::move(name)), taps_(tapsPerPixel), start_(std::chrono::steady_clock::now()) {}
+        : owner_(owner), name_(std::move(name)), taps_(tapsPerPixel), scope_(&traffic_),
+          start_(std::chrono::steady_clock::now()) {}
     ~ScopedPass() {
       double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_).count();
-      owner_->passes_.push_back({name_, ms, taps_, rays_});
+      owner_->passes_.push_back({name_, ms, taps_, rays_, std::move(traffic_)});
     }
     void setTaps(double taps) { taps_ = taps; }
     void setRays(double raysPerPixel) { rays_ = raysPerPixel; }
@@ -105,6 +111,8 @@ class Denoiser {
     std::string name_;
     double taps_;
     double rays_ = 0;
+    PassTraffic traffic_;
+    TrafficScope scope_;
     std::chrono::steady_clock::time_point start_;
   };
 

@@ -151,6 +151,15 @@ void Hybrid::disocclusion(const FrameContext& ctx) {
     virtual_.invalidateAll();
   }
   const float maxHistory = float(s_.maxHistory);
+  const int w = gbuffer_.width, h = gbuffer_.height;
+  if (gpu::recording()) {  // mask and h from the reprojection's records (the talk's "検出")
+    using namespace gpu_buffers;
+    gpu::dispatch(w, h);
+    gpu::read(kRecord, w, h);
+    if (useVirtual_) gpu::read({kVirtualRecord, kRoughness}, w, h);
+    gpu::read(kHistoryLengthHistory, w, h, surface_.readTapsPerPixel());
+    gpu::write({kMask, kHistoryLength}, w, h);
+  }
   for (size_t i = 0; i < gbuffer_.pixelCount(); ++i) {
     const bool valid = historySource(i) != 0;
     mask_.plane(0)[i] = valid ? 0.0f : 1.0f;
@@ -159,7 +168,13 @@ void Hybrid::disocclusion(const FrameContext& ctx) {
   }
   blurredMask_ = mask_;
   if (!s_.maskBlur) return;
-  const int w = gbuffer_.width, h = gbuffer_.height;
+  if (gpu::recording()) {
+    using namespace gpu_buffers;
+    gpu::dispatch(w, h);
+    gpu::read(kMask, w, h, 9);
+    gpu::read(kMeshId, w, h, 9);
+    gpu::write(kBlurredMask, w, h);
+  }
   parallelRows(h, [&](int y) {
     for (int x = 0; x < w; ++x) {
       const size_t p = size_t(y) * size_t(w) + size_t(x);
@@ -259,6 +274,23 @@ void Hybrid::temporal() {
   ScopedPass pass(this, "temporal", useVirtual_ ? 8 : 4);
   const int w = gbuffer_.width;
   const HistoryClampMode clipMode = s_.clipMode;
+  if (gpu::recording()) {  // one pixel's EMA, clip box, fill and threshold: every input once
+    using namespace gpu_buffers;
+    const int h = gbuffer_.height;
+    const double taps = surface_.readTapsPerPixel();
+    gpu::dispatch(w, h);
+    gpu::read({kSignal, kRecord, kMeshId, kHistoryLength}, w, h);
+    if (useVirtual_) gpu::read({kVirtualRecord, kRoughness}, w, h);
+    if (usesPreSpatial()) gpu::read({kRadiance, kSecondMoments}, w, h);
+    if (usesPreSpatial() && s_.preMip) gpu::read(kPreWide, w, h);
+    if (s_.disocclusionFill) gpu::read(s_.maskBlur ? kBlurredMask : kMask, w, h);
+    gpu::read({kRadianceHistory, kMomentsHistory}, w, h, taps);
+    if (s_.capcomRejection) {
+      gpu::read(kOneFrameHistory, w, h, taps);
+      gpu::write(kOneFrameHistory, w, h);
+    }
+    gpu::write({kRadiance, kMoments, kVariance, kHistoryLength}, w, h);
+  }
   parallelRows(gbuffer_.height, [&](int y) {
     for (int x = 0; x < w; ++x) {
       const size_t i = size_t(y) * size_t(w) + size_t(x);

@@ -171,6 +171,16 @@ void Reblur::temporalAccumulation() {
   const int w = gbuffer_.width;
   const float maxFrames = float(s_.maxAccumulatedFrames),
               maxFast = float(s_.maxFastAccumulatedFrames);
+  if (gpu::recording()) {  // slow and fast histories and N through the taps of each motion
+    using namespace gpu_buffers;
+    const int h = gbuffer_.height;
+    const double taps = surface_.readTapsPerPixel() * (useVirtual_ ? 2.0 : 1.0);
+    gpu::dispatch(w, h);
+    gpu::read({kRadiance, kRecord}, w, h);  // the pre-blurred signal, the record
+    if (useVirtual_) gpu::read({kVirtualRecord, kRoughness}, w, h);
+    gpu::read({kRadianceHistory, kFastHistory, kHistoryLengthHistory}, w, h, taps);
+    gpu::write({kRadiance, kFastRadiance, kHistoryLength}, w, h);
+  }
   parallelRows(gbuffer_.height, [&](int y) {
     for (int x0 = 0; x0 < w; x0 += 8) {  // eight pixels at a time
       const size_t i = size_t(y) * size_t(w) + size_t(x0);
@@ -277,6 +287,13 @@ void Reblur::antiFireflyPass() {
   const int w = gbuffer_.width, h = gbuffer_.height;
   const float k = s_.antilagSigmaScale;
   const float* previous = previousFrames_.plane(0);
+  if (gpu::recording()) {  // the 3x3 of the signal and of the fast history
+    using namespace gpu_buffers;
+    gpu::dispatch(w, h);
+    gpu::read({kRadiance, kFastRadiance, kMeshId}, w, h, 9);
+    gpu::read(kHistoryLength, w, h);
+    gpu::write(kRadiance, w, h);
+  }
   parallelRows(h, [&](int y) {
     for (int x0 = 0; x0 < w; x0 += 8) {  // eight pixels at a time
       const Neighbourhood3x3Lanes n(x0, y, w, h, gbuffer_.meshId);
@@ -400,6 +417,14 @@ void Reblur::stabilize(Image& output) {
   }
   const int w = gbuffer_.width, h = gbuffer_.height;
   const float k = s_.antilagSigmaScale;
+  if (gpu::recording()) {  // the stabilised history, clamped to the fast history's 3x3
+    using namespace gpu_buffers;
+    gpu::dispatch(w, h);
+    gpu::read({kRadiance, kRecord, kHistoryLength}, w, h);
+    gpu::read({kFastRadiance, kMeshId}, w, h, 9);
+    gpu::read(kStabilizerHistory, w, h, surface_.readTapsPerPixel());
+    gpu::write({kRadiance, kHistoryLength}, w, h);
+  }
   parallelRows(h, [&](int y) {
     for (int x0 = 0; x0 < w; x0 += 8) {
       // The box's mean and sigma over the 3x3 non-sky neighbourhood, eight pixels at a time

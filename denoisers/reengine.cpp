@@ -203,6 +203,15 @@ void ReEngine::reproject(const FrameContext& ctx) {
     virtual_.invalidateAll();
   }
   const bool virtualOnly = s_.specularMotion == ReEngineSettings::SpecularMotion::Virtual;
+  if (gpu::recording()) {  // which motion, h and the propagation radius per pixel
+    using namespace gpu_buffers;
+    gpu::dispatch(width_, height_);
+    gpu::read(kRecord, width_, height_);
+    if (useVirtual_) gpu::read(kVirtualRecord, width_, height_);
+    if (roughness_) gpu::read(kRoughness, width_, height_);
+    gpu::read(kHistoryLengthHistory, width_, height_, surface_.readTapsPerPixel());
+    gpu::write({kMask, kHistoryLength}, width_, height_);
+  }
   parallelRows(height_, [&](int y) {
     for (int x = 0; x < width_; ++x) {
       const size_t i = size_t(y) * size_t(width_) + size_t(x);
@@ -306,6 +315,21 @@ void ReEngine::temporalFilter() {
   const bool moments = needsMoments();
   const bool merge = s_.specularMotion == ReEngineSettings::SpecularMotion::Merge;
   const float maxHistory = float(s_.maxHistory);
+  if (gpu::recording()) {  // the current moments box, then each history through its taps
+    using namespace gpu_buffers;
+    const double taps = surface_.readTapsPerPixel() * (useVirtual_ ? 2.0 : 1.0);
+    gpu::dispatch(width_, height_);
+    gpu::read({kSignal, kRecord, kMask, kHistoryLength}, width_, height_);
+    if (useVirtual_) gpu::read(kVirtualRecord, width_, height_);
+    if (roughness_) gpu::read(kRoughness, width_, height_);
+    if (moments) gpu::read({kRadiance, kSecondMoments}, width_, height_);
+    gpu::read({kRadianceHistory, kMomentsHistory}, width_, height_, taps);
+    if (s_.lumaRejection) {
+      gpu::read(kOneFrameHistory, width_, height_, taps);
+      gpu::write(kOneFrameHistory, width_, height_);
+    }
+    gpu::write({kRadiance, kMoments, kHistoryLength}, width_, height_);
+  }
   parallelRows(height_, [&](int y) {
     for (int x = 0; x < width_; ++x) {
       const size_t i = size_t(y) * size_t(width_) + size_t(x);
@@ -444,6 +468,13 @@ void ReEngine::varianceCheck() {
   ScopedPass pass(this, "variance check", 0);
   const bool spatial = needsMoments();
   const float maxHistory = float(s_.maxHistory);
+  if (gpu::recording()) {
+    using namespace gpu_buffers;
+    gpu::dispatch(width_, height_);
+    gpu::read({kHistoryLength, kMoments, kRadiance}, width_, height_);
+    if (spatial) gpu::read(kSecondMoments, width_, height_);
+    gpu::write({kVariance, kNoise}, width_, height_);
+  }
   parallelRows(height_, [&](int y) {
     for (int x = 0; x < width_; ++x) {
       const size_t i = size_t(y) * size_t(width_) + size_t(x);
@@ -476,6 +507,12 @@ void ReEngine::spatialMerge() {
   }
   mips_.build(propagated2_, gbuffer_);
   mips_.upsample(mips_.levels(), nullptr, gbuffer_, {}, large_);
+  if (gpu::recording()) {  // the blend by the noise (a shader would fuse it into the upsample)
+    using namespace gpu_buffers;
+    gpu::dispatch(width_, height_);
+    gpu::read({kRadiance, kNoise}, width_, height_);
+    gpu::write(kRadiance, width_, height_);
+  }
   parallelRows(height_, [&](int y) {
     for (int x = 0; x < width_; ++x) {
       const size_t i = size_t(y) * size_t(width_) + size_t(x);
@@ -496,6 +533,14 @@ void ReEngine::deflicker() {
   if (!s_.deflicker) {
     parallelCopy(merged_, deflickered_);
     return;
+  }
+  if (gpu::recording()) {  // fireflies against the 3x3, then the stabiliser's history
+    using namespace gpu_buffers;
+    gpu::dispatch(width_, height_);
+    gpu::read({kRadiance, kMeshId}, width_, height_, 9);
+    gpu::read({kMask, kRecord}, width_, height_);
+    gpu::read(kStabilizerHistory, width_, height_, surface_.readTapsPerPixel());
+    gpu::write(kRadiance, width_, height_);
   }
   parallelRows(height_, [&](int y) {
     for (int x = 0; x < width_; ++x) {

@@ -140,6 +140,17 @@ class Slgf final : public Svgf {
     const float* meanVariance = meanVariance_[source_].plane(0);
     float* length = historyLength_.plane(0);
     const int w = accumulated_.width();
+    if (gpu::recording()) {  // the history through its taps, corrected by the estimate
+      using namespace gpu_buffers;
+      const int h = accumulated_.height();
+      gpu::dispatch(w, h);
+      gpu::read(kRadianceHistory, w, h, reprojection_.readTapsPerPixel());
+      // The estimate (mean; second moments when clamping) and its variance.
+      gpu::read({kRecord, kRadiance, kVariance, kHistoryLength, kSignal}, w, h);
+      if (clamp) gpu::read(kSecondMoments, w, h);
+      if (alpha) gpu::read(kAlpha, w, h);
+      gpu::write({kRadiance, kHistoryLength}, w, h);
+    }
     parallelRows(accumulated_.height(), [&](int y) {
       for (int x = 0; x < w; ++x) {
         const size_t i = size_t(y) * size_t(w) + size_t(x);

@@ -11,6 +11,7 @@
 #include "core/fast_math.hpp"
 #include "denoisers/common/atrous_kernel.hpp"
 #include "denoisers/common/footprint.hpp"
+#include "denoisers/common/gpu_traffic.hpp"
 #include "denoisers/common/parallel.hpp"
 #include "denoisers/common/simd.hpp"
 
@@ -90,6 +91,35 @@ const ParamTable<AtrousSettings>& atrousKernelParams() {
 }
 
 namespace {
+
+// What the iteration would move on a GPU (gpu_traffic.hpp): every buffer the enabled terms read
+// at every tap, the centre-only guides once. A skipped iteration (step 0) is a copy a shader
+// would not do: nothing. The pre-spatial pass's carried moments are computed from the colour
+// taps in a shader (their squares), so only their output is traffic.
+void recordTraffic(const AtrousSettings& settings, const AtrousGuide& guide,
+                   atrous_detail::Carry carry, int taps, int w, int h) {
+  using namespace gpu_buffers;
+  const EdgeStoppingSettings& s = settings.edges;
+  const GBufferView& g = guide.gbuffer;
+  gpu::dispatch(w, h);
+  gpu::read(kRadiance, w, h, taps);
+  if (g.meshId) gpu::read(kMeshId, w, h, taps);  // sky taps are never gathered
+  if (s.depth) {
+    gpu::read(kDepth, w, h, taps);
+    gpu::read(kDerivatives, w, h, 1);
+  }
+  if (s.normal) gpu::read(kNormal, w, h, taps);
+  if (s.position) gpu::read(kPosition, w, h, taps);
+  if (s.luminance) gpu::read(kFilteredVariance, w, h, 1);  // the centre's
+  if (guide.lobes) gpu::read(kLobes, w, h, taps);
+  gpu::write(kRadiance, w, h);
+  if (carry == atrous_detail::Carry::Variance) {
+    gpu::read(kVariance, w, h, taps);
+    gpu::write(kVariance, w, h);
+  } else if (carry == atrous_detail::Carry::Plain) {
+    gpu::write(kSecondMoments, w, h);
+  }
+}
 
 // One iteration with what it carries (atrous_kernel.hpp's Carry).
 void filterIteration(int iteration, const AtrousSettings& settings, const AtrousGuide& guide,
@@ -179,6 +209,8 @@ void filterIteration(int iteration, const AtrousSettings& settings, const Atrous
     it.lobeBeta = guide.lobeBeta;
   }
 
+  if (gpu::recording()) recordTraffic(settings, guide, carry, it.tapCount, w, h);
+
   const atrous_detail::FilterRowFunction filterRow =
       simdUsesAvx512()
           ? atrous_detail::selectFilterRowAvx512(s.depth, s.luminance, normalTerm, carry)
@@ -220,6 +252,14 @@ void prefilterVariance3x3(const Image& variance, const GBufferView& g, Image& fi
   constexpr float kGauss[3] = {0.25f, 0.5f, 0.25f};
   const float* in = variance.plane(0);
   float* out = filtered.plane(0);
+  // Counted as its own dispatch, as the pipelines here time it (Falcor fuses it into the
+  // à-trous shader, reading the variance at 9 taps there instead).
+  if (gpu::recording()) {
+    gpu::dispatch(w, h);
+    gpu::read(gpu_buffers::kVariance, w, h, 9);
+    if (g.meshId) gpu::read(gpu_buffers::kMeshId, w, h, 9);
+    gpu::write(gpu_buffers::kFilteredVariance, w, h);
+  }
   // Tap by tap across the row, in the order of a per-pixel loop over dy, then dx, so the sums
   // round exactly as that loop's would; sky and off-image taps add nothing.
   parallelRows(h, [&](int y) {

@@ -5,6 +5,7 @@
 
 #include "core/error.hpp"
 #include "core/fast_math.hpp"
+#include "denoisers/common/gpu_traffic.hpp"
 #include "denoisers/common/parallel.hpp"
 
 namespace arena {
@@ -87,6 +88,12 @@ void computeGeometryDerivatives(const GBufferView& g, Image& derivatives) {
   if (derivatives.width() != w || derivatives.height() != h ||
       derivatives.channels() != kGeometryDerivativeChannels)
     throw Error("computeGeometryDerivatives: the output must be 3 channels of the G-buffer's size");
+  if (gpu::recording()) {  // the pixel and its four axis neighbours
+    using namespace gpu_buffers;
+    gpu::dispatch(w, h);
+    for (const GpuBuffer& b : {kDepth, kNormal, kMeshId}) gpu::read(b, w, h, 5);
+    gpu::write(kDerivatives, w, h);
+  }
   float* dzdx = derivatives.plane(kDepthDx);
   float* dzdy = derivatives.plane(kDepthDy);
   float* normalFwidth = derivatives.plane(kNormalFwidth);

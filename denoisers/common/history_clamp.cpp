@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "denoisers/common/gpu_traffic.hpp"
 #include "denoisers/common/parallel.hpp"
 
 namespace arena {
@@ -38,6 +39,15 @@ double clampHistory(const Image& history, const Image& current, const GBufferVie
   if (!history.sameShape(current) || !out.sameShape(current) || channels > 4)
     throw Error("history clamp: history, current and output must match (at most 4 channels)");
   const int r = settings.radius;
+  if (gpu::recording()) {  // the box of the current signal around the history's texel
+    using namespace gpu_buffers;
+    const double box = double((2 * r + 1) * (2 * r + 1));
+    gpu::dispatch(w, h);
+    gpu::read(kRadiance, w, h, box);
+    if (g && g->meshId) gpu::read(kMeshId, w, h, box);
+    gpu::read(kRadianceHistory, w, h, 1);
+    gpu::write(kRadiance, w, h);
+  }
   parallelRows(h, [&](int y) {
     int64_t fetched = 0;
     for (int x = 0; x < w; ++x) {

@@ -5,6 +5,7 @@
 #include <cstddef>
 
 #include "core/error.hpp"
+#include "denoisers/common/gpu_traffic.hpp"
 
 namespace arena {
 
@@ -46,6 +47,15 @@ void HitPointReprojection::compute(const GBufferView& current, const float* hitD
       !hitDistance || !previous.depth || !previous.normal[0] || !previous.meshId)
     throw Error("hit-point reprojection: needs depth, normal, meshId, position and specHitDist");
   const int w = width_, h = height_;
+  if (gpu::recording()) {  // the virtual point, then its 2x2 footprint tested in the previous frame
+    using namespace gpu_buffers;
+    gpu::dispatch(w, h);
+    for (const GpuBuffer& b : {kDepth, kNormal, kMeshId, kPosition, kHitDistance})
+      gpu::read(b, w, h, 1);
+    for (const GpuBuffer& b : {kPreviousDepth, kPreviousNormal, kPreviousMeshId})
+      gpu::read(b, w, h, 4);
+    gpu::write(kVirtualRecord, w, h);
+  }
   parallelRows(h, [&](int y) {
     for (int x = 0; x < w; ++x) {
       const size_t p = size_t(y) * size_t(w) + size_t(x);

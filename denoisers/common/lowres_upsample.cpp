@@ -6,6 +6,7 @@
 
 #include "core/error.hpp"
 #include "core/sequence.hpp"
+#include "denoisers/common/gpu_traffic.hpp"
 #include "denoisers/common/parallel.hpp"
 
 namespace arena {
@@ -52,6 +53,17 @@ size_t LowresUpsampler::reconstruct(const LowresBuffer& buffer, const GBufferVie
                 std::to_string(lh) + " for factor " + std::to_string(f) + " at " +
                 std::to_string(w) + "x" + std::to_string(h));
   std::fill(read_.begin(), read_.end(), 0);
+  if (gpu::recording()) {  // the bracketing 2x2 low-resolution texels against full-res guides
+    using namespace gpu_buffers;
+    gpu::dispatch(w, h);
+    gpu::read(kLowres, lw, lh, 4);
+    if (buffer.direction) gpu::read(kLowresDirection, lw, lh, 4);
+    for (const GpuBuffer& b : {kDepth, kNormal, kMeshId, kPosition}) gpu::read(b, w, h, 1);
+    if (moments) gpu::read(kSecondMoments, w, h, 1);
+    gpu::read(kHistoryLength, w, h, 1);  // `need`: where the history is short
+    gpu::write(kRadiance, w, h);
+    gpu::write(kConfidence, w, h);
+  }
   const SurfaceWeights geometry(s.weights, SurfaceGuide{g});
   const bool directional = s.directional && buffer.direction != nullptr;
   const bool clampToMoments = s.momentClamp && moments != nullptr;

@@ -4,6 +4,7 @@
 
 #include "core/error.hpp"
 #include "core/fast_math.hpp"
+#include "denoisers/common/gpu_traffic.hpp"
 #include "denoisers/common/parallel.hpp"
 
 namespace arena {
@@ -38,6 +39,14 @@ double median3x3(const Image& in, const GBufferView* g, Image& out, bool edgeAwa
   const float* meshId = g ? g->meshId : nullptr;
   if (edgeAware && (!meshId || !g->normal[0] || !g->normal[1] || !g->normal[2]))
     throw Error("median 3x3: the edge-aware median needs the G-buffer's meshId and normal");
+  if (gpu::recording()) {
+    using namespace gpu_buffers;
+    gpu::dispatch(w, h);
+    gpu::read(kRadiance, w, h, 9);
+    if (meshId) gpu::read(kMeshId, w, h, 9);
+    if (edgeAware) gpu::read(kNormal, w, h, 9);
+    gpu::write(kRadiance, w, h);
+  }
   constexpr float kMinNormalCosine = 0.8f;
   constexpr float kInfinity = std::numeric_limits<float>::infinity();
   // Eight pixels at a time. A tap off the image or in the sky is missing; with k of the nine

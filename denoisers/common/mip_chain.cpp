@@ -5,6 +5,7 @@
 
 #include "core/error.hpp"
 #include "core/fast_math.hpp"
+#include "denoisers/common/gpu_traffic.hpp"
 #include "denoisers/common/parallel.hpp"
 
 namespace arena {
@@ -38,6 +39,22 @@ void MipChain::build(const Image& signal, const GBufferView& g) {
     const int fineH = l == 0 ? g.height : values_[l - 1].height();
     const Image* fineValues = l == 0 ? &signal : &values_[l - 1];
     const Image* fineGuide = l == 0 ? nullptr : &guides_[l - 1];
+    if (gpu::recording()) {  // one dispatch per level, 2x2 children per texel
+      namespace gb = gpu_buffers;
+      gpu::dispatch(dst.width(), dst.height());
+      gpu::read(l == 0 ? gb::kRadiance : gb::kMip, fineW, fineH, 4);
+      if (signal.channels() > 4) gpu::read(gb::kMipExtra, fineW, fineH, 4);
+      if (l == 0) {
+        gpu::read(gb::kDepth, fineW, fineH, 4);
+        gpu::read(gb::kNormal, fineW, fineH, 4);
+        if (g.meshId) gpu::read(gb::kMeshId, fineW, fineH, 4);
+      } else {
+        gpu::read(gb::kMipGuide, fineW, fineH, 4);
+      }
+      gpu::write(gb::kMip, dst.width(), dst.height());
+      if (signal.channels() > 4) gpu::write(gb::kMipExtra, dst.width(), dst.height());
+      gpu::write(gb::kMipGuide, dst.width(), dst.height());
+    }
     parallelRows(dst.height(), [&](int y) {
       for (int x = 0; x < dst.width(); ++x) {
         const size_t c = size_t(y) * size_t(dst.width()) + size_t(x);
@@ -82,6 +99,20 @@ void MipChain::upsample(int maxLevel, const Image* perPixelLevel, const GBufferV
   if (!out.sameShape(*base_) || &out == base_)
     throw Error("mip chain: output must match the signal, not alias it");
   const int w = g.width, channels = out.channels();
+  if (gpu::recording()) {  // 2x2 coarse texels of the finest level used, against the pixel's guides
+    namespace gb = gpu_buffers;
+    gpu::dispatch(w, g.height);
+    gpu::read(gb::kDepth, w, g.height, 1);
+    gpu::read(gb::kNormal, w, g.height, 1);
+    if (g.meshId) gpu::read(gb::kMeshId, w, g.height, 1);
+    if (perPixelLevel) gpu::read(gb::kRoughness, w, g.height, 1);  // the level is roughness-driven
+    const Image& coarse = maxLevel == 0 ? *base_ : level(maxLevel);
+    gpu::read(maxLevel == 0 ? gb::kRadiance : gb::kMip, coarse.width(), coarse.height(), 4);
+    if (channels > 4) gpu::read(gb::kMipExtra, coarse.width(), coarse.height(), 4);
+    if (maxLevel > 0) gpu::read(gb::kMipGuide, coarse.width(), coarse.height(), 4);
+    gpu::write(gb::kRadiance, w, g.height);
+    if (channels > 4) gpu::write(gb::kSecondMoments, w, g.height);
+  }
   parallelRows(g.height, [&](int y) {
     for (int x = 0; x < w; ++x) {
       const size_t p = size_t(y) * size_t(w) + size_t(x);

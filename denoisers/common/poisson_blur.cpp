@@ -6,6 +6,7 @@
 
 #include "core/error.hpp"
 #include "core/fast_math.hpp"
+#include "denoisers/common/gpu_traffic.hpp"
 #include "denoisers/common/parallel.hpp"
 #include "denoisers/common/poisson_blur_kernel.hpp"
 #include "denoisers/common/simd.hpp"
@@ -77,6 +78,22 @@ void sparseBlur(const Image& in, const SurfaceGuide& guide, const SurfaceWeightS
   if (radiusScale && (radiusScale->width() != w || radiusScale->height() != h))
     throw Error("sparse blur: the radius scale must have the image's size");
   const SurfaceWeights checked(weights, guide);  // throws where a guide is missing
+  if (gpu::recording()) {  // the centre and every tap: the signal and the guides the weight uses
+    using namespace gpu_buffers;
+    const double fetches = tapCount + 1;
+    gpu::dispatch(w, h);
+    gpu::read(kRadiance, w, h, fetches);
+    if (channels > 4) gpu::read(kExtraChannels, w, h, fetches);
+    if (g.meshId) gpu::read(kMeshId, w, h, fetches);
+    gpu::read(kDepth, w, h, 1);
+    if (weights.planeDistance) gpu::read(kPosition, w, h, fetches);
+    if (weights.normal) gpu::read(kNormal, w, h, fetches);
+    if (weights.hitDistance && guide.hitDistance) gpu::read(kHitDistance, w, h, fetches);
+    if (weights.roughness && guide.roughness) gpu::read(kRoughness, w, h, fetches);
+    if (radiusScale) gpu::read(kHistoryLength, w, h, 1);  // the radius follows the history
+    gpu::write(kRadiance, w, h);
+    if (channels > 4) gpu::write(kExtraChannels, w, h);
+  }
   poisson_detail::Blur b{};
   b.width = w;
   b.height = h;

@@ -8,6 +8,7 @@
 #include "core/consistency.hpp"
 #include "core/error.hpp"
 #include "core/fast_math.hpp"
+#include "denoisers/common/gpu_traffic.hpp"
 
 namespace arena {
 
@@ -158,6 +159,17 @@ void Reprojection::compute(const GBufferView& current, const Image& derivatives,
     testedTaps_.set(y, tested);
     readTaps_.set(y, read);
   });
+  if (gpu::recording()) {  // the tests of the taps actually tested, one record written per pixel
+    using namespace gpu_buffers;
+    gpu::dispatch(w, h);
+    for (const GpuBuffer& b : {kDepth, kNormal, kMeshId, kMotion, kDerivatives})
+      gpu::read(b, w, h, 1);
+    if (correctDepth) gpu::read(kPosition, w, h, 1);
+    const double taps = testedTapsPerPixel();
+    for (const GpuBuffer& b : {kPreviousDepth, kPreviousNormal, kPreviousMeshId})
+      gpu::read(b, w, h, taps);
+    gpu::write(kRecord, w, h);
+  }
 }
 
 HistoryLanes Reprojection::lanes(size_t i, int count) const {

@@ -1,6 +1,7 @@
 #include "denoisers/common/specular_lobe.hpp"
 
 #include "core/error.hpp"
+#include "denoisers/common/gpu_traffic.hpp"
 #include "denoisers/common/parallel.hpp"
 
 namespace arena {
@@ -12,6 +13,16 @@ void computeSpecularLobes(const GBufferView& g, const float* roughness, const Ca
     throw Error("specular lobes: the lobe image must be 4 channels of the G-buffer's size");
   if (!g.normal[0] || (specular && (!g.position[0] || !roughness)))
     throw Error("specular lobes: need normal (and position, roughness for the specular signal)");
+  if (gpu::recording()) {
+    using namespace gpu_buffers;
+    gpu::dispatch(g.width, g.height);
+    gpu::read(kNormal, g.width, g.height, 1);
+    if (specular) {
+      gpu::read(kPosition, g.width, g.height, 1);
+      gpu::read(kRoughness, g.width, g.height, 1);
+    }
+    gpu::write(kLobes, g.width, g.height);
+  }
   const int w = g.width;
   parallelRows(g.height, [&](int y) {
     for (int x = 0; x < w; ++x) {

@@ -1,6 +1,7 @@
 #include "denoisers/common/temporal_accumulation.hpp"
 
 #include "core/error.hpp"
+#include "denoisers/common/gpu_traffic.hpp"
 
 namespace arena {
 
@@ -38,6 +39,7 @@ void accumulateWithHistoryLength(const Reprojection& reprojection,
   if (!current.sameShape(history) || !current.sameShape(accumulated))
     throw Error("temporal accumulation: signal, history and output must have the same shape");
   const int w = current.width(), channels = current.channels();
+  recordAccumulationTraffic(reprojection, w, current.height(), false);
   const float* previous = previousHistoryLength.plane(0);
   float* length = historyLength.plane(0);
   parallelRows(current.height(), [&](int y) {
@@ -57,6 +59,19 @@ void accumulateWithHistoryLength(const Reprojection& reprojection,
             a * current.plane(c)[i] + (1.0f - a) * taps.apply(history.plane(c));
     }
   });
+}
+
+void recordAccumulationTraffic(const Reprojection& reprojection, int width, int height,
+                               bool moments) {
+  if (!gpu::recording()) return;
+  using namespace gpu_buffers;
+  const double taps = reprojection.readTapsPerPixel();
+  gpu::dispatch(width, height);
+  gpu::read({kRecord, kSignal}, width, height, 1);
+  gpu::read({kHistoryLengthHistory, kRadianceHistory}, width, height, taps);
+  if (moments) gpu::read(kMomentsHistory, width, height, taps);
+  gpu::write({kHistoryLength, kRadiance}, width, height);
+  if (moments) gpu::write(kMoments, width, height);
 }
 
 }  // namespace arena

@@ -94,4 +94,10 @@ void accumulateWithHistoryLength(const Reprojection& reprojection,
                                  const AccumulationAlpha& alpha, Image& historyLength,
                                  Image& accumulated);
 
+// What one accumulation sweep would move on a GPU (gpu_traffic.hpp): the reprojection record,
+// the signal, and each history (colour, h, and with `moments` the luminance moments) through the
+// consistent taps; h, colour (and moments) written.
+void recordAccumulationTraffic(const Reprojection& reprojection, int width, int height,
+                               bool moments);
+
 }  // namespace arena

@@ -9,6 +9,7 @@
 #include "core/error.hpp"
 #include "core/fast_math.hpp"
 #include "denoisers/common/edge_stopping.hpp"
+#include "denoisers/common/gpu_traffic.hpp"
 
 namespace arena {
 
@@ -39,6 +40,7 @@ void accumulateColorAndMoments(const Reprojection& reprojection, const Image& pr
       momentsHistory.channels() != 2 || !moments.sameShape(momentsHistory))
     throw Error("accumulation: expected RGB signal/history/output and 2-channel moment images");
   const int w = signal.width();
+  recordAccumulationTraffic(reprojection, w, signal.height(), true);
   const float* signalPlane[3] = {signal.plane(0), signal.plane(1), signal.plane(2)};
   const float* colorHistoryPlane[3] = {colorHistory.plane(0), colorHistory.plane(1),
                                        colorHistory.plane(2)};
@@ -341,7 +343,21 @@ double estimateVariance(const Image& moments, const Image& historyLength, const 
     }
     taps.set(y, fetchedInRow);
   });
-  return taps.perPixel(moments.pixelCount());
+  const double fetched = taps.perPixel(moments.pixelCount());
+  if (gpu::recording()) {  // every pixel its moments and h; young ones the 7x7 bilateral
+    using namespace gpu_buffers;
+    gpu::dispatch(w, h);
+    gpu::read(kHistoryLength, w, h, 1);
+    gpu::read(kMoments, w, h, 1 + fetched);
+    gpu::read(kRadiance, w, h, fetched);
+    gpu::read(kDepth, w, h, fetched);
+    gpu::read(kNormal, w, h, fetched);
+    gpu::read(kMeshId, w, h, 1 + fetched);
+    gpu::read(kDerivatives, w, h, 1);
+    gpu::write(kVariance, w, h);
+    if (youngColorMean) gpu::write(kRadiance, w, h);
+  }
+  return fetched;
 }
 
 void replaceYoungColor(const Image& youngColorMean, const Image& historyLength,

@@ -1,0 +1,164 @@
+#include "harness/gpu_cost.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "core/error.hpp"
+
+namespace arena {
+
+const std::vector<GpuDevice>& gpuDevices() {
+  // Texel rate = TMUs x boost clock (the fill-rate line of a spec sheet: 32-bit bilinear texels).
+  static const std::vector<GpuDevice> devices = {
+      {"TITAN RTX", 672.0, 288 * 1.770,
+       "NVIDIA launch specification (Dec 2018): 384-bit GDDR6 at 14 Gbps = 672 GB/s; full TU102, "
+       "288 TMUs, 1770 MHz boost"},
+      {"RTX 4080", 716.8, 304 * 2.505,
+       "NVIDIA specification: 256-bit GDDR6X at 22.4 Gbps = 716.8 GB/s; AD103, 304 TMUs, "
+       "2505 MHz boost"},
+      {"PS5", 448.0, 144 * 2.23,
+       "Sony (M. Cerny, 'The Road to PS5', 2020): 256-bit GDDR6 at 14 Gbps = 448 GB/s; 36 RDNA2 "
+       "CUs x 4 TMUs, up to 2.23 GHz"},
+  };
+  return devices;
+}
+
+const GpuDevice& gpuDevice(const std::string& name) {
+  std::string known;
+  for (const GpuDevice& d : gpuDevices()) {
+    if (d.name == name) return d;
+    known += (known.empty() ? "" : ", ") + d.name;
+  }
+  throw Error("unknown GPU device '" + name + "'; known: " + known);
+}
+
+PassPrediction predictPass(const PassTraffic& t, const GpuDevice& d, const GpuCostModel& m) {
+  PassPrediction p;
+  p.memoryMs = (t.bytesRead() + t.bytesWritten()) / (d.bandwidthGBs * 1e9) * 1e3;
+  p.fetchMs = m.fetchEfficiency * t.fetchCycles() / (d.texelRateGTs * 1e9) * 1e3;
+  const double units = m.fixed == FixedCost::PerDispatch ? double(t.dispatches.size())
+                                                         : t.threads() / (1920.0 * 1080.0);
+  const double scale = m.fitTexelRateGTs > 0 ? m.fitTexelRateGTs / d.texelRateGTs : 1.0;
+  p.fixedMs = m.dispatchMs * units * scale;
+  return p;
+}
+
+PassTraffic scaleTraffic(const PassTraffic& traffic, double pixelFactor) {
+  PassTraffic out = traffic;
+  const double side = std::sqrt(pixelFactor);
+  for (BufferTraffic& b : out.buffers) {
+    b.texels *= pixelFactor;
+    b.fetches *= pixelFactor;
+    b.width = int(std::lround(b.width * side));
+    b.height = int(std::lround(b.height * side));
+  }
+  for (auto& d : out.dispatches) {
+    d[0] = int(std::lround(d[0] * side));
+    d[1] = int(std::lround(d[1] * side));
+  }
+  return out;
+}
+
+namespace {
+bool sharedInput(const BufferTraffic& b) {
+  return b.name.find("(input)") != std::string::npos && b.name != gpu_buffers::kSignal.name;
+}
+}  // namespace
+
+PassTraffic mergeSignals(const PassTraffic& a, const PassTraffic& b) {
+  PassTraffic out = a;
+  if (b.dispatches.size() > out.dispatches.size()) out.dispatches = b.dispatches;
+  for (const BufferTraffic& buffer : b.buffers) {
+    auto same = std::find_if(out.buffers.begin(), out.buffers.end(), [&](const BufferTraffic& o) {
+      return o.name == buffer.name && o.write == buffer.write && o.dispatch == buffer.dispatch;
+    });
+    if (sharedInput(buffer) && same != out.buffers.end()) {
+      same->fetches = std::max(same->fetches, buffer.fetches);
+      continue;
+    }
+    out.buffers.push_back(buffer);
+  }
+  return out;
+}
+
+PassTraffic scaleGather(const PassTraffic& traffic, double factor) {
+  PassTraffic out = traffic;
+  for (BufferTraffic& b : out.buffers) {
+    const auto& d = out.dispatches[size_t(b.dispatch)];
+    const double threads = double(d[0]) * double(d[1]);
+    if (!b.write && b.fetches > 1.5 * threads) b.fetches *= factor;
+  }
+  return out;
+}
+
+PassTraffic repeatPass(const PassTraffic& traffic, int copies) {
+  PassTraffic out;
+  for (int k = 0; k < copies; ++k) {
+    const int offset = int(out.dispatches.size());
+    out.dispatches.insert(out.dispatches.end(), traffic.dispatches.begin(),
+                          traffic.dispatches.end());
+    for (BufferTraffic b : traffic.buffers) {
+      b.dispatch += offset;
+      out.buffers.push_back(b);
+    }
+  }
+  return out;
+}
+
+GpuCostModel fitModel(const std::vector<FitPoint>& points, const GpuDevice& device,
+                      FixedCost fixed) {
+  GpuCostModel best;
+  best.fixed = fixed;
+  best.fitTexelRateGTs = device.texelRateGTs;
+  double bestError = INFINITY;
+  for (int i = 0; i <= 400; ++i) {
+    const double k = 0.05 * std::pow(400.0, i / 400.0);  // 0.05 .. 20
+    for (int j = 0; j <= 500; ++j) {
+      const GpuCostModel m{k, 0.001 * j, fixed, device.texelRateGTs};  // c: 0 .. 0.5 ms
+      double error = 0;
+      for (const FitPoint& p : points) {
+        const double r = std::log(predictPass(p.traffic, device, m).totalMs() / p.publishedMs);
+        error += r * r;
+      }
+      if (error < bestError) {
+        bestError = error;
+        best = m;
+      }
+    }
+  }
+  return best;
+}
+
+namespace {
+std::vector<double> ranks(const std::vector<double>& v) {
+  std::vector<size_t> order(v.size());
+  std::iota(order.begin(), order.end(), size_t(0));
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return v[a] < v[b]; });
+  std::vector<double> r(v.size());
+  for (size_t i = 0; i < order.size();) {
+    size_t j = i;
+    while (j + 1 < order.size() && v[order[j + 1]] == v[order[i]]) ++j;
+    for (size_t k = i; k <= j; ++k) r[order[k]] = 0.5 * double(i + j) + 1.0;
+    i = j + 1;
+  }
+  return r;
+}
+}  // namespace
+
+double spearman(const std::vector<double>& a, const std::vector<double>& b) {
+  if (a.size() != b.size() || a.size() < 2) return 0.0;
+  const std::vector<double> ra = ranks(a), rb = ranks(b);
+  const double n = double(a.size());
+  const double ma = std::accumulate(ra.begin(), ra.end(), 0.0) / n;
+  const double mb = std::accumulate(rb.begin(), rb.end(), 0.0) / n;
+  double sab = 0, saa = 0, sbb = 0;
+  for (size_t i = 0; i < ra.size(); ++i) {
+    sab += (ra[i] - ma) * (rb[i] - mb);
+    saa += (ra[i] - ma) * (ra[i] - ma);
+    sbb += (rb[i] - mb) * (rb[i] - mb);
+  }
+  return saa > 0 && sbb > 0 ? sab / std::sqrt(saa * sbb) : 0.0;
+}
+
+}  // namespace arena

@@ -1,0 +1,84 @@
+#pragma once
+// A GPU cost model over the traffic the passes count (denoisers/common/gpu_traffic.hpp), checked
+// against published timings (docs/gpu-cost.md):
+//   t(pass) = max(bytes / bandwidth, k * fetchCycles / texelRate) + c * (dispatches or threads)
+// bandwidth and texelRate come from each device's specification; k (how many texture-unit cycles
+// a counted fetch cycle really costs) and c (fixed ms per dispatch) are the only fitted
+// constants, fitted on one published set (the CEDEC 2021 box-filter vs à-trous experiment) and
+// judged on the sets they never saw. `arena bench gpu-model` prints the validation tables.
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "denoisers/common/gpu_traffic.hpp"
+#include "tracer/render.hpp"
+
+namespace arena {
+
+struct GpuDevice {
+  std::string name;
+  double bandwidthGBs = 0;  // DRAM bandwidth, GB/s (1e9 bytes)
+  double texelRateGTs = 0;  // 32-bit bilinear texels per second, 1e9 (TMUs x boost clock)
+  std::string source;       // where the two numbers come from
+};
+const std::vector<GpuDevice>& gpuDevices();  // TITAN RTX, RTX 4080, PS5
+const GpuDevice& gpuDevice(const std::string& name);  // throws an Error naming the known ones
+
+// The fixed term, two forms fitted alike and both reported (docs/gpu-cost.md): per dispatch
+// (launch, barrier, a wave's ramp) or per thread (the ALU work of the weights, which grows with
+// the pixels a dispatch covers); per thread, c is quoted per 1920x1080 dispatch. On another
+// device c scales with the fit device's texel rate over its own (a chip with more units does the
+// same work sooner).
+enum class FixedCost { PerDispatch, PerThread };
+struct GpuCostModel {
+  double fetchEfficiency = 1.0;  // k
+  double dispatchMs = 0.0;       // c
+  FixedCost fixed = FixedCost::PerDispatch;
+  double fitTexelRateGTs = 0;  // the fit device's; 0: c used as is
+};
+
+struct PassPrediction {
+  double memoryMs = 0, fetchMs = 0, fixedMs = 0;
+  double totalMs() const { return std::max(memoryMs, fetchMs) + fixedMs; }
+  bool fetchBound() const { return fetchMs >= memoryMs; }
+};
+PassPrediction predictPass(const PassTraffic& traffic, const GpuDevice& device,
+                           const GpuCostModel& model);
+
+// The traffic of a pass at `pixelFactor` times the pixels (per-pixel counts kept, dispatches
+// kept): the same pass at another resolution, where its taps do not depend on the resolution.
+PassTraffic scaleTraffic(const PassTraffic& traffic, double pixelFactor);
+// One dispatch serving two signals (the way the talk's and NRD's passes read diffuse and specular
+// together): the G-buffer inputs are read once, every other buffer for each signal.
+PassTraffic mergeSignals(const PassTraffic& a, const PassTraffic& b);
+// The same pass gathering `factor` times the taps of every buffer it gathers (> 1 tap per
+// thread): a 3x3 à-trous iteration turned into a box of factor x 9 taps.
+PassTraffic scaleGather(const PassTraffic& traffic, double factor);
+// `copies` dispatches of the same pass in a row.
+PassTraffic repeatPass(const PassTraffic& traffic, int copies);
+
+struct FitPoint {
+  std::string name;
+  PassTraffic traffic;
+  double publishedMs = 0;
+};
+// k and c minimising sum(log(predicted / published)^2) over the points (a grid search: k on a
+// log grid 0.05..20, c on 0..0.5 ms), for the fixed term's form given.
+GpuCostModel fitModel(const std::vector<FitPoint>& points, const GpuDevice& device,
+                      FixedCost fixed = FixedCost::PerDispatch);
+
+// Spearman's rank correlation (ties get their mean rank); 0 for fewer than 2 values.
+double spearman(const std::vector<double>& a, const std::vector<double>& b);
+
+// `arena bench gpu-model`.
+struct GpuModelBench {
+  std::string sceneFile;
+  std::vector<std::string> denoisers;  // the per-denoiser table and the memory table
+  std::string device = "TITAN RTX";
+  int width = 1920, height = 1080, frames = 5;  // the last counted: h >= 4 by then
+};
+nlohmann::json benchGpuModel(const GpuModelBench& bench, const ProgressFn& progress);
+
+}  // namespace arena
