@@ -512,3 +512,37 @@ test('history dashboard: 50 runs, the regressing one is marked, and the page sta
   assert.deepEqual(problems, []);
   await page.close();
 });
+
+test('a capture: its validation on the page, a file: contender named with its own clock', async () => {
+  // Our own sequence exported as a capture, eaw's outputs stored in it as a contender that "ran
+  // elsewhere" with a recorded device time (docs/captures.md).
+  const capture = path.join(work, 'capture');
+  arena('export', 'cornell_static', '--resolution', '48x27', '--frames', '8', '--ref-spp', '16',
+    '--cache', path.join(work, 'cache'), '--out', capture);
+  const first = path.join(work, 'capture-first');
+  arena('run', '--capture', capture, '--denoisers', 'eaw', '--no-baselines', '--keep-frames', 'all', '--warmup', '2',
+    '--out', first);
+  const stored = path.join(capture, 'outputs', 'eaw_elsewhere');
+  fs.mkdirSync(stored, { recursive: true });
+  const frames = path.join(first, 'images', 'cornell_static', 'eaw');
+  for (const f of fs.readdirSync(frames).filter((n) => n.endsWith('.exr'))) fs.copyFileSync(path.join(frames, f), path.join(stored, f));
+  const description = JSON.parse(fs.readFileSync(path.join(capture, 'capture.json'), 'utf8'));
+  description.outputs = { eaw_elsewhere: { milliseconds: Array(8).fill(0.8), device: 'test GPU' } };
+  fs.writeFileSync(path.join(capture, 'capture.json'), JSON.stringify(description));
+  const run = path.join(work, 'capture-run');
+  arena('run', '--capture', capture, '--denoisers', 'eaw,file:eaw_elsewhere', '--warmup', '2', '--out', run);
+  const report = path.join(work, 'capture-report');
+  arena('report', run, '--out', report);
+  const { page, problems } = await openReport(report);
+  // Every check is a row with its value and thresholds.
+  const rows = await page.locator('.validation-table tbody tr').count();
+  assert.ok(rows >= 15, `validation rows: ${rows}`);
+  const text = await page.locator('.validation-table').innerText();
+  for (const check of ['motion.consistency', 'nonFinite.normal', 'reference.noiseVsInput'])
+    assert.ok(text.includes(check), `the validation table lacks ${check}`);
+  // The stored output is ranked like a built-in but kept off the CPU axis, named with its device.
+  const front = await page.locator('#speed-front').innerText();
+  assert.match(front, /timed on another clock.*file:eaw_elsewhere.*test GPU/);
+  assert.deepEqual(problems, []);
+  await page.close();
+});
