@@ -350,15 +350,15 @@ LayerSet readCaptureFrame(const CaptureDescription& c, int t) {
   const SequenceInfo& info = c.info;
   if (t < 0 || t >= info.frames) throw Error(c.dir.string() + ": frame " + std::to_string(t) + " out of range");
   const fs::path file = captureFramePath(c.dir, t);
-  const ExrHeader h = readExrHeader(file);
-  if (h.width != info.width || h.height != info.height)
-    throw Error(file.string() + ": " + std::to_string(h.width) + "x" + std::to_string(h.height) + ", expected " +
-                std::to_string(info.width) + "x" + std::to_string(info.height));
   std::vector<LayerSpec> specs;
   for (const LayerSpec& s : captureFrameSpecs())
     if (contains(c.layers, s.name) && !contains(c.derived, s.name)) specs.push_back(s);
-  // readExr names the file and channel when a frame lacks a layer the first frame had.
+  // readExr names the file and channel when a frame lacks a layer the first frame had; the size is
+  // checked on what it read (one open per frame).
   LayerSet layers = readExr(file, specs).layers;
+  if (layers.width() != info.width || layers.height() != info.height)
+    throw Error(file.string() + ": " + std::to_string(layers.width()) + "x" + std::to_string(layers.height()) +
+                ", expected " + std::to_string(info.width) + "x" + std::to_string(info.height));
   const int w = info.width, hgt = info.height;
   const size_t pixels = size_t(w) * size_t(hgt);
   if (contains(c.derived, "emission")) layers.set("emission", Image(w, hgt, 3));
