@@ -9,6 +9,9 @@
 #include <ImfThreading.h>
 #include <half.h>
 
+#include <cstdint>
+#include <utility>
+
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 
@@ -82,13 +85,25 @@ static ExrAttributes attributesOf(const Imf::Header& header) {
   return out;
 }
 
+// The image size a data window declares, refused (naming the file and the size) beyond what any
+// frame this project reads can be: 65536 pixels a side and 2^28 pixels in all (a damaged header
+// would otherwise ask for exabytes, or overflow the int arithmetic of the size).
+static std::pair<int, int> checkedSize(const fs::path& path, const Imath::Box2i& dw) {
+  const int64_t w = int64_t(dw.max.x) - int64_t(dw.min.x) + 1, h = int64_t(dw.max.y) - int64_t(dw.min.y) + 1;
+  constexpr int64_t kMaxSide = 65536, kMaxPixels = int64_t(1) << 28;
+  if (w <= 0 || h <= 0 || w > kMaxSide || h > kMaxSide || w * h > kMaxPixels)
+    throw Error(path.string() + ": data window of " + std::to_string(w) + "x" + std::to_string(h) +
+                " pixels (expected 1 to 65536 a side and at most 2^28 pixels; the header is damaged)");
+  return {int(w), int(h)};
+}
+
 ExrContents readExr(const fs::path& path, const std::vector<LayerSpec>& specs) {
   if (!fs::exists(path)) throw Error(path.string() + ": file does not exist");
   ExrContents out;
   try {
     Imf::InputFile file(path.c_str(), 1);
     const Imath::Box2i dw = file.header().dataWindow();
-    const int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
+    const auto [w, h] = checkedSize(path, dw);
     out.attributes = attributesOf(file.header());
     Imf::FrameBuffer fb;
     for (const LayerSpec& spec : specs) {
@@ -129,11 +144,13 @@ ExrHeader readExrHeader(const fs::path& path) {
   if (!fs::exists(path)) throw Error(path.string() + ": file does not exist");
   try {
     Imf::InputFile file(path.c_str(), 1);
-    const Imath::Box2i dw = file.header().dataWindow();
-    ExrHeader out{dw.max.x - dw.min.x + 1, dw.max.y - dw.min.y + 1, {}};
+    const auto [w, h] = checkedSize(path, file.header().dataWindow());
+    ExrHeader out{w, h, {}};
     for (auto it = file.header().channels().begin(); it != file.header().channels().end(); ++it)
       out.channels.push_back(it.name());
     return out;
+  } catch (const Error&) {
+    throw;
   } catch (const std::exception& e) {
     throw Error(path.string() + ": not a readable OpenEXR file (" + e.what() + ")");
   }
