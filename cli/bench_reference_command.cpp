@@ -19,6 +19,7 @@ void addBenchReferenceCommand(CLI::App* bench) {
     std::string scenes = "cornell_static,camera_pan_occluder", resolution = "128x72", json;
     std::string scenesDir = defaultScenesDir();
     int spp = 128, goldFactor = 32, frame = 0, replicates = RenderSettings().referenceReplicates, maxBounces = 0;
+    int repeats = ReferenceBench().repeats;
   };
   auto o = std::make_shared<Options>();
   cmd->add_option("--scenes", o->scenes, "Scenes, comma-separated, or 'all'");
@@ -33,6 +34,11 @@ void addBenchReferenceCommand(CLI::App* bench) {
                   "Override the scenes' maximum path length (gold included): comparing two lengths shows which "
                   "part of the error the longer paths carry")
       ->check(CLI::Range(1, 64));
+  cmd->add_option("--repeats", o->repeats,
+                  "Independent repeats of each compared reference (own seed each): the gains are medians over "
+                  "them with a 95% interval (the whole range under 6)")
+      ->check(CLI::Range(1, 256))
+      ->capture_default_str();
   cmd->add_option("--frame", o->frame, "Frame whose state is rendered")->check(CLI::NonNegativeNumber);
   cmd->add_option("--scenes-dir", o->scenesDir, "Directory of scene files");
   cmd->add_option("--json", o->json, "Write results to this JSON file");
@@ -47,6 +53,7 @@ void addBenchReferenceCommand(CLI::App* bench) {
     b.goldFactor = o->goldFactor;
     b.frame = o->frame;
     b.replicates = o->replicates;
+    b.repeats = o->repeats;
     const nlohmann::json out = benchReference(b, [](const std::string& line) { std::cout << line << std::endl; });
     if (!o->json.empty()) writeTextAtomically(o->json, out.dump(2));
   });

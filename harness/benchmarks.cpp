@@ -321,29 +321,61 @@ json benchReference(const ReferenceBench& b, const ProgressFn& progress) {
     const LayerSet gold = referenceLayersFromSums(goldSums);
     const double goldNoise = estimatedReferenceRelMse(goldSums);
     settings.referenceReplicates = b.replicates;
-    const Measured ind = measure(scene, settings, "independent", false, b.frame, b.spp, gold);
-    const Measured sob = measure(scene, settings, "sobol", false, b.frame, b.spp, gold);
-    const Measured ada = measure(scene, settings, "sobol", true, b.frame, b.spp, gold);
-    auto gainOver = [&](const Measured& m) { return (ind.relMse * ind.seconds) / std::max(m.relMse * m.seconds, 1e-300); };
-    const double sobolGain = gainOver(sob), gain = gainOver(ada);
-    progress(printed("%-22s %d spp: independent relMSE %.3e in %.2f s (est. %.3e) | sobol %.3e in %.2f s "
-                     "(est. %.3e, gain %.1fx) | adaptive %.0f spp %.3e in %.2f s (est. %.3e) | gold %d spp in "
-                     "%.1f s, own noise %.1e | gain %.1fx",
-                     scene.name.c_str(), goldSums.replicates * std::max(1, b.spp / goldSums.replicates), ind.relMse,
-                     ind.seconds, ind.estimatedRelMse, sob.relMse, sob.seconds, sob.estimatedRelMse, sobolGain,
-                     ada.spp, ada.relMse, ada.seconds, ada.estimatedRelMse, goldSums.spp(), goldSeconds, goldNoise,
-                     gain));
-    out["scenes"].push_back(
-        {{"scene", scene.name},
-         {"independent", {{"relMse", ind.relMse}, {"seconds", ind.seconds}, {"estimatedRelMse", ind.estimatedRelMse}}},
-         {"sobol", {{"relMse", sob.relMse}, {"seconds", sob.seconds}, {"estimatedRelMse", sob.estimatedRelMse}}},
-         {"adaptive",
-          {{"relMse", ada.relMse}, {"seconds", ada.seconds}, {"estimatedRelMse", ada.estimatedRelMse}, {"spp", ada.spp}}},
-         {"sobolGain", sobolGain},
-         {"goldSpp", goldSums.spp()},
-         {"goldSeconds", goldSeconds},
-         {"goldRelMse", goldNoise},
-         {"gain", gain}});
+    // Each repeat renders the three estimators under its own seed (repeat 0: the scene's), so the
+    // repeats are independent draws of each estimator's error and time; the gold is shared.
+    std::vector<Measured> ind, sob, ada;
+    std::vector<double> indCost, sobCost, adaCost;  // relMSE x seconds: lower is more efficient
+    for (int r = 0; r < b.repeats; ++r) {
+      Scene repeat = scene;
+      if (r > 0) repeat.seed = uint32_t(mix64(uint64_t(scene.seed) ^ (0x7265706561740000ull + uint64_t(r))) >> 32);
+      ind.push_back(measure(repeat, settings, "independent", false, b.frame, b.spp, gold));
+      sob.push_back(measure(repeat, settings, "sobol", false, b.frame, b.spp, gold));
+      ada.push_back(measure(repeat, settings, "sobol", true, b.frame, b.spp, gold));
+      indCost.push_back(ind.back().relMse * ind.back().seconds);
+      sobCost.push_back(sob.back().relMse * sob.back().seconds);
+      adaCost.push_back(ada.back().relMse * ada.back().seconds);
+    }
+    // The equal-time gain over the independent sampler: the median over repeats of the cost ratio,
+    // with the distribution-free 95% interval of that median (whole range under 6 repeats).
+    const PairedRatio sobolGain = pairedRatio(indCost, sobCost), gain = pairedRatio(indCost, adaCost);
+    auto medianOf = [](const std::vector<Measured>& ms, double Measured::*field) {
+      std::vector<double> v;
+      for (const Measured& m : ms) v.push_back(m.*field);
+      return median(v);
+    };
+    auto summary = [&](const std::vector<Measured>& ms) {
+      json j = {{"relMse", medianOf(ms, &Measured::relMse)},
+                {"seconds", medianOf(ms, &Measured::seconds)},
+                {"estimatedRelMse", medianOf(ms, &Measured::estimatedRelMse)},
+                {"spp", medianOf(ms, &Measured::spp)},
+                {"repeats", json::array()}};
+      for (const Measured& m : ms)
+        j["repeats"].push_back({{"relMse", m.relMse}, {"seconds", m.seconds}, {"estimatedRelMse", m.estimatedRelMse}});
+      return j;
+    };
+    const json indJ = summary(ind), sobJ = summary(sob), adaJ = summary(ada);
+    progress(printed("%-22s %d spp, %d repeats (medians): independent relMSE %.3e in %.2f s | sobol %.3e in %.2f s "
+                     "(gain %.2fx [95%% CI %.2f, %.2f]) | adaptive %.0f spp %.3e in %.2f s (est. %.3e) | gold %d spp "
+                     "in %.1f s, own noise %.1e | gain %.2fx [95%% CI %.2f, %.2f]",
+                     scene.name.c_str(), int(std::lround(indJ["spp"].get<double>())), b.repeats,
+                     indJ["relMse"].get<double>(), indJ["seconds"].get<double>(), sobJ["relMse"].get<double>(),
+                     sobJ["seconds"].get<double>(), sobolGain.median, sobolGain.lo, sobolGain.hi,
+                     adaJ["spp"].get<double>(), adaJ["relMse"].get<double>(), adaJ["seconds"].get<double>(),
+                     adaJ["estimatedRelMse"].get<double>(), goldSums.spp(), goldSeconds, goldNoise, gain.median,
+                     gain.lo, gain.hi));
+    out["scenes"].push_back({{"scene", scene.name},
+                             {"repeats", b.repeats},
+                             {"independent", indJ},
+                             {"sobol", sobJ},
+                             {"adaptive", adaJ},
+                             {"sobolGain", sobolGain.median},
+                             {"sobolGainCi95", {sobolGain.lo, sobolGain.hi}},
+                             {"goldSpp", goldSums.spp()},
+                             {"goldSeconds", goldSeconds},
+                             {"goldRelMse", goldNoise},
+                             {"gain", gain.median},
+                             {"gainCi95", {gain.lo, gain.hi}},
+                             {"gainEstimator", "adaptive sobol (the study's references)"}});
   }
   return out;
 }

@@ -38,6 +38,9 @@ struct ReferenceBench {
   std::vector<Scene> scenes;
   RenderSettings settings;  // resolution and path length
   int spp = 128, goldFactor = 32, frame = 0, replicates = RenderSettings().referenceReplicates;
+  // Independent repeats of each compared estimator (own seed each, the gold shared): the gain is the
+  // median over repeats with its 95% interval.
+  int repeats = 8;
 };
 nlohmann::json benchReference(const ReferenceBench& bench, const ProgressFn& progress);
 

@@ -34,7 +34,7 @@ std::string renderOptionsOf(const nlohmann::json& render);
 // paths. Scenes are taken cheapest first while their predictions fit in `budget` x the paths all
 // the references already hold: a budget in work, not seconds, so which scenes are refined does not
 // depend on the machine.
-inline constexpr double kRefineMargin = 0.8;
+inline constexpr double kRefineMargin = 0.9;
 struct ReferenceRefinement {
   std::string scene;
   double targetRelMse = 0;
