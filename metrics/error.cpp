@@ -243,8 +243,10 @@ MetricFamily linearErrorFamily() {
   MetricFamily f;
   f.metrics = {
       {.name = "relMse", .floor = FloorRule::ReferenceNoise, .ranked = true, .gatedByDefault = true, .overall = true,
+       .reportColumn = true, .chart = ReportChart::Error, .title = "relMSE",
        .description = "relative MSE vs the reference, eps 0.01 (raw)"},
-      {.name = "relMseCorrected", .description = "relMSE minus the reference's own noise term"},
+      {.name = "relMseCorrected", .reportColumn = true, .chart = ReportChart::Error,
+       .title = "relMSE (reference-corrected)", .description = "relMSE minus the reference's own noise term"},
       {.name = "mse", .description = "MSE, linear"},
       {.name = "rmse", .transform = FrameTransform::Sqrt, .description = "RMSE, linear"},
       {.name = "effectiveSpp", .unit = "spp", .better = Better::Higher,
@@ -275,11 +277,11 @@ MetricFamily displayErrorFamily() {
   f.metrics = {
       {.name = "psnr", .unit = "dB", .better = Better::Higher, .reads = MetricInput::Display,
        .transform = FrameTransform::Psnr, .floor = FloorRule::ReferenceNoise,
-       .description = "PSNR of the display image, dB (capped at 100)"},
+       .chart = ReportChart::Error, .title = "PSNR (dB)", .description = "PSNR of the display image, dB (capped at 100)"},
       {.name = "ssim", .better = Better::Higher, .reads = MetricInput::Display, .floor = FloorRule::ReferenceNoise,
-       .floorWarningFactor = 2, .perfect = 1, .ranked = true, .gatedByDefault = true,
+       .floorWarningFactor = 2, .perfect = 1, .ranked = true, .gatedByDefault = true, .reportColumn = true,
        .description = "SSIM of display luminance (11x11 Gaussian, sigma 1.5)"},
-      {.name = "dssim", .reads = MetricInput::Display, .overall = true,
+      {.name = "dssim", .reads = MetricInput::Display, .overall = true, .chart = ReportChart::Error, .title = "1 − SSIM",
        .description = "1 - SSIM: SSIM as an error, lower is better (the speed chart's axis and its overall score)"},
   };
   f.measure = [](const FrameView& v, const MetricOptions&, FrameRecorder& out) {

@@ -688,9 +688,9 @@ MetricFamily flipFamily() {
   f.metrics = {
       {.name = "ldrFlip", .reads = MetricInput::Display, .floor = FloorRule::ReferenceNoise,
        .floorWarningFactor = 2, .ranked = true, .gatedByDefault = true, .overall = true,
-       .description = "mean LDR-FLIP of the display image, 67 ppd"},
+       .reportColumn = true, .chart = ReportChart::Error, .title = "LDR-FLIP", .description = "mean LDR-FLIP of the display image, 67 ppd"},
       {.name = "hdrFlip", .floor = FloorRule::ReferenceNoise, .floorWarningFactor = 2, .ranked = true, .gatedByDefault = true,
-       .overall = true,
+       .overall = true, .reportColumn = true, .chart = ReportChart::Error, .title = "HDR-FLIP",
        .description = "mean HDR-FLIP of the linear image, 67 ppd"},
   };
   f.enabled = [](const MetricOptions& o) { return o.flip != "none"; };

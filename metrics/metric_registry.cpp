@@ -74,6 +74,11 @@ nlohmann::json metricCatalogJson() {
                    {"ranked", m->ranked},
                    {"gatedByDefault", m->gatedByDefault},
                    {"overall", m->overall},
+                   {"reportColumn", m->reportColumn},
+                   {"chart", m->chart == ReportChart::Error      ? "error"
+                             : m->chart == ReportChart::Temporal ? "temporal"
+                                                                 : ""},
+                   {"title", m->title.empty() ? m->name : m->title},
                    {"meaning", m->description}});
   return out;
 }

@@ -33,6 +33,9 @@ enum class FloorRule {
   None,            // no floor: a run fact, already corrected for the reference's noise, or no reference
   ReferenceNoise,  // the metric of an image with the reference's own noise and nothing else
 };
+// Which per-frame chart of the report offers a metric: the error over time, the temporal
+// (flicker) over time, or none.
+enum class ReportChart { None, Error, Temporal };
 
 struct MetricDefinition {
   std::string name;
@@ -51,6 +54,11 @@ struct MetricDefinition {
   // statistics scores every method across scenes on it (geometric mean of ratios to a baseline,
   // with an interval): the one overall score the printout and the report's all-scenes chart show.
   bool overall = false;
+  // The report: a table column shown before the reader picks any, the per-frame chart that offers
+  // it, and its label there (empty: the name).
+  bool reportColumn = false;
+  ReportChart chart = ReportChart::None;
+  std::string title;
   std::string description;  // one line; docs/metrics.md has the definition
   bool lowerIsBetter() const { return better == Better::Lower; }
   const char* betterName() const { return better == Better::Lower ? "lower" : "higher"; }

@@ -165,8 +165,10 @@ MetricFamily multiScaleStabilityFamily() {
   MetricFamily f;
   f.metrics = {
       {.name = "stabilityFine", .needsReference = false, .transform = FrameTransform::Sqrt,
+       .chart = ReportChart::Temporal, .title = "stability, fine (flicker)",
        .description = "motion-compensated relative change of the output vs lags 1-3, full resolution (flicker)"},
       {.name = "stabilityCoarse", .needsReference = false, .transform = FrameTransform::Sqrt,
+       .chart = ReportChart::Temporal, .title = "stability, coarse (boiling)",
        .description = "the same on 4x4 block means (boiling: low-frequency change)"},
       {.name = "errorStabilityFine", .transform = FrameTransform::Sqrt,
        .description = "stabilityFine of the error d - r, relative to r (reference twin)"},

@@ -118,12 +118,13 @@ namespace arena {
 MetricFamily temporalFlickerFamily() {
   MetricFamily f;
   f.metrics = {
-      {.name = "tRmae", .ranked = true, .gatedByDefault = true,
-       .description = "temporal relative MAE vs the reference's frame difference (no /3)"},
+      {.name = "tRmae", .ranked = true, .gatedByDefault = true, .reportColumn = true, .chart = ReportChart::Temporal,
+       .title = "tRMAE", .description = "temporal relative MAE vs the reference's frame difference (no /3)"},
       {.name = "tPsnr", .unit = "dB", .better = Better::Higher, .reads = MetricInput::Display,
-       .transform = FrameTransform::Psnr, .description = "temporal PSNR of display frame differences, dB"},
-      {.name = "warpedFlicker", .transform = FrameTransform::Sqrt, .ranked = true,
-       .description = "motion-compensated flicker of the error e = d - r"},
+       .transform = FrameTransform::Psnr, .chart = ReportChart::Temporal, .title = "tPSNR (dB)",
+       .description = "temporal PSNR of display frame differences, dB"},
+      {.name = "warpedFlicker", .transform = FrameTransform::Sqrt, .ranked = true, .reportColumn = true,
+       .chart = ReportChart::Temporal, .title = "warped flicker", .description = "motion-compensated flicker of the error e = d - r"},
   };
   f.measure = [](const FrameView& v, const MetricOptions&, FrameRecorder& out) {
     const FrameView* p = v.previous(1);

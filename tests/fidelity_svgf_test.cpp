@@ -2,7 +2,7 @@
 // h < 4, not only the variance but also the colour by the 7x7 bilateral mean (same weights); the
 // SVGF paper estimates only the variance spatially. `youngColor=spatial` is Falcor's,
 // `youngColor=accumulated` (default, measured below) the paper's. Here (the block against its
-// per-pixel definition is in denoisers_blocks_test.cpp): the denoiser's frame-0 output, and the
+// per-pixel definition is in denoisers_common_test.cpp): the denoiser's frame-0 output, and the
 // relMSE on freshly disoccluded pixels (h <= 2) of camera_pan_occluder and moving_object at 96x54
 // (24 frames, 64-spp references), frames >= 4.
 #include <gtest/gtest.h>

@@ -6,26 +6,17 @@
 (() => {
   const A = window.Arena;
   const { $, el } = A;
-  const TIME_ERROR = [
-    { key: 'relMse', title: 'relMSE', source: 'relMse' },
-    { key: 'relMseCorrected', title: 'relMSE (reference-corrected)', source: 'relMseCorrected' },
-    { key: 'hdrFlip', title: 'HDR-FLIP', source: 'hdrFlip' },
-    { key: 'ldrFlip', title: 'LDR-FLIP', source: 'ldrFlip' },
-    { key: 'dssim', title: '1 − SSIM', source: 'ssim', complement: true },
-    { key: 'psnr', title: 'PSNR (dB)', source: 'psnr' },
-  ];
-  const TIME_FLICKER = [
-    { key: 'tRmae', title: 'tRMAE', source: 'tRmae' },
-    { key: 'warpedFlicker', title: 'warped flicker', source: 'warpedFlicker' },
-    { key: 'tPsnr', title: 'tPSNR (dB)', source: 'tPsnr' },
-  ];
-  const present = (axes) => axes.filter((a) => A.D.pairs.some((p) => p.series && p.series[a.source]));
+  // The axes of the two charts: the metrics the registry offers to each (catalogue field `chart`),
+  // in its order, that some pair of the run has per frame.
+  const axesOf = (chart) => A.D.metrics
+    .filter((m) => m.chart === chart && A.D.pairs.some((p) => p.series && p.series[m.name]))
+    .map((m) => ({ key: m.name, title: m.title || m.name, source: m.name, lowerIsBetter: m.lowerIsBetter }));
 
   A.setupOverTime = function setupOverTime() {
     const errSel = $('time-error-metric');
-    for (const a of present(TIME_ERROR)) errSel.append(el('option', { value: a.key, text: a.title }));
+    for (const a of axesOf('error')) errSel.append(el('option', { value: a.key, text: a.title }));
     const flSel = $('time-flicker-metric');
-    for (const a of present(TIME_FLICKER)) flSel.append(el('option', { value: a.key, text: a.title }));
+    for (const a of axesOf('temporal')) flSel.append(el('option', { value: a.key, text: a.title }));
     errSel.addEventListener('change', A.renderOverTime);
     flSel.addEventListener('change', A.renderOverTime);
     $('time-log').addEventListener('change', A.renderOverTime);
@@ -50,11 +41,9 @@
     return layers;
   }
 
-  // A per-frame series of an axis (1 - SSIM from SSIM).
+  // A per-frame series of an axis.
   function axisSeries(pair, axis) {
-    const col = pair.series && pair.series[axis.source];
-    if (!col) return null;
-    return axis.complement ? col.map((v) => (v === null ? null : 1 - v)) : col;
+    return (pair.series && pair.series[axis.source]) || null;
   }
 
   function frameSeriesRows(pairs, axis, positiveOnly) {
@@ -109,12 +98,18 @@
       $('time-flicker-chart').replaceChildren();
       return Promise.resolve();
     }
-    const errAxis = TIME_ERROR.find((a) => a.key === $('time-error-metric').value) || TIME_ERROR[0];
-    const flAxis = TIME_FLICKER.find((a) => a.key === $('time-flicker-metric').value) || TIME_FLICKER[0];
-    const log = $('time-log').checked && errAxis.key !== 'psnr';
+    const errAxes = axesOf('error'), flAxes = axesOf('temporal');
+    const errAxis = errAxes.find((a) => a.key === $('time-error-metric').value) || errAxes[0];
+    const flAxis = flAxes.find((a) => a.key === $('time-flicker-metric').value) || flAxes[0];
+    const none = (id) => {
+      $(id).replaceChildren(el('p', { class: 'empty', text: 'No per-frame metric of this kind in this run.' }));
+      return Promise.resolve();
+    };
+    // A log axis for errors (lower is better); a dB axis (PSNR) stays linear.
+    const log = $('time-log').checked && errAxis && errAxis.lowerIsBetter;
     // The reference's own noise floor belongs next to raw relMSE (metrics.md: reference quality).
     const floor = [];
-    if (errAxis.key === 'relMse' && scene.noiseFloor) {
+    if (errAxis && errAxis.key === 'relMse' && scene.noiseFloor) {
       const f = [{ value: scene.noiseFloor.mean, text: 'reference noise floor' }];
       floor.push({ data: { values: f }, mark: { type: 'rule', color: '#777', strokeDash: [2, 2] },
                    encoding: { y: { field: 'value', type: 'quantitative' } } });
@@ -122,8 +117,8 @@
                    encoding: { y: { field: 'value', type: 'quantitative' }, text: { field: 'text' } } });
     }
     return Promise.all([
-      timeChart('timeError', $('time-error-chart'), scene, errAxis, log, floor),
-      timeChart('timeFlicker', $('time-flicker-chart'), scene, flAxis, false, []),
+      errAxis ? timeChart('timeError', $('time-error-chart'), scene, errAxis, log, floor) : none('time-error-chart'),
+      flAxis ? timeChart('timeFlicker', $('time-flicker-chart'), scene, flAxis, false, []) : none('time-flicker-chart'),
     ]);
   }
 })();

@@ -15,8 +15,6 @@
     { key: 'tapsPerPixel', title: 'taps/px', default: false },
   ];
   // Shown unless the user picks otherwise: the metrics a choice is usually made on.
-  const DEFAULT_METRICS = ['relMse', 'relMseCorrected', 'ldrFlip', 'hdrFlip', 'ssim', 'tRmae', 'warpedFlicker'];
-
   // Catalog metrics that some pair of the run summarises; ms is shown with the timing columns.
   const tableMetrics = () => A.D.metrics.filter((m) => m.name !== 'ms' && A.D.pairs.some((p) => p.summary && p.summary[m.name]));
 
@@ -35,7 +33,7 @@
     };
     picker.append(
       el('span', { class: 'picker-group' }, el('b', { text: 'Metrics: ' }),
-        tableMetrics().map((m) => box(m.name, m.name, DEFAULT_METRICS.includes(m.name), m.meaning))),
+        tableMetrics().map((m) => box(m.name, m.name, m.reportColumn, m.meaning))),
       el('span', { class: 'picker-group' }, el('b', { text: 'Time: ' }),
         TIMING_COLUMNS.map((t) => box(t.key, t.title, t.default))),
       el('span', { class: 'picker-group' }, el('b', { text: 'Show: ' }),

@@ -194,6 +194,15 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
   // (2) Over time on light_switch: one line per successful pair, and the event is marked.
   await page.waitForFunction((n) => document.querySelectorAll('#time-error-chart g.mark-line.role-mark path').length === n, okHere);
   assert.ok((await page.locator('#time-error-chart g.mark-rule.role-mark line').count()) >= 1, 'event rule drawn');
+  // The charts' metric menus come from the registry's catalogue (field `chart`), with its titles.
+  const menu = (id) => page.$$eval(`#${id} option`, (o) => o.map((x) => `${x.value}=${x.textContent}`));
+  const catalogue = (chart) => page.evaluate((c) => window.ARENA_DATA.metrics
+    .filter((m) => m.chart === c && window.ARENA_DATA.pairs.some((p) => p.series && p.series[m.name]))
+    .map((m) => `${m.name}=${m.title}`), chart);
+  assert.deepEqual(await menu('time-error-metric'), await catalogue('error'));
+  assert.deepEqual(await menu('time-flicker-metric'), await catalogue('temporal'));
+  assert.ok((await menu('time-error-metric')).includes('dssim=1 − SSIM'), (await menu('time-error-metric')).join(', '));
+  assert.ok((await menu('time-flicker-metric')).includes('tRmae=tRMAE'), (await menu('time-flicker-metric')).join(', '));
   assert.ok((await page.locator('#ghosting-body table tbody tr').count()) === okHere, 'ghosting table: one row per pair');
   // Every lag energy with its 95% interval (or why it has none); "best" = ranked first, ties included.
   const lagCells = await page.$$eval('#ghosting-body table.ghost-table tbody tr', (rows) => rows.map((r) => r.cells[1].textContent));

@@ -15,7 +15,7 @@
 #include "core/json_reader.hpp"
 #include "metrics/evaluator.hpp"
 #include "metrics/metric_registry.hpp"
-#include "tests/evaluation_golden.hpp"
+#include "tests/evaluator_golden.hpp"
 #include "tests/test_util.hpp"
 
 namespace arena {
@@ -103,6 +103,20 @@ TEST(MetricRegistry, EveryMetricIsDeclaredOnceAndCompletely) {
       EXPECT_TRUE(m->ranked) << m->name;
     }
   }
+  // The report's default columns and its per-frame charts' menus are read from here too.
+  std::set<ReportChart> charts;
+  for (const MetricDefinition* m : metricCatalog()) {
+    charts.insert(m->chart);
+    if (m->chart != ReportChart::None) {
+      EXPECT_FALSE(m->title.empty()) << m->name << " is charted without a title";
+    }
+    if (m->reportColumn) {
+      EXPECT_NE(m->reads, MetricInput::Run) << m->name << ": run facts have their own columns";
+    }
+  }
+  EXPECT_TRUE(charts.count(ReportChart::Error) && charts.count(ReportChart::Temporal));
+  EXPECT_TRUE(requireMetric("relMse", "test").reportColumn);
+  EXPECT_EQ(metricCatalogJson()[0]["title"], "relMSE");
   // The directions that the catalogue, compare, statistics and the report all read from here.
   EXPECT_TRUE(requireMetric("relMse", "test").lowerIsBetter());
   EXPECT_FALSE(requireMetric("ssim", "test").lowerIsBetter());
