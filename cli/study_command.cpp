@@ -10,6 +10,7 @@
 
 #include "core/capture.hpp"
 #include "core/error.hpp"
+#include "core/stage_clock.hpp"
 #include "cli/commands.hpp"
 #include "cli/printout.hpp"
 #include "cli/render_options.hpp"
@@ -136,12 +137,18 @@ void addStudyCommand(CLI::App& app) {
     ro.run = *out;
     ro.out = *report;
     progress->step("writing the report");
-    ReportSummary rs = writeReport(ro);
+    ReportSummary rs = [&] {
+      StageTimer timer(Stage::Report);
+      return writeReport(ro);
+    }();
     progress->clear();
     if (*verbose) printStudyTables(std::cout, results);
     const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     printStudySummary(std::cout, results,
                       {*out + "/results.json", *out + "/results.db", rs.index.string(), sec});
+    // Where the time went (rendering, references, denoisers, metrics, ...): what a study's cost is
+    // made of on this machine (docs/performance.md).
+    std::cout << "Time by stage: " << stageBreakdownLine(sec) << "\n";
     auto failed = failedPairs(results);
     if (!failed.empty()) {
       std::cerr << failed.size() << " pair(s) failed:\n";

@@ -10,6 +10,7 @@
 #include "core/display.hpp"
 #include "core/env_info.hpp"
 #include "core/error.hpp"
+#include "core/stage_clock.hpp"
 #include "harness/image_files.hpp"
 #include "harness/reference_quality.hpp"
 #include "metrics/capture_checks.hpp"
@@ -59,6 +60,7 @@ std::vector<int> chooseFrames(const SequenceInfo& info, int warmup) {
 // A capture is validated before anything runs on it (metrics/capture_checks.hpp): `validation`
 // receives the checks, and a hard failure refuses the scene with the checks' names and numbers.
 std::unique_ptr<SceneData> loadScene(const fs::path& dir, const EvaluationOptions& options, json* validation = nullptr) {
+  StageTimer timer(Stage::Loading);
   Sequence sequence = Sequence::open(dir);
   EvaluationInput input = readSequenceForEvaluation(sequence);
   if (sequence.isCapture()) {
@@ -140,6 +142,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
             // (asvgf), each at the rate it rendered at.
             if (run && (run->readsLowres() || run->readsGradients())) facts.extraRaysPerPixel = f.extraRaysPerPixel;
             facts.extraPathsPerSecond = run && run->readsLowres() ? info.lowresPathsPerSecond : info.inputPathsPerSecond;
+            StageTimer metrics(Stage::Metrics);  // inside the denoiser's run: its time is taken out of it
             evaluation.add(f.frame, f.color, facts);
             selfTimed |= f.selfTimed;
             for (const auto& [channel, n] : f.sanitized) sanitized[channel] += n;
@@ -148,17 +151,24 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
             for (const PassStats& p : f.passes) frame.push_back({p.name, p.milliseconds, p.tapsPerPixel});
             const bool chosen = std::find(sd.chosenFrames.begin(), sd.chosenFrames.end(), f.frame) != sd.chosenFrames.end();
             if (keepImages && (keepAll || chosen)) {
+              StageTimer images(Stage::Report);
               writeFrameImages(imageDir, f.frame, evaluation.lastImages());
               if (keepAll) writeOutputExr(imageDir, f, req, params);
             }
           };
-  if (run)
-    run->run([&](int t) -> const LayerSet& { return sd.evaluation.frame(t); }, onFrame);
-  else
-    runCapturedOutput(sd.sequence, captured, onFrame);
+  {
+    StageTimer denoisers(Stage::Denoisers);
+    if (run)
+      run->run([&](int t) -> const LayerSet& { return sd.evaluation.frame(t); }, onFrame);
+    else
+      runCapturedOutput(sd.sequence, captured, onFrame);
+  }
   json pair = {{"scene", info.scene}, {"denoiser", req.name}, {"label", req.label}, {"params", params.toJson()},
                {"status", "ok"}};
-  pair.update(evaluation.finish());
+  {
+    StageTimer metrics(Stage::Metrics);
+    pair.update(evaluation.finish());
+  }
   // First: what the inputs were matters before what the outputs measured.
   if (!sanitized.empty()) pair["warnings"].insert(pair["warnings"].begin(), sanitizedWarning(sanitized));
   json timing;
@@ -436,8 +446,11 @@ json runMatrix(const RunConfig& cfg) {
 }
 
 void finishRun(json& results, const RunConfig& cfg) {
-  results["statistics"] = analyseRun(results);
-  addReferenceQuality(results, cfg.warmup, cfg.referenceNotes);
+  {
+    StageTimer timer(Stage::Statistics);
+    results["statistics"] = analyseRun(results);
+    addReferenceQuality(results, cfg.warmup, cfg.referenceNotes);
+  }
   commitResults(cfg.out, results);
 }
 

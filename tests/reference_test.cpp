@@ -560,6 +560,8 @@ TEST(Reference, StudyRefinesReferencesThatMissTheGoal) {
   const auto [output, refined] = study("refined", "1000");
   EXPECT_NE(output.find("[refine] cornell_static: the study refined its references toward"), std::string::npos) << output;
   EXPECT_NE(output.find("running the refined scenes again"), std::string::npos) << output;
+  // Where its time went, stage by stage (core/stage_clock.hpp), after the summary.
+  EXPECT_TRUE(std::regex_search(output, std::regex("\nTime by stage: ([a-z]+ [0-9m.]+s, )*other [0-9m.]+s\n"))) << output;
   const nlohmann::json& q = refined["referenceQuality"];
   EXPECT_LT(q["floor"].get<double>(), plain["referenceQuality"]["floor"].get<double>() / 4) << q;
   EXPECT_TRUE(q["meets"].get<bool>()) << q;

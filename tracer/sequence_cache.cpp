@@ -12,6 +12,7 @@
 #include "core/error.hpp"
 #include "core/hash.hpp"
 #include "core/sequence.hpp"
+#include "core/stage_clock.hpp"
 
 namespace arena {
 
@@ -241,6 +242,7 @@ void shareReference(const fs::path& home, const fs::path& dir, int r) {
 fs::path refineSequence(const Scene& scene, const RenderSettings& settings, const fs::path& cacheRoot,
                         double targetRelMse, int maxSpp, const ProgressFn& progress, int fromFrame) {
   if (!(targetRelMse > 0)) throw Error("refine: --target must be a positive relMSE, got " + formatDouble(targetRelMse));
+  StageTimer timer(Stage::Refinement);
   const fs::path dir = sequenceDir(scene, settings, cacheRoot);
   if (!fs::exists(dir / "sequence.json"))
     throw Error("refine: " + scene.name + " has no rendered sequence for these settings at " + dir.string() +
@@ -284,6 +286,7 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
   if (shard.count < 1 || shard.index < 0 || shard.index >= shard.count)
     throw Error("--shard " + std::to_string(shard.index) + "/" + std::to_string(shard.count) +
                 ": expected i/n with 0 <= i < n");
+  StageTimer timer(Stage::Frames);  // the references inside it count as theirs
   const std::string hash = sequenceHash(scene, settings);
   const fs::path dir = sequenceDir(scene, settings, cacheRoot);
   if (!fs::is_directory(dir)) fs::create_directories(dir);
@@ -417,6 +420,7 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
       continue;
     }
     if (fs::exists(rp)) say("[" + scene.name + "] re-rendering " + rp.filename().string() + ": " + why);
+    StageTimer referenceTimer(Stage::References);
     auto t0 = std::chrono::steady_clock::now();
     ReferenceSums sums;
     RayCounts counts;
