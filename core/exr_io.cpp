@@ -9,7 +9,10 @@
 #include <ImfThreading.h>
 #include <half.h>
 
+#include <cerrno>
 #include <cstdint>
+#include <cstring>
+#include <fstream>
 #include <utility>
 
 #include "core/atomic_file.hpp"
@@ -85,6 +88,39 @@ static ExrAttributes attributesOf(const Imf::Header& header) {
   return out;
 }
 
+// The first header's attributes checked against the file before OpenEXR reads them: each is
+// "name\0type\0" + int32 size + size bytes, the list ends with an empty name. OpenEXR 3.1 allocates
+// (and, for a type it does not know, zero-fills) an attribute's declared size before reading it,
+// so a damaged size of up to 2 GiB in a file of a few hundred bytes costs seconds and gigabytes
+// before the read fails; here it is an error naming the file, the attribute and both sizes.
+static void checkExrAttributeSizes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path.string() + ": cannot open (" + std::strerror(errno) + ")");
+  in.seekg(0, std::ios::end);
+  const std::streamoff fileSize = in.tellg();
+  in.seekg(8);  // magic number and version field
+  auto readName = [&](std::string& out) {
+    out.clear();
+    for (char c; in.get(c);) {
+      if (c == '\0') return true;
+      if (out.size() >= 255) return false;  // longer than any name OpenEXR accepts: let it say so
+      out.push_back(c);
+    }
+    return false;
+  };
+  std::string name, type;
+  while (readName(name) && !name.empty()) {
+    if (!readName(type)) return;
+    int32_t size = 0;
+    if (!in.read(reinterpret_cast<char*>(&size), 4)) return;
+    const std::streamoff at = in.tellg();
+    if (size < 0 || std::streamoff(size) > fileSize - at)
+      throw Error(path.string() + ": header attribute '" + name + "' (" + type + ") declares " + std::to_string(size) +
+                  " bytes, but " + std::to_string(fileSize - at) + " remain in the file (a damaged header)");
+    in.seekg(size, std::ios::cur);
+  }
+}
+
 // The image size a data window declares, refused (naming the file and the size) beyond what any
 // frame this project reads can be: 65536 pixels a side and 2^28 pixels in all (a damaged header
 // would otherwise ask for exabytes, or overflow the int arithmetic of the size).
@@ -99,6 +135,7 @@ static std::pair<int, int> checkedSize(const fs::path& path, const Imath::Box2i&
 
 ExrContents readExr(const fs::path& path, const std::vector<LayerSpec>& specs) {
   if (!fs::exists(path)) throw Error(path.string() + ": file does not exist");
+  checkExrAttributeSizes(path);
   ExrContents out;
   try {
     Imf::InputFile file(path.c_str(), 1);
@@ -132,6 +169,7 @@ ExrContents readExr(const fs::path& path, const std::vector<LayerSpec>& specs) {
 }
 
 ExrAttributes readExrAttributes(const fs::path& path) {
+  checkExrAttributeSizes(path);
   try {
     Imf::InputFile file(path.c_str(), 1);
     return attributesOf(file.header());
@@ -142,6 +180,7 @@ ExrAttributes readExrAttributes(const fs::path& path) {
 
 ExrHeader readExrHeader(const fs::path& path) {
   if (!fs::exists(path)) throw Error(path.string() + ": file does not exist");
+  checkExrAttributeSizes(path);
   try {
     Imf::InputFile file(path.c_str(), 1);
     const auto [w, h] = checkedSize(path, file.header().dataWindow());

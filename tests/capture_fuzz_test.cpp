@@ -80,6 +80,23 @@ TEST(CaptureFuzz, AnExrDeclaringAnImpossibleSizeIsRefusedNamingTheFile) {
   EXPECT_NE(message.find("100000x4"), std::string::npos) << message;
 }
 
+// A header attribute whose size field claims 2 GiB: OpenEXR 3.1 would allocate and zero-fill it
+// before failing (seconds under the sanitizers); the size is checked against the file first.
+TEST(CaptureFuzz, AnExrAttributeLargerThanItsFileIsRefusedNamingIt) {
+  const fs::path dir = test::freshDir("capture_fuzz_attribute");
+  fuzz::writeSeedCapture(dir / "seed");
+  std::string frame = fuzz::readBytes(fuzz::captureFileOf(CaptureFile::Frame, dir / "seed"));
+  const std::string key = std::string("compression") + '\0' + "compression" + '\0';
+  const size_t at = frame.find(key);
+  ASSERT_NE(at, std::string::npos);
+  const int32_t huge = 0x7fffffff;
+  std::memcpy(&frame[at + key.size()], &huge, 4);
+  const std::string message = openError(dir / "seed", dir, CaptureFile::Frame, frame);
+  EXPECT_NE(message.find("frame_0001.exr: header attribute 'compression' (compression) declares 2147483647 bytes"),
+            std::string::npos)
+      << message;
+}
+
 TEST(CaptureFuzz, RandomMutationsOfEachFileOpenOrAreRejectedNamingAnError) {
   constexpr int kMutantsPerFile = 120;  // 5 files: 600 opens of a 6x4 capture, seconds in Release
   std::mt19937 rng(29);                 // fixed: the same mutants on every run
