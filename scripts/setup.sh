@@ -4,7 +4,13 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+# Each phase's wall time goes to stderr at the end (the study's breakdown, docs/performance.md).
+phase_start=$SECONDS
+phases=""
+phase() { phases="$phases $1 $((SECONDS - phase_start))s,"; phase_start=$SECONDS; }
+
 bash scripts/install_packages.sh
+phase packages
 
 # The report's npm packages (Vega, Vega-Lite, vega-embed; playwright-core for the browser test),
 # exactly as locked; again only when package-lock.json is newer than the installed tree.
@@ -13,11 +19,16 @@ if [ ! -d reports/node_modules ] || [ reports/package-lock.json -nt reports/node
   (cd reports && npm ci --no-audit --no-fund)
   touch reports/node_modules
 fi
+phase npm
 
 # The furniture models the scenes name ("assets:sweethome3d/<model>/..."), extracted from the
 # package's CC-0 archive into cache/assets/ (or $ARENA_ASSET_DIR); a no-op once they are there.
 python3 scripts/extract_assets.py
+phase assets
 
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
+phase configure
 # ARENA_TARGETS narrows the build (the study needs only `arena`; the tests need everything).
 cmake --build build -j"$(nproc)" --target ${ARENA_TARGETS:-all}
+phase build
+echo "setup:${phases%,}" >&2

@@ -11,6 +11,7 @@
 // gradients and one stored output with its times.
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
@@ -178,9 +179,16 @@ inline bool openMutatedCapture(const std::filesystem::path& seed, const std::fil
   const std::filesystem::path file = captureFileOf(kind, dir);
   writeBytes(file, bytes);
   struct Restore {  // even when the reader throws something the contract forbids
-    std::filesystem::path from, to;
-    ~Restore() { std::filesystem::copy_file(from, to, std::filesystem::copy_options::overwrite_existing); }
-  } restore{captureFileOf(kind, seed), file};
+    std::filesystem::path from, to, dir;
+    ~Restore() {  // never throws: a copy that fails drops the folder, and the next input copies it anew
+      std::error_code ec;
+      std::filesystem::copy_file(from, to, std::filesystem::copy_options::overwrite_existing, ec);
+      if (!ec) return;
+      std::fprintf(stderr, "capture fuzz: could not restore %s (%s); the folder is copied anew\n", to.c_str(),
+                   ec.message().c_str());
+      std::filesystem::remove_all(dir, ec);
+    }
+  } restore{captureFileOf(kind, seed), file, dir};
   return openCapture(dir, rejection);
 }
 
