@@ -510,16 +510,16 @@ TEST(Reference, RefinementPlanTakesTheCheapestScenesWithinTheBudget) {
     return info;
   };
   const std::map<std::string, SequenceInfo> sequences = {
-      // 1e-4 -> 9e-5: one round of 2^(1/4), 100 -> 118.9 spp on 100 pixels (a doubling would be 200).
+      // 1e-4 -> 9e-5: one round of sqrt(2), 100 -> 141.4 spp on 100 pixels (a doubling would be 200).
       {"cheap", sequence({0, 0, 0, 0}, {100}, {1e-4})},
-      // Reference 0 serves the warm-up frame only; reference 1 needs 14 rounds (11.3x), capped at 1000.
+      // Reference 0 serves the warm-up frame only; reference 1 needs eight rounds (16x), capped at 1000.
       {"dear", sequence({0, 1, 1, 1}, {100, 100}, {1e-2, 1e-3})},
       {"fine", sequence({0, 0, 0, 0}, {100}, {1e-5})}};
   const std::vector<ReferenceRefinement> plans = planReferenceRefinement(results, sequences, 1, 1000, 1.5);
   ASSERT_EQ(plans.size(), 2u);
   EXPECT_EQ(plans[0].scene, "cheap");
   EXPECT_DOUBLE_EQ(plans[0].targetRelMse, kRefineMargin * kReferenceQualityGoal * 1e-3);
-  const double cheapPaths = 100.0 * (100 * std::pow(2.0, 0.25) - 100);
+  const double cheapPaths = 100.0 * (100 * std::sqrt(2.0) - 100);
   EXPECT_DOUBLE_EQ(plans[0].predictedPaths, cheapPaths);
   EXPECT_DOUBLE_EQ(plans[0].budgetNeeded, cheapPaths / 40000);  // the references hold 400 spp x 100 pixels
   EXPECT_TRUE(plans[0].withinBudget);
@@ -529,7 +529,7 @@ TEST(Reference, RefinementPlanTakesTheCheapestScenesWithinTheBudget) {
   EXPECT_FALSE(plans[1].withinBudget);
   const std::string note = refinementNote(plans[1], 1.5);
   EXPECT_NE(note.find("not refined by the study"), std::string::npos) << note;
-  EXPECT_NE(note.find("`arena study --refine-budget 2.3`"), std::string::npos) << note;
+  EXPECT_NE(note.find("`arena study --refine-budget 2.4`"), std::string::npos) << note;
   EXPECT_NE(refinementNote(plans[0], 1.5).find("refined its references toward 9e-05"), std::string::npos);
   // A budget of 0 refines nothing; a scene without a sequence is not planned.
   for (const ReferenceRefinement& p : planReferenceRefinement(results, sequences, 1, 1000, 0)) EXPECT_FALSE(p.withinBudget);

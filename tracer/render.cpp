@@ -103,9 +103,6 @@ json RenderSettings::pixelSettings(const Scene& scene) const {
              {"referenceTile", referenceTile},
              {"preset", preset}};
   if (inputSeed != 0) px["inputSeed"] = inputSeed;  // absent by default: existing caches keep their hash
-  // The adaptive schedule's round growth decides a targeted reference's samples (2^(1/4) since
-  // issue 32; sqrt(2) before, when the key was absent). References without a target do not depend on it.
-  if (referenceRelError > 0) px["referenceRoundGrowth"] = kReferenceRoundGrowth;
   if (lowresFactor > 0) {
     px["lowresFactor"] = lowresFactor;
     px["lowresSpp"] = lowresSpp;

@@ -87,13 +87,9 @@ LayerSet referenceLayersFromSums(const ReferenceSums& sums);
 // How much each round of the adaptive schedule grows the frame's samples. A reference stops at the
 // first round that meets its target, so it overshoots the samples it needed by up to this factor:
 // (g - 1) / ln g on average for targets spread evenly in log, 1.44 for g = 2 (the first version's
-// doubling), 1.21 for sqrt(2) (the second) and 1.09 for 2^(1/4) (since issue 32). The growth is the
-// same in every round, whatever the target, so refining a reference to a stricter target continues
-// the very schedule a render at that target takes (`arena refine` gives the same bits); a round
-// sized to land on the target would break that. Tile counts stay powers of two (whole Sobol nets):
-// a round doubles the tiles whose doubling lowers the estimate most, about 1 / (g - 1) rounds per
-// doubling.
-inline constexpr double kReferenceRoundGrowth = 1.189207115002721;  // 2^(1/4)
+// doubling) and 1.21 for sqrt(2). Tile counts stay powers of two (whole Sobol nets): a round doubles
+// the tiles whose doubling lowers the estimate most, about 1 / (g - 1) rounds per doubling.
+inline constexpr double kReferenceRoundGrowth = 1.4142135623730951;
 // The next round of the adaptive schedule: tile counts for `growth` x the frame's samples, minimising
 // the estimated relMSE under that budget. With e_T the tile's share of the estimate at its n_T
 // samples per replicate and P_T its pixels, error ~ u_T / n with u_T = e_T n_T, so the optimum is
