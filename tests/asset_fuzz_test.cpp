@@ -5,6 +5,7 @@
 // naming the file; under ARENA_SANITIZE this also catches memory errors and undefined behaviour.
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <random>
 
 #include "core/atomic_file.hpp"
@@ -75,6 +76,22 @@ TEST(AssetFuzz, FindingsOfTheFuzzerAreClearErrorsOrFallbacks) {
   // unit normals (importAssetOrReject checks them).
   EXPECT_TRUE(fuzz::importAssetOrReject(AssetInput::MeshObj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nvn 1e39 0 0\nf 1//1 2//2 3//1\n", "", dir));
   EXPECT_TRUE(fuzz::importAssetOrReject(AssetInput::ObjWithMtl, "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nf 1//1 2//1 3//1\n", "", dir));
+  // A .glb chunk declaring 4 GiB: assimp 5.2 allocated it before checking (the fuzzer's OOM); now
+  // the container's sizes are checked first, naming the file and the chunk.
+  {
+    const Seed glb = readSeeds()[3];  // a copy: the vector is a temporary
+    ASSERT_EQ(glb.kind, AssetInput::Glb);
+    std::string damaged = glb.main;
+    const uint32_t huge = 4294965827u;
+    std::memcpy(&damaged[12], &huge, 4);
+    const std::string message = error(AssetInput::Glb, damaged, "");
+    EXPECT_NE(message.find((dir / "a.glb").string() + ": binary glTF chunk 0 declares 4294965827 bytes"),
+              std::string::npos)
+        << message;
+    std::memcpy(&damaged[8], &huge, 4);  // and a total length beyond the file
+    EXPECT_NE(error(AssetInput::Glb, damaged, "").find("binary glTF header declares 4294965827 bytes"), std::string::npos)
+        << error(AssetInput::Glb, damaged, "");
+  }
   // A node transform beyond float range places its triangles at infinity: an error naming the node.
   json gltf = json::parse(readSeeds()[1].main);
   gltf["nodes"][0]["translation"] = {1e39, 0, 0};
