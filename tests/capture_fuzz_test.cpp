@@ -68,7 +68,7 @@ TEST(CaptureFuzz, AnExrDeclaringAnImpossibleSizeIsRefusedNamingTheFile) {
   fuzz::writeSeedCapture(dir / "seed");
   // The data window of a 6x4 image (min 0,0 max 5,3) rewritten to max.x = 99999: OpenEXR accepts
   // the header (its line-offset table is unchanged), and a wider window would ask for any memory.
-  std::string frame = fuzz::readBytes(fuzz::captureFileOf(CaptureFile::Frame, dir / "seed"));
+  std::string frame = readText(fuzz::captureFileOf(CaptureFile::Frame, dir / "seed"));
   const std::string key = std::string("dataWindow") + '\0' + "box2i" + '\0';
   const size_t at = frame.find(key);
   ASSERT_NE(at, std::string::npos);
@@ -85,7 +85,7 @@ TEST(CaptureFuzz, AnExrDeclaringAnImpossibleSizeIsRefusedNamingTheFile) {
 TEST(CaptureFuzz, AnExrAttributeLargerThanItsFileIsRefusedNamingIt) {
   const fs::path dir = test::freshDir("capture_fuzz_attribute");
   fuzz::writeSeedCapture(dir / "seed");
-  std::string frame = fuzz::readBytes(fuzz::captureFileOf(CaptureFile::Frame, dir / "seed"));
+  std::string frame = readText(fuzz::captureFileOf(CaptureFile::Frame, dir / "seed"));
   const std::string key = std::string("compression") + '\0' + "compression" + '\0';
   const size_t at = frame.find(key);
   ASSERT_NE(at, std::string::npos);
@@ -105,7 +105,7 @@ TEST(CaptureFuzz, RandomMutationsOfEachFileOpenOrAreRejectedNamingAnError) {
   int opened = 0, rejected = 0;
   for (int k = 0; k < fuzz::kCaptureFileKinds; ++k) {
     const auto kind = CaptureFile(k);
-    const std::string seed = fuzz::readBytes(fuzz::captureFileOf(kind, dir / "seed"));
+    const std::string seed = readText(fuzz::captureFileOf(kind, dir / "seed"));
     for (int i = 0; i < kMutantsPerFile; ++i) {
       const std::string mutant =
           kind == CaptureFile::Description

@@ -16,6 +16,7 @@
 #include "tracer/asset.hpp"
 #include "tracer/scene.hpp"
 #include "tracer/scene_state.hpp"
+#include "tests/fuzz/work_dir.hpp"
 
 namespace arena::fuzz {
 
@@ -38,12 +39,6 @@ inline std::filesystem::path mainFileOf(AssetInput kind, const std::filesystem::
       break;
   }
   return dir / "m.obj";
-}
-
-inline void writeBytes(const std::filesystem::path& file, const std::string& bytes) {
-  std::ofstream out(file, std::ios::binary | std::ios::trunc);
-  out.write(bytes.data(), std::streamsize(bytes.size()));
-  if (!out) throw std::runtime_error("fuzz: cannot write " + file.string());
 }
 
 // The scene that places the file: an asset object, or a mesh object.

@@ -19,10 +19,12 @@
 #include <vector>
 
 #include "core/capture.hpp"
+#include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/sequence.hpp"
 #include "metrics/capture_checks.hpp"
 #include "metrics/evaluator.hpp"
+#include "tests/fuzz/work_dir.hpp"
 
 namespace arena::fuzz {
 
@@ -129,18 +131,6 @@ inline void writeSeedCapture(const std::filesystem::path& dir) {
                  {"cameras", cameras},
                  {"reference", {{"ofFrame", ofFrame}}},
                  {"outputs", {{"ext", {{"milliseconds", milliseconds}, {"device", "fuzz"}}}}}});
-}
-
-inline std::string readBytes(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw std::runtime_error("fuzz: cannot read " + file.string());
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-inline void writeBytes(const std::filesystem::path& file, const std::string& bytes) {
-  std::ofstream out(file, std::ios::binary | std::ios::trunc);
-  out.write(bytes.data(), std::streamsize(bytes.size()));
-  if (!out) throw std::runtime_error("fuzz: cannot write " + file.string());
 }
 
 // Everything a run does with a capture: open it, read every frame, reference, gradient file and

@@ -35,7 +35,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
       const auto kind = arena::fuzz::CaptureFile(k);
       arena::fuzz::writeBytes(std::filesystem::path(seeds) / ("seed_" + std::to_string(k)),
                               std::string(1, char(k)) +
-                                  arena::fuzz::readBytes(arena::fuzz::captureFileOf(kind, seedCapture())));
+                                  arena::readText(arena::fuzz::captureFileOf(kind, seedCapture())));
     }
   }
   return 0;
