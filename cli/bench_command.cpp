@@ -17,7 +17,7 @@ void printLine(const std::string& line) { std::cout << line << std::endl; }
 }  // namespace
 
 void addBenchCommand(CLI::App& app) {
-  auto* bench = app.add_subcommand("bench", "Benchmarks (tracer; denoise; reference; gpu-model)");
+  auto* bench = app.add_subcommand("bench", "Benchmarks (tracer; denoise; reference; gpu-model; gpu-measured)");
   bench->require_subcommand(1);
   addBenchReferenceCommand(bench);
   auto* tracer = bench->add_subcommand("tracer", "Tracer throughput: Mrays/s and Mpaths/s, Cornell box, 1 spp");
@@ -113,6 +113,24 @@ void addBenchCommand(CLI::App& app) {
     b.denoisers = g->denoisers == "all" ? DenoiserRegistry::instance().names() : splitList(g->denoisers);
     const nlohmann::json out = benchGpuModel(b, printLine);
     if (!g->json.empty()) writeTextAtomically(g->json, out.dump(2));
+  });
+
+  auto* gpuMeasured = bench->add_subcommand(
+      "gpu-measured",
+      "The cost model judged on kernels timed on a real GPU (bench/gpu/pass_timing.cu's JSON; "
+      "docs/gpu-cost.md)");
+  struct GpuMeasuredOptions {
+    std::string file, device, json;
+  };
+  auto gm = std::make_shared<GpuMeasuredOptions>();
+  gpuMeasured->add_option("file", gm->file, "JSON printed by bench/gpu/pass_timing.cu")->required();
+  gpuMeasured->add_option("--device", gm->device,
+                          "Specification to price with (TITAN RTX, RTX 4080, PS5, H200); default: the one "
+                          "the file's device names");
+  gpuMeasured->add_option("--json", gm->json, "Write results to this JSON file")->default_str("none");
+  gpuMeasured->callback([gm] {
+    const nlohmann::json out = benchGpuMeasured(gm->file, gm->device, printLine);
+    if (!gm->json.empty()) writeTextAtomically(gm->json, out.dump(2));
   });
 }
 

@@ -20,6 +20,9 @@ const std::vector<GpuDevice>& gpuDevices() {
       {"PS5", 448.0, 144 * 2.23,
        "Sony (M. Cerny, 'The Road to PS5', 2020): 256-bit GDDR6 at 14 Gbps = 448 GB/s; 36 RDNA2 "
        "CUs x 4 TMUs, up to 2.23 GHz"},
+      {"H200", 4800.0, 528 * 1.98,
+       "NVIDIA H200 SXM datasheet: 4.8 TB/s HBM3e; GH100 as in H100 SXM5 (Hopper whitepaper): "
+       "132 SMs x 4 = 528 texture units, 1980 MHz boost (nvidia-smi's max SM clock there)"},
   };
   return devices;
 }

@@ -23,7 +23,7 @@ struct GpuDevice {
   double texelRateGTs = 0;  // 32-bit bilinear texels per second, 1e9 (TMUs x boost clock)
   std::string source;       // where the two numbers come from
 };
-const std::vector<GpuDevice>& gpuDevices();  // TITAN RTX, RTX 4080, PS5
+const std::vector<GpuDevice>& gpuDevices();  // TITAN RTX, RTX 4080, PS5, H200
 const GpuDevice& gpuDevice(const std::string& name);  // throws an Error naming the known ones
 
 // The fixed term, two forms fitted alike and both reported (docs/gpu-cost.md): per dispatch
@@ -59,6 +59,13 @@ PassTraffic scaleGather(const PassTraffic& traffic, double factor);
 // `copies` dispatches of the same pass in a row.
 PassTraffic repeatPass(const PassTraffic& traffic, int copies);
 
+// The model every prediction outside `arena bench gpu-model` uses: the bench's fit on the
+// box/à-trous experiment (k, c), stored so that a study need not render 1080p frames to fit it
+// (the bench prints whether its fit still gives these), with the fixed term per thread -- the
+// form the measured set (bench/gpu/pass_timing.cu on an H200, docs/gpu-cost.md) chose, a set the
+// fit never saw.
+GpuCostModel boxAtrousModel(FixedCost fixed = FixedCost::PerThread);
+
 struct FitPoint {
   std::string name;
   PassTraffic traffic;
@@ -80,5 +87,26 @@ struct GpuModelBench {
   int width = 1920, height = 1080, frames = 5;  // the last counted: h >= 4 by then
 };
 nlohmann::json benchGpuModel(const GpuModelBench& bench, const ProgressFn& progress);
+
+// `arena bench gpu-measured FILE`: the kernels of a measured set (the JSON that
+// bench/gpu/pass_timing.cu prints) priced by the model on `device` and compared with their
+// measured median, for both forms of the fixed term. Their traffic is counted with the blocks
+// and the recorder the denoisers use (the SVGF step by atrousIteration itself).
+struct MeasuredKernel {
+  std::string kernel;
+  int width = 0, height = 0;
+  double medianMs = 0;
+};
+struct MeasuredSet {
+  std::string device;  // as the GPU named itself
+  std::vector<MeasuredKernel> rows;
+};
+// Throws an Error naming the file, the row and the field that is missing or wrong.
+MeasuredSet readMeasuredSet(const std::string& path);
+// Throws an Error naming a kernel it does not know.
+PassTraffic measuredKernelTraffic(const std::string& kernel, int width, int height);
+// `device`: a name of gpuDevices(); empty: the one whose name the file's device contains.
+nlohmann::json benchGpuMeasured(const std::string& path, const std::string& device,
+                                const ProgressFn& progress);
 
 }  // namespace arena

@@ -1,9 +1,15 @@
-// The cost model's arithmetic (harness/gpu_cost.hpp). No timings here: the model's validation
-// against published numbers is `arena bench gpu-model` (docs/gpu-cost.md).
+// The cost model's arithmetic (harness/gpu_cost.hpp) and the measured set's reading and counting.
+// No timings here: the model's validation against published numbers is `arena bench gpu-model`,
+// against timings measured on a GPU `arena bench gpu-measured` (docs/gpu-cost.md).
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <fstream>
+
+#include "core/error.hpp"
 #include "denoisers/common/gpu_traffic.hpp"
 #include "harness/gpu_cost.hpp"
+#include "test_util.hpp"
 
 namespace arena {
 namespace {
@@ -66,6 +72,122 @@ TEST(GpuCostModel, SpearmanAndSignalMerging) {
   EXPECT_DOUBLE_EQ(both.bytesRead(), 16.0 * (4 + 2 * 8));
   EXPECT_DOUBLE_EQ(scaleGather(a, 25.0 / 9.0).fetches(), 2.0 * 25.0 * 16.0);
   EXPECT_EQ(repeatPass(a, 3).dispatches.size(), 3u);
+}
+
+// The stored model is the bench's fit of the box/à-trous experiment: the counted à-trous iteration
+// (docs/gpu-cost.md: 38 B read, 10 B written, 46 fetches and 91 fetch cycles per pixel, one
+// full-screen dispatch) fitted on the six published points gives it back, in both forms.
+TEST(GpuCostModel, TheStoredModelIsTheFitOfTheBoxAtrousExperiment) {
+  PassTraffic iteration;
+  {
+    TrafficScope scope(&iteration);
+    const int w = 1920, h = 1080;
+    gpu::dispatch(w, h);
+    gpu::read(GpuBuffer{"position", GpuFormat::RGBA32Float}, w, h, 9);  // 16 B, 36 cycles
+    gpu::read({gpu_buffers::kRadiance, gpu_buffers::kLobes}, w, h, 9);  // 16 B, 36 cycles
+    gpu::read({gpu_buffers::kMeshId, gpu_buffers::kVariance}, w, h, 9);  // 4 B, 18 cycles
+    gpu::read(gpu_buffers::kFilteredVariance, w, h, 1);                 // 2 B, 1 cycle
+    gpu::write({gpu_buffers::kRadiance, gpu_buffers::kVariance}, w, h);  // 10 B
+  }
+  const double px = 1920.0 * 1080.0;
+  ASSERT_DOUBLE_EQ(iteration.bytesRead() / px, 38.0);
+  ASSERT_DOUBLE_EQ(iteration.fetches() / px, 46.0);
+  ASSERT_DOUBLE_EQ(iteration.fetchCycles() / px, 91.0);
+  const std::vector<FitPoint> points = {{"3x3 box", iteration, 0.52},
+                                        {"A-Trous x1", iteration, 0.42},
+                                        {"7x7 box", scaleGather(iteration, 49.0 / 9.0), 1.65},
+                                        {"A-Trous x2", repeatPass(iteration, 2), 0.86},
+                                        {"15x15 box", scaleGather(iteration, 225.0 / 9.0), 7.20},
+                                        {"A-Trous x3", repeatPass(iteration, 3), 1.16}};
+  for (FixedCost form : {FixedCost::PerDispatch, FixedCost::PerThread}) {
+    const GpuCostModel fit = fitModel(points, gpuDevice("TITAN RTX"), form);
+    const GpuCostModel stored = boxAtrousModel(form);
+    EXPECT_NEAR(fit.fetchEfficiency, stored.fetchEfficiency, 1e-9);
+    EXPECT_NEAR(fit.dispatchMs, stored.dispatchMs, 1e-9);
+    EXPECT_EQ(stored.fixed, form);
+  }
+  EXPECT_EQ(boxAtrousModel().fixed, FixedCost::PerThread);  // the measured set's choice
+}
+
+// The kernels of bench/gpu/pass_timing.cu counted as the CUDA code moves them: the SVGF step by the
+// very block the denoisers use (the hand count of gpu_traffic_test), a box, a format.
+TEST(GpuMeasured, KernelsAreCountedAsTheCudaKernelsMoveThem) {
+  const PassTraffic svgf = measuredKernelTraffic("svgf-atrous-5x5-step8", 32, 16);
+  const double px = 32.0 * 16.0;
+  EXPECT_EQ(svgf.dispatches.size(), 1u);
+  EXPECT_DOUBLE_EQ(svgf.bytesRead() / px, 30.0);
+  EXPECT_DOUBLE_EQ(svgf.bytesWritten() / px, 10.0);
+  EXPECT_DOUBLE_EQ(svgf.fetches() / px, 127.0);
+  EXPECT_DOUBLE_EQ(svgf.fetchCycles() / px, 153.0);
+  const PassTraffic box = measuredKernelTraffic("box-7x7", 20, 10);
+  EXPECT_DOUBLE_EQ(box.fetches() / 200.0, 49.0);
+  EXPECT_DOUBLE_EQ((box.bytesRead() + box.bytesWritten()) / 200.0, 16.0);
+  EXPECT_DOUBLE_EQ(measuredKernelTraffic("copy-1x1", 20, 10).fetches() / 200.0, 1.0);
+  const PassTraffic wide = measuredKernelTraffic("format-7x7-R32G32B32A32_FLOAT", 20, 10);
+  EXPECT_DOUBLE_EQ(wide.bytesRead() / 200.0, 16.0);
+  EXPECT_DOUBLE_EQ(wide.fetchCycles() / 200.0, 4.0 * 49.0);
+  EXPECT_DOUBLE_EQ(measuredKernelTraffic("format-7x7-R8_UINT", 20, 10).fetchCycles() / 200.0, 49.0);
+}
+
+void writeFile(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream(path) << text;
+}
+
+std::string errorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(GpuMeasured, BadFilesAndKernelsAreErrorsNamingWhatIsWrong) {
+  const auto dir = test::freshDir("gpu_measured_contract");
+  const std::string row = R"({"kernel": "box-3x3", "width": 64, "height": 32, "medianMs": 0.01})";
+  auto file = [&](const std::string& name, const std::string& text) {
+    writeFile(dir / name, text);
+    return (dir / name).string();
+  };
+  EXPECT_NE(errorOf([&] { readMeasuredSet(file("no_time.json", R"({"device": "X", "rows": [{"kernel": "box-3x3", "width": 64, "height": 32}]})")); })
+                .find("medianMs"),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] { readMeasuredSet(file("negative.json", R"({"device": "X", "rows": [{"kernel": "box-3x3", "width": 64, "height": 32, "medianMs": -1}]})")); })
+                .find("positive time"),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] { readMeasuredSet(file("empty.json", R"({"device": "X", "rows": []})")); }).find("empty.json"),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] { readMeasuredSet(file("typo.json", R"({"device": "X", "rowz": [], "rows": [)" + row + "]}")); })
+                .find("rowz"),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] { measuredKernelTraffic("gaussian-9x9", 8, 8); }).find("gaussian-9x9"), std::string::npos);
+  EXPECT_NE(errorOf([&] { measuredKernelTraffic("format-7x7-BC7", 8, 8); }).find("BC7"), std::string::npos);
+  const std::string unknownDevice = file("unknown_device.json", R"({"device": "Some GPU", "rows": [)" + row + "]}");
+  EXPECT_NE(errorOf([&] { benchGpuMeasured(unknownDevice, "", [](const std::string&) {}); }).find("Some GPU"),
+            std::string::npos);
+}
+
+// Measured times made by the per-thread model itself: that form fits them exactly, the other not,
+// and the bench says so.
+TEST(GpuMeasured, TheFormThatMadeTheTimesIsTheOneChosen) {
+  const auto dir = test::freshDir("gpu_measured_choice");
+  const GpuCostModel perThread = boxAtrousModel(FixedCost::PerThread);
+  std::string rows;
+  for (const char* kernel : {"svgf-atrous-5x5-step1", "box-15x15", "copy-1x1"})
+    for (int w : {1920, 240}) {
+      const int h = w * 9 / 16;
+      const double ms = predictPass(measuredKernelTraffic(kernel, w, h), gpuDevice("H200"), perThread).totalMs();
+      rows += std::string(rows.empty() ? "" : ",") + R"({"kernel": ")" + kernel + R"(", "width": )" +
+              std::to_string(w) + R"(, "height": )" + std::to_string(h) + R"(, "medianMs": )" + std::to_string(ms) + "}";
+    }
+  const auto path = dir / "made.json";
+  writeFile(path, R"({"device": "NVIDIA H200", "rows": [)" + rows + "]}");
+  const nlohmann::json out = benchGpuMeasured(path.string(), "", [](const std::string&) {});
+  EXPECT_EQ(out["pricedAs"], "H200");
+  EXPECT_EQ(out["chosenForm"], "per thread");
+  EXPECT_LT(out["forms"][1]["residual"].get<double>(), 1e-6);  // std::to_string keeps 6 decimals
+  EXPECT_EQ(out["forms"][1]["within2x"], 6);
+  EXPECT_GT(out["forms"][0]["residual"].get<double>(), 1.0);
 }
 
 }  // namespace
