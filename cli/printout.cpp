@@ -4,8 +4,10 @@
 #include <cmath>
 #include <cstdio>
 #include <iomanip>
+#include <map>
 #include <sstream>
 
+#include "harness/gpu_cost.hpp"
 #include "harness/reference_quality.hpp"
 #include "metrics/summary_value.hpp"
 
@@ -69,6 +71,48 @@ void printOverallRanking(std::ostream& out, const json& results) {
 }
 
 namespace {
+
+// The order of the methods by time: the CPU ms measured here against the GPU ms the cost model
+// predicts at 1080p on the first device (issue 31: does the order change?). Each label's time is
+// its mean over the scenes where both were measured.
+void printSpeedOrder(std::ostream& out, const json& results) {
+  std::map<std::string, std::pair<double, double>> sums;  // label -> (CPU, GPU) sums
+  std::map<std::string, int> counts;
+  std::vector<std::string> labels;
+  std::string device;
+  for (const json& p : results.value("pairs", json::array())) {
+    if (p.value("status", "") != "ok" || !p.contains("timing")) continue;
+    const json& t = p["timing"];
+    if (t.value("clock", "cpu") != "cpu" || !t.contains("gpuPredicted") || !t["gpuPredicted"].is_object()) continue;
+    const json devices = t["gpuPredicted"].value("devices", json::array());
+    if (devices.empty() || !devices[0].value("msMedian", json()).is_number() || !t.value("msMedian", json()).is_number())
+      continue;
+    device = devices[0].value("device", "");
+    const std::string label = p.value("label", "");
+    if (!counts.count(label)) labels.push_back(label);
+    sums[label].first += t["msMedian"].get<double>();
+    sums[label].second += devices[0]["msMedian"].get<double>();
+    ++counts[label];
+  }
+  if (labels.size() < 2) return;
+  std::vector<double> cpu, gpu;
+  for (const std::string& l : labels) {
+    cpu.push_back(sums[l].first / counts[l]);
+    gpu.push_back(sums[l].second / counts[l]);
+  }
+  auto order = [&](const std::vector<double>& ms) {
+    std::vector<size_t> idx(labels.size());
+    for (size_t i = 0; i < idx.size(); ++i) idx[i] = i;
+    std::stable_sort(idx.begin(), idx.end(), [&](size_t a, size_t b) { return ms[a] < ms[b]; });
+    std::string text;
+    for (size_t i : idx) text += (text.empty() ? "" : " < ") + labels[i] + " " + figureText(ms[i]);
+    return text;
+  };
+  out << "\nspeed, ms per frame (mean over scenes of each pair's median; the report charts each axis)\n"
+      << "  CPU measured here:                 " << order(cpu) << "\n"
+      << "  GPU predicted, " << device << " 1080p (a model): " << order(gpu) << "\n"
+      << "  rank correlation of the two orders (Spearman): " << figureText(spearman(cpu, gpu)) << "\n";
+}
 
 // The study's ranking with ties (metrics/statistics.hpp): per scene on relMSE, then overall on the
 // per-scene normalised score. Methods whose difference is not resolved at 95% share "tied with".
@@ -201,6 +245,7 @@ void printStudyTables(std::ostream& out, const json& results) {
 
 void printStudySummary(std::ostream& out, const json& results, const StudyOutputs& where) {
   printOverallRanking(out, results);
+  printSpeedOrder(out, results);
   printSceneWinners(out, results);
   // docs/references.md: said plainly, once, where a scene's references are too noisy to rank it.
   std::vector<std::string> missed;

@@ -5,6 +5,7 @@
 #include <numeric>
 
 #include "core/error.hpp"
+#include "metrics/summary.hpp"
 
 namespace arena {
 
@@ -107,6 +108,48 @@ PassTraffic repeatPass(const PassTraffic& traffic, int copies) {
     }
   }
   return out;
+}
+
+double predictFrameMs(const std::vector<PassStats>& passes, const GpuDevice& device,
+                      const GpuCostModel& model, double pixelFactor) {
+  // Passes in the order they first ran, each with its signals' traffic merged.
+  std::vector<std::pair<std::string, PassTraffic>> merged;
+  for (const PassStats& p : passes) {
+    const size_t slash = p.name.find('/');
+    const std::string name = slash == std::string::npos ? p.name : p.name.substr(slash + 1);
+    auto it = std::find_if(merged.begin(), merged.end(), [&](const auto& m) { return m.first == name; });
+    if (it == merged.end()) merged.push_back({name, p.traffic});
+    else it->second = mergeSignals(it->second, p.traffic);
+  }
+  double ms = 0;
+  for (const auto& [name, traffic] : merged)
+    if (!traffic.empty()) ms += predictPass(scaleTraffic(traffic, pixelFactor), device, model).totalMs();
+  return ms;
+}
+
+GpuFrameCost::GpuFrameCost(int width, int height)
+    : pixelFactor_(1920.0 * 1080.0 / (double(width) * double(height))), ms_(gpuDevices().size()) {}
+
+void GpuFrameCost::add(const std::vector<PassStats>& passes) {
+  for (const PassStats& p : passes) counted_ = counted_ || !p.traffic.empty();
+  for (size_t d = 0; d < gpuDevices().size(); ++d)
+    ms_[d].push_back(predictFrameMs(passes, gpuDevices()[d], boxAtrousModel(), pixelFactor_));
+}
+
+nlohmann::json GpuFrameCost::summary(int warmup) const {
+  if (!counted_) return nullptr;
+  nlohmann::json devices = nlohmann::json::array();  // in gpuDevices()'s order
+  for (size_t d = 0; d < gpuDevices().size(); ++d) {
+    const Summary s = summarize(ms_[d], warmup);
+    devices.push_back({{"device", gpuDevices()[d].name}, {"msMedian", s.median}, {"msP5", s.p5}, {"msP95", s.p95},
+                       {"msMean", s.mean}});
+  }
+  const GpuCostModel m = boxAtrousModel();
+  return {{"resolution", {1920, 1080}},
+          {"model", "max(bytes / bandwidth, k x fetch cycles / texel rate) + c x threads / 1920x1080; k = " +
+                        std::to_string(m.fetchEfficiency).substr(0, 5) + ", c = " + std::to_string(m.dispatchMs).substr(0, 5) +
+                        " ms (docs/gpu-cost.md)"},
+          {"devices", devices}};
 }
 
 GpuCostModel fitModel(const std::vector<FitPoint>& points, const GpuDevice& device,

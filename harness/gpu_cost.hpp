@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "denoisers/common/gpu_traffic.hpp"
+#include "denoisers/denoiser.hpp"
 #include "tracer/render.hpp"
 
 namespace arena {
@@ -65,6 +66,29 @@ PassTraffic repeatPass(const PassTraffic& traffic, int copies);
 // form the measured set (bench/gpu/pass_timing.cu on an H200, docs/gpu-cost.md) chose, a set the
 // fit never saw.
 GpuCostModel boxAtrousModel(FixedCost fixed = FixedCost::PerThread);
+
+// One frame of a denoiser priced: `passes` as a run reports them (each signal's instance its own
+// list, or one list with "signal/pass" names), every pass's signals merged into one dispatch
+// (mergeSignals: the G-buffer read once), scaled by `pixelFactor`, priced and summed.
+double predictFrameMs(const std::vector<PassStats>& passes, const GpuDevice& device,
+                      const GpuCostModel& model, double pixelFactor = 1.0);
+
+// The study's GPU axis (docs/gpu-cost.md, "In a study"): each frame's passes priced at 1920x1080
+// on every known device with boxAtrousModel(). The counts come from the sequence's resolution and
+// are scaled (scaleTraffic); taps that depend on the data are those of this sequence.
+class GpuFrameCost {
+ public:
+  GpuFrameCost(int width, int height);
+  void add(const std::vector<PassStats>& passes);
+  // {"resolution", "model", "devices": [{device, msMedian, msP5, msP95, msMean}]} over the frames
+  // after `warmup`; null when no pass counted any traffic (an external denoiser: nothing to price).
+  nlohmann::json summary(int warmup) const;
+
+ private:
+  double pixelFactor_;
+  bool counted_ = false;
+  std::vector<std::vector<double>> ms_;  // per device, per frame
+};
 
 struct FitPoint {
   std::string name;

@@ -152,18 +152,13 @@ double predictRow(const PublishedRow& row, const DenoiserRun& run, const GpuDevi
   return ms;
 }
 
-// The whole frame of a denoiser: every pass, both signals in one dispatch each.
+// The whole frame of a denoiser: every pass, both signals in one dispatch each (the study's GPU
+// axis prices the same way).
 double predictTotal(const DenoiserRun& run, const GpuDevice& device, const GpuCostModel& model,
                     double pixelFactor = 1.0) {
-  double ms = 0;
-  for (const PassStats& d : run.diffuse.passes) {
-    PassTraffic t = d.traffic;
-    for (const PassStats& s : run.specular.passes)
-      if (s.name == d.name) t = mergeSignals(t, s.traffic);
-    if (t.empty()) continue;
-    ms += predictPass(scaleTraffic(t, pixelFactor), device, model).totalMs();
-  }
-  return ms;
+  std::vector<PassStats> passes = run.diffuse.passes;
+  passes.insert(passes.end(), run.specular.passes.begin(), run.specular.passes.end());
+  return predictFrameMs(passes, device, model, pixelFactor);
 }
 
 json validate(const std::string& set, const std::vector<PublishedRow>& rows,
@@ -413,7 +408,8 @@ json benchGpuModel(const GpuModelBench& b, const ProgressFn& progress) {
   out["denoisers"] = json::array();
   progress("");
   progress(printed("per pass at %dx%d on %s: dispatches, sizes, bytes and fetches per pixel of the "
-                   "diffuse instance; GPU ms predicted and CPU ms measured here for both signals",
+                   "diffuse instance; GPU ms predicted (both signals in one dispatch per pass) and CPU ms measured "
+                   "here (both instances)",
                    b.width, b.height, device.name.c_str()));
   const double pixels = double(b.width) * double(b.height);
   std::vector<json> memoryRows;
@@ -427,8 +423,8 @@ json benchGpuModel(const GpuModelBench& b, const ProgressFn& progress) {
       const PassStats* s = nullptr;
       for (const PassStats& q : run.specular.passes)
         if (q.name == d.name) s = &q;
-      double ms = predictPass(d.traffic, device, model).totalMs() +
-                  (s ? predictPass(s->traffic, device, model).totalMs() : 0.0);
+      // Both signals in one dispatch, as the study's GPU axis prices them.
+      const double ms = predictPass(s ? mergeSignals(d.traffic, s->traffic) : d.traffic, device, model).totalMs();
       gpuMs += ms;
       const PassTraffic& t = d.traffic;
       std::string sizes;

@@ -11,6 +11,7 @@
 #include "core/env_info.hpp"
 #include "core/error.hpp"
 #include "core/stage_clock.hpp"
+#include "harness/gpu_cost.hpp"
 #include "harness/image_files.hpp"
 #include "harness/reference_quality.hpp"
 #include "metrics/capture_checks.hpp"
@@ -133,6 +134,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   NonFiniteCounts sanitized;  // over every frame, warm-up included: each one shaped the history
   std::vector<std::vector<PassTime>> passes;
   std::vector<double> ms;
+  GpuFrameCost gpuCost(info.width, info.height);  // the speed axis's predicted GPU ms (issue 31)
   const bool keepImages = cfg.keepFrames != "none";
   auto onFrame = [&](const DenoisedFrame& f) {
             FrameFacts facts;
@@ -149,6 +151,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
             ms.push_back(f.milliseconds);
             std::vector<PassTime>& frame = passes.emplace_back();
             for (const PassStats& p : f.passes) frame.push_back({p.name, p.milliseconds, p.tapsPerPixel});
+            if (run) gpuCost.add(f.passes);
             const bool chosen = std::find(sd.chosenFrames.begin(), sd.chosenFrames.end(), f.frame) != sd.chosenFrames.end();
             if (keepImages && (keepAll || chosen)) {
               StageTimer images(Stage::Report);
@@ -179,6 +182,8 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
     timing["msSource"] = selfTimed ? "reported by the process" : "harness wall clock";
     timing["clock"] = "cpu";
     if (selfTimed) timing["msWallMedian"] = summarize(evaluation.values("msWall"), cfg.warmup).median;
+    const json gpu = gpuCost.summary(cfg.warmup);
+    if (!gpu.is_null()) timing["gpuPredicted"] = gpu;
   } else {
     // A capture's recorded time is another device's: labelled, never mixed with the CPU times.
     const CaptureOutput& output = sd.sequence.capture().output(captured);

@@ -160,26 +160,87 @@ json speedScope(std::vector<json> points, bool needsComplete) {
   return {{"points", points}, {"front", front}, {"frontEqualPaths", frontEqual}};
 }
 
-// A pair's point on the chart: error with its bar, time with its p5-p95 bar, and the parameters.
-// The clock a pair's time comes from: "cpu" (this machine; built-ins, plugins, processes), "capture"
-// (another device's time recorded in a capture), "none". Only "cpu" times share the speed axis.
+// The time axes the speed chart offers (issue 31 section 4): "cpu", the time measured here;
+// "gpu:<device>", the GPU ms the cost model predicts at 1920x1080 on a named device from the
+// traffic the passes counted (harness/gpu_cost.hpp); "capture", another device's time recorded in
+// a capture. A pair is on an axis only when it has that time; each axis has its own Pareto front.
+struct SpeedClock {
+  std::string key, title;
+};
+
 std::string clockOf(const json& pair) { return pair.value("timing", json::object()).value("clock", "cpu"); }
 
-json speedPoint(const json& pair, const ErrorAxis& axis) {
-  if (clockOf(pair) != "cpu") return nullptr;
+std::vector<SpeedClock> speedClocks(const json& results, const std::vector<std::string>& scenes) {
+  const json env = results.value("environment", json::object());
+  std::set<std::string> sizes;
+  const json infos = results.value("scenes", json::object());
+  for (const std::string& scene : scenes)
+    if (infos.contains(scene) && infos[scene].contains("width") && infos[scene].value("source", "") != "capture")
+      sizes.insert(std::to_string(infos[scene]["width"].get<int>()) + "x" + std::to_string(infos[scene]["height"].get<int>()));
+  std::string where = env.value("cpu", std::string("this machine"));
+  if (env.contains("cores")) where += ", " + env["cores"].dump() + " threads";
+  for (const std::string& size : sizes) where += ", " + size;
+  std::vector<SpeedClock> clocks = {{"cpu", "CPU ms measured here (" + where + ")"}};
+  std::vector<std::string> devices, captureDevices;
+  for (const json& pair : results["pairs"]) {
+    const json timing = pair.value("timing", json::object());
+    if (timing.contains("gpuPredicted") && timing["gpuPredicted"].is_object()) {
+      for (const json& d : timing["gpuPredicted"].value("devices", json::array())) {
+        const std::string name = d.value("device", "");
+        if (!name.empty() && std::find(devices.begin(), devices.end(), name) == devices.end()) devices.push_back(name);
+      }
+    }
+    if (clockOf(pair) == "capture") {
+      const std::string d = timing.value("device", "");
+      if (std::find(captureDevices.begin(), captureDevices.end(), d) == captureDevices.end()) captureDevices.push_back(d);
+    }
+  }
+  for (const std::string& d : devices)
+    clocks.push_back({"gpu:" + d, "GPU ms predicted at 1920x1080 on " + d + " (a model: counted traffic, docs/gpu-cost.md)"});
+  if (!captureDevices.empty()) {
+    std::string list;
+    for (const std::string& d : captureDevices) list += (list.empty() ? "" : ", ") + (d.empty() ? "device not named" : d);
+    clocks.push_back({"capture", "GPU ms reported by the capture (" + list + ")"});
+  }
+  return clocks;
+}
+
+// A pair's time on a clock: median, p5 and p95; NaN where the pair has no time on it.
+struct ClockTime {
+  double ms = kNaN, lo = kNaN, hi = kNaN;
+};
+ClockTime timeOn(const json& pair, const std::string& clock) {
+  if (clock == "cpu" || clock == "capture") {
+    if (clockOf(pair) != clock) return {};
+    return {timingOf(pair, "msMedian"), timingOf(pair, "msP5"), timingOf(pair, "msP95")};  // msP5: results schema 2
+  }
+  const std::string device = clock.substr(4);  // "gpu:<device>"
+  const json timing = pair.value("timing", json::object());
+  if (!timing.contains("gpuPredicted") || !timing["gpuPredicted"].is_object()) return {};
+  json d;
+  for (const json& row : timing["gpuPredicted"].value("devices", json::array()))
+    if (row.is_object() && row.value("device", "") == device) d = row;
+  if (!d.is_object()) return {};
+  auto num = [&](const char* k) { return d.contains(k) && d[k].is_number() ? d[k].get<double>() : kNaN; };
+  return {num("msMedian"), num("msP5"), num("msP95")};
+}
+
+// A pair's point on the chart: error with its bar, time with its p5-p95 bar, and the parameters.
+json speedPoint(const json& pair, const ErrorAxis& axis, const std::string& clock) {
+  const ClockTime t = timeOn(pair, clock);
   json v = axisValue(pair, axis);
-  const double ms = msOf(pair);
-  if (v.is_null() || !std::isfinite(ms)) return nullptr;
+  if (v.is_null() || !std::isfinite(t.ms)) return nullptr;
   v["label"] = pair["label"];
   v["params"] = pair.value("params", json::object());
-  v["ms"] = ms;
-  const double lo = timingOf(pair, "msP5"), hi = timingOf(pair, "msP95");
-  v["msLo"] = std::isfinite(lo) ? json(lo) : json(nullptr);  // msP5: results schema 2
-  v["msHi"] = std::isfinite(hi) ? json(hi) : json(nullptr);
-  // Disocclusion rays (reengine): the paths a denoiser read from the low-resolution buffer and
-  // their equivalent tracing time, drawn as a separate bar beside its own time.
+  v["ms"] = t.ms;
+  v["msLo"] = std::isfinite(t.lo) ? json(t.lo) : json(nullptr);
+  v["msHi"] = std::isfinite(t.hi) ? json(t.hi) : json(nullptr);
+  // Disocclusion rays (reengine), gradient samples (asvgf): the paths a denoiser read beyond the
+  // frame's and, on the CPU axis, their equivalent tracing time, drawn as a bar beside its own
+  // time. The model prices no tracing, so a GPU axis keeps only the "+paths" mark.
   if (pair.contains("summary"))
     for (const char* key : {"tracingMs", "extraRaysPerPixel"}) {
+      if (clock != "cpu" && std::string(key) == "tracingMs") continue;
       const json& summary = pair["summary"];
       if (summary.contains(key) && summary[key].contains("mean") && summary[key]["mean"].is_number())
         v[key] = summary[key]["mean"];
@@ -191,14 +252,15 @@ json speedPoint(const json& pair, const ErrorAxis& axis) {
 
 namespace {
 
-json speedData(const json& results, const std::vector<std::string>& scenes,
-               const std::vector<std::string>& labels) {
+// One clock's charts: per scene and all scenes, per error axis.
+json speedView(const json& results, const std::vector<std::string>& scenes, const std::vector<std::string>& labels,
+               const std::string& clock) {
   json out = json::object();
   json perScene = json::object();
   std::map<std::string, std::map<std::string, std::map<std::string, json>>> byAxis;
   for (const json& pair : results["pairs"])
     for (const ErrorAxis& axis : kErrorAxes) {
-      json v = speedPoint(pair, axis);
+      json v = speedPoint(pair, axis, clock);
       if (!v.is_null())
         byAxis[axis.key][pair["scene"].get<std::string>()][pair["label"].get<std::string>()] = v;
     }
@@ -213,15 +275,17 @@ json speedData(const json& results, const std::vector<std::string>& scenes,
     perScene[scene] = axes;
   }
   out["scenes"] = perScene;
-  // Contenders timed elsewhere (a capture's recorded GPU time) or not at all: named under the chart
-  // with their own clock, never drawn on the CPU axis.
+  // Contenders with no time on this clock (another device's, none recorded, or nothing counted to
+  // price): named under the chart with the clock they have, never drawn on this axis.
   json elsewhere = json::array();
   for (const json& pair : results["pairs"])
-    if (isOk(pair) && clockOf(pair) != "cpu") {
-      const json& timing = pair["timing"];
+    if (isOk(pair) && !std::isfinite(timeOn(pair, clock).ms)) {
+      const json timing = pair.value("timing", json::object());
+      std::string source = timing.value("msSource", "");
+      if (clock.rfind("gpu:", 0) == 0 && clockOf(pair) == "cpu") source = "no GPU traffic counted (" + source + ")";
       elsewhere.push_back({{"scene", pair["scene"]}, {"label", pair["label"]},
                            {"ms", timing.contains("msMedian") ? timing["msMedian"] : json(nullptr)},
-                           {"source", timing.value("msSource", "")}});
+                           {"source", source}});
     }
   out["otherClocks"] = elsewhere;
   // All scenes: statistics' overall score on the axis's metric (relMSE: the run's "overall"; the
@@ -280,6 +344,16 @@ json speedData(const json& results, const std::vector<std::string>& scenes,
     all[axis.key] = scope;
   }
   out["all"] = all;
+  return out;
+}
+
+// Every clock's charts, and the clocks' titles (the page's time-axis selector).
+json speedData(const json& results, const std::vector<std::string>& scenes, const std::vector<std::string>& labels) {
+  json out = {{"clocks", json::array()}, {"views", json::object()}};
+  for (const SpeedClock& c : speedClocks(results, scenes)) {
+    out["clocks"].push_back({{"key", c.key}, {"title", c.title}});
+    out["views"][c.key] = speedView(results, scenes, labels, c.key);
+  }
   return out;
 }
 

@@ -74,6 +74,37 @@ TEST(GpuCostModel, SpearmanAndSignalMerging) {
   EXPECT_EQ(repeatPass(a, 3).dispatches.size(), 3u);
 }
 
+// The study's GPU axis: a frame's passes with the signals' instances merged per pass (the G-buffer
+// read once), scaled from the sequence's resolution to 1920x1080 and priced with the stored model;
+// a run whose passes counted nothing (an external denoiser) has no prediction at all.
+TEST(GpuCostModel, AFrameIsItsPassesMergedAcrossSignalsAndScaledTo1080p) {
+  PassTraffic filter;
+  {
+    TrafficScope scope(&filter);
+    gpu::dispatch(480, 270);
+    gpu::read(gpu_buffers::kDepth, 480, 270, 9);
+    gpu::read(gpu_buffers::kRadiance, 480, 270, 9);
+    gpu::write(gpu_buffers::kRadiance, 480, 270);
+  }
+  const std::vector<PassStats> passes = {{"diffuse/filter", 1.0, 9.0, 0.0, filter},
+                                         {"specular/filter", 1.0, 9.0, 0.0, filter}};
+  const GpuDevice& titan = gpuDevice("TITAN RTX");
+  const double expected = predictPass(scaleTraffic(mergeSignals(filter, filter), 16.0), titan, boxAtrousModel()).totalMs();
+  EXPECT_NEAR(predictFrameMs(passes, titan, boxAtrousModel(), 16.0), expected, 1e-12);
+  // The merge reads the depth once: less than two separate instances.
+  EXPECT_LT(expected, 2.0 * predictPass(scaleTraffic(filter, 16.0), titan, boxAtrousModel()).totalMs());
+  GpuFrameCost cost(480, 270);
+  for (int t = 0; t < 4; ++t) cost.add(passes);
+  const nlohmann::json s = cost.summary(1);
+  ASSERT_TRUE(s.is_object());
+  EXPECT_EQ(s["devices"][0]["device"], "TITAN RTX");
+  EXPECT_NEAR(s["devices"][0]["msMedian"].get<double>(), expected, 1e-12);
+  EXPECT_EQ(s["devices"].size(), gpuDevices().size());
+  GpuFrameCost external(480, 270);
+  external.add({{"process", 5.0, 0.0, 0.0, PassTraffic{}}});
+  EXPECT_TRUE(external.summary(0).is_null());
+}
+
 // The stored model is the bench's fit of the box/à-trous experiment: the counted à-trous iteration
 // (docs/gpu-cost.md: 38 B read, 10 B written, 46 fetches and 91 fetch cycles per pixel, one
 // full-screen dispatch) fitted on the six published points gives it back, in both forms.

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -126,6 +127,25 @@ TEST(StudySummary, AWarningAboutASceneIsStoredAndPrintedOncePerScene) {
   std::ostringstream out;
   cli::printStudySummary(out, results, {"r.json", "r.db", "index.html", 1});
   EXPECT_EQ(occurrences(out.str(), warning), 1u) << out.str();
+
+  // The speed axis's predicted GPU time (issue 31): every built-in that counted traffic carries one
+  // per device; svgf runs temporal's accumulation and five à-trous iterations more, so it costs
+  // more; passthrough counts nothing and has none. The summary prints both orders.
+  std::map<std::string, double> titan;
+  for (const json& p : results["pairs"]) {
+    const json timing = p["timing"];
+    if (p["label"] == "passthrough") {
+      EXPECT_FALSE(timing.contains("gpuPredicted"));
+      continue;
+    }
+    ASSERT_TRUE(timing.contains("gpuPredicted")) << p["label"];
+    EXPECT_EQ(timing["gpuPredicted"]["resolution"], json({1920, 1080}));
+    EXPECT_EQ(timing["gpuPredicted"]["devices"][0]["device"], "TITAN RTX");
+    titan[p["label"]] = timing["gpuPredicted"]["devices"][0]["msMedian"].get<double>();
+  }
+  EXPECT_GT(titan["temporal"], 0.0);
+  EXPECT_GT(titan["svgf"], titan["temporal"]);
+  EXPECT_NE(out.str().find("GPU predicted, TITAN RTX 1080p (a model):"), std::string::npos) << out.str();
 }
 
 }  // namespace

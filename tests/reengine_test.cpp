@@ -431,7 +431,7 @@ TEST(ReEngine, ARunChargesTheExtraRaysAtTheRendersOwnPathRate) {
   // The report's speed point carries the bar's length.
   const json data = reportData(r, c.out, nullptr);
   bool found = false;
-  const json& scope = data["speed"]["scenes"]["moving_object"]["relMse"];
+  const json& scope = data["speed"]["views"]["cpu"]["scenes"]["moving_object"]["relMse"];
   for (const json& p : scope["points"]) {
     if (p["label"] == re["label"]) {
       found = true;

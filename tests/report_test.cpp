@@ -201,18 +201,18 @@ TEST(Report, DataHasFrontNoiseFloorViewerAndAblation) {
 
   // Speed on "static", relMSE: passthrough (0.01 ms, 0.5), svgf[a=1,b=false] (3 ms, 0.06),
   // svgf[a=0] (4 ms, 0.05), svgf[a=1] (5 ms, 0.04): every point is on the front here.
-  const json& st = data["speed"]["scenes"]["static"]["relMse"];
+  const json& st = data["speed"]["views"]["cpu"]["scenes"]["static"]["relMse"];
   EXPECT_EQ(st["points"].size(), 4u);
   EXPECT_EQ(st["front"], json({"passthrough", "svgf[a=1,b=false]", "svgf[a=0]", "svgf[a=1]"}));
   // 1 - SSIM is an error axis: its bars flip (p5 of 1-SSIM = 1 - p95 of SSIM).
-  const json& dssim = data["speed"]["scenes"]["static"]["dssim"]["points"][0];
+  const json& dssim = data["speed"]["views"]["cpu"]["scenes"]["static"]["dssim"]["points"][0];
   EXPECT_NEAR(dssim["error"].get<double>(), 0.1, 1e-12);
   EXPECT_NEAR(dssim["p5"].get<double>(), 1 - 0.9 * 1.3, 1e-12);
   // No HDR-FLIP in this run: the axis is not offered.
   for (const json& a : data["errorAxes"]) EXPECT_NE(a["key"], "hdrFlip");
   // All scenes: this run has no statistics, so there is no overall score to show -- and the
   // report makes none up (AllScenesShowStatisticsOverallScoresAndNeverASecondOne has one).
-  EXPECT_FALSE(data["speed"]["all"].contains("relMse"));
+  EXPECT_FALSE(data["speed"]["views"]["cpu"]["all"].contains("relMse"));
   EXPECT_TRUE(data["rankings"]["overall"].is_null());
   // No intervals in this run: the bars are p5-p95 and the rankings say ties are unknown.
   EXPECT_EQ(st["points"][0]["interval"], "p5-p95");
@@ -262,6 +262,47 @@ TEST(Report, DataHasFrontNoiseFloorViewerAndAblation) {
   EXPECT_TRUE(sawA);
   EXPECT_TRUE(sawB);
   EXPECT_TRUE(data["regression"].is_null());
+}
+
+// The time axes (issue 31 section 4): the CPU time measured here, the GPU ms the model predicts
+// on each device a pair carries, and a capture's recorded time, each with its own points and front.
+// A pair with nothing to price (no counted traffic) is named under the GPU axis, never drawn on it.
+TEST(Report, EachTimeAxisHasItsOwnPointsAndFront) {
+  json run = fixtureRun();
+  // On the predicted axis the order reverses: svgf[a=1,b=false] is the slowest there.
+  const std::map<std::string, double> gpuMs = {{"svgf[a=0]", 2.0}, {"svgf[a=1]", 2.5}, {"svgf[a=1,b=false]", 9.0}};
+  for (json& pair : run["pairs"]) {
+    const std::string label = pair["label"];
+    if (pair["scene"] != "static" || !gpuMs.count(label)) continue;
+    const double ms = gpuMs.at(label);
+    pair["timing"]["gpuPredicted"] = {
+        {"resolution", {1920, 1080}},
+        {"model", "test"},
+        {"devices", json::array({{{"device", "TITAN RTX"}, {"msMedian", ms}, {"msP5", ms * 0.9}, {"msP95", ms * 1.2}, {"msMean", ms}}})}};
+  }
+  const fs::path dir = writeFixtureRun("report_clocks", run);
+  const json data = reportData(run, dir, nullptr);
+  const json& clocks = data["speed"]["clocks"];
+  ASSERT_EQ(clocks.size(), 2u);
+  EXPECT_EQ(clocks[0]["key"], "cpu");
+  EXPECT_NE(clocks[0]["title"].get<std::string>().find("test, 2 threads, 4x2"), std::string::npos) << clocks[0]["title"];
+  EXPECT_EQ(clocks[1]["key"], "gpu:TITAN RTX");
+  EXPECT_NE(clocks[1]["title"].get<std::string>().find("predicted at 1920x1080 on TITAN RTX"), std::string::npos);
+  const json& gpu = data["speed"]["views"]["gpu:TITAN RTX"]["scenes"]["static"]["relMse"];
+  ASSERT_EQ(gpu["points"].size(), 3u);
+  for (const json& p : gpu["points"]) {
+    EXPECT_DOUBLE_EQ(p["ms"].get<double>(), gpuMs.at(p["label"]));
+    EXPECT_DOUBLE_EQ(p["msHi"].get<double>(), 1.2 * gpuMs.at(p["label"]));
+  }
+  // svgf[a=1,b=false] (0.06) is slower and worse than svgf[a=0] there: off the GPU front, on the CPU one.
+  EXPECT_EQ(gpu["front"], json({"svgf[a=0]", "svgf[a=1]"}));
+  EXPECT_EQ(data["speed"]["views"]["cpu"]["scenes"]["static"]["relMse"]["front"],
+            json({"passthrough", "svgf[a=1,b=false]", "svgf[a=0]", "svgf[a=1]"}));
+  // passthrough carries no prediction here: named under the GPU axis with its own clock.
+  bool named = false;
+  for (const json& r : data["speed"]["views"]["gpu:TITAN RTX"]["otherClocks"])
+    named = named || (r["label"] == "passthrough" && r["scene"] == "static");
+  EXPECT_TRUE(named);
 }
 
 TEST(Report, AblationDeltasAreTheRunsPairedDifferences) {
@@ -332,7 +373,7 @@ TEST(Report, AllScenesShowStatisticsOverallScoresAndNeverASecondOne) {
       "ranking": [{"label": "svgf[a=0]", "rank": 1, "score": 0.25, "ci95": [0.2, 0.3], "tiedWith": []},
                   {"label": "passthrough", "rank": 2, "score": 1.0, "ci95": [1.0, 1.0], "tiedWith": []}]}}})json");
   const json data = reportData(run, test::freshDir("report_overall_axes"), nullptr);
-  const json& all = data["speed"]["all"];
+  const json& all = data["speed"]["views"]["cpu"]["all"];
   EXPECT_TRUE(all.contains("relMse"));
   EXPECT_FALSE(all.contains("ldrFlip")) << "no statistics score on LDR-FLIP: no all-scenes view of it";
   EXPECT_FALSE(all.contains("hdrFlip"));
@@ -366,16 +407,16 @@ TEST(Report, IntervalsAndTheRunsOwnRankingsAreUsedWhenPresent) {
     "overall": {"normalisation": "geometric mean of relMSE ratios to passthrough",
       "ranking": [{"label": "passthrough", "rank": 1, "score": 0.7, "ci95": [0.6, 0.8], "tiedWith": []}]}})");
   const json data = reportData(run, test::freshDir("report_stats"), nullptr);
-  const json& p = data["speed"]["scenes"]["static"]["relMse"]["points"][1];  // svgf[a=0], 0.05
+  const json& p = data["speed"]["views"]["cpu"]["scenes"]["static"]["relMse"]["points"][1];  // svgf[a=0], 0.05
   EXPECT_EQ(p["interval"], "ci95");
   EXPECT_NEAR(p["lo"].get<double>(), 0.0475, 1e-12);
   EXPECT_NEAR(p["msLo"].get<double>(), 2.0, 1e-12);
   // 1 - SSIM: the interval flips with the axis.
-  const json& d = data["speed"]["scenes"]["static"]["dssim"]["points"][0];
+  const json& d = data["speed"]["views"]["cpu"]["scenes"]["static"]["dssim"]["points"][0];
   EXPECT_NEAR(d["lo"].get<double>(), 1 - 0.92, 1e-12);
   EXPECT_NEAR(d["hi"].get<double>(), 1 - 0.89, 1e-12);
   // The run's own overall score replaces the report's aggregate, named as the run names it.
-  const json& all = data["speed"]["all"]["relMse"];
+  const json& all = data["speed"]["views"]["cpu"]["all"]["relMse"];
   EXPECT_EQ(all["source"], "statistics");
   EXPECT_EQ(all["normalisation"], "geometric mean of relMSE ratios to passthrough");
   EXPECT_NEAR(all["points"][0]["error"].get<double>(), 0.7, 1e-12);

@@ -22,6 +22,7 @@
       scene: D.scenes.length ? D.scenes[0].name : null,
       speedScene: '__all__',
       speedAxis: D.errorAxes.length ? D.errorAxes[0].key : null,
+      speedClock: 'cpu',  // the time measured here; the predicted GPU ms and captured times are offered beside it
       frame: null,
       zoom: { s: 1, x: 0, y: 0 },
       selected: null,  // a label clicked on the speed chart

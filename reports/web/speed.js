@@ -1,5 +1,7 @@
 // Speed vs accuracy: one chart (a scene, or all scenes through the per-scene normalised
-// aggregate) or small multiples (one panel per scene). Error bars: the metric's 95% interval when
+// aggregate) or small multiples (one panel per scene). The time axis is one of the run's clocks
+// (D.speed.clocks): the CPU time measured here (the default), the GPU ms the cost model predicts at
+// 1080p on a named device, or the GPU time a capture recorded; each has its own Pareto front. Error bars: the metric's 95% interval when
 // the run has one (else p5-p95 over frames); time bars: p5-p95 of the per-frame time. Hover shows
 // a point's parameters; clicking it selects that denoiser in the image viewer and over-time charts.
 'use strict';
@@ -23,6 +25,13 @@
     metricSel.value = state.speedAxis;
     metricSel.addEventListener('change', () => {
       state.speedAxis = metricSel.value;
+      A.renderSpeed();
+    });
+    const clockSel = $('speed-clock');
+    for (const c of D.speed.clocks) clockSel.append(el('option', { value: c.key, text: c.title }));
+    clockSel.value = state.speedClock;
+    clockSel.addEventListener('change', () => {
+      state.speedClock = clockSel.value;
       A.renderSpeed();
     });
     $('speed-log').addEventListener('change', () => A.renderSpeed());
@@ -57,18 +66,24 @@
     return { drawn, front, frontEqualPaths, hidden: points.filter((p) => !ok(p)).map((p) => p.label) };
   }
 
-  // Contenders whose time is another device's (a capture's recorded GPU time) or unknown: named
-  // with their clock, never placed on this machine's CPU axis.
+  const clockView = () => A.D.speed.views[A.state.speedClock];
+  const clock = () => A.D.speed.clocks.find((c) => c.key === A.state.speedClock);
+  const isGpuModel = () => A.state.speedClock.startsWith('gpu:');
+
+  // Contenders with no time on this axis (a capture's recorded GPU time on the CPU axis, a denoiser
+  // with no counted traffic on a predicted one): named with their clock, never placed on it.
   function otherClocks(scene) {
-    const rows = (A.D.speed.otherClocks || []).filter((r) => scene === null || r.scene === scene);
+    const rows = (clockView().otherClocks || []).filter((r) => scene === null || r.scene === scene);
     if (!rows.length) return [];
     const text = rows.map((r) => `${r.label}${scene === null ? ` on ${r.scene}` : ''}: ` +
       (r.ms === null ? 'no time' : `${Number(r.ms).toPrecision(3)} ms`) + ` (${r.source})`);
-    return [` · timed on another clock, not on this CPU axis: ${text.join('; ')}`];
+    return [` · timed on another clock, not on this axis: ${text.join('; ')}`];
   }
 
   function chartSpec({ drawn, front, frontEqualPaths }, axis, yTitle, logError, small, title) {
-    const x = { field: 'ms', type: 'quantitative', scale: { type: 'log' }, title: small ? 'ms (median)' : 'ms per frame (median; bars p5–p95; log scale)' };
+    const unit = A.state.speedClock === 'cpu' ? 'CPU ms' : isGpuModel() ? 'predicted GPU ms' : 'captured GPU ms';
+    const x = { field: 'ms', type: 'quantitative', scale: { type: 'log' },
+                title: small ? `${unit} (median)` : `${unit} per frame (median; bars p5–p95; log scale)` };
     const y = { field: 'error', type: 'quantitative', title: yTitle, scale: logError ? { type: 'log' } : { zero: false } };
     const color = { field: 'label', type: 'nominal', scale: A.colorScale, title: 'denoiser / setting', legend: small ? null : {} };
     const tooltip = [
@@ -140,7 +155,10 @@
     const traced = data.points.some((p) => p.tracingMs > 0)
       ? 'Dashed bars: a denoiser\'s extra paths ("+paths": reengine\'s low-resolution disocclusion rays, asvgf\'s re-shaded gradient samples), as the time the tracer took to trace them when the sequence was rendered, added to its own time; the point and the grey Pareto front use the denoiser\'s time alone, the dotted brown front (equal paths) its time plus that tracing time. '
       : '';
-    return `${bars} Time bars: p5–p95 of the per-frame time where the run records them. ${traced}` +
+    const model = isGpuModel()
+      ? 'Time axis: a prediction, not a measurement -- each pass\'s counted GPU traffic at 1920x1080 priced by the cost model (docs/gpu-cost.md), which misses its validation goal: read it as an order of magnitude and an order of methods; extra paths are not priced. '
+      : '';
+    return `${model}${bars} Time bars: p5–p95 of the per-frame time where the run records them. ${traced}` +
       `${logError ? 'Log error axis. ' : ''}${axis && axis.key === 'relMse' ? 'relMSE raw (not reference-corrected). ' : ''}` +
       'Hover a point for its parameters; click it to select that denoiser in Images and Over time.';
   };
@@ -163,7 +181,7 @@
       $('speed-note').textContent = noteFor(false, { points: [] }, axis, logError) + ' One panel per scene, each on its own scale.';
       const renders = [];
       for (const s of D.scenes) {
-        const data = (D.speed.scenes[s.name] || {})[state.speedAxis];
+        const data = (clockView().scenes[s.name] || {})[state.speedAxis];
         const holder = el('div', { class: 'multiple', 'data-scene': s.name });
         chart.append(holder);
         if (!data || !data.points.length) {
@@ -178,7 +196,7 @@
       return;
     }
     const all = state.speedScene === '__all__';
-    const data = (all ? D.speed.all : D.speed.scenes[state.speedScene] || {})[state.speedAxis];
+    const data = (all ? clockView().all : clockView().scenes[state.speedScene] || {})[state.speedAxis];
     if (!data || !data.points.length) {
       chart.append(el('p', { class: 'empty', text: 'No measured pair for this choice.' }));
       $('speed-front').textContent = '';
@@ -191,13 +209,18 @@
     // The aggregate is named on the chart itself, not only in the note.
     const yTitle = !all ? axis.title : data.source === 'statistics' ? `${axis.title}: overall score (see title)`
       : `${axis.title} ÷ ${data.baseline} (geo. mean over ${data.sceneCount} scenes)`;
-    const title = all ? `All scenes: ${data.normalisation}` : `${state.speedScene}: ${axis.title}`;
+    const title = (all ? `All scenes: ${data.normalisation}` : `${state.speedScene}: ${axis.title}`) +
+      (state.speedClock === 'cpu' ? '' : ` · ${clock().title}`);
+    // The order of the methods by time on this axis (does it change between clocks?).
+    const order = [...d.drawn].sort((a, b) => a.ms - b.ms).map((p) => p.label).join(' < ');
     $('speed-front').replaceChildren(
       'Pareto front (fastest first): ',
       ...d.front.flatMap((p, i) => [i ? ' → ' : '', el('b', { text: p.name })]),
       d.frontEqualPaths.length && d.drawn.some((p) => p.extraPaths)
-        ? ` · equal paths (extra paths' tracing counted): ${d.frontEqualPaths.map((p) => p.name).join(' → ')}` : '',
+        ? (isGpuModel() ? ' · without the methods that read extra paths (the model prices no tracing): '
+          : ' · equal paths (extra paths\' tracing counted): ') + d.frontEqualPaths.map((p) => p.name).join(' → ') : '',
       d.hidden.length ? ` · not drawn (0 on a log axis): ${d.hidden.join(', ')}` : '',
+      ` · by time on this axis: ${order}`,
       ...otherClocks(all ? null : state.speedScene),
     );
     const view = await A.embedChart('speed', chart, chartSpec(d, axis, yTitle, logError, false, title));

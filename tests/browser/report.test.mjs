@@ -178,9 +178,27 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
   await page.waitForFunction((k) => document.querySelector('#speed-chart g.points_marks')?.querySelectorAll('path').length === k, okHere);
   await shot(page.locator('#speed'), 'speed.png');
 
+  // The time axis (issue 31): the GPU ms the model predicts at 1080p. A point per pair whose passes
+  // counted traffic (passthrough has none: named under the chart, not drawn), labelled a model,
+  // with the order by time on that axis.
+  const clocks = await page.$$eval('#speed-clock option', (o) => o.map((x) => x.value));
+  assert.deepEqual(clocks.slice(0, 2), ['cpu', 'gpu:TITAN RTX']);
+  const predicted = results.pairs.filter((p) => p.scene === 'light_switch' && p.status === 'ok' && p.timing &&
+    p.timing.gpuPredicted && p.timing.gpuPredicted.devices.find((d) => d.device === 'TITAN RTX').msMedian > 0).length;
+  assert.ok(predicted >= 3, `pairs with a predicted GPU time: ${predicted}`);
+  await page.selectOption('#speed-clock', 'gpu:TITAN RTX');
+  await page.waitForFunction((k) => document.querySelector('#speed-chart g.points_marks')?.querySelectorAll('path').length === k, predicted);
+  assert.match(await page.locator('#speed-note').innerText(), /a prediction, not a measurement/);
+  assert.match(await page.locator('#speed-front').innerText(), /by time on this axis: .* < /);
+  assert.match(await page.locator('#speed-front').innerText(), /passthrough: .*no GPU traffic counted/);
+  assert.ok((await page.locator('#speed-chart svg.marks').textContent()).includes('predicted GPU ms'), 'the time axis says it is predicted');
+  await shot(page.locator('#speed'), 'speed-gpu.png');
+  await page.selectOption('#speed-clock', 'cpu');
+  await page.waitForFunction((k) => document.querySelector('#speed-chart g.points_marks')?.querySelectorAll('path').length === k, okHere);
+
   // Clicking a point selects that denoiser (and the point's scene) in the viewer and over time.
   // The symbols are drawn in the order of the scope's points (those a log axis can show).
-  const svgfPoint = await page.evaluate(() => window.ARENA_DATA.speed.scenes.light_switch.relMse.points
+  const svgfPoint = await page.evaluate(() => window.ARENA_DATA.speed.views.cpu.scenes.light_switch.relMse.points
     .filter((p) => p.ms > 0 && p.error > 0).findIndex((p) => p.label === 'svgf'));
   assert.ok(svgfPoint >= 0, 'svgf has a point on light_switch');
   await page.locator('#speed-chart g.points_marks path').nth(svgfPoint).click({ force: true });
