@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <numeric>
 
 #include "core/error.hpp"
@@ -127,6 +128,32 @@ double predictFrameMs(const std::vector<PassStats>& passes, const GpuDevice& dev
   return ms;
 }
 
+GpuMemory gpuMemory(const std::vector<PassStats>& passes) {
+  struct Owned {
+    double bytes = 0;
+    bool history = false, pingPong = false;
+  };
+  std::map<std::string, Owned> owned;
+  for (const PassStats& p : passes) {
+    std::map<std::string, double> levels;  // this pass's writes per name: mip levels add up
+    for (const BufferTraffic& b : p.traffic.buffers) {
+      if (b.name.find("(input)") != std::string::npos) continue;
+      const double bytes = double(b.width) * double(b.height) * gpuFormatBytes(b.format);
+      Owned& o = owned[b.name];
+      o.history = o.history || b.history;
+      if (b.write && b.name.find("mip") != std::string::npos) levels[b.name] += bytes;
+      o.bytes = std::max(o.bytes, bytes);
+      for (const BufferTraffic& c : p.traffic.buffers)
+        if (c.name == b.name && c.dispatch == b.dispatch && c.write != b.write) o.pingPong = true;
+    }
+    for (const auto& [name, bytes] : levels) owned[name].bytes = std::max(owned[name].bytes, bytes);
+  }
+  GpuMemory m;
+  for (const auto& [name, o] : owned)
+    (o.history ? m.persistent : m.transient) += o.bytes * (o.pingPong && !o.history ? 2.0 : 1.0);
+  return m;
+}
+
 GpuFrameCost::GpuFrameCost(int width, int height)
     : pixelFactor_(1920.0 * 1080.0 / (double(width) * double(height))), ms_(gpuDevices().size()) {}
 
@@ -134,6 +161,8 @@ void GpuFrameCost::add(const std::vector<PassStats>& passes) {
   for (const PassStats& p : passes) counted_ = counted_ || !p.traffic.empty();
   for (size_t d = 0; d < gpuDevices().size(); ++d)
     ms_[d].push_back(predictFrameMs(passes, gpuDevices()[d], boxAtrousModel(), pixelFactor_));
+  last_ = passes;
+  for (PassStats& p : last_) p.traffic = scaleTraffic(p.traffic, pixelFactor_);
 }
 
 nlohmann::json GpuFrameCost::summary(int warmup) const {
@@ -144,8 +173,22 @@ nlohmann::json GpuFrameCost::summary(int warmup) const {
     devices.push_back({{"device", gpuDevices()[d].name}, {"msMedian", s.median}, {"msP5", s.p5}, {"msP95", s.p95},
                        {"msMean", s.mean}});
   }
+  // Memory: each signal's instance owns its buffers ("diffuse/...", "specular/..." passes).
+  std::map<std::string, std::vector<PassStats>> instances;
+  for (const PassStats& p : last_) {
+    const size_t slash = p.name.find('/');
+    instances[slash == std::string::npos ? "" : p.name.substr(0, slash)].push_back(p);
+  }
+  double persistent = 0, working = 0;
+  for (const auto& [signal, passes] : instances) {
+    const GpuMemory m = gpuMemory(passes);
+    persistent += m.persistent;
+    working += m.persistent + m.transient;
+  }
+  constexpr double kMiB = 1024.0 * 1024.0;
   const GpuCostModel m = boxAtrousModel();
   return {{"resolution", {1920, 1080}},
+          {"memory", {{"persistentMiB", persistent / kMiB}, {"workingSetMiB", working / kMiB}}},
           {"model", "max(bytes / bandwidth, k x fetch cycles / texel rate) + c x threads / 1920x1080; k = " +
                         std::to_string(m.fetchEfficiency).substr(0, 5) + ", c = " + std::to_string(m.dispatchMs).substr(0, 5) +
                         " ms (docs/gpu-cost.md)"},

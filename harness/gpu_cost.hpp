@@ -73,20 +73,32 @@ GpuCostModel boxAtrousModel(FixedCost fixed = FixedCost::PerThread);
 double predictFrameMs(const std::vector<PassStats>& passes, const GpuDevice& device,
                       const GpuCostModel& model, double pixelFactor = 1.0);
 
-// The study's GPU axis (docs/gpu-cost.md, "In a study"): each frame's passes priced at 1920x1080
+// GPU-format memory of one instance from the buffers its passes touched: each buffer the denoiser
+// owns once, at its largest size (a mip chain: its levels summed); persistent = the history ones
+// (read next frame); a transient buffer some dispatch both reads and writes needs two (ping-pong).
+// Engine inputs ("(input)": G-buffer, noisy signal) are not the denoiser's, as in NRD's table.
+struct GpuMemory {
+  double persistent = 0, transient = 0;  // bytes
+};
+GpuMemory gpuMemory(const std::vector<PassStats>& passes);
+
+// The study's GPU axis (docs/gpu-cost.md section 7): each frame's passes priced at 1920x1080
 // on every known device with boxAtrousModel(). The counts come from the sequence's resolution and
 // are scaled (scaleTraffic); taps that depend on the data are those of this sequence.
 class GpuFrameCost {
  public:
   GpuFrameCost(int width, int height);
   void add(const std::vector<PassStats>& passes);
-  // {"resolution", "model", "devices": [{device, msMedian, msP5, msP95, msMean}]} over the frames
-  // after `warmup`; null when no pass counted any traffic (an external denoiser: nothing to price).
+  // {"resolution", "model", "devices": [{device, msMedian, msP5, msP95, msMean}], "memory":
+  // {persistentMiB, workingSetMiB}} over the frames after `warmup` (memory: the last frame's
+  // buffers at 1920x1080, every signal's instance summed); null when no pass counted any traffic
+  // (an external denoiser: nothing to price).
   nlohmann::json summary(int warmup) const;
 
  private:
   double pixelFactor_;
   bool counted_ = false;
+  std::vector<PassStats> last_;  // the last frame's passes, scaled to 1920x1080
   std::vector<std::vector<double>> ms_;  // per device, per frame
 };
 

@@ -209,39 +209,6 @@ json validate(const std::string& set, const std::vector<PublishedRow>& rows,
   return out;
 }
 
-// GPU-format memory from the buffers the passes touched: each buffer the denoiser owns once, at
-// its largest size (a mip chain: its levels summed); persistent = the history ones (read next
-// frame); a transient buffer some dispatch both reads and writes needs two (ping-pong). Engine
-// inputs ("(input)": G-buffer, noisy signal) are not the denoiser's, as in NRD's table.
-struct GpuMemory {
-  double persistent = 0, transient = 0;
-};
-GpuMemory gpuMemory(const InstanceRun& run) {
-  struct Owned {
-    double bytes = 0;
-    bool history = false, pingPong = false;
-  };
-  std::map<std::string, Owned> owned;
-  for (const PassStats& p : run.passes) {
-    std::map<std::string, double> levels;  // this pass's writes per name: mip levels add up
-    for (const BufferTraffic& b : p.traffic.buffers) {
-      if (b.name.find("(input)") != std::string::npos) continue;
-      const double bytes = double(b.width) * double(b.height) * gpuFormatBytes(b.format);
-      Owned& o = owned[b.name];
-      o.history = o.history || b.history;
-      if (b.write && b.name.find("mip") != std::string::npos) levels[b.name] += bytes;
-      o.bytes = std::max(o.bytes, bytes);
-      for (const BufferTraffic& c : p.traffic.buffers)
-        if (c.name == b.name && c.dispatch == b.dispatch && c.write != b.write) o.pingPong = true;
-    }
-    for (const auto& [name, bytes] : levels) owned[name].bytes = std::max(owned[name].bytes, bytes);
-  }
-  GpuMemory m;
-  for (const auto& [name, o] : owned)
-    (o.history ? m.persistent : m.transient) += o.bytes * (o.pingPong && !o.history ? 2.0 : 1.0);
-  return m;
-}
-
 constexpr double kMiB = 1024.0 * 1024.0;
 
 }  // namespace
@@ -462,7 +429,7 @@ json benchGpuModel(const GpuModelBench& b, const ProgressFn& progress) {
                         {"buffersDiffuse", buffers}});
     }
     progress(printed("  %-30s %78.3f ms GPU %8.1f ms CPU", "total", gpuMs, cpuMs));
-    const GpuMemory md = gpuMemory(run.diffuse), ms = gpuMemory(run.specular);
+    const GpuMemory md = gpuMemory(run.diffuse.passes), ms = gpuMemory(run.specular.passes);
     const json memory = {{"gpuPersistentMiB", (md.persistent + ms.persistent) / kMiB},
                          {"gpuWorkingSetMiB", (md.persistent + md.transient + ms.persistent + ms.transient) / kMiB},
                          {"cpuSetupMiB", (run.diffuse.setupBytes + run.specular.setupBytes) / kMiB},

@@ -622,6 +622,18 @@ json pairData(const json& pair) {
                  {"msPerMegapixel", timing.value("msPerMegapixel", kNaN)},
                  {"tapsPerPixel", timing.value("tapsPerPixel", kNaN)},
                  {"passes", timing.contains("passes") ? timing["passes"].size() : 0}};
+  // The cost model's view (docs/gpu-cost.md): the first device's predicted ms and the GPU memory.
+  if (timing.contains("gpuPredicted") && timing["gpuPredicted"].is_object()) {
+    const json& g = timing["gpuPredicted"];
+    const json devices = g.value("devices", json::array());
+    if (!devices.empty() && devices[0].is_object()) {
+      p["timing"]["gpuMs"] = devices[0].value("msMedian", kNaN);
+      p["timing"]["gpuDevice"] = devices[0].value("device", "");
+    }
+    const json memory = g.value("memory", json::object());
+    p["timing"]["gpuPersistentMiB"] = memory.value("persistentMiB", kNaN);
+    p["timing"]["gpuWorkingSetMiB"] = memory.value("workingSetMiB", kNaN);
+  }
   p["series"] = seriesColumns(pair.value("frames", json::array()));
   // Events and cuts with their figures and intervals; the tile data behind them stays in the run.
   for (const char* kind : {"ghosting", "cuts"}) {

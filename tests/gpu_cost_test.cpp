@@ -100,6 +100,21 @@ TEST(GpuCostModel, AFrameIsItsPassesMergedAcrossSignalsAndScaledTo1080p) {
   EXPECT_EQ(s["devices"][0]["device"], "TITAN RTX");
   EXPECT_NEAR(s["devices"][0]["msMedian"].get<double>(), expected, 1e-12);
   EXPECT_EQ(s["devices"].size(), gpuDevices().size());
+  // Memory at 1080p: the history buffer this pass writes, per signal's instance (RGBA16F, 8 B).
+  PassTraffic kept;
+  {
+    TrafficScope scope(&kept);
+    gpu::dispatch(480, 270);
+    gpu::read(gpu_buffers::kRadiance, 480, 270, 1);
+    gpu::write(gpu_buffers::kRadianceHistory, 480, 270);
+  }
+  GpuFrameCost withHistory(480, 270);
+  withHistory.add({{"diffuse/store", 0.1, 1.0, 0.0, kept}, {"specular/store", 0.1, 1.0, 0.0, kept}});
+  const nlohmann::json memory = withHistory.summary(0)["memory"];
+  const double historyMiB = 1920.0 * 1080.0 * 8.0 / (1024.0 * 1024.0);
+  EXPECT_NEAR(memory["persistentMiB"].get<double>(), 2.0 * historyMiB, 1e-9);
+  // The transient radiance the pass reads counts in the working set, once per instance.
+  EXPECT_NEAR(memory["workingSetMiB"].get<double>(), 4.0 * historyMiB, 1e-9);
   GpuFrameCost external(480, 270);
   external.add({{"process", 5.0, 0.0, 0.0, PassTraffic{}}});
   EXPECT_TRUE(external.summary(0).is_null());

@@ -278,7 +278,8 @@ TEST(Report, EachTimeAxisHasItsOwnPointsAndFront) {
     pair["timing"]["gpuPredicted"] = {
         {"resolution", {1920, 1080}},
         {"model", "test"},
-        {"devices", json::array({{{"device", "TITAN RTX"}, {"msMedian", ms}, {"msP5", ms * 0.9}, {"msP95", ms * 1.2}, {"msMean", ms}}})}};
+        {"devices", json::array({{{"device", "TITAN RTX"}, {"msMedian", ms}, {"msP5", ms * 0.9}, {"msP95", ms * 1.2}, {"msMean", ms}}})},
+        {"memory", {{"persistentMiB", 10.0 * ms}, {"workingSetMiB", 30.0 * ms}}}};
   }
   const fs::path dir = writeFixtureRun("report_clocks", run);
   const json data = reportData(run, dir, nullptr);
@@ -303,6 +304,14 @@ TEST(Report, EachTimeAxisHasItsOwnPointsAndFront) {
   for (const json& r : data["speed"]["views"]["gpu:TITAN RTX"]["otherClocks"])
     named = named || (r["label"] == "passthrough" && r["scene"] == "static");
   EXPECT_TRUE(named);
+  // The tables' GPU columns: the first device's predicted ms and the memory at 1080p.
+  for (const json& p : data["pairs"])
+    if (p["scene"] == "static" && p["label"] == "svgf[a=1]") {
+      EXPECT_DOUBLE_EQ(p["timing"]["gpuMs"].get<double>(), 2.5);
+      EXPECT_EQ(p["timing"]["gpuDevice"], "TITAN RTX");
+      EXPECT_DOUBLE_EQ(p["timing"]["gpuPersistentMiB"].get<double>(), 25.0);
+      EXPECT_DOUBLE_EQ(p["timing"]["gpuWorkingSetMiB"].get<double>(), 75.0);
+    }
 }
 
 TEST(Report, AblationDeltasAreTheRunsPairedDifferences) {

@@ -13,6 +13,14 @@
     { key: 'msP5', title: 'ms p5', default: false },
     { key: 'msPerMegapixel', title: 'ms/MP', default: false },
     { key: 'tapsPerPixel', title: 'taps/px', default: false },
+    // The cost model's view (docs/gpu-cost.md): the counted traffic priced at 1920x1080 on the
+    // first device, and the GPU-format memory of the buffers the passes touched, at 1080p.
+    { key: 'gpuMs', title: 'GPU ms', default: false, group: 'GPU, 1080p (model)',
+      hint: 'predicted from the counted traffic (a model, not a measurement) on' },
+    { key: 'gpuPersistentMiB', title: 'MiB kept', default: false, group: 'GPU, 1080p (model)',
+      hint: 'history buffers that survive the frame, GPU formats; NRD v4.16.0 README, context: REBLUR_DIFFUSE_SPECULAR 88.88, RELAX_DIFFUSE_SPECULAR 97.12' },
+    { key: 'gpuWorkingSetMiB', title: 'MiB working', default: false, group: 'GPU, 1080p (model)',
+      hint: 'persistent + transient buffers in one frame, GPU formats; NRD v4.16.0 README, context: REBLUR_DIFFUSE_SPECULAR 148.12, RELAX_DIFFUSE_SPECULAR 168.94' },
   ];
   // Shown unless the user picks otherwise: the metrics a choice is usually made on.
   // Catalog metrics that some pair of the run summarises; ms is shown with the timing columns.
@@ -115,8 +123,11 @@
                   get: (p) => (s(p) ? s(p).mean : null), ci: (p) => (s(p) ? s(p).ci95 : null), floor: m.name });
       if (on.has('p95')) cols.push({ group: m.name, title: 'p95', lower: m.lowerIsBetter, get: (p) => (s(p) ? s(p).p95 : null) });
     }
+    const gpuDevice = (pairs.find((p) => p.timing && p.timing.gpuDevice) || { timing: {} }).timing.gpuDevice || 'no device';
     for (const t of TIMING_COLUMNS)
-      if (on.has(t.key)) cols.push({ group: 'time', title: t.title, lower: true, get: (p) => (p.timing ? p.timing[t.key] : null) });
+      if (on.has(t.key)) cols.push({ group: t.group || 'time', plain: true, title: t.title, lower: true,
+                                     hint: t.key === 'gpuMs' ? `${t.hint} ${gpuDevice}` : t.hint,
+                                     get: (p) => (p.timing ? p.timing[t.key] : null) });
     const ok = pairs.filter(A.isOk);
     const best = cols.map((c) => {
       const vals = ok.map(c.get).filter((v) => Number.isFinite(v));
@@ -125,7 +136,7 @@
     const groups = [];
     for (const c of cols) {
       if (groups.length && groups[groups.length - 1].name === c.group) groups[groups.length - 1].span++;
-      else groups.push({ name: c.group, span: 1, meaning: c.meaning, lower: c.lower });
+      else groups.push({ name: c.group, span: 1, meaning: c.meaning, lower: c.lower, plain: c.plain });
     }
     const start = (i) => (i === 0 || cols[i - 1].group !== cols[i].group ? 'group-start' : '');
     const ranking = ((A.D.rankings || { scenes: {} }).scenes[A.state.scene] || {}).ranking || [];
@@ -133,8 +144,8 @@
     const head = el('thead', {},
       el('tr', {}, el('th', { rowspan: 2, text: 'rank' }), el('th', { class: 'first', rowspan: 2, text: 'denoiser / setting' }),
         groups.map((g) => el('th', { class: 'group', colspan: g.span, title: g.meaning ? `${g.meaning} (${g.lower ? 'lower' : 'higher'} is better)` : null,
-          text: g.name === 'time' ? 'time' : `${g.name} ${g.lower ? '↓' : '↑'}` }))),
-      el('tr', {}, cols.map((c, i) => el('th', { class: start(i) || null, text: c.title }))));
+          text: g.plain ? g.name : `${g.name} ${g.lower ? '↓' : '↑'}` }))),
+      el('tr', {}, cols.map((c, i) => el('th', { class: start(i) || null, title: c.hint || null, text: c.title }))));
 
     const rows = [];
     // The reference's own floors beside the metrics they bound: relMSE's noise floor, and each

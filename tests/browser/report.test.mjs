@@ -268,6 +268,14 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
   await page.locator('#column-picker input[data-column="p95"]').check();
   assert.ok((await headers()).filter((h) => h === 'p95').length > before, 'p95 columns added');
   await page.locator('#column-picker input[data-column="p95"]').uncheck();
+  // The cost model's columns (docs/gpu-cost.md): predicted GPU ms and GPU memory at 1080p, under
+  // one group; svgf's row has all three, passthrough's none (it counts no traffic).
+  for (const c of ['gpuMs', 'gpuPersistentMiB', 'gpuWorkingSetMiB']) await page.locator(`#column-picker input[data-column="${c}"]`).check();
+  assert.ok((await groups()).includes('GPU, 1080p (model)'), 'the GPU group is shown');
+  const cells = (label) => page.$$eval(`#summary-table tbody tr[data-label="${label}"] td`, (t) => t.slice(-3).map((x) => x.textContent));
+  for (const v of await cells('svgf')) assert.ok(Number(v) > 0, `svgf's GPU cells: ${await cells('svgf')}`);
+  for (const v of await cells('passthrough')) assert.ok(!(Number(v) > 0), `passthrough's GPU cells: ${await cells('passthrough')}`);
+  for (const c of ['gpuMs', 'gpuPersistentMiB', 'gpuWorkingSetMiB']) await page.locator(`#column-picker input[data-column="${c}"]`).uncheck();
   await shot(page.locator('#tables'), 'tables.png');
 
   // (4) Images on light_switch: every kept frame is offered, the event frame is marked.
