@@ -76,6 +76,12 @@ TEST(AssetFuzz, FindingsOfTheFuzzerAreClearErrorsOrFallbacks) {
   // unit normals (importAssetOrReject checks them).
   EXPECT_TRUE(fuzz::importAssetOrReject(AssetInput::MeshObj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nvn 1e39 0 0\nf 1//1 2//2 3//1\n", "", dir));
   EXPECT_TRUE(fuzz::importAssetOrReject(AssetInput::ObjWithMtl, "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nf 1//1 2//1 3//1\n", "", dir));
+  // Indices near INT_MAX: the bounds check multiplied them by 3 in int (signed overflow, found by
+  // UBSan under scripts/sanitize.sh). A vertex index is an error naming the face, a normal index a
+  // fallback to the face's normal.
+  EXPECT_NE(error(AssetInput::MeshObj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 2147483647\n", "").find("references a missing vertex"),
+            std::string::npos);
+  EXPECT_TRUE(fuzz::importAssetOrReject(AssetInput::MeshObj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//2147483647 2//1 3//1\n", "", dir));
   // A .glb chunk declaring 4 GiB: assimp 5.2 allocated it before checking (the fuzzer's OOM); now
   // the container's sizes are checked first, naming the file and the chunk.
   {

@@ -36,20 +36,25 @@ MeshData loadObj(const std::string& file) {
     for (size_t f = 0; f + 2 < idx.size(); f += 3) {
       glm::vec3 p[3];
       for (int k = 0; k < 3; ++k) {
-        int vi = idx[f + k].vertex_index;
-        if (vi < 0 || size_t(3 * vi + 2) >= attrib.vertices.size())
+        // Indices as size_t: 3 * index in int overflows for an index near INT_MAX (a malformed
+        // "f 2147483647 ..."; UBSan found it through the asset fuzz test).
+        const int vi = idx[f + k].vertex_index;
+        if (vi < 0 || 3 * size_t(vi) + 2 >= attrib.vertices.size())
           throw Error(file + ": face " + std::to_string(f / 3) + " references a missing vertex");
-        p[k] = {attrib.vertices[3 * vi], attrib.vertices[3 * vi + 1], attrib.vertices[3 * vi + 2]};
+        const size_t v = 3 * size_t(vi);
+        p[k] = {attrib.vertices[v], attrib.vertices[v + 1], attrib.vertices[v + 2]};
       }
       const glm::vec3 fn = directionOr(glm::cross(p[1] - p[0], p[2] - p[0]), glm::vec3(0, 1, 0));
       unsigned base = unsigned(m.positions.size());
       for (int k = 0; k < 3; ++k) {
-        int ni = idx[f + k].normal_index;
+        const int ni = idx[f + k].normal_index;
         glm::vec3 n = fn;
         // A zero or non-finite normal ("vn 0 0 0", "vn 1e39 0 0") has no direction: the face's
         // normal is used, as for a corner without one.
-        if (ni >= 0 && size_t(3 * ni + 2) < attrib.normals.size())
-          n = directionOr({attrib.normals[3 * ni], attrib.normals[3 * ni + 1], attrib.normals[3 * ni + 2]}, fn);
+        if (ni >= 0 && 3 * size_t(ni) + 2 < attrib.normals.size()) {
+          const size_t i = 3 * size_t(ni);
+          n = directionOr({attrib.normals[i], attrib.normals[i + 1], attrib.normals[i + 2]}, fn);
+        }
         m.positions.push_back(p[k]);
         m.normals.push_back(n);
       }
