@@ -76,6 +76,12 @@ TEST(AssetFuzz, FindingsOfTheFuzzerAreClearErrorsOrFallbacks) {
   // unit normals (importAssetOrReject checks them).
   EXPECT_TRUE(fuzz::importAssetOrReject(AssetInput::MeshObj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nvn 1e39 0 0\nf 1//1 2//2 3//1\n", "", dir));
   EXPECT_TRUE(fuzz::importAssetOrReject(AssetInput::ObjWithMtl, "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nf 1//1 2//1 3//1\n", "", dir));
+  // A texture that resolves to the MTL itself (a fuzzer find: "map_Kd ... a.mtl"): an error naming
+  // the texture path it could not decode, which is the side file.
+  EXPECT_NE(error(AssetInput::ObjWithMtl, "mtllib a.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nusemtl m\nf 1/1 2/1 3/1\n",
+                  "newmtl m\nKd 1 1 1\nmap_Kd a.mtl\n")
+                .find((dir / "a.mtl").string() + ": cannot decode the texture image"),
+            std::string::npos);
   // Indices near INT_MAX: the bounds check multiplied them by 3 in int (signed overflow, found by
   // UBSan under scripts/sanitize.sh). A vertex index is an error naming the face, a normal index a
   // fallback to the face's normal.

@@ -61,7 +61,7 @@ inline bool finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y
 
 // Writes `main` (and `side`, when not empty) into `dir` as `kind`'s files and parses the scene that
 // places them. Returns true if it loaded; false if it was rejected with an arena::Error naming the
-// file. Throws std::logic_error if a rejection does not name the file or loaded geometry breaks an
+// file at fault (the main file or its side file). Throws std::logic_error if a rejection does not name the file or loaded geometry breaks an
 // invariant the tracer relies on (finite positions, unit normals, indices in range, finite
 // materials and node matrices).
 inline bool importAssetOrReject(AssetInput kind, const std::string& main, const std::string& side,
@@ -78,8 +78,11 @@ inline bool importAssetOrReject(AssetInput kind, const std::string& main, const 
   try {
     scene = parseScene(sceneFor(kind, file), (dir / "fuzz.json").string());
   } catch (const Error& e) {
-    if (std::string(e.what()).find(file.string()) == std::string::npos)
-      throw std::logic_error(std::string("a rejection that does not name the file: ") + e.what());
+    // The file at fault is named: the main file, or the side file (an MTL line, or a texture that
+    // resolves to the MTL itself -- "cannot decode the texture image" naming it, a fuzzer find).
+    const std::string what = e.what();
+    if (what.find(file.string()) == std::string::npos && what.find(sideFile.string()) == std::string::npos)
+      throw std::logic_error(std::string("a rejection that does not name the file: ") + what);
     return false;
   }
   for (const Material& m : scene.materials)
