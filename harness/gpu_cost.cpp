@@ -162,7 +162,6 @@ void GpuFrameCost::add(const std::vector<PassStats>& passes) {
   for (size_t d = 0; d < gpuDevices().size(); ++d)
     ms_[d].push_back(predictFrameMs(passes, gpuDevices()[d], boxAtrousModel(), pixelFactor_));
   last_ = passes;
-  for (PassStats& p : last_) p.traffic = scaleTraffic(p.traffic, pixelFactor_);
 }
 
 nlohmann::json GpuFrameCost::summary(int warmup) const {
@@ -175,8 +174,9 @@ nlohmann::json GpuFrameCost::summary(int warmup) const {
   }
   // Memory: each signal's instance owns its buffers ("diffuse/...", "specular/..." passes).
   std::map<std::string, std::vector<PassStats>> instances;
-  for (const PassStats& p : last_) {
+  for (PassStats p : last_) {
     const size_t slash = p.name.find('/');
+    p.traffic = scaleTraffic(p.traffic, pixelFactor_);
     instances[slash == std::string::npos ? "" : p.name.substr(0, slash)].push_back(p);
   }
   double persistent = 0, working = 0;

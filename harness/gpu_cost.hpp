@@ -98,7 +98,7 @@ class GpuFrameCost {
  private:
   double pixelFactor_;
   bool counted_ = false;
-  std::vector<PassStats> last_;  // the last frame's passes, scaled to 1920x1080
+  std::vector<PassStats> last_;  // the last frame's passes (summary() scales their memory)
   std::vector<std::vector<double>> ms_;  // per device, per frame
 };
 

@@ -67,14 +67,7 @@ std::string faulty(const std::string& mode, double timeoutSeconds = 10) {
   return DenoiserRegistry::resolve("ext:" + writeManifest("faulty-" + mode, m).string());
 }
 
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+using test::errorOf;
 
 // --- manifests: contract --------------------------------------------------------------------
 

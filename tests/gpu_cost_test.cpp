@@ -179,14 +179,7 @@ void writeFile(const std::filesystem::path& path, const std::string& text) {
   std::ofstream(path) << text;
 }
 
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
-}
+using test::errorOf;
 
 TEST(GpuMeasured, BadFilesAndKernelsAreErrorsNamingWhatIsWrong) {
   const auto dir = test::freshDir("gpu_measured_contract");

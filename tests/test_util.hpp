@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -20,6 +21,9 @@ struct CommandResult {
   std::string output;
 };
 CommandResult runCommand(const std::string& commandLine);
+
+// The message of the arena::Error `f` throws; "(no error)" when it throws none.
+std::string errorOf(const std::function<void()>& f);
 
 // SELECT COUNT(*) FROM table in the SQLite database db; -1 when it cannot be read.
 int countRows(const std::filesystem::path& db, const char* table);
