@@ -67,6 +67,40 @@ TEST(AssetFuzz, FindingsOfTheFuzzerAreClearErrorsOrFallbacks) {
             std::string::npos)
       << error(AssetInput::ObjWithMtl, triangle, "# made by hand\nmap_Kd x.png\nnewmtl m\n");
   EXPECT_EQ(error(AssetInput::ObjWithMtl, triangle, "# made by hand\nnewmtl m\nmap_Kd x.png\n"), "");
+  // The OBJ read as its own material library, where assimp 5.2 wrote "map_d" through a null
+  // material (SEGV, the fuzzer's recurring find once each input started from an empty folder):
+  // named by "mtllib" itself, or reached by assimp's fallback for an unusable "mtllib" path.
+  {
+    const std::string self = error(AssetInput::ObjWithMtl, "mtllib a.obj\nmap_d\n", "");
+    EXPECT_NE(self.find((dir / "a.obj").string() + ":1: 'mtllib a.obj' names the OBJ file itself"), std::string::npos)
+        << self;
+    const std::string fallback =
+        error(AssetInput::ObjWithMtl, "mtllib a.mtl/x/a.obj\nmap_Kd missing.png\n", "0.5\n");
+    EXPECT_NE(fallback.find("the OBJ would be read as its own material library"), std::string::npos) << fallback;
+  }
+  // Any file an OBJ names as its material library is checked as one, whatever its extension.
+  {
+    const fs::path other = test::freshDir("asset_fuzz_findings_lib");
+    fuzz::writeBytes(other / "x.obj", "mtllib lib.txt\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    fuzz::writeBytes(other / "lib.txt", "map_Kd x.png\nnewmtl m\n");
+    EXPECT_NE(test::errorOf([&] { loadAsset((other / "x.obj").string(), AssetRef{}); })
+                  .find((other / "lib.txt").string() + ":1: 'map_Kd' comes before any 'newmtl'"),
+              std::string::npos)
+        << test::errorOf([&] { loadAsset((other / "x.obj").string(), AssetRef{}); });
+    fuzz::writeBytes(other / "lib.txt", "newmtl m\nmap_Kd x.png\n");
+    EXPECT_EQ(test::errorOf([&] { loadAsset((other / "x.obj").string(), AssetRef{}); }), "(no error)");
+  }
+  // A .glb made of OBJ text: refused before assimp hands it to another importer by its content.
+  {
+    const std::string message = error(AssetInput::Glb, "mtllib a.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "");
+    EXPECT_NE(message.find((dir / "a.glb").string() + ": not a readable glTF file (expected a binary glTF container"),
+              std::string::npos)
+        << message;
+    const std::string text = error(AssetInput::Gltf, "mtllib a.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "");
+    EXPECT_NE(text.find((dir / "a.gltf").string() + ": not a readable glTF file (expected a JSON object"),
+              std::string::npos)
+        << text;
+  }
   // A face of a mesh OBJ that tinyobjloader cannot read: the scene's error, not the first frame's.
   EXPECT_NE(error(AssetInput::MeshObj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n", "")
                 .find("$.objects[0].file: " + (dir / "m.obj").string() + ": "),

@@ -1,5 +1,6 @@
 #include "tracer/asset.hpp"
 
+#include <assimp/BaseImporter.h>
 #include <assimp/DefaultIOSystem.h>
 #include <assimp/GltfMaterial.h>
 #include <assimp/postprocess.h>
@@ -14,7 +15,9 @@
 #include <glm/gtc/type_ptr.hpp>
 #include <map>
 #include <set>
+#include <string>
 #include <unordered_map>
+#include <utility>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
@@ -33,12 +36,43 @@ namespace {
 // too (44 degrees by default); 60 keeps coarse cylinders smooth.
 constexpr float kCreaseAngleDegrees = 60.0f;
 
+// Calls f(lineNumber, keyword, rest) for each line of an OBJ or MTL text that holds a statement
+// (not blank, not a comment): the first word and the rest of the line without its surrounding blanks
+// (a name may hold spaces, as assimp reads it). Stops when f returns false.
+template <class F>
+void forEachStatement(const std::string& text, F f) {
+  int lineNumber = 0;
+  for (size_t at = 0; at < text.size();) {
+    const size_t end = std::min(text.find('\n', at), text.size());
+    const std::string line = text.substr(at, end - at);
+    at = end + 1;
+    ++lineNumber;
+    const size_t first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    const size_t keywordEnd = std::min(line.find_first_of(" \t\r", first), line.size());
+    const size_t restStart = line.find_first_not_of(" \t\r", keywordEnd);
+    const std::string rest =
+        restStart == std::string::npos ? "" : line.substr(restStart, line.find_last_not_of(" \t\r") + 1 - restStart);
+    if (!f(lineNumber, line.substr(first, keywordEnd - first), rest)) return;
+  }
+}
+
 // Opens files through assimp's default I/O but refuses oversized ones (before reading) and records
-// every file the importer opened (the MTL, .bin buffers), which the content hash covers.
+// every file the importer opened (the MTL, .bin buffers), which the content hash covers. For an OBJ
+// every file other than the OBJ is a material library, whatever its name ("mtllib a.glb"), and is
+// checked as one; the OBJ itself reached under another spelling is assimp 5.2's fallback for an
+// unusable "mtllib" ("mtllib a.mtl/x/a.obj" opened "dir//a.obj" as the MTL) and is refused, since
+// its MTL reader writes an OBJ's stray texture statement through a null material (a fuzzer find).
 class RecordingIOSystem : public Assimp::DefaultIOSystem {
  public:
   std::set<std::string> opened;
   std::string refused;  // the first file refused, with the reason
+
+  // `objPath`: the OBJ being imported, as given to ReadFile ("" for glTF).
+  explicit RecordingIOSystem(std::string objPath) : objPath_(std::move(objPath)) {
+    std::error_code ec;
+    if (!objPath_.empty()) objCanonical_ = fs::weakly_canonical(objPath_, ec).string();
+  }
 
   Assimp::IOStream* Open(const char* file, const char* mode) override {
     std::error_code ec;
@@ -54,7 +88,7 @@ class RecordingIOSystem : public Assimp::DefaultIOSystem {
       if (refused.empty()) refused = std::string(file) + ": not a regular file";
       return nullptr;
     }
-    if (std::string problem = mtlProblem(file); !problem.empty()) {
+    if (std::string problem = sideFileProblem(file); !problem.empty()) {
       if (refused.empty()) refused = problem;
       return nullptr;
     }
@@ -64,36 +98,77 @@ class RecordingIOSystem : public Assimp::DefaultIOSystem {
   }
 
  private:
+  std::string objPath_, objCanonical_;
+
+  std::string sideFileProblem(const char* file) const {
+    std::error_code ec;
+    if (!objPath_.empty()) {
+      if (file == objPath_) return "";
+      if (fs::weakly_canonical(file, ec).string() == objCanonical_)
+        return std::string(file) +
+               ": the OBJ would be read as its own material library (assimp's fallback for a 'mtllib' "
+               "line naming no readable file); expected 'mtllib' to name an existing .mtl file";
+      return mtlProblem(file);
+    }
+    std::string ext = fs::path(file).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return ext == ".mtl" ? mtlProblem(file) : "";
+  }
+
   // An MTL statement before the first "newmtl" belongs to no material, and assimp 5.2's MTL reader
   // writes a texture statement there ("map_Kd x.png", and any line starting with m, b or r, or
   // "disp", "norm") through a null material: a crash (found by scripts/fuzz.sh asset). Such a file
   // is refused before assimp reads it, naming the line. Returns "" when `file` is no such MTL.
   static std::string mtlProblem(const char* file) {
-    std::string ext = fs::path(file).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    if (ext != ".mtl") return "";
     std::string text;
     try {
       text = readText(file, kMaxAssetBytes);
     } catch (const Error&) {
       return "";  // unreadable: assimp's own open reports it
     }
-    int lineNumber = 0;
-    for (size_t at = 0; at < text.size();) {
-      const size_t end = std::min(text.find('\n', at), text.size());
-      const std::string line = text.substr(at, end - at);
-      at = end + 1;
-      ++lineNumber;
-      const size_t first = line.find_first_not_of(" \t\r");
-      if (first == std::string::npos || line[first] == '#') continue;
-      const std::string keyword = line.substr(first, line.find_first_of(" \t\r", first) - first);
-      if (keyword == "newmtl") return "";
-      return std::string(file) + ":" + std::to_string(lineNumber) + ": '" + keyword +
-             "' comes before any 'newmtl'; expected every MTL statement inside a material";
-    }
-    return "";
+    std::string problem;
+    forEachStatement(text, [&](int lineNumber, const std::string& keyword, const std::string&) {
+      if (keyword != "newmtl")
+        problem = std::string(file) + ":" + std::to_string(lineNumber) + ": '" + keyword +
+                  "' comes before any 'newmtl'; expected every MTL statement inside a material";
+      return false;  // only the first statement matters
+    });
+    return problem;
   }
 };
+
+// An OBJ whose "mtllib" names the OBJ itself: assimp 5.2 reads it as its own material library, and
+// a texture statement in it ("map_d") is written through a null material (SEGV, a fuzzer find).
+// Refused naming the line.
+void checkObjMaterialLibraries(const std::string& path, const std::string& bytes) {
+  std::error_code ec;
+  const std::string self = fs::weakly_canonical(path, ec).string();
+  forEachStatement(bytes, [&](int lineNumber, const std::string& keyword, const std::string& rest) {
+    if (keyword == "mtllib" && !rest.empty() &&
+        fs::weakly_canonical(fs::path(path).parent_path() / rest, ec).string() == self)
+      throw Error(path + ":" + std::to_string(lineNumber) + ": 'mtllib " + rest +
+                  "' names the OBJ file itself; expected a material library (.mtl)");
+    return true;
+  });
+}
+
+// A .gltf or .glb that neither of assimp's glTF readers accepts is refused before ReadFile: assimp
+// would otherwise try its other importers on it by content (an OBJ importer reading a .glb made of
+// OBJ text was one of the fuzzer's crashes).
+void checkGltfIsReadable(const std::string& path, Assimp::Importer& importer, Assimp::IOSystem* io) {
+  const std::string ext = fs::path(path).extension().string().substr(1);
+  for (size_t i = 0; i < importer.GetImporterCount(); ++i) {
+    std::string extensions = std::string(" ") + importer.GetImporterInfo(i)->mFileExtensions + " ";
+    std::transform(extensions.begin(), extensions.end(), extensions.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
+    if (extensions.find(" " + ext + " ") != std::string::npos && importer.GetImporter(i)->CanRead(path, io, true))
+      return;
+  }
+  throw Error(path + ": not a readable glTF file (expected " +
+              (ext == "glb" ? std::string("a binary glTF container: the magic 'glTF', version and chunks")
+                            : std::string("a JSON object with an \"asset\" that gives its \"version\"")) +
+              ")");
+}
 
 glm::mat4 toGlm(const aiMatrix4x4& m) {
   // assimp stores row-major (a1 a2 a3 a4 is the first row); glm is column-major.
@@ -591,9 +666,11 @@ AssetData loadAsset(const std::string& path, const AssetRef& ref) {
   Hasher hasher;
   hasher.add(bytes);
 
+  if (ext == ".obj") checkObjMaterialLibraries(path, bytes);
   Assimp::Importer importer;
-  auto* io = new RecordingIOSystem;  // the importer owns it
+  auto* io = new RecordingIOSystem(ext == ".obj" ? path : "");  // the importer owns it
   importer.SetIOHandler(io);
+  if (ext != ".obj") checkGltfIsReadable(path, importer, io);
   // Triangulate polygons; split points/lines into meshes of their own (counted and dropped).
   const aiScene* scene = importer.ReadFile(
       path, aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_ValidateDataStructure);

@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "core/error.hpp"
 #include "tracer/asset.hpp"
@@ -67,12 +68,16 @@ inline bool finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y
 inline bool importAssetOrReject(AssetInput kind, const std::string& main, const std::string& side,
                                 const std::filesystem::path& dir) {
   namespace fs = std::filesystem;
+  // Each input starts from an empty folder: a file left by an earlier input ("mtllib a.glb") made a
+  // finding depend on the process's history, and no single input reproduced it.
+  std::error_code ec;
+  std::vector<fs::path> leftovers;
+  for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) leftovers.push_back(e.path());
+  for (const fs::path& f : leftovers) fs::remove_all(f, ec);
   const fs::path file = mainFileOf(kind, dir);
   writeBytes(file, main);
   fs::path sideFile = file;
   sideFile.replace_extension(kind == AssetInput::ObjWithMtl ? ".mtl" : ".bin");
-  std::error_code ec;
-  fs::remove(sideFile, ec);
   if (!side.empty() && kind != AssetInput::MeshObj) writeBytes(sideFile, side);
   Scene scene;
   try {
