@@ -17,7 +17,7 @@ void printLine(const std::string& line) { std::cout << line << std::endl; }
 }  // namespace
 
 void addBenchCommand(CLI::App& app) {
-  auto* bench = app.add_subcommand("bench", "Benchmarks (tracer; denoise; reference; gpu-model; gpu-measured)");
+  auto* bench = app.add_subcommand("bench", "Benchmarks (tracer; denoise; reference; gpu-model; gpu-measured; rank-agreement)");
   bench->require_subcommand(1);
   addBenchReferenceCommand(bench);
   auto* tracer = bench->add_subcommand("tracer", "Tracer throughput: Mrays/s and Mpaths/s, Cornell box, 1 spp");
@@ -131,6 +131,22 @@ void addBenchCommand(CLI::App& app) {
   gpuMeasured->callback([gm] {
     const nlohmann::json out = benchGpuMeasured(gm->file, gm->device, printLine);
     if (!gm->json.empty()) writeTextAtomically(gm->json, out.dump(2));
+  });
+
+  auto* rank = bench->add_subcommand(
+      "rank-agreement",
+      "Do two runs of the same scenes (e.g. the quick preset and 2.5x its resolution: "
+      "scripts/bench_rank_agreement.sh) rank the methods alike? Kendall tau and flipped resolved pairs");
+  struct RankOptions {
+    std::string runA, runB, json;
+  };
+  auto ro = std::make_shared<RankOptions>();
+  rank->add_option("runA", ro->runA, "Run directory A (its results.json)")->required();
+  rank->add_option("runB", ro->runB, "Run directory B, the same scenes")->required();
+  rank->add_option("--json", ro->json, "Write results to this JSON file")->default_str("none");
+  rank->callback([ro] {
+    const nlohmann::json out = benchRankAgreement(ro->runA, ro->runB, printLine);
+    if (!ro->json.empty()) writeTextAtomically(ro->json, out.dump(2));
   });
 }
 

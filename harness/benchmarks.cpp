@@ -15,6 +15,8 @@
 #include "core/error.hpp"
 #include "harness/denoise_run.hpp"
 #include "metrics/error.hpp"
+#include "metrics/rank_agreement.hpp"
+#include "metrics/results.hpp"
 
 namespace arena {
 
@@ -377,6 +379,48 @@ json benchReference(const ReferenceBench& b, const ProgressFn& progress) {
                              {"gainCi95", {gain.lo, gain.hi}},
                              {"gainEstimator", "adaptive sobol (the study's references)"}});
   }
+  return out;
+}
+
+nlohmann::json benchRankAgreement(const std::string& runA, const std::string& runB, const ProgressFn& progress) {
+  const nlohmann::json a = loadResults(runA), b = loadResults(runB);
+  // The first common scene's size in each run: what the comparison is about.
+  auto size = [](const nlohmann::json& r, const std::string& scene) {
+    const nlohmann::json& s = r.at("scenes").value(scene, nlohmann::json::object());
+    return std::to_string(s.value("width", 0)) + "x" + std::to_string(s.value("height", 0));
+  };
+  const std::vector<SceneRankAgreement> scenes = compareRankings(a, b);
+  if (scenes.empty())
+    throw Error(runA + " and " + runB + ": no scene is ranked in both runs (expected runs of the same scenes)");
+  progress("rank agreement: " + runA + " (A, " + size(a, scenes.front().scene) + ") against " + runB + " (B, " +
+           size(b, scenes.front().scene) + "), ranked on " + scenes.front().metric);
+  char line[256];
+  std::snprintf(line, sizeof line, "%-22s %7s %10s %10s %10s %6s", "scene", "methods", "tau ranks", "tau values",
+                "resolved", "flips");
+  progress(line);
+  nlohmann::json out = {{"runA", runA}, {"runB", runB}, {"scenes", nlohmann::json::array()}};
+  double tauSum = 0;
+  int tauCount = 0, flips = 0;
+  for (const SceneRankAgreement& s : scenes) {
+    std::snprintf(line, sizeof line, "%-22s %7zu %10.2f %10.2f %4d/%-2d/%-2d %6zu", s.scene.c_str(), s.methods.size(),
+                  s.tauRanks, s.tauValues, s.resolvedA, s.resolvedB, s.resolvedBoth, s.flips.size());
+    progress(line);
+    for (const RankFlip& f : s.flips)
+      progress("    flip: " + f.better + " better than " + f.worse + " in A (" + std::to_string(f.diffA) +
+               "), worse in B (" + std::to_string(f.diffB) + ")");
+    if (std::isfinite(s.tauRanks)) {
+      tauSum += s.tauRanks;
+      ++tauCount;
+    }
+    flips += int(s.flips.size());
+    out["scenes"].push_back(s.toJson());
+  }
+  out["meanTauRanks"] = tauCount > 0 ? nlohmann::json(tauSum / tauCount) : nlohmann::json();
+  out["flips"] = flips;
+  progress("resolved: pairs resolved in A / in B / in both; a flip is resolved in both in opposite orders");
+  std::snprintf(line, sizeof line, "mean tau (ranks) over %d scene(s): %.2f; %d flip(s)", tauCount,
+                tauCount > 0 ? tauSum / tauCount : std::nan(""), flips);
+  progress(line);
   return out;
 }
 

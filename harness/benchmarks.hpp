@@ -44,6 +44,12 @@ struct ReferenceBench {
 };
 nlohmann::json benchReference(const ReferenceBench& bench, const ProgressFn& progress);
 
+// `bench rank-agreement`: whether two runs of the same scenes (the quick preset and a larger
+// resolution: scripts/bench_rank_agreement.sh) rank the methods alike -- per scene Kendall's tau-b
+// on the ranks with ties and on the values, and the pairs resolved in both runs in opposite orders
+// (metrics/rank_agreement.hpp). Each run's directory holds its results.json.
+nlohmann::json benchRankAgreement(const std::string& runA, const std::string& runB, const ProgressFn& progress);
+
 // One "bilateral unit" (BU): the median time of cv::bilateralFilter(src, dst, 5, 0.1, 2.0) on a
 // width x height CV_32FC3 image, measured in this process.
 double bilateralUnitMs(int width, int height, int repetitions);
