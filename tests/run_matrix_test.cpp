@@ -12,6 +12,25 @@
 #include "harness/reference_quality.hpp"
 #include "harness/run_matrix.hpp"
 #include "tests/test_util.hpp"
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <regex>
+#include "core/atomic_file.hpp"
+#include "core/json_reader.hpp"
+#include "core/non_finite.hpp"
+#include "core/sequence.hpp"
+#include "harness/denoise_run.hpp"
+#include "harness/scene_selection.hpp"
+#include "tracer/render.hpp"
+#include "tests/contract_fixture.hpp"
 
 namespace arena {
 namespace {
@@ -220,6 +239,161 @@ TEST(RunMatrix, BadInputIsAClearError) {
     EXPECT_NE(std::string(e.what()).find("missing channel 'motion'"), std::string::npos) << e.what();
   }
   EXPECT_THROW(compareRuns(json{{"pairs", json::array()}}, json{{"pairs", json::array()}}, {{"flipp", 0.02}}), Error);
+}
+
+
+// ---- Contract: bad input and state ------------------------------------------------------------
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+TEST(RunMatrixContract, TwoSceneFilesWithOneStemCannotShareARun) {
+  fs::path dir = test::freshDir("same_stem");
+  fs::path a = contract::writeScene(dir / "a", "room", contract::minimalScene()),
+           b = contract::writeScene(dir / "b", "room", contract::minimalScene());
+  try {
+    selectScenes(a.string() + "," + b.string(), dir.string());
+    ADD_FAILURE() << "accepted two scenes named room";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("share the name 'room'"), std::string::npos) << e.what();
+  }
+}
+
+TEST(RunMatrixContract, BadOutputsFailBeforeAnyWorkNamingTheFile) {
+  struct Case {
+    const char* name;
+    std::function<void(const fs::path&)> make;
+    const char* message;
+  };
+  const std::vector<Case> cases = {
+      {"garbage_db",
+       [](const fs::path& d) { writeTextAtomically(d / "results.db", std::string(5000, 'x')); },
+       "results.db: "},
+      {"foreign_schema",
+       [](const fs::path& d) {
+         sqlite3* h = nullptr;
+         sqlite3_open((d / "results.db").c_str(), &h);
+         sqlite3_exec(h, "CREATE TABLE summaries (x INTEGER); INSERT INTO summaries VALUES (1);",
+                      nullptr, nullptr, nullptr);
+         sqlite3_close(h);
+       },
+       "results.db: another schema (table"},
+      {"truncated_db",
+       [](const fs::path& d) {
+         json r = {{"name", "x"},
+                   {"environment", json::object()},
+                   {"settings", json::object()},
+                   {"pairs", json::array()}};
+         for (int i = 0; i < 200; ++i)  // enough rows for several pages
+           r["pairs"].push_back({{"scene", std::string("s").append(std::to_string(i))},
+                                 {"denoiser", std::string(200, 'd')},
+                                 {"label", "l"},
+                                 {"params", json::object()},
+                                 {"status", "failed"},
+                                 {"error", "e"}});
+         appendToDatabase(d / "results.db", r);
+         fs::resize_file(d / "results.db", fs::file_size(d / "results.db") / 2);
+       },
+       "results.db: "},
+      {"foreign_json",
+       [](const fs::path& d) { writeTextAtomically(d / "results.json", "{\"mine\": 1}"); },
+       "results.json: not an arena results file; refusing to replace it"},
+  };
+  for (const Case& c : cases) {
+    RunConfig cfg = contract::tinyRun(c.name);
+    c.make(cfg.out);
+    const bool hadJson = fs::exists(cfg.out / "results.json");
+    try {
+      runMatrix(cfg);
+      ADD_FAILURE() << c.name << ": the run went ahead";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(c.message), std::string::npos)
+          << c.name << ": " << e.what();
+    }
+    EXPECT_TRUE(fs::is_empty(cfg.cache)) << c.name << ": rendered before checking the outputs";
+    EXPECT_EQ(fs::exists(cfg.out / "results.json"), hadJson) << c.name;
+  }
+}
+
+TEST(RunMatrixContract, MergeCreatesItsOutputDirectory) {
+  RunConfig a = contract::tinyRun("merge_a"), b = contract::tinyRun("merge_b");
+  a.denoisers = b.denoisers = {{"passthrough", {}, ""}, {"temporal", {}, ""}};
+  b.cache = a.cache;
+  a.shardIndex = 0;
+  b.shardIndex = 1;
+  a.shardCount = b.shardCount = 2;
+  runMatrix(a);
+  runMatrix(b);
+  fs::path out = test::freshDir("merge_out") / "not" / "there";
+  json merged = mergeRuns({a.out, b.out}, out);
+  EXPECT_EQ(merged["pairs"].size(), 2u);
+  EXPECT_TRUE(fs::exists(out / "results.json"));
+  EXPECT_EQ(test::countRows(out / "results.db", "pairs"), 2);
+}
+
+// Rewrites `layer` channel `channel` of a cached EXR (keeping its attributes, so the cache still
+// trusts it) with NaN at the first `count` pixels.
+void poisonLayer(const fs::path& file, const std::vector<LayerSpec>& specs, const std::string& layer, int channel,
+                 int count) {
+  ExrContents c = readExr(file, specs);
+  Image& image = c.layers.get(layer);
+  for (int i = 0; i < count; ++i) image.plane(channel)[size_t(i)] = std::numeric_limits<float>::quiet_NaN();
+  writeExr(file, c.layers, specs, c.attributes);
+}
+
+TEST(RunMatrixContract, GuideAndGradientNaNsAreSanitisedCountedAndNamedInAWarning) {
+  // The rule itself: NaN/Inf -> 0, and a gradient sample with any non-finite field is invalid.
+  LayerSet samples;
+  Image gradient(2, 1, 5, 1.0f);
+  gradient.plane(2)[0] = std::numeric_limits<float>::infinity();  // lumNew of sample 0
+  samples.set("gradient", gradient);
+  NonFiniteCounts counts;
+  EXPECT_EQ(sanitizeGradientSamples(samples, counts), 1);
+  EXPECT_EQ(counts, (NonFiniteCounts{{"gradients: gradient.lumNew", 1}}));
+  EXPECT_EQ(samples.get("gradient").plane(2)[0], 0.0f);
+  EXPECT_EQ(samples.get("gradient").plane(4)[0], 0.0f) << "the sample is not marked invalid";
+  EXPECT_EQ(samples.get("gradient").plane(4)[1], 1.0f) << "a clean sample was touched";
+
+  // A-SVGF reads the guides and the gradient samples: NaNs in normal.Y of frame 2 and in lumNew of
+  // frame 2's gradient samples are replaced, counted per channel and named in the pair's warning.
+  RunConfig c;
+  c.name = "nonfinite";
+  c.cache = test::freshDir("nonfinite_cache");
+  c.render = test::tinySettings(24, 16, 4, 4);
+  c.scenes = {test::shippedScene("cornell_static")};
+  c.denoisers = {{"asvgf", {}, ""}};
+  c.baselines = false;
+  c.warmup = 1;
+  c.flip = "none";
+  c.keepFrames = "none";
+  c.out = test::freshDir("nonfinite_clean");
+  const fs::path dir = sequenceDir(c.scenes[0], c.render, c.cache);
+  json r = runMatrix(c);
+  ASSERT_EQ(r["pairs"].size(), 1u);
+  ASSERT_EQ(r["pairs"][0]["status"], "ok") << r["pairs"][0].dump();
+  EXPECT_EQ(r["pairs"][0]["sanitizedInputs"]["total"], 0);
+  EXPECT_TRUE(r["pairs"][0]["sanitizedInputs"]["channels"].empty());
+  for (const json& w : r["pairs"][0]["warnings"]) EXPECT_EQ(w.get<std::string>().find("non-finite"), std::string::npos) << w;
+
+  poisonLayer(Sequence::framePath(dir, 2), channels::frameLayers(), "normal", 1, 30);
+  poisonLayer(Sequence::gradientPath(dir, 2), channels::gradientLayers(), "gradient", 2, 30);
+  c.out = test::freshDir("nonfinite_poisoned");
+  r = runMatrix(c);
+  ASSERT_EQ(r["pairs"].size(), 1u);
+  const json& pair = r["pairs"][0];
+  // status ok: the harness checked every output value was finite.
+  ASSERT_EQ(pair["status"], "ok") << pair.dump();
+  EXPECT_TRUE(std::isfinite(pair["summary"]["relMse"]["mean"].get<double>()));
+  EXPECT_EQ(pair["sanitizedInputs"]["total"], 60);
+  EXPECT_EQ(pair["sanitizedInputs"]["channels"],
+            json({{"normal.Y", 30}, {"gradients: gradient.lumNew", 30}}));
+  ASSERT_FALSE(pair["warnings"].empty());
+  EXPECT_EQ(pair["warnings"][0],
+            "60 non-finite input values (gradients: gradient.lumNew x30, normal.Y x30) were replaced by 0 "
+            "before the denoiser ran; its results may differ from those on clean inputs");
+  // The scene says what its cache holds, per file and channel.
+  EXPECT_EQ(r["scenes"]["cornell_static"]["nonFiniteInputs"]["frame 2: normal.Y"], 30);
+  EXPECT_EQ(r["scenes"]["cornell_static"]["nonFiniteInputs"]["gradients 2: gradient.lumNew"], 30);
 }
 
 }  // namespace

@@ -7,6 +7,29 @@
 #include "core/error.hpp"
 #include "tests/test_util.hpp"
 #include "tracer/scene.hpp"
+#include <signal.h>
+#include <sqlite3.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <regex>
+#include "core/atomic_file.hpp"
+#include "core/json_reader.hpp"
+#include "core/non_finite.hpp"
+#include "core/sequence.hpp"
+#include "harness/denoise_run.hpp"
+#include "harness/run_matrix.hpp"
+#include "harness/scene_selection.hpp"
+#include "metrics/compare.hpp"
+#include "metrics/results.hpp"
+#include "tracer/render.hpp"
+#include "tests/contract_fixture.hpp"
 
 namespace arena {
 namespace {
@@ -142,6 +165,212 @@ TEST(Scene, UnorderedKeysAreRejected) {
 TEST(Scene, MissingMeshFileIsNamed) {
   std::string e = errorOf(replaced(kMinimal, R"("shape": "quad", "material")", R"("shape": "mesh", "file": "nope.obj", "material")"));
   EXPECT_NE(e.find("nope.obj"), std::string::npos) << e;
+}
+
+
+// ---- Contract: bad input and state ------------------------------------------------------------
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+TEST(SceneContract, DeeplyNestedJsonIsRejectedBeforeAnyRecursiveWalk) {
+  for (const std::string& open : {std::string("["), std::string("{\"a\":")}) {
+    std::string text;
+    for (int i = 0; i < 100000; ++i) text += open;
+    try {
+      parseScene(text, "deep.json");
+      ADD_FAILURE() << "accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("deep.json: JSON nested deeper than 64 levels"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  // Brackets inside strings are text, not nesting.
+  json s = contract::minimalScene();
+  s["purpose"] = std::string(1000, '[');
+  EXPECT_EQ(contract::sceneError(s), "");
+  // Through the CLI: exit 2 with the file named, not a segfault (exit 139).
+  fs::path dir = test::freshDir("deep_cli");
+  writeTextAtomically(dir / "deep.json", std::string(200000, '['));
+  contract::CliResult r = contract::arenaCli("scenes --scenes-dir " + dir.string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("deep.json: JSON nested deeper"), std::string::npos) << r.output;
+}
+
+TEST(SceneContract, UnusableCamerasAreErrorsNamingTheJsonPath) {
+  auto withKey = [](const json& key) {
+    json s = contract::minimalScene();
+    for (auto& [k, v] : key.items()) s["camera"]["keys"][0][k] = v;
+    return contract::sceneError(s);
+  };
+  EXPECT_NE(withKey({{"up", {0, 0, 0}}})
+                .find("scenes/t.json: $.camera.keys[0].up: expected a usable camera basis: up "
+                      "is the zero vector"),
+            std::string::npos)
+      << withKey({{"up", {0, 0, 0}}});
+  EXPECT_NE(withKey({{"up", {0, 0, -1}}, {"eye", {0, 0, 4}}, {"target", {0, 0, 0}}})
+                .find("is parallel to the view"),
+            std::string::npos);
+  EXPECT_NE(withKey({{"eye", {1e39, 0, 0}}})
+                .find("$.camera.keys[0].eye: expected values that fit a float"),
+            std::string::npos);
+  EXPECT_NE(withKey({{"eye", {1e7, 0, 0}}}).find("$.camera.keys[0].eye: expected values within"),
+            std::string::npos);
+  EXPECT_NE(withKey({{"target", {0, 1, 4}}}).find("target equals the eye"), std::string::npos);
+  // Each key is fine, the interpolation between them is not: up passes through zero at frame 1.
+  json s = contract::minimalScene();
+  s["camera"]["keys"].push_back({{"frame", 2}, {"up", {0, -1, 0}}});
+  EXPECT_NE(
+      contract::sceneError(s).find(
+          "$.camera.keys: the interpolated camera at frame 1 is unusable: up is the zero vector"),
+      std::string::npos)
+      << contract::sceneError(s);
+}
+
+TEST(SceneContract, IntegersBeyondTheirRangeAreErrorsNotWrapped) {
+  struct Case {
+    const char* pointer;
+    json value;
+    const char* message;
+  };
+  const std::vector<Case> cases = {
+      {"/frames", 4294967300LL, "$.frames: expected an integer in [1, 100000], got 4294967300"},
+      {"/frames", 0, "$.frames: expected an integer in [1, 100000], got 0"},
+      {"/seed", 4294967297LL, "$.seed: expected an integer in [0, 2147483647], got 4294967297"},
+      {"/seed", -1, "$.seed: expected an integer in [0, 2147483647], got -1"},
+      {"/max_bounces", 2147483648LL,
+       "$.max_bounces: expected an integer in [1, 64], got 2147483648"},
+      {"/resolution", json::array({4294967312LL, 8}), "$.resolution: expected two integers"},
+      {"/resolution", json::array({1e39, 8}), "$.resolution: expected two integers"},
+      {"/camera/keys/0/frame", 4294967296LL,
+       "$.camera.keys[0].frame: expected an integer in [-2147483648"},
+      {"/frames", 18446744073709551615ULL, "got 18446744073709551615"},
+  };
+  for (const Case& c : cases) {
+    json s = contract::minimalScene();
+    s[json::json_pointer(c.pointer)] = c.value;
+    EXPECT_NE(contract::sceneError(s).find(c.message), std::string::npos)
+        << c.pointer << ": " << contract::sceneError(s);
+  }
+  // The CLI's integers are range-checked too (CLI11 rejects what does not fit an int).
+  contract::CliResult r = contract::arenaCli("render cornell_static --frames 4294967300 --cache /nonexistent/never");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("--frames"), std::string::npos) << r.output;
+}
+
+TEST(SceneContract, RadianceAndCoordinatesThatOverflowFloatAreRejected) {
+  json s = contract::minimalScene();
+  s["materials"]["lamp"]["emission"] = {1e30, 0, 0};
+  EXPECT_NE(contract::sceneError(s).find("$.materials.lamp.emission: expected values within"),
+            std::string::npos)
+      << contract::sceneError(s);
+  s = contract::minimalScene();
+  s["lights"][0]["keys"][0]["color"] = {1e6, 1, 1};
+  s["lights"][0]["keys"][0]["intensity"] = 1e9;
+  EXPECT_NE(contract::sceneError(s).find("$.lights[0].keys[0].color: expected intensity * color"),
+            std::string::npos);
+  s = contract::minimalScene();
+  s["objects"][0]["keys"][0]["translate"] = {0, 3e38, 0};
+  EXPECT_NE(contract::sceneError(s).find("$.objects[0].keys[0].translate: expected values within"),
+            std::string::npos);
+}
+
+TEST(SceneContract, MeshFilesMustBeBoundedRegularFiles) {
+  fs::path dir = test::freshDir("mesh_files");
+  auto meshScene = [&](const std::string& file) {
+    json s = contract::minimalScene();
+    s["objects"].push_back({{"name", "m"},
+                            {"shape", "mesh"},
+                            {"file", file},
+                            {"material", "white"},
+                            {"keys", json::array({{{"frame", 0}}})}});
+    return contract::sceneError(s, (dir / "t.json").string());
+  };
+  EXPECT_NE(meshScene("/dev/zero").find("$.objects[1].file: /dev/zero: not a regular file"),
+            std::string::npos)
+      << meshScene("/dev/zero");
+  fs::create_directories(dir / "folder.obj");
+  EXPECT_NE(meshScene("folder.obj").find("not a regular file"), std::string::npos);
+  {  // a sparse file just over the limit: costs no disk
+    FILE* f = std::fopen((dir / "huge.obj").c_str(), "wb");
+    ASSERT_TRUE(f);
+    std::fclose(f);
+    fs::resize_file(dir / "huge.obj", kMaxMeshBytes + 1);
+  }
+  EXPECT_NE(meshScene("huge.obj").find("-byte limit"), std::string::npos) << meshScene("huge.obj");
+}
+
+TEST(SceneContract, CollidingNamesAndDuplicateKeysAreErrorsNamingBothPlaces) {
+  json s = contract::minimalScene();
+  s["objects"].push_back(s["objects"][0]);
+  EXPECT_NE(contract::sceneError(s).find("$.objects[1].name: 'floor' is already the name of $.objects[0]"),
+            std::string::npos)
+      << contract::sceneError(s);
+  s = contract::minimalScene();
+  s["lights"].push_back(s["lights"][0]);
+  EXPECT_NE(contract::sceneError(s).find("$.lights[1].name: 'light' is already the name of $.lights[0]"),
+            std::string::npos)
+      << contract::sceneError(s);
+  s = contract::minimalScene();
+  s["lights"][0]["name"] = "floor";
+  EXPECT_NE(contract::sceneError(s).find("$.lights[0].name: 'floor' is already the name of $.objects[0]"),
+            std::string::npos)
+      << contract::sceneError(s);
+  // Keys given twice: nlohmann would keep one of them silently. Each case inserts a member
+  // right after `after` in the scene's text; the error names the object's path and both members.
+  struct Case {
+    std::string after, member, message;
+  };
+  const std::vector<Case> cases = {
+      {"{", "\"frames\": 7,", "scenes/t.json: $: key \"frames\" is given twice (members 1 and "},
+      {"\"materials\":{", "\"white\":{\"albedo\":[0.1,0.1,0.1]},",
+       "$.materials: key \"white\" is given twice"},
+      {"\"keys\":[{", "\"fov\":30,", "$.camera.keys[0]: key \"fov\" is given twice"},
+  };
+  for (const Case& c : cases) {
+    std::string text = contract::minimalScene().dump();
+    text.insert(text.find(c.after) + c.after.size(), c.member);
+    EXPECT_NE(contract::sceneTextError(text).find(c.message), std::string::npos) << contract::sceneTextError(text);
+  }
+  EXPECT_EQ(contract::sceneTextError(contract::minimalScene().dump()), "");
+}
+
+TEST(SceneContract, UnusableVerticesAndOverbrightAssetsAreErrorsNamingFileAndElement) {
+  fs::path dir = test::freshDir("vanishing_geometry");
+  auto meshError = [&](const std::string& obj) {
+    writeTextAtomically(dir / "m.obj", obj);
+    json s = contract::minimalScene();
+    s["objects"].push_back({{"name", "m"},
+                            {"shape", "mesh"},
+                            {"file", "m.obj"},
+                            {"material", "white"},
+                            {"keys", json::array({{{"frame", 0}}})}});
+    return contract::sceneError(s, (dir / "t.json").string());
+  };
+  EXPECT_EQ(meshError("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), "");
+  std::string e = meshError("v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n");
+  EXPECT_NE(e.find("$.objects[1].file"), std::string::npos) << e;
+  EXPECT_NE(e.find("m.obj:2: vertex 2: coordinate 2 is 'nan'"), std::string::npos) << e;
+  e = meshError("# a comment\nv 0 0 0\nv 1 0 0\nv 0 1e39 0\nf 1 2 3\n");
+  EXPECT_NE(e.find("m.obj:4: vertex 3: coordinate 2 is '1e39'"), std::string::npos) << e;
+  // Assets: a vertex whose triangle's cross product overflows, an emitter beyond kMaxRadiance.
+  auto assetError = [&](const std::string& obj, const std::string& mtl) {
+    writeTextAtomically(dir / "a.obj", "mtllib a.mtl\n" + obj);
+    writeTextAtomically(dir / "a.mtl", mtl);
+    json s = contract::minimalScene();
+    s["objects"].push_back({{"name", "thing"},
+                            {"asset", {{"file", "a.obj"}, {"unitMeters", 1.0}, {"upAxis", "y"}}},
+                            {"keys", json::array({{{"frame", 0}}})}});
+    return contract::sceneError(s, (dir / "t.json").string());
+  };
+  const std::string tri = "usemtl lamp\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  EXPECT_EQ(assetError(tri, "newmtl lamp\nKe 4 4 4\n"), "");
+  e = assetError(tri, "newmtl lamp\nKe 1e20 1e20 1e20\n");
+  EXPECT_NE(e.find("material 'lamp' emits"), std::string::npos) << e;
+  EXPECT_NE(e.find("a.obj"), std::string::npos) << e;
+  e = assetError("usemtl lamp\nv 0 0 0\nv 1e30 0 0\nv 0 1 0\nf 1 2 3\n", "newmtl lamp\nKd 1 1 1\n");
+  EXPECT_NE(e.find("has a non-finite position or one beyond +-1e18"), std::string::npos) << e;
 }
 
 }  // namespace

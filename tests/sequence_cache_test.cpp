@@ -12,6 +12,26 @@
 #include "core/sequence.hpp"
 #include "tests/test_util.hpp"
 #include "tracer/render.hpp"
+#include <signal.h>
+#include <sqlite3.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <regex>
+#include "core/json_reader.hpp"
+#include "core/non_finite.hpp"
+#include "harness/denoise_run.hpp"
+#include "harness/run_matrix.hpp"
+#include "harness/scene_selection.hpp"
+#include "metrics/compare.hpp"
+#include "metrics/results.hpp"
+#include "tests/contract_fixture.hpp"
 
 namespace arena {
 namespace {
@@ -139,6 +159,84 @@ TEST_F(CacheRender, ReadingAMissingOrIncompleteSequenceIsAClearError) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("frame_0004.exr"), std::string::npos) << e.what();
   }
+}
+
+
+// ---- Contract: bad input and state ------------------------------------------------------------
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+// Every entry under `root` (directories included) with its inode, size and mtime: a file written
+// in place changes its mtime, an atomic replace its inode, and a temporary created, renamed or
+// removed changes its directory's mtime.
+std::map<std::string, std::string> treeSnapshot(const fs::path& root) {
+  std::map<std::string, std::string> out;
+  auto add = [&](const fs::path& p) {
+    struct stat st {};
+    if (lstat(p.c_str(), &st) != 0) return;
+    out[p.string()] = std::to_string(st.st_ino) + " " + std::to_string(st.st_size) + " " +
+                      std::to_string(st.st_mtim.tv_sec) + "." + std::to_string(st.st_mtim.tv_nsec);
+  };
+  add(root);
+  for (auto& e : fs::recursive_directory_iterator(root)) add(e.path());
+  return out;
+}
+
+TEST(SequenceCacheContract, ACompleteCacheIsReadWithoutWriting) {
+  fs::path cache = test::freshDir("readonly_cache");
+  Scene scene = test::shippedScene("cornell_static");
+  RenderSettings settings = test::tinySettings(16, 8, 2, 2);
+  fs::path dir = renderSequence(scene, settings, cache, nullptr);
+  // Back-date every entry by an hour, so that a write within the same clock tick still shows
+  // (permissions cannot show it: root writes through them).
+  const auto past = fs::file_time_type::clock::now() - std::chrono::hours(1);
+  fs::last_write_time(cache, past);
+  for (auto& e : fs::recursive_directory_iterator(cache)) fs::last_write_time(e.path(), past);
+  const auto before = treeSnapshot(cache);
+  ASSERT_GT(before.size(), 4u);
+  EXPECT_EQ(renderSequence(scene, settings, cache, nullptr), dir);
+  EXPECT_NO_THROW(Sequence::open(dir).frame(1));
+  EXPECT_EQ(treeSnapshot(cache), before)
+      << "the complete cache was written to although nothing changed";
+  // A read-only cache directory (enforced for normal users only): rendering and opening still work.
+  fs::permissions(dir, fs::perms::owner_write | fs::perms::group_write | fs::perms::others_write,
+                  fs::perm_options::remove);
+  EXPECT_NO_THROW(renderSequence(scene, settings, cache, nullptr));
+  EXPECT_NO_THROW(Sequence::open(dir).frame(1));
+  fs::permissions(dir, fs::perms::owner_write, fs::perm_options::add);
+  EXPECT_EQ(treeSnapshot(cache), before);
+}
+
+TEST(SequenceCacheContract, ADeadWritersTemporaryOnThisMachineIsCleanedAtAnyAge) {
+  fs::path dir = test::freshDir("stale_tmp_host");
+  const std::string own = temporaryPathFor(dir / "x.json").filename().string();
+  const size_t at = own.find('@'), underscore = own.find('_', at);
+  ASSERT_NE(at, std::string::npos) << own;
+  const std::string host = own.substr(at + 1, underscore - at - 1);
+  const std::string dead = "999999999";
+  writeTextAtomically(dir / ("frame_0003.tmp" + dead + "@" + host + "_4.exr"), "partial");
+  writeTextAtomically(dir / ("frame_0004.tmp" + dead + "@otherhost_5.exr"), "partial");
+  EXPECT_EQ(removeStaleTemporaries(dir), 1);
+  EXPECT_FALSE(fs::exists(dir / ("frame_0003.tmp" + dead + "@" + host + "_4.exr")));
+  EXPECT_TRUE(fs::exists(dir / ("frame_0004.tmp" + dead + "@otherhost_5.exr")))
+      << "a young temporary of another machine may be a live write";
+  // A render killed mid-write and rerun at once: the rerun leaves no temporary behind.
+  fs::path cache = test::freshDir("stale_tmp_cache");
+  Scene scene = test::shippedScene("cornell_static");
+  RenderSettings settings = test::tinySettings(8, 8, 2, 1);
+  fs::path seq = renderSequence(scene, settings, cache, nullptr);
+  fs::path frame;
+  for (auto& e : fs::directory_iterator(seq))
+    if (e.path().filename().string().rfind("frame_", 0) == 0 && e.path().extension() == ".exr")
+      frame = e.path();
+  ASSERT_FALSE(frame.empty());
+  const fs::path leftover = seq / (frame.stem().string() + ".tmp" + dead + "@" + host + "_7.exr");
+  fs::copy_file(frame, leftover);
+  fs::remove(seq / "sequence.json");  // the kill came before the sequence was complete
+  renderSequence(scene, settings, cache, nullptr);
+  EXPECT_FALSE(fs::exists(leftover));
+  EXPECT_NO_THROW(Sequence::open(seq).frame(1));
 }
 
 }  // namespace

@@ -1,7 +1,7 @@
 // `box`: the worked example of docs/extending.md -- a built-in-style denoiser in one file. A box
 // filter over the (2 radius + 1)^2 window that averages only the pixels of the same mesh (a
 // crude edge-stopping term); sky pixels (meshId -1) pass through. It is not registered in the
-// arena: tests/denoisers_variants_test.cpp puts it through the same contract tests as every
+// arena: tests/variants_test.cpp puts it through the same contract tests as every
 // registered variant, so the example keeps compiling and keeps the Denoiser contract. To make it
 // a built-in, copy it to denoisers/, declare boxInfo() in denoisers/variants.hpp and add it to
 // builtinDenoisers() there.

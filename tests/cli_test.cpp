@@ -1,0 +1,248 @@
+// cli/: every command refuses bad options, values and states with a message that names them, and
+// exits with the documented code; the readers of a run (printout, compare, report, history) say why
+// a summary is absent. Through the built `arena`.
+#include <gtest/gtest.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sqlite3.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <regex>
+#include "core/atomic_file.hpp"
+#include "core/error.hpp"
+#include "core/json_reader.hpp"
+#include "core/non_finite.hpp"
+#include "core/sequence.hpp"
+#include "harness/denoise_run.hpp"
+#include "harness/run_matrix.hpp"
+#include "harness/scene_selection.hpp"
+#include "metrics/compare.hpp"
+#include "metrics/results.hpp"
+#include "tracer/render.hpp"
+#include "tests/contract_fixture.hpp"
+#include "tests/test_util.hpp"
+
+namespace arena {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+TEST(CliContract, NegativeWarmupIsRejectedByTheCli) {
+  fs::path out = test::freshDir("warmup_cli");
+  contract::CliResult r = contract::arenaCli(
+      "run --scenes cornell_static --denoisers passthrough --no-baselines --resolution 8x8 "
+      "--frames 2 --ref-spp 1 --cache " +
+      (out / "cache").string() + " --out " + (out / "run").string() + " --warmup -3");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("--warmup"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("-3"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out / "run" / "results.json"));
+}
+
+TEST(CliContract, AResolutionBeyondMemoryIsAClearErrorBeforeAllocating) {
+  json s = contract::minimalScene();
+  s["resolution"] = {16384, 16384};
+  fs::path dir = test::freshDir("huge_scene");
+  fs::path file = contract::writeScene(dir, "huge", s);
+  Scene scene = loadScene(file.string());
+  RenderSettings settings = test::tinySettings(16384, 16384, 100000, 1);
+  try {
+    requireFitsInMemory(scene, settings, true);
+    ADD_FAILURE() << "16384x16384 x 100000 frames fits?";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("huge.json: 16384x16384 x 100000 frames needs about"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_NO_THROW(requireFitsInMemory(scene, test::tinySettings(64, 32, 10, 1), true));
+  contract::CliResult r =
+      contract::arenaCli("run --scenes " + file.string() + " --denoisers passthrough --frames 100000 --out " +
+               (dir / "run").string() + " --cache " + (dir / "cache").string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("GiB of memory"), std::string::npos) << r.output;
+}
+
+TEST(CliContract, ZeroNegativeAndMalformedCliValuesAreRejected) {
+  fs::path cache = test::freshDir("cli_values");
+  // Each would otherwise fall back to a default or parse a prefix; all must fail at parse time.
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"--frames 0", "--frames"},
+      {"--frames -2", "--frames"},
+      {"--ref-spp 0", "--ref-spp"},
+      {"--max-bounces 0", "--max-bounces"},
+      {"--ref-rel-error -1", "--ref-rel-error"},
+      {"--ref-rel-error nan", "--ref-rel-error"},
+      {"--resolution 0x8", "--resolution"},
+      {"--resolution 8x8junk", "--resolution"},
+      {"--resolution 99999999999x8", "--resolution"},
+  };
+  for (auto& [flags, name] : cases) {
+    contract::CliResult r =
+        contract::arenaCli("render cornell_static --resolution 8x8 --ref-spp 1 --frames 1 --cache " +
+                 cache.string() + " " + flags);
+    EXPECT_NE(r.status, 0) << flags << "\n" << r.output;
+    EXPECT_NE(r.output.find(name), std::string::npos) << flags << "\n" << r.output;
+  }
+  EXPECT_TRUE(fs::is_empty(cache)) << "a rejected command rendered something";
+}
+
+TEST(CliContract, ShardsParamsAndSweepsAreStrict) {
+  EXPECT_EQ(parseShard("3/8"), std::make_pair(3, 8));
+  for (const char* bad :
+       {"0/1junk", "0/0", "2/2", "-1/2", "0/4294967297", "1/", "/2", "1 /2", "0x1/2"})
+    EXPECT_THROW(parseShard(bad), Error) << bad;
+  try {
+    parseParamAssignments({"svgf.sigmaL=4", "svgf.sigmaL=8"});
+    ADD_FAILURE() << "accepted a duplicate --param";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("svgf.sigmaL is already set to '4'"), std::string::npos)
+        << e.what();
+  }
+  fs::path dir = test::freshDir("sweep_cli");
+  const std::string common =
+      " --scenes cornell_static --resolution 8x8 --frames 2 --ref-spp 1 --no-baselines --cache " +
+      (dir / "cache").string() + " --out " + (dir / "run").string();
+  contract::CliResult r =
+      contract::arenaCli("sweep --denoiser svgf --grid 'sigmaL=[2,4]' --param eaw.sigmaL=3" + common);
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("this sweep runs only svgf"), std::string::npos) << r.output;
+  r = contract::arenaCli("sweep --denoiser svgf --grid 'sigmaL=[2,4]' --grid 'sigmaL=[8]'" + common);
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("already an axis"), std::string::npos) << r.output;
+  r = contract::arenaCli("run --denoisers passthrough --shard 0/1junk" + common);
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("--shard '0/1junk'"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "run" / "results.json"));
+}
+
+TEST(CliContract, EveryOptionShowsItsDefault) {
+  const std::vector<std::string> commands = {
+      "scenes",  "render",    "study",        "run",           "sweep", "merge",
+      "compare", "denoisers", "bench tracer", "bench denoise", "report"};
+  // CLI11 prints "  --name TYPE=default", "  --name TYPE:{a,b}=default", "  --name INT:INT in [1 -
+  // 64]=8", "  name TEXT REQUIRED" (positionals); flags have no TYPE and need no default.
+  const std::regex valueLine(R"(^  (\S+) ([A-Z]+)\b.*)");
+  const std::regex withDefault(
+      R"(^  \S+ [A-Z]+(:\{[^}]*\}|:[A-Z]+ in \[[^\]]*\])?( \.\.\.)?(=\S| REQUIRED).*)");
+  int valueOptions = 0;
+  for (const std::string& c : commands) {
+    contract::CliResult r = contract::arenaCli(c + " --help");
+    ASSERT_EQ(r.status, 0) << c << ": " << r.output;
+    std::istringstream lines(r.output);
+    for (std::string line; std::getline(lines, line);) {
+      if (!std::regex_match(line, valueLine)) continue;
+      ++valueOptions;
+      EXPECT_TRUE(std::regex_match(line, withDefault))
+          << "arena " << c << ": no default shown in: " << line;
+    }
+  }
+  EXPECT_GT(valueOptions, 30);  // the parser above found the options
+}
+
+TEST(CliContract, AFullDiskDuringARunNamesTheFileThroughTheCli) {
+  fs::path dir = test::freshDir("full_disk_cli");
+  // ulimit -f counts 1024-byte blocks; SIGXFSZ ignored so the write fails with EFBIG instead.
+  contract::CliResult r =
+      contract::arenaCli("render cornell_static --resolution 32x16 --frames 2 --ref-spp 2 --cache " +
+                   (dir / "cache").string(),
+               "trap '' XFSZ; ulimit -f 4; ");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find((dir / "cache").string()), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(std::strerror(EFBIG)), std::string::npos) << r.output;
+}
+
+TEST(CliContract, ARunShorterThanTheWarmupSaysWhyEveryReaderHasNoSummary) {
+  fs::path dir = test::freshDir("short_run");
+  // 3 frames, the default warm-up of 8: no frame survives it.
+  contract::CliResult r = contract::tinyCliRun(dir, "run", "--frames 3");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("warning: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("the sequence has 3 frames and the warm-up excludes the first 8"),
+            std::string::npos)
+      << r.output;
+  EXPECT_LT(r.output.find("warning: "), r.output.find("results: ")) << "warned after the work";
+  EXPECT_NE(r.output.find("cornell_static: relMse absent in 1 pair(s): no frame after the warm-up"),
+            std::string::npos)
+      << r.output;
+  const std::string run = (dir / "run").string();
+  r = contract::arenaCli("compare " + run + " " + run);
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("absent"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("no frame after the warm-up"), std::string::npos) << r.output;
+  r = contract::arenaCli("report " + run + " --baseline " + run + " --out " + (dir / "report").string());
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("absent: cornell_static: relMse absent in 1 pair(s)"), std::string::npos)
+      << r.output;
+  r = contract::arenaCli("history " + run + " " + (dir / "run" / "results.db").string() + " --out " +
+               (dir / "history").string());
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("relMse absent in 1 pair(s): no frame after the warm-up"),
+            std::string::npos)
+      << r.output;
+}
+
+TEST(CliContract, UsageErrorsExitTwoAndOptionsAreStrict) {
+  fs::path dir = test::freshDir("usage_errors");
+  // CLI11's own codes (105 for a failed check, 106 for a missing option, 109 for an extra
+  // argument) are the documented usage-error code.
+  for (const std::string& args :
+       {std::string("run --out x --warmup abc"), std::string("run"), std::string("scenes extra"),
+        std::string("nosuchcommand"), std::string("run --out x --flip sometimes")}) {
+    contract::CliResult r = contract::arenaCli(args);
+    EXPECT_EQ(r.status, 2) << args << "\n" << r.output;
+  }
+  EXPECT_EQ(contract::arenaCli("run --help").status, 0);
+  // An empty denoiser list is not "only the baselines".
+  for (const std::string& list : {std::string("''"), std::string("svgf,"), std::string(",")}) {
+    contract::CliResult r = contract::arenaCli("run --scenes cornell_static --resolution 8x8 --frames 2 --ref-spp 1 --cache " +
+                           (dir / "cache").string() + " --out " + (dir / "empty").string() + " --denoisers " + list);
+    EXPECT_EQ(r.status, 2) << list << "\n" << r.output;
+    EXPECT_NE(r.output.find("an empty name"), std::string::npos) << r.output;
+  }
+  EXPECT_FALSE(fs::exists(dir / "empty" / "results.json"));
+  // A baseline that runs takes its --param; one that does not run is named as not running.
+  contract::CliResult r = contract::arenaCli("run --scenes cornell_static --denoisers passthrough --resolution 8x8 --ref-spp 1 "
+                         "--flip none --keep-frames none --frames 2 --warmup 1 --param temporal.maxHistory=4 "
+                         "--cache " + (dir / "cache").string() + " --out " + (dir / "baseline").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  json results = loadResults(dir / "baseline");
+  bool found = false;
+  for (const json& p : results["pairs"])
+    if (p["denoiser"] == "temporal") {
+      found = true;
+      EXPECT_EQ(p["params"]["maxHistory"], 4) << p["params"].dump();
+    }
+  EXPECT_TRUE(found);
+  r = contract::tinyCliRun(dir, "nobaseline", "--frames 2 --param temporal.maxHistory=4");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("temporal is not among the denoisers of this run (passthrough)"),
+            std::string::npos)
+      << r.output;
+  // Hexadecimal, padded or infinite values are not decimal numbers.
+  const ParamSchema& svgf = DenoiserRegistry::instance().find("svgf").schema;
+  for (const char* bad : {"0x10", " 8", "inf", "8 ", "1e", "+"}) {
+    try {
+      svgf.resolve({{"sigmaL", bad}}, "svgf");
+      ADD_FAILURE() << "accepted sigmaL=" << bad;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string("svgf.sigmaL=") + bad +
+                                           ": expected a number in decimal notation"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  EXPECT_NO_THROW(svgf.resolve({{"sigmaL", "1e1"}}, "svgf"));
+  EXPECT_NO_THROW(svgf.resolve({{"sigmaL", "8."}}, "svgf"));
+}
+
+}  // namespace
+}  // namespace arena

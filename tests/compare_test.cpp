@@ -1,0 +1,68 @@
+// metrics/compare: runs of other settings are compared only when asked, and then say which differ.
+#include <gtest/gtest.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sqlite3.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <regex>
+#include "core/atomic_file.hpp"
+#include "core/error.hpp"
+#include "core/json_reader.hpp"
+#include "core/non_finite.hpp"
+#include "core/sequence.hpp"
+#include "harness/denoise_run.hpp"
+#include "harness/run_matrix.hpp"
+#include "harness/scene_selection.hpp"
+#include "metrics/compare.hpp"
+#include "metrics/results.hpp"
+#include "tracer/render.hpp"
+#include "tests/contract_fixture.hpp"
+#include "tests/test_util.hpp"
+
+namespace arena {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+TEST(CompareContract, RunsOfOtherSettingsAreRefusedUnlessAllowed) {
+  RunConfig a = contract::tinyRun("settings_a"), b = contract::tinyRun("settings_b");
+  b.cache = a.cache;
+  b.warmup = 2;
+  runMatrix(a);
+  runMatrix(b);
+  const json ra = loadResults(a.out), rb = loadResults(b.out);
+  EXPECT_TRUE(settingsDifferences(ra, ra).empty());
+  const std::vector<std::string> differ = settingsDifferences(ra, rb);
+  ASSERT_EQ(differ.size(), 1u);
+  EXPECT_EQ(differ[0], "settings.warmup: 1 vs 2");
+  contract::CliResult r = contract::arenaCli("compare " + a.out.string() + " " + b.out.string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("were run with different settings"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("settings.warmup: 1 vs 2"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--allow-settings-mismatch"), std::string::npos) << r.output;
+  r = contract::arenaCli("compare " + a.out.string() + " " + b.out.string() + " --allow-settings-mismatch");
+  EXPECT_NE(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("warning: comparing runs with different settings"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("verdict"), std::string::npos) << r.output;
+  // Another resolution shows per scene.
+  RunConfig c = contract::tinyRun("settings_c");
+  c.render = test::tinySettings(8, 8, 3, 2);
+  runMatrix(c);
+  const std::vector<std::string> resolution = settingsDifferences(ra, loadResults(c.out));
+  EXPECT_NE(std::find(resolution.begin(), resolution.end(), "scenes.cornell_static.width: 16 vs 8"),
+            resolution.end());
+}
+
+}  // namespace
+}  // namespace arena
