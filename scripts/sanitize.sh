@@ -3,7 +3,7 @@
 # build-asan/ (RelWithDebInfo, -DARENA_SANITIZE=ON), then runs ctest there. Any sanitizer report
 # aborts the process that made it, so the test that caused it fails. Third-party suppressions
 # (each justified), when any are needed, are in tests/sanitizer/{lsan,asan,ubsan}.supp. Extra
-# arguments go to ctest (e.g. -R Robustness).
+# arguments go to ctest (e.g. -R Contract).
 #   bash scripts/sanitize.sh [ctest args...]
 set -euo pipefail
 cd "$(dirname "$0")/.."
