@@ -134,6 +134,10 @@ TEST(AssetFuzz, FindingsOfTheFuzzerAreClearErrorsOrFallbacks) {
     EXPECT_NE(message.find((dir / "a.glb").string() + ": binary glTF chunk 0 declares 4294965827 bytes"),
               std::string::npos)
         << message;
+    // The extension's case does not matter (the glTF readers are matched in lower case).
+    const fs::path upper = test::freshDir("asset_fuzz_upper") / "A.GLB";
+    fuzz::writeBytes(upper, glb.main);
+    EXPECT_EQ(test::errorOf([&] { loadAsset(upper.string(), AssetRef{}); }), "(no error)");
     std::memcpy(&damaged[8], &huge, 4);  // and a total length beyond the file
     EXPECT_NE(error(AssetInput::Glb, damaged, "").find("binary glTF header declares 4294965827 bytes"), std::string::npos)
         << error(AssetInput::Glb, damaged, "");

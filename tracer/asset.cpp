@@ -156,7 +156,8 @@ void checkObjMaterialLibraries(const std::string& path, const std::string& bytes
 // would otherwise try its other importers on it by content (an OBJ importer reading a .glb made of
 // OBJ text was one of the fuzzer's crashes).
 void checkGltfIsReadable(const std::string& path, Assimp::Importer& importer, Assimp::IOSystem* io) {
-  const std::string ext = fs::path(path).extension().string().substr(1);
+  std::string ext = fs::path(path).extension().string().substr(1);
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
   for (size_t i = 0; i < importer.GetImporterCount(); ++i) {
     std::string extensions = std::string(" ") + importer.GetImporterInfo(i)->mFileExtensions + " ";
     std::transform(extensions.begin(), extensions.end(), extensions.begin(),
