@@ -1,33 +1,20 @@
 // core/atomic_file: writes are atomic, a failed write names the path and the OS reason, and the
 // temporaries of killed writes are cleaned.
 #include <gtest/gtest.h>
-#include <gtest/gtest.h>
 #include <signal.h>
-#include <sqlite3.h>
 #include <sys/resource.h>
-#include <sys/stat.h>
 #include <unistd.h>
-#include <algorithm>
+
 #include <chrono>
-#include <cmath>
-#include <cstdio>
 #include <filesystem>
-#include <limits>
-#include <map>
-#include <regex>
+#include <string>
+
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
-#include "core/json_reader.hpp"
-#include "core/non_finite.hpp"
-#include "core/sequence.hpp"
-#include "harness/denoise_run.hpp"
-#include "harness/run_matrix.hpp"
-#include "harness/scene_selection.hpp"
-#include "metrics/compare.hpp"
 #include "metrics/results.hpp"
-#include "tracer/render.hpp"
 #include "tests/contract_fixture.hpp"
 #include "tests/test_util.hpp"
+#include "tracer/render.hpp"
 
 namespace arena {
 namespace {

@@ -2,33 +2,17 @@
 // exits with the documented code; the readers of a run (printout, compare, report, history) say why
 // a summary is absent. Through the built `arena`.
 #include <gtest/gtest.h>
-#include <gtest/gtest.h>
-#include <signal.h>
-#include <sqlite3.h>
-#include <sys/resource.h>
-#include <sys/stat.h>
-#include <unistd.h>
-#include <algorithm>
-#include <chrono>
-#include <cmath>
-#include <cstdio>
+
 #include <filesystem>
-#include <limits>
-#include <map>
 #include <regex>
-#include "core/atomic_file.hpp"
+#include <string>
+
 #include "core/error.hpp"
-#include "core/json_reader.hpp"
-#include "core/non_finite.hpp"
-#include "core/sequence.hpp"
-#include "harness/denoise_run.hpp"
-#include "harness/run_matrix.hpp"
 #include "harness/scene_selection.hpp"
-#include "metrics/compare.hpp"
 #include "metrics/results.hpp"
-#include "tracer/render.hpp"
 #include "tests/contract_fixture.hpp"
 #include "tests/test_util.hpp"
+#include "tracer/render.hpp"
 
 namespace arena {
 namespace {
