@@ -11,25 +11,8 @@
 #include "metrics/results.hpp"
 #include "harness/reference_quality.hpp"
 #include "harness/run_matrix.hpp"
-#include "tests/test_util.hpp"
-#include <signal.h>
-#include <sys/resource.h>
-#include <sys/stat.h>
-#include <unistd.h>
-#include <algorithm>
-#include <chrono>
-#include <cmath>
-#include <cstdio>
-#include <limits>
-#include <map>
-#include <regex>
-#include "core/atomic_file.hpp"
-#include "core/json_reader.hpp"
-#include "core/non_finite.hpp"
-#include "core/sequence.hpp"
-#include "harness/denoise_run.hpp"
 #include "harness/scene_selection.hpp"
-#include "tracer/render.hpp"
+#include "tests/test_util.hpp"
 #include "tests/contract_fixture.hpp"
 
 namespace arena {

@@ -12,25 +12,6 @@
 #include "core/sequence.hpp"
 #include "tests/test_util.hpp"
 #include "tracer/render.hpp"
-#include <signal.h>
-#include <sqlite3.h>
-#include <sys/resource.h>
-#include <sys/stat.h>
-#include <unistd.h>
-#include <algorithm>
-#include <chrono>
-#include <cmath>
-#include <cstdio>
-#include <limits>
-#include <map>
-#include <regex>
-#include "core/json_reader.hpp"
-#include "core/non_finite.hpp"
-#include "harness/denoise_run.hpp"
-#include "harness/run_matrix.hpp"
-#include "harness/scene_selection.hpp"
-#include "metrics/compare.hpp"
-#include "metrics/results.hpp"
 #include "tests/contract_fixture.hpp"
 
 namespace arena {
