@@ -67,6 +67,18 @@ TEST(AssetFuzz, FindingsOfTheFuzzerAreClearErrorsOrFallbacks) {
             std::string::npos)
       << error(AssetInput::ObjWithMtl, triangle, "# made by hand\nmap_Kd x.png\nnewmtl m\n");
   EXPECT_EQ(error(AssetInput::ObjWithMtl, triangle, "# made by hand\nnewmtl m\nmap_Kd x.png\n"), "");
+  // A statement after a NUL or a carriage return ends the comment before it, as assimp reads it
+  // ("#x\0aniso 1": a write through the null material at 0x50e0, a fuzzer find).
+  {
+    const std::string nul = std::string("#newmtl") + '\0' + "aniso 1\nnewmtl m\n";
+    EXPECT_NE(error(AssetInput::ObjWithMtl, triangle, nul).find((dir / "a.mtl").string() + ":1: 'aniso' comes before"),
+              std::string::npos)
+        << error(AssetInput::ObjWithMtl, triangle, nul);
+    EXPECT_NE(error(AssetInput::ObjWithMtl, triangle, "# a\raniso 1\nnewmtl m\n").find(":1: 'aniso' comes before"),
+              std::string::npos);
+    // Windows line ends stay one line each.
+    EXPECT_EQ(error(AssetInput::ObjWithMtl, triangle, "# made by hand\r\nnewmtl m\r\nKd 1 1 1\r\n"), "");
+  }
   // The OBJ read as its own material library, where assimp 5.2 wrote "map_d" through a null
   // material (SEGV, the fuzzer's recurring find once each input started from an empty folder):
   // named by "mtllib" itself, or reached by assimp's fallback for an unusable "mtllib" path.

@@ -38,22 +38,26 @@ constexpr float kCreaseAngleDegrees = 60.0f;
 
 // Calls f(lineNumber, keyword, rest) for each line of an OBJ or MTL text that holds a statement
 // (not blank, not a comment): the first word and the rest of the line without its surrounding blanks
-// (a name may hold spaces, as assimp reads it). Stops when f returns false.
+// (a name may hold spaces, as assimp reads it). Lines end where assimp's readers end them: at '\n',
+// '\r', '\f' and NUL (a comment "#x\0aniso 1" hid a statement from the MTL check until the fuzzer
+// found it). lineNumber counts '\n'. Stops when f returns false.
 template <class F>
 void forEachStatement(const std::string& text, F f) {
-  int lineNumber = 0;
+  static const std::string kLineEnds("\n\r\f\0", 4);
+  int lineNumber = 1;
   for (size_t at = 0; at < text.size();) {
-    const size_t end = std::min(text.find('\n', at), text.size());
+    const size_t end = std::min(text.find_first_of(kLineEnds, at), text.size());
     const std::string line = text.substr(at, end - at);
+    const int number = lineNumber;
+    if (end < text.size() && text[end] == '\n') ++lineNumber;
     at = end + 1;
-    ++lineNumber;
-    const size_t first = line.find_first_not_of(" \t\r");
+    const size_t first = line.find_first_not_of(" \t");
     if (first == std::string::npos || line[first] == '#') continue;
-    const size_t keywordEnd = std::min(line.find_first_of(" \t\r", first), line.size());
-    const size_t restStart = line.find_first_not_of(" \t\r", keywordEnd);
+    const size_t keywordEnd = std::min(line.find_first_of(" \t", first), line.size());
+    const size_t restStart = line.find_first_not_of(" \t", keywordEnd);
     const std::string rest =
-        restStart == std::string::npos ? "" : line.substr(restStart, line.find_last_not_of(" \t\r") + 1 - restStart);
-    if (!f(lineNumber, line.substr(first, keywordEnd - first), rest)) return;
+        restStart == std::string::npos ? "" : line.substr(restStart, line.find_last_not_of(" \t") + 1 - restStart);
+    if (!f(number, line.substr(first, keywordEnd - first), rest)) return;
   }
 }
 
