@@ -36,6 +36,12 @@ namespace {
 // too (44 degrees by default); 60 keeps coarse cylinders smooth.
 constexpr float kCreaseAngleDegrees = 60.0f;
 
+// `text` in ASCII lower case (file extensions, assimp's extension lists).
+std::string lowercase(std::string text) {
+  std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return text;
+}
+
 // Calls f(lineNumber, keyword, rest) for each line of an OBJ or MTL text that holds a statement
 // (not blank, not a comment): the first word and the rest of the line without its surrounding blanks
 // (a name may hold spaces, as assimp reads it). Lines end where assimp's readers end them: at '\n',
@@ -114,9 +120,7 @@ class RecordingIOSystem : public Assimp::DefaultIOSystem {
                "line naming no readable file); expected 'mtllib' to name an existing .mtl file";
       return mtlProblem(file);
     }
-    std::string ext = fs::path(file).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    return ext == ".mtl" ? mtlProblem(file) : "";
+    return lowercase(fs::path(file).extension().string()) == ".mtl" ? mtlProblem(file) : "";
   }
 
   // An MTL statement before the first "newmtl" belongs to no material, and assimp 5.2's MTL reader
@@ -159,13 +163,11 @@ void checkObjMaterialLibraries(const std::string& path, const std::string& bytes
 // A .gltf or .glb that neither of assimp's glTF readers accepts is refused before ReadFile: assimp
 // would otherwise try its other importers on it by content (an OBJ importer reading a .glb made of
 // OBJ text was one of the fuzzer's crashes).
-void checkGltfIsReadable(const std::string& path, Assimp::Importer& importer, Assimp::IOSystem* io) {
-  std::string ext = fs::path(path).extension().string().substr(1);
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+// `ext`: the file's extension in lower case, without the dot.
+void checkGltfIsReadable(const std::string& path, const std::string& ext, Assimp::Importer& importer,
+                         Assimp::IOSystem* io) {
   for (size_t i = 0; i < importer.GetImporterCount(); ++i) {
-    std::string extensions = std::string(" ") + importer.GetImporterInfo(i)->mFileExtensions + " ";
-    std::transform(extensions.begin(), extensions.end(), extensions.begin(),
-                   [](unsigned char c) { return char(std::tolower(c)); });
+    const std::string extensions = " " + lowercase(importer.GetImporterInfo(i)->mFileExtensions) + " ";
     if (extensions.find(" " + ext + " ") != std::string::npos && importer.GetImporter(i)->CanRead(path, io, true))
       return;
   }
@@ -658,9 +660,7 @@ static void checkBinaryGltfSizes(const std::string& path, const std::string& byt
 }
 
 AssetData loadAsset(const std::string& path, const AssetRef& ref) {
-  std::string ext = fs::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return char(std::tolower(c)); });
+  const std::string ext = lowercase(fs::path(path).extension().string());
   if (ext != ".obj" && ext != ".gltf" && ext != ".glb")
     throw Error(path + ": unsupported asset format '" + ext + "' (expected .obj, .gltf or .glb)");
   // Size and type before anything reads it.
@@ -675,7 +675,7 @@ AssetData loadAsset(const std::string& path, const AssetRef& ref) {
   Assimp::Importer importer;
   auto* io = new RecordingIOSystem(ext == ".obj" ? path : "");  // the importer owns it
   importer.SetIOHandler(io);
-  if (ext != ".obj") checkGltfIsReadable(path, importer, io);
+  if (ext != ".obj") checkGltfIsReadable(path, ext.substr(1), importer, io);
   // Triangulate polygons; split points/lines into meshes of their own (counted and dropped).
   const aiScene* scene = importer.ReadFile(
       path, aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_ValidateDataStructure);
