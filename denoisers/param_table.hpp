@@ -32,10 +32,12 @@ namespace arena {
 // both come from the table, so a name, a default or a field cannot drift between them. A field is
 // a data-member pointer or a callable returning a reference to it (member() for nested fields).
 // The table is the only default: settings() starts from a value-initialised Settings{} and sets
-// every bound field, so a bound field declares no initialiser of its own. selfCheck() verifies the
-// bindings themselves (each parameter reaches its own field and no other, each field holds its
-// default) and runs whenever the schema is built, so a binding slip fails every test that touches
-// the registry.
+// every bound field, so a bound field declares no initialiser of its own (a shared block's field
+// that one denoiser binds and another does not is set by the other's fixed() or by the code that
+// builds the block). selfCheck() verifies the bindings themselves (no bound field has an
+// initialiser, each parameter reaches its own field and no other, each field holds its default)
+// and runs whenever the schema is built, so a binding slip fails every test that touches the
+// registry.
 template <class Settings>
 class ParamTable {
  public:
@@ -43,6 +45,7 @@ class ParamTable {
     ParamSpec spec;
     std::function<void(const ParamSet&, Settings&)> apply;     // the resolved value -> field
     std::function<ParamSet::Value(const Settings&)> readBack;  // field -> value (self-check)
+    std::function<bool(const Settings&)> blank;  // the field holds its type's zero (self-check)
   };
   using Check = std::function<void(const Settings&, const std::string& owner)>;
   // The type of the field that `Field` (a member pointer or a callable) selects.
@@ -81,7 +84,7 @@ class ParamTable {
     if (std::find(names.begin(), names.end(), def) == names.end())
       throw Error("parameter table: '" + name + "' defaults to '" + def +
                   "', not one of its choices");
-    Binding b{ParamSpec::choice(name, def, std::move(names), std::move(meaning)), {}, {}};
+    Binding b{ParamSpec::choice(name, def, std::move(names), std::move(meaning)), {}, {}, {}};
     b.apply = [name, field, options](const ParamSet& p, Settings& s) {
       const std::string& chosen = p.getChoice(name);
       for (const auto& [optionName, value] : options)
@@ -92,6 +95,7 @@ class ParamTable {
         if (std::invoke(field, const_cast<Settings&>(s)) == value) return optionName;
       return std::string("?");
     };
+    b.blank = blankTest(field);
     bindings_.push_back(std::move(b));
     return *this;
   }
@@ -102,11 +106,15 @@ class ParamTable {
     for (const auto& inner : table.bindings()) {
       auto apply = inner.apply;
       auto readBack = inner.readBack;
+      auto blank = inner.blank;
       bindings_.push_back(
           {inner.spec,
            [apply, part](const ParamSet& p, Settings& s) { apply(p, std::invoke(part, s)); },
            [readBack, part](const Settings& s) {
              return readBack(std::invoke(part, const_cast<Settings&>(s)));
+           },
+           [blank, part](const Settings& s) {
+             return blank(std::invoke(part, const_cast<Settings&>(s)));
            }});
     }
     for (const auto& set : table.fixedSettings())
@@ -163,9 +171,10 @@ class ParamTable {
     return settings(ParamSchema(specs()).resolve({}, owner), owner);
   }
 
-  // What is wrong with the bindings, one line each: duplicate names, a default that does not
-  // read back from its field, or a parameter whose change moves another parameter's field (two
-  // names on one field) or not its own.
+  // What is wrong with the bindings, one line each: duplicate names, a bound field that declares
+  // an initialiser of its own (a second default that the table hides but a caller building the
+  // struct by hand would get), a default that does not read back from its field, or a parameter
+  // whose change moves another parameter's field (two names on one field) or not its own.
   std::vector<std::string> selfCheck() const {
     std::vector<std::string> problems;
     const ParamSchema schema(specs());
@@ -173,6 +182,12 @@ class ParamTable {
       for (size_t j = 0; j < i; ++j)
         if (bindings_[i].spec.name == bindings_[j].spec.name)
           problems.push_back("'" + bindings_[i].spec.name + "' is declared twice");
+    const Settings blank{};
+    for (const Binding& b : bindings_)
+      if (!b.blank(blank))
+        problems.push_back("'" + b.spec.name +
+                           "': its field declares an initialiser; the table's default is the only "
+                           "one (remove it from the struct)");
     const ParamSet defaultSet = schema.resolve({}, "table");
     const Settings defaultSettings = unchecked(defaultSet);
     auto expect = [](const ParamSpec& spec, const ParamSet::Value& v) -> ParamSet::Value {
@@ -210,8 +225,17 @@ class ParamTable {
                          },
                          [field, toValue](const Settings& s) {
                            return toValue(std::invoke(field, const_cast<Settings&>(s)));
-                         }});
+                         },
+                         blankTest(field)});
     return *this;
+  }
+  // Whether the field is its type's zero: in Settings{}, a field with an initialiser of its own
+  // (a second default beside the table's) is not.
+  template <class Field>
+  static std::function<bool(const Settings&)> blankTest(Field field) {
+    return [field](const Settings& s) {
+      return std::invoke(field, const_cast<Settings&>(s)) == FieldType<Field>{};
+    };
   }
   Settings unchecked(const ParamSet& params) const {
     Settings s{};

@@ -501,7 +501,6 @@ std::vector<std::pair<std::string, const Image*>> Reblur::passOutputs() const {
 
 const ParamTable<ReblurSettings>& reblurParams() {
   using S = ReblurSettings;
-  using W = SurfaceWeightSettings;
   static const ParamTable<S> table =
       ParamTable<S>()
           .boolean("preBlur", &S::preBlur, true, "pass 1: 8-tap Poisson pre-blur (NRD prepass)")
@@ -568,17 +567,7 @@ const ParamTable<ReblurSettings>& reblurParams() {
                   {{"current", StabilizationBox::Current}, {"fast", StabilizationBox::Fast}},
                   "stabiliser's clamp box: the 3x3 of this frame's post-blurred result (NRD "
                   "TemporalStabilization) or of the fast history (the first version)")
-          .real("planeSigma", member(&S::weights, &W::planeSigma), 0.02, 1e-6, 10,
-                "plane-distance weight scale, fraction of view depth (ours)")
-          .real("normalPower", member(&S::weights, &W::normalPower), 32, 0, 1e4,
-                "normal weight max(0, n.n')^this (ours)")
-          .real("hitSigma", member(&S::weights, &W::hitSigma), 0.3, 1e-6, 100,
-                "specular hit-distance weight scale, fraction of (h + z) (ours)")
-          .real("roughnessSigma", member(&S::weights, &W::roughnessSigma), 0.1, 1e-6, 10,
-                "specular roughness weight scale (ours)")
-          .real("minHitWeight", member(&S::weights, &W::minHitWeight), 0.1, 0, 1,
-                "floor of the specular hit-distance weight (NRD minHitDistanceWeight 0.1; 0 = "
-                "none, the first version)")
+          .include(surfaceWeightParams(), &S::weights)
           .include(reprojectionParams(), &S::reprojection)
           .include(footprintParams(), &S::footprint);
   return table;

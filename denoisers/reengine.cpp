@@ -625,8 +625,17 @@ void ReEngine::spatialFilter() {
   prefilterVariance3x3(lumVariance_, gbuffer_, filteredVariance_);
   AtrousSettings a;
   a.kernel = AtrousKernel::Compact3x3;
-  a.edges.sigmaL = s_.sigmaL;
-  a.edges.id = true;
+  // SVGF's depth and normal terms at the SVGF paper's sigmas (eq. 3: sigma_z 1; eq. 4: sigma_n
+  // 128), the luminance term at the parameter sigmaL, and never across meshes.
+  EdgeStoppingSettings& e = a.edges;
+  e.depth = true;
+  e.sigmaZ = 1.0f;
+  e.normal = true;
+  e.normalForm = NormalWeightForm::CosinePower;
+  e.sigmaN = 128.0f;
+  e.luminance = true;
+  e.sigmaL = s_.sigmaL;
+  e.id = true;
   const AtrousGuide guide{gbuffer_, &derivatives_, &filteredVariance_, nullptr, 1.0f};
   atrousIteration(0, a, guide, 1.0f, upscaledBlend_, final_);
 }
@@ -767,8 +776,14 @@ const ParamTable<ReEngineSettings>& reEngineParams() {
           .boolean("spatialFilter", &S::spatialFilter, true,
                    "final 3x3 edge-aware à-trous pass (slides 28, 43)")
           .real("sigmaL", &S::sigmaL, 4, 0, 1e6, "spatial filter luminance term sigma_l (SVGF 4)")
+          .include(surfaceWeightParams(), &S::weights)
           .include(reprojectionParams(), &S::reprojection)
-          .include(footprintParams(), &S::footprint);
+          .include(footprintParams(), &S::footprint)
+          .fixed([](S& s) {
+            // The upsampling's plane and normal tests between a pixel and a texel's anchor are
+            // the propagations' (its hit-distance and roughness terms stay off).
+            s.upsample.weights = s.weights;
+          });
   return table;
 }
 

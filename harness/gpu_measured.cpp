@@ -10,6 +10,7 @@
 #include "core/sequence.hpp"
 #include "denoisers/common/atrous.hpp"
 #include "denoisers/common/gbuffer.hpp"
+#include "denoisers/svgf.hpp"
 #include "harness/gpu_cost.hpp"
 
 namespace arena {
@@ -80,7 +81,7 @@ PassTraffic measuredKernelTraffic(const std::string& kernel, int w, int h) {
     computeGeometryDerivatives(g, derivatives);
     Image variance(w, h, 1, 0.1f), filtered(w, h, 1, 0.1f), varianceOut(w, h, 1), in(w, h, 3, 0.5f), out(w, h, 3);
     TrafficScope scope(&t);
-    atrousIteration(0, AtrousSettings{}, {g, &derivatives, &filtered}, 1.0f, in, out, &variance, &varianceOut);
+    atrousIteration(0, svgfParams().defaults().atrous, {g, &derivatives, &filtered}, 1.0f, in, out, &variance, &varianceOut);
     return t;
   }
   TrafficScope scope(&t);

@@ -22,6 +22,7 @@
 #include "denoisers/common/simd.hpp"
 #include "denoisers/common/temporal_accumulation.hpp"
 #include "denoisers/common/variance.hpp"
+#include "denoisers/svgf.hpp"
 #include "tests/test_util.hpp"
 
 namespace arena {
@@ -93,13 +94,17 @@ struct SyntheticGBuffer {
   }
 };
 
+// SVGF's terms at its defaults (its parameter table: depth, normal and luminance on).
+EdgeStoppingSettings svgfEdges() { return svgfParams().defaults().atrous.edges; }
+// SVGF's sigmas with every term on; the colour term at EAW's default sigma (2).
 EdgeStoppingSettings allTermsOn() {
-  EdgeStoppingSettings s;
+  EdgeStoppingSettings s = svgfEdges();
   s.depth = s.normal = s.luminance = s.position = s.color = s.id = true;
+  s.sigmaColor = 2.0f;
   return s;
 }
 EdgeStoppingSettings allTermsOff() {
-  EdgeStoppingSettings s;
+  EdgeStoppingSettings s = allTermsOn();
   s.depth = s.normal = s.luminance = s.position = s.color = s.id = false;
   return s;
 }
@@ -315,7 +320,7 @@ TEST(DenoiserBlocksAtrous, DepthDiscontinuityIsNeverCrossed) {
   EdgeStoppingSettings depthOnly = allTermsOff();
   depthOnly.depth = true;
   expectHalvesSeparate(g, depthOnly);
-  EdgeStoppingSettings svgfDefaults;  // depth, normal, luminance
+  EdgeStoppingSettings svgfDefaults = svgfEdges();  // depth, normal, luminance
   expectHalvesSeparate(g, svgfDefaults);
 }
 
@@ -400,10 +405,10 @@ TEST(DenoiserBlocksAtrous, MatchesTheDirectWeightedSumWithEveryTerm) {
   EdgeStoppingSettings gaussianNormals = allTermsOn();
   gaussianNormals.normalForm = NormalWeightForm::GaussianDistance;
   gaussianNormals.sigmaN = 0.5f;
-  EdgeStoppingSettings logNormals;  // SVGF's terms with a sigmaN that is no power of two
+  EdgeStoppingSettings logNormals = svgfEdges();  // SVGF's terms, a sigmaN no power of two
   logNormals.sigmaN = 100.0f;
   for (const EdgeStoppingSettings& edges :
-       {EdgeStoppingSettings{}, allTermsOn(), gaussianNormals, logNormals})
+       {svgfEdges(), allTermsOn(), gaussianNormals, logNormals})
     for (AtrousKernel kernel : {AtrousKernel::B3Spline5x5, AtrousKernel::Compact3x3})
       for (int iteration = 0; iteration < 4; ++iteration) {
         const AtrousSettings settings{kernel, edges};
@@ -427,7 +432,7 @@ TEST(DenoiserBlocksAtrous, SixteenAndEightLaneKernelsGiveTheSameBits) {
   const Image in = randomImage(w, h, 3, 5, 0.0f, 4.0f);
   Image variance = randomImage(w, h, 1, 6, 0.0f, 1.0f), filtered(w, h, 1);
   prefilterVariance3x3(variance, g.view(), filtered);
-  for (const EdgeStoppingSettings& edges : {EdgeStoppingSettings{}, allTermsOn()})
+  for (const EdgeStoppingSettings& edges : {svgfEdges(), allTermsOn()})
     for (int iteration = 0; iteration < 5; ++iteration) {
       Image wide(w, h, 3), narrow(w, h, 3), wideVariance(w, h, 1), narrowVariance(w, h, 1);
       const AtrousSettings settings{AtrousKernel::B3Spline5x5, edges};
@@ -553,8 +558,7 @@ TEST(DenoiserBlocksPoisson, MatchesThePerPixelGatherWithEveryTerm) {
   const Image in = randomImage(w, h, 4, 15, 0.0f, 3.0f);
   const GBufferView view = g.view();
   const SurfaceGuide guide{view, roughness.plane(0), hitDistance.plane(0)};
-  PoissonBlurSettings settings;
-  settings.radius = 9.0f;
+  PoissonBlurSettings settings{9.0f, surfaceWeightParams().defaults()};
   settings.weights.hitDistance = settings.weights.roughness = true;
   const float rotation = poissonRotation(3);
   Image out(w, h, 4);

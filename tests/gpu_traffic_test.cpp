@@ -6,6 +6,7 @@
 
 #include "denoisers/common/atrous.hpp"
 #include "denoisers/common/gpu_traffic.hpp"
+#include "denoisers/svgf.hpp"
 #include "test_util.hpp"
 
 namespace arena {
@@ -33,7 +34,8 @@ TEST(GpuTraffic, OneAtrousStepCountsWhatAHandCountGives) {
   computeGeometryDerivatives(g, derivatives);
   Image variance(w, h, 1, 0.1f), filtered(w, h, 1, 0.1f), varianceOut(w, h, 1);
   Image in(w, h, 3, 0.5f), out(w, h, 3);
-  AtrousSettings settings;  // B3 5x5, SVGF's depth, normal and luminance terms
+  // B3 5x5 with SVGF's depth, normal and luminance terms at its defaults.
+  const AtrousSettings settings = svgfParams().defaults().atrous;
   ASSERT_TRUE(settings.edges.depth && settings.edges.normal && settings.edges.luminance);
   ASSERT_FALSE(settings.edges.position || settings.edges.color);
 

@@ -6,11 +6,13 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 #include "core/error.hpp"
 #include "denoisers/asvgf.hpp"
 #include "denoisers/common/atrous.hpp"
 #include "denoisers/common/footprint.hpp"
+#include "denoisers/common/poisson_blur.hpp"
 #include "denoisers/common/reprojection.hpp"
 #include "denoisers/hybrid.hpp"
 #include "denoisers/reblur.hpp"
@@ -36,6 +38,7 @@ TEST(ParamTable, EveryBuiltInTableBindsEachParameterToItsOwnField) {
   EXPECT_EQ(problemsOf(footprintParams()), "");
   EXPECT_EQ(problemsOf(atrousKernelParams()), "");
   EXPECT_EQ(problemsOf(hitDistanceParams()), "");
+  EXPECT_EQ(problemsOf(surfaceWeightParams()), "");
   EXPECT_EQ(problemsOf(svgfParams()), "");
   EXPECT_EQ(problemsOf(asvgfParams()), "");
   EXPECT_EQ(problemsOf(reblurParams()), "");
@@ -141,6 +144,48 @@ TEST(ParamTable, SelfCheckCatchesBindingSlips) {
                          .boolean("on", &Toy::on, false, "on");
   EXPECT_TRUE(sound.selfCheck().empty());
   EXPECT_EQ(sound.defaults().b, 2.0f);
+}
+
+// A bound field with an initialiser of its own is a second default: a caller that builds the
+// struct by hand gets it, the table never shows it. The self-check names the parameter.
+struct ToyWithDefault {
+  float a = 3.0f;
+  float b{};
+};
+
+TEST(ParamTable, SelfCheckRefusesABoundFieldWithItsOwnInitialiser) {
+  const auto hidden = ParamTable<ToyWithDefault>()
+                          .real("a", &ToyWithDefault::a, 3, 0, 10, "a (the struct says 3 too)")
+                          .real("b", &ToyWithDefault::b, 2, 0, 10, "b");
+  const std::vector<std::string> problems = hidden.selfCheck();
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_NE(problems[0].find("'a': its field declares an initialiser"), std::string::npos)
+      << problems[0];
+  EXPECT_THROW(hidden.schema(), Error);
+  // An unbound field may keep its initialiser: it is a constant, declared once in the struct.
+  const auto constant = ParamTable<ToyWithDefault>().real("b", &ToyWithDefault::b, 2, 0, 10, "b");
+  EXPECT_TRUE(constant.selfCheck().empty());
+  EXPECT_EQ(constant.defaults().a, 3.0f);
+}
+
+// The shared blocks' parameters: reblur and reengine read the same surface-weight table, and
+// reengine's low-resolution upsampling takes its plane and normal tests from it.
+TEST(ParamTable, SharedBlocksAreDeclaredOnceAndReachEveryVariant) {
+  const SurfaceWeightSettings w = surfaceWeightParams().defaults();
+  const ReblurSettings reblur = reblurParams().defaults();
+  const ReEngineSettings reengine = reEngineParams().defaults();
+  for (const SurfaceWeightSettings& v :
+       {reblur.weights, reengine.weights, reengine.upsample.weights}) {
+    EXPECT_EQ(v.planeSigma, w.planeSigma);
+    EXPECT_EQ(v.normalPower, w.normalPower);
+    EXPECT_EQ(v.minHitWeight, w.minHitWeight);
+  }
+  EXPECT_EQ(w.planeSigma, 0.02f);
+  const ParamSchema schema = reEngineParams().schema();
+  const ReEngineSettings changed =
+      reEngineParams().settings(schema.resolve({{"planeSigma", "0.05"}}, "reengine"), "reengine");
+  EXPECT_EQ(changed.weights.planeSigma, 0.05f);
+  EXPECT_EQ(changed.upsample.weights.planeSigma, 0.05f);
 }
 
 }  // namespace

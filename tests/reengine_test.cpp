@@ -95,7 +95,8 @@ TEST(LowresUpsample, DirectionAndMomentsShapeTheResult) {
   Image need(plane.w, plane.h, 1, 1.0f), out(plane.w, plane.h, 3), confidence(plane.w, plane.h, 1);
   LowresUpsampler up;
   up.setup(plane.w, plane.h, 4);
-  LowresUpsampleSettings s;
+  // reengine's defaults: the directional step and the moment clamp on.
+  LowresUpsampleSettings s = reEngineParams().defaults().upsample;
   s.weights.normal = false;  // let the tilted pixel read its neighbours' texels
   s.weights.planeDistance = false;
   up.reconstruct({low, &direction, 4, 8}, plane.view(), nullptr, need, s, out, confidence);

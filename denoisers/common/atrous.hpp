@@ -23,7 +23,7 @@ enum class AtrousKernel {
 };
 
 struct AtrousSettings {
-  AtrousKernel kernel = AtrousKernel::B3Spline5x5;
+  AtrousKernel kernel{};  // the "kernel" parameter (atrousKernelParams) or set by the filter
   EdgeStoppingSettings edges;
   // footprint.hpp: iteration i's taps are atrousStep(i, footprintScale) px apart (2^i at 1); an
   // iteration whose step is 0 is the identity (colour and carried channels copied).

@@ -23,30 +23,35 @@ enum class NormalWeightForm {
   GaussianDistance,  // Dammertz 2010: exp(-|n(p) - n(q)|^2 / sigmaN)
 };
 
+// The terms' switches and sigmas are parameters: their defaults, ranges and meanings are declared
+// once, in the table of the variant that exposes them (svgfParams(): SVGF eq. 3-5 and Dammertz's
+// position term; eawParams(): Dammertz 2010's terms). A filter that builds the settings itself
+// (hybrid's and reengine's à-trous) sets every term it uses. A bare EdgeStoppingSettings{} has
+// every term off and every sigma 0; the eps guards and the normal form below are constants.
 struct EdgeStoppingSettings {
   // Depth, SVGF eq. 3: exp(-|z(p) - z(q)| / (sigmaZ |grad z(p) . (p - q)| + eps)).
-  bool depth = true;
-  float sigmaZ = 1.0f;  // [0; inf) SVGF paper 1
+  bool depth{};
+  float sigmaZ{};
   // eps of eq. 3, relative to z(p) (ours: keeps a camera-facing plane, grad z = 0, from rejecting
   // depth rounding while a depth step of 0.1 % of the distance still stops the filter).
   float depthEpsilon = 1e-3f;
-  // Normal.
-  bool normal = true;
+  // Normal: SVGF's cosine power or Dammertz's Gaussian of the normal distance (set by the variant).
+  bool normal{};
   NormalWeightForm normalForm = NormalWeightForm::CosinePower;
-  float sigmaN = 128.0f;  // [0; inf) SVGF paper and Falcor 128 (cosine power)
+  float sigmaN{};
   // Luminance, SVGF eq. 5: exp(-|l(p) - l(q)| / (sigmaL sqrt(g3x3(Var(l(p)))) + eps)).
-  bool luminance = true;
-  float sigmaL = 4.0f;             // [0; inf) SVGF paper 4 (Falcor phiColor 10)
+  bool luminance{};
+  float sigmaL{};
   float luminanceEpsilon = 1e-6f;  // eq. 5's eps, luminance units
-  // World position, Dammertz 2010: exp(-|x(p) - x(q)|^2 / sigmaX).
-  bool position = false;
-  float sigmaX = 0.05f;  // (0; inf) world units squared (ours)
+  // World position, Dammertz 2010: exp(-|x(p) - x(q)|^2 / sigmaX), sigmaX in world units squared.
+  bool position{};
+  float sigmaX{};
   // Colour, Dammertz 2010: exp(-|c(p) - c(q)|^2 / sigmaRt); the caller halves sigmaRt per
   // iteration.
-  bool color = false;
-  float sigmaColor = 2.0f;  // (0; inf) (ours, for demodulated radiance)
+  bool color{};
+  float sigmaColor{};
   // Mesh id (the talk: separates a poster from the wall it lies on): 0 across meshes.
-  bool id = false;
+  bool id{};
 };
 
 // The terms one by one, for filters that combine them differently and for tests.

@@ -28,9 +28,9 @@ namespace arena {
 
 struct LowresUpsampleSettings {
   SurfaceWeightSettings weights;    // plane distance and normal between p and a texel's anchor
-  bool directional = true;          // step 2 (only where a direction image is given)
+  bool directional{};  // step 2 (only where a direction image is given): reengine's parameter
   float maxDirectionalGain = 4.0f;  // (1; inf) ours: bounds the SH ratio at grazing texels
-  bool momentClamp = true;          // step 3 (only where moments are given)
+  bool momentClamp{};  // step 3 (only where moments are given): reengine's parameter
   float clampGamma = 2.0f;          // k of the moment box (ours)
 };
 

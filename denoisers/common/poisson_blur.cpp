@@ -17,6 +17,24 @@ namespace {
 constexpr float kGoldenAngle = 2.39996323f;  // pi (3 - sqrt 5)
 }
 
+const ParamTable<SurfaceWeightSettings>& surfaceWeightParams() {
+  using W = SurfaceWeightSettings;
+  static const ParamTable<W> table =
+      ParamTable<W>()
+          .real("planeSigma", &W::planeSigma, 0.02, 1e-6, 10,
+                "plane-distance weight scale, fraction of view depth (ours)")
+          .real("normalPower", &W::normalPower, 32, 0, 1e4,
+                "normal weight max(0, n.n')^this (ours)")
+          .real("hitSigma", &W::hitSigma, 0.3, 1e-6, 100,
+                "specular hit-distance weight scale, fraction of (h + z) (ours)")
+          .real("roughnessSigma", &W::roughnessSigma, 0.1, 1e-6, 10,
+                "specular roughness weight scale (ours)")
+          .real("minHitWeight", &W::minHitWeight, 0.1, 0, 1,
+                "floor of the specular hit-distance weight (NRD minHitDistanceWeight 0.1; 0 = "
+                "none, reblur's first version)");
+  return table;
+}
+
 SurfaceWeights::SurfaceWeights(const SurfaceWeightSettings& settings, const SurfaceGuide& guide)
     : s_(settings),
       g_(guide.gbuffer),

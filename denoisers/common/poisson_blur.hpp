@@ -11,6 +11,7 @@
 #include "core/fast_math.hpp"
 #include "core/image.hpp"
 #include "denoisers/common/gbuffer.hpp"
+#include "denoisers/param_table.hpp"
 
 namespace arena {
 
@@ -22,24 +23,28 @@ struct SurfaceGuide {
 };
 
 struct SurfaceWeightSettings {
+  // The sigmas are parameters ("planeSigma", ...; surfaceWeightParams() declares their defaults,
+  // ranges and meanings once, for every variant that includes it). A bare SurfaceWeightSettings
+  // has them 0: a caller outside a denoiser's table starts from surfaceWeightParams().defaults().
+  // The switches are set by the variant (hit distance and roughness: the specular signal).
   // Plane distance (NRD's geometry weight): exp(-|n(p).(x(q) - x(p))| / (planeSigma z(p))), a
   // neighbour off the tangent plane of p by planeSigma of the view depth weighs 1/e.
   bool planeDistance = true;
-  float planeSigma = 0.02f;  // (0; inf) ours (NRD compares with a fraction of the frustum size)
+  float planeSigma{};
   // Normal: max(0, n(p).n(q))^normalPower (NRD limits the lobe angle instead).
   bool normal = true;
-  float normalPower = 32.0f;  // [0; inf) ours: 10 degrees -> 0.61
+  float normalPower{};
   // Specular: hit distance, max(exp(-|h(p) - h(q)| / (hitSigma (min(h(p), 1e4) + z(p)))),
-  // minHitWeight). The floor is NRD's minHitDistanceWeight (0.1): without it the noise-free mirror
+  // minHitWeight). The floor is NRD's minHitDistanceWeight: without it the noise-free mirror
   // distance's cliff between a reflected miss (1e6) and a near hit split a glossy sphere into
   // regions that never exchanged samples -- the sharp-edged dark patch of issue 15, item 14.
   bool hitDistance = false;
-  float hitSigma = 0.3f;      // (0; inf) ours
-  float minHitWeight = 0.1f;  // [0; 1] NRD minHitDistanceWeight 0.1
+  float hitSigma{};
+  float minHitWeight{};
   float maxHitExponent() const { return minHitWeight > 0.0f ? -std::log(minHitWeight) : 1e30f; }
   // Specular: roughness, exp(-|r(p) - r(q)| / roughnessSigma).
   bool roughness = false;
-  float roughnessSigma = 0.1f;  // (0; inf) ours
+  float roughnessSigma{};
 };
 
 // The guides of one pixel as the weights read them; F is float or a lane type of
@@ -112,6 +117,10 @@ class SurfaceWeights {
   const float* roughness_;
   const float* hitDistance_;
 };
+
+// The sigmas above as parameters, shared by the variants that gather with these weights (reblur,
+// reengine; ParamTable::include at their SurfaceWeightSettings).
+const ParamTable<SurfaceWeightSettings>& surfaceWeightParams();
 
 struct PoissonBlurSettings {
   float radius = 30.0f;  // pixels (NRD blurRadius 30 at its defaults)

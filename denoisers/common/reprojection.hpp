@@ -19,7 +19,7 @@ struct ReprojectionSettings {
   // reprojectionParams() (reprojection.cpp), the only place they are declared. A bare
   // ReprojectionSettings{} leaves them 0 (every tap rejected): a caller outside a denoiser's table
   // starts from reprojectionParams().defaults().
-  float depthThreshold, normalThreshold;
+  float depthThreshold{}, normalThreshold{};
   // (0; 1] Falcor: the surviving bilinear weight must sum to at least 0.01.
   float minWeightSum = 0.01f;
   // SVGF §4.1: "if no tap is consistent, try a larger 3x3 filter to find thin geometry".

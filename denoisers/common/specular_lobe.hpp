@@ -34,8 +34,8 @@ struct SpecularLobeSettings {
   float minRoughness = 0.05f;
   // Diffuse signal: the lobe is the cosine lobe about the normal. A fitted cosine SG has
   // lambda ~ 2.13, far too wide to stop anything, so the diffuse instance uses this sharpness
-  // instead (ours: 64 gives s = 0.61 at 10 degrees, 0.01 at 30 degrees).
-  float diffuseSharpness = 64.0f;
+  // instead: the parameter "lobeDiffuseSharpness" (hybridParams(), its default and meaning).
+  float diffuseSharpness{};
 };
 
 // The specular lobe of a GGX surface seen from `view` (unit, surface to eye) with normal n:
