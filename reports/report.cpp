@@ -133,9 +133,6 @@ double timingOf(const json& pair, const char* key) {
   if (!pair.contains("timing")) return kNaN;
   return pair["timing"].value(key, kNaN);
 }
-double msOf(const json& pair) {
-  return timingOf(pair, "msMedian");
-}
 
 // One point per label with its error bars, and the labels on the Pareto front (time x error).
 // The Pareto front on the denoiser's own time ("front") and the equal-paths front

@@ -447,7 +447,8 @@ std::string assetCacheDir() {
 }
 
 std::string defaultScenesDir() {
-  return std::string(ARENA_SOURCE_DIR) + "/scenes";
+  // As a path: GCC 12 warns (a false positive, -Warray-bounds) on string + "/scenes" here.
+  return (std::filesystem::path(ARENA_SOURCE_DIR) / "scenes").string();
 }
 
 std::vector<std::string> listSceneFiles(const std::string& scenesDir) {
