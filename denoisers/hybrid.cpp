@@ -512,7 +512,9 @@ const ParamTable<HybridSettings>& hybridParams() {
           .real("lobeBeta", &S::lobeBeta, 1, 0, 1e4,
                 "exponent on the lobe similarity (the talk's beta; 1 = Tokuyoshi)")
           .real("lobeDiffuseSharpness", member(&S::lobe, &SpecularLobeSettings::diffuseSharpness),
-                64, 0, 1e6, "diffuse signal: SG sharpness of the normal lobe (ours)")
+                64, 0, 1e6,
+                "diffuse signal: SG sharpness of the normal lobe (ours: 64 gives 0.61 at 10 "
+                "degrees, 0.01 at 30)")
           .real("sigmaL", &S::sigmaL, 4, 0, 1e6, "luminance term sigma_l (SVGF 4)")
           .boolean("maskBlur", &S::maskBlur, true,
                    "disocclusion: grow and soften the mask by a 3x3 mean (the talk)")

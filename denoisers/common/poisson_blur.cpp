@@ -22,9 +22,10 @@ const ParamTable<SurfaceWeightSettings>& surfaceWeightParams() {
   static const ParamTable<W> table =
       ParamTable<W>()
           .real("planeSigma", &W::planeSigma, 0.02, 1e-6, 10,
-                "plane-distance weight scale, fraction of view depth (ours)")
+                "plane-distance weight scale, fraction of view depth (ours; NRD compares with a "
+                "fraction of the frustum size)")
           .real("normalPower", &W::normalPower, 32, 0, 1e4,
-                "normal weight max(0, n.n')^this (ours)")
+                "normal weight max(0, n.n')^this (ours: 10 degrees weighs 0.61)")
           .real("hitSigma", &W::hitSigma, 0.3, 1e-6, 100,
                 "specular hit-distance weight scale, fraction of (h + z) (ours)")
           .real("roughnessSigma", &W::roughnessSigma, 0.1, 1e-6, 10,
