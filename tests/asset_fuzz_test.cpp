@@ -32,7 +32,7 @@ struct Seed {
 std::vector<Seed> readSeeds() {
   std::vector<Seed> seeds;
   for (const char* name : {"obj_mtl", "gltf_inline", "gltf_bin", "glb", "mesh_obj"}) {
-    const std::string bytes = readText(std::string(ARENA_SOURCE_DIR) + "/tests/fuzz/asset_seeds/" + name);
+    const std::string bytes = readText((fs::path(ARENA_SOURCE_DIR) / "tests/fuzz/asset_seeds" / name).string());
     const std::string rest = bytes.substr(1);
     const size_t split = rest.find(fuzz::kSideFileSeparator);
     seeds.push_back({name, AssetInput(bytes[0] % 4), rest.substr(0, split),
@@ -89,6 +89,26 @@ TEST(AssetFuzz, FindingsOfTheFuzzerAreClearErrorsOrFallbacks) {
     const std::string fallback =
         error(AssetInput::ObjWithMtl, "mtllib a.mtl/x/a.obj\nmap_Kd missing.png\n", "0.5\n");
     EXPECT_NE(fallback.find("the OBJ would be read as its own material library"), std::string::npos) << fallback;
+  }
+  // A material library named like a URL: assimp 5.2 reduced "m[://" to the folder ".//" and, given
+  // no stream for it, searched again without end (a stack overflow, the fuzzer's input below). The
+  // line is refused first; a folder named directly too.
+  {
+    const std::string found = std::string("mtllib m[://\n`") + '\0' + ".";
+    const std::string url = error(AssetInput::ObjWithMtl, found, "");
+    EXPECT_NE(url.find((dir / "a.obj").string() + ":1: 'mtllib m[://' looks like a URL"), std::string::npos) << url;
+    EXPECT_NE(error(AssetInput::ObjWithMtl, "mtllib a://\n" + triangle.substr(13), "").find(":1: 'mtllib a://' looks like a URL"),
+              std::string::npos);
+    const std::string folder = error(AssetInput::ObjWithMtl, "mtllib .\n" + triangle.substr(13), "");
+    EXPECT_NE(folder.find(":1: 'mtllib .' names " + (dir / ".").string() + ", which is not a regular file"),
+              std::string::npos)
+        << folder;
+  }
+  // Any other file assimp opens and we refuse ends its import at once, whatever path assimp made of
+  // the name ("q/." it also tries as ".//.", a folder): the refusal, never a null stream.
+  {
+    const std::string made = error(AssetInput::ObjWithMtl, "mtllib q/.\n" + triangle.substr(13), "");
+    EXPECT_NE(made.find(": not a regular file (expected a material library or buffer file)"), std::string::npos) << made;
   }
   // Any file an OBJ names as its material library is checked as one, whatever its extension.
   {

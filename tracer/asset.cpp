@@ -15,6 +15,7 @@
 #include <glm/gtc/type_ptr.hpp>
 #include <map>
 #include <set>
+#include <sstream>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -73,6 +74,10 @@ void forEachStatement(const std::string& text, F f) {
 // checked as one; the OBJ itself reached under another spelling is assimp 5.2's fallback for an
 // unusable "mtllib" ("mtllib a.mtl/x/a.obj" opened "dir//a.obj" as the MTL) and is refused, since
 // its MTL reader writes an OBJ's stray texture statement through a null material (a fuzzer find).
+// A refused file ends the import at once, by throwing: assimp 5.2 catches it in its ReadFile and
+// returns no scene. A null stream instead lets assimp go on, and on a path it found to exist but
+// could not open it searches again without end (a stack overflow: "mtllib m://", which it reduces
+// to the folder ".//", a fuzzer find).
 class RecordingIOSystem : public Assimp::DefaultIOSystem {
  public:
   std::set<std::string> opened;
@@ -88,20 +93,13 @@ class RecordingIOSystem : public Assimp::DefaultIOSystem {
     std::error_code ec;
     if (fs::is_regular_file(file, ec)) {
       const uintmax_t size = fs::file_size(file, ec);
-      if (!ec && size > kMaxAssetBytes) {
-        if (refused.empty())
-          refused = std::string(file) + ": " + std::to_string(size) + " bytes exceeds the " +
-                    std::to_string(kMaxAssetBytes) + "-byte limit";
-        return nullptr;
-      }
+      if (!ec && size > kMaxAssetBytes)
+        refuse(std::string(file) + ": " + std::to_string(size) + " bytes exceeds the " +
+               std::to_string(kMaxAssetBytes) + "-byte limit");
     } else if (fs::exists(file, ec)) {
-      if (refused.empty()) refused = std::string(file) + ": not a regular file";
-      return nullptr;
+      refuse(std::string(file) + ": not a regular file (expected a material library or buffer file)");
     }
-    if (std::string problem = sideFileProblem(file); !problem.empty()) {
-      if (refused.empty()) refused = problem;
-      return nullptr;
-    }
+    if (std::string problem = sideFileProblem(file); !problem.empty()) refuse(problem);
     Assimp::IOStream* stream = DefaultIOSystem::Open(file, mode);
     if (stream) opened.insert(fs::weakly_canonical(file).string());
     return stream;
@@ -109,6 +107,11 @@ class RecordingIOSystem : public Assimp::DefaultIOSystem {
 
  private:
   std::string objPath_, objCanonical_;
+
+  [[noreturn]] void refuse(const std::string& why) {
+    if (refused.empty()) refused = why;
+    throw Error(why);
+  }
 
   std::string sideFileProblem(const char* file) const {
     std::error_code ec;
@@ -145,17 +148,25 @@ class RecordingIOSystem : public Assimp::DefaultIOSystem {
   }
 };
 
-// An OBJ whose "mtllib" names the OBJ itself: assimp 5.2 reads it as its own material library, and
-// a texture statement in it ("map_d") is written through a null material (SEGV, a fuzzer find).
-// Refused naming the line.
+// The "mtllib" lines of an OBJ, refused naming the line where assimp 5.2 would misread them:
+// - the OBJ itself: read as its own material library, a texture statement in it ("map_d") is
+//   written through a null material (SEGV, a fuzzer find);
+// - a name with "://": assimp reduces it to another path ("m://" to the folder ".//") and searches
+//   without end when that cannot be opened (a fuzzer find);
+// - a folder or other file that is not a regular file.
 void checkObjMaterialLibraries(const std::string& path, const std::string& bytes) {
   std::error_code ec;
   const std::string self = fs::weakly_canonical(path, ec).string();
   forEachStatement(bytes, [&](int lineNumber, const std::string& keyword, const std::string& rest) {
-    if (keyword == "mtllib" && !rest.empty() &&
-        fs::weakly_canonical(fs::path(path).parent_path() / rest, ec).string() == self)
-      throw Error(path + ":" + std::to_string(lineNumber) + ": 'mtllib " + rest +
-                  "' names the OBJ file itself; expected a material library (.mtl)");
+    if (keyword != "mtllib" || rest.empty()) return true;
+    const std::string where = path + ":" + std::to_string(lineNumber) + ": 'mtllib " + rest + "' ";
+    const fs::path named = fs::path(path).parent_path() / rest;
+    if (rest.find("://") != std::string::npos)
+      throw Error(where + "looks like a URL; expected the path of a material library (.mtl) relative to the OBJ");
+    if (fs::weakly_canonical(named, ec).string() == self)
+      throw Error(where + "names the OBJ file itself; expected a material library (.mtl)");
+    if (fs::exists(named, ec) && !fs::is_regular_file(named, ec))
+      throw Error(where + "names " + named.string() + ", which is not a regular file; expected a material library (.mtl)");
     return true;
   });
 }
@@ -167,9 +178,10 @@ void checkObjMaterialLibraries(const std::string& path, const std::string& bytes
 void checkGltfIsReadable(const std::string& path, const std::string& ext, Assimp::Importer& importer,
                          Assimp::IOSystem* io) {
   for (size_t i = 0; i < importer.GetImporterCount(); ++i) {
-    const std::string extensions = " " + lowercase(importer.GetImporterInfo(i)->mFileExtensions) + " ";
-    if (extensions.find(" " + ext + " ") != std::string::npos && importer.GetImporter(i)->CanRead(path, io, true))
-      return;
+    std::istringstream extensions(lowercase(importer.GetImporterInfo(i)->mFileExtensions));  // "gltf glb"
+    bool listed = false;
+    for (std::string word; extensions >> word;) listed = listed || word == ext;
+    if (listed && importer.GetImporter(i)->CanRead(path, io, true)) return;
   }
   throw Error(path + ": not a readable glTF file (expected " +
               (ext == "glb" ? std::string("a binary glTF container: the magic 'glTF', version and chunks")
