@@ -9,7 +9,6 @@
 
 #include "harness/gpu_cost.hpp"
 #include "harness/reference_quality.hpp"
-#include "metrics/summary_value.hpp"
 
 namespace arena::cli {
 
@@ -56,9 +55,9 @@ std::string tiedText(const json& m) {
   return s.empty() ? "" : "tied with " + s;
 }
 
-void printOverallRanking(std::ostream& out, const json& results) {
-  const json st = results.value("statistics", json::object());
-  if (!st.contains("overall")) return;
+void printOverallRanking(std::ostream& out, const RunResults& results) {
+  const json& st = results.statistics;
+  if (!st.is_object() || !st.contains("overall")) return;
   const json& o = st["overall"];
   out << "\noverall: " << o.value("normalisation", "") << " (lower is better)\n";
   for (const json& m : o.value("ranking", json::array())) {
@@ -75,20 +74,20 @@ namespace {
 // The order of the methods by time: the CPU ms measured here against the GPU ms the cost model
 // predicts at 1080p on the first device (issue 31: does the order change?). Each label's time is
 // its mean over the scenes where both were measured.
-void printSpeedOrder(std::ostream& out, const json& results) {
+void printSpeedOrder(std::ostream& out, const RunResults& results) {
   std::map<std::string, std::pair<double, double>> sums;  // label -> (CPU, GPU) sums
   std::map<std::string, int> counts;
   std::vector<std::string> labels;
   std::string device;
-  for (const json& p : results.value("pairs", json::array())) {
-    if (p.value("status", "") != "ok" || !p.contains("timing")) continue;
-    const json& t = p["timing"];
+  for (const PairResult& p : results.pairs) {
+    const json& t = p.part("timing");
+    if (!p.ok() || !t.is_object()) continue;
     if (t.value("clock", "cpu") != "cpu" || !t.contains("gpuPredicted") || !t["gpuPredicted"].is_object()) continue;
     const json devices = t["gpuPredicted"].value("devices", json::array());
     if (devices.empty() || !devices[0].value("msMedian", json()).is_number() || !t.value("msMedian", json()).is_number())
       continue;
     device = devices[0].value("device", "");
-    const std::string label = p.value("label", "");
+    const std::string& label = p.label;
     if (!counts.count(label)) labels.push_back(label);
     sums[label].first += t["msMedian"].get<double>();
     sums[label].second += devices[0]["msMedian"].get<double>();
@@ -116,9 +115,9 @@ void printSpeedOrder(std::ostream& out, const json& results) {
 
 // The study's ranking with ties (metrics/statistics.hpp): per scene on relMSE, then overall on the
 // per-scene normalised score. Methods whose difference is not resolved at 95% share "tied with".
-void printSceneRankings(std::ostream& out, const json& results) {
-  if (!results.contains("statistics")) return;
-  const json& st = results["statistics"];
+void printSceneRankings(std::ostream& out, const RunResults& results) {
+  if (!results.statistics.is_object()) return;
+  const json& st = results.statistics;
   out << "\nranking on relMSE with 95% intervals (" << st.value("method", "") << ")\n";
   for (auto it = st["scenes"].begin(); it != st["scenes"].end(); ++it) {
     const json& s = it.value();
@@ -161,9 +160,10 @@ std::string figure(const json& e, const char* name) {
 
 // The event-window figures with their 95% intervals, per scripted event and camera cut, methods in
 // the order of their rank (lag energy, old-view leak) with ties (metrics/ghosting_intervals.hpp).
-void printEventTables(std::ostream& out, const json& results) {
-  if (!results.contains("statistics")) return;
-  for (auto it = results["statistics"]["scenes"].begin(); it != results["statistics"]["scenes"].end(); ++it)
+void printEventTables(std::ostream& out, const RunResults& results) {
+  if (!results.statistics.is_object() || !results.statistics.contains("scenes")) return;
+  const json& scenes = results.statistics["scenes"];
+  for (auto it = scenes.begin(); it != scenes.end(); ++it)
     for (const char* kind : {"events", "cuts"})
       for (const json& ev : it.value().value(kind, json::array())) {
         const bool cut = std::string(kind) == "cuts";
@@ -176,9 +176,9 @@ void printEventTables(std::ostream& out, const json& results) {
                   << ranking.value("totalPairs", 0) << " pairs resolved)\n";
         for (const json& m : ranking.value("ranking", json::array())) {
           const json* e = nullptr;
-          for (const json& p : results["pairs"])
-            if (p["scene"] == it.key() && p["label"] == m["label"] && p.contains(cut ? "cuts" : "ghosting"))
-              for (const json& x : p.at(cut ? "cuts" : "ghosting"))
+          for (const PairResult& p : results.pairs)
+            if (p.scene == it.key() && m["label"] == p.label && p.part(cut ? "cuts" : "ghosting").is_array())
+              for (const json& x : p.part(cut ? "cuts" : "ghosting"))
                 if (x.value("eventFrame", -1) == frame) e = &x;
           if (!e) continue;
           out << "  " << std::left << std::setw(4) << m["rank"].get<int>() << std::setw(22)
@@ -194,8 +194,8 @@ void printEventTables(std::ostream& out, const json& results) {
 
 // One line per scene: the best method on relMSE (rank 1, first in the ranking) with its mean and
 // interval, and the methods not resolved from it -- the winner, or the tied group.
-void printSceneWinners(std::ostream& out, const json& results) {
-  const json scenes = results.value("statistics", json::object()).value("scenes", json::object());
+void printSceneWinners(std::ostream& out, const RunResults& results) {
+  const json scenes = results.statistics.is_object() ? results.statistics.value("scenes", json::object()) : json::object();
   if (scenes.empty()) return;
   out << "\nper scene: the best on relMSE with its 95% interval, and the methods not resolved from it\n";
   size_t width = 0;
@@ -217,10 +217,9 @@ void printSceneWinners(std::ostream& out, const json& results) {
 
 // The warnings that concern a scene, once per scene: results.scenes.<scene>.warnings (capped
 // references, non-finite inputs) and the asset loader's fallbacks.
-std::vector<std::string> sceneWarningLines(const json& results) {
+std::vector<std::string> sceneWarningLines(const RunResults& results) {
   std::vector<std::string> lines;
-  const json scenes = results.value("scenes", json::object());
-  for (const auto& [name, scene] : scenes.items()) {
+  for (const auto& [name, scene] : results.scenes.items()) {
     for (const json& w : scene.value("warnings", json::array())) lines.push_back(name + ": " + w.get<std::string>());
     const size_t fallbacks = scene.value("assets", json::object()).value("warnings", json::array()).size();
     if (fallbacks > 0)
@@ -232,7 +231,7 @@ std::vector<std::string> sceneWarningLines(const json& results) {
 
 }  // namespace
 
-void printStudyTables(std::ostream& out, const json& results) {
+void printStudyTables(std::ostream& out, const RunResults& results) {
   printSceneRankings(out, results);
   printEventTables(out, results);
   const std::vector<std::string> absent = absentSummaryLines(results, {"relMse"});
@@ -240,17 +239,16 @@ void printStudyTables(std::ostream& out, const json& results) {
   for (const std::string& line : absent) out << "  " << line << "\n";
   out << "\nreference quality (noise floor / best real denoiser's corrected relMSE, goal <= " << kReferenceQualityGoal
       << ")\n";
-  for (const std::string& line : referenceQualityLines(results)) out << "  " << line << "\n";
+  for (const std::string& line : referenceQualityLines(results.scenes)) out << "  " << line << "\n";
 }
 
-void printStudySummary(std::ostream& out, const json& results, const StudyOutputs& where) {
+void printStudySummary(std::ostream& out, const RunResults& results, const StudyOutputs& where) {
   printOverallRanking(out, results);
   printSpeedOrder(out, results);
   printSceneWinners(out, results);
   // docs/references.md: said plainly, once, where a scene's references are too noisy to rank it.
   std::vector<std::string> missed;
-  const json scenes = results.value("scenes", json::object());
-  for (const auto& [name, scene] : scenes.items())
+  for (const auto& [name, scene] : results.scenes.items())
     if (scene.contains("referenceQuality") && !scene["referenceQuality"].value("meets", false))
       missed.push_back(scene["referenceQuality"].value("verdict", name));
   if (!missed.empty())
@@ -261,8 +259,8 @@ void printStudySummary(std::ostream& out, const json& results, const StudyOutput
   if (!warnings.empty()) out << "\nwarnings\n";
   for (const std::string& line : warnings) out << "  " << line << "\n";
   size_t pairWarnings = 0, pairsWarned = 0;
-  for (const json& p : results.value("pairs", json::array())) {
-    const size_t n = p.value("warnings", json::array()).size();
+  for (const PairResult& p : results.pairs) {
+    const size_t n = p.part("warnings").is_array() ? p.part("warnings").size() : 0;
     pairWarnings += n;
     pairsWarned += n > 0;
   }

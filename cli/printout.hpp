@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "metrics/run_results.hpp"
+
 namespace arena::cli {
 
 // 4 significant digits, trailing zeros dropped; 2 decimals in exponent form below 1e-3 or from 1e5
@@ -20,7 +22,7 @@ std::string intervalText(const nlohmann::json& interval);
 std::string tiedText(const nlohmann::json& rankedMethod);
 // The run's overall ranking (statistics.overall): rank ("=" when tied), label, score, interval,
 // ties; and who was left out and why. Nothing when the run has none.
-void printOverallRanking(std::ostream& out, const nlohmann::json& results);
+void printOverallRanking(std::ostream& out, const RunResults& results);
 
 // Where a finished study put its outputs, and how long it took.
 struct StudyOutputs {
@@ -32,10 +34,10 @@ struct StudyOutputs {
 // not resolved from it; the reference verdicts that miss the goal; each scene's warnings once
 // (results.scenes.<scene>.warnings, asset fallbacks); a count of the pairs' own warnings and absent
 // summaries; where the results and the report are. The full tables are printStudyTables'.
-void printStudySummary(std::ostream& out, const nlohmann::json& results, const StudyOutputs& where);
+void printStudySummary(std::ostream& out, const RunResults& results, const StudyOutputs& where);
 // What `arena study --verbose` prints before the summary: every scene's ranking with intervals,
 // every event and camera cut with its figures and intervals, the absent summaries and every scene's
 // reference verdict.
-void printStudyTables(std::ostream& out, const nlohmann::json& results);
+void printStudyTables(std::ostream& out, const RunResults& results);
 
 }  // namespace arena::cli

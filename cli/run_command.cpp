@@ -14,7 +14,6 @@
 #include "cli/render_options.hpp"
 #include "metrics/compare.hpp"
 #include "metrics/results.hpp"
-#include "metrics/summary_value.hpp"
 #include "harness/run_matrix.hpp"
 #include "harness/scene_selection.hpp"
 #include "harness/sweep.hpp"
@@ -103,17 +102,19 @@ std::string formatNumber(double v, int precision) {
   return o.str();
 }
 
-void finish(const json& results, const std::string& out) {
+// Prints the run as committed to `out` (read back: what the table shows is what results.json holds).
+void finish(const std::string& out) {
+  const RunResults results = loadResults(out);
   std::cout << "results: " << out << "/results.json (and results.db)\n";
   std::cout << std::left << std::setw(22) << "scene" << std::setw(34) << "denoiser" << std::right << std::setw(12)
             << "relMSE" << std::setw(10) << "ms" << "\n";
-  for (const json& p : results["pairs"]) {
-    std::cout << std::left << std::setw(22) << p["scene"].get<std::string>() << std::setw(34) << p["label"].get<std::string>();
-    if (p["status"] == "ok") {
+  for (const PairResult& p : results.pairs) {
+    std::cout << std::left << std::setw(22) << p.scene << std::setw(34) << p.label;
+    if (p.ok()) {
       // An ok pair can still have no relMSE summary (a sequence no longer than the warm-up): "-"
       // here and the reason below the table.
-      const SummaryMean relMse = summaryMean(p, "relMse");
-      const json ms = p.value("timing", json::object()).value("msMedian", json());
+      const SummaryMean relMse = p.mean("relMse");
+      const json ms = p.part("timing").is_object() ? p.part("timing").value("msMedian", json()) : json();
       std::cout << std::right << std::setw(12) << (relMse.present() ? formatNumber(relMse.mean, 4) : "-")
                 << std::setw(10) << (ms.is_number() ? formatNumber(ms.get<double>(), 3) : "-") << "\n";
     } else {
@@ -178,7 +179,8 @@ void addRunCommands(CLI::App& app) {
         c.denoisers.push_back({n, params[n], ""});
       }
       resolveAutoLowres(c);
-      finish(runMatrix(c), o->out);
+      runMatrix(c);
+      finish(o->out);
     });
   }
   {
@@ -199,8 +201,8 @@ void addRunCommands(CLI::App& app) {
                       "; --param must name " + *denoiser + ".NAME");
       c = sweepRun(std::move(c), *denoiser, assignments[*denoiser], *grids);
       resolveAutoLowres(c);
-      json results = runMatrix(c);
-      finish(results, o->out);
+      runMatrix(c);
+      finish(o->out);
     });
   }
   {
@@ -211,7 +213,8 @@ void addRunCommands(CLI::App& app) {
     cmd->add_option("--out", *out, "Merged run directory")->required();
     cmd->callback([runs, out] {
       std::vector<std::filesystem::path> paths(runs->begin(), runs->end());
-      finish(mergeRuns(paths, *out), *out);
+      mergeRuns(paths, *out);
+      finish(*out);
     });
   }
   {
@@ -245,7 +248,7 @@ void addRunCommands(CLI::App& app) {
       if (tols.empty())
         for (const MetricDefinition* m : metricCatalog())
           if (m->gatedByDefault) tols.push_back({m->name, t});
-      const json baseline = loadResults(*a), candidate = loadResults(*b);
+      const RunResults baseline = loadResults(*a), candidate = loadResults(*b);
       // Numbers measured under other settings differ for that reason alone: refused unless asked.
       const std::vector<std::string> differ = settingsDifferences(baseline, candidate);
       if (!differ.empty()) {

@@ -17,6 +17,7 @@
 #include "harness/run_matrix.hpp"
 #include "harness/scene_selection.hpp"
 #include "harness/study.hpp"
+#include "metrics/results.hpp"
 #include "reports/report.hpp"
 
 namespace arena::cli {
@@ -132,7 +133,8 @@ void addStudyCommand(CLI::App& app) {
     for (const Scene& s : c.scenes) requireFitsInMemory(s, c.render, true);
     for (const std::string& w : shortSequenceWarnings(c.scenes, c.render, c.warmup))
       std::cerr << "arena: warning: " << w << "\n";
-    const json results = runStudy(study);
+    runStudy(study);
+    const RunResults results = loadResults(*out);  // as committed
     ReportOptions ro;
     ro.run = *out;
     ro.out = *report;

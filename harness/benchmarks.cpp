@@ -383,13 +383,15 @@ json benchReference(const ReferenceBench& b, const ProgressFn& progress) {
 }
 
 nlohmann::json benchRankAgreement(const std::string& runA, const std::string& runB, const ProgressFn& progress) {
-  const nlohmann::json a = loadResults(runA), b = loadResults(runB);
+  const RunResults a = loadResults(runA), b = loadResults(runB);
   // The first common scene's size in each run: what the comparison is about.
-  auto size = [](const nlohmann::json& r, const std::string& scene) {
-    const nlohmann::json& s = r.at("scenes").value(scene, nlohmann::json::object());
+  auto size = [](const RunResults& r, const std::string& scene) {
+    const nlohmann::json& s = r.scenes.value(scene, nlohmann::json::object());
     return std::to_string(s.value("width", 0)) + "x" + std::to_string(s.value("height", 0));
   };
-  const std::vector<SceneRankAgreement> scenes = compareRankings(a, b);
+  if (a.statistics.is_null() || b.statistics.is_null())
+    throw Error((a.statistics.is_null() ? runA : runB) + ": the run has no statistics (expected a finished run)");
+  const std::vector<SceneRankAgreement> scenes = compareRankings(a.statistics, b.statistics);
   if (scenes.empty())
     throw Error(runA + " and " + runB + ": no scene is ranked in both runs (expected runs of the same scenes)");
   progress("rank agreement: " + runA + " (A, " + size(a, scenes.front().scene) + ") against " + runB + " (B, " +

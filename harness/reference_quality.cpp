@@ -178,9 +178,9 @@ std::string refinementNote(const ReferenceRefinement& plan, double budget) {
          "x the references' paths; `arena study --refine-budget " + need + "` covers it";
 }
 
-std::vector<std::string> referenceQualityLines(const json& results) {
+std::vector<std::string> referenceQualityLines(const json& scenes) {
   std::vector<std::string> lines;
-  const json scenes = results.value("scenes", json::object());
+  if (!scenes.is_object()) return lines;
   for (const auto& [name, scene] : scenes.items())
     if (scene.contains("referenceQuality")) lines.push_back(scene["referenceQuality"].value("verdict", ""));
   return lines;

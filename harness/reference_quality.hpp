@@ -47,7 +47,7 @@ std::vector<ReferenceRefinement> planReferenceRefinement(const nlohmann::json& r
                                                          int warmup, int maxSpp, double budget);
 // The sentence the verdict carries for a planned scene.
 std::string refinementNote(const ReferenceRefinement& plan, double budget);
-// One line per scene for a printed summary (the verdicts above, aligned).
-std::vector<std::string> referenceQualityLines(const nlohmann::json& results);
+// One line per scene for a printed summary (the verdicts above, aligned), from results.scenes.
+std::vector<std::string> referenceQualityLines(const nlohmann::json& scenes);
 
 }  // namespace arena

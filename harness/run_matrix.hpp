@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "harness/denoise_run.hpp"
+#include "metrics/run_results.hpp"
 #include "tracer/sequence_cache.hpp"
 
 namespace arena {
@@ -62,6 +63,9 @@ nlohmann::json runMatrix(const RunConfig& config);
 // What ends every run: the statistics over all pairs, the reference-quality verdicts
 // (cfg.warmup, cfg.referenceNotes), and results.json + results.db committed to cfg.out.
 void finishRun(nlohmann::json& results, const RunConfig& cfg);
+// "label on scene: error" for every failed pair; of a committed run, or of the document runMatrix
+// returns.
+std::vector<std::string> failedPairs(const RunResults& results);
 std::vector<std::string> failedPairs(const nlohmann::json& results);
 // "i/n" -> (i, n), 0 <= i < n.
 std::pair<int, int> parseShard(const std::string& text);

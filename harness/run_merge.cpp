@@ -28,12 +28,15 @@ std::pair<int, int> parseShard(const std::string& text) {
   return {i, n};
 }
 
-std::vector<std::string> failedPairs(const json& results) {
+std::vector<std::string> failedPairs(const RunResults& results) {
   std::vector<std::string> out;
-  for (const json& p : results["pairs"])
-    if (p["status"] != "ok") out.push_back(p["label"].get<std::string>() + " on " + p["scene"].get<std::string>() + ": " +
-                                           p.value("error", ""));
+  for (const PairResult& p : results.pairs)
+    if (!p.ok()) out.push_back(p.label + " on " + p.scene + ": " + p.error);
   return out;
+}
+
+std::vector<std::string> failedPairs(const json& results) {
+  return failedPairs(RunResults::fromJson(results, "the run's results"));
 }
 
 json replaceScenes(json results, const json& part) {
@@ -57,14 +60,15 @@ json replaceScenes(json results, const json& part) {
 json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
   if (runs.empty()) throw Error("merge: no runs given");
   checkRunOutputs(out);  // creates --out when missing
-  json merged;
+  RunResults merged;
+  bool first = true;
   std::set<std::string> seen;
   // A gate must not pass on a partial study: every shard i/n of one n, each exactly once.
   std::map<int, std::string> shards;
   int shardCount = 0;
   for (const fs::path& run : runs) {
-    json r = loadResults(run);
-    const std::string shard = r["settings"].value("shard", "");
+    RunResults r = loadResults(run);
+    const std::string shard = r.settings.value("shard", "");
     if (shard == "merged") throw Error(run.string() + ": already a merged run; merge the shards it came from");
     const auto [i, n] = parseShard(shard);
     if (shardCount && n != shardCount)
@@ -73,24 +77,24 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
     shardCount = n;
     if (!shards.emplace(i, run.string()).second)
       throw Error(run.string() + ": shard " + shard + " is already given by " + shards[i]);
-    if (merged.is_null()) {
+    if (first) {
+      first = false;
       merged = r;
-      merged["pairs"] = json::array();
-      merged["scenes"] = json::object();
-      merged["settings"]["shard"] = "merged";
+      merged.pairs.clear();
+      merged.scenes = json::object();
+      merged.statistics = nullptr;
+      merged.settings["shard"] = "merged";
     } else {
-      json a = merged["settings"], b = r["settings"];
+      json a = merged.settings, b = r.settings;
       a.erase("shard");
       b.erase("shard");
       if (a != b) throw Error(run.string() + ": settings differ from " + runs.front().string() + "; only shards of one run can be merged");
     }
-    for (auto it = r["scenes"].begin(); it != r["scenes"].end(); ++it) merged["scenes"][it.key()] = it.value();
-    for (json& p : r["pairs"]) {
-      std::string key = p["scene"].get<std::string>() + "\n" + p["label"].get<std::string>();
-      if (!seen.insert(key).second)
-        throw Error(run.string() + ": pair " + p["label"].get<std::string>() + " on " + p["scene"].get<std::string>() +
-                    " appears in two shards");
-      merged["pairs"].push_back(p);
+    for (auto it = r.scenes.begin(); it != r.scenes.end(); ++it) merged.scenes[it.key()] = it.value();
+    for (PairResult& p : r.pairs) {
+      if (!seen.insert(p.scene + "\n" + p.label).second)
+        throw Error(run.string() + ": pair " + p.label + " on " + p.scene + " appears in two shards");
+      merged.pairs.push_back(std::move(p));
     }
   }
   std::string missing;
@@ -100,10 +104,12 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
   for (const fs::path& run : runs)
     if (fs::exists(run / "images"))
       fs::copy(run / "images", out / "images", fs::copy_options::recursive | fs::copy_options::skip_existing);
-  merged["statistics"] = analyseRun(merged);
-  addReferenceQuality(merged, merged["settings"].value("warmup", 8));
-  commitResults(out, merged);
-  return merged;
+  // The statistics and the verdicts are computed on the document as the run loop writes it.
+  json document = merged.toJson();
+  document["statistics"] = analyseRun(document);
+  addReferenceQuality(document, merged.settings.value("warmup", 8));
+  commitResults(out, document);
+  return document;
 }
 
 }  // namespace arena

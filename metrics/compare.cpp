@@ -6,7 +6,6 @@
 
 #include "core/error.hpp"
 #include "metrics/results.hpp"
-#include "metrics/summary_value.hpp"
 
 namespace arena {
 
@@ -30,15 +29,13 @@ double parseFraction(const std::string& text, const char* option, const char* ex
   return v;
 }
 
-std::string key(const json& p) {
-  return p.value("scene", "") + "\n" + p.value("label", "");
-}
+std::string key(const PairResult& p) { return p.scene + "\n" + p.label; }
 
 // A row about a whole pair (metric "*"): missing, failed or new; no numbers to compare.
-ComparisonRow pairRow(const json& p, const std::string& verdict, const std::string& note) {
+ComparisonRow pairRow(const PairResult& p, const std::string& verdict, const std::string& note) {
   ComparisonRow row;
-  row.scene = p.value("scene", "");
-  row.label = p.value("label", "");
+  row.scene = p.scene;
+  row.label = p.label;
   row.metric = "*";
   row.verdict = verdict;
   row.note = note;
@@ -61,15 +58,14 @@ void collectDifferences(const json& a, const json& b, const std::string& path, s
 
 }  // namespace
 
-std::vector<std::string> settingsDifferences(const json& baseline, const json& candidate) {
+std::vector<std::string> settingsDifferences(const RunResults& baseline, const RunResults& candidate) {
   std::vector<std::string> out;
-  json a = baseline.value("settings", json::object()), b = candidate.value("settings", json::object());
+  json a = baseline.settings, b = candidate.settings;
   a.erase("shard");  // which slice of the pairs a run holds, not how they were measured
   b.erase("shard");
   collectDifferences(a, b, "settings", out);
-  const json none = json::object();
-  const json& as = baseline.contains("scenes") ? baseline["scenes"] : none;
-  const json& bs = candidate.contains("scenes") ? candidate["scenes"] : none;
+  const json& as = baseline.scenes;
+  const json& bs = candidate.scenes;
   for (auto it = as.begin(); it != as.end(); ++it) {
     if (!bs.contains(it.key()) || !it.value().is_object() || !bs[it.key()].is_object()) continue;
     for (const char* field : {"width", "height", "frames"}) {
@@ -93,7 +89,7 @@ double parseConfidence(const std::string& text) {
   return v;
 }
 
-std::vector<ComparisonRow> compareRuns(const json& base, const json& cand,
+std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults& cand,
                                        std::vector<Tolerance> tolerances,
                                        const BootstrapConfig& cfg) {
   if (tolerances.empty())
@@ -105,38 +101,35 @@ std::vector<ComparisonRow> compareRuns(const json& base, const json& cand,
     if (!std::isfinite(t.relative) || t.relative < 0)
       throw Error("compare: tolerance of " + t.metric + " must be finite and non-negative");
   }
-  for (const json* r : {&base, &cand})
-    if (!r->contains("pairs") || !(*r)["pairs"].is_array())
-      throw Error("compare: a run has no pairs array");
-  std::map<std::string, const json*> candPairs;
+  std::map<std::string, const PairResult*> candPairs;
   std::set<std::string> baseScenes, candScenes;
-  for (const json& p : cand["pairs"])
-    candPairs[key(p)] = &p, candScenes.insert(p.value("scene", ""));
-  for (const json& p : base["pairs"]) baseScenes.insert(p.value("scene", ""));
+  for (const PairResult& p : cand.pairs) candPairs[key(p)] = &p, candScenes.insert(p.scene);
+  for (const PairResult& p : base.pairs) baseScenes.insert(p.scene);
   bool shared = false;
   for (const std::string& s : baseScenes) shared |= candScenes.count(s) > 0;
   if (!shared) throw Error("compare: the two runs share no scene; nothing can be compared");
 
   std::vector<ComparisonRow> rows;
   std::set<std::string> baseKeys;
-  for (const json& b : base["pairs"]) {
+  for (const PairResult& b : base.pairs) {
     baseKeys.insert(key(b));
-    const std::string scene = b.value("scene", ""), label = b.value("label", "");
+    const std::string& scene = b.scene;
+    const std::string& label = b.label;
     auto it = candPairs.find(key(b));
     if (it == candPairs.end()) {
       rows.push_back(pairRow(b, "missing", "pair not in the candidate run"));
       continue;
     }
-    const json& c = *it->second;
-    if (c.value("status", "") != "ok") {
-      rows.push_back(pairRow(b, "failed", c.value("error", "")));
+    const PairResult& c = *it->second;
+    if (!c.ok()) {
+      rows.push_back(pairRow(b, "failed", c.error));
       continue;
     }
-    if (b.value("status", "") != "ok") continue;  // nothing to hold the candidate to
+    if (!b.ok()) continue;  // nothing to hold the candidate to
     for (const Tolerance& t : tolerances) {
       ComparisonRow row{scene,      label, t.metric,   kUndefined, kUndefined,
                         kUndefined, {},    t.relative, "ok",       ""};
-      const SummaryMean bm = summaryMean(b, t.metric), cm = summaryMean(c, t.metric);
+      const SummaryMean bm = b.mean(t.metric), cm = c.mean(t.metric);
       if (!bm.computed && !cm.computed) continue;  // e.g. FLIP switched off in both runs
       if (!cm.present() && !bm.present()) {
         // Absent in both (a sequence no longer than the warm-up): nothing to hold the candidate
@@ -166,11 +159,10 @@ std::vector<ComparisonRow> compareRuns(const json& base, const json& cand,
       const double worse = lowerIsBetter ? row.change : -row.change;
       // Paired over the frames and tiles both runs have, seeded by the scene like the run's own.
       bool resolvedWorse = false, resolvedBetter = false;
-      if (b.contains("tiles") && c.contains("tiles") && b["tiles"].contains(t.metric) &&
-          c["tiles"].contains(t.metric)) {
+      const json &bt = b.part("tiles"), &ct = c.part("tiles");
+      if (bt.is_object() && ct.is_object() && bt.contains(t.metric) && ct.contains(t.metric)) {
         const PairedDifference d =
-            pairedDifference(MetricTiles::fromJson(c["tiles"][t.metric]),
-                             MetricTiles::fromJson(b["tiles"][t.metric]), scene, cfg);
+            pairedDifference(MetricTiles::fromJson(ct[t.metric]), MetricTiles::fromJson(bt[t.metric]), scene, cfg);
         if (d.ci.valid()) {
           row.changeCi = {d.ci.lo / scale, d.ci.hi / scale};
           const bool above = d.ci.lo > 0, below = d.ci.hi < 0;
@@ -191,7 +183,7 @@ std::vector<ComparisonRow> compareRuns(const json& base, const json& cand,
       rows.push_back(row);
     }
   }
-  for (const json& c : cand["pairs"])
+  for (const PairResult& c : cand.pairs)
     if (!baseKeys.count(key(c))) rows.push_back(pairRow(c, "new", "pair not in the baseline run"));
   return rows;
 }

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "metrics/run_results.hpp"
 #include "metrics/statistics.hpp"
 
 namespace arena {
@@ -35,15 +36,13 @@ struct ComparisonRow {
 };
 
 // Defaults when `tolerances` is empty: relMse, ldrFlip, hdrFlip, ssim, tRmae at 2%.
-std::vector<ComparisonRow> compareRuns(const nlohmann::json& baseline,
-                                       const nlohmann::json& candidate,
+std::vector<ComparisonRow> compareRuns(const RunResults& baseline, const RunResults& candidate,
                                        std::vector<Tolerance> tolerances,
                                        const BootstrapConfig& cfg = {});
 // What two runs' settings differ in, one line each ("settings.warmup: 8 vs 2",
 // "scenes.cornell_static.width: 16 vs 32"): every field under "settings" except the shard, and the
 // resolution and frame count of each scene both runs have. Empty when they match.
-std::vector<std::string> settingsDifferences(const nlohmann::json& baseline,
-                                             const nlohmann::json& candidate);
+std::vector<std::string> settingsDifferences(const RunResults& baseline, const RunResults& candidate);
 // "2%" -> 0.02, "0.02" -> 0.02; negative, NaN or infinite values are errors.
 double parseTolerance(const std::string& text);
 // "95%" or "0.95" -> 0.95; must lie in (0, 1).

@@ -68,9 +68,9 @@ std::map<std::string, double> resolvedDifferences(const json& scene) {
 
 }  // namespace
 
-std::vector<SceneRankAgreement> compareRankings(const json& resultsA, const json& resultsB) {
-  const json& scenesA = resultsA.at("statistics").at("scenes");
-  const json& scenesB = resultsB.at("statistics").at("scenes");
+std::vector<SceneRankAgreement> compareRankings(const json& statisticsA, const json& statisticsB) {
+  const json& scenesA = statisticsA.at("scenes");
+  const json& scenesB = statisticsB.at("scenes");
   std::vector<SceneRankAgreement> out;
   for (auto it = scenesA.begin(); it != scenesA.end(); ++it) {
     if (!scenesB.contains(it.key())) continue;

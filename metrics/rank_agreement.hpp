@@ -30,8 +30,9 @@ struct SceneRankAgreement {
   nlohmann::json toJson() const;
 };
 
-// The scenes both runs rank (results.json "statistics.scenes"), in A's order. A scene whose rankings
-// use different metrics, or with fewer than two common methods, is an error naming it.
-std::vector<SceneRankAgreement> compareRankings(const nlohmann::json& resultsA, const nlohmann::json& resultsB);
+// The scenes both runs rank (their statistics, RunResults::statistics: "scenes"), in A's order. A
+// scene whose rankings use different metrics, or with fewer than two common methods, is an error
+// naming it.
+std::vector<SceneRankAgreement> compareRankings(const nlohmann::json& statisticsA, const nlohmann::json& statisticsB);
 
 }  // namespace arena

@@ -18,82 +18,12 @@ namespace arena {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-namespace {
-
-// The shape every reader of results.json (compare, merge, report) relies on, checked once on load
-// so a hand-edited or foreign document is an error naming its JSON path, never an out-of-bounds
-// read.
-void requireResultsShape(const json& j, const std::string& file) {
-  auto fail = [&](const std::string& path, const std::string& expected, const json& got) {
-    throw Error(file + ": " + path + ": expected " + expected + ", got " + jsonTypeName(got));
-  };
-  auto member = [&](const json& obj, const std::string& path, const char* key,
-                    bool (json::*is)() const noexcept, const char* expected) -> const json& {
-    static const json missing;
-    const json& v = obj.contains(key) ? obj.at(key) : missing;
-    if (!(v.*is)()) fail(path + "." + key, expected, v);
-    return v;
-  };
-  member(j, "$", "name", &json::is_string, "a string");
-  member(j, "$", "settings", &json::is_object, "an object");
-  member(j, "$", "environment", &json::is_object, "an object");
-  for (auto& [name, scene] : member(j, "$", "scenes", &json::is_object, "an object").items())
-    if (!scene.is_object()) fail("$.scenes." + name, "an object", scene);
-  const json& pairs = member(j, "$", "pairs", &json::is_array, "an array of pairs");
-  for (size_t i = 0; i < pairs.size(); ++i) {
-    const std::string path = "$.pairs[" + std::to_string(i) + "]";
-    const json& p = pairs[i];
-    if (!p.is_object()) fail(path, "an object", p);
-    for (const char* key : {"scene", "denoiser", "label", "status"})
-      member(p, path, key, &json::is_string, "a string");
-    if (p.at("status") != "ok") {
-      member(p, path, "error", &json::is_string, "a string (the failure)");
-      continue;
-    }
-    // The numbers readers take as numbers (printouts, compare, report, history): a string in
-    // their place is an error naming it here, not nlohmann's type_error without a path later.
-    auto numbers = [&](const json& obj, const std::string& at, std::initializer_list<const char*> keys) {
-      for (const char* k : keys)
-        if (obj.contains(k) && !obj.at(k).is_number() && !obj.at(k).is_null())
-          fail(at + "." + k, "a number (or null)", obj.at(k));
-    };
-    for (auto& [metric, s] : member(p, path, "summary", &json::is_object, "an object").items()) {
-      if (!s.is_object()) fail(path + ".summary." + metric, "an object", s);
-      numbers(s, path + ".summary." + metric, {"mean", "median", "p5", "p95", "frames"});
-    }
-    if (p.contains("timing") && p.at("timing").is_object())
-      numbers(p.at("timing"), path + ".timing", {"msMedian", "msP5", "msP95", "msMean"});
-    const json& frames =
-        member(p, path, "frames", &json::is_array, "an array of per-frame metrics");
-    for (size_t f = 0; f < frames.size(); ++f) {
-      if (!frames[f].is_object())
-        fail(path + ".frames[" + std::to_string(f) + "]", "an object", frames[f]);
-      member(frames[f], path + ".frames[" + std::to_string(f) + "]", "frame",
-             &json::is_number_integer, "an integer");
-    }
-    member(p, path, "params", &json::is_object, "an object");
-    if (p.contains("timing") && !p.at("timing").is_object())
-      fail(path + ".timing", "an object", p.at("timing"));
-  }
-}
-
-}  // namespace
-
-json loadResults(const fs::path& runDir) {
+RunResults loadResults(const fs::path& runDir) {
   fs::path file = runDir / "results.json";
   if (!fs::exists(runDir)) throw Error(runDir.string() + ": no such run directory");
   if (!fs::exists(file))
     throw Error(runDir.string() + ": not a run (no results.json); create one with `arena run`");
-  json j = parseJsonFile(file.string());
-  if (!j.is_object() || !j.contains("kind") || j.at("kind") != "arena-run")
-    throw Error(file.string() + ": not an arena results file");
-  if (!j.contains("schema") || j.at("schema") != kResultsSchemaVersion)
-    throw Error(file.string() + ": results schema version " +
-                (j.contains("schema") ? j.at("schema").dump() : "none") +
-                ", this arena reads version " + std::to_string(kResultsSchemaVersion) +
-                " (re-run with this version)");
-  requireResultsShape(j, file.string());
-  return j;
+  return RunResults::fromJson(parseJsonFile(file.string()), file.string());
 }
 
 void saveResults(const fs::path& runDir, const json& results) {
@@ -243,16 +173,15 @@ void requireSchemaVersion(const Db& db) {
 
 }  // namespace
 
-void appendToDatabase(const fs::path& dbPath, const json& r, const std::string& nameInErrors) {
+void appendToDatabase(const fs::path& dbPath, const RunResults& r, const std::string& nameInErrors) {
   Db db(dbPath, nameInErrors.empty() ? dbPath.string() : nameInErrors, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
   requireSchemaVersion(db);
   db.exec("PRAGMA user_version = " + std::to_string(kResultsSchemaVersion));
   db.exec(kDatabaseSchema);
   db.exec("BEGIN");
   Statement run(db, "INSERT INTO runs (name, created, git_commit, schema, environment, settings) VALUES (?,?,?,?,?,?)");
-  run.text(1, r.value("name", "")).text(2, r.value("created", ""))
-      .text(3, r["environment"].value("git_commit", "")).integer(4, r.value("schema", 0))
-      .text(5, r["environment"].dump()).text(6, r["settings"].dump())
+  run.text(1, r.name).text(2, r.created).text(3, r.environment.value("git_commit", ""))
+      .integer(4, kResultsSchemaVersion).text(5, r.environment.dump()).text(6, r.settings.dump())
       .step();
   const long long runId = sqlite3_last_insert_rowid(db.db);
   // The registry as this arena knew it, so a dashboard reads each metric's direction and unit from
@@ -265,25 +194,22 @@ void appendToDatabase(const fs::path& dbPath, const json& r, const std::string& 
   Statement pair(db, "INSERT INTO pairs VALUES (?,?,?,?,?,?,?)");
   Statement frame(db, "INSERT INTO frame_metrics VALUES (?,?,?,?,?,?)");
   Statement summary(db, "INSERT INTO summaries VALUES (?,?,?,?,?,?,?,?,?,?,?,?)");
-  for (const json& p : r["pairs"]) {
-    const std::string scene = p["scene"], label = p["label"];
-    pair.integer(1, runId).text(2, scene).text(3, p["denoiser"]).text(4, label).text(5, p["params"].dump())
-        .text(6, p["status"]).text(7, p.value("error", "")).step();
-    if (p["status"] != "ok") continue;
-    for (const json& f : p["frames"])
+  for (const PairResult& p : r.pairs) {
+    pair.integer(1, runId).text(2, p.scene).text(3, p.denoiser).text(4, p.label).text(5, p.params.dump())
+        .text(6, p.status).text(7, p.error).step();
+    if (!p.ok()) continue;
+    for (const json& f : p.part("frames"))
       for (auto it = f.begin(); it != f.end(); ++it)
         if (it.key() != "frame" && it.value().is_number())
-          frame.integer(1, runId).text(2, scene).text(3, label).integer(4, f["frame"].get<int>()).text(5, it.key())
+          frame.integer(1, runId).text(2, p.scene).text(3, p.label).integer(4, f["frame"].get<int>()).text(5, it.key())
               .real(6, it.value().get<double>()).step();
-    for (auto it = p["summary"].begin(); it != p["summary"].end(); ++it) {
-      const json& v = it.value();
-      auto real = [&](const char* k) { return v.contains(k) && v[k].is_number() ? v[k].get<double>() : kUndefined; };
-      summary.integer(1, runId).text(2, scene).text(3, label).text(4, it.key()).real(5, real("mean"))
-          .real(6, real("median")).real(7, real("p5")).real(8, real("p95")).real(9, ciBound(v, 0))
-          .real(10, ciBound(v, 1)).integer(11, v.value("frames", 0)).text(12, v.value("absent", "")).step();
-    }
+    for (const auto& [metric, v] : p.summary)
+      summary.integer(1, runId).text(2, p.scene).text(3, p.label).text(4, metric).real(5, v.mean)
+          .real(6, v.median).real(7, v.p5).real(8, v.p95).real(9, v.ci95.lo).real(10, v.ci95.hi)
+          .integer(11, v.frames).text(12, v.absent).step();
   }
-  if (r.contains("statistics")) {
+  if (r.statistics.is_object()) {
+    const json& statistics = r.statistics;
     Statement paired(db, "INSERT INTO paired VALUES (?,?,?,?,?,?,?,?,?)");
     Statement rank(db, "INSERT INTO rankings VALUES (?,?,?,?,?,?,?,?,?)");
     auto addRanking = [&](const std::string& scene, const std::string& metric, const json& ranking, const char* value) {
@@ -297,7 +223,9 @@ void appendToDatabase(const fs::path& dbPath, const json& r, const std::string& 
         paired.integer(1, runId).text(2, scene).text(3, metric).text(4, x["a"]).text(5, x["b"]).real(6, x["diff"])
             .real(7, ciBound(x, 0)).real(8, ciBound(x, 1)).integer(9, x["resolved"].get<bool>()).step();
     };
-    for (auto it = r["statistics"]["scenes"].begin(); it != r["statistics"]["scenes"].end(); ++it) {
+    static const json none = json::object();
+    const json& scenes = statistics.contains("scenes") ? statistics["scenes"] : none;
+    for (auto it = scenes.begin(); it != scenes.end(); ++it) {
       addScene(it.key(), it.value(), it.value()["metric"]);
       for (auto m = it.value()["byMetric"].begin(); m != it.value()["byMetric"].end(); ++m)
         addScene(it.key(), m.value(), m.value()["metric"]);
@@ -310,8 +238,8 @@ void appendToDatabase(const fs::path& dbPath, const json& r, const std::string& 
                      std::string(kind == std::string("events") ? "ghosting@" : "cut@") +
                          std::to_string(e["eventFrame"].get<int>()) + "." + f.key());
     }
-    if (r["statistics"].contains("overall"))
-      addRanking("*", r["statistics"]["rankedOn"], r["statistics"]["overall"]["ranking"], "score");
+    if (statistics.contains("overall"))
+      addRanking("*", statistics["rankedOn"], statistics["overall"]["ranking"], "score");
   }
   db.exec("COMMIT");
 }
@@ -379,6 +307,9 @@ void checkRunOutputs(const fs::path& runDir) {
 
 void commitResults(const fs::path& runDir, const json& results) {
   const fs::path jsonPath = runDir / "results.json", dbPath = runDir / "results.db";
+  // A document its readers would refuse is never written: the model's own check, before any file.
+  // Both forms are then written from the model.
+  const RunResults run = RunResults::fromJson(results, jsonPath.string());
   const fs::path jsonTmp = temporaryPathFor(jsonPath), dbTmp = temporaryPathFor(dbPath);
   auto removeTemporaries = [&] {
     std::error_code ignored;
@@ -387,14 +318,14 @@ void commitResults(const fs::path& runDir, const json& results) {
     fs::remove(fs::path(dbTmp.string() + "-journal"), ignored);
   };
   try {
-    writeFileBytes(jsonTmp, results.dump(1));
+    writeFileBytes(jsonTmp, run.toJson().dump(1));
     std::error_code ec;
     if (fs::exists(dbPath)) {
       fs::copy_file(dbPath, dbTmp, ec);
       if (ec)
         throw Error(dbPath.string() + ": cannot copy to " + dbTmp.string() + ": " + ec.message());
     }
-    appendToDatabase(dbTmp, results, dbPath.string());
+    appendToDatabase(dbTmp, run, dbPath.string());
     // Both complete: the database first, so results.json never names a run the database lacks.
     if (std::rename(dbTmp.c_str(), dbPath.c_str()) != 0)
       throw Error(osError(dbPath, "cannot replace", errno));

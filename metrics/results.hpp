@@ -6,25 +6,28 @@
 #include <string>
 
 #include "metrics/metric_registry.hpp"
+#include "metrics/run_results.hpp"
 
 namespace arena {
 
 // 2: summaries carry ci95 or absent; pairs carry tiles; results carry statistics and scene floors.
 constexpr int kResultsSchemaVersion = 2;
 
-// Reads <run>/results.json; a missing run or another schema version is an Error saying so.
-nlohmann::json loadResults(const std::filesystem::path& runDir);
+// Reads <run>/results.json into the typed model; a missing run, another schema version or a
+// document out of shape is an Error saying so (naming the JSON path).
+RunResults loadResults(const std::filesystem::path& runDir);
 void saveResults(const std::filesystem::path& runDir, const nlohmann::json& results);
 // Appends the run to the database at dbPath (tables runs, pairs, frame_metrics, summaries) in one
 // transaction; errors name `nameInErrors` (default: dbPath).
-void appendToDatabase(const std::filesystem::path& dbPath, const nlohmann::json& results,
+void appendToDatabase(const std::filesystem::path& dbPath, const RunResults& results,
                       const std::string& nameInErrors = "");
 // Before any work: the run directory is (made) writable, an existing results.json is an arena run,
 // and an existing results.db is an intact SQLite database of this schema -- so a bad output fails
 // in a second, naming the file, instead of after every pair has run. Removes stale temporaries.
 void checkRunOutputs(const std::filesystem::path& runDir);
 // Writes results.json and appends to results.db as one commit: both are written to temporaries
-// (the database as an appended copy) and renamed into place only when both are complete.
+// (the database as an appended copy) and renamed into place only when both are complete. A
+// document RunResults::fromJson refuses is an Error before any file is touched.
 void commitResults(const std::filesystem::path& runDir, const nlohmann::json& results);
 
 }  // namespace arena

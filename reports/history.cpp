@@ -11,7 +11,6 @@
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "metrics/results.hpp"
-#include "metrics/summary_value.hpp"
 #include "reports/report.hpp"
 
 namespace arena {
@@ -74,7 +73,7 @@ class ReadOnlyDatabase {
 
 // A summary column pair that holds the 95% interval, whatever a schema calls it (ci95_lo/ci95_hi,
 // ci_lo/ci_hi): the first column names containing "ci" and ending in lo / hi.
-json intervalOf(const json& row) {
+Interval intervalOf(const json& row) {
   json lo, hi;
   for (auto it = row.begin(); it != row.end(); ++it) {
     const std::string& k = it.key();
@@ -82,97 +81,94 @@ json intervalOf(const json& row) {
     if (k.size() > 2 && k.compare(k.size() - 2, 2, "lo") == 0 && lo.is_null()) lo = it.value();
     if (k.size() > 2 && k.compare(k.size() - 2, 2, "hi") == 0 && hi.is_null()) hi = it.value();
   }
-  if (lo.is_null() || hi.is_null()) return nullptr;
-  return {lo, hi};
+  if (lo.is_null() || hi.is_null()) return {};
+  return {lo.get<double>(), hi.get<double>()};
 }
 
-std::vector<json> runsFromDatabase(const fs::path& file) {
+std::string textOf(const json& row, const char* column) {
+  return row.contains(column) && row[column].is_string() ? row[column].get<std::string>() : "";
+}
+
+std::vector<RunResults> runsFromDatabase(const fs::path& file) {
   ReadOnlyDatabase db(file);
-  std::map<long long, json> runs;
+  std::map<long long, RunResults> runs;
   std::vector<long long> order;
   for (json& r : db.rows("SELECT * FROM runs ORDER BY id")) {
     const long long id = r["id"];
-    json environment = json::object();
+    RunResults& run = runs[id];
     if (r["environment"].is_string())
-      environment = json::parse(r["environment"].get<std::string>(), nullptr, false);
-    if (environment.is_discarded() || !environment.is_object()) environment = json::object();
-    if (r["git_commit"].is_string() && !r["git_commit"].get<std::string>().empty())
-      environment["git_commit"] = r["git_commit"];
-    runs[id] = {{"kind", "arena-run"},
-                {"schema", r["schema"]},
-                {"name", r.value("name", json("")).is_string() ? r["name"] : json("")},
-                {"created", r["created"].is_string() ? r["created"] : json("")},
-                {"environment", environment},
-                {"source", file.string() + "#" + std::to_string(id)},
-                {"pairs", json::array()}};
+      run.environment = json::parse(r["environment"].get<std::string>(), nullptr, false);
+    if (run.environment.is_discarded() || !run.environment.is_object()) run.environment = json::object();
+    if (!textOf(r, "git_commit").empty()) run.environment["git_commit"] = r["git_commit"];
+    run.name = textOf(r, "name");
+    run.created = textOf(r, "created");
+    run.source = file.string() + "#" + std::to_string(id);
     order.push_back(id);
   }
   std::map<std::pair<long long, std::string>, size_t> pairIndex;  // (run, scene\nlabel) -> index
   for (const json& p : db.rows("SELECT * FROM pairs")) {
     const long long id = p["run_id"];
     if (!runs.count(id)) continue;
-    json& pairs = runs[id]["pairs"];
-    pairIndex[{id, p["scene"].get<std::string>() + "\n" + p["label"].get<std::string>()}] =
-        pairs.size();
-    json pair = {{"scene", p["scene"]},
-                 {"denoiser", p["denoiser"]},
-                 {"label", p["label"]},
-                 {"status", p["status"]},
-                 {"summary", json::object()}};
-    if (p["error"].is_string() && !p["error"].get<std::string>().empty())
-      pair["error"] = p["error"];
-    pairs.push_back(pair);
+    std::vector<PairResult>& pairs = runs[id].pairs;
+    PairResult pair;
+    pair.scene = textOf(p, "scene");
+    pair.denoiser = textOf(p, "denoiser");
+    pair.label = textOf(p, "label");
+    pair.status = textOf(p, "status");
+    pair.error = textOf(p, "error");
+    pairIndex[{id, pair.scene + "\n" + pair.label}] = pairs.size();
+    pairs.push_back(std::move(pair));
   }
   for (const json& s : db.rows("SELECT * FROM summaries")) {
     const long long id = s["run_id"];
-    auto it =
-        pairIndex.find({id, s["scene"].get<std::string>() + "\n" + s["label"].get<std::string>()});
+    auto it = pairIndex.find({id, textOf(s, "scene") + "\n" + textOf(s, "label")});
     if (it == pairIndex.end()) continue;
-    json summary = json::object();
-    for (const char* k : {"mean", "median", "p5", "p95"})
-      if (s.contains(k) && s[k].is_number()) summary[k] = s[k];
-    if (json ci = intervalOf(s); !ci.is_null()) summary["ci95"] = ci;
+    MetricSummary summary;
+    auto number = [&](const char* k) { return s.contains(k) && s[k].is_number() ? s[k].get<double>() : kUndefined; };
+    summary.mean = number("mean");
+    summary.median = number("median");
+    summary.p5 = number("p5");
+    summary.p95 = number("p95");
+    if (s.contains("frames") && s["frames"].is_number_integer()) summary.frames = s["frames"].get<int>();
+    summary.ci95 = intervalOf(s);
     // An absent summary keeps its reason (summaries.absent), so the dashboard can say it.
-    if (s.contains("absent") && s["absent"].is_string() && !s["absent"].get<std::string>().empty())
-      summary["absent"] = s["absent"];
-    runs[id]["pairs"][it->second]["summary"][s["metric"].get<std::string>()] = summary;
+    summary.absent = textOf(s, "absent");
+    runs[id].pairs[it->second].summary[textOf(s, "metric")] = summary;
   }
-  std::vector<json> out;
+  std::vector<RunResults> out;
   for (long long id : order) out.push_back(std::move(runs[id]));
   return out;
 }
 
 }  // namespace
 
-std::vector<json> loadHistory(const std::vector<fs::path>& inputs) {
+std::vector<RunResults> loadHistory(const std::vector<fs::path>& inputs) {
   if (inputs.empty()) throw Error("history: give run directories or results.db files");
-  std::vector<json> runs;
+  std::vector<RunResults> runs;
   for (const fs::path& in : inputs) {
     if (fs::is_directory(in)) {
-      json r = loadResults(in);
-      r["source"] = in.string();
-      runs.push_back(std::move(r));
+      runs.push_back(loadResults(in));
+      runs.back().source = in.string();
     } else if (fs::is_regular_file(in)) {
-      for (json& r : runsFromDatabase(in)) runs.push_back(std::move(r));
+      for (RunResults& r : runsFromDatabase(in)) runs.push_back(std::move(r));
     } else {
       throw Error("history: " + in.string() +
                   ": no such run directory or results database (expected a directory with "
                   "results.json, or a results.db file)");
     }
   }
-  std::stable_sort(runs.begin(), runs.end(), [](const json& a, const json& b) {
-    return a.value("created", "") < b.value("created", "");
-  });
+  std::stable_sort(runs.begin(), runs.end(),
+                   [](const RunResults& a, const RunResults& b) { return a.created < b.created; });
   return runs;
 }
 
-json historyData(const std::vector<json>& runs, const std::vector<Tolerance>& tolerances) {
+json historyData(const std::vector<RunResults>& runs, const std::vector<Tolerance>& tolerances) {
   json runList = json::array();
-  for (const json& r : runs)
-    runList.push_back({{"name", r.value("name", "")},
-                       {"created", r.value("created", "")},
-                       {"commit", r.value("environment", json::object()).value("git_commit", "")},
-                       {"source", r.value("source", "")}});
+  for (const RunResults& r : runs)
+    runList.push_back({{"name", r.name},
+                       {"created", r.created},
+                       {"commit", r.environment.value("git_commit", "")},
+                       {"source", r.source}});
   // Values per scene x label x metric, one slot per run (null where the run lacks it).
   json series = json::object();
   std::vector<std::string> metrics;
@@ -180,19 +176,18 @@ json historyData(const std::vector<json>& runs, const std::vector<Tolerance>& to
   for (size_t i = 0; i < runs.size(); ++i) {
     for (const std::string& line : absentSummaryLines(runs[i]))
       absent.push_back({{"run", i}, {"line", line}});
-    for (const json& p : runs[i]["pairs"]) {
-      if (p.value("status", "") != "ok" || !p.contains("summary")) continue;
-      for (auto it = p["summary"].begin(); it != p["summary"].end(); ++it) {
-        const SummaryMean mean = summaryMean(p, it.key());
+    for (const PairResult& p : runs[i].pairs) {
+      if (!p.ok()) continue;
+      for (const auto& [metric, summary] : p.summary) {
+        const SummaryMean mean = p.mean(metric);
         if (!mean.present()) continue;
-        if (std::find(metrics.begin(), metrics.end(), it.key()) == metrics.end())
-          metrics.push_back(it.key());
-        json& s = series[p["scene"].get<std::string>()][p["label"].get<std::string>()][it.key()];
+        if (std::find(metrics.begin(), metrics.end(), metric) == metrics.end()) metrics.push_back(metric);
+        json& s = series[p.scene][p.label][metric];
         if (s.is_null()) s = {{"value", json(runs.size(), nullptr)}};
         s["value"][i] = mean.mean;
-        if (it.value().contains("ci95") && it.value()["ci95"].is_array()) {
+        if (summary.ci95.valid()) {
           if (!s.contains("ci95")) s["ci95"] = json(runs.size(), nullptr);
-          s["ci95"][i] = it.value()["ci95"];
+          s["ci95"][i] = summary.ci95.toJson();
         }
       }
     }

@@ -16,14 +16,14 @@ namespace arena {
 // holds), ordered by creation time (ties keep the input order). A database run carries what the
 // database stores: its pairs' status and summaries (no per-frame data). Anything else is an Error
 // naming the path.
-std::vector<nlohmann::json> loadHistory(const std::vector<std::filesystem::path>& inputs);
+std::vector<RunResults> loadHistory(const std::vector<std::filesystem::path>& inputs);
 
 // The dashboard's data: runs [{name, created, commit}], per scene x label x metric the values (and
 // intervals where the runs have them) per run, the tolerance of each gated metric, and `changes`:
 // every row of compareRuns(run i-1, run i, tolerances) whose verdict is not "ok", with the run
 // index i and `fails` = anyRegression({row}) (the gate's own rule, not restated here); `failing`
 // counts those. Empty `tolerances`: compare's defaults.
-nlohmann::json historyData(const std::vector<nlohmann::json>& runs,
+nlohmann::json historyData(const std::vector<RunResults>& runs,
                            const std::vector<Tolerance>& tolerances);
 
 struct HistoryOptions {

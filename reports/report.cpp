@@ -13,7 +13,6 @@
 #include "metrics/compare.hpp"
 #include "metrics/error_maps.hpp"
 #include "metrics/results.hpp"
-#include "metrics/summary_value.hpp"
 #include "reports/pareto.hpp"
 
 namespace arena {
@@ -62,10 +61,6 @@ const ErrorAxis kErrorAxes[] = {{"relMse", "relMSE", "relMse", false, "relMse"},
                                 {"ldrFlip", "LDR-FLIP", "ldrFlip", false, "ldrFlip"},
                                 {"dssim", "1 − SSIM", "ssim", true, "dssim"}};
 
-bool isOk(const json& pair) {
-  return pair.value("status", "") == "ok";
-}
-
 std::string frameFile(const char* prefix, int t) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%s_%04d.png", prefix, t);
@@ -110,15 +105,13 @@ json seriesColumns(const json& frames) {
 // The value of an error axis from a pair's summary and its bar: the 95% interval of the mean
 // (results schema: summary.<metric>.ci95) when the run has one, else the p5-p95 spread over frames
 // (older runs). Null when the pair lacks the metric.
-json axisValue(const json& pair, const ErrorAxis& axis) {
-  if (!isOk(pair) || !pair.contains("summary") || !pair["summary"].contains(axis.source))
-    return nullptr;
-  const json& s = pair["summary"][axis.source];
-  double mean = s.value("mean", kNaN), p5 = s.value("p5", kNaN), p95 = s.value("p95", kNaN);
-  const bool hasCi = s.contains("ci95") && s["ci95"].is_array() && s["ci95"].size() == 2 &&
-                     s["ci95"][0].is_number() && s["ci95"][1].is_number();
-  double lo = hasCi ? s["ci95"][0].get<double>() : p5,
-         hi = hasCi ? s["ci95"][1].get<double>() : p95;
+json axisValue(const PairResult& pair, const ErrorAxis& axis) {
+  const auto found = pair.summary.find(axis.source);
+  if (!pair.ok() || found == pair.summary.end()) return nullptr;
+  const MetricSummary& s = found->second;
+  double mean = s.mean, p5 = s.p5, p95 = s.p95;
+  const bool hasCi = s.ci95.valid();
+  double lo = hasCi ? s.ci95.lo : p5, hi = hasCi ? s.ci95.hi : p95;
   if (axis.complement) {  // 1 - x reverses the order: the low end of SSIM is the high one of 1-SSIM
     mean = 1 - mean;
     std::swap(p5, p95), std::swap(lo, hi);
@@ -129,10 +122,12 @@ json axisValue(const json& pair, const ErrorAxis& axis) {
           {"lo", lo},      {"hi", hi}, {"interval", hasCi ? "ci95" : "p5-p95"}};
 }
 
-double timingOf(const json& pair, const char* key) {
-  if (!pair.contains("timing")) return kNaN;
-  return pair["timing"].value(key, kNaN);
+// The pair's timing object ({} when it has none).
+json timingObject(const PairResult& pair) {
+  return pair.part("timing").is_object() ? pair.part("timing") : json::object();
 }
+
+double timingOf(const PairResult& pair, const char* key) { return timingObject(pair).value(key, kNaN); }
 
 // One point per label with its error bars, and the labels on the Pareto front (time x error).
 // The Pareto front on the denoiser's own time ("front") and the equal-paths front
@@ -165,12 +160,12 @@ struct SpeedClock {
   std::string key, title;
 };
 
-std::string clockOf(const json& pair) { return pair.value("timing", json::object()).value("clock", "cpu"); }
+std::string clockOf(const PairResult& pair) { return timingObject(pair).value("clock", "cpu"); }
 
-std::vector<SpeedClock> speedClocks(const json& results, const std::vector<std::string>& scenes) {
-  const json env = results.value("environment", json::object());
+std::vector<SpeedClock> speedClocks(const RunResults& results, const std::vector<std::string>& scenes) {
+  const json& env = results.environment;
   std::set<std::string> sizes;
-  const json infos = results.value("scenes", json::object());
+  const json& infos = results.scenes;
   for (const std::string& scene : scenes)
     if (infos.contains(scene) && infos[scene].contains("width") && infos[scene].value("source", "") != "capture")
       sizes.insert(std::to_string(infos[scene]["width"].get<int>()) + "x" + std::to_string(infos[scene]["height"].get<int>()));
@@ -179,8 +174,8 @@ std::vector<SpeedClock> speedClocks(const json& results, const std::vector<std::
   for (const std::string& size : sizes) where += ", " + size;
   std::vector<SpeedClock> clocks = {{"cpu", "CPU ms measured here (" + where + ")"}};
   std::vector<std::string> devices, captureDevices;
-  for (const json& pair : results["pairs"]) {
-    const json timing = pair.value("timing", json::object());
+  for (const PairResult& pair : results.pairs) {
+    const json timing = timingObject(pair);
     if (timing.contains("gpuPredicted") && timing["gpuPredicted"].is_object()) {
       for (const json& d : timing["gpuPredicted"].value("devices", json::array())) {
         const std::string name = d.value("device", "");
@@ -206,13 +201,13 @@ std::vector<SpeedClock> speedClocks(const json& results, const std::vector<std::
 struct ClockTime {
   double ms = kNaN, lo = kNaN, hi = kNaN;
 };
-ClockTime timeOn(const json& pair, const std::string& clock) {
+ClockTime timeOn(const PairResult& pair, const std::string& clock) {
   if (clock == "cpu" || clock == "capture") {
     if (clockOf(pair) != clock) return {};
     return {timingOf(pair, "msMedian"), timingOf(pair, "msP5"), timingOf(pair, "msP95")};  // msP5: results schema 2
   }
   const std::string device = clock.substr(4);  // "gpu:<device>"
-  const json timing = pair.value("timing", json::object());
+  const json timing = timingObject(pair);
   if (!timing.contains("gpuPredicted") || !timing["gpuPredicted"].is_object()) return {};
   json d;
   for (const json& row : timing["gpuPredicted"].value("devices", json::array()))
@@ -223,25 +218,23 @@ ClockTime timeOn(const json& pair, const std::string& clock) {
 }
 
 // A pair's point on the chart: error with its bar, time with its p5-p95 bar, and the parameters.
-json speedPoint(const json& pair, const ErrorAxis& axis, const std::string& clock) {
+json speedPoint(const PairResult& pair, const ErrorAxis& axis, const std::string& clock) {
   const ClockTime t = timeOn(pair, clock);
   json v = axisValue(pair, axis);
   if (v.is_null() || !std::isfinite(t.ms)) return nullptr;
-  v["label"] = pair["label"];
-  v["params"] = pair.value("params", json::object());
+  v["label"] = pair.label;
+  v["params"] = pair.params;
   v["ms"] = t.ms;
   v["msLo"] = std::isfinite(t.lo) ? json(t.lo) : json(nullptr);
   v["msHi"] = std::isfinite(t.hi) ? json(t.hi) : json(nullptr);
   // Disocclusion rays (reengine), gradient samples (asvgf): the paths a denoiser read beyond the
   // frame's and, on the CPU axis, their equivalent tracing time, drawn as a bar beside its own
   // time. The model prices no tracing, so a GPU axis keeps only the "+paths" mark.
-  if (pair.contains("summary"))
-    for (const char* key : {"tracingMs", "extraRaysPerPixel"}) {
-      if (clock != "cpu" && std::string(key) == "tracingMs") continue;
-      const json& summary = pair["summary"];
-      if (summary.contains(key) && summary[key].contains("mean") && summary[key]["mean"].is_number())
-        v[key] = summary[key]["mean"];
-    }
+  for (const char* key : {"tracingMs", "extraRaysPerPixel"}) {
+    if (clock != "cpu" && std::string(key) == "tracingMs") continue;
+    const auto found = pair.summary.find(key);
+    if (found != pair.summary.end() && std::isfinite(found->second.mean)) v[key] = found->second.mean;
+  }
   return v;
 }
 
@@ -250,16 +243,15 @@ json speedPoint(const json& pair, const ErrorAxis& axis, const std::string& cloc
 namespace {
 
 // One clock's charts: per scene and all scenes, per error axis.
-json speedView(const json& results, const std::vector<std::string>& scenes, const std::vector<std::string>& labels,
+json speedView(const RunResults& results, const std::vector<std::string>& scenes, const std::vector<std::string>& labels,
                const std::string& clock) {
   json out = json::object();
   json perScene = json::object();
   std::map<std::string, std::map<std::string, std::map<std::string, json>>> byAxis;
-  for (const json& pair : results["pairs"])
+  for (const PairResult& pair : results.pairs)
     for (const ErrorAxis& axis : kErrorAxes) {
       json v = speedPoint(pair, axis, clock);
-      if (!v.is_null())
-        byAxis[axis.key][pair["scene"].get<std::string>()][pair["label"].get<std::string>()] = v;
+      if (!v.is_null()) byAxis[axis.key][pair.scene][pair.label] = v;
     }
   for (const std::string& scene : scenes) {
     json axes = json::object();
@@ -275,12 +267,12 @@ json speedView(const json& results, const std::vector<std::string>& scenes, cons
   // Contenders with no time on this clock (another device's, none recorded, or nothing counted to
   // price): named under the chart with the clock they have, never drawn on this axis.
   json elsewhere = json::array();
-  for (const json& pair : results["pairs"])
-    if (isOk(pair) && !std::isfinite(timeOn(pair, clock).ms)) {
-      const json timing = pair.value("timing", json::object());
+  for (const PairResult& pair : results.pairs)
+    if (pair.ok() && !std::isfinite(timeOn(pair, clock).ms)) {
+      const json timing = timingObject(pair);
       std::string source = timing.value("msSource", "");
       if (clock.rfind("gpu:", 0) == 0 && clockOf(pair) == "cpu") source = "no GPU traffic counted (" + source + ")";
-      elsewhere.push_back({{"scene", pair["scene"]}, {"label", pair["label"]},
+      elsewhere.push_back({{"scene", pair.scene}, {"label", pair.label},
                            {"ms", timing.contains("msMedian") ? timing["msMedian"] : json(nullptr)},
                            {"source", source}});
     }
@@ -288,7 +280,7 @@ json speedView(const json& results, const std::vector<std::string>& scenes, cons
   // All scenes: statistics' overall score on the axis's metric (relMSE: the run's "overall"; the
   // others: "overallByMetric"), with its interval -- the one score the printout shows too, never a
   // second one computed here. A point's time is the label's mean over the scenes it ran on.
-  const json stats = results.value("statistics", json::object());
+  const json stats = results.statistics.is_object() ? results.statistics : json::object();
   json all = json::object();
   for (const ErrorAxis& axis : kErrorAxes) {
     const json overall = std::string(axis.overall) == "relMse"
@@ -345,7 +337,7 @@ json speedView(const json& results, const std::vector<std::string>& scenes, cons
 }
 
 // Every clock's charts, and the clocks' titles (the page's time-axis selector).
-json speedData(const json& results, const std::vector<std::string>& scenes, const std::vector<std::string>& labels) {
+json speedData(const RunResults& results, const std::vector<std::string>& scenes, const std::vector<std::string>& labels) {
   json out = {{"clocks", json::array()}, {"views", json::object()}};
   for (const SpeedClock& c : speedClocks(results, scenes)) {
     out["clocks"].push_back({{"key", c.key}, {"title", c.title}});
@@ -356,8 +348,8 @@ json speedData(const json& results, const std::vector<std::string>& scenes, cons
 
 // The rankings the tables show: the run's own (metrics/statistics: ranks with ties from paired
 // differences) when present; else, for older runs, ranks by mean relMSE with ties unknown.
-json rankingData(const json& results, const std::vector<std::string>& scenes) {
-  const json stats = results.value("statistics", json::object());
+json rankingData(const RunResults& results, const std::vector<std::string>& scenes) {
+  const json stats = results.statistics.is_object() ? results.statistics : json::object();
   json out = {{"scenes", json::object()}, {"overall", nullptr}};
   const json statScenes = stats.value("scenes", json::object());
   for (const std::string& scene : scenes) {
@@ -385,10 +377,9 @@ json rankingData(const json& results, const std::vector<std::string>& scenes) {
       continue;
     }
     std::vector<std::pair<double, std::string>> order;
-    for (const json& pair : results["pairs"])
-      if (pair["scene"] == scene && isOk(pair))
-        if (const SummaryMean m = summaryMean(pair, "relMse"); m.present())
-          order.push_back({m.mean, pair["label"].get<std::string>()});
+    for (const PairResult& pair : results.pairs)
+      if (pair.scene == scene && pair.ok())
+        if (const SummaryMean m = pair.mean("relMse"); m.present()) order.push_back({m.mean, pair.label});
     if (order.empty()) continue;
     std::stable_sort(order.begin(), order.end(),
                      [](const auto& a, const auto& b) { return a.first < b.first; });
@@ -413,9 +404,10 @@ std::string valueText(const json& v) {
 
 // The paired difference a - b of `metric` on `scene` from the run's statistics (relMSE's in the
 // scene's pairs, the other ranked metrics' in byMetric), oriented a - b; null when not there.
-json pairedDifference(const json& results, const std::string& scene, const std::string& metric,
+json pairedDifference(const RunResults& results, const std::string& scene, const std::string& metric,
                       const std::string& a, const std::string& b) {
-  const json st = results.value("statistics", json::object()).value("scenes", json::object()).value(scene, json());
+  if (!results.statistics.is_object()) return nullptr;
+  const json st = results.statistics.value("scenes", json::object()).value(scene, json());
   if (!st.is_object()) return nullptr;
   const json ranking = metric == "relMse" ? st : st.value("byMetric", json::object()).value(metric, json());
   if (!ranking.is_object()) return nullptr;
@@ -439,13 +431,13 @@ json pairedDifference(const json& results, const std::string& scene, const std::
 // value). Per scene, a ranked metric's change is the run's paired difference (statistics: the same
 // frames and tiles, with its interval and whether it is resolved); other metrics' the difference of
 // the means. Over all scenes: the mean of the per-scene changes (no interval).
-json ablationData(const json& results) {
-  if (!results.contains("sweep") || !results["sweep"].is_object()) return nullptr;
-  const json& sweep = results["sweep"];
+json ablationData(const RunResults& results) {
+  if (!results.sweep.is_object()) return nullptr;
+  const json& sweep = results.sweep;
   const std::string denoiser = sweep.value("denoiser", "");
-  std::vector<const json*> pairs;
-  for (const json& p : results["pairs"])
-    if (p["denoiser"] == denoiser && isOk(p) && p.contains("params")) pairs.push_back(&p);
+  std::vector<const PairResult*> pairs;
+  for (const PairResult& p : results.pairs)
+    if (p.denoiser == denoiser && p.ok()) pairs.push_back(&p);
   std::vector<std::string> metrics;
   for (const MetricDefinition* m : metricCatalog()) metrics.push_back(m->name);
   json rows = json::array();
@@ -454,29 +446,28 @@ json ablationData(const json& results) {
     // Values in order of first appearance: the run enumerates the grid's Cartesian product with
     // every axis starting at its first value, so the first pair carries the first value of each.
     std::vector<json> values;
-    for (const json* p : pairs)
-      if ((*p)["params"].contains(name) &&
-          std::find(values.begin(), values.end(), (*p)["params"][name]) == values.end())
-        values.push_back((*p)["params"][name]);
+    for (const PairResult* p : pairs)
+      if (p->params.contains(name) && std::find(values.begin(), values.end(), p->params[name]) == values.end())
+        values.push_back(p->params[name]);
     if (values.size() < 2) continue;
     for (size_t vi = 1; vi < values.size(); ++vi) {
       std::map<std::string, std::map<std::string, std::vector<double>>> deltas, relative;
       std::map<std::string, std::map<std::string, json>> paired;  // scene -> metric -> difference
       std::map<std::string, size_t> matched;
-      for (const json* p : pairs) {
-        if ((*p)["params"][name] != values[vi]) continue;
-        json want = (*p)["params"];
+      for (const PairResult* p : pairs) {
+        if (p->params.value(name, json()) != values[vi]) continue;
+        json want = p->params;
         want[name] = values[0];
-        for (const json* q : pairs) {
-          if ((*q)["scene"] != (*p)["scene"] || (*q)["params"] != want) continue;
-          const std::string scene = (*p)["scene"];
+        for (const PairResult* q : pairs) {
+          if (q->scene != p->scene || q->params != want) continue;
+          const std::string& scene = p->scene;
           for (const std::string& scope : {scene, std::string()}) {
             ++matched[scope];
             for (const std::string& m : metrics) {
-              if (!(*p)["summary"].contains(m) || !(*q)["summary"].contains(m)) continue;
-              const double b = (*q)["summary"][m].value("mean", kNaN);
-              const json d = pairedDifference(results, scene, m, (*p)["label"], (*q)["label"]);
-              const double a = (*p)["summary"][m].value("mean", kNaN);
+              if (!p->summary.count(m) || !q->summary.count(m)) continue;
+              const double b = q->summary.at(m).mean;
+              const json d = pairedDifference(results, scene, m, p->label, q->label);
+              const double a = p->summary.at(m).mean;
               const double delta = d.is_object() ? d["diff"].get<double>() : a - b;
               if (!std::isfinite(delta) || !std::isfinite(b)) continue;
               deltas[scope][m].push_back(delta);
@@ -528,7 +519,7 @@ int keptFrame(const std::string& file, const std::string& prefix) {
 // image (a failed pair, or a run with --flip none or --keep-frames none, has fewer). Frames: every
 // frame some image was kept for (`--keep-frames all` keeps them all), with the auto-chosen ones
 // and the scene's event frames marked.
-json viewerData(const json& results, const std::string& scene, const json& sceneInfo,
+json viewerData(const RunResults& results, const std::string& scene, const json& sceneInfo,
                 const fs::path& runDir) {
   const std::string sceneDir = sceneInfo.value("images", "images/" + scene);
   std::set<int> kept;
@@ -552,10 +543,10 @@ json viewerData(const json& results, const std::string& scene, const json& scene
   };
   add("reference", nullptr, "reference", sceneDir, "reference");
   add("noisy", nullptr, "noisy input", sceneDir, "noisy");
-  for (const json& pair : results["pairs"]) {
-    if (pair["scene"] != scene || !isOk(pair) || !pair.contains("images")) continue;
-    const std::string dir = pair["images"].value("dir", "");
-    const std::string label = pair["label"];
+  for (const PairResult& pair : results.pairs) {
+    if (pair.scene != scene || !pair.ok() || !pair.part("images").is_object()) continue;
+    const std::string dir = pair.part("images").value("dir", "");
+    const std::string& label = pair.label;
     add("output", label, label, dir, "frame");
     add("flip", label, label + " · LDR-FLIP", dir, "flip");
     add("relerr", label, label + " · rel. error", dir, "relerr");
@@ -601,18 +592,20 @@ json colorMapData() {
 }
 
 // Everything a pair row needs in the page, without the per-pass timings (the table shows totals).
-json pairData(const json& pair) {
-  json p = {{"scene", pair["scene"]},
-            {"denoiser", pair.value("denoiser", "")},
-            {"label", pair["label"]},
-            {"params", pair.value("params", json::object())},
-            {"status", pair.value("status", "?")}};
-  if (!isOk(pair)) {
-    p["error"] = pair.value("error", "failed without a message");
+json pairData(const PairResult& pair) {
+  json p = {{"scene", pair.scene},
+            {"denoiser", pair.denoiser},
+            {"label", pair.label},
+            {"params", pair.params},
+            {"status", pair.status}};
+  if (!pair.ok()) {
+    p["error"] = pair.error;
     return p;
   }
-  p["summary"] = pair.value("summary", json::object());
-  const json timing = pair.value("timing", json::object());
+  json summary = json::object();
+  for (const auto& [metric, s] : pair.summary) summary[metric] = s.toJson();
+  p["summary"] = summary;
+  const json timing = timingObject(pair);
   p["timing"] = {{"msMedian", timing.value("msMedian", kNaN)},
                  {"msP5", timing.value("msP5", kNaN)},
                  {"msP95", timing.value("msP95", kNaN)},
@@ -631,30 +624,29 @@ json pairData(const json& pair) {
     p["timing"]["gpuPersistentMiB"] = memory.value("persistentMiB", kNaN);
     p["timing"]["gpuWorkingSetMiB"] = memory.value("workingSetMiB", kNaN);
   }
-  p["series"] = seriesColumns(pair.value("frames", json::array()));
+  auto list = [&](const char* key) { return pair.part(key).is_array() ? pair.part(key) : json::array(); };
+  p["series"] = seriesColumns(list("frames"));
   // Events and cuts with their figures and intervals; the tile data behind them stays in the run.
   for (const char* kind : {"ghosting", "cuts"}) {
-    p[kind] = pair.value(kind, json::array());
+    p[kind] = list(kind);
     for (json& e : p[kind]) e.erase("tiles");
   }
-  p["warnings"] = pair.value("warnings", json::array());
+  p["warnings"] = list("warnings");
   return p;
 }
 
 }  // namespace
 
-json reportData(const json& results, const fs::path& runDir, const json* baseline) {
-  const json settings = results.value("settings", json::object());
+json reportData(const RunResults& results, const fs::path& runDir, const RunResults* baseline) {
+  const json& settings = results.settings;
   const int warmup = settings.value("warmup", 8);
   // Scenes and labels in run order (results.json keeps scenes in an object, sorted by name).
   std::vector<std::string> sceneNames, labels;
-  for (const json& p : results["pairs"]) {
-    if (std::find(sceneNames.begin(), sceneNames.end(), p["scene"]) == sceneNames.end())
-      sceneNames.push_back(p["scene"]);
-    if (std::find(labels.begin(), labels.end(), p["label"]) == labels.end())
-      labels.push_back(p["label"]);
+  for (const PairResult& p : results.pairs) {
+    if (std::find(sceneNames.begin(), sceneNames.end(), p.scene) == sceneNames.end()) sceneNames.push_back(p.scene);
+    if (std::find(labels.begin(), labels.end(), p.label) == labels.end()) labels.push_back(p.label);
   }
-  const json sceneInfos = results.value("scenes", json::object());
+  const json& sceneInfos = results.scenes;
   for (auto it = sceneInfos.begin(); it != sceneInfos.end(); ++it)
     if (std::find(sceneNames.begin(), sceneNames.end(), it.key()) == sceneNames.end())
       sceneNames.push_back(it.key());
@@ -676,11 +668,9 @@ json reportData(const json& results, const fs::path& runDir, const json* baselin
   }
 
   json pairs = json::array(), failures = json::array();
-  for (const json& p : results["pairs"]) {
+  for (const PairResult& p : results.pairs) {
     pairs.push_back(pairData(p));
-    if (!isOk(p))
-      failures.push_back(
-          {{"scene", p["scene"]}, {"label", p["label"]}, {"error", p.value("error", "")}});
+    if (!p.ok()) failures.push_back({{"scene", p.scene}, {"label", p.label}, {"error", p.error}});
   }
 
   const json metrics = metricCatalogJson();
@@ -688,8 +678,7 @@ json reportData(const json& results, const fs::path& runDir, const json* baselin
   json axes = json::array();
   for (const ErrorAxis& a : kErrorAxes) {
     bool present = false;
-    for (const json& p : results["pairs"])
-      present = present || (isOk(p) && p.contains("summary") && p["summary"].contains(a.source));
+    for (const PairResult& p : results.pairs) present = present || (p.ok() && p.summary.count(a.source));
     if (present)
       axes.push_back(
           {{"key", a.key}, {"title", a.title}, {"source", a.source}, {"complement", a.complement}});
@@ -698,9 +687,9 @@ json reportData(const json& results, const fs::path& runDir, const json* baselin
   const json speed = speedData(results, sceneNames, labels);
   json data = {{"generator", "arena report"},
                {"run",
-                {{"name", results.value("name", "")},
-                 {"created", results.value("created", "")},
-                 {"environment", results.value("environment", json::object())},
+                {{"name", results.name},
+                 {"created", results.created},
+                 {"environment", results.environment},
                  {"settings", settings},
                  {"warmup", warmup}}},
                {"metrics", metrics},
@@ -719,20 +708,15 @@ json reportData(const json& results, const fs::path& runDir, const json* baselin
     json table = comparisonJson(rows);
     // compareRuns leaves the numbers at 0 when one side has no result; say why instead, and keep
     // the side that exists, so "regressed" from a failed pair is not read as a change of +0%.
-    auto findPair = [](const json& run, const json& row) -> const json* {
-      for (const json& p : run["pairs"])
-        if (p["scene"] == row["scene"] && p["label"] == row["label"]) return &p;
-      return nullptr;
-    };
     for (json& row : table) {
-      const json* b = findPair(*baseline, row);
-      const json* c = findPair(results, row);
+      const PairResult* b = baseline->find(row["scene"], row["label"]);
+      const PairResult* c = results.find(row["scene"], row["label"]);
       const std::string metric = row["metric"];
       // The mean, or why there is none (an absent summary gives its own reason).
-      auto meanOf = [&](const json* p) -> SummaryMean {
+      auto meanOf = [&](const PairResult* p) -> SummaryMean {
         if (!p) return {0, "not measured"};
-        if (!isOk(*p)) return {0, "failed: " + p->value("error", "")};
-        return summaryMean(*p, metric);
+        if (!p->ok()) return {0, "failed: " + p->error};
+        return p->mean(metric);
       };
       const SummaryMean bm = meanOf(b), cm = meanOf(c);
       if (!cm.present()) {
@@ -746,9 +730,9 @@ json reportData(const json& results, const fs::path& runDir, const json* baselin
     }
     data["regression"] = {
         {"baseline",
-         {{"name", baseline->value("name", "")},
-          {"created", baseline->value("created", "")},
-          {"commit", baseline->value("environment", json::object()).value("git_commit", "")}}},
+         {{"name", baseline->name},
+          {"created", baseline->created},
+          {"commit", baseline->environment.value("git_commit", "")}}},
         {"rows", table},
         {"anyRegression", anyRegression(rows)},
         {"settingsDiffer", settingsDifferences(*baseline, results)}};
@@ -918,8 +902,8 @@ void copyPageAssets(const fs::path& webDir, const fs::path& nodeModulesDir,
 
 ReportSummary writeReport(const ReportOptions& o) {
   if (o.out.empty()) throw Error("report: --out is required");
-  const json results = loadResults(o.run);
-  json baseline;
+  const RunResults results = loadResults(o.run);
+  RunResults baseline;
   if (!o.baseline.empty()) baseline = loadResults(o.baseline);
   std::vector<PageFile> files;
   for (const char* f : kWebFiles) files.push_back({f, f});

@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "metrics/run_results.hpp"
+
 namespace arena {
 
 struct ReportOptions {
@@ -29,15 +31,15 @@ struct ReportOptions {
 struct ReportSummary {
   std::filesystem::path index;  // <out>/index.html
   size_t pairs = 0, failedPairs = 0, imagesCopied = 0;
-  // The run's absent summaries with their reasons (metrics/summary_value.hpp), for the printout:
+  // The run's absent summaries with their reasons (metrics/run_results.hpp), for the printout:
   // the page shows them as empty cells.
   std::vector<std::string> absentSummaries;
 };
 
 // The document embedded as data.js. `runDir` is where the run's images are looked up (only images
 // that exist are offered to the viewer); `baseline` may be null. Pure apart from those look-ups.
-nlohmann::json reportData(const nlohmann::json& results, const std::filesystem::path& runDir,
-                          const nlohmann::json* baseline);
+nlohmann::json reportData(const RunResults& results, const std::filesystem::path& runDir,
+                          const RunResults* baseline);
 
 // Loads the run (and baseline) through loadResults, so a missing run or another schema version is
 // an arena::Error; a missing charting library is an Error that says to run scripts/setup.sh.

@@ -198,12 +198,12 @@ TEST(CliContract, UsageErrorsExitTwoAndOptionsAreStrict) {
                          "--flip none --keep-frames none --frames 2 --warmup 1 --param temporal.maxHistory=4 "
                          "--cache " + (dir / "cache").string() + " --out " + (dir / "baseline").string());
   ASSERT_EQ(r.status, 0) << r.output;
-  json results = loadResults(dir / "baseline");
+  const RunResults results = loadResults(dir / "baseline");
   bool found = false;
-  for (const json& p : results["pairs"])
-    if (p["denoiser"] == "temporal") {
+  for (const PairResult& p : results.pairs)
+    if (p.denoiser == "temporal") {
       found = true;
-      EXPECT_EQ(p["params"]["maxHistory"], 4) << p["params"].dump();
+      EXPECT_EQ(p.params["maxHistory"], 4) << p.params.dump();
     }
   EXPECT_TRUE(found);
   r = contract::tinyCliRun(dir, "nobaseline", "--frames 2 --param temporal.maxHistory=4");

@@ -23,7 +23,7 @@ TEST(CompareContract, RunsOfOtherSettingsAreRefusedUnlessAllowed) {
   b.warmup = 2;
   runMatrix(a);
   runMatrix(b);
-  const json ra = loadResults(a.out), rb = loadResults(b.out);
+  const RunResults ra = loadResults(a.out), rb = loadResults(b.out);
   EXPECT_TRUE(settingsDifferences(ra, ra).empty());
   const std::vector<std::string> differ = settingsDifferences(ra, rb);
   ASSERT_EQ(differ.size(), 1u);

@@ -508,7 +508,7 @@ TEST(EventIntervalsEndToEnd, IntervalsRankingsAndShardsMergedEqualOneRun) {
   // Shards written before the colour sums were stored still merge: the chromaticity lag is left
   // out of the ranking with the reason, every other figure ranks as before.
   for (const fs::path& dir : {dir0, dir1}) {
-    json r = loadResults(dir);
+    json r = loadResults(dir).toJson();
     for (json& p : r["pairs"])
       for (json& g : p["ghosting"]) g["tiles"].erase("colour");
     std::ofstream(dir / "results.json") << r.dump();

@@ -61,8 +61,8 @@ std::vector<int> changedRuns(const json& data, const std::string& label,
 }
 
 TEST(History, MarksWhatCompareSaysRunByRun) {
-  std::vector<json> runs;
-  for (int i = 0; i < 8; ++i) runs.push_back(historyRun(i, 5));
+  std::vector<RunResults> runs;
+  for (int i = 0; i < 8; ++i) runs.push_back(test::typed(historyRun(i, 5)));
   const std::vector<Tolerance> tolerances = {{"relMse", 0.02}, {"ssim", 0.02}};
   const json data = historyData(runs, tolerances);
   ASSERT_EQ(data["runs"].size(), 8u);
@@ -101,19 +101,19 @@ TEST(History, ReadsRunDirectoriesAndDatabasesInTimeOrder) {
   const fs::path dir = test::freshDir("history_inputs");
   // Runs 0..3 in a database (appended out of order), 4 and 5 as run directories.
   const fs::path db = dir / "results.db";
-  for (int i : {1, 0, 3, 2}) appendToDatabase(db, historyRun(i, 3));
+  for (int i : {1, 0, 3, 2}) appendToDatabase(db, test::typed(historyRun(i, 3)));
   std::vector<fs::path> inputs = {dir / "r5", db, dir / "r4"};
   for (int i : {4, 5}) saveResults(dir / ("r" + std::to_string(i)), historyRun(i, 3));
-  const std::vector<json> runs = loadHistory(inputs);
+  const std::vector<RunResults> runs = loadHistory(inputs);
   ASSERT_EQ(runs.size(), 6u);
-  for (int i = 0; i < 6; ++i) EXPECT_EQ(runs[size_t(i)]["name"], "run" + std::to_string(i));
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(runs[size_t(i)].name, "run" + std::to_string(i));
   // A database run has its pairs' summaries and commit.
-  EXPECT_EQ(runs[0]["environment"]["git_commit"], "abc0");
+  EXPECT_EQ(runs[0].environment["git_commit"], "abc0");
   bool found = false;
-  for (const json& p : runs[2]["pairs"])
-    if (p["label"] == "svgf") {
+  for (const PairResult& p : runs[2].pairs)
+    if (p.label == "svgf") {
       found = true;
-      EXPECT_NEAR(p["summary"]["relMse"]["mean"].get<double>(),
+      EXPECT_NEAR(p.summary.at("relMse").mean,
                   historyRun(2, 3)["pairs"][1]["summary"]["relMse"]["mean"].get<double>(), 1e-15);
     }
   EXPECT_TRUE(found);

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "cli/printout.hpp"
+#include "metrics/results.hpp"
 #include "harness/run_matrix.hpp"
 #include "tests/test_util.hpp"
 
@@ -43,7 +44,9 @@ json worstDefaultStudy() {
     if (e.path().extension() == ".json") scenes.push_back(e.path().stem().string());
   std::sort(scenes.begin(), scenes.end());
   const std::vector<std::string> labels = DenoiserRegistry::instance().names();
-  json results = {{"scenes", json::object()}, {"pairs", json::array()}};
+  json results = {{"schema", kResultsSchemaVersion}, {"kind", "arena-run"}, {"name", "worst"},
+                  {"environment", json::object()}, {"settings", json::object()},
+                  {"scenes", json::object()}, {"pairs", json::array()}};
   json stScenes = json::object();
   for (size_t i = 0; i < scenes.size(); ++i) {
     const std::string& name = scenes[i];
@@ -61,7 +64,8 @@ json worstDefaultStudy() {
         if (j != k && (j < 4) == (k < 4)) tied.push_back(labels[j]);
       ranking.push_back({{"label", labels[k]}, {"rank", k < 4 ? 1 : 5}, {"mean", 1e-3 * double(k + 1)},
                          {"ci95", {1e-3 * double(k), 1e-3 * double(k + 2)}}, {"tiedWith", tied}});
-      results["pairs"].push_back({{"scene", name}, {"label", labels[k]}, {"status", "ok"},
+      results["pairs"].push_back({{"scene", name}, {"denoiser", labels[k]}, {"label", labels[k]}, {"status", "ok"},
+                                  {"params", json::object()}, {"frames", json::array()},
                                   {"summary", {{"relMse", {{"mean", 1e-3}}}}},
                                   {"warnings", {sentence("a floor"), sentence("another floor")}}});
     }
@@ -81,7 +85,8 @@ TEST(StudySummary, TheDefaultStudyFitsOnOneScreen) {
   const json results = worstDefaultStudy();
   ASSERT_GE(results["scenes"].size(), 12u);  // the default suite: every scene in scenes/
   std::ostringstream out;
-  cli::printStudySummary(out, results, {"runs/study/results.json", "runs/study/results.db", "report/index.html", 61});
+  cli::printStudySummary(out, test::typed(results),
+                         {"runs/study/results.json", "runs/study/results.db", "report/index.html", 61});
   const std::string text = out.str();
   EXPECT_LE(lineCount(text), 60u) << text;
   // Every scene has its one line and its warning once; only the missed goals are printed.
@@ -95,7 +100,7 @@ TEST(StudySummary, TheDefaultStudyFitsOnOneScreen) {
   EXPECT_EQ(occurrences(text, "report/index.html"), 1u);
   // The full tables are longer: they are what --verbose adds.
   std::ostringstream tables;
-  cli::printStudyTables(tables, results);
+  cli::printStudyTables(tables, test::typed(results));
   EXPECT_GT(lineCount(tables.str()), 100u);
 }
 
@@ -125,7 +130,7 @@ TEST(StudySummary, AWarningAboutASceneIsStoredAndPrintedOncePerScene) {
     for (const json& w : p.value("warnings", json::array()))
       EXPECT_EQ(w.get<std::string>().find("sample cap"), std::string::npos) << p["label"] << ": " << w;
   std::ostringstream out;
-  cli::printStudySummary(out, results, {"r.json", "r.db", "index.html", 1});
+  cli::printStudySummary(out, test::typed(results), {"r.json", "r.db", "index.html", 1});
   EXPECT_EQ(occurrences(out.str(), warning), 1u) << out.str();
 
   // The speed axis's predicted GPU time (issue 31): every built-in that counted traffic carries one

@@ -45,7 +45,7 @@ TEST(RankAgreement, FlipsArePairsResolvedInBothRunsInOppositeOrders) {
   b["statistics"]["scenes"]["s"] = sceneStats({{"y", 1, 1.0}, {"x", 2, 1.5}, {"z", 2, 1.6}},
                                               {{"y", "x", -0.5, true}, {"x", "z", -0.1, false}, {"y", "z", -0.6, true}});
   b["statistics"]["scenes"]["other"] = sceneStats({{"x", 1, 1.0}, {"y", 2, 2.0}}, {});
-  const std::vector<SceneRankAgreement> r = compareRankings(a, b);
+  const std::vector<SceneRankAgreement> r = compareRankings(a["statistics"], b["statistics"]);
   ASSERT_EQ(r.size(), 1u);  // only the scene both runs rank
   EXPECT_EQ(r[0].methods, (std::vector<std::string>{"x", "y", "z"}));
   EXPECT_EQ(r[0].onlyInOne, (std::vector<std::string>{"onlyA"}));
@@ -64,20 +64,20 @@ TEST(RankAgreement, FlipsArePairsResolvedInBothRunsInOppositeOrders) {
   // Where higher is better (SSIM), the better method is the one with the larger value.
   a["statistics"]["scenes"]["s"]["metric"] = "ssim";
   b["statistics"]["scenes"]["s"]["metric"] = "ssim";
-  EXPECT_EQ(compareRankings(a, b)[0].flips[0].better, "y");
+  EXPECT_EQ(compareRankings(a["statistics"], b["statistics"])[0].flips[0].better, "y");
 }
 
 TEST(RankAgreement, UnlikeRankingsAreErrorsNamingTheScene) {
   json a, b;
   a["statistics"]["scenes"]["s"] = sceneStats({{"x", 1, 1.0}, {"y", 2, 2.0}}, {});
   b["statistics"]["scenes"]["s"] = sceneStats({{"x", 1, 1.0}, {"y", 2, 2.0}}, {}, "ssim");
-  EXPECT_NE(test::errorOf([&] { compareRankings(a, b); }).find("statistics.scenes.s: ranked on 'relMse' in one run and 'ssim'"),
+  EXPECT_NE(test::errorOf([&] { compareRankings(a["statistics"], b["statistics"]); }).find("statistics.scenes.s: ranked on 'relMse' in one run and 'ssim'"),
             std::string::npos);
   b["statistics"]["scenes"]["s"] = sceneStats({{"x", 1, 1.0}, {"w", 2, 2.0}}, {});
-  EXPECT_NE(test::errorOf([&] { compareRankings(a, b); }).find("1 method(s) ranked in both runs"), std::string::npos);
+  EXPECT_NE(test::errorOf([&] { compareRankings(a["statistics"], b["statistics"]); }).find("1 method(s) ranked in both runs"), std::string::npos);
   b["statistics"]["scenes"]["s"] = sceneStats({{"x", 1, 1.0}, {"y", 2, 2.0}}, {}, "noSuchMetric");
   a["statistics"]["scenes"]["s"]["metric"] = "noSuchMetric";
-  EXPECT_NE(test::errorOf([&] { compareRankings(a, b); }).find("'noSuchMetric' is no registered metric"), std::string::npos);
+  EXPECT_NE(test::errorOf([&] { compareRankings(a["statistics"], b["statistics"]); }).find("'noSuchMetric' is no registered metric"), std::string::npos);
 }
 
 }  // namespace

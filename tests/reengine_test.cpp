@@ -430,7 +430,7 @@ TEST(ReEngine, ARunChargesTheExtraRaysAtTheRendersOwnPathRate) {
   EXPECT_EQ(marked, 2);
   EXPECT_TRUE(r["statistics"]["extraPaths"]["perPixel"].contains(as["label"].get<std::string>()));
   // The report's speed point carries the bar's length.
-  const json data = reportData(r, c.out, nullptr);
+  const json data = reportData(test::typed(r), c.out, nullptr);
   bool found = false;
   const json& scope = data["speed"]["views"]["cpu"]["scenes"]["moving_object"]["relMse"];
   for (const json& p : scope["points"]) {

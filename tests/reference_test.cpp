@@ -470,7 +470,7 @@ TEST(Reference, QualityVerdictNamesTheRatioAndWhy) {
   const nlohmann::json& fine = results["scenes"]["fine"]["referenceQuality"];
   EXPECT_NEAR(fine["floor"].get<double>(), 2e-5, 1e-15);
   EXPECT_TRUE(fine["meets"].get<bool>());
-  EXPECT_EQ(referenceQualityLines(results).size(), 3u);
+  EXPECT_EQ(referenceQualityLines(results["scenes"]).size(), 3u);
 }
 
 // The options that find a run's sequences again: what differs from the preset, nothing more.

@@ -197,7 +197,7 @@ TEST(Report, GeneratorWritesEverySectionAndKeepsTheFailedPair) {
 TEST(Report, DataHasFrontNoiseFloorViewerAndAblation) {
   const json run = fixtureRun();
   const fs::path dir = writeFixtureRun("report_data", run);
-  const json data = reportData(run, dir, nullptr);
+  const json data = reportData(test::typed(run), dir, nullptr);
 
   // Speed on "static", relMSE: passthrough (0.01 ms, 0.5), svgf[a=1,b=false] (3 ms, 0.06),
   // svgf[a=0] (4 ms, 0.05), svgf[a=1] (5 ms, 0.04): every point is on the front here.
@@ -282,7 +282,7 @@ TEST(Report, EachTimeAxisHasItsOwnPointsAndFront) {
         {"memory", {{"persistentMiB", 10.0 * ms}, {"workingSetMiB", 30.0 * ms}}}};
   }
   const fs::path dir = writeFixtureRun("report_clocks", run);
-  const json data = reportData(run, dir, nullptr);
+  const json data = reportData(test::typed(run), dir, nullptr);
   const json& clocks = data["speed"]["clocks"];
   ASSERT_EQ(clocks.size(), 2u);
   EXPECT_EQ(clocks[0]["key"], "cpu");
@@ -322,7 +322,7 @@ TEST(Report, AblationDeltasAreTheRunsPairedDifferences) {
     "pairs": [{"a": "svgf[a=0]", "b": "svgf[a=1]", "diff": 0.0123, "ci95": [0.004, 0.02], "resolved": true},
               {"a": "svgf[a=1,b=false]", "b": "svgf[a=1]", "diff": 0.02, "ci95": [-0.001, 0.04], "resolved": false}],
     "byMetric": {}}}})");
-  const json data = reportData(run, test::freshDir("report_ablation_paired"), nullptr);
+  const json data = reportData(test::typed(run), test::freshDir("report_ablation_paired"), nullptr);
   int seen = 0;
   for (const json& r : data["ablation"]["rows"]) {
     if (r["scene"] != "static") continue;
@@ -357,7 +357,8 @@ TEST(Report, BaselineGivesCompareVerdicts) {
   };
   base["pairs"][1]["tiles"]["relMse"] = tiles(0.05);
   cand["pairs"][1]["tiles"]["relMse"] = tiles(0.06);
-  const json data = reportData(cand, test::freshDir("report_regression"), &base);
+  const RunResults baseRun = test::typed(base);
+  const json data = reportData(test::typed(cand), test::freshDir("report_regression"), &baseRun);
   ASSERT_TRUE(data["regression"].is_object());
   EXPECT_TRUE(data["regression"]["anyRegression"].get<bool>());
   bool found = false;
@@ -381,7 +382,7 @@ TEST(Report, AllScenesShowStatisticsOverallScoresAndNeverASecondOne) {
     "overallByMetric": {"dssim": {"normalisation": "geometric mean over 2 scenes of dssim / dssim(passthrough)",
       "ranking": [{"label": "svgf[a=0]", "rank": 1, "score": 0.25, "ci95": [0.2, 0.3], "tiedWith": []},
                   {"label": "passthrough", "rank": 2, "score": 1.0, "ci95": [1.0, 1.0], "tiedWith": []}]}}})json");
-  const json data = reportData(run, test::freshDir("report_overall_axes"), nullptr);
+  const json data = reportData(test::typed(run), test::freshDir("report_overall_axes"), nullptr);
   const json& all = data["speed"]["views"]["cpu"]["all"];
   EXPECT_TRUE(all.contains("relMse"));
   EXPECT_FALSE(all.contains("ldrFlip")) << "no statistics score on LDR-FLIP: no all-scenes view of it";
@@ -415,7 +416,7 @@ TEST(Report, IntervalsAndTheRunsOwnRankingsAreUsedWhenPresent) {
       "pairs": [], "resolvedPairs": 5, "totalPairs": 6}},
     "overall": {"normalisation": "geometric mean of relMSE ratios to passthrough",
       "ranking": [{"label": "passthrough", "rank": 1, "score": 0.7, "ci95": [0.6, 0.8], "tiedWith": []}]}})");
-  const json data = reportData(run, test::freshDir("report_stats"), nullptr);
+  const json data = reportData(test::typed(run), test::freshDir("report_stats"), nullptr);
   const json& p = data["speed"]["views"]["cpu"]["scenes"]["static"]["relMse"]["points"][1];  // svgf[a=0], 0.05
   EXPECT_EQ(p["interval"], "ci95");
   EXPECT_NEAR(p["lo"].get<double>(), 0.0475, 1e-12);

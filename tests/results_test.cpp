@@ -1,8 +1,10 @@
-// metrics/results: results.json and results.db are written together, and a results file of the
-// wrong shape or type is an error naming the file and the JSON path.
+// metrics/results and metrics/run_results: results.json and results.db are written together; the
+// typed model reads a run and writes it back byte for byte; a results file of the wrong shape or
+// type is an error naming the file and the JSON path.
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <functional>
 #include <string>
 
 #include "core/atomic_file.hpp"
@@ -92,6 +94,87 @@ TEST(ResultsContract, AWrongTypeInResultsNamesTheFileAndThePath) {
   contract::CliResult c = contract::arenaCli("compare " + cfg.out.string() + " " + cfg.out.string());
   EXPECT_EQ(c.status, 2) << c.output;
   EXPECT_NE(c.output.find("$.pairs[0].summary.relMse.mean"), std::string::npos) << c.output;
+}
+
+// What the run wrote is what the typed model writes back: every byte of results.json, failed pairs,
+// absent summaries (with their non-finite counts) and a sweep's grid included.
+TEST(RunResults, ARunRoundTripsByteForByte) {
+  RunConfig cfg = contract::tinyRun("round_trip");
+  json doc = runMatrix(cfg);
+  const std::string written = readText(cfg.out / "results.json");
+  const RunResults run = loadResults(cfg.out);
+  ASSERT_FALSE(run.pairs.empty());
+  EXPECT_EQ(run.toJson().dump(1), written);
+  // The parts a tiny run lacks, added by hand.
+  doc["pairs"].push_back({{"scene", "cornell_static"}, {"denoiser", "svgf"}, {"label", "svgf[x]"},
+                          {"params", json::object()}, {"status", "failed"}, {"error", "it broke"}});
+  doc["pairs"][0]["summary"]["relMse"] = {{"frames", 3}, {"nonFinite", 1},
+                                          {"absent", "1 of 3 frames after the warm-up are not finite (NaN or Inf)"}};
+  doc["pairs"][0]["summary"]["ssim"]["ci95"] = nullptr;
+  doc["sweep"] = {{"denoiser", "svgf"}, {"grid", {{"alpha", {0.1, 0.2}}}}, {"fixed", json::object()}};
+  const RunResults edited = test::typed(doc);
+  EXPECT_EQ(edited.toJson().dump(1), doc.dump(1));
+  EXPECT_EQ(edited.pairs.back().error, "it broke");
+  EXPECT_EQ(edited.pairs[0].summary.at("relMse").nonFinite, 1);
+  EXPECT_FALSE(edited.pairs[0].summary.at("ssim").ci95.valid());
+}
+
+// A reader asks a pair for a mean and gets it, or the reason there is none; never a number made up.
+TEST(RunResults, AMeanOrWhyThereIsNone) {
+  RunConfig cfg = contract::tinyRun("why_no_mean");
+  json doc = runMatrix(cfg);
+  doc["pairs"][0]["summary"]["relMse"] = {{"frames", 0}, {"absent", "no frame after the warm-up"}};
+  doc["pairs"][0]["summary"].erase("ssim");
+  doc["pairs"].push_back({{"scene", "cornell_static"}, {"denoiser", "svgf"}, {"label", "svgf[x]"},
+                          {"params", json::object()}, {"status", "failed"}, {"error", "it broke"}});
+  const RunResults run = test::typed(doc);
+  const PairResult& p = run.pairs[0];
+  EXPECT_TRUE(p.mean("psnr").present());
+  EXPECT_EQ(p.mean("psnr").mean, doc["pairs"][0]["summary"]["psnr"]["mean"].get<double>());
+  EXPECT_EQ(p.mean("relMse").absent, "no frame after the warm-up");
+  EXPECT_FALSE(p.mean("ssim").computed);
+  EXPECT_EQ(p.mean("ssim").absent, "ssim was not computed in this run");
+  EXPECT_EQ(run.pairs.back().mean("relMse").absent, "the pair has no summary (failed: it broke)");
+  EXPECT_EQ(run.find("cornell_static", "svgf[x]"), &run.pairs.back());
+  EXPECT_EQ(run.find("cornell_static", "nobody"), nullptr);
+  const std::vector<std::string> lines = absentSummaryLines(run, {"relMse"});
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_EQ(lines[0], "cornell_static: relMse absent in 1 pair(s): no frame after the warm-up");
+}
+
+// Each part of a summary and of the run is checked where the model reads it.
+TEST(RunResults, EveryMisshapenPartIsNamedByItsPath) {
+  RunConfig cfg = contract::tinyRun("misshapen");
+  const json doc = runMatrix(cfg);
+  auto errorWith = [&](const std::function<void(json&)>& edit) {
+    json d = doc;
+    edit(d);
+    return test::errorOf([&] { RunResults::fromJson(d, "r.json"); });
+  };
+  EXPECT_NE(errorWith([](json& d) { d["pairs"][0]["summary"]["relMse"]["ci95"] = {1}; })
+                .find("r.json: $.pairs[0].summary.relMse.ci95: expected [low, high] (or null), got an array"),
+            std::string::npos);
+  EXPECT_NE(errorWith([](json& d) { d["pairs"][0]["summary"]["relMse"]["meen"] = 1; })
+                .find("$.pairs[0].summary.relMse.meen: expected no such field"),
+            std::string::npos);
+  EXPECT_NE(errorWith([](json& d) { d["pairs"][0]["summary"]["relMse"]["frames"] = -3; })
+                .find("$.pairs[0].summary.relMse.frames: expected a non-negative integer"),
+            std::string::npos);
+  EXPECT_NE(errorWith([](json& d) { d["pairs"][0]["summary"]["relMse"] = {{"frames", 0}, {"absent", ""}}; })
+                .find("$.pairs[0].summary.relMse.absent: expected the reason the summary is absent"),
+            std::string::npos);
+  EXPECT_NE(errorWith([](json& d) { d["note"] = "mine"; }).find("r.json: $.note: expected no such field"),
+            std::string::npos);
+  EXPECT_NE(errorWith([](json& d) { d["pairs"][0]["denoiser"] = 3; })
+                .find("$.pairs[0].denoiser: expected a string, got a number"),
+            std::string::npos);
+  EXPECT_NE(errorWith([](json& d) { d["pairs"][0]["status"] = "failed"; })
+                .find("$.pairs[0].error: expected a string (the failure), got null"),
+            std::string::npos);
+  EXPECT_NE(errorWith([](json& d) { d["statistics"] = 1; }).find("$.statistics: expected an object"),
+            std::string::npos);
+  EXPECT_NE(errorWith([](json& d) { d["schema"] = 1; }).find("r.json: results schema version 1"), std::string::npos);
+  EXPECT_EQ(errorWith([](json&) {}), "(no error)");
 }
 
 }  // namespace

@@ -73,8 +73,8 @@ TEST(RunMatrix, TwoScenesThreeDenoisersWithEveryMetric) {
   EXPECT_GT(ghost[0]["maskFraction"].get<double>(), 0.3);
   EXPECT_GT(ghost[0]["signedBias"].get<double>(), 0.0);  // stale light lingers after switch-off
   // Results on disk: JSON and SQLite with one row per pair.
-  json onDisk = loadResults(c.out);
-  EXPECT_EQ(onDisk["pairs"].size(), 6u);
+  const RunResults onDisk = loadResults(c.out);
+  EXPECT_EQ(onDisk.pairs.size(), 6u);
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open((c.out / "results.db").c_str(), &db), SQLITE_OK);
   sqlite3_stmt* st = nullptr;
@@ -97,13 +97,13 @@ TEST(RunMatrix, CompareGatesARegressionAndPassesAnIdenticalRerun) {
   // Determinism: error metrics identical (times may differ).
   for (const char* m : {"relMse", "ssim", "ldrFlip", "tRmae", "warpedFlicker"})
     EXPECT_EQ(mean(base["pairs"][0], m), mean(rerun["pairs"][0], m)) << m;
-  EXPECT_FALSE(anyRegression(compareRuns(base, rerun, {})));
+  EXPECT_FALSE(anyRegression(compareRuns(test::typed(base), test::typed(rerun), {})));
   // A deliberately worse setting under the same label: no spatial filtering at all.
   RunConfig w = a;
   w.out = test::freshDir("run_worse");
   w.denoisers = {{"svgf", {{"iterations", "0"}, {"feedbackTap", "0"}, {"alpha", "1"}}, "svgf"}};
   json worse = runMatrix(w);
-  auto rows = compareRuns(base, worse, {{"relMse", 0.02}});
+  auto rows = compareRuns(test::typed(base), test::typed(worse), {{"relMse", 0.02}});
   ASSERT_EQ(rows.size(), 1u);
   EXPECT_EQ(rows[0].verdict, "regressed");
   EXPECT_TRUE(anyRegression(rows));
@@ -221,7 +221,7 @@ TEST(RunMatrix, BadInputIsAClearError) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("missing channel 'motion'"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(compareRuns(json{{"pairs", json::array()}}, json{{"pairs", json::array()}}, {{"flipp", 0.02}}), Error);
+  EXPECT_THROW(compareRuns(RunResults{}, RunResults{}, {{"flipp", 0.02}}), Error);
 }
 
 
@@ -263,17 +263,10 @@ TEST(RunMatrixContract, BadOutputsFailBeforeAnyWorkNamingTheFile) {
        "results.db: another schema (table"},
       {"truncated_db",
        [](const fs::path& d) {
-         json r = {{"name", "x"},
-                   {"environment", json::object()},
-                   {"settings", json::object()},
-                   {"pairs", json::array()}};
+         RunResults r;
          for (int i = 0; i < 200; ++i)  // enough rows for several pages
-           r["pairs"].push_back({{"scene", std::string("s").append(std::to_string(i))},
-                                 {"denoiser", std::string(200, 'd')},
-                                 {"label", "l"},
-                                 {"params", json::object()},
-                                 {"status", "failed"},
-                                 {"error", "e"}});
+           r.pairs.push_back(PairResult{.scene = std::string("s").append(std::to_string(i)), .denoiser = std::string(200, 'd'),
+                                        .label = "l", .status = "failed", .error = "e"});
          appendToDatabase(d / "results.db", r);
          fs::resize_file(d / "results.db", fs::file_size(d / "results.db") / 2);
        },

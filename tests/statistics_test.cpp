@@ -199,11 +199,10 @@ TEST(Summaries, NoDataIsAbsentNeverPerfect) {
 }
 
 // A results document with one scene and the given labels' relMSE tile data.
-json syntheticRun(const std::map<std::string, MetricTiles>& methods,
-                  const std::string& scene = "s") {
-  json r = {
-      {"schema", kResultsSchemaVersion}, {"kind", "arena-run"},        {"name", "synthetic"},
-      {"environment", json::object()},   {"settings", json::object()}, {"pairs", json::array()}};
+json syntheticJson(const std::map<std::string, MetricTiles>& methods, const std::string& scene = "s") {
+  json r = {{"schema", kResultsSchemaVersion}, {"kind", "arena-run"},        {"name", "synthetic"},
+            {"environment", json::object()},   {"settings", json::object()}, {"scenes", json::object()},
+            {"pairs", json::array()}};
   for (const auto& [label, m] : methods)
     r["pairs"].push_back({{"scene", scene},
                           {"label", label},
@@ -214,6 +213,9 @@ json syntheticRun(const std::map<std::string, MetricTiles>& methods,
                           {"summary", {{"relMse", {{"mean", m.mean()}}}}},
                           {"tiles", {{"relMse", m.toJson()}}}});
   return r;
+}
+RunResults syntheticRun(const std::map<std::string, MetricTiles>& methods, const std::string& scene = "s") {
+  return test::typed(syntheticJson(methods, scene));
 }
 
 TEST(CompareGate, NoiseIsNotARegressionAndARealWorseningIs) {
@@ -253,9 +255,9 @@ TEST(CompareGate, FailsOnWhatItCannotCompare) {
   EXPECT_THROW(parseConfidence("1.5"), Error);
   EXPECT_DOUBLE_EQ(parseConfidence("90%"), 0.9);
   // A metric the baseline had and the candidate reports absent fails too.
-  json cand = syntheticRun({{"a", m}});
+  json cand = syntheticJson({{"a", m}});
   cand["pairs"][0]["summary"]["relMse"] = {{"frames", 0}, {"absent", "no frame after the warm-up"}};
-  rows = compareRuns(syntheticRun({{"a", m}}), cand, tol);
+  rows = compareRuns(syntheticRun({{"a", m}}), test::typed(cand), tol);
   ASSERT_EQ(rows.size(), 1u);
   EXPECT_EQ(rows[0].verdict, "missing");
 }
@@ -263,7 +265,7 @@ TEST(CompareGate, FailsOnWhatItCannotCompare) {
 TEST(MergeGate, AnIncompleteShardSetIsAnError) {
   const fs::path root = test::freshDir("merge_gate");
   auto shard = [&](const std::string& name, const std::string& which) {
-    json r = syntheticRun({{"a", constantSeries(0.01)}}, name);
+    json r = syntheticJson({{"a", constantSeries(0.01)}}, name);
     r["settings"]["shard"] = which;
     r["scenes"] = json::object();
     saveResults(root / name, r);
@@ -328,11 +330,11 @@ TEST(StatisticsEndToEnd, IntervalsRankingsAndAQuietGate) {
   const json worse =
       run("worse", 0, {{"maxHistory", "3"}});  // a running mean of 3 frames: far noisier
   const std::vector<Tolerance> tol = {{"relMse", 0.02}};
-  auto rows = compareRuns(base, reseeded, tol);
+  auto rows = compareRuns(test::typed(base), test::typed(reseeded), tol);
   for (const auto& r : rows) EXPECT_NE(r.verdict, "regressed") << r.label << " " << r.change;
   EXPECT_NE(pairOfLabel(base, "svgf")["summary"]["relMse"]["mean"],
             pairOfLabel(reseeded, "svgf")["summary"]["relMse"]["mean"]);
-  rows = compareRuns(base, worse, tol);
+  rows = compareRuns(test::typed(base), test::typed(worse), tol);
   bool flagged = false;
   for (const auto& r : rows) {
     flagged |= r.label == "temporal" && r.verdict == "regressed";

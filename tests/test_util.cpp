@@ -65,6 +65,8 @@ const std::filesystem::path& processDir() {
   return dir.path;
 }
 
+RunResults typed(const nlohmann::json& run) { return RunResults::fromJson(run, "the test's run"); }
+
 std::filesystem::path freshDir(const std::string& name) {
   const auto dir = processDir() / name;
   std::filesystem::remove_all(dir);

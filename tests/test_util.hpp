@@ -10,6 +10,7 @@
 #include <string>
 
 #include "denoisers/denoiser.hpp"
+#include "metrics/run_results.hpp"
 #include "tracer/sequence_cache.hpp"
 #include "tracer/scene.hpp"
 
@@ -24,6 +25,10 @@ CommandResult runCommand(const std::string& commandLine);
 
 // The message of the arena::Error `f` throws; "(no error)" when it throws none.
 std::string errorOf(const std::function<void()>& f);
+
+// A run document (runMatrix's, or one built by hand) as the typed results its readers take; a
+// document out of shape fails the test with fromJson's error.
+RunResults typed(const nlohmann::json& run);
 
 // SELECT COUNT(*) FROM table in the SQLite database db; -1 when it cannot be read.
 int countRows(const std::filesystem::path& db, const char* table);

@@ -1,0 +1,84 @@
+#pragma once
+// The results of one run as a typed model: what results.json holds (schema kResultsSchemaVersion,
+// docs/usage.md) and what its readers take -- the printouts, compare, history and benchmarks.
+// fromJson checks the document's shape once, naming the JSON path of anything out of place (never
+// nlohmann's type_error later); toJson writes the same document back, byte for byte once dumped.
+//
+// Typed so far: the run's identity and provenance, every pair's identity, status, parameters and
+// metric summaries (with their intervals and the reason a summary is absent). A pair's per-frame
+// values, tile sums, timing, events and warnings, and the run's settings, scenes and statistics,
+// are still carried as the JSON the run wrote (`PairResult::detail`, the json members below).
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "metrics/statistics.hpp"
+
+namespace arena {
+
+// pair.summary.<metric>: the summary over the frames after the warm-up (metrics/summary.hpp), or
+// why there is none.
+struct MetricSummary {
+  double mean = kUndefined, median = kUndefined, p5 = kUndefined, p95 = kUndefined;
+  int frames = 0;        // frames after the warm-up that define the metric
+  Interval ci95;         // the mean's interval; invalid when too few frames gave one
+  int nonFinite = 0;     // of `frames`, those whose value was NaN or Inf (the summary is absent then)
+  std::string absent;    // why there is no mean; empty when there is one
+  bool present() const { return absent.empty(); }
+  nlohmann::json toJson() const;
+};
+
+// A summary's mean as its readers (printouts, compare, report, history) take it, or why there is
+// none: an absent summary is shown with its reason, never read as a number.
+struct SummaryMean {
+  double mean = 0;       // valid when present()
+  std::string absent;    // why there is no mean; empty when there is one
+  bool computed = true;  // false: the run did not compute the metric at all (e.g. FLIP off)
+  bool present() const { return absent.empty(); }
+};
+
+// One scene x denoiser configuration of the run.
+struct PairResult {
+  std::string scene, denoiser, label;
+  std::string status;      // "ok", or how it ended ("failed")
+  std::string error;       // the failure; set when status is not "ok"
+  nlohmann::json params = nlohmann::json::object();  // parameter -> value as the run applied it
+  std::map<std::string, MetricSummary> summary;       // metric -> summary (ok pairs)
+  // Everything else the run wrote of the pair, by key: frames (per-frame metrics), tiles, timing,
+  // cuts, ghosting, images, sanitizedInputs, warnings.
+  nlohmann::json detail = nlohmann::json::object();
+
+  bool ok() const { return status == "ok"; }
+  // The summary's mean, or why there is none: a failed pair, a metric the run did not compute, the
+  // summary's own reason, or a mean that is not a finite number.
+  SummaryMean mean(const std::string& metric) const;
+  // detail[key], or an empty JSON value when the pair has no such entry.
+  const nlohmann::json& part(const std::string& key) const;
+};
+
+struct RunResults {
+  std::string name, created;
+  nlohmann::json environment = nlohmann::json::object();  // compiler, cores, cpu, flags, git_commit
+  nlohmann::json settings = nlohmann::json::object();     // how the run measured (compare checks them)
+  nlohmann::json scenes = nlohmann::json::object();       // scene -> sequence facts, floors, events
+  std::vector<PairResult> pairs;
+  nlohmann::json statistics;  // rankings, paired differences, the overall score (null: none)
+  nlohmann::json metrics;     // the metric registry as the run had it (null: none)
+  nlohmann::json sweep;       // the sweep's grid (null: not a sweep)
+  std::string source;         // where it was read from (a run directory, "db#id"); not written
+
+  // `file`: the name errors give (the results.json path).
+  static RunResults fromJson(const nlohmann::json& j, const std::string& file);
+  nlohmann::json toJson() const;
+  // The pair of `scene` labelled `label`, or null.
+  const PairResult* find(const std::string& scene, const std::string& label) const;
+};
+
+// The absent summaries of a run's ok pairs, one line per scene, metric and reason:
+// "<scene>: <metric> absent in N pair(s): <reason>". `metrics` empty: every metric the pairs'
+// summaries name. For printouts that show means and must say why one is missing.
+std::vector<std::string> absentSummaryLines(const RunResults& results,
+                                            const std::vector<std::string>& metrics = {});
+
+}  // namespace arena
