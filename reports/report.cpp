@@ -123,8 +123,9 @@ json axisValue(const PairResult& pair, const ErrorAxis& axis) {
 }
 
 // The pair's timing object ({} when it has none).
-json timingObject(const PairResult& pair) {
-  return pair.part("timing").is_object() ? pair.part("timing") : json::object();
+const json& timingObject(const PairResult& pair) {
+  static const json none = json::object();
+  return pair.part("timing").is_object() ? pair.part("timing") : none;
 }
 
 double timingOf(const PairResult& pair, const char* key) { return timingObject(pair).value(key, kNaN); }
@@ -175,7 +176,7 @@ std::vector<SpeedClock> speedClocks(const RunResults& results, const std::vector
   std::vector<SpeedClock> clocks = {{"cpu", "CPU ms measured here (" + where + ")"}};
   std::vector<std::string> devices, captureDevices;
   for (const PairResult& pair : results.pairs) {
-    const json timing = timingObject(pair);
+    const json& timing = timingObject(pair);
     if (timing.contains("gpuPredicted") && timing["gpuPredicted"].is_object()) {
       for (const json& d : timing["gpuPredicted"].value("devices", json::array())) {
         const std::string name = d.value("device", "");
@@ -207,7 +208,7 @@ ClockTime timeOn(const PairResult& pair, const std::string& clock) {
     return {timingOf(pair, "msMedian"), timingOf(pair, "msP5"), timingOf(pair, "msP95")};  // msP5: results schema 2
   }
   const std::string device = clock.substr(4);  // "gpu:<device>"
-  const json timing = timingObject(pair);
+  const json& timing = timingObject(pair);
   if (!timing.contains("gpuPredicted") || !timing["gpuPredicted"].is_object()) return {};
   json d;
   for (const json& row : timing["gpuPredicted"].value("devices", json::array()))
@@ -269,7 +270,7 @@ json speedView(const RunResults& results, const std::vector<std::string>& scenes
   json elsewhere = json::array();
   for (const PairResult& pair : results.pairs)
     if (pair.ok() && !std::isfinite(timeOn(pair, clock).ms)) {
-      const json timing = timingObject(pair);
+      const json& timing = timingObject(pair);
       std::string source = timing.value("msSource", "");
       if (clock.rfind("gpu:", 0) == 0 && clockOf(pair) == "cpu") source = "no GPU traffic counted (" + source + ")";
       elsewhere.push_back({{"scene", pair.scene}, {"label", pair.label},
@@ -605,7 +606,7 @@ json pairData(const PairResult& pair) {
   json summary = json::object();
   for (const auto& [metric, s] : pair.summary) summary[metric] = s.toJson();
   p["summary"] = summary;
-  const json timing = timingObject(pair);
+  const json& timing = timingObject(pair);
   p["timing"] = {{"msMedian", timing.value("msMedian", kNaN)},
                  {"msP5", timing.value("msP5", kNaN)},
                  {"msP95", timing.value("msP95", kNaN)},
