@@ -37,36 +37,33 @@ std::string figureText(double v) {
   return buf;
 }
 
-std::string figureText(const json& v) { return v.is_number() ? figureText(v.get<double>()) : "–"; }
-
-std::string intervalText(const json& ci) {
-  if (!ci.is_array() || ci.size() != 2) return "–";
+std::string intervalText(const Interval& ci) {
+  if (!ci.valid()) return "–";
   std::string text = "[";  // appended, not "[" + string: GCC 12 warns falsely (-Wrestrict) on that
-  text += figureText(ci[0]);
+  text += figureText(ci.lo);
   text += ", ";
-  text += figureText(ci[1]);
+  text += figureText(ci.hi);
   text += "]";
   return text;
 }
 
-std::string tiedText(const json& m) {
+std::string tiedText(const RankedMethod& m) {
   std::string s;
-  for (const json& t : m.value("tiedWith", json::array())) s += (s.empty() ? "" : ", ") + t.get<std::string>();
+  for (const std::string& t : m.tiedWith) s += (s.empty() ? "" : ", ") + t;
   return s.empty() ? "" : "tied with " + s;
 }
 
 void printOverallRanking(std::ostream& out, const RunResults& results) {
-  const json& st = results.statistics;
-  if (!st.is_object() || !st.contains("overall")) return;
-  const json& o = st["overall"];
-  out << "\noverall: " << o.value("normalisation", "") << " (lower is better)\n";
-  for (const json& m : o.value("ranking", json::array())) {
-    const bool tied = !m.value("tiedWith", json::array()).empty();
-    out << "  " << std::left << std::setw(4) << (std::to_string(m.value("rank", 0)) + (tied ? "=" : "")) << std::setw(26)
-        << m.value("label", "") << std::right << std::setw(11) << figureText(m.value("score", json())) << "  "
-        << std::left << std::setw(24) << intervalText(m.value("ci95", json())) << tiedText(m) << "\n";
+  if (!results.statistics || !results.statistics->overall) return;
+  const OverallRanking& o = *results.statistics->overall;
+  out << "\noverall: " << o.normalisation << " (lower is better)\n";
+  for (const RankedMethod& m : o.ranking) {
+    const bool tied = !m.tiedWith.empty();
+    out << "  " << std::left << std::setw(4) << (std::to_string(m.rank) + (tied ? "=" : "")) << std::setw(26) << m.label
+        << std::right << std::setw(11) << figureText(m.value) << "  " << std::left << std::setw(24) << intervalText(m.ci)
+        << tiedText(m) << "\n";
   }
-  if (o.contains("excluded")) out << "  not ranked overall: " << o["excluded"].get<std::string>() << "\n";
+  if (!o.excluded.empty()) out << "  not ranked overall: " << o.excluded << "\n";
 }
 
 namespace {
@@ -116,25 +113,22 @@ void printSpeedOrder(std::ostream& out, const RunResults& results) {
 // The study's ranking with ties (metrics/statistics.hpp): per scene on relMSE, then overall on the
 // per-scene normalised score. Methods whose difference is not resolved at 95% share "tied with".
 void printSceneRankings(std::ostream& out, const RunResults& results) {
-  if (!results.statistics.is_object()) return;
-  const json& st = results.statistics;
-  out << "\nranking on relMSE with 95% intervals (" << st.value("method", "") << ")\n";
-  for (auto it = st["scenes"].begin(); it != st["scenes"].end(); ++it) {
-    const json& s = it.value();
-    out << "\n" << it.key() << ": " << s["resolvedPairs"] << " of " << s["totalPairs"]
-              << " pairwise differences resolved\n";
-    for (const json& m : s["ranking"])
-      out << "  " << std::left << std::setw(4) << m["rank"].get<int>() << std::setw(26)
-                << m["label"].get<std::string>() << std::right << std::setw(11) << figureText(m.value("mean", json()))
-                << "  " << std::left << std::setw(24) << intervalText(m.value("ci95", json())) << tiedText(m) << "\n";
-    if (s.contains("excluded") && s["excluded"].is_string())
-      out << "  not ranked: " << s["excluded"].get<std::string>() << "\n";
+  if (!results.statistics) return;
+  const RunStatistics& st = *results.statistics;
+  out << "\nranking on relMSE with 95% intervals (" << st.method << ")\n";
+  for (const auto& [name, scene] : st.scenes) {
+    const SceneRanking& s = scene.ranking;
+    out << "\n" << name << ": " << s.resolvedPairs << " of " << s.pairs.size() << " pairwise differences resolved\n";
+    for (const RankedMethod& m : s.ranking)
+      out << "  " << std::left << std::setw(4) << m.rank << std::setw(26) << m.label << std::right << std::setw(11)
+          << figureText(m.value) << "  " << std::left << std::setw(24) << intervalText(m.ci) << tiedText(m) << "\n";
+    if (!s.excluded.empty()) out << "  not ranked: " << s.excluded << "\n";
   }
 }
 
 // A figure with its interval: "0.123 [0.1, 0.15]", "-" when absent; a null bound of the response
 // is "never settled" (metrics/ghosting_intervals.hpp).
-std::string figure(const json& e, const char* name) {
+std::string figureWithInterval(const json& e, const char* name) {
   const bool never = std::string(name) == "responseFrames" && e.contains("response");
   if (!never && (!e.contains(name) || !e[name].is_number())) return "-";
   std::ostringstream o;
@@ -161,57 +155,54 @@ std::string figure(const json& e, const char* name) {
 // The event-window figures with their 95% intervals, per scripted event and camera cut, methods in
 // the order of their rank (lag energy, old-view leak) with ties (metrics/ghosting_intervals.hpp).
 void printEventTables(std::ostream& out, const RunResults& results) {
-  if (!results.statistics.is_object() || !results.statistics.contains("scenes")) return;
-  const json& scenes = results.statistics["scenes"];
-  for (auto it = scenes.begin(); it != scenes.end(); ++it)
-    for (const char* kind : {"events", "cuts"})
-      for (const json& ev : it.value().value(kind, json::array())) {
-        const bool cut = std::string(kind) == "cuts";
-        const int frame = ev["eventFrame"];
+  if (!results.statistics) return;
+  for (const auto& [name, scene] : results.statistics->scenes)
+    for (const bool cut : {false, true})
+      for (const EventStatistics& ev : cut ? scene.cuts : scene.events) {
+        const int frame = ev.eventFrame;
         const char* rankedOn = cut ? "oldViewLeak" : "lagEnergy";
-        const json ranking = ev["byFigure"].value(rankedOn, json::object());
-        const std::string what = ev.value("what", "");
-        out << "\n" << it.key() << ": " << ev.value("kind", "") << (what.empty() ? "" : " " + what) << " at frame "
-                  << frame << ": ranked on " << rankedOn << " (" << ranking.value("resolvedPairs", 0) << " of "
-                  << ranking.value("totalPairs", 0) << " pairs resolved)\n";
-        for (const json& m : ranking.value("ranking", json::array())) {
+        const auto figure = ev.byFigure.find(rankedOn);
+        const SceneRanking none;
+        const SceneRanking& ranking = figure == ev.byFigure.end() ? none : figure->second;
+        out << "\n" << name << ": " << ev.kind << (ev.what.empty() ? "" : " " + ev.what) << " at frame " << frame
+            << ": ranked on " << rankedOn << " (" << ranking.resolvedPairs << " of " << ranking.pairs.size()
+            << " pairs resolved)\n";
+        for (const RankedMethod& m : ranking.ranking) {
           const json* e = nullptr;
           for (const PairResult& p : results.pairs)
-            if (p.scene == it.key() && m["label"] == p.label && p.part(cut ? "cuts" : "ghosting").is_array())
+            if (p.scene == name && m.label == p.label && p.part(cut ? "cuts" : "ghosting").is_array())
               for (const json& x : p.part(cut ? "cuts" : "ghosting"))
                 if (x.value("eventFrame", -1) == frame) e = &x;
           if (!e) continue;
-          out << "  " << std::left << std::setw(4) << m["rank"].get<int>() << std::setw(22)
-                    << m["label"].get<std::string>();
+          out << "  " << std::left << std::setw(4) << m.rank << std::setw(22) << m.label;
           for (const char* f : cut ? std::vector<const char*>{"oldViewLeak", "atCut"}
                                    : std::vector<const char*>{"lagEnergy", "responseFrames", "peakExcess", "chromaLagEnergy"})
-            out << f << " " << std::setw(26) << figure(*e, f) << " ";
+            out << f << " " << std::setw(26) << figureWithInterval(*e, f) << " ";
           out << tiedText(m) << "\n";
         }
-        if (ranking.contains("excluded")) out << "  not ranked: " << ranking["excluded"].get<std::string>() << "\n";
+        if (!ranking.excluded.empty()) out << "  not ranked: " << ranking.excluded << "\n";
       }
 }
 
 // One line per scene: the best method on relMSE (rank 1, first in the ranking) with its mean and
 // interval, and the methods not resolved from it -- the winner, or the tied group.
 void printSceneWinners(std::ostream& out, const RunResults& results) {
-  const json scenes = results.statistics.is_object() ? results.statistics.value("scenes", json::object()) : json::object();
-  if (scenes.empty()) return;
+  if (!results.statistics || results.statistics->scenes.empty()) return;
+  const auto& scenes = results.statistics->scenes;
   out << "\nper scene: the best on relMSE with its 95% interval, and the methods not resolved from it\n";
   size_t width = 0;
-  for (auto it = scenes.begin(); it != scenes.end(); ++it) width = std::max(width, it.key().size());
-  for (auto it = scenes.begin(); it != scenes.end(); ++it) {
-    const json ranking = it.value().value("ranking", json::array());
-    out << "  " << std::left << std::setw(int(width) + 2) << it.key();
-    if (ranking.empty()) {
-      out << "not ranked" << (it.value().contains("excluded") ? ": " + it.value()["excluded"].get<std::string>() : "")
-          << "\n";
+  for (const auto& [name, scene] : scenes) width = std::max(width, name.size());
+  for (const auto& [name, scene] : scenes) {
+    const SceneRanking& s = scene.ranking;
+    out << "  " << std::left << std::setw(int(width) + 2) << name;
+    if (s.ranking.empty()) {
+      out << "not ranked" << (s.excluded.empty() ? "" : ": " + s.excluded) << "\n";
       continue;
     }
-    const json& best = ranking[0];
+    const RankedMethod& best = s.ranking[0];
     const std::string tied = tiedText(best);
-    out << best.value("label", "") << " " << figureText(best.value("mean", json())) << " "
-        << intervalText(best.value("ci95", json())) << (tied.empty() ? "" : "; " + tied) << "\n";
+    out << best.label << " " << figureText(best.value) << " " << intervalText(best.ci) << (tied.empty() ? "" : "; " + tied)
+        << "\n";
   }
 }
 

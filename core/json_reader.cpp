@@ -261,6 +261,25 @@ std::vector<double> JsonReader::numbers(const std::string& key, size_t count) {
   return out;
 }
 
+double JsonReader::numberOrNull(const std::string& key) {
+  const json& j = member(key, "a number or null");
+  if (j.is_null()) return std::numeric_limits<double>::quiet_NaN();
+  if (!j.is_number()) fail(key, "expected a number or null, got " + jsonTypeName(j));
+  return j.get<double>();
+}
+
+std::vector<std::string> JsonReader::strings(const std::string& key) {
+  const json& j = member(key, "an array of strings");
+  if (!j.is_array()) fail(key, "expected an array of strings, got " + jsonTypeName(j));
+  std::vector<std::string> out;
+  for (size_t i = 0; i < j.size(); ++i) {
+    if (!j[i].is_string())
+      fail(key + "[" + std::to_string(i) + "]", "expected a string, got " + jsonTypeName(j[i]));
+    out.push_back(j[i].get<std::string>());
+  }
+  return out;
+}
+
 glm::vec3 JsonReader::vec3(const std::string& key) {
   auto v = numbers(key, 3);
   for (double x : v)

@@ -46,6 +46,11 @@ class JsonReader {
   glm::vec3 vec3(const std::string& key);
   glm::vec3 vec3(const std::string& key, glm::vec3 fallback);
   std::vector<double> numbers(const std::string& key, size_t count);
+  // A number, or null for a value that was not defined (NaN then); results documents write NaN so.
+  double numberOrNull(const std::string& key);
+  std::vector<std::string> strings(const std::string& key);
+  // The member as it stands (marked read), for values a caller checks itself.
+  const nlohmann::json& value(const std::string& key) { return member(key, "a value"); }
 
   // Throws for every member of this object that no accessor read.
   void rejectUnread() const;

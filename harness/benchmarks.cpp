@@ -389,9 +389,9 @@ nlohmann::json benchRankAgreement(const std::string& runA, const std::string& ru
     const nlohmann::json& s = r.scenes.value(scene, nlohmann::json::object());
     return std::to_string(s.value("width", 0)) + "x" + std::to_string(s.value("height", 0));
   };
-  if (a.statistics.is_null() || b.statistics.is_null())
-    throw Error((a.statistics.is_null() ? runA : runB) + ": the run has no statistics (expected a finished run)");
-  const std::vector<SceneRankAgreement> scenes = compareRankings(a.statistics, b.statistics);
+  if (!a.statistics || !b.statistics)
+    throw Error((a.statistics ? runB : runA) + ": the run has no statistics (expected a finished run)");
+  const std::vector<SceneRankAgreement> scenes = compareRankings(*a.statistics, *b.statistics);
   if (scenes.empty())
     throw Error(runA + " and " + runB + ": no scene is ranked in both runs (expected runs of the same scenes)");
   progress("rank agreement: " + runA + " (A, " + size(a, scenes.front().scene) + ") against " + runB + " (B, " +

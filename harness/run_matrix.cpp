@@ -19,7 +19,7 @@
 #include "metrics/evaluator.hpp"
 #include "metrics/ghosting.hpp"
 #include "metrics/results.hpp"
-#include "metrics/statistics.hpp"
+#include "metrics/run_statistics.hpp"
 
 namespace arena {
 
@@ -453,7 +453,7 @@ json runMatrix(const RunConfig& cfg) {
 void finishRun(json& results, const RunConfig& cfg) {
   {
     StageTimer timer(Stage::Statistics);
-    results["statistics"] = analyseRun(results);
+    results["statistics"] = analyseRun(results).toJson();
     addReferenceQuality(results, cfg.warmup, cfg.referenceNotes);
   }
   commitResults(cfg.out, results);

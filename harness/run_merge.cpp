@@ -5,7 +5,7 @@
 #include "harness/reference_quality.hpp"
 #include "harness/run_matrix.hpp"
 #include "metrics/results.hpp"
-#include "metrics/statistics.hpp"
+#include "metrics/run_statistics.hpp"
 
 // Shard sets and the study's second pass: runs combined into one, analysed once (run_matrix.hpp).
 namespace arena {
@@ -82,7 +82,7 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
       merged = r;
       merged.pairs.clear();
       merged.scenes = json::object();
-      merged.statistics = nullptr;
+      merged.statistics.reset();
       merged.settings["shard"] = "merged";
     } else {
       json a = merged.settings, b = r.settings;
@@ -106,7 +106,7 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
       fs::copy(run / "images", out / "images", fs::copy_options::recursive | fs::copy_options::skip_existing);
   // The statistics and the verdicts are computed on the document as the run loop writes it.
   json document = merged.toJson();
-  document["statistics"] = analyseRun(document);
+  document["statistics"] = analyseRun(document).toJson();
   addReferenceQuality(document, merged.settings.value("warmup", 8));
   commitResults(out, document);
   return document;

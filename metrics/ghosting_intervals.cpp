@@ -391,10 +391,12 @@ std::map<std::string, double> pointFigures(const json& j, bool cut, const Ghosti
   return out;
 }
 
-json rankFigures(const std::vector<std::string>& ranked, const std::vector<std::string>& labels,
-                 const std::vector<std::map<std::string, double>>& points,
-                 const std::vector<FigureReplicates>& reps, const BootstrapConfig& cfg) {
-  json byFigure = json::object();
+std::map<std::string, SceneRanking> rankFigures(const std::vector<std::string>& ranked,
+                                                const std::vector<std::string>& labels,
+                                                const std::vector<std::map<std::string, double>>& points,
+                                                const std::vector<FigureReplicates>& reps,
+                                                const BootstrapConfig& cfg) {
+  std::map<std::string, SceneRanking> byFigure;
   for (const std::string& f : ranked) {
     std::vector<std::string> kept;
     std::vector<double> values;
@@ -418,21 +420,22 @@ json rankFigures(const std::vector<std::string>& ranked, const std::vector<std::
     SceneRanking r = rankReplicates(f, true, kept, values, replicates, cfg.confidence, widen);
     for (RankedMethod& m : r.ranking) m.ci = clipped(m.ci, f);  // as the pair's own figure
     r.excluded = excluded;
-    byFigure[f] = r.toJson();
+    r.replicates.clear();  // the figure's replicates serve no overall score
+    byFigure[f] = std::move(r);
   }
   return byFigure;
 }
 
 }  // namespace
 
-json rankSceneEvents(std::vector<std::pair<std::string, const json*>> pairs,
-                     const std::string& scene, const BootstrapConfig& cfg) {
+SceneEvents rankSceneEvents(std::vector<std::pair<std::string, const json*>> pairs,
+                            const std::string& scene, const BootstrapConfig& cfg) {
   const GhostingConfig gc;
   // By label, so that the pairs' order (a merge of shards puts them shard by shard) changes
   // nothing.
   std::stable_sort(pairs.begin(), pairs.end(),
                    [](const auto& a, const auto& b) { return a.first < b.first; });
-  json out = {{"events", json::array()}, {"cuts", json::array()}};
+  SceneEvents out;
   for (const bool cut : {false, true}) {
     const char* key = cut ? "cuts" : "ghosting";
     std::set<int> frames;
@@ -442,12 +445,17 @@ json rankSceneEvents(std::vector<std::pair<std::string, const json*>> pairs,
       std::vector<std::string> labels;
       std::vector<std::map<std::string, double>> points;
       std::vector<FigureReplicates> reps;
-      json event = {{"eventFrame", frame}};
+      EventStatistics event;
+      event.eventFrame = frame;
+      bool named = false;
       for (const auto& [label, p] : pairs)
         for (const json& e : p->value(key, json::array())) {
           if (e.value("eventFrame", -1) != frame) continue;
-          if (!event.contains("kind")) event["kind"] = e.value("kind", cut ? "camera_cut" : "");
-          if (!cut && !event.contains("what")) event["what"] = e.value("what", "");
+          if (!named) {  // the first pair's (by label) kind and object name the event
+            event.kind = e.value("kind", cut ? "camera_cut" : "");
+            if (!cut) event.what = e.value("what", "");
+            named = true;
+          }
           labels.push_back(label);
           points.push_back(pointFigures(e, cut, gc));
           if (!e.contains("tiles")) {
@@ -463,9 +471,9 @@ json rankSceneEvents(std::vector<std::pair<std::string, const json*>> pairs,
                                               eventSeedName(scene, frame), cfg, gc));
           }
         }
-      event["byFigure"] =
+      event.byFigure =
           rankFigures(cut ? cutFigureNames(gc) : kRankedEventFigures, labels, points, reps, cfg);
-      out[cut ? "cuts" : "events"].push_back(event);
+      (cut ? out.cuts : out.events).push_back(std::move(event));
     }
   }
   return out;

@@ -48,6 +48,7 @@
 #include <vector>
 
 #include "metrics/ghosting.hpp"
+#include "metrics/run_statistics.hpp"
 #include "metrics/statistics.hpp"
 
 namespace arena {
@@ -123,7 +124,10 @@ void addFigureIntervals(nlohmann::json& j, const FigureReplicates& r,
 // statistics.scenes.<scene>.events / .cuts: per event (matched by frame), for every figure, the
 // ranking with ties and the paired differences (as metrics/statistics' SceneRanking) over the ok
 // pairs that stored tile data. `pairs`: (label, pair JSON) of one scene.
-nlohmann::json rankSceneEvents(std::vector<std::pair<std::string, const nlohmann::json*>> pairs,
-                               const std::string& scene, const BootstrapConfig& cfg = {});
+struct SceneEvents {
+  std::vector<EventStatistics> events, cuts;
+};
+SceneEvents rankSceneEvents(std::vector<std::pair<std::string, const nlohmann::json*>> pairs,
+                            const std::string& scene, const BootstrapConfig& cfg = {});
 
 }  // namespace arena

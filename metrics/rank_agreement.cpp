@@ -46,50 +46,45 @@ struct Ranked {
   double value;
 };
 
-std::map<std::string, Ranked> rankingOf(const json& scene) {
+std::map<std::string, Ranked> rankingOf(const SceneRanking& scene) {
   std::map<std::string, Ranked> out;
-  for (const json& m : scene.at("ranking"))
-    out[m.at("label").get<std::string>()] = {m.at("rank").get<int>(),
-                                             m.value("mean", json()).is_number() ? m["mean"].get<double>() : std::nan("")};
+  for (const RankedMethod& m : scene.ranking) out[m.label] = {m.rank, m.value};
   return out;
 }
 
 // value(a) - value(b) when the pair is resolved, keyed "a|b" in both orders (b|a: the negation).
-std::map<std::string, double> resolvedDifferences(const json& scene) {
+std::map<std::string, double> resolvedDifferences(const SceneRanking& scene) {
   std::map<std::string, double> out;
-  for (const json& p : scene.value("pairs", json::array())) {
-    if (!p.value("resolved", false) || !p.value("diff", json()).is_number()) continue;
-    const std::string a = p.at("a").get<std::string>(), b = p.at("b").get<std::string>();
-    out[a + "|" + b] = p["diff"].get<double>();
-    out[b + "|" + a] = -p["diff"].get<double>();
+  for (const SceneRanking::Pair& p : scene.pairs) {
+    if (!p.d.resolved() || !std::isfinite(p.d.diff)) continue;
+    out[p.a + "|" + p.b] = p.d.diff;
+    out[p.b + "|" + p.a] = -p.d.diff;
   }
   return out;
 }
 
 }  // namespace
 
-std::vector<SceneRankAgreement> compareRankings(const json& statisticsA, const json& statisticsB) {
-  const json& scenesA = statisticsA.at("scenes");
-  const json& scenesB = statisticsB.at("scenes");
+std::vector<SceneRankAgreement> compareRankings(const RunStatistics& statisticsA, const RunStatistics& statisticsB) {
   std::vector<SceneRankAgreement> out;
-  for (auto it = scenesA.begin(); it != scenesA.end(); ++it) {
-    if (!scenesB.contains(it.key())) continue;
-    const json &a = it.value(), &b = scenesB[it.key()];
+  for (const auto& [scene, sceneA] : statisticsA.scenes) {
+    auto sceneB = statisticsB.scenes.find(scene);
+    if (sceneB == statisticsB.scenes.end()) continue;
+    const SceneRanking &a = sceneA.ranking, &b = sceneB->second.ranking;
     SceneRankAgreement s;
-    s.scene = it.key();
-    s.metric = a.value("metric", "");
-    if (b.value("metric", "") != s.metric)
-      throw Error("statistics.scenes." + s.scene + ": ranked on '" + s.metric + "' in one run and '" +
-                  b.value("metric", "") + "' in the other (expected one metric)");
+    s.scene = scene;
+    s.metric = a.metric;
+    if (b.metric != s.metric)
+      throw Error("statistics.scenes." + s.scene + ": ranked on '" + s.metric + "' in one run and '" + b.metric +
+                  "' in the other (expected one metric)");
     const MetricDefinition* definition = findMetric(s.metric);
     if (!definition)
       throw Error("statistics.scenes." + s.scene + ".metric: '" + s.metric + "' is no registered metric");
     const bool lowerIsBetter = definition->lowerIsBetter();
     const std::map<std::string, Ranked> rankedA = rankingOf(a), rankedB = rankingOf(b);
-    for (const json& m : a.at("ranking")) {
-      const std::string label = m.at("label").get<std::string>();
-      if (rankedB.count(label)) s.methods.push_back(label);
-      else s.onlyInOne.push_back(label);
+    for (const RankedMethod& m : a.ranking) {
+      if (rankedB.count(m.label)) s.methods.push_back(m.label);
+      else s.onlyInOne.push_back(m.label);
     }
     for (const auto& [label, r] : rankedB)
       if (!rankedA.count(label)) s.onlyInOne.push_back(label);

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "metrics/run_statistics.hpp"
+
 namespace arena {
 
 // Kendall's tau-b of two paired series (ties in either count as in Kendall 1945: tau-b =
@@ -30,9 +32,9 @@ struct SceneRankAgreement {
   nlohmann::json toJson() const;
 };
 
-// The scenes both runs rank (their statistics, RunResults::statistics: "scenes"), in A's order. A
+// The scenes both runs rank (RunStatistics::scenes, each on its ranked metric), in A's order. A
 // scene whose rankings use different metrics, or with fewer than two common methods, is an error
 // naming it.
-std::vector<SceneRankAgreement> compareRankings(const nlohmann::json& statisticsA, const nlohmann::json& statisticsB);
+std::vector<SceneRankAgreement> compareRankings(const RunStatistics& a, const RunStatistics& b);
 
 }  // namespace arena

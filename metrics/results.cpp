@@ -157,11 +157,6 @@ bool hasTable(sqlite3* db, const char* name) {
   return found;
 }
 
-double ciBound(const json& summary, int i) {
-  if (!summary.contains("ci95") || !summary["ci95"].is_array()) return kUndefined;
-  return summary["ci95"][size_t(i)].get<double>();
-}
-
 // The database's schema follows the results schema; one of another version is never mixed in.
 void requireSchemaVersion(const Db& db) {
   const int version = userVersion(db.db);
@@ -208,38 +203,32 @@ void appendToDatabase(const fs::path& dbPath, const RunResults& r, const std::st
           .real(6, v.median).real(7, v.p5).real(8, v.p95).real(9, v.ci95.lo).real(10, v.ci95.hi)
           .integer(11, v.frames).text(12, v.absent).step();
   }
-  if (r.statistics.is_object()) {
-    const json& statistics = r.statistics;
+  if (r.statistics) {
+    const RunStatistics& statistics = *r.statistics;
     Statement paired(db, "INSERT INTO paired VALUES (?,?,?,?,?,?,?,?,?)");
     Statement rank(db, "INSERT INTO rankings VALUES (?,?,?,?,?,?,?,?,?)");
-    auto addRanking = [&](const std::string& scene, const std::string& metric, const json& ranking, const char* value) {
-      for (const json& m : ranking)
-        rank.integer(1, runId).text(2, scene).text(3, metric).text(4, m["label"]).integer(5, m["rank"])
-            .real(6, m[value]).real(7, ciBound(m, 0)).real(8, ciBound(m, 1)).text(9, m["tiedWith"].dump()).step();
+    auto addRanking = [&](const std::string& scene, const std::string& metric, const std::vector<RankedMethod>& ranking) {
+      for (const RankedMethod& m : ranking)
+        rank.integer(1, runId).text(2, scene).text(3, metric).text(4, m.label).integer(5, m.rank).real(6, m.value)
+            .real(7, m.ci.lo).real(8, m.ci.hi).text(9, json(m.tiedWith).dump()).step();
     };
-    auto addScene = [&](const std::string& scene, const json& s, const std::string& metric) {
-      addRanking(scene, metric, s["ranking"], "mean");
-      for (const json& x : s["pairs"])
-        paired.integer(1, runId).text(2, scene).text(3, metric).text(4, x["a"]).text(5, x["b"]).real(6, x["diff"])
-            .real(7, ciBound(x, 0)).real(8, ciBound(x, 1)).integer(9, x["resolved"].get<bool>()).step();
+    auto addScene = [&](const std::string& scene, const SceneRanking& s, const std::string& metric) {
+      addRanking(scene, metric, s.ranking);
+      for (const SceneRanking::Pair& x : s.pairs)
+        paired.integer(1, runId).text(2, scene).text(3, metric).text(4, x.a).text(5, x.b).real(6, x.d.diff)
+            .real(7, x.d.ci.lo).real(8, x.d.ci.hi).integer(9, x.d.resolved()).step();
     };
-    static const json none = json::object();
-    const json& scenes = statistics.contains("scenes") ? statistics["scenes"] : none;
-    for (auto it = scenes.begin(); it != scenes.end(); ++it) {
-      addScene(it.key(), it.value(), it.value()["metric"]);
-      for (auto m = it.value()["byMetric"].begin(); m != it.value()["byMetric"].end(); ++m)
-        addScene(it.key(), m.value(), m.value()["metric"]);
+    for (const auto& [name, scene] : statistics.scenes) {
+      addScene(name, scene.ranking, scene.ranking.metric);
+      for (const auto& [metric, ranking] : scene.byMetric) addScene(name, ranking, ranking.metric);
       // Event-window figures (metrics/ghosting_intervals): metric "ghosting@<frame>.<figure>" or
       // "cut@<frame>.<figure>"; each method's figure and interval are its rankings row.
-      for (const char* kind : {"events", "cuts"})
-        for (const json& e : it.value().value(kind, json::array()))
-          for (auto f = e["byFigure"].begin(); f != e["byFigure"].end(); ++f)
-            addScene(it.key(), f.value(),
-                     std::string(kind == std::string("events") ? "ghosting@" : "cut@") +
-                         std::to_string(e["eventFrame"].get<int>()) + "." + f.key());
+      for (const bool cut : {false, true})
+        for (const EventStatistics& e : cut ? scene.cuts : scene.events)
+          for (const auto& [figure, ranking] : e.byFigure)
+            addScene(name, ranking, std::string(cut ? "cut@" : "ghosting@") + std::to_string(e.eventFrame) + "." + figure);
     }
-    if (statistics.contains("overall"))
-      addRanking("*", statistics["rankedOn"], statistics["overall"]["ranking"], "score");
+    if (statistics.overall) addRanking("*", statistics.rankedOn, statistics.overall->ranking);
   }
   db.exec("COMMIT");
 }

@@ -165,7 +165,8 @@ RunResults RunResults::fromJson(const json& j, const std::string& file) {
   const json& pairs = read.member(j, "$", "pairs", &json::is_array, "an array of pairs");
   r.pairs.reserve(pairs.size());
   for (size_t i = 0; i < pairs.size(); ++i) r.pairs.push_back(read.pair(pairs[i], "$.pairs[" + std::to_string(i) + "]"));
-  if (j.contains("statistics")) r.statistics = read.member(j, "$", "statistics", &json::is_object, "an object");
+  if (j.contains("statistics"))
+    r.statistics = RunStatistics::fromJson(read.member(j, "$", "statistics", &json::is_object, "an object"), file);
   if (j.contains("metrics")) r.metrics = read.member(j, "$", "metrics", &json::is_array, "an array");
   if (j.contains("sweep")) r.sweep = read.member(j, "$", "sweep", &json::is_object, "an object");
   return r;
@@ -192,7 +193,7 @@ json RunResults::toJson() const {
     ps.push_back(std::move(o));
   }
   j["pairs"] = std::move(ps);
-  if (!statistics.is_null()) j["statistics"] = statistics;
+  if (statistics) j["statistics"] = statistics->toJson();
   if (!metrics.is_null()) j["metrics"] = metrics;
   if (!sweep.is_null()) j["sweep"] = sweep;
   return j;

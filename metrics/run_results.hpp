@@ -5,14 +5,17 @@
 // nlohmann's type_error later); toJson writes the same document back, byte for byte once dumped.
 //
 // Typed so far: the run's identity and provenance, every pair's identity, status, parameters and
-// metric summaries (with their intervals and the reason a summary is absent). A pair's per-frame
-// values, tile sums, timing, events and warnings, and the run's settings, scenes and statistics,
-// are still carried as the JSON the run wrote (`PairResult::detail`, the json members below).
+// metric summaries (with their intervals and the reason a summary is absent), and the run's
+// statistics (metrics/run_statistics.hpp). A pair's per-frame values, tile sums, timing, events and
+// warnings, and the run's settings and scenes, are still carried as the JSON the run wrote
+// (`PairResult::detail`, the json members below).
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "metrics/run_statistics.hpp"
 #include "metrics/statistics.hpp"
 
 namespace arena {
@@ -63,7 +66,7 @@ struct RunResults {
   nlohmann::json settings = nlohmann::json::object();     // how the run measured (compare checks them)
   nlohmann::json scenes = nlohmann::json::object();       // scene -> sequence facts, floors, events
   std::vector<PairResult> pairs;
-  nlohmann::json statistics;  // rankings, paired differences, the overall score (null: none)
+  std::optional<RunStatistics> statistics;  // rankings, paired differences, the overall score
   nlohmann::json metrics;     // the metric registry as the run had it (null: none)
   nlohmann::json sweep;       // the sweep's grid (null: not a sweep)
   std::string source;         // where it was read from (a run directory, "db#id"); not written

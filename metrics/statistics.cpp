@@ -9,8 +9,6 @@
 #include "core/error.hpp"
 #include "core/hash.hpp"
 #include "metrics/error.hpp"
-#include "metrics/ghosting_intervals.hpp"
-#include "metrics/metric_registry.hpp"
 
 namespace arena {
 
@@ -369,12 +367,15 @@ void sortRanking(std::vector<RankedMethod>& methods, bool lowerIsBetter) {
 
 json rankingJson(const std::vector<RankedMethod>& ranking, const char* valueName) {
   json out = json::array();
-  for (const RankedMethod& m : ranking)
-    out.push_back({{"label", m.label},
-                   {"rank", m.rank},
-                   {valueName, m.value},
-                   {"ci95", m.ci.toJson()},
-                   {"tiedWith", m.tiedWith}});
+  for (const RankedMethod& m : ranking) {
+    json entry = {{"label", m.label},
+                  {"rank", m.rank},
+                  {valueName, m.value},
+                  {"ci95", m.ci.toJson()},
+                  {"tiedWith", m.tiedWith}};
+    if (std::isfinite(m.extraPathsPerPixel)) entry["extraPathsPerPixel"] = m.extraPathsPerPixel;
+    out.push_back(std::move(entry));
+  }
   return out;
 }
 
@@ -534,135 +535,6 @@ json OverallRanking::toJson() const {
             {"ranking", rankingJson(ranking, "score")}};
   if (!excluded.empty()) j["excluded"] = excluded;
   return j;
-}
-
-}  // namespace arena
-
-namespace arena {
-
-namespace {
-
-// Issue 34, section 2: every ranking entry of a method that read paths beyond the frame's own
-// 1-spp ones (reengine's disocclusion rays, asvgf's gradient samples) says so, with the paths.
-void markExtraPaths(json& node, const std::map<std::string, double>& extra) {
-  if (node.is_array()) {
-    for (json& child : node) markExtraPaths(child, extra);
-    return;
-  }
-  if (!node.is_object()) return;
-  if (node.contains("label") && node["label"].is_string() && node.contains("rank")) {
-    auto it = extra.find(node["label"].get<std::string>());
-    if (it != extra.end()) node["extraPathsPerPixel"] = it->second;
-  }
-  for (auto it = node.begin(); it != node.end(); ++it)
-    if (it.value().is_array() || it.value().is_object()) markExtraPaths(it.value(), extra);
-}
-
-}  // namespace
-
-json analyseRun(const json& results, const BootstrapConfig& cfg) {
-  // The registry's ranked metrics. relMSE ranks (paired differences of raw and corrected relMSE
-  // are the same: the correction subtracts the same reference term from every method); the others
-  // are reported beside it.
-  // Metrics with an overall score are ranked per scene too (the overall score combines the scenes'
-  // rankings), even when their scene rankings are not reported.
-  std::vector<const MetricDefinition*> rankedMetrics;
-  for (const MetricDefinition* m : metricCatalog())
-    if (m->ranked || m->overall) rankedMetrics.push_back(m);
-  std::map<std::string, std::vector<std::pair<std::string, std::map<std::string, MetricTiles>>>>
-      byScene;
-  std::map<std::string, std::vector<std::pair<std::string, const json*>>> pairsOfScene;
-  if (!results.contains("pairs") || !results["pairs"].is_array())
-    throw Error("statistics: results have no pairs array");
-  for (const json& p : results["pairs"]) {
-    if (p.value("status", "") != "ok") continue;
-    std::map<std::string, MetricTiles> tiles;
-    if (p.contains("tiles"))
-      for (auto it = p["tiles"].begin(); it != p["tiles"].end(); ++it)
-        tiles[it.key()] = MetricTiles::fromJson(it.value());
-    byScene[p.value("scene", "")].push_back({p.value("label", ""), std::move(tiles)});
-    pairsOfScene[p.value("scene", "")].push_back({p.value("label", ""), &p});
-  }
-  json scenes = json::object();
-  std::map<std::string, std::vector<SceneRanking>> overallInputs;  // metric -> its scene rankings
-  for (const auto& [scene, pairs] : byScene) {
-    json sceneJson;
-    for (const MetricDefinition* m : rankedMetrics) {
-      std::vector<std::pair<std::string, const MetricTiles*>> methods;
-      bool any = false;
-      for (const auto& [label, tiles] : pairs) {
-        auto it = tiles.find(m->name);
-        methods.push_back({label, it == tiles.end() ? nullptr : &it->second});
-        any |= it != tiles.end();
-      }
-      if (!any) continue;
-      SceneRanking r = rankScene(m->name, m->lowerIsBetter(), methods, scene, cfg);
-      if (m->name == "relMse") {
-        sceneJson = r.toJson();
-        sceneJson["byMetric"] = json::object();
-      } else if (sceneJson.is_object() && m->ranked) {
-        sceneJson["byMetric"][m->name] = r.toJson();
-      }
-      if (m->overall) overallInputs[m->name].push_back(std::move(r));
-    }
-    if (sceneJson.is_object()) {
-      // The event-window figures: paired tile bootstrap per event (metrics/ghosting_intervals).
-      const json events = rankSceneEvents(pairsOfScene[scene], scene, cfg);
-      if (!events["events"].empty()) sceneJson["events"] = events["events"];
-      if (!events["cuts"].empty()) sceneJson["cuts"] = events["cuts"];
-      scenes[scene] = sceneJson;
-    }
-  }
-  json out = {
-      {"method",
-       "crossed bootstrap: moving blocks of round(n^(1/3)) frames x " +
-           std::to_string(cfg.grid.cols) + "x" + std::to_string(cfg.grid.rows) + " image tiles, " +
-           std::to_string(cfg.replicates) +
-           " replicates, percentile intervals; one plan per scene, so differences are paired"},
-      {"confidence", cfg.confidence},
-      {"replicates", cfg.replicates},
-      {"tileGrid", {cfg.grid.cols, cfg.grid.rows}},
-      {"rankedOn", "relMse"},
-      {"scenes", scenes}};
-  // The overall scores: relMSE's is the run's ("overall"); the other metrics that declare one
-  // ("overallByMetric") are what the report's all-scenes chart shows on their axes.
-  for (const MetricDefinition* m : rankedMetrics) {
-    if (!m->overall) continue;
-    std::vector<const SceneRanking*> ranked;
-    for (const SceneRanking& r : overallInputs[m->name])
-      if (!r.ranking.empty()) ranked.push_back(&r);
-    if (ranked.empty()) continue;
-    const json overall = rankOverall(ranked, "temporal", m->lowerIsBetter(), cfg.confidence).toJson();
-    if (m->name == "relMse") out["overall"] = overall;
-    else out["overallByMetric"][m->name] = overall;
-  }
-  // The extra paths each label read, mean over its scenes (paths per pixel per frame).
-  std::map<std::string, std::pair<double, int>> sums;
-  for (const json& p : results["pairs"]) {
-    if (p.value("status", "") != "ok" || !p.contains("summary")) continue;
-    const json& s = p["summary"];
-    if (!s.contains("extraRaysPerPixel") || !s["extraRaysPerPixel"].contains("mean") ||
-        !s["extraRaysPerPixel"]["mean"].is_number())
-      continue;
-    auto& [sum, n] = sums[p.value("label", "")];
-    sum += s["extraRaysPerPixel"]["mean"].get<double>();
-    ++n;
-  }
-  std::map<std::string, double> extra;
-  for (const auto& [label, sn] : sums)
-    if (sn.first > 0) extra[label] = sn.first / sn.second;
-  if (!extra.empty()) {
-    markExtraPaths(out["scenes"], extra);
-    if (out.contains("overall")) markExtraPaths(out["overall"], extra);
-    if (out.contains("overallByMetric")) markExtraPaths(out["overallByMetric"], extra);
-    out["extraPaths"] = {
-        {"meaning",
-         "paths per pixel per frame read beyond the frame's own 1-spp paths (reengine: "
-         "low-resolution disocclusion rays; asvgf: re-shaded gradient samples); their equivalent "
-         "tracing time is each pair's tracingMs"},
-        {"perPixel", extra}};
-  }
-  return out;
 }
 
 }  // namespace arena

@@ -119,6 +119,9 @@ struct RankedMethod {
   double value = kUndefined;  // the summary mean on the common frames
   Interval ci;
   std::vector<std::string> tiedWith;
+  // Paths per pixel per frame the method read beyond the frame's own 1-spp paths (RunStatistics::
+  // extraPathsPerPixel); NaN: none.
+  double extraPathsPerPixel = kUndefined;
 };
 struct SceneRanking {
   std::string metric;
@@ -157,15 +160,5 @@ struct OverallRanking {
 OverallRanking rankOverall(const std::vector<const SceneRanking*>& scenes,
                            const std::string& preferredBaseline, bool lowerIsBetter,
                            double confidence = 0.95);
-
-}  // namespace arena
-
-namespace arena {
-
-// The statistics block of a run (results.json "statistics"): per scene the ranking with ties and
-// every paired difference on relMSE (and, under byMetric, on the other gated metrics), and the
-// overall ranking across scenes. Reads each ok pair's "tiles"; a pair without them is excluded
-// and named.
-nlohmann::json analyseRun(const nlohmann::json& results, const BootstrapConfig& cfg = {});
 
 }  // namespace arena

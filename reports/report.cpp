@@ -281,18 +281,20 @@ json speedView(const RunResults& results, const std::vector<std::string>& scenes
   // All scenes: statistics' overall score on the axis's metric (relMSE: the run's "overall"; the
   // others: "overallByMetric"), with its interval -- the one score the printout shows too, never a
   // second one computed here. A point's time is the label's mean over the scenes it ran on.
-  const json stats = results.statistics.is_object() ? results.statistics : json::object();
   json all = json::object();
   for (const ErrorAxis& axis : kErrorAxes) {
-    const json overall = std::string(axis.overall) == "relMse"
-                             ? stats.value("overall", json())
-                             : stats.value("overallByMetric", json::object()).value(axis.overall, json());
-    if (!overall.is_object() || !overall.contains("ranking")) continue;
+    const OverallRanking* overall = nullptr;
+    if (const auto& st = results.statistics; st && axis.overall == st->rankedOn && st->overall) {
+      overall = &*st->overall;
+    } else if (st && st->overallByMetric.count(axis.overall)) {
+      overall = &st->overallByMetric.at(axis.overall);
+    }
+    if (!overall) continue;
     auto& table = byAxis[axis.key];
     std::vector<json> points;
-    for (const json& r : overall["ranking"]) {
-      const std::string label = r.value("label", "");
-      if (!r.contains("score") || !r["score"].is_number()) continue;
+    for (const RankedMethod& r : overall->ranking) {
+      const std::string& label = r.label;
+      if (!std::isfinite(r.value)) continue;
       double ms = 0, msLo = 0, msHi = 0, tracing = 0;
       size_t n = 0, nLo = 0, nHi = 0, nTracing = 0;
       json params;
@@ -308,27 +310,26 @@ json speedView(const RunResults& results, const std::vector<std::string>& scenes
         ++n;
       }
       if (n == 0) continue;
-      const double k = double(n), score = r["score"].get<double>();
-      const bool hasCi = r.contains("ci95") && r["ci95"].is_array() && r["ci95"].size() == 2 &&
-                         r["ci95"][0].is_number() && r["ci95"][1].is_number();
+      const double k = double(n), score = r.value;
+      const bool hasCi = r.ci.valid();
       json point = {{"label", label},
                     {"params", params},
                     {"error", score},
-                    {"lo", hasCi ? r["ci95"][0] : json(score)},
-                    {"hi", hasCi ? r["ci95"][1] : json(score)},
+                    {"lo", hasCi ? r.ci.lo : score},
+                    {"hi", hasCi ? r.ci.hi : score},
                     {"ms", ms / k},
                     {"msLo", nLo == n ? json(msLo / k) : json(nullptr)},
                     {"msHi", nHi == n ? json(msHi / k) : json(nullptr)},
                     {"scenes", n},
                     {"complete", n == scenes.size()}};
       if (nTracing == n) point["tracingMs"] = tracing / k;  // the mean like its time's
-      if (r.contains("extraPathsPerPixel")) point["extraRaysPerPixel"] = r["extraPathsPerPixel"];
+      if (std::isfinite(r.extraPathsPerPixel)) point["extraRaysPerPixel"] = r.extraPathsPerPixel;
       points.push_back(std::move(point));
     }
     if (points.empty()) continue;
     json scope = speedScope(points, true);
-    scope["normalisation"] = overall.value("normalisation", "the run's overall score");
-    scope["baseline"] = overall.value("baseline", "");
+    scope["normalisation"] = overall->normalisation;
+    scope["baseline"] = overall->baseline;
     scope["sceneCount"] = scenes.size();
     scope["source"] = "statistics";
     all[axis.key] = scope;
@@ -350,29 +351,28 @@ json speedData(const RunResults& results, const std::vector<std::string>& scenes
 // The rankings the tables show: the run's own (metrics/statistics: ranks with ties from paired
 // differences) when present; else, for older runs, ranks by mean relMSE with ties unknown.
 json rankingData(const RunResults& results, const std::vector<std::string>& scenes) {
-  const json stats = results.statistics.is_object() ? results.statistics : json::object();
   json out = {{"scenes", json::object()}, {"overall", nullptr}};
-  const json statScenes = stats.value("scenes", json::object());
   for (const std::string& scene : scenes) {
-    if (statScenes.contains(scene) && statScenes[scene].contains("ranking")) {
+    if (results.statistics && results.statistics->scenes.count(scene)) {
+      const SceneStatistics& st = results.statistics->scenes.at(scene);
       // The ranking and its counts; every pair's difference is left out (tiedWith says enough).
-      json r = {{"tiesKnown", true}};
-      for (const char* k : {"metric", "ranking", "resolvedPairs", "totalPairs", "excluded"})
-        if (statScenes[scene].contains(k)) r[k] = statScenes[scene][k];
+      json r = st.ranking.toJson();
+      r.erase("pairs");
+      r["tiesKnown"] = true;
       // Events and cuts: per figure, who is ranked first with whom tied (the ghosting panel marks
       // the best with ties, metrics/ghosting_intervals).
-      for (const char* kind : {"events", "cuts"})
-        for (const json& e : statScenes[scene].value(kind, json::array())) {
+      for (const bool cut : {false, true})
+        for (const EventStatistics& e : cut ? st.cuts : st.events) {
           json figures = json::object();
-          for (auto f = e["byFigure"].begin(); f != e["byFigure"].end(); ++f) {
+          for (const auto& [figure, ranking] : e.byFigure) {
             json ranks = json::array();
-            for (const json& m : f.value()["ranking"])
-              ranks.push_back({{"label", m["label"]}, {"rank", m["rank"]}, {"tiedWith", m["tiedWith"]}});
-            figures[f.key()] = {{"ranking", ranks},
-                                {"resolvedPairs", f.value()["resolvedPairs"]},
-                                {"totalPairs", f.value()["totalPairs"]}};
+            for (const RankedMethod& m : ranking.ranking)
+              ranks.push_back({{"label", m.label}, {"rank", m.rank}, {"tiedWith", m.tiedWith}});
+            figures[figure] = {{"ranking", ranks},
+                               {"resolvedPairs", ranking.resolvedPairs},
+                               {"totalPairs", ranking.pairs.size()}};
           }
-          r[kind].push_back({{"eventFrame", e["eventFrame"]}, {"byFigure", figures}});
+          r[cut ? "cuts" : "events"].push_back({{"eventFrame", e.eventFrame}, {"byFigure", figures}});
         }
       out["scenes"][scene] = r;
       continue;
@@ -392,8 +392,8 @@ json rankingData(const RunResults& results, const std::vector<std::string>& scen
                          {"tiedWith", json::array()}});
     out["scenes"][scene] = {{"metric", "relMse"}, {"ranking", ranking}, {"tiesKnown", false}};
   }
-  if (stats.contains("overall") && stats["overall"].contains("ranking")) {
-    out["overall"] = stats["overall"];
+  if (results.statistics && results.statistics->overall) {
+    out["overall"] = results.statistics->overall->toJson();
     out["overall"]["tiesKnown"] = true;
   }
   return out;
@@ -407,21 +407,17 @@ std::string valueText(const json& v) {
 // scene's pairs, the other ranked metrics' in byMetric), oriented a - b; null when not there.
 json pairedDifference(const RunResults& results, const std::string& scene, const std::string& metric,
                       const std::string& a, const std::string& b) {
-  if (!results.statistics.is_object()) return nullptr;
-  const json st = results.statistics.value("scenes", json::object()).value(scene, json());
-  if (!st.is_object()) return nullptr;
-  const json ranking = metric == "relMse" ? st : st.value("byMetric", json::object()).value(metric, json());
-  if (!ranking.is_object()) return nullptr;
-  for (const json& d : ranking.value("pairs", json::array())) {
-    const bool forward = d.value("a", "") == a && d.value("b", "") == b;
-    const bool backward = d.value("a", "") == b && d.value("b", "") == a;
+  const SceneRanking* ranking = results.statistics ? results.statistics->ranking(scene, metric) : nullptr;
+  if (!ranking) return nullptr;
+  for (const SceneRanking::Pair& d : ranking->pairs) {
+    const bool forward = d.a == a && d.b == b;
+    const bool backward = d.a == b && d.b == a;
     if (!forward && !backward) continue;
-    if (!d.contains("diff") || !d["diff"].is_number()) return nullptr;
+    if (!std::isfinite(d.d.diff)) return nullptr;
     const double sign = forward ? 1.0 : -1.0;
-    json out = {{"diff", sign * d["diff"].get<double>()}, {"resolved", d.value("resolved", false)}};
-    const json ci = d.value("ci95", json());
-    if (ci.is_array() && ci.size() == 2 && ci[0].is_number() && ci[1].is_number())
-      out["ci95"] = forward ? ci : json::array({-ci[1].get<double>(), -ci[0].get<double>()});
+    json out = {{"diff", sign * d.d.diff}, {"resolved", d.d.resolved()}};
+    if (d.d.ci.valid())
+      out["ci95"] = forward ? json::array({d.d.ci.lo, d.d.ci.hi}) : json::array({-d.d.ci.hi, -d.d.ci.lo});
     return out;
   }
   return nullptr;

@@ -312,9 +312,9 @@ TEST(EventIntervals, IdenticalMethodsTieOnTheChromaticityLagALagFreeOneIsResolve
   const std::vector<EventTiles> m = withColour(rng, base, 0.04, {true, false});
   const json a = pairWithEvent("a", m[0]), b = pairWithEvent("b", m[0]),
              c = pairWithEvent("c", m[1]);
-  const json st = rankSceneEvents({{"a", &a}, {"b", &b}, {"c", &c}}, "s");
-  ASSERT_EQ(st["events"].size(), 1u);
-  const json& r = st["events"][0]["byFigure"]["chromaLagEnergy"];
+  const SceneEvents st = rankSceneEvents({{"a", &a}, {"b", &b}, {"c", &c}}, "s");
+  ASSERT_EQ(st.events.size(), 1u);
+  const json r = st.events[0].byFigure.at("chromaLagEnergy").toJson();
   ASSERT_EQ(r["ranking"].size(), 3u) << r.dump();
   EXPECT_EQ(r["ranking"][0]["label"], "c");
   EXPECT_EQ(r["ranking"][0]["rank"], 1);

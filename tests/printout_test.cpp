@@ -73,15 +73,31 @@ json worstDefaultStudy() {
                                   {"summary", {{"relMse", {{"mean", 1e-3}}}}},
                                   {"warnings", {sentence("a floor"), sentence("another floor")}}});
     }
-    stScenes[name] = {{"ranking", ranking}, {"resolvedPairs", 20}, {"totalPairs", 36}};
+    // The pairs the ties imply: within a group not resolved, across the groups resolved.
+    json pairs = json::array();
+    int resolved = 0;
+    for (size_t k = 0; k < labels.size(); ++k)
+      for (size_t j = k + 1; j < labels.size(); ++j) {
+        const bool apart = (j < 4) != (k < 4);
+        const double diff = 1e-3 * (double(k) - double(j));
+        pairs.push_back({{"a", labels[k]}, {"b", labels[j]}, {"diff", diff},
+                         {"ci95", apart ? json({1.5 * diff, 0.5 * diff}) : json({diff - 1e-2, diff + 1e-2})},
+                         {"resolved", apart}});
+        resolved += apart;
+      }
+    stScenes[name] = {{"metric", "relMse"}, {"ranking", ranking}, {"pairs", pairs}, {"byMetric", json::object()},
+                      {"resolvedPairs", resolved}, {"totalPairs", pairs.size()}};
   }
   json overall = json::array();
   for (size_t k = 0; k < labels.size(); ++k)
     overall.push_back({{"label", labels[k]}, {"rank", int(k) + 1}, {"score", 0.1 * double(k + 1)},
                        {"ci95", {0.1 * double(k), 0.1 * double(k + 2)}}, {"tiedWith", json::array()}});
-  results["statistics"] = {
-      {"scenes", stScenes},
-      {"overall", {{"normalisation", "geometric mean over scenes of relMse / relMse(temporal)"}, {"ranking", overall}}}};
+  results["statistics"] = test::statisticsBlock(
+      {{"scenes", stScenes},
+       {"overall",
+        {{"normalisation", "geometric mean over scenes of relMse / relMse(temporal)"},
+         {"baseline", "temporal"},
+         {"ranking", overall}}}});
   return results;
 }
 

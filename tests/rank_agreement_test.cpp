@@ -11,8 +11,6 @@
 namespace arena {
 namespace {
 
-using nlohmann::json;
-
 TEST(RankAgreement, KendallTauBByHand) {
   EXPECT_DOUBLE_EQ(kendallTauB({1, 2, 3, 4}, {10, 20, 30, 40}), 1.0);
   EXPECT_DOUBLE_EQ(kendallTauB({1, 2, 3, 4}, {4, 3, 2, 1}), -1.0);
@@ -25,27 +23,32 @@ TEST(RankAgreement, KendallTauBByHand) {
   EXPECT_NE(test::errorOf([] { kendallTauB({1, 2}, {1}); }).find("expected equal sizes"), std::string::npos);
 }
 
-// A run's statistics for one scene: labels best first with their ranks and means, and resolved
-// pairs as (a, b, value(a) - value(b)).
-json sceneStats(const std::vector<std::tuple<std::string, int, double>>& ranking,
-                const std::vector<std::tuple<std::string, std::string, double, bool>>& pairs,
-                const std::string& metric = "relMse") {
-  json s = {{"metric", metric}, {"ranking", json::array()}, {"pairs", json::array()}};
-  for (const auto& [label, rank, mean] : ranking) s["ranking"].push_back({{"label", label}, {"rank", rank}, {"mean", mean}});
-  for (const auto& [a, b, diff, resolved] : pairs)
-    s["pairs"].push_back({{"a", a}, {"b", b}, {"diff", diff}, {"resolved", resolved}});
+// A run's statistics for one scene: labels best first with their ranks and means, and pairs as
+// (a, b, value(a) - value(b), resolved). A resolved pair's interval excludes zero, another's holds it.
+SceneStatistics sceneStats(const std::vector<std::tuple<std::string, int, double>>& ranking,
+                           const std::vector<std::tuple<std::string, std::string, double, bool>>& pairs,
+                           const std::string& metric = "relMse") {
+  SceneStatistics s;
+  s.ranking.metric = metric;
+  for (const auto& [label, rank, mean] : ranking) s.ranking.ranking.push_back({label, rank, mean, {}, {}});
+  for (const auto& [a, b, diff, resolved] : pairs) {
+    const Interval ci = resolved ? Interval{diff - 0.1 * std::abs(diff), diff + 0.1 * std::abs(diff)}
+                                 : Interval{diff - 1.0, diff + 1.0};
+    s.ranking.pairs.push_back({a, b, {diff, ci}});
+    EXPECT_EQ(s.ranking.pairs.back().d.resolved(), resolved) << a << " - " << b;
+  }
   return s;
 }
 
 TEST(RankAgreement, FlipsArePairsResolvedInBothRunsInOppositeOrders) {
-  json a, b;
+  RunStatistics a, b;
   // A: x < y < z, every pair resolved. B: y < x (resolved: a flip), z tied with x (not resolved).
-  a["statistics"]["scenes"]["s"] = sceneStats({{"x", 1, 1.0}, {"y", 2, 2.0}, {"z", 3, 3.0}, {"onlyA", 4, 9.0}},
-                                              {{"x", "y", -1.0, true}, {"x", "z", -2.0, true}, {"y", "z", -1.0, true}});
-  b["statistics"]["scenes"]["s"] = sceneStats({{"y", 1, 1.0}, {"x", 2, 1.5}, {"z", 2, 1.6}},
-                                              {{"y", "x", -0.5, true}, {"x", "z", -0.1, false}, {"y", "z", -0.6, true}});
-  b["statistics"]["scenes"]["other"] = sceneStats({{"x", 1, 1.0}, {"y", 2, 2.0}}, {});
-  const std::vector<SceneRankAgreement> r = compareRankings(a["statistics"], b["statistics"]);
+  a.scenes["s"] = sceneStats({{"x", 1, 1.0}, {"y", 2, 2.0}, {"z", 3, 3.0}, {"onlyA", 4, 9.0}},
+                             {{"x", "y", -1.0, true}, {"x", "z", -2.0, true}, {"y", "z", -1.0, true}});
+  b.scenes["s"] = sceneStats({{"y", 1, 1.0}, {"x", 2, 1.5}, {"z", 2, 1.6}},
+                             {{"y", "x", -0.5, true}, {"x", "z", -0.1, false}, {"y", "z", -0.6, true}});
+  b.scenes["other"] = sceneStats({{"x", 1, 1.0}, {"y", 2, 2.0}}, {});
+  const std::vector<SceneRankAgreement> r = compareRankings(a, b);
   ASSERT_EQ(r.size(), 1u);  // only the scene both runs rank
   EXPECT_EQ(r[0].methods, (std::vector<std::string>{"x", "y", "z"}));
   EXPECT_EQ(r[0].onlyInOne, (std::vector<std::string>{"onlyA"}));
@@ -62,22 +65,22 @@ TEST(RankAgreement, FlipsArePairsResolvedInBothRunsInOppositeOrders) {
   // Values A (1, 2, 3) against B (1.5, 1, 1.6): (x,y) discordant, (x,z), (y,z) concordant.
   EXPECT_NEAR(r[0].tauValues, 1.0 / 3.0, 1e-12);
   // Where higher is better (SSIM), the better method is the one with the larger value.
-  a["statistics"]["scenes"]["s"]["metric"] = "ssim";
-  b["statistics"]["scenes"]["s"]["metric"] = "ssim";
-  EXPECT_EQ(compareRankings(a["statistics"], b["statistics"])[0].flips[0].better, "y");
+  a.scenes["s"].ranking.metric = "ssim";
+  b.scenes["s"].ranking.metric = "ssim";
+  EXPECT_EQ(compareRankings(a, b)[0].flips[0].better, "y");
 }
 
 TEST(RankAgreement, UnlikeRankingsAreErrorsNamingTheScene) {
-  json a, b;
-  a["statistics"]["scenes"]["s"] = sceneStats({{"x", 1, 1.0}, {"y", 2, 2.0}}, {});
-  b["statistics"]["scenes"]["s"] = sceneStats({{"x", 1, 1.0}, {"y", 2, 2.0}}, {}, "ssim");
-  EXPECT_NE(test::errorOf([&] { compareRankings(a["statistics"], b["statistics"]); }).find("statistics.scenes.s: ranked on 'relMse' in one run and 'ssim'"),
+  RunStatistics a, b;
+  a.scenes["s"] = sceneStats({{"x", 1, 1.0}, {"y", 2, 2.0}}, {});
+  b.scenes["s"] = sceneStats({{"x", 1, 1.0}, {"y", 2, 2.0}}, {}, "ssim");
+  EXPECT_NE(test::errorOf([&] { compareRankings(a, b); }).find("statistics.scenes.s: ranked on 'relMse' in one run and 'ssim'"),
             std::string::npos);
-  b["statistics"]["scenes"]["s"] = sceneStats({{"x", 1, 1.0}, {"w", 2, 2.0}}, {});
-  EXPECT_NE(test::errorOf([&] { compareRankings(a["statistics"], b["statistics"]); }).find("1 method(s) ranked in both runs"), std::string::npos);
-  b["statistics"]["scenes"]["s"] = sceneStats({{"x", 1, 1.0}, {"y", 2, 2.0}}, {}, "noSuchMetric");
-  a["statistics"]["scenes"]["s"]["metric"] = "noSuchMetric";
-  EXPECT_NE(test::errorOf([&] { compareRankings(a["statistics"], b["statistics"]); }).find("'noSuchMetric' is no registered metric"), std::string::npos);
+  b.scenes["s"] = sceneStats({{"x", 1, 1.0}, {"w", 2, 2.0}}, {});
+  EXPECT_NE(test::errorOf([&] { compareRankings(a, b); }).find("1 method(s) ranked in both runs"), std::string::npos);
+  b.scenes["s"] = sceneStats({{"x", 1, 1.0}, {"y", 2, 2.0}}, {}, "noSuchMetric");
+  a.scenes["s"].ranking.metric = "noSuchMetric";
+  EXPECT_NE(test::errorOf([&] { compareRankings(a, b); }).find("'noSuchMetric' is no registered metric"), std::string::npos);
 }
 
 }  // namespace

@@ -318,10 +318,10 @@ TEST(Report, AblationDeltasAreTheRunsPairedDifferences) {
   // The run's statistics hold svgf[a=0] - svgf[a=1] on "static" (the opposite orientation of the
   // ablation's a=1 vs a=0): the row takes that difference, turned round, with its interval.
   json run = fixtureRun();
-  run["statistics"] = json::parse(R"({"scenes": {"static": {"metric": "relMse", "ranking": [],
+  run["statistics"] = test::statisticsBlock(json::parse(R"({"scenes": {"static": {"metric": "relMse", "ranking": [],
     "pairs": [{"a": "svgf[a=0]", "b": "svgf[a=1]", "diff": 0.0123, "ci95": [0.004, 0.02], "resolved": true},
               {"a": "svgf[a=1,b=false]", "b": "svgf[a=1]", "diff": 0.02, "ci95": [-0.001, 0.04], "resolved": false}],
-    "byMetric": {}}}})");
+    "resolvedPairs": 1, "totalPairs": 2, "byMetric": {}}}})"));
   const json data = reportData(test::typed(run), test::freshDir("report_ablation_paired"), nullptr);
   int seen = 0;
   for (const json& r : data["ablation"]["rows"]) {
@@ -376,12 +376,13 @@ TEST(Report, AllScenesShowStatisticsOverallScoresAndNeverASecondOne) {
   // metric: without one the axis has no all-scenes view (the report computes no aggregate of its
   // own, so the page and the printout cannot disagree).
   json run = fixtureRun();
-  run["statistics"] = json::parse(R"json({"scenes": {},
-    "overall": {"normalisation": "geometric mean over 2 scenes of relMse / relMse(passthrough)",
+  run["statistics"] = test::statisticsBlock(json::parse(R"json({"scenes": {},
+    "overall": {"normalisation": "geometric mean over 2 scenes of relMse / relMse(passthrough)", "baseline": "passthrough",
       "ranking": [{"label": "passthrough", "rank": 1, "score": 1.0, "ci95": [1.0, 1.0], "tiedWith": []}]},
     "overallByMetric": {"dssim": {"normalisation": "geometric mean over 2 scenes of dssim / dssim(passthrough)",
+      "baseline": "passthrough",
       "ranking": [{"label": "svgf[a=0]", "rank": 1, "score": 0.25, "ci95": [0.2, 0.3], "tiedWith": []},
-                  {"label": "passthrough", "rank": 2, "score": 1.0, "ci95": [1.0, 1.0], "tiedWith": []}]}}})json");
+                  {"label": "passthrough", "rank": 2, "score": 1.0, "ci95": [1.0, 1.0], "tiedWith": []}]}}})json"));
   const json data = reportData(test::typed(run), test::freshDir("report_overall_axes"), nullptr);
   const json& all = data["speed"]["views"]["cpu"]["all"];
   EXPECT_TRUE(all.contains("relMse"));
@@ -409,13 +410,14 @@ TEST(Report, IntervalsAndTheRunsOwnRankingsAreUsedWhenPresent) {
     p["summary"]["ssim"]["ci95"] = {ssim - 0.01, ssim + 0.02};
     p["timing"]["msP5"] = 0.5 * p["timing"]["msMedian"].get<double>();
   }
-  run["statistics"] = json::parse(R"({
+  run["statistics"] = test::statisticsBlock(json::parse(R"({
     "scenes": {"static": {"metric": "relMse",
-      "ranking": [{"label": "svgf[a=1]", "rank": 1, "mean": 0.04, "tiedWith": ["svgf[a=0]"]},
-                  {"label": "svgf[a=0]", "rank": 1, "mean": 0.05, "tiedWith": ["svgf[a=1]"]}],
-      "pairs": [], "resolvedPairs": 5, "totalPairs": 6}},
-    "overall": {"normalisation": "geometric mean of relMSE ratios to passthrough",
-      "ranking": [{"label": "passthrough", "rank": 1, "score": 0.7, "ci95": [0.6, 0.8], "tiedWith": []}]}})");
+      "ranking": [{"label": "svgf[a=1]", "rank": 1, "mean": 0.04, "ci95": null, "tiedWith": ["svgf[a=0]"]},
+                  {"label": "svgf[a=0]", "rank": 1, "mean": 0.05, "ci95": null, "tiedWith": ["svgf[a=1]"]}],
+      "pairs": [{"a": "svgf[a=1]", "b": "svgf[a=0]", "diff": -0.01, "ci95": [-0.02, 0.01], "resolved": false}],
+      "resolvedPairs": 0, "totalPairs": 1, "byMetric": {}}},
+    "overall": {"normalisation": "geometric mean of relMSE ratios to passthrough", "baseline": "passthrough",
+      "ranking": [{"label": "passthrough", "rank": 1, "score": 0.7, "ci95": [0.6, 0.8], "tiedWith": []}]}})"));
   const json data = reportData(test::typed(run), test::freshDir("report_stats"), nullptr);
   const json& p = data["speed"]["views"]["cpu"]["scenes"]["static"]["relMse"]["points"][1];  // svgf[a=0], 0.05
   EXPECT_EQ(p["interval"], "ci95");
@@ -435,7 +437,8 @@ TEST(Report, IntervalsAndTheRunsOwnRankingsAreUsedWhenPresent) {
   const json& r = data["rankings"]["scenes"]["static"];
   EXPECT_TRUE(r["tiesKnown"].get<bool>());
   EXPECT_EQ(r["ranking"][1]["tiedWith"], json({"svgf[a=1]"}));
-  EXPECT_EQ(r["resolvedPairs"], 5);
+  EXPECT_EQ(r["resolvedPairs"], 0);
+  EXPECT_EQ(r["totalPairs"], 1);
   EXPECT_FALSE(data["rankings"]["scenes"]["switch"]["tiesKnown"].get<bool>());
   EXPECT_TRUE(data["rankings"]["overall"]["tiesKnown"].get<bool>());
   // Summaries keep their intervals for the tables; timing keeps msP5.

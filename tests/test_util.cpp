@@ -67,6 +67,17 @@ const std::filesystem::path& processDir() {
 
 RunResults typed(const nlohmann::json& run) { return RunResults::fromJson(run, "the test's run"); }
 
+nlohmann::json statisticsBlock(const nlohmann::json& parts) {
+  nlohmann::json block = {{"method", "crossed bootstrap (a test's block)"},
+                          {"confidence", 0.95},
+                          {"replicates", 1000},
+                          {"tileGrid", {4, 4}},
+                          {"rankedOn", "relMse"},
+                          {"scenes", nlohmann::json::object()}};
+  block.update(parts);
+  return block;
+}
+
 std::filesystem::path freshDir(const std::string& name) {
   const auto dir = processDir() / name;
   std::filesystem::remove_all(dir);

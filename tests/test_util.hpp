@@ -29,6 +29,10 @@ std::string errorOf(const std::function<void()>& f);
 // A run document (runMatrix's, or one built by hand) as the typed results its readers take; a
 // document out of shape fails the test with fromJson's error.
 RunResults typed(const nlohmann::json& run);
+// A statistics block built by hand (results.json "statistics"): `parts` (scenes, overall, ...) with
+// the run-level fields a run writes beside them (method, confidence, replicates, tileGrid,
+// rankedOn) where `parts` does not give them.
+nlohmann::json statisticsBlock(const nlohmann::json& parts);
 
 // SELECT COUNT(*) FROM table in the SQLite database db; -1 when it cannot be read.
 int countRows(const std::filesystem::path& db, const char* table);

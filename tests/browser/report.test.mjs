@@ -50,15 +50,18 @@ function failOnePair(runDir, scene, label) {
                        error: 'eaw: injected failure for the browser test' };
   // A failed pair has no statistics: drop it from the scene's ranking, as a real run would.
   const st = results.statistics && results.statistics.scenes && results.statistics.scenes[scene];
+  const drop = (r) => {
+    r.ranking = r.ranking.filter((m) => m.label !== label);
+    for (const m of r.ranking) m.tiedWith = m.tiedWith.filter((t) => t !== label);
+    r.pairs = r.pairs.filter((x) => x.a !== label && x.b !== label);
+    r.resolvedPairs = r.pairs.filter((x) => x.resolved).length;
+    r.totalPairs = r.pairs.length;
+  };
   if (st) {
-    st.ranking = st.ranking.filter((m) => m.label !== label);
-    for (const m of st.ranking) m.tiedWith = m.tiedWith.filter((t) => t !== label);
-    st.pairs = st.pairs.filter((x) => x.a !== label && x.b !== label);
+    drop(st);
+    for (const r of Object.values(st.byMetric || {})) drop(r);
     for (const e of [...(st.events || []), ...(st.cuts || [])])
-      for (const r of Object.values(e.byFigure)) {
-        r.ranking = r.ranking.filter((m) => m.label !== label);
-        for (const m of r.ranking) m.tiedWith = m.tiedWith.filter((t) => t !== label);
-      }
+      for (const r of Object.values(e.byFigure)) drop(r);
   }
   fs.writeFileSync(file, JSON.stringify(results));
   return results;
@@ -416,9 +419,23 @@ function syntheticRun(nScenes, nLabels, nFrames) {
   const ranking = (valueKey) => Array.from({ length: nLabels }, (_, l) => ({
     label: `denoiser_${l}`, rank: l === 2 ? 2 : l + 1, [valueKey]: 0.01 * (l + 1), ci95: [0.0097 * (l + 1), 0.0103 * (l + 1)],
     tiedWith: l === 1 ? ['denoiser_2'] : l === 2 ? ['denoiser_1'] : [] }));
-  const statistics = { scenes: {}, overall: { normalisation: 'geometric mean of relMSE ratios to denoiser_0', ranking: ranking('score') } };
+  const pairsOf = () => {
+    const out = [];
+    for (let a = 0; a < nLabels; ++a)
+      for (let b = a + 1; b < nLabels; ++b) {
+        const diff = 0.01 * (a - b), tied = a === 1 && b === 2;
+        out.push({ a: `denoiser_${a}`, b: `denoiser_${b}`, diff,
+                   ci95: tied ? [diff - 0.01, diff + 0.01] : [1.5 * diff, 0.5 * diff], resolved: !tied });
+      }
+    return out;
+  };
+  const statistics = { method: 'crossed bootstrap (synthetic)', confidence: 0.95, replicates: 1000, tileGrid: [4, 4],
+                       rankedOn: 'relMse', scenes: {},
+                       overall: { normalisation: 'geometric mean of relMSE ratios to denoiser_0', baseline: 'denoiser_0',
+                                  ranking: ranking('score') } };
   for (const name of Object.keys(scenes))
-    statistics.scenes[name] = { metric: 'relMse', ranking: ranking('mean'), pairs: [], resolvedPairs: nLabels * (nLabels - 1) / 2 - 1, totalPairs: nLabels * (nLabels - 1) / 2 };
+    statistics.scenes[name] = { metric: 'relMse', ranking: ranking('mean'), pairs: pairsOf(), byMetric: {},
+                                resolvedPairs: nLabels * (nLabels - 1) / 2 - 1, totalPairs: nLabels * (nLabels - 1) / 2 };
   return { schema: tinyRuns().schema, kind: 'arena-run', name: 'synthetic', created: '2025-01-01T00:00:00Z', environment: {},
            settings: { warmup: 8, flip: 'ldr', relMseEpsilon: 0.01 }, scenes, pairs, statistics };
 }
