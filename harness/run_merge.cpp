@@ -61,14 +61,13 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
   if (runs.empty()) throw Error("merge: no runs given");
   checkRunOutputs(out);  // creates --out when missing
   RunResults merged;
-  bool first = true;
   std::set<std::string> seen;
   // A gate must not pass on a partial study: every shard i/n of one n, each exactly once.
   std::map<int, std::string> shards;
   int shardCount = 0;
   for (const fs::path& run : runs) {
     RunResults r = loadResults(run);
-    const std::string shard = r.settings.value("shard", "");
+    const std::string shard = r.settings.shard();
     if (shard == "merged") throw Error(run.string() + ": already a merged run; merge the shards it came from");
     const auto [i, n] = parseShard(shard);
     if (shardCount && n != shardCount)
@@ -77,21 +76,20 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
     shardCount = n;
     if (!shards.emplace(i, run.string()).second)
       throw Error(run.string() + ": shard " + shard + " is already given by " + shards[i]);
-    if (first) {
-      first = false;
-      merged = r;
+    std::vector<PairResult> pairs = std::move(r.pairs);
+    const json scenes = std::move(r.scenes);
+    if (shards.size() == 1) {  // the first shard given: the run's identity, settings, metrics and sweep
+      merged = std::move(r);
       merged.pairs.clear();
       merged.scenes = json::object();
       merged.statistics.reset();
-      merged.settings["shard"] = "merged";
-    } else {
-      json a = merged.settings, b = r.settings;
-      a.erase("shard");
-      b.erase("shard");
-      if (a != b) throw Error(run.string() + ": settings differ from " + runs.front().string() + "; only shards of one run can be merged");
+      merged.settings.setShard("merged");
+    } else if (merged.settings.measurement() != r.settings.measurement()) {
+      throw Error(run.string() + ": settings differ from " + runs.front().string() +
+                  "; only shards of one run can be merged");
     }
-    for (auto it = r.scenes.begin(); it != r.scenes.end(); ++it) merged.scenes[it.key()] = it.value();
-    for (PairResult& p : r.pairs) {
+    for (auto it = scenes.begin(); it != scenes.end(); ++it) merged.scenes[it.key()] = it.value();
+    for (PairResult& p : pairs) {
       if (!seen.insert(p.scene + "\n" + p.label).second)
         throw Error(run.string() + ": pair " + p.label + " on " + p.scene + " appears in two shards");
       merged.pairs.push_back(std::move(p));
@@ -107,7 +105,7 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
   // The statistics and the verdicts are computed on the document as the run loop writes it.
   json document = merged.toJson();
   document["statistics"] = analyseRun(document).toJson();
-  addReferenceQuality(document, merged.settings.value("warmup", 8));
+  addReferenceQuality(document, merged.settings.warmup());
   commitResults(out, document);
   return document;
 }

@@ -60,9 +60,7 @@ void collectDifferences(const json& a, const json& b, const std::string& path, s
 
 std::vector<std::string> settingsDifferences(const RunResults& baseline, const RunResults& candidate) {
   std::vector<std::string> out;
-  json a = baseline.settings, b = candidate.settings;
-  a.erase("shard");  // which slice of the pairs a run holds, not how they were measured
-  b.erase("shard");
+  const json a = baseline.settings.measurement(), b = candidate.settings.measurement();
   collectDifferences(a, b, "settings", out);
   const json& as = baseline.scenes;
   const json& bs = candidate.scenes;

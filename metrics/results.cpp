@@ -176,7 +176,7 @@ void appendToDatabase(const fs::path& dbPath, const RunResults& r, const std::st
   db.exec("BEGIN");
   Statement run(db, "INSERT INTO runs (name, created, git_commit, schema, environment, settings) VALUES (?,?,?,?,?,?)");
   run.text(1, r.name).text(2, r.created).text(3, r.environment.value("git_commit", ""))
-      .integer(4, kResultsSchemaVersion).text(5, r.environment.dump()).text(6, r.settings.dump())
+      .integer(4, kResultsSchemaVersion).text(5, r.environment.dump()).text(6, r.settings.toJson().dump())
       .step();
   const long long runId = sqlite3_last_insert_rowid(db.db);
   // The registry as this arena knew it, so a dashboard reads each metric's direction and unit from

@@ -158,7 +158,7 @@ RunResults RunResults::fromJson(const json& j, const std::string& file) {
   r.name = read.text(j, "$", "name");
   if (j.contains("created")) r.created = read.text(j, "$", "created");
   r.environment = read.member(j, "$", "environment", &json::is_object, "an object");
-  r.settings = read.member(j, "$", "settings", &json::is_object, "an object");
+  r.settings = RunSettings::fromJson(read.member(j, "$", "settings", &json::is_object, "an object"), file);
   r.scenes = read.member(j, "$", "scenes", &json::is_object, "an object");
   for (auto& [name, scene] : r.scenes.items())
     if (!scene.is_object()) read.fail("$.scenes." + name, "an object", scene);
@@ -174,7 +174,7 @@ RunResults RunResults::fromJson(const json& j, const std::string& file) {
 
 json RunResults::toJson() const {
   json j = {{"kind", "arena-run"}, {"schema", kResultsSchemaVersion}, {"name", name},
-            {"environment", environment}, {"settings", settings}, {"scenes", scenes}};
+            {"environment", environment}, {"settings", settings.toJson()}, {"scenes", scenes}};
   if (!created.empty()) j["created"] = created;
   json ps = json::array();
   for (const PairResult& p : pairs) {

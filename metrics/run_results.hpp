@@ -6,15 +6,17 @@
 //
 // Typed so far: the run's identity and provenance, every pair's identity, status, parameters and
 // metric summaries (with their intervals and the reason a summary is absent), and the run's
-// statistics (metrics/run_statistics.hpp). A pair's per-frame values, tile sums, timing, events and
-// warnings, and the run's settings and scenes, are still carried as the JSON the run wrote
-// (`PairResult::detail`, the json members below).
+// statistics (metrics/run_statistics.hpp); the run's settings are the record it wrote, checked field
+// by field (metrics/run_settings.hpp). A pair's per-frame values, tile sums, timing, events and
+// warnings, and the run's scenes, are still carried as the JSON the run wrote (`PairResult::detail`,
+// the json members below).
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "metrics/run_settings.hpp"
 #include "metrics/run_statistics.hpp"
 #include "metrics/statistics.hpp"
 
@@ -63,7 +65,7 @@ struct PairResult {
 struct RunResults {
   std::string name, created;
   nlohmann::json environment = nlohmann::json::object();  // compiler, cores, cpu, flags, git_commit
-  nlohmann::json settings = nlohmann::json::object();     // how the run measured (compare checks them)
+  RunSettings settings;  // how the run measured (compare checks them)
   nlohmann::json scenes = nlohmann::json::object();       // scene -> sequence facts, floors, events
   std::vector<PairResult> pairs;
   std::optional<RunStatistics> statistics;  // rankings, paired differences, the overall score

@@ -635,8 +635,7 @@ json pairData(const PairResult& pair) {
 }  // namespace
 
 json reportData(const RunResults& results, const fs::path& runDir, const RunResults* baseline) {
-  const json& settings = results.settings;
-  const int warmup = settings.value("warmup", 8);
+  const int warmup = results.settings.warmup();
   // Scenes and labels in run order (results.json keeps scenes in an object, sorted by name).
   std::vector<std::string> sceneNames, labels;
   for (const PairResult& p : results.pairs) {
@@ -687,7 +686,7 @@ json reportData(const RunResults& results, const fs::path& runDir, const RunResu
                 {{"name", results.name},
                  {"created", results.created},
                  {"environment", results.environment},
-                 {"settings", settings},
+                 {"settings", results.settings.toJson()},
                  {"warmup", warmup}}},
                {"metrics", metrics},
                {"errorAxes", axes},

@@ -85,7 +85,7 @@ TEST(AtomicFile, WriteErrorsNameThePathAndTheReason) {
         writeExr(dir / "big.exr", layers, {{"color", {"R", "G", "B"}}}, {});
       },
       (dir / "big.exr").string());
-  const RunResults r{.settings = std::string(100000, 's')};
+  const RunResults r{.environment = std::string(100000, 's')};
   expectNamed([&] { appendToDatabase(dir / "results.db", r); }, (dir / "results.db").string(),
               "SQLite: disk I/O error");
   // Reads: a missing file names the path and the reason.

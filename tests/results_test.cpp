@@ -11,6 +11,7 @@
 #include "core/error.hpp"
 #include "harness/run_matrix.hpp"
 #include "metrics/results.hpp"
+#include "metrics/summary.hpp"
 #include "tests/contract_fixture.hpp"
 #include "tests/test_util.hpp"
 
@@ -175,6 +176,62 @@ TEST(RunResults, EveryMisshapenPartIsNamedByItsPath) {
             std::string::npos);
   EXPECT_NE(errorWith([](json& d) { d["schema"] = 1; }).find("r.json: results schema version 1"), std::string::npos);
   EXPECT_EQ(errorWith([](json&) {}), "(no error)");
+}
+
+// The settings are the record the run wrote, checked field by field when read: a reader (report,
+// merge, compare) never meets a string where the warm-up belongs.
+TEST(RunResults, SettingsAreCheckedFieldByFieldAndReadThroughAccessors) {
+  RunConfig cfg = contract::tinyRun("settings_checked");
+  const json doc = runMatrix(cfg);
+  auto errorWith = [&](const std::function<void(json&)>& edit) {
+    json d = doc;
+    edit(d["settings"]);
+    return test::errorOf([&] { RunResults::fromJson(d, "r.json"); });
+  };
+  EXPECT_EQ(errorWith([](json& s) { s["warmup"] = "x"; }), "r.json: $.settings.warmup: expected an integer, got a string");
+  EXPECT_EQ(errorWith([](json& s) { s["seeds"] = 0; }),
+            "r.json: $.settings.seeds: expected an integer in [1, 2147483647], got 0");
+  EXPECT_EQ(errorWith([](json& s) { s["shard"] = 3; }), "r.json: $.settings.shard: expected a string, got a number");
+  EXPECT_EQ(errorWith([](json& s) { s["render"] = 5; }), "r.json: $.settings.render: expected an object, got a number");
+  EXPECT_EQ(errorWith([](json& s) { s["render"]["referenceSpp"] = -1; }),
+            "r.json: $.settings.render.referenceSpp: expected an integer in [0, 2147483647], got -1");
+  EXPECT_EQ(errorWith([](json& s) { s["render"]["inputSeed"] = -2; }),
+            "r.json: $.settings.render.inputSeed: expected an integer in [0, 4294967295], got -2");
+  EXPECT_EQ(errorWith([](json& s) { s["ghosting"]["tauu"] = 0.2; }),
+            "r.json: $.settings.ghosting.tauu: unknown field (check the spelling; unknown fields are errors)");
+  EXPECT_EQ(errorWith([](json& s) { s["captures"] = {"a", 1}; }),
+            "r.json: $.settings.captures[1]: expected a string, got a number");
+  EXPECT_EQ(errorWith([](json& s) { s["relMseEpsilon"] = nullptr; }),
+            "r.json: $.settings.relMseEpsilon: expected a number, got null");
+  EXPECT_EQ(errorWith([](json& s) { s = json::array(); }), "r.json: $.settings: expected an object, got an array");
+  EXPECT_EQ(errorWith([](json&) {}), "(no error)");
+  // The accessors, and what a field the run did not record reads as.
+  RunResults run = test::typed(doc);
+  EXPECT_EQ(run.settings.warmup(), cfg.warmup);
+  EXPECT_EQ(run.settings.shard(), "0/1");
+  EXPECT_EQ(run.settings.render().value("referenceSpp", 0), cfg.render.referenceSpp);
+  EXPECT_FALSE(run.settings.measurement().contains("shard"));
+  run.settings.setShard("merged");
+  EXPECT_EQ(run.settings.toJson()["shard"], "merged");
+  json bare = doc;
+  bare["settings"] = json::object();
+  const RunResults none = test::typed(bare);
+  EXPECT_EQ(none.settings.warmup(), kDefaultWarmup);
+  EXPECT_EQ(none.settings.seeds(), 1);
+  EXPECT_EQ(none.settings.shard(), "");
+  EXPECT_TRUE(none.settings.render().empty());
+  // `arena report` of a run whose settings are out of shape: the error names the file and the
+  // field, not a JSON type error.
+  json bad = doc;
+  bad["settings"]["warmup"] = "x";
+  const fs::path dir = test::freshDir("settings_bad");
+  writeTextAtomically(dir / "results.json", bad.dump());
+  const contract::CliResult r = contract::arenaCli("report " + dir.string() + " --out " + (dir / "report").string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find((dir / "results.json").string() + ": $.settings.warmup: expected an integer, got a string"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("unexpected error"), std::string::npos) << r.output;
 }
 
 }  // namespace
