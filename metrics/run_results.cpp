@@ -50,6 +50,134 @@ struct ShapeReader {
     return v.get<int>();
   }
 
+  // Optional members that must have their type where present (what the run writes of them).
+  void optionalText(const json& obj, const std::string& path, const char* key) const {
+    if (obj.contains(key)) member(obj, path, key, &json::is_string, "a string");
+  }
+  void optionalFinite(const json& obj, const std::string& path, const char* key) const {
+    if (obj.contains(key) && (!obj.at(key).is_number() || !std::isfinite(obj.at(key).get<double>())))
+      fail(path + "." + key, "a finite number", obj.at(key));
+  }
+  void optionalCount(const json& obj, const std::string& path, const char* key) const {
+    if (obj.contains(key)) integer(obj, path, key);
+  }
+  void optionalFlag(const json& obj, const std::string& path, const char* key) const {
+    if (obj.contains(key)) member(obj, path, key, &json::is_boolean, "true or false");
+  }
+  // An array each of whose elements `element` accepts (`expected` says what it wants).
+  const json& arrayOf(const json& obj, const std::string& path, const char* key, bool (*element)(const json&),
+                      const char* expected) const {
+    const json& a = member(obj, path, key, &json::is_array, "an array");
+    for (size_t i = 0; i < a.size(); ++i)
+      if (!element(a[i])) fail(path + "." + key + "[" + std::to_string(i) + "]", expected, a[i]);
+    return a;
+  }
+  static bool isString(const json& j) { return j.is_string(); }
+  static bool isObject(const json& j) { return j.is_object(); }
+  static bool isCount(const json& j) { return j.is_number_integer() && j.get<int64_t>() >= 0; }
+  static bool isFlag(const json& j) { return j.is_boolean(); }
+  static bool isNumberOrNull(const json& j) { return j.is_number() || j.is_null(); }
+  // A rejection of every member of `obj` not in `known`.
+  void onlyKnown(const json& obj, const std::string& path, const std::set<std::string>& known) const {
+    for (auto it = obj.begin(); it != obj.end(); ++it)
+      if (!known.count(it.key())) fail(path + "." + it.key(), "no such field", it.value());
+  }
+
+  // pair.timing: how long the pair's frames took (metrics/evaluator.cpp timingSummary, the clock
+  // and, on the CPU, the GPU cost model's prediction).
+  void timing(const json& t, const std::string& path) const {
+    for (const char* k : {"msMedian", "msP5", "msP95", "msMean", "msPerMegapixel", "tapsPerPixel", "msWallMedian"})
+      optionalFinite(t, path, k);
+    for (const char* k : {"clock", "msSource", "device"}) optionalText(t, path, k);
+    if (t.contains("passes")) arrayOf(t, path, "passes", isObject, "an object (a pass's name and time)");
+    if (t.contains("gpuPredicted")) {
+      const json& g = member(t, path, "gpuPredicted", &json::is_object, "an object");
+      if (g.contains("devices")) {
+        const json& devices = arrayOf(g, path + ".gpuPredicted", "devices", isObject, "an object (one device)");
+        for (size_t d = 0; d < devices.size(); ++d) {
+          const std::string at = path + ".gpuPredicted.devices[" + std::to_string(d) + "]";
+          optionalText(devices[d], at, "device");
+          for (const char* k : {"msMedian", "msP5", "msP95"}) optionalFinite(devices[d], at, k);
+        }
+      }
+    }
+  }
+
+  // pair.ghosting / pair.cuts: one entry per event or cut, matched by its frame.
+  void events(const json& p, const std::string& path, const char* key) const {
+    const json& list = arrayOf(p, path, key, isObject, "an object (one event's figures)");
+    for (size_t i = 0; i < list.size(); ++i) {
+      const std::string at = path + "." + key + "[" + std::to_string(i) + "]";
+      member(list[i], at, "eventFrame", &json::is_number_integer, "an integer");
+      for (const char* k : {"kind", "what"}) optionalText(list[i], at, k);
+      for (const char* k : {"ci95", "ci95Absent", "tiles"})
+        if (list[i].contains(k)) member(list[i], at, k, &json::is_object, "an object");
+    }
+  }
+
+  // scenes.<scene>: the sequence's facts, its floors and events (harness/run_matrix.cpp, metrics/
+  // evaluator.cpp EvaluationScene::describe), its reference verdict (harness/reference_quality.cpp)
+  // and, for a capture, its validation.
+  void scene(const json& sc, const std::string& path) const {
+    static const std::set<std::string> known = {
+        "purpose", "sequence", "hash", "width", "height", "frames", "events", "referenceSpp", "referenceCapped",
+        "referenceEstimatedRelMse", "chosenFrames", "images", "referenceRelMse", "noisyRelMse", "exposure",
+        "exposurePerFrame", "floors", "nonFiniteInputs", "warnings", "hasReference", "source", "capture",
+        "validation", "derivedLayers", "layers", "assets", "referenceQuality"};
+    onlyKnown(sc, path, known);
+    for (const char* k : {"purpose", "sequence", "hash", "images", "source", "capture"}) optionalText(sc, path, k);
+    for (const char* k : {"width", "height", "frames"}) optionalCount(sc, path, k);
+    optionalFinite(sc, path, "exposure");
+    optionalFlag(sc, path, "hasReference");
+    for (const char* k : {"warnings", "derivedLayers", "layers"})
+      if (sc.contains(k)) arrayOf(sc, path, k, isString, "a string");
+    for (const char* k : {"referenceSpp", "chosenFrames"})
+      if (sc.contains(k)) arrayOf(sc, path, k, isCount, "a non-negative integer");
+    if (sc.contains("referenceCapped")) arrayOf(sc, path, "referenceCapped", isFlag, "true or false");
+    for (const char* k : {"referenceEstimatedRelMse", "referenceRelMse", "noisyRelMse", "exposurePerFrame"})
+      if (sc.contains(k)) arrayOf(sc, path, k, isNumberOrNull, "a number (or null)");
+    if (sc.contains("events")) {
+      const json& events = arrayOf(sc, path, "events", isObject, "an object (one scripted event)");
+      for (size_t i = 0; i < events.size(); ++i) {
+        const std::string at = path + ".events[" + std::to_string(i) + "]";
+        onlyKnown(events[i], at, {"frame", "kind", "what"});
+        member(events[i], at, "frame", &json::is_number_integer, "an integer");
+        text(events[i], at, "kind");
+        optionalText(events[i], at, "what");
+      }
+    }
+    if (sc.contains("floors")) {
+      const json& floors = member(sc, path, "floors", &json::is_object, "an object (metric -> floor)");
+      for (auto it = floors.begin(); it != floors.end(); ++it)
+        if (it.key() == "source" ? !it.value().is_string() : !isNumberOrNull(it.value()))
+          fail(path + ".floors." + it.key(), it.key() == "source" ? "a string" : "a number (or null)", it.value());
+    }
+    if (sc.contains("nonFiniteInputs")) {
+      const json& counts = member(sc, path, "nonFiniteInputs", &json::is_object, "an object (layer -> count)");
+      for (auto it = counts.begin(); it != counts.end(); ++it)
+        if (!isCount(it.value())) fail(path + ".nonFiniteInputs." + it.key(), "a non-negative integer", it.value());
+    }
+    if (sc.contains("referenceQuality")) {
+      const std::string at = path + ".referenceQuality";
+      const json& q = member(sc, path, "referenceQuality", &json::is_object, "an object");
+      onlyKnown(q, at, {"floor", "bestCorrectedRelMse", "bestLabel", "ratio", "goal", "meets", "cappedReferences",
+                        "references", "verdict"});
+      text(q, at, "verdict");
+      for (const char* k : {"floor", "bestCorrectedRelMse", "ratio", "goal"}) optionalFinite(q, at, k);
+      optionalText(q, at, "bestLabel");
+      optionalFlag(q, at, "meets");
+      for (const char* k : {"cappedReferences", "references"}) optionalCount(q, at, k);
+    }
+    if (sc.contains("assets")) {
+      const std::string at = path + ".assets";
+      const json& a = member(sc, path, "assets", &json::is_object, "an object");
+      onlyKnown(a, at, {"credits", "warnings"});
+      if (a.contains("credits")) arrayOf(a, at, "credits", isObject, "an object (one asset's credit)");
+      if (a.contains("warnings")) arrayOf(a, at, "warnings", isString, "a string");
+    }
+    if (sc.contains("validation")) member(sc, path, "validation", &json::is_object, "an object (the capture's checks)");
+  }
+
   MetricSummary summary(const json& s, const std::string& path) const {
     if (!s.is_object()) fail(path, "an object", s);
     MetricSummary m;
@@ -103,10 +231,15 @@ struct ShapeReader {
       if (!frames[f].is_object()) fail(at, "an object", frames[f]);
       member(frames[f], at, "frame", &json::is_number_integer, "an integer");
     }
-    if (p.contains("timing")) {
-      const json& t = member(p, path, "timing", &json::is_object, "an object");
-      for (const char* k : {"msMedian", "msP5", "msP95", "msMean"}) number(t, path + ".timing", k);
+    if (p.contains("timing")) timing(member(p, path, "timing", &json::is_object, "an object"), path + ".timing");
+    for (const char* k : {"ghosting", "cuts"})
+      if (p.contains(k)) events(p, path, k);
+    if (p.contains("images")) {
+      const json& images = member(p, path, "images", &json::is_object, "an object");
+      optionalText(images, path + ".images", "dir");
+      optionalFlag(images, path + ".images", "all");
     }
+    if (p.contains("warnings")) arrayOf(p, path, "warnings", isString, "a string");
     return r;
   }
 };
@@ -160,8 +293,10 @@ RunResults RunResults::fromJson(const json& j, const std::string& file) {
   r.environment = read.member(j, "$", "environment", &json::is_object, "an object");
   r.settings = RunSettings::fromJson(read.member(j, "$", "settings", &json::is_object, "an object"), file);
   r.scenes = read.member(j, "$", "scenes", &json::is_object, "an object");
-  for (auto& [name, scene] : r.scenes.items())
+  for (auto& [name, scene] : r.scenes.items()) {
     if (!scene.is_object()) read.fail("$.scenes." + name, "an object", scene);
+    read.scene(scene, "$.scenes." + name);
+  }
   const json& pairs = read.member(j, "$", "pairs", &json::is_array, "an array of pairs");
   r.pairs.reserve(pairs.size());
   for (size_t i = 0; i < pairs.size(); ++i) r.pairs.push_back(read.pair(pairs[i], "$.pairs[" + std::to_string(i) + "]"));

@@ -168,7 +168,8 @@ std::vector<SpeedClock> speedClocks(const RunResults& results, const std::vector
   std::set<std::string> sizes;
   const json& infos = results.scenes;
   for (const std::string& scene : scenes)
-    if (infos.contains(scene) && infos[scene].contains("width") && infos[scene].value("source", "") != "capture")
+    if (infos.contains(scene) && infos[scene].contains("width") && infos[scene].contains("height") &&
+        infos[scene].value("source", "") != "capture")
       sizes.insert(std::to_string(infos[scene]["width"].get<int>()) + "x" + std::to_string(infos[scene]["height"].get<int>()));
   std::string where = env.value("cpu", std::string("this machine"));
   if (env.contains("cores")) where += ", " + env["cores"].dump() + " threads";

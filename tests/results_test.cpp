@@ -178,6 +178,47 @@ TEST(RunResults, EveryMisshapenPartIsNamedByItsPath) {
   EXPECT_EQ(errorWith([](json&) {}), "(no error)");
 }
 
+// The parts of a scene's record and of a pair that readers (printouts, report, merge) take are
+// checked where the model reads them: an Error naming the path, never a JSON type error later.
+TEST(RunResults, ScenesAndPairDetailsAreCheckedWhereReadersTakeThem) {
+  RunConfig cfg = contract::tinyRun("details_checked");
+  const json doc = runMatrix(cfg);
+  const std::string scene = doc["scenes"].begin().key(), at = "r.json: $.scenes." + scene;
+  auto errorWith = [&](const std::function<void(json&)>& edit) {
+    json d = doc;
+    edit(d);
+    return test::errorOf([&] { RunResults::fromJson(d, "r.json"); });
+  };
+  EXPECT_EQ(errorWith([&](json& d) { d["scenes"][scene]["width"] = "x"; }),
+            at + ".width: expected a non-negative integer, got a string");
+  EXPECT_EQ(errorWith([&](json& d) { d["scenes"][scene]["referenceQuality"] = 5; }),
+            at + ".referenceQuality: expected an object, got a number");
+  EXPECT_EQ(errorWith([&](json& d) { d["scenes"][scene]["referenceQuality"]["meets"] = "yes"; }),
+            at + ".referenceQuality.meets: expected true or false, got a string");
+  EXPECT_EQ(errorWith([&](json& d) { d["scenes"][scene]["warnings"] = {1}; }),
+            at + ".warnings[0]: expected a string, got a number");
+  EXPECT_EQ(errorWith([&](json& d) { d["scenes"][scene]["images"] = json::object(); }),
+            at + ".images: expected a string, got an object");
+  EXPECT_EQ(errorWith([&](json& d) { d["scenes"][scene]["events"] = {{{"frame", "3"}, {"kind", "light_off"}}}; }),
+            at + ".events[0].frame: expected an integer, got a string");
+  EXPECT_EQ(errorWith([&](json& d) { d["scenes"][scene]["floors"]["relMse"] = "low"; }),
+            at + ".floors.relMse: expected a number (or null), got a string");
+  EXPECT_EQ(errorWith([&](json& d) { d["scenes"][scene]["note"] = "mine"; }), at + ".note: expected no such field, got a string");
+  EXPECT_EQ(errorWith([](json& d) { d["pairs"][0]["timing"]["clock"] = 5; }),
+            "r.json: $.pairs[0].timing.clock: expected a string, got a number");
+  EXPECT_EQ(errorWith([](json& d) { d["pairs"][0]["timing"]["msMedian"] = nullptr; }),
+            "r.json: $.pairs[0].timing.msMedian: expected a finite number, got null");
+  EXPECT_EQ(errorWith([](json& d) { d["pairs"][0]["ghosting"] = {1}; }),
+            "r.json: $.pairs[0].ghosting[0]: expected an object (one event's figures), got a number");
+  EXPECT_EQ(errorWith([](json& d) { d["pairs"][0]["cuts"] = {{{"eventFrame", nullptr}}}; }),
+            "r.json: $.pairs[0].cuts[0].eventFrame: expected an integer, got null");
+  EXPECT_EQ(errorWith([](json& d) { d["pairs"][0]["images"]["dir"] = 5; }),
+            "r.json: $.pairs[0].images.dir: expected a string, got a number");
+  EXPECT_EQ(errorWith([](json& d) { d["pairs"][0]["warnings"] = {json::object()}; }),
+            "r.json: $.pairs[0].warnings[0]: expected a string, got an object");
+  EXPECT_EQ(errorWith([](json&) {}), "(no error)");
+}
+
 // The settings are the record the run wrote, checked field by field when read: a reader (report,
 // merge, compare) never meets a string where the warm-up belongs.
 TEST(RunResults, SettingsAreCheckedFieldByFieldAndReadThroughAccessors) {
