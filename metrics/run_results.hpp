@@ -9,7 +9,8 @@
 // statistics (metrics/run_statistics.hpp); the run's settings are the record it wrote, checked field
 // by field (metrics/run_settings.hpp). A pair's per-frame values, tile sums, timing, events and
 // warnings, and the run's scenes, are still carried as the JSON the run wrote (`PairResult::detail`,
-// the json members below).
+// the json members below); fromJson checks the parts of them that readers take (a scene's size,
+// events, floors, verdict and warnings; a pair's timing, event figures, images and warnings).
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
