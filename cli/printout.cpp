@@ -157,31 +157,30 @@ std::string figureWithInterval(const json& e, const char* name) {
 void printEventTables(std::ostream& out, const RunResults& results) {
   if (!results.statistics) return;
   for (const auto& [name, scene] : results.statistics->scenes)
-    for (const bool cut : {false, true})
-      for (const EventStatistics& ev : cut ? scene.cuts : scene.events) {
-        const int frame = ev.eventFrame;
-        const char* rankedOn = cut ? "oldViewLeak" : "lagEnergy";
-        const auto figure = ev.byFigure.find(rankedOn);
-        const SceneRanking none;
-        const SceneRanking& ranking = figure == ev.byFigure.end() ? none : figure->second;
-        out << "\n" << name << ": " << ev.kind << (ev.what.empty() ? "" : " " + ev.what) << " at frame " << frame
-            << ": ranked on " << rankedOn << " (" << ranking.resolvedPairs << " of " << ranking.pairs.size()
-            << " pairs resolved)\n";
-        for (const RankedMethod& m : ranking.ranking) {
-          const json* e = nullptr;
-          for (const PairResult& p : results.pairs)
-            if (p.scene == name && m.label == p.label && p.part(cut ? "cuts" : "ghosting").is_array())
-              for (const json& x : p.part(cut ? "cuts" : "ghosting"))
-                if (x.value("eventFrame", -1) == frame) e = &x;
-          if (!e) continue;
-          out << "  " << std::left << std::setw(4) << m.rank << std::setw(22) << m.label;
-          for (const char* f : cut ? std::vector<const char*>{"oldViewLeak", "atCut"}
-                                   : std::vector<const char*>{"lagEnergy", "responseFrames", "peakExcess", "chromaLagEnergy"})
-            out << f << " " << std::setw(26) << figureWithInterval(*e, f) << " ";
-          out << tiedText(m) << "\n";
-        }
-        if (!ranking.excluded.empty()) out << "  not ranked: " << ranking.excluded << "\n";
+    scene.forEachEvent([&](const EventStatistics& ev, bool cut) {
+      const int frame = ev.eventFrame;
+      const char* rankedOn = cut ? "oldViewLeak" : "lagEnergy";
+      const auto figure = ev.byFigure.find(rankedOn);
+      const SceneRanking none;
+      const SceneRanking& ranking = figure == ev.byFigure.end() ? none : figure->second;
+      out << "\n" << name << ": " << ev.kind << (ev.what.empty() ? "" : " " + ev.what) << " at frame " << frame
+          << ": ranked on " << rankedOn << " (" << ranking.resolvedPairs << " of " << ranking.pairs.size()
+          << " pairs resolved)\n";
+      for (const RankedMethod& m : ranking.ranking) {
+        const json* e = nullptr;
+        for (const PairResult& p : results.pairs)
+          if (p.scene == name && m.label == p.label && p.part(cut ? "cuts" : "ghosting").is_array())
+            for (const json& x : p.part(cut ? "cuts" : "ghosting"))
+              if (x.value("eventFrame", -1) == frame) e = &x;
+        if (!e) continue;
+        out << "  " << std::left << std::setw(4) << m.rank << std::setw(22) << m.label;
+        for (const char* f : cut ? std::vector<const char*>{"oldViewLeak", "atCut"}
+                                 : std::vector<const char*>{"lagEnergy", "responseFrames", "peakExcess", "chromaLagEnergy"})
+          out << f << " " << std::setw(26) << figureWithInterval(*e, f) << " ";
+        out << tiedText(m) << "\n";
       }
+      if (!ranking.excluded.empty()) out << "  not ranked: " << ranking.excluded << "\n";
+    });
 }
 
 // One line per scene: the best method on relMSE (rank 1, first in the ranking) with its mean and

@@ -223,10 +223,10 @@ void appendToDatabase(const fs::path& dbPath, const RunResults& r, const std::st
       for (const auto& [metric, ranking] : scene.byMetric) addScene(name, ranking, ranking.metric);
       // Event-window figures (metrics/ghosting_intervals): metric "ghosting@<frame>.<figure>" or
       // "cut@<frame>.<figure>"; each method's figure and interval are its rankings row.
-      for (const bool cut : {false, true})
-        for (const EventStatistics& e : cut ? scene.cuts : scene.events)
-          for (const auto& [figure, ranking] : e.byFigure)
-            addScene(name, ranking, std::string(cut ? "cut@" : "ghosting@") + std::to_string(e.eventFrame) + "." + figure);
+      scene.forEachEvent([&](const EventStatistics& e, bool cut) {
+        for (const auto& [figure, ranking] : e.byFigure)
+          addScene(name, ranking, std::string(cut ? "cut@" : "ghosting@") + std::to_string(e.eventFrame) + "." + figure);
+      });
     }
     if (statistics.overall) addRanking("*", statistics.rankedOn, statistics.overall->ranking);
   }

@@ -205,9 +205,9 @@ void markExtraPaths(RunStatistics& s) {
   for (auto& [name, scene] : s.scenes) {
     markExtraPaths(scene.ranking.ranking, extra);
     for (auto& [m, r] : scene.byMetric) markExtraPaths(r.ranking, extra);
-    for (auto* events : {&scene.events, &scene.cuts})
-      for (EventStatistics& e : *events)
-        for (auto& [f, r] : e.byFigure) markExtraPaths(r.ranking, extra);
+    scene.forEachEvent([&](EventStatistics& e, bool) {
+      for (auto& [f, r] : e.byFigure) markExtraPaths(r.ranking, extra);
+    });
   }
   if (s.overall) markExtraPaths(s.overall->ranking, extra);
   for (auto& [m, o] : s.overallByMetric) markExtraPaths(o.ranking, extra);

@@ -33,6 +33,18 @@ struct SceneStatistics {
   SceneRanking ranking;                           // on RunStatistics::rankedOn
   std::map<std::string, SceneRanking> byMetric;   // metric -> ranking
   std::vector<EventStatistics> events, cuts;
+
+  // f(event, isCut) for the scripted events, then the camera cuts.
+  template <class F>
+  void forEachEvent(F&& f) const {
+    for (const EventStatistics& e : events) f(e, false);
+    for (const EventStatistics& e : cuts) f(e, true);
+  }
+  template <class F>
+  void forEachEvent(F&& f) {
+    for (EventStatistics& e : events) f(e, false);
+    for (EventStatistics& e : cuts) f(e, true);
+  }
 };
 
 struct RunStatistics {

@@ -287,8 +287,9 @@ json speedView(const RunResults& results, const std::vector<std::string>& scenes
     const OverallRanking* overall = nullptr;
     if (const auto& st = results.statistics; st && axis.overall == st->rankedOn && st->overall) {
       overall = &*st->overall;
-    } else if (st && st->overallByMetric.count(axis.overall)) {
-      overall = &st->overallByMetric.at(axis.overall);
+    } else if (st) {
+      const auto it = st->overallByMetric.find(axis.overall);
+      if (it != st->overallByMetric.end()) overall = &it->second;
     }
     if (!overall) continue;
     auto& table = byAxis[axis.key];
@@ -354,27 +355,30 @@ json speedData(const RunResults& results, const std::vector<std::string>& scenes
 json rankingData(const RunResults& results, const std::vector<std::string>& scenes) {
   json out = {{"scenes", json::object()}, {"overall", nullptr}};
   for (const std::string& scene : scenes) {
-    if (results.statistics && results.statistics->scenes.count(scene)) {
-      const SceneStatistics& st = results.statistics->scenes.at(scene);
+    const SceneStatistics* found = nullptr;
+    if (results.statistics)
+      if (const auto it = results.statistics->scenes.find(scene); it != results.statistics->scenes.end())
+        found = &it->second;
+    if (found) {
+      const SceneStatistics& st = *found;
       // The ranking and its counts; every pair's difference is left out (tiedWith says enough).
       json r = st.ranking.toJson();
       r.erase("pairs");
       r["tiesKnown"] = true;
       // Events and cuts: per figure, who is ranked first with whom tied (the ghosting panel marks
       // the best with ties, metrics/ghosting_intervals).
-      for (const bool cut : {false, true})
-        for (const EventStatistics& e : cut ? st.cuts : st.events) {
-          json figures = json::object();
-          for (const auto& [figure, ranking] : e.byFigure) {
-            json ranks = json::array();
-            for (const RankedMethod& m : ranking.ranking)
-              ranks.push_back({{"label", m.label}, {"rank", m.rank}, {"tiedWith", m.tiedWith}});
-            figures[figure] = {{"ranking", ranks},
-                               {"resolvedPairs", ranking.resolvedPairs},
-                               {"totalPairs", ranking.pairs.size()}};
-          }
-          r[cut ? "cuts" : "events"].push_back({{"eventFrame", e.eventFrame}, {"byFigure", figures}});
+      st.forEachEvent([&](const EventStatistics& e, bool cut) {
+        json figures = json::object();
+        for (const auto& [figure, ranking] : e.byFigure) {
+          json ranks = json::array();
+          for (const RankedMethod& m : ranking.ranking)
+            ranks.push_back({{"label", m.label}, {"rank", m.rank}, {"tiedWith", m.tiedWith}});
+          figures[figure] = {{"ranking", ranks},
+                             {"resolvedPairs", ranking.resolvedPairs},
+                             {"totalPairs", ranking.pairs.size()}};
         }
+        r[cut ? "cuts" : "events"].push_back({{"eventFrame", e.eventFrame}, {"byFigure", figures}});
+      });
       out["scenes"][scene] = r;
       continue;
     }

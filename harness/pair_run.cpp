@@ -1,0 +1,173 @@
+#include "harness/pair_run.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <limits>
+#include <memory>
+
+#include "core/capture.hpp"
+#include "core/error.hpp"
+#include "core/stage_clock.hpp"
+#include "harness/gpu_cost.hpp"
+#include "harness/image_files.hpp"
+#include "harness/run_matrix.hpp"
+#include "metrics/results.hpp"
+
+namespace arena {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+void writeFrameImages(const fs::path& imageDir, int t, const FrameImages& images) {
+  writePng(imageDir / frameName("frame", t), images.display);
+  if (!images.flip.empty()) writePng(imageDir / frameName("flip", t), images.flip);
+  writePng(imageDir / frameName("relerr", t), images.relativeError);
+}
+
+// Every output frame as an EXR (colour, and the two signals a split denoiser filtered).
+void writeOutputExr(const fs::path& imageDir, const DenoisedFrame& f, const DenoiserRequest& req, const ParamSet& params) {
+  LayerSet out;
+  out.set("color", f.color);
+  std::vector<LayerSpec> specs = {{"color", {"R", "G", "B"}}, {"color", {"R", "G", "B"}, false, true}};
+  for (const char* signal : {"diffuse", "specular"}) {
+    const Image& image = std::string(signal) == "diffuse" ? f.diffuse : f.specular;
+    if (image.empty()) continue;  // a colour denoiser has no separate signals
+    out.set(signal, image);
+    specs.push_back({signal, {"R", "G", "B"}});
+  }
+  char name[64];
+  std::snprintf(name, sizeof name, "frame_%04d.exr", f.frame);
+  writeExr(imageDir / name, out, specs, {{"arena.denoiser", req.name}, {"arena.params", params.toJson().dump()}});
+}
+
+// Reads the stored outputs of a denoiser that ran elsewhere (a capture's outputs/NAME) as the
+// stream of frames a built-in would hand over; their time is the one the capture recorded.
+void runCapturedOutput(const Sequence& sequence, const std::string& name,
+                       const std::function<void(const DenoisedFrame&)>& onFrame) {
+  const CaptureDescription& capture = sequence.capture();
+  const CaptureOutput& output = capture.output(name);
+  DenoisedFrame f;
+  for (int t = 0; t < sequence.info().frames; ++t) {
+    f.frame = t;
+    f.color = readCaptureOutput(capture, name, t);
+    long bad = 0;
+    for (float v : f.color.raw()) bad += !std::isfinite(v);
+    if (bad)
+      throw Error(captureOutputPath(output, t).string() + ": " + std::to_string(bad) +
+                  " non-finite colour values in the output of '" + name + "' (an output is scored as given, never repaired)");
+    f.selfTimed = !output.milliseconds.empty();
+    f.milliseconds = f.selfTimed ? output.milliseconds[size_t(t)] : std::numeric_limits<double>::quiet_NaN();
+    onFrame(f);
+  }
+}
+
+}  // namespace
+
+json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& req, const fs::path& imageDir,
+             bool keepAll) {
+  const SequenceInfo& info = sd.sequence.info();
+  const std::string captured = capturedOutputName(req.name);
+  if (!captured.empty() && !sd.sequence.isCapture())
+    throw Error(req.name + ": scene " + info.scene + " is not a capture; file: contenders are outputs stored in a "
+                "capture's outputs/ folder (docs/captures.md)");
+  std::unique_ptr<DenoiseRun> run = captured.empty() ? std::make_unique<DenoiseRun>(req, sd.sequence) : nullptr;
+  const ParamSet params = run ? run->params() : ParamSet{};
+  PairEvaluation evaluation(sd.evaluation);
+  bool selfTimed = false;
+  NonFiniteCounts sanitized;  // over every frame, warm-up included: each one shaped the history
+  std::vector<std::vector<PassTime>> passes;
+  std::vector<double> ms;
+  GpuFrameCost gpuCost(info.width, info.height);  // the speed axis's predicted GPU ms (issue 31)
+  const bool keepImages = cfg.keepFrames != "none";
+  auto onFrame = [&](const DenoisedFrame& f) {
+            FrameFacts facts;
+            facts.milliseconds = f.milliseconds;
+            if (f.selfTimed && run) facts.wallMilliseconds = f.wallMilliseconds;
+            // Extra paths: the low-resolution buffer's (reengine) or the gradient samples'
+            // (asvgf), each at the rate it rendered at.
+            if (run && (run->readsLowres() || run->readsGradients())) facts.extraRaysPerPixel = f.extraRaysPerPixel;
+            facts.extraPathsPerSecond = run && run->readsLowres() ? info.lowresPathsPerSecond : info.inputPathsPerSecond;
+            StageTimer metrics(Stage::Metrics);  // inside the denoiser's run: its time is taken out of it
+            evaluation.add(f.frame, f.color, facts);
+            selfTimed |= f.selfTimed;
+            for (const auto& [channel, n] : f.sanitized) sanitized[channel] += n;
+            ms.push_back(f.milliseconds);
+            std::vector<PassTime>& frame = passes.emplace_back();
+            for (const PassStats& p : f.passes) frame.push_back({p.name, p.milliseconds, p.tapsPerPixel});
+            if (run) gpuCost.add(f.passes);
+            const bool chosen = std::find(sd.chosenFrames.begin(), sd.chosenFrames.end(), f.frame) != sd.chosenFrames.end();
+            if (keepImages && (keepAll || chosen)) {
+              StageTimer images(Stage::Report);
+              writeFrameImages(imageDir, f.frame, evaluation.lastImages());
+              if (keepAll) writeOutputExr(imageDir, f, req, params);
+            }
+          };
+  {
+    StageTimer denoisers(Stage::Denoisers);
+    if (run)
+      run->run([&](int t) -> const LayerSet& { return sd.evaluation.frame(t); }, onFrame);
+    else
+      runCapturedOutput(sd.sequence, captured, onFrame);
+  }
+  json pair = {{"scene", info.scene}, {"denoiser", req.name}, {"label", req.label}, {"params", params.toJson()},
+               {"status", "ok"}};
+  {
+    StageTimer metrics(Stage::Metrics);
+    pair.update(evaluation.finish());
+  }
+  // First: what the inputs were matters before what the outputs measured.
+  if (!sanitized.empty()) pair["warnings"].insert(pair["warnings"].begin(), sanitizedWarning(sanitized));
+  json timing;
+  if (run) {
+    timing = timingSummary(passes, ms, cfg.warmup, info.width, info.height);
+    // External processes time themselves: "ms" is what they reported, "msWall" the harness's clock
+    // around the exchange (transfer included). Built-ins and plugins: the harness's clock.
+    timing["msSource"] = selfTimed ? "reported by the process" : "harness wall clock";
+    timing["clock"] = "cpu";
+    if (selfTimed) timing["msWallMedian"] = summarize(evaluation.values("msWall"), cfg.warmup).median;
+    const json gpu = gpuCost.summary(cfg.warmup);
+    if (!gpu.is_null()) timing["gpuPredicted"] = gpu;
+  } else {
+    // A capture's recorded time is another device's: labelled, never mixed with the CPU times.
+    const CaptureOutput& output = sd.sequence.capture().output(captured);
+    if (selfTimed) {
+      timing = timingSummary({}, ms, cfg.warmup, info.width, info.height);
+      timing["msSource"] = "recorded in the capture (" + output.device + ")";
+      timing["clock"] = "capture";
+      timing["device"] = output.device;
+    } else {
+      timing = {{"msSource", "not recorded in the capture"}, {"clock", "none"}, {"passes", json::array()}};
+    }
+  }
+  pair["timing"] = timing;
+  pair["sanitizedInputs"] = {{"total", totalNonFinite(sanitized)}, {"channels", sanitized}};
+  pair["images"] = {{"dir", fs::relative(imageDir, cfg.out).string()}, {"all", keepAll && keepImages}};
+  if (run && !run->info().origin.empty()) pair["origin"] = run->info().origin;
+  if (!run) pair["origin"] = (sd.sequence.dir() / "outputs" / captured).string();
+  if (!run || run->info().signals == SignalMode::Color) pair["signals"] = "color";
+  return pair;
+}
+
+json biasVarianceOf(const RunConfig& cfg, const SceneData& sd, const std::vector<SeedSequence>& seeds,
+                    const DenoiserRequest& req) {
+  const SequenceInfo& info = sd.sequence.info();
+  std::vector<std::vector<Image>> outputs(size_t(info.frames));
+  auto collect = [&](const Sequence& sequence, const std::function<const LayerSet&(int)>& frame) {
+    DenoiseRun run(req, sequence);
+    run.run(frame, [&](const DenoisedFrame& f) { outputs[size_t(f.frame)].push_back(f.color); });
+  };
+  collect(sd.sequence, [&](int t) -> const LayerSet& { return sd.evaluation.frame(t); });
+  json inputSeeds = json::array({cfg.render.inputSeed});
+  for (const SeedSequence& s : seeds) {
+    if (s.sequence.info().frames != info.frames) throw Error("bias/variance: seed sequences differ in frame count");
+    collect(s.sequence, [&](int t) -> const LayerSet& { return s.frames[size_t(t)]; });
+    inputSeeds.push_back(s.inputSeed);
+  }
+  return evaluateBiasVariance(sd.evaluation, outputs, inputSeeds);
+}
+
+}  // namespace arena

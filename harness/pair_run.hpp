@@ -1,0 +1,27 @@
+#pragma once
+// One pair of a run: a denoiser over a prepared scene (harness/scene_data.hpp), or the stored
+// output of a denoiser that ran elsewhere (a capture's `file:` contender). Each output frame goes
+// to the evaluation (metrics/evaluator.hpp), which measures it; the pair adds what only the run
+// knows -- its timing (CPU clock, a capture's recorded clock, the predicted GPU cost), the
+// non-finite inputs it was handed, the images it keeps -- and returns the pair's record.
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "harness/denoise_run.hpp"
+#include "harness/scene_data.hpp"
+
+namespace arena {
+
+struct RunConfig;
+
+// `imageDir` receives the chosen frames' images, or every frame's (and its EXR) with `keepAll`.
+nlohmann::json runPair(const RunConfig& config, const SceneData& scene, const DenoiserRequest& request,
+                       const std::filesystem::path& imageDir, bool keepAll);
+
+// The bias^2 / variance split of a pair's error over the scene's input seeds: the denoiser runs on
+// every seed's sequence from a reset history; the evaluation splits the K outputs per frame.
+nlohmann::json biasVarianceOf(const RunConfig& config, const SceneData& scene, const std::vector<SeedSequence>& seeds,
+                              const DenoiserRequest& request);
+
+}  // namespace arena

@@ -1,0 +1,114 @@
+#include "harness/scene_data.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <set>
+
+#include "core/capture.hpp"
+#include "core/error.hpp"
+#include "core/stage_clock.hpp"
+#include "harness/image_files.hpp"
+#include "harness/run_matrix.hpp"
+#include "metrics/capture_checks.hpp"
+
+namespace arena {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+std::string frameName(const char* prefix, int t) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%s_%04d.png", prefix, t);
+  return buf;
+}
+
+namespace {
+
+// The frames whose images the report shows: after the warm-up, the middle, the last, and each
+// event's frame and two after it.
+std::vector<int> chooseFrames(const SequenceInfo& info, int warmup) {
+  std::set<int> chosen = {std::min(warmup, info.frames - 1), info.frames / 2, info.frames - 1};
+  for (const SequenceEvent& e : info.events)
+    for (int t : {e.frame, e.frame + 2})
+      if (t < info.frames) chosen.insert(t);
+  return {chosen.begin(), chosen.end()};
+}
+
+}  // namespace
+
+std::unique_ptr<SceneData> loadScene(const fs::path& dir, const EvaluationOptions& options, json* validation) {
+  StageTimer timer(Stage::Loading);
+  Sequence sequence = Sequence::open(dir);
+  EvaluationInput input = readSequenceForEvaluation(sequence);
+  if (sequence.isCapture()) {
+    const CaptureValidation checks = validateCapture(sequence, input);
+    if (validation) *validation = checks.toJson();
+    if (checks.status() == CheckStatus::Fail)
+      throw Error("capture " + dir.string() + " refused by its validation: " + checks.failures());
+  }
+  EvaluationScene evaluation(std::move(input), options);
+  std::vector<int> chosen = chooseFrames(sequence.info(), options.warmup);
+  return std::make_unique<SceneData>(SceneData{std::move(sequence), std::move(evaluation), std::move(chosen)});
+}
+
+std::vector<SeedSequence> renderSeedSequences(const Scene& scene, const RunConfig& config) {
+  std::vector<SeedSequence> seeds;
+  for (int k = 1; k < config.seeds; ++k) {
+    RenderSettings seeded = config.render;
+    seeded.inputSeed = config.render.inputSeed + uint32_t(k);
+    const fs::path dir = renderSequence(scene, seeded, config.cache, config.progress);
+    SeedSequence s{seeded.inputSeed, Sequence::open(dir), {}};
+    for (int t = 0; t < s.sequence.info().frames; ++t) s.frames.push_back(s.sequence.frame(t));
+    seeds.push_back(std::move(s));
+  }
+  return seeds;
+}
+
+std::vector<std::string> validationLines(const json& validation) {
+  std::vector<std::string> lines;
+  if (validation.is_null()) return lines;
+  for (const json& c : validation["checks"])
+    if (c["status"] != "pass")
+      lines.push_back(c["status"].get<std::string>() + ": " + c["name"].get<std::string>() + " " +
+                      (c["value"].is_number() ? std::to_string(c["value"].get<double>()) : std::string("-")) + " (" +
+                      c["detail"].get<std::string>() + ")");
+  return lines;
+}
+
+json sceneRecord(const RunConfig& config, const SceneData& data, const std::string& purpose, const Scene* scene,
+                 const fs::path& dir, const json& validation) {
+  const SequenceInfo& info = data.sequence.info();
+  const EvaluationScene& ev = data.evaluation;
+  const fs::path images = config.out / "images" / info.scene;
+  json events = json::array();
+  for (auto& e : info.events) events.push_back({{"frame", e.frame}, {"kind", eventKindName(e.kind)}, {"what", e.what}});
+  if (config.keepFrames != "none")
+    for (int t : data.chosenFrames) {
+      if (ev.hasReference()) writePng(images / frameName("reference", t), ev.referenceDisplay(t));
+      writePng(images / frameName("noisy", t), ev.display(t, ev.frame(t).get("color")));
+    }
+  json entry = {{"purpose", purpose}, {"sequence", dir.string()}, {"hash", info.hash}, {"width", info.width},
+                {"height", info.height}, {"frames", info.frames}, {"events", events},
+                {"referenceSpp", info.referenceSpp}, {"referenceCapped", info.referenceCapped},
+                {"referenceEstimatedRelMse", info.referenceEstimatedRelMse}, {"chosenFrames", data.chosenFrames},
+                {"images", fs::relative(images, config.out).string()}};
+  entry.update(ev.describe());
+  if (!ev.hasReference()) entry["hasReference"] = false;
+  if (!scene) {
+    entry["source"] = "capture";
+    entry["capture"] = dir.string();
+    entry["validation"] = validation;
+    entry["derivedLayers"] = data.sequence.capture().derived;
+    entry["layers"] = info.availableLayers();
+  }
+  // Asset scenes (issue 18): the models' credits and the loader's counted fallbacks.
+  if (scene && (!scene->credits.empty() || !scene->warnings.empty())) {
+    json credits = json::array();
+    for (const Credit& c : scene->credits)
+      credits.push_back({{"asset", c.asset}, {"author", c.author}, {"license", c.license}, {"source", c.source}});
+    entry["assets"] = {{"credits", credits}, {"warnings", scene->warnings}};
+  }
+  return entry;
+}
+
+}  // namespace arena
