@@ -140,8 +140,8 @@ glm::vec3 specularAlbedo(glm::vec3 f0, float roughness, float NoV) {
   return glm::max(f0 * ab.x + ab.y, glm::vec3(0.0f));
 }
 
-EmbreeDevice::EmbreeDevice() {
-  device_ = rtcNewDevice("verbose=0");
+EmbreeDevice::EmbreeDevice(const char* config) {
+  device_ = rtcNewDevice(config);
   if (!device_) throw Error("Embree: cannot create a device (error " + std::to_string(rtcGetDeviceError(nullptr)) + ")");
 }
 EmbreeDevice::~EmbreeDevice() { rtcReleaseDevice(device_); }
@@ -241,7 +241,43 @@ bool FrameScene::intersect(glm::vec3 o, glm::vec3 d, float tmax, SurfaceHit& hit
   hit.u = rh.hit.u;
   hit.v = rh.hit.v;
   t = rh.ray.tfar;
+  exactHit(o, d, hit, t);
   return true;
+}
+
+// Embree finds the triangle; where on it the ray lands is computed here. Embree's own (t, u, v)
+// come from kernels chosen for the CPU at run time (SSE, AVX2, AVX-512), whose approximate
+// reciprocals (rcpps, vrcp14ps) differ between ISAs and between Intel and AMD: the same ray gave
+// other bits on another machine, so pixels, references and the evaluation golden depended on the
+// CPU. Moeller-Trumbore in float on the world-space vertices (IEEE operations only, no contraction:
+// -ffp-contract=off) gives the same bits on every CPU that runs this build. Embree's values stay
+// only for a ray in the triangle's plane (determinant 0). Still Embree's, and so still able to
+// differ between machines in exact ties: which of two triangles sharing an edge is hit, and
+// occlusion (the SSE kernels' BVH4 against the AVX2 and AVX-512 kernels' BVH8; measured:
+// FidelityTracer.HitsAreTheSameBitsWhicheverKernelsEmbreeRuns, and the evaluation golden's run
+// differs between the sse2 and avx2 kernels).
+void FrameScene::exactHit(glm::vec3 o, glm::vec3 d, SurfaceHit& hit, float& t) const {
+  const Geometry& g = geometries_[size_t(hit.meshId)];
+  const glm::uvec3& tri = g.local->triangles[size_t(hit.primId)];
+  const glm::vec3& p0 = g.positions[tri.x];
+  const glm::vec3 e1 = g.positions[tri.y] - p0, e2 = g.positions[tri.z] - p0;
+  const glm::vec3 p = glm::cross(d, e2);
+  const float det = glm::dot(e1, p);
+  if (det == 0.0f) return;
+  const float inv = 1.0f / det;
+  const glm::vec3 s = o - p0, q = glm::cross(s, e1);
+  float u = glm::dot(s, p) * inv, v = glm::dot(d, q) * inv;
+  const float tt = glm::dot(e2, q) * inv;
+  u = std::clamp(u, 0.0f, 1.0f);
+  v = std::clamp(v, 0.0f, 1.0f);
+  if (u + v > 1.0f) {
+    const float sum = u + v;
+    u /= sum;
+    v /= sum;
+  }
+  hit.u = u;
+  hit.v = v;
+  if (tt > 0) t = tt;
 }
 
 bool FrameScene::occluded(glm::vec3 o, glm::vec3 d, float tmax) const {

@@ -15,10 +15,11 @@
 
 namespace arena {
 
-// Embree device; one per process is enough.
+// Embree device; one per process is enough. `config` is Embree's device configuration (a test
+// pins the kernels' ISA with "isa=sse2" to show that hits do not depend on it).
 class EmbreeDevice {
  public:
-  EmbreeDevice();
+  explicit EmbreeDevice(const char* config = "verbose=0");
   ~EmbreeDevice();
   EmbreeDevice(const EmbreeDevice&) = delete;
   EmbreeDevice& operator=(const EmbreeDevice&) = delete;
@@ -110,6 +111,8 @@ class FrameScene {
   glm::vec3 sampleLight(const SurfaceHit& at, const Sampler& s, uint32_t dim, glm::vec3& wi,
                         float& dist, float& pdfSolidAngle) const;
   float lightPdf(const SurfaceHit& lightHit, glm::vec3 from) const;
+  // The hit's (t, u, v) recomputed from its triangle, the same bits on every CPU (tracer.cpp).
+  void exactHit(glm::vec3 origin, glm::vec3 dir, SurfaceHit& hit, float& t) const;
 
   const Scene& scene_;
   SceneState state_;
