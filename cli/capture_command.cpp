@@ -6,9 +6,9 @@
 
 #include "cli/commands.hpp"
 #include "cli/render_options.hpp"
+#include "core/blender_import.hpp"
 #include "core/capture.hpp"
 #include "core/error.hpp"
-#include "harness/blender_import.hpp"
 #include "harness/scene_selection.hpp"
 #include "metrics/capture_checks.hpp"
 #include "metrics/evaluator.hpp"

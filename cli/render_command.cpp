@@ -3,14 +3,14 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 
+#include "cli/commands.hpp"
+#include "cli/render_options.hpp"
 #include "core/display.hpp"
 #include "core/error.hpp"
 #include "core/sequence.hpp"
-#include "harness/image_files.hpp"
-#include "cli/commands.hpp"
-#include "cli/render_options.hpp"
 #include "harness/run_matrix.hpp"
 #include "harness/scene_selection.hpp"
+#include "reports/image_files.hpp"
 #include "tracer/sequence_cache.hpp"
 
 namespace arena::cli {

@@ -39,6 +39,32 @@ long replaceNonFinite(Image& image) {
   return count;
 }
 
+long nonFiniteValues(const Image& image) {
+  long count = 0;
+  for (float v : image.raw()) count += !std::isfinite(v);
+  return count;
+}
+
+long invalidateNonFinitePixels(Image& samples, int validChannel) {
+  float* valid = samples.plane(validChannel);
+  long marked = 0;
+  for (size_t i = 0; i < samples.pixelCount(); ++i)
+    for (int c = 0; c < samples.channels(); ++c)
+      if (!std::isfinite(samples.plane(c)[i])) {
+        marked += valid[i] != 0.0f;
+        valid[i] = 0.0f;
+        break;
+      }
+  return marked;
+}
+
+long nonZeroPixels(const Image& image, int channel) {
+  const float* plane = image.plane(channel);
+  long count = 0;
+  for (size_t i = 0; i < image.pixelCount(); ++i) count += plane[i] != 0.0f;
+  return count;
+}
+
 std::string describeNonFinite(const NonFiniteCounts& counts) {
   std::string out;
   for (const auto& [where, n] : counts) out += (out.empty() ? "" : ", ") + where + " x" + std::to_string(n);

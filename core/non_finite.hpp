@@ -26,6 +26,13 @@ long countNonFinite(const LayerSet& layers, const std::vector<LayerSpec>& specs,
 
 // Replaces NaN/Inf by 0 in place in `image`; returns how many were replaced.
 long replaceNonFinite(Image& image);
+// How many of `image`'s values (every channel) are NaN/Inf.
+long nonFiniteValues(const Image& image);
+// Sets channel `validChannel` to 0 at every pixel where any channel is NaN/Inf (a sample that a
+// consumer must then skip); returns how many pixels it marked.
+long invalidateNonFinitePixels(Image& samples, int validChannel);
+// How many pixels hold a non-zero value in channel `channel`.
+long nonZeroPixels(const Image& image, int channel);
 
 // "normal.Y x30, gradients: gradient.lumNew x2", in key order.
 std::string describeNonFinite(const NonFiniteCounts& counts);

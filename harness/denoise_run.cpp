@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "denoisers/common/remodulation.hpp"
 
 namespace arena {
 
@@ -55,12 +56,8 @@ long sanitizeGradientSamples(LayerSet& gradients, NonFiniteCounts& counts) {
     if (!gradients.has(spec.name)) continue;
     Image& samples = gradients.get(spec.name);
     const auto valid = std::find(spec.suffixes.begin(), spec.suffixes.end(), "valid");
-    if (valid != spec.suffixes.end() && int(valid - spec.suffixes.begin()) < samples.channels()) {
-      float* validPlane = samples.plane(int(valid - spec.suffixes.begin()));
-      for (size_t i = 0; i < samples.pixelCount(); ++i)
-        for (int c = 0; c < samples.channels(); ++c)
-          if (!std::isfinite(samples.plane(c)[i])) validPlane[i] = 0.0f;
-    }
+    if (valid != spec.suffixes.end() && int(valid - spec.suffixes.begin()) < samples.channels())
+      invalidateNonFinitePixels(samples, int(valid - spec.suffixes.begin()));
     replaced += replaceNonFinite(samples);
   }
   return replaced;
@@ -184,10 +181,9 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
       out.wallMilliseconds += wall;
       out.milliseconds += reported.value_or(wall);
       out.selfTimed = reported.has_value();
-      for (float v : result.raw())
-        if (!std::isfinite(v))
-          throw Error(request_.name + " produced a non-finite value on the " + signalName(kind) + " signal at frame " +
-                      std::to_string(t));
+      if (nonFiniteValues(result) > 0)
+        throw Error(request_.name + " produced a non-finite value on the " + signalName(kind) + " signal at frame " +
+                    std::to_string(t));
       for (PassStats p : d.lastPasses()) {
         p.name = std::string(signalName(kind)) + "/" + p.name;
         out.extraRaysPerPixel += p.raysPerPixel;
@@ -198,9 +194,7 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
     // read by both signals' instances but traced once. (The tracer also re-shades the old sample
     // to know its luminance; a real-time implementation keeps that value, so it is not charged.)
     if (needsGradients_ && t > 0) {
-      const Image& samples = gradients.get("gradient");
-      double valid = 0;
-      for (size_t i = 0; i < samples.pixelCount(); ++i) valid += samples.plane(4)[i] != 0.0f ? 1.0 : 0.0;
+      const double valid = double(nonZeroPixels(gradients.get("gradient"), 4));
       out.extraRaysPerPixel += valid / (double(w) * double(h));
     }
     if (colorOnly) {  // the denoiser's output is the final colour: nothing to remodulate
@@ -209,21 +203,15 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
     }
     // Remodulation reads the cache's own layers: a non-finite one fails the pair below, it is not
     // an input of the denoiser to sanitise.
-    const Image &albedo = cached.get("albedo"), &specAlbedo = cached.get("specAlbedo"), &emission = cached.get("emission");
-    for (size_t i = 0; i < out.color.raw().size(); ++i)
-      out.color.raw()[i] = albedo.raw()[i] * out.diffuse.raw()[i] + specAlbedo.raw()[i] * out.specular.raw()[i] +
-                           emission.raw()[i];
+    remodulate(cached.get("albedo"), out.diffuse, cached.get("specAlbedo"), out.specular, cached.get("emission"),
+               out.color);
     // The filtered signals are finite (checked above), so a non-finite colour comes from the cache's
     // remodulation layers: fail the pair naming them rather than score NaN as a perfect frame.
-    long bad = 0;
-    for (float v : out.color.raw()) bad += !std::isfinite(v);
-    if (bad) {
+    if (const long bad = nonFiniteValues(out.color)) {
       std::string layers;
-      for (const char* name : {"albedo", "specAlbedo", "emission"}) {
-        long n = 0;
-        for (float v : cached.get(name).raw()) n += !std::isfinite(v);
-        if (n) layers += std::string(layers.empty() ? "" : ", ") + name + " x" + std::to_string(n);
-      }
+      for (const char* name : {"albedo", "specAlbedo", "emission"})
+        if (const long n = nonFiniteValues(cached.get(name)))
+          layers += std::string(layers.empty() ? "" : ", ") + name + " x" + std::to_string(n);
       throw Error("frame " + std::to_string(t) + ": the remodulated colour has " + std::to_string(bad) +
                   " non-finite values (non-finite input layers: " + (layers.empty() ? "none; overflow" : layers) + ")");
     }

@@ -11,9 +11,9 @@
 #include "core/error.hpp"
 #include "core/stage_clock.hpp"
 #include "harness/gpu_cost.hpp"
-#include "harness/image_files.hpp"
 #include "harness/run_matrix.hpp"
 #include "metrics/results.hpp"
+#include "reports/image_files.hpp"
 
 namespace arena {
 
@@ -54,9 +54,7 @@ void runCapturedOutput(const Sequence& sequence, const std::string& name,
   for (int t = 0; t < sequence.info().frames; ++t) {
     f.frame = t;
     f.color = readCaptureOutput(capture, name, t);
-    long bad = 0;
-    for (float v : f.color.raw()) bad += !std::isfinite(v);
-    if (bad)
+    if (const long bad = nonFiniteValues(f.color))
       throw Error(captureOutputPath(output, t).string() + ": " + std::to_string(bad) +
                   " non-finite colour values in the output of '" + name + "' (an output is scored as given, never repaired)");
     f.selfTimed = !output.milliseconds.empty();

@@ -7,9 +7,9 @@
 #include "core/capture.hpp"
 #include "core/error.hpp"
 #include "core/stage_clock.hpp"
-#include "harness/image_files.hpp"
 #include "harness/run_matrix.hpp"
 #include "metrics/capture_checks.hpp"
+#include "reports/image_files.hpp"
 
 namespace arena {
 

@@ -8,10 +8,10 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "core/blender_import.hpp"
 #include "core/capture.hpp"
 #include "core/error.hpp"
 #include "core/json_reader.hpp"
-#include "harness/blender_import.hpp"
 #include "harness/run_matrix.hpp"
 #include "metrics/capture_checks.hpp"
 #include "tests/test_util.hpp"

@@ -11,13 +11,16 @@
 #include <vector>
 
 #include "core/consistency.hpp"
+#include "core/error.hpp"
 #include "core/fast_math.hpp"
+#include "core/non_finite.hpp"
 #include "denoisers/common/atrous.hpp"
 #include "denoisers/common/edge_stopping.hpp"
 #include "denoisers/common/gbuffer.hpp"
 #include "denoisers/common/history_clamp.hpp"
 #include "denoisers/common/median.hpp"
 #include "denoisers/common/poisson_blur.hpp"
+#include "denoisers/common/remodulation.hpp"
 #include "denoisers/common/reprojection.hpp"
 #include "denoisers/common/simd.hpp"
 #include "denoisers/common/temporal_accumulation.hpp"
@@ -1163,6 +1166,44 @@ TEST(DenoiserBlocksClamp, ResultsLieInsideTheNeighbourhoodBox) {
     }
     EXPECT_GT(moved, w * h);  // most history values were outside and moved
   }
+}
+
+// Remodulation (denoisers/common/remodulation.hpp): the albedos multiply their own signal and the
+// emission is added, channel by channel; layers of different sizes are refused.
+TEST(Remodulation, PutsEachAlbedoBackOnItsSignalAndAddsTheEmission) {
+  Image albedo(2, 1, 3), diffuse(2, 1, 3), specAlbedo(2, 1, 3), specular(2, 1, 3), emission(2, 1, 3), color;
+  for (int c = 0; c < 3; ++c)
+    for (int x = 0; x < 2; ++x) {
+      albedo.at(x, 0, c) = 0.5f + 0.1f * c;
+      diffuse.at(x, 0, c) = 2.0f + x;
+      specAlbedo.at(x, 0, c) = 0.25f;
+      specular.at(x, 0, c) = 4.0f * (x + 1);
+      emission.at(x, 0, c) = x == 1 ? 3.0f : 0.0f;
+    }
+  remodulate(albedo, diffuse, specAlbedo, specular, emission, color);
+  ASSERT_EQ(color.width(), 2);
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_FLOAT_EQ(color.at(0, 0, c), (0.5f + 0.1f * c) * 2.0f + 0.25f * 4.0f);
+    EXPECT_FLOAT_EQ(color.at(1, 0, c), (0.5f + 0.1f * c) * 3.0f + 0.25f * 8.0f + 3.0f);
+  }
+  const Image small(1, 1, 3);
+  EXPECT_THROW(remodulate(albedo, small, specAlbedo, specular, emission, color), Error);
+}
+
+// The non-finite helpers the denoiser run uses (core/non_finite.hpp): a sample with any NaN/Inf
+// channel is marked invalid, values are counted over every channel, valid pixels by their flag.
+TEST(NonFinite, InvalidSamplesAreMarkedAndCounted) {
+  Image samples(3, 1, 3, 1.0f);
+  samples.at(1, 0, 0) = std::numeric_limits<float>::quiet_NaN();
+  samples.at(2, 0, 1) = std::numeric_limits<float>::infinity();
+  EXPECT_EQ(nonFiniteValues(samples), 2);
+  EXPECT_EQ(nonZeroPixels(samples, 2), 3);
+  EXPECT_EQ(invalidateNonFinitePixels(samples, 2), 2);
+  EXPECT_EQ(samples.at(0, 0, 2), 1.0f);
+  EXPECT_EQ(samples.at(1, 0, 2), 0.0f);
+  EXPECT_EQ(samples.at(2, 0, 2), 0.0f);
+  EXPECT_EQ(nonZeroPixels(samples, 2), 1);
+  EXPECT_EQ(invalidateNonFinitePixels(samples, 2), 0);  // already invalid: nothing more to mark
 }
 
 }  // namespace

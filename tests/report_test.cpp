@@ -10,10 +10,10 @@
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
-#include "harness/image_files.hpp"
 #include "metrics/error_maps.hpp"
 #include "metrics/results.hpp"
 #include "metrics/statistics.hpp"
+#include "reports/image_files.hpp"
 #include "reports/pareto.hpp"
 #include "tests/test_util.hpp"
 

@@ -1,4 +1,4 @@
-#include "harness/blender_import.hpp"
+#include "core/blender_import.hpp"
 
 #include <cmath>
 #include <cstdio>

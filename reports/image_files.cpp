@@ -1,4 +1,4 @@
-#include "harness/image_files.hpp"
+#include "reports/image_files.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 
