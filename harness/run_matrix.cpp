@@ -139,7 +139,7 @@ json runMatrix(const RunConfig& cfg) {
     json validation;
     try {
       dir = source.scene ? renderSequence(*source.scene, cfg.render, cfg.cache, cfg.progress) : source.capture;
-      sd = loadScene(dir, evaluation, source.scene ? nullptr : &validation);
+      sd = prepareScene(dir, evaluation, source.scene ? nullptr : &validation);
       if (source.scene) seedSequences = renderSeedSequences(*source.scene, cfg);
     } catch (const std::exception& e) {
       sceneError = e.what();

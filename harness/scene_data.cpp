@@ -36,7 +36,7 @@ std::vector<int> chooseFrames(const SequenceInfo& info, int warmup) {
 
 }  // namespace
 
-std::unique_ptr<SceneData> loadScene(const fs::path& dir, const EvaluationOptions& options, json* validation) {
+std::unique_ptr<SceneData> prepareScene(const fs::path& dir, const EvaluationOptions& options, json* validation) {
   StageTimer timer(Stage::Loading);
   Sequence sequence = Sequence::open(dir);
   EvaluationInput input = readSequenceForEvaluation(sequence);

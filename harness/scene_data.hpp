@@ -34,10 +34,11 @@ struct SeedSequence {
 // "prefix_0007.png": the name of a kept frame's image.
 std::string frameName(const char* prefix, int t);
 
-// A capture is validated before anything runs on it (metrics/capture_checks.hpp): `validation`
-// receives the checks, and a hard failure refuses the scene with the checks' names and numbers.
-std::unique_ptr<SceneData> loadScene(const std::filesystem::path& dir, const EvaluationOptions& options,
-                                     nlohmann::json* validation = nullptr);
+// The sequence in `dir` (a cached render or a capture) opened for its pairs. A capture is
+// validated before anything runs on it (metrics/capture_checks.hpp): `validation` receives the
+// checks, and a hard failure refuses the scene with the checks' names and numbers.
+std::unique_ptr<SceneData> prepareScene(const std::filesystem::path& dir, const EvaluationOptions& options,
+                                        nlohmann::json* validation = nullptr);
 
 // The scene rendered with input seeds 1..config.seeds-1 (same references), their frames read.
 std::vector<SeedSequence> renderSeedSequences(const Scene& scene, const RunConfig& config);
