@@ -191,11 +191,10 @@ struct ShapeReader {
     m.median = number(s, path, "median");
     m.p5 = number(s, path, "p5");
     m.p95 = number(s, path, "p95");
-    if (s.contains("ci95") && !s.at("ci95").is_null()) {
-      const json& ci = s.at("ci95");
-      if (!ci.is_array() || ci.size() != 2 || !ci[0].is_number() || !ci[1].is_number())
-        fail(path + ".ci95", "[low, high] (or null)", ci);
-      m.ci95 = {ci[0].get<double>(), ci[1].get<double>()};
+    if (s.contains("ci95")) {
+      const std::optional<Interval> ci = Interval::fromJson(s.at("ci95"));
+      if (!ci) fail(path + ".ci95", "[low, high] (or null)", s.at("ci95"));
+      m.ci95 = *ci;
     }
     for (auto it = s.begin(); it != s.end(); ++it)
       if (!kSummaryKeys.count(it.key()))

@@ -17,10 +17,9 @@ namespace {
 
 Interval readInterval(JsonReader& r, const std::string& key) {
   const json& v = r.value(key);
-  if (v.is_null()) return {};
-  if (!v.is_array() || v.size() != 2 || !v[0].is_number() || !v[1].is_number())
-    r.fail(key, "expected [low, high] (or null), got " + v.dump());
-  return {v[0].get<double>(), v[1].get<double>()};
+  const std::optional<Interval> interval = Interval::fromJson(v);
+  if (!interval) r.fail(key, "expected [low, high] (or null), got " + v.dump());
+  return *interval;
 }
 
 // A ranking list: entries {label, rank, <valueName>, ci95, tiedWith, extraPathsPerPixel?}.

@@ -217,6 +217,12 @@ json Interval::toJson() const {
   return json::array({lo, hi});
 }
 
+std::optional<Interval> Interval::fromJson(const json& j) {
+  if (j.is_null()) return Interval{};
+  if (!j.is_array() || j.size() != 2 || !j[0].is_number() || !j[1].is_number()) return std::nullopt;
+  return Interval{j[0].get<double>(), j[1].get<double>()};
+}
+
 ResamplingPlan::ResamplingPlan(int frames, int tiles, const std::string& seedName,
                                const BootstrapConfig& cfg) {
   if (frames < 1 || tiles < 1 || cfg.replicates < 1) return;

@@ -20,6 +20,7 @@
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -63,6 +64,9 @@ struct Interval {
   bool valid() const { return lo == lo && hi == hi; }
   bool containsZero() const { return valid() && lo <= 0 && hi >= 0; }
   nlohmann::json toJson() const;
+  // What toJson writes, read back: [low, high], or null for no interval. Anything else: nullopt
+  // (the caller names the file and path).
+  static std::optional<Interval> fromJson(const nlohmann::json& j);
 };
 
 struct BootstrapConfig {
