@@ -47,13 +47,19 @@ struct PixelShade {
   glm::vec3 emission{0};
   glm::vec3 color() const { return radiance.diffuse + radiance.specular + emission; }
 };
-PixelShade shadePixel(const FrameScene& fs, const SurfaceHit& s, glm::vec3 eye, const Sampler& sampler,
+PixelShade shadePixel(const FrameScene& fs, const FrameScene::PrimaryVertex& vertex, const Sampler& sampler,
                       RayCounts& counts) {
   PixelShade out;
-  glm::vec3 wo = glm::normalize(eye - s.position);
-  if (glm::dot(s.geometricNormal, wo) > 0) out.emission = s.emission;
-  out.radiance = fs.shade(s, wo, sampler, counts);
+  if (glm::dot(vertex.hit.geometricNormal, vertex.wo) > 0) out.emission = vertex.hit.emission;
+  out.radiance = fs.shade(vertex, sampler, counts);
   return out;
+}
+FrameScene::PrimaryVertex primaryVertex(const FrameScene& fs, const SurfaceHit& s, glm::vec3 eye) {
+  return fs.prepare(s, glm::normalize(eye - s.position));
+}
+PixelShade shadePixel(const FrameScene& fs, const SurfaceHit& s, glm::vec3 eye, const Sampler& sampler,
+                      RayCounts& counts) {
+  return shadePixel(fs, primaryVertex(fs, s, eye), sampler, counts);
 }
 
 template <class Body>
@@ -379,9 +385,11 @@ void SequenceRenderer::extendReference(int t, ReferenceSums& sums, const std::ve
       counts.rays++;
       const bool hasHit = cur.intersect(cam.eye, dir, std::numeric_limits<float>::infinity(), hit, tHit, true);
       SurfaceHit s;
+      FrameScene::PrimaryVertex vertex;  // prepared once: every sample of the pixel starts here
       glm::vec3 demodDiffuse(0), demodSpecular(0);
       if (hasHit) {
         s = cur.surface(hit.meshId, hit.primId, hit.u, hit.v);
+        vertex = primaryVertex(cur, s, cam.eye);
         const glm::vec3 wo = glm::normalize(cam.eye - s.position);
         const glm::vec3 nrm = glm::dot(s.geometricNormal, wo) < 0 ? -s.shadingNormal : s.shadingNormal;
         const glm::vec3 specAlb =
@@ -400,7 +408,7 @@ void SequenceRenderer::extendReference(int t, ReferenceSums& sums, const std::ve
             const Sampler sampler =
                 sobol ? Sampler::owenSobol(scene_.seed, uint32_t(t), uint32_t(i), uint32_t(replicate), uint32_t(k))
                       : Sampler(scene_.seed, uint32_t(t), uint32_t(i), uint32_t(1 + k * allReplicates + replicate));
-            const PixelShade px = shadePixel(cur, s, cam.eye, sampler, counts);
+            const PixelShade px = shadePixel(cur, vertex, sampler, counts);
             c = px.color();
             d = px.radiance.diffuse * demodDiffuse;
             sp = px.radiance.specular * demodSpecular;
@@ -646,9 +654,10 @@ LayerSet SequenceRenderer::renderLowres(int t, RayCounts& total) {
       const glm::vec3 specAlb =
           s.lightIndex >= 0 ? glm::vec3(0) : specularAlbedo(s.f0(), s.roughness, std::max(glm::dot(n, wo), 0.0f));
       glm::vec3 d(0), sp(0), dir(0);
+      const FrameScene::PrimaryVertex vertex = cur.prepare(s, wo);
       for (int k = 0; k < spp; ++k) {
         const Sampler sampler(frameSeed(), uint32_t(t), uint32_t(y * width_ + x), kLowresFirstSample + uint32_t(k));
-        const FrameScene::Radiance r = cur.shade(s, wo, sampler, counts);
+        const FrameScene::Radiance r = cur.shade(vertex, sampler, counts);
         d += r.diffuse;
         sp += r.specular;
         dir += r.diffuseDirection;

@@ -384,7 +384,7 @@ glm::vec3 FrameScene::sampleLight(const SurfaceHit& at, const Sampler& s, uint32
   float su = std::sqrt(uv.x), b1 = 1.0f - su, b2 = uv.y * su;
   glm::vec3 p0 = g.positions[tri.x], p1 = g.positions[tri.y], p2 = g.positions[tri.z];
   glm::vec3 lp = (1.0f - b1 - b2) * p0 + b1 * p1 + b2 * p2;
-  glm::vec3 ln = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+  const glm::vec3 ln = g.faceNormals[ti];  // normalize(cross(p1 - p0, p2 - p0)), computed once per frame
   glm::vec3 d = lp - at.position;
   float dist2 = glm::dot(d, d);
   dist = std::sqrt(dist2);
@@ -425,11 +425,23 @@ float FrameScene::specularHitDistance(const SurfaceHit& primary, glm::vec3 wo, c
   return intersect(offsetOrigin(primary.position, o.ng), wi, kInf, h, t) ? t : kInf;
 }
 
-FrameScene::Radiance FrameScene::shade(const SurfaceHit& primary, glm::vec3 wo, const Sampler& sampler,
-                                       RayCounts& counts) const {
+FrameScene::PrimaryVertex FrameScene::prepare(const SurfaceHit& hit, glm::vec3 wo) const {
+  PrimaryVertex v;
+  v.hit = hit;
+  v.wo = wo;
+  if (hit.lightIndex >= 0) return v;  // emitters do not reflect
+  const Oriented o = orient(hit, wo);
+  v.n = o.n;
+  v.ng = o.ng;
+  v.pSpec = specularProbability(hit, glm::dot(o.n, wo));
+  v.reflects = !(v.pSpec <= 0 && maxComponent(hit.diffuseAlbedo()) <= 0);
+  return v;
+}
+
+FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Sampler& sampler, RayCounts& counts) const {
   Radiance out;
   counts.paths++;
-  if (primary.lightIndex >= 0) return out;  // emitters do not reflect
+  if (!vertex.reflects) return out;
   // Next-event estimation at a vertex, MIS-weighted against BSDF sampling (power heuristic).
   auto nextEvent = [&](const SurfaceHit& s, const Oriented& o, glm::vec3 w, float pSpec, uint32_t dim,
                        glm::vec3& diffuse, glm::vec3& specular, glm::vec3* direction) {
@@ -450,9 +462,10 @@ FrameScene::Radiance FrameScene::shade(const SurfaceHit& primary, glm::vec3 wo, 
   };
 
   // Vertex 0: split direct light and the continuation between the diffuse and specular signals.
-  Oriented o0 = orient(primary, wo);
-  const float pSpec0 = specularProbability(primary, glm::dot(o0.n, wo));
-  if (pSpec0 <= 0 && maxComponent(primary.diffuseAlbedo()) <= 0) return out;
+  const SurfaceHit& primary = vertex.hit;
+  const glm::vec3 wo = vertex.wo;
+  const Oriented o0{vertex.n, vertex.ng};
+  const float pSpec0 = vertex.pSpec;
   nextEvent(primary, o0, wo, pSpec0, 0, out.diffuse, out.specular, &out.diffuseDirection);
   glm::vec3 wi;
   glm::vec2 dir0 = sampler.get2(kDirU);

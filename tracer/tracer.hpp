@@ -87,9 +87,24 @@ class FrameScene {
     // (the low-resolution buffer's "average direction", CAPCOM 2023 slide 21).
     glm::vec3 diffuseDirection{0};
   };
+  // What a path's first vertex knows before its first random number: the surface, the direction
+  // towards the eye, both normals turned towards it and the specular lobe's probability. A
+  // reference shades hundreds of samples from one primary hit, so it prepares the vertex once per
+  // pixel; shading a prepared vertex gives the same bits as shading the hit itself.
+  struct PrimaryVertex {
+    SurfaceHit hit;
+    glm::vec3 wo{0, 0, 1};
+    glm::vec3 n{0, 0, 1}, ng{0, 0, 1};  // oriented towards wo (the shading normal falls back to ng)
+    float pSpec = 0;
+    bool reflects = false;  // false for emitters and surfaces with neither lobe: no path leaves
+  };
+  PrimaryVertex prepare(const SurfaceHit& hit, glm::vec3 wo) const;
   // One path sample starting at the primary surface `hit` seen from direction wo (towards the eye).
   // Emission of `hit` itself is not included (it is the emission channel).
-  Radiance shade(const SurfaceHit& hit, glm::vec3 wo, const Sampler& sampler, RayCounts& counts) const;
+  Radiance shade(const SurfaceHit& hit, glm::vec3 wo, const Sampler& sampler, RayCounts& counts) const {
+    return shade(prepare(hit, wo), sampler, counts);
+  }
+  Radiance shade(const PrimaryVertex& vertex, const Sampler& sampler, RayCounts& counts) const;
   // The specular lobe's hit distance at the primary surface `hit`, from a ray of its own: one
   // GGX sample (the mirror direction where the sample falls below the surface), the way a
   // real-time tracer traces its specular rays separately from its diffuse ones (CAPCOM 2023
