@@ -77,7 +77,7 @@ void addStudyCommand(CLI::App& app) {
   auto flip = std::make_shared<std::string>("all");
   auto scenes = std::make_shared<std::string>("all");
   auto exposure = std::make_shared<std::string>("per-frame");
-  auto refineBudget = std::make_shared<double>(0.5);
+  auto refineBudget = std::make_shared<double>(4);
   auto refineMaxSpp = std::make_shared<int>(8192);
   auto verbose = std::make_shared<bool>(false);
   cmd->add_option("--out", *out, "Run directory")->default_val("runs/study");
@@ -95,11 +95,11 @@ void addStudyCommand(CLI::App& app) {
       ->check(CLI::IsMember({"per-frame", "first"}))
       ->default_val("per-frame");
   cmd->add_option("--refine-budget", *refineBudget,
-                  "After the first pass, refine the references of scenes that miss the reference-quality goal "
-                  "(cheapest first) while the predicted extra paths stay within this many times the paths the "
-                  "references hold, then run again (0: off)")
+                  "After the first pass, refine the references of each scene that misses the reference-quality "
+                  "goal when its predicted extra paths are at most this many times the paths of its references "
+                  "at their sample cap (--ref-spp), then run those scenes again (0: off)")
       ->check(finiteRange(0.0, 1000.0))
-      ->default_val(0.5);
+      ->default_val(4);
   cmd->add_option("--refine-max-spp", *refineMaxSpp, "The refinement's cap on a reference's samples per pixel")
       ->check(CLI::Range(1, 1 << 20))
       ->default_val(8192);

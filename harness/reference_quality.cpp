@@ -126,12 +126,21 @@ void addReferenceQuality(json& results, int warmup, const std::map<std::string, 
   }
 }
 
+// A scene's budget unit: the paths its references would hold at the render's sample cap (the
+// preset's --ref-spp), a function of the settings alone. (Until 2026-11-27 the unit was the paths all
+// references held, cache history included, and the budget was shared cheapest first: a rerun on a
+// cache whose references had been refined had a larger unit and fewer scenes to pay for, so it
+// refined scenes the first run had not.)
+double budgetUnitPaths(const SequenceInfo& info) {
+  int cap = info.settings.is_object() ? info.settings.value("referenceSpp", 0) : 0;
+  double unit = 0;
+  for (int spp : info.referenceSpp) unit += double(info.width) * info.height * (cap > 0 ? cap : spp);
+  return unit;
+}
+
 std::vector<ReferenceRefinement> planReferenceRefinement(const json& results,
                                                          const std::map<std::string, SequenceInfo>& sequences,
                                                          int warmup, int maxSpp, double budget) {
-  double held = 0;  // the paths every reference holds now: the budget's unit
-  for (const auto& [name, info] : sequences)
-    for (int spp : info.referenceSpp) held += double(info.width) * info.height * spp;
   std::vector<ReferenceRefinement> plans;
   const json scenes = results.value("scenes", json::object());
   for (const auto& [name, scene] : scenes.items()) {
@@ -151,18 +160,14 @@ std::vector<ReferenceRefinement> planReferenceRefinement(const json& results,
       const double grown = std::min(s * std::pow(kReferenceRoundGrowth, rounds), double(maxSpp));
       plan.predictedPaths += double(info.width) * info.height * (grown - s);
     }
+    const double unit = budgetUnitPaths(info);
+    plan.budgetNeeded = unit > 0 ? plan.predictedPaths / unit : 0;
+    plan.withinBudget = plan.predictedPaths > 0 && plan.budgetNeeded <= budget;
     plans.push_back(plan);
   }
   std::stable_sort(plans.begin(), plans.end(), [](const ReferenceRefinement& a, const ReferenceRefinement& b) {
     return a.predictedPaths < b.predictedPaths;
   });
-  // Cheapest first, so a budget that covers a scene covers every cheaper one too.
-  double cumulative = 0;
-  for (ReferenceRefinement& plan : plans) {
-    cumulative += plan.predictedPaths;
-    plan.budgetNeeded = held > 0 ? cumulative / held : 0;
-    plan.withinBudget = plan.predictedPaths > 0 && plan.budgetNeeded <= budget;
-  }
   return plans;
 }
 
@@ -175,7 +180,7 @@ std::string refinementNote(const ReferenceRefinement& plan, double budget) {
   char need[32];
   std::snprintf(need, sizeof need, "%g", std::ceil(plan.budgetNeeded * 10) / 10);
   return "not refined by the study: about " + paths + " more, over its refinement budget of " + sci(budget) +
-         "x the references' paths; `arena study --refine-budget " + need + "` covers it";
+         "x the paths of its references at their sample cap; `arena study --refine-budget " + need + "` covers it";
 }
 
 std::vector<std::string> referenceQualityLines(const json& scenes) {

@@ -31,15 +31,16 @@ std::string renderOptionsOf(const nlohmann::json& render);
 // (t >= warmup) would add: a reference of P pixels, mean s spp and estimated relMSE e > target
 // needs k = ceil(log_g(e / target)) adaptive rounds of growth g = kReferenceRoundGrowth (relMSE ~
 // 1/spp: the independent sampler's rate, conservative for Sobol), i.e. P (min(s g^k, maxSpp) - s)
-// paths. Scenes are taken cheapest first while their predictions fit in `budget` x the paths all
-// the references already hold: a budget in work, not seconds, so which scenes are refined does not
-// depend on the machine.
+// paths. A scene is refined when its prediction is at most `budget` x the paths its references
+// would hold at the render's sample cap (--ref-spp: 512 per pixel for the quick preset): a budget
+// per scene, in work, not seconds, and a function of the settings, so which scenes are refined
+// depends neither on the machine nor on the cache's history.
 inline constexpr double kRefineMargin = 0.9;
 struct ReferenceRefinement {
   std::string scene;
   double targetRelMse = 0;
   double predictedPaths = 0;  // the paths refining would add
-  double budgetNeeded = 0;    // the smallest budget that covers it (and every cheaper scene)
+  double budgetNeeded = 0;    // the smallest budget that covers it
   bool withinBudget = false;
 };
 std::vector<ReferenceRefinement> planReferenceRefinement(const nlohmann::json& results,

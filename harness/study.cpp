@@ -14,7 +14,7 @@ using nlohmann::json;
 namespace {
 
 // The study's second pass (issue 13): refines the references of the scenes that missed the
-// reference-quality goal, cheapest first within the budget (planReferenceRefinement), and notes on
+// reference-quality goal, each within its budget (planReferenceRefinement), and notes on
 // each verdict what was done or what it would take. Returns the scenes whose references it refined.
 std::vector<Scene> refineReferences(RunConfig& c, const json& results, double budget, int maxSpp) {
   std::map<std::string, SequenceInfo> sequences;

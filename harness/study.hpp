@@ -1,7 +1,7 @@
 #pragma once
-// The study: every registered denoiser on the scene suite, then -- within a work budget -- the
-// references of the scenes that missed the reference-quality goal are refined (cheapest first)
-// and those scenes run again; the whole is analysed and committed once (results.json and
+// The study: every registered denoiser on the scene suite, then the references of each scene that
+// missed the reference-quality goal are refined (within a work budget per scene) and those scenes
+// run again; the whole is analysed and committed once (results.json and
 // results.db hold the final run alone). `arena study` parses its options and calls runStudy.
 #include <nlohmann/json.hpp>
 
@@ -11,7 +11,8 @@ namespace arena {
 
 struct StudyConfig {
   RunConfig run;              // scenes, render settings, cache, out, flip, exposure, progress
-  double refineBudget = 0.5;  // extra paths as a multiple of the references' (0: no refinement)
+  // Per scene: extra paths as a multiple of its references' paths at their sample cap (0: none).
+  double refineBudget = 4;
   int refineMaxSpp = 8192;    // the refinement's cap on a reference's samples per pixel
 };
 

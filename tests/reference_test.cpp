@@ -494,43 +494,54 @@ TEST(Reference, RenderOptionsOfARunReproduceItsSettings) {
 }
 
 // The study's refinement plan: targets with the margin, predicted paths from the rounds a
-// reference needs (capped, warm-up-only references left out), cheapest first within the budget.
-TEST(Reference, RefinementPlanTakesTheCheapestScenesWithinTheBudget) {
+// reference needs (capped, warm-up-only references left out), each scene within its own budget in
+// units of its references at their sample cap, cheapest first.
+TEST(Reference, RefinementPlanRefinesEachSceneWithinItsOwnBudget) {
   auto quality = [](bool meets, double best) {
     return nlohmann::json{{"referenceQuality", {{"meets", meets}, {"bestCorrectedRelMse", best}}}};
   };
   const nlohmann::json results = {
       {"scenes", {{"dear", quality(false, 1e-3)}, {"cheap", quality(false, 1e-3)}, {"fine", quality(true, 1e-3)}}}};
-  auto sequence = [](std::vector<int> ofFrame, std::vector<int> spp, std::vector<double> est) {
+  auto sequence = [](std::vector<int> ofFrame, std::vector<int> spp, std::vector<double> est, int cap) {
     SequenceInfo info;
     info.width = info.height = 10;
     info.referenceOfFrame = std::move(ofFrame);
     info.referenceSpp = std::move(spp);
     info.referenceEstimatedRelMse = std::move(est);
+    if (cap > 0) info.settings = {{"referenceSpp", cap}};
     return info;
   };
-  const std::map<std::string, SequenceInfo> sequences = {
+  std::map<std::string, SequenceInfo> sequences = {
       // 1e-4 -> 9e-5: one round of sqrt(2), 100 -> 141.4 spp on 100 pixels (a doubling would be 200).
-      {"cheap", sequence({0, 0, 0, 0}, {100}, {1e-4})},
+      {"cheap", sequence({0, 0, 0, 0}, {100}, {1e-4}, 400)},
       // Reference 0 serves the warm-up frame only; reference 1 needs eight rounds (16x), capped at 1000.
-      {"dear", sequence({0, 1, 1, 1}, {100, 100}, {1e-2, 1e-3})},
-      {"fine", sequence({0, 0, 0, 0}, {100}, {1e-5})}};
+      // No cap in its settings: the unit falls back to the samples the references hold.
+      {"dear", sequence({0, 1, 1, 1}, {100, 100}, {1e-2, 1e-3}, 0)},
+      {"fine", sequence({0, 0, 0, 0}, {100}, {1e-5}, 400)}};
   const std::vector<ReferenceRefinement> plans = planReferenceRefinement(results, sequences, 1, 1000, 1.5);
   ASSERT_EQ(plans.size(), 2u);
   EXPECT_EQ(plans[0].scene, "cheap");
   EXPECT_DOUBLE_EQ(plans[0].targetRelMse, kRefineMargin * kReferenceQualityGoal * 1e-3);
   const double cheapPaths = 100.0 * (100 * std::sqrt(2.0) - 100);
   EXPECT_DOUBLE_EQ(plans[0].predictedPaths, cheapPaths);
-  EXPECT_DOUBLE_EQ(plans[0].budgetNeeded, cheapPaths / 40000);  // the references hold 400 spp x 100 pixels
+  EXPECT_DOUBLE_EQ(plans[0].budgetNeeded, cheapPaths / 40000);  // one reference at its cap: 400 spp x 100 pixels
   EXPECT_TRUE(plans[0].withinBudget);
   EXPECT_EQ(plans[1].scene, "dear");
   EXPECT_DOUBLE_EQ(plans[1].predictedPaths, 100.0 * 900);
-  EXPECT_DOUBLE_EQ(plans[1].budgetNeeded, (cheapPaths + 90000) / 40000);
+  EXPECT_DOUBLE_EQ(plans[1].budgetNeeded, 90000.0 / 20000);  // two references holding 100 spp x 100 pixels
   EXPECT_FALSE(plans[1].withinBudget);
   const std::string note = refinementNote(plans[1], 1.5);
   EXPECT_NE(note.find("not refined by the study"), std::string::npos) << note;
-  EXPECT_NE(note.find("`arena study --refine-budget 2.4`"), std::string::npos) << note;
+  EXPECT_NE(note.find("`arena study --refine-budget 4.5`"), std::string::npos) << note;
   EXPECT_NE(refinementNote(plans[0], 1.5).find("refined its references toward 9e-05"), std::string::npos);
+  // The cache's history does not move a scene's decision: once "cheap" holds more samples (a rerun
+  // after its refinement, when it may still miss), "dear" is planned exactly as before.
+  sequences["cheap"].referenceSpp = {200};
+  for (const ReferenceRefinement& p : planReferenceRefinement(results, sequences, 1, 1000, 1.5))
+    if (p.scene == "dear") {
+      EXPECT_DOUBLE_EQ(p.budgetNeeded, plans[1].budgetNeeded);
+      EXPECT_FALSE(p.withinBudget);
+    }
   // A budget of 0 refines nothing; a scene without a sequence is not planned.
   for (const ReferenceRefinement& p : planReferenceRefinement(results, sequences, 1, 1000, 0)) EXPECT_FALSE(p.withinBudget);
   EXPECT_TRUE(planReferenceRefinement(results, {}, 1, 1000, 1).empty());
