@@ -126,15 +126,20 @@ void addReferenceQuality(json& results, int warmup, const std::map<std::string, 
   }
 }
 
-// A scene's budget unit: the paths its references would hold at the render's sample cap (the
-// preset's --ref-spp), a function of the settings alone. (Until 2026-11-27 the unit was the paths all
-// references held, cache history included, and the budget was shared cheapest first: a rerun on a
-// cache whose references had been refined had a larger unit and fewer scenes to pay for, so it
-// refined scenes the first run had not.)
+// A scene's budget unit: the paths of its frames at the references' sample cap (the preset's
+// --ref-spp), as if each frame had a reference of its own: W x H x frames x cap, a function of the
+// settings alone. Per frame, not per reference: a static scene's one reference serves every frame
+// and is as much work to a study as a moving scene's many. (Until 2026-11-27 the unit was the
+// paths all references held, cache history included, and the budget was shared cheapest first: a
+// rerun on a cache whose references had been refined had a larger unit and fewer scenes to pay
+// for, so it refined scenes the first run had not.)
 double budgetUnitPaths(const SequenceInfo& info) {
-  int cap = info.settings.is_object() ? info.settings.value("referenceSpp", 0) : 0;
+  const int cap = info.settings.is_object() ? info.settings.value("referenceSpp", 0) : 0;
   double unit = 0;
-  for (int spp : info.referenceSpp) unit += double(info.width) * info.height * (cap > 0 ? cap : spp);
+  for (int r : info.referenceOfFrame) {
+    const int held = r >= 0 && r < int(info.referenceSpp.size()) ? info.referenceSpp[size_t(r)] : 0;
+    unit += double(info.width) * info.height * (cap > 0 ? cap : held);
+  }
   return unit;
 }
 
@@ -180,7 +185,7 @@ std::string refinementNote(const ReferenceRefinement& plan, double budget) {
   char need[32];
   std::snprintf(need, sizeof need, "%g", std::ceil(plan.budgetNeeded * 10) / 10);
   return "not refined by the study: about " + paths + " more, over its refinement budget of " + sci(budget) +
-         "x the paths of its references at their sample cap; `arena study --refine-budget " + need + "` covers it";
+         "x the paths of its frames at the references' sample cap; `arena study --refine-budget " + need + "` covers it";
 }
 
 std::vector<std::string> referenceQualityLines(const json& scenes) {

@@ -31,10 +31,10 @@ std::string renderOptionsOf(const nlohmann::json& render);
 // (t >= warmup) would add: a reference of P pixels, mean s spp and estimated relMSE e > target
 // needs k = ceil(log_g(e / target)) adaptive rounds of growth g = kReferenceRoundGrowth (relMSE ~
 // 1/spp: the independent sampler's rate, conservative for Sobol), i.e. P (min(s g^k, maxSpp) - s)
-// paths. A scene is refined when its prediction is at most `budget` x the paths its references
-// would hold at the render's sample cap (--ref-spp: 512 per pixel for the quick preset): a budget
-// per scene, in work, not seconds, and a function of the settings, so which scenes are refined
-// depends neither on the machine nor on the cache's history.
+// paths. A scene is refined when its prediction is at most `budget` x the paths of its frames at
+// the references' sample cap (W x H x frames x --ref-spp, 512 per pixel for the quick preset): a
+// budget per scene, in work, not seconds, and a function of the settings, so which scenes are
+// refined depends neither on the machine nor on the cache's history.
 inline constexpr double kRefineMargin = 0.9;
 struct ReferenceRefinement {
   std::string scene;

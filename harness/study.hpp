@@ -11,7 +11,7 @@ namespace arena {
 
 struct StudyConfig {
   RunConfig run;              // scenes, render settings, cache, out, flip, exposure, progress
-  // Per scene: extra paths as a multiple of its references' paths at their sample cap (0: none).
+  // Per scene: extra paths as a multiple of its frames' paths at the references' sample cap (0: none).
   double refineBudget = 4;
   int refineMaxSpp = 8192;    // the refinement's cap on a reference's samples per pixel
 };

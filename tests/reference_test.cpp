@@ -495,7 +495,7 @@ TEST(Reference, RenderOptionsOfARunReproduceItsSettings) {
 
 // The study's refinement plan: targets with the margin, predicted paths from the rounds a
 // reference needs (capped, warm-up-only references left out), each scene within its own budget in
-// units of its references at their sample cap, cheapest first.
+// units of its frames at the references' sample cap, cheapest first.
 TEST(Reference, RefinementPlanRefinesEachSceneWithinItsOwnBudget) {
   auto quality = [](bool meets, double best) {
     return nlohmann::json{{"referenceQuality", {{"meets", meets}, {"bestCorrectedRelMse", best}}}};
@@ -524,15 +524,15 @@ TEST(Reference, RefinementPlanRefinesEachSceneWithinItsOwnBudget) {
   EXPECT_DOUBLE_EQ(plans[0].targetRelMse, kRefineMargin * kReferenceQualityGoal * 1e-3);
   const double cheapPaths = 100.0 * (100 * std::sqrt(2.0) - 100);
   EXPECT_DOUBLE_EQ(plans[0].predictedPaths, cheapPaths);
-  EXPECT_DOUBLE_EQ(plans[0].budgetNeeded, cheapPaths / 40000);  // one reference at its cap: 400 spp x 100 pixels
+  EXPECT_DOUBLE_EQ(plans[0].budgetNeeded, cheapPaths / 160000);  // 4 frames at the cap: 400 spp x 100 pixels each
   EXPECT_TRUE(plans[0].withinBudget);
   EXPECT_EQ(plans[1].scene, "dear");
   EXPECT_DOUBLE_EQ(plans[1].predictedPaths, 100.0 * 900);
-  EXPECT_DOUBLE_EQ(plans[1].budgetNeeded, 90000.0 / 20000);  // two references holding 100 spp x 100 pixels
+  EXPECT_DOUBLE_EQ(plans[1].budgetNeeded, 90000.0 / 40000);  // 4 frames whose references hold 100 spp x 100 pixels
   EXPECT_FALSE(plans[1].withinBudget);
   const std::string note = refinementNote(plans[1], 1.5);
   EXPECT_NE(note.find("not refined by the study"), std::string::npos) << note;
-  EXPECT_NE(note.find("`arena study --refine-budget 4.5`"), std::string::npos) << note;
+  EXPECT_NE(note.find("`arena study --refine-budget 2.3`"), std::string::npos) << note;
   EXPECT_NE(refinementNote(plans[0], 1.5).find("refined its references toward 9e-05"), std::string::npos);
   // The cache's history does not move a scene's decision: once "cheap" holds more samples (a rerun
   // after its refinement, when it may still miss), "dear" is planned exactly as before.
