@@ -59,7 +59,9 @@ json replaceScenes(json results, const json& part) {
 
 json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
   if (runs.empty()) throw Error("merge: no runs given");
-  checkRunOutputs(out);  // creates --out when missing
+  std::error_code ec;
+  if (fs::exists(out, ec) && !fs::is_directory(out, ec))
+    throw Error(out.string() + ": exists and is not a directory; --out needs a run directory");
   RunResults merged;
   std::set<std::string> seen;
   // A gate must not pass on a partial study: every shard i/n of one n, each exactly once.
@@ -99,6 +101,7 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
   for (int i = 0; i < shardCount; ++i)
     if (!shards.count(i)) missing += (missing.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(shardCount);
   if (!missing.empty()) throw Error("merge: incomplete shard set, missing " + missing + "; nothing was written");
+  checkRunOutputs(out);  // creates --out only now: shards that cannot be merged leave no directory behind
   for (const fs::path& run : runs)
     if (fs::exists(run / "images"))
       fs::copy(run / "images", out / "images", fs::copy_options::recursive | fs::copy_options::skip_existing);

@@ -301,6 +301,9 @@ TEST(RunMatrixContract, MergeCreatesItsOutputDirectory) {
   runMatrix(a);
   runMatrix(b);
   fs::path out = test::freshDir("merge_out") / "not" / "there";
+  // An incomplete set is refused before anything is created: no empty --out is left behind.
+  EXPECT_THROW(mergeRuns({a.out}, out), Error);
+  EXPECT_FALSE(fs::exists(out.parent_path()));
   json merged = mergeRuns({a.out, b.out}, out);
   EXPECT_EQ(merged["pairs"].size(), 2u);
   EXPECT_TRUE(fs::exists(out / "results.json"));
