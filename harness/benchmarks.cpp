@@ -13,6 +13,7 @@
 
 #include "core/env_info.hpp"
 #include "core/error.hpp"
+#include "core/printed.hpp"
 #include "harness/denoise_run.hpp"
 #include "metrics/error.hpp"
 #include "metrics/rank_agreement.hpp"
@@ -23,12 +24,6 @@ namespace arena {
 namespace {
 
 using nlohmann::json;
-
-std::string printed(const char* format, auto... args) {
-  char buf[1024];
-  std::snprintf(buf, sizeof buf, format, args...);
-  return buf;
-}
 
 // Runs Embree's tutorial benchmark and returns its average Mrays/s (0 if unavailable).
 double embreePathtracerMrays(int size, std::string& note) {

@@ -11,6 +11,7 @@
 #include <map>
 
 #include "core/error.hpp"
+#include "core/printed.hpp"
 #include "denoisers/denoiser.hpp"
 #include "harness/gpu_cost.hpp"
 #include "tracer/scene.hpp"
@@ -20,12 +21,6 @@ namespace arena {
 namespace {
 
 using nlohmann::json;
-
-std::string printed(const char* format, auto... args) {
-  char buffer[512];
-  std::snprintf(buffer, sizeof(buffer), format, args...);
-  return buffer;
-}
 
 // Heap bytes in use (glibc: small blocks plus mmapped ones -- every image plane at these sizes).
 double heapBytes() {

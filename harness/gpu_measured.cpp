@@ -7,6 +7,7 @@
 
 #include "core/error.hpp"
 #include "core/json_reader.hpp"
+#include "core/printed.hpp"
 #include "core/sequence.hpp"
 #include "denoisers/common/atrous.hpp"
 #include "denoisers/common/gbuffer.hpp"
@@ -117,11 +118,6 @@ nlohmann::json benchGpuMeasured(const std::string& path, const std::string& devi
     throw Error(path + ": device '" + set.device + "' is none of the known ones (" + known +
                 "); pass --device with the one whose specification it has");
   }
-  auto printed = [](const char* format, auto... args) {
-    char buffer[512];
-    std::snprintf(buffer, sizeof buffer, format, args...);
-    return std::string(buffer);
-  };
   progress(printed("measured set %s: %zu kernels timed on '%s', priced on %s (%.0f GB/s, %.1f Gtexel/s)",
                    path.c_str(), set.rows.size(), set.device.c_str(), device->name.c_str(), device->bandwidthGBs,
                    device->texelRateGTs));
