@@ -90,6 +90,17 @@ TEST(Sobol, EveryPrefixOfAReplicateIsA02Net) {
   }
 }
 
+// A replicate's sampler moved to another index (the reference loop hashes each replicate's key
+// once) is that index's sampler, bit for bit.
+TEST(Sobol, AReplicatesSamplerAtAnotherIndexIsThatIndexsSampler) {
+  for (uint32_t index : {0u, 1u, 3u, 1000u})
+    for (uint32_t dim : {0u, 2u, 13u}) {
+      const Sampler moved = Sampler::owenSobol(1, 0, 10, 2, 7).atIndex(index), fresh = Sampler::owenSobol(1, 0, 10, 2, index);
+      EXPECT_EQ(moved.get2(dim), fresh.get2(dim)) << index << " " << dim;
+      EXPECT_EQ(moved.get(dim), fresh.get(dim)) << index << " " << dim;
+    }
+}
+
 TEST(Sobol, ReplicatesAndPixelsAreDecorrelated) {
   // Different replicates (and pixels) must not repeat each other's points.
   const glm::vec2 a = Sampler::owenSobol(1, 0, 10, 0, 3).get2(2);

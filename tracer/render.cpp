@@ -400,13 +400,16 @@ void SequenceRenderer::extendReference(int t, ReferenceSums& sums, const std::ve
       const glm::vec3 sky = hasHit ? glm::vec3(0) : cur.sky(dir);
       for (int r = 0; r < K; ++r) {
         double* acc = &sums.sum[(i * size_t(K) + size_t(r)) * V];
+        const int replicate = sums.firstReplicate + r;
+        // The replicate's Sobol key, hashed once; each sample only sets its index.
+        const Sampler sobolReplicate =
+            Sampler::owenSobol(scene_.seed, uint32_t(t), uint32_t(i), uint32_t(replicate), 0);
         for (int k = begin; k < end; ++k) {
           glm::vec3 c = sky, d(0), sp(0);
           if (hasHit) {
             // Independent: sample ids 1.. (0 is the noisy frame's), interleaved over replicates.
-            const int replicate = sums.firstReplicate + r;
             const Sampler sampler =
-                sobol ? Sampler::owenSobol(scene_.seed, uint32_t(t), uint32_t(i), uint32_t(replicate), uint32_t(k))
+                sobol ? sobolReplicate.atIndex(uint32_t(k))
                       : Sampler(scene_.seed, uint32_t(t), uint32_t(i), uint32_t(1 + k * allReplicates + replicate));
             const PixelShade px = shadePixel(cur, vertex, sampler, counts);
             c = px.color();

@@ -118,6 +118,14 @@ class Sampler {
     return s;
   }
 
+  // Sample `index` of this sampler's Sobol randomisation: owenSobol(seed, frame, pixel, replicate,
+  // index) without hashing the replicate's key again (a reference draws hundreds per replicate).
+  Sampler atIndex(uint32_t index) const {
+    Sampler s = *this;
+    s.reversedIndex_ = sobol::reverseBits(index);
+    return s;
+  }
+
   SamplerKind kind() const { return kind_; }
   // Uniform in [0, 1) for dimension `dim`. Sobol: the value is
   //   nestedUniformScramble(dimension0(i), h_hi) with i = nestedUniformScramble(index, h_lo),
