@@ -390,7 +390,7 @@ void SequenceRenderer::extendReference(int t, ReferenceSums& sums, const std::ve
       if (hasHit) {
         s = cur.surface(hit.meshId, hit.primId, hit.u, hit.v);
         vertex = primaryVertex(cur, s, cam.eye);
-        const glm::vec3 wo = glm::normalize(cam.eye - s.position);
+        const glm::vec3 wo = vertex.wo;
         const glm::vec3 nrm = glm::dot(s.geometricNormal, wo) < 0 ? -s.shadingNormal : s.shadingNormal;
         const glm::vec3 specAlb =
             s.lightIndex >= 0 ? glm::vec3(0) : specularAlbedo(s.f0(), s.roughness, std::max(glm::dot(nrm, wo), 0.0f));
