@@ -120,6 +120,7 @@ class Sampler {
 
   // Sample `index` of this sampler's Sobol randomisation: owenSobol(seed, frame, pixel, replicate,
   // index) without hashing the replicate's key again (a reference draws hundreds per replicate).
+  // Sobol samplers only: an independent sampler's numbers do not depend on the index set here.
   Sampler atIndex(uint32_t index) const {
     Sampler s = *this;
     s.reversedIndex_ = sobol::reverseBits(index);
