@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -39,9 +38,7 @@ void writeOutputExr(const fs::path& imageDir, const DenoisedFrame& f, const Deno
     out.set(signal, image);
     specs.push_back({signal, {"R", "G", "B"}});
   }
-  char name[64];
-  std::snprintf(name, sizeof name, "frame_%04d.exr", f.frame);
-  writeExr(imageDir / name, out, specs, {{"arena.denoiser", req.name}, {"arena.params", params.toJson().dump()}});
+  writeExr(Sequence::framePath(imageDir, f.frame), out, specs, {{"arena.denoiser", req.name}, {"arena.params", params.toJson().dump()}});
 }
 
 // Reads the stored outputs of a denoiser that ran elsewhere (a capture's outputs/NAME) as the
@@ -82,28 +79,28 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   GpuFrameCost gpuCost(info.width, info.height);  // the speed axis's predicted GPU ms (issue 31)
   const bool keepImages = cfg.keepFrames != "none";
   auto onFrame = [&](const DenoisedFrame& f) {
-            FrameFacts facts;
-            facts.milliseconds = f.milliseconds;
-            if (f.selfTimed && run) facts.wallMilliseconds = f.wallMilliseconds;
-            // Extra paths: the low-resolution buffer's (reengine) or the gradient samples'
-            // (asvgf), each at the rate it rendered at.
-            if (run && (run->readsLowres() || run->readsGradients())) facts.extraRaysPerPixel = f.extraRaysPerPixel;
-            facts.extraPathsPerSecond = run && run->readsLowres() ? info.lowresPathsPerSecond : info.inputPathsPerSecond;
-            StageTimer metrics(Stage::Metrics);  // inside the denoiser's run: its time is taken out of it
-            evaluation.add(f.frame, f.color, facts);
-            selfTimed |= f.selfTimed;
-            for (const auto& [channel, n] : f.sanitized) sanitized[channel] += n;
-            ms.push_back(f.milliseconds);
-            std::vector<PassTime>& frame = passes.emplace_back();
-            for (const PassStats& p : f.passes) frame.push_back({p.name, p.milliseconds, p.tapsPerPixel});
-            if (run) gpuCost.add(f.passes);
-            const bool chosen = std::find(sd.chosenFrames.begin(), sd.chosenFrames.end(), f.frame) != sd.chosenFrames.end();
-            if (keepImages && (keepAll || chosen)) {
-              StageTimer images(Stage::Report);
-              writeFrameImages(imageDir, f.frame, evaluation.lastImages());
-              if (keepAll) writeOutputExr(imageDir, f, req, params);
-            }
-          };
+    FrameFacts facts;
+    facts.milliseconds = f.milliseconds;
+    if (f.selfTimed && run) facts.wallMilliseconds = f.wallMilliseconds;
+    // Extra paths: the low-resolution buffer's (reengine) or the gradient samples'
+    // (asvgf), each at the rate it rendered at.
+    if (run && (run->readsLowres() || run->readsGradients())) facts.extraRaysPerPixel = f.extraRaysPerPixel;
+    facts.extraPathsPerSecond = run && run->readsLowres() ? info.lowresPathsPerSecond : info.inputPathsPerSecond;
+    StageTimer metrics(Stage::Metrics);  // inside the denoiser's run: its time is taken out of it
+    evaluation.add(f.frame, f.color, facts);
+    selfTimed |= f.selfTimed;
+    for (const auto& [channel, n] : f.sanitized) sanitized[channel] += n;
+    ms.push_back(f.milliseconds);
+    std::vector<PassTime>& frame = passes.emplace_back();
+    for (const PassStats& p : f.passes) frame.push_back({p.name, p.milliseconds, p.tapsPerPixel});
+    if (run) gpuCost.add(f.passes);
+    const bool chosen = std::find(sd.chosenFrames.begin(), sd.chosenFrames.end(), f.frame) != sd.chosenFrames.end();
+    if (keepImages && (keepAll || chosen)) {
+      StageTimer images(Stage::Report);
+      writeFrameImages(imageDir, f.frame, evaluation.lastImages());
+      if (keepAll) writeOutputExr(imageDir, f, req, params);
+    }
+  };
   {
     StageTimer denoisers(Stage::Denoisers);
     if (run)

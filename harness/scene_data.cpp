@@ -1,7 +1,6 @@
 #include "harness/scene_data.hpp"
 
 #include <algorithm>
-#include <cstdio>
 #include <set>
 
 #include "core/capture.hpp"
@@ -15,12 +14,6 @@ namespace arena {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
-
-std::string frameName(const char* prefix, int t) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%s_%04d.png", prefix, t);
-  return buf;
-}
 
 namespace {
 

@@ -31,9 +31,6 @@ struct SeedSequence {
   std::vector<LayerSet> frames;
 };
 
-// "prefix_0007.png": the name of a kept frame's image.
-std::string frameName(const char* prefix, int t);
-
 // The sequence in `dir` (a cached render or a capture) opened for its pairs. A capture is
 // validated before anything runs on it (metrics/capture_checks.hpp): `validation` receives the
 // checks, and a hard failure refuses the scene with the checks' names and numbers.

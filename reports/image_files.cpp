@@ -2,10 +2,18 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include <cstdio>
+
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 
 namespace arena {
+
+std::string frameName(const char* prefix, int t) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%s_%04d.png", prefix, t);
+  return buf;
+}
 
 void writePng(const std::filesystem::path& path, const Image& display) {
   const int w = display.width(), h = display.height();

@@ -13,6 +13,7 @@
 #include "metrics/compare.hpp"
 #include "metrics/error_maps.hpp"
 #include "metrics/results.hpp"
+#include "reports/image_files.hpp"
 #include "reports/pareto.hpp"
 
 namespace arena {
@@ -60,12 +61,6 @@ const ErrorAxis kErrorAxes[] = {{"relMse", "relMSE", "relMse", false, "relMse"},
                                 {"hdrFlip", "HDR-FLIP", "hdrFlip", false, "hdrFlip"},
                                 {"ldrFlip", "LDR-FLIP", "ldrFlip", false, "ldrFlip"},
                                 {"dssim", "1 − SSIM", "ssim", true, "dssim"}};
-
-std::string frameFile(const char* prefix, int t) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%s_%04d.png", prefix, t);
-  return buf;
-}
 
 // The mean of the reference's own relMSE over frames t >= W (metrics.md's sequence summary), the
 // floor below which a method's raw relMSE cannot be ranked.
@@ -537,7 +532,7 @@ json viewerData(const RunResults& results, const std::string& scene, const json&
     }
     std::sort(frames.begin(), frames.end());
     for (int t : frames) {
-      srcs[std::to_string(t)] = dir + "/" + frameFile(prefix, t);
+      srcs[std::to_string(t)] = dir + "/" + frameName(prefix, t);
       kept.insert(t);
     }
     if (!srcs.empty())
