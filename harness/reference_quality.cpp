@@ -161,8 +161,7 @@ std::vector<ReferenceRefinement> planReferenceRefinement(const json& results,
       const double e = r < int(info.referenceEstimatedRelMse.size()) ? info.referenceEstimatedRelMse[size_t(r)] : 0;
       const double s = info.referenceSpp[size_t(r)];
       if (!(e > plan.targetRelMse) || s >= maxSpp) continue;
-      const double rounds = std::ceil(std::log(e / plan.targetRelMse) / std::log(kReferenceRoundGrowth));
-      const double grown = std::min(s * std::pow(kReferenceRoundGrowth, rounds), double(maxSpp));
+      const double grown = std::min(s * (e / plan.targetRelMse), double(maxSpp));
       plan.predictedPaths += double(info.width) * info.height * (grown - s);
     }
     const double unit = budgetUnitPaths(info);

@@ -29,8 +29,8 @@ std::string renderOptionsOf(const nlohmann::json& render);
 // target kRefineMargin x goal x its best corrected relMSE (the margin absorbs the noise of that
 // estimate), and a prediction of the paths that refining the references of its summarised frames
 // (t >= warmup) would add: a reference of P pixels, mean s spp and estimated relMSE e > target
-// needs k = ceil(log_g(e / target)) adaptive rounds of growth g = kReferenceRoundGrowth (relMSE ~
-// 1/spp: the independent sampler's rate, conservative for Sobol), i.e. P (min(s g^k, maxSpp) - s)
+// needs s e / target spp (relMSE ~ 1/spp: the independent sampler's rate, conservative for Sobol;
+// the schedule stops at the tile that meets the target), i.e. P (min(s e / target, maxSpp) - s)
 // paths. A scene is refined when its prediction is at most `budget` x the paths of its frames at
 // the references' sample cap (W x H x frames x --ref-spp, 512 per pixel for the quick preset): a
 // budget per scene, in work, not seconds, and a function of the settings, so which scenes are

@@ -317,21 +317,68 @@ TEST(Reference, CappedReferencesSayItAndSequenceJsonRecordsIt) {
 
 // `arena refine`: a loosely rendered sequence refined to a strict target holds the same bits as
 // one rendered with the strict target from the start.
+// A round of the adaptive schedule is carried out tile by tile, in order of the error each tile
+// saves per sample, and a reference stops at the first tile after which it meets its target. So
+// it holds the samples of the same rounds as a schedule that could stop only between rounds (as
+// until 2026-11-27), its last round part way, and no more than that schedule's.
+TEST(Reference, AReferenceStopsAtTheTileThatMeetsItsTarget) {
+  const Scene scene = test::shippedScene("cornell_static");
+  RenderSettings s = referenceSettings("sobol", 1024);
+  s.referenceMinSpp = 16;
+  const double target = 3e-4;
+  SequenceRenderer r(scene, s);
+  ReferenceSums stopped;
+  const ReferenceResult result = r.continueReference(0, stopped, target, 1024);
+  EXPECT_LE(result.estimatedRelMse, target);
+  EXPECT_EQ(result.estimatedRelMse, estimatedReferenceRelMse(stopped));
+  // The same rounds, each carried out whole.
+  ReferenceSums whole;
+  RayCounts counts;
+  r.extendReference(0, whole, 2, counts);  // the pilot: 16 spp over 8 replicates
+  std::vector<int> lastRoundStart;
+  while (estimatedReferenceRelMse(whole) > target) {
+    lastRoundStart = whole.tileSamples;
+    r.extendReference(0, whole, nextReferenceAllocation(whole, 128), counts);
+  }
+  ASSERT_FALSE(lastRoundStart.empty()) << "the pilot met the target: no round to stop in";
+  ASSERT_TRUE(stopped.roundPending()) << "stopped at the last tile of its round: nothing to compare";
+  EXPECT_EQ(stopped.roundTarget, whole.tileSamples) << "the stopped round is the whole schedule's last";
+  for (size_t i = 0; i < whole.tileSamples.size(); ++i) {
+    EXPECT_GE(stopped.tileSamples[i], lastRoundStart[i]) << "tile " << i;
+    EXPECT_LE(stopped.tileSamples[i], whole.tileSamples[i]) << "tile " << i;
+  }
+  EXPECT_LT(stopped.meanSpp(), whole.meanSpp());
+  // The tiles the round reached hold the same samples as the whole round's.
+  for (int y = 0; y < whole.height; ++y)
+    for (int x = 0; x < whole.width; ++x) {
+      const int tile = whole.tileOf(x, y);
+      if (stopped.tileSamples[size_t(tile)] != whole.tileSamples[size_t(tile)]) continue;
+      const size_t at = (size_t(y) * size_t(whole.width) + size_t(x)) * size_t(whole.replicates) * ReferenceSums::kValues;
+      for (size_t k = 0; k < size_t(whole.replicates) * ReferenceSums::kValues; ++k)
+        ASSERT_EQ(stopped.sum[at + k], whole.sum[at + k]) << "pixel " << x << "," << y;
+    }
+}
+
+// A reference that stopped part way through a round keeps the round in its sums file, and refining
+// it finishes that round first: the same bits as rendering the stricter target in one go.
 TEST(Reference, RefiningGivesTheSameBitsAsRenderingTheTargetAtOnce) {
   const auto cache = test::freshDir("reference_refine");
   const Scene scene = test::shippedScene("cornell_static");
   RenderSettings loose = referenceSettings("sobol", 1024);
   loose.referenceMinSpp = 16;
-  loose.referenceRelError = 1;  // met at the first step: 16 spp
+  loose.referenceRelError = 0.04;  // relMSE 1.6e-3: a round or two past the 16-spp pilot
   RenderSettings strict = loose;
   strict.referenceRelError = 0.02;  // relMSE 4e-4: a few adaptive rounds
   const auto looseDir = renderSequence(scene, loose, cache, nullptr);
-  ASSERT_EQ(Sequence::open(looseDir).info().referenceSpp[0], 16);
+  const SequenceInfo first = Sequence::open(looseDir).info();
+  ASSERT_GT(first.referenceSpp[0], 16);
+  ASSERT_TRUE(readReferenceSums(referenceSumsPath(looseDir, 0), first.hash, 0).roundPending())
+      << "the loose reference should have stopped part way through a round";
   refineSequence(scene, loose, cache, strict.referenceRelError * strict.referenceRelError, 1024, nullptr);
   ASSERT_EQ(Sequence::open(looseDir).info().referenceSpp.size(), 1u);
   const auto strictDir = renderSequence(scene, strict, cache, nullptr);
   const SequenceInfo a = Sequence::open(looseDir).info(), b = Sequence::open(strictDir).info();
-  EXPECT_GT(a.referenceSpp[0], 16);
+  EXPECT_GT(a.referenceSpp[0], first.referenceSpp[0]);
   EXPECT_EQ(a.referenceSpp, b.referenceSpp);
   EXPECT_EQ(a.referenceEstimatedRelMse, b.referenceEstimatedRelMse);
   EXPECT_EQ(a.referenceCapped, b.referenceCapped);
@@ -523,9 +570,9 @@ TEST(Reference, RefinementPlanRefinesEachSceneWithinItsOwnBudget) {
     return info;
   };
   std::map<std::string, SequenceInfo> sequences = {
-      // 1e-4 -> 9e-5: one round of sqrt(2), 100 -> 141.4 spp on 100 pixels (a doubling would be 200).
+      // 1e-4 -> 9e-5 at relMSE ~ 1/spp: 100 -> 111.1 spp on 100 pixels.
       {"cheap", sequence({0, 0, 0, 0}, {100}, {1e-4}, 400)},
-      // Reference 0 serves the warm-up frame only; reference 1 needs eight rounds (16x), capped at 1000.
+      // Reference 0 serves the warm-up frame only; reference 1 needs 11.1x, capped at 1000.
       // No cap in its settings: the unit falls back to the samples the references hold.
       {"dear", sequence({0, 1, 1, 1}, {100, 100}, {1e-2, 1e-3}, 0)},
       {"fine", sequence({0, 0, 0, 0}, {100}, {1e-5}, 400)}};
@@ -533,7 +580,7 @@ TEST(Reference, RefinementPlanRefinesEachSceneWithinItsOwnBudget) {
   ASSERT_EQ(plans.size(), 2u);
   EXPECT_EQ(plans[0].scene, "cheap");
   EXPECT_DOUBLE_EQ(plans[0].targetRelMse, kRefineMargin * kReferenceQualityGoal * 1e-3);
-  const double cheapPaths = 100.0 * (100 * std::sqrt(2.0) - 100);
+  const double cheapPaths = 100.0 * (100 * (1e-4 / (kRefineMargin * kReferenceQualityGoal * 1e-3)) - 100);
   EXPECT_DOUBLE_EQ(plans[0].predictedPaths, cheapPaths);
   EXPECT_DOUBLE_EQ(plans[0].budgetNeeded, cheapPaths / 160000);  // 4 frames at the cap: 400 spp x 100 pixels each
   EXPECT_TRUE(plans[0].withinBudget);

@@ -25,7 +25,7 @@ using nlohmann::json;
 
 namespace {
 
-constexpr int kTracerVersion = 5;  // bump when a change alters pixels: invalidates every cache
+constexpr int kTracerVersion = 6;  // bump when a change alters pixels: invalidates every cache
 constexpr float kMissHitDist = 1e6f;
 constexpr uint32_t kStratumPickSample = 0xFFFFF;  // sample index reserved for stratum picks
 constexpr uint32_t kLowresFirstSample = 0x80000;  // low-res paths: independent of frame and reference
@@ -350,7 +350,6 @@ void SequenceRenderer::extendReference(int t, ReferenceSums& sums, int perReplic
 void SequenceRenderer::extendReference(int t, ReferenceSums& sums, const std::vector<int>& tileTarget,
                                        RayCounts& total) {
   const FrameScene& cur = frameScene(t);
-  const CameraState& cam = cur.state().camera;
   const int w = width_, h = height_;
   const size_t n = size_t(w) * size_t(h);
   constexpr int V = ReferenceSums::kValues;
@@ -369,61 +368,89 @@ void SequenceRenderer::extendReference(int t, ReferenceSums& sums, const std::ve
   bool grows = false;
   for (size_t i = 0; i < tileTarget.size(); ++i) grows |= tileTarget[i] > sums.tileSamples[i];
   if (!grows) return;
-  const bool sobol = settings_.referenceSampler == "sobol";
   std::vector<RayCounts> rowCounts(static_cast<size_t>(h));
   forEachPixelRow(h, [&](int y) {
-    RayCounts& counts = rowCounts[size_t(y)];
     for (int x = 0; x < w; ++x) {
-      const size_t i = size_t(y) * w + x;
       const int tile = sums.tileOf(x, y), begin = sums.tileSamples[size_t(tile)];
       const int end = std::max(begin, tileTarget[size_t(tile)]);
-      if (end == begin) continue;  // this tile keeps its samples
-      // The primary hit through the pixel centre is the same for every sample (as in the frames).
-      const glm::vec3 dir = cam.rayDirection(float(x) + 0.5f, float(y) + 0.5f);
-      SurfaceHit hit;
-      float tHit;
-      counts.rays++;
-      const bool hasHit = cur.intersect(cam.eye, dir, std::numeric_limits<float>::infinity(), hit, tHit, true);
-      SurfaceHit s;
-      FrameScene::PrimaryVertex vertex;  // prepared once: every sample of the pixel starts here
-      glm::vec3 demodDiffuse(0), demodSpecular(0);
-      if (hasHit) {
-        s = cur.surface(hit.meshId, hit.primId, hit.u, hit.v);
-        vertex = primaryVertex(cur, s, cam.eye);
-        const glm::vec3 wo = vertex.wo;
-        const glm::vec3 nrm = glm::dot(s.geometricNormal, wo) < 0 ? -s.shadingNormal : s.shadingNormal;
-        const glm::vec3 specAlb =
-            s.lightIndex >= 0 ? glm::vec3(0) : specularAlbedo(s.f0(), s.roughness, std::max(glm::dot(nrm, wo), 0.0f));
-        demodDiffuse = 1.0f / glm::max(s.diffuseAlbedo(), glm::vec3(1e-3f));
-        demodSpecular = 1.0f / glm::max(specAlb, glm::vec3(1e-3f));
-      }
-      const glm::vec3 sky = hasHit ? glm::vec3(0) : cur.sky(dir);
-      for (int r = 0; r < K; ++r) {
-        double* acc = &sums.sum[(i * size_t(K) + size_t(r)) * V];
-        const int replicate = sums.firstReplicate + r;
-        // The replicate's Sobol key, hashed once; each sample only sets its index.
-        const Sampler sobolReplicate =
-            Sampler::owenSobol(scene_.seed, uint32_t(t), uint32_t(i), uint32_t(replicate), 0);
-        for (int k = begin; k < end; ++k) {
-          glm::vec3 c = sky, d(0), sp(0);
-          if (hasHit) {
-            // Independent: sample ids 1.. (0 is the noisy frame's), interleaved over replicates.
-            const Sampler sampler =
-                sobol ? sobolReplicate.atIndex(uint32_t(k))
-                      : Sampler(scene_.seed, uint32_t(t), uint32_t(i), uint32_t(1 + k * allReplicates + replicate));
-            const PixelShade px = shadePixel(cur, vertex, sampler, counts);
-            c = px.color();
-            d = px.radiance.diffuse * demodDiffuse;
-            sp = px.radiance.specular * demodSpecular;
-          }
-          const float v[V] = {c.x, c.y, c.z, d.x, d.y, d.z, sp.x, sp.y, sp.z};
-          for (int j = 0; j < V; ++j) acc[j] += v[j];
-        }
-      }
+      if (end > begin) extendPixel(t, cur, sums, x, y, begin, end, rowCounts[size_t(y)]);  // else it keeps its samples
     }
   });
   for (size_t i = 0; i < tileTarget.size(); ++i) sums.tileSamples[i] = std::max(sums.tileSamples[i], tileTarget[i]);
   for (const RayCounts& c : rowCounts) {
+    total.rays += c.rays;
+    total.paths += c.paths;
+  }
+}
+
+void SequenceRenderer::extendPixel(int t, const FrameScene& cur, ReferenceSums& sums, int x, int y, int begin, int end,
+                                   RayCounts& counts) const {
+  const CameraState& cam = cur.state().camera;
+  constexpr int V = ReferenceSums::kValues;
+  const size_t i = size_t(y) * size_t(width_) + size_t(x);
+  const int K = sums.replicates, allReplicates = referenceReplicates();
+  const bool sobol = settings_.referenceSampler == "sobol";
+  // The primary hit through the pixel centre is the same for every sample (as in the frames).
+  const glm::vec3 dir = cam.rayDirection(float(x) + 0.5f, float(y) + 0.5f);
+  SurfaceHit hit;
+  float tHit;
+  counts.rays++;
+  const bool hasHit = cur.intersect(cam.eye, dir, std::numeric_limits<float>::infinity(), hit, tHit, true);
+  SurfaceHit s;
+  FrameScene::PrimaryVertex vertex;  // prepared once: every sample of the pixel starts here
+  glm::vec3 demodDiffuse(0), demodSpecular(0);
+  if (hasHit) {
+    s = cur.surface(hit.meshId, hit.primId, hit.u, hit.v);
+    vertex = primaryVertex(cur, s, cam.eye);
+    const glm::vec3 wo = vertex.wo;
+    const glm::vec3 nrm = glm::dot(s.geometricNormal, wo) < 0 ? -s.shadingNormal : s.shadingNormal;
+    const glm::vec3 specAlb =
+        s.lightIndex >= 0 ? glm::vec3(0) : specularAlbedo(s.f0(), s.roughness, std::max(glm::dot(nrm, wo), 0.0f));
+    demodDiffuse = 1.0f / glm::max(s.diffuseAlbedo(), glm::vec3(1e-3f));
+    demodSpecular = 1.0f / glm::max(specAlb, glm::vec3(1e-3f));
+  }
+  const glm::vec3 sky = hasHit ? glm::vec3(0) : cur.sky(dir);
+  for (int r = 0; r < K; ++r) {
+    double* acc = &sums.sum[(i * size_t(K) + size_t(r)) * V];
+    const int replicate = sums.firstReplicate + r;
+    // The replicate's Sobol key, hashed once; each sample only sets its index.
+    const Sampler sobolReplicate = Sampler::owenSobol(scene_.seed, uint32_t(t), uint32_t(i), uint32_t(replicate), 0);
+    for (int k = begin; k < end; ++k) {
+      glm::vec3 c = sky, d(0), sp(0);
+      if (hasHit) {
+        // Independent: sample ids 1.. (0 is the noisy frame's), interleaved over replicates.
+        const Sampler sampler = sobol ? sobolReplicate.atIndex(uint32_t(k))
+                                      : Sampler(scene_.seed, uint32_t(t), uint32_t(i),
+                                                uint32_t(1 + k * allReplicates + replicate));
+        const PixelShade px = shadePixel(cur, vertex, sampler, counts);
+        c = px.color();
+        d = px.radiance.diffuse * demodDiffuse;
+        sp = px.radiance.specular * demodSpecular;
+      }
+      const float v[V] = {c.x, c.y, c.z, d.x, d.y, d.z, sp.x, sp.y, sp.z};
+      for (int j = 0; j < V; ++j) acc[j] += v[j];
+    }
+  }
+}
+
+void SequenceRenderer::extendTile(int t, ReferenceSums& sums, int tile, int perReplicate, RayCounts& total) {
+  const int begin = sums.tileSamples[size_t(tile)];
+  if (perReplicate <= begin) return;
+  const FrameScene& cur = frameScene(t);
+  const int x0 = (tile % sums.tilesX()) * sums.tileSize, y0 = (tile / sums.tilesX()) * sums.tileSize;
+  const int tw = std::min(width_, x0 + sums.tileSize) - x0, th = std::min(height_, y0 + sums.tileSize) - y0;
+  std::vector<RayCounts> pixelCounts(size_t(tw) * size_t(th));
+  // A tile is a few dozen pixels: one pixel per task keeps both cores busy to its end.
+  tbb::parallel_for(
+      tbb::blocked_range<int>(0, tw * th, 1),
+      [&](const tbb::blocked_range<int>& pixels) {
+        flushDenormals();
+        for (int p = pixels.begin(); p != pixels.end(); ++p)
+          extendPixel(t, cur, sums, x0 + p % tw, y0 + p / tw, begin, perReplicate, pixelCounts[size_t(p)]);
+      },
+      tbb::simple_partitioner());
+  sums.tileSamples[size_t(tile)] = perReplicate;
+  for (const RayCounts& c : pixelCounts) {
     total.rays += c.rays;
     total.paths += c.paths;
   }
@@ -481,21 +508,36 @@ LayerSet referenceLayersFromSums(const ReferenceSums& sums) {
   return out;
 }
 
-double estimatedReferenceRelMse(const ReferenceSums& sums) {
-  const int w = sums.width, h = sums.height;
-  std::vector<double> rowSums(size_t(h), 0.0);
-  tbb::parallel_for(0, h, [&](int y) {
-    double acc = 0;
-    for (int x = 0; x < w; ++x)
+double referenceTileShare(const ReferenceSums& sums, int tile) {
+  const int x0 = (tile % sums.tilesX()) * sums.tileSize, y0 = (tile / sums.tilesX()) * sums.tileSize;
+  const int x1 = std::min(sums.width, x0 + sums.tileSize), y1 = std::min(sums.height, y0 + sums.tileSize);
+  double share = 0;
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x)
       for (int c = 0; c < 3; ++c) {
-        const ReplicateStats st = replicateStats(sums, size_t(y) * w + x, c);
-        acc += st.varOfMean / (st.mean * st.mean + 0.01);  // metrics.md's eps
+        const ReplicateStats st = replicateStats(sums, size_t(y) * size_t(sums.width) + size_t(x), c);
+        share += st.varOfMean / (st.mean * st.mean + 0.01);  // metrics.md's eps
       }
-    rowSums[size_t(y)] = acc;
-  });
-  double relMse = 0;
-  for (double r : rowSums) relMse += r;  // fixed order: the stopping decision is deterministic
-  return relMse / double(size_t(w) * size_t(h) * 3);
+  return share;
+}
+
+std::vector<double> referenceTileShares(const ReferenceSums& sums) {
+  std::vector<double> shares(sums.tileSamples.size(), 0.0);
+  tbb::parallel_for(0, int(shares.size()), [&](int tile) { shares[size_t(tile)] = referenceTileShare(sums, tile); });
+  return shares;
+}
+
+namespace {
+// The estimate from the tiles' shares, summed in tile order: the stopping decision is deterministic.
+double relMseOfShares(const ReferenceSums& sums, const std::vector<double>& shares) {
+  double total = 0;
+  for (double share : shares) total += share;
+  return total / (double(sums.width) * double(sums.height) * 3);
+}
+}  // namespace
+
+double estimatedReferenceRelMse(const ReferenceSums& sums) {
+  return relMseOfShares(sums, referenceTileShares(sums));
 }
 
 Scene withIndependentSeed(Scene scene) {
@@ -515,25 +557,52 @@ ReferenceResult SequenceRenderer::continueReference(int t, ReferenceSums& sums, 
   const int minPer = std::min(std::max(1, (settings_.referenceMinSpp + K - 1) / K), maxPer);
   if (sums.replicates == 0) sums = emptyReferenceSums(0, K);
   // Without a target every pixel gets the cap at once (the same bits as any schedule up to it).
-  std::vector<int> allocation = sums.tileSamples;
-  for (int& n : allocation) n = std::max(n, targetRelMse > 0 ? minPer : maxPer);
-  for (;;) {
-    extendReference(t, sums, allocation, result.counts);
-    result.estimatedRelMse = estimatedReferenceRelMse(sums);
-    if (!(targetRelMse > 0)) break;
-    if (result.estimatedRelMse <= targetRelMse) break;
-    allocation = nextReferenceAllocation(sums, maxPer);
-    if (allocation == sums.tileSamples) {
-      result.capped = true;
-      break;
+  std::vector<int> pilot = sums.tileSamples;
+  for (int& n : pilot) n = std::max(n, targetRelMse > 0 ? minPer : maxPer);
+  extendReference(t, sums, pilot, result.counts);
+  std::vector<double> shares = referenceTileShares(sums);
+  result.estimatedRelMse = relMseOfShares(sums, shares);
+  // A round left part way under another cap is planned again (its counts may exceed this one).
+  if (sums.roundPending() && *std::max_element(sums.roundTarget.begin(), sums.roundTarget.end()) > maxPer)
+    sums.roundTarget.clear();
+  while (targetRelMse > 0 && result.estimatedRelMse > targetRelMse) {
+    if (!sums.roundPending()) {
+      sums.roundTarget = nextReferenceAllocation(sums, maxPer);
+      if (sums.roundTarget == sums.tileSamples) {
+        result.capped = true;
+        break;
+      }
+    }
+    // The round's tiles in order of the error each saves per sample added: a tile going from n to
+    // n' samples saves share (1 - n / n') for (n' - n) P samples, i.e. share / (n' P). The tiles a
+    // stopped round has not reached still hold what they held when it was planned, so a continued
+    // round takes them in the same order.
+    std::vector<int> order;
+    for (size_t i = 0; i < shares.size(); ++i)
+      if (sums.roundTarget[i] > sums.tileSamples[i]) order.push_back(int(i));
+    auto saving = [&](int i) { return shares[size_t(i)] / (double(sums.roundTarget[size_t(i)]) * sums.tilePixels(i)); };
+    std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return saving(a) > saving(b); });
+    for (int tile : order) {
+      extendTile(t, sums, tile, sums.roundTarget[size_t(tile)], result.counts);
+      shares[size_t(tile)] = referenceTileShare(sums, tile);
+      result.estimatedRelMse = relMseOfShares(sums, shares);
+      if (result.estimatedRelMse <= targetRelMse) break;
     }
   }
+  if (!sums.roundPending()) sums.roundTarget.clear();
   result.spp = sums.spp();
   result.sppMin = sums.minPerReplicate() * sums.replicates;
   result.sppMax = sums.maxPerReplicate() * sums.replicates;
   result.targetRelMse = targetRelMse;
   result.layers = referenceLayersFromSums(sums);
   return result;
+}
+
+bool ReferenceSums::roundPending() const {
+  if (roundTarget.size() != tileSamples.size()) return false;
+  for (size_t i = 0; i < tileSamples.size(); ++i)
+    if (roundTarget[i] > tileSamples[i]) return true;
+  return false;
 }
 
 int ReferenceSums::tilePixels(int tile) const {
@@ -560,13 +629,7 @@ std::vector<int> nextReferenceAllocation(const ReferenceSums& sums, int maxPer, 
   const size_t tiles = sums.tileSamples.size();
   // Each tile's share of the estimate (before the division by the pixel and channel count), in a
   // fixed order: the allocation is deterministic.
-  std::vector<double> share(tiles, 0.0);
-  for (int y = 0; y < sums.height; ++y)
-    for (int x = 0; x < sums.width; ++x)
-      for (int c = 0; c < 3; ++c) {
-        const ReplicateStats st = replicateStats(sums, size_t(y) * size_t(sums.width) + size_t(x), c);
-        share[size_t(sums.tileOf(x, y))] += st.varOfMean / (st.mean * st.mean + 0.01);
-      }
+  const std::vector<double> share = referenceTileShares(sums);
   std::vector<double> weight(tiles), pixels(tiles);
   double budget = 0, capBudget = 0;
   bool canGrow = false;

@@ -66,6 +66,9 @@ struct ReferenceSums {
   int firstReplicate = 0;  // these are replicates firstReplicate.. (a shard may hold a slice)
   int tileSize = 1;
   std::vector<int> tileSamples;  // per tile, row-major: samples per replicate of its pixels
+  // A round of the adaptive schedule that stopped at its target part way (continueReference): the
+  // counts it was taking its tiles to. Empty, or equal to tileSamples, when no round is pending.
+  std::vector<int> roundTarget;
   std::vector<double> sum;       // [(pixel * replicates + r) * kValues + j]
 
   int tilesX() const { return (width + tileSize - 1) / tileSize; }
@@ -80,15 +83,18 @@ struct ReferenceSums {
   int spp() const { return int(std::lround(meanSpp())); }
   int minPerReplicate() const;
   int maxPerReplicate() const;
+  bool roundPending() const;  // some tile is below roundTarget
 };
 // Means (color, diffuse, specular), the variance of each mean from the spread of the replicate
 // means, Var = sum_r (m_r - m)^2 / (K (K - 1)), and colorHalf (the mean of replicates 0..K/2-1).
 LayerSet referenceLayersFromSums(const ReferenceSums& sums);
-// How much each round of the adaptive schedule grows the frame's samples. A reference stops at the
-// first round that meets its target, so it overshoots the samples it needed by up to this factor:
-// (g - 1) / ln g on average for targets spread evenly in log, 1.44 for g = 2 (the first version's
-// doubling) and 1.21 for sqrt(2). Tile counts stay powers of two (whole Sobol nets): a round doubles
-// the tiles whose doubling lowers the estimate most, about 1 / (g - 1) rounds per doubling.
+// How much each round of the adaptive schedule grows the frame's samples. A round extends its tiles
+// one at a time, in order of the error each saves per sample added, and a reference stops at the
+// first tile after which it meets its target: its samples overshoot what it needed by about one
+// tile's extension, not by up to a round (1.21x on average for sqrt(2) when a reference could stop
+// only between rounds, as until 2026-11-27). Tile counts stay powers of two (whole Sobol nets): a
+// round doubles the tiles whose doubling lowers the estimate most, about 1 / (g - 1) rounds per
+// doubling.
 inline constexpr double kReferenceRoundGrowth = 1.4142135623730951;
 // The next round of the adaptive schedule: tile counts for `growth` x the frame's samples, minimising
 // the estimated relMSE under that budget. With e_T the tile's share of the estimate at its n_T
@@ -104,8 +110,14 @@ inline constexpr double kReferenceRoundGrowth = 1.4142135623730951;
 std::vector<int> nextReferenceAllocation(const ReferenceSums& sums, int maxPerReplicate,
                                          double growth = kReferenceRoundGrowth, double maxMeanPerReplicate = 0);
 // The reference's relMSE as metrics.md estimates it: mean over pixels and colour channels of
-// Var(mean) / (mean^2 + 0.01), with the replicate variance above.
+// Var(mean) / (mean^2 + 0.01), with the replicate variance above. Summed per tile, then over the
+// tiles in order (referenceTileShares), so that the estimate after extending one tile is the same
+// number however the tiles before it were reached.
 double estimatedReferenceRelMse(const ReferenceSums& sums);
+// Each tile's share of that estimate before the division by pixels x 3: the sum over its pixels,
+// row by row, and colour channels of Var(mean) / (mean^2 + 0.01).
+std::vector<double> referenceTileShares(const ReferenceSums& sums);
+double referenceTileShare(const ReferenceSums& sums, int tile);
 
 // The scene under another seed, so its references are an independent randomisation of the same
 // integral: what a reference is measured against (a "gold") must not share its samples. A gold of
@@ -153,11 +165,14 @@ class SequenceRenderer {
   // Empty sums of replicates first..first+count-1, with the settings' tiles.
   ReferenceSums emptyReferenceSums(int firstReplicate, int count) const;
   // The adaptive schedule: a uniform pilot of referenceMinSpp, then rounds that each grow the
-  // frame's samples by kReferenceRoundGrowth, placed by nextReferenceAllocation, until the
-  // estimated relMSE <= targetRelMse or no tile may grow (maxSpp per pixel): then `capped`.
-  // Without a target (0), every pixel gets maxSpp. The rounds do not depend on the target, only
-  // where they stop does, so continuing from a stop (`arena refine`) gives the same bits as one
-  // uninterrupted run.
+  // frame's samples by kReferenceRoundGrowth, planned by nextReferenceAllocation and carried out
+  // tile by tile in order of the error each tile saves per sample added (its share / (P_T x its new
+  // count)), until the estimated relMSE <= targetRelMse after some tile, or no tile may grow (maxSpp
+  // per pixel): then `capped`. A round stopped part way stays in sums.roundTarget; continuing (`arena
+  // refine`) finishes it first, in the same order, since the tiles it has not reached are unchanged.
+  // Without a target (0), every pixel gets maxSpp. Neither the rounds nor the order depend on the
+  // target, only where they stop does, so continuing from a stop gives the same bits as one
+  // uninterrupted run (with the same maxSpp).
   ReferenceResult continueReference(int t, ReferenceSums& sums, double targetRelMse, int maxSpp);
   int referenceReplicates() const;
   // The low-resolution buffer of frame t (channels::lowresLayers()); settings.lowresFactor > 0.
@@ -170,6 +185,11 @@ class SequenceRenderer {
   RenderSettings settings_;
   // The seed of the 1-spp frame and gradient samples (RenderSettings::inputSeed).
   uint32_t frameSeed() const;
+  // Reference samples begin..end-1 of every replicate of pixel (x, y), added to sums.
+  void extendPixel(int t, const FrameScene& cur, ReferenceSums& sums, int x, int y, int begin, int end,
+                   RayCounts& counts) const;
+  // Tile `tile` of sums to `perReplicate` samples, its pixels in parallel (sums already checked).
+  void extendTile(int t, ReferenceSums& sums, int tile, int perReplicate, RayCounts& counts);
   int width_, height_, frames_;
   EmbreeDevice device_;
   std::vector<MeshData> meshes_;

@@ -107,6 +107,7 @@ void writeReferenceSums(const fs::path& path, const ReferenceSums& sums, const s
       {"firstReplicate", sums.firstReplicate},
       {"tileSize", sums.tileSize},
       {"tileSamples", sums.tileSamples},
+      {"roundTarget", sums.roundPending() ? sums.roundTarget : std::vector<int>{}},
       {"values",
        ReferenceSums::kValues}}.dump();
   writeAtomically(path, [&](const fs::path& tmp) {
@@ -148,6 +149,7 @@ ReferenceSums readReferenceSums(const fs::path& path, const std::string& hash, i
     sums.firstReplicate = h.at("firstReplicate").get<int>();
     sums.tileSize = h.at("tileSize").get<int>();
     sums.tileSamples = h.at("tileSamples").get<std::vector<int>>();
+    sums.roundTarget = h.value("roundTarget", std::vector<int>{});  // absent before 2026-11-27: none pending
   } catch (const json::exception& e) {
     throw Error(path.string() + ": malformed header: " + e.what());
   }
@@ -158,6 +160,11 @@ ReferenceSums readReferenceSums(const fs::path& path, const std::string& hash, i
                 ": header has an empty or invalid size (width, height, replicates, tileSize, "
                 "tileSamples: one count "
                 ">= 1 per tile)");
+  bool roundFits = sums.roundTarget.empty() || sums.roundTarget.size() == sums.tileSamples.size();
+  for (size_t i = 0; roundFits && i < sums.roundTarget.size(); ++i) roundFits = sums.roundTarget[i] >= sums.tileSamples[i];
+  if (!roundFits)
+    throw Error(path.string() + ": header field 'roundTarget' must be empty or hold one count per tile, each at least "
+                "the tile's 'tileSamples'");
   sums.sum.resize(size_t(sums.width) * size_t(sums.height) * size_t(sums.replicates) * ReferenceSums::kValues);
   in.read(reinterpret_cast<char*>(sums.sum.data()), std::streamsize(sums.sum.size() * sizeof(double)));
   if (!in || in.peek() != std::ifstream::traits_type::eof()) throw Error(path.string() + ": truncated or oversized");
