@@ -95,9 +95,9 @@ void addStudyCommand(CLI::App& app) {
       ->check(CLI::IsMember({"per-frame", "first"}))
       ->default_val("per-frame");
   cmd->add_option("--refine-budget", *refineBudget,
-                  "After the first pass, refine the references of each scene that misses the reference-quality "
-                  "goal when its predicted extra paths are at most this many times the paths of its frames at the "
-                  "references' sample cap (width x height x frames x --ref-spp), then run those scenes again (0: off)")
+                  "After a scene's pairs, refine its references when it misses the reference-quality "
+                  "goal and its predicted extra paths are at most this many times the paths of its frames at the "
+                  "references' sample cap (width x height x frames x --ref-spp), then measure its pairs again (0: off)")
       ->check(finiteRange(0.0, 1000.0))
       ->default_val(4);
   cmd->add_option("--refine-max-spp", *refineMaxSpp, "The refinement's cap on a reference's samples per pixel")

@@ -63,7 +63,7 @@ void runCapturedOutput(const Sequence& sequence, const std::string& name,
 }  // namespace
 
 json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& req, const fs::path& imageDir,
-             bool keepAll) {
+             bool keepAll, std::vector<KeptFrame>* kept) {
   const SequenceInfo& info = sd.sequence.info();
   const std::string captured = capturedOutputName(req.name);
   if (!captured.empty() && !sd.sequence.isCapture())
@@ -88,6 +88,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
     facts.extraPathsPerSecond = run && run->readsLowres() ? info.lowresPathsPerSecond : info.inputPathsPerSecond;
     StageTimer metrics(Stage::Metrics);  // inside the denoiser's run: its time is taken out of it
     evaluation.add(f.frame, f.color, facts);
+    if (kept) kept->push_back({f.frame, f.color, facts});
     selfTimed |= f.selfTimed;
     for (const auto& [channel, n] : f.sanitized) sanitized[channel] += n;
     ms.push_back(f.milliseconds);
@@ -144,6 +145,27 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   if (run && !run->info().origin.empty()) pair["origin"] = run->info().origin;
   if (!run) pair["origin"] = (sd.sequence.dir() / "outputs" / captured).string();
   if (!run || run->info().signals == SignalMode::Color) pair["signals"] = "color";
+  return pair;
+}
+
+json evaluatePairAgain(const RunConfig& cfg, const SceneData& sd, const json& first, const std::vector<KeptFrame>& kept,
+                       const fs::path& imageDir, bool keepAll) {
+  StageTimer metrics(Stage::Metrics);
+  PairEvaluation evaluation(sd.evaluation);
+  const bool keepImages = cfg.keepFrames != "none";
+  for (const KeptFrame& f : kept) {
+    evaluation.add(f.frame, f.color, f.facts);
+    const bool chosen = std::find(sd.chosenFrames.begin(), sd.chosenFrames.end(), f.frame) != sd.chosenFrames.end();
+    if (keepImages && (keepAll || chosen)) {
+      StageTimer images(Stage::Report);
+      writeFrameImages(imageDir, f.frame, evaluation.lastImages());
+    }
+  }
+  json pair = first;
+  pair.update(evaluation.finish());
+  // First, as runPair put it: the inputs' warning, which the evaluation does not know.
+  if (first.value("sanitizedInputs", json::object()).value("total", 0L) > 0)
+    pair["warnings"].insert(pair["warnings"].begin(), first["warnings"][0]);
   return pair;
 }
 

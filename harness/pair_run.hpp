@@ -15,9 +15,26 @@ namespace arena {
 
 struct RunConfig;
 
+// An output frame as the evaluation received it: what evaluatePairAgain hands it once more.
+struct KeptFrame {
+  int frame = 0;
+  Image color;
+  FrameFacts facts;
+};
+
 // `imageDir` receives the chosen frames' images, or every frame's (and its EXR) with `keepAll`.
+// With `kept`, every output frame is also kept there (the study's refinement evaluates them again).
 nlohmann::json runPair(const RunConfig& config, const SceneData& scene, const DenoiserRequest& request,
-                       const std::filesystem::path& imageDir, bool keepAll);
+                       const std::filesystem::path& imageDir, bool keepAll, std::vector<KeptFrame>* kept = nullptr);
+
+// The record `pair` that runPair returned, with its measurements taken again from its kept output
+// frames against `scene` as it is now (the study's refined references): the same values as running
+// the denoiser again would give, which is deterministic, without running it. What only the run
+// knew -- its timing, the non-finite inputs it was handed -- stays; the chosen frames' images are
+// written again (their error maps changed), a pair's EXRs are not (its outputs did not).
+nlohmann::json evaluatePairAgain(const RunConfig& config, const SceneData& scene, const nlohmann::json& pair,
+                                 const std::vector<KeptFrame>& kept, const std::filesystem::path& imageDir,
+                                 bool keepAll);
 
 // The bias^2 / variance split of a pair's error over the scene's input seeds: the denoiser runs on
 // every seed's sequence from a reset history; the evaluation splits the K outputs per frame.

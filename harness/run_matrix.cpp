@@ -153,17 +153,23 @@ json runMatrix(const RunConfig& cfg) {
                                         {"capture", source.capture.string()}, {"validation", validation}};
     const auto sceneStart = std::chrono::steady_clock::now();
     size_t sceneFailures = 0;
+    // With a refinement after the scene, its output frames are kept to be measured again.
+    const bool mayRefine = cfg.refineScene && source.scene;
+    std::vector<std::vector<KeptFrame>> kept(mayRefine ? mine.size() : 0);
+    std::vector<size_t> pairAt;  // where the scene's pairs stand in results["pairs"]
     for (const DenoiserRequest* r : mine) {
       auto t0 = std::chrono::steady_clock::now();
       json pair;
       try {
         if (!sd) throw Error("scene " + source.name + " could not be prepared: " + sceneError);
-        pair = runPair(cfg, *sd, *r, cfg.out / "images" / source.name / safeName(r->label), keepAll);
+        pair = runPair(cfg, *sd, *r, cfg.out / "images" / source.name / safeName(r->label), keepAll,
+                       mayRefine ? &kept[pairAt.size()] : nullptr);
         if (!seedSequences.empty()) pair["biasVariance"] = biasVarianceOf(cfg, *sd, seedSequences, *r);
       } catch (const std::exception& e) {
         pair = {{"scene", source.name}, {"denoiser", r->name}, {"label", r->label}, {"params", json::object()},
                 {"status", "failed"}, {"error", e.what()}};
       }
+      pairAt.push_back(results["pairs"].size());
       results["pairs"].push_back(pair);
       ++pairsDone;
       double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -177,6 +183,35 @@ json runMatrix(const RunConfig& cfg) {
       else if (pair["sanitizedInputs"]["total"].get<long>() > 0)
         say("  warning: " + pair["warnings"][0].get<std::string>());
       sceneFailures += pair["status"] != "ok";
+    }
+    if (mayRefine && sd && cfg.refineScene(*source.scene, results)) {
+      // The references changed: the scene's floors, and every measurement against them.
+      try {
+        sd = prepareScene(dir, evaluation, nullptr);
+        results["scenes"][source.name] = sceneRecord(cfg, *sd, source.purpose, source.scene, dir, validation);
+      } catch (const std::exception& e) {
+        sd.reset();
+        sceneError = std::string("reading it again after refining its references: ") + e.what();
+      }
+      for (size_t k = 0; k < mine.size(); ++k) {
+        json& pair = results["pairs"][pairAt[k]];
+        if (pair["status"] != "ok") continue;
+        try {
+          if (!sd) throw Error("scene " + source.name + ": " + sceneError);
+          pair = evaluatePairAgain(cfg, *sd, pair, kept[k], cfg.out / "images" / source.name / safeName(mine[k]->label),
+                                   keepAll);
+          if (!seedSequences.empty()) pair["biasVariance"] = biasVarianceOf(cfg, *sd, seedSequences, *mine[k]);
+        } catch (const std::exception& e) {
+          pair = {{"scene", source.name}, {"denoiser", mine[k]->name}, {"label", mine[k]->label},
+                  {"params", json::object()}, {"status", "failed"}, {"error", e.what()}};
+          say("  error: " + std::string(e.what()));
+          ++sceneFailures;
+        }
+      }
+      const std::string line = "[refine] " + source.name + ": its " + std::to_string(mine.size()) +
+                               " pair(s) measured again against the refined references (their outputs were kept)";
+      if (cfg.milestone) cfg.milestone(line);
+      else say(line);
     }
     if (cfg.milestone) {
       ++scenesDone;

@@ -4,6 +4,7 @@
 // <out>/results.json, appends <out>/results.db, and keeps images of chosen frames for the report.
 // A failing pair is recorded with its error and does not lose the others.
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -48,6 +49,11 @@ struct RunConfig {
   ProgressFn milestone;
   // The low-resolution buffer was left to the run (no --lowres-factor): resolveAutoLowres decides.
   bool lowresAuto = false;
+  // Called after a rendered scene's pairs with the results so far (the scene's record and pairs in
+  // place): may refine the scene's references (the study, harness/study.hpp) and returns true when
+  // it did. The scene is then read again and its pairs are measured again from their kept output
+  // frames (evaluatePairAgain): the denoisers do not run twice.
+  std::function<bool(const Scene& scene, const nlohmann::json& results)> refineScene;
 };
 
 // One meaning of reengine's `disocclusionRays=auto` in every command (issue 34, item 6): where the
@@ -69,10 +75,6 @@ std::vector<std::string> failedPairs(const RunResults& results);
 std::vector<std::string> failedPairs(const nlohmann::json& results);
 // "i/n" -> (i, n), 0 <= i < n.
 std::pair<int, int> parseShard(const std::string& text);
-// The run `results` with the scenes of `part` (a run of the same configuration on some of its
-// scenes) in place of its own: their scene entries and pairs are replaced where they stand (the
-// study's second pass; finishRun then analyses the whole once).
-nlohmann::json replaceScenes(nlohmann::json results, const nlohmann::json& part);
 // Combines shard runs into one run directory (results.json, results.db, images).
 nlohmann::json mergeRuns(const std::vector<std::filesystem::path>& runs, const std::filesystem::path& out);
 

@@ -7,7 +7,7 @@
 #include "metrics/results.hpp"
 #include "metrics/run_statistics.hpp"
 
-// Shard sets and the study's second pass: runs combined into one, analysed once (run_matrix.hpp).
+// Shard sets: runs combined into one, analysed once (run_matrix.hpp).
 namespace arena {
 
 namespace fs = std::filesystem;
@@ -37,24 +37,6 @@ std::vector<std::string> failedPairs(const RunResults& results) {
 
 std::vector<std::string> failedPairs(const json& results) {
   return failedPairs(RunResults::fromJson(results, "the run's results"));
-}
-
-json replaceScenes(json results, const json& part) {
-  std::map<std::string, json> newPairs;  // scene \n label -> pair
-  for (const json& p : part.at("pairs")) newPairs[p.at("scene").get<std::string>() + "\n" + p.at("label").get<std::string>()] = p;
-  for (auto it = part.at("scenes").begin(); it != part.at("scenes").end(); ++it) {
-    if (!results["scenes"].contains(it.key())) throw Error("replaceScenes: scene " + it.key() + " is not in the run");
-    results["scenes"][it.key()] = it.value();
-  }
-  for (json& p : results["pairs"]) {
-    const std::string scene = p.at("scene").get<std::string>();
-    if (!part["scenes"].contains(scene)) continue;
-    const auto found = newPairs.find(scene + "\n" + p.at("label").get<std::string>());
-    if (found == newPairs.end())
-      throw Error("replaceScenes: pair " + p.at("label").get<std::string>() + " on " + scene + " is missing from the part");
-    p = found->second;
-  }
-  return results;
 }
 
 json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {

@@ -13,39 +13,37 @@ using nlohmann::json;
 
 namespace {
 
-// The study's second pass (issue 13): refines the references of the scenes that missed the
-// reference-quality goal, each within its budget (planReferenceRefinement), and notes on
-// each verdict what was done or what it would take. Returns the scenes whose references it refined.
-std::vector<Scene> refineReferences(RunConfig& c, const json& results, double budget, int maxSpp) {
-  std::map<std::string, SequenceInfo> sequences;
-  for (const Scene& s : c.scenes) {
-    const std::filesystem::path dir = sequenceDir(s, c.render, c.cache);
-    if (std::filesystem::exists(dir / "sequence.json")) sequences.emplace(s.name, Sequence::open(dir).info());
-  }
+// The study's refinement (issue 13), after each rendered scene's pairs: when the scene misses the
+// reference-quality goal and the paths predicted to meet it are within its budget
+// (planReferenceRefinement), its references are refined; each decision is said and noted on the
+// scene's verdict. Returns whether the references changed.
+bool refineAfterScene(const RunConfig& c, const Scene& scene, const json& results, double budget, int maxSpp,
+                      std::map<std::string, std::string>& notes) {
+  json one = {{"scenes", {{scene.name, results["scenes"][scene.name]}}}, {"pairs", json::array()}};
+  for (const json& p : results["pairs"])
+    if (p.value("scene", "") == scene.name) one["pairs"].push_back(p);
+  addReferenceQuality(one, c.warmup);
+  const std::filesystem::path dir = sequenceDir(scene, c.render, c.cache);
+  if (!std::filesystem::exists(dir / "sequence.json")) return false;
+  const std::map<std::string, SequenceInfo> sequences = {{scene.name, Sequence::open(dir).info()}};
+  const std::vector<ReferenceRefinement> plans = planReferenceRefinement(one, sequences, c.warmup, maxSpp, budget);
+  if (plans.empty()) return false;  // the goal is met (or unknown)
   auto say = [&](const std::string& line) {  // the study's decisions: milestones where they are kept apart
     if (c.milestone) c.milestone(line);
     else if (c.progress) c.progress(line);
   };
-  std::vector<Scene> refined;
-  for (const ReferenceRefinement& plan : planReferenceRefinement(results, sequences, c.warmup, maxSpp, budget)) {
-    c.referenceNotes[plan.scene] = refinementNote(plan, budget);
-    say("[refine] " + plan.scene + ": " + c.referenceNotes[plan.scene]);
-    const auto found = std::find_if(c.scenes.begin(), c.scenes.end(), [&](const Scene& s) { return s.name == plan.scene; });
-    if (found == c.scenes.end()) {  // a capture: its references are what it brought
-      c.referenceNotes[plan.scene] = "a capture's references cannot be refined by the study";
-      continue;
-    }
-    if (!plan.withinBudget) continue;
-    const Scene& scene = *found;
-    try {
-      refineSequence(scene, c.render, c.cache, plan.targetRelMse, maxSpp, c.progress, c.warmup);
-      refined.push_back(scene);
-    } catch (const Error& e) {  // e.g. a reference without its sums: the first pass's verdict stands
-      c.referenceNotes[plan.scene] = std::string("the study could not refine it: ") + e.what();
-      say("[refine] " + plan.scene + ": " + c.referenceNotes[plan.scene]);
-    }
+  const ReferenceRefinement& plan = plans.front();
+  notes[scene.name] = refinementNote(plan, budget);
+  say("[refine] " + scene.name + ": " + notes[scene.name]);
+  if (!plan.withinBudget) return false;
+  try {
+    refineSequence(scene, c.render, c.cache, plan.targetRelMse, maxSpp, c.progress, c.warmup);
+    return true;
+  } catch (const Error& e) {  // e.g. a reference without its sums: the first verdict stands
+    notes[scene.name] = std::string("the study could not refine it: ") + e.what();
+    say("[refine] " + scene.name + ": " + notes[scene.name]);
+    return false;
   }
-  return refined;
 }
 
 }  // namespace
@@ -67,25 +65,16 @@ RunConfig studyRun(std::vector<Scene> scenes, const RenderSettings& render) {
 
 json runStudy(StudyConfig config) {
   RunConfig& c = config.run;
-  // With a refinement budget the first pass is finished (analysed and committed) only after the
-  // refinement, once, so the run directory and results.db hold one run: the final one.
-  c.finish = !(config.refineBudget > 0);
+  if (!(config.refineBudget > 0)) return runMatrix(c);
+  // Each scene is refined right after its pairs, whose outputs are then measured again; the run is
+  // analysed and committed once, with the refinement's notes on the verdicts.
+  std::map<std::string, std::string> notes;
+  c.finish = false;
+  c.refineScene = [&](const Scene& scene, const json& results) {
+    return refineAfterScene(c, scene, results, config.refineBudget, config.refineMaxSpp, notes);
+  };
   json results = runMatrix(c);
-  if (c.finish) return results;
-  addReferenceQuality(results, c.warmup);  // the plan reads the first pass's verdicts
-  RunConfig again = c;
-  again.captures.clear();  // only rendered scenes are refined and run again
-  again.scenes = refineReferences(c, results, config.refineBudget, config.refineMaxSpp);
-  if (!again.scenes.empty()) {
-    const std::string line =
-        "[refine] running the refined scenes again (" + std::to_string(again.scenes.size()) + " of " +
-        std::to_string(c.scenes.size()) + ")";
-    if (c.milestone)
-      c.milestone(line);
-    else if (c.progress)
-      c.progress(line);
-    results = replaceScenes(std::move(results), runMatrix(again));
-  }
+  c.referenceNotes.insert(notes.begin(), notes.end());
   finishRun(results, c);
   return results;
 }

@@ -1,8 +1,8 @@
 #pragma once
-// The study: every registered denoiser on the scene suite, then the references of each scene that
-// missed the reference-quality goal are refined (within a work budget per scene) and those scenes
-// run again; the whole is analysed and committed once (results.json and
-// results.db hold the final run alone). `arena study` parses its options and calls runStudy.
+// The study: every registered denoiser on the scene suite. Right after a scene's pairs, when the
+// scene missed the reference-quality goal, its references are refined (within a work budget per
+// scene) and its pairs measured again from their kept outputs; the whole is analysed and committed
+// once. `arena study` parses its options and calls runStudy.
 #include <nlohmann/json.hpp>
 
 #include "harness/run_matrix.hpp"
