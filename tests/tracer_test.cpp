@@ -2,7 +2,9 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <cstring>
 #include <fstream>
 
@@ -61,6 +63,33 @@ TEST(Tracer, FurnaceConvergesToTheGeometricSeries) {
     EXPECT_LT(got, e / (1.0 - a) * 1.02);
     EXPECT_GT(got, previous);
     previous = got;
+  }
+}
+
+// The light sampler's guide finds exactly the triangle a binary search finds: std::lower_bound's
+// answer for every target, at and beside every entry and bucket edge, with repeated entries
+// (triangles of zero area) and targets outside the table.
+TEST(Tracer, CdfGuideFindsWhatABinarySearchFinds) {
+  std::vector<std::vector<float>> tables = {{1.0f}, {0.0f, 0.0f, 2.0f}, {0.5f, 0.5f, 0.5f, 3.0f}};
+  std::vector<float> sphere;  // 2208 slightly unequal areas, summed in float as the tracer sums them
+  float sum = 0;
+  for (int i = 0; i < 2208; ++i) sphere.push_back(sum += 1e-3f * (1.0f + 0.5f * std::sin(0.37f * float(i))));
+  tables.push_back(sphere);
+  std::vector<float> steps;  // past the plain search's 8 entries, with runs of zero-area entries
+  for (int i = 0; i < 24; ++i) steps.push_back(float(i / 3));
+  tables.push_back(steps);
+  for (const std::vector<float>& cdf : tables) {
+    const CdfGuide guide(cdf);
+    std::vector<float> targets = {-1.0f, 0.0f, cdf.back(), 2.0f * cdf.back(), std::numeric_limits<float>::infinity()};
+    for (size_t i = 0; i < cdf.size(); ++i) {
+      const float edge = float(i) * (cdf.back() / float(cdf.size()));
+      for (float v : {cdf[i], edge})
+        for (float t : {v, std::nextafter(v, -1.0f), std::nextafter(v, 1e9f)}) targets.push_back(t);
+    }
+    for (int k = 0; k < 1000; ++k) targets.push_back(cdf.back() * (float(k) + 0.5f) / 1000.0f);
+    for (float t : targets)
+      ASSERT_EQ(guide.lowerBound(cdf, t), size_t(std::lower_bound(cdf.begin(), cdf.end(), t) - cdf.begin()))
+          << "target " << t << " in a table of " << cdf.size();
   }
 }
 

@@ -198,6 +198,7 @@ FrameScene::FrameScene(const EmbreeDevice& device, const Scene& scene, const std
       // light switching anywhere changes every pixel's light choice and fakes a gradient where
       // nothing changed. A light with zero radiance contributes 0 (its pdf is 0 below).
       if (g.area > 0) selectableLights_.push_back(int(id));
+      g.areaGuide = CdfGuide(g.areaCdf);
     }
     RTCGeometry geom = rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
     auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
@@ -374,8 +375,7 @@ glm::vec3 FrameScene::sampleLight(const SurfaceHit& at, const Sampler& s, uint32
   const Geometry& g = geometries_[size_t(selectableLights_[li])];
   // Triangle in proportion to its area, then a uniform point on it.
   float target = (reuse ? std::min(uSelect - float(li), kOneMinusEpsilon) : s.get(dim + kLightTriangle)) * g.area;
-  size_t ti = size_t(std::lower_bound(g.areaCdf.begin(), g.areaCdf.end(), target) - g.areaCdf.begin());
-  ti = std::min(ti, g.areaCdf.size() - 1);
+  const size_t ti = std::min(g.areaGuide.lowerBound(g.areaCdf, target), g.areaCdf.size() - 1);
   if (reuse) {
     const float lo = ti > 0 ? g.areaCdf[ti - 1] : 0.0f, width = g.areaCdf[ti] - lo;
     uv.x = width > 0 ? std::clamp((target - lo) / width, 0.0f, kOneMinusEpsilon) : 0.0f;
@@ -395,6 +395,25 @@ glm::vec3 FrameScene::sampleLight(const SurfaceHit& at, const Sampler& s, uint32
   if (maxComponent(g.lightRadiance) <= 0) return glm::vec3(0);  // switched off: pdf stays 0
   pdf = dist2 / (cosLight * g.area * float(n));
   return g.lightRadiance;
+}
+
+CdfGuide::CdfGuide(const std::vector<float>& cdf) : total_(cdf.empty() ? 0.0f : cdf.back()) {
+  for (size_t b = 0; b < cdf.size(); ++b) {
+    low_.push_back(float(b) * (total_ / float(cdf.size())));
+    first_.push_back(uint32_t(std::lower_bound(cdf.begin(), cdf.end(), low_.back()) - cdf.begin()));
+  }
+}
+
+size_t CdfGuide::guided(const std::vector<float>& cdf, float target) const {
+  const size_t n = first_.size();
+  // Target's bucket, moved down while its lower end lies above target (rounding): every entry before
+  // first_[b] is then below target. Forward from there to the first entry that reaches it.
+  const float bucket = total_ > 0 && target > 0 ? target / total_ * float(n) : 0.0f;
+  size_t b = bucket < float(n - 1) ? size_t(bucket) : n - 1;
+  while (b > 0 && low_[b] > target) --b;
+  size_t i = first_[b];
+  while (i < n && cdf[i] < target) ++i;
+  return i;
 }
 
 float FrameScene::lightPdf(const SurfaceHit& lightHit, glm::vec3 from) const {

@@ -5,6 +5,7 @@
 // filter them separately.
 #include <embree3/rtcore.h>
 
+#include <algorithm>
 #include <atomic>
 #include <memory>
 #include <vector>
@@ -50,6 +51,28 @@ glm::vec3 specularAlbedo(glm::vec3 f0, float roughness, float NoV);
 // The probability that a path samples the specular lobe, from the luminances of the two lobes'
 // albedos: 0 without specular, 1 without diffuse, else in proportion, within [0.1, 0.9].
 float specularLobeProbability(float diffuseAlbedo, float specularAlbedo);
+
+// A guide into a non-decreasing table of cumulative sums (a light's triangle areas): lowerBound
+// gives std::lower_bound's answer, the first entry >= target, starting from the entry the target's
+// bucket points at, in a step or two instead of a binary search (a sphere light has 2208
+// triangles, searched once per light sample).
+class CdfGuide {
+ public:
+  CdfGuide() = default;
+  explicit CdfGuide(const std::vector<float>& cdf);
+  size_t lowerBound(const std::vector<float>& cdf, float target) const {
+    // A quad light's two triangles: a plain search is cheaper than the guide's arithmetic.
+    if (first_.size() <= 8 || cdf.size() != first_.size())
+      return size_t(std::lower_bound(cdf.begin(), cdf.end(), target) - cdf.begin());
+    return guided(cdf, target);
+  }
+
+ private:
+  size_t guided(const std::vector<float>& cdf, float target) const;
+  float total_ = 0;
+  std::vector<float> low_;        // bucket b covers [low_[b], low_[b + 1]): b x total / N
+  std::vector<uint32_t> first_;   // the first entry >= low_[b]
+};
 
 struct RayCounts {
   uint64_t rays = 0, paths = 0;
@@ -121,6 +144,7 @@ class FrameScene {
     int materialId = -1, lightIndex = -1;
     glm::vec3 lightRadiance{0};
     std::vector<float> areaCdf;  // lights: cumulative triangle areas
+    CdfGuide areaGuide;          // into areaCdf
     float area = 0;
   };
   glm::vec3 sampleLight(const SurfaceHit& at, const Sampler& s, uint32_t dim, glm::vec3& wi,
