@@ -1,6 +1,5 @@
 #include "harness/study.hpp"
 
-#include <algorithm>
 #include <filesystem>
 #include <map>
 
