@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <regex>
 #include <set>
 
@@ -394,6 +395,29 @@ TEST(Reference, RefiningGivesTheSameBitsAsRenderingTheTargetAtOnce) {
     FAIL() << "accepted sums of another sequence";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("reference_000.sums"), std::string::npos) << e.what();
+  }
+  // A pending round that does not fit the tiles (one count, or below a tile's samples) is refused,
+  // naming the file and the field.
+  const std::filesystem::path sumsFile = referenceSumsPath(looseDir, 0);
+  const std::string bytes = readText(sumsFile);
+  uint32_t size = 0;
+  std::memcpy(&size, bytes.data() + 8, sizeof size);
+  const nlohmann::json header = nlohmann::json::parse(bytes.substr(12, size));
+  const size_t tiles = header["tileSamples"].size();
+  for (const std::vector<int>& bad : {std::vector<int>{1 << 20}, std::vector<int>(tiles, 0)}) {
+    nlohmann::json h = header;
+    h["roundTarget"] = bad;
+    const std::string text = h.dump();
+    const uint32_t n = uint32_t(text.size());
+    writeTextAtomically(sumsFile, bytes.substr(0, 8) + std::string(reinterpret_cast<const char*>(&n), sizeof n) + text +
+                            bytes.substr(12 + size));
+    try {
+      readReferenceSums(sumsFile, a.hash, 0);
+      FAIL() << "accepted roundTarget " << h["roundTarget"].dump().substr(0, 40);
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("reference_000.sums"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("'roundTarget'"), std::string::npos) << e.what();
+    }
   }
 }
 
