@@ -97,7 +97,8 @@ void addStudyCommand(CLI::App& app) {
   cmd->add_option("--refine-budget", *refineBudget,
                   "After a scene's pairs, refine its references when it misses the reference-quality "
                   "goal and its predicted extra paths are at most this many times the paths of its frames at the "
-                  "references' sample cap (width x height x frames x --ref-spp), then measure its pairs again (0: off)")
+                  "references' sample cap (width x height x frames x --ref-spp), then measure its pairs again (0: off). "
+                  "With a budget, the first references are rendered to --ref-rel-error 0.02 unless it is given")
       ->check(finiteRange(0.0, 1000.0))
       ->default_val(4);
   cmd->add_option("--refine-max-spp", *refineMaxSpp, "The refinement's cap on a reference's samples per pixel")
@@ -114,7 +115,7 @@ void addStudyCommand(CLI::App& app) {
   cmd->callback([=] {
     const auto start = std::chrono::steady_clock::now();
     StudyConfig study{studyRun(selectScenes(*scenes, opt->scenesDir), opt->settings()), *refineBudget,
-                      *refineMaxSpp};
+                      *refineMaxSpp, opt->referenceRelError >= 0};
     RunConfig& c = study.run;
     for (const std::string& capture : *captures) {
       c.captures.push_back(capture);

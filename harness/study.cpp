@@ -1,5 +1,6 @@
 #include "harness/study.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <map>
 
@@ -65,6 +66,8 @@ RunConfig studyRun(std::vector<Scene> scenes, const RenderSettings& render) {
 json runStudy(StudyConfig config) {
   RunConfig& c = config.run;
   if (!(config.refineBudget > 0)) return runMatrix(c);
+  if (!config.referenceRelErrorGiven && c.render.referenceRelError > 0)
+    c.render.referenceRelError = std::max(c.render.referenceRelError, kStudyFirstReferenceRelError);
   // Each scene is refined right after its pairs, whose outputs are then measured again; the run is
   // analysed and committed once, with the refinement's notes on the verdicts.
   std::map<std::string, std::string> notes;

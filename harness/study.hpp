@@ -9,11 +9,21 @@
 
 namespace arena {
 
+// With a refinement budget, the study renders its first references to this relative error (relMSE
+// 4e-4), a quarter of the quick preset's samples, unless --ref-rel-error is given. They only have to
+// place each scene against the goal: the references of the summarised frames (t >= the warm-up) of a
+// scene that misses it are then refined to its target, and the schedule makes them the same bits as
+// rendering that target at once. The warm-up frames' references, which no summary reads (they are
+// drawn in the per-frame charts), stay at this target: 16% of the default study's reference paths
+// when they were rendered to 1% (docs/performance.md, 2026-11-27).
+inline constexpr double kStudyFirstReferenceRelError = 0.02;
+
 struct StudyConfig {
   RunConfig run;              // scenes, render settings, cache, out, flip, exposure, progress
   // Per scene: extra paths as a multiple of its frames' paths at the references' sample cap (0: none).
   double refineBudget = 4;
   int refineMaxSpp = 8192;    // the refinement's cap on a reference's samples per pixel
+  bool referenceRelErrorGiven = false;  // --ref-rel-error was set: the study keeps it
 };
 
 // The default run of the study: every registered denoiser (the baselines included once), the

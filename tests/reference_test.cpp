@@ -14,6 +14,7 @@
 #include "core/json_reader.hpp"
 #include "core/sequence.hpp"
 #include "harness/reference_quality.hpp"
+#include "harness/study.hpp"
 #include "metrics/error.hpp"
 #include "tests/test_util.hpp"
 #include "tracer/render.hpp"
@@ -681,6 +682,24 @@ TEST(Reference, StudySaysWhenItCannotRefine) {
       parseJsonFile((dir / "second" / "results.json").string())["scenes"]["cornell_static"]["referenceQuality"];
   EXPECT_FALSE(q["meets"].get<bool>()) << q;
   EXPECT_NE(q["verdict"].get<std::string>().find("(the study could not refine it: "), std::string::npos) << q;
+}
+
+// With a refinement budget and no --ref-rel-error, the study renders its first references to
+// kStudyFirstReferenceRelError (the summarised frames' are refined to the goal); without a budget, or
+// with the option given, it keeps the preset's or the given target.
+TEST(Reference, StudyRendersItsFirstReferencesLooserWhenItWillRefineThem) {
+  const std::filesystem::path dir = test::freshDir("study_first_references");
+  auto relError = [&](const std::string& run, const std::string& options) {
+    const test::CommandResult r = test::runCommand(
+        std::string(ARENA_BINARY) + " study --scenes cornell_static --resolution 32x18 --frames 10 --flip none " +
+        "--ref-spp 64 --refine-max-spp 1024 " + options + " --cache " + (dir / "cache").string() + " --out " +
+        (dir / run).string() + " --report " + (dir / (run + "_report")).string());
+    EXPECT_EQ(r.status, 0) << r.output;
+    return parseJsonFile((dir / run / "results.json").string())["settings"]["render"].value("referenceRelError", -1.0);
+  };
+  EXPECT_EQ(relError("refining", "--refine-budget 4"), kStudyFirstReferenceRelError);
+  EXPECT_EQ(relError("plain", "--refine-budget 0"), RenderSettings::fromPreset("quick").referenceRelError);
+  EXPECT_EQ(relError("given", "--refine-budget 4 --ref-rel-error 0.005"), 0.005);
 }
 
 // `arena bench reference` end to end on a tiny frame: a line per scene ending in its gain, the JSON
