@@ -565,7 +565,7 @@ ReferenceResult SequenceRenderer::continueReference(int t, ReferenceSums& sums, 
   // A round left part way under another cap is planned again (its counts may exceed this one).
   if (sums.roundPending() && *std::max_element(sums.roundTarget.begin(), sums.roundTarget.end()) > maxPer)
     sums.roundTarget.clear();
-  while (targetRelMse > 0 && result.estimatedRelMse > targetRelMse) {
+  while (targetRelMse > 0 && !(result.estimatedRelMse <= targetRelMse)) {  // NaN: not met
     if (!sums.roundPending()) {
       sums.roundTarget = nextReferenceAllocation(sums, maxPer);
       if (sums.roundTarget == sums.tileSamples) {
@@ -580,7 +580,10 @@ ReferenceResult SequenceRenderer::continueReference(int t, ReferenceSums& sums, 
     std::vector<int> order;
     for (size_t i = 0; i < shares.size(); ++i)
       if (sums.roundTarget[i] > sums.tileSamples[i]) order.push_back(int(i));
-    auto saving = [&](int i) { return shares[size_t(i)] / (double(sums.roundTarget[size_t(i)]) * sums.tilePixels(i)); };
+    auto saving = [&](int i) {  // a tile whose share is not a number goes last (a strict weak order)
+      const double v = shares[size_t(i)] / (double(sums.roundTarget[size_t(i)]) * sums.tilePixels(i));
+      return std::isfinite(v) ? v : -std::numeric_limits<double>::infinity();
+    };
     std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return saving(a) > saving(b); });
     for (int tile : order) {
       extendTile(t, sums, tile, sums.roundTarget[size_t(tile)], result.counts);
