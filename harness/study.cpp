@@ -39,10 +39,16 @@ bool refineAfterScene(const RunConfig& c, const Scene& scene, const json& result
   try {
     refineSequence(scene, c.render, c.cache, plan.targetRelMse, maxSpp, c.progress, c.warmup);
     return true;
-  } catch (const Error& e) {  // e.g. a reference without its sums: the first verdict stands
+  } catch (const std::exception& e) {  // e.g. a reference without its sums
     notes[scene.name] = std::string("the study could not refine it: ") + e.what();
     say("[refine] " + scene.name + ": " + notes[scene.name]);
-    return false;
+    // References refined before the failure are on disk (and in sequence.json): the pairs are
+    // measured again against them; if none was, the first verdict stands.
+    try {
+      return Sequence::open(dir).info().referenceSpp != sequences.at(scene.name).referenceSpp;
+    } catch (const std::exception&) {
+      return true;  // reading the scene again says what is wrong with it
+    }
   }
 }
 
@@ -76,7 +82,7 @@ json runStudy(StudyConfig config) {
     return refineAfterScene(c, scene, results, config.refineBudget, config.refineMaxSpp, notes);
   };
   json results = runMatrix(c);
-  c.referenceNotes.insert(notes.begin(), notes.end());
+  for (const auto& [scene, note] : notes) c.referenceNotes[scene] = note;
   finishRun(results, c);
   return results;
 }

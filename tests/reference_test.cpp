@@ -684,6 +684,42 @@ TEST(Reference, StudySaysWhenItCannotRefine) {
   EXPECT_NE(q["verdict"].get<std::string>().find("(the study could not refine it: "), std::string::npos) << q;
 }
 
+// A refinement that fails part way (the second reference's sums are gone) leaves the first
+// reference refined on disk: sequence.json records it, and the study measures the scene's pairs
+// against it, as a run on that cache would, and says why it stopped.
+TEST(Reference, AStudyWhoseRefinementFailsPartWayMeasuresWhatItRefined) {
+  const std::filesystem::path dir = test::freshDir("study_refine_part_way");
+  auto study = [&](const std::string& run, const std::string& budget) {
+    return test::runCommand(std::string(ARENA_BINARY) +
+                            " study --scenes moving_object --resolution 32x18 --frames 10 --flip none --ref-spp 16 " +
+                            "--ref-rel-error 0 --refine-max-spp 1024 --refine-budget " + budget + " --cache " +
+                            (dir / "cache").string() + " --out " + (dir / run).string() + " --report " +
+                            (dir / (run + "_report")).string());
+  };
+  ASSERT_EQ(study("first", "0").status, 0);
+  std::vector<std::filesystem::path> sums;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(dir / "cache"))
+    if (e.path().extension() == ".sums") sums.push_back(e.path());
+  std::sort(sums.begin(), sums.end());
+  ASSERT_EQ(sums.size(), 2u) << "moving_object's 10 frames: the static start and frame 9";
+  std::filesystem::remove(sums[1]);
+  const test::CommandResult r = study("refined", "1000");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("[refine] moving_object: the study could not refine it: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("measured again against the refined references"), std::string::npos) << r.output;
+  const nlohmann::json refined = parseJsonFile((dir / "refined" / "results.json").string())["scenes"]["moving_object"];
+  const nlohmann::json first = parseJsonFile((dir / "first" / "results.json").string())["scenes"]["moving_object"];
+  EXPECT_GT(refined["referenceSpp"][0].get<int>(), first["referenceSpp"][0].get<int>()) << refined["referenceSpp"];
+  EXPECT_EQ(refined["referenceSpp"][1], first["referenceSpp"][1]);
+  // What the run measured is what the cache now holds: a plain run on it gives the same floor.
+  ASSERT_EQ(study("after", "0").status, 0);
+  const nlohmann::json after = parseJsonFile((dir / "after" / "results.json").string())["scenes"]["moving_object"];
+  EXPECT_EQ(refined["referenceRelMse"], after["referenceRelMse"]);
+  EXPECT_NE(refined["referenceQuality"]["verdict"].get<std::string>().find("(the study could not refine it: "),
+            std::string::npos)
+      << refined["referenceQuality"];
+}
+
 // With a refinement budget and no --ref-rel-error, the study renders its first references to
 // kStudyFirstReferenceRelError (the summarised frames' are refined to the goal); without a budget, or
 // with the option given, it keeps the preset's or the given target.

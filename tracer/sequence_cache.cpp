@@ -263,25 +263,37 @@ fs::path refineSequence(const Scene& scene, const RenderSettings& settings, cons
   if (home != dir) removeStaleTemporaries(home);
   const std::string hash = sequenceHash(scene, referenceHomeSettings(settings));
   const int references = int(info.referenceSpp.size());
-  for (int r = 0; r < references; ++r) {
-    const int firstFrame =
-        int(std::find(info.referenceOfFrame.begin(), info.referenceOfFrame.end(), r) - info.referenceOfFrame.begin());
-    const double before = info.referenceEstimatedRelMse[size_t(r)];
-    if (before > 0 && before <= targetRelMse) continue;
-    if (!info.referenceUsedFrom(r, fromFrame)) continue;
-    ReferenceSums sums = readReferenceSums(referenceSumsPath(home, r), hash, r);
-    const auto t0 = std::chrono::steady_clock::now();
-    const ReferenceResult ref = renderer.continueReference(firstFrame, sums, targetRelMse, maxSpp);
-    const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const int spp = info.referenceSpp[size_t(r)];
-    writeReferenceFiles(home, hash, scene.name, r, ref, sums, info);
-    if (home != dir) shareReference(home, dir, r);
-    if (progress) {
-      progress("[" + scene.name + "] reference " + std::to_string(r) + ": " + std::to_string(spp) + " -> " +
-               std::to_string(ref.spp) + " spp, est. relMSE " + formatDouble(before, 3) + " -> " +
-               formatDouble(ref.estimatedRelMse, 3) + " in " + formatSeconds(sec));
-      if (ref.capped) progress(cappedWarning(scene.name, r, ref));
+  int refined = 0;
+  // A reference that fails (e.g. its sums are gone) leaves the ones before it refined on disk:
+  // sequence.json then records them before the error goes on, so that nothing describes them wrongly.
+  auto recordRefined = [&] {
+    if (refined > 0) writeTextAtomically(dir / "sequence.json", info.toJson().dump(1));
+  };
+  try {
+    for (int r = 0; r < references; ++r) {
+      const int firstFrame =
+          int(std::find(info.referenceOfFrame.begin(), info.referenceOfFrame.end(), r) - info.referenceOfFrame.begin());
+      const double before = info.referenceEstimatedRelMse[size_t(r)];
+      if (before > 0 && before <= targetRelMse) continue;
+      if (!info.referenceUsedFrom(r, fromFrame)) continue;
+      ReferenceSums sums = readReferenceSums(referenceSumsPath(home, r), hash, r);
+      const auto t0 = std::chrono::steady_clock::now();
+      const ReferenceResult ref = renderer.continueReference(firstFrame, sums, targetRelMse, maxSpp);
+      const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const int spp = info.referenceSpp[size_t(r)];
+      writeReferenceFiles(home, hash, scene.name, r, ref, sums, info);
+      ++refined;
+      if (home != dir) shareReference(home, dir, r);
+      if (progress) {
+        progress("[" + scene.name + "] reference " + std::to_string(r) + ": " + std::to_string(spp) + " -> " +
+                 std::to_string(ref.spp) + " spp, est. relMSE " + formatDouble(before, 3) + " -> " +
+                 formatDouble(ref.estimatedRelMse, 3) + " in " + formatSeconds(sec));
+        if (ref.capped) progress(cappedWarning(scene.name, r, ref));
+      }
     }
+  } catch (...) {
+    recordRefined();
+    throw;
   }
   info.settings["refineTargetRelMse"] = targetRelMse;
   writeTextAtomically(dir / "sequence.json", info.toJson().dump(1));
