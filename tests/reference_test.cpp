@@ -660,13 +660,13 @@ TEST(Reference, StudyRefinesReferencesThatMissTheGoal) {
   EXPECT_LT(q["floor"].get<double>(), plain["referenceQuality"]["floor"].get<double>() / 4) << q;
   EXPECT_TRUE(q["meets"].get<bool>()) << q;
   EXPECT_NE(q["verdict"].get<std::string>().find("(the study refined its references toward"), std::string::npos) << q;
-  // The first pass was not committed: the run directory's database holds the final run only.
+  // The run is committed once: the run directory's database holds the final measurements only.
   EXPECT_EQ(test::countRows(dir / "refined" / "results.db", "runs"), 1);
   EXPECT_EQ(test::countRows(dir / "plain" / "results.db", "runs"), 1);
 }
 
 // A reference that cannot be refined (its sums are gone) is said so in the verdict; the study
-// still finishes with the first pass's results.
+// still finishes, with the pairs measured against the references it has.
 TEST(Reference, StudySaysWhenItCannotRefine) {
   const std::filesystem::path dir = test::freshDir("study_refine_missing");
   ASSERT_EQ(tinyStudy(dir, "first", "0").status, 0);
