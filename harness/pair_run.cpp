@@ -21,6 +21,12 @@ using nlohmann::json;
 
 namespace {
 
+// Whether frame t's images are kept: every frame's with keepAll, else the report's chosen frames.
+bool keepsImagesOf(const RunConfig& cfg, const SceneData& sd, bool keepAll, int t) {
+  if (cfg.keepFrames == "none") return false;
+  return keepAll || std::find(sd.chosenFrames.begin(), sd.chosenFrames.end(), t) != sd.chosenFrames.end();
+}
+
 void writeFrameImages(const fs::path& imageDir, int t, const FrameImages& images) {
   writePng(imageDir / frameName("frame", t), images.display);
   if (!images.flip.empty()) writePng(imageDir / frameName("flip", t), images.flip);
@@ -77,7 +83,6 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   std::vector<std::vector<PassTime>> passes;
   std::vector<double> ms;
   GpuFrameCost gpuCost(info.width, info.height);  // the speed axis's predicted GPU ms (issue 31)
-  const bool keepImages = cfg.keepFrames != "none";
   auto onFrame = [&](const DenoisedFrame& f) {
     FrameFacts facts;
     facts.milliseconds = f.milliseconds;
@@ -95,8 +100,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
     std::vector<PassTime>& frame = passes.emplace_back();
     for (const PassStats& p : f.passes) frame.push_back({p.name, p.milliseconds, p.tapsPerPixel});
     if (run) gpuCost.add(f.passes);
-    const bool chosen = std::find(sd.chosenFrames.begin(), sd.chosenFrames.end(), f.frame) != sd.chosenFrames.end();
-    if (keepImages && (keepAll || chosen)) {
+    if (keepsImagesOf(cfg, sd, keepAll, f.frame)) {
       StageTimer images(Stage::Report);
       writeFrameImages(imageDir, f.frame, evaluation.lastImages());
       if (keepAll) writeOutputExr(imageDir, f, req, params);
@@ -141,7 +145,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   }
   pair["timing"] = timing;
   pair["sanitizedInputs"] = {{"total", totalNonFinite(sanitized)}, {"channels", sanitized}};
-  pair["images"] = {{"dir", fs::relative(imageDir, cfg.out).string()}, {"all", keepAll && keepImages}};
+  pair["images"] = {{"dir", fs::relative(imageDir, cfg.out).string()}, {"all", keepAll && cfg.keepFrames != "none"}};
   if (run && !run->info().origin.empty()) pair["origin"] = run->info().origin;
   if (!run) pair["origin"] = (sd.sequence.dir() / "outputs" / captured).string();
   if (!run || run->info().signals == SignalMode::Color) pair["signals"] = "color";
@@ -152,11 +156,9 @@ json evaluatePairAgain(const RunConfig& cfg, const SceneData& sd, const json& fi
                        const fs::path& imageDir, bool keepAll) {
   StageTimer metrics(Stage::Metrics);
   PairEvaluation evaluation(sd.evaluation);
-  const bool keepImages = cfg.keepFrames != "none";
   for (const KeptFrame& f : kept) {
     evaluation.add(f.frame, f.color, f.facts);
-    const bool chosen = std::find(sd.chosenFrames.begin(), sd.chosenFrames.end(), f.frame) != sd.chosenFrames.end();
-    if (keepImages && (keepAll || chosen)) {
+    if (keepsImagesOf(cfg, sd, keepAll, f.frame)) {
       StageTimer images(Stage::Report);
       writeFrameImages(imageDir, f.frame, evaluation.lastImages());
     }

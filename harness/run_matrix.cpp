@@ -28,6 +28,12 @@ std::string safeName(const std::string& label) {
   return s;
 }
 
+// The record of a pair that could not run or be measured.
+json failedPair(const std::string& scene, const DenoiserRequest& r, const std::string& error) {
+  return {{"scene", scene}, {"denoiser", r.name}, {"label", r.label}, {"params", json::object()},
+          {"status", "failed"}, {"error", error}};
+}
+
 std::string clock(double s) {
   char buf[32];
   int total = int(std::lround(std::max(0.0, s)));
@@ -156,20 +162,19 @@ json runMatrix(const RunConfig& cfg) {
     // With a refinement after the scene, its output frames are kept to be measured again.
     const bool mayRefine = cfg.refineScene && source.scene;
     std::vector<std::vector<KeptFrame>> kept(mayRefine ? mine.size() : 0);
-    std::vector<size_t> pairAt;  // where the scene's pairs stand in results["pairs"]
-    for (const DenoiserRequest* r : mine) {
+    const size_t firstPair = results["pairs"].size();  // the scene's pairs follow in the order of `mine`
+    for (size_t k = 0; k < mine.size(); ++k) {
+      const DenoiserRequest* r = mine[k];
       auto t0 = std::chrono::steady_clock::now();
       json pair;
       try {
         if (!sd) throw Error("scene " + source.name + " could not be prepared: " + sceneError);
         pair = runPair(cfg, *sd, *r, cfg.out / "images" / source.name / safeName(r->label), keepAll,
-                       mayRefine ? &kept[pairAt.size()] : nullptr);
+                       mayRefine ? &kept[k] : nullptr);
         if (!seedSequences.empty()) pair["biasVariance"] = biasVarianceOf(cfg, *sd, seedSequences, *r);
       } catch (const std::exception& e) {
-        pair = {{"scene", source.name}, {"denoiser", r->name}, {"label", r->label}, {"params", json::object()},
-                {"status", "failed"}, {"error", e.what()}};
+        pair = failedPair(source.name, *r, e.what());
       }
-      pairAt.push_back(results["pairs"].size());
       results["pairs"].push_back(pair);
       ++pairsDone;
       double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -194,7 +199,7 @@ json runMatrix(const RunConfig& cfg) {
         sceneError = std::string("reading it again after refining its references: ") + e.what();
       }
       for (size_t k = 0; k < mine.size(); ++k) {
-        json& pair = results["pairs"][pairAt[k]];
+        json& pair = results["pairs"][firstPair + k];
         if (pair["status"] != "ok") continue;
         try {
           if (!sd) throw Error("scene " + source.name + ": " + sceneError);
@@ -202,16 +207,14 @@ json runMatrix(const RunConfig& cfg) {
                                    keepAll);
           if (!seedSequences.empty()) pair["biasVariance"] = biasVarianceOf(cfg, *sd, seedSequences, *mine[k]);
         } catch (const std::exception& e) {
-          pair = {{"scene", source.name}, {"denoiser", mine[k]->name}, {"label", mine[k]->label},
-                  {"params", json::object()}, {"status", "failed"}, {"error", e.what()}};
+          pair = failedPair(source.name, *mine[k], e.what());
           say("  error: " + std::string(e.what()));
           ++sceneFailures;
         }
       }
       const std::string line = "[refine] " + source.name + ": its " + std::to_string(mine.size()) +
                                " pair(s) measured again against the refined references (their outputs were kept)";
-      if (cfg.milestone) cfg.milestone(line);
-      else say(line);
+      cfg.announce(line);
     }
     if (cfg.milestone) {
       ++scenesDone;

@@ -47,6 +47,11 @@ struct RunConfig {
   // One line per finished scene (its pairs, their time, failures, the ETA) and per decision of the
   // study (what it refines): the progress a log keeps when `progress` is shown only in passing.
   ProgressFn milestone;
+  // A decision's line: to `milestone` where there is one, else to `progress`.
+  void announce(const std::string& line) const {
+    if (milestone) milestone(line);
+    else if (progress) progress(line);
+  }
   // The low-resolution buffer was left to the run (no --lowres-factor): resolveAutoLowres decides.
   bool lowresAuto = false;
   // Called after a rendered scene's pairs with the results so far (the scene's record and pairs in

@@ -28,20 +28,16 @@ bool refineAfterScene(const RunConfig& c, const Scene& scene, const json& result
   const std::map<std::string, SequenceInfo> sequences = {{scene.name, Sequence::open(dir).info()}};
   const std::vector<ReferenceRefinement> plans = planReferenceRefinement(one, sequences, c.warmup, maxSpp, budget);
   if (plans.empty()) return false;  // the goal is met (or unknown)
-  auto say = [&](const std::string& line) {  // the study's decisions: milestones where they are kept apart
-    if (c.milestone) c.milestone(line);
-    else if (c.progress) c.progress(line);
-  };
   const ReferenceRefinement& plan = plans.front();
   notes[scene.name] = refinementNote(plan, budget);
-  say("[refine] " + scene.name + ": " + notes[scene.name]);
+  c.announce("[refine] " + scene.name + ": " + notes[scene.name]);
   if (!plan.withinBudget) return false;
   try {
     refineSequence(scene, c.render, c.cache, plan.targetRelMse, maxSpp, c.progress, c.warmup);
     return true;
   } catch (const std::exception& e) {  // e.g. a reference without its sums
     notes[scene.name] = std::string("the study could not refine it: ") + e.what();
-    say("[refine] " + scene.name + ": " + notes[scene.name]);
+    c.announce("[refine] " + scene.name + ": " + notes[scene.name]);
     // References refined before the failure are on disk (and in sequence.json): the pairs are
     // measured again against them; if none was, the first verdict stands.
     try {

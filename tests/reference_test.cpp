@@ -632,13 +632,15 @@ TEST(Reference, RefinementPlanRefinesEachSceneWithinItsOwnBudget) {
 
 // End to end: a study whose references are far too noisy for its scene (16 spp) says so; with a
 // refinement budget it refines them, runs again, and its verdict says what it did.
-// The study run of the refinement tests: cornell_static at 32x18, 10 frames, 16-spp references.
-test::CommandResult tinyStudy(const std::filesystem::path& dir, const std::string& run, const std::string& budget) {
-  return test::runCommand(std::string(ARENA_BINARY) +
-                          " study --scenes cornell_static --resolution 32x18 --frames 10 --flip none " +
-                          "--ref-spp 16 --ref-rel-error 0 --refine-max-spp 1024 --refine-budget " + budget +
-                          " --cache " + (dir / "cache").string() + " --out " + (dir / run).string() + " --report " +
-                          (dir / (run + "_report")).string());
+// The study run of the refinement tests: a scene (cornell_static) at 32x18, 10 frames, with
+// `references` (16-spp references at no target), the cache and the runs in `dir`.
+test::CommandResult tinyStudy(const std::filesystem::path& dir, const std::string& run, const std::string& budget,
+                              const std::string& scene = "cornell_static",
+                              const std::string& references = "--ref-spp 16 --ref-rel-error 0") {
+  return test::runCommand(std::string(ARENA_BINARY) + " study --scenes " + scene +
+                          " --resolution 32x18 --frames 10 --flip none " + references +
+                          " --refine-max-spp 1024 --refine-budget " + budget + " --cache " + (dir / "cache").string() +
+                          " --out " + (dir / run).string() + " --report " + (dir / (run + "_report")).string());
 }
 
 TEST(Reference, StudyRefinesReferencesThatMissTheGoal) {
@@ -690,11 +692,7 @@ TEST(Reference, StudySaysWhenItCannotRefine) {
 TEST(Reference, AStudyWhoseRefinementFailsPartWayMeasuresWhatItRefined) {
   const std::filesystem::path dir = test::freshDir("study_refine_part_way");
   auto study = [&](const std::string& run, const std::string& budget) {
-    return test::runCommand(std::string(ARENA_BINARY) +
-                            " study --scenes moving_object --resolution 32x18 --frames 10 --flip none --ref-spp 16 " +
-                            "--ref-rel-error 0 --refine-max-spp 1024 --refine-budget " + budget + " --cache " +
-                            (dir / "cache").string() + " --out " + (dir / run).string() + " --report " +
-                            (dir / (run + "_report")).string());
+    return tinyStudy(dir, run, budget, "moving_object");
   };
   ASSERT_EQ(study("first", "0").status, 0);
   std::vector<std::filesystem::path> sums;
@@ -725,17 +723,14 @@ TEST(Reference, AStudyWhoseRefinementFailsPartWayMeasuresWhatItRefined) {
 // with the option given, it keeps the preset's or the given target.
 TEST(Reference, StudyRendersItsFirstReferencesLooserWhenItWillRefineThem) {
   const std::filesystem::path dir = test::freshDir("study_first_references");
-  auto relError = [&](const std::string& run, const std::string& options) {
-    const test::CommandResult r = test::runCommand(
-        std::string(ARENA_BINARY) + " study --scenes cornell_static --resolution 32x18 --frames 10 --flip none " +
-        "--ref-spp 64 --refine-max-spp 1024 " + options + " --cache " + (dir / "cache").string() + " --out " +
-        (dir / run).string() + " --report " + (dir / (run + "_report")).string());
+  auto relError = [&](const std::string& run, const std::string& budget, const std::string& references) {
+    const test::CommandResult r = tinyStudy(dir, run, budget, "cornell_static", references);
     EXPECT_EQ(r.status, 0) << r.output;
     return parseJsonFile((dir / run / "results.json").string())["settings"]["render"].value("referenceRelError", -1.0);
   };
-  EXPECT_EQ(relError("refining", "--refine-budget 4"), kStudyFirstReferenceRelError);
-  EXPECT_EQ(relError("plain", "--refine-budget 0"), RenderSettings::fromPreset("quick").referenceRelError);
-  EXPECT_EQ(relError("given", "--refine-budget 4 --ref-rel-error 0.005"), 0.005);
+  EXPECT_EQ(relError("refining", "4", "--ref-spp 64"), kStudyFirstReferenceRelError);
+  EXPECT_EQ(relError("plain", "0", "--ref-spp 64"), RenderSettings::fromPreset("quick").referenceRelError);
+  EXPECT_EQ(relError("given", "4", "--ref-spp 64 --ref-rel-error 0.005"), 0.005);
 }
 
 // `arena bench reference` end to end on a tiny frame: a line per scene ending in its gain, the JSON

@@ -437,8 +437,8 @@ void SequenceRenderer::extendTile(int t, ReferenceSums& sums, int tile, int perR
   const int begin = sums.tileSamples[size_t(tile)];
   if (perReplicate <= begin) return;
   const FrameScene& cur = frameScene(t);
-  const int x0 = (tile % sums.tilesX()) * sums.tileSize, y0 = (tile / sums.tilesX()) * sums.tileSize;
-  const int tw = std::min(width_, x0 + sums.tileSize) - x0, th = std::min(height_, y0 + sums.tileSize) - y0;
+  const ReferenceSums::TileRect r = sums.tileRect(tile);
+  const int tw = r.x1 - r.x0, th = r.y1 - r.y0;
   std::vector<RayCounts> pixelCounts(size_t(tw) * size_t(th));
   // A tile is a few dozen pixels: one pixel per task keeps both cores busy to its end.
   tbb::parallel_for(
@@ -446,7 +446,7 @@ void SequenceRenderer::extendTile(int t, ReferenceSums& sums, int tile, int perR
       [&](const tbb::blocked_range<int>& pixels) {
         flushDenormals();
         for (int p = pixels.begin(); p != pixels.end(); ++p)
-          extendPixel(t, cur, sums, x0 + p % tw, y0 + p / tw, begin, perReplicate, pixelCounts[size_t(p)]);
+          extendPixel(t, cur, sums, r.x0 + p % tw, r.y0 + p / tw, begin, perReplicate, pixelCounts[size_t(p)]);
       },
       tbb::simple_partitioner());
   sums.tileSamples[size_t(tile)] = perReplicate;
@@ -509,11 +509,10 @@ LayerSet referenceLayersFromSums(const ReferenceSums& sums) {
 }
 
 double referenceTileShare(const ReferenceSums& sums, int tile) {
-  const int x0 = (tile % sums.tilesX()) * sums.tileSize, y0 = (tile / sums.tilesX()) * sums.tileSize;
-  const int x1 = std::min(sums.width, x0 + sums.tileSize), y1 = std::min(sums.height, y0 + sums.tileSize);
+  const ReferenceSums::TileRect r = sums.tileRect(tile);
   double share = 0;
-  for (int y = y0; y < y1; ++y)
-    for (int x = x0; x < x1; ++x)
+  for (int y = r.y0; y < r.y1; ++y)
+    for (int x = r.x0; x < r.x1; ++x)
       for (int c = 0; c < 3; ++c) {
         const ReplicateStats st = replicateStats(sums, size_t(y) * size_t(sums.width) + size_t(x), c);
         share += st.varOfMean / (st.mean * st.mean + 0.01);  // metrics.md's eps
@@ -608,10 +607,14 @@ bool ReferenceSums::roundPending() const {
   return false;
 }
 
+ReferenceSums::TileRect ReferenceSums::tileRect(int tile) const {
+  const int x0 = (tile % tilesX()) * tileSize, y0 = (tile / tilesX()) * tileSize;
+  return {x0, y0, std::min(width, x0 + tileSize), std::min(height, y0 + tileSize)};
+}
+
 int ReferenceSums::tilePixels(int tile) const {
-  const int tx = tile % tilesX(), ty = tile / tilesX();
-  return (std::min(width, (tx + 1) * tileSize) - tx * tileSize) *
-         (std::min(height, (ty + 1) * tileSize) - ty * tileSize);
+  const TileRect r = tileRect(tile);
+  return (r.x1 - r.x0) * (r.y1 - r.y0);
 }
 
 double ReferenceSums::meanSpp() const {

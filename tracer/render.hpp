@@ -77,7 +77,11 @@ struct ReferenceSums {
   int samplesOfPixel(size_t i) const {
     return tileSamples[size_t(tileOf(int(i % size_t(width)), int(i / size_t(width))))];
   }
-  int tilePixels(int tile) const;  // tiles at the right and bottom edges may be partial
+  struct TileRect {
+    int x0, y0, x1, y1;  // pixels [x0, x1) x [y0, y1)
+  };
+  TileRect tileRect(int tile) const;  // tiles at the right and bottom edges may be partial
+  int tilePixels(int tile) const;
   // Mean samples per pixel over every replicate held (the frame's cost), rounded in spp().
   double meanSpp() const;
   int spp() const { return int(std::lround(meanSpp())); }

@@ -264,11 +264,6 @@ fs::path refineSequence(const Scene& scene, const RenderSettings& settings, cons
   const std::string hash = sequenceHash(scene, referenceHomeSettings(settings));
   const int references = int(info.referenceSpp.size());
   int refined = 0;
-  // A reference that fails (e.g. its sums are gone) leaves the ones before it refined on disk:
-  // sequence.json then records them before the error goes on, so that nothing describes them wrongly.
-  auto recordRefined = [&] {
-    if (refined > 0) writeTextAtomically(dir / "sequence.json", info.toJson().dump(1));
-  };
   try {
     for (int r = 0; r < references; ++r) {
       const int firstFrame =
@@ -292,7 +287,9 @@ fs::path refineSequence(const Scene& scene, const RenderSettings& settings, cons
       }
     }
   } catch (...) {
-    recordRefined();
+    // A reference that fails (e.g. its sums are gone) leaves the ones before it refined on disk:
+    // sequence.json records them before the error goes on, so that nothing describes them wrongly.
+    if (refined > 0) writeTextAtomically(dir / "sequence.json", info.toJson().dump(1));
     throw;
   }
   info.settings["refineTargetRelMse"] = targetRelMse;
