@@ -103,6 +103,24 @@ TEST(Sobol, AReplicatesSamplerAtAnotherIndexIsThatIndexsSampler) {
     }
 }
 
+// A replicate's dimension hashes computed once (the reference loop) give every dimension's
+// numbers bit for bit, inside the table and beyond it (hashed on demand).
+TEST(Sobol, AReplicatesPrecomputedDimensionHashesGiveTheSameNumbers) {
+  Sampler::DimensionHashes table;
+  const Sampler base = Sampler::owenSobol(3, 1, 77, 5, 0);
+  const Sampler hashed = base.withHashes(table, 24);
+  EXPECT_EQ(table.count, 24u);
+  for (uint32_t index : {0u, 1u, 6u, 511u, 4097u})
+    for (uint32_t dim = 0; dim < 40; ++dim) {
+      const Sampler a = hashed.atIndex(index), b = base.atIndex(index);
+      EXPECT_EQ(a.get2(dim), b.get2(dim)) << index << " " << dim;
+      EXPECT_EQ(a.get(dim), b.get(dim)) << index << " " << dim;
+    }
+  Sampler::DimensionHashes capped;
+  base.withHashes(capped, 1000);
+  EXPECT_EQ(capped.count, Sampler::kMaxHashedDims);
+}
+
 TEST(Sobol, ReplicatesAndPixelsAreDecorrelated) {
   // Different replicates (and pixels) must not repeat each other's points.
   const glm::vec2 a = Sampler::owenSobol(1, 0, 10, 0, 3).get2(2);

@@ -413,8 +413,13 @@ void SequenceRenderer::extendPixel(int t, const FrameScene& cur, ReferenceSums& 
   for (int r = 0; r < K; ++r) {
     double* acc = &sums.sum[(i * size_t(K) + size_t(r)) * V];
     const int replicate = sums.firstReplicate + r;
-    // The replicate's Sobol key, hashed once; each sample only sets its index.
-    const Sampler sobolReplicate = Sampler::owenSobol(scene_.seed, uint32_t(t), uint32_t(i), uint32_t(replicate), 0);
+    // The replicate's Sobol key and the dimensions' hashes, computed once; each sample only sets
+    // its index.
+    Sampler::DimensionHashes hashes;
+    const Sampler sobolReplicate =
+        sobol && hasHit ? Sampler::owenSobol(scene_.seed, uint32_t(t), uint32_t(i), uint32_t(replicate), 0)
+                              .withHashes(hashes, cur.pathDimensions())
+                        : Sampler(0, 0, 0, 0);
     for (int k = begin; k < end; ++k) {
       glm::vec3 c = sky, d(0), sp(0);
       if (hasHit) {

@@ -127,13 +127,35 @@ class Sampler {
     return s;
   }
 
+  // A Sobol replicate's per-dimension hashes, which do not depend on the sample index: computed
+  // once for the hundreds of samples a reference draws from one replicate instead of at every
+  // draw. Dimensions from `count` on are hashed on demand; the numbers are the same bits either way.
+  static constexpr uint32_t kMaxHashedDims = 64;
+  struct DimensionHashes {
+    uint32_t count = 0;
+    uint64_t dim[kMaxHashedDims];     // hash(d)
+    uint32_t second[kMaxHashedDims];  // the seed of get2's second coordinate, uint32_t(mix64(hash(d)))
+  };
+  // This sampler reading dimensions 0..count-1 (at most kMaxHashedDims) from `table`, which it fills;
+  // samplers made from it with atIndex share the table, which must outlive them.
+  Sampler withHashes(DimensionHashes& table, uint32_t count) const {
+    table.count = count < kMaxHashedDims ? count : kMaxHashedDims;
+    for (uint32_t d = 0; d < table.count; ++d) {
+      table.dim[d] = hash(d);
+      table.second[d] = uint32_t(mix64(table.dim[d]));
+    }
+    Sampler s = *this;
+    s.hashes_ = &table;
+    return s;
+  }
+
   SamplerKind kind() const { return kind_; }
   // Uniform in [0, 1) for dimension `dim`. Sobol: the value is
   //   nestedUniformScramble(dimension0(i), h_hi) with i = nestedUniformScramble(index, h_lo),
   // computed with the bit reversals that cancel left out (reversedShuffledIndex, firstCoordinate).
   float get(uint32_t dim) const {
     if (kind_ == SamplerKind::Independent) return sobol::toUnitFloat(uint32_t(hash(dim) >> 32));
-    const uint64_t h = hash(dim);
+    const uint64_t h = hashed(dim);
     return firstCoordinate(reversedShuffledIndex(h), h);
   }
   // Uniform in [0, 1)^2 for dimensions (dim, dim + 1); stratified jointly by the Sobol sampler (the
@@ -141,15 +163,18 @@ class Sampler {
   // inner reverse(dimension1(reverse(x))) is one table lookup).
   glm::vec2 get2(uint32_t dim) const {
     if (kind_ == SamplerKind::Independent) return {get(dim), get(dim + 1)};
-    const uint64_t h = hash(dim);
+    const bool cached = hashes_ && dim < hashes_->count;
+    const uint64_t h = cached ? hashes_->dim[dim] : hash(dim);
     const uint32_t x = reversedShuffledIndex(h);
-    const uint32_t second = sobol::laineKarrasPermutation(sobol::reversedDimension1OfReversed(x), uint32_t(mix64(h)));
+    const uint32_t seed = cached ? hashes_->second[dim] : uint32_t(mix64(h));
+    const uint32_t second = sobol::laineKarrasPermutation(sobol::reversedDimension1OfReversed(x), seed);
     return {firstCoordinate(x, h), sobol::toUnitFloat(sobol::reverseBits(second))};
   }
   uint64_t key() const { return key_; }
 
  private:
   uint64_t hash(uint32_t dim) const { return mix64(key_ ^ (uint64_t(dim) * 0x9e3779b97f4a7c15ull)); }
+  uint64_t hashed(uint32_t dim) const { return hashes_ && dim < hashes_->count ? hashes_->dim[dim] : hash(dim); }
   // x = reverse(i), i the index under dimension hash h's nested uniform shuffle.
   uint32_t reversedShuffledIndex(uint64_t h) const {
     return sobol::laineKarrasPermutation(reversedIndex_, uint32_t(h));
@@ -161,6 +186,7 @@ class Sampler {
   }
 
   uint64_t key_ = 0;
+  const DimensionHashes* hashes_ = nullptr;  // Sobol: this replicate's, where withHashes set them
   uint32_t reversedIndex_ = 0;  // Sobol: the sample index, bit-reversed (every dimension's shuffle starts there)
   SamplerKind kind_ = SamplerKind::Independent;
 };

@@ -355,6 +355,11 @@ SurfaceHit FrameScene::surface(int meshId, int primId, float u, float v) const {
   return s;
 }
 
+uint32_t FrameScene::pathDimensions() const {
+  // Vertices 0..maxBounces-1 sample (the last bounce's hit only adds its emission).
+  return uint32_t(std::max(scene_.maxBounces, 1)) * kDimsPerVertex;
+}
+
 glm::vec3 FrameScene::sky(glm::vec3 dir) const {
   return glm::mix(scene_.skyBottom, scene_.skyTop, 0.5f * (dir.y + 1.0f));
 }

@@ -99,6 +99,9 @@ class FrameScene {
   // World position of (mesh, primitive, barycentrics) in this state.
   glm::vec3 positionOf(int meshId, int primId, float u, float v) const;
   glm::vec3 sky(glm::vec3 dir) const;
+  // The random dimensions a path of this scene can use (its vertices' 8 each, tracer.cpp): a
+  // Sobol replicate hashes them once (Sampler::withHashes).
+  uint32_t pathDimensions() const;
 
   struct Radiance {
     glm::vec3 diffuse{0}, specular{0};  // radiance reflected by the first vertex, not demodulated
