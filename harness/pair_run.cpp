@@ -69,15 +69,17 @@ void runCapturedOutput(const Sequence& sequence, const std::string& name,
 }  // namespace
 
 json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& req, const fs::path& imageDir,
-             bool keepAll, std::vector<KeptFrame>* kept) {
+             bool keepAll, std::vector<KeptFrame>* kept, EvaluationScope scope) {
   const SequenceInfo& info = sd.sequence.info();
+  const bool screening = scope == EvaluationScope::Screening;
+  if (screening && !kept) throw Error("runPair: a screening keeps the output frames to measure them in full");
   const std::string captured = capturedOutputName(req.name);
   if (!captured.empty() && !sd.sequence.isCapture())
     throw Error(req.name + ": scene " + info.scene + " is not a capture; file: contenders are outputs stored in a "
                 "capture's outputs/ folder (docs/captures.md)");
   std::unique_ptr<DenoiseRun> run = captured.empty() ? std::make_unique<DenoiseRun>(req, sd.sequence) : nullptr;
   const ParamSet params = run ? run->params() : ParamSet{};
-  PairEvaluation evaluation(sd.evaluation);
+  PairEvaluation evaluation(sd.evaluation, scope);
   bool selfTimed = false;
   NonFiniteCounts sanitized;  // over every frame, warm-up included: each one shaped the history
   std::vector<std::vector<PassTime>> passes;
@@ -102,7 +104,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
     if (run) gpuCost.add(f.passes);
     if (keepsImagesOf(cfg, sd, keepAll, f.frame)) {
       StageTimer images(Stage::Report);
-      writeFrameImages(imageDir, f.frame, evaluation.lastImages());
+      if (!screening) writeFrameImages(imageDir, f.frame, evaluation.lastImages());
       if (keepAll) writeOutputExr(imageDir, f, req, params);
     }
   };

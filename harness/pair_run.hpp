@@ -24,8 +24,12 @@ struct KeptFrame {
 
 // `imageDir` receives the chosen frames' images, or every frame's (and its EXR) with `keepAll`.
 // With `kept`, every output frame is also kept there (the study's refinement evaluates them again).
+// A screening (which needs `kept`) measures only the linear errors (metrics/evaluator.hpp) and writes
+// no frame images: the caller decides on them, then measures the kept frames in full with
+// evaluatePairAgain, which writes the images. Outputs' EXRs (`keepAll`) are written here either way.
 nlohmann::json runPair(const RunConfig& config, const SceneData& scene, const DenoiserRequest& request,
-                       const std::filesystem::path& imageDir, bool keepAll, std::vector<KeptFrame>* kept = nullptr);
+                       const std::filesystem::path& imageDir, bool keepAll, std::vector<KeptFrame>* kept = nullptr,
+                       EvaluationScope scope = EvaluationScope::Full);
 
 // The record `pair` that runPair returned, with its measurements taken again from its kept output
 // frames against `scene` as it is now (the study's refined references): the same values as running

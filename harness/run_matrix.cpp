@@ -159,7 +159,9 @@ json runMatrix(const RunConfig& cfg) {
                                         {"capture", source.capture.string()}, {"validation", validation}};
     const auto sceneStart = std::chrono::steady_clock::now();
     size_t sceneFailures = 0;
-    // With a refinement after the scene, its output frames are kept to be measured again.
+    // With a refinement after the scene, its pairs are first screened (their relMSE, all the
+    // decision reads) and their output frames kept, to be measured in full once the references are
+    // final: a refined scene is not measured in full twice.
     const bool mayRefine = cfg.refineScene && source.scene;
     std::vector<std::vector<KeptFrame>> kept(mayRefine ? mine.size() : 0);
     const size_t firstPair = results["pairs"].size();  // the scene's pairs follow in the order of `mine`
@@ -170,7 +172,7 @@ json runMatrix(const RunConfig& cfg) {
       try {
         if (!sd) throw Error("scene " + source.name + " could not be prepared: " + sceneError);
         pair = runPair(cfg, *sd, *r, cfg.out / "images" / source.name / safeName(r->label), keepAll,
-                       mayRefine ? &kept[k] : nullptr);
+                       mayRefine ? &kept[k] : nullptr, mayRefine ? EvaluationScope::Screening : EvaluationScope::Full);
         if (!seedSequences.empty()) pair["biasVariance"] = biasVarianceOf(cfg, *sd, seedSequences, *r);
       } catch (const std::exception& e) {
         pair = failedPair(source.name, *r, e.what());
@@ -189,7 +191,8 @@ json runMatrix(const RunConfig& cfg) {
         say("  warning: " + pair["warnings"][0].get<std::string>());
       sceneFailures += pair["status"] != "ok";
     }
-    if (mayRefine && sd && cfg.refineScene(*source.scene, results)) {
+    const bool refined = mayRefine && sd && cfg.refineScene(*source.scene, results);
+    if (refined) {
       // The references changed: the scene's floors, and every measurement against them.
       try {
         sd = prepareScene(dir, evaluation, nullptr);
@@ -198,6 +201,8 @@ json runMatrix(const RunConfig& cfg) {
         sd.reset();
         sceneError = std::string("reading it again after refining its references: ") + e.what();
       }
+    }
+    if (mayRefine) {  // the screened pairs measured in full, against the references as they now are
       for (size_t k = 0; k < mine.size(); ++k) {
         json& pair = results["pairs"][firstPair + k];
         if (pair["status"] != "ok") continue;
@@ -205,16 +210,16 @@ json runMatrix(const RunConfig& cfg) {
           if (!sd) throw Error("scene " + source.name + ": " + sceneError);
           pair = evaluatePairAgain(cfg, *sd, pair, kept[k], cfg.out / "images" / source.name / safeName(mine[k]->label),
                                    keepAll);
-          if (!seedSequences.empty()) pair["biasVariance"] = biasVarianceOf(cfg, *sd, seedSequences, *mine[k]);
+          if (refined && !seedSequences.empty()) pair["biasVariance"] = biasVarianceOf(cfg, *sd, seedSequences, *mine[k]);
         } catch (const std::exception& e) {
           pair = failedPair(source.name, *mine[k], e.what());
           say("  error: " + std::string(e.what()));
           ++sceneFailures;
         }
       }
-      const std::string line = "[refine] " + source.name + ": its " + std::to_string(mine.size()) +
-                               " pair(s) measured again against the refined references (their outputs were kept)";
-      cfg.announce(line);
+      if (refined)
+        cfg.announce("[refine] " + source.name + ": its " + std::to_string(mine.size()) +
+                     " pair(s) measured again against the refined references (their outputs were kept)");
     }
     if (cfg.milestone) {
       ++scenesDone;

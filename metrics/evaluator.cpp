@@ -49,6 +49,16 @@ std::vector<const MetricFamily*> activeFamilies(const MetricOptions& options, bo
   return out;
 }
 
+// The families a scope measures: a screening keeps the one that measures relMseCorrected.
+std::vector<const MetricFamily*> familiesIn(EvaluationScope scope, std::vector<const MetricFamily*> families) {
+  if (scope == EvaluationScope::Full) return families;
+  std::erase_if(families, [](const MetricFamily* f) {
+    return std::none_of(f->metrics.begin(), f->metrics.end(),
+                        [](const MetricDefinition& m) { return m.name == "relMseCorrected"; });
+  });
+  return families;
+}
+
 // Keeps one frame's values, notes and maps (what a family hands the evaluation).
 class FrameValues : public FrameRecorder {
  public:
@@ -273,6 +283,7 @@ std::vector<std::string> EvaluationScene::warnings() const {
 // every metric, and the event and cut curves with their tile sums.
 struct PairEvaluation::State {
   const EvaluationScene& scene;
+  EvaluationScope scope;
   std::vector<const MetricFamily*> families;
   struct Kept {  // what a later frame's metrics read of an earlier one
     Image output, display, error;
@@ -288,9 +299,10 @@ struct PairEvaluation::State {
   std::vector<EventTiles> eventTiles;
   std::vector<CutTiles> cutTiles;
   std::map<std::string, Image> lastMaps;
-  explicit State(const EvaluationScene& s)
+  State(const EvaluationScene& s, EvaluationScope sc)
       : scene(s),
-        families(activeFamilies(s.options().metrics, s.hasReference())),
+        scope(sc),
+        families(familiesIn(sc, activeFamilies(s.options().metrics, s.hasReference()))),
         series(s.frames(), s.options().warmup),
         eventCurves(s.events_.size()),
         eventBias(s.events_.size()),
@@ -300,7 +312,8 @@ struct PairEvaluation::State {
         cutTiles(s.cuts_.size()) {}
 };
 
-PairEvaluation::PairEvaluation(const EvaluationScene& scene) : state_(std::make_unique<State>(scene)) {}
+PairEvaluation::PairEvaluation(const EvaluationScene& scene, EvaluationScope scope)
+    : state_(std::make_unique<State>(scene, scope)) {}
 PairEvaluation::~PairEvaluation() = default;
 
 void PairEvaluation::add(int t, const Image& output, const FrameFacts& facts) {
@@ -319,13 +332,14 @@ void PairEvaluation::add(int t, const Image& output, const FrameFacts& facts) {
                 std::to_string(output.channels()) + ", the sequence's colour is " + std::to_string(input.width()) +
                 "x" + std::to_string(input.height()) + "x" + std::to_string(input.channels()));
   ++s.nextFrame;
+  const bool full = s.scope == EvaluationScope::Full;
   auto kept = std::make_unique<State::Kept>();
   kept->output = output;
-  kept->display = scene.display(t, output);
+  if (full) kept->display = scene.display(t, output);
   FrameView& v = kept->view;
   v.frame = t;
   v.output = &kept->output;
-  v.outputDisplay = &kept->display;
+  v.outputDisplay = full ? &kept->display : nullptr;
   v.guides = &scene.frame(t);
   v.facts = facts;
   v.cutFrames = scene.cutFrames_;
@@ -357,6 +371,7 @@ void PairEvaluation::add(int t, const Image& output, const FrameFacts& facts) {
   for (const auto& [key, value] : values.notes) m[key] = value;
   s.frames.push_back(m);
   s.lastMaps = std::move(values.maps);
+  if (!full) return;  // a screening's one family reads the frame alone: no history, events or cuts
 
   // The event windows: relMSE, signed bias and chromaticity error inside each event's mask.
   const GhostingConfig gc;
@@ -397,6 +412,8 @@ void PairEvaluation::add(int t, const Image& output, const FrameFacts& facts) {
 
 FrameImages PairEvaluation::lastImages() const {
   const State& s = *state_;
+  if (s.scope != EvaluationScope::Full)
+    throw Error("evaluation of " + s.scene.name() + ": a screening keeps no images (evaluate in full)");
   if (s.history.empty()) throw Error("evaluation of " + s.scene.name() + ": no frame added yet");
   const State::Kept& k = *s.history.front();
   FrameImages out;
@@ -418,8 +435,9 @@ json PairEvaluation::finish() {
   const size_t pixels = size_t(scene.frame(0).get("color").width()) * size_t(scene.frame(0).get("color").height());
   json summary = s.series.summaries(scene.name());
   const GhostingConfig gc;
+  const bool full = s.scope == EvaluationScope::Full;
   json ghosting = json::array();
-  for (size_t k = 0; k < scene.events_.size(); ++k) {
+  for (size_t k = 0; full && k < scene.events_.size(); ++k) {
     const auto& ev = scene.events_[k];
     GhostingResult g =
         analyseGhosting(ev.event.frame, ev.begin, s.eventCurves[k], s.eventBias[k], s.eventChroma[k], gc);
@@ -439,7 +457,7 @@ json PairEvaluation::finish() {
     ghosting.push_back(j);
   }
   json cuts = json::array();
-  if (scene.hasReference())
+  if (full && scene.hasReference())
     for (size_t k = 0; k < scene.cuts_.size(); ++k) {
       const auto& cut = scene.cuts_[k];
       const CutResult c = analyseCut(cut.frame, cut.segmentEnd, s.series.values("relMse"), s.cutLeak[k], gc);
@@ -475,8 +493,12 @@ json PairEvaluation::finish() {
                          std::to_string(int(m->floorWarningFactor)) + "x of the reference's own floor (" +
                          std::to_string(floor) + "): the reference's noise, not the method, dominates it");
   }
-  return {{"frames", s.frames}, {"summary", summary},          {"ghosting", ghosting},
-          {"cuts", cuts},       {"tiles", s.series.tilesJson()}, {"warnings", warnings}};
+  json out = {{"frames", s.frames}, {"summary", summary}, {"tiles", s.series.tilesJson()}, {"warnings", warnings}};
+  if (full) {
+    out["ghosting"] = ghosting;
+    out["cuts"] = cuts;
+  }
+  return out;
 }
 
 json timingSummary(const std::vector<std::vector<PassTime>>& passesPerFrame, const std::vector<double>& ms, int warmup,

@@ -109,17 +109,26 @@ struct FrameImages {
   Image relativeError;  // the relative error map (empty without a reference)
 };
 
+// What a PairEvaluation measures. Screening: only the linear error family (relMse,
+// relMseCorrected and their kin, the same values as a full evaluation gives), without display
+// images, FLIP maps, temporal metrics, event or cut curves -- for a decision that needs no more
+// (the study's reference-quality check before it refines, harness/run_matrix.hpp), after which the
+// outputs are evaluated in full.
+enum class EvaluationScope { Full, Screening };
+
 // One stream of output frames evaluated against one EvaluationScene.
 class PairEvaluation {
  public:
-  explicit PairEvaluation(const EvaluationScene& scene);
+  explicit PairEvaluation(const EvaluationScene& scene, EvaluationScope scope = EvaluationScope::Full);
   ~PairEvaluation();
   // Frame t's linear RGB output; frames arrive in order 0, 1, ... (a skipped frame is an Error).
   void add(int t, const Image& output, const FrameFacts& facts = {});
+  // Not in a screening (it keeps no images).
   FrameImages lastImages() const;
   // Per frame, NaN where undefined.
   std::vector<double> values(const std::string& metric) const;
-  // After the last frame: {frames, summary, ghosting, cuts, tiles, warnings}.
+  // After the last frame: {frames, summary, ghosting, cuts, tiles, warnings}; a screening's has no
+  // ghosting and no cuts.
   nlohmann::json finish();
 
  private:

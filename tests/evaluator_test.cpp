@@ -205,6 +205,32 @@ TEST(Evaluation, AnOutputEqualToTheReferenceScoresZeroErrorWithItsReferenceTerms
   EXPECT_TRUE(r["frames"][1].contains("tRmae"));
 }
 
+TEST(Evaluation, AScreeningMeasuresTheLinearErrorsAsTheFullEvaluationDoesAndNothingElse) {
+  EvaluationScene scene(flatInput(16, 12, 6, 0.25f, true), {2, {"all"}, ExposureMode::PerFrame});
+  PairEvaluation full(scene), screening(scene, EvaluationScope::Screening);
+  for (int t = 0; t < 6; ++t) {
+    Image out(16, 12, 3);
+    for (size_t i = 0; i < out.raw().size(); ++i) out.raw()[i] = 0.25f + 0.01f * float((i * 7 + size_t(t) * 3) % 11);
+    full.add(t, out);
+    screening.add(t, out);
+  }
+  EXPECT_THROW(screening.lastImages(), Error);  // it keeps none: images come from the full evaluation
+  const json a = full.finish(), b = screening.finish();
+  ASSERT_TRUE(b["summary"].contains("relMseCorrected"));
+  EXPECT_GT(b["summary"]["relMse"]["mean"].get<double>(), 0.0);  // the outputs differ from the reference
+  for (auto it = b["summary"].begin(); it != b["summary"].end(); ++it) {
+    EXPECT_EQ(it.value(), a["summary"][it.key()]) << it.key();
+    for (size_t t = 0; t < 6; ++t) EXPECT_EQ(b["frames"][t][it.key()], a["frames"][t][it.key()]) << it.key();
+  }
+  // Nothing beyond the linear errors: no display, perceptual or temporal metric, no events or cuts.
+  for (const char* absent : {"ssim", "ldrFlip", "tRmae", "stabilityFine"}) {
+    EXPECT_TRUE(a["summary"].contains(absent)) << absent;
+    EXPECT_FALSE(b["summary"].contains(absent)) << absent;
+  }
+  EXPECT_FALSE(b.contains("ghosting"));
+  EXPECT_FALSE(b.contains("cuts"));
+}
+
 TEST(Evaluation, FramesOutOfOrderOrOfAnotherSizeAreErrorsNamingThem) {
   EvaluationScene scene(flatInput(8, 6, 4, 0.5f, true), {});
   PairEvaluation pair(scene);

@@ -141,14 +141,20 @@ TEST(RunMatrix, ShardsMergeIntoTheFullRun) {
 // statistics included; the hook sees each scene once, with its pairs in place.
 TEST(RunMatrix, ARefinedSceneIsMeasuredAgainFromItsKeptOutputs) {
   RunConfig c = tinyRun("refine_hook", {{"eaw", {}, ""}});
-  c.flip = "none";
+  c.flip = "ldr";  // the FLIP maps among the images compared below
   c.cache = test::freshDir("refine_hook_cache");  // its references are refined: not the shared cache
   std::vector<std::string> seen;
   json before;  // light_switch as the first pass measured it
   c.refineScene = [&](const Scene& scene, const json& results) {
     seen.push_back(scene.name);
     size_t pairs = 0;
-    for (const json& p : results["pairs"]) pairs += p["scene"] == scene.name;
+    for (const json& p : results["pairs"])
+      if (p["scene"] == scene.name) {
+        ++pairs;
+        // Screened: the linear errors the decision reads, no more (measured in full afterwards).
+        EXPECT_TRUE(p["summary"].contains("relMseCorrected")) << scene.name;
+        EXPECT_FALSE(p["summary"].contains("ldrFlip")) << scene.name;
+      }
     EXPECT_EQ(pairs, 3u) << scene.name;  // passthrough, temporal, eaw
     if (scene.name != "light_switch") return false;
     before = results;
@@ -174,13 +180,19 @@ TEST(RunMatrix, ARefinedSceneIsMeasuredAgainFromItsKeptOutputs) {
     EXPECT_TRUE(a["pairs"][i] == b["pairs"][i]) << a["pairs"][i]["scene"] << " " << a["pairs"][i]["label"];
   EXPECT_TRUE(a["scenes"] == b["scenes"]);
   EXPECT_TRUE(a["statistics"] == b["statistics"]);
-  size_t images = 0;
-  for (const auto& e : fs::directory_iterator(c.out / "images" / "light_switch" / "eaw")) {
-    ++images;
-    EXPECT_EQ(readText(e.path()), readText(plain.out / "images" / "light_switch" / "eaw" / e.path().filename()))
-        << e.path();
+  // The images, of the refined scene and of the one left as it was: the same files.
+  for (const char* scene : {"light_switch", "cornell_static"}) {
+    size_t images = 0;
+    for (const auto& e : fs::directory_iterator(c.out / "images" / scene / "eaw")) {
+      ++images;
+      EXPECT_EQ(readText(e.path()), readText(plain.out / "images" / scene / "eaw" / e.path().filename()))
+          << e.path();
+    }
+    size_t plainImages = 0;
+    for ([[maybe_unused]] const auto& e : fs::directory_iterator(plain.out / "images" / scene / "eaw")) ++plainImages;
+    EXPECT_EQ(images, plainImages) << scene;
+    EXPECT_GT(images, 0u) << scene;
   }
-  EXPECT_GT(images, 0u);
 }
 
 TEST(RunMatrix, AFailingPairIsReportedAndTheOthersKept) {
