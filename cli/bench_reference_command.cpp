@@ -20,6 +20,7 @@ void addBenchReferenceCommand(CLI::App* bench) {
     std::string scenesDir = defaultScenesDir();
     int spp = 128, goldFactor = 32, frame = 0, replicates = RenderSettings().referenceReplicates, maxBounces = 0;
     int repeats = ReferenceBench().repeats;
+    int referenceTile = RenderSettings().referenceTile;
   };
   auto o = std::make_shared<Options>();
   cmd->add_option("--scenes", o->scenes, "Scenes, comma-separated, or 'all'");
@@ -39,6 +40,11 @@ void addBenchReferenceCommand(CLI::App* bench) {
                   "them with a 95% interval (the whole range under 6)")
       ->check(CLI::Range(1, 256))
       ->capture_default_str();
+  cmd->add_option("--ref-tile", o->referenceTile,
+                  "The adaptive reference's allocation tile, pixels square (0: one tile): comparing sizes shows "
+                  "what finer allocation buys and whether its estimate stays honest")
+      ->check(CLI::Range(0, 1024))
+      ->capture_default_str();
   cmd->add_option("--frame", o->frame, "Frame whose state is rendered")->check(CLI::NonNegativeNumber);
   cmd->add_option("--scenes-dir", o->scenesDir, "Directory of scene files");
   cmd->add_option("--json", o->json, "Write results to this JSON file");
@@ -46,6 +52,7 @@ void addBenchReferenceCommand(CLI::App* bench) {
     RenderOptions ro;
     ro.resolution = o->resolution;
     ro.maxBounces = o->maxBounces;
+    ro.referenceTile = o->referenceTile;
     ReferenceBench b;
     b.settings = ro.settings();
     b.scenes = selectScenes(o->scenes, o->scenesDir);

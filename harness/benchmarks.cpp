@@ -300,6 +300,7 @@ json benchReference(const ReferenceBench& b, const ProgressFn& progress) {
               {"spp", b.spp},
               {"goldFactor", b.goldFactor},
               {"maxBounces", settings.maxBounces > 0 ? json(settings.maxBounces) : json("scene")},
+              {"referenceTile", settings.referenceTile},
               {"scenes", json::array()},
               {"environment", environmentInfo()}};
   for (const Scene& scene : b.scenes) {
