@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "metrics/metric_registry.hpp"
 #include "tracer/render.hpp"
 
 namespace arena {
@@ -143,9 +144,11 @@ double budgetUnitPaths(const SequenceInfo& info) {
   return unit;
 }
 
+int firstFrameSummariesRead(int warmup) { return std::max(0, warmup - kMaxMetricHistory); }
+
 std::vector<ReferenceRefinement> planReferenceRefinement(const json& results,
                                                          const std::map<std::string, SequenceInfo>& sequences,
-                                                         int warmup, int maxSpp, double budget) {
+                                                         int firstFrame, int maxSpp, double budget) {
   std::vector<ReferenceRefinement> plans;
   const json scenes = results.value("scenes", json::object());
   for (const auto& [name, scene] : scenes.items()) {
@@ -157,7 +160,7 @@ std::vector<ReferenceRefinement> planReferenceRefinement(const json& results,
     plan.scene = name;
     plan.targetRelMse = kRefineMargin * kReferenceQualityGoal * q["bestCorrectedRelMse"].get<double>();
     for (int r = 0; r < int(info.referenceSpp.size()); ++r) {
-      if (!info.referenceUsedFrom(r, warmup)) continue;
+      if (!info.referenceUsedFrom(r, firstFrame)) continue;
       const double e = r < int(info.referenceEstimatedRelMse.size()) ? info.referenceEstimatedRelMse[size_t(r)] : 0;
       const double s = info.referenceSpp[size_t(r)];
       if (!(e > plan.targetRelMse) || s >= maxSpp) continue;

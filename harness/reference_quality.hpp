@@ -25,10 +25,15 @@ void addReferenceQuality(nlohmann::json& results, int warmup,
 // from its results.settings.render: each setting that differs from its preset's default, e.g.
 // " --lowres-factor 8" for the study; "" when nothing differs.
 std::string renderOptionsOf(const nlohmann::json& render);
+// The first frame whose reference a summary reads: the summaries cover frames t >= warmup, and a
+// temporal metric at frame t also reads the references of up to kMaxMetricHistory frames before it
+// (tRmae the frame difference r_t - r_{t-1}, the stability metrics up to three frames back).
+int firstFrameSummariesRead(int warmup);
+
 // The study's refinement of references to the goal (issue 13). A scene that misses it gets the
 // target kRefineMargin x goal x its best corrected relMSE (the margin absorbs the noise of that
-// estimate), and a prediction of the paths that refining the references of its summarised frames
-// (t >= warmup) would add: a reference of P pixels, mean s spp and estimated relMSE e > target
+// estimate), and a prediction of the paths that refining the references the summaries read (frames
+// t >= firstFrame, firstFrameSummariesRead) would add: a reference of P pixels, mean s spp and estimated relMSE e > target
 // needs s e / target spp (relMSE ~ 1/spp: the independent sampler's rate, conservative for Sobol;
 // the schedule stops at the tile that meets the target), i.e. P (min(s e / target, maxSpp) - s)
 // paths. A scene is refined when its prediction is at most `budget` x the paths of its frames at
@@ -45,7 +50,7 @@ struct ReferenceRefinement {
 };
 std::vector<ReferenceRefinement> planReferenceRefinement(const nlohmann::json& results,
                                                          const std::map<std::string, SequenceInfo>& sequences,
-                                                         int warmup, int maxSpp, double budget);
+                                                         int firstFrame, int maxSpp, double budget);
 // The sentence the verdict carries for a planned scene.
 std::string refinementNote(const ReferenceRefinement& plan, double budget);
 // One line per scene for a printed summary (the verdicts above, aligned), from results.scenes.

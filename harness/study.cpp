@@ -26,14 +26,17 @@ bool refineAfterScene(const RunConfig& c, const Scene& scene, const json& result
   const std::filesystem::path dir = sequenceDir(scene, c.render, c.cache);
   if (!std::filesystem::exists(dir / "sequence.json")) return false;
   const std::map<std::string, SequenceInfo> sequences = {{scene.name, Sequence::open(dir).info()}};
-  const std::vector<ReferenceRefinement> plans = planReferenceRefinement(one, sequences, c.warmup, maxSpp, budget);
+  // The references every summary reads: the summarised frames' and the few before them that their
+  // temporal metrics compare with.
+  const int firstFrame = firstFrameSummariesRead(c.warmup);
+  const std::vector<ReferenceRefinement> plans = planReferenceRefinement(one, sequences, firstFrame, maxSpp, budget);
   if (plans.empty()) return false;  // the goal is met (or unknown)
   const ReferenceRefinement& plan = plans.front();
   notes[scene.name] = refinementNote(plan, budget);
   c.announce("[refine] " + scene.name + ": " + notes[scene.name]);
   if (!plan.withinBudget) return false;
   try {
-    refineSequence(scene, c.render, c.cache, plan.targetRelMse, maxSpp, c.progress, c.warmup);
+    refineSequence(scene, c.render, c.cache, plan.targetRelMse, maxSpp, c.progress, firstFrame);
     return true;
   } catch (const std::exception& e) {  // e.g. a reference without its sums
     notes[scene.name] = std::string("the study could not refine it: ") + e.what();

@@ -16,6 +16,7 @@
 #include "harness/reference_quality.hpp"
 #include "harness/study.hpp"
 #include "metrics/error.hpp"
+#include "metrics/metric_registry.hpp"
 #include "tests/test_util.hpp"
 #include "tracer/render.hpp"
 #include "tracer/sampler.hpp"
@@ -734,6 +735,28 @@ TEST(Reference, AStudyWhoseRefinementFailsPartWayMeasuresWhatItRefined) {
   EXPECT_NE(refined["referenceQuality"]["verdict"].get<std::string>().find("(the study could not refine it: "),
             std::string::npos)
       << refined["referenceQuality"];
+}
+
+// The study refines every reference a summary reads: the summarised frames' (t >= the warm-up, 8)
+// and the three before them, whose references the temporal metrics at frames 8..10 compare with
+// (tRmae reads r_t - r_{t-1}, the stability metrics go three frames back); earlier ones stay.
+TEST(Reference, StudyRefinesTheReferencesItsTemporalMetricsRead) {
+  EXPECT_EQ(firstFrameSummariesRead(8), 8 - kMaxMetricHistory);
+  EXPECT_EQ(firstFrameSummariesRead(2), 0);
+  const std::filesystem::path dir = test::freshDir("study_refine_history");
+  auto spp = [&](const std::string& run, const std::string& budget) {
+    const test::CommandResult r = tinyStudy(dir, run, budget, "camera_pan_occluder");
+    EXPECT_EQ(r.status, 0) << r.output;
+    return parseJsonFile((dir / run / "results.json").string())["scenes"]["camera_pan_occluder"]["referenceSpp"];
+  };
+  const nlohmann::json plain = spp("plain", "0"), refined = spp("refined", "1000");
+  ASSERT_EQ(plain.size(), 10u) << "the camera pans: a reference per frame";
+  for (int t = 0; t < 10; ++t) {
+    if (t < 5)
+      EXPECT_EQ(refined[t], plain[t]) << "frame " << t;
+    else
+      EXPECT_GT(refined[t].get<int>(), plain[t].get<int>()) << "frame " << t;
+  }
 }
 
 // With a refinement budget and no --ref-rel-error, the study renders its first references to
