@@ -155,12 +155,12 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
 }
 
 json evaluatePairAgain(const RunConfig& cfg, const SceneData& sd, const json& first, const std::vector<KeptFrame>& kept,
-                       const fs::path& imageDir, bool keepAll) {
+                       const fs::path& imageDir, bool keepAll, EvaluationScope scope) {
   StageTimer metrics(Stage::Metrics);
-  PairEvaluation evaluation(sd.evaluation);
+  PairEvaluation evaluation(sd.evaluation, scope);
   for (const KeptFrame& f : kept) {
     evaluation.add(f.frame, f.color, f.facts);
-    if (keepsImagesOf(cfg, sd, keepAll, f.frame)) {
+    if (scope == EvaluationScope::Full && keepsImagesOf(cfg, sd, keepAll, f.frame)) {
       StageTimer images(Stage::Report);
       writeFrameImages(imageDir, f.frame, evaluation.lastImages());
     }

@@ -35,10 +35,11 @@ nlohmann::json runPair(const RunConfig& config, const SceneData& scene, const De
 // frames against `scene` as it is now (the study's refined references): the same values as running
 // the denoiser again would give, which is deterministic, without running it. What only the run
 // knew -- its timing, the non-finite inputs it was handed -- stays; the chosen frames' images are
-// written again (their error maps changed), a pair's EXRs are not (its outputs did not).
+// written again (their error maps changed), a pair's EXRs are not (its outputs did not). A
+// screening writes no images (`imageDir` unused).
 nlohmann::json evaluatePairAgain(const RunConfig& config, const SceneData& scene, const nlohmann::json& pair,
                                  const std::vector<KeptFrame>& kept, const std::filesystem::path& imageDir,
-                                 bool keepAll);
+                                 bool keepAll, EvaluationScope scope = EvaluationScope::Full);
 
 // The bias^2 / variance split of a pair's error over the scene's input seeds: the denoiser runs on
 // every seed's sequence from a reset history; the evaluation splits the K outputs per frame.

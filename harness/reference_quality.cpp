@@ -181,7 +181,7 @@ std::vector<ReferenceRefinement> planReferenceRefinement(const json& results,
 std::string refinementNote(const ReferenceRefinement& plan, double budget) {
   const std::string paths = sci(plan.predictedPaths / 1e6) + " Mpaths";
   if (plan.predictedPaths <= 0)
-    return "the study could not refine it: its summarised frames' references are at the refinement cap";
+    return "the study could not refine it: the references its summaries read are at the refinement cap";
   if (plan.withinBudget)
     return "the study refined its references toward " + sci(plan.targetRelMse) + " (predicted " + paths + ")";
   char need[32];

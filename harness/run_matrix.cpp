@@ -191,12 +191,22 @@ json runMatrix(const RunConfig& cfg) {
         say("  warning: " + pair["warnings"][0].get<std::string>());
       sceneFailures += pair["status"] != "ok";
     }
-    const bool refined = mayRefine && sd && cfg.refineScene(*source.scene, results);
-    if (refined) {
+    // The refinement may take rounds: each round's target rests on the best corrected relMSE
+    // measured against the references before it, which moves as they get cleaner, so after each
+    // the pairs are screened again and the hook decides again (at most kMaxRefineRounds).
+    bool refined = false;
+    for (int round = 0; mayRefine && sd && round < kMaxRefineRounds && cfg.refineScene(*source.scene, results);
+         ++round) {
+      refined = true;
       // The references changed: the scene's floors, and every measurement against them.
       try {
         sd = prepareScene(dir, evaluation, nullptr);
         results["scenes"][source.name] = sceneRecord(cfg, *sd, source.purpose, source.scene, dir, validation);
+        for (size_t k = 0; k < mine.size(); ++k) {
+          json& pair = results["pairs"][firstPair + k];
+          if (pair["status"] == "ok")
+            pair = evaluatePairAgain(cfg, *sd, pair, kept[k], {}, keepAll, EvaluationScope::Screening);
+        }
       } catch (const std::exception& e) {
         sd.reset();
         sceneError = std::string("reading it again after refining its references: ") + e.what();

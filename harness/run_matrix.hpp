@@ -55,11 +55,13 @@ struct RunConfig {
   // The low-resolution buffer was left to the run (no --lowres-factor): resolveAutoLowres decides.
   bool lowresAuto = false;
   // Called after a rendered scene's pairs with the results so far (the scene's record and pairs in
-  // place): may refine the scene's references (the study, harness/study.hpp) and returns true when
-  // it did. The scene is then read again and its pairs are measured again from their kept output
-  // frames (evaluatePairAgain): the denoisers do not run twice.
+  // place, the pairs screened: their linear errors only): may refine the scene's references (the
+  // study, harness/study.hpp) and returns true when it did. The scene is then read again, its pairs
+  // are screened again from their kept output frames (evaluatePairAgain), and it is called again,
+  // up to kMaxRefineRounds times; then the pairs are measured in full. The denoisers run once.
   std::function<bool(const Scene& scene, const nlohmann::json& results)> refineScene;
 };
+constexpr int kMaxRefineRounds = 3;
 
 // One meaning of reengine's `disocclusionRays=auto` in every command (issue 34, item 6): where the
 // buffer is left to the run (config.lowresAuto), the run renders it -- one texel per

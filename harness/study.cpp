@@ -17,8 +17,18 @@ namespace {
 // reference-quality goal and the paths predicted to meet it are within its budget
 // (planReferenceRefinement), its references are refined; each decision is said and noted on the
 // scene's verdict. Returns whether the references changed.
+// What the study's refinement did to a scene, round by round (run_matrix.hpp calls it again while it
+// refines): the verdict's note, and whether a round failed (then it does not try again).
+struct SceneRefinement {
+  std::string note;
+  bool failed = false;
+  void add(const std::string& sentence) { note = note.empty() ? sentence : note + "; then " + sentence; }
+};
+
 bool refineAfterScene(const RunConfig& c, const Scene& scene, const json& results, double budget, int maxSpp,
-                      std::map<std::string, std::string>& notes) {
+                      std::map<std::string, SceneRefinement>& done) {
+  SceneRefinement& state = done[scene.name];
+  if (state.failed) return false;
   json one = {{"scenes", {{scene.name, results["scenes"][scene.name]}}}, {"pairs", json::array()}};
   for (const json& p : results["pairs"])
     if (p.value("scene", "") == scene.name) one["pairs"].push_back(p);
@@ -32,15 +42,21 @@ bool refineAfterScene(const RunConfig& c, const Scene& scene, const json& result
   const std::vector<ReferenceRefinement> plans = planReferenceRefinement(one, sequences, firstFrame, maxSpp, budget);
   if (plans.empty()) return false;  // the goal is met (or unknown)
   const ReferenceRefinement& plan = plans.front();
-  notes[scene.name] = refinementNote(plan, budget);
-  c.announce("[refine] " + scene.name + ": " + notes[scene.name]);
-  if (!plan.withinBudget) return false;
+  const std::string note = refinementNote(plan, budget);
+  c.announce("[refine] " + scene.name + ": " + note);
+  if (!plan.withinBudget) {
+    state.add(note);
+    return false;
+  }
   try {
     refineSequence(scene, c.render, c.cache, plan.targetRelMse, maxSpp, c.progress, firstFrame);
+    state.add(note);
     return true;
   } catch (const std::exception& e) {  // e.g. a reference without its sums
-    notes[scene.name] = std::string("the study could not refine it: ") + e.what();
-    c.announce("[refine] " + scene.name + ": " + notes[scene.name]);
+    const std::string failed = std::string("the study could not refine it: ") + e.what();
+    state.add(failed);
+    state.failed = true;
+    c.announce("[refine] " + scene.name + ": " + failed);
     // References refined before the failure are on disk (and in sequence.json): the pairs are
     // measured again against them; if none was, the first verdict stands.
     try {
@@ -75,13 +91,14 @@ json runStudy(StudyConfig config) {
     c.render.referenceRelError = std::max(c.render.referenceRelError, kStudyFirstReferenceRelError);
   // Each scene is refined right after its pairs, whose outputs are then measured again; the run is
   // analysed and committed once, with the refinement's notes on the verdicts.
-  std::map<std::string, std::string> notes;
+  std::map<std::string, SceneRefinement> refinements;
   c.finish = false;
   c.refineScene = [&](const Scene& scene, const json& results) {
-    return refineAfterScene(c, scene, results, config.refineBudget, config.refineMaxSpp, notes);
+    return refineAfterScene(c, scene, results, config.refineBudget, config.refineMaxSpp, refinements);
   };
   json results = runMatrix(c);
-  for (const auto& [scene, note] : notes) c.referenceNotes[scene] = note;
+  for (const auto& [scene, refinement] : refinements)
+    if (!refinement.note.empty()) c.referenceNotes[scene] = refinement.note;
   finishRun(results, c);
   return results;
 }
