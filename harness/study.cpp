@@ -13,22 +13,24 @@ using nlohmann::json;
 
 namespace {
 
-// The study's refinement (issue 13), after each rendered scene's pairs: when the scene misses the
-// reference-quality goal and the paths predicted to meet it are within its budget
-// (planReferenceRefinement), its references are refined; each decision is said and noted on the
-// scene's verdict. Returns whether the references changed.
 // What the study's refinement did to a scene, round by round (run_matrix.hpp calls it again while it
-// refines): the verdict's note, and whether a round failed (then it does not try again).
+// refines): the verdict's note, the budget its rounds' predictions used (the budget is the scene's,
+// whatever the rounds), and whether it stopped (a round failed or could add nothing: no more rounds).
 struct SceneRefinement {
   std::string note;
-  bool failed = false;
+  double budgetUsed = 0;
+  bool stopped = false;
   void add(const std::string& sentence) { note = note.empty() ? sentence : note + "; then " + sentence; }
 };
 
+// The study's refinement (issue 13), after each rendered scene's pairs: when the scene misses the
+// reference-quality goal and the paths predicted to meet it, with those its earlier rounds were
+// predicted, are within its budget (planReferenceRefinement), its references are refined; each
+// decision is said and noted on the scene's verdict. Returns whether the references changed.
 bool refineAfterScene(const RunConfig& c, const Scene& scene, const json& results, double budget, int maxSpp,
                       std::map<std::string, SceneRefinement>& done) {
   SceneRefinement& state = done[scene.name];
-  if (state.failed) return false;
+  if (state.stopped) return false;
   json one = {{"scenes", {{scene.name, results["scenes"][scene.name]}}}, {"pairs", json::array()}};
   for (const json& p : results["pairs"])
     if (p.value("scene", "") == scene.name) one["pairs"].push_back(p);
@@ -41,26 +43,42 @@ bool refineAfterScene(const RunConfig& c, const Scene& scene, const json& result
   const int firstFrame = firstFrameSummariesRead(c.warmup);
   const std::vector<ReferenceRefinement> plans = planReferenceRefinement(one, sequences, firstFrame, maxSpp, budget);
   if (plans.empty()) return false;  // the goal is met (or unknown)
-  const ReferenceRefinement& plan = plans.front();
+  ReferenceRefinement plan = plans.front();
+  plan.budgetNeeded += state.budgetUsed;
+  plan.withinBudget = plan.withinBudget && plan.budgetNeeded <= budget;
   const std::string note = refinementNote(plan, budget);
   c.announce("[refine] " + scene.name + ": " + note);
   if (!plan.withinBudget) {
     state.add(note);
     return false;
   }
+  state.budgetUsed = plan.budgetNeeded;
+  // Whether the references on disk differ from those the decision read (a reference's mean spp is
+  // rounded; its estimated relMSE moves with any sample added).
+  auto changed = [&] {
+    const SequenceInfo now = Sequence::open(dir).info(), &then = sequences.at(scene.name);
+    return now.referenceSpp != then.referenceSpp || now.referenceEstimatedRelMse != then.referenceEstimatedRelMse;
+  };
   try {
     refineSequence(scene, c.render, c.cache, plan.targetRelMse, maxSpp, c.progress, firstFrame);
-    state.add(note);
-    return true;
+    if (changed()) {
+      state.add(note);
+      return true;
+    }
+    const std::string none = "its references could take no more samples (their tiles are at the cap)";
+    state.add(none);
+    state.stopped = true;
+    c.announce("[refine] " + scene.name + ": " + none);
+    return false;
   } catch (const std::exception& e) {  // e.g. a reference without its sums
     const std::string failed = std::string("the study could not refine it: ") + e.what();
     state.add(failed);
-    state.failed = true;
+    state.stopped = true;
     c.announce("[refine] " + scene.name + ": " + failed);
     // References refined before the failure are on disk (and in sequence.json): the pairs are
     // measured again against them; if none was, the first verdict stands.
     try {
-      return Sequence::open(dir).info().referenceSpp != sequences.at(scene.name).referenceSpp;
+      return changed();
     } catch (const std::exception&) {
       return true;  // reading the scene again says what is wrong with it
     }

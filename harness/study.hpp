@@ -11,12 +11,12 @@ namespace arena {
 
 // With a refinement budget, the study renders its first references to this relative error (relMSE
 // 4e-4), a quarter of the quick preset's samples, unless --ref-rel-error is given. They only have to
-// place each scene against the goal: the references of the summarised frames (t >= the warm-up) of a
-// scene that misses it are then refined to its target, and end there whichever target the first
-// render stopped at (not in the same bits: the rounds planned under the first render's sample cap
-// differ). The warm-up frames' references, which no summary reads (they are drawn in the per-frame
-// charts), stay at this target: 16% of the default study's reference paths when they were rendered
-// to 1% (docs/performance.md, 2026-11-27). A scene the study does not refine (over its budget, or
+// place each scene against the goal: the references its summaries read (frames t >= the warm-up
+// minus 3, firstFrameSummariesRead) of a scene that misses it are then refined to its target, and
+// end there whichever target the first render stopped at (not in the same bits: the rounds planned
+// under the first render's sample cap differ). The earlier frames' references, which no summary
+// reads (they are drawn in the per-frame charts), stay at this target (docs/performance.md,
+// 2026-11-27). A scene the study does not refine (over its budget, or
 // its refinement failed) keeps these references, and its verdict says how far they miss.
 inline constexpr double kStudyFirstReferenceRelError = 0.02;
 

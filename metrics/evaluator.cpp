@@ -49,12 +49,14 @@ std::vector<const MetricFamily*> activeFamilies(const MetricOptions& options, bo
   return out;
 }
 
-// The families a scope measures: a screening keeps the one that measures relMseCorrected.
+// The families a scope measures: a screening keeps the one that measures relMseCorrected and the
+// run's facts (its times, which read no pixels and which the pair's timing summary reads back).
 std::vector<const MetricFamily*> familiesIn(EvaluationScope scope, std::vector<const MetricFamily*> families) {
   if (scope == EvaluationScope::Full) return families;
   std::erase_if(families, [](const MetricFamily* f) {
-    return std::none_of(f->metrics.begin(), f->metrics.end(),
-                        [](const MetricDefinition& m) { return m.name == "relMseCorrected"; });
+    return std::none_of(f->metrics.begin(), f->metrics.end(), [](const MetricDefinition& m) {
+      return m.name == "relMseCorrected" || m.reads == MetricInput::Run;
+    });
   });
   return families;
 }

@@ -357,7 +357,7 @@ TEST(Reference, AReferenceStopsAtTheTileThatMeetsItsTarget) {
   // The same rounds, each carried out whole.
   ReferenceSums whole;
   RayCounts counts;
-  r.extendReference(0, whole, 2, counts);  // the pilot: 16 spp over 8 replicates
+  r.extendReference(0, whole, (16 + r.referenceReplicates() - 1) / r.referenceReplicates(), counts);  // the 16-spp pilot
   std::vector<int> lastRoundStart;
   while (estimatedReferenceRelMse(whole) > target) {
     lastRoundStart = whole.tileSamples;
@@ -742,7 +742,7 @@ TEST(Reference, AStudyWhoseRefinementFailsPartWayMeasuresWhatItRefined) {
 }
 
 // The study refines every reference a summary reads: the summarised frames' (t >= the warm-up, 8)
-// and the three before them, whose references the temporal metrics at frames 8..10 compare with
+// and the three before them, whose references the temporal metrics at frames 8 and 9 compare with
 // (tRmae reads r_t - r_{t-1}, the stability metrics go three frames back); earlier ones stay.
 TEST(Reference, StudyRefinesTheReferencesItsTemporalMetricsRead) {
   EXPECT_EQ(firstFrameSummariesRead(8), 8 - kMaxMetricHistory);

@@ -56,7 +56,8 @@ std::filesystem::path renderSequence(const Scene& scene, const RenderSettings& s
 // estimated relMSE is above targetRelMse, continuing its adaptive rounds until it meets the
 // target or maxSpp, and rewrites its files and sequence.json. Bit-identical to rendering with that
 // target in one go (the same rounds over the same samples). References that only frames
-// before fromFrame use are left as they are (the study: frames before the warm-up are not summarised).
+// before fromFrame use are left as they are (the study: those no summary reads,
+// harness/reference_quality.hpp's firstFrameSummariesRead).
 std::filesystem::path refineSequence(const Scene& scene, const RenderSettings& settings,
                                      const std::filesystem::path& cacheRoot, double targetRelMse, int maxSpp,
                                      const ProgressFn& progress, int fromFrame = 0);
