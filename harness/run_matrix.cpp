@@ -194,6 +194,25 @@ json runMatrix(const RunConfig& cfg) {
     // The refinement may take rounds: each round's target rests on the best corrected relMSE
     // measured against the references before it, which moves as they get cleaner, so after each
     // the pairs are screened again and the hook decides again (at most kMaxRefineRounds).
+    // The scene's pairs measured again from their kept outputs, against the references as they now
+    // are; a pair that cannot be is recorded failed with its error.
+    auto measureAgain = [&](EvaluationScope scope, bool refined) {
+      for (size_t k = 0; k < mine.size(); ++k) {
+        json& pair = results["pairs"][firstPair + k];
+        if (pair["status"] != "ok") continue;
+        try {
+          if (!sd) throw Error("scene " + source.name + ": " + sceneError);
+          pair = evaluatePairAgain(cfg, *sd, pair, kept[k], cfg.out / "images" / source.name / safeName(mine[k]->label),
+                                   keepAll, scope);
+          if (scope == EvaluationScope::Full && refined && !seedSequences.empty())
+            pair["biasVariance"] = biasVarianceOf(cfg, *sd, seedSequences, *mine[k]);
+        } catch (const std::exception& e) {
+          pair = failedPair(source.name, *mine[k], e.what());
+          say("  error: " + std::string(e.what()));
+          ++sceneFailures;
+        }
+      }
+    };
     bool refined = false;
     for (int round = 0; mayRefine && sd && round < kMaxRefineRounds && cfg.refineScene(*source.scene, results);
          ++round) {
@@ -202,31 +221,14 @@ json runMatrix(const RunConfig& cfg) {
       try {
         sd = prepareScene(dir, evaluation, nullptr);
         results["scenes"][source.name] = sceneRecord(cfg, *sd, source.purpose, source.scene, dir, validation);
-        for (size_t k = 0; k < mine.size(); ++k) {
-          json& pair = results["pairs"][firstPair + k];
-          if (pair["status"] == "ok")
-            pair = evaluatePairAgain(cfg, *sd, pair, kept[k], {}, keepAll, EvaluationScope::Screening);
-        }
       } catch (const std::exception& e) {
         sd.reset();
         sceneError = std::string("reading it again after refining its references: ") + e.what();
       }
+      measureAgain(EvaluationScope::Screening, refined);
     }
     if (mayRefine) {  // the screened pairs measured in full, against the references as they now are
-      for (size_t k = 0; k < mine.size(); ++k) {
-        json& pair = results["pairs"][firstPair + k];
-        if (pair["status"] != "ok") continue;
-        try {
-          if (!sd) throw Error("scene " + source.name + ": " + sceneError);
-          pair = evaluatePairAgain(cfg, *sd, pair, kept[k], cfg.out / "images" / source.name / safeName(mine[k]->label),
-                                   keepAll);
-          if (refined && !seedSequences.empty()) pair["biasVariance"] = biasVarianceOf(cfg, *sd, seedSequences, *mine[k]);
-        } catch (const std::exception& e) {
-          pair = failedPair(source.name, *mine[k], e.what());
-          say("  error: " + std::string(e.what()));
-          ++sceneFailures;
-        }
-      }
+      measureAgain(EvaluationScope::Full, refined);
       if (refined)
         cfg.announce("[refine] " + source.name + ": its " + std::to_string(mine.size()) +
                      " pair(s) measured again against the refined references (their outputs were kept)");

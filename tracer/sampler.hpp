@@ -163,10 +163,9 @@ class Sampler {
   // inner reverse(dimension1(reverse(x))) is one table lookup).
   glm::vec2 get2(uint32_t dim) const {
     if (kind_ == SamplerKind::Independent) return {get(dim), get(dim + 1)};
-    const bool cached = hashes_ && dim < hashes_->count;
-    const uint64_t h = cached ? hashes_->dim[dim] : hash(dim);
+    const uint64_t h = hashed(dim);
     const uint32_t x = reversedShuffledIndex(h);
-    const uint32_t seed = cached ? hashes_->second[dim] : uint32_t(mix64(h));
+    const uint32_t seed = hashes_ && dim < hashes_->count ? hashes_->second[dim] : uint32_t(mix64(h));
     const uint32_t second = sobol::laineKarrasPermutation(sobol::reversedDimension1OfReversed(x), seed);
     return {firstCoordinate(x, h), sobol::toUnitFloat(sobol::reverseBits(second))};
   }
