@@ -50,7 +50,7 @@ struct PixelShade {
 PixelShade shadePixel(const FrameScene& fs, const FrameScene::PrimaryVertex& vertex, const Sampler& sampler,
                       RayCounts& counts) {
   PixelShade out;
-  if (glm::dot(vertex.hit.geometricNormal, vertex.wo) > 0) out.emission = vertex.hit.emission;
+  if (glm::dot(vertex.hit.geometricNormal, vertex.bsdf.wo) > 0) out.emission = vertex.hit.emission;
   out.radiance = fs.shade(vertex, sampler, counts);
   return out;
 }
@@ -402,7 +402,7 @@ void SequenceRenderer::extendPixel(int t, const FrameScene& cur, ReferenceSums& 
   if (hasHit) {
     s = cur.surface(hit.meshId, hit.primId, hit.u, hit.v);
     vertex = primaryVertex(cur, s, cam.eye);
-    const glm::vec3 wo = vertex.wo;
+    const glm::vec3 wo = vertex.bsdf.wo;
     const glm::vec3 nrm = glm::dot(s.geometricNormal, wo) < 0 ? -s.shadingNormal : s.shadingNormal;
     const glm::vec3 specAlb =
         s.lightIndex >= 0 ? glm::vec3(0) : specularAlbedo(s.f0(), s.roughness, std::max(glm::dot(nrm, wo), 0.0f));

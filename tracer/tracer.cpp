@@ -60,6 +60,7 @@ Oriented orient(const SurfaceHit& s, glm::vec3 wo) {
 struct Lobes {
   glm::vec3 diffuse{0}, specular{0};  // BRDF values f_d, f_s
   float pdf = 0;                      // mixture pdf of the sampling strategy (solid angle)
+  float NoL = 0;                      // the cosine towards wi, dot(n, wi)
 };
 
 // Mixture sampling weights: specular lobe chosen in proportion to its Fresnel-weighted albedo.
@@ -70,26 +71,51 @@ float specularProbability(const SurfaceHit& s, float NoV) {
 
 float ggxAlpha(float roughness) { return std::max(roughness * roughness, 1e-3f); }
 
-Lobes evaluate(const SurfaceHit& s, glm::vec3 n, glm::vec3 wo, glm::vec3 wi, float pSpec) {
+// Smith's separable masking for GGX (alpha^2 = a2) at cosine x.
+float smithG1(float a2, float x) { return 2.0f * x / (x + std::sqrt(a2 + (1.0f - a2) * x * x)); }
+
+// The BSDF of surface s seen from wo (towards the previous vertex), its direction-free terms
+// computed once (VertexBsdf).
+VertexBsdf vertexBsdf(const SurfaceHit& s, glm::vec3 wo) {
+  VertexBsdf v;
+  v.wo = wo;
+  const Oriented o = orient(s, wo);
+  v.n = o.n;
+  v.ng = o.ng;
+  v.NoV = glm::dot(o.n, wo);
+  v.pSpec = specularProbability(s, v.NoV);
+  const glm::vec3 diffuseAlbedo = s.diffuseAlbedo();
+  v.reflects = !(v.pSpec <= 0 && maxComponent(diffuseAlbedo) <= 0);
+  orthonormalBasis(v.n, v.t, v.b);
+  v.diffuseOverPi = diffuseAlbedo / kPi;
+  v.f0 = s.f0();
+  v.oneMinusF0 = 1.0f - v.f0;
+  v.specular = maxComponent(v.f0) > 0;
+  v.alpha = ggxAlpha(s.roughness);
+  v.a2 = v.alpha * v.alpha;
+  v.G1V = v.NoV > 0 ? smithG1(v.a2, v.NoV) : 0.0f;
+  return v;
+}
+
+Lobes evaluate(const VertexBsdf& v, glm::vec3 wi) {
   Lobes out;
-  float NoL = glm::dot(n, wi), NoV = glm::dot(n, wo);
+  const float NoL = glm::dot(v.n, wi), NoV = v.NoV;
+  out.NoL = NoL;
   if (NoL <= 0 || NoV <= 0) return out;
-  out.diffuse = s.diffuseAlbedo() / kPi;
+  out.diffuse = v.diffuseOverPi;
   float pdfDiffuse = NoL / kPi, pdfSpecular = 0;
-  glm::vec3 f0 = s.f0();
-  if (maxComponent(f0) > 0) {
-    glm::vec3 h = glm::normalize(wo + wi);
-    float NoH = std::max(glm::dot(n, h), 0.0f), VoH = std::max(glm::dot(wo, h), 1e-6f);
-    float a = ggxAlpha(s.roughness), a2 = a * a;
-    float dd = NoH * NoH * (a2 - 1.0f) + 1.0f;
-    float D = a2 / (kPi * dd * dd);
-    auto G1 = [&](float x) { return 2.0f * x / (x + std::sqrt(a2 + (1.0f - a2) * x * x)); };
+  if (v.specular) {
+    const glm::vec3 h = glm::normalize(v.wo + wi);
+    const float NoH = std::max(glm::dot(v.n, h), 0.0f), VoH = std::max(glm::dot(v.wo, h), 1e-6f);
+    const float a2 = v.a2;
+    const float dd = NoH * NoH * (a2 - 1.0f) + 1.0f;
+    const float D = a2 / (kPi * dd * dd);
     const float m = 1.0f - VoH, m2 = m * m;
-    glm::vec3 F = f0 + (1.0f - f0) * (m2 * m2 * m);  // Schlick
-    out.specular = D * G1(NoV) * G1(NoL) * F / (4.0f * NoL * NoV);
+    const glm::vec3 F = v.f0 + v.oneMinusF0 * (m2 * m2 * m);  // Schlick
+    out.specular = D * v.G1V * smithG1(a2, NoL) * F / (4.0f * NoL * NoV);
     pdfSpecular = D * NoH / (4.0f * VoH);
   }
-  out.pdf = pSpec * pdfSpecular + (1.0f - pSpec) * pdfDiffuse;
+  out.pdf = v.pSpec * pdfSpecular + (1.0f - v.pSpec) * pdfDiffuse;
   return out;
 }
 
@@ -103,14 +129,13 @@ void reuseForLobe(float pSpec, float& uLobe, float& u1) {
     u1 = std::min((u1 - pSpec) / (1.0f - pSpec), kOneMinusEpsilon);
 }
 
-bool sampleDirection(const SurfaceHit& s, glm::vec3 n, glm::vec3 wo, float pSpec, float uLobe, float u1,
-                     float u2, glm::vec3& wi) {
-  glm::vec3 t, b;
-  orthonormalBasis(n, t, b);
+// A direction from the lobe mixture (the specular lobe where uLobe < pSpec); false where it falls
+// below the shading surface.
+bool sampleDirection(const VertexBsdf& v, float pSpec, float uLobe, float u1, float u2, glm::vec3& wi) {
+  const glm::vec3 n = v.n, t = v.t, b = v.b, wo = v.wo;
   if (uLobe < pSpec) {  // GGX distribution of normals, D(h) cos(h)
-    float a = ggxAlpha(s.roughness);
     float phi = 2.0f * kPi * u1;
-    float cosTheta = std::sqrt((1.0f - u2) / (1.0f + (a * a - 1.0f) * u2));
+    float cosTheta = std::sqrt((1.0f - u2) / (1.0f + (v.a2 - 1.0f) * u2));
     float sinTheta = std::sqrt(std::max(0.0f, 1.0f - cosTheta * cosTheta));
     glm::vec3 h = glm::normalize(t * (sinTheta * std::cos(phi)) + b * (sinTheta * std::sin(phi)) + n * cosTheta);
     wi = 2.0f * glm::dot(wo, h) * h - wo;
@@ -435,51 +460,47 @@ float FrameScene::lightPdf(const SurfaceHit& lightHit, glm::vec3 from) const {
 float FrameScene::specularHitDistance(const SurfaceHit& primary, glm::vec3 wo, const Sampler& sampler,
                                       RayCounts& counts) const {
   if (primary.lightIndex >= 0) return 0;
-  const Oriented o = orient(primary, wo);
+  const VertexBsdf v = vertexBsdf(primary, wo);
   const glm::vec2 u = sampler.get2(kSpecularRayDim);
   glm::vec3 wi;
   // One GGX sample of the specular lobe alone (pSpec 1); below the surface, the mirror direction
   // (a sample is never discarded: the channel has a distance wherever a specular ray could leave).
-  if (!sampleDirection(primary, o.n, wo, 1.0f, 0.0f, u.x, u.y, wi) || glm::dot(wi, o.ng) <= 0)
-    wi = 2.0f * glm::dot(wo, o.n) * o.n - wo;
-  if (glm::dot(wi, o.ng) <= 0) return 0;
+  if (!sampleDirection(v, 1.0f, 0.0f, u.x, u.y, wi) || glm::dot(wi, v.ng) <= 0)
+    wi = 2.0f * glm::dot(wo, v.n) * v.n - wo;
+  if (glm::dot(wi, v.ng) <= 0) return 0;
   SurfaceHit h;
   float t;
   counts.rays++;
-  return intersect(offsetOrigin(primary.position, o.ng), wi, kInf, h, t) ? t : kInf;
+  return intersect(offsetOrigin(primary.position, v.ng), wi, kInf, h, t) ? t : kInf;
 }
 
 FrameScene::PrimaryVertex FrameScene::prepare(const SurfaceHit& hit, glm::vec3 wo) const {
   PrimaryVertex v;
   v.hit = hit;
-  v.wo = wo;
+  v.bsdf.wo = wo;
   if (hit.lightIndex >= 0) return v;  // emitters do not reflect
-  const Oriented o = orient(hit, wo);
-  v.n = o.n;
-  v.ng = o.ng;
-  v.pSpec = specularProbability(hit, glm::dot(o.n, wo));
-  v.reflects = !(v.pSpec <= 0 && maxComponent(hit.diffuseAlbedo()) <= 0);
+  v.bsdf = vertexBsdf(hit, wo);
   return v;
 }
 
 FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Sampler& sampler, RayCounts& counts) const {
   Radiance out;
   counts.paths++;
-  if (!vertex.reflects) return out;
+  if (!vertex.bsdf.reflects) return out;
   // Next-event estimation at a vertex, MIS-weighted against BSDF sampling (power heuristic).
-  auto nextEvent = [&](const SurfaceHit& s, const Oriented& o, glm::vec3 w, float pSpec, uint32_t dim,
-                       glm::vec3& diffuse, glm::vec3& specular, glm::vec3* direction) {
+  auto nextEvent = [&](const SurfaceHit& s, const VertexBsdf& v, uint32_t dim, glm::vec3& diffuse,
+                       glm::vec3& specular, glm::vec3* direction) {
     glm::vec3 wi;
     float dist, pdfLight;
     glm::vec3 le = sampleLight(s, sampler, dim, wi, dist, pdfLight);
-    if (pdfLight <= 0 || glm::dot(wi, o.ng) <= 0) return;
-    Lobes f = evaluate(s, o.n, w, wi, pSpec);
+    if (pdfLight <= 0 || glm::dot(wi, v.ng) <= 0) return;
+    const Lobes f = evaluate(v, wi);
     if (f.pdf <= 0 && maxComponent(f.diffuse + f.specular) <= 0) return;
     counts.rays++;
-    glm::vec3 origin = offsetOrigin(s.position, o.ng);
+    glm::vec3 origin = offsetOrigin(s.position, v.ng);
     if (occluded(origin, wi, dist * (1.0f - 1e-3f))) return;
     float weight = pdfLight * pdfLight / (pdfLight * pdfLight + f.pdf * f.pdf);
-    float cosine = glm::dot(o.n, wi);
+    const float cosine = f.NoL;
     diffuse += f.diffuse * le * (cosine * weight / pdfLight);
     specular += f.specular * le * (cosine * weight / pdfLight);
     if (direction) *direction += wi * lum(f.diffuse * le * (cosine * weight / pdfLight));
@@ -487,28 +508,25 @@ FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Sample
 
   // Vertex 0: split direct light and the continuation between the diffuse and specular signals.
   const SurfaceHit& primary = vertex.hit;
-  const glm::vec3 wo = vertex.wo;
-  const Oriented o0{vertex.n, vertex.ng};
-  const float pSpec0 = vertex.pSpec;
-  nextEvent(primary, o0, wo, pSpec0, 0, out.diffuse, out.specular, &out.diffuseDirection);
+  const VertexBsdf& v0 = vertex.bsdf;
+  nextEvent(primary, v0, 0, out.diffuse, out.specular, &out.diffuseDirection);
   glm::vec3 wi;
   glm::vec2 dir0 = sampler.get2(kDirU);
   float lobe0 = 0;
   if (sampler.kind() == SamplerKind::OwenSobol)
-    reuseForLobe(pSpec0, lobe0, dir0.x);
+    reuseForLobe(v0.pSpec, lobe0, dir0.x);
   else
     lobe0 = sampler.get(kLobe);
-  if (!sampleDirection(primary, o0.n, wo, pSpec0, lobe0, dir0.x, dir0.y, wi) ||
-      glm::dot(wi, o0.ng) <= 0)
+  if (!sampleDirection(v0, v0.pSpec, lobe0, dir0.x, dir0.y, wi) || glm::dot(wi, v0.ng) <= 0)
     return out;
-  Lobes f0 = evaluate(primary, o0.n, wo, wi, pSpec0);
+  const Lobes f0 = evaluate(v0, wi);
   if (f0.pdf <= 0) return out;
-  const float cos0 = glm::dot(o0.n, wi);
+  const float cos0 = f0.NoL;
   const glm::vec3 weightDiffuse = f0.diffuse * (cos0 / f0.pdf), weightSpecular = f0.specular * (cos0 / f0.pdf);
 
   // Radiance arriving along wi from the rest of the path.
   glm::vec3 incoming(0), throughput(1);
-  glm::vec3 origin = offsetOrigin(primary.position, o0.ng), dir = wi;
+  glm::vec3 origin = offsetOrigin(primary.position, v0.ng), dir = wi;
   float prevPdf = f0.pdf;
   for (int depth = 1; depth <= scene_.maxBounces; ++depth) {
     SurfaceHit h;
@@ -528,32 +546,29 @@ FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Sample
     }
     if (depth == scene_.maxBounces || s.lightIndex >= 0) break;
     const uint32_t dim = uint32_t(depth) * kDimsPerVertex;
-    glm::vec3 w = -dir;
-    Oriented o = orient(s, w);
-    float pSpec = specularProbability(s, glm::dot(o.n, w));
-    if (pSpec <= 0 && maxComponent(s.diffuseAlbedo()) <= 0) break;
+    const VertexBsdf v = vertexBsdf(s, -dir);
+    if (!v.reflects) break;
     glm::vec3 direct(0);
-    nextEvent(s, o, w, pSpec, dim, direct, direct, nullptr);
+    nextEvent(s, v, dim, direct, direct, nullptr);
     incoming += throughput * direct;
     glm::vec3 next;
     glm::vec2 dirU = sampler.get2(dim + kDirU);
     float lobe = 0;
     if (sampler.kind() == SamplerKind::OwenSobol)
-      reuseForLobe(pSpec, lobe, dirU.x);
+      reuseForLobe(v.pSpec, lobe, dirU.x);
     else
       lobe = sampler.get(dim + kLobe);
-    if (!sampleDirection(s, o.n, w, pSpec, lobe, dirU.x, dirU.y, next) ||
-        glm::dot(next, o.ng) <= 0)
+    if (!sampleDirection(v, v.pSpec, lobe, dirU.x, dirU.y, next) || glm::dot(next, v.ng) <= 0)
       break;
-    Lobes f = evaluate(s, o.n, w, next, pSpec);
+    const Lobes f = evaluate(v, next);
     if (f.pdf <= 0) break;
-    throughput *= (f.diffuse + f.specular) * (glm::dot(o.n, next) / f.pdf);
+    throughput *= (f.diffuse + f.specular) * (f.NoL / f.pdf);
     if (depth >= 2) {  // Russian roulette after two bounces
       float q = std::clamp(maxComponent(throughput), 0.05f, 0.95f);
       if (sampler.get(dim + kRoulette) >= q) break;
       throughput /= q;
     }
-    origin = offsetOrigin(s.position, o.ng);
+    origin = offsetOrigin(s.position, v.ng);
     dir = next;
     prevPdf = f.pdf;
   }

@@ -44,6 +44,25 @@ struct SurfaceHit {
   glm::vec3 f0() const { return glm::mix(glm::vec3(specularF0), baseColor, metallic); }
 };
 
+// A path vertex's BSDF (Lambert diffuse + GGX specular) seen from wo, with everything that does
+// not depend on the incident direction computed once: a vertex evaluates its BSDF twice (towards
+// the light sample and towards the sampled direction) and samples it once, and a reference's first
+// vertex is shaded hundreds of times. The terms are the same operations on the same values as
+// computing them at every call, so the numbers are the same bits.
+struct VertexBsdf {
+  glm::vec3 wo{0, 0, 1};
+  glm::vec3 n{0, 0, 1}, ng{0, 0, 1};  // oriented towards wo (the shading normal falls back to ng)
+  glm::vec3 t{1, 0, 0}, b{0, 1, 0};   // an orthonormal basis around n (sampling)
+  glm::vec3 diffuseOverPi{0};         // the Lambert lobe, diffuse albedo / pi
+  glm::vec3 f0{0}, oneMinusF0{1};     // Schlick's Fresnel terms
+  float NoV = 1;
+  float alpha = 1, a2 = 1;            // GGX roughness alpha and alpha^2
+  float G1V = 0;                      // Smith's masking towards wo (0 where NoV <= 0)
+  float pSpec = 0;                    // the probability of sampling the specular lobe
+  bool specular = false;              // f0 > 0 in some channel
+  bool reflects = false;              // false for emitters and surfaces with neither lobe: no path leaves
+};
+
 // Specular albedo used for demodulation: the GGX directional albedo, Karis' analytic fit of the
 // pre-integrated split-sum term ("Physically Based Shading on Mobile", 2014). Ours: any smooth,
 // strictly positive estimate works for demodulation; this one tracks roughness and view angle.
@@ -113,16 +132,13 @@ class FrameScene {
     // (the low-resolution buffer's "average direction", CAPCOM 2023 slide 21).
     glm::vec3 diffuseDirection{0};
   };
-  // What a path's first vertex knows before its first random number: the surface, the direction
-  // towards the eye, both normals turned towards it and the specular lobe's probability. A
+  // What a path's first vertex knows before its first random number: the surface and its BSDF
+  // seen from the eye (wo, both normals turned towards it, the specular lobe's probability). A
   // reference shades hundreds of samples from one primary hit, so it prepares the vertex once per
   // pixel; shading a prepared vertex gives the same bits as shading the hit itself.
   struct PrimaryVertex {
     SurfaceHit hit;
-    glm::vec3 wo{0, 0, 1};
-    glm::vec3 n{0, 0, 1}, ng{0, 0, 1};  // oriented towards wo (the shading normal falls back to ng)
-    float pSpec = 0;
-    bool reflects = false;  // false for emitters and surfaces with neither lobe: no path leaves
+    VertexBsdf bsdf;
   };
   PrimaryVertex prepare(const SurfaceHit& hit, glm::vec3 wo) const;
   // One path sample starting at the primary surface `hit` seen from direction wo (towards the eye).
