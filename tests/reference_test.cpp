@@ -122,6 +122,35 @@ TEST(Sobol, AReplicatesPrecomputedDimensionHashesGiveTheSameNumbers) {
   EXPECT_EQ(capped.count, Sampler::kMaxHashedDims);
 }
 
+// A batch of samples' numbers (the reference loop fills kBatchLanes at a time) are each lane's
+// sampler's numbers bit for bit: pairs and lone dimensions it holds, a pair's first coordinate read
+// alone, a lone dimension read as a pair (computed: the batch has no second coordinate for it),
+// and dimensions it does not hold or the hash table does not cover (computed on demand).
+TEST(Sobol, ABatchOfSamplesGivesEachSamplesOwnNumbers) {
+  Sampler::DimensionHashes table;
+  const Sampler base = Sampler::owenSobol(9, 2, 501, 1, 0);
+  const Sampler hashed = base.withHashes(table, 24);
+  Sampler::Reads reads;
+  reads.pairs = (1ull << 2) | (1ull << 5) | (1ull << 13) | (1ull << 30);  // 30: beyond the table
+  reads.singles = (1ull << 7) | (1ull << 23);
+  Sampler::Batch batch;
+  for (uint32_t first : {0u, 16u, 4090u, 100000u}) {
+    hashed.fillBatch(batch, reads, first);
+    EXPECT_EQ(batch.rows, 5u);  // 2, 5, 7, 13, 23
+    for (uint32_t lane = 0; lane < Sampler::kBatchLanes; ++lane) {
+      const Sampler a = hashed.inBatch(batch, first, lane), b = base.atIndex(first + lane);
+      for (uint32_t dim = 0; dim < 40; ++dim) {
+        EXPECT_EQ(a.get2(dim), b.get2(dim)) << first << " " << lane << " " << dim;
+        EXPECT_EQ(a.get(dim), b.get(dim)) << first << " " << lane << " " << dim;
+      }
+    }
+  }
+  // The lanes are the samples first .. first + 15, in order (not a permutation of them).
+  hashed.fillBatch(batch, reads, 32);
+  EXPECT_EQ(batch.first[batch.row[2]][3], base.atIndex(35).get(2));
+  EXPECT_NE(batch.first[batch.row[2]][3], base.atIndex(36).get(2));
+}
+
 TEST(Sobol, ReplicatesAndPixelsAreDecorrelated) {
   // Different replicates (and pixels) must not repeat each other's points.
   const glm::vec2 a = Sampler::owenSobol(1, 0, 10, 0, 3).get2(2);

@@ -420,11 +420,19 @@ void SequenceRenderer::extendPixel(int t, const FrameScene& cur, ReferenceSums& 
         sobol && hasHit ? Sampler::owenSobol(scene_.seed, uint32_t(t), uint32_t(i), uint32_t(replicate), 0)
                               .withHashes(hashes, cur.pathDimensions())
                         : Sampler(0, 0, 0, 0);
+    // Sobol: the numbers of kBatchLanes samples at a time (Sampler::fillBatch).
+    Sampler::Batch batch;
+    const Sampler::Reads reads = cur.sobolReads();
+    int batchStart = begin - int(Sampler::kBatchLanes);
     for (int k = begin; k < end; ++k) {
       glm::vec3 c = sky, d(0), sp(0);
       if (hasHit) {
+        if (sobol && k >= batchStart + int(Sampler::kBatchLanes)) {
+          batchStart = k;
+          sobolReplicate.fillBatch(batch, reads, uint32_t(batchStart));
+        }
         // Independent: sample ids 1.. (0 is the noisy frame's), interleaved over replicates.
-        const Sampler sampler = sobol ? sobolReplicate.atIndex(uint32_t(k))
+        const Sampler sampler = sobol ? sobolReplicate.inBatch(batch, uint32_t(batchStart), uint32_t(k - batchStart))
                                       : Sampler(scene_.seed, uint32_t(t), uint32_t(i),
                                                 uint32_t(1 + k * allReplicates + replicate));
         const PixelShade px = shadePixel(cur, vertex, sampler, counts);

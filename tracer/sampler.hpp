@@ -149,12 +149,68 @@ class Sampler {
     return s;
   }
 
+  // A Sobol replicate's numbers for up to kBatchLanes consecutive sample indices at once, for the
+  // dimensions a path reads (FrameScene::sobolReads): a path's numbers are a chain of dependent
+  // integer multiplies (three Laine-Karras permutations per pair), which a path waits on at each
+  // vertex; filled for a batch of samples the lanes are independent, the loops vectorise, and a
+  // path only loads its numbers. The same integer operations as get and get2: the same bits.
+  static constexpr uint32_t kBatchLanes = 16;
+  // The dimensions a batch holds: bit d of `pairs` for a pair (d, d + 1) read with get2, bit d of
+  // `singles` for a dimension read with get; dimensions below kMaxHashedDims only.
+  struct Reads {
+    uint64_t pairs = 0, singles = 0;
+  };
+  struct Batch {
+    static constexpr uint8_t kAbsent = 0xFF;
+    uint8_t row[kMaxHashedDims];  // dimension -> its row of first (and second), or kAbsent
+    uint64_t pairs = 0;           // the dimensions whose second coordinate is held too
+    uint32_t rows = 0;
+    float first[kMaxHashedDims][kBatchLanes];   // get(d), the first coordinate of get2(d)
+    float second[kMaxHashedDims][kBatchLanes];  // get2(d)'s second coordinate (pairs only)
+  };
+  // Fills `batch` with this replicate's numbers (a sampler from withHashes, whose table covers
+  // the reads) for samples firstIndex .. firstIndex + kBatchLanes - 1.
+  void fillBatch(Batch& batch, Reads reads, uint32_t firstIndex) const {
+    uint32_t reversed[kBatchLanes], x[kBatchLanes];
+    for (uint32_t l = 0; l < kBatchLanes; ++l) reversed[l] = sobol::reverseBits(firstIndex + l);
+    batch.rows = 0;
+    batch.pairs = reads.pairs;
+    const uint64_t any = reads.pairs | reads.singles;
+    for (uint32_t d = 0; d < kMaxHashedDims; ++d) {
+      batch.row[d] = Batch::kAbsent;
+      if (!((any >> d) & 1) || !hashes_ || d >= hashes_->count) continue;
+      const uint32_t r = batch.rows++;
+      batch.row[d] = uint8_t(r);
+      const uint64_t h = hashes_->dim[d];
+      const uint32_t shuffle = uint32_t(h), scramble = uint32_t(h >> 32);
+      for (uint32_t l = 0; l < kBatchLanes; ++l) {
+        x[l] = sobol::laineKarrasPermutation(reversed[l], shuffle);
+        batch.first[r][l] = sobol::toUnitFloat(
+            sobol::reverseBits(sobol::laineKarrasPermutation(sobol::reverseBits(x[l]), scramble)));
+      }
+      if (!((reads.pairs >> d) & 1)) continue;
+      const uint32_t seed = hashes_->second[d];
+      for (uint32_t l = 0; l < kBatchLanes; ++l)
+        batch.second[r][l] = sobol::toUnitFloat(sobol::reverseBits(
+            sobol::laineKarrasPermutation(sobol::reversedDimension1OfReversed(x[l]), seed)));
+    }
+  }
+  // Sample firstIndex + lane of the batch (this replicate's): reads its numbers from the batch
+  // where it holds the dimension, computes them otherwise. The batch must outlive the sampler.
+  Sampler inBatch(const Batch& batch, uint32_t firstIndex, uint32_t lane) const {
+    Sampler s = atIndex(firstIndex + lane);
+    s.batch_ = &batch;
+    s.lane_ = lane;
+    return s;
+  }
+
   SamplerKind kind() const { return kind_; }
   // Uniform in [0, 1) for dimension `dim`. Sobol: the value is
   //   nestedUniformScramble(dimension0(i), h_hi) with i = nestedUniformScramble(index, h_lo),
   // computed with the bit reversals that cancel left out (reversedShuffledIndex, firstCoordinate).
   float get(uint32_t dim) const {
     if (kind_ == SamplerKind::Independent) return sobol::toUnitFloat(uint32_t(hash(dim) >> 32));
+    if (batch_ && dim < kMaxHashedDims && batch_->row[dim] != Batch::kAbsent) return batch_->first[batch_->row[dim]][lane_];
     const uint64_t h = hashed(dim);
     return firstCoordinate(reversedShuffledIndex(h), h);
   }
@@ -163,9 +219,13 @@ class Sampler {
   // inner reverse(dimension1(reverse(x))) is one table lookup).
   glm::vec2 get2(uint32_t dim) const {
     if (kind_ == SamplerKind::Independent) return {get(dim), get(dim + 1)};
+    if (batch_ && dim < kMaxHashedDims && ((batch_->pairs >> dim) & 1) && batch_->row[dim] != Batch::kAbsent) {
+      const uint32_t r = batch_->row[dim];
+      return {batch_->first[r][lane_], batch_->second[r][lane_]};
+    }
     const uint64_t h = hashed(dim);
     const uint32_t x = reversedShuffledIndex(h);
-    const uint32_t seed = hashes_ && dim < hashes_->count ? hashes_->second[dim] : uint32_t(mix64(h));
+    const uint32_t seed = inTable(dim) ? hashes_->second[dim] : uint32_t(mix64(h));
     const uint32_t second = sobol::laineKarrasPermutation(sobol::reversedDimension1OfReversed(x), seed);
     return {firstCoordinate(x, h), sobol::toUnitFloat(sobol::reverseBits(second))};
   }
@@ -173,7 +233,9 @@ class Sampler {
 
  private:
   uint64_t hash(uint32_t dim) const { return mix64(key_ ^ (uint64_t(dim) * 0x9e3779b97f4a7c15ull)); }
-  uint64_t hashed(uint32_t dim) const { return hashes_ && dim < hashes_->count ? hashes_->dim[dim] : hash(dim); }
+  // (dim < kMaxHashedDims, implied by count, is written out for the compiler's bounds analysis.)
+  bool inTable(uint32_t dim) const { return hashes_ && dim < kMaxHashedDims && dim < hashes_->count; }
+  uint64_t hashed(uint32_t dim) const { return inTable(dim) ? hashes_->dim[dim] : hash(dim); }
   // x = reverse(i), i the index under dimension hash h's nested uniform shuffle.
   uint32_t reversedShuffledIndex(uint64_t h) const {
     return sobol::laineKarrasPermutation(reversedIndex_, uint32_t(h));
@@ -186,6 +248,8 @@ class Sampler {
 
   uint64_t key_ = 0;
   const DimensionHashes* hashes_ = nullptr;  // Sobol: this replicate's, where withHashes set them
+  const Batch* batch_ = nullptr;             // Sobol: this sample's batch, where inBatch set it
+  uint32_t lane_ = 0;                        // its lane there
   uint32_t reversedIndex_ = 0;  // Sobol: the sample index, bit-reversed (every dimension's shuffle starts there)
   SamplerKind kind_ = SamplerKind::Independent;
 };

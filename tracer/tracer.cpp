@@ -385,6 +385,17 @@ uint32_t FrameScene::pathDimensions() const {
   return uint32_t(std::max(scene_.maxBounces, 1)) * kDimsPerVertex;
 }
 
+Sampler::Reads FrameScene::sobolReads() const {
+  Sampler::Reads reads;
+  for (uint32_t v = 0; v < uint32_t(std::max(scene_.maxBounces, 1)); ++v) {
+    const uint32_t dim = v * kDimsPerVertex;
+    if (dim + kDimsPerVertex > Sampler::kMaxHashedDims) break;  // the rest are computed per draw
+    reads.pairs |= (1ull << (dim + kLightU)) | (1ull << (dim + kDirU));
+    if (v >= 2) reads.singles |= 1ull << (dim + kRoulette);  // Russian roulette after two bounces
+  }
+  return reads;
+}
+
 glm::vec3 FrameScene::sky(glm::vec3 dir) const {
   return glm::mix(scene_.skyBottom, scene_.skyTop, 0.5f * (dir.y + 1.0f));
 }

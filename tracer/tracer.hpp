@@ -121,6 +121,9 @@ class FrameScene {
   // The random dimensions a path of this scene can use (its vertices' 8 each, tracer.cpp): a
   // Sobol replicate hashes them once (Sampler::withHashes).
   uint32_t pathDimensions() const;
+  // The Sobol dimensions a path reads, for a batch of samples (Sampler::fillBatch): at each vertex
+  // that samples, the light point's pair and the direction's pair; from the third on, roulette.
+  Sampler::Reads sobolReads() const;
 
   struct Radiance {
     glm::vec3 diffuse{0}, specular{0};  // radiance reflected by the first vertex, not demodulated
