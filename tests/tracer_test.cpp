@@ -8,6 +8,7 @@
 #include <cstring>
 #include <fstream>
 
+#include "core/error.hpp"
 #include "core/sequence.hpp"
 #include "tests/test_util.hpp"
 #include "tracer/asset.hpp"
@@ -229,6 +230,80 @@ TEST(Tracer, MotionVectorsFollowAnimatedAssetNodes) {
   checkMotion(loadScene((dir / "s.json").string()), 15, 1);
 }
 
+
+// A reference shades a pixel's samples 16 at a time (FrameScene::shadeBatch: their first
+// vertex's choices made together, their shadow rays one Embree packet); each sample's radiance is
+// the bits shade() gives it alone: pixels in light, in the pillar's shadow and on its edge, full
+// and partial batches, Sobol and independent samplers, and a pixel on the light (no path leaves).
+TEST(Tracer, ABatchOfSamplesShadesAsEachSampleAlone) {
+  const Scene scene = test::shippedScene("camera_pan_occluder");
+  std::vector<MeshData> meshes;
+  for (const Object& o : scene.objects) meshes.push_back(makeMesh(o));
+  for (const Light& l : scene.lights) meshes.push_back(makeMesh(l.shape, ""));
+  const int w = 64, h = 36;
+  const SceneState state = evaluateState(scene, 5, w, h);
+  const EmbreeDevice device;
+  const FrameScene fs(device, scene, meshes, state);
+  int shaded = 0, lit = 0, shadowed = 0;
+  for (int y = 1; y < h; y += 3)
+    for (int x = 2; x < w; x += 5) {
+      SurfaceHit hit;
+      float t;
+      const glm::vec3 dir = state.camera.rayDirection(x + 0.5f, y + 0.5f);
+      if (!fs.intersect(state.camera.eye, dir, 1e30f, hit, t, true)) continue;
+      const SurfaceHit s = fs.surface(hit.meshId, hit.primId, hit.u, hit.v);
+      const FrameScene::PrimaryVertex vertex = fs.prepare(s, glm::normalize(state.camera.eye - s.position));
+      Sampler::DimensionHashes hashes;
+      const Sampler replicate = Sampler::owenSobol(7, 5, uint32_t(y * w + x), 1, 0).withHashes(hashes, fs.pathDimensions());
+      Sampler::Batch batch;
+      for (const int count : {16, 5}) {
+        for (const bool sobol : {true, false}) {
+          const uint32_t first = count == 16 ? 32 : 7;
+          Sampler samplers[Sampler::kBatchLanes];
+          if (sobol) replicate.fillBatch(batch, fs.sobolReads(), first);
+          for (int l = 0; l < count; ++l)
+            samplers[l] = sobol ? replicate.inBatch(batch, first, uint32_t(l))
+                                : Sampler(7, 5, uint32_t(y * w + x), first + uint32_t(l));
+          FrameScene::Radiance batched[Sampler::kBatchLanes];
+          RayCounts batchCounts, aloneCounts;
+          fs.shadeBatch(vertex, samplers, count, batched, batchCounts);
+          for (int l = 0; l < count; ++l) {
+            const Sampler alone = sobol ? replicate.atIndex(first + uint32_t(l)) : samplers[l];
+            const FrameScene::Radiance r = fs.shade(vertex, alone, aloneCounts);
+            ASSERT_EQ(std::memcmp(&r.diffuse, &batched[l].diffuse, sizeof r.diffuse), 0) << x << "," << y << " lane " << l;
+            ASSERT_EQ(std::memcmp(&r.specular, &batched[l].specular, sizeof r.specular), 0) << x << "," << y;
+            ASSERT_EQ(std::memcmp(&r.diffuseDirection, &batched[l].diffuseDirection, sizeof r.diffuseDirection), 0);
+            ASSERT_EQ(std::memcmp(&r.hitDistance, &batched[l].hitDistance, sizeof r.hitDistance), 0);
+            const float direct = r.diffuse.x + r.diffuse.y + r.diffuse.z;
+            (direct > 0 ? lit : shadowed)++;
+            ++shaded;
+          }
+          EXPECT_EQ(batchCounts.rays, aloneCounts.rays);
+          EXPECT_EQ(batchCounts.paths, aloneCounts.paths);
+        }
+      }
+    }
+  EXPECT_GT(shaded, 2000);
+  EXPECT_GT(lit, 500);
+  EXPECT_GT(shadowed, 5);  // samples with no radiance at all: shadowed, and their bounce found none (11 here)
+  // A pixel on the emitter: no path leaves it, alone or batched.
+  SurfaceHit onLight;
+  onLight.meshId = int(scene.objects.size());
+  onLight.primId = 0;
+  const SurfaceHit light = fs.surface(onLight.meshId, 0, 0.3f, 0.3f);
+  const FrameScene::PrimaryVertex emitter = fs.prepare(light, -light.geometricNormal);
+  Sampler samplers[3] = {Sampler(1, 0, 0, 1), Sampler(1, 0, 0, 2), Sampler(1, 0, 0, 3)};
+  FrameScene::Radiance out[3];
+  RayCounts counts;
+  fs.shadeBatch(emitter, samplers, 3, out, counts);
+  EXPECT_EQ(counts.paths, 3u);
+  EXPECT_EQ(counts.rays, 0u);
+  for (const FrameScene::Radiance& r : out) EXPECT_EQ(r.diffuse + r.specular, glm::vec3(0));
+  // More samples than a batch holds: refused, not overrun.
+  FrameScene::Radiance many[Sampler::kBatchLanes + 1];
+  Sampler manySamplers[Sampler::kBatchLanes + 1];
+  EXPECT_THROW(fs.shadeBatch(emitter, manySamplers, int(Sampler::kBatchLanes) + 1, many, counts), Error);
+}
 
 // ---- Fidelity to the paper and the reference implementation ------------------------------
 // Issue 15's two tracer changes: the specular hit distance a real-time tracer has (item 3) and a

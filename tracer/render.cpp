@@ -420,28 +420,36 @@ void SequenceRenderer::extendPixel(int t, const FrameScene& cur, ReferenceSums& 
         sobol && hasHit ? Sampler::owenSobol(scene_.seed, uint32_t(t), uint32_t(i), uint32_t(replicate), 0)
                               .withHashes(hashes, cur.pathDimensions())
                         : Sampler(0, 0, 0, 0);
-    // Sobol: the numbers of kBatchLanes samples at a time (Sampler::fillBatch).
+    // kBatchLanes samples at a time: their Sobol numbers filled together (Sampler::fillBatch),
+    // their first vertex's choices made together (FrameScene::shadeBatch); summed in sample order.
     Sampler::Batch batch;
     const Sampler::Reads reads = cur.sobolReads();
-    int batchStart = begin - int(Sampler::kBatchLanes);
-    for (int k = begin; k < end; ++k) {
-      glm::vec3 c = sky, d(0), sp(0);
+    const glm::vec3 emission =
+        hasHit && glm::dot(vertex.hit.geometricNormal, vertex.bsdf.wo) > 0 ? vertex.hit.emission : glm::vec3(0);
+    for (int first = begin; first < end; first += int(Sampler::kBatchLanes)) {
+      const int count = std::min(end - first, int(Sampler::kBatchLanes));
+      Sampler samplers[Sampler::kBatchLanes];
+      FrameScene::Radiance radiance[Sampler::kBatchLanes];
       if (hasHit) {
-        if (sobol && k >= batchStart + int(Sampler::kBatchLanes)) {
-          batchStart = k;
-          sobolReplicate.fillBatch(batch, reads, uint32_t(batchStart));
-        }
-        // Independent: sample ids 1.. (0 is the noisy frame's), interleaved over replicates.
-        const Sampler sampler = sobol ? sobolReplicate.inBatch(batch, uint32_t(batchStart), uint32_t(k - batchStart))
-                                      : Sampler(scene_.seed, uint32_t(t), uint32_t(i),
-                                                uint32_t(1 + k * allReplicates + replicate));
-        const PixelShade px = shadePixel(cur, vertex, sampler, counts);
-        c = px.color();
-        d = px.radiance.diffuse * demodDiffuse;
-        sp = px.radiance.specular * demodSpecular;
+        if (sobol) sobolReplicate.fillBatch(batch, reads, uint32_t(first));
+        for (int l = 0; l < count; ++l)
+          // Independent: sample ids 1.. (0 is the noisy frame's), interleaved over replicates.
+          samplers[l] = sobol ? sobolReplicate.inBatch(batch, uint32_t(first), uint32_t(l))
+                              : Sampler(scene_.seed, uint32_t(t), uint32_t(i),
+                                        uint32_t(1 + (first + l) * allReplicates + replicate));
+        cur.shadeBatch(vertex, samplers, count, radiance, counts);
       }
-      const float v[V] = {c.x, c.y, c.z, d.x, d.y, d.z, sp.x, sp.y, sp.z};
-      for (int j = 0; j < V; ++j) acc[j] += v[j];
+      for (int l = 0; l < count; ++l) {
+        glm::vec3 c = sky, d(0), sp(0);
+        if (hasHit) {
+          // PixelShade::color(): the same sum in the same order.
+          c = radiance[l].diffuse + radiance[l].specular + emission;
+          d = radiance[l].diffuse * demodDiffuse;
+          sp = radiance[l].specular * demodSpecular;
+        }
+        const float v[V] = {c.x, c.y, c.z, d.x, d.y, d.z, sp.x, sp.y, sp.z};
+        for (int j = 0; j < V; ++j) acc[j] += v[j];
+      }
     }
   }
 }

@@ -103,6 +103,8 @@ enum class SamplerKind : uint8_t { Independent, OwenSobol };
 
 class Sampler {
  public:
+  // An unset sampler (independent, key 0), to be assigned: the batch loop's slots.
+  Sampler() = default;
   // Independent numbers for sample `sample` of a pixel.
   Sampler(uint32_t seed, uint32_t frame, uint32_t pixel, uint32_t sample) {
     key_ = mix64(mix64(mix64(uint64_t(seed) + 0x9e3779b97f4a7c15ull) ^ frame) ^

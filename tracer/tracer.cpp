@@ -494,22 +494,112 @@ FrameScene::PrimaryVertex FrameScene::prepare(const SurfaceHit& hit, glm::vec3 w
   return v;
 }
 
+// What a sample decides at a vertex before any ray leaves it: its light sample and its scattered
+// direction, each with the BSDF evaluated towards it. Nothing here waits on a ray, so a reference
+// decides its first vertex for a batch of samples at once and traces their shadow rays as one
+// packet (shadeBatch).
+struct FrameScene::VertexSample {
+  bool towardsLight = false;  // a light sample the BSDF reflects: it takes a shadow ray
+  glm::vec3 le{0}, wiLight{0};
+  float distLight = 0, pdfLight = 0;
+  Lobes fLight;
+  int8_t occluded = -1;  // the shadow ray's answer where a packet traced it already (0 or 1), else -1
+  bool scatters = false;  // a direction above the surface with a positive pdf: the path goes on
+  glm::vec3 wi{0};
+  Lobes f;
+};
+
+namespace {
+// Lane l of a packet: a ray from o along d over [0, tfar], every field set as for one ray.
+void setPacketRay(RTCRay16& r, int l, glm::vec3 o, glm::vec3 d, float tfar) {
+  r.org_x[l] = o.x, r.org_y[l] = o.y, r.org_z[l] = o.z;
+  r.dir_x[l] = d.x, r.dir_y[l] = d.y, r.dir_z[l] = d.z;
+  r.tnear[l] = 0.0f;
+  r.tfar[l] = tfar;
+  r.time[l] = 0.0f;
+  r.mask[l] = 0xFFFFFFFFu;
+  r.id[l] = unsigned(l);
+  r.flags[l] = 0;
+}
+}  // namespace
+
+FrameScene::VertexSample FrameScene::sampleVertex(const SurfaceHit& s, const VertexBsdf& v, const Sampler& sampler,
+                                                  uint32_t dim) const {
+  VertexSample out;
+  out.le = sampleLight(s, sampler, dim, out.wiLight, out.distLight, out.pdfLight);
+  if (out.pdfLight > 0 && glm::dot(out.wiLight, v.ng) > 0) {
+    out.fLight = evaluate(v, out.wiLight);
+    out.towardsLight = !(out.fLight.pdf <= 0 && maxComponent(out.fLight.diffuse + out.fLight.specular) <= 0);
+  }
+  glm::vec2 u = sampler.get2(dim + kDirU);
+  float lobe = 0;
+  if (sampler.kind() == SamplerKind::OwenSobol)
+    reuseForLobe(v.pSpec, lobe, u.x);
+  else
+    lobe = sampler.get(dim + kLobe);
+  if (sampleDirection(v, v.pSpec, lobe, u.x, u.y, out.wi) && glm::dot(out.wi, v.ng) > 0) {
+    out.f = evaluate(v, out.wi);
+    out.scatters = out.f.pdf > 0;
+  }
+  return out;
+}
+
 FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Sampler& sampler, RayCounts& counts) const {
+  if (!vertex.bsdf.reflects) {
+    counts.paths++;
+    return {};
+  }
+  return shade(vertex, sampleVertex(vertex.hit, vertex.bsdf, sampler, 0), sampler, counts);
+}
+
+void FrameScene::shadeBatch(const PrimaryVertex& vertex, const Sampler* samplers, int count, Radiance* out,
+                            RayCounts& counts) const {
+  if (count > int(Sampler::kBatchLanes)) throw Error("shadeBatch: more samples than a batch holds");
+  VertexSample first[Sampler::kBatchLanes];
+  if (vertex.bsdf.reflects) {
+    for (int l = 0; l < count; ++l) first[l] = sampleVertex(vertex.hit, vertex.bsdf, samplers[l], 0);
+    // Their shadow rays leave one point towards the same lights: one coherent packet. (The
+    // scattered rays as a packet too were measured: no faster, and Embree's packet kernels chose
+    // the other triangle of a shared edge for some of living_room's rays.)
+    static_assert(Sampler::kBatchLanes == 16, "the packet is Embree's RTCRay16");
+    const glm::vec3 origin = offsetOrigin(vertex.hit.position, vertex.bsdf.ng);
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    alignas(64) int valid[16];
+    alignas(64) RTCRay16 shadow;
+    for (int l = 0; l < 16; ++l) {
+      valid[l] = l < count && first[l].towardsLight ? -1 : 0;
+      setPacketRay(shadow, l, origin, first[l].wiLight, first[l].distLight * (1.0f - 1e-3f));
+    }
+    rtcOccluded16(valid, rtcScene_, &ctx, &shadow);
+    for (int l = 0; l < count; ++l)
+      if (valid[l]) first[l].occluded = shadow.tfar[l] < 0.0f ? 1 : 0;
+  }
+  for (int l = 0; l < count; ++l) {
+    if (vertex.bsdf.reflects) {
+      out[l] = shade(vertex, first[l], samplers[l], counts);
+    } else {
+      counts.paths++;
+      out[l] = {};
+    }
+  }
+}
+
+FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const VertexSample& first, const Sampler& sampler,
+                                       RayCounts& counts) const {
   Radiance out;
   counts.paths++;
-  if (!vertex.bsdf.reflects) return out;
-  // Next-event estimation at a vertex, MIS-weighted against BSDF sampling (power heuristic).
-  auto nextEvent = [&](const SurfaceHit& s, const VertexBsdf& v, uint32_t dim, glm::vec3& diffuse,
+  // The light sample's contribution: its shadow ray, MIS-weighted against BSDF sampling (power
+  // heuristic).
+  auto nextEvent = [&](const SurfaceHit& s, const VertexBsdf& v, const VertexSample& vs, glm::vec3& diffuse,
                        glm::vec3& specular, glm::vec3* direction) {
-    glm::vec3 wi;
-    float dist, pdfLight;
-    glm::vec3 le = sampleLight(s, sampler, dim, wi, dist, pdfLight);
-    if (pdfLight <= 0 || glm::dot(wi, v.ng) <= 0) return;
-    const Lobes f = evaluate(v, wi);
-    if (f.pdf <= 0 && maxComponent(f.diffuse + f.specular) <= 0) return;
+    if (!vs.towardsLight) return;
     counts.rays++;
-    glm::vec3 origin = offsetOrigin(s.position, v.ng);
-    if (occluded(origin, wi, dist * (1.0f - 1e-3f))) return;
+    const glm::vec3 origin = offsetOrigin(s.position, v.ng), wi = vs.wiLight, le = vs.le;
+    if (vs.occluded >= 0 ? vs.occluded != 0 : occluded(origin, wi, vs.distLight * (1.0f - 1e-3f))) return;
+    const Lobes& f = vs.fLight;
+    const float pdfLight = vs.pdfLight;
     float weight = pdfLight * pdfLight / (pdfLight * pdfLight + f.pdf * f.pdf);
     const float cosine = f.NoL;
     diffuse += f.diffuse * le * (cosine * weight / pdfLight);
@@ -520,18 +610,10 @@ FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Sample
   // Vertex 0: split direct light and the continuation between the diffuse and specular signals.
   const SurfaceHit& primary = vertex.hit;
   const VertexBsdf& v0 = vertex.bsdf;
-  nextEvent(primary, v0, 0, out.diffuse, out.specular, &out.diffuseDirection);
-  glm::vec3 wi;
-  glm::vec2 dir0 = sampler.get2(kDirU);
-  float lobe0 = 0;
-  if (sampler.kind() == SamplerKind::OwenSobol)
-    reuseForLobe(v0.pSpec, lobe0, dir0.x);
-  else
-    lobe0 = sampler.get(kLobe);
-  if (!sampleDirection(v0, v0.pSpec, lobe0, dir0.x, dir0.y, wi) || glm::dot(wi, v0.ng) <= 0)
-    return out;
-  const Lobes f0 = evaluate(v0, wi);
-  if (f0.pdf <= 0) return out;
+  nextEvent(primary, v0, first, out.diffuse, out.specular, &out.diffuseDirection);
+  if (!first.scatters) return out;
+  const glm::vec3 wi = first.wi;
+  const Lobes& f0 = first.f;
   const float cos0 = f0.NoL;
   const glm::vec3 weightDiffuse = f0.diffuse * (cos0 / f0.pdf), weightSpecular = f0.specular * (cos0 / f0.pdf);
 
@@ -559,20 +641,13 @@ FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Sample
     const uint32_t dim = uint32_t(depth) * kDimsPerVertex;
     const VertexBsdf v = vertexBsdf(s, -dir);
     if (!v.reflects) break;
+    const VertexSample vs = sampleVertex(s, v, sampler, dim);
     glm::vec3 direct(0);
-    nextEvent(s, v, dim, direct, direct, nullptr);
+    nextEvent(s, v, vs, direct, direct, nullptr);
     incoming += throughput * direct;
-    glm::vec3 next;
-    glm::vec2 dirU = sampler.get2(dim + kDirU);
-    float lobe = 0;
-    if (sampler.kind() == SamplerKind::OwenSobol)
-      reuseForLobe(v.pSpec, lobe, dirU.x);
-    else
-      lobe = sampler.get(dim + kLobe);
-    if (!sampleDirection(v, v.pSpec, lobe, dirU.x, dirU.y, next) || glm::dot(next, v.ng) <= 0)
-      break;
-    const Lobes f = evaluate(v, next);
-    if (f.pdf <= 0) break;
+    if (!vs.scatters) break;
+    const glm::vec3 next = vs.wi;
+    const Lobes& f = vs.f;
     throughput *= (f.diffuse + f.specular) * (f.NoL / f.pdf);
     if (depth >= 2) {  // Russian roulette after two bounces
       float q = std::clamp(maxComponent(throughput), 0.05f, 0.95f);

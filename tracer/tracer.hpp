@@ -150,6 +150,13 @@ class FrameScene {
     return shade(prepare(hit, wo), sampler, counts);
   }
   Radiance shade(const PrimaryVertex& vertex, const Sampler& sampler, RayCounts& counts) const;
+  // `count` (at most Sampler::kBatchLanes) path samples from one prepared vertex, out[l] from
+  // samplers[l], as shade(vertex, samplers[l]) gives them: their first vertex's choices are made
+  // for the whole batch, whose shadow rays Embree then traces as one packet (rtcOccluded16; a
+  // reference's pixel loop). Embree's packet and single-ray kernels could differ only where a
+  // shadow ray grazes an edge exactly; the study's twelve scenes gave the same bits.
+  void shadeBatch(const PrimaryVertex& vertex, const Sampler* samplers, int count, Radiance* out,
+                  RayCounts& counts) const;
   // The specular lobe's hit distance at the primary surface `hit`, from a ray of its own: one
   // GGX sample (the mirror direction where the sample falls below the surface), the way a
   // real-time tracer traces its specular rays separately from its diffuse ones (CAPCOM 2023
@@ -169,6 +176,10 @@ class FrameScene {
     CdfGuide areaGuide;          // into areaCdf
     float area = 0;
   };
+  struct VertexSample;  // a sample's choices at a vertex before it traces (tracer.cpp)
+  VertexSample sampleVertex(const SurfaceHit& s, const VertexBsdf& v, const Sampler& sampler, uint32_t dim) const;
+  Radiance shade(const PrimaryVertex& vertex, const VertexSample& first, const Sampler& sampler,
+                 RayCounts& counts) const;
   glm::vec3 sampleLight(const SurfaceHit& at, const Sampler& s, uint32_t dim, glm::vec3& wi,
                         float& dist, float& pdfSolidAngle) const;
   float lightPdf(const SurfaceHit& lightHit, glm::vec3 from) const;
