@@ -232,11 +232,19 @@ TEST(Tracer, MotionVectorsFollowAnimatedAssetNodes) {
 
 
 // A reference shades a pixel's samples 16 at a time (FrameScene::shadeBatch: their first
-// vertex's choices made together, their shadow rays one Embree packet); each sample's radiance is
-// the bits shade() gives it alone: pixels in light, in the pillar's shadow and on its edge, full
-// and partial batches, Sobol and independent samplers, and a pixel on the light (no path leaves).
+// vertex's choices made together, the BSDF towards them evaluated eight lanes at a time, their
+// shadow rays one Embree packet); each sample's radiance is the bits shade() gives it alone:
+// pixels in light, in the pillar's shadow and on its edge, full and partial batches, Sobol and
+// independent samplers, a pixel on the light (no path leaves), and glossy_orbit's rough and
+// smooth metals and dielectrics.
+void expectBatchesShadeAsSamplesAlone(const std::string& sceneName, int minLit, int minShadowed);
 TEST(Tracer, ABatchOfSamplesShadesAsEachSampleAlone) {
-  const Scene scene = test::shippedScene("camera_pan_occluder");
+  expectBatchesShadeAsSamplesAlone("camera_pan_occluder", 500, 5);  // 11 samples without radiance
+  expectBatchesShadeAsSamplesAlone("glossy_orbit", 500, 0);
+}
+void expectBatchesShadeAsSamplesAlone(const std::string& sceneName, int minLit, int minShadowed) {
+  SCOPED_TRACE(sceneName);
+  const Scene scene = test::shippedScene(sceneName);
   std::vector<MeshData> meshes;
   for (const Object& o : scene.objects) meshes.push_back(makeMesh(o));
   for (const Light& l : scene.lights) meshes.push_back(makeMesh(l.shape, ""));
@@ -244,7 +252,7 @@ TEST(Tracer, ABatchOfSamplesShadesAsEachSampleAlone) {
   const SceneState state = evaluateState(scene, 5, w, h);
   const EmbreeDevice device;
   const FrameScene fs(device, scene, meshes, state);
-  int shaded = 0, lit = 0, shadowed = 0;
+  int shaded = 0, lit = 0, shadowed = 0, glossy = 0;
   for (int y = 1; y < h; y += 3)
     for (int x = 2; x < w; x += 5) {
       SurfaceHit hit;
@@ -276,6 +284,7 @@ TEST(Tracer, ABatchOfSamplesShadesAsEachSampleAlone) {
             ASSERT_EQ(std::memcmp(&r.hitDistance, &batched[l].hitDistance, sizeof r.hitDistance), 0);
             const float direct = r.diffuse.x + r.diffuse.y + r.diffuse.z;
             (direct > 0 ? lit : shadowed)++;
+            glossy += r.specular.x + r.specular.y + r.specular.z > 0;
             ++shaded;
           }
           EXPECT_EQ(batchCounts.rays, aloneCounts.rays);
@@ -284,8 +293,9 @@ TEST(Tracer, ABatchOfSamplesShadesAsEachSampleAlone) {
       }
     }
   EXPECT_GT(shaded, 2000);
-  EXPECT_GT(lit, 500);
-  EXPECT_GT(shadowed, 5);  // samples with no radiance at all: shadowed, and their bounce found none (11 here)
+  EXPECT_GT(lit, minLit);
+  EXPECT_GE(shadowed, minShadowed);  // samples with no radiance at all: shadowed, and their bounce found none
+  EXPECT_GT(glossy, minLit);         // samples with specular radiance
   // A pixel on the emitter: no path leaves it, alone or batched.
   SurfaceHit onLight;
   onLight.meshId = int(scene.objects.size());

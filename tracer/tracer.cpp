@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "core/error.hpp"
+#include "core/fast_math.hpp"
 #include "core/image.hpp"
 
 namespace arena {
@@ -116,6 +117,50 @@ Lobes evaluate(const VertexBsdf& v, glm::vec3 wi) {
     pdfSpecular = D * NoH / (4.0f * VoH);
   }
   out.pdf = v.pSpec * pdfSpecular + (1.0f - v.pSpec) * pdfDiffuse;
+  return out;
+}
+
+// evaluate() for eight incident directions at once (a reference's first vertex, shadeBatch), in
+// the lanes of core/fast_math.hpp: the same IEEE operations in the same order as evaluate(), lane
+// by lane (glm's dot is (x + y) + z, its normalize v * (1 / sqrt(dot(v, v))), std::max(a, b) is
+// a < b ? b : a), so each lane holds the bits evaluate() gives that direction; a lane below the
+// surface holds its NoL and zeros, as evaluate()'s early return leaves them.
+struct LobeLanes {
+  Lanes8 diffuse[3], specular[3], pdf, NoL;
+};
+LobeLanes evaluateLanes(const VertexBsdf& v, const Lanes8 (&wi)[3]) {
+  const Lanes8 zero = Lanes8{} + 0.0f;
+  LobeLanes out;
+  const Lanes8 NoL = (v.n.x * wi[0] + v.n.y * wi[1]) + v.n.z * wi[2];
+  const float NoV = v.NoV;
+  out.NoL = NoL;
+  const LaneMask8 valid = NoV > 0 ? LaneMask8(NoL > zero) : LaneMask8{};
+  const Lanes8 pdfDiffuse = NoL / kPi;
+  Lanes8 pdfSpecular = zero;
+  for (int c = 0; c < 3; ++c) {
+    out.diffuse[c] = selectFloat(valid, zero + v.diffuseOverPi[c], zero);
+    out.specular[c] = zero;
+  }
+  if (v.specular) {
+    const Lanes8 sx = v.wo.x + wi[0], sy = v.wo.y + wi[1], sz = v.wo.z + wi[2];
+    const Lanes8 inverseLength = 1.0f / sqrtLanes((sx * sx + sy * sy) + sz * sz);
+    const Lanes8 hx = sx * inverseLength, hy = sy * inverseLength, hz = sz * inverseLength;
+    const Lanes8 NoHd = (v.n.x * hx + v.n.y * hy) + v.n.z * hz, VoHd = (v.wo.x * hx + v.wo.y * hy) + v.wo.z * hz;
+    const Lanes8 NoH = selectFloat(NoHd < 0.0f, zero, NoHd), VoH = selectFloat(VoHd < 1e-6f, zero + 1e-6f, VoHd);
+    const float a2 = v.a2;
+    const Lanes8 dd = NoH * NoH * (a2 - 1.0f) + 1.0f;
+    const Lanes8 D = a2 / (kPi * dd * dd);
+    const Lanes8 m = 1.0f - VoH, m2 = m * m;
+    const Lanes8 schlick = m2 * m2 * m;
+    const Lanes8 G1L = 2.0f * NoL / (NoL + sqrtLanes(a2 + (1.0f - a2) * NoL * NoL));
+    const Lanes8 DG = D * v.G1V * G1L, denominator = 4.0f * NoL * NoV;
+    for (int c = 0; c < 3; ++c) {
+      const Lanes8 F = v.f0[c] + v.oneMinusF0[c] * schlick;
+      out.specular[c] = selectFloat(valid, DG * F / denominator, zero);
+    }
+    pdfSpecular = D * NoH / (4.0f * VoH);
+  }
+  out.pdf = selectFloat(valid, v.pSpec * pdfSpecular + (1.0f - v.pSpec) * pdfDiffuse, zero);
   return out;
 }
 
@@ -507,6 +552,12 @@ struct FrameScene::VertexSample {
   bool scatters = false;  // a direction above the surface with a positive pdf: the path goes on
   glm::vec3 wi{0};
   Lobes f;
+  // With the BSDF evaluated towards both (fLight, f): a light sample the BSDF does not reflect
+  // takes no shadow ray, and a direction of zero pdf ends the path.
+  void settle() {
+    if (towardsLight) towardsLight = !(fLight.pdf <= 0 && maxComponent(fLight.diffuse + fLight.specular) <= 0);
+    if (scatters) scatters = f.pdf > 0;
+  }
 };
 
 namespace {
@@ -523,24 +574,29 @@ void setPacketRay(RTCRay16& r, int l, glm::vec3 o, glm::vec3 d, float tfar) {
 }
 }  // namespace
 
-FrameScene::VertexSample FrameScene::sampleVertex(const SurfaceHit& s, const VertexBsdf& v, const Sampler& sampler,
-                                                  uint32_t dim) const {
-  VertexSample out;
+// A sample's random choices at a vertex: the light sample and the scattered direction, and which
+// of them lie above the surface (towardsLight, scatters: set so far only from the geometry).
+void FrameScene::chooseAtVertex(const SurfaceHit& s, const VertexBsdf& v, const Sampler& sampler, uint32_t dim,
+                                VertexSample& out) const {
   out.le = sampleLight(s, sampler, dim, out.wiLight, out.distLight, out.pdfLight);
-  if (out.pdfLight > 0 && glm::dot(out.wiLight, v.ng) > 0) {
-    out.fLight = evaluate(v, out.wiLight);
-    out.towardsLight = !(out.fLight.pdf <= 0 && maxComponent(out.fLight.diffuse + out.fLight.specular) <= 0);
-  }
+  out.towardsLight = out.pdfLight > 0 && glm::dot(out.wiLight, v.ng) > 0;
   glm::vec2 u = sampler.get2(dim + kDirU);
   float lobe = 0;
   if (sampler.kind() == SamplerKind::OwenSobol)
     reuseForLobe(v.pSpec, lobe, u.x);
   else
     lobe = sampler.get(dim + kLobe);
-  if (sampleDirection(v, v.pSpec, lobe, u.x, u.y, out.wi) && glm::dot(out.wi, v.ng) > 0) {
-    out.f = evaluate(v, out.wi);
-    out.scatters = out.f.pdf > 0;
-  }
+  out.scatters = sampleDirection(v, v.pSpec, lobe, u.x, u.y, out.wi) && glm::dot(out.wi, v.ng) > 0;
+}
+
+
+FrameScene::VertexSample FrameScene::sampleVertex(const SurfaceHit& s, const VertexBsdf& v, const Sampler& sampler,
+                                                  uint32_t dim) const {
+  VertexSample out;
+  chooseAtVertex(s, v, sampler, dim, out);
+  if (out.towardsLight) out.fLight = evaluate(v, out.wiLight);
+  if (out.scatters) out.f = evaluate(v, out.wi);
+  out.settle();
   return out;
 }
 
@@ -557,7 +613,28 @@ void FrameScene::shadeBatch(const PrimaryVertex& vertex, const Sampler* samplers
   if (count > int(Sampler::kBatchLanes)) throw Error("shadeBatch: more samples than a batch holds");
   VertexSample first[Sampler::kBatchLanes];
   if (vertex.bsdf.reflects) {
-    for (int l = 0; l < count; ++l) first[l] = sampleVertex(vertex.hit, vertex.bsdf, samplers[l], 0);
+    // Their choices one by one; the BSDF towards their 32 directions eight lanes at a time
+    // (evaluateLanes: the bits evaluate() gives).
+    for (int l = 0; l < count; ++l) chooseAtVertex(vertex.hit, vertex.bsdf, samplers[l], 0, first[l]);
+    for (int half = 0; half < 2; ++half) {
+      VertexSample* lanes = first + 8 * half;
+      for (const bool light : {true, false}) {
+        Lanes8 wi[3] = {};
+        for (int c = 0; c < 3; ++c)
+          for (int l = 0; l < 8; ++l) wi[c][l] = light ? lanes[l].wiLight[c] : lanes[l].wi[c];
+        const LobeLanes f = evaluateLanes(vertex.bsdf, wi);
+        for (int l = 0; l < 8 && 8 * half + l < count; ++l) {
+          VertexSample& lane = lanes[l];
+          if (!(light ? lane.towardsLight : lane.scatters)) continue;  // left unevaluated, as sampleVertex leaves it
+          Lobes& lobes = light ? lane.fLight : lane.f;
+          lobes.diffuse = glm::vec3(f.diffuse[0][l], f.diffuse[1][l], f.diffuse[2][l]);
+          lobes.specular = glm::vec3(f.specular[0][l], f.specular[1][l], f.specular[2][l]);
+          lobes.pdf = f.pdf[l];
+          lobes.NoL = f.NoL[l];
+        }
+      }
+    }
+    for (int l = 0; l < count; ++l) first[l].settle();
     // Their shadow rays leave one point towards the same lights: one coherent packet. (The
     // scattered rays as a packet too were measured: no faster, and Embree's packet kernels chose
     // the other triangle of a shared edge for some of living_room's rays.)

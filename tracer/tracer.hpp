@@ -178,6 +178,8 @@ class FrameScene {
   };
   struct VertexSample;  // a sample's choices at a vertex before it traces (tracer.cpp)
   VertexSample sampleVertex(const SurfaceHit& s, const VertexBsdf& v, const Sampler& sampler, uint32_t dim) const;
+  void chooseAtVertex(const SurfaceHit& s, const VertexBsdf& v, const Sampler& sampler, uint32_t dim,
+                      VertexSample& out) const;
   Radiance shade(const PrimaryVertex& vertex, const VertexSample& first, const Sampler& sampler,
                  RayCounts& counts) const;
   glm::vec3 sampleLight(const SurfaceHit& at, const Sampler& s, uint32_t dim, glm::vec3& wi,
