@@ -92,6 +92,10 @@ inline Lanes8 selectFloat(LaneMask8 mask, Lanes8 ifTrue, Lanes8 ifFalse) {
 inline float absFloat(float x) {
   return std::abs(x);
 }
+// x in every lane, bit for bit (-0 stays -0, which 0 + x would not keep).
+inline Lanes8 splatLanes(float x) {
+  return reinterpret_cast<Lanes8>(_mm256_set1_ps(x));
+}
 inline float sqrtLanes(float x) {
   return std::sqrt(x);
 }

@@ -131,7 +131,8 @@ TEST(Sobol, ABatchOfSamplesGivesEachSamplesOwnNumbers) {
   const Sampler base = Sampler::owenSobol(9, 2, 501, 1, 0);
   const Sampler hashed = base.withHashes(table, 24);
   Sampler::Reads reads;
-  reads.pairs = (1ull << 2) | (1ull << 5) | (1ull << 13) | (1ull << 30);  // 30: beyond the table
+  reads.pairs = (1ull << 2) | (1ull << 5) | (1ull << 13) | (1ull << 30) |
+                (1ull << 63);  // 30, 63: beyond the table
   reads.singles = (1ull << 7) | (1ull << 23);
   Sampler::Batch batch;
   for (uint32_t first : {0u, 16u, 4090u, 100000u}) {
@@ -143,6 +144,15 @@ TEST(Sobol, ABatchOfSamplesGivesEachSamplesOwnNumbers) {
         EXPECT_EQ(a.get2(dim), b.get2(dim)) << first << " " << lane << " " << dim;
         EXPECT_EQ(a.get(dim), b.get(dim)) << first << " " << lane << " " << dim;
       }
+      for (uint32_t dim : {62u, 63u, 64u, 65u, 1u << 20}) {  // the last: the specular ray's pair
+        EXPECT_EQ(a.get2(dim), b.get2(dim)) << first << " " << lane << " " << dim;
+        EXPECT_EQ(a.get(dim), b.get(dim)) << first << " " << lane << " " << dim;
+      }
+      // Moved to another index, or given hashes again, a sampler leaves the batch (whose numbers
+      // are other indices').
+      EXPECT_EQ(a.atIndex(first + lane + 1).get2(2), base.atIndex(first + lane + 1).get2(2));
+      Sampler::DimensionHashes again;
+      EXPECT_EQ(a.withHashes(again, 24).atIndex(5).get2(5), base.atIndex(5).get2(5));
     }
   }
   // The lanes are the samples first .. first + 15, in order (not a permutation of them).

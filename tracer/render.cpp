@@ -410,28 +410,31 @@ void SequenceRenderer::extendPixel(int t, const FrameScene& cur, ReferenceSums& 
     demodSpecular = 1.0f / glm::max(specAlb, glm::vec3(1e-3f));
   }
   const glm::vec3 sky = hasHit ? glm::vec3(0) : cur.sky(dir);
+  // The emitted part of every sample's colour (shadePixel's), and the Sobol dimensions a path
+  // reads.
+  const glm::vec3 emission = hasHit && glm::dot(vertex.hit.geometricNormal, vertex.bsdf.wo) > 0
+                                 ? vertex.hit.emission
+                                 : glm::vec3(0);
+  const Sampler::Reads reads = cur.sobolReads();
+  const bool shades = hasHit && vertex.bsdf.reflects;  // else no path leaves: no numbers to fill
   for (int r = 0; r < K; ++r) {
     double* acc = &sums.sum[(i * size_t(K) + size_t(r)) * V];
     const int replicate = sums.firstReplicate + r;
-    // The replicate's Sobol key and the dimensions' hashes, computed once; each sample only sets
-    // its index.
+    // The replicate's Sobol key and the dimensions' hashes, computed once per replicate.
     Sampler::DimensionHashes hashes;
     const Sampler sobolReplicate =
         sobol && hasHit ? Sampler::owenSobol(scene_.seed, uint32_t(t), uint32_t(i), uint32_t(replicate), 0)
                               .withHashes(hashes, cur.pathDimensions())
                         : Sampler(0, 0, 0, 0);
     // kBatchLanes samples at a time: their Sobol numbers filled together (Sampler::fillBatch),
-    // their first vertex's choices made together (FrameScene::shadeBatch); summed in sample order.
+    // shaded together (FrameScene::shadeBatch); summed in sample order.
     Sampler::Batch batch;
-    const Sampler::Reads reads = cur.sobolReads();
-    const glm::vec3 emission =
-        hasHit && glm::dot(vertex.hit.geometricNormal, vertex.bsdf.wo) > 0 ? vertex.hit.emission : glm::vec3(0);
     for (int first = begin; first < end; first += int(Sampler::kBatchLanes)) {
       const int count = std::min(end - first, int(Sampler::kBatchLanes));
       Sampler samplers[Sampler::kBatchLanes];
       FrameScene::Radiance radiance[Sampler::kBatchLanes];
       if (hasHit) {
-        if (sobol) sobolReplicate.fillBatch(batch, reads, uint32_t(first));
+        if (sobol && shades) sobolReplicate.fillBatch(batch, reads, uint32_t(first));
         for (int l = 0; l < count; ++l)
           // Independent: sample ids 1.. (0 is the noisy frame's), interleaved over replicates.
           samplers[l] = sobol ? sobolReplicate.inBatch(batch, uint32_t(first), uint32_t(l))
@@ -442,8 +445,7 @@ void SequenceRenderer::extendPixel(int t, const FrameScene& cur, ReferenceSums& 
       for (int l = 0; l < count; ++l) {
         glm::vec3 c = sky, d(0), sp(0);
         if (hasHit) {
-          // PixelShade::color(): the same sum in the same order.
-          c = radiance[l].diffuse + radiance[l].specular + emission;
+          c = PixelShade{radiance[l], emission}.color();
           d = radiance[l].diffuse * demodDiffuse;
           sp = radiance[l].specular * demodSpecular;
         }

@@ -126,6 +126,7 @@ class Sampler {
   Sampler atIndex(uint32_t index) const {
     Sampler s = *this;
     s.reversedIndex_ = sobol::reverseBits(index);
+    s.batch_ = nullptr;  // a batch holds other indices' numbers
     return s;
   }
 
@@ -148,6 +149,7 @@ class Sampler {
     }
     Sampler s = *this;
     s.hashes_ = &table;
+    s.batch_ = nullptr;
     return s;
   }
 
@@ -197,8 +199,9 @@ class Sampler {
             sobol::laineKarrasPermutation(sobol::reversedDimension1OfReversed(x[l]), seed)));
     }
   }
-  // Sample firstIndex + lane of the batch (this replicate's): reads its numbers from the batch
-  // where it holds the dimension, computes them otherwise. The batch must outlive the sampler.
+  // Sample firstIndex + lane (lane < kBatchLanes) of the batch (this replicate's): reads its
+  // numbers from the batch where it holds the dimension, computes them otherwise. The batch must
+  // outlive the sampler.
   Sampler inBatch(const Batch& batch, uint32_t firstIndex, uint32_t lane) const {
     Sampler s = atIndex(firstIndex + lane);
     s.batch_ = &batch;
@@ -212,7 +215,8 @@ class Sampler {
   // computed with the bit reversals that cancel left out (reversedShuffledIndex, firstCoordinate).
   float get(uint32_t dim) const {
     if (kind_ == SamplerKind::Independent) return sobol::toUnitFloat(uint32_t(hash(dim) >> 32));
-    if (batch_ && dim < kMaxHashedDims && batch_->row[dim] != Batch::kAbsent) return batch_->first[batch_->row[dim]][lane_];
+    if (batch_ && dim < kMaxHashedDims && batch_->row[dim] != Batch::kAbsent)
+      return batch_->first[batch_->row[dim]][lane_];
     const uint64_t h = hashed(dim);
     return firstCoordinate(reversedShuffledIndex(h), h);
   }
@@ -221,7 +225,8 @@ class Sampler {
   // inner reverse(dimension1(reverse(x))) is one table lookup).
   glm::vec2 get2(uint32_t dim) const {
     if (kind_ == SamplerKind::Independent) return {get(dim), get(dim + 1)};
-    if (batch_ && dim < kMaxHashedDims && ((batch_->pairs >> dim) & 1) && batch_->row[dim] != Batch::kAbsent) {
+    if (batch_ && dim < kMaxHashedDims && ((batch_->pairs >> dim) & 1) &&
+        batch_->row[dim] != Batch::kAbsent) {
       const uint32_t r = batch_->row[dim];
       return {batch_->first[r][lane_], batch_->second[r][lane_]};
     }
@@ -236,7 +241,9 @@ class Sampler {
  private:
   uint64_t hash(uint32_t dim) const { return mix64(key_ ^ (uint64_t(dim) * 0x9e3779b97f4a7c15ull)); }
   // (dim < kMaxHashedDims, implied by count, is written out for the compiler's bounds analysis.)
-  bool inTable(uint32_t dim) const { return hashes_ && dim < kMaxHashedDims && dim < hashes_->count; }
+  bool inTable(uint32_t dim) const {
+    return hashes_ && dim < kMaxHashedDims && dim < hashes_->count;
+  }
   uint64_t hashed(uint32_t dim) const { return inTable(dim) ? hashes_->dim[dim] : hash(dim); }
   // x = reverse(i), i the index under dimension hash h's nested uniform shuffle.
   uint32_t reversedShuffledIndex(uint64_t h) const {

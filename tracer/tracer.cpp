@@ -73,7 +73,9 @@ float specularProbability(const SurfaceHit& s, float NoV) {
 float ggxAlpha(float roughness) { return std::max(roughness * roughness, 1e-3f); }
 
 // Smith's separable masking for GGX (alpha^2 = a2) at cosine x.
-float smithG1(float a2, float x) { return 2.0f * x / (x + std::sqrt(a2 + (1.0f - a2) * x * x)); }
+float smithG1(float a2, float x) {
+  return 2.0f * x / (x + std::sqrt(a2 + (1.0f - a2) * x * x));
+}
 
 // The BSDF of surface s seen from wo (towards the previous vertex), its direction-free terms
 // computed once (VertexBsdf).
@@ -92,9 +94,9 @@ VertexBsdf vertexBsdf(const SurfaceHit& s, glm::vec3 wo) {
   v.f0 = s.f0();
   v.oneMinusF0 = 1.0f - v.f0;
   v.specular = maxComponent(v.f0) > 0;
-  v.alpha = ggxAlpha(s.roughness);
-  v.a2 = v.alpha * v.alpha;
-  v.G1V = v.NoV > 0 ? smithG1(v.a2, v.NoV) : 0.0f;
+  const float alpha = ggxAlpha(s.roughness);
+  v.a2 = alpha * alpha;
+  v.G1V = !(v.NoV <= 0) ? smithG1(v.a2, v.NoV) : 0.0f;  // evaluate() reads it where !(NoV <= 0)
   return v;
 }
 
@@ -123,30 +125,34 @@ Lobes evaluate(const VertexBsdf& v, glm::vec3 wi) {
 // evaluate() for eight incident directions at once (a reference's first vertex, shadeBatch), in
 // the lanes of core/fast_math.hpp: the same IEEE operations in the same order as evaluate(), lane
 // by lane (glm's dot is (x + y) + z, its normalize v * (1 / sqrt(dot(v, v))), std::max(a, b) is
-// a < b ? b : a), so each lane holds the bits evaluate() gives that direction; a lane below the
-// surface holds its NoL and zeros, as evaluate()'s early return leaves them.
+// a < b ? b : a, and the early return's test is kept as written, NaN included), so each lane
+// holds the bits evaluate() gives that direction; a lane below the surface holds its NoL and
+// zeros, as evaluate()'s early return leaves them.
 struct LobeLanes {
   Lanes8 diffuse[3], specular[3], pdf, NoL;
 };
 LobeLanes evaluateLanes(const VertexBsdf& v, const Lanes8 (&wi)[3]) {
-  const Lanes8 zero = Lanes8{} + 0.0f;
+  const Lanes8 zero = splatLanes(0.0f);
   LobeLanes out;
   const Lanes8 NoL = (v.n.x * wi[0] + v.n.y * wi[1]) + v.n.z * wi[2];
   const float NoV = v.NoV;
   out.NoL = NoL;
-  const LaneMask8 valid = NoV > 0 ? LaneMask8(NoL > zero) : LaneMask8{};
+  const LaneMask8 valid =
+      !(NoV <= 0) ? ~LaneMask8(NoL <= zero) : LaneMask8{};  // !(NoL <= 0 || NoV <= 0)
   const Lanes8 pdfDiffuse = NoL / kPi;
   Lanes8 pdfSpecular = zero;
   for (int c = 0; c < 3; ++c) {
-    out.diffuse[c] = selectFloat(valid, zero + v.diffuseOverPi[c], zero);
+    out.diffuse[c] = selectFloat(valid, splatLanes(v.diffuseOverPi[c]), zero);
     out.specular[c] = zero;
   }
   if (v.specular) {
     const Lanes8 sx = v.wo.x + wi[0], sy = v.wo.y + wi[1], sz = v.wo.z + wi[2];
     const Lanes8 inverseLength = 1.0f / sqrtLanes((sx * sx + sy * sy) + sz * sz);
     const Lanes8 hx = sx * inverseLength, hy = sy * inverseLength, hz = sz * inverseLength;
-    const Lanes8 NoHd = (v.n.x * hx + v.n.y * hy) + v.n.z * hz, VoHd = (v.wo.x * hx + v.wo.y * hy) + v.wo.z * hz;
-    const Lanes8 NoH = selectFloat(NoHd < 0.0f, zero, NoHd), VoH = selectFloat(VoHd < 1e-6f, zero + 1e-6f, VoHd);
+    const Lanes8 NoHd = (v.n.x * hx + v.n.y * hy) + v.n.z * hz;
+    const Lanes8 VoHd = (v.wo.x * hx + v.wo.y * hy) + v.wo.z * hz;
+    const Lanes8 NoH = selectFloat(NoHd < 0.0f, zero, NoHd);
+    const Lanes8 VoH = selectFloat(VoHd < 1e-6f, splatLanes(1e-6f), VoHd);
     const float a2 = v.a2;
     const Lanes8 dd = NoH * NoH * (a2 - 1.0f) + 1.0f;
     const Lanes8 D = a2 / (kPi * dd * dd);
@@ -176,7 +182,8 @@ void reuseForLobe(float pSpec, float& uLobe, float& u1) {
 
 // A direction from the lobe mixture (the specular lobe where uLobe < pSpec); false where it falls
 // below the shading surface.
-bool sampleDirection(const VertexBsdf& v, float pSpec, float uLobe, float u1, float u2, glm::vec3& wi) {
+bool sampleDirection(const VertexBsdf& v, float pSpec, float uLobe, float u1, float u2,
+                     glm::vec3& wi) {
   const glm::vec3 n = v.n, t = v.t, b = v.b, wo = v.wo;
   if (uLobe < pSpec) {  // GGX distribution of normals, D(h) cos(h)
     float phi = 2.0f * kPi * u1;
@@ -216,9 +223,9 @@ EmbreeDevice::EmbreeDevice(const char* config) {
 }
 EmbreeDevice::~EmbreeDevice() { rtcReleaseDevice(device_); }
 
-FrameScene::FrameScene(const EmbreeDevice& device, const Scene& scene, const std::vector<MeshData>& meshes,
-                       const SceneState& state)
-    : scene_(scene), state_(state) {
+FrameScene::FrameScene(const EmbreeDevice& device, const Scene& scene,
+                       const std::vector<MeshData>& meshes, const SceneState& state)
+    : scene_(scene), state_(state), device_(device.get()) {
   rtcScene_ = rtcNewScene(device.get());
   rtcSetSceneBuildQuality(rtcScene_, RTC_BUILD_QUALITY_HIGH);
   const size_t count = scene.objects.size() + scene.lights.size();
@@ -544,19 +551,25 @@ FrameScene::PrimaryVertex FrameScene::prepare(const SurfaceHit& hit, glm::vec3 w
 // decides its first vertex for a batch of samples at once and traces their shadow rays as one
 // packet (shadeBatch).
 struct FrameScene::VertexSample {
-  bool towardsLight = false;  // a light sample the BSDF reflects: it takes a shadow ray
+  // After chooseAtVertex: the light sample lies above the surface; after settle, the BSDF also
+  // reflects it, and it takes a shadow ray.
+  bool towardsLight = false;
   glm::vec3 le{0}, wiLight{0};
   float distLight = 0, pdfLight = 0;
   Lobes fLight;
-  int8_t occluded = -1;  // the shadow ray's answer where a packet traced it already (0 or 1), else -1
-  bool scatters = false;  // a direction above the surface with a positive pdf: the path goes on
+  int8_t occluded =
+      -1;  // the shadow ray's answer where a packet traced it already (0 or 1), else -1
+  // After chooseAtVertex: the sampled direction lies above the surface; after settle, its pdf is
+  // positive too, and the path goes on.
+  bool scatters = false;
   glm::vec3 wi{0};
   Lobes f;
   // With the BSDF evaluated towards both (fLight, f): a light sample the BSDF does not reflect
   // takes no shadow ray, and a direction of zero pdf ends the path.
   void settle() {
-    if (towardsLight) towardsLight = !(fLight.pdf <= 0 && maxComponent(fLight.diffuse + fLight.specular) <= 0);
-    if (scatters) scatters = f.pdf > 0;
+    if (towardsLight)
+      towardsLight = !(fLight.pdf <= 0 && maxComponent(fLight.diffuse + fLight.specular) <= 0);
+    if (scatters) scatters = !(f.pdf <= 0);
   }
 };
 
@@ -576,22 +589,23 @@ void setPacketRay(RTCRay16& r, int l, glm::vec3 o, glm::vec3 d, float tfar) {
 
 // A sample's random choices at a vertex: the light sample and the scattered direction, and which
 // of them lie above the surface (towardsLight, scatters: set so far only from the geometry).
-void FrameScene::chooseAtVertex(const SurfaceHit& s, const VertexBsdf& v, const Sampler& sampler, uint32_t dim,
-                                VertexSample& out) const {
+void FrameScene::chooseAtVertex(const SurfaceHit& s, const VertexBsdf& v, const Sampler& sampler,
+                                uint32_t dim, VertexSample& out) const {
   out.le = sampleLight(s, sampler, dim, out.wiLight, out.distLight, out.pdfLight);
-  out.towardsLight = out.pdfLight > 0 && glm::dot(out.wiLight, v.ng) > 0;
+  // The conditions as the path loop wrote them before (NaN included): the same bits.
+  out.towardsLight = !(out.pdfLight <= 0 || glm::dot(out.wiLight, v.ng) <= 0);
   glm::vec2 u = sampler.get2(dim + kDirU);
   float lobe = 0;
   if (sampler.kind() == SamplerKind::OwenSobol)
     reuseForLobe(v.pSpec, lobe, u.x);
   else
     lobe = sampler.get(dim + kLobe);
-  out.scatters = sampleDirection(v, v.pSpec, lobe, u.x, u.y, out.wi) && glm::dot(out.wi, v.ng) > 0;
+  out.scatters =
+      !(!sampleDirection(v, v.pSpec, lobe, u.x, u.y, out.wi) || glm::dot(out.wi, v.ng) <= 0);
 }
 
-
-FrameScene::VertexSample FrameScene::sampleVertex(const SurfaceHit& s, const VertexBsdf& v, const Sampler& sampler,
-                                                  uint32_t dim) const {
+FrameScene::VertexSample FrameScene::sampleVertex(const SurfaceHit& s, const VertexBsdf& v,
+                                                  const Sampler& sampler, uint32_t dim) const {
   VertexSample out;
   chooseAtVertex(s, v, sampler, dim, out);
   if (out.towardsLight) out.fLight = evaluate(v, out.wiLight);
@@ -608,15 +622,16 @@ FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Sample
   return shade(vertex, sampleVertex(vertex.hit, vertex.bsdf, sampler, 0), sampler, counts);
 }
 
-void FrameScene::shadeBatch(const PrimaryVertex& vertex, const Sampler* samplers, int count, Radiance* out,
-                            RayCounts& counts) const {
+void FrameScene::shadeBatch(const PrimaryVertex& vertex, const Sampler* samplers, int count,
+                            Radiance* out, RayCounts& counts) const {
   if (count > int(Sampler::kBatchLanes)) throw Error("shadeBatch: more samples than a batch holds");
   VertexSample first[Sampler::kBatchLanes];
   if (vertex.bsdf.reflects) {
     // Their choices one by one; the BSDF towards their 32 directions eight lanes at a time
     // (evaluateLanes: the bits evaluate() gives).
-    for (int l = 0; l < count; ++l) chooseAtVertex(vertex.hit, vertex.bsdf, samplers[l], 0, first[l]);
-    for (int half = 0; half < 2; ++half) {
+    for (int l = 0; l < count; ++l)
+      chooseAtVertex(vertex.hit, vertex.bsdf, samplers[l], 0, first[l]);
+    for (int half = 0; half < 2 && 8 * half < count; ++half) {
       VertexSample* lanes = first + 8 * half;
       for (const bool light : {true, false}) {
         Lanes8 wi[3] = {};
@@ -625,7 +640,8 @@ void FrameScene::shadeBatch(const PrimaryVertex& vertex, const Sampler* samplers
         const LobeLanes f = evaluateLanes(vertex.bsdf, wi);
         for (int l = 0; l < 8 && 8 * half + l < count; ++l) {
           VertexSample& lane = lanes[l];
-          if (!(light ? lane.towardsLight : lane.scatters)) continue;  // left unevaluated, as sampleVertex leaves it
+          if (!(light ? lane.towardsLight : lane.scatters))
+            continue;  // left unevaluated, as sampleVertex leaves it
           Lobes& lobes = light ? lane.fLight : lane.f;
           lobes.diffuse = glm::vec3(f.diffuse[0][l], f.diffuse[1][l], f.diffuse[2][l]);
           lobes.specular = glm::vec3(f.specular[0][l], f.specular[1][l], f.specular[2][l]);
@@ -650,8 +666,11 @@ void FrameScene::shadeBatch(const PrimaryVertex& vertex, const Sampler* samplers
       setPacketRay(shadow, l, origin, first[l].wiLight, first[l].distLight * (1.0f - 1e-3f));
     }
     rtcOccluded16(valid, rtcScene_, &ctx, &shadow);
-    for (int l = 0; l < count; ++l)
-      if (valid[l]) first[l].occluded = shadow.tfar[l] < 0.0f ? 1 : 0;
+    // Should Embree refuse the packet (an error, the rays left untraced), shade() traces them
+    // one at a time.
+    if (rtcGetDeviceError(device_) == RTC_ERROR_NONE)
+      for (int l = 0; l < count; ++l)
+        if (valid[l]) first[l].occluded = shadow.tfar[l] < 0.0f ? 1 : 0;
   }
   for (int l = 0; l < count; ++l) {
     if (vertex.bsdf.reflects) {
@@ -663,18 +682,19 @@ void FrameScene::shadeBatch(const PrimaryVertex& vertex, const Sampler* samplers
   }
 }
 
-FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const VertexSample& first, const Sampler& sampler,
-                                       RayCounts& counts) const {
+FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const VertexSample& first,
+                                       const Sampler& sampler, RayCounts& counts) const {
   Radiance out;
   counts.paths++;
   // The light sample's contribution: its shadow ray, MIS-weighted against BSDF sampling (power
   // heuristic).
-  auto nextEvent = [&](const SurfaceHit& s, const VertexBsdf& v, const VertexSample& vs, glm::vec3& diffuse,
-                       glm::vec3& specular, glm::vec3* direction) {
+  auto nextEvent = [&](const SurfaceHit& s, const VertexBsdf& v, const VertexSample& vs,
+                       glm::vec3& diffuse, glm::vec3& specular, glm::vec3* direction) {
     if (!vs.towardsLight) return;
     counts.rays++;
     const glm::vec3 origin = offsetOrigin(s.position, v.ng), wi = vs.wiLight, le = vs.le;
-    if (vs.occluded >= 0 ? vs.occluded != 0 : occluded(origin, wi, vs.distLight * (1.0f - 1e-3f))) return;
+    if (vs.occluded >= 0 ? vs.occluded != 0 : occluded(origin, wi, vs.distLight * (1.0f - 1e-3f)))
+      return;
     const Lobes& f = vs.fLight;
     const float pdfLight = vs.pdfLight;
     float weight = pdfLight * pdfLight / (pdfLight * pdfLight + f.pdf * f.pdf);

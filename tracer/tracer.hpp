@@ -56,11 +56,11 @@ struct VertexBsdf {
   glm::vec3 diffuseOverPi{0};         // the Lambert lobe, diffuse albedo / pi
   glm::vec3 f0{0}, oneMinusF0{1};     // Schlick's Fresnel terms
   float NoV = 1;
-  float alpha = 1, a2 = 1;            // GGX roughness alpha and alpha^2
-  float G1V = 0;                      // Smith's masking towards wo (0 where NoV <= 0)
-  float pSpec = 0;                    // the probability of sampling the specular lobe
-  bool specular = false;              // f0 > 0 in some channel
-  bool reflects = false;              // false for emitters and surfaces with neither lobe: no path leaves
+  float a2 = 1;           // GGX alpha^2
+  float G1V = 0;          // Smith's masking towards wo (0 where NoV <= 0)
+  float pSpec = 0;        // the probability of sampling the specular lobe
+  bool specular = false;  // f0 > 0 in some channel
+  bool reflects = false;  // false for emitters and surfaces with neither lobe: no path leaves
 };
 
 // Specular albedo used for demodulation: the GGX directional albedo, Karis' analytic fit of the
@@ -153,8 +153,11 @@ class FrameScene {
   // `count` (at most Sampler::kBatchLanes) path samples from one prepared vertex, out[l] from
   // samplers[l], as shade(vertex, samplers[l]) gives them: their first vertex's choices are made
   // for the whole batch, whose shadow rays Embree then traces as one packet (rtcOccluded16; a
-  // reference's pixel loop). Embree's packet and single-ray kernels could differ only where a
-  // shadow ray grazes an edge exactly; the study's twelve scenes gave the same bits.
+  // reference's pixel loop; where Embree reports an error for the packet, one ray at a time).
+  // Embree's packet and single-ray kernels are different code, which could disagree on a shadow
+  // ray that grazes an edge or ends at a surface; the twelve scenes' references and frames gave
+  // the same bits, and a test compares every lane with shade() under Embree's AVX-512, AVX2 and
+  // SSE2 kernels.
   void shadeBatch(const PrimaryVertex& vertex, const Sampler* samplers, int count, Radiance* out,
                   RayCounts& counts) const;
   // The specular lobe's hit distance at the primary surface `hit`, from a ray of its own: one
@@ -177,9 +180,10 @@ class FrameScene {
     float area = 0;
   };
   struct VertexSample;  // a sample's choices at a vertex before it traces (tracer.cpp)
-  VertexSample sampleVertex(const SurfaceHit& s, const VertexBsdf& v, const Sampler& sampler, uint32_t dim) const;
-  void chooseAtVertex(const SurfaceHit& s, const VertexBsdf& v, const Sampler& sampler, uint32_t dim,
-                      VertexSample& out) const;
+  VertexSample sampleVertex(const SurfaceHit& s, const VertexBsdf& v, const Sampler& sampler,
+                            uint32_t dim) const;
+  void chooseAtVertex(const SurfaceHit& s, const VertexBsdf& v, const Sampler& sampler,
+                      uint32_t dim, VertexSample& out) const;
   Radiance shade(const PrimaryVertex& vertex, const VertexSample& first, const Sampler& sampler,
                  RayCounts& counts) const;
   glm::vec3 sampleLight(const SurfaceHit& at, const Sampler& s, uint32_t dim, glm::vec3& wi,
@@ -190,6 +194,7 @@ class FrameScene {
 
   const Scene& scene_;
   SceneState state_;
+  RTCDevice device_ = nullptr;  // the device's errors, read after a packet (shadeBatch)
   RTCScene rtcScene_ = nullptr;
   std::vector<Geometry> geometries_;
   std::vector<int> selectableLights_;  // meshIds of lights with an area (radiance 0 included)
