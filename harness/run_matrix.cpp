@@ -191,12 +191,10 @@ json runMatrix(const RunConfig& cfg) {
         say("  warning: " + pair["warnings"][0].get<std::string>());
       sceneFailures += pair["status"] != "ok";
     }
-    // The refinement may take rounds: each round's target rests on the best corrected relMSE
-    // measured against the references before it, which moves as they get cleaner, so after each
-    // the pairs are screened again and the hook decides again (at most kMaxRefineRounds).
     // The scene's pairs measured again from their kept outputs, against the references as they now
     // are; a pair that cannot be is recorded failed with its error.
-    auto measureAgain = [&](EvaluationScope scope, bool refined) {
+    bool refined = false;
+    auto measureAgain = [&](EvaluationScope scope) {
       for (size_t k = 0; k < mine.size(); ++k) {
         json& pair = results["pairs"][firstPair + k];
         if (pair["status"] != "ok") continue;
@@ -213,7 +211,9 @@ json runMatrix(const RunConfig& cfg) {
         }
       }
     };
-    bool refined = false;
+    // The refinement may take rounds: each round's target rests on the best corrected relMSE
+    // measured against the references before it, which moves as they get cleaner, so after each
+    // the pairs are screened again and the hook decides again (at most kMaxRefineRounds).
     for (int round = 0; mayRefine && sd && round < kMaxRefineRounds && cfg.refineScene(*source.scene, results);
          ++round) {
       refined = true;
@@ -225,10 +225,10 @@ json runMatrix(const RunConfig& cfg) {
         sd.reset();
         sceneError = std::string("reading it again after refining its references: ") + e.what();
       }
-      measureAgain(EvaluationScope::Screening, refined);
+      measureAgain(EvaluationScope::Screening);
     }
     if (mayRefine) {  // the screened pairs measured in full, against the references as they now are
-      measureAgain(EvaluationScope::Full, refined);
+      measureAgain(EvaluationScope::Full);
       if (refined)
         cfg.announce("[refine] " + source.name + ": its " + std::to_string(mine.size()) +
                      " pair(s) measured again against the refined references (their outputs were kept)");

@@ -111,9 +111,9 @@ struct FrameImages {
 
 // What a PairEvaluation measures. Screening: only the linear error family (relMse,
 // relMseCorrected and their kin) and the run's facts (its times), the same values as a full
-// evaluation gives, without display images, FLIP maps, temporal metrics, event or cut curves -- for a decision that needs no more
-// (the study's reference-quality check before it refines, harness/run_matrix.hpp), after which the
-// outputs are evaluated in full.
+// evaluation gives, without display images, FLIP maps, temporal metrics, event or cut curves --
+// for a decision that needs no more (the study's reference-quality check before it refines,
+// harness/run_matrix.hpp), after which the outputs are evaluated in full.
 enum class EvaluationScope { Full, Screening };
 
 // One stream of output frames evaluated against one EvaluationScene.

@@ -223,12 +223,14 @@ SequenceRenderer::FrameResult SequenceRenderer::renderFrame(int t) {
             cur.intersect(o, r, std::numeric_limits<float>::infinity(), mh, tm) ? tm : kMissHitDist;
       }
       const Sampler sampler(frameSeed(), uint32_t(t), uint32_t(y * w + x), 0);
-      const PixelShade px = shadePixel(cur, s, cam.eye, sampler, counts);
+      // Prepared once: the path and the specular ray start from it.
+      const FrameScene::PrimaryVertex vertex = primaryVertex(cur, s, cam.eye);
+      const PixelShade px = shadePixel(cur, vertex, sampler, counts);
       // What a real-time tracer has: its own specular ray's length (one GGX sample, noisy), not
       // the path's continuation, which for a dielectric mostly took the diffuse lobe.
       if (s.lightIndex < 0)
         specHitDist.at(x, y) =
-            std::min(cur.specularHitDistance(s, wo, sampler, counts), kMissHitDist);
+            std::min(cur.specularHitDistance(vertex, sampler, counts), kMissHitDist);
       // Demodulation (SVGF; Falcor divides by max(albedo, 0.001)).
       put3(diffuse, x, y, px.radiance.diffuse / glm::max(diffAlb, glm::vec3(1e-3f)));
       put3(specular, x, y, px.radiance.specular / glm::max(specAlb, glm::vec3(1e-3f)));

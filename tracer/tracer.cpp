@@ -520,10 +520,12 @@ float FrameScene::lightPdf(const SurfaceHit& lightHit, glm::vec3 from) const {
   return dist2 / (cosLight * g.area * float(selectableLights_.size()));
 }
 
-float FrameScene::specularHitDistance(const SurfaceHit& primary, glm::vec3 wo, const Sampler& sampler,
+float FrameScene::specularHitDistance(const PrimaryVertex& vertex, const Sampler& sampler,
                                       RayCounts& counts) const {
+  const SurfaceHit& primary = vertex.hit;
   if (primary.lightIndex >= 0) return 0;
-  const VertexBsdf v = vertexBsdf(primary, wo);
+  const VertexBsdf& v = vertex.bsdf;
+  const glm::vec3 wo = v.wo;
   const glm::vec2 u = sampler.get2(kSpecularRayDim);
   glm::vec3 wi;
   // One GGX sample of the specular lobe alone (pSpec 1); below the surface, the mirror direction
@@ -625,61 +627,59 @@ FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Sample
 void FrameScene::shadeBatch(const PrimaryVertex& vertex, const Sampler* samplers, int count,
                             Radiance* out, RayCounts& counts) const {
   if (count > int(Sampler::kBatchLanes)) throw Error("shadeBatch: more samples than a batch holds");
-  VertexSample first[Sampler::kBatchLanes];
-  if (vertex.bsdf.reflects) {
-    // Their choices one by one; the BSDF towards their 32 directions eight lanes at a time
-    // (evaluateLanes: the bits evaluate() gives).
-    for (int l = 0; l < count; ++l)
-      chooseAtVertex(vertex.hit, vertex.bsdf, samplers[l], 0, first[l]);
-    for (int half = 0; half < 2 && 8 * half < count; ++half) {
-      VertexSample* lanes = first + 8 * half;
-      for (const bool light : {true, false}) {
-        Lanes8 wi[3] = {};
-        for (int c = 0; c < 3; ++c)
-          for (int l = 0; l < 8; ++l) wi[c][l] = light ? lanes[l].wiLight[c] : lanes[l].wi[c];
-        const LobeLanes f = evaluateLanes(vertex.bsdf, wi);
-        for (int l = 0; l < 8 && 8 * half + l < count; ++l) {
-          VertexSample& lane = lanes[l];
-          if (!(light ? lane.towardsLight : lane.scatters))
-            continue;  // left unevaluated, as sampleVertex leaves it
-          Lobes& lobes = light ? lane.fLight : lane.f;
-          lobes.diffuse = glm::vec3(f.diffuse[0][l], f.diffuse[1][l], f.diffuse[2][l]);
-          lobes.specular = glm::vec3(f.specular[0][l], f.specular[1][l], f.specular[2][l]);
-          lobes.pdf = f.pdf[l];
-          lobes.NoL = f.NoL[l];
-        }
-      }
-    }
-    for (int l = 0; l < count; ++l) first[l].settle();
-    // Their shadow rays leave one point towards the same lights: one coherent packet. (The
-    // scattered rays as a packet too were measured: no faster, and Embree's packet kernels chose
-    // the other triangle of a shared edge for some of living_room's rays.)
-    static_assert(Sampler::kBatchLanes == 16, "the packet is Embree's RTCRay16");
-    const glm::vec3 origin = offsetOrigin(vertex.hit.position, vertex.bsdf.ng);
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-    alignas(64) int valid[16];
-    alignas(64) RTCRay16 shadow;
-    for (int l = 0; l < 16; ++l) {
-      valid[l] = l < count && first[l].towardsLight ? -1 : 0;
-      setPacketRay(shadow, l, origin, first[l].wiLight, first[l].distLight * (1.0f - 1e-3f));
-    }
-    rtcOccluded16(valid, rtcScene_, &ctx, &shadow);
-    // Should Embree refuse the packet (an error, the rays left untraced), shade() traces them
-    // one at a time.
-    if (rtcGetDeviceError(device_) == RTC_ERROR_NONE)
-      for (int l = 0; l < count; ++l)
-        if (valid[l]) first[l].occluded = shadow.tfar[l] < 0.0f ? 1 : 0;
-  }
-  for (int l = 0; l < count; ++l) {
-    if (vertex.bsdf.reflects) {
-      out[l] = shade(vertex, first[l], samplers[l], counts);
-    } else {
+  if (!vertex.bsdf.reflects) {  // no path leaves
+    for (int l = 0; l < count; ++l) {
       counts.paths++;
       out[l] = {};
     }
+    return;
   }
+  VertexSample first[Sampler::kBatchLanes];
+  // Their choices one by one; the BSDF towards their 32 directions eight lanes at a time
+  // (evaluateLanes: the bits evaluate() gives).
+  for (int l = 0; l < count; ++l)
+    chooseAtVertex(vertex.hit, vertex.bsdf, samplers[l], 0, first[l]);
+  for (int half = 0; half < 2 && 8 * half < count; ++half) {
+    VertexSample* lanes = first + 8 * half;
+    for (const bool light : {true, false}) {
+      Lanes8 wi[3] = {};
+      for (int c = 0; c < 3; ++c)
+        for (int l = 0; l < 8; ++l) wi[c][l] = light ? lanes[l].wiLight[c] : lanes[l].wi[c];
+      const LobeLanes f = evaluateLanes(vertex.bsdf, wi);
+      for (int l = 0; l < 8 && 8 * half + l < count; ++l) {
+        VertexSample& lane = lanes[l];
+        if (!(light ? lane.towardsLight : lane.scatters))
+          continue;  // left unevaluated, as sampleVertex leaves it
+        Lobes& lobes = light ? lane.fLight : lane.f;
+        lobes.diffuse = glm::vec3(f.diffuse[0][l], f.diffuse[1][l], f.diffuse[2][l]);
+        lobes.specular = glm::vec3(f.specular[0][l], f.specular[1][l], f.specular[2][l]);
+        lobes.pdf = f.pdf[l];
+        lobes.NoL = f.NoL[l];
+      }
+    }
+  }
+  for (int l = 0; l < count; ++l) first[l].settle();
+  // Their shadow rays leave one point towards the same lights: one coherent packet. (The
+  // scattered rays as a packet too were measured: no faster, and Embree's packet kernels chose
+  // the other triangle of a shared edge for some of living_room's rays.)
+  static_assert(Sampler::kBatchLanes == 16, "the packet is Embree's RTCRay16");
+  const glm::vec3 origin = offsetOrigin(vertex.hit.position, vertex.bsdf.ng);
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  alignas(64) int valid[16];
+  alignas(64) RTCRay16 shadow;
+  for (int l = 0; l < 16; ++l) {
+    valid[l] = l < count && first[l].towardsLight ? -1 : 0;
+    setPacketRay(shadow, l, origin, first[l].wiLight, first[l].distLight * (1.0f - 1e-3f));
+  }
+  rtcOccluded16(valid, rtcScene_, &ctx, &shadow);
+  // Should Embree refuse the packet (an error, the rays left untraced), shade() traces them
+  // one at a time.
+  if (rtcGetDeviceError(device_) == RTC_ERROR_NONE)
+    for (int l = 0; l < count; ++l)
+      if (valid[l]) first[l].occluded = shadow.tfar[l] < 0.0f ? 1 : 0;
+  for (int l = 0; l < count; ++l) out[l] = shade(vertex, first[l], samplers[l], counts);
 }
 
 FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const VertexSample& first,

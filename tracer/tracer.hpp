@@ -160,12 +160,12 @@ class FrameScene {
   // SSE2 kernels.
   void shadeBatch(const PrimaryVertex& vertex, const Sampler* samplers, int count, Radiance* out,
                   RayCounts& counts) const;
-  // The specular lobe's hit distance at the primary surface `hit`, from a ray of its own: one
+  // The specular lobe's hit distance at a prepared primary vertex, from a ray of its own: one
   // GGX sample (the mirror direction where the sample falls below the surface), the way a
   // real-time tracer traces its specular rays separately from its diffuse ones (CAPCOM 2023
   // slide 42: "Tracing Diffuse" / "Tracing Specular"; NRD's specular hit distance input).
   // Infinity on a miss; 0 for an emitter. Its random numbers are dimensions no path uses.
-  float specularHitDistance(const SurfaceHit& hit, glm::vec3 wo, const Sampler& sampler,
+  float specularHitDistance(const PrimaryVertex& vertex, const Sampler& sampler,
                             RayCounts& counts) const;
 
  private:
