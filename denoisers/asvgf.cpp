@@ -56,10 +56,26 @@ namespace arena {
 namespace {
 
 // Channels of the stratum guide image.
-enum StratumGuide : int { kZ, kDzDx, kDzDy, kNx, kNy, kNz, kPixelX, kPixelY, kGuideChannels };
+enum StratumGuide : int {
+  kZ,
+  kDzDx,
+  kDzDy,
+  kNx,
+  kNy,
+  kNz,
+  kPixelX,
+  kPixelY,
+  kStratumGuideChannels
+};
 // Channels of the filtered state: delta (paper) or the per-sample ratio (Q2RTX), Delta (paper;
 // unused by Q2RTX), luminance l^(k), its variance Var(l^(k)).
-enum GradientState : int { kDelta, kNormaliser, kLuminance, kVariance, kStateChannels };
+enum GradientState : int {
+  kGradientDelta,
+  kGradientNormaliser,
+  kGradientLuminance,
+  kGradientVariance,
+  kStateChannels
+};
 // Channels of the gradient layer (core/sequence.hpp).
 enum GradientSample : int { kSamplePixelX, kSamplePixelY, kLumNew, kLumOld, kSampleValid };
 
@@ -81,7 +97,7 @@ void Asvgf::setup(int width, int height) {
   strataWidth_ = (width + S - 1) / S;
   strataHeight_ = (height + S - 1) / S;
   guidePixel_.assign(size_t(strataWidth_) * size_t(strataHeight_), -1);
-  guide_ = Image(strataWidth_, strataHeight_, kGuideChannels);
+  guide_ = Image(strataWidth_, strataHeight_, kStratumGuideChannels);
   for (Image& image : gradient_) image = Image(strataWidth_, strataHeight_, kStateChannels);
   resultIndex_ = 0;
   blurredVariance_ = Image(strataWidth_, strataHeight_, 1);
@@ -164,17 +180,17 @@ void Asvgf::buildStrata(const DenoiserInputs& in) {
       guide_.plane(kPixelX)[s] = float(pixel % w);
       guide_.plane(kPixelY)[s] = float(pixel / w);
       const double mean = sum / count;
-      state.plane(kLuminance)[s] = float(mean);
-      state.plane(kVariance)[s] = float(std::max(0.0, sumSquares / count - mean * mean));
+      state.plane(kGradientLuminance)[s] = float(mean);
+      state.plane(kGradientVariance)[s] = float(std::max(0.0, sumSquares / count - mean * mean));
       if (!valid) continue;  // empty stratum: zero gradient, zero normaliser (§3.5)
       const float lumNew = samples.plane(kLumNew)[s], lumOld = samples.plane(kLumOld)[s];
       const float normaliser = std::max(lumNew, lumOld);  // eq. 13
       if (q2rtx) {
         const float ratio = normaliser > 0.0f ? std::abs(lumNew - lumOld) / normaliser : 0.0f;
-        state.plane(kDelta)[s] = ratio * ratio;
+        state.plane(kGradientDelta)[s] = ratio * ratio;
       } else {
-        state.plane(kDelta)[s] = lumNew - lumOld;  // eq. 2
-        state.plane(kNormaliser)[s] = normaliser;
+        state.plane(kGradientDelta)[s] = lumNew - lumOld;  // eq. 2
+        state.plane(kGradientNormaliser)[s] = normaliser;
       }
     }
   });
@@ -202,7 +218,7 @@ void Asvgf::filterGradients() {
       gpu::read(kNormal, sw, sh, 9);
       gpu::write(kGradientImage, sw, sh);
     }
-    const float* variance = in.plane(kVariance);
+    const float* variance = in.plane(kGradientVariance);
     if (asvgf_.gradientLuminance) {
       // eq. 11: g3x3, the variance blurred by a 3x3 Gaussian, drives the luminance weight only.
       constexpr float kGauss[3] = {0.25f, 0.5f, 0.25f};
@@ -229,7 +245,7 @@ void Asvgf::filterGradients() {
     const float* z = guide_.plane(kZ);
     const float* pixelX = guide_.plane(kPixelX);
     const float* pixelY = guide_.plane(kPixelY);
-    const float* luminance = in.plane(kLuminance);
+    const float* luminance = in.plane(kGradientLuminance);
     const bool normalTerm = asvgf_.gradientNormal && sigmaN != 0.0f;
     // Eight strata at a time, the taps in the order of the per-stratum loop (dy, then dx), so the
     // sums round as that loop's would; a dropped tap adds exactly 0.
@@ -285,10 +301,10 @@ void Asvgf::filterGradients() {
               weight = expNonPositive(-exponent);  // core/fast_math.hpp: ~1e-7 relative
             }
             weight = selectFloat(use, weight, Lanes8{});
-            sumDelta += weight * loadLanes(in.plane(kDelta) + q, use);
-            sumNormaliser += weight * loadLanes(in.plane(kNormaliser) + q, use);
+            sumDelta += weight * loadLanes(in.plane(kGradientDelta) + q, use);
+            sumNormaliser += weight * loadLanes(in.plane(kGradientNormaliser) + q, use);
             sumLuminance += weight * loadLanes(luminance + q, use);
-            sumVariance += weight * weight * loadLanes(in.plane(kVariance) + q, use);
+            sumVariance += weight * weight * loadLanes(in.plane(kGradientVariance) + q, use);
             sumWeight += weight;
           }
         }
@@ -323,11 +339,12 @@ void Asvgf::computeAlpha() {
     float lambda = 0.0f;
     if (guidePixel_[s] >= 0) {
       if (q2rtx) {
-        lambda = std::clamp(gain * g.plane(kDelta)[s], 0.0f, 1.0f);
+        lambda = std::clamp(gain * g.plane(kGradientDelta)[s], 0.0f, 1.0f);
       } else {
-        const float normaliser = g.plane(kNormaliser)[s];  // 0 where no sample reached
+        const float normaliser = g.plane(kGradientNormaliser)[s];  // 0 where no sample reached
         if (normaliser > 0.0f)
-          lambda = std::min(1.0f, gain * std::abs(g.plane(kDelta)[s]) / normaliser);  // eq. 14
+          lambda =
+              std::min(1.0f, gain * std::abs(g.plane(kGradientDelta)[s]) / normaliser);  // eq. 14
       }
     }
     stratumLambda_.plane(0)[s] = lambda;

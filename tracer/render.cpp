@@ -36,10 +36,6 @@ void flushDenormals() {
   _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
 }
 
-float lum(glm::vec3 c) {
-  return luminance(c.x, c.y, c.z);
-}
-
 // The 1-spp colour of a surface seen from `eye`, exactly as a frame computes it; used both for
 // frames and for the re-shaded gradient samples so equal inputs give bit-equal luminance.
 struct PixelShade {
@@ -300,8 +296,8 @@ SequenceRenderer::FrameResult SequenceRenderer::renderFrame(int t) {
       c.valid = true;
       c.qx = int(q.x);
       c.qy = int(q.y);
-      c.lumOld = lum(shadePixel(prev, sPrev, prevCam.eye, previousNumbers, counts).color());
-      c.lumNew = lum(shadePixel(cur, sNow, cam.eye, previousNumbers, counts).color());
+      c.lumOld = luminanceOf(shadePixel(prev, sPrev, prevCam.eye, previousNumbers, counts).color());
+      c.lumNew = luminanceOf(shadePixel(cur, sNow, cam.eye, previousNumbers, counts).color());
     }
   });
   // Each sample lands in the current-frame stratum containing its pixel; the first claim (in
@@ -759,7 +755,7 @@ LayerSet SequenceRenderer::renderLowres(int t, RayCounts& total) {
         sp += r.specular;
         dir += r.diffuseDirection;
       }
-      const float weight = lum(d);
+      const float weight = luminanceOf(d);
       const glm::vec3 meanDir = weight > 0 ? dir / weight : glm::vec3(0);
       const glm::vec3 dMean = d / float(spp) / glm::max(s.diffuseAlbedo(), glm::vec3(1e-3f));
       const glm::vec3 sMean = sp / float(spp) / glm::max(specAlb, glm::vec3(1e-3f));

@@ -443,7 +443,9 @@ Scene parseScene(const std::string& text, const std::string& path) {
 
 std::string assetCacheDir() {
   const char* dir = std::getenv("ARENA_ASSET_DIR");
-  return dir && *dir ? std::string(dir) : std::string(ARENA_SOURCE_DIR) + "/cache/assets";
+  // Built as a path, as defaultScenesDir below, for the same GCC 12 false positive.
+  return dir && *dir ? std::string(dir)
+                     : (std::filesystem::path(ARENA_SOURCE_DIR) / "cache" / "assets").string();
 }
 
 std::string defaultScenesDir() {

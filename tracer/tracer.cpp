@@ -27,7 +27,6 @@ enum Dim : uint32_t { kLightSelect, kLightTriangle, kLightU, kLightV, kLobe, kDi
 // vertex's dimensions, so the path's numbers, and hence its radiance, are untouched by it.
 constexpr uint32_t kSpecularRayDim = 1u << 20;
 
-float lum(glm::vec3 c) { return luminance(c.x, c.y, c.z); }
 float maxComponent(glm::vec3 c) { return std::max(c.x, std::max(c.y, c.z)); }
 
 void orthonormalBasis(glm::vec3 n, glm::vec3& t, glm::vec3& b) {
@@ -66,8 +65,8 @@ struct Lobes {
 
 // Mixture sampling weights: specular lobe chosen in proportion to its Fresnel-weighted albedo.
 float specularProbability(const SurfaceHit& s, float NoV) {
-  return specularLobeProbability(lum(s.diffuseAlbedo()),
-                                 lum(specularAlbedo(s.f0(), s.roughness, NoV)));
+  return specularLobeProbability(luminanceOf(s.diffuseAlbedo()),
+                                 luminanceOf(specularAlbedo(s.f0(), s.roughness, NoV)));
 }
 
 float ggxAlpha(float roughness) { return std::max(roughness * roughness, 1e-3f); }
@@ -701,7 +700,7 @@ FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Vertex
     const float cosine = f.NoL;
     diffuse += f.diffuse * le * (cosine * weight / pdfLight);
     specular += f.specular * le * (cosine * weight / pdfLight);
-    if (direction) *direction += wi * lum(f.diffuse * le * (cosine * weight / pdfLight));
+    if (direction) *direction += wi * luminanceOf(f.diffuse * le * (cosine * weight / pdfLight));
   };
 
   // Vertex 0: split direct light and the continuation between the diffuse and specular signals.
@@ -757,7 +756,7 @@ FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Vertex
   }
   out.diffuse += weightDiffuse * incoming;
   out.specular += weightSpecular * incoming;
-  out.diffuseDirection += wi * lum(weightDiffuse * incoming);
+  out.diffuseDirection += wi * luminanceOf(weightDiffuse * incoming);
   return out;
 }
 

@@ -10,11 +10,17 @@
 #include <memory>
 #include <vector>
 
+#include "core/image.hpp"
 #include "tracer/sampler.hpp"
 #include "tracer/scene.hpp"
 #include "tracer/scene_state.hpp"
 
 namespace arena {
+
+// A colour's luminance (core/image.hpp's weights), as the tracer weighs lobes and gradients.
+inline float luminanceOf(glm::vec3 c) {
+  return luminance(c.x, c.y, c.z);
+}
 
 // Embree device; one per process is enough. `config` is Embree's device configuration (a test
 // pins the kernels' ISA with "isa=sse2" to show that hits do not depend on it).

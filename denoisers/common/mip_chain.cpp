@@ -11,7 +11,7 @@
 namespace arena {
 
 namespace {
-enum GuideChannel : int { kDepth = 0, kNormalX = 1, kCount = 4, kGuideChannels = 5 };
+enum GuideChannel : int { kGuideDepth = 0, kGuideNormalX = 1, kGuideCount = 4, kGuideChannels = 5 };
 }
 
 void MipChain::setup(int width, int height, int levels, int channels) {
@@ -71,22 +71,23 @@ void MipChain::build(const Image& signal, const GBufferView& g) {
             depth += g.depth[f];
             for (size_t a = 0; a < 3; ++a) normal[a] += g.normal[a][f];
           } else {
-            weight = fineGuide->plane(kCount)[f];
+            weight = fineGuide->plane(kGuideCount)[f];
             if (weight <= 0.0f) continue;
-            depth += weight * fineGuide->plane(kDepth)[f];
-            for (int a = 0; a < 3; ++a) normal[a] += weight * fineGuide->plane(kNormalX + a)[f];
+            depth += weight * fineGuide->plane(kGuideDepth)[f];
+            for (int a = 0; a < 3; ++a)
+              normal[a] += weight * fineGuide->plane(kGuideNormalX + a)[f];
           }
           for (int ch = 0; ch < dst.channels(); ++ch) sum[ch] += weight * fineValues->plane(ch)[f];
           count += weight;
         }
         const float inverse = count > 0.0f ? 1.0f / count : 0.0f;
         for (int ch = 0; ch < dst.channels(); ++ch) dst.plane(ch)[c] = sum[ch] * inverse;
-        dstGuide.plane(kDepth)[c] = depth * inverse;
+        dstGuide.plane(kGuideDepth)[c] = depth * inverse;
         const float length =
             std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
         for (int a = 0; a < 3; ++a)
-          dstGuide.plane(kNormalX + a)[c] = length > 0 ? normal[a] / length : 0.0f;
-        dstGuide.plane(kCount)[c] = count;
+          dstGuide.plane(kGuideNormalX + a)[c] = length > 0 ? normal[a] / length : 0.0f;
+        dstGuide.plane(kGuideCount)[c] = count;
       }
     });
   }
@@ -136,11 +137,12 @@ void MipChain::upsample(int maxLevel, const Image* perPixelLevel, const GBufferV
       for (int k = 0; k < 4; ++k) {
         const int cx = std::clamp(x0 + k % 2, 0, cw - 1), cy = std::clamp(y0 + k / 2, 0, ch_ - 1);
         const size_t c = size_t(cy) * size_t(cw) + size_t(cx);
-        if (guide.plane(kCount)[c] <= 0.0f) continue;
-        const float dz = std::abs(g.depth[p] - guide.plane(kDepth)[c]) /
+        if (guide.plane(kGuideCount)[c] <= 0.0f) continue;
+        const float dz = std::abs(g.depth[p] - guide.plane(kGuideDepth)[c]) /
                          (settings.sigmaZ * std::abs(g.depth[p]) + 1e-20f);
         float cosine = 0;
-        for (int a = 0; a < 3; ++a) cosine += g.normal[size_t(a)][p] * guide.plane(kNormalX + a)[c];
+        for (int a = 0; a < 3; ++a)
+          cosine += g.normal[size_t(a)][p] * guide.plane(kGuideNormalX + a)[c];
         cosine = std::min(cosine, 1.0f);
         if (cosine <= 1e-30f) continue;
         const float weight = (bilinear[k] + 1e-4f) *
