@@ -7,9 +7,11 @@ cd "$(dirname "$0")/.."
 
 # python3-numpy: the Python example denoiser (examples/external/python_temporal), run by the tests.
 # libassimp-dev: asset import (OBJ+MTL, glTF 2.0); assimp-testmodels: glTF files the tests load.
+# ninja-build: the build runs each library's compiles as soon as their headers allow, where make
+# waits for the libraries upstream to be archived (setup.sh).
 # sweethome3d-furniture: the CC-0 furniture models of living_room and foliage_window (setup.sh
 # extracts them into cache/assets/).
-packages=(build-essential cmake libembree-dev libopenexr-dev libopencv-dev libbenchmark-dev libglm-dev
+packages=(build-essential cmake ninja-build libembree-dev libopenexr-dev libopencv-dev libbenchmark-dev libglm-dev
           nlohmann-json3-dev libtbb-dev libgtest-dev libcli11-dev libsqlite3-dev libtinyobjloader-dev
           openexr embree-tools python3-numpy libassimp-dev assimp-testmodels sweethome3d-furniture
           ${ARENA_EXTRA_PACKAGES:-} "$@")

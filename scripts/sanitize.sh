@@ -9,7 +9,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 root="$(pwd)"
 bash scripts/install_packages.sh ccache
-cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DARENA_SANITIZE=ON -DARENA_PCH=OFF \
+cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DARENA_SANITIZE=ON -DARENA_PCH=OFF -DARENA_UNITY_BUILD=OFF \
   -DCMAKE_CXX_COMPILER_LAUNCHER=ccache
 nice -n 19 cmake --build build-asan -j"$(nproc)"
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1${ASAN_OPTIONS:+:$ASAN_OPTIONS}"

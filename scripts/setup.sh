@@ -26,7 +26,14 @@ phase npm
 python3 scripts/extract_assets.py
 phase assets
 
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
+# Ninja: two cores stay busy across libraries (make builds a library only after the libraries it
+# links are archived). A build/ configured for another generator by an earlier version of this
+# script is reconfigured from scratch (its objects are rebuilt once).
+if [ -f build/CMakeCache.txt ] && ! grep -q '^CMAKE_GENERATOR:INTERNAL=Ninja$' build/CMakeCache.txt; then
+  echo "setup: build/ was configured for another generator; reconfiguring it for Ninja"
+  rm -rf build/CMakeCache.txt build/CMakeFiles
+fi
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 phase configure
 # ARENA_TARGETS narrows the build (the study needs only `arena`; the tests need everything).
 cmake --build build -j"$(nproc)" --target ${ARENA_TARGETS:-all}
