@@ -163,8 +163,10 @@ EvaluationScene::EvaluationScene(EvaluationInput input, EvaluationOptions option
     std::vector<const Image*> referenceColors;
     for (const LayerSet& r : input_.references) referenceColors.push_back(&r.get("color"));
     displays_ = displayTransforms(referenceColors, options_.exposure);
-    for (size_t r = 0; r < input_.references.size(); ++r)
+    for (size_t r = 0; r < input_.references.size(); ++r) {
       referenceDisplay_.push_back(displays_[r].apply(*referenceColors[r]));
+      referenceMemos_.push_back(std::make_unique<ReferenceMemo>());
+    }
     for (int t = 0; t < frames(); ++t) {
       const LayerSet& ref = reference(t);
       referenceRelMse_.push_back(input_.referenceNoiseKnown ? arena::referenceRelMse(ref.get("color"), ref.get("colorVar"))
@@ -240,6 +242,7 @@ void EvaluationScene::computeFloors() {
       v.guides = &frame(t);
       v.reference = &ref.get("color");
       v.referenceDisplay = &referenceDisplay_[r];
+      v.referenceMemo = referenceMemos_[r].get();
       // The floor is the raw metric: no variance to correct with (the noise *is* the variance).
       perReference[r] = floorsOf(v, options_.metrics);
     }
@@ -353,6 +356,7 @@ void PairEvaluation::add(int t, const Image& output, const FrameFacts& facts) {
     v.reference = r;
     v.referenceVariance = &ref.get("colorVar");
     v.referenceDisplay = &scene.referenceDisplay(t);
+    v.referenceMemo = scene.referenceMemos_[scene.referenceIndex(t)].get();
     kept->error = Image(output.width(), output.height(), 3);
     for (size_t i = 0; i < kept->error.raw().size(); ++i) kept->error.raw()[i] = output.raw()[i] - r->raw()[i];
     v.error = &kept->error;

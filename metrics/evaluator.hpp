@@ -95,6 +95,7 @@ class EvaluationScene {
   EvaluationOptions options_;
   std::vector<DisplayTransform> displays_;  // per reference (per frame without one)
   std::vector<Image> referenceDisplay_;     // per reference
+  std::vector<std::unique_ptr<ReferenceMemo>> referenceMemos_;  // per reference
   std::vector<double> referenceRelMse_, noisyRelMse_;  // per frame (empty without a reference)
   std::vector<EventWindow> events_;
   std::vector<CutSegment> cuts_;

@@ -16,8 +16,6 @@
 // allocations inside the parallel loops.
 #include "metrics/flip.hpp"
 
-#include "metrics/metric_registry.hpp"
-
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -27,10 +25,12 @@
 #include <cmath>
 #include <cstdint>
 #include <numbers>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/error.hpp"
+#include "metrics/metric_registry.hpp"
 
 namespace arena {
 namespace {
@@ -200,7 +200,11 @@ double maxColourDistance() {
 
 // Every FLIP kernel is even (Gaussians, second derivative) or odd (first derivative), so only
 // the taps at offsets 0..radius are kept and mirrored pairs are added (or subtracted) before
-// multiplying: half the multiplies.
+// multiplying: half the multiplies. Named (not file-local) types: a FlipReference keeps them.
+}  // namespace
+
+namespace flip_detail {
+
 struct Kernel {
   int radius = 0;
   bool odd = false;         // taps(-j) = -taps(j) (then taps(0) = 0); otherwise taps(-j) = taps(j)
@@ -228,6 +232,14 @@ struct Kernels {
   Kernel blur, d1, d2;
   int maxRadius = 0;
 };
+
+}  // namespace flip_detail
+
+namespace {
+
+using flip_detail::Kernel;
+using flip_detail::Kernels;
+using flip_detail::makeKernel;
 
 Kernels makeKernels(double ppd) {
   Kernels k;
@@ -346,18 +358,13 @@ inline void convolveColumn(const float* plane, int w, int h, int y, const Kernel
 enum HPlane { kHA, kHRG, kHBY1, kHBY2, kHBlur, kHD1, kHD2, kHCount };
 enum RefPlane { kRL, kRA, kRB, kREdge, kRPoint, kRCount };
 
+// The horizontal pass's planes: scratch for one image at a time.
 struct Workspace {
   int w = 0, h = 0;
   std::array<std::vector<float>, kHCount> hp;
-  std::array<std::vector<float>, kRCount> ref;
-  float cmax = 0, pcCmax = 0;
 
   Workspace(int width, int height) : w(width), h(height) {
     for (auto& p : hp) p.resize(size_t(w) * size_t(h) + kBlock);  // slack for block reads
-    for (auto& p : ref) p.resize(size_t(w) * size_t(h));
-    const double c = maxColourDistance();
-    cmax = float(c);
-    pcCmax = float(kPc * c);
   }
 };
 
@@ -510,32 +517,43 @@ void combineRow(float cmax, float pcCmax, const float* __restrict rl, const floa
   }
 }
 
-// LDR-FLIP of one pair into `map`; with takeMax the map keeps the per-pixel maximum of its
-// previous contents and this pair's values (HDR-FLIP).
+// The reference's side of one LDR-FLIP: its filtered Hunt L*a*b* and feature magnitudes.
+using ReferencePlanes = std::array<std::vector<float>, kRCount>;
+
 template <class ToLinear>
-void flipPair(const Image& reference, const Image& test, const ToLinear& toLinear, const Kernels& k,
-              Workspace& ws, float* map, bool takeMax) {
+ReferencePlanes filterReference(const Image& reference, const ToLinear& toLinear, const Kernels& k,
+                                Workspace& ws) {
   const size_t w = size_t(ws.w);
+  ReferencePlanes ref;
+  for (auto& plane : ref) plane.resize(w * size_t(ws.h));
   horizontalPass(reference, toLinear, k, ws);
   verticalPass(k, ws, [&](int y, const float* l, const float* a, const float* b, const float* e,
                           const float* p) {
     const size_t o = size_t(y) * w;
-    std::copy(l, l + w, ws.ref[kRL].data() + o);
-    std::copy(a, a + w, ws.ref[kRA].data() + o);
-    std::copy(b, b + w, ws.ref[kRB].data() + o);
-    std::copy(e, e + w, ws.ref[kREdge].data() + o);
-    std::copy(p, p + w, ws.ref[kRPoint].data() + o);
+    std::copy(l, l + w, ref[kRL].data() + o);
+    std::copy(a, a + w, ref[kRA].data() + o);
+    std::copy(b, b + w, ref[kRB].data() + o);
+    std::copy(e, e + w, ref[kREdge].data() + o);
+    std::copy(p, p + w, ref[kRPoint].data() + o);
   });
+  return ref;
+}
+
+// LDR-FLIP of `test` against a filtered reference into `map`; with takeMax the map keeps the
+// per-pixel maximum of its previous contents and this comparison's values (HDR-FLIP).
+template <class ToLinear>
+void compareWithReference(const ReferencePlanes& ref, const Image& test, const ToLinear& toLinear,
+                          const Kernels& k, Workspace& ws, float* map, bool takeMax) {
+  const size_t w = size_t(ws.w);
+  const double c = maxColourDistance();
+  const float cmax = float(c), pcCmax = float(kPc * c);
   horizontalPass(test, toLinear, k, ws);
   verticalPass(k, ws, [&](int y, const float* l, const float* a, const float* b, const float* e,
                           const float* p) {
     const size_t o = size_t(y) * w;
-    const float* rl = ws.ref[kRL].data() + o;
-    const float* ra = ws.ref[kRA].data() + o;
-    const float* rb = ws.ref[kRB].data() + o;
-    const float* re = ws.ref[kREdge].data() + o;
-    const float* rp = ws.ref[kRPoint].data() + o;
-    combineRow(ws.cmax, ws.pcCmax, rl, ra, rb, re, rp, l, a, b, e, p, int(w), takeMax, map + o);
+    combineRow(cmax, pcCmax, ref[kRL].data() + o, ref[kRA].data() + o, ref[kRB].data() + o,
+               ref[kREdge].data() + o, ref[kRPoint].data() + o, l, a, b, e, p, int(w), takeMax,
+               map + o);
   });
 }
 
@@ -556,8 +574,7 @@ double meanOf(const Image& map) {
   return total / double(map.pixelCount());
 }
 
-void validate(const char* fn, const Image& reference, const Image& test, double ppd) {
-  const std::string name(fn);
+void validate(const std::string& name, const Image& reference, const Image& test, double ppd) {
   if (reference.empty() || test.empty())
     throw Error(name + ": empty image (reference " + std::to_string(reference.width()) + "x" +
                 std::to_string(reference.height()) + ", test " + std::to_string(test.width()) + "x" +
@@ -632,49 +649,98 @@ ExposureRange exposureRange(const Image& reference) {
   return range;
 }
 
+// Display-referred input: clamp to the displayable range, then decode the sRGB transfer.
+struct SrgbDisplay {
+  float operator()(float v) const { return srgbToLinear(clamp01(v)); }
+};
+
+// Exposure, then the ACES curve, clamped to [0,1]. [2] then sRGB-encodes the tone-mapped image and
+// hands it to LDR-FLIP, which decodes it again; that round trip is the identity, so the tone-mapped
+// linear values go straight into the pipeline. Negative and NaN inputs become 0; the input is
+// capped where the curve has long saturated (it tends to k0/k3 > 1) so that +inf maps to white
+// instead of inf/inf.
+struct AcesExposure {
+  float scale = 1;
+  float operator()(float v) const {
+    float x = v * scale;
+    x = select(x > 0.0f, minF(x, 1.0e6f), 0.0f);
+    const float num = (float(kAcesK0) * x + float(kAcesK1)) * x;
+    const float den = (float(kAcesK3) * x + float(kAcesK4)) * x + float(kAcesK5);
+    return clamp01(num / den);
+  }
+};
+
 }  // namespace
 
-FlipResult ldrFlip(const Image& reference, const Image& test, double pixelsPerDegree) {
-  validate("ldrFlip", reference, test, pixelsPerDegree);
-  const Kernels k = makeKernels(pixelsPerDegree);
-  Workspace ws(reference.width(), reference.height());
+struct FlipReference::Filtered {
+  Kernels kernels;
+  ReferencePlanes ldr;               // of the display image (empty without one)
+  std::vector<float> hdrScales;      // per exposure: 2^exposure
+  std::vector<ReferencePlanes> hdr;  // per exposure (empty without a linear image)
+};
+
+FlipReference::FlipReference(const Image* display, const Image* linear, double pixelsPerDegree)
+    : display_(display), linear_(linear), pixelsPerDegree_(pixelsPerDegree) {
+  // Each image is checked against itself here (empty, channels, ppd); a test against it when
+  // compared.
+  if (display) validate("ldrFlip", *display, *display, pixelsPerDegree);
+  if (linear) validate("hdrFlip", *linear, *linear, pixelsPerDegree);
+  auto filtered = std::make_shared<Filtered>();
+  Filtered& f = *filtered;
+  f.kernels = makeKernels(pixelsPerDegree);
+  if (display) {
+    Workspace ws(display->width(), display->height());
+    f.ldr = filterReference(*display, SrgbDisplay{}, f.kernels, ws);
+  }
+  if (linear) {
+    Workspace ws(linear->width(), linear->height());
+    const ExposureRange range = exposureRange(*linear);
+    for (int i = 0; i < range.count; ++i) {
+      const double exposure =
+          range.count == 1
+              ? range.start
+              : range.start + (range.stop - range.start) * double(i) / double(range.count - 1);
+      f.hdrScales.push_back(float(std::exp2(exposure)));
+      f.hdr.push_back(filterReference(*linear, AcesExposure{f.hdrScales.back()}, f.kernels, ws));
+    }
+  }
+  filtered_ = std::move(filtered);
+}
+
+FlipResult FlipReference::ldr(const Image& test) const {
+  if (!display_) throw Error("ldrFlip: this FLIP reference was prepared without a display image");
+  validate("ldrFlip", *display_, test, pixelsPerDegree_);
+  Workspace ws(test.width(), test.height());
   FlipResult result;
-  result.map = Image(reference.width(), reference.height(), 1);
-  // Display-referred input: clamp to the displayable range, then decode the sRGB transfer.
-  auto toLinear = [](float v) { return srgbToLinear(clamp01(v)); };
-  flipPair(reference, test, toLinear, k, ws, result.map.plane(0), false);
+  result.map = Image(test.width(), test.height(), 1);
+  compareWithReference(filtered_->ldr, test, SrgbDisplay{}, filtered_->kernels, ws,
+                       result.map.plane(0), false);
   result.mean = meanOf(result.map);
   return result;
 }
 
-FlipResult hdrFlip(const Image& reference, const Image& test, double pixelsPerDegree) {
-  validate("hdrFlip", reference, test, pixelsPerDegree);
-  const Kernels k = makeKernels(pixelsPerDegree);
-  Workspace ws(reference.width(), reference.height());
+FlipResult FlipReference::hdr(const Image& test) const {
+  if (!linear_) throw Error("hdrFlip: this FLIP reference was prepared without a linear image");
+  validate("hdrFlip", *linear_, test, pixelsPerDegree_);
+  Workspace ws(test.width(), test.height());
   FlipResult result;
-  result.map = Image(reference.width(), reference.height(), 1);
-  const ExposureRange range = exposureRange(reference);
-  for (int i = 0; i < range.count; ++i) {
-    const double exposure =
-        range.count == 1 ? range.start
-                         : range.start + (range.stop - range.start) * double(i) / double(range.count - 1);
-    const float scale = float(std::exp2(exposure));
-    // Exposure, then the ACES curve, clamped to [0,1]. [2] then sRGB-encodes the tone-mapped
-    // image and hands it to LDR-FLIP, which decodes it again; that round trip is the identity,
-    // so the tone-mapped linear values go straight into the pipeline. Negative and NaN inputs
-    // become 0; the input is capped where the curve has long saturated (it tends to
-    // k0/k3 > 1) so that +inf maps to white instead of inf/inf.
-    auto toLinear = [scale](float v) {
-      float x = v * scale;
-      x = select(x > 0.0f, minF(x, 1.0e6f), 0.0f);
-      const float num = (float(kAcesK0) * x + float(kAcesK1)) * x;
-      const float den = (float(kAcesK3) * x + float(kAcesK4)) * x + float(kAcesK5);
-      return clamp01(num / den);
-    };
-    flipPair(reference, test, toLinear, k, ws, result.map.plane(0), i > 0);
-  }
+  result.map = Image(test.width(), test.height(), 1);
+  const Filtered& f = *filtered_;
+  for (size_t i = 0; i < f.hdr.size(); ++i)
+    compareWithReference(f.hdr[i], test, AcesExposure{f.hdrScales[i]}, f.kernels, ws,
+                         result.map.plane(0), i > 0);
   result.mean = meanOf(result.map);
   return result;
+}
+
+FlipResult ldrFlip(const Image& reference, const Image& test, double pixelsPerDegree) {
+  validate("ldrFlip", reference, test, pixelsPerDegree);
+  return FlipReference(&reference, nullptr, pixelsPerDegree).ldr(test);
+}
+
+FlipResult hdrFlip(const Image& reference, const Image& test, double pixelsPerDegree) {
+  validate("hdrFlip", reference, test, pixelsPerDegree);
+  return FlipReference(nullptr, &reference, pixelsPerDegree).hdr(test);
 }
 
 }  // namespace arena
@@ -696,12 +762,19 @@ MetricFamily flipFamily() {
   f.enabled = [](const MetricOptions& o) { return o.flip != "none"; };
   f.measure = [](const FrameView& v, const MetricOptions& o, FrameRecorder& out) {
     const int w = v.output->width(), h = v.output->height();
-    FlipResult ldr = ldrFlip(*v.referenceDisplay, *v.outputDisplay);
-    out.put("ldrFlip", ldr.mean, tileSumsOfMap(ldr.map.raw(), w, h));
-    out.keepMap("ldrFlip", std::move(ldr.map));
-    if (o.flip == "all") {
-      const FlipResult hdr = hdrFlip(*v.reference, *v.output);
-      out.put("hdrFlip", hdr.mean, tileSumsOfMap(hdr.map.raw(), w, h));
+    const bool hdr = o.flip == "all";
+    // The reference's side, filtered once per reference for every output compared with it.
+    auto prepare = [&] { return FlipReference(v.referenceDisplay, hdr ? v.reference : nullptr); };
+    std::optional<FlipReference> local;
+    const FlipReference& reference =
+        v.referenceMemo ? v.referenceMemo->get<FlipReference>("flip:" + o.flip, prepare)
+                        : local.emplace(prepare());
+    FlipResult ldrResult = reference.ldr(*v.outputDisplay);
+    out.put("ldrFlip", ldrResult.mean, tileSumsOfMap(ldrResult.map.raw(), w, h));
+    out.keepMap("ldrFlip", std::move(ldrResult.map));
+    if (hdr) {
+      const FlipResult hdrResult = reference.hdr(*v.output);
+      out.put("hdrFlip", hdrResult.mean, tileSumsOfMap(hdrResult.map.raw(), w, h));
     }
   };
   return f;

@@ -8,6 +8,9 @@
 // FLIP approximates the difference a viewer perceives when flipping between the two images at a
 // given viewing distance (pixels per degree of visual angle); 67 ppd corresponds to a 0.7 m wide
 // 4K monitor seen from 0.7 m, the papers' default.
+#include <memory>
+#include <vector>
+
 #include "core/image.hpp"
 
 namespace arena {
@@ -27,5 +30,24 @@ FlipResult ldrFlip(const Image& reference, const Image& test, double pixelsPerDe
 // derived from the reference, each exposure is tonemapped with the ACES fit used by FLIP, and the
 // result is the per-pixel maximum of LDR-FLIP over the exposures. Same errors as ldrFlip.
 FlipResult hdrFlip(const Image& reference, const Image& test, double pixelsPerDegree = 67.0);
+
+// A reference prepared once for FLIP against any number of test images: its filtered colour and
+// feature planes (LDR-FLIP of `display`; HDR-FLIP of `linear` at each of its exposures) are kept,
+// so each comparison filters only the test image, half the work of ldrFlip / hdrFlip, with the
+// same values. Either image may be null (that comparison then throws). The images must outlive
+// the FlipReference. Comparisons are const and may run concurrently.
+class FlipReference {
+ public:
+  FlipReference(const Image* display, const Image* linear, double pixelsPerDegree = 67.0);
+  FlipResult ldr(const Image& test) const;  // ldrFlip(*display, test)
+  FlipResult hdr(const Image& test) const;  // hdrFlip(*linear, test)
+
+ private:
+  struct Filtered;
+  const Image* display_;
+  const Image* linear_;
+  double pixelsPerDegree_;
+  std::shared_ptr<const Filtered> filtered_;
+};
 
 }  // namespace arena

@@ -11,11 +11,12 @@
 // with its family function plus one line in metric_registry.cpp's list.
 #include <functional>
 #include <map>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "core/exr_io.hpp"
 #include "core/image.hpp"
@@ -74,6 +75,24 @@ struct FrameFacts {
   double extraPathsPerSecond = 0;  // the render rate of those paths (0: unknown)
 };
 
+// What families derive from a reference alone, kept for every output compared with it (FLIP's
+// filtered reference planes): made on first use under `key`, then shared. An evaluation scene
+// keeps one per reference for all its pairs; a value may point into the reference's images.
+class ReferenceMemo {
+ public:
+  template <class T, class Make>
+  const T& get(const std::string& key, const Make& make) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::shared_ptr<const void>& slot = items_[key];
+    if (!slot) slot = std::make_shared<const T>(make());
+    return *static_cast<const T*>(slot.get());
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  mutable std::map<std::string, std::shared_ptr<const void>> items_;
+};
+
 // What a metric family sees of one output frame. Pointers to reference images are null when the
 // sequence has no reference (a capture without one): families that need it are not asked then.
 struct FrameView {
@@ -84,6 +103,7 @@ struct FrameView {
   const Image* reference = nullptr;      // r_t
   const Image* referenceVariance = nullptr;  // Var(r_t), the variance of the reference's mean
   const Image* referenceDisplay = nullptr;
+  const ReferenceMemo* referenceMemo = nullptr;  // r_t's; null: nothing is kept between outputs
   const Image* error = nullptr;          // d_t - r_t
   double noisyRelMse = kUndefined;       // relMSE of the 1-spp input against r_t
   double referenceRelMse = kUndefined;   // the reference's own estimated relMSE

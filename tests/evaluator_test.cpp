@@ -72,6 +72,19 @@ std::string firstDifference(const json& a, const json& b, const std::string& pat
   return a == b ? "" : path + ": " + a.dump() + " vs " + b.dump();
 }
 
+TEST(ReferenceMemo, MakesEachKeysValueOnceAndKeepsIt) {
+  // What the evaluation keeps per reference (FLIP's filtered planes) is made on first use only.
+  ReferenceMemo memo;
+  int made = 0;
+  auto make = [&] { return ++made * 10; };
+  const int& first = memo.get<int>("a", make);
+  EXPECT_EQ(first, 10);
+  EXPECT_EQ(&memo.get<int>("a", make), &first);  // the same object, not made again
+  EXPECT_EQ(made, 1);
+  EXPECT_EQ(memo.get<int>("b", make), 20);
+  EXPECT_EQ(made, 2);
+}
+
 TEST(Evaluation, RunResultsAreBitIdenticalToTheHarnessBeforeTheStage) {
   // tests/data/evaluation_golden.json was first written by the harness that computed every metric
   // inline (commit 5767363), from test::goldenRunConfig: the same inputs and settings must give the

@@ -1,15 +1,17 @@
 // FLIP (metrics/flip.hpp): zero for identical images, bounded output, monotone in noise, edges
 // weighted above flat regions, HDR exposure handling, input validation.
+#include "metrics/flip.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <vector>
 
 #include "core/error.hpp"
-#include "metrics/flip.hpp"
 
 namespace arena {
 namespace {
@@ -323,6 +325,106 @@ TEST(Flip, HdrFlipSeesBrighterCopy) {
   Image slightly = ref;
   for (float& v : slightly.raw()) v *= 1.05f;
   EXPECT_GT(r.mean, hdrFlip(ref, slightly).mean);
+}
+
+void expectSameMap(const FlipResult& a, const FlipResult& b) {
+  ASSERT_EQ(a.map.raw().size(), b.map.raw().size());
+  EXPECT_EQ(std::memcmp(a.map.raw().data(), b.map.raw().data(), a.map.raw().size() * sizeof(float)),
+            0);
+  EXPECT_EQ(a.mean, b.mean);
+}
+
+TEST(Flip, APreparedReferenceGivesEachComparisonsOwnValues) {
+  // The evaluation filters a reference once for every method compared with it: each comparison
+  // must be the bits of ldrFlip / hdrFlip alone, in any order, whatever was compared before.
+  const Image ldrRef = randomImage(11, 0.0f, 1.0f), hdrRef = randomImage(12, 0.0f, 200.0f);
+  const FlipReference prepared(&ldrRef, &hdrRef);
+  for (uint32_t seed : {13u, 14u, 13u}) {
+    const Image ldrTest = randomImage(seed, 0.0f, 1.0f),
+                hdrTest = randomImage(seed + 10, 0.0f, 200.0f);
+    const FlipResult hdr = prepared.hdr(hdrTest);
+    EXPECT_GT(hdr.mean, 0.05);  // a real difference, over several exposures
+    expectSameMap(hdr, hdrFlip(hdrRef, hdrTest));
+    expectSameMap(prepared.ldr(ldrTest), ldrFlip(ldrRef, ldrTest));
+  }
+}
+
+// [2]'s definition, written out independently: HDR-FLIP is the per-pixel maximum of LDR-FLIP
+// over the exposures, each pair tone-mapped (exposure, the ACES fit on 0.6x, clamp) and
+// sRGB-encoded for LDR-FLIP. Exposures run evenly from start = log2(x_max / Y_max) to stop =
+// log2(x_max / Y_median), max(2, ceil(stop - start)) of them, where the tone mapper maps x_max
+// to 0.85.
+std::vector<float> hdrFlipByItsExposures(const Image& ref, const Image& test) {
+  auto aces = [](double x) {
+    x *= 0.6;
+    return std::clamp(x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);
+  };
+  double lo = 0, hi = 100;  // x_max by bisection
+  for (int i = 0; i < 200; ++i) (aces((lo + hi) / 2) < 0.85 ? lo : hi) = (lo + hi) / 2;
+  const double xMax = (lo + hi) / 2;
+  std::vector<double> y;
+  for (size_t i = 0; i < ref.pixelCount(); ++i)
+    y.push_back(0.2126729 * ref.raw()[i] + 0.7151522 * ref.raw()[ref.pixelCount() + i] +
+                0.0721750 * ref.raw()[2 * ref.pixelCount() + i]);
+  std::sort(y.begin(), y.end());
+  const double median =
+      y.size() % 2 ? y[y.size() / 2] : 0.5 * (y[y.size() / 2 - 1] + y[y.size() / 2]);
+  const double start = std::log2(xMax / y.back()), stop = std::log2(xMax / median);
+  const int count = std::max(2, int(std::ceil(stop - start)));
+  auto toneMapped = [&](const Image& img, double exposure) {
+    Image out = img;
+    for (float& v : out.raw()) {
+      const double t = aces(std::max(0.0, double(v)) * std::exp2(exposure));
+      v = float(t <= 0.0031308 ? 12.92 * t
+                               : 1.055 * std::pow(t, 1 / 2.4) - 0.055);  // sRGB encoding
+    }
+    return out;
+  };
+  std::vector<float> map(ref.pixelCount(), 0.0f);
+  for (int i = 0; i < count; ++i) {
+    const double exposure = start + (stop - start) * i / (count - 1);
+    const FlipResult ldr = ldrFlip(toneMapped(ref, exposure), toneMapped(test, exposure));
+    for (size_t p = 0; p < map.size(); ++p) map[p] = std::max(map[p], ldr.map.raw()[p]);
+  }
+  EXPECT_GE(count, 4);  // the images span several stops
+  return map;
+}
+
+TEST(Flip, HdrIsTheMaximumOverItsExposuresOfLdrFlip) {
+  Image ref = smoothHdr(), test = ref;
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> u(0.7f, 1.4f);
+  for (float& v : test.raw()) v *= u(rng);
+  const std::vector<float> expected = hdrFlipByItsExposures(ref, test);
+  const FlipResult alone = hdrFlip(ref, test);
+  const FlipReference prepared(nullptr, &ref);
+  const FlipResult shared = prepared.hdr(test);
+  for (size_t p = 0; p < expected.size(); ++p) {
+    ASSERT_NEAR(alone.map.raw()[p], expected[p], 1e-4) << "pixel " << p;
+    ASSERT_NEAR(shared.map.raw()[p], expected[p], 1e-4) << "pixel " << p;
+  }
+  EXPECT_GT(alone.mean, 0.05);
+}
+
+TEST(Flip, APreparedReferenceRefusesWhatItWasNotPreparedFor) {
+  const Image a = randomImage(15, 0.0f, 1.0f), b(kSize + 1, kSize, 3);
+  const FlipReference linearOnly(nullptr, &a);
+  try {
+    linearOnly.ldr(a);
+    FAIL() << "no exception";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("without a display image"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(FlipReference(&a, nullptr).hdr(a), Error);
+  try {
+    linearOnly.hdr(b);
+    FAIL() << "no exception";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("sizes differ"), std::string::npos) << e.what();
+  }
+  const Image empty;
+  EXPECT_THROW(FlipReference(&empty, nullptr), Error);
+  EXPECT_THROW(FlipReference(&a, nullptr, 0.0), Error);
 }
 
 TEST(Flip, RejectsMismatchedOrEmptyImages) {
