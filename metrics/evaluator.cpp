@@ -163,9 +163,10 @@ EvaluationScene::EvaluationScene(EvaluationInput input, EvaluationOptions option
     std::vector<const Image*> referenceColors;
     for (const LayerSet& r : input_.references) referenceColors.push_back(&r.get("color"));
     displays_ = displayTransforms(referenceColors, options_.exposure);
+    auto budget = std::make_shared<ReferenceMemo::Budget>(kReferenceMemoBytes);
     for (size_t r = 0; r < input_.references.size(); ++r) {
       referenceDisplay_.push_back(displays_[r].apply(*referenceColors[r]));
-      referenceMemos_.push_back(std::make_unique<ReferenceMemo>());
+      referenceMemos_.push_back(std::make_unique<ReferenceMemo>(budget));
     }
     for (int t = 0; t < frames(); ++t) {
       const LayerSet& ref = reference(t);

@@ -52,6 +52,12 @@ struct EvaluationInput {
 // too). A reference with non-finite values is an Error naming the file and channels: it cannot rank.
 EvaluationInput readSequenceForEvaluation(const Sequence& sequence);
 
+// What a scene's reference memos may keep in all. FLIP's filtered reference is 5 float planes per
+// exposure plus 5 for LDR-FLIP: 0.7 MB per exposure at 256x144, 18 MB at 1280x720, so the study's
+// scenes keep every reference's, and a paper-size or capture-size scene of many references the
+// first few (the others are filtered for each output, as before).
+constexpr size_t kReferenceMemoBytes = size_t(1) << 30;
+
 // Everything about a sequence that every output's evaluation shares: display transforms, the
 // reference's and the input's own relMSE, event masks, camera-cut segments and metric floors.
 class EvaluationScene {

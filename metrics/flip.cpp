@@ -25,7 +25,6 @@
 #include <cmath>
 #include <cstdint>
 #include <numbers>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -574,20 +573,26 @@ double meanOf(const Image& map) {
   return total / double(map.pixelCount());
 }
 
-void validate(const std::string& name, const Image& reference, const Image& test, double ppd) {
-  if (reference.empty() || test.empty())
-    throw Error(name + ": empty image (reference " + std::to_string(reference.width()) + "x" +
-                std::to_string(reference.height()) + ", test " + std::to_string(test.width()) + "x" +
+void validate(const std::string& name, const FlipImageShape& reference, const Image& test,
+              double ppd) {
+  if (reference.empty || test.empty())
+    throw Error(name + ": empty image (reference " + std::to_string(reference.width) + "x" +
+                std::to_string(reference.height) + ", test " + std::to_string(test.width()) + "x" +
                 std::to_string(test.height()) + ")");
-  if (reference.width() != test.width() || reference.height() != test.height())
-    throw Error(name + ": image sizes differ (reference " + std::to_string(reference.width()) + "x" +
-                std::to_string(reference.height()) + ", test " + std::to_string(test.width()) + "x" +
+  if (reference.width != test.width() || reference.height != test.height())
+    throw Error(name + ": image sizes differ (reference " + std::to_string(reference.width) + "x" +
+                std::to_string(reference.height) + ", test " + std::to_string(test.width()) + "x" +
                 std::to_string(test.height()) + ")");
-  if (reference.channels() != 3 || test.channels() != 3)
-    throw Error(name + ": expected 3-channel RGB images, got " + std::to_string(reference.channels()) +
-                " (reference) and " + std::to_string(test.channels()) + " (test) channels");
+  if (reference.channels != 3 || test.channels() != 3)
+    throw Error(name + ": expected 3-channel RGB images, got " +
+                std::to_string(reference.channels) + " (reference) and " +
+                std::to_string(test.channels()) + " (test) channels");
   if (!(std::isfinite(ppd) && ppd > 0))
     throw Error(name + ": pixels per degree must be a positive finite number, got " + std::to_string(ppd));
+}
+
+void validate(const std::string& name, const Image& reference, const Image& test, double ppd) {
+  validate(name, FlipImageShape::of(reference), test, ppd);
 }
 
 // ---- HDR-FLIP ([2]) --------------------------------------------------------------------------
@@ -672,6 +677,10 @@ struct AcesExposure {
 
 }  // namespace
 
+FlipImageShape FlipImageShape::of(const Image& image) {
+  return {image.width(), image.height(), image.channels(), image.empty()};
+}
+
 struct FlipReference::Filtered {
   Kernels kernels;
   ReferencePlanes ldr;               // of the display image (empty without one)
@@ -680,7 +689,9 @@ struct FlipReference::Filtered {
 };
 
 FlipReference::FlipReference(const Image* display, const Image* linear, double pixelsPerDegree)
-    : display_(display), linear_(linear), pixelsPerDegree_(pixelsPerDegree) {
+    : pixelsPerDegree_(pixelsPerDegree) {
+  if (display) display_ = FlipImageShape::of(*display);
+  if (linear) linear_ = FlipImageShape::of(*linear);
   // Each image is checked against itself here (empty, channels, ppd); a test against it when
   // compared.
   if (display) validate("ldrFlip", *display, *display, pixelsPerDegree);
@@ -705,6 +716,14 @@ FlipReference::FlipReference(const Image* display, const Image* linear, double p
     }
   }
   filtered_ = std::move(filtered);
+}
+
+size_t FlipReference::bytes() const {
+  size_t floats = 0;
+  for (const auto& plane : filtered_->ldr) floats += plane.size();
+  for (const ReferencePlanes& planes : filtered_->hdr)
+    for (const auto& plane : planes) floats += plane.size();
+  return floats * sizeof(float);
 }
 
 FlipResult FlipReference::ldr(const Image& test) const {
@@ -765,10 +784,10 @@ MetricFamily flipFamily() {
     const bool hdr = o.flip == "all";
     // The reference's side, filtered once per reference for every output compared with it.
     auto prepare = [&] { return FlipReference(v.referenceDisplay, hdr ? v.reference : nullptr); };
-    std::optional<FlipReference> local;
-    const FlipReference& reference =
+    const std::shared_ptr<const FlipReference> prepared =
         v.referenceMemo ? v.referenceMemo->get<FlipReference>("flip:" + o.flip, prepare)
-                        : local.emplace(prepare());
+                        : std::make_shared<const FlipReference>(prepare());
+    const FlipReference& reference = *prepared;
     FlipResult ldrResult = reference.ldr(*v.outputDisplay);
     out.put("ldrFlip", ldrResult.mean, tileSumsOfMap(ldrResult.map.raw(), w, h));
     out.keepMap("ldrFlip", std::move(ldrResult.map));

@@ -8,7 +8,9 @@
 // FLIP approximates the difference a viewer perceives when flipping between the two images at a
 // given viewing distance (pixels per degree of visual angle); 67 ppd corresponds to a 0.7 m wide
 // 4K monitor seen from 0.7 m, the papers' default.
+#include <cstddef>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "core/image.hpp"
@@ -31,21 +33,28 @@ FlipResult ldrFlip(const Image& reference, const Image& test, double pixelsPerDe
 // result is the per-pixel maximum of LDR-FLIP over the exposures. Same errors as ldrFlip.
 FlipResult hdrFlip(const Image& reference, const Image& test, double pixelsPerDegree = 67.0);
 
+// What a comparison checks of a reference's image.
+struct FlipImageShape {
+  int width = 0, height = 0, channels = 0;
+  bool empty = true;
+  static FlipImageShape of(const Image& image);
+};
+
 // A reference prepared once for FLIP against any number of test images: its filtered colour and
 // feature planes (LDR-FLIP of `display`; HDR-FLIP of `linear` at each of its exposures) are kept,
 // so each comparison filters only the test image, half the work of ldrFlip / hdrFlip, with the
-// same values. Either image may be null (that comparison then throws). The images must outlive
-// the FlipReference. Comparisons are const and may run concurrently.
+// same values. Either image may be null (that comparison then throws); neither is read after the
+// constructor. Comparisons are const and may run concurrently.
 class FlipReference {
  public:
   FlipReference(const Image* display, const Image* linear, double pixelsPerDegree = 67.0);
   FlipResult ldr(const Image& test) const;  // ldrFlip(*display, test)
   FlipResult hdr(const Image& test) const;  // hdrFlip(*linear, test)
+  size_t bytes() const;                     // of the filtered planes it keeps
 
  private:
   struct Filtered;
-  const Image* display_;
-  const Image* linear_;
+  std::optional<FlipImageShape> display_, linear_;
   double pixelsPerDegree_;
   std::shared_ptr<const Filtered> filtered_;
 };

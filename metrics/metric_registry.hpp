@@ -15,7 +15,10 @@
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <stdexcept>
 #include <string>
+#include <typeindex>
+#include <typeinfo>
 #include <vector>
 
 #include "core/exr_io.hpp"
@@ -77,20 +80,55 @@ struct FrameFacts {
 
 // What families derive from a reference alone, kept for every output compared with it (FLIP's
 // filtered reference planes): made on first use under `key`, then shared. An evaluation scene
-// keeps one per reference for all its pairs; a value may point into the reference's images.
+// keeps one memo per reference for all its pairs, and its memos share one byte budget: a value
+// that does not fit is made, used and dropped as before (a scene of many large references keeps
+// what fits). A value is made outside the lock (it may run parallel loops); T says its size with
+// `size_t bytes() const` and must not point into anything that moves with the scene.
 class ReferenceMemo {
  public:
+  // Bytes left to the memos that share it.
+  struct Budget {
+    explicit Budget(size_t bytes) : left(bytes) {}
+    std::mutex mutex;
+    size_t left;
+  };
+  explicit ReferenceMemo(std::shared_ptr<Budget> budget) : budget_(std::move(budget)) {}
+
   template <class T, class Make>
-  const T& get(const std::string& key, const Make& make) const {
+  std::shared_ptr<const T> get(const std::string& key, const Make& make) const {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (auto it = items_.find(key); it != items_.end()) return cast<T>(key, it->second);
+    }
+    auto value = std::make_shared<const T>(make());
     std::lock_guard<std::mutex> lock(mutex_);
-    std::shared_ptr<const void>& slot = items_[key];
-    if (!slot) slot = std::make_shared<const T>(make());
-    return *static_cast<const T*>(slot.get());
+    if (auto it = items_.find(key); it != items_.end())
+      return cast<T>(key, it->second);  // made meanwhile
+    if (budget_ && take(value->bytes()))
+      items_.emplace(key, Item{std::type_index(typeid(T)), value});
+    return value;
   }
 
  private:
+  struct Item {
+    std::type_index type;
+    std::shared_ptr<const void> value;
+  };
+  template <class T>
+  static std::shared_ptr<const T> cast(const std::string& key, const Item& item) {
+    if (item.type != std::type_index(typeid(T)))
+      throw std::logic_error("ReferenceMemo: \"" + key + "\" holds another type");
+    return std::static_pointer_cast<const T>(item.value);
+  }
+  bool take(size_t bytes) const {
+    std::lock_guard<std::mutex> lock(budget_->mutex);
+    if (bytes > budget_->left) return false;
+    budget_->left -= bytes;
+    return true;
+  }
+  std::shared_ptr<Budget> budget_;
   mutable std::mutex mutex_;
-  mutable std::map<std::string, std::shared_ptr<const void>> items_;
+  mutable std::map<std::string, Item> items_;
 };
 
 // What a metric family sees of one output frame. Pointers to reference images are null when the

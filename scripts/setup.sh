@@ -29,9 +29,11 @@ phase assets
 # Ninja: two cores stay busy across libraries (make builds a library only after the libraries it
 # links are archived). A build/ configured for another generator by an earlier version of this
 # script is reconfigured from scratch (its objects are rebuilt once).
+# Options given to that configure by hand (-D...) are not carried over.
 if [ -f build/CMakeCache.txt ] && ! grep -q '^CMAKE_GENERATOR:INTERNAL=Ninja$' build/CMakeCache.txt; then
-  echo "setup: build/ was configured for another generator; reconfiguring it for Ninja"
-  rm -rf build/CMakeCache.txt build/CMakeFiles
+  old=$(sed -n 's/^CMAKE_GENERATOR:INTERNAL=//p' build/CMakeCache.txt)
+  echo "setup: build/ was configured for '${old:-an unknown generator}'; reconfiguring it for Ninja from scratch"
+  rm -rf build/CMakeCache.txt build/CMakeFiles build/Makefile build/cmake_install.cmake
 fi
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 phase configure

@@ -72,17 +72,35 @@ std::string firstDifference(const json& a, const json& b, const std::string& pat
   return a == b ? "" : path + ": " + a.dump() + " vs " + b.dump();
 }
 
-TEST(ReferenceMemo, MakesEachKeysValueOnceAndKeepsIt) {
-  // What the evaluation keeps per reference (FLIP's filtered planes) is made on first use only.
-  ReferenceMemo memo;
+struct SizedValue {
+  int value = 0;
+  size_t size = 0;
+  size_t bytes() const { return size; }
+};
+
+TEST(ReferenceMemo, MakesEachKeysValueOnceAndKeepsWhatFitsItsBudget) {
+  // What the evaluation keeps per reference (FLIP's filtered planes) is made on first use only,
+  // as long as the scene's memos have bytes left; beyond that, each use makes its own.
+  auto budget = std::make_shared<ReferenceMemo::Budget>(100);
+  ReferenceMemo memo(budget), other(budget);
   int made = 0;
-  auto make = [&] { return ++made * 10; };
-  const int& first = memo.get<int>("a", make);
-  EXPECT_EQ(first, 10);
-  EXPECT_EQ(&memo.get<int>("a", make), &first);  // the same object, not made again
+  auto make = [&](size_t size) { return [&made, size] { return SizedValue{++made, size}; }; };
+  const auto first = memo.get<SizedValue>("a", make(60));
+  EXPECT_EQ(first->value, 1);
+  EXPECT_EQ(memo.get<SizedValue>("a", make(60)).get(), first.get());  // kept, not made again
   EXPECT_EQ(made, 1);
-  EXPECT_EQ(memo.get<int>("b", make), 20);
-  EXPECT_EQ(made, 2);
+  EXPECT_EQ(other.get<SizedValue>("a", make(30))->value, 2);  // another reference's memo
+  EXPECT_EQ(other.get<SizedValue>("a", make(30))->value, 2);
+  EXPECT_EQ(budget->left, 10u);
+  // 20 bytes do not fit in the 10 left: made, used and dropped at every use.
+  EXPECT_EQ(memo.get<SizedValue>("b", make(20))->value, 3);
+  EXPECT_EQ(memo.get<SizedValue>("b", make(20))->value, 4);
+  EXPECT_EQ(budget->left, 10u);
+  // A key read as another type is a programming error, never a reinterpretation.
+  struct Other {
+    size_t bytes() const { return 0; }
+  };
+  EXPECT_THROW(memo.get<Other>("a", [] { return Other{}; }), std::logic_error);
 }
 
 TEST(Evaluation, RunResultsAreBitIdenticalToTheHarnessBeforeTheStage) {
