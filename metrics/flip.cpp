@@ -544,7 +544,7 @@ template <class ToLinear>
 void compareWithReference(const ReferencePlanes& ref, const Image& test, const ToLinear& toLinear,
                           const Kernels& k, Workspace& ws, float* map, bool takeMax) {
   const size_t w = size_t(ws.w);
-  const double c = maxColourDistance();
+  static const double c = maxColourDistance();
   const float cmax = float(c), pcCmax = float(kPc * c);
   horizontalPass(test, toLinear, k, ws);
   verticalPass(k, ws, [&](int y, const float* l, const float* a, const float* b, const float* e,
@@ -575,7 +575,7 @@ double meanOf(const Image& map) {
 
 void validate(const std::string& name, const FlipImageShape& reference, const Image& test,
               double ppd) {
-  if (reference.empty || test.empty())
+  if (reference.empty() || test.empty())
     throw Error(name + ": empty image (reference " + std::to_string(reference.width) + "x" +
                 std::to_string(reference.height) + ", test " + std::to_string(test.width()) + "x" +
                 std::to_string(test.height()) + ")");
@@ -678,15 +678,33 @@ struct AcesExposure {
 }  // namespace
 
 FlipImageShape FlipImageShape::of(const Image& image) {
-  return {image.width(), image.height(), image.channels(), image.empty()};
+  return {image.width(), image.height(), image.channels()};
 }
 
 struct FlipReference::Filtered {
+  struct Exposure {
+    float scale = 1;  // 2^exposure
+    ReferencePlanes planes;
+  };
   Kernels kernels;
-  ReferencePlanes ldr;               // of the display image (empty without one)
-  std::vector<float> hdrScales;      // per exposure: 2^exposure
-  std::vector<ReferencePlanes> hdr;  // per exposure (empty without a linear image)
+  ReferencePlanes ldr;        // of the display image (empty without one)
+  std::vector<Exposure> hdr;  // of the linear image, per exposure (empty without one)
 };
+
+namespace {
+
+// A FLIP map of `test`'s size filled by compareInto(workspace, map), and its mean.
+template <class CompareInto>
+FlipResult flipMap(const Image& test, const CompareInto& compareInto) {
+  Workspace ws(test.width(), test.height());
+  FlipResult result;
+  result.map = Image(test.width(), test.height(), 1);
+  compareInto(ws, result.map.plane(0));
+  result.mean = meanOf(result.map);
+  return result;
+}
+
+}  // namespace
 
 FlipReference::FlipReference(const Image* display, const Image* linear, double pixelsPerDegree)
     : pixelsPerDegree_(pixelsPerDegree) {
@@ -711,8 +729,8 @@ FlipReference::FlipReference(const Image* display, const Image* linear, double p
           range.count == 1
               ? range.start
               : range.start + (range.stop - range.start) * double(i) / double(range.count - 1);
-      f.hdrScales.push_back(float(std::exp2(exposure)));
-      f.hdr.push_back(filterReference(*linear, AcesExposure{f.hdrScales.back()}, f.kernels, ws));
+      const float scale = float(std::exp2(exposure));
+      f.hdr.push_back({scale, filterReference(*linear, AcesExposure{scale}, f.kernels, ws)});
     }
   }
   filtered_ = std::move(filtered);
@@ -721,37 +739,32 @@ FlipReference::FlipReference(const Image* display, const Image* linear, double p
 size_t FlipReference::bytes() const {
   size_t floats = 0;
   for (const auto& plane : filtered_->ldr) floats += plane.size();
-  for (const ReferencePlanes& planes : filtered_->hdr)
-    for (const auto& plane : planes) floats += plane.size();
+  for (const Filtered::Exposure& exposure : filtered_->hdr)
+    for (const auto& plane : exposure.planes) floats += plane.size();
   return floats * sizeof(float);
 }
 
 FlipResult FlipReference::ldr(const Image& test) const {
   if (!display_) throw Error("ldrFlip: this FLIP reference was prepared without a display image");
   validate("ldrFlip", *display_, test, pixelsPerDegree_);
-  Workspace ws(test.width(), test.height());
-  FlipResult result;
-  result.map = Image(test.width(), test.height(), 1);
-  compareWithReference(filtered_->ldr, test, SrgbDisplay{}, filtered_->kernels, ws,
-                       result.map.plane(0), false);
-  result.mean = meanOf(result.map);
-  return result;
+  const Filtered& f = *filtered_;
+  return flipMap(test, [&](Workspace& ws, float* map) {
+    compareWithReference(f.ldr, test, SrgbDisplay{}, f.kernels, ws, map, false);
+  });
 }
 
 FlipResult FlipReference::hdr(const Image& test) const {
   if (!linear_) throw Error("hdrFlip: this FLIP reference was prepared without a linear image");
   validate("hdrFlip", *linear_, test, pixelsPerDegree_);
-  Workspace ws(test.width(), test.height());
-  FlipResult result;
-  result.map = Image(test.width(), test.height(), 1);
   const Filtered& f = *filtered_;
-  for (size_t i = 0; i < f.hdr.size(); ++i)
-    compareWithReference(f.hdr[i], test, AcesExposure{f.hdrScales[i]}, f.kernels, ws,
-                         result.map.plane(0), i > 0);
-  result.mean = meanOf(result.map);
-  return result;
+  return flipMap(test, [&](Workspace& ws, float* map) {
+    for (size_t i = 0; i < f.hdr.size(); ++i)  // the per-pixel maximum over the exposures
+      compareWithReference(f.hdr[i].planes, test, AcesExposure{f.hdr[i].scale}, f.kernels, ws, map,
+                           i > 0);
+  });
 }
 
+// Both images checked first: a mismatched test is refused before the reference is filtered.
 FlipResult ldrFlip(const Image& reference, const Image& test, double pixelsPerDegree) {
   validate("ldrFlip", reference, test, pixelsPerDegree);
   return FlipReference(&reference, nullptr, pixelsPerDegree).ldr(test);

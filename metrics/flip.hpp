@@ -36,7 +36,7 @@ FlipResult hdrFlip(const Image& reference, const Image& test, double pixelsPerDe
 // What a comparison checks of a reference's image.
 struct FlipImageShape {
   int width = 0, height = 0, channels = 0;
-  bool empty = true;
+  bool empty() const { return size_t(width) * size_t(height) == 0 || channels == 0; }  // as Image's
   static FlipImageShape of(const Image& image);
 };
 

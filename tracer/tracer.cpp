@@ -558,8 +558,8 @@ struct FrameScene::VertexSample {
   glm::vec3 le{0}, wiLight{0};
   float distLight = 0, pdfLight = 0;
   Lobes fLight;
-  int8_t occluded =
-      -1;  // the shadow ray's answer where a packet traced it already (0 or 1), else -1
+  // The shadow ray's answer where a packet traced it already (0 or 1), else -1.
+  int8_t occluded = -1;
   // After chooseAtVertex: the sampled direction lies above the surface; after settle, its pdf is
   // positive too, and the path goes on.
   bool scatters = false;
