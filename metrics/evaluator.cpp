@@ -273,10 +273,28 @@ std::vector<std::string> EvaluationScene::warnings() const {
   std::vector<std::string> out;
   int capped = 0;
   for (bool c : input_.referenceCapped) capped += c;
-  if (capped > 0)
+  if (capped > 0) {
+    // The frames they serve, as ranges ("frames 0-4"): the study's capped references are often the
+    // warm-up frames' alone, which no summary reads.
+    std::string frames;
+    const int n = int(input_.referenceOfFrame.size());
+    auto isCapped = [&](int t) {
+      const int r = input_.referenceOfFrame[size_t(t)];
+      return r >= 0 && r < int(input_.referenceCapped.size()) && input_.referenceCapped[size_t(r)];
+    };
+    for (int t = 0; t < n; ++t) {
+      if (!isCapped(t)) continue;
+      int end = t;
+      while (end + 1 < n && isCapped(end + 1)) ++end;
+      frames += (frames.empty() ? "" : ", ") + std::to_string(t) +
+                (end > t ? "-" + std::to_string(end) : "");
+      t = end;
+    }
     out.push_back(std::to_string(capped) + " of " + std::to_string(input_.referenceCapped.size()) +
-                  " reference(s) stopped at the sample cap above their target relMSE (see sequence.json "
-                  "referenceEstimatedRelMse; `arena refine` can extend them)");
+                  " reference(s) stopped at the sample cap above their target relMSE (frames " +
+                  frames +
+                  "; see sequence.json referenceEstimatedRelMse; `arena refine` can extend them)");
+  }
   long nonFinite = 0;
   for (const auto& [where, count] : input_.nonFinite) nonFinite += count;
   if (nonFinite > 0)

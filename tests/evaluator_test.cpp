@@ -265,6 +265,23 @@ TEST(Evaluation, AScreeningMeasuresTheLinearErrorsAsTheFullEvaluationDoesAndNoth
   EXPECT_FALSE(b.contains("cuts"));
 }
 
+// A scene whose references stopped at their sample cap says how many and which frames they serve
+// (the study's capped references are often the warm-up frames' alone); none capped, no warning.
+TEST(Evaluation, CappedReferencesAreNamedWithTheFramesTheyServe) {
+  EvaluationInput in = flatInput(8, 6, 9, 0.5f, true);
+  in.references.resize(5, in.references.front());
+  in.referenceOfFrame = {0, 1, 2, 2, 3, 4, 4, 4, 4};
+  in.referenceCapped = {true, true, false, true, false};
+  const std::vector<std::string> warnings = EvaluationScene(in, {}).warnings();
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("3 of 5 reference(s) stopped at the sample cap above their target "
+                             "relMSE (frames 0-1, 4;"),
+            std::string::npos)
+      << warnings[0];
+  in.referenceCapped.assign(5, false);
+  EXPECT_TRUE(EvaluationScene(in, {}).warnings().empty());
+}
+
 TEST(Evaluation, FramesOutOfOrderOrOfAnotherSizeAreErrorsNamingThem) {
   EvaluationScene scene(flatInput(8, 6, 4, 0.5f, true), {});
   PairEvaluation pair(scene);
