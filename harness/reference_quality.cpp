@@ -127,15 +127,18 @@ void addReferenceQuality(json& results, int warmup, const std::map<std::string, 
   }
 }
 
-// A scene's budget unit: the paths of its frames at the references' sample cap (the preset's
-// --ref-spp), as if each frame had a reference of its own: W x H x frames x cap, a function of the
-// settings alone. Per frame, not per reference: a static scene's one reference serves every frame
-// and is as much work to a study as a moving scene's many. (Until 2026-11-27 the unit was the
-// paths all references held, cache history included, and the budget was shared cheapest first: a
-// rerun on a cache whose references had been refined had a larger unit and fewer scenes to pay
-// for, so it refined scenes the first run had not.)
-double budgetUnitPaths(const SequenceInfo& info) {
-  const int cap = info.settings.is_object() ? info.settings.value("referenceSpp", 0) : 0;
+// A scene's budget unit: the paths of its frames at the references' sample cap (unitSpp: the
+// preset's or the given --ref-spp; 0: the cap the sequence was rendered under), as if each frame
+// had a reference of its own: W x H x frames x cap, a function of the settings alone. Per frame,
+// not per reference: a static scene's one reference serves every frame and is as much work to a
+// study as a moving scene's many. (Until 2026-11-27 the unit was the paths all references held,
+// cache history included, and the budget was shared cheapest first: a rerun on a cache whose
+// references had been refined had a larger unit and fewer scenes to pay for, so it refined scenes
+// the first run had not.)
+double budgetUnitPaths(const SequenceInfo& info, int unitSpp) {
+  const int cap = unitSpp > 0                 ? unitSpp
+                  : info.settings.is_object() ? info.settings.value("referenceSpp", 0)
+                                              : 0;
   double unit = 0;
   for (int r : info.referenceOfFrame) {
     const int held = r >= 0 && r < int(info.referenceSpp.size()) ? info.referenceSpp[size_t(r)] : 0;
@@ -146,9 +149,9 @@ double budgetUnitPaths(const SequenceInfo& info) {
 
 int firstFrameSummariesRead(int warmup) { return std::max(0, warmup - kMaxMetricHistory); }
 
-std::vector<ReferenceRefinement> planReferenceRefinement(const json& results,
-                                                         const std::map<std::string, SequenceInfo>& sequences,
-                                                         int firstFrame, int maxSpp, double budget) {
+std::vector<ReferenceRefinement> planReferenceRefinement(
+    const json& results, const std::map<std::string, SequenceInfo>& sequences, int firstFrame,
+    int maxSpp, double budget, int unitSpp) {
   std::vector<ReferenceRefinement> plans;
   const json scenes = results.value("scenes", json::object());
   for (const auto& [name, scene] : scenes.items()) {
@@ -167,7 +170,7 @@ std::vector<ReferenceRefinement> planReferenceRefinement(const json& results,
       const double grown = std::min(s * (e / plan.targetRelMse), double(maxSpp));
       plan.predictedPaths += double(info.width) * info.height * (grown - s);
     }
-    const double unit = budgetUnitPaths(info);
+    const double unit = budgetUnitPaths(info, unitSpp);
     plan.budgetNeeded = unit > 0 ? plan.predictedPaths / unit : 0;
     plan.withinBudget = plan.predictedPaths > 0 && plan.budgetNeeded <= budget;
     plans.push_back(plan);

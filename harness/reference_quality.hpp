@@ -33,13 +33,16 @@ int firstFrameSummariesRead(int warmup);
 // The study's refinement of references to the goal (issue 13). A scene that misses it gets the
 // target kRefineMargin x goal x its best corrected relMSE (the margin absorbs the noise of that
 // estimate), and a prediction of the paths that refining the references the summaries read (frames
-// t >= firstFrame, firstFrameSummariesRead) would add: a reference of P pixels, mean s spp and estimated relMSE e > target
-// needs s e / target spp (relMSE ~ 1/spp: the independent sampler's rate, conservative for Sobol;
-// the schedule stops at the tile that meets the target), i.e. P (min(s e / target, maxSpp) - s)
-// paths. A scene is refined when its prediction is at most `budget` x the paths of its frames at
-// the references' sample cap (W x H x frames x --ref-spp, 512 per pixel for the quick preset): a
-// budget per scene, in work, not seconds, and a function of the settings, so which scenes are
-// refined depends neither on the machine nor on the cache's history.
+// t >= firstFrame, firstFrameSummariesRead) would add: a reference of P pixels, mean s spp and
+// estimated relMSE e > target needs s e / target spp (relMSE ~ 1/spp: the independent sampler's
+// rate, conservative for Sobol; the schedule stops at the tile that meets the target), i.e. P
+// (min(s e / target, maxSpp) - s) paths. A scene is refined when its prediction is at most `budget`
+// x the paths of its frames at the references' sample cap (W x H x frames x --ref-spp, 512 per
+// pixel for the quick preset; unitSpp, when > 0, is that cap, else the one the sequence was
+// rendered under: the study renders its first references under a lower cap,
+// kStudyFirstReferenceSpp, and counts its budget in the preset's): a budget per scene, in work, not
+// seconds, and a function of the settings, so which scenes are refined depends neither on the
+// machine nor on the cache's history.
 inline constexpr double kRefineMargin = 0.9;
 struct ReferenceRefinement {
   std::string scene;
@@ -48,9 +51,9 @@ struct ReferenceRefinement {
   double budgetNeeded = 0;    // the smallest budget that covers it
   bool withinBudget = false;
 };
-std::vector<ReferenceRefinement> planReferenceRefinement(const nlohmann::json& results,
-                                                         const std::map<std::string, SequenceInfo>& sequences,
-                                                         int firstFrame, int maxSpp, double budget);
+std::vector<ReferenceRefinement> planReferenceRefinement(
+    const nlohmann::json& results, const std::map<std::string, SequenceInfo>& sequences,
+    int firstFrame, int maxSpp, double budget, int unitSpp = 0);
 // The sentence the verdict carries for a planned scene.
 std::string refinementNote(const ReferenceRefinement& plan, double budget);
 // One line per scene for a printed summary (the verdicts above, aligned), from results.scenes.

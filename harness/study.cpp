@@ -27,8 +27,8 @@ struct SceneRefinement {
 // reference-quality goal and the paths predicted to meet it, with those its earlier rounds were
 // predicted, are within its budget (planReferenceRefinement), its references are refined; each
 // decision is said and noted on the scene's verdict. Returns whether the references changed.
-bool refineAfterScene(const RunConfig& c, const Scene& scene, const json& results, double budget, int maxSpp,
-                      std::map<std::string, SceneRefinement>& done) {
+bool refineAfterScene(const RunConfig& c, const Scene& scene, const json& results, double budget,
+                      int budgetSpp, int maxSpp, std::map<std::string, SceneRefinement>& done) {
   SceneRefinement& state = done[scene.name];
   if (state.stopped) return false;
   json one = {{"scenes", {{scene.name, results["scenes"][scene.name]}}}, {"pairs", json::array()}};
@@ -41,7 +41,8 @@ bool refineAfterScene(const RunConfig& c, const Scene& scene, const json& result
   // The references every summary reads: the summarised frames' and the few before them that their
   // temporal metrics compare with.
   const int firstFrame = firstFrameSummariesRead(c.warmup);
-  const std::vector<ReferenceRefinement> plans = planReferenceRefinement(one, sequences, firstFrame, maxSpp, budget);
+  const std::vector<ReferenceRefinement> plans =
+      planReferenceRefinement(one, sequences, firstFrame, maxSpp, budget, budgetSpp);
   if (plans.empty()) return false;  // the goal is met (or unknown)
   ReferenceRefinement plan = plans.front();
   plan.budgetNeeded += state.budgetUsed;
@@ -105,14 +106,23 @@ RunConfig studyRun(std::vector<Scene> scenes, const RenderSettings& render) {
 json runStudy(StudyConfig config) {
   RunConfig& c = config.run;
   if (!(config.refineBudget > 0)) return runMatrix(c);
-  if (!config.referenceRelErrorGiven && c.render.referenceRelError > 0)
+  // The budget is counted at the preset's (or the given) sample cap, whatever cap the first
+  // references are rendered under.
+  const int budgetSpp = c.render.referenceSpp;
+  if (!config.referenceRelErrorGiven && c.render.referenceRelError > 0) {
     c.render.referenceRelError = std::max(c.render.referenceRelError, kStudyFirstReferenceRelError);
+    if (!config.referenceSppGiven) {
+      c.render.referenceSpp = std::min(c.render.referenceSpp, kStudyFirstReferenceSpp);
+      c.render.referenceMinSpp = std::min(c.render.referenceMinSpp, c.render.referenceSpp);
+    }
+  }
   // Each scene is refined right after its pairs, whose outputs are then measured again; the run is
   // analysed and committed once, with the refinement's notes on the verdicts.
   std::map<std::string, SceneRefinement> refinements;
   c.finish = false;
   c.refineScene = [&](const Scene& scene, const json& results) {
-    return refineAfterScene(c, scene, results, config.refineBudget, config.refineMaxSpp, refinements);
+    return refineAfterScene(c, scene, results, config.refineBudget, budgetSpp, config.refineMaxSpp,
+                            refinements);
   };
   json results = runMatrix(c);
   for (const auto& [scene, refinement] : refinements)

@@ -687,6 +687,14 @@ TEST(Reference, RefinementPlanRefinesEachSceneWithinItsOwnBudget) {
       EXPECT_DOUBLE_EQ(p.budgetNeeded, plans[1].budgetNeeded);
       EXPECT_FALSE(p.withinBudget);
     }
+  // Counted at a given cap (the study's budget, at the preset's cap, for references rendered under
+  // a lower one), "dear" costs 90000 paths of 4 frames x 100 pixels x 1000 spp.
+  for (const ReferenceRefinement& p :
+       planReferenceRefinement(results, sequences, 1, 1000, 1.5, 1000))
+    if (p.scene == "dear") {
+      EXPECT_DOUBLE_EQ(p.budgetNeeded, 90000.0 / 400000);
+      EXPECT_TRUE(p.withinBudget);
+    }
   // A budget of 0 refines nothing; a scene without a sequence is not planned.
   for (const ReferenceRefinement& p : planReferenceRefinement(results, sequences, 1, 1000, 0)) EXPECT_FALSE(p.withinBudget);
   EXPECT_TRUE(planReferenceRefinement(results, {}, 1, 1000, 1).empty());
@@ -803,18 +811,33 @@ TEST(Reference, StudyRefinesTheReferencesItsTemporalMetricsRead) {
 }
 
 // With a refinement budget and no --ref-rel-error, the study renders its first references to
-// kStudyFirstReferenceRelError (the summarised frames' are refined to the goal); without a budget, or
-// with the option given, it keeps the preset's or the given target.
+// kStudyFirstReferenceRelError under kStudyFirstReferenceSpp (the summarised frames' are refined to
+// the goal); without a budget it keeps the preset's target and cap, and a given target or cap is
+// kept (with a given target, the preset's cap). The refinement's budget is counted at the preset's
+// cap either way: a scene the first render leaves within budget is refined.
 TEST(Reference, StudyRendersItsFirstReferencesLooserWhenItWillRefineThem) {
   const std::filesystem::path dir = test::freshDir("study_first_references");
-  auto relError = [&](const std::string& run, const std::string& budget, const std::string& references) {
+  auto render = [&](const std::string& run, const std::string& budget,
+                    const std::string& references) {
     const test::CommandResult r = tinyStudy(dir, run, budget, "cornell_static", references);
     EXPECT_EQ(r.status, 0) << r.output;
-    return parseJsonFile((dir / run / "results.json").string())["settings"]["render"].value("referenceRelError", -1.0);
+    return parseJsonFile((dir / run / "results.json").string())["settings"]["render"];
   };
-  EXPECT_EQ(relError("refining", "4", "--ref-spp 64"), kStudyFirstReferenceRelError);
-  EXPECT_EQ(relError("plain", "0", "--ref-spp 64"), RenderSettings::fromPreset("quick").referenceRelError);
-  EXPECT_EQ(relError("given", "4", "--ref-spp 64 --ref-rel-error 0.005"), 0.005);
+  const RenderSettings quick = RenderSettings::fromPreset("quick");
+  const nlohmann::json refining = render("refining", "4", "--ref-spp 64");
+  EXPECT_EQ(refining.value("referenceRelError", -1.0), kStudyFirstReferenceRelError);
+  EXPECT_EQ(refining.value("referenceSpp", 0), 64);
+  const nlohmann::json loose = render("loose", "4", "");
+  EXPECT_EQ(loose.value("referenceRelError", -1.0), kStudyFirstReferenceRelError);
+  EXPECT_EQ(loose.value("referenceSpp", 0), kStudyFirstReferenceSpp);
+  EXPECT_LT(kStudyFirstReferenceSpp, quick.referenceSpp);
+  const nlohmann::json plain = render("plain", "0", "");
+  EXPECT_EQ(plain.value("referenceRelError", -1.0), quick.referenceRelError);
+  EXPECT_EQ(plain.value("referenceSpp", 0), quick.referenceSpp);
+  const nlohmann::json given = render("given", "4", "--ref-rel-error 0.005");
+  EXPECT_EQ(given.value("referenceRelError", -1.0), 0.005);
+  EXPECT_EQ(given.value("referenceSpp", 0), quick.referenceSpp)
+      << "a given target keeps the preset's cap";
 }
 
 // `arena bench reference` end to end on a tiny frame: a line per scene ending in its gain, the JSON
