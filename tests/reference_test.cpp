@@ -838,6 +838,20 @@ TEST(Reference, StudyRendersItsFirstReferencesLooserWhenItWillRefineThem) {
   EXPECT_EQ(given.value("referenceRelError", -1.0), 0.005);
   EXPECT_EQ(given.value("referenceSpp", 0), quick.referenceSpp)
       << "a given target keeps the preset's cap";
+  // The budget a scene needs is counted at the preset's cap, not the first render's: hard_light at
+  // 32x18 misses the goal, and the note's budget is its predicted paths over 10 frames x 32 x 18
+  // pixels x 512 spp (rounded up to a tenth), where 128 spp would give four times as much.
+  const test::CommandResult tight = tinyStudy(dir, "tight", "0.0001", "hard_light", "");
+  ASSERT_EQ(tight.status, 0) << tight.output;
+  std::smatch m;
+  ASSERT_TRUE(
+      std::regex_search(tight.output, m,
+                        std::regex("about ([0-9.e+-]+) Mpaths more.*`arena study --refine-budget "
+                                   "([0-9.]+)` covers it")))
+      << tight.output;
+  const double needed = std::stod(m[1]) * 1e6 / (10.0 * 32 * 18 * quick.referenceSpp);
+  EXPECT_GE(std::stod(m[2]), needed - 0.01) << tight.output;
+  EXPECT_LE(std::stod(m[2]), needed + 0.11) << tight.output;
 }
 
 // `arena bench reference` end to end on a tiny frame: a line per scene ending in its gain, the JSON
