@@ -97,9 +97,10 @@ void addStudyCommand(CLI::App& app) {
   cmd->add_option("--refine-budget", *refineBudget,
                   "After a scene's pairs, refine its references when it misses the reference-quality goal "
                   "and its predicted extra paths are at most this many times the paths of its frames at the "
-                  "references' sample cap (width x height x frames x --ref-spp), then measure its pairs again "
-                  "(0: off). With a budget, the first references are rendered to --ref-rel-error 0.02 unless "
-                  "it is given, and then under --ref-spp 128 unless that is given")
+                  "preset's (or the given) reference sample cap (width x height x frames x --ref-spp), then "
+                  "measure its pairs again (0: off). With a budget, the quick preset's first references stop "
+                  "at relative error 0.02 or 128 spp when neither --ref-rel-error nor --ref-spp is given (at "
+                  "0.02 and the given cap with --ref-spp alone)")
       ->check(finiteRange(0.0, 1000.0))
       ->default_val(4);
   cmd->add_option("--refine-max-spp", *refineMaxSpp, "The refinement's cap on a reference's samples per pixel")

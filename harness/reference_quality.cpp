@@ -190,7 +190,8 @@ std::string refinementNote(const ReferenceRefinement& plan, double budget) {
   char need[32];
   std::snprintf(need, sizeof need, "%g", std::ceil(plan.budgetNeeded * 10) / 10);
   return "not refined by the study: about " + paths + " more, over its refinement budget of " + sci(budget) +
-         "x the paths of its frames at the references' sample cap; `arena study --refine-budget " + need + "` covers it";
+         "x the paths of its frames at the preset's reference sample cap (or the given --ref-spp); "
+         "`arena study --refine-budget " + need + "` covers it";
 }
 
 std::vector<std::string> referenceQualityLines(const json& scenes) {

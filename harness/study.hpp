@@ -21,14 +21,15 @@ namespace arena {
 inline constexpr double kStudyFirstReferenceRelError = 0.02;
 // ... and, when it chose that target and --ref-spp is not given, under this sample cap (the paper
 // preset, without a target, keeps its uniform 4096 spp). A scene whose references stop at the cap
-// before their 2% (living_room's and foliage_window's at the preset's 512 did, 7-9x above it) is
+// before their 2% (living_room's and foliage_window's at the preset's 512 did, 6-9x above it) is
 // refined only as far as its goal needs, not to the cap; its budget is still counted at the
 // preset's cap (docs/performance.md, 2026-11-27, eighth entry).
 inline constexpr int kStudyFirstReferenceSpp = 128;
 
 struct StudyConfig {
   RunConfig run;              // scenes, render settings, cache, out, flip, exposure, progress
-  // Per scene: extra paths as a multiple of its frames' paths at the references' sample cap (0: none).
+  // Per scene: extra paths as a multiple of its frames' paths at the preset's (or the given)
+  // reference sample cap (0: none).
   double refineBudget = 4;
   int refineMaxSpp = 8192;    // the refinement's cap on a reference's samples per pixel
   bool referenceRelErrorGiven = false;  // --ref-rel-error was set: the study keeps it

@@ -291,8 +291,8 @@ std::vector<std::string> EvaluationScene::warnings() const {
       t = end;
     }
     out.push_back(std::to_string(capped) + " of " + std::to_string(input_.referenceCapped.size()) +
-                  " reference(s) stopped at the sample cap above their target relMSE (frames " +
-                  frames +
+                  " reference(s) stopped at the sample cap above their target relMSE (" +
+                  (frames.empty() ? std::string("no frame reads them") : "frames " + frames) +
                   "; see sequence.json referenceEstimatedRelMse; `arena refine` can extend them)");
   }
   long nonFinite = 0;

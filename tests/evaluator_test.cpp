@@ -278,6 +278,18 @@ TEST(Evaluation, CappedReferencesAreNamedWithTheFramesTheyServe) {
                              "relMSE (frames 0-1, 4;"),
             std::string::npos)
       << warnings[0];
+  // A capped reference no frame reads (the evaluation's input may carry one) is counted, not
+  // listed.
+  in.referenceOfFrame = {0, 1, 1, 1, 1, 1, 1, 1, 1};
+  in.referenceCapped = {false, false, true, false, false};
+  const std::vector<std::string> unread = EvaluationScene(in, {}).warnings();
+  ASSERT_EQ(unread.size(), 1u);
+  EXPECT_NE(
+      unread[0].find(
+          "1 of 5 reference(s) stopped at the sample cap above their target relMSE (no frame reads "
+          "them;"),
+      std::string::npos)
+      << unread[0];
   in.referenceCapped.assign(5, false);
   EXPECT_TRUE(EvaluationScene(in, {}).warnings().empty());
 }
