@@ -25,7 +25,7 @@ using nlohmann::json;
 
 namespace {
 
-constexpr int kTracerVersion = 6;  // bump when a change alters pixels: invalidates every cache
+constexpr int kTracerVersion = 7;  // bump when a change alters pixels: invalidates every cache
 constexpr float kMissHitDist = 1e6f;
 constexpr uint32_t kStratumPickSample = 0xFFFFF;  // sample index reserved for stratum picks
 constexpr uint32_t kLowresFirstSample = 0x80000;  // low-res paths: independent of frame and reference

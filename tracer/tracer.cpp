@@ -43,6 +43,23 @@ glm::vec3 offsetOrigin(glm::vec3 p, glm::vec3 n) {
   return p + n * scale;
 }
 
+// A light sample's shadow ray: the segment from the shading point's offset origin to the light
+// point lifted off its emitter (sampleLight's shadowEnd). Both ends are offset. A segment from the
+// offset origin along the direction seen from the unlifted point, stopped a fixed fraction short
+// of the light point (as it was until tracer version 7), ends past the emitter wherever the
+// origin's offset points towards the light by more than that fraction of the distance, and the
+// emitter then occludes its own sample: surfaces near a light were too dark (hard_light's
+// reference by 30%, the ceiling under its sphere light; docs/references.md).
+struct Segment {
+  glm::vec3 dir;
+  float length;
+};
+Segment shadowSegment(glm::vec3 origin, glm::vec3 end) {
+  const glm::vec3 d = end - origin;
+  const float length = std::sqrt(glm::dot(d, d));
+  return {length > 0 ? d / length : glm::vec3(0, 1, 0), length};
+}
+
 // A surface oriented towards the viewer: both normals on the side of wo.
 struct Oriented {
   glm::vec3 n, ng;
@@ -275,6 +292,16 @@ FrameScene::FrameScene(const EmbreeDevice& device, const Scene& scene,
       // nothing changed. A light with zero radiance contributes 0 (its pdf is 0 below).
       if (g.area > 0) selectableLights_.push_back(int(id));
       g.areaGuide = CdfGuide(g.areaCdf);
+      if (scene.lights[size_t(g.lightIndex)].shape == Shape::Sphere && g.area > 0) {
+        // The sphere around the light's origin that holds every vertex (its scale may differ per
+        // axis), widened by a relative 1e-5 against rounding: a part of the mesh outside it would
+        // never be light-sampled, yet weighted as if it were.
+        g.sampledByCone = true;
+        g.coneCenter = glm::vec3(m * glm::vec4(0, 0, 0, 1));
+        for (const glm::vec3& p : g.positions)
+          g.coneRadius2 = std::max(g.coneRadius2, glm::dot(p - g.coneCenter, p - g.coneCenter));
+        g.coneRadius2 *= 1.0f + 1e-5f;
+      }
     }
     RTCGeometry geom = rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
     auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
@@ -451,20 +478,68 @@ glm::vec3 FrameScene::sky(glm::vec3 dir) const {
   return glm::mix(scene_.skyBottom, scene_.skyTop, 0.5f * (dir.y + 1.0f));
 }
 
-glm::vec3 FrameScene::sampleLight(const SurfaceHit& at, const Sampler& s, uint32_t dim, glm::vec3& wi,
-                                  float& dist, float& pdf) const {
-  pdf = 0;
-  if (selectableLights_.empty()) return glm::vec3(0);
+// A light sample. An area sample (meshId -1) names its point, and a shadow ray to shadowEnd decides
+// whether it is seen. A cone sample names only a direction: it is seen where the first thing a
+// ray along wi meets is the light's own mesh (meshId) from the front, which one closest-hit ray
+// decides (chooseAtVertex); between the mesh and the sphere around it the direction meets nothing
+// of the light and the sample is 0, as its pdf over the whole cone counts.
+struct FrameScene::LightSample {
+  glm::vec3 le{0};         // emitted radiance; 0 with pdf 0: no sample
+  glm::vec3 wi{0};         // unit direction from the shading point
+  float pdf = 0;           // solid angle, the light's choice included
+  glm::vec3 shadowEnd{0};  // area samples: the light point, lifted off the emitter
+  int meshId = -1;         // cone samples: the light the direction must reach
+};
+
+namespace {
+// 1 - cos(theta_max) of the cone a sphere of squared radius r2 subtends from squared distance d2 >
+// r2, written without the cancellation of 1 - sqrt(1 - sin^2) for small cones.
+float coneOneMinusCos(float r2, float d2) {
+  const float sin2 = r2 / d2;
+  return sin2 / (1.0f + std::sqrt(1.0f - sin2));
+}
+}  // namespace
+
+FrameScene::LightSample FrameScene::sampleLight(const SurfaceHit& at, const Sampler& s,
+                                                uint32_t dim) const {
+  LightSample out;
+  if (selectableLights_.empty()) return out;
   const size_t n = selectableLights_.size();
   glm::vec2 uv = s.get2(dim + kLightU);
   // The reference sampler reuses the pair's first coordinate for the discrete choices (light, then
-  // triangle), rescaled to [0, 1) within the chosen interval, so the pair's 2D stratification carries
-  // over to the point on the chosen light instead of being split at random between lights and
-  // triangles. The frames' independent sampler keeps its own dimensions (frames are unchanged).
+  // triangle), rescaled to [0, 1) within the chosen interval, so the pair's 2D stratification
+  // carries over to the point on the chosen light instead of being split at random between lights
+  // and triangles. The frames' independent sampler keeps its own dimensions.
   const bool reuse = s.kind() == SamplerKind::OwenSobol;
   float uSelect = reuse ? uv.x * float(n) : s.get(dim + kLightSelect) * float(n);
   const size_t li = std::min(size_t(uSelect), n - 1);
   const Geometry& g = geometries_[size_t(selectableLights_[li])];
+  if (g.sampledByCone) {
+    // A sphere light seen from outside the sphere that holds its mesh: a direction uniform in that
+    // sphere's cone (pbrt-v4's Sphere::Sample(ctx, u), here over the bounding sphere of a mesh).
+    // Area sampling wastes the half of its points that face away and weights the rest by
+    // cos / distance^2, which varies most near the light (hard_light's ceiling, 0.11 below its
+    // sphere): this halves hard_light's reference error at equal samples (docs/references.md).
+    const glm::vec3 toCenter = g.coneCenter - at.position;
+    const float d2 = glm::dot(toCenter, toCenter);
+    if (d2 > g.coneRadius2) {
+      if (maxComponent(g.lightRadiance) <= 0) return out;  // switched off: pdf stays 0
+      const float oneMinusCosMax = coneOneMinusCos(g.coneRadius2, d2);
+      const float u = reuse ? std::min(uSelect - float(li), kOneMinusEpsilon) : uv.x;
+      const float oneMinusCos = u * oneMinusCosMax;
+      const float cosTheta = 1.0f - oneMinusCos;
+      const float sinTheta = std::sqrt(std::max(0.0f, oneMinusCos * (2.0f - oneMinusCos)));
+      const float phi = 2.0f * kPi * uv.y;
+      const glm::vec3 w = toCenter / std::sqrt(d2);
+      glm::vec3 t, b;
+      orthonormalBasis(w, t, b);
+      out.wi = glm::normalize(cosTheta * w + sinTheta * (std::cos(phi) * t + std::sin(phi) * b));
+      out.pdf = 1.0f / (2.0f * kPi * oneMinusCosMax * float(n));
+      out.le = g.lightRadiance;
+      out.meshId = selectableLights_[li];
+      return out;
+    }
+  }
   // Triangle in proportion to its area, then a uniform point on it.
   float target = (reuse ? std::min(uSelect - float(li), kOneMinusEpsilon) : s.get(dim + kLightTriangle)) * g.area;
   const size_t ti = std::min(g.areaGuide.lowerBound(g.areaCdf, target), g.areaCdf.size() - 1);
@@ -479,14 +554,16 @@ glm::vec3 FrameScene::sampleLight(const SurfaceHit& at, const Sampler& s, uint32
   const glm::vec3 ln = g.faceNormals[ti];  // normalize(cross(p1 - p0, p2 - p0)), computed once per frame
   glm::vec3 d = lp - at.position;
   float dist2 = glm::dot(d, d);
-  dist = std::sqrt(dist2);
-  if (dist <= 0) return glm::vec3(0);
-  wi = d / dist;
-  float cosLight = glm::dot(ln, -wi);
-  if (cosLight <= 0) return glm::vec3(0);  // one-sided emitters
-  if (maxComponent(g.lightRadiance) <= 0) return glm::vec3(0);  // switched off: pdf stays 0
-  pdf = dist2 / (cosLight * g.area * float(n));
-  return g.lightRadiance;
+  const float dist = std::sqrt(dist2);
+  if (dist <= 0) return out;
+  out.wi = d / dist;
+  float cosLight = glm::dot(ln, -out.wi);
+  if (cosLight <= 0) return out;                       // one-sided emitters
+  if (maxComponent(g.lightRadiance) <= 0) return out;  // switched off: pdf stays 0
+  out.pdf = dist2 / (cosLight * g.area * float(n));
+  out.shadowEnd = offsetOrigin(lp, ln);  // off the emitter, on the side it lights (cosLight > 0)
+  out.le = g.lightRadiance;
+  return out;
 }
 
 CdfGuide::CdfGuide(const std::vector<float>& cdf) : total_(cdf.empty() ? 0.0f : cdf.back()) {
@@ -516,6 +593,13 @@ float FrameScene::lightPdf(const SurfaceHit& lightHit, glm::vec3 from) const {
   float dist2 = glm::dot(d, d);
   float cosLight = glm::dot(lightHit.geometricNormal, d / std::sqrt(dist2));
   if (cosLight <= 0) return 0;
+  if (g.sampledByCone) {  // the choice sampleLight makes for a point here
+    const glm::vec3 toCenter = g.coneCenter - from;
+    const float d2 = glm::dot(toCenter, toCenter);
+    if (d2 > g.coneRadius2)
+      return 1.0f /
+             (2.0f * kPi * coneOneMinusCos(g.coneRadius2, d2) * float(selectableLights_.size()));
+  }
   return dist2 / (cosLight * g.area * float(selectableLights_.size()));
 }
 
@@ -556,10 +640,13 @@ struct FrameScene::VertexSample {
   // reflects it, and it takes a shadow ray.
   bool towardsLight = false;
   glm::vec3 le{0}, wiLight{0};
-  float distLight = 0, pdfLight = 0;
+  glm::vec3 shadowEnd{0};  // where the shadow ray ends: the light point, lifted off the emitter
+  float pdfLight = 0;
   Lobes fLight;
-  // The shadow ray's answer where a packet traced it already (0 or 1), else -1.
+  // The shadow ray's answer where a packet traced it already, or a cone sample's closest-hit ray
+  // decided it (0 or 1), else -1.
   int8_t occluded = -1;
+  bool coneRay = false;  // a cone sample's ray was traced (counted once, whatever the BSDF says)
   // After chooseAtVertex: the sampled direction lies above the surface; after settle, its pdf is
   // positive too, and the path goes on.
   bool scatters = false;
@@ -592,9 +679,24 @@ void setPacketRay(RTCRay16& r, int l, glm::vec3 o, glm::vec3 d, float tfar) {
 // of them lie above the surface (towardsLight, scatters: set so far only from the geometry).
 void FrameScene::chooseAtVertex(const SurfaceHit& s, const VertexBsdf& v, const Sampler& sampler,
                                 uint32_t dim, VertexSample& out) const {
-  out.le = sampleLight(s, sampler, dim, out.wiLight, out.distLight, out.pdfLight);
-  // The conditions as the path loop wrote them before (NaN included): the same bits.
+  const LightSample light = sampleLight(s, sampler, dim);
+  out.le = light.le;
+  out.wiLight = light.wi;
+  out.pdfLight = light.pdf;
+  out.shadowEnd = light.shadowEnd;
   out.towardsLight = !(out.pdfLight <= 0 || glm::dot(out.wiLight, v.ng) <= 0);
+  if (out.towardsLight && light.meshId >= 0) {
+    // A cone sample is seen where its direction reaches the light's mesh, from the front, before
+    // anything else.
+    SurfaceHit h;
+    float t;
+    out.coneRay = true;
+    const bool seen =
+        intersect(offsetOrigin(s.position, v.ng), out.wiLight, kInf, h, t) &&
+        h.meshId == light.meshId &&
+        glm::dot(geometries_[size_t(h.meshId)].faceNormals[size_t(h.primId)], out.wiLight) < 0;
+    out.occluded = seen ? 0 : 1;
+  }
   glm::vec2 u = sampler.get2(dim + kDirU);
   float lobe = 0;
   if (sampler.kind() == SamplerKind::OwenSobol)
@@ -669,8 +771,9 @@ void FrameScene::shadeBatch(const PrimaryVertex& vertex, const Sampler* samplers
   alignas(64) int valid[16];
   alignas(64) RTCRay16 shadow;
   for (int l = 0; l < 16; ++l) {
-    valid[l] = l < count && first[l].towardsLight ? -1 : 0;
-    setPacketRay(shadow, l, origin, first[l].wiLight, first[l].distLight * (1.0f - 1e-3f));
+    valid[l] = l < count && first[l].towardsLight && first[l].occluded < 0 ? -1 : 0;
+    const Segment ray = shadowSegment(origin, first[l].shadowEnd);
+    setPacketRay(shadow, l, origin, ray.dir, ray.length);
   }
   rtcOccluded16(valid, rtcScene_, &ctx, &shadow);
   // Should Embree refuse the packet (an error, the rays left untraced), shade() traces them
@@ -689,11 +792,15 @@ FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Vertex
   // heuristic).
   auto nextEvent = [&](const SurfaceHit& s, const VertexBsdf& v, const VertexSample& vs,
                        glm::vec3& diffuse, glm::vec3& specular, glm::vec3* direction) {
+    if (vs.towardsLight || vs.coneRay) counts.rays++;
     if (!vs.towardsLight) return;
-    counts.rays++;
     const glm::vec3 origin = offsetOrigin(s.position, v.ng), wi = vs.wiLight, le = vs.le;
-    if (vs.occluded >= 0 ? vs.occluded != 0 : occluded(origin, wi, vs.distLight * (1.0f - 1e-3f)))
-      return;
+    if (vs.occluded >= 0) {
+      if (vs.occluded != 0) return;
+    } else {
+      const Segment ray = shadowSegment(origin, vs.shadowEnd);
+      if (occluded(origin, ray.dir, ray.length)) return;
+    }
     const Lobes& f = vs.fLight;
     const float pdfLight = vs.pdfLight;
     float weight = pdfLight * pdfLight / (pdfLight * pdfLight + f.pdf * f.pdf);
@@ -717,6 +824,9 @@ FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Vertex
   glm::vec3 incoming(0), throughput(1);
   glm::vec3 origin = offsetOrigin(primary.position, v0.ng), dir = wi;
   float prevPdf = f0.pdf;
+  // The previous vertex as sampleLight saw it (not the ray's offset origin): the light-sampling
+  // pdf of a light hit here is the one its light sample would have had.
+  glm::vec3 prevPosition = primary.position;
   for (int depth = 1; depth <= scene_.maxBounces; ++depth) {
     SurfaceHit h;
     float t;
@@ -729,7 +839,7 @@ FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Vertex
     }
     SurfaceHit s = surface(h.meshId, h.primId, h.u, h.v);
     if (maxComponent(s.emission) > 0 && glm::dot(s.geometricNormal, -dir) > 0) {
-      float pl = lightPdf(s, origin);
+      float pl = lightPdf(s, prevPosition);
       float weight = pl > 0 ? prevPdf * prevPdf / (prevPdf * prevPdf + pl * pl) : 1.0f;
       incoming += throughput * s.emission * weight;
     }
@@ -751,6 +861,7 @@ FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Vertex
       throughput /= q;
     }
     origin = offsetOrigin(s.position, v.ng);
+    prevPosition = s.position;
     dir = next;
     prevPdf = f.pdf;
   }

@@ -184,6 +184,11 @@ class FrameScene {
     std::vector<float> areaCdf;  // lights: cumulative triangle areas
     CdfGuide areaGuide;          // into areaCdf
     float area = 0;
+    // Sphere lights: the sphere around the light's origin that holds its mesh. From outside it the
+    // light is sampled by the solid angle of that sphere (sampleLight), not by area.
+    bool sampledByCone = false;
+    glm::vec3 coneCenter{0};
+    float coneRadius2 = 0;
   };
   struct VertexSample;  // a sample's choices at a vertex before it traces (tracer.cpp)
   VertexSample sampleVertex(const SurfaceHit& s, const VertexBsdf& v, const Sampler& sampler,
@@ -192,8 +197,10 @@ class FrameScene {
                       uint32_t dim, VertexSample& out) const;
   Radiance shade(const PrimaryVertex& vertex, const VertexSample& first, const Sampler& sampler,
                  RayCounts& counts) const;
-  glm::vec3 sampleLight(const SurfaceHit& at, const Sampler& s, uint32_t dim, glm::vec3& wi,
-                        float& dist, float& pdfSolidAngle) const;
+  // A light sample from `at`: radiance, direction, pdf (solid angle) and how its visibility is
+  // decided (LightSample in tracer.cpp).
+  struct LightSample;
+  LightSample sampleLight(const SurfaceHit& at, const Sampler& s, uint32_t dim) const;
   float lightPdf(const SurfaceHit& lightHit, glm::vec3 from) const;
   // The hit's (t, u, v) recomputed from its triangle, the same bits on every CPU (tracer.cpp).
   void exactHit(glm::vec3 origin, glm::vec3 dir, SurfaceHit& hit, float& t) const;
