@@ -339,7 +339,7 @@ TEST(Tracer, MotionVectorsFollowAnimatedAssetNodes) {
 // shadow rays one Embree packet); each sample's radiance is the bits shade() gives it alone:
 // pixels in light, in the pillar's shadow and on its edge, full and partial batches, Sobol and
 // independent samplers, a pixel on the light (no path leaves), and glossy_orbit's rough and
-// smooth metals and dielectrics. Under Embree's SSE2 and AVX2 kernels too, which have no 16-ray
+// smooth metals and dielectrics, and light_switch's sphere lamp. Under Embree's SSE2 and AVX2 kernels too, which have no 16-ray
 // packets (Embree reports an error and leaves the rays untraced): there the batch traces its
 // shadow rays one by one, or shadowed samples would come out lit.
 struct BatchCase {
@@ -355,6 +355,9 @@ TEST(Tracer, ABatchOfSamplesShadesAsEachSampleAlone) {
   expectBatchesShadeAsSamplesAlone({"camera_pan_occluder", "verbose=0,isa=sse2", 1500, 15, 1500});
   expectBatchesShadeAsSamplesAlone({"camera_pan_occluder", "verbose=0,isa=avx2", 1500, 15, 1500});
   expectBatchesShadeAsSamplesAlone({"glossy_orbit", "verbose=0", 1500, -1, 1500});
+  // A sphere light: half the light samples are cone samples, whose closest-hit ray each lane
+  // traces alone and which stay out of the shadow packet.
+  expectBatchesShadeAsSamplesAlone({"light_switch", "verbose=0", 1500, -1, 0});
 }
 void expectBatchesShadeAsSamplesAlone(const BatchCase& c) {
   SCOPED_TRACE(std::string(c.scene) + " " + c.embree);
