@@ -585,21 +585,26 @@ size_t CdfGuide::guided(const std::vector<float>& cdf, float target) const {
   return i;
 }
 
-float FrameScene::lightPdf(const SurfaceHit& lightHit, glm::vec3 from) const {
+float FrameScene::lightPdf(const SurfaceHit& lightHit, glm::vec3 from, glm::vec3 dir) const {
   if (lightHit.lightIndex < 0 || selectableLights_.empty()) return 0;
   const Geometry& g = geometries_[size_t(lightHit.meshId)];
   if (maxComponent(g.lightRadiance) <= 0) return 0;
+  if (g.sampledByCone) {  // the choice sampleLight makes at `from`
+    const glm::vec3 toCenter = g.coneCenter - from;
+    const float d2 = glm::dot(toCenter, toCenter);
+    if (d2 > g.coneRadius2) {
+      // The ray left an offset origin: near the mesh's silhouette its direction can lie just
+      // outside the cone seen from `from`, where light sampling never goes (pdf 0). Its front
+      // face the caller has checked along `dir`, as a cone sample's ray is checked.
+      const float oneMinusCosMax = coneOneMinusCos(g.coneRadius2, d2);
+      if (1.0f - glm::dot(dir, toCenter / std::sqrt(d2)) > oneMinusCosMax) return 0;
+      return 1.0f / (2.0f * kPi * oneMinusCosMax * float(selectableLights_.size()));
+    }
+  }
   glm::vec3 d = from - lightHit.position;
   float dist2 = glm::dot(d, d);
   float cosLight = glm::dot(lightHit.geometricNormal, d / std::sqrt(dist2));
   if (cosLight <= 0) return 0;
-  if (g.sampledByCone) {  // the choice sampleLight makes for a point here
-    const glm::vec3 toCenter = g.coneCenter - from;
-    const float d2 = glm::dot(toCenter, toCenter);
-    if (d2 > g.coneRadius2)
-      return 1.0f /
-             (2.0f * kPi * coneOneMinusCos(g.coneRadius2, d2) * float(selectableLights_.size()));
-  }
   return dist2 / (cosLight * g.area * float(selectableLights_.size()));
 }
 
@@ -631,16 +636,17 @@ FrameScene::PrimaryVertex FrameScene::prepare(const SurfaceHit& hit, glm::vec3 w
   return v;
 }
 
-// What a sample decides at a vertex before any ray leaves it: its light sample and its scattered
-// direction, each with the BSDF evaluated towards it. Nothing here waits on a ray, so a reference
-// decides its first vertex for a batch of samples at once and traces their shadow rays as one
-// packet (shadeBatch).
+// What a sample decides at a vertex before it goes on: its light sample and its scattered
+// direction, each with the BSDF evaluated towards it. Only a cone sample (a sphere light's) traces
+// a ray here, the closest-hit ray that decides it; an area sample's shadow ray waits, so a
+// reference decides its first vertex for a batch of samples at once and traces their area
+// samples' shadow rays as one packet (shadeBatch).
 struct FrameScene::VertexSample {
   // After chooseAtVertex: the light sample lies above the surface; after settle, the BSDF also
-  // reflects it, and it takes a shadow ray.
+  // reflects it, and it counts (an area sample takes its shadow ray then).
   bool towardsLight = false;
   glm::vec3 le{0}, wiLight{0};
-  glm::vec3 shadowEnd{0};  // where the shadow ray ends: the light point, lifted off the emitter
+  glm::vec3 shadowEnd{0};  // area samples: the light point lifted off the emitter (cone: unused)
   float pdfLight = 0;
   Lobes fLight;
   // The shadow ray's answer where a packet traced it already, or a cone sample's closest-hit ray
@@ -760,7 +766,8 @@ void FrameScene::shadeBatch(const PrimaryVertex& vertex, const Sampler* samplers
     }
   }
   for (int l = 0; l < count; ++l) first[l].settle();
-  // Their shadow rays leave one point towards the same lights: one coherent packet. (The
+  // Their area samples' shadow rays leave one point towards the same lights: one coherent packet
+  // (cone samples were decided in chooseAtVertex and stay out of it). (The
   // scattered rays as a packet too were measured: no faster, and Embree's packet kernels chose
   // the other triangle of a shared edge for some of living_room's rays.)
   static_assert(Sampler::kBatchLanes == 16, "the packet is Embree's RTCRay16");
@@ -788,8 +795,8 @@ FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Vertex
                                        const Sampler& sampler, RayCounts& counts) const {
   Radiance out;
   counts.paths++;
-  // The light sample's contribution: its shadow ray, MIS-weighted against BSDF sampling (power
-  // heuristic).
+  // The light sample's contribution, if seen (its shadow ray, or the answer a packet or a cone
+  // sample's ray gave), MIS-weighted against BSDF sampling (power heuristic).
   auto nextEvent = [&](const SurfaceHit& s, const VertexBsdf& v, const VertexSample& vs,
                        glm::vec3& diffuse, glm::vec3& specular, glm::vec3* direction) {
     if (vs.towardsLight || vs.coneRay) counts.rays++;
@@ -839,7 +846,7 @@ FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Vertex
     }
     SurfaceHit s = surface(h.meshId, h.primId, h.u, h.v);
     if (maxComponent(s.emission) > 0 && glm::dot(s.geometricNormal, -dir) > 0) {
-      float pl = lightPdf(s, prevPosition);
+      float pl = lightPdf(s, prevPosition, dir);
       float weight = pl > 0 ? prevPdf * prevPdf / (prevPdf * prevPdf + pl * pl) : 1.0f;
       incoming += throughput * s.emission * weight;
     }

@@ -201,7 +201,9 @@ class FrameScene {
   // decided (LightSample in tracer.cpp).
   struct LightSample;
   LightSample sampleLight(const SurfaceHit& at, const Sampler& s, uint32_t dim) const;
-  float lightPdf(const SurfaceHit& lightHit, glm::vec3 from) const;
+  // The pdf (solid angle) with which sampleLight at `from` would have chosen a ray along `dir`
+  // that hit the light at lightHit.
+  float lightPdf(const SurfaceHit& lightHit, glm::vec3 from, glm::vec3 dir) const;
   // The hit's (t, u, v) recomputed from its triangle, the same bits on every CPU (tracer.cpp).
   void exactHit(glm::vec3 origin, glm::vec3 dir, SurfaceHit& hit, float& t) const;
 
