@@ -500,8 +500,8 @@ float coneOneMinusCos(float r2, float d2) {
 }
 }  // namespace
 
-FrameScene::LightSample FrameScene::sampleLight(const SurfaceHit& at, const Sampler& s,
-                                                uint32_t dim) const {
+FrameScene::LightSample FrameScene::sampleLight(const SurfaceHit& at, glm::vec3 origin,
+                                                const Sampler& s, uint32_t dim) const {
   LightSample out;
   if (selectableLights_.empty()) return out;
   const size_t n = selectableLights_.size();
@@ -520,7 +520,9 @@ FrameScene::LightSample FrameScene::sampleLight(const SurfaceHit& at, const Samp
     // Area sampling wastes the half of its points that face away and weights the rest by
     // cos / distance^2, which varies most near the light (hard_light's ceiling, 0.11 below its
     // sphere): this halves hard_light's reference error at equal samples (docs/references.md).
-    const glm::vec3 toCenter = g.coneCenter - at.position;
+    // The cone is seen from the ray origin (offset off the surface), where its ray leaves and
+    // where a BSDF-sampled ray leaves too: every ray from there that meets the mesh lies in it.
+    const glm::vec3 toCenter = g.coneCenter - origin;
     const float d2 = glm::dot(toCenter, toCenter);
     if (d2 > g.coneRadius2) {
       if (maxComponent(g.lightRadiance) <= 0) return out;  // switched off: pdf stays 0
@@ -585,17 +587,18 @@ size_t CdfGuide::guided(const std::vector<float>& cdf, float target) const {
   return i;
 }
 
-float FrameScene::lightPdf(const SurfaceHit& lightHit, glm::vec3 from, glm::vec3 dir) const {
+float FrameScene::lightPdf(const SurfaceHit& lightHit, glm::vec3 from, glm::vec3 origin,
+                           glm::vec3 dir) const {
   if (lightHit.lightIndex < 0 || selectableLights_.empty()) return 0;
   const Geometry& g = geometries_[size_t(lightHit.meshId)];
   if (maxComponent(g.lightRadiance) <= 0) return 0;
-  if (g.sampledByCone) {  // the choice sampleLight makes at `from`
-    const glm::vec3 toCenter = g.coneCenter - from;
+  if (g.sampledByCone) {  // the choice sampleLight makes at the ray's origin
+    const glm::vec3 toCenter = g.coneCenter - origin;
     const float d2 = glm::dot(toCenter, toCenter);
     if (d2 > g.coneRadius2) {
-      // The ray left an offset origin: near the mesh's silhouette its direction can lie just
-      // outside the cone seen from `from`, where light sampling never goes (pdf 0). Its front
-      // face the caller has checked along `dir`, as a cone sample's ray is checked.
+      // A ray from the cone's apex that meets the mesh lies in the cone; the test only keeps a
+      // rounding at its edge from weighting a direction light sampling cannot take. Its front face
+      // the caller has checked along `dir`, as a cone sample's ray is checked.
       const float oneMinusCosMax = coneOneMinusCos(g.coneRadius2, d2);
       if (1.0f - glm::dot(dir, toCenter / std::sqrt(d2)) > oneMinusCosMax) return 0;
       return 1.0f / (2.0f * kPi * oneMinusCosMax * float(selectableLights_.size()));
@@ -685,7 +688,8 @@ void setPacketRay(RTCRay16& r, int l, glm::vec3 o, glm::vec3 d, float tfar) {
 // of them lie above the surface (towardsLight, scatters: set so far only from the geometry).
 void FrameScene::chooseAtVertex(const SurfaceHit& s, const VertexBsdf& v, const Sampler& sampler,
                                 uint32_t dim, VertexSample& out) const {
-  const LightSample light = sampleLight(s, sampler, dim);
+  const glm::vec3 origin = offsetOrigin(s.position, v.ng);  // where the vertex's rays leave
+  const LightSample light = sampleLight(s, origin, sampler, dim);
   out.le = light.le;
   out.wiLight = light.wi;
   out.pdfLight = light.pdf;
@@ -698,8 +702,7 @@ void FrameScene::chooseAtVertex(const SurfaceHit& s, const VertexBsdf& v, const 
     float t;
     out.coneRay = true;
     const bool seen =
-        intersect(offsetOrigin(s.position, v.ng), out.wiLight, kInf, h, t) &&
-        h.meshId == light.meshId &&
+        intersect(origin, out.wiLight, kInf, h, t) && h.meshId == light.meshId &&
         glm::dot(geometries_[size_t(h.meshId)].faceNormals[size_t(h.primId)], out.wiLight) < 0;
     out.occluded = seen ? 0 : 1;
   }
@@ -846,7 +849,7 @@ FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Vertex
     }
     SurfaceHit s = surface(h.meshId, h.primId, h.u, h.v);
     if (maxComponent(s.emission) > 0 && glm::dot(s.geometricNormal, -dir) > 0) {
-      float pl = lightPdf(s, prevPosition, dir);
+      float pl = lightPdf(s, prevPosition, origin, dir);
       float weight = pl > 0 ? prevPdf * prevPdf / (prevPdf * prevPdf + pl * pl) : 1.0f;
       incoming += throughput * s.emission * weight;
     }

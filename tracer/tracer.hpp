@@ -197,13 +197,14 @@ class FrameScene {
                       uint32_t dim, VertexSample& out) const;
   Radiance shade(const PrimaryVertex& vertex, const VertexSample& first, const Sampler& sampler,
                  RayCounts& counts) const;
-  // A light sample from `at`: radiance, direction, pdf (solid angle) and how its visibility is
-  // decided (LightSample in tracer.cpp).
+  // A light sample from `at`, whose rays leave `origin`: radiance, direction, pdf (solid angle)
+  // and how its visibility is decided (LightSample in tracer.cpp).
   struct LightSample;
-  LightSample sampleLight(const SurfaceHit& at, const Sampler& s, uint32_t dim) const;
-  // The pdf (solid angle) with which sampleLight at `from` would have chosen a ray along `dir`
-  // that hit the light at lightHit.
-  float lightPdf(const SurfaceHit& lightHit, glm::vec3 from, glm::vec3 dir) const;
+  LightSample sampleLight(const SurfaceHit& at, glm::vec3 origin, const Sampler& s,
+                          uint32_t dim) const;
+  // The pdf (solid angle) with which sampleLight at the vertex `from`, whose rays leave `origin`,
+  // would have chosen the ray along `dir` that hit the light at lightHit.
+  float lightPdf(const SurfaceHit& lightHit, glm::vec3 from, glm::vec3 origin, glm::vec3 dir) const;
   // The hit's (t, u, v) recomputed from its triangle, the same bits on every CPU (tracer.cpp).
   void exactHit(glm::vec3 origin, glm::vec3 dir, SurfaceHit& hit, float& t) const;
 
