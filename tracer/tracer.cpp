@@ -400,6 +400,15 @@ bool FrameScene::occluded(glm::vec3 o, glm::vec3 d, float tmax) const {
   return ray.tfar < 0.0f;
 }
 
+// A cone sample is seen where its direction reaches the light's mesh, from the front, before
+// anything else.
+bool FrameScene::reachesLight(glm::vec3 o, glm::vec3 d, int lightMesh) const {
+  SurfaceHit h;
+  float t;
+  return intersect(o, d, kInf, h, t) && h.meshId == lightMesh &&
+         glm::dot(geometries_[size_t(h.meshId)].faceNormals[size_t(h.primId)], d) < 0;
+}
+
 glm::vec3 FrameScene::positionOf(int meshId, int primId, float u, float v) const {
   const Geometry& g = geometries_[size_t(meshId)];
   const glm::uvec3 tri = g.local->triangles[size_t(primId)];
@@ -491,14 +500,24 @@ struct FrameScene::LightSample {
   int meshId = -1;         // cone samples: the light the direction must reach
 };
 
-namespace {
-// 1 - cos(theta_max) of the cone a sphere of squared radius r2 subtends from squared distance d2 >
-// r2, written without the cancellation of 1 - sqrt(1 - sin^2) for small cones.
-float coneOneMinusCos(float r2, float d2) {
-  const float sin2 = r2 / d2;
-  return sin2 / (1.0f + std::sqrt(1.0f - sin2));
+// The cone of directions a sphere light's bounding sphere subtends from a ray origin outside it:
+// its axis (unit, towards the centre), 1 - cos(theta_max) (written without the cancellation of
+// 1 - sqrt(1 - sin^2) for small cones) and the solid angle pdf of a uniform direction in it, the
+// light's choice among n included. False from inside (or on) the sphere: area sampling there.
+struct FrameScene::Cone {
+  glm::vec3 axis{0};
+  float oneMinusCosMax = 0, pdf = 0;
+};
+bool FrameScene::coneSeenFrom(const Geometry& g, glm::vec3 origin, Cone& cone) const {
+  const glm::vec3 toCenter = g.coneCenter - origin;
+  const float d2 = glm::dot(toCenter, toCenter);
+  if (!(d2 > g.coneRadius2)) return false;
+  const float sin2 = g.coneRadius2 / d2;
+  cone.axis = toCenter / std::sqrt(d2);
+  cone.oneMinusCosMax = sin2 / (1.0f + std::sqrt(1.0f - sin2));
+  cone.pdf = 1.0f / (2.0f * kPi * cone.oneMinusCosMax * float(selectableLights_.size()));
+  return true;
 }
-}  // namespace
 
 FrameScene::LightSample FrameScene::sampleLight(const SurfaceHit& at, glm::vec3 origin,
                                                 const Sampler& s, uint32_t dim) const {
@@ -514,7 +533,8 @@ FrameScene::LightSample FrameScene::sampleLight(const SurfaceHit& at, glm::vec3 
   float uSelect = reuse ? uv.x * float(n) : s.get(dim + kLightSelect) * float(n);
   const size_t li = std::min(size_t(uSelect), n - 1);
   const Geometry& g = geometries_[size_t(selectableLights_[li])];
-  if (g.sampledByCone) {
+  Cone cone;
+  if (g.sampledByCone && coneSeenFrom(g, origin, cone)) {
     // A sphere light seen from outside the sphere that holds its mesh: a direction uniform in that
     // sphere's cone (pbrt-v4's Sphere::Sample(ctx, u), here over the bounding sphere of a mesh).
     // Area sampling wastes the half of its points that face away and weights the rest by
@@ -522,25 +542,20 @@ FrameScene::LightSample FrameScene::sampleLight(const SurfaceHit& at, glm::vec3 
     // sphere): this halves hard_light's reference error at equal samples (docs/references.md).
     // The cone is seen from the ray origin (offset off the surface), where its ray leaves and
     // where a BSDF-sampled ray leaves too: every ray from there that meets the mesh lies in it.
-    const glm::vec3 toCenter = g.coneCenter - origin;
-    const float d2 = glm::dot(toCenter, toCenter);
-    if (d2 > g.coneRadius2) {
-      if (maxComponent(g.lightRadiance) <= 0) return out;  // switched off: pdf stays 0
-      const float oneMinusCosMax = coneOneMinusCos(g.coneRadius2, d2);
-      const float u = reuse ? std::min(uSelect - float(li), kOneMinusEpsilon) : uv.x;
-      const float oneMinusCos = u * oneMinusCosMax;
-      const float cosTheta = 1.0f - oneMinusCos;
-      const float sinTheta = std::sqrt(std::max(0.0f, oneMinusCos * (2.0f - oneMinusCos)));
-      const float phi = 2.0f * kPi * uv.y;
-      const glm::vec3 w = toCenter / std::sqrt(d2);
-      glm::vec3 t, b;
-      orthonormalBasis(w, t, b);
-      out.wi = glm::normalize(cosTheta * w + sinTheta * (std::cos(phi) * t + std::sin(phi) * b));
-      out.pdf = 1.0f / (2.0f * kPi * oneMinusCosMax * float(n));
-      out.le = g.lightRadiance;
-      out.meshId = selectableLights_[li];
-      return out;
-    }
+    if (maxComponent(g.lightRadiance) <= 0) return out;  // switched off: pdf stays 0
+    const float u = reuse ? std::min(uSelect - float(li), kOneMinusEpsilon) : uv.x;
+    const float oneMinusCos = u * cone.oneMinusCosMax;
+    const float cosTheta = 1.0f - oneMinusCos;
+    const float sinTheta = std::sqrt(std::max(0.0f, oneMinusCos * (2.0f - oneMinusCos)));
+    const float phi = 2.0f * kPi * uv.y;
+    glm::vec3 t, b;
+    orthonormalBasis(cone.axis, t, b);
+    out.wi =
+        glm::normalize(cosTheta * cone.axis + sinTheta * (std::cos(phi) * t + std::sin(phi) * b));
+    out.pdf = cone.pdf;
+    out.le = g.lightRadiance;
+    out.meshId = selectableLights_[li];
+    return out;
   }
   // Triangle in proportion to its area, then a uniform point on it.
   float target = (reuse ? std::min(uSelect - float(li), kOneMinusEpsilon) : s.get(dim + kLightTriangle)) * g.area;
@@ -592,17 +607,12 @@ float FrameScene::lightPdf(const SurfaceHit& lightHit, glm::vec3 from, glm::vec3
   if (lightHit.lightIndex < 0 || selectableLights_.empty()) return 0;
   const Geometry& g = geometries_[size_t(lightHit.meshId)];
   if (maxComponent(g.lightRadiance) <= 0) return 0;
-  if (g.sampledByCone) {  // the choice sampleLight makes at the ray's origin
-    const glm::vec3 toCenter = g.coneCenter - origin;
-    const float d2 = glm::dot(toCenter, toCenter);
-    if (d2 > g.coneRadius2) {
-      // A ray from the cone's apex that meets the mesh lies in the cone; the test only keeps a
-      // rounding at its edge from weighting a direction light sampling cannot take. Its front face
-      // the caller has checked along `dir`, as a cone sample's ray is checked.
-      const float oneMinusCosMax = coneOneMinusCos(g.coneRadius2, d2);
-      if (1.0f - glm::dot(dir, toCenter / std::sqrt(d2)) > oneMinusCosMax) return 0;
-      return 1.0f / (2.0f * kPi * oneMinusCosMax * float(selectableLights_.size()));
-    }
+  Cone cone;
+  if (g.sampledByCone && coneSeenFrom(g, origin, cone)) {  // the choice sampleLight makes there
+    // A ray from the cone's apex that meets the mesh lies in the cone; the test only keeps a
+    // rounding at its edge from weighting a direction light sampling cannot take. Its front face
+    // the caller has checked along `dir`, as a cone sample's ray is checked.
+    return 1.0f - glm::dot(dir, cone.axis) > cone.oneMinusCosMax ? 0.0f : cone.pdf;
   }
   glm::vec3 d = from - lightHit.position;
   float dist2 = glm::dot(d, d);
@@ -639,23 +649,22 @@ FrameScene::PrimaryVertex FrameScene::prepare(const SurfaceHit& hit, glm::vec3 w
   return v;
 }
 
-// What a sample decides at a vertex before it goes on: its light sample and its scattered
-// direction, each with the BSDF evaluated towards it. Only a cone sample (a sphere light's) traces
-// a ray here, the closest-hit ray that decides it; an area sample's shadow ray waits, so a
-// reference decides its first vertex for a batch of samples at once and traces their area
-// samples' shadow rays as one packet (shadeBatch).
+// What a sample decides at a vertex before any ray leaves it: its light sample and its scattered
+// direction, each with the BSDF evaluated towards it. Nothing here waits on a ray, so a reference
+// decides its first vertex for a batch of samples at once and traces their area samples' shadow
+// rays as one packet (shadeBatch).
 struct FrameScene::VertexSample {
   // After chooseAtVertex: the light sample lies above the surface; after settle, the BSDF also
-  // reflects it, and it counts (an area sample takes its shadow ray then).
+  // reflects it, and it takes a ray: an area sample's shadow ray to shadowEnd, a cone sample's
+  // closest-hit ray that must reach coneLight first.
   bool towardsLight = false;
   glm::vec3 le{0}, wiLight{0};
-  glm::vec3 shadowEnd{0};  // area samples: the light point lifted off the emitter (cone: unused)
+  glm::vec3 shadowEnd{0};  // area samples: the light point lifted off the emitter
+  int coneLight = -1;      // cone samples: the light's mesh id (LightSample::meshId)
   float pdfLight = 0;
   Lobes fLight;
-  // The shadow ray's answer where a packet traced it already, or a cone sample's closest-hit ray
-  // decided it (0 or 1), else -1.
+  // The shadow ray's answer where a packet traced it already (0 or 1), else -1.
   int8_t occluded = -1;
-  bool coneRay = false;  // a cone sample's ray was traced (counted once, whatever the BSDF says)
   // After chooseAtVertex: the sampled direction lies above the surface; after settle, its pdf is
   // positive too, and the path goes on.
   bool scatters = false;
@@ -688,24 +697,13 @@ void setPacketRay(RTCRay16& r, int l, glm::vec3 o, glm::vec3 d, float tfar) {
 // of them lie above the surface (towardsLight, scatters: set so far only from the geometry).
 void FrameScene::chooseAtVertex(const SurfaceHit& s, const VertexBsdf& v, const Sampler& sampler,
                                 uint32_t dim, VertexSample& out) const {
-  const glm::vec3 origin = offsetOrigin(s.position, v.ng);  // where the vertex's rays leave
-  const LightSample light = sampleLight(s, origin, sampler, dim);
+  const LightSample light = sampleLight(s, offsetOrigin(s.position, v.ng), sampler, dim);
   out.le = light.le;
   out.wiLight = light.wi;
   out.pdfLight = light.pdf;
   out.shadowEnd = light.shadowEnd;
+  out.coneLight = light.meshId;
   out.towardsLight = !(out.pdfLight <= 0 || glm::dot(out.wiLight, v.ng) <= 0);
-  if (out.towardsLight && light.meshId >= 0) {
-    // A cone sample is seen where its direction reaches the light's mesh, from the front, before
-    // anything else.
-    SurfaceHit h;
-    float t;
-    out.coneRay = true;
-    const bool seen =
-        intersect(origin, out.wiLight, kInf, h, t) && h.meshId == light.meshId &&
-        glm::dot(geometries_[size_t(h.meshId)].faceNormals[size_t(h.primId)], out.wiLight) < 0;
-    out.occluded = seen ? 0 : 1;
-  }
   glm::vec2 u = sampler.get2(dim + kDirU);
   float lobe = 0;
   if (sampler.kind() == SamplerKind::OwenSobol)
@@ -781,7 +779,7 @@ void FrameScene::shadeBatch(const PrimaryVertex& vertex, const Sampler* samplers
   alignas(64) int valid[16];
   alignas(64) RTCRay16 shadow;
   for (int l = 0; l < 16; ++l) {
-    valid[l] = l < count && first[l].towardsLight && first[l].occluded < 0 ? -1 : 0;
+    valid[l] = l < count && first[l].towardsLight && first[l].coneLight < 0 ? -1 : 0;
     const Segment ray = shadowSegment(origin, first[l].shadowEnd);
     setPacketRay(shadow, l, origin, ray.dir, ray.length);
   }
@@ -798,15 +796,17 @@ FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Vertex
                                        const Sampler& sampler, RayCounts& counts) const {
   Radiance out;
   counts.paths++;
-  // The light sample's contribution, if seen (its shadow ray, or the answer a packet or a cone
-  // sample's ray gave), MIS-weighted against BSDF sampling (power heuristic).
+  // The light sample's contribution, if seen (its ray, or the answer a packet gave),
+  // MIS-weighted against BSDF sampling (power heuristic).
   auto nextEvent = [&](const SurfaceHit& s, const VertexBsdf& v, const VertexSample& vs,
                        glm::vec3& diffuse, glm::vec3& specular, glm::vec3* direction) {
-    if (vs.towardsLight || vs.coneRay) counts.rays++;
     if (!vs.towardsLight) return;
+    counts.rays++;
     const glm::vec3 origin = offsetOrigin(s.position, v.ng), wi = vs.wiLight, le = vs.le;
     if (vs.occluded >= 0) {
       if (vs.occluded != 0) return;
+    } else if (vs.coneLight >= 0) {
+      if (!reachesLight(origin, wi, vs.coneLight)) return;
     } else {
       const Segment ray = shadowSegment(origin, vs.shadowEnd);
       if (occluded(origin, ray.dir, ray.length)) return;

@@ -205,6 +205,9 @@ class FrameScene {
   // The pdf (solid angle) with which sampleLight at the vertex `from`, whose rays leave `origin`,
   // would have chosen the ray along `dir` that hit the light at lightHit.
   float lightPdf(const SurfaceHit& lightHit, glm::vec3 from, glm::vec3 origin, glm::vec3 dir) const;
+  struct Cone;  // a sphere light's cone seen from a ray origin (tracer.cpp)
+  bool coneSeenFrom(const Geometry& g, glm::vec3 origin, Cone& cone) const;
+  bool reachesLight(glm::vec3 origin, glm::vec3 dir, int lightMesh) const;
   // The hit's (t, u, v) recomputed from its triangle, the same bits on every CPU (tracer.cpp).
   void exactHit(glm::vec3 origin, glm::vec3 dir, SurfaceHit& hit, float& t) const;
 
