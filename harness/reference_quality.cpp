@@ -149,9 +149,24 @@ double budgetUnitPaths(const SequenceInfo& info, int unitSpp) {
 
 int firstFrameSummariesRead(int warmup) { return std::max(0, warmup - kMaxMetricHistory); }
 
+double refinementPaths(const SequenceInfo& info, int firstFrame, double targetRelMse, int maxSpp) {
+  double paths = 0;
+  for (int r = 0; r < int(info.referenceSpp.size()); ++r) {
+    if (!info.referenceUsedFrom(r, firstFrame)) continue;
+    const double e = r < int(info.referenceEstimatedRelMse.size())
+                         ? info.referenceEstimatedRelMse[size_t(r)]
+                         : 0;
+    const double s = info.referenceSpp[size_t(r)];
+    if (!(e > targetRelMse) || s >= maxSpp) continue;
+    const double grown = std::min(s * (e / targetRelMse), double(maxSpp));
+    paths += double(info.width) * info.height * (grown - s);
+  }
+  return paths;
+}
+
 std::vector<ReferenceRefinement> planReferenceRefinement(
     const json& results, const std::map<std::string, SequenceInfo>& sequences, int firstFrame,
-    int maxSpp, double budget, int unitSpp) {
+    int maxSpp, double budget, int unitSpp, bool mayStopShort) {
   std::vector<ReferenceRefinement> plans;
   const json scenes = results.value("scenes", json::object());
   for (const auto& [name, scene] : scenes.items()) {
@@ -161,17 +176,20 @@ std::vector<ReferenceRefinement> planReferenceRefinement(
     const SequenceInfo& info = seq->second;
     ReferenceRefinement plan;
     plan.scene = name;
-    plan.targetRelMse = kRefineMargin * kReferenceQualityGoal * q["bestCorrectedRelMse"].get<double>();
-    for (int r = 0; r < int(info.referenceSpp.size()); ++r) {
-      if (!info.referenceUsedFrom(r, firstFrame)) continue;
-      const double e = r < int(info.referenceEstimatedRelMse.size()) ? info.referenceEstimatedRelMse[size_t(r)] : 0;
-      const double s = info.referenceSpp[size_t(r)];
-      if (!(e > plan.targetRelMse) || s >= maxSpp) continue;
-      const double grown = std::min(s * (e / plan.targetRelMse), double(maxSpp));
-      plan.predictedPaths += double(info.width) * info.height * (grown - s);
+    const double best = q["bestCorrectedRelMse"].get<double>();
+    plan.targetRelMse = kRefineMargin * kReferenceQualityGoal * best;
+    plan.predictedPaths = refinementPaths(info, firstFrame, plan.targetRelMse, maxSpp);
+    plan.roundTargetRelMse = plan.targetRelMse;
+    plan.roundPaths = plan.predictedPaths;
+    const double stop = kRefineStageRatio * best;
+    if (mayStopShort && q.value("floor", 0.0) > kRefineStageTrigger * best &&
+        stop > plan.targetRelMse) {
+      plan.roundTargetRelMse = stop;
+      plan.roundPaths = refinementPaths(info, firstFrame, stop, maxSpp);
     }
     const double unit = budgetUnitPaths(info, unitSpp);
     plan.budgetNeeded = unit > 0 ? plan.predictedPaths / unit : 0;
+    plan.roundBudgetNeeded = unit > 0 ? plan.roundPaths / unit : 0;
     plan.withinBudget = plan.predictedPaths > 0 && plan.budgetNeeded <= budget;
     plans.push_back(plan);
   }
@@ -185,6 +203,12 @@ std::string refinementNote(const ReferenceRefinement& plan, double budget) {
   const std::string paths = sci(plan.predictedPaths / 1e6) + " Mpaths";
   if (plan.predictedPaths <= 0)
     return "the study could not refine it: the references its summaries read are at the refinement cap";
+  if (plan.withinBudget && plan.roundTargetRelMse > plan.targetRelMse)
+    return "the study refined its references toward " + sci(plan.roundTargetRelMse) +
+           " (predicted " + sci(plan.roundPaths / 1e6) + " of the " + paths + " its target " +
+           sci(plan.targetRelMse) +
+           " needs), where their floor is its best corrected relMSE, to measure that best again "
+           "before the target";
   if (plan.withinBudget)
     return "the study refined its references toward " + sci(plan.targetRelMse) + " (predicted " + paths + ")";
   char need[32];

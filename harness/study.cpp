@@ -20,6 +20,7 @@ struct SceneRefinement {
   std::string note;
   double budgetUsed = 0;
   bool stopped = false;
+  bool stoppedShort = false;  // a round stopped short of the target (kRefineStageRatio): once
   void add(const std::string& sentence) { note = note.empty() ? sentence : note + "; then " + sentence; }
 };
 
@@ -41,8 +42,8 @@ bool refineAfterScene(const RunConfig& c, const Scene& scene, const json& result
   // The references every summary reads: the summarised frames' and the few before them that their
   // temporal metrics compare with.
   const int firstFrame = firstFrameSummariesRead(c.warmup);
-  const std::vector<ReferenceRefinement> plans =
-      planReferenceRefinement(one, sequences, firstFrame, maxSpp, budget, budgetSpp);
+  const std::vector<ReferenceRefinement> plans = planReferenceRefinement(
+      one, sequences, firstFrame, maxSpp, budget, budgetSpp, !state.stoppedShort);
   if (plans.empty()) return false;  // the goal is met (or unknown)
   ReferenceRefinement plan = plans.front();
   plan.budgetNeeded += state.budgetUsed;
@@ -53,7 +54,9 @@ bool refineAfterScene(const RunConfig& c, const Scene& scene, const json& result
     state.add(note);
     return false;
   }
-  state.budgetUsed = plan.budgetNeeded;
+  // The budget counts what the round is predicted to add (a stop short of the target adds less).
+  state.budgetUsed += plan.roundBudgetNeeded;
+  state.stoppedShort = state.stoppedShort || plan.roundTargetRelMse > plan.targetRelMse;
   // Whether the references on disk differ from those the decision read (a reference's mean spp is
   // rounded; its estimated relMSE moves with any sample added).
   auto changed = [&] {
@@ -61,7 +64,8 @@ bool refineAfterScene(const RunConfig& c, const Scene& scene, const json& result
     return now.referenceSpp != then.referenceSpp || now.referenceEstimatedRelMse != then.referenceEstimatedRelMse;
   };
   try {
-    refineSequence(scene, c.render, c.cache, plan.targetRelMse, maxSpp, c.progress, firstFrame);
+    refineSequence(scene, c.render, c.cache, plan.roundTargetRelMse, maxSpp, c.progress,
+                   firstFrame);
     if (changed()) {
       state.add(note);
       return true;

@@ -703,6 +703,50 @@ TEST(Reference, RefinementPlanRefinesEachSceneWithinItsOwnBudget) {
   EXPECT_TRUE(planReferenceRefinement(results, {}, 1, 1000, 1).empty());
 }
 
+// A scene whose floor is more than kRefineStageTrigger x its best corrected relMSE (that best a
+// small difference of noisy numbers) is refined in a first round only to where its floor is the
+// best, to be measured again; a scene whose floor is less (here 1.5x), or one that stopped short
+// before, goes to the target at once.
+TEST(Reference, RefinementStopsShortWhileTheFloorOutweighsTheBest) {
+  auto quality = [](double floor, double best) {
+    return nlohmann::json{
+        {"referenceQuality", {{"meets", false}, {"floor", floor}, {"bestCorrectedRelMse", best}}}};
+  };
+  const nlohmann::json results = {
+      {"scenes", {{"noisy", quality(5e-2, 1e-2)}, {"clean", quality(1.5e-2, 1e-2)}}}};
+  SequenceInfo info;
+  info.width = info.height = 10;
+  info.referenceOfFrame = {0, 0};
+  info.referenceSpp = {128};
+  info.referenceEstimatedRelMse = {5e-2};
+  info.settings = {{"referenceSpp", 512}};
+  SequenceInfo cleanInfo = info;
+  cleanInfo.referenceEstimatedRelMse = {1.5e-2};
+  const std::map<std::string, SequenceInfo> sequences = {{"noisy", info}, {"clean", cleanInfo}};
+  const double target = kRefineMargin * kReferenceQualityGoal * 1e-2;
+  for (const bool mayStopShort : {true, false})
+    for (const ReferenceRefinement& p :
+         planReferenceRefinement(results, sequences, 0, 1 << 20, 100, 0, mayStopShort)) {
+      SCOPED_TRACE(p.scene + (mayStopShort ? " may stop short" : " to the target"));
+      EXPECT_DOUBLE_EQ(p.targetRelMse, target);
+      const double e = p.scene == "noisy" ? 5e-2 : 1.5e-2;
+      EXPECT_DOUBLE_EQ(p.predictedPaths, 100.0 * (128 * (e / target) - 128));
+      if (p.scene == "noisy" && mayStopShort) {
+        EXPECT_DOUBLE_EQ(p.roundTargetRelMse, kRefineStageRatio * 1e-2);
+        EXPECT_DOUBLE_EQ(p.roundPaths, 100.0 * (128 * (5e-2 / (kRefineStageRatio * 1e-2)) - 128));
+        EXPECT_LT(p.roundPaths, p.predictedPaths);
+        EXPECT_DOUBLE_EQ(p.roundBudgetNeeded, p.roundPaths / (2 * 100 * 512.0));
+        const std::string note = refinementNote(p, 100);
+        EXPECT_NE(note.find("toward 0.01 (predicted"), std::string::npos) << note;
+        EXPECT_NE(note.find("to measure that best again"), std::string::npos) << note;
+      } else {
+        EXPECT_DOUBLE_EQ(p.roundTargetRelMse, target);
+        EXPECT_DOUBLE_EQ(p.roundPaths, p.predictedPaths);
+        EXPECT_DOUBLE_EQ(p.roundBudgetNeeded, p.budgetNeeded);
+      }
+    }
+}
+
 // End to end: a study whose references are far too noisy for its scene (16 spp) says so; with a
 // refinement budget it refines them, runs again, and its verdict says what it did.
 // The study run of the refinement tests: a scene (cornell_static) at 32x18, 10 frames, with
@@ -738,6 +782,37 @@ TEST(Reference, StudyRefinesReferencesThatMissTheGoal) {
   // The run is committed once: the run directory's database holds the final measurements only.
   EXPECT_EQ(test::countRows(dir / "refined" / "results.db", "runs"), 1);
   EXPECT_EQ(test::countRows(dir / "plain" / "results.db", "runs"), 1);
+}
+
+// End to end, hard_light's 16-spp references (fireflies: a floor several times its best): the first
+// round stops where the floor is the best, the pairs are screened again, and the second round goes
+// to the target planned from the best measured against the cleaner references; the verdict notes
+// both rounds.
+TEST(Reference, StudyStopsShortWhereTheFloorOutweighsTheBest) {
+  const std::filesystem::path dir = test::freshDir("study_refine_stop_short");
+  const test::CommandResult r = tinyStudy(dir, "refined", "1000", "hard_light");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const std::string stop = "[refine] hard_light: the study refined its references toward ";
+  const size_t first = r.output.find(stop);
+  ASSERT_NE(first, std::string::npos) << r.output;
+  const size_t firstEnd = r.output.find('\n', first);
+  EXPECT_NE(
+      r.output.substr(first, firstEnd - first).find("to measure that best again before the target"),
+      std::string::npos)
+      << r.output;
+  const size_t second = r.output.find(stop, firstEnd);
+  ASSERT_NE(second, std::string::npos) << r.output;
+  EXPECT_EQ(
+      r.output.substr(second, r.output.find('\n', second) - second).find("measure that best again"),
+      std::string::npos)
+      << "a scene stops short once\n"
+      << r.output;
+  const nlohmann::json q = parseJsonFile(
+      (dir / "refined" / "results.json").string())["scenes"]["hard_light"]["referenceQuality"];
+  const std::string verdict = q["verdict"].get<std::string>();
+  EXPECT_NE(verdict.find("before the target; then the study refined its references toward"),
+            std::string::npos)
+      << verdict;
 }
 
 // A reference that cannot be refined (its sums are gone) is said so in the verdict; the study
