@@ -50,12 +50,12 @@ inline constexpr double kRefineMargin = 0.9;
 // A round's stop short of that target. The best corrected relMSE is the measured one less the
 // floor, a difference of noisy numbers; where the floor is more than kRefineStageTrigger x the
 // best, the floor's own error can move it far (hard_light's first best, its floor 3.3x it, came
-// out 1.6x low against fireflies, and its references went 1.6x too far). Such a scene's round stops
-// where its floor is kRefineStageRatio x the best it measured (when that is above the target); the
-// pairs are screened again against the cleaner references and the next round plans the target from
-// their best (a scene stops short once: mayStopShort false after). camera_pan_occluder, floor 1.55x
-// its first best (which was right within 3%), gained nothing from a stop: docs/performance.md,
-// 2026-11-27, tenth entry.
+// out 1.6x low against fireflies, and its references were aimed 1.6x too far). Such a scene's
+// round stops where its floor is kRefineStageRatio x the best it measured (when that is above the
+// target); the pairs are screened again against the cleaner references and the next round plans
+// the target from their best (a scene stops short once: mayStopShort false after).
+// camera_pan_occluder, floor 1.55x its first best (which was right within 3%), gained nothing from
+// a stop: docs/performance.md, 2026-11-27, tenth entry.
 inline constexpr double kRefineStageTrigger = 2.0;
 inline constexpr double kRefineStageRatio = 1.0;
 struct ReferenceRefinement {
