@@ -101,6 +101,7 @@ VertexBsdf vertexBsdf(const SurfaceHit& s, glm::vec3 wo) {
   const Oriented o = orient(s, wo);
   v.n = o.n;
   v.ng = o.ng;
+  v.origin = offsetOrigin(s.position, o.ng);
   v.NoV = glm::dot(o.n, wo);
   v.pSpec = specularProbability(s, v.NoV);
   const glm::vec3 diffuseAlbedo = s.diffuseAlbedo();
@@ -637,7 +638,7 @@ float FrameScene::specularHitDistance(const PrimaryVertex& vertex, const Sampler
   SurfaceHit h;
   float t;
   counts.rays++;
-  return intersect(offsetOrigin(primary.position, v.ng), wi, kInf, h, t) ? t : kInf;
+  return intersect(v.origin, wi, kInf, h, t) ? t : kInf;
 }
 
 FrameScene::PrimaryVertex FrameScene::prepare(const SurfaceHit& hit, glm::vec3 wo) const {
@@ -697,7 +698,7 @@ void setPacketRay(RTCRay16& r, int l, glm::vec3 o, glm::vec3 d, float tfar) {
 // of them lie above the surface (towardsLight, scatters: set so far only from the geometry).
 void FrameScene::chooseAtVertex(const SurfaceHit& s, const VertexBsdf& v, const Sampler& sampler,
                                 uint32_t dim, VertexSample& out) const {
-  const LightSample light = sampleLight(s, offsetOrigin(s.position, v.ng), sampler, dim);
+  const LightSample light = sampleLight(s, v.origin, sampler, dim);
   out.le = light.le;
   out.wiLight = light.wi;
   out.pdfLight = light.pdf;
@@ -772,7 +773,7 @@ void FrameScene::shadeBatch(const PrimaryVertex& vertex, const Sampler* samplers
   // scattered rays as a packet too were measured: no faster, and Embree's packet kernels chose
   // the other triangle of a shared edge for some of living_room's rays.)
   static_assert(Sampler::kBatchLanes == 16, "the packet is Embree's RTCRay16");
-  const glm::vec3 origin = offsetOrigin(vertex.hit.position, vertex.bsdf.ng);
+  const glm::vec3 origin = vertex.bsdf.origin;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
@@ -798,11 +799,11 @@ FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Vertex
   counts.paths++;
   // The light sample's contribution, if seen (its ray, or the answer a packet gave),
   // MIS-weighted against BSDF sampling (power heuristic).
-  auto nextEvent = [&](const SurfaceHit& s, const VertexBsdf& v, const VertexSample& vs,
-                       glm::vec3& diffuse, glm::vec3& specular, glm::vec3* direction) {
+  auto nextEvent = [&](const VertexBsdf& v, const VertexSample& vs, glm::vec3& diffuse,
+                       glm::vec3& specular, glm::vec3* direction) {
     if (!vs.towardsLight) return;
     counts.rays++;
-    const glm::vec3 origin = offsetOrigin(s.position, v.ng), wi = vs.wiLight, le = vs.le;
+    const glm::vec3 origin = v.origin, wi = vs.wiLight, le = vs.le;
     if (vs.occluded >= 0) {
       if (vs.occluded != 0) return;
     } else if (vs.coneLight >= 0) {
@@ -823,7 +824,7 @@ FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Vertex
   // Vertex 0: split direct light and the continuation between the diffuse and specular signals.
   const SurfaceHit& primary = vertex.hit;
   const VertexBsdf& v0 = vertex.bsdf;
-  nextEvent(primary, v0, first, out.diffuse, out.specular, &out.diffuseDirection);
+  nextEvent(v0, first, out.diffuse, out.specular, &out.diffuseDirection);
   if (!first.scatters) return out;
   const glm::vec3 wi = first.wi;
   const Lobes& f0 = first.f;
@@ -832,7 +833,7 @@ FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Vertex
 
   // Radiance arriving along wi from the rest of the path.
   glm::vec3 incoming(0), throughput(1);
-  glm::vec3 origin = offsetOrigin(primary.position, v0.ng), dir = wi;
+  glm::vec3 origin = v0.origin, dir = wi;
   float prevPdf = f0.pdf;
   // The previous vertex as sampleLight saw it (not the ray's offset origin): the light-sampling
   // pdf of a light hit here is the one its light sample would have had.
@@ -859,7 +860,7 @@ FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Vertex
     if (!v.reflects) break;
     const VertexSample vs = sampleVertex(s, v, sampler, dim);
     glm::vec3 direct(0);
-    nextEvent(s, v, vs, direct, direct, nullptr);
+    nextEvent(v, vs, direct, direct, nullptr);
     incoming += throughput * direct;
     if (!vs.scatters) break;
     const glm::vec3 next = vs.wi;
@@ -870,7 +871,7 @@ FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Vertex
       if (sampler.get(dim + kRoulette) >= q) break;
       throughput /= q;
     }
-    origin = offsetOrigin(s.position, v.ng);
+    origin = v.origin;
     prevPosition = s.position;
     dir = next;
     prevPdf = f.pdf;

@@ -58,6 +58,7 @@ struct SurfaceHit {
 struct VertexBsdf {
   glm::vec3 wo{0, 0, 1};
   glm::vec3 n{0, 0, 1}, ng{0, 0, 1};  // oriented towards wo (the shading normal falls back to ng)
+  glm::vec3 origin{0};                // where the vertex's rays leave: the position lifted along ng
   glm::vec3 t{1, 0, 0}, b{0, 1, 0};   // an orthonormal basis around n (sampling)
   glm::vec3 diffuseOverPi{0};         // the Lambert lobe, diffuse albedo / pi
   glm::vec3 f0{0}, oneMinusF0{1};     // Schlick's Fresnel terms
