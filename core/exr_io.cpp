@@ -43,13 +43,14 @@ int LayerSet::width() const { return layers_.empty() ? 0 : layers_.begin()->seco
 int LayerSet::height() const { return layers_.empty() ? 0 : layers_.begin()->second.height(); }
 
 void writeExr(const fs::path& path, const LayerSet& layers, const std::vector<LayerSpec>& specs,
-              const ExrAttributes& attributes) {
+              const ExrAttributes& attributes, ExrCompression compression) {
   const int w = layers.width(), h = layers.height();
   if (w <= 0 || h <= 0) throw Error(path.string() + ": nothing to write");
   // Half layers need a converted copy that outlives the write.
   std::vector<std::vector<half>> halfPlanes;
   Imf::Header header(w, h);
-  header.compression() = Imf::ZIP_COMPRESSION;
+  header.compression() =
+      compression == ExrCompression::None ? Imf::NO_COMPRESSION : Imf::ZIP_COMPRESSION;
   for (const auto& [k, v] : attributes) header.insert(k, Imf::StringAttribute(v));
   Imf::FrameBuffer fb;
   for (const LayerSpec& spec : specs) {

@@ -218,7 +218,8 @@ void writeReferenceFiles(const fs::path& dir, const std::string& hash, const std
                       {"arena.estimatedRelMse", formatDouble(ref.estimatedRelMse)},
                       {"arena.capped", ref.capped ? "1" : "0"}};
   writeReferenceSums(referenceSumsPath(dir, r), sums, hash, r);
-  writeExr(Sequence::referencePath(dir, r), ref.layers, channels::referenceLayers(), attrs);
+  writeExr(Sequence::referencePath(dir, r), ref.layers, channels::referenceLayers(), attrs,
+           ExrCompression::None);
   info.referenceSpp[size_t(r)] = ref.spp;
   info.referenceEstimatedRelMse[size_t(r)] = ref.estimatedRelMse;
   info.referenceCapped[size_t(r)] = ref.capped;
