@@ -203,7 +203,7 @@ std::string refinementNote(const ReferenceRefinement& plan, double budget) {
   const std::string paths = sci(plan.predictedPaths / 1e6) + " Mpaths";
   if (plan.predictedPaths <= 0)
     return "the study could not refine it: the references its summaries read are at the refinement cap";
-  if (plan.withinBudget && plan.roundTargetRelMse > plan.targetRelMse)
+  if (plan.withinBudget && plan.stopsShort())
     return "the study refined its references toward " + sci(plan.roundTargetRelMse) +
            " (predicted " + sci(plan.roundPaths / 1e6) + " of the " + paths + " its target " +
            sci(plan.targetRelMse) +

@@ -69,6 +69,7 @@ struct ReferenceRefinement {
   double roundTargetRelMse = 0;
   double roundPaths = 0;
   double roundBudgetNeeded = 0;
+  bool stopsShort() const { return roundTargetRelMse > targetRelMse; }
 };
 std::vector<ReferenceRefinement> planReferenceRefinement(
     const nlohmann::json& results, const std::map<std::string, SequenceInfo>& sequences,

@@ -56,7 +56,7 @@ bool refineAfterScene(const RunConfig& c, const Scene& scene, const json& result
   }
   // The budget counts what the round is predicted to add (a stop short of the target adds less).
   state.budgetUsed += plan.roundBudgetNeeded;
-  state.stoppedShort = state.stoppedShort || plan.roundTargetRelMse > plan.targetRelMse;
+  state.stoppedShort = state.stoppedShort || plan.stopsShort();
   // Whether the references on disk differ from those the decision read (a reference's mean spp is
   // rounded; its estimated relMSE moves with any sample added).
   auto changed = [&] {

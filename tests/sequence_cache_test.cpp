@@ -105,14 +105,14 @@ TEST_F(CacheRender, ReferencesAreStoredUncompressedAndBothCompressionsReadBackEx
     const fs::path copy = cache / (c == ExrCompression::None ? "none.exr" : "zip.exr");
     writeExr(copy, ref, specs, {}, c);
     const LayerSet back = readExr(copy, specs).layers;
-    for (const LayerSpec& spec : specs)
-      for (int ch = 0; ch < spec.channels(); ++ch) {
-        const Image& a = ref.get(spec.name);
-        const Image& b = back.get(spec.name);
-        ASSERT_EQ(a.pixelCount(), b.pixelCount());
+    for (const LayerSpec& spec : specs) {
+      const Image& a = ref.get(spec.name);
+      const Image& b = back.get(spec.name);
+      ASSERT_EQ(a.pixelCount(), b.pixelCount());
+      for (int ch = 0; ch < spec.channels(); ++ch)
         EXPECT_EQ(std::memcmp(a.plane(ch), b.plane(ch), a.pixelCount() * sizeof(float)), 0)
             << spec.name << " " << ch;
-      }
+    }
   }
   EXPECT_EQ(compressionOf(cache / "none.exr"), Imf::NO_COMPRESSION);
 }
