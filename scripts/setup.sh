@@ -9,7 +9,12 @@ phase_start=$SECONDS
 phases=""
 phase() { phases="$phases $1 $((SECONDS - phase_start))s,"; phase_start=$SECONDS; }
 
-bash scripts/install_packages.sh
+# The study (ARENA_TARGETS=arena) installs only what it needs; everything else, the tests' too.
+if [ "${ARENA_TARGETS:-all}" = arena ]; then
+  bash scripts/install_packages.sh --study
+else
+  bash scripts/install_packages.sh
+fi
 phase packages
 
 # The report's npm packages (Vega, Vega-Lite, vega-embed; playwright-core for the browser test),
