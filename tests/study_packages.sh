@@ -65,7 +65,7 @@ fi
 : > "$tmp/links"
 : > "$tmp/files"
 while read -r f; do
-  case $f in "$src"/* | "$home"/* | "$build"/*) continue ;; esac
+  case $f in "$home"/* | "$build"/*) continue ;; esac
   [ -f "$f" ] || continue
   realpath -s "$f" >> "$tmp/links"
   realpath "$f" >> "$tmp/files"
@@ -83,7 +83,7 @@ fi
 # /usr/lib, and a package may have registered a file under either name: a /usr/... path nobody
 # owns is asked again without /usr.
 owners() {
-  xargs -d '\n' dpkg-query -S 2> /dev/null < "$1" | grep -v -e '^diversion by' -e '^local diversion' |
+  xargs -r -d '\n' dpkg-query -S 2> /dev/null < "$1" | grep -v -e '^diversion by' -e '^local diversion' |
     awk '{ i = index($0, ": /"); if (i == 0) next
            path = substr($0, i + 2); n = split(substr($0, 1, i - 1), p, ", ")
            for (k = 1; k <= n; ++k) { sub(/:.*/, "", p[k]); owned[path] = owned[path] " " p[k] } }
@@ -91,10 +91,8 @@ owners() {
 }
 owners "$tmp/files" > "$tmp/owned"
 cut -f1 "$tmp/owned" | sort -u | comm -23 "$tmp/files" - > "$tmp/unowned"
-if [ -s "$tmp/unowned" ]; then
-  grep '^/usr/' "$tmp/unowned" | sed 's#^/usr/#/#' > "$tmp/unowned_short" || true
-  owners "$tmp/unowned_short" | sed 's#^#/usr#' >> "$tmp/owned"
-fi
+grep '^/usr/' "$tmp/unowned" | sed 's#^/usr/#/#' > "$tmp/unowned_short" || true
+owners "$tmp/unowned_short" | sed 's#^#/usr#' >> "$tmp/owned"
 cut -f1 "$tmp/owned" | sort -u | comm -23 "$tmp/files" - > "$tmp/orphans"
 owners "$tmp/links_only" >> "$tmp/owned"
 
