@@ -163,10 +163,10 @@ EvaluationScene::EvaluationScene(EvaluationInput input, EvaluationOptions option
     std::vector<const Image*> referenceColors;
     for (const LayerSet& r : input_.references) referenceColors.push_back(&r.get("color"));
     displays_ = displayTransforms(referenceColors, options_.exposure);
-    auto budget = std::make_shared<ReferenceMemo::Budget>(kReferenceMemoBytes);
+    auto budget = std::make_shared<SceneMemo::Budget>(kReferenceMemoBytes);
     for (size_t r = 0; r < input_.references.size(); ++r) {
       referenceDisplay_.push_back(displays_[r].apply(*referenceColors[r]));
-      referenceMemos_.push_back(std::make_unique<ReferenceMemo>(budget));
+      referenceMemos_.push_back(std::make_unique<SceneMemo>(budget));
     }
     for (int t = 0; t < frames(); ++t) {
       const LayerSet& ref = reference(t);
@@ -181,6 +181,9 @@ EvaluationScene::EvaluationScene(EvaluationInput input, EvaluationOptions option
     for (const LayerSet& f : input_.frames) inputs.push_back(&f.get("color"));
     displays_ = displayTransforms(inputs, options_.exposure);
   }
+  auto frameBudget = std::make_shared<SceneMemo::Budget>(kFrameMemoBytes);
+  for (int t = 0; t < frames(); ++t)
+    frameMemos_.push_back(std::make_unique<SceneMemo>(frameBudget));
   for (const SequenceEvent& e : input_.events)
     if (e.kind == EventKind::CameraCut && e.frame >= 1) cutFrames_.push_back(e.frame);
   buildEventWindows();
@@ -365,6 +368,7 @@ void PairEvaluation::add(int t, const Image& output, const FrameFacts& facts) {
   v.output = &kept->output;
   v.outputDisplay = full ? &kept->display : nullptr;
   v.guides = &scene.frame(t);
+  v.frameMemo = scene.frameMemos_[size_t(t)].get();
   v.facts = facts;
   v.cutFrames = scene.cutFrames_;
   for (const auto& h : s.history) v.history.push_back(&h->view);

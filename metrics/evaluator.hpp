@@ -57,6 +57,10 @@ EvaluationInput readSequenceForEvaluation(const Sequence& sequence);
 // scenes keep every reference's, and a paper-size or capture-size scene of many references the
 // first few (the others are filtered for each output, as before).
 constexpr size_t kReferenceMemoBytes = size_t(1) << 30;
+// What a scene's frame memos may keep in all. The stability metric's paths back through the
+// motion layers are 9 bytes per pixel and lag, three lags a frame: 1 MB a frame at 256x144, 25 MB
+// at 1280x720, so the study's scenes keep every frame's.
+constexpr size_t kFrameMemoBytes = size_t(512) << 20;
 
 // Everything about a sequence that every output's evaluation shares: display transforms, the
 // reference's and the input's own relMSE, event masks, camera-cut segments and metric floors.
@@ -101,7 +105,8 @@ class EvaluationScene {
   EvaluationOptions options_;
   std::vector<DisplayTransform> displays_;  // per reference (per frame without one)
   std::vector<Image> referenceDisplay_;     // per reference
-  std::vector<std::unique_ptr<ReferenceMemo>> referenceMemos_;  // per reference
+  std::vector<std::unique_ptr<SceneMemo>> referenceMemos_;  // per reference
+  std::vector<std::unique_ptr<SceneMemo>> frameMemos_;      // per frame
   std::vector<double> referenceRelMse_, noisyRelMse_;  // per frame (empty without a reference)
   std::vector<EventWindow> events_;
   std::vector<CutSegment> cuts_;

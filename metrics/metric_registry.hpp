@@ -78,13 +78,15 @@ struct FrameFacts {
   double extraPathsPerSecond = 0;  // the render rate of those paths (0: unknown)
 };
 
-// What families derive from a reference alone, kept for every output compared with it (FLIP's
-// filtered reference planes): made on first use under `key`, then shared. An evaluation scene
-// keeps one memo per reference for all its pairs, and its memos share one byte budget: a value
-// that does not fit is made, used and dropped as before (a scene of many large references keeps
-// what fits). A value is made outside the lock (it may run parallel loops); T says its size with
-// `size_t bytes() const` and must not point into anything that moves with the scene.
-class ReferenceMemo {
+// What families derive from a scene's own data alone, kept for every output evaluated against it:
+// from a reference (FLIP's filtered reference planes) or from a frame's input layers (the
+// stability metric's paths back through the motion layers). Made on first use under `key`, then
+// shared. An evaluation scene keeps one memo per reference and one per frame for all its pairs;
+// each kind's memos share one byte budget: a value that does not fit is made, used and dropped as
+// before (a scene of many large references keeps what fits). A value is made outside the lock (it
+// may run parallel loops); T says its size with `size_t bytes() const` and must not point into
+// anything that moves with the scene.
+class SceneMemo {
  public:
   // Bytes left to the memos that share it.
   struct Budget {
@@ -92,7 +94,7 @@ class ReferenceMemo {
     std::mutex mutex;
     size_t left;
   };
-  explicit ReferenceMemo(std::shared_ptr<Budget> budget) : budget_(std::move(budget)) {}
+  explicit SceneMemo(std::shared_ptr<Budget> budget) : budget_(std::move(budget)) {}
 
   template <class T, class Make>
   std::shared_ptr<const T> get(const std::string& key, const Make& make) const {
@@ -117,7 +119,7 @@ class ReferenceMemo {
   template <class T>
   static std::shared_ptr<const T> cast(const std::string& key, const Item& item) {
     if (item.type != std::type_index(typeid(T)))
-      throw std::logic_error("ReferenceMemo: \"" + key + "\" holds another type");
+      throw std::logic_error("SceneMemo: \"" + key + "\" holds another type");
     return std::static_pointer_cast<const T>(item.value);
   }
   bool take(size_t bytes) const {
@@ -141,7 +143,8 @@ struct FrameView {
   const Image* reference = nullptr;      // r_t
   const Image* referenceVariance = nullptr;  // Var(r_t), the variance of the reference's mean
   const Image* referenceDisplay = nullptr;
-  const ReferenceMemo* referenceMemo = nullptr;  // r_t's; null: nothing is kept between outputs
+  const SceneMemo* referenceMemo = nullptr;  // r_t's; null: nothing is kept between outputs
+  const SceneMemo* frameMemo = nullptr;      // frame t's input layers'; null: likewise
   const Image* error = nullptr;          // d_t - r_t
   double noisyRelMse = kUndefined;       // relMSE of the 1-spp input against r_t
   double referenceRelMse = kUndefined;   // the reference's own estimated relMSE

@@ -27,43 +27,29 @@ double rootOfMean(const TileSums& tiles) {
 
 }  // namespace
 
-std::vector<StabilityResult> temporalStability(const std::vector<StabilityInput>& signals,
-                                               const std::vector<const LayerSet*>& guides,
-                                               const ConsistencyThresholds& thresholds) {
-  if (signals.empty()) return {};
-  for (const StabilityInput& in : signals)
-    if (!in.current || in.current->empty()) throw Error("temporal stability: no current frame");
-  const Image& first = *signals.front().current;
-  const size_t lags = signals.front().previous.size();
-  if (guides.size() != lags + 1)
-    throw Error("temporal stability: " + std::to_string(lags) + " previous frames need " + std::to_string(lags + 1) +
-                " guide layer sets, got " + std::to_string(guides.size()));
-  for (const StabilityInput& in : signals) {
-    if (!in.current->sameShape(first) || in.previous.size() != lags)
-      throw Error("temporal stability: the signals differ in size or in their number of previous frames");
-    for (const Image* p : in.previous)
-      if (!p || !p->sameShape(first)) throw Error("temporal stability: a previous frame differs in size or is missing");
-    if (in.normaliser && !in.normaliser->sameShape(first))
-      throw Error("temporal stability: the normaliser differs in size from the frame");
-  }
-  const int w = first.width(), h = first.height(), c = first.channels();
-  const size_t n = size_t(w) * size_t(h), count = signals.size();
+StabilityPaths traceStabilityPaths(const std::vector<const LayerSet*>& guides,
+                                   const ConsistencyThresholds& thresholds) {
+  if (guides.size() < 2)
+    throw Error("temporal stability: the paths need the guide layers of at least two frames");
+  for (const LayerSet* g : guides)
+    if (!g) throw Error("temporal stability: a guide layer set is missing");
+  const Image& meshNow = guides[0]->get("meshId", "temporal stability");
+  const int w = meshNow.width(), h = meshNow.height();
+  const size_t n = size_t(w) * size_t(h), lags = guides.size() - 1;
+  StabilityPaths paths;
+  paths.width = w, paths.height = h;
   // Each pixel's path back through the motion layers: its position in the frame reached so far,
   // the nearest pixel there (whose motion and surface the next step reads), and whether every
   // step so far was consistent.
   std::vector<float> posX(n), posY(n);
   std::vector<int> nearX(n), nearY(n);
   std::vector<uint8_t> valid(n);
-  const Image& meshNow = guides[0]->get("meshId", "temporal stability");
   for (int y = 0; y < h; ++y)
     for (int px = 0; px < w; ++px) {
       const size_t i = size_t(y) * size_t(w) + size_t(px);
       posX[i] = float(px), posY[i] = float(y), nearX[i] = px, nearY[i] = y;
       valid[i] = meshNow.at(px, y) >= 0;  // the sky has no surface to follow
     }
-  std::vector<std::vector<float>> warped(count, std::vector<float>(n * size_t(c)));
-  std::vector<TileAccumulator> fine(count, TileAccumulator(w, h)), coarse(count, TileAccumulator(w, h));
-  std::vector<StabilityResult> out(count);
   for (size_t k = 1; k <= lags; ++k) {
     const LayerSet &a = *guides[k - 1], &b = *guides[k];
     const Image& motion = a.get("motion", "temporal stability");
@@ -71,6 +57,9 @@ std::vector<StabilityResult> temporalStability(const std::vector<StabilityInput>
                 &meshA = a.get("meshId", "temporal stability");
     const Image &depthB = b.get("depth", "temporal stability"), &normalB = b.get("normal", "temporal stability"),
                 &meshB = b.get("meshId", "temporal stability");
+    for (const Image* layer : {&motion, &depthA, &normalA, &meshA, &depthB, &normalB, &meshB})
+      if (layer->width() != w || layer->height() != h)
+        throw Error("temporal stability: the guide layers differ in size from the frame");
     tbb::parallel_for(0, h, [&](int y) {
       for (int px = 0; px < w; ++px) {
         const size_t i = size_t(y) * size_t(w) + size_t(px);
@@ -92,6 +81,69 @@ std::vector<StabilityResult> temporalStability(const std::vector<StabilityInput>
         }
         posX[i] = qx, posY[i] = qy;
         nearX[i] = int(std::floor(qx + 0.5f)), nearY[i] = int(std::floor(qy + 0.5f));
+      }
+    });
+    paths.lags.push_back({posX, posY, valid});
+    if (k == 1) {
+      size_t kept = 0;
+      for (uint8_t v : valid) kept += v;
+      paths.validFraction = double(kept) / double(n);
+    }
+  }
+  return paths;
+}
+
+std::vector<StabilityResult> temporalStability(const std::vector<StabilityInput>& signals,
+                                               const std::vector<const LayerSet*>& guides,
+                                               const ConsistencyThresholds& thresholds) {
+  if (signals.empty()) return {};
+  const size_t lags = signals.front().previous.size();
+  if (guides.size() != lags + 1)
+    throw Error("temporal stability: " + std::to_string(lags) + " previous frames need " +
+                std::to_string(lags + 1) + " guide layer sets, got " +
+                std::to_string(guides.size()));
+  return temporalStability(signals, traceStabilityPaths(guides, thresholds));
+}
+
+std::vector<StabilityResult> temporalStability(const std::vector<StabilityInput>& signals,
+                                               const StabilityPaths& paths) {
+  if (signals.empty()) return {};
+  for (const StabilityInput& in : signals)
+    if (!in.current || in.current->empty()) throw Error("temporal stability: no current frame");
+  const Image& first = *signals.front().current;
+  const size_t lags = signals.front().previous.size();
+  if (paths.lags.size() != lags)
+    throw Error("temporal stability: " + std::to_string(lags) +
+                " previous frames need paths over as many lags, got " +
+                std::to_string(paths.lags.size()));
+  if (paths.width != first.width() || paths.height != first.height())
+    throw Error("temporal stability: the guide layers differ in size from the frame");
+  for (const StabilityInput& in : signals) {
+    if (!in.current->sameShape(first) || in.previous.size() != lags)
+      throw Error(
+          "temporal stability: the signals differ in size or in their number of previous frames");
+    for (const Image* p : in.previous)
+      if (!p || !p->sameShape(first))
+        throw Error("temporal stability: a previous frame differs in size or is missing");
+    if (in.normaliser && !in.normaliser->sameShape(first))
+      throw Error("temporal stability: the normaliser differs in size from the frame");
+  }
+  const int w = first.width(), h = first.height(), c = first.channels();
+  const size_t n = size_t(w) * size_t(h), count = signals.size();
+  std::vector<std::vector<float>> warped(count, std::vector<float>(n * size_t(c)));
+  std::vector<TileAccumulator> fine(count, TileAccumulator(w, h)),
+      coarse(count, TileAccumulator(w, h));
+  std::vector<StabilityResult> out(count);
+  for (StabilityResult& r : out) r.validFraction = paths.validFraction;
+  for (size_t k = 1; k <= lags; ++k) {
+    const StabilityPaths::Lag& lag = paths.lags[k - 1];
+    const std::vector<uint8_t>& valid = lag.valid;
+    tbb::parallel_for(0, h, [&](int y) {
+      for (int px = 0; px < w; ++px) {
+        const size_t i = size_t(y) * size_t(w) + size_t(px);
+        if (!valid[i]) continue;
+        const float qx = lag.x[i], qy = lag.y[i];
+        const int x0 = int(std::floor(qx)), y0 = int(std::floor(qy));
         // One bilinear resampling of frame t - k at the end of the path, so longer lags are not
         // blurred more than the first.
         const float fx = qx - float(x0), fy = qy - float(y0);
@@ -110,11 +162,6 @@ std::vector<StabilityResult> temporalStability(const std::vector<StabilityInput>
         }
       }
     });
-    if (k == 1) {
-      size_t kept = 0;
-      for (uint8_t v : valid) kept += v;
-      for (StabilityResult& r : out) r.validFraction = double(kept) / double(n);
-    }
     // The coarse scale: 4x4 block means of the frame and of its warped predecessor, over blocks
     // whose every pixel is valid for this lag; a block's entry goes to its top-left pixel's tile.
     const int blocksX = w / kStabilityBlock, blocksY = h / kStabilityBlock;
@@ -190,10 +237,15 @@ MetricFamily multiScaleStabilityFamily() {
     auto put = [&](const char* name, double value, TileSums tiles) {
       if (tiles.totalCount() > 0) out.put(name, value, std::move(tiles));  // else nothing was valid: undefined
     };
-    // The output and its error follow the same paths: traced once for both.
+    // The output and its error follow the same paths: traced once for both, and once for every
+    // output of the scene where the evaluation keeps them (the frame's memo).
     std::vector<StabilityInput> signals = {output};
     if (v.error) signals.push_back(error);
-    std::vector<StabilityResult> r = temporalStability(signals, output.guides);
+    const auto trace = [&] { return traceStabilityPaths(output.guides); };
+    const std::string key = "stability:paths:" + std::to_string(output.previous.size());
+    std::vector<StabilityResult> r =
+        v.frameMemo ? temporalStability(signals, *v.frameMemo->get<StabilityPaths>(key, trace))
+                    : temporalStability(signals, trace());
     put("stabilityFine", r[0].fine, std::move(r[0].fineTiles));
     put("stabilityCoarse", r[0].coarse, std::move(r[0].coarseTiles));
     if (r.size() < 2) return;

@@ -3,6 +3,7 @@
 // motion-compensated change of a frame against the frames 1, 2 and 3 before it, at full resolution
 // and on 4x4 block means, so per-pixel flicker and low-frequency boiling can be told apart. It needs
 // no reference; its twin measures the same on the error d - r.
+#include <cstdint>
 #include <vector>
 
 #include "core/consistency.hpp"
@@ -31,11 +32,31 @@ struct StabilityResult {
 
 StabilityResult temporalStability(const StabilityInput& in, const ConsistencyThresholds& thresholds = {});
 
+// Each pixel's path back through the motion layers of frames t, t-1, ..., t-K: where it lands in
+// frame t - k (lag k = 1..K) and whether every step so far was consistent. It reads only the guide
+// layers, so a scene's pairs share it (the evaluation keeps it per frame).
+struct StabilityPaths {
+  int width = 0, height = 0;
+  struct Lag {
+    std::vector<float> x, y;     // the path's position in frame t - k (valid pixels only)
+    std::vector<uint8_t> valid;  // every step up to lag k consistent
+  };
+  std::vector<Lag> lags;     // lags[k - 1]
+  double validFraction = 0;  // of pixels valid at lag 1
+  size_t bytes() const { return lags.size() * size_t(width) * size_t(height) * 9; }
+};
+// guides holds frames t, t-1, ..., t-K (K >= 1).
+StabilityPaths traceStabilityPaths(const std::vector<const LayerSet*>& guides,
+                                   const ConsistencyThresholds& thresholds = {});
+
 // Several signals over the same frames and guides (the output and its error): each pixel's path
 // back through the motion layers is followed once for all of them. signals[i].guides is ignored;
 // `guides` holds frames t, t-1, ..., t-K for every signal.
 std::vector<StabilityResult> temporalStability(const std::vector<StabilityInput>& signals,
                                                const std::vector<const LayerSet*>& guides,
                                                const ConsistencyThresholds& thresholds = {});
+// The same along paths traced before (signals[i].previous.size() must be paths.lags.size()).
+std::vector<StabilityResult> temporalStability(const std::vector<StabilityInput>& signals,
+                                               const StabilityPaths& paths);
 
 }  // namespace arena

@@ -78,11 +78,11 @@ struct SizedValue {
   size_t bytes() const { return size; }
 };
 
-TEST(ReferenceMemo, MakesEachKeysValueOnceAndKeepsWhatFitsItsBudget) {
+TEST(SceneMemo, MakesEachKeysValueOnceAndKeepsWhatFitsItsBudget) {
   // What the evaluation keeps per reference (FLIP's filtered planes) is made on first use only,
   // as long as the scene's memos have bytes left; beyond that, each use makes its own.
-  auto budget = std::make_shared<ReferenceMemo::Budget>(100);
-  ReferenceMemo memo(budget), other(budget);
+  auto budget = std::make_shared<SceneMemo::Budget>(100);
+  SceneMemo memo(budget), other(budget);
   int made = 0;
   auto make = [&](size_t size) { return [&made, size] { return SizedValue{++made, size}; }; };
   const auto first = memo.get<SizedValue>("a", make(60));

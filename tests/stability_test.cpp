@@ -112,6 +112,53 @@ TEST(Stability, FollowsMotionAndExcludesWhatCannotBeFollowed) {
   EXPECT_TRUE(std::isnan(temporalStability({&x3, {&x2}, {&sky, &sky}, nullptr}).fine));
 }
 
+TEST(Stability, PathsTracedOnceServeEveryOutputWithTheSameBits) {
+  // The evaluation traces a frame's paths once and applies them to every pair's output (they read
+  // only the guide layers): the values must be those of tracing them for each output.
+  const int w = 24, h = 8;
+  LayerSet g = test::planeFrame(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      g.get("motion").at(x, y, 0) = 0.75f, g.get("motion").at(x, y, 1) = 0.25f;
+  auto noise = [&](uint32_t frame, uint32_t seed) {
+    Image i(w, h, 3);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int c = 0; c < 3; ++c)
+          i.at(x, y, c) = test::hashUniform(x + 100 * y + 10000 * int(seed), frame, c);
+    return i;
+  };
+  const std::vector<const LayerSet*> guides = {&g, &g, &g, &g};
+  const StabilityPaths paths = traceStabilityPaths(guides);
+  ASSERT_EQ(paths.lags.size(), 3u);
+  for (uint32_t seed : {1u, 2u}) {
+    const Image x0 = noise(0, seed), x1 = noise(1, seed), x2 = noise(2, seed), x3 = noise(3, seed);
+    const Image ref = constant(w, h, 0.5f);
+    const std::vector<StabilityInput> signals = {{&x0, {&x1, &x2, &x3}, {}, nullptr},
+                                                 {&x0, {&x1, &x2, &x3}, {}, &ref}};
+    const std::vector<StabilityResult> once = temporalStability(signals, paths);
+    const std::vector<StabilityResult> each = temporalStability(signals, guides);
+    for (size_t s = 0; s < signals.size(); ++s) {
+      EXPECT_GT(once[s].fine, 0.0);
+      EXPECT_EQ(once[s].fine, each[s].fine);
+      EXPECT_EQ(once[s].coarse, each[s].coarse);
+      EXPECT_EQ(once[s].validFraction, each[s].validFraction);
+      EXPECT_EQ(once[s].fineTiles.totalSum(), each[s].fineTiles.totalSum());
+      EXPECT_EQ(once[s].coarseTiles.totalCount(), each[s].coarseTiles.totalCount());
+    }
+  }
+  // Paths over one lag cannot serve a signal with three previous frames.
+  const Image x0 = noise(0, 1), x1 = noise(1, 1), x2 = noise(2, 1), x3 = noise(3, 1);
+  const StabilityPaths one = traceStabilityPaths({&g, &g});
+  const std::string lags = test::errorOf([&] {
+    temporalStability({{&x0, {&x1, &x2, &x3}, {}, nullptr}}, one);
+  });
+  EXPECT_NE(lags.find("3 previous frames need paths over as many lags, got 1"), std::string::npos)
+      << lags;
+  const std::string single = test::errorOf([&] { traceStabilityPaths({&g}); });
+  EXPECT_NE(single.find("at least two frames"), std::string::npos) << single;
+}
+
 TEST(Stability, TheEvaluationRecordsItWithoutAReferenceAndNotAcrossACut) {
   // Six flat frames with a camera cut at frame 3; outputs alternate 0.4 / 0.6 (pure flicker).
   EvaluationInput in;
