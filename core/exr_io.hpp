@@ -41,10 +41,11 @@ class LayerSet {
 
 using ExrAttributes = std::map<std::string, std::string>;
 
-// How writeExr stores pixels: ZIP (lossless; the default), or uncompressed for layers ZIP hardly
-// shrinks: a reference's means and variances are noise-like floats, 14% smaller under ZIP at about
-// seven times the write time (camera_pan_occluder's, 256x144: 3.04 MB in 65-72 ms against 3.54 MB
-// in 8-10 ms; docs/performance.md, 2026-11-27, eleventh entry). Readers take either.
+// How writeExr stores pixels: ZIP (lossless; the default), or uncompressed where writing and
+// reading time matters more than disk: a reference's means and variances are noise-like floats,
+// 14% smaller under ZIP at about seven times the write time (camera_pan_occluder's, 256x144: 3.04
+// MB in 65-72 ms against 3.54 MB in 8-10 ms; docs/performance.md, 2026-11-27, eleventh entry); the
+// renderer's frames 2.8x smaller at about ten times (2026-11-28, thirteenth). Readers take either.
 enum class ExrCompression { Zip, None };
 
 // Writes the layers named in `specs` atomically (temporary file + rename).

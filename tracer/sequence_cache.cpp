@@ -366,6 +366,14 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
                          {"arena.index", std::to_string(index)},
                          {"arena.scene", scene.name}};
   };
+  // Frames, gradient samples and low-resolution buffers are written uncompressed, as references
+  // are: ZIP makes a 256x144 frame (35 channels) 2.8x smaller, but takes about 66 ms to write it
+  // against 5-15 ms, while the other core waits (a frame's files are written between frames), and
+  // 43 ms to read it against 26 ms. docs/performance.md, 2026-11-28 (thirteenth).
+  auto writeInput = [&](const fs::path& path, const LayerSet& layers,
+                        const std::vector<LayerSpec>& specs, const char* kind, int index) {
+    writeExr(path, layers, specs, attributes(kind, index), ExrCompression::None);
+  };
 
   // The low-resolution buffer's path rate on this machine, measured where it is rendered: the run
   // charges a denoiser that reads the buffer its equivalent tracing time (paths read / this rate).
@@ -393,7 +401,7 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
     if (frameOk && gradOk && !lowOk) {  // only the low-res buffer is missing
       say("[" + scene.name + "] " + (fs::exists(lp) ? "re-rendering " : "rendering ") + lp.filename().string() +
           (fs::exists(lp) ? ": " + whyLow : ""));
-      writeExr(lp, timedLowres(t), channels::lowresLayers(), attributes("lowres", t));
+      writeInput(lp, timedLowres(t), channels::lowresLayers(), "lowres", t);
       lowOk = true;
     }
     if (frameOk && gradOk && lowOk) {
@@ -408,9 +416,10 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
     double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     inputSeconds += sec;
     inputPaths += double(r.counts.paths);
-    writeExr(fp, r.frame, channels::frameLayers(), attributes("frame", t));
-    if (t > 0) writeExr(gp, r.gradients, channels::gradientLayers(), attributes("gradients", t));
-    if (settings.lowresFactor > 0) writeExr(lp, timedLowres(t), channels::lowresLayers(), attributes("lowres", t));
+    writeInput(fp, r.frame, channels::frameLayers(), "frame", t);
+    if (t > 0) writeInput(gp, r.gradients, channels::gradientLayers(), "gradients", t);
+    if (settings.lowresFactor > 0)
+      writeInput(lp, timedLowres(t), channels::lowresLayers(), "lowres", t);
     report("frame " + std::to_string(t), r.counts, sec);
   }
   info.referenceSpp.assign(firstFrameOfReference.size(), 0);
