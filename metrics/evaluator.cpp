@@ -1,8 +1,12 @@
 #include "metrics/evaluator.hpp"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <exception>
+#include <functional>
 #include <limits>
 #include <random>
 #include <set>
@@ -115,6 +119,23 @@ json evaluationSettings(const EvaluationOptions& options) {
           {"flipPixelsPerDegree", 67}};
 }
 
+namespace {
+// f(0) .. f(n - 1) on the task pool, any order; an error is the lowest index's, as a loop in order
+// would have thrown it (the others' work is dropped).
+void forEachIndexInParallel(int n, const std::function<void(int)>& f) {
+  std::vector<std::exception_ptr> errors(size_t(std::max(n, 0)));
+  tbb::parallel_for(0, n, [&](int i) {
+    try {
+      f(i);
+    } catch (...) {
+      errors[size_t(i)] = std::current_exception();
+    }
+  });
+  for (const std::exception_ptr& e : errors)
+    if (e) std::rethrow_exception(e);
+}
+}  // namespace
+
 EvaluationInput readSequenceForEvaluation(const Sequence& sequence) {
   const SequenceInfo& info = sequence.info();
   EvaluationInput in;
@@ -124,22 +145,33 @@ EvaluationInput readSequenceForEvaluation(const Sequence& sequence) {
   in.events = info.events;
   if (sequence.isCapture())
     in.referenceNoiseKnown = sequence.capture().referenceHasVariance || sequence.capture().referenceHasHalf;
-  for (int t = 0; t < info.frames; ++t) {
-    in.frames.push_back(sequence.frame(t));
-    countNonFinite(in.frames.back(), channels::frameLayers(), "frame " + std::to_string(t) + ": ", in.nonFinite);
+  // The files are read two or more at a time (reading is most of a scene's loading); counts and
+  // errors are taken in frame order, as one at a time would give them.
+  std::vector<NonFiniteCounts> frameCounts(size_t(info.frames));
+  in.frames.resize(size_t(info.frames));
+  forEachIndexInParallel(info.frames, [&](int t) {
+    in.frames[size_t(t)] = sequence.frame(t);
+    countNonFinite(in.frames[size_t(t)], channels::frameLayers(),
+                   "frame " + std::to_string(t) + ": ", frameCounts[size_t(t)]);
     if (t > 0 && info.hasGradients)
-      countNonFinite(sequence.gradients(t), channels::gradientLayers(), "gradients " + std::to_string(t) + ": ",
-                     in.nonFinite);
-  }
+      countNonFinite(sequence.gradients(t), channels::gradientLayers(),
+                     "gradients " + std::to_string(t) + ": ", frameCounts[size_t(t)]);
+  });
+  for (const NonFiniteCounts& counts : frameCounts)
+    for (const auto& [where, n] : counts) in.nonFinite[where] += n;
   int refs = 0;
   if (info.hasReference)
     for (int r : info.referenceOfFrame) refs = std::max(refs, r + 1);
+  in.references.resize(size_t(refs));
+  forEachIndexInParallel(refs,
+                         [&](int r) { in.references[size_t(r)] = sequence.referenceByIndex(r); });
   for (int r = 0; r < refs; ++r) {
-    const std::filesystem::path file = sequence.isCapture() ? captureReferencePath(sequence.dir(), r)
-                                                            : Sequence::referencePath(sequence.dir(), r);
-    in.references.push_back(sequence.referenceByIndex(r));
+    const std::filesystem::path file = sequence.isCapture()
+                                           ? captureReferencePath(sequence.dir(), r)
+                                           : Sequence::referencePath(sequence.dir(), r);
     NonFiniteCounts bad;
-    countNonFinite(in.references.back(), channels::referenceLayers(), file.string() + ": ", bad);
+    countNonFinite(in.references[size_t(r)], channels::referenceLayers(), file.string() + ": ",
+                   bad);
     // A non-finite reference cannot rank anything: every metric against it would be NaN or a
     // fake perfect score. The scene fails, naming the file and the channels.
     if (!bad.empty())
