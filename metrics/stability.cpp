@@ -84,13 +84,35 @@ StabilityPaths traceStabilityPaths(const std::vector<const LayerSet*>& guides,
       }
     });
     paths.lags.push_back({posX, posY, valid});
-    if (k == 1) {
-      size_t kept = 0;
-      for (uint8_t v : valid) kept += v;
-      paths.validFraction = double(kept) / double(n);
-    }
   }
   return paths;
+}
+
+double StabilityPaths::validFraction() const {
+  if (lags.empty() || lags[0].valid.empty()) return 0;
+  size_t kept = 0;
+  for (uint8_t v : lags[0].valid) kept += v;
+  return double(kept) / double(lags[0].valid.size());
+}
+
+int followableLags(const FrameView& v) {
+  int lags = 0;
+  while (lags < kMaxMetricHistory && v.previous(lags + 1) && !v.cutWithin(lags + 1)) ++lags;
+  return lags;
+}
+
+std::shared_ptr<const StabilityPaths> motionPaths(const FrameView& v, int lags) {
+  std::vector<const LayerSet*> guides = {v.guides};
+  for (int lag = 1; lag <= lags; ++lag) {
+    const FrameView* p = v.previous(lag);
+    if (!p)
+      throw Error("motion paths: frame " + std::to_string(v.frame) + " has no frame " + std::to_string(lag) +
+                  " before it");
+    guides.push_back(p->guides);
+  }
+  const auto trace = [&] { return traceStabilityPaths(guides); };
+  if (!v.frameMemo) return std::make_shared<const StabilityPaths>(trace());
+  return v.frameMemo->get<StabilityPaths>("motion paths over " + std::to_string(lags) + " lags", trace);
 }
 
 std::vector<StabilityResult> temporalStability(const std::vector<StabilityInput>& signals,
@@ -134,7 +156,8 @@ std::vector<StabilityResult> temporalStability(const std::vector<StabilityInput>
   std::vector<TileAccumulator> fine(count, TileAccumulator(w, h)),
       coarse(count, TileAccumulator(w, h));
   std::vector<StabilityResult> out(count);
-  for (StabilityResult& r : out) r.validFraction = paths.validFraction;
+  const double validFraction = paths.validFraction();
+  for (StabilityResult& r : out) r.validFraction = validFraction;
   for (size_t k = 1; k <= lags; ++k) {
     const StabilityPaths::Lag& lag = paths.lags[k - 1];
     const std::vector<uint8_t>& valid = lag.valid;
@@ -223,29 +246,23 @@ MetricFamily multiScaleStabilityFamily() {
        .description = "stabilityCoarse of the error d - r, relative to r (reference twin)"},
   };
   f.measure = [](const FrameView& v, const MetricOptions&, FrameRecorder& out) {
-    StabilityInput output{v.output, {}, {v.guides}, nullptr};
-    StabilityInput error{v.error, {}, {v.guides}, v.reference};
-    for (int lag = 1; lag <= kMaxMetricHistory; ++lag) {
-      const FrameView* p = v.previous(lag);
-      if (!p || v.cutWithin(lag)) break;  // across a camera cut there is nothing to follow
-      output.previous.push_back(p->output);
-      output.guides.push_back(p->guides);
-      error.previous.push_back(p->error);
-      error.guides.push_back(p->guides);
+    // Across a camera cut there is nothing to follow; frame 0 or right after a cut: undefined.
+    const int lags = followableLags(v);
+    if (lags == 0) return;
+    StabilityInput output{v.output, {}, {}, nullptr};
+    StabilityInput error{v.error, {}, {}, v.reference};
+    for (int lag = 1; lag <= lags; ++lag) {
+      output.previous.push_back(v.previous(lag)->output);
+      error.previous.push_back(v.previous(lag)->error);
     }
-    if (output.previous.empty()) return;  // frame 0 or right after a cut: undefined
     auto put = [&](const char* name, double value, TileSums tiles) {
       if (tiles.totalCount() > 0) out.put(name, value, std::move(tiles));  // else nothing was valid: undefined
     };
-    // The output and its error follow the same paths: traced once for both, and once for every
-    // output of the scene where the evaluation keeps them (the frame's memo).
+    // The output and its error follow the same paths, traced once for every output of the scene
+    // where the evaluation keeps them (the frame's memo).
     std::vector<StabilityInput> signals = {output};
     if (v.error) signals.push_back(error);
-    const auto trace = [&] { return traceStabilityPaths(output.guides); };
-    const std::string key = "stability:paths:" + std::to_string(output.previous.size());
-    std::vector<StabilityResult> r =
-        v.frameMemo ? temporalStability(signals, *v.frameMemo->get<StabilityPaths>(key, trace))
-                    : temporalStability(signals, trace());
+    std::vector<StabilityResult> r = temporalStability(signals, *motionPaths(v, lags));
     put("stabilityFine", r[0].fine, std::move(r[0].fineTiles));
     put("stabilityCoarse", r[0].coarse, std::move(r[0].coarseTiles));
     if (r.size() < 2) return;

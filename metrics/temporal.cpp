@@ -2,6 +2,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -60,30 +61,27 @@ double temporalPsnr(const Image& d, const Image& dPrev, const Image& r, const Im
 
 WarpedFlicker warpedFlicker(const Image& e, const Image& ePrev, const LayerSet& g, const LayerSet& gPrev,
                             const ConsistencyThresholds& thresholds, TileSums* tiles) {
+  return warpedFlicker(e, ePrev, traceStabilityPaths({&g, &gPrev}, thresholds), tiles);
+}
+
+WarpedFlicker warpedFlicker(const Image& e, const Image& ePrev, const StabilityPaths& paths, TileSums* tiles) {
   requireShapes({&e, &ePrev}, "warped flicker");
-  const Image &depth = g.get("depth", "warped flicker"), &normal = g.get("normal", "warped flicker"),
-              &meshId = g.get("meshId", "warped flicker"), &motion = g.get("motion", "warped flicker");
-  const Image &pDepth = gPrev.get("depth", "warped flicker"), &pNormal = gPrev.get("normal", "warped flicker"),
-              &pMesh = gPrev.get("meshId", "warped flicker");
   const int w = e.width(), h = e.height(), c = e.channels();
+  if (paths.lags.empty() || paths.width != w || paths.height != h)
+    throw Error("warped flicker: the motion paths have no lag or differ in size from the frame");
+  const StabilityPaths::Lag& lag = paths.lags[0];
   std::vector<double> rowSum(static_cast<size_t>(h)), rowCount(static_cast<size_t>(h));
   std::optional<TileAccumulator> acc;
   if (tiles) acc.emplace(w, h);
   tbb::parallel_for(0, h, [&](int y) {
     double s = 0, n = 0;
     for (int x = 0; x < w; ++x) {
-      if (meshId.at(x, y) < 0) continue;
+      const size_t i = size_t(y) * size_t(w) + size_t(x);
+      if (!lag.valid[i]) continue;
       // Previous-frame continuous position, relative to pixel centres.
-      float px = float(x) + motion.at(x, y, 0), py = float(y) + motion.at(x, y, 1);
-      int x0 = int(std::floor(px)), y0 = int(std::floor(py));
-      float fx = px - float(x0), fy = py - float(y0);
-      if (x0 < 0 || y0 < 0 || x0 + 1 >= w || y0 + 1 >= h) continue;
-      SurfaceSample cur = surfaceAt(depth, normal, meshId, x, y);
-      SurfaceDerivatives der = surfaceDerivatives(depth, normal, meshId, x, y);
-      bool ok = true;
-      for (int k = 0; k < 4 && ok; ++k)
-        ok = consistent(cur, der, surfaceAt(pDepth, pNormal, pMesh, x0 + (k & 1), y0 + (k >> 1)), thresholds);
-      if (!ok) continue;
+      const float px = lag.x[i], py = lag.y[i];
+      const int x0 = int(std::floor(px)), y0 = int(std::floor(py));
+      const float fx = px - float(x0), fy = py - float(y0);
       n += 1;
       double p = 0;
       for (int ch = 0; ch < c; ++ch) {
@@ -135,7 +133,8 @@ MetricFamily temporalFlickerFamily() {
     const double tpsnr = temporalPsnr(*v.outputDisplay, *p->outputDisplay, *v.referenceDisplay,
                                       *p->referenceDisplay, &tiles);
     out.put("tPsnr", tpsnr, std::move(tiles));
-    const WarpedFlicker wf = warpedFlicker(*v.error, *p->error, *v.guides, *p->guides, {}, &tiles);
+    // Lag 1 of the paths the stability metric follows, kept once per frame.
+    const WarpedFlicker wf = warpedFlicker(*v.error, *p->error, *motionPaths(v, std::max(1, followableLags(v))), &tiles);
     // No consistent pixel (a cut, a full disocclusion): warped flicker is undefined there.
     if (wf.validFraction > 0) out.put("warpedFlicker", wf.value, std::move(tiles));
     out.note("warpedValid", wf.validFraction);

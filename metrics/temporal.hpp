@@ -4,6 +4,7 @@
 #include "core/consistency.hpp"
 #include "core/exr_io.hpp"
 #include "core/image.hpp"
+#include "metrics/stability.hpp"
 #include "metrics/tiles.hpp"
 
 namespace arena {
@@ -28,6 +29,9 @@ struct WarpedFlicker {
 // `tiles` receives the tile sums of the squared difference over valid pixels (the mean inside the sqrt).
 WarpedFlicker warpedFlicker(const Image& error, const Image& errorPrev, const LayerSet& gbuffer,
                             const LayerSet& gbufferPrev, const ConsistencyThresholds& thresholds = {},
+                            TileSums* tiles = nullptr);
+// The same along paths traced before (their first lag: the warp from frame t to t - 1).
+WarpedFlicker warpedFlicker(const Image& error, const Image& errorPrev, const StabilityPaths& paths,
                             TileSums* tiles = nullptr);
 
 }  // namespace arena

@@ -50,6 +50,16 @@ TEST(Cache, AtomicWriteLeavesNothingWhenInterrupted) {
   EXPECT_EQ(readText(target), "whole");
 }
 
+// Every channel of the layers `specs` names holds the same bits in a and b.
+void expectSameBits(const LayerSet& a, const LayerSet& b, const std::vector<LayerSpec>& specs) {
+  for (const LayerSpec& spec : specs) {
+    const Image &x = a.get(spec.name), &y = b.get(spec.name);
+    ASSERT_EQ(x.pixelCount(), y.pixelCount()) << spec.name;
+    for (int ch = 0; ch < spec.channels(); ++ch)
+      EXPECT_EQ(std::memcmp(x.plane(ch), y.plane(ch), x.pixelCount() * sizeof(float)), 0) << spec.name << " " << ch;
+  }
+}
+
 class CacheRender : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -112,28 +122,14 @@ TEST_F(CacheRender, FilesAreStoredUncompressedAndBothCompressionsReadBackExactly
     Log log;
     renderSequence(scene, settings, cache, log.fn());
     EXPECT_EQ(log.lines.size(), 0u) << log.lines.front();  // not rendered again
-    const LayerSet after = Sequence::open(dir).frame(0);
-    for (const LayerSpec& spec : channels::frameLayers())
-      for (int ch = 0; ch < spec.channels(); ++ch)
-        EXPECT_EQ(std::memcmp(before.get(spec.name).plane(ch), after.get(spec.name).plane(ch),
-                              before.get(spec.name).pixelCount() * sizeof(float)),
-                  0)
-            << spec.name << " " << ch;
+    expectSameBits(before, Sequence::open(dir).frame(0), channels::frameLayers());
   }
   const LayerSet ref = Sequence::open(dir).reference(0);
   const std::vector<LayerSpec>& specs = channels::referenceLayers();
   for (ExrCompression c : {ExrCompression::None, ExrCompression::Zip}) {
     const fs::path copy = cache / (c == ExrCompression::None ? "none.exr" : "zip.exr");
     writeExr(copy, ref, specs, {}, c);
-    const LayerSet back = readExr(copy, specs).layers;
-    for (const LayerSpec& spec : specs) {
-      const Image& a = ref.get(spec.name);
-      const Image& b = back.get(spec.name);
-      ASSERT_EQ(a.pixelCount(), b.pixelCount());
-      for (int ch = 0; ch < spec.channels(); ++ch)
-        EXPECT_EQ(std::memcmp(a.plane(ch), b.plane(ch), a.pixelCount() * sizeof(float)), 0)
-            << spec.name << " " << ch;
-    }
+    expectSameBits(ref, readExr(copy, specs).layers, specs);
   }
   EXPECT_EQ(compressionOf(cache / "none.exr"), Imf::NO_COMPRESSION);
 }
@@ -146,15 +142,8 @@ TEST_F(CacheRender, TheEvaluationReadsItsFilesTogetherAndNamesTheFirstItCannot) 
   const EvaluationInput in = readSequenceForEvaluation(sequence);
   ASSERT_EQ(in.frames.size(), 14u);
   ASSERT_EQ(in.references.size(), 2u);
-  for (int t : {0, 7, 13})
-    EXPECT_EQ(std::memcmp(in.frames[size_t(t)].get("color").plane(0),
-                          sequence.frame(t).get("color").plane(0),
-                          in.frames[size_t(t)].get("color").pixelCount() * sizeof(float)),
-              0);
-  EXPECT_EQ(std::memcmp(in.references[1].get("color").plane(1),
-                        sequence.referenceByIndex(1).get("color").plane(1),
-                        in.references[1].get("color").pixelCount() * sizeof(float)),
-            0);
+  for (int t : {0, 7, 13}) expectSameBits(in.frames[size_t(t)], sequence.frame(t), channels::frameLayers());
+  expectSameBits(in.references[1], sequence.referenceByIndex(1), channels::referenceLayers());
   for (int t : {9, 4})
     fs::resize_file(Sequence::framePath(dir, t), fs::file_size(Sequence::framePath(dir, t)) / 2);
   const std::string error = test::errorOf([&] { readSequenceForEvaluation(Sequence::open(dir)); });
