@@ -326,7 +326,11 @@ json benchReference(const ReferenceBench& b, const ProgressFn& progress) {
     for (int r = 0; r < b.repeats; ++r) {
       Scene repeat = scene;
       if (r > 0) repeat.seed = uint32_t(mix64(uint64_t(scene.seed) ^ (0x7265706561740000ull + uint64_t(r))) >> 32);
-      ind.push_back(measure(repeat, settings, "independent", false, b.frame, b.spp, gold));
+      // The baseline is the plain path tracer under the independent sampler, whichever estimator
+      // the scene's references use (the Sobol rows and the gold use the scene's).
+      Scene baseline = repeat;
+      baseline.referenceEstimator = ReferenceEstimator::Path;
+      ind.push_back(measure(baseline, settings, "independent", false, b.frame, b.spp, gold));
       sob.push_back(measure(repeat, settings, "sobol", false, b.frame, b.spp, gold));
       ada.push_back(measure(repeat, settings, "sobol", true, b.frame, b.spp, gold));
       indCost.push_back(ind.back().relMse * ind.back().seconds);
@@ -352,15 +356,20 @@ json benchReference(const ReferenceBench& b, const ProgressFn& progress) {
       return j;
     };
     const json indJ = summary(ind), sobJ = summary(sob), adaJ = summary(ada);
-    progress(printed("%-22s %d spp, %d repeats (medians): independent relMSE %.3e in %.2f s | sobol %.3e in %.2f s "
-                     "(gain %.2fx [95%% CI %.2f, %.2f]) | adaptive %.0f spp %.3e in %.2f s (est. %.3e) | gold %d spp "
-                     "in %.1f s, own noise %.1e | gain %.2fx [95%% CI %.2f, %.2f]",
-                     scene.name.c_str(), int(std::lround(indJ["spp"].get<double>())), b.repeats,
-                     indJ["relMse"].get<double>(), indJ["seconds"].get<double>(), sobJ["relMse"].get<double>(),
-                     sobJ["seconds"].get<double>(), sobolGain.median, sobolGain.lo, sobolGain.hi,
-                     adaJ["spp"].get<double>(), adaJ["relMse"].get<double>(), adaJ["seconds"].get<double>(),
-                     adaJ["estimatedRelMse"].get<double>(), goldSums.spp(), goldSeconds, goldNoise, gain.median,
-                     gain.lo, gain.hi));
+    const char* estimator =
+        scene.referenceEstimator == ReferenceEstimator::Bidirectional ? "bidirectional" : "path";
+    progress(
+        printed("%-22s %d spp, %d repeats (medians): independent path relMSE %.3e in %.2f s | %s "
+                "sobol %.3e in %.2f s "
+                "(gain %.2fx [95%% CI %.2f, %.2f]) | adaptive %.0f spp %.3e in %.2f s (est. %.3e) "
+                "| gold %d spp "
+                "in %.1f s, own noise %.1e | gain %.2fx [95%% CI %.2f, %.2f]",
+                scene.name.c_str(), int(std::lround(indJ["spp"].get<double>())), b.repeats,
+                indJ["relMse"].get<double>(), indJ["seconds"].get<double>(), estimator,
+                sobJ["relMse"].get<double>(), sobJ["seconds"].get<double>(), sobolGain.median,
+                sobolGain.lo, sobolGain.hi, adaJ["spp"].get<double>(), adaJ["relMse"].get<double>(),
+                adaJ["seconds"].get<double>(), adaJ["estimatedRelMse"].get<double>(),
+                goldSums.spp(), goldSeconds, goldNoise, gain.median, gain.lo, gain.hi));
     out["scenes"].push_back({{"scene", scene.name},
                              {"repeats", b.repeats},
                              {"independent", indJ},
@@ -373,7 +382,9 @@ json benchReference(const ReferenceBench& b, const ProgressFn& progress) {
                              {"goldRelMse", goldNoise},
                              {"gain", gain.median},
                              {"gainCi95", {gain.lo, gain.hi}},
-                             {"gainEstimator", "adaptive sobol (the study's references)"}});
+                             {"estimator", estimator},
+                             {"gainEstimator", std::string("adaptive sobol, ") + estimator +
+                                                   " (the study's references)"}});
   }
   return out;
 }

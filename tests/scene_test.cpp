@@ -116,6 +116,22 @@ TEST(Scene, KeyBeyondTheSequenceIsRejected) {
   EXPECT_NE(e.find("4 frames"), std::string::npos) << e;
 }
 
+TEST(Scene, ReferenceEstimatorIsOneOfTwoAndBoundsTheBounces) {
+  EXPECT_EQ(loadScene(writeScene("estimator_default", kMinimal)).referenceEstimator,
+            ReferenceEstimator::Path);
+  const std::string bidirectional = replaced(
+      kMinimal, R"("frames": 4,)", R"("frames": 4, "reference_estimator": "bidirectional",)");
+  EXPECT_EQ(loadScene(writeScene("estimator_bidirectional", bidirectional)).referenceEstimator,
+            ReferenceEstimator::Bidirectional);
+  std::string e = errorOf(
+      replaced(kMinimal, R"("frames": 4,)", R"("frames": 4, "reference_estimator": "bdpt",)"));
+  EXPECT_NE(e.find("$.reference_estimator"), std::string::npos) << e;
+  EXPECT_NE(e.find("expected path or bidirectional, got 'bdpt'"), std::string::npos) << e;
+  e = errorOf(replaced(bidirectional, R"("frames": 4,)", R"("frames": 4, "max_bounces": 17,)"));
+  EXPECT_NE(e.find("$.max_bounces"), std::string::npos) << e;
+  EXPECT_NE(e.find("at most 16"), std::string::npos) << e;
+}
+
 TEST(Scene, MissingRequiredFieldIsNamed) {
   std::string e = errorOf(replaced(kMinimal, R"("purpose": "test",)", ""));
   EXPECT_NE(e.find("$.purpose"), std::string::npos) << e;

@@ -273,6 +273,16 @@ Scene parseScene(const std::string& text, const std::string& path) {
   scene.frames = root.integerIn("frames", 1, kMaxSceneFrames);
   scene.seed = uint32_t(root.integerIn("seed", 1, 0, JsonReader::kIntMax));
   scene.maxBounces = root.integerIn("max_bounces", 4, 1, 64);
+  const std::string estimator = root.string("reference_estimator", "path");
+  if (estimator == "bidirectional")
+    scene.referenceEstimator = ReferenceEstimator::Bidirectional;
+  else if (estimator != "path")
+    root.fail("reference_estimator", "expected path or bidirectional, got '" + estimator + "'");
+  if (scene.referenceEstimator == ReferenceEstimator::Bidirectional &&
+      scene.maxBounces > kMaxBidirectionalBounces)
+    root.fail("max_bounces", "at most " + std::to_string(kMaxBidirectionalBounces) +
+                                 " with \"reference_estimator\": \"bidirectional\", got " +
+                                 std::to_string(scene.maxBounces));
 
   if (auto sky = root.optionalChild("sky")) {
     glm::vec3 c = sky->vec3("color", glm::vec3(0.0f));

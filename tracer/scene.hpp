@@ -122,6 +122,10 @@ struct SceneEvent {
   std::string what;  // name of the light/object concerned
 };
 
+enum class ReferenceEstimator { Path, Bidirectional };
+// A bidirectional reference keeps both paths' vertices on the stack: max_bounces at most this.
+constexpr int kMaxBidirectionalBounces = 16;
+
 struct Scene {
   std::string name;     // file stem
   std::string file;     // path it was loaded from
@@ -129,6 +133,9 @@ struct Scene {
   int width = 320, height = 180, frames = 32;
   uint32_t seed = 1;
   int maxBounces = 4;
+  // How the references estimate each pixel (the 1-spp frames are always path traced):
+  // "path" (unidirectional, next-event estimation) or "bidirectional" (docs/references.md).
+  ReferenceEstimator referenceEstimator = ReferenceEstimator::Path;
   glm::vec3 skyTop{0.0f}, skyBottom{0.0f};
   Track<CameraKey> camera;
   std::vector<Material> materials;

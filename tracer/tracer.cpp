@@ -468,9 +468,21 @@ SurfaceHit FrameScene::surface(int meshId, int primId, float u, float v) const {
   return s;
 }
 
-uint32_t FrameScene::pathDimensions() const {
+uint32_t FrameScene::eyePathDimensions() const {
   // Vertices 0..maxBounces-1 sample (the last bounce's hit only adds its emission).
   return uint32_t(std::max(scene_.maxBounces, 1)) * kDimsPerVertex;
+}
+
+// A bidirectional reference's light path reads its numbers after the eye path's: at eyeDims the
+// light and triangle choice (a pair), at + 2 the point on the triangle, at + 4 the emitted
+// direction, then per bounce j = 1.. a pair for the direction and one number for the lobe (the
+// independent sampler's; the Sobol sampler takes the lobe from the pair, as the eye path does).
+constexpr uint32_t kLightPathFirstBounce = 6, kDimsPerLightBounce = 3;
+
+uint32_t FrameScene::pathDimensions() const {
+  if (scene_.referenceEstimator != ReferenceEstimator::Bidirectional) return eyePathDimensions();
+  const uint32_t bounces = uint32_t(std::max(scene_.maxBounces - 2, 0));
+  return eyePathDimensions() + kLightPathFirstBounce + bounces * kDimsPerLightBounce;
 }
 
 Sampler::Reads FrameScene::sobolReads() const {
@@ -480,6 +492,16 @@ Sampler::Reads FrameScene::sobolReads() const {
     if (dim + kDimsPerVertex > Sampler::kMaxHashedDims) break;  // the rest are computed per draw
     reads.pairs |= (1ull << (dim + kLightU)) | (1ull << (dim + kDirU));
     if (v >= 2) reads.singles |= 1ull << (dim + kRoulette);  // Russian roulette after two bounces
+  }
+  if (scene_.referenceEstimator == ReferenceEstimator::Bidirectional) {
+    const uint32_t base = eyePathDimensions();
+    for (uint32_t d = base; d < pathDimensions(); ++d) {
+      const uint32_t k = d - base;
+      const bool pair = k < kLightPathFirstBounce
+                            ? k % 2 == 0
+                            : (k - kLightPathFirstBounce) % kDimsPerLightBounce == 0;
+      if (pair && d + 1 < Sampler::kMaxHashedDims) reads.pairs |= 1ull << d;
+    }
   }
   return reads;
 }
@@ -499,6 +521,10 @@ struct FrameScene::LightSample {
   float pdf = 0;           // solid angle, the light's choice included
   glm::vec3 shadowEnd{0};  // area samples: the light point, lifted off the emitter
   int meshId = -1;         // cone samples: the light the direction must reach
+  // Area samples: the point on the light and its triangle's normal (bidirectional references
+  // weigh the sample by where it lies).
+  glm::vec3 point{0}, normal{0};
+  int areaMesh = -1;
 };
 
 // The cone of directions a sphere light's bounding sphere subtends from a ray origin outside it:
@@ -581,6 +607,9 @@ FrameScene::LightSample FrameScene::sampleLight(const SurfaceHit& at, glm::vec3 
   out.pdf = dist2 / (cosLight * g.area * float(n));
   out.shadowEnd = offsetOrigin(lp, ln);  // off the emitter, on the side it lights (cosLight > 0)
   out.le = g.lightRadiance;
+  out.point = lp;
+  out.normal = ln;
+  out.areaMesh = selectableLights_[li];
   return out;
 }
 
@@ -662,6 +691,8 @@ struct FrameScene::VertexSample {
   glm::vec3 le{0}, wiLight{0};
   glm::vec3 shadowEnd{0};  // area samples: the light point lifted off the emitter
   int coneLight = -1;      // cone samples: the light's mesh id (LightSample::meshId)
+  glm::vec3 lightPoint{0}, lightNormal{0};  // area samples (LightSample::point, normal, areaMesh)
+  int areaLight = -1;
   float pdfLight = 0;
   Lobes fLight;
   // The shadow ray's answer where a packet traced it already (0 or 1), else -1.
@@ -704,6 +735,9 @@ void FrameScene::chooseAtVertex(const SurfaceHit& s, const VertexBsdf& v, const 
   out.pdfLight = light.pdf;
   out.shadowEnd = light.shadowEnd;
   out.coneLight = light.meshId;
+  out.lightPoint = light.point;
+  out.lightNormal = light.normal;
+  out.areaLight = light.areaMesh;
   out.towardsLight = !(out.pdfLight <= 0 || glm::dot(out.wiLight, v.ng) <= 0);
   glm::vec2 u = sampler.get2(dim + kDirU);
   float lobe = 0;
@@ -736,6 +770,10 @@ FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Sample
 void FrameScene::shadeBatch(const PrimaryVertex& vertex, const Sampler* samplers, int count,
                             Radiance* out, RayCounts& counts) const {
   if (count > int(Sampler::kBatchLanes)) throw Error("shadeBatch: more samples than a batch holds");
+  if (scene_.referenceEstimator == ReferenceEstimator::Bidirectional) {
+    for (int l = 0; l < count; ++l) out[l] = shadeBidirectional(vertex, samplers[l], counts);
+    return;
+  }
   if (!vertex.bsdf.reflects) {  // no path leaves
     for (int l = 0; l < count; ++l) {
       counts.paths++;
@@ -879,6 +917,258 @@ FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Vertex
   out.diffuse += weightDiffuse * incoming;
   out.specular += weightSpecular * incoming;
   out.diffuseDirection += wi * luminanceOf(weightDiffuse * incoming);
+  return out;
+}
+
+// ---- Bidirectional references ---------------------------------------------------------------
+//
+// Bidirectional path tracing (Veach's thesis, 1997, chapter 10; the vertex bookkeeping as in
+// pbrt-v3's BDPT, Pharr, Jakob and Humphreys, 3rd edition, section 16.3), for the references of
+// scenes that ask for it ("reference_estimator": "bidirectional"): one sample traces the eye path
+// from the pixel's primary vertex and one light path from a point on a light, and counts every
+// way its two paths build a path of k <= maxBounces reflections: the eye path meeting a light
+// (s = 0), the eye vertex's light sample (s = 1), and eye vertex x_i joined to light vertex y_j
+// by a shadow ray (s = j + 1, k = i + j). Interpretations, written out in docs/references.md: no
+// strategy joins a light vertex to the camera (pbrt's t = 1: it would add to other pixels, and a
+// reference's pixels and tiles take their samples independently), so a path's weights run over
+// s = 0..k; the weights are the power heuristic (as the path tracer's light sample) over products
+// of each strategy's area pdfs; the light sample's pdf is sampleLight's (a sphere light's cone),
+// the light path's point is uniform by area and its direction cosine-distributed; neither path
+// uses Russian roulette; a light path's reflections carry Veach's correction for shading normals.
+
+namespace {
+// A vertex of either path: its surface, the throughput that reached it (the eye's from its second
+// vertex on; the light's emitted radiance over the pdfs) and its BSDF seen from where it was
+// reached.
+struct PathVertex {
+  SurfaceHit s;
+  glm::vec3 beta{0};
+  VertexBsdf v;
+};
+
+float areaPdf(float solidAnglePdf, glm::vec3 from, const SurfaceHit& to) {
+  const glm::vec3 d = to.position - from;
+  const float d2 = glm::dot(d, d);
+  return solidAnglePdf * std::abs(glm::dot(to.geometricNormal, d / std::sqrt(d2))) / d2;
+}
+
+// Veach's adjoint BSDF factor for light transported through a surface with a shading normal
+// (thesis eq. 5.17): |wo . ns| |wi . ng| / (|wo . ng| |wi . ns|), wo towards the light's side,
+// wi towards the eye's. 1 where ns = ng.
+float shadingNormalCorrection(const VertexBsdf& v, glm::vec3 wo, glm::vec3 wi) {
+  const float den = std::abs(glm::dot(wo, v.ng)) * std::abs(glm::dot(wi, v.n));
+  return den > 0 ? std::abs(glm::dot(wo, v.n)) * std::abs(glm::dot(wi, v.ng)) / den : 0.0f;
+}
+}  // namespace
+
+// The power-heuristic weight of strategy `used` for the path z[1..k+1] (z[1] the primary vertex
+// seen through `primary`, z[k+1] on a light): each strategy's pdf is the product of the area
+// pdfs of the vertices it samples, the eye's from z[2] on and the light's from z[k+1] down.
+double FrameScene::bidirectionalWeight(int used, int k, const SurfaceHit* const* z,
+                                       const VertexBsdf& primary) const {
+  double eyePdf[kMaxBidirectionalBounces + 2] = {}, lightPdf_[kMaxBidirectionalBounces + 2] = {};
+  auto towards = [&](int a, int b) { return glm::normalize(z[b]->position - z[a]->position); };
+  // The pdf of the BSDF sampling at z[at] reached from z[from] choosing z[to].
+  auto bsdfPdf = [&](int at, int from, int to) {
+    return evaluate(vertexBsdf(*z[at], towards(at, from)), towards(at, to)).pdf;
+  };
+  for (int j = 2; j <= k + 1; ++j)
+    eyePdf[j] = areaPdf(j == 2 ? evaluate(primary, towards(1, 2)).pdf : bsdfPdf(j - 1, j - 2, j),
+                        z[j - 1]->position, *z[j]);
+  const SurfaceHit& light = *z[k + 1];
+  const Geometry& g = geometries_[size_t(light.meshId)];
+  lightPdf_[k + 1] = 1.0 / (double(selectableLights_.size()) * double(g.area));
+  const float cosEmitted = glm::dot(light.geometricNormal, towards(k + 1, k));
+  lightPdf_[k] = cosEmitted > 0 ? areaPdf(cosEmitted / kPi, light.position, *z[k]) : 0.0f;
+  for (int j = k - 1; j >= 2; --j)
+    lightPdf_[j] = areaPdf(bsdfPdf(j + 1, j + 2, j), z[j + 1]->position, *z[j]);
+  const double lightSample = areaPdf(
+      lightPdf(light, z[k]->position, z[k]->position, towards(k, k + 1)), z[k]->position, light);
+  double strategy[kMaxBidirectionalBounces + 2] = {}, sum = 0;
+  for (int s = 0; s <= k; ++s) {
+    const int lastEye =
+        k + 1 - s;  // z[2..lastEye] from the eye, z[lastEye + 1..k + 1] from the light
+    double p = 1;
+    for (int j = 2; j <= lastEye; ++j) p *= eyePdf[j];
+    if (s == 1) p *= lightSample;
+    if (s >= 2)
+      for (int j = lastEye + 1; j <= k + 1; ++j) p *= lightPdf_[j];
+    strategy[s] = p;
+    sum += p * p;
+  }
+  return sum > 0 ? strategy[used] * strategy[used] / sum : 0.0;
+}
+
+FrameScene::Radiance FrameScene::shadeBidirectional(const PrimaryVertex& vertex,
+                                                    const Sampler& sampler,
+                                                    RayCounts& counts) const {
+  Radiance out;
+  counts.paths++;
+  const VertexBsdf& v1 = vertex.bsdf;
+  if (!v1.reflects) return out;
+  const int maxBounces = scene_.maxBounces;
+  if (maxBounces >
+      kMaxBidirectionalBounces)  // the scene loader refuses it; a Scene built in code may not
+    throw Error("bidirectional reference: max_bounces " + std::to_string(maxBounces) + " above " +
+                std::to_string(kMaxBidirectionalBounces));
+  const bool sobol = sampler.kind() == SamplerKind::OwenSobol;
+
+  // The light path: y[0] on a light, y[1..] where it reflects (at most maxBounces - 1 of them:
+  // a joined path keeps at least one eye vertex).
+  PathVertex y[kMaxBidirectionalBounces];
+  int lightVertices = 0;
+  if (!selectableLights_.empty()) {
+    const uint32_t base = eyePathDimensions();
+    const size_t n = selectableLights_.size();
+    const glm::vec2 choice = sampler.get2(base), onTriangle = sampler.get2(base + 2),
+                    emitted = sampler.get2(base + 4);
+    const size_t li = std::min(size_t(choice.x * float(n)), n - 1);
+    const int mesh = selectableLights_[li];
+    const Geometry& g = geometries_[size_t(mesh)];
+    if (maxComponent(g.lightRadiance) > 0) {
+      const size_t ti =
+          std::min(g.areaGuide.lowerBound(g.areaCdf, choice.y * g.area), g.areaCdf.size() - 1);
+      const glm::uvec3 tri = g.local->triangles[ti];
+      const float su = std::sqrt(onTriangle.x), b1 = 1.0f - su, b2 = onTriangle.y * su;
+      y[0].s.position =
+          (1.0f - b1 - b2) * g.positions[tri.x] + b1 * g.positions[tri.y] + b2 * g.positions[tri.z];
+      y[0].s.geometricNormal = y[0].s.shadingNormal = g.faceNormals[ti];
+      y[0].s.meshId = mesh;
+      y[0].s.lightIndex = g.lightIndex;
+      lightVertices = 1;
+      // A cosine-distributed direction on the emitting side: radiance / (pdf_area pdf_dir) =
+      // Le cos / ((1 / (n A)) (cos / pi)).
+      const float r = std::sqrt(emitted.x), phi = 2.0f * kPi * emitted.y;
+      glm::vec3 tangent, bitangent;
+      const glm::vec3 ln = y[0].s.geometricNormal;
+      orthonormalBasis(ln, tangent, bitangent);
+      glm::vec3 dir = glm::normalize(r * std::cos(phi) * tangent + r * std::sin(phi) * bitangent +
+                                     std::sqrt(std::max(0.0f, 1.0f - emitted.x)) * ln);
+      glm::vec3 beta = g.lightRadiance * (kPi * float(n) * g.area);
+      glm::vec3 origin = offsetOrigin(y[0].s.position, ln);
+      for (int j = 1; j < maxBounces; ++j) {
+        SurfaceHit h;
+        float t;
+        counts.rays++;
+        if (!intersect(origin, dir, kInf, h, t)) break;
+        const SurfaceHit s = surface(h.meshId, h.primId, h.u, h.v);
+        if (s.lightIndex >= 0) break;  // emitters do not reflect
+        const VertexBsdf v = vertexBsdf(s, -dir);
+        if (!v.reflects) break;
+        y[j] = {s, beta, v};
+        lightVertices = j + 1;
+        if (j + 1 == maxBounces) break;
+        const uint32_t dim = base + kLightPathFirstBounce + uint32_t(j - 1) * kDimsPerLightBounce;
+        glm::vec2 u = sampler.get2(dim);
+        float lobe = 0;
+        if (sobol)
+          reuseForLobe(v.pSpec, lobe, u.x);
+        else
+          lobe = sampler.get(dim + 2);
+        glm::vec3 wi;
+        if (!sampleDirection(v, v.pSpec, lobe, u.x, u.y, wi) || glm::dot(wi, v.ng) <= 0) break;
+        const Lobes f = evaluate(v, wi);
+        if (!(f.pdf > 0)) break;
+        beta *= (f.diffuse + f.specular) * (f.NoL / f.pdf) * shadingNormalCorrection(v, -dir, wi);
+        origin = v.origin;
+        dir = wi;
+      }
+    }
+  }
+
+  // The eye path: at each vertex x_i its light sample and its joins to the light path, then on.
+  // x[1]'s contributions split between the signals by lobe; x[i >= 2]'s arrive along the first
+  // direction and are split by the first vertex's lobe weights, as in shade().
+  PathVertex x[kMaxBidirectionalBounces + 1];
+  x[1] = {vertex.hit, glm::vec3(1), v1};
+  glm::vec3 incoming(0), weightDiffuse(0), weightSpecular(0);
+  const SurfaceHit* z[kMaxBidirectionalBounces + 2];
+  auto add = [&](int i, const Lobes& f, glm::vec3 rest) {  // f at x[i] times what lies beyond it
+    if (i == 1) {
+      out.diffuse += f.diffuse * rest;
+      out.specular += f.specular * rest;
+    } else {
+      incoming += x[i].beta * (f.diffuse + f.specular) * rest;
+    }
+  };
+  for (int i = 1; i <= maxBounces; ++i) {
+    const PathVertex& xi = x[i];
+    for (int a = 1; a <= i; ++a) z[a] = &x[a].s;
+    const VertexSample vs = sampleVertex(xi.s, xi.v, sampler, uint32_t(i - 1) * kDimsPerVertex);
+    if (vs.towardsLight) {  // s = 1
+      counts.rays++;
+      SurfaceHit light;
+      bool seen = false;
+      if (vs.coneLight >= 0) {  // where its ray meets the light's mesh first, from the front
+        float t;
+        if (intersect(xi.v.origin, vs.wiLight, kInf, light, t) && light.meshId == vs.coneLight) {
+          light = surface(light.meshId, light.primId, light.u, light.v);
+          seen = glm::dot(light.geometricNormal, -vs.wiLight) > 0;
+        }
+      } else {
+        const Segment ray = shadowSegment(xi.v.origin, vs.shadowEnd);
+        seen = !occluded(xi.v.origin, ray.dir, ray.length);
+        light.position = vs.lightPoint;
+        light.geometricNormal = light.shadingNormal = vs.lightNormal;
+        light.meshId = vs.areaLight;
+        light.lightIndex = geometries_[size_t(vs.areaLight)].lightIndex;
+      }
+      if (seen) {
+        z[i + 1] = &light;
+        const double w = bidirectionalWeight(1, i, z, v1);
+        add(i, vs.fLight, vs.le * float(vs.fLight.NoL * w / vs.pdfLight));
+      }
+    }
+    for (int j = 1; j < lightVertices && i + j <= maxBounces; ++j) {  // s = j + 1
+      const PathVertex& yj = y[j];
+      const glm::vec3 d = yj.s.position - xi.s.position;
+      const float dist2 = glm::dot(d, d);
+      const glm::vec3 dir = d / std::sqrt(dist2);
+      if (glm::dot(dir, xi.v.ng) <= 0 || glm::dot(-dir, yj.v.ng) <= 0) continue;
+      const Lobes fx = evaluate(xi.v, dir), fy = evaluate(yj.v, -dir);
+      if (!(fx.NoL > 0) || !(fy.NoL > 0)) continue;
+      if (maxComponent(fy.diffuse + fy.specular) <= 0 ||
+          maxComponent(fx.diffuse + fx.specular) <= 0)
+        continue;
+      counts.rays++;
+      const Segment ray = shadowSegment(xi.v.origin, yj.v.origin);
+      if (occluded(xi.v.origin, ray.dir, ray.length)) continue;
+      for (int a = 0; a <= j; ++a) z[i + 1 + a] = &y[j - a].s;
+      const double w = bidirectionalWeight(j + 1, i + j, z, v1);
+      // f_y cos_y (with the shading-normal correction) G's other cosine and distance, y's
+      // throughput.
+      const float geometry = fx.NoL * fy.NoL * shadingNormalCorrection(yj.v, yj.v.wo, -dir) / dist2;
+      add(i, fx, (fy.diffuse + fy.specular) * yj.beta * float(geometry * w));
+    }
+    if (!vs.scatters) break;
+    const glm::vec3 beta =
+        i == 1 ? glm::vec3(1) : xi.beta * (vs.f.diffuse + vs.f.specular) * (vs.f.NoL / vs.f.pdf);
+    if (i == 1) {
+      weightDiffuse = vs.f.diffuse * (vs.f.NoL / vs.f.pdf);
+      weightSpecular = vs.f.specular * (vs.f.NoL / vs.f.pdf);
+    }
+    SurfaceHit h;
+    float t;
+    counts.rays++;
+    if (!intersect(xi.v.origin, vs.wi, kInf, h, t)) {
+      incoming += beta * sky(vs.wi);  // the sky: no light path starts there
+      break;
+    }
+    const SurfaceHit s = surface(h.meshId, h.primId, h.u, h.v);
+    if (maxComponent(s.emission) > 0 && glm::dot(s.geometricNormal, -vs.wi) > 0) {  // s = 0
+      double w = 1;  // an emitter no light path starts from (an emissive material)
+      if (s.lightIndex >= 0 && geometries_[size_t(s.meshId)].area > 0) {
+        z[i + 1] = &s;
+        w = bidirectionalWeight(0, i, z, v1);
+      }
+      incoming += beta * s.emission * float(w);
+    }
+    if (s.lightIndex >= 0 || i == maxBounces) break;
+    x[i + 1] = {s, beta, vertexBsdf(s, -vs.wi)};
+    if (!x[i + 1].v.reflects) break;
+  }
+  out.diffuse += weightDiffuse * incoming;
+  out.specular += weightSpecular * incoming;
   return out;
 }
 

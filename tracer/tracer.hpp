@@ -128,6 +128,8 @@ class FrameScene {
   // The random dimensions a path of this scene can use (its vertices' 8 each, tracer.cpp): a
   // Sobol replicate hashes them once (Sampler::withHashes).
   uint32_t pathDimensions() const;
+  // The eye path's share of them (a bidirectional reference's light path reads the rest).
+  uint32_t eyePathDimensions() const;
   // The Sobol dimensions a path reads, for a batch of samples (Sampler::fillBatch): at each vertex
   // that samples, the light point's pair and the direction's pair; from the third on, roulette.
   Sampler::Reads sobolReads() const;
@@ -192,6 +194,12 @@ class FrameScene {
     float coneRadius2 = 0;
   };
   struct VertexSample;  // a sample's choices at a vertex before it traces (tracer.cpp)
+  // A bidirectional reference's sample (scenes with "reference_estimator": "bidirectional";
+  // tracer.cpp): the eye path from the prepared vertex, one light path, every join between them.
+  Radiance shadeBidirectional(const PrimaryVertex& vertex, const Sampler& sampler,
+                              RayCounts& counts) const;
+  double bidirectionalWeight(int used, int k, const SurfaceHit* const* z,
+                             const VertexBsdf& primary) const;
   VertexSample sampleVertex(const SurfaceHit& s, const VertexBsdf& v, const Sampler& sampler,
                             uint32_t dim) const;
   void chooseAtVertex(const SurfaceHit& s, const VertexBsdf& v, const Sampler& sampler,
