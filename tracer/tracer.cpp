@@ -1007,8 +1007,8 @@ FrameScene::Radiance FrameScene::shadeBidirectional(const PrimaryVertex& vertex,
   const VertexBsdf& v1 = vertex.bsdf;
   if (!v1.reflects) return out;
   const int maxBounces = scene_.maxBounces;
-  if (maxBounces >
-      kMaxBidirectionalBounces)  // the scene loader refuses it; a Scene built in code may not
+  // The scene loader refuses more; a Scene built in code may not.
+  if (maxBounces > kMaxBidirectionalBounces)
     throw Error("bidirectional reference: max_bounces " + std::to_string(maxBounces) + " above " +
                 std::to_string(kMaxBidirectionalBounces));
   const bool sobol = sampler.kind() == SamplerKind::OwenSobol;
