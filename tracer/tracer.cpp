@@ -80,6 +80,12 @@ struct Lobes {
   float NoL = 0;                      // the cosine towards wi, dot(n, wi)
 };
 
+// A uniform point on the triangle (p0, p1, p2) from u in [0, 1)^2 (the square-root warp).
+glm::vec3 uniformPointOnTriangle(glm::vec3 p0, glm::vec3 p1, glm::vec3 p2, glm::vec2 u) {
+  const float su = std::sqrt(u.x), b1 = 1.0f - su, b2 = u.y * su;
+  return (1.0f - b1 - b2) * p0 + b1 * p1 + b2 * p2;
+}
+
 // Mixture sampling weights: specular lobe chosen in proportion to its Fresnel-weighted albedo.
 float specularProbability(const SurfaceHit& s, float NoV) {
   return specularLobeProbability(luminanceOf(s.diffuseAlbedo()),
@@ -592,9 +598,8 @@ FrameScene::LightSample FrameScene::sampleLight(const SurfaceHit& at, glm::vec3 
     uv.x = width > 0 ? std::clamp((target - lo) / width, 0.0f, kOneMinusEpsilon) : 0.0f;
   }
   const glm::uvec3 tri = g.local->triangles[ti];
-  float su = std::sqrt(uv.x), b1 = 1.0f - su, b2 = uv.y * su;
-  glm::vec3 p0 = g.positions[tri.x], p1 = g.positions[tri.y], p2 = g.positions[tri.z];
-  glm::vec3 lp = (1.0f - b1 - b2) * p0 + b1 * p1 + b2 * p2;
+  const glm::vec3 lp =
+      uniformPointOnTriangle(g.positions[tri.x], g.positions[tri.y], g.positions[tri.z], uv);
   const glm::vec3 ln = g.faceNormals[ti];  // normalize(cross(p1 - p0, p2 - p0)), computed once per frame
   glm::vec3 d = lp - at.position;
   float dist2 = glm::dot(d, d);
@@ -1029,9 +1034,8 @@ FrameScene::Radiance FrameScene::shadeBidirectional(const PrimaryVertex& vertex,
       const size_t ti =
           std::min(g.areaGuide.lowerBound(g.areaCdf, choice.y * g.area), g.areaCdf.size() - 1);
       const glm::uvec3 tri = g.local->triangles[ti];
-      const float su = std::sqrt(onTriangle.x), b1 = 1.0f - su, b2 = onTriangle.y * su;
-      y[0].s.position =
-          (1.0f - b1 - b2) * g.positions[tri.x] + b1 * g.positions[tri.y] + b2 * g.positions[tri.z];
+      y[0].s.position = uniformPointOnTriangle(g.positions[tri.x], g.positions[tri.y],
+                                               g.positions[tri.z], onTriangle);
       y[0].s.geometricNormal = y[0].s.shadingNormal = g.faceNormals[ti];
       y[0].s.meshId = mesh;
       y[0].s.lightIndex = g.lightIndex;
