@@ -1,15 +1,17 @@
 #include "harness/benchmarks.hpp"
 
-#include <opencv2/imgproc.hpp>
-
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <map>
+#include <opencv2/imgproc.hpp>
 #include <random>
+#include <sstream>
 
 #include "core/env_info.hpp"
 #include "core/error.hpp"
@@ -25,26 +27,95 @@ namespace {
 
 using nlohmann::json;
 
-// Runs Embree's tutorial benchmark and returns its average Mrays/s (0 if unavailable).
-double embreePathtracerMrays(int size, std::string& note) {
-  const char* model = "/usr/share/doc/embree3/models/cornell_box.ecs";
-  if (!std::filesystem::exists("/usr/bin/pathtracer") || !std::filesystem::exists(model)) {
-    note = "embree-tools not installed (apt-get install embree-tools)";
-    return 0;
-  }
-  std::string cmd = std::string("/usr/bin/pathtracer -c ") + model + " --size " + std::to_string(size) + " " +
-                    std::to_string(size) + " --benchmark 10 50 2>/dev/null";
+// One run of Embree's `pathtracer` tutorial benchmark (embree-tools) on its Cornell box: its
+// average Mrays/s and frames/s (rays per frame = their quotient); zeros where it did not run.
+struct TutorialRun {
+  double mrays = 0, fps = 0;
+};
+constexpr const char* kTutorialModelDir = "/usr/share/doc/embree3/models";
+
+TutorialRun runTutorial(const std::string& sceneArgs, int size) {
+  const std::string cmd = std::string("cd ") + kTutorialModelDir + " && /usr/bin/pathtracer " +
+                          sceneArgs + " --size " + std::to_string(size) + " " +
+                          std::to_string(size) + " --benchmark 10 50 2>/dev/null";
   FILE* p = popen(cmd.c_str(), "r");
-  if (!p) return 0;
+  if (!p) return {};
   std::array<char, 512> line{};
-  double mrays = 0;
+  TutorialRun run;
   while (fgets(line.data(), int(line.size()), p)) {
     double v;
-    if (std::sscanf(line.data(), "BENCHMARK_RENDER_MRAYPS_AVG %lf", &v) == 1) mrays = v;
+    if (std::sscanf(line.data(), "BENCHMARK_RENDER_MRAYPS_AVG %lf", &v) == 1) run.mrays = v;
+    if (std::sscanf(line.data(), "BENCHMARK_RENDER_AVG %lf", &v) == 1) run.fps = v;
   }
   pclose(p);
-  if (mrays == 0) note = "could not parse pathtracer output";
-  return mrays;
+  return run;
+}
+
+// The tutorial's model file (cornell_box.ecs) holds its command line: the mesh, one point light
+// and the camera. Without the -pointlight option and its six numbers the same paths are traced
+// without their shadow rays.
+std::string withoutPointLight(const std::string& ecs) {
+  std::istringstream in(ecs);
+  std::string word, out;
+  while (in >> word) {
+    if (word == "-pointlight") {
+      for (int i = 0; i < 6 && in >> word; ++i) {
+      }
+      continue;
+    }
+    out += (out.empty() ? "" : " ") + word;
+  }
+  return out;
+}
+
+// Embree's tutorial beside our tracer (`out` holds our rays per path and occlusion rays per path).
+// Its headline rate is the tutorial's Mrays/s. A second run without its light counts its
+// closest-hit rays alone, so its ray mix and the cost of each kind follow: per frame, time without
+// the light / closest-hit rays, and the time the light adds / the shadow rays it adds. At our mix
+// those costs give the rate the tutorial would report for rays like ours (a model: the two kinds'
+// costs add up, and the light's own evaluation is charged to its shadow rays).
+void compareWithTutorial(int size, json& out, const ProgressFn& progress) {
+  const std::string model = std::string(kTutorialModelDir) + "/cornell_box.ecs";
+  if (!std::filesystem::exists("/usr/bin/pathtracer") || !std::filesystem::exists(model)) {
+    progress(
+        "embree pathtracer: not measured (embree-tools not installed: apt-get install "
+        "embree-tools)");
+    return;
+  }
+  const TutorialRun lit = runTutorial("-c " + model, size);
+  if (lit.mrays <= 0 || lit.fps <= 0) {
+    progress("embree pathtracer: not measured (could not parse its output)");
+    return;
+  }
+  const double ours = out["mrays_per_s"].get<double>();
+  out["embree_pathtracer_mrays_per_s"] = lit.mrays;
+  out["ratio_to_embree"] = ours / lit.mrays;
+  progress(printed("embree pathtracer: %.2f Mrays/s  -> ratio %.2fx", lit.mrays, ours / lit.mrays));
+
+  std::ifstream ecs(model);
+  const std::string args = withoutPointLight(std::string(std::istreambuf_iterator<char>(ecs), {}));
+  const TutorialRun dark = runTutorial(args, size);
+  const double raysLit = lit.mrays * 1e6 / lit.fps;
+  const double closest = dark.fps > 0 ? dark.mrays * 1e6 / dark.fps : 0;
+  const double shadow = raysLit - closest, addedSeconds = 1 / lit.fps - 1 / dark.fps;
+  if (!(closest > 0 && shadow > 0 && addedSeconds > 0)) {
+    progress("embree pathtracer without its light: not measured (its rays or time did not add up)");
+    return;
+  }
+  const double closestCost = 1 / dark.fps / closest, shadowCost = addedSeconds / shadow;
+  const double ourShadowShare =
+      out["occlusion_rays_per_path"].get<double>() / out["rays_per_path"].get<double>();
+  const double atOurMix = 1e-6 / ((1 - ourShadowShare) * closestCost + ourShadowShare * shadowCost);
+  out["embree_pathtracer_occlusion_share"] = shadow / raysLit;
+  out["embree_pathtracer_shadow_to_closest_cost"] = shadowCost / closestCost;
+  out["embree_pathtracer_mrays_per_s_at_our_mix"] = atOurMix;
+  out["ratio_to_embree_at_our_mix"] = ours / atOurMix;
+  progress(
+      printed("embree pathtracer: %.0f%% of its rays are occlusion rays (ours %.0f%%), each "
+              "costing %.2f of a closest-hit ray; at our mix it would report %.2f Mrays/s  -> "
+              "ratio %.2fx",
+              100 * shadow / raysLit, 100 * ourShadowShare, shadowCost / closestCost, atOurMix,
+              ours / atOurMix));
 }
 
 double median(std::vector<double> v) {
@@ -98,29 +169,26 @@ json benchTracer(const TracerBench& b, const ProgressFn& progress) {
   auto t0 = std::chrono::steady_clock::now();
   for (int i = 0; i < b.frames; ++i) {
     auto r = renderer.renderFrame(0);
-    total.rays += r.counts.rays;
-    total.paths += r.counts.paths;
+    total += r.counts;
   }
   double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  json out = {{"scene", scene.name}, {"size", b.size}, {"frames", b.frames},
-              {"seconds", sec}, {"mrays_per_s", double(total.rays) / sec * 1e-6},
+  json out = {{"scene", scene.name},
+              {"size", b.size},
+              {"frames", b.frames},
+              {"seconds", sec},
+              {"mrays_per_s", double(total.rays) / sec * 1e-6},
               {"mpaths_per_s", double(total.paths) / sec * 1e-6},
               {"rays_per_path", double(total.rays) / double(total.paths)},
-              {"ms_per_frame", sec * 1e3 / b.frames}, {"environment", environmentInfo()}};
-  progress(printed("arena tracer: %.2f Mrays/s, %.2f Mpaths/s, %.1f ms/frame at %dx%d (%.2f rays/path)",
-                   out["mrays_per_s"].get<double>(), out["mpaths_per_s"].get<double>(),
-                   out["ms_per_frame"].get<double>(), b.size, b.size, out["rays_per_path"].get<double>()));
-  if (b.embree) {
-    std::string note;
-    double e = embreePathtracerMrays(b.size, note);
-    out["embree_pathtracer_mrays_per_s"] = e;
-    if (e > 0) {
-      out["ratio_to_embree"] = out["mrays_per_s"].get<double>() / e;
-      progress(printed("embree pathtracer: %.2f Mrays/s  -> ratio %.2fx", e, out["ratio_to_embree"].get<double>()));
-    } else {
-      progress("embree pathtracer: not measured (" + note + ")");
-    }
-  }
+              {"occlusion_rays_per_path", double(total.occlusionRays) / double(total.paths)},
+              {"ms_per_frame", sec * 1e3 / b.frames},
+              {"environment", environmentInfo()}};
+  progress(
+      printed("arena tracer: %.2f Mrays/s, %.2f Mpaths/s, %.1f ms/frame at %dx%d (%.2f rays/path, "
+              "%.2f of them occlusion rays)",
+              out["mrays_per_s"].get<double>(), out["mpaths_per_s"].get<double>(),
+              out["ms_per_frame"].get<double>(), b.size, b.size, out["rays_per_path"].get<double>(),
+              out["occlusion_rays_per_path"].get<double>()));
+  if (b.embree) compareWithTutorial(b.size, out, progress);
   return out;
 }
 

@@ -8,11 +8,13 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <numbers>
 
 #include "core/error.hpp"
+#include "core/json_reader.hpp"
 #include "core/sequence.hpp"
 #include "tests/test_util.hpp"
 #include "tracer/asset.hpp"
@@ -634,6 +636,72 @@ TEST(FidelityTracer, HitsAreTheSameBitsWhicheverKernelsEmbreeRuns) {
       EXPECT_LT(glm::length(p - q), 1e-5f * (1.0f + ta)) << x << "," << y;
     }
   EXPECT_GT(hits, 10000);  // most of the 19200 rays hit a quad
+}
+
+// The ray counts say which rays only asked whether a segment is blocked. A Lambert floor under a
+// quad light facing it, one bounce: every floor pixel of a frame traces its primary ray, the mirror
+// ray, its light sample's shadow ray (the light is above every floor point, facing it), the path's
+// one continuation and the specular ray; a light pixel only its primary ray. A reference sample on
+// the floor traces one shadow ray under either estimator (a bidirectional light path with one
+// bounce allowed has no vertex to join).
+TEST(Tracer, RayCountsNameTheOcclusionRays) {
+  for (const char* estimator : {"path", "bidirectional"}) {
+    const Scene scene = sceneFromText(std::string("occlusion_") + estimator, R"({
+      "purpose": "ray counts", "resolution": [40, 30], "frames": 1, "max_bounces": 1,
+      "reference_estimator": ")" + std::string(estimator) + R"(",
+      "camera": {"keys": [{"frame": 0, "eye": [0, 4.5, 2.5], "target": [0, 0, -0.5], "fov": 40}]},
+      "materials": {"w": {"albedo": [0.5, 0.5, 0.5], "specular": 0}},
+      "objects": [{"name": "floor", "shape": "quad", "material": "w",
+                   "keys": [{"frame": 0, "scale": [4, 1, 4]}]}],
+      "lights": [{"name": "q", "shape": "quad", "keys": [{"frame": 0, "translate": [0, 1, -0.5],
+                  "rotate": [180, 0, 0], "scale": [0.5, 1, 0.5], "intensity": 10}]}]})");
+    const int spp = 4;
+    SequenceRenderer r(scene, test::tinySettings(40, 30, 1, spp));
+    const SequenceRenderer::FrameResult frame = r.renderFrame(0);
+    const Image& mesh = frame.frame.get("meshId");
+    uint64_t floor = 0, light = 0, sky = 0;
+    for (size_t i = 0; i < mesh.pixelCount(); ++i) {
+      const float m = mesh.plane(0)[i];
+      (m == 0.0f ? floor : m == 1.0f ? light : sky)++;
+    }
+    ASSERT_GT(floor, 600u) << estimator;
+    ASSERT_GT(light, 10u) << estimator;
+    ASSERT_GT(sky, 20u) << estimator;
+    EXPECT_EQ(frame.counts.occlusionRays, floor) << estimator;
+    EXPECT_EQ(frame.counts.rays, mesh.pixelCount() + 4 * floor) << estimator;
+    EXPECT_EQ(frame.counts.paths, floor + light) << estimator;
+    const ReferenceResult ref = r.renderReference(0);
+    ASSERT_EQ(ref.spp, spp);
+    EXPECT_EQ(ref.counts.occlusionRays, floor * spp) << estimator;
+    EXPECT_GT(ref.counts.rays, 2 * floor * spp) << estimator;  // and each sample's continuation
+  }
+}
+
+// `arena bench tracer --embree` end to end at a small size: our rays per path and how many of them
+// are occlusion rays, Embree's tutorial's rate and its own mix, from a second run without its
+// light, and its rate re-weighted to our mix. (The rates are not checked: a timing in a unit test
+// says nothing; docs/performance.md logs them.)
+TEST(Tracer, BenchTracerComparesWithEmbreesTutorialAtEitherMix) {
+  const std::filesystem::path json = test::freshDir("bench_tracer") / "bench.json";
+  const test::CommandResult r = test::runCommand(
+      std::string(ARENA_BINARY) + " bench tracer --scene " + ARENA_SOURCE_DIR +
+      "/bench/cornell_box.json --size 128 --frames 2 --warmup 0 --embree --json " + json.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  const nlohmann::json out = parseJsonFile(json.string());
+  EXPECT_GT(out["occlusion_rays_per_path"].get<double>(), 0.5) << out;
+  EXPECT_LT(out["occlusion_rays_per_path"].get<double>(), out["rays_per_path"].get<double>() / 2)
+      << out;
+  if (!std::filesystem::exists("/usr/bin/pathtracer")) {
+    EXPECT_NE(r.output.find("embree-tools not installed"), std::string::npos) << r.output;
+    GTEST_SKIP() << "embree-tools (Embree's tutorials) not installed";
+  }
+  EXPECT_GT(out["ratio_to_embree"].get<double>(), 0) << out;
+  // The tutorial traces one shadow ray to its point light per surface hit: close to half its rays.
+  EXPECT_GT(out["embree_pathtracer_occlusion_share"].get<double>(), 0.3) << out;
+  EXPECT_LT(out["embree_pathtracer_occlusion_share"].get<double>(), 0.5) << out;
+  EXPECT_GT(out["embree_pathtracer_shadow_to_closest_cost"].get<double>(), 0) << out;
+  EXPECT_GT(out["ratio_to_embree_at_our_mix"].get<double>(), 0) << out;
+  EXPECT_NE(r.output.find("at our mix it would report"), std::string::npos) << r.output;
 }
 
 }  // namespace

@@ -236,10 +236,7 @@ SequenceRenderer::FrameResult SequenceRenderer::renderFrame(int t) {
   });
 
   FrameResult result;
-  for (const RayCounts& c : rowCounts) {
-    result.counts.rays += c.rays;
-    result.counts.paths += c.paths;
-  }
+  for (const RayCounts& c : rowCounts) result.counts += c;
   result.frame.set("diffuse", std::move(diffuse));
   result.frame.set("specular", std::move(specular));
   result.frame.set("emission", std::move(emission));
@@ -288,6 +285,7 @@ SequenceRenderer::FrameResult SequenceRenderer::renderFrame(int t) {
       const glm::vec3 toPoint = pNow - cam.eye;
       const float dist = glm::length(toPoint);
       counts.rays++;
+      counts.occlusionRays++;
       if (cur.occluded(cam.eye, toPoint / dist, dist * (1.0f - 1e-4f))) continue;  // hidden at frame t
       const Sampler previousNumbers(frameSeed(), uint32_t(t - 1), uint32_t(py * w + px), 0);
       const SurfaceHit sPrev = prev.surface(hit.meshId, hit.primId, hit.u, hit.v);
@@ -314,10 +312,7 @@ SequenceRenderer::FrameResult SequenceRenderer::renderFrame(int t) {
     grad.at(dx, dy, 4) = 1.0f;
   }
   result.gradients.set("gradient", std::move(grad));
-  for (const RayCounts& c : stratumCounts) {
-    result.counts.rays += c.rays;
-    result.counts.paths += c.paths;
-  }
+  for (const RayCounts& c : stratumCounts) result.counts += c;
   return result;
 }
 
@@ -375,10 +370,7 @@ void SequenceRenderer::extendReference(int t, ReferenceSums& sums, const std::ve
     }
   });
   for (size_t i = 0; i < tileTarget.size(); ++i) sums.tileSamples[i] = std::max(sums.tileSamples[i], tileTarget[i]);
-  for (const RayCounts& c : rowCounts) {
-    total.rays += c.rays;
-    total.paths += c.paths;
-  }
+  for (const RayCounts& c : rowCounts) total += c;
 }
 
 void SequenceRenderer::extendPixel(int t, const FrameScene& cur, ReferenceSums& sums, int x, int y, int begin, int end,
@@ -471,10 +463,7 @@ void SequenceRenderer::extendTile(int t, ReferenceSums& sums, int tile, int perR
       },
       tbb::simple_partitioner());
   sums.tileSamples[size_t(tile)] = perReplicate;
-  for (const RayCounts& c : pixelCounts) {
-    total.rays += c.rays;
-    total.paths += c.paths;
-  }
+  for (const RayCounts& c : pixelCounts) total += c;
 }
 
 namespace {
@@ -766,10 +755,7 @@ LayerSet SequenceRenderer::renderLowres(int t, RayCounts& total) {
       }
     }
   });
-  for (const RayCounts& c : rowCounts) {
-    total.rays += c.rays;
-    total.paths += c.paths;
-  }
+  for (const RayCounts& c : rowCounts) total += c;
   LayerSet out;
   out.set("diffuse", std::move(diffuse));
   out.set("specular", std::move(specular));

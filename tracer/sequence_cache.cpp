@@ -487,8 +487,7 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
     }
     ReferenceResult ref = renderer.continueReference(
         firstFrameOfReference[r], sums, settings.referenceRelError * settings.referenceRelError, settings.referenceSpp);
-    ref.counts.rays += counts.rays;
-    ref.counts.paths += counts.paths;
+    ref.counts += counts;
     double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     writeReferenceFiles(refDir, refHash, scene.name, int(r), ref, sums, info);
     for (int k = 0; k < K && perReplicateUnits; ++k) fs::remove(replicateSumsPath(refDir, int(r), k));

@@ -846,6 +846,8 @@ FrameScene::Radiance FrameScene::shade(const PrimaryVertex& vertex, const Vertex
                        glm::vec3& specular, glm::vec3* direction) {
     if (!vs.towardsLight) return;
     counts.rays++;
+    if (vs.coneLight < 0)
+      counts.occlusionRays++;  // an area sample's shadow ray (or its packet lane)
     const glm::vec3 origin = v.origin, wi = vs.wiLight, le = vs.le;
     if (vs.occluded >= 0) {
       if (vs.occluded != 0) return;
@@ -1110,6 +1112,7 @@ FrameScene::Radiance FrameScene::shadeBidirectional(const PrimaryVertex& vertex,
           seen = glm::dot(light.geometricNormal, -vs.wiLight) > 0;
         }
       } else {
+        counts.occlusionRays++;
         const Segment ray = shadowSegment(xi.v.origin, vs.shadowEnd);
         seen = !occluded(xi.v.origin, ray.dir, ray.length);
         light.position = vs.lightPoint;
@@ -1135,6 +1138,7 @@ FrameScene::Radiance FrameScene::shadeBidirectional(const PrimaryVertex& vertex,
           maxComponent(fx.diffuse + fx.specular) <= 0)
         continue;
       counts.rays++;
+      counts.occlusionRays++;
       const Segment ray = shadowSegment(xi.v.origin, yj.v.origin);
       if (occluded(xi.v.origin, ray.dir, ray.length)) continue;
       for (int a = 0; a <= j; ++a) z[i + 1 + a] = &y[j - a].s;
