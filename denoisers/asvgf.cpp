@@ -79,7 +79,7 @@ enum GradientState : int {
 // Channels of the gradient layer (core/sequence.hpp).
 enum GradientSample : int { kSamplePixelX, kSamplePixelY, kLumNew, kLumOld, kSampleValid };
 
-constexpr int S = kGradientStratum;
+constexpr int kStratum = kGradientStratum;  // A-SVGF's stratum side, pixels
 constexpr float kLuminanceEpsilon = 1e-6f;  // eq. 11's guard (as SVGF's luminance term)
 
 }  // namespace
@@ -94,8 +94,8 @@ std::vector<std::string> Asvgf::requiredChannels() const {
 
 void Asvgf::setup(int width, int height) {
   Svgf::setup(width, height);
-  strataWidth_ = (width + S - 1) / S;
-  strataHeight_ = (height + S - 1) / S;
+  strataWidth_ = (width + kStratum - 1) / kStratum;
+  strataHeight_ = (height + kStratum - 1) / kStratum;
   guidePixel_.assign(size_t(strataWidth_) * size_t(strataHeight_), -1);
   guide_ = Image(strataWidth_, strataHeight_, kStratumGuideChannels);
   for (Image& image : gradient_) image = Image(strataWidth_, strataHeight_, kStateChannels);
@@ -136,15 +136,16 @@ void Asvgf::buildStrata(const DenoiserInputs& in) {
   if (gpu::recording()) {  // one thread per stratum: its 3x3 pixels' colour and its sample
     using namespace gpu_buffers;
     gpu::dispatch(strataWidth_, strataHeight_);
-    gpu::read(kColor, w, h, S * S);
-    gpu::read(kMeshId, w, h, S * S);
+    gpu::read(kColor, w, h, kStratum * kStratum);
+    gpu::read(kMeshId, w, h, kStratum * kStratum);
     gpu::read(kGradients, strataWidth_, strataHeight_, 1);
     gpu::write(kGradientImage, strataWidth_, strataHeight_);
   }
   parallelRows(strataHeight_, [&](int sy) {
     for (int sx = 0; sx < strataWidth_; ++sx) {
       const size_t s = size_t(sy) * size_t(strataWidth_) + size_t(sx);
-      const int x0 = sx * S, y0 = sy * S, x1 = std::min(x0 + S, w), y1 = std::min(y0 + S, h);
+      const int x0 = sx * kStratum, y0 = sy * kStratum, x1 = std::min(x0 + kStratum, w),
+                y1 = std::min(y0 + kStratum, h);
       // §3.4: l^(0) the mean, Var(l^(0)) the variance of the stratum's shading samples.
       double sum = 0, sumSquares = 0;
       int count = 0, firstSurface = -1;
@@ -372,7 +373,7 @@ void Asvgf::computeAlpha() {
   const int w = alpha_.width();
   parallelRows(alpha_.height(), [&](int y) {
     for (int x = 0; x < w; ++x) {
-      const float lambda = lambda_.at(x / S, y / S);
+      const float lambda = lambda_.at(x / kStratum, y / kStratum);
       alpha_.at(x, y) =
           q2rtxOrder ? lambda : (lambda > 0.0f ? (1.0f - lambda) * base + lambda : 0.0f);
     }
