@@ -234,25 +234,34 @@ TEST(Reference, ExtendingGivesTheSameBitsAsRenderingAtOnce) {
   EXPECT_EQ(once.spp(), 4 * r.referenceReplicates());
 }
 
-TEST(Reference, BitIdenticalAtAnyThreadCount) {
-  const Scene scene = test::shippedScene("moving_object");
+// A scene's reference (frame 0, adaptive below its cap) rendered on one thread and on two, under
+// either sampler: every layer the same bits, and the same error estimate.
+void expectReferencesBitIdenticalAtOneAndTwoThreads(const std::string& sceneName, int spp,
+                                                    int minSpp, double relError) {
+  const Scene scene = test::shippedScene(sceneName);
   for (const std::string sampler : {"sobol", "independent"}) {
     auto render = [&](int threads) {
       tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
-      RenderSettings s = referenceSettings(sampler, 256);
-      s.referenceMinSpp = 16;
-      s.referenceRelError = 0.02;  // relMSE 4e-4: a few adaptive rounds, below the cap
-      SequenceRenderer r(scene, s);
-      return r.renderReference(0);
+      RenderSettings s = referenceSettings(sampler, spp);
+      s.referenceMinSpp = minSpp;
+      s.referenceRelError = relError;
+      return SequenceRenderer(scene, s).renderReference(0);
     };
     const ReferenceResult one = render(1), two = render(2);
     if (sampler == "sobol") {
-      EXPECT_LT(one.sppMin, one.sppMax) << "the allocation should differ between tiles";
+      EXPECT_LT(one.sppMin, one.sppMax)
+          << sceneName << ": the allocation should differ between tiles";
     }
     for (const auto& [name, img] : one.layers.all())
-      EXPECT_TRUE(samePixels(img, two.layers.get(name))) << sampler << " layer " << name;
-    EXPECT_EQ(one.estimatedRelMse, two.estimatedRelMse);
+      EXPECT_TRUE(samePixels(img, two.layers.get(name)))
+          << sceneName << " " << sampler << " layer " << name;
+    EXPECT_EQ(one.estimatedRelMse, two.estimatedRelMse) << sceneName << " " << sampler;
   }
+}
+
+TEST(Reference, BitIdenticalAtAnyThreadCount) {
+  // relMSE 4e-4: a few adaptive rounds, below the cap.
+  expectReferencesBitIdenticalAtOneAndTwoThreads("moving_object", 256, 16, 0.02);
 }
 
 // hard_light's bidirectional references against path-traced ones of the same frame: each layer's
@@ -306,20 +315,7 @@ TEST(Reference, BidirectionalAgreesWithThePathTracer) {
 }
 
 TEST(Reference, BidirectionalBitIdenticalAtAnyThreadCount) {
-  const Scene scene = test::shippedScene("hard_light");
-  for (const std::string sampler : {"sobol", "independent"}) {
-    auto render = [&](int threads) {
-      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
-      RenderSettings s = referenceSettings(sampler, 64);
-      s.referenceMinSpp = 8;
-      s.referenceRelError = 0.05;
-      return SequenceRenderer(scene, s).renderReference(0);
-    };
-    const ReferenceResult one = render(1), two = render(2);
-    for (const auto& [name, img] : one.layers.all())
-      EXPECT_TRUE(samePixels(img, two.layers.get(name))) << sampler << " layer " << name;
-    EXPECT_EQ(one.estimatedRelMse, two.estimatedRelMse);
-  }
+  expectReferencesBitIdenticalAtOneAndTwoThreads("hard_light", 128, 8, 0.05);
 }
 
 // Two 8x8 tiles whose replicate means spread by a and 4a: the per-sample error of the second is
