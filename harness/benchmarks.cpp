@@ -52,8 +52,9 @@ TutorialRun runTutorial(const std::string& sceneArgs, int size) {
 }
 
 // The tutorial's model file (cornell_box.ecs) holds its command line: the mesh, one point light
-// and the camera. Without the -pointlight option and its six numbers the same paths are traced
-// without their shadow rays.
+// and the camera. Without the -pointlight option and its six numbers the tutorial traces paths of
+// the same distribution (its path weights and directions do not depend on the light; only their
+// random numbers shift, as the light no longer draws any) without their shadow rays.
 std::string withoutPointLight(const std::string& ecs) {
   std::istringstream in(ecs);
   std::string word, out;
