@@ -70,11 +70,8 @@ std::string withoutPointLight(const std::string& ecs) {
 }
 
 // Embree's tutorial beside our tracer (`out` holds our rays per path and occlusion rays per path).
-// Its headline rate is the tutorial's Mrays/s. A second run without its light counts its
-// closest-hit rays alone, so its ray mix and the cost of each kind follow: per frame, time without
-// the light / closest-hit rays, and the time the light adds / the shadow rays it adds. At our mix
-// those costs give the rate the tutorial would report for rays like ours (a model: the two kinds'
-// costs add up, and the light's own evaluation is charged to its shadow rays).
+// Its headline rate is the tutorial's Mrays/s; a second run without its light gives its ray mix,
+// the cost of each kind of ray and its rate at our mix (tutorialMix).
 void compareWithTutorial(int size, json& out, const ProgressFn& progress) {
   const std::string model = std::string(kTutorialModelDir) + "/cornell_box.ecs";
   if (!std::filesystem::exists("/usr/bin/pathtracer") || !std::filesystem::exists(model)) {
@@ -96,28 +93,55 @@ void compareWithTutorial(int size, json& out, const ProgressFn& progress) {
   std::ifstream ecs(model);
   const std::string args = withoutPointLight(std::string(std::istreambuf_iterator<char>(ecs), {}));
   const TutorialRun dark = runTutorial(args, size);
-  const double raysLit = lit.mrays * 1e6 / lit.fps;
-  const double closest = dark.fps > 0 ? dark.mrays * 1e6 / dark.fps : 0;
-  const double shadow = raysLit - closest, addedSeconds = 1 / lit.fps - 1 / dark.fps;
-  if (!(closest > 0 && shadow > 0 && addedSeconds > 0)) {
-    progress("embree pathtracer without its light: not measured (its rays or time did not add up)");
+  const double ourShare =
+      out["occlusion_rays_per_path"].get<double>() / out["rays_per_path"].get<double>();
+  const TutorialMix mix = tutorialMix(lit.mrays, lit.fps, dark.mrays, dark.fps, ourShare);
+  if (!mix.counted) {
+    progress(
+        "embree pathtracer without its light: not measured (its output, or its rays, did not add "
+        "up)");
     return;
   }
-  const double closestCost = 1 / dark.fps / closest, shadowCost = addedSeconds / shadow;
-  const double ourShadowShare =
-      out["occlusion_rays_per_path"].get<double>() / out["rays_per_path"].get<double>();
-  const double atOurMix = 1e-6 / ((1 - ourShadowShare) * closestCost + ourShadowShare * shadowCost);
-  out["embree_pathtracer_occlusion_share"] = shadow / raysLit;
-  out["embree_pathtracer_shadow_to_closest_cost"] = shadowCost / closestCost;
-  out["embree_pathtracer_mrays_per_s_at_our_mix"] = atOurMix;
-  out["ratio_to_embree_at_our_mix"] = ours / atOurMix;
+  out["embree_pathtracer_occlusion_share"] = mix.occlusionShare;
+  progress(printed("embree pathtracer: %.0f%% of its rays are occlusion rays (ours %.0f%%)",
+                   100 * mix.occlusionShare, 100 * ourShare));
+  if (!mix.timed) {
+    progress(
+        printed("embree pathtracer: its frames took %.2f ms without its light against %.2f ms "
+                "with it (a machine busy with something else?): no rate at our mix",
+                1e3 / dark.fps, 1e3 / lit.fps));
+    return;
+  }
+  out["embree_pathtracer_shadow_to_closest_cost"] = mix.shadowToClosestCost;
+  out["embree_pathtracer_mrays_per_s_at_our_mix"] = mix.mraysAtMix;
+  out["ratio_to_embree_at_our_mix"] = ours / mix.mraysAtMix;
   progress(
-      printed("embree pathtracer: %.0f%% of its rays are occlusion rays (ours %.0f%%), each "
-              "costing %.2f of a closest-hit ray; at our mix it would report %.2f Mrays/s  -> "
-              "ratio %.2fx",
-              100 * shadow / raysLit, 100 * ourShadowShare, shadowCost / closestCost, atOurMix,
-              ours / atOurMix));
+      printed("embree pathtracer: an occlusion ray costs it %.2f of a closest-hit ray; at our mix "
+              "it would report %.2f Mrays/s  -> ratio %.2fx",
+              mix.shadowToClosestCost, mix.mraysAtMix, ours / mix.mraysAtMix));
 }
+
+}  // namespace
+
+TutorialMix tutorialMix(double litMrays, double litFps, double darkMrays, double darkFps,
+                        double share) {
+  TutorialMix mix;
+  if (!(litMrays > 0 && litFps > 0 && darkMrays > 0 && darkFps > 0)) return mix;
+  const double raysLit = litMrays * 1e6 / litFps, closest = darkMrays * 1e6 / darkFps;
+  const double shadow = raysLit - closest;
+  if (!(shadow > 0)) return mix;
+  mix.counted = true;
+  mix.occlusionShare = shadow / raysLit;
+  const double addedSeconds = 1 / litFps - 1 / darkFps;
+  if (!(addedSeconds > 0)) return mix;
+  mix.timed = true;
+  const double closestCost = 1 / darkFps / closest, shadowCost = addedSeconds / shadow;
+  mix.shadowToClosestCost = shadowCost / closestCost;
+  mix.mraysAtMix = 1e-6 / ((1 - share) * closestCost + share * shadowCost);
+  return mix;
+}
+
+namespace {
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());

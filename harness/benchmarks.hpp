@@ -10,15 +10,34 @@
 
 namespace arena {
 
-// `bench tracer`: Mrays/s and Mpaths/s of the 1-spp frame pass (G-buffer, mirror ray, path with
-// NEE, gradient samples) on a scene at size x size, warm-up excluded; optionally beside Embree's
-// own `pathtracer` tutorial measured in the same sitting.
+// `bench tracer`: Mrays/s and Mpaths/s of the 1-spp frame pass of a first frame (G-buffer, mirror
+// ray, path with NEE, specular ray; a first frame has no gradient samples) on a scene at size x
+// size, warm-up excluded, and how many of a path's rays are occlusion rays; optionally beside
+// Embree's own `pathtracer` tutorial measured in the same sitting, with and without its light.
 struct TracerBench {
   std::string sceneFile;
   int size = 512, frames = 20, warmup = 3;
   bool embree = false;
 };
 nlohmann::json benchTracer(const TracerBench& bench, const ProgressFn& progress);
+
+// Embree's tutorial's ray mix from two of its benchmark runs, one with its light and one without
+// (each its Mrays/s and frames/s), and the rate it would report at another mix. Rays per frame are
+// a run's Mrays/s over its frames/s (a count, whatever the load): the run without the light traces
+// closest-hit rays alone, the rest of the lit run's are its occlusion (shadow) rays. The cost of a
+// closest-hit ray is the dark run's frame time over its rays, an occlusion ray's the time the light
+// adds over the rays it adds (a model: the two kinds' costs add, and the light's own evaluation
+// counts with its shadow rays). `counted` is false where the rays do not add up (no share),
+// `timed` false where the lit frames were not the slower ones (a load that changed between the
+// runs): no costs and no rate then.
+struct TutorialMix {
+  bool counted = false, timed = false;
+  double occlusionShare = 0;       // of the lit run's rays
+  double shadowToClosestCost = 0;  // an occlusion ray's cost over a closest-hit ray's
+  double mraysAtMix = 0;  // the rate it would report where `share` of the rays are occlusion rays
+};
+TutorialMix tutorialMix(double litMrays, double litFps, double darkMrays, double darkFps,
+                        double share);
 
 // `bench denoise`: every contender on the same rendered frames, in an order rotated frame by frame;
 // median ms/frame, bilateral units, per-pass times and taps, and each contender's paired per-frame
