@@ -203,6 +203,15 @@ void reuseForLobe(float pSpec, float& uLobe, float& u1) {
     u1 = std::min((u1 - pSpec) / (1.0f - pSpec), kOneMinusEpsilon);
 }
 
+// A cosine-weighted direction about n (t, b, n orthonormal) from u1, u2 in [0, 1): Malley's
+// method, a uniform point on the unit disc (radius sqrt(u1), angle 2 pi u2) lifted to the
+// hemisphere.
+glm::vec3 cosineDirection(glm::vec3 t, glm::vec3 b, glm::vec3 n, float u1, float u2) {
+  const float r = std::sqrt(u1), phi = 2.0f * kPi * u2;
+  return t * (r * std::cos(phi)) + b * (r * std::sin(phi)) +
+         n * std::sqrt(std::max(0.0f, 1.0f - u1));
+}
+
 // A direction from the lobe mixture (the specular lobe where uLobe < pSpec); false where it falls
 // below the shading surface.
 bool sampleDirection(const VertexBsdf& v, float pSpec, float uLobe, float u1, float u2,
@@ -214,9 +223,8 @@ bool sampleDirection(const VertexBsdf& v, float pSpec, float uLobe, float u1, fl
     float sinTheta = std::sqrt(std::max(0.0f, 1.0f - cosTheta * cosTheta));
     glm::vec3 h = glm::normalize(t * (sinTheta * std::cos(phi)) + b * (sinTheta * std::sin(phi)) + n * cosTheta);
     wi = 2.0f * glm::dot(wo, h) * h - wo;
-  } else {  // cosine-weighted hemisphere
-    float r = std::sqrt(u1), phi = 2.0f * kPi * u2;
-    wi = t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * std::sqrt(std::max(0.0f, 1.0f - u1));
+  } else {
+    wi = cosineDirection(t, b, n, u1, u2);
   }
   return glm::dot(wi, n) > 0;
 }
@@ -1044,12 +1052,10 @@ FrameScene::Radiance FrameScene::shadeBidirectional(const PrimaryVertex& vertex,
       lightVertices = 1;
       // A cosine-distributed direction on the emitting side: radiance / (pdf_area pdf_dir) =
       // Le cos / ((1 / (n A)) (cos / pi)).
-      const float r = std::sqrt(emitted.x), phi = 2.0f * kPi * emitted.y;
       glm::vec3 tangent, bitangent;
       const glm::vec3 ln = y[0].s.geometricNormal;
       orthonormalBasis(ln, tangent, bitangent);
-      glm::vec3 dir = glm::normalize(r * std::cos(phi) * tangent + r * std::sin(phi) * bitangent +
-                                     std::sqrt(std::max(0.0f, 1.0f - emitted.x)) * ln);
+      glm::vec3 dir = glm::normalize(cosineDirection(tangent, bitangent, ln, emitted.x, emitted.y));
       glm::vec3 beta = g.lightRadiance * (kPi * float(n) * g.area);
       glm::vec3 origin = offsetOrigin(y[0].s.position, ln);
       for (int j = 1; j < maxBounces; ++j) {
