@@ -56,7 +56,10 @@ std::string tiedText(const RankedMethod& m) {
 void printOverallRanking(std::ostream& out, const RunResults& results) {
   if (!results.statistics || !results.statistics->overall) return;
   const OverallRanking& o = *results.statistics->overall;
-  out << "\noverall: " << o.normalisation << " (lower is better)\n";
+  if (o.ranking.empty())
+    out << "\noverall: none\n";
+  else
+    out << "\noverall: " << o.normalisation << " (lower is better)\n";
   for (const RankedMethod& m : o.ranking) {
     const bool tied = !m.tiedWith.empty();
     out << "  " << std::left << std::setw(4) << (std::to_string(m.rank) + (tied ? "=" : "")) << std::setw(26) << m.label

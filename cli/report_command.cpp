@@ -50,9 +50,7 @@ void addReportCommand(CLI::App& app) {
     h.out = *histOut;
     const double t = parseTolerance(*tol);
     for (const std::string& m : *metrics) h.tolerances.push_back({m, t});
-    if (h.tolerances.empty())
-      for (const MetricDefinition* m : metricCatalog())
-        if (m->gatedByDefault) h.tolerances.push_back({m->name, t});
+    h.tolerances = gateTolerances(std::move(h.tolerances), t);
     const HistorySummary s = writeHistory(h);
     std::cout << "history: " << s.index.string() << " (" << s.runs << " runs, " << s.failing
               << " regression(s) `arena compare` would flag)\n";

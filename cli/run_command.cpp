@@ -245,9 +245,7 @@ void addRunCommands(CLI::App& app) {
       BootstrapConfig bc;
       bc.confidence = parseConfidence(*confidence);
       for (auto& m : *metrics) tols.push_back({m, t});
-      if (tols.empty())
-        for (const MetricDefinition* m : metricCatalog())
-          if (m->gatedByDefault) tols.push_back({m->name, t});
+      tols = gateTolerances(std::move(tols), t);
       const RunResults baseline = loadResults(*a), candidate = loadResults(*b);
       // Numbers measured under other settings differ for that reason alone: refused unless asked.
       const std::vector<std::string> differ = settingsDifferences(baseline, candidate);

@@ -1,5 +1,6 @@
 #include "metrics/compare.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <set>
@@ -60,7 +61,11 @@ void collectDifferences(const json& a, const json& b, const std::string& path, s
 
 std::vector<std::string> settingsDifferences(const RunResults& baseline, const RunResults& candidate) {
   std::vector<std::string> out;
-  const json a = baseline.settings.measurement(), b = candidate.settings.measurement();
+  json a = baseline.settings.measurement(), b = candidate.settings.measurement();
+  // Another --input-seed is another noise realisation of the same measurement, which the gate's
+  // paired intervals are there to tell from a change (shards of one run must still agree on it).
+  for (json* s : {&a, &b})
+    if (s->contains("render") && (*s)["render"].is_object()) (*s)["render"].erase("inputSeed");
   collectDifferences(a, b, "settings", out);
   const json& as = baseline.scenes;
   const json& bs = candidate.scenes;
@@ -87,27 +92,41 @@ double parseConfidence(const std::string& text) {
   return v;
 }
 
-std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults& cand,
-                                       std::vector<Tolerance> tolerances,
-                                       const BootstrapConfig& cfg) {
+std::vector<Tolerance> gateTolerances(std::vector<Tolerance> tolerances, double relative) {
   if (tolerances.empty())
     for (const MetricDefinition* m : metricCatalog())
-      if (m->gatedByDefault) tolerances.push_back({m->name, 0.02});
+      if (m->gatedByDefault) tolerances.push_back({m->name, relative, true});
   for (Tolerance& t : tolerances) {
     if (t.metric == "flip") t.metric = "ldrFlip";
     requireMetric(t.metric, "compare");
     if (!std::isfinite(t.relative) || t.relative < 0)
       throw Error("compare: tolerance of " + t.metric + " must be finite and non-negative");
   }
+  return tolerances;
+}
+
+std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults& cand,
+                                       std::vector<Tolerance> tolerances,
+                                       const BootstrapConfig& cfg) {
+  tolerances = gateTolerances(std::move(tolerances));
   std::map<std::string, const PairResult*> candPairs;
   std::set<std::string> baseScenes, candScenes;
   for (const PairResult& p : cand.pairs) candPairs[key(p)] = &p, candScenes.insert(p.scene);
   for (const PairResult& p : base.pairs) baseScenes.insert(p.scene);
   bool shared = false;
   for (const std::string& s : baseScenes) shared |= candScenes.count(s) > 0;
-  if (!shared) throw Error("compare: the two runs share no scene; nothing can be compared");
-
   std::vector<ComparisonRow> rows;
+  int comparedPairs = 0;  // pairs both runs ran
+  if (!shared) {
+    // Nothing to compare: every baseline pair is missing from the candidate (the gate fails) and
+    // every candidate pair is new, each row saying why.
+    for (const PairResult& b : base.pairs)
+      rows.push_back(
+          pairRow(b, "missing", "the runs share no scene: pair not in the candidate run"));
+    for (const PairResult& c : cand.pairs)
+      rows.push_back(pairRow(c, "new", "the runs share no scene: pair not in the baseline run"));
+    return rows;
+  }
   std::set<std::string> baseKeys;
   for (const PairResult& b : base.pairs) {
     baseKeys.insert(key(b));
@@ -124,6 +143,7 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
       continue;
     }
     if (!b.ok()) continue;  // nothing to hold the candidate to
+    ++comparedPairs;
     for (const Tolerance& t : tolerances) {
       ComparisonRow row{scene,      label, t.metric,   kUndefined, kUndefined,
                         kUndefined, {},    t.relative, "ok",       ""};
@@ -183,6 +203,17 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
   }
   for (const PairResult& c : cand.pairs)
     if (!baseKeys.count(key(c))) rows.push_back(pairRow(c, "new", "pair not in the baseline run"));
+  // A metric the caller named must have been computed somewhere; the defaults skip a metric
+  // neither run computed (FLIP switched off in both).
+  if (comparedPairs > 0)
+    for (const Tolerance& t : tolerances)
+      if (!t.optional && std::none_of(rows.begin(), rows.end(),
+                                      [&](const ComparisonRow& r) { return r.metric == t.metric; }))
+        throw Error("compare: --metric " + t.metric + ": neither run computed it on the " +
+                    std::to_string(comparedPairs) +
+                    " pair(s) both ran (nothing to gate on; `arena metrics` says what each metric "
+                    "needs, e.g. "
+                    "FLIP's --flip setting)");
   return rows;
 }
 

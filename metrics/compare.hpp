@@ -19,6 +19,10 @@ namespace arena {
 struct Tolerance {
   std::string metric;  // a name from metricCatalog() (aliases: flip = ldrFlip)
   double relative = 0.02;
+  // Skipped where neither run computed it (the defaults: FLIP may be switched off; a history,
+  // whose runs may differ in what they computed). Otherwise, when no pair both runs ran has it,
+  // compareRuns is an error: a gate on a metric nobody measured would pass having checked nothing.
+  bool optional = false;
 };
 
 struct ComparisonRow {
@@ -35,6 +39,10 @@ struct ComparisonRow {
   std::string note;
 };
 
+// The tolerances a gate applies: `tolerances` checked (a registered metric, finite and
+// non-negative; the alias flip read as ldrFlip), or when empty the defaults: every metric gated
+// by default, at `relative` (optional).
+std::vector<Tolerance> gateTolerances(std::vector<Tolerance> tolerances, double relative = 0.02);
 // Defaults when `tolerances` is empty: relMse, ldrFlip, hdrFlip, ssim, tRmae at 2%.
 std::vector<ComparisonRow> compareRuns(const RunResults& baseline, const RunResults& candidate,
                                        std::vector<Tolerance> tolerances,

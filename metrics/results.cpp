@@ -228,7 +228,10 @@ void appendToDatabase(const fs::path& dbPath, const RunResults& r, const std::st
           addScene(name, ranking, std::string(cut ? "cut@" : "ghosting@") + std::to_string(e.eventFrame) + "." + figure);
       });
     }
+    // The overall scores: scene "*", relMSE's and every other metric's that declares one.
     if (statistics.overall) addRanking("*", statistics.rankedOn, statistics.overall->ranking);
+    for (const auto& [metric, overall] : statistics.overallByMetric)
+      addRanking("*", metric, overall.ranking);
   }
   db.exec("COMMIT");
 }

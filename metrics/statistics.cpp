@@ -469,10 +469,13 @@ OverallRanking rankOverall(const std::vector<const SceneRanking*>& scenes,
                            double confidence) {
   OverallRanking out;
   if (scenes.empty()) return out;
-  // Methods ranked on every scene with a positive value (the log ratio needs one).
+  // Methods ranked on every scene with a positive value (the log ratio needs one); a method
+  // missing from any scene, the first included, is named with the reason.
   std::vector<std::string> labels;
-  for (const RankedMethod& m : scenes.front()->ranking) labels.push_back(m.label);
+  for (const SceneRanking* s : scenes)
+    for (const RankedMethod& m : s->ranking) labels.push_back(m.label);
   std::sort(labels.begin(), labels.end());
+  labels.erase(std::unique(labels.begin(), labels.end()), labels.end());
   std::vector<std::string> kept;
   for (const std::string& label : labels) {
     std::string why;
@@ -489,7 +492,13 @@ OverallRanking rankOverall(const std::vector<const SceneRanking*>& scenes,
     else
       out.excluded += (out.excluded.empty() ? "" : "; ") + label + ": " + why;
   }
-  if (kept.empty()) return out;
+  // An overall score is a method's error relative to another's: with one method there is nothing
+  // to compare, and its score against itself (1, interval [1, 1]) would read as a result.
+  if (kept.size() == 1)
+    out.excluded +=
+        (out.excluded.empty() ? "" : "; ") + kept.front() +
+        ": the only method ranked on every scene (an overall score compares two or more)";
+  if (kept.size() < 2) return out;
   out.baseline = std::find(kept.begin(), kept.end(), preferredBaseline) != kept.end()
                      ? preferredBaseline
                      : kept.front();

@@ -162,7 +162,10 @@ std::vector<RunResults> loadHistory(const std::vector<fs::path>& inputs) {
   return runs;
 }
 
-json historyData(const std::vector<RunResults>& runs, const std::vector<Tolerance>& tolerances) {
+json historyData(const std::vector<RunResults>& runs, std::vector<Tolerance> tolerances) {
+  // Runs over months differ in what they computed: a gated metric is compared where both have it.
+  tolerances = gateTolerances(std::move(tolerances));
+  for (Tolerance& t : tolerances) t.optional = true;
   json runList = json::array();
   for (const RunResults& r : runs)
     runList.push_back({{"name", r.name},
@@ -196,11 +199,11 @@ json historyData(const std::vector<RunResults>& runs, const std::vector<Toleranc
   // every verdict other than "ok" (improved, beyond tolerance but not resolved, ...) with `fails`:
   // whether compare's own rule makes the gate fail on it.
   json changes = json::array();
-  json gated = json::object();
+  json gated = json::object();  // the gate's tolerance per metric (0 included), from one run on
+  for (const Tolerance& t : tolerances) gated[t.metric] = t.relative;
   size_t failing = 0;
   for (size_t i = 1; i < runs.size(); ++i)
     for (const ComparisonRow& row : compareRuns(runs[i - 1], runs[i], tolerances)) {
-      if (row.tolerance > 0) gated[row.metric] = row.tolerance;
       if (row.verdict == "ok") continue;
       json change = comparisonJson({row})[0];
       change["run"] = i;

@@ -539,6 +539,15 @@ TEST(EventIntervalsEndToEnd, IntervalsRankingsAndShardsMergedEqualOneRun) {
   EXPECT_EQ(count("SELECT COUNT(*) FROM rankings WHERE metric = 'ghosting@12.chromaLagEnergy' AND "
                   "ci_lo IS NOT NULL"),
             3);
+  // And every overall score, relMSE's and the other metrics' (scene "*").
+  const json& overallByMetric = whole["statistics"]["overallByMetric"];
+  ASSERT_FALSE(overallByMetric.empty());
+  for (const auto& [metric, overall] : overallByMetric.items()) {
+    ASSERT_FALSE(overall["ranking"].empty()) << metric;
+    const std::string sql =
+        "SELECT COUNT(*) FROM rankings WHERE scene = '*' AND metric = '" + metric + "'";
+    EXPECT_EQ(count(sql.c_str()), int(overall["ranking"].size())) << metric;
+  }
   sqlite3_close(db);
 }
 

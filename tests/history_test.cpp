@@ -95,6 +95,29 @@ TEST(History, MarksWhatCompareSaysRunByRun) {
       EXPECT_TRUE(m["tolerance"].is_null());
     }
   }
+  // A zero tolerance gates too (any resolved worsening fails), and a one-run history shows the
+  // gate it would apply.
+  for (const size_t count : {size_t(8), size_t(1)}) {
+    const std::vector<RunResults> some(runs.begin(), runs.begin() + long(count));
+    const json strict = historyData(some, {{"relMse", 0.0}});
+    bool seen = false;
+    for (const json& m : strict["metrics"])
+      if (m["name"] == "relMse") {
+        seen = true;
+        ASSERT_TRUE(m["tolerance"].is_number()) << count;
+        EXPECT_EQ(m["tolerance"].get<double>(), 0.0);
+      }
+    EXPECT_TRUE(seen);
+  }
+  // Two consecutive runs with no scene in common: the history is still built, the second run's
+  // comparison fails the gate with the pairs it lost.
+  json moved = historyRun(8, 5);
+  for (json& p : moved["pairs"]) p["scene"] = "elsewhere";
+  std::vector<RunResults> withMove = runs;
+  withMove.push_back(test::typed(moved));
+  const json movedData = historyData(withMove, tolerances);
+  EXPECT_FALSE(changedRuns(movedData, "svgf", "*").empty());
+  EXPECT_GT(movedData["failing"].get<size_t>(), failing);
 }
 
 TEST(History, ReadsRunDirectoriesAndDatabasesInTimeOrder) {

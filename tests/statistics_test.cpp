@@ -163,6 +163,34 @@ TEST(Bootstrap, OverallRankingIsPerSceneNormalised) {
   EXPECT_NE(o.normalisation.find("geometric mean"), std::string::npos);
 }
 
+// A method missing from a scene is named, whichever scene it misses (the first included), and is
+// not scored; with one method left there is no overall score (1 with interval [1, 1] against
+// itself would read as a result).
+TEST(Bootstrap, OverallRankingNamesWhatItLeavesOut) {
+  const MetricTiles x1 = constantSeries(0.001), t1 = constantSeries(0.004);
+  const MetricTiles x2 = constantSeries(0.002), y2 = constantSeries(0.003),
+                    t2 = constantSeries(0.005);
+  SceneRanking first = rankScene("relMse", true, {{"x", &x1}, {"temporal", &t1}}, "first");
+  SceneRanking second =
+      rankScene("relMse", true, {{"x", &x2}, {"y", &y2}, {"temporal", &t2}}, "second");
+  for (const auto& order : {std::vector<const SceneRanking*>{&first, &second},
+                            std::vector<const SceneRanking*>{&second, &first}}) {
+    const OverallRanking o = rankOverall(order, "temporal", true);
+    ASSERT_EQ(o.ranking.size(), 2u);
+    EXPECT_EQ(o.excluded, "y: not ranked on every scene");
+  }
+  SceneRanking alone = rankScene("relMse", true, {{"x", &x1}}, "first");
+  const OverallRanking one = rankOverall({&alone}, "temporal", true);
+  EXPECT_TRUE(one.ranking.empty());
+  EXPECT_TRUE(one.baseline.empty());
+  EXPECT_NE(one.excluded.find("x: the only method"), std::string::npos) << one.excluded;
+  SceneRanking onlyX = rankScene("relMse", true, {{"x", &x2}, {"y", &y2}}, "second");
+  const OverallRanking leftOne = rankOverall({&first, &onlyX}, "temporal", true);
+  EXPECT_TRUE(leftOne.ranking.empty());
+  EXPECT_NE(leftOne.excluded.find("temporal: not ranked on every scene"), std::string::npos);
+  EXPECT_NE(leftOne.excluded.find("x: the only method"), std::string::npos) << leftOne.excluded;
+}
+
 TEST(Bootstrap, TileDataSurvivesJson) {
   std::mt19937_64 rng(3);
   const auto shared = sharedContent(9, 16, rng);
@@ -245,9 +273,22 @@ TEST(CompareGate, FailsOnWhatItCannotCompare) {
   bool named = false;
   for (auto& r : rows) named |= r.label == "b" && r.verdict == "missing";
   EXPECT_TRUE(named);
-  // No scene in common.
-  EXPECT_THROW(compareRuns(syntheticRun({{"a", m}}, "s1"), syntheticRun({{"a", m}}, "s2"), tol),
-               Error);
+  // No scene in common: every baseline pair is missing (the gate fails), every candidate pair new.
+  rows = compareRuns(syntheticRun({{"a", m}}, "s1"), syntheticRun({{"a", m}}, "s2"), tol);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].verdict, "missing");
+  EXPECT_EQ(rows[1].verdict, "new");
+  EXPECT_NE(rows[0].note.find("share no scene"), std::string::npos) << rows[0].note;
+  EXPECT_TRUE(anyRegression(rows));
+  // A metric named on the command line that neither run computed is an error, not a pass.
+  try {
+    compareRuns(syntheticRun({{"a", m}}), syntheticRun({{"a", m}}), {{"msWall", 0.02}});
+    FAIL() << "a gate on an uncomputed metric passed";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("--metric msWall"), std::string::npos) << e.what();
+  }
+  // The defaults skip what neither run computed (here all but relMSE).
+  EXPECT_FALSE(anyRegression(compareRuns(syntheticRun({{"a", m}}), syntheticRun({{"a", m}}), {})));
   // A tolerance that can never fail is refused.
   EXPECT_THROW(parseTolerance("nan"), Error);
   EXPECT_THROW(parseTolerance("inf"), Error);
@@ -330,6 +371,9 @@ TEST(StatisticsEndToEnd, IntervalsRankingsAndAQuietGate) {
   const json worse =
       run("worse", 0, {{"maxHistory", "3"}});  // a running mean of 3 frames: far noisier
   const std::vector<Tolerance> tol = {{"relMse", 0.02}};
+  // Another input seed is the same measurement (arena compare does not refuse it); another filter
+  // setting is not.
+  EXPECT_TRUE(settingsDifferences(test::typed(base), test::typed(reseeded)).empty());
   auto rows = compareRuns(test::typed(base), test::typed(reseeded), tol);
   for (const auto& r : rows) EXPECT_NE(r.verdict, "regressed") << r.label << " " << r.change;
   EXPECT_NE(pairOfLabel(base, "svgf")["summary"]["relMse"]["mean"],
