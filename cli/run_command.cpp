@@ -91,6 +91,13 @@ RunConfig configFrom(const MatrixOptions& o) {
   std::tie(c.shardIndex, c.shardCount) = parseShard(o.shard);
   for (const std::string& w : c.scenes.empty() ? std::vector<std::string>{} : shortSequenceWarnings(c.scenes, c.render, c.warmup))
     std::cerr << "arena: warning: " << w << "\n";
+  for (const std::filesystem::path& capture : c.captures)
+    if (isCapture(capture))  // else the run names what is wrong with it
+      if (const std::string w = shortSequenceWarning(
+              capture.string(), readCaptureDescription(capture).info.frames, c.warmup,
+              "lower --warmup; a capture's frames are what it holds");
+          !w.empty())
+        std::cerr << "arena: warning: " << w << "\n";
   c.progress = [](const std::string& line) { std::cout << line << std::endl; };
   return c;
 }

@@ -68,11 +68,19 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
   const fs::path camerasFile = source / "cameras.json";
   if (!fs::exists(camerasFile))
     throw Error(source.string() + ": no cameras.json (written by scripts/blender/render_capture.py)");
+  fs::path folder = fs::absolute(source).lexically_normal();
+  if (folder.filename().empty()) folder = folder.parent_path();  // "render/" names render
+  const std::string name = options.name.empty() ? folder.filename().string() : options.name;
+  if (!isPlainName(name))
+    throw Error(std::string(options.name.empty() ? "the source folder's name" : "--name") + " '" +
+                name + "' cannot name a capture (expected no spaces or slashes, not . or ..)" +
+                (options.name.empty() ? "; give one with --name" : ""));
   const json doc = parseJsonFile(camerasFile.string());
   JsonReader root(doc, camerasFile.string());
   const int width = root.integerIn("width", 1, 16384), height = root.integerIn("height", 1, 16384);
   const int frames = root.integerIn("frames", 1, 100000);
   const double fps = root.number("fps");
+  if (!(fps > 0) || !std::isfinite(fps)) root.fail("fps", "a positive number of frames per second");
   const double clipStart = root.number("clipStart"), clipEnd = root.number("clipEnd");
   const std::string producer = root.string("producer");
   const int spp = root.integer("spp"), referenceSpp = root.integer("referenceSpp");
@@ -182,7 +190,6 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
   }
   std::vector<int> ofFrame(static_cast<size_t>(frames));
   for (int t = 0; t < frames; ++t) ofFrame[size_t(t)] = t;
-  const std::string name = options.name.empty() ? fs::absolute(source).lexically_normal().filename().string() : options.name;
   json description = {
       {"format", kCaptureFormatName},
       {"version", kCaptureFormatVersion},

@@ -63,6 +63,11 @@ const std::vector<LayerSpec>& referenceSpecs() {
 
 }  // namespace
 
+bool isPlainName(const std::string& name) {
+  return !name.empty() && name != "." && name != ".." &&
+         name.find_first_of("/\\ \t") == std::string::npos;
+}
+
 // The same names as the cache's (core/sequence.cpp): a capture folder reads like a sequence folder.
 fs::path captureFramePath(const fs::path& dir, int t) { return Sequence::framePath(dir, t); }
 fs::path captureReferencePath(const fs::path& dir, int r) { return Sequence::referencePath(dir, r); }
@@ -175,8 +180,10 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
                 std::to_string(kCaptureFormatVersion));
   SequenceInfo& info = c.info;
   info.scene = root.string("name");
-  if (info.scene.empty() || info.scene.find_first_of("/\\ \t") != std::string::npos)
-    throw Error(file.string() + ": name '" + info.scene + "': expected a non-empty name without spaces or slashes");
+  if (!isPlainName(info.scene))
+    throw Error(file.string() + ": name '" + info.scene +
+                "': expected a non-empty name without spaces or slashes, not . or .. (it names the "
+                "capture's folders in a run)");
   info.purpose = root.string("purpose", "capture");
   info.width = root.integerIn("width", 1, 16384);
   info.height = root.integerIn("height", 1, 16384);
@@ -236,13 +243,21 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
     int count = 0;
     for (size_t t = 0; t < ofFrame.size(); ++t) {
       if (ofFrame[t] != std::floor(ofFrame[t]) || ofFrame[t] < 0 || ofFrame[t] > 100000)
-        throw Error(file.string() + ": reference.ofFrame[" + std::to_string(t) + "]: expected a reference index >= 0");
+        throw Error(file.string() + ": reference.ofFrame[" + std::to_string(t) +
+                    "]: expected a whole reference index from 0 to 100000, got " +
+                    json(ofFrame[t]).dump());
       info.referenceOfFrame.push_back(int(ofFrame[t]));
       count = std::max(count, info.referenceOfFrame.back() + 1);
     }
     if (ref->has("samples")) {
       const std::vector<double> spp = ref->numbers("samples", size_t(count));
-      for (double s : spp) info.referenceSpp.push_back(int(s));
+      for (size_t r = 0; r < spp.size(); ++r) {
+        if (!(spp[r] >= 1 && spp[r] <= 1e9 && spp[r] == std::floor(spp[r])))
+          throw Error(file.string() + ": reference.samples[" + std::to_string(r) +
+                      "]: expected a whole number of samples per pixel, 1 to 1e9, got " +
+                      json(spp[r]).dump());
+        info.referenceSpp.push_back(int(spp[r]));
+      }
     } else {
       info.referenceSpp.assign(size_t(count), 0);
     }
@@ -274,6 +289,10 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
   if (auto outputs = root.optionalChild("outputs")) {
     for (const std::string& name : outputs->memberNames()) {
       JsonReader o = outputs->child(name);
+      if (!isPlainName(name))
+        throw Error(file.string() + ": outputs: key '" + name +
+                    "': expected a folder name in outputs/ without " +
+                    "spaces or slashes, not . or ..");
       CaptureOutput out;
       out.name = name;
       out.dir = dir / "outputs" / name;
@@ -397,7 +416,19 @@ LayerSet readCaptureReference(const CaptureDescription& c, int r) {
   if (layers.width() != c.info.width || layers.height() != c.info.height)
     throw Error(file.string() + ": size differs from the capture's " + std::to_string(c.info.width) + "x" +
                 std::to_string(c.info.height));
-  if (!c.referenceHasVariance) {
+  if (c.referenceHasVariance) {
+    // A variance below zero is not one: the noise floor and the corrected relMSE would come out
+    // negative, and the correction would flatter every method.
+    const Image& var = layers.get("colorVar");
+    for (int y = 0; y < var.height(); ++y)
+      for (int x = 0; x < var.width(); ++x)
+        for (int k = 0; k < 3; ++k)
+          if (var.at(x, y, k) < 0)
+            throw Error(file.string() + ": channel colorVar." + "RGB"[k] + " at pixel (" +
+                        std::to_string(x) + ", " + std::to_string(y) + ") is " +
+                        std::to_string(var.at(x, y, k)) +
+                        ": expected a variance (>= 0) of the reference's mean");
+  } else {
     // With an independent half, (mean - half)^2 is an unbiased one-sample estimate of the mean's
     // variance (mean - half = (other half - half) / 2); with neither, zeros and an unknown floor.
     Image var(c.info.width, c.info.height, 3);
@@ -466,6 +497,13 @@ void CaptureWriter::commit(const json& description) {
     f << description.dump(1) << "\n";
     if (!f) throw Error(p.string() + ": could not write");
   });
+  // Read back as any user of it would: a capture its own reader refuses is never committed (the
+  // folder is removed with the writer).
+  try {
+    readCaptureDescription(tmp_);
+  } catch (const Error& e) {
+    throw Error(out_.string() + ": not written, the capture would not be valid: " + e.what());
+  }
   fs::rename(tmp_, out_);
   committed_ = true;
 }

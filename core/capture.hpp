@@ -61,6 +61,9 @@ std::filesystem::path captureGradientPath(const std::filesystem::path& dir, int 
 std::filesystem::path captureOutputPath(const CaptureOutput& output, int t);
 
 bool isCapture(const std::filesystem::path& dir);
+// A capture's name or a denoiser output's key: one folder name (non-empty, no spaces or slashes,
+// not . or ..).
+bool isPlainName(const std::string& name);
 // Parses and checks capture.json and the first frame's and references' channel lists; every
 // error names the file and the field or channel and what was expected.
 CaptureDescription readCaptureDescription(const std::filesystem::path& dir);

@@ -142,6 +142,18 @@ ExrContents readExr(const fs::path& path, const std::vector<LayerSpec>& specs) {
     Imf::InputFile file(path.c_str(), 1);
     const Imath::Box2i dw = file.header().dataWindow();
     const auto [w, h] = checkedSize(path, dw);
+    // The image is the display window; pixels stored elsewhere (a data window cropped or shifted
+    // inside it, as a border render writes) would land at the wrong place, so they are refused.
+    if (const Imath::Box2i& display = file.header().displayWindow(); display != dw) {
+      auto box = [](const Imath::Box2i& b) {
+        return "(" + std::to_string(b.min.x) + ", " + std::to_string(b.min.y) + ")-(" +
+               std::to_string(b.max.x) + ", " + std::to_string(b.max.y) + ")";
+      };
+      throw Error(path.string() + ": data window " + box(dw) + " differs from the display window " +
+                  box(display) +
+                  ": expected the pixels of the whole image, exactly the display window (save it "
+                  "uncropped)");
+    }
     out.attributes = attributesOf(file.header());
     Imf::FrameBuffer fb;
     for (const LayerSpec& spec : specs) {

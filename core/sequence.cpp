@@ -204,7 +204,11 @@ Sequence Sequence::open(const fs::path& dir) {
     return s;
   }
   fs::path file = dir / "sequence.json";
-  if (!fs::exists(file)) throw Error(dir.string() + ": not a rendered sequence (no sequence.json)");
+  if (!fs::exists(file))
+    throw Error(
+        dir.string() +
+        ": neither a capture (no capture.json, docs/captures.md) nor a rendered sequence (no "
+        "sequence.json)");
   Sequence s;
   s.dir_ = dir;
   s.info_ = SequenceInfo::fromJson(parseJsonFile(file.string()), file.string());

@@ -166,6 +166,8 @@ void GpuFrameCost::add(const std::vector<PassStats>& passes) {
 
 nlohmann::json GpuFrameCost::summary(int warmup) const {
   if (!counted_) return nullptr;
+  // No frame after the warm-up (a capture no longer than it): no prediction, rather than NaN times.
+  if (ms_.empty() || summarize(ms_.front(), warmup).empty()) return nullptr;
   nlohmann::json devices = nlohmann::json::array();  // in gpuDevices()'s order
   for (size_t d = 0; d < gpuDevices().size(); ++d) {
     const Summary s = summarize(ms_[d], warmup);

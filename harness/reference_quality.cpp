@@ -61,13 +61,21 @@ void addReferenceQuality(json& results, int warmup, const std::map<std::string, 
     const std::string& name = it.key();
     json& scene = it.value();
     // The floor as the report draws it: the reference's relMSE, mean over frames t >= warmup.
+    // Unknown (NaN) where the reference has no variance (a capture without colorVar): then there
+    // is no floor, rather than a mean over some frames.
     double floorSum = 0;
     int floorFrames = 0, frame = 0;
+    bool floorKnown = true;
     for (const json& v : scene.value("referenceRelMse", json::array()))
-      if (frame++ >= warmup && v.is_number()) {
+      if (frame++ >= warmup) {
+        if (!v.is_number() || !std::isfinite(v.get<double>())) {
+          floorKnown = false;
+          break;
+        }
         floorSum += v.get<double>();
         ++floorFrames;
       }
+    if (!floorKnown) floorFrames = 0;
     double best = std::numeric_limits<double>::infinity();
     std::string bestLabel;
     for (const json& p : results.value("pairs", json::array())) {

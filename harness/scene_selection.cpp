@@ -60,17 +60,23 @@ void requireFitsInMemory(const Scene& scene, const RenderSettings& settings, boo
   }
 }
 
+std::string shortSequenceWarning(const std::string& source, int frames, int warmup,
+                                 const std::string& remedy) {
+  if (frames > warmup) return "";
+  return source + ": the sequence has " + std::to_string(frames) +
+         " frames and the warm-up excludes the first " + std::to_string(warmup) +
+         ": no frame is left to summarise, every summary of this " + "sequence will be absent (" +
+         remedy + ")";
+}
+
 std::vector<std::string> shortSequenceWarnings(const std::vector<Scene>& scenes,
                                                const RenderSettings& settings, int warmup) {
   std::vector<std::string> out;
-  for (const Scene& scene : scenes) {
-    const int frames = settings.resolvedFrames(scene);
-    if (frames <= warmup)
-      out.push_back(scene.file + ": the sequence has " + std::to_string(frames) +
-                    " frames and the warm-up excludes the first " + std::to_string(warmup) +
-                    ": no frame is left to summarise, every summary of this scene will be absent "
-                    "(render more frames with --frames or lower --warmup)");
-  }
+  for (const Scene& scene : scenes)
+    if (std::string w = shortSequenceWarning(scene.file, settings.resolvedFrames(scene), warmup,
+                                             "render more frames with --frames or lower --warmup");
+        !w.empty())
+      out.push_back(std::move(w));
   return out;
 }
 

@@ -20,6 +20,10 @@ void requireFitsInMemory(const Scene& scene, const RenderSettings& settings, boo
 // --warmup slip costs a second, not a run.
 std::vector<std::string> shortSequenceWarnings(const std::vector<Scene>& scenes,
                                                const RenderSettings& settings, int warmup);
+// The line for one sequence (a scene file or a capture) of `frames` frames; empty when a frame is
+// left after the warm-up. `remedy` says what the user can change.
+std::string shortSequenceWarning(const std::string& source, int frames, int warmup,
+                                 const std::string& remedy);
 
 // The non-empty items of a comma-separated list ("a,,b" -> a, b).
 std::vector<std::string> splitList(const std::string& list);

@@ -196,15 +196,20 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
 
   // 1. Non-finite values, per layer and channel: guides must be finite, the colour's are counted.
   std::map<std::string, std::map<std::string, long>> bad;  // layer -> channel -> count
-  for (const LayerSet& f : input.frames)
+  std::map<std::string, std::vector<int>> empty;           // layer -> frames without a finite value
+  for (size_t t = 0; t < input.frames.size(); ++t)
     for (const LayerSpec& spec : channels::frameLayers()) {
+      const LayerSet& f = input.frames[t];
       if (spec.topLevel || !isGiven(spec.name) || !f.has(spec.name)) continue;
       const Image& img = f.get(spec.name);
+      long inFrame = 0;
       for (int c = 0; c < spec.channels(); ++c) {
         long n = 0;
         for (float x : img.planeSpan(c)) n += !std::isfinite(x);
         if (n) bad[spec.name][spec.channelName(c)] += n;
+        inFrame += n;
       }
+      if (inFrame > 0 && size_t(inFrame) == img.raw().size()) empty[spec.name].push_back(int(t));
     }
   for (const LayerSpec& spec : channels::frameLayers()) {
     if (spec.topLevel || !isGiven(spec.name)) continue;
@@ -220,6 +225,20 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
     else if (total)
       detail += " (a guide must be finite)";
     v.checks.push_back(check("nonFinite." + spec.name, double(total), 0, colour ? kSoft : 0, "values", detail));
+    // A frame with no finite value of a colour layer holds no data: replaced by 0 it would be
+    // denoised and scored (a flawless, flicker-free black) as if it were a measurement.
+    if (colour) {
+      const std::vector<int>& frames = empty[spec.name];
+      std::string which;
+      for (size_t k = 0; k < frames.size() && k < 8; ++k)
+        which += (k ? ", " : "") + std::to_string(frames[k]);
+      if (frames.size() > 8) which += ", ...";
+      v.checks.push_back(
+          check("nonFinite." + spec.name + ".wholeFrames", double(frames.size()), 0, 0, "frames",
+                frames.empty()
+                    ? ""
+                    : "frame(s) " + which + " hold no finite " + spec.name + " value: no data"));
+    }
   }
 
   // 2. Ranges: unit normals, positive depth, albedos and roughness in [0, 1].

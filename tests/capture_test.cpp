@@ -2,6 +2,12 @@
 // the validation that checks a capture before anything is ranked on it (metrics/capture_checks.hpp),
 // stored outputs of denoisers that ran elsewhere (file: contenders), bad input, and Blender Cycles
 // as a producer, end to end.
+#include "core/capture.hpp"
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfOutputFile.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -9,7 +15,6 @@
 #include <nlohmann/json.hpp>
 
 #include "core/blender_import.hpp"
-#include "core/capture.hpp"
 #include "core/error.hpp"
 #include "core/json_reader.hpp"
 #include "harness/run_matrix.hpp"
@@ -368,6 +373,71 @@ TEST(CaptureValidation, WithoutAReferenceOnlyNoReferenceMetricsAreScoredAndItIsS
   EXPECT_EQ(r["scenes"]["noref"]["hasReference"], false);
 }
 
+// A colour layer with no finite value in a frame is no data: refused, where a few NaNs are counted.
+TEST(CaptureValidation, AFrameWithoutAFiniteColourIsRefusedNamingTheFrame) {
+  const fs::path dir = writeSynthetic("nan_frame");
+  editFrames(dir, [](int t, LayerSet& f) {
+    if (t == 2)
+      for (float& v : f.get("color").raw()) v = std::numeric_limits<float>::quiet_NaN();
+  });
+  const CaptureValidation v = validate(dir);
+  const CaptureCheck& c = checkNamed(v, "nonFinite.color.wholeFrames");
+  EXPECT_EQ(c.status, CheckStatus::Fail);
+  EXPECT_EQ(c.value, 1.0);
+  EXPECT_NE(c.detail.find("frame(s) 2 "), std::string::npos) << c.detail;
+  EXPECT_EQ(checkNamed(validate(writeSynthetic("nan_none")), "nonFinite.color.wholeFrames").status,
+            CheckStatus::Pass);
+  // The run refuses it: no pair is scored on zeros standing in for a frame.
+  const json r =
+      runMatrix(captureRun(test::freshDir("nan_frame_run"), {{"passthrough", {}, ""}}, {dir}));
+  for (const json& p : r["pairs"]) {
+    EXPECT_EQ(p["status"], "failed") << p["label"];
+    EXPECT_NE(p.value("error", "").find("nonFinite.color.wholeFrames"), std::string::npos)
+        << p.value("error", "");
+  }
+}
+
+// A reference without a variance (or an independent half) has an unknown noise floor: the run
+// says so and scores everything else; a capture no longer than the warm-up runs with every
+// summary absent, warned, never NaN.
+TEST(Capture, AnUnknownFloorAndAShortCaptureRunToTheEnd) {
+  const fs::path dir = copyCapture(exportedCornell(), "no_variance");
+  {
+    const CaptureDescription c = readCaptureDescription(dir);
+    ASSERT_TRUE(c.referenceHasVariance);
+    for (size_t r = 0; r < c.info.referenceSpp.size(); ++r) {
+      LayerSet colourOnly;
+      colourOnly.set("color", readCaptureReference(c, int(r)).get("color"));
+      writeExr(captureReferencePath(dir, int(r)), colourOnly, {{"color", {"R", "G", "B"}}});
+    }
+    ASSERT_FALSE(readCaptureDescription(dir).referenceHasVariance);
+  }
+  const json r = runMatrix(captureRun(test::freshDir("no_variance_run"), {{"eaw", {}, ""}}, {dir}));
+  const json p = pairOf(r, "eaw");
+  ASSERT_EQ(p["status"], "ok") << p.dump().substr(0, 400);
+  EXPECT_GT(p["summary"]["relMse"]["mean"].get<double>(), 0.0);
+  ASSERT_TRUE(p["timing"].contains("gpuPredicted"));  // what the short run below must leave out
+  const json& quality = r["scenes"]["no_variance"]["referenceQuality"];
+  EXPECT_FALSE(quality.contains("floor")) << quality;
+  EXPECT_NE(quality["verdict"].get<std::string>().find("unknown"), std::string::npos) << quality;
+
+  RunConfig shortRun = captureRun(test::freshDir("short_capture_run"), {{"eaw", {}, ""}}, {dir});
+  shortRun.warmup = 10;  // the capture has 10 frames
+  const json s = runMatrix(shortRun);
+  const json q = pairOf(s, "eaw");
+  ASSERT_EQ(q["status"], "ok") << q.dump().substr(0, 400);
+  EXPECT_FALSE(q["summary"]["relMse"].contains("mean"));
+  EXPECT_TRUE(q["summary"]["relMse"].contains("absent"));
+  EXPECT_FALSE(q["timing"].contains("gpuPredicted")) << q["timing"];
+  const test::CommandResult cli =
+      test::runCommand(std::string(ARENA_BINARY) + " run --capture '" + dir.string() +
+                       "' --denoisers passthrough --no-baselines --flip none --warmup 10 --out '" +
+                       (test::freshDir("short_capture_cli") / "run").string() + "'");
+  EXPECT_NE(cli.output.find("warning: " + dir.string() +
+                            ": the sequence has 10 frames and the warm-up excludes the first 10"),
+            std::string::npos)
+      << cli.output;
+}
 // ---- file: contenders -------------------------------------------------------------------------
 
 TEST(Capture, AStoredOutputScoresExactlyLikeTheBuiltInThatMadeIt) {
@@ -446,6 +516,110 @@ TEST(CaptureContract, BadDescriptionsAreErrorsNamingTheFieldOrFile) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("motion.Y"), std::string::npos) << e.what();
   }
+}
+
+TEST(CaptureContract, BadValuesAndNamesAreErrorsNamingThem) {
+  const fs::path good = writeSynthetic("values_src");
+  expectError(copyCapture(good, "spp",
+                          [](json& d) { d["reference"]["samples"] = {64, 64, 2.7, 64, 64, 64}; }),
+              "reference.samples[2]: expected a whole number");
+  expectError(copyCapture(good, "spp_neg",
+                          [](json& d) { d["reference"]["samples"] = {64, 64, 64, 64, 64, -5}; }),
+              "reference.samples[5]");
+  expectError(copyCapture(good, "offrame", [](json& d) { d["reference"]["ofFrame"][1] = 0.5; }),
+              "reference.ofFrame[1]: expected a whole reference index");
+  // Names that are folders in a run: never "." or "..".
+  expectError(copyCapture(good, "dots", [](json& d) { d["name"] = ".."; }), "not . or ..");
+  expectError(copyCapture(good, "out_dots",
+                          [](json& d) {
+                            d["outputs"] = {{"..", json::object()}};
+                          }),
+              "outputs: key '..'");
+  // A negative variance in a reference: the file, the channel and the pixel.
+  const fs::path negative = copyCapture(exportedCornell(), "negative_var");
+  const CaptureDescription c = readCaptureDescription(negative);
+  ASSERT_TRUE(c.referenceHasVariance);
+  LayerSet ref = readCaptureReference(c, 0);
+  ref.get("colorVar").at(2, 1, 1) = -0.25f;
+  std::vector<LayerSpec> specs = {{"color", {"R", "G", "B"}}, {"colorVar", {"R", "G", "B"}}};
+  if (c.referenceHasHalf) specs.push_back({"colorHalf", {"R", "G", "B"}});
+  writeExr(captureReferencePath(negative, 0), ref, specs);
+  try {
+    readCaptureReference(c, 0);
+    ADD_FAILURE() << "a negative variance was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("reference_000.exr: channel colorVar.G at pixel (2, 1)"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// Pixels stored in a data window other than the display window (a cropped border render) would be
+// read shifted: refused with both windows.
+TEST(CaptureContract, AnExrWhoseDataWindowIsNotTheImageIsRefused) {
+  const fs::path file = test::freshDir("data_window") / "shifted.exr";
+  {
+    const Imath::Box2i display(Imath::V2i(0, 0), Imath::V2i(7, 7)),
+        data(Imath::V2i(3, 0), Imath::V2i(10, 7));
+    Imf::Header header(display, data);
+    header.channels().insert("R", Imf::Channel(Imf::FLOAT));
+    std::vector<float> pixels(8 * 8, 1.0f);
+    Imf::FrameBuffer fb;
+    fb.insert("R", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(pixels.data() - 3), sizeof(float),
+                              8 * sizeof(float)));
+    Imf::OutputFile out(file.c_str(), header);
+    out.setFrameBuffer(fb);
+    out.writePixels(8);
+  }
+  try {
+    readExr(file, {{"R", {}}});
+    ADD_FAILURE() << "a shifted data window was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(
+                  "data window (3, 0)-(10, 7) differs from the display window (0, 0)-(7, 7)"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// A capture its own reader would refuse is never committed: the writer leaves nothing behind.
+TEST(CaptureContract, AWriterNeverCommitsAnInvalidCapture) {
+  const fs::path root = test::freshDir("invalid_commit");
+  {
+    CaptureWriter writer(root / "capture");
+    EXPECT_THROW(writer.commit({{"format", kCaptureFormatName},
+                                {"version", kCaptureFormatVersion},
+                                {"name", "x"},
+                                {"width", 8},
+                                {"height", 8},
+                                {"frames", 1},
+                                {"frameRate", 0}}),
+                 Error);
+  }
+  EXPECT_FALSE(fs::exists(root / "capture"));
+  for (const auto& e : fs::directory_iterator(root)) ADD_FAILURE() << "left behind: " << e.path();
+  // The Blender importer names its capture after the source folder (a trailing slash included),
+  // and refuses a folder name that cannot be one before reading anything else.
+  fs::create_directories(root / "my render");
+  std::ofstream(root / "my render" / "cameras.json") << "{}";
+  try {
+    importBlender(root / "my render", root / "out", {});
+    ADD_FAILURE() << "a name with a space was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("'my render' cannot name a capture"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("--name"), std::string::npos) << e.what();
+  }
+  fs::create_directories(root / "render");
+  std::ofstream(root / "render" / "cameras.json") << "{}";
+  try {
+    importBlender(root.string() + "/render/", root / "out", {});
+    ADD_FAILURE() << "an empty cameras.json was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()).find("cannot name a capture"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("cameras.json"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(root / "out"));
 }
 
 TEST(CaptureContract, ADenoiserNeedingALayerTheCaptureLacksFailsThatPairOnly) {
