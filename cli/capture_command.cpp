@@ -63,7 +63,15 @@ void addCaptureCommands(CLI::App& app) {
         if (eq == std::string::npos || eq == 0 || eq + 1 == o.size())
           throw Error("--output '" + o + "': expected NAME=DIR");
         stored[o.substr(0, eq)] = o.substr(eq + 1);
+        if (!isPlainName(o.substr(0, eq)))
+          throw Error("--output '" + o +
+                      "': NAME must be a folder name without spaces or slashes, not . or ..");
+        if (!std::filesystem::is_directory(o.substr(eq + 1)))
+          throw Error("--output '" + o + "': " + o.substr(eq + 1) + " is not a folder");
       }
+      // Said before the render, which can take minutes: a capture is written to a new folder.
+      if (std::filesystem::exists(*out))
+        throw Error(*out + ": already exists; a capture is written to a new folder");
       const auto dir = renderSequence(scenes.front(), opt->settings(), opt->cacheDir,
                                       [](const std::string& line) { std::cout << line << std::endl; });
       exportCapture(Sequence::open(dir), *out, stored);

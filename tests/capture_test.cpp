@@ -666,6 +666,30 @@ TEST(CaptureContract, AnExportNeverLeavesAHalfWrittenFolder) {
   EXPECT_THROW(exportCapture(Sequence::open(cornellSequence()), out), Error);
 }
 
+// An export into an existing folder, or of an output folder that is not one, is refused before the
+// render (minutes on a real scene), which therefore leaves nothing in the cache.
+TEST(CaptureCommands, AnExportIsRefusedBeforeItRenders) {
+  const fs::path work = test::freshDir("export_refused");
+  fs::create_directories(work / "taken");
+  const std::string arena = std::string(ARENA_BINARY) +
+                            " export cornell_static --resolution 16x8 --frames 2 " +
+                            "--ref-spp 4 --cache '" + (work / "cache").string() + "'";
+  test::CommandResult r = test::runCommand(arena + " --out '" + (work / "taken").string() + "'");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("already exists"), std::string::npos) << r.output;
+  r = test::runCommand(arena + " --out '" + (work / "new").string() +
+                       "' --output 'mine=" + (work / "nowhere").string() + "'");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("is not a folder"), std::string::npos) << r.output;
+  r = test::runCommand(arena + " --out '" + (work / "new").string() +
+                       "' --output '..=" + (work / "taken").string() + "'");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("not . or .."), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(work / "new"));
+  EXPECT_TRUE(!fs::exists(work / "cache") || fs::is_empty(work / "cache"))
+      << "rendered before refusing";
+}
+
 TEST(CaptureCommands, ExportValidateRunAndReportFromTheCommandLine) {
   const fs::path work = test::freshDir("capture_cli");
   const std::string arena = ARENA_BINARY;
