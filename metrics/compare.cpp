@@ -142,7 +142,10 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
       rows.push_back(pairRow(b, "failed", c.error));
       continue;
     }
-    if (!b.ok()) continue;  // nothing to hold the candidate to
+    if (!b.ok()) {  // nothing to hold the candidate to; that it runs now is said
+      rows.push_back(pairRow(c, "new", "failed in the baseline run: " + b.error));
+      continue;
+    }
     ++comparedPairs;
     for (const Tolerance& t : tolerances) {
       ComparisonRow row{scene,      label, t.metric,   kUndefined, kUndefined,

@@ -33,8 +33,8 @@ struct ComparisonRow {
   double tolerance = 0;
   // "ok", "improved", "regressed", "unresolved" (beyond tolerance, within noise), "missing" (the
   // candidate lacks what the baseline had: fails the gate), "failed" (the candidate's pair failed),
-  // "new" (only the candidate has it), "absent" (neither run has a summary of it: the note gives
-  // both reasons; does not fail the gate).
+  // "new" (only the candidate has it, or only its pair ran), "absent" (neither run has a summary
+  // of it: the note gives both reasons; does not fail the gate).
   std::string verdict;
   std::string note;
 };

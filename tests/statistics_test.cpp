@@ -280,6 +280,16 @@ TEST(CompareGate, FailsOnWhatItCannotCompare) {
   EXPECT_EQ(rows[1].verdict, "new");
   EXPECT_NE(rows[0].note.find("share no scene"), std::string::npos) << rows[0].note;
   EXPECT_TRUE(anyRegression(rows));
+  // A pair that failed in the baseline and runs in the candidate is shown (it does not fail the
+  // gate).
+  json failedBase = syntheticJson({{"a", m}});
+  failedBase["pairs"][0]["status"] = "failed";
+  failedBase["pairs"][0]["error"] = "out of memory";
+  rows = compareRuns(test::typed(failedBase), syntheticRun({{"a", m}}), tol);
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].verdict, "new");
+  EXPECT_EQ(rows[0].note, "failed in the baseline run: out of memory");
+  EXPECT_FALSE(anyRegression(rows));
   // A metric named on the command line that neither run computed is an error, not a pass.
   try {
     compareRuns(syntheticRun({{"a", m}}), syntheticRun({{"a", m}}), {{"msWall", 0.02}});
