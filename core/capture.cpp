@@ -372,8 +372,13 @@ LayerSet readCaptureFrame(const CaptureDescription& c, int t) {
   std::vector<LayerSpec> specs;
   for (const LayerSpec& s : captureFrameSpecs())
     if (contains(c.layers, s.name) && !contains(c.derived, s.name)) specs.push_back(s);
-  // readExr names the file and channel when a frame lacks a layer the first frame had; the size is
-  // checked on what it read (one open per frame).
+  // Every frame holds frame 0's layers: readExr names the file and channel when one lacks a layer
+  // frame 0 had; a layer only this frame has (whole or partial) would be ignored, so it is refused.
+  for (const LayerSpec& s : layersPresent(file, readExrHeader(file), captureFrameSpecs()))
+    if (!contains(c.layers, s.name) || contains(c.derived, s.name))
+      throw Error(file.string() + ": layer '" + s.name + "' is in this frame but not in " +
+                  captureFramePath(c.dir, 0).filename().string() +
+                  " (every frame of a capture holds the same layers)");
   LayerSet layers = readExr(file, specs).layers;
   if (layers.width() != info.width || layers.height() != info.height)
     throw Error(file.string() + ": " + std::to_string(layers.width()) + "x" + std::to_string(layers.height()) +

@@ -397,6 +397,47 @@ TEST(CaptureValidation, AFrameWithoutAFiniteColourIsRefusedNamingTheFrame) {
   }
 }
 
+// Every frame holds frame 0's layers: one a later frame adds, whole or in part, is refused (it
+// would be ignored), as one it lacks is.
+TEST(CaptureContract, ALayerOnlyALaterFrameHasIsRefused) {
+  const fs::path whole = writeSynthetic("later_layer");
+  editFrames(whole, [](int t, LayerSet& f) {
+    if (t == 2) f.set("specular", Image(f.width(), f.height(), 3));
+  });
+  const CaptureDescription c = readCaptureDescription(whole);
+  EXPECT_NO_THROW(readCaptureFrame(c, 1));
+  try {
+    readCaptureFrame(c, 2);
+    ADD_FAILURE() << "a layer only frame 2 has was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(
+                  "frame_0002.exr: layer 'specular' is in this frame but not in frame_0000.exr"),
+              std::string::npos)
+        << e.what();
+  }
+  const fs::path partial = writeSynthetic("later_partial");
+  {
+    LayerSet f = readCaptureFrame(readCaptureDescription(partial), 3);
+    f.set("diffuse", Image(f.width(), f.height(), 1));
+    std::vector<LayerSpec> specs;
+    for (const LayerSpec& s : channels::frameLayers())
+      if (!s.topLevel && f.has(s.name) && s.name != "diffuse" && s.name != "emission" &&
+          s.name != "position")
+        specs.push_back(s);
+    specs.push_back({"diffuse", {"R"}});  // diffuse.R alone
+    writeExr(captureFramePath(partial, 3), f, specs);
+  }
+  try {
+    readCaptureFrame(readCaptureDescription(partial), 3);
+    ADD_FAILURE() << "a partial layer in frame 3 was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(
+        std::string(e.what()).find("layer 'diffuse' lacks channel(s) 'diffuse.G', 'diffuse.B'"),
+        std::string::npos)
+        << e.what();
+  }
+}
+
 // A reference without a variance (or an independent half) has an unknown noise floor: the run
 // says so and scores everything else; a capture no longer than the warm-up runs with every
 // summary absent, warned, never NaN.
