@@ -30,7 +30,10 @@ void saveResults(const fs::path& runDir, const json& results) {
   std::error_code ec;
   fs::create_directories(runDir, ec);
   if (ec) throw Error(runDir.string() + ": cannot create run directory: " + ec.message());
-  writeTextAtomically(runDir / "results.json", results.dump(1));
+  // Strings from outside (an external denoiser's messages) are made valid UTF-8 where they enter;
+  // should one slip through, a replacement character costs less than the whole run.
+  writeTextAtomically(runDir / "results.json",
+                      results.dump(1, ' ', false, json::error_handler_t::replace));
 }
 
 namespace {

@@ -1,9 +1,8 @@
 // External denoisers (docs/external-denoisers.md): manifests, the frame protocol end to end with
 // the Python and C++ examples, the C plugin ABI with eaw behind it, and every fault of a process
 // (exit, crash, wrong size, NaN, hang, error, garbage) as a clear per-pair error.
-#include <gtest/gtest.h>
-
 #include <dlfcn.h>
+#include <gtest/gtest.h>
 
 #include <chrono>
 #include <cmath>
@@ -14,6 +13,7 @@
 #include "core/error.hpp"
 #include "denoisers/external/loader.hpp"
 #include "denoisers/external/manifest.hpp"
+#include "denoisers/external/subprocess.hpp"
 #include "harness/denoise_run.hpp"
 #include "harness/run_matrix.hpp"
 #include "tests/test_util.hpp"
@@ -69,6 +69,22 @@ std::string faulty(const std::string& mode, double timeoutSeconds = 10) {
 
 using test::errorOf;
 
+// A run of `denoisers` on the tiny sequence (no baselines, warm-up 2, no FLIP, no frames kept).
+RunConfig tinyRun(const std::string& name, std::vector<DenoiserRequest> denoisers) {
+  RunConfig c;
+  c.name = name;
+  c.out = test::freshDir("run_" + name);
+  c.cache = sequenceCache();
+  c.render = test::tinySettings(kWidth, kHeight, kFrames, 8);
+  c.scenes = {test::shippedScene("cornell_static")};
+  c.denoisers = std::move(denoisers);
+  c.baselines = false;
+  c.warmup = 2;
+  c.flip = "none";
+  c.keepFrames = "none";
+  return c;
+}
+
 // --- manifests: contract --------------------------------------------------------------------
 
 TEST(ExternalManifest, EveryMistakeNamesTheFileAndTheField) {
@@ -92,6 +108,7 @@ TEST(ExternalManifest, EveryMistakeNamesTheFileAndTheField) {
        {{"parameters", {{{"name", "k"}, {"type", "double"}, {"default", 1}}}}},
        "$.parameters[0].type: expected one of bool, int, float, choice"},
       {"timeout", {{"timeoutSeconds", 0}}, "$.timeoutSeconds: expected a positive number"},
+      {"long timeout", {{"timeoutSeconds", 1e10}}, "at most 86400"},
   };
   for (const Case& c : cases) {
     json m = good;
@@ -222,18 +239,7 @@ TEST(ExternalProcess, CppBoxFiltersTheFullColour) {
 TEST(ExternalProcess, ARunRecordsTheExternalPairBesideAFailingOne) {
   const std::string good = DenoiserRegistry::resolve("ext:" ARENA_EXAMPLES_BINARY_DIR "/cpp_box");
   const std::string bad = faulty("crash");
-  RunConfig c;
-  c.name = "external";
-  c.out = test::freshDir("run_external");
-  c.cache = sequenceCache();
-  c.render = test::tinySettings(kWidth, kHeight, kFrames, 8);
-  c.scenes = {test::shippedScene("cornell_static")};
-  c.denoisers = {{good, {{"radius", "2"}}, ""}, {bad, {}, ""}};
-  c.baselines = false;
-  c.warmup = 2;
-  c.flip = "none";
-  c.keepFrames = "none";
-  const json r = runMatrix(c);
+  const json r = runMatrix(tinyRun("external", {{good, {{"radius", "2"}}, ""}, {bad, {}, ""}}));
   ASSERT_EQ(r["pairs"].size(), 2u);
   const json& ok = r["pairs"][0];
   ASSERT_EQ(ok["status"], "ok") << ok.dump();
@@ -295,6 +301,55 @@ TEST(ExternalFaults, ReportedErrorsAndGarbageAreQuoted) {
   EXPECT_NE(e.find("it reported an error: out of GPU memory"), std::string::npos) << e;
   const std::string g = errorOf([] { denoiseAll({faulty("garbage"), {}, ""}, tinySequence()); });
   EXPECT_NE(g.find("got: hello from print debugging"), std::string::npos) << g;
+}
+
+// Whatever bytes a process writes, the message is valid text (results.json is UTF-8: one stray
+// byte lost the whole run before), and a malformed error or pass report is named.
+TEST(ExternalFaults, BadBytesAndMalformedReportsFailThePairOnly) {
+  const std::string e = errorOf([] { denoiseAll({faulty("bad-bytes"), {}, ""}, tinySequence()); });
+  EXPECT_NE(e.find("exited with status 4"), std::string::npos) << e;
+  EXPECT_NE(e.find("\xEF\xBF\xBD\xEF\xBF\xBD weights"), std::string::npos)
+      << e;  // 0xff 0x80: U+FFFD twice
+  EXPECT_NO_THROW(static_cast<void>(json(e).dump()));
+  const std::string code = errorOf([] {
+    denoiseAll({faulty("error-code"), {}, ""}, tinySequence());
+  });
+  EXPECT_NE(code.find("it reported an error: (no message string; the header was {\"type\": "
+                      "\"error\", \"message\": 42}"),
+            std::string::npos)
+      << code;
+  const std::string pass = errorOf([] {
+    denoiseAll({faulty("bad-pass"), {}, ""}, tinySequence());
+  });
+  EXPECT_NE(pass.find("a number \"ms\" >= 0"), std::string::npos) << pass;
+  // A process that floods its output instead of reading its input: stopped long before its
+  // timeout, the flood held to a bound (a header line's 1 MiB here; 64 MiB while a frame too large
+  // for the socket's buffer is being sent, below).
+  const auto start = std::chrono::steady_clock::now();
+  const std::string flood = errorOf([] {
+    denoiseAll({faulty("flood", 60), {}, ""}, tinySequence());
+  });
+  EXPECT_NE(flood.find("longer than 1048576 bytes"), std::string::npos) << flood.substr(0, 300);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 30.0);
+  {
+    Subprocess yes({"/usr/bin/yes"}, fs::temp_directory_path());
+    const std::vector<char> frame(size_t(8) << 20, 'f');
+    const std::string unread = errorOf([&] {
+      yes.write(frame.data(), frame.size(), Subprocess::Clock::now() + std::chrono::seconds(60));
+    });
+    EXPECT_NE(unread.find("wrote more than 64 MiB to its output while it was being sent a frame"),
+              std::string::npos)
+        << unread;
+  }
+  // And in a run, the run is written with the other pair's result.
+  const RunConfig cfg =
+      tinyRun("bad_bytes", {{faulty("bad-bytes"), {}, ""}, {"passthrough", {}, ""}});
+  const json r = runMatrix(cfg);
+  ASSERT_EQ(r["pairs"].size(), 2u);
+  EXPECT_TRUE(fs::exists(cfg.out / "results.json"));
+  int ok = 0;
+  for (const json& p : r["pairs"]) ok += p["status"] == "ok";
+  EXPECT_EQ(ok, 1);
 }
 
 TEST(ExternalFaults, AMissingProgramIsNamed) {
@@ -387,6 +442,28 @@ TEST(Plugin, ScatteredPlanesGiveTheSameOutputAsContiguousOnes) {
   EXPECT_EQ(outputs[0], outputs[1]);
   EXPECT_NE(outputs[0], std::vector<float>(outputs[0].size(), -1.0f));  // it wrote the output
   dlclose(library);
+}
+
+// A plugin's error buffer is read only within its size and as valid text; a pass report it makes
+// with a NaN time fails the pair; an int parameter it declares as 2.5 is refused at load.
+TEST(Plugin, FaultsOfAPluginFailItsPairNamingThem) {
+  const std::string name = DenoiserRegistry::resolve(std::string("plugin:") + ARENA_FAULTY_PLUGIN);
+  ::setenv("ARENA_FAULTY_PLUGIN", "unterminated", 1);
+  const std::string e = errorOf([&] { denoiseAll({name, {}, ""}, tinySequence()); });
+  EXPECT_NE(e.find("denoise (frame 0) failed: eeee"), std::string::npos) << e.substr(0, 200);
+  EXPECT_LT(e.size(), 1024u + 300u) << "read past the error buffer";
+  EXPECT_NO_THROW(static_cast<void>(json(e).dump()));
+  ::setenv("ARENA_FAULTY_PLUGIN", "bad-pass", 1);
+  const std::string pass = errorOf([&] { denoiseAll({name, {}, ""}, tinySequence()); });
+  EXPECT_NE(pass.find("reportPass 'blur': milliseconds nan"), std::string::npos) << pass;
+  ::setenv("ARENA_FAULTY_PLUGIN", "", 1);
+  EXPECT_EQ(denoiseAll({name, {}, ""}, tinySequence()).size(), size_t(kFrames));
+  ::unsetenv("ARENA_FAULTY_PLUGIN");
+  const std::string params = errorOf(
+      [] { DenoiserRegistry::resolve(std::string("plugin:") + ARENA_FAULTY_PARAMS_PLUGIN); });
+  EXPECT_NE(params.find("an int parameter's default, min and max must be whole numbers"),
+            std::string::npos)
+      << params;
 }
 
 TEST(Plugin, AnotherAbiVersionIsRefused) {

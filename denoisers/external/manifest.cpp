@@ -142,7 +142,9 @@ ExternalManifest readManifest(const fs::path& file) {
   }
   m.schema = ParamSchema(std::move(specs));
   m.timeoutSeconds = r.number("timeoutSeconds", 30.0);
-  if (!(m.timeoutSeconds > 0)) r.fail("timeoutSeconds", "expected a positive number of seconds");
+  // At most a day: a longer wait is no timeout (and past ~292 years its deadline overflowed).
+  if (!(m.timeoutSeconds > 0 && m.timeoutSeconds <= 86400))
+    r.fail("timeoutSeconds", "expected a positive number of seconds, at most 86400 (a day)");
   rejectUnknownFields(
       r, {"name", "description", "command", "signals", "channels", "parameters", "timeoutSeconds"});
   return m;

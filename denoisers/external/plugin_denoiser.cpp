@@ -3,10 +3,12 @@
 #include <dlfcn.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 #include "arena_plugin.h"
 #include "core/error.hpp"
+#include "core/text.hpp"
 #include "denoisers/external/manifest.hpp"
 
 namespace arena {
@@ -116,19 +118,36 @@ class PluginDenoiser final : public Denoiser {
       out.planes[k] = output.plane(k);
     ArenaHost host{this, &PluginDenoiser::reportPass};
     char error[kErrorBytes] = "";
+    badPass_.clear();
     if (plugin_->denoise(instance_, &c, &inputs, &out, &host, error, sizeof error) != 0)
       fail("denoise (frame " + std::to_string(ctx.frameIndex) + ")", error);
+    // reportPass cannot throw through the plugin's C frames: what it refused fails the pair here.
+    if (!badPass_.empty())
+      throw Error(std::string(plugin_->name) + " (plugin " + library_ + "): frame " +
+                  std::to_string(ctx.frameIndex) + ": reportPass " + badPass_);
   }
 
  private:
   static void reportPass(void* context, const char* name, double milliseconds,
                          double tapsPerPixel) {
-    static_cast<PluginDenoiser*>(context)->passes_.push_back(
-        {name ? name : "?", milliseconds, tapsPerPixel});
+    auto* self = static_cast<PluginDenoiser*>(context);
+    const std::string pass = name ? validUtf8(name) : "?";
+    if (!(milliseconds >= 0 && std::isfinite(milliseconds) && tapsPerPixel >= 0 &&
+          std::isfinite(tapsPerPixel))) {
+      if (self->badPass_.empty())
+        self->badPass_ = "'" + pass + "': milliseconds " + std::to_string(milliseconds) +
+                         ", tapsPerPixel " + std::to_string(tapsPerPixel) +
+                         " (expected finite numbers >= 0)";
+      return;
+    }
+    self->passes_.push_back({pass, milliseconds, tapsPerPixel});
   }
-  [[noreturn]] void fail(const std::string& entry, const char* error) const {
+  // `error` is the plugin's buffer: terminated here (the ABI promises only its first errorSize
+  // bytes), its bytes made valid text.
+  [[noreturn]] void fail(const std::string& entry, char* error) const {
+    error[kErrorBytes - 1] = '\0';
     throw Error(std::string(plugin_->name) + " (plugin " + library_ + "): " + entry +
-                " failed: " + (error[0] ? error : "(no message)"));
+                " failed: " + (error[0] ? validUtf8(error) : "(no message)"));
   }
 
   const ArenaPlugin* plugin_;
@@ -136,10 +155,20 @@ class PluginDenoiser final : public Denoiser {
   void* instance_ = nullptr;
   std::vector<std::string> channels_;
   std::vector<ArenaLayer> layers_;
+  std::string badPass_;  // the first pass report refused in this frame (reportPass)
 };
 
 ParamSchema schemaOf(const ArenaPlugin& p, const std::string& where) {
   std::vector<ParamSpec> specs;
+  // Counts with no array behind them would be read through a null pointer.
+  if (p.paramCount > 0 && !p.params)
+    throw Error(where + ": paramCount " + std::to_string(p.paramCount) + " but params is NULL");
+  if (p.requiredChannelCount > 0 && !p.requiredChannels)
+    throw Error(where + ": requiredChannelCount " + std::to_string(p.requiredChannelCount) +
+                " but requiredChannels is NULL");
+  for (int i = 0; i < p.requiredChannelCount; ++i)
+    if (!p.requiredChannels[i])
+      throw Error(where + ": requiredChannels[" + std::to_string(i) + "] is NULL");
   for (int i = 0; i < p.paramCount; ++i) {
     const ArenaParamSpec& s = p.params[i];
     const std::string at = where + ": parameter " + std::to_string(i);
@@ -150,6 +179,12 @@ ParamSchema schemaOf(const ArenaPlugin& p, const std::string& where) {
         specs.push_back(ParamSpec::boolean(s.name, s.defaultValue != 0, meaning));
         break;
       case ARENA_PARAM_INT:
+        // Whole numbers within int, as a manifest's int parameter: 2.5 is not silently 2.
+        for (const double v : {s.defaultValue, s.min, s.max})
+          if (!(v == std::floor(v) && v >= -2147483648.0 && v <= 2147483647.0))
+            throw Error(at + " (" + s.name +
+                        "): an int parameter's default, min and max must be whole numbers " +
+                        "within int, got " + std::to_string(v));
         specs.push_back(
             ParamSpec::integer(s.name, int(s.defaultValue), int(s.min), int(s.max), meaning));
         break;
@@ -158,7 +193,13 @@ ParamSchema schemaOf(const ArenaPlugin& p, const std::string& where) {
         break;
       case ARENA_PARAM_CHOICE: {
         std::vector<std::string> choices;
-        for (int k = 0; k < s.choiceCount; ++k) choices.push_back(s.choices[k]);
+        if (s.choiceCount > 0 && !s.choices)
+          throw Error(at + " (" + s.name + "): choiceCount > 0 but choices is NULL");
+        for (int k = 0; k < s.choiceCount; ++k) {
+          if (!s.choices[k])
+            throw Error(at + " (" + s.name + "): choices[" + std::to_string(k) + "] is NULL");
+          choices.push_back(s.choices[k]);
+        }
         const int def = int(s.defaultValue);
         if (choices.empty() || def < 0 || def >= int(choices.size()))
           throw Error(at + " (" + s.name +

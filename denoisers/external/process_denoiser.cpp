@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "core/sequence.hpp"
+#include "core/text.hpp"
 
 namespace arena {
 
@@ -57,7 +58,7 @@ void ExternalProcessDenoiser::fail(const std::string& what) {
     message += tail.empty() ? "; its stderr was empty" : "; the end of its stderr:\n" + tail;
     process_.reset();
   }
-  throw Error(message);
+  throw Error(validUtf8(message));  // its words are the process's, in whatever bytes it wrote
 }
 
 nlohmann::json ExternalProcessDenoiser::readHeader(const std::string& expectedType) {
@@ -74,16 +75,21 @@ nlohmann::json ExternalProcessDenoiser::readHeader(const std::string& expectedTy
   try {
     header = nlohmann::json::parse(line);
   } catch (const std::exception&) {
-    fail("expected a JSON '" + expectedType + "' header line, got: " + line.substr(0, 200));
+    fail("expected a JSON '" + expectedType +
+         "' header line, got: " + utf8Excerpt(line, 200, false));
   }
   const std::string type =
       header.is_object() && header.contains("type") && header["type"].is_string()
           ? header["type"].get<std::string>()
           : "";
   if (type == "error")
-    fail("it reported an error: " + header.value("message", std::string("(no message)")));
+    fail("it reported an error: " +
+         (header.contains("message") && header["message"].is_string()
+              ? header["message"].get<std::string>()
+              : "(no message string; the header was " + utf8Excerpt(line, 200, false) + ")"));
   if (type != expectedType)
-    fail("expected a header with \"type\": \"" + expectedType + "\", got: " + line.substr(0, 200));
+    fail("expected a header with \"type\": \"" + expectedType +
+         "\", got: " + utf8Excerpt(line, 200, false));
   return header;
 }
 
@@ -183,10 +189,15 @@ void ExternalProcessDenoiser::denoise(const FrameContext& ctx, const DenoiserInp
     if (!result["passes"].is_array())
       fail("\"passes\" must be an array of {name, ms[, tapsPerPixel]}");
     for (const nlohmann::json& p : result["passes"]) {
-      if (!p.is_object() || !p.contains("name") || !p["name"].is_string() || !p.contains("ms") ||
-          !p["ms"].is_number())
-        fail("each entry of \"passes\" needs a string \"name\" and a number \"ms\", got: " +
-             p.dump());
+      const auto nonNegative = [&](const char* key) {
+        return p.contains(key) && p[key].is_number() && p[key].get<double>() >= 0;
+      };
+      if (!p.is_object() || !p.contains("name") || !p["name"].is_string() || !nonNegative("ms") ||
+          (p.contains("tapsPerPixel") && !nonNegative("tapsPerPixel")))
+        fail(
+            "frame " + std::to_string(ctx.frameIndex) +
+            ": each entry of \"passes\" needs a string \"name\", " +
+            "a number \"ms\" >= 0 and optionally a number \"tapsPerPixel\" >= 0, got: " + p.dump());
       passes_.push_back(
           {p["name"].get<std::string>(), p["ms"].get<double>(), p.value("tapsPerPixel", 0.0)});
     }

@@ -13,6 +13,8 @@
 #include <cstring>
 #include <thread>
 
+#include "core/text.hpp"
+
 extern char** environ;
 
 namespace arena {
@@ -20,6 +22,7 @@ namespace arena {
 namespace {
 
 constexpr size_t kStderrTailBytes = 2048;
+constexpr size_t kMaxUnreadBytes = size_t(64) << 20;
 constexpr size_t kChunk = size_t(1) << 16;
 
 void setNonBlocking(int fd) {
@@ -174,6 +177,11 @@ void Subprocess::write(const void* data, size_t bytes, Clock::time_point deadlin
   while (bytes > 0) {
     const size_t got = pump(p, bytes, chunk, sizeof chunk, deadline, "sending it a frame");
     stdoutBuffer_.append(chunk, got);
+    // An answer cannot come before its frame has arrived: what is kept meanwhile is a complaint
+    // or a header, not an unbounded stream held in memory until the timeout.
+    if (stdoutBuffer_.size() > kMaxUnreadBytes)
+      throw Error("wrote more than " + std::to_string(kMaxUnreadBytes >> 20) +
+                  " MiB to its output while it was being sent a frame (is it reading its input?)");
   }
 }
 
@@ -224,9 +232,7 @@ std::string Subprocess::exitStatus(std::chrono::milliseconds grace) {
 
 std::string Subprocess::stderrTail() {
   drainStderr();
-  std::string tail = stderrTail_.size() > kStderrTailBytes
-                         ? stderrTail_.substr(stderrTail_.size() - kStderrTailBytes)
-                         : stderrTail_;
+  std::string tail = utf8Excerpt(stderrTail_, kStderrTailBytes, true);
   while (!tail.empty() && (tail.back() == '\n' || tail.back() == ' ')) tail.pop_back();
   return tail;
 }

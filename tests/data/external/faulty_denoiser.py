@@ -10,6 +10,10 @@
   error      answers {"type": "error"} with a message
   garbage    answers a line that is not JSON
   no-ready   hangs before answering the setup
+  bad-bytes  writes bytes that are not UTF-8 (a cut character, 0xff) to stderr and exits
+  error-code answers {"type": "error"} whose message is a number
+  bad-pass   reports a pass with a negative time
+  flood      floods its output without reading the frame
 Plain Python (no numpy): the output is the input signal, so a correct frame is a passthrough."""
 import json
 import os
@@ -28,8 +32,15 @@ def main():
     w, h, planes = setup["width"], setup["height"], len(setup["planes"])
     if mode == "no-ready":
         time.sleep(60)
-    stdout.write(b'{"type": "ready"}\n')
-    stdout.flush()
+    def answer(data):
+        stdout.write(data)
+        stdout.flush()
+
+    answer(b'{"type": "ready"}\n')
+    if mode == "flood":
+        chunk = b"x" * 65536
+        while True:
+            stdout.write(chunk)
     for line in stdin:
         header = json.loads(line)
         data = stdin.read(header["bytes"])
@@ -50,23 +61,28 @@ def main():
                 result["width"] = w - 1
                 signal_bytes = signal_bytes[: 3 * (w - 1) * h * 4]
             if mode == "short":
-                stdout.write((json.dumps(result) + "\n").encode() + signal_bytes[: len(signal_bytes) // 2])
-                stdout.flush()
+                answer((json.dumps(result) + "\n").encode() + signal_bytes[: len(signal_bytes) // 2])
                 os._exit(0)
             if mode == "nan":
                 signal_bytes = struct.pack("<f", float("nan")) + signal_bytes[4:]
             if mode == "hang":
                 time.sleep(60)
             if mode == "error":
-                stdout.write(b'{"type": "error", "message": "out of GPU memory"}\n')
-                stdout.flush()
+                answer(b'{"type": "error", "message": "out of GPU memory"}\n')
                 continue
+            if mode == "bad-bytes":
+                sys.stderr.buffer.write("é".encode() * 1500 + b"\xff\x80 weights\n")
+                sys.stderr.flush()
+                os._exit(4)
+            if mode == "error-code":
+                answer(b'{"type": "error", "message": 42}\n')
+                continue
+            if mode == "bad-pass":
+                result["passes"] = [{"name": "blur", "ms": -5, "tapsPerPixel": 9}]
             if mode == "garbage":
-                stdout.write(b"hello from print debugging\n")
-                stdout.flush()
+                answer(b"hello from print debugging\n")
                 continue
-        stdout.write((json.dumps(result) + "\n").encode() + signal_bytes)
-        stdout.flush()
+        answer((json.dumps(result) + "\n").encode() + signal_bytes)
     del planes
 
 

@@ -1,0 +1,71 @@
+#include "core/text.hpp"
+
+#include <cstdint>
+
+namespace arena {
+
+namespace {
+
+constexpr std::string_view kReplacement = "\xEF\xBF\xBD";  // U+FFFD
+
+// The length of the well-formed sequence starting at text[i] (RFC 3629's table), 0 if none.
+size_t sequenceLength(std::string_view text, size_t i) {
+  const auto byte = [&](size_t k) { return uint8_t(text[k]); };
+  const uint8_t b = byte(i);
+  if (b < 0x80) return 1;
+  size_t n = 0;
+  uint8_t lo = 0x80, hi = 0xBF;  // the range of the second byte
+  if (b >= 0xC2 && b <= 0xDF) {
+    n = 2;
+  } else if (b >= 0xE0 && b <= 0xEF) {
+    n = 3;
+    if (b == 0xE0) lo = 0xA0;  // no overlong forms
+    if (b == 0xED) hi = 0x9F;  // no surrogates
+  } else if (b >= 0xF0 && b <= 0xF4) {
+    n = 4;
+    if (b == 0xF0) lo = 0x90;  // no overlong forms
+    if (b == 0xF4) hi = 0x8F;  // nothing beyond U+10FFFF
+  } else {
+    return 0;
+  }
+  if (i + n > text.size()) return 0;
+  if (byte(i + 1) < lo || byte(i + 1) > hi) return 0;
+  for (size_t k = 2; k < n; ++k)
+    if (byte(i + k) < 0x80 || byte(i + k) > 0xBF) return 0;
+  return n;
+}
+
+}  // namespace
+
+std::string validUtf8(std::string_view text) {
+  std::string out;
+  out.reserve(text.size());
+  for (size_t i = 0; i < text.size();) {
+    const size_t n = sequenceLength(text, i);
+    if (n == 0) {
+      out += kReplacement;
+      ++i;
+    } else {
+      out.append(text.substr(i, n));
+      i += n;
+    }
+  }
+  return out;
+}
+
+std::string utf8Excerpt(std::string_view text, size_t maxBytes, bool fromEnd) {
+  if (text.size() <= maxBytes) return validUtf8(text);
+  size_t begin = fromEnd ? text.size() - maxBytes : 0, end = fromEnd ? text.size() : maxBytes;
+  // Move the cut off a continuation byte (10xxxxxx), at most three bytes: a character is whole or
+  // left out (what is malformed anyway becomes U+FFFD).
+  const auto continuation = [&](size_t k) {
+    return k < text.size() && (uint8_t(text[k]) & 0xC0) == 0x80;
+  };
+  if (fromEnd)
+    for (int k = 0; k < 3 && continuation(begin); ++k) ++begin;
+  else
+    for (int k = 0; k < 3 && continuation(end); ++k) --end;
+  return validUtf8(text.substr(begin, end - begin));
+}
+
+}  // namespace arena

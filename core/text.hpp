@@ -1,0 +1,18 @@
+#pragma once
+// Text that comes from outside (an external denoiser's messages and output, a plugin's error
+// buffer) made safe to store: results.json is UTF-8, and one stray byte must not lose a run.
+#include <string>
+#include <string_view>
+
+namespace arena {
+
+// `text` with every byte that does not belong to a well-formed UTF-8 sequence (a stray or cut
+// continuation byte, an overlong form, a surrogate, a code point beyond U+10FFFF) replaced by
+// U+FFFD; well-formed text is returned unchanged.
+std::string validUtf8(std::string_view text);
+
+// At most `maxBytes` bytes of `text`'s end (or start: `fromEnd` false), cut at a character
+// boundary, as validUtf8.
+std::string utf8Excerpt(std::string_view text, size_t maxBytes, bool fromEnd);
+
+}  // namespace arena

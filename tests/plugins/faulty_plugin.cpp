@@ -1,0 +1,68 @@
+// A plugin that misbehaves (tests/external_test.cpp). Built twice: with FAULTY_PLUGIN_BAD_PARAMS
+// its schema has an int parameter of default 2.5 (refused at load); without, it loads and its
+// denoise() misbehaves as the environment variable ARENA_FAULTY_PLUGIN says, read per frame:
+//   unterminated  fails, filling the whole error buffer without a terminator, ending in bytes
+//                 that are not UTF-8
+//   bad-pass      reports a pass with a NaN time and succeeds
+// Otherwise it writes zeros and succeeds.
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <string_view>
+
+#include "arena_plugin.h"
+
+namespace {
+
+void* create(const ArenaParamValue*, int, ArenaSignal, char*, size_t) {
+  static int instance;
+  return &instance;
+}
+int setup(void*, int, int, char*, size_t) {
+  return 0;
+}
+void reset(void*) {}
+int denoise(void*, const ArenaFrameContext*, const ArenaInputs*, const ArenaMutableImage* output,
+            const ArenaHost* host, char* error, size_t errorSize) {
+  const char* mode = std::getenv("ARENA_FAULTY_PLUGIN");
+  const std::string_view m = mode ? mode : "";
+  if (m == "unterminated") {
+    std::memset(error, 'e', errorSize);
+    error[errorSize - 2] = char(0xff);
+    error[errorSize - 1] = char(0x80);
+    return 1;
+  }
+  if (m == "bad-pass" && host && host->reportPass)
+    host->reportPass(host->context, "blur", NAN, 1.0);
+  for (int c = 0; c < output->channels; ++c)
+    std::memset(output->planes[c], 0,
+                sizeof(float) * size_t(output->width) * size_t(output->height));
+  return 0;
+}
+void destroy(void*) {}
+
+}  // namespace
+
+extern "C" ARENA_PLUGIN_EXPORT const ArenaPlugin* arena_plugin(void) {
+#ifdef FAULTY_PLUGIN_BAD_PARAMS
+  static const ArenaParamSpec params[] = {
+      {"k", ARENA_PARAM_INT, 2.5, 0.5, 7.9, nullptr, 0, "taps"}};
+  static const char* name = "faulty-params";
+#else
+  static const ArenaParamSpec* params = nullptr;
+  static const char* name = "faulty";
+#endif
+  static ArenaPlugin plugin{};
+  plugin.abiVersion = ARENA_PLUGIN_ABI_VERSION;
+  plugin.name = name;
+  plugin.description = "misbehaves for the tests";
+  plugin.signals = ARENA_SIGNALS_DEMODULATED;
+  plugin.params = params;
+  plugin.paramCount = params ? 1 : 0;
+  plugin.create = create;
+  plugin.setup = setup;
+  plugin.reset = reset;
+  plugin.denoise = denoise;
+  plugin.destroy = destroy;
+  return &plugin;
+}
