@@ -1,0 +1,44 @@
+// core/text.hpp: text from outside made valid UTF-8, and cut at character boundaries.
+#include "core/text.hpp"
+
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+namespace arena {
+namespace {
+
+const std::string kFffd = "\xEF\xBF\xBD";
+
+TEST(Text, WellFormedTextIsUnchangedAndEveryMalformedByteIsReplaced) {
+  for (const std::string ok :
+       {"", "plain", "caf\xC3\xA9", "\xE2\x82\xAC 5", "\xF0\x9F\x98\x80", "\xF4\x8F\xBF\xBF"})
+    EXPECT_EQ(validUtf8(ok), ok);
+  EXPECT_EQ(validUtf8("a\xFF"
+                      "b"),
+            "a" + kFffd + "b");
+  EXPECT_EQ(validUtf8("\x80"), kFffd);                          // a stray continuation byte
+  EXPECT_EQ(validUtf8("\xC3"), kFffd);                          // a cut two-byte character
+  EXPECT_EQ(validUtf8("\xC0\xAF"), kFffd + kFffd);              // an overlong '/'
+  EXPECT_EQ(validUtf8("\xE0\x80\xAF"), kFffd + kFffd + kFffd);  // an overlong three-byte form
+  EXPECT_EQ(validUtf8("\xED\xA0\x80"), kFffd + kFffd + kFffd);  // a surrogate (U+D800)
+  EXPECT_EQ(validUtf8("\xF4\x90\x80\x80"), kFffd + kFffd + kFffd + kFffd);  // beyond U+10FFFF
+  // Whatever the bytes, the result is text a JSON writer accepts.
+  std::string every;
+  for (int b = 0; b < 256; ++b) every += char(b);
+  EXPECT_NO_THROW(static_cast<void>(nlohmann::json(validUtf8(every + every)).dump()));
+}
+
+TEST(Text, AnExcerptIsCutBetweenCharacters) {
+  const std::string e = "\xC3\xA9";    // two bytes
+  const std::string text = e + e + e;  // six bytes
+  EXPECT_EQ(utf8Excerpt(text, 6, true), text);
+  EXPECT_EQ(utf8Excerpt(text, 5, true), e + e);   // the cut would split the first: it is left out
+  EXPECT_EQ(utf8Excerpt(text, 5, false), e + e);  // and from the start, the last
+  EXPECT_EQ(utf8Excerpt("abcdef", 3, true), "def");
+  EXPECT_EQ(utf8Excerpt("abcdef", 3, false), "abc");
+  EXPECT_EQ(utf8Excerpt("ab\xFF", 8, true), "ab" + kFffd);
+}
+
+}  // namespace
+}  // namespace arena
