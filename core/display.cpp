@@ -9,6 +9,9 @@ namespace arena {
 
 float acesFilmic(float x) {
   x = std::max(x, 0.0f);
+  // The curve reaches 1 at x = 7.24 (and tends to a / c = 1.03 > 1, clamped); beyond 8 it is 1,
+  // said before x * x overflows (near 1.2e19) and inf / inf made a bright pixel NaN. NaN stays NaN.
+  if (x >= 8.0f) return 1.0f;
   const float a = 2.51f, b = 0.03f, c = 2.43f, d = 0.59f, e = 0.14f;
   return std::clamp((x * (a * x + b)) / (x * (c * x + d) + e), 0.0f, 1.0f);
 }

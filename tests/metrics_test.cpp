@@ -209,6 +209,26 @@ TEST(DisplayExposure, MapsTheReferencesMeanLuminanceToMiddleGrey) {
   EXPECT_NEAR(t.apply(0.3573f), srgbEncode(acesFilmic(0.18f)), 1e-6);
 }
 
+// The tone curve saturates at 1 for every large finite value: a firefly of 1e20 (or 1e16 under a
+// dark reference's exposure) is white, not NaN (x * x overflowed, and inf / inf is NaN: SSIM and
+// PSNR became absent, LDR-FLIP read the pixel as black). Below 8 the curve is the formula's, bit
+// for bit; NaN stays NaN.
+TEST(DisplayExposure, TheToneCurveSaturatesInsteadOfOverflowing) {
+  auto formula = [](float x) {
+    x = std::max(x, 0.0f);
+    return std::clamp((x * (2.51f * x + 0.03f)) / (x * (2.43f * x + 0.59f) + 0.14f), 0.0f, 1.0f);
+  };
+  for (float x = 0.0f; x < 8.0f; x += 0.001953125f) ASSERT_EQ(acesFilmic(x), formula(x)) << x;
+  EXPECT_EQ(formula(7.3f), 1.0f);  // already 1 where the short cut starts
+  for (const float x : {8.0f, 1e4f, 1e19f, 1.2e19f, 1e30f, std::numeric_limits<float>::max(),
+                        std::numeric_limits<float>::infinity()})
+    EXPECT_EQ(acesFilmic(x), 1.0f) << x;
+  EXPECT_TRUE(std::isnan(acesFilmic(std::numeric_limits<float>::quiet_NaN())));
+  DisplayTransform dark;
+  dark.exposure = 1800.0f;
+  EXPECT_EQ(dark.apply(1e16f), srgbEncode(1.0f));  // white
+}
+
 TEST(DisplayExposure, PerFrameFollowsEachReferenceAndFirstKeepsTheFirst) {
   Image lit = rgb(8, 4, 1.0f, 1.0f, 1.0f), dark = rgb(8, 4, 0.05f, 0.05f, 0.05f);
   const auto perFrame = displayTransforms({&lit, &dark, &lit}, ExposureMode::PerFrame);
