@@ -249,16 +249,33 @@ RunStatistics analyseRun(const json& results, const BootstrapConfig& cfg) {
   std::map<std::string, std::vector<SceneRanking>> overallInputs;  // metric -> its scene rankings
   for (const auto& [scene, pairs] : byScene) {
     std::optional<SceneStatistics> st;
+    const auto& documents = pairsOfScene[scene];  // in the order of pairs
     for (const MetricDefinition* m : rankedMetrics) {
       std::vector<std::pair<std::string, const MetricTiles*>> methods;
+      std::string notFinite;
+      std::vector<std::string> notFiniteLabels;
       bool any = false;
-      for (const auto& [label, tiles] : pairs) {
+      for (size_t k = 0; k < pairs.size(); ++k) {
+        const auto& [label, tiles] = pairs[k];
         auto it = tiles.find(m->name);
-        methods.push_back({label, it == tiles.end() ? nullptr : &it->second});
         any |= it != tiles.end();
+        // A method with a non-finite value on some frame has no mean (its summary says so); its
+        // tiles hold only its finite frames, and ranked on the frames all methods share, that
+        // frame would vanish from everyone's comparison unnoticed. It is left out, named.
+        const json& summary =
+            documents[k].second->value("summary", json::object()).value(m->name, json::object());
+        if (summary.value("nonFinite", 0) > 0) {
+          notFinite += (notFinite.empty() ? "" : "; ") + label + ": " +
+                       summary.value("absent", std::string("not finite"));
+          notFiniteLabels.push_back(label);
+          continue;
+        }
+        methods.push_back({label, it == tiles.end() ? nullptr : &it->second});
       }
       if (!any) continue;
       SceneRanking r = rankScene(m->name, m->lowerIsBetter(), methods, scene, cfg);
+      if (!notFinite.empty()) r.excluded += (r.excluded.empty() ? "" : "; ") + notFinite;
+      r.leftOut.insert(r.leftOut.end(), notFiniteLabels.begin(), notFiniteLabels.end());
       if (m->name == out.rankedOn) {
         st.emplace();
         st->ranking = r;

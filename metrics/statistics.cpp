@@ -397,6 +397,15 @@ SceneRanking rankScene(const std::string& metric, bool lowerIsBetter,
       excluded.push_back(label + ": no " + metric + " data");
       continue;
     }
+    // A tile sum stored as inf (beyond float's range) or NaN would be skipped by the means below.
+    const bool finite = std::all_of(m->rows.begin(), m->rows.end(), [](const TileSums& t) {
+      return std::all_of(t.sum.begin(), t.sum.end(), [](double v) { return std::isfinite(v); });
+    });
+    if (!finite) {
+      excluded.push_back(label + ": a " + metric +
+                         " tile sum is not finite (a value beyond float range)");
+      continue;
+    }
     labels.push_back(label);
     series.push_back(m);
   }
@@ -409,6 +418,9 @@ SceneRanking rankScene(const std::string& metric, bool lowerIsBetter,
     labels.clear();
   SceneRanking out = rankReplicates(metric, lowerIsBetter, labels, means, reps, cfg.confidence);
   for (const std::string& e : excluded) out.excluded += (out.excluded.empty() ? "" : "; ") + e;
+  for (const auto& [label, m] : methods)
+    if (std::find(labels.begin(), labels.end(), label) == labels.end())
+      out.leftOut.push_back(label);
   return out;
 }
 
@@ -472,8 +484,10 @@ OverallRanking rankOverall(const std::vector<const SceneRanking*>& scenes,
   // Methods ranked on every scene with a positive value (the log ratio needs one); a method
   // missing from any scene, the first included, is named with the reason.
   std::vector<std::string> labels;
-  for (const SceneRanking* s : scenes)
+  for (const SceneRanking* s : scenes) {
     for (const RankedMethod& m : s->ranking) labels.push_back(m.label);
+    labels.insert(labels.end(), s->leftOut.begin(), s->leftOut.end());
+  }
   std::sort(labels.begin(), labels.end());
   labels.erase(std::unique(labels.begin(), labels.end()), labels.end());
   std::vector<std::string> kept;

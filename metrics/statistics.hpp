@@ -138,6 +138,7 @@ struct SceneRanking {
   int resolvedPairs = 0;
   std::map<std::string, std::vector<double>> replicates;  // per label, for the overall ranking
   std::string excluded;                                   // methods left out, and why
+  std::vector<std::string> leftOut;  // their labels (in memory: the overall ranking names them too)
   nlohmann::json toJson() const;
 };
 SceneRanking rankScene(const std::string& metric, bool lowerIsBetter,

@@ -17,6 +17,7 @@
 #include "metrics/compare.hpp"
 #include "metrics/error.hpp"
 #include "metrics/results.hpp"
+#include "metrics/run_statistics.hpp"
 #include "metrics/summary.hpp"
 #include "tests/test_util.hpp"
 
@@ -244,6 +245,37 @@ json syntheticJson(const std::map<std::string, MetricTiles>& methods, const std:
 }
 RunResults syntheticRun(const std::map<std::string, MetricTiles>& methods, const std::string& scene = "s") {
   return test::typed(syntheticJson(methods, scene));
+}
+
+// A method with a non-finite value on a frame has no mean; ranked on the frames every method
+// shares, that frame would vanish from the comparison unnoticed: it is left out of the ranking,
+// named, as is a method whose stored tile sums overflowed float.
+TEST(Bootstrap, AMethodWithANonFiniteFrameIsLeftOutOfTheRankingNamed) {
+  json run = syntheticJson(
+      {{"a", constantSeries(0.01)}, {"b", constantSeries(0.02)}, {"c", constantSeries(0.03)}});
+  json& b = run["pairs"][1];
+  ASSERT_EQ(b["label"], "b");
+  b["summary"]["relMse"] = {
+      {"frames", 12},
+      {"nonFinite", 1},
+      {"absent", "1 of 12 frames after the warm-up are not finite (NaN or Inf)"}};
+  const RunStatistics st = analyseRun(run);
+  const SceneRanking& r = st.scenes.at("s").ranking;
+  ASSERT_EQ(r.ranking.size(), 2u);
+  for (const RankedMethod& m : r.ranking) EXPECT_NE(m.label, "b");
+  EXPECT_NE(r.excluded.find("b: 1 of 12 frames after the warm-up are not finite"),
+            std::string::npos)
+      << r.excluded;
+  ASSERT_TRUE(st.overall.has_value());
+  EXPECT_NE(st.overall->excluded.find("b: not ranked on every scene"), std::string::npos)
+      << st.overall->excluded;
+
+  MetricTiles overflowed = constantSeries(0.02);
+  overflowed.rows[3].sum[5] = std::numeric_limits<double>::infinity();
+  const MetricTiles a = constantSeries(0.01), c = constantSeries(0.03);
+  const SceneRanking o = rankScene("relMse", true, {{"a", &a}, {"b", &overflowed}, {"c", &c}}, "s");
+  ASSERT_EQ(o.ranking.size(), 2u);
+  EXPECT_NE(o.excluded.find("b: a relMse tile sum is not finite"), std::string::npos) << o.excluded;
 }
 
 TEST(CompareGate, NoiseIsNotARegressionAndARealWorseningIs) {
