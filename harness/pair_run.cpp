@@ -130,7 +130,9 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
     // around the exchange (transfer included). Built-ins and plugins: the harness's clock.
     timing["msSource"] = selfTimed ? "reported by the process" : "harness wall clock";
     timing["clock"] = "cpu";
-    if (selfTimed) timing["msWallMedian"] = summarize(evaluation.values("msWall"), cfg.warmup).median;
+    if (const Summary wall = summarize(evaluation.values("msWall"), cfg.warmup);
+        selfTimed && !wall.empty())
+      timing["msWallMedian"] = wall.median;
     const json gpu = gpuCost.summary(cfg.warmup);
     if (!gpu.is_null()) timing["gpuPredicted"] = gpu;
   } else {

@@ -565,6 +565,12 @@ json PairEvaluation::finish() {
 json timingSummary(const std::vector<std::vector<PassTime>>& passesPerFrame, const std::vector<double>& ms, int warmup,
                    int width, int height) {
   json passes = json::array();
+  // Times are summarised over t >= W like every metric: with no frame left there is no time (the
+  // warm-up's first frames, allocation and cold caches included, would pass for one).
+  if (int(ms.size()) <= warmup)
+    return {{"absent", "no frame after the warm-up: the sequence has " + std::to_string(ms.size()) +
+                           " frames, the warm-up is " + std::to_string(warmup)},
+            {"passes", passes}};
   if (!passesPerFrame.empty()) {
     const auto& names = passesPerFrame.back();
     for (size_t p = 0; p < names.size(); ++p) {
@@ -572,11 +578,12 @@ json timingSummary(const std::vector<std::vector<PassTime>>& passesPerFrame, con
       double taps = names[p].tapsPerPixel;
       for (const auto& f : passesPerFrame)
         if (p < f.size() && f[p].name == names[p].name) v.push_back(f[p].milliseconds);
-      Summary s = summarize(v, std::min(warmup, int(v.size()) - 1));
+      Summary s = summarize(v, warmup);
+      if (s.empty()) continue;  // a pass not run after the warm-up
       passes.push_back({{"name", names[p].name}, {"msMedian", s.median}, {"msP95", s.p95}, {"tapsPerPixel", taps}});
     }
   }
-  Summary total = summarize(ms, std::min(warmup, int(ms.size()) - 1));
+  Summary total = summarize(ms, warmup);
   double taps = 0;
   for (const json& p : passes) taps += p["tapsPerPixel"].get<double>();
   return {{"msMedian", total.median}, {"msP5", total.p5}, {"msP95", total.p95}, {"msMean", total.mean},

@@ -88,7 +88,7 @@ struct ShapeReader {
   void timing(const json& t, const std::string& path) const {
     for (const char* k : {"msMedian", "msP5", "msP95", "msMean", "msPerMegapixel", "tapsPerPixel", "msWallMedian"})
       optionalFinite(t, path, k);
-    for (const char* k : {"clock", "msSource", "device"}) optionalText(t, path, k);
+    for (const char* k : {"clock", "msSource", "device", "absent"}) optionalText(t, path, k);
     if (t.contains("passes")) arrayOf(t, path, "passes", isObject, "an object (a pass's name and time)");
     if (t.contains("gpuPredicted")) {
       const json& g = member(t, path, "gpuPredicted", &json::is_object, "an object");

@@ -466,6 +466,10 @@ TEST(Capture, AnUnknownFloorAndAShortCaptureRunToTheEnd) {
   EXPECT_FALSE(q["summary"]["relMse"].contains("mean"));
   EXPECT_TRUE(q["summary"]["relMse"].contains("absent"));
   EXPECT_FALSE(q["timing"].contains("gpuPredicted")) << q["timing"];
+  EXPECT_FALSE(q["timing"].contains("msMedian"))
+      << q["timing"];  // the warm-up's times are not the method's
+  EXPECT_NE(q["timing"].value("absent", "").find("no frame after the warm-up"), std::string::npos)
+      << q["timing"];
   const test::CommandResult cli =
       test::runCommand(std::string(ARENA_BINARY) + " run --capture '" + dir.string() +
                        "' --denoisers passthrough --no-baselines --flip none --warmup 10 --out '" +
