@@ -498,6 +498,7 @@ json PairEvaluation::finish() {
   const GhostingConfig gc;
   const bool full = s.scope == EvaluationScope::Full;
   json ghosting = json::array();
+  std::vector<std::string> emptyEvents;
   for (size_t k = 0; full && k < scene.events_.size(); ++k) {
     const auto& ev = scene.events_[k];
     GhostingResult g =
@@ -509,6 +510,20 @@ json PairEvaluation::finish() {
     json j = g.toJson();
     j["kind"] = eventKindName(ev.event.kind);
     j["what"] = ev.event.what;
+    if (maskPixels == 0) {
+      // No pixel changed: the curve and every figure over the region would read 0, a flawless
+      // response measured on nothing. They are null, with the reason (the ranking has no data
+      // either: its tiles are empty).
+      for (const char* figure : {"curve", "bias", "steadyState", "peakExcess", "ghostEnergy",
+                                 "signedBias", "biasPre", "lagEnergy", "settled", "responseFrames",
+                                 "chromaError", "chromaPre", "chromaLagEnergy"})
+        if (j.contains(figure)) j[figure] = nullptr;
+      j.erase("response");
+      j["absent"] = "the changed region is empty at frame " + std::to_string(ev.event.frame) +
+                    ": the reference does not change there, so there is no response to measure";
+      emptyEvents.push_back("event at frame " + std::to_string(ev.event.frame) + ": " +
+                            j["absent"].get<std::string>());
+    }
     const BootstrapConfig bc;
     addFigureIntervals(j,
                        ghostingReplicates(ev.event.frame, s.eventTiles[k], eventSeedName(scene.name(), ev.event.frame),
@@ -532,6 +547,7 @@ json PairEvaluation::finish() {
       cuts.push_back(j);
     }
   json warnings = json::array();
+  for (const std::string& e : emptyEvents) warnings.push_back(e);
   for (auto it = summary.begin(); it != summary.end(); ++it)
     if (it.value().contains("absent"))
       warnings.push_back(it.key() + " has no summary: " + it.value()["absent"].get<std::string>());

@@ -386,8 +386,11 @@ std::map<std::string, double> pointFigures(const json& j, bool cut, const Ghosti
                         "chromaLagEnergy", "chromaPre"})
     out[k] = num(k);
   out["absSignedBias"] = std::abs(out["signedBias"]);
+  // settled is null where the event has no figures (an empty changed region): no value then.
+  const bool neverSettled =
+      j.contains("settled") && j["settled"].is_boolean() && !j["settled"].get<bool>();
   out["responseFrames"] =
-      j.value("settled", true) ? num("responseFrames") : num("windowEnd") - num("eventFrame") + 1;
+      neverSettled ? num("windowEnd") - num("eventFrame") + 1 : num("responseFrames");
   return out;
 }
 

@@ -563,6 +563,46 @@ TEST(CameraCutEndToEnd, RecoveryAndOldViewLeakPerMethod) {
   }
 }
 
+// An event where the reference does not change has an empty changed region: no response to
+// measure, so no figure (zeros would read as a perfect response), the reason, a pair warning, and
+// nothing ranked.
+TEST(LagByBias, AnEventThatChangesNothingHasNoFigures) {
+  RunConfig c;
+  c.name = "still_event";
+  c.out = test::freshDir("run_still_event");
+  c.cache = test::freshDir("still_event_cache");
+  c.render = test::tinySettings(32, 18, 8, 8);
+  Scene scene = test::shippedScene("cornell_static");
+  scene.events.push_back(
+      {3, EventKind::LightChange, scene.lights.at(0).name});  // which does not change
+  c.scenes = {scene};
+  c.denoisers = {{"svgf", {}, ""}};
+  c.baselines = true;
+  c.warmup = 1;
+  c.flip = "none";
+  c.keepFrames = "none";
+  const json r = runMatrix(c);
+  ASSERT_TRUE(failedPairs(r).empty());
+  for (const json& p : r["pairs"]) {
+    ASSERT_EQ(p["ghosting"].size(), 1u) << p["label"];
+    const json& g = p["ghosting"][0];
+    EXPECT_EQ(g["maskFraction"], 0.0);
+    EXPECT_TRUE(g["lagEnergy"].is_null()) << g["lagEnergy"];
+    EXPECT_TRUE(g["responseFrames"].is_null());
+    EXPECT_TRUE(g["curve"].is_null());
+    EXPECT_NE(g.value("absent", "").find("the changed region is empty at frame 3"),
+              std::string::npos)
+        << g;
+    bool warned = false;
+    for (const json& w : p["warnings"])
+      warned |= w.get<std::string>().find("event at frame 3") != std::string::npos;
+    EXPECT_TRUE(warned) << p["warnings"];
+  }
+  for (const json& e : r["statistics"]["scenes"]["cornell_static"]["events"])
+    for (const auto& [figure, ranking] : e["byFigure"].items())
+      EXPECT_TRUE(ranking["ranking"].empty()) << figure;
+}
+
 TEST(CameraCutEndToEnd, ATemporalDenoiserRightAfterTheCutShowsOnlyTheNewView) {
   // With the reset, temporal accumulation at the cut frame is the noisy input itself. Without it
   // (the same frames, the cut event removed) it keeps history -- through this tracer's motion

@@ -63,6 +63,10 @@
       const withEvent = pairs.filter((p) => p.ghosting[k]);
       const g0 = withEvent[0].ghosting[k];
       body.append(el('h3', { text: `Event at frame ${g0.eventFrame}: ${g0.kind} ${g0.what || ''}` }));
+      if (g0.absent) {  // nothing changed in the reference: no figure to show (metrics.md)
+        body.append(el('p', {class: 'empty', text: `No ghosting figures: ${g0.absent}.`}));
+        continue;
+      }
       const rows = [];
       for (const p of withEvent) {
         const g = p.ghosting[k];
