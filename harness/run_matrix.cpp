@@ -119,6 +119,26 @@ json runMatrix(const RunConfig& cfg) {
     for (const fs::path& c : cfg.captures) captures.push_back(c.string());
     results["settings"]["captures"] = captures;
   }
+  // A shard records the whole run it is a slice of: every sequence with its size and every
+  // contender. Shards of runs with other scenes, sizes or denoisers then differ in their settings,
+  // and merge refuses them (their slices would not add up to one run).
+  if (cfg.shardCount > 1) {
+    json plan = {{"sequences", json::array()}, {"labels", json::array()}};
+    for (const Source& source : sources) {
+      int w = 0, h = 0, frames = 0;
+      if (source.scene) {
+        w = cfg.render.resolvedWidth(*source.scene), h = cfg.render.resolvedHeight(*source.scene);
+        frames = cfg.render.resolvedFrames(*source.scene);
+      } else {
+        const SequenceInfo info = readCaptureDescription(source.capture).info;
+        w = info.width, h = info.height, frames = info.frames;
+      }
+      plan["sequences"].push_back(
+          {{"name", source.name}, {"width", w}, {"height", h}, {"frames", frames}});
+    }
+    for (const DenoiserRequest& d : denoisers) plan["labels"].push_back(d.label);
+    results["settings"]["plan"] = plan;
+  }
   const size_t totalPairs = sources.size() * denoisers.size();
   size_t pairIndex = 0, pairsDone = 0, pairsMine = 0;
   for (size_t k = 0; k < totalPairs; ++k) pairsMine += int(k % size_t(cfg.shardCount)) == cfg.shardIndex;

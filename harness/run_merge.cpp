@@ -44,6 +44,10 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
   std::error_code ec;
   if (fs::exists(out, ec) && !fs::is_directory(out, ec))
     throw Error(out.string() + ": exists and is not a directory; --out needs a run directory");
+  for (const fs::path& run : runs)
+    if (fs::exists(out, ec) && fs::equivalent(out, run, ec))
+      throw Error("merge: --out " + out.string() + " is one of the shards it merges (" +
+                  run.string() + "); write the merged run to another directory");
   RunResults merged;
   std::set<std::string> seen;
   // A gate must not pass on a partial study: every shard i/n of one n, each exactly once.
@@ -84,6 +88,11 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
     if (!shards.count(i)) missing += (missing.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(shardCount);
   if (!missing.empty()) throw Error("merge: incomplete shard set, missing " + missing + "; nothing was written");
   checkRunOutputs(out);  // creates --out only now: shards that cannot be merged leave no directory behind
+  // The images are the shards', as the results are: a previous merge's in --out go.
+  fs::remove_all(out / "images", ec);
+  if (ec)
+    throw Error((out / "images").string() +
+                ": cannot replace the images of a previous merge: " + ec.message());
   for (const fs::path& run : runs)
     if (fs::exists(run / "images"))
       fs::copy(run / "images", out / "images", fs::copy_options::recursive | fs::copy_options::skip_existing);

@@ -35,6 +35,20 @@ RunSettings RunSettings::fromJson(const json& j, const std::string& file, const 
   text(r, "preset");
   text(r, "shard");
   if (r.has("captures")) r.strings("captures");
+  // A shard's plan: the whole run's sequences and contenders (merge compares them).
+  if (auto plan = r.optionalChild("plan")) {
+    const json& sequences = plan->value("sequences");
+    if (!sequences.is_array())
+      plan->fail("sequences", "expected an array of {name, width, height, frames}");
+    for (size_t i = 0; i < sequences.size(); ++i) {
+      JsonReader s(sequences[i], file, path + ".plan.sequences[" + std::to_string(i) + "]");
+      s.string("name");
+      for (const char* k : {"width", "height", "frames"}) s.integerIn(k, 1, JsonReader::kIntMax);
+      s.rejectUnread();
+    }
+    plan->strings("labels");
+    plan->rejectUnread();
+  }
   // The evaluation's (metrics/evaluator.cpp evaluationSettings, metrics/ghosting.cpp GhostingConfig).
   for (const char* k : {"flip", "exposure", "display", "oldViewLeak", "tRmae"}) text(r, k);
   number(r, "relMseEpsilon");

@@ -133,6 +133,31 @@ TEST(RunMatrix, ShardsMergeIntoTheFullRun) {
   EXPECT_EQ(m["pairs"].size(), 3u);
   EXPECT_NO_THROW(loadResults(merged));
   EXPECT_THROW(mergeRuns({parts[0], parts[0]}, test::freshDir("run_dup")), Error);
+  // Shards of another run -- other denoisers, or the same at another size -- are refused: their
+  // slices would not add up to one run (each records the whole run's plan).
+  for (const std::string change : {"denoisers", "frames"}) {
+    RunConfig other = full;
+    if (change == "denoisers")
+      other.denoisers = {{"svgf", {}, ""}};
+    else
+      other.render.frames += 1;
+    other.shardIndex = 1;
+    other.shardCount = 2;
+    other.out = test::freshDir("run_shard_other_" + change);
+    runMatrix(other);
+    const std::string e = test::errorOf([&] {
+      mergeRuns({parts[0], other.out}, test::freshDir("run_mixed"));
+    });
+    EXPECT_NE(e.find("settings differ"), std::string::npos) << change << ": " << e;
+  }
+  // --out one of the shards is refused before anything is written; merging again into --out
+  // replaces its images.
+  const std::string into = test::errorOf([&] { mergeRuns(parts, parts[1]); });
+  EXPECT_NE(into.find("is one of the shards it merges"), std::string::npos) << into;
+  fs::create_directories(merged / "images");
+  std::ofstream(merged / "images" / "stale.png") << "old";
+  mergeRuns(parts, merged);
+  EXPECT_FALSE(fs::exists(merged / "images" / "stale.png"));
 }
 
 // The study's refinement after a scene (RunConfig::refineScene): the scene's pairs are measured
