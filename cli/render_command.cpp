@@ -1,4 +1,6 @@
 // `arena scenes` and `arena render`.
+#include <cmath>
+#include <cstdlib>
 #include <iomanip>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -83,7 +85,15 @@ void addRefineCommand(CLI::App& app) {
   cmd->add_option("scenes", *names, "Scene names or files, comma-separated, or 'all'")->default_val("all");
   cmd->add_option("--target", *target, "Target relMSE of each reference (e.g. 1e-5)")
       ->required()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Validator(
+          [](const std::string& text) {
+            char* end = nullptr;
+            const double v = std::strtod(text.c_str(), &end);
+            return end != text.c_str() && *end == '\0' && v > 0 && std::isfinite(v)
+                       ? std::string()
+                       : "expected a relMSE > 0, e.g. 1e-5, got " + text;
+          },
+          "RELMSE>0"));
   cmd->add_option("--max-spp", *maxSpp, "Never go past this many samples per pixel")
       ->default_val(4096)
       ->check(CLI::Range(1, 1 << 20));

@@ -2,21 +2,22 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
-#include <set>
 #include <iostream>
+#include <set>
 #include <sstream>
 
-#include "core/capture.hpp"
-#include "core/error.hpp"
-#include "denoisers/external/loader.hpp"
 #include "cli/commands.hpp"
 #include "cli/printout.hpp"
 #include "cli/render_options.hpp"
-#include "metrics/compare.hpp"
-#include "metrics/results.hpp"
+#include "core/atomic_file.hpp"
+#include "core/capture.hpp"
+#include "core/error.hpp"
+#include "denoisers/external/loader.hpp"
 #include "harness/run_matrix.hpp"
 #include "harness/scene_selection.hpp"
 #include "harness/sweep.hpp"
+#include "metrics/compare.hpp"
+#include "metrics/results.hpp"
 
 namespace arena::cli {
 
@@ -74,7 +75,7 @@ void addMatrixOptions(CLI::App* cmd, MatrixOptions& o) {
 RunConfig configFrom(const MatrixOptions& o) {
   RunConfig c;
   c.out = o.out;
-  c.name = std::filesystem::path(o.out).filename().string();
+  c.name = folderName(o.out);  // "runs/today/" too
   c.cache = o.render.cacheDir;
   c.render = o.render.settings();
   c.lowresAuto = o.render.lowresAuto();  // resolved once the denoisers are known

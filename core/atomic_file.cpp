@@ -167,4 +167,10 @@ std::string readText(const fs::path& path, uintmax_t maxBytes) {
   return text;
 }
 
+std::string folderName(const std::filesystem::path& dir) {
+  std::filesystem::path p = std::filesystem::absolute(dir).lexically_normal();
+  if (p.filename().empty()) p = p.parent_path();
+  return p.filename().string();
+}
+
 }  // namespace arena

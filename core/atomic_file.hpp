@@ -32,4 +32,7 @@ std::string readText(const std::filesystem::path& path, uintmax_t maxBytes = kMa
 // "path: what: strerror(errno)".
 std::string osError(const std::filesystem::path& path, const std::string& what, int errnoValue);
 
+// The name of the folder `dir` names, a trailing slash or "." included ("runs/today/" -> "today").
+std::string folderName(const std::filesystem::path& dir);
+
 }  // namespace arena

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "core/atomic_file.hpp"
 #include "core/capture.hpp"
 #include "core/error.hpp"
 #include "core/exr_io.hpp"
@@ -68,9 +69,8 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
   const fs::path camerasFile = source / "cameras.json";
   if (!fs::exists(camerasFile))
     throw Error(source.string() + ": no cameras.json (written by scripts/blender/render_capture.py)");
-  fs::path folder = fs::absolute(source).lexically_normal();
-  if (folder.filename().empty()) folder = folder.parent_path();  // "render/" names render
-  const std::string name = options.name.empty() ? folder.filename().string() : options.name;
+  const std::string name =
+      options.name.empty() ? folderName(source) : options.name;  // "render/": render
   if (!isPlainName(name))
     throw Error(std::string(options.name.empty() ? "the source folder's name" : "--name") + " '" +
                 name + "' cannot name a capture (expected no spaces or slashes, not . or ..)" +

@@ -100,6 +100,11 @@ json runMatrix(const RunConfig& cfg) {
   const bool keepAll = cfg.keepFrames == "all" || (cfg.keepFrames == "auto" && sources.size() == 1 &&
                                                    denoisers.size() == (cfg.baselines ? 3u : 1u) && !cfg.denoisers.empty());
   checkRunOutputs(cfg.out);
+  // The cache, like --out, before any work: a file there would fail every pair one by one.
+  if (std::error_code ec;
+      !cfg.scenes.empty() && fs::exists(cfg.cache, ec) && !fs::is_directory(cfg.cache, ec))
+    throw Error(cfg.cache.string() +
+                ": exists and is not a directory; the sequence cache (--cache) needs one");
   const EvaluationOptions evaluation{cfg.warmup, {cfg.flip}, exposure};
   json settings = {{"render", cfg.scenes.empty() ? json::object() : cfg.render.pixelSettings(cfg.scenes.front())},
                    {"preset", cfg.render.preset},

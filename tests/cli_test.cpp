@@ -77,6 +77,14 @@ TEST(CliContract, ZeroNegativeAndMalformedCliValuesAreRejected) {
     EXPECT_NE(r.output.find(name), std::string::npos) << flags << "\n" << r.output;
   }
   EXPECT_TRUE(fs::is_empty(cache)) << "a rejected command rendered something";
+  for (const std::string target : {"0", "-1e-5", "nan", "1e-5x"}) {
+    const contract::CliResult r = contract::arenaCli("refine cornell_static --cache " +
+                                                     cache.string() + " --target " + target);
+    EXPECT_EQ(r.status, 2) << target << "\n" << r.output;
+    EXPECT_NE(r.output.find("--target: expected a relMSE > 0, e.g. 1e-5, got " + target),
+              std::string::npos)
+        << r.output;
+  }
 }
 
 TEST(CliContract, ShardsParamsAndSweepsAreStrict) {

@@ -345,6 +345,19 @@ TEST(RunMatrixContract, BadOutputsFailBeforeAnyWorkNamingTheFile) {
     EXPECT_TRUE(fs::is_empty(cfg.cache)) << c.name << ": rendered before checking the outputs";
     EXPECT_EQ(fs::exists(cfg.out / "results.json"), hadJson) << c.name;
   }
+  // A file where the cache belongs: refused before any work, not a failed pair for each scene.
+  RunConfig fileCache = contract::tinyRun("file_cache");
+  fileCache.cache = fileCache.out.parent_path() / "cache_is_a_file";
+  writeTextAtomically(fileCache.cache, "not a folder");
+  const std::string e = test::errorOf([&] { runMatrix(fileCache); });
+  EXPECT_NE(e.find("cache_is_a_file: exists and is not a directory; the sequence cache (--cache)"),
+            std::string::npos)
+      << e;
+  EXPECT_FALSE(fs::exists(fileCache.out / "results.json"));
+  // The run's name is its directory's, a trailing slash included.
+  EXPECT_EQ(folderName("runs/today/"), "today");
+  EXPECT_EQ(folderName("runs/today"), "today");
+  EXPECT_EQ(folderName("runs/today/."), "today");
 }
 
 TEST(RunMatrixContract, MergeCreatesItsOutputDirectory) {

@@ -225,11 +225,13 @@ void writeReferenceFiles(const fs::path& dir, const std::string& hash, const std
   info.referenceCapped[size_t(r)] = ref.capped;
 }
 
-std::string cappedWarning(const std::string& sceneName, int r, const ReferenceResult& ref) {
+// `remedy`: what the command that stopped it offers (render: --ref-spp; refine: --max-spp).
+std::string cappedWarning(const std::string& sceneName, int r, const ReferenceResult& ref,
+                          const std::string& remedy) {
   return "[" + sceneName + "] WARNING: reference " + std::to_string(r) + " stopped at its cap of " +
-         std::to_string(ref.sppMax) + " spp per pixel (mean " + std::to_string(ref.spp) + ") with estimated relMSE " +
-         formatDouble(ref.estimatedRelMse, 3) + " above its target " + formatDouble(ref.targetRelMse, 3) +
-         " (raise --ref-spp, loosen --ref-rel-error, or `arena refine` it later)";
+         std::to_string(ref.sppMax) + " spp per pixel (mean " + std::to_string(ref.spp) +
+         ") with estimated relMSE " + formatDouble(ref.estimatedRelMse, 3) + " above its target " +
+         formatDouble(ref.targetRelMse, 3) + " (" + remedy + ")";
 }
 
 // Makes dir's reference r the one in its home (a hard link, or a copy where links are refused),
@@ -284,7 +286,8 @@ fs::path refineSequence(const Scene& scene, const RenderSettings& settings, cons
         progress("[" + scene.name + "] reference " + std::to_string(r) + ": " + std::to_string(spp) + " -> " +
                  std::to_string(ref.spp) + " spp, est. relMSE " + formatDouble(before, 3) + " -> " +
                  formatDouble(ref.estimatedRelMse, 3) + " in " + formatSeconds(sec));
-        if (ref.capped) progress(cappedWarning(scene.name, r, ref));
+        if (ref.capped)
+          progress(cappedWarning(scene.name, r, ref, "raise --max-spp, or loosen --target"));
       }
     }
   } catch (...) {
@@ -495,7 +498,9 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings, cons
                "-" + std::to_string(ref.sppMax) + " per tile, est. relMSE " + formatDouble(ref.estimatedRelMse, 3) +
                ")",
            ref.counts, sec);
-    if (ref.capped) say(cappedWarning(scene.name, int(r), ref));
+    if (ref.capped)
+      say(cappedWarning(scene.name, int(r), ref,
+                        "raise --ref-spp, loosen --ref-rel-error, or `arena refine` it later"));
   }
   if (shard.count > 1) {
     say("[" + scene.name + "] shard " + std::to_string(shard.index) + "/" + std::to_string(shard.count) +
