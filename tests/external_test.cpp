@@ -14,6 +14,7 @@
 #include "denoisers/external/loader.hpp"
 #include "denoisers/external/manifest.hpp"
 #include "denoisers/external/subprocess.hpp"
+#include "harness/benchmarks.hpp"
 #include "harness/denoise_run.hpp"
 #include "harness/run_matrix.hpp"
 #include "tests/test_util.hpp"
@@ -253,6 +254,27 @@ TEST(ExternalProcess, ARunRecordsTheExternalPairBesideAFailingOne) {
   EXPECT_EQ(failed["status"], "failed");
   EXPECT_NE(failed["error"].get<std::string>().find("killed by signal 11"), std::string::npos)
       << failed["error"];
+}
+
+// arena bench denoise says which clock timed each contender: a process's own report of its compute
+// time sits beside built-ins timed by the wall clock, so it is labelled, with its wall time.
+TEST(ExternalProcess, TheDenoiseBenchNamesTheClockOfEachContender) {
+  DenoiseBench b;
+  b.sceneFile = std::string(ARENA_SOURCE_DIR) + "/scenes/cornell_static.json";
+  b.denoisers = {"eaw", DenoiserRegistry::resolve("ext:" ARENA_EXAMPLES_BINARY_DIR "/cpp_box")};
+  b.width = kWidth, b.height = kHeight, b.frames = 4, b.warmup = 1, b.inputs = 1;
+  std::vector<std::string> lines;
+  const json out = benchDenoise(b, [&](const std::string& line) { lines.push_back(line); });
+  ASSERT_EQ(out["denoisers"].size(), 2u);
+  const json &builtIn = out["denoisers"][0], &process = out["denoisers"][1];
+  EXPECT_EQ(builtIn["msSource"], "harness wall clock");
+  EXPECT_FALSE(builtIn.contains("msWallMedian"));
+  EXPECT_EQ(process["msSource"], "reported by the process");
+  EXPECT_GE(process["msWallMedian"].get<double>(), process["msMedian"].get<double>());
+  bool labelled = false;
+  for (const std::string& l : lines)
+    labelled |= l.find("[reported by the process; wall clock") != std::string::npos;
+  EXPECT_TRUE(labelled);
 }
 
 // --- faults: each a clear error; the harness neither hangs nor dies ---------------------------
