@@ -297,7 +297,12 @@ void addRunCommands(CLI::App& app) {
     auto asJson = std::make_shared<bool>(false);
     cmd->add_flag("--json", *asJson, "Machine-readable output");
     cmd->callback([asJson] {
-      for (const auto& manifest : manifestsOnSearchPath()) DenoiserRegistry::resolve("ext:" + manifest.string());
+      // One bad or shadowed file on the path is said and left out; it does not hide the rest.
+      for (const auto& manifest : manifestsOnSearchPath()) try {
+          DenoiserRegistry::resolve("ext:" + manifest.string());
+        } catch (const Error& e) {
+          std::cerr << "arena: warning: " << e.what() << " (not listed)\n";
+        }
       json out = json::array();
       for (const std::string& n : DenoiserRegistry::instance().names()) {
         const DenoiserInfo& info = DenoiserRegistry::instance().find(n);

@@ -172,6 +172,28 @@ TEST(ExternalManifest, NamesAreFoundOnTheSearchPath) {
               DenoiserRegistry::resolve("ext:missing");
             }).find("searched ARENA_DENOISER_PATH"),
             std::string::npos);
+  // A folder of that name without a manifest, here, does not hide the one on the path.
+  const fs::path here = fs::current_path(), work = test::freshDir("search_path_cwd");
+  fs::create_directories(work / "viaFolder");
+  fs::current_path(work);
+  const std::string found = errorOf([] { DenoiserRegistry::resolve("ext:viaFolder"); });
+  fs::current_path(here);
+  EXPECT_EQ(found, "(no error)");
+  // arena denoisers lists what the path holds; a file there that is no manifest, or a second
+  // manifest of a name an earlier one took, is a warning naming it, not the end of the listing.
+  std::ofstream(dir / "notes.json") << "{\"mine\": 1}";
+  const fs::path second = test::freshDir("search_path_second");
+  fs::create_directories(second / "again");
+  std::ofstream(second / "again" / "manifest.json")
+      << json({{"name", "via-folder"}, {"command", {"/bin/cat"}}, {"signals", "color"}}).dump();
+  const test::CommandResult listed =
+      test::runCommand("ARENA_DENOISER_PATH='" + dir.string() + ":" + second.string() + "' " +
+                       ARENA_BINARY + " denoisers");
+  EXPECT_EQ(listed.status, 0) << listed.output;
+  EXPECT_NE(listed.output.find("via-folder"), std::string::npos) << listed.output;
+  EXPECT_NE(listed.output.find("notes.json"), std::string::npos) << listed.output;
+  EXPECT_NE(listed.output.find("already taken"), std::string::npos) << listed.output;
+  EXPECT_NE(listed.output.find("svgf"), std::string::npos) << listed.output;
   unsetenv("ARENA_DENOISER_PATH");
 }
 

@@ -32,7 +32,9 @@ std::vector<fs::path> searchPath() {
 fs::path findManifest(const std::string& what) {
   const fs::path p(what);
   if (fs::is_regular_file(p)) return p;
-  if (fs::is_directory(p)) return p / "manifest.json";
+  if (fs::is_regular_file(p / "manifest.json")) return p / "manifest.json";
+  // A folder without a manifest (say ./mine while ARENA_DENOISER_PATH holds mine/) is not the
+  // denoiser: a plain name goes on to the search path.
   const bool isName = what.find('/') == std::string::npos && p.extension() != ".json";
   std::string message = "ext:" + what + ": no manifest there";
   if (isName) {
@@ -92,15 +94,17 @@ DenoiserInfo loadExternalDenoiser(const std::string& entry) {
 
 std::vector<fs::path> manifestsOnSearchPath() {
   std::vector<fs::path> found;
-  for (const fs::path& dir : searchPath()) {
+  for (const fs::path& dir : searchPath()) {  // in the path's order: the first folder wins a name
     if (!fs::is_directory(dir)) continue;
+    std::vector<fs::path> inDir;
     for (const fs::directory_entry& e : fs::directory_iterator(dir)) {
-      if (e.is_regular_file() && e.path().extension() == ".json") found.push_back(e.path());
+      if (e.is_regular_file() && e.path().extension() == ".json") inDir.push_back(e.path());
       if (e.is_directory() && fs::is_regular_file(e.path() / "manifest.json"))
-        found.push_back(e.path() / "manifest.json");
+        inDir.push_back(e.path() / "manifest.json");
     }
+    std::sort(inDir.begin(), inDir.end());
+    found.insert(found.end(), inDir.begin(), inDir.end());
   }
-  std::sort(found.begin(), found.end());
   return found;
 }
 
