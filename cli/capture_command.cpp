@@ -28,8 +28,12 @@ CheckStatus printValidation(const std::filesystem::path& dir) {
   for (const std::string& l : sequence.info().availableLayers()) std::cout << " " << l;
   std::cout << ")\n";
   for (const CaptureCheck& c : v.checks) {
-    std::cout << "  " << std::left << std::setw(5) << checkStatusName(c.status) << std::setw(28) << c.name << std::right
-              << std::setw(12) << std::setprecision(4) << c.value;
+    std::cout << "  " << std::left << std::setw(5) << checkStatusName(c.status) << std::setw(28)
+              << c.name << std::right << std::setw(12) << std::setprecision(4);
+    if (std::isnan(c.value))
+      std::cout << "-";  // not measured (the detail says why)
+    else
+      std::cout << c.value;
     if (std::isfinite(c.failAbove)) std::cout << "  (fail above " << c.failAbove << ")";
     else if (c.status != CheckStatus::Pass) std::cout << "  (warn above " << c.warnAbove << ")";
     std::cout << (c.unit.empty() ? "" : "  " + c.unit) << (c.detail.empty() ? "" : "\n        " + c.detail) << "\n";

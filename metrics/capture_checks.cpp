@@ -33,6 +33,18 @@ CaptureCheck check(std::string name, double value, double warnAbove, double fail
   return c;
 }
 
+// A check the capture gives no data for: a warning saying so, never a pass (value NaN: none
+// measured).
+CaptureCheck unchecked(std::string name, std::string why) {
+  return {std::move(name),
+          std::numeric_limits<double>::quiet_NaN(),
+          0,
+          kSoft,
+          "",
+          "not checked: " + std::move(why),
+          CheckStatus::Warn};
+}
+
 // High-frequency energy of an image's log luminance: sum (l - box3(l))^2 with l = log(L + eps).
 // Edges and texture contribute to it in the input and the reference alike; noise only where there
 // is noise. In the log domain an emitter's bright edge counts like any other edge instead of
@@ -283,9 +295,15 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
   }
   if (!isGiven("meshId")) moving.clear();  // no ids to tell objects apart: every surface counts
   if (info.frames < 2) {
-    v.checks.push_back(check("motion.consistency", 0, kSoft, kSoft, "", "one frame: nothing to check motion against"));
+    v.checks.push_back(
+        unchecked("motion.consistency", "one frame: nothing to check motion against"));
+  } else if (const MotionConsistency m = checkMotion(input.frames, info.cameras, cuts, 1.0, moving);
+             m.pixels == 0) {
+    v.checks.push_back(
+        unchecked("motion.consistency",
+                  "no static surface pixel with depth in two consecutive frames: the motion "
+                  "vectors could not be checked"));
   } else {
-    const MotionConsistency m = checkMotion(input.frames, info.cameras, cuts, 1.0, moving);
     std::string detail = "mean error " + number(m.meanErrorPx) + " px over " + std::to_string(m.pixels) +
                          " static surface pixels (motion = previous-frame pixel - this pixel, in pixels, x right, y down)";
     if (!m.explanation.empty())
@@ -335,11 +353,22 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
         inputError += linearError(input.frames[t].get("color"), ref.get("color"), &ref.get("colorVar")).relMse;
       }
     }
-    v.checks.push_back(check("reference.roughnessVsInput", counted ? roughRatio / counted : 0, 0.5, 1.0,
-                             "ratio of high-frequency energy, reference / input",
-                             "a converged reference is far smoother than a noisy input; above 1 it is noisier"));
-    if (input.referenceNoiseKnown) {
-      const double ratio = inputError > 0 ? floorSum / inputError : 0;
+    if (counted == 0)
+      v.checks.push_back(
+          unchecked("reference.roughnessVsInput",
+                    "the input has no high-frequency energy on any frame: nothing to compare the "
+                    "reference's smoothness with"));
+    else
+      v.checks.push_back(
+          check("reference.roughnessVsInput", roughRatio / counted, 0.5, 1.0,
+                "ratio of high-frequency energy, reference / input",
+                "a converged reference is far smoother than a noisy input; above 1 it is noisier"));
+    if (input.referenceNoiseKnown && !(inputError > 0)) {
+      v.checks.push_back(unchecked(
+          "reference.noiseVsInput",
+          "the input equals the reference: no input error to compare its noise floor with"));
+    } else if (input.referenceNoiseKnown) {
+      const double ratio = floorSum / inputError;
       v.checks.push_back(check("reference.noiseVsInput", ratio, 0.1, 1.0, "reference relMSE floor / input relMSE",
                                "reference noise floor " + number(floorSum / double(input.frames.size())) +
                                    " (from its variance or independent half)"));

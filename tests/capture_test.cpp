@@ -323,6 +323,18 @@ TEST(CaptureValidation, NaNInNormalsIsAHardFailureNamingTheChannel) {
   EXPECT_NE(v.failures().find("nonFinite.normal"), std::string::npos);
 }
 
+// A check the capture gives no data for warns that it was not checked; it never passes.
+TEST(CaptureValidation, ACheckWithoutDataWarnsInsteadOfPassing) {
+  const fs::path dir = writeSynthetic("all_sky");
+  editFrames(dir, [](int, LayerSet& f) {
+    for (float& z : f.get("depth").raw()) z = 0.0f;  // no surface anywhere: nothing to reproject
+  });
+  const CaptureCheck c = checkNamed(validate(dir), "motion.consistency");
+  EXPECT_EQ(c.status, CheckStatus::Warn);
+  EXPECT_TRUE(std::isnan(c.value));
+  EXPECT_NE(c.detail.find("not checked: no static surface pixel"), std::string::npos) << c.detail;
+}
+
 TEST(CaptureValidation, NaNInTheColourIsCountedButNotRefused) {
   const fs::path dir = writeSynthetic("nan_colour");
   editFrames(dir, [](int t, LayerSet& f) {
