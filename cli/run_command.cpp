@@ -338,6 +338,16 @@ void addRunCommands(CLI::App& app) {
                   << (m["better"].get<std::string>() == "lower" ? "lower" : "higher")
                   << std::setw(14) << (m["needsReference"].get<bool>() ? "reference" : "no reference")
                   << m["meaning"].get<std::string>() << (unit.empty() ? "" : " [" + unit + "]") << "\n";
+        // What the help promises: what it reads, how its tiles become a frame value, its floor, and
+        // whether it is ranked, gated by default and has an overall score.
+        std::string roles;
+        for (const auto& [key, role] : {std::pair<const char*, const char*>{"ranked", "ranked"},
+                                        {"gatedByDefault", "gated by default"},
+                                        {"overall", "overall score"}})
+          if (m.value(key, false)) roles += std::string(roles.empty() ? "" : ", ") + role;
+        std::cout << std::string(22, ' ') << "reads " << m.value("reads", std::string("?")) << "; frame value: "
+                  << m.value("transform", std::string("?")) << " of its tiles; floor: "
+                  << m.value("floor", std::string("none")) << (roles.empty() ? "" : "; " + roles) << "\n";
       }
       std::cout << "(definitions: docs/metrics.md)\n";
     });
