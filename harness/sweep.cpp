@@ -1,5 +1,6 @@
 #include "harness/sweep.hpp"
 
+#include <map>
 #include <set>
 
 #include "core/error.hpp"
@@ -24,8 +25,15 @@ RunConfig sweepRun(RunConfig c, const std::string& denoiser, const std::map<std:
     if (fixed.count(name)) throw Error("--grid '" + g + "': " + name + " is also fixed by --param");
     axes.push_back({name, splitList(g.substr(eq + 2, g.size() - eq - 3))});
     if (axes.back().second.empty()) throw Error("--grid '" + g + "': no values");
-    std::set<std::string> distinct(axes.back().second.begin(), axes.back().second.end());
-    if (distinct.size() != axes.back().second.size()) throw Error("--grid '" + g + "': a value is listed twice");
+    // Compared as the schema reads them ("2" and "2.0" are one setting: two contenders of one
+    // setting would only add ties), each value checked on the way.
+    std::map<std::string, std::string> distinct;  // resolved value -> as written
+    for (const std::string& v : axes.back().second) {
+      const std::string resolved = info.schema.resolve({{name, v}}, denoiser).toJson()[name].dump();
+      if (auto [it, added] = distinct.emplace(resolved, v); !added)
+        throw Error("--grid '" + g + "': " + v + " and " + it->second + " are the same value of " +
+                    name);
+    }
   }
   std::vector<std::map<std::string, std::string>> settings = {fixed};
   for (auto& [name, values] : axes) {

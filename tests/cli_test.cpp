@@ -110,6 +110,10 @@ TEST(CliContract, ShardsParamsAndSweepsAreStrict) {
   r = contract::arenaCli("sweep --denoiser svgf --grid 'sigmaL=[2,4]' --grid 'sigmaL=[8]'" + common);
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("already an axis"), std::string::npos) << r.output;
+  r = contract::arenaCli("sweep --denoiser svgf --grid 'sigmaL=[2,4,2.0]'" +
+                         common);  // one value twice
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("2.0 and 2 are the same value of sigmaL"), std::string::npos) << r.output;
   r = contract::arenaCli("run --denoisers passthrough --shard 0/1junk" + common);
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("--shard '0/1junk'"), std::string::npos) << r.output;
