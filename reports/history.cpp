@@ -202,7 +202,24 @@ json historyData(const std::vector<RunResults>& runs, std::vector<Tolerance> tol
   json gated = json::object();  // the gate's tolerance per metric (0 included), from one run on
   for (const Tolerance& t : tolerances) gated[t.metric] = t.relative;
   size_t failing = 0;
-  for (size_t i = 1; i < runs.size(); ++i)
+  for (size_t i = 1; i < runs.size(); ++i) {
+    // Runs measured under other settings: `arena compare` refuses them (exit 2) unless told to
+    // compare anyway, so the gate fails there, saying why, and compares nothing.
+    if (const std::vector<std::string> differ = settingsDifferences(runs[i - 1], runs[i]);
+        !differ.empty()) {
+      std::string list;
+      for (const std::string& d : differ) list += (list.empty() ? "" : "; ") + d;
+      ComparisonRow row;
+      row.scene = row.label = row.metric = "*";
+      row.verdict = "not comparable";
+      row.note = "run with other settings (arena compare refuses them): " + list;
+      json change = comparisonJson({row})[0];
+      change["run"] = i;
+      change["fails"] = true;
+      ++failing;
+      changes.push_back(change);
+      continue;
+    }
     for (const ComparisonRow& row : compareRuns(runs[i - 1], runs[i], tolerances)) {
       if (row.verdict == "ok") continue;
       json change = comparisonJson({row})[0];
@@ -211,6 +228,7 @@ json historyData(const std::vector<RunResults>& runs, std::vector<Tolerance> tol
       failing += change["fails"].get<bool>();
       changes.push_back(change);
     }
+  }
   json metricList = json::array();
   for (const MetricDefinition* m : metricCatalog())
     if (std::find(metrics.begin(), metrics.end(), m->name) != metrics.end())

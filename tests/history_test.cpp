@@ -118,6 +118,22 @@ TEST(History, MarksWhatCompareSaysRunByRun) {
   const json movedData = historyData(withMove, tolerances);
   EXPECT_FALSE(changedRuns(movedData, "svgf", "*").empty());
   EXPECT_GT(movedData["failing"].get<size_t>(), failing);
+  // A run measured under other settings: not comparable, as arena compare refuses it; the gate
+  // fails there and compares nothing.
+  json otherWarmup = historyRun(8, 5);
+  otherWarmup["settings"] = {{"warmup", 2}};
+  std::vector<RunResults> withOther = runs;
+  withOther.push_back(test::typed(otherWarmup));
+  const json otherData = historyData(withOther, tolerances);
+  int notComparable = 0;
+  for (const json& c : otherData["changes"])
+    if (c["run"] == 8) {
+      EXPECT_EQ(c["verdict"], "not comparable") << c;
+      EXPECT_NE(c["note"].get<std::string>().find("settings.warmup"), std::string::npos) << c;
+      EXPECT_TRUE(c["fails"].get<bool>());
+      ++notComparable;
+    }
+  EXPECT_EQ(notComparable, 1);
 }
 
 TEST(History, ReadsRunDirectoriesAndDatabasesInTimeOrder) {
