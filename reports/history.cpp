@@ -103,6 +103,14 @@ std::vector<RunResults> runsFromDatabase(const fs::path& file) {
     run.name = textOf(r, "name");
     run.created = textOf(r, "created");
     run.source = file.string() + "#" + std::to_string(id);
+    // The settings the run recorded (its gate compares them); a database row without them (or
+    // with an unreadable record) leaves them unknown, and the history does not judge them.
+    if (const json settings = json::parse(textOf(r, "settings"), nullptr, false);
+        settings.is_object())
+      try {
+        run.settings = RunSettings::fromJson(settings, run.source, "$.settings");
+      } catch (const Error&) {
+      }
     order.push_back(id);
   }
   std::map<std::pair<long long, std::string>, size_t> pairIndex;  // (run, scene\nlabel) -> index
@@ -205,7 +213,10 @@ json historyData(const std::vector<RunResults>& runs, std::vector<Tolerance> tol
   for (size_t i = 1; i < runs.size(); ++i) {
     // Runs measured under other settings: `arena compare` refuses them (exit 2) unless told to
     // compare anyway, so the gate fails there, saying why, and compares nothing.
-    if (const std::vector<std::string> differ = settingsDifferences(runs[i - 1], runs[i]);
+    const bool bothKnown =
+        !runs[i - 1].settings.measurement().empty() && !runs[i].settings.measurement().empty();
+    if (const std::vector<std::string> differ =
+            bothKnown ? settingsDifferences(runs[i - 1], runs[i]) : std::vector<std::string>{};
         !differ.empty()) {
       std::string list;
       for (const std::string& d : differ) list += (list.empty() ? "" : "; ") + d;

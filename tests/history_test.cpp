@@ -120,9 +120,11 @@ TEST(History, MarksWhatCompareSaysRunByRun) {
   EXPECT_GT(movedData["failing"].get<size_t>(), failing);
   // A run measured under other settings: not comparable, as arena compare refuses it; the gate
   // fails there and compares nothing.
-  json otherWarmup = historyRun(8, 5);
+  json last = historyRun(7, 5), otherWarmup = historyRun(8, 5);
+  last["settings"] = {{"warmup", 1}};
   otherWarmup["settings"] = {{"warmup", 2}};
-  std::vector<RunResults> withOther = runs;
+  std::vector<RunResults> withOther(runs.begin(), runs.begin() + 7);
+  withOther.push_back(test::typed(last));
   withOther.push_back(test::typed(otherWarmup));
   const json otherData = historyData(withOther, tolerances);
   int notComparable = 0;
@@ -134,6 +136,25 @@ TEST(History, MarksWhatCompareSaysRunByRun) {
       ++notComparable;
     }
   EXPECT_EQ(notComparable, 1);
+}
+
+// A run read from results.db keeps the settings it recorded: beside a run directory of the same
+// settings it is comparable, beside one of other settings it is not (as arena compare says).
+TEST(History, RunsFromADatabaseAreJudgedOnTheSettingsTheyRecorded) {
+  const fs::path dir = test::freshDir("history_settings");
+  json first = historyRun(0, 3), same = historyRun(1, 3), other = historyRun(2, 3);
+  first["settings"] = same["settings"] = {{"warmup", 2}};
+  other["settings"] = {{"warmup", 3}};
+  appendToDatabase(dir / "results.db", test::typed(first));
+  saveResults(dir / "same", same);
+  saveResults(dir / "other", other);
+  auto notComparable = [](const json& data) {
+    int n = 0;
+    for (const json& c : data["changes"]) n += c["verdict"] == "not comparable";
+    return n;
+  };
+  EXPECT_EQ(notComparable(historyData(loadHistory({dir / "results.db", dir / "same"}), {})), 0);
+  EXPECT_EQ(notComparable(historyData(loadHistory({dir / "results.db", dir / "other"}), {})), 1);
 }
 
 TEST(History, ReadsRunDirectoriesAndDatabasesInTimeOrder) {
