@@ -30,7 +30,9 @@ bool keepsImagesOf(const RunConfig& cfg, const SceneData& sd, bool keepAll, int 
 void writeFrameImages(const fs::path& imageDir, int t, const FrameImages& images) {
   writePng(imageDir / frameName("frame", t), images.display);
   if (!images.flip.empty()) writePng(imageDir / frameName("flip", t), images.flip);
-  writePng(imageDir / frameName("relerr", t), images.relativeError);
+  // No reference (a capture without one): no error map to keep.
+  if (!images.relativeError.empty())
+    writePng(imageDir / frameName("relerr", t), images.relativeError);
 }
 
 // Every output frame as an EXR (colour, and the two signals a split denoiser filtered).

@@ -383,6 +383,15 @@ TEST(CaptureValidation, WithoutAReferenceOnlyNoReferenceMetricsAreScoredAndItIsS
   EXPECT_TRUE(p["summary"].contains("stabilityCoarse"));
   EXPECT_FALSE(p["summary"].contains("warpedFlicker"));  // relative to the reference's own flicker
   EXPECT_EQ(r["scenes"]["noref"]["hasReference"], false);
+  // With its frames kept (the default for one capture): the images there are, no error map (every
+  // pair failed writing an empty one before).
+  RunConfig kept = captureRun(test::freshDir("noref_kept"), {{"eaw", {}, ""}}, {dir});
+  kept.keepFrames = "all";
+  const json k = runMatrix(kept);
+  ASSERT_EQ(pairOf(k, "eaw")["status"], "ok") << pairOf(k, "eaw").dump().substr(0, 400);
+  const fs::path images = kept.out / pairOf(k, "eaw")["images"]["dir"].get<std::string>();
+  EXPECT_TRUE(fs::exists(images / "frame_0004.png"));
+  EXPECT_FALSE(fs::exists(images / "relerr_0004.png"));
 }
 
 // A colour layer with no finite value in a frame is no data: refused, where a few NaNs are counted.

@@ -17,6 +17,10 @@
   // other verdicts worth seeing (beyond tolerance but unresolved, improved, ...).
   const flags = H.changes.filter((c) => c.fails);
   const appliesTo = (c, metric) => c.metric === metric || c.metric === '*';
+  // A flag about a whole run (scene '*': runs under other settings, not comparable) marks every
+  // series of that run.
+  const concerns = (c) =>
+      (c.scene === '*' || c.scene === state.scene) && (c.label === '*' || c.label === state.label);
 
   function renderInfo() {
     const n = H.runs.length;
@@ -41,7 +45,7 @@
           el('td', { text: fmt(f.baseline) }), el('td', { text: fmt(f.candidate) }), el('td', { class: 'verdict-regressed', text: pct(f.change) }),
           el('td', { text: `±${(100 * f.tolerance).toFixed(1)}%` }), el('td', { class: 'first verdict-regressed', text: f.verdict }),
           el('td', { class: 'left', text: f.note || '' }));
-        tr.addEventListener('click', () => choose(f.scene, f.label));
+        if (f.scene !== '*') tr.addEventListener('click', () => choose(f.scene, f.label));
         return tr;
       }))));
   }
@@ -65,7 +69,7 @@
   }
 
   function metricChart(metric, s) {
-    const here = H.changes.filter((c) => c.scene === state.scene && c.label === state.label && appliesTo(c, metric.name));
+    const here = H.changes.filter((c) => concerns(c) && appliesTo(c, metric.name));
     const flagged = new Set(here.filter((c) => c.fails).map((c) => c.run));
     const verdictAt = Object.fromEntries(here.map((c) => [c.run, c.verdict]));
     const rows = [];
@@ -134,7 +138,8 @@
     renderFlags();
     setupControls();
     // Start on the first flagged series, else the first one.
-    const first = flags[0] || { scene: Object.keys(H.series).sort()[0], label: null };
+    const first =
+        flags.find((f) => f.scene !== '*') || {scene: Object.keys(H.series).sort()[0], label: null};
     if (first.scene) await choose(first.scene, first.label);
   }
 
