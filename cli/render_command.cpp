@@ -55,7 +55,7 @@ void addRenderCommand(CLI::App& app) {
     Shard shard;
     std::tie(shard.index, shard.count) = parseShard(*shardText);
     const std::vector<Scene> scenes = selectScenes(*names, opt->scenesDir);
-    for (const Scene& scene : scenes) requireFitsInMemory(scene, opt->settings(), false);
+    for (const Scene& scene : scenes) requireRenderable(scene, opt->settings(), false);
     for (const Scene& scene : scenes) {
       auto dir = renderSequence(
           scene, opt->settings(), opt->cacheDir, [](const std::string& line) { std::cout << line << std::endl; },

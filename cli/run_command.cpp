@@ -82,7 +82,7 @@ RunConfig configFrom(const MatrixOptions& o) {
   // A run on captures covers only them unless scenes are asked for too.
   if (o.captures.empty() || o.scenesOption->count() > 0) c.scenes = selectScenes(o.scenes, o.render.scenesDir);
   for (const std::string& capture : o.captures) c.captures.push_back(capture);
-  for (const Scene& s : c.scenes) requireFitsInMemory(s, c.render, true);
+  for (const Scene& s : c.scenes) requireRenderable(s, c.render, true);
   c.baselines = !o.noBaselines;
   c.warmup = o.warmup;
   c.seeds = o.seeds;

@@ -134,7 +134,7 @@ void addStudyCommand(CLI::App& app) {
     auto progress = std::make_shared<StudyProgress>(*verbose);
     c.progress = [progress](const std::string& line) { progress->step(line); };
     c.milestone = [progress](const std::string& line) { progress->milestone(line); };
-    for (const Scene& s : c.scenes) requireFitsInMemory(s, c.render, true);
+    for (const Scene& s : c.scenes) requireRenderable(s, c.render, true);
     for (const std::string& w : shortSequenceWarnings(c.scenes, c.render, c.warmup))
       std::cerr << "arena: warning: " << w << "\n";
     runStudy(study);

@@ -130,7 +130,9 @@ void writeTextAtomically(const fs::path& path, const std::string& text) {
 }
 
 std::string readText(const fs::path& path, uintmax_t maxBytes) {
-  int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  // Non-blocking open: opening a FIFO for reading waits for a writer, forever; a regular file
+  // ignores the flag, and anything else is refused below.
+  int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
   if (fd < 0) throw Error(osError(path, "cannot open file", errno));
   struct stat st {};
   if (::fstat(fd, &st) != 0) {

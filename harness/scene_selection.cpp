@@ -31,6 +31,15 @@ std::pair<int, int> parseResolution(const std::string& option, const std::string
   return {side(text.substr(0, x)), side(text.substr(x + 1))};
 }
 
+void requireRenderable(const Scene& scene, const RenderSettings& settings, bool wholeSequence) {
+  const int bounces = settings.maxBounces > 0 ? settings.maxBounces : scene.maxBounces;
+  if (scene.referenceEstimator == ReferenceEstimator::Bidirectional &&
+      bounces > kMaxBidirectionalBounces)
+    throw Error(scene.file + ": --max-bounces " + std::to_string(bounces) +
+                ": its references are bidirectional, " + "which hold at most " +
+                std::to_string(kMaxBidirectionalBounces) + " bounces");
+  requireFitsInMemory(scene, settings, wholeSequence);
+}
 
 void requireFitsInMemory(const Scene& scene, const RenderSettings& settings, bool wholeSequence) {
   auto floatsPerPixel = [](const std::vector<LayerSpec>& specs) {

@@ -14,6 +14,9 @@ std::pair<int, int> parseResolution(const std::string& option, const std::string
 // `wholeSequence`, running denoisers on it: every frame is held in memory) needs more memory than
 // the machine has -- a clear error instead of std::bad_alloc halfway through.
 void requireFitsInMemory(const Scene& scene, const RenderSettings& settings, bool wholeSequence);
+// Everything checked before `scene` renders under `settings`: requireFitsInMemory, and a
+// --max-bounces its bidirectional references can hold (kMaxBidirectionalBounces).
+void requireRenderable(const Scene& scene, const RenderSettings& settings, bool wholeSequence);
 
 // One line per scene whose sequence (as `settings` render it) has no frame after the warm-up: every
 // summary of its pairs will be absent (metrics.md W). Said before any work, so that a --frames or

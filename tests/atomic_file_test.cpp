@@ -1,15 +1,17 @@
 // core/atomic_file: writes are atomic, a failed write names the path and the OS reason, and the
 // temporaries of killed writes are cleaned.
+#include "core/atomic_file.hpp"
+
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <chrono>
 #include <filesystem>
 #include <string>
 
-#include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "metrics/results.hpp"
 #include "tests/contract_fixture.hpp"
@@ -58,6 +60,15 @@ struct FileSizeLimit {
   }
   ~FileSizeLimit() { setrlimit(RLIMIT_FSIZE, &saved); }
 };
+
+// A named pipe where a document belongs is refused at once: a blocking open would wait for a
+// writer forever (a scene file, a mesh, a manifest).
+TEST(AtomicFile, AFifoIsRefusedWithoutWaitingForAWriter) {
+  const fs::path fifo = test::freshDir("atomic_fifo") / "scene.json";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const std::string e = test::errorOf([&] { readText(fifo); });
+  EXPECT_NE(e.find("scene.json: not a regular file"), std::string::npos) << e;
+}
 
 TEST(AtomicFile, WriteErrorsNameThePathAndTheReason) {
   fs::path dir = test::freshDir("write_errors");

@@ -77,6 +77,16 @@ TEST(CliContract, ZeroNegativeAndMalformedCliValuesAreRejected) {
     EXPECT_NE(r.output.find(name), std::string::npos) << flags << "\n" << r.output;
   }
   EXPECT_TRUE(fs::is_empty(cache)) << "a rejected command rendered something";
+  // More bounces than a scene's bidirectional references hold: refused before anything renders.
+  const contract::CliResult deep = contract::arenaCli(
+      "render hard_light --resolution 8x8 --ref-spp 1 --frames 1 "
+      "--max-bounces 20 --cache " +
+      cache.string());
+  EXPECT_EQ(deep.status, 2) << deep.output;
+  EXPECT_NE(deep.output.find("hard_light.json: --max-bounces 20: its references are bidirectional"),
+            std::string::npos)
+      << deep.output;
+  EXPECT_TRUE(fs::is_empty(cache)) << "rendered before refusing --max-bounces";
   for (const std::string target : {"0", "-1e-5", "nan", "1e-5x"}) {
     const contract::CliResult r = contract::arenaCli("refine cornell_static --cache " +
                                                      cache.string() + " --target " + target);

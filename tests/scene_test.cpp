@@ -268,6 +268,16 @@ TEST(SceneContract, RadianceAndCoordinatesThatOverflowFloatAreRejected) {
   s["objects"][0]["keys"][0]["translate"] = {0, 3e38, 0};
   EXPECT_NE(contract::sceneError(s).find("$.objects[0].keys[0].translate: expected values within"),
             std::string::npos);
+  // A light scaled to nothing, or mirrored (its emitting side turned away), is refused: it would
+  // render a darker or black scene without a word.
+  for (const json& scale : {json{0, 1, 0.5}, json{-0.5, 1, 0.5}, json{0.5, 0, 0.5}}) {
+    s = contract::minimalScene();
+    s["lights"][0]["keys"][0]["scale"] = scale;
+    EXPECT_NE(contract::sceneError(s).find(
+                  "$.lights[0].keys[0].scale: expected every component > 0 for a light"),
+              std::string::npos)
+        << scale << ": " << contract::sceneError(s);
+  }
 }
 
 TEST(SceneContract, MeshFilesMustBeBoundedRegularFiles) {

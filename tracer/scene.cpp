@@ -400,6 +400,15 @@ Scene parseScene(const std::string& text, const std::string& path) {
     auto track =
         readTrack<LightKey>(l, "keys", scene.frames, LightKey{}, [](JsonReader& k, LightKey& v) {
           readTransform(k, v.t);
+          // An emitter emits from the front of its triangles: a zero scale leaves it no area (it is
+          // never sampled, and its normals are NaN), a negative one mirrors it and turns its front
+          // away. Either would light the scene wrongly and silently.
+          if (!(v.t.scale.x > 0 && v.t.scale.y > 0 && v.t.scale.z > 0))
+            k.fail(
+                "scale",
+                "expected every component > 0 for a light (zero leaves it no area, negative turns "
+                "its emitting side away), got " +
+                    vecText(v.t.scale));
           v.v.intensity = numberIn(k, "intensity", v.v.intensity, 0.0, 1e9);
           v.v.color = k.vec3("color", v.v.color);
           requireNonNegative(k, "color", v.v.color);
