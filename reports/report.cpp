@@ -608,7 +608,9 @@ json pairData(const PairResult& pair) {
                  {"msP95", timing.value("msP95", kNaN)},
                  {"msPerMegapixel", timing.value("msPerMegapixel", kNaN)},
                  {"tapsPerPixel", timing.value("tapsPerPixel", kNaN)},
-                 {"passes", timing.contains("passes") ? timing["passes"].size() : 0}};
+                 {"passes", timing.contains("passes") ? timing["passes"].size() : 0},
+                 {"clock", timing.value("clock", std::string("cpu"))}};
+  if (timing.contains("device")) p["timing"]["device"] = timing["device"];
   // The cost model's view (docs/gpu-cost.md): the first device's predicted ms and the GPU memory.
   if (timing.contains("gpuPredicted") && timing["gpuPredicted"].is_object()) {
     const json& g = timing["gpuPredicted"];
@@ -705,6 +707,7 @@ json reportData(const RunResults& results, const fs::path& runDir, const RunResu
     // compareRuns leaves the numbers at 0 when one side has no result; say why instead, and keep
     // the side that exists, so "regressed" from a failed pair is not read as a change of +0%.
     for (json& row : table) {
+      if (row["metric"] == "*") continue;  // a whole pair: compare's own note says what is missing
       const PairResult* b = baseline->find(row["scene"], row["label"]);
       const PairResult* c = results.find(row["scene"], row["label"]);
       const std::string metric = row["metric"];

@@ -369,6 +369,21 @@ TEST(Report, BaselineGivesCompareVerdicts) {
       EXPECT_NEAR(r["change"].get<double>(), 0.2, 1e-9);
     }
   EXPECT_TRUE(found);
+  // A pair only this run has keeps compare's own note (a whole pair: metric "*").
+  json more = cand;
+  json extra = more["pairs"][1];
+  extra["label"] = "svgf[a=9]";
+  more["pairs"].push_back(extra);
+  const json withNew =
+      reportData(test::typed(more), test::freshDir("report_regression_new"), &baseRun);
+  bool noted = false;
+  for (const json& r : withNew["regression"]["rows"])
+    if (r["label"] == "svgf[a=9]") {
+      noted = true;
+      EXPECT_EQ(r["metric"], "*");
+      EXPECT_EQ(r["note"], "pair not in the baseline run") << r;
+    }
+  EXPECT_TRUE(noted);
 }
 
 TEST(Report, AllScenesShowStatisticsOverallScoresAndNeverASecondOne) {

@@ -25,27 +25,66 @@
     const draw = () => {
       const rows = R.rows.filter((r) => filter.value === 'all' || (filter.value === 'regressed' ? r.verdict === 'regressed' : r.verdict !== 'ok'))
         .sort((a, b) => order[a.verdict] - order[b.verdict] || Math.abs(b.change) - Math.abs(a.change));
-      tableBox.replaceChildren(rows.length ? el('table', { class: 'data regression-table' },
-        el('thead', {}, el('tr', {}, ['scene', 'denoiser / setting', 'metric', 'baseline', 'candidate', 'change', 'tolerance', 'verdict', 'note']
-          .map((t, i) => el('th', { class: i < 3 || i === 8 ? 'first' : null, text: t })))),
-        el('tbody', {}, rows.map((r) => el('tr', {},
-          el('td', { class: 'first', text: r.scene }), el('td', { class: 'first', text: r.label }), el('td', { class: 'first', text: r.metric }),
-          el('td', { text: fmt(r.baseline) }), el('td', { text: fmt(r.candidate) }), el('td', { text: r.note ? '–' : pct(r.change) }),
-          el('td', { text: `±${(100 * r.tolerance).toFixed(1)}%` }), el('td', { class: `verdict-${r.verdict}`, text: r.verdict }),
-          el('td', { class: 'left', text: r.note || '' })))))
-        : el('p', { class: 'empty', text: 'Nothing moved beyond its tolerance.' }));
+      tableBox.replaceChildren(
+          rows.length ?
+              el('table', {class: 'data regression-table'},
+                 el('thead', {},
+                    el('tr', {},
+                       [
+                         'scene', 'denoiser / setting', 'metric', 'baseline', 'candidate', 'change',
+                         'tolerance', 'verdict', 'note'
+                       ].map((t, i) => el('th', {
+                               class: i < 3 || i === 8 ? 'first' : null,
+                               text: t
+                             })))),
+                 el('tbody', {},
+                    rows.map(
+                        (r) => el(
+                            'tr', {}, el('td', {class: 'first', text: r.scene}),
+                            el('td', {class: 'first', text: r.label}),
+                            el('td', {class: 'first', text: r.metric}),
+                            el('td', {text: fmt(r.baseline)}), el('td', {text: fmt(r.candidate)}),
+                            el('td', {text: r.note ? '–' : pct(r.change)}), el('td', {
+                              text: r.metric === '*' ? '–' : `±${(100 * r.tolerance).toFixed(1)}%`
+                            }),
+                            el('td', {class: `verdict-${r.verdict}`, text: r.verdict}),
+                            el('td', {class: 'left', text: r.note || ''}))))) :
+              el('p', {class: 'empty', text: 'Nothing moved beyond its tolerance.'}));
     };
     filter.addEventListener('change', draw);
     const b = R.baseline;
-    body.replaceChildren(...[
-      el('p', {}, `Baseline: ${b.name || '(unnamed)'}${b.created ? ` (${b.created}` : ''}${b.commit ? `, commit ${b.commit})` : b.created ? ')' : ''}. `,
-        el('b', { class: R.anyRegression ? 'worse' : 'best', text: R.anyRegression ? '`arena compare` would fail (exit 1).' : '`arena compare` would pass.' })),
-      (R.settingsDiffer || []).length
-        ? el('p', { class: 'warnings', text: `The runs' settings differ (baseline vs this run), so their numbers are not comparable: ${R.settingsDiffer.join('; ')}. \`arena compare\` refuses this without --allow-settings-mismatch.` })
-        : null,
-      el('p', { class: 'note', text: `Verdicts: ${Object.entries(counts).map(([k, n]) => `${n} ${k}`).join(', ') || 'none'}. A metric regresses when its mean moved in its worse direction by more than its tolerance, relative to the baseline.` }),
-      el('div', { class: 'controls' }, el('label', {}, 'Show ', filter)),
-      tableBox].filter(Boolean));
+    body.replaceChildren(
+        ...[el('p', {},
+               `Baseline: ${b.name || '(unnamed)'}${b.created ? ` (${b.created}` : ''}${
+                   b.commit ? `, commit ${b.commit})` :
+                       b.created ? ')' :
+                                   ''}. `,
+               (R.settingsDiffer || []).length ? el('b', {
+                 class: 'worse',
+                 text: '`arena compare` would refuse these runs (exit 2): their settings differ.'
+               }) :
+                                                 el('b', {
+                                                   class: R.anyRegression ? 'worse' : 'best',
+                                                   text: R.anyRegression ?
+                                                       '`arena compare` would fail (exit 1).' :
+                                                       '`arena compare` would pass.'
+                                                 })),
+            (R.settingsDiffer || []).length ? el('p', {
+              class: 'warnings',
+              text:
+                  `The runs' settings differ (baseline vs this run), so their numbers are not comparable: ${
+                      R.settingsDiffer.join(
+                          '; ')}. \`arena compare\` refuses this without --allow-settings-mismatch.`
+            }) :
+                                              null,
+            el('p', {
+              class: 'note',
+              text: `Verdicts: ${
+                  Object.entries(counts).map(([k, n]) => `${n} ${k}`).join(', ') ||
+                  'none'}. A metric regresses when its mean moved in its worse direction by more than its tolerance, relative to the baseline.`
+            }),
+            el('div', {class: 'controls'}, el('label', {}, 'Show ', filter)), tableBox]
+            .filter(Boolean));
     draw();
   }
 })();

@@ -124,13 +124,28 @@
       if (on.has('p95')) cols.push({ group: m.name, title: 'p95', lower: m.lowerIsBetter, get: (p) => (s(p) ? s(p).p95 : null) });
     }
     const gpuDevice = (pairs.find((p) => p.timing && p.timing.gpuDevice) || { timing: {} }).timing.gpuDevice || 'no device';
+    // Times on another clock (a capture's recorded device times) are shown with their clock and
+    // never compared with the CPU's: the best of a column is taken among one clock's times.
+    const clockedColumns = new Set(['msMedian', 'msP95', 'msP5', 'msPerMegapixel']);
+    const otherClock = (p) => (
+        p.timing && p.timing.clock && p.timing.clock !== 'cpu' ? p.timing.device || p.timing.clock :
+                                                                 null);
     for (const t of TIMING_COLUMNS)
-      if (on.has(t.key)) cols.push({ group: t.group || 'time', plain: true, title: t.title, lower: true,
-                                     hint: t.key === 'gpuMs' ? `${t.hint} ${gpuDevice}` : t.hint,
-                                     get: (p) => (p.timing ? p.timing[t.key] : null) });
+      if (on.has(t.key))
+        cols.push({
+          group: t.group || 'time',
+          plain: true,
+          title: t.title,
+          lower: true,
+          hint: t.key === 'gpuMs' ? `${t.hint} ${gpuDevice}` : t.hint,
+          get: (p) => (p.timing ? p.timing[t.key] : null),
+          clockOf: clockedColumns.has(t.key) ? otherClock : null
+        });
     const ok = pairs.filter(A.isOk);
     const best = cols.map((c) => {
-      const vals = ok.map(c.get).filter((v) => Number.isFinite(v));
+      const vals = ok.filter((p) => !(c.clockOf && c.clockOf(p)))
+                       .map(c.get)
+                       .filter((v) => Number.isFinite(v));
       return vals.length > 1 ? (c.lower ? Math.min(...vals) : Math.max(...vals)) : null;
     });
     const groups = [];
@@ -170,9 +185,15 @@
         el('td', { class: 'first', title: JSON.stringify(p.params), text: p.label }),
         cols.map((c, i) => {
           const v = c.get(p);
-          const classes = [start(i), best[i] !== null && v === best[i] ? 'best' : ''].join(' ').trim();
+          const clock = c.clockOf ? c.clockOf(p) : null;  // another clock: labelled, never "best"
+          const classes = [
+            start(i), !clock && best[i] !== null && v === best[i] ? 'best' : ''
+          ].join(' ').trim();
           const ci = withCi && c.ci ? A.interval(c.ci(p)) : '';
-          return el('td', { class: classes || null }, fmt(v), ci ? el('span', { class: 'ci', text: ci }) : null);
+          return el(
+              'td', {class: classes || null}, fmt(v),
+              ci ? el('span', {class: 'ci', text: ci}) : null,
+              clock ? el('span', {class: 'ci', text: `(${clock})`}) : null);
         })));
     }
     table.replaceChildren(head, el('tbody', {}, rows));
