@@ -288,6 +288,14 @@ json speedView(const RunResults& results, const std::vector<std::string>& scenes
     }
     if (!overall) continue;
     auto& table = byAxis[axis.key];
+    // The scenes the overall score covers: those where a ranked method has a value on this axis (a
+    // capture without a reference has none, and is in no one's score). A point is complete when it
+    // covers all of them.
+    size_t covered = 0;
+    for (const std::string& scene : scenes)
+      covered +=
+          std::any_of(overall->ranking.begin(), overall->ranking.end(),
+                      [&](const RankedMethod& r) { return table[scene].count(r.label) > 0; });
     std::vector<json> points;
     for (const RankedMethod& r : overall->ranking) {
       const std::string& label = r.label;
@@ -318,7 +326,7 @@ json speedView(const RunResults& results, const std::vector<std::string>& scenes
                     {"msLo", nLo == n ? json(msLo / k) : json(nullptr)},
                     {"msHi", nHi == n ? json(msHi / k) : json(nullptr)},
                     {"scenes", n},
-                    {"complete", n == scenes.size()}};
+                    {"complete", n == covered}};
       if (nTracing == n) point["tracingMs"] = tracing / k;  // the mean like its time's
       if (std::isfinite(r.extraPathsPerPixel)) point["extraRaysPerPixel"] = r.extraPathsPerPixel;
       points.push_back(std::move(point));
@@ -327,7 +335,7 @@ json speedView(const RunResults& results, const std::vector<std::string>& scenes
     json scope = speedScope(points, true);
     scope["normalisation"] = overall->normalisation;
     scope["baseline"] = overall->baseline;
-    scope["sceneCount"] = scenes.size();
+    scope["sceneCount"] = covered;
     scope["source"] = "statistics";
     all[axis.key] = scope;
   }

@@ -413,6 +413,22 @@ TEST(Report, AllScenesShowStatisticsOverallScoresAndNeverASecondOne) {
   EXPECT_EQ(byLabel["svgf[a=0]"]["lo"].get<double>(), 0.2);
   EXPECT_EQ(byLabel["svgf[a=0]"]["hi"].get<double>(), 0.3);
   EXPECT_GT(byLabel["svgf[a=0]"]["ms"].get<double>(), 0.0);  // the label's mean time over its scenes
+
+  // A scene no overall score covers (a capture without a reference: no relMSE anywhere) leaves the
+  // points complete: they cover every scene the score does, and the front is drawn.
+  json withNoRef = run;
+  std::set<std::string> scored;
+  for (const json& p : run["pairs"]) scored.insert(p["scene"].get<std::string>());
+  json extra = run["pairs"][0];
+  extra["scene"] = "noref";
+  extra["summary"].erase("relMse");
+  withNoRef["pairs"].push_back(extra);
+  withNoRef["scenes"]["noref"] = withNoRef["scenes"].begin().value();
+  const json relMse = reportData(test::typed(withNoRef), test::freshDir("report_overall_noref"),
+                                 nullptr)["speed"]["views"]["cpu"]["all"]["relMse"];
+  EXPECT_EQ(relMse["sceneCount"], scored.size());
+  for (const json& p : relMse["points"]) EXPECT_TRUE(p["complete"].get<bool>()) << p;
+  EXPECT_FALSE(relMse["front"].empty());
 }
 
 TEST(Report, IntervalsAndTheRunsOwnRankingsAreUsedWhenPresent) {
