@@ -291,8 +291,7 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
       JsonReader o = outputs->child(name);
       if (!isPlainName(name))
         throw Error(file.string() + ": outputs: key '" + name +
-                    "': expected a folder name in outputs/ without " +
-                    "spaces or slashes, not . or ..");
+                    "': expected a folder name in outputs/ without spaces or slashes, not . or ..");
       CaptureOutput out;
       out.name = name;
       out.dir = dir / "outputs" / name;
@@ -373,13 +372,15 @@ LayerSet readCaptureFrame(const CaptureDescription& c, int t) {
   for (const LayerSpec& s : captureFrameSpecs())
     if (contains(c.layers, s.name) && !contains(c.derived, s.name)) specs.push_back(s);
   // Every frame holds frame 0's layers: readExr names the file and channel when one lacks a layer
-  // frame 0 had; a layer only this frame has (whole or partial) would be ignored, so it is refused.
-  for (const LayerSpec& s : layersPresent(file, readExrHeader(file), captureFrameSpecs()))
+  // frame 0 had; a layer only this frame has (whole or partial) would be ignored, so it is refused
+  // (from the channel list of the same read).
+  ExrContents contents = readExr(file, specs);
+  for (const LayerSpec& s : layersPresent(file, contents.header, captureFrameSpecs()))
     if (!contains(c.layers, s.name) || contains(c.derived, s.name))
       throw Error(file.string() + ": layer '" + s.name + "' is in this frame but not in " +
                   captureFramePath(c.dir, 0).filename().string() +
                   " (every frame of a capture holds the same layers)");
-  LayerSet layers = readExr(file, specs).layers;
+  LayerSet layers = std::move(contents.layers);
   if (layers.width() != info.width || layers.height() != info.height)
     throw Error(file.string() + ": " + std::to_string(layers.width()) + "x" + std::to_string(layers.height()) +
                 ", expected " + std::to_string(info.width) + "x" + std::to_string(info.height));

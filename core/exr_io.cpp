@@ -155,6 +155,9 @@ ExrContents readExr(const fs::path& path, const std::vector<LayerSpec>& specs) {
                   "uncropped)");
     }
     out.attributes = attributesOf(file.header());
+    out.header = {w, h, {}};
+    for (auto it = file.header().channels().begin(); it != file.header().channels().end(); ++it)
+      out.header.channels.push_back(it.name());
     Imf::FrameBuffer fb;
     for (const LayerSpec& spec : specs) {
       if (spec.topLevel) continue;  // a viewer-facing copy of a named layer

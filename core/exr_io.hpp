@@ -53,19 +53,21 @@ void writeExr(const std::filesystem::path& path, const LayerSet& layers,
               const std::vector<LayerSpec>& specs, const ExrAttributes& attributes = {},
               ExrCompression compression = ExrCompression::Zip);
 
+struct ExrHeader {
+  int width = 0, height = 0;
+  std::vector<std::string> channels;
+};
+
 struct ExrContents {
   LayerSet layers;
   ExrAttributes attributes;
+  ExrHeader header;  // the file's size and every channel it holds, read or not
 };
 // Reads the given layers; a missing channel, a size mismatch or an unreadable/truncated file is
 // an Error naming the file and the channel.
 ExrContents readExr(const std::filesystem::path& path, const std::vector<LayerSpec>& specs);
 ExrAttributes readExrAttributes(const std::filesystem::path& path);
 // The channel names a file holds ("diffuse.R", "R", ...), and its size, without reading pixels.
-struct ExrHeader {
-  int width = 0, height = 0;
-  std::vector<std::string> channels;
-};
 ExrHeader readExrHeader(const std::filesystem::path& path);
 
 }  // namespace arena

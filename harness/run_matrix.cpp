@@ -86,16 +86,25 @@ json runMatrix(const RunConfig& cfg) {
     std::string name, purpose;
     const Scene* scene = nullptr;
     fs::path capture;
+    int width = 0, height = 0, frames = 0;  // as the run sees it (a shard's plan records them)
   };
   std::vector<Source> sources;
-  for (const Scene& scene : cfg.scenes) sources.push_back({scene.name, scene.purpose, &scene, {}});
+  for (const Scene& scene : cfg.scenes)
+    sources.push_back({scene.name,
+                       scene.purpose,
+                       &scene,
+                       {},
+                       cfg.render.resolvedWidth(scene),
+                       cfg.render.resolvedHeight(scene),
+                       cfg.render.resolvedFrames(scene)});
   for (const fs::path& capture : cfg.captures) {
     const CaptureDescription d = readCaptureDescription(capture);
     for (const Source& other : sources)
       if (other.name == d.info.scene)
         throw Error("capture " + capture.string() + ": its name '" + d.info.scene + "' is also the name of " +
                     (other.scene ? "a scene" : "capture " + other.capture.string()) + " in this run");
-    sources.push_back({d.info.scene, d.info.purpose, nullptr, capture});
+    sources.push_back({d.info.scene, d.info.purpose, nullptr, capture, d.info.width, d.info.height,
+                       d.info.frames});
   }
   const bool keepAll = cfg.keepFrames == "all" || (cfg.keepFrames == "auto" && sources.size() == 1 &&
                                                    denoisers.size() == (cfg.baselines ? 3u : 1u) && !cfg.denoisers.empty());
@@ -129,18 +138,11 @@ json runMatrix(const RunConfig& cfg) {
   // and merge refuses them (their slices would not add up to one run).
   if (cfg.shardCount > 1) {
     json plan = {{"sequences", json::array()}, {"labels", json::array()}};
-    for (const Source& source : sources) {
-      int w = 0, h = 0, frames = 0;
-      if (source.scene) {
-        w = cfg.render.resolvedWidth(*source.scene), h = cfg.render.resolvedHeight(*source.scene);
-        frames = cfg.render.resolvedFrames(*source.scene);
-      } else {
-        const SequenceInfo info = readCaptureDescription(source.capture).info;
-        w = info.width, h = info.height, frames = info.frames;
-      }
-      plan["sequences"].push_back(
-          {{"name", source.name}, {"width", w}, {"height", h}, {"frames", frames}});
-    }
+    for (const Source& source : sources)
+      plan["sequences"].push_back({{"name", source.name},
+                                   {"width", source.width},
+                                   {"height", source.height},
+                                   {"frames", source.frames}});
     for (const DenoiserRequest& d : denoisers) plan["labels"].push_back(d.label);
     results["settings"]["plan"] = plan;
   }

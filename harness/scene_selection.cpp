@@ -32,11 +32,11 @@ std::pair<int, int> parseResolution(const std::string& option, const std::string
 }
 
 void requireRenderable(const Scene& scene, const RenderSettings& settings, bool wholeSequence) {
-  const int bounces = settings.maxBounces > 0 ? settings.maxBounces : scene.maxBounces;
+  const int bounces = settings.resolvedMaxBounces(scene);
   if (scene.referenceEstimator == ReferenceEstimator::Bidirectional &&
       bounces > kMaxBidirectionalBounces)
     throw Error(scene.file + ": --max-bounces " + std::to_string(bounces) +
-                ": its references are bidirectional, " + "which hold at most " +
+                ": its references are bidirectional, which hold at most " +
                 std::to_string(kMaxBidirectionalBounces) + " bounces");
   requireFitsInMemory(scene, settings, wholeSequence);
 }
@@ -74,7 +74,7 @@ std::string shortSequenceWarning(const std::string& source, int frames, int warm
   if (frames > warmup) return "";
   return source + ": the sequence has " + std::to_string(frames) +
          " frames and the warm-up excludes the first " + std::to_string(warmup) +
-         ": no frame is left to summarise, every summary of this " + "sequence will be absent (" +
+         ": no frame is left to summarise, every summary of this sequence will be absent (" +
          remedy + ")";
 }
 

@@ -118,18 +118,11 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
   for (const PairResult& p : base.pairs) baseScenes.insert(p.scene);
   bool shared = false;
   for (const std::string& s : baseScenes) shared |= candScenes.count(s) > 0;
+  // Without a scene in common every baseline pair is missing (the gate fails) and every candidate
+  // pair new, as below; their notes say why.
+  const std::string noShared = shared ? "" : "the runs share no scene: ";
   std::vector<ComparisonRow> rows;
   int comparedPairs = 0;  // pairs both runs ran
-  if (!shared) {
-    // Nothing to compare: every baseline pair is missing from the candidate (the gate fails) and
-    // every candidate pair is new, each row saying why.
-    for (const PairResult& b : base.pairs)
-      rows.push_back(
-          pairRow(b, "missing", "the runs share no scene: pair not in the candidate run"));
-    for (const PairResult& c : cand.pairs)
-      rows.push_back(pairRow(c, "new", "the runs share no scene: pair not in the baseline run"));
-    return rows;
-  }
   std::set<std::string> baseKeys;
   for (const PairResult& b : base.pairs) {
     baseKeys.insert(key(b));
@@ -137,7 +130,7 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
     const std::string& label = b.label;
     auto it = candPairs.find(key(b));
     if (it == candPairs.end()) {
-      rows.push_back(pairRow(b, "missing", "pair not in the candidate run"));
+      rows.push_back(pairRow(b, "missing", noShared + "pair not in the candidate run"));
       continue;
     }
     const PairResult& c = *it->second;
@@ -208,7 +201,8 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
     }
   }
   for (const PairResult& c : cand.pairs)
-    if (!baseKeys.count(key(c))) rows.push_back(pairRow(c, "new", "pair not in the baseline run"));
+    if (!baseKeys.count(key(c)))
+      rows.push_back(pairRow(c, "new", noShared + "pair not in the baseline run"));
   // A metric the caller named must have been computed somewhere; the defaults skip a metric
   // neither run computed (FLIP switched off in both).
   if (comparedPairs > 0)

@@ -54,6 +54,9 @@ struct RenderSettings {
   int resolvedWidth(const Scene& s) const { return width > 0 ? width : s.width; }
   int resolvedHeight(const Scene& s) const { return height > 0 ? height : s.height; }
   int resolvedFrames(const Scene& s) const { return frames > 0 ? frames : s.frames; }
+  int resolvedMaxBounces(const Scene& s) const {
+    return maxBounces > 0 ? maxBounces : s.maxBounces;
+  }
 };
 
 // What a reference needs to be extended: per pixel and replicate, the sums of (colour, diffuse,

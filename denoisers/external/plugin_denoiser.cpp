@@ -183,8 +183,9 @@ ParamSchema schemaOf(const ArenaPlugin& p, const std::string& where) {
         for (const double v : {s.defaultValue, s.min, s.max})
           if (!(v == std::floor(v) && v >= -2147483648.0 && v <= 2147483647.0))
             throw Error(at + " (" + s.name +
-                        "): an int parameter's default, min and max must be whole numbers " +
-                        "within int, got " + std::to_string(v));
+                        "): an int parameter's default, min and max must be whole numbers within "
+                        "int, got " +
+                        std::to_string(v));
         specs.push_back(
             ParamSpec::integer(s.name, int(s.defaultValue), int(s.min), int(s.max), meaning));
         break;

@@ -194,10 +194,11 @@ void ExternalProcessDenoiser::denoise(const FrameContext& ctx, const DenoiserInp
       };
       if (!p.is_object() || !p.contains("name") || !p["name"].is_string() || !nonNegative("ms") ||
           (p.contains("tapsPerPixel") && !nonNegative("tapsPerPixel")))
-        fail(
-            "frame " + std::to_string(ctx.frameIndex) +
-            ": each entry of \"passes\" needs a string \"name\", " +
-            "a number \"ms\" >= 0 and optionally a number \"tapsPerPixel\" >= 0, got: " + p.dump());
+        fail("frame " + std::to_string(ctx.frameIndex) +
+             ": each entry of \"passes\" needs a string \"name\", a number \"ms\" >= 0 and "
+             "optionally "
+             "a number \"tapsPerPixel\" >= 0, got: " +
+             p.dump());
       passes_.push_back(
           {p["name"].get<std::string>(), p["ms"].get<double>(), p.value("tapsPerPixel", 0.0)});
     }
