@@ -92,13 +92,18 @@ RenderSettings RenderSettings::fromPreset(const std::string& name) {
 }
 
 json RenderSettings::pixelSettings(const Scene& scene) const {
-  json px = {
-      {"width", resolvedWidth(scene)},           {"height", resolvedHeight(scene)},
-      {"frames", resolvedFrames(scene)},         {"referenceSpp", referenceSpp},
-      {"referenceMinSpp", referenceMinSpp},      {"referenceRelError", referenceRelError},
-      {"maxBounces", resolvedMaxBounces(scene)}, {"tracerVersion", kTracerVersion},
-      {"referenceSampler", referenceSampler},    {"referenceReplicates", referenceReplicates},
-      {"referenceTile", referenceTile},          {"preset", preset}};
+  json px = {{"width", resolvedWidth(scene)},
+             {"height", resolvedHeight(scene)},
+             {"frames", resolvedFrames(scene)},
+             {"referenceSpp", referenceSpp},
+             {"referenceMinSpp", referenceMinSpp},
+             {"referenceRelError", referenceRelError},
+             {"maxBounces", resolvedMaxBounces(scene)},
+             {"tracerVersion", kTracerVersion},
+             {"referenceSampler", referenceSampler},
+             {"referenceReplicates", referenceReplicates},
+             {"referenceTile", referenceTile},
+             {"preset", preset}};
   if (inputSeed != 0) px["inputSeed"] = inputSeed;  // absent by default: existing caches keep their hash
   if (lowresFactor > 0) {
     px["lowresFactor"] = lowresFactor;
