@@ -118,8 +118,13 @@ void addReferenceQuality(json& results, int warmup, const std::map<std::string, 
       else
         verdict += "its references met their target, which is too loose for this scene (`arena refine " + name +
                    options + " --target " + sci(needed) + "`)";
-      verdict += ", then run again (everything else is reused); rankings here rest on the corrected relMSE, "
-                 "and FLIP/SSIM partly measure the reference";
+      // A scene's ranks come from paired differences, the same for raw and corrected relMSE (the
+      // reference's term is every method's), which its noise leaves unbiased but widens; the
+      // overall score's ratios of raw relMSE it pulls towards 1.
+      verdict +=
+          ", then run again (everything else is reused); until then the reference's noise widens "
+          "the relMSE ranking's intervals (more ties) and pulls the overall score's ratios towards "
+          "1, and FLIP/SSIM partly measure the reference";
     }
     if (auto note = notes.find(name); note != notes.end()) verdict += " (" + note->second + ")";
     q = {{"floor", floor},

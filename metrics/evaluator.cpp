@@ -555,8 +555,11 @@ json PairEvaluation::finish() {
     const double refFloor = summarize(scene.referenceRelMse_, warmup).mean;
     if (summary.contains("relMse") && summary["relMse"].contains("mean") &&
         summary["relMse"]["mean"].get<double>() < 10.0 * refFloor)
-      warnings.push_back("relMSE is within 10x of the reference's own noise floor (" + std::to_string(refFloor) +
-                         "): the ranking on raw relMSE is unreliable; use relMseCorrected or a better reference");
+      warnings.push_back(
+          "relMSE is within 10x of the reference's own noise floor (" + std::to_string(refFloor) +
+          "): much of it is the reference's noise, which widens the ranking's intervals and pulls "
+          "ratios between methods (the overall score) towards 1; relMseCorrected removes it on "
+          "average, a better reference removes it");
   }
   // Metrics that cannot be corrected for the reference's noise (the perceptual ones): warn within
   // their declared factor of their own floor.
