@@ -126,16 +126,21 @@ MetricFamily temporalFlickerFamily() {
   };
   f.measure = [](const FrameView& v, const MetricOptions&, FrameRecorder& out) {
     const FrameView* p = v.previous(1);
-    if (!p) return;  // frame 0: no frame difference
+    // Frame 0, or a camera cut: the frame before shows another view, and its difference (or
+    // reprojection: walls keep their mesh ids across a cut, and a few pixels pass by chance)
+    // measures the cut, not flicker.
+    if (!p || v.cutWithin(1)) return;
     TileSums tiles;
     const double trmae = temporalRelativeMae(*v.output, *p->output, *v.reference, *p->reference, 0.01, &tiles);
     out.put("tRmae", trmae, std::move(tiles));
     const double tpsnr = temporalPsnr(*v.outputDisplay, *p->outputDisplay, *v.referenceDisplay,
                                       *p->referenceDisplay, &tiles);
     out.put("tPsnr", tpsnr, std::move(tiles));
-    // Lag 1 of the paths the stability metric follows, kept once per frame.
-    const WarpedFlicker wf = warpedFlicker(*v.error, *p->error, *motionPaths(v, std::max(1, followableLags(v))), &tiles);
-    // No consistent pixel (a cut, a full disocclusion): warped flicker is undefined there.
+    // Lag 1 of the paths the stability metric follows (at least one here: no cut), kept once per
+    // frame.
+    const WarpedFlicker wf =
+        warpedFlicker(*v.error, *p->error, *motionPaths(v, followableLags(v)), &tiles);
+    // No consistent pixel (a full disocclusion): warped flicker is undefined there.
     if (wf.validFraction > 0) out.put("warpedFlicker", wf.value, std::move(tiles));
     out.note("warpedValid", wf.validFraction);
   };

@@ -239,6 +239,30 @@ TEST(Evaluation, AnOutputEqualToTheReferenceScoresZeroErrorWithItsReferenceTerms
   EXPECT_TRUE(r["frames"][1].contains("tRmae"));
 }
 
+TEST(Evaluation, FrameDifferencesAreNotTakenAcrossACameraCut) {
+  // The frame before a cut shows another view: its difference measures the cut, not flicker.
+  EvaluationInput in = flatInput(16, 12, 6, 0.25f, true);
+  in.events.push_back({3, EventKind::CameraCut, "", -1});
+  EvaluationScene scene(std::move(in), {2, {"none"}, ExposureMode::PerFrame});
+  PairEvaluation pair(scene);
+  for (int t = 0; t < 6; ++t) {
+    Image out(16, 12, 3);
+    out.fill(t % 2 ? 0.3f : 0.2f);  // flicker on every frame
+    pair.add(t, out);
+  }
+  const json r = pair.finish();
+  for (const char* name : {"tRmae", "tPsnr", "warpedFlicker", "warpedValid"}) {
+    EXPECT_FALSE(r["frames"][3].contains(name)) << name << " taken across the cut";
+    EXPECT_TRUE(r["frames"][2].contains(name)) << name;
+    EXPECT_TRUE(r["frames"][4].contains(name)) << name;
+  }
+  // Frames 2..5 after the warm-up, the cut not counted.
+  EXPECT_EQ(r["summary"]["tRmae"]["frames"].get<int>(), 3);
+  EXPECT_EQ(r["summary"]["warpedFlicker"]["frames"].get<int>(), 3);
+  // The flicker is 0.1 against a still reference on every counted frame: |0.1| / (0 + 0.01).
+  EXPECT_NEAR(r["summary"]["tRmae"]["mean"].get<double>(), 0.1 / 0.01, 1e-4);
+}
+
 TEST(Evaluation, AScreeningMeasuresTheLinearErrorsAsTheFullEvaluationDoesAndNothingElse) {
   EvaluationScene scene(flatInput(16, 12, 6, 0.25f, true), {2, {"all"}, ExposureMode::PerFrame});
   PairEvaluation full(scene), screening(scene, EvaluationScope::Screening);
