@@ -175,12 +175,13 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
       const bool lowerIsBetter = findMetric(t.metric)->lowerIsBetter();
       const double worse = lowerIsBetter ? row.change : -row.change;
       // Paired over the frames and tiles both runs have, seeded by the scene like the run's own.
-      bool resolvedWorse = false, resolvedBetter = false;
+      bool resolvedWorse = false, resolvedBetter = false, interval = false;
       const json &bt = b.part("tiles"), &ct = c.part("tiles");
       if (bt.is_object() && ct.is_object() && bt.contains(t.metric) && ct.contains(t.metric)) {
         const PairedDifference d =
             pairedDifference(MetricTiles::fromJson(ct[t.metric]), MetricTiles::fromJson(bt[t.metric]), scene, cfg);
         if (d.ci.valid()) {
+          interval = true;
           row.changeCi = {d.ci.lo / scale, d.ci.hi / scale};
           const bool above = d.ci.lo > 0, below = d.ci.hi < 0;
           resolvedWorse = lowerIsBetter ? above : below;
@@ -188,11 +189,21 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
         } else {
           row.note = "no interval (too few frames)";
         }
+      } else if (!base.keepsTiles || !cand.keepsTiles) {
+        row.note = "no tile data for a paired interval (results.db keeps none)";
       } else {
         row.note = "no tile data for a paired interval";
       }
+      // A change beyond tolerance that no interval can judge fails the gate: passing it would be a
+      // verdict from no data. Runs read from results.db have no tiles by design (the dashboard
+      // marks their changes unresolved, docs/ci-dashboard.md).
+      const bool unjudgeable = !interval && base.keepsTiles && cand.keepsTiles;
       if (worse > t.relative)
-        row.verdict = resolvedWorse ? "regressed" : "unresolved";
+        row.verdict = resolvedWorse ? "regressed" : unjudgeable ? "unverified" : "unresolved";
+      if (row.verdict == "unverified")
+        row.note +=
+            ": the gate cannot tell this change from noise (rerun both with their tiles and "
+            "frames)";
       else if (-worse > t.relative)
         row.verdict = resolvedBetter ? "improved" : "unresolved";
       if (row.verdict == "unresolved" && row.note.empty())
@@ -236,7 +247,9 @@ json comparisonJson(const std::vector<ComparisonRow>& rows) {
 
 bool anyRegression(const std::vector<ComparisonRow>& rows) {
   for (const ComparisonRow& r : rows)
-    if (r.verdict == "regressed" || r.verdict == "missing" || r.verdict == "failed") return true;
+    if (r.verdict == "regressed" || r.verdict == "unverified" || r.verdict == "missing" ||
+        r.verdict == "failed")
+      return true;
   return false;
 }
 

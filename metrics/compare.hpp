@@ -31,7 +31,9 @@ struct ComparisonRow {
   double change = kUndefined;  // (candidate - baseline) / |baseline|
   Interval changeCi;           // the paired interval of the change, same scale
   double tolerance = 0;
-  // "ok", "improved", "regressed", "unresolved" (beyond tolerance, within noise), "missing" (the
+  // "ok", "improved", "regressed", "unresolved" (beyond tolerance, within noise), "unverified"
+  // (worse beyond tolerance with no interval to judge it: no tiles in a run directory, too few
+  // frames; fails the gate, as passing it would judge from no data), "missing" (the
   // candidate lacks what the baseline had: fails the gate), "failed" (the candidate's pair failed),
   // "new" (only the candidate has it, or only its pair ran), "absent" (neither run has a summary
   // of it: the note gives both reasons; does not fail the gate).

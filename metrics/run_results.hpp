@@ -73,6 +73,9 @@ struct RunResults {
   nlohmann::json metrics;     // the metric registry as the run had it (null: none)
   nlohmann::json sweep;       // the sweep's grid (null: not a sweep)
   std::string source;         // where it was read from (a run directory, "db#id"); not written
+  // false: read from results.db, which keeps no per-tile data by design (the gate cannot resolve a
+  // change there, and says so); a run directory's pairs keep theirs. Not written.
+  bool keepsTiles = true;
 
   // `file`: the name errors give (the results.json path).
   static RunResults fromJson(const nlohmann::json& j, const std::string& file);

@@ -103,6 +103,7 @@ std::vector<RunResults> runsFromDatabase(const fs::path& file) {
     run.name = textOf(r, "name");
     run.created = textOf(r, "created");
     run.source = file.string() + "#" + std::to_string(id);
+    run.keepsTiles = false;
     // The settings the run recorded (its gate compares them); a database row without them (or
     // with an unreadable record) leaves them unknown, and the history does not judge them.
     if (const json settings = json::parse(textOf(r, "settings"), nullptr, false);

@@ -345,6 +345,38 @@ TEST(CompareGate, FailsOnWhatItCannotCompare) {
   EXPECT_EQ(rows[0].verdict, "missing");
 }
 
+// A change beyond tolerance that no interval can judge would pass as noise on no data: it fails the
+// gate in run directories; results.db keeps no tiles by design, so its runs stay "unresolved".
+TEST(CompareGate, AWorseningNoIntervalCanJudgeFailsTheGate) {
+  const MetricTiles m = constantSeries(0.01);
+  const std::vector<Tolerance> tol = {{"relMse", 0.02}};
+  auto withoutTiles = [&](double mean) {
+    json cand = syntheticJson({{"a", m}});
+    cand["pairs"][0].erase("tiles");
+    cand["pairs"][0]["summary"]["relMse"]["mean"] = mean;
+    return test::typed(cand);
+  };
+  auto rows = compareRuns(syntheticRun({{"a", m}}), withoutTiles(0.02), tol);
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].verdict, "unverified");
+  EXPECT_NE(rows[0].note.find("no tile data"), std::string::npos) << rows[0].note;
+  EXPECT_NE(rows[0].note.find("cannot tell this change from noise"), std::string::npos)
+      << rows[0].note;
+  EXPECT_TRUE(anyRegression(rows));
+  // Within tolerance, or better: nothing to judge, nothing fails.
+  EXPECT_EQ(compareRuns(syntheticRun({{"a", m}}), withoutTiles(0.0101), tol)[0].verdict, "ok");
+  rows = compareRuns(syntheticRun({{"a", m}}), withoutTiles(0.005), tol);
+  EXPECT_EQ(rows[0].verdict, "unresolved");
+  EXPECT_FALSE(anyRegression(rows));
+  // From results.db (no tiles by design): marked, not failed, and the note says why.
+  RunResults fromDb = syntheticRun({{"a", m}});
+  fromDb.keepsTiles = false;
+  rows = compareRuns(fromDb, withoutTiles(0.02), tol);
+  EXPECT_EQ(rows[0].verdict, "unresolved");
+  EXPECT_NE(rows[0].note.find("results.db keeps none"), std::string::npos) << rows[0].note;
+  EXPECT_FALSE(anyRegression(rows));
+}
+
 TEST(MergeGate, AnIncompleteShardSetIsAnError) {
   const fs::path root = test::freshDir("merge_gate");
   auto shard = [&](const std::string& name, const std::string& which) {

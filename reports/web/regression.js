@@ -21,7 +21,17 @@
       el('option', { value: 'regressed', text: 'regressed only' }),
       el('option', { value: 'all', text: 'all comparisons' }));
     const tableBox = el('div', { class: 'table-wrap' });
-    const order = { regressed: 0, failed: 0, missing: 1, unresolved: 2, new: 3, improved: 4, absent: 5, ok: 6 };
+    const order = {
+      regressed: 0,
+      failed: 0,
+      unverified: 0,
+      missing: 1,
+      unresolved: 2,
+      new: 3,
+      improved: 4,
+      absent: 5,
+      ok: 6
+    };
     const draw = () => {
       const rows = R.rows.filter((r) => filter.value === 'all' || (filter.value === 'regressed' ? r.verdict === 'regressed' : r.verdict !== 'ok'))
         .sort((a, b) => order[a.verdict] - order[b.verdict] || Math.abs(b.change) - Math.abs(a.change));
