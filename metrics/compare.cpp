@@ -198,14 +198,15 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
       // verdict from no data. Runs read from results.db have no tiles by design (the dashboard
       // marks their changes unresolved, docs/ci-dashboard.md).
       const bool unjudgeable = !interval && base.keepsTiles && cand.keepsTiles;
-      if (worse > t.relative)
+      if (worse > t.relative) {
         row.verdict = resolvedWorse ? "regressed" : unjudgeable ? "unverified" : "unresolved";
-      if (row.verdict == "unverified")
-        row.note +=
-            ": the gate cannot tell this change from noise (rerun both with their tiles and "
-            "frames)";
-      else if (-worse > t.relative)
+        if (row.verdict == "unverified")
+          row.note +=
+              ": the gate cannot tell this change from noise (rerun both with their tiles and "
+              "frames)";
+      } else if (-worse > t.relative) {
         row.verdict = resolvedBetter ? "improved" : "unresolved";
+      }
       if (row.verdict == "unresolved" && row.note.empty())
         row.note = "beyond tolerance but within noise";
       rows.push_back(row);
