@@ -6,8 +6,10 @@
 
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <fstream>
 #include <functional>
+#include <thread>
 
 #include "arena_plugin.h"
 #include "core/error.hpp"
@@ -338,6 +340,53 @@ TEST(ExternalFaults, AHangIsKilledAfterTheTimeout) {
     denoiseAll({faulty("no-ready", 0.5), {}, ""}, tinySequence());
   });
   EXPECT_NE(setup.find("no ready header within timeoutSeconds"), std::string::npos) << setup;
+}
+
+// A wrapper script's background job shares the process's output: when the process exits, the job
+// is ended with it (it neither outlives the pair nor holds the output open until the timeout).
+TEST(ExternalFaults, NothingTheProcessStartedOutlivesIt) {
+  const fs::path dir = test::freshDir("external_leftovers");
+  for (const std::string mode : {"exit", "passthrough", "hang"}) {
+    const fs::path pidFile = dir / (mode + ".pid");
+    const json m = {{"name", "wrapped-" + mode},
+                    {"command",
+                     {"/bin/sh", "-c",
+                      "sleep 300 & echo $! > '" + pidFile.string() + "'; exec /usr/bin/python3 '" +
+                          std::string(ARENA_TEST_DATA) + "/external/faulty_denoiser.py' " + mode}},
+                    {"signals", "demodulated"},
+                    {"channels", {"meshId"}},
+                    {"timeoutSeconds", mode == "hang" ? 0.5 : 20.0}};
+    const std::string name =
+        DenoiserRegistry::resolve("ext:" + writeManifest("wrapped-" + mode, m).string());
+    const auto start = std::chrono::steady_clock::now();
+    const std::string e = errorOf([&] { denoiseAll({name, {}, ""}, tinySequence()); });
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (mode == "exit") {
+      EXPECT_NE(e.find("exited with status 3"), std::string::npos) << e;
+      EXPECT_LT(seconds, 15.0) << "an exit waited for the timeout";  // 20 s timeout
+    } else if (mode == "passthrough") {
+      EXPECT_EQ(e, "(no error)") << e;
+    }
+    int pid = 0;
+    std::ifstream(pidFile) >> pid;
+    ASSERT_GT(pid, 0) << mode;
+    // Gone, or a zombie waiting for its new parent (init) to reap it: not running. A SIGKILL takes
+    // effect when the process is next scheduled, so it is given a moment.
+    std::string stat;
+    char state = 'X';
+    for (int wait = 0; wait < 100; ++wait) {
+      stat.clear();
+      std::getline(std::ifstream("/proc/" + std::to_string(pid) + "/stat"), stat);
+      const size_t close = stat.rfind(')');
+      state = close != std::string::npos && close + 2 < stat.size() ? stat[close + 2] : 'X';
+      if (state == 'X' || state == 'Z') break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    EXPECT_TRUE(state == 'X' || state == 'Z')
+        << mode << ": the background job is still running (" << stat << ")";
+    if (state != 'X' && state != 'Z') ::kill(pid, SIGKILL);
+  }
 }
 
 TEST(ExternalFaults, ReportedErrorsAndGarbageAreQuoted) {

@@ -24,6 +24,7 @@ namespace {
 constexpr size_t kStderrTailBytes = 2048;
 constexpr size_t kMaxUnreadBytes = size_t(64) << 20;
 constexpr size_t kChunk = size_t(1) << 16;
+constexpr long long kEndedCheckMs = 100;  // how often a wait checks whether the process ended
 
 void setNonBlocking(int fd) {
   fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) | O_NONBLOCK);
@@ -141,12 +142,17 @@ size_t Subprocess::pump(const char*& out, size_t& outBytes, char* in, size_t inB
   const auto now = Clock::now();
   if (now >= deadline) throw TimedOut(std::string("timed out ") + what);
   const auto left = std::chrono::ceil<std::chrono::milliseconds>(deadline - now).count();
-  const int ready = ::poll(fds, n, int(std::min<long long>(left, 1 << 30)));
+  // In slices, so that a process that ended while something it started holds its output open is
+  // noticed: its group is ended, the output closes, and the exit is reported as one, not as a hang.
+  const int ready = ::poll(fds, n, int(std::min<long long>(left, kEndedCheckMs)));
   if (ready < 0) {
     if (errno == EINTR) return 0;
     throw Error(std::string("poll: ") + std::strerror(errno));
   }
-  if (ready == 0) throw TimedOut(std::string("timed out ") + what);
+  if (ready == 0) {
+    if (!reaped_ && ended() && !reaped_) ::kill(-pid_, SIGKILL);
+    return 0;  // the caller asks again; the deadline is checked first
+  }
   if (stderrSlot >= 0 && fds[stderrSlot].revents != 0) drainStderr();
   if (stdinSlot >= 0 && fds[stdinSlot].revents != 0) {
     const ssize_t sent =
@@ -216,12 +222,30 @@ void Subprocess::read(void* data, size_t bytes, Clock::time_point deadline) {
     got += pump(none, noBytes, p + got, bytes - got, deadline, "reading its output planes");
 }
 
+bool Subprocess::ended() {
+  if (reaped_) return true;
+  siginfo_t info{};
+  while (::waitid(P_PID, id_t(pid_), &info, WEXITED | WNOHANG | WNOWAIT) < 0) {
+    if (errno == EINTR) continue;
+    reaped_ = true;  // ECHILD: nothing left to reap (status unknown)
+    return true;
+  }
+  return info.si_pid == pid_;
+}
+
+void Subprocess::reap() {
+  if (reaped_) return;
+  ::kill(-pid_, SIGKILL);
+  while (::waitpid(pid_, &status_, 0) < 0 && errno == EINTR) {
+  }
+  reaped_ = true;
+}
+
 std::string Subprocess::exitStatus(std::chrono::milliseconds grace) {
   const auto until = Clock::now() + grace;
   while (!reaped_) {
-    const pid_t r = ::waitpid(pid_, &status_, WNOHANG);
-    if (r == pid_ || (r < 0 && errno != EINTR)) {
-      reaped_ = true;
+    if (ended()) {
+      reap();
       break;
     }
     if (Clock::now() >= until) return "still running";
@@ -241,9 +265,7 @@ void Subprocess::kill() {
   if (reaped_) return;
   ::kill(-pid_, SIGKILL);
   ::kill(pid_, SIGKILL);
-  while (::waitpid(pid_, &status_, 0) < 0 && errno == EINTR) {
-  }
-  reaped_ = true;
+  reap();
 }
 
 }  // namespace arena

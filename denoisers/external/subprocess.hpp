@@ -3,7 +3,10 @@
 // with a deadline on every exchange, so a process that hangs, stops reading or floods stderr can
 // never deadlock the harness: writes and reads make progress together, stderr is drained all the
 // time (its tail kept for error messages), and a missed deadline is an error, after which the
-// caller kills the process. The child runs in its own process group; kill() ends the group.
+// caller kills the process. The child runs in its own process group, and nothing it started
+// outlives it: kill() ends the group, and when the process ends by itself what it left running in
+// its group is ended before the process is reaped (a wrapper script's background job would
+// otherwise hold the output open, making an exit look like a hang, and run on after the pair).
 #include <sys/types.h>
 
 #include <chrono>
@@ -53,6 +56,11 @@ class Subprocess {
               Clock::time_point deadline, const char* what);
   void drainStderr();
   void closeStdin();
+  // Whether the process has ended, without reaping it (while unreaped its number stays taken, so
+  // signalling its group reaches what it left behind and no other process's group).
+  bool ended();
+  // Ends what the ended (or killed) process left in its group, then reaps it.
+  void reap();
 
   pid_t pid_ = -1;
   int stdin_ = -1, stdout_ = -1, stderr_ = -1;
