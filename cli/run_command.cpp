@@ -123,8 +123,18 @@ void finish(const std::string& out) {
       // here and the reason below the table.
       const SummaryMean relMse = p.mean("relMse");
       const json ms = p.part("timing").is_object() ? p.part("timing").value("msMedian", json()) : json();
-      std::cout << std::right << std::setw(12) << (relMse.present() ? formatNumber(relMse.mean, 4) : "-")
-                << std::setw(10) << (ms.is_number() ? formatNumber(ms.get<double>(), 3) : "-") << "\n";
+      // A time on another clock than this machine's (a process's own, a capture's device) says so.
+      const std::string clock =
+          p.part("timing").is_object() ? p.part("timing").value("clock", "cpu") : "cpu";
+      const std::string on =
+          clock == "process" ? " [reported by the process]"
+          : clock == "capture"
+              ? " [recorded on " +
+                    p.part("timing").value("device", std::string("the capture's device")) + "]"
+              : "";
+      std::cout << std::right << std::setw(12)
+                << (relMse.present() ? formatNumber(relMse.mean, 4) : "-") << std::setw(10)
+                << (ms.is_number() ? formatNumber(ms.get<double>(), 3) : "-") << on << "\n";
     } else {
       std::cout << "  FAILED\n";
     }

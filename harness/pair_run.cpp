@@ -129,9 +129,10 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   if (run) {
     timing = timingSummary(passes, ms, cfg.warmup, info.width, info.height);
     // External processes time themselves: "ms" is what they reported, "msWall" the harness's clock
-    // around the exchange (transfer included). Built-ins and plugins: the harness's clock.
+    // around the exchange (transfer included). Built-ins and plugins: the harness's clock. A
+    // process's own clock may be a GPU's: its time is charted on an axis of its own ("process").
     timing["msSource"] = selfTimed ? "reported by the process" : "harness wall clock";
-    timing["clock"] = "cpu";
+    timing["clock"] = selfTimed ? "process" : "cpu";
     if (const Summary wall = summarize(evaluation.values("msWall"), cfg.warmup);
         selfTimed && !wall.empty())
       timing["msWallMedian"] = wall.median;

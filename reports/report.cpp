@@ -171,7 +171,9 @@ std::vector<SpeedClock> speedClocks(const RunResults& results, const std::vector
   for (const std::string& size : sizes) where += ", " + size;
   std::vector<SpeedClock> clocks = {{"cpu", "CPU ms measured here (" + where + ")"}};
   std::vector<std::string> devices, captureDevices;
+  bool processClock = false;
   for (const PairResult& pair : results.pairs) {
+    processClock |= pair.ok() && clockOf(pair) == "process";
     const json& timing = timingObject(pair);
     if (timing.contains("gpuPredicted") && timing["gpuPredicted"].is_object()) {
       for (const json& d : timing["gpuPredicted"].value("devices", json::array())) {
@@ -186,6 +188,10 @@ std::vector<SpeedClock> speedClocks(const RunResults& results, const std::vector
   }
   for (const std::string& d : devices)
     clocks.push_back({"gpu:" + d, "GPU ms predicted at 1920x1080 on " + d + " (a model: counted traffic, docs/gpu-cost.md)"});
+  if (processClock)
+    clocks.push_back({"process",
+                      "ms the external processes reported for their own work (each its own clock, "
+                      "CPU or GPU: not measured here)"});
   if (!captureDevices.empty()) {
     std::string list;
     for (const std::string& d : captureDevices) list += (list.empty() ? "" : ", ") + (d.empty() ? "device not named" : d);
@@ -199,7 +205,7 @@ struct ClockTime {
   double ms = kNaN, lo = kNaN, hi = kNaN;
 };
 ClockTime timeOn(const PairResult& pair, const std::string& clock) {
-  if (clock == "cpu" || clock == "capture") {
+  if (clock == "cpu" || clock == "capture" || clock == "process") {
     if (clockOf(pair) != clock) return {};
     return {timingOf(pair, "msMedian"), timingOf(pair, "msP5"), timingOf(pair, "msP95")};  // msP5: results schema 2
   }
@@ -619,6 +625,7 @@ json pairData(const PairResult& pair) {
                  {"passes", timing.contains("passes") ? timing["passes"].size() : 0},
                  {"clock", timing.value("clock", std::string("cpu"))}};
   if (timing.contains("device")) p["timing"]["device"] = timing["device"];
+  if (clockOf(pair) == "process") p["timing"]["device"] = "reported by the process";
   // The cost model's view (docs/gpu-cost.md): the first device's predicted ms and the GPU memory.
   if (timing.contains("gpuPredicted") && timing["gpuPredicted"].is_object()) {
     const json& g = timing["gpuPredicted"];

@@ -272,6 +272,7 @@ TEST(ExternalProcess, ARunRecordsTheExternalPairBesideAFailingOne) {
   EXPECT_EQ(ok["signals"], "color");
   EXPECT_NE(ok["origin"].get<std::string>().find("cpp_box/manifest.json"), std::string::npos);
   EXPECT_EQ(ok["timing"]["msSource"], "reported by the process");
+  EXPECT_EQ(ok["timing"]["clock"], "process");  // its own clock, maybe a GPU's: not "cpu"
   EXPECT_GE(ok["timing"]["msWallMedian"].get<double>(), ok["timing"]["msMedian"].get<double>());
   EXPECT_GT(ok["summary"]["relMse"]["mean"].get<double>(), 0.0);
   const json& failed = r["pairs"][1];

@@ -314,6 +314,36 @@ TEST(Report, EachTimeAxisHasItsOwnPointsAndFront) {
     }
 }
 
+// An external process's own reported time may be a GPU's: it gets an axis of its own, is never
+// drawn on the CPU axis, and the tables label it.
+TEST(Report, AProcessReportedTimeHasAnAxisOfItsOwn) {
+  json run = fixtureRun();
+  for (json& pair : run["pairs"])
+    if (pair["label"] == "passthrough") {
+      pair["timing"]["clock"] = "process";
+      pair["timing"]["msSource"] = "reported by the process";
+    }
+  const fs::path dir = writeFixtureRun("report_process_clock", run);
+  const json data = reportData(test::typed(run), dir, nullptr);
+  std::vector<std::string> keys;
+  for (const json& c : data["speed"]["clocks"]) keys.push_back(c["key"]);
+  EXPECT_EQ(keys, (std::vector<std::string>{"cpu", "process"}));
+  const json& cpu = data["speed"]["views"]["cpu"]["scenes"]["static"]["relMse"];
+  for (const json& p : cpu["points"]) EXPECT_NE(p["label"], "passthrough");
+  const json& own = data["speed"]["views"]["process"]["scenes"]["static"]["relMse"];
+  ASSERT_EQ(own["points"].size(), 1u);
+  EXPECT_EQ(own["points"][0]["label"], "passthrough");
+  bool named = false;
+  for (const json& r : data["speed"]["views"]["cpu"]["otherClocks"])
+    named = named || (r["label"] == "passthrough" && r["source"] == "reported by the process");
+  EXPECT_TRUE(named);
+  for (const json& p : data["pairs"])
+    if (p["label"] == "passthrough") {
+      EXPECT_EQ(p["timing"]["clock"], "process");
+      EXPECT_EQ(p["timing"]["device"], "reported by the process");
+    }
+}
+
 TEST(Report, AblationDeltasAreTheRunsPairedDifferences) {
   // The run's statistics hold svgf[a=0] - svgf[a=1] on "static" (the opposite orientation of the
   // ablation's a=1 vs a=0): the row takes that difference, turned round, with its interval.
