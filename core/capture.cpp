@@ -229,7 +229,8 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
     c.jitter.push_back(jitter);
   }
   for (JsonReader& e : root.optionalArray("events")) {
-    const int frame = e.integerIn("frame", 0, n - 1);
+    // At frame 0 an event has no earlier frame to be measured against: the metrics would skip it.
+    const int frame = e.integerIn("frame", 1, n - 1);
     const std::string kind = e.string("kind");
     const std::optional<EventKind> k = eventKindFromName(kind);
     if (!k) e.fail("kind", "one of " + eventKindNames());

@@ -588,6 +588,12 @@ TEST(CaptureContract, BadValuesAndNamesAreErrorsNamingThem) {
               "reference.samples[5]");
   expectError(copyCapture(good, "offrame", [](json& d) { d["reference"]["ofFrame"][1] = 0.5; }),
               "reference.ofFrame[1]: expected a whole reference index");
+  // An event at frame 0 has nothing before it to be measured against.
+  expectError(copyCapture(good, "event0",
+                          [](json& d) {
+                            d["events"] = {{{"frame", 0}, {"kind", "light_off"}}};
+                          }),
+              "events[0].frame: expected an integer in [1, ");
   // Names that are folders in a run: never "." or "..".
   expectError(copyCapture(good, "dots", [](json& d) { d["name"] = ".."; }), "not . or ..");
   expectError(copyCapture(good, "out_dots",

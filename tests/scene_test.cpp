@@ -151,6 +151,48 @@ TEST(Scene, UnknownEventKindIsRejectedListingTheKinds) {
     EXPECT_NE(e.find(kind), std::string::npos) << kind << ": " << e;
 }
 
+// An event is measured against the frames before it: at frame 0 the metrics would skip it.
+TEST(Scene, AnEventAtFrameZeroIsRejected) {
+  std::string e = errorOf(replaced(kMinimal, R"({"frame": 2, "kind")", R"({"frame": 0, "kind")"));
+  EXPECT_NE(e.find("$.events[0].frame"), std::string::npos) << e;
+  EXPECT_NE(e.find("expected a frame in [1, 3]"), std::string::npos) << e;
+  EXPECT_NE(e.find("got 0"), std::string::npos) << e;
+}
+
+// A cut the camera does not make would be measured (recovery, old-view leak) as if it happened.
+TEST(Scene, ACameraCutNeedsTheCameraToJumpThere) {
+  const std::string cut = R"({"frame": 2, "kind": "camera_cut"})";
+  std::string e =
+      errorOf(replaced(kMinimal, R"({"frame": 2, "kind": "light_off", "what": "lamp"})", cut));
+  EXPECT_NE(e.find("$.events[0].frame"), std::string::npos) << e;
+  EXPECT_NE(e.find("needs a camera key there with \"step\": true"), std::string::npos) << e;
+  const std::string jumping = replaced(
+      replaced(kMinimal, R"({"frame": 2, "kind": "light_off", "what": "lamp"})", cut),
+      R"("fov": 40}]})",
+      R"("fov": 40}, {"frame": 2, "step": true, "eye": [1, 1, 3], "target": [0, 1, 0]}]})");
+  EXPECT_EQ(errorOf(jumping), "");
+  e = errorOf(
+      replaced(jumping, R"("kind": "camera_cut")", R"("kind": "camera_cut", "what": "lamp")"));
+  EXPECT_NE(e.find("$.events[0].what: a camera_cut names no object or light"), std::string::npos)
+      << e;
+}
+
+// A light switched off for a while is an event; nothing ever emitting is a mistake.
+TEST(Scene, ASceneWhereNothingEverEmitsIsRejected) {
+  const std::string dark = replaced(kMinimal, R"("intensity": 5})", R"("intensity": 0})");
+  std::string e = errorOf(dark);
+  EXPECT_NE(e.find("$.lights"), std::string::npos) << e;
+  EXPECT_NE(e.find("expected something to emit"), std::string::npos) << e;
+  // An emissive material or a sky is enough.
+  EXPECT_EQ(errorOf(replaced(dark, R"("albedo": [0.5, 0.5, 0.5]})",
+                             R"("albedo": [0.5, 0.5, 0.5], "emission": [1, 1, 1]})")),
+            "");
+  EXPECT_EQ(errorOf(replaced(dark, R"("frames": 4,)",
+                             R"("frames": 4, "sky": {"color": [0.2, 0.2, 0.2]},)")),
+            "");
+  EXPECT_EQ(errorOf(kMinimal), "");  // off from frame 2 on: an event, accepted
+}
+
 TEST(Scene, UnorderedKeysAreRejected) {
   std::string e = errorOf(replaced(kMinimal, R"({"frame": 2, "intensity": 0)", R"({"frame": 0, "intensity": 0)"));
   EXPECT_NE(e.find("strictly increasing"), std::string::npos) << e;

@@ -434,13 +434,30 @@ Scene parseScene(const std::string& text, const std::string& path) {
     ev.frame = e.integer("frame");
     const std::string kind = e.string("kind");
     ev.what = e.string("what", "");
-    if (ev.frame < 0 || ev.frame >= scene.frames)
-      e.fail("frame", "expected a frame in [0, " + std::to_string(scene.frames - 1) + "]");
+    // An event is measured against the frames before it (ghosting's window, a cut's old view): at
+    // frame 0 there are none, and the metrics would skip it without a word.
+    if (ev.frame < 1 || ev.frame >= scene.frames)
+      e.fail("frame",
+             "expected a frame in [1, " + std::to_string(scene.frames - 1) +
+                 "] (an event at frame 0 has no earlier frame to be measured against), got " +
+                 std::to_string(ev.frame));
     const std::optional<EventKind> parsed = eventKindFromName(kind);
     if (!parsed) e.fail("kind", "expected one of " + eventKindNames() + "; got '" + kind + "'");
     ev.kind = *parsed;
     if (!ev.what.empty() && !knownName(ev.what))
       e.fail("what", "no object or light is named '" + ev.what + "'");
+    if (ev.kind == EventKind::CameraCut) {
+      // A cut is the camera's: it names nothing else, and the camera must jump there, or the
+      // recovery and old-view figures would measure a cut that never happened.
+      if (!ev.what.empty())
+        e.fail("what", "a camera_cut names no object or light; got '" + ev.what + "'");
+      const bool jumps = std::any_of(scene.camera.keys.begin(), scene.camera.keys.end(),
+                                     [&](const auto& k) { return k.frame == ev.frame && k.step; });
+      if (!jumps)
+        e.fail("frame", "a camera_cut at frame " + std::to_string(ev.frame) +
+                            " needs a camera key there with \"step\": true; $.camera.keys has none "
+                            "(the view would not cut)");
+    }
     e.rejectUnread();
     scene.events.push_back(ev);
   }
@@ -456,6 +473,22 @@ Scene parseScene(const std::string& text, const std::string& path) {
   root.rejectUnread();
   if (scene.objects.empty() && scene.lights.empty())
     root.fail("objects", "expected at least one object or light");
+  // Something must emit at some frame (a light switched off for a while is a scene's event, one
+  // never on a mistake): a black reference leaves every relative metric without meaning.
+  auto emits = [](glm::vec3 c) { return std::max({c.x, c.y, c.z}) > 0.0f; };
+  bool emitting = emits(scene.skyTop) || emits(scene.skyBottom);
+  for (const Light& light : scene.lights)
+    for (const auto& key : light.emission.keys)
+      emitting |= key.value.intensity > 0.0f && emits(key.value.color);
+  for (const Object& obj : scene.objects)
+    for (size_t m = obj.material >= 0 ? size_t(obj.material) : size_t(obj.assetMaterialBase);
+         m < scene.materials.size() && (obj.material < 0 || m == size_t(obj.material)); ++m)
+      emitting |= emits(scene.materials[m].emission);  // an asset's own: every one from its first
+  if (!emitting)
+    root.fail("lights",
+              "expected something to emit at some frame: every light's intensity x color is 0 at "
+              "every key, and no object's material and no sky emits (the references would be black "
+              "and every relative metric meaningless)");
   scene.contentHash = hasher.hex();
   return scene;
 }
