@@ -557,6 +557,18 @@ TEST(AssetContract, BadAssetsAreErrorsNamingTheFileAndTheProblem) {
   expectError("quad.obj", "junk.png: cannot decode the texture image");
   writeFile(dir / "quad.mtl", "newmtl tex\nKd 1 1 1\n");
   EXPECT_EQ(errorOf("quad.obj"), "");
+  // Where assimp would give a default grey without a word: a library that is not there, a
+  // material no library defines.
+  {
+    std::string text = quadObj("tex");
+    writeFile(dir / "nolib.obj", text.replace(0, text.find('\n'), "mtllib gone.mtl"));
+  }
+  expectError("nolib.obj", "nolib.obj:1: 'mtllib gone.mtl' names");
+  expectError("nolib.obj", "which does not exist; expected a material library (.mtl) there");
+  writeFile(dir / "misspelt.obj", quadObj("texx"));
+  expectError(
+      "misspelt.obj",
+      "'usemtl texx' names no material of its libraries (quad.mtl); expected a 'newmtl texx'");
   // Scene-level fields.
   json bad = assetScene(assetObject("quad.obj", 1.0, "x"));
   EXPECT_NE(parseError(dir, bad).find("$.objects[0].asset.upAxis"), std::string::npos);

@@ -153,10 +153,14 @@ class RecordingIOSystem : public Assimp::DefaultIOSystem {
 //   written through a null material (SEGV, a fuzzer find);
 // - a name with "://": assimp reduces it to another path ("m://" to the folder ".//") and searches
 //   without end when that cannot be opened (a fuzzer find);
-// - a folder or other file that is not a regular file.
+// - a folder or other file that is not a regular file;
+// and, where assimp would give the object its default grey without a word, a library that does not
+// exist and a "usemtl" naming a material none of the OBJ's libraries defines (a library not copied
+// beside the OBJ, a misspelt name).
 void checkObjMaterialLibraries(const std::string& path, const std::string& bytes) {
   std::error_code ec;
   const std::string self = fs::weakly_canonical(path, ec).string();
+  std::vector<fs::path> libraries;
   forEachStatement(bytes, [&](int lineNumber, const std::string& keyword, const std::string& rest) {
     if (keyword != "mtllib" || rest.empty()) return true;
     const std::string where = path + ":" + std::to_string(lineNumber) + ": 'mtllib " + rest + "' ";
@@ -165,8 +169,31 @@ void checkObjMaterialLibraries(const std::string& path, const std::string& bytes
       throw Error(where + "looks like a URL; expected the path of a material library (.mtl) relative to the OBJ");
     if (fs::weakly_canonical(named, ec).string() == self)
       throw Error(where + "names the OBJ file itself; expected a material library (.mtl)");
-    if (fs::exists(named, ec) && !fs::is_regular_file(named, ec))
+    if (!fs::exists(named, ec))
+      throw Error(where + "names " + named.string() +
+                  ", which does not exist; expected a material library (.mtl) there (without it "
+                  "every material would be a default grey)");
+    if (!fs::is_regular_file(named, ec))
       throw Error(where + "names " + named.string() + ", which is not a regular file; expected a material library (.mtl)");
+    libraries.push_back(named);
+    return true;
+  });
+  if (libraries.empty()) return;  // no library: assimp's default material, as the OBJ asks
+  std::set<std::string> defined;
+  std::string names;
+  for (const fs::path& library : libraries) {
+    forEachStatement(readText(library, kMaxAssetBytes),
+                     [&](int, const std::string& keyword, const std::string& rest) {
+                       if (keyword == "newmtl") defined.insert(rest);
+                       return true;
+                     });
+    names += (names.empty() ? "" : ", ") + library.filename().string();
+  }
+  forEachStatement(bytes, [&](int lineNumber, const std::string& keyword, const std::string& rest) {
+    if (keyword == "usemtl" && !rest.empty() && !defined.count(rest))
+      throw Error(path + ":" + std::to_string(lineNumber) + ": 'usemtl " + rest +
+                  "' names no material of its libraries (" + names + "); expected a 'newmtl " +
+                  rest + "' in one of them");
     return true;
   });
 }
