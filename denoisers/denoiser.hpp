@@ -75,6 +75,8 @@ class Denoiser {
   virtual bool needsGradients() const { return false; }
   // Reads the sequence's low-resolution buffer when it has one (DenoiserInputs::lowres).
   virtual bool wantsLowres() const { return false; }
+  // Cannot run without that buffer (implies wantsLowres): a run rendering none is refused up front.
+  virtual bool needsLowres() const { return false; }
   // Allocates every buffer (history included) for this resolution; not timed.
   virtual void setup(int width, int height) = 0;
   // Clears the history (camera cut).

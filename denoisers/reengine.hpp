@@ -87,6 +87,9 @@ class ReEngine : public Denoiser {
   bool wantsLowres() const override {
     return s_.disocclusionRays != ReEngineSettings::DisocclusionRays::Off;
   }
+  bool needsLowres() const override {
+    return s_.disocclusionRays == ReEngineSettings::DisocclusionRays::On;
+  }
   void setup(int width, int height) override;
   void reset() override;
   void denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& output) override;

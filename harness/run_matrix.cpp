@@ -78,8 +78,20 @@ json runMatrix(const RunConfig& cfg) {
   for (const DenoiserRequest& r : cfg.denoisers) add(r);
   // Validate every parameter set before any work: a typo must fail in a second, not after an hour.
   for (const DenoiserRequest& r : denoisers)
-    if (capturedOutputName(r.name).empty()) DenoiserRegistry::instance().find(r.name).schema.resolve(r.params, r.name);
-    else if (!r.params.empty()) throw Error(r.name + ": a stored output has no parameters to set");
+    if (capturedOutputName(r.name).empty()) {
+      const DenoiserInfo& info = DenoiserRegistry::instance().find(r.name);
+      const ParamSet params = info.schema.resolve(r.params, r.name);
+      // A denoiser that cannot run without the low-resolution buffer, in a run rendering none,
+      // would fail each pair after the rendering.
+      if (!cfg.lowresAuto && cfg.render.lowresFactor == 0 && info.origin.empty() &&
+          info.create(params, SignalKind::Diffuse)->needsLowres())
+        throw Error("--lowres-factor 0: " + r.label +
+                    " needs the sequence's low-resolution buffer; expected --lowres-factor >= 2 "
+                    "(e.g. 8, with --lowres-spp 16), or parameters that do not need it (`arena "
+                    "denoisers` lists them)");
+    } else if (!r.params.empty()) {
+      throw Error(r.name + ": a stored output has no parameters to set");
+    }
 
   // What runs: the scenes (rendered or taken from the cache), then the captures.
   struct Source {

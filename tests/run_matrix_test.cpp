@@ -254,6 +254,21 @@ TEST(RunMatrix, BadInputIsAClearError) {
     EXPECT_NE(std::string(e.what()).find("unknown parameter 'sigmaLL'"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("svgf.sigmaL"), std::string::npos) << e.what();
   }
+  // A denoiser that cannot run without the low-resolution buffer, in a run rendering none: refused
+  // before anything renders, not pair by pair afterwards.
+  RunConfig low = tinyRun("no_lowres", {{"reengine", {{"disocclusionRays", "on"}}, ""}});
+  low.render.lowresFactor = 0;
+  low.cache = test::freshDir("run_no_lowres_cache");
+  const std::string lowError = test::errorOf([&] { runMatrix(low); });
+  EXPECT_NE(lowError.find("--lowres-factor 0: reengine[disocclusionRays=on] needs the sequence's "
+                          "low-resolution buffer"),
+            std::string::npos)
+      << lowError;
+  EXPECT_TRUE(fs::is_empty(low.cache)) << "rendered before refusing";
+  low.denoisers = {{"reengine", {{"disocclusionRays", "auto"}}, ""}};
+  low.out = test::freshDir("run_no_lowres_auto");
+  low.cache = sharedCache();
+  EXPECT_EQ(test::errorOf([&] { runMatrix(low); }), "(no error)");  // auto runs without it
   EXPECT_THROW(loadResults(test::freshDir("run_missing-run")), Error);
   fs::path other = test::freshDir("run_other-schema");
   std::ofstream(other / "results.json") << R"({"kind": "arena-run", "schema": 99})";
