@@ -606,6 +606,7 @@ TEST(FidelityTracer, SpecularHitDistanceIsTheSpecularLobesOwnRay) {
 TEST(FidelityTracer, HitsAreTheSameBitsWhicheverKernelsEmbreeRuns) {
   Scene scene = sceneFromText("slanted", R"({
     "purpose": "kernel independence", "resolution": [40, 30], "frames": 1, "max_bounces": 2,
+    "sky": {"color": [0.2, 0.2, 0.2]},
     "camera": {"keys": [{"frame": 0, "eye": [0.3, 1.1, 2.7], "target": [0, 0.2, 0], "fov": 50}]},
     "materials": {"m": {"albedo": [0.5, 0.5, 0.5]}},
     "objects": [{"name": "a", "shape": "quad", "material": "m",
