@@ -168,11 +168,20 @@
     const floors = { ...((scene && scene.floors) || {}) };
     if (scene && scene.noiseFloor && floors.relMse === undefined) floors.relMse = scene.noiseFloor.mean;
     if (Object.keys(floors).length) {
-      rows.push(el('tr', { class: 'reference-row' }, el('td', {}), el('td', { class: 'first', text: 'reference noise floor' }),
-        cols.map((c, i) => {
-          const v = c.floor && c.title === 'mean' ? floors[c.floor] : undefined;
-          return el('td', { class: start(i) || null, text: v === undefined || v === null ? '' : fmt(v) });
-        })));
+      // Named apart from the verdict's and the chart's "reference noise floor" (the reference's own
+      // estimated relMSE): these are scores, measured as a method would be.
+      rows.push(el(
+          'tr', {class: 'reference-row'}, el('td', {}), el('td', {
+            class: 'first',
+            text: 'floor: a perfect method',
+            title:
+                'each metric\'s value for an image with the reference\'s noise and nothing else (results: scenes.<scene>.floors); no method can be expected below it'
+          }),
+          cols.map((c, i) => {
+            const v = c.floor && c.title === 'mean' ? floors[c.floor] : undefined;
+            return el(
+                'td', {class: start(i) || null, text: v === undefined || v === null ? '' : fmt(v)});
+          })));
     }
     for (const p of pairs) {
       if (!A.isOk(p)) {

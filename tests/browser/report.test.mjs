@@ -255,6 +255,8 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
   assert.match(await page.locator('#failures').innerText(), /injected failure/);
   assert.equal(await page.locator('#summary-table tr.failed').count(), 1);
   assert.equal(await page.locator('#summary-table tbody tr[data-label]').count(), okHere);
+  // The floors row is named apart from the verdict's "reference noise floor" (another estimate).
+  assert.equal(await page.locator('#summary-table tr.reference-row td.first').first().textContent(), 'floor: a perfect method');
   const fits = () => page.$eval('#summary-wrap', (w) => ({ scroll: w.scrollWidth, client: w.clientWidth }));
   let f = await fits();
   assert.ok(f.scroll <= f.client, `summary table fits 1400 px: ${f.scroll} > ${f.client}`);
