@@ -175,7 +175,7 @@
             class: 'first',
             text: 'floor: a perfect method',
             title:
-                'each metric\'s value for an image with the reference\'s noise and nothing else (results: scenes.<scene>.floors); no method can be expected below it'
+                'each metric\'s value for a perfect method: an image with the reference\'s noise and nothing else, scored against the reference (results: scenes.<scene>.floors)'
           }),
           cols.map((c, i) => {
             const v = c.floor && c.title === 'mean' ? floors[c.floor] : undefined;
