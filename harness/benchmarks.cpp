@@ -21,6 +21,7 @@
 #include "metrics/error.hpp"
 #include "metrics/rank_agreement.hpp"
 #include "metrics/results.hpp"
+#include "tracer/scene_state.hpp"
 
 namespace arena {
 
@@ -144,6 +145,13 @@ TutorialMix tutorialMix(double litMrays, double litFps, double darkMrays, double
 
 namespace {
 
+// The input frame timed at step f of n distinct ones, forward and back: 0 1 .. n-1 n-2 .. 1 0 1 ..
+size_t pingPong(int f, size_t n) {
+  if (n < 2) return 0;
+  const size_t k = size_t(f) % (2 * (n - 1));
+  return k < n ? k : 2 * (n - 1) - k;
+}
+
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.empty() ? 0.0 : v[v.size() / 2];
@@ -229,11 +237,13 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
   settings.lowresSpp = b.lowresSpp;
   SequenceRenderer renderer(scene, settings);
   std::vector<LayerSet> inputs, inputGradients, inputLowres;
+  std::vector<CameraState> cameras;  // per input frame: reprojection needs them (hit points, depth)
   progress(printed("rendering %d input frame(s) of %s at %dx%d...", settings.frames, scene.name.c_str(), w, h));
   for (int t = 0; t < settings.frames; ++t) {
     auto r = renderer.renderFrame(t);
     inputs.push_back(std::move(r.frame));
     inputGradients.push_back(std::move(r.gradients));  // empty for frame 0
+    cameras.push_back(evaluateState(scene, t, w, h).camera);
   }
   const double bu = bilateralUnitMs(1280, 720, 15);
   progress(printed("1 BU = cv::bilateralFilter(5, 0.1, 2.0) on 1280x720 CV_32FC3 = %.2f ms", bu));
@@ -282,13 +292,19 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
   }
   Image outImage(w, h, 3), signal;
   for (int f = 0; f < b.warmup + b.frames; ++f) {
-    const LayerSet& frame = inputs[size_t(f) % inputs.size()];
-    const LayerSet& gradients = inputGradients[std::max<size_t>(1, size_t(f) % inputs.size()) % inputs.size()];
+    const size_t input = pingPong(f, inputs.size());
+    const LayerSet& frame = inputs[input];
+    const LayerSet& gradients = inputGradients[std::max<size_t>(1, input) % inputs.size()];
     FrameContext ctx;
     ctx.frameIndex = f;
     ctx.width = w;
     ctx.height = h;
+    // The input frames run forward and back (0 1 2 1 0 1 ...): every frame follows a neighbour
+    // with its camera, as in a sequence, and no wrap cuts the history (a cut every few frames
+    // would time another mix of work than a denoiser's steady state).
     ctx.reset = f == 0;
+    ctx.camera = cameras[input];
+    ctx.previousCamera = cameras[f > 0 ? pingPong(f - 1, inputs.size()) : input];
     for (size_t turn = 0; turn < contenders.size(); ++turn) {
       Contender& c = contenders[(turn + size_t(f)) % contenders.size()];
       const bool grads = c.instances[0]->needsGradients() && f > 0 && inputs.size() > 1;
@@ -306,7 +322,7 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
           else staged.get(name) = frame.get(name);
         }
         const bool low = c.instances[k]->wantsLowres() && !inputLowres.empty();
-        const LowresInputs lowInputs{low ? inputLowres[size_t(f) % inputs.size()] : frame, b.lowresFactor,
+        const LowresInputs lowInputs{low ? inputLowres[input] : frame, b.lowresFactor,
                                      b.lowresSpp};
         DenoiserInputs in{signal, staged, grads ? &gradients : nullptr, low ? &lowInputs : nullptr};
         c.instances[k]->clearPassStats();

@@ -15,6 +15,7 @@
 #include "denoisers/denoiser.hpp"
 #include "harness/gpu_cost.hpp"
 #include "tracer/scene.hpp"
+#include "tracer/scene_state.hpp"
 
 namespace arena {
 
@@ -31,6 +32,7 @@ double heapBytes() {
 struct Frames {
   int width = 0, height = 0, lowresFactor = 8, lowresSpp = 16;
   std::vector<LayerSet> frames, gradients, lowres;
+  std::vector<CameraState> cameras;  // per frame: reprojection needs them (hit points, depth)
 };
 
 Frames renderFrames(const std::string& sceneFile, int w, int h, int count, bool lowres,
@@ -52,6 +54,7 @@ Frames renderFrames(const std::string& sceneFile, int w, int h, int count, bool 
     auto r = renderer.renderFrame(t);
     f.frames.push_back(std::move(r.frame));
     f.gradients.push_back(std::move(r.gradients));
+    f.cameras.push_back(evaluateState(scene, t, w, h).camera);
     if (lowres) {
       RayCounts counts;
       f.lowres.push_back(renderer.renderLowres(t, counts));
@@ -81,6 +84,8 @@ InstanceRun runInstance(const DenoiserInfo& info, const ParamSet& params, Signal
     ctx.width = f.width;
     ctx.height = f.height;
     ctx.reset = t == 0;
+    ctx.camera = f.cameras[t];
+    ctx.previousCamera = f.cameras[t > 0 ? t - 1 : 0];
     const LayerSet& frame = f.frames[t];
     const Image signal = frame.get(signalName(kind));
     const LowresInputs low{f.lowres.empty() ? frame : f.lowres[t], f.lowresFactor, f.lowresSpp};

@@ -281,6 +281,16 @@ TEST(ExternalProcess, ARunRecordsTheExternalPairBesideAFailingOne) {
       << failed["error"];
 }
 
+// The bench times each denoiser on frames with their cameras, each frame after its neighbour (the
+// input frames run forward and back): reprojection (hit points, depth) does its real work there.
+TEST(ExternalProcess, TheDenoiseBenchGivesEachFrameItsCameras) {
+  DenoiseBench b;
+  b.sceneFile = std::string(ARENA_SOURCE_DIR) + "/scenes/camera_pan_occluder.json";
+  b.denoisers = {faulty("expects-cameras")};
+  b.width = kWidth, b.height = kHeight, b.frames = 6, b.warmup = 1, b.inputs = 3;
+  EXPECT_EQ(errorOf([&] { benchDenoise(b, [](const std::string&) {}); }), "(no error)");
+}
+
 // arena bench denoise says which clock timed each contender: a process's own report of its compute
 // time sits beside built-ins timed by the wall clock, so it is labelled, with its wall time.
 TEST(ExternalProcess, TheDenoiseBenchNamesTheClockOfEachContender) {

@@ -14,6 +14,8 @@
   error-code answers {"type": "error"} whose message is a number
   bad-pass   reports a pass with a negative time
   flood      floods its output without reading the frame
+  expects-cameras  correct, but reports an error on any frame whose camera is not the frame's size
+             or whose previousCamera is not the camera of the frame before (unless reset)
 Plain Python (no numpy): the output is the input signal, so a correct frame is a passthrough."""
 import json
 import os
@@ -41,10 +43,22 @@ def main():
         chunk = b"x" * 65536
         while True:
             stdout.write(chunk)
+    last_camera = None
     for line in stdin:
         header = json.loads(line)
         data = stdin.read(header["bytes"])
         frame = header["frame"]
+        if mode == "expects-cameras":
+            camera, previous = header["camera"], header["previousCamera"]
+            problem = None
+            if (camera["width"], camera["height"]) != (w, h):
+                problem = "camera is %dx%d; expected the frame's %dx%d" % (camera["width"], camera["height"], w, h)
+            elif last_camera is not None and not header["reset"] and previous != last_camera:
+                problem = "previousCamera is not the camera of the frame before"
+            last_camera = camera
+            if problem:
+                answer((json.dumps({"type": "error", "message": problem}) + "\n").encode())
+                continue
         signal_bytes = data[: 3 * w * h * 4]
         result = {"type": "result", "frame": frame, "width": w, "height": h, "channels": 3,
                   "computeMs": 0.25}
