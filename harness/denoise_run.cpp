@@ -193,7 +193,8 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
     // A-SVGF's gradient samples: each valid one is a path re-shaded at this frame (paper §3.1-3.3),
     // read by both signals' instances but traced once. (The tracer also re-shades the old sample
     // to know its luminance; a real-time implementation keeps that value, so it is not charged.)
-    if (needsGradients_ && t > 0) {
+    // At a cut the history they would correct is gone: none are traced there, none charged.
+    if (needsGradients_ && t > 0 && !ctx.reset) {
       const double valid = double(nonZeroPixels(gradients.get("gradient"), 4));
       out.extraRaysPerPixel += valid / (double(w) * double(h));
     }
