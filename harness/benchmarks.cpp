@@ -322,8 +322,7 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
           else staged.get(name) = frame.get(name);
         }
         const bool low = c.instances[k]->wantsLowres() && !inputLowres.empty();
-        const LowresInputs lowInputs{low ? inputLowres[input] : frame, b.lowresFactor,
-                                     b.lowresSpp};
+        const LowresInputs lowInputs{low ? inputLowres[input] : frame, b.lowresFactor, b.lowresSpp};
         DenoiserInputs in{signal, staged, grads ? &gradients : nullptr, low ? &lowInputs : nullptr};
         c.instances[k]->clearPassStats();
         auto t0 = std::chrono::steady_clock::now();
