@@ -29,6 +29,23 @@ class ReadOnlyDatabase {
       sqlite3_close(db_);
       throw Error(file.string() + ": cannot open as an SQLite database");
     }
+    // Another schema's tables could be read as if they were this one's: refused, as `arena run`
+    // refuses to append to one (a database of no schema, user_version 0, is not arena's).
+    int version = -1;
+    sqlite3_stmt* st = nullptr;
+    if (sqlite3_prepare_v2(db_, "PRAGMA user_version", -1, &st, nullptr) == SQLITE_OK &&
+        sqlite3_step(st) == SQLITE_ROW)
+      version = sqlite3_column_int(st, 0);
+    sqlite3_finalize(st);
+    if (version != kResultsSchemaVersion) {
+      sqlite3_close(db_);
+      throw Error(file.string() + ": " +
+                  (version == 0
+                       ? std::string("not an arena results database (no schema version)")
+                       : "a results database of schema version " + std::to_string(version)) +
+                  "; this arena reads version " + std::to_string(kResultsSchemaVersion) +
+                  " (the results.db that `arena run` writes)");
+    }
   }
   ~ReadOnlyDatabase() { sqlite3_close(db_); }
   ReadOnlyDatabase(const ReadOnlyDatabase&) = delete;
@@ -145,6 +162,7 @@ std::vector<RunResults> runsFromDatabase(const fs::path& file) {
     runs[id].pairs[it->second].summary[textOf(s, "metric")] = summary;
   }
   std::vector<RunResults> out;
+  if (order.empty()) throw Error(file.string() + ": holds no runs (nothing to chart or gate)");
   for (long long id : order) out.push_back(std::move(runs[id]));
   return out;
 }
@@ -154,7 +172,13 @@ std::vector<RunResults> runsFromDatabase(const fs::path& file) {
 std::vector<RunResults> loadHistory(const std::vector<fs::path>& inputs) {
   if (inputs.empty()) throw Error("history: give run directories or results.db files");
   std::vector<RunResults> runs;
+  std::set<std::string> seen;
   for (const fs::path& in : inputs) {
+    // A run given twice would be compared with itself, and the gate pass on it.
+    std::error_code ec;
+    if (const fs::path canonical = fs::weakly_canonical(in, ec);
+        !seen.insert(canonical.string()).second)
+      throw Error("history: " + in.string() + " is given more than once");
     if (fs::is_directory(in)) {
       runs.push_back(loadResults(in));
       runs.back().source = in.string();

@@ -3,6 +3,7 @@
 #include "reports/history.hpp"
 
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
 #include <fstream>
 
@@ -198,6 +199,33 @@ TEST(History, BadInputNamesThePath) {
     EXPECT_NE(std::string(e.what()).find("notes.txt"), std::string::npos) << e.what();
   }
   EXPECT_THROW(loadHistory({}), Error);
+  // A database of another schema, or of none, could be read as if it were this one's; one with no
+  // runs would chart and gate nothing and pass; a run given twice would be compared with itself.
+  const fs::path db = dir / "results.db";
+  appendToDatabase(db, test::typed(historyRun(0, 3)));
+  auto withSql = [&](const std::string& name, const std::string& sql) {
+    const fs::path copy = dir / name;
+    fs::copy_file(db, copy, fs::copy_options::overwrite_existing);
+    sqlite3* h = nullptr;
+    sqlite3_open(copy.c_str(), &h);
+    sqlite3_exec(h, sql.c_str(), nullptr, nullptr, nullptr);
+    sqlite3_close(h);
+    return copy;
+  };
+  std::string e =
+      test::errorOf([&] { loadHistory({withSql("v99.db", "PRAGMA user_version = 99")}); });
+  EXPECT_NE(e.find("v99.db: a results database of schema version 99; this arena reads version 2"),
+            std::string::npos)
+      << e;
+  e = test::errorOf([&] { loadHistory({withSql("v0.db", "PRAGMA user_version = 0")}); });
+  EXPECT_NE(e.find("v0.db: not an arena results database"), std::string::npos) << e;
+  e = test::errorOf([&] {
+    loadHistory(
+        {withSql("empty.db", "DELETE FROM summaries; DELETE FROM pairs; DELETE FROM runs")});
+  });
+  EXPECT_NE(e.find("empty.db: holds no runs"), std::string::npos) << e;
+  e = test::errorOf([&] { loadHistory({db, dir / "." / "results.db"}); });
+  EXPECT_NE(e.find("is given more than once"), std::string::npos) << e;
 }
 
 TEST(History, WritesTheDashboard) {
