@@ -228,6 +228,29 @@ json benchTracer(const TracerBench& b, const ProgressFn& progress) {
 
 json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
   const int w = b.width, h = b.height;
+  // What would time nothing, a contender against itself, or less than it does is refused before
+  // anything renders.
+  if (b.denoisers.empty()) throw Error("bench denoise: --denoisers names no denoiser");
+  for (size_t i = 0; i < b.denoisers.size(); ++i) {
+    const std::string& name = b.denoisers[i];
+    if (std::find(b.denoisers.begin(), b.denoisers.begin() + long(i), name) !=
+        b.denoisers.begin() + long(i))
+      throw Error("bench denoise: --denoisers names " + name + " twice");
+    const DenoiserInfo& info = DenoiserRegistry::instance().find(name);
+    const auto params = b.params.find(name);
+    const ParamSet resolved = info.schema.resolve(
+        params == b.params.end() ? std::map<std::string, std::string>{} : params->second, name);
+    if (b.inputs < 2 && info.origin.empty() &&
+        info.create(resolved, SignalKind::Diffuse)->needsGradients())
+      throw Error("bench denoise: " + name +
+                  " reads gradient samples, which need a frame before them: expected --inputs >= 2 "
+                  "(with 1 its gradient passes would not run and its time would be low)");
+  }
+  for (const auto& [name, values] : b.params)
+    if (std::find(b.denoisers.begin(), b.denoisers.end(), name) == b.denoisers.end())
+      throw Error("bench denoise: --param " + name + "." +
+                  (values.empty() ? "" : values.begin()->first) + ": " + name +
+                  " is not among the denoisers timed");
   Scene scene = loadScene(b.sceneFile);
   RenderSettings settings;
   settings.width = w;

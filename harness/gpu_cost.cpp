@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <map>
 #include <numeric>
 
@@ -238,7 +240,7 @@ std::vector<double> ranks(const std::vector<double>& v) {
 }  // namespace
 
 double spearman(const std::vector<double>& a, const std::vector<double>& b) {
-  if (a.size() != b.size() || a.size() < 2) return 0.0;
+  if (a.size() != b.size() || a.size() < 2) return std::numeric_limits<double>::quiet_NaN();
   const std::vector<double> ra = ranks(a), rb = ranks(b);
   const double n = double(a.size());
   const double ma = std::accumulate(ra.begin(), ra.end(), 0.0) / n;
@@ -249,7 +251,17 @@ double spearman(const std::vector<double>& a, const std::vector<double>& b) {
     saa += (ra[i] - ma) * (ra[i] - ma);
     sbb += (rb[i] - mb) * (rb[i] - mb);
   }
-  return saa > 0 && sbb > 0 ? sab / std::sqrt(saa * sbb) : 0.0;
+  return saa > 0 && sbb > 0 ? sab / std::sqrt(saa * sbb) : std::numeric_limits<double>::quiet_NaN();
+}
+
+std::string spearmanText(double rho, size_t values) {
+  if (std::isfinite(rho)) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.2f", rho);
+    return buf;
+  }
+  return values < 2 ? "undefined (fewer than two values)"
+                    : "undefined (every value of one side tied)";
 }
 
 }  // namespace arena

@@ -112,8 +112,10 @@ struct FitPoint {
 GpuCostModel fitModel(const std::vector<FitPoint>& points, const GpuDevice& device,
                       FixedCost fixed = FixedCost::PerDispatch);
 
-// Spearman's rank correlation (ties get their mean rank); 0 for fewer than 2 values.
+// Spearman's rank correlation (ties get their mean rank); NaN (JSON null) where it is undefined:
+// fewer than 2 values, or every value of one side tied. spearmanText says which, or "%.2f".
 double spearman(const std::vector<double>& a, const std::vector<double>& b);
+std::string spearmanText(double rho, size_t values);
 
 // `arena bench gpu-model`.
 struct GpuModelBench {

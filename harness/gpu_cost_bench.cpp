@@ -197,8 +197,8 @@ json validate(const std::string& set, const std::vector<PublishedRow>& rows,
                    sumPredicted / sumPublished));
   progress(printed("  %-46s %9.3f %9.3f %7.2f", ("total: " + totalNote).c_str(), total,
                    publishedTotal, total / publishedTotal));
-  progress(printed("  rows within 2x: %d of %zu; Spearman rank correlation %.2f", within2x,
-                   rows.size(), rho));
+  progress(printed("  rows within 2x: %d of %zu; Spearman rank correlation %s", within2x,
+                   rows.size(), spearmanText(rho, predicted.size()).c_str()));
   out["sumPredictedMs"] = sumPredicted;
   out["sumPublishedMs"] = sumPublished;
   out["totalPredictedMs"] = total;
@@ -214,6 +214,10 @@ constexpr double kMiB = 1024.0 * 1024.0;
 }  // namespace
 
 json benchGpuModel(const GpuModelBench& b, const ProgressFn& progress) {
+  // The options' mistakes before any work.
+  gpuDevice(b.device);
+  if (b.denoisers.empty()) throw Error("bench gpu-model: --denoisers names no denoiser");
+  for (const std::string& name : b.denoisers) DenoiserRegistry::instance().find(name);
   const GpuDevice& titan = gpuDevice("TITAN RTX");
   json out = {{"model",
                "t = max(bytes / bandwidth, k * fetchCycles / texelRate) + c * (dispatches | "
@@ -461,7 +465,7 @@ json benchGpuModel(const GpuModelBench& b, const ProgressFn& progress) {
   progress("");
   progress("order by CPU ms here:        " + cpuOrder);
   progress("order by predicted GPU ms:   " + gpuOrder);
-  progress(printed("Spearman rank correlation of the two: %.2f", orderRho));
+  progress("Spearman rank correlation of the two: " + spearmanText(orderRho, cpuTotals.size()));
   out["order"] = {{"cpu", cpuOrder}, {"gpu", gpuOrder}, {"spearman", orderRho}};
 
   progress("");

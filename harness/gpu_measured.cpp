@@ -163,8 +163,9 @@ nlohmann::json benchGpuMeasured(const std::string& path, const std::string& devi
   for (int f = 0; f < 2; ++f) {
     const char* name = f == 0 ? "per dispatch" : "per thread";
     const double rho = spearman(predicted[f], measured);
-    progress(printed("fixed cost %-12s: %d of %zu within 2x, sum(log ratio^2) = %.2f, Spearman %.2f", name, within[f],
-                     set.rows.size(), residual[f], rho));
+    progress(printed("fixed cost %-12s: %d of %zu within 2x, sum(log ratio^2) = %.2f, Spearman %s",
+                     name, within[f], set.rows.size(), residual[f],
+                     spearmanText(rho, measured.size()).c_str()));
     out["forms"].push_back(
         {{"form", name}, {"within2x", within[f]}, {"rows", set.rows.size()}, {"residual", residual[f]}, {"spearman", rho}});
   }

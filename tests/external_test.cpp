@@ -291,6 +291,32 @@ TEST(ExternalProcess, TheDenoiseBenchGivesEachFrameItsCameras) {
   EXPECT_EQ(errorOf([&] { benchDenoise(b, [](const std::string&) {}); }), "(no error)");
 }
 
+// What would time nothing, a contender against itself, or less work than it does is refused before
+// anything renders.
+TEST(ExternalProcess, TheDenoiseBenchRefusesWhatItCannotTimeFairly) {
+  DenoiseBench b;
+  b.sceneFile = std::string(ARENA_SOURCE_DIR) + "/scenes/cornell_static.json";
+  b.width = kWidth, b.height = kHeight, b.frames = 2, b.warmup = 0, b.inputs = 2;
+  auto errorWith = [&](std::vector<std::string> denoisers, int inputs = 2,
+                       std::map<std::string, std::map<std::string, std::string>> params = {}) {
+    DenoiseBench c = b;
+    c.denoisers = std::move(denoisers);
+    c.inputs = inputs;
+    c.params = std::move(params);
+    return errorOf([&] { benchDenoise(c, [](const std::string&) {}); });
+  };
+  EXPECT_NE(errorWith({}).find("--denoisers names no denoiser"), std::string::npos);
+  EXPECT_NE(errorWith({"eaw", "eaw"}).find("--denoisers names eaw twice"), std::string::npos);
+  EXPECT_NE(errorWith({"eaw"}, 2, {{"svgf", {{"sigmaL", "3"}}}})
+                .find("--param svgf.sigmaL: svgf is not among"),
+            std::string::npos);
+  EXPECT_NE(errorWith({"asvgf"}, 1)
+                .find("asvgf reads gradient samples, which need a frame before them: "
+                      "expected --inputs >= 2"),
+            std::string::npos)
+      << errorWith({"asvgf"}, 1);
+}
+
 // arena bench denoise says which clock timed each contender: a process's own report of its compute
 // time sits beside built-ins timed by the wall clock, so it is labelled, with its wall time.
 TEST(ExternalProcess, TheDenoiseBenchNamesTheClockOfEachContender) {

@@ -59,6 +59,14 @@ TEST(GpuCostModel, SpearmanAndSignalMerging) {
   EXPECT_DOUBLE_EQ(spearman({1, 2, 3, 4}, {10, 20, 30, 40}), 1.0);
   EXPECT_DOUBLE_EQ(spearman({1, 2, 3, 4}, {4, 3, 2, 1}), -1.0);
   EXPECT_DOUBLE_EQ(spearman({1, 1, 2}, {5, 5, 9}), 1.0);
+  // Undefined, never a number from no data: one value, none, or one side all tied.
+  EXPECT_TRUE(std::isnan(spearman({1}, {2})));
+  EXPECT_TRUE(std::isnan(spearman({}, {})));
+  EXPECT_TRUE(std::isnan(spearman({1, 2, 3}, {4, 4, 4})));
+  EXPECT_EQ(spearmanText(spearman({1}, {2}), 1), "undefined (fewer than two values)");
+  EXPECT_EQ(spearmanText(spearman({1, 2, 3}, {4, 4, 4}), 3),
+            "undefined (every value of one side tied)");
+  EXPECT_EQ(spearmanText(-1.0, 4), "-1.00");
   // Two signals in one dispatch: the G-buffer read once, the radiance twice.
   PassTraffic a;
   {
