@@ -94,7 +94,10 @@ void addRefineCommand(CLI::App& app) {
                        : "expected a relMSE > 0, e.g. 1e-5, got " + text;
           },
           "RELMSE>0"));
-  cmd->add_option("--max-spp", *maxSpp, "Never go past this many samples per pixel")
+  cmd->add_option(
+         "--max-spp", *maxSpp,
+         "Never go past this many samples per pixel, rounded up to a multiple of the reference's "
+         "replicates (4: 15 allows 16)")
       ->default_val(4096)
       ->check(CLI::Range(1, 1 << 20));
   addRenderOptions(cmd, *opt);

@@ -58,7 +58,10 @@ void addRenderOptions(CLI::App* cmd, RenderOptions& o) {
   cmd->add_option("--frames", o.frames, "Override the frame count")
       ->check(CLI::Range(1, kMaxSceneFrames))
       ->default_str("the scene's");
-  cmd->add_option("--ref-spp", o.referenceSpp, "Maximum samples per pixel of the references")
+  cmd->add_option(
+         "--ref-spp", o.referenceSpp,
+         "Maximum samples per pixel of the references (rounded up to a multiple of their 4 "
+         "replicates)")
       ->check(CLI::Range(1, 1 << 20))
       ->default_str("quick: 512, paper: 4096");
   cmd->add_option("--ref-rel-error", o.referenceRelError,
