@@ -120,6 +120,20 @@ json runMatrix(const RunConfig& cfg) {
   }
   const bool keepAll = cfg.keepFrames == "all" || (cfg.keepFrames == "auto" && sources.size() == 1 &&
                                                    denoisers.size() == (cfg.baselines ? 3u : 1u) && !cfg.denoisers.empty());
+  // A run written into the cache mixes its results with sequences (and a later cache clean-up
+  // with the run): the two stay apart.
+  if (!cfg.scenes.empty()) {
+    auto resolved = [](const fs::path& p) {
+      std::error_code ec;
+      fs::path r = fs::weakly_canonical(fs::absolute(p), ec).lexically_normal();
+      return r.has_filename() ? r : r.parent_path();  // "dir/" as "dir"
+    };
+    const fs::path out = resolved(cfg.out), cache = resolved(cfg.cache);
+    const auto [c, o] = std::mismatch(cache.begin(), cache.end(), out.begin(), out.end());
+    if (c == cache.end())
+      throw Error("--out " + cfg.out.string() + " lies in the sequence cache " +
+                  cfg.cache.string() + "; expected a directory outside it");
+  }
   checkRunOutputs(cfg.out);
   // The cache, like --out, before any work: a file there would fail every pair one by one.
   if (std::error_code ec;

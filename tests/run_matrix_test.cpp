@@ -369,6 +369,14 @@ TEST(RunMatrixContract, BadOutputsFailBeforeAnyWorkNamingTheFile) {
             std::string::npos)
       << e;
   EXPECT_FALSE(fs::exists(fileCache.out / "results.json"));
+  // A run written into the sequence cache, or as the cache itself: refused, nothing created there.
+  for (const std::string inside : {"run", ""}) {
+    RunConfig intoCache = contract::tinyRun("into_cache");
+    intoCache.out = inside.empty() ? intoCache.cache / "" : intoCache.cache / inside;
+    const std::string error = test::errorOf([&] { runMatrix(intoCache); });
+    EXPECT_NE(error.find("lies in the sequence cache"), std::string::npos) << error;
+    EXPECT_TRUE(fs::is_empty(intoCache.cache)) << "wrote into the cache before refusing";
+  }
   // The run's name is its directory's, a trailing slash included.
   EXPECT_EQ(folderName("runs/today/"), "today");
   EXPECT_EQ(folderName("runs/today"), "today");
