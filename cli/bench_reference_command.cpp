@@ -36,8 +36,9 @@ void addBenchReferenceCommand(CLI::App* bench) {
                   "part of the error the longer paths carry")
       ->check(CLI::Range(1, 64));
   cmd->add_option("--repeats", o->repeats,
-                  "Independent repeats of each compared reference (own seed each): the gains are medians over "
-                  "them with a 95% interval (the whole range under 6)")
+                  "Independent repeats of each compared reference (own seed each): the gains are "
+                  "medians over "
+                  "them with a 95% interval (none under 6)")
       ->check(CLI::Range(1, 256))
       ->capture_default_str();
   cmd->add_option("--ref-tile", o->referenceTile,

@@ -170,10 +170,18 @@ PairedRatio pairedRatio(const std::vector<double>& a, const std::vector<double>&
   if (r.empty()) return {};
   std::sort(r.begin(), r.end());
   const double n = double(r.size());
+  constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
+  if (r.size() < 6) return {median(r), kNone, kNone, r.size()};
   const double half = 1.96 * std::sqrt(n) / 2;
-  const size_t lo = n < 6 ? 0 : size_t(std::max(0.0, std::floor(n / 2 - half)));
-  const size_t hi = n < 6 ? r.size() - 1 : std::min(r.size() - 1, size_t(std::ceil(n / 2 + half)) - 1);
-  return {median(r), r[lo], r[hi]};
+  const size_t lo = size_t(std::max(0.0, std::floor(n / 2 - half)));
+  const size_t hi = std::min(r.size() - 1, size_t(std::ceil(n / 2 + half)) - 1);
+  return {median(r), r[lo], r[hi], r.size()};
+}
+
+std::string PairedRatio::ciText(const char* format) const {
+  if (!std::isfinite(lo) || !std::isfinite(hi))
+    return "no 95% CI from " + std::to_string(pairs) + " pair(s); 6 are needed";
+  return "95% CI " + printed(format, lo) + ", " + printed(format, hi);
 }
 
 double bilateralUnitMs(int width, int height, int repetitions) {
@@ -390,7 +398,8 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
     if (&c != &contenders.front()) {
       const PairedRatio r = pairedRatio(c.total, contenders.front().total);
       row["ratioTo"] = {{"name", contenders.front().name}, {"median", r.median}, {"ci95", {r.lo, r.hi}}};
-      line += printed("  x%.3f of %s [95%% CI %.3f, %.3f]", r.median, contenders.front().name.c_str(), r.lo, r.hi);
+      line += printed("  x%.3f of %s [%s]", r.median, contenders.front().name.c_str(),
+                      r.ciText().c_str());
     }
     progress(line);
     for (const auto& p : passes)
@@ -487,7 +496,7 @@ json benchReference(const ReferenceBench& b, const ProgressFn& progress) {
       adaCost.push_back(ada.back().relMse * ada.back().seconds);
     }
     // The equal-time gain over the independent sampler: the median over repeats of the cost ratio,
-    // with the distribution-free 95% interval of that median (whole range under 6 repeats).
+    // with the distribution-free 95% interval of that median (none under 6 repeats).
     const PairedRatio sobolGain = pairedRatio(indCost, sobCost), gain = pairedRatio(indCost, adaCost);
     auto medianOf = [](const std::vector<Measured>& ms, double Measured::*field) {
       std::vector<double> v;
@@ -507,18 +516,18 @@ json benchReference(const ReferenceBench& b, const ProgressFn& progress) {
     const json indJ = summary(ind), sobJ = summary(sob), adaJ = summary(ada);
     const char* estimator =
         scene.referenceEstimator == ReferenceEstimator::Bidirectional ? "bidirectional" : "path";
-    progress(
-        printed("%-22s %d spp, %d repeats (medians): independent path relMSE %.3e in %.2f s | %s "
-                "sobol %.3e in %.2f s "
-                "(gain %.2fx [95%% CI %.2f, %.2f]) | adaptive %.0f spp %.3e in %.2f s (est. %.3e) "
-                "| gold %d spp "
-                "in %.1f s, own noise %.1e | gain %.2fx [95%% CI %.2f, %.2f]",
-                scene.name.c_str(), int(std::lround(indJ["spp"].get<double>())), b.repeats,
-                indJ["relMse"].get<double>(), indJ["seconds"].get<double>(), estimator,
-                sobJ["relMse"].get<double>(), sobJ["seconds"].get<double>(), sobolGain.median,
-                sobolGain.lo, sobolGain.hi, adaJ["spp"].get<double>(), adaJ["relMse"].get<double>(),
-                adaJ["seconds"].get<double>(), adaJ["estimatedRelMse"].get<double>(),
-                goldSums.spp(), goldSeconds, goldNoise, gain.median, gain.lo, gain.hi));
+    progress(printed(
+        "%-22s %d spp, %d repeats (medians): independent path relMSE %.3e in %.2f s | %s "
+        "sobol %.3e in %.2f s "
+        "(gain %.2fx [%s]) | adaptive %.0f spp %.3e in %.2f s (est. %.3e) "
+        "| gold %d spp "
+        "in %.1f s, own noise %.1e | gain %.2fx [%s]",
+        scene.name.c_str(), int(std::lround(indJ["spp"].get<double>())), b.repeats,
+        indJ["relMse"].get<double>(), indJ["seconds"].get<double>(), estimator,
+        sobJ["relMse"].get<double>(), sobJ["seconds"].get<double>(), sobolGain.median,
+        sobolGain.ciText("%.2f").c_str(), adaJ["spp"].get<double>(), adaJ["relMse"].get<double>(),
+        adaJ["seconds"].get<double>(), adaJ["estimatedRelMse"].get<double>(), goldSums.spp(),
+        goldSeconds, goldNoise, gain.median, gain.ciText("%.2f").c_str()));
     out["scenes"].push_back({{"scene", scene.name},
                              {"repeats", b.repeats},
                              {"independent", indJ},

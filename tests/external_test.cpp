@@ -291,6 +291,20 @@ TEST(ExternalProcess, TheDenoiseBenchGivesEachFrameItsCameras) {
   EXPECT_EQ(errorOf([&] { benchDenoise(b, [](const std::string&) {}); }), "(no error)");
 }
 
+// The interval of a median of paired ratios (the benches' "x0.8 of eaw [95% CI ...]"):
+// distribution-free, from 6 pairs on; below that even the whole range covers less than 95%, so
+// there is none (never a zero-width one from one pair).
+TEST(ExternalProcess, ABenchRatioHasNoIntervalUnderSixPairs) {
+  const PairedRatio one = pairedRatio({2.0}, {1.0});
+  EXPECT_DOUBLE_EQ(one.median, 2.0);
+  EXPECT_TRUE(std::isnan(one.lo) && std::isnan(one.hi));
+  EXPECT_EQ(one.ciText(), "no 95% CI from 1 pair(s); 6 are needed");
+  const PairedRatio eight = pairedRatio({1, 2, 3, 4, 5, 6, 7, 8}, {1, 1, 1, 1, 1, 1, 1, 1});
+  EXPECT_DOUBLE_EQ(eight.lo, 2.0);  // order statistics floor(4 - 2.77) and ceil(4 + 2.77) - 1
+  EXPECT_DOUBLE_EQ(eight.hi, 7.0);
+  EXPECT_EQ(eight.ciText("%.1f"), "95% CI 2.0, 7.0");
+}
+
 // What would time nothing, a contender against itself, or less work than it does is refused before
 // anything renders.
 TEST(ExternalProcess, TheDenoiseBenchRefusesWhatItCannotTimeFairly) {
