@@ -33,7 +33,7 @@ void addBenchCommand(CLI::App& app) {
   tracer->add_option("--warmup", o->warmup, "Untimed warm-up frames")->check(CLI::Range(0, 100000))->default_val(3);
   tracer->add_option("--scene", o->scene, "Scene file");
   tracer->add_flag("--embree", o->embree, "Also run Embree's pathtracer tutorial (embree-tools) for comparison");
-  tracer->add_option("--json", o->json, "Write results to this JSON file")->default_str("none");
+  tracer->add_option("--json", o->json, "Write results to this JSON file")->default_str("(none)");
   tracer->callback([o] {
     const nlohmann::json out = benchTracer({o->scene, o->size, o->frames, o->warmup, o->embree}, printLine);
     if (!o->json.empty()) writeTextAtomically(o->json, out.dump(2));
@@ -57,7 +57,7 @@ void addBenchCommand(CLI::App& app) {
   denoise->add_option("--inputs", d->inputs, "Distinct rendered input frames, cycled")
       ->check(CLI::Range(1, 1000))
       ->default_val(3);
-  denoise->add_option("--json", d->json, "Write results to this JSON file")->default_str("none");
+  denoise->add_option("--json", d->json, "Write results to this JSON file")->default_str("(none)");
   denoise->add_option("--lowres-factor", d->lowresFactor,
                       "Low-resolution buffer for denoisers that read one (0: none)")
       ->check(CLI::Range(0, 64))
@@ -97,13 +97,15 @@ void addBenchCommand(CLI::App& app) {
   gpuModel->add_option("--scene", g->scene, "Scene file whose frames feed the denoisers");
   gpuModel->add_option("--resolution", g->resolution, "WIDTHxHEIGHT of the per-denoiser and memory tables")
       ->default_val("1920x1080");
-  gpuModel->add_option("--device", g->device, "Device of the per-denoiser table: TITAN RTX, RTX 4080, PS5")
+  gpuModel
+      ->add_option("--device", g->device,
+                   "Device of the per-denoiser table: TITAN RTX, RTX 4080, PS5, H200")
       ->default_val("TITAN RTX");
   gpuModel->add_option("--frames", g->frames,
                        "Frames per run; the last is counted (5: SVGF-family histories reach h >= 4)")
       ->check(CLI::Range(2, 100))
       ->default_val(5);
-  gpuModel->add_option("--json", g->json, "Write results to this JSON file")->default_str("none");
+  gpuModel->add_option("--json", g->json, "Write results to this JSON file")->default_str("(none)");
   gpuModel->callback([g] {
     GpuModelBench b;
     std::tie(b.width, b.height) = parseResolution("--resolution", g->resolution);
@@ -127,7 +129,8 @@ void addBenchCommand(CLI::App& app) {
   gpuMeasured->add_option("--device", gm->device,
                           "Specification to price with (TITAN RTX, RTX 4080, PS5, H200); default: the one "
                           "the file's device names");
-  gpuMeasured->add_option("--json", gm->json, "Write results to this JSON file")->default_str("none");
+  gpuMeasured->add_option("--json", gm->json, "Write results to this JSON file")
+      ->default_str("(none)");
   gpuMeasured->callback([gm] {
     const nlohmann::json out = benchGpuMeasured(gm->file, gm->device, printLine);
     if (!gm->json.empty()) writeTextAtomically(gm->json, out.dump(2));
@@ -143,7 +146,7 @@ void addBenchCommand(CLI::App& app) {
   auto ro = std::make_shared<RankOptions>();
   rank->add_option("runA", ro->runA, "Run directory A (its results.json)")->required();
   rank->add_option("runB", ro->runB, "Run directory B, the same scenes")->required();
-  rank->add_option("--json", ro->json, "Write results to this JSON file")->default_str("none");
+  rank->add_option("--json", ro->json, "Write results to this JSON file")->default_str("(none)");
   rank->callback([ro] {
     const nlohmann::json out = benchRankAgreement(ro->runA, ro->runB, printLine);
     if (!ro->json.empty()) writeTextAtomically(ro->json, out.dump(2));

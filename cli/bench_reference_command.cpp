@@ -32,9 +32,11 @@ void addBenchReferenceCommand(CLI::App* bench) {
                   "Independent randomisations of the compared references (the gold keeps the default)")
       ->check(CLI::Range(2, 64));
   cmd->add_option("--max-bounces", o->maxBounces,
-                  "Override the scenes' maximum path length (gold included): comparing two lengths shows which "
+                  "Override the scenes' maximum path length (gold included): comparing two lengths "
+                  "shows which "
                   "part of the error the longer paths carry")
-      ->check(CLI::Range(1, 64));
+      ->check(CLI::Range(1, 64))
+      ->default_str("(each scene's own)");
   cmd->add_option("--repeats", o->repeats,
                   "Independent repeats of each compared reference (own seed each): the gains are "
                   "medians over "

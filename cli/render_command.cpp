@@ -85,6 +85,7 @@ void addRefineCommand(CLI::App& app) {
   cmd->add_option("scenes", *names, "Scene names or files, comma-separated, or 'all'")->default_val("all");
   cmd->add_option("--target", *target, "Target relMSE of each reference (e.g. 1e-5)")
       ->required()
+      ->default_str("")
       ->check(CLI::Validator(
           [](const std::string& text) {
             char* end = nullptr;

@@ -65,15 +65,19 @@ void addMatrixOptions(CLI::App* cmd, MatrixOptions& o) {
       ->check(CLI::Range(0, kMaxSceneFrames))
       ->default_val(8);
   cmd->add_flag("--no-baselines", o.noBaselines, "Do not add passthrough and temporal for context");
-  cmd->add_option("--seeds", o.seeds,
-                  "Input seeds per scene: > 1 also renders K-1 more noise realisations and reports each "
-                  "pair's error split into bias^2 and variance")
+  cmd->add_option(
+         "--seeds", o.seeds,
+         "Input seeds per scene: > 1 also renders K-1 more noise realisations and reports each "
+         "pair's error split into bias^2 and variance")
+      ->check(CLI::Range(1, 64))
       ->default_val(1);
   addRenderOptions(cmd, o.render);
 }
 
 RunConfig configFrom(const MatrixOptions& o) {
   RunConfig c;
+  if (o.out.empty())
+    throw Error("--out: an empty directory name; expected the run's directory, e.g. runs/today");
   c.out = o.out;
   c.name = folderName(o.out);  // "runs/today/" too
   c.cache = o.render.cacheDir;

@@ -170,6 +170,7 @@ std::string readText(const fs::path& path, uintmax_t maxBytes) {
 }
 
 std::string folderName(const std::filesystem::path& dir) {
+  if (dir.empty()) throw Error("an empty directory name; expected a directory (e.g. runs/today)");
   std::filesystem::path p = std::filesystem::absolute(dir).lexically_normal();
   if (p.filename().empty()) p = p.parent_path();
   return p.filename().string();

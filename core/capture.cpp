@@ -251,6 +251,11 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
       count = std::max(count, info.referenceOfFrame.back() + 1);
     }
     if (ref->has("samples")) {
+      // One per reference: as many as ofFrame names (its largest index + 1).
+      if (const json& s = ref->value("samples"); s.is_array() && s.size() != size_t(count))
+        ref->fail("samples", "expected one number per reference, " + std::to_string(count) +
+                                 " (reference.ofFrame names references 0 to " +
+                                 std::to_string(count - 1) + "), got " + std::to_string(s.size()));
       const std::vector<double> spp = ref->numbers("samples", size_t(count));
       for (size_t r = 0; r < spp.size(); ++r) {
         if (!(spp[r] >= 1 && spp[r] <= 1e9 && spp[r] == std::floor(spp[r])))

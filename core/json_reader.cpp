@@ -252,7 +252,8 @@ std::string JsonReader::string(const std::string& key, const std::string& fallba
 std::vector<double> JsonReader::numbers(const std::string& key, size_t count) {
   const json& j = member(key, "an array of numbers");
   std::string expected = "expected an array of " + std::to_string(count) + " numbers";
-  if (!j.is_array() || j.size() != count) fail(key, expected + ", got " + jsonTypeName(j));
+  if (!j.is_array()) fail(key, expected + ", got " + jsonTypeName(j));
+  if (j.size() != count) fail(key, expected + ", got an array of " + std::to_string(j.size()));
   std::vector<double> out;
   for (const json& e : j) {
     if (!e.is_number() || !std::isfinite(e.get<double>())) fail(key, expected);

@@ -904,8 +904,15 @@ void checkPageAssets(const fs::path& webDir, const fs::path& nodeModulesDir,
                   " is missing); run scripts/setup.sh, which runs `npm ci` in reports/");
 }
 
+void requirePageDirectory(const fs::path& out) {
+  if (std::error_code ec; fs::exists(out, ec) && !fs::is_directory(out, ec))
+    throw Error("--out " + out.string() +
+                ": exists and is not a directory; expected a directory for the page");
+}
+
 void copyPageAssets(const fs::path& webDir, const fs::path& nodeModulesDir,
                     const std::vector<PageFile>& files, const fs::path& out) {
+  requirePageDirectory(out);
   fs::create_directories(out);
   for (const PageFile& f : files)
     fs::copy_file(webDir / f.source, out / f.target, fs::copy_options::overwrite_existing);
@@ -916,6 +923,7 @@ void copyPageAssets(const fs::path& webDir, const fs::path& nodeModulesDir,
 
 ReportSummary writeReport(const ReportOptions& o) {
   if (o.out.empty()) throw Error("report: --out is required");
+  requirePageDirectory(o.out);
   const RunResults results = loadResults(o.run);
   RunResults baseline;
   if (!o.baseline.empty()) baseline = loadResults(o.baseline);

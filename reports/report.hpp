@@ -54,6 +54,8 @@ struct PageFile {
 void checkPageAssets(const std::filesystem::path& webDir,
                      const std::filesystem::path& nodeModulesDir,
                      const std::vector<PageFile>& files);
+// Refuses an --out that exists and is not a directory (before any work).
+void requirePageDirectory(const std::filesystem::path& out);
 void copyPageAssets(const std::filesystem::path& webDir,
                     const std::filesystem::path& nodeModulesDir, const std::vector<PageFile>& files,
                     const std::filesystem::path& out);

@@ -586,6 +586,10 @@ TEST(CaptureContract, BadValuesAndNamesAreErrorsNamingThem) {
   expectError(copyCapture(good, "spp_neg",
                           [](json& d) { d["reference"]["samples"] = {64, 64, 64, 64, 64, -5}; }),
               "reference.samples[5]");
+  // As many samples as references, which ofFrame sets: the count got and why that many.
+  expectError(copyCapture(good, "spp_count", [](json& d) { d["reference"]["samples"] = {64}; }),
+              "reference.samples: expected one number per reference, 6 (reference.ofFrame names "
+              "references 0 to 5), got 1");
   expectError(copyCapture(good, "offrame", [](json& d) { d["reference"]["ofFrame"][1] = 0.5; }),
               "reference.ofFrame[1]: expected a whole reference index");
   // An event at frame 0 has nothing before it to be measured against.

@@ -124,6 +124,13 @@ TEST(CliContract, ShardsParamsAndSweepsAreStrict) {
                          common);  // one value twice
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("2.0 and 2 are the same value of sigmaL"), std::string::npos) << r.output;
+  r = contract::arenaCli("run --denoisers passthrough --scenes cornell_static --out ''");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("--out: an empty directory name"), std::string::npos) << r.output;
+  r = contract::arenaCli("sweep --denoiser svgf --grid 'sigmaL=[2,,4]'" +
+                         common);  // a value left out
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("an empty value between commas"), std::string::npos) << r.output;
   r = contract::arenaCli("run --denoisers passthrough --shard 0/1junk" + common);
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("--shard '0/1junk'"), std::string::npos) << r.output;

@@ -226,6 +226,14 @@ TEST(History, BadInputNamesThePath) {
   EXPECT_NE(e.find("empty.db: holds no runs"), std::string::npos) << e;
   e = test::errorOf([&] { loadHistory({db, dir / "." / "results.db"}); });
   EXPECT_NE(e.find("is given more than once"), std::string::npos) << e;
+  // A file where the page's directory belongs, named with the option.
+  HistoryOptions o;
+  o.inputs = {db};
+  o.out = dir / "notes.txt";
+  e = test::errorOf([&] { writeHistory(o); });
+  EXPECT_NE(e.find("--out " + o.out.string() + ": exists and is not a directory"),
+            std::string::npos)
+      << e;
 }
 
 TEST(History, WritesTheDashboard) {
