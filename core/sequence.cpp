@@ -34,6 +34,11 @@ const std::vector<LayerSpec>& frameLayers() {
   };
   return specs;
 }
+const std::map<std::string, std::string>& oracleLayers() {
+  static const std::map<std::string, std::string> oracles = {
+      {"specHitDistMirror", "the noise-free mirror ray's hit distance"}};
+  return oracles;
+}
 const std::vector<LayerSpec>& referenceLayers() {
   static const std::vector<LayerSpec> specs = {
       {"color", {"R", "G", "B"}, false},       {"color", {"R", "G", "B"}, false, true},

@@ -5,6 +5,7 @@
 // cameras). The channel layout is defined here once, for the writer (tracer) and the readers.
 #include <algorithm>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -27,6 +28,9 @@ const std::vector<LayerSpec>& gradientLayers();
 // Optional low-resolution, many-sample buffer (CAPCOM 2023 "disocclusion rays", slides 19-21): one
 // texel per factor x factor block, shaded lowresSpp times at its anchor pixel (lowresAnchor).
 const std::vector<LayerSpec>& lowresLayers();
+// Frame layers a real-time engine would not have (the tracer's noise-free extras), with what each
+// is: a denoiser reading one is not on equal terms, and its results say so.
+const std::map<std::string, std::string>& oracleLayers();
 }  // namespace channels
 
 // The full-resolution pixel whose primary hit a low-resolution texel shades: the block's centre

@@ -53,6 +53,8 @@ class DenoiseRun {
   // The denoiser reads the sequence's A-SVGF gradient samples: re-shaded paths beyond the frame's
   // own, charged one path per valid sample (DenoisedFrame::extraRaysPerPixel).
   bool readsGradients() const { return needsGradients_; }
+  // Every frame layer an instance reads (requiredChannels of all of them).
+  const std::vector<std::string>& readLayers() const { return readLayers_; }
   // Denoises frames 0..n-1 in order; `frame(t)` supplies the sequence frame's layers.
   void run(const std::function<const LayerSet&(int)>& frame, const std::function<void(const DenoisedFrame&)>& onFrame);
 

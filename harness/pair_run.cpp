@@ -125,6 +125,23 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   }
   // First: what the inputs were matters before what the outputs measured.
   if (!sanitized.empty()) pair["warnings"].insert(pair["warnings"].begin(), sanitizedWarning(sanitized));
+  // Oracle data (a layer no real-time engine has), named in the results and in a warning: the
+  // method is then not ranked on equal terms.
+  if (run) {
+    json oracles = json::array();
+    std::string named;
+    for (const std::string& layer : run->readLayers())
+      if (auto it = channels::oracleLayers().find(layer); it != channels::oracleLayers().end()) {
+        oracles.push_back(layer);
+        named += (named.empty() ? "" : ", ") + layer + " (" + it->second + ")";
+      }
+    if (!oracles.empty()) {
+      pair["oracleLayers"] = oracles;
+      pair["warnings"].insert(pair["warnings"].begin(),
+                              "reads oracle data a real-time engine would not have: " + named +
+                                  "; its results are not on equal terms with the others'");
+    }
+  }
   json timing;
   if (run) {
     timing = timingSummary(passes, ms, cfg.warmup, info.width, info.height);

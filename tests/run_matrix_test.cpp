@@ -228,6 +228,26 @@ TEST(RunMatrix, ARefinedSceneIsMeasuredAgainFromItsKeptOutputs) {
   }
 }
 
+// A denoiser reading a layer no real-time engine has (the noise-free mirror ray's hit distance)
+// is named with it in the results and a warning; one reading the 1-spp sample's is not.
+TEST(RunMatrix, OracleDataIsNamedInThePairThatReadsIt) {
+  RunConfig c =
+      tinyRun("oracle", {{"reblur", {{"hitDistance", "mirror"}}, ""}, {"reblur", {}, ""}});
+  c.scenes.resize(1);
+  c.baselines = false;
+  const json r = runMatrix(c);
+  const json& oracle = pairOf(r, "cornell_static", "reblur[hitDistance=mirror]");
+  EXPECT_EQ(oracle["oracleLayers"], json({"specHitDistMirror"}));
+  ASSERT_FALSE(oracle["warnings"].empty());
+  EXPECT_NE(oracle["warnings"][0].get<std::string>().find(
+                "reads oracle data a real-time engine would not have: "
+                "specHitDistMirror"),
+            std::string::npos)
+      << oracle["warnings"];
+  const json& plain = pairOf(r, "cornell_static", "reblur");
+  EXPECT_FALSE(plain.contains("oracleLayers"));
+}
+
 TEST(RunMatrix, AFailingPairIsReportedAndTheOthersKept) {
   RunConfig c = tinyRun("failing", {{"svgf", {}, ""}});
   c.scenes.resize(1);
