@@ -48,9 +48,10 @@ void addBenchReferenceCommand(CLI::App* bench) {
                   "what finer allocation buys and whether its estimate stays honest")
       ->check(CLI::Range(0, 1024))
       ->capture_default_str();
-  cmd->add_option("--frame", o->frame, "Frame whose state is rendered")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--frame", o->frame, "Frame whose state is rendered")
+      ->check(CLI::Range(0, 100000));
   cmd->add_option("--scenes-dir", o->scenesDir, "Directory of scene files");
-  cmd->add_option("--json", o->json, "Write results to this JSON file");
+  cmd->add_option("--json", o->json, "Write results to this JSON file")->default_str("(none)");
   cmd->callback([o] {
     RenderOptions ro;
     ro.resolution = o->resolution;

@@ -39,6 +39,12 @@ MeasuredSet readMeasuredSet(const std::string& path) {
     if (!(k.medianMs > 0) || !std::isfinite(k.medianMs)) row.fail("medianMs", "a positive time in ms");
     for (const char* optional : {"p5Ms", "p95Ms", "backToBackMs"}) row.number(optional, 0.0);
     row.rejectUnread();
+    // A kernel at one size timed twice would count twice in the fit's agreement figures.
+    for (const MeasuredKernel& other : set.rows)
+      if (other.kernel == k.kernel && other.width == k.width && other.height == k.height)
+        row.fail("kernel", "one row per kernel and size; '" + k.kernel + "' at " +
+                               std::to_string(k.width) + "x" + std::to_string(k.height) +
+                               " is already a row");
     set.rows.push_back(k);
   }
   root.rejectUnread();

@@ -207,6 +207,13 @@ TEST(GpuMeasured, BadFilesAndKernelsAreErrorsNamingWhatIsWrong) {
   EXPECT_NE(errorOf([&] { readMeasuredSet(file("typo.json", R"({"device": "X", "rowz": [], "rows": [)" + row + "]}")); })
                 .find("rowz"),
             std::string::npos);
+  EXPECT_NE(
+      errorOf([&] {
+        readMeasuredSet(
+            file("twice.json", R"({"device": "X", "rows": [)" + row + "," + row + "]}"));
+      }).find("rows[1].kernel: one row per kernel and size; 'box-3x3' at 64x32 is already a row"),
+      std::string::npos)
+      << errorOf([&] { readMeasuredSet((dir / "twice.json").string()); });
   EXPECT_NE(errorOf([&] { measuredKernelTraffic("gaussian-9x9", 8, 8); }).find("gaussian-9x9"), std::string::npos);
   EXPECT_NE(errorOf([&] { measuredKernelTraffic("format-7x7-BC7", 8, 8); }).find("BC7"), std::string::npos);
   const std::string unknownDevice = file("unknown_device.json", R"({"device": "Some GPU", "rows": [)" + row + "]}");
