@@ -54,7 +54,8 @@ void addBenchCommand(CLI::App& app) {
   denoise->add_option("--resolution", d->resolution, "WIDTHxHEIGHT")->default_val("1280x720");
   denoise->add_option("--frames", d->frames, "Timed frames per denoiser")->check(CLI::Range(1, 100000))->default_val(20);
   denoise->add_option("--warmup", d->warmup, "Untimed frames first")->check(CLI::Range(0, 100000))->default_val(5);
-  denoise->add_option("--inputs", d->inputs, "Distinct rendered input frames, cycled")
+  denoise
+      ->add_option("--inputs", d->inputs, "Distinct rendered input frames, played forward and back")
       ->check(CLI::Range(1, 1000))
       ->default_val(3);
   denoise->add_option("--json", d->json, "Write results to this JSON file")->default_str("(none)");

@@ -230,6 +230,9 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
   }
   for (JsonReader& e : root.optionalArray("events")) {
     // At frame 0 an event has no earlier frame to be measured against: the metrics would skip it.
+    if (n < 2)
+      e.fail("frame",
+             "a capture of one frame has no frame for an event (events lie in frames 1..N-1)");
     const int frame = e.integerIn("frame", 1, n - 1);
     const std::string kind = e.string("kind");
     const std::optional<EventKind> k = eventKindFromName(kind);

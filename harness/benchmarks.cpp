@@ -167,10 +167,10 @@ PairedRatio pairedRatio(const std::vector<double>& a, const std::vector<double>&
   std::vector<double> r;
   for (size_t i = 0; i < std::min(a.size(), b.size()); ++i)
     if (b[i] > 0) r.push_back(a[i] / b[i]);
-  if (r.empty()) return {};
+  constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
+  if (r.empty()) return {kNone, kNone, kNone, 0};
   std::sort(r.begin(), r.end());
   const double n = double(r.size());
-  constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
   if (r.size() < 6) return {median(r), kNone, kNone, r.size()};
   const double half = 1.96 * std::sqrt(n) / 2;
   const size_t lo = size_t(std::max(0.0, std::floor(n / 2 - half)));
@@ -331,8 +331,10 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
     ctx.width = w;
     ctx.height = h;
     // The input frames run forward and back (0 1 2 1 0 1 ...): every frame follows a neighbour
-    // with its camera, as in a sequence, and no wrap cuts the history (a cut every few frames
-    // would time another mix of work than a denoiser's steady state).
+    // with its camera, and no wrap cuts the history (a cut every few frames would time another mix
+    // of work than a denoiser's steady state). A backward step keeps the frame's own motion
+    // vectors, which point the other way: on a moving camera part of the history is rejected
+    // there (the default scene's camera is still).
     ctx.reset = f == 0;
     ctx.camera = cameras[input];
     ctx.previousCamera = cameras[f > 0 ? pingPong(f - 1, inputs.size()) : input];

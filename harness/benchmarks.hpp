@@ -73,12 +73,11 @@ nlohmann::json benchRankAgreement(const std::string& runA, const std::string& ru
 // width x height CV_32FC3 image, measured in this process.
 double bilateralUnitMs(int width, int height, int repetitions);
 
-// The median of the per-frame ratios a[i] / b[i] of two contenders timed on the same frames, and a
-// distribution-free 95% interval for it (order statistics at the binomial(n, 1/2) 2.5% and 97.5%
-// points, normal approximation, n >= 6; fewer frames give the whole range).
-// The median of the paired ratios a[i] / b[i] with the distribution-free 95% interval of that
-// median (order statistics); none (NaN bounds) under 6 pairs, where even the whole range covers
-// less than 95% (5 pairs: 94%, 1 pair: nothing). ciText: "95% CI lo, hi" or why there is none.
+// The median of the per-frame ratios a[i] / b[i] of two contenders timed on the same frames (pairs
+// with b[i] > 0), and a distribution-free 95% interval for it (order statistics at the binomial(n,
+// 1/2) 2.5% and 97.5% points, normal approximation); none (NaN bounds) under 6 pairs, where even
+// the whole range covers less than 95% (5 pairs: 94%, 1 pair: nothing), and no median without a
+// pair. ciText: "95% CI lo, hi" or why there is none.
 struct PairedRatio {
   double median = 0, lo = 0, hi = 0;
   size_t pairs = 0;

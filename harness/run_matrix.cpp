@@ -121,18 +121,26 @@ json runMatrix(const RunConfig& cfg) {
   const bool keepAll = cfg.keepFrames == "all" || (cfg.keepFrames == "auto" && sources.size() == 1 &&
                                                    denoisers.size() == (cfg.baselines ? 3u : 1u) && !cfg.denoisers.empty());
   // A run written into the cache mixes its results with sequences (and a later cache clean-up
-  // with the run): the two stay apart.
+  // with the run), as does a cache inside the run: the two stay apart.
   if (!cfg.scenes.empty()) {
+    if (cfg.cache.empty())
+      throw Error("--cache: an empty directory name; expected the sequence cache, e.g. cache");
     auto resolved = [](const fs::path& p) {
       std::error_code ec;
-      fs::path r = fs::weakly_canonical(fs::absolute(p), ec).lexically_normal();
+      fs::path r = fs::weakly_canonical(fs::absolute(p, ec), ec).lexically_normal();
       return r.has_filename() ? r : r.parent_path();  // "dir/" as "dir"
     };
+    auto inside = [](const fs::path& inner, const fs::path& outer) {
+      return std::mismatch(outer.begin(), outer.end(), inner.begin(), inner.end()).first ==
+             outer.end();
+    };
     const fs::path out = resolved(cfg.out), cache = resolved(cfg.cache);
-    const auto [c, o] = std::mismatch(cache.begin(), cache.end(), out.begin(), out.end());
-    if (c == cache.end())
+    if (inside(out, cache))
       throw Error("--out " + cfg.out.string() + " lies in the sequence cache " +
                   cfg.cache.string() + "; expected a directory outside it");
+    if (inside(cache, out))
+      throw Error("--cache " + cfg.cache.string() + " lies in the run directory " +
+                  cfg.out.string() + "; expected the sequence cache outside it");
   }
   checkRunOutputs(cfg.out);
   // The cache, like --out, before any work: a file there would fail every pair one by one.

@@ -122,6 +122,13 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
   // pair new, as below; their notes say why.
   const std::string noShared = shared ? "" : "the runs share no scene: ";
   std::vector<ComparisonRow> rows;
+  // Metrics that keep per-tile data in either run: one of them without tiles somewhere is data
+  // missing; the others (ms, referenceRelMse, ...) never have tiles and are never judged by them.
+  std::set<std::string> tiled;
+  for (const RunResults* run : {&base, &cand})
+    for (const PairResult& p : run->pairs)
+      if (const json& t = p.part("tiles"); t.is_object())
+        for (auto it = t.begin(); it != t.end(); ++it) tiled.insert(it.key());
   int comparedPairs = 0;  // pairs both runs ran
   std::set<std::string> baseKeys;
   for (const PairResult& b : base.pairs) {
@@ -191,13 +198,16 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
         }
       } else if (!base.keepsTiles || !cand.keepsTiles) {
         row.note = "no tile data for a paired interval (results.db keeps none)";
+      } else if (!tiled.count(t.metric)) {
+        row.note = "no paired interval (" + t.metric + " keeps no per-tile data)";
       } else {
         row.note = "no tile data for a paired interval";
       }
       // A change beyond tolerance that no interval can judge fails the gate: passing it would be a
       // verdict from no data. Runs read from results.db have no tiles by design (the dashboard
       // marks their changes unresolved, docs/ci-dashboard.md).
-      const bool unjudgeable = !interval && base.keepsTiles && cand.keepsTiles;
+      const bool unjudgeable =
+          !interval && base.keepsTiles && cand.keepsTiles && tiled.count(t.metric) > 0;
       if (worse > t.relative) {
         row.verdict = resolvedWorse ? "regressed" : unjudgeable ? "unverified" : "unresolved";
         if (row.verdict == "unverified")

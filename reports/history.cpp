@@ -38,9 +38,11 @@ class ReadOnlyDatabase {
       version = sqlite3_column_int(st, 0);
     sqlite3_finalize(st);
     if (version != kResultsSchemaVersion) {
+      const std::string why = sqlite3_errmsg(db_);
       sqlite3_close(db_);
       throw Error(file.string() + ": " +
-                  (version == 0
+                  (version < 0 ? "not an SQLite database (" + why + ")"
+                   : version == 0
                        ? std::string("not an arena results database (no schema version)")
                        : "a results database of schema version " + std::to_string(version)) +
                   "; this arena reads version " + std::to_string(kResultsSchemaVersion) +
@@ -172,13 +174,7 @@ std::vector<RunResults> runsFromDatabase(const fs::path& file) {
 std::vector<RunResults> loadHistory(const std::vector<fs::path>& inputs) {
   if (inputs.empty()) throw Error("history: give run directories or results.db files");
   std::vector<RunResults> runs;
-  std::set<std::string> seen;
   for (const fs::path& in : inputs) {
-    // A run given twice would be compared with itself, and the gate pass on it.
-    std::error_code ec;
-    if (const fs::path canonical = fs::weakly_canonical(in, ec);
-        !seen.insert(canonical.string()).second)
-      throw Error("history: " + in.string() + " is given more than once");
     if (fs::is_directory(in)) {
       runs.push_back(loadResults(in));
       runs.back().source = in.string();
@@ -192,6 +188,25 @@ std::vector<RunResults> loadHistory(const std::vector<fs::path>& inputs) {
   }
   std::stable_sort(runs.begin(), runs.end(),
                    [](const RunResults& a, const RunResults& b) { return a.created < b.created; });
+  // A run given twice (a path twice, a run directory and the results.db it appended to, two copies
+  // of a database) would be compared with itself, and the gate pass on it.
+  auto sameRun = [](const RunResults& a, const RunResults& b) {
+    if (a.created != b.created || a.name != b.name || a.pairs.size() != b.pairs.size() ||
+        a.environment.value("git_commit", "") != b.environment.value("git_commit", ""))
+      return false;
+    for (size_t p = 0; p < a.pairs.size(); ++p) {
+      const SummaryMean x = a.pairs[p].mean("relMse"), y = b.pairs[p].mean("relMse");
+      if (a.pairs[p].label != b.pairs[p].label || x.present() != y.present() ||
+          (x.present() && x.mean != y.mean))
+        return false;
+    }
+    return true;
+  };
+  for (size_t i = 1; i < runs.size(); ++i)
+    for (size_t j = 0; j < i; ++j)
+      if (sameRun(runs[j], runs[i]))
+        throw Error("history: the run '" + runs[i].name + "' of " + runs[i].created +
+                    " is given twice (" + runs[j].source + " and " + runs[i].source + ")");
   return runs;
 }
 

@@ -225,7 +225,13 @@ TEST(History, BadInputNamesThePath) {
   });
   EXPECT_NE(e.find("empty.db: holds no runs"), std::string::npos) << e;
   e = test::errorOf([&] { loadHistory({db, dir / "." / "results.db"}); });
-  EXPECT_NE(e.find("is given more than once"), std::string::npos) << e;
+  EXPECT_NE(e.find("is given twice"), std::string::npos) << e;
+  fs::copy_file(db, dir / "copy.db",
+                fs::copy_options::overwrite_existing);  // the same run, another file
+  e = test::errorOf([&] { loadHistory({db, dir / "copy.db"}); });
+  EXPECT_NE(e.find("is given twice"), std::string::npos) << e;
+  e = test::errorOf([&] { loadHistory({dir / "notes.txt"}); });
+  EXPECT_NE(e.find("notes.txt: not an SQLite database"), std::string::npos) << e;
   // A file where the page's directory belongs, named with the option.
   HistoryOptions o;
   o.inputs = {db};

@@ -397,6 +397,13 @@ TEST(RunMatrixContract, BadOutputsFailBeforeAnyWorkNamingTheFile) {
     EXPECT_NE(error.find("lies in the sequence cache"), std::string::npos) << error;
     EXPECT_TRUE(fs::is_empty(intoCache.cache)) << "wrote into the cache before refusing";
   }
+  RunConfig cacheInRun = contract::tinyRun("cache_in_run");
+  cacheInRun.cache = cacheInRun.out / "cache";
+  std::string inRun = test::errorOf([&] { runMatrix(cacheInRun); });
+  EXPECT_NE(inRun.find("lies in the run directory"), std::string::npos) << inRun;
+  cacheInRun.cache = "";
+  inRun = test::errorOf([&] { runMatrix(cacheInRun); });
+  EXPECT_NE(inRun.find("--cache: an empty directory name"), std::string::npos) << inRun;
   // The run's name is its directory's, a trailing slash included.
   EXPECT_EQ(folderName("runs/today/"), "today");
   EXPECT_EQ(folderName("runs/today"), "today");

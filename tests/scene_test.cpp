@@ -157,6 +157,13 @@ TEST(Scene, AnEventAtFrameZeroIsRejected) {
   EXPECT_NE(e.find("$.events[0].frame"), std::string::npos) << e;
   EXPECT_NE(e.find("expected a frame in [1, 3]"), std::string::npos) << e;
   EXPECT_NE(e.find("got 0"), std::string::npos) << e;
+  e = errorOf(R"({"purpose": "test", "resolution": [16, 8], "frames": 1,
+    "camera": {"keys": [{"frame": 0, "eye": [0, 1, 3], "target": [0, 1, 0], "fov": 40}]},
+    "materials": {"white": {"albedo": [0.5, 0.5, 0.5]}},
+    "objects": [{"name": "floor", "shape": "quad", "material": "white", "keys": [{"frame": 0}]}],
+    "lights": [{"name": "lamp", "shape": "quad", "keys": [{"frame": 0, "translate": [0, 2, 0], "intensity": 5}]}],
+    "events": [{"frame": 0, "kind": "light_off", "what": "lamp"}]})");
+  EXPECT_NE(e.find("a scene of one frame has no frame for an event"), std::string::npos) << e;
 }
 
 // A cut the camera does not make would be measured (recovery, old-view leak) as if it happened.

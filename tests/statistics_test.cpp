@@ -368,6 +368,13 @@ TEST(CompareGate, AWorseningNoIntervalCanJudgeFailsTheGate) {
   rows = compareRuns(syntheticRun({{"a", m}}), withoutTiles(0.005), tol);
   EXPECT_EQ(rows[0].verdict, "unresolved");
   EXPECT_FALSE(anyRegression(rows));
+  // A metric neither run keeps tiles of (ms, referenceRelMse): never judged by tiles, not failed.
+  json untiled = syntheticJson({{"a", m}});
+  untiled["pairs"][0].erase("tiles");
+  rows = compareRuns(test::typed(untiled), withoutTiles(0.02), tol);
+  EXPECT_EQ(rows[0].verdict, "unresolved");
+  EXPECT_NE(rows[0].note.find("relMse keeps no per-tile data"), std::string::npos) << rows[0].note;
+  EXPECT_FALSE(anyRegression(rows));
   // From results.db (no tiles by design): marked, not failed, and the note says why.
   RunResults fromDb = syntheticRun({{"a", m}});
   fromDb.keepsTiles = false;

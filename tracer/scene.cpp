@@ -436,6 +436,9 @@ Scene parseScene(const std::string& text, const std::string& path) {
     ev.what = e.string("what", "");
     // An event is measured against the frames before it (ghosting's window, a cut's old view): at
     // frame 0 there are none, and the metrics would skip it without a word.
+    if (scene.frames < 2)
+      e.fail("frame",
+             "a scene of one frame has no frame for an event (events lie in frames 1..N-1)");
     if (ev.frame < 1 || ev.frame >= scene.frames)
       e.fail("frame",
              "expected a frame in [1, " + std::to_string(scene.frames - 1) +

@@ -16,10 +16,11 @@
     }
     const counts = {};
     for (const r of R.rows) counts[r.verdict] = (counts[r.verdict] || 0) + 1;
-    const filter = el('select', { id: 'regression-filter' },
-      el('option', { value: 'moved', text: 'moved beyond tolerance (not ok)' }),
-      el('option', { value: 'regressed', text: 'regressed only' }),
-      el('option', { value: 'all', text: 'all comparisons' }));
+    const filter =
+        el('select', {id: 'regression-filter'},
+           el('option', {value: 'moved', text: 'moved beyond tolerance (not ok)'}),
+           el('option', {value: 'regressed', text: 'what fails the gate'}),
+           el('option', {value: 'all', text: 'all comparisons'}));
     const tableBox = el('div', { class: 'table-wrap' });
     const order = {
       regressed: 0,
@@ -33,8 +34,16 @@
       ok: 6
     };
     const draw = () => {
-      const rows = R.rows.filter((r) => filter.value === 'all' || (filter.value === 'regressed' ? r.verdict === 'regressed' : r.verdict !== 'ok'))
-        .sort((a, b) => order[a.verdict] - order[b.verdict] || Math.abs(b.change) - Math.abs(a.change));
+      const rows =
+          R.rows
+              .filter(
+                  (r) => filter.value === 'all' ||
+                      (filter.value === 'regressed' ?
+                           ['regressed', 'unverified', 'failed', 'missing'].includes(r.verdict) :
+                           r.verdict !== 'ok'))
+              .sort(
+                  (a, b) => order[a.verdict] - order[b.verdict] ||
+                      Math.abs(b.change) - Math.abs(a.change));
       tableBox.replaceChildren(
           rows.length ?
               el('table', {class: 'data regression-table'},
