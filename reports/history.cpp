@@ -188,8 +188,6 @@ std::vector<RunResults> loadHistory(const std::vector<fs::path>& inputs) {
   }
   std::stable_sort(runs.begin(), runs.end(),
                    [](const RunResults& a, const RunResults& b) { return a.created < b.created; });
-  // A run given twice (a path twice, a run directory and the results.db it appended to, two copies
-  // of a database) would be compared with itself, and the gate pass on it.
   auto sameRun = [](const RunResults& a, const RunResults& b) {
     if (a.created != b.created || a.name != b.name || a.pairs.size() != b.pairs.size() ||
         a.environment.value("git_commit", "") != b.environment.value("git_commit", ""))
@@ -202,12 +200,19 @@ std::vector<RunResults> loadHistory(const std::vector<fs::path>& inputs) {
     }
     return true;
   };
-  for (size_t i = 1; i < runs.size(); ++i)
-    for (size_t j = 0; j < i; ++j)
-      if (sameRun(runs[j], runs[i]))
-        throw Error("history: the run '" + runs[i].name + "' of " + runs[i].created +
-                    " is given twice (" + runs[j].source + " and " + runs[i].source + ")");
-  return runs;
+  // A run given twice (a path twice, a run directory and the results.db it appended to, two copies
+  // of a database) would be compared with itself, and the gate pass on it: it is taken once, from
+  // its run directory where there is one (the directory keeps the tiles the gate resolves with).
+  std::vector<RunResults> distinct;
+  for (RunResults& r : runs) {
+    auto same = std::find_if(distinct.begin(), distinct.end(),
+                             [&](const RunResults& d) { return sameRun(d, r); });
+    if (same == distinct.end())
+      distinct.push_back(std::move(r));
+    else if (!same->keepsTiles && r.keepsTiles)
+      *same = std::move(r);
+  }
+  return distinct;
 }
 
 json historyData(const std::vector<RunResults>& runs, std::vector<Tolerance> tolerances) {
