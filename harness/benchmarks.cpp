@@ -239,6 +239,7 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
   // What would time nothing, a contender against itself, or less than it does is refused before
   // anything renders.
   if (b.denoisers.empty()) throw Error("bench denoise: --denoisers names no denoiser");
+  bool lowres = false;  // a contender reads the low-resolution buffer
   for (size_t i = 0; i < b.denoisers.size(); ++i) {
     const std::string& name = b.denoisers[i];
     if (std::find(b.denoisers.begin(), b.denoisers.begin() + long(i), name) !=
@@ -248,8 +249,9 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
     const auto params = b.params.find(name);
     const ParamSet resolved = info.schema.resolve(
         params == b.params.end() ? std::map<std::string, std::string>{} : params->second, name);
-    if (b.inputs < 2 && info.origin.empty() &&
-        info.create(resolved, SignalKind::Diffuse)->needsGradients())
+    const std::unique_ptr<Denoiser> probe = info.create(resolved, SignalKind::Diffuse);
+    lowres = lowres || probe->wantsLowres();
+    if (b.inputs < 2 && info.origin.empty() && probe->needsGradients())
       throw Error("bench denoise: " + name +
                   " reads gradient samples, which need a frame before them: expected --inputs >= 2 "
                   "(with 1 its gradient passes would not run and its time would be low)");
@@ -279,11 +281,6 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
   const double bu = bilateralUnitMs(1280, 720, 15);
   progress(printed("1 BU = cv::bilateralFilter(5, 0.1, 2.0) on 1280x720 CV_32FC3 = %.2f ms", bu));
   auto params = b.params;
-  bool lowres = false;
-  for (const std::string& name : b.denoisers) {
-    const DenoiserInfo& info = DenoiserRegistry::instance().find(name);
-    lowres = lowres || info.create(info.schema.resolve(params[name], name), SignalKind::Diffuse)->wantsLowres();
-  }
   if (lowres && b.lowresFactor > 0) {
     progress(printed("rendering the low-resolution buffer (1/%d, %d spp)...", b.lowresFactor, b.lowresSpp));
     for (int t = 0; t < settings.frames; ++t) {

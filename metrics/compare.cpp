@@ -182,19 +182,22 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
       const bool lowerIsBetter = findMetric(t.metric)->lowerIsBetter();
       const double worse = lowerIsBetter ? row.change : -row.change;
       // Paired over the frames and tiles both runs have, seeded by the scene like the run's own.
-      bool resolvedWorse = false, resolvedBetter = false, interval = false;
+      // unjudgeable: a change beyond tolerance there fails the gate, as passing it would be a
+      // verdict from no data. Runs read from results.db have no tiles by design (the dashboard
+      // marks their changes unresolved, docs/ci-dashboard.md), nor do some metrics (ms).
+      bool resolvedWorse = false, resolvedBetter = false, unjudgeable = false;
       const json &bt = b.part("tiles"), &ct = c.part("tiles");
       if (bt.is_object() && ct.is_object() && bt.contains(t.metric) && ct.contains(t.metric)) {
         const PairedDifference d =
             pairedDifference(MetricTiles::fromJson(ct[t.metric]), MetricTiles::fromJson(bt[t.metric]), scene, cfg);
         if (d.ci.valid()) {
-          interval = true;
           row.changeCi = {d.ci.lo / scale, d.ci.hi / scale};
           const bool above = d.ci.lo > 0, below = d.ci.hi < 0;
           resolvedWorse = lowerIsBetter ? above : below;
           resolvedBetter = lowerIsBetter ? below : above;
         } else {
           row.note = "no interval (too few frames)";
+          unjudgeable = true;
         }
       } else if (!base.keepsTiles || !cand.keepsTiles) {
         row.note = "no tile data for a paired interval (results.db keeps none)";
@@ -202,18 +205,17 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
         row.note = "no paired interval (" + t.metric + " keeps no per-tile data)";
       } else {
         row.note = "no tile data for a paired interval";
+        unjudgeable = true;
       }
-      // A change beyond tolerance that no interval can judge fails the gate: passing it would be a
-      // verdict from no data. Runs read from results.db have no tiles by design (the dashboard
-      // marks their changes unresolved, docs/ci-dashboard.md).
-      const bool unjudgeable =
-          !interval && base.keepsTiles && cand.keepsTiles && tiled.count(t.metric) > 0;
-      if (worse > t.relative) {
-        row.verdict = resolvedWorse ? "regressed" : unjudgeable ? "unverified" : "unresolved";
-        if (row.verdict == "unverified")
-          row.note +=
-              ": the gate cannot tell this change from noise (rerun both with their tiles and "
-              "frames)";
+      if (worse > t.relative && resolvedWorse) {
+        row.verdict = "regressed";
+      } else if (worse > t.relative && unjudgeable) {
+        row.verdict = "unverified";
+        row.note +=
+            ": the gate cannot tell this change from noise (rerun both with their tiles and "
+            "frames)";
+      } else if (worse > t.relative) {
+        row.verdict = "unresolved";
       } else if (-worse > t.relative) {
         row.verdict = resolvedBetter ? "improved" : "unresolved";
       }

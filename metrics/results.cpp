@@ -138,9 +138,7 @@ struct Statement {
 
 }  // namespace
 
-namespace {
-
-int userVersion(sqlite3* db) {
+int databaseSchemaVersion(sqlite3* db) {
   sqlite3_stmt* s = nullptr;
   int v = -1;
   if (sqlite3_prepare_v2(db, "PRAGMA user_version", -1, &s, nullptr) == SQLITE_OK && sqlite3_step(s) == SQLITE_ROW)
@@ -148,6 +146,8 @@ int userVersion(sqlite3* db) {
   sqlite3_finalize(s);
   return v;
 }
+
+namespace {
 
 bool hasTable(sqlite3* db, const char* name) {
   sqlite3_stmt* s = nullptr;
@@ -162,7 +162,7 @@ bool hasTable(sqlite3* db, const char* name) {
 
 // The database's schema follows the results schema; one of another version is never mixed in.
 void requireSchemaVersion(const Db& db) {
-  const int version = userVersion(db.db);
+  const int version = databaseSchemaVersion(db.db);
   if (version != kResultsSchemaVersion && (version != 0 || hasTable(db.db, "runs")))
     throw Error(db.name + ": a results database of schema version " + std::to_string(version) +
                 ", this arena writes version " + std::to_string(kResultsSchemaVersion) +

@@ -8,10 +8,16 @@
 #include "metrics/metric_registry.hpp"
 #include "metrics/run_results.hpp"
 
+struct sqlite3;
+
 namespace arena {
 
 // 2: summaries carry ci95 or absent; pairs carry tiles; results carry statistics and scene floors.
 constexpr int kResultsSchemaVersion = 2;
+
+// A results database's schema version (PRAGMA user_version): 0 for a database of no schema, -1
+// where it cannot be read (not an SQLite database).
+int databaseSchemaVersion(sqlite3* db);
 
 // Reads <run>/results.json into the typed model; a missing run, another schema version or a
 // document out of shape is an Error saying so (naming the JSON path).

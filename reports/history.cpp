@@ -31,12 +31,7 @@ class ReadOnlyDatabase {
     }
     // Another schema's tables could be read as if they were this one's: refused, as `arena run`
     // refuses to append to one (a database of no schema, user_version 0, is not arena's).
-    int version = -1;
-    sqlite3_stmt* st = nullptr;
-    if (sqlite3_prepare_v2(db_, "PRAGMA user_version", -1, &st, nullptr) == SQLITE_OK &&
-        sqlite3_step(st) == SQLITE_ROW)
-      version = sqlite3_column_int(st, 0);
-    sqlite3_finalize(st);
+    const int version = databaseSchemaVersion(db_);
     if (version != kResultsSchemaVersion) {
       const std::string why = sqlite3_errmsg(db_);
       sqlite3_close(db_);

@@ -912,8 +912,7 @@ void requirePageDirectory(const fs::path& out) {
 
 void copyPageAssets(const fs::path& webDir, const fs::path& nodeModulesDir,
                     const std::vector<PageFile>& files, const fs::path& out) {
-  requirePageDirectory(out);
-  fs::create_directories(out);
+  fs::create_directories(out);  // the callers checked it with requirePageDirectory first
   for (const PageFile& f : files)
     fs::copy_file(webDir / f.source, out / f.target, fs::copy_options::overwrite_existing);
   for (const char* f : kVendorFiles)

@@ -150,7 +150,7 @@ size_t Subprocess::pump(const char*& out, size_t& outBytes, char* in, size_t inB
     throw Error(std::string("poll: ") + std::strerror(errno));
   }
   if (ready == 0) {
-    if (!reaped_ && ended() && !reaped_) ::kill(-pid_, SIGKILL);
+    if (ended() && !reaped_) ::kill(-pid_, SIGKILL);  // ended, not reaped: its group is its own
     return 0;  // the caller asks again; the deadline is checked first
   }
   if (stderrSlot >= 0 && fds[stderrSlot].revents != 0) drainStderr();
@@ -263,9 +263,8 @@ std::string Subprocess::stderrTail() {
 
 void Subprocess::kill() {
   if (reaped_) return;
-  ::kill(-pid_, SIGKILL);
   ::kill(pid_, SIGKILL);
-  reap();
+  reap();  // ends the group too
 }
 
 }  // namespace arena
