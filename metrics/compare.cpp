@@ -254,16 +254,18 @@ json comparisonJson(const std::vector<ComparisonRow>& rows) {
                    {"changeCi95", r.changeCi.toJson()},
                    {"tolerance", r.tolerance},
                    {"verdict", r.verdict},
+                   {"fails", failsGate(r)},
                    {"note", r.note}});
   return out;
 }
 
+bool failsGate(const ComparisonRow& row) {
+  return row.verdict == "regressed" || row.verdict == "unverified" || row.verdict == "missing" ||
+         row.verdict == "failed" || row.verdict == "not comparable";
+}
+
 bool anyRegression(const std::vector<ComparisonRow>& rows) {
-  for (const ComparisonRow& r : rows)
-    if (r.verdict == "regressed" || r.verdict == "unverified" || r.verdict == "missing" ||
-        r.verdict == "failed")
-      return true;
-  return false;
+  return std::any_of(rows.begin(), rows.end(), failsGate);
 }
 
 }  // namespace arena

@@ -57,8 +57,13 @@ std::vector<std::string> settingsDifferences(const RunResults& baseline, const R
 double parseTolerance(const std::string& text);
 // "95%" or "0.95" -> 0.95; must lie in (0, 1).
 double parseConfidence(const std::string& text);
+// Whether a row fails the gate: "regressed", "unverified", "missing", "failed", and history's "not
+// comparable" (runs under other settings, which compare refuses). The one place the rule lives:
+// the JSON rows carry it as `fails`, which the report's and the dashboard's pages read.
+bool failsGate(const ComparisonRow& row);
+// The rows as JSON, each with its verdict and `fails` (failsGate).
 nlohmann::json comparisonJson(const std::vector<ComparisonRow>& rows);
-// True when the gate must fail: a regression, a failed pair, or something missing.
+// True when the gate must fail: some row fails it.
 bool anyRegression(const std::vector<ComparisonRow>& rows);
 
 }  // namespace arena

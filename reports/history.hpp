@@ -21,7 +21,7 @@ std::vector<RunResults> loadHistory(const std::vector<std::filesystem::path>& in
 // The dashboard's data: runs [{name, created, commit}], per scene x label x metric the values (and
 // intervals where the runs have them) per run, the tolerance of each gated metric, and `changes`:
 // every row of compareRuns(run i-1, run i, tolerances) whose verdict is not "ok", with the run
-// index i and `fails` = anyRegression({row}) (the gate's own rule, not restated here); `failing`
+// index i and `fails` (failsGate: the gate's own rule, not restated here); `failing`
 // counts those. Empty `tolerances`: compare's defaults. A gated metric neither run of a pair
 // computed is skipped for that pair (runs over months differ in what they computed).
 nlohmann::json historyData(const std::vector<RunResults>& runs, std::vector<Tolerance> tolerances);

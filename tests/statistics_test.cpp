@@ -347,6 +347,35 @@ TEST(CompareGate, FailsOnWhatItCannotCompare) {
 
 // A change beyond tolerance that no interval can judge would pass as noise on no data: it fails the
 // gate in run directories; results.db keeps no tiles by design, so its runs stay "unresolved".
+// The JSON rows carry the gate's own rule as `fails` (the report's and the dashboard's pages read
+// it instead of keeping verdict lists of their own): true exactly for the verdicts that fail.
+TEST(CompareGate, JsonRowsSayWhetherTheyFailTheGate) {
+  const std::vector<std::pair<std::string, bool>> verdicts = {
+      {"ok", false},     {"improved", false},     {"unresolved", false}, {"new", false},
+      {"absent", false}, {"regressed", true},     {"unverified", true},  {"missing", true},
+      {"failed", true},  {"not comparable", true}};
+  for (const auto& [verdict, fails] : verdicts) {
+    ComparisonRow row;
+    row.scene = "s";
+    row.label = "a";
+    row.metric = "relMse";
+    row.verdict = verdict;
+    EXPECT_EQ(failsGate(row), fails) << verdict;
+    EXPECT_EQ(anyRegression({row}), fails) << verdict;
+    EXPECT_EQ(comparisonJson({row})[0]["fails"], fails) << verdict;
+  }
+  // On real rows: a lost denoiser fails, the one both runs have does not.
+  const MetricTiles m = constantSeries(0.01);
+  const auto rows =
+      compareRuns(syntheticRun({{"a", m}, {"b", m}}), syntheticRun({{"a", m}}), {{"relMse", 0.02}});
+  const json table = comparisonJson(rows);
+  ASSERT_EQ(table.size(), rows.size());
+  size_t failing = 0;
+  for (const json& r : table) failing += r["fails"].get<bool>();
+  EXPECT_GE(failing, 1u);
+  EXPECT_LT(failing, table.size());
+}
+
 TEST(CompareGate, AWorseningNoIntervalCanJudgeFailsTheGate) {
   const MetricTiles m = constantSeries(0.01);
   const std::vector<Tolerance> tol = {{"relMse", 0.02}};

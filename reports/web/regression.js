@@ -34,16 +34,13 @@
       ok: 6
     };
     const draw = () => {
-      const rows =
-          R.rows
-              .filter(
-                  (r) => filter.value === 'all' ||
-                      (filter.value === 'regressed' ?
-                           ['regressed', 'unverified', 'failed', 'missing'].includes(r.verdict) :
-                           r.verdict !== 'ok'))
-              .sort(
-                  (a, b) => order[a.verdict] - order[b.verdict] ||
-                      Math.abs(b.change) - Math.abs(a.change));
+      const rows = R.rows
+                       .filter(
+                           (r) => filter.value === 'all' ||
+                               (filter.value === 'regressed' ? r.fails : r.verdict !== 'ok'))
+                       .sort(
+                           (a, b) => order[a.verdict] - order[b.verdict] ||
+                               Math.abs(b.change) - Math.abs(a.change));
       tableBox.replaceChildren(
           rows.length ?
               el('table', {class: 'data regression-table'},

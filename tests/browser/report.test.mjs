@@ -381,6 +381,15 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
 
   // (5) Regression view from the baseline: svgf's sigmaL differs, so rows exist with verdicts.
   assert.ok((await page.locator('#regression-body table tbody tr').count()) >= 1, 'regression rows');
+  // "What fails the gate" shows the rows whose `fails` (compare's own rule) is true, and only those.
+  const gate = await page.evaluate(() => {
+    const rows = window.Arena.D.regression.rows;
+    return { failing: rows.filter((r) => r.fails === true).length, typed: rows.every((r) => typeof r.fails === 'boolean') };
+  });
+  assert.ok(gate.typed, 'every regression row says whether it fails the gate');
+  await page.selectOption('#regression-filter', 'regressed');
+  assert.equal(await page.locator('#regression-body table tbody tr').count(), gate.failing);
+  await page.selectOption('#regression-filter', 'moved');
 
   await page.evaluate(() => window.scrollTo(0, 0));
   await shot(page, 'report-top.png');
