@@ -80,9 +80,10 @@ void printSpeedOrder(std::ostream& out, const RunResults& results) {
   std::vector<std::string> labels;
   std::string device;
   for (const PairResult& p : results.pairs) {
-    const json& t = p.part("timing");
-    if (!p.ok() || !t.is_object()) continue;
-    if (t.value("clock", "cpu") != "cpu" || !t.contains("gpuPredicted") || !t["gpuPredicted"].is_object()) continue;
+    const json& t = p.timing();
+    if (!p.ok() || p.clock() != "cpu" || !t.contains("gpuPredicted") ||
+        !t["gpuPredicted"].is_object())
+      continue;
     const json devices = t["gpuPredicted"].value("devices", json::array());
     if (devices.empty() || !devices[0].value("msMedian", json()).is_number() || !t.value("msMedian", json()).is_number())
       continue;

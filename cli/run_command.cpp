@@ -126,15 +126,14 @@ void finish(const std::string& out) {
       // An ok pair can still have no relMSE summary (a sequence no longer than the warm-up): "-"
       // here and the reason below the table.
       const SummaryMean relMse = p.mean("relMse");
-      const json ms = p.part("timing").is_object() ? p.part("timing").value("msMedian", json()) : json();
+      const json ms = p.timing().value("msMedian", json());
       // A time on another clock than this machine's (a process's own, a capture's device) says so.
-      const std::string clock =
-          p.part("timing").is_object() ? p.part("timing").value("clock", "cpu") : "cpu";
+      const std::string clock = p.clock();
       const std::string on =
           clock == "process" ? " [reported by the process]"
           : clock == "capture"
-              ? " [recorded on " +
-                    p.part("timing").value("device", std::string("the capture's device")) + "]"
+              ? " [recorded on " + p.timing().value("device", std::string("the capture's device")) +
+                    "]"
               : "";
       std::cout << std::right << std::setw(12)
                 << (relMse.present() ? formatNumber(relMse.mean, 4) : "-") << std::setw(10)

@@ -274,6 +274,15 @@ const json& PairResult::part(const std::string& key) const {
   return detail.contains(key) ? detail.at(key) : none;
 }
 
+const json& PairResult::timing() const {
+  static const json none = json::object();
+  return part("timing").is_object() ? part("timing") : none;
+}
+
+std::string PairResult::clock() const {
+  return timing().value("clock", "cpu");
+}
+
 RunResults RunResults::fromJson(const json& j, const std::string& file) {
   if (!j.is_object() || !j.contains("kind") || j.at("kind") != "arena-run")
     throw Error(file + ": not an arena results file");

@@ -61,6 +61,11 @@ struct PairResult {
   SummaryMean mean(const std::string& metric) const;
   // detail[key], or an empty JSON value when the pair has no such entry.
   const nlohmann::json& part(const std::string& key) const;
+  // The pair's timing object (an empty object when it has none).
+  const nlohmann::json& timing() const;
+  // The clock its times were taken on: "cpu" (measured here; also where timing says none),
+  // "process" (an external process's own report), "capture" (a capture's device), "none".
+  std::string clock() const;
 };
 
 struct RunResults {

@@ -117,13 +117,9 @@ json axisValue(const PairResult& pair, const ErrorAxis& axis) {
           {"lo", lo},      {"hi", hi}, {"interval", hasCi ? "ci95" : "p5-p95"}};
 }
 
-// The pair's timing object ({} when it has none).
-const json& timingObject(const PairResult& pair) {
-  static const json none = json::object();
-  return pair.part("timing").is_object() ? pair.part("timing") : none;
+double timingOf(const PairResult& pair, const char* key) {
+  return pair.timing().value(key, kNaN);
 }
-
-double timingOf(const PairResult& pair, const char* key) { return timingObject(pair).value(key, kNaN); }
 
 // One point per label with its error bars, and the labels on the Pareto front (time x error).
 // The Pareto front on the denoiser's own time ("front") and the equal-paths front
@@ -156,8 +152,6 @@ struct SpeedClock {
   std::string key, title;
 };
 
-std::string clockOf(const PairResult& pair) { return timingObject(pair).value("clock", "cpu"); }
-
 std::vector<SpeedClock> speedClocks(const RunResults& results, const std::vector<std::string>& scenes) {
   const json& env = results.environment;
   std::set<std::string> sizes;
@@ -173,15 +167,15 @@ std::vector<SpeedClock> speedClocks(const RunResults& results, const std::vector
   std::vector<std::string> devices, captureDevices;
   bool processClock = false;
   for (const PairResult& pair : results.pairs) {
-    processClock |= pair.ok() && clockOf(pair) == "process";
-    const json& timing = timingObject(pair);
+    processClock |= pair.ok() && pair.clock() == "process";
+    const json& timing = pair.timing();
     if (timing.contains("gpuPredicted") && timing["gpuPredicted"].is_object()) {
       for (const json& d : timing["gpuPredicted"].value("devices", json::array())) {
         const std::string name = d.value("device", "");
         if (!name.empty() && std::find(devices.begin(), devices.end(), name) == devices.end()) devices.push_back(name);
       }
     }
-    if (clockOf(pair) == "capture") {
+    if (pair.clock() == "capture") {
       const std::string d = timing.value("device", "");
       if (std::find(captureDevices.begin(), captureDevices.end(), d) == captureDevices.end()) captureDevices.push_back(d);
     }
@@ -206,11 +200,11 @@ struct ClockTime {
 };
 ClockTime timeOn(const PairResult& pair, const std::string& clock) {
   if (clock == "cpu" || clock == "capture" || clock == "process") {
-    if (clockOf(pair) != clock) return {};
+    if (pair.clock() != clock) return {};
     return {timingOf(pair, "msMedian"), timingOf(pair, "msP5"), timingOf(pair, "msP95")};  // msP5: results schema 2
   }
   const std::string device = clock.substr(4);  // "gpu:<device>"
-  const json& timing = timingObject(pair);
+  const json& timing = pair.timing();
   if (!timing.contains("gpuPredicted") || !timing["gpuPredicted"].is_object()) return {};
   json d;
   for (const json& row : timing["gpuPredicted"].value("devices", json::array()))
@@ -272,9 +266,10 @@ json speedView(const RunResults& results, const std::vector<std::string>& scenes
   json elsewhere = json::array();
   for (const PairResult& pair : results.pairs)
     if (pair.ok() && !std::isfinite(timeOn(pair, clock).ms)) {
-      const json& timing = timingObject(pair);
+      const json& timing = pair.timing();
       std::string source = timing.value("msSource", "");
-      if (clock.rfind("gpu:", 0) == 0 && clockOf(pair) == "cpu") source = "no GPU traffic counted (" + source + ")";
+      if (clock.rfind("gpu:", 0) == 0 && pair.clock() == "cpu")
+        source = "no GPU traffic counted (" + source + ")";
       elsewhere.push_back({{"scene", pair.scene}, {"label", pair.label},
                            {"ms", timing.contains("msMedian") ? timing["msMedian"] : json(nullptr)},
                            {"source", source}});
@@ -616,16 +611,16 @@ json pairData(const PairResult& pair) {
   json summary = json::object();
   for (const auto& [metric, s] : pair.summary) summary[metric] = s.toJson();
   p["summary"] = summary;
-  const json& timing = timingObject(pair);
+  const json& timing = pair.timing();
   p["timing"] = {{"msMedian", timing.value("msMedian", kNaN)},
                  {"msP5", timing.value("msP5", kNaN)},
                  {"msP95", timing.value("msP95", kNaN)},
                  {"msPerMegapixel", timing.value("msPerMegapixel", kNaN)},
                  {"tapsPerPixel", timing.value("tapsPerPixel", kNaN)},
                  {"passes", timing.contains("passes") ? timing["passes"].size() : 0},
-                 {"clock", timing.value("clock", std::string("cpu"))}};
+                 {"clock", pair.clock()}};
   if (timing.contains("device")) p["timing"]["device"] = timing["device"];
-  if (clockOf(pair) == "process") p["timing"]["device"] = "reported by the process";
+  if (pair.clock() == "process") p["timing"]["device"] = "reported by the process";
   // The cost model's view (docs/gpu-cost.md): the first device's predicted ms and the GPU memory.
   if (timing.contains("gpuPredicted") && timing["gpuPredicted"].is_object()) {
     const json& g = timing["gpuPredicted"];

@@ -141,6 +141,14 @@ TEST(RunResults, AMeanOrWhyThereIsNone) {
   const std::vector<std::string> lines = absentSummaryLines(run, {"relMse"});
   ASSERT_EQ(lines.size(), 1u);
   EXPECT_EQ(lines[0], "cornell_static: relMse absent in 1 pair(s): no frame after the warm-up");
+  // The timing and its clock: measured here, or as the pair says; a failed pair has none.
+  EXPECT_EQ(p.clock(), "cpu");
+  EXPECT_EQ(p.timing().at("msMedian"), doc["pairs"][0]["timing"]["msMedian"]);
+  EXPECT_TRUE(run.pairs.back().timing().is_object());
+  EXPECT_TRUE(run.pairs.back().timing().empty());
+  EXPECT_EQ(run.pairs.back().clock(), "cpu");
+  doc["pairs"][0]["timing"]["clock"] = "process";
+  EXPECT_EQ(test::typed(doc).pairs[0].clock(), "process");
 }
 
 // Each part of a summary and of the run is checked where the model reads it.
