@@ -161,7 +161,9 @@ void checkObjMaterialLibraries(const std::string& path, const std::string& bytes
   std::error_code ec;
   const std::string self = fs::weakly_canonical(path, ec).string();
   std::vector<fs::path> libraries;
+  std::vector<std::pair<int, std::string>> uses;  // "usemtl" lines: number, material
   forEachStatement(bytes, [&](int lineNumber, const std::string& keyword, const std::string& rest) {
+    if (keyword == "usemtl" && !rest.empty()) uses.emplace_back(lineNumber, rest);
     if (keyword != "mtllib" || rest.empty()) return true;
     const std::string where = path + ":" + std::to_string(lineNumber) + ": 'mtllib " + rest + "' ";
     const fs::path named = fs::path(path).parent_path() / rest;
@@ -189,13 +191,11 @@ void checkObjMaterialLibraries(const std::string& path, const std::string& bytes
                      });
     names += (names.empty() ? "" : ", ") + library.filename().string();
   }
-  forEachStatement(bytes, [&](int lineNumber, const std::string& keyword, const std::string& rest) {
-    if (keyword == "usemtl" && !rest.empty() && !defined.count(rest))
-      throw Error(path + ":" + std::to_string(lineNumber) + ": 'usemtl " + rest +
+  for (const auto& [lineNumber, material] : uses)
+    if (!defined.count(material))
+      throw Error(path + ":" + std::to_string(lineNumber) + ": 'usemtl " + material +
                   "' names no material of its libraries (" + names + "); expected a 'newmtl " +
-                  rest + "' in one of them");
-    return true;
-  });
+                  material + "' in one of them");
 }
 
 // A .gltf or .glb that neither of assimp's glTF readers accepts is refused before ReadFile: assimp
