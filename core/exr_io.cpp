@@ -134,14 +134,37 @@ static std::pair<int, int> checkedSize(const fs::path& path, const Imath::Box2i&
   return {int(w), int(h)};
 }
 
-ExrContents readExr(const fs::path& path, const std::vector<LayerSpec>& specs) {
+// The size (checked) and channel names of an open file's header.
+static ExrHeader headerOf(const fs::path& path, const Imf::Header& header) {
+  const auto [w, h] = checkedSize(path, header.dataWindow());
+  ExrHeader out{w, h, {}};
+  for (auto it = header.channels().begin(); it != header.channels().end(); ++it)
+    out.channels.push_back(it.name());
+  return out;
+}
+
+// `read(file)` on the file opened by OpenEXR once its header's attribute sizes are checked; an
+// OpenEXR exception becomes an error naming the file, this project's own errors pass unchanged.
+template <class Read>
+static auto withExrFile(const fs::path& path, Read read) {
   if (!fs::exists(path)) throw Error(path.string() + ": file does not exist");
   checkExrAttributeSizes(path);
-  ExrContents out;
   try {
     Imf::InputFile file(path.c_str(), 1);
+    return read(file);
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw Error(path.string() + ": not a readable OpenEXR file (" + e.what() + ")");
+  }
+}
+
+ExrContents readExr(const fs::path& path, const std::vector<LayerSpec>& specs) {
+  return withExrFile(path, [&](Imf::InputFile& file) {
+    ExrContents out;
     const Imath::Box2i dw = file.header().dataWindow();
-    const auto [w, h] = checkedSize(path, dw);
+    out.header = headerOf(path, file.header());
+    const int w = out.header.width, h = out.header.height;
     // The image is the display window; pixels stored elsewhere (a data window cropped or shifted
     // inside it, as a border render writes) would land at the wrong place, so they are refused.
     if (const Imath::Box2i& display = file.header().displayWindow(); display != dw) {
@@ -155,9 +178,6 @@ ExrContents readExr(const fs::path& path, const std::vector<LayerSpec>& specs) {
                   "uncropped)");
     }
     out.attributes = attributesOf(file.header());
-    out.header = {w, h, {}};
-    for (auto it = file.header().channels().begin(); it != file.header().channels().end(); ++it)
-      out.header.channels.push_back(it.name());
     Imf::FrameBuffer fb;
     for (const LayerSpec& spec : specs) {
       if (spec.topLevel) continue;  // a viewer-facing copy of a named layer
@@ -174,41 +194,19 @@ ExrContents readExr(const fs::path& path, const std::vector<LayerSpec>& specs) {
       out.layers.set(spec.name, std::move(img));
     }
     file.setFrameBuffer(fb);
-    if (!file.isComplete()) throw Error(path.string() + ": file is truncated (incomplete pixel data)");
+    if (!file.isComplete())
+      throw Error(path.string() + ": file is truncated (incomplete pixel data)");
     file.readPixels(dw.min.y, dw.max.y);
-  } catch (const Error&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw Error(path.string() + ": not a readable OpenEXR file (" + e.what() + ")");
-  }
-  return out;
+    return out;
+  });
 }
 
 ExrAttributes readExrAttributes(const fs::path& path) {
-  checkExrAttributeSizes(path);
-  try {
-    Imf::InputFile file(path.c_str(), 1);
-    return attributesOf(file.header());
-  } catch (const std::exception& e) {
-    throw Error(path.string() + ": not a readable OpenEXR file (" + e.what() + ")");
-  }
+  return withExrFile(path, [](Imf::InputFile& file) { return attributesOf(file.header()); });
 }
 
 ExrHeader readExrHeader(const fs::path& path) {
-  if (!fs::exists(path)) throw Error(path.string() + ": file does not exist");
-  checkExrAttributeSizes(path);
-  try {
-    Imf::InputFile file(path.c_str(), 1);
-    const auto [w, h] = checkedSize(path, file.header().dataWindow());
-    ExrHeader out{w, h, {}};
-    for (auto it = file.header().channels().begin(); it != file.header().channels().end(); ++it)
-      out.channels.push_back(it.name());
-    return out;
-  } catch (const Error&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw Error(path.string() + ": not a readable OpenEXR file (" + e.what() + ")");
-  }
+  return withExrFile(path, [&](Imf::InputFile& file) { return headerOf(path, file.header()); });
 }
 
 }  // namespace arena
