@@ -75,7 +75,9 @@ void addBenchCommand(CLI::App& app) {
     b.inputs = d->inputs;
     b.lowresFactor = d->lowresFactor;
     b.lowresSpp = d->lowresSpp;
-    b.denoisers = d->denoisers == "all" ? DenoiserRegistry::instance().names() : splitList(d->denoisers);
+    b.denoisers = d->denoisers == "all"
+                      ? DenoiserRegistry::instance().names()
+                      : splitList(d->denoisers, "--denoisers", kDenoiserListExpected);
     for (const std::string& library : d->plugins) b.denoisers.push_back("plugin:" + library);
     for (std::string& n : b.denoisers) n = DenoiserRegistry::resolve(n);  // loads external ones
     b.params = parseParamAssignments(d->params);
@@ -113,7 +115,9 @@ void addBenchCommand(CLI::App& app) {
     b.sceneFile = g->scene;
     b.device = g->device;
     b.frames = g->frames;
-    b.denoisers = g->denoisers == "all" ? DenoiserRegistry::instance().names() : splitList(g->denoisers);
+    b.denoisers = g->denoisers == "all"
+                      ? DenoiserRegistry::instance().names()
+                      : splitList(g->denoisers, "--denoisers", kDenoiserListExpected);
     const nlohmann::json out = benchGpuModel(b, printLine);
     if (!g->json.empty()) writeTextAtomically(g->json, out.dump(2));
   });

@@ -14,4 +14,9 @@ void addReportCommand(CLI::App& app);
 void addCaptureCommands(CLI::App& app);  // export, import blender, validate
 void addBenchReferenceCommand(CLI::App* bench);  // `arena bench reference`, under `arena bench`
 
+// What a --denoisers list holds (the end of its error when an item is empty).
+inline constexpr const char* kDenoiserListExpected =
+    "registered names (`arena denoisers`), ext:MANIFEST or plugin:LIBRARY, comma-separated, or "
+    "'all'";
+
 }  // namespace arena::cli

@@ -168,17 +168,17 @@ void addRunCommands(CLI::App& app) {
     addMatrixOptions(cmd, *o);
     cmd->callback([o, names, plugins] {
       RunConfig c = configFrom(*o);
-      std::vector<std::string> list = *names == "all" ? DenoiserRegistry::instance().names() : splitList(*names);
       // '' or ',' would otherwise run only the baselines, as if the denoisers had been left out.
-      if (list.empty() || (*names != "all" && list.size() != size_t(std::count(names->begin(), names->end(), ',') + 1)))
-        throw Error("--denoisers '" + *names + "': an empty name; expected registered names (`arena denoisers`), " +
-                    "ext:MANIFEST or plugin:LIBRARY, comma-separated, or 'all'");
+      std::vector<std::string> list = *names == "all"
+                                          ? DenoiserRegistry::instance().names()
+                                          : splitList(*names, "--denoisers", kDenoiserListExpected);
       for (const std::string& library : *plugins) list.push_back("plugin:" + library);
       // 'all' on captures includes every denoiser output they store (file:NAME contenders).
       if (*names == "all")
         for (const auto& capture : c.captures)
           for (const auto& [output, stored] : readCaptureDescription(capture).outputs)
-            if (std::find(list.begin(), list.end(), "file:" + output) == list.end()) list.push_back("file:" + output);
+            if (std::find(list.begin(), list.end(), "file:" + output) == list.end())
+              list.push_back("file:" + output);
       for (std::string& n : list)
         if (capturedOutputName(n).empty()) n = DenoiserRegistry::resolve(n);  // loads external ones
       auto params = parseParamAssignments(o->params);

@@ -89,12 +89,18 @@ std::vector<std::string> shortSequenceWarnings(const std::vector<Scene>& scenes,
   return out;
 }
 
-
-std::vector<std::string> splitList(const std::string& list) {
+std::vector<std::string> splitList(const std::string& list, const std::string& what,
+                                   const std::string& expected) {
   std::vector<std::string> out;
-  std::stringstream in(list);
-  for (std::string item; std::getline(in, item, ',');)
-    if (!item.empty()) out.push_back(item);
+  size_t start = 0;
+  for (size_t comma; (comma = list.find(',', start)) != std::string::npos; start = comma + 1)
+    out.push_back(list.substr(start, comma - start));
+  out.push_back(list.substr(start));
+  for (const std::string& item : out)
+    if (item.empty())
+      throw Error(what + " '" + list +
+                  "': " + (list.empty() ? "empty" : "an empty entry (a comma too many)") +
+                  "; expected " + expected);
   return out;
 }
 
@@ -104,7 +110,9 @@ std::vector<Scene> selectScenes(const std::string& list, const std::string& scen
     for (const std::string& f : listSceneFiles(scenesDir)) out.push_back(loadScene(f));
     return out;
   }
-  for (const std::string& item : splitList(list)) {
+  for (const std::string& item :
+       splitList(list, "--scenes",
+                 "scene names (`arena scenes`) or .json paths, comma-separated, or 'all'")) {
     fs::path p = item;
     if (p.extension() != ".json") p = fs::path(scenesDir) / (item + ".json");
     if (!fs::exists(p))

@@ -28,8 +28,11 @@ std::vector<std::string> shortSequenceWarnings(const std::vector<Scene>& scenes,
 std::string shortSequenceWarning(const std::string& source, int frames, int warmup,
                                  const std::string& remedy);
 
-// The non-empty items of a comma-separated list ("a,,b" -> a, b).
-std::vector<std::string> splitList(const std::string& list);
+// The items of a comma-separated list. An empty item ("a,,b", a leading or trailing comma, the
+// empty list) is refused, never skipped: an error "<what> '<list>': an empty entry (a comma too
+// many); expected <expected>" (`what`: the option, e.g. "--scenes").
+std::vector<std::string> splitList(const std::string& list, const std::string& what,
+                                   const std::string& expected);
 
 // "all", or comma-separated scene names (looked up in scenesDir) or paths to .json files.
 std::vector<Scene> selectScenes(const std::string& list, const std::string& scenesDir);

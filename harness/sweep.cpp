@@ -25,11 +25,8 @@ RunConfig sweepRun(RunConfig c, const std::string& denoiser, const std::map<std:
     if (fixed.count(name)) throw Error("--grid '" + g + "': " + name + " is also fixed by --param");
     const std::string inner = g.substr(eq + 2, g.size() - eq - 3);
     // "[1,,2]" is a value left out, not a list of two: said, not read as [1,2].
-    if (inner.find(",,") != std::string::npos ||
-        (!inner.empty() && (inner.front() == ',' || inner.back() == ',')))
-      throw Error("--grid '" + g + "': an empty value between commas; expected NAME=[v1,v2,...]");
-    axes.push_back({name, splitList(inner)});
-    if (axes.back().second.empty()) throw Error("--grid '" + g + "': no values");
+    if (inner.empty()) throw Error("--grid '" + g + "': no values; expected NAME=[v1,v2,...]");
+    axes.push_back({name, splitList(inner, "--grid", "NAME=[v1,v2,...]")});
     // Compared as the schema reads them ("2" and "2.0" are one setting: two contenders of one
     // setting would only add ties), each value checked on the way.
     std::map<std::string, std::string> distinct;  // resolved value -> as written

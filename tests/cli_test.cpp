@@ -130,7 +130,22 @@ TEST(CliContract, ShardsParamsAndSweepsAreStrict) {
   r = contract::arenaCli("sweep --denoiser svgf --grid 'sigmaL=[2,,4]'" +
                          common);  // a value left out
   EXPECT_EQ(r.status, 2) << r.output;
-  EXPECT_NE(r.output.find("an empty value between commas"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("an empty entry (a comma too many); expected NAME=[v1,v2,...]"),
+            std::string::npos)
+      << r.output;
+  r = contract::arenaCli("sweep --denoiser svgf --grid 'sigmaL=[]'" + common);
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("--grid 'sigmaL=[]': no values"), std::string::npos) << r.output;
+  // A scene or denoiser left out between commas is refused, not skipped.
+  r = contract::arenaCli("run --denoisers passthrough --scenes cornell_static,,camera_cut --out " +
+                         (dir / "run").string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("--scenes 'cornell_static,,camera_cut': an empty entry"),
+            std::string::npos)
+      << r.output;
+  r = contract::arenaCli("bench denoise --denoisers eaw, --resolution 8x8 --frames 1");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("--denoisers 'eaw,': an empty entry"), std::string::npos) << r.output;
   r = contract::arenaCli("run --denoisers passthrough --shard 0/1junk" + common);
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("--shard '0/1junk'"), std::string::npos) << r.output;
@@ -225,7 +240,10 @@ TEST(CliContract, UsageErrorsExitTwoAndOptionsAreStrict) {
     contract::CliResult r = contract::arenaCli("run --scenes cornell_static --resolution 8x8 --frames 2 --ref-spp 1 --cache " +
                            (dir / "cache").string() + " --out " + (dir / "empty").string() + " --denoisers " + list);
     EXPECT_EQ(r.status, 2) << list << "\n" << r.output;
-    EXPECT_NE(r.output.find("an empty name"), std::string::npos) << r.output;
+    EXPECT_NE(
+        r.output.find(list == "''" ? "--denoisers '': empty" : "an empty entry (a comma too many)"),
+        std::string::npos)
+        << r.output;
   }
   EXPECT_FALSE(fs::exists(dir / "empty" / "results.json"));
   // A baseline that runs takes its --param; one that does not run is named as not running.
