@@ -426,5 +426,26 @@ TEST(SceneContract, UnusableVerticesAndOverbrightAssetsAreErrorsNamingFileAndEle
   EXPECT_NE(e.find("has a non-finite position or one beyond +-1e18"), std::string::npos) << e;
 }
 
+// The emitter check reads an asset's own materials, and only those of the object that uses them:
+// with the scene's light off, an asset whose material emits lights it; overridden by a material
+// that does not, nothing does.
+TEST(SceneContract, AnAssetsOwnEmittingMaterialCountsAsLightUnlessOverridden) {
+  fs::path dir = test::freshDir("asset_emitter");
+  writeTextAtomically(dir / "a.obj",
+                      "mtllib a.mtl\nusemtl glow\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  writeTextAtomically(dir / "a.mtl", "newmtl glow\nKd 0 0 0\nKe 2 2 2\n");
+  json s = contract::minimalScene();
+  s["lights"][0]["keys"][0]["intensity"] = 0;
+  s["materials"].erase("lamp");
+  const std::string file = (dir / "t.json").string();
+  EXPECT_NE(contract::sceneError(s, file).find("expected something to emit"), std::string::npos);
+  s["objects"].push_back({{"name", "thing"},
+                          {"asset", {{"file", "a.obj"}, {"unitMeters", 1.0}, {"upAxis", "y"}}},
+                          {"keys", json::array({{{"frame", 0}}})}});
+  EXPECT_EQ(contract::sceneError(s, file), "");
+  s["objects"][1]["material"] = "white";
+  EXPECT_NE(contract::sceneError(s, file).find("expected something to emit"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace arena

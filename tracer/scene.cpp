@@ -483,10 +483,14 @@ Scene parseScene(const std::string& text, const std::string& path) {
   for (const Light& light : scene.lights)
     for (const auto& key : light.emission.keys)
       emitting |= key.value.intensity > 0.0f && emits(key.value.color);
-  for (const Object& obj : scene.objects)
-    for (size_t m = obj.material >= 0 ? size_t(obj.material) : size_t(obj.assetMaterialBase);
-         m < scene.materials.size() && (obj.material < 0 || m == size_t(obj.material)); ++m)
-      emitting |= emits(scene.materials[m].emission);  // an asset's own: every one from its first
+  for (const Object& obj : scene.objects) {
+    if (obj.material >= 0) {
+      emitting |= emits(scene.materials[size_t(obj.material)].emission);
+    } else if (obj.asset) {  // the asset's own materials
+      for (size_t i = 0; i < obj.asset->materials.size(); ++i)
+        emitting |= emits(scene.materials[size_t(obj.assetMaterialBase) + i].emission);
+    }
+  }
   if (!emitting)
     root.fail("lights",
               "expected something to emit at some frame: every light's intensity x color is 0 at "
