@@ -292,8 +292,7 @@ json historyData(const std::vector<RunResults>& runs, std::vector<Tolerance> tol
 }
 
 HistorySummary writeHistory(const HistoryOptions& o) {
-  if (o.out.empty()) throw Error("history: --out is required");
-  requirePageDirectory(o.out);
+  requirePageDirectory(o.out, "history");
   const fs::path web = o.webDir.empty() ? ReportOptions::defaultWebDir() : o.webDir;
   const fs::path modules =
       o.nodeModulesDir.empty() ? ReportOptions::defaultNodeModulesDir() : o.nodeModulesDir;

@@ -899,9 +899,10 @@ void checkPageAssets(const fs::path& webDir, const fs::path& nodeModulesDir,
                   " is missing); run scripts/setup.sh, which runs `npm ci` in reports/");
 }
 
-void requirePageDirectory(const fs::path& out) {
+void requirePageDirectory(const fs::path& out, const std::string& command) {
+  if (out.empty()) throw Error(command + ": --out is required (the page's directory)");
   if (std::error_code ec; fs::exists(out, ec) && !fs::is_directory(out, ec))
-    throw Error("--out " + out.string() +
+    throw Error(command + ": --out " + out.string() +
                 ": exists and is not a directory; expected a directory for the page");
 }
 
@@ -916,8 +917,7 @@ void copyPageAssets(const fs::path& webDir, const fs::path& nodeModulesDir,
 }
 
 ReportSummary writeReport(const ReportOptions& o) {
-  if (o.out.empty()) throw Error("report: --out is required");
-  requirePageDirectory(o.out);
+  requirePageDirectory(o.out, "report");
   const RunResults results = loadResults(o.run);
   RunResults baseline;
   if (!o.baseline.empty()) baseline = loadResults(o.baseline);

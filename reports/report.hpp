@@ -54,8 +54,9 @@ struct PageFile {
 void checkPageAssets(const std::filesystem::path& webDir,
                      const std::filesystem::path& nodeModulesDir,
                      const std::vector<PageFile>& files);
-// Refuses an --out that exists and is not a directory (before any work).
-void requirePageDirectory(const std::filesystem::path& out);
+// Refuses an empty --out and one that exists and is not a directory (before any work); `command`
+// ("report", "history") begins the message.
+void requirePageDirectory(const std::filesystem::path& out, const std::string& command);
 void copyPageAssets(const std::filesystem::path& webDir,
                     const std::filesystem::path& nodeModulesDir, const std::vector<PageFile>& files,
                     const std::filesystem::path& out);

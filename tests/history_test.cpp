@@ -235,9 +235,12 @@ TEST(History, BadInputNamesThePath) {
   o.inputs = {db};
   o.out = dir / "notes.txt";
   e = test::errorOf([&] { writeHistory(o); });
-  EXPECT_NE(e.find("--out " + o.out.string() + ": exists and is not a directory"),
+  EXPECT_NE(e.find("history: --out " + o.out.string() + ": exists and is not a directory"),
             std::string::npos)
       << e;
+  o.out.clear();
+  e = test::errorOf([&] { writeHistory(o); });
+  EXPECT_NE(e.find("history: --out is required"), std::string::npos) << e;
 }
 
 TEST(History, WritesTheDashboard) {
