@@ -436,7 +436,11 @@ json pairedDifference(const RunResults& results, const std::string& scene, const
 // change of every metric against the pair that differs only in that parameter (set to the first
 // value). Per scene, a ranked metric's change is the run's paired difference (statistics: the same
 // frames and tiles, with its interval and whether it is resolved); other metrics' the difference of
-// the means. Over all scenes: the mean of the per-scene changes (no interval).
+// the means. Over all scenes: the mean of the per-scene changes (no interval). A row's `judged`
+// says per metric what the matched pairs' intervals show together: "better" or "worse" when every
+// match has a paired difference resolved that way, "mixed" when resolved both ways, "tie" when
+// some are unresolved, "no interval" when some match has none (a metric the statistics do not
+// rank): only the first two are a difference the run resolved.
 json ablationData(const RunResults& results) {
   if (!results.sweep.is_object()) return nullptr;
   const json& sweep = results.sweep;
@@ -445,7 +449,15 @@ json ablationData(const RunResults& results) {
   for (const PairResult& p : results.pairs)
     if (p.denoiser == denoiser && p.ok()) pairs.push_back(&p);
   std::vector<std::string> metrics;
-  for (const MetricDefinition* m : metricCatalog()) metrics.push_back(m->name);
+  std::map<std::string, bool> lowerIsBetter;
+  for (const MetricDefinition* m : metricCatalog()) {
+    metrics.push_back(m->name);
+    lowerIsBetter[m->name] = m->lowerIsBetter();
+  }
+  // Per scope and metric: matches with a paired difference, and those resolved each way.
+  struct Judged {
+    size_t intervals = 0, better = 0, worse = 0;
+  };
   json rows = json::array();
   for (auto g = sweep["grid"].begin(); g != sweep["grid"].end(); ++g) {
     const std::string name = g.key();
@@ -459,6 +471,7 @@ json ablationData(const RunResults& results) {
     for (size_t vi = 1; vi < values.size(); ++vi) {
       std::map<std::string, std::map<std::string, std::vector<double>>> deltas, relative;
       std::map<std::string, std::map<std::string, json>> paired;  // scene -> metric -> difference
+      std::map<std::string, std::map<std::string, Judged>> judged;
       std::map<std::string, size_t> matched;
       for (const PairResult* p : pairs) {
         if (p->params.value(name, json()) != values[vi]) continue;
@@ -479,18 +492,34 @@ json ablationData(const RunResults& results) {
               deltas[scope][m].push_back(delta);
               relative[scope][m].push_back(delta / std::max(std::abs(b), 1e-12));
               if (!scope.empty() && d.is_object()) paired[scope][m] = d;
+              if (d.is_object()) {
+                Judged& j = judged[scope][m];
+                ++j.intervals;
+                if (d["resolved"].get<bool>() && delta != 0)
+                  ++((delta < 0) == lowerIsBetter[m] ? j.better : j.worse);
+              }
             }
           }
           break;
         }
       }
       for (auto& [scope, byMetric] : deltas) {
-        json d = json::object(), r = json::object();
+        json d = json::object(), r = json::object(), verdicts = json::object();
         for (auto& [m, v] : byMetric) {
           double s = 0, sr = 0;
           for (size_t i = 0; i < v.size(); ++i) s += v[i], sr += relative[scope][m][i];
           d[m] = s / double(v.size());
           r[m] = sr / double(v.size());
+          const Judged j = judged[scope][m];
+          const std::string verdict = j.intervals < v.size()        ? "no interval"
+                                      : j.better == v.size()        ? "better"
+                                      : j.worse == v.size()         ? "worse"
+                                      : j.better > 0 && j.worse > 0 ? "mixed"
+                                                                    : "tie";
+          verdicts[m] = {{"verdict", verdict},
+                         {"matches", v.size()},
+                         {"intervals", j.intervals},
+                         {"resolved", j.better + j.worse}};
         }
         json row = {{"parameter", name},
                     {"value", valueText(values[vi])},
@@ -498,7 +527,8 @@ json ablationData(const RunResults& results) {
                     {"scene", scope.empty() ? json(nullptr) : json(scope)},
                     {"matched", matched[scope]},
                     {"delta", d},
-                    {"relative", r}};
+                    {"relative", r},
+                    {"judged", verdicts}};
         if (!scope.empty() && matched[scope] == 1 && paired.count(scope)) row["paired"] = paired[scope];
         rows.push_back(row);
       }

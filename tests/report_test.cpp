@@ -359,16 +359,72 @@ TEST(Report, AblationDeltasAreTheRunsPairedDifferences) {
     if (r["parameter"] == "a") {
       ++seen;
       EXPECT_NEAR(r["delta"]["relMse"].get<double>(), -0.0123, 1e-15);  // not the means' -0.01
+      EXPECT_EQ(r["judged"]["relMse"]["verdict"], "better");
       EXPECT_EQ(r["paired"]["relMse"]["ci95"], json({-0.02, -0.004}));
       EXPECT_TRUE(r["paired"]["relMse"]["resolved"].get<bool>());
     }
     if (r["parameter"] == "b") {
       ++seen;
       EXPECT_FALSE(r["paired"]["relMse"]["resolved"].get<bool>());  // drawn as a tie
+      EXPECT_EQ(r["judged"]["relMse"]["verdict"], "tie");
       EXPECT_FALSE(r["paired"].contains("ssim")) << "no paired difference on ssim in this run";
     }
   }
   EXPECT_EQ(seen, 2);
+}
+
+// Where a parameter's value matches the first value under several settings of the others, the
+// row's colour needs every matched paired difference resolved the same way (and over all scenes);
+// a metric without paired intervals has none.
+TEST(Report, AblationJudgesEveryMatchedIntervalTogether) {
+  json run = fixtureRun();
+  run["pairs"].push_back(
+      okPair("static", "svgf", "svgf[a=0,b=false]", {{"a", 0}, {"b", false}}, 0.07, 3.0));
+  // a=1 against a=0: at b=true resolved lower (better: relMSE is lower-is-better); at b=false as
+  // `second` says (oriented a=0 - a=1 in the statistics, as the first is).
+  auto judgedA = [&](const json& second, const json& scene) {
+    json r = run;
+    r["statistics"] =
+        test::statisticsBlock(json{{"scenes",
+                                    {{"static",
+                                      {{"metric", "relMse"},
+                                       {"ranking", json::array()},
+                                       {"pairs", json::array({json{{"a", "svgf[a=0]"},
+                                                                   {"b", "svgf[a=1]"},
+                                                                   {"diff", 0.0123},
+                                                                   {"ci95", {0.004, 0.02}},
+                                                                   {"resolved", true}},
+                                                              second})},
+                                       {"resolvedPairs", 1 + int(second["resolved"].get<bool>())},
+                                       {"totalPairs", 2},
+                                       {"byMetric", json::object()}}}}}});
+    const json data = reportData(test::typed(r), test::freshDir("report_ablation_judged"), nullptr);
+    for (const json& row : data["ablation"]["rows"])
+      if (row["parameter"] == "a" && row["scene"] == scene) return row;
+    ADD_FAILURE() << "no row for a on " << scene.dump();
+    return json();
+  };
+  auto pairOf = [](double diff, double lo, double hi, bool resolved) {
+    return json{{"a", "svgf[a=0,b=false]"},
+                {"b", "svgf[a=1,b=false]"},
+                {"diff", diff},
+                {"ci95", {lo, hi}},
+                {"resolved", resolved}};
+  };
+  json row = judgedA(pairOf(0.01, -0.001, 0.02, false), "static");
+  EXPECT_EQ(row["matched"], 2);
+  EXPECT_EQ(row["judged"]["relMse"],
+            (json{{"verdict", "tie"}, {"matches", 2}, {"intervals", 2}, {"resolved", 1}}));
+  EXPECT_EQ(row["judged"]["ssim"]["verdict"],
+            "no interval");  // the statistics rank only relMSE here
+  EXPECT_FALSE(row.contains("paired")) << "one interval per match: no single interval for the row";
+  row = judgedA(pairOf(0.01, 0.001, 0.02, true), "static");
+  EXPECT_EQ(row["judged"]["relMse"]["verdict"], "better");
+  EXPECT_EQ(judgedA(pairOf(0.01, 0.001, 0.02, true), nullptr)["judged"]["relMse"]["verdict"],
+            "better");
+  row = judgedA(pairOf(-0.01, -0.02, -0.001, true), "static");  // a=1 resolved worse at b=false
+  EXPECT_EQ(row["judged"]["relMse"],
+            (json{{"verdict", "mixed"}, {"matches", 2}, {"intervals", 2}, {"resolved", 2}}));
 }
 
 TEST(Report, BaselineGivesCompareVerdicts) {

@@ -245,8 +245,12 @@
     const AB = A.D.ablation;
     if (!AB) return;
     const rows = AB.rows.filter((r) => r.scene === A.state.scene || r.scene === null);
-    box.append(el('h3', { text: `Ablation of ${AB.denoiser} (sweep)` }),
-      el('p', { class: 'note', text: 'Δ = metric with the value − metric with the first value, other grid parameters held equal; relative change in brackets. Per scene, a ranked metric\'s Δ is the run\'s paired difference with its 95% interval: green or red only when the interval excludes 0 (else "tie"). All scenes: the mean of the per-scene Δ (no interval).' }));
+    box.append(
+        el('h3', {text: `Ablation of ${AB.denoiser} (sweep)`}), el('p', {
+          class: 'note',
+          text:
+              'Δ = metric with the value − metric with the first value, other grid parameters held equal; relative change in brackets. Per scene, a ranked metric\'s Δ is the run\'s paired difference with its 95% interval; where several settings of the other parameters match, and over all scenes, Δ is the mean and the count says how many of the matched paired differences are resolved. Green or red only when every matched difference is resolved that way ("tie": some are not; "mixed": resolved both ways; no colour: a metric without paired intervals).'
+        }));
     if (!rows.length) {
       box.append(el('p', { class: 'empty', text: 'No grid parameter has two values with matching pairs.' }));
       return;
@@ -261,13 +265,22 @@
         metrics.map((m) => {
           const d = r.delta[m.name];
           if (d === undefined) return el('td', { text: '–' });
-          const better = m.lowerIsBetter ? d < 0 : d > 0;
+          const j = r.judged[m.name];
+          const cls = {better: 'better', worse: 'worse', tie: 'tie', mixed: 'tie'}[j.verdict] ||
+              null;
           const p = r.paired && r.paired[m.name];
-          if (p) {
-            const cls = !p.resolved ? 'tie' : better ? 'better' : 'worse';
-            return el('td', { class: cls, 'data-paired': 'true', text: `${fmt(d)} (${pct(r.relative[m.name])}) ${A.interval(p.ci95)}${p.resolved ? '' : ' tie'}` });
-          }
-          return el('td', { class: d === 0 ? null : better ? 'better' : 'worse', text: `${fmt(d)} (${pct(r.relative[m.name])})` });
+          const change = `${fmt(d)} (${pct(r.relative[m.name])})`;
+          if (p && j.matches === 1)
+            return el('td', {
+              class: cls,
+              'data-paired': 'true',
+              'data-verdict': j.verdict,
+              text: `${change} ${A.interval(p.ci95)}${p.resolved ? '' : ' tie'}`
+            });
+          const said = j.verdict === 'no interval' ?
+              ' no interval' :
+              ` ${j.resolved}/${j.matches} resolved${j.verdict === 'mixed' ? ', mixed' : ''}`;
+          return el('td', {class: cls, 'data-verdict': j.verdict, text: change + said});
         })))))));
   }
 })();

@@ -490,6 +490,50 @@ test('10 denoisers x 10 scenes x 100 frames stays light', async () => {
   await page.close();
 });
 
+// A sweep of svgf over a 2x2 grid: each parameter's change is matched under both values of the
+// other. Green or red only where every matched paired difference is resolved that way.
+test('a sweep\'s ablation colours a change only where every matched interval resolves it', async () => {
+  const run = syntheticRun(1, 4, 20);
+  const grid = [[0, true], [1, true], [0, false], [1, false]];  // denoiser_l's (a, b)
+  run.pairs.forEach((p, l) => { p.denoiser = 'svgf'; p.params = { a: grid[l][0], b: grid[l][1] }; });
+  run.sweep = { denoiser: 'svgf', grid: { a: ['0', '1'], b: ['true', 'false'] }, fixed: {} };
+  // a=1 against a=0: resolved at b=true (denoiser_0 - denoiser_1), not at b=false (2 - 3).
+  const st = run.statistics.scenes.scene_0;
+  const unresolved = st.pairs.find((d) => d.a === 'denoiser_2' && d.b === 'denoiser_3');
+  unresolved.resolved = false;
+  unresolved.ci95 = [unresolved.diff - 0.02, unresolved.diff + 0.02];
+  st.resolvedPairs = st.pairs.filter((d) => d.resolved).length;
+  const dir = path.join(work, 'sweep');
+  fs.mkdirSync(dir, { recursive: true });
+  fs.writeFileSync(path.join(dir, 'results.json'), JSON.stringify(run));
+  const out = path.join(work, 'sweep-report');
+  arena('report', dir, '--out', out);
+  const { page, problems } = await openReport(out);
+  assert.ok((await page.locator('#ablation table tbody tr').count()) >= 4, 'ablation rows');
+  const cell = (parameter, scene, metricIndex) => page.$eval(`#ablation table`, (t, [parameter, scene, metricIndex]) => {
+    const heads = [...t.tHead.rows[0].cells].map((c) => c.textContent);
+    const row = [...t.tBodies[0].rows].find((r) => r.cells[0].textContent === parameter && r.cells[2].textContent === scene);
+    const c = row.cells[heads.indexOf(metricIndex)];
+    return { cls: c.className, verdict: c.dataset.verdict, text: c.textContent };
+  }, [parameter, scene, metricIndex]);
+  let c = await cell('a', 'scene_0', 'Δ relMse');
+  assert.equal(c.verdict, 'tie');
+  assert.equal(c.cls, 'tie');
+  assert.match(c.text, /1\/2 resolved/);
+  c = await cell('b', 'scene_0', 'Δ relMse');  // both matches resolved: b=false is worse
+  assert.equal(c.verdict, 'worse');
+  assert.equal(c.cls, 'worse');
+  assert.match(c.text, /2\/2 resolved/);
+  c = await cell('a', 'all scenes', 'Δ relMse');
+  assert.equal(c.verdict, 'tie');
+  c = await cell('b', 'scene_0', 'Δ ssim');  // no paired statistics on ssim: no colour
+  assert.equal(c.verdict, 'no interval');
+  assert.equal(c.cls, '');
+  assert.match(c.text, /no interval/);
+  assert.deepEqual(problems, []);
+  await page.close();
+});
+
 // A synthetic history of 50 runs (one per commit): 2 scenes x 3 denoisers, values wobbling by
 // ±0.5% (under compare's 2% tolerance); at run 30 svgf's relMSE on scene_b rises 15% and stays.
 function historyRuns(dir, schema) {
