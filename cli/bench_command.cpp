@@ -117,7 +117,8 @@ void addBenchCommand(CLI::App& app) {
     b.frames = g->frames;
     b.denoisers = g->denoisers == "all"
                       ? DenoiserRegistry::instance().names()
-                      : splitList(g->denoisers, "--denoisers", kDenoiserListExpected);
+                      : splitList(g->denoisers, "--denoisers",
+                                  "built-in names (`arena denoisers`), comma-separated, or 'all'");
     const nlohmann::json out = benchGpuModel(b, printLine);
     if (!g->json.empty()) writeTextAtomically(g->json, out.dump(2));
   });

@@ -58,9 +58,10 @@ void addCaptureCommands(CLI::App& app) {
                     "all` writes them) as the capture's file:NAME contender, repeatable");
     addRenderOptions(cmd, *opt);
     cmd->callback([=] {
-      const std::vector<Scene> scenes = selectScenes(*scene, opt->scenesDir);
-      if (scenes.size() != 1) throw Error("export: one scene at a time ('" + *scene + "' names " +
-                                          std::to_string(scenes.size()) + ")");
+      const std::vector<Scene> scenes = selectScenes(*scene, opt->scenesDir, "scene");
+      if (scenes.size() != 1)
+        throw Error("export: one scene at a time ('" + *scene + "' names " +
+                    std::to_string(scenes.size()) + ")");
       std::map<std::string, std::filesystem::path> stored;
       for (const std::string& o : *outputs) {
         const size_t eq = o.find('=');

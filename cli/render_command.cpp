@@ -54,7 +54,7 @@ void addRenderCommand(CLI::App& app) {
   cmd->callback([opt, names, previews, shardText] {
     Shard shard;
     std::tie(shard.index, shard.count) = parseShard(*shardText);
-    const std::vector<Scene> scenes = selectScenes(*names, opt->scenesDir);
+    const std::vector<Scene> scenes = selectScenes(*names, opt->scenesDir, "scenes");
     for (const Scene& scene : scenes) requireRenderable(scene, opt->settings(), false);
     for (const Scene& scene : scenes) {
       auto dir = renderSequence(
@@ -103,7 +103,7 @@ void addRefineCommand(CLI::App& app) {
       ->check(CLI::Range(1, 1 << 20));
   addRenderOptions(cmd, *opt);
   cmd->callback([opt, names, target, maxSpp] {
-    for (const Scene& scene : selectScenes(*names, opt->scenesDir)) {
+    for (const Scene& scene : selectScenes(*names, opt->scenesDir, "scenes")) {
       auto dir = refineSequence(scene, opt->settings(), opt->cacheDir, *target, *maxSpp,
                                 [](const std::string& line) { std::cout << line << std::endl; });
       std::cout << scene.name << ": " << dir.string() << std::endl;

@@ -104,15 +104,15 @@ std::vector<std::string> splitList(const std::string& list, const std::string& w
   return out;
 }
 
-std::vector<Scene> selectScenes(const std::string& list, const std::string& scenesDir) {
+std::vector<Scene> selectScenes(const std::string& list, const std::string& scenesDir,
+                                const std::string& what) {
   std::vector<Scene> out;
   if (list == "all") {
     for (const std::string& f : listSceneFiles(scenesDir)) out.push_back(loadScene(f));
     return out;
   }
-  for (const std::string& item :
-       splitList(list, "--scenes",
-                 "scene names (`arena scenes`) or .json paths, comma-separated, or 'all'")) {
+  for (const std::string& item : splitList(
+           list, what, "scene names (`arena scenes`) or .json paths, comma-separated, or 'all'")) {
     fs::path p = item;
     if (p.extension() != ".json") p = fs::path(scenesDir) / (item + ".json");
     if (!fs::exists(p))

@@ -34,7 +34,9 @@ std::string shortSequenceWarning(const std::string& source, int frames, int warm
 std::vector<std::string> splitList(const std::string& list, const std::string& what,
                                    const std::string& expected);
 
-// "all", or comma-separated scene names (looked up in scenesDir) or paths to .json files.
-std::vector<Scene> selectScenes(const std::string& list, const std::string& scenesDir);
+// "all", or comma-separated scene names (looked up in scenesDir) or paths to .json files. `what`
+// names the list in errors: the option ("--scenes") or the positional argument ("scenes").
+std::vector<Scene> selectScenes(const std::string& list, const std::string& scenesDir,
+                                const std::string& what = "--scenes");
 
 }  // namespace arena

@@ -26,7 +26,7 @@ RunConfig sweepRun(RunConfig c, const std::string& denoiser, const std::map<std:
     const std::string inner = g.substr(eq + 2, g.size() - eq - 3);
     // "[1,,2]" is a value left out, not a list of two: said, not read as [1,2].
     if (inner.empty()) throw Error("--grid '" + g + "': no values; expected NAME=[v1,v2,...]");
-    axes.push_back({name, splitList(inner, "--grid", "NAME=[v1,v2,...]")});
+    axes.push_back({name, splitList(inner, "--grid '" + g + "': values", "NAME=[v1,v2,...]")});
     // Compared as the schema reads them ("2" and "2.0" are one setting: two contenders of one
     // setting would only add ties), each value checked on the way.
     std::map<std::string, std::string> distinct;  // resolved value -> as written

@@ -130,8 +130,10 @@ TEST(CliContract, ShardsParamsAndSweepsAreStrict) {
   r = contract::arenaCli("sweep --denoiser svgf --grid 'sigmaL=[2,,4]'" +
                          common);  // a value left out
   EXPECT_EQ(r.status, 2) << r.output;
-  EXPECT_NE(r.output.find("an empty entry (a comma too many); expected NAME=[v1,v2,...]"),
-            std::string::npos)
+  EXPECT_NE(
+      r.output.find("--grid 'sigmaL=[2,,4]': values '2,,4': an empty entry (a comma too many); "
+                    "expected NAME=[v1,v2,...]"),
+      std::string::npos)
       << r.output;
   r = contract::arenaCli("sweep --denoiser svgf --grid 'sigmaL=[]'" + common);
   EXPECT_EQ(r.status, 2) << r.output;
@@ -143,6 +145,17 @@ TEST(CliContract, ShardsParamsAndSweepsAreStrict) {
   EXPECT_NE(r.output.find("--scenes 'cornell_static,,camera_cut': an empty entry"),
             std::string::npos)
       << r.output;
+  r = contract::arenaCli("render 'cornell_static,' --resolution 8x8 --frames 1 --cache " +
+                         (dir / "c").string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("scenes 'cornell_static,': an empty entry"), std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("--scenes"), std::string::npos)
+      << "render takes its scenes as an argument\n"
+      << r.output;
+  r = contract::arenaCli("bench gpu-model --denoisers eaw,");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("expected built-in names"), std::string::npos) << r.output;
   r = contract::arenaCli("bench denoise --denoisers eaw, --resolution 8x8 --frames 1");
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("--denoisers 'eaw,': an empty entry"), std::string::npos) << r.output;

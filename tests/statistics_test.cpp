@@ -345,8 +345,6 @@ TEST(CompareGate, FailsOnWhatItCannotCompare) {
   EXPECT_EQ(rows[0].verdict, "missing");
 }
 
-// A change beyond tolerance that no interval can judge would pass as noise on no data: it fails the
-// gate in run directories; results.db keeps no tiles by design, so its runs stay "unresolved".
 // The JSON rows carry the gate's own rule as `fails` (the report's and the dashboard's pages read
 // it instead of keeping verdict lists of their own): true exactly for the verdicts that fail.
 TEST(CompareGate, JsonRowsSayWhetherTheyFailTheGate) {
@@ -376,6 +374,8 @@ TEST(CompareGate, JsonRowsSayWhetherTheyFailTheGate) {
   EXPECT_LT(failing, table.size());
 }
 
+// A change beyond tolerance that no interval can judge would pass as noise on no data: it fails the
+// gate in run directories; results.db keeps no tiles by design, so its runs stay "unresolved".
 TEST(CompareGate, AWorseningNoIntervalCanJudgeFailsTheGate) {
   const MetricTiles m = constantSeries(0.01);
   const std::vector<Tolerance> tol = {{"relMse", 0.02}};
