@@ -510,19 +510,27 @@ json PairEvaluation::finish() {
     json j = g.toJson();
     j["kind"] = eventKindName(ev.event.kind);
     j["what"] = ev.event.what;
-    if (maskPixels == 0) {
-      // No pixel changed: the curve and every figure over the region would read 0, a flawless
-      // response measured on nothing. They are null, with the reason (the ranking has no data
-      // either: its tiles are empty).
-      for (const char* figure : {"curve", "bias", "steadyState", "peakExcess", "ghostEnergy",
-                                 "signedBias", "biasPre", "lagEnergy", "settled", "responseFrames",
-                                 "chromaError", "chromaPre", "chromaLagEnergy"})
+    // No pixel changed: the curve and every figure over the region would read 0, a flawless
+    // response measured on nothing. Too few frames from the event on: a response of 0 frames and
+    // no ghost energy, measured on the event frame alone. The figures are null, with the reason
+    // (the ranking has no data either: the intervals say the same).
+    const std::string absent =
+        maskPixels == 0
+            ? "the changed region is empty at frame " + std::to_string(ev.event.frame) +
+                  ": the reference does not change there, so there is no response to measure"
+            : ghostingWindowProblem(ev.event.frame, ev.end, gc);
+    if (!absent.empty()) {
+      for (const char* figure :
+           {"steadyState", "steadyBegin", "peakExcess", "ghostEnergy", "signedBias", "biasPre",
+            "lagEnergy", "settled", "responseFrames", "chromaPre", "chromaLagEnergy"})
         if (j.contains(figure)) j[figure] = nullptr;
+      if (maskPixels == 0)  // curves over an empty region are no measurement either
+        for (const char* curve : {"curve", "bias", "chromaError"})
+          if (j.contains(curve)) j[curve] = nullptr;
       j.erase("response");
-      j["absent"] = "the changed region is empty at frame " + std::to_string(ev.event.frame) +
-                    ": the reference does not change there, so there is no response to measure";
-      emptyEvents.push_back("event at frame " + std::to_string(ev.event.frame) + ": " +
-                            j["absent"].get<std::string>());
+      j.erase("steadyAbsent");  // `absent` covers every figure
+      j["absent"] = absent;
+      emptyEvents.push_back("event at frame " + std::to_string(ev.event.frame) + ": " + absent);
     }
     const BootstrapConfig bc;
     addFigureIntervals(j,

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 
 #include "core/error.hpp"
 #include "metrics/summary.hpp"
@@ -48,6 +49,7 @@ nlohmann::json GhostingConfig::toJson() const {
       {"windowBefore", before},
       {"windowAfter", after},
       {"steadyFrames", steadyFrames},
+      {"minFramesFromEvent", minFramesFromEvent},
       {"trailFrames", trailFrames},
       {"cutRecoveryFrames", recoveryFrames},
       {"intervals",
@@ -136,6 +138,23 @@ double chromaticityError(const Image& d, const Image& r, const Image& mask, Colo
   return chromaticityErrorOfSums(sd, sr);
 }
 
+std::string ghostingWindowProblem(int t0, int windowEnd, const GhostingConfig& c) {
+  const int fromEvent = windowEnd - t0 + 1;
+  if (fromEvent >= c.minFramesFromEvent) return "";
+  return "the window holds " + std::to_string(std::max(fromEvent, 0)) +
+         " frame(s) from the event on (to frame " + std::to_string(windowEnd) +
+         ": the sequence ends or the next event comes), fewer than the " +
+         std::to_string(c.minFramesFromEvent) + " needed to tell a response from a steady state";
+}
+
+std::string steadyStateProblem(int t0, int windowEnd, const GhostingConfig& c) {
+  const int fromEvent = windowEnd - t0 + 1;
+  if (fromEvent >= c.steadyFrames) return "";
+  return "the window holds " + std::to_string(std::max(fromEvent, 0)) +
+         " frame(s) from the event on, fewer than the " + std::to_string(c.steadyFrames) +
+         " the steady state E_ss is the median of (frames before the event held the old state)";
+}
+
 GhostingResult analyseGhosting(int t0, int begin, const std::vector<double>& curve,
                                const std::vector<double>& bias, const std::vector<double>& chroma,
                                const GhostingConfig& c) {
@@ -152,12 +171,20 @@ GhostingResult analyseGhosting(int t0, int begin, const std::vector<double>& cur
   if (curve.empty()) return g;
   const size_t n = curve.size();
   const size_t first = size_t(std::clamp(t0 - begin, 0, int(n) - 1));
-  // Secondary figures on E_M.
-  const size_t steadyFrom = n > size_t(c.steadyFrames) ? n - size_t(c.steadyFrames) : 0;
-  g.steadyState =
-      percentile(std::vector<double>(curve.begin() + long(steadyFrom), curve.end()), 50);
-  g.peakExcess = *std::max_element(curve.begin() + long(first), curve.end()) - g.steadyState;
-  for (size_t i = first; i < n; ++i) g.ghostEnergy += std::max(0.0, curve[i] - g.steadyState);
+  // Secondary figures on E_M. The steady state never reaches before t0: those frames hold the
+  // old state (a lower error there made a method that never settled look ghost-free).
+  g.steadyAbsent = steadyStateProblem(t0, g.windowEnd, c);
+  if (g.steadyAbsent.empty()) {
+    const size_t steadyFrom = n - size_t(c.steadyFrames);
+    g.steadyBegin = begin + int(steadyFrom);
+    g.steadyState =
+        percentile(std::vector<double>(curve.begin() + long(steadyFrom), curve.end()), 50);
+    g.peakExcess = *std::max_element(curve.begin() + long(first), curve.end()) - g.steadyState;
+    for (size_t i = first; i < n; ++i) g.ghostEnergy += std::max(0.0, curve[i] - g.steadyState);
+  } else {
+    g.steadyBegin = -1;
+    g.steadyState = g.peakExcess = g.ghostEnergy = std::numeric_limits<double>::quiet_NaN();
+  }
   // Response: one past the last frame from t0 on whose |b_M| exceeds the threshold.
   size_t lastAbove = n;
   for (size_t i = first; i < n; ++i)
@@ -178,23 +205,29 @@ GhostingResult analyseGhosting(int t0, int begin, const std::vector<double>& cur
 }
 
 nlohmann::json GhostingResult::toJson() const {
-  nlohmann::json j = {{"eventFrame", eventFrame},
-                      {"windowBegin", windowBegin},
-                      {"windowEnd", windowEnd},
-                      {"curve", curve},
-                      {"bias", bias},
-                      {"steadyState", steadyState},
-                      {"peakExcess", peakExcess},
-                      {"ghostEnergy", ghostEnergy},
-                      {"signedBias", signedBias},
-                      {"biasPre", biasPre},
-                      {"lagEnergy", lagEnergy},
-                      {"settled", settled},
-                      {"responseThreshold", responseThreshold},
-                      {"maskFraction", maskFraction},
-                      {"maskChromaFraction", maskChromaFraction}};
+  auto num = [](double v) {
+    return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+  };
+  nlohmann::json j = {
+      {"eventFrame", eventFrame},
+      {"windowBegin", windowBegin},
+      {"windowEnd", windowEnd},
+      {"curve", curve},
+      {"bias", bias},
+      {"steadyState", num(steadyState)},
+      {"steadyBegin", steadyBegin >= 0 ? nlohmann::json(steadyBegin) : nlohmann::json(nullptr)},
+      {"peakExcess", num(peakExcess)},
+      {"ghostEnergy", num(ghostEnergy)},
+      {"signedBias", signedBias},
+      {"biasPre", biasPre},
+      {"lagEnergy", lagEnergy},
+      {"settled", settled},
+      {"responseThreshold", responseThreshold},
+      {"maskFraction", maskFraction},
+      {"maskChromaFraction", maskChromaFraction}};
   j["responseFrames"] = settled ? nlohmann::json(responseFrames) : nlohmann::json(nullptr);
   if (!settled) j["response"] = "never settled within the window";
+  if (!steadyAbsent.empty()) j["steadyAbsent"] = steadyAbsent;
   if (!chroma.empty()) {
     j["chromaError"] = chroma;
     j["chromaPre"] = chromaPre;

@@ -17,7 +17,12 @@ struct GhostingConfig {
   double biasThreshold = 0.05;  // response time: |b_M| <= 5% relative brightness error (absolute)
   int before = 5;               // window starts at t0 - 5 (also the frames b_pre is taken over)
   int after = 60;               // ... and ends at t0 + 60 (clipped, see below)
-  int steadyFrames = 10;        // E_ss = median of the last 10 frames of the window
+  // E_ss = median of the last 10 frames of the window, all from t0 on: where fewer follow the
+  // event (the sequence ends or another event comes), E_ss and the figures on it are absent.
+  int steadyFrames = 10;
+  // Fewer frames than this from t0 on leave no figure (a response and a steady state cannot be
+  // told apart in fewer): absent, with the reason.
+  int minFramesFromEvent = 4;
   int trailFrames = 8;          // K: frames an object's trail stays in the mask
   int recoveryFrames = 5;       // camera cuts: relMSE at cut+1..cut+5 relative to the steady state
   nlohmann::json toJson() const;
@@ -61,6 +66,8 @@ struct GhostingResult {
   std::vector<double> chroma;                          // chromaticity error per window frame
   // Secondary (on E_M, mix lag with noise): E_ss, max E_M - E_ss, sum max(0, E_M - E_ss).
   double steadyState = 0, peakExcess = 0, ghostEnergy = 0;
+  int steadyBegin = 0;       // the first frame E_ss is taken over
+  std::string steadyAbsent;  // why E_ss and the two figures on it are undefined ("" when defined)
   double signedBias = 0;  // mean b_M over the first five frames from t0
   double biasPre = 0;     // b_pre: median |b_M| over the (up to) 5 frames before t0
   double lagEnergy = 0;   // sum over t >= t0 of max(0, |b_M| - b_pre), bias-frames
@@ -71,6 +78,12 @@ struct GhostingResult {
   double maskFraction = 0, maskChromaFraction = 0;  // M, and its chromaticity-only part, / pixels
   nlohmann::json toJson() const;                    // responseFrames is null when not settled
 };
+// Why a window [.., windowEnd] leaves no figure for the event at t0 (fewer than
+// c.minFramesFromEvent frames from t0 on), or "" when it does.
+std::string ghostingWindowProblem(int t0, int windowEnd, const GhostingConfig& c = {});
+// Why E_ss (and peakExcess, ghostEnergy on it) is undefined for that window (fewer than
+// c.steadyFrames frames from t0 on), or "" when it is defined.
+std::string steadyStateProblem(int t0, int windowEnd, const GhostingConfig& c = {});
 // Derives the event's numbers from its curves (window frames [begin, end], event at t0). `chroma`
 // may be empty.
 GhostingResult analyseGhosting(int t0, int begin, const std::vector<double>& curve,

@@ -215,6 +215,8 @@ FigureReplicates ghostingReplicates(int t0, const EventTiles& tiles, const std::
   if (t0 < begin || t0 > tiles.bias.frames.back())
     throw Error("event tile data: event frame " + std::to_string(t0) + " outside the window " +
                 std::to_string(begin) + ".." + std::to_string(tiles.bias.frames.back()));
+  if (std::string why = ghostingWindowProblem(t0, tiles.bias.frames.back(), gc); !why.empty())
+    return allAbsent(ghostingFigureNames(), why);
   FigureReplicates r;
   r.figures = ghostingFigureNames();
   r.effectiveTiles = effectiveTiles(tiles.bias);
@@ -232,6 +234,8 @@ FigureReplicates ghostingReplicates(int t0, const EventTiles& tiles, const std::
   const std::string noColour = colourMismatch(tiles);
   for (const char* f : {"chromaLagEnergy", "chromaPre"})
     if (!noColour.empty()) r.absent[f] = noColour;
+  if (std::string why = steadyStateProblem(t0, tiles.bias.frames.back(), gc); !why.empty())
+    for (const char* f : {"steadyState", "peakExcess", "ghostEnergy"}) r.absent[f] = why;
   r.neverSettled["responseFrames"] = double(tiles.bias.frames.back() - t0 + 1);
   std::vector<double> curve, bias, chroma;
   std::array<std::vector<double>, 3> d, ref;

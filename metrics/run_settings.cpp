@@ -55,7 +55,8 @@ RunSettings RunSettings::fromJson(const json& j, const std::string& file, const 
   number(r, "flipPixelsPerDegree");
   if (auto g = r.optionalChild("ghosting")) {
     for (const char* k : {"tau", "chromaTau", "eps", "biasThreshold"}) number(*g, k);
-    for (const char* k : {"windowBefore", "windowAfter", "steadyFrames", "trailFrames", "cutRecoveryFrames"})
+    for (const char* k : {"windowBefore", "windowAfter", "steadyFrames", "minFramesFromEvent",
+                          "trailFrames", "cutRecoveryFrames"})
       count(*g, k, 0);
     for (const char* k : {"chroma", "intervals"}) text(*g, k);
     g->rejectUnread();

@@ -140,6 +140,43 @@ TEST(Metrics, GhostingStepThatRecoversInKFrames) {
   EXPECT_NEAR(g.signedBias, 0.5, 1e-12);
 }
 
+// A window clipped after the event (the sequence ends, or the next event comes) keeps E_ss from
+// reaching before t0: with the old state's lower error as the steady state a method that never
+// settled read as ghost-free (a peak below the steady state, ghost energy 0). Fewer than 10 frames
+// from t0 on: no E_ss, peak excess or ghost energy, with the reason; fewer than 4: no figure.
+TEST(Metrics, GhostingWindowClippedAfterTheEvent) {
+  const int t0 = 10, begin = 5;
+  auto curveTo = [&](int end) {  // 0.5 before t0, then a slow decay from 2.0: no steady state yet
+    std::vector<double> c;
+    for (int t = begin; t <= end; ++t) c.push_back(t < t0 ? 0.5 : 2.0 - 0.1 * (t - t0));
+    return c;
+  };
+  const std::vector<double> clipped = curveTo(t0 + 5);  // 6 frames from t0
+  GhostingResult g = analyseGhosting(t0, begin, clipped, std::vector<double>(clipped.size(), 0.5));
+  EXPECT_TRUE(std::isnan(g.steadyState));
+  EXPECT_TRUE(std::isnan(g.peakExcess));
+  EXPECT_TRUE(std::isnan(g.ghostEnergy));
+  EXPECT_NE(g.steadyAbsent.find("6 frame(s) from the event on, fewer than the 10"),
+            std::string::npos)
+      << g.steadyAbsent;
+  EXPECT_TRUE(g.toJson()["ghostEnergy"].is_null());
+  EXPECT_TRUE(g.toJson()["steadyBegin"].is_null());
+  EXPECT_EQ(g.toJson()["steadyAbsent"], g.steadyAbsent);
+  EXPECT_NEAR(g.signedBias, 0.5, 1e-12);  // the bias figures stand
+  EXPECT_EQ(ghostingWindowProblem(t0, t0 + 5), "");
+  // Ten frames from t0: E_ss over exactly those, as before.
+  const std::vector<double> ten = curveTo(t0 + 9);
+  g = analyseGhosting(t0, begin, ten, std::vector<double>(ten.size(), 0.0));
+  EXPECT_EQ(g.steadyAbsent, "");
+  EXPECT_EQ(g.steadyBegin, t0);
+  EXPECT_GT(g.ghostEnergy, 0.0);
+  EXPECT_GE(g.peakExcess, 0.0);
+  // Three frames from t0 leave nothing to measure.
+  EXPECT_NE(ghostingWindowProblem(t0, t0 + 2).find("holds 3 frame(s) from the event on"),
+            std::string::npos);
+  EXPECT_NE(ghostingWindowProblem(t0, t0 + 2).find("fewer than the 4 needed"), std::string::npos);
+}
+
 TEST(Metrics, ChangedRegionAndTrail) {
   Image before = constant(4, 1, 1.0f), after = constant(4, 1, 1.0f);
   for (int c = 0; c < 3; ++c) after.at(1, 0, c) = 0.5f;  // 50% darker: inside
@@ -601,6 +638,47 @@ TEST(LagByBias, AnEventThatChangesNothingHasNoFigures) {
   for (const json& e : r["statistics"]["scenes"]["cornell_static"]["events"])
     for (const auto& [figure, ranking] : e["byFigure"].items())
       EXPECT_TRUE(ranking["ranking"].empty()) << figure;
+}
+
+// An event five frames before the sequence ends: the bias figures are measured; the steady state
+// E_ss, which needs 10 frames from the event on, is not, nor the two figures on it (taken before
+// the event, they made a method that never settled look ghost-free): null, the reason, unranked.
+TEST(LagByBias, AnEventNearTheEndKeepsOnlyWhatItsFramesDefine) {
+  RunConfig c;
+  c.name = "late_event";
+  c.out = test::freshDir("run_late_event");
+  c.cache = test::freshDir("late_event_cache");
+  c.render = test::tinySettings(32, 18, 17, 8);  // light_switch's light goes off at frame 12
+  c.scenes = {test::shippedScene("light_switch")};
+  c.denoisers = {{"svgf", {}, ""}};
+  c.baselines = true;
+  c.warmup = 1;
+  c.flip = "none";
+  c.keepFrames = "none";
+  const json r = runMatrix(c);
+  ASSERT_TRUE(failedPairs(r).empty());
+  for (const json& p : r["pairs"]) {
+    ASSERT_EQ(p["ghosting"].size(), 1u) << p["label"];
+    const json& g = p["ghosting"][0];
+    EXPECT_FALSE(g.contains("absent")) << g;
+    EXPECT_TRUE(g["lagEnergy"].is_number()) << g["lagEnergy"];
+    EXPECT_TRUE(g["signedBias"].is_number()) << g["signedBias"];
+    for (const char* figure : {"steadyState", "peakExcess", "ghostEnergy", "steadyBegin"})
+      EXPECT_TRUE(g[figure].is_null()) << figure << ": " << g[figure];
+    EXPECT_NE(
+        g.value("steadyAbsent", "").find("holds 5 frame(s) from the event on, fewer than the 10"),
+        std::string::npos)
+        << g;
+    EXPECT_EQ(g["ci95Absent"].value("ghostEnergy", ""), g["steadyAbsent"]) << g;
+  }
+  for (const json& p : r["pairs"])
+    if (p["label"] == "svgf")
+      EXPECT_GT(p["ghosting"][0]["signedBias"].get<double>(), 0.0)
+          << "stale light lingers after the switch-off";
+  const json& byFigure = r["statistics"]["scenes"]["light_switch"]["events"][0]["byFigure"];
+  EXPECT_FALSE(byFigure["lagEnergy"]["ranking"].empty());
+  for (const char* figure : {"peakExcess", "ghostEnergy"})
+    EXPECT_TRUE(byFigure[figure]["ranking"].empty()) << figure;
 }
 
 TEST(CameraCutEndToEnd, ATemporalDenoiserRightAfterTheCutShowsOnlyTheNewView) {
