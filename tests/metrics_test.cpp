@@ -603,22 +603,27 @@ TEST(CameraCutEndToEnd, RecoveryAndOldViewLeakPerMethod) {
 // An event where the reference does not change has an empty changed region: no response to
 // measure, so no figure (zeros would read as a perfect response), the reason, a pair warning, and
 // nothing ranked.
-TEST(LagByBias, AnEventThatChangesNothingHasNoFigures) {
+// svgf and the baselines on `scene`, 32x18, `frames` frames, the events' figures only.
+json eventRun(const std::string& name, const Scene& scene, int frames) {
   RunConfig c;
-  c.name = "still_event";
-  c.out = test::freshDir("run_still_event");
-  c.cache = test::freshDir("still_event_cache");
-  c.render = test::tinySettings(32, 18, 8, 8);
-  Scene scene = test::shippedScene("cornell_static");
-  scene.events.push_back(
-      {3, EventKind::LightChange, scene.lights.at(0).name});  // which does not change
+  c.name = name;
+  c.out = test::freshDir("run_" + name);
+  c.cache = test::freshDir(name + "_cache");
+  c.render = test::tinySettings(32, 18, frames, 8);
   c.scenes = {scene};
   c.denoisers = {{"svgf", {}, ""}};
   c.baselines = true;
   c.warmup = 1;
   c.flip = "none";
   c.keepFrames = "none";
-  const json r = runMatrix(c);
+  return runMatrix(c);
+}
+
+TEST(LagByBias, AnEventThatChangesNothingHasNoFigures) {
+  Scene scene = test::shippedScene("cornell_static");
+  scene.events.push_back(
+      {3, EventKind::LightChange, scene.lights.at(0).name});  // which does not change
+  const json r = eventRun("still_event", scene, 8);
   ASSERT_TRUE(failedPairs(r).empty());
   for (const json& p : r["pairs"]) {
     ASSERT_EQ(p["ghosting"].size(), 1u) << p["label"];
@@ -644,18 +649,7 @@ TEST(LagByBias, AnEventThatChangesNothingHasNoFigures) {
 // E_ss, which needs 10 frames from the event on, is not, nor the two figures on it (taken before
 // the event, they made a method that never settled look ghost-free): null, the reason, unranked.
 TEST(LagByBias, AnEventNearTheEndKeepsOnlyWhatItsFramesDefine) {
-  RunConfig c;
-  c.name = "late_event";
-  c.out = test::freshDir("run_late_event");
-  c.cache = test::freshDir("late_event_cache");
-  c.render = test::tinySettings(32, 18, 17, 8);  // light_switch's light goes off at frame 12
-  c.scenes = {test::shippedScene("light_switch")};
-  c.denoisers = {{"svgf", {}, ""}};
-  c.baselines = true;
-  c.warmup = 1;
-  c.flip = "none";
-  c.keepFrames = "none";
-  const json r = runMatrix(c);
+  const json r = eventRun("late_event", test::shippedScene("light_switch"), 17);  // off at frame 12
   ASSERT_TRUE(failedPairs(r).empty());
   for (const json& p : r["pairs"]) {
     ASSERT_EQ(p["ghosting"].size(), 1u) << p["label"];
