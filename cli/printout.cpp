@@ -62,8 +62,11 @@ void printOverallRanking(std::ostream& out, const RunResults& results) {
     out << "\noverall: " << o.normalisation << " (lower is better)\n";
   for (const RankedMethod& m : o.ranking) {
     const bool tied = !m.tiedWith.empty();
-    out << "  " << std::left << std::setw(4) << (std::to_string(m.rank) + (tied ? "=" : "")) << std::setw(26) << m.label
-        << std::right << std::setw(11) << figureText(m.value) << "  " << std::left << std::setw(24) << intervalText(m.ci)
+    out << "  " << std::left << std::setw(4) << (std::to_string(m.rank) + (tied ? "=" : ""))
+        << std::setw(26) << m.label << std::right << std::setw(11) << figureText(m.value) << "  "
+        << std::left << std::setw(24)
+        << (m.label == o.baseline ? "(1 by definition)"
+                                  : intervalText(m.ci))  // the baseline's [1, 1] is no certainty
         << tiedText(m) << "\n";
   }
   if (!o.excluded.empty()) out << "  not ranked overall: " << o.excluded << "\n";
@@ -108,10 +111,17 @@ void printSpeedOrder(std::ostream& out, const RunResults& results) {
     for (size_t i : idx) text += (text.empty() ? "" : " < ") + labels[i] + " " + figureText(ms[i]);
     return text;
   };
-  out << "\nspeed, ms per frame (mean over scenes of each pair's median; the report charts each axis)\n"
+  // Orders of medians: no interval separates two times here, so "<" is the order of the numbers,
+  // not a resolved difference; with two methods the correlation can only be +-1.
+  out << "\nspeed, ms per frame (mean over scenes of each pair's median, ordered; no interval: "
+         "close times may swap between runs; the report charts each axis)\n"
       << "  CPU measured here:                 " << order(cpu) << "\n"
       << "  GPU predicted, " << device << " 1080p (a model): " << order(gpu) << "\n"
-      << "  rank correlation of the two orders (Spearman): " << figureText(spearman(cpu, gpu)) << "\n";
+      << "  rank correlation of the two orders (Spearman): "
+      << (labels.size() < 3
+              ? "not given for " + std::to_string(labels.size()) + " methods (it can only be +-1)"
+              : spearmanText(spearman(cpu, gpu), labels.size()))
+      << "\n";
 }
 
 // The study's ranking with ties (metrics/statistics.hpp): per scene on relMSE, then overall on the
@@ -203,6 +213,10 @@ void printSceneWinners(std::ostream& out, const RunResults& results) {
       continue;
     }
     const RankedMethod& best = s.ranking[0];
+    if (s.ranking.size() == 1) {  // nothing to be best among
+      out << "only " << best.label << " ranked: not compared\n";
+      continue;
+    }
     const std::string tied = tiedText(best);
     out << best.label << " " << figureText(best.value) << " " << intervalText(best.ci) << (tied.empty() ? "" : "; " + tied)
         << "\n";

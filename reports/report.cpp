@@ -369,6 +369,19 @@ json rankingData(const RunResults& results, const std::vector<std::string>& scen
       json r = st.ranking.toJson();
       r.erase("pairs");
       r["tiesKnown"] = true;
+      // Per ranked metric, the methods ranked first with those tied with them (the summary table
+      // marks these, and only these, as the best of a column); a ranking of one method has none.
+      json first = json::object();
+      auto addFirst = [&](const std::string& metric, const SceneRanking& ranking) {
+        if (ranking.ranking.size() < 2) return;
+        json labels = json::array();
+        for (const RankedMethod& m : ranking.ranking)
+          if (m.rank == 1) labels.push_back(m.label);
+        first[metric] = labels;
+      };
+      addFirst(st.ranking.metric, st.ranking);
+      for (const auto& [metric, ranking] : st.byMetric) addFirst(metric, ranking);
+      r["firstByMetric"] = first;
       // Events and cuts: per figure, who is ranked first with whom tied (the ghosting panel marks
       // the best with ties, metrics/ghosting_intervals).
       st.forEachEvent([&](const EventStatistics& e, bool cut) {

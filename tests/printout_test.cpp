@@ -124,6 +124,40 @@ TEST(StudySummary, TheDefaultStudyFitsOnOneScreen) {
   EXPECT_GT(lineCount(tables.str()), 100u);
 }
 
+// Nothing is called best without something to be best among, and the order of two times is no
+// rank correlation: a scene ranking one method says it was not compared; with two methods timed,
+// the Spearman figure is not given (it can only be +-1).
+TEST(StudySummary, ALoneMethodIsNotCalledBestAndTwoTimesGiveNoCorrelation) {
+  json results = worstDefaultStudy();
+  const std::string scene = results["scenes"].begin().key();
+  json& st = results["statistics"]["scenes"][scene];
+  const std::string lone = st["ranking"][0]["label"];
+  st["ranking"] = json::array({{{"label", lone},
+                                {"rank", 1},
+                                {"mean", 1e-3},
+                                {"ci95", {0.0, 2e-3}},
+                                {"tiedWith", json::array()}}});
+  st["pairs"] = json::array();
+  st["resolvedPairs"] = 0;
+  st["totalPairs"] = 0;
+  int timed = 0;
+  for (json& p : results["pairs"])
+    if (p["scene"] == scene && timed < 2)
+      p["timing"] = {
+          {"msMedian", 1.0 + timed},
+          {"clock", "cpu"},
+          {"gpuPredicted",
+           {{"devices", json::array({{{"device", "H200"}, {"msMedian", 0.1 * ++timed}}})}}}};
+  std::ostringstream out;
+  cli::printStudySummary(out, test::typed(results), {"r.json", "r.db", "index.html", 1});
+  const std::string text = out.str();
+  EXPECT_EQ(occurrences(text, "only " + lone + " ranked: not compared"), 1u) << text;
+  EXPECT_EQ(occurrences(text, "not given for 2 methods"), 1u) << text;
+  EXPECT_EQ(occurrences(text, "no interval"), 1u) << text;
+  EXPECT_EQ(occurrences(text, "(1 by definition)"), 1u) << "the overall baseline (temporal)\n"
+                                                        << text;
+}
+
 // A scene whose references stopped at their sample cap: the warning is the scene's, stored once in
 // results.scenes.<scene>.warnings (not on each of its pairs) and printed once.
 TEST(StudySummary, AWarningAboutASceneIsStoredAndPrintedOncePerScene) {

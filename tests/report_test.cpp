@@ -427,6 +427,45 @@ TEST(Report, AblationJudgesEveryMatchedIntervalTogether) {
             (json{{"verdict", "mixed"}, {"matches", 2}, {"intervals", 2}, {"resolved", 2}}));
 }
 
+// The summary table's "best" of a column is what the statistics rank first, ties included: per
+// ranked metric the labels at rank 1; a metric ranked over one method has no first.
+TEST(Report, FirstByMetricIsTheStatisticsRankOneWithItsTies) {
+  json run = fixtureRun();
+  auto ranked = [](const std::string& label, int rank, json tied) {
+    return json{{"label", label},
+                {"rank", rank},
+                {"mean", 0.04},
+                {"ci95", {0.03, 0.05}},
+                {"tiedWith", tied}};
+  };
+  const json tiedPair = {{"a", "svgf[a=1]"},
+                         {"b", "svgf[a=0]"},
+                         {"diff", -0.01},
+                         {"ci95", {-0.03, 0.01}},
+                         {"resolved", false}};
+  run["statistics"] = test::statisticsBlock(
+      json{{"scenes",
+            {{"static",
+              {{"metric", "relMse"},
+               {"ranking", json::array({ranked("svgf[a=1]", 1, {"svgf[a=0]"}),
+                                        ranked("svgf[a=0]", 1, {"svgf[a=1]"})})},
+               {"pairs", json::array({tiedPair})},
+               {"resolvedPairs", 0},
+               {"totalPairs", 1},
+               {"byMetric",
+                {{"ssim",
+                  {{"metric", "ssim"},
+                   {"ranking", json::array({ranked("svgf[a=1]", 1, json::array())})},
+                   {"pairs", json::array()},
+                   {"resolvedPairs", 0},
+                   {"totalPairs", 0}}}}}}}}}});
+  const json data = reportData(test::typed(run), test::freshDir("report_first_by_metric"), nullptr);
+  const json& first = data["rankings"]["scenes"]["static"]["firstByMetric"];
+  EXPECT_EQ(first["relMse"], json({"svgf[a=1]", "svgf[a=0]"}));
+  EXPECT_FALSE(first.contains("ssim")) << "one method ranked: nothing to be first among";
+  EXPECT_FALSE(first.contains("ldrFlip")) << "not ranked by the statistics";
+}
+
 TEST(Report, BaselineGivesCompareVerdicts) {
   json base = fixtureRun();
   json cand = fixtureRun();

@@ -126,13 +126,26 @@
       best[c.key] = c.better === 'zero' ? Math.min(...vals.map(Math.abs)) : Math.min(...vals);
     }
     const isBest = (c, v) => c.better && Number.isFinite(v) && (c.better === 'zero' ? Math.abs(v) === best[c.key] : v === best[c.key]);
-    return el('div', { class: 'table-wrap' }, el('table', { class: 'data ghost-table' },
-      el('thead', {}, el('tr', {}, el('th', { class: 'first', text: 'denoiser / setting' }), GHOST_COLUMNS.map((c) => el('th', { text: c.title })))),
-      el('tbody', {}, pairs.map((p) => el('tr', {}, el('td', { class: 'first', text: p.label }),
-        GHOST_COLUMNS.map((c) => {
-          const v = p.ghosting[k][c.key];
-          return el('td', { class: isBest(c, v) ? 'best' : null, text: fmt(v) });
-        })))),
-    ));
+    return el(
+        'div', {class: 'table-wrap'}, el('p', {
+          class: 'note',
+          text:
+              'This run has no intervals for its events (older results): bold green marks the smallest value, ties unknown.'
+        }),
+        el(
+            'table',
+            {class: 'data ghost-table'},
+            el('thead', {},
+               el('tr', {}, el('th', {class: 'first', text: 'denoiser / setting'}),
+                  GHOST_COLUMNS.map((c) => el('th', {text: c.title})))),
+            el('tbody', {},
+               pairs.map(
+                   (p) =>
+                       el('tr', {}, el('td', {class: 'first', text: p.label}),
+                          GHOST_COLUMNS.map((c) => {
+                            const v = p.ghosting[k][c.key];
+                            return el('td', {class: isBest(c, v) ? 'best' : null, text: fmt(v)});
+                          })))),
+            ));
   }
 })();

@@ -60,7 +60,13 @@
                             el('td', {class: 'first', text: r.label}),
                             el('td', {class: 'first', text: r.metric}),
                             el('td', {text: fmt(r.baseline)}), el('td', {text: fmt(r.candidate)}),
-                            el('td', {text: r.note ? '–' : pct(r.change)}), el('td', {
+                            el('td', {text: r.note ? '–' : pct(r.change)},
+                               !r.note && r.changeCi95 ? el('span', {
+                                 class: 'ci',
+                                 text: A.interval(r.changeCi95.map((v) => 100 * v)) + ' %'
+                               }) :
+                                                         null),
+                            el('td', {
                               text: r.metric === '*' ? '–' : `±${(100 * r.tolerance).toFixed(1)}%`
                             }),
                             el('td', {class: `verdict-${r.verdict}`, text: r.verdict}),
@@ -97,7 +103,7 @@
               class: 'note',
               text: `Verdicts: ${
                   Object.entries(counts).map(([k, n]) => `${n} ${k}`).join(', ') ||
-                  'none'}. A metric regresses when its mean moved in its worse direction by more than its tolerance, relative to the baseline.`
+                  'none'}. A metric regresses when its mean moved in its worse direction by more than its tolerance, relative to the baseline, and the paired 95% interval of that change excludes zero (beyond tolerance within the noise: unresolved; with no interval to judge it: unverified, which fails the gate too).`
             }),
             el('div', {class: 'controls'}, el('label', {}, 'Show ', filter)), tableBox]
             .filter(Boolean));

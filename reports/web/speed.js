@@ -178,7 +178,10 @@
       return;
     }
     if (multiples) {
-      $('speed-note').textContent = noteFor(false, { points: [] }, axis, logError) + ' One panel per scene, each on its own scale.';
+      const allPoints = D.scenes.flatMap(
+          (s) => (((clockView().scenes[s.name] || {})[state.speedAxis]) || {points: []}).points);
+      $('speed-note').textContent = noteFor(false, {points: allPoints}, axis, logError) +
+          ' One panel per scene, each on its own scale.';
       const renders = [];
       for (const s of D.scenes) {
         const data = (clockView().scenes[s.name] || {})[state.speedAxis];
@@ -191,7 +194,8 @@
         const d = drawable(data, logError);
         renders.push(A.embedChart(`speed:${s.name}`, holder, chartSpec(d, axis, axis.title, logError, true, s.name)).then((v) => onClick(v, s.name)));
       }
-      $('speed-front').textContent = 'Dashed: each scene\'s Pareto front.';
+      $('speed-front').textContent =
+          'Dashed: each scene\'s Pareto front of the means (a step along it need not be resolved: the rankings say which differences are).';
       await Promise.all(renders);
       return;
     }
@@ -213,16 +217,20 @@
       (state.speedClock === 'cpu' ? '' : ` · ${clock().title}`);
     // The order of the methods by time on this axis (does it change between clocks?).
     const order = [...d.drawn].sort((a, b) => a.ms - b.ms).map((p) => p.label).join(' < ');
-    $('speed-front').replaceChildren(
-      'Pareto front (fastest first): ',
-      ...d.front.flatMap((p, i) => [i ? ' → ' : '', el('b', { text: p.name })]),
-      d.frontEqualPaths.length && d.drawn.some((p) => p.extraPaths)
-        ? (isGpuModel() ? ' · without the methods that read extra paths (the model prices no tracing): '
-          : ' · equal paths (extra paths\' tracing counted): ') + d.frontEqualPaths.map((p) => p.name).join(' → ') : '',
-      d.hidden.length ? ` · not drawn (0 on a log axis): ${d.hidden.join(', ')}` : '',
-      ` · by time on this axis: ${order}`,
-      ...otherClocks(all ? null : state.speedScene),
-    );
+    $('speed-front')
+        .replaceChildren(
+            'Pareto front of the means (fastest first; a step along it need not be resolved: the rankings say which differences are): ',
+            ...d.front.flatMap((p, i) => [i ? ' → ' : '', el('b', {text: p.name})]),
+            d.frontEqualPaths.length && d.drawn.some((p) => p.extraPaths) ?
+                (isGpuModel() ?
+                     ' · without the methods that read extra paths (the model prices no tracing): ' :
+                     ' · equal paths (extra paths\' tracing counted): ') +
+                    d.frontEqualPaths.map((p) => p.name).join(' → ') :
+                '',
+            d.hidden.length ? ` · not drawn (0 on a log axis): ${d.hidden.join(', ')}` : '',
+            ` · by time on this axis (medians, no interval): ${order}`,
+            ...otherClocks(all ? null : state.speedScene),
+        );
     const view = await A.embedChart('speed', chart, chartSpec(d, axis, yTitle, logError, false, title));
     onClick(view, all ? null : state.speedScene);
   };

@@ -76,12 +76,29 @@
     const rows = R.ranking.map((r) => {
       const tied = (r.tiedWith || []).length > 0;
       const g = groups[r.label];
-      return el('tr', { class: `${tied ? 'tied' : ''} ${g % 2 ? 'band' : ''}`.trim() || null, 'data-label': r.label, 'data-tied': tied ? 'true' : null },
-        el('td', { class: 'rank', text: `${r.rank}${tied ? '=' : ''}` }),
-        el('td', { class: 'first', text: r.label }),
-        el('td', { text: fmt(r[valueKey]) }),
-        el('td', { class: 'ci', text: A.interval(r.ci95) || '–' }),
-        el('td', { class: 'left', text: tied ? `tied with ${r.tiedWith.join(', ')}` : R.tiesKnown ? 'resolved' : '' }));
+      return el(
+          'tr', {
+            class: `${tied ? 'tied' : ''} ${g % 2 ? 'band' : ''}`.trim() || null,
+            'data-label': r.label,
+            'data-tied': tied ? 'true' : null
+          },
+          el('td', {class: 'rank', text: `${r.rank}${tied ? '=' : ''}`}),
+          el('td', {class: 'first', text: r.label}), el('td', {text: fmt(r[valueKey])}),
+          el('td',
+             R.baseline && r.label === R.baseline ? {
+               class: 'ci',
+               title:
+                   'the baseline of the normalisation: its score is 1 by definition, not a measurement with no uncertainty',
+               text: '(1 by definition)'
+             } :
+                                                    {class: 'ci', text: A.interval(r.ci95) || '–'}),
+          el('td', {
+            class: 'left',
+            text: tied ? `tied with ${r.tiedWith.join(', ')}` :
+                !R.tiesKnown         ? '' :
+                R.ranking.length < 2 ? 'the only method: not compared' :
+                                       'resolved'
+          }));
     });
     const resolved = R.totalPairs ? ` · ${R.resolvedPairs} of ${R.totalPairs} pairs resolved at 95%` : '';
     const how = R.tiesKnown
@@ -141,13 +158,26 @@
           get: (p) => (p.timing ? p.timing[t.key] : null),
           clockOf: clockedColumns.has(t.key) ? otherClock : null
         });
+    // "Best" is what the run's statistics rank first, with every method tied with it: a mean
+    // column of a ranked metric only (p95, times and unranked metrics have no paired interval,
+    // so nothing in them is called best). An older run without statistics: the best value, with
+    // ties unknown (the note says so).
     const ok = pairs.filter(A.isOk);
+    const sceneRanking = ((A.D.rankings || {scenes: {}}).scenes[A.state.scene]) || {};
+    const firstBy = sceneRanking.tiesKnown ? sceneRanking.firstByMetric || {} : null;
     const best = cols.map((c) => {
-      const vals = ok.filter((p) => !(c.clockOf && c.clockOf(p)))
-                       .map(c.get)
-                       .filter((v) => Number.isFinite(v));
-      return vals.length > 1 ? (c.lower ? Math.min(...vals) : Math.max(...vals)) : null;
+      if (firstBy)
+        return c.title === 'mean' && !c.plain && firstBy[c.group] ? new Set(firstBy[c.group]) :
+                                                                    null;
+      if (c.plain) return null;
+      const vals = ok.map(c.get).filter((v) => Number.isFinite(v));
+      if (vals.length < 2) return null;
+      const top = c.lower ? Math.min(...vals) : Math.max(...vals);
+      return new Set(ok.filter((p) => c.get(p) === top).map((p) => p.label));
     });
+    $('summary-best-note').textContent = firstBy ?
+        'Bold green: ranked first by the run\'s statistics on that metric, with every method tied with it (a paired 95% interval that excludes zero separates them); columns the statistics do not rank (p95, times, unranked metrics) mark nothing.' :
+        'Bold green: the best mean of a column; this run has no paired statistics, so ties are unknown.';
     const groups = [];
     for (const c of cols) {
       if (groups.length && groups[groups.length - 1].name === c.group) groups[groups.length - 1].span++;
@@ -195,9 +225,8 @@
         cols.map((c, i) => {
           const v = c.get(p);
           const clock = c.clockOf ? c.clockOf(p) : null;  // another clock: labelled, never "best"
-          const classes = [
-            start(i), !clock && best[i] !== null && v === best[i] ? 'best' : ''
-          ].join(' ').trim();
+          const classes =
+              [start(i), !clock && best[i] && best[i].has(p.label) ? 'best' : ''].join(' ').trim();
           const ci = withCi && c.ci ? A.interval(c.ci(p)) : '';
           return el(
               'td', {class: classes || null}, fmt(v),

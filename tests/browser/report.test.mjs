@@ -176,6 +176,8 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
   await page.waitForFunction(() => document.querySelectorAll('#speed-chart .multiple g.points_marks').length === 2);
   assert.equal(await page.locator('#speed-chart .multiple').count(), 2);
   assert.equal(await page.locator('#speed-chart .multiple[data-scene="light_switch"] g.points_marks path').count(), okHere);
+  // The run has intervals: the note says the bars are them (it said "no intervals" before).
+  assert.match(await page.locator('#speed-note').innerText(), /Error bars: 95% interval of the mean/);
   await shot(page.locator('#speed'), 'speed-multiples.png');
   await page.selectOption('#speed-layout', 'single');
   await page.waitForFunction((k) => document.querySelector('#speed-chart g.points_marks')?.querySelectorAll('path').length === k, okHere);
@@ -192,7 +194,7 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
   await page.selectOption('#speed-clock', 'gpu:TITAN RTX');
   await page.waitForFunction((k) => document.querySelector('#speed-chart g.points_marks')?.querySelectorAll('path').length === k, predicted);
   assert.match(await page.locator('#speed-note').innerText(), /a prediction, not a measurement/);
-  assert.match(await page.locator('#speed-front').innerText(), /by time on this axis: .* < /);
+  assert.match(await page.locator('#speed-front').innerText(), /by time on this axis \(medians, no interval\): .* < /);
   assert.match(await page.locator('#speed-front').innerText(), /passthrough: .*no GPU traffic counted/);
   assert.ok((await page.locator('#speed-chart svg.marks').textContent()).includes('predicted GPU ms'), 'the time axis says it is predicted');
   await shot(page.locator('#speed'), 'speed-gpu.png');
@@ -247,7 +249,7 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
     (rows) => rows.map((r) => [...r.querySelectorAll('td')].slice(0, 4).map((td) => td.textContent).join(' | ')));
   const printedOverall = tinyRuns().printed.split('\n\noverall: ')[1].split('\n').slice(1)
     .filter((l) => /^\s+\d/.test(l))
-    .map((l) => { const m = l.trim().match(/^(\d+=?)\s+(\S+)\s+(\S+)\s+(\[[^\]]*\]|–)/); return m.slice(1, 5).join(' | '); });
+    .map((l) => { const m = l.trim().match(/^(\d+=?)\s+(\S+)\s+(\S+)\s+(\[[^\]]*\]|–|\(1 by definition\))/); return m.slice(1, 5).join(' | '); });
   assert.ok(printedOverall.length >= 3, `the run printed its overall ranking: ${tinyRuns().printed.slice(-800)}`);
   assert.deepEqual(pageOverall, printedOverall, 'report and printout show the same overall ranking');
   assert.deepEqual(pageOverall.map((r) => r.split(' | ')[1]), results.statistics.overall.ranking.map((m) => m.label));
@@ -470,8 +472,15 @@ test('10 denoisers x 10 scenes x 100 frames stays light', async () => {
     assert.deepEqual(tied, [['denoiser_1', '2='], ['denoiser_2', '2=']]);
   }
   assert.match(await page.locator('#rankings').innerText(), /44 of 45 pairs resolved/);
+  // The overall baseline's score is 1 by its definition, not an interval of [1, 1].
+  assert.match(await page.locator('#rankings .ranking-table >> nth=1').locator('tr[data-label="denoiser_0"]').innerText(), /1 by definition/);
   // Intervals under the means in the summary table.
   assert.match(await page.locator('#summary-table tbody tr[data-label="denoiser_0"]').innerText(), /\[0\.0097, 0\.0103\]/);
+  // "Best" only where the statistics rank: relMSE's first (denoiser_0, resolved), nothing in the
+  // unranked columns (ldrFlip, ssim, tRmae, times), whatever their means.
+  const best = await page.$$eval('#summary-table td.best', (cells) => cells.map((c) => c.closest('tr').dataset.label));
+  assert.deepEqual(best, ['denoiser_0']);
+  assert.match(await page.locator('#summary-best-note').innerText(), /ranked first by the run's statistics/);
   const fits = await page.$eval('#summary-wrap', (w) => w.scrollWidth <= w.clientWidth);
   assert.ok(fits, 'summary table fits 1400 px');
   await shot(page.locator('#tables'), 'tables-ties.png');
