@@ -665,10 +665,11 @@ TEST(LagByBias, AnEventNearTheEndKeepsOnlyWhatItsFramesDefine) {
         << g;
     EXPECT_EQ(g["ci95Absent"].value("ghostEnergy", ""), g["steadyAbsent"]) << g;
   }
-  for (const json& p : r["pairs"])
-    if (p["label"] == "svgf")
-      EXPECT_GT(p["ghosting"][0]["signedBias"].get<double>(), 0.0)
-          << "stale light lingers after the switch-off";
+  for (const json& p : r["pairs"]) {
+    if (p["label"] != "svgf") continue;
+    EXPECT_GT(p["ghosting"][0]["signedBias"].get<double>(), 0.0)
+        << "stale light lingers after the switch-off";
+  }
   const json& byFigure = r["statistics"]["scenes"]["light_switch"]["events"][0]["byFigure"];
   EXPECT_FALSE(byFigure["lagEnergy"]["ranking"].empty());
   for (const char* figure : {"peakExcess", "ghostEnergy"})
