@@ -180,6 +180,7 @@ void printEventTables(std::ostream& out, const RunResults& results) {
       out << "\n" << name << ": " << ev.kind << (ev.what.empty() ? "" : " " + ev.what) << " at frame " << frame
           << ": ranked on " << rankedOn << " (" << ranking.resolvedPairs << " of " << ranking.pairs.size()
           << " pairs resolved)\n";
+      std::string steadyAbsent;  // the window's reason, the same for every method
       for (const RankedMethod& m : ranking.ranking) {
         const json* e = nullptr;
         for (const PairResult& p : results.pairs)
@@ -192,7 +193,10 @@ void printEventTables(std::ostream& out, const RunResults& results) {
                                  : std::vector<const char*>{"lagEnergy", "responseFrames", "peakExcess", "chromaLagEnergy"})
           out << f << " " << std::setw(26) << figureWithInterval(*e, f) << " ";
         out << tiedText(m) << "\n";
+        if (e->contains("steadyAbsent")) steadyAbsent = e->value("steadyAbsent", "");
       }
+      if (!steadyAbsent.empty())
+        out << "  peakExcess and ghostEnergy: none, " << steadyAbsent << "\n";
       if (!ranking.excluded.empty()) out << "  not ranked: " << ranking.excluded << "\n";
     });
 }

@@ -4,6 +4,7 @@
 #include "core/error.hpp"
 #include "harness/reference_quality.hpp"
 #include "harness/run_matrix.hpp"
+#include "metrics/ghosting.hpp"
 #include "metrics/results.hpp"
 #include "metrics/run_statistics.hpp"
 
@@ -83,6 +84,14 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
       merged.pairs.push_back(std::move(p));
     }
   }
+  // The statistics are recomputed below with this build's event figures: shards whose event
+  // figures were measured under other ghosting settings (an older build) would mix two definitions.
+  if (const json recorded = merged.settings.measurement().value("ghosting", json());
+      recorded != GhostingConfig{}.toJson())
+    throw Error(
+        "merge: the shards' settings.ghosting differ from this build's (their event figures were "
+        "measured under another definition); run the shards again with this build, or compare them "
+        "unmerged; nothing was written");
   std::string missing;
   for (int i = 0; i < shardCount; ++i)
     if (!shards.count(i)) missing += (missing.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(shardCount);

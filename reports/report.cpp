@@ -357,7 +357,11 @@ json speedData(const RunResults& results, const std::vector<std::string>& scenes
 // The rankings the tables show: the run's own (metrics/statistics: ranks with ties from paired
 // differences) when present; else, for older runs, ranks by mean relMSE with ties unknown.
 json rankingData(const RunResults& results, const std::vector<std::string>& scenes) {
-  json out = {{"scenes", json::object()}, {"overall", nullptr}};
+  // `statistics`: whether the run has paired statistics at all (a scene absent from them is not
+  // ranked; a run without them is an older one, ranked by means with ties unknown).
+  json out = {{"scenes", json::object()},
+              {"overall", nullptr},
+              {"statistics", results.statistics.has_value()}};
   for (const std::string& scene : scenes) {
     const SceneStatistics* found = nullptr;
     if (results.statistics)
@@ -369,8 +373,10 @@ json rankingData(const RunResults& results, const std::vector<std::string>& scen
       json r = st.ranking.toJson();
       r.erase("pairs");
       r["tiesKnown"] = true;
-      // Per ranked metric, the methods ranked first with those tied with them (the summary table
-      // marks these, and only these, as the best of a column); a ranking of one method has none.
+      // Per ranked metric, the methods at rank 1 (none resolved better; ties among them included):
+      // the summary table marks these, and only these, as the best of a column. relMseCorrected
+      // shares relMse's (the reference's floor subtracted from every method leaves each paired
+      // difference as it was). A ranking of one method has none.
       json first = json::object();
       auto addFirst = [&](const std::string& metric, const SceneRanking& ranking) {
         if (ranking.ranking.size() < 2) return;
@@ -380,6 +386,7 @@ json rankingData(const RunResults& results, const std::vector<std::string>& scen
         first[metric] = labels;
       };
       addFirst(st.ranking.metric, st.ranking);
+      if (st.ranking.metric == "relMse") addFirst("relMseCorrected", st.ranking);
       for (const auto& [metric, ranking] : st.byMetric) addFirst(metric, ranking);
       r["firstByMetric"] = first;
       // Events and cuts: per figure, who is ranked first with whom tied (the ghosting panel marks

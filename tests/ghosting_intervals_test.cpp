@@ -520,6 +520,18 @@ TEST(EventIntervalsEndToEnd, IntervalsRankingsAndShardsMergedEqualOneRun) {
   EXPECT_NE(oldEvent["chromaLagEnergy"].value("excluded", "").find("no per-tile colour sums"),
             std::string::npos)
       << oldEvent["chromaLagEnergy"];
+  // Shards whose event figures were measured under another ghosting definition (an older build,
+  // without minFramesFromEvent) are not merged: the statistics would be recomputed under this one.
+  for (const fs::path& dir : {dir0, dir1}) {
+    json r = loadResults(dir).toJson();
+    r["settings"]["ghosting"].erase("minFramesFromEvent");
+    std::ofstream(dir / "results.json") << r.dump();
+  }
+  const fs::path refused = test::freshDir("event_ci_merged_other_definition");
+  fs::remove_all(refused);
+  const std::string e = test::errorOf([&] { mergeRuns({dir0, dir1}, refused); });
+  EXPECT_NE(e.find("settings.ghosting differ from this build's"), std::string::npos) << e;
+  EXPECT_FALSE(fs::exists(refused)) << "nothing written";
   // results.db: the figures' rankings and paired differences, named by event and figure.
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open_v2((wholeDir / "results.db").c_str(), &db, SQLITE_OPEN_READONLY, nullptr),

@@ -3,14 +3,16 @@
 
 #include <cmath>
 #include <random>
+#include <sstream>
 
+#include "cli/printout.hpp"
 #include "core/display.hpp"
 #include "core/error.hpp"
+#include "harness/run_matrix.hpp"
 #include "metrics/error.hpp"
 #include "metrics/ghosting.hpp"
 #include "metrics/summary.hpp"
 #include "metrics/temporal.hpp"
-#include "harness/run_matrix.hpp"
 #include "tests/test_util.hpp"
 
 namespace arena {
@@ -672,6 +674,12 @@ TEST(LagByBias, AnEventNearTheEndKeepsOnlyWhatItsFramesDefine) {
   }
   const json& byFigure = r["statistics"]["scenes"]["light_switch"]["events"][0]["byFigure"];
   EXPECT_FALSE(byFigure["lagEnergy"]["ranking"].empty());
+  std::ostringstream tables;  // the verbose printout says why, once per event
+  cli::printStudyTables(tables, test::typed(r));
+  const std::string text = tables.str();
+  EXPECT_NE(text.find("peakExcess and ghostEnergy: none, the window holds 5 frame(s)"),
+            std::string::npos)
+      << text;
   for (const char* figure : {"peakExcess", "ghostEnergy"})
     EXPECT_TRUE(byFigure[figure]["ranking"].empty()) << figure;
 }

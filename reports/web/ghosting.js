@@ -92,6 +92,13 @@
       });
       renders.push(A.embedChart(`ghost${k}`, holder, spec));
       body.append(ghostTable(withEvent, k));
+      // Too few frames after the event for a steady state (metrics.md, clipped windows): said here,
+      // not only in the cells' tooltips.
+      if (g0.steadyAbsent)
+        body.append(el('p', {
+          class: 'note steady-absent',
+          text: `No E_ss, peak excess or ghost energy: ${g0.steadyAbsent}.`
+        }));
     }
     for (let k = 0; k < nCuts; ++k) {
       const withCut = pairs.filter((p) => p.cuts && p.cuts[k]);

@@ -158,13 +158,15 @@
           get: (p) => (p.timing ? p.timing[t.key] : null),
           clockOf: clockedColumns.has(t.key) ? otherClock : null
         });
-    // "Best" is what the run's statistics rank first, with every method tied with it: a mean
-    // column of a ranked metric only (p95, times and unranked metrics have no paired interval,
-    // so nothing in them is called best). An older run without statistics: the best value, with
-    // ties unknown (the note says so).
+    // "Best" is rank 1 in the run's statistics (no method resolved better; ties among them
+    // included): a mean column of a ranked metric only (p95, times and unranked metrics have no
+    // paired interval, so nothing in them is called best), nothing on a scene the statistics do
+    // not rank. An older run without statistics: the best value, ties unknown (the note says so).
     const ok = pairs.filter(A.isOk);
     const sceneRanking = ((A.D.rankings || {scenes: {}}).scenes[A.state.scene]) || {};
-    const firstBy = sceneRanking.tiesKnown ? sceneRanking.firstByMetric || {} : null;
+    const withStatistics = !!(A.D.rankings && A.D.rankings.statistics);
+    const firstBy =
+        withStatistics ? (sceneRanking.tiesKnown && sceneRanking.firstByMetric) || {} : null;
     const best = cols.map((c) => {
       if (firstBy)
         return c.title === 'mean' && !c.plain && firstBy[c.group] ? new Set(firstBy[c.group]) :
@@ -175,9 +177,11 @@
       const top = c.lower ? Math.min(...vals) : Math.max(...vals);
       return new Set(ok.filter((p) => c.get(p) === top).map((p) => p.label));
     });
-    $('summary-best-note').textContent = firstBy ?
-        'Bold green: ranked first by the run\'s statistics on that metric, with every method tied with it (a paired 95% interval that excludes zero separates them); columns the statistics do not rank (p95, times, unranked metrics) mark nothing.' :
-        'Bold green: the best mean of a column; this run has no paired statistics, so ties are unknown.';
+    $('summary-best-note').textContent = !firstBy ?
+        'Bold green: the best mean of a column; this run has no paired statistics, so ties are unknown.' :
+        !sceneRanking.tiesKnown ?
+        'The run\'s statistics do not rank this scene: nothing is marked best.' :
+        'Bold green: rank 1 in the run\'s statistics on that metric (no method resolved better by a paired 95% interval; ties among them included); columns the statistics do not rank (p95, times, unranked metrics) mark nothing.';
     const groups = [];
     for (const c of cols) {
       if (groups.length && groups[groups.length - 1].name === c.group) groups[groups.length - 1].span++;

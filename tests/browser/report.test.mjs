@@ -227,6 +227,8 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
   assert.ok((await menu('time-error-metric')).includes('dssim=1 − SSIM'), (await menu('time-error-metric')).join(', '));
   assert.ok((await menu('time-flicker-metric')).includes('tRmae=tRMAE'), (await menu('time-flicker-metric')).join(', '));
   assert.ok((await page.locator('#ghosting-body table tbody tr').count()) === okHere, 'ghosting table: one row per pair');
+  // Four frames from the event on: the lag figures, and no steady state (said under the table).
+  assert.match(await page.locator('#ghosting-body p.steady-absent').innerText(), /No E_ss, peak excess or ghost energy: the window holds 4 frame\(s\)/);
   // Every lag energy with its 95% interval (or why it has none); "best" = ranked first, ties included.
   const lagCells = await page.$$eval('#ghosting-body table.ghost-table tbody tr', (rows) => rows.map((r) => r.cells[1].textContent));
   assert.ok(lagCells.every((t) => /\[.+, .+\]|no interval/.test(t)), `lag energy cells: ${lagCells.join(' | ')}`);
@@ -480,7 +482,7 @@ test('10 denoisers x 10 scenes x 100 frames stays light', async () => {
   // unranked columns (ldrFlip, ssim, tRmae, times), whatever their means.
   const best = await page.$$eval('#summary-table td.best', (cells) => cells.map((c) => c.closest('tr').dataset.label));
   assert.deepEqual(best, ['denoiser_0']);
-  assert.match(await page.locator('#summary-best-note').innerText(), /ranked first by the run's statistics/);
+  assert.match(await page.locator('#summary-best-note').innerText(), /rank 1 in the run's statistics/);
   const fits = await page.$eval('#summary-wrap', (w) => w.scrollWidth <= w.clientWidth);
   assert.ok(fits, 'summary table fits 1400 px');
   await shot(page.locator('#tables'), 'tables-ties.png');
