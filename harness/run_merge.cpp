@@ -86,8 +86,9 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
   }
   // The statistics are recomputed below with this build's event figures: shards whose event
   // figures were measured under other ghosting settings (an older build) would mix two definitions.
+  // (Shards that record none, as hand-made ones, are taken as they are.)
   if (const json recorded = merged.settings.measurement().value("ghosting", json());
-      recorded != GhostingConfig{}.toJson())
+      recorded.is_object() && recorded != GhostingConfig{}.toJson())
     throw Error(
         "merge: the shards' settings.ghosting differ from this build's (their event figures were "
         "measured under another definition); run the shards again with this build, or compare them "
