@@ -138,21 +138,30 @@ double chromaticityError(const Image& d, const Image& r, const Image& mask, Colo
   return chromaticityErrorOfSums(sd, sr);
 }
 
-std::string ghostingWindowProblem(int t0, int windowEnd, const GhostingConfig& c) {
+namespace {
+// "the window holds N frame(s) from the event on<where>, fewer than the <needed> <forWhat>", or ""
+// when the window [.., windowEnd] holds at least `needed` frames from t0 on.
+std::string tooFewFromEvent(int t0, int windowEnd, int needed, const std::string& where,
+                            const std::string& forWhat) {
   const int fromEvent = windowEnd - t0 + 1;
-  if (fromEvent >= c.minFramesFromEvent) return "";
+  if (fromEvent >= needed) return "";
   return "the window holds " + std::to_string(std::max(fromEvent, 0)) +
-         " frame(s) from the event on (to frame " + std::to_string(windowEnd) +
-         ": the sequence ends or the next event comes), fewer than the " +
-         std::to_string(c.minFramesFromEvent) + " needed to tell a response from a steady state";
+         " frame(s) from the event on" + where + ", fewer than the " + std::to_string(needed) +
+         " " + forWhat;
+}
+}  // namespace
+
+std::string ghostingWindowProblem(int t0, int windowEnd, const GhostingConfig& c) {
+  return tooFewFromEvent(
+      t0, windowEnd, c.minFramesFromEvent,
+      " (to frame " + std::to_string(windowEnd) + ": the sequence ends or the next event comes)",
+      "needed to tell a response from a steady state");
 }
 
 std::string steadyStateProblem(int t0, int windowEnd, const GhostingConfig& c) {
-  const int fromEvent = windowEnd - t0 + 1;
-  if (fromEvent >= c.steadyFrames) return "";
-  return "the window holds " + std::to_string(std::max(fromEvent, 0)) +
-         " frame(s) from the event on, fewer than the " + std::to_string(c.steadyFrames) +
-         " the steady state E_ss is the median of (frames before the event held the old state)";
+  return tooFewFromEvent(
+      t0, windowEnd, c.steadyFrames, "",
+      "the steady state E_ss is the median of (frames before the event held the old state)");
 }
 
 GhostingResult analyseGhosting(int t0, int begin, const std::vector<double>& curve,

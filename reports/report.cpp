@@ -5,6 +5,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <numeric>
 #include <opencv2/imgcodecs.hpp>
 #include <set>
 
@@ -474,8 +475,10 @@ json ablationData(const RunResults& results) {
     metrics.push_back(m->name);
     lowerIsBetter[m->name] = m->lowerIsBetter();
   }
-  // Per scope and metric: matches with a paired difference, and those resolved each way.
-  struct Judged {
+  // Per scope (a scene, or "" for all scenes) and metric: the matched changes, absolute and
+  // relative, and how many of them carry a paired difference, resolved each way.
+  struct Changes {
+    std::vector<double> delta, relative;
     size_t intervals = 0, better = 0, worse = 0;
   };
   json rows = json::array();
@@ -489,9 +492,8 @@ json ablationData(const RunResults& results) {
         values.push_back(p->params[name]);
     if (values.size() < 2) continue;
     for (size_t vi = 1; vi < values.size(); ++vi) {
-      std::map<std::string, std::map<std::string, std::vector<double>>> deltas, relative;
+      std::map<std::string, std::map<std::string, Changes>> changes;  // scope -> metric
       std::map<std::string, std::map<std::string, json>> paired;  // scene -> metric -> difference
-      std::map<std::string, std::map<std::string, Judged>> judged;
       std::map<std::string, size_t> matched;
       for (const PairResult* p : pairs) {
         if (p->params.value(name, json()) != values[vi]) continue;
@@ -500,46 +502,44 @@ json ablationData(const RunResults& results) {
         for (const PairResult* q : pairs) {
           if (q->scene != p->scene || q->params != want) continue;
           const std::string& scene = p->scene;
-          for (const std::string& scope : {scene, std::string()}) {
-            ++matched[scope];
-            for (const std::string& m : metrics) {
-              if (!p->summary.count(m) || !q->summary.count(m)) continue;
-              const double b = q->summary.at(m).mean;
-              const json d = pairedDifference(results, scene, m, p->label, q->label);
-              const double a = p->summary.at(m).mean;
-              const double delta = d.is_object() ? d["diff"].get<double>() : a - b;
-              if (!std::isfinite(delta) || !std::isfinite(b)) continue;
-              deltas[scope][m].push_back(delta);
-              relative[scope][m].push_back(delta / std::max(std::abs(b), 1e-12));
-              if (!scope.empty() && d.is_object()) paired[scope][m] = d;
-              if (d.is_object()) {
-                Judged& j = judged[scope][m];
-                ++j.intervals;
-                if (d["resolved"].get<bool>() && delta != 0)
-                  ++((delta < 0) == lowerIsBetter[m] ? j.better : j.worse);
-              }
+          ++matched[scene];
+          ++matched[""];
+          for (const std::string& m : metrics) {
+            if (!p->summary.count(m) || !q->summary.count(m)) continue;
+            const double b = q->summary.at(m).mean;
+            const json d = pairedDifference(results, scene, m, p->label, q->label);
+            const double delta =
+                d.is_object() ? d["diff"].get<double>() : p->summary.at(m).mean - b;
+            if (!std::isfinite(delta) || !std::isfinite(b)) continue;
+            if (d.is_object()) paired[scene][m] = d;
+            for (const std::string& scope : {scene, std::string()}) {
+              Changes& c = changes[scope][m];
+              c.delta.push_back(delta);
+              c.relative.push_back(delta / std::max(std::abs(b), 1e-12));
+              if (!d.is_object()) continue;
+              ++c.intervals;
+              if (d["resolved"].get<bool>() && delta != 0)
+                ++((delta < 0) == lowerIsBetter[m] ? c.better : c.worse);
             }
           }
           break;
         }
       }
-      for (auto& [scope, byMetric] : deltas) {
+      for (const auto& [scope, byMetric] : changes) {
         json d = json::object(), r = json::object(), verdicts = json::object();
-        for (auto& [m, v] : byMetric) {
-          double s = 0, sr = 0;
-          for (size_t i = 0; i < v.size(); ++i) s += v[i], sr += relative[scope][m][i];
-          d[m] = s / double(v.size());
-          r[m] = sr / double(v.size());
-          const Judged j = judged[scope][m];
-          const std::string verdict = j.intervals < v.size()        ? "no interval"
-                                      : j.better == v.size()        ? "better"
-                                      : j.worse == v.size()         ? "worse"
-                                      : j.better > 0 && j.worse > 0 ? "mixed"
+        for (const auto& [m, c] : byMetric) {
+          const size_t n = c.delta.size();
+          d[m] = std::accumulate(c.delta.begin(), c.delta.end(), 0.0) / double(n);
+          r[m] = std::accumulate(c.relative.begin(), c.relative.end(), 0.0) / double(n);
+          const std::string verdict = c.intervals < n               ? "no interval"
+                                      : c.better == n               ? "better"
+                                      : c.worse == n                ? "worse"
+                                      : c.better > 0 && c.worse > 0 ? "mixed"
                                                                     : "tie";
           verdicts[m] = {{"verdict", verdict},
-                         {"matches", v.size()},
-                         {"intervals", j.intervals},
-                         {"resolved", j.better + j.worse}};
+                         {"matches", n},
+                         {"intervals", c.intervals},
+                         {"resolved", c.better + c.worse}};
         }
         json row = {{"parameter", name},
                     {"value", valueText(values[vi])},
