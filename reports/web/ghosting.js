@@ -45,10 +45,12 @@
     return r ? new Set(r.ranking.filter((m) => m.rank === 1).map((m) => m.label)) : null;
   }
 
-  A.renderGhosting = function renderGhosting() {
+  A.renderGhosting =
+      function renderGhosting() {
     const body = $('ghosting-body');
     // Finalize the previous scene's event charts before their containers go.
-    for (const name of Object.keys(A.views)) if (name.startsWith('ghost')) A.dropChart(name);
+    for (const name of Object.keys(A.views))
+      if (name.startsWith('ghost')) A.dropChart(name);
     body.replaceChildren();
     const scene = A.sceneByName[A.state.scene];
     const pairs = A.pairsOf(A.state.scene).filter(A.isOk);
@@ -104,55 +106,67 @@
       const withCut = pairs.filter((p) => p.cuts && p.cuts[k]);
       const frame = withCut[0].cuts[k].eventFrame;
       body.append(el('h3', { text: `Camera cut at frame ${frame}: relMSE ÷ steady state after the reset, and the old view's leak` }));
-      body.append(figureTable('cut-table', CUT_COLUMNS, withCut.map((p) => [p.label, p.cuts[k]]), 'cuts', frame));
+      body.append(figureTable(
+          'cut-table', CUT_COLUMNS, withCut.map((p) => [p.label, p.cuts[k]]),
+          rankedFirst(CUT_COLUMNS, 'cuts', frame)));
     }
     return Promise.all(renders);
   }
 
-  function figureTable(cls, columns, rows, kind, frame) {
-    const value = (c, e) => (c.at ? c.at(e) : e[c.key]);
+  const valueOf = (c, e) => (c.at ? c.at(e) : e[c.key]);
+
+  // `first`: column key -> the labels marked best in it (absent: none marked).
+  function figureTable(cls, columns, rows, first) {
+    return el(
+        'div', {class: 'table-wrap'},
+        el(
+            'table',
+            {class: `data ${cls}`},
+            el('thead', {},
+               el('tr', {}, el('th', {class: 'first', text: 'denoiser / setting'}),
+                  columns.map((c) => el('th', {text: c.title})))),
+            el('tbody', {},
+               rows.map(
+                   ([label, e]) =>
+                       el('tr', {'data-label': label}, el('td', {class: 'first', text: label}),
+                          columns.map(
+                              (c) => el(
+                                  'td',
+                                  {class: first[c.key] && first[c.key].has(label) ? 'best' : null},
+                                  A.fmt(valueOf(c, e)), ciSpan(e, c.key)))))),
+            ));
+  }
+
+  // The statistics' rank-1 labels of every ranked column of one event or cut.
+  function rankedFirst(columns, kind, frame) {
     const first = {};
-    for (const c of columns) if (c.rank) first[c.key] = firstRanked(kind, frame, c.rank);
-    return el('div', { class: 'table-wrap' }, el('table', { class: `data ${cls}` },
-      el('thead', {}, el('tr', {}, el('th', { class: 'first', text: 'denoiser / setting' }), columns.map((c) => el('th', { text: c.title })))),
-      el('tbody', {}, rows.map(([label, e]) => el('tr', { 'data-label': label }, el('td', { class: 'first', text: label }),
-        columns.map((c) => el('td', { class: first[c.key] && first[c.key].has(label) ? 'best' : null }, A.fmt(value(c, e)), ciSpan(e, c.key)))))),
-    ));
+    for (const c of columns)
+      if (c.rank) first[c.key] = firstRanked(kind, frame, c.rank);
+    return first;
   }
 
   function ghostTable(pairs, k) {
     const frame = pairs[0].ghosting[k].eventFrame;
+    const rows = pairs.map((p) => [p.label, p.ghosting[k]]);
     if (pairs.some((p) => p.ghosting[k].ci95) || firstRanked('events', frame, 'lagEnergy'))
-      return figureTable('ghost-table', GHOST_COLUMNS, pairs.map((p) => [p.label, p.ghosting[k]]), 'events', frame);
+      return figureTable(
+          'ghost-table', GHOST_COLUMNS, rows, rankedFirst(GHOST_COLUMNS, 'events', frame));
     // An older run without intervals or rankings: the smallest value is marked, ties unknown.
-    const best = {};
+    const first = {};
     for (const c of GHOST_COLUMNS) {
       if (!c.better) continue;
-      const vals = pairs.map((p) => p.ghosting[k][c.key]).filter((v) => Number.isFinite(v));
-      if (!vals.length) continue;
-      best[c.key] = c.better === 'zero' ? Math.min(...vals.map(Math.abs)) : Math.min(...vals);
+      const score = (e) => (c.better === 'zero' ? Math.abs(e[c.key]) : e[c.key]);
+      const finite = rows.filter(([, e]) => Number.isFinite(e[c.key]));
+      if (!finite.length) continue;
+      const best = Math.min(...finite.map(([, e]) => score(e)));
+      first[c.key] = new Set(finite.filter(([, e]) => score(e) === best).map(([label]) => label));
     }
-    const isBest = (c, v) => c.better && Number.isFinite(v) && (c.better === 'zero' ? Math.abs(v) === best[c.key] : v === best[c.key]);
     return el(
         'div', {class: 'table-wrap'}, el('p', {
           class: 'note',
           text:
               'This run has no intervals for its events (older results): bold green marks the smallest value, ties unknown.'
         }),
-        el(
-            'table',
-            {class: 'data ghost-table'},
-            el('thead', {},
-               el('tr', {}, el('th', {class: 'first', text: 'denoiser / setting'}),
-                  GHOST_COLUMNS.map((c) => el('th', {text: c.title})))),
-            el('tbody', {},
-               pairs.map(
-                   (p) =>
-                       el('tr', {}, el('td', {class: 'first', text: p.label}),
-                          GHOST_COLUMNS.map((c) => {
-                            const v = p.ghosting[k][c.key];
-                            return el('td', {class: isBest(c, v) ? 'best' : null, text: fmt(v)});
-                          })))),
-            ));
+        figureTable('ghost-table', GHOST_COLUMNS, rows, first));
   }
 })();

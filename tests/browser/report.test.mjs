@@ -545,6 +545,41 @@ test('a sweep\'s ablation colours a change only where every matched interval res
   await page.close();
 });
 
+// Results from before the event intervals (no statistics, no ci95 on the events): the smallest
+// value of each column is marked, ties included; rows are labelled and a response that never
+// settled reads so, as in a run with intervals.
+test('an older run\'s ghosting table: smallest values marked, rows labelled, never settled said', async () => {
+  const { run } = tinyRuns();
+  const dir = path.join(work, 'older');
+  fs.cpSync(run, dir, { recursive: true });
+  const results = JSON.parse(fs.readFileSync(path.join(dir, 'results.json'), 'utf8'));
+  delete results.statistics;
+  const withEvent = results.pairs.filter((p) => p.status === 'ok' && p.scene === 'light_switch' && (p.ghosting || []).length);
+  assert.ok(withEvent.length >= 3, 'fixture: pairs with the light_switch event');
+  for (const p of withEvent) { delete p.ghosting[0].ci95; delete p.ghosting[0].ci95Absent; }
+  const [never, tiedA, tiedB] = withEvent;
+  Object.assign(never.ghosting[0], { settled: false, responseFrames: null, response: 'never settled within the window' });
+  withEvent.forEach((p, i) => { p.ghosting[0].lagEnergy = 0.01 * (i + 1); });
+  tiedA.ghosting[0].lagEnergy = 0.001;
+  tiedB.ghosting[0].lagEnergy = 0.001;
+  fs.writeFileSync(path.join(dir, 'results.json'), JSON.stringify(results));
+  const out = path.join(work, 'older-report');
+  arena('report', dir, '--out', out);
+  const { page, problems } = await openReport(out);
+  await page.selectOption('#scene-select', 'light_switch');
+  const table = page.locator('#ghosting-body table.ghost-table');
+  await table.waitFor();
+  assert.match(await page.locator('#ghosting-body p.note').first().innerText(), /no intervals for its events/);
+  const rows = await table.locator('tbody tr').evaluateAll((trs) => trs.map((r) => ({
+    label: r.dataset.label, lag: r.cells[1].textContent, lagBest: r.cells[1].classList.contains('best'), response: r.cells[2].textContent })));
+  assert.deepEqual(rows.map((r) => r.label).sort(), withEvent.map((p) => p.label).sort(), 'every row names its pair');
+  assert.deepEqual(rows.filter((r) => r.lagBest).map((r) => r.label).sort(), [tiedA.label, tiedB.label].sort(), 'both smallest marked');
+  assert.equal(rows.find((r) => r.label === never.label).response, 'never settled');
+  assert.ok(rows.every((r) => !/\[/.test(r.lag)), 'no interval shown where the run has none');
+  assert.deepEqual(problems, []);
+  await page.close();
+});
+
 // A synthetic history of 50 runs (one per commit): 2 scenes x 3 denoisers, values wobbling by
 // ±0.5% (under compare's 2% tolerance); at run 30 svgf's relMSE on scene_b rises 15% and stays.
 function historyRuns(dir, schema) {
