@@ -1,13 +1,15 @@
 // Scene parser: the shipped scenes load; every malformed input is an error naming file and path.
+#include "tracer/scene.hpp"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
 
 #include "core/error.hpp"
-#include "tests/test_util.hpp"
-#include "tracer/scene.hpp"
 #include "tests/contract_fixture.hpp"
+#include "tests/test_util.hpp"
+#include "tracer/scene_state.hpp"
 
 namespace arena {
 namespace {
@@ -387,6 +389,34 @@ TEST(SceneContract, CollidingNamesAndDuplicateKeysAreErrorsNamingBothPlaces) {
     EXPECT_NE(contract::sceneTextError(text).find(c.message), std::string::npos) << contract::sceneTextError(text);
   }
   EXPECT_EQ(contract::sceneTextError(contract::minimalScene().dump()), "");
+}
+
+// The renderer builds a mesh object from the bytes loadScene read and hashed, never from the file
+// again: an OBJ edited during a study renders under its own hash, not the first one's.
+TEST(SceneContract, AMeshObjectKeepsTheFileAsLoadedAndHashed) {
+  fs::path dir = test::freshDir("mesh_as_loaded");
+  writeTextAtomically(dir / "m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  json s = contract::minimalScene();
+  s["objects"].push_back({{"name", "m"},
+                          {"shape", "mesh"},
+                          {"file", "m.obj"},
+                          {"material", "white"},
+                          {"keys", json::array({{{"frame", 0}}})}});
+  writeTextAtomically(dir / "t.json", s.dump());
+  const Scene first = loadScene((dir / "t.json").string());
+  const Object& mesh = first.objects.back();
+  ASSERT_EQ(mesh.shape, Shape::Mesh);
+  ASSERT_EQ(makeMesh(mesh).triangles.size(), 1u);
+  writeTextAtomically(dir / "m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\n");
+  EXPECT_EQ(makeMesh(mesh).triangles.size(), 1u) << "the mesh was read from the edited file";
+  const Scene second = loadScene((dir / "t.json").string());
+  EXPECT_EQ(makeMesh(second.objects.back()).triangles.size(), 2u);
+  EXPECT_NE(first.contentHash, second.contentHash);
+  // A mesh object that never went through loadScene is an error, not an empty mesh.
+  Object bare;
+  bare.name = "bare";
+  bare.shape = Shape::Mesh;
+  EXPECT_THROW(makeMesh(bare), Error);
 }
 
 TEST(SceneContract, UnusableVerticesAndOverbrightAssetsAreErrorsNamingFileAndElement) {

@@ -160,7 +160,7 @@ TEST(Tracer, LightsNearASurfaceLightItAsTheirSolidAngleSays) {
   {  // A sphere light of radius R (its mesh, 2208 triangles) fully above the floor.
     const float R = 0.04f, h = 0.1f, L = 50.0f;
     const glm::vec3 c(0, kFloorY + h, 0);
-    const MeshData sphere = makeMesh(Shape::Sphere, "");
+    const MeshData sphere = makeMesh(Shape::Sphere);
     const std::string light =
         R"({"name": "s", "shape": "sphere", "keys": [{"frame": 0, "translate": [0, )" +
         std::to_string(kFloorY + h) + R"(, 0], "scale": [0.04, 0.04, 0.04], "intensity": 50}]})";
@@ -405,7 +405,7 @@ void expectBatchesShadeAsSamplesAlone(const BatchCase& c) {
   const Scene scene = test::shippedScene(c.scene);
   std::vector<MeshData> meshes;
   for (const Object& o : scene.objects) meshes.push_back(makeMesh(o));
-  for (const Light& l : scene.lights) meshes.push_back(makeMesh(l.shape, ""));
+  for (const Light& l : scene.lights) meshes.push_back(makeMesh(l.shape));
   const int w = 64, h = 36;
   const SceneState state = evaluateState(scene, 5, w, h);
   const EmbreeDevice device(c.embree);

@@ -132,7 +132,7 @@ SequenceRenderer::SequenceRenderer(const Scene& scene, const RenderSettings& set
     throw Error("render settings: reference tile " + std::to_string(settings.referenceTile) +
                 " out of range (expected 0 (one tile) .. 1024 pixels)");
   for (const Object& o : scene_.objects) meshes_.push_back(makeMesh(o));
-  for (const Light& l : scene_.lights) meshes_.push_back(makeMesh(l.shape, ""));
+  for (const Light& l : scene_.lights) meshes_.push_back(makeMesh(l.shape));
 }
 
 SequenceRenderer::~SequenceRenderer() = default;

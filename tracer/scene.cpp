@@ -374,9 +374,9 @@ Scene parseScene(const std::string& text, const std::string& path) {
           // A regular file of bounded size (not /dev/zero).
           const std::string mesh = readText(obj.meshFile, kMaxMeshBytes);
           requireUsableObjVertices(mesh, obj.meshFile);
-          // The loader the renderer uses, now: a face it cannot read (an index out of range, a
-          // malformed "f" line) is this field's error, not a failure at the first frame.
-          makeMesh(Shape::Mesh, obj.meshFile);
+          // Parsed now, once, from the bytes hashed below: a face it cannot read (an index out of
+          // range, a malformed "f" line) is this field's error, not a failure at the first frame.
+          obj.mesh = std::make_shared<const MeshData>(parseObjMesh(mesh, obj.meshFile));
           hasher.add(mesh);
         } catch (const Error& e) {
           o.fail("file", e.what());

@@ -88,11 +88,15 @@ struct AssetRef {
   float fps = 30.0f;        // asset time t seconds plays at scene frame t * fps
 };
 struct AssetData;
+struct MeshData;
 
 struct Object {
   std::string name;
   Shape shape = Shape::Quad;
   std::string meshFile;  // Shape::Mesh: absolute path of an OBJ file
+  // Shape::Mesh: that file as loadScene read it, the bytes the scene's hash covers; the renderer
+  // never reads the file again (an edit during a study would render under the old hash).
+  std::shared_ptr<const MeshData> mesh;
   // The material; for an asset, the override of all its materials, or -1 to use the asset's own,
   // which are scene.materials[assetMaterialBase ..] in the asset's order.
   int material = 0;

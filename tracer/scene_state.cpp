@@ -24,11 +24,15 @@ void addQuad(MeshData& m, glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d, gl
   m.triangles.push_back({base, base + 2, base + 3});
 }
 
-MeshData loadObj(const std::string& file) {
+}  // namespace
+
+MeshData parseObjMesh(const std::string& text, const std::string& file) {
   tinyobj::ObjReader reader;
   tinyobj::ObjReaderConfig config;
   config.triangulate = true;
-  if (!reader.ParseFromFile(file, config)) throw Error(file + ": cannot read OBJ: " + reader.Error());
+  // Geometry only: a mesh object takes the scene's material, so no .mtl is read.
+  if (!reader.ParseFromString(text, "", config))
+    throw Error(file + ": cannot read OBJ: " + reader.Error());
   const auto& attrib = reader.GetAttrib();
   MeshData m;
   for (const auto& shape : reader.GetShapes()) {
@@ -65,9 +69,7 @@ MeshData loadObj(const std::string& file) {
   return m;
 }
 
-}  // namespace
-
-MeshData makeMesh(Shape shape, const std::string& objFile) {
+MeshData makeMesh(Shape shape) {
   MeshData m;
   const float h = 0.5f;
   switch (shape) {
@@ -102,16 +104,20 @@ MeshData makeMesh(Shape shape, const std::string& objFile) {
       break;
     }
     case Shape::Mesh:
-      m = loadObj(objFile);
-      break;
     case Shape::Asset:
-      throw Error("makeMesh: an asset's mesh comes from its object (makeMesh(const Object&))");
+      throw Error("makeMesh: an OBJ or asset mesh comes from its object (makeMesh(const Object&))");
   }
   return m;
 }
 
 MeshData makeMesh(const Object& object) {
-  if (object.shape != Shape::Asset) return makeMesh(object.shape, object.meshFile);
+  if (object.shape == Shape::Mesh) {
+    if (!object.mesh)
+      throw Error("makeMesh: mesh object '" + object.name +
+                  "' holds no mesh (loadScene parses it)");
+    return *object.mesh;
+  }
+  if (object.shape != Shape::Asset) return makeMesh(object.shape);
   MeshData m = object.asset->mesh;
   if (object.material >= 0)
     m.triangleMaterials.clear();  // the override: the object's material everywhere

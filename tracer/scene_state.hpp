@@ -37,7 +37,11 @@ struct MeshData {
   std::vector<uint32_t> vertexNodes;
   std::vector<int> triangleMaterials;
 };
-MeshData makeMesh(Shape shape, const std::string& objFile);
+// A built-in shape's unit mesh (Quad, Box, Sphere).
+MeshData makeMesh(Shape shape);
+// An OBJ file's triangles (`text`: its bytes; `file` names it in errors), normals per corner (the
+// face's where the file gives none or an unusable one). Throws an Error naming the file.
+MeshData parseObjMesh(const std::string& text, const std::string& file);
 // The object's local mesh: its shape's, or its asset's with triangleMaterials mapped to the
 // scene's materials (all the override when the object names one).
 MeshData makeMesh(const Object& object);
