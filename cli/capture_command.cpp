@@ -18,15 +18,7 @@ namespace arena::cli {
 
 namespace {
 
-// Prints every check of a capture; returns its verdict.
-CheckStatus printValidation(const std::filesystem::path& dir) {
-  const Sequence sequence = Sequence::open(dir);
-  const EvaluationInput input = readSequenceForEvaluation(sequence);
-  const CaptureValidation v = validateCapture(sequence, input);
-  std::cout << "validation of " << dir.string() << " (" << sequence.info().scene << ", " << sequence.info().width << "x"
-            << sequence.info().height << ", " << sequence.info().frames << " frames; layers:";
-  for (const std::string& l : sequence.info().availableLayers()) std::cout << " " << l;
-  std::cout << ")\n";
+void printChecks(const CaptureValidation& v) {
   for (const CaptureCheck& c : v.checks) {
     std::cout << "  " << std::left << std::setw(5) << checkStatusName(c.status) << std::setw(28)
               << c.name << std::right << std::setw(12) << std::setprecision(4);
@@ -38,8 +30,29 @@ CheckStatus printValidation(const std::filesystem::path& dir) {
     else if (c.status != CheckStatus::Pass) std::cout << "  (warn above " << c.warnAbove << ")";
     std::cout << (c.unit.empty() ? "" : "  " + c.unit) << (c.detail.empty() ? "" : "\n        " + c.detail) << "\n";
   }
+}
+
+// Prints every check of a capture and of its stored outputs; returns the worse verdict (a bad
+// output fails validation here, while a run fails only that output's pair).
+CheckStatus printValidation(const std::filesystem::path& dir) {
+  const Sequence sequence = Sequence::open(dir);
+  const EvaluationInput input = readSequenceForEvaluation(sequence);
+  const CaptureValidation v = validateCapture(sequence, input);
+  std::cout << "validation of " << dir.string() << " (" << sequence.info().scene << ", "
+            << sequence.info().width << "x" << sequence.info().height << ", "
+            << sequence.info().frames << " frames; layers:";
+  for (const std::string& l : sequence.info().availableLayers()) std::cout << " " << l;
+  std::cout << ")\n";
+  printChecks(v);
   std::cout << "verdict: " << checkStatusName(v.status()) << "\n";
-  return v.status();
+  const CaptureValidation outputs = validateCaptureOutputs(sequence.capture());
+  if (outputs.checks.size() > 1 ||
+      outputs.status() != CheckStatus::Pass) {  // more than "none undeclared"
+    std::cout << "stored outputs (--denoisers file:NAME)\n";
+    printChecks(outputs);
+    std::cout << "verdict on the stored outputs: " << checkStatusName(outputs.status()) << "\n";
+  }
+  return std::max(v.status(), outputs.status());
 }
 
 }  // namespace

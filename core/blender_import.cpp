@@ -82,8 +82,14 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
   const double fps = root.number("fps");
   if (!(fps > 0) || !std::isfinite(fps)) root.fail("fps", "a positive number of frames per second");
   const double clipStart = root.number("clipStart"), clipEnd = root.number("clipEnd");
+  if (!(clipStart > 0) || !std::isfinite(clipStart))
+    root.fail("clipStart", "expected a positive number (the camera's clip start)");
+  if (!(clipEnd > clipStart) || !std::isfinite(clipEnd))
+    root.fail("clipEnd", "expected a number above clipStart " + std::to_string(clipStart) +
+                             " (the camera's clip end)");
   const std::string producer = root.string("producer");
-  const int spp = root.integer("spp"), referenceSpp = root.integer("referenceSpp");
+  const int spp = root.integerIn("spp", 1, 1000000000),
+            referenceSpp = root.integerIn("referenceSpp", 1, 1000000000);
   // Arrays of rows: read as plain JSON (our script writes them), checked for shape and numbers.
   const json cams = root.node().contains("cameras") ? root.node()["cameras"] : json();
   root.optionalArray("cameras");
@@ -154,7 +160,10 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
     Image depth(width, height, 1), motion(width, height, 2), meshId(width, height, 1), materialId(width, height, 1);
     for (size_t i = 0; i < depth.pixelCount(); ++i) {
       const float z = depthPass.raw()[i];
-      const bool background = !(z > 0) || z >= clipEnd;  // Cycles writes 1e10 where nothing was hit
+      // Cycles writes 1e10 where nothing was hit. Anything else is kept as written, a NaN or a
+      // negative depth included, so the validation names it (nonFinite.depth, depth.positive)
+      // instead of the import turning it into sky.
+      const bool background = z == 0 || z >= clipEnd;
       depth.raw()[i] = background ? 0.0f : z;
       motion.plane(0)[i] = vector.plane(0)[i];
       motion.plane(1)[i] = -vector.plane(1)[i];

@@ -8,6 +8,7 @@
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/json_reader.hpp"
+#include "core/non_finite.hpp"
 
 namespace arena {
 
@@ -166,7 +167,12 @@ json captureCameraJson(const CameraState& c) {
 
 CaptureDescription readCaptureDescription(const fs::path& dir) {
   const fs::path file = dir / "capture.json";
-  if (!fs::exists(file)) throw Error(dir.string() + ": not a capture (no capture.json; docs/captures.md)");
+  if (!fs::exists(file)) {
+    if (dir.filename() == "capture.json" && fs::is_regular_file(dir))
+      throw Error(dir.string() + ": give the capture's folder, " + dir.parent_path().string() +
+                  ", not its capture.json");
+    throw Error(dir.string() + ": not a capture (no capture.json; docs/captures.md)");
+  }
   const json doc = parseJsonFile(file.string());
   JsonReader root(doc, file.string());
   CaptureDescription c;
@@ -202,6 +208,8 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
     c.deltaTime.assign(size_t(n), 1.0 / rate);
   }
   c.exposure = root.number("exposure", 1.0);
+  if (!(c.exposure > 0) || !std::isfinite(c.exposure))
+    root.fail("exposure", "a positive number (recorded; the colour is scored as stored)");
   c.reverseZ = root.boolean("reverseZ", false);
   c.nearPlane = root.number("near", 0.01);
   c.farPlane = root.number("far", 1000.0);
@@ -237,7 +245,17 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
     const std::string kind = e.string("kind");
     const std::optional<EventKind> k = eventKindFromName(kind);
     if (!k) e.fail("kind", "one of " + eventKindNames());
-    info.events.push_back({frame, *k, e.string("what", ""), e.integer("meshId", -1)});
+    const SequenceEvent event{frame, *k, e.string("what", ""), e.integer("meshId", -1)};
+    if (e.has("meshId") && *k != EventKind::ObjectMoves)
+      e.fail(
+          "meshId",
+          "only an object_moves event names a mesh (its moving object's id in the meshId layer)");
+    for (const SequenceEvent& other : info.events)
+      if (other.frame == event.frame && other.kind == event.kind && other.what == event.what)
+        e.fail("kind", "this event (" + kind + " at frame " + std::to_string(frame) +
+                           (event.what.empty() ? "" : " of '" + event.what + "'") +
+                           ") is given twice");
+    info.events.push_back(event);
     e.rejectUnread();
   }
   // References: reference_NNN.exr, shared by the frames that name them.
@@ -383,16 +401,13 @@ LayerSet readCaptureFrame(const CaptureDescription& c, int t) {
   // Every frame holds frame 0's layers: readExr names the file and channel when one lacks a layer
   // frame 0 had; a layer only this frame has (whole or partial) would be ignored, so it is refused
   // (from the channel list of the same read).
-  ExrContents contents = readExr(file, specs);
+  ExrContents contents = readExr(file, specs, ExrSize{info.width, info.height});
   for (const LayerSpec& s : layersPresent(file, contents.header, captureFrameSpecs()))
     if (!contains(c.layers, s.name) || contains(c.derived, s.name))
       throw Error(file.string() + ": layer '" + s.name + "' is in this frame but not in " +
                   captureFramePath(c.dir, 0).filename().string() +
                   " (every frame of a capture holds the same layers)");
   LayerSet layers = std::move(contents.layers);
-  if (layers.width() != info.width || layers.height() != info.height)
-    throw Error(file.string() + ": " + std::to_string(layers.width()) + "x" + std::to_string(layers.height()) +
-                ", expected " + std::to_string(info.width) + "x" + std::to_string(info.height));
   const int w = info.width, hgt = info.height;
   const size_t pixels = size_t(w) * size_t(hgt);
   if (contains(c.derived, "emission")) layers.set("emission", Image(w, hgt, 3));
@@ -427,10 +442,7 @@ LayerSet readCaptureReference(const CaptureDescription& c, int r) {
   std::vector<LayerSpec> specs = {referenceSpecs()[0]};
   if (c.referenceHasVariance) specs.push_back(referenceSpecs()[1]);
   if (c.referenceHasHalf) specs.push_back(referenceSpecs()[2]);
-  LayerSet layers = readExr(file, specs).layers;
-  if (layers.width() != c.info.width || layers.height() != c.info.height)
-    throw Error(file.string() + ": size differs from the capture's " + std::to_string(c.info.width) + "x" +
-                std::to_string(c.info.height));
+  LayerSet layers = readExr(file, specs, ExrSize{c.info.width, c.info.height}).layers;
   if (c.referenceHasVariance) {
     // A variance below zero is not one: the noise floor and the corrected relMSE would come out
     // negative, and the correction would flatter every method.
@@ -459,10 +471,9 @@ LayerSet readCaptureReference(const CaptureDescription& c, int r) {
 Image readCaptureOutput(const CaptureDescription& c, const std::string& name, int t) {
   const CaptureOutput& o = c.output(name);
   const fs::path file = captureOutputPath(o, t);
-  LayerSet layers = readExr(file, {{"color", {"R", "G", "B"}, false}}).layers;
-  if (layers.width() != c.info.width || layers.height() != c.info.height)
-    throw Error(file.string() + ": " + std::to_string(layers.width()) + "x" + std::to_string(layers.height()) +
-                ", expected " + std::to_string(c.info.width) + "x" + std::to_string(c.info.height));
+  LayerSet layers =
+      readExr(file, {{"color", {"R", "G", "B"}, false}}, ExrSize{c.info.width, c.info.height})
+          .layers;
   return std::move(layers.get("color"));
 }
 
@@ -517,7 +528,12 @@ void CaptureWriter::commit(const json& description) {
   try {
     readCaptureDescription(tmp_);
   } catch (const Error& e) {
-    throw Error(out_.string() + ": not written, the capture would not be valid: " + e.what());
+    // Named as the folder it would have become, not the temporary one it was written in.
+    std::string what = e.what();
+    const std::string tmp = tmp_.string();
+    for (size_t at = what.find(tmp); at != std::string::npos; at = what.find(tmp, at + 1))
+      what.replace(at, tmp.size(), out_.string());
+    throw Error(out_.string() + ": not written, the capture would not be valid: " + what);
   }
   fs::rename(tmp_, out_);
   committed_ = true;
@@ -565,7 +581,18 @@ void exportCapture(const Sequence& sequence, const fs::path& out, const std::map
       if (!fs::exists(src))
         throw Error(src.string() + ": output frame " + std::to_string(t) + " of '" + name +
                     "' is missing (`arena run --keep-frames all` writes every frame)");
-      writer.output(name, t, readExr(src, {{"color", {"R", "G", "B"}, false}}).layers.get("color"));
+      const Image color = readExr(src, {{"color", {"R", "G", "B"}, false}}).layers.get("color");
+      // What the capture's reader will require of it (readCaptureOutput, runCapturedOutput).
+      if (color.width() != info.width || color.height() != info.height)
+        throw Error(src.string() + ": output frame " + std::to_string(t) + " of '" + name +
+                    "' is " + std::to_string(color.width()) + "x" + std::to_string(color.height()) +
+                    ", expected " + std::to_string(info.width) + "x" + std::to_string(info.height) +
+                    " (the sequence's size)");
+      if (const long bad = nonFiniteValues(color))
+        throw Error(src.string() + ": output frame " + std::to_string(t) + " of '" + name +
+                    "' has " + std::to_string(bad) +
+                    " non-finite colour values (an output is scored as given, never repaired)");
+      writer.output(name, t, color);
     }
     doc["outputs"][name] = json::object();
   }

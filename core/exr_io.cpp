@@ -159,7 +159,8 @@ static auto withExrFile(const fs::path& path, Read read) {
   }
 }
 
-ExrContents readExr(const fs::path& path, const std::vector<LayerSpec>& specs) {
+ExrContents readExr(const fs::path& path, const std::vector<LayerSpec>& specs,
+                    std::optional<ExrSize> expected) {
   return withExrFile(path, [&](Imf::InputFile& file) {
     ExrContents out;
     const Imath::Box2i dw = file.header().dataWindow();
@@ -177,6 +178,13 @@ ExrContents readExr(const fs::path& path, const std::vector<LayerSpec>& specs) {
                   ": expected the pixels of the whole image, exactly the display window (save it "
                   "uncropped)");
     }
+    if (expected && (w != expected->width || h != expected->height))
+      throw Error(path.string() + ": " + std::to_string(w) + "x" + std::to_string(h) +
+                  ", expected " + std::to_string(expected->width) + "x" +
+                  std::to_string(expected->height));
+    // Before any allocation: a header claiming a size its data does not hold asks for any memory.
+    if (!file.isComplete())
+      throw Error(path.string() + ": file is truncated (incomplete pixel data)");
     out.attributes = attributesOf(file.header());
     Imf::FrameBuffer fb;
     for (const LayerSpec& spec : specs) {
@@ -194,8 +202,6 @@ ExrContents readExr(const fs::path& path, const std::vector<LayerSpec>& specs) {
       out.layers.set(spec.name, std::move(img));
     }
     file.setFrameBuffer(fb);
-    if (!file.isComplete())
-      throw Error(path.string() + ": file is truncated (incomplete pixel data)");
     file.readPixels(dw.min.y, dw.max.y);
     return out;
   });

@@ -4,6 +4,7 @@
 // frame index) so a foreign or stale file is recognised.
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -63,9 +64,16 @@ struct ExrContents {
   ExrAttributes attributes;
   ExrHeader header;  // the file's size and every channel it holds, read or not
 };
-// Reads the given layers; a missing channel, a size mismatch or an unreadable/truncated file is
-// an Error naming the file and the channel.
-ExrContents readExr(const std::filesystem::path& path, const std::vector<LayerSpec>& specs);
+// The size a reader expects of a file: checked against its header before any pixel is allocated
+// (a header may claim any size).
+struct ExrSize {
+  int width = 0, height = 0;
+};
+// Reads the given layers; a missing channel, a size other than `expected`, or an
+// unreadable/truncated file is an Error naming the file and the channel or sizes. A file whose
+// pixel data is incomplete is refused before its pixels are allocated.
+ExrContents readExr(const std::filesystem::path& path, const std::vector<LayerSpec>& specs,
+                    std::optional<ExrSize> expected = std::nullopt);
 ExrAttributes readExrAttributes(const std::filesystem::path& path);
 // The channel names a file holds ("diffuse.R", "R", ...), and its size, without reading pixels.
 ExrHeader readExrHeader(const std::filesystem::path& path);

@@ -223,19 +223,24 @@ Sequence Sequence::open(const fs::path& dir) {
 LayerSet Sequence::frame(int t) const {
   if (capture_) return readCaptureFrame(*capture_, t);
   if (t < 0 || t >= info_.frames) throw Error(dir_.string() + ": frame " + std::to_string(t) + " out of range");
-  return readExr(framePath(dir_, t), channels::frameLayers()).layers;
+  return readExr(framePath(dir_, t), channels::frameLayers(), ExrSize{info_.width, info_.height})
+      .layers;
 }
 
 LayerSet Sequence::reference(int t) const {
   if (t < 0 || t >= info_.frames) throw Error(dir_.string() + ": frame " + std::to_string(t) + " out of range");
   if (capture_) return readCaptureReference(*capture_, info_.referenceOfFrame[size_t(t)]);
-  return readExr(referencePath(dir_, info_.referenceOfFrame[t]), channels::referenceLayers()).layers;
+  return readExr(referencePath(dir_, info_.referenceOfFrame[t]), channels::referenceLayers(),
+                 ExrSize{info_.width, info_.height})
+      .layers;
 }
 
 LayerSet Sequence::referenceByIndex(int r) const {
   if (!info_.hasReference) throw Error(dir_.string() + ": the capture has no reference");
   if (capture_) return readCaptureReference(*capture_, r);
-  return readExr(referencePath(dir_, r), channels::referenceLayers()).layers;
+  return readExr(referencePath(dir_, r), channels::referenceLayers(),
+                 ExrSize{info_.width, info_.height})
+      .layers;
 }
 
 LayerSet Sequence::gradients(int t) const {

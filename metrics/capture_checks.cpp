@@ -2,12 +2,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <set>
+#include <span>
 
 #include "core/capture.hpp"
 #include "core/error.hpp"
+#include "core/non_finite.hpp"
 #include "metrics/error.hpp"
 
 namespace arena {
@@ -76,6 +80,22 @@ double meanLuminance(const Image& rgb) {
   for (float v : lum.raw())
     if (std::isfinite(v)) sum += std::max(0.0f, v);
   return lum.pixelCount() ? sum / double(lum.pixelCount()) : 0;
+}
+
+// Whether an image holds any nonzero finite value.
+bool hasSignal(const Image& image) {
+  for (float x : image.raw())
+    if (std::isfinite(x) && x != 0.0f) return true;
+  return false;
+}
+
+// "0, 3, 7" (at most 8, then "...").
+std::string frameList(const std::vector<int>& frames) {
+  std::string out;
+  for (size_t k = 0; k < frames.size() && k < 8; ++k)
+    out += (k ? ", " : "") + std::to_string(frames[k]);
+  if (frames.size() > 8) out += ", ...";
+  return out;
 }
 
 }  // namespace
@@ -199,6 +219,84 @@ MotionConsistency checkMotion(const std::vector<LayerSet>& frames, const std::ve
   return out;
 }
 
+PositionConsistency checkPositions(const std::vector<LayerSet>& frames,
+                                   const std::vector<CameraState>& cameras) {
+  PositionConsistency out;
+  long off = 0;
+  std::vector<float> ratios;
+  for (size_t t = 0; t < frames.size(); ++t) {
+    const Image &depth = frames[t].get("depth"), &position = frames[t].get("position");
+    const CameraState& cam = cameras[t];
+    for (int y = 0; y < depth.height(); ++y)
+      for (int x = 0; x < depth.width(); ++x) {
+        const float z = depth.at(x, y);
+        const glm::vec3 p(position.at(x, y, 0), position.at(x, y, 1), position.at(x, y, 2));
+        if (!(z > 0) || !std::isfinite(z) || !std::isfinite(p.x + p.y + p.z))
+          continue;  // sky, or counted as non-finite
+        ++out.pixels;
+        const float stored = cam.viewDepth(p);
+        ratios.push_back(stored / z);
+        // Within the pixel's sample (jitter of up to a pixel, or a random point in it) and storage.
+        glm::vec2 pixel;
+        const bool depthOff = !(std::abs(stored - z) <= 0.01f * z + 1e-5f);
+        const bool pixelOff =
+            !cam.project(p, pixel) ||
+            glm::length(pixel - glm::vec2(float(x) + 0.5f, float(y) + 0.5f)) > 2.0f;
+        off += depthOff || pixelOff;
+      }
+  }
+  if (out.pixels == 0) return out;
+  out.offShare = double(off) / double(out.pixels);
+  std::nth_element(ratios.begin(), ratios.begin() + long(ratios.size() / 2), ratios.end());
+  out.medianDepthRatio = ratios[ratios.size() / 2];
+  return out;
+}
+
+CaptureValidation validateCaptureOutputs(const CaptureDescription& capture) {
+  CaptureValidation v;
+  for (const auto& [name, output] : capture.outputs) {
+    // What `--denoisers file:NAME` would meet frame by frame: the first problem of each bad frame.
+    std::vector<int> bad;
+    std::string first;
+    for (int t = 0; t < capture.info.frames; ++t) {
+      std::string problem;
+      try {
+        const Image color = readCaptureOutput(capture, name, t);
+        if (const long n = nonFiniteValues(color))
+          problem = captureOutputPath(output, t).string() + ": " + std::to_string(n) +
+                    " non-finite colour values";
+      } catch (const Error& e) {
+        problem = e.what();
+      }
+      if (problem.empty()) continue;
+      bad.push_back(t);
+      if (first.empty()) first = problem;
+    }
+    v.checks.push_back(check("output." + name, double(bad.size()), 0, 0, "frames",
+                             bad.empty() ? ""
+                                         : "frame(s) " + frameList(bad) +
+                                               " cannot be scored (an output is scored as "
+                                               "given, never repaired); first: " +
+                                               first));
+  }
+  // Folders the description does not declare are never scored: said, so a forgotten entry shows.
+  std::error_code ec;
+  std::vector<std::string> undeclared;
+  for (const auto& entry : std::filesystem::directory_iterator(capture.dir / "outputs", ec)) {
+    const std::string folder = entry.path().filename().string();
+    if (entry.is_directory() && !capture.outputs.count(folder)) undeclared.push_back(folder);
+  }
+  std::sort(undeclared.begin(), undeclared.end());
+  std::string names;
+  for (const std::string& u : undeclared) names += (names.empty() ? "" : ", ") + u;
+  v.checks.push_back(check("outputs.undeclared", double(undeclared.size()), 0, kSoft, "folders",
+                           undeclared.empty() ? ""
+                                              : "outputs/ holds " + names +
+                                                    ", not in capture.json's \"outputs\": "
+                                                    "never scored until declared there"));
+  return v;
+}
+
 CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInput& input) {
   const SequenceInfo& info = sequence.info();
   CaptureValidation v;
@@ -241,10 +339,7 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
     // denoised and scored (a flawless, flicker-free black) as if it were a measurement.
     if (colour) {
       const std::vector<int>& frames = empty[spec.name];
-      std::string which;
-      for (size_t k = 0; k < frames.size() && k < 8; ++k)
-        which += (k ? ", " : "") + std::to_string(frames[k]);
-      if (frames.size() > 8) which += ", ...";
+      const std::string which = frameList(frames);
       v.checks.push_back(
           check("nonFinite." + spec.name + ".wholeFrames", double(frames.size()), 0, 0, "frames",
                 frames.empty()
@@ -285,6 +380,26 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
   for (const auto& [layer, counts] : range)
     v.checks.push_back(check(layer + ".range", counts.second ? double(counts.first) / double(counts.second) : 0, 0, 0.001,
                              "share of values", layer + " must lie in [0, 1]"));
+
+  // 2b. Positions against depth and the camera: a stored world position must lie where the pixel's
+  // view depth and its camera put it (the same units, the same space). A position layer in other
+  // units or another space would silently steer every denoiser that reads it.
+  if (isGiven("position")) {
+    const PositionConsistency pc = checkPositions(input.frames, info.cameras);
+    if (pc.pixels == 0)
+      v.checks.push_back(
+          unchecked("position.consistency",
+                    "no surface pixel (depth > 0): the positions could not be checked"));
+    else
+      v.checks.push_back(
+          check("position.consistency", pc.offShare, 0.05, 0.25,
+                "share of surface pixels off by more than 2 px or 1% of the depth",
+                "the stored world position against the one rebuilt from depth and camera; median "
+                "view depth of "
+                "the stored positions / depth layer " +
+                    number(pc.medianDepthRatio) +
+                    (std::abs(pc.medianDepthRatio - 1) > 0.01 ? " (another unit or space?)" : "")));
+  }
 
   // 3. Motion against depth and the two cameras, on static surfaces.
   std::vector<int> cuts;
@@ -331,12 +446,60 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
                              "and other lobes end up in the difference)"));
   }
 
+  // 4b. Signal: a colour layer black in every frame holds no measurement (every method would
+  // score a flawless, flicker-free black, or tie at relMSE 1); a few black frames (a fade) warn.
+  {
+    std::vector<int> black;
+    for (size_t t = 0; t < input.frames.size(); ++t)
+      if (!hasSignal(input.frames[t].get("color"))) black.push_back(int(t));
+    v.checks.push_back(check(
+        "color.blackFrames", double(black.size()), 0, double(input.frames.size()) - 1, "frames",
+        black.empty() ? ""
+                      : "frame(s) " + frameList(black) +
+                            " of the input colour hold no nonzero "
+                            "finite value (fails when every frame does: nothing was captured)"));
+  }
+
   // 5. The reference: present, less noisy than the input, its noise floor known.
   if (input.references.empty()) {
     v.checks.push_back(check("reference.present", 1, 0, kSoft, "",
                              "no reference: the error metrics are absent; rankings use only the metrics that need "
                              "none (stabilityFine, stabilityCoarse, time), labelled as such"));
   } else {
+    // Which reference frames are black, hold negative radiance, or repeat their input frame.
+    std::vector<int> black, equal;
+    long negative = 0, values = 0;
+    for (size_t r = 0; r < input.references.size(); ++r) {
+      const Image& c = input.references[r].get("color");
+      if (!hasSignal(c)) black.push_back(int(r));
+      for (float x : c.raw()) negative += x < 0.0f;
+      values += long(c.raw().size());
+    }
+    for (size_t t = 0; t < input.frames.size(); ++t) {
+      const std::span<const float>
+          a = input.frames[t].get("color").raw(),
+          b = input.references[size_t(input.referenceOfFrame[t])].get("color").raw();
+      if (a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size_bytes()) == 0)
+        equal.push_back(int(t));
+    }
+    v.checks.push_back(check(
+        "reference.blackFrames", double(black.size()), 0, double(input.references.size()) - 1,
+        "references",
+        black.empty() ? ""
+                      : "reference(s) " + frameList(black) +
+                            " hold no nonzero finite value: "
+                            "relative errors there measure only the output's own brightness (fails "
+                            "when every reference does: nothing to measure against)"));
+    v.checks.push_back(check("reference.negative", values ? double(negative) / double(values) : 0,
+                             0, 0.001, "share of values",
+                             "radiance is not negative; a negative reference is not one"));
+    v.checks.push_back(
+        check("reference.equalsInput", double(equal.size()), 0, 0, "frames",
+              equal.empty() ? ""
+                            : "frame(s) " + frameList(equal) +
+                                  " equal their reference value for "
+                                  "value: the input scores as perfect there (a reference must be "
+                                  "rendered apart from the input)"));
     double roughRatio = 0;
     int counted = 0;
     double inputError = 0, floorSum = 0;

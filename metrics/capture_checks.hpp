@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "core/capture.hpp"
 #include "core/image.hpp"
 #include "core/sequence.hpp"
 #include "metrics/evaluator.hpp"
@@ -53,6 +54,22 @@ struct MotionConsistency {
 MotionConsistency checkMotion(const std::vector<LayerSet>& frames, const std::vector<CameraState>& cameras,
                               const std::vector<int>& cutFrames, double tolerancePx = 1.0,
                               const std::set<int>& movingMeshes = {});
+
+// Stored world positions against depth and camera, per surface pixel: the share whose view depth
+// is off by more than 1% of the depth layer's or that project more than 2 px from their pixel's
+// centre, and the median ratio of their view depth to the depth layer's (1000: millimetres).
+struct PositionConsistency {
+  double offShare = 0, medianDepthRatio = 1;
+  long pixels = 0;
+};
+PositionConsistency checkPositions(const std::vector<LayerSet>& frames,
+                                   const std::vector<CameraState>& cameras);
+
+// The stored outputs of denoisers that ran elsewhere (`--denoisers file:NAME`), as a run would read
+// them: per output, the frames missing, unreadable, of another size or with non-finite values
+// (fail: that contender's pair would fail); folders in outputs/ the description does not declare
+// (warn). Apart from validateCapture: a bad stored output fails its own pair, not the capture.
+CaptureValidation validateCaptureOutputs(const CaptureDescription& capture);
 
 // Every check of a sequence read for evaluation (frames, references) and its description.
 CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInput& input);

@@ -175,8 +175,13 @@ EvaluationInput readSequenceForEvaluation(const Sequence& sequence) {
     // A non-finite reference cannot rank anything: every metric against it would be NaN or a
     // fake perfect score. The scene fails, naming the file and the channels.
     if (!bad.empty())
-      throw Error("scene " + info.scene + ": the reference has non-finite values (" + describeNonFinite(bad) +
-                  "); check the scene's emitters and materials (a value beyond float range becomes Inf)");
+      throw Error(
+          (sequence.isCapture() ? "capture " : "scene ") + info.scene +
+          ": the reference has non-finite values (" + describeNonFinite(bad) + "); " +
+          (sequence.isCapture()
+               ? "a reference is scored as given, never repaired: write it again without them"
+               : "check the scene's emitters and materials (a value beyond float range becomes "
+                 "Inf)"));
   }
   return in;
 }

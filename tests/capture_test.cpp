@@ -418,6 +418,153 @@ TEST(CaptureValidation, AFrameWithoutAFiniteColourIsRefusedNamingTheFrame) {
   }
 }
 
+// Rewrites every reference colour of a synthetic capture (colour only, as writeSynthetic gives).
+void editReferences(const fs::path& dir, const std::function<void(int, Image&)>& edit) {
+  const CaptureDescription c = readCaptureDescription(dir);
+  int refs = 0;
+  for (int r : c.info.referenceOfFrame) refs = std::max(refs, r + 1);
+  for (int r = 0; r < refs; ++r) {
+    LayerSet ref;
+    ref.set("color", readCaptureReference(c, r).get("color"));
+    edit(r, ref.get("color"));
+    writeExr(captureReferencePath(dir, r), ref, {{"color", {"R", "G", "B"}, false}});
+  }
+}
+
+// No data is never a perfect score: an input or a reference black in every frame, a reference
+// that repeats its input or holds negative radiance is refused; a few black frames (a fade) warn.
+TEST(CaptureValidation, BlackNegativeOrRepeatedColourIsRefusedNamingTheFrames) {
+  const CaptureValidation good = validate(writeSynthetic("signal_ok"));
+  for (const char* name : {"color.blackFrames", "reference.blackFrames", "reference.negative",
+                           "reference.equalsInput"})
+    EXPECT_EQ(checkNamed(good, name).status, CheckStatus::Pass)
+        << name << ": " << checkNamed(good, name).detail;
+
+  const fs::path fade = writeSynthetic("input_fade");
+  editFrames(fade, [](int t, LayerSet& f) {
+    if (t == 4) f.get("color").fill(0.0f);
+  });
+  const CaptureCheck oneBlack = checkNamed(validate(fade), "color.blackFrames");
+  EXPECT_EQ(oneBlack.status, CheckStatus::Warn);
+  EXPECT_NE(oneBlack.detail.find("frame(s) 4 "), std::string::npos) << oneBlack.detail;
+
+  const fs::path dark = writeSynthetic("input_black");
+  editFrames(dark, [](int, LayerSet& f) { f.get("color").fill(0.0f); });
+  const CaptureValidation darkV = validate(dark);
+  EXPECT_EQ(checkNamed(darkV, "color.blackFrames").status, CheckStatus::Fail);
+  EXPECT_EQ(checkNamed(darkV, "color.blackFrames").value, 6.0);
+  // ... and the run refuses it: no pair is scored on it.
+  const json r =
+      runMatrix(captureRun(test::freshDir("input_black_run"), {{"passthrough", {}, ""}}, {dark}));
+  for (const json& p : r["pairs"]) {
+    EXPECT_EQ(p["status"], "failed") << p["label"];
+    EXPECT_NE(p.value("error", "").find("color.blackFrames"), std::string::npos)
+        << p.value("error", "");
+  }
+
+  const fs::path blackRef = writeSynthetic("reference_black");
+  editReferences(blackRef, [](int, Image& c) { c.fill(0.0f); });
+  EXPECT_EQ(checkNamed(validate(blackRef), "reference.blackFrames").status, CheckStatus::Fail);
+  const fs::path oneBlackRef = writeSynthetic("reference_one_black");
+  editReferences(oneBlackRef, [](int k, Image& c) {
+    if (k == 2) c.fill(0.0f);
+  });
+  EXPECT_EQ(checkNamed(validate(oneBlackRef), "reference.blackFrames").status, CheckStatus::Warn);
+
+  const fs::path negated = writeSynthetic("reference_negated");
+  editReferences(negated, [](int, Image& c) {
+    for (float& v : c.raw()) v = -v;
+  });
+  const CaptureCheck neg = checkNamed(validate(negated), "reference.negative");
+  EXPECT_EQ(neg.status, CheckStatus::Fail);
+  EXPECT_GT(neg.value, 0.5);
+
+  const fs::path repeated = writeSynthetic("reference_is_input");
+  const CaptureDescription c = readCaptureDescription(repeated);
+  editReferences(repeated, [&](int k, Image& ref) { ref = readCaptureFrame(c, k).get("color"); });
+  const CaptureCheck eq = checkNamed(validate(repeated), "reference.equalsInput");
+  EXPECT_EQ(eq.status, CheckStatus::Fail);
+  EXPECT_EQ(eq.value, 6.0);
+  EXPECT_NE(eq.detail.find("frame(s) 0, 1, 2, 3, 4, 5 "), std::string::npos) << eq.detail;
+}
+
+// A stored position must be where depth and camera put it: one in other units (millimetres) is
+// refused and the ratio said; a capture without positions derives them and is not checked.
+TEST(CaptureValidation, PositionsInOtherUnitsThanDepthAreRefused) {
+  const Synthetic s;
+  const fs::path dir = writeSynthetic("positions");
+  editFrames(dir, [&](int t, LayerSet& f) {
+    const CameraState cam = s.camera(t);
+    Image position(s.w, s.h, 3);
+    for (int y = 0; y < s.h; ++y)
+      for (int x = 0; x < s.w; ++x) {
+        const glm::vec3 ray = cam.rayDirection(float(x) + 0.5f, float(y) + 0.5f);
+        const glm::vec3 p = cam.eye + ray * (f.get("depth").at(x, y) / glm::dot(ray, cam.forward));
+        for (int k = 0; k < 3; ++k) position.at(x, y, k) = p[k];
+      }
+    f.set("position", std::move(position));
+  });
+  const CaptureCheck good = checkNamed(validate(dir), "position.consistency");
+  EXPECT_EQ(good.status, CheckStatus::Pass) << good.value << " " << good.detail;
+  EXPECT_NEAR(good.value, 0.0, 1e-9);
+  editFrames(dir, [](int, LayerSet& f) {
+    for (float& v : f.get("position").raw()) v *= 1000.0f;
+  });
+  const CaptureCheck mm = checkNamed(validate(dir), "position.consistency");
+  EXPECT_EQ(mm.status, CheckStatus::Fail) << mm.value;
+  EXPECT_NE(mm.detail.find("depth layer 1000"), std::string::npos) << mm.detail;
+  EXPECT_THROW(checkNamed(validate(writeSynthetic("positions_derived")), "position.consistency"),
+               Error);
+}
+
+// `arena validate` reads the stored outputs as a run would: a missing, mis-sized or non-finite
+// frame fails (naming the file), an undeclared folder warns; a run fails only that output's pair.
+TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
+  const fs::path dir = copyCapture(exportedCornell(), "outputs_checked", [](json& d) {
+    d["outputs"] = {{"good", json::object()},
+                    {"short", json::object()},
+                    {"small", json::object()},
+                    {"nan", json::object()}};
+  });
+  const CaptureDescription base = readCaptureDescription(exportedCornell());
+  const int w = base.info.width, h = base.info.height;
+  auto write = [&](const std::string& name, int t, const Image& color) {
+    fs::create_directories(dir / "outputs" / name);
+    LayerSet l;
+    l.set("color", color);
+    writeExr(dir / "outputs" / name / numberedFileName("frame", t, 4), l,
+             {{"color", {"R", "G", "B"}, false}});
+  };
+  for (int t = 0; t < base.info.frames; ++t) {
+    write("good", t, Image(w, h, 3, 0.5f));
+    if (t != 3) write("short", t, Image(w, h, 3, 0.5f));
+    write("small", t, Image(t == 1 ? w / 2 : w, h, 3, 0.5f));
+    Image bad(w, h, 3, 0.5f);
+    if (t == 5) bad.at(1, 1, 0) = std::numeric_limits<float>::quiet_NaN();
+    write("nan", t, bad);
+  }
+  fs::create_directories(dir / "outputs" / "forgotten");
+  const CaptureValidation v = validateCaptureOutputs(readCaptureDescription(dir));
+  EXPECT_EQ(checkNamed(v, "output.good").status, CheckStatus::Pass) << checkNamed(v, "output.good").detail;
+  const CaptureCheck &missing = checkNamed(v, "output.short"), &small = checkNamed(v, "output.small"),
+                     &nan = checkNamed(v, "output.nan"), &forgotten = checkNamed(v, "outputs.undeclared");
+  EXPECT_EQ(missing.status, CheckStatus::Fail);
+  EXPECT_NE(missing.detail.find("frame(s) 3 "), std::string::npos) << missing.detail;
+  EXPECT_NE(missing.detail.find("frame_0003.exr"), std::string::npos) << missing.detail;
+  EXPECT_EQ(small.status, CheckStatus::Fail);
+  EXPECT_NE(small.detail.find("expected " + std::to_string(w) + "x" + std::to_string(h)), std::string::npos) << small.detail;
+  EXPECT_EQ(nan.status, CheckStatus::Fail);
+  EXPECT_NE(nan.detail.find("1 non-finite colour values"), std::string::npos) << nan.detail;
+  EXPECT_EQ(forgotten.status, CheckStatus::Warn);
+  EXPECT_NE(forgotten.detail.find("forgotten"), std::string::npos) << forgotten.detail;
+  // The capture itself stays usable: a run scores the good output and fails only the bad ones.
+  const json r = runMatrix(captureRun(test::freshDir("outputs_checked_run"),
+                                      {{"file:good", {}, ""}, {"file:short", {}, ""}, {"passthrough", {}, ""}}, {dir}));
+  EXPECT_EQ(pairOf(r, "file:good")["status"], "ok") << pairOf(r, "file:good").dump().substr(0, 300);
+  EXPECT_EQ(pairOf(r, "passthrough")["status"], "ok");
+  EXPECT_EQ(pairOf(r, "file:short")["status"], "failed");
+}
+
 // Every frame holds frame 0's layers: one a later frame adds, whole or in part, is refused (it
 // would be ignored), as one it lacks is.
 TEST(CaptureContract, ALayerOnlyALaterFrameHasIsRefused) {
@@ -598,6 +745,37 @@ TEST(CaptureContract, BadValuesAndNamesAreErrorsNamingThem) {
                             d["events"] = {{{"frame", 0}, {"kind", "light_off"}}};
                           }),
               "events[0].frame: expected an integer in [1, ");
+  // A mesh id belongs to an object_moves event; the same event twice is a slip, not two events.
+  expectError(copyCapture(good, "event_mesh",
+                          [](json& d) {
+                            d["events"] = {{{"frame", 2}, {"kind", "light_off"}, {"meshId", 3}}};
+                          }),
+              "events[0].meshId: only an object_moves event names a mesh");
+  expectError(copyCapture(good, "event_twice",
+                          [](json& d) {
+                            d["events"] = {{{"frame", 2}, {"kind", "camera_cut"}}, {{"frame", 2}, {"kind", "camera_cut"}}};
+                          }),
+              "events[1].kind: this event (camera_cut at frame 2) is given twice");
+  EXPECT_NO_THROW(readCaptureDescription(copyCapture(good, "two_lights", [](json& d) {
+    d["events"] = {{{"frame", 2}, {"kind", "light_off"}, {"what", "a"}}, {{"frame", 2}, {"kind", "light_off"}, {"what", "b"}}};
+  })));
+  for (const double exposure : {0.0, -1.0})
+    expectError(copyCapture(good, "exposure", [&](json& d) { d["exposure"] = exposure; }),
+                "exposure: a positive number");
+  // The description's path instead of its folder: said so.
+  expectError(copyCapture(good, "json_path") / "capture.json", "give the capture's folder");
+  // A frame whose header claims another size: refused with both sizes before its pixels are read.
+  const fs::path resized = copyCapture(good, "resized");
+  {
+    LayerSet f;
+    f.set("color", Image(640, 480, 3));
+    writeExr(captureFramePath(resized, 3), f, {{"color", {"R", "G", "B"}}});
+  }
+  {
+    const Sequence seq = Sequence::open(resized);
+    const std::string error = test::errorOf([&] { seq.frame(3); });
+    EXPECT_NE(error.find("frame_0003.exr: 640x480, expected 64x36"), std::string::npos) << error;
+  }
   // Names that are folders in a run: never "." or "..".
   expectError(copyCapture(good, "dots", [](json& d) { d["name"] = ".."; }), "not . or ..");
   expectError(copyCapture(good, "out_dots",
@@ -663,6 +841,15 @@ TEST(CaptureContract, AWriterNeverCommitsAnInvalidCapture) {
                  Error);
   }
   EXPECT_FALSE(fs::exists(root / "capture"));
+  {  // The error names the folder the capture would have been, not the temporary one.
+    CaptureWriter writer(root / "capture");
+    const std::string error = test::errorOf([&] {
+      writer.commit({{"format", kCaptureFormatName}, {"version", kCaptureFormatVersion}, {"name", "x"}, {"width", 8},
+                     {"height", 8}, {"frames", 1}, {"frameRate", 0}});
+    });
+    EXPECT_NE(error.find((root / "capture" / "capture.json").string() + ": $.frameRate"), std::string::npos) << error;
+    EXPECT_EQ(error.find(".tmp"), std::string::npos) << error;
+  }
   for (const auto& e : fs::directory_iterator(root)) ADD_FAILURE() << "left behind: " << e.path();
   // The Blender importer names its capture after the source folder (a trailing slash included),
   // and refuses a folder name that cannot be one before reading anything else.
@@ -695,7 +882,8 @@ TEST(CaptureContract, ADenoiserNeedingALayerTheCaptureLacksFailsThatPairOnly) {
   const json p = pairOf(r, "svgf");
   EXPECT_EQ(p["status"], "failed");
   EXPECT_NE(p["error"].get<std::string>().find("'meshId'"), std::string::npos) << p["error"];
-  EXPECT_NE(p["error"].get<std::string>().find("docs/captures.md"), std::string::npos) << p["error"];
+  EXPECT_NE(p["error"].get<std::string>().find("docs/captures.md"), std::string::npos)
+      << p["error"];
   EXPECT_EQ(pairOf(r, "passthrough")["status"], "ok");
   ASSERT_EQ(r["pairs"].size(), 3u);
   const json derived = r["scenes"]["no_mesh_id"]["derivedLayers"];
@@ -703,11 +891,13 @@ TEST(CaptureContract, ADenoiserNeedingALayerTheCaptureLacksFailsThatPairOnly) {
 }
 
 TEST(CaptureContract, AFileContenderOnARenderedSceneOrAnUnknownOutputIsAnError) {
-  RunConfig cfg = captureRun(test::freshDir("file_bad"), {{"file:nothing", {}, ""}}, {exportedCornell()});
+  RunConfig cfg =
+      captureRun(test::freshDir("file_bad"), {{"file:nothing", {}, ""}}, {exportedCornell()});
   const json r = runMatrix(cfg);
   const json p = pairOf(r, "file:nothing");
   EXPECT_EQ(p["status"], "failed");
-  EXPECT_NE(p["error"].get<std::string>().find("no denoiser output 'nothing'"), std::string::npos) << p["error"];
+  EXPECT_NE(p["error"].get<std::string>().find("no denoiser output 'nothing'"), std::string::npos)
+      << p["error"];
   RunConfig noCapture = captureRun(test::freshDir("file_bad2"), {{"file:x", {}, ""}}, {});
   noCapture.scenes = {test::shippedScene("cornell_static")};
   EXPECT_THROW(runMatrix(noCapture), Error);
@@ -716,10 +906,34 @@ TEST(CaptureContract, AFileContenderOnARenderedSceneOrAnUnknownOutputIsAnError) 
 TEST(CaptureContract, AnExportNeverLeavesAHalfWrittenFolder) {
   const fs::path out = test::freshDir("export_fail") / "capture";
   // An output folder without the frames: the export fails and leaves nothing.
-  EXPECT_THROW(exportCapture(Sequence::open(cornellSequence()), out, {{"ghost", test::freshDir("empty_outputs")}}),
+  EXPECT_THROW(exportCapture(Sequence::open(cornellSequence()), out,
+                             {{"ghost", test::freshDir("empty_outputs")}}),
                Error);
   EXPECT_FALSE(fs::exists(out));
   for (const auto& e : fs::directory_iterator(out.parent_path())) ADD_FAILURE() << "left behind: " << e.path();
+  // Output frames of another size, or with a NaN, would make a capture its own run refuses: the
+  // export fails naming the file, and leaves nothing.
+  const Sequence sequence = Sequence::open(cornellSequence());
+  const SequenceInfo& info = sequence.info();
+  for (const bool nan : {false, true}) {
+    const fs::path frames = test::freshDir(nan ? "nan_outputs" : "small_outputs");
+    for (int t = 0; t < info.frames; ++t) {
+      LayerSet l;
+      l.set("color", Image(nan ? info.width : info.width / 2, info.height, 3, 0.5f));
+      if (nan && t == 2) l.get("color").at(0, 0, 1) = std::numeric_limits<float>::quiet_NaN();
+      writeExr(frames / numberedFileName("frame", t, 4), l, {{"color", {"R", "G", "B"}, false}});
+    }
+    try {
+      exportCapture(Sequence::open(cornellSequence()), out, {{"odd", frames}});
+      ADD_FAILURE() << "exported outputs " << (nan ? "with a NaN" : "of another size");
+    } catch (const Error& e) {
+      const std::string expected = nan ? "frame_0002.exr: output frame 2 of 'odd' has 1 non-finite"
+                                       : "frame_0000.exr: output frame 0 of 'odd' is " + std::to_string(info.width / 2) +
+                                             "x" + std::to_string(info.height) + ", expected";
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(out));
+  }
   // And an existing folder is never overwritten.
   fs::create_directories(out);
   EXPECT_THROW(exportCapture(Sequence::open(cornellSequence()), out), Error);
@@ -815,7 +1029,8 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
   double worst = 0;
   for (size_t i = 0; i < f.get("color").raw().size(); ++i) {
     const float sum = f.get("albedo").raw()[i] * f.get("diffuse").raw()[i] +
-                      f.get("specAlbedo").raw()[i] * f.get("specular").raw()[i] + f.get("emission").raw()[i];
+                      f.get("specAlbedo").raw()[i] * f.get("specular").raw()[i] +
+                      f.get("emission").raw()[i];
     worst = std::max(worst, double(std::abs(sum - f.get("color").raw()[i])));
   }
   EXPECT_LT(worst, 1e-5);
@@ -834,11 +1049,48 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
     }
     // What cannot run says which input the capture lacks: gradient samples or a hit distance.
     const std::string error = p["error"];
-    EXPECT_TRUE(error.find("gradient samples") != std::string::npos || error.find("specHitDist") != std::string::npos)
+    EXPECT_TRUE(error.find("gradient samples") != std::string::npos ||
+                error.find("specHitDist") != std::string::npos)
         << p["label"] << ": " << error;
   }
   EXPECT_GE(ok, 5);  // passthrough, temporal, eaw, svgf, slgf at least
-  EXPECT_EQ(r["scenes"]["blender_room"]["validation"]["status"], v.status() == CheckStatus::Warn ? "warn" : "pass");
+  EXPECT_EQ(r["scenes"]["blender_room"]["validation"]["status"],
+            v.status() == CheckStatus::Warn ? "warn" : "pass");
+
+  // A NaN or negative depth is imported as written, so the validation names it (it became sky);
+  // a clip end at or below the clip start is refused naming the field (it made every pixel sky).
+  const fs::path bad = work / "bad_depth";
+  fs::copy(work / "render", bad, fs::copy_options::recursive);
+  const fs::path frame = bad / "noisy" / "frame_0002.exr";
+  std::map<std::string, std::vector<std::string>> byLayer;  // "ViewLayer.Depth" -> {"Z"}
+  for (const std::string& c : readExrHeader(frame).channels)
+    byLayer[c.substr(0, c.rfind('.'))].push_back(c.substr(c.rfind('.') + 1));
+  std::vector<LayerSpec> specs;
+  for (const auto& [layer, suffixes] : byLayer) specs.push_back({layer, suffixes, false});
+  LayerSet passes = readExr(frame, specs).layers;
+  for (const LayerSpec& spec : specs)
+    if (spec.name.size() > 6 && spec.name.compare(spec.name.size() - 6, 6, ".Depth") == 0) {
+      passes.get(spec.name).at(3, 3) = std::numeric_limits<float>::quiet_NaN();
+      passes.get(spec.name).at(5, 5) = -2.0f;
+    }
+  writeExr(frame, passes, specs);
+  importBlender(bad, work / "bad_capture", {"bad_depth"});
+  const CaptureValidation badV = validate(work / "bad_capture");
+  EXPECT_EQ(checkNamed(badV, "nonFinite.depth").status, CheckStatus::Fail);
+  EXPECT_EQ(checkNamed(badV, "nonFinite.depth").value, 1.0);
+  EXPECT_EQ(checkNamed(badV, "depth.positive").status, CheckStatus::Fail);
+  json cams = parseJsonFile((bad / "cameras.json").string());
+  cams["clipEnd"] = cams["clipStart"].get<double>() / 2;
+  std::ofstream(bad / "cameras.json") << cams.dump();
+  const std::string clip = test::errorOf([&] { importBlender(bad, work / "clip_capture", {"clip"}); });
+  EXPECT_NE(clip.find("cameras.json: $.clipEnd: expected a number above clipStart"), std::string::npos) << clip;
+  EXPECT_FALSE(fs::exists(work / "clip_capture"));
+  // A sample count is cameras.json's field, named there (it surfaced as the capture's).
+  cams = parseJsonFile((work / "render" / "cameras.json").string());
+  cams["referenceSpp"] = 0;
+  std::ofstream(bad / "cameras.json") << cams.dump();
+  const std::string spp = test::errorOf([&] { importBlender(bad, work / "spp_capture", {"spp"}); });
+  EXPECT_NE(spp.find("cameras.json: $.referenceSpp: expected an integer in [1, "), std::string::npos) << spp;
 }
 
 }  // namespace

@@ -104,10 +104,18 @@ inline void writeSeedCapture(const std::filesystem::path& dir) {
       frame.set("color", std::move(color));
     }
     writer.frame(t, frame);
+    // The reference: the frame's mean colour everywhere, smoother than the input and apart from it
+    // (a reference equal to its input is refused).
+    Image mean(w, h, 3);
+    for (int c = 0; c < 3; ++c) {
+      double sum = 0;
+      for (float v : frame.get("color").planeSpan(c)) sum += v;
+      for (float& v : mean.planeSpan(c)) v = float(sum / double(w * h));
+    }
     LayerSet reference;
-    reference.set("color", frame.get("color"));
+    reference.set("color", mean);
     reference.set("colorVar", seedImage(w, h, 3, t, 1e-4f));
-    reference.set("colorHalf", frame.get("color"));
+    reference.set("colorHalf", mean);
     writer.reference(t, reference);
     if (t > 0) {
       LayerSet gradients;
