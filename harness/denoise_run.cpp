@@ -76,7 +76,19 @@ std::string capturedOutputName(const std::string& entry) {
 DenoiseRun::DenoiseRun(const DenoiserRequest& request, const Sequence& sequence)
     : sequence_(sequence), request_(request), info_(DenoiserRegistry::instance().find(request.name)) {
   params_ = info_.schema.resolve(request.params, request.name);
-  if (info_.signals == SignalMode::Color) {
+  // A capture of the colour alone has no signals to demodulate. A denoiser that reads nothing but
+  // its signal (passthrough: the input as given) then runs on the colour, which is the same image
+  // it would remodulate to; any other needs the parts and says so below.
+  mode_ = info_.signals;
+  if (mode_ == SignalMode::Demodulated && sequence.isCapture()) {
+    const std::vector<std::string> known = sequence.info().availableLayers();
+    const bool hasParts = std::find(known.begin(), known.end(), "diffuse") != known.end();
+    const std::unique_ptr<Denoiser> probe = info_.create(params_, SignalKind::Diffuse);
+    if (!hasParts && probe->requiredChannels().empty() && !probe->needsGradients() &&
+        !probe->wantsLowres())
+      mode_ = SignalMode::Color;
+  }
+  if (mode_ == SignalMode::Color) {
     instances_.emplace_back(SignalKind::Color, info_.create(params_, SignalKind::Color));
   } else {
     instances_.emplace_back(SignalKind::Diffuse, info_.create(params_, SignalKind::Diffuse));
@@ -94,7 +106,7 @@ DenoiseRun::DenoiseRun(const DenoiserRequest& request, const Sequence& sequence)
   std::vector<std::string> missing;
   const std::vector<std::string> known = sequence.info().availableLayers();
   std::vector<std::string> needed = readLayers_;
-  if (info_.signals == SignalMode::Demodulated)  // remodulation reads these
+  if (mode_ == SignalMode::Demodulated)  // remodulation reads these
     for (const char* c : {"albedo", "specAlbedo", "emission"}) needed.push_back(c);
   for (const std::string& c : needed)
     if (std::find(known.begin(), known.end(), c) == known.end() &&
@@ -120,7 +132,7 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
                      const std::function<void(const DenoisedFrame&)>& onFrame) {
   const SequenceInfo& info = sequence_.info();
   const int w = info.width, h = info.height;
-  const bool colorOnly = info_.signals == SignalMode::Color;
+  const bool colorOnly = mode_ == SignalMode::Color;
   DenoisedFrame out;
   if (!colorOnly) {
     out.diffuse = Image(w, h, 3);

@@ -48,6 +48,9 @@ class DenoiseRun {
   DenoiseRun(const DenoiserRequest& request, const Sequence& sequence);
   const ParamSet& params() const { return params_; }
   const DenoiserInfo& info() const { return info_; }
+  // What the instances filter: the registered mode, or the colour where a capture has no parts
+  // and the denoiser reads nothing but its signal (passthrough on a colour-only capture).
+  SignalMode signals() const { return mode_; }
   // The denoiser reads the sequence's low-resolution buffer (it wants it and the sequence has one).
   bool readsLowres() const { return readsLowres_; }
   // The denoiser reads the sequence's A-SVGF gradient samples: re-shaded paths beyond the frame's
@@ -63,6 +66,7 @@ class DenoiseRun {
   DenoiserRequest request_;
   const DenoiserInfo& info_;
   ParamSet params_;
+  SignalMode mode_ = SignalMode::Demodulated;
   std::vector<std::pair<SignalKind, std::unique_ptr<Denoiser>>> instances_;  // one per signal
   std::vector<std::string> readLayers_;  // every frame layer a denoiser instance reads
   bool needsGradients_ = false;

@@ -172,7 +172,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   pair["images"] = {{"dir", fs::relative(imageDir, cfg.out).string()}, {"all", keepAll && cfg.keepFrames != "none"}};
   if (run && !run->info().origin.empty()) pair["origin"] = run->info().origin;
   if (!run) pair["origin"] = (sd.sequence.dir() / "outputs" / captured).string();
-  if (!run || run->info().signals == SignalMode::Color) pair["signals"] = "color";
+  if (!run || run->signals() == SignalMode::Color) pair["signals"] = "color";
   return pair;
 }
 

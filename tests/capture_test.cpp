@@ -517,6 +517,36 @@ TEST(CaptureValidation, PositionsInOtherUnitsThanDepthAreRefused) {
                Error);
 }
 
+// A capture of the colour alone (with its required guides): passthrough, which reads nothing but
+// its signal, scores the colour as given -- exactly what it scores on the same capture with the
+// parts -- while a filter that needs the parts fails naming them.
+TEST(Capture, PassthroughScoresAColourOnlyCaptureAsTheInputItIs) {
+  const fs::path full = copyCapture(exportedCornell(), "with_parts");
+  const fs::path bare = copyCapture(exportedCornell(), "colour_only");
+  editFrames(bare, [](int, LayerSet& f) {
+    LayerSet kept;
+    for (const char* layer : {"color", "normal", "depth", "motion"}) kept.set(layer, f.get(layer));
+    f = std::move(kept);
+  });
+  const std::vector<std::string> layers = readCaptureDescription(bare).layers;
+  ASSERT_EQ(std::count(layers.begin(), layers.end(), "diffuse"), 0);
+  const json withParts =
+      runMatrix(captureRun(test::freshDir("with_parts_run"), {{"passthrough", {}, ""}}, {full}));
+  const json colourOnly = runMatrix(captureRun(
+      test::freshDir("colour_only_run"), {{"passthrough", {}, ""}, {"svgf", {}, ""}}, {bare}));
+  const json a = pairOf(withParts, "passthrough"), b = pairOf(colourOnly, "passthrough");
+  ASSERT_EQ(b["status"], "ok") << b.dump().substr(0, 400);
+  EXPECT_EQ(b["signals"], "color");
+  EXPECT_FALSE(a.contains("signals"));
+  EXPECT_NEAR(b["summary"]["relMse"]["mean"].get<double>(),
+              a["summary"]["relMse"]["mean"].get<double>(),
+              1e-6 * a["summary"]["relMse"]["mean"].get<double>());
+  const json svgf = pairOf(colourOnly, "svgf");
+  EXPECT_EQ(svgf["status"], "failed");
+  EXPECT_NE(svgf.value("error", "").find("'diffuse'"), std::string::npos)
+      << svgf.value("error", "");
+}
+
 // `arena validate` reads the stored outputs as a run would: a missing, mis-sized or non-finite
 // frame fails (naming the file), an undeclared folder warns; a run fails only that output's pair.
 TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
