@@ -347,6 +347,12 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
     throw Error(first.string() + ": " + std::to_string(h.width) + "x" + std::to_string(h.height) + ", expected " +
                 std::to_string(info.width) + "x" + std::to_string(info.height) + " (capture.json)");
   for (const LayerSpec& s : layersPresent(first, h, captureFrameSpecs())) c.layers.push_back(s.name);
+  for (const std::string& channel : h.channels) {
+    bool named = false;
+    for (const LayerSpec& s : channels::frameLayers())
+      for (int k = 0; k < s.channels() && !named; ++k) named = s.channelName(k) == channel;
+    if (!named) c.unknownChannels.push_back(channel);
+  }
   for (const char* required : {"normal", "depth", "motion"})
     if (!contains(c.layers, required))
       throw Error(first.string() + ": missing layer '" + std::string(required) + "' (" + frameSpec(required).channelName(0) +
@@ -407,6 +413,12 @@ LayerSet readCaptureFrame(const CaptureDescription& c, int t) {
       throw Error(file.string() + ": layer '" + s.name + "' is in this frame but not in " +
                   captureFramePath(c.dir, 0).filename().string() +
                   " (every frame of a capture holds the same layers)");
+  // A frame that says which one it is (arena export writes the attribute) must be that one: a file
+  // copied over another or frames renamed out of order are refused, not scored in the wrong place.
+  if (const auto it = contents.attributes.find("arena.capture.frame");
+      it != contents.attributes.end() && it->second != std::to_string(t))
+    throw Error(file.string() + ": holds frame " + it->second +
+                " (its arena.capture.frame attribute), expected " + std::to_string(t));
   LayerSet layers = std::move(contents.layers);
   const int w = info.width, hgt = info.height;
   const size_t pixels = size_t(w) * size_t(hgt);

@@ -39,6 +39,9 @@ struct CaptureDescription {
   // + emission), "position" (view depth + camera), "emission" (zero). meshId is filled with 0 for
   // the metrics' disocclusion tests only; no denoiser is given an invented meshId.
   std::vector<std::string> derived;
+  // Channels of frame 0 that no layer names (a typo such as "motoin.X"): ignored, and the
+  // validation warns about them.
+  std::vector<std::string> unknownChannels;
   std::vector<std::array<double, 2>> jitter;  // per frame, pixels; zeros when not given
   std::vector<double> deltaTime;              // per frame, seconds
   double exposure = 1.0;

@@ -89,6 +89,12 @@ bool hasSignal(const Image& image) {
   return false;
 }
 
+// Whether two images hold the same values bit for bit.
+bool sameValues(const Image& a, const Image& b) {
+  const std::span<const float> x = a.raw(), y = b.raw();
+  return x.size() == y.size() && std::memcmp(x.data(), y.data(), x.size_bytes()) == 0;
+}
+
 // "0, 3, 7" (at most 8, then "...").
 std::string frameList(const std::vector<int>& frames) {
   std::string out;
@@ -256,7 +262,7 @@ CaptureValidation validateCaptureOutputs(const CaptureDescription& capture) {
   CaptureValidation v;
   for (const auto& [name, output] : capture.outputs) {
     // What `--denoisers file:NAME` would meet frame by frame: the first problem of each bad frame.
-    std::vector<int> bad;
+    std::vector<int> bad, equalsReference;
     std::string first;
     for (int t = 0; t < capture.info.frames; ++t) {
       std::string problem;
@@ -265,6 +271,11 @@ CaptureValidation validateCaptureOutputs(const CaptureDescription& capture) {
         if (const long n = nonFiniteValues(color))
           problem = captureOutputPath(output, t).string() + ": " + std::to_string(n) +
                     " non-finite colour values";
+        if (capture.info.hasReference &&
+            sameValues(color,
+                       readCaptureReference(capture, capture.info.referenceOfFrame[size_t(t)])
+                           .get("color")))
+          equalsReference.push_back(t);
       } catch (const Error& e) {
         problem = e.what();
       }
@@ -278,6 +289,12 @@ CaptureValidation validateCaptureOutputs(const CaptureDescription& capture) {
                                                " cannot be scored (an output is scored as "
                                                "given, never repaired); first: " +
                                                first));
+    if (!equalsReference.empty())
+      v.checks.push_back(check(
+          "output." + name + ".equalsReference", double(equalsReference.size()), 0, kSoft, "frames",
+          "frame(s) " + frameList(equalsReference) +
+              " equal their reference value for value: a perfect score there (is the "
+              "reference wired in as the output?)"));
   }
   // Folders the description does not declare are never scored: said, so a forgotten entry shows.
   std::error_code ec;
@@ -475,13 +492,16 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
       for (float x : c.raw()) negative += x < 0.0f;
       values += long(c.raw().size());
     }
-    for (size_t t = 0; t < input.frames.size(); ++t) {
-      const std::span<const float>
-          a = input.frames[t].get("color").raw(),
-          b = input.references[size_t(input.referenceOfFrame[t])].get("color").raw();
-      if (a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size_bytes()) == 0)
+    for (size_t t = 0; t < input.frames.size(); ++t)
+      if (sameValues(input.frames[t].get("color"),
+                     input.references[size_t(input.referenceOfFrame[t])].get("color")))
         equal.push_back(int(t));
-    }
+    // An independent half equal to the mean gives a noise floor of exactly 0.
+    std::vector<int> halfIsMean;
+    for (size_t r = 0; r < input.references.size(); ++r)
+      if (input.references[r].has("colorHalf") &&
+          sameValues(input.references[r].get("colorHalf"), input.references[r].get("color")))
+        halfIsMean.push_back(int(r));
     v.checks.push_back(check(
         "reference.blackFrames", double(black.size()), 0, double(input.references.size()) - 1,
         "references",
@@ -500,6 +520,14 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
                                   " equal their reference value for "
                                   "value: the input scores as perfect there (a reference must be "
                                   "rendered apart from the input)"));
+    if (sequence.isCapture() && sequence.capture().referenceHasHalf)
+      v.checks.push_back(
+          check("reference.halfEqualsMean", double(halfIsMean.size()), 0, kSoft, "references",
+                halfIsMean.empty() ? ""
+                                   : "reference(s) " + frameList(halfIsMean) +
+                                         ": colorHalf equals "
+                                         "color, so their noise floor reads 0 (no noise, or no "
+                                         "independent half)"));
     double roughRatio = 0;
     int counted = 0;
     double inputError = 0, floorSum = 0;
@@ -544,6 +572,40 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
 
   // 6. Jitter: built-in denoisers assume samples at pixel centres.
   if (sequence.isCapture()) {
+    // 7. What the folder holds beyond the description: never read, so a typo or a stray frame is
+    // said rather than silently ignored.
+    const CaptureDescription& c = sequence.capture();
+    std::string unknown;
+    for (const std::string& ch : c.unknownChannels) unknown += (unknown.empty() ? "" : ", ") + ch;
+    v.checks.push_back(check(
+        "channels.unknown", double(c.unknownChannels.size()), 0, kSoft, "channels",
+        unknown.empty() ? ""
+                        : captureFramePath(c.dir, 0).filename().string() + " holds " + unknown +
+                              ", which no layer names (docs/captures.md lists them): ignored"));
+    std::set<std::string> expected = {"capture.json", "outputs"};
+    for (int t = 0; t < info.frames; ++t) {
+      expected.insert(captureFramePath(c.dir, t).filename().string());
+      if (t > 0 && info.hasGradients)
+        expected.insert(captureGradientPath(c.dir, t).filename().string());
+    }
+    for (size_t r = 0; r < input.references.size(); ++r)
+      expected.insert(captureReferencePath(c.dir, int(r)).filename().string());
+    std::vector<std::string> stray;
+    std::error_code ec;
+    for (const auto& entry : std::filesystem::directory_iterator(c.dir, ec))
+      if (!expected.count(entry.path().filename().string()))
+        stray.push_back(entry.path().filename().string());
+    std::sort(stray.begin(), stray.end());
+    std::string names;
+    for (size_t k = 0; k < stray.size() && k < 8; ++k) names += (k ? ", " : "") + stray[k];
+    if (stray.size() > 8) names += ", ...";
+    v.checks.push_back(check(
+        "files.unexpected", double(stray.size()), 0, kSoft, "files",
+        stray.empty() ? ""
+                      : "the folder holds " + names +
+                            ", which capture.json does not describe (a "
+                            "frame beyond `frames`, a reference no frame names): never read"));
+
     double maxJitter = 0;
     for (const auto& j : sequence.capture().jitter) maxJitter = std::max({maxJitter, std::abs(j[0]), std::abs(j[1])});
     v.checks.push_back(check("jitter", maxJitter, 0, kSoft, "px",

@@ -554,7 +554,8 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
     d["outputs"] = {{"good", json::object()},
                     {"short", json::object()},
                     {"small", json::object()},
-                    {"nan", json::object()}};
+                    {"nan", json::object()},
+                    {"oracle", json::object()}};
   });
   const CaptureDescription base = readCaptureDescription(exportedCornell());
   const int w = base.info.width, h = base.info.height;
@@ -572,6 +573,8 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
     Image bad(w, h, 3, 0.5f);
     if (t == 5) bad.at(1, 1, 0) = std::numeric_limits<float>::quiet_NaN();
     write("nan", t, bad);
+    write("oracle", t,
+          readCaptureReference(base, base.info.referenceOfFrame[size_t(t)]).get("color"));
   }
   fs::create_directories(dir / "outputs" / "forgotten");
   const CaptureValidation v = validateCaptureOutputs(readCaptureDescription(dir));
@@ -587,12 +590,76 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
   EXPECT_NE(nan.detail.find("1 non-finite colour values"), std::string::npos) << nan.detail;
   EXPECT_EQ(forgotten.status, CheckStatus::Warn);
   EXPECT_NE(forgotten.detail.find("forgotten"), std::string::npos) << forgotten.detail;
+  // An output that is the reference scores perfectly: readable, so a warning, not a failure.
+  EXPECT_EQ(checkNamed(v, "output.oracle").status, CheckStatus::Pass);
+  const CaptureCheck& oracle = checkNamed(v, "output.oracle.equalsReference");
+  EXPECT_EQ(oracle.status, CheckStatus::Warn);
+  EXPECT_EQ(oracle.value, double(base.info.frames));
+  EXPECT_THROW(checkNamed(v, "output.good.equalsReference"), Error);
   // The capture itself stays usable: a run scores the good output and fails only the bad ones.
   const json r = runMatrix(captureRun(test::freshDir("outputs_checked_run"),
                                       {{"file:good", {}, ""}, {"file:short", {}, ""}, {"passthrough", {}, ""}}, {dir}));
   EXPECT_EQ(pairOf(r, "file:good")["status"], "ok") << pairOf(r, "file:good").dump().substr(0, 300);
   EXPECT_EQ(pairOf(r, "passthrough")["status"], "ok");
   EXPECT_EQ(pairOf(r, "file:short")["status"], "failed");
+}
+
+// What the folder holds beyond its description is said, never silently ignored: a channel no layer
+// names (a typo), files no frame or reference is, an independent half equal to its mean; a frame
+// whose attribute names another frame (copied over it) is refused.
+TEST(CaptureValidation, UndescribedFilesUnknownChannelsAndMisplacedFramesAreSaid) {
+  const CaptureValidation clean = validate(exportedCornell());
+  for (const char* name : {"channels.unknown", "files.unexpected", "reference.halfEqualsMean"})
+    EXPECT_EQ(checkNamed(clean, name).status, CheckStatus::Pass)
+        << name << ": " << checkNamed(clean, name).detail;
+
+  const fs::path dir = copyCapture(exportedCornell(), "undescribed");
+  const CaptureDescription c = readCaptureDescription(dir);
+  {  // frame 0 with a misspelt roughness channel beside its layers
+    LayerSet f = readCaptureFrame(c, 0);
+    std::vector<LayerSpec> specs;
+    for (const LayerSpec& spec : channels::frameLayers())
+      if (!spec.topLevel && f.has(spec.name) &&
+          std::count(c.layers.begin(), c.layers.end(), spec.name))
+        specs.push_back(spec);
+    f.set("roughnes", f.get("roughness"));
+    specs.push_back({"roughnes", {"X"}, false});
+    writeExr(captureFramePath(dir, 0), f, specs, {{"arena.capture.frame", "0"}});
+  }
+  fs::copy_file(captureFramePath(dir, 1), dir / numberedFileName("frame", c.info.frames, 4));
+  std::ofstream(dir / "notes.txt") << "x";
+  {  // every reference's half set to its mean
+    for (int r = 0; r < int(c.info.referenceSpp.size()); ++r) {
+      LayerSet ref = readCaptureReference(c, r);
+      ref.set("colorHalf", ref.get("color"));
+      writeExr(captureReferencePath(dir, r), ref,
+               {{"color", {"R", "G", "B"}},
+                {"colorVar", {"R", "G", "B"}},
+                {"colorHalf", {"R", "G", "B"}}});
+    }
+  }
+  const CaptureValidation v = validate(dir);
+  const CaptureCheck &unknown = checkNamed(v, "channels.unknown"),
+                     &stray = checkNamed(v, "files.unexpected"),
+                     &half = checkNamed(v, "reference.halfEqualsMean");
+  EXPECT_EQ(unknown.status, CheckStatus::Warn);
+  EXPECT_NE(unknown.detail.find("roughnes.X"), std::string::npos) << unknown.detail;
+  EXPECT_EQ(stray.status, CheckStatus::Warn);
+  EXPECT_EQ(stray.value, 2.0);
+  EXPECT_NE(stray.detail.find(numberedFileName("frame", c.info.frames, 4) + ", notes.txt"),
+            std::string::npos)
+      << stray.detail;
+  EXPECT_EQ(half.status, CheckStatus::Warn);
+  EXPECT_NE(v.status(), CheckStatus::Fail) << v.failures();
+
+  // Frame 1 copied over frame 2: its attribute says it is frame 1.
+  fs::copy_file(captureFramePath(dir, 1), captureFramePath(dir, 2),
+                fs::copy_options::overwrite_existing);
+  const std::string error = test::errorOf([&] { readCaptureFrame(c, 2); });
+  EXPECT_NE(
+      error.find("frame_0002.exr: holds frame 1 (its arena.capture.frame attribute), expected 2"),
+      std::string::npos)
+      << error;
 }
 
 // Every frame holds frame 0's layers: one a later frame adds, whole or in part, is refused (it
