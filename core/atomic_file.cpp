@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -10,6 +11,9 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
+#include <iostream>
+#include <map>
+#include <mutex>
 #include <regex>
 
 #include "core/error.hpp"
@@ -108,6 +112,17 @@ int removeStaleTemporaries(const fs::path& dir, double minAgeSeconds) {
   return removed;
 }
 
+int removeStaleTemporariesBelow(const fs::path& dir, double minAgeSeconds) {
+  int removed = removeStaleTemporaries(dir, minAgeSeconds);
+  std::error_code ec;
+  for (auto it =
+           fs::recursive_directory_iterator(dir, fs::directory_options::skip_permission_denied, ec);
+       !ec && it != fs::recursive_directory_iterator(); it.increment(ec))
+    if (it->is_directory(ec) && !it->is_symlink(ec))
+      removed += removeStaleTemporaries(it->path(), minAgeSeconds);
+  return removed;
+}
+
 void writeFileBytes(const fs::path& path, const std::string& bytes) {
   int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw Error(osError(path, "cannot create file", errno));
@@ -174,6 +189,110 @@ std::string folderName(const std::filesystem::path& dir) {
   std::filesystem::path p = std::filesystem::absolute(dir).lexically_normal();
   if (p.filename().empty()) p = p.parent_path();
   return p.filename().string();
+}
+
+namespace {
+
+// The directories this process has locked: canonical path -> its lock file and how many holders.
+struct HeldLock {
+  int fd = -1;
+  int holders = 0;
+  DirectoryLock::Mode mode = DirectoryLock::Mode::Shared;
+};
+std::mutex heldMutex;
+std::map<std::string, HeldLock>& heldLocks() {
+  static std::map<std::string, HeldLock> held;
+  return held;
+}
+
+// What the holder wrote into the lock file: "pid N: purpose" (empty when unreadable).
+std::string holderOf(int fd) {
+  char buf[256];
+  const ssize_t n = pread(fd, buf, sizeof buf - 1, 0);
+  if (n <= 0) return "";
+  std::string text(buf, size_t(n));
+  while (!text.empty() && (text.back() == '\n' || text.back() == '\0')) text.pop_back();
+  return text;
+}
+
+void recordHolder(int fd, const std::string& purpose) {
+  const std::string text = "pid " + std::to_string(getpid()) + ": " + purpose + "\n";
+  if (ftruncate(fd, 0) == 0 && pwrite(fd, text.data(), text.size(), 0) < 0) {
+    // Only the messages of other processes read it: a lock without its note still locks.
+  }
+}
+
+}  // namespace
+
+DirectoryLock::DirectoryLock(const fs::path& dir, Mode mode, IfHeld ifHeld,
+                             const std::string& purpose) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw Error(dir.string() + ": cannot create directory: " + ec.message());
+  const std::string key = fs::weakly_canonical(fs::absolute(dir), ec).string();
+  std::lock_guard<std::mutex> guard(heldMutex);
+  HeldLock& held = heldLocks()[key];
+  const bool fresh = held.fd < 0;
+  if (fresh) {
+    const fs::path file = dir / ".arena.lock";
+    held.fd = ::open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    // A directory this process may not write (a shared cache on a read-only mount): flock works
+    // on a read-only descriptor of an existing lock file; with none, a reader goes on unlocked
+    // (nothing can rewrite what it reads through this process's rights either).
+    if (held.fd < 0 && (errno == EACCES || errno == EROFS || errno == EPERM))
+      held.fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
+    if (held.fd < 0) {
+      const int err = errno;
+      heldLocks().erase(key);
+      if (mode == Mode::Shared && (err == ENOENT || err == EACCES || err == EROFS || err == EPERM))
+        return;
+      throw Error(osError(file, "cannot open the directory's lock file", err));
+    }
+  }
+  if (fresh || (mode == Mode::Exclusive && held.mode == Mode::Shared)) {
+    const int op = mode == Mode::Exclusive ? LOCK_EX : LOCK_SH;
+    if (flock(held.fd, op | LOCK_NB) != 0) {
+      const std::string holder = holderOf(held.fd);
+      const std::string who =
+          holder.empty() ? "another arena process" : "another arena process (" + holder + ")";
+      if (ifHeld == IfHeld::Refuse) {
+        if (fresh) {
+          ::close(held.fd);
+          heldLocks().erase(key);
+        }
+        throw Error(dir.string() + ": " + who +
+                    " is using it; wait for it to finish or choose another directory");
+      }
+      std::cerr << "arena: waiting for " << who << " to finish with " << dir.string() << std::endl;
+      while (flock(held.fd, op) != 0)
+        if (errno != EINTR) {
+          const int err = errno;
+          if (fresh) {
+            ::close(held.fd);
+            heldLocks().erase(key);
+          }
+          throw Error(osError(dir, "cannot lock", err));
+        }
+    }
+    held.mode = fresh ? mode : Mode::Exclusive;
+    // Only a writer notes itself (readers leave the directory untouched, read-only ones too).
+    if (mode == Mode::Exclusive) recordHolder(held.fd, purpose);
+  }
+  ++held.holders;
+  key_ = key;
+}
+
+DirectoryLock::DirectoryLock(DirectoryLock&& other) noexcept : key_(std::move(other.key_)) {
+  other.key_.clear();
+}
+
+DirectoryLock::~DirectoryLock() {
+  if (key_.empty()) return;
+  std::lock_guard<std::mutex> guard(heldMutex);
+  const auto it = heldLocks().find(key_);
+  if (it == heldLocks().end() || --it->second.holders > 0) return;
+  ::close(it->second.fd);  // releases the flock
+  heldLocks().erase(it);
 }
 
 }  // namespace arena

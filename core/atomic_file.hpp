@@ -19,6 +19,8 @@ std::filesystem::path temporaryPathFor(const std::filesystem::path& path);
 // gone and which are older than `minAgeSeconds` (a write on another host sharing the directory
 // finishes within seconds). Returns how many were removed; a read-only directory removes none.
 int removeStaleTemporaries(const std::filesystem::path& dir, double minAgeSeconds = 600);
+// The same in `dir` and every folder below it (a run's images/, a report's tiles/).
+int removeStaleTemporariesBelow(const std::filesystem::path& dir, double minAgeSeconds = 600);
 
 void writeTextAtomically(const std::filesystem::path& path, const std::string& text);
 // Writes `bytes` to `path` directly (used on temporaries); errors name the path and the reason.
@@ -34,5 +36,29 @@ std::string osError(const std::filesystem::path& path, const std::string& what, 
 
 // The name of the folder `dir` names, a trailing slash or "." included ("runs/today/" -> "today").
 std::string folderName(const std::filesystem::path& dir);
+
+// An advisory lock on a directory between arena processes (flock(2) on DIR/.arena.lock, released
+// when the lock is destroyed or the process dies, so a killed process never leaves it held).
+// Shared locks coexist; an exclusive one excludes every other. Within one process a directory is
+// locked once: a nested lock of the same directory is granted at once (an exclusive one upgrades
+// a shared one). `purpose` ("writing this run") is recorded for the messages other processes give.
+class DirectoryLock {
+ public:
+  enum class Mode { Shared, Exclusive };
+  enum class IfHeld { Wait, Refuse };
+  // Creates `dir` if needed. Refuse: an Error naming the directory, the holder's process id and
+  // purpose when another process holds a conflicting lock. Wait: says so once on stderr, then
+  // waits.
+  DirectoryLock(const std::filesystem::path& dir, Mode mode, IfHeld ifHeld,
+                const std::string& purpose);
+  ~DirectoryLock();
+  DirectoryLock(DirectoryLock&& other) noexcept;
+  DirectoryLock(const DirectoryLock&) = delete;
+  DirectoryLock& operator=(const DirectoryLock&) = delete;
+  DirectoryLock& operator=(DirectoryLock&&) = delete;
+
+ private:
+  std::string key_;  // the directory's canonical path; empty once moved from
+};
 
 }  // namespace arena

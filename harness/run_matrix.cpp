@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 #include "core/capture.hpp"
 #include "core/env_info.hpp"
@@ -142,12 +143,17 @@ json runMatrix(const RunConfig& cfg) {
       throw Error("--cache " + cfg.cache.string() + " lies in the run directory " +
                   cfg.out.string() + "; expected the sequence cache outside it");
   }
-  checkRunOutputs(cfg.out);
+  const DirectoryLock outLock = checkRunOutputs(cfg.out);
   // The cache, like --out, before any work: a file there would fail every pair one by one.
   if (std::error_code ec;
       !cfg.scenes.empty() && fs::exists(cfg.cache, ec) && !fs::is_directory(cfg.cache, ec))
     throw Error(cfg.cache.string() +
                 ": exists and is not a directory; the sequence cache (--cache) needs one");
+  // Held while the run reads the cache: a refinement (which rewrites references) waits for it.
+  std::optional<DirectoryLock> cacheLock;
+  if (!cfg.scenes.empty())
+    cacheLock.emplace(cfg.cache, DirectoryLock::Mode::Shared, DirectoryLock::IfHeld::Wait,
+                      "a run reading sequences");
   const EvaluationOptions evaluation{cfg.warmup, {cfg.flip}, exposure};
   json settings = {{"render", cfg.scenes.empty() ? json::object() : cfg.render.pixelSettings(cfg.scenes.front())},
                    {"preset", cfg.render.preset},

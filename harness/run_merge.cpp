@@ -97,7 +97,8 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
   for (int i = 0; i < shardCount; ++i)
     if (!shards.count(i)) missing += (missing.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(shardCount);
   if (!missing.empty()) throw Error("merge: incomplete shard set, missing " + missing + "; nothing was written");
-  checkRunOutputs(out);  // creates --out only now: shards that cannot be merged leave no directory behind
+  const DirectoryLock outLock = checkRunOutputs(
+      out);  // creates --out only now: shards that cannot be merged leave no directory behind
   // The images are the shards', as the results are: a previous merge's in --out go.
   fs::remove_all(out / "images", ec);
   if (ec)

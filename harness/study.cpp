@@ -6,6 +6,7 @@
 
 #include "core/error.hpp"
 #include "harness/reference_quality.hpp"
+#include "metrics/results.hpp"
 
 namespace arena {
 
@@ -110,6 +111,12 @@ RunConfig studyRun(std::vector<Scene> scenes, const RenderSettings& render) {
 json runStudy(StudyConfig config) {
   RunConfig& c = config.run;
   if (!(config.refineBudget > 0)) return runMatrix(c);
+  // The study holds its run directory from the first pass to the commit after the refinement,
+  // and the cache alone: its refinement rewrites references that another run or study would
+  // otherwise read half old, half new (a second study waits, then finds them refined).
+  const DirectoryLock outLock = checkRunOutputs(c.out);
+  const DirectoryLock cacheLock(c.cache, DirectoryLock::Mode::Exclusive,
+                                DirectoryLock::IfHeld::Wait, "a study refining references");
   // The budget is counted at the preset's (or the given) sample cap, whatever cap the first
   // references are rendered under.
   const int budgetSpp = c.render.referenceSpp;

@@ -239,7 +239,7 @@ void appendToDatabase(const fs::path& dbPath, const RunResults& r, const std::st
   db.exec("COMMIT");
 }
 
-void checkRunOutputs(const fs::path& runDir) {
+DirectoryLock checkRunOutputs(const fs::path& runDir) {
   std::error_code ec;
   if (fs::exists(runDir, ec) && !fs::is_directory(runDir, ec))
     throw Error(runDir.string() + ": exists and is not a directory; --out needs a run directory");
@@ -247,7 +247,9 @@ void checkRunOutputs(const fs::path& runDir) {
   if (ec) throw Error(runDir.string() + ": cannot create run directory: " + ec.message());
   if (access(runDir.c_str(), W_OK) != 0)
     throw Error(osError(runDir, "run directory is not writable", errno));
-  removeStaleTemporaries(runDir);
+  DirectoryLock lock(runDir, DirectoryLock::Mode::Exclusive, DirectoryLock::IfHeld::Refuse,
+                     "writing this run");
+  removeStaleTemporariesBelow(runDir);  // images/ too
 
   const fs::path jsonPath = runDir / "results.json";
   if (fs::exists(jsonPath, ec)) {
@@ -265,7 +267,7 @@ void checkRunOutputs(const fs::path& runDir) {
   }
 
   const fs::path dbPath = runDir / "results.db";
-  if (!fs::exists(dbPath, ec)) return;
+  if (!fs::exists(dbPath, ec)) return lock;
   Db expected(":memory:", "schema", SQLITE_OPEN_READWRITE | SQLITE_OPEN_MEMORY);
   expected.exec(kDatabaseSchema);
   Db existing(dbPath, dbPath.string(), SQLITE_OPEN_READONLY);
@@ -289,7 +291,7 @@ void checkRunOutputs(const fs::path& runDir) {
     }
     return text;
   };
-  if (have.empty()) return;  // an empty database file: the append creates the tables
+  if (have.empty()) return lock;  // an empty database file: the append creates the tables
   for (auto& [table, columns] : want) {
     auto it = have.find(table);
     if (it == have.end() || it->second != columns)
@@ -298,6 +300,7 @@ void checkRunOutputs(const fs::path& runDir) {
                   "), this arena writes (" + join(columns) +
                   ")); move it away or choose another --out");
   }
+  return lock;
 }
 
 void commitResults(const fs::path& runDir, const json& results) {

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "core/atomic_file.hpp"
 #include "metrics/metric_registry.hpp"
 #include "metrics/run_results.hpp"
 
@@ -30,7 +31,9 @@ void appendToDatabase(const std::filesystem::path& dbPath, const RunResults& res
 // Before any work: the run directory is (made) writable, an existing results.json is an arena run,
 // and an existing results.db is an intact SQLite database of this schema -- so a bad output fails
 // in a second, naming the file, instead of after every pair has run. Removes stale temporaries.
-void checkRunOutputs(const std::filesystem::path& runDir);
+// The returned lock keeps other arena processes out of the directory until the run is committed:
+// a second run into the same --out is refused (two commits would each drop the other's rows).
+[[nodiscard]] DirectoryLock checkRunOutputs(const std::filesystem::path& runDir);
 // Writes results.json and appends to results.db as one commit: both are written to temporaries
 // (the database as an appended copy) and renamed into place only when both are complete. A
 // document RunResults::fromJson refuses is an Error before any file is touched.

@@ -976,6 +976,15 @@ ReportSummary writeReport(const ReportOptions& o) {
   checkPageAssets(o.webDir, o.nodeModulesDir, files);
   json data = reportData(results, o.run, o.baseline.empty() ? nullptr : &baseline);
   fs::create_directories(o.out);
+  const DirectoryLock lock(o.out, DirectoryLock::Mode::Exclusive, DirectoryLock::IfHeld::Refuse,
+                           "writing a report");
+  // An earlier page here stops being one before anything is written: its data.js goes (a page
+  // without it is incomplete, so a killed report never shows old data over new tiles), its tiles
+  // too, and the temporaries of a killed write.
+  std::error_code ec;
+  fs::remove(o.out / "data.js", ec);
+  fs::remove_all(o.out / "tiles", ec);
+  removeStaleTemporariesBelow(o.out);
   for (size_t i = 0; i < data["scenes"].size(); ++i) {
     json& scene = data["scenes"][i];
     if (scene.contains("viewer"))

@@ -6,11 +6,13 @@
 #include <signal.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
 #include <filesystem>
 #include <string>
+#include <thread>
 
 #include "core/error.hpp"
 #include "metrics/results.hpp"
@@ -63,6 +65,77 @@ struct FileSizeLimit {
 
 // A named pipe where a document belongs is refused at once: a blocking open would wait for a
 // writer forever (a scene file, a mesh, a manifest).
+// Directory locks between processes: an exclusive holder (a child process here) makes a refusing
+// lock fail naming its pid and purpose and a shared one wait until it lets go; a second run into
+// the same run directory is refused; locks nest within one process; a killed holder frees it.
+TEST(AtomicFile, DirectoryLocksKeepOtherProcessesOutAndNestWithinOne) {
+  const fs::path dir = test::freshDir("directory_lock");
+  int ready[2], release[2];
+  ASSERT_EQ(pipe(ready), 0);
+  ASSERT_EQ(pipe(release), 0);
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    {
+      const DirectoryLock held(dir, DirectoryLock::Mode::Exclusive, DirectoryLock::IfHeld::Refuse,
+                               "the child's test");
+      char c = 1;
+      if (write(ready[1], &c, 1) != 1) _exit(2);
+      if (read(release[0], &c, 1) != 1) _exit(3);
+    }
+    _exit(0);
+  }
+  char c = 0;
+  ASSERT_EQ(read(ready[0], &c, 1), 1);
+  const std::string refused = test::errorOf([&] {
+    DirectoryLock(dir, DirectoryLock::Mode::Shared, DirectoryLock::IfHeld::Refuse, "reading");
+  });
+  EXPECT_NE(refused.find(dir.string() + ": another arena process (pid " + std::to_string(child) +
+                         ": the child's test) is using it"),
+            std::string::npos)
+      << refused;
+  const std::string runRefused = test::errorOf([&] { (void)checkRunOutputs(dir); });
+  EXPECT_NE(runRefused.find("is using it"), std::string::npos) << runRefused;
+  // A waiting lock is granted once the holder lets go.
+  const auto asked = std::chrono::steady_clock::now();
+  std::thread letGo([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    char r = 1;
+    EXPECT_EQ(write(release[1], &r, 1), 1);
+  });
+  {
+    const DirectoryLock shared(dir, DirectoryLock::Mode::Shared, DirectoryLock::IfHeld::Wait,
+                               "reading");
+    EXPECT_GE(std::chrono::steady_clock::now() - asked, std::chrono::milliseconds(250));
+    // Nested within this process: granted at once, an exclusive one upgrading the shared one.
+    const DirectoryLock again(dir, DirectoryLock::Mode::Shared, DirectoryLock::IfHeld::Refuse,
+                              "again");
+    const DirectoryLock upgraded(dir, DirectoryLock::Mode::Exclusive, DirectoryLock::IfHeld::Refuse,
+                                 "writing");
+  }
+  letGo.join();
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << status;
+  // A holder killed while holding it leaves it free.
+  const pid_t killed = fork();
+  ASSERT_GE(killed, 0);
+  if (killed == 0) {
+    const DirectoryLock held(dir, DirectoryLock::Mode::Exclusive, DirectoryLock::IfHeld::Refuse,
+                             "to be killed");
+    char r = 1;
+    if (write(ready[1], &r, 1) != 1) _exit(2);
+    pause();
+    _exit(0);
+  }
+  ASSERT_EQ(read(ready[0], &c, 1), 1);
+  kill(killed, SIGKILL);
+  ASSERT_EQ(waitpid(killed, &status, 0), killed);
+  EXPECT_NO_THROW(
+      DirectoryLock(dir, DirectoryLock::Mode::Exclusive, DirectoryLock::IfHeld::Refuse, "after"));
+  for (int fd : {ready[0], ready[1], release[0], release[1]}) close(fd);
+}
+
 TEST(AtomicFile, AFifoIsRefusedWithoutWaitingForAWriter) {
   const fs::path fifo = test::freshDir("atomic_fifo") / "scene.json";
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);

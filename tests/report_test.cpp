@@ -192,6 +192,13 @@ TEST(Report, GeneratorWritesEverySectionAndKeepsTheFailedPair) {
   EXPECT_NE(js.find("missing channel albedo.R"), std::string::npos);
   EXPECT_EQ(data["pairs"].size(), 6u);
   EXPECT_EQ(data["pairs"][5]["status"], "failed");
+  // Written again into the same folder: an earlier page's tiles go (a killed report had left new
+  // tiles beside the old data.js).
+  fs::create_directories(o.out / "tiles");
+  std::ofstream(o.out / "tiles" / "s9_f99.js") << "stale";
+  writeReport(o);
+  EXPECT_FALSE(fs::exists(o.out / "tiles" / "s9_f99.js"));
+  EXPECT_TRUE(fs::exists(o.out / "data.js"));
 }
 
 TEST(Report, DataHasFrontNoiseFloorViewerAndAblation) {

@@ -15,6 +15,7 @@
 #include "core/exr_io.hpp"
 #include "core/sequence.hpp"
 #include "metrics/evaluator.hpp"
+#include "metrics/results.hpp"
 #include "tests/contract_fixture.hpp"
 #include "tests/test_util.hpp"
 #include "tracer/render.hpp"
@@ -283,6 +284,17 @@ TEST(SequenceCacheContract, ADeadWritersTemporaryOnThisMachineIsCleanedAtAnyAge)
   renderSequence(scene, settings, cache, nullptr);
   EXPECT_FALSE(fs::exists(leftover));
   EXPECT_NO_THROW(Sequence::open(seq).frame(1));
+  // Below the top of a directory (a run's images/<scene>/<label>/, a report's tiles/) as well.
+  fs::create_directories(dir / "images" / "scene" / "svgf");
+  const fs::path deep = dir / "images" / "scene" / "svgf" / ("flip_0002.tmp" + dead + "@" + host + "_9.png");
+  writeTextAtomically(deep, "partial");
+  EXPECT_EQ(removeStaleTemporaries(dir), 0);
+  EXPECT_EQ(removeStaleTemporariesBelow(dir), 1);
+  EXPECT_FALSE(fs::exists(deep));
+  // A run clears them when it starts in its directory.
+  writeTextAtomically(deep, "partial");
+  (void)checkRunOutputs(dir);
+  EXPECT_FALSE(fs::exists(deep));
 }
 
 }  // namespace

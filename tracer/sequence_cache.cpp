@@ -249,9 +249,13 @@ void shareReference(const fs::path& home, const fs::path& dir, int r) {
 
 }  // namespace
 
-fs::path refineSequence(const Scene& scene, const RenderSettings& settings, const fs::path& cacheRoot,
-                        double targetRelMse, int maxSpp, const ProgressFn& progress, int fromFrame) {
+fs::path refineSequence(const Scene& scene, const RenderSettings& settings,
+                        const fs::path& cacheRoot, double targetRelMse, int maxSpp,
+                        const ProgressFn& progress, int fromFrame) {
   if (!(targetRelMse > 0)) throw Error("refine: --target must be a positive relMSE, got " + formatDouble(targetRelMse));
+  // Refinement rewrites references other processes may be reading: it waits until none is.
+  const DirectoryLock lock(cacheRoot, DirectoryLock::Mode::Exclusive, DirectoryLock::IfHeld::Wait,
+                           "refining the references of " + scene.name);
   StageTimer timer(Stage::Refinement);
   const fs::path dir = sequenceDir(scene, settings, cacheRoot);
   if (!fs::exists(dir / "sequence.json"))
@@ -301,11 +305,14 @@ fs::path refineSequence(const Scene& scene, const RenderSettings& settings, cons
   return dir;
 }
 
-fs::path renderSequence(const Scene& scene, const RenderSettings& settings, const fs::path& cacheRoot,
-                        const ProgressFn& progress, const Shard& shard) {
+fs::path renderSequence(const Scene& scene, const RenderSettings& settings,
+                        const fs::path& cacheRoot, const ProgressFn& progress, const Shard& shard) {
   if (shard.count < 1 || shard.index < 0 || shard.index >= shard.count)
     throw Error("--shard " + std::to_string(shard.index) + "/" + std::to_string(shard.count) +
                 ": expected i/n with 0 <= i < n");
+  // Renders share the cache (each file is written atomically); a refinement waits for them.
+  const DirectoryLock lock(cacheRoot, DirectoryLock::Mode::Shared, DirectoryLock::IfHeld::Wait,
+                           "rendering " + scene.name);
   StageTimer timer(Stage::Frames);  // the references inside it count as theirs
   const std::string hash = sequenceHash(scene, settings);
   const fs::path dir = sequenceDir(scene, settings, cacheRoot);
