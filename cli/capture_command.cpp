@@ -45,7 +45,7 @@ CheckStatus printValidation(const std::filesystem::path& dir) {
   std::cout << ")\n";
   printChecks(v);
   std::cout << "verdict: " << checkStatusName(v.status()) << "\n";
-  const CaptureValidation outputs = validateCaptureOutputs(sequence.capture());
+  const CaptureValidation outputs = validateCaptureOutputs(sequence.capture(), input.references);
   if (outputs.checks.size() > 1 ||
       outputs.status() != CheckStatus::Pass) {  // more than "none undeclared"
     std::cout << "stored outputs (--denoisers file:NAME)\n";

@@ -1,9 +1,12 @@
 #include "core/capture.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <optional>
+#include <set>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
@@ -251,7 +254,8 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
           "meshId",
           "only an object_moves event names a mesh (its moving object's id in the meshId layer)");
     for (const SequenceEvent& other : info.events)
-      if (other.frame == event.frame && other.kind == event.kind && other.what == event.what)
+      if (other.frame == event.frame && other.kind == event.kind && other.what == event.what &&
+          other.meshId == event.meshId)
         e.fail("kind", "this event (" + kind + " at frame " + std::to_string(frame) +
                            (event.what.empty() ? "" : " of '" + event.what + "'") +
                            ") is given twice");
@@ -385,9 +389,28 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
     for (unsigned char ch : s) hash = (hash ^ ch) * 1099511628211ull;
   };
   mix(text);
+  std::optional<long> frameOffset;  // arena.capture.frame - t, from the first frame that has one
   for (int t = 0; t < n; ++t) {
     const fs::path f = captureFramePath(dir, t);
     if (!fs::exists(f)) throw Error(f.string() + ": frame " + std::to_string(t) + " of " + std::to_string(n) + " is missing");
+    // Frames that say which one they are (arena export writes the attribute) keep their order: a
+    // file copied over another or frames swapped are refused, not scored in the wrong place. A
+    // constant offset is a trimmed sequence renumbered, and stands.
+    const ExrAttributes attributes = readExrAttributes(f);
+    if (const auto it = attributes.find("arena.capture.frame"); it != attributes.end()) {
+      long index = 0;
+      try {
+        index = std::stol(it->second);
+      } catch (const std::exception&) {
+        throw Error(f.string() + ": arena.capture.frame '" + it->second + "' is not a frame index");
+      }
+      if (!frameOffset) frameOffset = index - t;
+      if (index - t != *frameOffset)
+        throw Error(f.string() + ": holds frame " + it->second +
+                    " (its arena.capture.frame attribute), where the "
+                    "frames before it say frame " +
+                    std::to_string(t + *frameOffset) + ": copied over another, or out of order");
+    }
     mix(std::to_string(fs::file_size(f)));
   }
   char buf[32];
@@ -413,12 +436,6 @@ LayerSet readCaptureFrame(const CaptureDescription& c, int t) {
       throw Error(file.string() + ": layer '" + s.name + "' is in this frame but not in " +
                   captureFramePath(c.dir, 0).filename().string() +
                   " (every frame of a capture holds the same layers)");
-  // A frame that says which one it is (arena export writes the attribute) must be that one: a file
-  // copied over another or frames renamed out of order are refused, not scored in the wrong place.
-  if (const auto it = contents.attributes.find("arena.capture.frame");
-      it != contents.attributes.end() && it->second != std::to_string(t))
-    throw Error(file.string() + ": holds frame " + it->second +
-                " (its arena.capture.frame attribute), expected " + std::to_string(t));
   LayerSet layers = std::move(contents.layers);
   const int w = info.width, hgt = info.height;
   const size_t pixels = size_t(w) * size_t(hgt);
@@ -480,13 +497,47 @@ LayerSet readCaptureReference(const CaptureDescription& c, int r) {
   return layers;
 }
 
-Image readCaptureOutput(const CaptureDescription& c, const std::string& name, int t) {
-  const CaptureOutput& o = c.output(name);
-  const fs::path file = captureOutputPath(o, t);
+Image readOutputFrame(const fs::path& file, const std::string& name, int width, int height) {
   LayerSet layers =
-      readExr(file, {{"color", {"R", "G", "B"}, false}}, ExrSize{c.info.width, c.info.height})
-          .layers;
-  return std::move(layers.get("color"));
+      readExr(file, {{"color", {"R", "G", "B"}, false}}, ExrSize{width, height}).layers;
+  Image color = std::move(layers.get("color"));
+  if (const long bad = nonFiniteValues(color))
+    throw Error(file.string() + ": " + std::to_string(bad) +
+                " non-finite colour values in the output of '" + name +
+                "' (an output is scored as given, never repaired)");
+  return color;
+}
+
+Image readCaptureOutput(const CaptureDescription& c, const std::string& name, int t) {
+  return readOutputFrame(captureOutputPath(c.output(name), t), name, c.info.width, c.info.height);
+}
+
+std::vector<std::string> undescribedEntries(const CaptureDescription& c) {
+  std::set<std::string> described = {"capture.json", "outputs", ".arena.lock"};
+  for (int t = 0; t < c.info.frames; ++t) {
+    described.insert(captureFramePath(c.dir, t).filename().string());
+    if (t > 0 && c.info.hasGradients)
+      described.insert(captureGradientPath(c.dir, t).filename().string());
+  }
+  for (size_t r = 0; r < c.info.referenceSpp.size(); ++r)
+    described.insert(captureReferencePath(c.dir, int(r)).filename().string());
+  std::vector<std::string> out;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(c.dir, ec))
+    if (!described.count(entry.path().filename().string()))
+      out.push_back(entry.path().filename().string());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::vector<std::string> undeclaredOutputs(const CaptureDescription& c) {
+  std::vector<std::string> out;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(c.dir / "outputs", ec))
+    if (entry.is_directory(ec) && !c.outputs.count(entry.path().filename().string()))
+      out.push_back(entry.path().filename().string());
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
 CaptureWriter::CaptureWriter(fs::path out) : out_(std::move(out)) {
@@ -593,18 +644,8 @@ void exportCapture(const Sequence& sequence, const fs::path& out, const std::map
       if (!fs::exists(src))
         throw Error(src.string() + ": output frame " + std::to_string(t) + " of '" + name +
                     "' is missing (`arena run --keep-frames all` writes every frame)");
-      const Image color = readExr(src, {{"color", {"R", "G", "B"}, false}}).layers.get("color");
-      // What the capture's reader will require of it (readCaptureOutput, runCapturedOutput).
-      if (color.width() != info.width || color.height() != info.height)
-        throw Error(src.string() + ": output frame " + std::to_string(t) + " of '" + name +
-                    "' is " + std::to_string(color.width()) + "x" + std::to_string(color.height()) +
-                    ", expected " + std::to_string(info.width) + "x" + std::to_string(info.height) +
-                    " (the sequence's size)");
-      if (const long bad = nonFiniteValues(color))
-        throw Error(src.string() + ": output frame " + std::to_string(t) + " of '" + name +
-                    "' has " + std::to_string(bad) +
-                    " non-finite colour values (an output is scored as given, never repaired)");
-      writer.output(name, t, color);
+      // Read as the capture's reader will: a frame it would refuse is never exported.
+      writer.output(name, t, readOutputFrame(src, name, info.width, info.height));
     }
     doc["outputs"][name] = json::object();
   }

@@ -76,6 +76,16 @@ LayerSet readCaptureFrame(const CaptureDescription& capture, int t);
 // referenceHasVariance is false and every reader says the noise floor is unknown) and colorHalf
 // when given.
 LayerSet readCaptureReference(const CaptureDescription& capture, int r);
+// One stored output frame as a run reads it (`name` names the output in errors): its colour at
+// width x height (checked before its pixels are read), every value finite; an Error naming the
+// file otherwise. readCaptureOutput reads a capture's through it, `arena export --output` too.
+Image readOutputFrame(const std::filesystem::path& file, const std::string& name, int width,
+                      int height);
+// Entries of the capture's folder its description does not cover (a frame beyond `frames`, a
+// reference no frame names, notes), sorted: never read.
+std::vector<std::string> undescribedEntries(const CaptureDescription& capture);
+// Folders in outputs/ that capture.json does not declare, sorted: never scored.
+std::vector<std::string> undeclaredOutputs(const CaptureDescription& capture);
 // A denoiser output's colour at frame t.
 Image readCaptureOutput(const CaptureDescription& capture, const std::string& name, int t);
 

@@ -129,6 +129,9 @@ struct DenoiserInfo {
   std::function<std::unique_ptr<Denoiser>(const ParamSet&, SignalKind)> create;
   SignalMode signals = SignalMode::Demodulated;
   std::string origin;  // where it came from: empty for built-ins, else the manifest or library
+  // Its output is its input signal unchanged (passthrough): on a capture of the colour alone it
+  // runs on the colour, the same image its remodulated signals give where the parts exist.
+  bool identity = false;
 };
 
 class DenoiserRegistry {

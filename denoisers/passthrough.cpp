@@ -20,8 +20,10 @@ class Passthrough final : public Denoiser {
 }  // namespace
 
 DenoiserInfo passthroughInfo() {
-  return {"passthrough", "The noisy 1-spp input, unfiltered (baseline)", ParamSchema{},
-          [](const ParamSet&, SignalKind) { return std::make_unique<Passthrough>(); }};
+  DenoiserInfo info{"passthrough", "The noisy 1-spp input, unfiltered (baseline)", ParamSchema{},
+                    [](const ParamSet&, SignalKind) { return std::make_unique<Passthrough>(); }};
+  info.identity = true;
+  return info;
 }
 
 }  // namespace arena

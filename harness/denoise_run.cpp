@@ -76,17 +76,13 @@ std::string capturedOutputName(const std::string& entry) {
 DenoiseRun::DenoiseRun(const DenoiserRequest& request, const Sequence& sequence)
     : sequence_(sequence), request_(request), info_(DenoiserRegistry::instance().find(request.name)) {
   params_ = info_.schema.resolve(request.params, request.name);
-  // A capture of the colour alone has no signals to demodulate. A denoiser that reads nothing but
-  // its signal (passthrough: the input as given) then runs on the colour, which is the same image
-  // it would remodulate to; any other needs the parts and says so below.
+  // A capture of the colour alone has no signals to demodulate. A denoiser whose output is its
+  // input (passthrough) then runs on the colour, the same image its remodulated signals give; any
+  // other needs the parts and says so below.
   mode_ = info_.signals;
-  if (mode_ == SignalMode::Demodulated && sequence.isCapture()) {
+  if (mode_ == SignalMode::Demodulated && info_.identity && sequence.isCapture()) {
     const std::vector<std::string> known = sequence.info().availableLayers();
-    const bool hasParts = std::find(known.begin(), known.end(), "diffuse") != known.end();
-    const std::unique_ptr<Denoiser> probe = info_.create(params_, SignalKind::Diffuse);
-    if (!hasParts && probe->requiredChannels().empty() && !probe->needsGradients() &&
-        !probe->wantsLowres())
-      mode_ = SignalMode::Color;
+    if (std::find(known.begin(), known.end(), "diffuse") == known.end()) mode_ = SignalMode::Color;
   }
   if (mode_ == SignalMode::Color) {
     instances_.emplace_back(SignalKind::Color, info_.create(params_, SignalKind::Color));

@@ -49,7 +49,7 @@ class DenoiseRun {
   const ParamSet& params() const { return params_; }
   const DenoiserInfo& info() const { return info_; }
   // What the instances filter: the registered mode, or the colour where a capture has no parts
-  // and the denoiser reads nothing but its signal (passthrough on a colour-only capture).
+  // and the denoiser's output is its input (DenoiserInfo::identity: passthrough).
   SignalMode signals() const { return mode_; }
   // The denoiser reads the sequence's low-resolution buffer (it wants it and the sequence has one).
   bool readsLowres() const { return readsLowres_; }

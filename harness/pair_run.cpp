@@ -58,10 +58,7 @@ void runCapturedOutput(const Sequence& sequence, const std::string& name,
   DenoisedFrame f;
   for (int t = 0; t < sequence.info().frames; ++t) {
     f.frame = t;
-    f.color = readCaptureOutput(capture, name, t);
-    if (const long bad = nonFiniteValues(f.color))
-      throw Error(captureOutputPath(output, t).string() + ": " + std::to_string(bad) +
-                  " non-finite colour values in the output of '" + name + "' (an output is scored as given, never repaired)");
+    f.color = readCaptureOutput(capture, name, t);  // refuses non-finite values, naming the file
     f.selfTimed = !output.milliseconds.empty();
     f.milliseconds = f.selfTimed ? output.milliseconds[size_t(t)] : std::numeric_limits<double>::quiet_NaN();
     onFrame(f);

@@ -95,13 +95,27 @@ bool sameValues(const Image& a, const Image& b) {
   return x.size() == y.size() && std::memcmp(x.data(), y.data(), x.size_bytes()) == 0;
 }
 
+// "a, b, c" (at most 8, then "...").
+std::string listText(const std::vector<std::string>& items) {
+  std::string out;
+  for (size_t k = 0; k < items.size() && k < 8; ++k) out += (k ? ", " : "") + items[k];
+  if (items.size() > 8) out += ", ...";
+  return out;
+}
+
+// A soft check counting what the capture holds and nothing reads (folders, files, channels):
+// "<before>a, b, c<after>" when there are any.
+CaptureCheck namesWarning(std::string name, const std::vector<std::string>& names, std::string unit,
+                          const std::string& before, const std::string& after) {
+  return check(std::move(name), double(names.size()), 0, kSoft, std::move(unit),
+               names.empty() ? "" : before + listText(names) + after);
+}
+
 // "0, 3, 7" (at most 8, then "...").
 std::string frameList(const std::vector<int>& frames) {
-  std::string out;
-  for (size_t k = 0; k < frames.size() && k < 8; ++k)
-    out += (k ? ", " : "") + std::to_string(frames[k]);
-  if (frames.size() > 8) out += ", ...";
-  return out;
+  std::vector<std::string> items;
+  for (int f : frames) items.push_back(std::to_string(f));
+  return listText(items);
 }
 
 }  // namespace
@@ -229,25 +243,33 @@ PositionConsistency checkPositions(const std::vector<LayerSet>& frames,
                                    const std::vector<CameraState>& cameras) {
   PositionConsistency out;
   long off = 0;
+  // The median ratio from at most about a million pixels (every k-th): a 1080p sequence of 100
+  // frames would otherwise hold 200 million ratios.
+  size_t all = 0;
+  for (const LayerSet& f : frames) all += f.get("depth").pixelCount();
+  const size_t every = std::max<size_t>(1, all / 1000000);
   std::vector<float> ratios;
   for (size_t t = 0; t < frames.size(); ++t) {
     const Image &depth = frames[t].get("depth"), &position = frames[t].get("position");
     const CameraState& cam = cameras[t];
+    const float pixelAngle = 2.0f * cam.tanHalfFovY / float(cam.height);  // radians per pixel
     for (int y = 0; y < depth.height(); ++y)
       for (int x = 0; x < depth.width(); ++x) {
         const float z = depth.at(x, y);
         const glm::vec3 p(position.at(x, y, 0), position.at(x, y, 1), position.at(x, y, 2));
         if (!(z > 0) || !std::isfinite(z) || !std::isfinite(p.x + p.y + p.z))
           continue;  // sky, or counted as non-finite
-        ++out.pixels;
         const float stored = cam.viewDepth(p);
-        ratios.push_back(stored / z);
-        // Within the pixel's sample (jitter of up to a pixel, or a random point in it) and storage.
+        if (size_t(out.pixels++) % every == 0) ratios.push_back(stored / z);
+        // Within the pixel's sample (jitter of up to a pixel, or a random point in it) and the
+        // storage: a half float holds |p| to about 4.9e-4 |p| (world coordinates far from the
+        // origin lose the most), which the depth and pixel tolerances both allow.
+        const float storage = 4.9e-4f * glm::length(p);
         glm::vec2 pixel;
-        const bool depthOff = !(std::abs(stored - z) <= 0.01f * z + 1e-5f);
-        const bool pixelOff =
-            !cam.project(p, pixel) ||
-            glm::length(pixel - glm::vec2(float(x) + 0.5f, float(y) + 0.5f)) > 2.0f;
+        const bool depthOff = !(std::abs(stored - z) <= 0.01f * z + storage + 1e-5f);
+        const bool pixelOff = !cam.project(p, pixel) ||
+                              glm::length(pixel - glm::vec2(float(x) + 0.5f, float(y) + 0.5f)) >
+                                  2.0f + storage / (z * pixelAngle);
         off += depthOff || pixelOff;
       }
   }
@@ -258,37 +280,31 @@ PositionConsistency checkPositions(const std::vector<LayerSet>& frames,
   return out;
 }
 
-CaptureValidation validateCaptureOutputs(const CaptureDescription& capture) {
+CaptureValidation validateCaptureOutputs(const CaptureDescription& capture,
+                                         const std::vector<LayerSet>& references) {
   CaptureValidation v;
   for (const auto& [name, output] : capture.outputs) {
-    // What `--denoisers file:NAME` would meet frame by frame: the first problem of each bad frame.
+    // What `--denoisers file:NAME` meets frame by frame (the same reader and messages): the first
+    // problem of each bad frame.
     std::vector<int> bad, equalsReference;
     std::string first;
     for (int t = 0; t < capture.info.frames; ++t) {
-      std::string problem;
+      Image color;
       try {
-        const Image color = readCaptureOutput(capture, name, t);
-        if (const long n = nonFiniteValues(color))
-          problem = captureOutputPath(output, t).string() + ": " + std::to_string(n) +
-                    " non-finite colour values";
-        if (capture.info.hasReference &&
-            sameValues(color,
-                       readCaptureReference(capture, capture.info.referenceOfFrame[size_t(t)])
-                           .get("color")))
-          equalsReference.push_back(t);
+        color = readCaptureOutput(capture, name, t);
       } catch (const Error& e) {
-        problem = e.what();
+        bad.push_back(t);
+        if (first.empty()) first = e.what();
+        continue;
       }
-      if (problem.empty()) continue;
-      bad.push_back(t);
-      if (first.empty()) first = problem;
+      const size_t r = capture.info.hasReference ? size_t(capture.info.referenceOfFrame[size_t(t)])
+                                                 : references.size();
+      if (r < references.size() && sameValues(color, references[r].get("color")))
+        equalsReference.push_back(t);
     }
-    v.checks.push_back(check("output." + name, double(bad.size()), 0, 0, "frames",
-                             bad.empty() ? ""
-                                         : "frame(s) " + frameList(bad) +
-                                               " cannot be scored (an output is scored as "
-                                               "given, never repaired); first: " +
-                                               first));
+    v.checks.push_back(check(
+        "output." + name, double(bad.size()), 0, 0, "frames",
+        bad.empty() ? "" : "frame(s) " + frameList(bad) + " cannot be scored; first: " + first));
     if (!equalsReference.empty())
       v.checks.push_back(check(
           "output." + name + ".equalsReference", double(equalsReference.size()), 0, kSoft, "frames",
@@ -297,20 +313,9 @@ CaptureValidation validateCaptureOutputs(const CaptureDescription& capture) {
               "reference wired in as the output?)"));
   }
   // Folders the description does not declare are never scored: said, so a forgotten entry shows.
-  std::error_code ec;
-  std::vector<std::string> undeclared;
-  for (const auto& entry : std::filesystem::directory_iterator(capture.dir / "outputs", ec)) {
-    const std::string folder = entry.path().filename().string();
-    if (entry.is_directory() && !capture.outputs.count(folder)) undeclared.push_back(folder);
-  }
-  std::sort(undeclared.begin(), undeclared.end());
-  std::string names;
-  for (const std::string& u : undeclared) names += (names.empty() ? "" : ", ") + u;
-  v.checks.push_back(check("outputs.undeclared", double(undeclared.size()), 0, kSoft, "folders",
-                           undeclared.empty() ? ""
-                                              : "outputs/ holds " + names +
-                                                    ", not in capture.json's \"outputs\": "
-                                                    "never scored until declared there"));
+  v.checks.push_back(
+      namesWarning("outputs.undeclared", undeclaredOutputs(capture), "folders", "outputs/ holds ",
+                   ", not in capture.json's \"outputs\": never scored until declared there"));
   return v;
 }
 
@@ -484,18 +489,27 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
                              "none (stabilityFine, stabilityCoarse, time), labelled as such"));
   } else {
     // Which reference frames are black, hold negative radiance, or repeat their input frame.
+    // Negative: below -1e-3 of the reference's mean luminance (a filtered or denoised reference
+    // carries values like -1e-7 from negative filter lobes; a negated one is negative throughout).
     std::vector<int> black, equal;
     long negative = 0, values = 0;
     for (size_t r = 0; r < input.references.size(); ++r) {
       const Image& c = input.references[r].get("color");
       if (!hasSignal(c)) black.push_back(int(r));
-      for (float x : c.raw()) negative += x < 0.0f;
+      const float below = -1e-3f * float(meanLuminance(c)) - 1e-12f;
+      for (float x : c.raw()) negative += x < below;
       values += long(c.raw().size());
     }
-    for (size_t t = 0; t < input.frames.size(); ++t)
-      if (sameValues(input.frames[t].get("color"),
-                     input.references[size_t(input.referenceOfFrame[t])].get("color")))
+    // Equal to the input: frames with signal only (a black frame of a fade is black in both, and
+    // color.blackFrames names it).
+    int signalFrames = 0;
+    for (size_t t = 0; t < input.frames.size(); ++t) {
+      const Image& color = input.frames[t].get("color");
+      if (!hasSignal(color)) continue;
+      ++signalFrames;
+      if (sameValues(color, input.references[size_t(input.referenceOfFrame[t])].get("color")))
         equal.push_back(int(t));
+    }
     // An independent half equal to the mean gives a noise floor of exactly 0.
     std::vector<int> halfIsMean;
     for (size_t r = 0; r < input.references.size(); ++r)
@@ -511,15 +525,15 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
                             "relative errors there measure only the output's own brightness (fails "
                             "when every reference does: nothing to measure against)"));
     v.checks.push_back(check("reference.negative", values ? double(negative) / double(values) : 0,
-                             0, 0.001, "share of values",
+                             0, 0.001, "share of values below -0.001 x the mean luminance",
                              "radiance is not negative; a negative reference is not one"));
-    v.checks.push_back(
-        check("reference.equalsInput", double(equal.size()), 0, 0, "frames",
-              equal.empty() ? ""
-                            : "frame(s) " + frameList(equal) +
-                                  " equal their reference value for "
-                                  "value: the input scores as perfect there (a reference must be "
-                                  "rendered apart from the input)"));
+    v.checks.push_back(check(
+        "reference.equalsInput", double(equal.size()), 0, std::max(0, signalFrames - 1), "frames",
+        equal.empty() ? ""
+                      : "frame(s) " + frameList(equal) +
+                            " equal their reference value for value: the input scores as perfect "
+                            "there (a reference must be rendered apart from the input; fails when "
+                            "every frame with a signal does)"));
     if (sequence.isCapture() && sequence.capture().referenceHasHalf)
       v.checks.push_back(
           check("reference.halfEqualsMean", double(halfIsMean.size()), 0, kSoft, "references",
@@ -570,42 +584,20 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
     }
   }
 
-  // 6. Jitter: built-in denoisers assume samples at pixel centres.
   if (sequence.isCapture()) {
-    // 7. What the folder holds beyond the description: never read, so a typo or a stray frame is
+    // 6. What the folder holds beyond the description: never read, so a typo or a stray frame is
     // said rather than silently ignored.
     const CaptureDescription& c = sequence.capture();
-    std::string unknown;
-    for (const std::string& ch : c.unknownChannels) unknown += (unknown.empty() ? "" : ", ") + ch;
-    v.checks.push_back(check(
-        "channels.unknown", double(c.unknownChannels.size()), 0, kSoft, "channels",
-        unknown.empty() ? ""
-                        : captureFramePath(c.dir, 0).filename().string() + " holds " + unknown +
-                              ", which no layer names (docs/captures.md lists them): ignored"));
-    std::set<std::string> expected = {"capture.json", "outputs"};
-    for (int t = 0; t < info.frames; ++t) {
-      expected.insert(captureFramePath(c.dir, t).filename().string());
-      if (t > 0 && info.hasGradients)
-        expected.insert(captureGradientPath(c.dir, t).filename().string());
-    }
-    for (size_t r = 0; r < input.references.size(); ++r)
-      expected.insert(captureReferencePath(c.dir, int(r)).filename().string());
-    std::vector<std::string> stray;
-    std::error_code ec;
-    for (const auto& entry : std::filesystem::directory_iterator(c.dir, ec))
-      if (!expected.count(entry.path().filename().string()))
-        stray.push_back(entry.path().filename().string());
-    std::sort(stray.begin(), stray.end());
-    std::string names;
-    for (size_t k = 0; k < stray.size() && k < 8; ++k) names += (k ? ", " : "") + stray[k];
-    if (stray.size() > 8) names += ", ...";
-    v.checks.push_back(check(
-        "files.unexpected", double(stray.size()), 0, kSoft, "files",
-        stray.empty() ? ""
-                      : "the folder holds " + names +
-                            ", which capture.json does not describe (a "
-                            "frame beyond `frames`, a reference no frame names): never read"));
+    v.checks.push_back(
+        namesWarning("channels.unknown", c.unknownChannels, "channels",
+                     captureFramePath(c.dir, 0).filename().string() + " holds ",
+                     ", which no layer names (docs/captures.md lists them): ignored"));
+    v.checks.push_back(
+        namesWarning("files.unexpected", undescribedEntries(c), "files", "the folder holds ",
+                     ", which capture.json does not describe (a frame beyond `frames`, a "
+                     "reference no frame names): never read"));
 
+    // 7. Jitter: built-in denoisers assume samples at pixel centres.
     double maxJitter = 0;
     for (const auto& j : sequence.capture().jitter) maxJitter = std::max({maxJitter, std::abs(j[0]), std::abs(j[1])});
     v.checks.push_back(check("jitter", maxJitter, 0, kSoft, "px",

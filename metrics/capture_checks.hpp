@@ -69,7 +69,10 @@ PositionConsistency checkPositions(const std::vector<LayerSet>& frames,
 // them: per output, the frames missing, unreadable, of another size or with non-finite values
 // (fail: that contender's pair would fail); folders in outputs/ the description does not declare
 // (warn). Apart from validateCapture: a bad stored output fails its own pair, not the capture.
-CaptureValidation validateCaptureOutputs(const CaptureDescription& capture);
+// `references`: the capture's references as read for evaluation (an output equal to its frame's
+// reference warns); empty when it has none.
+CaptureValidation validateCaptureOutputs(const CaptureDescription& capture,
+                                         const std::vector<LayerSet>& references);
 
 // Every check of a sequence read for evaluation (frames, references) and its description.
 CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInput& input);

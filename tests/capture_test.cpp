@@ -4,6 +4,7 @@
 // as a producer, end to end.
 #include "core/capture.hpp"
 
+#include <Imath/half.h>
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
@@ -456,6 +457,7 @@ TEST(CaptureValidation, BlackNegativeOrRepeatedColourIsRefusedNamingTheFrames) {
   // ... and the run refuses it: no pair is scored on it.
   const json r =
       runMatrix(captureRun(test::freshDir("input_black_run"), {{"passthrough", {}, ""}}, {dark}));
+  ASSERT_FALSE(r["pairs"].empty());
   for (const json& p : r["pairs"]) {
     EXPECT_EQ(p["status"], "failed") << p["label"];
     EXPECT_NE(p.value("error", "").find("color.blackFrames"), std::string::npos)
@@ -486,24 +488,62 @@ TEST(CaptureValidation, BlackNegativeOrRepeatedColourIsRefusedNamingTheFrames) {
   EXPECT_EQ(eq.status, CheckStatus::Fail);
   EXPECT_EQ(eq.value, 6.0);
   EXPECT_NE(eq.detail.find("frame(s) 0, 1, 2, 3, 4, 5 "), std::string::npos) << eq.detail;
+
+  // A fade: frame 3 black in the input and its reference alike. Both are said (warnings); the
+  // frames are not "equal to the input" (nothing to score), so the capture is not refused.
+  const fs::path fadeBoth = writeSynthetic("fade_both");
+  editFrames(fadeBoth, [](int t, LayerSet& f) {
+    if (t == 3) f.get("color").fill(0.0f);
+  });
+  editReferences(fadeBoth, [](int k, Image& img) {
+    if (k == 3) img.fill(0.0f);
+  });
+  const CaptureValidation fadeV = validate(fadeBoth);
+  EXPECT_EQ(checkNamed(fadeV, "reference.equalsInput").status, CheckStatus::Pass)
+      << checkNamed(fadeV, "reference.equalsInput").detail;
+  EXPECT_EQ(checkNamed(fadeV, "color.blackFrames").status, CheckStatus::Warn);
+  EXPECT_EQ(checkNamed(fadeV, "reference.blackFrames").status, CheckStatus::Warn);
+  EXPECT_NE(fadeV.status(), CheckStatus::Fail) << fadeV.failures();
+  // One frame's reference copied from its input: a warning; every frame's: refused (above).
+  const fs::path oneCopied = writeSynthetic("reference_one_copied");
+  const CaptureDescription oc = readCaptureDescription(oneCopied);
+  editReferences(oneCopied, [&](int k, Image& ref) {
+    if (k == 1) ref = readCaptureFrame(oc, k).get("color");
+  });
+  EXPECT_EQ(checkNamed(validate(oneCopied), "reference.equalsInput").status, CheckStatus::Warn);
+  // A filtered reference's tiny negative values (a negative filter lobe) are not negative radiance.
+  const fs::path lobes = writeSynthetic("reference_lobes");
+  editReferences(lobes, [](int, Image& img) {
+    for (size_t i = 0; i < img.raw().size(); i += 3) img.raw()[i] = -1e-7f;
+  });
+  EXPECT_EQ(checkNamed(validate(lobes), "reference.negative").status, CheckStatus::Pass);
 }
 
 // A stored position must be where depth and camera put it: one in other units (millimetres) is
-// refused and the ratio said; a capture without positions derives them and is not checked.
+// refused and the ratio said; one from a sample off the pixel centre (jitter) and stored as half
+// floats passes; a capture without positions derives them and is not checked.
 TEST(CaptureValidation, PositionsInOtherUnitsThanDepthAreRefused) {
   const Synthetic s;
   const fs::path dir = writeSynthetic("positions");
-  editFrames(dir, [&](int t, LayerSet& f) {
-    const CameraState cam = s.camera(t);
-    Image position(s.w, s.h, 3);
-    for (int y = 0; y < s.h; ++y)
-      for (int x = 0; x < s.w; ++x) {
-        const glm::vec3 ray = cam.rayDirection(float(x) + 0.5f, float(y) + 0.5f);
-        const glm::vec3 p = cam.eye + ray * (f.get("depth").at(x, y) / glm::dot(ray, cam.forward));
-        for (int k = 0; k < 3; ++k) position.at(x, y, k) = p[k];
-      }
-    f.set("position", std::move(position));
-  });
+  auto writePositions = [&](glm::vec2 sampleOffset, bool halfFloats) {
+    editFrames(dir, [&](int t, LayerSet& f) {
+      const CameraState cam = s.camera(t);
+      Image position(s.w, s.h, 3);
+      for (int y = 0; y < s.h; ++y)
+        for (int x = 0; x < s.w; ++x) {
+          const glm::vec3 ray =
+              cam.rayDirection(float(x) + 0.5f + sampleOffset.x, float(y) + 0.5f + sampleOffset.y);
+          const glm::vec3 p =
+              cam.eye + ray * (f.get("depth").at(x, y) / glm::dot(ray, cam.forward));
+          for (int k = 0; k < 3; ++k) position.at(x, y, k) = halfFloats ? float(half(p[k])) : p[k];
+        }
+      f.set("position", std::move(position));
+    });
+  };
+  writePositions({0.7f, -0.6f}, true);
+  const CaptureCheck jittered = checkNamed(validate(dir), "position.consistency");
+  EXPECT_EQ(jittered.status, CheckStatus::Pass) << jittered.value << " " << jittered.detail;
+  writePositions({0.0f, 0.0f}, false);
   const CaptureCheck good = checkNamed(validate(dir), "position.consistency");
   EXPECT_EQ(good.status, CheckStatus::Pass) << good.value << " " << good.detail;
   EXPECT_NEAR(good.value, 0.0, 1e-9);
@@ -577,7 +617,8 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
           readCaptureReference(base, base.info.referenceOfFrame[size_t(t)]).get("color"));
   }
   fs::create_directories(dir / "outputs" / "forgotten");
-  const CaptureValidation v = validateCaptureOutputs(readCaptureDescription(dir));
+  const CaptureValidation v = validateCaptureOutputs(
+      readCaptureDescription(dir), readSequenceForEvaluation(Sequence::open(dir)).references);
   EXPECT_EQ(checkNamed(v, "output.good").status, CheckStatus::Pass) << checkNamed(v, "output.good").detail;
   const CaptureCheck &missing = checkNamed(v, "output.short"), &small = checkNamed(v, "output.small"),
                      &nan = checkNamed(v, "output.nan"), &forgotten = checkNamed(v, "outputs.undeclared");
@@ -655,11 +696,25 @@ TEST(CaptureValidation, UndescribedFilesUnknownChannelsAndMisplacedFramesAreSaid
   // Frame 1 copied over frame 2: its attribute says it is frame 1.
   fs::copy_file(captureFramePath(dir, 1), captureFramePath(dir, 2),
                 fs::copy_options::overwrite_existing);
-  const std::string error = test::errorOf([&] { readCaptureFrame(c, 2); });
+  const std::string error = test::errorOf([&] { readCaptureDescription(dir); });
   EXPECT_NE(
-      error.find("frame_0002.exr: holds frame 1 (its arena.capture.frame attribute), expected 2"),
+      error.find(
+          "frame_0002.exr: holds frame 1 (its arena.capture.frame attribute), where the frames "
+          "before it say frame 2"),
       std::string::npos)
       << error;
+  // Frames renumbered after a trim keep one offset between name and attribute: they stand.
+  const fs::path shifted = copyCapture(exportedCornell(), "shifted");
+  const CaptureDescription sc = readCaptureDescription(shifted);
+  std::vector<LayerSpec> given;
+  for (const LayerSpec& spec : channels::frameLayers())
+    if (!spec.topLevel && std::count(sc.layers.begin(), sc.layers.end(), spec.name) &&
+        !std::count(sc.derived.begin(), sc.derived.end(), spec.name))
+      given.push_back(spec);
+  for (int t = 0; t < sc.info.frames; ++t)
+    writeExr(captureFramePath(shifted, t), readExr(captureFramePath(shifted, t), given).layers,
+             given, {{"arena.capture.frame", std::to_string(t + 5)}});
+  EXPECT_NO_THROW(readCaptureDescription(shifted));
 }
 
 // Every frame holds frame 0's layers: one a later frame adds, whole or in part, is refused (it
@@ -853,6 +908,10 @@ TEST(CaptureContract, BadValuesAndNamesAreErrorsNamingThem) {
                             d["events"] = {{{"frame", 2}, {"kind", "camera_cut"}}, {{"frame", 2}, {"kind", "camera_cut"}}};
                           }),
               "events[1].kind: this event (camera_cut at frame 2) is given twice");
+  EXPECT_NO_THROW(readCaptureDescription(copyCapture(good, "two_objects", [](json& d) {
+    d["events"] = {{{"frame", 2}, {"kind", "object_moves"}, {"meshId", 3}},
+                   {{"frame", 2}, {"kind", "object_moves"}, {"meshId", 7}}};
+  })));
   EXPECT_NO_THROW(readCaptureDescription(copyCapture(good, "two_lights", [](json& d) {
     d["events"] = {{{"frame", 2}, {"kind", "light_off"}, {"what", "a"}}, {{"frame", 2}, {"kind", "light_off"}, {"what", "b"}}};
   })));
@@ -1024,9 +1083,10 @@ TEST(CaptureContract, AnExportNeverLeavesAHalfWrittenFolder) {
       exportCapture(Sequence::open(cornellSequence()), out, {{"odd", frames}});
       ADD_FAILURE() << "exported outputs " << (nan ? "with a NaN" : "of another size");
     } catch (const Error& e) {
-      const std::string expected = nan ? "frame_0002.exr: output frame 2 of 'odd' has 1 non-finite"
-                                       : "frame_0000.exr: output frame 0 of 'odd' is " + std::to_string(info.width / 2) +
-                                             "x" + std::to_string(info.height) + ", expected";
+      const std::string expected =
+          nan ? "frame_0002.exr: 1 non-finite colour values in the output of 'odd'"
+              : "frame_0000.exr: " + std::to_string(info.width / 2) + "x" +
+                    std::to_string(info.height) + ", expected";
       EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
     }
     EXPECT_FALSE(fs::exists(out));
