@@ -17,6 +17,7 @@
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/hash.hpp"
 
 namespace arena {
 
@@ -43,7 +44,7 @@ int LayerSet::width() const { return layers_.empty() ? 0 : layers_.begin()->seco
 int LayerSet::height() const { return layers_.empty() ? 0 : layers_.begin()->second.height(); }
 
 void writeExr(const fs::path& path, const LayerSet& layers, const std::vector<LayerSpec>& specs,
-              const ExrAttributes& attributes, ExrCompression compression) {
+              const ExrAttributes& attributes, ExrCompression compression, ExrChecksums checksums) {
   const int w = layers.width(), h = layers.height();
   if (w <= 0 || h <= 0) throw Error(path.string() + ": nothing to write");
   // Half layers need a converted copy that outlives the write.
@@ -60,6 +61,15 @@ void writeExr(const fs::path& path, const LayerSet& layers, const std::vector<La
                   " channels, expected " + std::to_string(spec.channels()));
     for (int c = 0; c < spec.channels(); ++c) {
       const std::string name = spec.channelName(c);
+      if (checksums == ExrChecksums::PerChannel) {
+        // Of the values a reader gets back: a half channel's as widened from its halves.
+        std::vector<float> stored(img.plane(c), img.plane(c) + img.pixelCount());
+        if (spec.half)
+          for (float& v : stored) v = float(half(v));
+        header.insert(
+            "arena.sum." + name,
+            Imf::StringAttribute(checksumHex(wordChecksum(stored.data(), stored.size()))));
+      }
       if (spec.half) {
         auto& hp = halfPlanes.emplace_back(img.pixelCount());
         const float* src = img.plane(c);
@@ -203,6 +213,18 @@ ExrContents readExr(const fs::path& path, const std::vector<LayerSpec>& specs,
     }
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);
+    for (const LayerSpec& spec : specs) {
+      if (spec.topLevel) continue;
+      const Image& img = out.layers.get(spec.name);
+      for (int c = 0; c < spec.channels(); ++c) {
+        const auto sum = out.attributes.find("arena.sum." + spec.channelName(c));
+        if (sum == out.attributes.end()) continue;
+        if (checksumHex(wordChecksum(img.plane(c), img.pixelCount())) != sum->second)
+          throw Error(path.string() + ": channel '" + spec.channelName(c) +
+                      "': its pixels do not match the checksum they were written with (the file is "
+                      "damaged); delete it and run again, which renders it anew");
+      }
+    }
     return out;
   });
 }

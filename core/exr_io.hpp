@@ -49,10 +49,16 @@ using ExrAttributes = std::map<std::string, std::string>;
 // renderer's frames 2.8x smaller at about ten times (2026-11-28, thirteenth). Readers take either.
 enum class ExrCompression { Zip, None };
 
+// Whether a file carries a checksum of every channel's pixels (attributes "arena.sum.<channel>"),
+// which readExr verifies: the sequence cache's files, whose damaged bytes (uncompressed, nothing
+// else would notice) must never be measured. Files others may edit (captures) carry none.
+enum class ExrChecksums { None, PerChannel };
+
 // Writes the layers named in `specs` atomically (temporary file + rename).
 void writeExr(const std::filesystem::path& path, const LayerSet& layers,
               const std::vector<LayerSpec>& specs, const ExrAttributes& attributes = {},
-              ExrCompression compression = ExrCompression::Zip);
+              ExrCompression compression = ExrCompression::Zip,
+              ExrChecksums checksums = ExrChecksums::None);
 
 struct ExrHeader {
   int width = 0, height = 0;
@@ -69,8 +75,9 @@ struct ExrContents {
 struct ExrSize {
   int width = 0, height = 0;
 };
-// Reads the given layers; a missing channel, a size other than `expected`, or an
-// unreadable/truncated file is an Error naming the file and the channel or sizes. A file whose
+// Reads the given layers; a missing channel, a size other than `expected`, an unreadable/truncated
+// file, or a channel whose pixels do not match the checksum it was written with is an Error naming
+// the file and the channel or sizes. A file whose
 // pixel data is incomplete is refused before its pixels are allocated.
 ExrContents readExr(const std::filesystem::path& path, const std::vector<LayerSpec>& specs,
                     std::optional<ExrSize> expected = std::nullopt);

@@ -3,10 +3,29 @@
 // cryptographic; collisions only matter between a user's own cache entries.
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <string>
 #include <string_view>
 
 namespace arena {
+
+// A checksum of a block of 32-bit words, to notice damaged data (not to resist an adversary):
+// FNV-1a over words rather than bytes, four times faster; hex() as Hasher's.
+inline uint64_t wordChecksum(const void* data, size_t words) {
+  uint64_t h = 1469598103934665603ull;
+  const auto* w = static_cast<const unsigned char*>(data);
+  for (size_t i = 0; i < words; ++i) {
+    uint32_t v;
+    std::memcpy(&v, w + 4 * i, 4);
+    h = (h ^ v) * 1099511628211ull;
+  }
+  return h;
+}
+inline std::string checksumHex(uint64_t h) {
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
 
 class Hasher {
  public:

@@ -445,10 +445,11 @@ TEST(RunMatrixContract, MergeCreatesItsOutputDirectory) {
 // trusts it) with NaN at the first `count` pixels.
 void poisonLayer(const fs::path& file, const std::vector<LayerSpec>& specs, const std::string& layer, int channel,
                  int count) {
-  ExrContents c = readExr(file, specs);
-  Image& image = c.layers.get(layer);
-  for (int i = 0; i < count; ++i) image.plane(channel)[size_t(i)] = std::numeric_limits<float>::quiet_NaN();
-  writeExr(file, c.layers, specs, c.attributes);
+  test::rewriteCachedExr(file, specs, [&](LayerSet& layers) {
+    Image& image = layers.get(layer);
+    for (int i = 0; i < count; ++i)
+      image.plane(channel)[size_t(i)] = std::numeric_limits<float>::quiet_NaN();
+  });
 }
 
 TEST(RunMatrixContract, GuideAndGradientNaNsAreSanitisedCountedAndNamedInAWarning) {

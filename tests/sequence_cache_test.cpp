@@ -255,6 +255,39 @@ TEST(SequenceCacheContract, ACompleteCacheIsReadWithoutWriting) {
   EXPECT_EQ(treeSnapshot(cache), before);
 }
 
+// A cached file's damaged pixels (uncompressed: nothing else notices a flipped byte) are an error
+// naming the file and channel, never measured; so are damaged reference sums.
+TEST(SequenceCacheContract, DamagedPixelsOrSumsAreRefusedNamingTheFile) {
+  fs::path cache = test::freshDir("damaged_cache");
+  Scene scene = test::shippedScene("cornell_static");
+  fs::path dir = renderSequence(scene, test::tinySettings(16, 8, 3, 4), cache, nullptr);
+  ASSERT_NO_THROW(Sequence::open(dir).frame(1));
+  auto flipLastBytes = [](const fs::path& file, size_t fromEnd) {
+    std::fstream f(file, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekg(0, std::ios::end);
+    const std::streamoff at = f.tellg() - std::streamoff(fromEnd);
+    f.seekg(at);
+    char b[4];
+    f.read(b, 4);
+    for (char& c : b) c = char(~c);
+    f.seekp(at);
+    f.write(b, 4);
+  };
+  flipLastBytes(Sequence::framePath(dir, 1), 40);  // inside the last scanline's pixels
+  const std::string frame = test::errorOf([&] { Sequence::open(dir).frame(1); });
+  EXPECT_NE(frame.find("frame_0001.exr: channel '"), std::string::npos) << frame;
+  EXPECT_NE(frame.find("do not match the checksum"), std::string::npos) << frame;
+  EXPECT_NO_THROW(Sequence::open(dir).frame(2));
+  const fs::path sums = fs::path(Sequence::referencePath(dir, 0)).replace_extension(".sums");
+  ASSERT_TRUE(fs::exists(sums));
+  flipLastBytes(sums, 16);
+  const std::string summed = test::errorOf(
+      [&] { refineSequence(scene, test::tinySettings(16, 8, 3, 4), cache, 1e-9, 8, nullptr, 0); });
+  EXPECT_NE(summed.find("reference_000.sums: its sums do not match the checksum"),
+            std::string::npos)
+      << summed;
+}
+
 TEST(SequenceCacheContract, ADeadWritersTemporaryOnThisMachineIsCleanedAtAnyAge) {
   fs::path dir = test::freshDir("stale_tmp_host");
   const std::string own = temporaryPathFor(dir / "x.json").filename().string();

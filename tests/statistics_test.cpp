@@ -563,9 +563,9 @@ namespace {
 // Rewrites one layer of a cached EXR (keeping its attributes, so the cache still trusts it) with a
 // non-finite value at one pixel.
 void poison(const fs::path& file, const std::vector<LayerSpec>& specs, const std::string& layer) {
-  ExrContents c = readExr(file, specs);
-  c.layers.get(layer).at(3, 2, 0) = std::numeric_limits<float>::quiet_NaN();
-  writeExr(file, c.layers, specs, c.attributes);
+  test::rewriteCachedExr(file, specs, [&](LayerSet& layers) {
+    layers.get(layer).at(3, 2, 0) = std::numeric_limits<float>::quiet_NaN();
+  });
 }
 
 // No fake perfect score from non-finite data: a NaN in a frame's albedo fails the pair naming the

@@ -1,14 +1,14 @@
 #include "tests/test_util.hpp"
 
+#include <sqlite3.h>
 #include <sys/wait.h>
 #include <unistd.h>
-
-#include <sqlite3.h>
 
 #include <cstdio>
 #include <cstdlib>
 
 #include "core/error.hpp"
+#include "core/exr_io.hpp"
 #include "core/sequence.hpp"
 
 namespace arena::test {
@@ -149,6 +149,16 @@ std::unique_ptr<Denoiser> createDenoiser(const std::string& name,
 int responseOrWindow(const nlohmann::json& g) {
   return g["responseFrames"].is_null() ? g["windowEnd"].get<int>() - g["eventFrame"].get<int>() + 1
                                        : g["responseFrames"].get<int>();
+}
+
+void rewriteCachedExr(const std::filesystem::path& file, const std::vector<LayerSpec>& specs,
+                      const std::function<void(LayerSet&)>& edit) {
+  ExrContents c = readExr(file, specs);
+  edit(c.layers);
+  ExrAttributes attributes;
+  for (const auto& [key, value] : c.attributes)
+    if (key.rfind("arena.sum.", 0) != 0) attributes[key] = value;
+  writeExr(file, c.layers, specs, attributes, ExrCompression::None, ExrChecksums::PerChannel);
 }
 
 }  // namespace arena::test

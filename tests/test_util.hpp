@@ -67,4 +67,9 @@ std::unique_ptr<Denoiser> createDenoiser(const std::string& name,
 // (responseFrames null) counts as the window's length from the event, a lower bound of the truth.
 int responseOrWindow(const nlohmann::json& ghostingEntry);
 
+// Rewrites a cached EXR through `edit` as the renderer would have written the edited values: its
+// attributes kept (the cache still trusts it), its channel checksums made anew.
+void rewriteCachedExr(const std::filesystem::path& file, const std::vector<LayerSpec>& specs,
+                      const std::function<void(LayerSet&)>& edit);
+
 }  // namespace arena::test

@@ -98,18 +98,20 @@ constexpr char kSumsMagic[8] = {'A', 'R', 'S', 'U', 'M', 'S', '0', '2'};
 }  // namespace
 
 void writeReferenceSums(const fs::path& path, const ReferenceSums& sums, const std::string& hash, int index) {
-  const std::string header = json{
-      {"hash", hash},
-      {"index", index},
-      {"width", sums.width},
-      {"height", sums.height},
-      {"replicates", sums.replicates},
-      {"firstReplicate", sums.firstReplicate},
-      {"tileSize", sums.tileSize},
-      {"tileSamples", sums.tileSamples},
-      {"roundTarget", sums.roundPending() ? sums.roundTarget : std::vector<int>{}},
-      {"values",
-       ReferenceSums::kValues}}.dump();
+  const std::string header =
+      json{{"hash", hash},
+           {"index", index},
+           {"width", sums.width},
+           {"height", sums.height},
+           {"replicates", sums.replicates},
+           {"firstReplicate", sums.firstReplicate},
+           {"tileSize", sums.tileSize},
+           {"tileSamples", sums.tileSamples},
+           {"roundTarget", sums.roundPending() ? sums.roundTarget : std::vector<int>{}},
+           {"values", ReferenceSums::kValues},
+           // Of the doubles that follow: a damaged byte there would change the refined reference.
+           {"checksum", checksumHex(wordChecksum(sums.sum.data(), sums.sum.size() * 2))}}
+          .dump();
   writeAtomically(path, [&](const fs::path& tmp) {
     std::ofstream out(tmp, std::ios::binary);
     const uint32_t size = uint32_t(header.size());
@@ -135,6 +137,7 @@ ReferenceSums readReferenceSums(const fs::path& path, const std::string& hash, i
   std::string header(size, '\0');
   in.read(header.data(), std::streamsize(size));
   ReferenceSums sums;
+  std::string checksum;
   try {
     const json h = json::parse(header);
     if (h.at("hash").get<std::string>() != hash || h.at("index").get<int>() != index)
@@ -150,6 +153,7 @@ ReferenceSums readReferenceSums(const fs::path& path, const std::string& hash, i
     sums.tileSize = h.at("tileSize").get<int>();
     sums.tileSamples = h.at("tileSamples").get<std::vector<int>>();
     sums.roundTarget = h.value("roundTarget", std::vector<int>{});  // absent before 2026-11-27: none pending
+    checksum = h.value("checksum", std::string());                  // absent before 2026-11-28
   } catch (const json::exception& e) {
     throw Error(path.string() + ": malformed header: " + e.what());
   }
@@ -168,6 +172,11 @@ ReferenceSums readReferenceSums(const fs::path& path, const std::string& hash, i
   sums.sum.resize(size_t(sums.width) * size_t(sums.height) * size_t(sums.replicates) * ReferenceSums::kValues);
   in.read(reinterpret_cast<char*>(sums.sum.data()), std::streamsize(sums.sum.size() * sizeof(double)));
   if (!in || in.peek() != std::ifstream::traits_type::eof()) throw Error(path.string() + ": truncated or oversized");
+  if (!checksum.empty() &&
+      checksumHex(wordChecksum(sums.sum.data(), sums.sum.size() * 2)) != checksum)
+    throw Error(
+        path.string() +
+        ": its sums do not match the checksum they were written with (the file is damaged)");
   return sums;
 }
 
@@ -219,7 +228,7 @@ void writeReferenceFiles(const fs::path& dir, const std::string& hash, const std
                       {"arena.capped", ref.capped ? "1" : "0"}};
   writeReferenceSums(referenceSumsPath(dir, r), sums, hash, r);
   writeExr(Sequence::referencePath(dir, r), ref.layers, channels::referenceLayers(), attrs,
-           ExrCompression::None);
+           ExrCompression::None, ExrChecksums::PerChannel);
   info.referenceSpp[size_t(r)] = ref.spp;
   info.referenceEstimatedRelMse[size_t(r)] = ref.estimatedRelMse;
   info.referenceCapped[size_t(r)] = ref.capped;
@@ -382,7 +391,8 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings,
   // 43 ms to read it against 26 ms. docs/performance.md, 2026-11-28 (thirteenth).
   auto writeInput = [&](const fs::path& path, const LayerSet& layers,
                         const std::vector<LayerSpec>& specs, const char* kind, int index) {
-    writeExr(path, layers, specs, attributes(kind, index), ExrCompression::None);
+    writeExr(path, layers, specs, attributes(kind, index), ExrCompression::None,
+             ExrChecksums::PerChannel);
   };
 
   // The low-resolution buffer's path rate on this machine, measured where it is rendered: the run
