@@ -5,7 +5,7 @@
 
 (() => {
   const A = window.Arena;
-  const { $, el, fmt } = A;
+  const { $, el } = A;
 
   // `rank`: the figure the run's statistics rank this column on (lower is better).
   const GHOST_COLUMNS = [
@@ -66,7 +66,7 @@
       const g0 = withEvent[0].ghosting[k];
       body.append(el('h3', { text: `Event at frame ${g0.eventFrame}: ${g0.kind} ${g0.what || ''}` }));
       if (g0.absent) {  // nothing changed in the reference: no figure to show (metrics.md)
-        body.append(el('p', {class: 'empty', text: `No ghosting figures: ${g0.absent}.`}));
+        body.append(el('p', { class: 'empty', text: `No ghosting figures: ${g0.absent}.` }));
         continue;
       }
       const rows = [];
@@ -117,31 +117,17 @@
 
   // `first`: column key -> the labels marked best in it (absent: none marked).
   function figureTable(cls, columns, rows, first) {
-    return el(
-        'div', {class: 'table-wrap'},
-        el(
-            'table',
-            {class: `data ${cls}`},
-            el('thead', {},
-               el('tr', {}, el('th', {class: 'first', text: 'denoiser / setting'}),
-                  columns.map((c) => el('th', {text: c.title})))),
-            el('tbody', {},
-               rows.map(
-                   ([label, e]) =>
-                       el('tr', {'data-label': label}, el('td', {class: 'first', text: label}),
-                          columns.map(
-                              (c) => el(
-                                  'td',
-                                  {class: first[c.key] && first[c.key].has(label) ? 'best' : null},
-                                  A.fmt(valueOf(c, e)), ciSpan(e, c.key)))))),
-            ));
+    return el('div', { class: 'table-wrap' }, el('table', { class: `data ${cls}` },
+      el('thead', {}, el('tr', {}, el('th', { class: 'first', text: 'denoiser / setting' }), columns.map((c) => el('th', { text: c.title })))),
+      el('tbody', {}, rows.map(([label, e]) => el('tr', { 'data-label': label }, el('td', { class: 'first', text: label }),
+        columns.map((c) => el('td', { class: first[c.key] && first[c.key].has(label) ? 'best' : null }, A.fmt(valueOf(c, e)), ciSpan(e, c.key)))))),
+    ));
   }
 
   // The statistics' rank-1 labels of every ranked column of one event or cut.
   function rankedFirst(columns, kind, frame) {
     const first = {};
-    for (const c of columns)
-      if (c.rank) first[c.key] = firstRanked(kind, frame, c.rank);
+    for (const c of columns) if (c.rank) first[c.key] = firstRanked(kind, frame, c.rank);
     return first;
   }
 
@@ -149,8 +135,7 @@
     const frame = pairs[0].ghosting[k].eventFrame;
     const rows = pairs.map((p) => [p.label, p.ghosting[k]]);
     if (pairs.some((p) => p.ghosting[k].ci95) || firstRanked('events', frame, 'lagEnergy'))
-      return figureTable(
-          'ghost-table', GHOST_COLUMNS, rows, rankedFirst(GHOST_COLUMNS, 'events', frame));
+      return figureTable('ghost-table', GHOST_COLUMNS, rows, rankedFirst(GHOST_COLUMNS, 'events', frame));
     // An older run without intervals or rankings: the smallest value is marked, ties unknown.
     const first = {};
     for (const c of GHOST_COLUMNS) {
@@ -161,12 +146,8 @@
       const best = Math.min(...finite.map(([, e]) => score(e)));
       first[c.key] = new Set(finite.filter(([, e]) => score(e) === best).map(([label]) => label));
     }
-    return el(
-        'div', {class: 'table-wrap'}, el('p', {
-          class: 'note',
-          text:
-              'This run has no intervals for its events (older results): bold green marks the smallest value, ties unknown.'
-        }),
-        figureTable('ghost-table', GHOST_COLUMNS, rows, first));
+    return el('div', { class: 'table-wrap' },
+      el('p', { class: 'note', text: 'This run has no intervals for its events (older results): bold green marks the smallest value, ties unknown.' }),
+      figureTable('ghost-table', GHOST_COLUMNS, rows, first));
   }
 })();
