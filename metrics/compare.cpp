@@ -226,7 +226,8 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
   }
   for (const PairResult& c : cand.pairs)
     if (!baseKeys.count(key(c)))
-      rows.push_back(pairRow(c, "new", noShared + "pair not in the baseline run"));
+      rows.push_back(c.ok() ? pairRow(c, "new", noShared + "pair not in the baseline run")
+                            : pairRow(c, "failed", c.error));  // new or not, a failure is one
   // A metric the caller named must have been computed somewhere; the defaults skip a metric
   // neither run computed (FLIP switched off in both).
   if (comparedPairs > 0)
@@ -238,6 +239,19 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
                     " pair(s) both ran (nothing to gate on; `arena metrics` says what each metric "
                     "needs, e.g. "
                     "FLIP's --flip setting)");
+  // A gate that held nothing to anything (every figure absent, no pair both runs ran, a baseline
+  // whose pairs all failed) has checked nothing: it fails, saying so, rather than pass on no data.
+  const bool judged = std::any_of(rows.begin(), rows.end(), [](const ComparisonRow& r) {
+    return r.verdict == "ok" || r.verdict == "improved" || r.verdict == "regressed" ||
+           r.verdict == "unresolved" || r.verdict == "unverified";
+  });
+  if (!judged) {
+    ComparisonRow none{"*",        "*", "*", kUndefined,         kUndefined,
+                       kUndefined, {},  0,   "nothing compared", ""};
+    none.note = "no figure was measured by both runs (" + std::to_string(comparedPairs) +
+                " pair(s) both ran): the gate would pass having checked nothing";
+    rows.push_back(none);
+  }
   return rows;
 }
 
@@ -261,7 +275,8 @@ json comparisonJson(const std::vector<ComparisonRow>& rows) {
 
 bool failsGate(const ComparisonRow& row) {
   return row.verdict == "regressed" || row.verdict == "unverified" || row.verdict == "missing" ||
-         row.verdict == "failed" || row.verdict == "not comparable";
+         row.verdict == "failed" || row.verdict == "not comparable" ||
+         row.verdict == "nothing compared";
 }
 
 bool anyRegression(const std::vector<ComparisonRow>& rows) {

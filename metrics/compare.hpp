@@ -35,8 +35,10 @@ struct ComparisonRow {
   // (worse beyond tolerance with no interval to judge it: no tiles in a run directory, too few
   // frames; fails the gate, as passing it would judge from no data), "missing" (the
   // candidate lacks what the baseline had: fails the gate), "failed" (the candidate's pair failed),
-  // "new" (only the candidate has it, or only its pair ran), "absent" (neither run has a summary
-  // of it: the note gives both reasons; does not fail the gate).
+  // "new" (only the candidate has it, or only its pair ran; a candidate pair that failed is
+  // "failed" whether or not the baseline had it), "absent" (neither run has a summary of it: the
+  // note gives both reasons; does not fail the gate on its own), "nothing compared" (one row,
+  // scene "*": no figure was measured by both runs, so the gate fails rather than pass on nothing).
   std::string verdict;
   std::string note;
 };
@@ -57,9 +59,10 @@ std::vector<std::string> settingsDifferences(const RunResults& baseline, const R
 double parseTolerance(const std::string& text);
 // "95%" or "0.95" -> 0.95; must lie in (0, 1).
 double parseConfidence(const std::string& text);
-// Whether a row fails the gate: "regressed", "unverified", "missing", "failed", and history's "not
-// comparable" (runs under other settings, which compare refuses). The one place the rule lives:
-// the JSON rows carry it as `fails`, which the report's and the dashboard's pages read.
+// Whether a row fails the gate: "regressed", "unverified", "missing", "failed", "nothing
+// compared", and history's "not comparable" (runs under other settings, which compare refuses). The
+// one place the rule lives: the JSON rows carry it as `fails`, which the report's and the
+// dashboard's pages read.
 bool failsGate(const ComparisonRow& row);
 // The rows as JSON, each with its verdict and `fails` (failsGate).
 nlohmann::json comparisonJson(const std::vector<ComparisonRow>& rows);

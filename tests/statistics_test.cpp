@@ -305,23 +305,45 @@ TEST(CompareGate, FailsOnWhatItCannotCompare) {
   bool named = false;
   for (auto& r : rows) named |= r.label == "b" && r.verdict == "missing";
   EXPECT_TRUE(named);
-  // No scene in common: every baseline pair is missing (the gate fails), every candidate pair new.
+  // No scene in common: every baseline pair is missing (the gate fails), every candidate pair new,
+  // and the gate says it compared nothing.
   rows = compareRuns(syntheticRun({{"a", m}}, "s1"), syntheticRun({{"a", m}}, "s2"), tol);
-  ASSERT_EQ(rows.size(), 2u);
+  ASSERT_EQ(rows.size(), 3u);
   EXPECT_EQ(rows[0].verdict, "missing");
   EXPECT_EQ(rows[1].verdict, "new");
+  EXPECT_EQ(rows[2].verdict, "nothing compared");
   EXPECT_NE(rows[0].note.find("share no scene"), std::string::npos) << rows[0].note;
   EXPECT_TRUE(anyRegression(rows));
   // A pair that failed in the baseline and runs in the candidate is shown (it does not fail the
-  // gate).
-  json failedBase = syntheticJson({{"a", m}});
+  // gate), beside another that both ran.
+  json failedBase = syntheticJson({{"a", m}, {"b", m}});
   failedBase["pairs"][0]["status"] = "failed";
   failedBase["pairs"][0]["error"] = "out of memory";
-  rows = compareRuns(test::typed(failedBase), syntheticRun({{"a", m}}), tol);
-  ASSERT_EQ(rows.size(), 1u);
+  rows = compareRuns(test::typed(failedBase), syntheticRun({{"a", m}, {"b", m}}), tol);
+  ASSERT_EQ(rows.size(), 2u);
   EXPECT_EQ(rows[0].verdict, "new");
   EXPECT_EQ(rows[0].note, "failed in the baseline run: out of memory");
+  EXPECT_EQ(rows[1].verdict, "ok");
   EXPECT_FALSE(anyRegression(rows));
+  // With only that pair, the gate held nothing to anything: it fails, saying so (it passed).
+  json onlyFailed = syntheticJson({{"a", m}});
+  onlyFailed["pairs"][0]["status"] = "failed";
+  onlyFailed["pairs"][0]["error"] = "out of memory";
+  rows = compareRuns(test::typed(onlyFailed), syntheticRun({{"a", m}}), tol);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[1].verdict, "nothing compared");
+  EXPECT_EQ(rows[1].scene, "*");
+  EXPECT_TRUE(anyRegression(rows));
+  // A candidate pair that failed fails the gate, new or not (a new one passed as "new").
+  json failedNew = syntheticJson({{"a", m}, {"c", m}});
+  failedNew["pairs"][1]["status"] = "failed";
+  failedNew["pairs"][1]["error"] = "crashed";
+  rows = compareRuns(syntheticRun({{"a", m}}), test::typed(failedNew), tol);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[1].label, "c");
+  EXPECT_EQ(rows[1].verdict, "failed");
+  EXPECT_EQ(rows[1].note, "crashed");
+  EXPECT_TRUE(anyRegression(rows));
   // A metric named on the command line that neither run computed is an error, not a pass.
   try {
     compareRuns(syntheticRun({{"a", m}}), syntheticRun({{"a", m}}), {{"msWall", 0.02}});
@@ -341,17 +363,28 @@ TEST(CompareGate, FailsOnWhatItCannotCompare) {
   json cand = syntheticJson({{"a", m}});
   cand["pairs"][0]["summary"]["relMse"] = {{"frames", 0}, {"absent", "no frame after the warm-up"}};
   rows = compareRuns(syntheticRun({{"a", m}}), test::typed(cand), tol);
-  ASSERT_EQ(rows.size(), 1u);
+  ASSERT_EQ(rows.size(), 2u);
   EXPECT_EQ(rows[0].verdict, "missing");
+  EXPECT_EQ(rows[1].verdict, "nothing compared");
+  // Absent in both (every frame inside the warm-up): a row that does not fail on its own, and a
+  // gate that compared nothing, which does (it passed with exit 0).
+  json base = syntheticJson({{"a", m}});
+  base["pairs"][0]["summary"]["relMse"] = {{"frames", 0}, {"absent", "no frame after the warm-up"}};
+  rows = compareRuns(test::typed(base), test::typed(cand), tol);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].verdict, "absent");
+  EXPECT_FALSE(failsGate(rows[0]));
+  EXPECT_EQ(rows[1].verdict, "nothing compared");
+  EXPECT_TRUE(anyRegression(rows));
 }
 
 // The JSON rows carry the gate's own rule as `fails` (the report's and the dashboard's pages read
 // it instead of keeping verdict lists of their own): true exactly for the verdicts that fail.
 TEST(CompareGate, JsonRowsSayWhetherTheyFailTheGate) {
   const std::vector<std::pair<std::string, bool>> verdicts = {
-      {"ok", false},     {"improved", false},     {"unresolved", false}, {"new", false},
-      {"absent", false}, {"regressed", true},     {"unverified", true},  {"missing", true},
-      {"failed", true},  {"not comparable", true}};
+      {"ok", false},     {"improved", false},      {"unresolved", false},     {"new", false},
+      {"absent", false}, {"regressed", true},      {"unverified", true},      {"missing", true},
+      {"failed", true},  {"not comparable", true}, {"nothing compared", true}};
   for (const auto& [verdict, fails] : verdicts) {
     ComparisonRow row;
     row.scene = "s";
