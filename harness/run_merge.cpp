@@ -97,6 +97,25 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
   for (int i = 0; i < shardCount; ++i)
     if (!shards.count(i)) missing += (missing.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(shardCount);
   if (!missing.empty()) throw Error("merge: incomplete shard set, missing " + missing + "; nothing was written");
+  // Every pair of the plan the shards record (each sequence with each contender) is in one of
+  // them: a shard that lost a pair would merge into a run silently without it.
+  if (const json plan = merged.settings.measurement().value("plan", json()); plan.is_object()) {
+    std::string lost;
+    int count = 0;
+    for (const json& sequence : plan.value("sequences", json::array()))
+      for (const json& label : plan.value("labels", json::array()))
+        if (sequence.is_object() && sequence.value("name", json()).is_string() &&
+            label.is_string() &&
+            !seen.count(sequence["name"].get<std::string>() + "\n" + label.get<std::string>())) {
+          if (++count <= 5)
+            lost += (lost.empty() ? "" : ", ") + label.get<std::string>() + " on " +
+                    sequence["name"].get<std::string>();
+        }
+    if (count > 0)
+      throw Error("merge: " + std::to_string(count) +
+                  " pair(s) of the run's plan are in no shard (" + lost +
+                  (count > 5 ? ", ..." : "") + "); a shard lost them; nothing was written");
+  }
   const DirectoryLock outLock = checkRunOutputs(
       out);  // creates --out only now: shards that cannot be merged leave no directory behind
   // The images are the shards', as the results are: a previous merge's in --out go.

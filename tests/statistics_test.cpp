@@ -468,6 +468,28 @@ TEST(MergeGate, AnIncompleteShardSetIsAnError) {
   json merged = mergeRuns({s0, s1, s2}, root / "new" / "merged");  // --out created when missing
   EXPECT_EQ(merged["pairs"].size(), 3u);
   EXPECT_TRUE(merged["statistics"]["scenes"].contains("s1"));
+  // Shards that record their run's plan: one that lost a pair is refused, naming it (it merged
+  // into a run silently without it).
+  const json plan = {
+      {"sequences", json::array({{{"name", "p0"}, {"width", 4}, {"height", 4}, {"frames", 8}},
+                                 {{"name", "p1"}, {"width", 4}, {"height", 4}, {"frames", 8}}})},
+      {"labels", json::array({"a"})}};
+  auto planned = [&](const std::string& name, const std::string& which, bool lost) {
+    json r = syntheticJson({{"a", constantSeries(0.01)}}, name);
+    r["settings"]["shard"] = which;
+    r["settings"]["plan"] = plan;
+    r["scenes"] = json::object();
+    if (lost) r["pairs"] = json::array();
+    saveResults(root / ("planned_" + name + (lost ? "_lost" : "")), r);
+    return root / ("planned_" + name + (lost ? "_lost" : ""));
+  };
+  const fs::path p0 = planned("p0", "0/2", false), p1 = planned("p1", "1/2", false),
+                 p1lost = planned("p1", "1/2", true);
+  EXPECT_EQ(mergeRuns({p0, p1}, root / "planned_merged")["pairs"].size(), 2u);
+  const std::string lost = test::errorOf([&] { mergeRuns({p0, p1lost}, root / "planned_lost"); });
+  EXPECT_NE(lost.find("1 pair(s) of the run's plan are in no shard (a on p1)"), std::string::npos)
+      << lost;
+  EXPECT_FALSE(fs::exists(root / "planned_lost"));
 }
 
 // End to end on a tiny sequence: every summary has an interval around its mean, the run carries
