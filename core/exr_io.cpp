@@ -62,13 +62,17 @@ void writeExr(const fs::path& path, const LayerSet& layers, const std::vector<La
     for (int c = 0; c < spec.channels(); ++c) {
       const std::string name = spec.channelName(c);
       if (checksums == ExrChecksums::PerChannel) {
-        // Of the values a reader gets back: a half channel's as widened from its halves.
-        std::vector<float> stored(img.plane(c), img.plane(c) + img.pixelCount());
-        if (spec.half)
-          for (float& v : stored) v = float(half(v));
-        header.insert(
-            "arena.sum." + name,
-            Imf::StringAttribute(checksumHex(wordChecksum(stored.data(), stored.size()))));
+        // Of the values a reader gets back: a half channel's as widened from its halves (a float
+        // channel's are its own, hashed in place).
+        uint64_t sum = 0;
+        if (spec.half) {
+          std::vector<float> stored(img.pixelCount());
+          for (size_t i = 0; i < stored.size(); ++i) stored[i] = float(half(img.plane(c)[i]));
+          sum = wordChecksum(stored.data(), stored.size());
+        } else {
+          sum = wordChecksum(img.plane(c), img.pixelCount());
+        }
+        header.insert("arena.sum." + name, Imf::StringAttribute(checksumHex(sum)));
       }
       if (spec.half) {
         auto& hp = halfPlanes.emplace_back(img.pixelCount());

@@ -331,15 +331,20 @@ TEST(SceneContract, RadianceAndCoordinatesThatOverflowFloatAreRejected) {
   }
 }
 
+// A mesh object "m" reading `file` (relative to the scene file), in the white material.
+json meshObject(const std::string& file) {
+  return {{"name", "m"},
+          {"shape", "mesh"},
+          {"file", file},
+          {"material", "white"},
+          {"keys", json::array({{{"frame", 0}}})}};
+}
+
 TEST(SceneContract, MeshFilesMustBeBoundedRegularFiles) {
   fs::path dir = test::freshDir("mesh_files");
   auto meshScene = [&](const std::string& file) {
     json s = contract::minimalScene();
-    s["objects"].push_back({{"name", "m"},
-                            {"shape", "mesh"},
-                            {"file", file},
-                            {"material", "white"},
-                            {"keys", json::array({{{"frame", 0}}})}});
+    s["objects"].push_back(meshObject(file));
     return contract::sceneError(s, (dir / "t.json").string());
   };
   EXPECT_NE(meshScene("/dev/zero").find("$.objects[1].file: /dev/zero: not a regular file"),
@@ -397,11 +402,7 @@ TEST(SceneContract, AMeshObjectKeepsTheFileAsLoadedAndHashed) {
   fs::path dir = test::freshDir("mesh_as_loaded");
   writeTextAtomically(dir / "m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
   json s = contract::minimalScene();
-  s["objects"].push_back({{"name", "m"},
-                          {"shape", "mesh"},
-                          {"file", "m.obj"},
-                          {"material", "white"},
-                          {"keys", json::array({{{"frame", 0}}})}});
+  s["objects"].push_back(meshObject("m.obj"));
   writeTextAtomically(dir / "t.json", s.dump());
   const Scene first = loadScene((dir / "t.json").string());
   const Object& mesh = first.objects.back();
@@ -424,11 +425,7 @@ TEST(SceneContract, UnusableVerticesAndOverbrightAssetsAreErrorsNamingFileAndEle
   auto meshError = [&](const std::string& obj) {
     writeTextAtomically(dir / "m.obj", obj);
     json s = contract::minimalScene();
-    s["objects"].push_back({{"name", "m"},
-                            {"shape", "mesh"},
-                            {"file", "m.obj"},
-                            {"material", "white"},
-                            {"keys", json::array({{{"frame", 0}}})}});
+    s["objects"].push_back(meshObject("m.obj"));
     return contract::sceneError(s, (dir / "t.json").string());
   };
   EXPECT_EQ(meshError("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), "");
