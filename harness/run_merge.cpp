@@ -4,6 +4,7 @@
 #include "core/error.hpp"
 #include "harness/reference_quality.hpp"
 #include "harness/run_matrix.hpp"
+#include "metrics/compare.hpp"
 #include "metrics/ghosting.hpp"
 #include "metrics/results.hpp"
 #include "metrics/run_statistics.hpp"
@@ -73,9 +74,14 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
       merged.scenes = json::object();
       merged.statistics.reset();
       merged.settings.setShard("merged");
-    } else if (merged.settings.measurement() != r.settings.measurement()) {
-      throw Error(run.string() + ": settings differ from " + runs.front().string() +
-                  "; only shards of one run can be merged");
+    } else if (const std::vector<std::string> differ = jsonDifferences(
+                   merged.settings.measurement(), r.settings.measurement(), "settings");
+               !differ.empty()) {
+      std::string fields;
+      for (size_t k = 0; k < differ.size() && k < 3; ++k) fields += (k ? "; " : "") + differ[k];
+      if (differ.size() > 3) fields += "; and " + std::to_string(differ.size() - 3) + " more";
+      throw Error(run.string() + ": settings differ from " + runs.front().string() + " (" + fields +
+                  "); only shards of one run can be merged");
     }
     for (auto it = scenes.begin(); it != scenes.end(); ++it) merged.scenes[it.key()] = it.value();
     for (PairResult& p : pairs) {

@@ -43,7 +43,8 @@ ComparisonRow pairRow(const PairResult& p, const std::string& verdict, const std
   return row;
 }
 
-// Appends "path: a vs b" for every leaf where a and b differ (a missing side reads "absent").
+// Appends "path: a vs b" for every leaf where a and b differ (a missing side reads "absent"; arrays
+// of one length are compared element by element, others whole).
 void collectDifferences(const json& a, const json& b, const std::string& path, std::vector<std::string>& out) {
   if (a.is_object() && b.is_object()) {
     std::set<std::string> keys;
@@ -54,10 +55,21 @@ void collectDifferences(const json& a, const json& b, const std::string& path, s
       collectDifferences(a.contains(k) ? a[k] : absent, b.contains(k) ? b[k] : absent, path + "." + k, out);
     return;
   }
+  if (a.is_array() && b.is_array() && a.size() == b.size()) {  // element by element: "[2].frames"
+    for (size_t i = 0; i < a.size(); ++i)
+      collectDifferences(a[i], b[i], path + "[" + std::to_string(i) + "]", out);
+    return;
+  }
   if (a != b) out.push_back(path + ": " + a.dump() + " vs " + b.dump());
 }
 
 }  // namespace
+
+std::vector<std::string> jsonDifferences(const json& a, const json& b, const std::string& path) {
+  std::vector<std::string> out;
+  collectDifferences(a, b, path, out);
+  return out;
+}
 
 std::vector<std::string> settingsDifferences(const RunResults& baseline, const RunResults& candidate) {
   std::vector<std::string> out;

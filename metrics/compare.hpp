@@ -55,6 +55,9 @@ std::vector<ComparisonRow> compareRuns(const RunResults& baseline, const RunResu
 // "scenes.cornell_static.width: 16 vs 32"): every field under "settings" except the shard, and the
 // resolution and frame count of each scene both runs have. Empty when they match.
 std::vector<std::string> settingsDifferences(const RunResults& baseline, const RunResults& candidate);
+// Every leaf where two documents differ, as "PATH.key: a vs b" (a missing side reads "absent").
+std::vector<std::string> jsonDifferences(const nlohmann::json& a, const nlohmann::json& b,
+                                         const std::string& path);
 // "2%" -> 0.02, "0.02" -> 0.02; negative, NaN or infinite values are errors.
 double parseTolerance(const std::string& text);
 // "95%" or "0.95" -> 0.95; must lie in (0, 1).

@@ -4,6 +4,7 @@
 #include <set>
 #include <tuple>
 
+#include "core/env_info.hpp"
 #include "core/error.hpp"
 #include "core/json_reader.hpp"
 #include "metrics/results.hpp"
@@ -297,7 +298,14 @@ RunResults RunResults::fromJson(const json& j, const std::string& file) {
                 it.value());
   RunResults r;
   r.name = read.text(j, "$", "name");
-  if (j.contains("created")) r.created = read.text(j, "$", "created");
+  if (j.contains("created")) {
+    r.created = read.text(j, "$", "created");
+    if (!isUtcTimestamp(r.created))
+      throw Error(file +
+                  ": $.created: expected a UTC time as 2026-11-28T21:15:00Z (runs are ordered by "
+                  "it), got \"" +
+                  r.created + "\"");
+  }
   r.environment = read.member(j, "$", "environment", &json::is_object, "an object");
   r.settings = RunSettings::fromJson(read.member(j, "$", "settings", &json::is_object, "an object"), file);
   r.scenes = read.member(j, "$", "scenes", &json::is_object, "an object");

@@ -9,6 +9,7 @@
 #include <set>
 
 #include "core/atomic_file.hpp"
+#include "core/env_info.hpp"
 #include "core/error.hpp"
 #include "metrics/results.hpp"
 #include "reports/report.hpp"
@@ -117,6 +118,11 @@ std::vector<RunResults> runsFromDatabase(const fs::path& file) {
     run.name = textOf(r, "name");
     run.created = textOf(r, "created");
     run.source = file.string() + "#" + std::to_string(id);
+    if (!isUtcTimestamp(run.created))
+      throw Error(run.source +
+                  ": runs.created: expected a UTC time as 2026-11-28T21:15:00Z (runs are "
+                  "ordered by it), got \"" +
+                  run.created + "\"");
     run.keepsTiles = false;
     // The settings the run recorded (its gate compares them); a database row without them (or
     // with an unreadable record) leaves them unknown, and the history does not judge them.
@@ -181,6 +187,12 @@ std::vector<RunResults> loadHistory(const std::vector<fs::path>& inputs) {
                   "results.json, or a results.db file)");
     }
   }
+  // The history is in the order the runs were made: a run that does not say when it was made
+  // cannot be placed (and would be gated against the wrong neighbour).
+  for (const RunResults& r : runs)
+    if (r.created.empty())
+      throw Error("history: " + r.source +
+                  ": the run records no `created` time; the history orders runs by it");
   std::stable_sort(runs.begin(), runs.end(),
                    [](const RunResults& a, const RunResults& b) { return a.created < b.created; });
   auto sameRun = [](const RunResults& a, const RunResults& b) {

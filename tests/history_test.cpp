@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "core/atomic_file.hpp"
+#include "core/env_info.hpp"
 #include "core/error.hpp"
 #include "metrics/results.hpp"
 #include "tests/test_util.hpp"
@@ -183,6 +184,18 @@ TEST(History, ReadsRunDirectoriesAndDatabasesInTimeOrder) {
   EXPECT_EQ(changedRuns(data, "svgf", "relMse"), std::vector<int>{3}) << data["changes"].dump();
 }
 
+TEST(History, TimesAreTheFormRunsWrite) {
+  EXPECT_TRUE(isUtcTimestamp(utcTimestamp()));
+  for (const char* good : {"2026-11-28T21:15:00Z", "2024-02-29T00:00:00Z", "2016-12-31T23:59:60Z"})
+    EXPECT_TRUE(isUtcTimestamp(good)) << good;
+  for (const char* bad : {"", "2026-11-28", "2026-11-28T21:15:00", "2026-11-28 21:15:00Z",
+                          "2026-11-28T21:15:00+01:00", "2026-13-01T00:00:00Z",
+                          "2026-00-10T00:00:00Z", "2025-02-29T00:00:00Z", "2026-04-31T00:00:00Z",
+                          "2026-11-28T24:00:00Z", "2026-11-28T21:60:00Z", "2026-11-28T21:15:61Z",
+                          "2026-11-2aT21:15:00Z", "+026-11-28T21:15:00Z"})
+    EXPECT_FALSE(isUtcTimestamp(bad)) << bad;
+}
+
 TEST(History, BadInputNamesThePath) {
   const fs::path dir = test::freshDir("history_bad");
   try {
@@ -224,6 +237,26 @@ TEST(History, BadInputNamesThePath) {
         {withSql("empty.db", "DELETE FROM summaries; DELETE FROM pairs; DELETE FROM runs")});
   });
   EXPECT_NE(e.find("empty.db: holds no runs"), std::string::npos) << e;
+  // Runs are placed by when they were made: a time in another form, or none, would put a run
+  // beside the wrong neighbour for the gate; each is refused, naming where it was read.
+  e = test::errorOf(
+      [&] { loadHistory({withSql("when.db", "UPDATE runs SET created = '28/11/2026 21:15'")}); });
+  EXPECT_NE(e.find("when.db#1: runs.created: expected a UTC time as 2026-11-28T21:15:00Z"),
+            std::string::npos)
+      << e;
+  EXPECT_NE(e.find("got \"28/11/2026 21:15\""), std::string::npos) << e;
+  json run = historyRun(1, 3);
+  run["created"] = "2025-02-30T00:00:00Z";  // no such day
+  saveResults(dir / "badday", run);
+  e = test::errorOf([&] { loadHistory({dir / "badday"}); });
+  EXPECT_NE(e.find("$.created: expected a UTC time"), std::string::npos) << e;
+  run.erase("created");
+  saveResults(dir / "undated", run);
+  e = test::errorOf([&] { loadHistory({db, dir / "undated"}); });
+  EXPECT_NE(
+      e.find("history: " + (dir / "undated").string() + ": the run records no `created` time"),
+      std::string::npos)
+      << e;
   // The same run given twice is taken once (compared with itself, the gate would pass on nothing).
   EXPECT_EQ(loadHistory({db, dir / "." / "results.db"}).size(), 1u);
   fs::copy_file(db, dir / "copy.db", fs::copy_options::overwrite_existing);  // another file

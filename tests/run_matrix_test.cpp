@@ -161,6 +161,10 @@ TEST(RunMatrix, ShardsMergeIntoTheFullRun) {
       mergeRuns({parts[0], other.out}, test::freshDir("run_mixed"));
     });
     EXPECT_NE(e.find("settings differ"), std::string::npos) << change << ": " << e;
+    // The message names the field and both values, not only that something differs.
+    const std::string field =
+        change == "frames" ? "settings.plan.sequences[0].frames: " : "denoisers";
+    EXPECT_NE(e.find(field), std::string::npos) << change << ": " << e;
   }
   // --out one of the shards is refused before anything is written; merging again into --out
   // replaces its images.
