@@ -41,7 +41,7 @@ std::string validUtf8(std::string_view text) {
   std::string out;
   out.reserve(text.size());
   for (size_t i = 0; i < text.size();) {
-    const size_t n = sequenceLength(text, i);
+    const size_t n = text[i] == '\0' ? 0 : sequenceLength(text, i);
     if (n == 0) {
       out += kReplacement;
       ++i;

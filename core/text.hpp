@@ -8,7 +8,8 @@ namespace arena {
 
 // `text` with every byte that does not belong to a well-formed UTF-8 sequence (a stray or cut
 // continuation byte, an overlong form, a surrogate, a code point beyond U+10FFFF) replaced by
-// U+FFFD; well-formed text is returned unchanged.
+// U+FFFD, and NUL too (it would end the text wherever it passes as a C string, an error's what()
+// first of all); well-formed text without NUL is returned unchanged.
 std::string validUtf8(std::string_view text);
 
 // At most `maxBytes` bytes of `text`'s end (or start: `fromEnd` false), cut at a character

@@ -1,13 +1,58 @@
 #include "harness/denoise_run.hpp"
 
-#include <chrono>
 #include <algorithm>
+#include <bit>
+#include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 
 #include "core/error.hpp"
 #include "denoisers/common/remodulation.hpp"
 
 namespace arena {
+
+namespace {
+
+// A value no denoiser computes: a quiet NaN with a payload of its own. Each call's output is
+// filled with it first (outside the timed call), so a denoiser that leaves values unwritten (a
+// plugin that returns success without writing) fails its pair instead of being scored on what the
+// buffer held from the frame before.
+constexpr uint32_t kUnwrittenBits = 0x7fc0dea1u;
+
+void markUnwritten(Image& image) {
+  for (int c = 0; c < image.channels(); ++c)
+    std::fill(image.planeSpan(c).begin(), image.planeSpan(c).end(),
+              std::bit_cast<float>(kUnwrittenBits));
+}
+
+// What is wrong with a call's own report of its time, or "": no work inside a call can take longer
+// than the call (1% and 0.05 ms allowed for two clocks' reading).
+std::string implausibleTime(const std::optional<double>& reported,
+                            const std::vector<PassStats>& passes, double wall) {
+  const double limit = wall * 1.01 + 0.05;
+  char buf[160];
+  if (reported && *reported > limit) {
+    std::snprintf(buf, sizeof buf, "computeMs %.4g ms in a call of %.4g ms", *reported, wall);
+    return buf;
+  }
+  double sum = 0;
+  for (const PassStats& p : passes) sum += p.milliseconds;
+  if (sum > limit) {
+    std::snprintf(buf, sizeof buf, "passes of %.4g ms in all in a call of %.4g ms", sum, wall);
+    return buf;
+  }
+  return "";
+}
+
+size_t unwrittenValues(const Image& image) {
+  size_t n = 0;
+  for (int c = 0; c < image.channels(); ++c)
+    for (const float v : image.planeSpan(c)) n += std::bit_cast<uint32_t>(v) == kUnwrittenBits;
+  return n;
+}
+
+}  // namespace
 
 std::map<std::string, std::map<std::string, std::string>> parseParamAssignments(const std::vector<std::string>& items) {
   std::map<std::string, std::map<std::string, std::string>> out;
@@ -176,12 +221,14 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
     out.wallMilliseconds = 0;
     out.selfTimed = false;
     out.extraRaysPerPixel = 0;
+    out.implausibleTime.clear();
     for (auto& [kind, instance] : instances_) {
       Denoiser& d = *instance;
       Image& result = kind == SignalKind::Color ? out.color : kind == SignalKind::Diffuse ? out.diffuse : out.specular;
       DenoiserInputs in{frame.get(signalName(kind)), frame, needsGradients_ && t > 0 ? &gradients : nullptr,
                         readsLowres_ ? &lowres : nullptr};
       d.clearPassStats();
+      markUnwritten(result);
       auto start = std::chrono::steady_clock::now();
       d.denoise(ctx, in, result);
       const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
@@ -189,6 +236,15 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
       out.wallMilliseconds += wall;
       out.milliseconds += reported.value_or(wall);
       out.selfTimed = reported.has_value();
+      if (const std::string wrong = implausibleTime(reported, d.lastPasses(), wall);
+          !wrong.empty() && out.implausibleTime.empty())
+        out.implausibleTime = std::string(signalName(kind)) + ": " + wrong;
+      if (const size_t unwritten = unwrittenValues(result))
+        throw Error(request_.name + " left " + std::to_string(unwritten) + " of the " +
+                    std::to_string(result.pixelCount() * size_t(result.channels())) +
+                    " values of its " + signalName(kind) + " output unwritten at frame " +
+                    std::to_string(t) +
+                    " (every value of the output image must be written on every frame)");
       if (nonFiniteValues(result) > 0)
         throw Error(request_.name + " produced a non-finite value on the " + signalName(kind) + " signal at frame " +
                     std::to_string(t));

@@ -39,6 +39,9 @@ struct DenoisedFrame {
   std::vector<PassStats> passes;   // "diffuse/<pass>", "specular/<pass>"
   NonFiniteCounts sanitized;       // NaN/Inf input values replaced by 0, per layer.channel
   double extraRaysPerPixel = 0;    // extra paths read per pixel (low-resolution or gradient samples)
+  // The first call of this frame whose own report of its time (a process's computeMs, the sum of
+  // its passes) exceeds the harness's wall clock around that call, said in words; empty if none.
+  std::string implausibleTime;
 };
 
 class DenoiseRun {

@@ -19,12 +19,42 @@ namespace arena {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
+std::vector<std::string> runWarnings(const json& pair, int frames) {
+  std::vector<std::string> first;
+  if (const json timing = pair.value("timing", json::object());
+      timing.contains("implausibleFrames"))
+    first.push_back("reported times longer than the call that carried them on " +
+                    timing["implausibleFrames"].dump() + " of " + std::to_string(frames) +
+                    " frames (" + timing.value("implausibleFirst", "") +
+                    "); no work in a call outlasts the call, so its reported ms are not credible");
+  if (pair.contains("oracleLayers")) {
+    std::string named;
+    for (const json& layer : pair["oracleLayers"]) {
+      const std::string name = layer.get<std::string>();
+      named += (named.empty() ? "" : ", ") + name + " (" + channels::oracleLayers().at(name) + ")";
+    }
+    first.push_back("reads oracle data a real-time engine would not have: " + named +
+                    "; its results are not on equal terms with the others'");
+  }
+  if (const json inputs = pair.value("sanitizedInputs", json::object());
+      inputs.value("total", 0L) > 0)
+    first.push_back(sanitizedWarning(inputs["channels"].get<NonFiniteCounts>()));
+  return first;
+}
+
 namespace {
 
 // Whether frame t's images are kept: every frame's with keepAll, else the report's chosen frames.
 bool keepsImagesOf(const RunConfig& cfg, const SceneData& sd, bool keepAll, int t) {
   if (cfg.keepFrames == "none") return false;
   return keepAll || std::find(sd.chosenFrames.begin(), sd.chosenFrames.end(), t) != sd.chosenFrames.end();
+}
+
+// runWarnings, put before the evaluation's (a pair measured again keeps them).
+void prependRunWarnings(json& pair, int frames) {
+  json all = runWarnings(pair, frames);
+  for (const json& w : pair.value("warnings", json::array())) all.push_back(w);
+  pair["warnings"] = std::move(all);
 }
 
 void writeFrameImages(const fs::path& imageDir, int t, const FrameImages& images) {
@@ -81,6 +111,8 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   PairEvaluation evaluation(sd.evaluation, scope);
   bool selfTimed = false;
   NonFiniteCounts sanitized;  // over every frame, warm-up included: each one shaped the history
+  int implausibleFrames = 0;  // frames whose reported time exceeds the call that carried it
+  std::string firstImplausible;
   std::vector<std::vector<PassTime>> passes;
   std::vector<double> ms;
   GpuFrameCost gpuCost(info.width, info.height);  // the speed axis's predicted GPU ms (issue 31)
@@ -97,6 +129,8 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
     if (kept) kept->push_back({f.frame, f.color, facts});
     selfTimed |= f.selfTimed;
     for (const auto& [channel, n] : f.sanitized) sanitized[channel] += n;
+    if (!f.implausibleTime.empty() && implausibleFrames++ == 0)
+      firstImplausible = "frame " + std::to_string(f.frame) + ", " + f.implausibleTime;
     ms.push_back(f.milliseconds);
     std::vector<PassTime>& frame = passes.emplace_back();
     for (const PassStats& p : f.passes) frame.push_back({p.name, p.milliseconds, p.tapsPerPixel});
@@ -120,24 +154,13 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
     StageTimer metrics(Stage::Metrics);
     pair.update(evaluation.finish());
   }
-  // First: what the inputs were matters before what the outputs measured.
-  if (!sanitized.empty()) pair["warnings"].insert(pair["warnings"].begin(), sanitizedWarning(sanitized));
   // Oracle data (a layer no real-time engine has), named in the results and in a warning: the
   // method is then not ranked on equal terms.
   if (run) {
     json oracles = json::array();
-    std::string named;
     for (const std::string& layer : run->readLayers())
-      if (auto it = channels::oracleLayers().find(layer); it != channels::oracleLayers().end()) {
-        oracles.push_back(layer);
-        named += (named.empty() ? "" : ", ") + layer + " (" + it->second + ")";
-      }
-    if (!oracles.empty()) {
-      pair["oracleLayers"] = oracles;
-      pair["warnings"].insert(pair["warnings"].begin(),
-                              "reads oracle data a real-time engine would not have: " + named +
-                                  "; its results are not on equal terms with the others'");
-    }
+      if (channels::oracleLayers().count(layer)) oracles.push_back(layer);
+    if (!oracles.empty()) pair["oracleLayers"] = oracles;
   }
   json timing;
   if (run) {
@@ -164,8 +187,15 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
       timing = {{"msSource", "not recorded in the capture"}, {"clock", "none"}, {"passes", json::array()}};
     }
   }
+  // A time the denoiser reported for work longer than the call that carried it cannot be: counted
+  // and warned of (runWarnings), never charted silently.
+  if (implausibleFrames > 0) {
+    timing["implausibleFrames"] = implausibleFrames;
+    timing["implausibleFirst"] = firstImplausible;
+  }
   pair["timing"] = timing;
   pair["sanitizedInputs"] = {{"total", totalNonFinite(sanitized)}, {"channels", sanitized}};
+  prependRunWarnings(pair, info.frames);
   pair["images"] = {{"dir", fs::relative(imageDir, cfg.out).string()}, {"all", keepAll && cfg.keepFrames != "none"}};
   if (run && !run->info().origin.empty()) pair["origin"] = run->info().origin;
   if (!run) pair["origin"] = (sd.sequence.dir() / "outputs" / captured).string();
@@ -186,9 +216,7 @@ json evaluatePairAgain(const RunConfig& cfg, const SceneData& sd, const json& fi
   }
   json pair = first;
   pair.update(evaluation.finish());
-  // First, as runPair put it: the inputs' warning, which the evaluation does not know.
-  if (first.value("sanitizedInputs", json::object()).value("total", 0L) > 0)
-    pair["warnings"].insert(pair["warnings"].begin(), first["warnings"][0]);
+  prependRunWarnings(pair, sd.sequence.info().frames);  // the evaluation's warnings were replaced
   return pair;
 }
 

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <optional>
+#include <set>
 
 #include "core/capture.hpp"
 #include "core/env_info.hpp"
@@ -33,6 +34,31 @@ std::string safeName(const std::string& label) {
 json failedPair(const std::string& scene, const DenoiserRequest& r, const std::string& error) {
   return {{"scene", scene}, {"denoiser", r.name}, {"label", r.label}, {"params", json::object()},
           {"status", "failed"}, {"error", error}};
+}
+
+// A pair's image folder emptied: before the pair runs (a reused --out's earlier images are not
+// this run's), and when it fails (its frames so far are no measurement).
+void removePairImages(const fs::path& dir) {
+  std::error_code ec;
+  fs::remove_all(dir, ec);
+  if (ec) throw Error(dir.string() + ": cannot remove the images there: " + ec.message());
+}
+
+// The image folders of images/SCENE/LABEL that no measured pair of `results` names (a reused
+// --out's pairs that this run did not have) removed, so the report copies only this run's images.
+void pruneImages(const fs::path& out, const json& results) {
+  std::set<fs::path> kept;
+  for (const json& p : results["pairs"])
+    if (p.value("status", "") == "ok" && p.contains("images"))
+      kept.insert(out / p["images"]["dir"].get<std::string>());
+  std::error_code ec;
+  if (!fs::is_directory(out / "images", ec)) return;
+  for (const fs::directory_entry& scene : fs::directory_iterator(out / "images")) {
+    if (!scene.is_directory()) continue;
+    for (const fs::directory_entry& label : fs::directory_iterator(scene.path()))
+      if (label.is_directory() && !kept.count(label.path())) removePairImages(label.path());
+    if (fs::is_empty(scene.path(), ec)) fs::remove(scene.path(), ec);
+  }
 }
 
 std::string clock(double s) {
@@ -236,13 +262,16 @@ json runMatrix(const RunConfig& cfg) {
       const DenoiserRequest* r = mine[k];
       auto t0 = std::chrono::steady_clock::now();
       json pair;
+      const fs::path images = cfg.out / "images" / source.name / safeName(r->label);
       try {
+        removePairImages(images);
         if (!sd) throw Error("scene " + source.name + " could not be prepared: " + sceneError);
-        pair = runPair(cfg, *sd, *r, cfg.out / "images" / source.name / safeName(r->label), keepAll,
-                       mayRefine ? &kept[k] : nullptr, mayRefine ? EvaluationScope::Screening : EvaluationScope::Full);
+        pair = runPair(cfg, *sd, *r, images, keepAll, mayRefine ? &kept[k] : nullptr,
+                       mayRefine ? EvaluationScope::Screening : EvaluationScope::Full);
         if (!seedSequences.empty()) pair["biasVariance"] = biasVarianceOf(cfg, *sd, seedSequences, *r);
       } catch (const std::exception& e) {
         pair = failedPair(source.name, *r, e.what());
+        removePairImages(images);
       }
       results["pairs"].push_back(pair);
       ++pairsDone;
@@ -253,9 +282,12 @@ json runMatrix(const RunConfig& cfg) {
                     source.name.c_str(), pair["status"] == "ok" ? "done" : "FAILED", took,
                     clock(elapsed / double(pairsDone) * double(pairsMine - pairsDone)).c_str());
       say(buf);
-      if (pair["status"] != "ok") say("  error: " + pair["error"].get<std::string>());
-      else if (pair["sanitizedInputs"]["total"].get<long>() > 0)
-        say("  warning: " + pair["warnings"][0].get<std::string>());
+      if (pair["status"] != "ok") {
+        say("  error: " + pair["error"].get<std::string>());
+      } else {
+        for (const std::string& warning : runWarnings(pair, sd->sequence.info().frames))
+          say("  warning: " + warning);
+      }
       sceneFailures += pair["status"] != "ok";
     }
     // The scene's pairs measured again from their kept outputs, against the references as they now
@@ -273,6 +305,7 @@ json runMatrix(const RunConfig& cfg) {
             pair["biasVariance"] = biasVarianceOf(cfg, *sd, seedSequences, *mine[k]);
         } catch (const std::exception& e) {
           pair = failedPair(source.name, *mine[k], e.what());
+          removePairImages(cfg.out / "images" / source.name / safeName(mine[k]->label));
           say("  error: " + std::string(e.what()));
           ++sceneFailures;
         }
@@ -323,6 +356,7 @@ void finishRun(json& results, const RunConfig& cfg) {
     results["statistics"] = analyseRun(results).toJson();
     addReferenceQuality(results, cfg.warmup, cfg.referenceNotes);
   }
+  pruneImages(cfg.out, results);
   commitResults(cfg.out, results);
 }
 

@@ -103,6 +103,12 @@ TEST(ExternalManifest, EveryMistakeNamesTheFileAndTheField) {
       {"both", {{"library", "x.so"}}, "give exactly one of \"command\""},
       {"signals", {{"signals", "rgb"}}, "$.signals: expected \"demodulated\""},
       {"channel", {{"channels", {"normal", "normals"}}}, "$.channels[1]: unknown layer 'normals'"},
+      {"channel list",
+       {{"channels", {"normals"}}},
+       "are: diffuse specular emission color albedo specAlbedo"},
+      {"channel twice",
+       {{"channels", {"normal", "depth", "normal"}}},
+       "$.channels[2]: 'normal' is already $.channels[0]; name each layer once"},
       {"unknown field", {{"timeout", 3}}, "$.timeout: unknown field"},
       {"param default",
        {{"parameters", {{{"name", "k"}, {"type", "int"}, {"default", 9}, {"min", 0}, {"max", 4}}}}},
@@ -350,6 +356,13 @@ TEST(ExternalProcess, TheDenoiseBenchNamesTheClockOfEachContender) {
   for (const std::string& l : lines)
     labelled |= l.find("[reported by the process; wall clock") != std::string::npos;
   EXPECT_TRUE(labelled);
+  // Its ratio to the built-in is taken on one clock, the wall clock around both: a process's own
+  // report (a GPU's time, perhaps) divided by a CPU wall clock is no ratio.
+  EXPECT_EQ(process["ratioTo"]["clock"], "harness wall clock, both");
+  bool onWall = false;
+  for (const std::string& l : lines)
+    onWall |= l.find("of eaw on the wall clock") != std::string::npos;
+  EXPECT_TRUE(onWall);
 }
 
 // --- faults: each a clear error; the harness neither hangs nor dies ---------------------------
@@ -359,6 +372,7 @@ TEST(ExternalFaults, ExitEarlyGivesTheStatusAndTheStderrTail) {
   EXPECT_NE(e.find("exited with status 3"), std::string::npos) << e;
   EXPECT_NE(e.find("cannot find model weights weights.bin"), std::string::npos) << e;
   EXPECT_NE(e.find("diffuse process"), std::string::npos) << e;
+  EXPECT_NE(e.find("): frame 1: "), std::string::npos) << e;  // every fault names its frame
 }
 
 TEST(ExternalFaults, ACrashNamesTheSignal) {
@@ -384,13 +398,14 @@ TEST(ExternalFaults, AHangIsKilledAfterTheTimeout) {
   const std::string e = errorOf([] { denoiseAll({faulty("hang", 0.5), {}, ""}, tinySequence()); });
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  EXPECT_NE(e.find("no result header within timeoutSeconds = 0.5"), std::string::npos) << e;
+  EXPECT_NE(e.find("frame 1: no result header within timeoutSeconds = 0.5"), std::string::npos)
+      << e;
   EXPECT_NE(e.find("killed by the harness"), std::string::npos) << e;
   EXPECT_LT(seconds, 8.0);  // 0.5 s for the hang; the rest is the sequence and Python starting
   const std::string setup = errorOf([] {
     denoiseAll({faulty("no-ready", 0.5), {}, ""}, tinySequence());
   });
-  EXPECT_NE(setup.find("no ready header within timeoutSeconds"), std::string::npos) << setup;
+  EXPECT_NE(setup.find("setup: no ready header within timeoutSeconds"), std::string::npos) << setup;
 }
 
 // A wrapper script's background job shares the process's output: when the process exits, the job
@@ -444,7 +459,19 @@ TEST(ExternalFaults, ReportedErrorsAndGarbageAreQuoted) {
   const std::string e = errorOf([] { denoiseAll({faulty("error"), {}, ""}, tinySequence()); });
   EXPECT_NE(e.find("it reported an error: out of GPU memory"), std::string::npos) << e;
   const std::string g = errorOf([] { denoiseAll({faulty("garbage"), {}, ""}, tinySequence()); });
-  EXPECT_NE(g.find("got: hello from print debugging"), std::string::npos) << g;
+  EXPECT_NE(
+      g.find("frame 1: expected a JSON 'result' header line, got: hello from print debugging"),
+      std::string::npos)
+      << g;
+  // A NUL byte ended the message where it was (what() is a C string): the rest of the line, how
+  // the process ended and its stderr were lost. It is shown as U+FFFD, like any byte that is not
+  // text.
+  const std::string n = errorOf([] { denoiseAll({faulty("nul"), {}, ""}, tinySequence()); });
+  EXPECT_NE(n.find("got: junk\xEF\xBF\xBDtail"), std::string::npos) << n;
+  EXPECT_NE(n.find("before\xEF\xBF\xBD"
+                   "after the NUL"),
+            std::string::npos)
+      << n;
 }
 
 // Whatever bytes a process writes, the message is valid text (results.json is UTF-8: one stray
@@ -494,6 +521,41 @@ TEST(ExternalFaults, BadBytesAndMalformedReportsFailThePairOnly) {
   int ok = 0;
   for (const json& p : r["pairs"]) ok += p["status"] == "ok";
   EXPECT_EQ(ok, 1);
+}
+
+// A process's reported time longer than the exchange that carried it is warned of, in the results
+// and the run's printout; a pair that fails leaves no images behind (the report copied a failed
+// pair's first frames), and a reused --out keeps no other run's.
+TEST(ExternalFaults, ImplausibleTimesAreWarnedOfAndFailedPairsLeaveNoImages) {
+  RunConfig cfg =
+      tinyRun("implausible", {{faulty("slow-report"), {}, ""}, {faulty("exit"), {}, ""}});
+  cfg.keepFrames = "all";
+  std::vector<std::string> printed;
+  cfg.progress = [&](const std::string& line) { printed.push_back(line); };
+  fs::create_directories(cfg.out / "images" / "cornell_static" / "an-earlier-run");
+  std::ofstream(cfg.out / "images" / "cornell_static" / "an-earlier-run" / "frame_0000.png")
+      << "old";
+  const json r = runMatrix(cfg);
+  ASSERT_EQ(r["pairs"].size(), 2u);
+  const json& slow = r["pairs"][0];
+  ASSERT_EQ(slow["status"], "ok");
+  EXPECT_EQ(slow["timing"]["implausibleFrames"], kFrames - 1);  // it misreports from frame 1 on
+  const std::string warning = slow["warnings"][0];
+  EXPECT_NE(warning.find("on 5 of 6 frames (frame 1, diffuse: computeMs 2e+12 ms in a call of"),
+            std::string::npos)
+      << warning;
+  bool said = false;
+  for (const std::string& line : printed) said |= line == "  warning: " + warning;
+  EXPECT_TRUE(said);
+  EXPECT_EQ(r["pairs"][1]["status"], "failed");
+  const fs::path sceneImages = cfg.out / "images" / "cornell_static";
+  EXPECT_TRUE(fs::exists(cfg.out / slow["images"]["dir"].get<std::string>() / "frame_0000.exr"));
+  std::vector<std::string> folders;
+  for (const fs::directory_entry& e : fs::directory_iterator(sceneImages))
+    if (e.is_directory())
+      folders.push_back(e.path().filename().string());  // beside the scene's own images
+  EXPECT_EQ(folders, std::vector<std::string>{
+                         fs::path(slow["images"]["dir"].get<std::string>()).filename().string()});
 }
 
 TEST(ExternalFaults, AMissingProgramIsNamed) {
@@ -600,9 +662,37 @@ TEST(Plugin, FaultsOfAPluginFailItsPairNamingThem) {
   ::setenv("ARENA_FAULTY_PLUGIN", "bad-pass", 1);
   const std::string pass = errorOf([&] { denoiseAll({name, {}, ""}, tinySequence()); });
   EXPECT_NE(pass.find("reportPass 'blur': milliseconds nan"), std::string::npos) << pass;
+  // Success without writing the output: scored before on what the buffer held from the frame
+  // before; now the harness marks the buffer before each call and fails the pair.
+  ::setenv("ARENA_FAULTY_PLUGIN", "unwritten", 1);
+  const std::string unwritten = errorOf([&] { denoiseAll({name, {}, ""}, tinySequence()); });
+  EXPECT_NE(
+      unwritten.find("left 1728 of the 1728 values of its diffuse output unwritten at frame 0"),
+      std::string::npos)
+      << unwritten;
+  ::setenv("ARENA_FAULTY_PLUGIN", "partial", 1);
+  const std::string partial = errorOf([&] { denoiseAll({name, {}, ""}, tinySequence()); });
+  EXPECT_NE(partial.find("left 1152 of the 1728 values"), std::string::npos) << partial;
   ::setenv("ARENA_FAULTY_PLUGIN", "", 1);
   EXPECT_EQ(denoiseAll({name, {}, ""}, tinySequence()).size(), size_t(kFrames));
+  // A pass reported longer than the call that ran it: the pair is measured, its times are warned
+  // of.
+  ::setenv("ARENA_FAULTY_PLUGIN", "slow-pass", 1);
+  const json slow = runMatrix(tinyRun("slow_pass", {{name, {}, ""}}));
   ::unsetenv("ARENA_FAULTY_PLUGIN");
+  ASSERT_EQ(slow["pairs"][0]["status"], "ok") << slow["pairs"][0].dump().substr(0, 300);
+  EXPECT_EQ(slow["pairs"][0]["timing"]["implausibleFrames"], kFrames);
+  const std::string warning = slow["pairs"][0]["warnings"][0];
+  EXPECT_NE(warning.find("reported times longer than the call that carried them on 6 of 6 frames "
+                         "(frame 0, diffuse: passes of 1e+09 ms in all in a call of"),
+            std::string::npos)
+      << warning;
+  // A descriptor's negative count is refused (it loaded as if it declared nothing).
+  ::setenv("ARENA_FAULTY_DESCRIPTOR", "negative-count", 1);
+  const std::string negative = errorOf(
+      [] { DenoiserRegistry::resolve(std::string("plugin:") + ARENA_FAULTY_PARAMS_PLUGIN); });
+  ::unsetenv("ARENA_FAULTY_DESCRIPTOR");
+  EXPECT_NE(negative.find("paramCount -2 (expected a count >= 0)"), std::string::npos) << negative;
   const std::string params = errorOf(
       [] { DenoiserRegistry::resolve(std::string("plugin:") + ARENA_FAULTY_PARAMS_PLUGIN); });
   EXPECT_NE(params.find("an int parameter's default, min and max must be whole numbers"),

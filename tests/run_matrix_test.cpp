@@ -181,7 +181,10 @@ TEST(RunMatrix, ShardsMergeIntoTheFullRun) {
 // of a run that starts from the refined references (the denoisers are deterministic), images and
 // statistics included; the hook sees each scene once, with its pairs in place.
 TEST(RunMatrix, ARefinedSceneIsMeasuredAgainFromItsKeptOutputs) {
-  RunConfig c = tinyRun("refine_hook", {{"eaw", {}, ""}});
+  // reblur reading the mirror ray's oracle distance: its warning, the run's own, must survive the
+  // measurement again (it was dropped there).
+  RunConfig c =
+      tinyRun("refine_hook", {{"eaw", {}, ""}, {"reblur", {{"hitDistance", "mirror"}}, ""}});
   c.flip = "ldr";  // the FLIP maps among the images compared below
   c.cache = test::freshDir("refine_hook_cache");  // its references are refined: not the shared cache
   std::vector<std::string> seen;
@@ -196,7 +199,7 @@ TEST(RunMatrix, ARefinedSceneIsMeasuredAgainFromItsKeptOutputs) {
         EXPECT_TRUE(p["summary"].contains("relMseCorrected")) << scene.name;
         EXPECT_FALSE(p["summary"].contains("ldrFlip")) << scene.name;
       }
-    EXPECT_EQ(pairs, 3u) << scene.name;  // passthrough, temporal, eaw
+    EXPECT_EQ(pairs, 4u) << scene.name;  // passthrough, temporal, eaw, reblur
     if (scene.name != "light_switch") return false;
     if (!before.is_null()) {  // the second round: the scene and its pairs against the refined references
       EXPECT_LT(results["scenes"]["light_switch"]["referenceRelMse"][6].get<double>(),
@@ -220,6 +223,9 @@ TEST(RunMatrix, ARefinedSceneIsMeasuredAgainFromItsKeptOutputs) {
             before["scenes"]["light_switch"]["referenceRelMse"][6].get<double>() / 4);
   EXPECT_NE(pairOf(refined, "light_switch", "eaw")["summary"]["relMse"]["mean"],
             pairOf(before, "light_switch", "eaw")["summary"]["relMse"]["mean"]);
+  const json& oracle = pairOf(refined, "light_switch", "reblur[hitDistance=mirror]");
+  ASSERT_FALSE(oracle["warnings"].empty());
+  EXPECT_NE(oracle["warnings"][0].get<std::string>().find("reads oracle data"), std::string::npos);
   RunConfig plain = c;
   plain.refineScene = nullptr;
   plain.out = test::freshDir("run_refine_hook_plain");

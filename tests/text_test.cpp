@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
+#include <stdexcept>
 
 namespace arena {
 namespace {
@@ -23,6 +24,10 @@ TEST(Text, WellFormedTextIsUnchangedAndEveryMalformedByteIsReplaced) {
   EXPECT_EQ(validUtf8("\xE0\x80\xAF"), kFffd + kFffd + kFffd);  // an overlong three-byte form
   EXPECT_EQ(validUtf8("\xED\xA0\x80"), kFffd + kFffd + kFffd);  // a surrogate (U+D800)
   EXPECT_EQ(validUtf8("\xF4\x90\x80\x80"), kFffd + kFffd + kFffd + kFffd);  // beyond U+10FFFF
+  // NUL is well-formed UTF-8 but ends a C string: an error's what() lost everything after it.
+  const std::string nul("a\0b", 3);
+  EXPECT_EQ(validUtf8(nul), "a" + kFffd + "b");
+  EXPECT_EQ(std::string(std::runtime_error(validUtf8(nul)).what()), "a" + kFffd + "b");
   // Whatever the bytes, the result is text a JSON writer accepts.
   std::string every;
   for (int b = 0; b < 256; ++b) every += char(b);

@@ -24,8 +24,11 @@ void checkDenoiserName(const std::string& name, const std::string& where) {
 const LayerSpec& frameLayerSpec(const std::string& name, const std::string& where) {
   for (const LayerSpec& spec : channels::frameLayers())
     if (spec.name == name) return spec;
+  std::vector<std::string> names;  // each once: "color" has two specs (its plain R, G, B alias)
+  for (const LayerSpec& spec : channels::frameLayers())
+    if (std::find(names.begin(), names.end(), spec.name) == names.end()) names.push_back(spec.name);
   std::string known;
-  for (const LayerSpec& spec : channels::frameLayers()) known += " " + spec.name;
+  for (const std::string& name : names) known += " " + name;
   throw Error(where + ": unknown layer '" + name + "'; the sequence layers are:" + known);
 }
 
@@ -131,8 +134,16 @@ ExternalManifest readManifest(const fs::path& file) {
            "expected \"demodulated\" (one process per diffuse and specular signal, "
            "remodulated by the harness) or \"color\" (one process on the colour)");
   m.channels = stringArray(r, "channels", false);
-  for (size_t i = 0; i < m.channels.size(); ++i)
-    frameLayerSpec(m.channels[i], file.string() + ": $.channels[" + std::to_string(i) + "]");
+  for (size_t i = 0; i < m.channels.size(); ++i) {
+    const std::string where = file.string() + ": $.channels[" + std::to_string(i) + "]";
+    frameLayerSpec(m.channels[i], where);
+    // Twice, its planes would be sent twice under the same names: a process that maps planes by
+    // name keeps one and loses the other's place.
+    for (size_t k = 0; k < i; ++k)
+      if (m.channels[k] == m.channels[i])
+        throw Error(where + ": '" + m.channels[i] + "' is already $.channels[" + std::to_string(k) +
+                    "]; name each layer once");
+  }
   std::vector<ParamSpec> specs;
   for (JsonReader& p : r.optionalArray("parameters")) {
     specs.push_back(readParamSpec(p));

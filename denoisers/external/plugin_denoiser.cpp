@@ -160,6 +160,11 @@ class PluginDenoiser final : public Denoiser {
 
 ParamSchema schemaOf(const ArenaPlugin& p, const std::string& where) {
   std::vector<ParamSpec> specs;
+  // A negative count is no count (a plugin with one loaded and ran as if it declared nothing).
+  for (const auto& [field, count] : {std::pair{"paramCount", p.paramCount},
+                                     std::pair{"requiredChannelCount", p.requiredChannelCount}})
+    if (count < 0)
+      throw Error(where + ": " + field + " " + std::to_string(count) + " (expected a count >= 0)");
   // Counts with no array behind them would be read through a null pointer.
   if (p.paramCount > 0 && !p.params)
     throw Error(where + ": paramCount " + std::to_string(p.paramCount) + " but params is NULL");

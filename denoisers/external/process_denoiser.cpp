@@ -46,7 +46,8 @@ std::chrono::steady_clock::time_point ExternalProcessDenoiser::deadline() const 
 
 void ExternalProcessDenoiser::fail(const std::string& what) {
   std::string message = manifest_->name + " (" + signalName(kind_) + " process, " +
-                        manifest_->file.string() + "): " + what;
+                        manifest_->file.string() + "): " + (stage_.empty() ? "" : stage_ + ": ") +
+                        what;
   if (process_) {
     std::string status = process_->exitStatus(std::chrono::milliseconds(200));
     if (status == "still running") {
@@ -95,6 +96,7 @@ nlohmann::json ExternalProcessDenoiser::readHeader(const std::string& expectedTy
 
 void ExternalProcessDenoiser::setup(int width, int height) {
   process_.reset();  // a second setup() starts afresh
+  stage_ = "setup";
   width_ = width;
   height_ = height;
   try {
@@ -125,6 +127,7 @@ void ExternalProcessDenoiser::denoise(const FrameContext& ctx, const DenoiserInp
   if (!process_)
     fail("the process is not running (a previous frame failed, or setup() was not called)");
   computeMs_.reset();
+  stage_ = "frame " + std::to_string(ctx.frameIndex);
   std::vector<const float*> planes;
   for (int c = 0; c < 3; ++c) planes.push_back(in.signal.plane(c));
   for (const std::string& layer : manifest_->channels) {
@@ -133,8 +136,8 @@ void ExternalProcessDenoiser::denoise(const FrameContext& ctx, const DenoiserInp
     for (int c = 0; c < image.channels(); ++c) planes.push_back(image.plane(c));
   }
   if (planes.size() != planeNames_.size())
-    fail("frame " + std::to_string(ctx.frameIndex) + " has " + std::to_string(planes.size()) +
-         " planes where the setup announced " + std::to_string(planeNames_.size()));
+    fail("it has " + std::to_string(planes.size()) + " planes where the setup announced " +
+         std::to_string(planeNames_.size()));
   const size_t planeBytes = size_t(width_) * size_t(height_) * sizeof(float);
   const nlohmann::json header = {{"type", "frame"},
                                  {"frame", ctx.frameIndex},
@@ -149,16 +152,16 @@ void ExternalProcessDenoiser::denoise(const FrameContext& ctx, const DenoiserInp
     process_->write(line.data(), line.size(), sendBy);
     for (const float* p : planes) process_->write(p, planeBytes, sendBy);
   } catch (const Subprocess::TimedOut&) {
-    fail("frame " + std::to_string(ctx.frameIndex) + " could not be sent within timeoutSeconds = " +
-         seconds(manifest_->timeoutSeconds) + " (it stopped reading its input)");
+    fail("could not be sent within timeoutSeconds = " + seconds(manifest_->timeoutSeconds) +
+         " (it stopped reading its input)");
   } catch (const Error& e) {
-    fail("frame " + std::to_string(ctx.frameIndex) + ": " + e.what());
+    fail(e.what());
   }
   const nlohmann::json result = readHeader("result");
   auto number = [&](const char* key) -> double {
     if (!result.contains(key) || !result[key].is_number())
-      fail("frame " + std::to_string(ctx.frameIndex) + ": the result header needs a number \"" +
-           key + "\", got: " + result.dump().substr(0, 200));
+      fail(std::string("the result header needs a number \"") + key +
+           "\", got: " + result.dump().substr(0, 200));
     return result[key].get<double>();
   };
   if (number("frame") != ctx.frameIndex)
@@ -166,23 +169,20 @@ void ExternalProcessDenoiser::denoise(const FrameContext& ctx, const DenoiserInp
          std::to_string(ctx.frameIndex) + " was sent");
   const double w = number("width"), h = number("height"), channels = number("channels");
   if (w != width_ || h != height_ || channels != 3)
-    fail("frame " + std::to_string(ctx.frameIndex) + ": sent a " + result["width"].dump() + "x" +
-         result["height"].dump() + "x" + result["channels"].dump() + " result; expected " +
-         std::to_string(width_) + "x" + std::to_string(height_) + "x3 (RGB planes)");
+    fail("sent a " + result["width"].dump() + "x" + result["height"].dump() + "x" +
+         result["channels"].dump() + " result; expected " + std::to_string(width_) + "x" +
+         std::to_string(height_) + "x3 (RGB planes)");
   const double ms = number("computeMs");
-  if (!std::isfinite(ms) || ms < 0)
-    fail("frame " + std::to_string(ctx.frameIndex) + ": computeMs must be a finite number >= 0");
+  if (!std::isfinite(ms) || ms < 0) fail("computeMs must be a finite number >= 0");
   try {
     const auto readBy = deadline();
     for (int c = 0; c < 3; ++c) process_->read(output.plane(c), planeBytes, readBy);
   } catch (const Subprocess::TimedOut&) {
-    fail("frame " + std::to_string(ctx.frameIndex) +
-         ": its planes did not arrive within timeoutSeconds = " +
-         seconds(manifest_->timeoutSeconds) + " (fewer bytes than 3 x " +
-         std::to_string(planeBytes) + "?)");
+    fail("its planes did not arrive within timeoutSeconds = " + seconds(manifest_->timeoutSeconds) +
+         " (fewer bytes than 3 x " + std::to_string(planeBytes) + "?)");
   } catch (const Error& e) {
-    fail("frame " + std::to_string(ctx.frameIndex) + ": " + e.what() + " (expected 3 planes of " +
-         std::to_string(planeBytes) + " bytes after the result header)");
+    fail(std::string(e.what()) + " (expected 3 planes of " + std::to_string(planeBytes) +
+         " bytes after the result header)");
   }
   passes_.clear();
   if (result.contains("passes")) {
@@ -194,11 +194,11 @@ void ExternalProcessDenoiser::denoise(const FrameContext& ctx, const DenoiserInp
       };
       if (!p.is_object() || !p.contains("name") || !p["name"].is_string() || !nonNegative("ms") ||
           (p.contains("tapsPerPixel") && !nonNegative("tapsPerPixel")))
-        fail("frame " + std::to_string(ctx.frameIndex) +
-             ": each entry of \"passes\" needs a string \"name\", a number \"ms\" >= 0 and "
-             "optionally "
-             "a number \"tapsPerPixel\" >= 0, got: " +
-             p.dump());
+        fail(
+            "each entry of \"passes\" needs a string \"name\", a number \"ms\" >= 0 and "
+            "optionally "
+            "a number \"tapsPerPixel\" >= 0, got: " +
+            p.dump());
       passes_.push_back(
           {p["name"].get<std::string>(), p["ms"].get<double>(), p.value("tapsPerPixel", 0.0)});
     }

@@ -43,6 +43,7 @@ class ExternalProcessDenoiser final : public Denoiser {
   std::vector<std::string> planeNames_;  // "signal.R", ..., "normal.X", ... in sending order
   bool pendingReset_ = false;
   std::optional<double> computeMs_;
+  std::string stage_;  // "setup" or "frame N": what every error of the exchange is prefixed with
 };
 
 }  // namespace arena

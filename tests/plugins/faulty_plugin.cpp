@@ -4,7 +4,11 @@
 //   unterminated  fails, filling the whole error buffer without a terminator, ending in bytes
 //                 that are not UTF-8
 //   bad-pass      reports a pass with a NaN time and succeeds
-// Otherwise it writes zeros and succeeds.
+//   slow-pass     reports a pass of 1e9 ms (longer than the call) and succeeds
+//   unwritten     succeeds without writing its output
+//   partial       writes only the output's first plane and succeeds
+// Otherwise it writes zeros and succeeds. The FAULTY_PLUGIN_BAD_PARAMS build reads
+// ARENA_FAULTY_DESCRIPTOR when loaded: "negative-count" declares paramCount -2 with no array.
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -34,7 +38,11 @@ int denoise(void*, const ArenaFrameContext*, const ArenaInputs*, const ArenaMuta
   }
   if (m == "bad-pass" && host && host->reportPass)
     host->reportPass(host->context, "blur", NAN, 1.0);
-  for (int c = 0; c < output->channels; ++c)
+  if (m == "slow-pass" && host && host->reportPass)
+    host->reportPass(host->context, "blur", 1e9, 1.0);
+  if (m == "unwritten") return 0;
+  const int planes = m == "partial" ? 1 : output->channels;
+  for (int c = 0; c < planes; ++c)
     std::memset(output->planes[c], 0,
                 sizeof(float) * size_t(output->width) * size_t(output->height));
   return 0;
@@ -59,6 +67,13 @@ extern "C" ARENA_PLUGIN_EXPORT const ArenaPlugin* arena_plugin(void) {
   plugin.signals = ARENA_SIGNALS_DEMODULATED;
   plugin.params = params;
   plugin.paramCount = params ? 1 : 0;
+#ifdef FAULTY_PLUGIN_BAD_PARAMS
+  if (const char* d = std::getenv("ARENA_FAULTY_DESCRIPTOR");
+      d && std::string_view(d) == "negative-count") {
+    plugin.params = nullptr;
+    plugin.paramCount = -2;
+  }
+#endif
   plugin.create = create;
   plugin.setup = setup;
   plugin.reset = reset;

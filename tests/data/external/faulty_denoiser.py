@@ -9,6 +9,8 @@
   hang       stops answering (sleeps)
   error      answers {"type": "error"} with a message
   garbage    answers a line that is not JSON
+  nul        answers a line holding a NUL byte, and writes one to stderr
+  slow-report  answers correctly but reports a computeMs of 2e12 (more than the exchange took)
   no-ready   hangs before answering the setup
   bad-bytes  writes bytes that are not UTF-8 (a cut character, 0xff) to stderr and exits
   error-code answers {"type": "error"} whose message is a number
@@ -96,6 +98,13 @@ def main():
             if mode == "garbage":
                 answer(b"hello from print debugging\n")
                 continue
+            if mode == "nul":
+                sys.stderr.buffer.write(b"before\0after the NUL\n")
+                sys.stderr.flush()
+                answer(b"junk\0tail\n")
+                continue
+            if mode == "slow-report":
+                result["computeMs"] = 2e12
         answer((json.dumps(result) + "\n").encode() + signal_bytes)
     del planes
 
