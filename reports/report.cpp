@@ -969,6 +969,10 @@ void copyPageAssets(const fs::path& webDir, const fs::path& nodeModulesDir,
 ReportSummary writeReport(const ReportOptions& o) {
   requirePageDirectory(o.out, "report");
   const RunResults results = loadResults(o.run);
+  // A page of nothing would look like a report; a run always has pairs (failed ones included).
+  if (results.pairs.empty())
+    throw Error("report: " + (o.run / "results.json").string() +
+                ": holds no pairs; nothing to report");
   RunResults baseline;
   if (!o.baseline.empty()) baseline = loadResults(o.baseline);
   std::vector<PageFile> files;

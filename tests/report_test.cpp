@@ -680,6 +680,20 @@ TEST(Report, OtherSchemaVersionIsAClearError) {
   EXPECT_FALSE(fs::exists(o.out / "data.js"));
 }
 
+// A results file with no pairs (only a hand-made one has none) is no report: refused, nothing
+// written.
+TEST(Report, AResultsFileWithNoPairsIsRefused) {
+  json run = fixtureRun();
+  run["pairs"] = json::array();
+  ReportOptions o;
+  o.run = writeFixtureRun("report_nopairs", run);
+  o.out = test::freshDir("report_nopairs_out") / "page";
+  o.nodeModulesDir = fakeNodeModules("report_nopairs_modules");
+  const std::string e = test::errorOf([&] { writeReport(o); });
+  EXPECT_NE(e.find("results.json: holds no pairs; nothing to report"), std::string::npos) << e;
+  EXPECT_FALSE(fs::exists(o.out));
+}
+
 TEST(Report, MissingChartingLibrarySaysToRunSetup) {
   ReportOptions o;
   o.run = writeFixtureRun("report_nolib", fixtureRun());
