@@ -214,9 +214,16 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
   if (!(c.exposure > 0) || !std::isfinite(c.exposure))
     root.fail("exposure", "a positive number (recorded; the colour is scored as stored)");
   c.reverseZ = root.boolean("reverseZ", false);
+  // Recorded, not used (the arena reads linear view depth), but recorded only when they can be
+  // true.
   c.nearPlane = root.number("near", 0.01);
+  if (!(c.nearPlane > 0) || !std::isfinite(c.nearPlane))
+    root.fail("near", "a positive distance to the near plane");
   c.farPlane = root.number("far", 1000.0);
+  if (!(c.farPlane > c.nearPlane) || !std::isfinite(c.farPlane))
+    root.fail("far", "a finite distance beyond near (" + std::to_string(c.nearPlane) + ")");
   c.units = root.string("units", "m");
+  if (c.units.empty()) root.fail("units", "the world units of positions and depth, e.g. \"m\"");
   if (auto source = root.optionalChild("source")) c.source = source->node();
 
   std::vector<JsonReader> cameras = root.requiredArray("cameras");

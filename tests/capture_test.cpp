@@ -918,6 +918,13 @@ TEST(CaptureContract, BadValuesAndNamesAreErrorsNamingThem) {
   for (const double exposure : {0.0, -1.0})
     expectError(copyCapture(good, "exposure", [&](json& d) { d["exposure"] = exposure; }),
                 "exposure: a positive number");
+  // Recorded planes that cannot be: refused, naming the field.
+  expectError(copyCapture(good, "near", [](json& d) { d["near"] = 0.0; }),
+              "near: a positive distance");
+  expectError(copyCapture(good, "far", [](json& d) { d["near"] = 5.0, d["far"] = 1.0; }),
+              "far: a finite distance beyond near (5.0");
+  expectError(copyCapture(good, "units", [](json& d) { d["units"] = ""; }),
+              "units: the world units");
   // The description's path instead of its folder: said so.
   expectError(copyCapture(good, "json_path") / "capture.json", "give the capture's folder");
   // A frame whose header claims another size: refused with both sizes before its pixels are read.
