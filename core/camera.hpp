@@ -37,6 +37,12 @@ struct CameraState {
   }
   // Linear view depth (distance along the forward axis).
   float viewDepth(glm::vec3 p) const { return glm::dot(p - eye, forward); }
+  // The world point at linear view depth `depth` on the ray through pixel coordinates (px, py):
+  // viewDepth's inverse (a G-buffer's position from its depth).
+  glm::vec3 pointAtDepth(float px, float py, float depth) const {
+    const glm::vec3 dir = rayDirection(px, py);
+    return eye + dir * (depth / glm::dot(dir, forward));
+  }
 
   // Continuous pixel coordinates of a world point; returns false when it is behind the camera.
   bool project(glm::vec3 p, glm::vec2& pixel) const { return projectDirection(p - eye, pixel); }

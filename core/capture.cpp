@@ -463,8 +463,7 @@ LayerSet readCaptureFrame(const CaptureDescription& c, int t) {
       for (int x = 0; x < w; ++x) {
         const float z = depth.at(x, y);
         if (!(z > 0)) continue;
-        const glm::vec3 dir = cam.rayDirection(float(x) + 0.5f, float(y) + 0.5f);
-        const glm::vec3 p = cam.eye + dir * (z / glm::dot(dir, cam.forward));
+        const glm::vec3 p = cam.pointAtDepth(float(x) + 0.5f, float(y) + 0.5f, z);
         for (int k = 0; k < 3; ++k) position.at(x, y, k) = p[k];
       }
     layers.set("position", std::move(position));

@@ -197,8 +197,7 @@ MotionConsistency checkMotion(const std::vector<LayerSet>& frames, const std::ve
         if (!(z > 0) || !std::isfinite(z)) continue;
         if (movingMeshes.count(int(mesh.at(x, y)))) continue;  // not a static surface
         const glm::vec2 pixel(float(x) + 0.5f, float(y) + 0.5f);
-        const glm::vec3 dir = cam.rayDirection(pixel.x, pixel.y);
-        const glm::vec3 p = cam.eye + dir * (z / glm::dot(dir, cam.forward));
+        const glm::vec3 p = cam.pointAtDepth(pixel.x, pixel.y, z);
         glm::vec2 pp, pn;
         if (!prev.project(p, pp)) continue;
         const glm::vec2 e = pp - pixel;

@@ -81,10 +81,8 @@ void HitPointReprojection::compute(const GBufferView& current, const float* hitD
         const glm::vec3 nq(previous.normal[0][q], previous.normal[1][q], previous.normal[2][q]);
         if (glm::dot(n, nq) < settings.normalThreshold) return false;
         // The previous surface point at q, from the previous camera and its linear view depth.
-        const glm::vec3 dir = previousCamera.rayDirection(float(qx) + 0.5f, float(qy) + 0.5f);
-        const float along = glm::dot(dir, previousCamera.forward);
-        if (along <= 1e-6f) return false;
-        const glm::vec3 xq = previousCamera.eye + dir * (previous.depth[q] / along);
+        const glm::vec3 xq =
+            previousCamera.pointAtDepth(float(qx) + 0.5f, float(qy) + 0.5f, previous.depth[q]);
         return std::abs(glm::dot(n, xq - surface)) <= planeLimit;
       };
       const float fx = pixel.x - 0.5f, fy = pixel.y - 0.5f;
