@@ -1,6 +1,8 @@
 #include "core/text.hpp"
 
+#include <charconv>
 #include <cstdint>
+#include <system_error>
 
 namespace arena {
 
@@ -51,6 +53,13 @@ std::string validUtf8(std::string_view text) {
     }
   }
   return out;
+}
+
+std::string shortestText(double x) {
+  char buf[64];
+  if (x == 0) x = 0.0;  // -0 compares equal to 0, and is written as it
+  const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, x);
+  return ec == std::errc() ? std::string(buf, end) : std::to_string(x);
 }
 
 std::string utf8Excerpt(std::string_view text, size_t maxBytes, bool fromEnd) {

@@ -16,4 +16,8 @@ std::string validUtf8(std::string_view text);
 // boundary, as validUtf8.
 std::string utf8Excerpt(std::string_view text, size_t maxBytes, bool fromEnd);
 
+// The shortest decimal that reads back as `x` ("2" for 2.0, "0.05", "1e-05"), -0 written as "0":
+// one text per number, whatever was typed (a parameter's value in a label).
+std::string shortestText(double x);
+
 }  // namespace arena

@@ -139,6 +139,7 @@ class DenoiserRegistry {
   static const DenoiserRegistry& instance();
   // Throws an Error listing the registered names when `name` is unknown.
   const DenoiserInfo& find(const std::string& name) const;
+  bool has(const std::string& name) const;
   std::vector<std::string> names() const;  // in registration order
   void add(DenoiserInfo info);
   // Resolves one `--denoisers` entry: a registered name, "ext:MANIFEST" (a manifest file, a

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "core/error.hpp"
+#include "core/text.hpp"
 
 namespace arena {
 
@@ -60,6 +61,13 @@ bool ParamSet::getBool(const std::string& name) const { return std::get<bool>(fi
 int ParamSet::getInt(const std::string& name) const { return std::get<int>(find(name)); }
 float ParamSet::getFloat(const std::string& name) const { return float(std::get<double>(find(name))); }
 const std::string& ParamSet::getChoice(const std::string& name) const { return std::get<std::string>(find(name)); }
+
+std::string ParamSet::text(const Value& v) {
+  if (const bool* b = std::get_if<bool>(&v)) return *b ? "true" : "false";
+  if (const int* i = std::get_if<int>(&v)) return std::to_string(*i);
+  if (const double* d = std::get_if<double>(&v)) return shortestText(*d);
+  return std::get<std::string>(v);
+}
 
 nlohmann::json ParamSet::toJson() const {
   nlohmann::json j = nlohmann::json::object();

@@ -37,6 +37,11 @@ class ParamSet {
   void set(const std::string& name, Value v) { values_[name] = std::move(v); }
   const std::map<std::string, Value>& values() const { return values_; }
   nlohmann::json toJson() const;
+  // One text per setting, whatever was typed: "true"/"false", "3", the shortest decimal that reads
+  // back as the double ("2" for 2.0, "0.05"; -0 as "0"), a choice as itself. Labels are built from
+  // it, so "2.0" and "2" (or "on" and "true") name one contender across runs.
+  static std::string text(const Value& v);
+  std::string text(const std::string& name) const { return text(find(name)); }
 
  private:
   const Value& find(const std::string& name) const;

@@ -68,6 +68,11 @@ const DenoiserInfo& DenoiserRegistry::find(const std::string& name) const {
   throw Error("unknown denoiser '" + name + "'; registered: " + known);
 }
 
+bool DenoiserRegistry::has(const std::string& name) const {
+  return std::any_of(infos_.begin(), infos_.end(),
+                     [&](const DenoiserInfo& i) { return i.name == name; });
+}
+
 std::vector<std::string> DenoiserRegistry::names() const {
   std::vector<std::string> out;
   for (const DenoiserInfo& i : infos_) out.push_back(i.name);

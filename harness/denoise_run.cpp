@@ -74,10 +74,15 @@ std::map<std::string, std::map<std::string, std::string>> parseParamAssignments(
 
 std::string defaultLabel(const DenoiserRequest& r) {
   if (r.params.empty()) return r.name;
+  // The values as the schema reads them ("2.0" and "2" are one contender), where the denoiser is
+  // registered (a label is also asked of entries that are not, e.g. a capture's stored outputs).
+  std::optional<ParamSet> resolved;
+  if (DenoiserRegistry::instance().has(r.name))
+    resolved = DenoiserRegistry::instance().find(r.name).schema.resolve(r.params, r.name);
   std::string s = r.name + "[";
   bool first = true;
   for (const auto& [k, v] : r.params) {
-    s += (first ? "" : ",") + k + "=" + v;
+    s += (first ? "" : ",") + k + "=" + (resolved ? resolved->text(k) : v);
     first = false;
   }
   return s + "]";

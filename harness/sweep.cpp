@@ -4,6 +4,7 @@
 #include <set>
 
 #include "core/error.hpp"
+#include "denoisers/params.hpp"
 #include "harness/scene_selection.hpp"
 
 namespace arena {
@@ -27,14 +28,18 @@ RunConfig sweepRun(RunConfig c, const std::string& denoiser, const std::map<std:
     // "[1,,2]" is a value left out, not a list of two: said, not read as [1,2].
     if (inner.empty()) throw Error("--grid '" + g + "': no values; expected NAME=[v1,v2,...]");
     axes.push_back({name, splitList(inner, "--grid '" + g + "': values", "NAME=[v1,v2,...]")});
-    // Compared as the schema reads them ("2" and "2.0" are one setting: two contenders of one
-    // setting would only add ties), each value checked on the way.
-    std::map<std::string, std::string> distinct;  // resolved value -> as written
+    // Compared as the denoiser reads them ("2" and "2.0", "0" and "-0" are one setting: two
+    // contenders of one setting would only add ties), each value checked on the way. A built-in
+    // reads a float parameter as a float, so values that round to one float are one setting too.
+    std::map<std::string, std::string> distinct;  // as read -> as written
     for (const std::string& v : axes.back().second) {
-      const std::string resolved = info.schema.resolve({{name, v}}, denoiser).toJson()[name].dump();
-      if (auto [it, added] = distinct.emplace(resolved, v); !added)
+      ParamSet::Value read = info.schema.resolve({{name, v}}, denoiser).values().at(name);
+      if (const double* d = std::get_if<double>(&read); d && info.origin.empty())
+        read = double(float(*d));
+      const std::string key = ParamSet::text(read);
+      if (auto [it, added] = distinct.emplace(key, v); !added)
         throw Error("--grid '" + g + "': " + v + " and " + it->second + " are the same value of " +
-                    name);
+                    name + " (as " + denoiser + " reads it: " + key + ")");
     }
   }
   std::vector<std::map<std::string, std::string>> settings = {fixed};
@@ -50,8 +55,17 @@ RunConfig sweepRun(RunConfig c, const std::string& denoiser, const std::map<std:
   }
   nlohmann::json grid = nlohmann::json::object();
   for (auto& [name, values] : axes) grid[name] = values;
-  for (auto& s : settings) c.denoisers.push_back({denoiser, s, ""});
-  c.annotations["sweep"] = {{"denoiser", denoiser}, {"grid", grid}, {"fixed", fixed}};
+  // Its points' labels, in the grid's order: the report's ablation tells them from a baseline of
+  // the same denoiser, and takes each axis's first value from the first of them.
+  nlohmann::json labels = nlohmann::json::array();
+  for (auto& s : settings) {
+    DenoiserRequest point{denoiser, s, ""};
+    point.label = defaultLabel(point);
+    labels.push_back(point.label);
+    c.denoisers.push_back(point);
+  }
+  c.annotations["sweep"] = {
+      {"denoiser", denoiser}, {"grid", grid}, {"fixed", fixed}, {"labels", labels}};
   return c;
 }
 

@@ -6,6 +6,7 @@
 #include <set>
 
 #include "core/error.hpp"
+#include "core/text.hpp"
 #include "metrics/results.hpp"
 
 namespace arena {
@@ -81,6 +82,16 @@ std::vector<std::string> settingsDifferences(const RunResults& baseline, const R
     if (s->contains("render") && (*s)["render"].is_object()) (*s)["render"].erase("inputSeed");
     s->erase("plan");
   }
+  // A low-resolution buffer rendered in one run only (a contender there reads it) changes none of
+  // the frames both runs measure (its paths are its own), and the other run has no pair that reads
+  // it: not a difference. Rendered in both at other settings, it is one.
+  auto lowres = [](const json& s) {
+    return s.contains("render") && s["render"].contains("lowresFactor");
+  };
+  if (lowres(a) != lowres(b))
+    for (json* s : {&a, &b})
+      if (s->contains("render") && (*s)["render"].is_object())
+        for (const char* k : {"lowresFactor", "lowresSpp"}) (*s)["render"].erase(k);
   collectDifferences(a, b, "settings", out);
   const json& as = baseline.scenes;
   const json& bs = candidate.scenes;
@@ -95,8 +106,15 @@ std::vector<std::string> settingsDifferences(const RunResults& baseline, const R
 }
 
 double parseTolerance(const std::string& text) {
-  return parseFraction(text, "--tolerance",
-                       "a finite non-negative number or percentage, e.g. 2% or 0.02");
+  const double v = parseFraction(text, "--tolerance",
+                                 "a finite non-negative number or percentage, e.g. 2% or 0.02");
+  // A bare number is a fraction: "2" is 200%, a gate that passes almost anything, most likely
+  // meant as 2%. A tolerance of 100% or more is written as a percentage.
+  if (v >= 1 && !text.empty() && text.back() != '%')
+    throw Error("--tolerance '" + text + "': a bare number is a fraction (" + text + " is " +
+                shortestText(v * 100) + "%); write " + text + "% for " + text + " percent, or " +
+                shortestText(v * 100) + "% if that is meant");
+  return v;
 }
 
 double parseConfidence(const std::string& text) {

@@ -11,6 +11,7 @@
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/text.hpp"
 #include "metrics/compare.hpp"
 #include "metrics/error_maps.hpp"
 #include "metrics/results.hpp"
@@ -429,7 +430,9 @@ json rankingData(const RunResults& results, const std::vector<std::string>& scen
   return out;
 }
 
+// A parameter's value as its label writes it ("2", not "2.0").
 std::string valueText(const json& v) {
+  if (v.is_number_float()) return shortestText(v.get<double>());
   return v.is_string() ? v.get<std::string>() : v.dump();
 }
 
@@ -437,7 +440,11 @@ std::string valueText(const json& v) {
 // scene's pairs, the other ranked metrics' in byMetric), oriented a - b; null when not there.
 json pairedDifference(const RunResults& results, const std::string& scene, const std::string& metric,
                       const std::string& a, const std::string& b) {
-  const SceneRanking* ranking = results.statistics ? results.statistics->ranking(scene, metric) : nullptr;
+  // relMseCorrected's paired difference is relMSE's: the reference's floor, subtracted from both
+  // methods' every frame, cancels in it (as the summary table's firstByMetric has it).
+  const std::string ranked = metric == "relMseCorrected" ? "relMse" : metric;
+  const SceneRanking* ranking =
+      results.statistics ? results.statistics->ranking(scene, ranked) : nullptr;
   if (!ranking) return nullptr;
   for (const SceneRanking::Pair& d : ranking->pairs) {
     const bool forward = d.a == a && d.b == b;
@@ -466,9 +473,24 @@ json ablationData(const RunResults& results) {
   if (!results.sweep.is_object()) return nullptr;
   const json& sweep = results.sweep;
   const std::string denoiser = sweep.value("denoiser", "");
+  // The grid's own points, in the grid's order (its labels, which the sweep records): not a
+  // baseline of the same denoiser, and not in whatever order the pairs were stored (a merge of
+  // shards given in another order put the last value first). A sweep recorded without its labels
+  // (an older run): the denoiser's pairs, in their order.
   std::vector<const PairResult*> pairs;
-  for (const PairResult& p : results.pairs)
-    if (p.denoiser == denoiser && p.ok()) pairs.push_back(&p);
+  if (const json labels = sweep.value("labels", json()); labels.is_array()) {
+    for (const json& label : labels)
+      for (const PairResult& p : results.pairs)
+        if (label.is_string() && p.label == label.get<std::string>() && p.denoiser == denoiser &&
+            p.ok())
+          pairs.push_back(&p);
+    // Without the grid's first point (failed on every scene) no axis has its first value to be
+    // compared with: no rows rather than rows against the second value.
+    if (!labels.empty() && (pairs.empty() || pairs.front()->label != labels.front())) pairs.clear();
+  } else {
+    for (const PairResult& p : results.pairs)
+      if (p.denoiser == denoiser && p.ok()) pairs.push_back(&p);
+  }
   std::vector<std::string> metrics;
   std::map<std::string, bool> lowerIsBetter;
   for (const MetricDefinition* m : metricCatalog()) {
@@ -484,8 +506,8 @@ json ablationData(const RunResults& results) {
   json rows = json::array();
   for (auto g = sweep["grid"].begin(); g != sweep["grid"].end(); ++g) {
     const std::string name = g.key();
-    // Values in order of first appearance: the run enumerates the grid's Cartesian product with
-    // every axis starting at its first value, so the first pair carries the first value of each.
+    // Values in order of first appearance: the grid's Cartesian product has every axis starting at
+    // its first value, so the first point carries the first value of each.
     std::vector<json> values;
     for (const PairResult* p : pairs)
       if (p->params.contains(name) && std::find(values.begin(), values.end(), p->params[name]) == values.end())

@@ -45,6 +45,20 @@ TEST(CompareContract, RunsOfOtherSettingsAreRefusedUnlessAllowed) {
   const std::vector<std::string> resolution = settingsDifferences(ra, loadResults(c.out));
   EXPECT_NE(std::find(resolution.begin(), resolution.end(), "scenes.cornell_static.width: 16 vs 8"),
             resolution.end());
+  // A low-resolution buffer rendered for one run only (a contender of it reads it) is no settings
+  // difference: the frames both measure are the same, the other run has no pair reading it. At
+  // other settings in both runs, it is one.
+  RunResults withLowres = ra, otherLowres = ra;
+  json settings = ra.settings.measurement();
+  settings["render"]["lowresFactor"] = 8;
+  settings["render"]["lowresSpp"] = 4;
+  withLowres.settings = RunSettings::fromJson(settings, "test");
+  EXPECT_TRUE(settingsDifferences(ra, withLowres).empty());
+  EXPECT_TRUE(settingsDifferences(withLowres, ra).empty());
+  settings["render"]["lowresFactor"] = 4;
+  otherLowres.settings = RunSettings::fromJson(settings, "test");
+  EXPECT_EQ(settingsDifferences(withLowres, otherLowres),
+            std::vector<std::string>{"settings.render.lowresFactor: 8 vs 4"});
 }
 
 }  // namespace

@@ -355,6 +355,11 @@ TEST(Report, AblationDeltasAreTheRunsPairedDifferences) {
   // The run's statistics hold svgf[a=0] - svgf[a=1] on "static" (the opposite orientation of the
   // ablation's a=1 vs a=0): the row takes that difference, turned round, with its interval.
   json run = fixtureRun();
+  // relMseCorrected: each method's relMSE less the reference's floor (here 0.001 for both).
+  for (json& p : run["pairs"])
+    if (p.contains("summary") && p["summary"].contains("relMse"))
+      p["summary"]["relMseCorrected"] =
+          summaryOf(p["summary"]["relMse"]["mean"].get<double>() - 0.001);
   run["statistics"] = test::statisticsBlock(json::parse(R"({"scenes": {"static": {"metric": "relMse", "ranking": [],
     "pairs": [{"a": "svgf[a=0]", "b": "svgf[a=1]", "diff": 0.0123, "ci95": [0.004, 0.02], "resolved": true},
               {"a": "svgf[a=1,b=false]", "b": "svgf[a=1]", "diff": 0.02, "ci95": [-0.001, 0.04], "resolved": false}],
@@ -369,6 +374,10 @@ TEST(Report, AblationDeltasAreTheRunsPairedDifferences) {
       EXPECT_EQ(r["judged"]["relMse"]["verdict"], "better");
       EXPECT_EQ(r["paired"]["relMse"]["ci95"], json({-0.02, -0.004}));
       EXPECT_TRUE(r["paired"]["relMse"]["resolved"].get<bool>());
+      // The floor cancels in a paired difference: relMseCorrected's is relMSE's, interval included
+      // (it was "no interval").
+      EXPECT_EQ(r["judged"]["relMseCorrected"]["verdict"], "better");
+      EXPECT_EQ(r["paired"]["relMseCorrected"], r["paired"]["relMse"]);
     }
     if (r["parameter"] == "b") {
       ++seen;

@@ -1,22 +1,27 @@
 // The run matrix end to end on tiny sequences: results, SQLite, compare as a CI gate, sweeps,
 // shards and merge, determinism, and clear errors on bad input.
+#include "harness/run_matrix.hpp"
+
 #include <gtest/gtest.h>
 #include <sqlite3.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <set>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/sequence.hpp"
+#include "harness/reference_quality.hpp"
+#include "harness/scene_selection.hpp"
+#include "harness/sweep.hpp"
 #include "metrics/compare.hpp"
 #include "metrics/results.hpp"
-#include "harness/reference_quality.hpp"
-#include "harness/run_matrix.hpp"
-#include "harness/scene_selection.hpp"
+#include "reports/report.hpp"
+#include "tests/contract_fixture.hpp"
 #include "tests/evaluator_golden.hpp"
 #include "tests/test_util.hpp"
-#include "tests/contract_fixture.hpp"
 
 namespace arena {
 namespace {
@@ -50,6 +55,50 @@ const json& pairOf(const json& results, const std::string& scene, const std::str
 }
 
 double mean(const json& pair, const char* metric) { return pair["summary"][metric]["mean"].get<double>(); }
+
+// A sweep's values are compared and labelled as the denoiser reads them: "2.0" is "2" (a sweep of
+// [2.0,4.0] and one of [2,4] name the same contenders, so compare matches them), "0" and "-0" are
+// one value, and so are two values that round to one float for a built-in (it runs both as 4.0f).
+TEST(Sweep, ValuesAreComparedAndLabelledAsTheDenoiserReadsThem) {
+  const RunConfig c = sweepRun(RunConfig{}, "svgf", {}, {"sigmaL=[2.0,4]", "edge.id=[on,false]"});
+  std::vector<std::string> labels;
+  for (const DenoiserRequest& r : c.denoisers) labels.push_back(r.label);
+  EXPECT_EQ(labels, (std::vector<std::string>{
+                        "svgf[edge.id=true,sigmaL=2]", "svgf[edge.id=false,sigmaL=2]",
+                        "svgf[edge.id=true,sigmaL=4]", "svgf[edge.id=false,sigmaL=4]"}));
+  EXPECT_EQ(c.annotations.at("sweep")["labels"], json(labels));
+  EXPECT_EQ(defaultLabel({"svgf", {{"sigmaL", "2.50"}, {"alpha", "-0"}}, ""}),
+            "svgf[alpha=0,sigmaL=2.5]");
+  EXPECT_NE(test::errorOf([] {
+              sweepRun(RunConfig{}, "svgf", {}, {"alpha=[0,-0]"});
+            }).find("-0 and 0 are the same value of alpha (as svgf reads it: 0)"),
+            std::string::npos);
+  EXPECT_NE(test::errorOf([] {
+              sweepRun(RunConfig{}, "svgf", {}, {"sigmaL=[4,4.0000000001]"});
+            }).find("4.0000000001 and 4 are the same value of sigmaL (as svgf reads it: 4)"),
+            std::string::npos);
+  EXPECT_NO_THROW(sweepRun(RunConfig{}, "svgf", {}, {"sigmaL=[4,4.001]"}));
+}
+
+// The ablation compares each value with the grid's first, whatever else ran: a baseline of the
+// swept denoiser (temporal at its defaults) is not a grid point, and the order the pairs were
+// stored in (a merge of shards given in another order) does not choose the first value.
+TEST(Sweep, TheAblationComparesWithTheGridsFirstValue) {
+  RunConfig c = sweepRun(tinyRun("sweep_temporal", {}), "temporal", {}, {"alphaMin=[0.05,0.2]"});
+  c.scenes.resize(1);
+  c.keepFrames = "none";
+  const json run = runMatrix(c);
+  ASSERT_EQ(run["pairs"].size(), 4u);  // passthrough, temporal (baselines), the two grid points
+  for (const bool reversed : {false, true}) {
+    json stored = run;
+    if (reversed) std::reverse(stored["pairs"].begin(), stored["pairs"].end());
+    const json data = reportData(test::typed(stored), c.out, nullptr);
+    std::set<std::string> compared;
+    for (const json& row : data["ablation"]["rows"])
+      compared.insert(row["value"].get<std::string>() + " vs " + row["versus"].get<std::string>());
+    EXPECT_EQ(compared, std::set<std::string>{"0.2 vs 0.05"}) << (reversed ? "reversed" : "as run");
+  }
+}
 
 TEST(RunMatrix, TwoScenesThreeDenoisersWithEveryMetric) {
   RunConfig c = tinyRun("matrix", {{"svgf", {}, ""}});

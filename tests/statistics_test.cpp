@@ -357,6 +357,15 @@ TEST(CompareGate, FailsOnWhatItCannotCompare) {
   EXPECT_THROW(parseTolerance("nan"), Error);
   EXPECT_THROW(parseTolerance("inf"), Error);
   EXPECT_THROW(parseTolerance("-1%"), Error);
+  // A bare 2 is 200%, almost certainly meant as 2%: refused, saying both; as a percentage it
+  // stands.
+  EXPECT_NE(test::errorOf([] {
+              parseTolerance("2");
+            }).find("--tolerance '2': a bare number is a fraction (2 is 200%); write 2%"),
+            std::string::npos)
+      << test::errorOf([] { parseTolerance("2"); });
+  EXPECT_DOUBLE_EQ(parseTolerance("200%"), 2.0);
+  EXPECT_DOUBLE_EQ(parseTolerance("0.5"), 0.5);
   EXPECT_THROW(parseConfidence("1.5"), Error);
   EXPECT_DOUBLE_EQ(parseConfidence("90%"), 0.9);
   // A metric the baseline had and the candidate reports absent fails too.
