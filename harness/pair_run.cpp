@@ -8,6 +8,7 @@
 
 #include "core/capture.hpp"
 #include "core/error.hpp"
+#include "core/hash.hpp"
 #include "core/stage_clock.hpp"
 #include "harness/gpu_cost.hpp"
 #include "harness/run_matrix.hpp"
@@ -111,6 +112,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   PairEvaluation evaluation(sd.evaluation, scope);
   bool selfTimed = false;
   NonFiniteCounts sanitized;  // over every frame, warm-up included: each one shaped the history
+  uint64_t outputChecksum = 1469598103934665603ull;  // of every output frame, in order
   int implausibleFrames = 0;  // frames whose reported time exceeds the call that carried it
   std::string firstImplausible;
   std::vector<std::vector<PassTime>> passes;
@@ -128,6 +130,9 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
     evaluation.add(f.frame, f.color, facts);
     if (kept) kept->push_back({f.frame, f.color, facts});
     selfTimed |= f.selfTimed;
+    for (int c = 0; c < f.color.channels(); ++c)
+      outputChecksum = (outputChecksum ^ wordChecksum(f.color.plane(c), f.color.pixelCount())) *
+                       1099511628211ull;
     for (const auto& [channel, n] : f.sanitized) sanitized[channel] += n;
     if (!f.implausibleTime.empty() && implausibleFrames++ == 0)
       firstImplausible = "frame " + std::to_string(f.frame) + ", " + f.implausibleTime;
@@ -194,6 +199,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
     timing["implausibleFirst"] = firstImplausible;
   }
   pair["timing"] = timing;
+  pair["outputChecksum"] = checksumHex(outputChecksum);
   pair["sanitizedInputs"] = {{"total", totalNonFinite(sanitized)}, {"channels", sanitized}};
   prependRunWarnings(pair, info.frames);
   pair["images"] = {{"dir", fs::relative(imageDir, cfg.out).string()}, {"all", keepAll && cfg.keepFrames != "none"}};

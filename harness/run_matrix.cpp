@@ -61,6 +61,40 @@ void pruneImages(const fs::path& out, const json& results) {
   }
 }
 
+const std::string kIdenticalOutputs = "its output on this scene is bit-identical to ";
+
+}  // namespace
+
+void warnOfIdenticalSweepPoints(json& results, const ProgressFn& say) {
+  const json labels = results.value("sweep", json::object()).value("labels", json::array());
+  for (json& p : results["pairs"])  // a merge recomputes them over every shard's pairs
+    if (p.contains("warnings"))
+      for (size_t w = p["warnings"].size(); w-- > 0;)
+        if (p["warnings"][w].get<std::string>().rfind(kIdenticalOutputs, 0) == 0)
+          p["warnings"].erase(w);
+  std::map<std::pair<std::string, std::string>, std::vector<json*>> groups;  // (scene, checksum)
+  for (json& p : results["pairs"])
+    if (p.value("status", "") == "ok" && p.contains("outputChecksum") &&
+        std::find(labels.begin(), labels.end(), p["label"]) != labels.end())
+      groups[{p["scene"], p["outputChecksum"]}].push_back(&p);
+  for (auto& [key, group] : groups) {
+    if (group.size() < 2) continue;
+    for (json* p : group) {
+      std::string others;
+      for (const json* q : group)
+        if (q != p) others += (others.empty() ? "" : ", ") + (*q)["label"].get<std::string>();
+      const std::string warning =
+          kIdenticalOutputs + others +
+          " (every frame): the parameters that differ between them changed nothing here";
+      (*p)["warnings"].push_back(warning);
+      if (say)
+        say("  warning: " + (*p)["label"].get<std::string>() + " on " + key.first + ": " + warning);
+    }
+  }
+}
+
+namespace {
+
 std::string clock(double s) {
   char buf[32];
   int total = int(std::lround(std::max(0.0, s)));
@@ -356,6 +390,7 @@ void finishRun(json& results, const RunConfig& cfg) {
     results["statistics"] = analyseRun(results).toJson();
     addReferenceQuality(results, cfg.warmup, cfg.referenceNotes);
   }
+  warnOfIdenticalSweepPoints(results, cfg.progress);
   pruneImages(cfg.out, results);
   commitResults(cfg.out, results);
 }

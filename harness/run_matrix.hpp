@@ -76,6 +76,11 @@ nlohmann::json runMatrix(const RunConfig& config);
 // What ends every run: the statistics over all pairs, the reference-quality verdicts
 // (cfg.warmup, cfg.referenceNotes), and results.json + results.db committed to cfg.out.
 void finishRun(nlohmann::json& results, const RunConfig& cfg);
+// A sweep's points whose outputs on a scene are bit-identical (every frame; `outputChecksum`) each
+// get a warning naming the others: the grid's change did nothing there (a filter stage skipped at
+// this resolution, a parameter another one overrides), and their tie is no measurement. Earlier
+// such warnings are replaced (a merge sees every shard's points). Each is also said to `say`.
+void warnOfIdenticalSweepPoints(nlohmann::json& results, const ProgressFn& say);
 // "label on scene: error" for every failed pair; of a committed run, or of the document runMatrix
 // returns.
 std::vector<std::string> failedPairs(const RunResults& results);

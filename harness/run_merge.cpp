@@ -134,6 +134,7 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
       fs::copy(run / "images", out / "images", fs::copy_options::recursive | fs::copy_options::skip_existing);
   // The statistics and the verdicts are computed on the document as the run loop writes it.
   json document = merged.toJson();
+  warnOfIdenticalSweepPoints(document, nullptr);
   document["statistics"] = analyseRun(document).toJson();
   addReferenceQuality(document, merged.settings.warmup());
   commitResults(out, document);

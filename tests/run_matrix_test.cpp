@@ -100,6 +100,50 @@ TEST(Sweep, TheAblationComparesWithTheGridsFirstValue) {
   }
 }
 
+// Grid points whose outputs are bit-identical are named in a warning on each (at 24 lines svgf's
+// scaled footprint skips iterations 2-5: iterations=1 and =5 run the same filter), once, also in a
+// merge of shards that each held some of them; points that differ get none.
+TEST(Sweep, PointsWithIdenticalOutputsAreWarnedOf) {
+  RunConfig c =
+      sweepRun(tinyRun("sweep_identical", {}), "svgf", {}, {"iterations=[1,5]", "sigmaL=[2,8]"});
+  c.scenes.resize(1);
+  c.baselines = false;
+  c.keepFrames = "none";
+  std::vector<std::string> said;
+  c.progress = [&](const std::string& line) { said.push_back(line); };
+  auto identicalTo = [](const json& results, const std::string& label) {
+    std::vector<std::string> out;
+    for (const json& w : pairOf(results, "cornell_static", label).value("warnings", json::array()))
+      if (w.get<std::string>().rfind("its output on this scene is bit-identical to ", 0) == 0)
+        out.push_back(w);
+    return out;
+  };
+  const std::string same =
+      "its output on this scene is bit-identical to svgf[iterations=5,sigmaL=2] (every "
+      "frame): the parameters that differ between them changed nothing here";
+  const json run = runMatrix(c);
+  EXPECT_EQ(identicalTo(run, "svgf[iterations=1,sigmaL=2]"), std::vector<std::string>{same});
+  EXPECT_EQ(identicalTo(run, "svgf[iterations=5,sigmaL=8]").size(), 1u);
+  EXPECT_NE(std::find(said.begin(), said.end(),
+                      "  warning: svgf[iterations=1,sigmaL=2] on cornell_static: " + same),
+            said.end());
+  EXPECT_NE(pairOf(run, "cornell_static", "svgf[iterations=1,sigmaL=2]")["outputChecksum"],
+            pairOf(run, "cornell_static", "svgf[iterations=1,sigmaL=8]")["outputChecksum"]);
+  // Shards 0/2 and 1/2 each hold one identical couple; the merge warns of each once.
+  std::vector<fs::path> shards;
+  for (int i = 0; i < 2; ++i) {
+    RunConfig s = c;
+    s.shardIndex = i, s.shardCount = 2;
+    s.out = test::freshDir("sweep_identical_shard" + std::to_string(i));
+    runMatrix(s);
+    shards.push_back(s.out);
+  }
+  const json merged = mergeRuns(shards, test::freshDir("sweep_identical_merged"));
+  for (const char* label : {"svgf[iterations=1,sigmaL=2]", "svgf[iterations=5,sigmaL=2]",
+                            "svgf[iterations=1,sigmaL=8]", "svgf[iterations=5,sigmaL=8]"})
+    EXPECT_EQ(identicalTo(merged, label).size(), 1u) << label;
+}
+
 TEST(RunMatrix, TwoScenesThreeDenoisersWithEveryMetric) {
   RunConfig c = tinyRun("matrix", {{"svgf", {}, ""}});
   json r = runMatrix(c);
