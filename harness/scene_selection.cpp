@@ -125,7 +125,10 @@ std::vector<Scene> selectScenes(const std::string& list, const std::string& scen
   // stem would overwrite each other's pairs.
   for (size_t i = 0; i < out.size(); ++i)
     for (size_t j = 0; j < i; ++j)
-      if (out[i].name == out[j].name)
+      if (out[i].name == out[j].name &&
+          fs::weakly_canonical(out[i].file) == fs::weakly_canonical(out[j].file))
+        throw Error(what + " '" + list + "': scene '" + out[i].name + "' is listed twice");
+      else if (out[i].name == out[j].name)
         throw Error("scenes " + out[j].file + " and " + out[i].file + " share the name '" +
                     out[i].name + "' (the file stem); a run needs distinct names");
   return out;

@@ -446,6 +446,15 @@ TEST(RunMatrixContract, TwoSceneFilesWithOneStemCannotShareARun) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("share the name 'room'"), std::string::npos) << e.what();
   }
+  {
+    const std::string e = test::errorOf([] {
+      selectScenes("cornell_static,cornell_static", ARENA_SOURCE_DIR "/scenes", "--scenes");
+    });
+    EXPECT_NE(
+        e.find("--scenes 'cornell_static,cornell_static': scene 'cornell_static' is listed twice"),
+        std::string::npos)
+        << e;
+  }
 }
 
 TEST(RunMatrixContract, BadOutputsFailBeforeAnyWorkNamingTheFile) {
