@@ -200,6 +200,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   }
   pair["timing"] = timing;
   pair["outputChecksum"] = checksumHex(outputChecksum);
+  if (run) pair["readsLowres"] = run->readsLowres();  // compare judges the buffer's settings by it
   pair["sanitizedInputs"] = {{"total", totalNonFinite(sanitized)}, {"channels", sanitized}};
   prependRunWarnings(pair, info.frames);
   pair["images"] = {{"dir", fs::relative(imageDir, cfg.out).string()}, {"all", keepAll && cfg.keepFrames != "none"}};

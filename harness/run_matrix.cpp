@@ -6,6 +6,7 @@
 #include <optional>
 #include <set>
 
+#include "core/atomic_file.hpp"
 #include "core/capture.hpp"
 #include "core/env_info.hpp"
 #include "core/error.hpp"
@@ -36,29 +37,93 @@ json failedPair(const std::string& scene, const DenoiserRequest& r, const std::s
           {"status", "failed"}, {"error", error}};
 }
 
-// A pair's image folder emptied: before the pair runs (a reused --out's earlier images are not
-// this run's), and when it fails (its frames so far are no measurement).
+// A pair's image folder emptied before the pair runs (a reused --out's earlier images are not
+// this run's); an error fails the pair.
 void removePairImages(const fs::path& dir) {
   std::error_code ec;
   fs::remove_all(dir, ec);
   if (ec) throw Error(dir.string() + ": cannot remove the images there: " + ec.message());
 }
 
-// The image folders of images/SCENE/LABEL that no measured pair of `results` names (a reused
-// --out's pairs that this run did not have) removed, so the report copies only this run's images.
-void pruneImages(const fs::path& out, const json& results) {
-  std::set<fs::path> kept;
-  for (const json& p : results["pairs"])
-    if (p.value("status", "") == "ok" && p.contains("images"))
-      kept.insert(out / p["images"]["dir"].get<std::string>());
+// A failed pair's images removed (its frames so far are no measurement); never throws, so a
+// folder that cannot be removed fails only that pair, saying so in its error.
+void discardPairImages(const fs::path& dir, json& pair) {
   std::error_code ec;
-  if (!fs::is_directory(out / "images", ec)) return;
-  for (const fs::directory_entry& scene : fs::directory_iterator(out / "images")) {
-    if (!scene.is_directory()) continue;
-    for (const fs::directory_entry& label : fs::directory_iterator(scene.path()))
-      if (label.is_directory() && !kept.count(label.path())) removePairImages(label.path());
-    if (fs::is_empty(scene.path(), ec)) fs::remove(scene.path(), ec);
+  fs::remove_all(dir, ec);
+  if (ec)
+    pair["error"] = pair["error"].get<std::string>() + " (its images in " + dir.string() +
+                    " could not be removed: " + ec.message() + ")";
+}
+
+// A scene's own images (the chosen frames' noisy_ and reference_ PNGs) removed before the scene
+// writes them again: a reused --out's other chosen frames are not this run's.
+void removeSceneImages(const fs::path& dir, const ProgressFn& say) {
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (it->is_regular_file(ec) &&
+        (name.rfind("noisy_", 0) == 0 || name.rfind("reference_", 0) == 0)) {
+      std::error_code removed;
+      fs::remove(it->path(), removed);
+      if (removed && say)
+        say("  warning: " + it->path().string() +
+            ": cannot remove an earlier run's image: " + removed.message());
+    }
   }
+}
+
+// A path that a results file recorded under the run directory, if it is one: relative, below
+// images/, no "..". Anything else is left alone.
+std::optional<fs::path> recordedImagePath(const fs::path& out, const json& recorded) {
+  if (!recorded.is_string()) return std::nullopt;
+  const fs::path relative = recorded.get<std::string>();
+  if (relative.is_absolute() || relative.empty() || *relative.begin() != "images")
+    return std::nullopt;
+  for (const fs::path& part : relative)
+    if (part == "..") return std::nullopt;
+  return out / relative;
+}
+
+// The image folders that the run directory's previous results.json recorded (a reused --out) and
+// this run did not write are removed before the new results replace it, so the report copies only
+// this run's images. Only what that file names is touched (a --out holding other folders keeps
+// them), and nothing here fails a finished run: what cannot be removed is said.
+void pruneEarlierImages(const fs::path& out, const json& results, const ProgressFn& say) {
+  std::error_code ec;
+  if (!fs::exists(out / "results.json", ec)) return;
+  json earlier;
+  try {
+    earlier = json::parse(readText(out / "results.json"));
+  } catch (const std::exception&) {
+    return;  // not readable as JSON: checkRunOutputs took it as replaceable, and it names nothing
+  }
+  if (!earlier.is_object()) return;
+  std::set<fs::path> written;
+  for (const json& p : results["pairs"])
+    if (p.contains("images"))
+      if (auto dir = recordedImagePath(out, p["images"].value("dir", json()))) written.insert(*dir);
+  for (const json& scene : results["scenes"])
+    if (scene.is_object())
+      if (auto dir = recordedImagePath(out, scene.value("images", json()))) written.insert(*dir);
+  std::vector<fs::path> stale;
+  for (const json& p : earlier.value("pairs", json::array()))
+    if (p.is_object() && p.contains("images") && p["images"].is_object())
+      if (auto dir = recordedImagePath(out, p["images"].value("dir", json()));
+          dir && !written.count(*dir))
+        stale.push_back(*dir);
+  for (const fs::path& dir : stale) {
+    fs::remove_all(dir, ec);
+    if (ec && say)
+      say("  warning: " + dir.string() +
+          ": cannot remove an earlier run's images: " + ec.message());
+  }
+  for (const json& scene : earlier.value("scenes", json::object()))
+    if (scene.is_object())
+      if (auto dir = recordedImagePath(out, scene.value("images", json()));
+          dir && !written.count(*dir)) {
+        removeSceneImages(*dir, say);
+        if (fs::is_empty(*dir, ec)) fs::remove(*dir, ec);
+      }
 }
 
 const std::string kIdenticalOutputs = "its output on this scene is bit-identical to ";
@@ -127,6 +192,13 @@ json runMatrix(const RunConfig& cfg) {
     if (r.label.empty()) r.label = defaultLabel(r);
     for (auto& d : denoisers)
       if (d.label == r.label) return;
+    // Each pair's images have a folder named after its label: two labels that differ only in
+    // characters a file name cannot hold would share one (and delete each other's images).
+    for (auto& d : denoisers)
+      if (safeName(d.label) == safeName(r.label))
+        throw Error("contenders '" + d.label + "' and '" + r.label +
+                    "' would share the image folder '" + safeName(r.label) +
+                    "'; labels must differ in letters, digits or ._=,-[]");
     if (capturedOutputName(r.name).empty()) DenoiserRegistry::instance().find(r.name);
     else if (cfg.captures.empty()) throw Error(r.name + ": file: contenders need a capture (--capture DIR)");
     denoisers.push_back(std::move(r));
@@ -265,6 +337,7 @@ json runMatrix(const RunConfig& cfg) {
     for (const DenoiserRequest& r : denoisers)
       if (int(pairIndex++ % size_t(cfg.shardCount)) == cfg.shardIndex) mine.push_back(&r);
     if (mine.empty()) continue;
+    removeSceneImages(cfg.out / "images" / source.name, cfg.progress);
     fs::path dir;
     std::unique_ptr<SceneData> sd;
     std::vector<SeedSequence> seedSequences;
@@ -305,7 +378,7 @@ json runMatrix(const RunConfig& cfg) {
         if (!seedSequences.empty()) pair["biasVariance"] = biasVarianceOf(cfg, *sd, seedSequences, *r);
       } catch (const std::exception& e) {
         pair = failedPair(source.name, *r, e.what());
-        removePairImages(images);
+        discardPairImages(images, pair);
       }
       results["pairs"].push_back(pair);
       ++pairsDone;
@@ -339,7 +412,7 @@ json runMatrix(const RunConfig& cfg) {
             pair["biasVariance"] = biasVarianceOf(cfg, *sd, seedSequences, *mine[k]);
         } catch (const std::exception& e) {
           pair = failedPair(source.name, *mine[k], e.what());
-          removePairImages(cfg.out / "images" / source.name / safeName(mine[k]->label));
+          discardPairImages(cfg.out / "images" / source.name / safeName(mine[k]->label), pair);
           say("  error: " + std::string(e.what()));
           ++sceneFailures;
         }
@@ -391,7 +464,7 @@ void finishRun(json& results, const RunConfig& cfg) {
     addReferenceQuality(results, cfg.warmup, cfg.referenceNotes);
   }
   warnOfIdenticalSweepPoints(results, cfg.progress);
-  pruneImages(cfg.out, results);
+  pruneEarlierImages(cfg.out, results, cfg.progress);
   commitResults(cfg.out, results);
 }
 

@@ -83,12 +83,26 @@ std::vector<std::string> settingsDifferences(const RunResults& baseline, const R
     s->erase("plan");
   }
   // A low-resolution buffer rendered in one run only (a contender there reads it) changes none of
-  // the frames both runs measure (its paths are its own), and the other run has no pair that reads
-  // it: not a difference. Rendered in both at other settings, it is one.
+  // the frames both runs measure (its paths are its own): not a difference when no pair the two
+  // runs have in common read it in either (each pair records readsLowres; a pair that does not
+  // say, from an older run, might have). Rendered in both at other settings, it is one.
   auto lowres = [](const json& s) {
     return s.contains("render") && s["render"].contains("lowresFactor");
   };
-  if (lowres(a) != lowres(b))
+  auto commonPairsReadNoLowres = [&] {
+    std::set<std::string> inBaseline, common;
+    for (const PairResult& p : baseline.pairs) inBaseline.insert(key(p));
+    for (const PairResult& p : candidate.pairs)
+      if (inBaseline.count(key(p))) common.insert(key(p));
+    for (const RunResults* run : {&baseline, &candidate})
+      for (const PairResult& p : run->pairs) {
+        if (!common.count(key(p))) continue;
+        const json& reads = p.part("readsLowres");
+        if (!reads.is_boolean() || reads.get<bool>()) return false;
+      }
+    return true;
+  };
+  if (lowres(a) != lowres(b) && commonPairsReadNoLowres())
     for (json* s : {&a, &b})
       if (s->contains("render") && (*s)["render"].is_object())
         for (const char* k : {"lowresFactor", "lowresSpp"}) (*s)["render"].erase(k);
@@ -166,6 +180,23 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
     const std::string& scene = b.scene;
     const std::string& label = b.label;
     auto it = candPairs.find(key(b));
+    // Labels were once written as typed ("svgf[sigmaL=2.0]"; now "svgf[sigmaL=2]"): a baseline
+    // pair without its label in the candidate is matched by what it ran, the denoiser and its
+    // resolved parameters, where exactly one candidate pair of the scene ran that.
+    if (it == candPairs.end() && b.ok() && !b.params.empty()) {
+      auto same = candPairs.end();
+      int matches = 0;
+      for (auto c = candPairs.begin(); c != candPairs.end(); ++c)
+        if (c->second->scene == scene && c->second->denoiser == b.denoiser &&
+            c->second->params == b.params &&
+            !std::any_of(base.pairs.begin(), base.pairs.end(),
+                         [&](const PairResult& other) { return key(other) == c->first; }))
+          same = c, ++matches;
+      if (matches == 1) {
+        it = same;
+        baseKeys.insert(it->first);  // not "new" below
+      }
+    }
     if (it == candPairs.end()) {
       rows.push_back(pairRow(b, "missing", noShared + "pair not in the candidate run"));
       continue;

@@ -532,9 +532,14 @@ TEST(ExternalFaults, ImplausibleTimesAreWarnedOfAndFailedPairsLeaveNoImages) {
   cfg.keepFrames = "all";
   std::vector<std::string> printed;
   cfg.progress = [&](const std::string& line) { printed.push_back(line); };
-  fs::create_directories(cfg.out / "images" / "cornell_static" / "an-earlier-run");
-  std::ofstream(cfg.out / "images" / "cornell_static" / "an-earlier-run" / "frame_0000.png")
-      << "old";
+  // An earlier run into the same --out, with a contender this run does not have; and a folder of
+  // the user's that no run recorded (left alone).
+  RunConfig earlier = tinyRun("implausible", {{"passthrough", {}, ""}});
+  earlier.keepFrames = "all";
+  runMatrix(earlier);
+  ASSERT_TRUE(fs::exists(cfg.out / "images" / "cornell_static" / "passthrough" / "frame_0000.exr"));
+  fs::create_directories(cfg.out / "images" / "cornell_static" / "my-notes");
+  std::ofstream(cfg.out / "images" / "cornell_static" / "my-notes" / "notes.txt") << "mine";
   const json r = runMatrix(cfg);
   ASSERT_EQ(r["pairs"].size(), 2u);
   const json& slow = r["pairs"][0];
@@ -554,8 +559,10 @@ TEST(ExternalFaults, ImplausibleTimesAreWarnedOfAndFailedPairsLeaveNoImages) {
   for (const fs::directory_entry& e : fs::directory_iterator(sceneImages))
     if (e.is_directory())
       folders.push_back(e.path().filename().string());  // beside the scene's own images
-  EXPECT_EQ(folders, std::vector<std::string>{
-                         fs::path(slow["images"]["dir"].get<std::string>()).filename().string()});
+  std::sort(folders.begin(), folders.end());
+  EXPECT_EQ(folders, (std::vector<std::string>{
+                         fs::path(slow["images"]["dir"].get<std::string>()).filename().string(),
+                         "my-notes"}));
 }
 
 TEST(ExternalFaults, AMissingProgramIsNamed) {

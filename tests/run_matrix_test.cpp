@@ -457,6 +457,18 @@ TEST(RunMatrixContract, TwoSceneFilesWithOneStemCannotShareARun) {
   }
 }
 
+// Two labels that differ only where a file name cannot hold them would share one image folder (the
+// second pair's start removed the first's images): refused before any work.
+TEST(RunMatrixContract, LabelsThatShareAnImageFolderAreRefused) {
+  RunConfig c = contract::tinyRun("image_folder_clash");
+  c.denoisers = {{"eaw", {}, "eaw a"}, {"eaw", {{"sigmaL", "2"}}, "eaw/a"}};
+  const std::string e = test::errorOf([&] { runMatrix(c); });
+  EXPECT_NE(e.find("contenders 'eaw a' and 'eaw/a' would share the image folder 'eaw_a'"),
+            std::string::npos)
+      << e;
+  EXPECT_FALSE(fs::exists(c.out / "results.json"));
+}
+
 TEST(RunMatrixContract, BadOutputsFailBeforeAnyWorkNamingTheFile) {
   struct Case {
     const char* name;

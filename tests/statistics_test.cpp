@@ -296,6 +296,32 @@ TEST(CompareGate, NoiseIsNotARegressionAndARealWorseningIs) {
   EXPECT_TRUE(anyRegression(rows));
 }
 
+// A baseline written before labels were canonical ("svgf[sigmaL=2.0]") meets the same contender
+// under its new label ("svgf[sigmaL=2]"): matched by denoiser and resolved parameters, compared,
+// neither missing nor new. Two candidates of those parameters would be ambiguous: no match.
+TEST(CompareGate, APairUnderAnOlderLabelIsMatchedByWhatItRan) {
+  std::mt19937_64 rng(12);
+  const auto shared = sharedContent(20, 16, rng);
+  json base = syntheticJson({{"svgf[sigmaL=2.0]", syntheticSeries(20, 16, 0.0, rng, shared)}});
+  json cand = syntheticJson({{"svgf[sigmaL=2]", syntheticSeries(20, 16, 0.0, rng, shared)}});
+  for (json* r : {&base, &cand}) {
+    (*r)["pairs"][0]["denoiser"] = "svgf";
+    (*r)["pairs"][0]["params"] = {{"sigmaL", 2.0}};
+  }
+  const std::vector<Tolerance> tol = {{"relMse", 0.01}};
+  auto rows = compareRuns(test::typed(base), test::typed(cand), tol);
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].metric, "relMse");
+  EXPECT_EQ(rows[0].label, "svgf[sigmaL=2.0]");
+  EXPECT_FALSE(anyRegression(rows));
+  json twice = cand;
+  twice["pairs"].push_back(cand["pairs"][0]);
+  twice["pairs"][1]["label"] = "svgf[sigmaL=2,x]";
+  rows = compareRuns(test::typed(base), test::typed(twice), tol);
+  EXPECT_TRUE(std::any_of(rows.begin(), rows.end(),
+                          [](const ComparisonRow& r) { return r.verdict == "missing"; }));
+}
+
 TEST(CompareGate, FailsOnWhatItCannotCompare) {
   const MetricTiles m = constantSeries(0.01);
   const std::vector<Tolerance> tol = {{"relMse", 0.02}};

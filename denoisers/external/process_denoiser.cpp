@@ -124,10 +124,10 @@ void ExternalProcessDenoiser::setup(int width, int height) {
 
 void ExternalProcessDenoiser::denoise(const FrameContext& ctx, const DenoiserInputs& in,
                                       Image& output) {
+  stage_ = "frame " + std::to_string(ctx.frameIndex);
   if (!process_)
     fail("the process is not running (a previous frame failed, or setup() was not called)");
   computeMs_.reset();
-  stage_ = "frame " + std::to_string(ctx.frameIndex);
   std::vector<const float*> planes;
   for (int c = 0; c < 3; ++c) planes.push_back(in.signal.plane(c));
   for (const std::string& layer : manifest_->channels) {
