@@ -46,7 +46,7 @@ class EdgeAvoidingAtrous final : public Denoiser {
     const Image* source = &in.signal;
     for (int i = 0; i < settings_.iterations; ++i) {
       ScopedPass pass(this, "atrous " + std::to_string(i + 1),
-                      atrousTapCount(settings_.atrous.kernel));
+                      atrousIterationTaps(i, settings_.atrous));
       Image& target = i + 1 == settings_.iterations ? output : pingPong_[size_t(i % 2)];
       // Dammertz §2.2: sigma_rt^i = 2^-i sigma_rt. (Seed 002's code multiplies by 2^i instead.)
       const float colorSigma = std::ldexp(settings_.atrous.edges.sigmaColor, -i);

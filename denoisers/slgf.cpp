@@ -119,7 +119,7 @@ class Slgf final : public Svgf {
     const AtrousGuide guide{gbuffer_, &derivatives_, nullptr};
     source_ = 0;
     for (int k = 0; k < slgf_.estimatorIterations; ++k) {
-      const int taps = atrousTapCount(estimator_.kernel);
+      const int taps = atrousIterationTaps(k, estimator_);
       ScopedPass pass(this, "luminance estimate " + std::to_string(k + 1), clamp ? 2 * taps : taps);
       const int target = 1 - source_;
       atrousIteration(k, estimator_, guide, 1.0f, estimate_[source_], estimate_[target],

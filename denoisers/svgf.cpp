@@ -121,7 +121,7 @@ void Svgf::filterWavelet(Image& output) {
       ScopedPass pass(this, "variance prefilter " + iteration, 9);
       prefilterVariance3x3(*variance, gbuffer_, filteredVariance_);
     }
-    ScopedPass pass(this, "atrous " + iteration, atrousTapCount(settings_.atrous.kernel));
+    ScopedPass pass(this, "atrous " + iteration, atrousIterationTaps(i, settings_.atrous));
     Image& colorOut = i + 1 == iterations ? output : colorPingPong_[size_t(i % 2)];
     Image& varianceOut = variancePingPong_[size_t(i % 2)];
     atrousIteration(i, settings_.atrous, guide, settings_.atrous.edges.sigmaColor, *color, colorOut,

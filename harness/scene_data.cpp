@@ -38,6 +38,19 @@ std::unique_ptr<SceneData> prepareScene(const fs::path& dir, const EvaluationOpt
     if (validation) *validation = checks.toJson();
     if (checks.status() == CheckStatus::Fail)
       throw Error("capture " + dir.string() + " refused by its validation: " + checks.failures());
+  } else if (!input.references.empty() &&
+             std::all_of(input.references.begin(), input.references.end(), [](const LayerSet& r) {
+               const Image& c = r.get("color");
+               for (int k = 0; k < c.channels(); ++k)
+                 for (const float v : c.planeSpan(k))
+                   if (v != 0) return false;
+               return true;
+             })) {
+    // Against a black reference every method, and the noisy input, scores relMSE 0: a tie of
+    // perfect scores measured on nothing (the captures' reference.blackFrames check, for scenes).
+    throw Error("scene " + sequence.info().scene + " (" + dir.string() +
+                "): its reference is black in every frame, so no light reaches the camera (a light "
+                "facing away, or hidden?); every method would score a perfect 0 on nothing");
   }
   EvaluationScene evaluation(std::move(input), options);
   std::vector<int> chosen = chooseFrames(sequence.info(), options.warmup);
@@ -87,6 +100,22 @@ json sceneRecord(const RunConfig& config, const SceneData& data, const std::stri
                 {"images", fs::relative(images, config.out).string()}};
   entry.update(ev.describe());
   if (!ev.hasReference()) entry["hasReference"] = false;
+  // Events the scene has on frames a shorter sequence (--frames) does not reach: not measured,
+  // said.
+  if (scene) {
+    std::string dropped;
+    for (const SceneEvent& e : scene->events)
+      if (e.frame >= info.frames)
+        dropped += std::string(dropped.empty() ? "" : ", ") + eventKindName(e.kind) +
+                   (e.what.empty() ? "" : " ") + e.what + " at frame " + std::to_string(e.frame);
+    if (!dropped.empty()) {
+      if (!entry.contains("warnings") || !entry["warnings"].is_array())
+        entry["warnings"] = json::array();
+      entry["warnings"].push_back("events beyond the sequence's " + std::to_string(info.frames) +
+                                  " frames are not measured (" + dropped +
+                                  "); render more frames to measure them");
+    }
+  }
   if (!scene) {
     entry["source"] = "capture";
     entry["capture"] = dir.string();

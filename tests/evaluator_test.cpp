@@ -31,9 +31,13 @@ json withoutNewMetrics(json r) {
   r.erase("metrics");  // the registry's catalogue, stored since the registry exists
   r["statistics"].erase("overallByMetric");  // overall scores on other metrics than relMSE, since then
   // Scene warnings are stored once per scene since issue 33; the golden's scenes have none (their
-  // references have fixed sample counts, their inputs are finite), and no pair lost one.
+  // references have fixed sample counts, their inputs are finite), and no pair lost one. Since
+  // then too, the events a shorter sequence does not reach are named (light_switch's at frame 24).
   for (auto& [name, scene] : r["scenes"].items()) {
-    EXPECT_EQ(scene.value("warnings", json::array()), json::array()) << name;
+    json warnings = json::array();
+    for (const json& w : scene.value("warnings", json::array()))
+      if (w.get<std::string>().rfind("events beyond the sequence's", 0) != 0) warnings.push_back(w);
+    EXPECT_EQ(warnings, json::array()) << name;
     scene.erase("warnings");
   }
   for (json& p : r["pairs"])

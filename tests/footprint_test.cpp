@@ -1,6 +1,8 @@
 // Issue 15, item 1: one footprint policy for every denoiser. The 90%-energy radius of each
 // denoiser's impulse response keeps its ratio to SVGF's between 256x144 and 1280x720, under the
 // default (scaled) and the native policy; the policy is a recorded parameter of every variant.
+#include "denoisers/common/footprint.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,10 +14,10 @@
 #include <vector>
 
 #include "core/error.hpp"
-#include "denoisers/common/footprint.hpp"
-#include "tests/test_util.hpp"
 #include "core/image.hpp"
+#include "denoisers/common/atrous.hpp"
 #include "harness/denoise_run.hpp"
+#include "tests/test_util.hpp"
 #include "tracer/render.hpp"
 #include "tracer/scene.hpp"
 
@@ -57,6 +59,15 @@ TEST(Footprint, AtrousStepsFollowTheScale) {
   EXPECT_FLOAT_EQ(f.scale(720), 720.0f / 1080.0f);
   f.policy = FootprintPolicy::Native;
   EXPECT_EQ(f.scale(144), 1.0f);
+  // A skipped iteration is a copy: its pass counts no taps (the bench printed 25 taps per pixel
+  // for passes that did nothing, and the GPU model priced them).
+  AtrousSettings atrous;
+  atrous.footprintScale = s;
+  const int taps[5] = {25, 0, 25, 25, 25};
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(atrousIterationTaps(i, atrous), taps[i]) << i;
+  atrous.kernel = AtrousKernel::Compact3x3;
+  EXPECT_EQ(atrousIterationTaps(1, atrous), 0);
+  EXPECT_EQ(atrousIterationTaps(2, atrous), 9);
 }
 
 // The radius around the impulse holding 90 % of the output's (non-negative) energy.

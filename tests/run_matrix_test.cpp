@@ -457,6 +457,43 @@ TEST(RunMatrixContract, TwoSceneFilesWithOneStemCannotShareARun) {
   }
 }
 
+// A scene whose light reaches the camera nowhere (below the floor) renders black references:
+// every method would score a perfect 0 on nothing. Its pairs fail, naming why; the others rank.
+TEST(RunMatrixContract, ASceneWithABlackReferenceIsRefused) {
+  json scene = contract::minimalScene();
+  scene["lights"][0]["keys"][0]["translate"] = {0, -5, 0};
+  RunConfig c = contract::tinyRun("black_reference");
+  c.scenes = {
+      loadScene(
+          contract::writeScene(test::freshDir("black_reference_scene"), "unlit", scene).string()),
+      test::shippedScene("cornell_static")};
+  const json r = runMatrix(c);
+  const json& unlit = pairOf(r, "unlit", "passthrough");
+  EXPECT_EQ(unlit["status"], "failed");
+  EXPECT_NE(unlit["error"].get<std::string>().find(
+                "its reference is black in every frame, so no light reaches the camera"),
+            std::string::npos)
+      << unlit["error"];
+  EXPECT_EQ(pairOf(r, "cornell_static", "passthrough")["status"], "ok");
+}
+
+// light_switch's light goes off at frame 12 and back at 24: a 14-frame sequence measures the first
+// event only, and says the second is not measured (the scene's warnings, printed by the run).
+TEST(RunMatrixContract, EventsBeyondTheFramesAreNamed) {
+  RunConfig c = contract::tinyRun("dropped_events");
+  c.render = test::tinySettings(16, 8, 14, 2);
+  c.scenes = {test::shippedScene("light_switch")};
+  const json r = runMatrix(c);
+  const json& scene = r["scenes"]["light_switch"];
+  EXPECT_EQ(scene["events"].size(), 1u);
+  bool named = false;
+  for (const json& w : scene.value("warnings", json::array()))
+    named |= w.get<std::string>().find(
+                 "events beyond the sequence's 14 frames are not measured (light_on") !=
+             std::string::npos;
+  EXPECT_TRUE(named) << scene["warnings"];
+}
+
 // Two labels that differ only where a file name cannot hold them would share one image folder (the
 // second pair's start removed the first's images): refused before any work.
 TEST(RunMatrixContract, LabelsThatShareAnImageFolderAreRefused) {

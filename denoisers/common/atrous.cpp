@@ -82,6 +82,10 @@ int atrousTapCount(AtrousKernel kernel) {
   return int(kernelTaps(kernel).size());
 }
 
+int atrousIterationTaps(int iteration, const AtrousSettings& settings) {
+  return atrousStep(iteration, settings.footprintScale) == 0 ? 0 : atrousTapCount(settings.kernel);
+}
+
 const ParamTable<AtrousSettings>& atrousKernelParams() {
   static const ParamTable<AtrousSettings> table = ParamTable<AtrousSettings>().choice(
       "kernel", &AtrousSettings::kernel, "5x5",

@@ -43,6 +43,9 @@ struct AtrousGuide {
 };
 
 int atrousTapCount(AtrousKernel kernel);  // 25 or 9: neighbour fetches per pixel
+// Iteration `iteration`'s fetches per pixel: atrousTapCount, or 0 where its step is 0 (the
+// footprint skips it: a copy, which its ScopedPass must not count as 25 taps).
+int atrousIterationTaps(int iteration, const AtrousSettings& settings);
 
 // The "kernel" parameter ("5x5" or "3x3") of every variant that lets the user pick (included into
 // its table at its AtrousSettings).
