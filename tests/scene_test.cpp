@@ -186,6 +186,33 @@ TEST(Scene, ACameraCutNeedsTheCameraToJumpThere) {
       << e;
 }
 
+// An event names something of its kind: a light's switch a light, a move the object that moves
+// (the ghosting figures follow its trail); the same event twice is a mistake.
+TEST(Scene, AnEventNamesSomethingOfItsKind) {
+  const std::string off = R"({"frame": 2, "kind": "light_off", "what": "lamp"})";
+  std::string e =
+      errorOf(replaced(kMinimal, off, R"({"frame": 2, "kind": "light_off", "what": "floor"})"));
+  EXPECT_NE(e.find("$.events[0].what: a light_off event names a light (one of $.lights); 'floor' "
+                   "is an object"),
+            std::string::npos)
+      << e;
+  e = errorOf(replaced(kMinimal, off, R"({"frame": 2, "kind": "object_moves", "what": "lamp"})"));
+  EXPECT_NE(e.find("an object_moves event names the object that moves (one of $.objects); 'lamp' "
+                   "is a light"),
+            std::string::npos)
+      << e;
+  e = errorOf(replaced(kMinimal, off, R"({"frame": 2, "kind": "object_moves"})"));
+  EXPECT_NE(e.find("$.events[0].what: an object_moves event names the object that moves"),
+            std::string::npos)
+      << e;
+  e = errorOf(replaced(kMinimal, off, off + ", " + off));
+  EXPECT_NE(e.find("$.events[1].kind: this event (light_off lamp at frame 2) is given twice"),
+            std::string::npos)
+      << e;
+  EXPECT_EQ(errorOf(replaced(kMinimal, off, R"({"frame": 2, "kind": "light_off"})")),
+            "");  // some light
+}
+
 // A light switched off for a while is an event; nothing ever emitting is a mistake.
 TEST(Scene, ASceneWhereNothingEverEmitsIsRejected) {
   const std::string dark = replaced(kMinimal, R"("intensity": 5})", R"("intensity": 0})");

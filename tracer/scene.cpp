@@ -449,6 +449,23 @@ Scene parseScene(const std::string& text, const std::string& path) {
     ev.kind = *parsed;
     if (!ev.what.empty() && !knownName(ev.what))
       e.fail("what", "no object or light is named '" + ev.what + "'");
+    // What an event names is of its kind: a light's switch or change names a light, a move an
+    // object (whose trail the ghosting figures follow: without it they measured the whole frame
+    // and said nothing).
+    const bool isLight = std::any_of(scene.lights.begin(), scene.lights.end(),
+                                     [&](auto& l) { return l.name == ev.what; });
+    if (ev.kind == EventKind::ObjectMoves && (ev.what.empty() || isLight))
+      e.fail("what", "an object_moves event names the object that moves (one of $.objects)" +
+                         (ev.what.empty() ? std::string() : "; '" + ev.what + "' is a light"));
+    if ((ev.kind == EventKind::LightOff || ev.kind == EventKind::LightOn ||
+         ev.kind == EventKind::LightChange) &&
+        !ev.what.empty() && !isLight)
+      e.fail("what", "a " + kind + " event names a light (one of $.lights); '" + ev.what +
+                         "' is an object");
+    for (const SceneEvent& earlier : scene.events)
+      if (earlier.frame == ev.frame && earlier.kind == ev.kind && earlier.what == ev.what)
+        e.fail("kind", "this event (" + kind + (ev.what.empty() ? "" : " " + ev.what) +
+                           " at frame " + std::to_string(ev.frame) + ") is given twice");
     if (ev.kind == EventKind::CameraCut) {
       // A cut is the camera's: it names nothing else, and the camera must jump there, or the
       // recovery and old-view figures would measure a cut that never happened.
