@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/commands.hpp"
+#include "cli/render_options.hpp"
 #include "core/atomic_file.hpp"
 #include "harness/benchmarks.hpp"
 #include "harness/denoise_run.hpp"
@@ -33,7 +34,9 @@ void addBenchCommand(CLI::App& app) {
   tracer->add_option("--warmup", o->warmup, "Untimed warm-up frames")->check(CLI::Range(0, 100000))->default_val(3);
   tracer->add_option("--scene", o->scene, "Scene file");
   tracer->add_flag("--embree", o->embree, "Also run Embree's pathtracer tutorial (embree-tools) for comparison");
-  tracer->add_option("--json", o->json, "Write results to this JSON file")->default_str("(none)");
+  tracer->add_option("--json", o->json, "Write results to this JSON file")
+      ->check(writableFile())
+      ->default_str("(none)");
   tracer->callback([o] {
     const nlohmann::json out = benchTracer({o->scene, o->size, o->frames, o->warmup, o->embree}, printLine);
     if (!o->json.empty()) writeTextAtomically(o->json, out.dump(2));
@@ -58,7 +61,9 @@ void addBenchCommand(CLI::App& app) {
       ->add_option("--inputs", d->inputs, "Distinct rendered input frames, played forward and back")
       ->check(CLI::Range(1, 1000))
       ->default_val(3);
-  denoise->add_option("--json", d->json, "Write results to this JSON file")->default_str("(none)");
+  denoise->add_option("--json", d->json, "Write results to this JSON file")
+      ->check(writableFile())
+      ->default_str("(none)");
   denoise->add_option("--lowres-factor", d->lowresFactor,
                       "Low-resolution buffer for denoisers that read one (0: none)")
       ->check(CLI::Range(0, 64))
@@ -108,7 +113,9 @@ void addBenchCommand(CLI::App& app) {
                        "Frames per run; the last is counted (5: SVGF-family histories reach h >= 4)")
       ->check(CLI::Range(2, 100))
       ->default_val(5);
-  gpuModel->add_option("--json", g->json, "Write results to this JSON file")->default_str("(none)");
+  gpuModel->add_option("--json", g->json, "Write results to this JSON file")
+      ->check(writableFile())
+      ->default_str("(none)");
   gpuModel->callback([g] {
     GpuModelBench b;
     std::tie(b.width, b.height) = parseResolution("--resolution", g->resolution);
@@ -136,6 +143,7 @@ void addBenchCommand(CLI::App& app) {
                           "Specification to price with (TITAN RTX, RTX 4080, PS5, H200); default: the one "
                           "the file's device names");
   gpuMeasured->add_option("--json", gm->json, "Write results to this JSON file")
+      ->check(writableFile())
       ->default_str("(none)");
   gpuMeasured->callback([gm] {
     const nlohmann::json out = benchGpuMeasured(gm->file, gm->device, printLine);
@@ -152,7 +160,9 @@ void addBenchCommand(CLI::App& app) {
   auto ro = std::make_shared<RankOptions>();
   rank->add_option("runA", ro->runA, "Run directory A (its results.json)")->required();
   rank->add_option("runB", ro->runB, "Run directory B, the same scenes")->required();
-  rank->add_option("--json", ro->json, "Write results to this JSON file")->default_str("(none)");
+  rank->add_option("--json", ro->json, "Write results to this JSON file")
+      ->check(writableFile())
+      ->default_str("(none)");
   rank->callback([ro] {
     const nlohmann::json out = benchRankAgreement(ro->runA, ro->runB, printLine);
     if (!ro->json.empty()) writeTextAtomically(ro->json, out.dump(2));

@@ -51,7 +51,9 @@ void addBenchReferenceCommand(CLI::App* bench) {
   cmd->add_option("--frame", o->frame, "Frame whose state is rendered")
       ->check(CLI::Range(0, 100000));
   cmd->add_option("--scenes-dir", o->scenesDir, "Directory of scene files");
-  cmd->add_option("--json", o->json, "Write results to this JSON file")->default_str("(none)");
+  cmd->add_option("--json", o->json, "Write results to this JSON file")
+      ->check(writableFile())
+      ->default_str("(none)");
   cmd->callback([o] {
     RenderOptions ro;
     ro.resolution = o->resolution;

@@ -48,6 +48,27 @@ CLI::Validator finiteRange(double lo, double hi) {
       "FLOAT in " + range);
 }
 
+CLI::Validator writableFile() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        namespace fs = std::filesystem;
+        std::error_code ec;
+        const fs::path path = text;
+        if (fs::is_directory(path, ec)) return text + " is a directory; expected a file name";
+        // Missing folders are created when it is written; one that exists as a file cannot be.
+        for (fs::path folder = path.parent_path(); !folder.empty(); folder = folder.parent_path()) {
+          if (fs::exists(folder, ec)) {
+            if (!fs::is_directory(folder, ec))
+              return text + ": " + folder.string() + " is not a directory";
+            break;
+          }
+          if (folder == folder.parent_path()) break;
+        }
+        return "";
+      },
+      "FILE");
+}
+
 void addRenderOptions(CLI::App* cmd, RenderOptions& o) {
   cmd->add_option("--preset", o.preset,
                   "quick (the scene's resolution) or paper (1280x720, 4096 spp)")

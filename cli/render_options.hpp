@@ -30,5 +30,8 @@ void addRenderOptions(CLI::App* cmd, RenderOptions& options);
 
 // A CLI check: a finite number in [lo, hi] (CLI::Range lets "nan" through).
 CLI::Validator finiteRange(double lo, double hi);
+// A file an option writes when the work is done (--json): refused before the work when it is a
+// folder, or a folder on its path is a file (a benchmark's minutes were lost to a late error).
+CLI::Validator writableFile();
 
 }  // namespace arena::cli

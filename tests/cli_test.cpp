@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <regex>
 #include <string>
 
@@ -250,6 +251,17 @@ TEST(CliContract, UsageErrorsExitTwoAndOptionsAreStrict) {
     EXPECT_EQ(r.status, 2) << args << "\n" << r.output;
   }
   EXPECT_EQ(contract::arenaCli("run --help").status, 0);
+  // A bench's --json that cannot be written is refused before the timed work, not after it.
+  std::ofstream(dir / "afile") << "x";
+  for (const std::string& target : {(dir / "afile" / "x.json").string(), dir.string()}) {
+    contract::CliResult r = contract::arenaCli("bench tracer --frames 1 --size 8 --json " + target);
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_EQ(r.output.find("arena tracer:"), std::string::npos)
+        << "timed before refusing: " << r.output;
+    EXPECT_NE(r.output.find(target == dir.string() ? "is a directory" : "afile is not a directory"),
+              std::string::npos)
+        << r.output;
+  }
   // An empty denoiser list is not "only the baselines".
   for (const std::string& list : {std::string("''"), std::string("svgf,"), std::string(",")}) {
     contract::CliResult r = contract::arenaCli("run --scenes cornell_static --resolution 8x8 --frames 2 --ref-spp 1 --cache " +
