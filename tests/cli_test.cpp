@@ -171,10 +171,11 @@ TEST(CliContract, EveryOptionShowsItsDefault) {
       "scenes",  "render",    "study",        "run",           "sweep", "merge",
       "compare", "denoisers", "bench tracer", "bench denoise", "report"};
   // CLI11 prints "  --name TYPE=default", "  --name TYPE:{a,b}=default", "  --name INT:INT in [1 -
-  // 64]=8", "  name TEXT REQUIRED" (positionals); flags have no TYPE and need no default.
+  // 64]=8", "  --name TEXT:FILE=(none)", "  name TEXT REQUIRED" (positionals); flags have no TYPE
+  // and need no default.
   const std::regex valueLine(R"(^  (\S+) ([A-Z]+)\b.*)");
   const std::regex withDefault(
-      R"(^  \S+ [A-Z]+(:\{[^}]*\}|:[A-Z]+ in \[[^\]]*\])?( \.\.\.)?(=\S| REQUIRED).*)");
+      R"(^  \S+ [A-Z]+(:\{[^}]*\}|:[A-Z]+ in \[[^\]]*\]|:[A-Z]+)?( \.\.\.)?(=\S| REQUIRED).*)");
   int valueOptions = 0;
   for (const std::string& c : commands) {
     contract::CliResult r = contract::arenaCli(c + " --help");
