@@ -213,6 +213,29 @@ TEST(Scene, AnEventNamesSomethingOfItsKind) {
             "");  // some light
 }
 
+// A zero scale collapses an object, which then vanishes without a word: refused where the shape
+// needs the axis (a quad's y does not matter).
+TEST(Scene, AScaleThatCollapsesAnObjectIsRefused) {
+  const std::string floor = R"("shape": "quad", "material": "white", "keys": [{"frame": 0}])";
+  auto withKey = [&](const std::string& shape, const std::string& scale) {
+    return replaced(kMinimal, floor,
+                    R"("shape": ")" + shape +
+                        R"(", "material": "white", "keys": [{"frame": 0, "scale": )" + scale +
+                        "}]");
+  };
+  for (const auto& [shape, scale] :
+       std::vector<std::pair<std::string, std::string>>{{"quad", "[0, 0, 0]"},
+                                                        {"quad", "[0, 1, 1]"},
+                                                        {"box", "[1, 0, 1]"},
+                                                        {"sphere", "[1, 1, 0]"}}) {
+    const std::string e = errorOf(withKey(shape, scale));
+    EXPECT_NE(e.find("$.objects[0].keys[0].scale: a scale that collapses the object"),
+              std::string::npos)
+        << shape << " " << scale << ": " << e;
+  }
+  EXPECT_EQ(errorOf(withKey("quad", "[2, 0, 2]")), "");  // flat along its own normal: the same quad
+}
+
 // A light switched off for a while is an event; nothing ever emitting is a mistake.
 TEST(Scene, ASceneWhereNothingEverEmitsIsRejected) {
   const std::string dark = replaced(kMinimal, R"("intensity": 5})", R"("intensity": 0})");

@@ -384,7 +384,25 @@ Scene parseScene(const std::string& text, const std::string& path) {
       }
       obj.material = materialOf(o, materialIndex, "material");
     }
-    obj.transform = readTrack<Transform>(o, "keys", scene.frames, Transform{}, readTransform);
+    // A zero scale collapses an object and it vanishes without a word (lights refuse it too): all
+    // three for any object; for a quad either of its plane's axes (x, z); for a box or sphere any
+    // (a flat one's side faces have no normal). A mesh may be flat along an axis of its own.
+    const Shape shape = obj.shape;
+    obj.transform = readTrack<Transform>(
+        o, "keys", scene.frames, Transform{}, [shape](JsonReader& k, Transform& t) {
+          readTransform(k, t);
+          const glm::vec3 s = t.scale;
+          const bool collapsed = (s.x == 0 && s.y == 0 && s.z == 0) ||
+                                 (shape == Shape::Quad && (s.x == 0 || s.z == 0)) ||
+                                 ((shape == Shape::Box || shape == Shape::Sphere) &&
+                                  (s.x == 0 || s.y == 0 || s.z == 0));
+          if (collapsed)
+            k.fail("scale",
+                   "a scale that collapses the object (a quad needs x and z, a box or sphere every "
+                   "component, "
+                   "any object one component non-zero), got " +
+                       vecText(s));
+        });
     o.rejectUnread();
     scene.objects.push_back(std::move(obj));
   }
