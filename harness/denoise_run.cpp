@@ -244,15 +244,18 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
       if (const std::string wrong = implausibleTime(reported, d.lastPasses(), wall);
           !wrong.empty() && out.implausibleTime.empty())
         out.implausibleTime = std::string(signalName(kind)) + ": " + wrong;
-      if (const size_t unwritten = unwrittenValues(result))
-        throw Error(request_.name + " left " + std::to_string(unwritten) + " of the " +
-                    std::to_string(result.pixelCount() * size_t(result.channels())) +
-                    " values of its " + signalName(kind) + " output unwritten at frame " +
-                    std::to_string(t) +
-                    " (every value of the output image must be written on every frame)");
-      if (nonFiniteValues(result) > 0)
+      // The marker is a NaN: one pass finds a non-finite output, and only then is it told apart
+      // from a value left unwritten.
+      if (nonFiniteValues(result) > 0) {
+        if (const size_t unwritten = unwrittenValues(result))
+          throw Error(request_.name + " left " + std::to_string(unwritten) + " of the " +
+                      std::to_string(result.pixelCount() * size_t(result.channels())) +
+                      " values of its " + signalName(kind) + " output unwritten at frame " +
+                      std::to_string(t) +
+                      " (every value of the output image must be written on every frame)");
         throw Error(request_.name + " produced a non-finite value on the " + signalName(kind) + " signal at frame " +
                     std::to_string(t));
+      }
       for (PassStats p : d.lastPasses()) {
         p.name = std::string(signalName(kind)) + "/" + p.name;
         out.extraRaysPerPixel += p.raysPerPixel;

@@ -175,6 +175,9 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
         for (auto it = t.begin(); it != t.end(); ++it) tiled.insert(it.key());
   int comparedPairs = 0;  // pairs both runs ran
   std::set<std::string> baseKeys;
+  std::set<std::string>
+      baselineKeys;  // every baseline pair's: a candidate under one is not another's
+  for (const PairResult& b : base.pairs) baselineKeys.insert(key(b));
   for (const PairResult& b : base.pairs) {
     baseKeys.insert(key(b));
     const std::string& scene = b.scene;
@@ -188,9 +191,7 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
       int matches = 0;
       for (auto c = candPairs.begin(); c != candPairs.end(); ++c)
         if (c->second->scene == scene && c->second->denoiser == b.denoiser &&
-            c->second->params == b.params &&
-            !std::any_of(base.pairs.begin(), base.pairs.end(),
-                         [&](const PairResult& other) { return key(other) == c->first; }))
+            c->second->params == b.params && !baselineKeys.count(c->first))
           same = c, ++matches;
       if (matches == 1) {
         it = same;
