@@ -1,11 +1,13 @@
 #include "core/json_reader.hpp"
 
+#include <cctype>
 #include <cmath>
 #include <limits>
 #include <map>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/text.hpp"
 
 namespace arena {
 
@@ -153,12 +155,47 @@ void JsonReader::fail(const std::string& key, const std::string& expected) const
   throw Error(where(key) + ": " + expected);
 }
 
+namespace {
+
+// Of `names`, the one closest to `name` (case aside) if within one edit of a name up to four
+// letters long or two of a longer one, else empty: what a user who typed one most likely meant.
+std::string closestName(const std::string& name, const std::vector<std::string>& names) {
+  auto lower = [](std::string s) {
+    for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return s;
+  };
+  const size_t limit = name.size() <= 4 ? 1 : 2;
+  std::string best;
+  size_t bestDistance = limit + 1;
+  for (const std::string& n : names) {
+    const size_t d = editDistance(lower(n), lower(name));
+    if (d < bestDistance) best = n, bestDistance = d;
+  }
+  return best;
+}
+
+}  // namespace
+
+std::string JsonReader::misspelling(const std::string& key) const {
+  // A member not read yet, close to the missing key: the user most likely meant it ("camra" for
+  // "camera").
+  std::vector<std::string> unread;
+  for (auto it = node_.begin(); it != node_.end(); ++it)
+    if (!read_.count(it.key())) unread.push_back(it.key());
+  const std::string best = closestName(key, unread);
+  return best.empty() ? ""
+                      : " (the object has \"" + best + "\": a misspelling of \"" + key + "\"?)";
+}
+
 bool JsonReader::has(const std::string& key) const {
+  asked_.insert(key);
   return node_.contains(key);
 }
 
 const json& JsonReader::member(const std::string& key, const char* expected) {
-  if (!node_.contains(key)) fail(key, std::string("missing; expected ") + expected);
+  asked_.insert(key);
+  if (!node_.contains(key))
+    fail(key, std::string("missing; expected ") + expected + misspelling(key));
   read_.insert(key);
   return node_.at(key);
 }
@@ -295,9 +332,17 @@ glm::vec3 JsonReader::vec3(const std::string& key, glm::vec3 fallback) {
 
 void JsonReader::rejectUnread() const {
   for (auto it = node_.begin(); it != node_.end(); ++it) {
-    if (!read_.count(it.key()))
-      throw Error(where(it.key()) +
-                  ": unknown field (check the spelling; unknown fields are errors)");
+    if (read_.count(it.key())) continue;
+    // The names this reader asked for and did not find: an unknown field close to one of them
+    // is most likely it misspelt.
+    std::vector<std::string> absent;
+    for (const std::string& k : asked_)
+      if (!node_.contains(k)) absent.push_back(k);
+    const std::string meant = closestName(it.key(), absent);
+    throw Error(where(it.key()) + ": unknown field" +
+                (meant.empty()
+                     ? std::string(" (check the spelling; unknown fields are errors)")
+                     : ": a misspelling of \"" + meant + "\"? (unknown fields are errors)"));
   }
 }
 

@@ -59,11 +59,17 @@ class JsonReader {
  private:
   const nlohmann::json& member(const std::string& key, const char* expected);
   std::string where(const std::string& key) const;
+  // " (the object has "camra": a misspelling of "camera"?)" when an unread member is within two
+  // edits of a missing key; empty otherwise.
+  std::string misspelling(const std::string& key) const;
 
   const nlohmann::json& node_;
   std::string file_;
   std::string path_;
   std::set<std::string> read_;
+  // Every key looked up, present or not: the names this object's reader knows, which
+  // rejectUnread offers for an unknown field that is one of them misspelt.
+  mutable std::set<std::string> asked_;
 };
 
 std::string jsonTypeName(const nlohmann::json& j);

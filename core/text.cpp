@@ -1,8 +1,10 @@
 #include "core/text.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cstdint>
 #include <system_error>
+#include <vector>
 
 namespace arena {
 
@@ -75,6 +77,22 @@ std::string utf8Excerpt(std::string_view text, size_t maxBytes, bool fromEnd) {
   else
     for (int k = 0; k < 3 && continuation(end); ++k) --end;
   return validUtf8(text.substr(begin, end - begin));
+}
+
+size_t editDistance(std::string_view a, std::string_view b) {
+  // One row of the table at a time: row[j] is the distance from a's prefix to b's first j.
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diagonal = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t substituted = diagonal + (a[i - 1] == b[j - 1] ? 0 : 1);
+      diagonal = row[j];
+      row[j] = std::min({substituted, row[j] + 1, row[j - 1] + 1});
+    }
+  }
+  return row[b.size()];
 }
 
 }  // namespace arena

@@ -20,4 +20,8 @@ std::string utf8Excerpt(std::string_view text, size_t maxBytes, bool fromEnd);
 // one text per number, whatever was typed (a parameter's value in a label).
 std::string shortestText(double x);
 
+// The number of single-character insertions, deletions and substitutions that turn `a` into `b`
+// (Levenshtein): how an error message finds the misspelling of a name it expected.
+size_t editDistance(std::string_view a, std::string_view b);
+
 }  // namespace arena

@@ -140,6 +140,29 @@ TEST(Scene, MissingRequiredFieldIsNamed) {
   EXPECT_NE(e.find("missing"), std::string::npos) << e;
 }
 
+TEST(Scene, AMisspeltRequiredFieldIsNamedWithTheFieldMeant) {
+  // The scene has "camra": the required "camera" is missing, and the message names what was
+  // written.
+  std::string e = errorOf(replaced(kMinimal, R"("camera":)", R"("camra":)"));
+  EXPECT_NE(e.find("$.camera: missing; expected an object (the object has \"camra\": a misspelling "
+                   "of \"camera\"?)"),
+            std::string::npos)
+      << e;
+  // An optional field misspelt is an unknown field, named with the field it most likely is (case
+  // aside); one not close to any field the object may hold is not.
+  e = errorOf(replaced(kMinimal, R"("fov": 40)", R"("FOV": 40)"));
+  EXPECT_NE(e.find("$.camera.keys[0].FOV: unknown field: a misspelling of \"fov\"? (unknown fields "
+                   "are errors)"),
+            std::string::npos)
+      << e;
+  e = errorOf(replaced(kMinimal, R"("frames": 4,)", R"("frames": 4, "albedo": 1,)"));
+  EXPECT_NE(e.find("$.albedo: unknown field (check the spelling"), std::string::npos) << e;
+  // Nothing close: the message stays as it was.
+  e = errorOf(replaced(kMinimal, R"("purpose": "test",)", R"("intent": "test",)"));
+  EXPECT_NE(e.find("$.purpose: missing; expected a string"), std::string::npos) << e;
+  EXPECT_EQ(e.find("misspelling"), std::string::npos) << e;
+}
+
 TEST(Scene, EventNamingNothingIsRejected) {
   std::string e = errorOf(replaced(kMinimal, R"("what": "lamp")", R"("what": "lmap")"));
   EXPECT_NE(e.find("$.events[0].what"), std::string::npos) << e;

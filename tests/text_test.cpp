@@ -45,5 +45,15 @@ TEST(Text, AnExcerptIsCutBetweenCharacters) {
   EXPECT_EQ(utf8Excerpt("ab\xFF", 8, true), "ab" + kFffd);
 }
 
+TEST(Text, EditDistanceCountsInsertionsDeletionsAndSubstitutions) {
+  EXPECT_EQ(editDistance("", ""), 0u);
+  EXPECT_EQ(editDistance("camera", "camera"), 0u);
+  EXPECT_EQ(editDistance("camra", "camera"), 1u);    // one insertion
+  EXPECT_EQ(editDistance("camera", "camra"), 1u);    // symmetric
+  EXPECT_EQ(editDistance("kitten", "sitting"), 3u);  // two substitutions, one insertion
+  EXPECT_EQ(editDistance("", "abc"), 3u);
+  EXPECT_EQ(editDistance("ab", "ba"), 2u);  // a swap is two edits here
+}
+
 }  // namespace
 }  // namespace arena
