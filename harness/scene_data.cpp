@@ -103,18 +103,36 @@ json sceneRecord(const RunConfig& config, const SceneData& data, const std::stri
   // Events the scene has on frames a shorter sequence (--frames) does not reach: not measured,
   // said.
   if (scene) {
+    auto warn = [&](const std::string& warning) {
+      if (!entry.contains("warnings") || !entry["warnings"].is_array())
+        entry["warnings"] = json::array();
+      entry["warnings"].push_back(warning);
+    };
     std::string dropped;
     for (const SceneEvent& e : scene->events)
       if (e.frame >= info.frames)
         dropped += std::string(dropped.empty() ? "" : ", ") + eventKindName(e.kind) +
                    (e.what.empty() ? "" : " ") + e.what + " at frame " + std::to_string(e.frame);
-    if (!dropped.empty()) {
-      if (!entry.contains("warnings") || !entry["warnings"].is_array())
-        entry["warnings"] = json::array();
-      entry["warnings"].push_back("events beyond the sequence's " + std::to_string(info.frames) +
-                                  " frames are not measured (" + dropped +
-                                  "); render more frames to measure them");
+    if (!dropped.empty())
+      warn("events beyond the sequence's " + std::to_string(info.frames) +
+           " frames are not measured (" + dropped + "); render more frames to measure them");
+    // A camera that jumps without a camera_cut event: the denoisers are not told (no reset, as an
+    // engine that forgets to flag a teleport) and no cut figures are measured there. A test may
+    // mean exactly that; the results say it.
+    std::string unflagged;
+    for (const auto& key : scene->camera.keys) {
+      const bool cut =
+          std::any_of(scene->events.begin(), scene->events.end(), [&](const SceneEvent& e) {
+            return e.kind == EventKind::CameraCut && e.frame == key.frame;
+          });
+      if (key.step && key.frame > 0 && key.frame < info.frames && !cut)
+        unflagged += (unflagged.empty() ? "" : ", ") + std::to_string(key.frame);
     }
+    if (!unflagged.empty())
+      warn("the camera jumps (a key with \"step\": true) at frame(s) " + unflagged +
+           " without a camera_cut event: the denoisers keep their histories there and no "
+           "cut figures are measured; add {\"frame\": N, \"kind\": \"camera_cut\"} "
+           "if an engine would flag the jump");
   }
   if (!scene) {
     entry["source"] = "capture";

@@ -494,6 +494,31 @@ TEST(RunMatrixContract, EventsBeyondTheFramesAreNamed) {
   EXPECT_TRUE(named) << scene["warnings"];
 }
 
+// camera_cut's view jumps at frame 8; without its camera_cut event nobody tells the denoisers, and
+// no cut is measured: allowed (an engine that forgets to flag a teleport), and said.
+TEST(RunMatrixContract, ACameraJumpWithoutACutEventIsNamed) {
+  RunConfig c = contract::tinyRun("unflagged_jump");
+  c.render = test::tinySettings(16, 8, 10, 2);
+  Scene scene = test::shippedScene("camera_cut");
+  scene.events.clear();
+  c.scenes = {scene};
+  const json r = runMatrix(c);
+  const json& entry = r["scenes"]["camera_cut"];
+  EXPECT_TRUE(entry["events"].empty()) << entry["events"];
+  bool named = false;
+  for (const json& w : entry.value("warnings", json::array()))
+    named |= w.get<std::string>().find(
+                 "the camera jumps (a key with \"step\": true) at frame(s) 8 without a "
+                 "camera_cut event") != std::string::npos;
+  EXPECT_TRUE(named) << entry.value("warnings", json::array());
+  // The shipped scene flags its jump: no such warning.
+  c.scenes = {test::shippedScene("camera_cut")};
+  c.out = test::freshDir("flagged_jump");
+  c.cache = test::freshDir("flagged_jump_cache");  // the scene's hash is the file's, events or not
+  for (const json& w : runMatrix(c)["scenes"]["camera_cut"].value("warnings", json::array()))
+    EXPECT_EQ(w.get<std::string>().find("the camera jumps"), std::string::npos) << w;
+}
+
 // Two labels that differ only where a file name cannot hold them would share one image folder (the
 // second pair's start removed the first's images): refused before any work.
 TEST(RunMatrixContract, LabelsThatShareAnImageFolderAreRefused) {
