@@ -53,6 +53,18 @@ std::string tiedText(const RankedMethod& m) {
   return s.empty() ? "" : "tied with " + s;
 }
 
+namespace {
+
+// The width of a ranking's label column: `minimum`, or the longest label and two spaces where a
+// label is longer (a sweep's labels carry their parameters), so the columns after it stay aligned.
+int labelColumn(const std::vector<RankedMethod>& ranking, int minimum) {
+  size_t width = size_t(minimum);
+  for (const RankedMethod& m : ranking) width = std::max(width, m.label.size() + 2);
+  return int(width);
+}
+
+}  // namespace
+
 void printOverallRanking(std::ostream& out, const RunResults& results) {
   if (!results.statistics || !results.statistics->overall) return;
   const OverallRanking& o = *results.statistics->overall;
@@ -60,11 +72,12 @@ void printOverallRanking(std::ostream& out, const RunResults& results) {
     out << "\noverall: none\n";
   else
     out << "\noverall: " << o.normalisation << " (lower is better)\n";
+  const int column = labelColumn(o.ranking, 26);
   for (const RankedMethod& m : o.ranking) {
     const bool tied = !m.tiedWith.empty();
     out << "  " << std::left << std::setw(4) << (std::to_string(m.rank) + (tied ? "=" : ""))
-        << std::setw(26) << m.label << std::right << std::setw(11) << figureText(m.value) << "  "
-        << std::left << std::setw(24)
+        << std::setw(column) << m.label << std::right << std::setw(11) << figureText(m.value)
+        << "  " << std::left << std::setw(24)
         << (m.label == o.baseline ? "(1 by definition)"
                                   : intervalText(m.ci))  // the baseline's [1, 1] is no certainty
         << tiedText(m) << "\n";
@@ -133,9 +146,11 @@ void printSceneRankings(std::ostream& out, const RunResults& results) {
   for (const auto& [name, scene] : st.scenes) {
     const SceneRanking& s = scene.ranking;
     out << "\n" << name << ": " << s.resolvedPairs << " of " << s.pairs.size() << " pairwise differences resolved\n";
+    const int column = labelColumn(s.ranking, 26);
     for (const RankedMethod& m : s.ranking)
-      out << "  " << std::left << std::setw(4) << m.rank << std::setw(26) << m.label << std::right << std::setw(11)
-          << figureText(m.value) << "  " << std::left << std::setw(24) << intervalText(m.ci) << tiedText(m) << "\n";
+      out << "  " << std::left << std::setw(4) << m.rank << std::setw(column) << m.label
+          << std::right << std::setw(11) << figureText(m.value) << "  " << std::left
+          << std::setw(24) << intervalText(m.ci) << tiedText(m) << "\n";
     if (!s.excluded.empty()) out << "  not ranked: " << s.excluded << "\n";
   }
 }
@@ -181,6 +196,7 @@ void printEventTables(std::ostream& out, const RunResults& results) {
           << ": ranked on " << rankedOn << " (" << ranking.resolvedPairs << " of " << ranking.pairs.size()
           << " pairs resolved)\n";
       std::string steadyAbsent;  // the window's reason, the same for every method
+      const int column = labelColumn(ranking.ranking, 22);
       for (const RankedMethod& m : ranking.ranking) {
         const json* e = nullptr;
         for (const PairResult& p : results.pairs)
@@ -188,7 +204,7 @@ void printEventTables(std::ostream& out, const RunResults& results) {
             for (const json& x : p.part(cut ? "cuts" : "ghosting"))
               if (x.value("eventFrame", -1) == frame) e = &x;
         if (!e) continue;
-        out << "  " << std::left << std::setw(4) << m.rank << std::setw(22) << m.label;
+        out << "  " << std::left << std::setw(4) << m.rank << std::setw(column) << m.label;
         for (const char* f : cut ? std::vector<const char*>{"oldViewLeak", "atCut"}
                                  : std::vector<const char*>{"lagEnergy", "responseFrames", "peakExcess", "chromaLagEnergy"})
           out << f << " " << std::setw(26) << figureWithInterval(*e, f) << " ";

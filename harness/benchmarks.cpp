@@ -16,6 +16,7 @@
 
 #include "core/env_info.hpp"
 #include "core/error.hpp"
+#include "core/non_finite.hpp"
 #include "core/printed.hpp"
 #include "harness/denoise_run.hpp"
 #include "metrics/error.hpp"
@@ -251,6 +252,10 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
         params == b.params.end() ? std::map<std::string, std::string>{} : params->second, name);
     const std::unique_ptr<Denoiser> probe = info.create(resolved, SignalKind::Diffuse);
     lowres = lowres || probe->wantsLowres();
+    if (b.lowresFactor == 0 && probe->needsLowres())
+      throw Error("bench denoise: --lowres-factor 0: " + name +
+                  " needs the low-resolution buffer; expected --lowres-factor >= 2 (e.g. 8) or "
+                  "parameters that do not need it");
     if (b.inputs < 2 && info.origin.empty() && probe->needsGradients())
       throw Error("bench denoise: " + name +
                   " reads gradient samples, which need a frame before them: expected --inputs >= 2 "
@@ -262,6 +267,12 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
                   (values.empty() ? "" : values.begin()->first) + ": " + name +
                   " is not among the denoisers timed");
   Scene scene = loadScene(b.sceneFile);
+  // Frames past the scene's end would render its last pose again (keys hold), so more inputs
+  // than the scene has would not be distinct frames as the option promises.
+  if (b.inputs > scene.frames)
+    throw Error(
+        printed("bench denoise: --inputs %d: %s has %d frames; expected at most %d distinct inputs",
+                b.inputs, b.sceneFile.c_str(), scene.frames, scene.frames));
   RenderSettings settings;
   settings.width = w;
   settings.height = h;
@@ -355,9 +366,14 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
         const LowresInputs lowInputs{low ? inputLowres[input] : frame, b.lowresFactor, b.lowresSpp};
         DenoiserInputs in{signal, staged, grads ? &gradients : nullptr, low ? &lowInputs : nullptr};
         c.instances[k]->clearPassStats();
+        markUnwritten(outImage);  // as a run does: a call that writes nothing is not timed as fast
         auto t0 = std::chrono::steady_clock::now();
         c.instances[k]->denoise(ctx, in, outImage);
         const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        if (nonFiniteValues(outImage) > 0)
+          if (const std::string unwritten = unwrittenOutput(outImage, c.name, kind, f);
+              !unwritten.empty())
+            throw Error("bench denoise: " + unwritten);
         // An external process's own compute time; the wall clock (transfer included) otherwise.
         const std::optional<double> reported = c.instances[k]->reportedMilliseconds();
         c.reported = c.reported || reported.has_value();
@@ -576,8 +592,9 @@ nlohmann::json benchRankAgreement(const std::string& runA, const std::string& ru
   double tauSum = 0;
   int tauCount = 0, flips = 0;
   for (const SceneRankAgreement& s : scenes) {
-    std::snprintf(line, sizeof line, "%-22s %7zu %10.2f %10.2f %4d/%-2d/%-2d %6zu", s.scene.c_str(), s.methods.size(),
-                  s.tauRanks, s.tauValues, s.resolvedA, s.resolvedB, s.resolvedBoth, s.flips.size());
+    std::snprintf(line, sizeof line, "%-22s %7zu %10.2f %10.2f %10s %6zu", s.scene.c_str(),
+                  s.methods.size(), s.tauRanks, s.tauValues, s.resolvedText().c_str(),
+                  s.flips.size());
     progress(line);
     for (const RankFlip& f : s.flips)
       progress("    flip: " + f.better + " better than " + f.worse + " in A (" + std::to_string(f.diffA) +

@@ -14,17 +14,8 @@ namespace arena {
 
 namespace {
 
-// A value no denoiser computes: a quiet NaN with a payload of its own. Each call's output is
-// filled with it first (outside the timed call), so a denoiser that leaves values unwritten (a
-// plugin that returns success without writing) fails its pair instead of being scored on what the
-// buffer held from the frame before.
+// The unwritten-value marker (markUnwritten).
 constexpr uint32_t kUnwrittenBits = 0x7fc0dea1u;
-
-void markUnwritten(Image& image) {
-  for (int c = 0; c < image.channels(); ++c)
-    std::fill(image.planeSpan(c).begin(), image.planeSpan(c).end(),
-              std::bit_cast<float>(kUnwrittenBits));
-}
 
 // What is wrong with a call's own report of its time, or "": no work inside a call can take longer
 // than the call (1% and 0.05 ms allowed for two clocks' reading).
@@ -45,14 +36,25 @@ std::string implausibleTime(const std::optional<double>& reported,
   return "";
 }
 
-size_t unwrittenValues(const Image& image) {
-  size_t n = 0;
-  for (int c = 0; c < image.channels(); ++c)
-    for (const float v : image.planeSpan(c)) n += std::bit_cast<uint32_t>(v) == kUnwrittenBits;
-  return n;
+}  // namespace
+
+void markUnwritten(Image& output) {
+  for (int c = 0; c < output.channels(); ++c)
+    std::fill(output.planeSpan(c).begin(), output.planeSpan(c).end(),
+              std::bit_cast<float>(kUnwrittenBits));
 }
 
-}  // namespace
+std::string unwrittenOutput(const Image& output, const std::string& name, SignalKind kind,
+                            int frame) {
+  size_t n = 0;
+  for (int c = 0; c < output.channels(); ++c)
+    for (const float v : output.planeSpan(c)) n += std::bit_cast<uint32_t>(v) == kUnwrittenBits;
+  if (n == 0) return "";
+  return name + " left " + std::to_string(n) + " of the " +
+         std::to_string(output.pixelCount() * size_t(output.channels())) + " values of its " +
+         signalName(kind) + " output unwritten at frame " + std::to_string(frame) +
+         " (every value of the output image must be written on every frame)";
+}
 
 std::map<std::string, std::map<std::string, std::string>> parseParamAssignments(const std::vector<std::string>& items) {
   std::map<std::string, std::map<std::string, std::string>> out;
@@ -247,12 +249,9 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
       // The marker is a NaN: one pass finds a non-finite output, and only then is it told apart
       // from a value left unwritten.
       if (nonFiniteValues(result) > 0) {
-        if (const size_t unwritten = unwrittenValues(result))
-          throw Error(request_.name + " left " + std::to_string(unwritten) + " of the " +
-                      std::to_string(result.pixelCount() * size_t(result.channels())) +
-                      " values of its " + signalName(kind) + " output unwritten at frame " +
-                      std::to_string(t) +
-                      " (every value of the output image must be written on every frame)");
+        if (const std::string unwritten = unwrittenOutput(result, request_.name, kind, t);
+            !unwritten.empty())
+          throw Error(unwritten);
         throw Error(request_.name + " produced a non-finite value on the " + signalName(kind) + " signal at frame " +
                     std::to_string(t));
       }

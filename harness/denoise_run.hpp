@@ -92,4 +92,13 @@ long sanitizeGradientSamples(LayerSet& gradients, NonFiniteCounts& counts);
 // ...) were replaced by 0 before the denoiser ran"; empty when nothing was.
 std::string sanitizedWarning(const NonFiniteCounts& counts);
 
+// A value no denoiser computes: a quiet NaN with a payload of its own. markUnwritten fills an
+// output with it before each call (outside the timed call), so a denoiser that leaves values
+// unwritten (a plugin that returns success without writing) is caught instead of being scored, or
+// timed, on what the buffer held from the frame before. unwrittenOutput is then the error for the
+// call ("NAME left N of the M values of its diffuse output unwritten at frame T ..."), or "".
+void markUnwritten(Image& output);
+std::string unwrittenOutput(const Image& output, const std::string& name, SignalKind kind,
+                            int frame);
+
 }  // namespace arena

@@ -37,7 +37,19 @@ MeasuredSet readMeasuredSet(const std::string& path) {
     k.height = row.integerIn("height", 1, 65536);
     k.medianMs = row.number("medianMs");
     if (!(k.medianMs > 0) || !std::isfinite(k.medianMs)) row.fail("medianMs", "a positive time in ms");
-    for (const char* optional : {"p5Ms", "p95Ms", "backToBackMs"}) row.number(optional, 0.0);
+    // The spread, where the row gives it, must be a spread around the median: a p5 above it or a
+    // p95 below it is a file written wrong, not a measurement.
+    for (const char* optional : {"p5Ms", "p95Ms", "backToBackMs"}) {
+      if (!row.has(optional)) continue;
+      const double ms = row.number(optional);
+      if (!(ms > 0) || !std::isfinite(ms)) row.fail(optional, "expected a positive time in ms");
+      if (std::string(optional) == "p5Ms" && ms > k.medianMs)
+        row.fail(optional,
+                 "expected at most the row's medianMs (" + printed("%g", k.medianMs) + ")");
+      if (std::string(optional) == "p95Ms" && ms < k.medianMs)
+        row.fail(optional,
+                 "expected at least the row's medianMs (" + printed("%g", k.medianMs) + ")");
+    }
     row.rejectUnread();
     // A kernel at one size timed twice would count twice in the fit's agreement figures.
     for (const MeasuredKernel& other : set.rows)

@@ -28,6 +28,11 @@ double kendallTauB(const std::vector<double>& x, const std::vector<double>& y) {
   return denominator > 0 ? (concordant - discordant) / denominator : std::nan("");
 }
 
+std::string SceneRankAgreement::resolvedText() const {
+  return std::to_string(resolvedA) + "/" + std::to_string(resolvedB) + "/" +
+         std::to_string(resolvedBoth);
+}
+
 json SceneRankAgreement::toJson() const {
   json flipsJson = json::array();
   for (const RankFlip& f : flips)

@@ -30,6 +30,8 @@ struct SceneRankAgreement {
   std::vector<RankFlip> flips;
   std::vector<std::string> onlyInOne;  // methods ranked in one run only (not compared)
   nlohmann::json toJson() const;
+  // "A/B/both": the resolved counts as one column of the bench's table.
+  std::string resolvedText() const;
 };
 
 // The scenes both runs rank (RunStatistics::scenes, each on its ranked metric), in A's order. A

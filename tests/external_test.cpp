@@ -335,6 +335,20 @@ TEST(ExternalProcess, TheDenoiseBenchRefusesWhatItCannotTimeFairly) {
                       "expected --inputs >= 2"),
             std::string::npos)
       << errorWith({"asvgf"}, 1);
+  // A denoiser that cannot run without the low-resolution buffer, with none to be rendered.
+  DenoiseBench noLowres = b;
+  noLowres.denoisers = {"reengine"};
+  noLowres.params = {{"reengine", {{"disocclusionRays", "on"}}}};
+  noLowres.lowresFactor = 0;
+  EXPECT_NE(errorOf([&] {
+              benchDenoise(noLowres, [](const std::string&) {});
+            }).find("--lowres-factor 0: reengine needs the low-resolution buffer"),
+            std::string::npos)
+      << errorOf([&] { benchDenoise(noLowres, [](const std::string&) {}); });
+  // More distinct inputs than the scene has frames would repeat its last pose.
+  EXPECT_NE(errorWith({"eaw"}, 1000).find("--inputs 1000: " + b.sceneFile + " has "),
+            std::string::npos)
+      << errorWith({"eaw"}, 1000);
 }
 
 // arena bench denoise says which clock timed each contender: a process's own report of its compute
@@ -680,6 +694,19 @@ TEST(Plugin, FaultsOfAPluginFailItsPairNamingThem) {
   ::setenv("ARENA_FAULTY_PLUGIN", "partial", 1);
   const std::string partial = errorOf([&] { denoiseAll({name, {}, ""}, tinySequence()); });
   EXPECT_NE(partial.find("left 1152 of the 1728 values"), std::string::npos) << partial;
+  // The denoise bench marks its output too: a call that writes part of it is not timed as a call
+  // that did the work.
+  DenoiseBench bench;
+  bench.sceneFile = std::string(ARENA_SOURCE_DIR) + "/scenes/cornell_static.json";
+  bench.denoisers = {name};
+  bench.width = kWidth, bench.height = kHeight, bench.frames = 2, bench.warmup = 0,
+  bench.inputs = 2;
+  const std::string benched = errorOf([&] { benchDenoise(bench, [](const std::string&) {}); });
+  EXPECT_NE(
+      benched.find("bench denoise: " + name +
+                   " left 1152 of the 1728 values of its diffuse output unwritten at frame 0"),
+      std::string::npos)
+      << benched;
   ::setenv("ARENA_FAULTY_PLUGIN", "", 1);
   EXPECT_EQ(denoiseAll({name, {}, ""}, tinySequence()).size(), size_t(kFrames));
   // A pass reported longer than the call that ran it: the pair is measured, its times are warned

@@ -214,6 +214,27 @@ TEST(GpuMeasured, BadFilesAndKernelsAreErrorsNamingWhatIsWrong) {
       }).find("rows[1].kernel: one row per kernel and size; 'box-3x3' at 64x32 is already a row"),
       std::string::npos)
       << errorOf([&] { readMeasuredSet((dir / "twice.json").string()); });
+  // A spread that is not around the median is a file written wrong.
+  const std::string spread =
+      R"({"device": "X", "rows": [{"kernel": "box-3x3", "width": 64, "height": 32, "medianMs": 0.01, )";
+  EXPECT_NE(errorOf([&] {
+              readMeasuredSet(file("p5.json", spread + R"("p5Ms": 0.02}]})"));
+            }).find("rows[0].p5Ms: expected at most the row's medianMs (0.01)"),
+            std::string::npos)
+      << errorOf([&] { readMeasuredSet((dir / "p5.json").string()); });
+  EXPECT_NE(errorOf([&] {
+              readMeasuredSet(file("p95.json", spread + R"("p95Ms": 0.005}]})"));
+            }).find("rows[0].p95Ms: expected at least"),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] {
+              readMeasuredSet(file("b2b.json", spread + R"("backToBackMs": 0}]})"));
+            }).find("backToBackMs: expected a positive time"),
+            std::string::npos);
+  EXPECT_EQ(
+      readMeasuredSet(
+          file("ok.json", spread + R"("p5Ms": 0.009, "p95Ms": 0.01, "backToBackMs": 0.02}]})"))
+          .rows.size(),
+      1u);
   EXPECT_NE(errorOf([&] { measuredKernelTraffic("gaussian-9x9", 8, 8); }).find("gaussian-9x9"), std::string::npos);
   EXPECT_NE(errorOf([&] { measuredKernelTraffic("format-7x7-BC7", 8, 8); }).find("BC7"), std::string::npos);
   const std::string unknownDevice = file("unknown_device.json", R"({"device": "Some GPU", "rows": [)" + row + "]}");

@@ -1,18 +1,20 @@
 // What `arena study` prints (cli/printout.hpp): the summary of the default study fits on one
 // screen, and a warning that concerns a scene is stored and printed once per scene, not once per
 // denoiser (issue 33). These tests count lines and occurrences; they read no numbers from the text.
+#include "cli/printout.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <filesystem>
 #include <map>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
 
-#include "cli/printout.hpp"
-#include "metrics/results.hpp"
 #include "harness/run_matrix.hpp"
+#include "metrics/results.hpp"
 #include "tests/test_util.hpp"
 
 namespace arena {
@@ -156,6 +158,29 @@ TEST(StudySummary, ALoneMethodIsNotCalledBestAndTwoTimesGiveNoCorrelation) {
   EXPECT_EQ(occurrences(text, "no interval"), 1u) << text;
   EXPECT_EQ(occurrences(text, "(1 by definition)"), 1u) << "the overall baseline (temporal)\n"
                                                         << text;
+}
+
+// A sweep's labels carry their parameters and run longer than the label column: the column widens
+// to the longest label, so every line's figures start in one column.
+TEST(StudySummary, LongLabelsKeepTheRankingsColumnsAligned) {
+  json results = worstDefaultStudy();
+  const std::string longLabel = "svgf(alphaColor=0.05,sigmaLuminance=4,sigmaNormal=128)";
+  results["statistics"]["overall"]["ranking"][1]["label"] = longLabel;
+  std::ostringstream out;
+  cli::printOverallRanking(out, test::typed(results));
+  std::istringstream lines(out.str());
+  std::set<size_t> intervalColumns;
+  int rows = 0;
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("  ", 0) != 0 || line.find("not ranked") != std::string::npos) continue;
+    const size_t column = std::min(line.find('['), line.find("(1 by"));
+    ASSERT_NE(column, std::string::npos) << line;
+    intervalColumns.insert(column);
+    ++rows;
+  }
+  EXPECT_GE(rows, 2) << out.str();
+  EXPECT_EQ(intervalColumns.size(), 1u) << out.str();
+  EXPECT_NE(out.str().find(longLabel + "  "), std::string::npos) << out.str();
 }
 
 // A scene whose references stopped at their sample cap: the warning is the scene's, stored once in

@@ -55,6 +55,7 @@ TEST(RankAgreement, FlipsArePairsResolvedInBothRunsInOppositeOrders) {
   EXPECT_EQ(r[0].resolvedA, 3);
   EXPECT_EQ(r[0].resolvedB, 2);
   EXPECT_EQ(r[0].resolvedBoth, 2);
+  EXPECT_EQ(r[0].resolvedText(), "3/2/2");  // one column of the bench's table, no padding inside
   ASSERT_EQ(r[0].flips.size(), 1u);
   EXPECT_EQ(r[0].flips[0].better, "x");  // A's order
   EXPECT_EQ(r[0].flips[0].worse, "y");
