@@ -64,9 +64,10 @@ void addBenchCommand(CLI::App& app) {
   denoise->add_option("--json", d->json, "Write results to this JSON file")
       ->check(writableFile())
       ->default_str("(none)");
-  denoise->add_option("--lowres-factor", d->lowresFactor,
-                      "Low-resolution buffer for denoisers that read one (0: none)")
-      ->check(CLI::Range(0, 64))
+  denoise
+      ->add_option("--lowres-factor", d->lowresFactor,
+                   "Low-resolution buffer for denoisers that read one (0: none)")
+      ->check(lowresFactorCheck(64))
       ->default_val(8);
   denoise->add_option("--lowres-spp", d->lowresSpp, "Paths per low-resolution texel")
       ->check(CLI::Range(1, 4096))

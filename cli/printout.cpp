@@ -7,6 +7,7 @@
 #include <map>
 #include <sstream>
 
+#include "core/text.hpp"
 #include "harness/gpu_cost.hpp"
 #include "harness/reference_quality.hpp"
 
@@ -57,10 +58,17 @@ namespace {
 
 // The width of a ranking's label column: `minimum`, or the longest label and two spaces where a
 // label is longer (a sweep's labels carry their parameters), so the columns after it stay aligned.
-int labelColumn(const std::vector<RankedMethod>& ranking, int minimum) {
-  size_t width = size_t(minimum);
-  for (const RankedMethod& m : ranking) width = std::max(width, m.label.size() + 2);
-  return int(width);
+size_t labelColumn(const std::vector<RankedMethod>& ranking, size_t minimum) {
+  size_t width = minimum;
+  for (const RankedMethod& m : ranking) width = std::max(width, displayWidth(m.label) + 2);
+  return width;
+}
+
+// `text` right-aligned in `width` characters ("–", the missing value, is one character of three
+// bytes: std::setw would pad it two short).
+std::string rightAligned(const std::string& text, size_t width) {
+  const size_t w = displayWidth(text);
+  return w < width ? std::string(width - w, ' ') + text : text;
 }
 
 }  // namespace
@@ -72,14 +80,15 @@ void printOverallRanking(std::ostream& out, const RunResults& results) {
     out << "\noverall: none\n";
   else
     out << "\noverall: " << o.normalisation << " (lower is better)\n";
-  const int column = labelColumn(o.ranking, 26);
+  const size_t column = labelColumn(o.ranking, 26);
   for (const RankedMethod& m : o.ranking) {
     const bool tied = !m.tiedWith.empty();
     out << "  " << std::left << std::setw(4) << (std::to_string(m.rank) + (tied ? "=" : ""))
-        << std::setw(column) << m.label << std::right << std::setw(11) << figureText(m.value)
-        << "  " << std::left << std::setw(24)
-        << (m.label == o.baseline ? "(1 by definition)"
-                                  : intervalText(m.ci))  // the baseline's [1, 1] is no certainty
+        << paddedText(m.label, column) << rightAligned(figureText(m.value), 11) << "  "
+        << paddedText(m.label == o.baseline
+                          ? "(1 by definition)"
+                          : intervalText(m.ci),  // the baseline's [1, 1] is no certainty
+                      24)
         << tiedText(m) << "\n";
   }
   if (!o.excluded.empty()) out << "  not ranked overall: " << o.excluded << "\n";
@@ -146,11 +155,11 @@ void printSceneRankings(std::ostream& out, const RunResults& results) {
   for (const auto& [name, scene] : st.scenes) {
     const SceneRanking& s = scene.ranking;
     out << "\n" << name << ": " << s.resolvedPairs << " of " << s.pairs.size() << " pairwise differences resolved\n";
-    const int column = labelColumn(s.ranking, 26);
+    const size_t column = labelColumn(s.ranking, 26);
     for (const RankedMethod& m : s.ranking)
-      out << "  " << std::left << std::setw(4) << m.rank << std::setw(column) << m.label
-          << std::right << std::setw(11) << figureText(m.value) << "  " << std::left
-          << std::setw(24) << intervalText(m.ci) << tiedText(m) << "\n";
+      out << "  " << std::left << std::setw(4) << m.rank << paddedText(m.label, column)
+          << rightAligned(figureText(m.value), 11) << "  " << paddedText(intervalText(m.ci), 24)
+          << tiedText(m) << "\n";
     if (!s.excluded.empty()) out << "  not ranked: " << s.excluded << "\n";
   }
 }
@@ -196,7 +205,7 @@ void printEventTables(std::ostream& out, const RunResults& results) {
           << ": ranked on " << rankedOn << " (" << ranking.resolvedPairs << " of " << ranking.pairs.size()
           << " pairs resolved)\n";
       std::string steadyAbsent;  // the window's reason, the same for every method
-      const int column = labelColumn(ranking.ranking, 22);
+      const size_t column = labelColumn(ranking.ranking, 22);
       for (const RankedMethod& m : ranking.ranking) {
         const json* e = nullptr;
         for (const PairResult& p : results.pairs)
@@ -204,7 +213,7 @@ void printEventTables(std::ostream& out, const RunResults& results) {
             for (const json& x : p.part(cut ? "cuts" : "ghosting"))
               if (x.value("eventFrame", -1) == frame) e = &x;
         if (!e) continue;
-        out << "  " << std::left << std::setw(4) << m.rank << std::setw(column) << m.label;
+        out << "  " << std::left << std::setw(4) << m.rank << paddedText(m.label, column);
         for (const char* f : cut ? std::vector<const char*>{"oldViewLeak", "atCut"}
                                  : std::vector<const char*>{"lagEnergy", "responseFrames", "peakExcess", "chromaLagEnergy"})
           out << f << " " << std::setw(26) << figureWithInterval(*e, f) << " ";
@@ -224,10 +233,10 @@ void printSceneWinners(std::ostream& out, const RunResults& results) {
   const auto& scenes = results.statistics->scenes;
   out << "\nper scene: the best on relMSE with its 95% interval, and the methods not resolved from it\n";
   size_t width = 0;
-  for (const auto& [name, scene] : scenes) width = std::max(width, name.size());
+  for (const auto& [name, scene] : scenes) width = std::max(width, displayWidth(name));
   for (const auto& [name, scene] : scenes) {
     const SceneRanking& s = scene.ranking;
-    out << "  " << std::left << std::setw(int(width) + 2) << name;
+    out << "  " << paddedText(name, width + 2);
     if (s.ranking.empty()) {
       out << "not ranked" << (s.excluded.empty() ? "" : ": " + s.excluded) << "\n";
       continue;

@@ -69,6 +69,19 @@ CLI::Validator writableFile() {
       "FILE");
 }
 
+CLI::Validator lowresFactorCheck(int max) {
+  return CLI::Validator(
+      [max](std::string& text) -> std::string {
+        int v = -1;
+        const bool integer = CLI::detail::lexical_cast(text, v);
+        if (!integer || v < 0 || v == 1 || v > max)
+          return "--lowres-factor " + text + ": expected 0 (none) or a block size in [2, " +
+                 std::to_string(max) + "]";
+        return "";
+      },
+      "INT in [0 or 2 - " + std::to_string(max) + "]");
+}
+
 void addRenderOptions(CLI::App* cmd, RenderOptions& o) {
   cmd->add_option("--preset", o.preset,
                   "quick (the scene's resolution) or paper (1280x720, 4096 spp)")
@@ -104,12 +117,14 @@ void addRenderOptions(CLI::App* cmd, RenderOptions& o) {
                   "toward --ref-rel-error (0: one tile, every pixel the same count)")
       ->check(CLI::Range(0, 1024))
       ->default_val(8);
-  cmd->add_option("--lowres-factor", o.lowresFactor,
-                  "Also render a low-resolution, many-sample buffer per frame, one texel per FxF block "
-                  "(CAPCOM 2023 disocclusion rays; 0: none)")
-      ->check(CLI::Range(0, 1 << 16))
-      ->default_str("run, sweep, study: 8 when a denoiser reads it (reengine's disocclusionRays=auto or on), "
-                    "else none; render: none");
+  cmd->add_option(
+         "--lowres-factor", o.lowresFactor,
+         "Also render a low-resolution, many-sample buffer per frame, one texel per FxF block "
+         "(CAPCOM 2023 disocclusion rays; 0: none)")
+      ->check(lowresFactorCheck(1 << 16))
+      ->default_str(
+          "run, sweep, study: 8 when a denoiser reads it (reengine's disocclusionRays=auto or on), "
+          "else none; render: none");
   cmd->add_option("--lowres-spp", o.lowresSpp, "Paths per low-resolution texel (default 16)");
   cmd->add_option("--cache", o.cacheDir, "Sequence cache directory")->default_val("cache");
   cmd->add_option("--scenes-dir", o.scenesDir, "Directory of scene files")

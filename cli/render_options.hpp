@@ -33,5 +33,8 @@ CLI::Validator finiteRange(double lo, double hi);
 // A file an option writes when the work is done (--json): refused before the work when it is a
 // folder, or a folder on its path is a file (a benchmark's minutes were lost to a late error).
 CLI::Validator writableFile();
+// A CLI check for --lowres-factor: 0 (no buffer) or a block size in [2, max] (1 would be the frame
+// itself, which no buffer needs to repeat).
+CLI::Validator lowresFactorCheck(int max);
 
 }  // namespace arena::cli

@@ -96,7 +96,14 @@ class DuplicateKeyCheckingParser : public nlohmann::detail::json_sax_dom_parser<
   bool number_integer(json::number_integer_t v) { return enterValue(), Base::number_integer(v); }
   bool number_unsigned(json::number_unsigned_t v) { return enterValue(), Base::number_unsigned(v); }
   bool number_float(json::number_float_t v, const std::string& s) {
-    return enterValue(), Base::number_float(v, s);
+    enterValue();
+    // "1e-400" is not zero, but reads as 0 (below the smallest double): a value the user wrote
+    // would be replaced by one they did not, and a range check would then report "got 0".
+    if (v == 0 && s.find_first_of("123456789") < s.find_first_of("eE"))
+      throw Error(
+          file_ + ": " + path(scopes_.size()) + ": " + s +
+          " is too small to be stored as a number (it would read as 0); write 0 if 0 is meant");
+    return Base::number_float(v, s);
   }
   bool string(std::string& v) { return enterValue(), Base::string(v); }
 
@@ -112,9 +119,11 @@ class DuplicateKeyCheckingParser : public nlohmann::detail::json_sax_dom_parser<
     if (!scopes_.empty() && !scopes_.back().object) ++scopes_.back().members;
   }
   // The JSON path of the innermost object, as JsonReader names paths ($.camera.keys[0]).
-  std::string path() const {
+  std::string path() const { return path(scopes_.empty() ? 0 : scopes_.size() - 1); }
+  // With `depth` scopes: the value being read (all of them) rather than its object.
+  std::string path(size_t depth) const {
     std::string p = "$";
-    for (size_t i = 0; i + 1 < scopes_.size(); ++i)
+    for (size_t i = 0; i < depth && i < scopes_.size(); ++i)
       p += scopes_[i].object ? "." + scopes_[i].key : "[" + std::to_string(scopes_[i].members - 1) + "]";
     return p;
   }
@@ -157,14 +166,17 @@ void JsonReader::fail(const std::string& key, const std::string& expected) const
 
 namespace {
 
-// Of `names`, the one closest to `name` (case aside) if within one edit of a name up to four
-// letters long or two of a longer one, else empty: what a user who typed one most likely meant.
+// Of `names`, the one closest to `name` (case aside) if within one edit of a name of three or four
+// letters, two of a longer one, or differing only in case from a shorter one, else empty: what a
+// user who typed one most likely meant. (One edit of a one- or two-letter name is another name:
+// "a" and "b" are both fields of a results pair.) Bytes are compared: a slip in a non-ASCII name
+// counts as the bytes of its character.
 std::string closestName(const std::string& name, const std::vector<std::string>& names) {
   auto lower = [](std::string s) {
     for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
     return s;
   };
-  const size_t limit = name.size() <= 4 ? 1 : 2;
+  const size_t limit = name.size() <= 2 ? 0 : name.size() <= 4 ? 1 : 2;
   std::string best;
   size_t bestDistance = limit + 1;
   for (const std::string& n : names) {
@@ -188,12 +200,12 @@ std::string JsonReader::misspelling(const std::string& key) const {
 }
 
 bool JsonReader::has(const std::string& key) const {
-  asked_.insert(key);
-  return node_.contains(key);
+  if (node_.contains(key)) return true;
+  missing_.insert(key);
+  return false;
 }
 
 const json& JsonReader::member(const std::string& key, const char* expected) {
-  asked_.insert(key);
   if (!node_.contains(key))
     fail(key, std::string("missing; expected ") + expected + misspelling(key));
   read_.insert(key);
@@ -335,10 +347,7 @@ void JsonReader::rejectUnread() const {
     if (read_.count(it.key())) continue;
     // The names this reader asked for and did not find: an unknown field close to one of them
     // is most likely it misspelt.
-    std::vector<std::string> absent;
-    for (const std::string& k : asked_)
-      if (!node_.contains(k)) absent.push_back(k);
-    const std::string meant = closestName(it.key(), absent);
+    const std::string meant = closestName(it.key(), {missing_.begin(), missing_.end()});
     throw Error(where(it.key()) + ": unknown field" +
                 (meant.empty()
                      ? std::string(" (check the spelling; unknown fields are errors)")

@@ -67,9 +67,9 @@ class JsonReader {
   std::string file_;
   std::string path_;
   std::set<std::string> read_;
-  // Every key looked up, present or not: the names this object's reader knows, which
-  // rejectUnread offers for an unknown field that is one of them misspelt.
-  mutable std::set<std::string> asked_;
+  // The keys looked up and not found: names this object's reader knows, which rejectUnread offers
+  // for an unknown field that is one of them misspelt (a document without mistakes adds none).
+  mutable std::set<std::string> missing_;
 };
 
 std::string jsonTypeName(const nlohmann::json& j);

@@ -95,4 +95,17 @@ size_t editDistance(std::string_view a, std::string_view b) {
   return row[b.size()];
 }
 
+size_t displayWidth(std::string_view text) {
+  size_t n = 0;
+  for (const char c : text) n += (uint8_t(c) & 0xC0) != 0x80;
+  return n;
+}
+
+std::string paddedText(std::string_view text, size_t width) {
+  std::string out(text);
+  const size_t w = displayWidth(text);
+  if (w < width) out.append(width - w, ' ');
+  return out;
+}
+
 }  // namespace arena

@@ -20,6 +20,13 @@ std::string utf8Excerpt(std::string_view text, size_t maxBytes, bool fromEnd);
 // one text per number, whatever was typed (a parameter's value in a label).
 std::string shortestText(double x);
 
+// The characters of UTF-8 `text` (its code points; continuation bytes not counted): the columns
+// it takes in a console, for the Latin, Greek and Cyrillic text of labels and names.
+size_t displayWidth(std::string_view text);
+// `text` followed by spaces up to `width` characters (displayWidth), unchanged if as wide or wider:
+// what std::setw does for bytes.
+std::string paddedText(std::string_view text, size_t width);
+
 // The number of single-character insertions, deletions and substitutions that turn `a` into `b`
 // (Levenshtein): how an error message finds the misspelling of a name it expected.
 size_t editDistance(std::string_view a, std::string_view b);

@@ -253,9 +253,7 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
     const std::unique_ptr<Denoiser> probe = info.create(resolved, SignalKind::Diffuse);
     lowres = lowres || probe->wantsLowres();
     if (b.lowresFactor == 0 && probe->needsLowres())
-      throw Error("bench denoise: --lowres-factor 0: " + name +
-                  " needs the low-resolution buffer; expected --lowres-factor >= 2 (e.g. 8) or "
-                  "parameters that do not need it");
+      throw Error("bench denoise: " + lowresNeeded(name));
     if (b.inputs < 2 && info.origin.empty() && probe->needsGradients())
       throw Error("bench denoise: " + name +
                   " reads gradient samples, which need a frame before them: expected --inputs >= 2 "
@@ -356,6 +354,9 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
         // declared layers) has just been written, as by the passes that produce them in an
         // engine. Without this the layers came cold from the cycled input pool, while a plugin
         // that copied its inputs first read them warm -- and measured faster than its own code.
+        // The output is marked first (as a run does, so a call that writes nothing is not timed
+        // as fast), then the inputs copied: they are what the call finds in the cache.
+        markUnwritten(outImage);
         signal = frame.get(signalName(kind));
         LayerSet& staged = c.staged[k];  // the instance's own: only what it declared
         for (const std::string& name : c.instances[k]->requiredChannels()) {
@@ -366,14 +367,12 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
         const LowresInputs lowInputs{low ? inputLowres[input] : frame, b.lowresFactor, b.lowresSpp};
         DenoiserInputs in{signal, staged, grads ? &gradients : nullptr, low ? &lowInputs : nullptr};
         c.instances[k]->clearPassStats();
-        markUnwritten(outImage);  // as a run does: a call that writes nothing is not timed as fast
         auto t0 = std::chrono::steady_clock::now();
         c.instances[k]->denoise(ctx, in, outImage);
         const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-        if (nonFiniteValues(outImage) > 0)
-          if (const std::string unwritten = unwrittenOutput(outImage, c.name, kind, f);
-              !unwritten.empty())
-            throw Error("bench denoise: " + unwritten);
+        if (const std::string fault = outputFault(outImage, c.name, kind, int(input));
+            !fault.empty())
+          throw Error("bench denoise: " + fault);
         // An external process's own compute time; the wall clock (transfer included) otherwise.
         const std::optional<double> reported = c.instances[k]->reportedMilliseconds();
         c.reported = c.reported || reported.has_value();
@@ -585,14 +584,14 @@ nlohmann::json benchRankAgreement(const std::string& runA, const std::string& ru
   progress("rank agreement: " + runA + " (A, " + size(a, scenes.front().scene) + ") against " + runB + " (B, " +
            size(b, scenes.front().scene) + "), ranked on " + scenes.front().metric);
   char line[256];
-  std::snprintf(line, sizeof line, "%-22s %7s %10s %10s %10s %6s", "scene", "methods", "tau ranks", "tau values",
-                "resolved", "flips");
+  std::snprintf(line, sizeof line, "%-22s %7s %10s %10s %14s %6s", "scene", "methods", "tau ranks",
+                "tau values", "resolved", "flips");
   progress(line);
   nlohmann::json out = {{"runA", runA}, {"runB", runB}, {"scenes", nlohmann::json::array()}};
   double tauSum = 0;
   int tauCount = 0, flips = 0;
   for (const SceneRankAgreement& s : scenes) {
-    std::snprintf(line, sizeof line, "%-22s %7zu %10.2f %10.2f %10s %6zu", s.scene.c_str(),
+    std::snprintf(line, sizeof line, "%-22s %7zu %10.2f %10.2f %14s %6zu", s.scene.c_str(),
                   s.methods.size(), s.tauRanks, s.tauValues, s.resolvedText().c_str(),
                   s.flips.size());
     progress(line);

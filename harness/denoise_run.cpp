@@ -44,16 +44,24 @@ void markUnwritten(Image& output) {
               std::bit_cast<float>(kUnwrittenBits));
 }
 
-std::string unwrittenOutput(const Image& output, const std::string& name, SignalKind kind,
-                            int frame) {
+std::string outputFault(const Image& output, const std::string& name, SignalKind kind, int frame) {
+  if (nonFiniteValues(output) == 0) return "";
   size_t n = 0;
   for (int c = 0; c < output.channels(); ++c)
     for (const float v : output.planeSpan(c)) n += std::bit_cast<uint32_t>(v) == kUnwrittenBits;
-  if (n == 0) return "";
+  if (n == 0)
+    return name + " produced a non-finite value on the " + signalName(kind) + " signal at frame " +
+           std::to_string(frame);
   return name + " left " + std::to_string(n) + " of the " +
          std::to_string(output.pixelCount() * size_t(output.channels())) + " values of its " +
          signalName(kind) + " output unwritten at frame " + std::to_string(frame) +
          " (every value of the output image must be written on every frame)";
+}
+
+std::string lowresNeeded(const std::string& label) {
+  return "--lowres-factor 0: " + label +
+         " needs the sequence's low-resolution buffer; expected --lowres-factor >= 2 (e.g. 8, with "
+         "--lowres-spp 16), or parameters that do not need it (`arena denoisers` lists them)";
 }
 
 std::map<std::string, std::map<std::string, std::string>> parseParamAssignments(const std::vector<std::string>& items) {
@@ -246,15 +254,8 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
       if (const std::string wrong = implausibleTime(reported, d.lastPasses(), wall);
           !wrong.empty() && out.implausibleTime.empty())
         out.implausibleTime = std::string(signalName(kind)) + ": " + wrong;
-      // The marker is a NaN: one pass finds a non-finite output, and only then is it told apart
-      // from a value left unwritten.
-      if (nonFiniteValues(result) > 0) {
-        if (const std::string unwritten = unwrittenOutput(result, request_.name, kind, t);
-            !unwritten.empty())
-          throw Error(unwritten);
-        throw Error(request_.name + " produced a non-finite value on the " + signalName(kind) + " signal at frame " +
-                    std::to_string(t));
-      }
+      if (const std::string fault = outputFault(result, request_.name, kind, t); !fault.empty())
+        throw Error(fault);
       for (PassStats p : d.lastPasses()) {
         p.name = std::string(signalName(kind)) + "/" + p.name;
         out.extraRaysPerPixel += p.raysPerPixel;

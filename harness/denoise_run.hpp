@@ -95,10 +95,15 @@ std::string sanitizedWarning(const NonFiniteCounts& counts);
 // A value no denoiser computes: a quiet NaN with a payload of its own. markUnwritten fills an
 // output with it before each call (outside the timed call), so a denoiser that leaves values
 // unwritten (a plugin that returns success without writing) is caught instead of being scored, or
-// timed, on what the buffer held from the frame before. unwrittenOutput is then the error for the
-// call ("NAME left N of the M values of its diffuse output unwritten at frame T ..."), or "".
+// timed, on what the buffer held from the frame before. outputFault is then what is wrong with the
+// call's output: "NAME left N of the M values of its diffuse output unwritten at frame T ...",
+// "NAME produced a non-finite value on the diffuse signal at frame T", or "" (one pass over a
+// finite output: the marker is a NaN).
 void markUnwritten(Image& output);
-std::string unwrittenOutput(const Image& output, const std::string& name, SignalKind kind,
-                            int frame);
+std::string outputFault(const Image& output, const std::string& name, SignalKind kind, int frame);
+
+// The error for a denoiser (its label) that cannot run without the low-resolution buffer, where
+// none is rendered (--lowres-factor 0): `arena run` and `arena bench denoise` refuse it up front.
+std::string lowresNeeded(const std::string& label);
 
 }  // namespace arena

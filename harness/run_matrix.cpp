@@ -218,10 +218,7 @@ json runMatrix(const RunConfig& cfg) {
       // would fail each pair after the rendering.
       if (!cfg.lowresAuto && cfg.render.lowresFactor == 0 && info.origin.empty() &&
           info.create(params, SignalKind::Diffuse)->needsLowres())
-        throw Error("--lowres-factor 0: " + r.label +
-                    " needs the sequence's low-resolution buffer; expected --lowres-factor >= 2 "
-                    "(e.g. 8, with --lowres-spp 16), or parameters that do not need it (`arena "
-                    "denoisers` lists them)");
+        throw Error(lowresNeeded(r.label));
     } else if (!r.params.empty()) {
       throw Error(r.name + ": a stored output has no parameters to set");
     }

@@ -125,7 +125,7 @@ json sceneRecord(const RunConfig& config, const SceneData& data, const std::stri
           std::any_of(scene->events.begin(), scene->events.end(), [&](const SceneEvent& e) {
             return e.kind == EventKind::CameraCut && e.frame == key.frame;
           });
-      if (key.step && key.frame > 0 && key.frame < info.frames && !cut)
+      if (scene->camera.stepsAt(key.frame) && key.frame < info.frames && !cut)
         unflagged += (unflagged.empty() ? "" : ", ") + std::to_string(key.frame);
     }
     if (!unflagged.empty())

@@ -160,6 +160,17 @@ TEST(CliContract, ShardsParamsAndSweepsAreStrict) {
   r = contract::arenaCli("bench denoise --denoisers eaw, --resolution 8x8 --frames 1");
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("--denoisers 'eaw,': an empty entry"), std::string::npos) << r.output;
+  // A block of 1 texel would be the frame itself: refused alike by the run and the bench.
+  for (const std::string& cmd : std::vector<std::string>{
+           "bench denoise --denoisers eaw --resolution 8x8 --frames 1 --lowres-factor 1",
+           "run --denoisers passthrough --lowres-factor 1" + common,
+           "bench denoise --denoisers eaw --lowres-factor 65"}) {
+    r = contract::arenaCli(cmd);
+    EXPECT_EQ(r.status, 2) << cmd << "\n" << r.output;
+    EXPECT_NE(r.output.find(": expected 0 (none) or a block size in [2, "), std::string::npos)
+        << cmd << "\n"
+        << r.output;
+  }
   r = contract::arenaCli("run --denoisers passthrough --shard 0/1junk" + common);
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("--shard '0/1junk'"), std::string::npos) << r.output;

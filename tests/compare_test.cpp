@@ -58,7 +58,7 @@ TEST(CompareContract, RunsOfOtherSettingsAreRefusedUnlessAllowed) {
   // ... unless a pair both runs have read it in one of them (reengine at disocclusionRays=auto
   // reads the buffer where there is one): then its inputs differed. A pair that does not say
   // (an older run) might have read it.
-  for (const json reads : {json(true), json()}) {
+  for (const json& reads : {json(true), json()}) {
     RunResults reading = withLowres;
     if (reads.is_null())
       reading.pairs[0].detail.erase("readsLowres");

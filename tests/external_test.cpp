@@ -342,7 +342,7 @@ TEST(ExternalProcess, TheDenoiseBenchRefusesWhatItCannotTimeFairly) {
   noLowres.lowresFactor = 0;
   EXPECT_NE(errorOf([&] {
               benchDenoise(noLowres, [](const std::string&) {});
-            }).find("--lowres-factor 0: reengine needs the low-resolution buffer"),
+            }).find("--lowres-factor 0: reengine needs the sequence's low-resolution buffer"),
             std::string::npos)
       << errorOf([&] { benchDenoise(noLowres, [](const std::string&) {}); });
   // More distinct inputs than the scene has frames would repeat its last pose.

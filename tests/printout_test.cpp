@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "core/text.hpp"
 #include "harness/run_matrix.hpp"
 #include "metrics/results.hpp"
 #include "tests/test_util.hpp"
@@ -162,25 +163,53 @@ TEST(StudySummary, ALoneMethodIsNotCalledBestAndTwoTimesGiveNoCorrelation) {
 
 // A sweep's labels carry their parameters and run longer than the label column: the column widens
 // to the longest label, so every line's figures start in one column.
-TEST(StudySummary, LongLabelsKeepTheRankingsColumnsAligned) {
-  json results = worstDefaultStudy();
-  const std::string longLabel = "svgf(alphaColor=0.05,sigmaLuminance=4,sigmaNormal=128)";
-  results["statistics"]["overall"]["ranking"][1]["label"] = longLabel;
-  std::ostringstream out;
-  cli::printOverallRanking(out, test::typed(results));
-  std::istringstream lines(out.str());
-  std::set<size_t> intervalColumns;
-  int rows = 0;
-  for (std::string line; std::getline(lines, line);) {
+// The columns (in characters, not bytes) where each ranking line's interval starts, over the
+// lines of `text` from the one starting with `heading` to the next blank line.
+std::set<size_t> intervalColumns(const std::string& text, const std::string& heading, int& rows) {
+  std::istringstream lines(text.substr(text.find(heading)));
+  std::set<size_t> columns;
+  rows = 0;
+  std::string line;
+  std::getline(lines, line);  // the heading
+  for (; std::getline(lines, line) && !line.empty();) {
     if (line.rfind("  ", 0) != 0 || line.find("not ranked") != std::string::npos) continue;
-    const size_t column = std::min(line.find('['), line.find("(1 by"));
-    ASSERT_NE(column, std::string::npos) << line;
-    intervalColumns.insert(column);
+    const size_t at = std::min(line.find('['), line.find("(1 by"));
+    if (at == std::string::npos) continue;
+    columns.insert(displayWidth(line.substr(0, at)));
     ++rows;
   }
-  EXPECT_GE(rows, 2) << out.str();
-  EXPECT_EQ(intervalColumns.size(), 1u) << out.str();
-  EXPECT_NE(out.str().find(longLabel + "  "), std::string::npos) << out.str();
+  return columns;
+}
+
+TEST(StudySummary, LongLabelsKeepTheRankingsColumnsAligned) {
+  json results = worstDefaultStudy();
+  // Longer than the 26-character column, and with a two-byte character.
+  const std::string longLabel = "svgf(alphaColor=0.05,sigmaLuminance=4,sigmaNormal=128,σ=2)";
+  results["statistics"]["overall"]["ranking"][1]["label"] = longLabel;
+  std::ostringstream overall;
+  cli::printOverallRanking(overall, test::typed(results));
+  int rows = 0;
+  EXPECT_EQ(intervalColumns(overall.str(), "overall:", rows).size(), 1u) << overall.str();
+  EXPECT_GE(rows, 2) << overall.str();
+  // A scene's ranking: its second method renamed, in the ranking and in the pairs that name it.
+  const std::string scene = results["scenes"].begin().key();
+  json& st = results["statistics"]["scenes"][scene];
+  const std::string renamed = st["ranking"][1]["label"];
+  const std::string text = st.dump();
+  std::string replaced;
+  for (size_t p = 0, q; p <= text.size(); p = q + renamed.size() + 2) {
+    q = text.find("\"" + renamed + "\"", p);
+    if (q == std::string::npos) {
+      replaced += text.substr(p);
+      break;
+    }
+    replaced += text.substr(p, q - p) + "\"" + longLabel + "\"";
+  }
+  st = json::parse(replaced);
+  std::ostringstream tables;
+  cli::printStudyTables(tables, test::typed(results));
+  EXPECT_EQ(intervalColumns(tables.str(), scene + ": ", rows).size(), 1u) << tables.str();
+  EXPECT_GE(rows, 2) << tables.str();
 }
 
 // A scene whose references stopped at their sample cap: the warning is the scene's, stored once in

@@ -109,6 +109,18 @@ TEST(RunStatistics, EveryMisshapenPartIsNamedByItsPath) {
   EXPECT_EQ(errorWith([](json& d) { d.erase("method"); }), "r.json: $.statistics.method: missing; expected a string");
   EXPECT_EQ(errorWith([](json& d) { d["rankedOnn"] = "relMse"; }),
             "r.json: $.statistics.rankedOnn: unknown field (check the spelling; unknown fields are errors)");
+  // A one-letter field missing is not "a misspelling" of its neighbour: "b" is a field of its own.
+  EXPECT_EQ(errorWith([](json& d) { d["scenes"]["light_switch"]["pairs"][0].erase("a"); }),
+            scene + ".pairs[0].a: missing; expected a string");
+  // The same word in other case is the field misspelt, whatever its length.
+  EXPECT_EQ(errorWith([](json& d) {
+              json& pair = d["scenes"]["light_switch"]["pairs"][0];
+              pair["A"] = pair["a"];
+              pair.erase("a");
+            }),
+            scene +
+                ".pairs[0].a: missing; expected a string (the object has \"A\": a misspelling of "
+                "\"a\"?)");
   EXPECT_EQ(errorWith([](json& d) { d["tileGrid"] = {0, 4}; }),
             "r.json: $.statistics.tileGrid: expected [columns, rows], two positive integers, got [0,4]");
   EXPECT_EQ(errorWith([](json& d) { d["confidence"] = 95; }), "r.json: $.statistics.confidence: expected a level in (0, 1)");

@@ -140,6 +140,28 @@ TEST(Scene, MissingRequiredFieldIsNamed) {
   EXPECT_NE(e.find("missing"), std::string::npos) << e;
 }
 
+// A number below the smallest double reads as 0: refused where it is written, not reported later as
+// "got 0" by a range it never was in.
+TEST(Scene, ANumberTooSmallToStoreIsRefusedAsWritten) {
+  std::string e = errorOf(replaced(kMinimal, R"("fov": 40)", R"("fov": 1e-400)"));
+  EXPECT_NE(e.find("$.camera.keys[0].fov: 1e-400 is too small to be stored as a number (it would "
+                   "read as 0)"),
+            std::string::npos)
+      << e;
+  e = errorOf(replaced(kMinimal, R"("resolution": [16, 8])", R"("resolution": [16, 0.0000e-999])"));
+  EXPECT_EQ(e.find("too small"), std::string::npos) << e;  // a zero written as zero is a zero
+  EXPECT_NE(e.find("$.resolution: expected two integers [width, height] in [1, 16384], got 0"),
+            std::string::npos)
+      << e;
+  e = errorOf(replaced(kMinimal, R"("resolution": [16, 8])", R"("resolution": [16, 2.5e-324000])"));
+  EXPECT_NE(e.find("$.resolution[1]: 2.5e-324000 is too small"), std::string::npos) << e;
+  // A range's bounds and the value read back as they are written, not as %f's six decimals.
+  e = errorOf(replaced(kMinimal, R"("fov": 40)", R"("fov": 0.5)"));
+  EXPECT_NE(e.find("$.camera.keys[0].fov: expected a value in [1, 170], got 0.5"),
+            std::string::npos)
+      << e;
+}
+
 TEST(Scene, AMisspeltRequiredFieldIsNamedWithTheFieldMeant) {
   // The scene has "camra": the required "camera" is missing, and the message names what was
   // written.
@@ -207,6 +229,13 @@ TEST(Scene, ACameraCutNeedsTheCameraToJumpThere) {
       replaced(jumping, R"("kind": "camera_cut")", R"("kind": "camera_cut", "what": "lamp")"));
   EXPECT_NE(e.find("$.events[0].what: a camera_cut names no object or light"), std::string::npos)
       << e;
+  // The camera's first key has nothing to jump from, step or not: the view holds it before.
+  const std::string firstStep = replaced(
+      replaced(kMinimal, R"({"frame": 2, "kind": "light_off", "what": "lamp"})", cut),
+      R"({"keys": [{"frame": 0, "eye": [0, 1, 3], "target": [0, 1, 0], "fov": 40}]})",
+      R"({"keys": [{"frame": 2, "step": true, "eye": [0, 1, 3], "target": [0, 1, 0], "fov": 40}]})");
+  e = errorOf(firstStep);
+  EXPECT_NE(e.find("needs a camera key there with \"step\": true"), std::string::npos) << e;
 }
 
 // An event names something of its kind: a light's switch a light, a move the object that moves

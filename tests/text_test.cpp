@@ -45,6 +45,15 @@ TEST(Text, AnExcerptIsCutBetweenCharacters) {
   EXPECT_EQ(utf8Excerpt("ab\xFF", 8, true), "ab" + kFffd);
 }
 
+TEST(Text, DisplayWidthCountsCharactersAndPaddingUsesIt) {
+  EXPECT_EQ(displayWidth(""), 0u);
+  EXPECT_EQ(displayWidth("svgf"), 4u);
+  EXPECT_EQ(displayWidth("σ=2"), 3u);           // a two-byte character counts once
+  EXPECT_EQ(displayWidth("\xE2\x80\x93"), 1u);  // the missing value's dash, three bytes
+  EXPECT_EQ(paddedText("σ", 3), "σ  ");
+  EXPECT_EQ(paddedText("abcd", 2), "abcd");  // never cut
+}
+
 TEST(Text, EditDistanceCountsInsertionsDeletionsAndSubstitutions) {
   EXPECT_EQ(editDistance("", ""), 0u);
   EXPECT_EQ(editDistance("camera", "camera"), 0u);

@@ -13,6 +13,7 @@
 #include "core/error.hpp"
 #include "core/hash.hpp"
 #include "core/json_reader.hpp"
+#include "core/text.hpp"
 #include "tracer/asset.hpp"
 #include "tracer/scene_state.hpp"
 
@@ -79,8 +80,8 @@ std::string cameraProblem(const CameraKey& c) {
 float numberIn(JsonReader& r, const std::string& key, double fallback, double lo, double hi) {
   double v = r.number(key, fallback);
   if (v < lo || v > hi)
-    r.fail(key, "expected a value in [" + std::to_string(lo) + ", " + std::to_string(hi) +
-                    "], got " + std::to_string(v));
+    r.fail(key, "expected a value in [" + shortestText(lo) + ", " + shortestText(hi) + "], got " +
+                    shortestText(v));
   return float(v);
 }
 
@@ -267,7 +268,7 @@ Scene parseScene(const std::string& text, const std::string& path) {
     if (!(v >= 1 && v <= kMaxSceneResolution) || v != std::floor(v))
       root.fail("resolution", "expected two integers [width, height] in [1, " +
                                   std::to_string(kMaxSceneResolution) + "], got " +
-                                  std::to_string(v));
+                                  shortestText(v));
   scene.width = int(res[0]);
   scene.height = int(res[1]);
   scene.frames = root.integerIn("frames", 1, kMaxSceneFrames);
@@ -489,9 +490,7 @@ Scene parseScene(const std::string& text, const std::string& path) {
       // recovery and old-view figures would measure a cut that never happened.
       if (!ev.what.empty())
         e.fail("what", "a camera_cut names no object or light; got '" + ev.what + "'");
-      const bool jumps = std::any_of(scene.camera.keys.begin(), scene.camera.keys.end(),
-                                     [&](const auto& k) { return k.frame == ev.frame && k.step; });
-      if (!jumps)
+      if (!scene.camera.stepsAt(ev.frame))
         e.fail("frame", "a camera_cut at frame " + std::to_string(ev.frame) +
                             " needs a camera key there with \"step\": true; $.camera.keys has none "
                             "(the view would not cut)");

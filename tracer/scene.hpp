@@ -38,6 +38,14 @@ struct Track {
     }
     return keys.back().value;
   }
+
+  // Whether the value jumps at `frame`: a key there with "step": true after an earlier key (the
+  // first key's step has nothing to switch from; `at` holds its value before it).
+  bool stepsAt(int frame) const {
+    for (size_t i = 1; i < keys.size(); ++i)
+      if (keys[i].frame == frame) return keys[i].step;
+    return false;
+  }
 };
 
 struct Transform {

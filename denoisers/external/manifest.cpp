@@ -28,7 +28,7 @@ const LayerSpec& frameLayerSpec(const std::string& name, const std::string& wher
   for (const LayerSpec& spec : channels::frameLayers())
     if (std::find(names.begin(), names.end(), spec.name) == names.end()) names.push_back(spec.name);
   std::string known;
-  for (const std::string& name : names) known += " " + name;
+  for (const std::string& n : names) known += " " + n;
   throw Error(where + ": unknown layer '" + name + "'; the sequence layers are:" + known);
 }
 
