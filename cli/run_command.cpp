@@ -74,6 +74,34 @@ void addMatrixOptions(CLI::App* cmd, MatrixOptions& o) {
   addRenderOptions(cmd, o.render);
 }
 
+// The rendering options given a value of their own: they shape the scenes a run renders, and a
+// run of captures alone renders nothing, so there they would be ignored without a word.
+std::vector<std::string> renderingOptionsGiven(const MatrixOptions& o) {
+  const RenderOptions defaults;
+  const RenderOptions& r = o.render;
+  std::vector<std::string> given;
+  if (r.preset != defaults.preset) given.push_back("--preset " + r.preset);
+  if (!r.resolution.empty()) given.push_back("--resolution " + r.resolution);
+  if (r.frames != defaults.frames) given.push_back("--frames " + std::to_string(r.frames));
+  if (r.referenceSpp != defaults.referenceSpp)
+    given.push_back("--ref-spp " + std::to_string(r.referenceSpp));
+  if (r.referenceRelError != defaults.referenceRelError) given.push_back("--ref-rel-error");
+  if (r.maxBounces != defaults.maxBounces)
+    given.push_back("--max-bounces " + std::to_string(r.maxBounces));
+  if (r.inputSeed != defaults.inputSeed)
+    given.push_back("--input-seed " + std::to_string(r.inputSeed));
+  if (r.referenceSampler != defaults.referenceSampler)
+    given.push_back("--ref-sampler " + r.referenceSampler);
+  if (r.referenceTile != defaults.referenceTile)
+    given.push_back("--ref-tile " + std::to_string(r.referenceTile));
+  if (r.lowresFactor != defaults.lowresFactor)
+    given.push_back("--lowres-factor " + std::to_string(r.lowresFactor));
+  if (r.lowresSpp != defaults.lowresSpp)
+    given.push_back("--lowres-spp " + std::to_string(r.lowresSpp));
+  if (o.seeds != 1) given.push_back("--seeds " + std::to_string(o.seeds));
+  return given;
+}
+
 RunConfig configFrom(const MatrixOptions& o) {
   RunConfig c;
   if (o.out.empty())
@@ -86,6 +114,16 @@ RunConfig configFrom(const MatrixOptions& o) {
   // A run on captures covers only them unless scenes are asked for too.
   if (o.captures.empty() || o.scenesOption->count() > 0) c.scenes = selectScenes(o.scenes, o.render.scenesDir);
   for (const std::string& capture : o.captures) c.captures.push_back(capture);
+  if (c.scenes.empty())
+    if (const std::vector<std::string> given = renderingOptionsGiven(o); !given.empty()) {
+      std::string list;
+      for (const std::string& g : given) list += (list.empty() ? "" : ", ") + g;
+      throw Error(
+          list +
+          ": rendering options, for the scenes a run renders; this run scores captures only, "
+          "whose frames, resolution and references are what they hold (drop them, or name "
+          "scenes too with --scenes)");
+    }
   for (const Scene& s : c.scenes) requireRenderable(s, c.render, true);
   c.baselines = !o.noBaselines;
   c.warmup = o.warmup;
@@ -173,6 +211,7 @@ void addRunCommands(CLI::App& app) {
                                           ? DenoiserRegistry::instance().names()
                                           : splitList(*names, "--denoisers", kDenoiserListExpected);
       for (const std::string& library : *plugins) list.push_back("plugin:" + library);
+      c.everyDenoiser = *names == "all";
       // 'all' on captures includes every denoiser output they store (file:NAME contenders).
       if (*names == "all")
         for (const auto& capture : c.captures)

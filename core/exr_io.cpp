@@ -113,7 +113,10 @@ static void checkExrAttributeSizes(const fs::path& path) {
   if (!in) throw Error(path.string() + ": cannot open (" + std::strerror(errno) + ")");
   in.seekg(0, std::ios::end);
   const std::streamoff fileSize = in.tellg();
-  in.seekg(8);  // magic number and version field
+  in.seekg(4);  // after the magic number: the version field, whose bit 12 marks a multi-part file
+  uint32_t version = 0;
+  if (!in.read(reinterpret_cast<char*>(&version), 4)) return;  // OpenEXR will say what is wrong
+  const bool multiPart = (version & 0x1000u) != 0;
   auto readName = [&](std::string& out) {
     out.clear();
     for (char c; in.get(c);) {
@@ -124,16 +127,30 @@ static void checkExrAttributeSizes(const fs::path& path) {
     return false;
   };
   std::string name, type;
-  while (readName(name) && !name.empty()) {
-    if (!readName(type)) return;
-    int32_t size = 0;
-    if (!in.read(reinterpret_cast<char*>(&size), 4)) return;
-    const std::streamoff at = in.tellg();
-    if (size < 0 || std::streamoff(size) > fileSize - at)
-      throw Error(path.string() + ": header attribute '" + name + "' (" + type + ") declares " + std::to_string(size) +
-                  " bytes, but " + std::to_string(fileSize - at) + " remain in the file (a damaged header)");
-    in.seekg(size, std::ios::cur);
+  int parts = 0;
+  for (;;) {  // one header, or a multi-part file's headers up to the empty one
+    if (multiPart && in.peek() == '\0') break;
+    ++parts;
+    while (readName(name) && !name.empty()) {
+      if (!readName(type)) return;
+      int32_t size = 0;
+      if (!in.read(reinterpret_cast<char*>(&size), 4)) return;
+      const std::streamoff at = in.tellg();
+      if (size < 0 || std::streamoff(size) > fileSize - at)
+        throw Error(path.string() + ": header attribute '" + name + "' (" + type + ") declares " +
+                    std::to_string(size) + " bytes, but " + std::to_string(fileSize - at) +
+                    " remain in the file (a damaged header)");
+      in.seekg(size, std::ios::cur);
+    }
+    if (!multiPart || !in) break;
   }
+  // Only the first part of a multi-part file would be read: a layer in another part would be
+  // reported missing although the file holds it.
+  if (parts > 1)
+    throw Error(
+        path.string() + ": a multi-part OpenEXR file (" + std::to_string(parts) +
+        " parts); expected a single-part file holding every layer's channels (only the first part "
+        "would be read)");
 }
 
 // The image size a data window declares, refused (naming the file and the size) beyond what any

@@ -39,6 +39,13 @@ long replaceNonFinite(Image& image) {
   return count;
 }
 
+const Image& finiteInput(const Image& image, Image& scratch) {
+  if (nonFiniteValues(image) == 0) return image;
+  scratch = image;
+  replaceNonFinite(scratch);
+  return scratch;
+}
+
 long nonFiniteValues(const Image& image) {
   long count = 0;
   for (float v : image.raw()) count += !std::isfinite(v);

@@ -28,6 +28,10 @@ long countNonFinite(const LayerSet& layers, const std::vector<LayerSpec>& specs,
 long replaceNonFinite(Image& image);
 // How many of `image`'s values (every channel) are NaN/Inf.
 long nonFiniteValues(const Image& image);
+// `image` as a denoiser reads it: `image` itself when every value is finite, else `scratch`
+// holding a copy with NaN/Inf replaced by 0. What is measured of an input (its error, its noise)
+// is measured on this, as the denoisers see it, not left NaN by one bad pixel.
+const Image& finiteInput(const Image& image, Image& scratch);
 // Sets channel `validChannel` to 0 at every pixel where any channel is NaN/Inf (a sample that a
 // consumer must then skip); returns how many pixels it marked.
 long invalidateNonFinitePixels(Image& samples, int validChannel);

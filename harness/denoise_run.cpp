@@ -133,8 +133,17 @@ std::string capturedOutputName(const std::string& entry) {
   return entry.rfind("file:", 0) == 0 ? entry.substr(5) : std::string();
 }
 
+std::string lackingInputs(const DenoiserRequest& request, const Sequence& sequence) {
+  return DenoiseRun(request, sequence, false).lacking_;
+}
+
 DenoiseRun::DenoiseRun(const DenoiserRequest& request, const Sequence& sequence)
-    : sequence_(sequence), request_(request), info_(DenoiserRegistry::instance().find(request.name)) {
+    : DenoiseRun(request, sequence, true) {}
+
+DenoiseRun::DenoiseRun(const DenoiserRequest& request, const Sequence& sequence, bool setUp)
+    : sequence_(sequence),
+      request_(request),
+      info_(DenoiserRegistry::instance().find(request.name)) {
   params_ = info_.schema.resolve(request.params, request.name);
   // A capture of the colour alone has no signals to demodulate. A denoiser whose output is its
   // input (passthrough) then runs on the colour, the same image its remodulated signals give; any
@@ -171,16 +180,23 @@ DenoiseRun::DenoiseRun(const DenoiserRequest& request, const Sequence& sequence)
   if (!missing.empty()) {
     std::string list;
     for (auto& m : missing) list += " '" + m + "'";
-    throw Error(request.name + " needs channel(s)" + list + " that " + (sequence.isCapture() ? "capture " : "sequence ") +
-                sequence.dir().string() + " does not provide" +
-                (sequence.isCapture() ? " (docs/captures.md lists the layers and their meaning)"
-                                      : " (re-render it with a tracer that writes them)"));
+    lacking_ = request.name + " needs channel(s)" + list + " that " +
+               (sequence.isCapture() ? "capture " : "sequence ") + sequence.dir().string() +
+               " does not provide" +
+               (sequence.isCapture() ? " (docs/captures.md lists the layers and their meaning)"
+                                     : " (re-render it with a tracer that writes them)");
   }
   needsGradients_ = first.needsGradients();
-  if (needsGradients_ && !sequence.info().hasGradients)
-    throw Error(request.name + " needs gradient samples ('gradient' layer: frame t re-shaded with frame t-1's random "
-                "numbers) that " + sequence.dir().string() + " does not provide");
+  if (needsGradients_ && !sequence.info().hasGradients && lacking_.empty())
+    lacking_ = request.name +
+               " needs gradient samples (frame t re-shaded with frame t-1's random numbers" +
+               (sequence.isCapture()
+                    ? std::string(": a capture's gradients_NNNN.exr files, docs/captures.md")
+                    : std::string(": the 'gradient' layer")) +
+               ") that " + sequence.dir().string() + " does not provide";
   readsLowres_ = first.wantsLowres() && sequence.info().lowresFactor() > 0;
+  if (!setUp) return;
+  if (!lacking_.empty()) throw Error(lacking_);
   for (auto& [kind, d] : instances_) d->setup(sequence.info().width, sequence.info().height);
 }
 

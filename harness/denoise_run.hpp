@@ -44,10 +44,15 @@ struct DenoisedFrame {
   std::string implausibleTime;
 };
 
+// What `sequence` lacks of what the denoiser reads ("svgf needs channel(s) 'meshId' that capture
+// ... does not provide ..."), or "": the error DenoiseRun's constructor throws, found without
+// setting anything up. A run of every denoiser (--denoisers all) on a capture skips those it names.
+std::string lackingInputs(const DenoiserRequest& request, const Sequence& sequence);
+
 class DenoiseRun {
  public:
   // Resolves parameters (errors list the valid names), checks the sequence has every channel the
-  // denoiser declares, creates and sets up both instances.
+  // denoiser declares (else the error lackingInputs gives), creates and sets up both instances.
   DenoiseRun(const DenoiserRequest& request, const Sequence& sequence);
   const ParamSet& params() const { return params_; }
   const DenoiserInfo& info() const { return info_; }
@@ -65,6 +70,11 @@ class DenoiseRun {
   void run(const std::function<const LayerSet&(int)>& frame, const std::function<void(const DenoisedFrame&)>& onFrame);
 
  private:
+  friend std::string lackingInputs(const DenoiserRequest& request, const Sequence& sequence);
+  // setUp false: only what the denoiser would read is worked out (lacking_), nothing is refused or
+  // allocated.
+  DenoiseRun(const DenoiserRequest& request, const Sequence& sequence, bool setUp);
+  std::string lacking_;  // what the sequence lacks of what the denoiser reads, or ""
   const Sequence& sequence_;
   DenoiserRequest request_;
   const DenoiserInfo& info_;

@@ -111,7 +111,13 @@ void addReferenceQuality(json& results, int warmup, const std::map<std::string, 
       const std::string options = renderOptionsOf(results.value("settings", json::object()).value("render", json()));
       verdict +=
           "the reference's noise must fall " + sci(ratio / kReferenceQualityGoal) + "x (to " + sci(needed) + "); ";
-      if (capped > 0)
+      if (scene.value("source", "") ==
+          "capture")  // references rendered elsewhere: ours to judge, not to refine
+        verdict +=
+            "a capture's references come from the renderer that made them (`arena refine` renders "
+            "scenes only): render them there with about " +
+            sci(ratio / kReferenceQualityGoal) + "x the samples";
+      else if (capped > 0)
         verdict += std::to_string(capped) + " of " + std::to_string(references) +
                    " references stopped at their sample cap (raise --ref-spp, or `arena refine " + name + options +
                    " --target " + sci(needed) + " --max-spp N`)";

@@ -367,6 +367,14 @@ json runMatrix(const RunConfig& cfg) {
       auto t0 = std::chrono::steady_clock::now();
       json pair;
       const fs::path images = cfg.out / "images" / source.name / safeName(r->label);
+      if (cfg.everyDenoiser && sd && !source.scene && capturedOutputName(r->name).empty())
+        if (const std::string lacking = lackingInputs(*r, sd->sequence); !lacking.empty()) {
+          results["scenes"][source.name]["notRun"].push_back(
+              {{"label", r->label}, {"reason", lacking}});
+          say("  " + r->label + " not run on " + source.name + ": " + lacking);
+          --pairsMine;
+          continue;
+        }
       try {
         removePairImages(images);
         if (!sd) throw Error("scene " + source.name + " could not be prepared: " + sceneError);
@@ -387,7 +395,11 @@ json runMatrix(const RunConfig& cfg) {
                     clock(elapsed / double(pairsDone) * double(pairsMine - pairsDone)).c_str());
       say(buf);
       if (pair["status"] != "ok") {
-        say("  error: " + pair["error"].get<std::string>());
+        // A scene that could not be prepared fails each of its pairs with one error: said once.
+        if (sd || k == 0)
+          say("  error: " + pair["error"].get<std::string>());
+        else
+          say("  error: as above (the scene could not be prepared)");
       } else {
         for (const std::string& warning : runWarnings(pair, sd->sequence.info().frames))
           say("  warning: " + warning);

@@ -24,6 +24,9 @@ struct RunConfig {
   // Captures (core/capture.hpp): sequences rendered elsewhere, validated and scored like scenes.
   std::vector<std::filesystem::path> captures;
   std::vector<DenoiserRequest> denoisers;
+  // The denoisers are every one there is (--denoisers all), not a list the user made: on a capture
+  // those it lacks the inputs for are not run (scenes.NAME.notRun says why) rather than failed.
+  bool everyDenoiser = false;
   bool baselines = true;          // add passthrough (noisy input) and temporal for context
   // --param values for those baselines (e.g. temporal.maxHistory), by denoiser name.
   std::map<std::string, std::map<std::string, std::string>> baselineParams;

@@ -139,7 +139,13 @@ json sceneRecord(const RunConfig& config, const SceneData& data, const std::stri
     entry["capture"] = dir.string();
     entry["validation"] = validation;
     entry["derivedLayers"] = data.sequence.capture().derived;
-    entry["layers"] = info.availableLayers();
+    // The layers the capture gives: what derivedLayers lists was made from them.
+    json given = json::array();
+    for (const std::string& layer : info.availableLayers())
+      if (std::find(data.sequence.capture().derived.begin(), data.sequence.capture().derived.end(),
+                    layer) == data.sequence.capture().derived.end())
+        given.push_back(layer);
+    entry["layers"] = given;
   }
   // Asset scenes (issue 18): the models' credits and the loader's counted fallbacks.
   if (scene && (!scene->credits.empty() || !scene->warnings.empty())) {

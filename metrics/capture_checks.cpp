@@ -180,7 +180,8 @@ MotionConsistency checkMotion(const std::vector<LayerSet>& frames, const std::ve
                                        {"scaled by 1/2", false},    {"in normalised units, not pixels", false},
                                        {"pointing to the next frame", true}};
   MotionConsistency out;
-  long off = 0;
+  long off = 0,
+       nextIsMirror = 0;  // informative pixels whose next-frame motion is -e (constant velocity)
   double errorSum = 0;
   auto isCut = [&](int t) { return std::find(cutFrames.begin(), cutFrames.end(), t) != cutFrames.end(); };
   const int n = int(frames.size());
@@ -213,6 +214,7 @@ MotionConsistency checkMotion(const std::vector<LayerSet>& frames, const std::ve
         if (glm::length(e) < 4 * tol) continue;
         const glm::vec2 size{float(w), float(h)};
         const glm::vec2 predictions[] = {e, -e, {-e.x, e.y}, {e.x, -e.y}, {e.y, e.x}, 2.0f * e, 0.5f * e, e / size, nx};
+        nextIsMirror += next && glm::length(nx + e) < 2 * tol;
         for (size_t k = 0; k < candidates.size(); ++k) {
           if (candidates[k].needsNext && (!next || glm::length(nx + e) < 2 * tol)) continue;  // n = -e: no information
           ++candidates[k].informative;
@@ -233,6 +235,12 @@ MotionConsistency checkMotion(const std::vector<LayerSet>& frames, const std::ve
     for (size_t k = 1; k < candidates.size(); ++k)
       if (share(candidates[k]) >= best - 0.02)
         out.explanation += (out.explanation.empty() ? "" : " or ") + std::string(candidates[k].name);
+    // At a constant camera velocity the next frame's motion is the previous frame's flipped: the
+    // two slips predict the same vectors there, and the check cannot tell them apart.
+    if (share(candidates[1]) >= best - 0.02 && candidates[8].informative < nextIsMirror)
+      out.explanation +=
+          " (or pointing to the next frame: at this constant camera velocity the two are the same "
+          "vectors)";
     out.explainedShare = best;
   }
   return out;
@@ -544,19 +552,41 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
     double roughRatio = 0;
     int counted = 0;
     double inputError = 0, floorSum = 0;
+    // The worst frame of each ratio: a mean over the sequence hides one bad reference (a frame
+    // whose reference is as noisy as its input moved a 12-frame mean by a tenth of the threshold).
+    double worstRough = 0, worstNoise = 0;
+    int worstRoughFrame = -1, worstNoiseFrame = -1;
     for (size_t t = 0; t < input.frames.size(); ++t) {
       const LayerSet& ref = input.references[size_t(input.referenceOfFrame[t])];
       const double eps = 0.01 * meanLuminance(ref.get("color")) + 1e-6;
-      const double ri = highFrequencyEnergy(input.frames[t].get("color"), eps);
+      Image scratch;  // the input as the denoisers read it: one NaN pixel must not void the checks
+      const Image& color = finiteInput(input.frames[t].get("color"), scratch);
+      const double ri = highFrequencyEnergy(color, eps);
       if (ri > 0) {
-        roughRatio += highFrequencyEnergy(ref.get("color"), eps) / ri;
+        const double ratio = highFrequencyEnergy(ref.get("color"), eps) / ri;
+        roughRatio += ratio;
         ++counted;
+        if (ratio > worstRough) worstRough = ratio, worstRoughFrame = int(t);
       }
       if (input.referenceNoiseKnown) {
-        floorSum += referenceRelMse(ref.get("color"), ref.get("colorVar"));
-        inputError += linearError(input.frames[t].get("color"), ref.get("color"), &ref.get("colorVar")).relMse;
+        const double floor = referenceRelMse(ref.get("color"), ref.get("colorVar"));
+        const double error = linearError(color, ref.get("color"), &ref.get("colorVar")).relMse;
+        floorSum += floor;
+        inputError += error;
+        if (error > 0 && floor / error > worstNoise)
+          worstNoise = floor / error, worstNoiseFrame = int(t);
       }
     }
+    const auto worstFrame = [&](const std::string& name, double value, int frame, double warn,
+                                double fail, const std::string& unit) {
+      v.checks.push_back(check(
+          name, value, warn, fail, unit,
+          frame < 0
+              ? ""
+              : "worst at frame " + std::to_string(frame) + " (" +
+                    Sequence::referencePath({}, input.referenceOfFrame[size_t(frame)]).string() +
+                    ")"));
+    };
     if (counted == 0)
       v.checks.push_back(
           unchecked("reference.roughnessVsInput",
@@ -567,6 +597,9 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
           check("reference.roughnessVsInput", roughRatio / counted, 0.5, 1.0,
                 "ratio of high-frequency energy, reference / input",
                 "a converged reference is far smoother than a noisy input; above 1 it is noisier"));
+    if (counted > 0)
+      worstFrame("reference.roughnessVsInput.worstFrame", worstRough, worstRoughFrame, 0.5, 1.0,
+                 "ratio of high-frequency energy, reference / input");
     if (input.referenceNoiseKnown && !(inputError > 0)) {
       v.checks.push_back(unchecked(
           "reference.noiseVsInput",
@@ -576,6 +609,8 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
       v.checks.push_back(check("reference.noiseVsInput", ratio, 0.1, 1.0, "reference relMSE floor / input relMSE",
                                "reference noise floor " + number(floorSum / double(input.frames.size())) +
                                    " (from its variance or independent half)"));
+      worstFrame("reference.noiseVsInput.worstFrame", worstNoise, worstNoiseFrame, 0.1, 1.0,
+                 "reference relMSE floor / input relMSE");
     } else {
       v.checks.push_back(check("reference.noiseFloorKnown", 1, 0, kSoft, "",
                                "the reference has neither colorVar nor colorHalf: its noise floor is unknown, and "

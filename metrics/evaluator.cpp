@@ -209,8 +209,10 @@ EvaluationScene::EvaluationScene(EvaluationInput input, EvaluationOptions option
       const LayerSet& ref = reference(t);
       referenceRelMse_.push_back(input_.referenceNoiseKnown ? arena::referenceRelMse(ref.get("color"), ref.get("colorVar"))
                                                             : std::numeric_limits<double>::quiet_NaN());
-      noisyRelMse_.push_back(
-          linearError(frame(t).get("color"), ref.get("color"), &ref.get("colorVar")).relMse);
+      Image scratch;  // the input as the denoisers read it (a NaN pixel becomes 0)
+      noisyRelMse_.push_back(linearError(finiteInput(frame(t).get("color"), scratch),
+                                         ref.get("color"), &ref.get("colorVar"))
+                                 .relMse);
     }
   } else {
     // No reference: each frame is shown through the exposure of its own noisy input.
@@ -307,6 +309,24 @@ json EvaluationScene::describe() const {
           {"warnings", warnings()}};
 }
 
+namespace {
+
+// "frame 3", "frames 0-4, 7" (ascending frames, runs as ranges): the study's capped references are
+// often the warm-up frames' alone, which no summary reads.
+std::string frameRanges(const std::vector<int>& frames) {
+  std::string text;
+  for (size_t i = 0; i < frames.size(); ++i) {
+    size_t end = i;
+    while (end + 1 < frames.size() && frames[end + 1] == frames[end] + 1) ++end;
+    text += (text.empty() ? "" : ", ") + std::to_string(frames[i]) +
+            (end > i ? "-" + std::to_string(frames[end]) : "");
+    i = end;
+  }
+  return (frames.size() == 1 ? "frame " : "frames ") + text;
+}
+
+}  // namespace
+
 std::vector<std::string> EvaluationScene::warnings() const {
   // What concerns the scene's sequence rather than one method: said once per scene, not on each
   // of its pairs (the printout and the report list it once).
@@ -314,25 +334,15 @@ std::vector<std::string> EvaluationScene::warnings() const {
   int capped = 0;
   for (bool c : input_.referenceCapped) capped += c;
   if (capped > 0) {
-    // The frames they serve, as ranges ("frames 0-4"): the study's capped references are often the
-    // warm-up frames' alone, which no summary reads.
-    std::string frames;
-    const int n = int(input_.referenceOfFrame.size());
-    auto isCapped = [&](int t) {
+    std::vector<int> frames;  // the frames they serve
+    for (int t = 0; t < int(input_.referenceOfFrame.size()); ++t) {
       const int r = input_.referenceOfFrame[size_t(t)];
-      return r >= 0 && r < int(input_.referenceCapped.size()) && input_.referenceCapped[size_t(r)];
-    };
-    for (int t = 0; t < n; ++t) {
-      if (!isCapped(t)) continue;
-      int end = t;
-      while (end + 1 < n && isCapped(end + 1)) ++end;
-      frames += (frames.empty() ? "" : ", ") + std::to_string(t) +
-                (end > t ? "-" + std::to_string(end) : "");
-      t = end;
+      if (r >= 0 && r < int(input_.referenceCapped.size()) && input_.referenceCapped[size_t(r)])
+        frames.push_back(t);
     }
     out.push_back(std::to_string(capped) + " of " + std::to_string(input_.referenceCapped.size()) +
                   " reference(s) stopped at the sample cap above their target relMSE (" +
-                  (frames.empty() ? std::string("no frame reads them") : "frames " + frames) +
+                  (frames.empty() ? std::string("no frame reads them") : frameRanges(frames)) +
                   "; see sequence.json referenceEstimatedRelMse; `arena refine` can extend them)");
   }
   long nonFinite = 0;
@@ -363,6 +373,9 @@ struct PairEvaluation::State {
   std::vector<EventTiles> eventTiles;
   std::vector<CutTiles> cutTiles;
   std::map<std::string, Image> lastMaps;
+  // Frames whose output equals the reference value for value while the input does not: a perfect
+  // score no denoiser computes from its input (a stored output wired to the reference).
+  std::vector<int> equalsReference;
   State(const EvaluationScene& s, EvaluationScope sc)
       : scene(s),
         scope(sc),
@@ -418,7 +431,12 @@ void PairEvaluation::add(int t, const Image& output, const FrameFacts& facts) {
     v.referenceDisplay = &scene.referenceDisplay(t);
     v.referenceMemo = scene.referenceMemos_[scene.referenceIndex(t)].get();
     kept->error = Image(output.width(), output.height(), 3);
-    for (size_t i = 0; i < kept->error.raw().size(); ++i) kept->error.raw()[i] = output.raw()[i] - r->raw()[i];
+    bool same = true;
+    for (size_t i = 0; i < kept->error.raw().size(); ++i) {
+      kept->error.raw()[i] = output.raw()[i] - r->raw()[i];
+      same = same && kept->error.raw()[i] == 0.0f;
+    }
+    if (same && scene.noisyRelMse_[size_t(t)] != 0) s.equalsReference.push_back(t);
     v.error = &kept->error;
     v.noisyRelMse = scene.noisyRelMse_[size_t(t)];
     v.referenceRelMse = scene.referenceRelMse_[size_t(t)];
@@ -560,6 +578,11 @@ json PairEvaluation::finish() {
       cuts.push_back(j);
     }
   json warnings = json::array();
+  if (!s.equalsReference.empty())
+    warnings.push_back(
+        "the output equals its reference value for value on " + frameRanges(s.equalsReference) +
+        " while the input does not: a perfect score there that no denoiser computes from its "
+        "input (is the reference wired in as the output?)");
   for (const std::string& e : emptyEvents) warnings.push_back(e);
   for (auto it = summary.begin(); it != summary.end(); ++it)
     if (it.value().contains("absent"))

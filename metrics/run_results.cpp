@@ -120,11 +120,34 @@ struct ShapeReader {
   // evaluator.cpp EvaluationScene::describe), its reference verdict (harness/reference_quality.cpp)
   // and, for a capture, its validation.
   void scene(const json& sc, const std::string& path) const {
-    static const std::set<std::string> known = {
-        "purpose", "sequence", "hash", "width", "height", "frames", "events", "referenceSpp", "referenceCapped",
-        "referenceEstimatedRelMse", "chosenFrames", "images", "referenceRelMse", "noisyRelMse", "exposure",
-        "exposurePerFrame", "floors", "nonFiniteInputs", "warnings", "hasReference", "source", "capture",
-        "validation", "derivedLayers", "layers", "assets", "referenceQuality"};
+    static const std::set<std::string> known = {"purpose",
+                                                "sequence",
+                                                "hash",
+                                                "width",
+                                                "height",
+                                                "frames",
+                                                "events",
+                                                "referenceSpp",
+                                                "referenceCapped",
+                                                "referenceEstimatedRelMse",
+                                                "chosenFrames",
+                                                "images",
+                                                "referenceRelMse",
+                                                "noisyRelMse",
+                                                "exposure",
+                                                "exposurePerFrame",
+                                                "floors",
+                                                "nonFiniteInputs",
+                                                "warnings",
+                                                "hasReference",
+                                                "source",
+                                                "capture",
+                                                "validation",
+                                                "derivedLayers",
+                                                "layers",
+                                                "assets",
+                                                "referenceQuality",
+                                                "notRun"};
     onlyKnown(sc, path, known);
     for (const char* k : {"purpose", "sequence", "hash", "images", "source", "capture"}) optionalText(sc, path, k);
     for (const char* k : {"width", "height", "frames"}) optionalCount(sc, path, k);
@@ -137,6 +160,17 @@ struct ShapeReader {
     if (sc.contains("referenceCapped")) arrayOf(sc, path, "referenceCapped", isFlag, "true or false");
     for (const char* k : {"referenceEstimatedRelMse", "referenceRelMse", "noisyRelMse", "exposurePerFrame"})
       if (sc.contains(k)) arrayOf(sc, path, k, isNumberOrNull, "a number (or null)");
+    if (sc.contains(
+            "notRun")) {  // a capture's denoisers it lacks the inputs for, under --denoisers all
+      const json& notRun =
+          arrayOf(sc, path, "notRun", isObject, "an object (a denoiser not run, and why)");
+      for (size_t i = 0; i < notRun.size(); ++i) {
+        const std::string at = path + ".notRun[" + std::to_string(i) + "]";
+        onlyKnown(notRun[i], at, {"label", "reason"});
+        text(notRun[i], at, "label");
+        text(notRun[i], at, "reason");
+      }
+    }
     if (sc.contains("events")) {
       const json& events = arrayOf(sc, path, "events", isObject, "an object (one scripted event)");
       for (size_t i = 0; i < events.size(); ++i) {

@@ -736,10 +736,14 @@ json reportData(const RunResults& results, const fs::path& runDir, const RunResu
     json s = {{"name", name}, {"prepared", sceneInfos.contains(name)}};
     if (sceneInfos.contains(name)) {
       const json& info = sceneInfos[name];
-      for (const char* k : {"purpose", "width", "height", "frames", "events", "chosenFrames",
-                            "referenceRelMse", "noisyRelMse", "referenceSpp", "exposure", "floors",
-                            "referenceQuality", "warnings", "validation", "source", "capture", "hasReference",
-                            "derivedLayers", "assets"})  // assets: credits and loader fallbacks (issue 18)
+      for (const char* k :
+           {"purpose",         "width",        "height",
+            "frames",          "events",       "chosenFrames",
+            "referenceRelMse", "noisyRelMse",  "referenceSpp",
+            "exposure",        "floors",       "referenceQuality",
+            "warnings",        "validation",   "source",
+            "capture",         "hasReference", "derivedLayers",
+            "assets",          "notRun"})  // assets: credits and loader fallbacks (issue 18)
         if (info.contains(k)) s[k] = info[k];
       s["noiseFloor"] = noiseFloor(info, warmup);
       s["viewer"] = viewerData(results, name, info, runDir);

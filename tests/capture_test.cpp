@@ -8,7 +8,10 @@
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
+#include <ImfMultiPartOutputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfOutputPart.h>
+#include <ImfPartType.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -179,9 +182,11 @@ TEST(Capture, TheExampleInDocsCapturesIsAValidDescription) {
 // right and up with acceleration (so motion to the previous and to the next frame differ).
 struct Synthetic {
   int w = 64, h = 36, frames = 6;
+  bool constantVelocity = false;  // else the camera accelerates: the next frame's motion is not -e
   std::vector<CameraState> cameras;
   CameraState camera(int t) const {
-    const glm::vec3 eye(0.12f * float(t * t), 0.05f * float(t * t), 0.0f);
+    const float s = constantVelocity ? 4.0f * float(t) : float(t * t);
+    const glm::vec3 eye(0.12f * s, 0.05f * s, 0.0f);
     return CameraState::lookAt(eye, eye + glm::vec3(0, 0, -1), {0, 1, 0}, 45.0f, w, h);
   }
   static glm::vec3 texture(glm::vec3 p) {
@@ -199,8 +204,8 @@ struct Synthetic {
   }
 };
 
-fs::path writeSynthetic(const std::string& name, float noise = 0.3f, float referenceNoise = 0.0f) {
-  const Synthetic s;
+fs::path writeSynthetic(const std::string& name, float noise = 0.3f, float referenceNoise = 0.0f,
+                        const Synthetic& s = Synthetic()) {
   const fs::path dir = test::freshDir("synthetic_" + name) / name;
   CaptureWriter writer(dir);
   json cameras = json::array();
@@ -309,6 +314,21 @@ TEST(CaptureValidation, MotionVectorSlipsAreRefusedAndNamed) {
     EXPECT_NE(r["pairs"][0]["error"].get<std::string>().find("motion.consistency"), std::string::npos);
     EXPECT_EQ(r["scenes"][std::string("slip_") + slip.name]["validation"]["status"], "fail");
   }
+  // At a constant camera velocity a flipped sign and vectors to the next frame are the same
+  // vectors: named as such (the accelerating camera above told them apart).
+  Synthetic steady;
+  steady.constantVelocity = true;
+  const fs::path dir = writeSynthetic("slip_steady_flipped", 0.3f, 0.0f, steady);
+  editFrames(dir, [](int t, LayerSet& f) {
+    if (t > 0)
+      for (float& v : f.get("motion").raw()) v = -v;
+  });
+  const CaptureValidation v = validate(dir);
+  const CaptureCheck& c = checkNamed(v, "motion.consistency");
+  EXPECT_NE(c.detail.find(
+                "sign flipped (or pointing to the next frame: at this constant camera velocity"),
+            std::string::npos)
+      << c.detail;
 }
 
 TEST(CaptureValidation, NaNInNormalsIsAHardFailureNamingTheChannel) {
@@ -341,9 +361,25 @@ TEST(CaptureValidation, NaNInTheColourIsCountedButNotRefused) {
   editFrames(dir, [](int t, LayerSet& f) {
     if (t == 1) f.get("color").at(3, 3, 0) = std::numeric_limits<float>::infinity();
   });
-  const CaptureCheck c = checkNamed(validate(dir), "nonFinite.color");
+  const CaptureValidation v = validate(dir);
+  const CaptureCheck c = checkNamed(v, "nonFinite.color");
   EXPECT_EQ(c.status, CheckStatus::Warn);
   EXPECT_EQ(c.value, 1.0);
+  // The reference checks read the input as the denoisers do (the Inf as 0): one bad pixel no
+  // longer turned them off as "the input equals the reference".
+  const CaptureCheck& rough = checkNamed(v, "reference.roughnessVsInput");
+  EXPECT_EQ(rough.status, CheckStatus::Pass) << rough.value << " " << rough.detail;
+  EXPECT_TRUE(std::isfinite(rough.value)) << rough.detail;
+  // A reference with a noise estimate (an export's two halves): its noise is still compared with
+  // the input's error, which one NaN made NaN ("not checked: the input equals the reference").
+  const fs::path exported = copyCapture(exportedCornell(), "nan_input");
+  editFrames(exported, [](int t, LayerSet& f) {
+    if (t == 1) f.get("color").at(3, 3, 0) = std::numeric_limits<float>::quiet_NaN();
+  });
+  const CaptureValidation withNaN = validate(exported);
+  const CaptureCheck& noise = checkNamed(withNaN, "reference.noiseVsInput");
+  EXPECT_TRUE(std::isfinite(noise.value)) << noise.detail;
+  EXPECT_EQ(noise.detail.find("not checked"), std::string::npos) << noise.detail;
 }
 
 TEST(CaptureValidation, AReferenceNoisierThanTheInputIsRefused) {
@@ -354,6 +390,31 @@ TEST(CaptureValidation, AReferenceNoisierThanTheInputIsRefused) {
   const CaptureCheck& c = checkNamed(bad, "reference.roughnessVsInput");
   EXPECT_EQ(c.status, CheckStatus::Fail) << c.value;
   EXPECT_GT(c.value, 1.0);
+}
+
+// One frame's reference as noisy as an input, among converged ones: the sequence's mean stays
+// below the threshold, the worst frame does not, and the check names it.
+TEST(CaptureValidation, OneBadReferenceFrameIsNamed) {
+  const fs::path dir = writeSynthetic("one_bad_reference");
+  const CaptureDescription c = readCaptureDescription(dir);
+  LayerSet bad;
+  Image noisy = readCaptureFrame(c, 2).get("color");
+  for (int y = 0; y < noisy.height(); ++y)
+    for (int x = (y & 1); x < noisy.width(); x += 2)
+      for (int k = 0; k < 3; ++k) noisy.at(x, y, k) *= 2.0f;  // rougher than the input
+  bad.set("color", noisy);
+  writeExr(Sequence::referencePath(dir, 2), bad, {{"color", {"R", "G", "B"}}}, {});
+  const CaptureValidation v = validate(dir);
+  EXPECT_NE(checkNamed(v, "reference.roughnessVsInput").status, CheckStatus::Fail)
+      << checkNamed(v, "reference.roughnessVsInput").value;
+  const CaptureCheck& worst = checkNamed(v, "reference.roughnessVsInput.worstFrame");
+  EXPECT_EQ(worst.status, CheckStatus::Fail) << worst.value;
+  EXPECT_EQ(worst.detail, "worst at frame 2 (reference_002.exr)");
+  // A capture whose references are all converged passes the worst frame too.
+  EXPECT_EQ(checkNamed(validate(writeSynthetic("all_good_references")),
+                       "reference.roughnessVsInput.worstFrame")
+                .status,
+            CheckStatus::Pass);
 }
 
 TEST(CaptureValidation, RangesOfNormalsDepthAlbedoAndRoughness) {
@@ -989,6 +1050,51 @@ TEST(CaptureContract, AnExrWhoseDataWindowIsNotTheImageIsRefused) {
   }
 }
 
+// A multi-part file would be read as its first part: a layer in another part reported missing
+// although the file holds it. Refused as what it is; a single-part file with the same channels
+// reads.
+TEST(CaptureContract, AMultiPartExrIsRefusedAsOne) {
+  const fs::path dir = test::freshDir("multipart");
+  std::vector<float> pixels(4 * 2, 1.0f);
+  auto slice = [&] {
+    return Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(pixels.data()), sizeof(float),
+                      4 * sizeof(float));
+  };
+  {
+    std::vector<Imf::Header> headers(2, Imf::Header(4, 2));
+    const char* channel[] = {"color.R", "diffuse.R"};
+    for (int p = 0; p < 2; ++p) {
+      headers[size_t(p)].setName(std::string("part") + std::to_string(p));
+      headers[size_t(p)].setType(Imf::SCANLINEIMAGE);
+      headers[size_t(p)].channels().insert(channel[p], Imf::Channel(Imf::FLOAT));
+    }
+    Imf::MultiPartOutputFile file((dir / "two.exr").c_str(), headers.data(), 2);
+    for (int p = 0; p < 2; ++p) {
+      Imf::OutputPart part(file, p);
+      Imf::FrameBuffer fb;
+      fb.insert(channel[p], slice());
+      part.setFrameBuffer(fb);
+      part.writePixels(2);
+    }
+  }
+  const std::string error = test::errorOf([&] { readExrHeader(dir / "two.exr"); });
+  EXPECT_NE(error.find("two.exr: a multi-part OpenEXR file (2 parts); expected a single-part file"),
+            std::string::npos)
+      << error;
+  {
+    Imf::Header header(4, 2);
+    header.channels().insert("color.R", Imf::Channel(Imf::FLOAT));
+    header.channels().insert("diffuse.R", Imf::Channel(Imf::FLOAT));
+    Imf::FrameBuffer fb;
+    fb.insert("color.R", slice());
+    fb.insert("diffuse.R", slice());
+    Imf::OutputFile out((dir / "one.exr").c_str(), header);
+    out.setFrameBuffer(fb);
+    out.writePixels(2);
+  }
+  EXPECT_EQ(readExrHeader(dir / "one.exr").channels.size(), 2u);
+}
+
 // A capture its own reader would refuse is never committed: the writer leaves nothing behind.
 TEST(CaptureContract, AWriterNeverCommitsAnInvalidCapture) {
   const fs::path root = test::freshDir("invalid_commit");
@@ -1051,6 +1157,22 @@ TEST(CaptureContract, ADenoiserNeedingALayerTheCaptureLacksFailsThatPairOnly) {
   ASSERT_EQ(r["pairs"].size(), 3u);
   const json derived = r["scenes"]["no_mesh_id"]["derivedLayers"];
   EXPECT_NE(std::find(derived.begin(), derived.end(), "meshId"), derived.end());
+  const json given =
+      r["scenes"]["no_mesh_id"]["layers"];  // what the capture gives, not what was made
+  EXPECT_EQ(std::find(given.begin(), given.end(), "meshId"), given.end()) << given;
+  EXPECT_NE(std::find(given.begin(), given.end(), "normal"), given.end()) << given;
+  // Every denoiser there is (--denoisers all): the one the capture lacks the inputs for is not
+  // run, and the scene says why; nothing fails.
+  RunConfig every = captureRun(test::freshDir("lacking_every"), {{"svgf", {}, ""}}, {dir});
+  every.everyDenoiser = true;
+  const json e = runMatrix(every);
+  ASSERT_EQ(e["pairs"].size(), 1u);  // passthrough
+  EXPECT_EQ(e["pairs"][0]["status"], "ok");
+  const json notRun = e["scenes"]["no_mesh_id"]["notRun"];  // the temporal baseline tests ids too
+  ASSERT_EQ(notRun.size(), 2u) << notRun;
+  EXPECT_EQ(notRun[0]["label"], "temporal");  // the baselines run first
+  EXPECT_EQ(notRun[1]["label"], "svgf");
+  EXPECT_NE(notRun[1]["reason"].get<std::string>().find("'meshId'"), std::string::npos) << notRun;
 }
 
 TEST(CaptureContract, AFileContenderOnARenderedSceneOrAnUnknownOutputIsAnError) {
@@ -1143,6 +1265,18 @@ TEST(CaptureCommands, ExportValidateRunAndReportFromTheCommandLine) {
   const json results = parseJsonFile((work / "run" / "results.json").string());
   EXPECT_EQ(results["scenes"]["moving_object"]["source"], "capture");
   EXPECT_EQ(results["pairs"].size(), 3u);  // only the capture: no scene was asked for
+  // Rendering options on a run of captures alone would be ignored without a word: refused.
+  r = test::runCommand(arena + " run --capture '" + (work / "capture").string() +
+                       "' --denoisers eaw --warmup 2 --resolution 16x8 --seeds 2 --out '" +
+                       (work / "ignored").string() + "'");
+  EXPECT_NE(r.status, 0) << r.output;
+  EXPECT_NE(
+      r.output.find(
+          "--resolution 16x8, --seeds 2: rendering options, for the scenes a run renders; this run "
+          "scores captures only"),
+      std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(work / "ignored" / "results.json"));
   r = test::runCommand(arena + " report '" + (work / "run").string() + "' --out '" + (work / "report").string() + "'");
   EXPECT_EQ(r.status, 0) << r.output;
   // A broken capture: validate exits 1 naming the check, and an export never overwrites.

@@ -3,17 +3,19 @@
 // (a golden recorded from that code), every registered metric is declared completely and defined
 // in docs/metrics.md, and frames from anywhere -- with or without a reference -- are scored or
 // refused with a clear error.
+#include "metrics/evaluator.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 #include <regex>
 #include <set>
 #include <sstream>
 
 #include "core/error.hpp"
 #include "core/json_reader.hpp"
-#include "metrics/evaluator.hpp"
 #include "metrics/metric_registry.hpp"
 #include "tests/evaluator_golden.hpp"
 #include "tests/test_util.hpp"
@@ -322,6 +324,36 @@ TEST(Evaluation, CappedReferencesAreNamedWithTheFramesTheyServe) {
       << unread[0];
   in.referenceCapped.assign(5, false);
   EXPECT_TRUE(EvaluationScene(in, {}).warnings().empty());
+}
+
+// An output that is the reference value for value, where the input is not, scores a perfect 0 no
+// denoiser computes: the pair says so (a stored output wired to the reference). Where the input is
+// the reference too, there is nothing to say; one NaN pixel of the input leaves its error finite
+// (it is measured as the denoisers read it: the NaN as 0).
+TEST(Evaluation, AnOutputThatIsTheReferenceIsWarnedOf) {
+  EvaluationInput in = flatInput(8, 6, 5, 0.5f, true);
+  for (int t : {1, 2, 4}) in.frames[size_t(t)].get("color").fill(0.4f);  // noisy on these frames
+  in.frames[2].get("color").at(3, 3, 1) = std::numeric_limits<float>::quiet_NaN();
+  EvaluationScene scene(in, {0, {"relMse"}, ExposureMode::PerFrame});
+  EXPECT_TRUE(std::isfinite(scene.describe()["noisyRelMse"][2].get<double>()))
+      << scene.describe()["noisyRelMse"];
+  PairEvaluation pair(scene);
+  Image ref(8, 6, 3);
+  ref.fill(0.5f);
+  for (int t = 0; t < 5; ++t) pair.add(t, ref);
+  const json r = pair.finish();
+  ASSERT_FALSE(r["warnings"].empty());
+  EXPECT_EQ(r["warnings"][0],
+            "the output equals its reference value for value on frames 1-2, 4 while the input does "
+            "not: a "
+            "perfect score there that no denoiser computes from its input (is the reference wired "
+            "in as the "
+            "output?)");
+  PairEvaluation near(scene);  // one value off on every frame: a measurement, however good
+  ref.at(0, 0, 0) = 0.50001f;
+  for (int t = 0; t < 5; ++t) near.add(t, ref);
+  for (const json& w : near.finish()["warnings"])
+    EXPECT_EQ(w.get<std::string>().find("equals its reference"), std::string::npos) << w;
 }
 
 TEST(Evaluation, FramesOutOfOrderOrOfAnotherSizeAreErrorsNamingThem) {

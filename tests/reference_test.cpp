@@ -680,6 +680,14 @@ TEST(Reference, QualityVerdictNamesTheRatioAndWhy) {
   EXPECT_NEAR(fine["floor"].get<double>(), 2e-5, 1e-15);
   EXPECT_TRUE(fine["meets"].get<bool>());
   EXPECT_EQ(referenceQualityLines(results["scenes"]).size(), 3u);
+  // A capture's references were rendered elsewhere: no `arena refine` (it finds no such scene).
+  results["scenes"]["loose"]["source"] = "capture";
+  addReferenceQuality(results, 1);
+  const std::string capture = results["scenes"]["loose"]["referenceQuality"]["verdict"];
+  EXPECT_EQ(capture.find("arena refine loose"), std::string::npos) << capture;
+  EXPECT_NE(capture.find("a capture's references come from the renderer that made them"),
+            std::string::npos)
+      << capture;
 }
 
 // The options that find a run's sequences again: what differs from the preset, nothing more.

@@ -247,7 +247,9 @@
       ? [el('p', { class: 'reference-quality warnings', text: `Reference quality: ${quality.verdict}` })] : [];
     // A warning about the scene (results: scenes.<scene>.warnings) is listed once, before the pairs' own.
     const sceneWarnings = (scene && scene.warnings) || [];
-    const items = sceneWarnings.map((w) => el('li', {}, el('b', { text: 'scene: ' }), w))
+    // A capture's denoisers it lacked the inputs for (results: scenes.<scene>.notRun), not run there.
+    const notRun = ((scene && scene.notRun) || []).map((n) => el('li', {}, el('b', { text: `${n.label}: ` }), `not run: ${n.reason}`));
+    const items = sceneWarnings.map((w) => el('li', {}, el('b', { text: 'scene: ' }), w)).concat(notRun)
       .concat(warnings.flatMap((p) => p.warnings.map((w) => el('li', {}, el('b', { text: `${p.label}: ` }), w))));
     $('warnings').replaceChildren(...qualityNote, ...validationTable(scene), ...(items.length ? [el('h3', { text: 'Warnings' }),
       el('ul', { class: 'warnings' }, items)] : []));
