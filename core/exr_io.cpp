@@ -129,9 +129,13 @@ static void checkExrAttributeSizes(const fs::path& path) {
   std::string name, type;
   int parts = 0;
   for (;;) {  // one header, or a multi-part file's headers up to the empty one
-    if (multiPart && in.peek() == '\0') break;
-    ++parts;
-    while (readName(name) && !name.empty()) {
+    if (multiPart && (in.peek() == '\0' || in.peek() == std::char_traits<char>::eof())) break;
+    bool ended = false;  // the header's attribute list ended on its empty name
+    while (readName(name)) {
+      if (name.empty()) {
+        ended = true;
+        break;
+      }
       if (!readName(type)) return;
       int32_t size = 0;
       if (!in.read(reinterpret_cast<char*>(&size), 4)) return;
@@ -142,7 +146,9 @@ static void checkExrAttributeSizes(const fs::path& path) {
                     " remain in the file (a damaged header)");
       in.seekg(size, std::ios::cur);
     }
-    if (!multiPart || !in) break;
+    if (!ended) return;  // truncated or damaged: OpenEXR says what is wrong
+    ++parts;
+    if (!multiPart) break;
   }
   // Only the first part of a multi-part file would be read: a layer in another part would be
   // reported missing although the file holds it.

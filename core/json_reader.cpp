@@ -164,30 +164,6 @@ void JsonReader::fail(const std::string& key, const std::string& expected) const
   throw Error(where(key) + ": " + expected);
 }
 
-namespace {
-
-// Of `names`, the one closest to `name` (case aside) if within one edit of a name of three or four
-// letters, two of a longer one, or differing only in case from a shorter one, else empty: what a
-// user who typed one most likely meant. (One edit of a one- or two-letter name is another name:
-// "a" and "b" are both fields of a results pair.) Bytes are compared: a slip in a non-ASCII name
-// counts as the bytes of its character.
-std::string closestName(const std::string& name, const std::vector<std::string>& names) {
-  auto lower = [](std::string s) {
-    for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
-    return s;
-  };
-  const size_t limit = name.size() <= 2 ? 0 : name.size() <= 4 ? 1 : 2;
-  std::string best;
-  size_t bestDistance = limit + 1;
-  for (const std::string& n : names) {
-    const size_t d = editDistance(lower(n), lower(name));
-    if (d < bestDistance) best = n, bestDistance = d;
-  }
-  return best;
-}
-
-}  // namespace
-
 std::string JsonReader::misspelling(const std::string& key) const {
   // A member not read yet, close to the missing key: the user most likely meant it ("camra" for
   // "camera").

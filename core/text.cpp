@@ -1,6 +1,7 @@
 #include "core/text.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cstdint>
 #include <system_error>
@@ -106,6 +107,21 @@ std::string paddedText(std::string_view text, size_t width) {
   const size_t w = displayWidth(text);
   if (w < width) out.append(width - w, ' ');
   return out;
+}
+
+std::string closestName(const std::string& name, const std::vector<std::string>& names) {
+  auto lower = [](std::string s) {
+    for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return s;
+  };
+  const size_t limit = name.size() <= 2 ? 0 : name.size() <= 4 ? 1 : 2;
+  std::string best;
+  size_t bestDistance = limit + 1;
+  for (const std::string& n : names) {
+    const size_t d = editDistance(lower(n), lower(name));
+    if (d < bestDistance) best = n, bestDistance = d;
+  }
+  return best;
 }
 
 }  // namespace arena

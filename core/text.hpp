@@ -3,6 +3,7 @@
 // buffer) made safe to store: results.json is UTF-8, and one stray byte must not lose a run.
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace arena {
 
@@ -30,5 +31,12 @@ std::string paddedText(std::string_view text, size_t width);
 // The number of single-character insertions, deletions and substitutions that turn `a` into `b`
 // (Levenshtein): how an error message finds the misspelling of a name it expected.
 size_t editDistance(std::string_view a, std::string_view b);
+
+// Of `names`, the one closest to `name` (case aside) if within one edit of a name of three or four
+// letters, two of a longer one, or differing only in case from a shorter one; else empty: what a
+// user who typed `name` most likely meant. (One edit of a one- or two-letter name is another name:
+// "a" and "b" are both fields of a results pair.) Bytes are compared: a slip in a non-ASCII name
+// counts as the bytes of its character.
+std::string closestName(const std::string& name, const std::vector<std::string>& names);
 
 }  // namespace arena

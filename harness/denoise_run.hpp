@@ -71,8 +71,8 @@ class DenoiseRun {
 
  private:
   friend std::string lackingInputs(const DenoiserRequest& request, const Sequence& sequence);
-  // setUp false: only what the denoiser would read is worked out (lacking_), nothing is refused or
-  // allocated.
+  // setUp false: only what the denoiser would read is worked out (lacking_); the instances are
+  // created but not set up, and nothing is refused.
   DenoiseRun(const DenoiserRequest& request, const Sequence& sequence, bool setUp);
   std::string lacking_;  // what the sequence lacks of what the denoiser reads, or ""
   const Sequence& sequence_;

@@ -367,14 +367,24 @@ json runMatrix(const RunConfig& cfg) {
       auto t0 = std::chrono::steady_clock::now();
       json pair;
       const fs::path images = cfg.out / "images" / source.name / safeName(r->label);
-      if (cfg.everyDenoiser && sd && !source.scene && capturedOutputName(r->name).empty())
-        if (const std::string lacking = lackingInputs(*r, sd->sequence); !lacking.empty()) {
-          results["scenes"][source.name]["notRun"].push_back(
-              {{"label", r->label}, {"reason", lacking}});
-          say("  " + r->label + " not run on " + source.name + ": " + lacking);
-          --pairsMine;
-          continue;
+      // Under --denoisers all, a built-in (a plugin or process the user named fails instead) that
+      // the capture lacks the inputs for is not run there. A denoiser that cannot even be created
+      // here fails its pair below, with its own error.
+      std::string lacking;
+      if (cfg.everyDenoiser && sd && !source.scene && capturedOutputName(r->name).empty() &&
+          DenoiserRegistry::instance().find(r->name).origin.empty()) {
+        try {
+          lacking = lackingInputs(*r, sd->sequence);
+        } catch (const std::exception&) {
         }
+      }
+      if (!lacking.empty()) {
+        results["scenes"][source.name]["notRun"].push_back(
+            {{"label", r->label}, {"reason", lacking}});
+        say("  " + r->label + " not run on " + source.name + ": " + lacking);
+        --pairsMine;
+        continue;
+      }
       try {
         removePairImages(images);
         if (!sd) throw Error("scene " + source.name + " could not be prepared: " + sceneError);
@@ -453,11 +463,14 @@ json runMatrix(const RunConfig& cfg) {
       ++scenesDone;
       const auto now = std::chrono::steady_clock::now();
       char buf[512];
-      std::snprintf(buf, sizeof buf, "[scene %zu/%zu] %s: %zu pair(s) in %.1f s%s (ETA %s)", scenesDone, scenesMine,
-                    source.name.c_str(), mine.size(), std::chrono::duration<double>(now - sceneStart).count(),
+      std::snprintf(buf, sizeof buf, "[scene %zu/%zu] %s: %zu pair(s) in %.1f s%s (ETA %s)",
+                    scenesDone, scenesMine, source.name.c_str(),
+                    results["pairs"].size() - firstPair,  // run: not those notRun
+                    std::chrono::duration<double>(now - sceneStart).count(),
                     sceneFailures ? (", " + std::to_string(sceneFailures) + " FAILED").c_str() : "",
-                    clock(std::chrono::duration<double>(now - start).count() / double(pairsDone) *
-                          double(pairsMine - pairsDone))
+                    clock(pairsDone == 0 ? 0.0
+                                         : std::chrono::duration<double>(now - start).count() /
+                                               double(pairsDone) * double(pairsMine - pairsDone))
                         .c_str());
       cfg.milestone(buf);
     }

@@ -51,7 +51,8 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
       throw Error("merge: --out " + out.string() + " is one of the shards it merges (" +
                   run.string() + "); write the merged run to another directory");
   RunResults merged;
-  std::set<std::string> seen;
+  std::set<std::string> seen,
+      seenNotRun;  // "scene\nlabel" of the pairs run, and of those not run (notRun)
   // A gate must not pass on a partial study: every shard i/n of one n, each exactly once.
   std::map<int, std::string> shards;
   int shardCount = 0;
@@ -83,7 +84,17 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
       throw Error(run.string() + ": settings differ from " + runs.front().string() + " (" + fields +
                   "); only shards of one run can be merged");
     }
-    for (auto it = scenes.begin(); it != scenes.end(); ++it) merged.scenes[it.key()] = it.value();
+    for (auto it = scenes.begin(); it != scenes.end(); ++it) {
+      // Each shard lists the capture's denoisers it did not run (notRun): the merge keeps them all.
+      json notRun = merged.scenes.value(it.key(), json::object()).value("notRun", json::array());
+      for (const json& entry : it.value().value("notRun", json::array()))
+        if (std::find(notRun.begin(), notRun.end(), entry) == notRun.end()) notRun.push_back(entry);
+      merged.scenes[it.key()] = it.value();
+      if (!notRun.empty()) merged.scenes[it.key()]["notRun"] = notRun;
+      // A pair not run for want of inputs is accounted for, as a pair run is.
+      for (const json& entry : notRun)
+        seenNotRun.insert(it.key() + "\n" + entry.value("label", ""));
+    }
     for (PairResult& p : pairs) {
       if (!seen.insert(p.scene + "\n" + p.label).second)
         throw Error(run.string() + ": pair " + p.label + " on " + p.scene + " appears in two shards");
@@ -112,7 +123,9 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
       for (const json& label : plan.value("labels", json::array()))
         if (sequence.is_object() && sequence.value("name", json()).is_string() &&
             label.is_string() &&
-            !seen.count(sequence["name"].get<std::string>() + "\n" + label.get<std::string>())) {
+            !seen.count(sequence["name"].get<std::string>() + "\n" + label.get<std::string>()) &&
+            !seenNotRun.count(sequence["name"].get<std::string>() + "\n" +
+                              label.get<std::string>())) {
           if (++count <= 5)
             lost += (lost.empty() ? "" : ", ") + label.get<std::string>() + " on " +
                     sequence["name"].get<std::string>();

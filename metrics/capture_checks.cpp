@@ -12,6 +12,7 @@
 #include "core/capture.hpp"
 #include "core/error.hpp"
 #include "core/non_finite.hpp"
+#include "core/text.hpp"
 #include "metrics/error.hpp"
 
 namespace arena {
@@ -82,6 +83,32 @@ double meanLuminance(const Image& rgb) {
   return lum.pixelCount() ? sum / double(lum.pixelCount()) : 0;
 }
 
+// The input's brightness against its reference's: the ratio of their mean luminances, and how many
+// standard errors the mean per-pixel difference lies from 0. A noisy input is an unbiased estimate
+// of the converged image, so a ratio far from 1 at a large z is no noise: an exposure, a scale or
+// a colour space that differs between the two.
+struct Brightness {
+  double ratio = 1, z = 0;
+};
+Brightness brightnessAgainst(const Image& input, const Image& reference) {
+  const Image a = luminance(input), b = luminance(reference);
+  double sumA = 0, sumB = 0, sumD = 0, sumD2 = 0;
+  const size_t n = a.raw().size();
+  for (size_t i = 0; i < n; ++i) {
+    const double x = a.raw()[i], y = b.raw()[i];
+    sumA += x;
+    sumB += y;
+    sumD += x - y;
+    sumD2 += (x - y) * (x - y);
+  }
+  Brightness out;
+  if (n < 2 || !(sumB > 0) || !(sumA > 0)) return out;
+  out.ratio = sumA / sumB;
+  const double mean = sumD / double(n), variance = std::max(0.0, sumD2 / double(n) - mean * mean);
+  out.z = variance > 0 ? mean / std::sqrt(variance / double(n - 1)) : (mean != 0 ? 1e9 : 0.0);
+  return out;
+}
+
 // Whether an image holds any nonzero finite value.
 bool hasSignal(const Image& image) {
   for (float x : image.raw())
@@ -109,6 +136,19 @@ CaptureCheck namesWarning(std::string name, const std::vector<std::string>& name
                           const std::string& before, const std::string& after) {
   return check(std::move(name), double(names.size()), 0, kSoft, std::move(unit),
                names.empty() ? "" : before + listText(names) + after);
+}
+
+// Unknown channel names with the layer channel each most likely misspells: "color.r (color.R?)".
+std::vector<std::string> withLikelyNames(const std::vector<std::string>& unknown) {
+  std::vector<std::string> known;
+  for (const LayerSpec& spec : channels::frameLayers())
+    for (int k = 0; k < spec.channels(); ++k) known.push_back(spec.channelName(k));
+  std::vector<std::string> out;
+  for (const std::string& name : unknown) {
+    const std::string likely = closestName(name, known);
+    out.push_back(likely.empty() ? name : name + " (" + likely + "?)");
+  }
+  return out;
 }
 
 // "0, 3, 7" (at most 8, then "...").
@@ -237,7 +277,8 @@ MotionConsistency checkMotion(const std::vector<LayerSet>& frames, const std::ve
         out.explanation += (out.explanation.empty() ? "" : " or ") + std::string(candidates[k].name);
     // At a constant camera velocity the next frame's motion is the previous frame's flipped: the
     // two slips predict the same vectors there, and the check cannot tell them apart.
-    if (share(candidates[1]) >= best - 0.02 && candidates[8].informative < nextIsMirror)
+    if (share(candidates[1]) >= best - 0.02 && share(candidates[8]) < best - 0.02 &&
+        candidates[8].informative < nextIsMirror)
       out.explanation +=
           " (or pointing to the next frame: at this constant camera velocity the two are the same "
           "vectors)";
@@ -479,8 +520,19 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
   // score a flawless, flicker-free black, or tie at relMSE 1); a few black frames (a fade) warn.
   {
     std::vector<int> black;
-    for (size_t t = 0; t < input.frames.size(); ++t)
-      if (!hasSignal(input.frames[t].get("color"))) black.push_back(int(t));
+    long negative = 0, values = 0;  // below -1e-3 of the frame's mean luminance, as for references
+    for (size_t t = 0; t < input.frames.size(); ++t) {
+      const Image& c = input.frames[t].get("color");
+      if (!hasSignal(c)) black.push_back(int(t));
+      const float below = -1e-3f * float(meanLuminance(c)) - 1e-12f;
+      for (float x : c.raw()) negative += x < below;
+      values += long(c.raw().size());
+    }
+    v.checks.push_back(check(
+        "color.negative", values ? double(negative) / double(values) : 0, 0, kSoft,
+        "share of values below -0.001 x the mean luminance",
+        "radiance is not negative: the input was filtered, sharpened or offset before capture "
+        "(a denoiser's input is the renderer's raw estimate)"));
     v.checks.push_back(check(
         "color.blackFrames", double(black.size()), 0, double(input.frames.size()) - 1, "frames",
         black.empty() ? ""
@@ -554,14 +606,25 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
     double inputError = 0, floorSum = 0;
     // The worst frame of each ratio: a mean over the sequence hides one bad reference (a frame
     // whose reference is as noisy as its input moved a 12-frame mean by a tenth of the threshold).
+    // Warnings only: one frame whose input is itself nearly converged (a sky, a fade) reads high
+    // with a good reference, and refusing the capture for it would be wrong.
     double worstRough = 0, worstNoise = 0;
     int worstRoughFrame = -1, worstNoiseFrame = -1;
+    // The frame whose input is brightest or darkest against its reference, beyond its noise.
+    double worstFactor = 1;
+    int worstFactorFrame = -1;
+    Brightness worstBrightness;
     for (size_t t = 0; t < input.frames.size(); ++t) {
       const LayerSet& ref = input.references[size_t(input.referenceOfFrame[t])];
       const double eps = 0.01 * meanLuminance(ref.get("color")) + 1e-6;
       Image scratch;  // the input as the denoisers read it: one NaN pixel must not void the checks
       const Image& color = finiteInput(input.frames[t].get("color"), scratch);
       const double ri = highFrequencyEnergy(color, eps);
+      if (const Brightness b = brightnessAgainst(color, ref.get("color")); std::abs(b.z) > 5) {
+        const double factor = std::max(b.ratio, 1.0 / b.ratio);
+        if (factor > worstFactor)
+          worstFactor = factor, worstFactorFrame = int(t), worstBrightness = b;
+      }
       if (ri > 0) {
         const double ratio = highFrequencyEnergy(ref.get("color"), eps) / ri;
         roughRatio += ratio;
@@ -587,6 +650,17 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
                     Sequence::referencePath({}, input.referenceOfFrame[size_t(frame)]).string() +
                     ")"));
     };
+    v.checks.push_back(check("reference.brightnessVsInput", worstFactor, 1.1, 2.0,
+                             "factor between mean luminances, worst frame",
+                             worstFactorFrame < 0
+                                 ? ""
+                                 : "frame " + std::to_string(worstFactorFrame) +
+                                       ": the input's mean luminance is " +
+                                       number(worstBrightness.ratio) + "x its reference's, " +
+                                       number(std::abs(worstBrightness.z)) +
+                                       " standard errors from equal (a noisy input averages to its "
+                                       "reference: an exposure, a scale "
+                                       "or a colour space differs between them)"));
     if (counted == 0)
       v.checks.push_back(
           unchecked("reference.roughnessVsInput",
@@ -598,7 +672,7 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
                 "ratio of high-frequency energy, reference / input",
                 "a converged reference is far smoother than a noisy input; above 1 it is noisier"));
     if (counted > 0)
-      worstFrame("reference.roughnessVsInput.worstFrame", worstRough, worstRoughFrame, 0.5, 1.0,
+      worstFrame("reference.roughnessVsInput.worstFrame", worstRough, worstRoughFrame, 0.5, kSoft,
                  "ratio of high-frequency energy, reference / input");
     if (input.referenceNoiseKnown && !(inputError > 0)) {
       v.checks.push_back(unchecked(
@@ -609,7 +683,7 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
       v.checks.push_back(check("reference.noiseVsInput", ratio, 0.1, 1.0, "reference relMSE floor / input relMSE",
                                "reference noise floor " + number(floorSum / double(input.frames.size())) +
                                    " (from its variance or independent half)"));
-      worstFrame("reference.noiseVsInput.worstFrame", worstNoise, worstNoiseFrame, 0.1, 1.0,
+      worstFrame("reference.noiseVsInput.worstFrame", worstNoise, worstNoiseFrame, 0.1, kSoft,
                  "reference relMSE floor / input relMSE");
     } else {
       v.checks.push_back(check("reference.noiseFloorKnown", 1, 0, kSoft, "",
@@ -623,7 +697,7 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
     // said rather than silently ignored.
     const CaptureDescription& c = sequence.capture();
     v.checks.push_back(
-        namesWarning("channels.unknown", c.unknownChannels, "channels",
+        namesWarning("channels.unknown", withLikelyNames(c.unknownChannels), "channels",
                      captureFramePath(c.dir, 0).filename().string() + " holds ",
                      ", which no layer names (docs/captures.md lists them): ignored"));
     v.checks.push_back(

@@ -431,12 +431,14 @@ void PairEvaluation::add(int t, const Image& output, const FrameFacts& facts) {
     v.referenceDisplay = &scene.referenceDisplay(t);
     v.referenceMemo = scene.referenceMemos_[scene.referenceIndex(t)].get();
     kept->error = Image(output.width(), output.height(), 3);
-    bool same = true;
+    bool same = true,
+         signal = false;  // a black reference equals any black output: no verdict there
     for (size_t i = 0; i < kept->error.raw().size(); ++i) {
       kept->error.raw()[i] = output.raw()[i] - r->raw()[i];
       same = same && kept->error.raw()[i] == 0.0f;
+      signal = signal || r->raw()[i] != 0.0f;
     }
-    if (same && scene.noisyRelMse_[size_t(t)] != 0) s.equalsReference.push_back(t);
+    if (same && signal && scene.noisyRelMse_[size_t(t)] != 0) s.equalsReference.push_back(t);
     v.error = &kept->error;
     v.noisyRelMse = scene.noisyRelMse_[size_t(t)];
     v.referenceRelMse = scene.referenceRelMse_[size_t(t)];

@@ -6,6 +6,7 @@
 #include "core/error.hpp"
 #include "core/json_reader.hpp"
 #include "core/sequence.hpp"
+#include "core/text.hpp"
 
 namespace arena {
 
@@ -29,7 +30,10 @@ const LayerSpec& frameLayerSpec(const std::string& name, const std::string& wher
     if (std::find(names.begin(), names.end(), spec.name) == names.end()) names.push_back(spec.name);
   std::string known;
   for (const std::string& n : names) known += " " + n;
-  throw Error(where + ": unknown layer '" + name + "'; the sequence layers are:" + known);
+  const std::string likely = closestName(name, names);
+  throw Error(where + ": unknown layer '" + name + "'" +
+              (likely.empty() ? "" : " ('" + likely + "'?)") +
+              "; the sequence layers are:" + known);
 }
 
 namespace {

@@ -62,8 +62,10 @@ def main():
                 answer((json.dumps({"type": "error", "message": problem}) + "\n").encode())
                 continue
         signal_bytes = data[: 3 * w * h * 4]
+        # A compute time no exchange can undercut (0.25 ms did, on an idle machine at 16x8: the
+        # harness then rightly called it implausible).
         result = {"type": "result", "frame": frame, "width": w, "height": h, "channels": 3,
-                  "computeMs": 0.25}
+                  "computeMs": 0.001}
         if frame >= FAIL_AT:
             if mode == "exit":
                 sys.stderr.write("faulty: cannot find model weights weights.bin\n")
