@@ -109,6 +109,16 @@ Brightness brightnessAgainst(const Image& input, const Image& reference) {
   return out;
 }
 
+// How many of an image's values are negative radiance: below -1e-3 of its mean luminance (a
+// filtered or denoised image carries values like -1e-7 from negative filter lobes; a negated one is
+// negative throughout).
+long negativeValues(const Image& c) {
+  const float below = -1e-3f * float(meanLuminance(c)) - 1e-12f;
+  long n = 0;
+  for (float x : c.raw()) n += x < below;
+  return n;
+}
+
 // Whether an image holds any nonzero finite value.
 bool hasSignal(const Image& image) {
   for (float x : image.raw())
@@ -524,8 +534,7 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
     for (size_t t = 0; t < input.frames.size(); ++t) {
       const Image& c = input.frames[t].get("color");
       if (!hasSignal(c)) black.push_back(int(t));
-      const float below = -1e-3f * float(meanLuminance(c)) - 1e-12f;
-      for (float x : c.raw()) negative += x < below;
+      negative += negativeValues(c);
       values += long(c.raw().size());
     }
     v.checks.push_back(check(
@@ -555,8 +564,7 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
     for (size_t r = 0; r < input.references.size(); ++r) {
       const Image& c = input.references[r].get("color");
       if (!hasSignal(c)) black.push_back(int(r));
-      const float below = -1e-3f * float(meanLuminance(c)) - 1e-12f;
-      for (float x : c.raw()) negative += x < below;
+      negative += negativeValues(c);
       values += long(c.raw().size());
     }
     // Equal to the input: frames with signal only (a black frame of a fade is black in both, and
