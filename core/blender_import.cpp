@@ -135,6 +135,14 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
   }
   root.rejectUnread();
 
+  // The reference folders there are: both halves (the script's), one (a render of the reference
+  // alone: no noise floor), or none (a capture without a reference: the metrics that need none).
+  std::vector<std::string> halves;
+  for (const char* half : {"reference_a", "reference_b"})
+    if (fs::is_directory(source / half)) halves.push_back(half);
+  // referenceSpp counts both halves' samples together.
+  const int referenceSamples = halves.size() == 2 ? referenceSpp : std::max(1, referenceSpp / 2);
+
   CaptureWriter writer(out);
   double emissionResidual = 0, combinedTotal = 0;
   for (int t = 0; t < frames; ++t) {
@@ -183,18 +191,29 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
     f.set("meshId", std::move(meshId));
     f.set("materialId", std::move(materialId));
     writer.frame(t, f);
-    // The reference: two independent halves rendered with different seeds.
-    const fs::path fa = source / "reference_a" / frameFile(t), fb = source / "reference_b" / frameFile(t);
-    const Image a = rgb(readPasses(fa, {{"Combined", {"R", "G", "B", "A"}}}).get("Combined"));
-    const Image b = rgb(readPasses(fb, {{"Combined", {"R", "G", "B", "A"}}}).get("Combined"));
-    if (a.width() != width || a.height() != height || b.width() != width || b.height() != height)
-      throw Error(fa.string() + " / " + fb.string() + ": size differs from " + std::to_string(width) + "x" +
-                  std::to_string(height));
+    if (halves.empty()) continue;  // a capture without a reference
+    // The reference: two independent halves rendered with different seeds (their mean, and the
+    // first half for the noise floor), or the one folder there is (no noise floor).
+    std::vector<Image> read;
+    for (const std::string& half : halves) {
+      const fs::path halfFile = source / half / frameFile(t);
+      read.push_back(
+          rgb(readPasses(halfFile, {{"Combined", {"R", "G", "B", "A"}}}).get("Combined")));
+      if (read.back().width() != width || read.back().height() != height)
+        throw Error(halfFile.string() + ": " + std::to_string(read.back().width()) + "x" +
+                    std::to_string(read.back().height()) + ", expected " + std::to_string(width) +
+                    "x" + std::to_string(height) + " (the noisy frames')");
+    }
     LayerSet ref;
-    Image mean(width, height, 3);
-    for (size_t i = 0; i < mean.raw().size(); ++i) mean.raw()[i] = 0.5f * (a.raw()[i] + b.raw()[i]);
-    ref.set("color", std::move(mean));
-    ref.set("colorHalf", a);
+    if (read.size() == 2) {
+      Image mean(width, height, 3);
+      for (size_t i = 0; i < mean.raw().size(); ++i)
+        mean.raw()[i] = 0.5f * (read[0].raw()[i] + read[1].raw()[i]);
+      ref.set("color", std::move(mean));
+      ref.set("colorHalf", read[0]);
+    } else {
+      ref.set("color", read[0]);
+    }
     writer.reference(t, ref);
   }
   std::vector<int> ofFrame(static_cast<size_t>(frames));
@@ -213,7 +232,8 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
       {"far", clipEnd},
       {"cameras", cameras},
       {"events", events},
-      {"reference", {{"ofFrame", ofFrame}, {"samples", std::vector<int>(size_t(frames), referenceSpp)}}},
+      {"reference",
+       {{"ofFrame", ofFrame}, {"samples", std::vector<int>(size_t(frames), referenceSamples)}}},
       {"source",
        {{"producer", producer},
         {"spp", spp},
@@ -221,6 +241,7 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
         // How much of the colour is neither the two lobes nor Emit + Env (transmission, volumes):
         // it is kept in `emission`, so the colour stays exact.
         {"emissionBeyondEmitEnv", combinedTotal > 0 ? emissionResidual / combinedTotal : 0.0}}}};
+  if (halves.empty()) description.erase("reference");
   writer.commit(description);
 }
 

@@ -5,14 +5,17 @@
 //   color       = Combined
 //   diffuse     = DiffDir + DiffInd        albedo     = DiffCol   (Cycles divides the light passes
 //   specular    = GlossDir + GlossInd      specAlbedo = GlossCol   by their colour pass, so these
-//   emission    = Combined - albedo * diffuse - specAlbedo * specular   remodulate exactly; emission
+//   emission    = Combined - albedo * diffuse - specAlbedo * specular   remodulate exactly;
+//   emission
 //                 holds Emit + Env and whatever other lobes -- transmission, volumes -- add)
 //   normal      = Normal (world space)     depth      = Depth.Z (view depth; background -> 0)
 //   motion      = (Vector.X, -Vector.Y): Cycles' Vector.XY is the previous frame's raster position
 //                 minus this one's with y up; ours is the same offset with y down
 //   roughness   = the 'roughness' AOV the script's materials write
 //   meshId      = IndexOB (object pass index; -1 on the background), materialId = IndexMA
-//   reference   = the mean of the two halves; colorHalf = the first half (the noise floor)
+//   reference   = the mean of the two halves; colorHalf = the first half (the noise floor); with
+//                 one of reference_a/ and reference_b/, that one (no noise floor); with neither,
+//                 no reference
 // No specular hit distance: Cycles has no such pass; denoisers that need it fail on this capture
 // with the channel named.
 #include <filesystem>

@@ -1438,6 +1438,22 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
   std::ofstream(bad / "cameras.json") << cams.dump();
   const std::string spp = test::errorOf([&] { importBlender(bad, work / "spp_capture", {"spp"}); });
   EXPECT_NE(spp.find("cameras.json: $.referenceSpp: expected an integer in [1, "), std::string::npos) << spp;
+  // One reference folder: the reference without a noise floor; none: a capture without a reference.
+  const fs::path one = work / "one_reference", none = work / "no_reference";
+  fs::copy(work / "render", one, fs::copy_options::recursive);
+  fs::remove_all(one / "reference_b");
+  importBlender(one, work / "one_capture", {"one"});
+  const CaptureDescription oneC = readCaptureDescription(work / "one_capture");
+  EXPECT_TRUE(oneC.info.hasReference);
+  EXPECT_FALSE(oneC.referenceHasHalf);
+  EXPECT_EQ(checkNamed(validate(work / "one_capture"), "reference.noiseFloorKnown").status,
+            CheckStatus::Warn);
+  fs::copy(one, none, fs::copy_options::recursive);
+  fs::remove_all(none / "reference_a");
+  importBlender(none, work / "none_capture", {"none"});
+  EXPECT_FALSE(readCaptureDescription(work / "none_capture").info.hasReference);
+  EXPECT_EQ(checkNamed(validate(work / "none_capture"), "reference.present").status,
+            CheckStatus::Warn);
 }
 
 }  // namespace
