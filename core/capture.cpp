@@ -353,6 +353,22 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
 
   // The layers: every frame holds the same set (checked on each read), taken from frame 0.
   const fs::path first = captureFramePath(dir, 0);
+  if (!fs::exists(first)) {
+    // Frames numbered from 1 (Blender's default) or with another width of number are the usual
+    // slip: the folder's EXR files say which.
+    std::vector<std::string> exrs;
+    std::error_code ec;
+    for (const fs::directory_entry& e : fs::directory_iterator(dir, ec))
+      if (e.path().extension() == ".exr") exrs.push_back(e.path().filename().string());
+    std::sort(exrs.begin(), exrs.end());
+    std::string held;
+    for (size_t i = 0; i < exrs.size() && i < 3; ++i) held += (i ? ", " : "") + exrs[i];
+    if (exrs.size() > 3) held += ", ...";
+    throw Error(first.string() + ": file does not exist; frames are frame_0000.exr to " +
+                captureFramePath({}, info.frames - 1).string() + " (numbered from 0, four digits)" +
+                (held.empty() ? std::string("; the folder holds no .exr file")
+                              : "; the folder holds " + held));
+  }
   const ExrHeader h = readExrHeader(first);
   if (h.width != info.width || h.height != info.height)
     throw Error(first.string() + ": " + std::to_string(h.width) + "x" + std::to_string(h.height) + ", expected " +

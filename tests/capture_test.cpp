@@ -954,6 +954,14 @@ TEST(CaptureContract, BadDescriptionsAreErrorsNamingTheFieldOrFile) {
   const fs::path missing = copyCapture(good, "missing");
   fs::remove(captureFramePath(missing, 4));
   expectError(missing, "frame_0004.exr");
+  // Frames numbered from 1, as Blender numbers them: the folder's files are named.
+  const fs::path fromOne = copyCapture(good, "from_one");
+  for (int t = 5; t >= 0; --t)
+    fs::rename(captureFramePath(fromOne, t), captureFramePath(fromOne, t + 1));
+  expectError(
+      fromOne,
+      "frame_0000.exr: file does not exist; frames are frame_0000.exr to frame_0005.exr (numbered "
+      "from 0, four digits); the folder holds frame_0001.exr, frame_0002.exr, frame_0003.exr, ...");
   // A layer with only some of its channels.
   const fs::path partial = copyCapture(good, "partial");
   {
