@@ -89,6 +89,15 @@ const CaptureOutput& CaptureDescription::output(const std::string& name) const {
               (list.empty() ? "none" : list) + ")");
 }
 
+namespace {
+
+// What a matrix whose transpose fits says: the usual slip of a row-major engine.
+constexpr const char* kTransposed =
+    "; it looks transposed: capture.json holds matrices column-major (element (row r, column c) at "
+    "index c * 4 + r), as OpenGL and glm store them";
+
+}  // namespace
+
 CameraState cameraFromMatrices(const std::vector<double>& view, const std::vector<double>& projection,
                                const std::vector<double>* position, int width, int height, const std::string& where) {
   // Column-major: element (row r, column c) is m[c * 4 + r].
@@ -111,7 +120,12 @@ CameraState cameraFromMatrices(const std::vector<double>& view, const std::vecto
                 "); expected a world-to-camera matrix without scale (docs/captures.md)");
   if (std::abs(at(view, 3, 0)) + std::abs(at(view, 3, 1)) + std::abs(at(view, 3, 2)) > 1e-6 ||
       std::abs(at(view, 3, 3) - 1) > 1e-6)
-    throw Error(where + ".view: the last row must be (0, 0, 0, 1)");
+    throw Error(
+        where + ".view: the last row must be (0, 0, 0, 1)" +
+        (std::abs(at(view, 0, 3)) + std::abs(at(view, 1, 3)) + std::abs(at(view, 2, 3)) < 1e-6 &&
+                 std::abs(at(view, 3, 3) - 1) < 1e-6
+             ? std::string(kTransposed)
+             : std::string()));
   const glm::dvec3 t(at(view, 0, 3), at(view, 1, 3), at(view, 2, 3));
   const glm::dvec3 eye = -(r * t.x + u * t.y + b * t.z);
   if (position) {
@@ -134,8 +148,10 @@ CameraState cameraFromMatrices(const std::vector<double>& view, const std::vecto
                 ", P[1][2] = " + std::to_string(at(projection, 1, 2)) +
                 "); give the unjittered projection and the sub-pixel offset in \"jitter\"");
   if (std::abs(at(projection, 3, 2) + 1) > 1e-6)
-    throw Error(where + ".projection: P[3][2] = " + std::to_string(at(projection, 3, 2)) +
-                ", expected -1 (a camera looking down -Z, OpenGL clip space)");
+    throw Error(
+        where + ".projection: P[3][2] = " + std::to_string(at(projection, 3, 2)) +
+        ", expected -1 (a camera looking down -Z, OpenGL clip space)" +
+        (std::abs(at(projection, 2, 3) + 1) < 1e-6 ? std::string(kTransposed) : std::string()));
   const double aspect = p11 / p00, pixels = double(width) / double(height);
   if (std::abs(aspect / pixels - 1) > 1e-3)
     throw Error(where + ".projection: aspect " + std::to_string(aspect) + " differs from width / height " +

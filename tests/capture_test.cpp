@@ -954,6 +954,24 @@ TEST(CaptureContract, BadDescriptionsAreErrorsNamingTheFieldOrFile) {
   const fs::path missing = copyCapture(good, "missing");
   fs::remove(captureFramePath(missing, 4));
   expectError(missing, "frame_0004.exr");
+  // Matrices written row-major, as many engines hold them: said to look transposed.
+  auto transposed = [](json m) {
+    json t = m;
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c) t[size_t(c * 4 + r)] = m[size_t(r * 4 + c)];
+    return t;
+  };
+  expectError(
+      copyCapture(good, "view_rows",
+                  [&](json& d) { d["cameras"][1]["view"] = transposed(d["cameras"][1]["view"]); }),
+      "cameras[1].view: the last row must be (0, 0, 0, 1); it looks transposed");  // camera 0 sits
+                                                                                   // at the origin
+  expectError(copyCapture(good, "projection_rows",
+                          [&](json& d) {
+                            d["cameras"][0]["projection"] =
+                                transposed(d["cameras"][0]["projection"]);
+                          }),
+              "expected -1 (a camera looking down -Z, OpenGL clip space); it looks transposed");
   // Frames numbered from 1, as Blender numbers them: the folder's files are named.
   const fs::path fromOne = copyCapture(good, "from_one");
   for (int t = 5; t >= 0; --t)
