@@ -53,7 +53,7 @@ void addReportCommand(CLI::App& app) {
     h.tolerances = gateTolerances(std::move(h.tolerances), t);
     const HistorySummary s = writeHistory(h);
     std::cout << "history: " << s.index.string() << " (" << s.runs << " runs, " << s.failing
-              << " regression(s) `arena compare` would flag)\n";
+              << " comparison(s) failing `arena compare`'s gate)\n";
     for (const std::string& line : s.absentSummaries) std::cout << "absent: " << line << "\n";
   });
 }

@@ -12,6 +12,7 @@
 #include "core/atomic_file.hpp"
 #include "core/capture.hpp"
 #include "core/error.hpp"
+#include "core/text.hpp"
 #include "denoisers/external/loader.hpp"
 #include "harness/run_matrix.hpp"
 #include "harness/scene_selection.hpp"
@@ -156,10 +157,16 @@ std::string formatNumber(double v, int precision) {
 void finish(const std::string& out) {
   const RunResults results = loadResults(out);
   std::cout << "results: " << out << "/results.json (and results.db)\n";
-  std::cout << std::left << std::setw(22) << "scene" << std::setw(34) << "denoiser" << std::right << std::setw(12)
-            << "relMSE" << std::setw(10) << "ms" << "\n";
+  size_t sceneWidth = 22, labelWidth = 34;  // as wide as the longest entry
   for (const PairResult& p : results.pairs) {
-    std::cout << std::left << std::setw(22) << p.scene << std::setw(34) << p.label;
+    sceneWidth = std::max(sceneWidth, displayWidth(p.scene) + 2);
+    labelWidth = std::max(labelWidth, displayWidth(p.label) + 2);
+  }
+  std::cout << paddedText("scene", sceneWidth) << paddedText("denoiser", labelWidth) << std::right
+            << std::setw(12) << "relMSE" << std::setw(10) << "ms"
+            << "\n";
+  for (const PairResult& p : results.pairs) {
+    std::cout << paddedText(p.scene, sceneWidth) << paddedText(p.label, labelWidth);
     if (p.ok()) {
       // An ok pair can still have no relMSE summary (a sequence no longer than the warm-up): "-"
       // here and the reason below the table.
@@ -324,19 +331,35 @@ void addRunCommands(CLI::App& app) {
       } else {
         std::cout << "regressed = worse by more than the tolerance AND the paired " << bc.confidence * 100
                   << "% interval of the change excludes zero\n";
-        std::cout << std::left << std::setw(22) << "scene" << std::setw(30) << "denoiser" << std::setw(16) << "metric"
-                  << std::right << std::setw(12) << "baseline" << std::setw(12) << "candidate" << std::setw(9)
-                  << "change" << std::setw(22) << "interval" << "  verdict\n";
+        // Columns as wide as their longest entry (a sweep's labels carry their parameters).
+        size_t sceneWidth = 22, labelWidth = 30;
+        for (const ComparisonRow& r : rows) {
+          sceneWidth = std::max(sceneWidth, displayWidth(r.scene) + 2);
+          labelWidth = std::max(labelWidth, displayWidth(r.label) + 2);
+        }
+        std::cout << paddedText("scene", sceneWidth) << paddedText("denoiser", labelWidth)
+                  << std::left << std::setw(16) << "metric" << std::right << std::setw(12)
+                  << "baseline" << std::setw(12) << "candidate" << std::setw(9) << "change"
+                  << std::setw(22) << "interval"
+                  << "  verdict\n";
         auto pct = [](double v) {
           char buf[32];
           std::snprintf(buf, sizeof buf, "%+.1f%%", v * 100);
           return std::string(std::isfinite(v) ? buf : "-");
         };
+        auto figure = [](double v) {  // a missing value is "-", not "nan"
+          std::ostringstream o;
+          o << std::setprecision(4) << v;
+          return std::isfinite(v) ? o.str() : std::string("-");
+        };
         for (auto& r : rows)
-          std::cout << std::left << std::setw(22) << r.scene << std::setw(30) << r.label << std::setw(16) << r.metric
-                    << std::right << std::setw(12) << std::setprecision(4) << r.baseline << std::setw(12) << r.candidate
-                    << std::setw(9) << pct(r.change) << std::setw(22)
-                    << (r.changeCi.valid() ? "[" + pct(r.changeCi.lo) + ", " + pct(r.changeCi.hi) + "]" : "-")
+          std::cout << paddedText(r.scene, sceneWidth) << paddedText(r.label, labelWidth)
+                    << std::left << std::setw(16) << r.metric << std::right << std::setw(12)
+                    << figure(r.baseline) << std::setw(12) << figure(r.candidate) << std::setw(9)
+                    << pct(r.change) << std::setw(22)
+                    << (r.changeCi.valid()
+                            ? "[" + pct(r.changeCi.lo) + ", " + pct(r.changeCi.hi) + "]"
+                            : "-")
                     << "  " << r.verdict << (r.note.empty() ? "" : " (" + r.note + ")") << "\n";
       }
       if (anyRegression(rows)) throw CLI::RuntimeError(1);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <tuple>
 
 #include "core/error.hpp"
 #include "core/text.hpp"
@@ -107,6 +108,19 @@ std::vector<std::string> settingsDifferences(const RunResults& baseline, const R
       if (s->contains("render") && (*s)["render"].is_object())
         for (const char* k : {"lowresFactor", "lowresSpp"}) (*s)["render"].erase(k);
   collectDifferences(a, b, "settings", out);
+  // A slice of a run (one shard) against a whole run, or another slice: the pairs it lacks would
+  // read as "new" or "missing", and a regression in them would pass. Shards are merged first.
+  // ("0/1", "merged" and none are whole runs.)
+  auto slice = [](const std::string& s) {
+    const size_t slash = s.find('/');
+    return slash != std::string::npos && s.substr(slash + 1) != "1";
+  };
+  const std::string sa = baseline.settings.shard(), sb = candidate.settings.shard();
+  if ((slice(sa) || slice(sb)) && sa != sb)
+    out.push_back(
+        "settings.shard: \"" + sa + "\" vs \"" + sb +
+        "\" (a slice of a run is compared with the same slice of another only; `arena merge` "
+        "its shards first)");
   const json& as = baseline.scenes;
   const json& bs = candidate.scenes;
   for (auto it = as.begin(); it != as.end(); ++it) {
@@ -250,8 +264,25 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
       bool resolvedWorse = false, resolvedBetter = false, unjudgeable = false;
       const json &bt = b.part("tiles"), &ct = c.part("tiles");
       if (bt.is_object() && ct.is_object() && bt.contains(t.metric) && ct.contains(t.metric)) {
-        const PairedDifference d =
-            pairedDifference(MetricTiles::fromJson(ct[t.metric]), MetricTiles::fromJson(bt[t.metric]), scene, cfg);
+        const MetricTiles baseTiles = MetricTiles::fromJson(bt[t.metric]),
+                          candTiles = MetricTiles::fromJson(ct[t.metric]);
+        // The interval comes from the tiles, the change from the summaries: the two must be one
+        // measurement (a hand-edited mean showed +1107% with an interval of [+0%, +0%], and
+        // passed).
+        for (const auto& [which, tiles, mean] : {std::tuple{"baseline", &baseTiles, bm.mean},
+                                                 std::tuple{"candidate", &candTiles, cm.mean}}) {
+          // Float32 tile sums against the double summary: agreed within 1e-4 of the frames' own
+          // size (a corrected relMSE near 0 is a difference of two larger terms).
+          double size = std::abs(mean);
+          for (double v : tiles->frameValues()) size = std::max(size, std::abs(v));
+          const double fromTiles = tiles->mean();
+          if (std::isfinite(fromTiles) && !(std::abs(fromTiles - mean) <= 1e-4 * size + 1e-12))
+            throw Error(std::string(which) + " run, " + c.label + " on " + scene + ": summary." +
+                        t.metric + ".mean " + std::to_string(mean) +
+                        " disagrees with its per-tile data (" + std::to_string(fromTiles) +
+                        "); the results were edited or damaged, and the gate will not judge them");
+        }
+        const PairedDifference d = pairedDifference(candTiles, baseTiles, scene, cfg);
         if (d.ci.valid()) {
           row.changeCi = {d.ci.lo / scale, d.ci.hi / scale};
           const bool above = d.ci.lo > 0, below = d.ci.hi < 0;
@@ -282,7 +313,8 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
         row.verdict = resolvedBetter ? "improved" : "unresolved";
       }
       if (row.verdict == "unresolved" && row.note.empty())
-        row.note = "beyond tolerance but within noise";
+        row.note = worse > 0 ? "worse beyond tolerance but within noise"
+                             : "better beyond tolerance but within noise";
       rows.push_back(row);
     }
   }

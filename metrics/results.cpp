@@ -21,6 +21,12 @@ using nlohmann::json;
 RunResults loadResults(const fs::path& runDir) {
   fs::path file = runDir / "results.json";
   if (!fs::exists(runDir)) throw Error(runDir.string() + ": no such run directory");
+  if (!fs::is_directory(runDir))
+    throw Error(runDir.string() +
+                ": a file; expected a run directory (the folder that holds results.json" +
+                (runDir.filename() == "results.json" ? ": " + runDir.parent_path().string()
+                                                     : std::string()) +
+                ")");
   if (!fs::exists(file))
     throw Error(runDir.string() + ": not a run (no results.json); create one with `arena run`");
   return RunResults::fromJson(parseJsonFile(file.string()), file.string());

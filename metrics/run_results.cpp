@@ -1,6 +1,7 @@
 #include "metrics/run_results.hpp"
 
 #include <cmath>
+#include <map>
 #include <set>
 #include <tuple>
 
@@ -349,7 +350,19 @@ RunResults RunResults::fromJson(const json& j, const std::string& file) {
   }
   const json& pairs = read.member(j, "$", "pairs", &json::is_array, "an array of pairs");
   r.pairs.reserve(pairs.size());
-  for (size_t i = 0; i < pairs.size(); ++i) r.pairs.push_back(read.pair(pairs[i], "$.pairs[" + std::to_string(i) + "]"));
+  std::map<std::string, size_t> pairIndex;  // scene + label -> its index: one pair each
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    const std::string at = "$.pairs[" + std::to_string(i) + "]";
+    r.pairs.push_back(read.pair(pairs[i], at));
+    const auto [it, fresh] =
+        pairIndex.emplace(r.pairs.back().scene + "\n" + r.pairs.back().label, i);
+    if (!fresh)
+      read.fail(at,
+                "a pair of its own (" + r.pairs.back().label + " on " + r.pairs.back().scene +
+                    " is already $.pairs[" + std::to_string(it->second) +
+                    "]; every reader would keep one of the two)",
+                pairs[i]);
+  }
   if (j.contains("statistics"))
     r.statistics = RunStatistics::fromJson(read.member(j, "$", "statistics", &json::is_object, "an object"), file);
   if (j.contains("metrics")) r.metrics = read.member(j, "$", "metrics", &json::is_array, "an array");

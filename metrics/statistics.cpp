@@ -220,6 +220,7 @@ json Interval::toJson() const {
 std::optional<Interval> Interval::fromJson(const json& j) {
   if (j.is_null()) return Interval{};
   if (!j.is_array() || j.size() != 2 || !j[0].is_number() || !j[1].is_number()) return std::nullopt;
+  if (j[0].get<double>() > j[1].get<double>()) return std::nullopt;  // [high, low]: not an interval
   return Interval{j[0].get<double>(), j[1].get<double>()};
 }
 

@@ -236,16 +236,42 @@ json historyData(const std::vector<RunResults>& runs, std::vector<Tolerance> tol
   json series = json::object();
   std::vector<std::string> metrics;
   json absent = json::array();  // {run, line}: the summaries a run has no mean for, and why
+  // A contender whose label changed between runs (labels were once written as typed,
+  // "svgf[sigmaL=2.0]"; a default named explicitly, "svgf[iterations=5]", is svgf) stays one
+  // series, under its first label, as `arena compare` matches it: by denoiser and resolved
+  // parameters, where exactly one series of the scene ran that and the run has no pair under that
+  // series' label.
+  std::map<std::string, std::map<std::string, std::pair<std::string, json>>>
+      ran;  // scene -> label -> (denoiser, params)
+  auto seriesLabel = [&](const RunResults& run, const PairResult& p) {
+    auto& labels = ran[p.scene];
+    if (labels.count(p.label) || p.params.empty()) return p.label;
+    std::string match;
+    int matches = 0;
+    for (const auto& [label, what] : labels)
+      if (what.first == p.denoiser && what.second == p.params &&
+          std::none_of(run.pairs.begin(), run.pairs.end(),
+                       [&](const PairResult& q) { return q.scene == p.scene && q.label == label; }))
+        match = label, ++matches;
+    return matches == 1 ? match : p.label;
+  };
   for (size_t i = 0; i < runs.size(); ++i) {
     for (const std::string& line : absentSummaryLines(runs[i]))
       absent.push_back({{"run", i}, {"line", line}});
     for (const PairResult& p : runs[i].pairs) {
       if (!p.ok()) continue;
+      const std::string label = seriesLabel(runs[i], p);
+      ran[p.scene].emplace(label, std::make_pair(p.denoiser, p.params));
+      if (label != p.label) {
+        json& aliases = series[p.scene][label]["aliases"];
+        if (std::find(aliases.begin(), aliases.end(), p.label) == aliases.end())
+          aliases.push_back(p.label);
+      }
       for (const auto& [metric, summary] : p.summary) {
         const SummaryMean mean = p.mean(metric);
         if (!mean.present()) continue;
         if (std::find(metrics.begin(), metrics.end(), metric) == metrics.end()) metrics.push_back(metric);
-        json& s = series[p.scene][p.label][metric];
+        json& s = series[p.scene][label][metric];
         if (s.is_null()) s = {{"value", json(runs.size(), nullptr)}};
         s["value"][i] = mean.mean;
         if (summary.ci95.valid()) {

@@ -38,6 +38,15 @@ TEST(CompareContract, RunsOfOtherSettingsAreRefusedUnlessAllowed) {
   EXPECT_NE(r.output.find("warning: comparing runs with different settings"), std::string::npos)
       << r.output;
   EXPECT_NE(r.output.find("verdict"), std::string::npos) << r.output;
+  // A pair the candidate lacks has no figures: "-", not "nan".
+  RunConfig d = contract::tinyRun("settings_d");
+  d.cache = a.cache;
+  d.denoisers = {{"eaw", {}, ""}};
+  runMatrix(d);
+  r = contract::arenaCli("compare " + a.out.string() + " " + d.out.string());
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("missing"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("nan"), std::string::npos) << r.output;
   // Another resolution shows per scene.
   RunConfig c = contract::tinyRun("settings_c");
   c.render = test::tinySettings(8, 8, 3, 2);

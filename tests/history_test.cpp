@@ -142,6 +142,34 @@ TEST(History, MarksWhatCompareSaysRunByRun) {
 
 // A run read from results.db keeps the settings it recorded: beside a run directory of the same
 // settings it is comparable, beside one of other settings it is not (as arena compare says).
+// A contender run under a new label with the same denoiser and parameters (a default named
+// explicitly: "svgf[iterations=5]" is svgf) stays one series, as `arena compare` matches it.
+TEST(History, ARelabelledContenderStaysOneSeries) {
+  std::vector<RunResults> runs;
+  for (int i = 0; i < 3; ++i) {
+    json r = historyRun(i, 99);
+    for (json& p : r["pairs"])
+      if (p["label"] == "svgf") {
+        p["params"] = {{"iterations", 5}};
+        if (i == 2) p["label"] = "svgf[iterations=5]";
+      }
+    runs.push_back(test::typed(r));
+  }
+  const json data = historyData(runs, {});
+  ASSERT_TRUE(data["series"]["s"].contains("svgf"));
+  EXPECT_FALSE(data["series"]["s"].contains("svgf[iterations=5]"))
+      << data["series"]["s"].dump().substr(0, 300);
+  for (const json& v : data["series"]["s"]["svgf"]["relMse"]["value"])
+    EXPECT_TRUE(v.is_number()) << v;
+  EXPECT_EQ(data["series"]["s"]["svgf"]["aliases"], json::array({"svgf[iterations=5]"}));
+  // Other parameters are another contender: another series.
+  json other = historyRun(3, 99);
+  for (json& p : other["pairs"])
+    if (p["label"] == "svgf") p["label"] = "svgf[iterations=2]", p["params"] = {{"iterations", 2}};
+  runs.push_back(test::typed(other));
+  EXPECT_TRUE(historyData(runs, {})["series"]["s"].contains("svgf[iterations=2]"));
+}
+
 TEST(History, RunsFromADatabaseAreJudgedOnTheSettingsTheyRecorded) {
   const fs::path dir = test::freshDir("history_settings");
   json first = historyRun(0, 3), same = historyRun(1, 3), other = historyRun(2, 3);

@@ -486,12 +486,14 @@ TEST(Report, BaselineGivesCompareVerdicts) {
   json base = fixtureRun();
   json cand = fixtureRun();
   cand["pairs"][1]["summary"]["relMse"]["mean"] = 0.06;  // svgf[a=0] on static: +20% relMSE
-  // The gate needs the per-tile data to resolve the change: 12 frames x 16 tiles around each mean.
+  // The gate needs the per-tile data to resolve the change: 12 frames x 16 tiles around each mean,
+  // whose mean is the summary's (compare checks that the two agree).
   auto tiles = [](double mean) {
     MetricTiles m;
     for (int f = 0; f < 12; ++f) {
       TileSums t;
-      for (int k = 0; k < 16; ++k) t.sum.push_back(mean * (1 + 0.01 * ((f * 16 + k) % 5 - 2))), t.count.push_back(1);
+      for (int k = 0; k < 16; ++k)
+        t.sum.push_back(mean * (1 + 0.01 * ((f + k) % 4 - 1.5))), t.count.push_back(1);
       m.add(f, std::move(t));
     }
     return m.toJson();
@@ -671,6 +673,18 @@ TEST(Report, MissingRunIsAClearError) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("no such run directory"), std::string::npos) << e.what();
   }
+}
+
+// A run's results.json given where its directory is expected: the directory is named.
+TEST(Report, AResultsFileGivenForItsRunNamesTheDirectory) {
+  const fs::path run = writeFixtureRun("report_file_for_run", fixtureRun());
+  const std::string e = test::errorOf([&] { loadResults(run / "results.json"); });
+  EXPECT_NE(
+      e.find(
+          "results.json: a file; expected a run directory (the folder that holds results.json: " +
+          run.string() + ")"),
+      std::string::npos)
+      << e;
 }
 
 TEST(Report, OtherSchemaVersionIsAClearError) {

@@ -216,6 +216,49 @@ TEST(RunMatrix, CompareGatesARegressionAndPassesAnIdenticalRerun) {
   EXPECT_EQ(rows[0].verdict, "regressed");
   EXPECT_TRUE(anyRegression(rows));
   EXPECT_GT(rows[0].change, 0.5);
+  // The change is read from the summaries, its interval from the tiles: a summary edited apart from
+  // its tiles (a mean set by hand, or a regressed run's tiles under the old means) is refused, not
+  // judged (it passed at +1107% with an interval of [+0%, +0%]).
+  json edited = worse;
+  edited["pairs"][0]["summary"]["relMse"]["mean"] = mean(base["pairs"][0], "relMse");
+  const std::string e = test::errorOf([&] {
+    compareRuns(test::typed(base), test::typed(edited), {{"relMse", 0.02}});
+  });
+  EXPECT_NE(e.find("candidate run, svgf on cornell_static: summary.relMse.mean"), std::string::npos)
+      << e;
+  EXPECT_NE(e.find("disagrees with its per-tile data"), std::string::npos) << e;
+  // A slice of a run (a shard) against a whole run is refused as a settings difference: the
+  // pairs it lacks read as "new" and a regression in them passed.
+  RunResults shard = test::typed(base);
+  shard.settings.setShard("1/2");
+  const std::vector<std::string> differ = settingsDifferences(shard, test::typed(rerun));
+  ASSERT_EQ(differ.size(), 1u);
+  EXPECT_EQ(differ[0].rfind("settings.shard: \"1/2\" vs \"0/1\" (a slice of a run", 0), 0u)
+      << differ[0];
+  EXPECT_TRUE(settingsDifferences(shard, shard).empty());  // the same slice of two runs compares
+}
+
+// A results file with one pair twice (every reader kept one of them: the gate passed or failed on
+// whichever came last) or an interval written [high, low] is refused naming the path.
+TEST(RunMatrix, AResultsFileWithAPairTwiceOrAReversedIntervalIsRefused) {
+  RunConfig a = tinyRun("duplicate_pair", {{"passthrough", {}, ""}});
+  a.scenes.resize(1);
+  a.baselines = false;
+  json r = runMatrix(a);
+  json twice = r;
+  twice["pairs"].push_back(r["pairs"][0]);
+  const std::string e = test::errorOf([&] { test::typed(twice); });
+  EXPECT_NE(e.find("$.pairs[1]: expected a pair of its own (passthrough on cornell_static is "
+                   "already $.pairs[0]"),
+            std::string::npos)
+      << e;
+  json reversed = r;
+  reversed["pairs"][0]["summary"]["relMse"]["ci95"] = {0.5, 0.1};
+  EXPECT_NE(test::errorOf([&] {
+              test::typed(reversed);
+            }).find("$.pairs[0].summary.relMse.ci95: expected [low, high]"),
+            std::string::npos)
+      << test::errorOf([&] { test::typed(reversed); });
 }
 
 TEST(RunMatrix, ShardsMergeIntoTheFullRun) {

@@ -25,7 +25,7 @@
   function renderInfo() {
     const n = H.runs.length;
     $('history-info').textContent = n
-      ? `${n} runs, ${runText(0)} → ${runText(n - 1)} · ${flags.length} comparison(s) fail the gate, ${H.changes.length - flags.length} other change(s) beyond tolerance`
+      ? `${n} runs, ${runText(0)} → ${runText(n - 1)} · ${flags.length} comparison(s) fail the gate, ${H.changes.length - flags.length} other change(s) (improvements, changes within noise, new pairs)`
       : 'No runs.';
   }
 

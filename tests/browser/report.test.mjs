@@ -593,10 +593,11 @@ function historyRuns(dir, schema) {
         const regress = label === 'svgf' && scene === 'scene_b' && i >= 30 ? 1.15 : 1;
         const st = (v) => ({ mean: v, median: v, p5: 0.8 * v, p95: 1.2 * v, frames: 8, ci95: [0.998 * v, 1.002 * v] });
         // Per-frame tile sums (results schema: pair.tiles.<metric>), which compare's paired interval
-        // reads: 8 frames x 16 tiles of 100 pixels, varying over tiles and frames around the mean.
+        // reads: 8 frames x 16 tiles of 100 pixels, varying over tiles and frames around the mean
+        // (tile q + 8 mirrors tile q, so each frame's mean is the summary's: compare checks it).
         const tilesOf = (v) => {
           const sums = new Float32Array(8 * 16);
-          for (let t = 0; t < 8; ++t) for (let q = 0; q < 16; ++q) sums[t * 16 + q] = 100 * v * (1 + 0.1 * Math.sin(1.3 * q + t));
+          for (let t = 0; t < 8; ++t) for (let q = 0; q < 16; ++q) sums[t * 16 + q] = 100 * v * (1 + (q < 8 ? 0.1 : -0.1) * Math.sin(1.3 * (q % 8) + t));
           const b64 = (a) => Buffer.from(a.buffer).toString('base64');
           return { transform: 'mean', frames: [2, 3, 4, 5, 6, 7, 8, 9], tiles: 16, sum: b64(sums), count: b64(new Float32Array(16).fill(100)), countPerFrame: false };
         };
@@ -624,7 +625,7 @@ test('history dashboard: 50 runs, the regressing one is marked, and the page sta
   const out = path.join(work, 'history');
   // Given newest first: the dashboard orders runs by creation time itself.
   const said = arena('history', ...runs.slice().reverse(), '--out', out);
-  assert.match(said, /50 runs, 1 regression/);
+  assert.match(said, /50 runs, 1 comparison\(s\) failing `arena compare`'s gate/);
   // `arena compare` on the same two runs fails too (the dashboard marks what the gate does).
   assert.throws(() => arena('compare', runs[29], runs[30]), (e) => e.status === 1);
 
