@@ -332,15 +332,16 @@ void addRunCommands(CLI::App& app) {
         std::cout << "regressed = worse by more than the tolerance AND the paired " << bc.confidence * 100
                   << "% interval of the change excludes zero\n";
         // Columns as wide as their longest entry (a sweep's labels carry their parameters).
-        size_t sceneWidth = 22, labelWidth = 30;
+        size_t sceneWidth = 22, labelWidth = 30, metricWidth = 16;
         for (const ComparisonRow& r : rows) {
           sceneWidth = std::max(sceneWidth, displayWidth(r.scene) + 2);
           labelWidth = std::max(labelWidth, displayWidth(r.label) + 2);
+          metricWidth = std::max(metricWidth, displayWidth(r.metric) + 2);
         }
         std::cout << paddedText("scene", sceneWidth) << paddedText("denoiser", labelWidth)
-                  << std::left << std::setw(16) << "metric" << std::right << std::setw(12)
-                  << "baseline" << std::setw(12) << "candidate" << std::setw(9) << "change"
-                  << std::setw(22) << "interval"
+                  << paddedText("metric", metricWidth) << std::right << std::setw(12) << "baseline"
+                  << std::setw(12) << "candidate" << std::setw(9) << "change" << std::setw(22)
+                  << "interval"
                   << "  verdict\n";
         auto pct = [](double v) {
           char buf[32];
@@ -354,7 +355,7 @@ void addRunCommands(CLI::App& app) {
         };
         for (auto& r : rows)
           std::cout << paddedText(r.scene, sceneWidth) << paddedText(r.label, labelWidth)
-                    << std::left << std::setw(16) << r.metric << std::right << std::setw(12)
+                    << paddedText(r.metric, metricWidth) << std::right << std::setw(12)
                     << figure(r.baseline) << std::setw(12) << figure(r.candidate) << std::setw(9)
                     << pct(r.change) << std::setw(22)
                     << (r.changeCi.valid()

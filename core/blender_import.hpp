@@ -5,9 +5,8 @@
 //   color       = Combined
 //   diffuse     = DiffDir + DiffInd        albedo     = DiffCol   (Cycles divides the light passes
 //   specular    = GlossDir + GlossInd      specAlbedo = GlossCol   by their colour pass, so these
-//   emission    = Combined - albedo * diffuse - specAlbedo * specular   remodulate exactly;
-//   emission
-//                 holds Emit + Env and whatever other lobes -- transmission, volumes -- add)
+//   emission    = Combined - albedo * diffuse - specAlbedo * specular     remodulate exactly)
+//                 (Emit + Env and whatever other lobes -- transmission, volumes -- add)
 //   normal      = Normal (world space)     depth      = Depth.Z (view depth; background -> 0)
 //   motion      = (Vector.X, -Vector.Y): Cycles' Vector.XY is the previous frame's raster position
 //                 minus this one's with y up; ours is the same offset with y down

@@ -87,27 +87,37 @@ double meanLuminance(const Image& rgb) {
 // standard errors the mean per-pixel difference lies from 0. A noisy input is an unbiased estimate
 // of the converged image, so a ratio far from 1 at a large z is no noise: an exposure, a scale or
 // a colour space that differs between the two.
+// Sums over pixels, so that one frame or the whole sequence is judged alike. The z assumes the
+// differences are near normal, which rare bright paths at 1 spp (caustics, small lights) are not:
+// a frame that misses them reads dark at a large z, so one frame only warns.
 struct Brightness {
-  double ratio = 1, z = 0;
-};
-Brightness brightnessAgainst(const Image& input, const Image& reference) {
-  const Image a = luminance(input), b = luminance(reference);
   double sumA = 0, sumB = 0, sumD = 0, sumD2 = 0;
-  const size_t n = a.raw().size();
-  for (size_t i = 0; i < n; ++i) {
-    const double x = a.raw()[i], y = b.raw()[i];
-    sumA += x;
-    sumB += y;
-    sumD += x - y;
-    sumD2 += (x - y) * (x - y);
+  size_t n = 0;
+  void add(const Image& input, const Image& reference) {
+    const Image a = luminance(input), b = luminance(reference);
+    for (size_t i = 0; i < a.raw().size(); ++i) {
+      const double x = a.raw()[i], y = b.raw()[i];
+      sumA += x;
+      sumB += y;
+      sumD += x - y;
+      sumD2 += (x - y) * (x - y);
+    }
+    n += a.raw().size();
   }
-  Brightness out;
-  if (n < 2 || !(sumB > 0) || !(sumA > 0)) return out;
-  out.ratio = sumA / sumB;
-  const double mean = sumD / double(n), variance = std::max(0.0, sumD2 / double(n) - mean * mean);
-  out.z = variance > 0 ? mean / std::sqrt(variance / double(n - 1)) : (mean != 0 ? 1e9 : 0.0);
-  return out;
-}
+  bool measured() const { return n >= 2 && sumA > 0 && sumB > 0; }
+  double ratio() const { return measured() ? sumA / sumB : 1.0; }
+  double factor() const { return std::max(ratio(), 1.0 / ratio()); }
+  double z() const {
+    if (!measured()) return 0;
+    const double mean = sumD / double(n), variance = std::max(0.0, sumD2 / double(n) - mean * mean);
+    return variance > 0 ? mean / std::sqrt(variance / double(n - 1)) : (mean != 0 ? 1e9 : 0.0);
+  }
+  // "the input's mean luminance is 4x its reference's, 38 standard errors from equal"
+  std::string text() const {
+    return "the input's mean luminance is " + number(ratio()) + "x its reference's, " +
+           number(std::abs(z())) + " standard errors from equal";
+  }
+};
 
 // How many of an image's values are negative radiance: below -1e-3 of its mean luminance (a
 // filtered or denoised image carries values like -1e-7 from negative filter lobes; a negated one is
@@ -149,10 +159,13 @@ CaptureCheck namesWarning(std::string name, const std::vector<std::string>& name
 }
 
 // Unknown channel names with the layer channel each most likely misspells: "color.r (color.R?)".
-std::vector<std::string> withLikelyNames(const std::vector<std::string>& unknown) {
+std::vector<std::string> withLikelyNames(const std::vector<std::string>& unknown,
+                                         const std::vector<std::string>& layersGiven) {
+  // Only the channels the file lacks: "color.A" beside color.R, G and B is no misspelt color.R.
   std::vector<std::string> known;
   for (const LayerSpec& spec : channels::frameLayers())
-    for (int k = 0; k < spec.channels(); ++k) known.push_back(spec.channelName(k));
+    if (std::find(layersGiven.begin(), layersGiven.end(), spec.name) == layersGiven.end())
+      for (int k = 0; k < spec.channels(); ++k) known.push_back(spec.channelName(k));
   std::vector<std::string> out;
   for (const std::string& name : unknown) {
     const std::string likely = closestName(name, known);
@@ -534,14 +547,15 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
     for (size_t t = 0; t < input.frames.size(); ++t) {
       const Image& c = input.frames[t].get("color");
       if (!hasSignal(c)) black.push_back(int(t));
-      negative += negativeValues(c);
+      Image scratch;  // a NaN pixel would make the frame's mean, and so its threshold, NaN
+      negative += negativeValues(finiteInput(c, scratch));
       values += long(c.raw().size());
     }
     v.checks.push_back(check(
         "color.negative", values ? double(negative) / double(values) : 0, 0, kSoft,
         "share of values below -0.001 x the mean luminance",
-        "radiance is not negative: the input was filtered, sharpened or offset before capture "
-        "(a denoiser's input is the renderer's raw estimate)"));
+        "radiance is not negative: the input was filtered, sharpened or offset before capture, or "
+        "converted from a wider gamut (a denoiser's input is the renderer's raw estimate)"));
     v.checks.push_back(check(
         "color.blackFrames", double(black.size()), 0, double(input.frames.size()) - 1, "frames",
         black.empty() ? ""
@@ -618,21 +632,21 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
     // with a good reference, and refusing the capture for it would be wrong.
     double worstRough = 0, worstNoise = 0;
     int worstRoughFrame = -1, worstNoiseFrame = -1;
-    // The frame whose input is brightest or darkest against its reference, beyond its noise.
-    double worstFactor = 1;
+    // The input's brightness against the references: over the sequence (a reference at another
+    // scale or in another colour space), and the frame brightest or darkest beyond its noise.
+    Brightness pooled, worstBrightness;
     int worstFactorFrame = -1;
-    Brightness worstBrightness;
     for (size_t t = 0; t < input.frames.size(); ++t) {
       const LayerSet& ref = input.references[size_t(input.referenceOfFrame[t])];
       const double eps = 0.01 * meanLuminance(ref.get("color")) + 1e-6;
       Image scratch;  // the input as the denoisers read it: one NaN pixel must not void the checks
       const Image& color = finiteInput(input.frames[t].get("color"), scratch);
       const double ri = highFrequencyEnergy(color, eps);
-      if (const Brightness b = brightnessAgainst(color, ref.get("color")); std::abs(b.z) > 5) {
-        const double factor = std::max(b.ratio, 1.0 / b.ratio);
-        if (factor > worstFactor)
-          worstFactor = factor, worstFactorFrame = int(t), worstBrightness = b;
-      }
+      Brightness b;
+      b.add(color, ref.get("color"));
+      pooled.add(color, ref.get("color"));
+      if (std::abs(b.z()) > 5 && b.factor() > worstBrightness.factor())
+        worstBrightness = b, worstFactorFrame = int(t);
       if (ri > 0) {
         const double ratio = highFrequencyEnergy(ref.get("color"), eps) / ri;
         roughRatio += ratio;
@@ -658,17 +672,21 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
                     Sequence::referencePath({}, input.referenceOfFrame[size_t(frame)]).string() +
                     ")"));
     };
-    v.checks.push_back(check("reference.brightnessVsInput", worstFactor, 1.1, 2.0,
-                             "factor between mean luminances, worst frame",
-                             worstFactorFrame < 0
-                                 ? ""
-                                 : "frame " + std::to_string(worstFactorFrame) +
-                                       ": the input's mean luminance is " +
-                                       number(worstBrightness.ratio) + "x its reference's, " +
-                                       number(std::abs(worstBrightness.z)) +
-                                       " standard errors from equal (a noisy input averages to its "
-                                       "reference: an exposure, a scale "
-                                       "or a colour space differs between them)"));
+    const std::string causes =
+        " (a noisy input averages to its reference: an exposure, a scale or a colour space differs "
+        "between "
+        "them, or the input is clamped or biased)";
+    v.checks.push_back(
+        check("reference.brightnessVsInput", std::abs(pooled.z()) > 5 ? pooled.factor() : 1.0, 1.1,
+              2.0, "factor between mean luminances over the sequence",
+              std::abs(pooled.z()) > 5 ? "over the sequence, " + pooled.text() + causes : ""));
+    v.checks.push_back(check(
+        "reference.brightnessVsInput.worstFrame", worstBrightness.factor(), 1.1, kSoft,
+        "factor between mean luminances, worst frame",
+        worstFactorFrame < 0
+            ? ""
+            : "frame " + std::to_string(worstFactorFrame) + ": " + worstBrightness.text() + causes +
+                  "; one frame can also miss the rare bright paths of a 1-spp input"));
     if (counted == 0)
       v.checks.push_back(
           unchecked("reference.roughnessVsInput",
@@ -705,7 +723,7 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
     // said rather than silently ignored.
     const CaptureDescription& c = sequence.capture();
     v.checks.push_back(
-        namesWarning("channels.unknown", withLikelyNames(c.unknownChannels), "channels",
+        namesWarning("channels.unknown", withLikelyNames(c.unknownChannels, c.layers), "channels",
                      captureFramePath(c.dir, 0).filename().string() + " holds ",
                      ", which no layer names (docs/captures.md lists them): ignored"));
     v.checks.push_back(

@@ -277,8 +277,9 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
           for (double v : tiles->frameValues()) size = std::max(size, std::abs(v));
           const double fromTiles = tiles->mean();
           if (std::isfinite(fromTiles) && !(std::abs(fromTiles - mean) <= 1e-4 * size + 1e-12))
-            throw Error(std::string(which) + " run, " + c.label + " on " + scene + ": summary." +
-                        t.metric + ".mean " + std::to_string(mean) +
+            throw Error(std::string(which) + " run, " +
+                        (std::string(which) == "baseline" ? label : c.label) + " on " + scene +
+                        ": summary." + t.metric + ".mean " + std::to_string(mean) +
                         " disagrees with its per-tile data (" + std::to_string(fromTiles) +
                         "); the results were edited or damaged, and the gate will not judge them");
         }

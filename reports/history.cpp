@@ -253,8 +253,17 @@ json historyData(const std::vector<RunResults>& runs, std::vector<Tolerance> tol
           std::none_of(run.pairs.begin(), run.pairs.end(),
                        [&](const PairResult& q) { return q.scene == p.scene && q.label == label; }))
         match = label, ++matches;
-    return matches == 1 ? match : p.label;
+    // Another pair of the run that ran the same (two labels for one contender): no alias, or the
+    // two would overwrite each other's value.
+    const auto sameRun =
+        std::count_if(run.pairs.begin(), run.pairs.end(), [&](const PairResult& q) {
+          return q.scene == p.scene && q.denoiser == p.denoiser && q.params == p.params;
+        });
+    return matches == 1 && sameRun == 1 ? match : p.label;
   };
+  // Run i's (scene, pair label) -> the series its values went to: the gate's rows name the pair's
+  // own label, the page's flags the series.
+  std::vector<std::map<std::pair<std::string, std::string>, std::string>> seriesOf(runs.size());
   for (size_t i = 0; i < runs.size(); ++i) {
     for (const std::string& line : absentSummaryLines(runs[i]))
       absent.push_back({{"run", i}, {"line", line}});
@@ -262,6 +271,7 @@ json historyData(const std::vector<RunResults>& runs, std::vector<Tolerance> tol
       if (!p.ok()) continue;
       const std::string label = seriesLabel(runs[i], p);
       ran[p.scene].emplace(label, std::make_pair(p.denoiser, p.params));
+      seriesOf[i][{p.scene, p.label}] = label;
       if (label != p.label) {
         json& aliases = series[p.scene][label]["aliases"];
         if (std::find(aliases.begin(), aliases.end(), p.label) == aliases.end())
@@ -312,6 +322,12 @@ json historyData(const std::vector<RunResults>& runs, std::vector<Tolerance> tol
       if (row.verdict == "ok") continue;
       json change = comparisonJson({row})[0];
       change["run"] = i;
+      // The row names the baseline's label (or the candidate's, for a new pair): the series.
+      for (const size_t r : {i - 1, i})
+        if (auto it = seriesOf[r].find({row.scene, row.label}); it != seriesOf[r].end()) {
+          change["label"] = it->second;
+          break;
+        }
       failing += change["fails"].get<bool>();
       changes.push_back(change);
     }

@@ -147,21 +147,40 @@ TEST(History, MarksWhatCompareSaysRunByRun) {
 TEST(History, ARelabelledContenderStaysOneSeries) {
   std::vector<RunResults> runs;
   for (int i = 0; i < 3; ++i) {
-    json r = historyRun(i, 99);
+    json r = historyRun(i, 2);  // run 2 jumps 10%
     for (json& p : r["pairs"])
       if (p["label"] == "svgf") {
         p["params"] = {{"iterations", 5}};
-        if (i == 2) p["label"] = "svgf[iterations=5]";
+        if (i >= 1) p["label"] = "svgf[iterations=5]";
       }
     runs.push_back(test::typed(r));
   }
   const json data = historyData(runs, {});
+  // The gate's row for run 2 names the pair's label; the page's flag names the series it charts.
+  bool flagged = false;
+  for (const json& c : data["changes"])
+    if (c["run"] == 2 && c["metric"] == "relMse") {
+      flagged = true;
+      EXPECT_EQ(c["label"], "svgf") << c;
+    }
+  EXPECT_TRUE(flagged) << data["changes"];
   ASSERT_TRUE(data["series"]["s"].contains("svgf"));
   EXPECT_FALSE(data["series"]["s"].contains("svgf[iterations=5]"))
       << data["series"]["s"].dump().substr(0, 300);
   for (const json& v : data["series"]["s"]["svgf"]["relMse"]["value"])
     EXPECT_TRUE(v.is_number()) << v;
   EXPECT_EQ(data["series"]["s"]["svgf"]["aliases"], json::array({"svgf[iterations=5]"}));
+  // Two labels for one contender in one run: no alias (they would overwrite each other's values).
+  json twice = historyRun(3, 99);
+  json copy = twice["pairs"][1];
+  copy["label"] = "svgf[iterations=5]";
+  twice["pairs"][1]["params"] = copy["params"] = {{"iterations", 5}};
+  twice["pairs"][1]["label"] = "svgf-again";
+  twice["pairs"].push_back(copy);
+  std::vector<RunResults> withTwice = {runs[0], test::typed(twice)};
+  const json both = historyData(withTwice, {})["series"]["s"];
+  EXPECT_TRUE(both.contains("svgf-again") && both.contains("svgf[iterations=5]"))
+      << both.dump().substr(0, 300);
   // Other parameters are another contender: another series.
   json other = historyRun(3, 99);
   for (json& p : other["pairs"])

@@ -54,6 +54,15 @@ TEST(Text, DisplayWidthCountsCharactersAndPaddingUsesIt) {
   EXPECT_EQ(paddedText("abcd", 2), "abcd");  // never cut
 }
 
+TEST(Text, ClosestNameIsWithinAFewEditsAndNeverBetweenShortNames) {
+  EXPECT_EQ(closestName("color.r", {"color.R", "color.G", "normal.X"}), "color.R");  // case aside
+  EXPECT_EQ(closestName("roughnes.X", {"roughness", "depth.Z"}), "roughness");       // two edits
+  EXPECT_EQ(closestName("camra", {"camera", "frames"}), "camera");
+  EXPECT_EQ(closestName("albedo", {"camera", "frames"}), "");  // nothing close
+  EXPECT_EQ(closestName("a", {"b"}), "");  // one letter: another name, not a slip
+  EXPECT_EQ(closestName("A", {"a"}), "a");
+}
+
 TEST(Text, EditDistanceCountsInsertionsDeletionsAndSubstitutions) {
   EXPECT_EQ(editDistance("", ""), 0u);
   EXPECT_EQ(editDistance("camera", "camera"), 0u);
