@@ -318,7 +318,23 @@ json historyData(const std::vector<RunResults>& runs, std::vector<Tolerance> tol
       changes.push_back(change);
       continue;
     }
-    for (const ComparisonRow& row : compareRuns(runs[i - 1], runs[i], tolerances)) {
+    // A run the gate refuses to judge (a summary that disagrees with its tiles) fails the gate
+    // there, saying why; the dashboard of the other runs is still built.
+    std::vector<ComparisonRow> rows;
+    try {
+      rows = compareRuns(runs[i - 1], runs[i], tolerances);
+    } catch (const Error& e) {
+      ComparisonRow row;
+      row.scene = row.label = row.metric = "*";
+      row.verdict = "not comparable";
+      row.note = std::string("arena compare refuses these runs: ") + e.what();
+      json change = comparisonJson({row})[0];
+      change["run"] = i;
+      ++failing;
+      changes.push_back(change);
+      continue;
+    }
+    for (const ComparisonRow& row : rows) {
       if (row.verdict == "ok") continue;
       json change = comparisonJson({row})[0];
       change["run"] = i;

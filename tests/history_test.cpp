@@ -11,6 +11,7 @@
 #include "core/env_info.hpp"
 #include "core/error.hpp"
 #include "metrics/results.hpp"
+#include "metrics/statistics.hpp"
 #include "tests/test_util.hpp"
 
 namespace arena {
@@ -187,6 +188,37 @@ TEST(History, ARelabelledContenderStaysOneSeries) {
     if (p["label"] == "svgf") p["label"] = "svgf[iterations=2]", p["params"] = {{"iterations", 2}};
   runs.push_back(test::typed(other));
   EXPECT_TRUE(historyData(runs, {})["series"]["s"].contains("svgf[iterations=2]"));
+}
+
+// A run the gate refuses to judge (its summary disagrees with its per-tile data) fails the gate at
+// that run, saying why; the dashboard is still built from the others.
+TEST(History, ARunTheGateRefusesIsMarkedNotComparable) {
+  std::vector<RunResults> runs;
+  for (int i = 0; i < 3; ++i) {
+    json r = historyRun(i, 99);
+    MetricTiles tiles;  // svgf's relMSE tiles: its summary's mean on every frame
+    const double mean = r["pairs"][1]["summary"]["relMse"]["mean"];
+    for (int f = 0; f < 8; ++f) {
+      TileSums t;
+      for (int k = 0; k < 4; ++k) t.sum.push_back(float(mean)), t.count.push_back(1);
+      tiles.add(f, std::move(t));
+    }
+    r["pairs"][1]["tiles"]["relMse"] = tiles.toJson();
+    if (i == 1) r["pairs"][1]["summary"]["relMse"]["mean"] = 0.5;  // edited by hand
+    runs.push_back(test::typed(r));
+  }
+  const std::vector<RunResults> unedited = {runs[0], runs[2]};  // their tiles agree: judged
+  for (const json& c : historyData(unedited, {})["changes"])
+    EXPECT_NE(c["verdict"], "not comparable") << c;
+  const json data = historyData(runs, {});
+  int refused = 0;
+  for (const json& c : data["changes"])
+    if (c["verdict"] == "not comparable" &&
+        c["note"].get<std::string>().find("disagrees with its per-tile data") != std::string::npos)
+      ++refused;
+  EXPECT_EQ(refused, 2) << data["changes"];  // runs 1 (against 0) and 2 (against 1)
+  EXPECT_EQ(data["failing"], 2);
+  EXPECT_TRUE(data["series"]["s"].contains("svgf"));
 }
 
 TEST(History, RunsFromADatabaseAreJudgedOnTheSettingsTheyRecorded) {
