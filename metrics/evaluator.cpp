@@ -170,8 +170,16 @@ EvaluationInput readSequenceForEvaluation(const Sequence& sequence) {
                                            ? captureReferencePath(sequence.dir(), r)
                                            : Sequence::referencePath(sequence.dir(), r);
     NonFiniteCounts bad;
-    countNonFinite(in.references[size_t(r)], channels::referenceLayers(), file.string() + ": ",
-                   bad);
+    // The layers the file holds: a capture's colorVar derived from its half carries the colour's
+    // NaN, which the colour already names.
+    std::vector<std::string> held;
+    for (const LayerSpec& spec : channels::referenceLayers())
+      if (in.references[size_t(r)].has(spec.name) &&
+          !(spec.name == "colorVar" && sequence.isCapture() &&
+            !sequence.capture().referenceHasVariance))
+        held.push_back(spec.name);
+    countNonFinite(in.references[size_t(r)], channels::referenceLayers(), file.string() + ": ", bad,
+                   held);
     // A non-finite reference cannot rank anything: every metric against it would be NaN or a
     // fake perfect score. The scene fails, naming the file and the channels.
     if (!bad.empty())

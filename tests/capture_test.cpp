@@ -383,6 +383,28 @@ TEST(CaptureValidation, NaNInTheColourIsCountedButNotRefused) {
   EXPECT_EQ(noise.detail.find("not checked"), std::string::npos) << noise.detail;
 }
 
+// A NaN in a reference's colour is named once: its colorVar, derived from colorHalf, is not in the
+// file and is not named too.
+TEST(CaptureValidation, ANaNInAReferenceIsNamedInTheLayersTheFileHolds) {
+  const fs::path dir = writeSynthetic("nan_reference");
+  const CaptureDescription c = readCaptureDescription(dir);
+  LayerSet ref = readCaptureReference(c, 0);
+  ref.set("colorHalf", ref.get("color"));
+  ref.get("color").at(2, 2, 0) = std::numeric_limits<float>::quiet_NaN();
+  writeExr(captureReferencePath(dir, 0), ref,
+           {{"color", {"R", "G", "B"}}, {"colorHalf", {"R", "G", "B"}}});
+  for (int r = 1; r < c.info.frames;
+       ++r) {  // every reference with its half, as a capture gives them
+    LayerSet other = readCaptureReference(c, r);
+    other.set("colorHalf", other.get("color"));
+    writeExr(captureReferencePath(dir, r), other,
+             {{"color", {"R", "G", "B"}}, {"colorHalf", {"R", "G", "B"}}});
+  }
+  const std::string e = test::errorOf([&] { readSequenceForEvaluation(Sequence::open(dir)); });
+  EXPECT_NE(e.find("reference_000.exr: color.R x1"), std::string::npos) << e;
+  EXPECT_EQ(e.find("colorVar"), std::string::npos) << e;
+}
+
 TEST(CaptureValidation, AReferenceNoisierThanTheInputIsRefused) {
   const CaptureValidation good = validate(writeSynthetic("ref_ok", 0.3f, 0.0f));
   EXPECT_EQ(checkNamed(good, "reference.roughnessVsInput").status, CheckStatus::Pass)
