@@ -253,13 +253,14 @@ json historyData(const std::vector<RunResults>& runs, std::vector<Tolerance> tol
           std::none_of(run.pairs.begin(), run.pairs.end(),
                        [&](const PairResult& q) { return q.scene == p.scene && q.label == label; }))
         match = label, ++matches;
+    if (matches != 1) return p.label;
     // Another pair of the run that ran the same (two labels for one contender): no alias, or the
     // two would overwrite each other's value.
     const auto sameRun =
         std::count_if(run.pairs.begin(), run.pairs.end(), [&](const PairResult& q) {
           return q.scene == p.scene && q.denoiser == p.denoiser && q.params == p.params;
         });
-    return matches == 1 && sameRun == 1 ? match : p.label;
+    return sameRun == 1 ? match : p.label;
   };
   // Run i's (scene, pair label) -> the series its values went to: the gate's rows name the pair's
   // own label, the page's flags the series.
@@ -298,6 +299,18 @@ json historyData(const std::vector<RunResults>& runs, std::vector<Tolerance> tol
   json gated = json::object();  // the gate's tolerance per metric (0 included), from one run on
   for (const Tolerance& t : tolerances) gated[t.metric] = t.relative;
   size_t failing = 0;
+  // A comparison the gate cannot make (other settings, data it refuses): one row for the whole run,
+  // which fails the gate there, saying why.
+  auto notComparable = [&](size_t run, const std::string& why) {
+    ComparisonRow row;
+    row.scene = row.label = row.metric = "*";
+    row.verdict = "not comparable";
+    row.note = why;
+    json change = comparisonJson({row})[0];
+    change["run"] = run;
+    ++failing;
+    changes.push_back(change);
+  };
   for (size_t i = 1; i < runs.size(); ++i) {
     // Runs measured under other settings: `arena compare` refuses them (exit 2) unless told to
     // compare anyway, so the gate fails there, saying why, and compares nothing.
@@ -308,14 +321,7 @@ json historyData(const std::vector<RunResults>& runs, std::vector<Tolerance> tol
         !differ.empty()) {
       std::string list;
       for (const std::string& d : differ) list += (list.empty() ? "" : "; ") + d;
-      ComparisonRow row;
-      row.scene = row.label = row.metric = "*";
-      row.verdict = "not comparable";
-      row.note = "run with other settings (arena compare refuses them): " + list;
-      json change = comparisonJson({row})[0];
-      change["run"] = i;
-      ++failing;
-      changes.push_back(change);
+      notComparable(i, "run with other settings (arena compare refuses them): " + list);
       continue;
     }
     // A run the gate refuses to judge (a summary that disagrees with its tiles) fails the gate
@@ -324,14 +330,7 @@ json historyData(const std::vector<RunResults>& runs, std::vector<Tolerance> tol
     try {
       rows = compareRuns(runs[i - 1], runs[i], tolerances);
     } catch (const Error& e) {
-      ComparisonRow row;
-      row.scene = row.label = row.metric = "*";
-      row.verdict = "not comparable";
-      row.note = std::string("arena compare refuses these runs: ") + e.what();
-      json change = comparisonJson({row})[0];
-      change["run"] = i;
-      ++failing;
-      changes.push_back(change);
+      notComparable(i, std::string("arena compare refuses these runs: ") + e.what());
       continue;
     }
     for (const ComparisonRow& row : rows) {
