@@ -1,25 +1,14 @@
 #include "core/env_info.hpp"
 
-#include <array>
 #include <cctype>
-#include <cstdio>
 #include <ctime>
 #include <fstream>
 #include <string>
 #include <thread>
 
-namespace arena {
+#include "git_state.hpp"  // generated at build time (cmake/git_state.cmake)
 
-static std::string commandOutput(const std::string& cmd) {
-  std::string out;
-  FILE* p = popen(cmd.c_str(), "r");
-  if (!p) return out;
-  std::array<char, 256> buf{};
-  while (fgets(buf.data(), int(buf.size()), p)) out += buf.data();
-  pclose(p);
-  while (!out.empty() && (out.back() == '\n' || out.back() == '\r')) out.pop_back();
-  return out;
-}
+namespace arena {
 
 nlohmann::json environmentInfo() {
   std::string cpu;
@@ -33,7 +22,7 @@ nlohmann::json environmentInfo() {
           {"cores", std::thread::hardware_concurrency()},
           {"compiler", ARENA_COMPILER},
           {"flags", ARENA_CXX_FLAGS},
-          {"git_commit", commandOutput("git -C '" ARENA_SOURCE_DIR "' rev-parse --short HEAD 2>/dev/null")}};
+          {"git_commit", ARENA_GIT_COMMIT}};
 }
 
 std::string utcTimestamp() {

@@ -31,8 +31,9 @@ packages=(build-essential cmake ninja-build libembree-dev libopenexr-dev libopen
           python3 sweethome3d-furniture)
 # What only the tests and benches use: OpenEXR's tools (a test reads a cached frame with
 # exrheader), Embree's pathtracer tutorial (`arena bench tracer --embree`), NumPy for the Python
-# example denoiser (examples/external/python_temporal), and glTF files the asset tests load.
-$study || packages+=(openexr embree-tools python3-numpy assimp-testmodels)
+# example denoiser (examples/external/python_temporal), glTF files the asset tests load, and git (a
+# test builds a repository to check the commit a run records; the build records none without it).
+$study || packages+=(openexr embree-tools python3-numpy assimp-testmodels git)
 packages+=(${ARENA_EXTRA_PACKAGES:-} "$@")
 # `arena report` copies Vega's browser builds from reports/node_modules, installed with npm.
 command -v node >/dev/null 2>&1 || packages+=(nodejs)

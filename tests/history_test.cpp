@@ -275,6 +275,48 @@ TEST(History, TimesAreTheFormRunsWrite) {
     EXPECT_FALSE(isUtcTimestamp(bad)) << bad;
 }
 
+// The commit a run records is the one its binary was built from, written at build time by
+// cmake/git_state.cmake; tried here on a repository of its own: clean, edited, untracked, none.
+TEST(History, TheRecordedCommitIsTheBuiltTreeAndSaysWhenItWasDirty) {
+  const std::string recorded = environmentInfo()["git_commit"];
+  const auto isHash = [](const std::string& text) {
+    return text.size() == 12 && text.find_first_not_of("0123456789abcdef") == std::string::npos;
+  };
+  const std::string bare = recorded.size() > 6 && recorded.ends_with("-dirty")
+                               ? recorded.substr(0, recorded.size() - 6)
+                               : recorded;
+  EXPECT_TRUE(recorded.empty() || isHash(bare)) << recorded;
+
+  const fs::path repo = test::freshDir("git_state");
+  const fs::path header = repo / "out" / "git_state.hpp";
+  fs::create_directories(header.parent_path());
+  const std::string git = "git -C '" + repo.string() + "' -c user.name=t -c user.email=t@t ";
+  const auto state = [&] {
+    const test::CommandResult r =
+        test::runCommand("cmake -DSOURCE='" + repo.string() + "' -DOUTPUT='" + header.string() +
+                         "' -P '" ARENA_SOURCE_DIR "/cmake/git_state.cmake'");
+    EXPECT_EQ(r.status, 0) << r.output;
+    std::ifstream in(header);
+    const std::string text{std::istreambuf_iterator<char>(in), {}};
+    const size_t open = text.find("ARENA_GIT_COMMIT \"") + 18;
+    return text.substr(open, text.find('"', open) - open);
+  };
+  EXPECT_EQ(state(), "");  // not a checkout: nothing to claim
+  ASSERT_EQ(test::runCommand(git + "init -q").status, 0);
+  std::ofstream(repo / "code.cpp") << "int x;\n";
+  std::ofstream(repo / ".gitignore") << "out/\n";
+  ASSERT_EQ(test::runCommand(git + "add -A && " + git + "commit -q -m one").status, 0);
+  const std::string head = test::runCommand(git + "rev-parse --short=12 HEAD").output.substr(0, 12);
+  EXPECT_EQ(state(), head);
+  const auto written = fs::last_write_time(header);
+  EXPECT_EQ(state(), head);
+  EXPECT_EQ(fs::last_write_time(header), written);  // unchanged: nothing recompiles
+  std::ofstream(repo / "notes.txt") << "untracked\n";
+  EXPECT_EQ(state(), head);  // an untracked file changes no code
+  std::ofstream(repo / "code.cpp") << "int y;\n";
+  EXPECT_EQ(state(), head + "-dirty");
+}
+
 TEST(History, BadInputNamesThePath) {
   const fs::path dir = test::freshDir("history_bad");
   try {
