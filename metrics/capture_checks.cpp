@@ -1,6 +1,7 @@
 #include "metrics/capture_checks.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -117,6 +118,39 @@ struct Brightness {
     return "the input's mean luminance is " + number(ratio()) + "x its reference's, " +
            number(std::abs(z())) + " standard errors from equal";
   }
+};
+
+// Which of two references a frame's input lies on: its own (`own`) or a neighbouring frame's
+// (`other`). The input is an unbiased estimate of its own reference, so per value
+// d = (x - other)^2 - (x - own)^2 has the expectation (own - other)^2 when `own` is the right one
+// and -(own - other)^2 when `other` is; the references' own noise, where known (their variance),
+// is taken off (var_other - var_own), so that a less converged neighbour does not read as a worse
+// fit. `side()` is sum d / sum (own - other)^2: +1 on its own reference, -1 on the other; `z()`
+// is sum d in standard errors of the input's noise, which is independent between pixels.
+struct ReferenceFit {
+  double sumD = 0, sumD2 = 0, sumGap = 0;
+  size_t n = 0;
+  void add(const Image& input, const Image& own, const Image& other, const Image* ownVar,
+           const Image* otherVar) {
+    for (size_t i = 0; i < input.raw().size(); ++i) {
+      const double x = input.raw()[i], a = own.raw()[i], b = other.raw()[i];
+      const double noise = ownVar && otherVar ? double(otherVar->raw()[i]) - ownVar->raw()[i] : 0.0;
+      const double d = (x - b) * (x - b) - (x - a) * (x - a) - noise;
+      sumD += d;
+      sumD2 += d * d;
+      sumGap += (a - b) * (a - b);
+    }
+    n += input.raw().size();
+  }
+  double side() const { return sumGap > 0 ? sumD / sumGap : 0.0; }
+  double z() const {
+    if (n < 2) return 0;
+    const double mean = sumD / double(n), variance = std::max(0.0, sumD2 / double(n) - mean * mean);
+    return variance > 0 ? mean / std::sqrt(variance / double(n - 1)) : 0.0;
+  }
+  // On the other reference beyond noise, and nearer it than its own.
+  bool onOther() const { return z() < -5 && side() < -0.5; }
+  bool onOwn() const { return z() > 5 && side() > 0.5; }
 };
 
 // How many of an image's values are negative radiance: below -1e-3 of its mean luminance (a
@@ -661,6 +695,59 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
         if (error > 0 && floor / error > worstNoise)
           worstNoise = floor / error, worstNoiseFrame = int(t);
       }
+    }
+    // Each frame's input against the references of the frames before and after it: references
+    // written one frame late (or early) score every method against the wrong image, and favour
+    // the methods that lag. A frame is judged only between two neighbours: a misaligned reference
+    // puts its input on one neighbour's, a noisy own reference (or a periodic texture moving by
+    // its period) makes both look nearer, and says nothing of alignment. Frames whose neighbours
+    // share their reference (a still capture with one reference) decide nothing.
+    const int frames = int(input.frames.size());
+    std::vector<std::array<ReferenceFit, 2>> fits(size_t(std::max(frames, 0)));  // [before, after]
+    for (int t = 1; t + 1 < frames; ++t)
+      for (int side = 0; side < 2; ++side) {
+        const size_t own = size_t(input.referenceOfFrame[size_t(t)]),
+                     other = size_t(input.referenceOfFrame[size_t(t + (side ? 1 : -1))]);
+        if (own == other) continue;
+        const LayerSet &a = input.references[own], &b = input.references[other];
+        const bool variances = input.referenceNoiseKnown && a.has("colorVar") && b.has("colorVar");
+        Image scratch;
+        fits[size_t(t)][size_t(side)].add(
+            finiteInput(input.frames[size_t(t)].get("color"), scratch), a.get("color"),
+            b.get("color"), variances ? &a.get("colorVar") : nullptr,
+            variances ? &b.get("colorVar") : nullptr);
+      }
+    for (int side = 0; side < 2; ++side) {
+      std::vector<int> onOther;
+      int onOwn = 0;
+      double z = 0;  // of the frames on the other reference, pooled
+      ReferenceFit pooled;
+      for (int t = 1; t + 1 < frames; ++t) {
+        const ReferenceFit &fit = fits[size_t(t)][size_t(side)],
+                           &opposite = fits[size_t(t)][size_t(1 - side)];
+        if (fit.onOther() && !opposite.onOther()) {
+          onOther.push_back(t);
+          pooled.sumD += fit.sumD, pooled.sumD2 += fit.sumD2, pooled.n += fit.n;
+        }
+        onOwn += fit.onOwn();
+      }
+      z = pooled.z();
+      const int decided = int(onOther.size()) + onOwn;
+      const std::string neighbour = side == 0 ? "before" : "after";
+      v.checks.push_back(check(
+          "reference.alignment." + neighbour, decided ? double(onOther.size()) / decided : 0.0, 0.2,
+          0.5, "share of frames nearer the reference of the frame " + neighbour + " than their own",
+          onOther.empty()
+              ? (decided ? ""
+                         : "not decided: no frame's neighbouring references differ beyond the "
+                           "input's noise")
+              : "frame(s) " + frameList(onOther) + " lie on the reference of the frame " +
+                    neighbour + ", " + std::to_string(onOther.size()) + " of the " +
+                    std::to_string(decided) + " frames decided (" + number(-z) +
+                    " standard errors nearer it than their own): the references look one frame " +
+                    (side == 0 ? "ahead of their inputs (written after the frame advanced?)"
+                               : "behind their inputs (written a frame early?)") +
+                    "; every error metric would then favour the methods that lag"));
     }
     const auto worstFrame = [&](const std::string& name, double value, int frame, double warn,
                                 double fail, const std::string& unit) {

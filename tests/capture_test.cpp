@@ -184,9 +184,10 @@ TEST(Capture, TheExampleInDocsCapturesIsAValidDescription) {
 struct Synthetic {
   int w = 64, h = 36, frames = 6;
   bool constantVelocity = false;  // else the camera accelerates: the next frame's motion is not -e
+  bool still = false;             // the camera never moves
   std::vector<CameraState> cameras;
   CameraState camera(int t) const {
-    const float s = constantVelocity ? 4.0f * float(t) : float(t * t);
+    const float s = still ? 0.0f : constantVelocity ? 4.0f * float(t) : float(t * t);
     const glm::vec3 eye(0.12f * s, 0.05f * s, 0.0f);
     return CameraState::lookAt(eye, eye + glm::vec3(0, 0, -1), {0, 1, 0}, 45.0f, w, h);
   }
@@ -576,6 +577,67 @@ void editReferences(const fs::path& dir, const std::function<void(int, Image&)>&
     edit(r, ref.get("color"));
     writeExr(captureReferencePath(dir, r), ref, {{"color", {"R", "G", "B"}, false}});
   }
+}
+
+// References written one frame late or early: every input lies on its neighbour's reference.
+// A still camera decides nothing (the references are one image), and references of unequal noise
+// beside each other are no misalignment.
+TEST(CaptureValidation, ReferencesOneFrameOffTheirInputsAreRefused) {
+  const auto alignment = [](const CaptureValidation& v, const std::string& side) {
+    return checkNamed(v, "reference.alignment." + side);
+  };
+  const CaptureValidation good = validate(writeSynthetic("aligned"));
+  for (const char* side : {"before", "after"}) {
+    EXPECT_EQ(alignment(good, side).status, CheckStatus::Pass) << alignment(good, side).detail;
+    EXPECT_EQ(alignment(good, side).detail, "");
+  }
+  // Reference file r holds frame r+1's image (the last repeats its own): one frame ahead.
+  const fs::path ahead = writeSynthetic("references_ahead");
+  {
+    const CaptureDescription c = readCaptureDescription(ahead);
+    std::vector<Image> refs;
+    for (int r = 0; r < c.info.frames; ++r) refs.push_back(readCaptureReference(c, r).get("color"));
+    editReferences(
+        ahead, [&](int r, Image& ref) { ref = refs[size_t(std::min(r + 1, c.info.frames - 1))]; });
+  }
+  const CaptureValidation a = validate(ahead);
+  EXPECT_EQ(alignment(a, "before").status, CheckStatus::Fail) << alignment(a, "before").value;
+  // Frame 3 is not judged: the texture's period is near the camera's move from frame 3 to 5, so
+  // both neighbours' references look nearer than its own, as a noisy reference would.
+  EXPECT_EQ(alignment(a, "before")
+                .detail.rfind("frame(s) 1, 2, 4 lie on the reference of the frame before, 3 of the "
+                              "3 frames decided",
+                              0),
+            0u)
+      << alignment(a, "before").detail;
+  EXPECT_NE(alignment(a, "before").detail.find("one frame ahead of their inputs"),
+            std::string::npos);
+  EXPECT_EQ(alignment(a, "after").status, CheckStatus::Pass) << alignment(a, "after").detail;
+  // One frame behind: reference file r holds frame r-1's image.
+  const fs::path behind = writeSynthetic("references_behind");
+  {
+    const CaptureDescription c = readCaptureDescription(behind);
+    std::vector<Image> refs;
+    for (int r = 0; r < c.info.frames; ++r) refs.push_back(readCaptureReference(c, r).get("color"));
+    editReferences(behind, [&](int r, Image& ref) { ref = refs[size_t(std::max(r - 1, 0))]; });
+  }
+  const CaptureValidation b = validate(behind);
+  EXPECT_EQ(alignment(b, "after").status, CheckStatus::Fail) << alignment(b, "after").detail;
+  EXPECT_EQ(alignment(b, "before").status, CheckStatus::Pass) << alignment(b, "before").detail;
+  EXPECT_NE(b.failures().find("reference.alignment.after"), std::string::npos) << b.failures();
+  // A still camera, references of very unequal noise (every other one noisy): nothing decided.
+  Synthetic still;
+  still.still = true;
+  const fs::path unequal = writeSynthetic("still_unequal_references", 0.3f, 0.0f, still);
+  editReferences(unequal, [](int r, Image& ref) {
+    if (r % 2 == 0)
+      for (size_t i = 0; i < ref.raw().size(); ++i)
+        ref.raw()[i] *= 1.0f + 0.8f * (test::hashUniform(uint32_t(r + 7), uint32_t(i)) - 0.5f);
+  });
+  const CaptureValidation u = validate(unequal);
+  for (const char* side : {"before", "after"})
+    EXPECT_EQ(alignment(u, side).status, CheckStatus::Pass)
+        << side << ": " << alignment(u, side).detail;
 }
 
 // No data is never a perfect score: an input or a reference black in every frame, a reference
