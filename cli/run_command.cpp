@@ -332,10 +332,14 @@ void addRunCommands(CLI::App& app) {
         std::cout << "regressed = worse by more than the tolerance AND the paired " << bc.confidence * 100
                   << "% interval of the change excludes zero\n";
         // Columns as wide as their longest entry (a sweep's labels carry their parameters).
+        // A pair matched by what it ran under another label shows both ("svgf = svgf[sigmaL=4]").
+        const auto shownLabel = [](const ComparisonRow& r) {
+          return r.candidateLabel.empty() ? r.label : r.label + " = " + r.candidateLabel;
+        };
         size_t sceneWidth = 22, labelWidth = 30, metricWidth = 16;
         for (const ComparisonRow& r : rows) {
           sceneWidth = std::max(sceneWidth, displayWidth(r.scene) + 2);
-          labelWidth = std::max(labelWidth, displayWidth(r.label) + 2);
+          labelWidth = std::max(labelWidth, displayWidth(shownLabel(r)) + 2);
           metricWidth = std::max(metricWidth, displayWidth(r.metric) + 2);
         }
         std::cout << paddedText("scene", sceneWidth) << paddedText("denoiser", labelWidth)
@@ -354,7 +358,7 @@ void addRunCommands(CLI::App& app) {
           return std::isfinite(v) ? o.str() : std::string("-");
         };
         for (auto& r : rows)
-          std::cout << paddedText(r.scene, sceneWidth) << paddedText(r.label, labelWidth)
+          std::cout << paddedText(r.scene, sceneWidth) << paddedText(shownLabel(r), labelWidth)
                     << paddedText(r.metric, metricWidth) << std::right << std::setw(12)
                     << figure(r.baseline) << std::setw(12) << figure(r.candidate) << std::setw(9)
                     << pct(r.change) << std::setw(22)

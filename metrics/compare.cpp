@@ -226,9 +226,10 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
       continue;
     }
     ++comparedPairs;
+    const std::string candidateLabel = c.label != label ? c.label : "";
     for (const Tolerance& t : tolerances) {
-      ComparisonRow row{scene,      label, t.metric,   kUndefined, kUndefined,
-                        kUndefined, {},    t.relative, "ok",       ""};
+      ComparisonRow row{scene, label,      t.metric, kUndefined, kUndefined,    kUndefined,
+                        {},    t.relative, "ok",     "",         candidateLabel};
       const SummaryMean bm = b.mean(t.metric), cm = c.mean(t.metric);
       if (!bm.computed && !cm.computed) continue;  // e.g. FLIP switched off in both runs
       if (!cm.present() && !bm.present()) {
@@ -364,7 +365,8 @@ json comparisonJson(const std::vector<ComparisonRow>& rows) {
                    {"tolerance", r.tolerance},
                    {"verdict", r.verdict},
                    {"fails", failsGate(r)},
-                   {"note", r.note}});
+                   {"note", r.note},
+                   {"candidateLabel", r.candidateLabel.empty() ? r.label : r.candidateLabel}});
   return out;
 }
 

@@ -41,6 +41,9 @@ struct ComparisonRow {
   // scene "*": no figure was measured by both runs, so the gate fails rather than pass on nothing).
   std::string verdict;
   std::string note;
+  // The candidate's label where it differs from the baseline's (`label`): a pair matched by what it
+  // ran, the denoiser and its parameters ("svgf" against a sweep's "svgf[sigmaL=4]").
+  std::string candidateLabel;
 };
 
 // The tolerances a gate applies: `tolerances` checked (a registered metric, finite and

@@ -57,11 +57,19 @@
                     rows.map(
                         (r) => el(
                             'tr', {}, el('td', {class: 'first', text: r.scene}),
-                            el('td', {class: 'first', text: r.label}),
+                            // A pair matched by what it ran under another label shows both.
+                            el('td', {
+                              class: 'first',
+                              text: r.candidateLabel && r.candidateLabel !== r.label ?
+                                  `${r.label} = ${r.candidateLabel}` :
+                                  r.label
+                            }),
                             el('td', {class: 'first', text: r.metric}),
                             el('td', {text: fmt(r.baseline)}), el('td', {text: fmt(r.candidate)}),
-                            el('td', {text: r.note ? '–' : pct(r.change)},
-                               !r.note && r.changeCi95 ? el('span', {
+                            // The change wherever both runs measured it (a note such as
+                            // "within noise" does not hide it).
+                            el('td', {text: r.change == null ? '–' : pct(r.change)},
+                               r.change != null && r.changeCi95 ? el('span', {
                                  class: 'ci',
                                  text: A.interval(r.changeCi95.map((v) => 100 * v)) + ' %'
                                }) :

@@ -284,7 +284,7 @@
         el('h3', {text: `Ablation of ${AB.denoiser} (sweep)`}), el('p', {
           class: 'note',
           text:
-              'Δ = metric with the value − metric with the first value, other grid parameters held equal; relative change in brackets. Per scene, a ranked metric\'s Δ is the run\'s paired difference with its 95% interval; where several settings of the other parameters match, and over all scenes, Δ is the mean and the count says how many of the matched paired differences are resolved. Green or red only when every matched difference is resolved that way ("tie": some are not; "mixed": resolved both ways; no colour: a metric without paired intervals).'
+              'Δ = metric with the value − metric with the first value, other grid parameters held equal; relative change in brackets; time is the median frame time, as everywhere on this page. Per scene, a ranked metric\'s Δ is the run\'s paired difference with its 95% interval; where several settings of the other parameters match, and over all scenes, Δ is the mean and the count says how many of the matched paired differences are resolved. Green or red only when every matched difference is resolved that way ("tie": some are not; "mixed": resolved both ways; no colour: a metric without paired intervals).'
         }));
     if (!rows.length) {
       box.append(el('p', { class: 'empty', text: 'No grid parameter has two values with matching pairs.' }));
@@ -293,7 +293,7 @@
     const metrics = A.D.metrics.filter((m) => rows.some((r) => r.delta[m.name] !== undefined));
     box.append(el('div', { class: 'table-wrap' }, el('table', { class: 'data ablation-table' },
       el('thead', {}, el('tr', {}, el('th', { class: 'first', text: 'parameter' }), el('th', { text: 'value vs first' }),
-        el('th', { text: 'scene' }), el('th', { text: 'pairs' }), metrics.map((m) => el('th', { text: `Δ ${m.name}` })))),
+        el('th', { text: 'scene' }), el('th', { text: 'pairs' }), metrics.map((m) => el('th', { text: m.name === 'ms' ? 'Δ ms (median)' : `Δ ${m.name}` })))),
       el('tbody', {}, rows.map((r) => el('tr', {},
         el('td', { class: 'first', text: r.parameter }), el('td', { text: `${r.value} vs ${r.versus}` }),
         el('td', { text: r.scene === null ? 'all scenes' : r.scene }), el('td', { text: r.matched }),

@@ -393,6 +393,14 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
   assert.ok(gate.typed, 'every regression row says whether it fails the gate');
   await page.selectOption('#regression-filter', 'regressed');
   assert.equal(await page.locator('#regression-body table tbody tr').count(), gate.failing);
+  // Every row both runs measured shows its change, whatever its note says.
+  await page.selectOption('#regression-filter', 'all');
+  const changes = await page.evaluate(() => ({
+    measured: window.Arena.D.regression.rows.filter((r) => r.change != null).length,
+    shown: [...document.querySelectorAll('#regression-body table tbody tr td:nth-child(6)')]
+               .filter((td) => !td.textContent.startsWith('–')).length
+  }));
+  assert.equal(changes.shown, changes.measured, 'a measured change is shown');
   await page.selectOption('#regression-filter', 'moved');
 
   await page.evaluate(() => window.scrollTo(0, 0));
