@@ -1,6 +1,8 @@
 #include "denoisers/params.hpp"
 
+#include <charconv>
 #include <cmath>
+#include <cstdlib>
 #include <regex>
 #include <sstream>
 
@@ -81,13 +83,25 @@ const ParamSpec* ParamSchema::find(const std::string& name) const {
   return nullptr;
 }
 
+namespace {
+// The float `v` is read as, written back as the shortest decimal that reads as that float.
+double asReadFloat(double v) {
+  const float f = float(v);
+  char buf[32];
+  const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, f);
+  return ec == std::errc() ? std::strtod(std::string(buf, end).c_str(), nullptr) : double(f);
+}
+}  // namespace
+
 ParamSet ParamSchema::resolve(const std::map<std::string, std::string>& overrides, const std::string& owner) const {
   ParamSet out;
   for (const ParamSpec& s : specs_) {
     switch (s.type) {
       case ParamSpec::Type::Bool: out.set(s.name, s.defaultValue != 0); break;
       case ParamSpec::Type::Int: out.set(s.name, int(s.defaultValue)); break;
-      case ParamSpec::Type::Float: out.set(s.name, s.defaultValue); break;
+      case ParamSpec::Type::Float:
+        out.set(s.name, floats_ ? asReadFloat(s.defaultValue) : s.defaultValue);
+        break;
       case ParamSpec::Type::Choice: out.set(s.name, s.choices[size_t(s.defaultValue)]); break;
     }
   }
@@ -128,7 +142,8 @@ ParamSet ParamSchema::resolve(const std::map<std::string, std::string>& override
         if (v < s->min || v > s->max)
           bad("a value in [" + formatNumber(s->min) + ", " + formatNumber(s->max) + "]");
         if (s->type == ParamSpec::Type::Int) out.set(name, int(v));
-        else out.set(name, v);
+        else
+          out.set(name, floats_ ? asReadFloat(v) : v);
         break;
       }
       case ParamSpec::Type::Choice: {

@@ -57,9 +57,16 @@ class ParamSchema {
   // Defaults overridden by `overrides` (name -> text value, as from `--param svgf.sigmaL=4` or
   // JSON). `owner` names the denoiser in error messages.
   ParamSet resolve(const std::map<std::string, std::string>& overrides, const std::string& owner) const;
+  // A built-in reads its float parameters as `float`: each resolved value is then the shortest
+  // decimal of the float it reads (0.30000001 resolves to 0.3, the float both read as), so that
+  // labels, recorded parameters and compare's matching say what ran. External denoisers read
+  // doubles, and keep every digit.
+  void readsFloatsAsFloat() { floats_ = true; }
+  bool floatsAsFloat() const { return floats_; }
 
  private:
   std::vector<ParamSpec> specs_;
+  bool floats_ = false;
 };
 
 }  // namespace arena

@@ -57,6 +57,7 @@ std::string DenoiserRegistry::resolve(const std::string& entry) {
 void DenoiserRegistry::add(DenoiserInfo info) {
   if (std::any_of(infos_.begin(), infos_.end(), [&](auto& i) { return i.name == info.name; }))
     throw Error("denoiser '" + info.name + "' registered twice");
+  if (info.origin.empty()) info.schema.readsFloatsAsFloat();  // built-ins: ParamSet::getFloat
   infos_.push_back(std::move(info));
 }
 

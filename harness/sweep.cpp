@@ -30,13 +30,12 @@ RunConfig sweepRun(RunConfig c, const std::string& denoiser, const std::map<std:
     axes.push_back({name, splitList(inner, "--grid '" + g + "': values", "NAME=[v1,v2,...]")});
     // Compared as the denoiser reads them ("2" and "2.0", "0" and "-0" are one setting: two
     // contenders of one setting would only add ties), each value checked on the way. A built-in
-    // reads a float parameter as a float, so values that round to one float are one setting too.
+    // reads a float parameter as a float, so values that round to one float are one setting too
+    // (its schema resolves them to one value).
     std::map<std::string, std::string> distinct;  // as read -> as written
     for (const std::string& v : axes.back().second) {
-      ParamSet::Value read = info.schema.resolve({{name, v}}, denoiser).values().at(name);
-      if (const double* d = std::get_if<double>(&read); d && info.origin.empty())
-        read = double(float(*d));
-      const std::string key = ParamSet::text(read);
+      const std::string key =
+          ParamSet::text(info.schema.resolve({{name, v}}, denoiser).values().at(name));
       if (auto [it, added] = distinct.emplace(key, v); !added)
         throw Error("--grid '" + g + "': " + v + " and " + it->second + " are the same value of " +
                     name + " (as " + denoiser + " reads it: " + key + ")");

@@ -78,6 +78,28 @@ TEST(Sweep, ValuesAreComparedAndLabelledAsTheDenoiserReadsThem) {
             }).find("4.0000000001 and 4 are the same value of sigmaL (as svgf reads it: 4)"),
             std::string::npos);
   EXPECT_NO_THROW(sweepRun(RunConfig{}, "svgf", {}, {"sigmaL=[4,4.001]"}));
+  // Spaces after the commas are layout ("[2, 4]" read " 4" and refused it as no number).
+  EXPECT_EQ(sweepRun(RunConfig{}, "svgf", {}, {"sigmaL=[2, 4 ]"}).denoisers[1].label,
+            "svgf[sigmaL=4]");
+  EXPECT_NE(test::errorOf([] {
+              sweepRun(RunConfig{}, "svgf", {}, {"sigmaL=[2, ]"});
+            }).find("an empty entry"),
+            std::string::npos);
+  // A value written with more digits than a float holds is labelled and recorded as the float a
+  // built-in reads (0.30000001 ran as 0.3f: a plain run of 0.3 is the same contender, and compare
+  // matches them); an external denoiser reads doubles and keeps every digit.
+  const RunConfig digits = sweepRun(RunConfig{}, "svgf", {}, {"alpha=[0.1,0.30000001]"});
+  EXPECT_EQ(digits.denoisers[1].label, "svgf[alpha=0.3]");
+  EXPECT_EQ(defaultLabel({"svgf", {{"alpha", "0.30000001"}}, ""}),
+            defaultLabel({"svgf", {{"alpha", "0.3"}}, ""}));
+  const ParamSchema& svgf = DenoiserRegistry::instance().find("svgf").schema;
+  EXPECT_EQ(svgf.resolve({{"alpha", "0.30000001"}}, "svgf").toJson()["alpha"], json(0.3));
+  for (const ParamSpec& spec : svgf.specs())  // the defaults stay as the code writes them
+    if (spec.type == ParamSpec::Type::Float)
+      EXPECT_EQ(svgf.resolve({}, "svgf").values().at(spec.name), ParamSet::Value(spec.defaultValue))
+          << spec.name;
+  const ParamSchema external({ParamSpec::real("alpha", 0.2, 0, 1, "a double")});
+  EXPECT_EQ(external.resolve({{"alpha", "0.30000001"}}, "ext").toJson()["alpha"], json(0.30000001));
 }
 
 // The ablation compares each value with the grid's first, whatever else ran: a baseline of the
