@@ -257,8 +257,13 @@ void addRunCommands(CLI::App& app) {
     auto grids = std::make_shared<std::vector<std::string>>();
     cmd->add_option("--denoiser", *denoiser, "The denoiser to sweep")->required();
     cmd->add_option("--grid", *grids, "NAME=[v1,v2,...], repeatable; the run covers the Cartesian product")->required();
+    auto maxPoints = std::make_shared<size_t>(kDefaultMaxSweepPoints);
+    cmd->add_option("--max-points", *maxPoints,
+                    "Refuse a grid of more points than this (each runs on every scene)")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
     addMatrixOptions(cmd, *o);
-    cmd->callback([o, denoiser, grids] {
+    cmd->callback([o, denoiser, grids, maxPoints] {
       RunConfig c = configFrom(*o);
       *denoiser = DenoiserRegistry::resolve(*denoiser);  // ext:MANIFEST or plugin:LIBRARY too
       auto assignments = parseParamAssignments(o->params);
@@ -266,7 +271,7 @@ void addRunCommands(CLI::App& app) {
         if (other != *denoiser)
           throw Error("--param " + other + "." + kv.begin()->first + ": this sweep runs only " + *denoiser +
                       "; --param must name " + *denoiser + ".NAME");
-      c = sweepRun(std::move(c), *denoiser, assignments[*denoiser], *grids);
+      c = sweepRun(std::move(c), *denoiser, assignments[*denoiser], *grids, *maxPoints);
       resolveAutoLowres(c);
       runMatrix(c);
       finish(o->out);

@@ -84,11 +84,34 @@ std::optional<fs::path> recordedImagePath(const fs::path& out, const json& recor
   return out / relative;
 }
 
+// Pair image folders under images/<scene>/ that no results file records (a run killed before its
+// commit wrote them) are said, not removed: they are not this run's, and nothing names them.
+void warnOfUnrecordedImages(const fs::path& out, const std::set<fs::path>& written,
+                            const ProgressFn& say) {
+  std::error_code ec;
+  std::vector<std::string> unrecorded;
+  for (fs::directory_iterator scene(out / "images", ec), end; !ec && scene != end;
+       scene.increment(ec))
+    if (scene->is_directory(ec))
+      for (fs::directory_iterator pair(scene->path(), ec); !ec && pair != end; pair.increment(ec))
+        if (pair->is_directory(ec) && !written.count(pair->path()))
+          unrecorded.push_back(fs::relative(pair->path(), out, ec).string());
+  if (unrecorded.empty() || !say) return;
+  std::sort(unrecorded.begin(), unrecorded.end());
+  std::string names;
+  for (size_t i = 0; i < std::min<size_t>(unrecorded.size(), 3); ++i)
+    names += (i ? ", " : "") + unrecorded[i];
+  say("  warning: " + out.string() + " holds " + std::to_string(unrecorded.size()) +
+      " image folder(s) no run recorded (" + names + (unrecorded.size() > 3 ? ", ..." : "") +
+      "), left by a run stopped before its commit?; the report reads none of them: remove them");
+}
+
 // The image folders that the run directory's previous results.json recorded (a reused --out) and
 // this run did not write are removed before the new results replace it, so the report copies only
 // this run's images. Only what that file names is touched (a --out holding other folders keeps
 // them), and nothing here fails a finished run: what cannot be removed is said.
-void pruneEarlierImages(const fs::path& out, const json& results, const ProgressFn& say) {
+void pruneRecordedImages(const fs::path& out, const std::set<fs::path>& written,
+                         const ProgressFn& say) {
   std::error_code ec;
   if (!fs::exists(out / "results.json", ec)) return;
   json earlier;
@@ -98,13 +121,6 @@ void pruneEarlierImages(const fs::path& out, const json& results, const Progress
     return;  // not readable as JSON: checkRunOutputs took it as replaceable, and it names nothing
   }
   if (!earlier.is_object()) return;
-  std::set<fs::path> written;
-  for (const json& p : results["pairs"])
-    if (p.contains("images"))
-      if (auto dir = recordedImagePath(out, p["images"].value("dir", json()))) written.insert(*dir);
-  for (const json& scene : results["scenes"])
-    if (scene.is_object())
-      if (auto dir = recordedImagePath(out, scene.value("images", json()))) written.insert(*dir);
   std::vector<fs::path> stale;
   for (const json& p : earlier.value("pairs", json::array()))
     if (p.is_object() && p.contains("images") && p["images"].is_object())
@@ -124,6 +140,19 @@ void pruneEarlierImages(const fs::path& out, const json& results, const Progress
         removeSceneImages(*dir, say);
         if (fs::is_empty(*dir, ec)) fs::remove(*dir, ec);
       }
+}
+
+// The images of this run, alone under images/: the earlier run's are removed, strays are said.
+void pruneEarlierImages(const fs::path& out, const json& results, const ProgressFn& say) {
+  std::set<fs::path> written;
+  for (const json& p : results["pairs"])
+    if (p.contains("images"))
+      if (auto dir = recordedImagePath(out, p["images"].value("dir", json()))) written.insert(*dir);
+  for (const json& scene : results["scenes"])
+    if (scene.is_object())
+      if (auto dir = recordedImagePath(out, scene.value("images", json()))) written.insert(*dir);
+  pruneRecordedImages(out, written, say);
+  warnOfUnrecordedImages(out, written, say);
 }
 
 const std::string kIdenticalOutputs = "its output on this scene is bit-identical to ";
@@ -272,7 +301,7 @@ json runMatrix(const RunConfig& cfg) {
       throw Error("--cache " + cfg.cache.string() + " lies in the run directory " +
                   cfg.out.string() + "; expected the sequence cache outside it");
   }
-  const DirectoryLock outLock = checkRunOutputs(cfg.out);
+  const RunDirectoryLock outLock = checkRunOutputs(cfg.out);
   // The cache, like --out, before any work: a file there would fail every pair one by one.
   if (std::error_code ec;
       !cfg.scenes.empty() && fs::exists(cfg.cache, ec) && !fs::is_directory(cfg.cache, ec))

@@ -135,7 +135,7 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
                   " pair(s) of the run's plan are in no shard (" + lost +
                   (count > 5 ? ", ..." : "") + "); a shard lost them; nothing was written");
   }
-  const DirectoryLock outLock = checkRunOutputs(
+  const RunDirectoryLock outLock = checkRunOutputs(
       out);  // creates --out only now: shards that cannot be merged leave no directory behind
   // The images are the shards', as the results are: a previous merge's in --out go.
   fs::remove_all(out / "images", ec);

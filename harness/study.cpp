@@ -115,7 +115,7 @@ json runStudy(StudyConfig config) {
   // The study holds its run directory from the first pass to the commit after the refinement,
   // and the cache alone: its refinement rewrites references that another run or study would
   // otherwise read half old, half new (a second study waits, then finds them refined).
-  const DirectoryLock outLock = checkRunOutputs(c.out);
+  const RunDirectoryLock outLock = checkRunOutputs(c.out);
   const DirectoryLock cacheLock(c.cache, DirectoryLock::Mode::Exclusive,
                                 DirectoryLock::IfHeld::Wait, "a study refining references");
   // The budget is counted at the preset's (or the given) sample cap, whatever cap the first

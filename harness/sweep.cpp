@@ -1,5 +1,6 @@
 #include "harness/sweep.hpp"
 
+#include <algorithm>
 #include <map>
 #include <set>
 
@@ -9,9 +10,9 @@
 
 namespace arena {
 
-
-RunConfig sweepRun(RunConfig c, const std::string& denoiser, const std::map<std::string, std::string>& fixed,
-                   const std::vector<std::string>& grids) {
+RunConfig sweepRun(RunConfig c, const std::string& denoiser,
+                   const std::map<std::string, std::string>& fixed,
+                   const std::vector<std::string>& grids, size_t maxPoints) {
   const DenoiserInfo& info = DenoiserRegistry::instance().find(denoiser);
   std::vector<std::pair<std::string, std::vector<std::string>>> axes;
   for (const std::string& g : grids) {
@@ -41,6 +42,17 @@ RunConfig sweepRun(RunConfig c, const std::string& denoiser, const std::map<std:
                     name + " (as " + denoiser + " reads it: " + key + ")");
     }
   }
+  size_t points = 1;
+  std::string product;
+  for (auto& [name, values] : axes) {
+    points =
+        values.size() > maxPoints ? maxPoints + 1 : std::min(points * values.size(), maxPoints + 1);
+    product += (product.empty() ? "" : " x ") + std::to_string(values.size());
+  }
+  if (points > maxPoints)
+    throw Error("--grid: " + product + " = more than " + std::to_string(maxPoints) +
+                " grid points (--max-points), each run on every scene; narrow the grid, or raise "
+                "--max-points to run it");
   std::vector<std::map<std::string, std::string>> settings = {fixed};
   for (auto& [name, values] : axes) {
     std::vector<std::map<std::string, std::string>> next;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <map>
+#include <utility>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
@@ -245,16 +246,31 @@ void appendToDatabase(const fs::path& dbPath, const RunResults& r, const std::st
   db.exec("COMMIT");
 }
 
-DirectoryLock checkRunOutputs(const fs::path& runDir) {
+RunDirectoryLock::RunDirectoryLock(fs::path dir, bool created, DirectoryLock lock)
+    : dir_(std::move(dir)), created_(created), lock_(std::move(lock)) {}
+
+RunDirectoryLock::RunDirectoryLock(RunDirectoryLock&& other) noexcept
+    : dir_(std::move(other.dir_)),
+      created_(std::exchange(other.created_, false)),
+      lock_(std::move(other.lock_)) {}
+
+RunDirectoryLock::~RunDirectoryLock() {
+  std::error_code ec;
+  if (created_ && !fs::exists(dir_ / "results.json", ec)) fs::remove_all(dir_, ec);
+}
+
+RunDirectoryLock checkRunOutputs(const fs::path& runDir) {
   std::error_code ec;
   if (fs::exists(runDir, ec) && !fs::is_directory(runDir, ec))
     throw Error(runDir.string() + ": exists and is not a directory; --out needs a run directory");
+  const bool created = !fs::exists(runDir, ec);
   fs::create_directories(runDir, ec);
   if (ec) throw Error(runDir.string() + ": cannot create run directory: " + ec.message());
   if (access(runDir.c_str(), W_OK) != 0)
     throw Error(osError(runDir, "run directory is not writable", errno));
-  DirectoryLock lock(runDir, DirectoryLock::Mode::Exclusive, DirectoryLock::IfHeld::Refuse,
-                     "writing this run");
+  RunDirectoryLock lock(runDir, created,
+                        DirectoryLock(runDir, DirectoryLock::Mode::Exclusive,
+                                      DirectoryLock::IfHeld::Refuse, "writing this run"));
   removeStaleTemporariesBelow(runDir);  // images/ too
 
   const fs::path jsonPath = runDir / "results.json";

@@ -33,7 +33,25 @@ void appendToDatabase(const std::filesystem::path& dbPath, const RunResults& res
 // in a second, naming the file, instead of after every pair has run. Removes stale temporaries.
 // The returned lock keeps other arena processes out of the directory until the run is committed:
 // a second run into the same --out is refused (two commits would each drop the other's rows).
-[[nodiscard]] DirectoryLock checkRunOutputs(const std::filesystem::path& runDir);
+// When the run fails, a directory it created is removed on release (see RunDirectoryLock).
+class RunDirectoryLock {
+ public:
+  RunDirectoryLock(std::filesystem::path dir, bool created, DirectoryLock lock);
+  RunDirectoryLock(RunDirectoryLock&& other) noexcept;
+  RunDirectoryLock(const RunDirectoryLock&) = delete;
+  RunDirectoryLock& operator=(const RunDirectoryLock&) = delete;
+  RunDirectoryLock& operator=(RunDirectoryLock&&) = delete;
+  // A directory this lock created, released without results.json (the run failed before its
+  // commit), is removed whole: an error leaves no directory holding only a lock file, or a pair's
+  // images without results. One that existed before the run is left as it was found.
+  ~RunDirectoryLock();
+
+ private:
+  std::filesystem::path dir_;
+  bool created_ = false;
+  DirectoryLock lock_;
+};
+[[nodiscard]] RunDirectoryLock checkRunOutputs(const std::filesystem::path& runDir);
 // Writes results.json and appends to results.db as one commit: both are written to temporaries
 // (the database as an appended copy) and renamed into place only when both are complete. A
 // document RunResults::fromJson refuses is an Error before any file is touched.

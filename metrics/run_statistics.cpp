@@ -294,13 +294,22 @@ RunStatistics analyseRun(const json& results, const BootstrapConfig& cfg) {
   }
   // The overall scores: relMSE's is the run's ("overall"); the other metrics that declare one
   // ("overallByMetric") are what the report's all-scenes chart shows on their axes.
+  // Scores are relative to `temporal` where it ran (the baselines); without it, to a sweep's
+  // first grid point, else to the run's first contender (not the first label in sorted order).
+  std::vector<std::string> preferred = {"temporal"};
+  if (const json labels = results.value("sweep", json::object()).value("labels", json::array());
+      !labels.empty() && labels.front().is_string())
+    preferred.push_back(labels.front());
+  for (const json& p : results["pairs"])
+    if (p.value("status", "") == "ok" && p.contains("label") && p["label"].is_string())
+      preferred.push_back(p["label"]);
   for (const MetricDefinition* m : rankedMetrics) {
     if (!m->overall) continue;
     std::vector<const SceneRanking*> ranked;
     for (const SceneRanking& r : overallInputs[m->name])
       if (!r.ranking.empty()) ranked.push_back(&r);
     if (ranked.empty()) continue;
-    OverallRanking overall = rankOverall(ranked, "temporal", m->lowerIsBetter(), cfg.confidence);
+    OverallRanking overall = rankOverall(ranked, preferred, m->lowerIsBetter(), cfg.confidence);
     if (m->name == out.rankedOn) out.overall = std::move(overall);
     else out.overallByMetric[m->name] = std::move(overall);
   }

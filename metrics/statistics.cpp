@@ -478,7 +478,7 @@ json SceneRanking::toJson() const {
 }
 
 OverallRanking rankOverall(const std::vector<const SceneRanking*>& scenes,
-                           const std::string& preferredBaseline, bool lowerIsBetter,
+                           const std::vector<std::string>& preferredBaselines, bool lowerIsBetter,
                            double confidence) {
   OverallRanking out;
   if (scenes.empty()) return out;
@@ -514,9 +514,9 @@ OverallRanking rankOverall(const std::vector<const SceneRanking*>& scenes,
         (out.excluded.empty() ? "" : "; ") + kept.front() +
         ": the only method ranked on every scene (an overall score compares two or more)";
   if (kept.size() < 2) return out;
-  out.baseline = std::find(kept.begin(), kept.end(), preferredBaseline) != kept.end()
-                     ? preferredBaseline
-                     : kept.front();
+  out.baseline = kept.front();
+  for (auto it = preferredBaselines.rbegin(); it != preferredBaselines.rend(); ++it)
+    if (std::find(kept.begin(), kept.end(), *it) != kept.end()) out.baseline = *it;
   out.normalisation = "geometric mean over " + std::to_string(scenes.size()) + " scenes of " +
                       scenes.front()->metric + " / " + scenes.front()->metric + "(" + out.baseline +
                       ")";

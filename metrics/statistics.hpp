@@ -162,8 +162,10 @@ struct OverallRanking {
   std::string excluded;
   nlohmann::json toJson() const;
 };
+// The baseline is the first of `preferredBaselines` ranked on every scene (else the first such
+// label in sorted order).
 OverallRanking rankOverall(const std::vector<const SceneRanking*>& scenes,
-                           const std::string& preferredBaseline, bool lowerIsBetter,
+                           const std::vector<std::string>& preferredBaselines, bool lowerIsBetter,
                            double confidence = 0.95);
 
 }  // namespace arena

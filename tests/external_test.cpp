@@ -549,7 +549,7 @@ TEST(ExternalFaults, ImplausibleTimesAreWarnedOfAndFailedPairsLeaveNoImages) {
   std::vector<std::string> printed;
   cfg.progress = [&](const std::string& line) { printed.push_back(line); };
   // An earlier run into the same --out, with a contender this run does not have; and a folder of
-  // the user's that no run recorded (left alone).
+  // the user's that no run recorded (left alone, and said).
   RunConfig earlier = tinyRun("implausible", {{"passthrough", {}, ""}});
   earlier.keepFrames = "all";
   runMatrix(earlier);
@@ -579,6 +579,13 @@ TEST(ExternalFaults, ImplausibleTimesAreWarnedOfAndFailedPairsLeaveNoImages) {
   EXPECT_EQ(folders, (std::vector<std::string>{
                          fs::path(slow["images"]["dir"].get<std::string>()).filename().string(),
                          "my-notes"}));
+  // ... and said, as folders a run stopped before its commit leaves are (nothing records them).
+  bool stray = false;
+  for (const std::string& line : printed)
+    stray |=
+        line.find("holds 1 image folder(s) no run recorded (images/cornell_static/my-notes)") !=
+        std::string::npos;
+  EXPECT_TRUE(stray);
 }
 
 TEST(ExternalFaults, AMissingProgramIsNamed) {

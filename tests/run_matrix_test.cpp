@@ -78,6 +78,22 @@ TEST(Sweep, ValuesAreComparedAndLabelledAsTheDenoiserReadsThem) {
             }).find("4.0000000001 and 4 are the same value of sigmaL (as svgf reads it: 4)"),
             std::string::npos);
   EXPECT_NO_THROW(sweepRun(RunConfig{}, "svgf", {}, {"sigmaL=[4,4.001]"}));
+  // A grid too large to mean it is refused before it is planned, with its size.
+  const std::vector<std::string> huge = {"sigmaL=[1,2,3,4,5,6,7,8,9,10]",
+                                         "sigmaZ=[1,2,3,4,5,6,7,8,9,10]",
+                                         "sigmaN=[1,2,3,4,5,6,7,8,9,10]",
+                                         "alpha=[0.1,0.2,0.3,0.4,0.5,0.6,0.7,0.8,0.9,1]",
+                                         "momentsAlpha=[0.1,0.2,0.3,0.4,0.5,0.6,0.7,0.8,0.9,1]",
+                                         "iterations=[1,2,3,4,5,6,7,8,9,10]"};
+  EXPECT_EQ(test::errorOf([&] { sweepRun(RunConfig{}, "svgf", {}, huge); }),
+            "--grid: 10 x 10 x 10 x 10 x 10 x 10 = more than 1000 grid points (--max-points), each "
+            "run on "
+            "every scene; narrow the grid, or raise --max-points to run it");
+  EXPECT_EQ(sweepRun(RunConfig{}, "svgf", {}, {huge[0], huge[1]}, 100).denoisers.size(), 100u);
+  EXPECT_NE(test::errorOf([&] {
+              sweepRun(RunConfig{}, "svgf", {}, {huge[0], huge[1]}, 99);
+            }).find("more than 99"),
+            std::string::npos);
   // Spaces after the commas are layout ("[2, 4]" read " 4" and refused it as no number).
   EXPECT_EQ(sweepRun(RunConfig{}, "svgf", {}, {"sigmaL=[2, 4 ]"}).denoisers[1].label,
             "svgf[sigmaL=4]");
@@ -652,6 +668,12 @@ TEST(RunMatrixContract, BadOutputsFailBeforeAnyWorkNamingTheFile) {
             std::string::npos)
       << e;
   EXPECT_FALSE(fs::exists(fileCache.out / "results.json"));
+  EXPECT_TRUE(fs::is_directory(fileCache.out)) << "a directory that existed before the run is kept";
+  // Into a directory the run creates: a failure removes it (it held only the run's lock file).
+  fileCache.out /= "new_run";
+  EXPECT_NE(test::errorOf([&] { runMatrix(fileCache); }).find("cache_is_a_file"),
+            std::string::npos);
+  EXPECT_FALSE(fs::exists(fileCache.out)) << "a failed run left the directory it created";
   // A run written into the sequence cache, or as the cache itself: refused, nothing created there.
   for (const std::string inside : {"run", ""}) {
     RunConfig intoCache = contract::tinyRun("into_cache");

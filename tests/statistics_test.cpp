@@ -156,7 +156,7 @@ TEST(Bootstrap, OverallRankingIsPerSceneNormalised) {
       rankScene("relMse", true, {{"x", &xs}, {"y", &ys}, {"temporal", &ts}}, "small");
   SceneRanking large =
       rankScene("relMse", true, {{"x", &xl}, {"y", &yl}, {"temporal", &tl}}, "large");
-  OverallRanking o = rankOverall({&small, &large}, "temporal", true);
+  OverallRanking o = rankOverall({&small, &large}, std::vector<std::string>{"temporal"}, true);
   ASSERT_EQ(o.ranking.size(), 3u);
   EXPECT_EQ(o.ranking[0].label, "x");
   EXPECT_NEAR(o.ranking[0].value, std::sqrt(0.25 * 0.55), 0.01);
@@ -176,17 +176,18 @@ TEST(Bootstrap, OverallRankingNamesWhatItLeavesOut) {
       rankScene("relMse", true, {{"x", &x2}, {"y", &y2}, {"temporal", &t2}}, "second");
   for (const auto& order : {std::vector<const SceneRanking*>{&first, &second},
                             std::vector<const SceneRanking*>{&second, &first}}) {
-    const OverallRanking o = rankOverall(order, "temporal", true);
+    const OverallRanking o = rankOverall(order, std::vector<std::string>{"temporal"}, true);
     ASSERT_EQ(o.ranking.size(), 2u);
     EXPECT_EQ(o.excluded, "y: not ranked on every scene");
   }
   SceneRanking alone = rankScene("relMse", true, {{"x", &x1}}, "first");
-  const OverallRanking one = rankOverall({&alone}, "temporal", true);
+  const OverallRanking one = rankOverall({&alone}, std::vector<std::string>{"temporal"}, true);
   EXPECT_TRUE(one.ranking.empty());
   EXPECT_TRUE(one.baseline.empty());
   EXPECT_NE(one.excluded.find("x: the only method"), std::string::npos) << one.excluded;
   SceneRanking onlyX = rankScene("relMse", true, {{"x", &x2}, {"y", &y2}}, "second");
-  const OverallRanking leftOne = rankOverall({&first, &onlyX}, "temporal", true);
+  const OverallRanking leftOne =
+      rankOverall({&first, &onlyX}, std::vector<std::string>{"temporal"}, true);
   EXPECT_TRUE(leftOne.ranking.empty());
   EXPECT_NE(leftOne.excluded.find("temporal: not ranked on every scene"), std::string::npos);
   EXPECT_NE(leftOne.excluded.find("x: the only method"), std::string::npos) << leftOne.excluded;
@@ -245,6 +246,35 @@ json syntheticJson(const std::map<std::string, MetricTiles>& methods, const std:
 }
 RunResults syntheticRun(const std::map<std::string, MetricTiles>& methods, const std::string& scene = "s") {
   return test::typed(syntheticJson(methods, scene));
+}
+
+// Without `temporal` (--no-baselines) the scores are relative to a sweep's first grid point, else
+// to the run's first contender: not to whichever label sorts first. The order is the same either
+// way; the scores' scale is named after a contender the user chose.
+TEST(Bootstrap, WithoutTemporalTheOverallBaselineIsTheSweepsFirstPointOrTheFirstContender) {
+  std::mt19937_64 rng(5);
+  json run = json::object();
+  for (const char* scene : {"s1", "s2"}) {
+    const auto shared = sharedContent(12, 16, rng);
+    json part = syntheticJson({{"b[x=1]", syntheticSeries(12, 16, 0.0, rng, shared)},
+                               {"a[x=2]", syntheticSeries(12, 16, 0.1, rng, shared)}},
+                              scene);
+    std::reverse(part["pairs"].begin(), part["pairs"].end());  // "b[x=1]" ran first
+    if (run.empty())
+      run = part;
+    else
+      for (const json& p : part["pairs"]) run["pairs"].push_back(p);
+  }
+  ASSERT_EQ(run["pairs"][0]["label"], "b[x=1]");
+  ASSERT_TRUE(analyseRun(run).overall.has_value());
+  EXPECT_EQ(analyseRun(run).overall->baseline, "b[x=1]");
+  run["sweep"] = {{"labels", {"a[x=2]", "b[x=1]"}}};
+  EXPECT_EQ(analyseRun(run).overall->baseline, "a[x=2]");
+  const RunStatistics st = analyseRun(run);
+  const OverallRanking preferred =
+      rankOverall({&st.scenes.at("s1").ranking, &st.scenes.at("s2").ranking},
+                  {"temporal", "nobody", "b[x=1]"}, true);
+  EXPECT_EQ(preferred.baseline, "b[x=1]");
 }
 
 // A method with a non-finite value on a frame has no mean; ranked on the frames every method
