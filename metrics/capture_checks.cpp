@@ -289,6 +289,7 @@ MotionConsistency checkMotion(const std::vector<LayerSet>& frames, const std::ve
     const CameraState &cam = cameras[size_t(t)], &prev = cameras[size_t(t - 1)];
     const bool hasNext = t + 1 < n && !isCut(t + 1);
     const int w = depth.width(), h = depth.height();
+    const long pixelsBefore = out.pixels, offBefore = off;
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
         const float z = depth.at(x, y);
@@ -320,6 +321,10 @@ MotionConsistency checkMotion(const std::vector<LayerSet>& frames, const std::ve
           candidates[k].matched += glm::length(m - predictions[k]) <= tolerance;
         }
       }
+    if (const long checked = out.pixels - pixelsBefore; checked > 0) {
+      const double share = double(off - offBefore) / double(checked);
+      if (share > out.worstFrameShare) out.worstFrameShare = share, out.worstFrame = t;
+    }
   }
   if (out.pixels == 0) return out;
   out.offShare = double(off) / double(out.pixels);
@@ -551,6 +556,9 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
     if (!m.explanation.empty())
       detail = "the motion vectors look " + m.explanation + " (" + number(m.explainedShare * 100) +
                "% of the pixels with motion fit that); " + detail;
+    if (m.worstFrameShare > 0.05)
+      detail += "; worst at frame " + std::to_string(m.worstFrame) + " (" +
+                number(m.worstFrameShare * 100) + "% off)";
     if (!isGiven("meshId") && !moving.empty()) detail += "; no meshId, so moving objects count too";
     v.checks.push_back(check("motion.consistency", m.offShare, 0.05, 0.25, "share of pixels off by more than 1 px", detail));
   }

@@ -49,6 +49,10 @@ struct MotionConsistency {
   long pixels = 0;
   std::string explanation;  // empty, or e.g. "sign flipped" when another convention fits far better
   double explainedShare = 0;
+  // The frame with the largest share off (-1: none checked), and that share: one frame written
+  // with another convention, or for another camera, hides in the sequence's share.
+  int worstFrame = -1;
+  double worstFrameShare = 0;
 };
 // Pixels of the meshes in `movingMeshes` (object_moves events' meshId) are not static: skipped.
 MotionConsistency checkMotion(const std::vector<LayerSet>& frames, const std::vector<CameraState>& cameras,

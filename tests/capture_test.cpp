@@ -331,6 +331,17 @@ TEST(CaptureValidation, MotionVectorSlipsAreRefusedAndNamed) {
                 "sign flipped (or pointing to the next frame: at this constant camera velocity"),
             std::string::npos)
       << c.detail;
+  // One frame's vectors flipped: the sequence's share may only warn, the frame is named.
+  const fs::path one = writeSynthetic("slip_one_frame");
+  editFrames(one, [](int t, LayerSet& f) {
+    if (t == 4)
+      for (float& v : f.get("motion").raw()) v = -v;
+  });
+  const CaptureCheck& single = checkNamed(validate(one), "motion.consistency");
+  EXPECT_NE(single.detail.find("; worst at frame 4 ("), std::string::npos) << single.detail;
+  EXPECT_EQ(checkNamed(validate(writeSynthetic("motion_good")), "motion.consistency")
+                .detail.find("worst at"),
+            std::string::npos);
 }
 
 TEST(CaptureValidation, NaNInNormalsIsAHardFailureNamingTheChannel) {
