@@ -262,8 +262,33 @@ std::vector<std::string> CaptureValidation::warnings() const {
   return out;
 }
 
-MotionConsistency checkMotion(const std::vector<LayerSet>& frames, const std::vector<CameraState>& cameras,
-                              const std::vector<int>& cutFrames, double tol, const std::set<int>& movingMeshes) {
+std::vector<DepthReading> depthReadings(double n, double f) {
+  std::vector<DepthReading> out = {
+      {"in millimetres (1000x the scene's units)", [](float z) { return z / 1000.0f; }},
+      {"in centimetres (100x the scene's units)", [](float z) { return z / 100.0f; }},
+      {"100x smaller than the scene's units", [](float z) { return z * 100.0f; }},
+      {"1000x smaller than the scene's units", [](float z) { return z * 1000.0f; }}};
+  if (n > 0 && f > n) {  // a depth buffer's value d in [0, 1], linearised
+    out.push_back({"a depth-buffer value (0 at near, 1 at far), not view depth",
+                   [n, f](float d) { return float(n * f / (f - double(d) * (f - n))); }});
+    out.push_back({"a reversed depth-buffer value (1 at near, 0 at far), not view depth",
+                   [n, f](float d) { return float(n * f / (n + double(d) * (f - n))); }});
+  }
+  return out;
+}
+
+MotionConsistency checkMotion(const std::vector<LayerSet>& frames,
+                              const std::vector<CameraState>& cameras,
+                              const std::vector<int>& cutFrames, double tol,
+                              const std::set<int>& movingMeshes,
+                              const std::vector<DepthReading>& readings) {
+  // Per reading of the depth: the pixels where it predicts another motion than the depth as
+  // written (by more than 2 tolerances), how many of those the stored motion fits under it, and
+  // how many as written.
+  struct DepthCount {
+    long informative = 0, matched = 0, matchedAsWritten = 0;
+  };
+  std::vector<DepthCount> depthCounts(readings.size());
   // The conventions a capture may have slipped into, as the stored vector they predict from the
   // expected motion e (to the previous frame) and n (to the next): name -> prediction.
   struct Candidate {
@@ -305,6 +330,19 @@ MotionConsistency checkMotion(const std::vector<LayerSet>& frames, const std::ve
         const glm::vec2 m(motion.at(x, y, 0), motion.at(x, y, 1));
         if (!std::isfinite(m.x) || !std::isfinite(m.y)) continue;  // counted by the non-finite check
         const float err = glm::length(m - e);
+        out.depthWithinUnit = out.depthWithinUnit && z <= 1.0f;
+        for (size_t k = 0; k < readings.size(); ++k) {
+          const float zk = readings[k].toViewDepth(z);
+          glm::vec2 pk;
+          if (!(zk > 0) || !std::isfinite(zk) ||
+              !prev.project(cam.pointAtDepth(pixel.x, pixel.y, zk), pk))
+            continue;
+          const glm::vec2 ek = pk - pixel;
+          if (glm::length(ek - e) <= 2 * tol) continue;  // the two readings agree here
+          ++depthCounts[k].informative;
+          depthCounts[k].matched += glm::length(m - ek) <= tol;
+          depthCounts[k].matchedAsWritten += err <= tol;
+        }
         ++out.pixels;
         errorSum += err;
         off += err > tol;
@@ -345,6 +383,16 @@ MotionConsistency checkMotion(const std::vector<LayerSet>& frames, const std::ve
           " (or pointing to the next frame: at this constant camera velocity the two are the same "
           "vectors)";
     out.explainedShare = best;
+  }
+  // A reading of the depth that the motion fits where the depth as written does not: on most of
+  // the pixels it decides (at least 1% of those checked, so that a few edge pixels do not name it).
+  for (size_t k = 0; k < readings.size(); ++k) {
+    const DepthCount& c = depthCounts[k];
+    if (c.informative < std::max<long>(20, out.pixels / 100)) continue;
+    const double fit = double(c.matched) / double(c.informative),
+                 asWritten = double(c.matchedAsWritten) / double(c.informative);
+    if (fit >= 0.75 && asWritten < 0.5 && fit > out.depthExplainedShare)
+      out.depthExplanation = readings[k].name, out.depthExplainedShare = fit;
   }
   return out;
 }
@@ -544,7 +592,11 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
   if (info.frames < 2) {
     v.checks.push_back(
         unchecked("motion.consistency", "one frame: nothing to check motion against"));
-  } else if (const MotionConsistency m = checkMotion(input.frames, info.cameras, cuts, 1.0, moving);
+  } else if (const MotionConsistency m = checkMotion(
+                 input.frames, info.cameras, cuts, 1.0, moving,
+                 sequence.isCapture()
+                     ? depthReadings(sequence.capture().nearPlane, sequence.capture().farPlane)
+                     : depthReadings(0, 0));
              m.pixels == 0) {
     v.checks.push_back(
         unchecked("motion.consistency",
@@ -556,6 +608,18 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
     if (!m.explanation.empty())
       detail = "the motion vectors look " + m.explanation + " (" + number(m.explainedShare * 100) +
                "% of the pixels with motion fit that); " + detail;
+    if (!m.depthExplanation.empty())
+      detail = "the depth layer looks " + m.depthExplanation + " (" +
+               number(m.depthExplainedShare * 100) +
+               "% of the pixels where that reading moves differently fit the motion with it); " +
+               detail;
+    else if (m.offShare > 0.25 && m.depthWithinUnit)
+      detail += "; every depth lies in (0, 1]: a depth buffer's value rather than view depth?" +
+                (sequence.isCapture() ? " (read as one with capture.json's near " +
+                                            number(sequence.capture().nearPlane) + " and far " +
+                                            number(sequence.capture().farPlane) +
+                                            " it fits no better: are those the capture's planes?)"
+                                      : std::string());
     if (m.worstFrameShare > 0.05)
       detail += "; worst at frame " + std::to_string(m.worstFrame) + " (" +
                 number(m.worstFrameShare * 100) + "% off)";

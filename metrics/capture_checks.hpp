@@ -6,6 +6,7 @@
 //   pass; warn (soft: the run goes on, the warning is in results.json and on the report page);
 //   fail (hard: the capture is refused with the check's name and numbers).
 // docs/captures.md lists the checks and their thresholds.
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <string>
@@ -53,11 +54,26 @@ struct MotionConsistency {
   // with another convention, or for another camera, hides in the sequence's share.
   int worstFrame = -1;
   double worstFrameShare = 0;
+  // Empty, or what the depth layer looks like where another reading of it fits the stored motion
+  // far better ("in millimetres (1000x the scene's units)", "a depth-buffer value ..."), with the
+  // share of the pixels it decides that fit it. Needs correct motion and a moving camera.
+  std::string depthExplanation;
+  double depthExplainedShare = 0;
+  bool depthWithinUnit = true;  // every checked depth lies in (0, 1]: a depth buffer's range
 };
+// The readings of a depth layer tried against the motion: a unit slip, and, where the capture
+// records its near and far planes, a depth buffer's value (standard or reversed) linearised.
+struct DepthReading {
+  std::string name;
+  std::function<float(float)> toViewDepth;
+};
+std::vector<DepthReading> depthReadings(double nearPlane, double farPlane);
 // Pixels of the meshes in `movingMeshes` (object_moves events' meshId) are not static: skipped.
-MotionConsistency checkMotion(const std::vector<LayerSet>& frames, const std::vector<CameraState>& cameras,
+MotionConsistency checkMotion(const std::vector<LayerSet>& frames,
+                              const std::vector<CameraState>& cameras,
                               const std::vector<int>& cutFrames, double tolerancePx = 1.0,
-                              const std::set<int>& movingMeshes = {});
+                              const std::set<int>& movingMeshes = {},
+                              const std::vector<DepthReading>& readings = {});
 
 // Stored world positions against depth and camera, per surface pixel: the share whose view depth
 // is off by more than 1% of the depth layer's or that project more than 2 px from their pixel's

@@ -344,6 +344,59 @@ TEST(CaptureValidation, MotionVectorSlipsAreRefusedAndNamed) {
             std::string::npos);
 }
 
+// Depth in other units, or a depth buffer's value where view depth belongs: the motion vectors
+// (right) fit another reading of the depth, which the check names; a z-buffer without the
+// capture's planes is said from its range.
+TEST(CaptureValidation, DepthInOtherUnitsOrFromADepthBufferIsNamedByTheMotion) {
+  const auto motionOf = [](const fs::path& dir) {
+    return checkNamed(validate(dir), "motion.consistency");
+  };
+  const fs::path mm = writeSynthetic("depth_mm");
+  editFrames(mm, [](int, LayerSet& f) {
+    for (float& z : f.get("depth").raw()) z *= 1000.0f;
+  });
+  CaptureCheck c = motionOf(mm);
+  EXPECT_EQ(c.status, CheckStatus::Fail) << c.detail;
+  EXPECT_EQ(c.detail.rfind("the depth layer looks in millimetres (1000x the scene's units) (", 0),
+            0u)
+      << c.detail;
+  const float n = 0.5f, f = 100.0f;
+  for (const bool reversed : {false, true}) {
+    const fs::path dir =
+        copyCapture(writeSynthetic(reversed ? "zbuffer_reversed_src" : "zbuffer_src"),
+                    reversed ? "zbuffer_reversed" : "zbuffer", [&](json& j) {
+                      j["near"] = n;
+                      j["far"] = f;
+                    });
+    editFrames(dir, [&](int, LayerSet& frame) {
+      for (float& z : frame.get("depth").raw())
+        if (z > 0) z = reversed ? n * (f - z) / (z * (f - n)) : f * (z - n) / (z * (f - n));
+    });
+    c = motionOf(dir);
+    EXPECT_EQ(c.status, CheckStatus::Fail) << c.detail;
+    EXPECT_NE(c.detail.find(reversed ? "looks a reversed depth-buffer value (1 at near, 0 at far)"
+                                     : "looks a depth-buffer value (0 at near, 1 at far)"),
+              std::string::npos)
+        << c.detail;
+  }
+  // The same depth buffer with the default planes (none given): its range is said.
+  const fs::path unplaned = writeSynthetic("zbuffer_no_planes");
+  editFrames(unplaned, [&](int, LayerSet& frame) {
+    for (float& z : frame.get("depth").raw())
+      if (z > 0) z = f * (z - n) / (z * (f - n));
+  });
+  c = motionOf(unplaned);
+  EXPECT_NE(
+      c.detail.find(
+          "every depth lies in (0, 1]: a depth buffer's value rather than view depth? (read as "
+          "one with capture.json's near 0.01 and far 1000"),
+      std::string::npos)
+      << c.detail;
+  // Right depth, right motion: no reading is named.
+  EXPECT_EQ(motionOf(writeSynthetic("depth_right")).detail.find("depth layer looks"),
+            std::string::npos);
+}
+
 TEST(CaptureValidation, NaNInNormalsIsAHardFailureNamingTheChannel) {
   const fs::path dir = writeSynthetic("nan_normals");
   editFrames(dir, [](int t, LayerSet& f) {
