@@ -2,7 +2,6 @@
 
 #include <charconv>
 #include <cmath>
-#include <cstdlib>
 #include <regex>
 #include <sstream>
 
@@ -89,7 +88,11 @@ double asReadFloat(double v) {
   const float f = float(v);
   char buf[32];
   const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, f);
-  return ec == std::errc() ? std::strtod(std::string(buf, end).c_str(), nullptr) : double(f);
+  double shortest = 0;  // from_chars: no locale can read "0.3" as 0
+  if (ec != std::errc() || std::from_chars(buf, end, shortest).ec != std::errc() ||
+      float(shortest) != f)
+    return double(f);
+  return shortest;
 }
 }  // namespace
 

@@ -86,7 +86,7 @@ std::optional<fs::path> recordedImagePath(const fs::path& out, const json& recor
 
 // Pair image folders under images/<scene>/ that no results file records (a run killed before its
 // commit wrote them) are said, not removed: they are not this run's, and nothing names them.
-void warnOfUnrecordedImages(const fs::path& out, const std::set<fs::path>& written,
+void warnOfUnrecordedImages(const fs::path& out, const std::set<fs::path>& recorded,
                             const ProgressFn& say) {
   std::error_code ec;
   std::vector<std::string> unrecorded;
@@ -94,7 +94,7 @@ void warnOfUnrecordedImages(const fs::path& out, const std::set<fs::path>& writt
        scene.increment(ec))
     if (scene->is_directory(ec))
       for (fs::directory_iterator pair(scene->path(), ec); !ec && pair != end; pair.increment(ec))
-        if (pair->is_directory(ec) && !written.count(pair->path()))
+        if (pair->is_directory(ec) && !recorded.count(pair->path()))
           unrecorded.push_back(fs::relative(pair->path(), out, ec).string());
   if (unrecorded.empty() || !say) return;
   std::sort(unrecorded.begin(), unrecorded.end());
@@ -110,23 +110,24 @@ void warnOfUnrecordedImages(const fs::path& out, const std::set<fs::path>& writt
 // this run did not write are removed before the new results replace it, so the report copies only
 // this run's images. Only what that file names is touched (a --out holding other folders keeps
 // them), and nothing here fails a finished run: what cannot be removed is said.
-void pruneRecordedImages(const fs::path& out, const std::set<fs::path>& written,
-                         const ProgressFn& say) {
+// Returns the folders the earlier run recorded (removed, or said when they could not be).
+std::set<fs::path> pruneRecordedImages(const fs::path& out, const std::set<fs::path>& written,
+                                       const ProgressFn& say) {
   std::error_code ec;
-  if (!fs::exists(out / "results.json", ec)) return;
+  std::set<fs::path> stale;
+  if (!fs::exists(out / "results.json", ec)) return stale;
   json earlier;
   try {
     earlier = json::parse(readText(out / "results.json"));
   } catch (const std::exception&) {
-    return;  // not readable as JSON: checkRunOutputs took it as replaceable, and it names nothing
+    return stale;  // not readable as JSON: checkRunOutputs took it as replaceable, it names nothing
   }
-  if (!earlier.is_object()) return;
-  std::vector<fs::path> stale;
+  if (!earlier.is_object()) return stale;
   for (const json& p : earlier.value("pairs", json::array()))
     if (p.is_object() && p.contains("images") && p["images"].is_object())
       if (auto dir = recordedImagePath(out, p["images"].value("dir", json()));
           dir && !written.count(*dir))
-        stale.push_back(*dir);
+        stale.insert(*dir);
   for (const fs::path& dir : stale) {
     fs::remove_all(dir, ec);
     if (ec && say)
@@ -140,6 +141,7 @@ void pruneRecordedImages(const fs::path& out, const std::set<fs::path>& written,
         removeSceneImages(*dir, say);
         if (fs::is_empty(*dir, ec)) fs::remove(*dir, ec);
       }
+  return stale;
 }
 
 // The images of this run, alone under images/: the earlier run's are removed, strays are said.
@@ -151,8 +153,9 @@ void pruneEarlierImages(const fs::path& out, const json& results, const Progress
   for (const json& scene : results["scenes"])
     if (scene.is_object())
       if (auto dir = recordedImagePath(out, scene.value("images", json()))) written.insert(*dir);
-  pruneRecordedImages(out, written, say);
-  warnOfUnrecordedImages(out, written, say);
+  std::set<fs::path> known = pruneRecordedImages(out, written, say);
+  known.insert(written.begin(), written.end());
+  warnOfUnrecordedImages(out, known, say);
 }
 
 const std::string kIdenticalOutputs = "its output on this scene is bit-identical to ";

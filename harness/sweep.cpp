@@ -1,6 +1,7 @@
 #include "harness/sweep.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <map>
 #include <set>
 
@@ -42,17 +43,20 @@ RunConfig sweepRun(RunConfig c, const std::string& denoiser,
                     name + " (as " + denoiser + " reads it: " + key + ")");
     }
   }
-  size_t points = 1;
+  double points = 1;  // in double: no overflow however many axes
   std::string product;
   for (auto& [name, values] : axes) {
-    points =
-        values.size() > maxPoints ? maxPoints + 1 : std::min(points * values.size(), maxPoints + 1);
+    points *= double(values.size());
     product += (product.empty() ? "" : " x ") + std::to_string(values.size());
   }
-  if (points > maxPoints)
-    throw Error("--grid: " + product + " = more than " + std::to_string(maxPoints) +
-                " grid points (--max-points), each run on every scene; narrow the grid, or raise "
-                "--max-points to run it");
+  if (points > double(maxPoints)) {
+    char count[32];
+    std::snprintf(count, sizeof count, "%.0f", points);
+    throw Error("--grid: " + product + " = " + count + " grid points, more than " +
+                std::to_string(maxPoints) +
+                " (--max-points), each run on every scene; narrow the "
+                "grid, or raise --max-points to run it");
+  }
   std::vector<std::map<std::string, std::string>> settings = {fixed};
   for (auto& [name, values] : axes) {
     std::vector<std::map<std::string, std::string>> next;

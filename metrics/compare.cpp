@@ -34,6 +34,19 @@ double parseFraction(const std::string& text, const char* option, const char* ex
 
 std::string key(const PairResult& p) { return p.scene + "\n" + p.label; }
 
+// Two recorded parameter sets as what ran: numbers equal as the float a built-in reads (an older
+// run recorded alpha 0.30000001 where a newer one records the float it ran, 0.3).
+bool sameParameters(const json& a, const json& b) {
+  if (!a.is_object() || !b.is_object() || a.size() != b.size()) return a == b;
+  for (auto it = a.begin(); it != a.end(); ++it) {
+    if (!b.contains(it.key())) return false;
+    const json &x = it.value(), &y = b[it.key()];
+    if (x.is_number() && y.is_number() ? float(x.get<double>()) != float(y.get<double>()) : x != y)
+      return false;
+  }
+  return true;
+}
+
 // A row about a whole pair (metric "*"): missing, failed or new; no numbers to compare.
 ComparisonRow pairRow(const PairResult& p, const std::string& verdict, const std::string& note) {
   ComparisonRow row;
@@ -205,7 +218,7 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
       int matches = 0;
       for (auto c = candPairs.begin(); c != candPairs.end(); ++c)
         if (c->second->scene == scene && c->second->denoiser == b.denoiser &&
-            c->second->params == b.params && !baselineKeys.count(c->first))
+            sameParameters(c->second->params, b.params) && !baselineKeys.count(c->first))
           same = c, ++matches;
       if (matches == 1) {
         it = same;
@@ -219,6 +232,7 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
     const PairResult& c = *it->second;
     if (!c.ok()) {
       rows.push_back(pairRow(b, "failed", c.error));
+      if (c.label != b.label) rows.back().candidateLabel = c.label;
       continue;
     }
     if (!b.ok()) {  // nothing to hold the candidate to; that it runs now is said

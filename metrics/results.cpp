@@ -256,7 +256,13 @@ RunDirectoryLock::RunDirectoryLock(RunDirectoryLock&& other) noexcept
 
 RunDirectoryLock::~RunDirectoryLock() {
   std::error_code ec;
-  if (created_ && !fs::exists(dir_ / "results.json", ec)) fs::remove_all(dir_, ec);
+  if (!created_ || fs::exists(dir_ / "results.json", ec)) return;
+  // What the run wrote (its images, temporaries and lock file); then the directory, if that was
+  // all (a file someone put there during the run stays, and so does the directory).
+  fs::remove_all(dir_ / "images", ec);
+  removeStaleTemporariesBelow(dir_, 0);
+  fs::remove(dir_ / ".arena.lock", ec);
+  fs::remove(dir_, ec);  // only when empty
 }
 
 RunDirectoryLock checkRunOutputs(const fs::path& runDir) {

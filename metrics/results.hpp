@@ -42,8 +42,9 @@ class RunDirectoryLock {
   RunDirectoryLock& operator=(const RunDirectoryLock&) = delete;
   RunDirectoryLock& operator=(RunDirectoryLock&&) = delete;
   // A directory this lock created, released without results.json (the run failed before its
-  // commit), is removed whole: an error leaves no directory holding only a lock file, or a pair's
-  // images without results. One that existed before the run is left as it was found.
+  // commit), loses what the run wrote (images, temporaries, the lock file) and is removed if that
+  // leaves it empty: an error leaves no directory holding only a lock file, or a pair's images
+  // without results. One that existed before the run is left as it was found.
   ~RunDirectoryLock();
 
  private:

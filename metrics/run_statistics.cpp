@@ -300,6 +300,11 @@ RunStatistics analyseRun(const json& results, const BootstrapConfig& cfg) {
   if (const json labels = results.value("sweep", json::object()).value("labels", json::array());
       !labels.empty() && labels.front().is_string())
     preferred.push_back(labels.front());
+  // The contenders in the order the run was asked for: a merge's pairs are in the order its
+  // shards were given, so a sharded run reads its plan's order.
+  const json plan = results.value("settings", json::object()).value("plan", json::object());
+  for (const json& label : plan.value("labels", json::array()))
+    if (label.is_string()) preferred.push_back(label);
   for (const json& p : results["pairs"])
     if (p.value("status", "") == "ok" && p.contains("label") && p["label"].is_string())
       preferred.push_back(p["label"]);

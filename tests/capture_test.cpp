@@ -655,14 +655,20 @@ TEST(CaptureValidation, ReferencesOneFrameOffTheirInputsAreRefused) {
     EXPECT_EQ(alignment(good, side).status, CheckStatus::Pass) << alignment(good, side).detail;
     EXPECT_EQ(alignment(good, side).detail, "");
   }
-  // Reference file r holds frame r+1's image (the last repeats its own): one frame ahead.
+  // Reference file r holds frame r+1's image (the last repeats its own): one frame ahead. With
+  // the references' variance (these are exact: 0) the check refuses it.
   const fs::path ahead = writeSynthetic("references_ahead");
   {
     const CaptureDescription c = readCaptureDescription(ahead);
     std::vector<Image> refs;
     for (int r = 0; r < c.info.frames; ++r) refs.push_back(readCaptureReference(c, r).get("color"));
-    editReferences(
-        ahead, [&](int r, Image& ref) { ref = refs[size_t(std::min(r + 1, c.info.frames - 1))]; });
+    for (int r = 0; r < c.info.frames; ++r) {
+      LayerSet ref;
+      ref.set("color", refs[size_t(std::min(r + 1, c.info.frames - 1))]);
+      ref.set("colorVar", Image(c.info.width, c.info.height, 3, 0.0f));
+      writeExr(captureReferencePath(ahead, r), ref,
+               {{"color", {"R", "G", "B"}, false}, {"colorVar", {"R", "G", "B"}, false}});
+    }
   }
   const CaptureValidation a = validate(ahead);
   EXPECT_EQ(alignment(a, "before").status, CheckStatus::Fail) << alignment(a, "before").value;
@@ -685,10 +691,40 @@ TEST(CaptureValidation, ReferencesOneFrameOffTheirInputsAreRefused) {
     for (int r = 0; r < c.info.frames; ++r) refs.push_back(readCaptureReference(c, r).get("color"));
     editReferences(behind, [&](int r, Image& ref) { ref = refs[size_t(std::max(r - 1, 0))]; });
   }
+  // Without their variance a less converged reference beside better ones can read so: a warning.
   const CaptureValidation b = validate(behind);
-  EXPECT_EQ(alignment(b, "after").status, CheckStatus::Fail) << alignment(b, "after").detail;
+  EXPECT_EQ(alignment(b, "after").status, CheckStatus::Warn) << alignment(b, "after").detail;
+  EXPECT_NE(alignment(b, "after").detail.find("one frame behind their inputs"), std::string::npos);
+  EXPECT_NE(alignment(b, "after").detail.find("(a warning: without the references' colorVar"),
+            std::string::npos);
   EXPECT_EQ(alignment(b, "before").status, CheckStatus::Pass) << alignment(b, "before").detail;
-  EXPECT_NE(b.failures().find("reference.alignment.after"), std::string::npos) << b.failures();
+  // Correct references, a still camera, and a step in their noise (the first half rendered at
+  // fewer samples, each later one nested in the earlier: no variance given): no pattern.
+  Synthetic stillStep;
+  stillStep.still = true;
+  const fs::path step = writeSynthetic("still_noise_step", 0.3f, 0.0f, stillStep);
+  editReferences(step, [](int r, Image& ref) {
+    if (r < 3)
+      for (size_t i = 0; i < ref.raw().size(); ++i)
+        ref.raw()[i] *= 1.0f + 0.2f * float(3 - r) * (test::hashUniform(99, uint32_t(i)) - 0.5f);
+  });
+  const CaptureValidation st = validate(step);
+  for (const char* side : {"before", "after"})
+    EXPECT_NE(alignment(st, side).status, CheckStatus::Fail)
+        << side << ": " << alignment(st, side).detail;
+  // A slightly dark input during a fade (4% low against a 5% step a frame) lies on its own
+  // reference: the input is scaled to it first.
+  const fs::path fade = writeSynthetic("fade_dark_input", 0.05f, 0.0f, stillStep);
+  editReferences(fade, [](int r, Image& ref) {
+    for (float& x : ref.raw()) x *= std::pow(0.95f, float(r));
+  });
+  editFrames(fade, [](int t, LayerSet& f) {
+    for (float& x : f.get("color").raw()) x *= 0.96f * std::pow(0.95f, float(t));
+  });
+  const CaptureValidation fd = validate(fade);
+  for (const char* side : {"before", "after"})
+    EXPECT_EQ(alignment(fd, side).status, CheckStatus::Pass)
+        << side << ": " << alignment(fd, side).detail;
   // A still camera, references of very unequal noise (every other one noisy): nothing decided.
   Synthetic still;
   still.still = true;

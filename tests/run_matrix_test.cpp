@@ -86,13 +86,13 @@ TEST(Sweep, ValuesAreComparedAndLabelledAsTheDenoiserReadsThem) {
                                          "momentsAlpha=[0.1,0.2,0.3,0.4,0.5,0.6,0.7,0.8,0.9,1]",
                                          "iterations=[1,2,3,4,5,6,7,8,9,10]"};
   EXPECT_EQ(test::errorOf([&] { sweepRun(RunConfig{}, "svgf", {}, huge); }),
-            "--grid: 10 x 10 x 10 x 10 x 10 x 10 = more than 1000 grid points (--max-points), each "
-            "run on "
-            "every scene; narrow the grid, or raise --max-points to run it");
+            "--grid: 10 x 10 x 10 x 10 x 10 x 10 = 1000000 grid points, more than 1000 "
+            "(--max-points), each run on every scene; narrow the grid, or raise --max-points to "
+            "run it");
   EXPECT_EQ(sweepRun(RunConfig{}, "svgf", {}, {huge[0], huge[1]}, 100).denoisers.size(), 100u);
   EXPECT_NE(test::errorOf([&] {
               sweepRun(RunConfig{}, "svgf", {}, {huge[0], huge[1]}, 99);
-            }).find("more than 99"),
+            }).find("= 100 grid points, more than 99"),
             std::string::npos);
   // Spaces after the commas are layout ("[2, 4]" read " 4" and refused it as no number).
   EXPECT_EQ(sweepRun(RunConfig{}, "svgf", {}, {"sigmaL=[2, 4 ]"}).denoisers[1].label,

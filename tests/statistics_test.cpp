@@ -268,6 +268,10 @@ TEST(Bootstrap, WithoutTemporalTheOverallBaselineIsTheSweepsFirstPointOrTheFirst
   ASSERT_EQ(run["pairs"][0]["label"], "b[x=1]");
   ASSERT_TRUE(analyseRun(run).overall.has_value());
   EXPECT_EQ(analyseRun(run).overall->baseline, "b[x=1]");
+  json merged = run;  // shards merged in another order: the plan's order decides
+  std::reverse(merged["pairs"].begin(), merged["pairs"].end());
+  merged["settings"]["plan"] = {{"labels", {"b[x=1]", "a[x=2]"}}};
+  EXPECT_EQ(analyseRun(merged).overall->baseline, "b[x=1]");
   run["sweep"] = {{"labels", {"a[x=2]", "b[x=1]"}}};
   EXPECT_EQ(analyseRun(run).overall->baseline, "a[x=2]");
   const RunStatistics st = analyseRun(run);
@@ -343,7 +347,16 @@ TEST(CompareGate, APairUnderAnOlderLabelIsMatchedByWhatItRan) {
   ASSERT_EQ(rows.size(), 1u);
   EXPECT_EQ(rows[0].metric, "relMse");
   EXPECT_EQ(rows[0].label, "svgf[sigmaL=2.0]");
+  EXPECT_EQ(rows[0].candidateLabel, "svgf[sigmaL=2]");
   EXPECT_FALSE(anyRegression(rows));
+  // A value recorded with more digits than the float that ran (before parameters were resolved
+  // to it) matches the float's shortest text.
+  json digits = base, floatRan = cand;
+  digits["pairs"][0]["params"] = {{"sigmaL", 0.30000001}};
+  floatRan["pairs"][0]["params"] = {{"sigmaL", 0.3}};
+  rows = compareRuns(test::typed(digits), test::typed(floatRan), tol);
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].verdict, "ok") << rows[0].note;
   json twice = cand;
   twice["pairs"].push_back(cand["pairs"][0]);
   twice["pairs"][1]["label"] = "svgf[sigmaL=2,x]";
