@@ -191,12 +191,18 @@ nlohmann::json GpuFrameCost::summary(int warmup) const {
   }
   constexpr double kMiB = 1024.0 * 1024.0;
   const GpuCostModel m = boxAtrousModel();
-  return {{"resolution", {1920, 1080}},
-          {"memory", {{"persistentMiB", persistent / kMiB}, {"workingSetMiB", working / kMiB}}},
-          {"model", "max(bytes / bandwidth, k x fetch cycles / texel rate) + c x threads / 1920x1080; k = " +
-                        std::to_string(m.fetchEfficiency).substr(0, 5) + ", c = " + std::to_string(m.dispatchMs).substr(0, 5) +
-                        " ms (docs/gpu-cost.md)"},
-          {"devices", devices}};
+  int skipped = 0;  // on the last frame: the same on every frame (the footprint is per resolution)
+  for (const PassStats& p : last_) skipped += p.traffic.skippedHere;
+  nlohmann::json out = {
+      {"resolution", {1920, 1080}},
+      {"memory", {{"persistentMiB", persistent / kMiB}, {"workingSetMiB", working / kMiB}}},
+      {"model",
+       "max(bytes / bandwidth, k x fetch cycles / texel rate) + c x threads / 1920x1080; k = " +
+           std::to_string(m.fetchEfficiency).substr(0, 5) +
+           ", c = " + std::to_string(m.dispatchMs).substr(0, 5) + " ms (docs/gpu-cost.md)"},
+      {"devices", devices}};
+  if (skipped > 0) out["skippedHere"] = skipped;
+  return out;
 }
 
 GpuCostModel fitModel(const std::vector<FitPoint>& points, const GpuDevice& device,

@@ -353,6 +353,24 @@ json speedData(const RunResults& results, const std::vector<std::string>& scenes
     out["clocks"].push_back({{"key", c.key}, {"title", c.title}});
     out["views"][c.key] = speedView(results, scenes, labels, c.key);
   }
+  // The 1080p predictions are priced from the run's own passes: à-trous iterations its footprint
+  // skipped at this resolution run at 1080p and are missing from them (they read low, the more
+  // so the more a method has).
+  std::map<std::string, int> skipped;
+  for (const PairResult& pair : results.pairs)
+    if (const json& timing = pair.timing();
+        timing.contains("gpuPredicted") && timing["gpuPredicted"].is_object())
+      if (const int n = timing["gpuPredicted"].value("skippedHere", 0); n > 0)
+        skipped[pair.label] = std::max(skipped[pair.label], n);
+  if (!skipped.empty()) {
+    std::string list;
+    for (const auto& [label, n] : skipped)
+      list += (list.empty() ? "" : ", ") + label + " " + std::to_string(n);
+    out["gpuSkipped"] =
+        "At this run's resolution the footprint skipped passes (à-trous steps below half a pixel) "
+        "that a 1080p frame runs, and the prediction lacks them: " +
+        list + " per frame; those read low (`arena bench gpu-model` prices a 1080p frame). ";
+  }
   return out;
 }
 

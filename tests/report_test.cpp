@@ -287,9 +287,16 @@ TEST(Report, EachTimeAxisHasItsOwnPointsAndFront) {
         {"model", "test"},
         {"devices", json::array({{{"device", "TITAN RTX"}, {"msMedian", ms}, {"msP5", ms * 0.9}, {"msP95", ms * 1.2}, {"msMean", ms}}})},
         {"memory", {{"persistentMiB", 10.0 * ms}, {"workingSetMiB", 30.0 * ms}}}};
+    if (label == "svgf[a=1]") pair["timing"]["gpuPredicted"]["skippedHere"] = 4;
   }
   const fs::path dir = writeFixtureRun("report_clocks", run);
   const json data = reportData(test::typed(run), dir, nullptr);
+  // A prediction that lacks passes the run's resolution skipped is said under the GPU axis.
+  EXPECT_NE(data["speed"]
+                .value("gpuSkipped", "")
+                .find("the prediction lacks them: svgf[a=1] 4 per frame"),
+            std::string::npos)
+      << data["speed"].value("gpuSkipped", "");
   const json& clocks = data["speed"]["clocks"];
   ASSERT_EQ(clocks.size(), 2u);
   EXPECT_EQ(clocks[0]["key"], "cpu");

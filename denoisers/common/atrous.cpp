@@ -136,6 +136,7 @@ void filterIteration(int iteration, const AtrousSettings& settings, const Atrous
   if (iteration < 0 || iteration > 24) throw Error("à-trous: iteration out of range [0, 24]");
   const int step = atrousStep(iteration, settings.footprintScale);
   if (step == 0) {  // footprint.hpp: an iteration scaled below half a pixel is skipped
+    if (settings.footprintScale < 1) gpu::skippedHere();  // at the reference height it runs
     parallelCopy(colorIn, colorOut);
     if (carryIn) parallelCopy(*carryIn, *carryOut);
     return;

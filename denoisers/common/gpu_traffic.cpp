@@ -98,6 +98,10 @@ void dispatch(int width, int height) {
   if (current) current->dispatches.push_back({width, height});
 }
 
+void skippedHere() {
+  if (current) ++current->skippedHere;
+}
+
 void read(const GpuBuffer& buffer, int width, int height, double fetchesPerThread) {
   if (!current) return;
   BufferTraffic& b = entry(buffer, false, width, height);

@@ -110,6 +110,9 @@ struct BufferTraffic {
 struct PassTraffic {
   std::vector<BufferTraffic> buffers;
   std::vector<std::array<int, 2>> dispatches;  // width x height threads of each dispatch
+  // Dispatches the footprint policy skipped at this resolution that it runs at its reference
+  // height (an à-trous iteration scaled below half a pixel): the 1080p prediction lacks them.
+  int skippedHere = 0;
 
   bool empty() const { return dispatches.empty() && buffers.empty(); }
   double bytesRead() const;
@@ -145,6 +148,8 @@ void write(const GpuBuffer& buffer, int width, int height);
 void read(std::initializer_list<GpuBuffer> buffers, int width, int height,
           double fetchesPerThread = 1.0);
 void write(std::initializer_list<GpuBuffer> buffers, int width, int height);
+// A dispatch skipped at this resolution that a 1080p frame would make (PassTraffic::skippedHere).
+void skippedHere();
 }  // namespace gpu
 
 }  // namespace arena

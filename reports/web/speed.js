@@ -156,7 +156,8 @@
       ? 'Dashed bars: a denoiser\'s extra paths ("+paths": reengine\'s low-resolution disocclusion rays, asvgf\'s re-shaded gradient samples), as the time the tracer took to trace them when the sequence was rendered, added to its own time; the point and the grey Pareto front use the denoiser\'s time alone, the dotted brown front (equal paths) its time plus that tracing time. '
       : '';
     const model = isGpuModel()
-      ? 'Time axis: a prediction, not a measurement -- each pass\'s counted GPU traffic at 1920x1080 priced by the cost model (docs/gpu-cost.md), which misses its validation goal: read it as an order of magnitude and an order of methods; extra paths are not priced. '
+      ? 'Time axis: a prediction, not a measurement -- each pass\'s counted GPU traffic at 1920x1080 priced by the cost model (docs/gpu-cost.md), which misses its validation goal: read it as an order of magnitude and an order of methods; extra paths are not priced. ' +
+          (A.D.speed.gpuSkipped || '')
       : '';
     return `${model}${bars} Time bars: p5–p95 of the per-frame time where the run records them. ${traced}` +
       `${logError ? 'Log error axis. ' : ''}${axis && axis.key === 'relMse' ? 'relMSE raw (not reference-corrected). ' : ''}` +
