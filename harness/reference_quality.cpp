@@ -55,7 +55,8 @@ std::string renderOptionsOf(const json& render) {
   return o;
 }
 
-void addReferenceQuality(json& results, int warmup, const std::map<std::string, std::string>& notes) {
+void addReferenceQuality(json& results, int warmup, const std::map<std::string, std::string>& notes,
+                         const std::string& cache) {
   if (!results.contains("scenes")) return;
   for (auto it = results["scenes"].begin(); it != results["scenes"].end(); ++it) {
     const std::string& name = it.key();
@@ -106,9 +107,21 @@ void addReferenceQuality(json& results, int warmup, const std::map<std::string, 
                           sci(kReferenceQualityGoal) + (meets ? ": met" : ": NOT MET, ");
     if (!meets) {
       const double needed = kReferenceQualityGoal * best;
-      // The command must find the run's sequences: the same settings hash (--cache, and a
-      // --resolution or --frames override, are not in the results and stay the user's to add).
-      const std::string options = renderOptionsOf(results.value("settings", json::object()).value("render", json()));
+      // The command must find the run's sequences: the same settings hash (the render settings,
+      // the size and length the scene ran at) in the same cache.
+      std::string options;
+      if (scene.value("width", 0) > 0 && scene.value("height", 0) > 0)
+        options += " --resolution " + std::to_string(scene.value("width", 0)) + "x" +
+                   std::to_string(scene.value("height", 0));
+      if (scene.value("frames", 0) > 0)
+        options += " --frames " + std::to_string(scene.value("frames", 0));
+      options += renderOptionsOf(results.value("settings", json::object()).value("render", json()));
+      if (!cache.empty() && cache != "cache")  // quoted for a shell where it needs it
+        options += " --cache " +
+                   (cache.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                            "0123456789_-./") == std::string::npos
+                        ? cache
+                        : "'" + cache + "'");
       verdict +=
           "the reference's noise must fall " + sci(ratio / kReferenceQualityGoal) + "x (to " + sci(needed) + "); ";
       if (scene.value("source", "") ==

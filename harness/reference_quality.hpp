@@ -18,9 +18,12 @@ inline constexpr double kReferenceQualityGoal = 0.1;
 // results.scenes.<scene>.referenceQuality = {floor, bestCorrectedRelMse, bestLabel, ratio, goal,
 // meets, cappedReferences, references, verdict}; scenes without a floor or a real denoiser's
 // corrected relMSE get {verdict} only. Baselines (passthrough, temporal) are not "real" denoisers.
-// notes: per scene, a sentence appended to its verdict (the study's refinement, below).
+// notes: per scene, a sentence appended to its verdict (the study's refinement, below). The
+// suggested `arena refine` command carries the scene's resolution and frame count as run, and
+// `cache` when it is not the default "cache" (the sequence cache the run read).
 void addReferenceQuality(nlohmann::json& results, int warmup,
-                         const std::map<std::string, std::string>& notes = {});
+                         const std::map<std::string, std::string>& notes = {},
+                         const std::string& cache = "cache");
 // The options that make `arena render`/`refine` find a run's sequences (the same settings hash),
 // from its results.settings.render: each setting that differs from its preset's default, e.g.
 // " --lowres-factor 8" for the study; "" when nothing differs.

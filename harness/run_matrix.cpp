@@ -515,7 +515,7 @@ void finishRun(json& results, const RunConfig& cfg) {
   {
     StageTimer timer(Stage::Statistics);
     results["statistics"] = analyseRun(results).toJson();
-    addReferenceQuality(results, cfg.warmup, cfg.referenceNotes);
+    addReferenceQuality(results, cfg.warmup, cfg.referenceNotes, cfg.cache.string());
   }
   warnOfIdenticalSweepPoints(results, cfg.progress);
   pruneEarlierImages(cfg.out, results, cfg.progress);

@@ -654,17 +654,24 @@ TEST(Reference, QualityVerdictNamesTheRatioAndWhy) {
   nlohmann::json results = {
       {"scenes",
        {{"capped", {{"referenceRelMse", {1.0, 4e-4, 4e-4}}, {"referenceCapped", {true, false}}}},
-        {"loose", {{"referenceRelMse", {1.0, 1e-4, 1e-4}}, {"referenceCapped", {false}}}},
+        {"loose",
+         {{"referenceRelMse", {1.0, 1e-4, 1e-4}},
+          {"referenceCapped", {false}},
+          {"width", 64},
+          {"height", 36},
+          {"frames", 3}}},
         {"fine", {{"referenceRelMse", {1.0, 1e-5, 3e-5}}, {"referenceCapped", {false}}}}}},
       {"pairs",
-       {pair("capped", "svgf", 2e-3), pair("capped", "passthrough", 1e-9), pair("loose", "asvgf", 2e-4),
-        pair("fine", "svgf", 4e-4), pair("fine", "temporal", 1e-9)}},
+       {pair("capped", "svgf", 2e-3), pair("capped", "passthrough", 1e-9),
+        pair("loose", "asvgf", 2e-4), pair("fine", "svgf", 4e-4), pair("fine", "temporal", 1e-9)}},
       // The study's settings: its low-res buffer is part of the sequences' hash, so the printed
       // command must carry it or it finds nothing to refine.
-      {"settings", {{"render", RenderSettings::fromPreset("quick").pixelSettings(test::shippedScene("cornell_static"))}}}};
+      {"settings",
+       {{"render", RenderSettings::fromPreset("quick").pixelSettings(
+                       test::shippedScene("cornell_static"))}}}};
   results["settings"]["render"]["lowresFactor"] = 8;
   results["settings"]["render"]["lowresSpp"] = 16;
-  addReferenceQuality(results, 1);
+  addReferenceQuality(results, 1, {}, "/tmp/my cache");
   const nlohmann::json& capped = results["scenes"]["capped"]["referenceQuality"];
   EXPECT_NEAR(capped["ratio"].get<double>(), 0.2, 1e-12);  // 4e-4 / 2e-3: the passthrough is no denoiser
   EXPECT_FALSE(capped["meets"].get<bool>());
@@ -675,7 +682,12 @@ TEST(Reference, QualityVerdictNamesTheRatioAndWhy) {
   const std::string loose = results["scenes"]["loose"]["referenceQuality"]["verdict"];
   EXPECT_NE(loose.find("= 0.5 > 0.1: NOT MET"), std::string::npos) << loose;
   EXPECT_NE(loose.find("met their target, which is too loose"), std::string::npos) << loose;
-  EXPECT_NE(loose.find("`arena refine loose --lowres-factor 8 --target 2e-05`"), std::string::npos) << loose;
+  // The command finds the run's sequences: the size and length they ran at, its cache.
+  EXPECT_NE(loose.find("`arena refine loose --resolution 64x36 --frames 3 --lowres-factor 8 "
+                       "--cache '/tmp/my cache' "
+                       "--target 2e-05`"),
+            std::string::npos)
+      << loose;
   const nlohmann::json& fine = results["scenes"]["fine"]["referenceQuality"];
   EXPECT_NEAR(fine["floor"].get<double>(), 2e-5, 1e-15);
   EXPECT_TRUE(fine["meets"].get<bool>());
