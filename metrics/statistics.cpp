@@ -517,9 +517,9 @@ OverallRanking rankOverall(const std::vector<const SceneRanking*>& scenes,
   out.baseline = kept.front();
   for (auto it = preferredBaselines.rbegin(); it != preferredBaselines.rend(); ++it)
     if (std::find(kept.begin(), kept.end(), *it) != kept.end()) out.baseline = *it;
-  out.normalisation = "geometric mean over " + std::to_string(scenes.size()) + " scenes of " +
-                      scenes.front()->metric + " / " + scenes.front()->metric + "(" + out.baseline +
-                      ")";
+  out.normalisation = "geometric mean over " + std::to_string(scenes.size()) +
+                      (scenes.size() == 1 ? " scene of " : " scenes of ") + scenes.front()->metric +
+                      " / " + scenes.front()->metric + "(" + out.baseline + ")";
   auto valueOn = [](const SceneRanking* s, const std::string& label) {
     for (const RankedMethod& m : s->ranking)
       if (m.label == label) return m.value;

@@ -214,6 +214,27 @@ TEST(CliContract, AFullDiskDuringARunNamesTheFileThroughTheCli) {
   EXPECT_NE(r.output.find(std::strerror(EFBIG)), std::string::npos) << r.output;
 }
 
+// A reference too noisy to separate the methods is said under the run's ranking (it was only in
+// results.json and the report), with a refine command that finds the run's sequences.
+TEST(CliContract, ARunSaysWhenAScenesReferenceMissesTheGoal) {
+  fs::path dir = test::freshDir("noisy_reference_cli");
+  contract::CliResult r = contract::arenaCli(
+      "run --scenes cornell_static --denoisers svgf --resolution 16x8 --frames 6 --warmup 2 "
+      "--ref-spp 4 "
+      "--flip none --keep-frames none --cache " +
+      (dir / "cache").string() + " --out " + (dir / "run").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("(mean relMSE after the warm-up; median ms a frame)"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("geometric mean over 1 scene of"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("reference quality: 1 of 1 scene(s) miss the goal"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find(
+                "arena refine cornell_static --resolution 16x8 --frames 6 --ref-spp 4 --cache "),
+            std::string::npos)
+      << r.output;
+}
+
 TEST(CliContract, ARunShorterThanTheWarmupSaysWhyEveryReaderHasNoSummary) {
   fs::path dir = test::freshDir("short_run");
   // 3 frames, the default warm-up of 8: no frame survives it.
