@@ -345,6 +345,16 @@ void addRunCommands(CLI::App& app) {
         std::cerr << "arena: warning: comparing runs with different settings (baseline vs candidate):" << list
                   << "\n";
       }
+      if (const std::vector<std::string> refs = referenceDifferences(baseline, candidate);
+          !refs.empty()) {
+        std::string list;
+        for (const std::string& d : refs) list += "\n  " + d;
+        std::cerr
+            << "arena: warning: the runs measured these scenes against references of other sample "
+               "counts (refined between them?); part of each change there is the reference's, not "
+               "the denoiser's (run both on one cache state to compare the denoisers alone):"
+            << list << "\n";
+      }
       auto rows = compareRuns(baseline, candidate, tols, bc);
       if (*asJson) {
         std::cout << comparisonJson(rows).dump(2) << "\n";

@@ -86,6 +86,23 @@ std::vector<std::string> jsonDifferences(const json& a, const json& b, const std
   return out;
 }
 
+std::vector<std::string> referenceDifferences(const RunResults& baseline,
+                                              const RunResults& candidate) {
+  std::vector<std::string> out;
+  if (!baseline.scenes.is_object() || !candidate.scenes.is_object()) return out;
+  for (auto it = baseline.scenes.begin(); it != baseline.scenes.end(); ++it) {
+    if (!candidate.scenes.contains(it.key())) continue;
+    const json &a = it.value(), &b = candidate.scenes[it.key()];
+    if (!a.is_object() || !b.is_object() || !a.contains("referenceSpp") ||
+        !b.contains("referenceSpp"))
+      continue;
+    if (a["referenceSpp"] != b["referenceSpp"])
+      out.push_back("scenes." + it.key() + ".referenceSpp: " + a["referenceSpp"].dump() + " vs " +
+                    b["referenceSpp"].dump());
+  }
+  return out;
+}
+
 std::vector<std::string> settingsDifferences(const RunResults& baseline, const RunResults& candidate) {
   std::vector<std::string> out;
   json a = baseline.settings.measurement(), b = candidate.settings.measurement();

@@ -58,6 +58,12 @@ std::vector<ComparisonRow> compareRuns(const RunResults& baseline, const RunResu
 // "scenes.cornell_static.width: 16 vs 32"): every field under "settings" except the shard, and the
 // resolution and frame count of each scene both runs have. Empty when they match.
 std::vector<std::string> settingsDifferences(const RunResults& baseline, const RunResults& candidate);
+// The scenes both runs measured against references of other sample counts (a refinement between
+// them): "scenes.light_switch.referenceSpp: [64,64] vs [256,64]". Part of each change there is the
+// reference's, not the denoiser's; `compare` warns of it. Empty when they match or are not
+// recorded.
+std::vector<std::string> referenceDifferences(const RunResults& baseline,
+                                              const RunResults& candidate);
 // Every leaf where two documents differ, as "PATH.key: a vs b" (a missing side reads "absent").
 std::vector<std::string> jsonDifferences(const nlohmann::json& a, const nlohmann::json& b,
                                          const std::string& path);

@@ -365,6 +365,18 @@ TEST(CompareGate, APairUnderAnOlderLabelIsMatchedByWhatItRan) {
                           [](const ComparisonRow& r) { return r.verdict == "missing"; }));
 }
 
+// References refined between two runs: said, scene by scene (part of each change there is the
+// reference's); equal sample counts, or a scene only one run has, say nothing.
+TEST(CompareGate, ReferencesOfOtherSampleCountsAreNamed) {
+  json base = syntheticJson({{"a", constantSeries(0.01)}}), cand = base;
+  base["scenes"]["s"] = {{"referenceSpp", {64, 64}}};
+  cand["scenes"]["s"] = {{"referenceSpp", {256, 64}}};
+  cand["scenes"]["other"] = {{"referenceSpp", {8}}};
+  EXPECT_EQ(referenceDifferences(test::typed(base), test::typed(cand)),
+            std::vector<std::string>{"scenes.s.referenceSpp: [64,64] vs [256,64]"});
+  EXPECT_TRUE(referenceDifferences(test::typed(base), test::typed(base)).empty());
+}
+
 TEST(CompareGate, FailsOnWhatItCannotCompare) {
   const MetricTiles m = constantSeries(0.01);
   const std::vector<Tolerance> tol = {{"relMse", 0.02}};
