@@ -58,9 +58,15 @@ namespace {
 
 // The width of a ranking's label column: `minimum`, or the longest label and two spaces where a
 // label is longer (a sweep's labels carry their parameters), so the columns after it stay aligned.
+// A ranked method's label, marked "(+paths)" when it read paths beyond the frame's own 1-spp ones
+// (reengine's disocclusion rays, asvgf's gradient samples): not on equal terms with the others.
+std::string rankedLabel(const RankedMethod& m) {
+  return m.extraPathsPerPixel > 0 ? m.label + " (+paths)" : m.label;
+}
+
 size_t labelColumn(const std::vector<RankedMethod>& ranking, size_t minimum) {
   size_t width = minimum;
-  for (const RankedMethod& m : ranking) width = std::max(width, displayWidth(m.label) + 2);
+  for (const RankedMethod& m : ranking) width = std::max(width, displayWidth(rankedLabel(m)) + 2);
   return width;
 }
 
@@ -84,7 +90,7 @@ void printOverallRanking(std::ostream& out, const RunResults& results) {
   for (const RankedMethod& m : o.ranking) {
     const bool tied = !m.tiedWith.empty();
     out << "  " << std::left << std::setw(4) << (std::to_string(m.rank) + (tied ? "=" : ""))
-        << paddedText(m.label, column) << rightAligned(figureText(m.value), 11) << "  "
+        << paddedText(rankedLabel(m), column) << rightAligned(figureText(m.value), 11) << "  "
         << paddedText(m.label == o.baseline
                           ? "(1 by definition)"
                           : intervalText(m.ci),  // the baseline's [1, 1] is no certainty
@@ -92,6 +98,10 @@ void printOverallRanking(std::ostream& out, const RunResults& results) {
         << tiedText(m) << "\n";
   }
   if (!o.excluded.empty()) out << "  not ranked overall: " << o.excluded << "\n";
+  if (std::any_of(o.ranking.begin(), o.ranking.end(),
+                  [](const RankedMethod& m) { return m.extraPathsPerPixel > 0; }))
+    out << "  (+paths): read paths beyond the frame's 1-spp ones (results.json: "
+           "statistics.extraPaths; their tracing time is each pair's tracingMs)\n";
 }
 
 namespace {
@@ -157,7 +167,7 @@ void printSceneRankings(std::ostream& out, const RunResults& results) {
     out << "\n" << name << ": " << s.resolvedPairs << " of " << s.pairs.size() << " pairwise differences resolved\n";
     const size_t column = labelColumn(s.ranking, 26);
     for (const RankedMethod& m : s.ranking)
-      out << "  " << std::left << std::setw(4) << m.rank << paddedText(m.label, column)
+      out << "  " << std::left << std::setw(4) << m.rank << paddedText(rankedLabel(m), column)
           << rightAligned(figureText(m.value), 11) << "  " << paddedText(intervalText(m.ci), 24)
           << tiedText(m) << "\n";
     if (!s.excluded.empty()) out << "  not ranked: " << s.excluded << "\n";

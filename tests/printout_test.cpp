@@ -212,6 +212,25 @@ TEST(StudySummary, LongLabelsKeepTheRankingsColumnsAligned) {
   EXPECT_GE(rows, 2) << tables.str();
 }
 
+// A method that read extra paths is marked in the rankings, with a line saying what the mark
+// means, and the columns stay aligned.
+TEST(StudySummary, AMethodThatReadExtraPathsIsMarkedInTheRankings) {
+  json results = worstDefaultStudy();
+  results["statistics"]["overall"]["ranking"][0]["extraPathsPerPixel"] = 0.1;
+  const std::string label = results["statistics"]["overall"]["ranking"][0]["label"];
+  std::ostringstream overall;
+  cli::printOverallRanking(overall, test::typed(results));
+  EXPECT_NE(overall.str().find(label + " (+paths)"), std::string::npos) << overall.str();
+  EXPECT_NE(overall.str().find("(+paths): read paths beyond the frame's 1-spp ones"),
+            std::string::npos);
+  int rows = 0;
+  EXPECT_EQ(intervalColumns(overall.str(), "overall:", rows).size(), 1u) << overall.str();
+  results["statistics"]["overall"]["ranking"][0].erase("extraPathsPerPixel");
+  std::ostringstream plain;
+  cli::printOverallRanking(plain, test::typed(results));
+  EXPECT_EQ(plain.str().find("(+paths)"), std::string::npos) << plain.str();
+}
+
 // A scene whose references stopped at their sample cap: the warning is the scene's, stored once in
 // results.scenes.<scene>.warnings (not on each of its pairs) and printed once.
 TEST(StudySummary, AWarningAboutASceneIsStoredAndPrintedOncePerScene) {

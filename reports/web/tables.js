@@ -83,7 +83,13 @@
             'data-tied': tied ? 'true' : null
           },
           el('td', {class: 'rank', text: `${r.rank}${tied ? '=' : ''}`}),
-          el('td', {class: 'first', text: r.label}), el('td', {text: fmt(r[valueKey])}),
+          // A method that read paths beyond the frame's own is marked, as on the speed chart.
+          el('td', r.extraPathsPerPixel > 0 ? {
+            class: 'first',
+            title: `reads ${fmt(r.extraPathsPerPixel)} paths per pixel per frame beyond the frame's 1-spp ones`,
+            text: `${r.label} (+paths)`
+          } : {class: 'first', text: r.label}),
+          el('td', {text: fmt(r[valueKey])}),
           el('td',
              R.baseline && r.label === R.baseline ? {
                class: 'ci',
