@@ -251,10 +251,12 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
     (rows) => rows.map((r) => [...r.querySelectorAll('td')].slice(0, 4).map((td) => td.textContent).join(' | ')));
   const printedOverall = tinyRuns().printed.split('\n\noverall: ')[1].split('\n').slice(1)
     .filter((l) => /^\s+\d/.test(l))
-    .map((l) => { const m = l.trim().match(/^(\d+=?)\s+(\S+)\s+(\S+)\s+(\[[^\]]*\]|–|\(1 by definition\))/); return m.slice(1, 5).join(' | '); });
+    .map((l) => { const m = l.trim().match(/^(\d+=?)\s+(\S+(?: \(\+paths\))?)\s+(\S+)\s+(\[[^\]]*\]|–|\(1 by definition\))/); return m.slice(1, 5).join(' | '); });
   assert.ok(printedOverall.length >= 3, `the run printed its overall ranking: ${tinyRuns().printed.slice(-800)}`);
   assert.deepEqual(pageOverall, printedOverall, 'report and printout show the same overall ranking');
-  assert.deepEqual(pageOverall.map((r) => r.split(' | ')[1]), results.statistics.overall.ranking.map((m) => m.label));
+  // A method that read extra paths is marked "(+paths)" on both.
+  assert.deepEqual(pageOverall.map((r) => r.split(' | ')[1]),
+    results.statistics.overall.ranking.map((m) => m.label + (m.extraPathsPerPixel > 0 ? ' (+paths)' : '')));
   assert.equal(await page.locator('#rankings table.ranking-table').first().locator('tbody tr').count(), okHere);
   assert.match(await page.locator('#failures').innerText(), /injected failure/);
   assert.equal(await page.locator('#summary-table tr.failed').count(), 1);
