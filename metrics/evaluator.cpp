@@ -614,10 +614,22 @@ json PairEvaluation::finish() {
         !summary[m->name].contains("mean"))
       continue;
     const double floor = scene.floors_[m->name], value = summary[m->name]["mean"];
+    // Distances from the perfect score (1 for SSIM: "0.59 within 2x of 0.79" read as nonsense).
+    const auto fromPerfect = [&](double v) {
+      const auto g4 = [](double x) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%.4g", x);
+        return std::string(buf);
+      };
+      return m->perfect == 0 ? g4(v)
+                             : g4(v) + ", " + g4(std::abs(v - m->perfect)) + " from a perfect " +
+                                   g4(m->perfect);
+    };
     if (std::abs(value - m->perfect) < m->floorWarningFactor * std::abs(floor - m->perfect))
-      warnings.push_back(m->name + " " + std::to_string(value) + " is within " +
-                         std::to_string(int(m->floorWarningFactor)) + "x of the reference's own floor (" +
-                         std::to_string(floor) + "): the reference's noise, not the method, dominates it");
+      warnings.push_back(m->name + " (" + fromPerfect(value) + ") is within " +
+                         std::to_string(int(m->floorWarningFactor)) +
+                         "x of the reference's own floor (" + fromPerfect(floor) +
+                         "): the reference's noise, not the method, dominates it");
   }
   json out = {{"frames", s.frames}, {"summary", summary}, {"tiles", s.series.tilesJson()}, {"warnings", warnings}};
   if (full) {
