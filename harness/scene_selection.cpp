@@ -78,9 +78,23 @@ std::string shortSequenceWarning(const std::string& source, int frames, int warm
          remedy + ")";
 }
 
+std::string tinyImageWarning(const std::string& source, int width, int height) {
+  if (std::min(width, height) >= 16) return "";
+  return source + ": " + std::to_string(width) + "x" + std::to_string(height) +
+         " is too small to measure much: the statistics' 4x4 tiles are " +
+         std::to_string(width / 4) + "x" + std::to_string(height / 4) + " pixels" +
+         (std::min(width, height) < 11 ? ", SSIM's 11x11 window is larger than the image" : "") +
+         ", and the scaled footprints skip most of every filter (a smoke test, not a ranking)";
+}
+
 std::vector<std::string> shortSequenceWarnings(const std::vector<Scene>& scenes,
                                                const RenderSettings& settings, int warmup) {
   std::vector<std::string> out;
+  for (const Scene& scene : scenes)
+    if (std::string w = tinyImageWarning(scene.file, settings.resolvedWidth(scene),
+                                         settings.resolvedHeight(scene));
+        !w.empty())
+      out.push_back(std::move(w));
   for (const Scene& scene : scenes)
     if (std::string w = shortSequenceWarning(scene.file, settings.resolvedFrames(scene), warmup,
                                              "render more frames with --frames or lower --warmup");

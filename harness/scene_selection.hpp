@@ -20,7 +20,9 @@ void requireRenderable(const Scene& scene, const RenderSettings& settings, bool 
 
 // One line per scene whose sequence (as `settings` render it) has no frame after the warm-up: every
 // summary of its pairs will be absent (metrics.md W). Said before any work, so that a --frames or
-// --warmup slip costs a second, not a run.
+// --warmup slip costs a second, not a run. Also one per scene rendered smaller than 16 pixels on a
+// side (tinyImageWarning): it runs, as a smoke test, but measures little.
+std::string tinyImageWarning(const std::string& source, int width, int height);
 std::vector<std::string> shortSequenceWarnings(const std::vector<Scene>& scenes,
                                                const RenderSettings& settings, int warmup);
 // The line for one sequence (a scene file or a capture) of `frames` frames; empty when a frame is

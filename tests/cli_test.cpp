@@ -229,6 +229,15 @@ TEST(CliContract, ARunSaysWhenAScenesReferenceMissesTheGoal) {
   EXPECT_NE(r.output.find("geometric mean over 1 scene of"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("reference quality: 1 of 1 scene(s) miss the goal"), std::string::npos)
       << r.output;
+  // An image this small runs, as a smoke test, and is said to measure little.
+  EXPECT_NE(
+      r.output.find(
+          "16x8 is too small to measure much: the statistics' 4x4 tiles are 4x2 pixels, SSIM's "
+          "11x11 window is larger than the image"),
+      std::string::npos)
+      << r.output;
+  EXPECT_EQ(tinyImageWarning("s", 16, 16), "");
+  EXPECT_EQ(tinyImageWarning("s", 64, 12).find("SSIM"), std::string::npos);
   EXPECT_NE(r.output.find(
                 "arena refine cornell_static --resolution 16x8 --frames 6 --ref-spp 4 --cache "),
             std::string::npos)
