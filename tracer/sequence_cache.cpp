@@ -240,7 +240,8 @@ std::string cappedWarning(const std::string& sceneName, int r, const ReferenceRe
   return "[" + sceneName + "] WARNING: reference " + std::to_string(r) + " stopped at its cap of " +
          std::to_string(ref.sppMax) + " spp per pixel (mean " + std::to_string(ref.spp) +
          ") with estimated relMSE " + formatDouble(ref.estimatedRelMse, 3) + " above its target " +
-         formatDouble(ref.targetRelMse, 3) + " (" + remedy + ")";
+         formatDouble(ref.targetRelMse, 3) + " (a relMSE: a relative error of " +
+         formatDouble(std::sqrt(ref.targetRelMse), 3) + "; " + remedy + ")";
 }
 
 // Makes dir's reference r the one in its home (a hard link, or a copy where links are refused),
