@@ -1,6 +1,7 @@
 #include "core/env_info.hpp"
 
 #include <cctype>
+#include <cstdlib>
 #include <ctime>
 #include <fstream>
 #include <string>
@@ -18,8 +19,14 @@ nlohmann::json environmentInfo() {
       cpu = line.substr(line.find(':') + 2);
       break;
     }
+  // The machine's load when the measurement began (1, 5 and 15 minute averages): times taken
+  // beside other work read slower, and this says whether there was any.
+  double load[3] = {-1, -1, -1};
+  const bool loadKnown = getloadavg(load, 3) == 3;
   return {{"cpu", cpu},
           {"cores", std::thread::hardware_concurrency()},
+          {"loadAverage",
+           loadKnown ? nlohmann::json{load[0], load[1], load[2]} : nlohmann::json(nullptr)},
           {"compiler", ARENA_COMPILER},
           {"flags", ARENA_CXX_FLAGS},
           {"git_commit", ARENA_GIT_COMMIT}};

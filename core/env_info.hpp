@@ -1,5 +1,6 @@
 #pragma once
-// The machine and build a measurement was taken on: CPU model, cores, compiler, flags, and the
+// The machine and build a measurement was taken on: CPU model, cores, load average at the start
+// (null where unknown), compiler, flags, and the
 // commit the binary was built from ("<hash>-dirty" when tracked files had uncommitted changes).
 #include <nlohmann/json.hpp>
 #include <string>

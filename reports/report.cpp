@@ -165,6 +165,13 @@ std::vector<SpeedClock> speedClocks(const RunResults& results, const std::vector
   std::string where = env.value("cpu", std::string("this machine"));
   if (env.contains("cores")) where += ", " + env["cores"].dump() + " threads";
   for (const std::string& size : sizes) where += ", " + size;
+  // Other work on the machine slows what is timed: its load when the run began.
+  if (const json load = env.value("loadAverage", json());
+      load.is_array() && !load.empty() && load[0].is_number()) {
+    char buf[48];
+    std::snprintf(buf, sizeof buf, ", load %.2f at the start", load[0].get<double>());
+    where += buf;
+  }
   std::vector<SpeedClock> clocks = {{"cpu", "CPU ms measured here (" + where + ")"}};
   std::vector<std::string> devices, captureDevices;
   bool processClock = false;

@@ -301,6 +301,12 @@ TEST(Report, EachTimeAxisHasItsOwnPointsAndFront) {
   ASSERT_EQ(clocks.size(), 2u);
   EXPECT_EQ(clocks[0]["key"], "cpu");
   EXPECT_NE(clocks[0]["title"].get<std::string>().find("test, 2 threads, 4x2"), std::string::npos) << clocks[0]["title"];
+  json loaded = run;  // the machine's load when the run began is part of what the clock says
+  loaded["environment"]["loadAverage"] = {1.7, 1.2, 0.9};
+  EXPECT_NE(reportData(test::typed(loaded), dir, nullptr)["speed"]["clocks"][0]["title"]
+                .get<std::string>()
+                .find("4x2, load 1.70 at the start)"),
+            std::string::npos);
   EXPECT_EQ(clocks[1]["key"], "gpu:TITAN RTX");
   EXPECT_NE(clocks[1]["title"].get<std::string>().find("predicted at 1920x1080 on TITAN RTX"), std::string::npos);
   const json& gpu = data["speed"]["views"]["gpu:TITAN RTX"]["scenes"]["static"]["relMse"];
