@@ -345,8 +345,9 @@ void addRunCommands(CLI::App& app) {
         std::cerr << "arena: warning: comparing runs with different settings (baseline vs candidate):" << list
                   << "\n";
       }
+      // (Runs of other settings render other references anyway: said above.)
       if (const std::vector<std::string> refs = referenceDifferences(baseline, candidate);
-          !refs.empty()) {
+          !refs.empty() && differ.empty()) {
         std::string list;
         for (const std::string& d : refs) list += "\n  " + d;
         std::cerr

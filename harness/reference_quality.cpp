@@ -3,12 +3,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <limits>
 
 #include "metrics/metric_registry.hpp"
 #include "tracer/render.hpp"
 
 namespace arena {
+
+namespace fs = std::filesystem;
 
 using nlohmann::json;
 
@@ -116,12 +119,16 @@ void addReferenceQuality(json& results, int warmup, const std::map<std::string, 
       if (scene.value("frames", 0) > 0)
         options += " --frames " + std::to_string(scene.value("frames", 0));
       options += renderOptionsOf(results.value("settings", json::object()).value("render", json()));
-      if (!cache.empty() && cache != "cache")  // quoted for a shell where it needs it
-        options += " --cache " +
-                   (cache.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
-                                            "0123456789_-./") == std::string::npos
-                        ? cache
-                        : "'" + cache + "'");
+      // The cache the scene's sequence was read from (a merge of shards has no --cache of its own).
+      std::string cacheDir = cache;
+      if (scene.contains("sequence") && scene["sequence"].is_string())
+        cacheDir = fs::path(scene["sequence"].get<std::string>()).parent_path().string();
+      if (!cacheDir.empty() && cacheDir != "cache" && cacheDir.find('\'') == std::string::npos)
+        options += " --cache " + (cacheDir.find_first_not_of(
+                                      "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                      "0123456789_-./") == std::string::npos
+                                      ? cacheDir
+                                      : "'" + cacheDir + "'");
       verdict +=
           "the reference's noise must fall " + sci(ratio / kReferenceQualityGoal) + "x (to " + sci(needed) + "); ";
       if (scene.value("source", "") ==

@@ -81,10 +81,12 @@ std::string shortSequenceWarning(const std::string& source, int frames, int warm
 std::string tinyImageWarning(const std::string& source, int width, int height) {
   if (std::min(width, height) >= 16) return "";
   return source + ": " + std::to_string(width) + "x" + std::to_string(height) +
-         " is too small to measure much: the statistics' 4x4 tiles are " +
-         std::to_string(width / 4) + "x" + std::to_string(height / 4) + " pixels" +
+         " is too small to measure much: the statistics' 4x4 tiles hold a few pixels each" +
          (std::min(width, height) < 11 ? ", SSIM's 11x11 window is larger than the image" : "") +
-         ", and the scaled footprints skip most of every filter (a smoke test, not a ranking)";
+         (height < 16 ? ", and under the default scaled footprint the à-trous filters skip most of "
+                        "their iterations"
+                      : "") +
+         " (a smoke test, not a ranking)";
 }
 
 std::vector<std::string> shortSequenceWarnings(const std::vector<Scene>& scenes,

@@ -345,7 +345,9 @@ MotionConsistency checkMotion(const std::vector<LayerSet>& frames,
               !prev.project(cam.pointAtDepth(pixel.x, pixel.y, zk), pk))
             continue;
           const glm::vec2 ek = pk - pixel;
-          if (glm::length(ek - e) <= 2 * tol) continue;  // the two readings agree here
+          // The two readings agree here; or this one predicts no motion, which a motion layer
+          // left empty (or in other units) would match without saying anything of the depth.
+          if (glm::length(ek - e) <= 2 * tol || glm::length(ek) <= tol) continue;
           ++depthCounts[k].informative;
           depthCounts[k].matched += glm::length(m - ek) <= tol;
           depthCounts[k].matchedAsWritten += err <= tol;
@@ -366,7 +368,7 @@ MotionConsistency checkMotion(const std::vector<LayerSet>& frames,
           candidates[k].matched += glm::length(m - predictions[k]) <= tolerance;
         }
       }
-    if (const long checked = out.pixels - pixelsBefore; checked > 0) {
+    if (const long checked = out.pixels - pixelsBefore; checked >= 100) {  // sky: no verdict
       const double share = double(off - offBefore) / double(checked);
       if (share > out.worstFrameShare) out.worstFrameShare = share, out.worstFrame = t;
     }
@@ -615,18 +617,20 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
     if (!m.explanation.empty())
       detail = "the motion vectors look " + m.explanation + " (" + number(m.explainedShare * 100) +
                "% of the pixels with motion fit that); " + detail;
-    if (!m.depthExplanation.empty())
+    if (!m.depthExplanation.empty() && m.explanation.empty())
       detail = "the depth layer looks " + m.depthExplanation + " (" +
                number(m.depthExplainedShare * 100) +
                "% of the pixels where that reading moves differently fit the motion with it); " +
                detail;
-    else if (m.offShare > 0.25 && m.depthWithinUnit)
-      detail += "; every depth lies in (0, 1]: a depth buffer's value rather than view depth?" +
-                (sequence.isCapture() ? " (read as one with capture.json's near " +
-                                            number(sequence.capture().nearPlane) + " and far " +
-                                            number(sequence.capture().farPlane) +
-                                            " it fits no better: are those the capture's planes?)"
-                                      : std::string());
+    else if (m.offShare > 0.25 && m.depthWithinUnit && m.explanation.empty())
+      detail +=
+          "; every depth lies in (0, 1]: a depth buffer's value rather than view depth?" +
+          (sequence.isCapture()
+               ? " (read as one with near " + number(sequence.capture().nearPlane) + " and far " +
+                     number(sequence.capture().farPlane) +
+                     ", capture.json's or the defaults where it gives none, it fits no better: "
+                     "give the capture's planes)"
+               : std::string());
     if (m.worstFrameShare > 0.05)
       detail += "; worst at frame " + std::to_string(m.worstFrame) + " (" +
                 number(m.worstFrameShare * 100) + "% off)";

@@ -389,9 +389,18 @@ TEST(CaptureValidation, DepthInOtherUnitsOrFromADepthBufferIsNamedByTheMotion) {
   EXPECT_NE(
       c.detail.find(
           "every depth lies in (0, 1]: a depth buffer's value rather than view depth? (read as "
-          "one with capture.json's near 0.01 and far 1000"),
+          "one with near 0.01 and far 1000, capture.json's or the defaults"),
       std::string::npos)
       << c.detail;
+  // Motion left empty (every vector 0) under a moving camera: no depth reading is blamed (one
+  // 1000x too deep predicts no motion too).
+  const fs::path empty = writeSynthetic("motion_empty");
+  editFrames(empty, [](int, LayerSet& frame) {
+    for (float& v : frame.get("motion").raw()) v = 0;
+  });
+  c = motionOf(empty);
+  EXPECT_EQ(c.status, CheckStatus::Fail) << c.detail;
+  EXPECT_EQ(c.detail.find("depth layer looks"), std::string::npos) << c.detail;
   // Right depth, right motion: no reading is named.
   EXPECT_EQ(motionOf(writeSynthetic("depth_right")).detail.find("depth layer looks"),
             std::string::npos);

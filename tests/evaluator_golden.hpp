@@ -45,8 +45,9 @@ inline nlohmann::json goldenPart(nlohmann::json r) {
     if (scene.contains("referenceQuality") && scene["referenceQuality"].contains("verdict")) {
       std::string verdict = scene["referenceQuality"]["verdict"];
       const size_t at = verdict.find(" --cache ");
-      if (at != std::string::npos)
-        verdict.replace(at + 9, verdict.find(' ', at + 9) - (at + 9), "CACHE");
+      if (const size_t end = verdict.find(" --target", at);
+          at != std::string::npos && end != std::string::npos)
+        verdict.replace(at + 9, end - (at + 9), "CACHE");
       scene["referenceQuality"]["verdict"] = verdict;
     }
   }

@@ -136,7 +136,10 @@ void filterIteration(int iteration, const AtrousSettings& settings, const Atrous
   if (iteration < 0 || iteration > 24) throw Error("à-trous: iteration out of range [0, 24]");
   const int step = atrousStep(iteration, settings.footprintScale);
   if (step == 0) {  // footprint.hpp: an iteration scaled below half a pixel is skipped
-    if (settings.footprintScale < 1) gpu::skippedHere();  // at the reference height it runs
+    // A 1080p frame (the GPU prediction's) runs it where its step there is not 0: 1080 lines
+    // under the same policy scale the footprint by 1080 / h times this one.
+    if (atrousStep(iteration, settings.footprintScale * 1080.0f / float(h)) != 0)
+      gpu::skippedHere();
     parallelCopy(colorIn, colorOut);
     if (carryIn) parallelCopy(*carryIn, *carryOut);
     return;
