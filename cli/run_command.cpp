@@ -336,9 +336,13 @@ void addRunCommands(CLI::App& app) {
       const RunResults baseline = loadResults(*a), candidate = loadResults(*b);
       // Numbers measured under other settings differ for that reason alone: refused unless asked.
       const std::vector<std::string> differ = settingsDifferences(baseline, candidate);
+      const auto lines = [](const std::vector<std::string>& items) {  // one indented line each
+        std::string text;
+        for (const std::string& item : items) text += "\n  " + item;
+        return text;
+      };
       if (!differ.empty()) {
-        std::string list;
-        for (const std::string& d : differ) list += "\n  " + d;
+        const std::string list = lines(differ);
         if (!*allowMismatch)
           throw Error("compare: " + *a + " and " + *b + " were run with different settings (baseline vs candidate):" +
                       list + "\ntheir numbers are not comparable; pass --allow-settings-mismatch to compare anyway");
@@ -348,13 +352,11 @@ void addRunCommands(CLI::App& app) {
       // (Runs of other settings render other references anyway: said above.)
       if (const std::vector<std::string> refs = referenceDifferences(baseline, candidate);
           !refs.empty() && differ.empty()) {
-        std::string list;
-        for (const std::string& d : refs) list += "\n  " + d;
         std::cerr
             << "arena: warning: the runs measured these scenes against references of other sample "
                "counts (refined between them?); part of each change there is the reference's, not "
                "the denoiser's (run both on one cache state to compare the denoisers alone):"
-            << list << "\n";
+            << lines(refs) << "\n";
       }
       auto rows = compareRuns(baseline, candidate, tols, bc);
       if (*asJson) {

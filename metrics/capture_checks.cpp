@@ -149,6 +149,10 @@ struct ReferenceFit {
     }
     n += input.raw().size();
   }
+  void add(const ReferenceFit& other) {  // pooled over frames
+    sumD += other.sumD, sumD2 += other.sumD2, sumGap += other.sumGap, n += other.n;
+    noiseKnown = noiseKnown && other.noiseKnown;
+  }
   double side() const { return sumGap > 0 ? sumD / sumGap : 0.0; }
   double z() const {
     if (n < 2) return 0;
@@ -809,8 +813,7 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
                            &opposite = fits[size_t(t)][size_t(1 - side)];
         if (fit.onOther() && !opposite.onOther()) {
           onOther.push_back(t);
-          pooled.sumD += fit.sumD, pooled.sumD2 += fit.sumD2, pooled.n += fit.n;
-          pooled.noiseKnown = pooled.noiseKnown && fit.noiseKnown;
+          pooled.add(fit);
         }
         onOwn += fit.onOwn();
       }
