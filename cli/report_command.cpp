@@ -26,7 +26,7 @@ void addReportCommand(CLI::App& app) {
     ReportSummary s = writeReport(*o);
     std::cout << "report: " << s.index.string() << " (" << s.pairs << " pairs";
     if (s.failedPairs) std::cout << ", " << s.failedPairs << " failed: shown in the report";
-    std::cout << ", " << s.imagesCopied << " images)\n";
+    std::cout << ", " << s.images << " images" << (s.imagesInPlace ? ", in place" : "") << ")\n";
     for (const std::string& line : s.absentSummaries) std::cout << "absent: " << line << "\n";
   });
 

@@ -203,14 +203,16 @@ void Asvgf::filterGradients() {
   const float sigmaL = asvgf_.gradientSigmaL;
   const int sw = strataWidth_, sh = strataHeight_;
   for (int k = 0; k < asvgf_.gradientIterations; ++k) {
-    // Taps 2^k strata apart, or the footprint policy's step (footprint.hpp; 0: skipped).
+    // Taps 2^k strata apart, or the footprint policy's step (footprint.hpp; 0: skipped). An
+    // iteration skipped here that a 1080p frame runs is a pass of no work here whose traffic is
+    // that frame's, for the GPU prediction (PassTraffic::skippedHere).
     const int step = atrousStep(k, settings_.atrous.footprintScale);
-    if (step == 0) continue;
+    const bool onlyAt1080p =
+        step == 0 && atrousRunsAt1080p(k, settings_.atrous.footprintScale, gbuffer_.height);
+    if (step == 0 && !onlyAt1080p) continue;
     // Taps per full-resolution pixel: 9 per stratum, a ninth of the pixels' count.
-    ScopedPass pass(this, "gradient atrous " + std::to_string(k + 1),
-                    asvgf_.gradientLuminance ? 2.0 : 1.0);
-    const Image& in = gradient_[source];
-    Image& out = gradient_[1 - source];
+    const double taps = asvgf_.gradientLuminance ? 2.0 : 1.0;
+    ScopedPass pass(this, "gradient atrous " + std::to_string(k + 1), onlyAt1080p ? 0.0 : taps);
     if (gpu::recording()) {  // 3x3 strata, guided by the stratum pixels' depth and normal
       using namespace gpu_buffers;
       gpu::dispatch(sw, sh);
@@ -218,7 +220,11 @@ void Asvgf::filterGradients() {
       gpu::read(kDepth, sw, sh, 9);  // only one pixel per stratum is read
       gpu::read(kNormal, sw, sh, 9);
       gpu::write(kGradientImage, sw, sh);
+      if (onlyAt1080p) gpu::skippedHere();
     }
+    if (onlyAt1080p) continue;
+    const Image& in = gradient_[source];
+    Image& out = gradient_[1 - source];
     const float* variance = in.plane(kGradientVariance);
     if (asvgf_.gradientLuminance) {
       // eq. 11: g3x3, the variance blurred by a 3x3 Gaussian, drives the luminance weight only.

@@ -30,7 +30,11 @@ struct ReportOptions {
 
 struct ReportSummary {
   std::filesystem::path index;  // <out>/index.html
-  size_t pairs = 0, failedPairs = 0, imagesCopied = 0;
+  size_t pairs = 0, failedPairs = 0;
+  // The run's display images the page shows: copied beside it, or there already when the page is
+  // written into the run directory itself (imagesInPlace).
+  size_t images = 0;
+  bool imagesInPlace = false;
   // The run's absent summaries with their reasons (metrics/run_results.hpp), for the printout:
   // the page shows them as empty cells.
   std::vector<std::string> absentSummaries;

@@ -125,6 +125,34 @@ TEST(AsvgfVariant, GradientSamplesRaiseAlphaWhereTheLightChanged) {
   EXPECT_NEAR(asvgf.at(w - 2, h / 2, 0), 1.0f, 1e-5f);
 }
 
+// The gradient à-trous under the scaled footprint: at 30 lines it skips iterations a 1080p frame
+// runs; each is a pass of no work here that carries that frame's traffic for the GPU prediction
+// (gpu_traffic.hpp, skippedHere), so A-SVGF's 1080p figure has all five.
+TEST(AsvgfVariant, GradientIterationsSkippedHereArePricedForA1080pFrame) {
+  const int w = 60, h = 30;
+  const LayerSet frame = planeFrame(w, h);
+  const LayerSet gradients = gradientSamples(w, h, w / 2, 0.5f, 1.0f, 1.0f);
+  auto d = create("asvgf", {});
+  d->setup(w, h);
+  Image output(w, h, 3);
+  const Image& signal = frame.get("color");
+  d->denoise(test::stillCameraContext(0, w, h), {signal, frame, nullptr}, output);
+  d->denoise(test::stillCameraContext(1, w, h), {signal, frame, &gradients}, output);
+  int passes = 0, priced = 0;
+  for (const PassStats& p : d->lastPasses()) {
+    if (p.name.rfind("gradient atrous", 0) != 0) continue;
+    ++passes;
+    EXPECT_EQ(p.traffic.dispatches.size(), 1u) << p.name;
+    if (p.traffic.skippedHere > 0) {
+      ++priced;
+      EXPECT_EQ(p.tapsPerPixel, 0.0) << p.name << ": no tap is taken here";
+    }
+  }
+  EXPECT_EQ(passes, 5);  // the default iterations, every one of which runs at 1080p
+  EXPECT_GT(priced, 0);
+  EXPECT_LT(priced, 5);  // the first always runs
+}
+
 TEST(AsvgfVariant, UnknownParameterIsRejected) {
   for (const char* name : {"asvgf", "slgf"}) {
     const ParamSchema& schema = DenoiserRegistry::instance().find(name).schema;

@@ -1,11 +1,13 @@
 // The GPU traffic the shared blocks count (denoisers/common/gpu_traffic.hpp) against counts done
 // by hand.
+#include "denoisers/common/gpu_traffic.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "denoisers/common/atrous.hpp"
-#include "denoisers/common/gpu_traffic.hpp"
+#include "denoisers/common/footprint.hpp"
 #include "denoisers/svgf.hpp"
 #include "test_util.hpp"
 
@@ -87,7 +89,8 @@ TEST(GpuTraffic, NothingIsRecordedOutsideAPassOrForASkippedIteration) {
   settings.edges.depth = settings.edges.normal = settings.edges.luminance = false;
   EXPECT_FALSE(gpu::recording());
   atrousIteration(0, settings, {g}, 1.0f, in, out);  // no scope: a no-op for the recorder
-  settings.footprintScale = 0.01f;                    // step 2^3 x 0.01 rounds to 0: skipped
+  // Step 2^3 x 1e-4 rounds to 0 here, and at 1080 lines (x 1080 / 8) too: skipped everywhere.
+  settings.footprintScale = 1e-4f;
   PassTraffic t;
   {
     TrafficScope scope(&t);
@@ -96,6 +99,39 @@ TEST(GpuTraffic, NothingIsRecordedOutsideAPassOrForASkippedIteration) {
   }
   EXPECT_FALSE(gpu::recording());
   EXPECT_TRUE(t.empty());
+}
+
+// An iteration the footprint skips at this height but a 1080p frame runs (step 2^3 x 0.01 rounds
+// to 0 at 8 lines, to 11 at 1080) is not run here, and is priced as that frame's iteration: the
+// same traffic per pixel as the iteration run, counted in skippedHere.
+TEST(GpuTraffic, AnIterationSkippedHereThatA1080pFrameRunsIsPricedAsRun) {
+  const int w = 8, h = 8;
+  const LayerSet frame = planeFrame(w, h);
+  const GBufferView g = GBufferView::fromFrame(frame, {"depth", "normal", "meshId"}, "test");
+  Image in(w, h, 3, 0.5f), out(w, h, 3);
+  in.at(3, 3, 0) = 2.0f;
+  AtrousSettings settings;
+  settings.edges.depth = settings.edges.luminance = false;
+  PassTraffic run, skipped;
+  {
+    TrafficScope scope(&run);
+    atrousIteration(3, settings, {g}, 1.0f, in, out);
+  }
+  EXPECT_EQ(run.skippedHere, 0);
+  settings.footprintScale = 0.01f;
+  ASSERT_EQ(atrousStep(3, settings.footprintScale), 0);
+  ASSERT_TRUE(atrousRunsAt1080p(3, settings.footprintScale, h));
+  {
+    TrafficScope scope(&skipped);
+    atrousIteration(3, settings, {g}, 1.0f, in, out);
+  }
+  EXPECT_EQ(skipped.skippedHere, 1);
+  EXPECT_EQ(out.at(3, 3, 0), 2.0f);  // not run: the identity
+  EXPECT_EQ(skipped.dispatches, run.dispatches);
+  EXPECT_DOUBLE_EQ(skipped.bytesRead(), run.bytesRead());
+  EXPECT_DOUBLE_EQ(skipped.bytesWritten(), run.bytesWritten());
+  EXPECT_DOUBLE_EQ(skipped.fetches(), run.fetches());
+  EXPECT_GT(skipped.fetches(), 0.0);
 }
 
 // Every timed à-trous pass of eaw records one full-screen dispatch whose radiance fetches are

@@ -170,6 +170,8 @@ TEST(Report, GeneratorWritesEverySectionAndKeepsTheFailedPair) {
   ReportSummary s = writeReport(o);
   EXPECT_EQ(s.pairs, 6u);
   EXPECT_EQ(s.failedPairs, 1u);
+  EXPECT_EQ(s.images, 11u);  // the fixture's PNGs, copied
+  EXPECT_FALSE(s.imagesInPlace);
   for (const char* f :
        {"index.html", "data.js", "app.js", "style.css", "vega.min.js", "vega-lite.min.js",
         "vega-embed.min.js", "images/static/svgf[a=0]/flip_0002.png",
@@ -291,10 +293,10 @@ TEST(Report, EachTimeAxisHasItsOwnPointsAndFront) {
   }
   const fs::path dir = writeFixtureRun("report_clocks", run);
   const json data = reportData(test::typed(run), dir, nullptr);
-  // A prediction that lacks passes the run's resolution skipped is said under the GPU axis.
+  // A prediction that priced passes the run's resolution skipped is said under the GPU axis.
   EXPECT_NE(data["speed"]
                 .value("gpuSkipped", "")
-                .find("the prediction lacks them: svgf[a=1] 4 per frame"),
+                .find("as that frame would run them: svgf[a=1] 4 per frame"),
             std::string::npos)
       << data["speed"].value("gpuSkipped", "");
   const json& clocks = data["speed"]["clocks"];
@@ -724,6 +726,20 @@ TEST(Report, MissingRunIsAClearError) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("no such run directory"), std::string::npos) << e.what();
   }
+}
+
+// A page written into its run directory shows the run's own images: counted there, not copied
+// (the printout said "0 images" for a page that showed every one of them).
+TEST(Report, APageInItsRunDirectoryCountsTheImagesInPlace) {
+  ReportOptions o;
+  o.run = writeFixtureRun("report_in_place", fixtureRun());
+  o.out = o.run;
+  o.nodeModulesDir = fakeNodeModules("report_in_place_modules");
+  const ReportSummary s = writeReport(o);
+  EXPECT_EQ(s.images, 11u);
+  EXPECT_TRUE(s.imagesInPlace);
+  EXPECT_TRUE(fs::exists(o.out / "index.html"));
+  EXPECT_TRUE(fs::exists(o.out / "images/switch/reference_0005.png"));
 }
 
 // A run's results.json given where its directory is expected: the directory is named.

@@ -97,9 +97,10 @@ const ParamTable<AtrousSettings>& atrousKernelParams() {
 namespace {
 
 // What the iteration would move on a GPU (gpu_traffic.hpp): every buffer the enabled terms read
-// at every tap, the centre-only guides once. A skipped iteration (step 0) is a copy a shader
-// would not do: nothing. The pre-spatial pass's carried moments are computed from the colour
-// taps in a shader (their squares), so only their output is traffic.
+// at every tap, the centre-only guides once. An iteration skipped here (step 0) is a copy a shader
+// would not do, but a 1080p frame runs it where its step there is not 0: it is counted as that
+// frame's iteration, every tap (PassTraffic::skippedHere). The pre-spatial pass's carried moments
+// are computed from the colour taps in a shader (their squares), so only their output is traffic.
 void recordTraffic(const AtrousSettings& settings, const AtrousGuide& guide,
                    atrous_detail::Carry carry, int taps, int w, int h) {
   using namespace gpu_buffers;
@@ -136,10 +137,10 @@ void filterIteration(int iteration, const AtrousSettings& settings, const Atrous
   if (iteration < 0 || iteration > 24) throw Error("à-trous: iteration out of range [0, 24]");
   const int step = atrousStep(iteration, settings.footprintScale);
   if (step == 0) {  // footprint.hpp: an iteration scaled below half a pixel is skipped
-    // A 1080p frame (the GPU prediction's) runs it where its step there is not 0: 1080 lines
-    // under the same policy scale the footprint by 1080 / h times this one.
-    if (atrousStep(iteration, settings.footprintScale * 1080.0f / float(h)) != 0)
+    if (gpu::recording() && atrousRunsAt1080p(iteration, settings.footprintScale, h)) {
+      recordTraffic(settings, guide, carry, atrousTapCount(settings.kernel), w, h);
       gpu::skippedHere();
+    }
     parallelCopy(colorIn, colorOut);
     if (carryIn) parallelCopy(*carryIn, *carryOut);
     return;

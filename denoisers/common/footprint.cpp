@@ -16,6 +16,10 @@ int atrousStep(int iteration, float scale) {
   return iteration == 0 ? std::max(step, 1) : step;
 }
 
+bool atrousRunsAt1080p(int iteration, float scale, int height) {
+  return atrousStep(iteration, scale * 1080.0f / float(height)) != 0;
+}
+
 int scaledMipLevel(int level, float scale) {
   if (scale == 1.0f) return level;
   return std::max(1, int(std::lround(double(level) + std::log2(double(scale)))));

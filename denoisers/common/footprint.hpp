@@ -43,6 +43,11 @@ struct Footprint {
 // under scale s: 2^iteration exactly when s = 1, else round(2^iteration s), 0 meaning "skip", and
 // never 0 for the first iteration.
 int atrousStep(int iteration, float scale);
+// Whether a 1920x1080 frame under the same policy runs à-trous iteration `iteration`, which an
+// image `height` lines high filters under `scale`: 1080 lines scale the footprint by 1080 / height
+// times this one. The GPU prediction prices an iteration skipped here but run there
+// (gpu_traffic.hpp, PassTraffic::skippedHere).
+bool atrousRunsAt1080p(int iteration, float scale, int height);
 
 // The mip level that stands for published level `level` (2^level px blocks) under scale s:
 // `level` exactly when s = 1, else round(level + log2 s), never below 1 -- like the first à-trous

@@ -110,8 +110,9 @@ struct BufferTraffic {
 struct PassTraffic {
   std::vector<BufferTraffic> buffers;
   std::vector<std::array<int, 2>> dispatches;  // width x height threads of each dispatch
-  // Dispatches the footprint policy skipped at this resolution that it runs at its reference
-  // height (an à-trous iteration scaled below half a pixel): the 1080p prediction lacks them.
+  // Dispatches the footprint policy skipped at this resolution that a 1920x1080 frame runs (an
+  // à-trous iteration scaled below half a pixel here): not run, but their traffic is above, as
+  // that frame's iteration would move it per pixel, so that the 1080p prediction has them.
   int skippedHere = 0;
 
   bool empty() const { return dispatches.empty() && buffers.empty(); }
@@ -148,7 +149,8 @@ void write(const GpuBuffer& buffer, int width, int height);
 void read(std::initializer_list<GpuBuffer> buffers, int width, int height,
           double fetchesPerThread = 1.0);
 void write(std::initializer_list<GpuBuffer> buffers, int width, int height);
-// A dispatch skipped at this resolution that a 1080p frame would make (PassTraffic::skippedHere).
+// Counts a dispatch skipped at this resolution that a 1080p frame makes (PassTraffic::skippedHere);
+// the caller records its traffic as that frame's.
 void skippedHere();
 }  // namespace gpu
 
