@@ -807,17 +807,17 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
     for (int side = 0; side < 2; ++side) {
       std::vector<int> onOther;
       int onOwn = 0;
-      ReferenceFit pooled;  // the frames on the other reference
+      ReferenceFit onOtherFit;  // the frames on the other reference
       for (int t = 1; t + 1 < frames; ++t) {
         const ReferenceFit &fit = fits[size_t(t)][size_t(side)],
                            &opposite = fits[size_t(t)][size_t(1 - side)];
         if (fit.onOther() && !opposite.onOther()) {
           onOther.push_back(t);
-          pooled.add(fit);
+          onOtherFit.add(fit);
         }
         onOwn += fit.onOwn();
       }
-      const double z = pooled.z();
+      const double z = onOtherFit.z();
       const int decided = int(onOther.size()) + onOwn;
       const std::string neighbour = side == 0 ? "before" : "after";
       // One frame alone is no pattern (a reference re-rendered at another sample count beside
@@ -826,7 +826,7 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
       const bool pattern = onOther.size() >= 2;
       v.checks.push_back(check(
           "reference.alignment." + neighbour, pattern ? double(onOther.size()) / decided : 0.0, 0.2,
-          pooled.noiseKnown ? 0.5 : kSoft,
+          onOtherFit.noiseKnown ? 0.5 : kSoft,
           "share of frames nearer the reference of the frame " + neighbour + " than their own",
           onOther.empty()
               ? (decided ? ""
@@ -842,9 +842,10 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
                     (side == 0 ? "ahead of their inputs (written after the frame advanced?)"
                                : "behind their inputs (written a frame early?)") +
                     "; every error metric would then favour the methods that lag" +
-                    (pooled.noiseKnown ? ""
-                                       : " (a warning: without the references' colorVar, a less "
-                                         "converged reference beside better ones can read so)")));
+                    (onOtherFit.noiseKnown
+                         ? ""
+                         : " (a warning: without the references' colorVar, a less "
+                           "converged reference beside better ones can read so)")));
     }
     const auto worstFrame = [&](const std::string& name, double value, int frame, double warn,
                                 double fail, const std::string& unit) {

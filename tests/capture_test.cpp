@@ -335,7 +335,7 @@ TEST(CaptureValidation, MotionVectorSlipsAreRefusedAndNamed) {
   const fs::path one = writeSynthetic("slip_one_frame");
   editFrames(one, [](int t, LayerSet& f) {
     if (t == 4)
-      for (float& v : f.get("motion").raw()) v = -v;
+      for (float& m : f.get("motion").raw()) m = -m;
   });
   const CaptureCheck& single = checkNamed(validate(one), "motion.consistency");
   EXPECT_NE(single.detail.find("; worst at frame 4 ("), std::string::npos) << single.detail;

@@ -110,10 +110,12 @@ TEST(Sweep, ValuesAreComparedAndLabelledAsTheDenoiserReadsThem) {
             defaultLabel({"svgf", {{"alpha", "0.3"}}, ""}));
   const ParamSchema& svgf = DenoiserRegistry::instance().find("svgf").schema;
   EXPECT_EQ(svgf.resolve({{"alpha", "0.30000001"}}, "svgf").toJson()["alpha"], json(0.3));
-  for (const ParamSpec& spec : svgf.specs())  // the defaults stay as the code writes them
-    if (spec.type == ParamSpec::Type::Float)
+  for (const ParamSpec& spec : svgf.specs()) {  // the defaults stay as the code writes them
+    if (spec.type == ParamSpec::Type::Float) {
       EXPECT_EQ(svgf.resolve({}, "svgf").values().at(spec.name), ParamSet::Value(spec.defaultValue))
           << spec.name;
+    }
+  }
   const ParamSchema external({ParamSpec::real("alpha", 0.2, 0, 1, "a double")});
   EXPECT_EQ(external.resolve({{"alpha", "0.30000001"}}, "ext").toJson()["alpha"], json(0.30000001));
 }
