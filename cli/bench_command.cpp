@@ -89,6 +89,16 @@ void addBenchCommand(CLI::App& app) {
     b.params = parseParamAssignments(d->params);
     const nlohmann::json out = benchDenoise(b, printLine);
     if (!d->json.empty()) writeTextAtomically(d->json, out.dump(2));
+    // A contender that failed was reported with its error and the others timed; the exit status
+    // says the bench is not whole (1, as a run with a failed pair).
+    int failed = 0;
+    for (const nlohmann::json& row : out["denoisers"])
+      failed += row.value("status", "") == "failed";
+    if (failed > 0) {
+      std::cerr << "bench denoise: " << failed << " of " << out["denoisers"].size()
+                << " contender(s) failed (their errors above)\n";
+      throw CLI::RuntimeError(1);
+    }
   });
 
   auto* gpuModel = bench->add_subcommand(

@@ -312,6 +312,10 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
     std::vector<double>
         wall;               // the harness's clock around the calls, where a process reports its own
     bool reported = false;  // total holds a process's own reported compute time
+    // Timed frames whose own report of their time outlasts the call (implausibleTime), the first
+    // said in words; and the error that ended the contender's part (the others go on).
+    int implausibleFrames = 0;
+    std::string firstImplausible, error;
     std::map<std::string, std::vector<double>> passMs;
     std::map<std::string, double> passTaps;
     std::vector<std::string> passOrder;
@@ -319,7 +323,7 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
   std::vector<Contender> contenders;
   for (const std::string& name : b.denoisers) {
     const DenoiserInfo& info = DenoiserRegistry::instance().find(name);
-    Contender c{name, info.schema.resolve(params[name], name), {}, {}, {}, {}, {}, {}, {}};
+    Contender c{name, info.schema.resolve(params[name], name)};
     c.kinds = info.signals == SignalMode::Color ? std::vector<SignalKind>{SignalKind::Color}
                                                 : std::vector<SignalKind>{SignalKind::Diffuse, SignalKind::Specular};
     for (SignalKind kind : c.kinds) c.instances.push_back(info.create(c.params, kind));
@@ -346,73 +350,128 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
     ctx.previousCamera = cameras[f > 0 ? pingPong(f - 1, inputs.size()) : input];
     for (size_t turn = 0; turn < contenders.size(); ++turn) {
       Contender& c = contenders[(turn + size_t(f)) % contenders.size()];
+      if (!c.error.empty()) continue;
       const bool grads = c.instances[0]->needsGradients() && f > 0 && inputs.size() > 1;
       double frameMs = 0, frameWall = 0;
-      for (size_t k = 0; k < c.instances.size(); ++k) {
-        const SignalKind kind = c.kinds[k];
-        // Every contender starts from the same cache state: what it reads (the signal and its
-        // declared layers) has just been written, as by the passes that produce them in an
-        // engine. Without this the layers came cold from the cycled input pool, while a plugin
-        // that copied its inputs first read them warm -- and measured faster than its own code.
-        // The output is marked first (as a run does, so a call that writes nothing is not timed
-        // as fast), then the inputs copied: they are what the call finds in the cache.
-        markUnwritten(outImage);
-        signal = frame.get(signalName(kind));
-        LayerSet& staged = c.staged[k];  // the instance's own: only what it declared
-        for (const std::string& name : c.instances[k]->requiredChannels()) {
-          if (!staged.has(name)) staged.set(name, frame.get(name));
-          else staged.get(name) = frame.get(name);
+      std::string implausible;
+      // A contender that fails (an error, a process that crashed, an output it did not write) ends
+      // its own part, as a run fails only its pair; the others are timed on.
+      try {
+        for (size_t k = 0; k < c.instances.size(); ++k) {
+          const SignalKind kind = c.kinds[k];
+          // Every contender starts from the same cache state: what it reads (the signal and its
+          // declared layers) has just been written, as by the passes that produce them in an
+          // engine. Without this the layers came cold from the cycled input pool, while a plugin
+          // that copied its inputs first read them warm -- and measured faster than its own code.
+          // The output is marked first (as a run does, so a call that writes nothing is not timed
+          // as fast), then the inputs copied: they are what the call finds in the cache.
+          markUnwritten(outImage);
+          signal = frame.get(signalName(kind));
+          LayerSet& staged = c.staged[k];  // the instance's own: only what it declared
+          for (const std::string& name : c.instances[k]->requiredChannels()) {
+            if (!staged.has(name))
+              staged.set(name, frame.get(name));
+            else
+              staged.get(name) = frame.get(name);
+          }
+          const bool low = c.instances[k]->wantsLowres() && !inputLowres.empty();
+          const LowresInputs lowInputs{low ? inputLowres[input] : frame, b.lowresFactor,
+                                       b.lowresSpp};
+          DenoiserInputs in{signal, staged, grads ? &gradients : nullptr,
+                            low ? &lowInputs : nullptr};
+          c.instances[k]->clearPassStats();
+          auto t0 = std::chrono::steady_clock::now();
+          c.instances[k]->denoise(ctx, in, outImage);
+          const double wall =
+              std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                  .count();
+          if (const std::string fault =
+                  outputFault(outImage, c.name, kind, int(input),
+                              DenoiserRegistry::instance().find(c.name).origin);
+              !fault.empty())
+            throw Error(fault);
+          // An external process's own compute time; the wall clock (transfer included) otherwise.
+          const std::optional<double> reported = c.instances[k]->reportedMilliseconds();
+          c.reported = c.reported || reported.has_value();
+          frameMs += reported.value_or(wall);
+          frameWall += wall;
+          if (f < b.warmup) continue;
+          if (const std::string wrong =
+                  implausibleTime(reported, c.instances[k]->lastPasses(), wall);
+              !wrong.empty() && implausible.empty())
+            implausible = std::string(signalName(kind)) + ": " + wrong;
+          for (const PassStats& p : c.instances[k]->lastPasses()) {
+            std::string pn = std::string(signalName(kind)) + "/" + p.name;
+            if (!c.passMs.count(pn)) c.passOrder.push_back(pn);
+            c.passMs[pn].push_back(p.milliseconds);
+            c.passTaps[pn] = p.tapsPerPixel;
+          }
         }
-        const bool low = c.instances[k]->wantsLowres() && !inputLowres.empty();
-        const LowresInputs lowInputs{low ? inputLowres[input] : frame, b.lowresFactor, b.lowresSpp};
-        DenoiserInputs in{signal, staged, grads ? &gradients : nullptr, low ? &lowInputs : nullptr};
-        c.instances[k]->clearPassStats();
-        auto t0 = std::chrono::steady_clock::now();
-        c.instances[k]->denoise(ctx, in, outImage);
-        const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-        if (const std::string fault = outputFault(outImage, c.name, kind, int(input));
-            !fault.empty())
-          throw Error("bench denoise: " + fault);
-        // An external process's own compute time; the wall clock (transfer included) otherwise.
-        const std::optional<double> reported = c.instances[k]->reportedMilliseconds();
-        c.reported = c.reported || reported.has_value();
-        frameMs += reported.value_or(wall);
-        frameWall += wall;
-        if (f < b.warmup) continue;
-        for (const PassStats& p : c.instances[k]->lastPasses()) {
-          std::string pn = std::string(signalName(kind)) + "/" + p.name;
-          if (!c.passMs.count(pn)) c.passOrder.push_back(pn);
-          c.passMs[pn].push_back(p.milliseconds);
-          c.passTaps[pn] = p.tapsPerPixel;
-        }
+      } catch (const Error& e) {
+        c.error = e.what();
+        progress(printed("%s failed at frame %d; the others go on: %s", c.name.c_str(), f,
+                         c.error.c_str()));
+        continue;
       }
-      if (f >= b.warmup) c.total.push_back(frameMs), c.wall.push_back(frameWall);
+      if (f < b.warmup) continue;
+      c.total.push_back(frameMs), c.wall.push_back(frameWall);
+      if (!implausible.empty() && c.implausibleFrames++ == 0)
+        c.firstImplausible = "frame " + std::to_string(f) + ", " + implausible;
     }
   }
+  // The ratios' denominator: the first contender that did not fail.
+  const Contender* baseline = nullptr;
+  for (const Contender& c : contenders)
+    if (c.error.empty() && !baseline) baseline = &c;
+  if (!baseline) {
+    std::string errors;
+    for (const Contender& c : contenders) errors += (errors.empty() ? "" : "; ") + c.error;
+    throw Error("bench denoise: every contender failed, nothing was timed: " + errors);
+  }
   for (const Contender& c : contenders) {
+    if (!c.error.empty()) {
+      progress(printed("%-14s failed: %s", c.name.c_str(), c.error.c_str()));
+      out["denoisers"].push_back({{"name", c.name},
+                                  {"params", c.params.toJson()},
+                                  {"status", "failed"},
+                                  {"error", c.error}});
+      continue;
+    }
+    // Bilateral units are this CPU's: a process's own report of its time (a GPU's, perhaps) is on
+    // another clock and has none, its passes neither.
     json passes = json::array();
-    for (const std::string& pn : c.passOrder)
-      passes.push_back({{"name", pn}, {"msMedian", median(c.passMs.at(pn))}, {"bu", median(c.passMs.at(pn)) / bu},
-                        {"tapsPerPixel", c.passTaps.at(pn)}});
+    for (const std::string& pn : c.passOrder) {
+      json pass = {{"name", pn}, {"msMedian", median(c.passMs.at(pn))}};
+      if (!c.reported) pass["bu"] = median(c.passMs.at(pn)) / bu;
+      if (std::isfinite(c.passTaps.at(pn))) pass["tapsPerPixel"] = c.passTaps.at(pn);
+      passes.push_back(pass);
+    }
     // Which clock measured it, as `arena run` says (timing.msSource): a process's own report of its
     // compute time is not the harness's wall clock, and the two sit side by side here.
     json row = {{"name", c.name},
                 {"params", c.params.toJson()},
+                {"status", "ok"},
                 {"msMedian", median(c.total)},
                 {"msP95", p95(c.total)},
-                {"bu", median(c.total) / bu},
                 {"passes", passes},
                 {"msSource", c.reported ? "reported by the process" : "harness wall clock"}};
-    std::string line = printed("%-14s %8.2f ms/frame (p95 %.2f)  %5.2f BU", c.name.c_str(), median(c.total),
-                               p95(c.total), median(c.total) / bu);
+    std::string line =
+        printed("%-14s %8.2f ms/frame (p95 %.2f)", c.name.c_str(), median(c.total), p95(c.total));
     if (c.reported) {
       row["msWallMedian"] = median(c.wall);
-      line += printed("  [reported by the process; wall clock %.2f ms]", median(c.wall));
+      line += printed("  [reported by the process, no BU; wall clock %.2f ms]", median(c.wall));
+    } else {
+      row["bu"] = median(c.total) / bu;
+      line += printed("  %5.2f BU", median(c.total) / bu);
     }
-    if (&c != &contenders.front()) {
+    if (c.implausibleFrames > 0) {
+      row["implausibleFrames"] = c.implausibleFrames;
+      row["implausibleFirst"] = c.firstImplausible;
+    }
+    if (&c != baseline) {
       // A ratio of two times read on one clock: where either contender reported its own time (a
       // process's, perhaps a GPU's), both are taken on the harness's wall clock around the calls.
-      const Contender& first = contenders.front();
+      const Contender& first = *baseline;
       const bool wall = c.reported || first.reported;
       const PairedRatio r =
           wall ? pairedRatio(c.wall, first.wall) : pairedRatio(c.total, first.total);
@@ -424,9 +483,18 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
                       wall ? " on the wall clock" : "", r.ciText().c_str());
     }
     progress(line);
+    if (c.implausibleFrames > 0)
+      progress(
+          printed("    warning: reported times longer than the call that carried them on %d of %d "
+                  "frames (%s); no work in a call outlasts the call, so these ms are not credible",
+                  c.implausibleFrames, int(c.total.size()), c.firstImplausible.c_str()));
     for (const auto& p : passes)
-      progress(printed("    %-34s %8.2f ms  %5.2f BU  %5.1f taps/px", p["name"].get<std::string>().c_str(),
-                       p["msMedian"].get<double>(), p["bu"].get<double>(), p["tapsPerPixel"].get<double>()));
+      progress(printed(
+          "    %-34s %8.2f ms  %s  %s taps/px", p["name"].get<std::string>().c_str(),
+          p["msMedian"].get<double>(),
+          p.contains("bu") ? printed("%5.2f BU", p["bu"].get<double>()).c_str() : "   no BU",
+          p.contains("tapsPerPixel") ? printed("%5.1f", p["tapsPerPixel"].get<double>()).c_str()
+                                     : "    ?"));
     out["denoisers"].push_back(row);
   }
   return out;

@@ -17,8 +17,8 @@ namespace {
 // The unwritten-value marker (markUnwritten).
 constexpr uint32_t kUnwrittenBits = 0x7fc0dea1u;
 
-// What is wrong with a call's own report of its time, or "": no work inside a call can take longer
-// than the call (1% and 0.05 ms allowed for two clocks' reading).
+}  // namespace
+
 std::string implausibleTime(const std::optional<double>& reported,
                             const std::vector<PassStats>& passes, double wall) {
   const double limit = wall * 1.01 + 0.05;
@@ -36,16 +36,16 @@ std::string implausibleTime(const std::optional<double>& reported,
   return "";
 }
 
-}  // namespace
-
 void markUnwritten(Image& output) {
   for (int c = 0; c < output.channels(); ++c)
     std::fill(output.planeSpan(c).begin(), output.planeSpan(c).end(),
               std::bit_cast<float>(kUnwrittenBits));
 }
 
-std::string outputFault(const Image& output, const std::string& name, SignalKind kind, int frame) {
+std::string outputFault(const Image& output, const std::string& denoiser, SignalKind kind,
+                        int frame, const std::string& origin) {
   if (nonFiniteValues(output) == 0) return "";
+  const std::string name = origin.empty() ? denoiser : denoiser + " (" + origin + ")";
   size_t n = 0;
   for (int c = 0; c < output.channels(); ++c)
     for (const float v : output.planeSpan(c)) n += std::bit_cast<uint32_t>(v) == kUnwrittenBits;
@@ -270,7 +270,8 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
       if (const std::string wrong = implausibleTime(reported, d.lastPasses(), wall);
           !wrong.empty() && out.implausibleTime.empty())
         out.implausibleTime = std::string(signalName(kind)) + ": " + wrong;
-      if (const std::string fault = outputFault(result, request_.name, kind, t); !fault.empty())
+      if (const std::string fault = outputFault(result, request_.name, kind, t, info_.origin);
+          !fault.empty())
         throw Error(fault);
       for (PassStats p : d.lastPasses()) {
         p.name = std::string(signalName(kind)) + "/" + p.name;

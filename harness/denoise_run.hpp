@@ -6,6 +6,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,12 @@ struct DenoisedFrame {
   // its passes) exceeds the harness's wall clock around that call, said in words; empty if none.
   std::string implausibleTime;
 };
+
+// What is wrong with a call's own report of its time (a process's computeMs, the sum of its
+// reported passes), or "": no work inside a call can take longer than the call, the harness's
+// wall clock `wall` around it (1% and 0.05 ms allowed for two clocks' reading).
+std::string implausibleTime(const std::optional<double>& reported,
+                            const std::vector<PassStats>& passes, double wall);
 
 // What `sequence` lacks of what the denoiser reads ("svgf needs channel(s) 'meshId' that capture
 // ... does not provide ..."), or "": the error DenoiseRun's constructor throws, found without
@@ -108,9 +115,11 @@ std::string sanitizedWarning(const NonFiniteCounts& counts);
 // timed, on what the buffer held from the frame before. outputFault is then what is wrong with the
 // call's output: "NAME left N of the M values of its diffuse output unwritten at frame T ...",
 // "NAME produced a non-finite value on the diffuse signal at frame T", or "" (one pass over a
-// finite output: the marker is a NaN).
+// finite output: the marker is a NaN). `origin` (DenoiserInfo::origin: the plugin library or the
+// manifest; empty for a built-in) follows the name in brackets, as the denoiser's other errors say.
 void markUnwritten(Image& output);
-std::string outputFault(const Image& output, const std::string& name, SignalKind kind, int frame);
+std::string outputFault(const Image& output, const std::string& name, SignalKind kind, int frame,
+                        const std::string& origin = "");
 
 // The error for a denoiser (its label) that cannot run without the low-resolution buffer, where
 // none is rendered (--lowres-factor 0): `arena run` and `arena bench denoise` refuse it up front.

@@ -180,6 +180,9 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
       timing["msWallMedian"] = wall.median;
     const json gpu = gpuCost.summary(cfg.warmup);
     if (!gpu.is_null()) timing["gpuPredicted"] = gpu;
+    // A process or plugin that reports no passes says nothing of its taps: unknown, not the 0 of a
+    // built-in that has none (passthrough).
+    if (!run->info().origin.empty() && timing["passes"].empty()) timing.erase("tapsPerPixel");
   } else {
     // A capture's recorded time is another device's: labelled, never mixed with the CPU times.
     const CaptureOutput& output = sd.sequence.capture().output(captured);

@@ -283,10 +283,28 @@ TEST(ExternalProcess, ARunRecordsTheExternalPairBesideAFailingOne) {
   EXPECT_EQ(ok["timing"]["clock"], "process");  // its own clock, maybe a GPU's: not "cpu"
   EXPECT_GE(ok["timing"]["msWallMedian"].get<double>(), ok["timing"]["msMedian"].get<double>());
   EXPECT_GT(ok["summary"]["relMse"]["mean"].get<double>(), 0.0);
+  EXPECT_GT(ok["timing"]["tapsPerPixel"].get<double>(), 0.0);  // its passes report them
   const json& failed = r["pairs"][1];
   EXPECT_EQ(failed["status"], "failed");
   EXPECT_NE(failed["error"].get<std::string>().find("killed by signal 11"), std::string::npos)
       << failed["error"];
+}
+
+// Taps a process does not report are unknown, not 0 (a column of zeros read as passthrough's): a
+// pass without them, or no passes at all, leaves tapsPerPixel out of the pair's timing.
+TEST(ExternalProcess, TapsItDoesNotReportAreLeftOutNotZero) {
+  const json r = runMatrix(
+      tinyRun("unknown_taps", {{faulty("pass-without-taps"), {}, ""}, {faulty("quiet"), {}, ""}}));
+  ASSERT_EQ(r["pairs"].size(), 2u);
+  for (const json& pair : r["pairs"]) {
+    ASSERT_EQ(pair["status"], "ok") << pair.dump().substr(0, 300);
+    EXPECT_FALSE(pair["timing"].contains("tapsPerPixel")) << pair["timing"];
+  }
+  const json& passes = r["pairs"][0]["timing"]["passes"];
+  ASSERT_FALSE(passes.empty());
+  EXPECT_FALSE(passes.back().contains("tapsPerPixel")) << passes;
+  EXPECT_TRUE(passes.back().contains("msMedian"));
+  EXPECT_TRUE(r["pairs"][1]["timing"]["passes"].empty());
 }
 
 // The bench times each denoiser on frames with their cameras, each frame after its neighbour (the
@@ -367,10 +385,13 @@ TEST(ExternalProcess, TheDenoiseBenchNamesTheClockOfEachContender) {
   EXPECT_EQ(builtIn["msSource"], "harness wall clock");
   EXPECT_FALSE(builtIn.contains("msWallMedian"));
   EXPECT_EQ(process["msSource"], "reported by the process");
+  // Bilateral units are this CPU's: a process's own clock has none.
+  EXPECT_GT(builtIn["bu"].get<double>(), 0.0);
+  EXPECT_FALSE(process.contains("bu")) << process;
   EXPECT_GE(process["msWallMedian"].get<double>(), process["msMedian"].get<double>());
   bool labelled = false;
   for (const std::string& l : lines)
-    labelled |= l.find("[reported by the process; wall clock") != std::string::npos;
+    labelled |= l.find("[reported by the process, no BU; wall clock") != std::string::npos;
   EXPECT_TRUE(labelled);
   // Its ratio to the built-in is taken on one clock, the wall clock around both: a process's own
   // report (a GPU's time, perhaps) divided by a CPU wall clock is no ratio.
@@ -404,9 +425,29 @@ TEST(ExternalFaults, AWrongSizeIsRefused) {
   EXPECT_NE(s.find("expected 3 planes of 2304 bytes"), std::string::npos) << s;
 }
 
+// Like every other fault of a process, with its manifest and the end of its stderr (where its own
+// prints say why).
 TEST(ExternalFaults, ANaNFailsThePair) {
   const std::string e = errorOf([] { denoiseAll({faulty("nan"), {}, ""}, tinySequence()); });
-  EXPECT_NE(e.find("non-finite value on the diffuse signal at frame 1"), std::string::npos) << e;
+  EXPECT_NE(e.find("faulty-nan (diffuse process, "), std::string::npos) << e;
+  EXPECT_NE(e.find("frame 1: sent 1 non-finite value(s) in its result (the first nan at x 0, y 0 "
+                   "of its R plane)"),
+            std::string::npos)
+      << e;
+  EXPECT_NE(e.find("faulty: the exposure went to zero"), std::string::npos) << e;
+}
+
+// Bytes beyond an answer's planes land before the next header: the error falls on that frame,
+// and says what probably happened.
+TEST(ExternalFaults, BytesBeyondThePlanesAreSaidToBeStray) {
+  const std::string e = errorOf([] {
+    denoiseAll({faulty("extra-bytes"), {}, ""}, tinySequence());
+  });
+  EXPECT_NE(e.find("frame 2: expected a JSON 'result' header line"), std::string::npos) << e;
+  EXPECT_NE(e.find("(12 stray byte(s) before the header: did the answer before send more than its "
+                   "3 planes"),
+            std::string::npos)
+      << e;
 }
 
 TEST(ExternalFaults, AHangIsKilledAfterTheTimeout) {
@@ -700,6 +741,7 @@ TEST(Plugin, FaultsOfAPluginFailItsPairNamingThem) {
       unwritten.find("left 1728 of the 1728 values of its diffuse output unwritten at frame 0"),
       std::string::npos)
       << unwritten;
+  EXPECT_NE(unwritten.find(name + " (plugin /"), std::string::npos) << unwritten;
   ::setenv("ARENA_FAULTY_PLUGIN", "partial", 1);
   const std::string partial = errorOf([&] { denoiseAll({name, {}, ""}, tinySequence()); });
   EXPECT_NE(partial.find("left 1152 of the 1728 values"), std::string::npos) << partial;
@@ -711,18 +753,54 @@ TEST(Plugin, FaultsOfAPluginFailItsPairNamingThem) {
   bench.width = kWidth, bench.height = kHeight, bench.frames = 2, bench.warmup = 0,
   bench.inputs = 2;
   const std::string benched = errorOf([&] { benchDenoise(bench, [](const std::string&) {}); });
+  EXPECT_NE(benched.find("bench denoise: every contender failed, nothing was timed: " + name +
+                         " (plugin "),
+            std::string::npos)
+      << benched;
   EXPECT_NE(
-      benched.find("bench denoise: " + name +
-                   " left 1152 of the 1728 values of its diffuse output unwritten at frame 0"),
+      benched.find(") left 1152 of the 1728 values of its diffuse output unwritten at frame 0"),
       std::string::npos)
       << benched;
+  // Beside a contender that works, the failing one is reported failed with its error and the
+  // other timed, as a run fails only the failed pair.
+  bench.denoisers = {"eaw", name};
+  std::vector<std::string> lines;
+  const json both = benchDenoise(bench, [&](const std::string& l) { lines.push_back(l); });
+  ASSERT_EQ(both["denoisers"].size(), 2u);
+  EXPECT_EQ(both["denoisers"][0]["status"], "ok");
+  EXPECT_GT(both["denoisers"][0]["msMedian"].get<double>(), 0.0);
+  EXPECT_EQ(both["denoisers"][1]["status"], "failed");
+  EXPECT_FALSE(both["denoisers"][1].contains("msMedian"));
+  EXPECT_NE(both["denoisers"][1]["error"].get<std::string>().find("left 1152 of the 1728 values"),
+            std::string::npos)
+      << both["denoisers"][1];
+  bool said = false;
+  for (const std::string& l : lines)
+    said |= l.find(name + " failed at frame 0") != std::string::npos;
+  EXPECT_TRUE(said);
   ::setenv("ARENA_FAULTY_PLUGIN", "", 1);
   EXPECT_EQ(denoiseAll({name, {}, ""}, tinySequence()).size(), size_t(kFrames));
   // A pass reported longer than the call that ran it: the pair is measured, its times are warned
   // of.
   ::setenv("ARENA_FAULTY_PLUGIN", "slow-pass", 1);
   const json slow = runMatrix(tinyRun("slow_pass", {{name, {}, ""}}));
+  // The denoise bench says so too: its ms would otherwise be copied into a comparison unwarned.
+  bench.denoisers = {name};
+  std::vector<std::string> benchLines;
+  const json slowBench =
+      benchDenoise(bench, [&](const std::string& l) { benchLines.push_back(l); });
   ::unsetenv("ARENA_FAULTY_PLUGIN");
+  EXPECT_EQ(slowBench["denoisers"][0]["implausibleFrames"], bench.frames);
+  EXPECT_NE(slowBench["denoisers"][0]
+                .value("implausibleFirst", "")
+                .find("frame 0, diffuse: passes of 1e+09 ms in all in a call of"),
+            std::string::npos)
+      << slowBench["denoisers"][0];
+  bool warned = false;
+  for (const std::string& l : benchLines)
+    warned |= l.find("warning: reported times longer than the call that carried them on 2 of 2") !=
+              std::string::npos;
+  EXPECT_TRUE(warned);
   ASSERT_EQ(slow["pairs"][0]["status"], "ok") << slow["pairs"][0].dump().substr(0, 300);
   EXPECT_EQ(slow["pairs"][0]["timing"]["implausibleFrames"], kFrames);
   const std::string warning = slow["pairs"][0]["warnings"][0];

@@ -3,6 +3,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 #include "core/sequence.hpp"
 #include "core/text.hpp"
@@ -76,8 +77,17 @@ nlohmann::json ExternalProcessDenoiser::readHeader(const std::string& expectedTy
   try {
     header = nlohmann::json::parse(line);
   } catch (const std::exception&) {
+    // Bytes before a header that parses: most likely the previous answer's, more than its planes
+    // (or a print to stdout); said, since the error otherwise falls on the frame after.
+    const size_t brace = line.find('{');
+    const bool stray =
+        brace != std::string::npos && brace > 0 && nlohmann::json::accept(line.substr(brace));
     fail("expected a JSON '" + expectedType +
-         "' header line, got: " + utf8Excerpt(line, 200, false));
+         "' header line, got: " + utf8Excerpt(line, 200, false) +
+         (stray ? " (" + std::to_string(brace) +
+                      " stray byte(s) before the header: did the answer before send more than "
+                      "its 3 planes, or the program print to stdout?)"
+                : ""));
   }
   const std::string type =
       header.is_object() && header.contains("type") && header["type"].is_string()
@@ -199,11 +209,32 @@ void ExternalProcessDenoiser::denoise(const FrameContext& ctx, const DenoiserInp
             "optionally "
             "a number \"tapsPerPixel\" >= 0, got: " +
             p.dump());
-      passes_.push_back(
-          {p["name"].get<std::string>(), p["ms"].get<double>(), p.value("tapsPerPixel", 0.0)});
+      // Taps not reported are unknown (NaN), not 0: the results leave them out.
+      passes_.push_back({p["name"].get<std::string>(), p["ms"].get<double>(),
+                         p.value("tapsPerPixel", std::numeric_limits<double>::quiet_NaN())});
     }
   }
-  // Non-finite output values fail the pair in DenoiseRun, as for every denoiser.
+  // A non-finite output value fails the pair in DenoiseRun, as for every denoiser; found here,
+  // the error also names the manifest and quotes the end of the process's stderr, where its own
+  // prints are.
+  size_t nonFinite = 0, first = 0;
+  int firstPlane = 0;
+  for (int c = 0; c < 3; ++c) {
+    const float* p = output.plane(c);
+    for (size_t i = 0; i < size_t(width_) * size_t(height_); ++i)
+      if (!std::isfinite(p[i]) && nonFinite++ == 0) first = i, firstPlane = c;
+  }
+  if (nonFinite > 0) {
+    char where[160];
+    std::snprintf(where, sizeof where, "%g at x %zu, y %zu of its %s plane",
+                  double(output.plane(firstPlane)[first]), first % size_t(width_),
+                  first / size_t(width_),
+                  firstPlane == 0   ? "R"
+                  : firstPlane == 1 ? "G"
+                                    : "B");
+    fail("sent " + std::to_string(nonFinite) + " non-finite value(s) in its result (the first " +
+         where + "); every output value must be a finite number");
+  }
   computeMs_ = ms;
 }
 

@@ -82,6 +82,8 @@ def main():
                 answer((json.dumps(result) + "\n").encode() + signal_bytes[: len(signal_bytes) // 2])
                 os._exit(0)
             if mode == "nan":
+                sys.stderr.write("faulty: the exposure went to zero\n")
+                sys.stderr.flush()
                 signal_bytes = struct.pack("<f", float("nan")) + signal_bytes[4:]
             if mode == "hang":
                 time.sleep(60)
@@ -105,6 +107,10 @@ def main():
                 sys.stderr.flush()
                 answer(b"junk\0tail\n")
                 continue
+            if mode == "extra-bytes":  # 12 bytes more than the planes: read as the next header's
+                signal_bytes = signal_bytes + b"\x01" * 12
+            if mode == "pass-without-taps":
+                result["passes"] = [{"name": "blur", "ms": 0.0005}]
             if mode == "slow-report":
                 result["computeMs"] = 2e12
         answer((json.dumps(result) + "\n").encode() + signal_bytes)
