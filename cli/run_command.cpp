@@ -429,7 +429,12 @@ void addRunCommands(CLI::App& app) {
         return;
       }
       for (auto& d : out) {
-        std::cout << d["name"].get<std::string>() << ": " << d["description"].get<std::string>() << "\n";
+        // An external's line says where it came from (the manifest or library the name resolves
+        // to: a search path may hold several of that name).
+        const std::string description = d["description"].get<std::string>();
+        std::cout << d["name"].get<std::string>() << (description.empty() ? "" : ": " + description)
+                  << (d.contains("origin") ? " [" + d["origin"].get<std::string>() + "]" : "")
+                  << "\n";
         for (auto& p : d["parameters"]) std::cout << "    " << p.get<std::string>() << "\n";
       }
     });

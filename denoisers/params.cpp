@@ -50,7 +50,7 @@ std::string ParamSpec::describe() const {
       break;
     }
   }
-  return out + "): " + meaning;
+  return out + ")" + (meaning.empty() ? "" : ": " + meaning);  // a manifest may give none
 }
 
 const ParamSet::Value& ParamSet::find(const std::string& name) const {
@@ -140,7 +140,10 @@ ParamSet ParamSchema::resolve(const std::map<std::string, std::string>& override
         } catch (...) {
           used = 0;
         }
-        if (used != text.size() || !std::isfinite(v)) bad("a finite number");
+        // stod throws out_of_range for a value beyond a double's range, either way (1e400, and
+        // 1e-400, which would round to 0): neither is the number written.
+        if (used != text.size() || !std::isfinite(v))
+          bad("a finite number within a double's range (about 1e-308 to 1e308 in magnitude, or 0)");
         if (s->type == ParamSpec::Type::Int && v != std::floor(v)) bad("an integer");
         if (v < s->min || v > s->max)
           bad("a value in [" + formatNumber(s->min) + ", " + formatNumber(s->max) + "]");

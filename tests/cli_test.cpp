@@ -349,6 +349,17 @@ TEST(CliContract, UsageErrorsExitTwoAndOptionsAreStrict) {
   }
   EXPECT_NO_THROW(svgf.resolve({{"sigmaL", "1e1"}}, "svgf"));
   EXPECT_NO_THROW(svgf.resolve({{"sigmaL", "8."}}, "svgf"));
+  // Decimal, but beyond a double's range: too large, or so small it would round to 0 (it was
+  // called "not finite", which 1e-400 is).
+  for (const char* far : {"1e400", "1e-400"}) {
+    const std::string e = test::errorOf([&] { svgf.resolve({{"sigmaL", far}}, "svgf"); });
+    EXPECT_NE(e.find(std::string("svgf.sigmaL=") + far +
+                     ": expected a finite number within a double's range"),
+              std::string::npos)
+        << e;
+  }
+  // A parameter with no meaning (a manifest may give none) is described without a dangling ": ".
+  EXPECT_EQ(ParamSpec::real("k", 0.5, 0, 1, "").describe(), "k (float, default 0.5, range [0, 1])");
 }
 
 }  // namespace

@@ -115,6 +115,10 @@ TEST(ExternalManifest, EveryMistakeNamesTheFileAndTheField) {
       {"param default",
        {{"parameters", {{{"name", "k"}, {"type", "int"}, {"default", 9}, {"min", 0}, {"max", 4}}}}},
        "$.parameters[0].default: must lie in [min, max]"},
+      {"param range",
+       {{"parameters",
+         {{{"name", "k"}, {"type", "float"}, {"default", 0.5}, {"min", 1}, {"max", 0.25}}}}},
+       "$.parameters[0].min: must not exceed max (1 > 0.25)"},
       {"param type",
        {{"parameters", {{{"name", "k"}, {"type", "double"}, {"default", 1}}}}},
        "$.parameters[0].type: expected one of bool, int, float, choice"},
@@ -201,6 +205,11 @@ TEST(ExternalManifest, NamesAreFoundOnTheSearchPath) {
                        ARENA_BINARY + " denoisers");
   EXPECT_EQ(listed.status, 0) << listed.output;
   EXPECT_NE(listed.output.find("via-folder"), std::string::npos) << listed.output;
+  // With the manifest it came from (no description: no dangling ": ").
+  EXPECT_NE(listed.output.find("via-folder [external process " +
+                               (dir / "viaFolder" / "manifest.json").string() + "]"),
+            std::string::npos)
+      << listed.output;
   EXPECT_NE(listed.output.find("notes.json"), std::string::npos) << listed.output;
   EXPECT_NE(listed.output.find("already taken"), std::string::npos) << listed.output;
   EXPECT_NE(listed.output.find("svgf"), std::string::npos) << listed.output;
@@ -830,6 +839,14 @@ TEST(Plugin, AnotherAbiVersionIsRefused) {
   const std::string missing =
       errorOf([] { DenoiserRegistry::resolve("plugin:/no/such/libfoo.so"); });
   EXPECT_NE(missing.find("no such plugin library"), std::string::npos) << missing;
+  // Named by a manifest: the manifest is named too (the library path alone did not say which).
+  const fs::path manifest = writeManifest("ghost", {{"name", "ghost"}, {"library", "libghost.so"}});
+  const std::string viaManifest =
+      errorOf([&] { DenoiserRegistry::resolve("ext:" + manifest.string()); });
+  EXPECT_NE(viaManifest.find(manifest.string() + ": $.library: "), std::string::npos)
+      << viaManifest;
+  EXPECT_NE(viaManifest.find("libghost.so: no such plugin library"), std::string::npos)
+      << viaManifest;
   const std::string notPlugin =
       errorOf([] { DenoiserRegistry::resolve(std::string("plugin:") + ARENA_BINARY); });
   EXPECT_NE(notPlugin.find("cannot load the plugin"), std::string::npos) << notPlugin;

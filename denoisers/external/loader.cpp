@@ -83,7 +83,12 @@ DenoiserInfo loadExternalDenoiser(const std::string& entry) {
   ExternalManifest manifest =
       readManifest(findManifest(entry.substr(std::strlen(kManifestPrefix))));
   if (manifest.library.empty()) return processDenoiserInfo(std::move(manifest));
-  DenoiserInfo info = loadPluginDenoiser(manifest.library);
+  DenoiserInfo info;
+  try {
+    info = loadPluginDenoiser(manifest.library);
+  } catch (const Error& e) {  // the library's own errors name it; the manifest that named it too
+    throw Error(manifest.file.string() + ": $.library: " + e.what());
+  }
   if (info.name != manifest.name)
     throw Error(manifest.file.string() + ": $.name '" + manifest.name +
                 "' differs from the name '" + info.name + "' that the library " +

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <sstream>
 
 #include "core/error.hpp"
 #include "core/json_reader.hpp"
@@ -75,7 +76,11 @@ ParamSpec readParamSpec(JsonReader& p) {
   } else if (type == "int" || type == "float") {
     const double min = p.number("min"), max = p.number("max");
     const double def = p.number("default");
-    if (min > max) p.fail("min", "must not exceed max (" + std::to_string(max) + ")");
+    if (min > max) {
+      std::ostringstream text;
+      text << "must not exceed max (" << min << " > " << max << ")";
+      p.fail("min", text.str());
+    }
     if (def < min || def > max) p.fail("default", "must lie in [min, max]");
     if (type == "int") {
       if (def != double(int(def)) || min != double(int(min)) || max != double(int(max)))
