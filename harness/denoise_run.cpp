@@ -9,6 +9,7 @@
 
 #include "core/error.hpp"
 #include "denoisers/common/remodulation.hpp"
+#include "denoisers/external/process_denoiser.hpp"
 
 namespace arena {
 
@@ -198,6 +199,14 @@ DenoiseRun::DenoiseRun(const DenoiserRequest& request, const Sequence& sequence,
   if (!setUp) return;
   if (!lacking_.empty()) throw Error(lacking_);
   for (auto& [kind, d] : instances_) d->setup(sequence.info().width, sequence.info().height);
+}
+
+std::vector<std::string> DenoiseRun::finish() {
+  std::vector<std::string> out;
+  for (auto& [kind, instance] : instances_)
+    if (auto* process = dynamic_cast<ExternalProcessDenoiser*>(instance.get()))
+      if (std::string ended = process->finish(); !ended.empty()) out.push_back(std::move(ended));
+  return out;
 }
 
 void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,

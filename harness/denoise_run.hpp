@@ -75,6 +75,9 @@ class DenoiseRun {
   const std::vector<std::string>& readLayers() const { return readLayers_; }
   // Denoises frames 0..n-1 in order; `frame(t)` supplies the sequence frame's layers.
   void run(const std::function<const LayerSet&(int)>& frame, const std::function<void(const DenoisedFrame&)>& onFrame);
+  // After run(): ends the instances' external processes, one line for each that ended badly
+  // (ExternalProcessDenoiser::finish); empty for every other denoiser.
+  std::vector<std::string> finish();
 
  private:
   friend std::string lackingInputs(const DenoiserRequest& request, const Sequence& sequence);

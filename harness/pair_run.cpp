@@ -40,6 +40,9 @@ std::vector<std::string> runWarnings(const json& pair, int frames) {
   if (const json inputs = pair.value("sanitizedInputs", json::object());
       inputs.value("total", 0L) > 0)
     first.push_back(sanitizedWarning(inputs["channels"].get<NonFiniteCounts>()));
+  for (const json& ended : pair.value("processEnds", json::array()))
+    if (ended.is_string())
+      first.push_back(ended.get<std::string>() + " (every frame was answered: its results stand)");
   return first;
 }
 
@@ -146,11 +149,13 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
       if (keepAll) writeOutputExr(imageDir, f, req, params);
     }
   };
+  std::vector<std::string> processEnds;  // an external process that ended badly after its frames
   {
     StageTimer denoisers(Stage::Denoisers);
-    if (run)
+    if (run) {
       run->run([&](int t) -> const LayerSet& { return sd.evaluation.frame(t); }, onFrame);
-    else
+      processEnds = run->finish();
+    } else
       runCapturedOutput(sd.sequence, captured, onFrame);
   }
   json pair = {{"scene", info.scene}, {"denoiser", req.name}, {"label", req.label}, {"params", params.toJson()},
@@ -205,6 +210,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   pair["outputChecksum"] = checksumHex(outputChecksum);
   if (run) pair["readsLowres"] = run->readsLowres();  // compare judges the buffer's settings by it
   pair["sanitizedInputs"] = {{"total", totalNonFinite(sanitized)}, {"channels", sanitized}};
+  if (!processEnds.empty()) pair["processEnds"] = processEnds;
   prependRunWarnings(pair, info.frames);
   pair["images"] = {{"dir", fs::relative(imageDir, cfg.out).string()}, {"all", keepAll && cfg.keepFrames != "none"}};
   if (run && !run->info().origin.empty()) pair["origin"] = run->info().origin;

@@ -43,7 +43,8 @@ nlohmann::json evaluatePairAgain(const RunConfig& config, const SceneData& scene
 
 // The warnings of the run itself, which the evaluation does not know, from what `pair` records: its
 // reported times that outlast their calls (timing.implausibleFrames), the oracle layers it read,
-// the non-finite inputs it was handed. They come first in the pair's warnings; the run prints them.
+// the non-finite inputs it was handed, an external process that exited badly after its last frame
+// (processEnds). They come first in the pair's warnings; the run prints them.
 std::vector<std::string> runWarnings(const nlohmann::json& pair, int frames);
 
 // The bias^2 / variance split of a pair's error over the scene's input seeds: the denoiser runs on

@@ -299,6 +299,26 @@ TEST(ExternalProcess, ARunRecordsTheExternalPairBesideAFailingOne) {
       << failed["error"];
 }
 
+// A process that answered every frame and then exits badly (a crash at shutdown): its results
+// stand, and the pair says how it ended, with its stderr (it was silently "ok").
+TEST(ExternalProcess, AProcessEndingBadlyAfterItsFramesIsWarnedOf) {
+  const json r = runMatrix(tinyRun("exit_at_end", {{faulty("exit-at-end"), {}, ""}}));
+  const json& pair = r["pairs"][0];
+  ASSERT_EQ(pair["status"], "ok") << pair.dump().substr(0, 300);
+  ASSERT_EQ(pair["processEnds"].size(), 2u) << pair["processEnds"];  // diffuse and specular
+  std::string warnings;
+  for (const json& w : pair["warnings"]) warnings += w.get<std::string>() + "\n";
+  EXPECT_NE(warnings.find("the diffuse process ("), std::string::npos) << warnings;
+  EXPECT_NE(warnings.find(") exited with status 3 after its last frame; the end of its stderr:\n"
+                          "faulty: could not free the device buffers (every frame was answered: "
+                          "its results stand)"),
+            std::string::npos)
+      << warnings;
+  // A process that ends well says nothing.
+  const json quiet = runMatrix(tinyRun("exit_well", {{faulty("quiet"), {}, ""}}));
+  EXPECT_FALSE(quiet["pairs"][0].contains("processEnds"));
+}
+
 // Taps a process does not report are unknown, not 0 (a column of zeros read as passthrough's): a
 // pass without them, or no passes at all, leaves tapsPerPixel out of the pair's timing.
 TEST(ExternalProcess, TapsItDoesNotReportAreLeftOutNotZero) {

@@ -63,6 +63,17 @@ void ExternalProcessDenoiser::fail(const std::string& what) {
   throw Error(validUtf8(message));  // its words are the process's, in whatever bytes it wrote
 }
 
+std::string ExternalProcessDenoiser::finish() {
+  if (!process_) return "";
+  const std::string status = process_->endInput(std::chrono::milliseconds(1000));
+  if (status == "still running" || status == "exited with status 0") return "";
+  const std::string tail = process_->stderrTail();
+  process_.reset();
+  return validUtf8(std::string("the ") + signalName(kind_) + " process (" +
+                   manifest_->file.string() + ") " + status + " after its last frame" +
+                   (tail.empty() ? "; its stderr was empty" : "; the end of its stderr:\n" + tail));
+}
+
 nlohmann::json ExternalProcessDenoiser::readHeader(const std::string& expectedType) {
   std::string line;
   try {

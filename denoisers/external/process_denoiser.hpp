@@ -27,6 +27,12 @@ class ExternalProcessDenoiser final : public Denoiser {
   void reset() override { pendingReset_ = true; }
   void denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& output) override;
   std::optional<double> reportedMilliseconds() const override { return computeMs_; }
+  // After the sequence's last frame: ends the process's input and waits up to a second for it to
+  // exit. When it exits with a non-zero status or is killed by a signal, what to warn of (its
+  // results stand: every frame was answered): "the diffuse process exited with status 3 after its
+  // last frame; the end of its stderr: ...". Empty when it exits with 0, runs on (the destructor
+  // then ends it, as it does a process that never reaches here), or is not running.
+  std::string finish();
 
  private:
   // Fails the run: what went wrong, then how the process ended and the tail of its stderr. The

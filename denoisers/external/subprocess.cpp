@@ -254,6 +254,11 @@ std::string Subprocess::exitStatus(std::chrono::milliseconds grace) {
   return describeStatus(status_);
 }
 
+std::string Subprocess::endInput(std::chrono::milliseconds grace) {
+  closeStdin();
+  return exitStatus(grace);
+}
+
 std::string Subprocess::stderrTail() {
   drainStderr();
   std::string tail = utf8Excerpt(stderrTail_, kStderrTailBytes, true);

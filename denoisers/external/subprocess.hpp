@@ -45,6 +45,9 @@ class Subprocess {
   // "exited with status 1", "killed by signal 11 (Segmentation fault)", or "still running"; waits
   // up to `grace` for the process to end first.
   std::string exitStatus(std::chrono::milliseconds grace = std::chrono::milliseconds(500));
+  // Closes the process's stdin (the end of its input: a well-behaved process exits) and returns
+  // exitStatus(grace).
+  std::string endInput(std::chrono::milliseconds grace);
   // The last lines of what the process wrote to stderr (at most ~2 KiB).
   std::string stderrTail();
   void kill();

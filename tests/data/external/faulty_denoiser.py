@@ -18,6 +18,9 @@
   flood      floods its output without reading the frame
   expects-cameras  correct, but reports an error on any frame whose camera is not the frame's size
              or whose previousCamera is not the camera of the frame before (unless reset)
+  extra-bytes  sends 12 bytes more than its planes (they land before the next header)
+  pass-without-taps  reports a pass with no tapsPerPixel
+  exit-at-end  answers every frame, then writes to stderr and exits with status 3 at end of input
 Plain Python (no numpy): the output is the input signal, so a correct frame is a passthrough."""
 import json
 import os
@@ -114,6 +117,10 @@ def main():
             if mode == "slow-report":
                 result["computeMs"] = 2e12
         answer((json.dumps(result) + "\n").encode() + signal_bytes)
+    if mode == "exit-at-end":
+        sys.stderr.write("faulty: could not free the device buffers\n")
+        sys.stderr.flush()
+        os._exit(3)
     del planes
 
 
