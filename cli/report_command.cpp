@@ -44,6 +44,10 @@ void addReportCommand(CLI::App& app) {
                    "Metric(s) the gate checks, as for `arena compare` (default: its defaults)");
   hist->add_option("--tolerance", *tol, "Allowed relative change, as for `arena compare`")
       ->default_val("2%");
+  auto confidence = std::make_shared<std::string>("95%");
+  hist->add_option("--confidence", *confidence,
+                   "Confidence of the paired intervals, as for `arena compare`")
+      ->default_val("95%");
   hist->callback([=] {
     HistoryOptions h;
     h.inputs.assign(inputs->begin(), inputs->end());
@@ -51,9 +55,18 @@ void addReportCommand(CLI::App& app) {
     const double t = parseTolerance(*tol);
     for (const std::string& m : *metrics) h.tolerances.push_back({m, t});
     h.tolerances = gateTolerances(std::move(h.tolerances), t);
+    h.bootstrap.confidence = parseConfidence(*confidence);
     const HistorySummary s = writeHistory(h);
-    std::cout << "history: " << s.index.string() << " (" << s.runs << " runs, " << s.failing
-              << " comparison(s) failing `arena compare`'s gate)\n";
+    std::cout << "history: " << s.index.string() << " (" << s.runs
+              << (s.runs == 1 ? " run, " : " runs, ") << s.failing
+              << " comparison(s) failing `arena compare`'s gate";
+    // Changes beyond the tolerance the gate could not resolve are not passes: said, with why a
+    // database's runs cannot resolve any.
+    if (s.unresolved > 0)
+      std::cout << "; " << s.unresolved
+                << " change(s) beyond the tolerance unresolved (orange on the page: within noise, "
+                   "or runs from results.db, which keep no tiles to resolve them)";
+    std::cout << ")\n";
     for (const std::string& line : s.absentSummaries) std::cout << "absent: " << line << "\n";
   });
 }

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <map>
+#include <set>
 #include <utility>
 
 #include "core/atomic_file.hpp"
@@ -61,7 +62,13 @@ constexpr const char* kDatabaseSchema = R"(
              CREATE TABLE IF NOT EXISTS rankings (run_id INTEGER, scene TEXT, metric TEXT, label TEXT, rank INTEGER,
                value REAL, ci_lo REAL, ci_hi REAL, tied_with TEXT);
              CREATE TABLE IF NOT EXISTS metrics (run_id INTEGER, name TEXT, unit TEXT, better TEXT,
-               needs_reference INTEGER, reads TEXT, transform TEXT, ranked INTEGER, meaning TEXT);)";
+               needs_reference INTEGER, reads TEXT, transform TEXT, ranked INTEGER, meaning TEXT);
+             CREATE TABLE IF NOT EXISTS scenes (run_id INTEGER, scene TEXT, width INTEGER,
+               height INTEGER, frames INTEGER);)";
+// Tables added to the schema after databases were written without them: such a database is still
+// this schema (the append creates the table), and its earlier runs simply lack the rows (scenes,
+// 2026-12-06: each scene's size and length, which the gate compares, as results.json has them).
+const std::set<std::string> kTablesAddedLater = {"scenes"};
 
 // An open database; every error names `name` (the path the user knows) and SQLite's reason, with
 // the operating system's reason where SQLite had one (a full disk, a read-only directory).
@@ -196,6 +203,20 @@ void appendToDatabase(const fs::path& dbPath, const RunResults& r, const std::st
     registered.integer(1, runId).text(2, m["name"]).text(3, m["unit"]).text(4, m["better"])
         .integer(5, m["needsReference"].get<bool>()).text(6, m["reads"]).text(7, m["transform"])
         .integer(8, m["ranked"].get<bool>()).text(9, m["meaning"]).step();
+  // Each scene's size and length as the run measured it (settingsDifferences compares them).
+  Statement scene(db, "INSERT INTO scenes VALUES (?,?,?,?,?)");
+  for (auto it = r.scenes.begin(); it != r.scenes.end(); ++it) {
+    const json& facts = it.value();
+    if (!facts.is_object()) continue;
+    scene.integer(1, runId).text(2, it.key());
+    int column = 3;
+    for (const char* k : {"width", "height", "frames"}) {  // unbound: NULL, not a made-up size
+      if (facts.contains(k) && facts[k].is_number_integer())
+        scene.integer(column, facts[k].get<long long>());
+      ++column;
+    }
+    scene.step();
+  }
   Statement pair(db, "INSERT INTO pairs VALUES (?,?,?,?,?,?,?)");
   Statement frame(db, "INSERT INTO frame_metrics VALUES (?,?,?,?,?,?)");
   Statement summary(db, "INSERT INTO summaries VALUES (?,?,?,?,?,?,?,?,?,?,?,?)");
@@ -322,6 +343,7 @@ RunDirectoryLock checkRunOutputs(const fs::path& runDir) {
   if (have.empty()) return lock;  // an empty database file: the append creates the tables
   for (auto& [table, columns] : want) {
     auto it = have.find(table);
+    if (it == have.end() && kTablesAddedLater.count(table)) continue;
     if (it == have.end() || it->second != columns)
       throw Error(dbPath.string() + ": another schema (table " + table + " has columns (" +
                   (it == have.end() ? std::string("missing") : join(it->second)) +

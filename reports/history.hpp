@@ -22,19 +22,25 @@ std::vector<RunResults> loadHistory(const std::vector<std::filesystem::path>& in
 // intervals where the runs have them) per run, the tolerance of each gated metric, and `changes`:
 // every row of compareRuns(run i-1, run i, tolerances) whose verdict is not "ok", with the run
 // index i and `fails` (failsGate: the gate's own rule, not restated here); `failing`
-// counts those. Empty `tolerances`: compare's defaults. A gated metric neither run of a pair
-// computed is skipped for that pair (runs over months differ in what they computed).
-nlohmann::json historyData(const std::vector<RunResults>& runs, std::vector<Tolerance> tolerances);
+// counts those, `unresolved` the changes beyond the tolerance that the gate could not resolve
+// (no tiles: runs read from results.db; or within noise). Empty `tolerances`: compare's defaults.
+// A gated metric neither run of a pair computed is skipped for that pair (runs over months differ
+// in what they computed); one the caller named that no run computed is an Error. `bootstrap` is
+// compare's --confidence (and seed): the dashboard judges as the gate it stands for.
+nlohmann::json historyData(const std::vector<RunResults>& runs, std::vector<Tolerance> tolerances,
+                           const BootstrapConfig& bootstrap = {});
 
 struct HistoryOptions {
   std::vector<std::filesystem::path> inputs;
   std::filesystem::path out;
   std::vector<Tolerance> tolerances;
+  BootstrapConfig bootstrap;                     // the gate's --confidence
   std::filesystem::path webDir, nodeModulesDir;  // empty: the report's defaults
 };
 struct HistorySummary {
   std::filesystem::path index;
   size_t runs = 0, failing = 0;  // failing: comparisons that fail the gate
+  size_t unresolved = 0;         // changes beyond the tolerance the gate could not resolve
   std::vector<std::string> absentSummaries;  // "<run>: <scene>: <metric> absent in N pair(s): <why>"
 };
 HistorySummary writeHistory(const HistoryOptions& options);

@@ -238,6 +238,70 @@ TEST(History, RunsFromADatabaseAreJudgedOnTheSettingsTheyRecorded) {
   EXPECT_EQ(notComparable(historyData(loadHistory({dir / "results.db", dir / "other"}), {})), 1);
 }
 
+// A scene's resolution and frame count are part of what the gate compares; a database keeps them
+// (table scenes), so a history read from one alone flags a run at another size, as compare
+// refuses it (it charted 64x36 against 96x54 as ordinary changes).
+TEST(History, RunsFromADatabaseKeepTheirScenesSizes) {
+  const fs::path dir = test::freshDir("history_scene_sizes");
+  json small = historyRun(0, 3), same = historyRun(1, 3), large = historyRun(2, 3),
+       longer = historyRun(3, 3);
+  for (json* r : {&small, &same, &large, &longer}) {
+    (*r)["settings"] = {{"warmup", 2}};
+    (*r)["scenes"]["s"] = {{"width", 64}, {"height", 36}, {"frames", 16}};
+  }
+  large["scenes"]["s"]["width"] = 96;
+  longer["scenes"]["s"]["frames"] = 12;
+  for (const json* r : {&small, &same, &large, &longer})
+    appendToDatabase(dir / "results.db", test::typed(*r));
+  const json data = historyData(loadHistory({dir / "results.db"}), {});
+  std::vector<std::string> why;
+  for (const json& c : data["changes"])
+    if (c["verdict"] == "not comparable")
+      why.push_back(std::to_string(c["run"].get<int>()) + " " + c["note"].get<std::string>());
+  ASSERT_EQ(why.size(), 2u) << data["changes"].dump();
+  EXPECT_NE(why[0].find("2 run with other settings"), std::string::npos) << why[0];
+  EXPECT_NE(why[0].find("scenes.s.width: 64 vs 96"), std::string::npos) << why[0];
+  EXPECT_NE(why[1].find("3 run with other settings"), std::string::npos) << why[1];
+  EXPECT_NE(why[1].find("scenes.s.width: 96 vs 64"), std::string::npos) << why[1];
+  EXPECT_NE(why[1].find("scenes.s.frames: 16 vs 12"), std::string::npos) << why[1];
+}
+
+// Runs from a database keep no tiles: a change beyond the tolerance there is unresolved (orange),
+// never a failure, and the summary counts those so the CI log does not read "0 failing" alone.
+// A metric the caller names that no run computed is an error, as in compare (not a page of
+// "nothing compared" that hid every other change).
+TEST(History, CountsWhatItCouldNotResolveAndRefusesAMetricNoRunComputed) {
+  const fs::path dir = test::freshDir("history_unresolved");
+  for (int i = 0; i < 4; ++i) appendToDatabase(dir / "results.db", test::typed(historyRun(i, 2)));
+  const json data = historyData(loadHistory({dir / "results.db"}), {{"relMse", 0.02}});
+  EXPECT_EQ(data["failing"], 0);
+  EXPECT_EQ(data["unresolved"], 1) << data["changes"].dump();
+  EXPECT_EQ(changedRuns(data, "svgf", "relMse"), std::vector<int>{2});
+  const std::string e = test::errorOf([&] {
+    historyData(loadHistory({dir / "results.db"}), {{"ldrFlip", 0.02}});
+  });
+  EXPECT_NE(e.find("history: --metric ldrFlip: no run computed it"), std::string::npos) << e;
+}
+
+// A database written before the scenes table existed is still this schema: a run appends to it
+// (adding the table), and its older runs are read without their scenes' sizes.
+TEST(History, ADatabaseWithoutTheScenesTableIsStillRead) {
+  const fs::path dir = test::freshDir("history_no_scenes_table");
+  json first = historyRun(0, 3), second = historyRun(1, 3);
+  first["scenes"]["s"] = second["scenes"]["s"] = {{"width", 64}, {"height", 36}, {"frames", 16}};
+  appendToDatabase(dir / "results.db", test::typed(first));
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open((dir / "results.db").c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db, "DROP TABLE scenes", nullptr, nullptr, nullptr), SQLITE_OK);
+  sqlite3_close(db);
+  EXPECT_EQ(test::errorOf([&] { (void)checkRunOutputs(dir); }), "(no error)");
+  appendToDatabase(dir / "results.db", test::typed(second));
+  const std::vector<RunResults> runs = loadHistory({dir / "results.db"});
+  ASSERT_EQ(runs.size(), 2u);
+  EXPECT_FALSE(runs[0].scenes.contains("s"));  // written before the table
+  EXPECT_EQ(runs[1].scenes["s"]["width"], 64);
+}
+
 TEST(History, ReadsRunDirectoriesAndDatabasesInTimeOrder) {
   const fs::path dir = test::freshDir("history_inputs");
   // Runs 0..3 in a database (appended out of order), 4 and 5 as run directories.
