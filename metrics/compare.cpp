@@ -288,12 +288,12 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
       const double scale = std::max(std::abs(row.baseline), 1e-12);
       row.change = (row.candidate - row.baseline) / scale;
       const bool lowerIsBetter = findMetric(t.metric)->lowerIsBetter();
-      const double worse = lowerIsBetter ? row.change : -row.change;
       // Paired over the frames and tiles both runs have, seeded by the scene like the run's own.
       // unjudgeable: a change beyond tolerance there fails the gate, as passing it would be a
       // verdict from no data. Runs read from results.db have no tiles by design (the dashboard
       // marks their changes unresolved, docs/ci-dashboard.md), nor do some metrics (ms).
       bool resolvedWorse = false, resolvedBetter = false, unjudgeable = false;
+      bool sharedFrames = false;  // the runs summarise other frames: compared on those both have
       const json &bt = b.part("tiles"), &ct = c.part("tiles");
       if (bt.is_object() && ct.is_object() && bt.contains(t.metric) && ct.contains(t.metric)) {
         const MetricTiles baseTiles = MetricTiles::fromJson(bt[t.metric]),
@@ -315,14 +315,28 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
                         " disagrees with its per-tile data (" + std::to_string(fromTiles) +
                         "); the results were edited or damaged, and the gate will not judge them");
         }
-        const PairedDifference d = pairedDifference(candTiles, baseTiles, scene, cfg);
+        const PairedChange d = pairedRelativeChange(candTiles, baseTiles, scene, cfg);
+        // Runs that summarise other frames (compared with --allow-settings-mismatch): the change
+        // is taken over the frames both have, as its interval is, or the two would disagree (a
+        // +98% change with an interval of [+0%, +0%]).
+        sharedFrames = !d.frames.empty() && (d.frames.size() != baseTiles.frames.size() ||
+                                             d.frames.size() != candTiles.frames.size());
+        if (sharedFrames) {
+          row.baseline = d.b;
+          row.candidate = d.a;
+          row.change = d.change;
+          row.note = "over the " + std::to_string(d.frames.size()) +
+                     " frames both runs summarise (baseline " +
+                     std::to_string(baseTiles.frames.size()) + ", candidate " +
+                     std::to_string(candTiles.frames.size()) + ")";
+        }
         if (d.ci.valid()) {
-          row.changeCi = {d.ci.lo / scale, d.ci.hi / scale};
+          row.changeCi = d.ci;
           const bool above = d.ci.lo > 0, below = d.ci.hi < 0;
           resolvedWorse = lowerIsBetter ? above : below;
           resolvedBetter = lowerIsBetter ? below : above;
         } else {
-          row.note = "no interval (too few frames)";
+          row.note += (row.note.empty() ? "" : "; ") + std::string("no interval (too few frames)");
           unjudgeable = true;
         }
       } else if (!base.keepsTiles || !cand.keepsTiles) {
@@ -333,6 +347,7 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
         row.note = "no tile data for a paired interval";
         unjudgeable = true;
       }
+      const double worse = lowerIsBetter ? row.change : -row.change;
       if (worse > t.relative && resolvedWorse) {
         row.verdict = "regressed";
       } else if (worse > t.relative && unjudgeable) {
@@ -345,9 +360,10 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
       } else if (-worse > t.relative) {
         row.verdict = resolvedBetter ? "improved" : "unresolved";
       }
-      if (row.verdict == "unresolved" && row.note.empty())
-        row.note = worse > 0 ? "worse beyond tolerance but within noise"
-                             : "better beyond tolerance but within noise";
+      if (row.verdict == "unresolved" && (row.note.empty() || sharedFrames))
+        row.note += (row.note.empty() ? "" : "; ") +
+                    std::string(worse > 0 ? "worse beyond tolerance but within noise"
+                                          : "better beyond tolerance but within noise");
       rows.push_back(row);
     }
   }

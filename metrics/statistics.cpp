@@ -349,6 +349,25 @@ PairedDifference pairedDifference(const MetricTiles& a, const MetricTiles& b,
   return {means[0] - means[1], percentileInterval(difference(reps[0], reps[1]), cfg.confidence)};
 }
 
+PairedChange pairedRelativeChange(const MetricTiles& a, const MetricTiles& b,
+                                  const std::string& seedName, const BootstrapConfig& cfg) {
+  PairedChange out;
+  out.frames = commonFrames({&a, &b});
+  if (out.frames.empty()) return out;
+  std::vector<double> means;
+  auto reps = pairedReplicates({&a, &b}, out.frames, seedName, cfg, &means);
+  const auto relative = [](double x, double base) {
+    return (x - base) / std::max(std::abs(base), 1e-12);
+  };
+  out.a = means[0];
+  out.b = means[1];
+  out.change = relative(out.a, out.b);
+  std::vector<double> changes(reps[0].size());
+  for (size_t i = 0; i < changes.size(); ++i) changes[i] = relative(reps[0][i], reps[1][i]);
+  out.ci = percentileInterval(changes, cfg.confidence);
+  return out;
+}
+
 namespace {
 
 // rank = 1 + number of methods resolved better; ties = not resolved either way.

@@ -112,6 +112,19 @@ struct PairedDifference {
 PairedDifference pairedDifference(const MetricTiles& a, const MetricTiles& b,
                                   const std::string& seedName, const BootstrapConfig& cfg = {});
 
+// (a - b) / |b| on the frames both have, with its interval: the percentile interval of each
+// replicate's own relative change, so it keeps to the metric's range (a relMSE cannot fall by more
+// than 100%), which pairedDifference's interval divided by b's point value did not. Its sign in
+// each replicate is the difference's: resolved exactly where pairedDifference is. `a` and `b` are
+// the means over `frames`, the frames both have.
+struct PairedChange {
+  double change = kUndefined, a = kUndefined, b = kUndefined;
+  Interval ci;
+  std::vector<int> frames;
+};
+PairedChange pairedRelativeChange(const MetricTiles& a, const MetricTiles& b,
+                                  const std::string& seedName, const BootstrapConfig& cfg = {});
+
 // Frames present in every series (sorted).
 std::vector<int> commonFrames(const std::vector<const MetricTiles*>& series);
 

@@ -330,6 +330,61 @@ TEST(CompareGate, NoiseIsNotARegressionAndARealWorseningIs) {
   EXPECT_TRUE(anyRegression(rows));
 }
 
+// The interval of a relative change is each replicate's own, so it keeps to the metric's range: a
+// candidate at 5% of the baseline everywhere is a -95% change with an interval of about -95%. The
+// difference's interval divided by the baseline's point value reached -156% for a relMSE on tiles
+// of uneven error (a replicate drawing the worst tile often has a baseline well above its mean).
+TEST(CompareGate, AChangesIntervalKeepsToTheMetricsRange) {
+  std::mt19937_64 rng(3);
+  std::exponential_distribution<double> skewed(1.0);
+  MetricTiles base, cand;
+  for (int f = 0; f < 20; ++f) {
+    TileSums b, c;
+    for (int k = 0; k < 16; ++k) {
+      const double v = std::pow(skewed(rng), 3.0);  // a few tiles hold most of the error
+      b.sum.push_back(v);
+      c.sum.push_back(0.05 * v);
+      b.count.push_back(1.0);
+      c.count.push_back(1.0);
+    }
+    base.add(f, std::move(b));
+    cand.add(f, std::move(c));
+  }
+  const auto rows =
+      compareRuns(syntheticRun({{"m", base}}), syntheticRun({{"m", cand}}), {{"relMse", 0.02}});
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].verdict, "improved");
+  EXPECT_NEAR(rows[0].change, -0.95, 1e-6);
+  EXPECT_GE(rows[0].changeCi.lo, -1.0);
+  EXPECT_NEAR(rows[0].changeCi.lo, -0.95, 1e-6);
+  EXPECT_NEAR(rows[0].changeCi.hi, -0.95, 1e-6);
+  // The sign is the difference's in every replicate: resolved exactly where pairedDifference is.
+  EXPECT_EQ(pairedDifference(cand, base, "s").resolved(),
+            pairedRelativeChange(cand, base, "s").ci.valid() &&
+                !pairedRelativeChange(cand, base, "s").ci.containsZero());
+}
+
+// Runs that summarise other frames (compared with --allow-settings-mismatch): the change is taken
+// over the frames both have, like its interval, and the row says so. It took each run's own mean,
+// and showed +98% with an interval of [+0%, +0%] over the shared frames.
+TEST(CompareGate, RunsOfOtherFramesAreComparedOnTheFramesBothHave) {
+  std::mt19937_64 rng(7);
+  const auto shared = sharedContent(20, 16, rng);
+  const MetricTiles base = syntheticSeries(20, 16, 0.0, rng, shared);
+  MetricTiles shorter = base.restrictedTo({0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11});
+  for (TileSums& t : shorter.rows)
+    for (double& v : t.sum) v *= 1.001;  // the same frames, all but unchanged
+  const auto rows =
+      compareRuns(syntheticRun({{"m", base}}), syntheticRun({{"m", shorter}}), {{"relMse", 0.02}});
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_NEAR(rows[0].change, 0.001, 1e-6);  // the results keep tile sums as float32
+  EXPECT_NEAR(rows[0].baseline, base.restrictedTo(shorter.frames).mean(), 1e-6);
+  EXPECT_EQ(rows[0].verdict, "ok");
+  EXPECT_NE(rows[0].note.find("over the 12 frames both runs summarise (baseline 20, candidate 12)"),
+            std::string::npos)
+      << rows[0].note;
+}
+
 // A baseline written before labels were canonical ("svgf[sigmaL=2.0]") meets the same contender
 // under its new label ("svgf[sigmaL=2]"): matched by denoiser and resolved parameters, compared,
 // neither missing nor new. Two candidates of those parameters would be ambiguous: no match.
