@@ -3,6 +3,7 @@
 #include <cmath>
 #include <iomanip>
 #include <iostream>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -102,6 +103,13 @@ std::vector<std::string> renderingOptionsGiven(const MatrixOptions& o) {
     given.push_back("--lowres-spp " + std::to_string(r.lowresSpp));
   if (o.seeds != 1) given.push_back("--seeds " + std::to_string(o.seeds));
   return given;
+}
+
+// A note on one table row: a failed pair's error may quote a process's stderr over several lines.
+std::string oneLine(std::string text) {
+  while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
+  for (size_t at; (at = text.find('\n')) != std::string::npos;) text.replace(at, 1, " / ");
+  return text;
 }
 
 RunConfig configFrom(const MatrixOptions& o) {
@@ -358,6 +366,13 @@ void addRunCommands(CLI::App& app) {
                "the denoiser's (run both on one cache state to compare the denoisers alone):"
             << lines(refs) << "\n";
       }
+      // The same run on both sides (a CI step that copied the wrong directory) passes every row
+      // by construction: said, so that a pass is not read as a check.
+      if (baseline.name == candidate.name && baseline.created == candidate.created &&
+          baseline.environment == candidate.environment)
+        std::cerr << "arena: warning: " << *a << " and " << *b << " hold the same run (name "
+                  << baseline.name << ", created " << baseline.created
+                  << "): every change is zero by construction\n";
       auto rows = compareRuns(baseline, candidate, tols, bc);
       if (*asJson) {
         std::cout << comparisonJson(rows).dump(2) << "\n";
@@ -398,7 +413,16 @@ void addRunCommands(CLI::App& app) {
                     << (r.changeCi.valid()
                             ? "[" + pct(r.changeCi.lo) + ", " + pct(r.changeCi.hi) + "]"
                             : "-")
-                    << "  " << r.verdict << (r.note.empty() ? "" : " (" + r.note + ")") << "\n";
+                    << "  " << r.verdict << (r.note.empty() ? "" : " (" + oneLine(r.note) + ")")
+                    << "\n";
+        // The verdict in one line, with what it rests on, for a CI log.
+        std::map<std::string, int> verdicts;
+        for (const ComparisonRow& r : rows) ++verdicts[r.verdict];
+        std::string counts;
+        for (const auto& [verdict, n] : verdicts)
+          counts += (counts.empty() ? "" : ", ") + std::to_string(n) + " " + verdict;
+        std::cout << "gate: " << (anyRegression(rows) ? "FAIL" : "pass") << " (" << rows.size()
+                  << " row(s): " << counts << ")\n";
       }
       if (anyRegression(rows)) throw CLI::RuntimeError(1);
     });

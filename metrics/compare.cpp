@@ -409,7 +409,8 @@ json comparisonJson(const std::vector<ComparisonRow>& rows) {
                    {"candidate", num(r.candidate)},
                    {"change", num(r.change)},
                    {"changeCi95", r.changeCi.toJson()},
-                   {"tolerance", r.tolerance},
+                   // A row of a whole pair or run (metric "*") was held to no tolerance.
+                   {"tolerance", r.metric == "*" ? json(nullptr) : json(r.tolerance)},
                    {"verdict", r.verdict},
                    {"fails", failsGate(r)},
                    {"note", r.note},

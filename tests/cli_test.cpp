@@ -262,6 +262,9 @@ TEST(CliContract, ARunShorterThanTheWarmupSaysWhyEveryReaderHasNoSummary) {
   // Compared with itself, every figure absent: the gate says it compared nothing and fails.
   r = contract::arenaCli("compare " + run + " " + run);
   EXPECT_EQ(r.status, 1) << r.output;
+  // Said: the same run on both sides, and the verdict in one line for a CI log.
+  EXPECT_NE(r.output.find("hold the same run (name run, created "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("gate: FAIL ("), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("absent"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("no frame after the warm-up"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("nothing compared"), std::string::npos) << r.output;

@@ -38,6 +38,9 @@ TEST(CompareContract, RunsOfOtherSettingsAreRefusedUnlessAllowed) {
   EXPECT_NE(r.output.find("warning: comparing runs with different settings"), std::string::npos)
       << r.output;
   EXPECT_NE(r.output.find("verdict"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(r.status == 0 ? "gate: pass (" : "gate: FAIL ("), std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("hold the same run"), std::string::npos) << r.output;
   // A pair the candidate lacks has no figures: "-", not "nan".
   RunConfig d = contract::tinyRun("settings_d");
   d.cache = a.cache;

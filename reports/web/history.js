@@ -43,7 +43,7 @@
           el('td', { class: 'first', text: `#${f.run}` }), el('td', { class: 'first', text: H.runs[f.run].commit || '–' }),
           el('td', { class: 'first', text: f.scene }), el('td', { class: 'first', text: f.label }), el('td', { class: 'first', text: f.metric }),
           el('td', { text: fmt(f.baseline) }), el('td', { text: fmt(f.candidate) }), el('td', { class: 'verdict-regressed', text: pct(f.change) }),
-          el('td', { text: `±${(100 * f.tolerance).toFixed(1)}%` }), el('td', { class: 'first verdict-regressed', text: f.verdict }),
+          el('td', { text: f.tolerance === null ? '–' : `±${(100 * f.tolerance).toFixed(1)}%` }), el('td', { class: 'first verdict-regressed', text: f.verdict }),
           el('td', { class: 'left', text: f.note || '' }));
         if (f.scene !== '*') tr.addEventListener('click', () => choose(f.scene, f.label));
         return tr;
