@@ -206,6 +206,9 @@ json benchTracer(const TracerBench& b, const ProgressFn& progress) {
   RenderSettings settings;
   settings.width = settings.height = b.size;
   settings.frames = 1;
+  // The machine as the bench found it: read after the timed loop, the load average counted the
+  // bench's own two busy threads.
+  const json environment = environmentInfo();
   SequenceRenderer renderer(scene, settings);
   for (int i = 0; i < b.warmup; ++i) renderer.renderFrame(0);
   RayCounts total;
@@ -224,7 +227,7 @@ json benchTracer(const TracerBench& b, const ProgressFn& progress) {
               {"rays_per_path", double(total.rays) / double(total.paths)},
               {"occlusion_rays_per_path", double(total.occlusionRays) / double(total.paths)},
               {"ms_per_frame", sec * 1e3 / b.frames},
-              {"environment", environmentInfo()}};
+              {"environment", environment}};
   progress(
       printed("arena tracer: %.2f Mrays/s, %.2f Mpaths/s, %.1f ms/frame at %dx%d (%.2f rays/path, "
               "%.2f of them occlusion rays)",
@@ -237,6 +240,7 @@ json benchTracer(const TracerBench& b, const ProgressFn& progress) {
 
 json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
   const int w = b.width, h = b.height;
+  const json environment = environmentInfo();  // before the inputs' rendering loads the machine
   // What would time nothing, a contender against itself, or less than it does is refused before
   // anything renders.
   if (b.denoisers.empty()) throw Error("bench denoise: --denoisers names no denoiser");
@@ -297,8 +301,8 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
       inputLowres.push_back(renderer.renderLowres(t, counts));
     }
   }
-  json out = {{"resolution", {w, h}}, {"bilateralUnitMs", bu}, {"frames", b.frames},
-              {"warmup", b.warmup}, {"environment", environmentInfo()}, {"denoisers", json::array()}};
+  json out = {{"resolution", {w, h}}, {"bilateralUnitMs", bu},      {"frames", b.frames},
+              {"warmup", b.warmup},   {"environment", environment}, {"denoisers", json::array()}};
   // Every contender runs on every frame, in an order rotated frame by frame, so that a change
   // of machine load (another process, thermal state) falls on all of them alike and the
   // per-frame ratios to the first contender are paired measurements.
