@@ -90,7 +90,10 @@
       }
     }
     const log = $('history-log').checked && rows.every((r) => r.value > 0) && band.every((b) => b.bandLo > 0);
-    const x = { field: 'run', type: 'quantitative', title: 'run (oldest → newest)', scale: { nice: false, domain: [0, Math.max(1, H.runs.length - 1)] }, axis: { tickMinStep: 1, format: 'd' } };
+    // Each tick names its run and the commit it was built from (the section is "against commit").
+    const tickLabels = H.runs.map((r, i) => (r.commit ? `${i} ${r.commit.replace(/^([0-9a-f]{7})[0-9a-f]*/, '$1')}` : String(i)));  // "-dirty" kept
+    const x = { field: 'run', type: 'quantitative', title: 'run and commit (oldest → newest)', scale: { nice: false, domain: [0, Math.max(1, H.runs.length - 1)] },
+                axis: { tickMinStep: 1, format: 'd', labelAngle: -30, labelExpr: `${JSON.stringify(tickLabels)}[datum.value] || datum.label` } };
     const y = { field: 'value', type: 'quantitative', title: `${metric.name} ${metric.lowerIsBetter ? '↓' : '↑'}`, scale: log ? { type: 'log' } : { zero: false } };
     const withCi = rows.filter((r) => r.lo !== null && r.hi !== null);
     return A.baseSpec({

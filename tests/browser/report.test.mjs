@@ -663,6 +663,9 @@ test('history dashboard: 50 runs, the regressing one is marked, and the page sta
   assert.equal(await page.locator('#history-charts .chart[data-metric="relMse"] g.values_marks path').count(), 1, 'one line');
   assert.equal(await page.locator('#history-charts .chart[data-metric="ldrFlip"] g.flagged_marks path').count(), 0);
   assert.ok((await page.locator('#history-charts .chart[data-metric="relMse"] g.band_marks path').count()) >= 1, 'tolerance band');
+  // The run axis names each tick's commit ("30 c0ffee3"), not the run's number alone.
+  const ticks = await page.$$eval('#history-charts .chart[data-metric="relMse"] .role-axis-label text', (ts) => ts.map((t) => t.textContent));
+  assert.ok(ticks.some((t) => /^\d+ c0ffee/.test(t)), `axis labels: ${ticks.join(' | ')}`);
   await shot(page, 'history.png');
   // Another series: nothing flagged there.
   await page.selectOption('#history-label', 'temporal');
