@@ -36,13 +36,15 @@
       return;
     }
     box.replaceChildren(el('table', { class: 'data flags-table' },
-      el('thead', {}, el('tr', {}, ['run', 'commit', 'scene', 'denoiser / setting', 'metric', 'previous', 'this run', 'change', 'tolerance', 'verdict', 'note']
-        .map((t, i) => el('th', { class: i < 5 || i > 8 ? 'first' : null, text: t })))),
+      el('thead', {}, el('tr', {}, ['run', 'commit', 'scene', 'denoiser / setting', 'metric', 'previous', 'this run', 'change', 'interval', 'tolerance', 'verdict', 'note']
+        .map((t, i) => el('th', { class: i < 5 || i > 9 ? 'first' : null, text: t })))),
       el('tbody', {}, flags.map((f) => {
         const tr = el('tr', { class: 'flag', 'data-run': String(f.run), 'data-scene': f.scene, 'data-label': f.label, 'data-metric': f.metric },
           el('td', { class: 'first', text: `#${f.run}` }), el('td', { class: 'first', text: H.runs[f.run].commit || '–' }),
           el('td', { class: 'first', text: f.scene }), el('td', { class: 'first', text: f.label }), el('td', { class: 'first', text: f.metric }),
           el('td', { text: fmt(f.baseline) }), el('td', { text: fmt(f.candidate) }), el('td', { class: 'verdict-regressed', text: pct(f.change) }),
+          // The paired interval of the change, as compare prints it (none: no tiles to resample).
+          el('td', { text: Array.isArray(f.changeCi95) ? `[${pct(f.changeCi95[0])}, ${pct(f.changeCi95[1])}]` : '–' }),
           el('td', { text: f.tolerance === null ? '–' : `±${(100 * f.tolerance).toFixed(1)}%` }), el('td', { class: 'first verdict-regressed', text: f.verdict }),
           el('td', { class: 'left', text: f.note || '' }));
         if (f.scene !== '*') tr.addEventListener('click', () => choose(f.scene, f.label));

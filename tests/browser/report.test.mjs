@@ -655,6 +655,8 @@ test('history dashboard: 50 runs, the regressing one is marked, and the page sta
   // The flag: run 30, its commit, svgf on scene_b, relMSE; and only that.
   const flags = await page.$$eval('#flags tr.flag', (rows) => rows.map((r) => ({ ...r.dataset, commit: r.cells[1].textContent })));
   assert.deepEqual(flags, [{ run: '30', scene: 'scene_b', label: 'svgf', metric: 'relMse', commit: 'c0ffee30' }]);
+  // With the change's paired interval, which the gate resolved above zero.
+  assert.match(await page.$eval('#flags tr.flag', (r) => r.cells[8].textContent), /^\[\+\d+\.\d%, \+\d+\.\d%\]$/);
   // The page opens on the flagged series: one chart per metric, the flagged point ringed on relMSE only.
   assert.equal(await page.$eval('#history-scene', (s) => s.value), 'scene_b');
   assert.equal(await page.$eval('#history-label', (s) => s.value), 'svgf');
