@@ -506,6 +506,8 @@ void ReEngine::spatialMerge() {
     return;
   }
   mips_.build(propagated2_, gbuffer_);
+  // A 1080p frame (the GPU prediction's) under the same policy can build a deeper chain.
+  mips_.priceLevelsBeyond(scaledMipLevel(s_.mergeLevels, s_.footprint.scale(1080)));
   mips_.upsample(mips_.levels(), nullptr, gbuffer_, {}, large_);
   if (gpu::recording()) {  // the blend by the noise (a shader would fuse it into the upsample)
     using namespace gpu_buffers;

@@ -263,6 +263,34 @@ TEST(ReEngine, DisocclusionRaysOnWithoutTheBufferSaysHowToRenderIt) {
 
 // Identical inputs give identical bits, whichever denormal mode the calling thread is in (the
 // tracer leaves flush-to-zero on in threads it ran on): two instances, pass by pass.
+// Under the scaled footprint the merge's mip chain is shallower at 36 lines than at 1080 (one
+// level against three): the two a 1080p frame adds are priced for the GPU prediction and counted;
+// nothing is built for them (priceLevelsBeyond is const).
+TEST(ReEngine, TheMergeLevelsA1080pFrameBuildsArePricedNotBuilt) {
+  const Rendered& r = rendered("camera_pan_occluder", 64, 36, 10, 32, 4);
+  const SequenceInfo& info = r.sequence.info();
+  const DenoiserInfo& registered = DenoiserRegistry::instance().find("reengine");
+  ReEngine d(reEngineParams().settings(registered.schema.resolve({}, "reengine"), "reengine"),
+             SignalKind::Diffuse);
+  d.setup(info.width, info.height);
+  Image out(info.width, info.height, 3);
+  const LayerSet low = r.sequence.lowres(2);
+  const LowresInputs lowres{low, info.lowresFactor(), info.lowresSpp()};
+  for (int t = 0; t < 3; ++t)
+    d.denoise(sequenceContext(info, t),
+              {r.frames[size_t(t)].get("diffuse"), r.frames[size_t(t)], nullptr, &lowres}, out);
+  const PassStats* merge = nullptr;
+  for (const PassStats& p : d.lastPasses())
+    if (p.name == "spatial merge") merge = &p;
+  ASSERT_NE(merge, nullptr);
+  ASSERT_EQ(scaledMipLevel(3, 36.0f / 1080.0f), 1);  // this chain's depth; 1080p builds 3
+  EXPECT_EQ(merge->traffic.skippedHere, 2);
+  // Dispatches: level 1 built, levels 2 and 3 priced, then the upsample and the blend.
+  EXPECT_EQ(merge->traffic.dispatches.size(), 5u);
+  EXPECT_EQ(merge->traffic.dispatches[1], (std::array<int, 2>{16, 9}));
+  EXPECT_EQ(merge->traffic.dispatches[2], (std::array<int, 2>{8, 5}));
+}
+
 TEST(ReEngine, IdenticalInputsGiveIdenticalPassesInAnyDenormalMode) {
   const Rendered& r = rendered("camera_pan_occluder", 64, 36, 10, 32, 4);
   const SequenceInfo& info = r.sequence.info();

@@ -26,6 +26,42 @@ void MipChain::setup(int width, int height, int levels, int channels) {
   }
 }
 
+namespace {
+
+// What building one level moves on a GPU: one dispatch of the level's size, 2x2 children per
+// texel (the finest level's children read the G-buffer, coarser ones the level guide above).
+void recordLevelTraffic(bool fromBase, int fineW, int fineH, int w, int h, int channels,
+                        bool meshId) {
+  namespace gb = gpu_buffers;
+  gpu::dispatch(w, h);
+  gpu::read(fromBase ? gb::kRadiance : gb::kMip, fineW, fineH, 4);
+  if (channels > 4) gpu::read(gb::kMipExtra, fineW, fineH, 4);
+  if (fromBase) {
+    gpu::read(gb::kDepth, fineW, fineH, 4);
+    gpu::read(gb::kNormal, fineW, fineH, 4);
+    if (meshId) gpu::read(gb::kMeshId, fineW, fineH, 4);
+  } else {
+    gpu::read(gb::kMipGuide, fineW, fineH, 4);
+  }
+  gpu::write(gb::kMip, w, h);
+  if (channels > 4) gpu::write(gb::kMipExtra, w, h);
+  gpu::write(gb::kMipGuide, w, h);
+}
+
+}  // namespace
+
+void MipChain::priceLevelsBeyond(int levels) const {
+  if (!gpu::recording() || values_.empty()) return;
+  int w = values_.back().width(), h = values_.back().height();
+  for (int l = int(values_.size()); l < levels; ++l) {
+    const int fineW = w, fineH = h;
+    w = (w + 1) / 2;
+    h = (h + 1) / 2;
+    recordLevelTraffic(false, fineW, fineH, w, h, values_.back().channels(), false);
+    gpu::skippedHere();
+  }
+}
+
 void MipChain::build(const Image& signal, const GBufferView& g) {
   if (signal.width() != g.width || signal.height() != g.height)
     throw Error("mip chain: signal and G-buffer sizes differ");
@@ -39,22 +75,9 @@ void MipChain::build(const Image& signal, const GBufferView& g) {
     const int fineH = l == 0 ? g.height : values_[l - 1].height();
     const Image* fineValues = l == 0 ? &signal : &values_[l - 1];
     const Image* fineGuide = l == 0 ? nullptr : &guides_[l - 1];
-    if (gpu::recording()) {  // one dispatch per level, 2x2 children per texel
-      namespace gb = gpu_buffers;
-      gpu::dispatch(dst.width(), dst.height());
-      gpu::read(l == 0 ? gb::kRadiance : gb::kMip, fineW, fineH, 4);
-      if (signal.channels() > 4) gpu::read(gb::kMipExtra, fineW, fineH, 4);
-      if (l == 0) {
-        gpu::read(gb::kDepth, fineW, fineH, 4);
-        gpu::read(gb::kNormal, fineW, fineH, 4);
-        if (g.meshId) gpu::read(gb::kMeshId, fineW, fineH, 4);
-      } else {
-        gpu::read(gb::kMipGuide, fineW, fineH, 4);
-      }
-      gpu::write(gb::kMip, dst.width(), dst.height());
-      if (signal.channels() > 4) gpu::write(gb::kMipExtra, dst.width(), dst.height());
-      gpu::write(gb::kMipGuide, dst.width(), dst.height());
-    }
+    if (gpu::recording())
+      recordLevelTraffic(l == 0, fineW, fineH, dst.width(), dst.height(), signal.channels(),
+                         g.meshId != nullptr);
     parallelRows(dst.height(), [&](int y) {
       for (int x = 0; x < dst.width(); ++x) {
         const size_t c = size_t(y) * size_t(dst.width()) + size_t(x);

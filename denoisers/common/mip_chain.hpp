@@ -33,6 +33,11 @@ class MipChain {
   void upsample(int level, const Image* perPixelLevel, const GBufferView& gbuffer,
                 const MipUpsampleSettings& settings, Image& out) const;
   const Image& level(int l) const { return values_[size_t(l - 1)]; }
+  // For the GPU prediction, after build(): levels levels()+1 .. `levels`, which a 1080p frame
+  // builds where a scaled depth gives this resolution fewer (scaledMipLevel), recorded as that
+  // frame's dispatches would move them (this chain's coarsest size halved on; the 1080p scaling
+  // multiplies their texels like every pass's) and counted (gpu::skippedHere). Nothing is built.
+  void priceLevelsBeyond(int levels) const;
 
  private:
   const Image* base_ = nullptr;
