@@ -128,7 +128,11 @@ struct Brightness {
 // fit. `side()` is sum d / sum (own - other)^2: +1 on its own reference, -1 on the other; `z()`
 // is sum d in standard errors of the input's noise, which is independent between pixels. The
 // input is first scaled to its own reference's mean: a slightly dark input during a fade would
-// otherwise lie nearer a darker neighbour.
+// otherwise lie nearer a darker neighbour. Each value's d (and gap) weighs 1 / (m^2 + 0.01 mean^2),
+// m the two references' mean there, as relMSE weighs its errors: a path tracer's noise grows with
+// the radiance, so unweighted sums were ruled by the bright pixels' noise and decided nothing on a
+// 1-spp Cycles capture whose references were one frame late (z -1.7 where the weighted sum gives
+// -19; aligned frames +10 to +28), scale-free (the capture's units are its own).
 struct ReferenceFit {
   double sumD = 0, sumD2 = 0, sumGap = 0;
   size_t n = 0;
@@ -139,13 +143,16 @@ struct ReferenceFit {
     double sumX = 0, sumA = 0;
     for (size_t i = 0; i < input.raw().size(); ++i) sumX += input.raw()[i], sumA += own.raw()[i];
     const double gain = sumX > 0 && sumA > 0 ? sumA / sumX : 1.0;
+    const double meanA = input.raw().empty() ? 0.0 : sumA / double(input.raw().size());
+    const double epsilon = 0.01 * meanA * meanA + 1e-30;
     for (size_t i = 0; i < input.raw().size(); ++i) {
       const double x = gain * input.raw()[i], a = own.raw()[i], b = other.raw()[i];
       const double noise = ownVar && otherVar ? double(otherVar->raw()[i]) - ownVar->raw()[i] : 0.0;
-      const double d = (x - b) * (x - b) - (x - a) * (x - a) - noise;
+      const double m = 0.5 * (a + b), w = 1.0 / (m * m + epsilon);
+      const double d = w * ((x - b) * (x - b) - (x - a) * (x - a) - noise);
       sumD += d;
       sumD2 += d * d;
-      sumGap += (a - b) * (a - b);
+      sumGap += w * (a - b) * (a - b);
     }
     n += input.raw().size();
   }

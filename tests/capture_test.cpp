@@ -1615,6 +1615,27 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
   EXPECT_EQ(checkNamed(v, "reference.roughnessVsInput").status, CheckStatus::Pass)
       << checkNamed(v, "reference.roughnessVsInput").value;
   EXPECT_EQ(checkNamed(v, "reference.noiseVsInput").status, CheckStatus::Pass);
+  // Its references are where they belong, and the check decides so (1 spp of Cycles: the sums
+  // weigh each value as relMSE does, else its bright pixels' noise decided nothing).
+  for (const char* side : {"before", "after"}) {
+    const CaptureCheck& aligned = checkNamed(v, std::string("reference.alignment.") + side);
+    EXPECT_EQ(aligned.status, CheckStatus::Pass) << aligned.detail;
+    EXPECT_EQ(aligned.detail, "") << side;
+  }
+  // The references written one frame late (frame k holds frame k-1's): refused, naming the side.
+  const fs::path late = work / "late_references";
+  fs::copy(work / "render", late, fs::copy_options::recursive);
+  for (const char* half : {"reference_a", "reference_b"})
+    for (int k = 4; k >= 1; --k) {
+      char from[32], to[32];
+      std::snprintf(from, sizeof from, "frame_%04d.exr", k - 1);
+      std::snprintf(to, sizeof to, "frame_%04d.exr", k);
+      fs::copy_file(late / half / from, late / half / to, fs::copy_options::overwrite_existing);
+    }
+  importBlender(late, work / "late_capture", {"late_references"});
+  const CheckStatus lateAfter =
+      checkNamed(validate(work / "late_capture"), "reference.alignment.after").status;
+  EXPECT_EQ(lateAfter, CheckStatus::Fail);
   // Read without our y negation, the same vectors are refused as "y flipped".
   std::vector<LayerSet> raw = input.frames;
   for (LayerSet& f : raw)
