@@ -82,7 +82,7 @@ void writeAtomically(const fs::path& path, const std::function<void(const fs::pa
 // A temporary is "<stem>.tmp<pid>@<host>_<n><ext>". One whose process is gone is removed at any
 // age when it was written on this machine; from another machine sharing the directory (or with an
 // older name without the machine) a process id says nothing, so only `minAgeSeconds` of age does.
-int removeStaleTemporaries(const fs::path& dir, double minAgeSeconds) {
+int removeStaleTemporaries(const fs::path& dir, double minAgeSeconds, bool folders) {
   // SQLite's journal of a temporary database ends in ".db-journal". Names without "@host" are
   // those of older versions: their machine is unknown.
   static const std::regex pattern(R"(.+\.tmp([0-9]+)(@([A-Za-z0-9-]+))?_[0-9]+(\.[A-Za-z0-9-]+)?)");
@@ -94,7 +94,9 @@ int removeStaleTemporaries(const fs::path& dir, double minAgeSeconds) {
        it.increment(ec)) {
     std::smatch m;
     const std::string name = it->path().filename().string();
-    if (!std::regex_match(name, m, pattern) || !it->is_regular_file(ec)) continue;
+    const bool folder = it->is_directory(ec) && !it->is_symlink(ec);
+    if (!std::regex_match(name, m, pattern) || !(it->is_regular_file(ec) || (folders && folder)))
+      continue;
     const long pid = std::stol(m[1].str());
     const bool alive = pid == getpid() || (pid > 0 && pid < (1L << 30) &&
                                            (kill(pid_t(pid), 0) == 0 || errno != ESRCH));
@@ -107,7 +109,8 @@ int removeStaleTemporaries(const fs::path& dir, double minAgeSeconds) {
     if (ec || (!thisMachine && std::chrono::duration<double>(now - written).count() < minAgeSeconds))
       continue;
     std::error_code removeError;
-    if (fs::remove(it->path(), removeError)) ++removed;
+    if (folder ? fs::remove_all(it->path(), removeError) > 0 : fs::remove(it->path(), removeError))
+      ++removed;
   }
   return removed;
 }

@@ -242,7 +242,16 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
         // it is kept in `emission`, so the colour stays exact.
         {"emissionBeyondEmitEnv", combinedTotal > 0 ? emissionResidual / combinedTotal : 0.0}}}};
   if (halves.empty()) description.erase("reference");
-  writer.commit(description);
+  try {
+    writer.commit(description);
+  } catch (const Error& e) {
+    // The capture's description is written from cameras.json: a field the reader refuses there
+    // is one of the user's, under another name.
+    throw Error(std::string(e.what()) + " (capture.json is written from " + camerasFile.string() +
+                ": its cameras[i].view is the inverse of cameras[i].cameraToWorld there, and its "
+                "events, frameRate and clip planes are that file's events, fps, clipStart and "
+                "clipEnd)");
+  }
 }
 
 }  // namespace arena

@@ -581,6 +581,9 @@ std::vector<std::string> undeclaredOutputs(const CaptureDescription& c) {
 CaptureWriter::CaptureWriter(fs::path out) : out_(std::move(out)) {
   if (fs::exists(out_)) throw Error(out_.string() + ": already exists; a capture is written to a new folder");
   if (!out_.parent_path().empty()) fs::create_directories(out_.parent_path());
+  // The temporary folders of killed writes here (an import stopped with Ctrl-C) go first.
+  removeStaleTemporaries(out_.parent_path().empty() ? fs::path(".") : out_.parent_path(), 600,
+                         true);
   tmp_ = temporaryPathFor(out_);
   fs::create_directories(tmp_);
 }

@@ -40,6 +40,10 @@ std::vector<std::string> runWarnings(const json& pair, int frames) {
   if (const json inputs = pair.value("sanitizedInputs", json::object());
       inputs.value("total", 0L) > 0)
     first.push_back(sanitizedWarning(inputs["channels"].get<NonFiniteCounts>()));
+  if (pair.value("equalsInputEveryFrame", false))
+    first.push_back("the output is its input value for value on all " + std::to_string(frames) +
+                    " frames: scored as a denoiser's, it filtered nothing (is the input wired in "
+                    "as the output?)");
   for (const json& ended : pair.value("processEnds", json::array()))
     if (ended.is_string())
       first.push_back(ended.get<std::string>() + " (every frame was answered: its results stand)");
@@ -121,13 +125,26 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   std::vector<std::vector<PassTime>> passes;
   std::vector<double> ms;
   GpuFrameCost gpuCost(info.width, info.height);  // the speed axis's predicted GPU ms (issue 31)
+  // Frames whose output is the input value for value: on every frame, a contender wired to pass
+  // its input through (a stored output copied from the noisy frames), said, never scored silently
+  // as a denoiser. (On some frames it is no fault: a temporal filter's first frame is its input.)
+  // Not for an identity by design (passthrough).
+  const bool identity = run && run->info().identity;
+  std::vector<int> equalsInput;
   auto onFrame = [&](const DenoisedFrame& f) {
+    if (!identity) {
+      const Image& in = sd.evaluation.frame(f.frame).get("color");
+      if (in.sameShape(f.color) &&
+          std::equal(in.raw().begin(), in.raw().end(), f.color.raw().begin()))
+        equalsInput.push_back(f.frame);
+    }
     FrameFacts facts;
     facts.milliseconds = f.milliseconds;
     if (f.selfTimed && run) facts.wallMilliseconds = f.wallMilliseconds;
     // Extra paths: the low-resolution buffer's (reengine) or the gradient samples'
     // (asvgf), each at the rate it rendered at.
-    if (run && (run->readsLowres() || run->readsGradients())) facts.extraRaysPerPixel = f.extraRaysPerPixel;
+    if (run && (run->readsLowres() || run->readsGradients()))
+      facts.extraRaysPerPixel = f.extraRaysPerPixel;
     facts.extraPathsPerSecond = run && run->readsLowres() ? info.lowresPathsPerSecond : info.inputPathsPerSecond;
     StageTimer metrics(Stage::Metrics);  // inside the denoiser's run: its time is taken out of it
     evaluation.add(f.frame, f.color, facts);
@@ -198,6 +215,11 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
       timing["device"] = output.device;
     } else {
       timing = {{"msSource", "not recorded in the capture"}, {"clock", "none"}, {"passes", json::array()}};
+      // Its frames carry no time (NaN): the summary says why, not "not finite".
+      if (pair.contains("summary") && pair["summary"].contains("ms") &&
+          pair["summary"]["ms"].contains("absent"))
+        pair["summary"]["ms"]["absent"] = "not recorded in the capture (capture.json's outputs." +
+                                          captured + " gives no milliseconds)";
     }
   }
   // A time the denoiser reported for work longer than the call that carried it cannot be: counted
@@ -211,6 +233,8 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   if (run) pair["readsLowres"] = run->readsLowres();  // compare judges the buffer's settings by it
   pair["sanitizedInputs"] = {{"total", totalNonFinite(sanitized)}, {"channels", sanitized}};
   if (!processEnds.empty()) pair["processEnds"] = processEnds;
+  if (!equalsInput.empty() && int(equalsInput.size()) == info.frames)
+    pair["equalsInputEveryFrame"] = true;
   prependRunWarnings(pair, info.frames);
   pair["images"] = {{"dir", fs::relative(imageDir, cfg.out).string()}, {"all", keepAll && cfg.keepFrames != "none"}};
   if (run && !run->info().origin.empty()) pair["origin"] = run->info().origin;

@@ -11,9 +11,11 @@
 
 #include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <thread>
 
+#include "core/capture.hpp"
 #include "core/error.hpp"
 #include "metrics/results.hpp"
 #include "tests/contract_fixture.hpp"
@@ -48,6 +50,26 @@ TEST(AtomicFile, TemporariesOfKilledWritesAreCleaned) {
   EXPECT_TRUE(fs::exists(dir / ("results.tmp" + dead + "_2.db")));
   EXPECT_TRUE(fs::exists(dir / ("results.tmp" + self + "_3.json")));
   EXPECT_TRUE(fs::exists(dir / "notes.tmp.json"));
+}
+
+// A capture is written in a temporary folder: a killed import's folder is removed by the next
+// writer in the same place (with folders), never by the file cleaners (without).
+TEST(AtomicFile, TemporaryFoldersOfKilledWritesAreCleanedWhereAsked) {
+  const fs::path dir = test::freshDir("stale_tmp_folders");
+  const std::string dead = std::to_string(999999999L);
+  const fs::path killed = dir / ("room.tmp" + dead + "_0");
+  fs::create_directories(killed / "frames");
+  std::ofstream(killed / "frames" / "frame_0001.exr") << "partial";
+  fs::last_write_time(killed, fs::file_time_type::clock::now() - std::chrono::seconds(3600));
+  EXPECT_EQ(removeStaleTemporaries(dir), 0);
+  EXPECT_TRUE(fs::exists(killed));
+  EXPECT_EQ(removeStaleTemporaries(dir, 600, true), 1);
+  EXPECT_FALSE(fs::exists(killed));
+  // What a writer of a new capture there does first.
+  fs::create_directories(killed / "frames");
+  fs::last_write_time(killed, fs::file_time_type::clock::now() - std::chrono::seconds(3600));
+  { CaptureWriter writer(dir / "other"); }
+  EXPECT_FALSE(fs::exists(killed));
 }
 
 // Makes writes beyond `bytes` fail with EFBIG (as a full disk fails with ENOSPC) for this scope.

@@ -908,11 +908,9 @@ TEST(Capture, PassthroughScoresAColourOnlyCaptureAsTheInputItIs) {
 // frame fails (naming the file), an undeclared folder warns; a run fails only that output's pair.
 TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
   const fs::path dir = copyCapture(exportedCornell(), "outputs_checked", [](json& d) {
-    d["outputs"] = {{"good", json::object()},
-                    {"short", json::object()},
-                    {"small", json::object()},
-                    {"nan", json::object()},
-                    {"oracle", json::object()}};
+    d["outputs"] = {{"good", json::object()},   {"short", json::object()},
+                    {"small", json::object()},  {"nan", json::object()},
+                    {"oracle", json::object()}, {"copied", json::object()}};
   });
   const CaptureDescription base = readCaptureDescription(exportedCornell());
   const int w = base.info.width, h = base.info.height;
@@ -932,6 +930,7 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
     write("nan", t, bad);
     write("oracle", t,
           readCaptureReference(base, base.info.referenceOfFrame[size_t(t)]).get("color"));
+    write("copied", t, readCaptureFrame(base, t).get("color"));  // the noisy input itself
   }
   fs::create_directories(dir / "outputs" / "forgotten");
   const CaptureValidation v = validateCaptureOutputs(
@@ -960,6 +959,23 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
   EXPECT_EQ(pairOf(r, "file:good")["status"], "ok") << pairOf(r, "file:good").dump().substr(0, 300);
   EXPECT_EQ(pairOf(r, "passthrough")["status"], "ok");
   EXPECT_EQ(pairOf(r, "file:short")["status"], "failed");
+  // An output that is its input on every frame is scored, and said to have filtered nothing
+  // (passthrough, an identity by design, is not); with no time recorded, its ms summary says so.
+  const json copied =
+      runMatrix(captureRun(test::freshDir("outputs_copied_run"),
+                           {{"file:copied", {}, ""}, {"passthrough", {}, ""}}, {dir}));
+  const json copy = pairOf(copied, "file:copied");
+  ASSERT_EQ(copy["status"], "ok") << copy.dump().substr(0, 300);
+  EXPECT_TRUE(copy.value("equalsInputEveryFrame", false));
+  EXPECT_NE(copy["warnings"][0].get<std::string>().find(
+                "the output is its input value for value on all " +
+                std::to_string(base.info.frames) + " frames"),
+            std::string::npos)
+      << copy["warnings"];
+  EXPECT_FALSE(pairOf(copied, "passthrough").contains("equalsInputEveryFrame"));
+  EXPECT_NE(copy["summary"]["ms"].value("absent", "").find("not recorded in the capture"),
+            std::string::npos)
+      << copy["summary"]["ms"];
 }
 
 // What the folder holds beyond its description is said, never silently ignored: a channel no layer
@@ -1636,6 +1652,23 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
   const CheckStatus lateAfter =
       checkNamed(validate(work / "late_capture"), "reference.alignment.after").status;
   EXPECT_EQ(lateAfter, CheckStatus::Fail);
+  // A camera whose matrix is scaled (a scaled camera object): the capture's reader refuses the
+  // view it becomes, and the error says which field of cameras.json that is.
+  const fs::path scaled = work / "scaled_camera";
+  fs::copy(work / "render", scaled, fs::copy_options::recursive);
+  json scaledCams = parseJsonFile((scaled / "cameras.json").string());
+  json& matrix = scaledCams["cameras"][2]["cameraToWorld"];
+  for (size_t r = 0; r < 3; ++r)
+    for (size_t c = 0; c < 3; ++c) matrix[r][c] = 2.0 * matrix[r][c].get<double>();
+  std::ofstream(scaled / "cameras.json") << scaledCams.dump();
+  const std::string scaledError =
+      test::errorOf([&] { importBlender(scaled, work / "scaled_capture", {"scaled"}); });
+  EXPECT_NE(scaledError.find("cameras[2].view"), std::string::npos) << scaledError;
+  EXPECT_NE(scaledError.find("(capture.json is written from " + (scaled / "cameras.json").string() +
+                             ": its cameras[i].view is the inverse of cameras[i].cameraToWorld"),
+            std::string::npos)
+      << scaledError;
+  EXPECT_FALSE(fs::exists(work / "scaled_capture"));
   // Read without our y negation, the same vectors are refused as "y flipped".
   std::vector<LayerSet> raw = input.frames;
   for (LayerSet& f : raw)

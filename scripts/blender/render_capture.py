@@ -172,7 +172,8 @@ def main():
     render(scene, os.path.join(args.out, "reference_a"), half, False, args.seed + 1)
     render(scene, os.path.join(args.out, "reference_b"), half, False, args.seed + 2)
     info = {"producer": "Blender %s (Cycles), scripts/blender/render_capture.py" % bpy.app.version_string,
-            "width": args.width, "height": args.height, "frames": args.frames, "fps": scene.render.fps,
+            "width": args.width, "height": args.height, "frames": args.frames,
+            "fps": scene.render.fps / scene.render.fps_base,
             "spp": args.spp, "referenceSpp": 2 * half, "clipStart": cam.data.clip_start,
             "clipEnd": cam.data.clip_end, "cameras": cameras(scene, cam),
             "events": [{"frame": 2, "kind": "object_moves", "what": "cube", "passIndex": 3}]}
