@@ -1,4 +1,5 @@
 // `arena export`, `arena import blender`, `arena validate`: captures in and out (docs/captures.md).
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <iostream>
@@ -19,9 +20,13 @@ namespace arena::cli {
 namespace {
 
 void printChecks(const CaptureValidation& v) {
+  // The name column as wide as the longest name: values line up whatever the checks are called.
+  size_t nameWidth = 28;
+  for (const CaptureCheck& c : v.checks) nameWidth = std::max(nameWidth, c.name.size() + 1);
   for (const CaptureCheck& c : v.checks) {
-    std::cout << "  " << std::left << std::setw(5) << checkStatusName(c.status) << std::setw(28)
-              << c.name << std::right << std::setw(12) << std::setprecision(4);
+    std::cout << "  " << std::left << std::setw(5) << checkStatusName(c.status)
+              << std::setw(int(nameWidth)) << c.name << std::right << std::setw(12)
+              << std::setprecision(4);
     if (std::isnan(c.value))
       std::cout << "-";  // not measured (the detail says why)
     else
@@ -41,7 +46,13 @@ CheckStatus printValidation(const std::filesystem::path& dir) {
   std::cout << "validation of " << dir.string() << " (" << sequence.info().scene << ", "
             << sequence.info().width << "x" << sequence.info().height << ", "
             << sequence.info().frames << " frames; layers:";
-  for (const std::string& l : sequence.info().availableLayers()) std::cout << " " << l;
+  const std::vector<std::string>& derived = sequence.capture().derived;
+  for (const std::string& l : sequence.info().availableLayers())
+    if (std::find(derived.begin(), derived.end(), l) == derived.end()) std::cout << " " << l;
+  if (!derived.empty()) {  // computed on reading (position from depth and the cameras)
+    std::cout << "; derived:";
+    for (const std::string& l : derived) std::cout << " " << l;
+  }
   std::cout << ")\n";
   printChecks(v);
   std::cout << "verdict: " << checkStatusName(v.status()) << "\n";

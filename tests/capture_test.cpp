@@ -17,6 +17,9 @@
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <regex>
+#include <set>
+#include <sstream>
 
 #include "core/blender_import.hpp"
 #include "core/error.hpp"
@@ -1576,6 +1579,14 @@ TEST(CaptureCommands, ExportValidateRunAndReportFromTheCommandLine) {
   r = test::runCommand(arena + " validate '" + (work / "capture").string() + "'");
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("motion.consistency"), std::string::npos) << r.output;
+  {  // Every check's value ends in one column, however long the check names are.
+    std::set<long> valueEnds;
+    std::istringstream lines(r.output);
+    const std::regex row(R"(^  (pass|warn|fail) +\S+ +\S+)");
+    for (std::string line; std::getline(lines, line);)
+      if (std::smatch m; std::regex_search(line, m, row)) valueEnds.insert(m.length(0));
+    EXPECT_EQ(valueEnds.size(), 1u) << r.output;
+  }
   r = test::runCommand(arena + " run --capture '" + (work / "capture").string() + "' --denoisers eaw --warmup 2 --out '" +
                        (work / "run").string() + "'");
   EXPECT_EQ(r.status, 0) << r.output;
