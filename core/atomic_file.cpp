@@ -105,6 +105,9 @@ int removeStaleTemporaries(const fs::path& dir, double minAgeSeconds, bool folde
     // rerun at once must not keep it). From another machine sharing the directory (or an older
     // name without the machine), a process id says nothing here: only its age does.
     const bool thisMachine = m[3].matched && m[3].str() == hostTag();
+    // A folder goes, with what it holds, only when this machine's killed write made it: a folder
+    // of a name like ours without the machine (someone's "shots.tmp2019_1") is never guessed at.
+    if (folder && !thisMachine) continue;
     auto written = fs::last_write_time(it->path(), ec);
     if (ec || (!thisMachine && std::chrono::duration<double>(now - written).count() < minAgeSeconds))
       continue;

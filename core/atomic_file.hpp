@@ -19,7 +19,8 @@ std::filesystem::path temporaryPathFor(const std::filesystem::path& path);
 // gone and which are older than `minAgeSeconds` (a write on another host sharing the directory
 // finishes within seconds). Returns how many were removed; a read-only directory removes none.
 // `folders`: folders of those names too, with what they hold (a capture written in a temporary
-// folder, CaptureWriter); files only otherwise.
+// folder, CaptureWriter), but only those this machine's processes made (the name carries the
+// machine); files only otherwise.
 int removeStaleTemporaries(const std::filesystem::path& dir, double minAgeSeconds = 600,
                            bool folders = false);
 // The same in `dir` and every folder below it (a run's images/, a report's tiles/).

@@ -246,7 +246,8 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
     writer.commit(description);
   } catch (const Error& e) {
     // The capture's description is written from cameras.json: a field the reader refuses there
-    // is one of the user's, under another name.
+    // is one of the user's, under another name. (Any other error, a full disk, is as it is.)
+    if (std::string(e.what()).find("the capture would not be valid") == std::string::npos) throw;
     throw Error(std::string(e.what()) + " (capture.json is written from " + camerasFile.string() +
                 ": its cameras[i].view is the inverse of cameras[i].cameraToWorld there, and its "
                 "events, frameRate and clip planes are that file's events, fps, clipStart and "

@@ -330,8 +330,15 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
     Contender c{name, info.schema.resolve(params[name], name)};
     c.kinds = info.signals == SignalMode::Color ? std::vector<SignalKind>{SignalKind::Color}
                                                 : std::vector<SignalKind>{SignalKind::Diffuse, SignalKind::Specular};
-    for (SignalKind kind : c.kinds) c.instances.push_back(info.create(c.params, kind));
-    for (auto& inst : c.instances) inst->setup(w, h);
+    // Failing to start (a process that crashes before it is ready) ends this contender's part
+    // too, as it fails its pair in a run: it is reported failed, the others are timed.
+    try {
+      for (SignalKind kind : c.kinds) c.instances.push_back(info.create(c.params, kind));
+      for (auto& inst : c.instances) inst->setup(w, h);
+    } catch (const std::exception& e) {
+      c.error = std::string("setup: ") + e.what();
+      progress(printed("%s failed in setup; the others go on: %s", name.c_str(), e.what()));
+    }
     c.staged.resize(c.instances.size());
     contenders.push_back(std::move(c));
   }
@@ -411,7 +418,7 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
             c.passTaps[pn] = p.tapsPerPixel;
           }
         }
-      } catch (const Error& e) {
+      } catch (const std::exception& e) {
         c.error = e.what();
         progress(printed("%s failed at frame %d; the others go on: %s", c.name.c_str(), f,
                          c.error.c_str()));

@@ -360,7 +360,8 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
       } else if (-worse > t.relative) {
         row.verdict = resolvedBetter ? "improved" : "unresolved";
       }
-      if (row.verdict == "unresolved" && (row.note.empty() || sharedFrames))
+      if (row.verdict == "unresolved" &&
+          (row.note.empty() || (sharedFrames && row.changeCi.valid())))
         row.note += (row.note.empty() ? "" : "; ") +
                     std::string(worse > 0 ? "worse beyond tolerance but within noise"
                                           : "better beyond tolerance but within noise");

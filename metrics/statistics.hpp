@@ -115,7 +115,8 @@ PairedDifference pairedDifference(const MetricTiles& a, const MetricTiles& b,
 // (a - b) / |b| on the frames both have, with its interval: the percentile interval of each
 // replicate's own relative change, so it keeps to the metric's range (a relMSE cannot fall by more
 // than 100%), which pairedDifference's interval divided by b's point value did not. Its sign in
-// each replicate is the difference's: resolved exactly where pairedDifference is. `a` and `b` are
+// each replicate is the difference's, so it is resolved where pairedDifference is, but for an end
+// interpolated between two replicates of opposite signs (a boundary case). `a` and `b` are
 // the means over `frames`, the frames both have.
 struct PairedChange {
   double change = kUndefined, a = kUndefined, b = kUndefined;

@@ -374,8 +374,9 @@ json speedData(const RunResults& results, const std::vector<std::string>& scenes
     for (const auto& [label, n] : skipped)
       list += (list.empty() ? "" : ", ") + label + " " + std::to_string(n);
     out["gpuSkipped"] =
-        "At this run's resolution the footprint skipped passes (à-trous steps below half a pixel) "
-        "that a 1080p frame runs; the prediction prices them as that frame would run them: " +
+        "At this run's resolution the footprint skipped passes (à-trous steps below half a pixel, "
+        "mip levels of a scaled chain) that a 1080p frame runs; the prediction prices them as "
+        "that frame would run them: " +
         list + " per frame (`arena bench gpu-model` times a 1080p frame's own passes). ";
   }
   return out;

@@ -52,24 +52,32 @@ TEST(AtomicFile, TemporariesOfKilledWritesAreCleaned) {
   EXPECT_TRUE(fs::exists(dir / "notes.tmp.json"));
 }
 
-// A capture is written in a temporary folder: a killed import's folder is removed by the next
-// writer in the same place (with folders), never by the file cleaners (without).
+// A capture is written in a temporary folder: a killed import's folder (this machine's, its process
+// gone) is removed by the next writer in the same place (with folders), never by the file
+// cleaners (without); a folder of such a name without the machine is someone's, and stays.
 TEST(AtomicFile, TemporaryFoldersOfKilledWritesAreCleanedWhereAsked) {
   const fs::path dir = test::freshDir("stale_tmp_folders");
   const std::string dead = std::to_string(999999999L);
-  const fs::path killed = dir / ("room.tmp" + dead + "_0");
-  fs::create_directories(killed / "frames");
-  std::ofstream(killed / "frames" / "frame_0001.exr") << "partial";
-  fs::last_write_time(killed, fs::file_time_type::clock::now() - std::chrono::seconds(3600));
+  // temporaryPathFor's name for this machine, with a process that is gone.
+  std::string name = temporaryPathFor(dir / "room").filename().string();
+  const size_t digits = name.find(".tmp") + 4;
+  name.replace(digits, name.find('@') - digits, dead);
+  const fs::path killed = dir / name, someones = dir / ("shots.tmp" + dead + "_1");
+  for (const fs::path& d : {killed, someones}) {
+    fs::create_directories(d / "frames");
+    std::ofstream(d / "frames" / "frame_0001.exr") << "partial";
+    fs::last_write_time(d, fs::file_time_type::clock::now() - std::chrono::seconds(3600));
+  }
   EXPECT_EQ(removeStaleTemporaries(dir), 0);
   EXPECT_TRUE(fs::exists(killed));
   EXPECT_EQ(removeStaleTemporaries(dir, 600, true), 1);
   EXPECT_FALSE(fs::exists(killed));
+  EXPECT_TRUE(fs::exists(someones / "frames" / "frame_0001.exr"));
   // What a writer of a new capture there does first.
   fs::create_directories(killed / "frames");
-  fs::last_write_time(killed, fs::file_time_type::clock::now() - std::chrono::seconds(3600));
   { CaptureWriter writer(dir / "other"); }
   EXPECT_FALSE(fs::exists(killed));
+  EXPECT_TRUE(fs::exists(someones));
 }
 
 // Makes writes beyond `bytes` fail with EFBIG (as a full disk fails with ENOSPC) for this scope.

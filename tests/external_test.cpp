@@ -346,6 +346,21 @@ TEST(ExternalProcess, TheDenoiseBenchGivesEachFrameItsCameras) {
   EXPECT_EQ(errorOf([&] { benchDenoise(b, [](const std::string&) {}); }), "(no error)");
 }
 
+// A contender that fails before its first frame (a process that never says it is ready) is
+// reported failed, and the others are timed: the bench ended there.
+TEST(ExternalProcess, TheDenoiseBenchGoesOnPastAContenderThatFailsInSetup) {
+  DenoiseBench b;
+  b.sceneFile = std::string(ARENA_SOURCE_DIR) + "/scenes/cornell_static.json";
+  b.denoisers = {"eaw", faulty("no-ready", 0.5)};
+  b.width = kWidth, b.height = kHeight, b.frames = 2, b.warmup = 0, b.inputs = 1;
+  const json out = benchDenoise(b, [](const std::string&) {});
+  ASSERT_EQ(out["denoisers"].size(), 2u);
+  EXPECT_EQ(out["denoisers"][0]["status"], "ok");
+  EXPECT_EQ(out["denoisers"][1]["status"], "failed");
+  EXPECT_NE(out["denoisers"][1]["error"].get<std::string>().find("setup: "), std::string::npos)
+      << out["denoisers"][1];
+}
+
 // The interval of a median of paired ratios (the benches' "x0.8 of eaw [95% CI ...]"):
 // distribution-free, from 6 pairs on; below that even the whole range covers less than 95%, so
 // there is none (never a zero-width one from one pair).

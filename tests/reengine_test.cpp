@@ -261,8 +261,6 @@ TEST(ReEngine, DisocclusionRaysOnWithoutTheBufferSaysHowToRenderIt) {
   for (double rays : autoRays.rays) EXPECT_EQ(rays, 0.0);
 }
 
-// Identical inputs give identical bits, whichever denormal mode the calling thread is in (the
-// tracer leaves flush-to-zero on in threads it ran on): two instances, pass by pass.
 // Under the scaled footprint the merge's mip chain is shallower at 36 lines than at 1080 (one
 // level against three): the two a 1080p frame adds are priced for the GPU prediction and counted;
 // nothing is built for them (priceLevelsBeyond is const).
@@ -291,6 +289,8 @@ TEST(ReEngine, TheMergeLevelsA1080pFrameBuildsArePricedNotBuilt) {
   EXPECT_EQ(merge->traffic.dispatches[2], (std::array<int, 2>{8, 5}));
 }
 
+// Identical inputs give identical bits, whichever denormal mode the calling thread is in (the
+// tracer leaves flush-to-zero on in threads it ran on): two instances, pass by pass.
 TEST(ReEngine, IdenticalInputsGiveIdenticalPassesInAnyDenormalMode) {
   const Rendered& r = rendered("camera_pan_occluder", 64, 36, 10, 32, 4);
   const SequenceInfo& info = r.sequence.info();

@@ -88,9 +88,11 @@ nlohmann::json ExternalProcessDenoiser::readHeader(const std::string& expectedTy
   try {
     header = nlohmann::json::parse(line);
   } catch (const std::exception&) {
-    // Bytes before a header that parses: most likely the previous answer's, more than its planes
-    // (or a print to stdout); said, since the error otherwise falls on the frame after.
-    const size_t brace = line.find('{');
+    // Bytes before a header that parses (a line ending in {"type": ...}): perhaps the previous
+    // answer's, more than its planes, or a print to stdout; said, since the error otherwise falls
+    // on the frame after. (Stray float data holding a newline byte ends the line before any
+    // header: then only the line is quoted.)
+    const size_t brace = line.find("{\"type\"");
     const bool stray =
         brace != std::string::npos && brace > 0 && nlohmann::json::accept(line.substr(brace));
     fail("expected a JSON '" + expectedType +
