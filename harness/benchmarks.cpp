@@ -320,6 +320,7 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
     // said in words; and the error that ended the contender's part (the others go on).
     int implausibleFrames = 0;
     std::string firstImplausible, error;
+    std::string origin;  // DenoiserInfo::origin, which a fault of its output names
     std::map<std::string, std::vector<double>> passMs;
     std::map<std::string, double> passTaps;
     std::vector<std::string> passOrder;
@@ -328,6 +329,7 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
   for (const std::string& name : b.denoisers) {
     const DenoiserInfo& info = DenoiserRegistry::instance().find(name);
     Contender c{name, info.schema.resolve(params[name], name)};
+    c.origin = info.origin;
     c.kinds = info.signals == SignalMode::Color ? std::vector<SignalKind>{SignalKind::Color}
                                                 : std::vector<SignalKind>{SignalKind::Diffuse, SignalKind::Specular};
     // Failing to start (a process that crashes before it is ready) ends this contender's part
@@ -396,9 +398,7 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
           const double wall =
               std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
                   .count();
-          if (const std::string fault =
-                  outputFault(outImage, c.name, kind, int(input),
-                              DenoiserRegistry::instance().find(c.name).origin);
+          if (const std::string fault = outputFault(outImage, c.name, kind, int(input), c.origin);
               !fault.empty())
             throw Error(fault);
           // An external process's own compute time; the wall clock (transfer included) otherwise.
