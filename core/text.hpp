@@ -39,4 +39,9 @@ size_t editDistance(std::string_view a, std::string_view b);
 // counts as the bytes of its character.
 std::string closestName(const std::string& name, const std::vector<std::string>& names);
 
+// `word` as one word of a POSIX shell command line: unchanged when it holds only letters, digits
+// and `_-./:=,+@%`, else in single quotes with each `'` written '\'' (a suggested command a user
+// pastes must name the same path, whatever characters it holds).
+std::string shellWord(const std::string& word);
+
 }  // namespace arena

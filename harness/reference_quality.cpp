@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <limits>
 
+#include "core/text.hpp"
 #include "metrics/metric_registry.hpp"
 #include "tracer/render.hpp"
 
@@ -119,16 +120,15 @@ void addReferenceQuality(json& results, int warmup, const std::map<std::string, 
       if (scene.value("frames", 0) > 0)
         options += " --frames " + std::to_string(scene.value("frames", 0));
       options += renderOptionsOf(results.value("settings", json::object()).value("render", json()));
+      // A run's --max-bounces is part of every sequence's settings; without it refine would look
+      // for (and render) the scene's own path length.
+      if (scene.value("maxBounces", 0) > 0)
+        options += " --max-bounces " + std::to_string(scene.value("maxBounces", 0));
       // The cache the scene's sequence was read from (a merge of shards has no --cache of its own).
       std::string cacheDir = cache;
       if (scene.contains("sequence") && scene["sequence"].is_string())
         cacheDir = fs::path(scene["sequence"].get<std::string>()).parent_path().string();
-      if (!cacheDir.empty() && cacheDir != "cache" && cacheDir.find('\'') == std::string::npos)
-        options += " --cache " + (cacheDir.find_first_not_of(
-                                      "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
-                                      "0123456789_-./") == std::string::npos
-                                      ? cacheDir
-                                      : "'" + cacheDir + "'");
+      if (!cacheDir.empty() && cacheDir != "cache") options += " --cache " + shellWord(cacheDir);
       verdict +=
           "the reference's noise must fall " + sci(ratio / kReferenceQualityGoal) + "x (to " + sci(needed) + "); ";
       if (scene.value("source", "") ==

@@ -100,6 +100,9 @@ json sceneRecord(const RunConfig& config, const SceneData& data, const std::stri
                 {"images", fs::relative(images, config.out).string()}};
   entry.update(ev.describe());
   if (!ev.hasReference()) entry["hasReference"] = false;
+  // A run's --max-bounces, which the scene's sequence was rendered under (absent: the scene's own
+  // path length): a command that must find the sequence again (`arena refine`) repeats it.
+  if (scene && config.render.maxBounces > 0) entry["maxBounces"] = config.render.maxBounces;
   // Events the scene has on frames a shorter sequence (--frames) does not reach: not measured,
   // said.
   if (scene) {

@@ -204,18 +204,18 @@ void appendToDatabase(const fs::path& dbPath, const RunResults& r, const std::st
         .integer(5, m["needsReference"].get<bool>()).text(6, m["reads"]).text(7, m["transform"])
         .integer(8, m["ranked"].get<bool>()).text(9, m["meaning"]).step();
   // Each scene's size and length as the run measured it (settingsDifferences compares them).
-  Statement scene(db, "INSERT INTO scenes VALUES (?,?,?,?,?)");
+  Statement sceneRow(db, "INSERT INTO scenes VALUES (?,?,?,?,?)");
   for (auto it = r.scenes.begin(); it != r.scenes.end(); ++it) {
     const json& facts = it.value();
     if (!facts.is_object()) continue;
-    scene.integer(1, runId).text(2, it.key());
+    sceneRow.integer(1, runId).text(2, it.key());
     int column = 3;
     for (const char* k : {"width", "height", "frames"}) {  // unbound: NULL, not a made-up size
       if (facts.contains(k) && facts[k].is_number_integer())
-        scene.integer(column, facts[k].get<long long>());
+        sceneRow.integer(column, facts[k].get<long long>());
       ++column;
     }
-    scene.step();
+    sceneRow.step();
   }
   Statement pair(db, "INSERT INTO pairs VALUES (?,?,?,?,?,?,?)");
   Statement frame(db, "INSERT INTO frame_metrics VALUES (?,?,?,?,?,?)");

@@ -127,6 +127,7 @@ struct ShapeReader {
                                                 "width",
                                                 "height",
                                                 "frames",
+                                                "maxBounces",
                                                 "events",
                                                 "referenceSpp",
                                                 "referenceCapped",
@@ -151,7 +152,7 @@ struct ShapeReader {
                                                 "notRun"};
     onlyKnown(sc, path, known);
     for (const char* k : {"purpose", "sequence", "hash", "images", "source", "capture"}) optionalText(sc, path, k);
-    for (const char* k : {"width", "height", "frames"}) optionalCount(sc, path, k);
+    for (const char* k : {"width", "height", "frames", "maxBounces"}) optionalCount(sc, path, k);
     optionalFinite(sc, path, "exposure");
     optionalFlag(sc, path, "hasReference");
     for (const char* k : {"warnings", "derivedLayers", "layers"})

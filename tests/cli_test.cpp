@@ -9,6 +9,7 @@
 #include <string>
 
 #include "core/error.hpp"
+#include "core/text.hpp"
 #include "harness/scene_selection.hpp"
 #include "metrics/results.hpp"
 #include "tests/contract_fixture.hpp"
@@ -218,11 +219,14 @@ TEST(CliContract, AFullDiskDuringARunNamesTheFileThroughTheCli) {
 // results.json and the report), with a refine command that finds the run's sequences.
 TEST(CliContract, ARunSaysWhenAScenesReferenceMissesTheGoal) {
   fs::path dir = test::freshDir("noisy_reference_cli");
+  // A cache whose path a shell would split, and a path length of the run's own: the printed
+  // command must still find the run's sequence.
+  const fs::path cache = dir / "Ann's cache";
   contract::CliResult r = contract::arenaCli(
       "run --scenes cornell_static --denoisers svgf --resolution 16x8 --frames 6 --warmup 2 "
-      "--ref-spp 4 "
+      "--ref-spp 4 --max-bounces 2 "
       "--flip none --keep-frames none --cache " +
-      (dir / "cache").string() + " --out " + (dir / "run").string());
+      shellWord(cache.string()) + " --out " + (dir / "run").string());
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("(mean relMSE after the warm-up; median ms a frame)"), std::string::npos)
       << r.output;
@@ -238,10 +242,22 @@ TEST(CliContract, ARunSaysWhenAScenesReferenceMissesTheGoal) {
       << r.output;
   EXPECT_EQ(tinyImageWarning("s", 16, 16), "");
   EXPECT_EQ(tinyImageWarning("s", 64, 12).find("SSIM"), std::string::npos);
-  EXPECT_NE(r.output.find(
-                "arena refine cornell_static --resolution 16x8 --frames 6 --ref-spp 4 --cache "),
-            std::string::npos)
-      << r.output;
+  const std::string printed =
+      "arena refine cornell_static --resolution 16x8 --frames 6 --ref-spp 4 --max-bounces 2 "
+      "--cache " +
+      shellWord(cache.string()) + " --target ";
+  const size_t at = r.output.find(printed);
+  ASSERT_NE(at, std::string::npos) << r.output;
+  // Pasted (with a cap for its N), it refines that sequence rather than render another.
+  std::string command = r.output.substr(at + 6, r.output.find('`', at) - at - 6);
+  ASSERT_NE(command.find("--max-spp N"), std::string::npos) << command;
+  command.replace(command.find("--max-spp N"), 11, "--max-spp 16");
+  const contract::CliResult refined = contract::arenaCli(command);
+  ASSERT_EQ(refined.status, 0) << command << "\n" << refined.output;
+  EXPECT_NE(refined.output.find("reference 0: 4 -> "), std::string::npos) << refined.output;
+  int sequences = 0;
+  for (const auto& entry : fs::directory_iterator(cache)) sequences += entry.is_directory();
+  EXPECT_EQ(sequences, 1) << refined.output;
 }
 
 TEST(CliContract, ARunShorterThanTheWarmupSaysWhyEveryReaderHasNoSummary) {

@@ -690,6 +690,16 @@ TEST(Reference, QualityVerdictNamesTheRatioAndWhy) {
                        "--target 2e-05`"),
             std::string::npos)
       << loose;
+  // A cache whose path holds a quote, and a run's --max-bounces: the pasted command still names
+  // the run's sequences.
+  results["scenes"]["loose"]["maxBounces"] = 3;
+  addReferenceQuality(results, 1, {}, "/tmp/Ann's cache");
+  const std::string quoted = results["scenes"]["loose"]["referenceQuality"]["verdict"];
+  EXPECT_NE(quoted.find("`arena refine loose --resolution 64x36 --frames 3 --lowres-factor 8 "
+                        "--max-bounces 3 --cache '/tmp/Ann'\\''s cache' --target 2e-05`"),
+            std::string::npos)
+      << quoted;
+  results["scenes"]["loose"].erase("maxBounces");
   const nlohmann::json& fine = results["scenes"]["fine"]["referenceQuality"];
   EXPECT_NEAR(fine["floor"].get<double>(), 2e-5, 1e-15);
   EXPECT_TRUE(fine["meets"].get<bool>());

@@ -63,6 +63,15 @@ TEST(Text, ClosestNameIsWithinAFewEditsAndNeverBetweenShortNames) {
   EXPECT_EQ(closestName("A", {"a"}), "a");
 }
 
+TEST(Text, ShellWordQuotesWhatAShellWouldSplitOrExpand) {
+  EXPECT_EQ(shellWord("runs/cache-2.1"), "runs/cache-2.1");
+  EXPECT_EQ(shellWord("/tmp/my cache"), "'/tmp/my cache'");
+  EXPECT_EQ(shellWord("Ann's"), "'Ann'\\''s'");
+  EXPECT_EQ(shellWord("$HOME/*"), "'$HOME/*'");
+  EXPECT_EQ(shellWord("~/cache"), "'~/cache'");
+  EXPECT_EQ(shellWord(""), "''");
+}
+
 TEST(Text, EditDistanceCountsInsertionsDeletionsAndSubstitutions) {
   EXPECT_EQ(editDistance("", ""), 0u);
   EXPECT_EQ(editDistance("camera", "camera"), 0u);
