@@ -48,6 +48,11 @@ void addReportCommand(CLI::App& app) {
   hist->add_option("--confidence", *confidence,
                    "Confidence of the paired intervals, as for `arena compare`")
       ->default_val("95%");
+  auto correction = std::make_shared<std::string>("holm");
+  hist->add_option("--correction", *correction,
+                   "How each comparison's rows are counted together, as for `arena compare`")
+      ->check(CLI::IsMember({"holm", "none"}))
+      ->default_val("holm");
   hist->callback([=] {
     HistoryOptions h;
     h.inputs.assign(inputs->begin(), inputs->end());
@@ -56,6 +61,7 @@ void addReportCommand(CLI::App& app) {
     for (const std::string& m : *metrics) h.tolerances.push_back({m, t});
     h.tolerances = gateTolerances(std::move(h.tolerances), t);
     h.bootstrap.confidence = parseConfidence(*confidence);
+    h.correction = parseCorrection(*correction);
     const HistorySummary s = writeHistory(h);
     std::cout << "history: " << s.index.string() << " (" << s.runs
               << (s.runs == 1 ? " run, " : " runs, ") << s.failing

@@ -329,6 +329,13 @@ void addRunCommands(CLI::App& app) {
     cmd->add_option("--confidence", *confidence,
                     "A change regresses only when its paired bootstrap interval at this level excludes zero")
         ->default_val("95%");
+    auto correction = std::make_shared<std::string>("holm");
+    cmd->add_option(
+           "--correction", *correction,
+           "holm: a change regresses only when it stays resolved among every row the gate judges "
+           "(noise alone fails the gate at most 1 - confidence of the time); none: each row alone")
+        ->check(CLI::IsMember({"holm", "none"}))
+        ->default_val("holm");
     cmd->add_flag("--json", *asJson, "Machine-readable output")->default_str("off");
     auto allowMismatch = std::make_shared<bool>(false);
     cmd->add_flag("--allow-settings-mismatch", *allowMismatch,
@@ -373,12 +380,22 @@ void addRunCommands(CLI::App& app) {
         std::cerr << "arena: warning: " << *a << " and " << *b << " hold the same run (name "
                   << baseline.name << ", created " << baseline.created
                   << "): every change is zero by construction\n";
-      auto rows = compareRuns(baseline, candidate, tols, bc);
+      const Correction corrected = parseCorrection(*correction);
+      auto rows = compareRuns(baseline, candidate, tols, bc, corrected);
       if (*asJson) {
         std::cout << comparisonJson(rows).dump(2) << "\n";
       } else {
-        std::cout << "regressed = worse by more than the tolerance AND the paired " << bc.confidence * 100
-                  << "% interval of the change excludes zero\n";
+        const size_t family =
+            size_t(std::count_if(rows.begin(), rows.end(),
+                                 [](const ComparisonRow& r) { return std::isfinite(r.pValue); }));
+        std::cout << "regressed = worse by more than the tolerance AND the paired "
+                  << bc.confidence * 100 << "% interval of the change excludes zero"
+                  << (corrected == Correction::Holm
+                          ? " AND it stays resolved among the " + std::to_string(family) +
+                                " rows judged together (Holm)"
+                          : std::string(
+                                " (each row alone: no correction for the rows judged together)"))
+                  << "\n";
         // Columns as wide as their longest entry (a sweep's labels carry their parameters).
         // A pair matched by what it ran under another label shows both ("svgf = svgf[sigmaL=4]").
         const auto shownLabel = [](const ComparisonRow& r) {

@@ -332,6 +332,23 @@ std::vector<std::vector<double>> pairedReplicates(const std::vector<const Metric
   return out;
 }
 
+double relativeChange(double x, double base) {
+  return (x - base) / std::max(std::abs(base), 1e-12);
+}
+
+// 2 (min(#{c <= 0}, #{c >= 0}) + 1) / (R + 1) over the finite replicates, at most 1.
+double changePValue(const std::vector<double>& changes) {
+  size_t finite = 0, atMost = 0, atLeast = 0;
+  for (double c : changes) {
+    if (!std::isfinite(c)) continue;
+    ++finite;
+    atMost += c <= 0;
+    atLeast += c >= 0;
+  }
+  if (finite == 0) return kUndefined;
+  return std::min(1.0, 2 * double(std::min(atMost, atLeast) + 1) / double(finite + 1));
+}
+
 std::vector<double> difference(const std::vector<double>& a, const std::vector<double>& b) {
   std::vector<double> d(a.size());
   for (size_t i = 0; i < a.size(); ++i) d[i] = a[i] - b[i];
@@ -356,16 +373,43 @@ PairedChange pairedRelativeChange(const MetricTiles& a, const MetricTiles& b,
   if (out.frames.empty()) return out;
   std::vector<double> means;
   auto reps = pairedReplicates({&a, &b}, out.frames, seedName, cfg, &means);
-  const auto relative = [](double x, double base) {
-    return (x - base) / std::max(std::abs(base), 1e-12);
-  };
   out.a = means[0];
   out.b = means[1];
-  out.change = relative(out.a, out.b);
+  out.change = relativeChange(out.a, out.b);
   std::vector<double> changes(reps[0].size());
-  for (size_t i = 0; i < changes.size(); ++i) changes[i] = relative(reps[0][i], reps[1][i]);
+  for (size_t i = 0; i < changes.size(); ++i) changes[i] = relativeChange(reps[0][i], reps[1][i]);
   out.ci = percentileInterval(changes, cfg.confidence);
+  out.pValue = changePValue(changes);
   return out;
+}
+
+double pairedChangePValue(const MetricTiles& a, const MetricTiles& b, const std::string& seedName,
+                          const BootstrapConfig& cfg, int replicates) {
+  const std::vector<int> frames = commonFrames({&a, &b});
+  if (frames.empty() || cfg.replicates < 1) return kUndefined;
+  std::vector<double> changes;
+  for (int batch = 1; int(changes.size()) < replicates; ++batch) {
+    const std::string seed = batch == 1 ? seedName : seedName + "#" + std::to_string(batch);
+    const auto reps = pairedReplicates({&a, &b}, frames, seed, cfg, nullptr);
+    for (size_t i = 0; i < reps[0].size(); ++i)
+      changes.push_back(relativeChange(reps[0][i], reps[1][i]));
+  }
+  return changePValue(changes);
+}
+
+std::vector<bool> holmRejections(const std::vector<double>& pValues, double alpha) {
+  std::vector<size_t> order;
+  for (size_t i = 0; i < pValues.size(); ++i)
+    if (std::isfinite(pValues[i])) order.push_back(i);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t x, size_t y) { return pValues[x] < pValues[y]; });
+  std::vector<bool> rejected(pValues.size(), false);
+  const size_t m = order.size();
+  for (size_t k = 0; k < m; ++k) {
+    if (!(pValues[order[k]] <= alpha / double(m - k))) break;
+    rejected[order[k]] = true;
+  }
+  return rejected;
 }
 
 namespace {

@@ -118,13 +118,32 @@ PairedDifference pairedDifference(const MetricTiles& a, const MetricTiles& b,
 // each replicate is the difference's, so it is resolved where pairedDifference is, but for an end
 // interpolated between two replicates of opposite signs (a boundary case). `a` and `b` are
 // the means over `frames`, the frames both have.
+//
+// `pValue`: the two-sided bootstrap p-value of "no change" from the same replicates,
+// 2 (min(#{change <= 0}, #{change >= 0}) + 1) / (R + 1), at most 1 (below 0.05 where the 95%
+// interval excludes zero, up to the interpolation at its ends); NaN without replicates. It cannot
+// fall below 2 / (R + 1): pairedChangePValue draws more replicates where a smaller one matters.
 struct PairedChange {
   double change = kUndefined, a = kUndefined, b = kUndefined;
   Interval ci;
+  double pValue = kUndefined;
   std::vector<int> frames;
 };
 PairedChange pairedRelativeChange(const MetricTiles& a, const MetricTiles& b,
                                   const std::string& seedName, const BootstrapConfig& cfg = {});
+// PairedChange::pValue from at least `replicates` replicates, drawn in plans of cfg.replicates each
+// (the first seeded by `seedName`, as pairedRelativeChange's, the k-th by "seedName#k"), so the
+// memory stays that of one plan: how a family-wise correction over m rows tells p-values down to
+// (1 - confidence) / m.
+double pairedChangePValue(const MetricTiles& a, const MetricTiles& b, const std::string& seedName,
+                          const BootstrapConfig& cfg, int replicates);
+
+// Holm's step-down procedure over a family of two-sided p-values at family-wise level `alpha`:
+// rejected[i] when p-value i is rejected (sorted ascending, the k-th smallest is rejected while
+// every smaller one was and it is <= alpha / (m - k), m the number of finite p-values). NaN
+// p-values are not in the family and never rejected. The chance that any true "no change" is
+// rejected stays <= alpha whatever the p-values' dependence.
+std::vector<bool> holmRejections(const std::vector<double>& pValues, double alpha);
 
 // Frames present in every series (sorted).
 std::vector<int> commonFrames(const std::vector<const MetricTiles*>& series);

@@ -26,15 +26,18 @@ std::vector<RunResults> loadHistory(const std::vector<std::filesystem::path>& in
 // (no tiles: runs read from results.db; or within noise). Empty `tolerances`: compare's defaults.
 // A gated metric neither run of a pair computed is skipped for that pair (runs over months differ
 // in what they computed); one the caller named that no run computed is an Error. `bootstrap` is
-// compare's --confidence (and seed): the dashboard judges as the gate it stands for.
+// compare's --confidence (and seed), `correction` its --correction: the dashboard judges as the
+// gate it stands for.
 nlohmann::json historyData(const std::vector<RunResults>& runs, std::vector<Tolerance> tolerances,
-                           const BootstrapConfig& bootstrap = {});
+                           const BootstrapConfig& bootstrap = {},
+                           Correction correction = Correction::Holm);
 
 struct HistoryOptions {
   std::vector<std::filesystem::path> inputs;
   std::filesystem::path out;
   std::vector<Tolerance> tolerances;
   BootstrapConfig bootstrap;                     // the gate's --confidence
+  Correction correction = Correction::Holm;      // the gate's --correction
   std::filesystem::path webDir, nodeModulesDir;  // empty: the report's defaults
 };
 struct HistorySummary {

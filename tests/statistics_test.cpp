@@ -330,6 +330,99 @@ TEST(CompareGate, NoiseIsNotARegressionAndARealWorseningIs) {
   EXPECT_TRUE(anyRegression(rows));
 }
 
+// A gate judges many rows at once: each at 95% alone, noise resolves a few in a hundred, and a
+// gate of 60 rows of pure noise (every candidate another realisation of its baseline) failed in
+// most trials. Corrected together (Holm, the default), noise fails it in at most about 5% of them,
+// while a real worsening among the noise is still caught.
+TEST(CompareGate, ManyRowsOfNoiseAreJudgedTogether) {
+  std::mt19937_64 rng(41);
+  // A realisation's noise persists in each tile over the frames (a denoiser's history carries
+  // it), as in a rendered sequence, where the paired intervals were measured to be about right
+  // (docs/ci-dashboard.md); noise fresh in every frame and tile would leave them wide.
+  std::normal_distribution<double> unit(0.0, 1.0);
+  const auto realisation = [&](const std::vector<double>& shared, double offset) {
+    std::vector<double> persistent(64);
+    for (double& v : persistent) v = 0.15 * unit(rng);
+    MetricTiles m;
+    for (int f = 0; f < 16; ++f) {
+      TileSums t;
+      for (int k = 0; k < 64; ++k) {
+        t.sum.push_back(shared[size_t(f * 64 + k)] + offset + persistent[size_t(k)] +
+                        0.3 * unit(rng));
+        t.count.push_back(1.0);
+      }
+      m.add(f, std::move(t));
+    }
+    return m;
+  };
+  const std::vector<Tolerance> tol = {{"relMse", 0.001}};
+  BootstrapConfig cfg;
+  cfg.replicates = 400;
+  int failedAlone = 0, failedTogether = 0, caught = 0;
+  const int trials = 20, rows = 60;
+  for (int trial = 0; trial < trials; ++trial) {
+    const auto shared = sharedContent(16, 64, rng);
+    std::map<std::string, MetricTiles> base, noise, worse;
+    for (int k = 0; k < rows; ++k) {
+      const std::string name = "m" + std::to_string(k);
+      base[name] = realisation(shared, 0.0);
+      noise[name] = realisation(shared, 0.0);
+      worse[name] = k == 0 ? realisation(shared, 0.4) : noise[name];  // ~+20%
+    }
+    const RunResults b = syntheticRun(base, "s" + std::to_string(trial));
+    failedAlone += anyRegression(compareRuns(b, syntheticRun(noise, "s" + std::to_string(trial)),
+                                             tol, cfg, Correction::None));
+    const auto together =
+        compareRuns(b, syntheticRun(noise, "s" + std::to_string(trial)), tol, cfg);
+    failedTogether += anyRegression(together);
+    for (const ComparisonRow& r : together) {
+      EXPECT_TRUE(std::isfinite(r.pValue));
+      if (r.verdict == "unresolved" && r.changeCi.valid() && !r.changeCi.containsZero())
+        EXPECT_NE(r.note.find("not among the 60 rows judged together: Holm, p "), std::string::npos)
+            << r.note;
+    }
+    const auto withWorse =
+        compareRuns(b, syntheticRun(worse, "s" + std::to_string(trial)), tol, cfg);
+    caught += withWorse[0].label == "m0" && withWorse[0].verdict == "regressed";
+  }
+  std::cout << "gates of " << rows << " rows of noise failed: " << failedAlone << "/" << trials
+            << " judged alone, " << failedTogether << "/" << trials
+            << " together; a +20% row caught in " << caught << "/" << trials << "\n";
+  EXPECT_GE(failedAlone, 6);  // 11 of 20 with this seed: judged alone, noise fails the gate often
+  EXPECT_LE(failedTogether, 3);
+  EXPECT_EQ(caught, trials);
+}
+
+TEST(CompareGate, HolmRejectsInOrderAndStopsAtTheFirstThatStays) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  // m = 3 finite: 0.01 <= 0.05/3, then 0.03 > 0.05/2 stops it; 0.04 stays too.
+  EXPECT_EQ(holmRejections({0.01, 0.04, 0.03, nan}, 0.05),
+            (std::vector<bool>{true, false, false, false}));
+  EXPECT_EQ(holmRejections({0.04, 0.001, 0.02}, 0.05), (std::vector<bool>{true, true, true}));
+  EXPECT_EQ(holmRejections({0.03, 0.03}, 0.05), (std::vector<bool>{false, false}));
+  EXPECT_EQ(holmRejections({0.02, 0.02}, 0.05), (std::vector<bool>{true, true}));  // 0.025, 0.05
+  EXPECT_TRUE(holmRejections({}, 0.05).empty());
+  EXPECT_EQ(parseCorrection("none"), Correction::None);
+  EXPECT_THROW(parseCorrection("bonferroni"), Error);
+}
+
+// The p-value counts the replicates on each side of zero; more replicates (in plans of the
+// configured size) tell a smaller one, starting from the same first plan.
+TEST(CompareGate, APairedChangesPValueCountsItsReplicates) {
+  std::mt19937_64 rng(9);
+  const auto shared = sharedContent(16, 16, rng);
+  const MetricTiles a = syntheticSeries(16, 16, 0.0, rng, shared);
+  const MetricTiles far = syntheticSeries(16, 16, 1.0, rng, shared);
+  BootstrapConfig cfg;
+  cfg.replicates = 200;
+  EXPECT_EQ(pairedRelativeChange(a, a, "s", cfg).pValue, 1.0);  // no change
+  const PairedChange d = pairedRelativeChange(far, a, "s", cfg);
+  EXPECT_NEAR(d.pValue, 2.0 / 201, 1e-12);  // every replicate above zero: the floor of 200
+  EXPECT_EQ(pairedChangePValue(far, a, "s", cfg, 200), d.pValue);
+  EXPECT_NEAR(pairedChangePValue(far, a, "s", cfg, 1000), 2.0 / 1001, 1e-12);  // five plans
+  EXPECT_TRUE(std::isnan(pairedChangePValue(a, MetricTiles{}, "s", cfg, 200)));
+}
+
 // The interval of a relative change is each replicate's own, so it keeps to the metric's range: a
 // candidate at 5% of the baseline everywhere is a -95% change with an interval of about -95%. The
 // difference's interval divided by the baseline's point value reached -156% for a relMSE on tiles
