@@ -200,11 +200,13 @@ void finish(const std::string& out) {
   printOverallRanking(std::cout, results);
   // The scenes whose reference is too noisy to separate the methods well: said here, not only in
   // results.json and the report (the ranking above is read first).
-  std::vector<std::string> missed;
+  std::vector<std::string> missed, unknown;
   for (const auto& [name, scene] : results.scenes.items())
     if (const json q = scene.value("referenceQuality", json::object());
         q.value("meets", true) == false)
       missed.push_back(q.value("verdict", name));
+    else if (!q.contains("meets") && q.contains("verdict") && scene.value("hasReference", true))
+      unknown.push_back(q.value("verdict", name));
   if (!missed.empty()) {
     std::cout << "\nreference quality: " << missed.size() << " of " << results.scenes.size()
               << " scene(s) miss the goal (noise floor / best corrected relMSE <= "
@@ -212,10 +214,21 @@ void finish(const std::string& out) {
               << "); their rankings hold more ties and the overall score reads nearer 1:\n";
     for (const std::string& line : missed) std::cout << "  " << line << "\n";
   }
+  // A reference whose quality cannot be judged (a capture's without its variance) is said too: a
+  // 4-spp reference scored as if converged otherwise passes without a word.
+  for (const std::string& line : unknown) std::cout << "reference quality: " << line << "\n";
   auto failed = failedPairs(results);
   if (!failed.empty()) {
     std::cerr << failed.size() << " pair(s) failed:\n";
     for (auto& f : failed) std::cerr << "  " << f << "\n";
+    throw CLI::RuntimeError(1);
+  }
+  // Every contender left out where it lacked the inputs (a capture without the layers any of them
+  // reads): nothing was measured, which a run must not pass as done.
+  if (results.pairs.empty()) {
+    std::cerr << "no pair ran: every contender lacked the inputs it reads on every capture (the "
+                 "\"not run\" lines above say which); give those layers, or name a denoiser that "
+                 "reads what the capture has\n";
     throw CLI::RuntimeError(1);
   }
 }

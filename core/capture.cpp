@@ -360,8 +360,8 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
         out.device = o.string("device", "");
       }
       o.rejectUnread();
-      if (!fs::is_directory(out.dir))
-        throw Error(file.string() + ": outputs." + name + ": folder " + out.dir.string() + " does not exist");
+      // A declared folder that is not there fails its `file:` pair (readCaptureOutput), not the
+      // capture: the frames and the other contenders are still scored.
       c.outputs[name] = out;
     }
   }
@@ -402,9 +402,21 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
                   "...): normals, view depth and motion are required (docs/captures.md)");
   const bool parts = contains(c.layers, "diffuse") && contains(c.layers, "specular") && contains(c.layers, "albedo") &&
                      contains(c.layers, "specAlbedo");
-  if (!contains(c.layers, "color") && !parts)
-    throw Error(first.string() + ": no colour: give 'color' (color.R/G/B) or the demodulated 'diffuse' and "
-                "'specular' with 'albedo' and 'specAlbedo' (docs/captures.md)");
+  if (!contains(c.layers, "color") && !parts) {
+    // Plain R, G, B are a viewer's copy (what `export` writes beside color.*), never read: the
+    // usual slip of a writer that stored the beauty pass under them.
+    bool plain = true;
+    for (const char* k : {"R", "G", "B"})
+      plain = plain && std::find(h.channels.begin(), h.channels.end(), k) != h.channels.end();
+    throw Error(
+        first.string() +
+        ": no colour: give 'color' (color.R/G/B) or the demodulated 'diffuse' and "
+        "'specular' with 'albedo' and 'specAlbedo' (docs/captures.md)" +
+        (plain ? std::string(
+                     "; the file holds plain R, G, B, which are a viewer's copy and never read: "
+                     "name them color.R, color.G, color.B")
+               : std::string()));
+  }
   // Gradient samples: all frames 1.. or none.
   info.hasGradients = info.frames > 1 && fs::exists(captureGradientPath(dir, 1));
   for (int t = 1; t < info.frames && info.hasGradients; ++t)
@@ -547,7 +559,11 @@ Image readOutputFrame(const fs::path& file, const std::string& name, int width, 
 }
 
 Image readCaptureOutput(const CaptureDescription& c, const std::string& name, int t) {
-  return readOutputFrame(captureOutputPath(c.output(name), t), name, c.info.width, c.info.height);
+  const CaptureOutput& output = c.output(name);
+  if (std::error_code ec; !fs::is_directory(output.dir, ec))
+    throw Error((c.dir / "capture.json").string() + ": outputs." + name + ": folder " +
+                output.dir.string() + " does not exist (capture.json declares it)");
+  return readOutputFrame(captureOutputPath(output, t), name, c.info.width, c.info.height);
 }
 
 std::vector<std::string> undescribedEntries(const CaptureDescription& c) {

@@ -1,6 +1,7 @@
 #include "core/image.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "core/error.hpp"
 
@@ -96,6 +97,15 @@ Image luminance(const Image& rgb) {
   float* l = out.plane(0);
   for (size_t i = 0; i < rgb.pixelCount(); ++i) l[i] = luminance(r[i], g[i], b[i]);
   return out;
+}
+
+double finiteLuminanceSum(const Image& rgb) {
+  if (rgb.channels() < 3) throw Error("luminance: expected an RGB image (3 channels)");
+  const float *r = rgb.plane(0), *g = rgb.plane(1), *b = rgb.plane(2);
+  double sum = 0;
+  for (size_t i = 0; i < rgb.pixelCount(); ++i)
+    if (const float l = luminance(r[i], g[i], b[i]); std::isfinite(l)) sum += double(l);
+  return sum;
 }
 
 }  // namespace arena

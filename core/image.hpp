@@ -84,6 +84,9 @@ bool samePixels(const Image& a, const Image& b);
 
 // Rec.709 luminance of a planar RGB image (channels 0..2).
 Image luminance(const Image& rgb);
+// The sum of an RGB image's Rec.709 luminance over its pixels whose luminance is finite (a NaN
+// pixel is left out, not allowed to make the sum NaN): what a brightness comparison reads.
+double finiteLuminanceSum(const Image& rgb);
 // Of one pixel, or of several at once (F: float or a lane type of core/fast_math.hpp).
 template <class F>
 inline F luminance(F r, F g, F b) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -44,6 +45,14 @@ std::vector<std::string> runWarnings(const json& pair, int frames) {
     first.push_back("the output is its input value for value on all " + std::to_string(frames) +
                     " frames: scored as a denoiser's, it filtered nothing (is the input wired in "
                     "as the output?)");
+  if (const json ratio = pair.value("brightnessVsReference", json()); ratio.is_number()) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.3g", ratio.get<double>());
+    first.push_back("its output's mean luminance is " + std::string(text) +
+                    "x the references' over the sequence: outputs are linear radiance at the "
+                    "input's exposure, and another exposure, a tone map or display encoding (sRGB, "
+                    "gamma) is scored as the denoiser's error");
+  }
   for (const json& ended : pair.value("processEnds", json::array()))
     if (ended.is_string())
       first.push_back(ended.get<std::string>() + " (every frame was answered: its results stand)");
@@ -131,7 +140,16 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   // Not for an identity by design (passthrough).
   const bool identity = run && run->info().identity;
   std::vector<int> equalsInput;
+  // An output made outside (a stored output, a process, a plugin) at another exposure, tone
+  // mapped or display-encoded scores as a poor denoiser, which it may not be: its mean luminance
+  // against the references', over every frame, is warned of beyond 1.25x.
+  const bool madeOutside = !run || !run->info().origin.empty();
+  double outputLight = 0, referenceLight = 0;
   auto onFrame = [&](const DenoisedFrame& f) {
+    if (madeOutside && sd.evaluation.hasReference() && f.color.channels() >= 3) {
+      outputLight += finiteLuminanceSum(f.color);
+      referenceLight += finiteLuminanceSum(sd.evaluation.reference(f.frame).get("color"));
+    }
     if (!identity) {
       const Image& in = sd.evaluation.frame(f.frame).get("color");
       if (in.sameShape(f.color) &&
@@ -235,6 +253,10 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   if (!processEnds.empty()) pair["processEnds"] = processEnds;
   if (!equalsInput.empty() && int(equalsInput.size()) == info.frames)
     pair["equalsInputEveryFrame"] = true;
+  if (outputLight > 0 && referenceLight > 0) {
+    const double ratio = outputLight / referenceLight;
+    if (std::max(ratio, 1 / ratio) > 1.25) pair["brightnessVsReference"] = ratio;
+  }
   prependRunWarnings(pair, info.frames);
   pair["images"] = {{"dir", fs::relative(imageDir, cfg.out).string()}, {"all", keepAll && cfg.keepFrames != "none"}};
   if (run && !run->info().origin.empty()) pair["origin"] = run->info().origin;

@@ -95,7 +95,16 @@ void addReferenceQuality(json& results, int warmup, const std::map<std::string, 
     }
     json q;
     if (floorFrames == 0 || bestLabel.empty() || !(best > 0)) {
-      q["verdict"] = name + ": reference quality unknown (no reference floor or no real denoiser's corrected relMSE)";
+      const bool hasReference = scene.value("hasReference", true);
+      q["verdict"] = name + ": reference quality unknown (" +
+                     (!hasReference ? std::string("no reference")
+                      : floorFrames == 0 && scene.value("source", "") == "capture"
+                          ? "no reference noise floor: the capture's references give no colorVar "
+                            "or colorHalf, so how "
+                            "noisy they are, and how much of each error is theirs, is not known"
+                      : floorFrames == 0 ? "no reference noise floor"
+                                         : "no real denoiser's corrected relMSE") +
+                     ")";
       scene["referenceQuality"] = q;
       continue;
     }

@@ -314,11 +314,18 @@ MotionConsistency checkMotion(const std::vector<LayerSet>& frames,
     bool needsNext;
     long informative = 0, matched = 0;
   };
-  std::vector<Candidate> candidates = {{"as specified", false},     {"sign flipped", false},
-                                       {"x flipped", false},        {"y flipped", false},
-                                       {"axes swapped", false},     {"scaled by 2", false},
-                                       {"scaled by 1/2", false},    {"in normalised units, not pixels", false},
-                                       {"pointing to the next frame", true}};
+  std::vector<Candidate> candidates = {
+      {"as specified", false},
+      {"sign flipped", false},
+      {"x flipped", false},
+      {"y flipped", false},
+      {"axes swapped", false},
+      {"scaled by 2", false},
+      {"scaled by 1/2", false},
+      {"in normalised units, not pixels", false},
+      {"pointing to the next frame", true},
+      {"in NDC units (2 / width, 2 / height a pixel), not pixels", false},
+      {"in NDC units with y up (2 / width, -2 / height a pixel), not pixels", false}};
   MotionConsistency out;
   long off = 0,
        nextIsMirror = 0;  // informative pixels whose next-frame motion is -e (constant velocity)
@@ -369,13 +376,19 @@ MotionConsistency checkMotion(const std::vector<LayerSet>& frames,
         // Only motion of more than a few pixels tells conventions apart (at 0 they all agree).
         if (glm::length(e) < 4 * tol) continue;
         const glm::vec2 size{float(w), float(h)};
-        const glm::vec2 predictions[] = {e, -e, {-e.x, e.y}, {e.x, -e.y}, {e.y, e.x}, 2.0f * e, 0.5f * e, e / size, nx};
+        const glm::vec2 ndc = 2.0f * e / size;
+        const glm::vec2 predictions[] = {e,          -e,       {-e.x, e.y},    {e.x, -e.y},
+                                         {e.y, e.x}, 2.0f * e, 0.5f * e,       e / size,
+                                         nx,         ndc,      {ndc.x, -ndc.y}};
         nextIsMirror += next && glm::length(nx + e) < 2 * tol;
         for (size_t k = 0; k < candidates.size(); ++k) {
           if (candidates[k].needsNext && (!next || glm::length(nx + e) < 2 * tol)) continue;  // n = -e: no information
           ++candidates[k].informative;
-          // Normalised units are a hundred times smaller: judged at a proportionally smaller tolerance.
-          const float tolerance = k == 7 ? float(tol) / std::max(size.x, size.y) : float(tol);
+          // Normalised and NDC units are a hundred times smaller: judged at a proportionally
+          // smaller tolerance.
+          const float tolerance = k == 7   ? float(tol) / std::max(size.x, size.y)
+                                  : k >= 9 ? 2 * float(tol) / std::max(size.x, size.y)
+                                           : float(tol);
           candidates[k].matched += glm::length(m - predictions[k]) <= tolerance;
         }
       }
@@ -387,6 +400,7 @@ MotionConsistency checkMotion(const std::vector<LayerSet>& frames,
   if (out.pixels == 0) return out;
   out.offShare = double(off) / double(out.pixels);
   out.meanErrorPx = errorSum / double(out.pixels);
+  out.conventionPixels = candidates[0].informative;
   auto share = [](const Candidate& c) { return c.informative > 0 ? double(c.matched) / double(c.informative) : 0.0; };
   const double asSpecified = share(candidates[0]);
   double best = 0;
@@ -466,6 +480,9 @@ CaptureValidation validateCaptureOutputs(const CaptureDescription& capture,
     // problem of each bad frame.
     std::vector<int> bad, equalsReference;
     std::string first;
+    // Mean luminance of the output and of its references over the frames read: an output at
+    // another exposure, or display-encoded, scores as a poor denoiser, which it may not be.
+    double outputLight = 0, referenceLight = 0;
     for (int t = 0; t < capture.info.frames; ++t) {
       Image color;
       try {
@@ -479,6 +496,10 @@ CaptureValidation validateCaptureOutputs(const CaptureDescription& capture,
                                                  : references.size();
       if (r < references.size() && sameValues(color, references[r].get("color")))
         equalsReference.push_back(t);
+      if (r < references.size()) {
+        outputLight += finiteLuminanceSum(color);
+        referenceLight += finiteLuminanceSum(references[r].get("color"));
+      }
     }
     v.checks.push_back(check(
         "output." + name, double(bad.size()), 0, 0, "frames",
@@ -489,6 +510,15 @@ CaptureValidation validateCaptureOutputs(const CaptureDescription& capture,
           "frame(s) " + frameList(equalsReference) +
               " equal their reference value for value: a perfect score there (is the "
               "reference wired in as the output?)"));
+    if (outputLight > 0 && referenceLight > 0) {
+      const double ratio = outputLight / referenceLight;
+      v.checks.push_back(check(
+          "output." + name + ".brightnessVsReference", std::max(ratio, 1 / ratio), 1.25, 2, "x",
+          "mean luminance " + number(ratio) +
+              "x the references' over its frames: outputs are linear radiance at the input's "
+              "exposure; another exposure, a tone map or display encoding (sRGB, gamma) would be "
+              "scored as the denoiser's error"));
+    }
   }
   // Folders the description does not declare are never scored: said, so a forgotten entry shows.
   v.checks.push_back(
@@ -642,6 +672,11 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
                      ", capture.json's or the defaults where it gives none, it fits no better: "
                      "give the capture's planes)"
                : std::string());
+    if (m.offShare > 0.05 && m.explanation.empty() && m.conventionPixels < 100)
+      detail += "; the camera moves under 4 px a frame on " +
+                std::string(m.conventionPixels == 0 ? "every" : "almost every") +
+                " pixel, too little to tell a sign, scale or unit slip from an error: not tried (a "
+                "larger resolution or a faster move would)";
     if (m.worstFrameShare > 0.05)
       detail += "; worst at frame " + std::to_string(m.worstFrame) + " (" +
                 number(m.worstFrameShare * 100) + "% off)";
@@ -651,20 +686,62 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
 
   // 4. Colour against its parts, when both are given.
   if (isGiven("color") && isGiven("diffuse") && isGiven("specular") && isGiven("albedo") && isGiven("specAlbedo")) {
-    long mismatched = 0, values = 0;
+    // The denoisers read the parts, remodulated, and not the colour: parts that describe another
+    // image rank them on that image. The commonest slip, a part written before demodulation (the
+    // engine's lit diffuse, not diffuse / albedo), is tried and named, and fails the capture.
+    long mismatched = 0, values = 0, diffuseLit = 0, specularLit = 0, bothLit = 0;
+    const auto off = [](float colour, float sum) {
+      return std::abs(colour - sum) > 1e-3f * (std::abs(colour) + 1e-2f);
+    };
     for (const LayerSet& f : input.frames) {
       const Image &c = f.get("color"), &a = f.get("albedo"), &d = f.get("diffuse"), &sa = f.get("specAlbedo"),
                   &s = f.get("specular"), &e = f.get("emission");
       for (size_t i = 0; i < c.raw().size(); ++i) {
-        const float sum = a.raw()[i] * d.raw()[i] + sa.raw()[i] * s.raw()[i] + e.raw()[i];
+        const float colour = c.raw()[i], ad = a.raw()[i] * d.raw()[i],
+                    ss = sa.raw()[i] * s.raw()[i], em = e.raw()[i];
         ++values;
-        mismatched += std::abs(c.raw()[i] - sum) > 1e-3f * (std::abs(c.raw()[i]) + 1e-2f);
+        mismatched += off(colour, ad + ss + em);
+        diffuseLit += off(colour, d.raw()[i] + ss + em);
+        specularLit += off(colour, ad + s.raw()[i] + em);
+        bothLit += off(colour, d.raw()[i] + s.raw()[i] + em);
       }
     }
-    v.checks.push_back(check("color.equalsParts", values ? double(mismatched) / double(values) : 0, 0.01, kSoft,
-                             "share of values",
-                             "color = albedo * diffuse + specAlbedo * specular + emission (transmission, volumes "
-                             "and other lobes end up in the difference)"));
+    const double share = values ? double(mismatched) / double(values) : 0;
+    std::string detail =
+        "color = albedo * diffuse + specAlbedo * specular + emission (transmission, volumes and "
+        "other lobes end "
+        "up in the difference)";
+    // A slip is named where it explains the colour on at least half the values the parts miss,
+    // and leaves at most a tenth of what they miss unexplained.
+    const std::pair<long, const char*> slips[] = {
+        {bothLit,
+         "diffuse and specular hold lit radiance, not demodulated (color = diffuse + specular + "
+         "emission): write diffuse / albedo and specular / specAlbedo"},
+        {diffuseLit,
+         "diffuse holds lit radiance, not demodulated (color = diffuse + specAlbedo * specular + "
+         "emission): write diffuse / albedo"},
+        {specularLit,
+         "specular holds lit radiance, not demodulated (color = albedo * diffuse + specular + "
+         "emission): write specular / specAlbedo"}};
+    bool named = false;
+    if (share > 0.01)
+      for (const auto& [left, what] : slips)
+        if (double(left) <= 0.1 * double(mismatched) && mismatched - left >= values / 200) {
+          detail = what + std::string(" (") +
+                   number(100.0 * double(mismatched - left) / double(values)) +
+                   "% of the values fit that, against the parts as given); the denoisers read the "
+                   "parts, so "
+                   "they would be ranked on another image than this colour";
+          named = true;
+          break;
+        }
+    if (!named && share > 0.01)
+      detail +=
+          "; the denoisers read the parts, not this colour: where they differ, they are ranked on "
+          "the parts' "
+          "image";
+    v.checks.push_back(
+        check("color.equalsParts", share, 0.01, named ? 0.01 : kSoft, "share of values", detail));
   }
 
   // 4b. Signal: a colour layer black in every frame holds no measurement (every method would
@@ -846,9 +923,12 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
                     neighbour + ", " + std::to_string(onOther.size()) + " of the " +
                     std::to_string(decided) + " frames decided (" + number(-z) +
                     " standard errors nearer it than their own): the references look one frame " +
-                    (side == 0 ? "ahead of their inputs (written after the frame advanced?)"
-                               : "behind their inputs (written a frame early?)") +
-                    "; every error metric would then favour the methods that lag" +
+                    (side == 0
+                         ? "ahead of their inputs (written after the frame advanced?); every "
+                           "error metric would then count a frame's motion as error, the most "
+                           "against the methods that lag"
+                         : "behind their inputs (written a frame early?); every error metric "
+                           "would then favour the methods that lag") +
                     (onOtherFit.noiseKnown
                          ? ""
                          : " (a warning: without the references' colorVar, a less "

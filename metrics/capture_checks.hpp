@@ -60,6 +60,9 @@ struct MotionConsistency {
   std::string depthExplanation;
   double depthExplainedShare = 0;
   bool depthWithinUnit = true;  // every checked depth lies in (0, 1]: a depth buffer's range
+  // Pixels whose expected motion (4 px or more) could tell the conventions apart: where none
+  // could, `explanation` stays empty for want of motion, not because none fits.
+  long conventionPixels = 0;
 };
 // The readings of a depth layer tried against the motion: a unit slip, and, where the capture
 // records its near and far planes, a depth buffer's value (standard or reversed) linearised.

@@ -278,6 +278,22 @@ TEST(CaptureValidation, ACorrectSyntheticCapturePasses) {
   EXPECT_EQ(checkNamed(v, "reference.noiseFloorKnown").status, CheckStatus::Warn);
 }
 
+// A run on references whose noise is unknown (no colorVar, no colorHalf) says so under its
+// ranking: a reference of a few samples would otherwise be scored as converged without a word.
+TEST(CaptureValidation, ARunSaysWhenAReferencesQualityIsUnknown) {
+  const fs::path dir = writeSynthetic("unknown_floor");
+  const test::CommandResult cli =
+      test::runCommand(std::string(ARENA_BINARY) + " run --capture '" + dir.string() +
+                       "' --denoisers passthrough --no-baselines --flip none --warmup 2 --out '" +
+                       (test::freshDir("unknown_floor_cli") / "run").string() + "'");
+  EXPECT_EQ(cli.status, 0) << cli.output;
+  EXPECT_NE(
+      cli.output.find("reference quality: unknown_floor: reference quality unknown (no reference "
+                      "noise floor: the capture's references give no colorVar or colorHalf"),
+      std::string::npos)
+      << cli.output;
+}
+
 struct MotionSlip {
   const char* name;
   const char* expected;  // what the explanation must name
@@ -287,13 +303,25 @@ struct MotionSlip {
 TEST(CaptureValidation, MotionVectorSlipsAreRefusedAndNamed) {
   const std::vector<MotionSlip> slips = {
       {"flipped", "sign flipped", [](const Synthetic&, int, int, int, glm::vec2 m) { return -m; }},
-      {"swapped", "axes swapped", [](const Synthetic&, int, int, int, glm::vec2 m) { return glm::vec2(m.y, m.x); }},
-      {"doubled", "scaled by 2", [](const Synthetic&, int, int, int, glm::vec2 m) { return 2.0f * m; }},
+      {"swapped", "axes swapped",
+       [](const Synthetic&, int, int, int, glm::vec2 m) { return glm::vec2(m.y, m.x); }},
+      {"doubled", "scaled by 2",
+       [](const Synthetic&, int, int, int, glm::vec2 m) { return 2.0f * m; }},
       {"next", "next frame",
        [](const Synthetic& s, int t, int x, int y, glm::vec2) {
          return t + 1 < s.frames ? s.motionTo(t, t + 1, x, y) : glm::vec2(0);
        }},
-      {"yflip", "y flipped", [](const Synthetic&, int, int, int, glm::vec2 m) { return glm::vec2(m.x, -m.y); }},
+      {"yflip", "y flipped",
+       [](const Synthetic&, int, int, int, glm::vec2 m) { return glm::vec2(m.x, -m.y); }},
+      // An engine's NDC vectors ([-1, 1] across the image), with y down and with y up.
+      {"ndc", "in NDC units (2 / width",
+       [](const Synthetic& s, int, int, int, glm::vec2 m) {
+         return glm::vec2(2 * m.x / float(s.w), 2 * m.y / float(s.h));
+       }},
+      {"ndcup", "in NDC units with y up",
+       [](const Synthetic& s, int, int, int, glm::vec2 m) {
+         return glm::vec2(2 * m.x / float(s.w), -2 * m.y / float(s.h));
+       }},
   };
   const Synthetic s;
   for (const MotionSlip& slip : slips) {
@@ -334,13 +362,29 @@ TEST(CaptureValidation, MotionVectorSlipsAreRefusedAndNamed) {
                 "sign flipped (or pointing to the next frame: at this constant camera velocity"),
             std::string::npos)
       << c.detail;
+  // A camera moving under 4 px a frame cannot tell a slip from an error: said, not left silent.
+  Synthetic slow;
+  slow.constantVelocity = true;
+  slow.w = 16;
+  slow.h = 9;
+  const fs::path small = writeSynthetic("slip_slow_flipped", 0.3f, 0.0f, slow);
+  editFrames(small, [](int t, LayerSet& f) {
+    if (t > 0)
+      for (float& m : f.get("motion").raw()) m = -m;
+  });
+  const CaptureCheck untried = checkNamed(validate(small), "motion.consistency");
+  EXPECT_NE(untried.status, CheckStatus::Pass) << untried.detail;
+  EXPECT_NE(untried.detail.find("under 4 px a frame on every pixel, too little to tell a sign, "
+                                "scale or unit slip from an error: not tried"),
+            std::string::npos)
+      << untried.detail;
   // One frame's vectors flipped: the sequence's share may only warn, the frame is named.
   const fs::path one = writeSynthetic("slip_one_frame");
   editFrames(one, [](int t, LayerSet& f) {
     if (t == 4)
       for (float& m : f.get("motion").raw()) m = -m;
   });
-  const CaptureCheck& single = checkNamed(validate(one), "motion.consistency");
+  const CaptureCheck single = checkNamed(validate(one), "motion.consistency");
   EXPECT_NE(single.detail.find("; worst at frame 4 ("), std::string::npos) << single.detail;
   EXPECT_EQ(checkNamed(validate(writeSynthetic("motion_good")), "motion.consistency")
                 .detail.find("worst at"),
@@ -913,7 +957,8 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
   const fs::path dir = copyCapture(exportedCornell(), "outputs_checked", [](json& d) {
     d["outputs"] = {{"good", json::object()},   {"short", json::object()},
                     {"small", json::object()},  {"nan", json::object()},
-                    {"oracle", json::object()}, {"copied", json::object()}};
+                    {"oracle", json::object()}, {"copied", json::object()},
+                    {"bright", json::object()}, {"absent", json::object()}};
   });
   const CaptureDescription base = readCaptureDescription(exportedCornell());
   const int w = base.info.width, h = base.info.height;
@@ -934,6 +979,9 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
     write("oracle", t,
           readCaptureReference(base, base.info.referenceOfFrame[size_t(t)]).get("color"));
     write("copied", t, readCaptureFrame(base, t).get("color"));  // the noisy input itself
+    Image bright = readCaptureReference(base, base.info.referenceOfFrame[size_t(t)]).get("color");
+    for (float& v : bright.raw()) v *= 3;  // another exposure
+    write("bright", t, bright);
   }
   fs::create_directories(dir / "outputs" / "forgotten");
   const CaptureValidation v = validateCaptureOutputs(
@@ -948,6 +996,13 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
   EXPECT_NE(small.detail.find("expected " + std::to_string(w) + "x" + std::to_string(h)), std::string::npos) << small.detail;
   EXPECT_EQ(nan.status, CheckStatus::Fail);
   EXPECT_NE(nan.detail.find("1 non-finite colour values"), std::string::npos) << nan.detail;
+  // A declared folder that is not there fails that output, not the capture.
+  const CaptureCheck& absent = checkNamed(v, "output.absent");
+  EXPECT_EQ(absent.status, CheckStatus::Fail);
+  EXPECT_NE(absent.detail.find("outputs.absent: folder " + (dir / "outputs" / "absent").string() +
+                               " does not exist (capture.json declares it)"),
+            std::string::npos)
+      << absent.detail;
   EXPECT_EQ(forgotten.status, CheckStatus::Warn);
   EXPECT_NE(forgotten.detail.find("forgotten"), std::string::npos) << forgotten.detail;
   // An output that is the reference scores perfectly: readable, so a warning, not a failure.
@@ -956,9 +1011,24 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
   EXPECT_EQ(oracle.status, CheckStatus::Warn);
   EXPECT_EQ(oracle.value, double(base.info.frames));
   EXPECT_THROW(checkNamed(v, "output.good.equalsReference"), Error);
+  // An output at another exposure is said before it is scored as a poor denoiser.
+  const CaptureCheck& bright = checkNamed(v, "output.bright.brightnessVsReference");
+  EXPECT_EQ(bright.status, CheckStatus::Fail) << bright.detail;
+  EXPECT_NEAR(bright.value, 3.0, 1e-3);
+  EXPECT_NE(bright.detail.find("mean luminance 3x the references'"), std::string::npos)
+      << bright.detail;
+  EXPECT_EQ(checkNamed(v, "output.oracle.brightnessVsReference").status, CheckStatus::Pass);
   // The capture itself stays usable: a run scores the good output and fails only the bad ones.
   const json r = runMatrix(captureRun(test::freshDir("outputs_checked_run"),
-                                      {{"file:good", {}, ""}, {"file:short", {}, ""}, {"passthrough", {}, ""}}, {dir}));
+                                      {{"file:good", {}, ""},
+                                       {"file:short", {}, ""},
+                                       {"file:absent", {}, ""},
+                                       {"passthrough", {}, ""}},
+                                      {dir}));
+  EXPECT_EQ(pairOf(r, "file:absent")["status"], "failed");
+  EXPECT_NE(pairOf(r, "file:absent")["error"].get<std::string>().find("does not exist"),
+            std::string::npos)
+      << pairOf(r, "file:absent")["error"];
   EXPECT_EQ(pairOf(r, "file:good")["status"], "ok") << pairOf(r, "file:good").dump().substr(0, 300);
   EXPECT_EQ(pairOf(r, "passthrough")["status"], "ok");
   EXPECT_EQ(pairOf(r, "file:short")["status"], "failed");
@@ -976,9 +1046,44 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
             std::string::npos)
       << copy["warnings"];
   EXPECT_FALSE(pairOf(copied, "passthrough").contains("equalsInputEveryFrame"));
+  const json brighter = pairOf(
+      runMatrix(captureRun(test::freshDir("outputs_bright_run"), {{"file:bright", {}, ""}}, {dir})),
+      "file:bright");
+  ASSERT_EQ(brighter["status"], "ok") << brighter.dump().substr(0, 300);
+  EXPECT_NEAR(brighter.value("brightnessVsReference", 0.0), 3.0, 1e-3);
+  EXPECT_NE(brighter["warnings"].dump().find("its output's mean luminance is 3x the references'"),
+            std::string::npos)
+      << brighter["warnings"];
+  EXPECT_FALSE(copy.contains("brightnessVsReference"));  // a noisy input averages to its reference
   EXPECT_NE(copy["summary"]["ms"].value("absent", "").find("not recorded in the capture"),
             std::string::npos)
       << copy["summary"]["ms"];
+}
+
+// Parts written before demodulation (an engine's lit diffuse): the denoisers, which read the
+// parts, would be ranked on another image than the colour. Named, and the capture fails.
+TEST(CaptureValidation, PartsThatWereNotDemodulatedAreNamed) {
+  const fs::path clean = exportedCornell();
+  EXPECT_EQ(checkNamed(validate(clean), "color.equalsParts").status, CheckStatus::Pass);
+  const fs::path lit = copyCapture(clean, "parts_lit");
+  editFrames(lit, [](int, LayerSet& f) {
+    Image& d = f.get("diffuse");
+    const Image& a = f.get("albedo");
+    for (size_t i = 0; i < d.raw().size(); ++i) d.raw()[i] *= a.raw()[i];
+  });
+  const CaptureCheck c = checkNamed(validate(lit), "color.equalsParts");
+  EXPECT_EQ(c.status, CheckStatus::Fail) << c.value << " " << c.detail;
+  EXPECT_NE(c.detail.find("diffuse holds lit radiance, not demodulated"), std::string::npos)
+      << c.detail;
+  // Parts that differ in no named way (another lobe in the colour) only warn, saying what it means.
+  const fs::path other = copyCapture(clean, "parts_other");
+  editFrames(other, [](int, LayerSet& f) {
+    for (float& v : f.get("color").raw()) v = v * 1.1f + 0.01f;
+  });
+  const CaptureCheck w = checkNamed(validate(other), "color.equalsParts");
+  EXPECT_EQ(w.status, CheckStatus::Warn) << w.value << " " << w.detail;
+  EXPECT_NE(w.detail.find("the denoisers read the parts, not this colour"), std::string::npos)
+      << w.detail;
 }
 
 // What the folder holds beyond its description is said, never silently ignored: a channel no layer
@@ -1137,6 +1242,48 @@ TEST(Capture, AnUnknownFloorAndAShortCaptureRunToTheEnd) {
             std::string::npos)
       << cli.output;
 }
+// A beauty pass stored in plain R, G, B (a viewer's copy, never read) and no color.*: refused
+// saying so, not with a bare "no colour".
+TEST(CaptureContract, AColourInPlainRgbIsRefusedSayingSo) {
+  const fs::path dir = copyCapture(exportedCornell(), "plain_rgb");
+  const CaptureDescription c = readCaptureDescription(dir);
+  std::vector<LayerSpec> guides = {{"color", {"R", "G", "B"}, false, true}};
+  for (const LayerSpec& spec : channels::frameLayers())
+    if (!spec.topLevel && spec.name != "color" && spec.name != "diffuse" &&
+        std::count(c.layers.begin(), c.layers.end(), spec.name) &&
+        !std::count(c.derived.begin(), c.derived.end(), spec.name))
+      guides.push_back(spec);
+  writeExr(captureFramePath(dir, 0), readCaptureFrame(c, 0), guides);
+  const std::string error = test::errorOf([&] { readCaptureDescription(dir); });
+  EXPECT_NE(error.find("no colour: give 'color'"), std::string::npos) << error;
+  EXPECT_NE(
+      error.find("the file holds plain R, G, B, which are a viewer's copy and never read: name "
+                 "them color.R, color.G, color.B"),
+      std::string::npos)
+      << error;
+}
+
+// A capture whose parts lack the albedo that remodulation needs: no contender can run on it, and a
+// run that measured nothing says so and exits 1 rather than finish as done.
+TEST(Capture, ARunWhereNoContenderCouldRunFails) {
+  const fs::path dir = copyCapture(exportedCornell(), "no_albedo");
+  editFrames(dir, [](int, LayerSet& f) {
+    LayerSet kept;
+    for (const auto& [name, image] : f.all())
+      if (name != "albedo") kept.set(name, image);
+    f = kept;
+  });
+  const test::CommandResult cli =
+      test::runCommand(std::string(ARENA_BINARY) + " run --capture '" + dir.string() +
+                       "' --flip none --warmup 2 --out '" +
+                       (test::freshDir("no_albedo_cli") / "run").string() + "'");
+  EXPECT_EQ(cli.status, 1) << cli.output;
+  EXPECT_NE(cli.output.find("not run on no_albedo"), std::string::npos) << cli.output;
+  EXPECT_NE(cli.output.find("no pair ran: every contender lacked the inputs it reads"),
+            std::string::npos)
+      << cli.output;
+}
+
 // ---- file: contenders -------------------------------------------------------------------------
 
 TEST(Capture, AStoredOutputScoresExactlyLikeTheBuiltInThatMadeIt) {
