@@ -690,6 +690,11 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
     // image rank them on that image. The commonest slip, a part written before demodulation (the
     // engine's lit diffuse, not diffuse / albedo), is tried and named, and fails the capture.
     long mismatched = 0, values = 0, diffuseLit = 0, specularLit = 0, bothLit = 0;
+    // Without an emission layer (then zero): the colour's light the parts lack, as a share of
+    // all of it. A visible light is a few pixels but much of the light; the denoisers, which
+    // remodulate without it, would lose it.
+    const bool emissionDerived = !isGiven("emission");
+    double colourLight = 0, lacking = 0;
     const auto off = [](float colour, float sum) {
       return std::abs(colour - sum) > 1e-3f * (std::abs(colour) + 1e-2f);
     };
@@ -704,13 +709,16 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
         diffuseLit += off(colour, d.raw()[i] + ss + em);
         specularLit += off(colour, ad + s.raw()[i] + em);
         bothLit += off(colour, d.raw()[i] + s.raw()[i] + em);
+        if (emissionDerived && std::isfinite(colour) && std::isfinite(ad + ss)) {
+          colourLight += std::max(0.0f, colour);
+          lacking += std::max(0.0f, colour - (ad + ss));
+        }
       }
     }
     const double share = values ? double(mismatched) / double(values) : 0;
     std::string detail =
         "color = albedo * diffuse + specAlbedo * specular + emission (transmission, volumes and "
-        "other lobes end "
-        "up in the difference)";
+        "other lobes end up in the difference)";
     // A slip is named where it explains the colour on at least half the values the parts miss,
     // and leaves at most a tenth of what they miss unexplained.
     const std::pair<long, const char*> slips[] = {
@@ -730,18 +738,23 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
           detail = what + std::string(" (") +
                    number(100.0 * double(mismatched - left) / double(values)) +
                    "% of the values fit that, against the parts as given); the denoisers read the "
-                   "parts, so "
-                   "they would be ranked on another image than this colour";
+                   "parts, so they would be ranked on another image than this colour";
           named = true;
           break;
         }
     if (!named && share > 0.01)
       detail +=
           "; the denoisers read the parts, not this colour: where they differ, they are ranked on "
-          "the parts' "
-          "image";
+          "the parts' image";
     v.checks.push_back(
         check("color.equalsParts", share, 0.01, named ? 0.01 : kSoft, "share of values", detail));
+    if (emissionDerived && colourLight > 0 && !named)
+      v.checks.push_back(check(
+          "emission.missing", lacking / colourLight, 0.01, kSoft, "share of the colour's light",
+          "the colour's light that albedo * diffuse + specAlbedo * specular lacks, with no "
+          "emission "
+          "layer given: a visible light or sky there is lost to every denoiser that remodulates "
+          "the parts (they are given no emission); give the emission layer"));
   }
 
   // 4b. Signal: a colour layer black in every frame holds no measurement (every method would

@@ -1084,6 +1084,20 @@ TEST(CaptureValidation, PartsThatWereNotDemodulatedAreNamed) {
   EXPECT_EQ(w.status, CheckStatus::Warn) << w.value << " " << w.detail;
   EXPECT_NE(w.detail.find("the denoisers read the parts, not this colour"), std::string::npos)
       << w.detail;
+  // No emission layer where a light is in view: the parts lack its light, which a share of values
+  // hid (a few pixels); counted as a share of the colour's light, it is said.
+  const fs::path unlit = copyCapture(clean, "parts_no_emission");
+  editFrames(unlit, [](int, LayerSet& f) {
+    LayerSet kept;
+    for (const auto& [name, image] : f.all())
+      if (name != "emission") kept.set(name, image);
+    f = kept;
+  });
+  const CaptureValidation noEmission = validate(unlit);
+  const CaptureCheck& missing = checkNamed(noEmission, "emission.missing");
+  EXPECT_EQ(missing.status, CheckStatus::Warn) << missing.value << " " << missing.detail;
+  EXPECT_GT(missing.value, 0.01);
+  EXPECT_THROW(checkNamed(validate(clean), "emission.missing"), Error);  // emission given
 }
 
 // What the folder holds beyond its description is said, never silently ignored: a channel no layer
