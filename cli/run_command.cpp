@@ -296,7 +296,7 @@ void addRunCommands(CLI::App& app) {
     auto maxPoints = std::make_shared<size_t>(kDefaultMaxSweepPoints);
     cmd->add_option("--max-points", *maxPoints,
                     "Refuse a grid of more points than this (each runs on every scene)")
-        ->check(CLI::PositiveNumber)
+        ->check(CLI::Range(size_t(1), size_t(1000000)))
         ->capture_default_str();
     addMatrixOptions(cmd, *o);
     cmd->callback([o, denoiser, grids, maxPoints] {

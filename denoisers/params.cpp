@@ -123,7 +123,8 @@ ParamSet ParamSchema::resolve(const std::map<std::string, std::string>& override
       case ParamSpec::Type::Bool:
         if (text == "true" || text == "1" || text == "on") out.set(name, true);
         else if (text == "false" || text == "0" || text == "off") out.set(name, false);
-        else bad("true or false");
+        else
+          bad("true or false (or 1/0, on/off)");
         break;
       case ParamSpec::Type::Int:
       case ParamSpec::Type::Float: {
@@ -131,8 +132,9 @@ ParamSet ParamSchema::resolve(const std::map<std::string, std::string>& override
         // slip in a sweep would run a value nobody wrote.
         static const std::regex decimal(R"([+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?)");
         if (!std::regex_match(text, decimal))
-          bad(std::string(s->type == ParamSpec::Type::Int ? "an integer" : "a number") +
-              " in decimal notation, e.g. 8, 0.5 or 1e-3");
+          bad(s->type == ParamSpec::Type::Int
+                  ? "an integer in decimal notation, e.g. 8 or 1e2"
+                  : "a number in decimal notation, e.g. 8, 0.5 or 1e-3");
         size_t used = 0;
         double v = 0;
         try {

@@ -18,10 +18,18 @@ using nlohmann::json;
 
 namespace {
 
-std::string sci(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.2g", v);
+std::string sci(double v, int digits = 2) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
   return buf;
+}
+
+// `v` with as many digits as tell it from `other` (at least two, at most six): a ratio of 0.1018
+// against the goal of 0.1 reads "0.102 > 0.1", not "0.1 > 0.1".
+std::string sciApart(double v, double other) {
+  int digits = 2;
+  while (digits < 6 && v != other && sci(v, digits) == sci(other, digits)) ++digits;
+  return sci(v, digits);
 }
 
 bool isBaseline(const std::string& denoiser) {
@@ -115,9 +123,10 @@ void addReferenceQuality(json& results, int warmup, const std::map<std::string, 
       capped += c.is_boolean() && c.get<bool>();
     }
     const bool meets = ratio <= kReferenceQualityGoal;
-    std::string verdict = name + ": reference noise floor " + sci(floor) + " / best corrected relMSE " + sci(best) +
-                          " (" + bestLabel + ") = " + sci(ratio) + (meets ? " <= " : " > ") +
-                          sci(kReferenceQualityGoal) + (meets ? ": met" : ": NOT MET, ");
+    std::string verdict =
+        name + ": reference noise floor " + sci(floor) + " / best corrected relMSE " + sci(best) +
+        " (" + bestLabel + ") = " + sciApart(ratio, kReferenceQualityGoal) +
+        (meets ? " <= " : " > ") + sci(kReferenceQualityGoal) + (meets ? ": met" : ": NOT MET, ");
     if (!meets) {
       const double needed = kReferenceQualityGoal * best;
       // The command must find the run's sequences: the same settings hash (the render settings,
@@ -138,14 +147,14 @@ void addReferenceQuality(json& results, int warmup, const std::map<std::string, 
       if (scene.contains("sequence") && scene["sequence"].is_string())
         cacheDir = fs::path(scene["sequence"].get<std::string>()).parent_path().string();
       if (!cacheDir.empty() && cacheDir != "cache") options += " --cache " + shellWord(cacheDir);
-      verdict +=
-          "the reference's noise must fall " + sci(ratio / kReferenceQualityGoal) + "x (to " + sci(needed) + "); ";
+      verdict += "the reference's noise must fall " + sciApart(ratio / kReferenceQualityGoal, 1) +
+                 "x (to " + sci(needed) + "); ";
       if (scene.value("source", "") ==
           "capture")  // references rendered elsewhere: ours to judge, not to refine
         verdict +=
             "a capture's references come from the renderer that made them (`arena refine` renders "
             "scenes only): render them there with about " +
-            sci(ratio / kReferenceQualityGoal) + "x the samples";
+            sciApart(ratio / kReferenceQualityGoal, 1) + "x the samples";
       else if (capped > 0)
         verdict += std::to_string(capped) + " of " + std::to_string(references) +
                    " references stopped at their sample cap (raise --ref-spp, or `arena refine " + name + options +

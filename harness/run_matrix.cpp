@@ -159,6 +159,7 @@ void pruneEarlierImages(const fs::path& out, const json& results, const Progress
 }
 
 const std::string kIdenticalOutputs = "its output on this scene is bit-identical to ";
+const std::string kSkippedPasses = "at this resolution its scaled footprint skipped ";
 
 }  // namespace
 
@@ -167,8 +168,33 @@ void warnOfIdenticalSweepPoints(json& results, const ProgressFn& say) {
   for (json& p : results["pairs"])  // a merge recomputes them over every shard's pairs
     if (p.contains("warnings"))
       for (size_t w = p["warnings"].size(); w-- > 0;)
-        if (p["warnings"][w].get<std::string>().rfind(kIdenticalOutputs, 0) == 0)
+        if (const std::string text = p["warnings"][w].get<std::string>();
+            text.rfind(kIdenticalOutputs, 0) == 0 || text.rfind(kSkippedPasses, 0) == 0)
           p["warnings"].erase(w);
+  // A grid over iterations where the scaled footprint skips some of them (steps that scale below
+  // a pixel): a point named "iterations=5" ran fewer, and the table would compare what it names
+  // with what it did not run. Said per point; the identical outputs below say the rest.
+  const json grid = results.value("sweep", json::object()).value("grid", json::object());
+  if (grid.is_object() && grid.contains("iterations"))
+    for (json& p : results["pairs"]) {
+      if (p.value("status", "") != "ok" ||
+          std::find(labels.begin(), labels.end(), p["label"]) == labels.end())
+        continue;
+      const json predicted =
+          p.value("timing", json::object()).value("gpuPredicted", json::object());
+      const int skipped = predicted.is_object() ? predicted.value("skippedHere", 0) : 0;
+      if (skipped <= 0) continue;
+      const std::string warning =
+          kSkippedPasses + std::to_string(skipped) +
+          " à-trous pass(es) (over its signals) whose steps scale below a pixel, which a 1080p "
+          "frame "
+          "runs: its iterations value names more passes than ran here; for an ablation of "
+          "iterations, run at a larger --resolution or with footprint=native (docs/statistics.md)";
+      p["warnings"].push_back(warning);
+      if (say)
+        say("  warning: " + p["label"].get<std::string>() + " on " + p.value("scene", "") + ": " +
+            warning);
+    }
   std::map<std::pair<std::string, std::string>, std::vector<json*>> groups;  // (scene, checksum)
   for (json& p : results["pairs"])
     if (p.value("status", "") == "ok" && p.contains("outputChecksum") &&

@@ -703,6 +703,17 @@ TEST(Reference, QualityVerdictNamesTheRatioAndWhy) {
   const nlohmann::json& fine = results["scenes"]["fine"]["referenceQuality"];
   EXPECT_NEAR(fine["floor"].get<double>(), 2e-5, 1e-15);
   EXPECT_TRUE(fine["meets"].get<bool>());
+  // Just past the goal: as many digits as tell the ratio from it ("0.1 > 0.1" read as a
+  // contradiction).
+  results["scenes"]["edge"] = {{"referenceRelMse", {1.0, 1.018e-5, 1.018e-5}},
+                               {"referenceCapped", {false}}};
+  results["pairs"].push_back(pair("edge", "svgf", 1e-4));
+  addReferenceQuality(results, 1);
+  const std::string edge = results["scenes"]["edge"]["referenceQuality"]["verdict"];
+  EXPECT_NE(edge.find("= 0.102 > 0.1: NOT MET, the reference's noise must fall 1.02x"),
+            std::string::npos)
+      << edge;
+  results["scenes"].erase("edge");
   EXPECT_EQ(referenceQualityLines(results["scenes"]).size(), 3u);
   // A capture's references were rendered elsewhere: no `arena refine` (it finds no such scene).
   results["scenes"]["loose"]["source"] = "capture";

@@ -169,6 +169,21 @@ TEST(Sweep, PointsWithIdenticalOutputsAreWarnedOf) {
             said.end());
   EXPECT_NE(pairOf(run, "cornell_static", "svgf[iterations=1,sigmaL=2]")["outputChecksum"],
             pairOf(run, "cornell_static", "svgf[iterations=1,sigmaL=8]")["outputChecksum"]);
+  // The grid holds iterations, and iterations=5 ran one pass of five per signal: said on that
+  // point (iterations=1 skipped nothing).
+  auto skipped = [](const json& results, const std::string& label) {
+    std::vector<std::string> out;
+    for (const json& w : pairOf(results, "cornell_static", label).value("warnings", json::array()))
+      if (w.get<std::string>().rfind("at this resolution its scaled footprint skipped ", 0) == 0)
+        out.push_back(w);
+    return out;
+  };
+  ASSERT_EQ(skipped(run, "svgf[iterations=5,sigmaL=2]").size(), 1u);
+  EXPECT_NE(skipped(run, "svgf[iterations=5,sigmaL=2]")[0].find(
+                "skipped 8 à-trous pass(es) (over its signals) whose steps scale below a pixel"),
+            std::string::npos)
+      << skipped(run, "svgf[iterations=5,sigmaL=2]")[0];
+  EXPECT_TRUE(skipped(run, "svgf[iterations=1,sigmaL=2]").empty());
   // Shards 0/2 and 1/2 each hold one identical couple; the merge warns of each once.
   std::vector<fs::path> shards;
   for (int i = 0; i < 2; ++i) {
@@ -182,6 +197,7 @@ TEST(Sweep, PointsWithIdenticalOutputsAreWarnedOf) {
   for (const char* label : {"svgf[iterations=1,sigmaL=2]", "svgf[iterations=5,sigmaL=2]",
                             "svgf[iterations=1,sigmaL=8]", "svgf[iterations=5,sigmaL=8]"})
     EXPECT_EQ(identicalTo(merged, label).size(), 1u) << label;
+  EXPECT_EQ(skipped(merged, "svgf[iterations=5,sigmaL=8]").size(), 1u);  // once, after the merge
 }
 
 TEST(RunMatrix, TwoScenesThreeDenoisersWithEveryMetric) {

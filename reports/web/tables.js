@@ -255,7 +255,7 @@
     const sceneWarnings = (scene && scene.warnings) || [];
     // A capture's denoisers it lacked the inputs for (results: scenes.<scene>.notRun), not run there.
     const notRun = ((scene && scene.notRun) || []).map((n) => el('li', {}, el('b', { text: `${n.label}: ` }), `not run: ${n.reason}`));
-    const items = sceneWarnings.map((w) => el('li', {}, el('b', { text: 'scene: ' }), w)).concat(notRun)
+    const items = sceneWarnings.map((w) => el('li', {}, el('b', { text: `${A.state.scene}: ` }), w)).concat(notRun)
       .concat(warnings.flatMap((p) => p.warnings.map((w) => el('li', {}, el('b', { text: `${p.label}: ` }), w))));
     $('warnings').replaceChildren(...qualityNote, ...validationTable(scene), ...(items.length ? [el('h3', { text: 'Warnings' }),
       el('ul', { class: 'warnings' }, items)] : []));
@@ -290,7 +290,7 @@
         el('h3', {text: `Ablation of ${AB.denoiser} (sweep)`}), el('p', {
           class: 'note',
           text:
-              'Δ = metric with the value − metric with the first value, other grid parameters held equal; relative change in brackets; time is the median frame time, as everywhere on this page. Per scene, a ranked metric\'s Δ is the run\'s paired difference with its 95% interval; where several settings of the other parameters match, and over all scenes, Δ is the mean and the count says how many of the matched paired differences are resolved. Green or red only when every matched difference is resolved that way ("tie": some are not; "mixed": resolved both ways; no colour: a metric without paired intervals).'
+              'Δ = metric with the value − metric with the first value, other grid parameters held equal; relative change in brackets (where several differences are matched, the mean of their relative changes, which can differ in sign from the mean Δ: over all scenes Δ is weighted by each scene\'s scale, the bracket is not); time is the median frame time, as everywhere on this page, measured under this machine\'s load (no interval: a difference in time between values that cannot change the work is load). Per scene, a ranked metric\'s Δ is the run\'s paired difference with its 95% interval; where several settings of the other parameters match, and over all scenes, Δ is the mean and the count says how many of the matched paired differences are resolved. Green or red only when every matched difference is resolved that way ("tie": some are not; "mixed": resolved both ways; no colour: a metric without paired intervals).'
         }));
     if (!rows.length) {
       box.append(el('p', { class: 'empty', text: 'No grid parameter has two values with matching pairs.' }));
