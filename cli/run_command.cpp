@@ -225,7 +225,11 @@ void finish(const std::string& out) {
   }
   // Every contender left out where it lacked the inputs (a capture without the layers any of them
   // reads): nothing was measured, which a run must not pass as done.
-  if (results.pairs.empty()) {
+  bool leftOut = false;
+  for (const auto& [name, scene] : results.scenes.items())
+    leftOut =
+        leftOut || (scene.is_object() && scene.contains("notRun") && !scene["notRun"].empty());
+  if (results.pairs.empty() && leftOut) {
     std::cerr << "no pair ran: every contender lacked the inputs it reads on every capture (the "
                  "\"not run\" lines above say which); give those layers, or name a denoiser that "
                  "reads what the capture has\n";
@@ -346,7 +350,8 @@ void addRunCommands(CLI::App& app) {
     cmd->add_option(
            "--correction", *correction,
            "holm: a change regresses only when it stays resolved among every row the gate judges "
-           "(noise alone fails the gate at most 1 - confidence of the time); none: each row alone")
+           "(made so that noise alone fails the gate about 1 - confidence of the time, where the "
+           "intervals hold their level); none: each row alone")
         ->check(CLI::IsMember({"holm", "none"}))
         ->default_val("holm");
     cmd->add_flag("--json", *asJson, "Machine-readable output")->default_str("off");
@@ -395,6 +400,16 @@ void addRunCommands(CLI::App& app) {
                   << "): every change is zero by construction\n";
       const Correction corrected = parseCorrection(*correction);
       auto rows = compareRuns(baseline, candidate, tols, bc, corrected);
+      if (const size_t judged =
+              size_t(std::count_if(rows.begin(), rows.end(),
+                                   [](const ComparisonRow& r) { return std::isfinite(r.pValue); }));
+          corrected == Correction::Holm && judged > holmResolvableRows(bc.confidence))
+        std::cerr
+            << "arena: warning: " << judged << " rows judged together: more than "
+            << holmResolvableRows(bc.confidence)
+            << ", beyond which the correction can resolve no row at this confidence (its smallest "
+               "threshold lies below what its replicates can show); narrow the gate with --metric, "
+               "or judge each row alone with --correction none\n";
       if (*asJson) {
         std::cout << comparisonJson(rows).dump(2) << "\n";
       } else {

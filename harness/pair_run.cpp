@@ -253,9 +253,9 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   if (!processEnds.empty()) pair["processEnds"] = processEnds;
   if (!equalsInput.empty() && int(equalsInput.size()) == info.frames)
     pair["equalsInputEveryFrame"] = true;
-  if (outputLight > 0 && referenceLight > 0) {
-    const double ratio = outputLight / referenceLight;
-    if (std::max(ratio, 1 / ratio) > 1.25) pair["brightnessVsReference"] = ratio;
+  if (referenceLight > 0) {  // a black output is the extreme case: a ratio of 0
+    const double ratio = std::max(outputLight, 0.0) / referenceLight;
+    if (ratio == 0 || std::max(ratio, 1 / ratio) > 1.25) pair["brightnessVsReference"] = ratio;
   }
   prependRunWarnings(pair, info.frames);
   pair["images"] = {{"dir", fs::relative(imageDir, cfg.out).string()}, {"all", keepAll && cfg.keepFrames != "none"}};

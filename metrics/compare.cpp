@@ -110,7 +110,7 @@ std::vector<std::string> settingsDifferences(const RunResults& baseline, const R
   json a = baseline.settings.measurement(), b = candidate.settings.measurement();
   // Another --input-seed is another noise realisation of the same measurement, which the gate's
   // paired intervals, corrected together, tell from a change (shards of one run must still agree
-  // on it). Measured over 15 pairs of six seeds, docs/ci-dashboard.md: the intervals hold their
+  // on it). Measured over 15 pairs of six seeds, docs/statistics.md: the intervals hold their
   // level (changes' root-mean-square z 0.99) but on light_switch's relMSE (1.67).
   // Nor does a shard's plan (which run it is a slice of): the pairs are compared one by one.
   for (json* s : {&a, &b}) {
@@ -391,8 +391,12 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
         row.note += (row.note.empty() ? "" : "; ") +
                     std::string(worse > 0 ? "worse beyond tolerance but within noise"
                                           : "better beyond tolerance but within noise");
+      // The rows resolved alone, and every row whose replicates all lie on one side (its p-value
+      // at the plan's floor): Holm's thresholds rise as rows are rejected, so a row left at the
+      // floor would stop the procedure before a later one.
       if (correction == Correction::Holm && pairedTiles &&
-          (row.verdict == "regressed" || row.verdict == "improved"))
+          (row.verdict == "regressed" || row.verdict == "improved" ||
+           row.pValue <= 2.0 / double(cfg.replicates + 1) * (1 + 1e-9)))
         sharper.push_back({rows.size(), scene, std::move(*pairedTiles)});
       rows.push_back(row);
     }
@@ -409,7 +413,7 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
         rows.begin(), rows.end(), [](const ComparisonRow& r) { return std::isfinite(r.pValue); }));
     // The smallest threshold is alpha / m; a p-value of replicates cannot fall below 2 / (R + 1).
     // The rows that may fail or pass the gate on it are resampled to 4 m / alpha replicates (at
-    // most kMaxGateReplicates: a larger gate is said to resolve less, docs/ci-dashboard.md).
+    // most kMaxGateReplicates: a larger gate resolves less, docs/statistics.md; compare says so).
     const int needed =
         int(std::min(std::ceil(4.0 * double(family) / alpha), double(kMaxGateReplicates)));
     if (needed > cfg.replicates)
@@ -421,7 +425,9 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
     const std::vector<bool> kept = holmRejections(pValues, alpha);
     for (size_t i = 0; i < rows.size(); ++i) {
       ComparisonRow& r = rows[i];
-      if ((r.verdict != "regressed" && r.verdict != "improved") || kept[i]) continue;
+      // One row is its own family: its interval's verdict stands (the count's p-value and the
+      // interpolated interval end can disagree at the margin).
+      if ((r.verdict != "regressed" && r.verdict != "improved") || kept[i] || family == 1) continue;
       const bool worse = r.verdict == "regressed";
       r.verdict = "unresolved";
       char p[32], first[32];

@@ -6,9 +6,10 @@
 // entirely on the worse side of zero. A rerun with another input seed moves every number a little;
 // that noise is not a regression. A gate judges many rows at once (scenes x denoisers x metrics),
 // and at 95% each, a few of a hundred resolve by chance: measured, a change of --input-seed alone
-// failed 12 of 15 comparisons of a 144-row gate (docs/ci-dashboard.md). So by default the rows'
+// failed 12 of 15 comparisons of a 144-row gate (docs/statistics.md). So by default the rows'
 // tests are corrected together (Holm): a row regresses only when it stays resolved among all the
-// rows the gate judged, and the chance that noise alone fails the gate stays within 1 - confidence.
+// rows the gate judged, so that noise alone fails the gate about 1 - confidence of the time, where
+// the rows' intervals hold their level (docs/statistics.md: on light_switch's relMSE they do not).
 // The command exits 1 on a regression and on anything it cannot
 // compare (a pair or metric the baseline had and the candidate lacks, no scene in common), so it
 // can gate a merge in CI.
@@ -60,6 +61,11 @@ enum class Correction { Holm, None };
 // (kMaxGateReplicates + 1) is the smallest p-value it can show, so a gate of more than about
 // alpha kMaxGateReplicates / 2 rows (2,500 at 95%) can resolve nothing under the correction.
 constexpr int kMaxGateReplicates = 100000;
+// The most rows a gate corrected with Holm at `confidence` can resolve any of: beyond, its smallest
+// threshold (1 - confidence) / m lies below the smallest p-value kMaxGateReplicates can show.
+inline size_t holmResolvableRows(double confidence) {
+  return size_t((1 - confidence) * (kMaxGateReplicates + 1) / 2);
+}
 // "holm" or "none".
 Correction parseCorrection(const std::string& text);
 const char* correctionName(Correction c);

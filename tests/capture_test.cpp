@@ -955,10 +955,10 @@ TEST(Capture, PassthroughScoresAColourOnlyCaptureAsTheInputItIs) {
 // frame fails (naming the file), an undeclared folder warns; a run fails only that output's pair.
 TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
   const fs::path dir = copyCapture(exportedCornell(), "outputs_checked", [](json& d) {
-    d["outputs"] = {{"good", json::object()},   {"short", json::object()},
-                    {"small", json::object()},  {"nan", json::object()},
-                    {"oracle", json::object()}, {"copied", json::object()},
-                    {"bright", json::object()}, {"absent", json::object()}};
+    d["outputs"] = {
+        {"good", json::object()},   {"short", json::object()},  {"small", json::object()},
+        {"nan", json::object()},    {"oracle", json::object()}, {"copied", json::object()},
+        {"bright", json::object()}, {"absent", json::object()}, {"black", json::object()}};
   });
   const CaptureDescription base = readCaptureDescription(exportedCornell());
   const int w = base.info.width, h = base.info.height;
@@ -982,6 +982,7 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
     Image bright = readCaptureReference(base, base.info.referenceOfFrame[size_t(t)]).get("color");
     for (float& v : bright.raw()) v *= 3;  // another exposure
     write("bright", t, bright);
+    write("black", t, Image(w, h, 3, 0.0f));  // the extreme case: no light at all
   }
   fs::create_directories(dir / "outputs" / "forgotten");
   const CaptureValidation v = validateCaptureOutputs(
@@ -1018,6 +1019,10 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
   EXPECT_NE(bright.detail.find("mean luminance 3x the references'"), std::string::npos)
       << bright.detail;
   EXPECT_EQ(checkNamed(v, "output.oracle.brightnessVsReference").status, CheckStatus::Pass);
+  const CaptureCheck& black = checkNamed(v, "output.black.brightnessVsReference");
+  EXPECT_EQ(black.status, CheckStatus::Fail) << black.detail;
+  EXPECT_NE(black.detail.find("mean luminance 0x the references'"), std::string::npos)
+      << black.detail;
   // The capture itself stays usable: a run scores the good output and fails only the bad ones.
   const json r = runMatrix(captureRun(test::freshDir("outputs_checked_run"),
                                       {{"file:good", {}, ""},

@@ -260,6 +260,15 @@ TEST(CliContract, ARunSaysWhenAScenesReferenceMissesTheGoal) {
   EXPECT_EQ(sequences, 1) << refined.output;
 }
 
+// A shard whose slice of the pairs is empty (more shards than pairs) ran all it was given: not a
+// run that measured nothing for want of inputs.
+TEST(CliContract, AShardWithNoPairsIsNoFailure) {
+  fs::path dir = test::freshDir("empty_shard");
+  contract::CliResult r = contract::tinyCliRun(dir, "run", "--shard 3/4");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(r.output.find("no pair ran"), std::string::npos) << r.output;
+}
+
 TEST(CliContract, ARunShorterThanTheWarmupSaysWhyEveryReaderHasNoSummary) {
   fs::path dir = test::freshDir("short_run");
   // 3 frames, the default warm-up of 8: no frame survives it.

@@ -338,7 +338,7 @@ TEST(CompareGate, ManyRowsOfNoiseAreJudgedTogether) {
   std::mt19937_64 rng(41);
   // A realisation's noise persists in each tile over the frames (a denoiser's history carries
   // it), as in a rendered sequence, where the paired intervals were measured to be about right
-  // (docs/ci-dashboard.md); noise fresh in every frame and tile would leave them wide.
+  // (docs/statistics.md); noise fresh in every frame and tile would leave them wide.
   std::normal_distribution<double> unit(0.0, 1.0);
   const auto realisation = [&](const std::vector<double>& shared, double offset) {
     std::vector<double> persistent(64);
@@ -403,6 +403,10 @@ TEST(CompareGate, HolmRejectsInOrderAndStopsAtTheFirstThatStays) {
   EXPECT_EQ(holmRejections({0.02, 0.02}, 0.05), (std::vector<bool>{true, true}));  // 0.025, 0.05
   EXPECT_TRUE(holmRejections({}, 0.05).empty());
   EXPECT_EQ(parseCorrection("none"), Correction::None);
+  // Beyond 2,500 rows at 95% no p-value of at most 100,000 replicates reaches 0.05 / m.
+  EXPECT_EQ(holmResolvableRows(0.95), 2500u);
+  EXPECT_LT(2.0 / (kMaxGateReplicates + 1), 0.05 / double(holmResolvableRows(0.95)));
+  EXPECT_GT(2.0 / (kMaxGateReplicates + 1), 0.05 / double(holmResolvableRows(0.95) + 1));
   EXPECT_THROW(parseCorrection("bonferroni"), Error);
 }
 
@@ -420,6 +424,16 @@ TEST(CompareGate, APairedChangesPValueCountsItsReplicates) {
   EXPECT_NEAR(d.pValue, 2.0 / 201, 1e-12);  // every replicate above zero: the floor of 200
   EXPECT_EQ(pairedChangePValue(far, a, "s", cfg, 200), d.pValue);
   EXPECT_NEAR(pairedChangePValue(far, a, "s", cfg, 1000), 2.0 / 1001, 1e-12);  // five plans
+  // A change whose replicates fall on both sides: five plans of their own, not one plan five
+  // times (which would give 2 (5 k + 1) / 1001 for the first plan's k).
+  const MetricTiles near = syntheticSeries(16, 16, 0.02, rng, shared);
+  const PairedChange n = pairedRelativeChange(near, a, "s", cfg);
+  const double k = n.pValue * 201 / 2 - 1;  // the first plan's replicates on the far side
+  ASSERT_GT(k, 0.5) << n.pValue;
+  ASSERT_LT(n.pValue, 1.0);  // not capped: k read back from it
+  const double five = pairedChangePValue(near, a, "s", cfg, 1000);
+  EXPECT_GT(five, 0.0);
+  EXPECT_NE(five, 2 * (5 * k + 1) / 1001);
   EXPECT_TRUE(std::isnan(pairedChangePValue(a, MetricTiles{}, "s", cfg, 200)));
 }
 
