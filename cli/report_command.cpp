@@ -27,6 +27,7 @@ void addReportCommand(CLI::App& app) {
     std::cout << "report: " << s.index.string() << " (" << s.pairs << " pairs";
     if (s.failedPairs) std::cout << ", " << s.failedPairs << " failed: shown in the report";
     std::cout << ", " << s.images << " images" << (s.imagesInPlace ? ", in place" : "") << ")\n";
+    if (!s.ablation.empty()) std::cout << "ablation: " << s.ablation.string() << "\n";
     for (const std::string& line : s.absentSummaries) std::cout << "absent: " << line << "\n";
   });
 

@@ -197,6 +197,12 @@ void finish(const std::string& out) {
     }
   }
   for (const std::string& line : absentSummaryLines(results, {"relMse"})) std::cout << line << "\n";
+  // What concerns a scene rather than a method (events beyond the frames rendered, an unflagged
+  // camera jump, references at their cap): in results.json and the report, and said here too.
+  for (const auto& [name, scene] : results.scenes.items())
+    if (scene.is_object() && scene.contains("warnings") && scene["warnings"].is_array())
+      for (const json& w : scene["warnings"])
+        if (w.is_string()) std::cout << "warning: " << name << ": " << w.get<std::string>() << "\n";
   printOverallRanking(std::cout, results);
   // The scenes whose reference is too noisy to separate the methods well: said here, not only in
   // results.json and the report (the ranking above is read first).

@@ -38,12 +38,19 @@ struct ReportSummary {
   // The run's absent summaries with their reasons (metrics/run_results.hpp), for the printout:
   // the page shows them as empty cells.
   std::vector<std::string> absentSummaries;
+  std::filesystem::path ablation;  // <out>/ablation.csv for a sweep (ablationCsv), else empty
 };
 
 // The document embedded as data.js. `runDir` is where the run's images are looked up (only images
 // that exist are offered to the viewer); `baseline` may be null. Pure apart from those look-ups.
 nlohmann::json reportData(const RunResults& results, const std::filesystem::path& runDir,
                           const RunResults* baseline);
+
+// A sweep's ablation (reportData's "ablation") as CSV, one line per row and metric, for a paper's
+// table or a plot: parameter, value, versus, scene ("all scenes" for the mean over them), matched,
+// metric, delta, relative, verdict, matches, intervals, resolved, and the paired 95% interval
+// (ci95Lo, ci95Hi) where one match carries it; empty when the run is no sweep or has no rows.
+std::string ablationCsv(const nlohmann::json& ablation);
 
 // Loads the run (and baseline) through loadResults, so a missing run or another schema version is
 // an arena::Error; a missing charting library is an Error that says to run scripts/setup.sh.

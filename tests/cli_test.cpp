@@ -260,6 +260,22 @@ TEST(CliContract, ARunSaysWhenAScenesReferenceMissesTheGoal) {
   EXPECT_EQ(sequences, 1) << refined.output;
 }
 
+// What concerns a scene (here its events beyond the frames rendered) is printed with the run's
+// table, not left to results.json and the report.
+TEST(CliContract, ARunPrintsItsScenesWarnings) {
+  fs::path dir = test::freshDir("scene_warnings");
+  contract::CliResult r = contract::arenaCli(
+      "run --scenes light_switch --denoisers passthrough --no-baselines --resolution 8x8 --ref-spp "
+      "1 "
+      "--frames 4 --warmup 1 --flip none --keep-frames none --cache " +
+      (dir / "cache").string() + " --out " + (dir / "run").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find(
+                "warning: light_switch: events beyond the sequence's 4 frames are not measured"),
+            std::string::npos)
+      << r.output;
+}
+
 // A shard whose slice of the pairs is empty (more shards than pairs) ran all it was given: not a
 // run that measured nothing for want of inputs.
 TEST(CliContract, AShardWithNoPairsIsNoFailure) {

@@ -172,6 +172,11 @@ TEST(Report, GeneratorWritesEverySectionAndKeepsTheFailedPair) {
   EXPECT_EQ(s.failedPairs, 1u);
   EXPECT_EQ(s.images, 11u);  // the fixture's PNGs, copied
   EXPECT_FALSE(s.imagesInPlace);
+  // The fixture is a sweep: its ablation is written beside the page as CSV too.
+  EXPECT_EQ(s.ablation, o.out / "ablation.csv");
+  EXPECT_EQ(
+      readText(o.out / "ablation.csv").rfind("parameter,value,versus,scene,matched,metric,", 0),
+      0u);
   for (const char* f :
        {"index.html", "data.js", "app.js", "style.css", "vega.min.js", "vega-lite.min.js",
         "vega-embed.min.js", "images/static/svgf[a=0]/flip_0002.png",
@@ -402,6 +407,16 @@ TEST(Report, AblationDeltasAreTheRunsPairedDifferences) {
     }
   }
   EXPECT_EQ(seen, 2);
+  // The same rows as CSV, one line per metric, the paired interval where one match has it.
+  const std::string csv = ablationCsv(data["ablation"]);
+  EXPECT_EQ(csv.rfind("parameter,value,versus,scene,matched,metric,delta,relative,verdict,matches,"
+                      "intervals,resolved,ci95Lo,ci95Hi\n",
+                      0),
+            0u)
+      << csv;
+  EXPECT_NE(csv.find("\na,1,0,static,1,relMse,-0.0123"), std::string::npos) << csv;
+  EXPECT_NE(csv.find(",better,1,1,1,-0.02,-0.0040000000000000001\n"), std::string::npos) << csv;
+  EXPECT_EQ(ablationCsv(nullptr), "");
 }
 
 // Time in the ablation is the median frame time, as in the summary table and the speed chart: a
