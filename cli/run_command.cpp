@@ -231,6 +231,17 @@ void finish(const std::string& out) {
   }
   // Every contender left out where it lacked the inputs (a capture without the layers any of them
   // reads): nothing was measured, which a run must not pass as done.
+  // Every summary of every pair absent (no frame after the warm-up, said per metric above): the
+  // run measured nothing, which is no result to pass as done (compare fails on it too).
+  bool measured = false;
+  for (const PairResult& p : results.pairs)
+    for (const auto& [metric, summary] : p.summary) measured = measured || p.mean(metric).present();
+  if (!results.pairs.empty() && !measured) {
+    std::cerr
+        << "nothing measured: every summary of every pair is absent (the lines above say why; "
+           "a sequence no longer than the warm-up: render more --frames or lower --warmup)\n";
+    throw CLI::RuntimeError(1);
+  }
   bool leftOut = false;
   for (const auto& [name, scene] : results.scenes.items())
     leftOut =

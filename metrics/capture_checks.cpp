@@ -539,6 +539,7 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
   // 1. Non-finite values, per layer and channel: guides must be finite, the colour's are counted.
   std::map<std::string, std::map<std::string, long>> bad;  // layer -> channel -> count
   std::map<std::string, std::vector<int>> empty;           // layer -> frames without a finite value
+  std::map<std::string, std::string> firstBad;             // layer -> "frame t, pixel (x, y)"
   for (size_t t = 0; t < input.frames.size(); ++t)
     for (const LayerSpec& spec : channels::frameLayers()) {
       const LayerSet& f = input.frames[t];
@@ -547,7 +548,12 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
       long inFrame = 0;
       for (int c = 0; c < spec.channels(); ++c) {
         long n = 0;
-        for (float x : img.planeSpan(c)) n += !std::isfinite(x);
+        const auto plane = img.planeSpan(c);
+        for (size_t i = 0; i < plane.size(); ++i)
+          if (!std::isfinite(plane[i]) && n++ == 0 && !firstBad.count(spec.name))
+            firstBad[spec.name] = "frame " + std::to_string(t) + ", pixel (" +
+                                  std::to_string(i % size_t(img.width())) + ", " +
+                                  std::to_string(i / size_t(img.width())) + ")";
         if (n) bad[spec.name][spec.channelName(c)] += n;
         inFrame += n;
       }
@@ -562,6 +568,7 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
       total += n;
       detail += (detail.empty() ? "" : ", ") + channel + " x" + std::to_string(n);
     }
+    if (total) detail += "; the first at " + firstBad[spec.name];
     if (colour)
       detail = total ? detail + " (replaced by 0 before a denoiser reads them, and counted per pair)" : "";
     else if (total)

@@ -289,7 +289,11 @@ TEST(CliContract, ARunShorterThanTheWarmupSaysWhyEveryReaderHasNoSummary) {
   fs::path dir = test::freshDir("short_run");
   // 3 frames, the default warm-up of 8: no frame survives it.
   contract::CliResult r = contract::tinyCliRun(dir, "run", "--frames 3");
-  ASSERT_EQ(r.status, 0) << r.output;
+  // It measured nothing: done, but no result (exit 1), saying why.
+  ASSERT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("nothing measured: every summary of every pair is absent"),
+            std::string::npos)
+      << r.output;
   EXPECT_NE(r.output.find("warning: "), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("the sequence has 3 frames and the warm-up excludes the first 8"),
             std::string::npos)
