@@ -962,6 +962,29 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
                          : " (a warning: without the references' colorVar, a less "
                            "converged reference beside better ones can read so)")));
     }
+    // Frame t on the reference after it and frame t + 1 on the one before: two frames (or their
+    // references) swapped, which each side's check above takes for one frame alone. Frames whose
+    // files carry their number are refused on reading; these did not.
+    std::vector<int> swapped;
+    bool swapNoiseKnown = true;
+    for (int t = 1; t + 2 < frames; ++t)
+      if (fits[size_t(t)][1].onOther() && fits[size_t(t + 1)][0].onOther()) {
+        swapped.push_back(t);
+        swapNoiseKnown =
+            swapNoiseKnown && fits[size_t(t)][1].noiseKnown && fits[size_t(t + 1)][0].noiseKnown;
+      }
+    std::string pairs;
+    for (int t : swapped)
+      pairs += (pairs.empty() ? "" : ", ") + std::to_string(t) + " and " + std::to_string(t + 1);
+    v.checks.push_back(
+        check("reference.alignment.swapped", double(swapped.size()), 0, swapNoiseKnown ? 0 : kSoft,
+              "pairs of frames",
+              swapped.empty()
+                  ? ""
+                  : "frames " + pairs +
+                        " each lie on the other's reference: two frames, or their references, "
+                        "swapped (frame files numbered out of order?); each is scored against the "
+                        "other's image"));
     const auto worstFrame = [&](const std::string& name, double value, int frame, double warn,
                                 double fail, const std::string& unit) {
       v.checks.push_back(check(

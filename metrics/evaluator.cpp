@@ -590,7 +590,7 @@ json PairEvaluation::finish() {
   json warnings = json::array();
   if (!s.equalsReference.empty())
     warnings.push_back(
-        "the output equals its reference value for value on " + frameRanges(s.equalsReference) +
+        kEqualsReferenceWarning + frameRanges(s.equalsReference) +
         " while the input does not: a perfect score there that no denoiser computes from its "
         "input (is the reference wired in as the output?)");
   for (const std::string& e : emptyEvents) warnings.push_back(e);

@@ -24,6 +24,11 @@
 
 namespace arena {
 
+// How a pair's warning that its output equals the reference (a perfect score no denoiser computes
+// from its input) begins: the run also prints it, not only results.json.
+inline constexpr const char* kEqualsReferenceWarning =
+    "the output equals its reference value for value on ";
+
 struct EvaluationOptions {
   int warmup = kDefaultWarmup;  // summaries over frames t >= warmup
   MetricOptions metrics;

@@ -703,6 +703,21 @@ void editReferences(const fs::path& dir, const std::function<void(int, Image&)>&
 // References written one frame late or early: every input lies on its neighbour's reference.
 // A still camera decides nothing (the references are one image), and references of unequal noise
 // beside each other are no misalignment.
+// Reference file r rewritten to hold reference source(r, frames)'s image, with a variance of 0 (the
+// synthetic references are exact): references shifted or swapped, with their noise known.
+void exactReferencesFrom(const fs::path& dir, const std::function<int(int, int)>& source) {
+  const CaptureDescription c = readCaptureDescription(dir);
+  std::vector<Image> refs;
+  for (int r = 0; r < c.info.frames; ++r) refs.push_back(readCaptureReference(c, r).get("color"));
+  for (int r = 0; r < c.info.frames; ++r) {
+    LayerSet ref;
+    ref.set("color", refs[size_t(source(r, c.info.frames))]);
+    ref.set("colorVar", Image(c.info.width, c.info.height, 3, 0.0f));
+    writeExr(captureReferencePath(dir, r), ref,
+             {{"color", {"R", "G", "B"}, false}, {"colorVar", {"R", "G", "B"}, false}});
+  }
+}
+
 TEST(CaptureValidation, ReferencesOneFrameOffTheirInputsAreRefused) {
   const auto alignment = [](const CaptureValidation& v, const std::string& side) {
     return checkNamed(v, "reference.alignment." + side);
@@ -712,21 +727,20 @@ TEST(CaptureValidation, ReferencesOneFrameOffTheirInputsAreRefused) {
     EXPECT_EQ(alignment(good, side).status, CheckStatus::Pass) << alignment(good, side).detail;
     EXPECT_EQ(alignment(good, side).detail, "");
   }
+  EXPECT_EQ(checkNamed(good, "reference.alignment.swapped").status, CheckStatus::Pass);
+  // References 1 and 2 swapped (exact, so with their variance of 0): named as a swap, not as two
+  // frames each alone on a neighbour's reference.
+  const fs::path swapped = writeSynthetic("references_swapped");
+  exactReferencesFrom(swapped, [](int r, int) { return r == 1 ? 2 : r == 2 ? 1 : r; });
+  const CaptureValidation sw = validate(swapped);
+  const CaptureCheck swap = checkNamed(sw, "reference.alignment.swapped");
+  EXPECT_EQ(swap.status, CheckStatus::Fail) << swap.detail;
+  EXPECT_NE(swap.detail.find("frames 1 and 2 each lie on the other's reference"), std::string::npos)
+      << swap.detail;
   // Reference file r holds frame r+1's image (the last repeats its own): one frame ahead. With
   // the references' variance (these are exact: 0) the check refuses it.
   const fs::path ahead = writeSynthetic("references_ahead");
-  {
-    const CaptureDescription c = readCaptureDescription(ahead);
-    std::vector<Image> refs;
-    for (int r = 0; r < c.info.frames; ++r) refs.push_back(readCaptureReference(c, r).get("color"));
-    for (int r = 0; r < c.info.frames; ++r) {
-      LayerSet ref;
-      ref.set("color", refs[size_t(std::min(r + 1, c.info.frames - 1))]);
-      ref.set("colorVar", Image(c.info.width, c.info.height, 3, 0.0f));
-      writeExr(captureReferencePath(ahead, r), ref,
-               {{"color", {"R", "G", "B"}, false}, {"colorVar", {"R", "G", "B"}, false}});
-    }
-  }
+  exactReferencesFrom(ahead, [](int r, int frames) { return std::min(r + 1, frames - 1); });
   const CaptureValidation a = validate(ahead);
   EXPECT_EQ(alignment(a, "before").status, CheckStatus::Fail) << alignment(a, "before").value;
   // Frame 3 is not judged: the texture's period is near the camera's move from frame 3 to 5, so
@@ -1061,6 +1075,19 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
             std::string::npos)
       << brighter["warnings"];
   EXPECT_FALSE(copy.contains("brightnessVsReference"));  // a noisy input averages to its reference
+  // The reference wired in as the output: a perfect score, said while the run goes, not only kept.
+  RunConfig wired =
+      captureRun(test::freshDir("outputs_oracle_run"), {{"file:oracle", {}, ""}}, {dir});
+  std::vector<std::string> said;
+  wired.progress = [&](const std::string& line) { said.push_back(line); };
+  runMatrix(wired);
+  EXPECT_NE(std::find_if(
+                said.begin(), said.end(),
+                [](const std::string& l) {
+                  return l.rfind("  warning: the output equals its reference value for value on ",
+                                 0) == 0;
+                }),
+            said.end());
   EXPECT_NE(copy["summary"]["ms"].value("absent", "").find("not recorded in the capture"),
             std::string::npos)
       << copy["summary"]["ms"];
