@@ -282,15 +282,19 @@ std::vector<std::string> CaptureValidation::warnings() const {
 
 std::vector<DepthReading> depthReadings(double n, double f) {
   std::vector<DepthReading> out = {
-      {"in millimetres (1000x the scene's units)", [](float z) { return z / 1000.0f; }},
-      {"in centimetres (100x the scene's units)", [](float z) { return z / 100.0f; }},
-      {"100x smaller than the scene's units", [](float z) { return z * 100.0f; }},
-      {"1000x smaller than the scene's units", [](float z) { return z * 1000.0f; }}};
+      {"in millimetres (1000x the scene's units)", [](float z, float) { return z / 1000.0f; }},
+      {"in centimetres (100x the scene's units)", [](float z, float) { return z / 100.0f; }},
+      {"100x smaller than the scene's units", [](float z, float) { return z * 100.0f; }},
+      {"1000x smaller than the scene's units", [](float z, float) { return z * 1000.0f; }},
+      // A ray tracer's hit distance: the same as view depth at the image's centre, larger
+      // towards its edges.
+      {"a ray distance (eye to hit), not view depth along the camera's axis",
+       [](float z, float cosine) { return z * cosine; }}};
   if (n > 0 && f > n) {  // a depth buffer's value d in [0, 1], linearised
     out.push_back({"a depth-buffer value (0 at near, 1 at far), not view depth",
-                   [n, f](float d) { return float(n * f / (f - double(d) * (f - n))); }});
+                   [n, f](float d, float) { return float(n * f / (f - double(d) * (f - n))); }});
     out.push_back({"a reversed depth-buffer value (1 at near, 0 at far), not view depth",
-                   [n, f](float d) { return float(n * f / (n + double(d) * (f - n))); }});
+                   [n, f](float d, float) { return float(n * f / (n + double(d) * (f - n))); }});
   }
   return out;
 }
@@ -356,8 +360,10 @@ MotionConsistency checkMotion(const std::vector<LayerSet>& frames,
         if (!std::isfinite(m.x) || !std::isfinite(m.y)) continue;  // counted by the non-finite check
         const float err = glm::length(m - e);
         out.depthWithinUnit = out.depthWithinUnit && z <= 1.0f;
+        const float cosine =
+            glm::dot(glm::normalize(cam.rayDirection(pixel.x, pixel.y)), cam.forward);
         for (size_t k = 0; k < readings.size(); ++k) {
-          const float zk = readings[k].toViewDepth(z);
+          const float zk = readings[k].toViewDepth(z, cosine);
           glm::vec2 pk;
           if (!(zk > 0) || !std::isfinite(zk) ||
               !prev.project(cam.pointAtDepth(pixel.x, pixel.y, zk), pk))

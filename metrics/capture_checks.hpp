@@ -68,7 +68,9 @@ struct MotionConsistency {
 // records its near and far planes, a depth buffer's value (standard or reversed) linearised.
 struct DepthReading {
   std::string name;
-  std::function<float(float)> toViewDepth;
+  // The view depth the layer's value z means at a pixel whose ray makes an angle with the
+  // camera's forward axis of cosine `cosine` (a ray distance is z x cosine there).
+  std::function<float(float z, float cosine)> toViewDepth;
 };
 std::vector<DepthReading> depthReadings(double nearPlane, double farPlane);
 // Pixels of the meshes in `movingMeshes` (object_moves events' meshId) are not static: skipped.

@@ -407,6 +407,21 @@ TEST(CaptureValidation, DepthInOtherUnitsOrFromADepthBufferIsNamedByTheMotion) {
   EXPECT_EQ(c.detail.rfind("the depth layer looks in millimetres (1000x the scene's units) (", 0),
             0u)
       << c.detail;
+  // A ray tracer's hit distance written as depth: larger than view depth off the image's centre.
+  const fs::path ray = writeSynthetic("depth_ray_distance");
+  editFrames(ray, [](int t, LayerSet& frame) {
+    const CameraState cam = Synthetic().camera(t);
+    Image& depth = frame.get("depth");
+    for (int y = 0; y < depth.height(); ++y)
+      for (int x = 0; x < depth.width(); ++x)
+        depth.at(x, y) /= glm::dot(
+            glm::normalize(cam.rayDirection(float(x) + 0.5f, float(y) + 0.5f)), cam.forward);
+  });
+  c = motionOf(ray);
+  EXPECT_NE(c.status, CheckStatus::Pass) << c.detail;
+  EXPECT_EQ(c.detail.rfind("the depth layer looks a ray distance (eye to hit), not view depth", 0),
+            0u)
+      << c.detail;
   const float n = 0.5f, f = 100.0f;
   for (const bool reversed : {false, true}) {
     const fs::path dir =
