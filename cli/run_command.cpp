@@ -229,8 +229,6 @@ void finish(const std::string& out) {
     for (auto& f : failed) std::cerr << "  " << f << "\n";
     throw CLI::RuntimeError(1);
   }
-  // Every contender left out where it lacked the inputs (a capture without the layers any of them
-  // reads): nothing was measured, which a run must not pass as done.
   // Every summary of every pair absent (no frame after the warm-up, said per metric above): the
   // run measured nothing, which is no result to pass as done (compare fails on it too).
   bool measured = false;
@@ -242,6 +240,9 @@ void finish(const std::string& out) {
            "a sequence no longer than the warm-up: render more --frames or lower --warmup)\n";
     throw CLI::RuntimeError(1);
   }
+  // Every contender left out where it lacked the inputs (a capture without the layers any of them
+  // reads): nothing was measured, which a run must not pass as done. (A shard whose slice held no
+  // pair left nothing out.)
   bool leftOut = false;
   for (const auto& [name, scene] : results.scenes.items())
     leftOut =
@@ -417,12 +418,13 @@ void addRunCommands(CLI::App& app) {
                   << "): every change is zero by construction\n";
       const Correction corrected = parseCorrection(*correction);
       auto rows = compareRuns(baseline, candidate, tols, bc, corrected);
-      if (const size_t judged =
-              size_t(std::count_if(rows.begin(), rows.end(),
-                                   [](const ComparisonRow& r) { return std::isfinite(r.pValue); }));
-          corrected == Correction::Holm && judged > holmResolvableRows(bc.confidence))
+      // The rows with an interval: the family the correction judges together.
+      const size_t family =
+          size_t(std::count_if(rows.begin(), rows.end(),
+                               [](const ComparisonRow& r) { return std::isfinite(r.pValue); }));
+      if (corrected == Correction::Holm && family > holmResolvableRows(bc.confidence))
         std::cerr
-            << "arena: warning: " << judged << " rows judged together: more than "
+            << "arena: warning: " << family << " rows judged together: more than "
             << holmResolvableRows(bc.confidence)
             << ", beyond which the correction can resolve no row at this confidence (its smallest "
                "threshold lies below what its replicates can show); narrow the gate with --metric, "
@@ -430,9 +432,6 @@ void addRunCommands(CLI::App& app) {
       if (*asJson) {
         std::cout << comparisonJson(rows).dump(2) << "\n";
       } else {
-        const size_t family =
-            size_t(std::count_if(rows.begin(), rows.end(),
-                                 [](const ComparisonRow& r) { return std::isfinite(r.pValue); }));
         std::cout << "regressed = worse by more than the tolerance AND the paired "
                   << bc.confidence * 100 << "% interval of the change excludes zero"
                   << (corrected == Correction::Holm

@@ -92,6 +92,16 @@ void editFrames(const fs::path& dir, const std::function<void(int, LayerSet&)>& 
   }
 }
 
+// Every frame of the capture in `dir` rewritten without `layer`.
+void dropLayer(const fs::path& dir, const std::string& layer) {
+  editFrames(dir, [&](int, LayerSet& f) {
+    LayerSet kept;
+    for (const auto& [name, image] : f.all())
+      if (name != layer) kept.set(name, image);
+    f = kept;
+  });
+}
+
 json pairOf(const json& results, const std::string& label) {
   for (const json& p : results["pairs"])
     if (p["label"] == label) return p;
@@ -1135,12 +1145,7 @@ TEST(CaptureValidation, PartsThatWereNotDemodulatedAreNamed) {
   // No emission layer where a light is in view: the parts lack its light, which a share of values
   // hid (a few pixels); counted as a share of the colour's light, it is said.
   const fs::path unlit = copyCapture(clean, "parts_no_emission");
-  editFrames(unlit, [](int, LayerSet& f) {
-    LayerSet kept;
-    for (const auto& [name, image] : f.all())
-      if (name != "emission") kept.set(name, image);
-    f = kept;
-  });
+  dropLayer(unlit, "emission");
   const CaptureValidation noEmission = validate(unlit);
   const CaptureCheck& missing = checkNamed(noEmission, "emission.missing");
   EXPECT_EQ(missing.status, CheckStatus::Warn) << missing.value << " " << missing.detail;
@@ -1329,12 +1334,7 @@ TEST(CaptureContract, AColourInPlainRgbIsRefusedSayingSo) {
 // run that measured nothing says so and exits 1 rather than finish as done.
 TEST(Capture, ARunWhereNoContenderCouldRunFails) {
   const fs::path dir = copyCapture(exportedCornell(), "no_albedo");
-  editFrames(dir, [](int, LayerSet& f) {
-    LayerSet kept;
-    for (const auto& [name, image] : f.all())
-      if (name != "albedo") kept.set(name, image);
-    f = kept;
-  });
+  dropLayer(dir, "albedo");
   const test::CommandResult cli =
       test::runCommand(std::string(ARENA_BINARY) + " run --capture '" + dir.string() +
                        "' --flip none --warmup 2 --out '" +
