@@ -595,9 +595,16 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
 
   // 2. Ranges: unit normals, positive depth, albedos and roughness in [0, 1].
   long surface = 0, notUnit = 0, negativeDepth = 0, depthValues = 0;
+  // Of the pixels whose normal is not unit: those with no normal at all at their frame's largest
+  // depth, the far plane an engine writes where nothing was hit (its sky then reads as a surface).
+  long zeroAtFar = 0, unitNearer = 0;  // unitNearer: good normals well in front of that depth
+  float farDepth = 0;
   std::map<std::string, std::pair<long, long>> range;  // layer -> (outside, values)
   for (const LayerSet& f : input.frames) {
     const Image &depth = f.get("depth"), &normal = f.get("normal");
+    float largest = 0;
+    for (float z : depth.raw())
+      if (std::isfinite(z)) largest = std::max(largest, z);
     for (size_t i = 0; i < depth.pixelCount(); ++i) {
       const float z = depth.raw()[i];
       ++depthValues;
@@ -607,7 +614,10 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
       const double len = std::sqrt(double(normal.plane(0)[i]) * normal.plane(0)[i] +
                                    double(normal.plane(1)[i]) * normal.plane(1)[i] +
                                    double(normal.plane(2)[i]) * normal.plane(2)[i]);
-      notUnit += !(std::abs(len - 1) <= 0.02);  // half floats hold a unit vector to ~1e-3
+      const bool off = !(std::abs(len - 1) <= 0.02);  // half floats hold a unit vector to ~1e-3
+      notUnit += off;
+      if (off && len < 0.02 && z == largest) ++zeroAtFar, farDepth = z;
+      unitNearer += !off && z < 0.5f * largest;
     }
     for (const char* layer : {"albedo", "specAlbedo", "roughness"}) {
       if (!isGiven(layer)) continue;
@@ -618,8 +628,13 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
       }
     }
   }
-  v.checks.push_back(check("normal.unitLength", surface ? double(notUnit) / double(surface) : 0, 0, 0.01,
-                           "share of surface pixels", "normals must be unit length (| |n| - 1 | <= 0.02)"));
+  std::string unitDetail = "normals must be unit length (| |n| - 1 | <= 0.02)";
+  if (notUnit > 0 && zeroAtFar >= notUnit / 2 && unitNearer > 0)
+    unitDetail += "; " + std::to_string(zeroAtFar) + " of the " + std::to_string(notUnit) +
+                  " have no normal at their frame's largest depth (" + number(farDepth) +
+                  "): sky written as the far plane? Write depth 0 where nothing was hit";
+  v.checks.push_back(check("normal.unitLength", surface ? double(notUnit) / double(surface) : 0, 0,
+                           0.01, "share of surface pixels", unitDetail));
   v.checks.push_back(check("depth.positive", depthValues ? double(negativeDepth) / double(depthValues) : 0, 0, 0,
                            "share of pixels", "view depth is positive on surfaces and 0 where there is none (sky)"));
   for (const auto& [layer, counts] : range)

@@ -663,6 +663,24 @@ TEST(CaptureValidation, RangesOfNormalsDepthAlbedoAndRoughness) {
   EXPECT_EQ(checkNamed(v, "depth.positive").status, CheckStatus::Fail);
   EXPECT_EQ(checkNamed(v, "roughness.range").status, CheckStatus::Fail);
   EXPECT_EQ(checkNamed(v, "albedo.range").status, CheckStatus::Warn);  // 1 value in 13824: below the hard share
+  EXPECT_EQ(checkNamed(v, "normal.unitLength").detail.find("sky written as the far plane"),
+            std::string::npos);
+  // The sky (here the top rows) written at the far plane with no normal: named, not only counted.
+  const fs::path sky = writeSynthetic("sky_at_far");
+  editFrames(sky, [](int, LayerSet& f) {
+    for (int y = 0; y < 6; ++y)
+      for (int x = 0; x < f.get("depth").width(); ++x) {
+        f.get("depth").at(x, y) = 1000.0f;
+        for (int c = 0; c < 3; ++c) f.get("normal").at(x, y, c) = 0.0f;
+      }
+  });
+  const CaptureCheck far = checkNamed(validate(sky), "normal.unitLength");
+  EXPECT_EQ(far.status, CheckStatus::Fail);
+  EXPECT_NE(far.detail.find(
+                "have no normal at their frame's largest depth (1000): sky written as the far "
+                "plane? Write depth 0 where nothing was hit"),
+            std::string::npos)
+      << far.detail;
 }
 
 TEST(CaptureValidation, WithoutAReferenceOnlyNoReferenceMetricsAreScoredAndItIsSaid) {
