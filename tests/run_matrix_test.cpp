@@ -151,12 +151,15 @@ TEST(Sweep, PointsWithIdenticalOutputsAreWarnedOf) {
   c.keepFrames = "none";
   std::vector<std::string> said;
   c.progress = [&](const std::string& line) { said.push_back(line); };
-  auto identicalTo = [](const json& results, const std::string& label) {
+  // A point's warnings that begin with `prefix`.
+  auto warningsOf = [](const json& results, const std::string& label, const std::string& prefix) {
     std::vector<std::string> out;
     for (const json& w : pairOf(results, "cornell_static", label).value("warnings", json::array()))
-      if (w.get<std::string>().rfind("its output on this scene is bit-identical to ", 0) == 0)
-        out.push_back(w);
+      if (w.get<std::string>().rfind(prefix, 0) == 0) out.push_back(w);
     return out;
+  };
+  auto identicalTo = [&](const json& results, const std::string& label) {
+    return warningsOf(results, label, "its output on this scene is bit-identical to ");
   };
   const std::string same =
       "its output on this scene is bit-identical to svgf[iterations=5,sigmaL=2] (every "
@@ -171,12 +174,8 @@ TEST(Sweep, PointsWithIdenticalOutputsAreWarnedOf) {
             pairOf(run, "cornell_static", "svgf[iterations=1,sigmaL=8]")["outputChecksum"]);
   // The grid holds iterations, and iterations=5 ran one pass of five per signal: said on that
   // point (iterations=1 skipped nothing).
-  auto skipped = [](const json& results, const std::string& label) {
-    std::vector<std::string> out;
-    for (const json& w : pairOf(results, "cornell_static", label).value("warnings", json::array()))
-      if (w.get<std::string>().rfind("at this resolution its scaled footprint skipped ", 0) == 0)
-        out.push_back(w);
-    return out;
+  auto skipped = [&](const json& results, const std::string& label) {
+    return warningsOf(results, label, "at this resolution its scaled footprint skipped ");
   };
   ASSERT_EQ(skipped(run, "svgf[iterations=5,sigmaL=2]").size(), 1u);
   EXPECT_NE(skipped(run, "svgf[iterations=5,sigmaL=2]")[0].find(
