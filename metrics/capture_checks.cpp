@@ -1082,6 +1082,54 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
                              maxJitter > 0 ? "jittered frames: the built-in denoisers assume samples at pixel centres"
                                            : ""));
   }
+
+  // 8. Events the frames contradict. An object_moves event whose meshId no frame's meshId layer
+  // holds: its window then measures only where the reference changed, not the object's trail. A
+  // camera_cut where the camera moves no more than on its neighbouring frames: every denoiser's
+  // history is thrown away there for nothing, and the old-view leak has no old view to measure.
+  std::vector<std::string> noObject, noCut;
+  for (const SequenceEvent& e : info.events) {
+    if (e.kind == EventKind::ObjectMoves && e.meshId >= 0 && isGiven("meshId")) {
+      const float id = float(e.meshId);
+      const bool held =
+          std::any_of(input.frames.begin(), input.frames.end(), [&](const LayerSet& f) {
+            if (!f.has("meshId")) return false;
+            const auto& values = f.get("meshId").raw();
+            return std::find(values.begin(), values.end(), id) != values.end();
+          });
+      if (!held)
+        noObject.push_back("frame " + std::to_string(e.frame) + ", meshId " +
+                           std::to_string(e.meshId));
+    }
+    if (e.kind == EventKind::CameraCut && e.frame >= 1 && size_t(e.frame) < info.cameras.size()) {
+      // A camera's step into frame t: how far its eye moved and how far its view turned (radians).
+      const auto step = [&](int t) {
+        const CameraState &a = info.cameras[size_t(t - 1)], &b = info.cameras[size_t(t)];
+        const double turn =
+            std::acos(std::clamp(double(glm::dot(a.forward, b.forward)), -1.0, 1.0)) +
+            std::acos(std::clamp(double(glm::dot(a.up, b.up)), -1.0, 1.0));
+        return std::array<double, 2>{double(glm::length(b.eye - a.eye)), turn};
+      };
+      const std::array<double, 2> atCut = step(e.frame);
+      std::array<double, 2> around{0, 0};
+      for (int t : {e.frame - 1, e.frame + 1})
+        if (t >= 1 && size_t(t) < info.cameras.size())
+          for (size_t k = 0; k < 2; ++k) around[k] = std::max(around[k], step(t)[k]);
+      const bool sameFov = info.cameras[size_t(e.frame)].tanHalfFovY ==
+                           info.cameras[size_t(e.frame - 1)].tanHalfFovY;
+      if (sameFov && atCut[0] <= 2 * around[0] + 1e-6 && atCut[1] <= 2 * around[1] + 1e-6)
+        noCut.push_back("frame " + std::to_string(e.frame));
+    }
+  }
+  v.checks.push_back(namesWarning(
+      "events.meshIdAbsent", noObject, "events", "object_moves at ",
+      ": no frame's meshId layer holds that id, so the event's window measures only where "
+      "the reference changed, not the object's trail (give the id the meshId layer writes)"));
+  v.checks.push_back(namesWarning(
+      "events.cutWithoutMotion", noCut, "events", "camera_cut at ",
+      ": the camera moves there no more than on the frames around it; a cut resets every "
+      "denoiser's history and has no old view to measure leaking (remove the event if the "
+      "shot goes on)"));
   return v;
 }
 

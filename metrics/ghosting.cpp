@@ -262,7 +262,7 @@ double oldViewLeak(const Image& d, const Image& r, const Image& old, TileSums* t
     }
   }
   if (tiles) *tiles = acc.finish();
-  return dd > 0 ? ed / dd : 0.0;
+  return dd > 0 ? ed / dd : std::numeric_limits<double>::quiet_NaN();
 }
 
 CutResult analyseCut(int cut, int segmentEnd, const std::vector<double>& relMse,
@@ -283,10 +283,14 @@ CutResult analyseCut(int cut, int segmentEnd, const std::vector<double>& relMse,
     out.recoveryFrames.push_back(t);
     out.recovery.push_back(relMse[size_t(t)] / s);
   }
+  out.oldViewLeak = std::numeric_limits<double>::quiet_NaN();
   for (size_t k = 0; k < leak.size(); ++k) {
     out.leakFrames.push_back(cut + int(k));
     out.leak.push_back(leak[k]);
-    out.oldViewLeak = std::max(out.oldViewLeak, std::abs(leak[k]));
+    if (std::isfinite(leak[k]))
+      out.oldViewLeak = std::isfinite(out.oldViewLeak)
+                            ? std::max(out.oldViewLeak, std::abs(leak[k]))
+                            : std::abs(leak[k]);
   }
   return out;
 }
@@ -298,7 +302,12 @@ nlohmann::json CutResult::toJson() const {
                       {"steadyFrames", {steadyBegin, steadyEnd}},
                       {"leakFrames", leakFrames},
                       {"leak", leak},
-                      {"oldViewLeak", oldViewLeak}};
+                      {"oldViewLeak", std::isfinite(oldViewLeak) ? nlohmann::json(oldViewLeak)
+                                                                 : nlohmann::json(nullptr)}};
+  if (!std::isfinite(oldViewLeak) && !leak.empty())
+    j["oldViewLeakAbsent"] =
+        "the reference of frame " + std::to_string(cutFrame - 1) +
+        " equals the references after the cut: no old view can show (did the camera cut here?)";
   if (steadyEnd >= steadyBegin && steadyState > 0) {
     j["steadyState"] = steadyState;
     j["atCut"] = atCut;

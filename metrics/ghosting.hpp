@@ -94,8 +94,10 @@ GhostingResult analyseGhosting(int t0, int begin, const std::vector<double>& cur
 // Old-view leak after a camera cut (ours): the least-squares coefficient a of the error
 // e = d - r onto the pre-cut difference D = r_old - r, a = sum(e D) / sum(D D) over pixels and
 // channels (linear RGB). 0: nothing of the old view; 1: the output still shows it entirely.
-// Noise in d is uncorrelated with D and averages out. 0 when D vanishes. With `tiles`, per tile
-// sum(e D) as the sum and sum(D D) as the count, so a tile draw's leak is sum / count.
+// Noise in d is uncorrelated with D and averages out. Undefined (NaN) when D vanishes: the
+// references before and after the cut are one image, so no old view can show (a cut declared
+// where the camera did not cut); never 0, which would read as a perfect score. With `tiles`, per
+// tile sum(e D) as the sum and sum(D D) as the count, so a tile draw's leak is sum / count.
 double oldViewLeak(const Image& denoised, const Image& reference, const Image& oldViewReference,
                    TileSums* tiles = nullptr);
 
@@ -107,8 +109,8 @@ struct CutResult {
   int steadyBegin = 0, steadyEnd = -1;  // steady state: median relMSE over these frames
   double steadyState = 0;
   std::vector<int> leakFrames;    // cut .. cut+5
-  std::vector<double> leak;       // oldViewLeak per frame
-  double oldViewLeak = 0;         // max |leak|
+  std::vector<double> leak;       // oldViewLeak per frame (NaN where the view did not change)
+  double oldViewLeak = 0;         // max |leak| over the defined frames; NaN when none is
   nlohmann::json toJson() const;  // no ratios ("absent") when the segment has no steady frames
 };
 // `relMse` per frame of the whole sequence; the post-cut segment is [cut, segmentEnd]; its steady

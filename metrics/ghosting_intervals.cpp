@@ -288,6 +288,9 @@ FigureReplicates cutReplicates(int cut, int segmentEnd, const CutTiles& tiles,
            [&](const std::vector<int>& draw, std::map<std::string, double>& out) {
              if (!curveUnder(tiles.relMse, draw, rows) || !curveUnder(tiles.leak, draw, leak))
                return false;
+             // A frame whose view did not change has no leak (oldViewLeak), not a leak of 0.
+             for (size_t f = 0; f < leak.size(); ++f)
+               if (tiles.leak.rows[f].totalCount() == 0) leak[f] = kUndefined;
              std::copy(rows.begin(), rows.end(), relMse.begin() + cut);
              out = cutFigures(analyseCut(cut, segmentEnd, relMse, leak, gc), gc);
              return true;

@@ -21,6 +21,7 @@
 #include <set>
 #include <sstream>
 
+#include "core/atomic_file.hpp"
 #include "core/blender_import.hpp"
 #include "core/error.hpp"
 #include "core/json_reader.hpp"
@@ -591,6 +592,56 @@ TEST(CaptureValidation, OneBadReferenceFrameIsNamed) {
 // A noisy input averages to its reference: a frame four times as bright (an exposure applied to it
 // alone), a reference at twice the scale, or negative input radiance pass no other check.
 // A layer's channels misspelt where the file lacks the layer: named with the likely one.
+TEST(CaptureValidation, EventsTheFramesContradictAreNamed) {
+  // The synthetic camera accelerates smoothly (no cut anywhere); its meshId layer holds only 0.
+  const fs::path dir = writeSynthetic("event_checks");
+  const json written = json::parse(readText(dir / "capture.json"));
+  const auto withEvents = [&](const json& events, bool jump) {
+    json d = written;
+    d["events"] = events;
+    if (jump)  // the camera jumps to another place and view from frame 3 on: a real cut
+      for (size_t t = 3; t < d["cameras"].size(); ++t)
+        d["cameras"][t] = captureCameraJson(CameraState::lookAt(
+            {40, 2, 9}, {0, 0, -20}, {0, 1, 0}, 45.0f, Synthetic().w, Synthetic().h));
+    writeTextAtomically(dir / "capture.json", d.dump(1));
+    return validate(dir);
+  };
+  const CaptureValidation fine =
+      withEvents({{{"frame", 2}, {"kind", "object_moves"}, {"meshId", 0}},
+                  {{"frame", 3}, {"kind", "camera_cut"}}},
+                 true);
+  EXPECT_EQ(checkNamed(fine, "events.meshIdAbsent").status, CheckStatus::Pass)
+      << checkNamed(fine, "events.meshIdAbsent").detail;
+  EXPECT_EQ(checkNamed(fine, "events.cutWithoutMotion").status, CheckStatus::Pass)
+      << checkNamed(fine, "events.cutWithoutMotion").detail;
+
+  const CaptureValidation wrong =
+      withEvents({{{"frame", 2}, {"kind", "object_moves"}, {"meshId", 5}},
+                  {{"frame", 3}, {"kind", "camera_cut"}}},
+                 false);
+  const CaptureCheck noObject = checkNamed(wrong, "events.meshIdAbsent");
+  EXPECT_EQ(noObject.status, CheckStatus::Warn);
+  EXPECT_NE(noObject.detail.find(
+                "object_moves at frame 2, meshId 5: no frame's meshId layer holds that id"),
+            std::string::npos)
+      << noObject.detail;
+  const CaptureCheck noCut = checkNamed(wrong, "events.cutWithoutMotion");
+  EXPECT_EQ(noCut.status, CheckStatus::Warn);
+  EXPECT_NE(
+      noCut.detail.find(
+          "camera_cut at frame 3: the camera moves there no more than on the frames around it"),
+      std::string::npos)
+      << noCut.detail;
+  // A still camera does not cut either.
+  Synthetic still;
+  still.still = true;
+  const fs::path stillDir = writeSynthetic("event_still", 0.3f, 0.0f, still);
+  json d = json::parse(readText(stillDir / "capture.json"));
+  d["events"] = {{{"frame", 4}, {"kind", "camera_cut"}}};
+  writeTextAtomically(stillDir / "capture.json", d.dump(1));
+  EXPECT_EQ(checkNamed(validate(stillDir), "events.cutWithoutMotion").status, CheckStatus::Warn);
+}
+
 TEST(CaptureValidation, AnUnknownChannelIsNamedWithTheChannelItLikelyMisspells) {
   const fs::path dir = writeSynthetic("misspelt_channel");
   const CaptureDescription c = readCaptureDescription(dir);

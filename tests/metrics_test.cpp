@@ -523,7 +523,24 @@ TEST(CameraCut, OldViewLeakIsTheRegressionCoefficient) {
   EXPECT_NEAR(oldViewLeak(d, r, old), 0.3, 1e-6);
   EXPECT_NEAR(oldViewLeak(r, r, old), 0.0, 1e-12);
   EXPECT_NEAR(oldViewLeak(old, r, old), 1.0, 1e-6);
-  EXPECT_EQ(oldViewLeak(d, r, r), 0.0);  // no old view to leak
+  // No old view to leak (the references before and after the cut are one image): undefined, never
+  // a perfect 0.
+  EXPECT_TRUE(std::isnan(oldViewLeak(d, r, r)));
+}
+
+TEST(CameraCut, ACutWithoutAnOldViewHasNoLeakRatherThanAPerfectOne) {
+  const std::vector<double> rel(16, 0.01);
+  const double none = std::numeric_limits<double>::quiet_NaN();
+  const CutResult c = analyseCut(4, 15, rel, {none, none, none});
+  EXPECT_TRUE(std::isnan(c.oldViewLeak));
+  const json j = c.toJson();
+  EXPECT_TRUE(j["oldViewLeak"].is_null()) << j.dump();
+  EXPECT_NE(j.value("oldViewLeakAbsent", "").find("reference of frame 3 equals"), std::string::npos)
+      << j.dump();
+  // One frame with an old view is enough for a value: the undefined frames are left out of the max.
+  const CutResult some = analyseCut(4, 15, rel, {none, -0.03, 0.01});
+  EXPECT_NEAR(some.oldViewLeak, 0.03, 1e-12);
+  EXPECT_FALSE(some.toJson().contains("oldViewLeakAbsent"));
 }
 
 TEST(CameraCut, RecoveryRelativeToTheSteadyState) {

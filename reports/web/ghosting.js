@@ -109,6 +109,9 @@
       body.append(figureTable(
           'cut-table', CUT_COLUMNS, withCut.map((p) => [p.label, p.cuts[k]]),
           rankedFirst(CUT_COLUMNS, 'cuts', frame)));
+      // The references did not change at the cut (metrics.md): no leak to show, and why.
+      const leakAbsent = withCut[0].cuts[k].oldViewLeakAbsent;
+      if (leakAbsent) body.append(el('p', { class: 'note leak-absent', text: `No old-view leak: ${leakAbsent}.` }));
     }
     return Promise.all(renders);
   }

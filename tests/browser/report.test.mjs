@@ -434,8 +434,9 @@ function syntheticRun(nScenes, nLabels, nFrames) {
                                 curve: Array.from({ length: 55 }, (_, i) => 0.01 + 0.5 * Math.exp(-i / (l + 1))),
                                 steadyState: 0.01, peakExcess: 0.5, responseFrames: l + 1, ghostEnergy: 0.3 * l, signedBias: 0.1, maskFraction: 0.4,
                                 lagEnergy: 0.2 * l, ci95: { lagEnergy: [0.15 * l, 0.25 * l] } }],
-                   cuts: [{ kind: 'camera_cut', eventFrame: 70, atCut: 1 + l, recovery: [1, 1, 1, 1, 1], oldViewLeak: 0.01,
-                            ci95: { atCut: [0.9 + l, 1.1 + l], oldViewLeak: [0.005, 0.02] }, ci95Absent: { recovery1: 'the figure itself is undefined for this event' } }],
+                   cuts: [{ kind: 'camera_cut', eventFrame: 70, atCut: 1 + l, recovery: [1, 1, 1, 1, 1], oldViewLeak: null,
+                            oldViewLeakAbsent: 'the reference of frame 69 equals the references after the cut: no old view can show (did the camera cut here?)',
+                            ci95: { atCut: [0.9 + l, 1.1 + l] }, ci95Absent: { recovery1: 'the figure itself is undefined for this event' } }],
                    warnings: [], images: { dir: `images/${name}/denoiser_${l}`, all: false } });
     }
   }
@@ -500,6 +501,8 @@ test('10 denoisers x 10 scenes x 100 frames stays light', async () => {
   assert.equal(await page.locator('#ghosting-body table.cut-table tbody tr').count(), 10);
   assert.match(await page.locator('#ghosting-body table.cut-table tbody tr[data-label="denoiser_2"]').innerText(), /\[2\.9, 3\.1\]/);
   assert.equal(await page.locator('#ghosting-body table.cut-table span.ci[title="the figure itself is undefined for this event"]').count(), 10);
+  // A cut whose references did not change has no leak, and the page says why (never a 0).
+  assert.match(await page.locator('#ghosting-body p.leak-absent').innerText(), /No old-view leak: the reference of frame 69 equals/);
   // Only the selected scene's lines: 10, not 100.
   assert.equal(await page.locator('#time-error-chart g.mark-line.role-mark path').count(), 10);
   const domSize = await page.evaluate(() => document.getElementsByTagName('*').length);
