@@ -88,6 +88,7 @@ void addReferenceQuality(json& results, int warmup, const std::map<std::string, 
         floorSum += v.get<double>();
         ++floorFrames;
       }
+    const bool noFrameAfterWarmup = floorKnown && floorFrames == 0;
     if (!floorKnown) floorFrames = 0;
     double best = std::numeric_limits<double>::infinity();
     std::string bestLabel;
@@ -105,7 +106,9 @@ void addReferenceQuality(json& results, int warmup, const std::map<std::string, 
     if (floorFrames == 0 || bestLabel.empty() || !(best > 0)) {
       const bool hasReference = scene.value("hasReference", true);
       q["verdict"] = name + ": reference quality unknown (" +
-                     (!hasReference ? std::string("no reference")
+                     (!hasReference        ? std::string("no reference")
+                      : noFrameAfterWarmup ? "no frame after the warm-up of " +
+                                                 std::to_string(warmup) + " to measure it on"
                       : floorFrames == 0 && scene.value("source", "") == "capture"
                           ? "no reference noise floor: the capture's references give no colorVar "
                             "or colorHalf, so how "

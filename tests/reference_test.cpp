@@ -723,6 +723,14 @@ TEST(Reference, QualityVerdictNamesTheRatioAndWhy) {
   EXPECT_NE(capture.find("a capture's references come from the renderer that made them"),
             std::string::npos)
       << capture;
+  // A capture no longer than the warm-up: the floor is unmeasured for that reason, not for want
+  // of colorVar (which these references have).
+  addReferenceQuality(results, 3);
+  const std::string short_ = results["scenes"]["loose"]["referenceQuality"]["verdict"];
+  EXPECT_NE(
+      short_.find("reference quality unknown (no frame after the warm-up of 3 to measure it on)"),
+      std::string::npos)
+      << short_;
 }
 
 // The options that find a run's sequences again: what differs from the preset, nothing more.
