@@ -65,15 +65,20 @@ void addReportCommand(CLI::App& app) {
     h.correction = parseCorrection(*correction);
     const HistorySummary s = writeHistory(h);
     std::cout << "history: " << s.index.string() << " (" << s.runs
-              << (s.runs == 1 ? " run, " : " runs, ") << s.failing
-              << " comparison(s) failing `arena compare`'s gate";
-    // Changes beyond the tolerance the gate could not resolve are not passes: said, with why a
-    // database's runs cannot resolve any.
+              << (s.runs == 1 ? " run, " : " runs, ") << s.failingComparisons << " of "
+              << s.comparisons << " comparison(s) failing `arena compare`'s gate (" << s.failing
+              << " row(s))";
+    // Changes beyond the tolerance that the gate did not resolve are not passes: said, and those
+    // it could not judge at all (a database's runs keep no tiles) apart from those within noise.
     if (s.unresolved > 0)
       std::cout << "; " << s.unresolved
-                << " change(s) beyond the tolerance unresolved (orange on the page: within noise, "
-                   "or runs from results.db, which keep no tiles to resolve them)";
+                << " change(s) beyond the tolerance within noise (orange on the page)";
     std::cout << ")\n";
+    if (s.notJudged > 0)
+      std::cerr << "arena: warning: " << s.notJudged
+                << " change(s) beyond the tolerance were NOT JUDGED: runs read from results.db "
+                   "keep no per-tile data, so the gate cannot tell them from noise; give `arena "
+                   "history` the run directories (their results.json) to judge them\n";
     for (const std::string& line : s.absentSummaries) std::cout << "absent: " << line << "\n";
   });
 }

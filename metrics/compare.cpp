@@ -315,7 +315,7 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
       // unjudgeable: a change beyond tolerance there fails the gate, as passing it would be a
       // verdict from no data. Runs read from results.db have no tiles by design (the dashboard
       // marks their changes unresolved, docs/ci-dashboard.md), nor do some metrics (ms).
-      bool resolvedWorse = false, resolvedBetter = false, unjudgeable = false;
+      bool resolvedWorse = false, resolvedBetter = false, unjudgeable = false, noTilesKept = false;
       bool sharedFrames = false;  // the runs summarise other frames: compared on those both have
       std::optional<std::pair<MetricTiles, MetricTiles>> pairedTiles;  // baseline's, candidate's
       const json &bt = b.part("tiles"), &ct = c.part("tiles");
@@ -367,6 +367,7 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
         }
       } else if (!base.keepsTiles || !cand.keepsTiles) {
         row.note = "no tile data for a paired interval (results.db keeps none)";
+        noTilesKept = true;
       } else if (!tiled.count(t.metric)) {
         row.note = "no paired interval (" + t.metric + " keeps no per-tile data)";
       } else {
@@ -381,6 +382,11 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
         row.note +=
             ": the gate cannot tell this change from noise (rerun both with their tiles and "
             "frames)";
+      } else if (std::abs(worse) > t.relative && noTilesKept) {
+        row.verdict = "not judged";
+        row.note +=
+            ": the gate cannot tell this change from noise without them (judge the run "
+            "directories, which keep them)";
       } else if (worse > t.relative) {
         row.verdict = "unresolved";
       } else if (-worse > t.relative) {
@@ -454,7 +460,7 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
   // whose pairs all failed) has checked nothing: it fails, saying so, rather than pass on no data.
   const bool judged = std::any_of(rows.begin(), rows.end(), [](const ComparisonRow& r) {
     return r.verdict == "ok" || r.verdict == "improved" || r.verdict == "regressed" ||
-           r.verdict == "unresolved" || r.verdict == "unverified";
+           r.verdict == "unresolved" || r.verdict == "unverified" || r.verdict == "not judged";
   });
   if (!judged) {
     ComparisonRow none{"*",        "*", "*", kUndefined,         kUndefined,

@@ -39,7 +39,10 @@ struct ComparisonRow {
   double tolerance = 0;
   // "ok", "improved", "regressed", "unresolved" (beyond tolerance, within noise), "unverified"
   // (worse beyond tolerance with no interval to judge it: no tiles in a run directory, too few
-  // frames; fails the gate, as passing it would judge from no data), "missing" (the
+  // frames; fails the gate, as passing it would judge from no data), "not judged" (beyond
+  // tolerance, either way, on a run read from results.db, which keeps no tiles by design: the
+  // gate's verdict is unknown; `arena history` counts and lists these apart, and they do not fail
+  // it), "missing" (the
   // candidate lacks what the baseline had: fails the gate), "failed" (the candidate's pair failed),
   // "new" (only the candidate has it, or only its pair ran; a candidate pair that failed is
   // "failed" whether or not the baseline had it), "absent" (neither run has a summary of it: the

@@ -21,9 +21,11 @@ std::vector<RunResults> loadHistory(const std::vector<std::filesystem::path>& in
 // The dashboard's data: runs [{name, created, commit}], per scene x label x metric the values (and
 // intervals where the runs have them) per run, the tolerance of each gated metric, and `changes`:
 // every row of compareRuns(run i-1, run i, tolerances) whose verdict is not "ok", with the run
-// index i and `fails` (failsGate: the gate's own rule, not restated here); `failing`
-// counts those, `unresolved` the changes beyond the tolerance that the gate could not resolve
-// (no tiles: runs read from results.db; or within noise). Empty `tolerances`: compare's defaults.
+// index i and `fails` (failsGate: the gate's own rule, not restated here); `failing` counts those
+// rows, `failingComparisons` the comparisons (of `comparisons`) with one; `unresolved` the changes
+// beyond the tolerance within noise, `notJudged` those the gate could not judge (runs read from
+// results.db keep no tiles); `correction` and `confidence` say how the rows were judged. Empty
+// `tolerances`: compare's defaults.
 // A gated metric neither run of a pair computed is skipped for that pair (runs over months differ
 // in what they computed); one the caller named that no run computed is an Error. `bootstrap` is
 // compare's --confidence (and seed), `correction` its --correction: the dashboard judges as the
@@ -42,8 +44,10 @@ struct HistoryOptions {
 };
 struct HistorySummary {
   std::filesystem::path index;
-  size_t runs = 0, failing = 0;  // failing: comparisons that fail the gate
-  size_t unresolved = 0;         // changes beyond the tolerance the gate could not resolve
+  size_t runs = 0, failing = 0;                    // failing: rows that fail the gate
+  size_t comparisons = 0, failingComparisons = 0;  // run i against run i - 1; those that fail
+  size_t unresolved = 0;                           // changes beyond the tolerance within noise
+  size_t notJudged = 0;  // changes beyond the tolerance with no tiles to judge them (results.db)
   std::vector<std::string> absentSummaries;  // "<run>: <scene>: <metric> absent in N pair(s): <why>"
 };
 HistorySummary writeHistory(const HistoryOptions& options);

@@ -85,7 +85,39 @@ TEST(History, MarksWhatCompareSaysRunByRun) {
     EXPECT_EQ(marked, anyRegression(compareRuns(runs[i - 1], runs[i], tolerances))) << i;
     failing += marked;
   }
-  EXPECT_EQ(data["failing"].get<size_t>(), failing);
+  EXPECT_EQ(data["failingComparisons"].get<size_t>(), failing);
+  EXPECT_EQ(data["comparisons"], 7);
+  // Rows and comparisons are counted apart: one comparison may fail several rows (here
+  // passthrough's relMSE jumps with svgf's at run 5: two rows, one comparison).
+  std::vector<RunResults> both;
+  for (int i = 0; i < 8; ++i) {
+    json r = historyRun(i, 5);
+    if (i >= 5) r["pairs"][0]["summary"]["relMse"] = stat(0.55);
+    for (json& p : r["pairs"]) {  // relMSE tiles: the summary's mean on every tile and frame
+      MetricTiles tiles;
+      for (int f = 0; f < 8; ++f) {
+        TileSums t;
+        for (int k = 0; k < 4; ++k)
+          t.sum.push_back(float(p["summary"]["relMse"]["mean"].get<double>())),
+              t.count.push_back(1);
+        tiles.add(f, std::move(t));
+      }
+      p["tiles"]["relMse"] = tiles.toJson();
+    }
+    both.push_back(test::typed(r));
+  }
+  const json all = historyData(both, tolerances);
+  size_t failingRows = 0;
+  std::set<int> failingRuns;
+  for (const json& c : all["changes"])
+    if (c["fails"].get<bool>()) {
+      ++failingRows;
+      failingRuns.insert(c["run"].get<int>());
+    }
+  EXPECT_EQ(failingRows, 2u) << all["changes"].dump();
+  EXPECT_EQ(failingRuns, std::set<int>{5});
+  EXPECT_EQ(all["failing"].get<size_t>(), 2u);
+  EXPECT_EQ(all["failingComparisons"].get<size_t>(), 1u);
   // Series per scene x label x metric, one slot per run; gated metrics carry their tolerance.
   const json& v = data["series"]["s"]["svgf"]["relMse"]["value"];
   ASSERT_EQ(v.size(), 8u);
@@ -266,8 +298,9 @@ TEST(History, RunsFromADatabaseKeepTheirScenesSizes) {
   EXPECT_NE(why[1].find("scenes.s.frames: 16 vs 12"), std::string::npos) << why[1];
 }
 
-// Runs from a database keep no tiles: a change beyond the tolerance there is unresolved (orange),
-// never a failure, and the summary counts those so the CI log does not read "0 failing" alone.
+// Runs from a database keep no tiles: a change beyond the tolerance there is "not judged", never a
+// failure and never "within noise", and the summary counts those so the CI log does not read
+// "0 failing" alone.
 // A metric the caller names that no run computed is an error, as in compare (not a page of
 // "nothing compared" that hid every other change).
 TEST(History, CountsWhatItCouldNotResolveAndRefusesAMetricNoRunComputed) {
@@ -275,7 +308,12 @@ TEST(History, CountsWhatItCouldNotResolveAndRefusesAMetricNoRunComputed) {
   for (int i = 0; i < 4; ++i) appendToDatabase(dir / "results.db", test::typed(historyRun(i, 2)));
   const json data = historyData(loadHistory({dir / "results.db"}), {{"relMse", 0.02}});
   EXPECT_EQ(data["failing"], 0);
-  EXPECT_EQ(data["unresolved"], 1) << data["changes"].dump();
+  EXPECT_EQ(data["failingComparisons"], 0);
+  EXPECT_EQ(data["comparisons"], 3);
+  EXPECT_EQ(data["unresolved"], 0) << data["changes"].dump();
+  EXPECT_EQ(data["notJudged"], 1) << data["changes"].dump();
+  EXPECT_EQ(data["correction"], "holm");
+  EXPECT_EQ(data["confidence"], 0.95);
   EXPECT_EQ(changedRuns(data, "svgf", "relMse"), std::vector<int>{2});
   const std::string e = test::errorOf([&] {
     historyData(loadHistory({dir / "results.db"}), {{"ldrFlip", 0.02}});

@@ -22,34 +22,63 @@
   const concerns = (c) =>
       (c.scene === '*' || c.scene === state.scene) && (c.label === '*' || c.label === state.label);
 
+  // Changes beyond the tolerance that the gate could not judge (runs read from results.db keep no
+  // tiles): neither a failure nor a pass, listed apart.
+  const notJudged = H.changes.filter((c) => c.verdict === 'not judged');
+  const others = H.changes.length - flags.length - notJudged.length;
+
   function renderInfo() {
     const n = H.runs.length;
+    const comparisons = H.comparisons ?? Math.max(0, n - 1);
+    const failing = H.failingComparisons ?? new Set(flags.map((f) => f.run)).size;
     $('history-info').textContent = n
-      ? `${n} runs, ${runText(0)} → ${runText(n - 1)} · ${flags.length} comparison(s) fail the gate, ${H.changes.length - flags.length} other change(s) (improvements, changes within noise, new pairs)`
+      ? `${n} runs, ${runText(0)} → ${runText(n - 1)} · ${failing} of ${comparisons} comparison(s) fail the gate (${flags.length} row(s))` +
+        (notJudged.length ? `, ${notJudged.length} change(s) beyond the tolerance not judged` : '') +
+        `, ${others} other change(s) (improvements, changes within noise, new pairs)`
       : 'No runs.';
+    // How the rows were judged: the gate's own options (arena compare --correction, --confidence).
+    if (H.correction)
+      $('history-judged').textContent =
+        `Rows judged as \`arena compare --confidence ${(100 * H.confidence).toPrecision(3).replace(/\.?0+$/, '')}% --correction ${H.correction}\`: ` +
+        'a change is a regression when it is worse by more than the tolerance and the paired interval of the change excludes zero' +
+        (H.correction === 'holm'
+          ? ', and it stays resolved among all the rows of its comparison judged together (Holm\'s step-down correction: with many rows, some would be resolved by noise alone).'
+          : ' (each row alone, no correction for the many rows of a comparison).');
+  }
+
+  function changeTable(rows, cls) {
+    return el('table', { class: `data ${cls}` },
+      el('thead', {}, el('tr', {}, ['run', 'commit', 'scene', 'denoiser / setting', 'metric', 'previous', 'this run', 'change', 'interval', 'tolerance', 'verdict', 'note']
+        .map((t, i) => el('th', { class: i < 5 || i > 9 ? 'first' : null, text: t })))),
+      el('tbody', {}, rows.map((f) => {
+        const tr = el('tr', { class: 'flag', 'data-run': String(f.run), 'data-scene': f.scene, 'data-label': f.label, 'data-metric': f.metric },
+          el('td', { class: 'first', text: `#${f.run}` }), el('td', { class: 'first', text: H.runs[f.run].commit || '–' }),
+          el('td', { class: 'first', text: f.scene }), el('td', { class: 'first', text: f.label }), el('td', { class: 'first', text: f.metric }),
+          el('td', { text: fmt(f.baseline) }), el('td', { text: fmt(f.candidate) }), el('td', { class: f.fails ? 'verdict-regressed' : null, text: pct(f.change) }),
+          // The paired interval of the change, as compare prints it (none: no tiles to resample).
+          el('td', { text: Array.isArray(f.changeCi95) ? `[${pct(f.changeCi95[0])}, ${pct(f.changeCi95[1])}]` : '–' }),
+          el('td', { text: f.tolerance === null ? '–' : `±${(100 * f.tolerance).toFixed(1)}%` }), el('td', { class: f.fails ? 'first verdict-regressed' : 'first', text: f.verdict }),
+          el('td', { class: 'left', text: f.note || '' }));
+        if (f.scene !== '*') tr.addEventListener('click', () => choose(f.scene, f.label));
+        return tr;
+      })));
   }
 
   function renderFlags() {
     const box = $('flags');
-    if (!flags.length) {
-      box.replaceChildren(el('p', { class: 'empty', text: 'No run would have failed the gate.' }));
-      return;
+    const parts = [];
+    if (flags.length) parts.push(changeTable(flags, 'flags-table'));
+    else if (notJudged.length) parts.push(el('p', { class: 'empty', text: 'No run failed the gate where it could judge; the changes below were not judged.' }));
+    else parts.push(el('p', { class: 'empty', text: 'No run would have failed the gate.' }));
+    if (notJudged.length) {
+      // Largest changes first: what a reader must check by hand, or judge from the run directories.
+      const sorted = [...notJudged].sort((a, b) => Math.abs(b.change ?? 0) - Math.abs(a.change ?? 0));
+      parts.push(el('p', { class: 'failures not-judged', text:
+        `${notJudged.length} change(s) beyond the tolerance were NOT JUDGED: these runs were read from results.db, which keeps no per-tile data, ` +
+        'so the gate cannot tell them from noise; whether `arena compare` would fail them is unknown. Give `arena history` the run directories (their results.json) to judge them.' }));
+      parts.push(changeTable(sorted, 'not-judged-table'));
     }
-    box.replaceChildren(el('table', { class: 'data flags-table' },
-      el('thead', {}, el('tr', {}, ['run', 'commit', 'scene', 'denoiser / setting', 'metric', 'previous', 'this run', 'change', 'interval', 'tolerance', 'verdict', 'note']
-        .map((t, i) => el('th', { class: i < 5 || i > 9 ? 'first' : null, text: t })))),
-      el('tbody', {}, flags.map((f) => {
-        const tr = el('tr', { class: 'flag', 'data-run': String(f.run), 'data-scene': f.scene, 'data-label': f.label, 'data-metric': f.metric },
-          el('td', { class: 'first', text: `#${f.run}` }), el('td', { class: 'first', text: H.runs[f.run].commit || '–' }),
-          el('td', { class: 'first', text: f.scene }), el('td', { class: 'first', text: f.label }), el('td', { class: 'first', text: f.metric }),
-          el('td', { text: fmt(f.baseline) }), el('td', { text: fmt(f.candidate) }), el('td', { class: 'verdict-regressed', text: pct(f.change) }),
-          // The paired interval of the change, as compare prints it (none: no tiles to resample).
-          el('td', { text: Array.isArray(f.changeCi95) ? `[${pct(f.changeCi95[0])}, ${pct(f.changeCi95[1])}]` : '–' }),
-          el('td', { text: f.tolerance === null ? '–' : `±${(100 * f.tolerance).toFixed(1)}%` }), el('td', { class: 'first verdict-regressed', text: f.verdict }),
-          el('td', { class: 'left', text: f.note || '' }));
-        if (f.scene !== '*') tr.addEventListener('click', () => choose(f.scene, f.label));
-        return tr;
-      }))));
+    box.replaceChildren(...parts);
   }
 
   function setupControls() {

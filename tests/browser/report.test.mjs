@@ -637,7 +637,8 @@ test('history dashboard: 50 runs, the regressing one is marked, and the page sta
   const out = path.join(work, 'history');
   // Given newest first: the dashboard orders runs by creation time itself.
   const said = arena('history', ...runs.slice().reverse(), '--out', out);
-  assert.match(said, /50 runs, 1 comparison\(s\) failing `arena compare`'s gate/);
+  // Comparisons counted as comparisons, their failing rows apart.
+  assert.match(said, /50 runs, 1 of 49 comparison\(s\) failing `arena compare`'s gate \(1 row\(s\)\)/);
   // `arena compare` on the same two runs fails too (the dashboard marks what the gate does).
   assert.throws(() => arena('compare', runs[29], runs[30]), (e) => e.status === 1);
 
@@ -680,8 +681,31 @@ test('history dashboard: 50 runs, the regressing one is marked, and the page sta
   await page.click('#flags tr.flag');
   await page.waitForFunction(() => document.getElementById('history-label').value === 'svgf');
   assert.match(await page.locator('#load-time').innerText(), /Page ready \d+ ms/);
+  // How the rows were judged, in the gate's own options.
+  assert.match(await page.locator('#history-judged').innerText(), /arena compare --confidence 95% --correction holm.*Holm's step-down/);
+  assert.match(await page.locator('#history-info').innerText(), /1 of 49 comparison\(s\) fail the gate \(1 row\(s\)\)/);
   assert.deepEqual(problems, []);
   await page.close();
+
+  // The same change read from results.db (no tiles): not judged, said above the table of those
+  // changes, never "no run would have failed the gate".
+  const dbOut = path.join(work, 'history-not-judged');
+  fs.cpSync(out, dbOut, { recursive: true });
+  const dataFile = path.join(dbOut, 'history-data.js');
+  const data = JSON.parse(fs.readFileSync(dataFile, 'utf8').replace(/^[^]*?window\.ARENA_HISTORY = /, '').replace(/;\s*$/, ''));
+  for (const c of data.changes)
+    if (c.fails) Object.assign(c, { verdict: 'not judged', fails: false, changeCi95: null, note: 'no tile data for a paired interval (results.db keeps none)' });
+  Object.assign(data, { failing: 0, failingComparisons: 0, notJudged: 1 });
+  fs.writeFileSync(dataFile, `window.ARENA_HISTORY = ${JSON.stringify(data)};\n`);
+  const db = await context.newPage();
+  await db.goto(pathToFileURL(path.join(dbOut, 'index.html')).href);
+  await db.waitForSelector('body[data-ready]', { timeout: 30000 });
+  assert.match(await db.locator('#flags').innerText(), /No run failed the gate where it could judge/);
+  assert.match(await db.locator('#flags p.not-judged').innerText(), /1 change\(s\) beyond the tolerance were NOT JUDGED/);
+  assert.equal(await db.locator('#flags table.not-judged-table tbody tr').count(), 1);
+  assert.doesNotMatch(await db.locator('#flags').innerText(), /No run would have failed/);
+  assert.match(await db.locator('#history-info').innerText(), /0 of 49 comparison\(s\) fail the gate \(0 row\(s\)\), 1 change\(s\) beyond the tolerance not judged/);
+  await db.close();
 });
 
 test('a capture: its validation on the page, a file: contender named with its own clock', async () => {
