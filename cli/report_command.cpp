@@ -2,8 +2,9 @@
 #include <iostream>
 
 #include "cli/commands.hpp"
-#include "metrics/metric_registry.hpp"
+#include "harness/scene_selection.hpp"
 #include "metrics/compare.hpp"
+#include "metrics/metric_registry.hpp"
 #include "reports/history.hpp"
 #include "reports/report.hpp"
 
@@ -41,14 +42,23 @@ void addReportCommand(CLI::App& app) {
   auto tol = std::make_shared<std::string>("2%");
   hist->add_option("inputs", *inputs, "results.db files and/or run directories")->required();
   hist->add_option("--out", *histOut, "Output directory for index.html and its files")->required();
-  hist->add_option("--metric", *metrics,
-                   "Metric(s) the gate checks, as for `arena compare` (default: its defaults)");
+  hist->add_option(
+          "--metric", *metrics,
+          "Metric(s) the gate checks, as for `arena compare`, repeatable or comma-separated "
+          "(default: its defaults)")
+      ->delimiter(',')
+      ->allow_extra_args(false);
   hist->add_option("--tolerance", *tol, "Allowed relative change, as for `arena compare`")
       ->default_val("2%");
   auto confidence = std::make_shared<std::string>("95%");
   hist->add_option("--confidence", *confidence,
                    "Confidence of the paired intervals, as for `arena compare`")
       ->default_val("95%");
+  auto only = std::make_shared<std::string>();
+  hist->add_option("--denoisers", *only,
+                   "Gate only these contenders (labels or denoiser names, comma-separated), as for "
+                   "`arena compare`")
+      ->default_str("every pair");
   auto correction = std::make_shared<std::string>("holm");
   hist->add_option("--correction", *correction,
                    "How each comparison's rows are counted together, as for `arena compare`")
@@ -63,6 +73,7 @@ void addReportCommand(CLI::App& app) {
     h.tolerances = gateTolerances(std::move(h.tolerances), t);
     h.bootstrap.confidence = parseConfidence(*confidence);
     h.correction = parseCorrection(*correction);
+    if (!only->empty()) h.contenders = splitList(*only, "--denoisers", "labels or denoiser names");
     const HistorySummary s = writeHistory(h);
     std::cout << "history: " << s.index.string() << " (" << s.runs
               << (s.runs == 1 ? " run, " : " runs, ") << s.failingComparisons << " of "

@@ -348,7 +348,10 @@ void addRunCommands(CLI::App& app) {
     });
   }
   {
-    auto* cmd = app.add_subcommand("compare", "Compare two runs; exit 1 when a metric regresses beyond its tolerance");
+    auto* cmd = app.add_subcommand(
+        "compare",
+        "Compare two runs; exit 1 when a metric regresses beyond its tolerance (or a pair is "
+        "missing or failed), 2 when the gate could not judge");
     auto a = std::make_shared<std::string>(), b = std::make_shared<std::string>();
     auto metrics = std::make_shared<std::vector<std::string>>();
     auto tol = std::make_shared<std::string>("2%");
@@ -359,7 +362,18 @@ void addRunCommands(CLI::App& app) {
     std::string gated;
     for (const MetricDefinition* m : metricCatalog())
       if (m->gatedByDefault) gated += (gated.empty() ? "" : " ") + m->name;
-    cmd->add_option("--metric", *metrics, "Metric(s) to gate on (`arena metrics` lists them)")->default_str(gated);
+    // One value per --metric, or a comma-separated list: never the positional runs after it.
+    cmd->add_option(
+           "--metric", *metrics,
+           "Metric(s) to gate on, repeatable or comma-separated (`arena metrics` lists them)")
+        ->default_str(gated)
+        ->delimiter(',')
+        ->allow_extra_args(false);
+    auto only = std::make_shared<std::string>();
+    cmd->add_option("--denoisers", *only,
+                    "Gate only these contenders (labels or denoiser names, comma-separated): the "
+                    "ones a change can move, not the baselines it cannot")
+        ->default_str("every pair");
     cmd->add_option("--tolerance", *tol, "Allowed relative change in the worse direction, e.g. 2%")->default_val("2%");
     cmd->add_option("--confidence", *confidence,
                     "A change regresses only when its paired bootstrap interval at this level excludes zero")
@@ -384,7 +398,26 @@ void addRunCommands(CLI::App& app) {
       bc.confidence = parseConfidence(*confidence);
       for (auto& m : *metrics) tols.push_back({m, t});
       tols = gateTolerances(std::move(tols), t);
-      const RunResults baseline = loadResults(*a), candidate = loadResults(*b);
+      RunResults baseline = loadResults(*a), candidate = loadResults(*b);
+      // The same run on both sides (a CI step that copied the candidate into the baseline) would
+      // pass every row by construction: the gate cannot judge it (exit 2), rather than pass.
+      if (baseline.name == candidate.name && baseline.created == candidate.created &&
+          baseline.environment == candidate.environment)
+        throw Error("compare: " + *a + " and " + *b + " hold the same run (name " + baseline.name +
+                    ", created " + baseline.created +
+                    "): every change would be zero by construction, and the gate would pass having "
+                    "checked nothing (was the candidate copied into the baseline?)");
+      if (!only->empty()) {
+        const std::vector<std::string> chosen =
+            splitList(*only, "--denoisers", "labels or denoiser names");
+        keepContenders(baseline, chosen, *a);
+        keepContenders(candidate, chosen, *b);
+      }
+      std::vector<std::string> warnings;  // said on stderr, and in the JSON
+      const auto warn = [&](const std::string& text) {
+        std::cerr << "arena: warning: " << text << "\n";
+        warnings.push_back(text);
+      };
       // Numbers measured under other settings differ for that reason alone: refused unless asked.
       const std::vector<std::string> differ = settingsDifferences(baseline, candidate);
       const auto lines = [](const std::vector<std::string>& items) {  // one indented line each
@@ -397,25 +430,23 @@ void addRunCommands(CLI::App& app) {
         if (!*allowMismatch)
           throw Error("compare: " + *a + " and " + *b + " were run with different settings (baseline vs candidate):" +
                       list + "\ntheir numbers are not comparable; pass --allow-settings-mismatch to compare anyway");
-        std::cerr << "arena: warning: comparing runs with different settings (baseline vs candidate):" << list
-                  << "\n";
+        warn("comparing runs with different settings (baseline vs candidate):" + list);
       }
       // (Runs of other settings render other references anyway: said above.)
       if (const std::vector<std::string> refs = referenceDifferences(baseline, candidate);
-          !refs.empty() && differ.empty()) {
-        std::cerr
-            << "arena: warning: the runs measured these scenes against references of other sample "
-               "counts (refined between them?); part of each change there is the reference's, not "
-               "the denoiser's (run both on one cache state to compare the denoisers alone):"
-            << lines(refs) << "\n";
-      }
-      // The same run on both sides (a CI step that copied the wrong directory) passes every row
-      // by construction: said, so that a pass is not read as a check.
-      if (baseline.name == candidate.name && baseline.created == candidate.created &&
-          baseline.environment == candidate.environment)
-        std::cerr << "arena: warning: " << *a << " and " << *b << " hold the same run (name "
-                  << baseline.name << ", created " << baseline.created
-                  << "): every change is zero by construction\n";
+          !refs.empty() && differ.empty())
+        warn(
+            "the runs measured these scenes against references of other sample counts (refined "
+            "between them?); part of each change there is the reference's, not the denoiser's "
+            "(run both on one cache state to compare the denoisers alone):" +
+            lines(refs));
+      // A candidate older than its baseline: the arguments are likely swapped, which turns every
+      // regression into an improvement.
+      if (!baseline.created.empty() && !candidate.created.empty() &&
+          candidate.created < baseline.created)
+        warn("the candidate " + *b + " (created " + candidate.created +
+             ") is older than the baseline " + *a + " (created " + baseline.created +
+             "): are the arguments swapped? (arena compare BASELINE CANDIDATE)");
       const Correction corrected = parseCorrection(*correction);
       auto rows = compareRuns(baseline, candidate, tols, bc, corrected);
       // The rows with an interval: the family the correction judges together.
@@ -423,14 +454,26 @@ void addRunCommands(CLI::App& app) {
           size_t(std::count_if(rows.begin(), rows.end(),
                                [](const ComparisonRow& r) { return std::isfinite(r.pValue); }));
       if (corrected == Correction::Holm && family > holmResolvableRows(bc.confidence))
-        std::cerr
-            << "arena: warning: " << family << " rows judged together: more than "
-            << holmResolvableRows(bc.confidence)
-            << ", beyond which the correction can resolve no row at this confidence (its smallest "
-               "threshold lies below what its replicates can show); narrow the gate with --metric, "
-               "or judge each row alone with --correction none\n";
+        warn(std::to_string(family) + " rows judged together: more than " +
+             std::to_string(holmResolvableRows(bc.confidence)) +
+             ", beyond which the correction can resolve no row at this confidence (its smallest "
+             "threshold lies below what its replicates can show); narrow the gate with --metric or "
+             "--denoisers, or judge each row alone with --correction none");
+      const GateOutcome outcome = gateOutcome(rows);
       if (*asJson) {
-        std::cout << comparisonJson(rows).dump(2) << "\n";
+        const auto runJson = [](const std::string& path, const RunResults& r) {
+          return json{{"path", path},
+                      {"name", r.name},
+                      {"created", r.created},
+                      {"commit", r.environment.value("git_commit", "")}};
+        };
+        const json out = {
+            {"gate", gateOutcomeName(outcome)},  {"exitCode", gateExitCode(outcome)},
+            {"baseline", runJson(*a, baseline)}, {"candidate", runJson(*b, candidate)},
+            {"confidence", bc.confidence},       {"correction", *correction},
+            {"rowsJudgedTogether", family},      {"warnings", warnings},
+            {"rows", comparisonJson(rows)}};
+        std::cout << out.dump(2) << "\n";
       } else {
         std::cout << "regressed = worse by more than the tolerance AND the paired "
                   << bc.confidence * 100 << "% interval of the change excludes zero"
@@ -482,10 +525,13 @@ void addRunCommands(CLI::App& app) {
         std::string counts;
         for (const auto& [verdict, n] : verdicts)
           counts += (counts.empty() ? "" : ", ") + std::to_string(n) + " " + verdict;
-        std::cout << "gate: " << (anyRegression(rows) ? "FAIL" : "pass") << " (" << rows.size()
-                  << " row(s): " << counts << ")\n";
+        std::cout << "gate: "
+                  << (outcome == GateOutcome::Regressed       ? "FAIL"
+                      : outcome == GateOutcome::CouldNotJudge ? "COULD NOT JUDGE"
+                                                              : "pass")
+                  << " (" << rows.size() << " row(s): " << counts << ")\n";
       }
-      if (anyRegression(rows)) throw CLI::RuntimeError(1);
+      if (gateExitCode(outcome) != 0) throw CLI::RuntimeError(gateExitCode(outcome));
     });
   }
   {

@@ -193,9 +193,9 @@ std::vector<Tolerance> gateTolerances(std::vector<Tolerance> tolerances, double 
       if (m->gatedByDefault) tolerances.push_back({m->name, relative, true});
   for (Tolerance& t : tolerances) {
     if (t.metric == "flip") t.metric = "ldrFlip";
-    requireMetric(t.metric, "compare");
+    requireMetric(t.metric, "--metric");
     if (!std::isfinite(t.relative) || t.relative < 0)
-      throw Error("compare: tolerance of " + t.metric + " must be finite and non-negative");
+      throw Error("--tolerance of " + t.metric + " must be finite and non-negative");
   }
   return tolerances;
 }
@@ -501,6 +501,48 @@ bool failsGate(const ComparisonRow& row) {
 
 bool anyRegression(const std::vector<ComparisonRow>& rows) {
   return std::any_of(rows.begin(), rows.end(), failsGate);
+}
+
+GateOutcome gateOutcome(const std::vector<ComparisonRow>& rows) {
+  if (std::any_of(rows.begin(), rows.end(), [](const ComparisonRow& r) {
+        return r.verdict == "regressed" || r.verdict == "missing" || r.verdict == "failed";
+      }))
+    return GateOutcome::Regressed;
+  return anyRegression(rows) ? GateOutcome::CouldNotJudge : GateOutcome::Pass;
+}
+
+const char* gateOutcomeName(GateOutcome outcome) {
+  switch (outcome) {
+    case GateOutcome::Regressed:
+      return "regressed";
+    case GateOutcome::CouldNotJudge:
+      return "could not judge";
+    case GateOutcome::Pass:
+      break;
+  }
+  return "pass";
+}
+
+int gateExitCode(GateOutcome outcome) {
+  return outcome == GateOutcome::Regressed ? 1 : outcome == GateOutcome::CouldNotJudge ? 2 : 0;
+}
+
+void keepContenders(RunResults& run, const std::vector<std::string>& names,
+                    const std::string& runName) {
+  std::set<std::string> labels;
+  for (const PairResult& p : run.pairs) labels.insert(p.label);
+  for (const std::string& name : names)
+    if (std::none_of(run.pairs.begin(), run.pairs.end(),
+                     [&](const PairResult& p) { return p.label == name || p.denoiser == name; })) {
+      std::string list;
+      for (const std::string& l : labels) list += (list.empty() ? "" : ", ") + l;
+      throw Error("compare: --denoisers " + name + ": " + runName +
+                  " has no pair of that label or denoiser (its labels: " + list + ")");
+    }
+  std::erase_if(run.pairs, [&](const PairResult& p) {
+    return std::find(names.begin(), names.end(), p.label) == names.end() &&
+           std::find(names.begin(), names.end(), p.denoiser) == names.end();
+  });
 }
 
 }  // namespace arena

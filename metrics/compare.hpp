@@ -110,5 +110,17 @@ bool failsGate(const ComparisonRow& row);
 nlohmann::json comparisonJson(const std::vector<ComparisonRow>& rows);
 // True when the gate must fail: some row fails it.
 bool anyRegression(const std::vector<ComparisonRow>& rows);
+// What the gate decided, for a CI step to tell apart: Regressed (a row "regressed", "missing" or
+// "failed": the candidate is worse or lost something; exit 1), CouldNotJudge (no such row, but a
+// row the gate fails for want of data: "unverified", "nothing compared", "not comparable"; exit 2,
+// as for input the gate refuses), Pass (exit 0).
+enum class GateOutcome { Pass, Regressed, CouldNotJudge };
+GateOutcome gateOutcome(const std::vector<ComparisonRow>& rows);
+const char* gateOutcomeName(GateOutcome outcome);  // "pass", "regressed", "could not judge"
+int gateExitCode(GateOutcome outcome);             // 0, 1, 2
+// Keeps the pairs of `run` whose label or denoiser is among `names` (`arena compare --denoisers`);
+// a name no pair has is an Error naming `runName` and the labels it has.
+void keepContenders(RunResults& run, const std::vector<std::string>& names,
+                    const std::string& runName);
 
 }  // namespace arena

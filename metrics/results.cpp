@@ -29,6 +29,10 @@ RunResults loadResults(const fs::path& runDir) {
                 (runDir.filename() == "results.json" ? ": " + runDir.parent_path().string()
                                                      : std::string()) +
                 ")");
+  // A run still being written (its writer holds the directory's lock) holds a results.json of an
+  // earlier run, or none: refused, naming the writer, rather than judged as if finished.
+  const DirectoryLock reading(runDir, DirectoryLock::Mode::Shared, DirectoryLock::IfHeld::Refuse,
+                              "reading this run");
   if (!fs::exists(file))
     throw Error(runDir.string() + ": not a run (no results.json); create one with `arena run`");
   return RunResults::fromJson(parseJsonFile(file.string()), file.string());

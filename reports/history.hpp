@@ -40,6 +40,9 @@ struct HistoryOptions {
   std::vector<Tolerance> tolerances;
   BootstrapConfig bootstrap;                     // the gate's --confidence
   Correction correction = Correction::Holm;      // the gate's --correction
+  // The gate's --denoisers: only pairs of these labels or denoiser names (empty: every pair). Runs
+  // over months differ in what they ran: a name no run has is an Error, one some runs lack is not.
+  std::vector<std::string> contenders;
   std::filesystem::path webDir, nodeModulesDir;  // empty: the report's defaults
 };
 struct HistorySummary {

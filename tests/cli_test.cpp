@@ -8,6 +8,7 @@
 #include <regex>
 #include <string>
 
+#include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/text.hpp"
 #include "harness/scene_selection.hpp"
@@ -304,12 +305,22 @@ TEST(CliContract, ARunShorterThanTheWarmupSaysWhyEveryReaderHasNoSummary) {
             std::string::npos)
       << r.output;
   const std::string run = (dir / "run").string();
-  // Compared with itself, every figure absent: the gate says it compared nothing and fails.
+  // Compared with itself, the gate could not judge (exit 2), whatever the run holds.
   r = contract::arenaCli("compare " + run + " " + run);
-  EXPECT_EQ(r.status, 1) << r.output;
-  // Said: the same run on both sides, and the verdict in one line for a CI log.
+  EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("hold the same run (name run, created "), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("gate: FAIL ("), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("the gate would pass having checked nothing"), std::string::npos)
+      << r.output;
+  // Against a later run of it, every figure absent: the gate says it compared nothing and could
+  // not judge (exit 2, not the 1 of a regression), in one line for a CI log.
+  const fs::path later = dir / "later";
+  fs::create_directories(later);
+  json copied = json::parse(readText(dir / "run" / "results.json"));
+  copied["created"] = "2999-01-01T00:00:00Z";
+  writeTextAtomically(later / "results.json", copied.dump());
+  r = contract::arenaCli("compare " + run + " " + later.string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("gate: COULD NOT JUDGE ("), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("absent"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("no frame after the warm-up"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("nothing compared"), std::string::npos) << r.output;

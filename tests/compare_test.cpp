@@ -1,12 +1,14 @@
 // metrics/compare: runs of other settings are compared only when asked, and then say which differ.
+#include "metrics/compare.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <filesystem>
 #include <string>
 
+#include "core/atomic_file.hpp"
 #include "harness/run_matrix.hpp"
-#include "metrics/compare.hpp"
 #include "metrics/results.hpp"
 #include "tests/contract_fixture.hpp"
 #include "tests/test_util.hpp"
@@ -85,6 +87,80 @@ TEST(CompareContract, RunsOfOtherSettingsAreRefusedUnlessAllowed) {
   otherLowres.settings = RunSettings::fromJson(settings, "test");
   EXPECT_EQ(settingsDifferences(withLowres, otherLowres),
             std::vector<std::string>{"settings.render.lowresFactor: 8 vs 4"});
+}
+
+// What a CI step reads from the gate: exit 1 for a regression, 2 for what it could not judge (or
+// refuses), 0 for a pass; the JSON says the same with the rows; --metric never takes the runs;
+// --denoisers gates only the contenders named; a run still being written is refused.
+TEST(CompareContract, ACiStepTellsARegressionFromWhatTheGateCouldNotJudge) {
+  RunConfig a = contract::tinyRun("gate_a"), b = contract::tinyRun("gate_b");
+  b.cache = a.cache;
+  a.denoisers = b.denoisers = {{"passthrough", {}, ""}, {"eaw", {}, ""}};
+  runMatrix(a);
+  runMatrix(b);
+  const std::string A = a.out.string(), B = b.out.string();
+  {  // b was created later (both runs may fall within one second of the clock)
+    json later = json::parse(readText(b.out / "results.json"));
+    later["created"] = "2999-01-01T00:00:00Z";
+    writeTextAtomically(b.out / "results.json", later.dump());
+  }
+  contract::CliResult r = contract::arenaCli("compare --metric relMse " + A + " " + B + " --json");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const json j = json::parse(r.output.substr(r.output.find('{')));
+  EXPECT_EQ(j["gate"], "pass");
+  EXPECT_EQ(j["exitCode"], 0);
+  EXPECT_EQ(j["baseline"]["path"], A);
+  EXPECT_EQ(j["candidate"]["name"], "gate_b");
+  EXPECT_EQ(j["correction"], "holm");
+  EXPECT_EQ(j["rows"].size(), 2u) << j.dump();  // relMSE of both pairs: --metric took one value
+  // A comma-separated list, and the arguments swapped (the candidate is the older run): said.
+  r = contract::arenaCli("compare --metric relMse,dssim " + B + " " + A);
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("is older than the baseline"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("are the arguments swapped?"), std::string::npos) << r.output;
+  // Only the contenders named; a name neither run has is refused with the labels they have.
+  r = contract::arenaCli("compare " + A + " " + B + " --metric relMse --denoisers eaw --json");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const json only = json::parse(r.output.substr(r.output.find('{')));
+  ASSERT_EQ(only["rows"].size(), 1u) << only.dump();
+  EXPECT_EQ(only["rows"][0]["label"], "eaw");
+  r = contract::arenaCli("compare " + A + " " + B + " --denoisers svgf");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("--denoisers svgf: " + A +
+                          " has no pair of that label or denoiser (its labels: eaw, passthrough)"),
+            std::string::npos)
+      << r.output;
+  // A pair the candidate lost is a regression (exit 1), told apart in the JSON too.
+  const fs::path lost = test::freshDir("gate_lost") / "run";
+  fs::create_directories(lost);
+  json results = json::parse(readText(b.out / "results.json"));
+  results["pairs"].erase(results["pairs"].begin());
+  writeTextAtomically(lost / "results.json", results.dump());
+  r = contract::arenaCli("compare " + A + " " + lost.string() + " --json");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_EQ(json::parse(r.output.substr(r.output.find('{')))["gate"], "regressed");
+  // A run still being written (another process holds its lock) is refused, naming the writer.
+  {
+    const DirectoryLock writing(b.out, DirectoryLock::Mode::Exclusive,
+                                DirectoryLock::IfHeld::Refuse, "writing this run");
+    r = contract::arenaCli("compare " + A + " " + B);
+  }
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find(B + ": another arena process (pid "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("writing this run"), std::string::npos) << r.output;
+  // The dashboard takes the same options: --metric before the runs does not swallow them.
+  const fs::path page = test::freshDir("gate_history") / "page";
+  r = contract::arenaCli("history --metric relMse --denoisers eaw " + A + " " + B + " --out " +
+                         page.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  const std::string data = readText(page / "history-data.js");
+  EXPECT_NE(data.find("\"eaw\""), std::string::npos);
+  EXPECT_EQ(data.find("\"passthrough\""), std::string::npos) << "only the contenders named";
+  r = contract::arenaCli("history " + A + " " + B + " --denoisers svgf --out " + page.string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("--denoisers svgf: no run has a pair of that label or denoiser"),
+            std::string::npos)
+      << r.output;
 }
 
 }  // namespace
