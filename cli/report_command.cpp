@@ -20,10 +20,33 @@ void addReportCommand(CLI::App& app) {
   cmd->add_option("--baseline", *baseline, "A run to compare against: adds the regression view")
       ->default_str("none");
   cmd->add_option("--out", *out, "Output directory for index.html and its files")->required();
-  cmd->callback([o, run, baseline, out] {
+  // The regression view judges as the gate does, with the gate's options.
+  auto gateMetrics = std::make_shared<std::vector<std::string>>();
+  auto gateTolerance = std::make_shared<std::string>("2%");
+  auto gateConfidence = std::make_shared<std::string>("95%");
+  auto gateCorrection = std::make_shared<std::string>("holm");
+  cmd->add_option(
+         "--metric", *gateMetrics,
+         "With --baseline: the metric(s) the regression view gates, as for `arena compare`")
+      ->default_str("compare's defaults")
+      ->delimiter(',')
+      ->allow_extra_args(false);
+  cmd->add_option("--tolerance", *gateTolerance, "With --baseline: as for `arena compare`")
+      ->default_val("2%");
+  cmd->add_option("--confidence", *gateConfidence, "With --baseline: as for `arena compare`")
+      ->default_val("95%");
+  cmd->add_option("--correction", *gateCorrection, "With --baseline: as for `arena compare`")
+      ->check(CLI::IsMember({"holm", "none"}))
+      ->default_val("holm");
+  cmd->callback([=] {
     o->run = *run;
     o->baseline = *baseline;
     o->out = *out;
+    const double t = parseTolerance(*gateTolerance);
+    for (const std::string& m : *gateMetrics) o->gate.tolerances.push_back({m, t});
+    o->gate.tolerances = gateTolerances(std::move(o->gate.tolerances), t);
+    o->gate.bootstrap.confidence = parseConfidence(*gateConfidence);
+    o->gate.correction = parseCorrection(*gateCorrection);
     ReportSummary s = writeReport(*o);
     std::cout << "report: " << s.index.string() << " (" << s.pairs << " pairs";
     if (s.failedPairs) std::cout << ", " << s.failedPairs << " failed: shown in the report";

@@ -34,6 +34,7 @@ struct MatrixOptions {
   std::string exposure = "per-frame";
   std::vector<std::string> params;
   std::vector<std::string> captures;
+  std::string revision;
   CLI::Option* scenesOption = nullptr;
   bool noBaselines = false;
   int warmup = 8;
@@ -49,6 +50,11 @@ void addMatrixOptions(CLI::App* cmd, MatrixOptions& o) {
                   "scene, repeatable")
       ->default_str("none");
   cmd->add_option("--out", o.out, "Run directory, e.g. runs/today")->required();
+  cmd->add_option("--revision", o.revision,
+                  "The revision of what this run measures (your denoiser's commit, say): recorded "
+                  "as environment.revision and shown beside arena's own commit by the report and "
+                  "the history")
+      ->default_str("none");
   cmd->add_option("--param", o.params, "DENOISER.NAME=VALUE, repeatable (e.g. svgf.sigmaL=8)")
       ->default_str("none: registry defaults");
   cmd->add_option("--shard", o.shard, "Run only the deterministic slice i/n of the pairs (see `arena merge`)")
@@ -118,6 +124,9 @@ RunConfig configFrom(const MatrixOptions& o) {
     throw Error("--out: an empty directory name; expected the run's directory, e.g. runs/today");
   c.out = o.out;
   c.name = folderName(o.out);  // "runs/today/" too
+  if (o.revision.find_first_of("\n\r") != std::string::npos)
+    throw Error("--revision: one line expected (a commit or tag), got \"" + o.revision + "\"");
+  c.revision = o.revision;
   c.cache = o.render.cacheDir;
   c.render = o.render.settings();
   c.lowresAuto = o.render.lowresAuto();  // resolved once the denoisers are known

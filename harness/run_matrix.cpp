@@ -351,6 +351,7 @@ json runMatrix(const RunConfig& cfg) {
                   {"environment", environmentInfo()}, {"settings", settings},
                   {"metrics", metricCatalogJson()}, {"scenes", json::object()}, {"pairs", json::array()}};
   results.update(cfg.annotations);
+  if (!cfg.revision.empty()) results["environment"]["revision"] = cfg.revision;
   results["settings"]["render"].erase("width");
   results["settings"]["render"].erase("height");
   results["settings"]["render"].erase("frames");

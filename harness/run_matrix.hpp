@@ -18,6 +18,9 @@ namespace arena {
 
 struct RunConfig {
   std::string name;
+  // The revision of what the run measures (`--revision`: a denoiser's own commit), recorded as
+  // environment.revision beside arena's build commit; empty: none.
+  std::string revision;
   std::filesystem::path out, cache = "cache";
   RenderSettings render;
   std::vector<Scene> scenes;

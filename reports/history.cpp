@@ -254,6 +254,7 @@ json historyData(const std::vector<RunResults>& runs, std::vector<Tolerance> tol
     runList.push_back({{"name", r.name},
                        {"created", r.created},
                        {"commit", r.environment.value("git_commit", "")},
+                       {"revision", r.environment.value("revision", "")},
                        {"source", r.source}});
   // Values per scene x label x metric, one slot per run (null where the run lacks it).
   json series = json::object();

@@ -792,7 +792,8 @@ std::string ablationCsv(const json& ablation) {
   return csv;
 }
 
-json reportData(const RunResults& results, const fs::path& runDir, const RunResults* baseline) {
+json reportData(const RunResults& results, const fs::path& runDir, const RunResults* baseline,
+                const RegressionGate& gate) {
   const int warmup = results.settings.warmup();
   // Scenes and labels in run order (results.json keeps scenes in an object, sorted by name).
   std::vector<std::string> sceneNames, labels;
@@ -862,7 +863,8 @@ json reportData(const RunResults& results, const fs::path& runDir, const RunResu
                {"ablation", ablationData(results)},
                {"regression", nullptr}};
   if (baseline) {
-    const std::vector<ComparisonRow> rows = compareRuns(*baseline, results, {});
+    const std::vector<ComparisonRow> rows =
+        compareRuns(*baseline, results, gate.tolerances, gate.bootstrap, gate.correction);
     json table = comparisonJson(rows);
     // compareRuns leaves the numbers at 0 when one side has no result; say why instead, and keep
     // the side that exists, so "regressed" from a failed pair is not read as a change of +0%.
@@ -887,14 +889,21 @@ json reportData(const RunResults& results, const fs::path& runDir, const RunResu
         row["note"] = "the baseline: " + bm.absent;
       }
     }
-    data["regression"] = {
-        {"baseline",
-         {{"name", baseline->name},
-          {"created", baseline->created},
-          {"commit", baseline->environment.value("git_commit", "")}}},
-        {"rows", table},
-        {"anyRegression", anyRegression(rows)},
-        {"settingsDiffer", settingsDifferences(*baseline, results)}};
+    data["regression"] = {{"baseline",
+                           {{"name", baseline->name},
+                            {"created", baseline->created},
+                            {"commit", baseline->environment.value("git_commit", "")}}},
+                          {"rows", table},
+                          {"anyRegression", anyRegression(rows)},
+                          {"gate", gateOutcomeName(gateOutcome(rows))},
+                          {"exitCode", gateExitCode(gateOutcome(rows))},
+                          {"confidence", gate.bootstrap.confidence},
+                          {"correction", correctionName(gate.correction)},
+                          {"rowsJudgedTogether", std::count_if(rows.begin(), rows.end(),
+                                                               [](const ComparisonRow& r) {
+                                                                 return std::isfinite(r.pValue);
+                                                               })},
+                          {"settingsDiffer", settingsDifferences(*baseline, results)}};
   }
   return data;
 }
@@ -1077,7 +1086,7 @@ ReportSummary writeReport(const ReportOptions& o) {
   std::vector<PageFile> files;
   for (const char* f : kWebFiles) files.push_back({f, f});
   checkPageAssets(o.webDir, o.nodeModulesDir, files);
-  json data = reportData(results, o.run, o.baseline.empty() ? nullptr : &baseline);
+  json data = reportData(results, o.run, o.baseline.empty() ? nullptr : &baseline, o.gate);
   fs::create_directories(o.out);
   const DirectoryLock lock(o.out, DirectoryLock::Mode::Exclusive, DirectoryLock::IfHeld::Refuse,
                            "writing a report");

@@ -11,13 +11,22 @@
 #include <string>
 #include <vector>
 
+#include "metrics/compare.hpp"
 #include "metrics/run_results.hpp"
 
 namespace arena {
 
+// The regression view's gate, as `arena compare`'s options (empty tolerances: its defaults).
+struct RegressionGate {
+  std::vector<Tolerance> tolerances;
+  BootstrapConfig bootstrap;
+  Correction correction = Correction::Holm;
+};
+
 struct ReportOptions {
   std::filesystem::path run;       // the run directory to report
   std::filesystem::path baseline;  // optional: a run to compare against (regression view)
+  RegressionGate gate;
   std::filesystem::path out;       // where index.html and its files go
   // The page's static files and the npm packages with the browser builds; the defaults are the
   // source tree's, tests point them elsewhere.
@@ -42,9 +51,10 @@ struct ReportSummary {
 };
 
 // The document embedded as data.js. `runDir` is where the run's images are looked up (only images
-// that exist are offered to the viewer); `baseline` may be null. Pure apart from those look-ups.
+// that exist are offered to the viewer); `baseline` may be null, and is judged with `gate`. Pure
+// apart from those look-ups.
 nlohmann::json reportData(const RunResults& results, const std::filesystem::path& runDir,
-                          const RunResults* baseline);
+                          const RunResults* baseline, const RegressionGate& gate = {});
 
 // A sweep's ablation (reportData's "ablation") as CSV, one line per row and metric, for a paper's
 // table or a plot: parameter, value, versus, scene ("all scenes" for the mean over them), matched,

@@ -96,6 +96,7 @@ TEST(CompareContract, ACiStepTellsARegressionFromWhatTheGateCouldNotJudge) {
   RunConfig a = contract::tinyRun("gate_a"), b = contract::tinyRun("gate_b");
   b.cache = a.cache;
   a.denoisers = b.denoisers = {{"passthrough", {}, ""}, {"eaw", {}, ""}};
+  b.revision = "mydn-4f2a9c1";  // the team's own commit of what b measured
   runMatrix(a);
   runMatrix(b);
   const std::string A = a.out.string(), B = b.out.string();
@@ -155,6 +156,10 @@ TEST(CompareContract, ACiStepTellsARegressionFromWhatTheGateCouldNotJudge) {
   ASSERT_EQ(r.status, 0) << r.output;
   const std::string data = readText(page / "history-data.js");
   EXPECT_NE(data.find("\"eaw\""), std::string::npos);
+  EXPECT_NE(data.find("\"revision\":\"mydn-4f2a9c1\""), std::string::npos)
+      << "the run's own revision";
+  EXPECT_EQ(json::parse(readText(b.out / "results.json"))["environment"]["revision"],
+            "mydn-4f2a9c1");
   EXPECT_EQ(data.find("\"passthrough\""), std::string::npos) << "only the contenders named";
   r = contract::arenaCli("history " + A + " " + B + " --denoisers svgf --out " + page.string());
   EXPECT_EQ(r.status, 2) << r.output;

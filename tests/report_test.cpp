@@ -561,6 +561,21 @@ TEST(Report, BaselineGivesCompareVerdicts) {
       EXPECT_NEAR(r["change"].get<double>(), 0.2, 1e-9);
     }
   EXPECT_TRUE(found);
+  EXPECT_EQ(data["regression"]["gate"], "regressed");
+  EXPECT_EQ(data["regression"]["exitCode"], 1);
+  EXPECT_EQ(data["regression"]["correction"], "holm");
+  // The gate's options reach the view: a tolerance of 25% passes the +20% change.
+  RegressionGate loose;
+  loose.tolerances = gateTolerances({{"relMse", 0.25}});
+  loose.correction = Correction::None;
+  const json passed =
+      reportData(test::typed(cand), test::freshDir("report_regression_loose"), &baseRun, loose);
+  for (const json& r : passed["regression"]["rows"])
+    if (r["scene"] == "static" && r["label"] == "svgf[a=0]") {
+      EXPECT_EQ(r["verdict"], "ok") << r;
+      EXPECT_EQ(r["tolerance"], 0.25) << r;
+    }
+  EXPECT_EQ(passed["regression"]["correction"], "none");
   // The same contender under another label (a sweep's grid point against a plain run's default):
   // compare matches it by denoiser and parameters, and the page shows the candidate's figures
   // (it said "this run: not measured" beside compare's verdict).

@@ -61,7 +61,8 @@
     const s = r.settings || {};
     const parts = [
       r.created && `created ${r.created}`,
-      env.git_commit && `commit ${env.git_commit}`,
+      env.revision && `revision ${env.revision}`,
+      env.git_commit && `${env.revision ? 'arena ' : ''}commit ${env.git_commit}`,
       env.cpu && `${env.cpu} (${env.cores} cores)`,
       env.compiler,
       `warm-up W = ${r.warmup}`,

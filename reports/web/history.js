@@ -9,9 +9,12 @@
   const H = window.ARENA_HISTORY;
   const state = { scene: null, label: null };
 
+  // A run names the revision it measured (`arena run --revision`) where it has one, arena's own
+  // commit beside it.
   const runText = (i) => {
     const r = H.runs[i];
-    return `#${i} ${r.commit || '(no commit)'}${r.created ? ` · ${r.created}` : ''}`;
+    const built = r.commit || '(no commit)';
+    return `#${i} ${r.revision ? `${r.revision} (arena ${built})` : built}${r.created ? ` · ${r.created}` : ''}`;
   };
   // Comparisons that fail the gate (compare's own rule, decided in reports/history.cpp), and the
   // other verdicts worth seeing (beyond tolerance but unresolved, improved, ...).
@@ -52,7 +55,7 @@
         .map((t, i) => el('th', { class: i < 5 || i > 9 ? 'first' : null, text: t })))),
       el('tbody', {}, rows.map((f) => {
         const tr = el('tr', { class: 'flag', 'data-run': String(f.run), 'data-scene': f.scene, 'data-label': f.label, 'data-metric': f.metric },
-          el('td', { class: 'first', text: `#${f.run}` }), el('td', { class: 'first', text: H.runs[f.run].commit || '–' }),
+          el('td', { class: 'first', text: `#${f.run}` }), el('td', { class: 'first', text: H.runs[f.run].revision || H.runs[f.run].commit || '–' }),
           el('td', { class: 'first', text: f.scene }), el('td', { class: 'first', text: f.label }), el('td', { class: 'first', text: f.metric }),
           el('td', { text: fmt(f.baseline) }), el('td', { text: fmt(f.candidate) }), el('td', { class: f.fails ? 'verdict-regressed' : null, text: pct(f.change) }),
           // The paired interval of the change, as compare prints it (none: no tiles to resample).
@@ -107,7 +110,7 @@
     s.value.forEach((v, i) => {
       if (v === null) return;
       const ci = s.ci95 && s.ci95[i];
-      rows.push({ run: i, commit: H.runs[i].commit || '', created: H.runs[i].created || '', value: v,
+      rows.push({ run: i, commit: H.runs[i].revision ? `${H.runs[i].revision} (arena ${H.runs[i].commit || '?'})` : H.runs[i].commit || '', created: H.runs[i].created || '', value: v,
                   lo: ci ? ci[0] : null, hi: ci ? ci[1] : null, flagged: flagged.has(i),
                   other: !flagged.has(i) && verdictAt[i] !== undefined && verdictAt[i] !== 'improved', verdict: verdictAt[i] || 'ok' });
     });
@@ -122,7 +125,8 @@
     }
     const log = $('history-log').checked && rows.every((r) => r.value > 0) && band.every((b) => b.bandLo > 0);
     // Each tick names its run and the commit it was built from (the section is "against commit").
-    const tickLabels = H.runs.map((r, i) => (r.commit ? `${i} ${r.commit.replace(/^([0-9a-f]{7})[0-9a-f]*/, '$1')}` : String(i)));  // "-dirty" kept
+    const shortCommit = (c) => c.replace(/^([0-9a-f]{7})[0-9a-f]*/, '$1');  // "-dirty" kept
+    const tickLabels = H.runs.map((r, i) => (r.revision ? `${i} ${shortCommit(r.revision)}` : r.commit ? `${i} ${shortCommit(r.commit)}` : String(i)));
     const x = { field: 'run', type: 'quantitative', title: 'run and commit (oldest → newest)', scale: { nice: false, domain: [0, Math.max(1, H.runs.length - 1)] },
                 axis: { tickMinStep: 1, format: 'd', labelAngle: -30, labelExpr: `${JSON.stringify(tickLabels)}[datum.value] || datum.label` } };
     const y = { field: 'value', type: 'quantitative', title: `${metric.name} ${metric.lowerIsBetter ? '↓' : '↑'}`, scale: log ? { type: 'log' } : { zero: false } };

@@ -95,7 +95,9 @@
                }) :
                                                  el('b', {
                                                    class: R.anyRegression ? 'worse' : 'best',
-                                                   text: R.anyRegression ?
+                                                   text: R.gate === 'could not judge' ?
+                                                       '`arena compare` could not judge these runs (exit 2).' :
+                                                       R.anyRegression ?
                                                        '`arena compare` would fail (exit 1).' :
                                                        '`arena compare` would pass.'
                                                  })),
@@ -111,7 +113,11 @@
               class: 'note',
               text: `Verdicts: ${
                   Object.entries(counts).map(([k, n]) => `${n} ${k}`).join(', ') ||
-                  'none'}. A metric regresses when its mean moved in its worse direction by more than its tolerance, relative to the baseline, and the paired 95% interval of that change excludes zero (beyond tolerance within the noise: unresolved; with no interval to judge it: unverified, which fails the gate too).`
+                  'none'}. A metric regresses when its mean moved in its worse direction by more than its tolerance, relative to the baseline, and the paired ${
+                  A.fmt(100 * (R.confidence ?? 0.95))}% interval of that change excludes zero${
+                  (R.correction ?? 'holm') === 'holm' ?
+                      `, and it stays resolved among the ${R.rowsJudgedTogether ?? 'many'} rows judged together (Holm's correction: among many rows, some intervals exclude zero by noise alone; such a row is unresolved, and its note says so)` :
+                      ' (each row alone: --correction none)'} (beyond tolerance within the noise: unresolved; with no interval to judge it: unverified, which fails the gate too).`
             }),
             el('div', {class: 'controls'}, el('label', {}, 'Show ', filter)), tableBox]
             .filter(Boolean));

@@ -404,6 +404,10 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
   }));
   assert.equal(changes.shown, changes.measured, 'a measured change is shown');
   await page.selectOption('#regression-filter', 'moved');
+  // The rule as the gate applies it: its confidence, and Holm's correction over the rows judged together.
+  const judged = await page.evaluate(() => window.Arena.D.regression.rowsJudgedTogether);
+  assert.match(await page.locator('#regression-body').innerText(),
+               new RegExp(`paired 95% interval of that change excludes zero, and it stays resolved among the ${judged} rows judged together \\(Holm`));
 
   await page.evaluate(() => window.scrollTo(0, 0));
   await shot(page, 'report-top.png');
