@@ -66,7 +66,10 @@ const DenoiserInfo& DenoiserRegistry::find(const std::string& name) const {
     if (i.name == name) return i;
   std::string known;
   for (const DenoiserInfo& i : infos_) known += (known.empty() ? "" : ", ") + i.name;
-  throw Error("unknown denoiser '" + name + "'; registered: " + known);
+  // A denoiser of one's own is not registered by its name alone: say how it is named.
+  throw Error("unknown denoiser '" + name + "'; registered: " + known +
+              " (an external one is named ext:MANIFEST.json or plugin:LIBRARY.so, or by its name "
+              "once its manifest's folder is on ARENA_DENOISER_PATH; docs/external-denoisers.md)");
 }
 
 bool DenoiserRegistry::has(const std::string& name) const {

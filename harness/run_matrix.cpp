@@ -8,6 +8,7 @@
 
 #include "core/atomic_file.hpp"
 #include "core/capture.hpp"
+#include "core/crash_note.hpp"
 #include "core/env_info.hpp"
 #include "core/error.hpp"
 #include "core/stage_clock.hpp"
@@ -447,6 +448,8 @@ json runMatrix(const RunConfig& cfg) {
       try {
         removePairImages(images);
         if (!sd) throw Error("scene " + source.name + " could not be prepared: " + sceneError);
+        // A fatal signal while the pair runs names it (a plugin's names its call too).
+        const CrashNote note("while " + r->label + " ran on " + source.name);
         pair = runPair(cfg, *sd, *r, images, keepAll, mayRefine ? &kept[k] : nullptr,
                        mayRefine ? EvaluationScope::Screening : EvaluationScope::Full);
         if (!seedSequences.empty()) pair["biasVariance"] = biasVarianceOf(cfg, *sd, seedSequences, *r);

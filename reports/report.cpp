@@ -843,6 +843,13 @@ json reportData(const RunResults& results, const fs::path& runDir, const RunResu
           {{"key", a.key}, {"title", a.title}, {"source", a.source}, {"complement", a.complement}});
   }
 
+  // Where each contender that is not a built-in came from (an external process's manifest, a
+  // plugin's library, a capture's stored output): the page marks those rows.
+  json origins = json::object();
+  for (const PairResult& p : results.pairs)
+    if (const std::string origin = p.detail.value("origin", "");
+        !origin.empty() && !origins.contains(p.label))
+      origins[p.label] = origin;
   const json speed = speedData(results, sceneNames, labels);
   json data = {{"generator", "arena report"},
                {"run",
@@ -855,6 +862,7 @@ json reportData(const RunResults& results, const fs::path& runDir, const RunResu
                {"errorAxes", axes},
                {"scenes", scenes},
                {"labels", labels},
+               {"origins", origins},
                {"pairs", pairs},
                {"failures", failures},
                {"speed", speed},

@@ -19,6 +19,7 @@
 #include "harness/benchmarks.hpp"
 #include "harness/denoise_run.hpp"
 #include "harness/run_matrix.hpp"
+#include "tests/contract_fixture.hpp"
 #include "tests/test_util.hpp"
 
 namespace arena {
@@ -763,6 +764,36 @@ TEST(Plugin, ScatteredPlanesGiveTheSameOutputAsContiguousOnes) {
   EXPECT_EQ(outputs[0], outputs[1]);
   EXPECT_NE(outputs[0], std::vector<float>(outputs[0].size(), -1.0f));  // it wrote the output
   dlclose(library);
+}
+
+// A plugin runs inside arena's process: a fault in it ends the run (nothing can be trusted after
+// it), but never silently. The note names the plugin, its call and frame, the pair, and what is
+// lost; the process dies of the same signal (exit 139 from the shell); no results are written.
+TEST(Plugin, AFaultInAPluginIsNamedBeforeTheProcessDies) {
+  const fs::path dir = test::freshDir("plugin_segfault");
+  const contract::CliResult r = contract::arenaCli(
+      "run --plugin " + std::string(ARENA_FAULTY_PLUGIN) +
+          " --scenes cornell_static --denoisers passthrough --no-baselines --resolution 8x8 "
+          "--frames 3 --warmup 1 --ref-spp 1 --flip none --keep-frames none --cache " +
+          (dir / "cache").string() + " --out " + (dir / "run").string(),
+      "ARENA_FAULTY_PLUGIN=segfault ");
+  EXPECT_EQ(r.status, 128 + SIGSEGV) << r.output;
+  EXPECT_NE(
+      r.output.find(
+          "arena: fatal: signal 11 (Segmentation fault) in plugin faulty's denoise of frame 0 (" +
+          fs::absolute(ARENA_FAULTY_PLUGIN).lexically_normal().string() +
+          ") while faulty ran on cornell_static; arena stops here and writes no results"),
+      std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(dir / "run" / "results.json"));
+  // A relative path that names nothing says where it looked.
+  const std::string missing =
+      errorOf([] { DenoiserRegistry::resolve("plugin:no/such/libplug.so"); });
+  EXPECT_NE(missing.find("no/such/libplug.so: no such plugin library (looked for " +
+                         fs::absolute("no/such/libplug.so").lexically_normal().string() +
+                         ": a relative path is taken from the current directory)"),
+            std::string::npos)
+      << missing;
 }
 
 // A plugin's error buffer is read only within its size and as valid text; a pass report it makes

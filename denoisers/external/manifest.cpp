@@ -81,7 +81,11 @@ ParamSpec readParamSpec(JsonReader& p) {
       text << "must not exceed max (" << min << " > " << max << ")";
       p.fail("min", text.str());
     }
-    if (def < min || def > max) p.fail("default", "must lie in [min, max]");
+    if (def < min || def > max) {
+      std::ostringstream text;
+      text << "must lie in [min, max] (" << def << " outside [" << min << ", " << max << "])";
+      p.fail("default", text.str());
+    }
     if (type == "int") {
       if (def != double(int(def)) || min != double(int(min)) || max != double(int(max)))
         p.fail("default", "an int parameter needs integer default, min and max");
@@ -111,7 +115,15 @@ ExternalManifest readManifest(const fs::path& file) {
     throw Error(file.string() +
                 ": no such manifest file (expected a JSON manifest, see "
                 "docs/external-denoisers.md)");
-  const nlohmann::json j = parseJsonFile(file.string());
+  nlohmann::json j;
+  try {
+    j = parseJsonFile(file.string());
+  } catch (const Error& e) {
+    // ext: given the program itself rather than its manifest: said as such.
+    throw Error(std::string(e.what()) +
+                " (ext: names the denoiser's JSON manifest, which names the program to run; see "
+                "docs/external-denoisers.md)");
+  }
   if (!j.is_object())
     throw Error(file.string() + ": expected a JSON object, got " + jsonTypeName(j));
   JsonReader r(j, file.string());

@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "arena_plugin.h"
+#include "core/crash_note.hpp"
 #include "core/error.hpp"
 #include "core/text.hpp"
 #include "denoisers/external/manifest.hpp"
@@ -86,24 +87,37 @@ class PluginDenoiser final : public Denoiser {
       values.push_back(v);
     }
     char error[kErrorBytes] = "";
-    instance_ =
-        plugin_->create(values.data(), int(values.size()), signalOf(kind), error, sizeof error);
+    {
+      const CrashNote note = crashNote("create");
+      instance_ =
+          plugin_->create(values.data(), int(values.size()), signalOf(kind), error, sizeof error);
+    }
     if (!instance_) fail("create", error);
     for (int i = 0; i < plugin_->requiredChannelCount; ++i)
       channels_.push_back(plugin_->requiredChannels[i]);
   }
   ~PluginDenoiser() override {
-    if (instance_) plugin_->destroy(instance_);
+    if (!instance_) return;
+    const CrashNote note = crashNote("destroy");
+    plugin_->destroy(instance_);
   }
 
   std::vector<std::string> requiredChannels() const override { return channels_; }
 
   void setup(int width, int height) override {
     char error[kErrorBytes] = "";
-    if (plugin_->setup(instance_, width, height, error, sizeof error) != 0) fail("setup", error);
+    int status = 0;
+    {
+      const CrashNote note = crashNote("setup");
+      status = plugin_->setup(instance_, width, height, error, sizeof error);
+    }
+    if (status != 0) fail("setup", error);
   }
 
-  void reset() override { plugin_->reset(instance_); }
+  void reset() override {
+    const CrashNote note = crashNote("reset");
+    plugin_->reset(instance_);
+  }
 
   void denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& output) override {
     ArenaFrameContext c{ctx.frameIndex,       ctx.width,
@@ -119,8 +133,12 @@ class PluginDenoiser final : public Denoiser {
     ArenaHost host{this, &PluginDenoiser::reportPass};
     char error[kErrorBytes] = "";
     badPass_.clear();
-    if (plugin_->denoise(instance_, &c, &inputs, &out, &host, error, sizeof error) != 0)
-      fail("denoise (frame " + std::to_string(ctx.frameIndex) + ")", error);
+    int status = 0;
+    {
+      const CrashNote note = crashNote("denoise of frame " + std::to_string(ctx.frameIndex));
+      status = plugin_->denoise(instance_, &c, &inputs, &out, &host, error, sizeof error);
+    }
+    if (status != 0) fail("denoise (frame " + std::to_string(ctx.frameIndex) + ")", error);
     // reportPass cannot throw through the plugin's C frames: what it refused fails the pair here.
     if (!badPass_.empty())
       throw Error(std::string(plugin_->name) + " (plugin " + library_ + "): frame " +
@@ -141,6 +159,16 @@ class PluginDenoiser final : public Denoiser {
       return;
     }
     self->passes_.push_back({pass, milliseconds, tapsPerPixel});
+  }
+  // What a fatal signal in the plugin's `entry` says (core/crash_note.hpp): the plugin, the call,
+  // the pair the harness was running, and that the run is lost with it.
+  CrashNote crashNote(const std::string& entry) const {
+    const std::string pair = outerCrashNote();
+    return CrashNote("in plugin " + std::string(plugin_->name) + "'s " + entry + " (" + library_ +
+                     ")" + (pair.empty() ? "" : " " + pair) +
+                     "; arena stops here and writes no results (a plugin runs inside arena's "
+                     "process: give it as an external process, docs/external-denoisers.md, to keep "
+                     "a crash to its own pair)");
   }
   // `error` is the plugin's buffer: terminated here (the ABI promises only its first errorSize
   // bytes), its bytes made valid text.
@@ -230,8 +258,13 @@ ParamSchema schemaOf(const ArenaPlugin& p, const std::string& where) {
 }  // namespace
 
 DenoiserInfo loadPluginDenoiser(const fs::path& libraryPath) {
-  const std::string library = libraryPath.string();
-  if (!fs::exists(libraryPath)) throw Error(library + ": no such plugin library");
+  // Named absolute in every message (and the origin), as the run that reads it may run elsewhere.
+  const std::string library = fs::absolute(libraryPath).lexically_normal().string();
+  if (!fs::exists(libraryPath))
+    throw Error(
+        libraryPath.string() + ": no such plugin library (looked for " + library +
+        (libraryPath.is_relative() ? ": a relative path is taken from the current directory" : "") +
+        ")");
   // Never unloaded: instances and thread-local state may outlive any registry entry.
   void* handle = dlopen(fs::absolute(libraryPath).c_str(), RTLD_NOW | RTLD_LOCAL);
   if (!handle) throw Error(library + ": cannot load the plugin: " + dlerror());
@@ -264,7 +297,7 @@ DenoiserInfo loadPluginDenoiser(const fs::path& libraryPath) {
   info.schema = schemaOf(*plugin, library);
   info.signals =
       plugin->signals == ARENA_SIGNALS_COLOR ? SignalMode::Color : SignalMode::Demodulated;
-  info.origin = "plugin " + fs::absolute(libraryPath).lexically_normal().string();
+  info.origin = "plugin " + library;
   info.create = [plugin, library, schema = info.schema](const ParamSet& params, SignalKind kind) {
     return std::make_unique<PluginDenoiser>(plugin, library, schema, params, kind);
   };

@@ -66,7 +66,16 @@ void ExternalProcessDenoiser::fail(const std::string& what) {
 std::string ExternalProcessDenoiser::finish() {
   if (!process_) return "";
   const std::string status = process_->endInput(std::chrono::milliseconds(1000));
-  if (status == "still running" || status == "exited with status 0") return "";
+  if (status == "exited with status 0") return "";
+  if (status == "still running") {
+    // Killed now (its destructor would wait another second), and said: every pair of this
+    // contender, each signal, pays the second, which the user can save.
+    process_->kill();
+    process_.reset();
+    return std::string("the ") + signalName(kind_) + " process (" + manifest_->file.string() +
+           ") was still running 1 s after its input ended and was killed (exit when stdin closes: "
+           "each process that does not costs every pair a second)";
+  }
   const std::string tail = process_->stderrTail();
   process_.reset();
   return validUtf8(std::string("the ") + signalName(kind_) + " process (" +

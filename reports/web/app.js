@@ -16,6 +16,11 @@
     A.sceneByName = Object.fromEntries(D.scenes.map((s) => [s.name, s]));
     A.pairsOf = (scene) => D.pairs.filter((p) => p.scene === scene);
     A.isOk = (p) => p.status === 'ok';
+    // A contender from outside arena (D.origins): its kind, shown beside its label ('' for a built-in).
+    A.originKind = (label) => {
+      const o = (D.origins || {})[label];
+      return !o ? '' : o.startsWith('plugin ') ? 'plugin' : o.startsWith('external process') ? 'external' : 'stored output';
+    };
     // Every chart colours a label the same way, whichever labels the scene has.
     A.colorScale = { domain: D.labels, scheme: D.labels.length > 10 ? 'category20' : 'tableau10' };
     A.state = {
@@ -71,6 +76,11 @@
       s.display && `display: ${s.display}`,
     ].filter(Boolean);
     $('run-info').textContent = parts.join(' · ');
+    // Contenders from outside arena, named with where they came from (their rows are marked too).
+    const origins = Object.entries(D.origins || {});
+    if (origins.length)
+      $('run-info').after(el('p', { id: 'run-origins', class: 'note', text:
+        `Not built in: ${origins.map(([label, origin]) => `${label} (${origin})`).join('; ')}.` }));
 
     if (D.failures.length) {
       const box = $('failures');

@@ -231,7 +231,8 @@
       }
       rows.push(el('tr', { 'data-label': p.label, class: p.label === A.state.selected ? 'selected' : null },
         el('td', { class: 'rank', text: rankOf[p.label] || '' }),
-        el('td', { class: 'first', title: JSON.stringify(p.params), text: p.label }),
+        el('td', { class: 'first', title: A.originKind(p.label) ? `${(A.D.origins || {})[p.label]}; ${JSON.stringify(p.params)}` : JSON.stringify(p.params),
+                   text: A.originKind(p.label) ? `${p.label} (${A.originKind(p.label)})` : p.label }),
         cols.map((c, i) => {
           const v = c.get(p);
           const clock = c.clockOf ? c.clockOf(p) : null;  // another clock: labelled, never "best"

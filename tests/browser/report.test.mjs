@@ -742,6 +742,10 @@ test('a capture: its validation on the page, a file: contender named with its ow
   // The stored output is ranked like a built-in but kept off the CPU axis, named with its device.
   const front = await page.locator('#speed-front').innerText();
   assert.match(front, /timed on another clock.*file:eaw_elsewhere.*test GPU/);
+  // Where it came from, in the header and on its row; the built-in's row unmarked.
+  assert.match(await page.locator('#run-origins').innerText(), /Not built in: file:eaw_elsewhere \(.*outputs\/eaw_elsewhere\)/);
+  assert.equal(await page.locator('#summary-table tbody tr[data-label="file:eaw_elsewhere"] td.first').innerText(), 'file:eaw_elsewhere (stored output)');
+  assert.equal(await page.locator('#summary-table tbody tr[data-label="eaw"] td.first').innerText(), 'eaw');
   assert.deepEqual(problems, []);
   await page.close();
 });

@@ -7,9 +7,11 @@
 //   slow-pass     reports a pass of 1e9 ms (longer than the call) and succeeds
 //   unwritten     succeeds without writing its output
 //   partial       writes only the output's first plane and succeeds
+//   segfault      writes through a null pointer (a real fault, not a raised signal)
 // Otherwise it writes zeros and succeeds. The FAULTY_PLUGIN_BAD_PARAMS build reads
 // ARENA_FAULTY_DESCRIPTOR when loaded: "negative-count" declares paramCount -2 with no array.
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <string_view>
@@ -41,6 +43,10 @@ int denoise(void*, const ArenaFrameContext*, const ArenaInputs*, const ArenaMuta
   if (m == "slow-pass" && host && host->reportPass)
     host->reportPass(host->context, "blur", 1e9, 1.0);
   if (m == "unwritten") return 0;
+  if (m == "segfault") {
+    volatile std::uintptr_t address = 0;  // volatile: the compiler cannot see the null
+    *reinterpret_cast<volatile int*>(address) = 1;
+  }
   const int planes = m == "partial" ? 1 : output->channels;
   for (int c = 0; c < planes; ++c)
     std::memset(output->planes[c], 0,
