@@ -54,16 +54,37 @@ int main(int argc, char** argv) {
   arena::cli::addBenchCommand(app);
   arena::cli::addReportCommand(app);
   arena::cli::addCaptureCommands(app);
+  // A misspelt command would read "A subcommand is required": named, with the commands there are.
+  if (argc > 1 && argv[1][0] != '-') {
+    const std::vector<CLI::App*> commands = app.get_subcommands([](CLI::App*) { return true; });
+    std::string names;
+    bool known = false;
+    for (const CLI::App* c : commands) {
+      known = known || c->get_name() == argv[1];
+      names += (names.empty() ? "" : ", ") + c->get_name();
+    }
+    if (!known) {
+      std::cerr << "arena: error: unknown command '" << argv[1] << "'; the commands are: " << names
+                << " (`arena --help` says what each does)\n";
+      return 2;
+    }
+  }
   // No input may end in abort() or an unnamed exception: everything is caught here and named.
   try {
     app.parse(argc, argv);
   } catch (const CLI::RuntimeError& e) {
     return e.get_exit_code();
   } catch (const CLI::ParseError& e) {
-    // CLI11 prints the message; its own codes (105 for a failed check, 106 for a missing option,
-    // ...) would make a usage error look different from every other bad input, so all of them
-    // are the documented usage-error code 2 (README "Exit codes"). --help exits 0.
-    return app.exit(e) == 0 ? 0 : 2;
+    // --help (and its kind) print and exit 0. A usage error reads as every other bad input does,
+    // "arena: error: ...", with where the options are listed; CLI11's own codes (105 for a failed
+    // check, 106 for a missing option, ...) would make it look different from every other bad
+    // input, so all of them are the documented usage-error code 2 (README "Exit codes").
+    if (e.get_exit_code() == 0) return app.exit(e);
+    const std::vector<CLI::App*> given = app.get_subcommands();
+    std::cerr << "arena: error: " << e.what() << "\n(`arena "
+              << (given.empty() ? std::string() : given.front()->get_name() + " ")
+              << "--help` lists the options)\n";
+    return 2;
   } catch (const arena::Error& e) {
     std::cerr << "arena: error: " << e.what() << "\n";
     return 2;

@@ -351,7 +351,17 @@ TEST(CliContract, UsageErrorsExitTwoAndOptionsAreStrict) {
         std::string("nosuchcommand"), std::string("run --out x --flip sometimes")}) {
     contract::CliResult r = contract::arenaCli(args);
     EXPECT_EQ(r.status, 2) << args << "\n" << r.output;
+    // Worded as every other bad input, with where the options are listed.
+    EXPECT_EQ(r.output.rfind("arena: error: ", 0), 0u) << args << "\n" << r.output;
   }
+  EXPECT_NE(contract::arenaCli("run --out x --warmup abc")
+                .output.find("(`arena run --help` lists the options)"),
+            std::string::npos);
+  EXPECT_NE(
+      contract::arenaCli("nosuchcommand")
+          .output.find(
+              "arena: error: unknown command 'nosuchcommand'; the commands are: scenes, render,"),
+      std::string::npos);
   EXPECT_EQ(contract::arenaCli("run --help").status, 0);
   // A bench's --json that cannot be written is refused before the timed work, not after it.
   std::ofstream(dir / "afile") << "x";
