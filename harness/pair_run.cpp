@@ -258,7 +258,10 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
     if (ratio == 0 || std::max(ratio, 1 / ratio) > 1.25) pair["brightnessVsReference"] = ratio;
   }
   prependRunWarnings(pair, info.frames);
-  pair["images"] = {{"dir", fs::relative(imageDir, cfg.out).string()}, {"all", keepAll && cfg.keepFrames != "none"}};
+  // With --keep-frames none no image was written: none is recorded (a folder named in results.json
+  // that does not exist read as images lost).
+  if (cfg.keepFrames != "none")
+    pair["images"] = {{"dir", fs::relative(imageDir, cfg.out).string()}, {"all", keepAll}};
   if (run && !run->info().origin.empty()) pair["origin"] = run->info().origin;
   if (!run) pair["origin"] = (sd.sequence.dir() / "outputs" / captured).string();
   if (!run || run->signals() == SignalMode::Color) pair["signals"] = "color";

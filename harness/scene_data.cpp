@@ -93,11 +93,20 @@ json sceneRecord(const RunConfig& config, const SceneData& data, const std::stri
       if (ev.hasReference()) writePng(images / frameName("reference", t), ev.referenceDisplay(t));
       writePng(images / frameName("noisy", t), ev.display(t, ev.frame(t).get("color")));
     }
-  json entry = {{"purpose", purpose}, {"sequence", dir.string()}, {"hash", info.hash}, {"width", info.width},
-                {"height", info.height}, {"frames", info.frames}, {"events", events},
-                {"referenceSpp", info.referenceSpp}, {"referenceCapped", info.referenceCapped},
-                {"referenceEstimatedRelMse", info.referenceEstimatedRelMse}, {"chosenFrames", data.chosenFrames},
-                {"images", fs::relative(images, config.out).string()}};
+  json entry = {{"purpose", purpose},
+                {"sequence", dir.string()},
+                {"hash", info.hash},
+                {"width", info.width},
+                {"height", info.height},
+                {"frames", info.frames},
+                {"events", events},
+                {"referenceSpp", info.referenceSpp},
+                {"referenceCapped", info.referenceCapped},
+                {"referenceEstimatedRelMse", info.referenceEstimatedRelMse}};
+  if (config.keepFrames != "none") {  // none: no image written, none recorded
+    entry["chosenFrames"] = data.chosenFrames;
+    entry["images"] = fs::relative(images, config.out).string();
+  }
   entry.update(ev.describe());
   if (!ev.hasReference()) entry["hasReference"] = false;
   // A run's --max-bounces, which the scene's sequence was rendered under (absent: the scene's own

@@ -158,8 +158,12 @@ TEST(CompareContract, ACiStepTellsARegressionFromWhatTheGateCouldNotJudge) {
   EXPECT_NE(data.find("\"eaw\""), std::string::npos);
   EXPECT_NE(data.find("\"revision\":\"mydn-4f2a9c1\""), std::string::npos)
       << "the run's own revision";
-  EXPECT_EQ(json::parse(readText(b.out / "results.json"))["environment"]["revision"],
-            "mydn-4f2a9c1");
+  const json written = json::parse(readText(b.out / "results.json"));
+  EXPECT_EQ(written["environment"]["revision"], "mydn-4f2a9c1");
+  // --keep-frames none (tinyRun's): no image written, and none recorded.
+  EXPECT_FALSE(written["pairs"][0].contains("images")) << written["pairs"][0].dump().substr(0, 300);
+  EXPECT_FALSE(written["scenes"]["cornell_static"].contains("chosenFrames"));
+  EXPECT_FALSE(written["scenes"]["cornell_static"].contains("images"));
   EXPECT_EQ(data.find("\"passthrough\""), std::string::npos) << "only the contenders named";
   r = contract::arenaCli("history " + A + " " + B + " --denoisers svgf --out " + page.string());
   EXPECT_EQ(r.status, 2) << r.output;
