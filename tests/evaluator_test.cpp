@@ -123,6 +123,8 @@ TEST(Evaluation, RunResultsAreBitIdenticalToTheHarnessBeforeTheStage) {
   // same references, so every value against them moved within their noise), and for 7 (shadow rays
   // end off the emitter and sphere lights are sampled by solid angle: light_switch's sphere light
   // lit its surroundings a little more; every scene's frames and references are other draws).
+  // Recorded again when a run with --keep-frames none stopped recording chosenFrames (no number
+  // moved: the three scenes' chosenFrames were the only difference).
   const std::string file = std::string(ARENA_TEST_DATA) + "/evaluation_golden.json";
   const json now = test::goldenPart(
       withoutNewMetrics(runMatrix(test::goldenRunConfig(test::freshDir("golden_run"), test::freshDir("golden_cache")))));
