@@ -215,15 +215,26 @@ void printEventTables(std::ostream& out, const RunResults& results) {
           << ": ranked on " << rankedOn << " (" << ranking.resolvedPairs << " of " << ranking.pairs.size()
           << " pairs resolved)\n";
       std::string steadyAbsent;  // the window's reason, the same for every method
-      const size_t column = labelColumn(ranking.ranking, 22);
-      for (const RankedMethod& m : ranking.ranking) {
+      // Nothing ranked (the figure is undefined for every pair: a cut with no old view): every
+      // pair's other figures are still shown, unranked.
+      std::vector<RankedMethod> rows = ranking.ranking;
+      if (rows.empty())
+        for (const PairResult& p : results.pairs)
+          if (p.scene == name && p.part(cut ? "cuts" : "ghosting").is_array()) {
+            RankedMethod unranked;
+            unranked.label = p.label;
+            rows.push_back(unranked);
+          }
+      const size_t column = labelColumn(rows, 22);
+      for (const RankedMethod& m : rows) {
         const json* e = nullptr;
         for (const PairResult& p : results.pairs)
           if (p.scene == name && m.label == p.label && p.part(cut ? "cuts" : "ghosting").is_array())
             for (const json& x : p.part(cut ? "cuts" : "ghosting"))
               if (x.value("eventFrame", -1) == frame) e = &x;
         if (!e) continue;
-        out << "  " << std::left << std::setw(4) << m.rank << paddedText(m.label, column);
+        out << "  " << std::left << std::setw(4) << (m.rank > 0 ? std::to_string(m.rank) : "-")
+            << paddedText(m.label, column);
         for (const char* f : cut ? std::vector<const char*>{"oldViewLeak", "atCut"}
                                  : std::vector<const char*>{"lagEnergy", "responseFrames", "peakExcess", "chromaLagEnergy"})
           out << f << " " << std::setw(26) << figureWithInterval(*e, f) << " ";

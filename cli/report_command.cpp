@@ -39,6 +39,12 @@ void addReportCommand(CLI::App& app) {
       ->check(CLI::IsMember({"holm", "none"}))
       ->default_val("holm");
   cmd->callback([=] {
+    // The gate's options judge the regression view, which only a baseline makes.
+    if (baseline->empty())
+      for (const char* option : {"--metric", "--tolerance", "--confidence", "--correction"})
+        if (cmd->count(option) > 0)
+          throw Error(std::string("report: ") + option +
+                      " judges the regression view against a baseline: give --baseline RUN too");
     o->run = *run;
     o->baseline = *baseline;
     o->out = *out;

@@ -419,8 +419,7 @@ void addRunCommands(CLI::App& app) {
       if (!only->empty()) {
         const std::vector<std::string> chosen =
             splitList(*only, "--denoisers", "labels or denoiser names");
-        keepContenders(baseline, chosen, *a);
-        keepContenders(candidate, chosen, *b);
+        keepContenders(baseline, candidate, chosen);
       }
       std::vector<std::string> warnings;  // said on stderr, and in the JSON
       const auto warn = [&](const std::string& text) {

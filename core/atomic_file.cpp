@@ -231,7 +231,7 @@ void recordHolder(int fd, const std::string& purpose) {
 }  // namespace
 
 DirectoryLock::DirectoryLock(const fs::path& dir, Mode mode, IfHeld ifHeld,
-                             const std::string& purpose) {
+                             const std::string& purpose, bool createFile) {
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) throw Error(dir.string() + ": cannot create directory: " + ec.message());
@@ -241,7 +241,7 @@ DirectoryLock::DirectoryLock(const fs::path& dir, Mode mode, IfHeld ifHeld,
   const bool fresh = held.fd < 0;
   if (fresh) {
     const fs::path file = dir / ".arena.lock";
-    held.fd = ::open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    held.fd = ::open(file.c_str(), O_RDWR | (createFile ? O_CREAT : 0) | O_CLOEXEC, 0644);
     // A directory this process may not write (a shared cache on a read-only mount): flock works
     // on a read-only descriptor of an existing lock file; with none, a reader goes on unlocked
     // (nothing can rewrite what it reads through this process's rights either).
@@ -257,7 +257,14 @@ DirectoryLock::DirectoryLock(const fs::path& dir, Mode mode, IfHeld ifHeld,
   }
   if (fresh || (mode == Mode::Exclusive && held.mode == Mode::Shared)) {
     const int op = mode == Mode::Exclusive ? LOCK_EX : LOCK_SH;
-    if (flock(held.fd, op | LOCK_NB) != 0) {
+    const bool locked = flock(held.fd, op | LOCK_NB) == 0;
+    if (!locked && errno != EWOULDBLOCK && !createFile && fresh && mode == Mode::Shared) {
+      // A file system without flock: a reader goes on unlocked rather than blame a writer.
+      ::close(held.fd);
+      heldLocks().erase(key);
+      return;
+    }
+    if (!locked) {
       const std::string holder = holderOf(held.fd);
       const std::string who =
           holder.empty() ? "another arena process" : "another arena process (" + holder + ")";

@@ -53,8 +53,11 @@ class DirectoryLock {
   // Creates `dir` if needed. Refuse: an Error naming the directory, the holder's process id and
   // purpose when another process holds a conflicting lock. Wait: says so once on stderr, then
   // waits.
+  // `createFile` false (a reader of a finished run): no lock file is created where there is
+  // none, and a shared lock the file system cannot take goes on unlocked; only a writer's lock
+  // held by another process refuses or waits.
   DirectoryLock(const std::filesystem::path& dir, Mode mode, IfHeld ifHeld,
-                const std::string& purpose);
+                const std::string& purpose, bool createFile = true);
   ~DirectoryLock();
   DirectoryLock(DirectoryLock&& other) noexcept;
   DirectoryLock(const DirectoryLock&) = delete;

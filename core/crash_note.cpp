@@ -18,7 +18,8 @@ std::atomic<const char*> currentNote{nullptr};
 struct sigaction previous[kSignalCount];
 std::once_flag installed;
 
-// An alternate stack, so that a plugin that overflows its stack still gets its note written.
+// An alternate stack for the thread that installs the handlers (the harness's), so that a plugin
+// overflowing that thread's stack still gets its note written.
 alignas(16) char alternateStack[1 << 16];
 
 const char* signalName(int signal) {

@@ -8,6 +8,11 @@
 // dies of that signal as it would have (same exit status, core dump where enabled). The handlers
 // are installed with the first note and chain to those installed before them (a sanitizer's), so a
 // crash outside any note is reported as before.
+//
+// The note is one for the process, set by the harness's thread (the one that calls denoisers):
+// a plugin's own worker thread that faults still writes it. The alternate signal stack, which lets
+// a stack overflow write its note, is that thread's only; a worker that overflows its stack dies
+// without one. Notes nest last in, first out, on that one thread.
 #include <string>
 
 namespace arena {

@@ -88,7 +88,7 @@ void addReferenceQuality(json& results, int warmup, const std::map<std::string, 
         floorSum += v.get<double>();
         ++floorFrames;
       }
-    const bool noFrameAfterWarmup = floorKnown && floorFrames == 0;
+    const bool noFrameAfterWarmup = floorKnown && floorFrames == 0 && frame > 0;
     if (!floorKnown) floorFrames = 0;
     double best = std::numeric_limits<double>::infinity();
     std::string bestLabel;

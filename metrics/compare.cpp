@@ -314,7 +314,7 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
       // Paired over the frames and tiles both runs have, seeded by the scene like the run's own.
       // unjudgeable: a change beyond tolerance there fails the gate, as passing it would be a
       // verdict from no data. Runs read from results.db have no tiles by design (the dashboard
-      // marks their changes unresolved, docs/ci-dashboard.md), nor do some metrics (ms).
+      // lists their changes as not judged, docs/ci-dashboard.md), nor do some metrics (ms).
       bool resolvedWorse = false, resolvedBetter = false, unjudgeable = false, noTilesKept = false;
       bool sharedFrames = false;  // the runs summarise other frames: compared on those both have
       std::optional<std::pair<MetricTiles, MetricTiles>> pairedTiles;  // baseline's, candidate's
@@ -527,22 +527,29 @@ int gateExitCode(GateOutcome outcome) {
   return outcome == GateOutcome::Regressed ? 1 : outcome == GateOutcome::CouldNotJudge ? 2 : 0;
 }
 
-void keepContenders(RunResults& run, const std::vector<std::string>& names,
-                    const std::string& runName) {
-  std::set<std::string> labels;
-  for (const PairResult& p : run.pairs) labels.insert(p.label);
-  for (const std::string& name : names)
-    if (std::none_of(run.pairs.begin(), run.pairs.end(),
-                     [&](const PairResult& p) { return p.label == name || p.denoiser == name; })) {
-      std::string list;
-      for (const std::string& l : labels) list += (list.empty() ? "" : ", ") + l;
-      throw Error("compare: --denoisers " + name + ": " + runName +
-                  " has no pair of that label or denoiser (its labels: " + list + ")");
-    }
-  std::erase_if(run.pairs, [&](const PairResult& p) {
-    return std::find(names.begin(), names.end(), p.label) == names.end() &&
-           std::find(names.begin(), names.end(), p.denoiser) == names.end();
-  });
+bool isContender(const PairResult& p, const std::vector<std::string>& names) {
+  return std::find(names.begin(), names.end(), p.label) != names.end() ||
+         std::find(names.begin(), names.end(), p.denoiser) != names.end();
+}
+
+void keepContenders(RunResults& baseline, RunResults& candidate,
+                    const std::vector<std::string>& names) {
+  for (const std::string& name : names) {
+    const auto has = [&](const RunResults& run) {
+      return std::any_of(run.pairs.begin(), run.pairs.end(),
+                         [&](const PairResult& p) { return isContender(p, {name}); });
+    };
+    if (has(baseline) || has(candidate)) continue;
+    std::set<std::string> labels;
+    for (const RunResults* run : {&baseline, &candidate})
+      for (const PairResult& p : run->pairs) labels.insert(p.label);
+    std::string list;
+    for (const std::string& l : labels) list += (list.empty() ? "" : ", ") + l;
+    throw Error("compare: --denoisers " + name +
+                ": neither run has a pair of that label or denoiser (their labels: " + list + ")");
+  }
+  for (RunResults* run : {&baseline, &candidate})
+    std::erase_if(run->pairs, [&](const PairResult& p) { return !isContender(p, names); });
 }
 
 }  // namespace arena

@@ -118,9 +118,12 @@ enum class GateOutcome { Pass, Regressed, CouldNotJudge };
 GateOutcome gateOutcome(const std::vector<ComparisonRow>& rows);
 const char* gateOutcomeName(GateOutcome outcome);  // "pass", "regressed", "could not judge"
 int gateExitCode(GateOutcome outcome);             // 0, 1, 2
-// Keeps the pairs of `run` whose label or denoiser is among `names` (`arena compare --denoisers`);
-// a name no pair has is an Error naming `runName` and the labels it has.
-void keepContenders(RunResults& run, const std::vector<std::string>& names,
-                    const std::string& runName);
+// Keeps the pairs of `baseline` and `candidate` whose label or denoiser is among `names` (`arena
+// compare --denoisers`): a contender one run lacks is then `missing` or `new`, as without the
+// option; a name neither run has is an Error listing the labels they have.
+void keepContenders(RunResults& baseline, RunResults& candidate,
+                    const std::vector<std::string>& names);
+// Whether `p` is one of `names` (its label or its denoiser's name).
+bool isContender(const PairResult& p, const std::vector<std::string>& names);
 
 }  // namespace arena

@@ -32,7 +32,7 @@ RunResults loadResults(const fs::path& runDir) {
   // A run still being written (its writer holds the directory's lock) holds a results.json of an
   // earlier run, or none: refused, naming the writer, rather than judged as if finished.
   const DirectoryLock reading(runDir, DirectoryLock::Mode::Shared, DirectoryLock::IfHeld::Refuse,
-                              "reading this run");
+                              "reading this run", /*createFile=*/false);
   if (!fs::exists(file))
     throw Error(runDir.string() + ": not a run (no results.json); create one with `arena run`");
   return RunResults::fromJson(parseJsonFile(file.string()), file.string());

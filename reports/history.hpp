@@ -30,9 +30,12 @@ std::vector<RunResults> loadHistory(const std::vector<std::filesystem::path>& in
 // in what they computed); one the caller named that no run computed is an Error. `bootstrap` is
 // compare's --confidence (and seed), `correction` its --correction: the dashboard judges as the
 // gate it stands for.
-nlohmann::json historyData(const std::vector<RunResults>& runs, std::vector<Tolerance> tolerances,
+// `contenders` (--denoisers): only those pairs are gated, and a comparison whose earlier run has
+// none of them (before they existed) is not made.
+nlohmann::json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances,
                            const BootstrapConfig& bootstrap = {},
-                           Correction correction = Correction::Holm);
+                           Correction correction = Correction::Holm,
+                           const std::vector<std::string>& contenders = {});
 
 struct HistoryOptions {
   std::vector<std::filesystem::path> inputs;

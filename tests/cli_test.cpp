@@ -362,6 +362,9 @@ TEST(CliContract, UsageErrorsExitTwoAndOptionsAreStrict) {
           .output.find(
               "arena: error: unknown command 'nosuchcommand'; the commands are: scenes, render,"),
       std::string::npos);
+  EXPECT_NE(contract::arenaCli("report somerun --out x --tolerance 5%")
+                .output.find("report: --tolerance judges the regression view against a baseline"),
+            std::string::npos);
   EXPECT_EQ(contract::arenaCli("run --help").status, 0);
   // A bench's --json that cannot be written is refused before the timed work, not after it.
   std::ofstream(dir / "afile") << "x";

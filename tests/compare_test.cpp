@@ -127,19 +127,27 @@ TEST(CompareContract, ACiStepTellsARegressionFromWhatTheGateCouldNotJudge) {
   EXPECT_EQ(only["rows"][0]["label"], "eaw");
   r = contract::arenaCli("compare " + A + " " + B + " --denoisers svgf");
   EXPECT_EQ(r.status, 2) << r.output;
-  EXPECT_NE(r.output.find("--denoisers svgf: " + A +
-                          " has no pair of that label or denoiser (its labels: eaw, passthrough)"),
+  EXPECT_NE(r.output.find("--denoisers svgf: neither run has a pair of that label or denoiser "
+                          "(their labels: eaw, passthrough)"),
             std::string::npos)
       << r.output;
   // A pair the candidate lost is a regression (exit 1), told apart in the JSON too.
   const fs::path lost = test::freshDir("gate_lost") / "run";
   fs::create_directories(lost);
   json results = json::parse(readText(b.out / "results.json"));
-  results["pairs"].erase(results["pairs"].begin());
+  json kept = json::array();
+  for (const json& p : results["pairs"])
+    if (p["label"] != "eaw") kept.push_back(p);
+  results["pairs"] = kept;
   writeTextAtomically(lost / "results.json", results.dump());
   r = contract::arenaCli("compare " + A + " " + lost.string() + " --json");
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_EQ(json::parse(r.output.substr(r.output.find('{')))["gate"], "regressed");
+  // ... also when it is the one contender gated: missing, not "could not judge".
+  r = contract::arenaCli("compare " + A + " " + lost.string() + " --denoisers eaw");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("missing"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(lost / ".arena.lock")) << "a reader leaves a run's directory as it was";
   // A run still being written (another process holds its lock) is refused, naming the writer.
   {
     const DirectoryLock writing(b.out, DirectoryLock::Mode::Exclusive,

@@ -148,6 +148,29 @@ TEST(ExternalManifest, EveryMistakeNamesTheFileAndTheField) {
             std::string::npos);
 }
 
+// ext: given the denoiser's program instead of its manifest is said as such; a manifest with a
+// typo keeps the parser's own message; an unknown name says how external ones are named.
+TEST(ExternalManifest, TheProgramGivenForItsManifestIsNamedAsSuch) {
+  const fs::path dir = test::freshDir("manifests/script");
+  std::ofstream(dir / "mydenoiser.py") << "#!/usr/bin/env python3\nimport sys\n";
+  std::ofstream(dir / "typo.json") << "{ \"name\": \"x\",, }";
+  const std::string script =
+      errorOf([&] { DenoiserRegistry::resolve("ext:" + (dir / "mydenoiser.py").string()); });
+  EXPECT_NE(script.find("malformed JSON"), std::string::npos) << script;
+  EXPECT_NE(script.find("(ext: names the denoiser's JSON manifest, which names the program to run"),
+            std::string::npos)
+      << script;
+  const std::string typo =
+      errorOf([&] { DenoiserRegistry::resolve("ext:" + (dir / "typo.json").string()); });
+  EXPECT_NE(typo.find("malformed JSON"), std::string::npos) << typo;
+  EXPECT_EQ(typo.find("ext: names"), std::string::npos) << typo;
+  const std::string unknown = errorOf([] { DenoiserRegistry::instance().find("mybox"); });
+  EXPECT_NE(unknown.find("unknown denoiser 'mybox'; registered: "), std::string::npos) << unknown;
+  EXPECT_NE(unknown.find("an external one is named ext:MANIFEST.json or plugin:LIBRARY.so"),
+            std::string::npos)
+      << unknown;
+}
+
 TEST(ExternalManifest, ParametersUseTheTypedSchemaAndAreRecorded) {
   const std::string name =
       DenoiserRegistry::resolve("ext:" ARENA_EXAMPLES_SOURCE_DIR "/external/python_temporal");

@@ -321,6 +321,27 @@ TEST(History, CountsWhatItCouldNotResolveAndRefusesAMetricNoRunComputed) {
   EXPECT_NE(e.find("history: --metric ldrFlip: no run computed it"), std::string::npos) << e;
 }
 
+// --denoisers: only the named contender is gated; the runs from before it existed are no
+// comparisons (they read "nothing compared", failing, before), and a name no run has is refused.
+TEST(History, GatesOnlyTheNamedContenderFromWhenItExists) {
+  std::vector<RunResults> runs;
+  for (int i = 0; i < 5; ++i) {
+    json r = historyRun(i, 99);
+    if (i < 2) r["pairs"].erase(1);  // svgf first ran in run 2
+    runs.push_back(test::typed(r));
+  }
+  const json data = historyData(runs, {{"relMse", 0.02}}, {}, Correction::Holm, {"svgf"});
+  EXPECT_EQ(data["comparisons"], 2) << data["changes"].dump();  // 3 against 2, 4 against 3
+  EXPECT_EQ(data["failingComparisons"], 0) << data["changes"].dump();
+  EXPECT_FALSE(data["series"]["s"].contains("passthrough"));
+  EXPECT_TRUE(data["series"]["s"].contains("svgf"));
+  const std::string e =
+      test::errorOf([&] { historyData(runs, {}, {}, Correction::Holm, {"reblur"}); });
+  EXPECT_NE(e.find("history: --denoisers reblur: no run has a pair of that label or denoiser"),
+            std::string::npos)
+      << e;
+}
+
 // A database written before the scenes table existed is still this schema: a run appends to it
 // (adding the table), and its older runs are read without their scenes' sizes.
 TEST(History, ADatabaseWithoutTheScenesTableIsStillRead) {

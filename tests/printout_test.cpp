@@ -127,6 +127,43 @@ TEST(StudySummary, TheDefaultStudyFitsOnOneScreen) {
   EXPECT_GT(lineCount(tables.str()), 100u);
 }
 
+// A camera cut whose old-view leak is undefined for every pair (the references did not change)
+// ranks no method on it; the cut's table still lists every pair's figures, unranked.
+TEST(StudySummary, ACutWithNoRankedFigureStillListsItsPairs) {
+  json results = worstDefaultStudy();
+  const std::string scene = results["scenes"].begin().key();
+  results["statistics"]["scenes"][scene]["cuts"] =
+      json::array({{{"eventFrame", 8},
+                    {"kind", "camera_cut"},
+                    {"byFigure",
+                     {{"oldViewLeak",
+                       {{"metric", "oldViewLeak"},
+                        {"ranking", json::array()},
+                        {"pairs", json::array()},
+                        {"resolvedPairs", 0},
+                        {"totalPairs", 0},
+                        {"excluded", "the figure itself is undefined for this event"}}}}}}});
+  std::vector<std::string> labels;
+  for (json& p : results["pairs"])
+    if (p["scene"] == scene) {
+      p["cuts"] = json::array(
+          {{{"eventFrame", 8}, {"kind", "camera_cut"}, {"atCut", 2.5}, {"oldViewLeak", nullptr}}});
+      labels.push_back(p["label"]);
+    }
+  ASSERT_GE(labels.size(), 2u);
+  std::ostringstream tables;
+  cli::printStudyTables(tables, test::typed(results));
+  const std::string text = tables.str();
+  const size_t at =
+      text.find(scene + ": camera_cut at frame 8: ranked on oldViewLeak (0 of 0 pairs resolved)");
+  ASSERT_NE(at, std::string::npos) << text;
+  for (const std::string& label : labels)
+    EXPECT_NE(text.find("  -   " + label, at), std::string::npos) << label << "\n"
+                                                                  << text.substr(at, 2000);
+  EXPECT_NE(text.find("not ranked: the figure itself is undefined for this event", at),
+            std::string::npos);
+}
+
 // Nothing is called best without something to be best among, and the order of two times is no
 // rank correlation: a scene ranking one method says it was not compared; with two methods timed,
 // the Spearman figure is not given (it can only be +-1).

@@ -570,11 +570,16 @@ TEST(Report, BaselineGivesCompareVerdicts) {
   loose.correction = Correction::None;
   const json passed =
       reportData(test::typed(cand), test::freshDir("report_regression_loose"), &baseRun, loose);
+  bool judgedLoose = false;
   for (const json& r : passed["regression"]["rows"])
     if (r["scene"] == "static" && r["label"] == "svgf[a=0]") {
+      judgedLoose = true;
       EXPECT_EQ(r["verdict"], "ok") << r;
       EXPECT_EQ(r["tolerance"], 0.25) << r;
     }
+  EXPECT_TRUE(judgedLoose) << passed["regression"].dump();
+  // The fixture's failed pair still fails the gate: the tolerance moved only the +20% row.
+  EXPECT_EQ(passed["regression"]["gate"], "regressed");
   EXPECT_EQ(passed["regression"]["correction"], "none");
   // The same contender under another label (a sweep's grid point against a plain run's default):
   // compare matches it by denoiser and parameters, and the page shows the candidate's figures

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <fstream>
 #include <sstream>
 
 #include "core/error.hpp"
@@ -119,11 +120,19 @@ ExternalManifest readManifest(const fs::path& file) {
   try {
     j = parseJsonFile(file.string());
   } catch (const Error& e) {
-    // ext: given the program itself rather than its manifest: said as such.
+    // ext: given the program itself rather than its manifest (a script, a binary): said as such.
+    // A manifest with a typo (it starts as JSON does) keeps the parser's message alone.
+    std::string head(64, '\0');
+    std::ifstream in(file, std::ios::binary);
+    in.read(head.data(), std::streamsize(head.size()));
+    head.resize(size_t(in.gcount()));
+    const size_t first = head.find_first_not_of(" \t\r\n");
+    if (first != std::string::npos && head[first] == '{') throw;
     throw Error(std::string(e.what()) +
                 " (ext: names the denoiser's JSON manifest, which names the program to run; see "
                 "docs/external-denoisers.md)");
   }
+
   if (!j.is_object())
     throw Error(file.string() + ": expected a JSON object, got " + jsonTypeName(j));
   JsonReader r(j, file.string());

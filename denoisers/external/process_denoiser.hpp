@@ -30,8 +30,8 @@ class ExternalProcessDenoiser final : public Denoiser {
   // After the sequence's last frame: ends the process's input and waits up to a second for it to
   // exit. When it exits with a non-zero status or is killed by a signal, what to warn of (its
   // results stand: every frame was answered): "the diffuse process exited with status 3 after its
-  // last frame; the end of its stderr: ...". Empty when it exits with 0, runs on (the destructor
-  // then ends it, as it does a process that never reaches here), or is not running.
+  // last frame; the end of its stderr: ...". One still running after that second is killed, and
+  // said too (every pair paid the second). Empty when it exits with 0 or is not running.
   std::string finish();
 
  private:

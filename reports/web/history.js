@@ -42,7 +42,7 @@
     // How the rows were judged: the gate's own options (arena compare --correction, --confidence).
     if (H.correction)
       $('history-judged').textContent =
-        `Rows judged as \`arena compare --confidence ${(100 * H.confidence).toPrecision(3).replace(/\.?0+$/, '')}% --correction ${H.correction}\`: ` +
+        `Rows judged as \`arena compare --confidence ${fmt(100 * H.confidence)}% --correction ${H.correction}\`: ` +
         'a change is a regression when it is worse by more than the tolerance and the paired interval of the change excludes zero' +
         (H.correction === 'holm'
           ? ', and it stays resolved among all the rows of its comparison judged together (Holm\'s step-down correction: with many rows, some would be resolved by noise alone).'
