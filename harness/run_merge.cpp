@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <map>
 #include <set>
 
@@ -134,6 +135,23 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
       throw Error("merge: " + std::to_string(count) +
                   " pair(s) of the run's plan are in no shard (" + lost +
                   (count > 5 ? ", ..." : "") + "); a shard lost them; nothing was written");
+    // The pairs in the plan's order (each sequence, each contender), as one run writes them; the
+    // shards' order would interleave them.
+    std::map<std::string, size_t> sequenceAt, labelAt;
+    for (const json& sequence : plan.value("sequences", json::array()))
+      if (sequence.is_object() && sequence.value("name", json()).is_string())
+        sequenceAt.emplace(sequence["name"].get<std::string>(), sequenceAt.size());
+    for (const json& label : plan.value("labels", json::array()))
+      if (label.is_string()) labelAt.emplace(label.get<std::string>(), labelAt.size());
+    const auto at = [](const std::map<std::string, size_t>& order, const std::string& key) {
+      const auto it = order.find(key);
+      return it == order.end() ? order.size() : it->second;
+    };
+    std::stable_sort(merged.pairs.begin(), merged.pairs.end(),
+                     [&](const PairResult& a, const PairResult& b) {
+                       return std::pair(at(sequenceAt, a.scene), at(labelAt, a.label)) <
+                              std::pair(at(sequenceAt, b.scene), at(labelAt, b.label));
+                     });
   }
   const RunDirectoryLock outLock = checkRunOutputs(
       out);  // creates --out only now: shards that cannot be merged leave no directory behind

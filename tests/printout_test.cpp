@@ -127,6 +127,22 @@ TEST(StudySummary, TheDefaultStudyFitsOnOneScreen) {
   EXPECT_GT(lineCount(tables.str()), 100u);
 }
 
+// The overall ranking says which contenders are not built in, and where each came from.
+TEST(StudySummary, TheOverallRankingNamesTheContendersNotBuiltIn) {
+  json results = worstDefaultStudy();
+  const std::string label = results["statistics"]["overall"]["ranking"][0]["label"];
+  for (json& p : results["pairs"])
+    if (p["label"] == label) p["origin"] = "plugin /opt/team/libmine.so";
+  std::ostringstream out;
+  cli::printOverallRanking(out, test::typed(results));
+  EXPECT_NE(out.str().find("  not built in: " + label + " (plugin /opt/team/libmine.so)\n"),
+            std::string::npos)
+      << out.str();
+  std::ostringstream plain;
+  cli::printOverallRanking(plain, test::typed(worstDefaultStudy()));
+  EXPECT_EQ(plain.str().find("not built in"), std::string::npos) << plain.str();
+}
+
 // A camera cut whose old-view leak is undefined for every pair (the references did not change)
 // ranks no method on it; the cut's table still lists every pair's figures, unranked.
 TEST(StudySummary, ACutWithNoRankedFigureStillListsItsPairs) {

@@ -335,6 +335,11 @@ TEST(RunMatrix, ShardsMergeIntoTheFullRun) {
   json m = mergeRuns(parts, merged);
   EXPECT_EQ(m["pairs"].size(), 3u);
   EXPECT_NO_THROW(loadResults(merged));
+  // In the order one run writes its pairs (the plan's contenders), not shard by shard.
+  std::vector<std::string> order, planned;
+  for (const json& p : m["pairs"]) order.push_back(p["label"]);
+  for (const json& l : m["settings"]["plan"]["labels"]) planned.push_back(l);
+  EXPECT_EQ(order, planned);
   EXPECT_THROW(mergeRuns({parts[0], parts[0]}, test::freshDir("run_dup")), Error);
   // Shards of another run -- other denoisers, or the same at another size -- are refused: their
   // slices would not add up to one run (each records the whole run's plan).
