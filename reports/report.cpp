@@ -715,6 +715,8 @@ json pairData(const PairResult& pair) {
   json summary = json::object();
   for (const auto& [metric, s] : pair.summary) summary[metric] = s.toJson();
   p["summary"] = summary;
+  // Outputs of the same bits (a sweep's points a parameter did not reach): the rankings say so.
+  if (pair.detail.contains("outputChecksum")) p["outputChecksum"] = pair.detail["outputChecksum"];
   const json& timing = pair.timing();
   p["timing"] = {{"msMedian", timing.value("msMedian", kNaN)},
                  {"msP5", timing.value("msP5", kNaN)},

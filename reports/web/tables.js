@@ -68,8 +68,12 @@
     return group;
   }
 
-  function rankingTable(title, R, valueTitle, valueKey) {
+  // `checksums`: label -> the checksum of its output frames on this scene (a scene's ranking;
+  // null overall): methods tied because their outputs are the same bits are said to be.
+  function rankingTable(title, R, valueTitle, valueKey, checksums = null) {
     if (!R || !R.ranking || !R.ranking.length) return null;
+    const sameOutput = (r) => (checksums && checksums[r.label]
+      ? (r.tiedWith || []).filter((other) => checksums[other] === checksums[r.label]) : []);
     const groups = tieGroups(R.ranking);
     const sizes = {};
     for (const g of Object.values(groups)) sizes[g] = (sizes[g] || 0) + 1;
@@ -100,7 +104,8 @@
                                                     {class: 'ci', text: A.interval(r.ci95) || '–'}),
           el('td', {
             class: 'left',
-            text: tied ? `tied with ${r.tiedWith.join(', ')}` :
+            text: tied ? `tied with ${r.tiedWith.join(', ')}` +
+                    (sameOutput(r).length ? ` (identical outputs: ${sameOutput(r).join(', ')})` : '') :
                 !R.tiesKnown         ? '' :
                 R.ranking.length < 2 ? 'the only method: not compared' :
                                        'resolved'
@@ -125,7 +130,8 @@
     const scene = R.scenes[A.state.scene];
     const overall = R.overall;
     $('rankings').replaceChildren(...[
-      rankingTable(`Ranking on ${A.state.scene}${scene ? ` (${scene.metric || 'relMse'})` : ''}`, scene, `mean ${scene ? scene.metric || 'relMse' : ''}`, 'mean'),
+      rankingTable(`Ranking on ${A.state.scene}${scene ? ` (${scene.metric || 'relMse'})` : ''}`, scene, `mean ${scene ? scene.metric || 'relMse' : ''}`, 'mean',
+                   Object.fromEntries(A.pairsOf(A.state.scene).filter((p) => p.outputChecksum).map((p) => [p.label, p.outputChecksum]))),
       overall && rankingTable(`Overall ranking (${overall.normalisation || 'normalised over scenes'})`, overall, 'score', 'score'),
     ].filter(Boolean));
   }
