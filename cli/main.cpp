@@ -55,17 +55,19 @@ int main(int argc, char** argv) {
   arena::cli::addReportCommand(app);
   arena::cli::addCaptureCommands(app);
   // A misspelt command would read "A subcommand is required": named, with the commands there are.
-  if (argc > 1 && argv[1][0] != '-') {
+  if (argc == 1 || argv[1][0] != '-') {
     const std::vector<CLI::App*> commands = app.get_subcommands([](CLI::App*) { return true; });
     std::string names;
     bool known = false;
     for (const CLI::App* c : commands) {
-      known = known || c->get_name() == argv[1];
+      known = known || (argc > 1 && c->get_name() == argv[1]);
       names += (names.empty() ? "" : ", ") + c->get_name();
     }
     if (!known) {
-      std::cerr << "arena: error: unknown command '" << argv[1] << "'; the commands are: " << names
-                << " (`arena --help` says what each does)\n";
+      std::cerr << "arena: error: "
+                << (argc == 1 ? std::string("a command is required")
+                              : "unknown command '" + std::string(argv[1]) + "'")
+                << "; the commands are: " << names << " (`arena --help` says what each does)\n";
       return 2;
     }
   }

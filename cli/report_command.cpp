@@ -31,6 +31,9 @@ void addReportCommand(CLI::App& app) {
       ->default_str("compare's defaults")
       ->delimiter(',')
       ->allow_extra_args(false);
+  auto gateOnly = std::make_shared<std::string>();
+  cmd->add_option("--denoisers", *gateOnly, "With --baseline: as for `arena compare`")
+      ->default_str("every pair");
   cmd->add_option("--tolerance", *gateTolerance, "With --baseline: as for `arena compare`")
       ->default_val("2%");
   cmd->add_option("--confidence", *gateConfidence, "With --baseline: as for `arena compare`")
@@ -41,7 +44,8 @@ void addReportCommand(CLI::App& app) {
   cmd->callback([=] {
     // The gate's options judge the regression view, which only a baseline makes.
     if (baseline->empty())
-      for (const char* option : {"--metric", "--tolerance", "--confidence", "--correction"})
+      for (const char* option :
+           {"--metric", "--tolerance", "--confidence", "--correction", "--denoisers"})
         if (cmd->count(option) > 0)
           throw Error(std::string("report: ") + option +
                       " judges the regression view against a baseline: give --baseline RUN too");
@@ -53,6 +57,8 @@ void addReportCommand(CLI::App& app) {
     o->gate.tolerances = gateTolerances(std::move(o->gate.tolerances), t);
     o->gate.bootstrap.confidence = parseConfidence(*gateConfidence);
     o->gate.correction = parseCorrection(*gateCorrection);
+    if (!gateOnly->empty())
+      o->gate.contenders = splitList(*gateOnly, "--denoisers", "labels or denoiser names");
     ReportSummary s = writeReport(*o);
     std::cout << "report: " << s.index.string() << " (" << s.pairs << " pairs";
     if (s.failedPairs) std::cout << ", " << s.failedPairs << " failed: shown in the report";

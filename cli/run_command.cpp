@@ -410,8 +410,7 @@ void addRunCommands(CLI::App& app) {
       RunResults baseline = loadResults(*a), candidate = loadResults(*b);
       // The same run on both sides (a CI step that copied the candidate into the baseline) would
       // pass every row by construction: the gate cannot judge it (exit 2), rather than pass.
-      if (baseline.name == candidate.name && baseline.created == candidate.created &&
-          baseline.environment == candidate.environment)
+      if (sameRunRecord(baseline, candidate))
         throw Error("compare: " + *a + " and " + *b + " hold the same run (name " + baseline.name +
                     ", created " + baseline.created +
                     "): every change would be zero by construction, and the gate would pass having "
@@ -473,7 +472,8 @@ void addRunCommands(CLI::App& app) {
           return json{{"path", path},
                       {"name", r.name},
                       {"created", r.created},
-                      {"commit", r.environment.value("git_commit", "")}};
+                      {"commit", r.environment.value("git_commit", "")},
+                      {"revision", r.environment.value("revision", "")}};
         };
         const json out = {
             {"gate", gateOutcomeName(outcome)},  {"exitCode", gateExitCode(outcome)},

@@ -219,6 +219,11 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
   std::set<std::string> baseScenes, candScenes;
   for (const PairResult& p : cand.pairs) candPairs[key(p)] = &p, candScenes.insert(p.scene);
   for (const PairResult& p : base.pairs) baseScenes.insert(p.scene);
+  // The scenes the runs measured (their records), whichever pairs are compared (--denoisers).
+  for (const auto& [runScenes, into] :
+       {std::pair{&base.scenes, &baseScenes}, std::pair{&cand.scenes, &candScenes}})
+    if (runScenes->is_object())
+      for (auto it = runScenes->begin(); it != runScenes->end(); ++it) into->insert(it.key());
   bool shared = false;
   for (const std::string& s : baseScenes) shared |= candScenes.count(s) > 0;
   // Without a scene in common every baseline pair is missing (the gate fails) and every candidate
@@ -525,6 +530,23 @@ const char* gateOutcomeName(GateOutcome outcome) {
 
 int gateExitCode(GateOutcome outcome) {
   return outcome == GateOutcome::Regressed ? 1 : outcome == GateOutcome::CouldNotJudge ? 2 : 0;
+}
+
+bool sameRunRecord(const RunResults& a, const RunResults& b) {
+  if (a.created != b.created || a.name != b.name || a.pairs.size() != b.pairs.size() ||
+      a.environment.value("git_commit", "") != b.environment.value("git_commit", ""))
+    return false;
+  for (size_t p = 0; p < a.pairs.size(); ++p) {
+    const PairResult &x = a.pairs[p], &y = b.pairs[p];
+    if (x.label != y.label || x.scene != y.scene || x.status != y.status ||
+        x.summary.size() != y.summary.size())
+      return false;
+    for (const auto& [metric, summary] : x.summary) {
+      const SummaryMean u = x.mean(metric), v = y.mean(metric);
+      if (u.present() != v.present() || (u.present() && u.mean != v.mean)) return false;
+    }
+  }
+  return true;
 }
 
 bool isContender(const PairResult& p, const std::vector<std::string>& names) {

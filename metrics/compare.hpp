@@ -123,6 +123,10 @@ int gateExitCode(GateOutcome outcome);             // 0, 1, 2
 // option; a name neither run has is an Error listing the labels they have.
 void keepContenders(RunResults& baseline, RunResults& candidate,
                     const std::vector<std::string>& names);
+// Whether `a` and `b` are one run read twice (a copy, a directory and the database it appended
+// to): the same name, creation time and build commit, and the same pairs with the same means of
+// every summary. Two runs made in the same second under one name differ in their numbers.
+bool sameRunRecord(const RunResults& a, const RunResults& b);
 // Whether `p` is one of `names` (its label or its denoiser's name).
 bool isContender(const PairResult& p, const std::vector<std::string>& names);
 

@@ -191,6 +191,11 @@ std::vector<RunResults> loadHistory(const std::vector<fs::path>& inputs) {
       runs.push_back(loadResults(in));
       runs.back().source = in.string();
     } else if (fs::is_regular_file(in)) {
+      // A database a run is appending to (its directory's writer holds the lock) is refused, as
+      // a run directory being written is: the dashboard would miss the run.
+      const DirectoryLock reading(fs::absolute(in).parent_path(), DirectoryLock::Mode::Shared,
+                                  DirectoryLock::IfHeld::Refuse, "reading its results.db",
+                                  /*createFile=*/false);
       for (RunResults& r : runsFromDatabase(in)) runs.push_back(std::move(r));
     } else {
       throw Error("history: " + in.string() +
@@ -206,18 +211,7 @@ std::vector<RunResults> loadHistory(const std::vector<fs::path>& inputs) {
                   ": the run records no `created` time; the history orders runs by it");
   std::stable_sort(runs.begin(), runs.end(),
                    [](const RunResults& a, const RunResults& b) { return a.created < b.created; });
-  auto sameRun = [](const RunResults& a, const RunResults& b) {
-    if (a.created != b.created || a.name != b.name || a.pairs.size() != b.pairs.size() ||
-        a.environment.value("git_commit", "") != b.environment.value("git_commit", ""))
-      return false;
-    for (size_t p = 0; p < a.pairs.size(); ++p) {
-      const SummaryMean x = a.pairs[p].mean("relMse"), y = b.pairs[p].mean("relMse");
-      if (a.pairs[p].label != b.pairs[p].label || x.present() != y.present() ||
-          (x.present() && x.mean != y.mean))
-        return false;
-    }
-    return true;
-  };
+  const auto sameRun = sameRunRecord;
   // A run given twice (a path twice, a run directory and the results.db it appended to, two copies
   // of a database) would be compared with itself, and the gate pass on it: it is taken once, from
   // its run directory where there is one (the directory keeps the tiles the gate resolves with).

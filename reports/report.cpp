@@ -873,8 +873,13 @@ json reportData(const RunResults& results, const fs::path& runDir, const RunResu
                {"ablation", ablationData(results)},
                {"regression", nullptr}};
   if (baseline) {
+    // The gate's --denoisers: only those contenders' rows, as `arena compare` judges them.
+    RunResults gatedBaseline = *baseline, gatedResults = results;
+    if (!gate.contenders.empty()) keepContenders(gatedBaseline, gatedResults, gate.contenders);
     const std::vector<ComparisonRow> rows =
-        compareRuns(*baseline, results, gate.tolerances, gate.bootstrap, gate.correction);
+        compareRuns(gatedBaseline, gatedResults, gate.tolerances, gate.bootstrap, gate.correction);
+    // The run against itself: compare refuses it (every change zero by construction).
+    const bool sameRun = sameRunRecord(*baseline, results);
     json table = comparisonJson(rows);
     // compareRuns leaves the numbers at 0 when one side has no result; say why instead, and keep
     // the side that exists, so "regressed" from a failed pair is not read as a change of +0%.
@@ -899,21 +904,23 @@ json reportData(const RunResults& results, const fs::path& runDir, const RunResu
         row["note"] = "the baseline: " + bm.absent;
       }
     }
-    data["regression"] = {{"baseline",
-                           {{"name", baseline->name},
-                            {"created", baseline->created},
-                            {"commit", baseline->environment.value("git_commit", "")}}},
-                          {"rows", table},
-                          {"anyRegression", anyRegression(rows)},
-                          {"gate", gateOutcomeName(gateOutcome(rows))},
-                          {"exitCode", gateExitCode(gateOutcome(rows))},
-                          {"confidence", gate.bootstrap.confidence},
-                          {"correction", correctionName(gate.correction)},
-                          {"rowsJudgedTogether", std::count_if(rows.begin(), rows.end(),
-                                                               [](const ComparisonRow& r) {
-                                                                 return std::isfinite(r.pValue);
-                                                               })},
-                          {"settingsDiffer", settingsDifferences(*baseline, results)}};
+    data["regression"] = {
+        {"baseline",
+         {{"name", baseline->name},
+          {"created", baseline->created},
+          {"commit", baseline->environment.value("git_commit", "")},
+          {"revision", baseline->environment.value("revision", "")}}},
+        {"rows", table},
+        {"anyRegression", anyRegression(rows)},
+        {"sameRun", sameRun},
+        {"gate", sameRun ? "could not judge" : gateOutcomeName(gateOutcome(rows))},
+        {"exitCode", sameRun ? 2 : gateExitCode(gateOutcome(rows))},
+        {"confidence", gate.bootstrap.confidence},
+        {"correction", correctionName(gate.correction)},
+        {"rowsJudgedTogether",
+         std::count_if(rows.begin(), rows.end(),
+                       [](const ComparisonRow& r) { return std::isfinite(r.pValue); })},
+        {"settingsDiffer", settingsDifferences(*baseline, results)}};
   }
   return data;
 }

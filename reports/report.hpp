@@ -21,6 +21,7 @@ struct RegressionGate {
   std::vector<Tolerance> tolerances;
   BootstrapConfig bootstrap;
   Correction correction = Correction::Holm;
+  std::vector<std::string> contenders;  // --denoisers: only these (empty: every pair)
 };
 
 struct ReportOptions {

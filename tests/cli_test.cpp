@@ -358,6 +358,9 @@ TEST(CliContract, UsageErrorsExitTwoAndOptionsAreStrict) {
                 .output.find("(`arena run --help` lists the options)"),
             std::string::npos);
   EXPECT_NE(
+      contract::arenaCli("").output.find("arena: error: a command is required; the commands are: "),
+      std::string::npos);
+  EXPECT_NE(
       contract::arenaCli("nosuchcommand")
           .output.find(
               "arena: error: unknown command 'nosuchcommand'; the commands are: scenes, render,"),

@@ -147,6 +147,7 @@ TEST(CompareContract, ACiStepTellsARegressionFromWhatTheGateCouldNotJudge) {
   r = contract::arenaCli("compare " + A + " " + lost.string() + " --denoisers eaw");
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_NE(r.output.find("missing"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("share no scene"), std::string::npos) << "they share it: " << r.output;
   EXPECT_FALSE(fs::exists(lost / ".arena.lock")) << "a reader leaves a run's directory as it was";
   // A run still being written (another process holds its lock) is refused, naming the writer.
   {
@@ -157,6 +158,20 @@ TEST(CompareContract, ACiStepTellsARegressionFromWhatTheGateCouldNotJudge) {
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find(B + ": another arena process (pid "), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("writing this run"), std::string::npos) << r.output;
+  {  // ... and so is the results.db it is appending to
+    const DirectoryLock writing(b.out, DirectoryLock::Mode::Exclusive,
+                                DirectoryLock::IfHeld::Refuse, "writing this run");
+    r = contract::arenaCli("history " + (b.out / "results.db").string() + " --out " +
+                           (test::freshDir("gate_history_locked") / "page").string());
+  }
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("writing this run"), std::string::npos) << r.output;
+  // Two runs of one name made in the same second are not one run when their numbers differ.
+  const RunResults ra = loadResults(a.out);
+  RunResults twin = ra;
+  EXPECT_TRUE(sameRunRecord(ra, twin));
+  twin.pairs[0].summary.begin()->second.mean *= 1.5;
+  EXPECT_FALSE(sameRunRecord(ra, twin));
   // The dashboard takes the same options: --metric before the runs does not swallow them.
   const fs::path page = test::freshDir("gate_history") / "page";
   r = contract::arenaCli("history --metric relMse --denoisers eaw " + A + " " + B + " --out " +

@@ -581,6 +581,19 @@ TEST(Report, BaselineGivesCompareVerdicts) {
   // The fixture's failed pair still fails the gate: the tolerance moved only the +20% row.
   EXPECT_EQ(passed["regression"]["gate"], "regressed");
   EXPECT_EQ(passed["regression"]["correction"], "none");
+  // The gate's --denoisers: only that contender's rows.
+  RegressionGate one;
+  one.contenders = {"passthrough"};
+  const json only =
+      reportData(test::typed(cand), test::freshDir("report_regression_one"), &baseRun, one);
+  ASSERT_FALSE(only["regression"]["rows"].empty());
+  for (const json& r : only["regression"]["rows"]) EXPECT_EQ(r["label"], "passthrough") << r;
+  // The baseline is the run itself: compare refuses it (exit 2), and the view says so.
+  const RunResults self = test::typed(cand);
+  const json itself = reportData(self, test::freshDir("report_regression_self"), &self);
+  EXPECT_TRUE(itself["regression"]["sameRun"].get<bool>());
+  EXPECT_EQ(itself["regression"]["gate"], "could not judge");
+  EXPECT_EQ(itself["regression"]["exitCode"], 2);
   // The same contender under another label (a sweep's grid point against a plain run's default):
   // compare matches it by denoiser and parameters, and the page shows the candidate's figures
   // (it said "this run: not measured" beside compare's verdict).

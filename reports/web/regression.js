@@ -86,9 +86,14 @@
     body.replaceChildren(
         ...[el('p', {},
                `Baseline: ${b.name || '(unnamed)'}${b.created ? ` (${b.created}` : ''}${
+                   b.revision ? `, revision ${b.revision}` : ''}${
                    b.commit ? `, commit ${b.commit})` :
                        b.created ? ')' :
                                    ''}. `,
+               R.sameRun ? el('b', {
+                 class: 'worse',
+                 text: '`arena compare` would refuse these runs (exit 2): the baseline is this run itself, so every change is zero by construction.'
+               }) :
                (R.settingsDiffer || []).length ? el('b', {
                  class: 'worse',
                  text: '`arena compare` would refuse these runs (exit 2): their settings differ.'
@@ -117,7 +122,7 @@
                   A.fmt(100 * (R.confidence ?? 0.95))}% interval of that change excludes zero${
                   (R.correction ?? 'holm') === 'holm' ?
                       `, and it stays resolved among the ${R.rowsJudgedTogether ?? 'many'} rows judged together (Holm's correction: among many rows, some intervals exclude zero by noise alone; such a row is unresolved, and its note says so)` :
-                      ' (each row alone: --correction none)'} (beyond tolerance within the noise: unresolved; with no interval to judge it: unverified, which fails the gate too).`
+                      ' (each row alone: --correction none)'} (beyond tolerance within the noise: unresolved; with no interval to judge it: unverified, where the gate could not judge and fails, exit 2).`
             }),
             el('div', {class: 'controls'}, el('label', {}, 'Show ', filter)), tableBox]
             .filter(Boolean));
