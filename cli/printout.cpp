@@ -104,13 +104,11 @@ void printOverallRanking(std::ostream& out, const RunResults& results) {
            "statistics.extraPaths; their tracing time is each pair's tracingMs)\n";
   // The contenders that are not built in, with where each came from (a process's manifest, a
   // plugin's library, a capture's stored output): a reader of the ranking should know.
+  const std::map<std::string, std::string> origins = contenderOrigins(results);
   std::vector<std::string> outside;
   for (const RankedMethod& m : o.ranking)
-    for (const PairResult& p : results.pairs)
-      if (p.label == m.label && p.detail.contains("origin") && p.detail["origin"].is_string()) {
-        outside.push_back(m.label + " (" + p.detail["origin"].get<std::string>() + ")");
-        break;
-      }
+    if (const auto it = origins.find(m.label); it != origins.end())
+      outside.push_back(m.label + " (" + it->second + ")");
   if (!outside.empty()) {
     out << "  not built in:";
     for (size_t k = 0; k < outside.size(); ++k) out << (k ? "; " : " ") << outside[k];

@@ -101,8 +101,4 @@ std::string outerCrashNote() {
   return note ? note : "";
 }
 
-std::string crashNoteLine(int signal, const std::string& note) {
-  return "arena: fatal: signal " + std::to_string(signal) + " (" + signalName(signal) + ") " + note;
-}
-
 }  // namespace arena

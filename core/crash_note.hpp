@@ -34,7 +34,4 @@ class CrashNote {
 // The text of the note in force ("" when none): what a nested note builds on.
 std::string outerCrashNote();
 
-// The line a fatal signal writes under `note` (without the handler: for tests and for the docs).
-std::string crashNoteLine(int signal, const std::string& note);
-
 }  // namespace arena

@@ -404,6 +404,14 @@ const PairResult* RunResults::find(const std::string& scene, const std::string& 
   return nullptr;
 }
 
+std::map<std::string, std::string> contenderOrigins(const RunResults& results) {
+  std::map<std::string, std::string> out;
+  for (const PairResult& p : results.pairs)
+    if (p.detail.contains("origin") && p.detail["origin"].is_string())
+      out.emplace(p.label, p.detail["origin"].get<std::string>());
+  return out;
+}
+
 std::vector<std::string> absentSummaryLines(const RunResults& results, const std::vector<std::string>& metrics) {
   std::map<std::tuple<std::string, std::string, std::string>, int> count;
   for (const PairResult& p : results.pairs) {

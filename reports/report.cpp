@@ -847,11 +847,7 @@ json reportData(const RunResults& results, const fs::path& runDir, const RunResu
 
   // Where each contender that is not a built-in came from (an external process's manifest, a
   // plugin's library, a capture's stored output): the page marks those rows.
-  json origins = json::object();
-  for (const PairResult& p : results.pairs)
-    if (const std::string origin = p.detail.value("origin", "");
-        !origin.empty() && !origins.contains(p.label))
-      origins[p.label] = origin;
+  const json origins = contenderOrigins(results);
   const json speed = speedData(results, sceneNames, labels);
   json data = {{"generator", "arena report"},
                {"run",
@@ -880,6 +876,7 @@ json reportData(const RunResults& results, const fs::path& runDir, const RunResu
         compareRuns(gatedBaseline, gatedResults, gate.tolerances, gate.bootstrap, gate.correction);
     // The run against itself: compare refuses it (every change zero by construction).
     const bool sameRun = sameRunRecord(*baseline, results);
+    const GateOutcome outcome = gateOutcome(rows);
     json table = comparisonJson(rows);
     // compareRuns leaves the numbers at 0 when one side has no result; say why instead, and keep
     // the side that exists, so "regressed" from a failed pair is not read as a change of +0%.
@@ -904,23 +901,23 @@ json reportData(const RunResults& results, const fs::path& runDir, const RunResu
         row["note"] = "the baseline: " + bm.absent;
       }
     }
-    data["regression"] = {
-        {"baseline",
-         {{"name", baseline->name},
-          {"created", baseline->created},
-          {"commit", baseline->environment.value("git_commit", "")},
-          {"revision", baseline->environment.value("revision", "")}}},
-        {"rows", table},
-        {"anyRegression", anyRegression(rows)},
-        {"sameRun", sameRun},
-        {"gate", sameRun ? "could not judge" : gateOutcomeName(gateOutcome(rows))},
-        {"exitCode", sameRun ? 2 : gateExitCode(gateOutcome(rows))},
-        {"confidence", gate.bootstrap.confidence},
-        {"correction", correctionName(gate.correction)},
-        {"rowsJudgedTogether",
-         std::count_if(rows.begin(), rows.end(),
-                       [](const ComparisonRow& r) { return std::isfinite(r.pValue); })},
-        {"settingsDiffer", settingsDifferences(*baseline, results)}};
+    data["regression"] = {{"baseline",
+                           {{"name", baseline->name},
+                            {"created", baseline->created},
+                            {"commit", baseline->environment.value("git_commit", "")},
+                            {"revision", baseline->environment.value("revision", "")}}},
+                          {"rows", table},
+                          {"anyRegression", anyRegression(rows)},
+                          {"sameRun", sameRun},
+                          {"gate", sameRun ? "could not judge" : gateOutcomeName(outcome)},
+                          {"exitCode", sameRun ? 2 : gateExitCode(outcome)},
+                          {"confidence", gate.bootstrap.confidence},
+                          {"correction", correctionName(gate.correction)},
+                          {"rowsJudgedTogether", std::count_if(rows.begin(), rows.end(),
+                                                               [](const ComparisonRow& r) {
+                                                                 return std::isfinite(r.pValue);
+                                                               })},
+                          {"settingsDiffer", settingsDifferences(*baseline, results)}};
   }
   return data;
 }
