@@ -126,6 +126,7 @@ void addReportCommand(CLI::App& app) {
                    "keep no per-tile data, so the gate cannot tell them from noise; give `arena "
                    "history` the run directories (their results.json) to judge them\n";
     for (const std::string& line : s.absentSummaries) std::cout << "absent: " << line << "\n";
+    for (const std::string& line : s.warnings) std::cerr << "arena: warning: " << line << "\n";
   });
 }
 

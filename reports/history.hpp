@@ -16,7 +16,10 @@ namespace arena {
 // holds), ordered by creation time (ties keep the input order). A database run carries what the
 // database stores: its pairs' status and summaries (no per-frame data). Anything else is an Error
 // naming the path.
-std::vector<RunResults> loadHistory(const std::vector<std::filesystem::path>& inputs);
+// `warnings` (optional): one line per run given twice in one form (a copied directory, a
+// database given twice), which is taken once; a run directory and its results.db are one run.
+std::vector<RunResults> loadHistory(const std::vector<std::filesystem::path>& inputs,
+                                    std::vector<std::string>* warnings = nullptr);
 
 // The dashboard's data: runs [{name, created, commit}], per scene x label x metric the values (and
 // intervals where the runs have them) per run, the tolerance of each gated metric, and `changes`:
@@ -54,6 +57,7 @@ struct HistorySummary {
   size_t comparisons = 0, failingComparisons = 0;  // run i against run i - 1; those that fail
   size_t unresolved = 0;                           // changes beyond the tolerance within noise
   size_t notJudged = 0;  // changes beyond the tolerance with no tiles to judge them (results.db)
+  std::vector<std::string> warnings;         // runs given twice; comparisons of too many rows
   std::vector<std::string> absentSummaries;  // "<run>: <scene>: <metric> absent in N pair(s): <why>"
 };
 HistorySummary writeHistory(const HistoryOptions& options);

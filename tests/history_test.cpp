@@ -118,6 +118,18 @@ TEST(History, MarksWhatCompareSaysRunByRun) {
   EXPECT_EQ(failingRuns, std::set<int>{5});
   EXPECT_EQ(all["failing"].get<size_t>(), 2u);
   EXPECT_EQ(all["failingComparisons"].get<size_t>(), 1u);
+  EXPECT_TRUE(all["warnings"].empty()) << all["warnings"].dump();
+  // At a confidence whose smallest Holm threshold no replicate count can show (0 rows resolvable),
+  // the dashboard warns as `arena compare` does, once.
+  BootstrapConfig strict;
+  strict.confidence = 0.99999;
+  ASSERT_EQ(holmResolvableRows(strict.confidence), 0u);
+  const json unresolvable = historyData(both, tolerances, strict);
+  ASSERT_EQ(unresolvable["warnings"].size(), 1u) << unresolvable["warnings"].dump();
+  EXPECT_NE(unresolvable["warnings"][0].get<std::string>().find(
+                "rows judged together in a comparison: more than 0, beyond which the correction "
+                "can resolve no row"),
+            std::string::npos);
   // Series per scene x label x metric, one slot per run; gated metrics carry their tolerance.
   const json& v = data["series"]["s"]["svgf"]["relMse"]["value"];
   ASSERT_EQ(v.size(), 8u);
@@ -511,7 +523,14 @@ TEST(History, BadInputNamesThePath) {
   // The same run given twice is taken once (compared with itself, the gate would pass on nothing).
   EXPECT_EQ(loadHistory({db, dir / "." / "results.db"}).size(), 1u);
   fs::copy_file(db, dir / "copy.db", fs::copy_options::overwrite_existing);  // another file
-  EXPECT_EQ(loadHistory({db, dir / "copy.db"}).size(), 1u);
+  std::vector<std::string> said;
+  EXPECT_EQ(loadHistory({db, dir / "copy.db"}, &said).size(), 1u);
+  // ... and said: a copy given beside its original is taken once, with a warning naming both.
+  ASSERT_FALSE(said.empty());
+  EXPECT_NE(said[0].find("copy.db#"), std::string::npos) << said[0];
+  EXPECT_NE(said[0].find("holds the same run as " + db.string() + "#"), std::string::npos)
+      << said[0];
+  EXPECT_NE(said[0].find("taken once"), std::string::npos) << said[0];
   e = test::errorOf([&] { loadHistory({dir / "notes.txt"}); });
   EXPECT_NE(e.find("notes.txt: not an SQLite database"), std::string::npos) << e;
   // A file where the page's directory belongs, named with the option.
