@@ -1115,7 +1115,8 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
       std::array<double, 2> around{0, 0};
       for (int t : {e.frame - 1, e.frame + 1})
         if (t >= 1 && size_t(t) < info.cameras.size())
-          for (size_t k = 0; k < 2; ++k) around[k] = std::max(around[k], step(t)[k]);
+          for (const std::array<double, 2> neighbour = step(t); size_t k : {size_t(0), size_t(1)})
+            around[k] = std::max(around[k], neighbour[k]);
       const float fovBefore = info.cameras[size_t(e.frame - 1)].tanHalfFovY,
                   fovAt = info.cameras[size_t(e.frame)].tanHalfFovY;
       const bool sameFov = std::abs(fovAt - fovBefore) <= 1e-4f * std::max(fovAt, fovBefore);

@@ -162,13 +162,10 @@ class PluginDenoiser final : public Denoiser {
   }
   // What a fatal signal in the plugin's `entry` says (core/crash_note.hpp): the plugin, the call,
   // the pair the harness was running, and that the run is lost with it.
+  // The parts that do not change are composed once (a denoise call is timed): the pair's note is
+  // in force when the instance is made.
   CrashNote crashNote(const std::string& entry) const {
-    const std::string pair = outerCrashNote();
-    return CrashNote("in plugin " + std::string(plugin_->name) + "'s " + entry + " (" + library_ +
-                     ")" + (pair.empty() ? "" : " " + pair) +
-                     "; arena stops here and writes no results (a plugin runs inside arena's "
-                     "process: give it as an external process, docs/external-denoisers.md, to keep "
-                     "a crash to its own pair)");
+    return CrashNote(noteHead_ + entry + noteTail_);
   }
   // `error` is the plugin's buffer: terminated here (the ABI promises only its first errorSize
   // bytes), its bytes made valid text.
@@ -180,6 +177,12 @@ class PluginDenoiser final : public Denoiser {
 
   const ArenaPlugin* plugin_;
   std::string library_;
+  // crashNote's fixed parts (declared after plugin_ and library_, which they read).
+  const std::string noteHead_ = "in plugin " + std::string(plugin_->name) + "'s ";
+  const std::string noteTail_ =
+      " (" + library_ + ")" + (outerCrashNote().empty() ? "" : " " + outerCrashNote()) +
+      "; arena stops here and writes no results (a plugin runs inside arena's process: give it as "
+      "an external process, docs/external-denoisers.md, to keep a crash to its own pair)";
   void* instance_ = nullptr;
   std::vector<std::string> channels_;
   std::vector<ArenaLayer> layers_;
