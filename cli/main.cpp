@@ -12,8 +12,9 @@
 #include <thread>
 #include <typeinfo>
 
-#include "core/error.hpp"
 #include "cli/commands.hpp"
+#include "core/error.hpp"
+#include "denoisers/external/loader.hpp"
 
 namespace {
 
@@ -41,6 +42,10 @@ int main(int argc, char** argv) {
   // every cached frame's ZIP compression ran on one core while the other waited. The bytes are the
   // same whichever thread compresses a block.
   Imf::setGlobalThreadCount(int(std::max(1u, std::thread::hardware_concurrency())));
+  // An isolated plugin runs in `arena serve`, started from this very executable.
+  std::error_code noPath;
+  if (const auto self = std::filesystem::read_symlink("/proc/self/exe", noPath); !noPath)
+    arena::setServeExecutable(self.string());
   CLI::App app{
       "Denoise Arena: real-time path-tracing denoisers side by side on identical sequences"};
   app.require_subcommand(1);

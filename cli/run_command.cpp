@@ -1,6 +1,10 @@
-// `arena run`, `arena sweep`, `arena merge`, `arena compare`, `arena denoisers`.
+// `arena run`, `arena sweep`, `arena merge`, `arena compare`, `arena denoisers`, `arena serve`.
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <iomanip>
 #include <iostream>
 #include <map>
@@ -15,6 +19,8 @@
 #include "core/error.hpp"
 #include "core/text.hpp"
 #include "denoisers/external/loader.hpp"
+#include "denoisers/external/plugin_denoiser.hpp"
+#include "harness/denoiser_server.hpp"
 #include "harness/reference_quality.hpp"
 #include "harness/run_matrix.hpp"
 #include "harness/scene_selection.hpp"
@@ -576,6 +582,36 @@ void addRunCommands(CLI::App& app) {
                   << "\n";
         for (auto& p : d["parameters"]) std::cout << "    " << p.get<std::string>() << "\n";
       }
+    });
+  }
+  {
+    auto* cmd = app.add_subcommand(
+        "serve",
+        "Run one denoiser (plugin:LIBRARY or a built-in) as a frame-protocol process on stdin and "
+        "stdout: what an isolated plugin runs in (docs/external-denoisers.md)");
+    auto entry = std::make_shared<std::string>();
+    cmd->add_option("denoiser", *entry,
+                    "plugin:LIBRARY, or a built-in that reads neither gradient samples nor the "
+                    "low-resolution buffer")
+        ->required();
+    cmd->footer(
+        "It reads one setup line and answers ready, then answers each frame with its result, as "
+        "any process speaking the frame protocol; its stdout carries only the protocol (what the "
+        "denoiser prints there goes to stderr). Exit status 0 when its input ends after whole "
+        "frames, 1 after a fault (answered with an error message), 2 when the denoiser cannot be "
+        "loaded.");
+    cmd->callback([entry] {
+      // The protocol keeps the real stdout; the denoiser's own prints go to stderr.
+      std::cout.flush();
+      const int protocolOut = ::dup(STDOUT_FILENO);
+      if (protocolOut < 0 || ::dup2(STDERR_FILENO, STDOUT_FILENO) < 0)
+        throw Error(std::string("arena serve: cannot set up its output: ") + std::strerror(errno));
+      setPluginCrashConsequence(
+          "this process (arena serve, the plugin's isolated host) ends here and the harness fails "
+          "this pair alone");
+      const int status = serveDenoiser(*entry, STDIN_FILENO, protocolOut);
+      ::close(protocolOut);
+      if (status != 0) throw CLI::RuntimeError(status);
     });
   }
   {

@@ -12,7 +12,9 @@
  * refuses any other version. Images are views into the harness's memory: zero copy.
  *
  * Load it with `arena run --plugin ./libfoo.so` (or `--denoisers plugin:./libfoo.so`, or a
- * manifest {"library": "libfoo.so"}); see docs/external-denoisers.md. */
+ * manifest {"library": "libfoo.so"}); see docs/external-denoisers.md. A manifest that adds
+ * "isolated": true runs each instance in a process of its own (`arena serve`), where a crash or a
+ * hang fails only its pair. */
 #ifndef ARENA_PLUGIN_H
 #define ARENA_PLUGIN_H
 

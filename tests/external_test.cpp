@@ -941,5 +941,212 @@ TEST(Plugin, AnotherAbiVersionIsRefused) {
   EXPECT_NE(notPlugin.find("cannot load the plugin"), std::string::npos) << notPlugin;
 }
 
+// --- isolated plugins and `arena serve`
+// -----------------------------------------------------------
+
+// The camera-cut room, 32x18, 10 frames: the cut at frame 8 resets every denoiser.
+const Sequence& cutSequence() {
+  static const Sequence sequence = Sequence::open(
+      renderSequence(test::shippedScene("camera_cut"), test::tinySettings(kWidth, kHeight, 10, 2),
+                     sequenceCache(), nullptr));
+  return sequence;
+}
+
+// A built-in served by `arena serve` over the frame protocol gives, frame by frame, the pixels it
+// gives inside arena: the planes mapped back to its layers, the parameters to its schema, the
+// reset at the cut called as DenoiseRun calls it. Its time is the wall clock the server took
+// around its call, reported as computeMs.
+TEST(Serve, ABuiltInServedGivesTheSamePixelsAsInsideArena) {
+  const auto svgf = DenoiserRegistry::instance().find("svgf").create(
+      DenoiserRegistry::instance().find("svgf").schema.resolve({}, "svgf"), SignalKind::Diffuse);
+  const json m = {
+      {"name", "svgf-served"},
+      {"command", {ARENA_BINARY, "serve", "svgf"}},
+      {"signals", "demodulated"},
+      {"channels", svgf->requiredChannels()},
+      {"parameters",
+       {{{"name", "sigmaL"}, {"type", "float"}, {"default", 4}, {"min", 0}, {"max", 1e6}}}}};
+  const std::string name =
+      DenoiserRegistry::resolve("ext:" + writeManifest("svgf-served", m).string());
+  const Sequence& seq = cutSequence();
+  ASSERT_TRUE(std::any_of(seq.info().events.begin(), seq.info().events.end(),
+                          [](const SequenceEvent& e) { return e.kind == EventKind::CameraCut; }));
+  for (const char* sigmaL : {"4", "0.75"}) {
+    const auto inside = denoiseAll({"svgf", {{"sigmaL", sigmaL}}, ""}, seq);
+    const auto served = denoiseAll({name, {{"sigmaL", sigmaL}}, ""}, seq);
+    ASSERT_EQ(served.size(), inside.size());
+    for (size_t t = 0; t < inside.size(); ++t) {
+      EXPECT_TRUE(samePixels(inside[t].color, served[t].color))
+          << "sigmaL " << sigmaL << " frame " << t;
+      EXPECT_TRUE(served[t].selfTimed);
+      EXPECT_GT(served[t].milliseconds, 0.0);
+      EXPECT_LE(served[t].milliseconds, served[t].wallMilliseconds);
+      ASSERT_EQ(served[t].passes.size(), inside[t].passes.size());
+      EXPECT_EQ(served[t].passes[0].name, inside[t].passes[0].name);
+      EXPECT_EQ(served[t].passes[0].tapsPerPixel, inside[t].passes[0].tapsPerPixel);
+    }
+  }
+  // The two settings differ: the parameter went over the wire.
+  EXPECT_FALSE(samePixels(denoiseAll({name, {{"sigmaL", "4"}}, ""}, seq)[3].color,
+                          denoiseAll({name, {{"sigmaL", "0.75"}}, ""}, seq)[3].color));
+}
+
+// `arena serve` refuses what the protocol does not allow, answering an error message the harness
+// quotes (exit 1), and a denoiser it cannot serve before reading anything (exit 2).
+TEST(Serve, EveryMistakeIsAnsweredWithAnError) {
+  const fs::path dir = test::freshDir("serve_contract");
+  // svgf's layers, plane by plane, as the harness would announce them.
+  json svgfPlanes = {"signal.R", "signal.G", "signal.B"};
+  const auto svgf = DenoiserRegistry::instance().find("svgf").create(
+      DenoiserRegistry::instance().find("svgf").schema.resolve({}, "svgf"), SignalKind::Diffuse);
+  for (const std::string& layer : svgf->requiredChannels()) {
+    const LayerSpec& spec = frameLayerSpec(layer, "svgf");
+    for (int c = 0; c < spec.channels(); ++c)
+      svgfPlanes.push_back(spec.suffixes.empty() ? layer : layer + "." + spec.suffixes[size_t(c)]);
+  }
+  const size_t frameBytes = svgfPlanes.size() * 2 * sizeof(float);
+  const json setup = {
+      {"type", "setup"}, {"protocol", 1}, {"denoiser", "svgf"},   {"signal", "diffuse"},
+      {"width", 2},      {"height", 1},   {"planes", svgfPlanes}, {"params", json::object()}};
+  auto serve = [&](const std::string& entry, const std::string& input) {
+    std::ofstream(dir / "in", std::ios::binary) << input;
+    return test::runCommand(std::string(ARENA_BINARY) + " serve " + entry + " < " +
+                            (dir / "in").string());
+  };
+  auto patched = [&](const json& patch) {
+    json s = setup;
+    if (!patch.is_null()) s.merge_patch(patch);
+    return s.dump() + "\n";
+  };
+  const auto unknown = serve("nosuch", "");
+  EXPECT_EQ(unknown.status, 2);
+  EXPECT_NE(unknown.output.find("arena serve: unknown denoiser 'nosuch'"), std::string::npos)
+      << unknown.output;
+  const auto nothing = serve("svgf", "");
+  EXPECT_EQ(nothing.status, 1);
+  EXPECT_NE(nothing.output.find("the input ended before the setup line"), std::string::npos)
+      << nothing.output;
+  struct Case {
+    const char* entry;
+    std::string input;
+    std::string expected;
+  };
+  const std::string frameHeader =
+      json{{"type", "frame"},
+           {"frame", 0},
+           {"reset", true},
+           {"bytes", frameBytes},
+           {"camera", cameraToJson(cutSequence().info().cameras[0])},
+           {"previousCamera", cameraToJson(cutSequence().info().cameras[0])}}
+          .dump() +
+      "\n";
+  const std::vector<Case> cases = {
+      {"svgf", patched({{"protocol", 2}}), "setup: protocol 2; this arena speaks version 1"},
+      {"svgf", "hello\n", "expected a JSON 'setup' line, got: hello"},
+      {"svgf", patched({{"width", 0}}), "integer \\\"width\\\" in [1, 32768], got: 0"},
+      {"svgf", patched({{"signal", "color"}}),
+       "setup: signal 'color', but svgf filters the demodulated diffuse and specular signals"},
+      {"svgf", patched({{"planes", {"signal.R", "signal.G", "signal.B", "depth"}}}),
+       "svgf reads the layer 'depth', but \\\"planes\\\" has no 'depth.Z'"},
+      {"svgf", patched({{"planes", {"diffuse.R"}}}),
+       "\\\"planes\\\" must begin with signal.R, signal.G, signal.B; got 'diffuse.R' at index 0"},
+      {"svgf", patched({{"params", {{"sigmaQ", 1}}}}), "sigmaQ"},
+      {"asvgf", patched({{"denoiser", "asvgf"}}),
+       "asvgf reads A-SVGF's gradient samples, which the frame protocol does not carry"},
+      {"svgf",
+       patched({}) + json{{"type", "frame"}, {"frame", 0}, {"reset", true}, {"bytes", 8}}.dump() +
+           "\n",
+       "frame 0: \\\"bytes\\\" must be"},
+      {"svgf", patched({}) + frameHeader + std::string(20, '\0'),
+       "frame 0: plane 'signal.B' (3 of " + std::to_string(svgfPlanes.size()) +
+           "): the input ended after 4 of its 8 bytes"},
+  };
+  for (const Case& c : cases) {
+    const auto r = serve(c.entry, c.input);
+    EXPECT_EQ(r.status, 1) << c.expected << "\n" << r.output;
+    EXPECT_NE(r.output.find("{\"message\":"), std::string::npos) << r.output;  // the answer
+    EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.expected << "\n" << r.output;
+  }
+  // Whole frames, then the end of the input: ready, one result, exit 0.
+  const std::string planes(frameBytes, '\0');
+  const auto good = serve("svgf", patched({}) + frameHeader + planes);
+  EXPECT_EQ(good.status, 0) << good.output;
+  EXPECT_NE(good.output.find("{\"type\":\"ready\"}"), std::string::npos) << good.output;
+  EXPECT_NE(good.output.find("\"type\":\"result\""), std::string::npos) << good.output;
+}
+
+// A plugin whose manifest says "isolated": true runs in `arena serve`, a process of its own per
+// sequence and signal: the same pixels as inside arena, timed by the server around its call; a
+// crash or a hang fails its own pair, and the run's other pairs and results stand.
+TEST(Plugin, AnIsolatedPluginsCrashOrHangFailsOnlyItsPair) {
+  const fs::path dir = test::freshDir("isolated_plugins");
+  const json eaw = {{"name", "eaw-plugin"}, {"library", ARENA_EAW_PLUGIN}, {"isolated", true}};
+  const json faulty = {{"name", "faulty"},
+                       {"library", ARENA_FAULTY_PLUGIN},
+                       {"isolated", true},
+                       {"timeoutSeconds", 0.5}};
+  fs::create_directories(dir / "eaw");
+  fs::create_directories(dir / "faulty");
+  std::ofstream(dir / "eaw" / "manifest.json") << eaw.dump();
+  std::ofstream(dir / "faulty" / "manifest.json") << faulty.dump();
+  auto run = [&](const std::string& mode, const std::string& name) {
+    return contract::arenaCli(
+        "run --scenes cornell_static --denoisers eaw,ext:" + (dir / "eaw").string() +
+            ",ext:" + (dir / "faulty").string() +
+            " --no-baselines --resolution 16x8 --frames 3 --warmup 1 --ref-spp 1 --flip none "
+            "--keep-frames none --cache " +
+            (dir / "cache").string() + " --out " + (dir / name).string(),
+        "ARENA_FAULTY_PLUGIN=" + mode + " ");
+  };
+  const contract::CliResult crashed = run("segfault", "crash");
+  ASSERT_TRUE(fs::exists(dir / "crash" / "results.json")) << crashed.output;
+  const json results = json::parse(std::ifstream(dir / "crash" / "results.json"));
+  std::map<std::string, json> pairs;
+  for (const json& p : results["pairs"]) pairs[p["denoiser"].get<std::string>()] = p;
+  ASSERT_EQ(pairs.size(), 3u) << crashed.output;
+  EXPECT_EQ(pairs["eaw"]["status"], "ok");
+  EXPECT_EQ(pairs["eaw-plugin"]["status"], "ok") << pairs["eaw-plugin"].dump().substr(0, 400);
+  EXPECT_EQ(pairs["eaw-plugin"]["outputChecksum"], pairs["eaw"]["outputChecksum"]);
+  EXPECT_EQ(pairs["eaw-plugin"]["timing"]["msSource"], "reported by the process");
+  EXPECT_NE(pairs["eaw-plugin"]["origin"].get<std::string>().find("isolated plugin /"),
+            std::string::npos);
+  EXPECT_EQ(pairs["faulty"]["status"], "failed");
+  const std::string crash = pairs["faulty"]["error"];
+  for (const char* said :
+       {"faulty (diffuse process, ", "frame 0: ", "the process was killed by signal 11",
+        "arena: fatal: signal 11 (Segmentation fault) in plugin faulty's denoise of frame 0",
+        "this process (arena serve, the plugin's isolated host) ends here and the harness fails "
+        "this pair alone"})
+    EXPECT_NE(crash.find(said), std::string::npos) << said << "\n" << crash;
+  const contract::CliResult hung = run("hang", "hang");
+  const json hangResults = json::parse(std::ifstream(dir / "hang" / "results.json"));
+  bool timedOut = false;
+  for (const json& p : hangResults["pairs"])
+    if (p["denoiser"] == "faulty") {
+      EXPECT_EQ(p["status"], "failed");
+      timedOut = p["error"].get<std::string>().find(
+                     "frame 0: no result header within timeoutSeconds = 0.5 s (a hang?); the "
+                     "process was killed by the harness") != std::string::npos;
+      EXPECT_TRUE(timedOut) << p["error"];
+    } else {
+      EXPECT_EQ(p["status"], "ok") << p["denoiser"];
+    }
+  EXPECT_TRUE(timedOut) << hung.output;
+  // Its manifest's mistakes are named: a timeout without isolation, isolation of a command.
+  const std::string timeout = errorOf([&] {
+    readManifest(writeManifest("timeout_inside",
+                               {{"name", "faulty"}, {"library", "x.so"}, {"timeoutSeconds", 3}}));
+  });
+  EXPECT_NE(timeout.find("$.timeoutSeconds: a plugin inside arena's process has no timeout"),
+            std::string::npos)
+      << timeout;
+  const std::string command = errorOf([&] {
+    readManifest(writeManifest(
+        "isolated_command",
+        {{"name", "c"}, {"command", {"/bin/cat"}}, {"signals", "color"}, {"isolated", true}}));
+  });
+  EXPECT_NE(command.find("$.isolated: applies to a \"library\""), std::string::npos) << command;
+}
+
 }  // namespace
 }  // namespace arena

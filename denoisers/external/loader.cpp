@@ -68,7 +68,42 @@ DenoiserInfo processDenoiserInfo(ExternalManifest manifest) {
   return info;
 }
 
+std::string& serveExecutablePath() {
+  static std::string path;
+  return path;
+}
+
+// An isolated plugin: its descriptor read here (a load that fails is refused before anything
+// runs, as for any plugin), its instances made by `arena serve plugin:LIBRARY`, one process per
+// sequence and signal, which speak the frame protocol.
+DenoiserInfo isolatedPluginInfo(ExternalManifest manifest, const DenoiserInfo& plugin,
+                                std::vector<std::string> channels) {
+  const std::string library = fs::absolute(manifest.library).lexically_normal().string();
+  manifest.command = {serveExecutable(), "serve", "plugin:" + library};
+  manifest.signals = plugin.signals;
+  manifest.channels = std::move(channels);
+  manifest.schema = plugin.schema;
+  if (manifest.description.empty()) manifest.description = plugin.description;
+  const std::string origin =
+      "isolated plugin " + library + " (manifest " + manifest.file.string() + ")";
+  DenoiserInfo info = processDenoiserInfo(std::move(manifest));
+  info.origin = origin;
+  return info;
+}
+
 }  // namespace
+
+void setServeExecutable(std::string path) {
+  serveExecutablePath() = std::move(path);
+}
+
+std::string serveExecutable() {
+  if (!serveExecutablePath().empty()) return serveExecutablePath();
+  if (const char* env = std::getenv("ARENA_EXECUTABLE"); env && *env) return env;
+  throw Error(
+      "an isolated plugin runs in `arena serve`, but this program does not know where the arena "
+      "executable is (set ARENA_EXECUTABLE to its path)");
+}
 
 bool isExternalEntry(const std::string& entry) {
   return entry.rfind(kManifestPrefix, 0) == 0 || entry.rfind(kPluginPrefix, 0) == 0;
@@ -84,8 +119,9 @@ DenoiserInfo loadExternalDenoiser(const std::string& entry) {
       readManifest(findManifest(entry.substr(std::strlen(kManifestPrefix))));
   if (manifest.library.empty()) return processDenoiserInfo(std::move(manifest));
   DenoiserInfo info;
+  std::vector<std::string> channels;
   try {
-    info = loadPluginDenoiser(manifest.library);
+    info = loadPluginDenoiser(manifest.library, &channels);
   } catch (const Error& e) {  // the library's own errors name it; the manifest that named it too
     throw Error(manifest.file.string() + ": $.library: " + e.what());
   }
@@ -93,6 +129,7 @@ DenoiserInfo loadExternalDenoiser(const std::string& entry) {
     throw Error(manifest.file.string() + ": $.name '" + manifest.name +
                 "' differs from the name '" + info.name + "' that the library " +
                 manifest.library.string() + " gives itself");
+  if (manifest.isolated) return isolatedPluginInfo(std::move(manifest), info, std::move(channels));
   if (!manifest.description.empty()) info.description = manifest.description;
   return info;
 }

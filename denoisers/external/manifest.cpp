@@ -109,6 +109,14 @@ ParamSpec readParamSpec(JsonReader& p) {
   return spec;
 }
 
+double readTimeout(JsonReader& r) {
+  const double seconds = r.number("timeoutSeconds", 30.0);
+  // At most a day: a longer wait is no timeout (and past ~292 years its deadline overflowed).
+  if (!(seconds > 0 && seconds <= 86400))
+    r.fail("timeoutSeconds", "expected a positive number of seconds, at most 86400 (a day)");
+  return seconds;
+}
+
 }  // namespace
 
 ExternalManifest readManifest(const fs::path& file) {
@@ -149,9 +157,20 @@ ExternalManifest readManifest(const fs::path& file) {
   if (hasLibrary) {
     m.library = r.string("library");
     if (m.library.is_relative()) m.library = m.folder() / m.library;
-    rejectUnknownFields(r, {"name", "description", "library"});  // the rest is in the library
+    m.isolated = r.boolean("isolated", false);
+    if (r.has("timeoutSeconds") && !m.isolated)
+      r.fail("timeoutSeconds",
+             "a plugin inside arena's process has no timeout; with \"isolated\": true it runs in "
+             "a process of its own, which is killed after timeoutSeconds");
+    m.timeoutSeconds = readTimeout(r);
+    // The rest (signals, channels, parameters) is in the library.
+    rejectUnknownFields(r, {"name", "description", "library", "isolated", "timeoutSeconds"});
     return m;
   }
+  if (r.has("isolated"))
+    r.fail("isolated",
+           "applies to a \"library\" (a plugin); a \"command\" already runs in a process of "
+           "its own");
   m.command = stringArray(r, "command", true);
   if (m.command.empty() || m.command[0].empty()) r.fail("command", "must name a program to start");
   const std::string signals = r.string("signals");
@@ -182,10 +201,7 @@ ExternalManifest readManifest(const fs::path& file) {
         p.fail("name", "'" + specs.back().name + "' given twice");
   }
   m.schema = ParamSchema(std::move(specs));
-  m.timeoutSeconds = r.number("timeoutSeconds", 30.0);
-  // At most a day: a longer wait is no timeout (and past ~292 years its deadline overflowed).
-  if (!(m.timeoutSeconds > 0 && m.timeoutSeconds <= 86400))
-    r.fail("timeoutSeconds", "expected a positive number of seconds, at most 86400 (a day)");
+  m.timeoutSeconds = readTimeout(r);
   rejectUnknownFields(
       r, {"name", "description", "command", "signals", "channels", "parameters", "timeoutSeconds"});
   return m;

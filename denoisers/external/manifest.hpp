@@ -17,6 +17,9 @@ struct ExternalManifest {
   std::string name, description;
   std::vector<std::string> command;  // argv; run in the manifest's folder (empty for a library)
   std::filesystem::path library;     // a C plugin (include/arena_plugin.h) instead of a command
+  // The plugin runs in a process of its own (`arena serve plugin:LIBRARY`, speaking the frame
+  // protocol), so that a crash or a hang past timeoutSeconds fails only its pair.
+  bool isolated = false;
   SignalMode signals = SignalMode::Demodulated;
   std::vector<std::string> channels;  // sequence layers sent with the signal, in this order
   ParamSchema schema;

@@ -48,6 +48,13 @@ ArenaCamera cameraOf(const CameraState& c) {
   return a;
 }
 
+std::string& crashConsequence() {
+  static std::string text =
+      "arena stops here and writes no results (a plugin runs inside arena's process: isolate it, "
+      "docs/external-denoisers.md, to keep a crash to its own pair)";
+  return text;
+}
+
 ArenaSignal signalOf(SignalKind kind) {
   switch (kind) {
     case SignalKind::Diffuse:
@@ -179,10 +186,9 @@ class PluginDenoiser final : public Denoiser {
   std::string library_;
   // crashNote's fixed parts (declared after plugin_ and library_, which they read).
   const std::string noteHead_ = "in plugin " + std::string(plugin_->name) + "'s ";
-  const std::string noteTail_ =
-      " (" + library_ + ")" + (outerCrashNote().empty() ? "" : " " + outerCrashNote()) +
-      "; arena stops here and writes no results (a plugin runs inside arena's process: give it as "
-      "an external process, docs/external-denoisers.md, to keep a crash to its own pair)";
+  const std::string noteTail_ = " (" + library_ + ")" +
+                                (outerCrashNote().empty() ? "" : " " + outerCrashNote()) + "; " +
+                                crashConsequence();
   void* instance_ = nullptr;
   std::vector<std::string> channels_;
   std::vector<ArenaLayer> layers_;
@@ -260,7 +266,11 @@ ParamSchema schemaOf(const ArenaPlugin& p, const std::string& where) {
 
 }  // namespace
 
-DenoiserInfo loadPluginDenoiser(const fs::path& libraryPath) {
+void setPluginCrashConsequence(std::string text) {
+  crashConsequence() = std::move(text);
+}
+
+DenoiserInfo loadPluginDenoiser(const fs::path& libraryPath, std::vector<std::string>* channels) {
   // Named absolute in every message (and the origin), as the run that reads it may run elsewhere.
   const std::string library = fs::absolute(libraryPath).lexically_normal().string();
   if (!fs::exists(libraryPath))
@@ -301,6 +311,9 @@ DenoiserInfo loadPluginDenoiser(const fs::path& libraryPath) {
   info.signals =
       plugin->signals == ARENA_SIGNALS_COLOR ? SignalMode::Color : SignalMode::Demodulated;
   info.origin = "plugin " + library;
+  if (channels)
+    channels->assign(plugin->requiredChannels,
+                     plugin->requiredChannels + plugin->requiredChannelCount);
   info.create = [plugin, library, schema = info.schema](const ParamSet& params, SignalKind kind) {
     return std::make_unique<PluginDenoiser>(plugin, library, schema, params, kind);
   };

@@ -8,13 +8,16 @@
 //   unwritten     succeeds without writing its output
 //   partial       writes only the output's first plane and succeeds
 //   segfault      writes through a null pointer (a real fault, not a raised signal)
+//   hang          never returns (sleeps; only an isolated plugin's process can be ended)
 // Otherwise it writes zeros and succeeds. The FAULTY_PLUGIN_BAD_PARAMS build reads
 // ARENA_FAULTY_DESCRIPTOR when loaded: "negative-count" declares paramCount -2 with no array.
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <string_view>
+#include <thread>
 
 #include "arena_plugin.h"
 
@@ -43,6 +46,8 @@ int denoise(void*, const ArenaFrameContext*, const ArenaInputs*, const ArenaMuta
   if (m == "slow-pass" && host && host->reportPass)
     host->reportPass(host->context, "blur", 1e9, 1.0);
   if (m == "unwritten") return 0;
+  if (m == "hang")
+    for (;;) std::this_thread::sleep_for(std::chrono::seconds(1));
   if (m == "segfault") {
     volatile std::uintptr_t address = 0;  // volatile: the compiler cannot see the null
     *reinterpret_cast<volatile int*>(address) = 1;
