@@ -431,6 +431,10 @@ void addRunCommands(CLI::App& app) {
         std::cerr << "arena: warning: " << text << "\n";
         warnings.push_back(text);
       };
+      // Its numbers are whole (the earlier run's); only its images are mixed: said, and compared.
+      for (const std::string* dir : {a.get(), b.get()})
+        if (const std::string note = unfinishedRunNote(*dir); !note.empty())
+          warn(note + "; compared on the earlier run's numbers, which are whole");
       // Numbers measured under other settings differ for that reason alone: refused unless asked.
       const std::vector<std::string> differ = settingsDifferences(baseline, candidate);
       const auto lines = [](const std::vector<std::string>& items) {  // one indented line each

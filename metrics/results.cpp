@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "core/atomic_file.hpp"
+#include "core/env_info.hpp"
 #include "core/error.hpp"
 #include "core/json_reader.hpp"
 #include "metrics/statistics.hpp"
@@ -19,6 +20,28 @@ namespace arena {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+
+namespace {
+
+// Written when a run starts into a directory holding an earlier run's results.json, removed when
+// its own are committed: while it lies there, the images are partly the new run's.
+constexpr const char* kUnfinishedMarker = ".arena.unfinished";
+
+}  // namespace
+
+std::string unfinishedRunNote(const fs::path& runDir) {
+  std::error_code ec;
+  if (!fs::exists(runDir / kUnfinishedMarker, ec)) return "";
+  std::string started;
+  try {
+    started = readText(runDir / kUnfinishedMarker);
+  } catch (const Error&) {
+  }
+  while (!started.empty() && (started.back() == '\n' || started.back() == ' ')) started.pop_back();
+  return runDir.string() + ": a run into this directory stopped before its commit" +
+         (started.empty() ? "" : " (" + started + ")") +
+         ": results.json is still the run before it, but that run's images were being replaced";
+}
 
 RunResults loadResults(const fs::path& runDir) {
   fs::path file = runDir / "results.json";
@@ -317,6 +340,10 @@ RunDirectoryLock checkRunOutputs(const fs::path& runDir) {
       throw Error(jsonPath.string() +
                   ": not an arena results file; refusing to replace it (move it away or choose "
                   "another --out)");
+    // From here the earlier run's images are replaced pair by pair: until this run commits, a
+    // report of the directory would show them beside the earlier numbers (unfinishedRunNote).
+    writeTextAtomically(runDir / kUnfinishedMarker, "started " + utcTimestamp() + " by process " +
+                                                        std::to_string(getpid()) + "\n");
   }
 
   const fs::path dbPath = runDir / "results.db";
@@ -387,6 +414,9 @@ void commitResults(const fs::path& runDir, const json& results) {
     removeTemporaries();
     throw;
   }
+  // The directory's images and results are one run's again.
+  std::error_code ignored;
+  fs::remove(runDir / kUnfinishedMarker, ignored);
 }
 
 }  // namespace arena

@@ -53,6 +53,12 @@ class RunDirectoryLock {
   DirectoryLock lock_;
 };
 [[nodiscard]] RunDirectoryLock checkRunOutputs(const std::filesystem::path& runDir);
+// What a run that stopped before its commit (killed, or failed) left in a directory that held an
+// earlier run: "DIR: a run into this directory stopped before its commit (started T by process
+// P): results.json is still the run before it, but that run's images were being replaced"; ""
+// when none did. The numbers (results.json, results.db) are the earlier run's, whole; its images
+// are not: the report refuses such a directory, compare and history warn.
+std::string unfinishedRunNote(const std::filesystem::path& runDir);
 // Writes results.json and appends to results.db as one commit: both are written to temporaries
 // (the database as an appended copy) and renamed into place only when both are complete. A
 // document RunResults::fromJson refuses is an Error before any file is touched.

@@ -191,6 +191,9 @@ std::vector<RunResults> loadHistory(const std::vector<fs::path>& inputs,
     if (fs::is_directory(in)) {
       runs.push_back(loadResults(in));
       runs.back().source = in.string();
+      if (const std::string note = unfinishedRunNote(in); !note.empty() && warnings)
+        warnings->push_back(note +
+                            "; the dashboard shows the earlier run's numbers, which are whole");
     } else if (fs::is_regular_file(in)) {
       // A database a run is appending to (its directory's writer holds the lock) is refused, as
       // a run directory being written is: the dashboard would miss the run.

@@ -1091,6 +1091,11 @@ void copyPageAssets(const fs::path& webDir, const fs::path& nodeModulesDir,
 ReportSummary writeReport(const ReportOptions& o) {
   requirePageDirectory(o.out, "report");
   const RunResults results = loadResults(o.run);
+  // Its images are partly another run's than its numbers: a page would show them side by side.
+  if (const std::string note = unfinishedRunNote(o.run); !note.empty())
+    throw Error("report: " + note +
+                "; a report would show those images beside numbers they do not belong to. Run it "
+                "again to completion (`arena compare` reads the earlier numbers, which are whole)");
   // A page of nothing would look like a report; a run always has pairs (failed ones included).
   if (results.pairs.empty())
     throw Error("report: " + (o.run / "results.json").string() +

@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "arena_plugin.h"
+#include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "denoisers/external/loader.hpp"
 #include "denoisers/external/manifest.hpp"
@@ -817,6 +818,55 @@ TEST(Plugin, AFaultInAPluginIsNamedBeforeTheProcessDies) {
                          ": a relative path is taken from the current directory)"),
             std::string::npos)
       << missing;
+}
+
+// A run that dies before its commit in a directory holding an earlier run (a crash, a kill) leaves
+// that run's results.json with images partly its own: the directory is marked, the report refuses
+// it, compare warns (the numbers are whole), and the next complete run clears the mark.
+TEST(Plugin, ARunThatDiesBeforeItsCommitLeavesItsDirectoryMarked) {
+  const fs::path dir = test::freshDir("unfinished_run");
+  const std::string common =
+      "run --scenes cornell_static --no-baselines --resolution 8x8 "
+      "--frames 3 --warmup 1 --ref-spp 1 --flip none --cache " +
+      (dir / "cache").string();
+  const std::string run = common + " --out " + (dir / "run").string();
+  const contract::CliResult first = contract::arenaCli(run + " --denoisers passthrough");
+  ASSERT_EQ(first.status, 0) << first.output;
+  EXPECT_FALSE(fs::exists(dir / "run" / ".arena.unfinished"));
+  const std::string earlier = readText(dir / "run" / "results.json");
+  const contract::CliResult second = contract::arenaCli(
+      common + " --denoisers passthrough --input-seed 1 --out " + (dir / "other").string());
+  ASSERT_EQ(second.status, 0) << second.output;
+  const contract::CliResult crashed =
+      contract::arenaCli(run + " --denoisers passthrough --plugin " + ARENA_FAULTY_PLUGIN,
+                         "ARENA_FAULTY_PLUGIN=segfault ");
+  ASSERT_EQ(crashed.status, 128 + SIGSEGV) << crashed.output;
+  EXPECT_EQ(readText(dir / "run" / "results.json"), earlier);
+  ASSERT_TRUE(fs::exists(dir / "run" / ".arena.unfinished"));
+  const contract::CliResult report =
+      contract::arenaCli("report " + (dir / "run").string() + " --out " + (dir / "page").string());
+  EXPECT_EQ(report.status, 2) << report.output;
+  EXPECT_NE(report.output.find((dir / "run").string() +
+                               ": a run into this directory stopped before its commit (started "),
+            std::string::npos)
+      << report.output;
+  EXPECT_NE(report.output.find("a report would show those images beside numbers they do not "
+                               "belong to"),
+            std::string::npos)
+      << report.output;
+  EXPECT_FALSE(fs::exists(dir / "page" / "index.html"));
+  const contract::CliResult compared =
+      contract::arenaCli("compare " + (dir / "other").string() + " " + (dir / "run").string());
+  EXPECT_NE(compared.output.find("compared on the earlier run's numbers, which are whole"),
+            std::string::npos)
+      << compared.output;
+  const contract::CliResult again = contract::arenaCli(run + " --denoisers passthrough");
+  ASSERT_EQ(again.status, 0) << again.output;
+  EXPECT_FALSE(fs::exists(dir / "run" / ".arena.unfinished"));
+  EXPECT_EQ(
+      contract::arenaCli("report " + (dir / "run").string() + " --out " + (dir / "page").string())
+          .status,
+      0);
 }
 
 // A plugin's error buffer is read only within its size and as valid text; a pass report it makes
