@@ -532,6 +532,7 @@ json PairEvaluation::finish() {
   const bool full = s.scope == EvaluationScope::Full;
   json ghosting = json::array();
   std::vector<std::string> emptyEvents;
+  int unsettledEvent = -1;  // the previous event, when this method never settled after it
   for (size_t k = 0; full && k < scene.events_.size(); ++k) {
     const auto& ev = scene.events_[k];
     GhostingResult g =
@@ -566,10 +567,30 @@ json PairEvaluation::finish() {
       emptyEvents.push_back("event at frame " + std::to_string(ev.event.frame) + ": " + absent);
     }
     const BootstrapConfig bc;
-    addFigureIntervals(j,
-                       ghostingReplicates(ev.event.frame, s.eventTiles[k], eventSeedName(scene.name(), ev.event.frame),
-                                          bc, gc),
-                       ghostingFigures(g), bc.confidence);
+    FigureReplicates replicates = ghostingReplicates(
+        ev.event.frame, s.eventTiles[k], eventSeedName(scene.name(), ev.event.frame), bc, gc);
+    // Still lagging from the previous event when this one comes (it never settled, and b_pre is
+    // above the settle threshold here): the lag figures would be measured against that offset,
+    // and an error that never rises above it reads as lag energy 0, the best score. Undefined
+    // instead, with the reason (a steady offset with no earlier event, a spatial filter's bias,
+    // is what b_pre subtracts, and stays).
+    if (absent.empty() && unsettledEvent >= 0 && g.biasPre > gc.biasThreshold) {
+      char text[320];
+      std::snprintf(text, sizeof text,
+                    "the method never settled after the event at frame %d, and |b_M| before this "
+                    "one was %.3g (above the settle threshold %.3g): its lag here is measured "
+                    "against that earlier lag, and an error that stays under it would read as lag "
+                    "energy 0",
+                    unsettledEvent, g.biasPre, gc.biasThreshold);
+      j["lagAbsent"] = text;
+      for (const char* figure : {"lagEnergy", "chromaLagEnergy"})
+        if (j.contains(figure)) {
+          j[figure] = nullptr;
+          replicates.absent[figure] = text;
+        }
+    }
+    unsettledEvent = absent.empty() && !g.settled ? ev.event.frame : -1;
+    addFigureIntervals(j, replicates, ghostingFigures(g), bc.confidence);
     j["tiles"] = s.eventTiles[k].toJson();
     ghosting.push_back(j);
   }

@@ -480,6 +480,11 @@ SceneEvents rankSceneEvents(std::vector<std::pair<std::string, const json*>> pai
             reps.push_back(ghostingReplicates(frame, EventTiles::fromJson(e["tiles"]),
                                               eventSeedName(scene, frame), cfg, gc));
           }
+          // Lag figures the evaluation left undefined (a method still lagging from the event
+          // before): the ranking excludes it with the evaluation's reason.
+          if (!cut && e.contains("lagAbsent") && e["lagAbsent"].is_string())
+            for (const char* f : {"lagEnergy", "chromaLagEnergy"})
+              reps.back().absent[f] = e["lagAbsent"].get<std::string>();
         }
       event.byFigure =
           rankFigures(cut ? cutFigureNames(gc) : kRankedEventFigures, labels, points, reps, cfg);

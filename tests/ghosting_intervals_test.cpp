@@ -14,6 +14,7 @@
 #include "core/error.hpp"
 #include "harness/run_matrix.hpp"
 #include "metrics/results.hpp"
+#include "tests/contract_fixture.hpp"
 #include "tests/test_util.hpp"
 
 namespace arena {
@@ -414,6 +415,51 @@ TEST(CutIntervals, NoSteadyStateMeansNoRecoveryInterval) {
 // (camera_cut, frame 8): every figure has an interval or a reason, the point lies in it, the
 // statistics rank each figure, results.db holds them, and two shards merged give exactly the
 // unsharded run's intervals and rankings.
+// light_switch: temporal accumulation never settles after the light goes off at frame 12, and
+// meets the switch-on at 24 still far off (|b_M| near 3). Its error after 24 never rises above
+// that offset, so its lag energy read 0 and ranked first. Now it has none there, with the reason,
+// and the ranking leaves it out; its figures at 12, and a method that settled, keep theirs.
+TEST(EventIntervalsEndToEnd, ALagMeasuredAgainstAnEarlierLagIsNotRanked) {
+  RunConfig c = contract::tinyRun("lag_on_lag");  // no baselines, no FLIP, no frames kept
+  c.render = test::tinySettings(48, 27, 36, 16);
+  c.scenes = {test::shippedScene("light_switch")};
+  c.denoisers = {{"temporal", {}, ""}, {"asvgf", {}, ""}};
+  c.warmup = 8;
+  const json run = runMatrix(c);
+  ASSERT_TRUE(failedPairs(run).empty());
+  std::map<std::string, json> events;  // "label@frame"
+  for (const json& p : run["pairs"])
+    for (const json& g : p["ghosting"])
+      events[p["label"].get<std::string>() + "@" + std::to_string(g["eventFrame"].get<int>())] = g;
+  ASSERT_EQ(events.size(), 4u);
+  const json& before = events["temporal@12"];
+  EXPECT_FALSE(before["settled"].get<bool>());
+  EXPECT_TRUE(before["lagEnergy"].is_number());
+  const json& after = events["temporal@24"];
+  EXPECT_GT(after["biasPre"].get<double>(), 0.05);
+  EXPECT_TRUE(after["lagEnergy"].is_null()) << after["lagEnergy"];
+  EXPECT_TRUE(after["chromaLagEnergy"].is_null());
+  const std::string why = after.value("lagAbsent", "");
+  EXPECT_NE(why.find("the method never settled after the event at frame 12, and |b_M| before "
+                     "this one was"),
+            std::string::npos)
+      << why;
+  EXPECT_EQ(after["ci95Absent"]["lagEnergy"], why);
+  EXPECT_FALSE(after["ci95"].contains("lagEnergy"));
+  EXPECT_TRUE(after["responseFrames"].is_null() || after["responseFrames"].is_number());
+  // A method that settled after 12 keeps its lag figures at 24.
+  EXPECT_TRUE(events["asvgf@12"]["settled"].get<bool>());
+  EXPECT_TRUE(events["asvgf@24"]["lagEnergy"].is_number());
+  EXPECT_FALSE(events["asvgf@24"].contains("lagAbsent"));
+  const json& ranked = run["statistics"]["scenes"]["light_switch"]["events"];
+  ASSERT_EQ(ranked.size(), 2u);
+  const json& lag = ranked[1]["byFigure"]["lagEnergy"];
+  ASSERT_EQ(lag["ranking"].size(), 1u) << lag.dump().substr(0, 400);
+  EXPECT_EQ(lag["ranking"][0]["label"], "asvgf");
+  EXPECT_NE(lag.value("excluded", "").find("temporal: " + why), std::string::npos)
+      << lag.value("excluded", "");
+}
+
 TEST(EventIntervalsEndToEnd, IntervalsRankingsAndShardsMergedEqualOneRun) {
   const fs::path cache = test::freshDir("event_ci_cache");
   auto run = [&](const std::string& name, int shard, int shards) {

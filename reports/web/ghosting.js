@@ -9,20 +9,28 @@
 
   // `rank`: the figure the run's statistics rank this column on (lower is better).
   const GHOST_COLUMNS = [
-    { key: 'lagEnergy', title: 'lag energy', better: 'lower', rank: 'lagEnergy' },
+    { key: 'lagEnergy', title: 'lag energy', better: 'lower', rank: 'lagEnergy', at: (e) => lagAt(e, 'lagEnergy') },
     { key: 'responseFrames', title: 'response (frames)', better: 'lower', rank: 'responseFrames',
       at: (e) => (e.responseFrames === null && e.response ? 'never settled' : e.responseFrames) },
     { key: 'ghostEnergy', title: 'ghost energy', better: 'lower', rank: 'ghostEnergy' },
     { key: 'peakExcess', title: 'peak excess', better: 'lower', rank: 'peakExcess' },
     { key: 'signedBias', title: 'signed bias', better: 'zero', rank: 'absSignedBias' },
-    { key: 'chromaLagEnergy', title: 'chroma lag energy', better: 'lower', rank: 'chromaLagEnergy' },
+    { key: 'chromaLagEnergy', title: 'chroma lag energy', better: 'lower', rank: 'chromaLagEnergy', at: (e) => lagAt(e, 'chromaLagEnergy') },
     { key: 'steadyState', title: 'E_ss' },
     { key: 'maskFraction', title: 'mask (fraction of pixels)' },
   ];
+  // A method still off from an earlier change has no lag figure (metrics.md): said, not shown as 0.
+  function lagAt(e, key) {
+    return e[key] === null && e.lagAbsent ? 'not settled before' : e[key];
+  }
+  // The ratios are each method's own jump (÷ its own steady state after the reset): a method
+  // without history is near 1 by construction. The absolute error beside them is unranked.
   const CUT_COLUMNS = [
     { key: 'atCut', title: 'at cut (÷ steady)', rank: 'atCut' },
     ...[1, 2, 3, 4, 5].map((k) => ({ key: `recovery${k}`, title: `cut+${k}`, rank: `recovery${k}`, at: (e) => (e.recovery || [])[k - 1] })),
     { key: 'oldViewLeak', title: 'old-view leak', rank: 'oldViewLeak' },
+    { key: 'relMseAtCut', title: 'relMSE at cut', at: (e) => (Number.isFinite(e.atCut) && Number.isFinite(e.steadyState) ? e.atCut * e.steadyState : null) },
+    { key: 'steadyState', title: 'relMSE steady' },
   ];
 
   // "[lo, hi]" under a figure; a null bound of the response is "never settled"; no interval: why.
@@ -94,6 +102,15 @@
       });
       renders.push(A.embedChart(`ghost${k}`, holder, spec));
       body.append(ghostTable(withEvent, k));
+      // Methods still off from an earlier change: no lag figure, and why (their 0 read as best).
+      const unsettled = withEvent.filter((p) => p.ghosting[k].lagAbsent);
+      if (unsettled.length)
+        body.append(el('p', {
+          class: 'note lag-absent',
+          text: `No lag energy for ${unsettled.map((p) => p.label).join(', ')}: |b_M| before the event was above ` +
+            `the settle threshold (${A.fmt(g0.responseThreshold)}): each had not settled from an earlier change, so its ` +
+            'lag after this one cannot be told from that (metrics.md).'
+        }));
       // Too few frames after the event for a steady state (metrics.md, clipped windows): said here,
       // not only in the cells' tooltips.
       if (g0.steadyAbsent)
@@ -109,6 +126,13 @@
       body.append(figureTable(
           'cut-table', CUT_COLUMNS, withCut.map((p) => [p.label, p.cuts[k]]),
           rankedFirst(CUT_COLUMNS, 'cuts', frame)));
+      body.append(el('p', {
+        class: 'note cut-ratios',
+        text: 'Lower is better in every column. "at cut" and "cut+k" divide each method\'s relMSE by its own ' +
+          'steady state after the reset: they rank the jump, not the error, and a method without history ' +
+          '(passthrough) is near 1 by construction. The last two columns are the absolute relMSE at the cut ' +
+          'and in the steady state (not ranked here; the scene ranking ranks the error).'
+      }));
       // The references did not change at the cut (metrics.md): no leak to show, and why.
       const leakAbsent = withCut[0].cuts[k].oldViewLeakAbsent;
       if (leakAbsent) body.append(el('p', { class: 'note leak-absent', text: `No old-view leak: ${leakAbsent}.` }));

@@ -437,8 +437,11 @@ function syntheticRun(nScenes, nLabels, nFrames) {
                    ghosting: [{ eventFrame: 50, kind: 'light_off', what: 'lamp', windowBegin: 45, windowEnd: 99,
                                 curve: Array.from({ length: 55 }, (_, i) => 0.01 + 0.5 * Math.exp(-i / (l + 1))),
                                 steadyState: 0.01, peakExcess: 0.5, responseFrames: l + 1, ghostEnergy: 0.3 * l, signedBias: 0.1, maskFraction: 0.4,
-                                lagEnergy: 0.2 * l, ci95: { lagEnergy: [0.15 * l, 0.25 * l] } }],
-                   cuts: [{ kind: 'camera_cut', eventFrame: 70, atCut: 1 + l, recovery: [1, 1, 1, 1, 1], oldViewLeak: null,
+                                // denoiser_3 meets the event still lagging from an earlier one: no lag figure.
+                                ...(l === 3 ? { lagEnergy: null, lagAbsent: 'the method never settled after the event at frame 20',
+                                                ci95Absent: { lagEnergy: 'the method never settled after the event at frame 20' } }
+                                            : { lagEnergy: 0.2 * l, ci95: { lagEnergy: [0.15 * l, 0.25 * l] } }) }],
+                   cuts: [{ kind: 'camera_cut', eventFrame: 70, atCut: 1 + l, steadyState: 0.002, recovery: [1, 1, 1, 1, 1], oldViewLeak: null,
                             oldViewLeakAbsent: 'the reference of frame 69 equals the references after the cut: no old view can show (did the camera cut here?)',
                             ci95: { atCut: [0.9 + l, 1.1 + l] }, ci95Absent: { recovery1: 'the figure itself is undefined for this event' } }],
                    warnings: [], images: { dir: `images/${name}/denoiser_${l}`, all: false },
@@ -511,6 +514,17 @@ test('10 denoisers x 10 scenes x 100 frames stays light', async () => {
   assert.equal(await page.locator('#ghosting-body table.cut-table tbody tr').count(), 10);
   assert.match(await page.locator('#ghosting-body table.cut-table tbody tr[data-label="denoiser_2"]').innerText(), /\[2\.9, 3\.1\]/);
   assert.equal(await page.locator('#ghosting-body table.cut-table span.ci[title="the figure itself is undefined for this event"]').count(), 10);
+  // The ratios rank each method's jump: the absolute relMSE at the cut and in the steady state
+  // stand beside them, unranked, and a note says what the ratios are.
+  const cutHead = await page.$$eval('#ghosting-body table.cut-table thead th', (th) => th.map((h) => h.textContent));
+  const atCutColumn = cutHead.indexOf('relMSE at cut');
+  assert.ok(atCutColumn > 0 && cutHead.includes('relMSE steady'), cutHead.join(' | '));
+  assert.equal(await page.$eval('#ghosting-body table.cut-table tbody tr[data-label="denoiser_2"]',
+                                (r, c) => r.cells[c].textContent, atCutColumn), '0.006');
+  assert.match(await page.locator('#ghosting-body p.cut-ratios').innerText(), /rank the jump, not the error/);
+  // A method still lagging from an earlier event has no lag figure: said in its cell and below.
+  assert.match(await page.locator('#ghosting-body table.ghost-table tbody tr[data-label="denoiser_3"]').innerText(), /not settled before/);
+  assert.match(await page.locator('#ghosting-body p.lag-absent').innerText(), /No lag energy for denoiser_3: /);
   // A cut whose references did not change has no leak, and the page says why (never a 0).
   assert.match(await page.locator('#ghosting-body p.leak-absent').innerText(), /No old-view leak: the reference of frame 69 equals/);
   // Only the selected scene's lines: 10, not 100.
