@@ -88,7 +88,13 @@ int main(int argc, char** argv) {
     // input, so all of them are the documented usage-error code 2 (README "Exit codes").
     if (e.get_exit_code() == 0) return app.exit(e);
     const std::vector<CLI::App*> given = app.get_subcommands();
-    std::cerr << "arena: error: " << e.what() << "\n(`arena "
+    // CLI11 says "--scenes: At Most 1 required but received 2" of an option given twice.
+    std::string what = e.what();
+    const std::string twice = ": At Most 1 required but received ";
+    if (const size_t at = what.find(twice); at != std::string::npos && what.rfind("--", 0) == 0)
+      what = what.substr(0, at) + " given " + what.substr(at + twice.size()) +
+             " times; give it once (a list is one comma-separated value, e.g. --scenes a,b)";
+    std::cerr << "arena: error: " << what << "\n(`arena "
               << (given.empty() ? std::string() : given.front()->get_name() + " ")
               << "--help` lists the options)\n";
     return 2;

@@ -32,8 +32,10 @@ void addReportCommand(CLI::App& app) {
       ->delimiter(',')
       ->allow_extra_args(false);
   auto gateOnly = std::make_shared<std::string>();
-  cmd->add_option("--denoisers", *gateOnly, "With --baseline: as for `arena compare`")
-      ->default_str("every pair");
+  cmd->add_option("--denoisers", *gateOnly,
+                  "With --baseline: gate only these contenders (labels or denoiser names, "
+                  "comma-separated), as for `arena compare`")
+      ->default_str("all");
   cmd->add_option("--tolerance", *gateTolerance, "With --baseline: as for `arena compare`")
       ->default_val("2%");
   cmd->add_option("--confidence", *gateConfidence, "With --baseline: as for `arena compare`")
@@ -93,7 +95,7 @@ void addReportCommand(CLI::App& app) {
   hist->add_option("--denoisers", *only,
                    "Gate only these contenders (labels or denoiser names, comma-separated), as for "
                    "`arena compare`")
-      ->default_str("every pair");
+      ->default_str("all");
   auto correction = std::make_shared<std::string>("holm");
   hist->add_option("--correction", *correction,
                    "How each comparison's rows are counted together, as for `arena compare`")

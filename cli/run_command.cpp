@@ -166,7 +166,8 @@ RunConfig configFrom(const MatrixOptions& o) {
               "lower --warmup; a capture's frames are what it holds");
           !w.empty())
         std::cerr << "arena: warning: " << w << "\n";
-  c.progress = [](const std::string& line) { std::cout << line << std::endl; };
+  // Progress on stderr, as the study's: stdout holds the results table alone.
+  c.progress = [](const std::string& line) { std::cerr << line << std::endl; };
   return c;
 }
 
@@ -642,9 +643,13 @@ void addRunCommands(CLI::App& app) {
                                         {"gatedByDefault", "gated by default"},
                                         {"overall", "overall score"}})
           if (m.value(key, false)) roles += std::string(roles.empty() ? "" : ", ") + role;
-        std::cout << std::string(22, ' ') << "reads " << m.value("reads", std::string("?")) << "; frame value: "
-                  << m.value("transform", std::string("?")) << " of its tiles; floor: "
-                  << m.value("floor", std::string("none")) << (roles.empty() ? "" : "; " + roles) << "\n";
+        // A counter of the run (a time, rays) is one number per frame: it has no tiles.
+        const std::string reads = m.value("reads", std::string("?"));
+        std::cout << std::string(22, ' ') << "reads " << reads << "; frame value: "
+                  << (reads == "run" ? "one per frame (no image, no tiles)"
+                                     : m.value("transform", std::string("?")) + " of its tiles")
+                  << "; floor: " << m.value("floor", std::string("none"))
+                  << (roles.empty() ? "" : "; " + roles) << "\n";
       }
       std::cout << "(definitions: docs/metrics.md)\n";
     });

@@ -72,6 +72,12 @@ std::map<std::string, std::map<std::string, std::string>> parseParamAssignments(
     size_t eq = item.find('='), dot = item.find('.');
     if (eq == std::string::npos || dot == std::string::npos || dot > eq)
       throw Error("--param '" + item + "': expected DENOISER.NAME=VALUE, e.g. svgf.sigmaL=4");
+    // "svgf.sigmaL=8,svgf.alpha=0.1" would read "8,svgf.alpha=0.1" as sigmaL's value.
+    if (const size_t comma = item.find(',', eq);
+        comma != std::string::npos && item.find('=', comma) != std::string::npos)
+      throw Error("--param '" + item +
+                  "': one assignment per --param; give each its own (--param " +
+                  item.substr(0, comma) + " --param " + item.substr(comma + 1) + ")");
     std::string denoiser = item.substr(0, dot);
     registry.find(denoiser);  // throws, listing the registered names
     const std::string name = item.substr(dot + 1, eq - dot - 1);

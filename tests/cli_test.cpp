@@ -365,6 +365,25 @@ TEST(CliContract, UsageErrorsExitTwoAndOptionsAreStrict) {
           .output.find(
               "arena: error: unknown command 'nosuchcommand'; the commands are: scenes, render,"),
       std::string::npos);
+  // An option given twice, and two assignments in one --param, are said as such.
+  const contract::CliResult twice = contract::arenaCli("run --out x --scenes a --scenes b");
+  EXPECT_EQ(twice.status, 2);
+  EXPECT_NE(twice.output.find("arena: error: --scenes given 2 times; give it once (a list is one "
+                              "comma-separated value, e.g. --scenes a,b)"),
+            std::string::npos)
+      << twice.output;
+  const contract::CliResult params =
+      contract::arenaCli("run --out x --param svgf.sigmaL=8,svgf.alpha=0.1");
+  EXPECT_EQ(params.status, 2);
+  EXPECT_NE(params.output.find("--param 'svgf.sigmaL=8,svgf.alpha=0.1': one assignment per "
+                               "--param; give each its own (--param svgf.sigmaL=8 --param "
+                               "svgf.alpha=0.1)"),
+            std::string::npos)
+      << params.output;
+  // A counter of the run has no tiles to average.
+  EXPECT_NE(contract::arenaCli("metrics").output.find(
+                "reads run; frame value: one per frame (no image, no tiles)"),
+            std::string::npos);
   EXPECT_NE(contract::arenaCli("report somerun --out x --tolerance 5%")
                 .output.find("report: --tolerance judges the regression view against a baseline"),
             std::string::npos);
