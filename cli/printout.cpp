@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <iomanip>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "core/text.hpp"
@@ -79,6 +80,16 @@ std::string rightAligned(const std::string& text, size_t width) {
 
 }  // namespace
 
+std::string sceneSizesText(const RunResults& results) {
+  std::set<std::string> sizes;
+  for (const auto& [name, scene] : results.scenes.items())
+    if (scene.is_object() && scene.contains("width") && scene.contains("height"))
+      sizes.insert(scene["width"].dump() + "x" + scene["height"].dump());
+  std::string text;
+  for (const std::string& size : sizes) text += (text.empty() ? "" : ", ") + size;
+  return text;
+}
+
 void printOverallRanking(std::ostream& out, const RunResults& results) {
   if (!results.statistics || !results.statistics->overall) return;
   const OverallRanking& o = *results.statistics->overall;
@@ -98,6 +109,11 @@ void printOverallRanking(std::ostream& out, const RunResults& results) {
         << tiedText(m) << "\n";
   }
   if (!o.excluded.empty()) out << "  not ranked overall: " << o.excluded << "\n";
+  // "3=" above "4=" with a lower score reads as an error without this.
+  if (std::any_of(o.ranking.begin(), o.ranking.end(),
+                  [](const RankedMethod& m) { return !m.tiedWith.empty(); }))
+    out << "  (rank: 1 + the methods resolved better; =: tied with those named, a difference not "
+           "resolved, so tied methods may hold different ranks)\n";
   if (std::any_of(o.ranking.begin(), o.ranking.end(),
                   [](const RankedMethod& m) { return m.extraPathsPerPixel > 0; }))
     out << "  (+paths): read paths beyond the frame's 1-spp ones (results.json: "
@@ -125,9 +141,11 @@ void printSpeedOrder(std::ostream& out, const RunResults& results) {
   std::map<std::string, std::pair<double, double>> sums;  // label -> (CPU, GPU) sums
   std::map<std::string, int> counts;
   std::vector<std::string> labels;
+  std::set<std::string> unmodelled;  // CPU-timed methods the cost model does not price
   std::string device;
   for (const PairResult& p : results.pairs) {
     const json& t = p.timing();
+    if (p.ok() && p.clock() == "cpu" && !t.contains("gpuPredicted")) unmodelled.insert(p.label);
     if (!p.ok() || p.clock() != "cpu" || !t.contains("gpuPredicted") ||
         !t["gpuPredicted"].is_object())
       continue;
@@ -151,21 +169,40 @@ void printSpeedOrder(std::ostream& out, const RunResults& results) {
     std::vector<size_t> idx(labels.size());
     for (size_t i = 0; i < idx.size(); ++i) idx[i] = i;
     std::stable_sort(idx.begin(), idx.end(), [&](size_t a, size_t b) { return ms[a] < ms[b]; });
-    std::string text;
-    for (size_t i : idx) text += (text.empty() ? "" : " < ") + labels[i] + " " + figureText(ms[i]);
+    // Two times that print alike are not ordered by the print ("20.89 < 20.89").
+    std::string text, previous;
+    for (size_t i : idx) {
+      const std::string figure = figureText(ms[i]);
+      text += (text.empty() ? "" : figure == previous ? " = " : " < ") + labels[i] + " " + figure;
+      previous = figure;
+    }
     return text;
   };
+  for (const std::string& l : labels) unmodelled.erase(l);  // priced on another scene
+  // What the CPU times are: this machine at the scenes' sizes, with the load when the run began
+  // (a run beside other work reads slower).
+  std::string where = sceneSizesText(results);
+  if (const json load = results.environment.value("loadAverage", json());
+      load.is_array() && !load.empty() && load[0].is_number())
+    where += (where.empty() ? "" : ", ") + std::string("load ") +
+             figureText(load[0].get<double>()) + " at the start";
   // Orders of medians: no interval separates two times here, so "<" is the order of the numbers,
   // not a resolved difference; with two methods the correlation can only be +-1.
   out << "\nspeed, ms per frame (mean over scenes of each pair's median, ordered; no interval: "
          "close times may swap between runs; the report charts each axis)\n"
-      << "  CPU measured here:                 " << order(cpu) << "\n"
+      << "  CPU measured here" << (where.empty() ? "" : " (" + where + ")") << ": " << order(cpu)
+      << "\n"
       << "  GPU predicted, " << device << " 1080p (a model): " << order(gpu) << "\n"
       << "  rank correlation of the two orders (Spearman): "
       << (labels.size() < 3
               ? "not given for " + std::to_string(labels.size()) + " methods (it can only be +-1)"
               : spearmanText(spearman(cpu, gpu), labels.size()))
       << "\n";
+  if (!unmodelled.empty()) {
+    std::string names;
+    for (const std::string& l : unmodelled) names += (names.empty() ? "" : ", ") + l;
+    out << "  not in these orders (no GPU cost model): " << names << "\n";
+  }
 }
 
 // The study's ranking with ties (metrics/statistics.hpp): per scene on relMSE, then overall on the

@@ -21,6 +21,8 @@ std::string intervalText(const Interval& interval);
 std::string tiedText(const RankedMethod& rankedMethod);
 // The run's overall ranking (statistics.overall): rank ("=" when tied), label, score, interval,
 // ties; and who was left out and why. Nothing when the run has none.
+// The scenes' image sizes, each once: "256x144" or "256x144, 512x288" ("" when none is recorded).
+std::string sceneSizesText(const RunResults& results);
 void printOverallRanking(std::ostream& out, const RunResults& results);
 
 // Where a finished study put its outputs, and how long it took.

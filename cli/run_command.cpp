@@ -187,12 +187,27 @@ void finish(const std::string& out) {
     sceneWidth = std::max(sceneWidth, displayWidth(p.scene) + 2);
     labelWidth = std::max(labelWidth, displayWidth(p.label) + 2);
   }
+  // Each pair's rank on its scene, with ties: a mean alone reads as an order the intervals may
+  // not support. "3=": two methods resolved better, tied with another (statistics.scenes).
+  std::map<std::pair<std::string, std::string>, std::string> ranks;
+  if (results.statistics)
+    for (const auto& [scene, st] : results.statistics->scenes)
+      for (const RankedMethod& m : st.ranking.ranking)
+        ranks[{scene, m.label}] = std::to_string(m.rank) + (m.tiedWith.empty() ? "" : "=");
+  // The times' clock and size: this machine's CPU at the scenes' resolutions (a reader with a GPU
+  // budget must not read them as GPU times).
+  const std::string sizeText = sceneSizesText(results);
   std::cout << paddedText("scene", sceneWidth) << paddedText("denoiser", labelWidth) << std::right
-            << std::setw(12) << "relMSE" << std::setw(10) << "ms"
-            << "  (mean relMSE after the warm-up; median ms a frame)\n";
+            << std::setw(6) << "rank" << std::setw(12) << "relMSE" << std::setw(10) << "ms"
+            << "  (rank on relMSE, = tied: not resolved at "
+            << (results.statistics ? formatNumber(100 * results.statistics->confidence, 3) : "95")
+            << "%; mean relMSE after the warm-up; median ms a frame on this machine's CPU"
+            << (sizeText.empty() ? "" : " at " + sizeText) << ")\n";
   for (const PairResult& p : results.pairs) {
     std::cout << paddedText(p.scene, sceneWidth) << paddedText(p.label, labelWidth);
     if (p.ok()) {
+      const auto rank = ranks.find({p.scene, p.label});
+      std::cout << std::right << std::setw(6) << (rank == ranks.end() ? "-" : rank->second);
       // An ok pair can still have no relMSE summary (a sequence no longer than the warm-up): "-"
       // here and the reason below the table.
       const SummaryMean relMse = p.mean("relMse");

@@ -214,6 +214,44 @@ TEST(StudySummary, ALoneMethodIsNotCalledBestAndTwoTimesGiveNoCorrelation) {
                                                         << text;
 }
 
+// The speed orders say what the CPU times are (this machine, the scenes' sizes, the load at the
+// start), print two times that look alike as equal rather than ordered, and name the methods the
+// cost model does not price rather than drop them silently.
+TEST(StudySummary, TheSpeedOrdersSayWhatTheirTimesAre) {
+  json results = worstDefaultStudy();
+  results["environment"]["loadAverage"] = {2.5, 1.0, 0.5};
+  for (auto& [name, info] : results["scenes"].items())
+    info.update({{"width", 256}, {"height", 144}});
+  const std::string scene = results["scenes"].begin().key();
+  std::vector<std::string> labels;
+  for (json& p : results["pairs"]) {
+    if (p["scene"] != scene) {
+      p["timing"] = {{"clock", "cpu"}};  // untimed elsewhere: one scene's times make the orders
+      continue;
+    }
+    const double cpu[] = {1.0, 1.00001, 2.0};
+    const size_t k = labels.size();
+    labels.push_back(p["label"]);
+    p["timing"] = {{"msMedian", k < 3 ? cpu[k] : 5.0}, {"clock", "cpu"}};
+    if (k < 3)
+      p["timing"]["gpuPredicted"] = {
+          {"devices", json::array({{{"device", "H200"}, {"msMedian", 0.1 * double(k + 1)}}})}};
+  }
+  ASSERT_GE(labels.size(), 4u);
+  std::ostringstream out;
+  cli::printStudySummary(out, test::typed(results), {"r.json", "r.db", "index.html", 1});
+  const std::string text = out.str();
+  EXPECT_NE(text.find("  CPU measured here (256x144, load 2.5 at the start): " + labels[0] +
+                      " 1 = " + labels[1] + " 1 < " + labels[2] + " 2\n"),
+            std::string::npos)
+      << text;
+  const size_t unpriced = text.find("  not in these orders (no GPU cost model): ");
+  ASSERT_NE(unpriced, std::string::npos) << text;
+  const std::string line = text.substr(unpriced, text.find('\n', unpriced) - unpriced);
+  EXPECT_NE(line.find(labels[3]), std::string::npos) << line;
+  EXPECT_EQ(line.find(labels[0]), std::string::npos) << line;
+}
+
 // A sweep's labels carry their parameters and run longer than the label column: the column widens
 // to the longest label, so every line's figures start in one column.
 // The columns (in characters, not bytes) where each ranking line's interval starts, over the

@@ -159,14 +159,17 @@
     const otherClock = (p) => (
         p.timing && p.timing.clock && p.timing.clock !== 'cpu' ? p.timing.device || p.timing.clock :
                                                                  null);
+    // Which clock and size the times are: this machine's CPU at the scene's resolution (a reader
+    // with a GPU budget must not read them as GPU times); the model's columns name their device.
+    const cpuGroup = `CPU time here${scene && scene.width ? `, ${scene.width}×${scene.height}` : ''}`;
     for (const t of TIMING_COLUMNS)
       if (on.has(t.key))
         cols.push({
-          group: t.group || 'time',
+          group: t.group ? `${t.group}, ${gpuDevice}` : cpuGroup,
           plain: true,
           title: t.title,
           lower: true,
-          hint: t.key === 'gpuMs' ? `${t.hint} ${gpuDevice}` : t.hint,
+          hint: t.key === 'gpuMs' ? `${t.hint} ${gpuDevice}` : t.hint || `${t.title} per frame on this machine's CPU (the run's environment), at the scene's resolution`,
           get: (p) => (p.timing ? p.timing[t.key] : null),
           clockOf: clockedColumns.has(t.key) ? otherClock : null
         });

@@ -282,7 +282,8 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
   // The cost model's columns (docs/gpu-cost.md): predicted GPU ms and GPU memory at 1080p, under
   // one group; svgf's row has all three, passthrough's none (it counts no traffic).
   for (const c of ['gpuMs', 'gpuPersistentMiB', 'gpuWorkingSetMiB']) await page.locator(`#column-picker input[data-column="${c}"]`).check();
-  assert.ok((await groups()).includes('GPU, 1080p (model)'), 'the GPU group is shown');
+  assert.ok((await groups()).some((g) => g.startsWith('GPU, 1080p (model), ')), 'the GPU group is shown, with its device');
+  assert.ok((await groups()).includes('CPU time here, 48×27'), 'the times say whose clock and what size');
   const cells = (label) => page.$$eval(`#summary-table tbody tr[data-label="${label}"] td`, (t) => t.slice(-3).map((x) => x.textContent));
   for (const v of await cells('svgf')) assert.ok(Number(v) > 0, `svgf's GPU cells: ${await cells('svgf')}`);
   for (const v of await cells('passthrough')) assert.ok(!(Number(v) > 0), `passthrough's GPU cells: ${await cells('passthrough')}`);
