@@ -42,10 +42,9 @@ int main(int argc, char** argv) {
   // every cached frame's ZIP compression ran on one core while the other waited. The bytes are the
   // same whichever thread compresses a block.
   Imf::setGlobalThreadCount(int(std::max(1u, std::thread::hardware_concurrency())));
-  // An isolated plugin runs in `arena serve`, started from this very executable.
-  std::error_code noPath;
-  if (const auto self = std::filesystem::read_symlink("/proc/self/exe", noPath); !noPath)
-    arena::setServeExecutable(self.string());
+  // An isolated plugin runs in `arena serve`, started from this very executable: /proc/self/exe
+  // in the child is the parent's own binary until the exec, even if the file was relinked since.
+  arena::setServeExecutable("/proc/self/exe");
   CLI::App app{
       "Denoise Arena: real-time path-tracing denoisers side by side on identical sequences"};
   app.require_subcommand(1);
@@ -91,9 +90,13 @@ int main(int argc, char** argv) {
     // CLI11 says "--scenes: At Most 1 required but received 2" of an option given twice.
     std::string what = e.what();
     const std::string twice = ": At Most 1 required but received ";
-    if (const size_t at = what.find(twice); at != std::string::npos && what.rfind("--", 0) == 0)
-      what = what.substr(0, at) + " given " + what.substr(at + twice.size()) +
-             " times; give it once (a list is one comma-separated value, e.g. --scenes a,b)";
+    if (const size_t at = what.find(twice); at != std::string::npos && what.rfind("--", 0) == 0) {
+      const std::string option = what.substr(0, at);
+      const bool list = option == "--scenes" || option == "--denoisers" || option == "--metric" ||
+                        option == "--grid";
+      what = option + " given " + what.substr(at + twice.size()) + " times; give it once" +
+             (list ? " (a list is one comma-separated value, e.g. " + option + " a,b)" : "");
+    }
     std::cerr << "arena: error: " << what << "\n(`arena "
               << (given.empty() ? std::string() : given.front()->get_name() + " ")
               << "--help` lists the options)\n";

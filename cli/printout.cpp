@@ -201,7 +201,7 @@ void printSpeedOrder(std::ostream& out, const RunResults& results) {
   if (!unmodelled.empty()) {
     std::string names;
     for (const std::string& l : unmodelled) names += (names.empty() ? "" : ", ") + l;
-    out << "  not in these orders (no GPU cost model): " << names << "\n";
+    out << "  not in these orders (no predicted GPU time): " << names << "\n";
   }
 }
 
@@ -264,16 +264,17 @@ void printEventTables(std::ostream& out, const RunResults& results) {
           << ": ranked on " << rankedOn << " (" << ranking.resolvedPairs << " of " << ranking.pairs.size()
           << " pairs resolved)\n";
       std::string steadyAbsent;  // the window's reason, the same for every method
-      // Nothing ranked (the figure is undefined for every pair: a cut with no old view): every
-      // pair's other figures are still shown, unranked.
+      // A pair the ranking leaves out (its figure undefined: a cut with no old view, a lag after an
+      // event it never settled from) keeps its row, unranked ("-"), with its other figures.
       std::vector<RankedMethod> rows = ranking.ranking;
-      if (rows.empty())
-        for (const PairResult& p : results.pairs)
-          if (p.scene == name && p.part(cut ? "cuts" : "ghosting").is_array()) {
-            RankedMethod unranked;
-            unranked.label = p.label;
-            rows.push_back(unranked);
-          }
+      for (const PairResult& p : results.pairs)
+        if (p.scene == name && p.part(cut ? "cuts" : "ghosting").is_array() &&
+            std::none_of(rows.begin(), rows.end(),
+                         [&](const RankedMethod& m) { return m.label == p.label; })) {
+          RankedMethod unranked;
+          unranked.label = p.label;
+          rows.push_back(unranked);
+        }
       const size_t column = labelColumn(rows, 22);
       for (const RankedMethod& m : rows) {
         const json* e = nullptr;

@@ -90,8 +90,8 @@ void addRenderOptions(CLI::App* cmd, RenderOptions& o) {
   cmd->add_option("--resolution", o.resolution, "Override the resolution, WIDTHxHEIGHT")
       ->default_str("the scene's; paper: 1280x720");
   cmd->add_option("--frames", o.frames,
-                  "Override the frame count (a run summarises the frames after its --warmup, 8 by "
-                  "default)")
+                  "Override the frame count (a run or study summarises only the frames after its "
+                  "--warmup, 8 by default)")
       ->check(CLI::Range(1, kMaxSceneFrames))
       ->default_str("the scene's");
   cmd->add_option(

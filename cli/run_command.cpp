@@ -1,9 +1,11 @@
 // `arena run`, `arena sweep`, `arena merge`, `arena compare`, `arena denoisers`, `arena serve`.
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <iomanip>
 #include <iostream>
@@ -202,7 +204,7 @@ void finish(const std::string& out) {
             << "  (rank on relMSE, = tied: not resolved at "
             << (results.statistics ? formatNumber(100 * results.statistics->confidence, 3) : "95")
             << "%; mean relMSE after the warm-up; median ms a frame on this machine's CPU"
-            << (sizeText.empty() ? "" : " at " + sizeText) << ")\n";
+            << (sizeText.empty() ? "" : " at " + sizeText) << ", unless marked)\n";
   for (const PairResult& p : results.pairs) {
     std::cout << paddedText(p.scene, sceneWidth) << paddedText(p.label, labelWidth);
     if (p.ok()) {
@@ -621,15 +623,26 @@ void addRunCommands(CLI::App& app) {
         "frames, 1 after a fault (answered with an error message), 2 when the denoiser cannot be "
         "loaded.");
     cmd->callback([entry] {
-      // The protocol keeps the real stdout; the denoiser's own prints go to stderr.
+      // The protocol keeps the real stdin and stdout on descriptors of its own (closed on exec:
+      // a child the plugin starts does not inherit them); the denoiser's prints go to stderr, and
+      // a read of stdin or a close of it reaches /dev/null, not the protocol.
       std::cout.flush();
-      const int protocolOut = ::dup(STDOUT_FILENO);
-      if (protocolOut < 0 || ::dup2(STDERR_FILENO, STDOUT_FILENO) < 0)
-        throw Error(std::string("arena serve: cannot set up its output: ") + std::strerror(errno));
+      const int protocolIn = ::fcntl(STDIN_FILENO, F_DUPFD_CLOEXEC, 3);
+      const int protocolOut = ::fcntl(STDOUT_FILENO, F_DUPFD_CLOEXEC, 3);
+      const int devNull = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
+      if (protocolIn < 0 || protocolOut < 0 || devNull < 0 || ::dup2(devNull, STDIN_FILENO) < 0 ||
+          ::dup2(STDERR_FILENO, STDOUT_FILENO) < 0)
+        throw Error(std::string("arena serve: cannot set up its input and output: ") +
+                    std::strerror(errno));
+      ::close(devNull);
+      // Line by line: what the plugin prints before a crash reaches the pair's error.
+      std::setvbuf(stdout, nullptr, _IOLBF, 0);
       setPluginCrashConsequence(
-          "this process (arena serve, the plugin's isolated host) ends here and the harness fails "
-          "this pair alone");
-      const int status = serveDenoiser(*entry, STDIN_FILENO, protocolOut);
+          "this process (arena serve, the plugin's isolated host) ends here; the harness fails "
+          "this "
+          "pair alone, unless every frame was answered before (a crash in destroy)");
+      const int status = serveDenoiser(*entry, protocolIn, protocolOut);
+      ::close(protocolIn);
       ::close(protocolOut);
       if (status != 0) throw CLI::RuntimeError(status);
     });

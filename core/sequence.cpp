@@ -84,15 +84,37 @@ json cameraToJson(const CameraState& c) {
 }
 
 CameraState cameraFromJson(const json& j) {
-  auto v = [](const json& a) { return glm::vec3(a[0].get<float>(), a[1].get<float>(), a[2].get<float>()); };
+  // Checked field by field (a frame protocol's camera comes from another program): a short array
+  // indexed unchecked is undefined behaviour, a missing key nlohmann's own words.
+  const auto what = [](const json& x) {
+    return x.is_null() ? std::string("nothing") : x.dump().substr(0, 80);
+  };
+  if (!j.is_object())
+    throw Error(
+        "a camera must be an object (eye, forward, right, up, tanHalfFovY, width, height), got " +
+        what(j));
+  auto v = [&](const char* key) {
+    const json& a = j.contains(key) ? j[key] : json();
+    if (!a.is_array() || a.size() != 3 || !a[0].is_number() || !a[1].is_number() ||
+        !a[2].is_number())
+      throw Error(std::string("camera.") + key + ": expected 3 numbers, got " + what(a));
+    return glm::vec3(a[0].get<float>(), a[1].get<float>(), a[2].get<float>());
+  };
+  auto positive = [&](const char* key, bool integer) {
+    const json& x = j.contains(key) ? j[key] : json();
+    if (!(integer ? x.is_number_integer() : x.is_number()) || !(x.get<double>() > 0))
+      throw Error(std::string("camera.") + key + ": expected a positive " +
+                  (integer ? "integer" : "number") + ", got " + what(x));
+    return x.get<double>();
+  };
   CameraState c;
-  c.eye = v(j.at("eye"));
-  c.forward = v(j.at("forward"));
-  c.right = v(j.at("right"));
-  c.up = v(j.at("up"));
-  c.tanHalfFovY = j.at("tanHalfFovY").get<float>();
-  c.width = j.at("width").get<int>();
-  c.height = j.at("height").get<int>();
+  c.eye = v("eye");
+  c.forward = v("forward");
+  c.right = v("right");
+  c.up = v("up");
+  c.tanHalfFovY = float(positive("tanHalfFovY", false));
+  c.width = int(positive("width", true));
+  c.height = int(positive("height", true));
   c.aspect = float(c.width) / float(c.height);
   return c;
 }

@@ -47,7 +47,10 @@ std::string DenoiserRegistry::resolve(const std::string& entry) {
       if (known.origin == info.origin) return info.name;  // loaded before
       throw Error(entry + ": its name '" + info.name + "' is already taken by " +
                   (known.origin.empty() ? "a built-in denoiser" : known.origin) +
-                  "; rename it in its manifest or library");
+                  (info.origin.find("plugin ") != std::string::npos
+                       ? "; a plugin's name is its library's (a manifest cannot rename it): give "
+                         "one of the two only, or rebuild one library under another name"
+                       : "; rename it in its manifest"));
     }
   std::string name = info.name;
   registry.add(std::move(info));

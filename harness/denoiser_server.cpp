@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <bit>
 #include <cerrno>
 #include <chrono>
@@ -61,7 +62,8 @@ class Wire {
     for (size_t got = buffered; got < bytes;) {
       const ssize_t n = ::read(in_, to + got, bytes - got);
       if (n < 0 && errno == EINTR) continue;
-      if (n <= 0)
+      if (n < 0) throw Error(std::string("cannot read its input: ") + std::strerror(errno));
+      if (n == 0)
         throw Error("the input ended after " + std::to_string(got) + " of its " +
                     std::to_string(bytes) + " bytes");
       got += size_t(n);
@@ -87,7 +89,8 @@ class Wire {
     for (;;) {
       const ssize_t n = ::read(in_, chunk, sizeof chunk);
       if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) return false;
+      if (n < 0) throw Error(std::string("cannot read its input: ") + std::strerror(errno));
+      if (n == 0) return false;
       buffer_.append(chunk, size_t(n));
       return true;
     }
@@ -162,10 +165,20 @@ PlaneMap mapPlanes(const std::vector<std::string>& sent, const std::vector<std::
   return map;
 }
 
+// A manifest's process already speaks the protocol: serving it again would only add a hop.
+const std::string& servable(const std::string& entry) {
+  if (entry.rfind("ext:", 0) == 0)
+    throw Error("'" + entry +
+                "': serve takes plugin:LIBRARY or a built-in's name; an ext: manifest names a "
+                "program that speaks the frame protocol itself");
+  return entry;
+}
+
 class Server {
  public:
   Server(const std::string& entry, Wire& wire)
-      : info_(DenoiserRegistry::instance().find(DenoiserRegistry::resolve(entry))), wire_(wire) {}
+      : info_(DenoiserRegistry::instance().find(DenoiserRegistry::resolve(servable(entry)))),
+        wire_(wire) {}
 
   void setup(const json& s) {
     const int protocol = intField(s, "protocol", 0, 1 << 30);
@@ -194,6 +207,9 @@ class Server {
       throw Error("setup: expected \"planes\", an array of plane names");
     for (const json& p : s["planes"]) {
       if (!p.is_string()) throw Error("setup: \"planes\" holds " + p.dump() + ", not a name");
+      if (std::find(sent_.begin(), sent_.end(), p.get<std::string>()) != sent_.end())
+        throw Error("setup: \"planes\" names '" + p.get<std::string>() +
+                    "' twice (each plane once, as a manifest names each layer once)");
       sent_.push_back(p.get<std::string>());
     }
     std::map<std::string, std::string> overrides;
@@ -238,12 +254,18 @@ class Server {
     ctx.width = width_;
     ctx.height = height_;
     ctx.reset = f["reset"].get<bool>();
-    try {
-      ctx.camera = cameraFromJson(f.at("camera"));
-      ctx.previousCamera = cameraFromJson(f.at("previousCamera"));
-    } catch (const std::exception& e) {
-      throw Error("frame " + std::to_string(t) +
-                  ": its \"camera\" and \"previousCamera\": " + e.what());
+    for (const char* key : {"camera", "previousCamera"}) {
+      CameraState& camera = std::string(key) == "camera" ? ctx.camera : ctx.previousCamera;
+      try {
+        camera = cameraFromJson(f.contains(key) ? f[key] : json());
+      } catch (const Error& e) {
+        throw Error("frame " + std::to_string(t) + ": \"" + key + "\": " + e.what());
+      }
+      // The plugin derives its aspect and pixel mapping from it: the frame's size or an error.
+      if (camera.width != width_ || camera.height != height_)
+        throw Error("frame " + std::to_string(t) + ": \"" + key + "\" is " +
+                    std::to_string(camera.width) + "x" + std::to_string(camera.height) +
+                    "; the frames are " + std::to_string(width_) + "x" + std::to_string(height_));
     }
     // Every plane read, in the order sent; those the denoiser does not read are read and dropped.
     std::vector<float*> into(sent_.size(), nullptr);
@@ -258,6 +280,18 @@ class Server {
         throw Error("frame " + std::to_string(t) + ": plane '" + sent_[i] + "' (" +
                     std::to_string(i + 1) + " of " + std::to_string(into.size()) +
                     "): " + e.what());
+      }
+    // The harness replaces non-finite inputs by 0 before sending: one here is the sender's, and
+    // would otherwise come back as the denoiser's non-finite output.
+    for (size_t i = 0; i < into.size(); ++i)
+      if (into[i]) {
+        const size_t bad = size_t(std::count_if(into[i], into[i] + size_t(width_) * size_t(height_),
+                                                [](float v) { return !std::isfinite(v); }));
+        if (bad > 0)
+          throw Error("frame " + std::to_string(t) + ": its input plane '" + sent_[i] + "' holds " +
+                      std::to_string(bad) +
+                      " non-finite value(s); the protocol's planes are finite (the harness "
+                      "replaces NaN/Inf by 0 before sending)");
       }
     // As DenoiseRun: reset() at a cut after the first frame, the context saying reset on both.
     if (ctx.reset && started_) denoiser_->reset();

@@ -18,7 +18,9 @@ namespace arena {
 // standard error, where the harness keeps it, so that it cannot corrupt the answers. A fault (a
 // setup or frame the protocol does not allow, a denoiser's error, an output it left unwritten) is
 // answered with {"type": "error", "message": ...}. Returns the exit status: 0 when the input ended
-// after whole frames, 1 after an error, 2 when `entry` cannot be served (said on stderr).
+// after whole frames, 1 after an error (a denoiser the protocol cannot feed, one reading gradient
+// samples or the low-resolution buffer, is refused at the setup), 2 when `entry` cannot be loaded
+// (said on stderr).
 int serveDenoiser(const std::string& entry, int inFd, int outFd);
 
 }  // namespace arena

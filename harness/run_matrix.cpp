@@ -389,6 +389,8 @@ json runMatrix(const RunConfig& cfg) {
   auto say = [&](const std::string& s) {
     if (cfg.progress) cfg.progress(s);
   };
+  // From here an earlier run's images in --out are replaced pair by pair (unfinishedRunNote).
+  markRunUnfinished(cfg.out);
   for (const Source& source : sources) {
     std::vector<const DenoiserRequest*> mine;
     for (const DenoiserRequest& r : denoisers)

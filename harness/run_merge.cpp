@@ -59,6 +59,9 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
   int shardCount = 0;
   for (const fs::path& run : runs) {
     RunResults r = loadResults(run);
+    // Its images are partly another run's: the merged report would show them as the shard's.
+    if (const std::string note = unfinishedRunNote(run); !note.empty())
+      throw Error(note + "; run that shard again to completion before merging it");
     const std::string shard = r.settings.shard();
     if (shard == "merged") throw Error(run.string() + ": already a merged run; merge the shards it came from");
     const auto [i, n] = parseShard(shard);
@@ -156,6 +159,7 @@ json mergeRuns(const std::vector<fs::path>& runs, const fs::path& out) {
   const RunDirectoryLock outLock = checkRunOutputs(
       out);  // creates --out only now: shards that cannot be merged leave no directory behind
   // The images are the shards', as the results are: a previous merge's in --out go.
+  markRunUnfinished(out);
   fs::remove_all(out / "images", ec);
   if (ec)
     throw Error((out / "images").string() +

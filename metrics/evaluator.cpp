@@ -533,6 +533,7 @@ json PairEvaluation::finish() {
   json ghosting = json::array();
   std::vector<std::string> emptyEvents;
   int unsettledEvent = -1;  // the previous event, when this method never settled after it
+  double unsettledBiasPre = 0;  // |b_M| before that event: the method's own offset then
   for (size_t k = 0; full && k < scene.events_.size(); ++k) {
     const auto& ev = scene.events_[k];
     GhostingResult g =
@@ -569,19 +570,20 @@ json PairEvaluation::finish() {
     const BootstrapConfig bc;
     FigureReplicates replicates = ghostingReplicates(
         ev.event.frame, s.eventTiles[k], eventSeedName(scene.name(), ev.event.frame), bc, gc);
-    // Still lagging from the previous event when this one comes (it never settled, and b_pre is
-    // above the settle threshold here): the lag figures would be measured against that offset,
-    // and an error that never rises above it reads as lag energy 0, the best score. Undefined
-    // instead, with the reason (a steady offset with no earlier event, a spatial filter's bias,
-    // is what b_pre subtracts, and stays).
-    if (absent.empty() && unsettledEvent >= 0 && g.biasPre > gc.biasThreshold) {
-      char text[320];
+    // Still lagging from the previous event when this one comes (it never settled, and b_pre
+    // here exceeds its b_pre before that event by more than the settle threshold): the lag
+    // figures would be measured against that offset, and an error that never rises above it reads
+    // as lag energy 0, the best score. Undefined instead, with the reason. A steady offset (a
+    // spatial filter's bias, the same before both events, which "never settles" under the
+    // absolute threshold) is what b_pre subtracts, and stays.
+    if (absent.empty() && unsettledEvent >= 0 && g.biasPre > unsettledBiasPre + gc.biasThreshold) {
+      char text[360];
       std::snprintf(text, sizeof text,
                     "the method never settled after the event at frame %d, and |b_M| before this "
-                    "one was %.3g (above the settle threshold %.3g): its lag here is measured "
-                    "against that earlier lag, and an error that stays under it would read as lag "
-                    "energy 0",
-                    unsettledEvent, g.biasPre, gc.biasThreshold);
+                    "one was %.3g, %.3g before that one (more than the settle threshold %.3g "
+                    "apart): its lag here is measured against that earlier lag, and an error that "
+                    "stays under it would read as lag energy 0",
+                    unsettledEvent, g.biasPre, unsettledBiasPre, gc.biasThreshold);
       j["lagAbsent"] = text;
       for (const char* figure : {"lagEnergy", "chromaLagEnergy"})
         if (j.contains(figure)) {
@@ -590,6 +592,7 @@ json PairEvaluation::finish() {
         }
     }
     unsettledEvent = absent.empty() && !g.settled ? ev.event.frame : -1;
+    unsettledBiasPre = g.biasPre;
     addFigureIntervals(j, replicates, ghostingFigures(g), bc.confidence);
     j["tiles"] = s.eventTiles[k].toJson();
     ghosting.push_back(j);

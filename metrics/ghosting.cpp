@@ -52,6 +52,11 @@ nlohmann::json GhostingConfig::toJson() const {
       {"minFramesFromEvent", minFramesFromEvent},
       {"trailFrames", trailFrames},
       {"cutRecoveryFrames", recoveryFrames},
+      // Since lag energy after an event a method never settled from became undefined: shards
+      // and runs from before measured it as 0 there, and merge and compare refuse to mix them.
+      {"lagAfterUnsettled",
+       "undefined where the previous event never settled and b_pre rose above its own before it "
+       "by more than biasThreshold (lagAbsent)"},
       {"intervals",
        "tile bootstrap (metrics/ghosting_intervals.hpp): the image's 4x4 tiles drawn with "
        "replacement "

@@ -29,6 +29,13 @@ constexpr const char* kUnfinishedMarker = ".arena.unfinished";
 
 }  // namespace
 
+void markRunUnfinished(const fs::path& runDir) {
+  std::error_code ec;
+  if (!fs::exists(runDir / "results.json", ec)) return;  // no earlier run's numbers to mismatch
+  writeTextAtomically(runDir / kUnfinishedMarker, "started " + utcTimestamp() + " by process " +
+                                                      std::to_string(getpid()) + "\n");
+}
+
 std::string unfinishedRunNote(const fs::path& runDir) {
   std::error_code ec;
   if (!fs::exists(runDir / kUnfinishedMarker, ec)) return "";
@@ -340,10 +347,6 @@ RunDirectoryLock checkRunOutputs(const fs::path& runDir) {
       throw Error(jsonPath.string() +
                   ": not an arena results file; refusing to replace it (move it away or choose "
                   "another --out)");
-    // From here the earlier run's images are replaced pair by pair: until this run commits, a
-    // report of the directory would show them beside the earlier numbers (unfinishedRunNote).
-    writeTextAtomically(runDir / kUnfinishedMarker, "started " + utcTimestamp() + " by process " +
-                                                        std::to_string(getpid()) + "\n");
   }
 
   const fs::path dbPath = runDir / "results.db";

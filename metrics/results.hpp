@@ -59,6 +59,10 @@ class RunDirectoryLock {
 // when none did. The numbers (results.json, results.db) are the earlier run's, whole; its images
 // are not: the report refuses such a directory, compare and history warn.
 std::string unfinishedRunNote(const std::filesystem::path& runDir);
+// Before the first image of a directory holding an earlier run is replaced (a run's, a merge's):
+// marks it until commitResults (nothing when it holds no results.json). Not earlier: a run refused
+// before touching anything leaves the directory as it was.
+void markRunUnfinished(const std::filesystem::path& runDir);
 // Writes results.json and appends to results.db as one commit: both are written to temporaries
 // (the database as an appended copy) and renamed into place only when both are complete. A
 // document RunResults::fromJson refuses is an Error before any file is touched.

@@ -59,6 +59,7 @@ RunSettings RunSettings::fromJson(const json& j, const std::string& file, const 
                           "trailFrames", "cutRecoveryFrames"})
       count(*g, k, 0);
     for (const char* k : {"chroma", "intervals"}) text(*g, k);
+    if (g->has("lagAfterUnsettled")) text(*g, "lagAfterUnsettled");  // absent in older runs
     g->rejectUnread();
   }
   // The sequences' (tracer/render.cpp RenderSettings::pixelSettings, less width, height, frames).

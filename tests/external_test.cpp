@@ -7,8 +7,10 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <cstring>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <thread>
 
 #include "arena_plugin.h"
@@ -795,12 +797,18 @@ TEST(Plugin, ScatteredPlanesGiveTheSameOutputAsContiguousOnes) {
 // lost; the process dies of the same signal (exit 139 from the shell); no results are written.
 TEST(Plugin, AFaultInAPluginIsNamedBeforeTheProcessDies) {
   const fs::path dir = test::freshDir("plugin_segfault");
-  const contract::CliResult r = contract::arenaCli(
-      "run --plugin " + std::string(ARENA_FAULTY_PLUGIN) +
-          " --scenes cornell_static --denoisers passthrough --no-baselines --resolution 8x8 "
-          "--frames 3 --warmup 1 --ref-spp 1 --flip none --keep-frames none --cache " +
-          (dir / "cache").string() + " --out " + (dir / "run").string(),
-      "ARENA_FAULTY_PLUGIN=segfault ");
+  // A tiny run of passthrough beside `plugin` into dir/OUT, with `environment` set.
+  auto runWith = [&](const std::string& plugin, const std::string& out,
+                     const std::string& environment) {
+    return contract::arenaCli(
+        "run --plugin " + plugin +
+            " --scenes cornell_static --denoisers passthrough --no-baselines --resolution 8x8 "
+            "--frames 3 --warmup 1 --ref-spp 1 --flip none --keep-frames none --cache " +
+            (dir / "cache").string() + " --out " + (dir / out).string(),
+        environment);
+  };
+  const contract::CliResult r =
+      runWith(ARENA_FAULTY_PLUGIN, "run", "ARENA_FAULTY_PLUGIN=segfault ");
   EXPECT_EQ(r.status, 128 + SIGSEGV) << r.output;
   EXPECT_NE(
       r.output.find(
@@ -810,6 +818,17 @@ TEST(Plugin, AFaultInAPluginIsNamedBeforeTheProcessDies) {
       std::string::npos)
       << r.output;
   EXPECT_FALSE(fs::exists(dir / "run" / "results.json"));
+  // Loading runs the library's code in arena, isolated or not: a crash there is named too.
+  const contract::CliResult loading =
+      runWith(ARENA_FAULTY_PARAMS_PLUGIN, "loading", "ARENA_FAULTY_DESCRIPTOR=crash ");
+  EXPECT_EQ(loading.status, 128 + SIGSEGV) << loading.output;
+  EXPECT_NE(
+      loading.output.find("arena: fatal: signal 11 (Segmentation fault) while loading plugin "
+                          "library " +
+                          fs::absolute(ARENA_FAULTY_PARAMS_PLUGIN).lexically_normal().string()),
+      std::string::npos)
+      << loading.output;
+  EXPECT_FALSE(fs::exists(dir / "loading"));
   // A relative path that names nothing says where it looked.
   const std::string missing =
       errorOf([] { DenoiserRegistry::resolve("plugin:no/such/libplug.so"); });
@@ -834,6 +853,14 @@ TEST(Plugin, ARunThatDiesBeforeItsCommitLeavesItsDirectoryMarked) {
   ASSERT_EQ(first.status, 0) << first.output;
   EXPECT_FALSE(fs::exists(dir / "run" / ".arena.unfinished"));
   const std::string earlier = readText(dir / "run" / "results.json");
+  // A run refused before it touched anything (its cache is a file) leaves no mark.
+  std::ofstream(dir / "a_file") << "x";
+  const contract::CliResult refused = contract::arenaCli(
+      "run --scenes cornell_static --denoisers passthrough --no-baselines --resolution 8x8 "
+      "--frames 3 --warmup 1 --ref-spp 1 --flip none --cache " +
+      (dir / "a_file").string() + " --out " + (dir / "run").string());
+  EXPECT_EQ(refused.status, 2) << refused.output;
+  EXPECT_FALSE(fs::exists(dir / "run" / ".arena.unfinished"));
   const contract::CliResult second = contract::arenaCli(
       common + " --denoisers passthrough --input-seed 1 --out " + (dir / "other").string());
   ASSERT_EQ(second.status, 0) << second.output;
@@ -860,6 +887,13 @@ TEST(Plugin, ARunThatDiesBeforeItsCommitLeavesItsDirectoryMarked) {
   EXPECT_NE(compared.output.find("compared on the earlier run's numbers, which are whole"),
             std::string::npos)
       << compared.output;
+  // Nor is it merged: the merged report would show the mixed images as the shard's.
+  const contract::CliResult merged =
+      contract::arenaCli("merge " + (dir / "run").string() + " --out " + (dir / "merged").string());
+  EXPECT_EQ(merged.status, 2) << merged.output;
+  EXPECT_NE(merged.output.find("run that shard again to completion before merging it"),
+            std::string::npos)
+      << merged.output;
   const contract::CliResult again = contract::arenaCli(run + " --denoisers passthrough");
   ASSERT_EQ(again.status, 0) << again.output;
   EXPECT_FALSE(fs::exists(dir / "run" / ".arena.unfinished"));
@@ -1039,6 +1073,22 @@ TEST(Serve, ABuiltInServedGivesTheSamePixelsAsInsideArena) {
   // The two settings differ: the parameter went over the wire.
   EXPECT_FALSE(samePixels(denoiseAll({name, {{"sigmaL", "4"}}, ""}, seq)[3].color,
                           denoiseAll({name, {{"sigmaL", "0.75"}}, ""}, seq)[3].color));
+  // reset() is called at the cut and nowhere else, served as inside arena: the faulty plugin's
+  // reset-check fails a frame where it was called without a cut, or not called at one.
+  const std::string inside =
+      DenoiserRegistry::resolve(std::string("plugin:") + ARENA_FAULTY_PLUGIN);
+  const std::string served = DenoiserRegistry::resolve(
+      "ext:" +
+      writeManifest(
+          "faulty-served",
+          {{"name", "faulty-served"},
+           {"command", {ARENA_BINARY, "serve", std::string("plugin:") + ARENA_FAULTY_PLUGIN}},
+           {"signals", "demodulated"}})
+          .string());
+  ::setenv("ARENA_FAULTY_PLUGIN", "reset-check", 1);
+  EXPECT_EQ(errorOf([&] { denoiseAll({inside, {}, ""}, seq); }), "(no error)");
+  EXPECT_EQ(errorOf([&] { denoiseAll({served, {}, ""}, seq); }), "(no error)");
+  ::unsetenv("ARENA_FAULTY_PLUGIN");
 }
 
 // `arena serve` refuses what the protocol does not allow, answering an error message the harness
@@ -1081,15 +1131,24 @@ TEST(Serve, EveryMistakeIsAnsweredWithAnError) {
     std::string input;
     std::string expected;
   };
-  const std::string frameHeader =
-      json{{"type", "frame"},
-           {"frame", 0},
-           {"reset", true},
-           {"bytes", frameBytes},
-           {"camera", cameraToJson(cutSequence().info().cameras[0])},
-           {"previousCamera", cameraToJson(cutSequence().info().cameras[0])}}
-          .dump() +
-      "\n";
+  CameraState camera = cutSequence().info().cameras[0];
+  camera.width = 2, camera.height = 1;  // the frames' size
+  const json frame = {{"type", "frame"},
+                      {"frame", 0},
+                      {"reset", true},
+                      {"bytes", frameBytes},
+                      {"camera", cameraToJson(camera)},
+                      {"previousCamera", cameraToJson(camera)}};
+  const std::string frameHeader = frame.dump() + "\n";
+  auto frameWith = [&](const json& patch) {
+    json f = frame;
+    f.merge_patch(patch);
+    return f.dump() + "\n";
+  };
+  const std::string zeros(frameBytes, '\0');
+  std::string nanPlanes = zeros;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  std::memcpy(nanPlanes.data() + 2 * sizeof(float), &nan, sizeof nan);  // signal.G, pixel 0
   const std::vector<Case> cases = {
       {"svgf", patched({{"protocol", 2}}), "setup: protocol 2; this arena speaks version 1"},
       {"svgf", "hello\n", "expected a JSON 'setup' line, got: hello"},
@@ -1111,6 +1170,29 @@ TEST(Serve, EveryMistakeIsAnsweredWithAnError) {
        "frame 0: plane 'signal.B' (3 of " + std::to_string(svgfPlanes.size()) +
            "): the input ended after 4 of its 8 bytes"},
   };
+  const std::vector<Case> frames = {
+      {"svgf", patched({}) + frameWith({{"camera", {{"width", 32}}}}) + zeros,
+       "frame 0: \\\"camera\\\" is 32x1; the frames are 2x1"},
+      {"svgf", patched({}) + frameWith({{"previousCamera", {{"eye", {1, 2}}}}}) + zeros,
+       "frame 0: \\\"previousCamera\\\": camera.eye: expected 3 numbers, got [1,2]"},
+      {"svgf", patched({}) + frameWith({{"camera", nullptr}}) + zeros,
+       "frame 0: \\\"camera\\\": a camera must be an object"},
+      {"svgf", patched({}) + frameHeader + nanPlanes,
+       "frame 0: its input plane 'signal.G' holds 1 non-finite value(s)"},
+      {"svgf", patched({{"planes", {"signal.R", "signal.G", "signal.B", "meshId", "meshId"}}}),
+       "setup: \\\"planes\\\" names 'meshId' twice"},
+  };
+  for (const Case& c : frames) {
+    const auto r = serve(c.entry, c.input);
+    EXPECT_EQ(r.status, 1) << c.expected << "\n" << r.output;
+    EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.expected << "\n" << r.output;
+  }
+  // A manifest names a program that speaks the protocol itself: not served again.
+  const auto manifest = serve("ext:" ARENA_EXAMPLES_BINARY_DIR "/cpp_box", "");
+  EXPECT_EQ(manifest.status, 2) << manifest.output;
+  EXPECT_NE(manifest.output.find("serve takes plugin:LIBRARY or a built-in's name"),
+            std::string::npos)
+      << manifest.output;
   for (const Case& c : cases) {
     const auto r = serve(c.entry, c.input);
     EXPECT_EQ(r.status, 1) << c.expected << "\n" << r.output;
@@ -1118,8 +1200,7 @@ TEST(Serve, EveryMistakeIsAnsweredWithAnError) {
     EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.expected << "\n" << r.output;
   }
   // Whole frames, then the end of the input: ready, one result, exit 0.
-  const std::string planes(frameBytes, '\0');
-  const auto good = serve("svgf", patched({}) + frameHeader + planes);
+  const auto good = serve("svgf", patched({}) + frameHeader + zeros);
   EXPECT_EQ(good.status, 0) << good.output;
   EXPECT_NE(good.output.find("{\"type\":\"ready\"}"), std::string::npos) << good.output;
   EXPECT_NE(good.output.find("\"type\":\"result\""), std::string::npos) << good.output;
@@ -1165,8 +1246,8 @@ TEST(Plugin, AnIsolatedPluginsCrashOrHangFailsOnlyItsPair) {
   for (const char* said :
        {"faulty (diffuse process, ", "frame 0: ", "the process was killed by signal 11",
         "arena: fatal: signal 11 (Segmentation fault) in plugin faulty's denoise of frame 0",
-        "this process (arena serve, the plugin's isolated host) ends here and the harness fails "
-        "this pair alone"})
+        "this process (arena serve, the plugin's isolated host) ends here; the harness fails this "
+        "pair alone"})
     EXPECT_NE(crash.find(said), std::string::npos) << said << "\n" << crash;
   const contract::CliResult hung = run("hang", "hang");
   const json hangResults = json::parse(std::ifstream(dir / "hang" / "results.json"));

@@ -245,7 +245,7 @@ TEST(StudySummary, TheSpeedOrdersSayWhatTheirTimesAre) {
                       " 1 = " + labels[1] + " 1 < " + labels[2] + " 2\n"),
             std::string::npos)
       << text;
-  const size_t unpriced = text.find("  not in these orders (no GPU cost model): ");
+  const size_t unpriced = text.find("  not in these orders (no predicted GPU time): ");
   ASSERT_NE(unpriced, std::string::npos) << text;
   const std::string line = text.substr(unpriced, text.find('\n', unpriced) - unpriced);
   EXPECT_NE(line.find(labels[3]), std::string::npos) << line;

@@ -99,7 +99,9 @@ void setServeExecutable(std::string path) {
 
 std::string serveExecutable() {
   if (!serveExecutablePath().empty()) return serveExecutablePath();
-  if (const char* env = std::getenv("ARENA_EXECUTABLE"); env && *env) return env;
+  // Absolute: the process starts in its manifest's folder.
+  if (const char* env = std::getenv("ARENA_EXECUTABLE"); env && *env)
+    return fs::absolute(env).lexically_normal().string();
   throw Error(
       "an isolated plugin runs in `arena serve`, but this program does not know where the arena "
       "executable is (set ARENA_EXECUTABLE to its path)");

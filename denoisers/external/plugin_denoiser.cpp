@@ -72,7 +72,7 @@ class PluginDenoiser final : public Denoiser {
  public:
   PluginDenoiser(const ArenaPlugin* plugin, std::string library, const ParamSchema& schema,
                  const ParamSet& params, SignalKind kind)
-      : plugin_(plugin), library_(std::move(library)) {
+      : plugin_(plugin), library_(std::move(library)), signal_(signalName(kind)) {
     // The resolved values, in schema order; the strings live in `choices_` for create().
     std::vector<ArenaParamValue> values;
     for (const ParamSpec& spec : schema.specs()) {
@@ -178,12 +178,14 @@ class PluginDenoiser final : public Denoiser {
   // bytes), its bytes made valid text.
   [[noreturn]] void fail(const std::string& entry, char* error) const {
     error[kErrorBytes - 1] = '\0';
-    throw Error(std::string(plugin_->name) + " (plugin " + library_ + "): " + entry +
+    throw Error(std::string(plugin_->name) + " (plugin " + library_ + ", " + signal_ +
+                " signal): " + entry +
                 " failed: " + (error[0] ? validUtf8(error) : "(no message)"));
   }
 
   const ArenaPlugin* plugin_;
   std::string library_;
+  std::string signal_;  // "diffuse", "specular" or "color": which instance failed
   // crashNote's fixed parts (declared after plugin_ and library_, which they read).
   const std::string noteHead_ = "in plugin " + std::string(plugin_->name) + "'s ";
   const std::string noteTail_ = " (" + library_ + ")" +
@@ -271,6 +273,7 @@ void setPluginCrashConsequence(std::string text) {
 }
 
 DenoiserInfo loadPluginDenoiser(const fs::path& libraryPath, std::vector<std::string>* channels) {
+  if (libraryPath.empty()) throw Error("plugin: needs a library's path (plugin:./libmine.so)");
   // Named absolute in every message (and the origin), as the run that reads it may run elsewhere.
   const std::string library = fs::absolute(libraryPath).lexically_normal().string();
   if (!fs::exists(libraryPath))
@@ -278,6 +281,11 @@ DenoiserInfo loadPluginDenoiser(const fs::path& libraryPath, std::vector<std::st
         libraryPath.string() + ": no such plugin library (looked for " + library +
         (libraryPath.is_relative() ? ": a relative path is taken from the current directory" : "") +
         ")");
+  // Loading runs the library's own code (static constructors, arena_plugin()) in this process,
+  // isolated or not: a fault there is named before the process dies of it.
+  const CrashNote loading("while loading plugin library " + library +
+                          " (its static constructors or arena_plugin()); loading is not isolated, "
+                          "even for an isolated plugin, and arena stops here");
   // Never unloaded: instances and thread-local state may outlive any registry entry.
   void* handle = dlopen(fs::absolute(libraryPath).c_str(), RTLD_NOW | RTLD_LOCAL);
   if (!handle) throw Error(library + ": cannot load the plugin: " + dlerror());

@@ -72,6 +72,12 @@ std::string ExternalProcessDenoiser::finish() {
     // contender, each signal, pays the second, which the user can save.
     process_->kill();
     process_.reset();
+    // An isolated plugin's host exits as soon as the plugin's destroy() returns.
+    if (manifest_->isolated)
+      return std::string("the ") + signalName(kind_) + " instance of the isolated plugin (" +
+             manifest_->file.string() +
+             ") did not end within 1 s of its last frame (its destroy() did not return) and its "
+             "process was killed (each pair paid that second)";
     return std::string("the ") + signalName(kind_) + " process (" + manifest_->file.string() +
            ") was still running 1 s after its input ended and was killed (exit when stdin closes: "
            "each process that does not costs every pair a second)";

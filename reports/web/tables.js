@@ -12,7 +12,8 @@
     { key: 'msP95', title: 'ms p95', default: true },
     { key: 'msP5', title: 'ms p5', default: false },
     { key: 'msPerMegapixel', title: 'ms/MP', default: false },
-    { key: 'tapsPerPixel', title: 'taps/px', default: false },
+    { key: 'tapsPerPixel', title: 'taps/px', default: false, group: 'work',
+      hint: 'neighbour fetches per pixel per frame, summed over the passes (no clock)' },
     // The cost model's view (docs/gpu-cost.md): the counted traffic priced at 1920x1080 on the
     // first device, and the GPU-format memory of the buffers the passes touched, at 1080p.
     { key: 'gpuMs', title: 'GPU ms', default: false, group: 'GPU, 1080p (model)',
@@ -165,7 +166,7 @@
     for (const t of TIMING_COLUMNS)
       if (on.has(t.key))
         cols.push({
-          group: t.group ? `${t.group}, ${gpuDevice}` : cpuGroup,
+          group: t.group === 'work' ? t.group : t.group ? `${t.group}, ${gpuDevice}` : cpuGroup,
           plain: true,
           title: t.title,
           lower: true,

@@ -9,11 +9,15 @@
 //   partial       writes only the output's first plane and succeeds
 //   segfault      writes through a null pointer (a real fault, not a raised signal)
 //   hang          never returns (sleeps; only an isolated plugin's process can be ended)
+//   reset-check   fails unless reset() was called exactly before the frames whose context says
+//                 reset, after the first (a camera cut), as the harness calls it
 // Otherwise it writes zeros and succeeds. The FAULTY_PLUGIN_BAD_PARAMS build reads
-// ARENA_FAULTY_DESCRIPTOR when loaded: "negative-count" declares paramCount -2 with no array.
+// ARENA_FAULTY_DESCRIPTOR when loaded: "negative-count" declares paramCount -2 with no array,
+// "crash" writes through a null pointer inside arena_plugin().
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <string_view>
@@ -23,18 +27,31 @@
 
 namespace {
 
+struct Instance {
+  bool resetSinceLastFrame = false;
+};
+
 void* create(const ArenaParamValue*, int, ArenaSignal, char*, size_t) {
-  static int instance;
-  return &instance;
+  return new Instance;
 }
 int setup(void*, int, int, char*, size_t) {
   return 0;
 }
-void reset(void*) {}
-int denoise(void*, const ArenaFrameContext*, const ArenaInputs*, const ArenaMutableImage* output,
-            const ArenaHost* host, char* error, size_t errorSize) {
+void reset(void* instance) {
+  static_cast<Instance*>(instance)->resetSinceLastFrame = true;
+}
+int denoise(void* instance, const ArenaFrameContext* ctx, const ArenaInputs*,
+            const ArenaMutableImage* output, const ArenaHost* host, char* error, size_t errorSize) {
   const char* mode = std::getenv("ARENA_FAULTY_PLUGIN");
   const std::string_view m = mode ? mode : "";
+  Instance& self = *static_cast<Instance*>(instance);
+  const bool wasReset = self.resetSinceLastFrame;
+  self.resetSinceLastFrame = false;
+  if (m == "reset-check" && wasReset != (ctx->reset && ctx->frameIndex > 0)) {
+    std::snprintf(error, errorSize, "frame %d: reset() %s (the context says reset = %d)",
+                  ctx->frameIndex, wasReset ? "was called" : "was not called", ctx->reset);
+    return 1;
+  }
   if (m == "unterminated") {
     std::memset(error, 'e', errorSize);
     error[errorSize - 2] = char(0xff);
@@ -58,7 +75,9 @@ int denoise(void*, const ArenaFrameContext*, const ArenaInputs*, const ArenaMuta
                 sizeof(float) * size_t(output->width) * size_t(output->height));
   return 0;
 }
-void destroy(void*) {}
+void destroy(void* instance) {
+  delete static_cast<Instance*>(instance);
+}
 
 }  // namespace
 
@@ -79,6 +98,10 @@ extern "C" ARENA_PLUGIN_EXPORT const ArenaPlugin* arena_plugin(void) {
   plugin.params = params;
   plugin.paramCount = params ? 1 : 0;
 #ifdef FAULTY_PLUGIN_BAD_PARAMS
+  if (const char* d = std::getenv("ARENA_FAULTY_DESCRIPTOR"); d && std::string_view(d) == "crash") {
+    volatile std::uintptr_t address = 0;
+    *reinterpret_cast<volatile int*>(address) = 1;
+  }
   if (const char* d = std::getenv("ARENA_FAULTY_DESCRIPTOR");
       d && std::string_view(d) == "negative-count") {
     plugin.params = nullptr;
