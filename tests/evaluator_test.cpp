@@ -124,7 +124,9 @@ TEST(Evaluation, RunResultsAreBitIdenticalToTheHarnessBeforeTheStage) {
   // end off the emitter and sphere lights are sampled by solid angle: light_switch's sphere light
   // lit its surroundings a little more; every scene's frames and references are other draws).
   // Recorded again when a run with --keep-frames none stopped recording chosenFrames (no number
-  // moved: the three scenes' chosenFrames were the only difference).
+  // moved: the three scenes' chosenFrames were the only difference), and when settings.ghosting
+  // recorded the lag rule after an unsettled event (lagAfterUnsettled, the only difference: no
+  // event of the golden's scenes meets the rule).
   const std::string file = std::string(ARENA_TEST_DATA) + "/evaluation_golden.json";
   const json now = test::goldenPart(
       withoutNewMetrics(runMatrix(test::goldenRunConfig(test::freshDir("golden_run"), test::freshDir("golden_cache")))));
