@@ -616,13 +616,17 @@ void addRunCommands(CLI::App& app) {
                     "plugin:LIBRARY, or a built-in that reads neither gradient samples nor the "
                     "low-resolution buffer")
         ->required();
+    auto describe = std::make_shared<bool>(false);
+    cmd->add_flag("--describe", *describe,
+                  "Print what the denoiser is, as a manifest would (name, signals, channels, "
+                  "parameters), one JSON line, and exit");
     cmd->footer(
         "It reads one setup line and answers ready, then answers each frame with its result, as "
         "any process speaking the frame protocol; its stdout carries only the protocol (what the "
         "denoiser prints there goes to stderr). Exit status 0 when its input ends after whole "
         "frames, 1 after a fault (answered with an error message), 2 when the denoiser cannot be "
         "loaded.");
-    cmd->callback([entry] {
+    cmd->callback([entry, describe] {
       // The protocol keeps the real stdin and stdout on descriptors of its own (closed on exec:
       // a child the plugin starts does not inherit them); the denoiser's prints go to stderr, and
       // a read of stdin or a close of it reaches /dev/null, not the protocol.
@@ -638,10 +642,14 @@ void addRunCommands(CLI::App& app) {
       // Line by line: what the plugin prints before a crash reaches the pair's error.
       std::setvbuf(stdout, nullptr, _IOLBF, 0);
       setPluginCrashConsequence(
-          "this process (arena serve, the plugin's isolated host) ends here; the harness fails "
-          "this "
-          "pair alone, unless every frame was answered before (a crash in destroy)");
-      const int status = serveDenoiser(*entry, protocolIn, protocolOut);
+          *describe
+              ? "this process (arena serve --describe, the plugin's isolated host) ends here, "
+                "and arena refuses the manifest before anything runs"
+              : "this process (arena serve, the plugin's isolated host) ends here; the "
+                "harness fails this pair alone, unless every frame was answered before (a "
+                "crash in destroy)");
+      const int status = *describe ? describeDenoiser(*entry, protocolOut)
+                                   : serveDenoiser(*entry, protocolIn, protocolOut);
       ::close(protocolIn);
       ::close(protocolOut);
       if (status != 0) throw CLI::RuntimeError(status);

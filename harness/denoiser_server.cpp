@@ -17,6 +17,7 @@
 #include "core/text.hpp"
 #include "denoisers/denoiser.hpp"
 #include "denoisers/external/manifest.hpp"
+#include "denoisers/external/plugin_denoiser.hpp"
 #include "denoisers/external/process_denoiser.hpp"
 #include "harness/denoise_run.hpp"
 
@@ -340,6 +341,35 @@ class Server {
 };
 
 }  // namespace
+
+int describeDenoiser(const std::string& entry, int outFd) {
+  try {
+    json d;
+    std::vector<std::string> channels;
+    DenoiserInfo info;
+    if (entry.rfind("plugin:", 0) == 0) {
+      info = loadPluginDenoiser(entry.substr(7), &channels);
+    } else {
+      info = DenoiserRegistry::instance().find(DenoiserRegistry::resolve(servable(entry)));
+      channels =
+          info.create(info.schema.resolve({}, info.name),
+                      info.signals == SignalMode::Color ? SignalKind::Color : SignalKind::Diffuse)
+              ->requiredChannels();
+    }
+    d["name"] = info.name;
+    d["description"] = info.description;
+    d["signals"] = info.signals == SignalMode::Color ? "color" : "demodulated";
+    d["channels"] = channels;
+    d["parameters"] = json::array();
+    for (const ParamSpec& spec : info.schema.specs())
+      d["parameters"].push_back(paramSpecJson(spec));
+    Wire(-1, outFd).writeLine(d);
+    return 0;
+  } catch (const Error& e) {
+    std::cerr << "arena serve: " << e.what() << "\n";
+    return 2;
+  }
+}
 
 int serveDenoiser(const std::string& entry, int inFd, int outFd) {
   Wire wire(inFd, outFd);

@@ -23,4 +23,10 @@ namespace arena {
 // (said on stderr).
 int serveDenoiser(const std::string& entry, int inFd, int outFd);
 
+// `arena serve --describe ENTRY`: one JSON line on `outFd` saying what the denoiser is, as a
+// manifest would (name, description, signals, channels, parameters): how arena learns an isolated
+// plugin's schema without loading the library itself. Returns 0, or 2 when it cannot be loaded
+// (said on stderr).
+int describeDenoiser(const std::string& entry, int outFd);
+
 }  // namespace arena

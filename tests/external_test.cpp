@@ -1091,6 +1091,22 @@ TEST(Serve, ABuiltInServedGivesTheSamePixelsAsInsideArena) {
   ::unsetenv("ARENA_FAULTY_PLUGIN");
 }
 
+// What `arena serve --describe` prints of a schema reads back as the same schema: every parameter
+// of every built-in, through a manifest's "parameters" and back.
+TEST(Serve, ASchemaDescribedReadsBackTheSame) {
+  for (const std::string& name : DenoiserRegistry::instance().names()) {
+    const DenoiserInfo& info = DenoiserRegistry::instance().find(name);
+    if (!info.origin.empty()) continue;
+    json d = {{"name", "described"}, {"command", {"x"}}, {"signals", "demodulated"}};
+    for (const ParamSpec& spec : info.schema.specs())
+      d["parameters"].push_back(paramSpecJson(spec));
+    const ExternalManifest m = manifestFromJson(d, "described.json", "described");
+    ASSERT_EQ(m.schema.specs().size(), info.schema.specs().size()) << name;
+    for (size_t i = 0; i < m.schema.specs().size(); ++i)
+      EXPECT_EQ(m.schema.specs()[i].describe(), info.schema.specs()[i].describe()) << name;
+  }
+}
+
 // `arena serve` refuses what the protocol does not allow, answering an error message the harness
 // quotes (exit 1), and a denoiser it cannot serve before reading anything (exit 2).
 TEST(Serve, EveryMistakeIsAnsweredWithAnError) {
@@ -1263,6 +1279,53 @@ TEST(Plugin, AnIsolatedPluginsCrashOrHangFailsOnlyItsPair) {
       EXPECT_EQ(p["status"], "ok") << p["denoiser"];
     }
   EXPECT_TRUE(timedOut) << hung.output;
+  // Isolated, the library is loaded only in a process of its own (arena serve --describe): a
+  // crash or a hang while it loads, or a descriptor it gets wrong, refuses the manifest before
+  // anything runs, naming how that process ended, and arena itself exits 2.
+  const json params = {{"name", "faulty-params"},
+                       {"library", ARENA_FAULTY_PARAMS_PLUGIN},
+                       {"isolated", true},
+                       {"timeoutSeconds", 0.5}};
+  fs::create_directories(dir / "params");
+  std::ofstream(dir / "params" / "manifest.json") << params.dump();
+  auto describeWith = [&](const std::string& environment) {
+    return contract::arenaCli("denoisers",
+                              environment + "ARENA_DENOISER_PATH=" + dir.string() + " ");
+  };
+  auto loadWith = [&](const std::string& environment) {
+    return contract::arenaCli(
+        "run --scenes cornell_static --denoisers ext:" + (dir / "params").string() +
+            " --no-baselines --resolution 16x8 --frames 3 --warmup 1 "
+            "--ref-spp 1 --flip none --keep-frames none --cache " +
+            (dir / "cache").string() + " --out " + (dir / "load").string(),
+        environment);
+  };
+  const contract::CliResult loadCrash = loadWith("ARENA_FAULTY_DESCRIPTOR=crash ");
+  EXPECT_EQ(loadCrash.status, 2) << loadCrash.output;
+  for (const char* said :
+       {"$.library: ", "loading it in its isolated process (arena serve --describe) failed",
+        "the process was killed by signal 11",
+        "arena: fatal: signal 11 (Segmentation fault) while loading plugin library ",
+        "this process (arena serve --describe, the plugin's isolated host) ends here, and arena "
+        "refuses the manifest before anything runs"})
+    EXPECT_NE(loadCrash.output.find(said), std::string::npos) << said << "\n" << loadCrash.output;
+  const contract::CliResult loadHang = loadWith("ARENA_FAULTY_DESCRIPTOR=hang ");
+  EXPECT_EQ(loadHang.status, 2) << loadHang.output;
+  EXPECT_NE(loadHang.output.find("gave no description within timeoutSeconds (a hang while "
+                                 "loading?); the process was killed"),
+            std::string::npos)
+      << loadHang.output;
+  const contract::CliResult badSchema = loadWith("");
+  EXPECT_EQ(badSchema.status, 2) << badSchema.output;
+  EXPECT_NE(badSchema.output.find("an int parameter's default, min and max must be whole numbers"),
+            std::string::npos)
+      << badSchema.output;
+  EXPECT_FALSE(fs::exists(dir / "load"));
+  // `arena denoisers` lists what it can and warns of the rest: its own process goes on.
+  const contract::CliResult listed = describeWith("ARENA_FAULTY_DESCRIPTOR=crash ");
+  EXPECT_EQ(listed.status, 0) << listed.output;
+  EXPECT_NE(listed.output.find("eaw-plugin: "), std::string::npos) << listed.output;
+  EXPECT_NE(listed.output.find("(not listed)"), std::string::npos) << listed.output;
   // Its manifest's mistakes are named: a timeout without isolation, isolation of a command.
   const std::string timeout = errorOf([&] {
     readManifest(writeManifest("timeout_inside",

@@ -1,15 +1,18 @@
 #include "denoisers/external/loader.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdlib>
 #include <cstring>
 #include <memory>
 #include <sstream>
 
 #include "core/error.hpp"
+#include "core/text.hpp"
 #include "denoisers/external/manifest.hpp"
 #include "denoisers/external/plugin_denoiser.hpp"
 #include "denoisers/external/process_denoiser.hpp"
+#include "denoisers/external/subprocess.hpp"
 
 namespace arena {
 
@@ -73,20 +76,61 @@ std::string& serveExecutablePath() {
   return path;
 }
 
-// An isolated plugin: its descriptor read here (a load that fails is refused before anything
-// runs, as for any plugin), its instances made by `arena serve plugin:LIBRARY`, one process per
-// sequence and signal, which speak the frame protocol.
-DenoiserInfo isolatedPluginInfo(ExternalManifest manifest, const DenoiserInfo& plugin,
-                                std::vector<std::string> channels) {
+// An isolated plugin: never loaded in this process. `arena serve --describe plugin:LIBRARY` loads
+// it in a process of its own and says what it is (a crash or a hang there refuses the manifest
+// before anything runs, and arena goes on); its instances are made by `arena serve plugin:LIBRARY`,
+// one process per sequence and signal, which speak the frame protocol.
+DenoiserInfo isolatedPluginInfo(const ExternalManifest& manifest) {
   const std::string library = fs::absolute(manifest.library).lexically_normal().string();
-  manifest.command = {serveExecutable(), "serve", "plugin:" + library};
-  manifest.signals = plugin.signals;
-  manifest.channels = std::move(channels);
-  manifest.schema = plugin.schema;
-  if (manifest.description.empty()) manifest.description = plugin.description;
+  const std::vector<std::string> command = {serveExecutable(), "serve", "plugin:" + library};
+  const std::string where = manifest.file.string() + ": $.library: " + library;
+  auto fail = [&](const std::string& what, Subprocess& p) {
+    std::string status = p.exitStatus(std::chrono::milliseconds(500));
+    if (status == "still running") {
+      p.kill();
+      status = "was killed";
+    }
+    const std::string tail = p.stderrTail();
+    throw Error(validUtf8(where + ": loading it in its isolated process (arena serve --describe) " +
+                          what + "; the process " + status +
+                          (tail.empty() ? "" : "; the end of its stderr:\n" + tail)));
+  };
+  nlohmann::json described;
+  {
+    std::vector<std::string> describe = command;
+    describe.insert(describe.begin() + 2, "--describe");
+    Subprocess process(describe, manifest.folder());
+    std::string line;
+    try {
+      line = process.readLine(size_t(1) << 20,
+                              std::chrono::steady_clock::now() +
+                                  std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                      std::chrono::duration<double>(manifest.timeoutSeconds)));
+    } catch (const Subprocess::TimedOut&) {
+      fail("gave no description within timeoutSeconds (a hang while loading?)", process);
+    } catch (const Error& e) {
+      fail(std::string("failed (") + e.what() + ")", process);
+    }
+    try {
+      described = nlohmann::json::parse(line);
+    } catch (const std::exception&) {
+      fail("answered what is not a JSON description: " + line.substr(0, 200), process);
+    }
+  }
+  described["command"] = command;  // read as the process manifest it becomes
+  ExternalManifest m = manifestFromJson(described, manifest.file, where + " (its description)");
+  if (m.name != manifest.name)
+    throw Error(manifest.file.string() + ": $.name '" + manifest.name +
+                "' differs from the name '" + m.name + "' that the library " + library +
+                " gives itself");
+  m.file = manifest.file;
+  m.library = manifest.library;
+  m.isolated = true;
+  m.timeoutSeconds = manifest.timeoutSeconds;
+  if (!manifest.description.empty()) m.description = manifest.description;
   const std::string origin =
       "isolated plugin " + library + " (manifest " + manifest.file.string() + ")";
-  DenoiserInfo info = processDenoiserInfo(std::move(manifest));
+  DenoiserInfo info = processDenoiserInfo(std::move(m));
   info.origin = origin;
   return info;
 }
@@ -120,10 +164,10 @@ DenoiserInfo loadExternalDenoiser(const std::string& entry) {
   ExternalManifest manifest =
       readManifest(findManifest(entry.substr(std::strlen(kManifestPrefix))));
   if (manifest.library.empty()) return processDenoiserInfo(std::move(manifest));
+  if (manifest.isolated) return isolatedPluginInfo(manifest);
   DenoiserInfo info;
-  std::vector<std::string> channels;
   try {
-    info = loadPluginDenoiser(manifest.library, &channels);
+    info = loadPluginDenoiser(manifest.library);
   } catch (const Error& e) {  // the library's own errors name it; the manifest that named it too
     throw Error(manifest.file.string() + ": $.library: " + e.what());
   }
@@ -131,7 +175,6 @@ DenoiserInfo loadExternalDenoiser(const std::string& entry) {
     throw Error(manifest.file.string() + ": $.name '" + manifest.name +
                 "' differs from the name '" + info.name + "' that the library " +
                 manifest.library.string() + " gives itself");
-  if (manifest.isolated) return isolatedPluginInfo(std::move(manifest), info, std::move(channels));
   if (!manifest.description.empty()) info.description = manifest.description;
   return info;
 }

@@ -119,6 +119,30 @@ double readTimeout(JsonReader& r) {
 
 }  // namespace
 
+nlohmann::json paramSpecJson(const ParamSpec& spec) {
+  nlohmann::json j = {{"name", spec.name}};
+  switch (spec.type) {
+    case ParamSpec::Type::Bool:
+      j["type"] = "bool";
+      j["default"] = spec.defaultValue != 0;
+      break;
+    case ParamSpec::Type::Int:
+    case ParamSpec::Type::Float:
+      j["type"] = spec.type == ParamSpec::Type::Int ? "int" : "float";
+      j["default"] = spec.defaultValue;
+      j["min"] = spec.min;
+      j["max"] = spec.max;
+      break;
+    case ParamSpec::Type::Choice:
+      j["type"] = "choice";
+      j["choices"] = spec.choices;
+      j["default"] = spec.choices.at(size_t(spec.defaultValue));
+      break;
+  }
+  if (!spec.meaning.empty()) j["meaning"] = spec.meaning;
+  return j;
+}
+
 ExternalManifest readManifest(const fs::path& file) {
   if (!fs::is_regular_file(file))
     throw Error(file.string() +
@@ -141,13 +165,17 @@ ExternalManifest readManifest(const fs::path& file) {
                 "docs/external-denoisers.md)");
   }
 
-  if (!j.is_object())
-    throw Error(file.string() + ": expected a JSON object, got " + jsonTypeName(j));
-  JsonReader r(j, file.string());
+  return manifestFromJson(j, file, file.string());
+}
+
+ExternalManifest manifestFromJson(const nlohmann::json& j, const fs::path& file,
+                                  const std::string& where) {
+  if (!j.is_object()) throw Error(where + ": expected a JSON object, got " + jsonTypeName(j));
+  JsonReader r(j, where);
   ExternalManifest m;
   m.file = fs::absolute(file).lexically_normal();
   m.name = r.string("name");
-  checkDenoiserName(m.name, file.string() + ": $.name");
+  checkDenoiserName(m.name, where + ": $.name");
   m.description = r.string("description", "");
   const bool hasCommand = r.has("command"), hasLibrary = r.has("library");
   if (hasCommand == hasLibrary)
@@ -184,13 +212,13 @@ ExternalManifest readManifest(const fs::path& file) {
            "remodulated by the harness) or \"color\" (one process on the colour)");
   m.channels = stringArray(r, "channels", false);
   for (size_t i = 0; i < m.channels.size(); ++i) {
-    const std::string where = file.string() + ": $.channels[" + std::to_string(i) + "]";
-    frameLayerSpec(m.channels[i], where);
+    const std::string at = where + ": $.channels[" + std::to_string(i) + "]";
+    frameLayerSpec(m.channels[i], at);
     // Twice, its planes would be sent twice under the same names: a process that maps planes by
     // name keeps one and loses the other's place.
     for (size_t k = 0; k < i; ++k)
       if (m.channels[k] == m.channels[i])
-        throw Error(where + ": '" + m.channels[i] + "' is already $.channels[" + std::to_string(k) +
+        throw Error(at + ": '" + m.channels[i] + "' is already $.channels[" + std::to_string(k) +
                     "]; name each layer once");
   }
   std::vector<ParamSpec> specs;

@@ -5,6 +5,7 @@
 // built-ins, so unknown and out-of-range values are errors and results record the values) and
 // which signal one instance filters. Every mistake is an Error naming the file and the field.
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,11 @@ struct ExternalManifest {
 
 // Reads and validates a manifest file.
 ExternalManifest readManifest(const std::filesystem::path& file);
+// The same from its JSON (`file`: where relative paths start; `where`: how errors name it).
+ExternalManifest manifestFromJson(const nlohmann::json& j, const std::filesystem::path& file,
+                                  const std::string& where);
+// A parameter as a manifest declares it (the inverse of reading one): `arena serve --describe`.
+nlohmann::json paramSpecJson(const ParamSpec& spec);
 
 // Registry names become CLI prefixes ("NAME.param=value"): letters, digits, '_' and '-' only.
 // Throws naming `where` otherwise.

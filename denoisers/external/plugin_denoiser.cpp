@@ -281,11 +281,10 @@ DenoiserInfo loadPluginDenoiser(const fs::path& libraryPath, std::vector<std::st
         libraryPath.string() + ": no such plugin library (looked for " + library +
         (libraryPath.is_relative() ? ": a relative path is taken from the current directory" : "") +
         ")");
-  // Loading runs the library's own code (static constructors, arena_plugin()) in this process,
-  // isolated or not: a fault there is named before the process dies of it.
+  // Loading runs the library's own code (static constructors, arena_plugin()) in this process: a
+  // fault there is named before the process dies of it.
   const CrashNote loading("while loading plugin library " + library +
-                          " (its static constructors or arena_plugin()); loading is not isolated, "
-                          "even for an isolated plugin, and arena stops here");
+                          " (its static constructors or arena_plugin()); " + crashConsequence());
   // Never unloaded: instances and thread-local state may outlive any registry entry.
   void* handle = dlopen(fs::absolute(libraryPath).c_str(), RTLD_NOW | RTLD_LOCAL);
   if (!handle) throw Error(library + ": cannot load the plugin: " + dlerror());

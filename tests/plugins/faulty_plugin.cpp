@@ -13,7 +13,7 @@
 //                 reset, after the first (a camera cut), as the harness calls it
 // Otherwise it writes zeros and succeeds. The FAULTY_PLUGIN_BAD_PARAMS build reads
 // ARENA_FAULTY_DESCRIPTOR when loaded: "negative-count" declares paramCount -2 with no array,
-// "crash" writes through a null pointer inside arena_plugin().
+// "crash" writes through a null pointer inside arena_plugin(), "hang" never returns from it.
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -102,6 +102,8 @@ extern "C" ARENA_PLUGIN_EXPORT const ArenaPlugin* arena_plugin(void) {
     volatile std::uintptr_t address = 0;
     *reinterpret_cast<volatile int*>(address) = 1;
   }
+  if (const char* d = std::getenv("ARENA_FAULTY_DESCRIPTOR"); d && std::string_view(d) == "hang")
+    for (;;) std::this_thread::sleep_for(std::chrono::seconds(1));
   if (const char* d = std::getenv("ARENA_FAULTY_DESCRIPTOR");
       d && std::string_view(d) == "negative-count") {
     plugin.params = nullptr;
