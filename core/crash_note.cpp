@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cstdlib>
 #include <cstring>
 #include <mutex>
 
@@ -73,7 +74,18 @@ void onFatalSignal(int signal, siginfo_t* info, void*) {
   if (!info || info->si_code <= 0) raise(signal);  // sent, not a fault: it would not recur
 }
 
+// exit() called while a note is in force (a plugin ending the process from inside a call): said as
+// a fatal signal is; the process then exits with the status it was given.
+void onExit() {
+  if (const char* note = currentNote.load()) {
+    writeAll("\narena: fatal: exit() was called ");
+    writeAll(note);
+    writeAll("\n");
+  }
+}
+
 void install() {
+  std::atexit(onExit);
   stack_t stack{};
   stack.ss_sp = alternateStack;
   stack.ss_size = sizeof alternateStack;

@@ -5,7 +5,9 @@
 //
 // A CrashNote is set around a call into such code: its text, formatted before the call, is what a
 // fatal signal (SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT) writes to stderr before the process
-// dies of that signal as it would have (same exit status, core dump where enabled). The handlers
+// dies of that signal as it would have (same exit status, core dump where enabled). exit() called
+// while a note is in force writes it too ("arena: fatal: exit() was called <text>"), and the
+// process exits with the status it was given. The handlers
 // are installed with the first note and chain to those installed before them (a sanitizer's), so a
 // crash outside any note is reported as before.
 //

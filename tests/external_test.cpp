@@ -818,6 +818,14 @@ TEST(Plugin, AFaultInAPluginIsNamedBeforeTheProcessDies) {
       std::string::npos)
       << r.output;
   EXPECT_FALSE(fs::exists(dir / "run" / "results.json"));
+  // A plugin that calls exit() ends arena with its status, said as a crash is.
+  const contract::CliResult exited =
+      runWith(ARENA_FAULTY_PLUGIN, "exited", "ARENA_FAULTY_PLUGIN=exit ");
+  EXPECT_EQ(exited.status, 3) << exited.output;
+  EXPECT_NE(exited.output.find("arena: fatal: exit() was called in plugin faulty's denoise of "
+                               "frame 0"),
+            std::string::npos)
+      << exited.output;
   // Loading runs the library's code in arena, isolated or not: a crash there is named too.
   const contract::CliResult loading =
       runWith(ARENA_FAULTY_PARAMS_PLUGIN, "loading", "ARENA_FAULTY_DESCRIPTOR=crash ");

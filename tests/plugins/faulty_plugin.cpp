@@ -9,6 +9,7 @@
 //   partial       writes only the output's first plane and succeeds
 //   segfault      writes through a null pointer (a real fault, not a raised signal)
 //   hang          never returns (sleeps; only an isolated plugin's process can be ended)
+//   exit          calls exit(3), as a library that gives up on a driver error might
 //   reset-check   fails unless reset() was called exactly before the frames whose context says
 //                 reset, after the first (a camera cut), as the harness calls it
 // Otherwise it writes zeros and succeeds. The FAULTY_PLUGIN_BAD_PARAMS build reads
@@ -63,6 +64,7 @@ int denoise(void* instance, const ArenaFrameContext* ctx, const ArenaInputs*,
   if (m == "slow-pass" && host && host->reportPass)
     host->reportPass(host->context, "blur", 1e9, 1.0);
   if (m == "unwritten") return 0;
+  if (m == "exit") std::exit(3);
   if (m == "hang")
     for (;;) std::this_thread::sleep_for(std::chrono::seconds(1));
   if (m == "segfault") {
