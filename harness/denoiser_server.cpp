@@ -172,6 +172,15 @@ const std::string& servable(const std::string& entry) {
     throw Error("'" + entry +
                 "': serve takes plugin:LIBRARY or a built-in's name; an ext: manifest names a "
                 "program that speaks the frame protocol itself");
+  // The registry's own error would offer ext: and names on ARENA_DENOISER_PATH, which serve takes
+  // neither of.
+  if (entry.rfind("plugin:", 0) != 0 && !DenoiserRegistry::instance().has(entry)) {
+    std::string known;
+    for (const std::string& name : DenoiserRegistry::instance().names())
+      known += (known.empty() ? "" : ", ") + name;
+    throw Error("unknown denoiser '" + entry +
+                "'; serve takes plugin:LIBRARY or a built-in: " + known);
+  }
   return entry;
 }
 

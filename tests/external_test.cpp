@@ -1144,7 +1144,9 @@ TEST(Serve, EveryMistakeIsAnsweredWithAnError) {
   };
   const auto unknown = serve("nosuch", "");
   EXPECT_EQ(unknown.status, 2);
-  EXPECT_NE(unknown.output.find("arena serve: unknown denoiser 'nosuch'"), std::string::npos)
+  EXPECT_NE(unknown.output.find("arena serve: unknown denoiser 'nosuch'; serve takes "
+                                "plugin:LIBRARY or a built-in: passthrough, "),
+            std::string::npos)
       << unknown.output;
   const auto nothing = serve("svgf", "");
   EXPECT_EQ(nothing.status, 1);
