@@ -377,9 +377,10 @@ TEST(CompareGate, ManyRowsOfNoiseAreJudgedTogether) {
     failedTogether += anyRegression(together);
     for (const ComparisonRow& r : together) {
       EXPECT_TRUE(std::isfinite(r.pValue));
-      if (r.verdict == "unresolved" && r.changeCi.valid() && !r.changeCi.containsZero())
+      if (r.verdict == "unresolved" && r.changeCi.valid() && !r.changeCi.containsZero()) {
         EXPECT_NE(r.note.find("not among the 60 rows judged together: Holm, p "), std::string::npos)
             << r.note;
+      }
     }
     const auto withWorse =
         compareRuns(b, syntheticRun(worse, "s" + std::to_string(trial)), tol, cfg);
