@@ -85,15 +85,8 @@ DenoiserInfo isolatedPluginInfo(const ExternalManifest& manifest) {
   const std::vector<std::string> command = {serveExecutable(), "serve", "plugin:" + library};
   const std::string where = manifest.file.string() + ": $.library: " + library;
   auto fail = [&](const std::string& what, Subprocess& p) {
-    std::string status = p.exitStatus(std::chrono::milliseconds(500));
-    if (status == "still running") {
-      p.kill();
-      status = "was killed";
-    }
-    const std::string tail = p.stderrTail();
     throw Error(validUtf8(where + ": loading it in its isolated process (arena serve --describe) " +
-                          what + "; the process " + status +
-                          (tail.empty() ? "" : "; the end of its stderr:\n" + tail)));
+                          what + p.howItEnded(std::chrono::milliseconds(500))));
   };
   nlohmann::json described;
   {

@@ -50,14 +50,7 @@ void ExternalProcessDenoiser::fail(const std::string& what) {
                         manifest_->file.string() + "): " + (stage_.empty() ? "" : stage_ + ": ") +
                         what;
   if (process_) {
-    std::string status = process_->exitStatus(std::chrono::milliseconds(200));
-    if (status == "still running") {
-      process_->kill();
-      status = "was killed by the harness";
-    }
-    message += "; the process " + status;
-    const std::string tail = process_->stderrTail();
-    message += tail.empty() ? "; its stderr was empty" : "; the end of its stderr:\n" + tail;
+    message += process_->howItEnded(std::chrono::milliseconds(200));
     process_.reset();
   }
   throw Error(validUtf8(message));  // its words are the process's, in whatever bytes it wrote

@@ -259,6 +259,17 @@ std::string Subprocess::endInput(std::chrono::milliseconds grace) {
   return exitStatus(grace);
 }
 
+std::string Subprocess::howItEnded(std::chrono::milliseconds grace) {
+  std::string status = exitStatus(grace);
+  if (status == "still running") {
+    kill();
+    status = "was killed by the harness";
+  }
+  const std::string tail = stderrTail();
+  return "; the process " + status +
+         (tail.empty() ? "; its stderr was empty" : "; the end of its stderr:\n" + tail);
+}
+
 std::string Subprocess::stderrTail() {
   drainStderr();
   std::string tail = utf8Excerpt(stderrTail_, kStderrTailBytes, true);

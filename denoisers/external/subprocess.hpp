@@ -50,6 +50,10 @@ class Subprocess {
   std::string endInput(std::chrono::milliseconds grace);
   // The last lines of what the process wrote to stderr (at most ~2 KiB).
   std::string stderrTail();
+  // What a failure's message adds about the process: "; the process exited with status 3" (or
+  // "was killed by the harness", after killing one still running after `grace`), then "; the end
+  // of its stderr:\n..." or "; its stderr was empty".
+  std::string howItEnded(std::chrono::milliseconds grace);
   void kill();
 
  private:
