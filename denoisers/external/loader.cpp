@@ -71,6 +71,8 @@ DenoiserInfo processDenoiserInfo(ExternalManifest manifest) {
   return info;
 }
 
+constexpr double kLoadSeconds = 10;
+
 std::string& serveExecutablePath() {
   static std::string path;
   return path;
@@ -94,13 +96,19 @@ DenoiserInfo isolatedPluginInfo(const ExternalManifest& manifest) {
     describe.insert(describe.begin() + 2, "--describe");
     Subprocess process(describe, manifest.folder());
     std::string line;
+    // Loading (a process started, a library and its driver loaded) gets at least kLoadSeconds: a
+    // per-frame timeout tuned tight must not refuse a library that loads slowly on a busy machine.
+    const double seconds = std::max(manifest.timeoutSeconds, kLoadSeconds);
     try {
       line = process.readLine(size_t(1) << 20,
                               std::chrono::steady_clock::now() +
                                   std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                      std::chrono::duration<double>(manifest.timeoutSeconds)));
+                                      std::chrono::duration<double>(seconds)));
     } catch (const Subprocess::TimedOut&) {
-      fail("gave no description within timeoutSeconds (a hang while loading?)", process);
+      fail("gave no description within " + std::to_string(int(seconds)) +
+               " s (timeoutSeconds, at least " + std::to_string(int(kLoadSeconds)) +
+               " s for loading: a hang while loading?)",
+           process);
     } catch (const Error& e) {
       fail(std::string("failed (") + e.what() + ")", process);
     }
