@@ -30,7 +30,6 @@ namespace {
 
 using nlohmann::json;
 
-constexpr size_t kMaxHeaderBytes = size_t(1) << 20;  // as the harness allows an answer's header
 constexpr int kMaxSide = 1 << 15;
 
 // Blocking reads and writes on the two descriptors (the harness drives its end with deadlines).
@@ -47,7 +46,7 @@ class Wire {
         buffer_.erase(0, nl + 1);
         return true;
       }
-      if (buffer_.size() > kMaxHeaderBytes)
+      if (buffer_.size() > kMaxProtocolHeaderBytes)
         throw Error("a header line longer than 1 MiB (expected one JSON line)");
       if (!fill()) {
         if (buffer_.empty()) return false;
@@ -151,8 +150,7 @@ PlaneMap mapPlanes(const std::vector<std::string>& sent, const std::vector<std::
     const LayerSpec& spec = frameLayerSpec(layer, denoiser + " reads");
     std::vector<size_t> at;
     for (int c = 0; c < spec.channels(); ++c) {
-      const std::string name =
-          spec.suffixes.empty() ? layer : layer + "." + spec.suffixes[size_t(c)];
+      const std::string name = spec.channelName(c);
       const auto it = std::find(sent.begin(), sent.end(), name);
       if (it == sent.end())
         throw Error("setup: " + denoiser + " reads the layer '" + layer +

@@ -1125,8 +1125,7 @@ TEST(Serve, EveryMistakeIsAnsweredWithAnError) {
       DenoiserRegistry::instance().find("svgf").schema.resolve({}, "svgf"), SignalKind::Diffuse);
   for (const std::string& layer : svgf->requiredChannels()) {
     const LayerSpec& spec = frameLayerSpec(layer, "svgf");
-    for (int c = 0; c < spec.channels(); ++c)
-      svgfPlanes.push_back(spec.suffixes.empty() ? layer : layer + "." + spec.suffixes[size_t(c)]);
+    for (int c = 0; c < spec.channels(); ++c) svgfPlanes.push_back(spec.channelName(c));
   }
   const size_t frameBytes = svgfPlanes.size() * 2 * sizeof(float);
   const json setup = {

@@ -100,7 +100,7 @@ DenoiserInfo isolatedPluginInfo(const ExternalManifest& manifest) {
     // per-frame timeout tuned tight must not refuse a library that loads slowly on a busy machine.
     const double seconds = std::max(manifest.timeoutSeconds, kLoadSeconds);
     try {
-      line = process.readLine(size_t(1) << 20,
+      line = process.readLine(kMaxProtocolHeaderBytes,
                               std::chrono::steady_clock::now() +
                                   std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                       std::chrono::duration<double>(seconds)));

@@ -15,8 +15,6 @@ static_assert(std::endian::native == std::endian::little,
 
 namespace {
 
-constexpr size_t kMaxHeaderBytes = size_t(1) << 20;
-
 std::string seconds(double s) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%g s", s);
@@ -32,8 +30,7 @@ ExternalProcessDenoiser::ExternalProcessDenoiser(std::shared_ptr<const ExternalM
   for (const char* s : suffixes) planeNames_.push_back(std::string("signal.") + s);
   for (const std::string& layer : manifest_->channels) {
     const LayerSpec& spec = frameLayerSpec(layer, manifest_->file.string());
-    for (int c = 0; c < spec.channels(); ++c)
-      planeNames_.push_back(spec.suffixes.empty() ? layer : layer + "." + spec.suffixes[size_t(c)]);
+    for (int c = 0; c < spec.channels(); ++c) planeNames_.push_back(spec.channelName(c));
   }
 }
 
@@ -85,7 +82,7 @@ std::string ExternalProcessDenoiser::finish() {
 nlohmann::json ExternalProcessDenoiser::readHeader(const std::string& expectedType) {
   std::string line;
   try {
-    line = process_->readLine(kMaxHeaderBytes, deadline());
+    line = process_->readLine(kMaxProtocolHeaderBytes, deadline());
   } catch (const Subprocess::TimedOut&) {
     fail("no " + expectedType +
          " header within timeoutSeconds = " + seconds(manifest_->timeoutSeconds) + " (a hang?)");

@@ -15,6 +15,8 @@
 namespace arena {
 
 constexpr int kExternalProtocolVersion = 1;
+// The longest header line either side of the frame protocol takes (a JSON line, not planes).
+constexpr size_t kMaxProtocolHeaderBytes = size_t(1) << 20;
 
 class ExternalProcessDenoiser final : public Denoiser {
  public:
