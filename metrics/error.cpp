@@ -93,8 +93,8 @@ BiasVariance biasVariance(const std::vector<const Image*>& outputs, const Image&
   const double k = double(outputs.size());
   const size_t rows = static_cast<size_t>(h);
   std::vector<double> rowBias(rows), rowCorr(rows), rowVar(rows);
-  std::optional<TileAccumulator> tBias, tVar;
-  if (tiles) tBias.emplace(w, h), tVar.emplace(w, h);
+  std::optional<TileAccumulator> tBias, tCorr, tVar;
+  if (tiles) tBias.emplace(w, h), tCorr.emplace(w, h), tVar.emplace(w, h);
   tbb::parallel_for(0, h, [&](int y) {
     double b = 0, bc = 0, v = 0;
     for (int x = 0; x < w; ++x) {
@@ -112,7 +112,7 @@ BiasVariance biasVariance(const std::vector<const Image*>& outputs, const Image&
         pv += s2 / denom;
       }
       b += pb, bc += pc, v += pv;
-      if (tiles) tBias->add(x, y, pc, c), tVar->add(x, y, pv, c);
+      if (tiles) tBias->add(x, y, pb, c), tCorr->add(x, y, pc, c), tVar->add(x, y, pv, c);
     }
     rowBias[size_t(y)] = b, rowCorr[size_t(y)] = bc, rowVar[size_t(y)] = v;
   });
@@ -120,7 +120,7 @@ BiasVariance biasVariance(const std::vector<const Image*>& outputs, const Image&
   for (int y = 0; y < h; ++y) out.bias2 += rowBias[size_t(y)], out.bias2Corrected += rowCorr[size_t(y)], out.variance += rowVar[size_t(y)];
   const double n = double(r.pixelCount()) * c;
   out.bias2 /= n, out.bias2Corrected /= n, out.variance /= n;
-  if (tiles) *tiles = {tBias->finish(), tVar->finish()};
+  if (tiles) *tiles = {tBias->finish(), tCorr->finish(), tVar->finish()};
   return out;
 }
 

@@ -34,7 +34,7 @@ struct BiasVariance {
   double bias2 = 0, bias2Corrected = 0, variance = 0;
 };
 struct BiasVarianceTiles {
-  TileSums bias2Corrected, variance;
+  TileSums bias2, bias2Corrected, variance;
 };
 BiasVariance biasVariance(const std::vector<const Image*>& outputs, const Image& reference, const Image* referenceVariance,
                           double eps = kRelMseEpsilon, BiasVarianceTiles* tiles = nullptr);

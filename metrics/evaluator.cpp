@@ -718,7 +718,7 @@ json evaluateBiasVariance(const EvaluationScene& scene, const std::vector<std::v
     const LayerSet& ref = scene.reference(t);
     BiasVarianceTiles tiles;
     const BiasVariance bv = biasVariance(out, ref.get("color"), &ref.get("colorVar"), kRelMseEpsilon, &tiles);
-    series.record("bias2", t, bv.bias2, {}, FrameTransform::Mean);
+    series.record("bias2", t, bv.bias2, std::move(tiles.bias2), FrameTransform::Mean);
     series.record("bias2Corrected", t, bv.bias2Corrected, std::move(tiles.bias2Corrected), FrameTransform::Mean);
     series.record("variance", t, bv.variance, std::move(tiles.variance), FrameTransform::Mean);
     frames.push_back({{"frame", t}, {"bias2", bv.bias2}, {"bias2Corrected", bv.bias2Corrected}, {"variance", bv.variance}});

@@ -841,6 +841,23 @@ TEST(BiasVarianceSplit, AddsUpToTheMeanRelMseAndSeparatesTheTerms) {
   EXPECT_THROW(biasVariance({&outs[0]}, r, nullptr), Error);
 }
 
+// Every term has its tiles (the spatial blocks of its interval), and they add up to the term.
+TEST(BiasVarianceSplit, EachTermsTilesAddUpToIt) {
+  const Image r = noiseImage(20, 12, 1, 0.2f), var = noiseImage(20, 12, 2, 0.001f);
+  std::vector<Image> outs;
+  for (uint32_t k = 0; k < 3; ++k) outs.push_back(noiseImage(20, 12, 10 + k, 0.3f));
+  BiasVarianceTiles tiles;
+  const BiasVariance bv =
+      biasVariance({&outs[0], &outs[1], &outs[2]}, r, &var, kRelMseEpsilon, &tiles);
+  for (const auto& [term, value] :
+       {std::pair{&tiles.bias2, bv.bias2}, std::pair{&tiles.bias2Corrected, bv.bias2Corrected},
+        std::pair{&tiles.variance, bv.variance}}) {
+    ASSERT_EQ(term->sum.size(), 16u);
+    EXPECT_NEAR(term->totalSum() / term->totalCount(), value, 1e-9);
+  }
+  EXPECT_LT(bv.bias2Corrected, bv.bias2);  // the reference's noise term is positive here
+}
+
 // End to end: the noisy input is unbiased (its error is all variance); a spatial filter trades
 // variance for bias.
 TEST(BiasVarianceSplit, ThreeInputSeedsOnATinySequence) {
@@ -867,6 +884,16 @@ TEST(BiasVarianceSplit, ThreeInputSeedsOnATinySequence) {
   EXPECT_LT(split("eaw", "variance"), 0.5 * split("passthrough", "variance"));
   EXPECT_GT(split("eaw", "bias2Corrected") / split("eaw", "variance"),
             split("passthrough", "bias2Corrected") / split("passthrough", "variance"));
+  // bias2Corrected is bias2 less a non-negative term, frame by frame and tile by tile: resampled
+  // with the same plan (frames and tiles), each replicate keeps that order, and so do the
+  // intervals' ends (bias2's interval once came from frames alone, far narrower than the others).
+  for (const json& p : r["pairs"]) {
+    const json& s = p["biasVariance"]["summary"];
+    const auto ci = [&](const char* term) { return s[term]["ci95"].get<std::vector<double>>(); };
+    ASSERT_EQ(ci("bias2").size(), 2u) << p["label"];
+    EXPECT_LE(ci("bias2Corrected")[0], ci("bias2")[0]) << p["label"];
+    EXPECT_LE(ci("bias2Corrected")[1], ci("bias2")[1]) << p["label"];
+  }
 }
 
 }  // namespace
