@@ -471,8 +471,9 @@ void addRunCommands(CLI::App& app) {
       if (const std::vector<std::string> refs = referenceDifferences(baseline, candidate);
           !refs.empty() && differ.empty())
         warn(
-            "the runs measured these scenes against references of other sample counts (refined "
-            "between them?); part of each change there is the reference's, not the denoiser's "
+            "the runs measured these scenes against other references (refined between them, or a "
+            "capture's references rendered again?); part of each change there is the reference's, "
+            "not the denoiser's "
             "(run both on one cache state to compare the denoisers alone):" +
             lines(refs));
       // A candidate older than its baseline: the arguments are likely swapped, which turns every

@@ -4,12 +4,14 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <optional>
 #include <set>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/hash.hpp"
 #include "core/json_reader.hpp"
 #include "core/non_finite.hpp"
 
@@ -469,6 +471,57 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
   info.hash = std::string(buf).substr(0, 12);
   info.settings = {{"source", "capture"}, {"captureFormat", kCaptureFormatVersion}, {"capture", c.source}};
   return c;
+}
+
+namespace {
+
+// FNV-1a over the file's 32-bit words (wordChecksum's rule, chunk by chunk), its tail bytes and
+// its length.
+void addFileBytes(Hasher& hasher, const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw Error(file.string() + ": cannot be read");
+  std::vector<char> chunk(size_t(1) << 20);
+  uint64_t h = 1469598103934665603ull, length = 0;
+  while (in) {
+    in.read(chunk.data(), std::streamsize(chunk.size()));
+    const size_t got = size_t(in.gcount());
+    if (got == 0) break;
+    length += got;
+    const size_t words = got / 4;
+    for (size_t i = 0; i < words; ++i) {
+      uint32_t v;
+      std::memcpy(&v, chunk.data() + 4 * i, 4);
+      h = (h ^ v) * 1099511628211ull;
+    }
+    for (size_t i = 4 * words; i < got; ++i)
+      h = (h ^ static_cast<unsigned char>(chunk[i])) * 1099511628211ull;
+  }
+  if (in.bad()) throw Error(file.string() + ": read failed");
+  hasher.add(checksumHex(h)).add(std::to_string(length));
+}
+
+}  // namespace
+
+CaptureContent captureContent(const CaptureDescription& c) {
+  json described = parseJsonFile((c.dir / "capture.json").string());
+  const json reference = described.contains("reference") ? described["reference"] : json();
+  for (const char* k : {"reference", "outputs", "source"}) described.erase(k);
+  Hasher inputs;
+  inputs.add(described.dump());
+  for (int t = 0; t < c.info.frames; ++t) {
+    addFileBytes(inputs, captureFramePath(c.dir, t));
+    if (t > 0 && c.info.hasGradients) addFileBytes(inputs, captureGradientPath(c.dir, t));
+  }
+  CaptureContent content;
+  content.inputs = inputs.hex().substr(0, 12);
+  if (c.info.hasReference) {
+    Hasher references;
+    references.add(reference.dump());
+    for (int r = 0; r < int(c.info.referenceSpp.size()); ++r)
+      addFileBytes(references, captureReferencePath(c.dir, r));
+    content.references = references.hex().substr(0, 12);
+  }
+  return content;
 }
 
 LayerSet readCaptureFrame(const CaptureDescription& c, int t) {

@@ -70,6 +70,16 @@ bool isPlainName(const std::string& name);
 // Parses and checks capture.json and the first frame's and references' channel lists; every
 // error names the file and the field or channel and what was expected.
 CaptureDescription readCaptureDescription(const std::filesystem::path& dir);
+// What a capture's pixels are, as checksums of its files' bytes (a run records them; `arena
+// compare` refuses runs of other inputs and warns of other references): `inputs` covers the
+// frames (and gradient samples) with capture.json's description of them (everything but its
+// `reference`, `outputs` and `source`), `references` the reference files with the `reference`
+// entry (empty without references). The stored outputs are contenders, not the sequence: not
+// covered. Reads every frame and reference once.
+struct CaptureContent {
+  std::string inputs, references;
+};
+CaptureContent captureContent(const CaptureDescription& capture);
 // Frame t with the internal layer names, derived layers filled in (see CaptureDescription::derived).
 LayerSet readCaptureFrame(const CaptureDescription& capture, int t);
 // Reference r: color, with colorVar (zeros when the capture gives no variance: then

@@ -146,6 +146,15 @@ json sceneRecord(const RunConfig& config, const SceneData& data, const std::stri
            "cut figures are measured; add {\"frame\": N, \"kind\": \"camera_cut\"} "
            "if an engine would flag the jump");
   }
+  // What the sequence's pixels are made of (metrics/compare.cpp compares it): a scene's file and
+  // assets (its references follow from them and referenceSpp), a capture's files.
+  if (scene) {
+    entry["content"] = {{"inputs", scene->contentHash.substr(0, 12)}};
+  } else {
+    const CaptureContent content = captureContent(data.sequence.capture());
+    entry["content"] = {{"inputs", content.inputs}};
+    if (!content.references.empty()) entry["content"]["references"] = content.references;
+  }
   if (!scene) {
     entry["source"] = "capture";
     entry["capture"] = dir.string();

@@ -95,12 +95,17 @@ std::vector<std::string> referenceDifferences(const RunResults& baseline,
   for (auto it = baseline.scenes.begin(); it != baseline.scenes.end(); ++it) {
     if (!candidate.scenes.contains(it.key())) continue;
     const json &a = it.value(), &b = candidate.scenes[it.key()];
-    if (!a.is_object() || !b.is_object() || !a.contains("referenceSpp") ||
-        !b.contains("referenceSpp"))
-      continue;
-    if (a["referenceSpp"] != b["referenceSpp"])
+    if (!a.is_object() || !b.is_object()) continue;
+    if (a.contains("referenceSpp") && b.contains("referenceSpp") &&
+        a["referenceSpp"] != b["referenceSpp"])
       out.push_back("scenes." + it.key() + ".referenceSpp: " + a["referenceSpp"].dump() + " vs " +
                     b["referenceSpp"].dump());
+    // A capture's reference files, checksummed (runs written before 2026-12-06 lack them).
+    const json ra = a.value("content", json::object()).value("references", json()),
+               rb = b.value("content", json::object()).value("references", json());
+    if (ra.is_string() && rb.is_string() && ra != rb)
+      out.push_back("scenes." + it.key() + ".content.references: " + ra.dump() + " vs " +
+                    rb.dump() + " (other reference files)");
   }
   return out;
 }
@@ -168,6 +173,15 @@ std::vector<std::string> settingsDifferences(const RunResults& baseline, const R
       const json x = it.value().value(field, json()), y = bs[it.key()].value(field, json());
       if (x != y) out.push_back("scenes." + it.key() + "." + field + ": " + x.dump() + " vs " + y.dump());
     }
+    // Other inputs under one scene name (a scene file edited, a capture's frames exported again):
+    // every denoiser saw other frames, so no change is the denoiser's alone. Runs written before
+    // 2026-12-06 record no content: not compared.
+    const json x = it.value().value("content", json::object()).value("inputs", json()),
+               y = bs[it.key()].value("content", json::object()).value("inputs", json());
+    if (x.is_string() && y.is_string() && x != y)
+      out.push_back("scenes." + it.key() + ".content.inputs: " + x.dump() + " vs " + y.dump() +
+                    " (other input frames: the scene's file or assets, or the capture's frames or "
+                    "description, changed)");
   }
   return out;
 }

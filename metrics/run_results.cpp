@@ -149,9 +149,16 @@ struct ShapeReader {
                                                 "layers",
                                                 "assets",
                                                 "referenceQuality",
+                                                "content",
                                                 "notRun"};
     onlyKnown(sc, path, known);
     for (const char* k : {"purpose", "sequence", "hash", "images", "source", "capture"}) optionalText(sc, path, k);
+    if (sc.contains("content")) {
+      member(sc, path, "content", &json::is_object, "an object");
+      onlyKnown(sc["content"], path + ".content", {"inputs", "references"});
+      for (const char* k : {"inputs", "references"})
+        optionalText(sc["content"], path + ".content", k);
+    }
     for (const char* k : {"width", "height", "frames", "maxBounces"}) optionalCount(sc, path, k);
     optionalFinite(sc, path, "exposure");
     optionalFlag(sc, path, "hasReference");

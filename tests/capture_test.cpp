@@ -28,6 +28,7 @@
 #include "harness/run_matrix.hpp"
 #include "harness/study.hpp"
 #include "metrics/capture_checks.hpp"
+#include "metrics/compare.hpp"
 #include "tests/test_util.hpp"
 
 namespace arena {
@@ -797,6 +798,45 @@ void editReferences(const fs::path& dir, const std::function<void(int, Image&)>&
 // References written one frame late or early: every input lies on its neighbour's reference.
 // A still camera decides nothing (the references are one image), and references of unequal noise
 // beside each other are no misalignment.
+// A run records what the capture's pixels are (checksums of its files): compare refuses runs of
+// other input frames under one name and warns of other references, where the hash of capture.json
+// and the files' sizes saw neither (an engine's capture exported again, references re-rendered).
+TEST(CaptureContract, CompareTellsOtherInputsAndOtherReferencesOfOneCapture) {
+  const fs::path capture = copyCapture(exportedCornell(), "content");
+  auto run = [&](const std::string& name) {
+    return test::typed(
+        runMatrix(captureRun(test::freshDir("content_" + name), {{"eaw", {}, ""}}, {capture})));
+  };
+  const RunResults first = run("first"), again = run("again");
+  ASSERT_TRUE(first.scenes["content"].contains("content")) << first.scenes.dump().substr(0, 400);
+  EXPECT_TRUE(settingsDifferences(first, again).empty());
+  EXPECT_TRUE(referenceDifferences(first, again).empty());
+  // Who wrote it and which outputs it stores are not its pixels.
+  const CaptureContent before = captureContent(readCaptureDescription(capture));
+  json doc = parseJsonFile((capture / "capture.json").string());
+  doc["source"] = {{"engine", "another build"}};
+  std::ofstream(capture / "capture.json") << doc.dump(1);
+  EXPECT_EQ(captureContent(readCaptureDescription(capture)).inputs, before.inputs);
+  EXPECT_EQ(captureContent(readCaptureDescription(capture)).references, before.references);
+
+  editReferences(capture, [](int, Image& c) {
+    for (float& v : c.raw()) v *= 1.5f;
+  });
+  const RunResults brighter = run("brighter");
+  EXPECT_TRUE(settingsDifferences(first, brighter).empty());
+  const std::vector<std::string> refs = referenceDifferences(first, brighter);
+  ASSERT_EQ(refs.size(), 1u);
+  EXPECT_NE(refs[0].find("scenes.content.content.references: "), std::string::npos) << refs[0];
+
+  editFrames(capture, [](int, LayerSet& f) {
+    for (float& v : f.get("diffuse").raw()) v *= 0.5f;
+  });
+  const std::vector<std::string> differ = settingsDifferences(brighter, run("darker"));
+  ASSERT_EQ(differ.size(), 1u);
+  EXPECT_NE(differ[0].find("scenes.content.content.inputs: "), std::string::npos) << differ[0];
+  EXPECT_NE(differ[0].find("other input frames"), std::string::npos) << differ[0];
+}
+
 // Reference file r rewritten to hold reference source(r, frames)'s image, with a variance of 0 (the
 // synthetic references are exact): references shifted or swapped, with their noise known.
 void exactReferencesFrom(const fs::path& dir, const std::function<int(int, int)>& source) {

@@ -32,6 +32,19 @@ TEST(CompareContract, RunsOfOtherSettingsAreRefusedUnlessAllowed) {
   json older = ra.toJson();
   older["settings"]["ghosting"].erase("lagAfterUnsettled");
   EXPECT_TRUE(settingsDifferences(RunResults::fromJson(older, "older"), ra).empty());
+  // A scene whose file (or assets) changed between the runs is another sequence under one name;
+  // a run from before the content was recorded compares as before.
+  json edited = ra.toJson();
+  for (auto& [name, scene] : edited["scenes"].items()) {
+    ASSERT_TRUE(scene["content"]["inputs"].is_string()) << name;
+    scene["content"]["inputs"] = "0123456789ab";
+  }
+  const std::vector<std::string> otherScene =
+      settingsDifferences(ra, RunResults::fromJson(edited, "edited"));
+  ASSERT_FALSE(otherScene.empty());
+  EXPECT_NE(otherScene[0].find(".content.inputs: "), std::string::npos) << otherScene[0];
+  for (auto& [name, scene] : edited["scenes"].items()) scene.erase("content");
+  EXPECT_TRUE(settingsDifferences(ra, RunResults::fromJson(edited, "edited")).empty());
   const std::vector<std::string> differ = settingsDifferences(ra, rb);
   ASSERT_EQ(differ.size(), 1u);
   EXPECT_EQ(differ[0], "settings.warmup: 1 vs 2");
