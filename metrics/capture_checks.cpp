@@ -39,6 +39,39 @@ CaptureCheck check(std::string name, double value, double warnAbove, double fail
   return c;
 }
 
+// How far, in pixels, the picture of frame b's camera lies from frame a's: the turn of its axes
+// and the change of its field of view at the focal length in pixels, plus its move seen at
+// `nearDepth` (the nearest surfaces move most; without a depth, any move beyond rounding counts
+// as a pixel).
+double cameraShiftPixels(const CameraState& a, const CameraState& b, double nearDepth) {
+  const double focal = 0.5 * a.height / double(a.tanHalfFovY);
+  auto angle = [](glm::vec3 u, glm::vec3 v) {
+    return double(
+        std::acos(std::clamp(glm::dot(glm::normalize(u), glm::normalize(v)), -1.0f, 1.0f)));
+  };
+  const double turn =
+      std::max({angle(a.forward, b.forward), angle(a.up, b.up), angle(a.right, b.right)});
+  const double zoom =
+      std::abs(double(b.tanHalfFovY) / double(a.tanHalfFovY) - 1.0) * 0.5 * a.height;
+  const double move = double(glm::length(b.eye - a.eye));
+  const double moved = nearDepth > 0
+                           ? move / nearDepth * focal
+                           : (move > 1e-5 * (1.0 + double(glm::length(a.eye))) ? 1.0 : 0.0);
+  return turn * focal + zoom + moved;
+}
+
+// The nearest surfaces' view depth: the 1st percentile of the positive finite depths (0: none).
+double nearDepth(const LayerSet& frame) {
+  if (!frame.has("depth")) return 0;
+  std::vector<float> d;
+  for (float v : frame.get("depth").raw())
+    if (std::isfinite(v) && v > 0) d.push_back(v);
+  if (d.empty()) return 0;
+  const size_t k = d.size() / 100;
+  std::nth_element(d.begin(), d.begin() + std::ptrdiff_t(k), d.end());
+  return d[k];
+}
+
 // A check the capture gives no data for: a warning saying so, never a pass (value NaN: none
 // measured).
 CaptureCheck unchecked(std::string name, std::string why) {
@@ -869,6 +902,38 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
                             " equal their reference value for value: the input scores as perfect "
                             "there (a reference must be rendered apart from the input; fails when "
                             "every frame with a signal does)"));
+    // Frames that share a reference must show one picture: a reference named for a frame whose
+    // camera moved (one reference too few, the last frame pointed at the one before) scores that
+    // frame against another view, and nothing else notices it (the alignment checks judge a frame
+    // between two neighbours of other references). Each frame against the first frame naming its
+    // reference.
+    if (int(info.cameras.size()) == int(input.frames.size())) {
+      std::map<int, int> firstOfReference;
+      std::vector<std::string> moved;
+      double worst = 0;
+      for (size_t t = 0; t < input.frames.size(); ++t) {
+        const int r = input.referenceOfFrame[t];
+        const auto [it, first] = firstOfReference.emplace(r, int(t));
+        if (first) continue;
+        const size_t a = size_t(it->second);
+        const double shift =
+            cameraShiftPixels(info.cameras[a], info.cameras[t],
+                              std::min(nearDepth(input.frames[a]), nearDepth(input.frames[t])));
+        worst = std::max(worst, shift);
+        if (shift > 0.25)
+          moved.push_back("frame " + std::to_string(t) + " on reference " + std::to_string(r) +
+                          " of frame " + std::to_string(a) + " (" + number(shift) + " px)");
+      }
+      v.checks.push_back(check(
+          "reference.sharedAcrossCameras", worst, 0.25, 1.0,
+          "px of camera motion between frames sharing a reference",
+          moved.empty()
+              ? ""
+              : listText(moved) +
+                    ": the camera moved between frames that reference.ofFrame gives one reference; "
+                    "each frame needs the reference of its own view (a reference missing, or "
+                    "ofFrame off by one?)"));
+    }
     if (sequence.isCapture() && sequence.capture().referenceHasHalf)
       v.checks.push_back(
           check("reference.halfEqualsMean", double(halfIsMean.size()), 0, kSoft, "references",

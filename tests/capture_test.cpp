@@ -290,6 +290,32 @@ TEST(CaptureValidation, ACorrectSyntheticCapturePasses) {
   EXPECT_EQ(checkNamed(v, "reference.noiseFloorKnown").status, CheckStatus::Warn);
 }
 
+// A reference shared by frames whose camera moved scores them against another view: the last
+// frame pointed at the reference before it (one reference too few) is refused, naming the frame;
+// a still camera's frames may share one reference.
+TEST(CaptureValidation, AReferenceSharedByAMovingCameraIsRefused) {
+  const CaptureCheck& own =
+      checkNamed(validate(writeSynthetic("own_references")), "reference.sharedAcrossCameras");
+  EXPECT_EQ(own.status, CheckStatus::Pass);
+  EXPECT_EQ(own.value, 0.0);
+  const fs::path reused = copyCapture(writeSynthetic("reused_reference"), "reused_reference",
+                                      [](json& d) { d["reference"]["ofFrame"][5] = 4; });
+  const CaptureValidation v = validate(reused);
+  const CaptureCheck& shared = checkNamed(v, "reference.sharedAcrossCameras");
+  EXPECT_EQ(shared.status, CheckStatus::Fail) << shared.detail;
+  EXPECT_GT(shared.value,
+            10.0);  // the camera moves 1.1 units at a depth of 3 between frames 4 and 5
+  EXPECT_EQ(shared.detail.rfind("frame 5 on reference 4 of frame 4 (", 0), 0u) << shared.detail;
+  Synthetic still;
+  still.still = true;
+  const fs::path stillDir =
+      copyCapture(writeSynthetic("still_shared", 0.3f, 0.0f, still), "still_shared",
+                  [](json& d) { d["reference"]["ofFrame"] = {0, 0, 0, 0, 0, 0}; });
+  const CaptureCheck& stillShared = checkNamed(validate(stillDir), "reference.sharedAcrossCameras");
+  EXPECT_EQ(stillShared.status, CheckStatus::Pass) << stillShared.detail;
+  EXPECT_LT(stillShared.value, 1e-3);
+}
+
 // A run on references whose noise is unknown (no colorVar, no colorHalf) says so under its
 // ranking: a reference of a few samples would otherwise be scored as converged without a word.
 TEST(CaptureValidation, ARunSaysWhenAReferencesQualityIsUnknown) {
