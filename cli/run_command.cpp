@@ -318,6 +318,24 @@ void addRunCommands(CLI::App& app) {
               list.push_back("file:" + output);
       for (std::string& n : list)
         if (capturedOutputName(n).empty()) n = DenoiserRegistry::resolve(n);  // loads external ones
+      // A stored output no capture of the run holds (a misspelt file:NAME) is refused before the
+      // work, as a misspelt denoiser is; one that some captures lack fails there only.
+      for (const std::string& n : list) {
+        const std::string output = capturedOutputName(n);
+        if (output.empty() || c.captures.empty())
+          continue;  // without captures: runMatrix refuses it
+        std::set<std::string> names;
+        for (const auto& capture : c.captures)
+          for (const auto& [name, unused] : readCaptureDescription(capture).outputs)
+            names.insert(name);
+        std::string stored;
+        for (const std::string& name : names) stored += (stored.empty() ? "" : ", ") + name;
+        if (!names.count(output))
+          throw Error("--denoisers " + n + ": no capture of this run stores an output '" + output +
+                      "' (" +
+                      (stored.empty() ? std::string("they store none") : "stored: " + stored) +
+                      "; docs/captures.md, \"outputs\")");
+      }
       auto params = parseParamAssignments(o->params);
       for (auto& [denoiser, kv] : params) {
         if (std::find(list.begin(), list.end(), denoiser) != list.end()) continue;

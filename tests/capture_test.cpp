@@ -1937,6 +1937,17 @@ TEST(CaptureCommands, ExportValidateRunAndReportFromTheCommandLine) {
   const json results = parseJsonFile((work / "run" / "results.json").string());
   EXPECT_EQ(results["scenes"]["moving_object"]["source"], "capture");
   EXPECT_EQ(results["pairs"].size(), 3u);  // only the capture: no scene was asked for
+  // A stored output the capture lacks (a misspelt file:NAME) is refused before the work.
+  r = test::runCommand(arena + " run --capture '" + (work / "capture").string() +
+                       "' --denoisers eaw,file:dlss --warmup 2 --out '" + (work / "typo").string() +
+                       "'");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(
+      r.output.find("--denoisers file:dlss: no capture of this run stores an output 'dlss' (they "
+                    "store none"),
+      std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(work / "typo"));
   // Rendering options on a run of captures alone would be ignored without a word: refused.
   r = test::runCommand(arena + " run --capture '" + (work / "capture").string() +
                        "' --denoisers eaw --warmup 2 --resolution 16x8 --seeds 2 --out '" +
