@@ -85,18 +85,40 @@ std::optional<fs::path> recordedImagePath(const fs::path& out, const json& recor
   return out / relative;
 }
 
-// Pair image folders under images/<scene>/ that no results file records (a run killed before its
-// commit wrote them) are said, not removed: they are not this run's, and nothing names them.
-void warnOfUnrecordedImages(const fs::path& out, const std::set<fs::path>& recorded,
-                            const ProgressFn& say) {
+// Pair image folders under images/<scene>/ that no results file records: a run stopped before its
+// commit wrote them. When that run marked the directory (`stoppedRun`: the mark was there before
+// this run set its own), they are its, and are removed with the scene's own images of scenes this
+// run did not write; otherwise (an older arena's run) nothing names them: said, not removed.
+void pruneUnrecordedImages(const fs::path& out, const std::set<fs::path>& recorded, bool stoppedRun,
+                           const ProgressFn& say) {
   std::error_code ec;
   std::vector<std::string> unrecorded;
+  std::vector<fs::path> strayPairs, strayScenes;
   for (fs::directory_iterator scene(out / "images", ec), end; !ec && scene != end;
        scene.increment(ec))
-    if (scene->is_directory(ec))
+    if (scene->is_directory(ec)) {
       for (fs::directory_iterator pair(scene->path(), ec); !ec && pair != end; pair.increment(ec))
-        if (pair->is_directory(ec) && !recorded.count(pair->path()))
+        if (pair->is_directory(ec) && !recorded.count(pair->path())) {
           unrecorded.push_back(fs::relative(pair->path(), out, ec).string());
+          strayPairs.push_back(pair->path());
+        }
+      if (!recorded.count(scene->path())) strayScenes.push_back(scene->path());
+    }
+  if (stoppedRun) {
+    for (const fs::path& dir : strayPairs) {
+      std::error_code removed;
+      fs::remove_all(dir, removed);
+      if (removed && say)
+        say("  warning: " + dir.string() +
+            ": cannot remove a stopped run's images: " + removed.message());
+    }
+    for (const fs::path& dir : strayScenes) {  // the scene's own PNGs; emptied, the folder too
+      removeSceneImages(dir, say);
+      std::error_code removed;
+      if (fs::is_empty(dir, removed)) fs::remove(dir, removed);
+    }
+    return;
+  }
   if (unrecorded.empty() || !say) return;
   std::sort(unrecorded.begin(), unrecorded.end());
   std::string names;
@@ -145,8 +167,10 @@ std::set<fs::path> pruneRecordedImages(const fs::path& out, const std::set<fs::p
   return stale;
 }
 
-// The images of this run, alone under images/: the earlier run's are removed, strays are said.
-void pruneEarlierImages(const fs::path& out, const json& results, const ProgressFn& say) {
+// The images of this run, alone under images/: the earlier run's are removed, and so are a stopped
+// run's strays (`stoppedRun`), else said.
+void pruneEarlierImages(const fs::path& out, const json& results, bool stoppedRun,
+                        const ProgressFn& say) {
   std::set<fs::path> written;
   for (const json& p : results["pairs"])
     if (p.contains("images"))
@@ -156,7 +180,7 @@ void pruneEarlierImages(const fs::path& out, const json& results, const Progress
       if (auto dir = recordedImagePath(out, scene.value("images", json()))) written.insert(*dir);
   std::set<fs::path> known = pruneRecordedImages(out, written, say);
   known.insert(written.begin(), written.end());
-  warnOfUnrecordedImages(out, known, say);
+  pruneUnrecordedImages(out, known, stoppedRun, say);
 }
 
 const std::string kIdenticalOutputs = "its output on this scene is bit-identical to ";
@@ -554,7 +578,7 @@ void finishRun(json& results, const RunConfig& cfg) {
     addReferenceQuality(results, cfg.warmup, cfg.referenceNotes, cfg.cache.string());
   }
   warnOfIdenticalSweepPoints(results, cfg.progress);
-  pruneEarlierImages(cfg.out, results, cfg.progress);
+  pruneEarlierImages(cfg.out, results, runFollowsAStoppedRun(cfg.out), cfg.progress);
   commitResults(cfg.out, results);
 }
 

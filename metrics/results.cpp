@@ -23,17 +23,28 @@ using nlohmann::json;
 
 namespace {
 
-// Written when a run starts into a directory holding an earlier run's results.json, removed when
-// its own are committed: while it lies there, the images are partly the new run's.
+// Written when a run starts writing images, removed when its results are committed: while it lies
+// there, the images are partly the new run's.
 constexpr const char* kUnfinishedMarker = ".arena.unfinished";
 
 }  // namespace
 
+constexpr const char* kAfterStoppedRun = ", over a run stopped before its commit";
+
 void markRunUnfinished(const fs::path& runDir) {
   std::error_code ec;
-  if (!fs::exists(runDir / "results.json", ec)) return;  // no earlier run's numbers to mismatch
+  const bool stopped = fs::exists(runDir / kUnfinishedMarker, ec);
   writeTextAtomically(runDir / kUnfinishedMarker, "started " + utcTimestamp() + " by process " +
-                                                      std::to_string(getpid()) + "\n");
+                                                      std::to_string(getpid()) +
+                                                      (stopped ? kAfterStoppedRun : "") + "\n");
+}
+
+bool runFollowsAStoppedRun(const fs::path& runDir) {
+  try {
+    return readText(runDir / kUnfinishedMarker).find(kAfterStoppedRun) != std::string::npos;
+  } catch (const Error&) {
+    return false;
+  }
 }
 
 std::string unfinishedRunNote(const fs::path& runDir) {
@@ -47,7 +58,10 @@ std::string unfinishedRunNote(const fs::path& runDir) {
   while (!started.empty() && (started.back() == '\n' || started.back() == ' ')) started.pop_back();
   return runDir.string() + ": a run into this directory stopped before its commit" +
          (started.empty() ? "" : " (" + started + ")") +
-         ": results.json is still the run before it, but that run's images were being replaced";
+         (fs::exists(runDir / "results.json", ec)
+              ? ": results.json is still the run before it, but that run's images were being "
+                "replaced"
+              : ": it wrote images but no results (run it again)");
 }
 
 RunResults loadResults(const fs::path& runDir) {

@@ -1090,6 +1090,10 @@ void copyPageAssets(const fs::path& webDir, const fs::path& nodeModulesDir,
 
 ReportSummary writeReport(const ReportOptions& o) {
   requirePageDirectory(o.out, "report");
+  // A run stopped before it wrote any results: said so, rather than "no results.json".
+  if (const std::string note = unfinishedRunNote(o.run);
+      !note.empty() && fs::is_directory(o.run) && !fs::exists(o.run / "results.json"))
+    throw Error("report: " + note);
   const RunResults results = loadResults(o.run);
   // Its images are partly another run's than its numbers: a page would show them side by side.
   if (const std::string note = unfinishedRunNote(o.run); !note.empty())

@@ -909,6 +909,44 @@ TEST(Plugin, ARunThatDiesBeforeItsCommitLeavesItsDirectoryMarked) {
       contract::arenaCli("report " + (dir / "run").string() + " --out " + (dir / "page").string())
           .status,
       0);
+  // The stopped run's own image folders (the plugin's pair, which no results file records) went
+  // with it: what lies under images/ is what results.json records.
+  const auto folders = [](const fs::path& out) {
+    std::set<std::string> found;
+    for (const fs::directory_entry& e : fs::recursive_directory_iterator(out / "images"))
+      if (e.is_directory()) found.insert(fs::relative(e.path(), out).string());
+    return found;
+  };
+  {
+    const json results = json::parse(readText(dir / "run" / "results.json"));
+    std::set<std::string> recorded = {"images/cornell_static"};
+    for (const json& p : results["pairs"]) recorded.insert(p["images"]["dir"].get<std::string>());
+    EXPECT_EQ(folders(dir / "run"), recorded);
+  }
+  // Stopped in a new directory: marked too, and the next run there removes what it wrote
+  // (a scene it had reached that the next run does not render, here made by hand).
+  const std::string fresh = common + " --out " + (dir / "fresh").string();
+  ASSERT_EQ(contract::arenaCli(fresh + " --denoisers passthrough --plugin " + ARENA_FAULTY_PLUGIN,
+                               "ARENA_FAULTY_PLUGIN=segfault ")
+                .status,
+            128 + SIGSEGV);
+  ASSERT_TRUE(fs::exists(dir / "fresh" / ".arena.unfinished"));
+  EXPECT_FALSE(fs::exists(dir / "fresh" / "results.json"));
+  const contract::CliResult freshReport = contract::arenaCli("report " + (dir / "fresh").string() +
+                                                             " --out " + (dir / "page2").string());
+  EXPECT_EQ(freshReport.status, 2) << freshReport.output;
+  EXPECT_NE(freshReport.output.find("it wrote images but no results (run it again)"),
+            std::string::npos)
+      << freshReport.output;
+  fs::create_directories(dir / "fresh" / "images" / "living_room" / "svgf");
+  std::ofstream(dir / "fresh" / "images" / "living_room" / "noisy_0000.png") << "x";
+  ASSERT_EQ(contract::arenaCli(fresh + " --denoisers passthrough").status, 0);
+  EXPECT_FALSE(fs::exists(dir / "fresh" / ".arena.unfinished"));
+  EXPECT_FALSE(fs::exists(dir / "fresh" / "images" / "living_room"));
+  const json results = json::parse(readText(dir / "fresh" / "results.json"));
+  ASSERT_EQ(results["pairs"].size(), 1u);
+  EXPECT_EQ(folders(dir / "fresh"),
+            (std::set<std::string>{"images/cornell_static", results["pairs"][0]["images"]["dir"]}));
 }
 
 // A plugin's error buffer is read only within its size and as valid text; a pass report it makes
