@@ -853,9 +853,11 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
 
   // 5. The reference: present, less noisy than the input, its noise floor known.
   if (input.references.empty()) {
-    v.checks.push_back(check("reference.present", 1, 0, kSoft, "",
-                             "no reference: the error metrics are absent; rankings use only the metrics that need "
-                             "none (stabilityFine, stabilityCoarse, time), labelled as such"));
+    v.checks.push_back(
+        check("reference.present", 1, 0, kSoft, "",
+              "no reference: the error metrics are absent and the scene is not ranked (the "
+              "rankings rank relMSE); the metrics that need none (stabilityFine, "
+              "stabilityCoarse, the times) are measured, each with its interval"));
   } else {
     // Which reference frames are black, hold negative radiance, or repeat their input frame.
     // Negative: below -1e-3 of the reference's mean luminance (a filtered or denoised reference

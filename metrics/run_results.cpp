@@ -8,6 +8,7 @@
 #include "core/env_info.hpp"
 #include "core/error.hpp"
 #include "core/json_reader.hpp"
+#include "metrics/metric_registry.hpp"
 #include "metrics/results.hpp"
 
 namespace arena {
@@ -426,8 +427,21 @@ std::vector<std::string> absentSummaryLines(const RunResults& results, const std
     std::vector<std::string> names = metrics;
     if (names.empty())
       for (const auto& [metric, s] : p.summary) names.push_back(metric);
+    // A scene without a reference (a capture may have none) computes no metric that needs one:
+    // said so, not as a metric this run left out.
+    const bool noReference = results.scenes.is_object() && results.scenes.contains(p.scene) &&
+                             results.scenes[p.scene].is_object() &&
+                             results.scenes[p.scene].value("hasReference", true) == false;
     for (const std::string& m : names)
-      if (const SummaryMean s = p.mean(m); !s.present()) ++count[{p.scene, m, s.absent}];
+      if (const SummaryMean s = p.mean(m); !s.present()) {
+        const MetricDefinition* d = findMetric(m);
+        const bool needsReference = d && d->needsReference && !p.summary.count(m);
+        ++count[{p.scene, m,
+                 noReference && needsReference
+                     ? "the scene has no reference (" + m +
+                           " needs one; the metrics that need none are measured)"
+                     : s.absent}];
+      }
   }
   std::vector<std::string> lines;
   for (const auto& [key, n] : count) {

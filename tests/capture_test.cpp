@@ -773,6 +773,18 @@ TEST(CaptureValidation, WithoutAReferenceOnlyNoReferenceMetricsAreScoredAndItIsS
   EXPECT_TRUE(p["summary"].contains("stabilityCoarse"));
   EXPECT_FALSE(p["summary"].contains("warpedFlicker"));  // relative to the reference's own flicker
   EXPECT_EQ(r["scenes"]["noref"]["hasReference"], false);
+  EXPECT_TRUE(p["summary"]["stabilityFine"]["ci95"].is_array());
+  // Its absent error metrics are said to want a reference, not to have been left out of the run;
+  // and the validation promises no ranking that the statistics do not make.
+  const std::vector<std::string> absent = absentSummaryLines(test::typed(r), {"relMse"});
+  ASSERT_EQ(absent.size(), 1u);
+  EXPECT_NE(absent[0].find(
+                "noref: relMse absent in 3 pair(s): the scene has no reference (relMse needs one"),
+            std::string::npos)
+      << absent[0];
+  EXPECT_FALSE(r["statistics"].value("scenes", json::object()).contains("noref"));
+  EXPECT_NE(checkNamed(v, "reference.present").detail.find("the scene is not ranked"),
+            std::string::npos);
   // With its frames kept (the default for one capture): the images there are, no error map (every
   // pair failed writing an empty one before).
   RunConfig kept = captureRun(test::freshDir("noref_kept"), {{"eaw", {}, ""}}, {dir});
