@@ -438,6 +438,13 @@ void addRunCommands(CLI::App& app) {
         ->check(CLI::IsMember({"holm", "none"}))
         ->default_val("holm");
     cmd->add_flag("--json", *asJson, "Machine-readable output")->default_str("off");
+    auto matchLabels = std::make_shared<std::vector<std::string>>();
+    cmd->add_option(
+           "--match", *matchLabels,
+           "BASELINE=CANDIDATE: compare the baseline's pairs of one label with the "
+           "candidate's of another on every scene (e.g. 'svgf=svgf[sigmaL=8]': a parameter "
+           "changed between the runs), repeatable")
+        ->allow_extra_args(false);
     auto allowMismatch = std::make_shared<bool>(false);
     cmd->add_flag("--allow-settings-mismatch", *allowMismatch,
                   "Compare runs whose settings differ (resolution, warm-up, references, ...): warn and go on "
@@ -457,6 +464,8 @@ void addRunCommands(CLI::App& app) {
                     ", created " + baseline.created +
                     "): every change would be zero by construction, and the gate would pass having "
                     "checked nothing (was the candidate copied into the baseline?)");
+      const std::map<std::string, std::string> matches =
+          checkLabelMatches(*matchLabels, baseline, candidate);
       if (!only->empty()) {
         const std::vector<std::string> chosen =
             splitList(*only, "--denoisers", "labels or denoiser names");
@@ -502,7 +511,7 @@ void addRunCommands(CLI::App& app) {
              ") is older than the baseline " + *a + " (created " + baseline.created +
              "): are the arguments swapped? (arena compare BASELINE CANDIDATE)");
       const Correction corrected = parseCorrection(*correction);
-      auto rows = compareRuns(baseline, candidate, tols, bc, corrected);
+      auto rows = compareRuns(baseline, candidate, tols, bc, corrected, matches);
       // The rows with an interval: the family the correction judges together.
       const size_t family =
           size_t(std::count_if(rows.begin(), rows.end(),
@@ -540,8 +549,11 @@ void addRunCommands(CLI::App& app) {
                   << "\n";
         // Columns as wide as their longest entry (a sweep's labels carry their parameters).
         // A pair matched by what it ran under another label shows both ("svgf = svgf[sigmaL=4]").
+        // One matched by --match shows where it went ("svgf -> svgf[sigmaL=8]").
         const auto shownLabel = [](const ComparisonRow& r) {
-          return r.candidateLabel.empty() ? r.label : r.label + " = " + r.candidateLabel;
+          return r.candidateLabel.empty()
+                     ? r.label
+                     : r.label + (r.matchedByRequest ? " -> " : " = ") + r.candidateLabel;
         };
         size_t sceneWidth = 22, labelWidth = 30, metricWidth = 16;
         for (const ComparisonRow& r : rows) {

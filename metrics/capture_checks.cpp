@@ -1163,7 +1163,7 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
             if (!f.has("meshId")) return false;
             const auto plane = f.get("meshId").planeSpan(0);
             return std::any_of(plane.begin(), plane.end(),
-                               [&](float v) { return int(v) == e.meshId; });
+                               [&](float id) { return int(id) == e.meshId; });
           });
       if (!held)
         noObject.push_back("frame " + std::to_string(e.frame) + ", meshId " +

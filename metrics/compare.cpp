@@ -232,7 +232,8 @@ const char* correctionName(Correction c) {
 
 std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults& cand,
                                        std::vector<Tolerance> tolerances,
-                                       const BootstrapConfig& cfg, Correction correction) {
+                                       const BootstrapConfig& cfg, Correction correction,
+                                       const std::map<std::string, std::string>& matches) {
   tolerances = gateTolerances(std::move(tolerances));
   std::map<std::string, const PairResult*> candPairs;
   std::set<std::string> baseScenes, candScenes;
@@ -274,29 +275,52 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
     const std::string& scene = b.scene;
     const std::string& label = b.label;
     auto it = candPairs.find(key(b));
+    const auto requested = matches.find(label);
+    if (requested != matches.end()) {
+      it = candPairs.find(scene + "\n" + requested->second);
+      if (it != candPairs.end()) baseKeys.insert(it->first);  // not "new" below
+    }
     // Labels were once written as typed ("svgf[sigmaL=2.0]"; now "svgf[sigmaL=2]"): a baseline
     // pair without its label in the candidate is matched by what it ran, the denoiser and its
     // resolved parameters, where exactly one candidate pair of the scene ran that.
-    if (it == candPairs.end() && b.ok() && !b.params.empty()) {
+    if (it == candPairs.end() && requested == matches.end() && b.ok() && !b.params.empty()) {
       auto same = candPairs.end();
-      int matches = 0;
+      int ranTheSame = 0;
       for (auto c = candPairs.begin(); c != candPairs.end(); ++c)
         if (c->second->scene == scene && c->second->denoiser == b.denoiser &&
             sameParameters(c->second->params, b.params) && !baselineKeys.count(c->first))
-          same = c, ++matches;
-      if (matches == 1) {
+          same = c, ++ranTheSame;
+      if (ranTheSame == 1) {
         it = same;
         baseKeys.insert(it->first);  // not "new" below
       }
     }
     if (it == candPairs.end()) {
-      rows.push_back(pairRow(b, "missing", noShared + "pair not in the candidate run"));
+      std::string note = noShared + "pair not in the candidate run";
+      if (requested != matches.end()) {
+        note = "the candidate has no pair " + requested->second + " on this scene (--match)";
+      } else {
+        // The same denoiser under another label only the candidate has (another parameter):
+        // what would compare them, said.
+        std::vector<std::string> others;
+        for (const auto& [k, c] : candPairs)
+          if (c->scene == scene && c->denoiser == b.denoiser && !baselineKeys.count(k))
+            others.push_back(c->label);
+        if (!others.empty())
+          note +=
+              "; the candidate ran " + b.denoiser + " as " + others.front() +
+              (others.size() > 1 ? " (and " + std::to_string(others.size() - 1) + " more)" : "") +
+              ": `--match '" + label + "=" + others.front() + "'` compares them";
+      }
+      rows.push_back(pairRow(b, "missing", note));
       continue;
     }
     const PairResult& c = *it->second;
+    const bool byRequest = requested != matches.end();
     if (!c.ok()) {
       rows.push_back(pairRow(b, "failed", c.error));
       if (c.label != b.label) rows.back().candidateLabel = c.label;
+      rows.back().matchedByRequest = byRequest;
       continue;
     }
     if (!b.ok()) {  // nothing to hold the candidate to; that it runs now is said
@@ -306,8 +330,8 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
     ++comparedPairs;
     const std::string candidateLabel = c.label != label ? c.label : "";
     for (const Tolerance& t : tolerances) {
-      ComparisonRow row{scene, label,      t.metric, kUndefined, kUndefined,    kUndefined,
-                        {},    t.relative, "ok",     "",         candidateLabel};
+      ComparisonRow row{scene, label,      t.metric, kUndefined, kUndefined,     kUndefined,
+                        {},    t.relative, "ok",     "",         candidateLabel, byRequest};
       const SummaryMean bm = b.mean(t.metric), cm = c.mean(t.metric);
       if (!bm.computed && !cm.computed) continue;  // e.g. FLIP switched off in both runs
       if (!cm.present() && !bm.present()) {
@@ -513,7 +537,8 @@ json comparisonJson(const std::vector<ComparisonRow>& rows) {
                    {"fails", failsGate(r)},
                    {"p", num(r.pValue)},
                    {"note", r.note},
-                   {"candidateLabel", r.candidateLabel.empty() ? r.label : r.candidateLabel}});
+                   {"candidateLabel", r.candidateLabel.empty() ? r.label : r.candidateLabel},
+                   {"matchedByRequest", r.matchedByRequest}});
   return out;
 }
 
@@ -571,6 +596,50 @@ bool sameRunRecord(const RunResults& a, const RunResults& b) {
 bool isContender(const PairResult& p, const std::vector<std::string>& names) {
   return std::find(names.begin(), names.end(), p.label) != names.end() ||
          std::find(names.begin(), names.end(), p.denoiser) != names.end();
+}
+
+std::map<std::string, std::string> checkLabelMatches(const std::vector<std::string>& assignments,
+                                                     const RunResults& baseline,
+                                                     const RunResults& candidate) {
+  const auto labelsOf = [](const RunResults& run) {
+    std::set<std::string> labels;
+    for (const PairResult& p : run.pairs) labels.insert(p.label);
+    return labels;
+  };
+  const auto listed = [](const std::set<std::string>& labels) {
+    std::string list;
+    for (const std::string& l : labels) list += (list.empty() ? "" : ", ") + l;
+    return list;
+  };
+  const std::set<std::string> base = labelsOf(baseline), cand = labelsOf(candidate);
+  std::map<std::string, std::string> matches;
+  std::set<std::string> matched;
+  for (const std::string& a : assignments) {
+    // A label may hold '=' itself (svgf[sigmaL=8]): the first '=' outside brackets splits.
+    size_t split = std::string::npos;
+    int depth = 0;
+    for (size_t i = 0; i < a.size() && split == std::string::npos; ++i) {
+      depth += a[i] == '[' ? 1 : a[i] == ']' ? -1 : 0;
+      if (a[i] == '=' && depth == 0) split = i;
+    }
+    if (split == std::string::npos || split == 0 || split + 1 == a.size())
+      throw Error("--match " + a +
+                  ": expected BASELINE=CANDIDATE, two labels (e.g. 'svgf=svgf[sigmaL=8]')");
+    const std::string from = a.substr(0, split), to = a.substr(split + 1);
+    if (!base.count(from))
+      throw Error("--match " + a + ": the baseline has no pair labelled " + from +
+                  " (its labels: " + listed(base) + ")");
+    if (!cand.count(to))
+      throw Error("--match " + a + ": the candidate has no pair labelled " + to +
+                  " (its labels: " + listed(cand) + ")");
+    if (matches.count(from)) throw Error("--match " + a + ": " + from + " is matched twice");
+    if (!matched.insert(to).second) throw Error("--match " + a + ": " + to + " is matched twice");
+    if (to != from && base.count(to))
+      throw Error("--match " + a + ": the baseline has a pair labelled " + to +
+                  " too, which is compared with the candidate's by its label");
+    matches[from] = to;
+  }
+  return matches;
 }
 
 void keepContenders(RunResults& baseline, RunResults& candidate,

@@ -53,6 +53,9 @@ struct ComparisonRow {
   // The candidate's label where it differs from the baseline's (`label`): a pair matched by what it
   // ran, the denoiser and its parameters ("svgf" against a sweep's "svgf[sigmaL=4]").
   std::string candidateLabel;
+  // Matched because `--match` asked (the labels name different configurations, "svgf ->
+  // svgf[sigmaL=8]"), not because both ran the same.
+  bool matchedByRequest = false;
   // The two-sided p-value of "no change" (PairedChange::pValue); NaN without an interval.
   double pValue = kUndefined;
 };
@@ -80,10 +83,19 @@ std::vector<Tolerance> gateTolerances(std::vector<Tolerance> tolerances, double 
 // Defaults when `tolerances` is empty: relMse, ldrFlip, hdrFlip, ssim, tRmae at 2%.
 // A row "regressed" or "improved" by its own interval that does not survive `correction` at
 // level 1 - cfg.confidence reads "unresolved", its note saying so.
+// `matches` pairs a baseline label with a candidate label on every scene (`--match`: the same
+// denoiser with another parameter, a renamed contender), checked by checkLabelMatches.
 std::vector<ComparisonRow> compareRuns(const RunResults& baseline, const RunResults& candidate,
                                        std::vector<Tolerance> tolerances,
                                        const BootstrapConfig& cfg = {},
-                                       Correction correction = Correction::Holm);
+                                       Correction correction = Correction::Holm,
+                                       const std::map<std::string, std::string>& matches = {});
+// `--match BASELINE=CANDIDATE` assignments read and checked: each label one a run has (the
+// baseline's first, the candidate's second), each once, and the candidate's not also a baseline
+// label (its own pair would be compared with it by label); Errors name the assignment.
+std::map<std::string, std::string> checkLabelMatches(const std::vector<std::string>& assignments,
+                                                     const RunResults& baseline,
+                                                     const RunResults& candidate);
 // What two runs' settings differ in, one line each ("settings.warmup: 8 vs 2",
 // "scenes.cornell_static.width: 16 vs 32"): every field under "settings" except the shard, and the
 // resolution and frame count of each scene both runs have. Empty when they match.

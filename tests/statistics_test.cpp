@@ -528,6 +528,68 @@ TEST(CompareGate, APairUnderAnOlderLabelIsMatchedByWhatItRan) {
                           [](const ComparisonRow& r) { return r.verdict == "missing"; }));
 }
 
+// A parameter changed between two runs (a researcher's ablation): the pairs' labels differ, so
+// the baseline's is missing and the candidate's new, and the missing row says how to compare
+// them; --match compares them, marked as asked for.
+TEST(CompareGate, PairsOfOtherLabelsAreComparedWhenAskedTo) {
+  std::mt19937_64 rng(13);
+  const auto shared = sharedContent(20, 16, rng);
+  json base = syntheticJson({{"svgf", syntheticSeries(20, 16, 0.0, rng, shared)},
+                             {"eaw", syntheticSeries(20, 16, 0.0, rng, shared)}});
+  json cand = syntheticJson({{"svgf[sigmaL=8]", syntheticSeries(20, 16, 0.0, rng, shared)},
+                             {"eaw", syntheticSeries(20, 16, 0.0, rng, shared)}});
+  for (json* r : {&base, &cand})
+    for (json& p : (*r)["pairs"]) {
+      p["denoiser"] = p["label"].get<std::string>().substr(0, 4) == "svgf" ? "svgf" : "eaw";
+      if (p["label"] == "svgf[sigmaL=8]") p["params"] = {{"sigmaL", 8.0}};
+    }
+  const RunResults a = test::typed(base), b = test::typed(cand);
+  const std::vector<Tolerance> tol = {{"relMse", 0.01}};
+  std::vector<ComparisonRow> rows = compareRuns(a, b, tol);
+  const auto missing = std::find_if(rows.begin(), rows.end(),
+                                    [](const ComparisonRow& r) { return r.verdict == "missing"; });
+  ASSERT_NE(missing, rows.end());
+  EXPECT_NE(missing->note.find("the candidate ran svgf as svgf[sigmaL=8]: `--match "
+                               "'svgf=svgf[sigmaL=8]'` compares them"),
+            std::string::npos)
+      << missing->note;
+  const std::map<std::string, std::string> matches =
+      checkLabelMatches({"svgf=svgf[sigmaL=8]"}, a, b);
+  EXPECT_EQ(matches, (std::map<std::string, std::string>{{"svgf", "svgf[sigmaL=8]"}}));
+  rows = compareRuns(a, b, tol, {}, Correction::Holm, matches);
+  ASSERT_EQ(rows.size(), 2u);
+  for (const ComparisonRow& r : rows) {
+    EXPECT_TRUE(r.verdict == "ok" || r.verdict == "unresolved")
+        << r.label << " " << r.verdict << " " << r.note;
+    EXPECT_TRUE(std::isfinite(r.change)) << r.label;
+  }
+  for (const ComparisonRow& r : rows) {
+    EXPECT_EQ(r.matchedByRequest, r.label == "svgf") << r.label;
+    EXPECT_EQ(r.candidateLabel, r.label == "svgf" ? "svgf[sigmaL=8]" : "") << r.label;
+  }
+  // Each assignment names labels the runs have, each once; a label both runs have is compared by
+  // it already.
+  const auto refused = [&](const std::string& assignment) {
+    try {
+      checkLabelMatches({assignment}, a, b);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(refused("svgf").find("expected BASELINE=CANDIDATE"), std::string::npos);
+  EXPECT_NE(
+      refused("svgff=eaw").find("the baseline has no pair labelled svgff (its labels: eaw, svgf)"),
+      std::string::npos)
+      << refused("svgff=eaw");
+  EXPECT_NE(
+      refused("svgf=svgf[sigmaL=9]").find("the candidate has no pair labelled svgf[sigmaL=9]"),
+      std::string::npos);
+  EXPECT_NE(refused("svgf=eaw").find("the baseline has a pair labelled eaw too"),
+            std::string::npos);
+  EXPECT_THROW(checkLabelMatches({"svgf=svgf[sigmaL=8]", "svgf=eaw"}, a, b), Error);
+}
+
 // References refined between two runs: said, scene by scene (part of each change there is the
 // reference's); equal sample counts, or a scene only one run has, say nothing.
 TEST(CompareGate, ReferencesOfOtherSampleCountsAreNamed) {
