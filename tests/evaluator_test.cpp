@@ -126,7 +126,9 @@ TEST(Evaluation, RunResultsAreBitIdenticalToTheHarnessBeforeTheStage) {
   // Recorded again when a run with --keep-frames none stopped recording chosenFrames (no number
   // moved: the three scenes' chosenFrames were the only difference), and when settings.ghosting
   // recorded the lag rule after an unsettled event (lagAfterUnsettled, the only difference: no
-  // event of the golden's scenes meets the rule).
+  // event of the golden's scenes meets the rule). Recorded again when --seeds' bias2 kept its
+  // tiles (its intervals, now the crossed bootstrap's, were the only numbers to move) and the
+  // scenes recorded their content checksums (scenes.<s>.content, new).
   const std::string file = std::string(ARENA_TEST_DATA) + "/evaluation_golden.json";
   const json now = test::goldenPart(
       withoutNewMetrics(runMatrix(test::goldenRunConfig(test::freshDir("golden_run"), test::freshDir("golden_cache")))));
