@@ -109,11 +109,18 @@ void printOverallRanking(std::ostream& out, const RunResults& results) {
         << tiedText(m) << "\n";
   }
   if (!o.excluded.empty()) out << "  not ranked overall: " << o.excluded << "\n";
-  // "3=" above "4=" with a lower score reads as an error without this.
-  if (std::any_of(o.ranking.begin(), o.ranking.end(),
-                  [](const RankedMethod& m) { return !m.tiedWith.empty(); }))
-    out << "  (rank: 1 + the methods resolved better; =: tied with those named, a difference not "
-           "resolved, so tied methods may hold different ranks)\n";
+  // Ranks 1, 2, 3 beside overlapping intervals read as an error without the first part; "3="
+  // above "4=" with a lower score without the second.
+  if (!o.ranking.empty())
+    out << "  (rank: 1 + the methods resolved better, on paired differences (the same frames and "
+           "tiles), which resolve differences where each method's own interval above overlaps "
+           "another's"
+        << (std::any_of(o.ranking.begin(), o.ranking.end(),
+                        [](const RankedMethod& m) { return !m.tiedWith.empty(); })
+                ? "; =: tied with those named, a difference not resolved, so tied methods may hold "
+                  "different ranks"
+                : "")
+        << ")\n";
   if (std::any_of(o.ranking.begin(), o.ranking.end(),
                   [](const RankedMethod& m) { return m.extraPathsPerPixel > 0; }))
     out << "  (+paths): read paths beyond the frame's 1-spp ones (results.json: "

@@ -39,7 +39,7 @@ RunConfig sweepRun(RunConfig c, const std::string& denoiser,
       const std::string key =
           ParamSet::text(info.schema.resolve({{name, v}}, denoiser).values().at(name));
       if (auto [it, added] = distinct.emplace(key, v); !added)
-        throw Error("--grid '" + g + "': " + v + " and " + it->second + " are the same value of " +
+        throw Error("--grid '" + g + "': " + it->second + " and " + v + " are the same value of " +
                     name + " (as " + denoiser + " reads it: " + key + ")");
     }
   }

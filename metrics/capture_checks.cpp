@@ -332,6 +332,18 @@ std::vector<DepthReading> depthReadings(double n, double f) {
   return out;
 }
 
+// The camera whose view matrix is the inverse of `c`'s: what capture.json meant when its `view`
+// held camera-to-world matrices (the view's rows are the camera's axes, its translation the eye).
+CameraState invertedCamera(const CameraState& c) {
+  const glm::vec3 back = -c.forward;
+  CameraState inv = c;
+  inv.right = glm::vec3(c.right.x, c.up.x, back.x);
+  inv.up = glm::vec3(c.right.y, c.up.y, back.y);
+  inv.forward = -glm::vec3(c.right.z, c.up.z, back.z);
+  inv.eye = -glm::vec3(glm::dot(c.right, c.eye), glm::dot(c.up, c.eye), glm::dot(back, c.eye));
+  return inv;
+}
+
 MotionConsistency checkMotion(const std::vector<LayerSet>& frames,
                               const std::vector<CameraState>& cameras,
                               const std::vector<int>& cutFrames, double tol,
@@ -362,7 +374,12 @@ MotionConsistency checkMotion(const std::vector<LayerSet>& frames,
       {"in normalised units, not pixels", false},
       {"pointing to the next frame", true},
       {"in NDC units (2 / width, 2 / height a pixel), not pixels", false},
-      {"in NDC units with y up (2 / width, -2 / height a pixel), not pixels", false}};
+      {"in NDC units with y up (2 / width, -2 / height a pixel), not pixels", false},
+      {"right for the inverse cameras (capture.json's view holding camera-to-world matrices: "
+       "invert them, the vectors may be right)",
+       false}};
+  std::vector<CameraState> inverse;
+  for (const CameraState& c : cameras) inverse.push_back(invertedCamera(c));
   MotionConsistency out;
   long off = 0,
        nextIsMirror = 0;  // informative pixels whose next-frame motion is -e (constant velocity)
@@ -416,18 +433,24 @@ MotionConsistency checkMotion(const std::vector<LayerSet>& frames,
         if (glm::length(e) < 4 * tol) continue;
         const glm::vec2 size{float(w), float(h)};
         const glm::vec2 ndc = 2.0f * e / size;
-        const glm::vec2 predictions[] = {e,          -e,       {-e.x, e.y},    {e.x, -e.y},
-                                         {e.y, e.x}, 2.0f * e, 0.5f * e,       e / size,
-                                         nx,         ndc,      {ndc.x, -ndc.y}};
+        // The motion under the inverse cameras: the point at this depth seen by frame t's
+        // inverse, projected by frame t - 1's.
+        glm::vec2 pi(std::numeric_limits<float>::quiet_NaN());
+        if (!inverse[size_t(t - 1)].project(inverse[size_t(t)].pointAtDepth(pixel.x, pixel.y, z),
+                                            pi))
+          pi = glm::vec2(std::numeric_limits<float>::quiet_NaN());
+        const glm::vec2 predictions[] = {e,          -e,       {-e.x, e.y},     {e.x, -e.y},
+                                         {e.y, e.x}, 2.0f * e, 0.5f * e,        e / size,
+                                         nx,         ndc,      {ndc.x, -ndc.y}, pi - pixel};
         nextIsMirror += next && glm::length(nx + e) < 2 * tol;
         for (size_t k = 0; k < candidates.size(); ++k) {
           if (candidates[k].needsNext && (!next || glm::length(nx + e) < 2 * tol)) continue;  // n = -e: no information
           ++candidates[k].informative;
           // Normalised and NDC units are a hundred times smaller: judged at a proportionally
           // smaller tolerance.
-          const float tolerance = k == 7   ? float(tol) / std::max(size.x, size.y)
-                                  : k >= 9 ? 2 * float(tol) / std::max(size.x, size.y)
-                                           : float(tol);
+          const float tolerance = k == 7              ? float(tol) / std::max(size.x, size.y)
+                                  : k == 9 || k == 10 ? 2 * float(tol) / std::max(size.x, size.y)
+                                                      : float(tol);
           candidates[k].matched += glm::length(m - predictions[k]) <= tolerance;
         }
       }

@@ -301,14 +301,18 @@ CutResult analyseCut(int cut, int segmentEnd, const std::vector<double>& relMse,
 }
 
 nlohmann::json CutResult::toJson() const {
-  nlohmann::json j = {{"kind", "camera_cut"},
-                      {"eventFrame", cutFrame},
-                      {"recoveryFrames", recoveryFrames},
-                      {"steadyFrames", {steadyBegin, steadyEnd}},
-                      {"leakFrames", leakFrames},
-                      {"leak", leak},
-                      {"oldViewLeak", std::isfinite(oldViewLeak) ? nlohmann::json(oldViewLeak)
-                                                                 : nlohmann::json(nullptr)}};
+  nlohmann::json j = {
+      {"kind", "camera_cut"},
+      {"eventFrame", cutFrame},
+      {"recoveryFrames", recoveryFrames},
+      // The steady frames' first and last; none (null) when the segment ends
+      // first, its last frame then in segmentEnd.
+      {"steadyFrames",
+       steadyEnd >= steadyBegin ? nlohmann::json{steadyBegin, steadyEnd} : nlohmann::json(nullptr)},
+      {"leakFrames", leakFrames},
+      {"leak", leak},
+      {"oldViewLeak",
+       std::isfinite(oldViewLeak) ? nlohmann::json(oldViewLeak) : nlohmann::json(nullptr)}};
   if (!std::isfinite(oldViewLeak) && !leak.empty())
     j["oldViewLeakAbsent"] =
         "the reference of frame " + std::to_string(cutFrame - 1) +
@@ -318,6 +322,7 @@ nlohmann::json CutResult::toJson() const {
     j["atCut"] = atCut;
     j["recovery"] = recovery;
   } else {
+    if (steadyEnd < steadyBegin) j["segmentEnd"] = steadyEnd;
     j["absent"] = "no frames after frame " + std::to_string(steadyBegin - 1) +
                   " before the segment ends: no steady state to compare with";
   }

@@ -472,10 +472,15 @@ SceneEvents rankSceneEvents(std::vector<std::pair<std::string, const json*>> pai
             reps.push_back(allAbsent(cut ? cutFigureNames(gc) : ghostingFigureNames(),
                                      "no per-tile data stored (an older run)"));
           } else if (cut) {
-            const json& steady = e.value("steadyFrames", json::array({frame, frame}));
-            reps.push_back(cutReplicates(frame, steady.at(1).get<int>(),
-                                         CutTiles::fromJson(e["tiles"]), cutSeedName(scene, frame),
-                                         cfg, gc));
+            // The segment's last frame: the steady frames' last, or where there are none (null;
+            // an older run wrote them as an empty range, [first, last] with first > last),
+            // segmentEnd.
+            const json steady = e.value("steadyFrames", json());
+            const int segmentEnd = steady.is_array() && steady.size() == 2
+                                       ? steady.at(1).get<int>()
+                                       : e.value("segmentEnd", frame);
+            reps.push_back(cutReplicates(frame, segmentEnd, CutTiles::fromJson(e["tiles"]),
+                                         cutSeedName(scene, frame), cfg, gc));
           } else {
             reps.push_back(ghostingReplicates(frame, EventTiles::fromJson(e["tiles"]),
                                               eventSeedName(scene, frame), cfg, gc));

@@ -385,6 +385,28 @@ TEST(CaptureValidation, MotionVectorSlipsAreRefusedAndNamed) {
     EXPECT_NE(r["pairs"][0]["error"].get<std::string>().find("motion.consistency"), std::string::npos);
     EXPECT_EQ(r["scenes"][std::string("slip_") + slip.name]["validation"]["status"], "fail");
   }
+  // Cameras given as camera-to-world matrices (Blender's own convention) where capture.json wants
+  // world-to-camera: the vectors are right, the cameras inverted; the check names that reading
+  // (beside a flipped sign, which a camera that only moves cannot tell from it).
+  {
+    const fs::path inverted =
+        copyCapture(writeSynthetic("cameras_inverted"), "cameras_inverted", [](json& d) {
+          for (json& camera : d["cameras"]) {
+            glm::dmat4 view;
+            for (int k = 0; k < 16; ++k)
+              view[k / 4][k % 4] = camera["view"][size_t(k)].get<double>();
+            const glm::dmat4 toWorld = glm::inverse(view);
+            for (int k = 0; k < 16; ++k) camera["view"][size_t(k)] = toWorld[k / 4][k % 4];
+            camera.erase("position");
+          }
+        });
+    const CaptureCheck& c = checkNamed(validate(inverted), "motion.consistency");
+    EXPECT_EQ(c.status, CheckStatus::Fail) << c.detail;
+    EXPECT_NE(c.detail.find("right for the inverse cameras (capture.json's view holding "
+                            "camera-to-world matrices"),
+              std::string::npos)
+        << c.detail;
+  }
   // At a constant camera velocity a flipped sign and vectors to the next frame are the same
   // vectors: named as such (the accelerating camera above told them apart).
   Synthetic steady;
@@ -396,9 +418,13 @@ TEST(CaptureValidation, MotionVectorSlipsAreRefusedAndNamed) {
   });
   const CaptureValidation v = validate(dir);
   const CaptureCheck& c = checkNamed(v, "motion.consistency");
-  EXPECT_NE(c.detail.find(
-                "sign flipped (or pointing to the next frame: at this constant camera velocity"),
+  EXPECT_NE(c.detail.find("(or pointing to the next frame: at this constant camera velocity"),
             std::string::npos)
+      << c.detail;
+  // A camera that moves without turning: inverse cameras predict the flipped vectors too, named.
+  EXPECT_EQ(
+      c.detail.rfind("the motion vectors look sign flipped or right for the inverse cameras", 0),
+      0u)
       << c.detail;
   // A camera moving under 4 px a frame cannot tell a slip from an error: said, not left silent.
   Synthetic slow;

@@ -126,7 +126,7 @@ TEST(CliContract, ShardsParamsAndSweepsAreStrict) {
   r = contract::arenaCli("sweep --denoiser svgf --grid 'sigmaL=[2,4,2.0]'" +
                          common);  // one value twice
   EXPECT_EQ(r.status, 2) << r.output;
-  EXPECT_NE(r.output.find("2.0 and 2 are the same value of sigmaL"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("2 and 2.0 are the same value of sigmaL"), std::string::npos) << r.output;
   r = contract::arenaCli("run --denoisers passthrough --scenes cornell_static --out ''");
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("--out: an empty directory name"), std::string::npos) << r.output;

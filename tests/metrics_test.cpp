@@ -560,6 +560,10 @@ TEST(CameraCut, RecoveryRelativeToTheSteadyState) {
   const json j = analyseCut(4, 9, rel, {}).toJson();
   EXPECT_FALSE(j.contains("recovery"));
   EXPECT_TRUE(j.contains("absent"));
+  // No steady frame: none named (not the empty range [10, 9]); the segment's end said apart.
+  EXPECT_TRUE(j["steadyFrames"].is_null()) << j["steadyFrames"];
+  EXPECT_EQ(j["segmentEnd"], 9);
+  EXPECT_EQ(analyseCut(4, 15, rel, {}).toJson()["steadyFrames"], json({10, 15}));
   EXPECT_THROW(analyseCut(4, 16, rel, {}), Error);
 }
 

@@ -71,11 +71,11 @@ TEST(Sweep, ValuesAreComparedAndLabelledAsTheDenoiserReadsThem) {
             "svgf[alpha=0,sigmaL=2.5]");
   EXPECT_NE(test::errorOf([] {
               sweepRun(RunConfig{}, "svgf", {}, {"alpha=[0,-0]"});
-            }).find("-0 and 0 are the same value of alpha (as svgf reads it: 0)"),
+            }).find("0 and -0 are the same value of alpha (as svgf reads it: 0)"),
             std::string::npos);
   EXPECT_NE(test::errorOf([] {
               sweepRun(RunConfig{}, "svgf", {}, {"sigmaL=[4,4.0000000001]"});
-            }).find("4.0000000001 and 4 are the same value of sigmaL (as svgf reads it: 4)"),
+            }).find("4 and 4.0000000001 are the same value of sigmaL (as svgf reads it: 4)"),
             std::string::npos);
   EXPECT_NO_THROW(sweepRun(RunConfig{}, "svgf", {}, {"sigmaL=[4,4.001]"}));
   // A grid too large to mean it is refused before it is planned, with its size.
