@@ -1,6 +1,7 @@
 #include "cli/printout.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <iomanip>
@@ -88,6 +89,44 @@ std::string sceneSizesText(const RunResults& results) {
   std::string text;
   for (const std::string& size : sizes) text += (text.empty() ? "" : ", ") + size;
   return text;
+}
+
+void printSeedSplit(std::ostream& out, const RunResults& results) {
+  const int seeds = results.settings.seeds();
+  if (seeds < 2) return;
+  size_t sceneWidth = 22, labelWidth = 26;
+  for (const PairResult& p : results.pairs) {
+    sceneWidth = std::max(sceneWidth, displayWidth(p.scene) + 2);
+    labelWidth = std::max(labelWidth, displayWidth(p.label) + 2);
+  }
+  // Each cell "mean  [lo, hi]"; the columns as wide as their longest cell.
+  std::vector<std::array<std::string, 5>> rows;
+  for (const PairResult& p : results.pairs) {
+    const nlohmann::json& split = p.part("biasVariance");
+    if (!p.ok() || !split.is_object()) continue;
+    const nlohmann::json summary = split.value("summary", nlohmann::json::object());
+    const auto term = [&](const char* name) {
+      const nlohmann::json s = summary.value(name, nlohmann::json::object());
+      if (!s.contains("mean") || !s["mean"].is_number()) return std::string("–");
+      const std::optional<Interval> ci = Interval::fromJson(s.value("ci95", nlohmann::json()));
+      return figureText(s["mean"].get<double>()) + "  " + intervalText(ci ? *ci : Interval{});
+    };
+    rows.push_back({p.scene, p.label, term("bias2"), term("variance"), term("bias2Corrected")});
+  }
+  std::array<std::string, 5> header = {"scene", "denoiser", "bias2", "variance", "bias2Corrected"};
+  std::array<size_t, 5> width = {sceneWidth, labelWidth, 0, 0, 0};
+  for (const auto& row : rows)
+    for (size_t k = 2; k < 5; ++k)
+      width[k] = std::max({width[k], displayWidth(row[k]) + 2, displayWidth(header[k]) + 2});
+  out << "\nerror over the " << seeds
+      << " input seeds (relMSE units, mean after the warm-up [95% interval]; bias2 + variance = "
+         "the seeds' mean relMSE, bias2Corrected less the reference's own noise; the relMSE above "
+         "is the first seed's):\n";
+  rows.insert(rows.begin(), header);
+  for (const auto& row : rows) {
+    for (size_t k = 0; k < 4; ++k) out << paddedText(row[k], width[k]);
+    out << row[4] << "\n";
+  }
 }
 
 void printOverallRanking(std::ostream& out, const RunResults& results) {

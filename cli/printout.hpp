@@ -24,6 +24,10 @@ std::string tiedText(const RankedMethod& rankedMethod);
 // The scenes' image sizes, each once: "256x144" or "256x144, 512x288" ("" when none is recorded).
 std::string sceneSizesText(const RunResults& results);
 void printOverallRanking(std::ostream& out, const RunResults& results);
+// A run of several input seeds (--seeds K): each pair's error split over them (pairs[].
+// biasVariance: bias2, variance, bias2Corrected, each mean with its interval), and that the
+// table's relMSE is the first seed's. Nothing for a run of one seed.
+void printSeedSplit(std::ostream& out, const RunResults& results);
 
 // Where a finished study put its outputs, and how long it took.
 struct StudyOutputs {

@@ -229,6 +229,7 @@ void finish(const std::string& out) {
       std::cout << "  FAILED\n";
     }
   }
+  printSeedSplit(std::cout, results);
   for (const std::string& line : absentSummaryLines(results, {"relMse"})) std::cout << line << "\n";
   // What concerns a scene rather than a method (events beyond the frames rendered, an unflagged
   // camera jump, references at their cap): in results.json and the report, and said here too.

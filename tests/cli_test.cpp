@@ -8,6 +8,7 @@
 #include <regex>
 #include <string>
 
+#include "cli/printout.hpp"
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/text.hpp"
@@ -288,6 +289,27 @@ TEST(CliContract, AShardWithNoPairsIsNoFailure) {
   contract::CliResult r = contract::tinyCliRun(dir, "run", "--shard 3/4");
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_EQ(r.output.find("no pair ran"), std::string::npos) << r.output;
+}
+
+// A run of several input seeds prints each pair's error split, with intervals, beside its table
+// (it was in results.json alone), and says the table's relMSE is the first seed's.
+TEST(CliContract, ARunOfSeveralSeedsPrintsTheErrorSplit) {
+  fs::path dir = test::freshDir("seeds_printed");
+  const contract::CliResult r = contract::tinyCliRun(dir, "run", "--frames 6 --warmup 2 --seeds 2");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("error over the 2 input seeds (relMSE units"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("the relMSE above is the first seed's"), std::string::npos) << r.output;
+  const json results = json::parse(readText(dir / "run" / "results.json"));
+  const json& bias2 = results["pairs"][0]["biasVariance"]["summary"]["bias2"];
+  const std::string printed = cli::figureText(bias2["mean"].get<double>()) + "  [" +
+                              cli::figureText(bias2["ci95"][0].get<double>()) + ", " +
+                              cli::figureText(bias2["ci95"][1].get<double>()) + "]";
+  EXPECT_NE(r.output.find("passthrough  "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(printed), std::string::npos) << printed << "\n" << r.output;
+  // One seed: no split.
+  EXPECT_EQ(contract::tinyCliRun(dir, "one", "--frames 6 --warmup 2").output.find("input seeds"),
+            std::string::npos);
 }
 
 TEST(CliContract, ARunShorterThanTheWarmupSaysWhyEveryReaderHasNoSummary) {
