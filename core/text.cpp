@@ -81,16 +81,19 @@ std::string utf8Excerpt(std::string_view text, size_t maxBytes, bool fromEnd) {
 }
 
 size_t editDistance(std::string_view a, std::string_view b) {
-  // One row of the table at a time: row[j] is the distance from a's prefix to b's first j.
-  std::vector<size_t> row(b.size() + 1);
+  // Three rows of the table: row[j] is the distance from a's first i characters to b's first j;
+  // a swap reads the row two back.
+  std::vector<size_t> before(b.size() + 1), previous(b.size() + 1), row(b.size() + 1);
   for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
   for (size_t i = 1; i <= a.size(); ++i) {
-    size_t diagonal = row[0];
+    before.swap(previous);
+    previous.swap(row);
     row[0] = i;
     for (size_t j = 1; j <= b.size(); ++j) {
-      const size_t substituted = diagonal + (a[i - 1] == b[j - 1] ? 0 : 1);
-      diagonal = row[j];
-      row[j] = std::min({substituted, row[j] + 1, row[j - 1] + 1});
+      row[j] = std::min(
+          {previous[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1), previous[j] + 1, row[j - 1] + 1});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1])
+        row[j] = std::min(row[j], before[j - 2] + 1);
     }
   }
   return row[b.size()];

@@ -28,8 +28,10 @@ size_t displayWidth(std::string_view text);
 // what std::setw does for bytes.
 std::string paddedText(std::string_view text, size_t width);
 
-// The number of single-character insertions, deletions and substitutions that turn `a` into `b`
-// (Levenshtein): how an error message finds the misspelling of a name it expected.
+// The number of single-character insertions, deletions, substitutions and swaps of two neighbours
+// that turn `a` into `b` (optimal string alignment: Levenshtein with transpositions, each
+// substring edited once): how an error message finds the misspelling of a name it expected
+// ("veiw" is one swap from "view").
 size_t editDistance(std::string_view a, std::string_view b);
 
 // Of `names`, the one closest to `name` (case aside) if within one edit of a name of three or four

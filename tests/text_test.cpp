@@ -79,7 +79,11 @@ TEST(Text, EditDistanceCountsInsertionsDeletionsAndSubstitutions) {
   EXPECT_EQ(editDistance("camera", "camra"), 1u);    // symmetric
   EXPECT_EQ(editDistance("kitten", "sitting"), 3u);  // two substitutions, one insertion
   EXPECT_EQ(editDistance("", "abc"), 3u);
-  EXPECT_EQ(editDistance("ab", "ba"), 2u);  // a swap is two edits here
+  EXPECT_EQ(editDistance("ab", "ba"), 1u);      // a swap of neighbours is one edit
+  EXPECT_EQ(editDistance("veiw", "view"), 1u);  // the commonest typo
+  EXPECT_EQ(editDistance("fsp", "fps"), 1u);
+  EXPECT_EQ(editDistance("ca", "abc"), 3u);  // optimal string alignment: no substring edited twice
+  EXPECT_EQ(closestName("veiw", {"projection", "view", "jitter"}), "view");
 }
 
 }  // namespace
