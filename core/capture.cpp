@@ -272,7 +272,7 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
     const int frame = e.integerIn("frame", 1, n - 1);
     const std::string kind = e.string("kind");
     const std::optional<EventKind> k = eventKindFromName(kind);
-    if (!k) e.fail("kind", "one of " + eventKindNames());
+    if (!k) e.fail("kind", "expected one of " + eventKindNames() + ", got " + json(kind).dump());
     const SequenceEvent event{frame, *k, e.string("what", ""), e.integer("meshId", -1)};
     if (e.has("meshId") && *k != EventKind::ObjectMoves)
       e.fail(

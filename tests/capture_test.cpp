@@ -1579,6 +1579,19 @@ TEST(CaptureContract, BadDescriptionsAreErrorsNamingTheFieldOrFile) {
   expectError(copyCapture(good, "v2", [](json& d) { d["version"] = 2; }), "version 2");
   expectError(copyCapture(good, "noframes", [](json& d) { d.erase("frames"); }), "frames");
   expectError(copyCapture(good, "typo", [](json& d) { d["frameRat"] = 30; }), "frameRat");
+  expectError(copyCapture(good, "kind_typo",
+                          [](json& d) {
+                            d["events"] = {{{"frame", 2}, {"kind", "light_of"}}};
+                          }),
+              "events[0].kind: expected one of light_off, light_on, light_change, object_moves, "
+              "camera_cut, got \"light_of\"");
+  expectError(copyCapture(good, "view_typo",
+                          [](json& d) {
+                            d["cameras"][3]["veiw"] = d["cameras"][3]["view"];
+                            d["cameras"][3].erase("view");
+                          }),
+              "cameras[3].view: missing; expected an array of numbers (the object has \"veiw\": a "
+              "misspelling of \"view\"?)");
   expectError(copyCapture(good, "cams", [](json& d) { d["cameras"].erase(0); }), "cameras has 5 entries");
   expectError(copyCapture(good, "scaled", [](json& d) { d["cameras"][1]["view"][0] = 2.0; }), "cameras[1].view");
   expectError(copyCapture(good, "offcentre", [](json& d) { d["cameras"][0]["projection"][8] = 0.1; }), "jitter");
