@@ -98,6 +98,19 @@ constexpr const char* kTransposed =
     "; it looks transposed: capture.json holds matrices column-major (element (row r, column c) at "
     "index c * 4 + r), as OpenGL and glm store them";
 
+// Plain R, G, B are a viewer's copy (what `export` writes beside color.*), never read: the usual
+// slip of a writer that stored the beauty pass under them. The hint for a file that lacks
+// color.R/G/B but holds them ("" otherwise).
+std::string plainRgbHint(const ExrHeader& h) {
+  const auto holds = [&](const char* k) {
+    return std::find(h.channels.begin(), h.channels.end(), k) != h.channels.end();
+  };
+  return holds("R") && holds("G") && holds("B") && !holds("color.R")
+             ? "; the file holds plain R, G, B, which are a viewer's copy and never read: name "
+               "them color.R, color.G, color.B"
+             : "";
+}
+
 }  // namespace
 
 CameraState cameraFromMatrices(const std::vector<double>& view, const std::vector<double>& projection,
@@ -331,7 +344,9 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
       auto has = [&](const char* name) {
         return std::any_of(present.begin(), present.end(), [&](const LayerSpec& s) { return s.name == name; });
       };
-      if (!has("color")) throw Error(rf.string() + ": missing channel 'color.R' (the reference's colour)");
+      if (!has("color"))
+        throw Error(rf.string() + ": missing channel 'color.R' (the reference's colour)" +
+                    plainRgbHint(h));
       allVar = allVar && has("colorVar");
       allHalf = allHalf && has("colorHalf");
     }
@@ -404,21 +419,11 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
                   "...): normals, view depth and motion are required (docs/captures.md)");
   const bool parts = contains(c.layers, "diffuse") && contains(c.layers, "specular") && contains(c.layers, "albedo") &&
                      contains(c.layers, "specAlbedo");
-  if (!contains(c.layers, "color") && !parts) {
-    // Plain R, G, B are a viewer's copy (what `export` writes beside color.*), never read: the
-    // usual slip of a writer that stored the beauty pass under them.
-    bool plain = true;
-    for (const char* k : {"R", "G", "B"})
-      plain = plain && std::find(h.channels.begin(), h.channels.end(), k) != h.channels.end();
-    throw Error(
-        first.string() +
-        ": no colour: give 'color' (color.R/G/B) or the demodulated 'diffuse' and "
-        "'specular' with 'albedo' and 'specAlbedo' (docs/captures.md)" +
-        (plain ? std::string(
-                     "; the file holds plain R, G, B, which are a viewer's copy and never read: "
-                     "name them color.R, color.G, color.B")
-               : std::string()));
-  }
+  if (!contains(c.layers, "color") && !parts)
+    throw Error(first.string() +
+                ": no colour: give 'color' (color.R/G/B) or the demodulated 'diffuse' and "
+                "'specular' with 'albedo' and 'specAlbedo' (docs/captures.md)" +
+                plainRgbHint(h));
   // Gradient samples: all frames 1.. or none.
   info.hasGradients = info.frames > 1 && fs::exists(captureGradientPath(dir, 1));
   for (int t = 1; t < info.frames && info.hasGradients; ++t)
@@ -601,6 +606,9 @@ LayerSet readCaptureReference(const CaptureDescription& c, int r) {
 }
 
 Image readOutputFrame(const fs::path& file, const std::string& name, int width, int height) {
+  if (std::error_code ec; fs::exists(file, ec))
+    if (const std::string hint = plainRgbHint(readExrHeader(file)); !hint.empty())
+      throw Error(file.string() + ": missing channel 'color.R' (the output's colour)" + hint);
   LayerSet layers =
       readExr(file, {{"color", {"R", "G", "B"}, false}}, ExrSize{width, height}).layers;
   Image color = std::move(layers.get("color"));

@@ -1507,6 +1507,24 @@ TEST(CaptureContract, AColourInPlainRgbIsRefusedSayingSo) {
                  "them color.R, color.G, color.B"),
       std::string::npos)
       << error;
+  // A reference or a stored output in plain R, G, B: the same hint.
+  const fs::path refDir = copyCapture(exportedCornell(), "plain_rgb_reference");
+  const CaptureDescription rc = readCaptureDescription(refDir);
+  const LayerSet reference = readCaptureReference(rc, 0);
+  writeExr(captureReferencePath(refDir, 0), reference, {{"color", {"R", "G", "B"}, false, true}});
+  const std::string refError = test::errorOf([&] { readCaptureDescription(refDir); });
+  EXPECT_NE(refError.find(
+                "missing channel 'color.R' (the reference's colour); the file holds plain R, G, B"),
+            std::string::npos)
+      << refError;
+  const fs::path output = test::freshDir("plain_rgb_output") / "frame_0000.exr";
+  writeExr(output, reference, {{"color", {"R", "G", "B"}, false, true}});
+  const std::string outError =
+      test::errorOf([&] { readOutputFrame(output, "engine", rc.info.width, rc.info.height); });
+  EXPECT_NE(outError.find(
+                "missing channel 'color.R' (the output's colour); the file holds plain R, G, B"),
+            std::string::npos)
+      << outError;
 }
 
 // A capture whose parts lack the albedo that remodulation needs: no contender can run on it, and a
