@@ -85,12 +85,13 @@ std::optional<fs::path> recordedImagePath(const fs::path& out, const json& recor
   return out / relative;
 }
 
-// Pair image folders under images/<scene>/ that no results file records: a run stopped before its
-// commit wrote them. When that run marked the directory (`stoppedRun`: the mark was there before
-// this run set its own), they are its, and are removed with the scene's own images of scenes this
-// run did not write; otherwise (an older arena's run) nothing names them: said, not removed.
-void pruneUnrecordedImages(const fs::path& out, const std::set<fs::path>& recorded, bool stoppedRun,
-                           const ProgressFn& say) {
+// Image folders under images/ that no results file records: a run stopped before its commit wrote
+// them, or someone else did. Those the run's mark names (`named`: this run's plan and a stopped
+// run's, metrics/results.hpp unfinishedRunFolders) are removed (a pair's folder whole, a scene's
+// own PNGs and then the folder if that emptied it); anything else is said, not removed: nothing
+// says whose it is.
+void pruneUnrecordedImages(const fs::path& out, const std::set<fs::path>& recorded,
+                           const std::set<fs::path>& named, const ProgressFn& say) {
   std::error_code ec;
   std::vector<std::string> unrecorded;
   std::vector<fs::path> strayPairs, strayScenes;
@@ -99,25 +100,25 @@ void pruneUnrecordedImages(const fs::path& out, const std::set<fs::path>& record
     if (scene->is_directory(ec)) {
       for (fs::directory_iterator pair(scene->path(), ec); !ec && pair != end; pair.increment(ec))
         if (pair->is_directory(ec) && !recorded.count(pair->path())) {
-          unrecorded.push_back(fs::relative(pair->path(), out, ec).string());
-          strayPairs.push_back(pair->path());
+          if (named.count(pair->path()))
+            strayPairs.push_back(pair->path());
+          else
+            unrecorded.push_back(fs::relative(pair->path(), out, ec).string());
         }
-      if (!recorded.count(scene->path())) strayScenes.push_back(scene->path());
+      if (!recorded.count(scene->path()) && named.count(scene->path()))
+        strayScenes.push_back(scene->path());
     }
-  if (stoppedRun) {
-    for (const fs::path& dir : strayPairs) {
-      std::error_code removed;
-      fs::remove_all(dir, removed);
-      if (removed && say)
-        say("  warning: " + dir.string() +
-            ": cannot remove a stopped run's images: " + removed.message());
-    }
-    for (const fs::path& dir : strayScenes) {  // the scene's own PNGs; emptied, the folder too
-      removeSceneImages(dir, say);
-      std::error_code removed;
-      if (fs::is_empty(dir, removed)) fs::remove(dir, removed);
-    }
-    return;
+  for (const fs::path& dir : strayPairs) {
+    std::error_code removed;
+    fs::remove_all(dir, removed);
+    if (removed && say)
+      say("  warning: " + dir.string() +
+          ": cannot remove a stopped run's images: " + removed.message());
+  }
+  for (const fs::path& dir : strayScenes) {
+    removeSceneImages(dir, say);
+    std::error_code removed;
+    if (fs::is_empty(dir, removed)) fs::remove(dir, removed);
   }
   if (unrecorded.empty() || !say) return;
   std::sort(unrecorded.begin(), unrecorded.end());
@@ -167,10 +168,9 @@ std::set<fs::path> pruneRecordedImages(const fs::path& out, const std::set<fs::p
   return stale;
 }
 
-// The images of this run, alone under images/: the earlier run's are removed, and so are a stopped
-// run's strays (`stoppedRun`), else said.
-void pruneEarlierImages(const fs::path& out, const json& results, bool stoppedRun,
-                        const ProgressFn& say) {
+// The images of this run, alone under images/: the earlier run's are removed, and so are the
+// folders the mark names that no results record (a stopped run's); other strays are said.
+void pruneEarlierImages(const fs::path& out, const json& results, const ProgressFn& say) {
   std::set<fs::path> written;
   for (const json& p : results["pairs"])
     if (p.contains("images"))
@@ -180,7 +180,8 @@ void pruneEarlierImages(const fs::path& out, const json& results, bool stoppedRu
       if (auto dir = recordedImagePath(out, scene.value("images", json()))) written.insert(*dir);
   std::set<fs::path> known = pruneRecordedImages(out, written, say);
   known.insert(written.begin(), written.end());
-  pruneUnrecordedImages(out, known, stoppedRun, say);
+  const std::vector<fs::path> marked = unfinishedRunFolders(out);
+  pruneUnrecordedImages(out, known, {marked.begin(), marked.end()}, say);
 }
 
 const std::string kIdenticalOutputs = "its output on this scene is bit-identical to ";
@@ -413,8 +414,19 @@ json runMatrix(const RunConfig& cfg) {
   auto say = [&](const std::string& s) {
     if (cfg.progress) cfg.progress(s);
   };
-  // From here an earlier run's images in --out are replaced pair by pair (unfinishedRunNote).
-  markRunUnfinished(cfg.out);
+  // From here an earlier run's images in --out are replaced pair by pair (unfinishedRunNote). The
+  // mark names the folders this run may write: a later run removes them if this one stops.
+  std::vector<fs::path> plannedFolders;
+  for (size_t k = 0, index = 0; k < sources.size(); ++k) {
+    bool any = false;
+    for (const DenoiserRequest& r : denoisers)
+      if (int(index++ % size_t(cfg.shardCount)) == cfg.shardIndex) {
+        plannedFolders.push_back(fs::path("images") / sources[k].name / safeName(r.label));
+        any = true;
+      }
+    if (any) plannedFolders.push_back(fs::path("images") / sources[k].name);
+  }
+  markRunUnfinished(cfg.out, plannedFolders);
   for (const Source& source : sources) {
     std::vector<const DenoiserRequest*> mine;
     for (const DenoiserRequest& r : denoisers)
@@ -578,7 +590,7 @@ void finishRun(json& results, const RunConfig& cfg) {
     addReferenceQuality(results, cfg.warmup, cfg.referenceNotes, cfg.cache.string());
   }
   warnOfIdenticalSweepPoints(results, cfg.progress);
-  pruneEarlierImages(cfg.out, results, runFollowsAStoppedRun(cfg.out), cfg.progress);
+  pruneEarlierImages(cfg.out, results, cfg.progress);
   commitResults(cfg.out, results);
 }
 

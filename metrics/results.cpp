@@ -8,6 +8,7 @@
 #include <cstring>
 #include <map>
 #include <set>
+#include <sstream>
 #include <utility>
 
 #include "core/atomic_file.hpp"
@@ -23,45 +24,64 @@ using nlohmann::json;
 
 namespace {
 
-// Written when a run starts writing images, removed when its results are committed: while it lies
-// there, the images are partly the new run's.
+// Written when a run starts replacing images, removed when its results are committed: while it
+// lies there, the images are partly the new run's. Its first line says who started it; each
+// line after it, "folder images/SCENE[/PAIR]", names an image folder that run (or a run stopped
+// before it) may have written.
 constexpr const char* kUnfinishedMarker = ".arena.unfinished";
+constexpr const char* kFolderLine = "folder ";
+
+// The marker's lines ({} when there is none or it cannot be read).
+std::vector<std::string> markerLines(const fs::path& runDir) {
+  std::vector<std::string> lines;
+  std::error_code ec;
+  if (!fs::exists(runDir / kUnfinishedMarker, ec)) return lines;
+  try {
+    std::istringstream in(readText(runDir / kUnfinishedMarker));
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+  } catch (const Error&) {
+  }
+  return lines;
+}
 
 }  // namespace
 
-constexpr const char* kAfterStoppedRun = ", over a run stopped before its commit";
-
-void markRunUnfinished(const fs::path& runDir) {
-  std::error_code ec;
-  const bool stopped = fs::exists(runDir / kUnfinishedMarker, ec);
-  writeTextAtomically(runDir / kUnfinishedMarker, "started " + utcTimestamp() + " by process " +
-                                                      std::to_string(getpid()) +
-                                                      (stopped ? kAfterStoppedRun : "") + "\n");
+void markRunUnfinished(const fs::path& runDir, const std::vector<fs::path>& folders) {
+  // A stopped run's folders stay named: the run that completes removes those no results record.
+  std::set<std::string> named;
+  for (const std::string& line : markerLines(runDir))
+    if (line.rfind(kFolderLine, 0) == 0) named.insert(line.substr(std::string(kFolderLine).size()));
+  for (const fs::path& f : folders) named.insert(f.generic_string());
+  std::string text = "started " + utcTimestamp() + " by process " + std::to_string(getpid()) + "\n";
+  for (const std::string& f : named) text += kFolderLine + f + "\n";
+  writeTextAtomically(runDir / kUnfinishedMarker, text);
 }
 
-bool runFollowsAStoppedRun(const fs::path& runDir) {
-  try {
-    return readText(runDir / kUnfinishedMarker).find(kAfterStoppedRun) != std::string::npos;
-  } catch (const Error&) {
-    return false;
-  }
+std::vector<fs::path> unfinishedRunFolders(const fs::path& runDir) {
+  std::vector<fs::path> folders;
+  for (const std::string& line : markerLines(runDir))
+    if (line.rfind(kFolderLine, 0) == 0) {
+      const fs::path relative = line.substr(std::string(kFolderLine).size());
+      // Only what a run writes: relative, below images/, no "..".
+      bool plain = !relative.empty() && !relative.is_absolute() && *relative.begin() == "images";
+      for (const fs::path& part : relative) plain = plain && part != "..";
+      if (plain) folders.push_back(runDir / relative);
+    }
+  return folders;
 }
 
 std::string unfinishedRunNote(const fs::path& runDir) {
   std::error_code ec;
   if (!fs::exists(runDir / kUnfinishedMarker, ec)) return "";
-  std::string started;
-  try {
-    started = readText(runDir / kUnfinishedMarker);
-  } catch (const Error&) {
-  }
-  while (!started.empty() && (started.back() == '\n' || started.back() == ' ')) started.pop_back();
+  const std::vector<std::string> lines = markerLines(runDir);
+  std::string started = lines.empty() ? "" : lines.front();
+  while (!started.empty() && (started.back() == '\r' || started.back() == ' ')) started.pop_back();
   return runDir.string() + ": a run into this directory stopped before its commit" +
          (started.empty() ? "" : " (" + started + ")") +
          (fs::exists(runDir / "results.json", ec)
               ? ": results.json is still the run before it, but that run's images were being "
                 "replaced"
-              : ": it wrote images but no results (run it again)");
+              : ": it left no results (run it again)");
 }
 
 RunResults loadResults(const fs::path& runDir) {
@@ -330,6 +350,7 @@ RunDirectoryLock::~RunDirectoryLock() {
   // all (a file someone put there during the run stays, and so does the directory).
   fs::remove_all(dir_ / "images", ec);
   removeStaleTemporariesBelow(dir_, 0);
+  fs::remove(dir_ / kUnfinishedMarker, ec);  // its images are gone with it
   fs::remove(dir_ / ".arena.lock", ec);
   fs::remove(dir_, ec);  // only when empty
 }

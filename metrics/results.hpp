@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "core/atomic_file.hpp"
 #include "metrics/metric_registry.hpp"
@@ -56,18 +57,19 @@ class RunDirectoryLock {
 // What a run that stopped before its commit (killed, or failed) left in a directory: "DIR: a run
 // into this directory stopped before its commit (started T by process P): results.json is still
 // the run before it, but that run's images were being replaced" (or, with no earlier run, "...:
-// it wrote images but no results"); "" when none did. The numbers (results.json, results.db) are
+// it left no results"); "" when none did. The numbers (results.json, results.db) are
 // the earlier run's, whole; its images are not: the report refuses such a directory, compare and
 // history warn.
 std::string unfinishedRunNote(const std::filesystem::path& runDir);
-// Before the first image is written (a run's, a merge's): marks the directory until commitResults.
-// Not earlier: a run refused before touching anything leaves the directory as it was. A later run
-// into a marked directory knows that the image folders no results file records are a stopped
-// run's, and removes them.
-void markRunUnfinished(const std::filesystem::path& runDir);
-// Whether the mark was already there when this run set its own: a run stopped before its commit
-// wrote into the directory, and the image folders that no results file records are that run's.
-bool runFollowsAStoppedRun(const std::filesystem::path& runDir);
+// Before the first image is replaced or written (a run's, a merge's): marks the directory until
+// commitResults, naming the image folders (relative, images/...) the run may write, with those a
+// run stopped before it named. Not earlier: a run refused before touching anything leaves the
+// directory as it was.
+void markRunUnfinished(const std::filesystem::path& runDir,
+                       const std::vector<std::filesystem::path>& folders = {});
+// The image folders the mark names (under runDir): a run that completes removes those that no
+// results file records (a stopped run's), and only those.
+std::vector<std::filesystem::path> unfinishedRunFolders(const std::filesystem::path& runDir);
 // Writes results.json and appends to results.db as one commit: both are written to temporaries
 // (the database as an appended copy) and renamed into place only when both are complete. A
 // document RunResults::fromJson refuses is an Error before any file is touched.

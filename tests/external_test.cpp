@@ -22,6 +22,7 @@
 #include "harness/benchmarks.hpp"
 #include "harness/denoise_run.hpp"
 #include "harness/run_matrix.hpp"
+#include "metrics/results.hpp"
 #include "tests/contract_fixture.hpp"
 #include "tests/test_util.hpp"
 
@@ -923,8 +924,9 @@ TEST(Plugin, ARunThatDiesBeforeItsCommitLeavesItsDirectoryMarked) {
     for (const json& p : results["pairs"]) recorded.insert(p["images"]["dir"].get<std::string>());
     EXPECT_EQ(folders(dir / "run"), recorded);
   }
-  // Stopped in a new directory: marked too, and the next run there removes what it wrote
-  // (a scene it had reached that the next run does not render, here made by hand).
+  // Stopped in a new directory: marked too, naming the folders it may have written; the next run
+  // there removes those it does not record itself (the plugin's pair, its images here made by
+  // hand), and nothing else: a folder of the user's under images/ stays, and is said.
   const std::string fresh = common + " --out " + (dir / "fresh").string();
   ASSERT_EQ(contract::arenaCli(fresh + " --denoisers passthrough --plugin " + ARENA_FAULTY_PLUGIN,
                                "ARENA_FAULTY_PLUGIN=segfault ")
@@ -935,18 +937,30 @@ TEST(Plugin, ARunThatDiesBeforeItsCommitLeavesItsDirectoryMarked) {
   const contract::CliResult freshReport = contract::arenaCli("report " + (dir / "fresh").string() +
                                                              " --out " + (dir / "page2").string());
   EXPECT_EQ(freshReport.status, 2) << freshReport.output;
-  EXPECT_NE(freshReport.output.find("it wrote images but no results (run it again)"),
-            std::string::npos)
+  EXPECT_NE(freshReport.output.find("it left no results (run it again)"), std::string::npos)
       << freshReport.output;
-  fs::create_directories(dir / "fresh" / "images" / "living_room" / "svgf");
-  std::ofstream(dir / "fresh" / "images" / "living_room" / "noisy_0000.png") << "x";
-  ASSERT_EQ(contract::arenaCli(fresh + " --denoisers passthrough").status, 0);
+  std::string pluginFolder;
+  for (const fs::path& f : unfinishedRunFolders(dir / "fresh"))
+    if (f.parent_path().filename() == "cornell_static" && f.filename() != "passthrough")
+      pluginFolder = fs::relative(f, dir / "fresh").string();
+  ASSERT_FALSE(pluginFolder.empty()) << readText(dir / "fresh" / ".arena.unfinished");
+  fs::create_directories(dir / "fresh" / pluginFolder);
+  std::ofstream(dir / "fresh" / pluginFolder / "frame_0000.png") << "x";
+  fs::create_directories(dir / "fresh" / "images" / "screenshots" / "2024");
+  std::ofstream(dir / "fresh" / "images" / "screenshots" / "2024" / "keep.png") << "mine";
+  const contract::CliResult rerun = contract::arenaCli(fresh + " --denoisers passthrough");
+  ASSERT_EQ(rerun.status, 0) << rerun.output;
   EXPECT_FALSE(fs::exists(dir / "fresh" / ".arena.unfinished"));
-  EXPECT_FALSE(fs::exists(dir / "fresh" / "images" / "living_room"));
+  EXPECT_FALSE(fs::exists(dir / "fresh" / pluginFolder));
+  EXPECT_TRUE(fs::exists(dir / "fresh" / "images" / "screenshots" / "2024" / "keep.png"));
+  EXPECT_NE(rerun.output.find("image folder(s) no run recorded (images/screenshots/2024)"),
+            std::string::npos)
+      << rerun.output;
   const json results = json::parse(readText(dir / "fresh" / "results.json"));
   ASSERT_EQ(results["pairs"].size(), 1u);
   EXPECT_EQ(folders(dir / "fresh"),
-            (std::set<std::string>{"images/cornell_static", results["pairs"][0]["images"]["dir"]}));
+            (std::set<std::string>{"images/cornell_static", results["pairs"][0]["images"]["dir"],
+                                   "images/screenshots", "images/screenshots/2024"}));
 }
 
 // A plugin's error buffer is read only within its size and as valid text; a pass report it makes
