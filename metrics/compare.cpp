@@ -179,9 +179,10 @@ std::vector<std::string> settingsDifferences(const RunResults& baseline, const R
     const json x = it.value().value("content", json::object()).value("inputs", json()),
                y = bs[it.key()].value("content", json::object()).value("inputs", json());
     if (x.is_string() && y.is_string() && x != y)
-      out.push_back("scenes." + it.key() + ".content.inputs: " + x.dump() + " vs " + y.dump() +
-                    " (other input frames: the scene's file or assets, or the capture's frames or "
-                    "description, changed)");
+      out.push_back(
+          "scenes." + it.key() + ".content.inputs: " + x.dump() + " vs " + y.dump() +
+          " (other inputs: the scene's file (any of its text) or assets, or the capture's "
+          "frames or description, changed)");
   }
   return out;
 }
@@ -270,6 +271,11 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
   std::set<std::string>
       baselineKeys;  // every baseline pair's: a candidate under one is not another's
   for (const PairResult& b : base.pairs) baselineKeys.insert(key(b));
+  // A --match target is its baseline pair's: never matched to another by what it ran.
+  std::set<std::string> targets;
+  for (const auto& [from, to] : matches) targets.insert(to);
+  for (const PairResult& c : cand.pairs)
+    if (targets.count(c.label)) baselineKeys.insert(key(c));
   for (const PairResult& b : base.pairs) {
     baseKeys.insert(key(b));
     const std::string& scene = b.scene;
@@ -637,6 +643,9 @@ std::map<std::string, std::string> checkLabelMatches(const std::vector<std::stri
     if (to != from && base.count(to))
       throw Error("--match " + a + ": the baseline has a pair labelled " + to +
                   " too, which is compared with the candidate's by its label");
+    if (to != from && cand.count(from))
+      throw Error("--match " + a + ": the candidate has a pair labelled " + from +
+                  " too, which is compared with the baseline's by its label");
     matches[from] = to;
   }
   return matches;

@@ -588,6 +588,14 @@ TEST(CompareGate, PairsOfOtherLabelsAreComparedWhenAskedTo) {
   EXPECT_NE(refused("svgf=eaw").find("the baseline has a pair labelled eaw too"),
             std::string::npos);
   EXPECT_THROW(checkLabelMatches({"svgf=svgf[sigmaL=8]", "svgf=eaw"}, a, b), Error);
+  // The candidate's own pair of that label would vanish from the gate (a failed one with it).
+  json both = cand;
+  both["pairs"].push_back(base["pairs"][0]);
+  both["pairs"].back()["label"] = "svgf";
+  EXPECT_NE(test::errorOf([&] {
+              checkLabelMatches({"svgf=svgf[sigmaL=8]"}, a, test::typed(both));
+            }).find("the candidate has a pair labelled svgf too"),
+            std::string::npos);
 }
 
 // References refined between two runs: said, scene by scene (part of each change there is the
