@@ -113,6 +113,7 @@ void printSeedSplit(std::ostream& out, const RunResults& results) {
     };
     rows.push_back({p.scene, p.label, term("bias2"), term("variance"), term("bias2Corrected")});
   }
+  if (rows.empty()) return;  // every pair failed: no split to show
   std::array<std::string, 5> header = {"scene", "denoiser", "bias2", "variance", "bias2Corrected"};
   std::array<size_t, 5> width = {sceneWidth, labelWidth, 0, 0, 0};
   for (const auto& row : rows)

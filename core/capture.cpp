@@ -510,7 +510,7 @@ void addFileBytes(Hasher& hasher, const fs::path& file) {
 CaptureContent captureContent(const CaptureDescription& c) {
   json described = parseJsonFile((c.dir / "capture.json").string());
   const json reference = described.contains("reference") ? described["reference"] : json();
-  for (const char* k : {"reference", "outputs", "source"}) described.erase(k);
+  for (const char* k : {"reference", "outputs", "source", "purpose"}) described.erase(k);
   Hasher inputs;
   inputs.add(described.dump());
   for (int t = 0; t < c.info.frames; ++t) {

@@ -73,9 +73,9 @@ CaptureDescription readCaptureDescription(const std::filesystem::path& dir);
 // What a capture's pixels are, as checksums of its files' bytes (a run records them; `arena
 // compare` refuses runs of other inputs and warns of other references): `inputs` covers the
 // frames (and gradient samples) with capture.json's description of them (everything but its
-// `reference`, `outputs` and `source`), `references` the reference files with the `reference`
-// entry (empty without references). The stored outputs are contenders, not the sequence: not
-// covered. Reads every frame and reference once.
+// `reference`, `outputs`, `source` and `purpose`), `references` the reference files with the
+// `reference` entry (empty without references). The stored outputs are contenders, not the
+// sequence: not covered. Reads every frame and reference once.
 struct CaptureContent {
   std::string inputs, references;
 };

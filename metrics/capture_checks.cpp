@@ -45,9 +45,11 @@ CaptureCheck check(std::string name, double value, double warnAbove, double fail
 // as a pixel).
 double cameraShiftPixels(const CameraState& a, const CameraState& b, double nearDepth) {
   const double focal = 0.5 * a.height / double(a.tanHalfFovY);
+  // atan2 of the cross and dot products, in double: acos of a float dot product near 1 reads a
+  // turn of 3e-4 rad for two equal directions one rounding apart.
   auto angle = [](glm::vec3 u, glm::vec3 v) {
-    return double(
-        std::acos(std::clamp(glm::dot(glm::normalize(u), glm::normalize(v)), -1.0f, 1.0f)));
+    const glm::dvec3 a(u), b(v);
+    return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b));
   };
   const double turn =
       std::max({angle(a.forward, b.forward), angle(a.up, b.up), angle(a.right, b.right)});

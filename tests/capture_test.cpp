@@ -875,10 +875,11 @@ TEST(CaptureContract, CompareTellsOtherInputsAndOtherReferencesOfOneCapture) {
   ASSERT_TRUE(first.scenes["content"].contains("content")) << first.scenes.dump().substr(0, 400);
   EXPECT_TRUE(settingsDifferences(first, again).empty());
   EXPECT_TRUE(referenceDifferences(first, again).empty());
-  // Who wrote it and which outputs it stores are not its pixels.
+  // Who wrote it, what it is for and which outputs it stores are not its pixels.
   const CaptureContent before = captureContent(readCaptureDescription(capture));
   json doc = parseJsonFile((capture / "capture.json").string());
   doc["source"] = {{"engine", "another build"}};
+  doc["purpose"] = "another description";
   std::ofstream(capture / "capture.json") << doc.dump(1);
   EXPECT_EQ(captureContent(readCaptureDescription(capture)).inputs, before.inputs);
   EXPECT_EQ(captureContent(readCaptureDescription(capture)).references, before.references);
@@ -898,7 +899,7 @@ TEST(CaptureContract, CompareTellsOtherInputsAndOtherReferencesOfOneCapture) {
   const std::vector<std::string> differ = settingsDifferences(brighter, run("darker"));
   ASSERT_EQ(differ.size(), 1u);
   EXPECT_NE(differ[0].find("scenes.content.content.inputs: "), std::string::npos) << differ[0];
-  EXPECT_NE(differ[0].find("other input frames"), std::string::npos) << differ[0];
+  EXPECT_NE(differ[0].find("(other inputs: "), std::string::npos) << differ[0];
 }
 
 // Reference file r rewritten to hold reference source(r, frames)'s image, with a variance of 0 (the
