@@ -326,9 +326,16 @@ void addRunCommands(CLI::App& app) {
         if (output.empty() || c.captures.empty())
           continue;  // without captures: runMatrix refuses it
         std::set<std::string> names;
-        for (const auto& capture : c.captures)
-          for (const auto& [name, unused] : readCaptureDescription(capture).outputs)
-            names.insert(name);
+        bool unreadable = false;  // a capture that cannot be read fails its own pairs, saying why
+        for (const auto& capture : c.captures) {
+          try {
+            for (const auto& [name, unused] : readCaptureDescription(capture).outputs)
+              names.insert(name);
+          } catch (const Error&) {
+            unreadable = true;
+          }
+        }
+        if (unreadable) continue;
         std::string stored;
         for (const std::string& name : names) stored += (stored.empty() ? "" : ", ") + name;
         if (!names.count(output))
