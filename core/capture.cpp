@@ -147,8 +147,14 @@ CameraState cameraFromMatrices(const std::vector<double>& view, const std::vecto
     const glm::dvec3 p((*position)[0], (*position)[1], (*position)[2]);
     if (glm::length(p - eye) > 1e-3 * std::max(1.0, glm::length(eye)))
       throw Error(where + ".position: (" + std::to_string(p.x) + ", " + std::to_string(p.y) + ", " +
-                  std::to_string(p.z) + ") disagrees with the view matrix's eye (" + std::to_string(eye.x) + ", " +
-                  std::to_string(eye.y) + ", " + std::to_string(eye.z) + ")");
+                  std::to_string(p.z) + ") disagrees with the view matrix's eye (" +
+                  std::to_string(eye.x) + ", " + std::to_string(eye.y) + ", " +
+                  std::to_string(eye.z) + ")" +
+                  // A camera-to-world matrix holds the eye as its translation column.
+                  (glm::length(p - t) <= 1e-3 * std::max(1.0, glm::length(p))
+                       ? "; it equals the view's translation column, as in a camera-to-world "
+                         "matrix: capture.json's view is world-to-camera (invert the matrices)"
+                       : ""));
     c.eye = glm::vec3(float(p.x), float(p.y), float(p.z));
   } else {
     c.eye = glm::vec3(eye);

@@ -98,6 +98,11 @@ void pruneUnrecordedImages(const fs::path& out, const std::set<fs::path>& record
   for (fs::directory_iterator scene(out / "images", ec), end; !ec && scene != end;
        scene.increment(ec))
     if (scene->is_directory(ec)) {
+      // A folder beside the scenes' that nothing records or names (a user's): said as a whole.
+      if (!recorded.count(scene->path()) && !named.count(scene->path())) {
+        unrecorded.push_back(fs::relative(scene->path(), out, ec).string());
+        continue;
+      }
       for (fs::directory_iterator pair(scene->path(), ec); !ec && pair != end; pair.increment(ec))
         if (pair->is_directory(ec) && !recorded.count(pair->path())) {
           if (named.count(pair->path()))
@@ -426,13 +431,14 @@ json runMatrix(const RunConfig& cfg) {
       }
     if (any) plannedFolders.push_back(fs::path("images") / sources[k].name);
   }
-  markRunUnfinished(cfg.out, plannedFolders);
+  // Set once the first scene is ready, before its images replace anything: a run stopped while
+  // it renders (a long reference, a Ctrl-C) leaves the directory as it was.
+  bool marked = false;
   for (const Source& source : sources) {
     std::vector<const DenoiserRequest*> mine;
     for (const DenoiserRequest& r : denoisers)
       if (int(pairIndex++ % size_t(cfg.shardCount)) == cfg.shardIndex) mine.push_back(&r);
     if (mine.empty()) continue;
-    removeSceneImages(cfg.out / "images" / source.name, cfg.progress);
     fs::path dir;
     std::unique_ptr<SceneData> sd;
     std::vector<SeedSequence> seedSequences;
@@ -445,6 +451,8 @@ json runMatrix(const RunConfig& cfg) {
     } catch (const std::exception& e) {
       sceneError = e.what();
     }
+    if (!marked) markRunUnfinished(cfg.out, plannedFolders), marked = true;
+    removeSceneImages(cfg.out / "images" / source.name, cfg.progress);
     // A capture's checks are printed and kept, also when they refused it.
     for (const std::string& line : validationLines(validation)) say("  " + source.name + ": " + line);
     if (sd)

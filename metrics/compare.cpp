@@ -121,7 +121,20 @@ std::vector<std::string> settingsDifferences(const RunResults& baseline, const R
   // Nor does the rule for lag energy after an unsettled event (settings.ghosting.
   // lagAfterUnsettled): the gate compares the pairs' summaries, never the event figures it changed
   // (merge, which ranks those, still refuses to mix it).
+  // Captures named by other paths (a folder moved, given relative once and absolute once) are the
+  // same sequences when every capture of both runs records its content: the scenes' checksums,
+  // compared below, decide. Without them (older runs) the paths are all there is.
+  const auto capturesRecordContent = [](const RunResults& run) {
+    if (!run.scenes.is_object()) return true;
+    for (auto it = run.scenes.begin(); it != run.scenes.end(); ++it)
+      if (it.value().is_object() && it.value().value("source", "") == "capture" &&
+          !it.value().value("content", json::object()).value("inputs", json()).is_string())
+        return false;
+    return true;
+  };
+  const bool contentDecides = capturesRecordContent(baseline) && capturesRecordContent(candidate);
   for (json* s : {&a, &b}) {
+    if (contentDecides) s->erase("captures");
     if (s->contains("render") && (*s)["render"].is_object()) (*s)["render"].erase("inputSeed");
     s->erase("plan");
     if (s->contains("ghosting") && (*s)["ghosting"].is_object())

@@ -875,6 +875,13 @@ TEST(CaptureContract, CompareTellsOtherInputsAndOtherReferencesOfOneCapture) {
   ASSERT_TRUE(first.scenes["content"].contains("content")) << first.scenes.dump().substr(0, 400);
   EXPECT_TRUE(settingsDifferences(first, again).empty());
   EXPECT_TRUE(referenceDifferences(first, again).empty());
+  // The same capture under another path (moved, copied): the checksums decide, not the path.
+  const fs::path moved = test::freshDir("content_moved") / "elsewhere";
+  fs::copy(capture, moved, fs::copy_options::recursive);
+  const RunResults fromMoved = test::typed(
+      runMatrix(captureRun(test::freshDir("content_moved_run"), {{"eaw", {}, ""}}, {moved})));
+  EXPECT_TRUE(settingsDifferences(first, fromMoved).empty())
+      << settingsDifferences(first, fromMoved).front();
   // Who wrote it, what it is for and which outputs it stores are not its pixels.
   const CaptureContent before = captureContent(readCaptureDescription(capture));
   json doc = parseJsonFile((capture / "capture.json").string());
@@ -1663,6 +1670,22 @@ TEST(CaptureContract, BadDescriptionsAreErrorsNamingTheFieldOrFile) {
 
 TEST(CaptureContract, BadValuesAndNamesAreErrorsNamingThem) {
   const fs::path good = writeSynthetic("values_src");
+  // A camera-to-world matrix given as the view, with the camera's position beside it: the
+  // position is the matrix's translation column, which says what the matrix is.
+  expectError(
+      copyCapture(good, "camera_to_world2",
+                  [](json& d) {
+                    json& camera = d["cameras"][2];
+                    glm::dmat4 view;
+                    for (int k = 0; k < 16; ++k)
+                      view[k / 4][k % 4] = camera["view"][size_t(k)].get<double>();
+                    const glm::dmat4 toWorld = glm::inverse(view);
+                    for (int k = 0; k < 16; ++k) camera["view"][size_t(k)] = toWorld[k / 4][k % 4];
+                    camera["position"] = {toWorld[3][0], toWorld[3][1], toWorld[3][2]};
+                  }),
+      "cameras[2].position: (0.480000, 0.200000, 0.000000) disagrees with the view matrix's "
+      "eye (-0.480000, -0.200000, -0.000000); it equals the view's translation column, as in "
+      "a camera-to-world matrix");
   expectError(copyCapture(good, "spp",
                           [](json& d) { d["reference"]["samples"] = {64, 64, 2.7, 64, 64, 64}; }),
               "reference.samples[2]: expected a whole number");

@@ -291,6 +291,35 @@ TEST(CliContract, AShardWithNoPairsIsNoFailure) {
   EXPECT_EQ(r.output.find("no pair ran"), std::string::npos) << r.output;
 }
 
+// Runs that differ in one parameter: --match compares the two labels, and --denoisers naming
+// either label of a match keeps the matched pair (naming the candidate's made it "new").
+TEST(CliContract, MatchedLabelsAreComparedAndGatedByEitherName) {
+  fs::path dir = test::freshDir("match_labels");
+  const std::string common =
+      "run --scenes cornell_static --denoisers temporal --no-baselines "
+      "--resolution 8x8 --ref-spp 1 --flip none --keep-frames none --frames 5 "
+      "--warmup 1 --cache " +
+      (dir / "cache").string();
+  ASSERT_EQ(contract::arenaCli(common + " --out " + (dir / "a").string()).status, 0);
+  ASSERT_EQ(
+      contract::arenaCli(common + " --param temporal.alphaMin=0.5 --out " + (dir / "b").string())
+          .status,
+      0);
+  const std::string compare = "compare " + (dir / "a").string() + " " + (dir / "b").string() +
+                              " --match 'temporal=temporal[alphaMin=0.5]' --tolerance 1000%";
+  for (const std::string& only :
+       {"", " --denoisers temporal", " --denoisers 'temporal[alphaMin=0.5]'"}) {
+    const contract::CliResult r = contract::arenaCli(compare + only);
+    EXPECT_EQ(r.status, 0) << only << "\n" << r.output;
+    EXPECT_NE(r.output.find("temporal -> temporal[alphaMin=0.5]"), std::string::npos)
+        << only << "\n"
+        << r.output;
+    EXPECT_EQ(r.output.find("new (pair not in the baseline run)"), std::string::npos)
+        << only << "\n"
+        << r.output;
+  }
+}
+
 // A run of several input seeds prints each pair's error split, with intervals, beside its table
 // (it was in results.json alone), and says the table's relMSE is the first seed's.
 TEST(CliContract, ARunOfSeveralSeedsPrintsTheErrorSplit) {
