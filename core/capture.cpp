@@ -4,7 +4,6 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <fstream>
 #include <optional>
 #include <set>
@@ -499,11 +498,7 @@ void addFileBytes(Hasher& hasher, const fs::path& file) {
     if (got == 0) break;
     length += got;
     const size_t words = got / 4;
-    for (size_t i = 0; i < words; ++i) {
-      uint32_t v;
-      std::memcpy(&v, chunk.data() + 4 * i, 4);
-      h = (h ^ v) * 1099511628211ull;
-    }
+    h = wordChecksum(chunk.data(), words, h);
     for (size_t i = 4 * words; i < got; ++i)
       h = (h ^ static_cast<unsigned char>(chunk[i])) * 1099511628211ull;
   }

@@ -10,9 +10,9 @@
 namespace arena {
 
 // A checksum of a block of 32-bit words, to notice damaged data (not to resist an adversary):
-// FNV-1a over words rather than bytes, four times faster; hex() as Hasher's.
-inline uint64_t wordChecksum(const void* data, size_t words) {
-  uint64_t h = 1469598103934665603ull;
+// FNV-1a over words rather than bytes, four times faster; hex() as Hasher's. `h` continues an
+// earlier block's checksum (a file read in chunks).
+inline uint64_t wordChecksum(const void* data, size_t words, uint64_t h = 1469598103934665603ull) {
   const auto* w = static_cast<const unsigned char*>(data);
   for (size_t i = 0; i < words; ++i) {
     uint32_t v;

@@ -405,15 +405,14 @@ json runMatrix(const RunConfig& cfg) {
     for (const DenoiserRequest& d : denoisers) plan["labels"].push_back(d.label);
     results["settings"]["plan"] = plan;
   }
-  const size_t totalPairs = sources.size() * denoisers.size();
-  size_t pairIndex = 0, pairsDone = 0, pairsMine = 0;
-  for (size_t k = 0; k < totalPairs; ++k) pairsMine += int(k % size_t(cfg.shardCount)) == cfg.shardIndex;
-  size_t scenesMine = 0, scenesDone = 0;
-  for (size_t k = 0; k < sources.size(); ++k) {
-    bool any = false;
-    for (size_t d = 0; d < denoisers.size(); ++d)
-      any = any || int((k * denoisers.size() + d) % size_t(cfg.shardCount)) == cfg.shardIndex;
-    scenesMine += any;
+  // Each source's pairs in this shard's slice (pair k of the scene-major order is shard k % n's).
+  std::vector<std::vector<const DenoiserRequest*>> minePerSource(sources.size());
+  size_t pairsDone = 0, pairsMine = 0, scenesMine = 0, scenesDone = 0;
+  for (size_t k = 0, index = 0; k < sources.size(); ++k) {
+    for (const DenoiserRequest& r : denoisers)
+      if (int(index++ % size_t(cfg.shardCount)) == cfg.shardIndex) minePerSource[k].push_back(&r);
+    pairsMine += minePerSource[k].size();
+    scenesMine += !minePerSource[k].empty();
   }
   const auto start = std::chrono::steady_clock::now();
   auto say = [&](const std::string& s) {
@@ -422,22 +421,17 @@ json runMatrix(const RunConfig& cfg) {
   // From here an earlier run's images in --out are replaced pair by pair (unfinishedRunNote). The
   // mark names the folders this run may write: a later run removes them if this one stops.
   std::vector<fs::path> plannedFolders;
-  for (size_t k = 0, index = 0; k < sources.size(); ++k) {
-    bool any = false;
-    for (const DenoiserRequest& r : denoisers)
-      if (int(index++ % size_t(cfg.shardCount)) == cfg.shardIndex) {
-        plannedFolders.push_back(fs::path("images") / sources[k].name / safeName(r.label));
-        any = true;
-      }
-    if (any) plannedFolders.push_back(fs::path("images") / sources[k].name);
+  for (size_t k = 0; k < sources.size(); ++k) {
+    for (const DenoiserRequest* r : minePerSource[k])
+      plannedFolders.push_back(fs::path("images") / sources[k].name / safeName(r->label));
+    if (!minePerSource[k].empty()) plannedFolders.push_back(fs::path("images") / sources[k].name);
   }
   // Set once the first scene is ready, before its images replace anything: a run stopped while
   // it renders (a long reference, a Ctrl-C) leaves the directory as it was.
   bool marked = false;
-  for (const Source& source : sources) {
-    std::vector<const DenoiserRequest*> mine;
-    for (const DenoiserRequest& r : denoisers)
-      if (int(pairIndex++ % size_t(cfg.shardCount)) == cfg.shardIndex) mine.push_back(&r);
+  for (size_t sourceIndex = 0; sourceIndex < sources.size(); ++sourceIndex) {
+    const Source& source = sources[sourceIndex];
+    const std::vector<const DenoiserRequest*>& mine = minePerSource[sourceIndex];
     if (mine.empty()) continue;
     fs::path dir;
     std::unique_ptr<SceneData> sd;
