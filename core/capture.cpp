@@ -13,6 +13,7 @@
 #include "core/hash.hpp"
 #include "core/json_reader.hpp"
 #include "core/non_finite.hpp"
+#include "core/text.hpp"
 
 namespace arena {
 
@@ -290,7 +291,18 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
     const int frame = e.integerIn("frame", 1, n - 1);
     const std::string kind = e.string("kind");
     const std::optional<EventKind> k = eventKindFromName(kind);
-    if (!k) e.fail("kind", "expected one of " + eventKindNames() + ", got " + json(kind).dump());
+    if (!k) {
+      std::vector<std::string> names;
+      const std::string all = eventKindNames();
+      for (std::string_view rest = all; !rest.empty();) {
+        const size_t comma = rest.find(", ");
+        names.emplace_back(rest.substr(0, comma));
+        rest = comma == std::string_view::npos ? std::string_view() : rest.substr(comma + 2);
+      }
+      const std::string meant = closestName(kind, names);
+      e.fail("kind", "expected one of " + eventKindNames() + ", got " + json(kind).dump() +
+                         (meant.empty() ? "" : " (" + meant + "?)"));
+    }
     const SequenceEvent event{frame, *k, e.string("what", ""), e.integer("meshId", -1)};
     if (e.has("meshId") && *k != EventKind::ObjectMoves)
       e.fail(

@@ -97,8 +97,11 @@ RunResults loadResults(const fs::path& runDir) {
   // earlier run, or none: refused, naming the writer, rather than judged as if finished.
   const DirectoryLock reading(runDir, DirectoryLock::Mode::Shared, DirectoryLock::IfHeld::Refuse,
                               "reading this run", /*createFile=*/false);
-  if (!fs::exists(file))
+  if (!fs::exists(file)) {
+    // A run stopped before its first commit: said so (its mark), rather than "not a run".
+    if (const std::string note = unfinishedRunNote(runDir); !note.empty()) throw Error(note);
     throw Error(runDir.string() + ": not a run (no results.json); create one with `arena run`");
+  }
   return RunResults::fromJson(parseJsonFile(file.string()), file.string());
 }
 

@@ -1610,7 +1610,7 @@ TEST(CaptureContract, BadDescriptionsAreErrorsNamingTheFieldOrFile) {
                             d["events"] = {{{"frame", 2}, {"kind", "light_of"}}};
                           }),
               "events[0].kind: expected one of light_off, light_on, light_change, object_moves, "
-              "camera_cut, got \"light_of\"");
+              "camera_cut, got \"light_of\" (light_off?)");
   expectError(copyCapture(good, "view_typo",
                           [](json& d) {
                             d["cameras"][3]["veiw"] = d["cameras"][3]["view"];

@@ -939,6 +939,13 @@ TEST(Plugin, ARunThatDiesBeforeItsCommitLeavesItsDirectoryMarked) {
   EXPECT_EQ(freshReport.status, 2) << freshReport.output;
   EXPECT_NE(freshReport.output.find("it left no results (run it again)"), std::string::npos)
       << freshReport.output;
+  // compare says so too, rather than "not a run".
+  const contract::CliResult freshCompare =
+      contract::arenaCli("compare " + (dir / "run").string() + " " + (dir / "fresh").string());
+  EXPECT_EQ(freshCompare.status, 2) << freshCompare.output;
+  EXPECT_NE(freshCompare.output.find("fresh: a run into this directory stopped before its commit"),
+            std::string::npos)
+      << freshCompare.output;
   std::string pluginFolder;
   for (const fs::path& f : unfinishedRunFolders(dir / "fresh"))
     if (f.parent_path().filename() == "cornell_static" && f.filename() != "passthrough")
