@@ -292,14 +292,7 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
     const std::string kind = e.string("kind");
     const std::optional<EventKind> k = eventKindFromName(kind);
     if (!k) {
-      std::vector<std::string> names;
-      const std::string all = eventKindNames();
-      for (std::string_view rest = all; !rest.empty();) {
-        const size_t comma = rest.find(", ");
-        names.emplace_back(rest.substr(0, comma));
-        rest = comma == std::string_view::npos ? std::string_view() : rest.substr(comma + 2);
-      }
-      const std::string meant = closestName(kind, names);
+      const std::string meant = closestName(kind, eventKindNameList());
       e.fail("kind", "expected one of " + eventKindNames() + ", got " + json(kind).dump() +
                          (meant.empty() ? "" : " (" + meant + "?)"));
     }

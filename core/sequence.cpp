@@ -138,6 +138,12 @@ std::optional<EventKind> eventKindFromName(std::string_view name) {
   return std::nullopt;
 }
 
+std::vector<std::string> eventKindNameList() {
+  std::vector<std::string> out;
+  for (const auto& [k, name] : kEventKindNames) out.emplace_back(name);
+  return out;
+}
+
 std::string eventKindNames() {
   std::string out;
   for (const auto& [k, name] : kEventKindNames) out += (out.empty() ? "" : ", ") + std::string(name);

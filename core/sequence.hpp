@@ -52,6 +52,8 @@ const char* eventKindName(EventKind kind);
 std::optional<EventKind> eventKindFromName(std::string_view name);
 // "light_off, light_on, ...": the valid names, for error messages.
 std::string eventKindNames();
+// The kind names one by one, in that order (for a misspelling's nearest name).
+std::vector<std::string> eventKindNameList();
 
 struct SequenceEvent {
   int frame = 0;
