@@ -77,9 +77,17 @@ void prependRunWarnings(json& pair, int frames) {
 void writeFrameImages(const fs::path& imageDir, int t, const FrameImages& images) {
   writePng(imageDir / frameName("frame", t), images.display);
   if (!images.flip.empty()) writePng(imageDir / frameName("flip", t), images.flip);
-  // No reference (a capture without one): no error map to keep.
-  if (!images.relativeError.empty())
+  // No reference (a capture without one): no error map to keep. Beside the map, its values
+  // unclamped (the map's 8 bits stop at 10, where a firefly's error begins): a region's relMSE.
+  if (!images.relativeError.empty()) {
     writePng(imageDir / frameName("relerr", t), images.relativeError);
+    LayerSet values;
+    values.set("Y", images.relativeSquaredError);
+    writeExr(fs::path(imageDir / frameName("relerr", t)).replace_extension(".exr"), values,
+             {{"Y", {}}},
+             {{"arena.values",
+               "per-pixel relative squared error (d - r)^2 / (r^2 + 0.01), mean of R, G, B"}});
+  }
 }
 
 // Every output frame as an EXR (colour, and the two signals a split denoiser filtered).

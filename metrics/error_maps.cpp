@@ -133,7 +133,10 @@ Image relativeSquaredError(const Image& d, const Image& r) {
 }
 
 Image relativeErrorMap(const Image& d, const Image& r) {
-  Image v = relativeSquaredError(d, r);
+  return relativeErrorMap(relativeSquaredError(d, r));
+}
+
+Image relativeErrorMap(Image v) {
   const double span = kRelErrorMapLog10Max - kRelErrorMapLog10Min;
   for (float& x : v.raw())
     x = float((std::log10(std::max(double(x), 1e-30)) - kRelErrorMapLog10Min) / span);

@@ -42,6 +42,8 @@ constexpr double kRelErrorMapLog10Min = -4.0, kRelErrorMapLog10Max = 1.0;
 Image relativeSquaredError(const Image& d, const Image& r);
 // The relative-error map's colours for d against r (viridis on the log scale above).
 Image relativeErrorMap(const Image& d, const Image& r);
+// The same of values relativeSquaredError computed.
+Image relativeErrorMap(Image relativeSquaredErrors);
 // A decoded relative-error map value (0..1) back to the relative squared error it stands for.
 double relativeErrorOfMapValue(double value);
 

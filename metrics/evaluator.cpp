@@ -326,8 +326,10 @@ std::string frameRanges(const std::vector<int>& frames) {
   for (size_t i = 0; i < frames.size(); ++i) {
     size_t end = i;
     while (end + 1 < frames.size() && frames[end + 1] == frames[end] + 1) ++end;
-    text += (text.empty() ? "" : ", ") + std::to_string(frames[i]) +
-            (end > i ? "-" + std::to_string(frames[end]) : "");
+    // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on one concatenated string.
+    if (!text.empty()) text += ", ";
+    text += std::to_string(frames[i]);
+    if (end > i) text.append("-").append(std::to_string(frames[end]));
     i = end;
   }
   return (frames.size() == 1 ? "frame " : "frames ") + text;
@@ -513,7 +515,10 @@ FrameImages PairEvaluation::lastImages() const {
   FrameImages out;
   out.display = k.display;
   if (auto it = s.lastMaps.find("ldrFlip"); it != s.lastMaps.end()) out.flip = applyColorMap(it->second, magmaColorMap());
-  if (k.view.reference) out.relativeError = relativeErrorMap(k.output, *k.view.reference);
+  if (k.view.reference) {
+    out.relativeSquaredError = relativeSquaredError(k.output, *k.view.reference);
+    out.relativeError = relativeErrorMap(out.relativeSquaredError);
+  }
   return out;
 }
 

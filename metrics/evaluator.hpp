@@ -124,6 +124,9 @@ struct FrameImages {
   Image display;    // the output through the scene's display transform
   Image flip;       // the LDR-FLIP map, colour-mapped (empty when FLIP is off or no reference)
   Image relativeError;  // the relative error map (empty without a reference)
+  // What that map shows, unclamped: the per-pixel relative squared error, one channel, whose mean
+  // is the frame's relMSE (a region's relMSE in the report is read from it, not from the map).
+  Image relativeSquaredError;
 };
 
 // What a PairEvaluation measures. Screening: only the linear error family (relMse,

@@ -11,6 +11,7 @@
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/exr_io.hpp"
 #include "core/text.hpp"
 #include "metrics/compare.hpp"
 #include "metrics/error_maps.hpp"
@@ -993,12 +994,25 @@ struct TileGrid {
         out.push_back(std::min(tile, width - c * tile) * std::min(tile, height - r * tile));
     return out;
   }
+  // Per tile, how many of its pixels `holds`.
+  template <class PixelTest>
+  json counts(PixelTest holds) const {
+    std::vector<int> n(size_t(cols) * size_t(rows), 0);
+    for (int y = 0; y < height; ++y)
+      for (int x = 0; x < width; ++x)
+        if (holds(size_t(y) * size_t(width) + size_t(x)))
+          ++n[size_t(y / tile) * size_t(cols) + size_t(x / tile)];
+    return n;
+  }
 };
 
 // The crop measurements: for each kept frame of a scene, per-tile means computed from the kept
-// 8-bit images (so what the page can measure is what it shows): the display images' squared
+// images (so what the page can measure is what it shows): the 8-bit display images' squared
 // error against the reference PNG (-> PSNR), the LDR-FLIP value decoded from the magma map, and
-// the relative squared error decoded from the relative-error map. Written as one script per
+// the relative squared error: from the values the run kept beside its map (relerr_NNNN.exr,
+// unclamped: the region's relMSE as the run defines it), else decoded from the map, which stops
+// at 10 (a region holding such pixels reads low: their count per tile is kept, and the page
+// says "at least"). Written as one script per
 // frame (tiles/...js, loaded when the user marks a region); returns the scene's index of them.
 json writeCropTiles(const json& viewer, const fs::path& runDir, const fs::path& out,
                     const std::string& stem) {
@@ -1036,8 +1050,17 @@ json writeCropTiles(const json& viewer, const fs::path& runDir, const fs::path& 
         const std::vector<float> v = decodeColorMap(img, magmaColorMap());
         byPanel[key]["flip"] = g.means([&](size_t i) { return double(v[i]); });
       } else if (kind == "relerr") {
-        const std::vector<float> v = decodeColorMap(img, viridisColorMap());
-        byPanel[key]["relerr"] = g.means([&](size_t i) { return relativeErrorOfMapValue(v[i]); });
+        const fs::path values =
+            (runDir / p["srcs"][it.key()].get<std::string>()).replace_extension(".exr");
+        std::error_code ec;
+        if (fs::exists(values, ec)) {
+          const Image e = readExr(values, {{"Y", {}}}, ExrSize{w, h}).layers.get("Y");
+          byPanel[key]["relerr"] = g.means([&](size_t i) { return double(e.raw()[i]); });
+        } else {
+          const std::vector<float> v = decodeColorMap(img, viridisColorMap());
+          byPanel[key]["relerr"] = g.means([&](size_t i) { return relativeErrorOfMapValue(v[i]); });
+          byPanel[key]["relerrClamped"] = g.counts([&](size_t i) { return v[i] >= 1.0f; });
+        }
       }
     }
     grid = {{"tile", g.tile}, {"cols", g.cols}, {"rows", g.rows},

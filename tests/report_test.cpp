@@ -10,11 +10,14 @@
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/exr_io.hpp"
+#include "harness/run_matrix.hpp"
 #include "metrics/error_maps.hpp"
 #include "metrics/results.hpp"
 #include "metrics/statistics.hpp"
 #include "reports/image_files.hpp"
 #include "reports/pareto.hpp"
+#include "tests/contract_fixture.hpp"
 #include "tests/test_util.hpp"
 
 namespace arena {
@@ -759,6 +762,73 @@ TEST(Report, CropTilesComeFromTheKeptImages) {
   // Frame 5 has no real reference image (the fixture's stand-in is not a PNG): no tiles for it.
   const std::string data = readText(o.out / "data.js");
   EXPECT_NE(data.find("\"crops\":{\"files\":{\"2\":\"tiles/s0_f2.js\"}"), std::string::npos);
+
+  // The relative error: a firefly of 1000 in the first tile, 0.5 elsewhere there. The map stops
+  // at 10: decoded from it the tile reads low, and its clamped pixel is counted (the page says
+  // "at least"); from the values the run keeps beside the map, the tile's mean is exact.
+  Image errors(20, 10, 1, 0.5f);
+  errors.at(0, 0, 0) = 1000.0f;
+  writePng(sd / "svgf[a=0]/relerr_0002.png", relativeErrorMap(errors));
+  const auto relerrOf = [&](const std::string& name) {
+    ReportOptions again = o;
+    again.out = test::freshDir(name);
+    writeReport(again);
+    const std::string text = readText(again.out / "tiles/s0_f2.js");
+    return json::parse(text.substr(text.find("] = ") + 4,
+                                   text.rfind(';') - text.find("] = ") - 4))["panels"]["svgf[a=0]"];
+  };
+  const json decoded = relerrOf("report_tiles_map");
+  EXPECT_NEAR(decoded["relerr"][0].get<double>(), (10.0 + 63 * 0.5) / 64, 0.05);
+  EXPECT_EQ(decoded["relerrClamped"], json({1, 0, 0, 0, 0, 0}));
+  LayerSet values;
+  values.set("Y", errors);
+  writeExr(sd / "svgf[a=0]/relerr_0002.exr", values, {{"Y", {}}});
+  const json exact = relerrOf("report_tiles_values");
+  EXPECT_NEAR(exact["relerr"][0].get<double>(), (1000.0 + 63 * 0.5) / 64, 1e-3 * 16.1);
+  EXPECT_NEAR(exact["relerr"][5].get<double>(), 0.5, 1e-12);
+  EXPECT_FALSE(exact.contains("relerrClamped"));
+}
+
+// End to end: a region's relMSE in the page is the run's. Over the whole frame the tiles' pixel-
+// weighted mean is the frame's relMSE as the run recorded it (to the tiles' 4 digits), for the
+// noisy input passed through, whose fireflies lie far beyond the error map's scale.
+TEST(Report, ARegionsRelMseIsTheRunsOwn) {
+  RunConfig c = contract::tinyRun("crop_e2e");
+  c.render = test::tinySettings(40, 24, 8, 8);
+  c.scenes = {test::shippedScene("light_switch")};
+  c.keepFrames = "chosen";
+  const json run = runMatrix(c);
+  ReportOptions o;
+  o.run = c.out;
+  o.out = test::freshDir("report_crop_out");
+  o.nodeModulesDir = fakeNodeModules("report_crop_modules");
+  writeReport(o);
+  const json& pair = run["pairs"][0];
+  int checked = 0;
+  bool beyondTheMap = false;
+  for (const auto& entry : fs::directory_iterator(o.out / "tiles")) {
+    const std::string text = readText(entry.path());
+    const json t =
+        json::parse(text.substr(text.find("] = ") + 4, text.rfind(';') - text.find("] = ") - 4));
+    const std::string name = entry.path().stem().string();  // s0_f<frame>
+    const int frame = std::stoi(name.substr(name.find("_f") + 2));
+    double sum = 0, pixels = 0;
+    for (size_t k = 0; k < t["counts"].size(); ++k) {
+      sum += t["panels"]["passthrough"]["relerr"][k].get<double>() * t["counts"][k].get<double>();
+      pixels += t["counts"][k].get<double>();
+    }
+    const double recorded = pair["frames"][size_t(frame)]["relMse"].get<double>();
+    EXPECT_NEAR(sum / pixels, recorded, 1e-3 * recorded) << "frame " << frame;
+    const Image e = readExr(c.out / pair["images"]["dir"].get<std::string>() /
+                                ("relerr_" + std::string(4 - std::to_string(frame).size(), '0') +
+                                 std::to_string(frame) + ".exr"),
+                            {{"Y", {}}})
+                        .layers.get("Y");
+    for (float v : e.raw()) beyondTheMap = beyondTheMap || v > 10.0f;
+    ++checked;
+  }
+  EXPECT_GE(checked, 1);
+  EXPECT_TRUE(beyondTheMap) << "the case this test is for: pixels the map clamps";
 }
 
 // ---------------------------------------------------------------- bad input

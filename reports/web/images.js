@@ -268,14 +268,21 @@
     const y0 = Math.min(...rows) * T.tile, y1 = Math.min(T.height, (Math.max(...rows) + 1) * T.tile);
     const psnr = (mse) => (mse === null ? null : mse > 0 ? Math.min(100, 10 * Math.log10(1 / mse)) : 100);
     const entries = Object.entries(T.panels).sort(([a], [b]) => (a === 'noisy' ? -1 : b === 'noisy' ? 1 : 0));
+    // relMSE from the run's unclamped values, or (runs that kept only the map) decoded from the
+    // map, which stops at 10: with such pixels in the region the figure is a lower bound.
+    const clampedIn = (v) => (v.relerrClamped ? tiles.reduce((s, k) => s + v.relerrClamped[k], 0) : 0);
+    const fromMap = entries.some(([, v]) => v.relerr && v.relerrClamped);
+    const relMseText = (v) => (v.relerr && clampedIn(v) > 0 ? `≥ ${fmt(mean(v.relerr))}` : fmt(mean(v.relerr)));
     out.replaceChildren(
       el('p', { class: 'note', text: `Region x ${x0}–${x1}, y ${y0}–${y1} px (${pixels} pixels, ${tiles.length} tiles of ${T.tile} px), frame ${A.state.frame}. ` +
-        'Computed in the report from the kept 8-bit images: PSNR of the display PNG against the reference PNG, LDR-FLIP decoded from the magma map (1/255 steps), relMSE decoded from the relative-error map (log-quantised, ±5%).' }),
+        'Computed in the report from the kept images: PSNR of the display PNG against the reference PNG, LDR-FLIP decoded from the magma map (1/255 steps), ' +
+        (fromMap ? 'relMSE decoded from the relative-error map (log-quantised, ±5%; the map stops at 10, so a region with pixels beyond it reads ≥, a lower bound: this run kept no unclamped values).'
+                 : 'relMSE from the per-pixel relative squared errors the run kept (as the run computes it, to 4 digits).') }),
       el('table', { class: 'data crop-table' },
         el('thead', {}, el('tr', {}, ['', 'PSNR display (dB) ↑', 'LDR-FLIP ↓', 'relMSE ↓'].map((t, i) => el('th', { class: i ? null : 'first', text: t })))),
         el('tbody', {}, entries.map(([key, v]) => el('tr', { 'data-label': key },
           el('td', { class: 'first', text: key === 'noisy' ? 'noisy input' : key }),
-          el('td', { text: fmt(psnr(mean(v.sqerr))) }), el('td', { text: fmt(mean(v.flip)) }), el('td', { text: fmt(mean(v.relerr)) }))))));
+          el('td', { text: fmt(psnr(mean(v.sqerr))) }), el('td', { text: fmt(mean(v.flip)) }), el('td', { text: relMseText(v) }))))));
   }
 
   // ------------------------------------------------------------ grid of every image
