@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <optional>
 #include <set>
@@ -617,6 +618,58 @@ bool isContender(const PairResult& p, const std::vector<std::string>& names) {
          std::find(names.begin(), names.end(), p.denoiser) != names.end();
 }
 
+namespace {
+
+// The label of `labels` that `typed` names: itself, or the one that differs from it only in how a
+// number is written ("svgf[sigmaL=8.0]" for "svgf[sigmaL=8]", as a run writes it): the same name,
+// the same keys in the same order, each value the same text or the same number. Empty when none,
+// or when more than one would.
+std::string labelTyped(const std::set<std::string>& labels, const std::string& typed) {
+  if (labels.count(typed)) return typed;
+  // name, then key=value texts; false when the text has no brackets or does not close them.
+  const auto parts = [](const std::string& label, std::vector<std::string>& out) {
+    const size_t open = label.find('[');
+    if (open == std::string::npos || label.back() != ']') return false;
+    out = {label.substr(0, open)};
+    std::string inner = label.substr(open + 1, label.size() - open - 2);
+    for (size_t start = 0;;) {
+      const size_t comma = inner.find(',', start);
+      out.push_back(inner.substr(start, comma - start));
+      if (comma == std::string::npos) return true;
+      start = comma + 1;
+    }
+  };
+  const auto number = [](const std::string& text, double& x) {
+    if (text.empty()) return false;
+    char* end = nullptr;
+    x = std::strtod(text.c_str(), &end);
+    return end == text.c_str() + text.size() && std::isfinite(x);
+  };
+  const auto sameValue = [&](const std::string& a, const std::string& b) {
+    const size_t ea = a.find('='), eb = b.find('=');
+    if (ea == std::string::npos || eb == std::string::npos) return a == b;
+    if (a.substr(0, ea) != b.substr(0, eb)) return false;
+    const std::string va = a.substr(ea + 1), vb = b.substr(eb + 1);
+    double x = 0, y = 0;
+    return va == vb || (number(va, x) && number(vb, y) && x == y);
+  };
+  std::vector<std::string> want;
+  if (!parts(typed, want)) return {};
+  std::string found;
+  for (const std::string& label : labels) {
+    std::vector<std::string> have;
+    if (!parts(label, have) || have.size() != want.size() || have[0] != want[0]) continue;
+    bool same = true;
+    for (size_t i = 1; i < have.size() && same; ++i) same = sameValue(have[i], want[i]);
+    if (!same) continue;
+    if (!found.empty()) return {};
+    found = label;
+  }
+  return found;
+}
+
+}  // namespace
+
 std::map<std::string, std::string> checkLabelMatches(const std::vector<std::string>& assignments,
                                                      const RunResults& baseline,
                                                      const RunResults& candidate) {
@@ -644,7 +697,10 @@ std::map<std::string, std::string> checkLabelMatches(const std::vector<std::stri
     if (split == std::string::npos || split == 0 || split + 1 == a.size())
       throw Error("--match " + a +
                   ": expected BASELINE=CANDIDATE, two labels (e.g. 'svgf=svgf[sigmaL=8]')");
-    const std::string from = a.substr(0, split), to = a.substr(split + 1);
+    // As the runs write them: a number typed another way names the label it reads as.
+    std::string from = a.substr(0, split), to = a.substr(split + 1);
+    if (const std::string label = labelTyped(base, from); !label.empty()) from = label;
+    if (const std::string label = labelTyped(cand, to); !label.empty()) to = label;
     if (!base.count(from))
       throw Error("--match " + a + ": the baseline has no pair labelled " + from +
                   " (its labels: " + listed(base) + ")");

@@ -567,6 +567,9 @@ TEST(CompareGate, PairsOfOtherLabelsAreComparedWhenAskedTo) {
     EXPECT_EQ(r.matchedByRequest, r.label == "svgf") << r.label;
     EXPECT_EQ(r.candidateLabel, r.label == "svgf" ? "svgf[sigmaL=8]" : "") << r.label;
   }
+  // A number typed otherwise than the run wrote it names the same label.
+  EXPECT_EQ(checkLabelMatches({"svgf=svgf[sigmaL=8.0]"}, a, b), matches);
+  EXPECT_EQ(checkLabelMatches({"svgf=svgf[sigmaL=8e0]"}, a, b), matches);
   // Each assignment names labels the runs have, each once; a label both runs have is compared by
   // it already.
   const auto refused = [&](const std::string& assignment) {
@@ -585,6 +588,10 @@ TEST(CompareGate, PairsOfOtherLabelsAreComparedWhenAskedTo) {
   EXPECT_NE(
       refused("svgf=svgf[sigmaL=9]").find("the candidate has no pair labelled svgf[sigmaL=9]"),
       std::string::npos);
+  EXPECT_NE(refused("svgf=svgf[sigmaL=8.5]").find("the candidate has no pair labelled"),
+            std::string::npos);
+  EXPECT_NE(refused("svgf=svgf[sigmaZ=8]").find("the candidate has no pair labelled"),
+            std::string::npos);
   EXPECT_NE(refused("svgf=eaw").find("the baseline has a pair labelled eaw too"),
             std::string::npos);
   EXPECT_THROW(checkLabelMatches({"svgf=svgf[sigmaL=8]", "svgf=eaw"}, a, b), Error);
