@@ -325,20 +325,20 @@ void addRunCommands(CLI::App& app) {
         const std::string output = capturedOutputName(n);
         if (output.empty() || c.captures.empty())
           continue;  // without captures: runMatrix refuses it
-        std::set<std::string> names;
+        std::set<std::string> outputs;
         bool unreadable = false;  // a capture that cannot be read fails its own pairs, saying why
         for (const auto& capture : c.captures) {
           try {
             for (const auto& [name, unused] : readCaptureDescription(capture).outputs)
-              names.insert(name);
+              outputs.insert(name);
           } catch (const Error&) {
             unreadable = true;
           }
         }
         if (unreadable) continue;
         std::string stored;
-        for (const std::string& name : names) stored += (stored.empty() ? "" : ", ") + name;
-        if (!names.count(output))
+        for (const std::string& name : outputs) stored += (stored.empty() ? "" : ", ") + name;
+        if (!outputs.count(output))
           throw Error("--denoisers " + n + ": no capture of this run stores an output '" + output +
                       "' (" +
                       (stored.empty() ? std::string("they store none") : "stored: " + stored) +

@@ -4,6 +4,9 @@
 # "<short hash>" for a clean tree, "<short hash>-dirty" when tracked files differ from the commit,
 # "" when SOURCE is not the top of a git checkout (a source tarball, even one unpacked inside
 # another repository) or without git.
+# A script run by cmake -P starts with no policies set: the project's, so that the escaped quotes
+# below read without CMP0053's warning on every build.
+cmake_minimum_required(VERSION 3.20)
 set(commit "")
 find_package(Git QUIET)
 if(GIT_FOUND)

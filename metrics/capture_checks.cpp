@@ -48,8 +48,8 @@ double cameraShiftPixels(const CameraState& a, const CameraState& b, double near
   // atan2 of the cross and dot products, in double: acos of a float dot product near 1 reads a
   // turn of 3e-4 rad for two equal directions one rounding apart.
   auto angle = [](glm::vec3 u, glm::vec3 v) {
-    const glm::dvec3 a(u), b(v);
-    return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b));
+    const glm::dvec3 x(u), y(v);
+    return std::atan2(glm::length(glm::cross(x, y)), glm::dot(x, y));
   };
   const double turn =
       std::max({angle(a.forward, b.forward), angle(a.up, b.up), angle(a.right, b.right)});
