@@ -107,6 +107,35 @@ TEST(EventIntervals, CoverTheNoiseFreeFigureOfAKnownLag) {
   }
 }
 
+// The peak excess is a maximum over frames that hold the steady state's own, so never below 0,
+// and neither is its interval: a peak in one tile of 16 (absent from a third of the replicates)
+// gives a percentile interval from 0, which the small-sample widening about the median would
+// push below 0; it is cut there.
+TEST(EventIntervals, ThePeakExcessAndItsIntervalAreNeverNegative) {
+  std::mt19937_64 rng(21);
+  std::normal_distribution<double> n(0.0, 1.0);
+  EventTiles e;
+  for (int t = 0; t < kFrames; ++t) {
+    TileSums bias, curve;
+    for (int k = 0; k < kTiles; ++k) {
+      bias.sum.push_back(kPixels * 0.04 * n(rng));
+      bias.count.push_back(kPixels);
+      curve.sum.push_back(kPixels * (k == 0 && t == kT0 ? 1.0 : 0.01));
+      curve.count.push_back(kPixels);
+    }
+    e.bias.add(t, std::move(bias));
+    e.curve.add(t, std::move(curve));
+  }
+  const GhostingResult g = analyseGhosting(kT0, 0, valuesOf(e.curve), valuesOf(e.bias));
+  EXPECT_NEAR(g.peakExcess, 0.99 / kTiles, 1e-9);
+  const auto point = ghostingFigures(g);
+  json j;
+  addFigureIntervals(j, ghostingReplicates(kT0, e, "one tile"), point, 0.95);
+  ASSERT_TRUE(j["ci95"].contains("peakExcess")) << j.dump();
+  EXPECT_EQ(j["ci95"]["peakExcess"][0].get<double>(), 0.0) << j["ci95"].dump();
+  EXPECT_GT(j["ci95"]["peakExcess"][1].get<double>(), g.peakExcess);
+}
+
 TEST(EventIntervals, SameSeedSameIntervalAnotherSeedAnother) {
   std::mt19937_64 rng(3);
   const EventTiles e = syntheticEvent(rng, 0.04);
