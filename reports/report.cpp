@@ -236,12 +236,14 @@ json speedPoint(const PairResult& pair, const ErrorAxis& axis, const std::string
   v["msHi"] = std::isfinite(t.hi) ? json(t.hi) : json(nullptr);
   // Disocclusion rays (reengine), gradient samples (asvgf): the paths a denoiser read beyond the
   // frame's and, on the CPU axis, their equivalent tracing time, drawn as a bar beside its own
-  // time. The model prices no tracing, so a GPU axis keeps only the "+paths" mark.
-  for (const char* key : {"tracingMs", "extraRaysPerPixel"}) {
-    if (clock != "cpu" && std::string(key) == "tracingMs") continue;
-    const auto found = pair.summary.find(key);
-    if (found != pair.summary.end() && std::isfinite(found->second.mean)) v[key] = found->second.mean;
-  }
+  // time: its median, as the time's. The model prices no tracing, so a GPU axis keeps only the
+  // "+paths" mark.
+  if (const auto found = pair.summary.find("tracingMs");
+      clock == "cpu" && found != pair.summary.end() && std::isfinite(found->second.median))
+    v["tracingMs"] = found->second.median;
+  if (const auto found = pair.summary.find("extraRaysPerPixel");
+      found != pair.summary.end() && std::isfinite(found->second.mean))
+    v["extraRaysPerPixel"] = found->second.mean;
   return v;
 }
 

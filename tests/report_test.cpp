@@ -298,6 +298,11 @@ TEST(Report, EachTimeAxisHasItsOwnPointsAndFront) {
         {"devices", json::array({{{"device", "TITAN RTX"}, {"msMedian", ms}, {"msP5", ms * 0.9}, {"msP95", ms * 1.2}, {"msMean", ms}}})},
         {"memory", {{"persistentMiB", 10.0 * ms}, {"workingSetMiB", 30.0 * ms}}}};
     if (label == "svgf[a=1]") pair["timing"]["gpuPredicted"]["skippedHere"] = 4;
+    // Extra paths: their tracing time is drawn at its median beside the time's median.
+    if (label == "svgf[a=0]") {
+      pair["summary"]["tracingMs"] = summaryOf(2.0);
+      pair["summary"]["tracingMs"]["median"] = 1.5;
+    }
   }
   const fs::path dir = writeFixtureRun("report_clocks", run);
   const json data = reportData(test::typed(run), dir, nullptr);
@@ -325,6 +330,9 @@ TEST(Report, EachTimeAxisHasItsOwnPointsAndFront) {
     EXPECT_DOUBLE_EQ(p["ms"].get<double>(), gpuMs.at(p["label"]));
     EXPECT_DOUBLE_EQ(p["msHi"].get<double>(), 1.2 * gpuMs.at(p["label"]));
   }
+  for (const json& p : data["speed"]["views"]["cpu"]["scenes"]["static"]["relMse"]["points"])
+    EXPECT_EQ(p.value("tracingMs", -1.0), p["label"] == "svgf[a=0]" ? 1.5 : -1.0) << p["label"];
+  for (const json& p : gpu["points"]) EXPECT_FALSE(p.contains("tracingMs")) << p["label"];
   // svgf[a=1,b=false] (0.06) is slower and worse than svgf[a=0] there: off the GPU front, on the CPU one.
   EXPECT_EQ(gpu["front"], json({"svgf[a=0]", "svgf[a=1]"}));
   EXPECT_EQ(data["speed"]["views"]["cpu"]["scenes"]["static"]["relMse"]["front"],

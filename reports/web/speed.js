@@ -80,10 +80,13 @@
     return [` · timed on another clock, not on this axis: ${text.join('; ')}`];
   }
 
-  function chartSpec({ drawn, front, frontEqualPaths }, axis, yTitle, logError, small, title) {
+  // `all`: the all-scenes chart, whose times are means over scenes of each scene's median.
+  function chartSpec({ drawn, front, frontEqualPaths }, axis, yTitle, logError, small, title, all = false) {
     const unit = A.state.speedClock === 'cpu' ? 'CPU ms' : isGpuModel() ? 'predicted GPU ms' : 'captured GPU ms';
     const x = { field: 'ms', type: 'quantitative', scale: { type: 'log' },
-                title: small ? `${unit} (median)` : `${unit} per frame (median; bars p5–p95; log scale)` };
+                title: small ? `${unit} (median)` : all
+                  ? `${unit} per frame (mean over scenes of each scene's median; bars: means of p5 and p95; log scale)`
+                  : `${unit} per frame (median; bars p5–p95; log scale)` };
     const y = { field: 'error', type: 'quantitative', title: yTitle, scale: logError ? { type: 'log' } : { zero: false } };
     const color = { field: 'label', type: 'nominal', scale: A.colorScale, title: 'denoiser / setting', legend: small ? null : {} };
     const tooltip = [
@@ -232,7 +235,7 @@
             ` · by time on this axis (medians, no interval): ${order}`,
             ...otherClocks(all ? null : state.speedScene),
         );
-    const view = await A.embedChart('speed', chart, chartSpec(d, axis, yTitle, logError, false, title));
+    const view = await A.embedChart('speed', chart, chartSpec(d, axis, yTitle, logError, false, title, all));
     onClick(view, all ? null : state.speedScene);
   };
 })();
