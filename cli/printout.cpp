@@ -50,6 +50,23 @@ std::string intervalText(const Interval& ci) {
   return text;
 }
 
+// A scene's pairs whose outputs were bit-identical (pairs[].outputChecksum), "asvgf = svgf" per
+// group: a tie between them measures one output twice.
+std::string identicalOutputsText(const RunResults& results, const std::string& scene) {
+  std::map<std::string, std::vector<std::string>> byChecksum;
+  for (const PairResult& p : results.pairs)
+    if (p.scene == scene && p.ok() && p.detail.contains("outputChecksum") &&
+        p.detail["outputChecksum"].is_string())
+      byChecksum[p.detail["outputChecksum"].get<std::string>()].push_back(p.label);
+  std::string text;
+  for (const auto& [checksum, labels] : byChecksum) {
+    if (labels.size() < 2) continue;
+    if (!text.empty()) text += "; ";
+    for (size_t k = 0; k < labels.size(); ++k) text.append(k ? " = " : "").append(labels[k]);
+  }
+  return text;
+}
+
 std::string tiedText(const RankedMethod& m) {
   std::string s;
   for (const std::string& t : m.tiedWith) s += (s.empty() ? "" : ", ") + t;
@@ -64,6 +81,15 @@ namespace {
 // (reengine's disocclusion rays, asvgf's gradient samples): not on equal terms with the others.
 std::string rankedLabel(const RankedMethod& m) {
   return m.extraPathsPerPixel > 0 ? m.label + " (+paths)" : m.label;
+}
+
+// Whether a ranking lists a method above one with a lower (better) value: ranks count the methods
+// resolved better, so one whose differences are less certain can stand above a lower mean.
+bool ranksAboveALowerValue(const std::vector<RankedMethod>& ranking) {
+  for (size_t i = 0; i < ranking.size(); ++i)
+    for (size_t j = i + 1; j < ranking.size(); ++j)
+      if (ranking[i].rank < ranking[j].rank && ranking[j].value < ranking[i].value) return true;
+  return false;
 }
 
 size_t labelColumn(const std::vector<RankedMethod>& ranking, size_t minimum) {
@@ -160,6 +186,10 @@ void printOverallRanking(std::ostream& out, const RunResults& results) {
                 ? "; =: tied with those named, a difference not resolved, so tied methods may hold "
                   "different ranks"
                 : "")
+        << (ranksAboveALowerValue(o.ranking)
+                ? "; a method above one with a lower score has fewer methods resolved better than "
+                  "it (its differences are less certain), not a better score"
+                : "")
         << ")\n";
   if (std::any_of(o.ranking.begin(), o.ranking.end(),
                   [](const RankedMethod& m) { return m.extraPathsPerPixel > 0; }))
@@ -186,7 +216,8 @@ namespace {
 // its mean over the scenes where both were measured.
 void printSpeedOrder(std::ostream& out, const RunResults& results) {
   std::map<std::string, std::pair<double, double>> sums;  // label -> (CPU, GPU) sums
-  std::map<std::string, int> counts;
+  std::map<std::string, int> counts, traced;
+  std::map<std::string, double> tracing;  // label -> sum of its extra paths' tracing ms
   std::vector<std::string> labels;
   std::set<std::string> unmodelled;  // CPU-timed methods the cost model does not price
   std::string device;
@@ -205,6 +236,13 @@ void printSpeedOrder(std::ostream& out, const RunResults& results) {
     sums[label].first += t["msMedian"].get<double>();
     sums[label].second += devices[0]["msMedian"].get<double>();
     ++counts[label];
+    // Extra paths (asvgf's gradient samples, reengine's disocclusion rays): their tracing time is
+    // not in the denoiser's, so the order marks them with it (median, as the time's).
+    if (const auto found = p.summary.find("tracingMs");
+        found != p.summary.end() && std::isfinite(found->second.median)) {
+      tracing[label] += found->second.median;
+      ++traced[label];
+    }
   }
   if (labels.size() < 2) return;
   std::vector<double> cpu, gpu;
@@ -212,7 +250,8 @@ void printSpeedOrder(std::ostream& out, const RunResults& results) {
     cpu.push_back(sums[l].first / counts[l]);
     gpu.push_back(sums[l].second / counts[l]);
   }
-  auto order = [&](const std::vector<double>& ms) {
+  // onCpu: the CPU line, whose extra paths' tracing time (CPU ms too) is given beside the time.
+  auto order = [&](const std::vector<double>& ms, bool onCpu) {
     std::vector<size_t> idx(labels.size());
     for (size_t i = 0; i < idx.size(); ++i) idx[i] = i;
     std::stable_sort(idx.begin(), idx.end(), [&](size_t a, size_t b) { return ms[a] < ms[b]; });
@@ -221,6 +260,10 @@ void printSpeedOrder(std::ostream& out, const RunResults& results) {
     for (size_t i : idx) {
       const std::string figure = figureText(ms[i]);
       text += (text.empty() ? "" : figure == previous ? " = " : " < ") + labels[i] + " " + figure;
+      if (traced.count(labels[i]))
+        text +=
+            onCpu ? " (+paths: " + figureText(tracing[labels[i]] / traced[labels[i]]) + " tracing)"
+                  : " (+paths)";
       previous = figure;
     }
     return text;
@@ -237,14 +280,18 @@ void printSpeedOrder(std::ostream& out, const RunResults& results) {
   // not a resolved difference; with two methods the correlation can only be +-1.
   out << "\nspeed, ms per frame (mean over scenes of each pair's median, ordered; no interval: "
          "close times may swap between runs; the report charts each axis)\n"
-      << "  CPU measured here" << (where.empty() ? "" : " (" + where + ")") << ": " << order(cpu)
-      << "\n"
-      << "  GPU predicted, " << device << " 1080p (a model): " << order(gpu) << "\n"
+      << "  CPU measured here" << (where.empty() ? "" : " (" + where + ")") << ": "
+      << order(cpu, true) << "\n"
+      << "  GPU predicted, " << device << " 1080p (a model): " << order(gpu, false) << "\n"
       << "  rank correlation of the two orders (Spearman): "
       << (labels.size() < 3
               ? "not given for " + std::to_string(labels.size()) + " methods (it can only be +-1)"
               : spearmanText(spearman(cpu, gpu), labels.size()))
       << "\n";
+  if (!traced.empty())
+    out << "  (+paths: T tracing): read paths beyond the frame's 1-spp ones, whose tracing, T ms "
+           "at "
+           "the render's rate, is not in the time ordered (the GPU model prices none)\n";
   if (!unmodelled.empty()) {
     std::string names;
     for (const std::string& l : unmodelled) names += (names.empty() ? "" : ", ") + l;
@@ -267,6 +314,11 @@ void printSceneRankings(std::ostream& out, const RunResults& results) {
           << rightAligned(figureText(m.value), 11) << "  " << paddedText(intervalText(m.ci), 24)
           << tiedText(m) << "\n";
     if (!s.excluded.empty()) out << "  not ranked: " << s.excluded << "\n";
+    if (const std::string same = identicalOutputsText(results, name); !same.empty())
+      out << "  identical outputs (bit for bit, every frame): " << same << "\n";
+    if (ranksAboveALowerValue(s.ranking))
+      out << "  (a method above one with a lower mean has fewer methods resolved better than it: "
+             "its differences are less certain)\n";
   }
 }
 
@@ -364,8 +416,9 @@ void printSceneWinners(std::ostream& out, const RunResults& results) {
       out << "only " << best.label << " ranked: not compared\n";
       continue;
     }
-    const std::string tied = tiedText(best);
-    out << best.label << " " << figureText(best.value) << " " << intervalText(best.ci) << (tied.empty() ? "" : "; " + tied)
+    const std::string tied = tiedText(best), same = identicalOutputsText(results, name);
+    out << rankedLabel(best) << " " << figureText(best.value) << " " << intervalText(best.ci)
+        << (tied.empty() ? "" : "; " + tied) << (same.empty() ? "" : "; identical outputs: " + same)
         << "\n";
   }
 }

@@ -19,6 +19,9 @@ std::string figureText(double value);
 std::string intervalText(const Interval& interval);
 // "tied with a, b" from a ranking entry's tiedWith, or "".
 std::string tiedText(const RankedMethod& rankedMethod);
+// A scene's pairs whose outputs were bit-identical on every frame (pairs[].outputChecksum), each
+// group "asvgf = svgf", groups separated by "; "; "" when none.
+std::string identicalOutputsText(const RunResults& results, const std::string& scene);
 // The run's overall ranking (statistics.overall): rank ("=" when tied), label, score, interval,
 // ties; and who was left out and why. Nothing when the run has none.
 // The scenes' image sizes, each once: "256x144" or "256x144, 512x288" ("" when none is recorded).

@@ -229,6 +229,10 @@ void finish(const std::string& out) {
       std::cout << "  FAILED\n";
     }
   }
+  // A tie between two methods whose outputs are the same bits measures one output twice.
+  for (const auto& [name, scene] : results.scenes.items())
+    if (const std::string same = identicalOutputsText(results, name); !same.empty())
+      std::cout << name << ": identical outputs (bit for bit, every frame): " << same << "\n";
   printSeedSplit(std::cout, results);
   for (const std::string& line : absentSummaryLines(results, {"relMse"})) std::cout << line << "\n";
   // What concerns a scene rather than a method (events beyond the frames rendered, an unflagged

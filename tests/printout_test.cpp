@@ -322,6 +322,50 @@ TEST(StudySummary, AMethodThatReadExtraPathsIsMarkedInTheRankings) {
   EXPECT_EQ(plain.str().find("(+paths)"), std::string::npos) << plain.str();
 }
 
+// What a reader would otherwise take for a measured tie or a fair time: a scene's best tied with
+// a method of the same output bits says so, the best that read extra paths is marked, the speed
+// order gives extra paths' tracing time beside the time it orders (CPU only: the GPU model prices
+// none), and a ranking that lists a method above a lower mean says why.
+TEST(StudySummary, IdenticalOutputsExtraPathsAndRanksAboveALowerMeanAreSaid) {
+  json results = worstDefaultStudy();
+  const std::string scene = results["scenes"].begin().key();
+  json& st = results["statistics"]["scenes"][scene];
+  const std::string best = st["ranking"][0]["label"], second = st["ranking"][1]["label"];
+  st["ranking"][0]["extraPathsPerPixel"] = 0.1;
+  int timed = 0;
+  for (json& p : results["pairs"]) {
+    if (p["scene"] != scene) continue;
+    if (p["label"] == best || p["label"] == second) p["outputChecksum"] = "abc";
+    if (timed < 3) {
+      p["timing"] = {
+          {"msMedian", 1.0 + timed},
+          {"clock", "cpu"},
+          {"gpuPredicted",
+           {{"devices", json::array({{{"device", "H200"}, {"msMedian", 0.1 * (1 + timed)}}})}}}};
+      if (p["label"] == best) p["summary"]["tracingMs"] = {{"mean", 2.5}, {"median", 2.0}};
+      ++timed;
+    }
+  }
+  std::ostringstream out;
+  cli::printStudySummary(out, test::typed(results), {"r.json", "r.db", "index.html", 1});
+  const std::string text = out.str();
+  EXPECT_NE(text.find(best + " (+paths) 0.001 "), std::string::npos) << text;
+  EXPECT_EQ(occurrences(text, "; identical outputs: " + best + " = " + second + "\n"), 1u) << text;
+  EXPECT_NE(text.find(best + " 1 (+paths: 2 tracing)"), std::string::npos) << text;
+  EXPECT_NE(text.find(best + " 0.1 (+paths)"), std::string::npos) << text;
+  EXPECT_EQ(occurrences(text, "(+paths: T tracing): read paths beyond"), 1u) << text;
+  EXPECT_EQ(cli::identicalOutputsText(test::typed(results), "no such scene"), "");
+  // Ranked above a lower mean: the method ranked 1 with the higher mean.
+  std::swap(st["ranking"][0]["mean"], st["ranking"][5]["mean"]);
+  std::ostringstream tables;
+  cli::printStudyTables(tables, test::typed(results));
+  EXPECT_EQ(occurrences(tables.str(), "a method above one with a lower mean has fewer methods"), 1u)
+      << tables.str();
+  EXPECT_EQ(occurrences(tables.str(),
+                        "identical outputs (bit for bit, every frame): " + best + " = " + second),
+            1u);
+}
+
 // A scene whose references stopped at their sample cap: the warning is the scene's, stored once in
 // results.scenes.<scene>.warnings (not on each of its pairs) and printed once.
 TEST(StudySummary, AWarningAboutASceneIsStoredAndPrintedOncePerScene) {
