@@ -309,13 +309,43 @@ void appendToDatabase(const fs::path& dbPath, const RunResults& r, const std::st
     const RunStatistics& statistics = *r.statistics;
     Statement paired(db, "INSERT INTO paired VALUES (?,?,?,?,?,?,?,?,?)");
     Statement rank(db, "INSERT INTO rankings VALUES (?,?,?,?,?,?,?,?,?)");
-    auto addRanking = [&](const std::string& scene, const std::string& metric, const std::vector<RankedMethod>& ranking) {
-      for (const RankedMethod& m : ranking)
-        rank.integer(1, runId).text(2, scene).text(3, metric).text(4, m.label).integer(5, m.rank).real(6, m.value)
-            .real(7, m.ci.lo).real(8, m.ci.hi).text(9, json(m.tiedWith).dump()).step();
+    // `unsettled`: the response of an event's methods that never settled, whose ranking value
+    // (and a bound at it) is the window's frame count, by which the ranking orders them last; no
+    // number of frames, so NULL here, as the pair's own figure is null in results.json.
+    auto addRanking = [&](const std::string& scene, const std::string& metric,
+                          const std::vector<RankedMethod>& ranking,
+                          const std::map<std::string, double>& unsettled = {}) {
+      for (const RankedMethod& m : ranking) {
+        const auto never = unsettled.find(m.label);
+        const auto bound = [&](double v) {
+          return never != unsettled.end() && v >= never->second ? kUndefined : v;
+        };
+        rank.integer(1, runId)
+            .text(2, scene)
+            .text(3, metric)
+            .text(4, m.label)
+            .integer(5, m.rank)
+            .real(6, never != unsettled.end() ? kUndefined : m.value)
+            .real(7, bound(m.ci.lo))
+            .real(8, bound(m.ci.hi))
+            .text(9, json(m.tiedWith).dump())
+            .step();
+      }
     };
-    auto addScene = [&](const std::string& scene, const SceneRanking& s, const std::string& metric) {
-      addRanking(scene, metric, s.ranking);
+    // Of a scene's event at `frame`, the methods that never settled: label -> the window's frames.
+    auto unsettledAt = [&](const std::string& scene, int frame) {
+      std::map<std::string, double> out;
+      for (const PairResult& p : r.pairs)
+        if (p.scene == scene && p.ok() && p.part("ghosting").is_array())
+          for (const json& g : p.part("ghosting"))
+            if (g.value("eventFrame", -1) == frame && g.value("settled", json()).is_boolean() &&
+                !g["settled"].get<bool>() && g.value("windowEnd", json()).is_number())
+              out[p.label] = g["windowEnd"].get<double>() - frame + 1;
+      return out;
+    };
+    auto addScene = [&](const std::string& scene, const SceneRanking& s, const std::string& metric,
+                        const std::map<std::string, double>& unsettled = {}) {
+      addRanking(scene, metric, s.ranking, unsettled);
       for (const SceneRanking::Pair& x : s.pairs)
         paired.integer(1, runId).text(2, scene).text(3, metric).text(4, x.a).text(5, x.b).real(6, x.d.diff)
             .real(7, x.d.ci.lo).real(8, x.d.ci.hi).integer(9, x.d.resolved()).step();
@@ -327,7 +357,11 @@ void appendToDatabase(const fs::path& dbPath, const RunResults& r, const std::st
       // "cut@<frame>.<figure>"; each method's figure and interval are its rankings row.
       scene.forEachEvent([&](const EventStatistics& e, bool cut) {
         for (const auto& [figure, ranking] : e.byFigure)
-          addScene(name, ranking, std::string(cut ? "cut@" : "ghosting@") + std::to_string(e.eventFrame) + "." + figure);
+          addScene(
+              name, ranking,
+              std::string(cut ? "cut@" : "ghosting@") + std::to_string(e.eventFrame) + "." + figure,
+              !cut && figure == "responseFrames" ? unsettledAt(name, e.eventFrame)
+                                                 : std::map<std::string, double>{});
       });
     }
     // The overall scores: scene "*", relMSE's and every other metric's that declares one.

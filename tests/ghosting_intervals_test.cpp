@@ -628,6 +628,28 @@ TEST(EventIntervalsEndToEnd, IntervalsRankingsAndShardsMergedEqualOneRun) {
   EXPECT_EQ(count("SELECT COUNT(*) FROM rankings WHERE metric = 'ghosting@12.chromaLagEnergy' AND "
                   "ci_lo IS NOT NULL"),
             3);
+  // A method that never settled has no number of frames: NULL, as its figure is null in the JSON
+  // (its rank orders it last); one that settled has its figure.
+  int never = 0, settled = 0;
+  for (const json& p : whole["pairs"])
+    for (const json& g : p["ghosting"]) {
+      const std::string where =
+          "FROM rankings WHERE scene = 'light_switch' AND metric = "
+          "'ghosting@12.responseFrames' AND label = '" +
+          p["label"].get<std::string>() + "'";
+      if (!g["settled"].get<bool>()) {
+        ++never;
+        EXPECT_EQ(count(("SELECT COUNT(*) " + where + " AND value IS NULL").c_str()), 1)
+            << p["label"];
+      } else {
+        ++settled;
+        const std::string sql = "SELECT COUNT(*) " + where +
+                                " AND value = " + std::to_string(g["responseFrames"].get<int>());
+        EXPECT_EQ(count(sql.c_str()), 1) << p["label"];
+      }
+    }
+  EXPECT_GE(never, 1) << "the case this part is for: temporal does not settle in 6 frames";
+  EXPECT_GE(settled, 1);
   // And every overall score, relMSE's and the other metrics' (scene "*").
   const json& overallByMetric = whole["statistics"]["overallByMetric"];
   ASSERT_FALSE(overallByMetric.empty());
