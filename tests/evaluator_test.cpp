@@ -316,6 +316,10 @@ TEST(Evaluation, CappedReferencesAreNamedWithTheFramesTheyServe) {
                              "relMSE (frames 0-1, 4;"),
             std::string::npos)
       << warnings[0];
+  // What to do about it: the verdict says whether it matters, and how to refine.
+  EXPECT_NE(warnings[0].find("Whether that matters is the scene's reference-quality verdict"),
+            std::string::npos)
+      << warnings[0];
   // A capped reference no frame reads (the evaluation's input may carry one) is counted, not
   // listed.
   in.referenceOfFrame = {0, 1, 1, 1, 1, 1, 1, 1, 1};
