@@ -83,6 +83,12 @@ std::string rankedLabel(const RankedMethod& m) {
   return m.extraPathsPerPixel > 0 ? m.label + " (+paths)" : m.label;
 }
 
+// A rank as every table prints it: "3", "3=" when tied with others, "-" when not ranked.
+std::string rankText(const RankedMethod& m) {
+  if (m.rank <= 0) return "-";
+  return std::to_string(m.rank) + (m.tiedWith.empty() ? "" : "=");
+}
+
 // Whether a ranking lists a method above one with a lower (better) value: ranks count the methods
 // resolved better, so one whose differences are less certain can stand above a lower mean.
 bool ranksAboveALowerValue(const std::vector<RankedMethod>& ranking) {
@@ -165,9 +171,8 @@ void printOverallRanking(std::ostream& out, const RunResults& results) {
     out << "\noverall: " << o.normalisation << " (lower is better)\n";
   const size_t column = labelColumn(o.ranking, 26);
   for (const RankedMethod& m : o.ranking) {
-    const bool tied = !m.tiedWith.empty();
-    out << "  " << std::left << std::setw(4) << (std::to_string(m.rank) + (tied ? "=" : ""))
-        << paddedText(rankedLabel(m), column) << rightAligned(figureText(m.value), 11) << "  "
+    out << "  " << std::left << std::setw(4) << rankText(m) << paddedText(rankedLabel(m), column)
+        << rightAligned(figureText(m.value), 11) << "  "
         << paddedText(m.label == o.baseline
                           ? "(1 by definition)"
                           : intervalText(m.ci),  // the baseline's [1, 1] is no certainty
@@ -310,7 +315,7 @@ void printSceneRankings(std::ostream& out, const RunResults& results) {
     out << "\n" << name << ": " << s.resolvedPairs << " of " << s.pairs.size() << " pairwise differences resolved\n";
     const size_t column = labelColumn(s.ranking, 26);
     for (const RankedMethod& m : s.ranking)
-      out << "  " << std::left << std::setw(4) << m.rank << paddedText(rankedLabel(m), column)
+      out << "  " << std::left << std::setw(4) << rankText(m) << paddedText(rankedLabel(m), column)
           << rightAligned(figureText(m.value), 11) << "  " << paddedText(intervalText(m.ci), 24)
           << tiedText(m) << "\n";
     if (!s.excluded.empty()) out << "  not ranked: " << s.excluded << "\n";
@@ -382,8 +387,7 @@ void printEventTables(std::ostream& out, const RunResults& results) {
             for (const json& x : p.part(cut ? "cuts" : "ghosting"))
               if (x.value("eventFrame", -1) == frame) e = &x;
         if (!e) continue;
-        out << "  " << std::left << std::setw(4) << (m.rank > 0 ? std::to_string(m.rank) : "-")
-            << paddedText(m.label, column);
+        out << "  " << std::left << std::setw(4) << rankText(m) << paddedText(m.label, column);
         for (const char* f : cut ? std::vector<const char*>{"oldViewLeak", "atCut"}
                                  : std::vector<const char*>{"lagEnergy", "responseFrames", "peakExcess", "chromaLagEnergy"})
           out << f << " " << std::setw(26) << figureWithInterval(*e, f) << " ";
