@@ -110,9 +110,9 @@ void addStudyCommand(CLI::App& app) {
                 "Print every progress line and the full tables (every scene's ranking, every event and cut with "
                 "its intervals, every reference verdict) before the summary");
   // The study, like every run, renders the low-resolution buffer (1/8, 16 paths per texel, the
-  // CAPCOM 2023 setting in algorithms.md) because reengine reads it (resolveAutoLowres), so
-  // reengine runs its disocclusion rays and is charged for them (a quarter of the 1-spp input's
-  // paths per frame); --lowres-factor 0 leaves it out.
+  // CAPCOM 2023 setting, denoisers/FIDELITY.md `reengine`) because reengine reads it
+  // (resolveAutoLowres), so reengine runs its disocclusion rays and is charged for them (a quarter
+  // of the 1-spp input's paths per frame); --lowres-factor 0 leaves it out.
   addRenderOptions(cmd, *opt);
   cmd->callback([=] {
     const auto start = std::chrono::steady_clock::now();

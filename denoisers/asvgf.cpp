@@ -35,8 +35,8 @@
 //     1-spp noise enters (issue 15, item 2).
 //   - Q2RTX's current moments are a 3x3 spatial estimate (depth/normal weighted); ours stay the
 //     pixel's own (SVGF), so that A-SVGF equals SVGF wherever lambda = 0.
-//   - Q2RTX's minimum alphas (colour 0.02, moments 0.01; algorithms.md quotes 0.02-0.075) are
-//     SVGF's `alpha` and `momentsAlpha` here; the defaults stay at the SVGF paper's 0.2.
+//   - Q2RTX's minimum alphas (colour 0.02, moments 0.01) are SVGF's `alpha` and `momentsAlpha`
+//     here; the defaults stay at the SVGF paper's 0.2.
 //   - Q2RTX drops the 3x3 max and disables gradients on reflections; we keep the max
 //     (gradient.max3x3) and apply the gradient to both signals.
 #include "denoisers/asvgf.hpp"

@@ -71,9 +71,9 @@ constexpr int kMaxRefineRounds = 3;
 
 // One meaning of reengine's `disocclusionRays=auto` in every command (issue 34, item 6): where the
 // buffer is left to the run (config.lowresAuto), the run renders it -- one texel per
-// kAutoLowresFactor^2 pixels (CAPCOM 2023's 1/8, algorithms.md), render.lowresSpp paths each --
-// when any of its built-in denoisers, with its parameters, reads it, and not otherwise. An
-// explicit --lowres-factor (0: none) is kept as given.
+// kAutoLowresFactor^2 pixels (CAPCOM 2023's 1/8, denoisers/FIDELITY.md, `reengine`),
+// render.lowresSpp paths each -- when any of its built-in denoisers, with its parameters, reads it,
+// and not otherwise. An explicit --lowres-factor (0: none) is kept as given.
 constexpr int kAutoLowresFactor = 8;
 void resolveAutoLowres(RunConfig& config);
 

@@ -43,7 +43,7 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // The page's static files, copied as they are.
-// app.js is split by view (style.md); shared.js holds the helpers every view uses, once.
+// app.js is split by view; shared.js holds the helpers every view uses, once.
 const char* const kWebFiles[] = {"index.html",    "style.css",   "shared.js", "speed.js",
                                  "over_time.js",  "ghosting.js", "tables.js", "images.js",
                                  "regression.js", "app.js"};

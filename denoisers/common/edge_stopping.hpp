@@ -1,5 +1,6 @@
 #pragma once
-// Edge-stopping functions w(p, q) for joint-bilateral filters (the table in docs/algorithms.md):
+// Edge-stopping functions w(p, q) for joint-bilateral filters (each variant's terms and constants
+// are in denoisers/FIDELITY.md):
 // each term switchable and tunable, the weight their product, in [0, 1], 1 at the centre.
 // EdgeStopping::weight is the per-tap reference form; the à-trous kernel (atrous_kernel.hpp)
 // evaluates the same terms register-blocked, plus the specular-lobe similarity

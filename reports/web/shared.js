@@ -1,4 +1,4 @@
-// Denoise Arena pages: helpers every view shares, defined once (style.md). Each view's script
+// Denoise Arena pages: helpers every view shares, defined once. Each view's script
 // (speed.js, over_time.js, ghosting.js, tables.js, images.js, regression.js, history.js) adds its
 // setup and render functions to window.Arena; app.js (the report) or history.js starts them.
 'use strict';
