@@ -333,14 +333,15 @@ void appendToDatabase(const fs::path& dbPath, const RunResults& r, const std::st
       }
     };
     // Of a scene's event at `frame`, the methods that never settled: label -> the window's frames.
-    auto unsettledAt = [&](const std::string& scene, int frame) {
+    auto unsettledAt = [&](const std::string& scene, int eventFrame) {
       std::map<std::string, double> out;
       for (const PairResult& p : r.pairs)
         if (p.scene == scene && p.ok() && p.part("ghosting").is_array())
           for (const json& g : p.part("ghosting"))
-            if (g.value("eventFrame", -1) == frame && g.value("settled", json()).is_boolean() &&
-                !g["settled"].get<bool>() && g.value("windowEnd", json()).is_number())
-              out[p.label] = g["windowEnd"].get<double>() - frame + 1;
+            if (g.value("eventFrame", -1) == eventFrame &&
+                g.value("settled", json()).is_boolean() && !g["settled"].get<bool>() &&
+                g.value("windowEnd", json()).is_number())
+              out[p.label] = g["windowEnd"].get<double>() - eventFrame + 1;
       return out;
     };
     auto addScene = [&](const std::string& scene, const SceneRanking& s, const std::string& metric,

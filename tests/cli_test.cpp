@@ -307,7 +307,7 @@ TEST(CliContract, MatchedLabelsAreComparedAndGatedByEitherName) {
       0);
   const std::string compare = "compare " + (dir / "a").string() + " " + (dir / "b").string() +
                               " --match 'temporal=temporal[alphaMin=0.5]' --tolerance 1000%";
-  for (const std::string& only :
+  for (const std::string only :
        {"", " --denoisers temporal", " --denoisers 'temporal[alphaMin=0.5]'"}) {
     const contract::CliResult r = contract::arenaCli(compare + only);
     EXPECT_EQ(r.status, 0) << only << "\n" << r.output;
