@@ -178,10 +178,16 @@ class ParamTable {
   std::vector<std::string> selfCheck() const {
     std::vector<std::string> problems;
     const ParamSchema schema(specs());
+    for (const Binding& b : bindings_)
+      if (const std::string problem = b.spec.problem(); !problem.empty())
+        problems.push_back(problem);
     for (size_t i = 0; i < bindings_.size(); ++i)
       for (size_t j = 0; j < i; ++j)
         if (bindings_[i].spec.name == bindings_[j].spec.name)
           problems.push_back("'" + bindings_[i].spec.name + "' is declared twice");
+    // The checks below resolve the declarations: with these wrong they would read nonsense (a
+    // name declared int and then real reads one value as the other).
+    if (!problems.empty()) return problems;
     const Settings blank{};
     for (const Binding& b : bindings_)
       if (!b.blank(blank))

@@ -32,6 +32,19 @@ static std::string formatNumber(double v) {
   return s.str();
 }
 
+std::string ParamSpec::problem() const {
+  if (name.empty() || name.find_first_of("=,[] ") != std::string::npos)
+    return "'" + name + "': a name must be non-empty without '=', ',', '[', ']' or spaces";
+  if (meaning.empty()) return "'" + name + "': no meaning (arena denoisers lists it)";
+  if (type != Type::Int && type != Type::Float) return "";
+  const std::string range = "[" + formatNumber(min) + ", " + formatNumber(max) + "]";
+  if (!(min <= max)) return "'" + name + "': its range " + range + " is inverted (min > max)";
+  if (!(defaultValue >= min && defaultValue <= max))
+    return "'" + name + "': its default " + formatNumber(defaultValue) +
+           " lies outside its range " + range;
+  return "";
+}
+
 std::string ParamSpec::describe() const {
   std::string out = name + " (";
   switch (type) {

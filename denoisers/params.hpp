@@ -24,6 +24,11 @@ struct ParamSpec {
   static ParamSpec integer(std::string name, int def, int min, int max, std::string meaning);
   static ParamSpec real(std::string name, double def, double min, double max, std::string meaning);
   static ParamSpec choice(std::string name, std::string def, std::vector<std::string> choices, std::string meaning);
+  // What is wrong with the declaration itself, "" when nothing: a name that is empty or holds
+  // '=', ',', '[', ']' or a space (a label or --param could not be read back), no meaning, a
+  // range whose min exceeds its max, or a default outside its range (which --param would refuse
+  // when typed, yet every run would use unasked).
+  std::string problem() const;
   std::string describe() const;  // "iterations (int, default 5, range [1, 8]): meaning"
 };
 

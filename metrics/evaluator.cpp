@@ -65,15 +65,23 @@ std::vector<const MetricFamily*> familiesIn(EvaluationScope scope, std::vector<c
   return families;
 }
 
-// Keeps one frame's values, notes and maps (what a family hands the evaluation).
+// Keeps one frame's values, notes and maps (what the families hand the evaluation). Each family
+// puts only the metrics it declares: one that put another's would silently replace its values.
 class FrameValues : public FrameRecorder {
  public:
   struct Value {
     double value;
     TileSums tiles;
   };
+  // Runs `family` on the frame, its puts checked against its own declarations.
+  void measure(const MetricFamily& f, const FrameView& v, const MetricOptions& options) {
+    family_ = &f;
+    f.measure(v, options, *this);
+    family_ = nullptr;
+  }
   void put(const std::string& metric, double value, TileSums tiles) override {
     requireMetric(metric, "a metric family");  // registered, so its transform and direction are known
+    if (family_) requireOwnMetric(*family_, metric);
     values[metric] = {value, std::move(tiles)};
   }
   void note(const std::string& key, double value) override { notes[key] = value; }
@@ -81,6 +89,9 @@ class FrameValues : public FrameRecorder {
   std::map<std::string, Value> values;
   std::map<std::string, double> notes;
   std::map<std::string, Image> maps;
+
+ private:
+  const MetricFamily* family_ = nullptr;  // the family measuring now
 };
 
 // The metrics with a reference-noise floor, measured on an image that carries only the reference's
@@ -92,7 +103,7 @@ std::map<std::string, double> floorsOf(const FrameView& noiseView, const MetricO
                      [](const MetricDefinition& m) { return m.floor == FloorRule::ReferenceNoise; }))
       continue;
     FrameValues values;
-    f->measure(noiseView, options, values);
+    values.measure(*f, noiseView, options);
     for (const MetricDefinition& m : f->metrics)
       if (m.floor == FloorRule::ReferenceNoise && values.values.count(m.name))
         out[m.name] = values.values.at(m.name).value;
@@ -458,7 +469,7 @@ void PairEvaluation::add(int t, const Image& output, const FrameFacts& facts) {
   }
 
   FrameValues values;
-  for (const MetricFamily* f : s.families) f->measure(v, scene.options().metrics, values);
+  for (const MetricFamily* f : s.families) values.measure(*f, v, scene.options().metrics);
   json m = {{"frame", t}};
   for (auto& [name, value] : values.values) {
     m[name] = std::isfinite(value.value) ? json(value.value) : json(nullptr);

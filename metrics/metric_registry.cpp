@@ -1,6 +1,8 @@
 #include "metrics/metric_registry.hpp"
 
 #include <algorithm>
+#include <cctype>
+#include <set>
 
 #include "core/error.hpp"
 
@@ -14,15 +16,47 @@ MetricFamily temporalFlickerFamily();  // temporal.cpp
 MetricFamily runFactsFamily();         // run_facts.cpp
 MetricFamily multiScaleStabilityFamily();  // stability.cpp
 
+// A metric's name is a key in results.json, results.db and --metric: declared once, by one family,
+// as an identifier (a second declaration would silently replace the first one's values).
+void checkFamilies(const std::vector<MetricFamily>& families) {
+  std::set<std::string> names;
+  for (const MetricFamily& f : families)
+    for (const MetricDefinition& m : f.metrics) {
+      const bool identifier =
+          !m.name.empty() && std::islower(static_cast<unsigned char>(m.name[0])) &&
+          std::all_of(m.name.begin(), m.name.end(),
+                      [](char c) { return std::isalnum(static_cast<unsigned char>(c)); });
+      if (!identifier)
+        throw Error("metric registry: '" + m.name +
+                    "' is not a name (a lower-case letter, then letters and digits)");
+      if (!names.insert(m.name).second)
+        throw Error("metric registry: '" + m.name +
+                    "' is declared twice (each metric once, by the family that computes it)");
+      if (m.description.empty())
+        throw Error("metric registry: '" + m.name +
+                    "' has no description (arena metrics lists it)");
+    }
+}
+
+void requireOwnMetric(const MetricFamily& family, const std::string& metric) {
+  if (std::any_of(family.metrics.begin(), family.metrics.end(),
+                  [&](const MetricDefinition& m) { return m.name == metric; }))
+    return;
+  std::string own;
+  for (const MetricDefinition& m : family.metrics) own += (own.empty() ? "" : ", ") + m.name;
+  throw Error("the metric family of " + own + " put '" + metric +
+              "', which it does not declare (a family puts only its own metrics)");
+}
+
 const std::vector<MetricFamily>& metricFamilies() {
-  static const std::vector<MetricFamily> families = {
-      linearErrorFamily(),
-      flipFamily(),
-      displayErrorFamily(),
-      temporalFlickerFamily(),
-      runFactsFamily(),
-      multiScaleStabilityFamily(),
-  };
+  static const std::vector<MetricFamily> families = [] {
+    std::vector<MetricFamily> all = {
+        linearErrorFamily(),     flipFamily(),     displayErrorFamily(),
+        temporalFlickerFamily(), runFactsFamily(), multiScaleStabilityFamily(),
+    };
+    checkFamilies(all);
+    return all;
+  }();
   return families;
 }
 

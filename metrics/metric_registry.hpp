@@ -186,8 +186,14 @@ struct MetricFamily {
   bool needsReference() const;
 };
 
-// Every family, in registration order (metric_registry.cpp).
+// Every family, in registration order (metric_registry.cpp), checked once: each metric declared
+// once, its name an identifier, its description given (an Error names the first that is not).
 const std::vector<MetricFamily>& metricFamilies();
+// That check, on any list of families.
+void checkFamilies(const std::vector<MetricFamily>& families);
+// An Error unless `family` declares `metric`: a family puts only its own metrics (one that put
+// another's would silently replace that family's values).
+void requireOwnMetric(const MetricFamily& family, const std::string& metric);
 // Every metric, in registration order.
 std::vector<const MetricDefinition*> metricCatalog();
 // The declaration of `name`, or null.

@@ -141,6 +141,37 @@ TEST(Evaluation, RunResultsAreBitIdenticalToTheHarnessBeforeTheStage) {
   EXPECT_GT(golden["pairs"][0]["summary"]["relMse"]["mean"].get<double>(), 0.0);
 }
 
+// A contributor's slips are refused when the registry is built, not found in a test run later: a
+// name declared by two families (the second's values replaced the first's in every result), a
+// name that is no identifier, no description; and a family that puts another family's metric.
+TEST(MetricRegistry, ARegistrySlipIsAnErrorNamingTheMetric) {
+  const auto family = [](std::vector<std::string> names) {
+    MetricFamily f;
+    for (const std::string& n : names) f.metrics.push_back({.name = n, .description = "d"});
+    return f;
+  };
+  EXPECT_NO_THROW(checkFamilies({family({"mae"}), family({"mse2"})}));
+  EXPECT_EQ(test::errorOf([&] {
+              checkFamilies({family({"mse"}), family({"mae", "mse"})});
+            }),
+            "metric registry: 'mse' is declared twice (each metric once, by the family that "
+            "computes it)");
+  EXPECT_EQ(test::errorOf([&] { checkFamilies({family({"Mae"})}); }),
+            "metric registry: 'Mae' is not a name (a lower-case letter, then letters and digits)");
+  EXPECT_NE(test::errorOf([&] { checkFamilies({family({"m.ae"})}); }).find("is not a name"),
+            std::string::npos);
+  MetricFamily silent = family({"mae"});
+  silent.metrics[0].description.clear();
+  EXPECT_EQ(test::errorOf([&] { checkFamilies({silent}); }),
+            "metric registry: 'mae' has no description (arena metrics lists it)");
+  EXPECT_NO_THROW(requireOwnMetric(family({"mae", "mse"}), "mse"));
+  EXPECT_EQ(test::errorOf([&] { requireOwnMetric(family({"mae"}), "relMse"); }),
+            "the metric family of mae put 'relMse', which it does not declare (a family puts "
+            "only its own metrics)");
+  // The registry itself passes.
+  EXPECT_NO_THROW(checkFamilies(metricFamilies()));
+}
+
 TEST(MetricRegistry, EveryMetricIsDeclaredOnceAndCompletely) {
   std::set<std::string> names;
   for (const MetricDefinition* m : metricCatalog()) {

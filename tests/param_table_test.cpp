@@ -146,6 +146,39 @@ TEST(ParamTable, SelfCheckCatchesBindingSlips) {
   EXPECT_EQ(sound.defaults().b, 2.0f);
 }
 
+// A declaration that is wrong in itself is named, before anything is resolved from it: a default
+// outside its range (every run would use what --param refuses), an inverted range, a name a label
+// could not hold, no meaning, a name declared as two types (which read one value as the other).
+struct ToyInt {
+  int radius;
+  float sigma;
+};
+
+TEST(ParamTable, SelfCheckNamesADeclarationWrongInItself) {
+  const auto problemOf = [](const auto& table) {
+    const std::vector<std::string> problems = table.selfCheck();
+    return problems.empty() ? std::string("none") : problems.front();
+  };
+  EXPECT_EQ(problemOf(ParamTable<ToyInt>().integer("radius", &ToyInt::radius, 9, 1, 8, "r")),
+            "'radius': its default 9 lies outside its range [1, 8]");
+  EXPECT_EQ(problemOf(ParamTable<ToyInt>().real("sigma", &ToyInt::sigma, 4, 8, 0, "s")),
+            "'sigma': its range [8, 0] is inverted (min > max)");
+  EXPECT_EQ(problemOf(ParamTable<ToyInt>().integer("the radius", &ToyInt::radius, 2, 1, 8, "r")),
+            "'the radius': a name must be non-empty without '=', ',', '[', ']' or spaces");
+  EXPECT_EQ(problemOf(ParamTable<ToyInt>().integer("", &ToyInt::radius, 2, 1, 8, "r")),
+            "'': a name must be non-empty without '=', ',', '[', ']' or spaces");
+  EXPECT_EQ(problemOf(ParamTable<ToyInt>().integer("radius", &ToyInt::radius, 2, 1, 8, "")),
+            "'radius': no meaning (arena denoisers lists it)");
+  EXPECT_EQ(problemOf(ParamTable<ToyInt>()
+                          .integer("radius", &ToyInt::radius, 2, 1, 8, "r")
+                          .real("radius", &ToyInt::sigma, 2, 1, 8, "r as a real")),
+            "'radius' is declared twice");
+  EXPECT_THROW(ParamTable<ToyInt>().integer("radius", &ToyInt::radius, 9, 1, 8, "r").schema(),
+               Error);
+  EXPECT_EQ(problemOf(ParamTable<ToyInt>().integer("radius", &ToyInt::radius, 8, 1, 8, "r")),
+            "none");
+}
+
 // A bound field with an initialiser of its own is a second default: a caller that builds the
 // struct by hand gets it, the table never shows it. The self-check names the parameter.
 struct ToyWithDefault {

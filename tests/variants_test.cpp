@@ -59,13 +59,13 @@ std::unique_ptr<Denoiser> create(const std::string& name,
 }
 
 }  // namespace
-DenoiserInfo boxInfo();  // examples/denoiser/box_denoiser.cpp
+DenoiserInfo exampleBoxInfo();  // examples/denoiser/box_denoiser.cpp
 namespace {
 
 // What the contract tests below check: every registered variant, then the worked example of
 // docs/extending.md, so the example a newcomer copies keeps the contract too.
 std::vector<const DenoiserInfo*> contractSubjects() {
-  static const DenoiserInfo example = boxInfo();
+  static const DenoiserInfo example = exampleBoxInfo();
   std::vector<const DenoiserInfo*> subjects;
   for (const std::string& name : DenoiserRegistry::instance().names())
     subjects.push_back(&DenoiserRegistry::instance().find(name));

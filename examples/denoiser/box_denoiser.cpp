@@ -2,11 +2,16 @@
 // filter over the (2 radius + 1)^2 window that averages only the pixels of the same mesh (a
 // crude edge-stopping term); sky pixels (meshId -1) pass through. It is not registered in the
 // arena: tests/variants_test.cpp puts it through the same contract tests as every
-// registered variant, so the example keeps compiling and keeps the Denoiser contract. To make it
-// a built-in, copy it to denoisers/, declare boxInfo() in denoisers/variants.hpp and add it to
-// builtinDenoisers() there.
+// registered variant, so the example keeps compiling and keeps the Denoiser contract. Like every
+// spatial built-in it takes the footprint policy (denoisers/common/footprint.hpp): its radius is
+// in pixels at `footprintHeight` lines, scaled with the image. To make it a built-in, follow
+// docs/extending.md: copy it to denoisers/box.cpp and rename exampleBoxInfo() to boxInfo() there
+// (the tests build this file under its own name), declare boxInfo() in denoisers/variants.hpp and
+// add it to builtinDenoisers() there.
 #include <algorithm>
+#include <cmath>
 
+#include "denoisers/common/footprint.hpp"
 #include "denoisers/denoiser.hpp"
 #include "denoisers/param_table.hpp"
 
@@ -16,7 +21,8 @@ namespace {
 
 // Set from boxParams() below, which declares each default, range and meaning once.
 struct BoxSettings {
-  int radius;
+  int radius;           // pixels at footprint.referenceHeight lines
+  Footprint footprint;  // the shared policy: `footprint`, `footprintHeight`
 };
 
 class BoxDenoiser final : public Denoiser {
@@ -25,11 +31,16 @@ class BoxDenoiser final : public Denoiser {
 
   // The harness checks these layers are in the sequence before the first frame.
   std::vector<std::string> requiredChannels() const override { return {"meshId"}; }
-  void setup(int, int) override {}  // no buffers: the filter keeps no history
+  // No buffers (the filter keeps no history); the radius in this image's pixels, at least one
+  // where the setting is, so that the filter never vanishes (as the first à-trous step).
+  void setup(int, int height) override {
+    const float r = float(settings_.radius) * settings_.footprint.scale(height);
+    radius_ = settings_.radius == 0 ? 0 : std::max(1, int(std::lround(r)));
+  }
   void reset() override {}
 
   void denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& output) override {
-    const int r = settings_.radius, w = ctx.width, h = ctx.height;
+    const int r = radius_, w = ctx.width, h = ctx.height;
     const Image& meshId = in.frame.get("meshId");
     ScopedPass pass(this, "box", double((2 * r + 1) * (2 * r + 1)));  // timed; taps per pixel
     for (int y = 0; y < h; ++y)
@@ -48,18 +59,22 @@ class BoxDenoiser final : public Denoiser {
 
  private:
   BoxSettings settings_;
+  int radius_ = 0;  // this image's pixels (setup)
 };
 
 const ParamTable<BoxSettings>& boxParams() {
   using S = BoxSettings;
   static const ParamTable<S> table =
-      ParamTable<S>().integer("radius", &S::radius, 2, 0, 8, "half-width of the box window, pixels");
+      ParamTable<S>()
+          .integer("radius", &S::radius, 8, 0, 64,
+                   "half-width of the box window, pixels at footprintHeight lines (0: none)")
+          .include(footprintParams(), &S::footprint);
   return table;
 }
 
 }  // namespace
 
-DenoiserInfo boxInfo() {
+DenoiserInfo exampleBoxInfo() {
   return {"box", "Box filter within each mesh (the worked example of docs/extending.md)", boxParams().schema(),
           [](const ParamSet& params, SignalKind) {
             return std::make_unique<BoxDenoiser>(boxParams().settings(params, "box"));
