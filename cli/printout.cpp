@@ -368,6 +368,7 @@ void printEventTables(std::ostream& out, const RunResults& results) {
           << ": ranked on " << rankedOn << " (" << ranking.resolvedPairs << " of " << ranking.pairs.size()
           << " pairs resolved)\n";
       std::string steadyAbsent;  // the window's reason, the same for every method
+      std::string neverSettled;  // methods whose E_ss is taken from frames still lagging
       // A pair the ranking leaves out (its figure undefined: a cut with no old view, a lag after an
       // event it never settled from) keeps its row, unranked ("-"), with its other figures.
       std::vector<RankedMethod> rows = ranking.ranking;
@@ -393,9 +394,16 @@ void printEventTables(std::ostream& out, const RunResults& results) {
           out << f << " " << std::setw(26) << figureWithInterval(*e, f) << " ";
         out << tiedText(m) << "\n";
         if (e->contains("steadyAbsent")) steadyAbsent = e->value("steadyAbsent", "");
+        if (!cut && e->value("settled", json()).is_boolean() && !(*e)["settled"].get<bool>() &&
+            e->value("steadyState", json()).is_number())
+          neverSettled += (neverSettled.empty() ? "" : ", ") + m.label;
       }
       if (!steadyAbsent.empty())
         out << "  peakExcess and ghostEnergy: none, " << steadyAbsent << "\n";
+      if (!neverSettled.empty())
+        out << "  never settled within the window: " << neverSettled
+            << " (E_ss is then a median of frames still lagging: their peakExcess and ghostEnergy "
+               "read low, lower bounds)\n";
       if (!ranking.excluded.empty()) out << "  not ranked: " << ranking.excluded << "\n";
     });
 }

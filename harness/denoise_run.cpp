@@ -8,6 +8,8 @@
 #include <cstdio>
 
 #include "core/error.hpp"
+#include "core/sequence.hpp"
+#include "core/text.hpp"
 #include "denoisers/common/remodulation.hpp"
 #include "denoisers/external/process_denoiser.hpp"
 
@@ -140,6 +142,18 @@ std::string capturedOutputName(const std::string& entry) {
   return entry.rfind("file:", 0) == 0 ? entry.substr(5) : std::string();
 }
 
+std::string unknownLayerProblem(const std::string& denoiser, const std::string& channel) {
+  std::vector<std::string> layerNames;
+  for (const LayerSpec& spec : channels::frameLayers()) layerNames.push_back(spec.name);
+  if (std::find(layerNames.begin(), layerNames.end(), channel) != layerNames.end()) return "";
+  std::string all;
+  for (const std::string& n : layerNames) all += (all.empty() ? "" : ", ") + n;
+  const std::string likely = closestName(channel, layerNames);
+  return denoiser + " requires channel '" + channel + "', which is no frame layer" +
+         (likely.empty() ? "" : " (did you mean '" + likely + "'?)") + "; the layers: " + all +
+         " (core/sequence.hpp)";
+}
+
 std::string lackingInputs(const DenoiserRequest& request, const Sequence& sequence) {
   return DenoiseRun(request, sequence, false).lacking_;
 }
@@ -184,7 +198,11 @@ DenoiseRun::DenoiseRun(const DenoiserRequest& request, const Sequence& sequence,
     if (std::find(known.begin(), known.end(), c) == known.end() &&
         std::find(missing.begin(), missing.end(), c) == missing.end())
       missing.push_back(c);
-  if (!missing.empty()) {
+  // A name that is no frame layer at all (a denoiser's typo, `normals`): no sequence could hold
+  // it, and re-rendering would not help.
+  for (const std::string& c : missing)
+    if (lacking_.empty()) lacking_ = unknownLayerProblem(request.name, c);
+  if (!missing.empty() && lacking_.empty()) {
     std::string list;
     for (auto& m : missing) list += " '" + m + "'";
     lacking_ = request.name + " needs channel(s)" + list + " that " +

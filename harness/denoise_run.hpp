@@ -55,6 +55,9 @@ std::string implausibleTime(const std::optional<double>& reported,
 // ... does not provide ..."), or "": the error DenoiseRun's constructor throws, found without
 // setting anything up. A run of every denoiser (--denoisers all) on a capture skips those it names.
 std::string lackingInputs(const DenoiserRequest& request, const Sequence& sequence);
+// What is wrong with a denoiser requiring `channel` when that is no frame layer at all (a typo:
+// no sequence could hold it), naming the layer it likely means; "" for a frame layer.
+std::string unknownLayerProblem(const std::string& denoiser, const std::string& channel);
 
 class DenoiseRun {
  public:

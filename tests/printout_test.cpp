@@ -180,6 +180,43 @@ TEST(StudySummary, ACutWithNoRankedFigureStillListsItsPairs) {
             std::string::npos);
 }
 
+// An event's methods that never settled are named beside the figures their lagging E_ss lowers.
+TEST(StudySummary, MethodsThatNeverSettledAreNamedBesideTheirEventFigures) {
+  json results = worstDefaultStudy();
+  const std::string scene = results["scenes"].begin().key();
+  results["statistics"]["scenes"][scene]["events"] = json::array({{{"eventFrame", 12},
+                                                                   {"kind", "light_off"},
+                                                                   {"what", "lamp"},
+                                                                   {"byFigure",
+                                                                    {{"lagEnergy",
+                                                                      {{"metric", "lagEnergy"},
+                                                                       {"ranking", json::array()},
+                                                                       {"pairs", json::array()},
+                                                                       {"resolvedPairs", 0},
+                                                                       {"totalPairs", 0}}}}}}});
+  std::vector<std::string> labels;
+  for (json& p : results["pairs"])
+    if (p["scene"] == scene) {
+      const bool settled = !labels.empty();  // the first never settles
+      p["ghosting"] = json::array({{{"eventFrame", 12},
+                                    {"kind", "light_off"},
+                                    {"settled", settled},
+                                    {"steadyState", 0.01},
+                                    {"peakExcess", 0.02},
+                                    {"lagEnergy", 1.0}}});
+      labels.push_back(p["label"]);
+    }
+  ASSERT_GE(labels.size(), 2u);
+  std::ostringstream tables;
+  cli::printStudyTables(tables, test::typed(results));
+  const std::string text = tables.str();
+  EXPECT_EQ(occurrences(text, "  never settled within the window: " + labels[0] +
+                                  " (E_ss is then a median of frames still lagging"),
+            1u)
+      << text;
+  EXPECT_EQ(text.find("never settled within the window: " + labels[0] + ", "), std::string::npos);
+}
+
 // Nothing is called best without something to be best among, and the order of two times is no
 // rank correlation: a scene ranking one method says it was not compared; with two methods timed,
 // the Spearman figure is not given (it can only be +-1).

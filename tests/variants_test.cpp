@@ -14,6 +14,7 @@
 #include "core/error.hpp"
 #include "core/sequence.hpp"
 #include "denoisers/denoiser.hpp"
+#include "harness/denoise_run.hpp"
 #include "tests/test_util.hpp"
 
 namespace arena {
@@ -193,6 +194,18 @@ TEST(DenoiserVariants, SchemaRejectsUnknownAndOutOfRangeParameters) {
       EXPECT_NO_THROW(create(*info, {}));
     }
   }
+}
+
+// A run of a denoiser that requires no frame layer at all (a contributor's typo) says so and names
+// the layer it likely means, rather than "re-render the sequence with a tracer that writes it".
+TEST(DenoiserVariants, AnUnknownRequiredLayerIsNamedWithTheLikelyOne) {
+  EXPECT_EQ(unknownLayerProblem("oops", "normal"), "");
+  const std::string problem = unknownLayerProblem("oops", "normals");
+  EXPECT_EQ(problem.rfind("oops requires channel 'normals', which is no frame layer (did you mean "
+                          "'normal'?); the layers: ",
+                          0),
+            0u)
+      << problem;
 }
 
 TEST(DenoiserVariants, EveryVariantDeclaresOnlyFrameLayers) {

@@ -111,6 +111,16 @@
             `the settle threshold (${A.fmt(g0.responseThreshold)}): each had not settled from an earlier change, so its ` +
             'lag after this one cannot be told from that (metrics.md).'
         }));
+      // Methods that never settled in the window: their E_ss is a median of frames still lagging,
+      // so their peak excess and ghost energy are measured from a raised baseline and read low.
+      const neverSettled = withEvent.filter((p) => p.ghosting[k].settled === false && Number.isFinite(p.ghosting[k].steadyState));
+      if (neverSettled.length)
+        body.append(el('p', {
+          class: 'note never-settled',
+          text: `${neverSettled.map((p) => p.label).join(', ')} never settled within the window: E_ss is then the median of ` +
+            'frames still lagging, not a steady state, so their peak excess and ghost energy are measured from a raised ' +
+            'baseline and read low (lower bounds); their lag energy and response (never settled) rank them (metrics.md).'
+        }));
       // Too few frames after the event for a steady state (metrics.md, clipped windows): said here,
       // not only in the cells' tooltips.
       if (g0.steadyAbsent)

@@ -107,9 +107,21 @@
     };
     // A log axis for errors (lower is better); a dB axis (PSNR) stays linear.
     const log = $('time-log').checked && errAxis && errAxis.lowerIsBetter;
-    // The reference's own noise floor belongs next to raw relMSE (metrics.md: reference quality).
+    // The reference's own noise floor belongs next to raw relMSE (metrics.md: reference quality):
+    // per frame, since a scene's references differ (light_switch's dark segment has its own, as
+    // noisy relative to the methods' error as the lit one or not); the mean where a run lacks them.
     const floor = [];
-    if (errAxis && errAxis.key === 'relMse' && scene.noiseFloor) {
+    const perFrame = errAxis && errAxis.key === 'relMse' && Array.isArray(scene.referenceRelMse)
+      ? scene.referenceRelMse.map((v, i) => ({ frame: i, value: v })).filter((r) => Number.isFinite(r.value) && r.value > 0)
+      : [];
+    if (perFrame.length) {
+      floor.push({ data: { values: perFrame }, mark: { type: 'line', color: '#777', strokeDash: [2, 2], strokeWidth: 1.2 },
+                   encoding: { x: { field: 'frame', type: 'quantitative' }, y: { field: 'value', type: 'quantitative' },
+                               tooltip: [{ field: 'frame' }, { field: 'value', title: 'reference noise floor', format: '.4~g' }] } });
+      floor.push({ data: { values: [{ ...perFrame[perFrame.length - 1], text: 'reference noise floor (per frame)' }] },
+                   mark: { type: 'text', color: '#777', align: 'right', baseline: 'bottom', dy: -2, fontSize: 11 },
+                   encoding: { x: { field: 'frame', type: 'quantitative' }, y: { field: 'value', type: 'quantitative' }, text: { field: 'text' } } });
+    } else if (errAxis && errAxis.key === 'relMse' && scene.noiseFloor) {
       const f = [{ value: scene.noiseFloor.mean, text: 'reference noise floor' }];
       floor.push({ data: { values: f }, mark: { type: 'rule', color: '#777', strokeDash: [2, 2] },
                    encoding: { y: { field: 'value', type: 'quantitative' } } });
