@@ -181,6 +181,51 @@ void addReferenceQuality(json& results, int warmup, const std::map<std::string, 
           "the relMSE ranking's intervals (more ties) and pulls the overall score's ratios towards "
           "1, and FLIP/SSIM partly measure the reference";
     }
+    // The same ratio between the scene's events (a light switched off has a reference of its own,
+    // and the event's figures are measured there): a segment above the goal is said, though the
+    // scene's ratio of means meets it (the verdict and the refinement stay the scene's).
+    json segments = json::array();
+    std::string segmentNote;
+    {
+      std::vector<int> bounds = {warmup};
+      for (const json& e : scene.value("events", json::array()))
+        if (e.value("frame", -1) > warmup) bounds.push_back(e.value("frame", -1));
+      const json refs = scene.value("referenceRelMse", json::array());
+      bounds.push_back(int(refs.size()));
+      std::sort(bounds.begin(), bounds.end());
+      bounds.erase(std::unique(bounds.begin(), bounds.end()), bounds.end());
+      json bestFrames = json::array();
+      for (const json& p : results.value("pairs", json::array()))
+        if (p.value("scene", "") == name && p.value("label", "") == bestLabel)
+          bestFrames = p.value("frames", json::array());
+      for (size_t k = 0; bounds.size() > 2 && k + 1 < bounds.size(); ++k) {
+        double f = 0, b = 0;
+        int n = 0;
+        for (int t = bounds[k]; t < bounds[k + 1]; ++t) {
+          const json& r = refs[size_t(t)];
+          const json v = size_t(t) < bestFrames.size()
+                             ? bestFrames[size_t(t)].value("relMseCorrected", json())
+                             : json();
+          if (!r.is_number() || !v.is_number()) continue;
+          f += r.get<double>();
+          b += v.get<double>();
+          ++n;
+        }
+        if (n == 0 || !(b > 0)) continue;
+        const double segmentRatio = f / b;
+        segments.push_back(
+            {{"from", bounds[k]}, {"to", bounds[k + 1] - 1}, {"ratio", segmentRatio}});
+        if (meets && segmentRatio > kReferenceQualityGoal)
+          segmentNote += std::string(segmentNote.empty() ? "" : "; ") + "frames " +
+                         std::to_string(bounds[k]) + "-" + std::to_string(bounds[k + 1] - 1) + " " +
+                         sciApart(segmentRatio, kReferenceQualityGoal) + " > " +
+                         sci(kReferenceQualityGoal);
+      }
+    }
+    if (!segmentNote.empty())
+      verdict += " for the scene's mean, not between its events (" + segmentNote +
+                 ": the figures measured there, an event's lag and ghosting, carry more of the "
+                 "reference's noise)";
     if (auto note = notes.find(name); note != notes.end()) verdict += " (" + note->second + ")";
     q = {{"floor", floor},
          {"bestCorrectedRelMse", best},
@@ -191,6 +236,7 @@ void addReferenceQuality(json& results, int warmup, const std::map<std::string, 
          {"cappedReferences", capped},
          {"references", references},
          {"verdict", verdict}};
+    if (!segments.empty()) q["segments"] = segments;
     scene["referenceQuality"] = q;
   }
 }

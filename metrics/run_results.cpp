@@ -205,8 +205,20 @@ struct ShapeReader {
     if (sc.contains("referenceQuality")) {
       const std::string at = path + ".referenceQuality";
       const json& q = member(sc, path, "referenceQuality", &json::is_object, "an object");
-      onlyKnown(q, at, {"floor", "bestCorrectedRelMse", "bestLabel", "ratio", "goal", "meets", "cappedReferences",
-                        "references", "verdict"});
+      onlyKnown(q, at,
+                {"floor", "bestCorrectedRelMse", "bestLabel", "ratio", "goal", "meets",
+                 "cappedReferences", "references", "verdict", "segments"});
+      // The ratio between the scene's events: {from, to, ratio} each.
+      if (q.contains("segments")) {
+        arrayOf(q, at, "segments", isObject, "an object (from, to, ratio)");
+        for (size_t k = 0; k < q["segments"].size(); ++k) {
+          const json& s = q["segments"][k];
+          const std::string sat = at + ".segments[" + std::to_string(k) + "]";
+          onlyKnown(s, sat, {"from", "to", "ratio"});
+          for (const char* f : {"from", "to"}) optionalCount(s, sat, f);
+          optionalFinite(s, sat, "ratio");
+        }
+      }
       text(q, at, "verdict");
       for (const char* k : {"floor", "bestCorrectedRelMse", "ratio", "goal"}) optionalFinite(q, at, k);
       optionalText(q, at, "bestLabel");

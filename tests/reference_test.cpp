@@ -733,6 +733,48 @@ TEST(Reference, QualityVerdictNamesTheRatioAndWhy) {
       << short_;
 }
 
+// Between a scene's events its references differ (a light switched off has its own): the ratio
+// per segment, and a segment above the goal said beside a met verdict, which stays the scene's.
+TEST(Reference, QualityVerdictNamesASegmentAboveTheGoal) {
+  nlohmann::json frames = nlohmann::json::array();
+  for (int t = 0; t < 8; ++t)
+    frames.push_back({{"frame", t}, {"relMseCorrected", t < 4 ? 1e-2 : 1e-3}});
+  nlohmann::json results = {
+      {"scenes",
+       {{"switch",
+         {{"referenceRelMse", {1.0, 1e-4, 1e-4, 1e-4, 2e-4, 2e-4, 2e-4, 2e-4}},
+          {"referenceCapped", {false, false}},
+          {"events", {{{"frame", 4}, {"kind", "light_off"}, {"what", "lamp"}}}}}}}},
+      {"pairs",
+       {{{"scene", "switch"},
+         {"denoiser", "svgf"},
+         {"label", "svgf"},
+         {"status", "ok"},
+         {"frames", frames},
+         {"summary", {{"relMseCorrected", {{"mean", (3 * 1e-2 + 4 * 1e-3) / 7}}}}}}}}};
+  addReferenceQuality(results, 1);
+  const nlohmann::json& q = results["scenes"]["switch"]["referenceQuality"];
+  // The scene: (3e-4 + 8e-4) / 7 over 0.034 / 7 = 0.032, met; frames 4-7: 2e-4 / 1e-3 = 0.2.
+  EXPECT_TRUE(q["meets"].get<bool>());
+  ASSERT_EQ(q["segments"].size(), 2u);
+  EXPECT_EQ(q["segments"][0]["from"], 1);
+  EXPECT_EQ(q["segments"][0]["to"], 3);
+  EXPECT_NEAR(q["segments"][0]["ratio"].get<double>(), 1e-2, 1e-12);
+  EXPECT_EQ(q["segments"][1]["from"], 4);
+  EXPECT_NEAR(q["segments"][1]["ratio"].get<double>(), 0.2, 1e-12);
+  EXPECT_NE(q["verdict"].get<std::string>().find(
+                ": met for the scene's mean, not between its events (frames 4-7 0.2 > 0.1"),
+            std::string::npos)
+      << q["verdict"];
+  // Without events there is one segment, the scene's: nothing more is said.
+  results["scenes"]["switch"].erase("events");
+  addReferenceQuality(results, 1);
+  EXPECT_FALSE(results["scenes"]["switch"]["referenceQuality"].contains("segments"));
+  EXPECT_EQ(results["scenes"]["switch"]["referenceQuality"]["verdict"].get<std::string>().find(
+                "between its events"),
+            std::string::npos);
+}
+
 // The options that find a run's sequences again: what differs from the preset, nothing more.
 TEST(Reference, RenderOptionsOfARunReproduceItsSettings) {
   const Scene scene = test::shippedScene("cornell_static");
