@@ -365,10 +365,24 @@ void appendToDatabase(const fs::path& dbPath, const RunResults& r, const std::st
                                                  : std::map<std::string, double>{});
       });
     }
-    // The overall scores: scene "*", relMSE's and every other metric's that declares one.
-    if (statistics.overall) addRanking("*", statistics.rankedOn, statistics.overall->ranking);
-    for (const auto& [metric, overall] : statistics.overallByMetric)
+    // The overall scores: scene "*", relMSE's and every other metric's that declares one; their
+    // pairs' diff is log(score_a / score_b), from which the ranking's ties are read.
+    auto addOverall = [&](const std::string& metric, const OverallRanking& overall) {
       addRanking("*", metric, overall.ranking);
+      for (const SceneRanking::Pair& x : overall.pairs)
+        paired.integer(1, runId)
+            .text(2, "*")
+            .text(3, metric)
+            .text(4, x.a)
+            .text(5, x.b)
+            .real(6, x.d.diff)
+            .real(7, x.d.ci.lo)
+            .real(8, x.d.ci.hi)
+            .integer(9, x.d.resolved())
+            .step();
+    };
+    if (statistics.overall) addOverall(statistics.rankedOn, *statistics.overall);
+    for (const auto& [metric, overall] : statistics.overallByMetric) addOverall(metric, overall);
   }
   db.exec("COMMIT");
 }

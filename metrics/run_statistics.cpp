@@ -81,6 +81,19 @@ OverallRanking readOverall(JsonReader r) {
   o.baseline = r.string("baseline");
   o.ranking = readRanking(r, "score");
   if (r.has("excluded")) o.excluded = r.string("excluded");
+  for (JsonReader& p : r.optionalArray("pairs")) {  // absent in results written before they were
+    SceneRanking::Pair x;
+    x.a = p.string("a");
+    x.b = p.string("b");
+    x.d.diff = p.numberOrNull("logRatio");
+    x.d.ci = readInterval(p, "ci95");
+    const json& resolved = p.value("resolved");
+    if (!resolved.is_boolean() || resolved.get<bool>() != x.d.resolved())
+      p.fail("resolved", "expected " + std::string(x.d.resolved() ? "true" : "false") +
+                             " (whether the interval excludes zero), got " + resolved.dump());
+    p.rejectUnread();
+    o.pairs.push_back(std::move(x));
+  }
   r.rejectUnread();
   return o;
 }

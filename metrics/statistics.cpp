@@ -614,6 +614,12 @@ OverallRanking rankOverall(const std::vector<const SceneRanking*>& scenes,
     for (size_t j = i + 1; j < n; ++j) {
       const Interval ci = percentileInterval(difference(logReps[i], logReps[j]), confidence);
       resolved[i][j] = resolved[j][i] = ci.valid() && !ci.containsZero();
+      SceneRanking::Pair pair;
+      pair.a = kept[i];
+      pair.b = kept[j];
+      pair.d.diff = logScore[i] - logScore[j];
+      pair.d.ci = ci;
+      out.pairs.push_back(std::move(pair));
       better[i][j] = lowerIsBetter ? logScore[i] < logScore[j] : logScore[i] > logScore[j];
       better[j][i] = !better[i][j];
     }
@@ -623,9 +629,17 @@ OverallRanking rankOverall(const std::vector<const SceneRanking*>& scenes,
 }
 
 json OverallRanking::toJson() const {
+  json p = json::array();
+  for (const SceneRanking::Pair& x : pairs)
+    p.push_back({{"a", x.a},
+                 {"b", x.b},
+                 {"logRatio", x.d.diff},
+                 {"ci95", x.d.ci.toJson()},
+                 {"resolved", x.d.resolved()}});
   json j = {{"normalisation", normalisation},
             {"baseline", baseline},
             {"ranking", rankingJson(ranking, "score")}};
+  if (!pairs.empty()) j["pairs"] = p;
   if (!excluded.empty()) j["excluded"] = excluded;
   return j;
 }

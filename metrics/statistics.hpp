@@ -192,6 +192,10 @@ SceneRanking rankReplicates(const std::string& metric, bool lowerIsBetter,
 struct OverallRanking {
   std::string normalisation, baseline;
   std::vector<RankedMethod> ranking;  // value = score
+  // Every pair of ranked methods: diff = log(score_a / score_b), the mean over scenes of the log
+  // ratios, with its interval on the same scale (resolved: excludes 0); the ties above read from
+  // these. Results written before they were stored have none.
+  std::vector<SceneRanking::Pair> pairs;
   std::string excluded;
   nlohmann::json toJson() const;
 };

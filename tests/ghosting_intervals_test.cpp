@@ -658,6 +658,11 @@ TEST(EventIntervalsEndToEnd, IntervalsRankingsAndShardsMergedEqualOneRun) {
     const std::string sql =
         "SELECT COUNT(*) FROM rankings WHERE scene = '*' AND metric = '" + metric + "'";
     EXPECT_EQ(count(sql.c_str()), int(overall["ranking"].size())) << metric;
+    // And its pairs (log ratios of the scores), from which the ties are read.
+    const size_t n = overall["ranking"].size();
+    const std::string pairsSql =
+        "SELECT COUNT(*) FROM paired WHERE scene = '*' AND metric = '" + metric + "'";
+    EXPECT_EQ(count(pairsSql.c_str()), int(n * (n - 1) / 2)) << metric;
   }
   sqlite3_close(db);
 }

@@ -162,6 +162,30 @@ TEST(Bootstrap, OverallRankingIsPerSceneNormalised) {
   EXPECT_NEAR(o.ranking[0].value, std::sqrt(0.25 * 0.55), 0.01);
   EXPECT_EQ(o.baseline, "temporal");
   EXPECT_NE(o.normalisation.find("geometric mean"), std::string::npos);
+  // Every pair is kept, on the log scale its ties are read from: diff = log(score_a / score_b),
+  // resolved exactly where the ranking does not tie them; through JSON and back unchanged.
+  ASSERT_EQ(o.pairs.size(), 3u);
+  for (const SceneRanking::Pair& p : o.pairs) {
+    const auto score = [&](const std::string& label) {
+      for (const RankedMethod& m : o.ranking)
+        if (m.label == label) return m;
+      return RankedMethod{};
+    };
+    const RankedMethod a = score(p.a), b = score(p.b);
+    EXPECT_NEAR(p.d.diff, std::log(a.value / b.value), 1e-9) << p.a << " " << p.b;
+    EXPECT_TRUE(p.d.ci.lo <= p.d.diff && p.d.diff <= p.d.ci.hi) << p.a << " " << p.b;
+    const bool tied = std::find(a.tiedWith.begin(), a.tiedWith.end(), p.b) != a.tiedWith.end();
+    EXPECT_EQ(p.d.resolved(), !tied) << p.a << " " << p.b;
+  }
+  RunStatistics st;
+  st.overall = o;
+  const RunStatistics back = RunStatistics::fromJson(st.toJson(), "r.json");
+  ASSERT_EQ(back.overall->pairs.size(), 3u);
+  EXPECT_EQ(back.overall->toJson(), o.toJson());
+  // Results written before the pairs were stored read without them.
+  json old = st.toJson();
+  old["overall"].erase("pairs");
+  EXPECT_TRUE(RunStatistics::fromJson(old, "r.json").overall->pairs.empty());
 }
 
 // A method missing from a scene is named, whichever scene it misses (the first included), and is
