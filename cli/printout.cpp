@@ -405,6 +405,9 @@ void printEventTables(std::ostream& out, const RunResults& results) {
             << " (E_ss is then a median of frames still lagging: their peakExcess and ghostEnergy "
                "read low, lower bounds)\n";
       if (!ranking.excluded.empty()) out << "  not ranked: " << ranking.excluded << "\n";
+      if (ranksAboveALowerValue(ranking.ranking))
+        out << "  (a method above one with a lower " << rankedOn
+            << " has fewer methods resolved better than it: its differences are less certain)\n";
     });
 }
 

@@ -20,7 +20,7 @@ ParamSpec ParamSpec::real(std::string name, double def, double min, double max, 
   return {std::move(name), Type::Float, def, min, max, {}, std::move(meaning)};
 }
 ParamSpec ParamSpec::choice(std::string name, std::string def, std::vector<std::string> choices, std::string meaning) {
-  double index = 0;
+  double index = -1;  // not among the choices: problem() says so
   for (size_t i = 0; i < choices.size(); ++i)
     if (choices[i] == def) index = double(i);
   return {std::move(name), Type::Choice, index, 0, 0, std::move(choices), std::move(meaning)};
@@ -36,6 +36,8 @@ std::string ParamSpec::problem() const {
   if (name.empty() || name.find_first_of("=,[] ") != std::string::npos)
     return "'" + name + "': a name must be non-empty without '=', ',', '[', ']' or spaces";
   if (meaning.empty()) return "'" + name + "': no meaning (arena denoisers lists it)";
+  if (type == Type::Choice && !(defaultValue >= 0 && defaultValue < double(choices.size())))
+    return "'" + name + "': its default is not one of its choices";
   if (type != Type::Int && type != Type::Float) return "";
   const std::string range = "[" + formatNumber(min) + ", " + formatNumber(max) + "]";
   if (!(min <= max)) return "'" + name + "': its range " + range + " is inverted (min > max)";

@@ -5,9 +5,11 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <set>
 
 #include "core/text.hpp"
 #include "metrics/evaluator.hpp"
+#include "metrics/ghosting.hpp"
 #include "metrics/metric_registry.hpp"
 #include "tracer/render.hpp"
 
@@ -188,8 +190,12 @@ void addReferenceQuality(json& results, int warmup, const std::map<std::string, 
     std::string segmentNote;
     {
       std::vector<int> bounds = {warmup};
+      std::set<int> eventFrames;
       for (const json& e : scene.value("events", json::array()))
-        if (e.value("frame", -1) > warmup) bounds.push_back(e.value("frame", -1));
+        if (e.value("frame", -1) > warmup) {
+          bounds.push_back(e.value("frame", -1));
+          eventFrames.insert(e.value("frame", -1));
+        }
       const json refs = scene.value("referenceRelMse", json::array());
       bounds.push_back(int(refs.size()));
       std::sort(bounds.begin(), bounds.end());
@@ -215,7 +221,10 @@ void addReferenceQuality(json& results, int warmup, const std::map<std::string, 
         const double segmentRatio = f / b;
         segments.push_back(
             {{"from", bounds[k]}, {"to", bounds[k + 1] - 1}, {"ratio", segmentRatio}});
-        if (meets && segmentRatio > kReferenceQualityGoal)
+        // Said from an event on, over as many frames as an event's figures need (the frames
+        // before the first event measure no event figure, and one frame's ratio is noise).
+        if (meets && segmentRatio > kReferenceQualityGoal && eventFrames.count(bounds[k]) &&
+            n >= GhostingConfig{}.minFramesFromEvent)
           segmentNote += std::string(segmentNote.empty() ? "" : "; ") + "frames " +
                          std::to_string(bounds[k]) + "-" + std::to_string(bounds[k + 1] - 1) + " " +
                          sciApart(segmentRatio, kReferenceQualityGoal) + " > " +

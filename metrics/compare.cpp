@@ -622,7 +622,7 @@ namespace {
 
 // The label of `labels` that `typed` names: itself, or the one that differs from it only in how a
 // number is written ("svgf[sigmaL=8.0]" for "svgf[sigmaL=8]", as a run writes it): the same name,
-// the same keys in the same order, each value the same text or the same number. Empty when none,
+// the same keys in the same order, each value the same text, number or float. Empty when none,
 // or when more than one would.
 std::string labelTyped(const std::set<std::string>& labels, const std::string& typed) {
   if (labels.count(typed)) return typed;
@@ -651,7 +651,9 @@ std::string labelTyped(const std::set<std::string>& labels, const std::string& t
     if (a.substr(0, ea) != b.substr(0, eb)) return false;
     const std::string va = a.substr(ea + 1), vb = b.substr(eb + 1);
     double x = 0, y = 0;
-    return va == vb || (number(va, x) && number(vb, y) && x == y);
+    // The same number, or the same float (a built-in reads and labels floats: 4.1234567 ran as
+    // the float its label writes 4.1234565).
+    return va == vb || (number(va, x) && number(vb, y) && (x == y || float(x) == float(y)));
   };
   std::vector<std::string> want;
   if (!parts(typed, want)) return {};

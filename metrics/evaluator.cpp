@@ -361,13 +361,15 @@ std::vector<std::string> EvaluationScene::warnings() const {
       if (r >= 0 && r < int(input_.referenceCapped.size()) && input_.referenceCapped[size_t(r)])
         frames.push_back(t);
     }
-    out.push_back(std::to_string(capped) + " of " + std::to_string(input_.referenceCapped.size()) +
-                  " reference(s) stopped at the sample cap above their target relMSE (" +
-                  (frames.empty() ? std::string("no frame reads them") : frameRanges(frames)) +
-                  "; see sequence.json referenceEstimatedRelMse). Whether that matters is the "
-                  "scene's reference-quality verdict: met, their noise is small enough beside the "
-                  "methods' error to rank the scene; NOT MET, the verdict gives the `arena refine` "
-                  "command that extends them");
+    out.push_back(
+        std::to_string(capped) + " of " + std::to_string(input_.referenceCapped.size()) +
+        " reference(s) stopped at the sample cap above their target relMSE (" +
+        (frames.empty() ? std::string("no frame reads them") : frameRanges(frames)) +
+        "; see sequence.json referenceEstimatedRelMse). Whether that matters is the "
+        "scene's reference-quality verdict (results.json scenes.<scene>.referenceQuality, "
+        "the report; printed when the goal is missed): met, their noise is small enough "
+        "beside the methods' error to rank the scene; NOT MET, the verdict gives the "
+        "`arena refine` command that extends them");
   }
   long nonFinite = 0;
   for (const auto& [where, count] : input_.nonFinite) nonFinite += count;

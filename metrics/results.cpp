@@ -309,44 +309,49 @@ void appendToDatabase(const fs::path& dbPath, const RunResults& r, const std::st
     const RunStatistics& statistics = *r.statistics;
     Statement paired(db, "INSERT INTO paired VALUES (?,?,?,?,?,?,?,?,?)");
     Statement rank(db, "INSERT INTO rankings VALUES (?,?,?,?,?,?,?,?,?)");
-    // `unsettled`: the response of an event's methods that never settled, whose ranking value
-    // (and a bound at it) is the window's frame count, by which the ranking orders them last; no
-    // number of frames, so NULL here, as the pair's own figure is null in results.json.
+    // An event's response: a method that never settled has the window's frame count as its
+    // ranking value, by which the ranking orders it last, and any interval bound that reaches
+    // that count means "never"; no number of frames, so NULL here, as results.json has null.
+    struct Response {
+      double window;  // the window's frames from the event: "never"
+      bool never;     // the method never settled
+    };
     auto addRanking = [&](const std::string& scene, const std::string& metric,
                           const std::vector<RankedMethod>& ranking,
-                          const std::map<std::string, double>& unsettled = {}) {
+                          const std::map<std::string, Response>& responses = {}) {
       for (const RankedMethod& m : ranking) {
-        const auto never = unsettled.find(m.label);
+        const auto response = responses.find(m.label);
+        const bool known = response != responses.end();
         const auto bound = [&](double v) {
-          return never != unsettled.end() && v >= never->second ? kUndefined : v;
+          return known && v >= response->second.window ? kUndefined : v;
         };
         rank.integer(1, runId)
             .text(2, scene)
             .text(3, metric)
             .text(4, m.label)
             .integer(5, m.rank)
-            .real(6, never != unsettled.end() ? kUndefined : m.value)
+            .real(6, known && response->second.never ? kUndefined : m.value)
             .real(7, bound(m.ci.lo))
             .real(8, bound(m.ci.hi))
             .text(9, json(m.tiedWith).dump())
             .step();
       }
     };
-    // Of a scene's event at `frame`, the methods that never settled: label -> the window's frames.
-    auto unsettledAt = [&](const std::string& scene, int eventFrame) {
-      std::map<std::string, double> out;
+    // Of a scene's event at `eventFrame`, each method's response: label -> window, never settled.
+    auto responsesAt = [&](const std::string& scene, int eventFrame) {
+      std::map<std::string, Response> out;
       for (const PairResult& p : r.pairs)
         if (p.scene == scene && p.ok() && p.part("ghosting").is_array())
           for (const json& g : p.part("ghosting"))
             if (g.value("eventFrame", -1) == eventFrame &&
-                g.value("settled", json()).is_boolean() && !g["settled"].get<bool>() &&
-                g.value("windowEnd", json()).is_number())
-              out[p.label] = g["windowEnd"].get<double>() - eventFrame + 1;
+                g.value("settled", json()).is_boolean() && g.value("windowEnd", json()).is_number())
+              out[p.label] = {g["windowEnd"].get<double>() - eventFrame + 1,
+                              !g["settled"].get<bool>()};
       return out;
     };
     auto addScene = [&](const std::string& scene, const SceneRanking& s, const std::string& metric,
-                        const std::map<std::string, double>& unsettled = {}) {
-      addRanking(scene, metric, s.ranking, unsettled);
+                        const std::map<std::string, Response>& responses = {}) {
+      addRanking(scene, metric, s.ranking, responses);
       for (const SceneRanking::Pair& x : s.pairs)
         paired.integer(1, runId).text(2, scene).text(3, metric).text(4, x.a).text(5, x.b).real(6, x.d.diff)
             .real(7, x.d.ci.lo).real(8, x.d.ci.hi).integer(9, x.d.resolved()).step();
@@ -361,8 +366,8 @@ void appendToDatabase(const fs::path& dbPath, const RunResults& r, const std::st
           addScene(
               name, ranking,
               std::string(cut ? "cut@" : "ghosting@") + std::to_string(e.eventFrame) + "." + figure,
-              !cut && figure == "responseFrames" ? unsettledAt(name, e.eventFrame)
-                                                 : std::map<std::string, double>{});
+              !cut && figure == "responseFrames" ? responsesAt(name, e.eventFrame)
+                                                 : std::map<std::string, Response>{});
       });
     }
     // The overall scores: scene "*", relMSE's and every other metric's that declares one; their

@@ -39,6 +39,21 @@ std::vector<RankedMethod> readRanking(JsonReader& r, const char* valueName) {
   return out;
 }
 
+// One paired difference {a, b, <diffKey>, ci95, resolved}; `resolved` must agree with the interval.
+SceneRanking::Pair readPair(JsonReader& p, const char* diffKey) {
+  SceneRanking::Pair x;
+  x.a = p.string("a");
+  x.b = p.string("b");
+  x.d.diff = p.numberOrNull(diffKey);
+  x.d.ci = readInterval(p, "ci95");
+  const json& resolved = p.value("resolved");
+  if (!resolved.is_boolean() || resolved.get<bool>() != x.d.resolved())
+    p.fail("resolved", "expected " + std::string(x.d.resolved() ? "true" : "false") +
+                           " (whether the interval excludes zero), got " + resolved.dump());
+  p.rejectUnread();
+  return x;
+}
+
 // The members of a ranking block; the caller rejects what is left unread (a scene's block holds
 // byMetric, events and cuts beside them).
 SceneRanking readSceneRankingMembers(JsonReader& r) {
@@ -46,18 +61,8 @@ SceneRanking readSceneRankingMembers(JsonReader& r) {
   s.metric = r.string("metric");
   s.ranking = readRanking(r, "mean");
   for (JsonReader& p : r.requiredArray("pairs")) {
-    SceneRanking::Pair x;
-    x.a = p.string("a");
-    x.b = p.string("b");
-    x.d.diff = p.numberOrNull("diff");
-    x.d.ci = readInterval(p, "ci95");
-    const json& resolved = p.value("resolved");
-    if (!resolved.is_boolean() || resolved.get<bool>() != x.d.resolved())
-      p.fail("resolved", "expected " + std::string(x.d.resolved() ? "true" : "false") +
-                             " (whether the interval excludes zero), got " + resolved.dump());
-    p.rejectUnread();
-    s.resolvedPairs += x.d.resolved();
-    s.pairs.push_back(std::move(x));
+    s.pairs.push_back(readPair(p, "diff"));
+    s.resolvedPairs += s.pairs.back().d.resolved();
   }
   if (r.integer("resolvedPairs") != s.resolvedPairs)
     r.fail("resolvedPairs", "expected " + std::to_string(s.resolvedPairs) +
@@ -81,19 +86,8 @@ OverallRanking readOverall(JsonReader r) {
   o.baseline = r.string("baseline");
   o.ranking = readRanking(r, "score");
   if (r.has("excluded")) o.excluded = r.string("excluded");
-  for (JsonReader& p : r.optionalArray("pairs")) {  // absent in results written before they were
-    SceneRanking::Pair x;
-    x.a = p.string("a");
-    x.b = p.string("b");
-    x.d.diff = p.numberOrNull("logRatio");
-    x.d.ci = readInterval(p, "ci95");
-    const json& resolved = p.value("resolved");
-    if (!resolved.is_boolean() || resolved.get<bool>() != x.d.resolved())
-      p.fail("resolved", "expected " + std::string(x.d.resolved() ? "true" : "false") +
-                             " (whether the interval excludes zero), got " + resolved.dump());
-    p.rejectUnread();
-    o.pairs.push_back(std::move(x));
-  }
+  // Absent in results written before they were stored.
+  for (JsonReader& p : r.optionalArray("pairs")) o.pairs.push_back(readPair(p, "logRatio"));
   r.rejectUnread();
   return o;
 }

@@ -1055,10 +1055,15 @@ json writeCropTiles(const json& viewer, const fs::path& runDir, const fs::path& 
         const fs::path values =
             (runDir / p["srcs"][it.key()].get<std::string>()).replace_extension(".exr");
         std::error_code ec;
-        if (fs::exists(values, ec)) {
-          const Image e = readExr(values, {{"Y", {}}}, ExrSize{w, h}).layers.get("Y");
-          byPanel[key]["relerr"] = g.means([&](size_t i) { return double(e.raw()[i]); });
-        } else {
+        bool exact = false;
+        if (fs::exists(values, ec)) try {
+            const Image e = readExr(values, {{"Y", {}}}, ExrSize{w, h}).layers.get("Y");
+            byPanel[key]["relerr"] = g.means([&](size_t i) { return double(e.raw()[i]); });
+            exact = true;
+          } catch (const Error&) {
+            // Unreadable (cut short, another size): measured from the map, as where none was kept.
+          }
+        if (!exact) {
           const std::vector<float> v = decodeColorMap(img, viridisColorMap());
           byPanel[key]["relerr"] = g.means([&](size_t i) { return relativeErrorOfMapValue(v[i]); });
           byPanel[key]["relerrClamped"] = g.counts([&](size_t i) { return v[i] >= 1.0f; });

@@ -637,6 +637,15 @@ TEST(EventIntervalsEndToEnd, IntervalsRankingsAndShardsMergedEqualOneRun) {
           "FROM rankings WHERE scene = 'light_switch' AND metric = "
           "'ghosting@12.responseFrames' AND label = '" +
           p["label"].get<std::string>() + "'";
+      // A bound is NULL exactly where results.json's is null ("never"), settled or not.
+      const json ci = g["ci95"].value("responseFrames", json());
+      if (ci.is_array())
+        for (const char* column : {"ci_lo", "ci_hi"}) {
+          const bool null = ci[std::string(column) == "ci_lo" ? 0 : 1].is_null();
+          const std::string sql =
+              "SELECT COUNT(*) " + where + " AND " + column + (null ? " IS NULL" : " IS NOT NULL");
+          EXPECT_EQ(count(sql.c_str()), 1) << p["label"] << " " << column;
+        }
       if (!g["settled"].get<bool>()) {
         ++never;
         EXPECT_EQ(count(("SELECT COUNT(*) " + where + " AND value IS NULL").c_str()), 1)

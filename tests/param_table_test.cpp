@@ -177,6 +177,9 @@ TEST(ParamTable, SelfCheckNamesADeclarationWrongInItself) {
                Error);
   EXPECT_EQ(problemOf(ParamTable<ToyInt>().integer("radius", &ToyInt::radius, 8, 1, 8, "r")),
             "none");
+  EXPECT_EQ(ParamSpec::choice("mode", "wide", {"narrow", "scaled"}, "m").problem(),
+            "'mode': its default is not one of its choices");
+  EXPECT_EQ(ParamSpec::choice("mode", "scaled", {"narrow", "scaled"}, "m").problem(), "");
 }
 
 // A bound field with an initialiser of its own is a second default: a caller that builds the

@@ -766,6 +766,17 @@ TEST(Reference, QualityVerdictNamesASegmentAboveTheGoal) {
                 ": met for the scene's mean, not between its events (frames 4-7 0.2 > 0.1"),
             std::string::npos)
       << q["verdict"];
+  // Before the first event no event figure is measured: a segment there above the goal is kept,
+  // not said.
+  results["scenes"]["switch"]["referenceRelMse"] = {1.0, 2e-3, 2e-3, 2e-3, 1e-5, 1e-5, 1e-5, 1e-5};
+  for (int t = 4; t < 8; ++t) results["pairs"][0]["frames"][size_t(t)]["relMseCorrected"] = 0.1;
+  results["pairs"][0]["summary"]["relMseCorrected"]["mean"] = (3 * 1e-2 + 4 * 0.1) / 7;
+  addReferenceQuality(results, 1);
+  const nlohmann::json& before = results["scenes"]["switch"]["referenceQuality"];
+  EXPECT_TRUE(before["meets"].get<bool>()) << before["verdict"];
+  EXPECT_NEAR(before["segments"][0]["ratio"].get<double>(), 0.2, 1e-12);
+  EXPECT_EQ(before["verdict"].get<std::string>().find("between its events"), std::string::npos)
+      << before["verdict"];
   // Without events there is one segment, the scene's: nothing more is said.
   results["scenes"]["switch"].erase("events");
   addReferenceQuality(results, 1);

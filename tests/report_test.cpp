@@ -795,6 +795,10 @@ TEST(Report, CropTilesComeFromTheKeptImages) {
   EXPECT_NEAR(exact["relerr"][0].get<double>(), (1000.0 + 63 * 0.5) / 64, 1e-3 * 16.1);
   EXPECT_NEAR(exact["relerr"][5].get<double>(), 0.5, 1e-12);
   EXPECT_FALSE(exact.contains("relerrClamped"));
+  // Values that cannot be read (a file cut short) leave the page to the map, as none kept would.
+  std::ofstream(sd / "svgf[a=0]/relerr_0002.exr", std::ios::trunc) << "not an EXR";
+  const json unreadable = relerrOf("report_tiles_unreadable");
+  EXPECT_EQ(unreadable["relerrClamped"], json({1, 0, 0, 0, 0, 0}));
 }
 
 // End to end: a region's relMSE in the page is the run's. Over the whole frame the tiles' pixel-

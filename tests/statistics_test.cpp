@@ -594,6 +594,7 @@ TEST(CompareGate, PairsOfOtherLabelsAreComparedWhenAskedTo) {
   // A number typed otherwise than the run wrote it names the same label.
   EXPECT_EQ(checkLabelMatches({"svgf=svgf[sigmaL=8.0]"}, a, b), matches);
   EXPECT_EQ(checkLabelMatches({"svgf=svgf[sigmaL=8e0]"}, a, b), matches);
+  EXPECT_EQ(checkLabelMatches({"svgf=svgf[sigmaL=8.0000001]"}, a, b), matches);  // as a float
   // Each assignment names labels the runs have, each once; a label both runs have is compared by
   // it already.
   const auto refused = [&](const std::string& assignment) {

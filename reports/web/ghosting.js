@@ -119,7 +119,7 @@
           class: 'note never-settled',
           text: `${neverSettled.map((p) => p.label).join(', ')} never settled within the window: E_ss is then the median of ` +
             'frames still lagging, not a steady state, so their peak excess and ghost energy are measured from a raised ' +
-            'baseline and read low (lower bounds); their lag energy and response (never settled) rank them (metrics.md).'
+            'baseline and read low (lower bounds, metrics.md).'
         }));
       // Too few frames after the event for a steady state (metrics.md, clipped windows): said here,
       // not only in the cells' tooltips.

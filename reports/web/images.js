@@ -235,7 +235,7 @@
     else if (measure) measureCrop();
   }
 
-  // The crop's metrics from the report's per-tile means (computed from the kept 8-bit images):
+  // The crop's metrics from the report's per-tile means (computed from the kept images and values):
   // the tiles whose centre lies in the region (at least the tile under its centre), weighted by
   // their pixel counts.
   async function measureCrop() {
@@ -271,13 +271,15 @@
     // relMSE from the run's unclamped values, or (runs that kept only the map) decoded from the
     // map, which stops at 10: with such pixels in the region the figure is a lower bound.
     const clampedIn = (v) => (v.relerrClamped ? tiles.reduce((s, k) => s + v.relerrClamped[k], 0) : 0);
-    const fromMap = entries.some(([, v]) => v.relerr && v.relerrClamped);
+    const fromMap = entries.filter(([, v]) => v.relerr && v.relerrClamped).map(([key]) => (key === 'noisy' ? 'noisy input' : key));
+    const exact = entries.some(([, v]) => v.relerr && !v.relerrClamped);
     const relMseText = (v) => (v.relerr && clampedIn(v) > 0 ? `≥ ${fmt(mean(v.relerr))}` : fmt(mean(v.relerr)));
     out.replaceChildren(
       el('p', { class: 'note', text: `Region x ${x0}–${x1}, y ${y0}–${y1} px (${pixels} pixels, ${tiles.length} tiles of ${T.tile} px), frame ${A.state.frame}. ` +
         'Computed in the report from the kept images: PSNR of the display PNG against the reference PNG, LDR-FLIP decoded from the magma map (1/255 steps), ' +
-        (fromMap ? 'relMSE decoded from the relative-error map (log-quantised, ±5%; the map stops at 10, so a region with pixels beyond it reads ≥, a lower bound: this run kept no unclamped values).'
-                 : 'relMSE from the per-pixel relative squared errors the run kept (as the run computes it, to 4 digits).') }),
+        (exact ? 'relMSE from the per-pixel relative squared errors the run kept (as the run computes it, to 4 digits)' : '') +
+        (fromMap.length ? `${exact ? '; for ' + fromMap.join(', ') + ', which kept none, ' : 'relMSE '}decoded from the relative-error map ` +
+          '(log-quantised, ±5%; the map stops at 10, so a region with pixels beyond it reads ≥, a lower bound)' : '') + '.' }),
       el('table', { class: 'data crop-table' },
         el('thead', {}, el('tr', {}, ['', 'PSNR display (dB) ↑', 'LDR-FLIP ↓', 'relMSE ↓'].map((t, i) => el('th', { class: i ? null : 'first', text: t })))),
         el('tbody', {}, entries.map(([key, v]) => el('tr', { 'data-label': key },
