@@ -13,6 +13,7 @@
 #include "core/stage_clock.hpp"
 #include "harness/gpu_cost.hpp"
 #include "harness/run_matrix.hpp"
+#include "metrics/error_maps.hpp"
 #include "metrics/results.hpp"
 #include "reports/image_files.hpp"
 
@@ -78,15 +79,19 @@ void writeFrameImages(const fs::path& imageDir, int t, const FrameImages& images
   writePng(imageDir / frameName("frame", t), images.display);
   if (!images.flip.empty()) writePng(imageDir / frameName("flip", t), images.flip);
   // No reference (a capture without one): no error map to keep. Beside the map, its values
-  // unclamped (the map's 8 bits stop at 10, where a firefly's error begins): a region's relMSE.
+  // unclamped (the map's 8 bits stop at 10, where a firefly's error begins) as block means: a
+  // region's relMSE in the report.
   if (!images.relativeError.empty()) {
     writePng(imageDir / frameName("relerr", t), images.relativeError);
     LayerSet values;
-    values.set("Y", images.relativeSquaredError);
+    values.set("Y", blockMeans(images.relativeSquaredError, kRelErrorBlock));
     writeExr(fs::path(imageDir / frameName("relerr", t)).replace_extension(".exr"), values,
              {{"Y", {}}},
-             {{"arena.values",
-               "per-pixel relative squared error (d - r)^2 / (r^2 + 0.01), mean of R, G, B"}});
+             ExrAttributes{{"arena.values",
+                            "relative squared error (d - r)^2 / (r^2 + 0.01), mean of R, G, B, "
+                            "mean over each block of " +
+                                std::to_string(kRelErrorBlock) + "x" +
+                                std::to_string(kRelErrorBlock) + " pixels"}});
   }
 }
 

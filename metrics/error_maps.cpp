@@ -143,6 +143,22 @@ Image relativeErrorMap(Image v) {
   return applyColorMap(v, viridisColorMap());
 }
 
+Image blockMeans(const Image& values, int block) {
+  const int w = values.width(), h = values.height();
+  const int bw = (w + block - 1) / block, bh = (h + block - 1) / block;
+  std::vector<double> sum(size_t(bw) * size_t(bh), 0.0);
+  std::vector<int> count(sum.size(), 0);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t k = size_t(y / block) * size_t(bw) + size_t(x / block);
+      sum[k] += double(values.at(x, y, 0));
+      ++count[k];
+    }
+  Image out(bw, bh, 1);
+  for (size_t k = 0; k < sum.size(); ++k) out.raw()[k] = float(sum[k] / count[k]);
+  return out;
+}
+
 double relativeErrorOfMapValue(double value) {
   return std::pow(10.0,
                   kRelErrorMapLog10Min + value * (kRelErrorMapLog10Max - kRelErrorMapLog10Min));

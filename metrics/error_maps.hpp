@@ -47,4 +47,12 @@ Image relativeErrorMap(Image relativeSquaredErrors);
 // A decoded relative-error map value (0..1) back to the relative squared error it stands for.
 double relativeErrorOfMapValue(double value);
 
+// The run keeps a relative error's values beside its map as the means of blocks of this many
+// pixels square (edge blocks smaller): a region's relMSE from whole blocks is exact, at 1/64 of
+// the per-pixel file's size. The report's crop tiles are whole blocks.
+constexpr int kRelErrorBlock = 8;
+// Per block of `block` x `block` pixels of a one-channel image, the mean of its pixels (an image
+// ceil(w / block) x ceil(h / block), accumulated in double).
+Image blockMeans(const Image& values, int block);
+
 }  // namespace arena

@@ -972,7 +972,9 @@ struct TileGrid {
   TileGrid(int w, int h)
       : width(w),
         height(h),
-        tile(std::max(8, (std::max(w, h) + 47) / 48)),
+        // About 48 tiles across, each whole blocks of the run's kept relative-error values.
+        tile(kRelErrorBlock *
+             std::max(1, (std::max(w, h) + 48 * kRelErrorBlock - 1) / (48 * kRelErrorBlock))),
         cols((w + tile - 1) / tile),
         rows((h + tile - 1) / tile) {}
   template <class PixelValue>
@@ -1057,8 +1059,14 @@ json writeCropTiles(const json& viewer, const fs::path& runDir, const fs::path& 
         std::error_code ec;
         bool exact = false;
         if (fs::exists(values, ec)) try {
-            const Image e = readExr(values, {{"Y", {}}}, ExrSize{w, h}).layers.get("Y");
-            byPanel[key]["relerr"] = g.means([&](size_t i) { return double(e.raw()[i]); });
+            const int block = kRelErrorBlock, bw = (w + block - 1) / block;
+            const Image e =
+                readExr(values, {{"Y", {}}}, ExrSize{bw, (h + block - 1) / block}).layers.get("Y");
+            // Each pixel stands for its block's mean: a tile of whole blocks sums them exactly.
+            byPanel[key]["relerr"] = g.means([&](size_t i) {
+              const size_t x = i % size_t(w), y = i / size_t(w);
+              return double(e.raw()[(y / size_t(block)) * size_t(bw) + x / size_t(block)]);
+            });
             exact = true;
           } catch (const Error&) {
             // Unreadable (cut short, another size): measured from the map, as where none was kept.

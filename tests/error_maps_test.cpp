@@ -77,5 +77,25 @@ TEST(ErrorMaps, BadInputIsAClearError) {
   }
 }
 
+// The kept values: each block's mean, edge blocks over the pixels they hold (a 10x9 image in 8x8
+// blocks: 2 x 2 blocks of 64, 16, 8 and 2 pixels), so that any union of whole blocks sums exactly.
+TEST(ErrorMaps, BlockMeansAverageEachBlocksOwnPixels) {
+  Image v(10, 9, 1);
+  for (int y = 0; y < 9; ++y)
+    for (int x = 0; x < 10; ++x) v.at(x, y, 0) = float(x + 10 * y);
+  const Image b = blockMeans(v, 8);
+  ASSERT_EQ(b.width(), 2);
+  ASSERT_EQ(b.height(), 2);
+  EXPECT_FLOAT_EQ(b.at(0, 0, 0), 3.5f + 10 * 3.5f);  // x 0-7, y 0-7
+  EXPECT_FLOAT_EQ(b.at(1, 0, 0), 8.5f + 10 * 3.5f);  // x 8-9
+  EXPECT_FLOAT_EQ(b.at(0, 1, 0), 3.5f + 10 * 8.0f);  // y 8
+  EXPECT_FLOAT_EQ(b.at(1, 1, 0), 8.5f + 10 * 8.0f);
+  double whole = 0;
+  for (float x : v.raw()) whole += x;
+  const double fromBlocks =
+      64 * b.at(0, 0, 0) + 16 * b.at(1, 0, 0) + 8 * b.at(0, 1, 0) + 2 * b.at(1, 1, 0);
+  EXPECT_NEAR(fromBlocks, whole, 1e-9 * whole);
+}
+
 }  // namespace
 }  // namespace arena
