@@ -115,8 +115,10 @@
       ? scene.referenceRelMse.map((v, i) => ({ frame: i, value: v })).filter((r) => Number.isFinite(r.value) && r.value > 0)
       : [];
     if (perFrame.length) {
-      floor.push({ data: { values: perFrame }, mark: { type: 'line', color: '#777', strokeDash: [2, 2], strokeWidth: 1.2 },
-                   encoding: { x: { field: 'frame', type: 'quantitative' }, y: { field: 'value', type: 'quantitative' },
+      // Drawn as steps (one rule per frame, to the next): a line mark would read as a method's.
+      const steps = perFrame.map((r) => ({ ...r, next: r.frame + 1 < scene.frames ? r.frame + 1 : r.frame }));
+      floor.push({ data: { values: steps }, mark: { type: 'rule', color: '#777', strokeDash: [2, 2], strokeWidth: 1.2 },
+                   encoding: { x: { field: 'frame', type: 'quantitative' }, x2: { field: 'next' }, y: { field: 'value', type: 'quantitative' },
                                tooltip: [{ field: 'frame' }, { field: 'value', title: 'reference noise floor', format: '.4~g' }] } });
       floor.push({ data: { values: [{ ...perFrame[perFrame.length - 1], text: 'reference noise floor (per frame)' }] },
                    mark: { type: 'text', color: '#777', align: 'right', baseline: 'bottom', dy: -2, fontSize: 11 },
