@@ -189,15 +189,14 @@ void addReferenceQuality(json& results, int warmup, const std::map<std::string, 
     json segments = json::array();
     std::string segmentNote;
     {
-      std::vector<int> bounds = {warmup};
-      std::set<int> eventFrames;
-      for (const json& e : scene.value("events", json::array()))
-        if (e.value("frame", -1) > warmup) {
-          bounds.push_back(e.value("frame", -1));
-          eventFrames.insert(e.value("frame", -1));
-        }
       const json refs = scene.value("referenceRelMse", json::array());
-      bounds.push_back(int(refs.size()));
+      std::vector<int> bounds = {warmup, int(refs.size())};
+      std::set<int> eventFrames;
+      for (const json& e : scene.value("events", json::array()))  // those within the frames
+        if (const int at = e.value("frame", -1); at > warmup && at < int(refs.size())) {
+          bounds.push_back(at);
+          eventFrames.insert(at);
+        }
       std::sort(bounds.begin(), bounds.end());
       bounds.erase(std::unique(bounds.begin(), bounds.end()), bounds.end());
       json bestFrames = json::array();

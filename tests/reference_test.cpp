@@ -766,6 +766,11 @@ TEST(Reference, QualityVerdictNamesASegmentAboveTheGoal) {
                 ": met for the scene's mean, not between its events (frames 4-7 0.2 > 0.1"),
             std::string::npos)
       << q["verdict"];
+  // An event beyond the frames (a sequence shorter than the scene's script) bounds nothing.
+  results["scenes"]["switch"]["events"].push_back(
+      {{"frame", 30}, {"kind", "light_on"}, {"what", "lamp"}});
+  addReferenceQuality(results, 1);
+  EXPECT_EQ(results["scenes"]["switch"]["referenceQuality"]["segments"].size(), 2u);
   // Before the first event no event figure is measured: a segment there above the goal is kept,
   // not said.
   results["scenes"]["switch"]["referenceRelMse"] = {1.0, 2e-3, 2e-3, 2e-3, 1e-5, 1e-5, 1e-5, 1e-5};
