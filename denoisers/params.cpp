@@ -32,8 +32,12 @@ static std::string formatNumber(double v) {
   return s.str();
 }
 
+bool ParamSpec::validName(const std::string& name) {
+  return !name.empty() && name.find_first_of("=,[] ") == std::string::npos;
+}
+
 std::string ParamSpec::problem() const {
-  if (name.empty() || name.find_first_of("=,[] ") != std::string::npos)
+  if (!validName(name))
     return "'" + name + "': a name must be non-empty without '=', ',', '[', ']' or spaces";
   if (meaning.empty()) return "'" + name + "': no meaning (arena denoisers lists it)";
   if (type == Type::Choice && !(defaultValue >= 0 && defaultValue < double(choices.size())))

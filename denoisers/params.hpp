@@ -29,6 +29,9 @@ struct ParamSpec {
   // range whose min exceeds its max, or a default outside its range (which --param would refuse
   // when typed, yet every run would use unasked).
   std::string problem() const;
+  // Whether `name` can name a parameter: non-empty, without '=', ',', '[', ']' or spaces (a label
+  // `svgf[sigmaL=4]` and `--param svgf.sigmaL=4` must read back).
+  static bool validName(const std::string& name);
   std::string describe() const;  // "iterations (int, default 5, range [1, 8]): meaning"
 };
 

@@ -103,7 +103,7 @@ ParamSpec readParamSpec(JsonReader& p) {
   } else {
     p.fail("type", "expected one of bool, int, float, choice; got '" + type + "'");
   }
-  if (name.empty() || name.find_first_of("=,[] ") != std::string::npos)
+  if (!ParamSpec::validName(name))
     p.fail("name", "must be non-empty without '=', ',', '[', ']' or spaces");
   rejectUnknownFields(p, {"name", "type", "default", "min", "max", "choices", "meaning"});
   return spec;
