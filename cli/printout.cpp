@@ -214,6 +214,62 @@ void printOverallRanking(std::ostream& out, const RunResults& results) {
   }
 }
 
+void printOtherOverallScores(std::ostream& out, const RunResults& results) {
+  if (!results.statistics || !results.statistics->overall) return;
+  const RunStatistics& st = *results.statistics;
+  std::vector<std::pair<std::string, const OverallRanking*>> metrics;
+  for (const auto& [name, o] : st.overallByMetric)
+    if (!o.ranking.empty()) metrics.push_back({name, &o});
+  if (metrics.empty()) return;
+  // Rows in the relMSE ranking's order, then any method ranked only on another metric.
+  std::vector<std::string> rows;
+  for (const RankedMethod& m : st.overall->ranking) rows.push_back(m.label);
+  for (const auto& [name, o] : metrics)
+    for (const RankedMethod& m : o->ranking)
+      if (std::find(rows.begin(), rows.end(), m.label) == rows.end()) rows.push_back(m.label);
+  size_t column = 26;
+  for (const std::string& label : rows) column = std::max(column, displayWidth(label) + 2);
+  constexpr size_t kCell = 14;
+  out << "\noverall on the other metrics (rank and score, each the relMSE one's normalisation on "
+         "that metric; lower is better)\n"
+      << "  " << std::string(column, ' ');
+  for (const auto& [name, o] : metrics) out << rightAligned(name, kCell);
+  out << "\n";
+  for (const std::string& label : rows) {
+    out << "  " << paddedText(label, column);
+    for (const auto& [name, o] : metrics) {
+      const auto it = std::find_if(o->ranking.begin(), o->ranking.end(),
+                                   [&](const RankedMethod& m) { return m.label == label; });
+      out << (it == o->ranking.end() ? rightAligned("-", kCell)
+                                     : "  " + paddedText(rankText(*it), 4) +
+                                           rightAligned(figureText(it->value), kCell - 6));
+    }
+    out << "\n";
+  }
+  for (const auto& [name, o] : metrics) {
+    if (o->baseline != st.overall->baseline)
+      out << "  " << name << ": relative to " << (o->baseline.empty() ? "(none)" : o->baseline)
+          << "\n";
+    if (!o->excluded.empty() && o->excluded != st.overall->excluded)
+      out << "  not ranked overall on " << name << ": " << o->excluded << "\n";
+  }
+  out << "  (=: tied, as above; intervals and pairs: results.json statistics.overallByMetric, the "
+         "report's rankings)\n";
+}
+
+std::string otherOverallFirstsText(const RunResults& results) {
+  if (!results.statistics) return "";
+  std::string text;
+  for (const auto& [name, o] : results.statistics->overallByMetric) {
+    std::string firsts;
+    for (const RankedMethod& m : o.ranking)
+      if (m.rank == 1) firsts += (firsts.empty() ? "" : ", ") + m.label;
+    if (firsts.empty()) continue;
+    text += (text.empty() ? "" : "; ") + name + " " + firsts;
+  }
+  return text;
+}
+
 namespace {
 
 // The order of the methods by time: the CPU ms measured here against the GPU ms the cost model
@@ -456,6 +512,7 @@ std::vector<std::string> sceneWarningLines(const RunResults& results) {
 
 void printStudyTables(std::ostream& out, const RunResults& results) {
   printSceneRankings(out, results);
+  printOtherOverallScores(out, results);
   printEventTables(out, results);
   const std::vector<std::string> absent = absentSummaryLines(results, {"relMse"});
   if (!absent.empty()) out << "\nabsent summaries\n";
@@ -467,6 +524,8 @@ void printStudyTables(std::ostream& out, const RunResults& results) {
 
 void printStudySummary(std::ostream& out, const RunResults& results, const StudyOutputs& where) {
   printOverallRanking(out, results);
+  if (const std::string firsts = otherOverallFirstsText(results); !firsts.empty())
+    out << "  rank 1 overall on the other metrics: " << firsts << " (--verbose: their table)\n";
   printSpeedOrder(out, results);
   printSceneWinners(out, results);
   // docs/references.md: said plainly, once, where a scene's references are too noisy to rank it.

@@ -22,11 +22,17 @@ std::string tiedText(const RankedMethod& rankedMethod);
 // A scene's pairs whose outputs were bit-identical on every frame (pairs[].outputChecksum), each
 // group "asvgf = svgf", groups separated by "; "; "" when none.
 std::string identicalOutputsText(const RunResults& results, const std::string& scene);
-// The run's overall ranking (statistics.overall): rank ("=" when tied), label, score, interval,
-// ties; and who was left out and why. Nothing when the run has none.
 // The scenes' image sizes, each once: "256x144" or "256x144, 512x288" ("" when none is recorded).
 std::string sceneSizesText(const RunResults& results);
+// The run's overall ranking (statistics.overall): rank ("=" when tied), label, score, interval,
+// ties; and who was left out and why. Nothing when the run has none.
 void printOverallRanking(std::ostream& out, const RunResults& results);
+// The overall scores on the other metrics that declare one (statistics.overallByMetric: 1 - SSIM,
+// the FLIPs): a row per method in the relMSE ranking's order, a column per metric holding its rank
+// (ties "=") and score, so a reader sees whether the choice holds on them. Nothing without them.
+void printOtherOverallScores(std::ostream& out, const RunResults& results);
+// The methods at rank 1 on each of those metrics ("dssim svgf; ldrFlip passthrough"), "" if none.
+std::string otherOverallFirstsText(const RunResults& results);
 // A run of several input seeds (--seeds K): each pair's error split over them (pairs[].
 // biasVariance: bias2, variance, bias2Corrected, each mean with its interval), and that the
 // table's relMSE is the first seed's. Nothing for a run of one seed.

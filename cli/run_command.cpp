@@ -242,6 +242,7 @@ void finish(const std::string& out) {
       for (const json& w : scene["warnings"])
         if (w.is_string()) std::cout << "warning: " << name << ": " << w.get<std::string>() << "\n";
   printOverallRanking(std::cout, results);
+  printOtherOverallScores(std::cout, results);
   // The scenes whose reference is too noisy to separate the methods well: said here, not only in
   // results.json and the report (the ranking above is read first).
   std::vector<std::string> missed, unknown;

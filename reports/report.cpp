@@ -455,6 +455,13 @@ json rankingData(const RunResults& results, const std::vector<std::string>& scen
   if (results.statistics && results.statistics->overall) {
     out["overall"] = results.statistics->overall->toJson();
     out["overall"]["tiesKnown"] = true;
+    // The overall scores on the other metrics that declare one (1 - SSIM, the FLIPs), ranked with
+    // ties as relMSE's: the printout's table of them, with their intervals.
+    for (const auto& [metric, o] : results.statistics->overallByMetric) {
+      if (o.ranking.empty()) continue;
+      out["overallByMetric"][metric] = o.toJson();
+      out["overallByMetric"][metric]["tiesKnown"] = true;
+    }
   }
   return out;
 }

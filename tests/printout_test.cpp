@@ -95,12 +95,29 @@ json worstDefaultStudy() {
   for (size_t k = 0; k < labels.size(); ++k)
     overall.push_back({{"label", labels[k]}, {"rank", int(k) + 1}, {"score", 0.1 * double(k + 1)},
                        {"ci95", {0.1 * double(k), 0.1 * double(k + 2)}}, {"tiedWith", json::array()}});
+  // The other metrics' overall scores (1 - SSIM and both FLIPs, as the default study has them), in
+  // the reverse order.
+  json byMetric = json::object();
+  for (const char* metric : {"dssim", "ldrFlip", "hdrFlip"}) {
+    json ranking = json::array();
+    for (size_t k = 0; k < labels.size(); ++k)
+      ranking.push_back({{"label", labels[labels.size() - 1 - k]},
+                         {"rank", int(k) + 1},
+                         {"score", 0.2 * double(k + 1)},
+                         {"ci95", {0.2 * double(k), 0.2 * double(k + 2)}},
+                         {"tiedWith", json::array()}});
+    byMetric[metric] = {{"normalisation", std::string("geometric mean over scenes of ") + metric +
+                                              " / " + metric + "(temporal)"},
+                        {"baseline", "temporal"},
+                        {"ranking", ranking}};
+  }
   results["statistics"] = test::statisticsBlock(
       {{"scenes", stScenes},
        {"overall",
         {{"normalisation", "geometric mean over scenes of relMse / relMse(temporal)"},
          {"baseline", "temporal"},
-         {"ranking", overall}}}});
+         {"ranking", overall}}},
+       {"overallByMetric", byMetric}});
   return results;
 }
 
@@ -401,6 +418,74 @@ TEST(StudySummary, IdenticalOutputsExtraPathsAndRanksAboveALowerMeanAreSaid) {
   EXPECT_EQ(occurrences(tables.str(),
                         "identical outputs (bit for bit, every frame): " + best + " = " + second),
             1u);
+}
+
+// The overall scores on the other metrics (1 - SSIM, the FLIPs) are printed beside relMSE's: a row
+// per method in relMSE's order, each metric's rank (ties "=") and score; a method a metric did not
+// rank is "-"; another baseline and another exclusion are said. The study's summary names each
+// metric's first (the full table is --verbose's).
+TEST(StudySummary, TheOtherMetricsOverallScoresArePrintedBesideRelMses) {
+  json results = worstDefaultStudy();
+  json& byMetric = results["statistics"]["overallByMetric"];
+  const std::string second = results["statistics"]["overall"]["ranking"][1]["label"];
+  json& ldr = byMetric["ldrFlip"]["ranking"];
+  ldr[0]["tiedWith"] = {ldr[1]["label"]};
+  ldr[1]["tiedWith"] = {ldr[0]["label"]};
+  ldr[1]["rank"] = 1;
+  const std::string ldrFirsts =
+      ldr[0]["label"].get<std::string>() + ", " + ldr[1]["label"].get<std::string>();
+  json& hdr = byMetric["hdrFlip"];
+  for (size_t k = 0; k < hdr["ranking"].size(); ++k)
+    if (hdr["ranking"][k]["label"] == second) hdr["ranking"].erase(k);
+  hdr["excluded"] = second + ": no HDR-FLIP on every scene";
+  hdr["baseline"] = "eaw";
+  std::ostringstream out;
+  cli::printOtherOverallScores(out, test::typed(results));
+  const std::string text = out.str();
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  ASSERT_GE(lines.size(), 4u) << text;
+  EXPECT_NE(lines[1].find("overall on the other metrics"), std::string::npos) << text;
+  // The header names the metrics in order; the rows follow relMSE's ranking.
+  EXPECT_LT(lines[2].find("dssim"), lines[2].find("hdrFlip")) << text;
+  EXPECT_LT(lines[2].find("hdrFlip"), lines[2].find("ldrFlip")) << text;
+  const size_t n = results["statistics"]["overall"]["ranking"].size();
+  ASSERT_GE(lines.size(), 3 + n);
+  for (size_t k = 0; k < n; ++k)
+    EXPECT_EQ(
+        lines[3 + k].rfind(
+            "  " + results["statistics"]["overall"]["ranking"][k]["label"].get<std::string>() + " ",
+            0),
+        0u)
+        << lines[3 + k];
+  // The first row (relMSE's best) is last on every metric here: rank n, score 0.2 n.
+  EXPECT_NE(lines[3].find(cli::figureText(0.2 * double(n))), std::string::npos) << lines[3];
+  EXPECT_EQ(occurrences(lines[4], " -"), 1u) << "the second is not ranked on hdrFlip: " << lines[4];
+  EXPECT_EQ(occurrences(text, "1= "), 2u) << "a tie is marked on both methods: " << text;
+  EXPECT_EQ(occurrences(text, "hdrFlip: relative to eaw"), 1u) << text;
+  EXPECT_EQ(occurrences(text, "not ranked overall on hdrFlip: " + second + ": no HDR-FLIP"), 1u)
+      << text;
+  EXPECT_EQ(occurrences(text, "ldrFlip: relative to"), 0u) << text;
+  // The summary: one line, each metric's rank 1.
+  std::ostringstream summary;
+  cli::printStudySummary(summary, test::typed(results), {"r.json", "r.db", "index.html", 1});
+  const std::string dssimFirst = byMetric["dssim"]["ranking"][0]["label"];
+  EXPECT_EQ(occurrences(summary.str(),
+                        "rank 1 overall on the other metrics: dssim " + dssimFirst + "; hdrFlip "),
+            1u)
+      << summary.str();
+  EXPECT_NE(summary.str().find("; ldrFlip " + ldrFirsts + " (--verbose"), std::string::npos)
+      << summary.str();
+  std::ostringstream tables;
+  cli::printStudyTables(tables, test::typed(results));
+  EXPECT_EQ(occurrences(tables.str(), "overall on the other metrics"), 1u);
+  // Without them, nothing.
+  results["statistics"].erase("overallByMetric");
+  std::ostringstream none;
+  cli::printOtherOverallScores(none, test::typed(results));
+  EXPECT_EQ(none.str(), "");
+  EXPECT_EQ(cli::otherOverallFirstsText(test::typed(results)), "");
 }
 
 // A scene whose references stopped at their sample cap: the warning is the scene's, stored once in

@@ -126,6 +126,19 @@
         el('tbody', {}, rows)));
   }
 
+  // The overall scores on the other metrics that declare one (1 − SSIM, the FLIPs), folded under
+  // the relMSE ranking: does the choice hold on them?
+  function otherOverallRankings(byMetric) {
+    const titleOf = (name) => (A.D.metrics.find((m) => m.name === name) || {}).title || name;
+    const tables = Object.entries(byMetric)
+      .map(([name, o]) => rankingTable(`Overall ranking on ${titleOf(name)} (${o.normalisation || 'normalised over scenes'})`, o, 'score', 'score'))
+      .filter(Boolean);
+    if (!tables.length) return null;
+    return el('details', { class: 'other-overall' },
+      el('summary', { text: `Overall rankings on the other metrics (${Object.keys(byMetric).map(titleOf).join(', ')})` }),
+      ...tables);
+  }
+
   function renderRankings() {
     const R = A.D.rankings || { scenes: {} };
     const scene = R.scenes[A.state.scene];
@@ -134,6 +147,7 @@
       rankingTable(`Ranking on ${A.state.scene}${scene ? ` (${scene.metric || 'relMse'})` : ''}`, scene, `mean ${scene ? scene.metric || 'relMse' : ''}`, 'mean',
                    Object.fromEntries(A.pairsOf(A.state.scene).filter((p) => p.outputChecksum).map((p) => [p.label, p.outputChecksum]))),
       overall && rankingTable(`Overall ranking (${overall.normalisation || 'normalised over scenes'})`, overall, 'score', 'score'),
+      otherOverallRankings(R.overallByMetric || {}),
     ].filter(Boolean));
   }
 

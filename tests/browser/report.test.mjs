@@ -244,7 +244,7 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
   assert.ok(chromaCells.every((t) => /\[.+, .+\]/.test(t)), `chroma lag energy cells: ${chromaCells.join(' | ')}`);
 
   // (3) Tables: rankings (scene and overall), the failed pair, intervals, and a table that fits.
-  assert.equal(await page.locator('#rankings table.ranking-table').count(), 2, 'scene and overall rankings');
+  assert.equal(await page.locator('#rankings > .ranking table.ranking-table').count(), 2, 'scene and overall rankings');
   // The overall ranking is statistics' one score: the page shows exactly what `arena run` printed
   // (rank with ties, label, score, interval), digit for digit.
   const pageOverall = await page.locator('#rankings table.ranking-table').nth(1).locator('tbody tr').evaluateAll(
@@ -258,6 +258,28 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
   assert.deepEqual(pageOverall.map((r) => r.split(' | ')[1]),
     results.statistics.overall.ranking.map((m) => m.label + (m.extraPathsPerPixel > 0 ? ' (+paths)' : '')));
   assert.equal(await page.locator('#rankings table.ranking-table').first().locator('tbody tr').count(), okHere);
+  // The overall rankings on the other metrics (1 − SSIM, LDR-FLIP), folded under it, are the
+  // printout's table of them: rank with ties and score, method by method.
+  const others = Object.keys(results.statistics.overallByMetric)
+    .filter((m) => results.statistics.overallByMetric[m].ranking.length > 0);
+  assert.ok(others.includes('dssim') && others.includes('ldrFlip'), others.join(', '));
+  const otherTables = page.locator('#rankings details.other-overall table.ranking-table');
+  assert.equal(await otherTables.count(), others.length);
+  const printedOther = {};
+  for (const line of tinyRuns().printed.split('\noverall on the other metrics ')[1].split('\n').slice(2)) {
+    if (!/^  [^ (]/.test(line)) break;
+    const [, label, cells] = line.match(/^  (\S+)\s+(.*)$/);
+    printedOther[label] = [...cells.matchAll(/(\d+=?)\s+(\S+)|-/g)].map((c) => (c[1] ? `${c[1]} ${c[2]}` : '-'));
+  }
+  for (let k = 0; k < others.length; ++k) {
+    const rows = await otherTables.nth(k).locator('tbody tr').evaluateAll(
+      (trs) => trs.map((r) => [...r.querySelectorAll('td')].slice(0, 3).map((td) => td.textContent)));
+    assert.equal(rows.length, results.statistics.overallByMetric[others[k]].ranking.length);
+    for (const [rank, shown, score] of rows) {
+      const label = shown.replace(/ \(\+paths\)$/, '');
+      assert.equal(printedOther[label] && printedOther[label][k], `${rank} ${score}`, `${others[k]}, ${label}: ${JSON.stringify(printedOther)}`);
+    }
+  }
   assert.match(await page.locator('#failures').innerText(), /injected failure/);
   assert.equal(await page.locator('#summary-table tr.failed').count(), 1);
   assert.equal(await page.locator('#summary-table tbody tr[data-label]').count(), okHere);
