@@ -151,6 +151,28 @@
     ].filter(Boolean));
   }
 
+  // A column whose marked (rank 1) methods include one with a worse mean than a method not marked:
+  // ranks count the methods resolved better, so a method with a wide interval stays at rank 1 while
+  // one with a better mean but a narrow interval has a method resolved better than it. Said, so
+  // that the mark is not read as "the best mean".
+  function markedAboveABetterMean(cols, best, ok) {
+    const said = [];
+    cols.forEach((c, i) => {
+      if (!best[i] || c.title !== 'mean') return;
+      const better = (a, b) => (c.lower ? a < b : a > b);
+      const valued = ok.filter((p) => Number.isFinite(c.get(p)));
+      const marked = valued.filter((p) => best[i].has(p.label));
+      if (!marked.length) return;
+      const worst = marked.reduce((w, p) => (better(c.get(w), c.get(p)) ? p : w));
+      const above = valued.filter((p) => !best[i].has(p.label) && better(c.get(p), c.get(worst)));
+      if (above.length)
+        said.push(`${c.group}: ${above.map((p) => p.label).join(', ')} not marked, with a ${c.lower ? 'lower' : 'higher'} mean than ${worst.label}`);
+    });
+    return said.length ?
+        ` A mark is not the best mean (${said.join('; ')}): a method not marked has a method resolved better than it, while the marked one, with a wider interval, has none.` :
+        '';
+  }
+
   A.renderTables = function renderTables() {
     renderRankings();
     const table = $('summary-table');
@@ -211,7 +233,8 @@
         'Bold green: the best mean of a column; this run has no paired statistics, so ties are unknown.' :
         !sceneRanking.tiesKnown ?
         'The run\'s statistics do not rank this scene: nothing is marked best.' :
-        'Bold green: rank 1 in the run\'s statistics on that metric (no method resolved better by a paired 95% interval; ties among them included); columns the statistics do not rank (p95, times, unranked metrics) mark nothing.';
+        'Bold green: rank 1 in the run\'s statistics on that metric (no method resolved better by a paired 95% interval; ties among them included); columns the statistics do not rank (p95, times, unranked metrics) mark nothing.' +
+        markedAboveABetterMean(cols, best, ok);
     const groups = [];
     for (const c of cols) {
       if (groups.length && groups[groups.length - 1].name === c.group) groups[groups.length - 1].span++;
