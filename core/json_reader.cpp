@@ -106,6 +106,16 @@ class DuplicateKeyCheckingParser : public nlohmann::detail::json_sax_dom_parser<
     return Base::number_float(v, s);
   }
   bool string(std::string& v) { return enterValue(), Base::string(v); }
+  // A number beyond the double range (1e999) is named where it is, as a value too small is.
+  template <class Exception>
+  bool parse_error(std::size_t position, const std::string& token, const Exception& ex) {
+    if (ex.id == 406) {
+      enterValue();
+      throw Error(file_ + ": " + path(scopes_.size()) + ": " + token +
+                  " is too large to be stored as a number (beyond 1.8e308)");
+    }
+    return Base::parse_error(position, token, ex);
+  }
 
  private:
   struct Scope {

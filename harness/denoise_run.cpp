@@ -286,6 +286,7 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
     out.selfTimed = false;
     out.extraRaysPerPixel = 0;
     out.implausibleTime.clear();
+    out.outputIsInput = true;
     for (auto& [kind, instance] : instances_) {
       Denoiser& d = *instance;
       Image& result = kind == SignalKind::Color ? out.color : kind == SignalKind::Diffuse ? out.diffuse : out.specular;
@@ -306,6 +307,9 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
       if (const std::string fault = outputFault(result, request_.name, kind, t, info_.origin);
           !fault.empty())
         throw Error(fault);
+      out.outputIsInput =
+          out.outputIsInput && in.signal.sameShape(result) &&
+          std::equal(in.signal.raw().begin(), in.signal.raw().end(), result.raw().begin());
       for (PassStats p : d.lastPasses()) {
         p.name = std::string(signalName(kind)) + "/" + p.name;
         out.extraRaysPerPixel += p.raysPerPixel;

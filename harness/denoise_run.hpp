@@ -43,6 +43,10 @@ struct DenoisedFrame {
   // The first call of this frame whose own report of its time (a process's computeMs, the sum of
   // its passes) exceeds the harness's wall clock around that call, said in words; empty if none.
   std::string implausibleTime;
+  // Every signal's output is the signal the denoiser was given, bit for bit (a demodulated
+  // denoiser that passes its inputs through: the remodulated colour differs from the frame's by
+  // rounding, so comparing the colours would not see it).
+  bool outputIsInput = false;
 };
 
 // What is wrong with a call's own report of its time (a process's computeMs, the sum of its

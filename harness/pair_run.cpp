@@ -30,6 +30,16 @@ std::vector<std::string> runWarnings(const json& pair, int frames) {
                     timing["implausibleFrames"].dump() + " of " + std::to_string(frames) +
                     " frames (" + timing.value("implausibleFirst", "") +
                     "); no work in a call outlasts the call, so its reported ms are not credible");
+  if (const json timing = pair.value("timing", json::object());
+      timing.value("reportedZeroEveryFrame", false)) {
+    char wall[48] = "not known";
+    if (const json w = timing.value("msWallMedian", json()); w.is_number())
+      std::snprintf(wall, sizeof wall, "median %.3g ms", w.get<double>());
+    first.push_back("reported a time of 0 ms on all " + std::to_string(frames) +
+                    " frames (the harness's wall clock around its calls: " + wall +
+                    "): no filter takes no time, so its timer is likely not read; its ms, and its "
+                    "place on the speed axes, are not credible");
+  }
   if (pair.contains("oracleLayers")) {
     std::string named;
     for (const json& layer : pair["oracleLayers"]) {
@@ -43,9 +53,11 @@ std::vector<std::string> runWarnings(const json& pair, int frames) {
       inputs.value("total", 0L) > 0)
     first.push_back(sanitizedWarning(inputs["channels"].get<NonFiniteCounts>()));
   if (pair.value("equalsInputEveryFrame", false))
-    first.push_back("the output is its input value for value on all " + std::to_string(frames) +
-                    " frames: scored as a denoiser's, it filtered nothing (is the input wired in "
-                    "as the output?)");
+    first.push_back(
+        "the output is its input value for value on all " + std::to_string(frames) + " frames" +
+        (pair.value("signals", "") != "color" ? " (the diffuse and specular signals it was given)"
+                                              : std::string()) +
+        ": scored as a denoiser's, it filtered nothing (is the input wired in as the output?)");
   if (const json ratio = pair.value("brightnessVsReference", json()); ratio.is_number()) {
     char text[32];
     std::snprintf(text, sizeof text, "%.3g", ratio.get<double>());
@@ -143,6 +155,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   NonFiniteCounts sanitized;  // over every frame, warm-up included: each one shaped the history
   uint64_t outputChecksum = 1469598103934665603ull;  // of every output frame, in order
   int implausibleFrames = 0;  // frames whose reported time exceeds the call that carried it
+  int zeroTimedFrames = 0;    // frames whose reported time is 0 (a timer not read?)
   std::string firstImplausible;
   std::vector<std::vector<PassTime>> passes;
   std::vector<double> ms;
@@ -165,8 +178,8 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
     }
     if (!identity) {
       const Image& in = sd.evaluation.frame(f.frame).get("color");
-      if (in.sameShape(f.color) &&
-          std::equal(in.raw().begin(), in.raw().end(), f.color.raw().begin()))
+      if (f.outputIsInput || (in.sameShape(f.color) &&
+                              std::equal(in.raw().begin(), in.raw().end(), f.color.raw().begin())))
         equalsInput.push_back(f.frame);
     }
     FrameFacts facts;
@@ -185,6 +198,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
       outputChecksum = (outputChecksum ^ wordChecksum(f.color.plane(c), f.color.pixelCount())) *
                        1099511628211ull;
     for (const auto& [channel, n] : f.sanitized) sanitized[channel] += n;
+    zeroTimedFrames += f.selfTimed && f.milliseconds == 0;
     if (!f.implausibleTime.empty() && implausibleFrames++ == 0)
       firstImplausible = "frame " + std::to_string(f.frame) + ", " + f.implausibleTime;
     ms.push_back(f.milliseconds);
@@ -255,6 +269,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   }
   // A time the denoiser reported for work longer than the call that carried it cannot be: counted
   // and warned of (runWarnings), never charted silently.
+  if (run && zeroTimedFrames == info.frames) timing["reportedZeroEveryFrame"] = true;
   if (implausibleFrames > 0) {
     timing["implausibleFrames"] = implausibleFrames;
     timing["implausibleFirst"] = firstImplausible;
@@ -270,6 +285,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
     const double ratio = std::max(outputLight, 0.0) / referenceLight;
     if (ratio == 0 || std::max(ratio, 1 / ratio) > 1.25) pair["brightnessVsReference"] = ratio;
   }
+  if (!run || run->signals() == SignalMode::Color) pair["signals"] = "color";
   prependRunWarnings(pair, info.frames);
   // With --keep-frames none no image was written: none is recorded (a folder named in results.json
   // that does not exist read as images lost).
@@ -277,7 +293,6 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
     pair["images"] = {{"dir", fs::relative(imageDir, cfg.out).string()}, {"all", keepAll}};
   if (run && !run->info().origin.empty()) pair["origin"] = run->info().origin;
   if (!run) pair["origin"] = (sd.sequence.dir() / "outputs" / captured).string();
-  if (!run || run->signals() == SignalMode::Color) pair["signals"] = "color";
   return pair;
 }
 

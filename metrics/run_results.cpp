@@ -432,6 +432,16 @@ std::map<std::string, std::string> contenderOrigins(const RunResults& results) {
   return out;
 }
 
+// The origins' prefixes are the loaders' (denoisers/external/plugin_denoiser.cpp, loader.cpp); a
+// capture's stored output is its outputs folder's path (harness/pair_run.cpp).
+std::string contenderKind(const std::string& origin) {
+  if (origin.empty()) return "";
+  if (origin.rfind("plugin ", 0) == 0) return "plugin";
+  if (origin.rfind("isolated plugin ", 0) == 0) return "isolated plugin";
+  if (origin.rfind("external process ", 0) == 0) return "external";
+  return "stored output";
+}
+
 std::vector<std::string> absentSummaryLines(const RunResults& results, const std::vector<std::string>& metrics) {
   std::map<std::tuple<std::string, std::string, std::string>, int> count;
   for (const PairResult& p : results.pairs) {

@@ -90,12 +90,16 @@ struct RunResults {
 };
 
 // The absent summaries of a run's ok pairs, one line per scene, metric and reason:
-// "<scene>: <metric> absent in N pair(s): <reason>". `metrics` empty: every metric the pairs'
-// summaries name. For printouts that show means and must say why one is missing.
 // Where each contender that is not built in came from, by label (a pair's `origin`: an external
 // process's manifest, a plugin's library, a capture's stored output); built-ins are not listed.
 std::map<std::string, std::string> contenderOrigins(const RunResults& results);
+// What kind of contender an origin names, as the report's tables say it: "plugin" (loaded into
+// arena), "isolated plugin" (run in `arena serve`), "external" (a process's manifest) or "stored
+// output" (a capture's outputs folder).
+std::string contenderKind(const std::string& origin);
 
+// "<scene>: <metric> absent in N pair(s): <reason>". `metrics` empty: every metric the pairs'
+// summaries name. For printouts that show means and must say why one is missing.
 std::vector<std::string> absentSummaryLines(const RunResults& results,
                                             const std::vector<std::string>& metrics = {});
 

@@ -858,6 +858,9 @@ json reportData(const RunResults& results, const fs::path& runDir, const RunResu
   // Where each contender that is not a built-in came from (an external process's manifest, a
   // plugin's library, a capture's stored output): the page marks those rows.
   const json origins = contenderOrigins(results);
+  json originKinds = json::object();
+  for (const auto& [label, origin] : contenderOrigins(results))
+    originKinds[label] = contenderKind(origin);
   const json speed = speedData(results, sceneNames, labels);
   json data = {{"generator", "arena report"},
                {"run",
@@ -871,6 +874,7 @@ json reportData(const RunResults& results, const fs::path& runDir, const RunResu
                {"scenes", scenes},
                {"labels", labels},
                {"origins", origins},
+               {"originKinds", originKinds},
                {"pairs", pairs},
                {"failures", failures},
                {"speed", speed},

@@ -23,6 +23,7 @@
 #include "harness/denoise_run.hpp"
 #include "harness/run_matrix.hpp"
 #include "metrics/results.hpp"
+#include "metrics/run_results.hpp"
 #include "tests/contract_fixture.hpp"
 #include "tests/test_util.hpp"
 
@@ -45,6 +46,14 @@ const Sequence& tinySequence() {
       renderSequence(test::shippedScene("cornell_static"),
                      test::tinySettings(kWidth, kHeight, kFrames, 8), sequenceCache(), nullptr));
   return sequence;
+}
+
+// "plugin:LIBRARY", appended rather than std::string("plugin:") + LIBRARY, on which GCC 12 warns
+// falsely (-Warray-bounds) once inlined into a test's lambda.
+std::string pluginSpec(const char* library) {
+  std::string spec = "plugin:";
+  spec += library;
+  return spec;
 }
 
 std::vector<DenoisedFrame> denoiseAll(const DenoiserRequest& request, const Sequence& seq) {
@@ -116,7 +125,11 @@ TEST(ExternalManifest, EveryMistakeNamesTheFileAndTheField) {
       {"channel twice",
        {{"channels", {"normal", "depth", "normal"}}},
        "$.channels[2]: 'normal' is already $.channels[0]; name each layer once"},
-      {"unknown field", {{"timeout", 3}}, "$.timeout: unknown field"},
+      {"unknown field",
+       {{"timeout", 3}},
+       "$.timeout: unknown field (check the spelling; a process's manifest has name description "
+       "command signals channels parameters timeoutSeconds; a plugin's has library isolated "
+       "instead of command signals channels parameters)"},
       {"param default",
        {{"parameters", {{{"name", "k"}, {"type", "int"}, {"default", 9}, {"min", 0}, {"max", 4}}}}},
        "$.parameters[0].default: must lie in [min, max]"},
@@ -316,6 +329,7 @@ TEST(ExternalProcess, ARunRecordsTheExternalPairBesideAFailingOne) {
   EXPECT_EQ(ok["params"]["radius"], 2);
   EXPECT_EQ(ok["signals"], "color");
   EXPECT_NE(ok["origin"].get<std::string>().find("cpp_box/manifest.json"), std::string::npos);
+  EXPECT_EQ(contenderKind(ok["origin"]), "external");  // what the report's tables say
   EXPECT_EQ(ok["timing"]["msSource"], "reported by the process");
   EXPECT_EQ(ok["timing"]["clock"], "process");  // its own clock, maybe a GPU's: not "cpu"
   EXPECT_GE(ok["timing"]["msWallMedian"].get<double>(), ok["timing"]["msMedian"].get<double>());
@@ -344,6 +358,42 @@ TEST(ExternalProcess, AProcessEndingBadlyAfterItsFramesIsWarnedOf) {
       << warnings;
   // A process that ends well says nothing.
   const json quiet = runMatrix(tinyRun("exit_well", {{faulty("quiet"), {}, ""}}));
+  EXPECT_FALSE(quiet["pairs"][0].contains("processEnds"));
+}
+
+// What a plugin author's trial found passing silently: a header giving computeMs twice (the last
+// was read), a time of 0 on every frame (a timer not read: the process looked free), and a print
+// to stdout after the last answer (between frames it would have failed the pair).
+TEST(ExternalProcess, ATimeOfZeroAKeyTwiceAndOutputAfterTheLastAnswerAreSaid) {
+  const json r = runMatrix(tinyRun("time_and_end", {{faulty("zero-time"), {}, ""},
+                                                    {faulty("duplicate-key"), {}, ""},
+                                                    {faulty("goodbye"), {}, ""}}));
+  ASSERT_EQ(r["pairs"].size(), 3u);
+  const json& zero = r["pairs"][0];
+  ASSERT_EQ(zero["status"], "ok") << zero.dump().substr(0, 300);
+  EXPECT_TRUE(zero["timing"].value("reportedZeroEveryFrame", false)) << zero["timing"];
+  EXPECT_EQ(zero["warnings"][0].get<std::string>().rfind(
+                "reported a time of 0 ms on all 6 frames (the harness's wall clock around its "
+                "calls: median ",
+                0),
+            0u)
+      << zero["warnings"];
+  const json& twice = r["pairs"][1];
+  ASSERT_EQ(twice["status"], "failed");
+  EXPECT_NE(twice["error"].get<std::string>().find(
+                "its 'result' header: $: key \"computeMs\" is given twice"),
+            std::string::npos)
+      << twice["error"];
+  const json& goodbye = r["pairs"][2];
+  ASSERT_EQ(goodbye["status"], "ok") << goodbye.dump().substr(0, 300);
+  ASSERT_EQ(goodbye["processEnds"].size(), 2u) << goodbye;
+  EXPECT_NE(goodbye["processEnds"][0].get<std::string>().find(
+                ") wrote 18 byte(s) to its output after its last answer (all done, goodbye"),
+            std::string::npos)
+      << goodbye["processEnds"];
+  // The other processes of this file report a time and end quietly: none of this is said.
+  const json quiet = runMatrix(tinyRun("time_quiet", {{faulty("quiet"), {}, ""}}));
+  EXPECT_FALSE(quiet["pairs"][0]["timing"].contains("reportedZeroEveryFrame"));
   EXPECT_FALSE(quiet["pairs"][0].contains("processEnds"));
 }
 
@@ -712,7 +762,7 @@ TEST(ExternalFaults, AMissingProgramIsNamed) {
 // --- the C plugin ABI -------------------------------------------------------------------------
 
 TEST(Plugin, EawThroughTheAbiIsIdenticalToTheBuiltIn) {
-  const std::string name = DenoiserRegistry::resolve(std::string("plugin:") + ARENA_EAW_PLUGIN);
+  const std::string name = DenoiserRegistry::resolve(pluginSpec(ARENA_EAW_PLUGIN));
   EXPECT_EQ(name, "eaw-plugin");
   // The schema came through the ABI: the same names, defaults and ranges as the built-in's.
   const DenoiserInfo& plugin = DenoiserRegistry::instance().find(name);
@@ -970,10 +1020,32 @@ TEST(Plugin, ARunThatDiesBeforeItsCommitLeavesItsDirectoryMarked) {
                                    "images/screenshots", "images/screenshots/2024"}));
 }
 
+// A demodulated plugin that returns the signals it was given is warned of, as a colour denoiser
+// returning its input is: its remodulated colour differs from the frame's by rounding only, which
+// a comparison of the colours missed (a plugin author's trial).
+TEST(Plugin, ADemodulatedPluginReturningItsInputsIsSaidToFilterNothing) {
+  const std::string name = DenoiserRegistry::resolve(pluginSpec(ARENA_FAULTY_PLUGIN));
+  ::setenv("ARENA_FAULTY_PLUGIN", "echo", 1);
+  const json echoed = runMatrix(tinyRun("echo_plugin", {{name, {}, ""}}));
+  ::setenv("ARENA_FAULTY_PLUGIN", "", 1);  // zeros: filtered into nothing, but not its input
+  const json zeros = runMatrix(tinyRun("zeros_plugin", {{name, {}, ""}}));
+  ::unsetenv("ARENA_FAULTY_PLUGIN");
+  const json& pair = echoed["pairs"][0];
+  ASSERT_EQ(pair["status"], "ok") << pair.dump().substr(0, 300);
+  EXPECT_TRUE(pair.value("equalsInputEveryFrame", false));
+  bool warned = false;
+  for (const json& w : pair["warnings"])
+    warned |= w.get<std::string>().find(
+                  "the output is its input value for value on all 6 frames "
+                  "(the diffuse and specular signals it was given): ") == 0;
+  EXPECT_TRUE(warned) << pair["warnings"].dump();
+  EXPECT_FALSE(zeros["pairs"][0].contains("equalsInputEveryFrame"));
+}
+
 // A plugin's error buffer is read only within its size and as valid text; a pass report it makes
 // with a NaN time fails the pair; an int parameter it declares as 2.5 is refused at load.
 TEST(Plugin, FaultsOfAPluginFailItsPairNamingThem) {
-  const std::string name = DenoiserRegistry::resolve(std::string("plugin:") + ARENA_FAULTY_PLUGIN);
+  const std::string name = DenoiserRegistry::resolve(pluginSpec(ARENA_FAULTY_PLUGIN));
   ::setenv("ARENA_FAULTY_PLUGIN", "unterminated", 1);
   const std::string e = errorOf([&] { denoiseAll({name, {}, ""}, tinySequence()); });
   EXPECT_NE(e.find("denoise (frame 0) failed: eeee"), std::string::npos) << e.substr(0, 200);
@@ -1059,12 +1131,29 @@ TEST(Plugin, FaultsOfAPluginFailItsPairNamingThem) {
       << warning;
   // A descriptor's negative count is refused (it loaded as if it declared nothing).
   ::setenv("ARENA_FAULTY_DESCRIPTOR", "negative-count", 1);
-  const std::string negative = errorOf(
-      [] { DenoiserRegistry::resolve(std::string("plugin:") + ARENA_FAULTY_PARAMS_PLUGIN); });
+  const std::string negative =
+      errorOf([] { DenoiserRegistry::resolve(pluginSpec(ARENA_FAULTY_PARAMS_PLUGIN)); });
   ::unsetenv("ARENA_FAULTY_DESCRIPTOR");
   EXPECT_NE(negative.find("paramCount -2 (expected a count >= 0)"), std::string::npos) << negative;
-  const std::string params = errorOf(
-      [] { DenoiserRegistry::resolve(std::string("plugin:") + ARENA_FAULTY_PARAMS_PLUGIN); });
+  // A missing entry point is named, and a layer required twice is refused as a manifest's is.
+  const auto loadWith = [](const char* descriptor) {
+    ::setenv("ARENA_FAULTY_DESCRIPTOR", descriptor, 1);
+    const std::string refused =
+        errorOf([] { DenoiserRegistry::resolve(pluginSpec(ARENA_FAULTY_PARAMS_PLUGIN)); });
+    ::unsetenv("ARENA_FAULTY_DESCRIPTOR");
+    return refused;
+  };
+  const std::string noReset = loadWith("null-reset");
+  EXPECT_NE(noReset.find(": its ArenaPlugin's reset is NULL (a name and the entry points"),
+            std::string::npos)
+      << noReset;
+  const std::string twice = loadWith("duplicate-channel");
+  EXPECT_NE(twice.find(": requiredChannels[2]: 'depth' is already requiredChannels[0]; name each "
+                       "layer once"),
+            std::string::npos)
+      << twice;
+  const std::string params =
+      errorOf([] { DenoiserRegistry::resolve(pluginSpec(ARENA_FAULTY_PARAMS_PLUGIN)); });
   EXPECT_NE(params.find("an int parameter's default, min and max must be whole numbers"),
             std::string::npos)
       << params;
@@ -1072,7 +1161,7 @@ TEST(Plugin, FaultsOfAPluginFailItsPairNamingThem) {
 
 TEST(Plugin, AnotherAbiVersionIsRefused) {
   const std::string e =
-      errorOf([] { DenoiserRegistry::resolve(std::string("plugin:") + ARENA_WRONG_ABI_PLUGIN); });
+      errorOf([] { DenoiserRegistry::resolve(pluginSpec(ARENA_WRONG_ABI_PLUGIN)); });
   EXPECT_NE(e.find("built against plugin ABI version 999, but this arena speaks version 1"),
             std::string::npos)
       << e;
@@ -1088,7 +1177,7 @@ TEST(Plugin, AnotherAbiVersionIsRefused) {
   EXPECT_NE(viaManifest.find("libghost.so: no such plugin library"), std::string::npos)
       << viaManifest;
   const std::string notPlugin =
-      errorOf([] { DenoiserRegistry::resolve(std::string("plugin:") + ARENA_BINARY); });
+      errorOf([] { DenoiserRegistry::resolve(pluginSpec(ARENA_BINARY)); });
   EXPECT_NE(notPlugin.find("cannot load the plugin"), std::string::npos) << notPlugin;
 }
 
@@ -1142,16 +1231,13 @@ TEST(Serve, ABuiltInServedGivesTheSamePixelsAsInsideArena) {
                           denoiseAll({name, {{"sigmaL", "0.75"}}, ""}, seq)[3].color));
   // reset() is called at the cut and nowhere else, served as inside arena: the faulty plugin's
   // reset-check fails a frame where it was called without a cut, or not called at one.
-  const std::string inside =
-      DenoiserRegistry::resolve(std::string("plugin:") + ARENA_FAULTY_PLUGIN);
+  const std::string inside = DenoiserRegistry::resolve(pluginSpec(ARENA_FAULTY_PLUGIN));
   const std::string served = DenoiserRegistry::resolve(
-      "ext:" +
-      writeManifest(
-          "faulty-served",
-          {{"name", "faulty-served"},
-           {"command", {ARENA_BINARY, "serve", std::string("plugin:") + ARENA_FAULTY_PLUGIN}},
-           {"signals", "demodulated"}})
-          .string());
+      "ext:" + writeManifest("faulty-served",
+                             {{"name", "faulty-served"},
+                              {"command", {ARENA_BINARY, "serve", pluginSpec(ARENA_FAULTY_PLUGIN)}},
+                              {"signals", "demodulated"}})
+                   .string());
   ::setenv("ARENA_FAULTY_PLUGIN", "reset-check", 1);
   EXPECT_EQ(errorOf([&] { denoiseAll({inside, {}, ""}, seq); }), "(no error)");
   EXPECT_EQ(errorOf([&] { denoiseAll({served, {}, ""}, seq); }), "(no error)");
@@ -1327,6 +1413,8 @@ TEST(Plugin, AnIsolatedPluginsCrashOrHangFailsOnlyItsPair) {
   EXPECT_EQ(pairs["eaw-plugin"]["timing"]["msSource"], "reported by the process");
   EXPECT_NE(pairs["eaw-plugin"]["origin"].get<std::string>().find("isolated plugin /"),
             std::string::npos);
+  // The report's tables say "isolated plugin" (they said "stored output", a capture's word).
+  EXPECT_EQ(contenderKind(pairs["eaw-plugin"]["origin"]), "isolated plugin");
   EXPECT_EQ(pairs["faulty"]["status"], "failed");
   const std::string crash = pairs["faulty"]["error"];
   for (const char* said :

@@ -148,6 +148,13 @@ TEST(Scene, ANumberTooSmallToStoreIsRefusedAsWritten) {
                    "read as 0)"),
             std::string::npos)
       << e;
+  // One too large is named where it is too (it read as an unplaced "number overflow").
+  e = errorOf(replaced(kMinimal, R"("fov": 40)", R"("fov": 1e999)"));
+  EXPECT_NE(e.find("$.camera.keys[0].fov: 1e999 is too large to be stored as a number"),
+            std::string::npos)
+      << e;
+  e = errorOf(replaced(kMinimal, R"("resolution": [16, 8])", R"("resolution": [16, -1e999])"));
+  EXPECT_NE(e.find("$.resolution[1]: -1e999 is too large"), std::string::npos) << e;
   e = errorOf(replaced(kMinimal, R"("resolution": [16, 8])", R"("resolution": [16, 0.0000e-999])"));
   EXPECT_EQ(e.find("too small"), std::string::npos) << e;  // a zero written as zero is a zero
   EXPECT_NE(e.find("$.resolution: expected two integers [width, height] in [1, 16384], got 0"),

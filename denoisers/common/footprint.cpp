@@ -34,7 +34,8 @@ const ParamTable<Footprint>& footprintParams() {
                   "spatial footprints: scaled = published pixel constants are pixels at "
                   "footprintHeight, scaled by height / footprintHeight (keeps the screen "
                   "extent); native = published pixel constants at any resolution (Falcor, "
-                  "Q2RTX, NRD; keeps the sample count); the same for every denoiser")
+                  "Q2RTX, NRD; keeps the sample count); the same for every built-in denoiser (an "
+                  "external one's footprint is its own)")
           .real("footprintHeight", &Footprint::referenceHeight, 1080, 1, 100000,
                 "footprint=scaled: the image height the pixel constants are tuned for "
                 "(1080: NRD, SVGF paper)");

@@ -58,12 +58,18 @@ std::vector<std::string> stringArray(JsonReader& r, const std::string& key, bool
 
 // Unknown fields are errors (a typo must not silently fall back to a default). JsonReader's own
 // check cannot see arrays of strings as read, so the manifest lists its fields here.
-void rejectUnknownFields(JsonReader& r, const std::vector<std::string>& known) {
+// `kind` names the manifest ("a process's manifest"), `other` the other kind's fields, so that a
+// reader who took the wrong kind sees both.
+void rejectUnknownFields(JsonReader& r, const std::vector<std::string>& known,
+                         const std::string& kind = "", const std::string& other = "") {
   for (const std::string& key : r.memberNames())
     if (std::find(known.begin(), known.end(), key) == known.end()) {
       std::string list;
       for (const std::string& k : known) list += " " + k;
-      r.fail(key, "unknown field (check the spelling; the fields are" + list + ")");
+      r.fail(key,
+             "unknown field (check the spelling; " +
+                 (kind.empty() ? "the fields are" + list : kind + " has" + list + "; " + other) +
+                 ")");
     }
 }
 
@@ -192,7 +198,10 @@ ExternalManifest manifestFromJson(const nlohmann::json& j, const fs::path& file,
              "a process of its own, which is killed after timeoutSeconds");
     m.timeoutSeconds = readTimeout(r);
     // The rest (signals, channels, parameters) is in the library.
-    rejectUnknownFields(r, {"name", "description", "library", "isolated", "timeoutSeconds"});
+    rejectUnknownFields(r, {"name", "description", "library", "isolated", "timeoutSeconds"},
+                        "a plugin's manifest",
+                        "a process's has command signals channels parameters instead of library "
+                        "isolated");
     return m;
   }
   if (r.has("isolated"))
@@ -231,7 +240,9 @@ ExternalManifest manifestFromJson(const nlohmann::json& j, const fs::path& file,
   m.schema = ParamSchema(std::move(specs));
   m.timeoutSeconds = readTimeout(r);
   rejectUnknownFields(
-      r, {"name", "description", "command", "signals", "channels", "parameters", "timeoutSeconds"});
+      r, {"name", "description", "command", "signals", "channels", "parameters", "timeoutSeconds"},
+      "a process's manifest",
+      "a plugin's has library isolated instead of command signals channels parameters");
   return m;
 }
 

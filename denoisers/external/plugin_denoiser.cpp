@@ -300,17 +300,28 @@ DenoiserInfo loadPluginDenoiser(const fs::path& libraryPath, std::vector<std::st
                 std::to_string(plugin->abiVersion) + ", but this arena speaks version " +
                 std::to_string(ARENA_PLUGIN_ABI_VERSION) +
                 "; rebuild the plugin against this arena's include/arena_plugin.h");
-  if (!plugin->name || !plugin->create || !plugin->setup || !plugin->reset || !plugin->denoise ||
-      !plugin->destroy)
-    throw Error(library +
-                ": its ArenaPlugin lacks a name or an entry point (create, setup, reset, denoise, "
-                "destroy are all required)");
+  for (const auto& [field, given] :
+       {std::pair{"name", plugin->name != nullptr}, std::pair{"create", plugin->create != nullptr},
+        std::pair{"setup", plugin->setup != nullptr}, std::pair{"reset", plugin->reset != nullptr},
+        std::pair{"denoise", plugin->denoise != nullptr},
+        std::pair{"destroy", plugin->destroy != nullptr}})
+    if (!given)
+      throw Error(library + ": its ArenaPlugin's " + field +
+                  " is NULL (a name and the entry points create, setup, reset, denoise and "
+                  "destroy are all required)");
   checkDenoiserName(plugin->name, library);
   if (plugin->signals != ARENA_SIGNALS_DEMODULATED && plugin->signals != ARENA_SIGNALS_COLOR)
     throw Error(library + ": signals must be ARENA_SIGNALS_DEMODULATED or ARENA_SIGNALS_COLOR");
-  for (int i = 0; i < plugin->requiredChannelCount; ++i)
-    frameLayerSpec(plugin->requiredChannels[i] ? plugin->requiredChannels[i] : "",
-                   library + ": requiredChannels[" + std::to_string(i) + "]");
+  for (int i = 0; i < plugin->requiredChannelCount; ++i) {
+    const std::string at = library + ": requiredChannels[" + std::to_string(i) + "]";
+    const std::string name = plugin->requiredChannels[i] ? plugin->requiredChannels[i] : "";
+    frameLayerSpec(name, at);
+    // As a manifest's channels: a layer named twice would be handed over twice under one name.
+    for (int k = 0; k < i; ++k)
+      if (name == plugin->requiredChannels[k])
+        throw Error(at + ": '" + name + "' is already requiredChannels[" + std::to_string(k) +
+                    "]; name each layer once");
+  }
   DenoiserInfo info;
   info.name = plugin->name;
   info.description = plugin->description ? plugin->description : "";

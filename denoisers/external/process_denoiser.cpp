@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "core/json_reader.hpp"
 #include "core/sequence.hpp"
 #include "core/text.hpp"
 
@@ -56,7 +57,22 @@ void ExternalProcessDenoiser::fail(const std::string& what) {
 std::string ExternalProcessDenoiser::finish() {
   if (!process_) return "";
   const std::string status = process_->endInput(std::chrono::milliseconds(1000));
-  if (status == "exited with status 0") return "";
+  // Output beyond its last answer (a goodbye print): harmless now, but the same print between
+  // frames would have failed a pair, so it is said.
+  std::string excerpt;
+  const size_t unread = status == "still running" ? 0 : process_->unreadOutput(excerpt);
+  const std::string stray =
+      unread == 0
+          ? ""
+          : "wrote " + std::to_string(unread) + " byte(s) to its output after its last answer (" +
+                utf8Excerpt(excerpt, 64, false) +
+                "): its output carries only answers; write anything else to stderr";
+  if (status == "exited with status 0") {
+    if (stray.empty()) return "";
+    process_.reset();
+    return validUtf8(std::string("the ") + signalName(kind_) + " process (" +
+                     manifest_->file.string() + ") " + stray);
+  }
   if (status == "still running") {
     // Killed now (its destructor would wait another second), and said: every pair of this
     // contender, each signal, pays the second, which the user can save.
@@ -76,6 +92,7 @@ std::string ExternalProcessDenoiser::finish() {
   process_.reset();
   return validUtf8(std::string("the ") + signalName(kind_) + " process (" +
                    manifest_->file.string() + ") " + status + " after its last frame" +
+                   (stray.empty() ? "" : "; it " + stray) +
                    (tail.empty() ? "; its stderr was empty" : "; the end of its stderr:\n" + tail));
 }
 
@@ -91,8 +108,17 @@ nlohmann::json ExternalProcessDenoiser::readHeader(const std::string& expectedTy
   }
   nlohmann::json header;
   try {
-    header = nlohmann::json::parse(line);
-  } catch (const std::exception&) {
+    if (nlohmann::json::accept(line)) {
+      // A key given twice ("computeMs": 0.5, "computeMs": 1e9) is refused, not read as the last.
+      try {
+        header = parseJsonText(line, "its '" + expectedType + "' header");
+      } catch (const Error& e) {
+        fail(e.what());
+      }
+    } else {
+      header = nlohmann::json::parse(line);  // throws: the message below
+    }
+  } catch (const nlohmann::json::exception&) {
     // Bytes before a header that parses (a line ending in {"type": ...}): perhaps the previous
     // answer's, more than its planes, or a print to stdout; said, since the error otherwise falls
     // on the frame after. (Stray float data holding a newline byte ends the line before any

@@ -277,6 +277,23 @@ std::string Subprocess::stderrTail() {
   return tail;
 }
 
+size_t Subprocess::unreadOutput(std::string& excerpt) {
+  size_t count = stdoutBuffer_.size();
+  excerpt = stdoutBuffer_.substr(0, 64);
+  char buf[4096];
+  while (stdout_ >= 0 && count < (size_t(16) << 20)) {
+    const ssize_t n = ::read(stdout_, buf, sizeof buf);
+    if (n > 0) {
+      if (excerpt.size() < 64) excerpt.append(buf, std::min(size_t(n), 64 - excerpt.size()));
+      count += size_t(n);
+      continue;
+    }
+    if (n < 0 && errno == EINTR) continue;
+    break;  // the end of its output, or nothing more for now (EAGAIN)
+  }
+  return count;
+}
+
 void Subprocess::kill() {
   if (reaped_) return;
   ::kill(pid_, SIGKILL);

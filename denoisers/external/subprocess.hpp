@@ -50,6 +50,9 @@ class Subprocess {
   std::string endInput(std::chrono::milliseconds grace);
   // The last lines of what the process wrote to stderr (at most ~2 KiB).
   std::string stderrTail();
+  // After the process ended: what it wrote to its output beyond what was read (bytes counted up to
+  // 16 MiB; `excerpt` holds the first up to 64 of them). 0 when nothing.
+  size_t unreadOutput(std::string& excerpt);
   // What a failure's message adds about the process: "; the process exited with status 3" (or
   // "was killed by the harness", after killing one still running after `grace`), then "; the end
   // of its stderr:\n..." or "; its stderr was empty".

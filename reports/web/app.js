@@ -17,10 +17,8 @@
     A.pairsOf = (scene) => D.pairs.filter((p) => p.scene === scene);
     A.isOk = (p) => p.status === 'ok';
     // A contender from outside arena (D.origins): its kind, shown beside its label ('' for a built-in).
-    A.originKind = (label) => {
-      const o = (D.origins || {})[label];
-      return !o ? '' : o.startsWith('plugin ') ? 'plugin' : o.startsWith('external process') ? 'external' : 'stored output';
-    };
+    // "plugin", "isolated plugin", "external" or "stored output" (metrics/run_results contenderKind).
+    A.originKind = (label) => (D.originKinds || {})[label] || '';
     // Every chart colours a label the same way, whichever labels the scene has.
     A.colorScale = { domain: D.labels, scheme: D.labels.length > 10 ? 'category20' : 'tableau10' };
     A.state = {

@@ -10,11 +10,13 @@
 //   segfault      writes through a null pointer (a real fault, not a raised signal)
 //   hang          never returns (sleeps; only an isolated plugin's process can be ended)
 //   exit          calls exit(3), as a library that gives up on a driver error might
+//   echo          returns the signal it was given, unchanged (an input wired in as the output)
 //   reset-check   fails unless reset() was called exactly before the frames whose context says
 //                 reset, after the first (a camera cut), as the harness calls it
 // Otherwise it writes zeros and succeeds. The FAULTY_PLUGIN_BAD_PARAMS build reads
 // ARENA_FAULTY_DESCRIPTOR when loaded: "negative-count" declares paramCount -2 with no array,
-// "crash" writes through a null pointer inside arena_plugin(), "hang" never returns from it.
+// "crash" writes through a null pointer inside arena_plugin(), "hang" never returns from it,
+// "null-reset" gives no reset entry point, "duplicate-channel" requires depth twice.
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -41,7 +43,7 @@ int setup(void*, int, int, char*, size_t) {
 void reset(void* instance) {
   static_cast<Instance*>(instance)->resetSinceLastFrame = true;
 }
-int denoise(void* instance, const ArenaFrameContext* ctx, const ArenaInputs*,
+int denoise(void* instance, const ArenaFrameContext* ctx, const ArenaInputs* inputs,
             const ArenaMutableImage* output, const ArenaHost* host, char* error, size_t errorSize) {
   const char* mode = std::getenv("ARENA_FAULTY_PLUGIN");
   const std::string_view m = mode ? mode : "";
@@ -70,6 +72,12 @@ int denoise(void* instance, const ArenaFrameContext* ctx, const ArenaInputs*,
   if (m == "segfault") {
     volatile std::uintptr_t address = 0;  // volatile: the compiler cannot see the null
     *reinterpret_cast<volatile int*>(address) = 1;
+  }
+  if (m == "echo") {
+    for (int c = 0; c < output->channels; ++c)
+      std::memcpy(output->planes[c], inputs->signal.planes[c],
+                  sizeof(float) * size_t(output->width) * size_t(output->height));
+    return 0;
   }
   const int planes = m == "partial" ? 1 : output->channels;
   for (int c = 0; c < planes; ++c)
@@ -117,5 +125,18 @@ extern "C" ARENA_PLUGIN_EXPORT const ArenaPlugin* arena_plugin(void) {
   plugin.reset = reset;
   plugin.denoise = denoise;
   plugin.destroy = destroy;
+  plugin.requiredChannels = nullptr;
+  plugin.requiredChannelCount = 0;
+#ifdef FAULTY_PLUGIN_BAD_PARAMS
+  if (const char* d = std::getenv("ARENA_FAULTY_DESCRIPTOR");
+      d && std::string_view(d) == "null-reset")
+    plugin.reset = nullptr;
+  static const char* twice[] = {"depth", "normal", "depth"};
+  if (const char* d = std::getenv("ARENA_FAULTY_DESCRIPTOR");
+      d && std::string_view(d) == "duplicate-channel") {
+    plugin.requiredChannels = twice;
+    plugin.requiredChannelCount = 3;
+  }
+#endif
   return &plugin;
 }

@@ -21,6 +21,9 @@
   extra-bytes  sends 12 bytes more than its planes (they land before the next header)
   pass-without-taps  reports a pass with no tapsPerPixel
   exit-at-end  answers every frame, then writes to stderr and exits with status 3 at end of input
+  zero-time  answers every frame correctly but reports a computeMs of 0 (a timer not read)
+  duplicate-key  answers a header giving computeMs twice
+  goodbye    answers every frame, then prints a line to stdout at end of input and exits with 0
 Plain Python (no numpy): the output is the input signal, so a correct frame is a passthrough."""
 import json
 import os
@@ -69,7 +72,13 @@ def main():
         # harness then rightly called it implausible).
         result = {"type": "result", "frame": frame, "width": w, "height": h, "channels": 3,
                   "computeMs": 0.001}
+        if mode == "zero-time":
+            result["computeMs"] = 0
         if frame >= FAIL_AT:
+            if mode == "duplicate-key":
+                head = json.dumps(result)[:-1] + ', "computeMs": 1e9}'
+                answer((head + "\n").encode() + signal_bytes)
+                continue
             if mode == "exit":
                 sys.stderr.write("faulty: cannot find model weights weights.bin\n")
                 sys.stderr.flush()
@@ -117,6 +126,8 @@ def main():
             if mode == "slow-report":
                 result["computeMs"] = 2e12
         answer((json.dumps(result) + "\n").encode() + signal_bytes)
+    if mode == "goodbye":
+        answer(b"all done, goodbye\n")
     if mode == "exit-at-end":
         sys.stderr.write("faulty: could not free the device buffers\n")
         sys.stderr.flush()
