@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <fstream>
 #include <map>
+#include <set>
 #include <string>
 
 #include "core/error.hpp"
@@ -249,6 +250,31 @@ TEST(DenoiserVariants, EveryRegisteredVariantHasAFidelitySection) {
     EXPECT_TRUE(found) << name << " is registered but denoisers/FIDELITY.md has no section on it (a \"## \" "
                        << "heading naming `" << name << "`)";
   }
+}
+
+// The README's denoisers table lists every built-in (a row "| `name` | ...") and nothing else:
+// docs/extending.md asks for the row, and a reader choosing from it must see every contender.
+TEST(DenoiserVariants, TheReadmesTableListsEveryBuiltIn) {
+  std::ifstream file(std::string(ARENA_SOURCE_DIR) + "/README.md");
+  ASSERT_TRUE(file) << "README.md is missing";
+  std::set<std::string> rows;
+  bool inSection = false;
+  for (std::string line; std::getline(file, line);) {
+    if (line.rfind("## ", 0) == 0) inSection = line == "## Denoisers";
+    if (inSection && line.rfind("| `", 0) == 0) {
+      const size_t end = line.find('`', 3);
+      if (end != std::string::npos) rows.insert(line.substr(3, end - 3));
+    }
+  }
+  std::set<std::string> builtIn;
+  for (const std::string& name : DenoiserRegistry::instance().names())
+    if (DenoiserRegistry::instance().find(name).origin.empty()) builtIn.insert(name);
+  for (const std::string& name : builtIn)
+    EXPECT_TRUE(rows.count(name)) << name << " is built in but README.md's \"## Denoisers\" table "
+                                  << "has no row \"| `" << name << "` | ...\"";
+  for (const std::string& name : rows)
+    EXPECT_TRUE(builtIn.count(name))
+        << "README.md's denoisers table lists `" << name << "`, which is no built-in denoiser";
 }
 
 // ---------------------------------------------------------------------------------------------
