@@ -67,11 +67,11 @@ std::vector<double> PairSeries::values(const std::string& metric) const {
 json PairSeries::summaries(const std::string& seedName, const BootstrapConfig& cfg) const {
   json out = json::object();
   for (const auto& [name, s] : series_) {
-    int defined = 0, nonFinite = 0;
+    int defined = 0, nonFinite = 0, firstNonFinite = -1;
     for (size_t t = size_t(warmup_); t < s.values.size(); ++t) {
       if (std::isnan(s.values[t])) continue;
       ++defined;
-      nonFinite += std::isinf(s.values[t]);
+      if (std::isinf(s.values[t]) && nonFinite++ == 0) firstNonFinite = int(t);
     }
     if (defined == 0) {
       out[name] = {
@@ -83,10 +83,17 @@ json PairSeries::summaries(const std::string& seedName, const BootstrapConfig& c
       continue;
     }
     if (nonFinite > 0) {
-      out[name] = {{"frames", defined},
-                   {"nonFinite", nonFinite},
-                   {"absent", std::to_string(nonFinite) + " of " + std::to_string(defined) +
-                                  " frames after the warm-up are not finite (NaN or Inf)"}};
+      std::string why =
+          "its value is not finite (NaN or Inf) on ";  // appended: GCC 12 warns falsely on +
+      why += std::to_string(nonFinite);
+      why += " of ";
+      why += std::to_string(defined);
+      why += " frames after the warm-up, first frame ";
+      why += std::to_string(firstNonFinite);
+      why +=
+          " (the images it reads are checked finite before: the metric's own arithmetic failed "
+          "there, e.g. a division by 0 or an overflow)";
+      out[name] = {{"frames", defined}, {"nonFinite", nonFinite}, {"absent", why}};
       continue;
     }
     json j = summarize(values(name), warmup_).toJson();

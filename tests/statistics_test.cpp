@@ -243,6 +243,12 @@ TEST(Summaries, NoDataIsAbsentNeverPerfect) {
   s = nan.summaries("scene");
   EXPECT_FALSE(s["ssim"].contains("mean"));
   EXPECT_EQ(s["ssim"]["nonFinite"], 1);
+  // Said as the metric's failure, where: the images a metric reads are checked finite before.
+  EXPECT_EQ(
+      s["ssim"]["absent"],
+      "its value is not finite (NaN or Inf) on 1 of 10 frames after the warm-up, first frame 7 "
+      "(the images it reads are checked finite before: the metric's own arithmetic failed "
+      "there, e.g. a division by 0 or an overflow)");
 
   PairSeries fine(12, 2);
   for (int t = 0; t < 12; ++t) fine.record("ms", t, 10.0 + t % 3, {}, FrameTransform::Mean);
