@@ -22,6 +22,20 @@ namespace arena {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
+namespace {
+
+// An output's mean luminance against the references' (or, without them, the noisy inputs'), said.
+std::string brightnessText(double ratio, bool againstReference) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", ratio);
+  return "its output's mean luminance is " + std::string(text) + "x the " +
+         (againstReference ? "references'" : "noisy inputs' (there are no references)") +
+         " over the sequence: outputs are linear radiance at the input's exposure, and another "
+         "exposure, a tone map or display encoding (sRGB, gamma) is scored as the denoiser's error";
+}
+
+}  // namespace
+
 std::vector<std::string> runWarnings(const json& pair, int frames) {
   std::vector<std::string> first;
   if (const json timing = pair.value("timing", json::object());
@@ -58,14 +72,11 @@ std::vector<std::string> runWarnings(const json& pair, int frames) {
         (pair.value("signals", "") != "color" ? " (the diffuse and specular signals it was given)"
                                               : std::string()) +
         ": scored as a denoiser's, it filtered nothing (is the input wired in as the output?)");
-  if (const json ratio = pair.value("brightnessVsReference", json()); ratio.is_number()) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%.3g", ratio.get<double>());
-    first.push_back("its output's mean luminance is " + std::string(text) +
-                    "x the references' over the sequence: outputs are linear radiance at the "
-                    "input's exposure, and another exposure, a tone map or display encoding (sRGB, "
-                    "gamma) is scored as the denoiser's error");
-  }
+  for (const bool againstReference : {true, false})
+    if (const json ratio =
+            pair.value(againstReference ? "brightnessVsReference" : "brightnessVsInput", json());
+        ratio.is_number())
+      first.push_back(brightnessText(ratio.get<double>(), againstReference));
   for (const json& ended : pair.value("processEnds", json::array()))
     if (ended.is_string())
       first.push_back(ended.get<std::string>() + " (every frame was answered: its results stand)");
@@ -168,13 +179,18 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   std::vector<int> equalsInput;
   // An output made outside (a stored output, a process, a plugin) at another exposure, tone
   // mapped or display-encoded scores as a poor denoiser, which it may not be: its mean luminance
-  // against the references', over every frame, is warned of beyond 1.25x.
+  // against the references' (without references, the noisy inputs', which average to them), over
+  // every frame, is warned of beyond 1.25x and fails the pair beyond 2x (or black), as `arena
+  // validate` fails a stored output there.
   const bool madeOutside = !run || !run->info().origin.empty();
+  const bool againstReference = sd.evaluation.hasReference();
   double outputLight = 0, referenceLight = 0;
   auto onFrame = [&](const DenoisedFrame& f) {
-    if (madeOutside && sd.evaluation.hasReference() && f.color.channels() >= 3) {
+    if (madeOutside && f.color.channels() >= 3) {
       outputLight += finiteLuminanceSum(f.color);
-      referenceLight += finiteLuminanceSum(sd.evaluation.reference(f.frame).get("color"));
+      referenceLight +=
+          finiteLuminanceSum(againstReference ? sd.evaluation.reference(f.frame).get("color")
+                                              : sd.evaluation.frame(f.frame).get("color"));
     }
     if (!identity) {
       const Image& in = sd.evaluation.frame(f.frame).get("color");
@@ -260,11 +276,14 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
       timing["device"] = output.device;
     } else {
       timing = {{"msSource", "not recorded in the capture"}, {"clock", "none"}, {"passes", json::array()}};
-      // Its frames carry no time (NaN): the summary says why, not "not finite".
-      if (pair.contains("summary") && pair["summary"].contains("ms") &&
-          pair["summary"]["ms"].contains("absent"))
-        pair["summary"]["ms"]["absent"] = "not recorded in the capture (capture.json's outputs." +
-                                          captured + " gives no milliseconds)";
+      // Its frames carry no time (none is put): the summary says why, and a warning repeats it,
+      // as for any absent summary.
+      if (pair.contains("summary")) {
+        const std::string why = "not recorded in the capture (capture.json's outputs." + captured +
+                                " gives no milliseconds)";
+        pair["summary"]["ms"] = {{"frames", 0}, {"absent", why}};
+        pair["warnings"].push_back("ms has no summary: " + why);
+      }
     }
   }
   // A time the denoiser reported for work longer than the call that carried it cannot be: counted
@@ -283,7 +302,15 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
     pair["equalsInputEveryFrame"] = true;
   if (referenceLight > 0) {  // a black output is the extreme case: a ratio of 0
     const double ratio = std::max(outputLight, 0.0) / referenceLight;
-    if (ratio == 0 || std::max(ratio, 1 / ratio) > 1.25) pair["brightnessVsReference"] = ratio;
+    const double factor =
+        ratio > 0 ? std::max(ratio, 1 / ratio) : std::numeric_limits<double>::infinity();
+    if (factor > 2)
+      throw Error(
+          brightnessText(ratio, againstReference) +
+          "; beyond 2x it is not scored (`arena validate` fails a stored output there too): "
+          "export linear radiance at the input's exposure");
+    if (factor > 1.25)
+      pair[againstReference ? "brightnessVsReference" : "brightnessVsInput"] = ratio;
   }
   if (!run || run->signals() == SignalMode::Color) pair["signals"] = "color";
   prependRunWarnings(pair, info.frames);

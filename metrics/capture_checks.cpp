@@ -563,6 +563,13 @@ CaptureValidation validateCaptureOutputs(const CaptureDescription& capture,
       if (r < references.size()) {
         outputLight += finiteLuminanceSum(color);
         referenceLight += finiteLuminanceSum(references[r].get("color"));
+      } else if (!capture.info.hasReference) {  // no references: the noisy inputs average to them
+        try {
+          const double input = finiteLuminanceSum(readCaptureFrame(capture, t).get("color"));
+          outputLight += finiteLuminanceSum(color);
+          referenceLight += input;
+        } catch (const Error&) {  // an unreadable frame is the frame checks' finding
+        }
       }
     }
     v.checks.push_back(check(
@@ -576,14 +583,16 @@ CaptureValidation validateCaptureOutputs(const CaptureDescription& capture,
               "reference wired in as the output?)"));
     if (referenceLight > 0) {  // a black output is the extreme case: a ratio of 0
       const double ratio = std::max(outputLight, 0.0) / referenceLight;
+      const bool againstReference = capture.info.hasReference;
       v.checks.push_back(check(
-          "output." + name + ".brightnessVsReference",
+          "output." + name + (againstReference ? ".brightnessVsReference" : ".brightnessVsInput"),
           ratio > 0 ? std::max(ratio, 1 / ratio) : std::numeric_limits<double>::infinity(), 1.25, 2,
           "x",
-          "mean luminance " + number(ratio) +
-              "x the references' over its frames: outputs are linear radiance at the input's "
-              "exposure; another exposure, a tone map or display encoding (sRGB, gamma) would be "
-              "scored as the denoiser's error"));
+          "mean luminance " + number(ratio) + "x the " +
+              (againstReference ? "references'" : "noisy inputs' (there are no references)") +
+              " over its frames: outputs are linear radiance at the input's exposure; another "
+              "exposure, a tone map or display encoding (sRGB, gamma) would be scored as the "
+              "denoiser's error (a run does not score it beyond 2x)"));
     }
   }
   // Folders the description does not declare are never scored: said, so a forgotten entry shows.

@@ -1,5 +1,7 @@
 // The run's facts that are not pixels, recorded per frame like every metric so they get the same
 // summaries and intervals: the denoiser's time and the extra paths it read (docs/metrics.md, "Time").
+#include <cmath>
+
 #include "metrics/metric_registry.hpp"
 
 namespace arena {
@@ -20,7 +22,8 @@ MetricFamily runFactsFamily() {
   };
   f.measure = [](const FrameView& v, const MetricOptions&, FrameRecorder& out) {
     const FrameFacts& facts = v.facts;
-    out.put("ms", facts.milliseconds);
+    // A time not known (a stored output whose capture records none) is undefined, not a value.
+    if (!std::isnan(facts.milliseconds)) out.put("ms", facts.milliseconds);
     // An external process timed itself ("ms"); the harness's clock around the exchange beside it.
     if (facts.wallMilliseconds) out.put("msWall", *facts.wallMilliseconds);
     if (!facts.extraRaysPerPixel) return;

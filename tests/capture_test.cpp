@@ -811,6 +811,33 @@ TEST(CaptureValidation, WithoutAReferenceOnlyNoReferenceMetricsAreScoredAndItIsS
   EXPECT_FALSE(r["statistics"].value("scenes", json::object()).contains("noref"));
   EXPECT_NE(checkNamed(v, "reference.present").detail.find("the scene is not ranked"),
             std::string::npos);
+  // An output at another exposure is still found without references: against the noisy inputs,
+  // which average to them (the trial's 10x output passed unsaid).
+  const fs::path lit = copyCapture(dir, "noref_lit", [](json& d) {
+    d["outputs"] = {{"lit", json::object()}};
+  });
+  const CaptureDescription litCapture = readCaptureDescription(lit);
+  for (int t = 0; t < litCapture.info.frames; ++t) {
+    Image c = readCaptureFrame(litCapture, t).get("color");
+    for (float& x : c.raw()) x *= 10;
+    fs::create_directories(lit / "outputs" / "lit");
+    LayerSet l;
+    l.set("color", c);
+    writeExr(lit / "outputs" / "lit" / numberedFileName("frame", t, 4), l,
+             {{"color", {"R", "G", "B"}, false}});
+  }
+  const CaptureValidation litChecks = validateCaptureOutputs(litCapture, {});
+  const CaptureCheck& litCheck = checkNamed(litChecks, "output.lit.brightnessVsInput");
+  EXPECT_EQ(litCheck.status, CheckStatus::Fail) << litCheck.detail;
+  EXPECT_NE(litCheck.detail.find("x the noisy inputs' (there are no references)"),
+            std::string::npos)
+      << litCheck.detail;
+  const json litRun =
+      runMatrix(captureRun(test::freshDir("noref_lit_run"), {{"file:lit", {}, ""}}, {lit}));
+  EXPECT_EQ(pairOf(litRun, "file:lit")["status"], "failed");
+  EXPECT_NE(pairOf(litRun, "file:lit")["error"].get<std::string>().find("10x the noisy inputs'"),
+            std::string::npos)
+      << pairOf(litRun, "file:lit")["error"];
   // With its frames kept (the default for one capture): the images there are, no error map (every
   // pair failed writing an empty one before).
   RunConfig kept = captureRun(test::freshDir("noref_kept"), {{"eaw", {}, ""}}, {dir});
@@ -1176,10 +1203,11 @@ TEST(Capture, PassthroughScoresAColourOnlyCaptureAsTheInputItIs) {
 // frame fails (naming the file), an undeclared folder warns; a run fails only that output's pair.
 TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
   const fs::path dir = copyCapture(exportedCornell(), "outputs_checked", [](json& d) {
-    d["outputs"] = {
-        {"good", json::object()},   {"short", json::object()},  {"small", json::object()},
-        {"nan", json::object()},    {"oracle", json::object()}, {"copied", json::object()},
-        {"bright", json::object()}, {"absent", json::object()}, {"black", json::object()}};
+    d["outputs"] = {{"good", json::object()},   {"short", json::object()},
+                    {"small", json::object()},  {"nan", json::object()},
+                    {"oracle", json::object()}, {"copied", json::object()},
+                    {"bright", json::object()}, {"absent", json::object()},
+                    {"black", json::object()},  {"warm", json::object()}};
   });
   const CaptureDescription base = readCaptureDescription(exportedCornell());
   const int w = base.info.width, h = base.info.height;
@@ -1191,7 +1219,9 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
              {{"color", {"R", "G", "B"}, false}});
   };
   for (int t = 0; t < base.info.frames; ++t) {
-    write("good", t, Image(w, h, 3, 0.5f));
+    Image good = readCaptureReference(base, base.info.referenceOfFrame[size_t(t)]).get("color");
+    for (float& v : good.raw()) v *= 1.05f;  // readable, at the references' exposure
+    write("good", t, good);
     if (t != 3) write("short", t, Image(w, h, 3, 0.5f));
     write("small", t, Image(t == 1 ? w / 2 : w, h, 3, 0.5f));
     Image bad(w, h, 3, 0.5f);
@@ -1201,8 +1231,11 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
           readCaptureReference(base, base.info.referenceOfFrame[size_t(t)]).get("color"));
     write("copied", t, readCaptureFrame(base, t).get("color"));  // the noisy input itself
     Image bright = readCaptureReference(base, base.info.referenceOfFrame[size_t(t)]).get("color");
+    Image warm = bright;
     for (float& v : bright.raw()) v *= 3;  // another exposure
     write("bright", t, bright);
+    for (float& v : warm.raw()) v *= 1.5f;  // a warning, still scored
+    write("warm", t, warm);
     write("black", t, Image(w, h, 3, 0.0f));  // the extreme case: no light at all
   }
   fs::create_directories(dir / "outputs" / "forgotten");
@@ -1240,6 +1273,7 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
   EXPECT_NE(bright.detail.find("mean luminance 3x the references'"), std::string::npos)
       << bright.detail;
   EXPECT_EQ(checkNamed(v, "output.oracle.brightnessVsReference").status, CheckStatus::Pass);
+  EXPECT_EQ(checkNamed(v, "output.warm.brightnessVsReference").status, CheckStatus::Warn);
   const CaptureCheck& black = checkNamed(v, "output.black.brightnessVsReference");
   EXPECT_EQ(black.status, CheckStatus::Fail) << black.detail;
   EXPECT_NE(black.detail.find("mean luminance 0x the references'"), std::string::npos)
@@ -1272,14 +1306,24 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
             std::string::npos)
       << copy["warnings"];
   EXPECT_FALSE(pairOf(copied, "passthrough").contains("equalsInputEveryFrame"));
-  const json brighter = pairOf(
-      runMatrix(captureRun(test::freshDir("outputs_bright_run"), {{"file:bright", {}, ""}}, {dir})),
-      "file:bright");
-  ASSERT_EQ(brighter["status"], "ok") << brighter.dump().substr(0, 300);
-  EXPECT_NEAR(brighter.value("brightnessVsReference", 0.0), 3.0, 1e-3);
-  EXPECT_NE(brighter["warnings"].dump().find("its output's mean luminance is 3x the references'"),
+  // Beyond 2x (validate's failure) a run does not score it either (a 10x output entered the
+  // overall ranking); between 1.25x and 2x it is scored, with a warning.
+  const json lit = runMatrix(captureRun(test::freshDir("outputs_bright_run"),
+                                        {{"file:bright", {}, ""}, {"file:warm", {}, ""}}, {dir}));
+  const json& brighter = pairOf(lit, "file:bright");
+  ASSERT_EQ(brighter["status"], "failed") << brighter.dump().substr(0, 300);
+  EXPECT_NE(brighter["error"].get<std::string>().find(
+                "its output's mean luminance is 3x the references' over the sequence"),
             std::string::npos)
-      << brighter["warnings"];
+      << brighter["error"];
+  EXPECT_NE(brighter["error"].get<std::string>().find("beyond 2x it is not scored"),
+            std::string::npos);
+  const json& warmer = pairOf(lit, "file:warm");
+  ASSERT_EQ(warmer["status"], "ok") << warmer.dump().substr(0, 300);
+  EXPECT_NEAR(warmer.value("brightnessVsReference", 0.0), 1.5, 1e-3);
+  EXPECT_NE(warmer["warnings"].dump().find("its output's mean luminance is 1.5x the references'"),
+            std::string::npos)
+      << warmer["warnings"];
   EXPECT_FALSE(copy.contains("brightnessVsReference"));  // a noisy input averages to its reference
   // The reference wired in as the output: a perfect score, said while the run goes, not only kept.
   RunConfig wired = captureRun(test::freshDir("outputs_oracle_run"),
@@ -1303,6 +1347,11 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
   EXPECT_NE(copy["summary"]["ms"].value("absent", "").find("not recorded in the capture"),
             std::string::npos)
       << copy["summary"]["ms"];
+  // The warning repeating it says the same, not "not finite" (no value was).
+  const std::string warnings = copy["warnings"].dump();
+  EXPECT_NE(warnings.find("ms has no summary: not recorded in the capture"), std::string::npos)
+      << warnings;
+  EXPECT_EQ(warnings.find("not finite"), std::string::npos) << warnings;
 }
 
 // Parts written before demodulation (an engine's lit diffuse): the denoisers, which read the
