@@ -1189,6 +1189,22 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
   // camera_cut where the camera moves no more than on its neighbouring frames: every denoiser's
   // history is thrown away there for nothing, and the old-view leak has no old view to measure.
   std::vector<std::string> noObject, noCut;
+  // A camera's step into frame t: how far its eye moved and how far its view turned (radians).
+  const auto step = [&](size_t t) {
+    const CameraState &a = info.cameras[t - 1], &b = info.cameras[t];
+    const double turn = std::acos(std::clamp(double(glm::dot(a.forward, b.forward)), -1.0, 1.0)) +
+                        std::acos(std::clamp(double(glm::dot(a.up, b.up)), -1.0, 1.0));
+    return std::array<double, 2>{double(glm::length(b.eye - a.eye)), turn};
+  };
+  // The largest of the steps into the frames on either side of frame t.
+  const auto stepsAround = [&](size_t t) {
+    std::array<double, 2> around{0, 0};
+    for (const size_t n : {t - 1, t + 1})
+      if (n >= 1 && n < info.cameras.size())
+        for (const std::array<double, 2> neighbour = step(n); size_t k : {size_t(0), size_t(1)})
+          around[k] = std::max(around[k], neighbour[k]);
+    return around;
+  };
   for (const SequenceEvent& e : info.events) {
     if (e.kind == EventKind::ObjectMoves && e.meshId >= 0 && isGiven("meshId")) {
       // The id as the trail's test reads it (metrics/ghosting.cpp addTrail: int(v) of plane 0).
@@ -1204,20 +1220,8 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
                            std::to_string(e.meshId));
     }
     if (e.kind == EventKind::CameraCut && e.frame >= 1 && size_t(e.frame) < info.cameras.size()) {
-      // A camera's step into frame t: how far its eye moved and how far its view turned (radians).
-      const auto step = [&](int t) {
-        const CameraState &a = info.cameras[size_t(t - 1)], &b = info.cameras[size_t(t)];
-        const double turn =
-            std::acos(std::clamp(double(glm::dot(a.forward, b.forward)), -1.0, 1.0)) +
-            std::acos(std::clamp(double(glm::dot(a.up, b.up)), -1.0, 1.0));
-        return std::array<double, 2>{double(glm::length(b.eye - a.eye)), turn};
-      };
-      const std::array<double, 2> atCut = step(e.frame);
-      std::array<double, 2> around{0, 0};
-      for (int t : {e.frame - 1, e.frame + 1})
-        if (t >= 1 && size_t(t) < info.cameras.size())
-          for (const std::array<double, 2> neighbour = step(t); size_t k : {size_t(0), size_t(1)})
-            around[k] = std::max(around[k], neighbour[k]);
+      const std::array<double, 2> atCut = step(size_t(e.frame));
+      const std::array<double, 2> around = stepsAround(size_t(e.frame));
       const float fovBefore = info.cameras[size_t(e.frame - 1)].tanHalfFovY,
                   fovAt = info.cameras[size_t(e.frame)].tanHalfFovY;
       const bool sameFov = std::abs(fovAt - fovBefore) <= 1e-4f * std::max(fovAt, fovBefore);
@@ -1229,6 +1233,45 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
       "events.meshIdAbsent", noObject, "events", "object_moves at ",
       ": no frame's meshId layer holds that id, so the event's window measures only where "
       "the reference changed, not the object's trail (give the id the meshId layer writes)"));
+  // The other way round: a cut the cameras show and no event marks (an engine that did not flag
+  // it). Every denoiser then carries its history across the change and the run measures no cut.
+  // A jump is a step over 4x the steps on either side that is large in itself: the eye moves more
+  // than 5% of the viewing distance (the median depth before it; 1 where there is no depth) or the
+  // view turns more than 3 degrees, in one frame. A camera that starts, stops or accelerates
+  // smoothly changes its step by less.
+  std::set<size_t> marked;
+  for (const SequenceEvent& e : info.events)
+    if (e.kind == EventKind::CameraCut && e.frame >= 0) marked.insert(size_t(e.frame));
+  std::vector<std::string> unmarked;
+  for (size_t t = 1; t < info.cameras.size() && t < input.frames.size(); ++t) {
+    if (marked.count(t)) continue;
+    const std::array<double, 2> at = step(t), around = stepsAround(t);
+    double distance = 1;
+    if (input.frames[t - 1].has("depth")) {
+      std::vector<float> depths;
+      for (const float z : input.frames[t - 1].get("depth").planeSpan(0))
+        if (std::isfinite(z) && z > 0) depths.push_back(z);
+      if (!depths.empty()) {
+        std::nth_element(depths.begin(), depths.begin() + long(depths.size() / 2), depths.end());
+        distance = depths[depths.size() / 2];
+      }
+    }
+    constexpr double kDegree = 3.14159265358979323846 / 180.0;
+    const bool moved = at[0] > 0.05 * distance && at[0] > 4 * around[0];
+    const bool turned = at[1] > 3 * kDegree && at[1] > 4 * around[1];
+    if (!moved && !turned) continue;
+    char text[200];
+    std::snprintf(text, sizeof text,
+                  "frame %zu (the eye moves %.3g and the view turns %.3g degrees; into the frames "
+                  "beside it at most %.3g and %.3g degrees)",
+                  t, at[0], at[1] / kDegree, around[0], around[1] / kDegree);
+    unmarked.push_back(text);
+  }
+  v.checks.push_back(namesWarning(
+      "events.cutUnmarked", unmarked, "frames", "the camera jumps at ",
+      " with no camera_cut event there: every denoiser keeps its history across the change and "
+      "the run measures no cut (add {\"frame\": N, \"kind\": \"camera_cut\"} to \"events\" if the "
+      "shot changes there)"));
   v.checks.push_back(namesWarning(
       "events.cutWithoutMotion", noCut, "events", "camera_cut at ",
       ": the camera moves there no more than on the frames around it; a cut resets every "

@@ -667,6 +667,17 @@ TEST(CaptureValidation, EventsTheFramesContradictAreNamed) {
       << checkNamed(fine, "events.meshIdAbsent").detail;
   EXPECT_EQ(checkNamed(fine, "events.cutWithoutMotion").status, CheckStatus::Pass)
       << checkNamed(fine, "events.cutWithoutMotion").detail;
+  EXPECT_EQ(checkNamed(fine, "events.cutUnmarked").status, CheckStatus::Pass)
+      << checkNamed(fine, "events.cutUnmarked").detail;
+  // The same jump with no event: the cut is named (an engine that did not flag it scored on, the
+  // denoisers keeping their history across it).
+  const CaptureCheck unmarked = checkNamed(withEvents(json::array(), true), "events.cutUnmarked");
+  EXPECT_EQ(unmarked.status, CheckStatus::Warn);
+  EXPECT_EQ(unmarked.value, 1.0) << unmarked.detail;
+  EXPECT_NE(unmarked.detail.find("the camera jumps at frame 3 (the eye moves "), std::string::npos)
+      << unmarked.detail;
+  EXPECT_NE(unmarked.detail.find("with no camera_cut event there"), std::string::npos)
+      << unmarked.detail;
 
   const CaptureValidation wrong =
       withEvents({{{"frame", 2}, {"kind", "object_moves"}, {"meshId", 5}},
@@ -678,6 +689,9 @@ TEST(CaptureValidation, EventsTheFramesContradictAreNamed) {
                 "object_moves at frame 2, meshId 5: no frame's meshId layer holds that id"),
             std::string::npos)
       << noObject.detail;
+  // The synthetic camera accelerating smoothly has no jump.
+  EXPECT_EQ(checkNamed(wrong, "events.cutUnmarked").status, CheckStatus::Pass)
+      << checkNamed(wrong, "events.cutUnmarked").detail;
   const CaptureCheck noCut = checkNamed(wrong, "events.cutWithoutMotion");
   EXPECT_EQ(noCut.status, CheckStatus::Warn);
   EXPECT_NE(
