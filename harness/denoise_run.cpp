@@ -166,13 +166,15 @@ DenoiseRun::DenoiseRun(const DenoiserRequest& request, const Sequence& sequence,
       request_(request),
       info_(DenoiserRegistry::instance().find(request.name)) {
   params_ = info_.schema.resolve(request.params, request.name);
-  // A capture of the colour alone has no signals to demodulate. A denoiser whose output is its
-  // input (passthrough) then runs on the colour, the same image its remodulated signals give; any
-  // other needs the parts and says so below.
+  // A denoiser whose output is its input (passthrough) runs on the colour: its output is then the
+  // noisy input itself, bit for bit (remodulated signals differ from an engine's colour by
+  // rounding, so a stored copy of the input did not read as identical to it), and a capture of the
+  // colour alone, with no signals to demodulate, has it too. Any other denoiser needs the parts
+  // and says so below.
   mode_ = info_.signals;
-  if (mode_ == SignalMode::Demodulated && info_.identity && sequence.isCapture()) {
+  if (mode_ == SignalMode::Demodulated && info_.identity) {
     const std::vector<std::string> known = sequence.info().availableLayers();
-    if (std::find(known.begin(), known.end(), "diffuse") == known.end()) mode_ = SignalMode::Color;
+    if (std::find(known.begin(), known.end(), "color") != known.end()) mode_ = SignalMode::Color;
   }
   if (mode_ == SignalMode::Color) {
     instances_.emplace_back(SignalKind::Color, info_.create(params_, SignalKind::Color));

@@ -133,7 +133,9 @@ TEST(Evaluation, RunResultsAreBitIdenticalToTheHarnessBeforeTheStage) {
   // recorded the lag rule after an unsettled event (lagAfterUnsettled, the only difference: no
   // event of the golden's scenes meets the rule). Recorded again when --seeds' bias2 kept its
   // tiles (its intervals, now the crossed bootstrap's, were the only numbers to move) and the
-  // scenes recorded their content checksums (scenes.<s>.content, new).
+  // scenes recorded their content checksums (scenes.<s>.content, new). Recorded again when
+  // passthrough's output became the frame's colour layer itself rather than its remodulated
+  // signals (only passthrough's values moved, by rounding: 4e-9 relative at most).
   const std::string file = std::string(ARENA_TEST_DATA) + "/evaluation_golden.json";
   const json now = test::goldenPart(
       withoutNewMetrics(runMatrix(test::goldenRunConfig(test::freshDir("golden_run"), test::freshDir("golden_cache")))));
