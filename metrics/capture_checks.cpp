@@ -478,8 +478,9 @@ MotionConsistency checkMotion(const std::vector<LayerSet>& frames,
     if (share(candidates[1]) >= best - 0.02 && share(candidates[8]) < best - 0.02 &&
         candidates[8].informative < nextIsMirror)
       out.explanation +=
-          " (or pointing to the next frame: at this constant camera velocity the two are the same "
-          "vectors)";
+          " (or pointing to the next frame: where the camera's velocity changes little from frame "
+          "to frame the two predict nearly the same vectors, and these frames do not tell them "
+          "apart)";
     out.explainedShare = best;
   }
   // A reading of the depth that the motion fits where the depth as written does not: on most of
@@ -769,9 +770,11 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
                      ", capture.json's or the defaults where it gives none, it fits no better: "
                      "give the capture's planes)"
                : std::string());
-    if (m.offShare > 0.05 && m.explanation.empty() &&
+    // (Not where the depth was found to be read wrongly: the motion predicted from it is then wrong
+    // too, and small where the depth reads far.)
+    if (m.offShare > 0.05 && m.explanation.empty() && m.depthExplanation.empty() &&
         m.conventionPixels < std::max(20L, m.pixels / 100))
-      detail += "; the camera moves under 4 px a frame on " +
+      detail += "; the motion the cameras and depth predict is under 4 px a frame on " +
                 std::string(m.conventionPixels == 0 ? "every" : "all but a few") +
                 " pixel, too little to tell a sign, scale or unit slip from an error: not tried (a "
                 "larger resolution or a faster move would)";
@@ -1074,11 +1077,13 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
                     std::to_string(decided) + " frames decided (" + number(-z) +
                     " standard errors nearer it than their own): the references look one frame " +
                     (side == 0
-                         ? "ahead of their inputs (written after the frame advanced?); every "
+                         ? "ahead of their inputs (each holds the frame after's image: rendered "
+                           "after the scene advanced past its frame?); every "
                            "error metric would then count a frame's motion as error, the most "
                            "against the methods that lag"
-                         : "behind their inputs (written a frame early?); every error metric "
-                           "would then favour the methods that lag") +
+                         : "behind their inputs (each holds the frame before's image: rendered "
+                           "before the scene advanced to its frame?); every error metric would "
+                           "then favour the methods that lag") +
                     (onOtherFit.noiseKnown
                          ? ""
                          : " (a warning: without the references' colorVar, a less "
