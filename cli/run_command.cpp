@@ -229,6 +229,31 @@ void finish(const std::string& out) {
       std::cout << "  FAILED\n";
     }
   }
+  // A scene without a reference has no relMSE ("-" above): what was measured without one, the
+  // output's own stability, is printed for it (a capture author saw no number of their run).
+  for (const auto& [name, scene] : results.scenes.items()) {
+    if (!scene.is_object() || scene.value("hasReference", true)) continue;
+    std::cout << name
+              << " has no reference: the output's own temporal stability (mean after the "
+                 "warm-up with its 95% interval; lower is steadier; docs/metrics.md)\n";
+    std::cout << "  " << paddedText("", labelWidth) << std::right << std::setw(28)
+              << "stabilityFine" << std::setw(28) << "stabilityCoarse"
+              << "\n";
+    for (const PairResult& p : results.pairs) {
+      if (p.scene != name || !p.ok()) continue;
+      std::cout << "  " << paddedText(p.label, labelWidth);
+      for (const char* metric : {"stabilityFine", "stabilityCoarse"}) {
+        const SummaryMean m = p.mean(metric);
+        std::string cell = m.present() ? formatNumber(m.mean, 4) : "-";
+        if (const auto it = p.summary.find(metric);
+            m.present() && it != p.summary.end() && it->second.ci95.valid())
+          cell += " [" + formatNumber(it->second.ci95.lo, 3) + ", " +
+                  formatNumber(it->second.ci95.hi, 3) + "]";
+        std::cout << std::right << std::setw(28) << cell;
+      }
+      std::cout << "\n";
+    }
+  }
   // A tie between two methods whose outputs are the same bits measures one output twice.
   for (const auto& [name, scene] : results.scenes.items())
     if (const std::string same = identicalOutputsText(results, name); !same.empty())

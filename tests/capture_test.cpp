@@ -856,6 +856,19 @@ TEST(CaptureValidation, WithoutAReferenceOnlyNoReferenceMetricsAreScoredAndItIsS
   EXPECT_NE(pairOf(litRun, "file:lit")["error"].get<std::string>().find("10x the noisy inputs'"),
             std::string::npos)
       << pairOf(litRun, "file:lit")["error"];
+  // The run's printout shows what was measured (every relMSE cell is "-"): each method's stability.
+  const test::CommandResult cli = test::runCommand(
+      std::string(ARENA_BINARY) + " run --capture '" + dir.string() +
+      "' --denoisers eaw --no-baselines --flip none --warmup 2 --keep-frames none --out '" +
+      (test::freshDir("noref_cli") / "run").string() + "'");
+  ASSERT_EQ(cli.status, 0) << cli.output;
+  EXPECT_NE(cli.output.find("noref has no reference: the output's own temporal stability"),
+            std::string::npos)
+      << cli.output;
+  const size_t row = cli.output.find("\n  eaw ");
+  ASSERT_NE(row, std::string::npos) << cli.output;
+  const std::string eawRow = cli.output.substr(row + 1, cli.output.find('\n', row + 1) - row - 1);
+  EXPECT_EQ(std::count(eawRow.begin(), eawRow.end(), '['), 2) << eawRow;  // both, with intervals
   // With its frames kept (the default for one capture): the images there are, no error map (every
   // pair failed writing an empty one before).
   RunConfig kept = captureRun(test::freshDir("noref_kept"), {{"eaw", {}, ""}}, {dir});

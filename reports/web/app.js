@@ -72,6 +72,9 @@
       s.relMseEpsilon !== undefined && `relMSE eps = ${s.relMseEpsilon}`,
       s.flip && `FLIP: ${s.flip}`,
       s.display && `display: ${s.display}`,
+      // A scene without a reference is shown through its noisy inputs' exposure instead.
+      s.display && D.scenes.some((x) => x.hasReference === false) &&
+          `(${D.scenes.filter((x) => x.hasReference === false).map((x) => x.name).join(', ')}: no reference, exposure from each frame's noisy input)`,
     ].filter(Boolean);
     $('run-info').textContent = parts.join(' · ');
     // Contenders from outside arena, named with where they came from (their rows are marked too).
