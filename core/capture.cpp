@@ -22,6 +22,23 @@ using nlohmann::json;
 
 namespace {
 
+// What a folder holds of EXR files, for an error about a frame file that is not there: frames
+// numbered from 1 (Blender's default) or with another width of number are the usual slip, and
+// the first names say which. "; the folder holds a, b, c, ..." or "; the folder holds no .exr
+// file".
+std::string exrFilesHeld(const fs::path& dir) {
+  std::vector<std::string> exrs;
+  std::error_code ec;
+  for (const fs::directory_entry& e : fs::directory_iterator(dir, ec))
+    if (e.path().extension() == ".exr") exrs.push_back(e.path().filename().string());
+  std::sort(exrs.begin(), exrs.end());
+  if (exrs.empty()) return "; the folder holds no .exr file";
+  std::string held;
+  for (size_t i = 0; i < exrs.size() && i < 3; ++i) held += (i ? ", " : "") + exrs[i];
+  if (exrs.size() > 3) held += ", ... (" + std::to_string(exrs.size()) + " in all)";
+  return "; the folder holds " + held;
+}
+
 // The frame layers a capture may carry (every frame layer except the viewer-facing R,G,B copy).
 std::vector<LayerSpec> captureFrameSpecs() {
   std::vector<LayerSpec> out;
@@ -396,22 +413,10 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
 
   // The layers: every frame holds the same set (checked on each read), taken from frame 0.
   const fs::path first = captureFramePath(dir, 0);
-  if (!fs::exists(first)) {
-    // Frames numbered from 1 (Blender's default) or with another width of number are the usual
-    // slip: the folder's EXR files say which.
-    std::vector<std::string> exrs;
-    std::error_code ec;
-    for (const fs::directory_entry& e : fs::directory_iterator(dir, ec))
-      if (e.path().extension() == ".exr") exrs.push_back(e.path().filename().string());
-    std::sort(exrs.begin(), exrs.end());
-    std::string held;
-    for (size_t i = 0; i < exrs.size() && i < 3; ++i) held += (i ? ", " : "") + exrs[i];
-    if (exrs.size() > 3) held += ", ...";
+  if (!fs::exists(first))
     throw Error(first.string() + ": file does not exist; frames are frame_0000.exr to " +
                 captureFramePath({}, info.frames - 1).string() + " (numbered from 0, four digits)" +
-                (held.empty() ? std::string("; the folder holds no .exr file")
-                              : "; the folder holds " + held));
-  }
+                exrFilesHeld(dir));
   const ExrHeader h = readExrHeader(first);
   if (h.width != info.width || h.height != info.height)
     throw Error(first.string() + ": " + std::to_string(h.width) + "x" + std::to_string(h.height) + ", expected " +
@@ -630,7 +635,13 @@ Image readCaptureOutput(const CaptureDescription& c, const std::string& name, in
   if (std::error_code ec; !fs::is_directory(output.dir, ec))
     throw Error((c.dir / "capture.json").string() + ": outputs." + name + ": folder " +
                 output.dir.string() + " does not exist (capture.json declares it)");
-  return readOutputFrame(captureOutputPath(output, t), name, c.info.width, c.info.height);
+  const fs::path file = captureOutputPath(output, t);
+  if (std::error_code ec; !fs::exists(file, ec))  // numbered from 1, or another width: said
+    throw Error(file.string() + ": file does not exist; " + name +
+                "'s frames are frame_0000.exr to " +
+                captureFramePath({}, c.info.frames - 1).string() +
+                " (numbered from 0, four digits)" + exrFilesHeld(output.dir));
+  return readOutputFrame(file, name, c.info.width, c.info.height);
 }
 
 std::vector<std::string> undescribedEntries(const CaptureDescription& c) {

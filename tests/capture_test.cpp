@@ -1284,6 +1284,16 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
   EXPECT_EQ(missing.status, CheckStatus::Fail);
   EXPECT_NE(missing.detail.find("frame(s) 3 "), std::string::npos) << missing.detail;
   EXPECT_NE(missing.detail.find("frame_0003.exr"), std::string::npos) << missing.detail;
+  // Said as a missing input frame is: the numbering expected and what the folder holds (an output
+  // numbered from 1 got a bare "file does not exist").
+  EXPECT_NE(missing.detail.find("frame_0003.exr: file does not exist; short's frames are "
+                                "frame_0000.exr to "),
+            std::string::npos)
+      << missing.detail;
+  EXPECT_NE(missing.detail.find("(numbered from 0, four digits); the folder holds frame_0000.exr, "
+                                "frame_0001.exr, frame_0002.exr, ... ("),
+            std::string::npos)
+      << missing.detail;
   EXPECT_EQ(small.status, CheckStatus::Fail);
   EXPECT_NE(small.detail.find("expected " + std::to_string(w) + "x" + std::to_string(h)), std::string::npos) << small.detail;
   EXPECT_EQ(nan.status, CheckStatus::Fail);
