@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -429,9 +430,34 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
     if (!named) c.unknownChannels.push_back(channel);
   }
   for (const char* required : {"normal", "depth", "motion"})
-    if (!contains(c.layers, required))
-      throw Error(first.string() + ": missing layer '" + std::string(required) + "' (" + frameSpec(required).channelName(0) +
-                  "...): normals, view depth and motion are required (docs/captures.md)");
+    if (!contains(c.layers, required)) {
+      // The channels the file holds that no layer names, each with the channel of this layer it
+      // most likely is (motion.x for motion.X, a plain Z for depth.Z): a near miss is the usual
+      // cause.
+      const LayerSpec& spec = frameSpec(required);
+      std::vector<std::string> wanted;
+      for (int k = 0; k < spec.channels(); ++k) wanted.push_back(spec.channelName(k));
+      std::string near;
+      for (size_t i = 0; i < c.unknownChannels.size() && i < 8; ++i) {
+        std::string likely = closestName(c.unknownChannels[i], wanted);
+        const auto lowered = [](std::string text) {
+          for (char& ch : text) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+          return text;
+        };
+        for (const std::string& w : wanted)  // a bare channel: Z for depth.Z
+          if (likely.empty() && lowered(w.substr(w.find('.') + 1)) == lowered(c.unknownChannels[i]))
+            likely = w;
+        near += (near.empty() ? "" : ", ") + c.unknownChannels[i] +
+                (likely.empty() ? "" : " (" + likely + "?)");
+      }
+      if (c.unknownChannels.size() > 8) near += ", ...";
+      std::string all;
+      for (const std::string& w : wanted) all += (all.empty() ? "" : ", ") + w;
+      throw Error(
+          first.string() + ": missing layer '" + std::string(required) + "' (" + all +
+          "): normals, view depth and motion are required (docs/captures.md)" +
+          (near.empty() ? std::string() : "; the file's channels that no layer names: " + near));
+    }
   const bool parts = contains(c.layers, "diffuse") && contains(c.layers, "specular") && contains(c.layers, "albedo") &&
                      contains(c.layers, "specAlbedo");
   if (!contains(c.layers, "color") && !parts)

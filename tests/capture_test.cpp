@@ -104,6 +104,36 @@ void dropLayer(const fs::path& dir, const std::string& layer) {
   });
 }
 
+// A required layer written under near-miss channel names (motion.x and motion.y; a plain Z for the
+// depth) is refused naming the channels the file holds with the ones they most likely are.
+TEST(Capture, ARequiredLayerUnderOtherChannelNamesIsRefusedNamingThem) {
+  const auto rewritten = [](const std::string& name, const LayerSpec& replacement) {
+    const fs::path dir = copyCapture(exportedCornell(), name);
+    const CaptureDescription c = readCaptureDescription(dir);
+    for (int t = 0; t < c.info.frames; ++t) {
+      const LayerSet f = readCaptureFrame(c, t);
+      std::vector<LayerSpec> specs;
+      for (const LayerSpec& s : channels::frameLayers())
+        if (!s.topLevel && f.has(s.name) &&
+            std::find(c.derived.begin(), c.derived.end(), s.name) == c.derived.end())
+          specs.push_back(s.name == replacement.name ? replacement : s);
+      writeExr(captureFramePath(dir, t), f, specs);
+    }
+    return test::errorOf([&] { readCaptureDescription(dir); });
+  };
+  const std::string lower = rewritten("motion_lower", {"motion", {"x", "y"}});
+  EXPECT_NE(
+      lower.find("missing layer 'motion' (motion.X, motion.Y): normals, view depth and motion "
+                 "are required (docs/captures.md); the file's channels that no layer names: "
+                 "motion.x (motion.X?), motion.y (motion.Y?)"),
+      std::string::npos)
+      << lower;
+  const std::string bare = rewritten("depth_bare", {"depth", {"Z"}, false, true});
+  EXPECT_NE(bare.find("missing layer 'depth' (depth.Z): "), std::string::npos) << bare;
+  EXPECT_NE(bare.find("the file's channels that no layer names: Z (depth.Z?)"), std::string::npos)
+      << bare;
+}
+
 json pairOf(const json& results, const std::string& label) {
   for (const json& p : results["pairs"])
     if (p["label"] == label) return p;
