@@ -622,7 +622,7 @@ namespace {
 
 // The label of `labels` that `typed` names: itself, or the one that differs from it only in how a
 // number is written ("svgf[sigmaL=8.0]" for "svgf[sigmaL=8]", as a run writes it): the same name,
-// the same keys in the same order, each value the same text, number or float. Empty when none,
+// the same keys in any order, each value the same text, number or float. Empty when none,
 // or when more than one would.
 std::string labelTyped(const std::set<std::string>& labels, const std::string& typed) {
   if (labels.count(typed)) return typed;
@@ -655,12 +655,21 @@ std::string labelTyped(const std::set<std::string>& labels, const std::string& t
     // the float its label writes 4.1234565).
     return va == vb || (number(va, x) && number(vb, y) && (x == y || float(x) == float(y)));
   };
+  // The parameters in any order ("svgf[sigmaL=8,iterations=3]" for the run's
+  // "svgf[iterations=3,sigmaL=8]"): compared key by key.
+  const auto byKey = [](std::vector<std::string>& p) {
+    std::sort(p.begin() + 1, p.end(), [](const std::string& a, const std::string& b) {
+      return a.substr(0, a.find('=')) < b.substr(0, b.find('='));
+    });
+  };
   std::vector<std::string> want;
   if (!parts(typed, want)) return {};
+  byKey(want);
   std::string found;
   for (const std::string& label : labels) {
     std::vector<std::string> have;
     if (!parts(label, have) || have.size() != want.size() || have[0] != want[0]) continue;
+    byKey(have);
     bool same = true;
     for (size_t i = 1; i < have.size() && same; ++i) same = sameValue(have[i], want[i]);
     if (!same) continue;

@@ -558,6 +558,27 @@ TEST(CompareGate, APairUnderAnOlderLabelIsMatchedByWhatItRan) {
                           [](const ComparisonRow& r) { return r.verdict == "missing"; }));
 }
 
+// --match takes a label's parameters in any order: the run writes them in the schema's order,
+// which a user need not know.
+TEST(CompareGate, AMatchNamesParametersInAnyOrder) {
+  std::mt19937_64 rng(17);
+  const auto shared = sharedContent(20, 16, rng);
+  json base = syntheticJson({{"svgf", syntheticSeries(20, 16, 0.0, rng, shared)}});
+  json cand =
+      syntheticJson({{"svgf[iterations=3,sigmaL=8]", syntheticSeries(20, 16, 0.0, rng, shared)}});
+  for (json* r : {&base, &cand})
+    for (json& p : (*r)["pairs"]) p["denoiser"] = "svgf";
+  cand["pairs"][0]["params"] = {{"iterations", 3}, {"sigmaL", 8.0}};
+  const RunResults a = test::typed(base), b = test::typed(cand);
+  const std::map<std::string, std::string> matches = {{"svgf", "svgf[iterations=3,sigmaL=8]"}};
+  EXPECT_EQ(checkLabelMatches({"svgf=svgf[iterations=3,sigmaL=8]"}, a, b), matches);
+  EXPECT_EQ(checkLabelMatches({"svgf=svgf[sigmaL=8,iterations=3]"}, a, b), matches);
+  EXPECT_EQ(checkLabelMatches({"svgf=svgf[sigmaL=8.0,iterations=3]"}, a, b), matches);
+  // A value that differs, or a key given twice, is still no label of the run.
+  for (const char* wrong : {"svgf=svgf[sigmaL=8,iterations=4]", "svgf=svgf[sigmaL=8,sigmaL=8]"})
+    EXPECT_THROW(checkLabelMatches({wrong}, a, b), Error) << wrong;
+}
+
 // A parameter changed between two runs (a researcher's ablation): the pairs' labels differ, so
 // the baseline's is missing and the candidate's new, and the missing row says how to compare
 // them; --match compares them, marked as asked for.
