@@ -31,7 +31,12 @@ std::string brightnessText(double ratio, bool againstReference) {
   return "its output's mean luminance is " + std::string(text) + "x the " +
          (againstReference ? "references'" : "noisy inputs' (there are no references)") +
          " over the sequence: outputs are linear radiance at the input's exposure, and another "
-         "exposure, a tone map or display encoding (sRGB, gamma) is scored as the denoiser's error";
+         "exposure, a tone map or display encoding (sRGB, gamma) is scored as the denoiser's "
+         "error" +
+         (ratio < 1
+              ? std::string("; a denoiser that clamps fireflies loses light too (hybrid keeps "
+                            "0.3x on hard_light), so darker may be its bias, which is scored")
+              : std::string());
 }
 
 }  // namespace
@@ -180,8 +185,9 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   // An output made outside (a stored output, a process, a plugin) at another exposure, tone
   // mapped or display-encoded scores as a poor denoiser, which it may not be: its mean luminance
   // against the references' (without references, the noisy inputs', which average to them), over
-  // every frame, is warned of beyond 1.25x and fails the pair beyond 2x (or black), as `arena
-  // validate` fails a stored output there.
+  // every frame, is warned of beyond 1.25x either way. It is still scored: a denoiser that clamps
+  // fireflies loses light (hybrid keeps 0.31x of hard_light's at 48x27), which is its bias and its
+  // measurement, and a short noisy input's mean is itself uncertain.
   const bool madeOutside = !run || !run->info().origin.empty();
   const bool againstReference = sd.evaluation.hasReference();
   double outputLight = 0, referenceLight = 0;
@@ -304,11 +310,6 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
     const double ratio = std::max(outputLight, 0.0) / referenceLight;
     const double factor =
         ratio > 0 ? std::max(ratio, 1 / ratio) : std::numeric_limits<double>::infinity();
-    if (factor > 2)
-      throw Error(
-          brightnessText(ratio, againstReference) +
-          "; beyond 2x it is not scored (`arena validate` fails a stored output there too): "
-          "export linear radiance at the input's exposure");
     if (factor > 1.25)
       pair[againstReference ? "brightnessVsReference" : "brightnessVsInput"] = ratio;
   }

@@ -876,16 +876,17 @@ TEST(CaptureValidation, WithoutAReferenceOnlyNoReferenceMetricsAreScoredAndItIsS
   }
   const CaptureValidation litChecks = validateCaptureOutputs(litCapture, {});
   const CaptureCheck& litCheck = checkNamed(litChecks, "output.lit.brightnessVsInput");
-  EXPECT_EQ(litCheck.status, CheckStatus::Fail) << litCheck.detail;
+  EXPECT_EQ(litCheck.status, CheckStatus::Warn) << litCheck.detail;  // a noisy mean: a warning
   EXPECT_NE(litCheck.detail.find("x the noisy inputs' (there are no references)"),
             std::string::npos)
       << litCheck.detail;
   const json litRun =
       runMatrix(captureRun(test::freshDir("noref_lit_run"), {{"file:lit", {}, ""}}, {lit}));
-  EXPECT_EQ(pairOf(litRun, "file:lit")["status"], "failed");
-  EXPECT_NE(pairOf(litRun, "file:lit")["error"].get<std::string>().find("10x the noisy inputs'"),
+  EXPECT_EQ(pairOf(litRun, "file:lit")["status"], "ok");
+  EXPECT_NEAR(pairOf(litRun, "file:lit").value("brightnessVsInput", 0.0), 10.0, 1e-3);
+  EXPECT_NE(pairOf(litRun, "file:lit")["warnings"].dump().find("10x the noisy inputs'"),
             std::string::npos)
-      << pairOf(litRun, "file:lit")["error"];
+      << pairOf(litRun, "file:lit")["warnings"];
   // The run's printout shows what was measured (every relMSE cell is "-"): each method's stability.
   const test::CommandResult cli = test::runCommand(
       std::string(ARENA_BINARY) + " run --capture '" + dir.string() +
@@ -1270,11 +1271,11 @@ TEST(Capture, PassthroughScoresAColourOnlyCaptureAsTheInputItIs) {
 // frame fails (naming the file), an undeclared folder warns; a run fails only that output's pair.
 TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
   const fs::path dir = copyCapture(exportedCornell(), "outputs_checked", [](json& d) {
-    d["outputs"] = {{"good", json::object()},   {"short", json::object()},
-                    {"small", json::object()},  {"nan", json::object()},
-                    {"oracle", json::object()}, {"copied", json::object()},
-                    {"bright", json::object()}, {"absent", json::object()},
-                    {"black", json::object()},  {"warm", json::object()}};
+    d["outputs"] = {
+        {"good", json::object()},   {"short", json::object()},  {"small", json::object()},
+        {"nan", json::object()},    {"oracle", json::object()}, {"copied", json::object()},
+        {"bright", json::object()}, {"absent", json::object()}, {"black", json::object()},
+        {"warm", json::object()},   {"dark", json::object()}};
   });
   const CaptureDescription base = readCaptureDescription(exportedCornell());
   const int w = base.info.width, h = base.info.height;
@@ -1303,6 +1304,9 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
     write("bright", t, bright);
     for (float& v : warm.raw()) v *= 1.5f;  // a warning, still scored
     write("warm", t, warm);
+    Image dark = readCaptureReference(base, base.info.referenceOfFrame[size_t(t)]).get("color");
+    for (float& v : dark.raw()) v *= 0.3f;  // as much light as hybrid keeps of hard_light's
+    write("dark", t, dark);
     write("black", t, Image(w, h, 3, 0.0f));  // the extreme case: no light at all
   }
   fs::create_directories(dir / "outputs" / "forgotten");
@@ -1351,6 +1355,12 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
       << bright.detail;
   EXPECT_EQ(checkNamed(v, "output.oracle.brightnessVsReference").status, CheckStatus::Pass);
   EXPECT_EQ(checkNamed(v, "output.warm.brightnessVsReference").status, CheckStatus::Warn);
+  // Darker is a warning: a denoiser that clamps fireflies loses light (failing it failed a stored
+  // copy of hybrid's output on hard_light, 0.31x).
+  const CaptureCheck& dark = checkNamed(v, "output.dark.brightnessVsReference");
+  EXPECT_EQ(dark.status, CheckStatus::Warn) << dark.detail;
+  EXPECT_NE(dark.detail.find("a denoiser that clamps fireflies loses light too"), std::string::npos)
+      << dark.detail;
   const CaptureCheck& black = checkNamed(v, "output.black.brightnessVsReference");
   EXPECT_EQ(black.status, CheckStatus::Fail) << black.detail;
   EXPECT_NE(black.detail.find("mean luminance 0x the references'"), std::string::npos)
@@ -1383,18 +1393,18 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
             std::string::npos)
       << copy["warnings"];
   EXPECT_FALSE(pairOf(copied, "passthrough").contains("equalsInputEveryFrame"));
-  // Beyond 2x (validate's failure) a run does not score it either (a 10x output entered the
-  // overall ranking); between 1.25x and 2x it is scored, with a warning.
+  // A run scores both, each with its warning: a denoiser that clamps fireflies loses light (hybrid
+  // keeps 0.31x of hard_light's), so a run cannot tell a slip from a bias by the factor; validate
+  // fails only the brighter side beyond 2x (tried: failing a run's pair beyond 2x failed a stored
+  // copy of hybrid's own output while the built-in ranked first).
   const json lit = runMatrix(captureRun(test::freshDir("outputs_bright_run"),
                                         {{"file:bright", {}, ""}, {"file:warm", {}, ""}}, {dir}));
   const json& brighter = pairOf(lit, "file:bright");
-  ASSERT_EQ(brighter["status"], "failed") << brighter.dump().substr(0, 300);
-  EXPECT_NE(brighter["error"].get<std::string>().find(
-                "its output's mean luminance is 3x the references' over the sequence"),
+  ASSERT_EQ(brighter["status"], "ok") << brighter.dump().substr(0, 300);
+  EXPECT_NEAR(brighter.value("brightnessVsReference", 0.0), 3.0, 1e-3);
+  EXPECT_NE(brighter["warnings"].dump().find("its output's mean luminance is 3x the references'"),
             std::string::npos)
-      << brighter["error"];
-  EXPECT_NE(brighter["error"].get<std::string>().find("beyond 2x it is not scored"),
-            std::string::npos);
+      << brighter["warnings"];
   const json& warmer = pairOf(lit, "file:warm");
   ASSERT_EQ(warmer["status"], "ok") << warmer.dump().substr(0, 300);
   EXPECT_NEAR(warmer.value("brightnessVsReference", 0.0), 1.5, 1e-3);

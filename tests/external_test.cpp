@@ -367,8 +367,16 @@ TEST(ExternalProcess, AProcessEndingBadlyAfterItsFramesIsWarnedOf) {
 TEST(ExternalProcess, ATimeOfZeroAKeyTwiceAndOutputAfterTheLastAnswerAreSaid) {
   const json r = runMatrix(tinyRun("time_and_end", {{faulty("zero-time"), {}, ""},
                                                     {faulty("duplicate-key"), {}, ""},
-                                                    {faulty("goodbye"), {}, ""}}));
-  ASSERT_EQ(r["pairs"].size(), 3u);
+                                                    {faulty("goodbye"), {}, ""},
+                                                    {faulty("huge"), {}, ""}}));
+  ASSERT_EQ(r["pairs"].size(), 4u);
+  // A number beyond the double range is named where it is, as in any JSON file.
+  const json& huge = r["pairs"][3];
+  ASSERT_EQ(huge["status"], "failed");
+  EXPECT_NE(huge["error"].get<std::string>().find(
+                "its 'result' header: $.computeMs: 1e999 is too large to be stored as a number"),
+            std::string::npos)
+      << huge["error"];
   const json& zero = r["pairs"][0];
   ASSERT_EQ(zero["status"], "ok") << zero.dump().substr(0, 300);
   EXPECT_TRUE(zero["timing"].value("reportedZeroEveryFrame", false)) << zero["timing"];
@@ -387,9 +395,10 @@ TEST(ExternalProcess, ATimeOfZeroAKeyTwiceAndOutputAfterTheLastAnswerAreSaid) {
   const json& goodbye = r["pairs"][2];
   ASSERT_EQ(goodbye["status"], "ok") << goodbye.dump().substr(0, 300);
   ASSERT_EQ(goodbye["processEnds"].size(), 2u) << goodbye;
-  EXPECT_NE(goodbye["processEnds"][0].get<std::string>().find(
-                ") wrote 18 byte(s) to its output after its last answer (all done, goodbye"),
-            std::string::npos)
+  EXPECT_NE(
+      goodbye["processEnds"][0].get<std::string>().find(
+          ") wrote 18 byte(s) to its output after its last answer (\"all done, goodbye\\n\"): "),
+      std::string::npos)
       << goodbye["processEnds"];
   // The other processes of this file report a time and end quietly: none of this is said.
   const json quiet = runMatrix(tinyRun("time_quiet", {{faulty("quiet"), {}, ""}}));

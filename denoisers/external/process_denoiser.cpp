@@ -61,12 +61,15 @@ std::string ExternalProcessDenoiser::finish() {
   // frames would have failed a pair, so it is said.
   std::string excerpt;
   const size_t unread = status == "still running" ? 0 : process_->unreadOutput(excerpt);
+  // Quoted on one line: a newline in it would break the warning that quotes it.
+  std::string quoted;
+  for (const char ch : utf8Excerpt(excerpt, 64, false))
+    quoted += ch == '\n' ? std::string("\\n") : std::string(1, ch);
   const std::string stray =
       unread == 0
           ? ""
-          : "wrote " + std::to_string(unread) + " byte(s) to its output after its last answer (" +
-                utf8Excerpt(excerpt, 64, false) +
-                "): its output carries only answers; write anything else to stderr";
+          : "wrote " + std::to_string(unread) + " byte(s) to its output after its last answer (\"" +
+                quoted + "\"): its output carries only answers; write anything else to stderr";
   if (status == "exited with status 0") {
     if (stray.empty()) return "";
     process_.reset();
@@ -118,7 +121,13 @@ nlohmann::json ExternalProcessDenoiser::readHeader(const std::string& expectedTy
     } else {
       header = nlohmann::json::parse(line);  // throws: the message below
     }
-  } catch (const nlohmann::json::exception&) {
+  } catch (const nlohmann::json::exception& e) {
+    // A number beyond the double range (1e999) is named with its place, as in any JSON file.
+    if (e.id == 406) try {
+        static_cast<void>(parseJsonText(line, "its '" + expectedType + "' header"));
+      } catch (const Error& placed) {
+        fail(placed.what());
+      }
     // Bytes before a header that parses (a line ending in {"type": ...}): perhaps the previous
     // answer's, more than its planes, or a print to stdout; said, since the error otherwise falls
     // on the frame after. (Stray float data holding a newline byte ends the line before any

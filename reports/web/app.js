@@ -60,6 +60,17 @@
   function renderHeader() {
     const r = D.run;
     $('run-name').textContent = r.name || '(unnamed run)';
+    // The display's exposure comes from the references; a scene without one is shown through its
+    // noisy inputs' exposure instead (every scene: the run's sentence says so; some: named).
+    const displayText = (display) => {
+      if (!display) return null;
+      const without = D.scenes.filter((x) => x.hasReference === false).map((x) => x.name);
+      const fromInputs = display.replace(/exposure from (each frame's own|the scene's first) reference/,
+                                         "exposure from each frame's noisy input (no reference)");
+      if (without.length && without.length === D.scenes.length) return `display: ${fromInputs}`;
+      return `display: ${display}` +
+          (without.length ? ` (${without.join(', ')}: no reference, exposure from each frame's noisy input)` : '');
+    };
     const env = r.environment || {};
     const s = r.settings || {};
     const parts = [
@@ -71,10 +82,7 @@
       `warm-up W = ${r.warmup}`,
       s.relMseEpsilon !== undefined && `relMSE eps = ${s.relMseEpsilon}`,
       s.flip && `FLIP: ${s.flip}`,
-      s.display && `display: ${s.display}`,
-      // A scene without a reference is shown through its noisy inputs' exposure instead.
-      s.display && D.scenes.some((x) => x.hasReference === false) &&
-          `(${D.scenes.filter((x) => x.hasReference === false).map((x) => x.name).join(', ')}: no reference, exposure from each frame's noisy input)`,
+      displayText(s.display),
     ].filter(Boolean);
     $('run-info').textContent = parts.join(' · ');
     // Contenders from outside arena, named with where they came from (their rows are marked too).

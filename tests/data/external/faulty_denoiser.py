@@ -23,6 +23,7 @@
   exit-at-end  answers every frame, then writes to stderr and exits with status 3 at end of input
   zero-time  answers every frame correctly but reports a computeMs of 0 (a timer not read)
   duplicate-key  answers a header giving computeMs twice
+  huge       answers a header whose computeMs is 1e999 (beyond the double range)
   goodbye    answers every frame, then prints a line to stdout at end of input and exits with 0
 Plain Python (no numpy): the output is the input signal, so a correct frame is a passthrough."""
 import json
@@ -75,6 +76,11 @@ def main():
         if mode == "zero-time":
             result["computeMs"] = 0
         if frame >= FAIL_AT:
+            if mode == "huge":
+                head = json.dumps(result)[:-1] + ', "computeMs": 1e999}'
+                head = head.replace('"computeMs": 0.001, ', '')
+                answer((head + "\n").encode() + signal_bytes)
+                continue
             if mode == "duplicate-key":
                 head = json.dumps(result)[:-1] + ', "computeMs": 1e9}'
                 answer((head + "\n").encode() + signal_bytes)
