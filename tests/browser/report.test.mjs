@@ -818,4 +818,23 @@ test('a capture: its validation on the page, a file: contender named with its ow
   assert.equal(await page.locator('#summary-table tbody tr[data-label="eaw"] td.first').innerText(), 'eaw');
   assert.deepEqual(problems, []);
   await page.close();
+  // The same capture without its references: the page says its display exposure comes from the
+  // noisy inputs (the header said "from each frame's own reference").
+  const bare = path.join(work, 'capture-noref');
+  fs.cpSync(capture, bare, { recursive: true });
+  const bareDescription = JSON.parse(fs.readFileSync(path.join(bare, 'capture.json'), 'utf8'));
+  delete bareDescription.reference;
+  delete bareDescription.outputs;
+  fs.rmSync(path.join(bare, 'outputs'), { recursive: true, force: true });
+  fs.writeFileSync(path.join(bare, 'capture.json'), JSON.stringify(bareDescription));
+  const bareRun = path.join(work, 'capture-noref-run');
+  arena('run', '--capture', bare, '--denoisers', 'eaw', '--no-baselines', '--warmup', '2', '--out', bareRun);
+  const bareReport = path.join(work, 'capture-noref-report');
+  arena('report', bareRun, '--out', bareReport);
+  const opened = await openReport(bareReport);
+  const info = await opened.page.locator('#run-info').innerText();
+  assert.match(info, /display: exposure from each frame's noisy input \(no reference\)/);
+  assert.doesNotMatch(info, /own reference/);
+  assert.deepEqual(opened.problems, []);
+  await opened.page.close();
 });
