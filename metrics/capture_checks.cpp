@@ -111,6 +111,62 @@ double highFrequencyEnergy(const Image& rgb, double eps) {
   return energy;
 }
 
+// Sums over the pixels of the high-frequency parts of two images' linear luminance (each minus
+// its 3x3 box): sum a^2, sum b^2 and sum a*b. For a noisy input a and its reference b, whose
+// noises are independent and whose signals are the same, E(sum a*b) is the signal's own energy,
+// so sum b^2 - sum a*b is the reference's noise and sum a^2 - sum a*b the input's: the ratio of
+// their noises, with the signal (edges, texture) cancelled, unlike roughnessVsInput's.
+struct HighFrequencySums {
+  double aa = 0, bb = 0, ab = 0;
+  // Only where the 3x3 neighbourhood is one flat surface (the same normal, depth within 2%, and
+  // the same mesh id and albedo where the frame gives them): at an edge a 1-spp input sampled at
+  // pixel centres and a reference that averages the pixel differ in the picture itself, which
+  // would not cancel (cornell_static's read like 3 samples whatever the reference's count).
+  void add(const Image& a, const Image& b, const LayerSet& frame) {
+    const Image la = luminance(a), lb = luminance(b);
+    const int w = la.width(), h = la.height();
+    const Image& normal = frame.get("normal");
+    const Image& depth = frame.get("depth");
+    const Image* mesh = frame.has("meshId") ? &frame.get("meshId") : nullptr;
+    const Image* albedo = frame.has("albedo") ? &frame.get("albedo") : nullptr;
+    const auto flat = [&](int x, int y) {
+      const float z = depth.at(x, y);
+      if (!(z > 0) || !std::isfinite(z)) return false;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int u = std::clamp(x + dx, 0, w - 1), v = std::clamp(y + dy, 0, h - 1);
+          const float zn = depth.at(u, v);
+          if (!(std::abs(zn - z) <= 0.02f * z)) return false;
+          float dot = 0;
+          for (int c = 0; c < 3; ++c) dot += normal.at(x, y, c) * normal.at(u, v, c);
+          if (!(dot > 0.99f)) return false;
+          if (mesh && mesh->at(u, v) != mesh->at(x, y)) return false;
+          if (albedo)
+            for (int c = 0; c < 3; ++c)
+              if (!(std::abs(albedo->at(u, v, c) - albedo->at(x, y, c)) <= 1e-3f)) return false;
+        }
+      return true;
+    };
+    const auto residual = [](const Image& l, int x, int y) {
+      double box = 0;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) box += double(l.atClamped(x + dx, y + dy));
+      return double(l.at(x, y)) - box / 9.0;
+    };
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        if (!flat(x, y)) continue;
+        const double ra = residual(la, x, y), rb = residual(lb, x, y);
+        if (!std::isfinite(ra) || !std::isfinite(rb)) continue;
+        aa += ra * ra, bb += rb * rb, ab += ra * rb;
+      }
+  }
+  // The reference's noise over the input's; NaN when the input shows none.
+  double ratio() const {
+    return aa - ab > 0 ? (bb - ab) / (aa - ab) : std::numeric_limits<double>::quiet_NaN();
+  }
+};
+
 double meanLuminance(const Image& rgb) {
   const Image lum = luminance(rgb);
   double sum = 0;
@@ -993,6 +1049,7 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
                                          "independent half)"));
     double roughRatio = 0;
     int counted = 0;
+    HighFrequencySums noiseSums;
     double inputError = 0, floorSum = 0;
     // The worst frame of each ratio: a mean over the sequence hides one bad reference (a frame
     // whose reference is as noisy as its input moved a 12-frame mean by a tenth of the threshold).
@@ -1015,6 +1072,7 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
       pooled.add(color, ref.get("color"));
       if (std::abs(b.z()) > 5 && b.factor() > worstBrightness.factor())
         worstBrightness = b, worstFactorFrame = int(t);
+      noiseSums.add(color, ref.get("color"), input.frames[t]);
       if (ri > 0) {
         const double ratio = highFrequencyEnergy(ref.get("color"), eps) / ri;
         roughRatio += ratio;
@@ -1160,6 +1218,34 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
     if (counted > 0)
       worstFrame("reference.roughnessVsInput.worstFrame", worstRough, worstRoughFrame, 0.5, kSoft,
                  "ratio of high-frequency energy, reference / input");
+    // The reference's pixel noise against the input's with the signal cancelled: a reference of N
+    // samples over a 1-spp input reads about 1/N. A capture author's reference of 1 sample declared
+    // as 4096 read 0.999 on roughnessVsInput (a warning) and was ranked on; it reads about 1 here.
+    // Fails where it reads as at most about 2.5x the input's samples while 16x or more are
+    // declared; warns beyond 8x what the declared samples give a 1-spp input (and above 0.1).
+    if (const double noiseRatio = noiseSums.ratio();
+        !std::isfinite(noiseRatio) && !info.referenceSpp.empty()) {
+      v.checks.push_back(unchecked("reference.noiseVsDeclared",
+                                   "no pixel of a flat surface shows the input's noise: nothing to "
+                                   "compare the references' noise with"));
+    } else if (!info.referenceSpp.empty()) {
+      const int declared = *std::min_element(info.referenceSpp.begin(), info.referenceSpp.end());
+      const double implied =
+          noiseRatio > 0 ? 1 / noiseRatio : std::numeric_limits<double>::infinity();
+      v.checks.push_back(check(
+          "reference.noiseVsDeclared", std::max(noiseRatio, 0.0), std::max(8.0 / declared, 0.1),
+          declared >= 16 ? 0.4 : kSoft, "reference noise / input noise, high frequencies",
+          noiseRatio * declared > 8 && noiseRatio > 0.1
+              ? "the references' pixel noise is " + number(noiseRatio) +
+                    " of the input's (their high frequencies against the input's, where the "
+                    "picture cancels): what about " +
+                    number(implied) +
+                    "x the input's samples give, while their fewest declared is " +
+                    std::to_string(declared) +
+                    " (a reference rendered with fewer samples than "
+                    "capture.json says?)"
+              : ""));
+    }
     if (input.referenceNoiseKnown && !(inputError > 0)) {
       v.checks.push_back(unchecked(
           "reference.noiseVsInput",

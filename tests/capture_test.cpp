@@ -650,6 +650,33 @@ TEST(CaptureValidation, AReferenceNoisierThanTheInputIsRefused) {
   EXPECT_GT(c.value, 1.0);
 }
 
+// A reference's pixel noise against the input's, the picture cancelled between them, against the
+// samples capture.json declares (a capture author's 1-sample reference declared as 4096 read
+// 0.999 on roughnessVsInput, a warning, and was ranked on).
+TEST(CaptureValidation, AReferenceNoisierThanItsDeclaredSamplesIsNamed) {
+  const auto declared = [](const fs::path& dir, int samples) {
+    json d = json::parse(readText(dir / "capture.json"));
+    d["reference"]["samples"] = std::vector<int>(d["frames"].get<size_t>(), samples);
+    writeTextAtomically(dir / "capture.json", d.dump(1));
+    return checkNamed(validate(dir), "reference.noiseVsDeclared");
+  };
+  // As noisy as the input: a ratio about 1, refused when 4096 samples are declared.
+  const CaptureCheck one = declared(writeSynthetic("ref_one_sample", 0.3f, 0.3f), 4096);
+  EXPECT_EQ(one.status, CheckStatus::Fail) << one.value << " " << one.detail;
+  EXPECT_NEAR(one.value, 1.0, 0.2) << one.detail;
+  EXPECT_NE(one.detail.find("while their fewest declared is 4096"), std::string::npos)
+      << one.detail;
+  // Half the input's noise (the variance of 4 samples): warned of at 4096, passed at 4.
+  const fs::path four = writeSynthetic("ref_four_samples", 0.3f, 0.15f);
+  const CaptureCheck fourAsMany = declared(four, 4096);
+  EXPECT_EQ(fourAsMany.status, CheckStatus::Warn) << fourAsMany.value;
+  EXPECT_NEAR(fourAsMany.value, 0.25, 0.06);
+  EXPECT_EQ(declared(four, 4).status, CheckStatus::Pass);
+  // A converged reference passes whatever is declared: the texture cancels (roughnessVsInput, which
+  // keeps it, reads a textured reference far higher).
+  EXPECT_EQ(declared(writeSynthetic("ref_converged", 0.3f, 0.0f), 4096).status, CheckStatus::Pass);
+}
+
 // One frame's reference as noisy as an input, among converged ones: the sequence's mean stays
 // below the threshold, the worst frame does not, and the check names it.
 TEST(CaptureValidation, OneBadReferenceFrameIsNamed) {
