@@ -112,16 +112,22 @@ void addReportCommand(CLI::App& app) {
     h.correction = parseCorrection(*correction);
     if (!only->empty()) h.contenders = splitList(*only, "--denoisers", "labels or denoiser names");
     const HistorySummary s = writeHistory(h);
-    std::cout << "history: " << s.index.string() << " (" << s.runs
-              << (s.runs == 1 ? " run, " : " runs, ") << s.failingComparisons << " of "
-              << s.comparisons << " comparison(s) failing `arena compare`'s gate (" << s.failing
-              << " row(s))";
-    // Changes beyond the tolerance that the gate did not resolve are not passes: said, and those
-    // it could not judge at all (a database's runs keep no tiles) apart from those within noise.
-    if (s.unresolved > 0)
-      std::cout << "; " << s.unresolved
-                << " change(s) beyond the tolerance within noise (orange on the page)";
-    std::cout << ")\n";
+    if (s.runs == 1) {  // "0 of 0 comparison(s) failing" read as a pass
+      std::cout << "history: " << s.index.string()
+                << " (one run: nothing to compare it with yet; a history judges each run against "
+                   "the one before)\n";
+    } else {
+      std::cout << "history: " << s.index.string() << " (" << s.runs << " runs, "
+                << s.failingComparisons << " of " << s.comparisons
+                << " comparison(s) failing `arena compare`'s gate (" << s.failing << " row(s))";
+      // Changes beyond the tolerance that the gate did not resolve are not passes: said, and
+      // those it could not judge at all (a database's runs keep no tiles) apart from those within
+      // noise.
+      if (s.unresolved > 0)
+        std::cout << "; " << s.unresolved
+                  << " change(s) beyond the tolerance within noise (orange on the page)";
+      std::cout << ")\n";
+    }
     if (s.notJudged > 0)
       std::cerr << "arena: warning: " << s.notJudged
                 << " change(s) beyond the tolerance were NOT JUDGED: runs read from results.db "

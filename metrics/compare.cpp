@@ -21,15 +21,16 @@ namespace {
 
 double parseFraction(const std::string& text, const char* option, const char* expected) {
   double v = kUndefined;
-  try {
-    size_t used = 0;
-    v = std::stod(text, &used);
-    if (used == text.size() - 1 && text.back() == '%')
-      v /= 100.0;
-    else if (used != text.size())
-      v = kUndefined;
-  } catch (...) {
-  }
+  // Decimal only: std::stod reads "0x10" as 16 and "inf" as infinity.
+  if (text.find_first_not_of("0123456789.eE+-%") == std::string::npos) try {
+      size_t used = 0;
+      v = std::stod(text, &used);
+      if (used == text.size() - 1 && text.back() == '%')
+        v /= 100.0;
+      else if (used != text.size())
+        v = kUndefined;
+    } catch (...) {
+    }
   if (!std::isfinite(v) || v < 0)
     throw Error(std::string(option) + " '" + text + "': expected " + expected);
   return v;
@@ -231,7 +232,14 @@ std::vector<Tolerance> gateTolerances(std::vector<Tolerance> tolerances, double 
     if (!std::isfinite(t.relative) || t.relative < 0)
       throw Error("--tolerance of " + t.metric + " must be finite and non-negative");
   }
-  return tolerances;
+  // A metric named twice (`--metric relMse,relMse`, `flip` and `ldrFlip`) is judged once: twice,
+  // its rows counted double and, judged together, raised the bar the others must clear.
+  std::vector<Tolerance> once;
+  for (Tolerance& t : tolerances)
+    if (std::none_of(once.begin(), once.end(),
+                     [&](const Tolerance& o) { return o.metric == t.metric; }))
+      once.push_back(std::move(t));
+  return once;
 }
 
 Correction parseCorrection(const std::string& text) {

@@ -739,6 +739,22 @@ TEST(CompareGate, FailsOnWhatItCannotCompare) {
       << test::errorOf([] { parseTolerance("2"); });
   EXPECT_DOUBLE_EQ(parseTolerance("200%"), 2.0);
   EXPECT_DOUBLE_EQ(parseTolerance("0.5"), 0.5);
+  // Decimal only: "0x10%" read as 16% (hexadecimal), unsaid.
+  EXPECT_THROW(parseTolerance("0x10%"), Error);
+  EXPECT_THROW(parseTolerance("0x10"), Error);
+  EXPECT_DOUBLE_EQ(parseTolerance("1e1%"), 0.1);
+  // A metric named twice is judged once: twice, its rows were counted double and, judged
+  // together (Holm), raised the bar every row must clear (a resolved regression read unresolved).
+  const std::vector<Tolerance> once =
+      gateTolerances({{"relMse", 0.02}, {"relMse", 0.02}, {"flip", 0.02}, {"ldrFlip", 0.02}});
+  ASSERT_EQ(once.size(), 2u);
+  EXPECT_EQ(once[0].metric, "relMse");
+  EXPECT_EQ(once[1].metric, "ldrFlip");
+  EXPECT_EQ(
+      compareRuns(syntheticRun({{"a", m}}), syntheticRun({{"a", m}}),
+                  {{"relMse", 0.02}, {"relMse", 0.02}})
+          .size(),
+      compareRuns(syntheticRun({{"a", m}}), syntheticRun({{"a", m}}), {{"relMse", 0.02}}).size());
   EXPECT_THROW(parseConfidence("1.5"), Error);
   EXPECT_DOUBLE_EQ(parseConfidence("90%"), 0.9);
   // A metric the baseline had and the candidate reports absent fails too.

@@ -34,7 +34,9 @@
     const n = H.runs.length;
     const comparisons = H.comparisons ?? Math.max(0, n - 1);
     const failing = H.failingComparisons ?? new Set(flags.map((f) => f.run)).size;
-    $('history-info').textContent = n
+    $('history-info').textContent = n === 1
+      ? `One run, ${runText(0)}: nothing to compare it with yet (a history judges each run against the one before).`
+      : n
       ? `${n} runs, ${runText(0)} → ${runText(n - 1)} · ${failing} of ${comparisons} comparison(s) fail the gate (${flags.length} row(s))` +
         (notJudged.length ? `, ${notJudged.length} change(s) beyond the tolerance not judged` : '') +
         `, ${others} other change(s) (improvements, changes within noise, new pairs)`
@@ -72,6 +74,7 @@
     const parts = [];
     if (flags.length) parts.push(changeTable(flags, 'flags-table'));
     else if (notJudged.length) parts.push(el('p', { class: 'empty', text: 'No run failed the gate where it could judge; the changes below were not judged.' }));
+    else if (H.runs.length < 2) parts.push(el('p', { class: 'empty', text: 'One run: nothing was compared, so nothing could fail the gate.' }));
     else parts.push(el('p', { class: 'empty', text: 'No run would have failed the gate.' }));
     if (notJudged.length) {
       // Largest changes first: what a reader must check by hand, or judge from the run directories.
