@@ -396,8 +396,17 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
       std::optional<std::pair<MetricTiles, MetricTiles>> pairedTiles;  // baseline's, candidate's
       const json &bt = b.part("tiles"), &ct = c.part("tiles");
       if (bt.is_object() && ct.is_object() && bt.contains(t.metric) && ct.contains(t.metric)) {
-        const MetricTiles baseTiles = MetricTiles::fromJson(bt[t.metric]),
-                          candTiles = MetricTiles::fromJson(ct[t.metric]);
+        // A damaged tile record names its run, pair and field (it said only "tile data: sum is
+        // not base64").
+        const auto tilesOf = [&](const RunResults& run, const PairResult& p, const json& j) {
+          try {
+            return MetricTiles::fromJson(j[t.metric]);
+          } catch (const Error& e) {
+            throw Error(run.source + ": pair " + p.label + " on " + p.scene + ", tiles." +
+                        t.metric + ": " + e.what());
+          }
+        };
+        const MetricTiles baseTiles = tilesOf(base, b, bt), candTiles = tilesOf(cand, c, ct);
         // The interval comes from the tiles, the change from the summaries: the two must be one
         // measurement (a hand-edited mean showed +1107% with an interval of [+0%, +0%], and
         // passed).

@@ -102,7 +102,9 @@ RunResults loadResults(const fs::path& runDir) {
     if (const std::string note = unfinishedRunNote(runDir); !note.empty()) throw Error(note);
     throw Error(runDir.string() + ": not a run (no results.json); create one with `arena run`");
   }
-  return RunResults::fromJson(parseJsonFile(file.string()), file.string());
+  RunResults results = RunResults::fromJson(parseJsonFile(file.string()), file.string());
+  results.source = file.string();  // what later errors about its contents name
+  return results;
 }
 
 void saveResults(const fs::path& runDir, const json& results) {

@@ -11,6 +11,7 @@
 #include "cli/printout.hpp"
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/json_reader.hpp"
 #include "core/text.hpp"
 #include "harness/scene_selection.hpp"
 #include "metrics/results.hpp"
@@ -318,6 +319,20 @@ TEST(CliContract, MatchedLabelsAreComparedAndGatedByEitherName) {
         << only << "\n"
         << r.output;
   }
+  // A damaged tile record names the file, the pair and the field (it said only "tile data: sum is
+  // not base64").
+  const fs::path damaged = dir / "b" / "results.json";
+  json b = parseJsonFile(damaged.string());
+  std::string& sum = b["pairs"][0]["tiles"]["relMse"]["sum"].get_ref<std::string&>();
+  sum.resize(sum.size() - 3);
+  writeTextAtomically(damaged, b.dump());
+  const contract::CliResult r = contract::arenaCli(compare);
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(
+      r.output.find(damaged.string() +
+                    ": pair temporal[alphaMin=0.5] on cornell_static, tiles.relMse: tile data: "),
+      std::string::npos)
+      << r.output;
 }
 
 // A run of several input seeds prints each pair's error split, with intervals, beside its table
