@@ -130,7 +130,8 @@ void addReportCommand(CLI::App& app) {
     }
     if (s.notJudged > 0)
       std::cerr << "arena: warning: " << s.notJudged
-                << " change(s) beyond the tolerance were NOT JUDGED: runs read from results.db "
+                << " change(s) in the worse direction beyond the tolerance were NOT JUDGED: runs "
+                   "read from results.db "
                    "keep no per-tile data, so the gate cannot tell them from noise; give `arena "
                    "history` the run directories (their results.json) to judge them\n";
     for (const std::string& line : s.absentSummaries) std::cout << "absent: " << line << "\n";

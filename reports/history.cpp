@@ -409,7 +409,10 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
       failing += change["fails"].get<bool>();
       if (change["fails"].get<bool>()) failingRuns.insert(i);
       unresolved += row.verdict == "unresolved";
-      notJudged += row.verdict == "not judged";
+      // Only a change in the worse direction could fail the gate: an improvement it could not
+      // judge is no warning (24 of a trial's 50 "NOT JUDGED" were improvements).
+      if (row.verdict == "not judged")
+        notJudged += (findMetric(row.metric)->lowerIsBetter() ? row.change : -row.change) > 0;
       changes.push_back(change);
     }
   }

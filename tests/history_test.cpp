@@ -331,6 +331,20 @@ TEST(History, CountsWhatItCouldNotResolveAndRefusesAMetricNoRunComputed) {
     historyData(loadHistory({dir / "results.db"}), {{"ldrFlip", 0.02}});
   });
   EXPECT_NE(e.find("history: --metric ldrFlip: no run computed it"), std::string::npos) << e;
+  // An improvement the gate could not judge is listed as a change but not counted: it could never
+  // fail the gate (a trial's dashboard warned of 24 improvements as "NOT JUDGED").
+  const fs::path better = test::freshDir("history_improved");
+  for (int i = 0; i < 4; ++i) {
+    json r = historyRun(i, 2);
+    const double relMse = r["pairs"][1]["summary"]["relMse"]["mean"].get<double>();
+    if (i >= 2) r["pairs"][1]["summary"]["relMse"] = stat(relMse / 1.21);  // 10% better, not worse
+    appendToDatabase(better / "results.db", test::typed(r));
+  }
+  const json improved = historyData(loadHistory({better / "results.db"}), {{"relMse", 0.02}});
+  EXPECT_EQ(improved["notJudged"], 0) << improved["changes"].dump();
+  bool listed = false;
+  for (const json& c : improved["changes"]) listed |= c["verdict"] == "not judged";
+  EXPECT_TRUE(listed) << improved["changes"].dump();
 }
 
 // --denoisers: only the named contender is gated; the runs from before it existed are no

@@ -27,7 +27,11 @@
 
   // Changes beyond the tolerance that the gate could not judge (runs read from results.db keep no
   // tiles): neither a failure nor a pass, listed apart.
-  const notJudged = H.changes.filter((c) => c.verdict === 'not judged');
+  // Changes the gate could not judge (runs read from results.db keep no tiles): only those in the
+  // worse direction could fail it, and only those are listed to check by hand.
+  const lowerIsBetter = Object.fromEntries((H.metrics || []).map((m) => [m.name, m.lowerIsBetter]));
+  const worse = (c) => (lowerIsBetter[c.metric] === false ? -(c.change ?? 0) : (c.change ?? 0)) > 0;
+  const notJudged = H.changes.filter((c) => c.verdict === 'not judged' && worse(c));
   const others = H.changes.length - flags.length - notJudged.length;
 
   function renderInfo() {
