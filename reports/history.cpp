@@ -234,6 +234,15 @@ std::vector<RunResults> loadHistory(const std::vector<fs::path>& inputs,
                           ", created " + r.created + "): taken once");
     if (!same->keepsTiles && r.keepsTiles) *same = std::move(r);
   }
+  // Two runs made in the same second (`created` has one-second resolution) keep the order they
+  // were given in, which a shell's `ls` of commit-named folders does not make the commits' order:
+  // every change between them would flip its sign. Said.
+  for (size_t i = 1; i < distinct.size() && warnings; ++i)
+    if (distinct[i].created == distinct[i - 1].created)
+      warnings->push_back(distinct[i - 1].source + " and " + distinct[i].source +
+                          " were created in the same second (" + distinct[i].created +
+                          "): the history keeps them in the order given, so give them in the order "
+                          "they were made (or their changes read reversed)");
   return distinct;
 }
 

@@ -545,6 +545,21 @@ TEST(History, BadInputNamesThePath) {
   EXPECT_NE(said[0].find("holds the same run as " + db.string() + "#"), std::string::npos)
       << said[0];
   EXPECT_NE(said[0].find("taken once"), std::string::npos) << said[0];
+  // Two runs made in the same second keep the order given, said (their changes would read reversed
+  // if given out of order).
+  json first = historyRun(1, 3), second = historyRun(2, 3);
+  second["created"] = first["created"];
+  saveResults(dir / "same_a", first);
+  saveResults(dir / "same_b", second);
+  std::vector<std::string> tied;
+  const std::vector<RunResults> ordered = loadHistory({dir / "same_b", dir / "same_a"}, &tied);
+  ASSERT_EQ(ordered.size(), 2u);
+  EXPECT_EQ(ordered[0].name, second["name"].get<std::string>());  // as given
+  ASSERT_EQ(tied.size(), 1u);
+  EXPECT_NE(
+      tied[0].find(" were created in the same second (" + first["created"].get<std::string>()),
+      std::string::npos)
+      << tied[0];
   e = test::errorOf([&] { loadHistory({dir / "notes.txt"}); });
   EXPECT_NE(e.find("notes.txt: not an SQLite database"), std::string::npos) << e;
   // A file where the page's directory belongs, named with the option.
