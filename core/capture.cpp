@@ -437,13 +437,13 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
       const LayerSpec& spec = frameSpec(required);
       std::vector<std::string> wanted;
       for (int k = 0; k < spec.channels(); ++k) wanted.push_back(spec.channelName(k));
+      const auto lowered = [](std::string text) {
+        for (char& ch : text) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+        return text;
+      };
       std::string near;
       for (size_t i = 0; i < c.unknownChannels.size() && i < 8; ++i) {
         std::string likely = closestName(c.unknownChannels[i], wanted);
-        const auto lowered = [](std::string text) {
-          for (char& ch : text) ch = char(std::tolower(static_cast<unsigned char>(ch)));
-          return text;
-        };
         for (const std::string& w : wanted)  // a bare channel: Z for depth.Z
           if (likely.empty() && lowered(w.substr(w.find('.') + 1)) == lowered(c.unknownChannels[i]))
             likely = w;
