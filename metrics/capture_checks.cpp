@@ -91,6 +91,14 @@ CaptureCheck unchecked(std::string name, std::string why) {
 // is noise. In the log domain an emitter's bright edge counts like any other edge instead of
 // outweighing the noise of every dark region, so a converged reference has far less of it than a
 // noisy input, and one with as much is not converged. `eps` is shared by the two images compared.
+// A one-channel image's value at (x, y) minus its 3x3 box mean (edges clamped): its high frequency.
+double boxResidual(const Image& l, int x, int y) {
+  double box = 0;
+  for (int dy = -1; dy <= 1; ++dy)
+    for (int dx = -1; dx <= 1; ++dx) box += double(l.atClamped(x + dx, y + dy));
+  return double(l.at(x, y)) - box / 9.0;
+}
+
 double highFrequencyEnergy(const Image& rgb, double eps) {
   const Image lum = luminance(rgb);
   const int w = lum.width(), h = lum.height();
@@ -102,10 +110,7 @@ double highFrequencyEnergy(const Image& rgb, double eps) {
   double energy = 0;
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
-      double box = 0;
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) box += logLum.atClamped(x + dx, y + dy);
-      const double r = logLum.at(x, y) - box / 9.0;
+      const double r = boxResidual(logLum, x, y);
       energy += r * r;
     }
   return energy;
@@ -147,16 +152,10 @@ struct HighFrequencySums {
         }
       return true;
     };
-    const auto residual = [](const Image& l, int x, int y) {
-      double box = 0;
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) box += double(l.atClamped(x + dx, y + dy));
-      return double(l.at(x, y)) - box / 9.0;
-    };
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
         if (!flat(x, y)) continue;
-        const double ra = residual(la, x, y), rb = residual(lb, x, y);
+        const double ra = boxResidual(la, x, y), rb = boxResidual(lb, x, y);
         if (!std::isfinite(ra) || !std::isfinite(rb)) continue;
         aa += ra * ra, bb += rb * rb, ab += ra * rb;
       }
