@@ -260,7 +260,7 @@ RunStatistics analyseRun(const json& results, const BootstrapConfig& cfg) {
     for (const MetricDefinition* m : rankedMetrics) {
       std::vector<std::pair<std::string, const MetricTiles*>> methods;
       std::string notFinite;
-      std::vector<std::string> notFiniteLabels;
+      std::vector<std::pair<std::string, std::string>> notFiniteLabels;  // label, why
       bool any = false;
       for (size_t k = 0; k < pairs.size(); ++k) {
         const auto& [label, tiles] = pairs[k];
@@ -272,9 +272,9 @@ RunStatistics analyseRun(const json& results, const BootstrapConfig& cfg) {
         const json& summary =
             documents[k].second->value("summary", json::object()).value(m->name, json::object());
         if (summary.value("nonFinite", 0) > 0) {
-          notFinite += (notFinite.empty() ? "" : "; ") + label + ": " +
-                       summary.value("absent", std::string("not finite"));
-          notFiniteLabels.push_back(label);
+          const std::string why = summary.value("absent", std::string("not finite"));
+          notFinite += (notFinite.empty() ? "" : "; ") + label + ": " + why;
+          notFiniteLabels.push_back({label, why});
           continue;
         }
         methods.push_back({label, it == tiles.end() ? nullptr : &it->second});

@@ -455,10 +455,11 @@ SceneRanking rankScene(const std::string& metric, bool lowerIsBetter,
                        const std::vector<std::pair<std::string, const MetricTiles*>>& methods,
                        const std::string& seedName, const BootstrapConfig& cfg) {
   std::vector<const MetricTiles*> series;
-  std::vector<std::string> labels, excluded;
+  std::vector<std::string> labels;
+  std::vector<std::pair<std::string, std::string>> excluded;  // label, why
   for (const auto& [label, m] : methods) {
     if (!m || m->empty()) {
-      excluded.push_back(label + ": no " + metric + " data");
+      excluded.push_back({label, "no " + metric + " data"});
       continue;
     }
     // A tile sum stored as inf (beyond float's range) or NaN would be skipped by the means below.
@@ -466,8 +467,8 @@ SceneRanking rankScene(const std::string& metric, bool lowerIsBetter,
       return std::all_of(t.sum.begin(), t.sum.end(), [](double v) { return std::isfinite(v); });
     });
     if (!finite) {
-      excluded.push_back(label + ": a " + metric +
-                         " tile sum is not finite (a value beyond float range)");
+      excluded.push_back(
+          {label, "a " + metric + " tile sum is not finite (a value beyond float range)"});
       continue;
     }
     labels.push_back(label);
@@ -476,15 +477,18 @@ SceneRanking rankScene(const std::string& metric, bool lowerIsBetter,
   const std::vector<int> frames = commonFrames(series);
   std::vector<double> means;
   std::vector<std::vector<double>> reps;
-  if (!series.empty() && !frames.empty())
+  if (!series.empty() && !frames.empty()) {
     reps = pairedReplicates(series, frames, seedName, cfg, &means);
-  else
+  } else {
+    for (const std::string& label : labels)
+      excluded.push_back({label, "no frame that every method measured"});
     labels.clear();
+  }
   SceneRanking out = rankReplicates(metric, lowerIsBetter, labels, means, reps, cfg.confidence);
-  for (const std::string& e : excluded) out.excluded += (out.excluded.empty() ? "" : "; ") + e;
-  for (const auto& [label, m] : methods)
-    if (std::find(labels.begin(), labels.end(), label) == labels.end())
-      out.leftOut.push_back(label);
+  out.scene = seedName;
+  for (const auto& [label, why] : excluded)
+    out.excluded += (out.excluded.empty() ? "" : "; ") + label + ": " + why;
+  out.leftOut = std::move(excluded);
   return out;
 }
 
@@ -550,21 +554,40 @@ OverallRanking rankOverall(const std::vector<const SceneRanking*>& scenes,
   std::vector<std::string> labels;
   for (const SceneRanking* s : scenes) {
     for (const RankedMethod& m : s->ranking) labels.push_back(m.label);
-    labels.insert(labels.end(), s->leftOut.begin(), s->leftOut.end());
+    for (const auto& [label, why] : s->leftOut) labels.push_back(label);
   }
   std::sort(labels.begin(), labels.end());
   labels.erase(std::unique(labels.begin(), labels.end()), labels.end());
+  // The first scene that leaves a method out names it, with that scene's reason; how many more
+  // scenes do is counted.
+  auto onScene = [](const SceneRanking& s) {
+    return s.scene.empty() ? std::string("a scene") : s.scene;
+  };
   std::vector<std::string> kept;
   for (const std::string& label : labels) {
     std::string why;
+    int more = 0;
     for (const SceneRanking* s : scenes) {
       auto it = std::find_if(s->ranking.begin(), s->ranking.end(),
                              [&](const RankedMethod& m) { return m.label == label; });
-      if (it == s->ranking.end())
-        why = "not ranked on every scene";
-      else if (!(it->value > 0))
-        why = "value <= 0 on a scene";
+      std::string reason;
+      if (it == s->ranking.end()) {
+        auto left = std::find_if(s->leftOut.begin(), s->leftOut.end(),
+                                 [&](const auto& l) { return l.first == label; });
+        reason = left == s->leftOut.end()
+                     ? "not run on " + onScene(*s)
+                     : "not ranked on " + onScene(*s) + " (" + left->second + ")";
+      } else if (!(it->value > 0)) {
+        reason = "value <= 0 on " + onScene(*s) + " (a geometric mean needs positive values)";
+      }
+      if (reason.empty()) continue;
+      if (why.empty())
+        why = reason;
+      else
+        ++more;
     }
+    if (more > 0)
+      why += " and on " + std::to_string(more) + (more == 1 ? " other scene" : " other scenes");
     if (why.empty())
       kept.push_back(label);
     else

@@ -171,7 +171,9 @@ struct SceneRanking {
   int resolvedPairs = 0;
   std::map<std::string, std::vector<double>> replicates;  // per label, for the overall ranking
   std::string excluded;                                   // methods left out, and why
-  std::vector<std::string> leftOut;  // their labels (in memory: the overall ranking names them too)
+  // Their labels and each one's reason (in memory: the overall ranking names them too).
+  std::vector<std::pair<std::string, std::string>> leftOut;
+  std::string scene;  // the scene ranked (rankScene's seed name), for the overall ranking's reasons
   nlohmann::json toJson() const;
 };
 SceneRanking rankScene(const std::string& metric, bool lowerIsBetter,

@@ -202,7 +202,7 @@ TEST(Bootstrap, OverallRankingNamesWhatItLeavesOut) {
                             std::vector<const SceneRanking*>{&second, &first}}) {
     const OverallRanking o = rankOverall(order, std::vector<std::string>{"temporal"}, true);
     ASSERT_EQ(o.ranking.size(), 2u);
-    EXPECT_EQ(o.excluded, "y: not ranked on every scene");
+    EXPECT_EQ(o.excluded, "y: not run on first");
   }
   SceneRanking alone = rankScene("relMse", true, {{"x", &x1}}, "first");
   const OverallRanking one = rankOverall({&alone}, std::vector<std::string>{"temporal"}, true);
@@ -213,8 +213,21 @@ TEST(Bootstrap, OverallRankingNamesWhatItLeavesOut) {
   const OverallRanking leftOne =
       rankOverall({&first, &onlyX}, std::vector<std::string>{"temporal"}, true);
   EXPECT_TRUE(leftOne.ranking.empty());
-  EXPECT_NE(leftOne.excluded.find("temporal: not ranked on every scene"), std::string::npos);
+  EXPECT_NE(leftOne.excluded.find("temporal: not run on second"), std::string::npos)
+      << leftOne.excluded;
   EXPECT_NE(leftOne.excluded.find("x: the only method"), std::string::npos) << leftOne.excluded;
+  // A method measured nowhere on two scenes: the first scene names it with its reason, the other
+  // is counted; a method whose value is 0 on a scene has no logarithm.
+  const MetricTiles empty, zero = constantSeries(0.0);
+  SceneRanking a = rankScene("relMse", true, {{"x", &x1}, {"t", &t1}, {"e", &empty}}, "first");
+  SceneRanking b = rankScene("relMse", true, {{"x", &x2}, {"t", &t2}, {"e", &empty}}, "second");
+  SceneRanking c = rankScene("relMse", true, {{"x", &zero}, {"t", &t2}}, "third");
+  const OverallRanking reasons = rankOverall({&a, &b, &c}, std::vector<std::string>{"t"}, true);
+  EXPECT_NE(
+      reasons.excluded.find("e: not ranked on first (no relMse data) and on 2 other scenes; "),
+      std::string::npos)
+      << reasons.excluded;
+  EXPECT_NE(reasons.excluded.find("x: value <= 0 on third"), std::string::npos) << reasons.excluded;
 }
 
 TEST(Bootstrap, TileDataSurvivesJson) {
@@ -331,7 +344,9 @@ TEST(Bootstrap, AMethodWithANonFiniteFrameIsLeftOutOfTheRankingNamed) {
             std::string::npos)
       << r.excluded;
   ASSERT_TRUE(st.overall.has_value());
-  EXPECT_NE(st.overall->excluded.find("b: not ranked on every scene"), std::string::npos)
+  EXPECT_NE(st.overall->excluded.find(
+                "b: not ranked on s (1 of 12 frames after the warm-up are not finite"),
+            std::string::npos)
       << st.overall->excluded;
 
   MetricTiles overflowed = constantSeries(0.02);
