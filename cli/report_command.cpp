@@ -66,6 +66,8 @@ void addReportCommand(CLI::App& app) {
     if (s.failedPairs) std::cout << ", " << s.failedPairs << " failed: shown in the report";
     std::cout << ", " << s.images << " images" << (s.imagesInPlace ? ", in place" : "") << ")\n";
     if (!s.ablation.empty()) std::cout << "ablation: " << s.ablation.string() << "\n";
+    if (!s.noAblation.empty()) std::cout << "no ablation: " << s.noAblation << "\n";
+    if (!s.points.empty()) std::cout << "points: " << s.points.string() << "\n";
     for (const std::string& line : s.absentSummaries) std::cout << "absent: " << line << "\n";
   });
 

@@ -206,6 +206,35 @@ void warnOfIdenticalSweepPoints(json& results, const ProgressFn& say) {
   // a pixel): a point named "iterations=5" ran fewer, and the table would compare what it names
   // with what it did not run. Said per point; the identical outputs below say the rest.
   const json grid = results.value("sweep", json::object()).value("grid", json::object());
+  // Any other grid: every point ran the same shortened filter, so the comparison stands, but it
+  // describes the filter as it runs at this resolution, not a 1080p frame's: said once for the
+  // sweep (a researcher ablating sigmaL at 64x36 concluded on a 2-pass svgf unwarned).
+  if (results.contains("sweep") && results["sweep"].is_object()) {
+    results["sweep"].erase("footprintNote");
+    int most = 0;
+    for (const json& p : results["pairs"]) {
+      if (p.value("status", "") != "ok" ||
+          std::find(labels.begin(), labels.end(), p["label"]) == labels.end())
+        continue;
+      const json predicted =
+          p.value("timing", json::object()).value("gpuPredicted", json::object());
+      most = std::max(most, predicted.is_object() ? predicted.value("skippedHere", 0) : 0);
+    }
+    if (most > 0 && !grid.contains("iterations")) {
+      const std::string denoiser = results["sweep"].value("denoiser", "");
+      const std::string note =
+          "at this resolution " + denoiser + "'s scaled footprint skipped up to " +
+          std::to_string(most) +
+          " pass(es) per frame (à-trous steps or mip levels below half a pixel, which a 1080p "
+          "frame runs): every point ran that shortened filter, so the ablation describes " +
+          denoiser +
+          " as it runs here; for the filter a 1080p frame runs, sweep at a larger "
+          "--resolution or with --param " +
+          denoiser + ".footprint=native (docs/statistics.md)";
+      results["sweep"]["footprintNote"] = note;
+      if (say) say("  note: " + note);
+    }
+  }
   if (grid.is_object() && grid.contains("iterations"))
     for (json& p : results["pairs"]) {
       if (p.value("status", "") != "ok" ||

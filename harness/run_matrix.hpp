@@ -85,7 +85,9 @@ void finishRun(nlohmann::json& results, const RunConfig& cfg);
 // A sweep's points whose outputs on a scene are bit-identical (every frame; `outputChecksum`) each
 // get a warning naming the others: the grid's change did nothing there (a filter stage skipped at
 // this resolution, a parameter another one overrides), and their tie is no measurement. Earlier
-// such warnings are replaced (a merge sees every shard's points). Each is also said to `say`.
+// such warnings are replaced (a merge sees every shard's points). Each is also said to `say`. A
+// sweep whose scaled footprint skipped passes at this resolution gets `sweep.footprintNote` (one
+// note; where the grid holds `iterations`, each point skipping passes is warned of instead).
 void warnOfIdenticalSweepPoints(nlohmann::json& results, const ProgressFn& say);
 // "label on scene: error" for every failed pair; of a committed run, or of the document runMatrix
 // returns.

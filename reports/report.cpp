@@ -472,15 +472,9 @@ std::string valueText(const json& v) {
   return v.is_string() ? v.get<std::string>() : v.dump();
 }
 
-// The paired difference a - b of `metric` on `scene` from the run's statistics (relMSE's in the
-// scene's pairs, the other ranked metrics' in byMetric), oriented a - b; null when not there.
-json pairedDifference(const RunResults& results, const std::string& scene, const std::string& metric,
-                      const std::string& a, const std::string& b) {
-  // relMseCorrected's paired difference is relMSE's: the reference's floor, subtracted from both
-  // methods' every frame, cancels in it (as the summary table's firstByMetric has it).
-  const std::string ranked = metric == "relMseCorrected" ? "relMse" : metric;
-  const SceneRanking* ranking =
-      results.statistics ? results.statistics->ranking(scene, ranked) : nullptr;
+// The paired difference a - b in `ranking` (its pairs are stored one way round), oriented a - b;
+// null when the ranking holds no finite one.
+json pairedIn(const SceneRanking* ranking, const std::string& a, const std::string& b) {
   if (!ranking) return nullptr;
   for (const SceneRanking::Pair& d : ranking->pairs) {
     const bool forward = d.a == a && d.b == b;
@@ -496,15 +490,64 @@ json pairedDifference(const RunResults& results, const std::string& scene, const
   return nullptr;
 }
 
+// The paired difference a - b of `metric` on `scene` from the run's statistics (relMSE's in the
+// scene's pairs, the other ranked metrics' in byMetric), oriented a - b; null when not there.
+json pairedDifference(const RunResults& results, const std::string& scene,
+                      const std::string& metric, const std::string& a, const std::string& b) {
+  // relMseCorrected's paired difference is relMSE's: the reference's floor, subtracted from both
+  // methods' every frame, cancels in it (as the summary table's firstByMetric has it).
+  const std::string ranked = metric == "relMseCorrected" ? "relMse" : metric;
+  return pairedIn(results.statistics ? results.statistics->ranking(scene, ranked) : nullptr, a, b);
+}
+
+// The event-window figures the statistics rank on `scene` (metrics/ghosting_intervals), named as
+// results.db names them: "ghosting@<frame>.<figure>", "cut@<frame>.<figure>" (all lower is better).
+std::vector<std::pair<std::string, const SceneRanking*>> eventFigures(const RunResults& results,
+                                                                      const std::string& scene) {
+  std::vector<std::pair<std::string, const SceneRanking*>> out;
+  if (!results.statistics) return out;
+  auto st = results.statistics->scenes.find(scene);
+  if (st == results.statistics->scenes.end()) return out;
+  st->second.forEachEvent([&](const EventStatistics& e, bool cut) {
+    for (const auto& [figure, ranking] : e.byFigure)
+      out.push_back(
+          {std::string(cut ? "cut@" : "ghosting@") + std::to_string(e.eventFrame) + "." + figure,
+           &ranking});
+  });
+  return out;
+}
+
+// A method's value in a ranking, or NaN.
+double rankedValue(const SceneRanking& ranking, const std::string& label) {
+  for (const RankedMethod& m : ranking.ranking)
+    if (m.label == label) return m.value;
+  return kUndefined;
+}
+
+// What several matched paired differences show together: "better" or "worse" when every one is
+// resolved that way, "mixed" when resolved both ways, "partly better" or "partly worse" when some
+// are resolved one way and the rest not, "tie" when none is, "no interval" when some has none.
+std::string ablationVerdict(size_t matches, size_t intervals, size_t better, size_t worse) {
+  if (intervals < matches) return "no interval";
+  if (better == matches) return "better";
+  if (worse == matches) return "worse";
+  if (better > 0 && worse > 0) return "mixed";
+  if (better > 0) return "partly better";
+  if (worse > 0) return "partly worse";
+  return "tie";
+}
+
 // The ablation of a sweep: for each grid parameter and each of its values after the first, the
 // change of every metric against the pair that differs only in that parameter (set to the first
 // value). Per scene, a ranked metric's change is the run's paired difference (statistics: the same
 // frames and tiles, with its interval and whether it is resolved); other metrics' the difference of
-// the means. Over all scenes: the mean of the per-scene changes (no interval). A row's `judged`
-// says per metric what the matched pairs' intervals show together: "better" or "worse" when every
-// match has a paired difference resolved that way, "mixed" when resolved both ways, "tie" when
-// some are unresolved, "no interval" when some match has none (a metric the statistics do not
-// rank): only the first two are a difference the run resolved.
+// the means. The event-window figures the statistics rank (lag, response, ghosting per scripted
+// event and camera cut) are changes too, named as results.db names them ("figures"). Over all
+// scenes: the mean of the per-scene changes (no interval). A row's `judged` says per metric what
+// the matched pairs' intervals show together (ablationVerdict); where a value is matched under
+// several settings of the other parameters on a scene, `byMatch` lists each match ("given" those
+// settings) with its own paired difference: an effect that holds under one setting only (an
+// interaction) shows there.
 json ablationData(const RunResults& results) {
   if (!results.sweep.is_object()) return nullptr;
   const json& sweep = results.sweep;
@@ -527,7 +570,7 @@ json ablationData(const RunResults& results) {
     for (const PairResult& p : results.pairs)
       if (p.denoiser == denoiser && p.ok()) pairs.push_back(&p);
   }
-  std::vector<std::string> metrics;
+  std::vector<std::string> metrics, figures;
   std::map<std::string, bool> lowerIsBetter;
   for (const MetricDefinition* m : metricCatalog()) {
     metrics.push_back(m->name);
@@ -552,6 +595,7 @@ json ablationData(const RunResults& results) {
     for (size_t vi = 1; vi < values.size(); ++vi) {
       std::map<std::string, std::map<std::string, Changes>> changes;  // scope -> metric
       std::map<std::string, std::map<std::string, json>> paired;  // scene -> metric -> difference
+      std::map<std::string, json> byMatch;                        // scene -> its matches
       std::map<std::string, size_t> matched;
       for (const PairResult* p : pairs) {
         if (p->params.value(name, json()) != values[vi]) continue;
@@ -562,6 +606,42 @@ json ablationData(const RunResults& results) {
           const std::string& scene = p->scene;
           ++matched[scene];
           ++matched[""];
+          // The other grid parameters' settings under which the two differ only in this one.
+          std::string given;
+          for (auto other = sweep["grid"].begin(); other != sweep["grid"].end(); ++other)
+            if (other.key() != name)
+              given += (given.empty() ? "" : ",") + other.key() + "=" +
+                       valueText(p->params.value(other.key(), json()));
+          json match = {{"given", given},
+                        {"delta", json::object()},
+                        {"relative", json::object()},
+                        {"paired", json::object()},
+                        {"judged", json::object()}};
+          auto record = [&](const std::string& m, double delta, double b, const json& d,
+                            bool lower) {
+            if (!std::isfinite(delta) || !std::isfinite(b)) return;
+            const double relative = delta / std::max(std::abs(b), 1e-12);
+            match["delta"][m] = delta;
+            match["relative"][m] = relative;
+            const bool resolved = d.is_object() && d["resolved"].get<bool>() && delta != 0;
+            match["judged"][m] = !d.is_object()         ? "no interval"
+                                 : !resolved            ? "tie"
+                                 : (delta < 0) == lower ? "better"
+                                                        : "worse";
+            if (d.is_object()) {
+              paired[scene][m] = d;
+              match["paired"][m] = d;
+            }
+            for (const std::string& scope : {scene, std::string()}) {
+              Changes& c = changes[scope][m];
+              c.delta.push_back(delta);
+              c.relative.push_back(relative);
+              if (!d.is_object()) continue;
+              ++c.intervals;
+              if (d["resolved"].get<bool>() && delta != 0)
+                ++((delta < 0) == lower ? c.better : c.worse);
+            }
+          };
           for (const std::string& m : metrics) {
             if (!p->summary.count(m) || !q->summary.count(m)) continue;
             // Time as the rest of the report reads it, the median frame time: the mean follows a
@@ -572,18 +652,16 @@ json ablationData(const RunResults& results) {
             const double delta = time            ? timingOf(*p, "msMedian") - b
                                  : d.is_object() ? d["diff"].get<double>()
                                                  : p->summary.at(m).mean - b;
-            if (!std::isfinite(delta) || !std::isfinite(b)) continue;
-            if (d.is_object()) paired[scene][m] = d;
-            for (const std::string& scope : {scene, std::string()}) {
-              Changes& c = changes[scope][m];
-              c.delta.push_back(delta);
-              c.relative.push_back(delta / std::max(std::abs(b), 1e-12));
-              if (!d.is_object()) continue;
-              ++c.intervals;
-              if (d["resolved"].get<bool>() && delta != 0)
-                ++((delta < 0) == lowerIsBetter[m] ? c.better : c.worse);
-            }
+            record(m, delta, b, d, lowerIsBetter[m]);
           }
+          for (const auto& [figure, ranking] : eventFigures(results, scene)) {
+            const json d = pairedIn(ranking, p->label, q->label);
+            if (!d.is_object()) continue;  // a method the event's ranking leaves out (named there)
+            if (std::find(figures.begin(), figures.end(), figure) == figures.end())
+              figures.push_back(figure);
+            record(figure, d["diff"].get<double>(), rankedValue(*ranking, q->label), d, true);
+          }
+          byMatch[scene].push_back(std::move(match));
           break;
         }
       }
@@ -595,12 +673,7 @@ json ablationData(const RunResults& results) {
           const size_t n = c.delta.size();
           d[m] = std::accumulate(c.delta.begin(), c.delta.end(), 0.0) / double(n);
           r[m] = std::accumulate(c.relative.begin(), c.relative.end(), 0.0) / double(n);
-          const std::string verdict = c.intervals < n               ? "no interval"
-                                      : c.better == n               ? "better"
-                                      : c.worse == n                ? "worse"
-                                      : c.better > 0 && c.worse > 0 ? "mixed"
-                                                                    : "tie";
-          verdicts[m] = {{"verdict", verdict},
+          verdicts[m] = {{"verdict", ablationVerdict(n, c.intervals, c.better, c.worse)},
                          {"matches", n},
                          {"intervals", c.intervals},
                          {"resolved", c.better + c.worse}};
@@ -613,15 +686,23 @@ json ablationData(const RunResults& results) {
                     {"delta", d},
                     {"relative", r},
                     {"judged", verdicts}};
-        if (!scope.empty() && matched[scope] == 1 && paired.count(scope)) row["paired"] = paired[scope];
+        if (!scope.empty() && matched[scope] == 1) {
+          row["given"] = byMatch[scope][0]["given"];  // one match: the row is that match
+          if (paired.count(scope)) row["paired"] = paired[scope];
+        }
+        if (!scope.empty() && matched[scope] > 1) row["byMatch"] = byMatch[scope];
         rows.push_back(row);
       }
     }
   }
-  return {{"denoiser", denoiser},
-          {"grid", sweep["grid"]},
-          {"fixed", sweep.value("fixed", json::object())},
-          {"rows", rows}};
+  json out = {{"denoiser", denoiser},
+              {"grid", sweep["grid"]},
+              {"fixed", sweep.value("fixed", json::object())},
+              {"figures", figures},
+              {"rows", rows}};
+  if (sweep.contains("footprintNote") && sweep["footprintNote"].is_string())
+    out["footprintNote"] = sweep["footprintNote"];
+  return out;
 }
 
 // The frame number of a kept image named <prefix>_NNNN.png, or -1.
@@ -760,26 +841,47 @@ json pairData(const PairResult& pair) {
   return p;
 }
 
+// A CSV field (RFC 4180): quoted where it must be.
+std::string csvField(const std::string& text) {
+  if (text.find_first_of(",\"\n\r") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return quoted + "\"";
+}
+
+// A number as CSV writes it: every digit a double holds; empty where it is not finite.
+std::string csvNumber(double v) {
+  if (!std::isfinite(v)) return std::string();
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return std::string(buf);
+}
+
 }  // namespace
 
 std::string ablationCsv(const json& ablation) {
   if (!ablation.is_object() || !ablation.contains("rows") || ablation["rows"].empty()) return "";
-  const auto field = [](const std::string& text) {  // RFC 4180: quoted where it must be
-    if (text.find_first_of(",\"\n\r") == std::string::npos) return text;
-    std::string quoted = "\"";
-    for (char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
-    return quoted + "\"";
-  };
   const auto number = [](const json& v) {
-    if (!v.is_number()) return std::string();
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%.17g", v.get<double>());
-    return std::string(buf);
+    return v.is_number() ? csvNumber(v.get<double>()) : std::string();
   };
   std::string csv =
-      "parameter,value,versus,scene,matched,metric,delta,relative,verdict,matches,intervals,"
-      "resolved,"
-      "ci95Lo,ci95Hi\n";
+      "parameter,value,versus,given,scene,matched,metric,delta,relative,verdict,matches,intervals,"
+      "resolved,ci95Lo,ci95Hi\n";
+  // One line: a row's (given empty) or one of its matches' (matched 1, its own paired difference).
+  auto line = [&](const json& row, const std::string& given, const std::string& scene,
+                  const json& matched, const std::string& m, const json& delta,
+                  const json& relative, const std::string& verdict, const json& matches,
+                  const json& intervals, const json& resolved, const json& ci) {
+    csv +=
+        csvField(row["parameter"].get<std::string>()) + "," +
+        csvField(row["value"].get<std::string>()) + "," +
+        csvField(row["versus"].get<std::string>()) + "," + csvField(given) + "," + csvField(scene) +
+        "," + number(matched) + "," + csvField(m) + "," + number(delta) + "," + number(relative) +
+        "," + csvField(verdict) + "," + number(matches) + "," + number(intervals) + "," +
+        number(resolved) + "," +
+        (ci.is_array() && ci.size() == 2 ? number(ci[0]) + "," + number(ci[1]) : std::string(",")) +
+        "\n";
+  };
   for (const json& row : ablation["rows"]) {
     const std::string scene =
         row["scene"].is_string() ? row["scene"].get<std::string>() : "all scenes";
@@ -788,19 +890,83 @@ std::string ablationCsv(const json& ablation) {
       const json judged = row["judged"].value(m, json::object());
       const json ci =
           row.value("paired", json::object()).value(m, json::object()).value("ci95", json());
-      csv += field(row["parameter"].get<std::string>()) + "," +
-             field(row["value"].get<std::string>()) + "," +
-             field(row["versus"].get<std::string>()) + "," + field(scene) + "," +
-             number(row["matched"]) + "," + field(m) + "," + number(d.value()) + "," +
-             number(row["relative"].value(m, json())) + "," + field(judged.value("verdict", "")) +
-             "," + number(judged.value("matches", json())) + "," +
-             number(judged.value("intervals", json())) + "," +
-             number(judged.value("resolved", json())) + "," +
-             (ci.is_array() && ci.size() == 2 ? number(ci[0]) + "," + number(ci[1])
-                                              : std::string(",")) +
-             "\n";
+      line(row, row.value("given", ""), scene, row["matched"], m, d.value(),
+           row["relative"].value(m, json()), judged.value("verdict", ""),
+           judged.value("matches", json()), judged.value("intervals", json()),
+           judged.value("resolved", json()), ci);
+      for (const json& match : row.value("byMatch", json::array())) {
+        if (!match["delta"].contains(m)) continue;
+        const json paired = match["paired"].value(m, json());
+        const std::string verdict = match["judged"].value(m, "");
+        line(row, match["given"].get<std::string>(), scene, 1, m, match["delta"][m],
+             match["relative"].value(m, json()), verdict, 1, paired.is_object() ? 1 : 0,
+             verdict == "better" || verdict == "worse" ? 1 : 0,
+             paired.is_object() ? paired.value("ci95", json()) : json());
+      }
     }
   }
+  return csv;
+}
+
+std::string sweepPointsCsv(const RunResults& results) {
+  if (!results.sweep.is_object()) return "";
+  const json& sweep = results.sweep;
+  const json grid = sweep.value("grid", json::object()),
+             fixed = sweep.value("fixed", json::object());
+  const auto number = csvNumber;
+  // The grid's points first, in the grid's order, then every other contender in run order.
+  std::vector<std::string> labels;
+  for (const json& label : sweep.value("labels", json::array()))
+    if (label.is_string()) labels.push_back(label);
+  for (const PairResult& p : results.pairs)  // (a label may hold several pairs: one per scene)
+    if (std::find(labels.begin(), labels.end(), p.label) == labels.end()) labels.push_back(p.label);
+  std::string csv = "label,point";
+  for (auto g = grid.begin(); g != grid.end(); ++g) csv += "," + csvField(g.key());
+  for (auto f = fixed.begin(); f != fixed.end(); ++f) csv += "," + csvField(f.key());
+  csv += ",scene,metric,mean,ci95Lo,ci95Hi,rank,frames\n";
+  // A sweep recorded without its labels (an older run): the swept denoiser's pairs are its points.
+  const json points = sweep.value("labels", json());
+  for (const std::string& label : labels)
+    for (const PairResult& p : results.pairs) {
+      if (p.label != label || !p.ok()) continue;
+      const bool point = points.is_array()
+                             ? std::find(points.begin(), points.end(), json(label)) != points.end()
+                             : p.denoiser == sweep.value("denoiser", "");
+      std::string head = csvField(label) + "," + (point ? "true" : "false");
+      for (auto g = grid.begin(); g != grid.end(); ++g)
+        head += "," +
+                (point && p.params.contains(g.key()) ? csvField(valueText(p.params[g.key()])) : "");
+      for (auto f = fixed.begin(); f != fixed.end(); ++f)
+        head += "," + (point ? csvField(valueText(f.value())) : "");
+      head += "," + csvField(p.scene) + ",";
+      auto line = [&](const std::string& metric, double mean, Interval ci, int rank, int frames) {
+        csv += head + csvField(metric) + "," + number(mean) + "," +
+               (ci.valid() ? number(ci.lo) + "," + number(ci.hi) : std::string(",")) + "," +
+               (rank > 0 ? std::to_string(rank) : "") + "," +
+               (frames > 0 ? std::to_string(frames) : "") + "\n";
+      };
+      auto ranked = [&](const SceneRanking* r) -> const RankedMethod* {
+        if (!r) return nullptr;
+        for (const RankedMethod& m : r->ranking)
+          if (m.label == label) return &m;
+        return nullptr;
+      };
+      for (const MetricDefinition* m : metricCatalog()) {
+        auto s = p.summary.find(m->name);
+        if (s == p.summary.end()) continue;
+        if (m->name == "ms") {
+          line("ms (median)", timingOf(p, "msMedian"), {}, 0, s->second.frames);
+          continue;
+        }
+        if (!s->second.present()) continue;  // its reason is in results.json and the report
+        const RankedMethod* r =
+            ranked(results.statistics ? results.statistics->ranking(p.scene, m->name) : nullptr);
+        line(m->name, r ? r->value : s->second.mean, r ? r->ci : s->second.ci95, r ? r->rank : 0,
+             s->second.frames);
+      }
+      for (const auto& [figure, ranking] : eventFigures(results, p.scene))
+        if (const RankedMethod* r = ranked(ranking)) line(figure, r->value, r->ci, r->rank, 0);
+    }
   return csv;
 }
 
@@ -1183,8 +1349,24 @@ ReportSummary writeReport(const ReportOptions& o) {
   if (const std::string csv = ablationCsv(data["ablation"]); !csv.empty()) {
     writeTextAtomically(o.out / "ablation.csv", csv);
     summary.ablation = o.out / "ablation.csv";
-  } else
+  } else {
     fs::remove(o.out / "ablation.csv", ec);
+    if (results.sweep.is_object()) {
+      bool twoValues = false;
+      for (const json& values : results.sweep.value("grid", json::object()))
+        twoValues = twoValues || (values.is_array() && values.size() > 1);
+      summary.noAblation =
+          twoValues ? "no grid value could be compared with its parameter's first value on any "
+                      "scene (the pairs that would match failed or are missing)"
+                    : "no grid parameter has two values (a one-point grid compares nothing; the "
+                      "run's rankings still compare it with the other contenders)";
+    }
+  }
+  if (const std::string csv = sweepPointsCsv(results); !csv.empty()) {
+    writeTextAtomically(o.out / "points.csv", csv);
+    summary.points = o.out / "points.csv";
+  } else
+    fs::remove(o.out / "points.csv", ec);
   // Written last and atomically: a page whose data.js exists is complete.
   writeTextAtomically(o.out / "data.js",
                       "// Generated by `arena report`; read by app.js.\nwindow.ARENA_DATA = " +

@@ -49,6 +49,8 @@ struct ReportSummary {
   // the page shows them as empty cells.
   std::vector<std::string> absentSummaries;
   std::filesystem::path ablation;  // <out>/ablation.csv for a sweep (ablationCsv), else empty
+  std::filesystem::path points;    // <out>/points.csv for a sweep (sweepPointsCsv), else empty
+  std::string noAblation;          // a sweep without ablation rows: why (the printout says it)
 };
 
 // The document embedded as data.js. `runDir` is where the run's images are looked up (only images
@@ -58,10 +60,21 @@ nlohmann::json reportData(const RunResults& results, const std::filesystem::path
                           const RunResults* baseline, const RegressionGate& gate = {});
 
 // A sweep's ablation (reportData's "ablation") as CSV, one line per row and metric, for a paper's
-// table or a plot: parameter, value, versus, scene ("all scenes" for the mean over them), matched,
-// metric, delta, relative, verdict, matches, intervals, resolved, and the paired 95% interval
-// (ci95Lo, ci95Hi) where one match carries it; empty when the run is no sweep or has no rows.
+// table: parameter, value, versus, given (the other grid parameters' settings where the row is one
+// match), scene ("all scenes" for the mean over them), matched, metric, delta, relative, verdict,
+// matches, intervals, resolved, and the paired 95% interval (ci95Lo, ci95Hi) where one match
+// carries it; a row over several matches is followed by a line per match (given its settings,
+// with its own paired difference). Empty when the run is no sweep or has no rows.
 std::string ablationCsv(const nlohmann::json& ablation);
+
+// A sweep's points themselves, for a plot of a metric against a parameter: one line per contender
+// (the grid's points, then the run's other contenders, e.g. the baselines), scene and metric, with
+// a column per grid parameter (empty for a contender that is no grid point) and per fixed
+// parameter, the mean, its 95% interval and rank from the run's statistics where the metric is
+// ranked (else the summary's own interval and no rank), and the frames summarised. The event
+// figures the statistics rank are metrics named as results.db names them ("ghosting@12.lagEnergy").
+// Time is the median frame time. Empty when the run is no sweep.
+std::string sweepPointsCsv(const RunResults& results);
 
 // Loads the run (and baseline) through loadResults, so a missing run or another schema version is
 // an arena::Error; a missing charting library is an Error that says to run scripts/setup.sh.

@@ -178,9 +178,31 @@ TEST(Report, GeneratorWritesEverySectionAndKeepsTheFailedPair) {
   EXPECT_FALSE(s.imagesInPlace);
   // The fixture is a sweep: its ablation is written beside the page as CSV too.
   EXPECT_EQ(s.ablation, o.out / "ablation.csv");
-  EXPECT_EQ(
-      readText(o.out / "ablation.csv").rfind("parameter,value,versus,scene,matched,metric,", 0),
-      0u);
+  EXPECT_EQ(readText(o.out / "ablation.csv")
+                .rfind("parameter,value,versus,given,scene,matched,metric,", 0),
+            0u);
+  EXPECT_EQ(s.points, o.out / "points.csv");
+  EXPECT_EQ(readText(o.out / "points.csv").rfind("label,point,a,b,scene,metric,", 0), 0u);
+  EXPECT_TRUE(s.noAblation.empty());
+  // A one-point grid compares nothing: no ablation, said why (the report of a two-value grid
+  // before it, in the same folder, leaves no ablation.csv behind).
+  {
+    json one = fixtureRun();
+    one["sweep"]["grid"] = {{"a", {"0"}}};
+    one["sweep"]["labels"] = {"svgf[a=0]"};
+    json kept = json::array();
+    for (const json& pair : one["pairs"])
+      if (pair["label"] == "svgf[a=0]" || pair["label"] == "passthrough") kept.push_back(pair);
+    one["pairs"] = kept;
+    ReportOptions p = o;
+    p.run = writeFixtureRun("report_fixture_one_point", one);
+    const ReportSummary q = writeReport(p);
+    EXPECT_TRUE(q.ablation.empty());
+    EXPECT_FALSE(fs::exists(o.out / "ablation.csv"));
+    EXPECT_NE(q.noAblation.find("no grid parameter has two values"), std::string::npos)
+        << q.noAblation;
+  }
+  s = writeReport(o);
   for (const char* f :
        {"index.html", "data.js", "app.js", "style.css", "vega.min.js", "vega-lite.min.js",
         "vega-embed.min.js", "images/static/svgf[a=0]/flip_0002.png",
@@ -421,12 +443,12 @@ TEST(Report, AblationDeltasAreTheRunsPairedDifferences) {
   EXPECT_EQ(seen, 2);
   // The same rows as CSV, one line per metric, the paired interval where one match has it.
   const std::string csv = ablationCsv(data["ablation"]);
-  EXPECT_EQ(csv.rfind("parameter,value,versus,scene,matched,metric,delta,relative,verdict,matches,"
-                      "intervals,resolved,ci95Lo,ci95Hi\n",
+  EXPECT_EQ(csv.rfind("parameter,value,versus,given,scene,matched,metric,delta,relative,verdict,"
+                      "matches,intervals,resolved,ci95Lo,ci95Hi\n",
                       0),
             0u)
       << csv;
-  EXPECT_NE(csv.find("\na,1,0,static,1,relMse,-0.0123"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\na,1,0,b=true,static,1,relMse,-0.0123"), std::string::npos) << csv;
   EXPECT_NE(csv.find(",better,1,1,1,-0.02,-0.0040000000000000001\n"), std::string::npos) << csv;
   EXPECT_EQ(ablationCsv(nullptr), "");
 }
@@ -492,8 +514,27 @@ TEST(Report, AblationJudgesEveryMatchedIntervalTogether) {
   };
   json row = judgedA(pairOf(0.01, -0.001, 0.02, false), "static");
   EXPECT_EQ(row["matched"], 2);
-  EXPECT_EQ(row["judged"]["relMse"],
-            (json{{"verdict", "tie"}, {"matches", 2}, {"intervals", 2}, {"resolved", 1}}));
+  // Resolved at b=true, not at b=false: an effect under one setting only, not a tie.
+  EXPECT_EQ(
+      row["judged"]["relMse"],
+      (json{{"verdict", "partly better"}, {"matches", 2}, {"intervals", 2}, {"resolved", 1}}));
+  // Each match with its own paired difference, named by the other parameters' settings.
+  ASSERT_EQ(row["byMatch"].size(), 2u) << row.dump();
+  EXPECT_EQ(row["byMatch"][0]["given"], "b=true");
+  EXPECT_EQ(row["byMatch"][0]["judged"]["relMse"], "better");
+  EXPECT_EQ(row["byMatch"][0]["paired"]["relMse"]["ci95"], json({-0.02, -0.004}));
+  EXPECT_EQ(row["byMatch"][1]["given"], "b=false");
+  EXPECT_EQ(row["byMatch"][1]["judged"]["relMse"], "tie");
+  EXPECT_EQ(row["byMatch"][1]["judged"]["ssim"], "no interval");
+  // ... and in the CSV, a line per match under the row's line.
+  json ablation = {{"rows", json::array({row})}};
+  const std::string csv = ablationCsv(ablation);
+  EXPECT_NE(csv.find("\na,1,0,,static,2,relMse,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find(",partly better,2,2,1,,\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\na,1,0,b=true,static,1,relMse,-0.0123"), std::string::npos) << csv;
+  EXPECT_NE(csv.find(",better,1,1,1,-0.02,-0.0040000000000000001\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\na,1,0,b=false,static,1,relMse,-0.01"), std::string::npos) << csv;
+  EXPECT_NE(csv.find(",tie,1,1,0,-0.02,0.001\n"), std::string::npos) << csv;
   EXPECT_EQ(row["judged"]["ssim"]["verdict"],
             "no interval");  // the statistics rank only relMSE here
   EXPECT_FALSE(row.contains("paired")) << "one interval per match: no single interval for the row";
@@ -502,6 +543,94 @@ TEST(Report, AblationJudgesEveryMatchedIntervalTogether) {
   row = judgedA(pairOf(-0.01, -0.02, -0.001, true), "static");  // a=1 resolved worse at b=false
   EXPECT_EQ(row["judged"]["relMse"],
             (json{{"verdict", "mixed"}, {"matches", 2}, {"intervals", 2}, {"resolved", 2}}));
+}
+
+// An ablation of an anti-lag term is about lag: the event figures the statistics rank (per
+// scripted event and camera cut) are changes of the row too, named as results.db names them,
+// with their paired intervals.
+TEST(Report, AblationCarriesTheEventFiguresPairedDifferences) {
+  json run = fixtureRun();
+  const json ranking = json::parse(R"({"metric": "lagEnergy",
+    "ranking": [{"label": "svgf[a=1]", "rank": 1, "mean": 0.5, "ci95": [0.4, 0.6], "tiedWith": []},
+                {"label": "svgf[a=0]", "rank": 2, "mean": 2.0, "ci95": [1.5, 2.5], "tiedWith": []}],
+    "pairs": [{"a": "svgf[a=0]", "b": "svgf[a=1]", "diff": 1.5, "ci95": [1.0, 2.0], "resolved": true}],
+    "resolvedPairs": 1, "totalPairs": 1})");
+  run["statistics"] = test::statisticsBlock(
+      {{"scenes",
+        {{"static",
+          {{"metric", "relMse"},
+           {"ranking", json::array()},
+           {"pairs", json::array()},
+           {"resolvedPairs", 0},
+           {"totalPairs", 0},
+           {"byMetric", json::object()},
+           {"events", json::array({{{"eventFrame", 12},
+                                    {"kind", "light_switch"},
+                                    {"what", "lamp"},
+                                    {"byFigure", {{"lagEnergy", ranking}}}}})}}}}}});
+  const json data = reportData(test::typed(run), test::freshDir("report_ablation_events"), nullptr);
+  EXPECT_EQ(data["ablation"]["figures"], json({"ghosting@12.lagEnergy"}));
+  int seen = 0;
+  for (const json& r : data["ablation"]["rows"]) {
+    if (r["parameter"] != "a") continue;
+    ++seen;
+    EXPECT_DOUBLE_EQ(r["delta"]["ghosting@12.lagEnergy"].get<double>(), -1.5);  // a=1 - a=0
+    EXPECT_DOUBLE_EQ(r["relative"]["ghosting@12.lagEnergy"].get<double>(), -0.75);
+    EXPECT_EQ(r["judged"]["ghosting@12.lagEnergy"]["verdict"], "better");
+    EXPECT_EQ(r["paired"]["ghosting@12.lagEnergy"]["ci95"], json({-2.0, -1.0}));
+  }
+  EXPECT_EQ(seen, 1);
+  EXPECT_NE(
+      ablationCsv(data["ablation"])
+          .find("\na,1,0,b=true,static,1,ghosting@12.lagEnergy,-1.5,-0.75,better,1,1,1,-2,-1\n"),
+      std::string::npos)
+      << ablationCsv(data["ablation"]);
+  // The points themselves, for a plot: the event figure's value, interval and rank per point.
+  const std::string points = sweepPointsCsv(test::typed(run));
+  EXPECT_NE(
+      points.find("\nsvgf[a=1],true,1,true,static,ghosting@12.lagEnergy,0.5,0.40000000000000002,"
+                  "0.59999999999999998,1,\n"),
+      std::string::npos)
+      << points;
+}
+
+// A sweep's points as CSV: the grid's points first in the grid's order, a column per grid and
+// fixed parameter (empty for a contender that is no point), the statistics' interval and rank
+// where the metric is ranked, the summary's own interval where not, the median time.
+TEST(Report, SweepPointsAreOneLinePerContenderSceneAndMetric) {
+  json run = fixtureRun();
+  run["sweep"]["labels"] = {"svgf[a=0]", "svgf[a=1]", "svgf[a=1,b=false]"};
+  run["sweep"]["fixed"] = {{"sigmaL", "8"}};
+  for (json& p : run["pairs"])
+    if (p["label"] == "svgf[a=1]") p["summary"]["ssim"]["ci95"] = {0.85, 0.95};
+  run["statistics"] =
+      test::statisticsBlock(json::parse(R"({"scenes": {"static": {"metric": "relMse",
+    "ranking": [{"label": "svgf[a=1]", "rank": 1, "mean": 0.04, "ci95": [0.03, 0.05], "tiedWith": []},
+                {"label": "svgf[a=0]", "rank": 2, "mean": 0.05, "ci95": [0.045, 0.055], "tiedWith": []}],
+    "pairs": [], "resolvedPairs": 0, "totalPairs": 0, "byMetric": {}}}})"));
+  const std::string csv = sweepPointsCsv(test::typed(run));
+  EXPECT_EQ(csv.rfind("label,point,a,b,sigmaL,scene,metric,mean,ci95Lo,ci95Hi,rank,frames\n", 0),
+            0u)
+      << csv;
+  EXPECT_LT(csv.find("\nsvgf[a=0],true,0,true,8,static,relMse,0.050000000000000003,"
+                     "0.044999999999999998,0.055,2,4\n"),
+            csv.find("\nsvgf[a=1],true,1,true,8,static,relMse,0.040000000000000001,"
+                     "0.029999999999999999,0.050000000000000003,1,4\n"))
+      << csv;
+  EXPECT_NE(csv.find("\nsvgf[a=1],true,1,true,8,static,relMse,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\nsvgf[a=1],true,1,true,8,static,ssim,0.90000000000000002,"
+                     "0.84999999999999998,0.94999999999999996,,4\n"),
+            std::string::npos)
+      << csv;
+  EXPECT_NE(csv.find("\nsvgf[a=1],true,1,true,8,static,ms (median),5,,,,4\n"), std::string::npos)
+      << csv;
+  EXPECT_NE(csv.find("\npassthrough,false,,,,static,relMse,0.5,,,,4\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\npassthrough,false,,,,switch,relMse,0.59999999999999998,,,,4\n"),
+            std::string::npos)
+      << csv;
+  EXPECT_EQ(csv.find("svgf[a=0],true,0,true,8,switch,"), std::string::npos) << "it failed there";
+  run.erase("sweep");
+  EXPECT_EQ(sweepPointsCsv(test::typed(run)), "");
 }
 
 // The summary table's "best" of a column is what the statistics rank first, ties included: per

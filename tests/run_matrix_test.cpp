@@ -183,6 +183,7 @@ TEST(Sweep, PointsWithIdenticalOutputsAreWarnedOf) {
             std::string::npos)
       << skipped(run, "svgf[iterations=5,sigmaL=2]")[0];
   EXPECT_TRUE(skipped(run, "svgf[iterations=1,sigmaL=2]").empty());
+  EXPECT_FALSE(run["sweep"].contains("footprintNote")) << "said per point instead";
   // Shards 0/2 and 1/2 each hold one identical couple; the merge warns of each once.
   std::vector<fs::path> shards;
   for (int i = 0; i < 2; ++i) {
@@ -197,6 +198,38 @@ TEST(Sweep, PointsWithIdenticalOutputsAreWarnedOf) {
                             "svgf[iterations=1,sigmaL=8]", "svgf[iterations=5,sigmaL=8]"})
     EXPECT_EQ(identicalTo(merged, label).size(), 1u) << label;
   EXPECT_EQ(skipped(merged, "svgf[iterations=5,sigmaL=8]").size(), 1u);  // once, after the merge
+}
+
+// A grid without iterations: every point ran the same shortened filter (at 24 lines svgf's
+// scaled footprint skips four of its five à-trous steps), so the sweep says once that it
+// describes the filter as it runs here; at footprint=native nothing is skipped and nothing said.
+TEST(Sweep, AShortenedFilterIsSaidOnceForTheSweep) {
+  for (const bool native : {false, true}) {
+    RunConfig c = sweepRun(tinyRun(native ? "sweep_native" : "sweep_scaled", {}), "svgf",
+                           native ? std::map<std::string, std::string>{{"footprint", "native"}}
+                                  : std::map<std::string, std::string>{},
+                           {"sigmaL=[2,8]"});
+    c.scenes.resize(1);
+    c.baselines = false;
+    c.keepFrames = "none";
+    std::vector<std::string> said;
+    c.progress = [&](const std::string& line) { said.push_back(line); };
+    const json run = runMatrix(c);
+    if (native) {
+      EXPECT_FALSE(run["sweep"].contains("footprintNote")) << run["sweep"].dump();
+      continue;
+    }
+    ASSERT_TRUE(run["sweep"].contains("footprintNote")) << run["sweep"].dump();
+    const std::string note = run["sweep"]["footprintNote"];
+    EXPECT_NE(note.find("svgf's scaled footprint skipped up to 8 pass(es) per frame"),
+              std::string::npos)
+        << note;
+    EXPECT_NE(note.find("--param svgf.footprint=native"), std::string::npos) << note;
+    EXPECT_EQ(std::count(said.begin(), said.end(), "  note: " + note), 1);
+    for (const json& p : run["pairs"])  // not per point: the grid does not name passes
+      for (const json& w : p["warnings"])
+        EXPECT_EQ(w.get<std::string>().find("scaled footprint skipped"), std::string::npos) << w;
+  }
 }
 
 TEST(RunMatrix, TwoScenesThreeDenoisersWithEveryMetric) {

@@ -338,38 +338,55 @@
         el('h3', {text: `Ablation of ${AB.denoiser} (sweep)`}), el('p', {
           class: 'note',
           text:
-              'Every row, every scene and every metric is also in ablation.csv beside this page. Δ = metric with the value − metric with the first value, other grid parameters held equal; relative change in brackets (where several differences are matched, the mean of their relative changes, which can differ in sign from the mean Δ: over all scenes Δ is weighted by each scene\'s scale, the bracket is not); time is the median frame time, as everywhere on this page, measured under this machine\'s load (no interval: a difference in time between values that cannot change the work is load). Per scene, a ranked metric\'s Δ is the run\'s paired difference with its 95% interval; where several settings of the other parameters match, and over all scenes, Δ is the mean and the count says how many of the matched paired differences are resolved. Green or red only when every matched difference is resolved that way ("tie": some are not; "mixed": resolved both ways; no colour: a metric without paired intervals).'
+              'Every row, every scene and every metric is also in ablation.csv beside this page. Δ = metric with the value − metric with the first value, other grid parameters held equal; relative change in brackets (where several differences are matched, the mean of their relative changes, which can differ in sign from the mean Δ: over all scenes Δ is weighted by each scene\'s scale, the bracket is not); time is the median frame time, as everywhere on this page, measured under this machine\'s load (no interval: a difference in time between values that cannot change the work is load). Per scene, a ranked metric\'s Δ is the run\'s paired difference with its 95% interval; where several settings of the other parameters match, and over all scenes, Δ is the mean and the count says how many of the matched paired differences are resolved, and each match follows on its own line ("given" the other parameters\' settings) with its paired interval: an effect under one setting only shows there. Green or red only when every matched difference is resolved that way ("partly worse" or "partly better": resolved under some settings, not under the others; "tie": under none; "mixed": resolved both ways; no colour: a metric without paired intervals). Columns named ghosting@frame.figure or cut@frame.figure are the event windows\' figures (lag, response, ghosting; lower is better), paired as the metrics are.'
         }));
+    if (AB.footprintNote) box.append(el('p', { class: 'note footprint-note', text: AB.footprintNote }));
     if (!rows.length) {
       box.append(el('p', { class: 'empty', text: 'No grid parameter has two values with matching pairs.' }));
       return;
     }
-    const metrics = A.D.metrics.filter((m) => rows.some((r) => r.delta[m.name] !== undefined));
+    const names = A.D.metrics.map((m) => m.name).concat(AB.figures || [])
+        .filter((name) => rows.some((r) => r.delta[name] !== undefined));
+    const classOf = { better: 'better', worse: 'worse', tie: 'tie', mixed: 'tie', 'partly better': 'tie', 'partly worse': 'tie' };
+    const pairedCell = (d, relative, p, verdict) => el('td', {
+      class: classOf[verdict] || null,
+      'data-paired': 'true',
+      'data-verdict': verdict,
+      text: `${fmt(d)} (${pct(relative)}) ${A.interval(p.ci95)}${p.resolved ? '' : ' tie'}`
+    });
+    const cells = (r) => names.map((name) => {
+      const d = r.delta[name];
+      if (d === undefined) return el('td', { text: '–' });
+      const j = r.judged[name];
+      const p = r.paired && r.paired[name];
+      if (p && j.matches === 1) return pairedCell(d, r.relative[name], p, j.verdict);
+      const said = j.verdict === 'no interval' ?
+          ' no interval' :
+          ` ${j.resolved}/${j.matches} resolved${['mixed', 'partly better', 'partly worse'].includes(j.verdict) ? ', ' + j.verdict : ''}`;
+      return el('td', {class: classOf[j.verdict] || null, 'data-verdict': j.verdict, text: `${fmt(d)} (${pct(r.relative[name])})` + said});
+    });
+    const matchCells = (m) => names.map((name) => {
+      const d = m.delta[name];
+      if (d === undefined) return el('td', { text: '–' });
+      const p = m.paired[name];
+      if (p) return pairedCell(d, m.relative[name], p, m.judged[name]);
+      return el('td', { 'data-verdict': m.judged[name], text: `${fmt(d)} (${pct(m.relative[name])}) no interval` });
+    });
+    const body = [];
+    for (const r of rows) {
+      body.push(el('tr', {},
+        el('td', { class: 'first', text: r.parameter }),
+        el('td', { text: `${r.value} vs ${r.versus}` + (r.given ? ` given ${r.given}` : '') }),
+        el('td', { text: r.scene === null ? 'all scenes' : r.scene }), el('td', { text: r.matched }),
+        cells(r)));
+      for (const m of r.byMatch || [])
+        body.push(el('tr', { class: 'match' },
+          el('td', { class: 'first', text: '' }), el('td', { text: `given ${m.given}` }),
+          el('td', { text: r.scene }), el('td', { text: '1' }), matchCells(m)));
+    }
     box.append(el('div', { class: 'table-wrap' }, el('table', { class: 'data ablation-table' },
       el('thead', {}, el('tr', {}, el('th', { class: 'first', text: 'parameter' }), el('th', { text: 'value vs first' }),
-        el('th', { text: 'scene' }), el('th', { text: 'pairs' }), metrics.map((m) => el('th', { text: m.name === 'ms' ? 'Δ ms (median)' : `Δ ${m.name}` })))),
-      el('tbody', {}, rows.map((r) => el('tr', {},
-        el('td', { class: 'first', text: r.parameter }), el('td', { text: `${r.value} vs ${r.versus}` }),
-        el('td', { text: r.scene === null ? 'all scenes' : r.scene }), el('td', { text: r.matched }),
-        metrics.map((m) => {
-          const d = r.delta[m.name];
-          if (d === undefined) return el('td', { text: '–' });
-          const j = r.judged[m.name];
-          const cls = {better: 'better', worse: 'worse', tie: 'tie', mixed: 'tie'}[j.verdict] ||
-              null;
-          const p = r.paired && r.paired[m.name];
-          const change = `${fmt(d)} (${pct(r.relative[m.name])})`;
-          if (p && j.matches === 1)
-            return el('td', {
-              class: cls,
-              'data-paired': 'true',
-              'data-verdict': j.verdict,
-              text: `${change} ${A.interval(p.ci95)}${p.resolved ? '' : ' tie'}`
-            });
-          const said = j.verdict === 'no interval' ?
-              ' no interval' :
-              ` ${j.resolved}/${j.matches} resolved${j.verdict === 'mixed' ? ', mixed' : ''}`;
-          return el('td', {class: cls, 'data-verdict': j.verdict, text: change + said});
-        })))))));
+        el('th', { text: 'scene' }), el('th', { text: 'pairs' }), names.map((name) => el('th', { text: name === 'ms' ? 'Δ ms (median)' : `Δ ${name}` })))),
+      el('tbody', {}, body))));
   }
 })();

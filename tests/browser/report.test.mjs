@@ -607,18 +607,33 @@ test('a sweep\'s ablation colours a change only where every matched interval res
   const out = path.join(work, 'sweep-report');
   arena('report', dir, '--out', out);
   const { page, problems } = await openReport(out);
-  // One scene: a row per parameter, no "all scenes" row repeating it.
-  assert.equal(await page.locator('#ablation table tbody tr').count(), 2, 'ablation rows');
+  // One scene: a row per parameter, no "all scenes" row repeating it; under each, its two matches.
+  assert.equal(await page.locator('#ablation table tbody tr:not(.match)').count(), 2, 'ablation rows');
+  assert.equal(await page.locator('#ablation table tbody tr.match').count(), 4, 'one line per match');
   const cell = (parameter, scene, metricIndex) => page.$eval(`#ablation table`, (t, [parameter, scene, metricIndex]) => {
     const heads = [...t.tHead.rows[0].cells].map((c) => c.textContent);
     const row = [...t.tBodies[0].rows].find((r) => r.cells[0].textContent === parameter && r.cells[2].textContent === scene);
     const c = row.cells[heads.indexOf(metricIndex)];
     return { cls: c.className, verdict: c.dataset.verdict, text: c.textContent };
   }, [parameter, scene, metricIndex]);
-  let c = await cell('a', 'scene_0', 'Δ relMse');
-  assert.equal(c.verdict, 'tie');
+  let c = await cell('a', 'scene_0', 'Δ relMse');  // resolved under b=true only: no colour
+  assert.match(c.verdict, /^partly (better|worse)$/);
   assert.equal(c.cls, 'tie');
-  assert.match(c.text, /1\/2 resolved/);
+  assert.match(c.text, /1\/2 resolved, partly (better|worse)/);
+  // Its matches, each with its own paired interval: resolved given b=true, a tie given b=false.
+  const matches = await page.$$eval('#ablation table tbody tr', (trs) => {
+    const out = [];
+    let parameter = null;
+    for (const r of trs) {
+      if (!r.classList.contains('match')) { parameter = r.cells[0].textContent; continue; }
+      if (parameter === 'a') out.push({ given: r.cells[1].textContent, verdict: r.cells[4].dataset.verdict, text: r.cells[4].textContent });
+    }
+    return out;
+  });
+  assert.deepEqual(matches.map((m) => m.given), ['given b=true', 'given b=false']);
+  assert.match(matches[0].verdict, /^(better|worse)$/);
+  assert.equal(matches[1].verdict, 'tie');
+  assert.match(matches[1].text, / tie$/);
   c = await cell('b', 'scene_0', 'Δ relMse');  // both matches resolved: b=false is worse
   assert.equal(c.verdict, 'worse');
   assert.equal(c.cls, 'worse');
