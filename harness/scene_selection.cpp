@@ -71,7 +71,15 @@ void requireFitsInMemory(const Scene& scene, const RenderSettings& settings, boo
 
 std::string shortSequenceWarning(const std::string& source, int frames, int warmup,
                                  const std::string& remedy) {
-  if (frames > warmup) return "";
+  if (frames > warmup + kFewSummarisedFrames) return "";
+  if (frames > warmup) {
+    const int n = frames - warmup;
+    return source + ": only " + std::to_string(n) + (n == 1 ? " frame follows" : " frames follow") +
+           " the warm-up of " + std::to_string(warmup) +
+           ": the intervals resample so few frames that they hardly cover how a method varies "
+           "from frame to frame, and differences resolved on them are fragile (" +
+           remedy + "; " + std::to_string(kFewSummarisedFrames + 1) + " or more frames after it)";
+  }
   return source + ": the sequence has " + std::to_string(frames) +
          " frames and the warm-up excludes the first " + std::to_string(warmup) +
          ": no frame is left to summarise, every summary of this sequence will be absent (" +

@@ -18,15 +18,20 @@ void requireFitsInMemory(const Scene& scene, const RenderSettings& settings, boo
 // --max-bounces its bidirectional references can hold (kMaxBidirectionalBounces).
 void requireRenderable(const Scene& scene, const RenderSettings& settings, bool wholeSequence);
 
-// One line per scene whose sequence (as `settings` render it) has no frame after the warm-up: every
-// summary of its pairs will be absent (metrics.md W). Said before any work, so that a --frames or
+// One line per scene whose sequence (as `settings` render it) has no frame after the warm-up (every
+// summary of its pairs will be absent, metrics.md W) or few (shortSequenceWarning). Said before any
+// work, so that a --frames or
 // --warmup slip costs a second, not a run. Also one per scene rendered smaller than 16 pixels on a
 // side (tinyImageWarning): it runs, as a smoke test, but measures little.
 std::string tinyImageWarning(const std::string& source, int width, int height);
 std::vector<std::string> shortSequenceWarnings(const std::vector<Scene>& scenes,
                                                const RenderSettings& settings, int warmup);
-// The line for one sequence (a scene file or a capture) of `frames` frames; empty when a frame is
-// left after the warm-up. `remedy` says what the user can change.
+// The line for one sequence (a scene file or a capture) of `frames` frames; empty when more than
+// kFewSummarisedFrames are left after the warm-up. With 1 to kFewSummarisedFrames left, the line
+// says the intervals hardly cover the frames' variation (statistics.md: frames are resampled in
+// blocks; one frame gives no frame-to-frame variation at all, and a trial's sweep resolved more
+// differences on 1 frame than on 8). `remedy` says what the user can change.
+inline constexpr int kFewSummarisedFrames = 7;
 std::string shortSequenceWarning(const std::string& source, int frames, int warmup,
                                  const std::string& remedy);
 

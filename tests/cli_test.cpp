@@ -249,6 +249,20 @@ TEST(CliContract, ARunSaysWhenAScenesReferenceMissesTheGoal) {
       << r.output;
   EXPECT_EQ(tinyImageWarning("s", 16, 16), "");
   EXPECT_EQ(tinyImageWarning("s", 64, 12).find("SSIM"), std::string::npos);
+  // Few frames after the warm-up: said (a trial's sweep resolved more on 1 frame than on 8); the
+  // run above summarises 4.
+  EXPECT_NE(r.output.find("only 4 frames follow the warm-up of 2: the intervals resample so few "
+                          "frames"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(shortSequenceWarning("s", 16, 8, "more"), "");
+  EXPECT_EQ(
+      shortSequenceWarning("s", 9, 8, "more").rfind("s: only 1 frame follows the warm-up of 8", 0),
+      0u);
+  EXPECT_NE(shortSequenceWarning("s", 15, 8, "more").find("(more; 8 or more frames after it)"),
+            std::string::npos);
+  EXPECT_NE(shortSequenceWarning("s", 8, 8, "more").find("no frame is left to summarise"),
+            std::string::npos);
   const std::string printed =
       "arena refine cornell_static --resolution 16x8 --frames 6 --ref-spp 4 --max-bounces 2 "
       "--cache " +
