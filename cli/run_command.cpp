@@ -419,6 +419,15 @@ void addRunCommands(CLI::App& app) {
           throw Error("--param " + other + "." + kv.begin()->first + ": this sweep runs only " + *denoiser +
                       "; --param must name " + *denoiser + ".NAME");
       c = sweepRun(std::move(c), *denoiser, assignments[*denoiser], *grids, *maxPoints);
+      // What a large grid costs beyond its pairs (a trial's 500 points on one scene at 64x36:
+      // 2 minutes, 4 GB of memory, a 372 MB results.json, most of it after the pairs' ETA).
+      if (const size_t n = c.denoisers.size() + (c.baselines ? 2 : 0); n > kManyContenders)
+        std::cerr << "arena: warning: " << n << " contenders per scene: the statistics compare "
+                  << n * (n - 1) / 2
+                  << " pairs of them on each scene and metric and results.json keeps them all, "
+                     "so time, memory and the file grow with the square of the grid (shards "
+                     "merged are compared whole); for an ablation, sweeps of fewer axes cost "
+                     "less\n";
       resolveAutoLowres(c);
       runMatrix(c);
       finish(o->out);

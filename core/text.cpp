@@ -121,6 +121,11 @@ std::string shellWord(const std::string& word) {
   return quoted + "'";
 }
 
+std::string trimmed(const std::string& text) {
+  const size_t first = text.find_first_not_of(" \t"), last = text.find_last_not_of(" \t");
+  return first == std::string::npos ? "" : text.substr(first, last - first + 1);
+}
+
 std::string closestName(const std::string& name, const std::vector<std::string>& names) {
   auto lower = [](std::string s) {
     for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));

@@ -34,6 +34,9 @@ std::string paddedText(std::string_view text, size_t width);
 // ("veiw" is one swap from "view").
 size_t editDistance(std::string_view a, std::string_view b);
 
+// `text` without the spaces and tabs around it (a writer's layout, as in "[2, 4]").
+std::string trimmed(const std::string& text);
+
 // Of `names`, the one closest to `name` (case aside) if within one edit of a name of three or four
 // letters, two of a longer one, or differing only in case from a shorter one; else empty: what a
 // user who typed `name` most likely meant. (One edit of a one- or two-letter name is another name:

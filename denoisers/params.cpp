@@ -131,9 +131,16 @@ ParamSet ParamSchema::resolve(const std::map<std::string, std::string>& override
     const ParamSpec* s = find(name);
     if (!s) {
       std::string valid;
-      for (const ParamSpec& p : specs_) valid += "\n  " + owner + "." + p.describe();
+      std::vector<std::string> names;
+      for (const ParamSpec& p : specs_) {
+        valid += "\n  " + owner + "." + p.describe();
+        names.push_back(p.name);
+      }
       if (specs_.empty()) valid = " (none: it has no parameters)";
-      throw Error(owner + ": unknown parameter '" + name + "'; valid parameters:" + valid);
+      const std::string meant = closestName(name, names);
+      throw Error(owner + ": unknown parameter '" + name + "'" +
+                  (meant.empty() ? "" : " (did you mean '" + meant + "'?)") +
+                  "; valid parameters:" + valid);
     }
     auto bad = [&](const std::string& expected) {
       throw Error(owner + "." + name + "=" + text + ": expected " + expected + " (" + s->describe() + ")");
@@ -143,7 +150,7 @@ ParamSet ParamSchema::resolve(const std::map<std::string, std::string>& override
         if (text == "true" || text == "1" || text == "on") out.set(name, true);
         else if (text == "false" || text == "0" || text == "off") out.set(name, false);
         else
-          bad("true or false (or 1/0, on/off)");
+          bad("true or false in lower case (or 1/0, on/off)");
         break;
       case ParamSpec::Type::Int:
       case ParamSpec::Type::Float: {

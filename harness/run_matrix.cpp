@@ -270,8 +270,16 @@ void warnOfIdenticalSweepPoints(json& results, const ProgressFn& say) {
           kIdenticalOutputs + others +
           " (every frame): the parameters that differ between them changed nothing here";
       (*p)["warnings"].push_back(warning);
-      if (say)
-        say("  warning: " + (*p)["label"].get<std::string>() + " on " + key.first + ": " + warning);
+    }
+    // Said once per group (each point's record names the others): a group of k points said per
+    // point was k lines of k - 1 labels each, hundreds of lines in a large grid.
+    if (say) {
+      std::string labels;
+      for (const json* q : group)
+        labels += (labels.empty() ? "" : ", ") + (*q)["label"].get<std::string>();
+      say("  warning: on " + key.first + " the outputs of " + std::to_string(group.size()) +
+          " points are bit-identical (every frame): " + labels +
+          "; the parameters that differ between them changed nothing here");
     }
   }
 }
@@ -616,6 +624,20 @@ json runMatrix(const RunConfig& cfg) {
 
 void finishRun(json& results, const RunConfig& cfg) {
   {
+    // Every pair of contenders on a scene is compared (paired intervals): with many contenders,
+    // after the pairs' ETA has run out, this is where a large sweep's time goes; said.
+    std::map<std::string, size_t> perScene;
+    for (const json& p : results["pairs"])
+      if (p.value("status", "") == "ok") ++perScene[p.value("scene", "")];
+    size_t most = 0, comparisons = 0;
+    for (const auto& [scene, n] : perScene) {
+      most = std::max(most, n);
+      comparisons += n * (n - 1) / 2;
+    }
+    if (most > kManyContenders && cfg.progress)
+      cfg.progress("statistics: " + std::to_string(comparisons) + " paired comparisons of up to " +
+                   std::to_string(most) + " contenders on " + std::to_string(perScene.size()) +
+                   " scene(s), each metric (this can take a while)");
     StageTimer timer(Stage::Statistics);
     results["statistics"] = analyseRun(results).toJson();
     addReferenceQuality(results, cfg.warmup, cfg.referenceNotes, cfg.cache.string());

@@ -82,6 +82,9 @@ nlohmann::json runMatrix(const RunConfig& config);
 // What ends every run: the statistics over all pairs, the reference-quality verdicts
 // (cfg.warmup, cfg.referenceNotes), and results.json + results.db committed to cfg.out.
 void finishRun(nlohmann::json& results, const RunConfig& cfg);
+// Above this many contenders on a scene, finishRun says how many paired comparisons it computes,
+// and a sweep of more grid points warns of its cost before it starts (cli: sweep).
+inline constexpr size_t kManyContenders = 100;
 // A sweep's points whose outputs on a scene are bit-identical (every frame; `outputChecksum`) each
 // get a warning naming the others: the grid's change did nothing there (a filter stage skipped at
 // this resolution, a parameter another one overrides), and their tie is no measurement. Earlier

@@ -9,6 +9,7 @@
 
 #include "core/error.hpp"
 #include "core/sequence.hpp"
+#include "core/text.hpp"
 
 namespace arena {
 
@@ -121,10 +122,7 @@ std::vector<std::string> splitList(const std::string& list, const std::string& w
     out.push_back(list.substr(start, comma - start));
   out.push_back(list.substr(start));
   // Spaces around an entry are the writer's layout ("[2, 4]"), not part of a name or a value.
-  for (std::string& item : out) {
-    const size_t first = item.find_first_not_of(" \t"), last = item.find_last_not_of(" \t");
-    item = first == std::string::npos ? "" : item.substr(first, last - first + 1);
-  }
+  for (std::string& item : out) item = trimmed(item);
   for (const std::string& item : out)
     if (item.empty())
       throw Error(what + " '" + list +
