@@ -274,11 +274,11 @@ void warnOfIdenticalSweepPoints(json& results, const ProgressFn& say) {
     // Said once per group (each point's record names the others): a group of k points said per
     // point was k lines of k - 1 labels each, hundreds of lines in a large grid.
     if (say) {
-      std::string labels;
+      std::string members;
       for (const json* q : group)
-        labels += (labels.empty() ? "" : ", ") + (*q)["label"].get<std::string>();
+        members += (members.empty() ? "" : ", ") + (*q)["label"].get<std::string>();
       say("  warning: on " + key.first + " the outputs of " + std::to_string(group.size()) +
-          " points are bit-identical (every frame): " + labels +
+          " points are bit-identical (every frame): " + members +
           "; the parameters that differ between them changed nothing here");
     }
   }
