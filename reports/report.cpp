@@ -496,6 +496,16 @@ json pairedDifference(const RunResults& results, const std::string& scene,
                       const std::string& metric, const std::string& a, const std::string& b) {
   // relMseCorrected's paired difference is relMSE's: the reference's floor, subtracted from both
   // methods' every frame, cancels in it (as the summary table's firstByMetric has it).
+  // dssim is 1 - SSIM frame by frame and tile by tile: its paired difference is SSIM's, negated
+  // (the statistics rank SSIM only; the ablation read dssim "no interval" beside SSIM's).
+  if (metric == "dssim") {
+    json d = pairedDifference(results, scene, "ssim", a, b);
+    if (!d.is_object()) return d;
+    d["diff"] = -d["diff"].get<double>();
+    if (d.contains("ci95"))
+      d["ci95"] = json::array({-d["ci95"][1].get<double>(), -d["ci95"][0].get<double>()});
+    return d;
+  }
   const std::string ranked = metric == "relMseCorrected" ? "relMse" : metric;
   return pairedIn(results.statistics ? results.statistics->ranking(scene, ranked) : nullptr, a, b);
 }

@@ -414,10 +414,16 @@ TEST(Report, AblationDeltasAreTheRunsPairedDifferences) {
     if (p.contains("summary") && p["summary"].contains("relMse"))
       p["summary"]["relMseCorrected"] =
           summaryOf(p["summary"]["relMse"]["mean"].get<double>() - 0.001);
-  run["statistics"] = test::statisticsBlock(json::parse(R"({"scenes": {"static": {"metric": "relMse", "ranking": [],
+  for (json& p : run["pairs"])
+    if (p.contains("summary") && p["summary"].contains("ssim"))
+      p["summary"]["dssim"] = summaryOf(1 - p["summary"]["ssim"]["mean"].get<double>());
+  run["statistics"] =
+      test::statisticsBlock(json::parse(R"({"scenes": {"static": {"metric": "relMse", "ranking": [],
     "pairs": [{"a": "svgf[a=0]", "b": "svgf[a=1]", "diff": 0.0123, "ci95": [0.004, 0.02], "resolved": true},
               {"a": "svgf[a=1,b=false]", "b": "svgf[a=1]", "diff": 0.02, "ci95": [-0.001, 0.04], "resolved": false}],
-    "resolvedPairs": 1, "totalPairs": 2, "byMetric": {}}}})"));
+    "resolvedPairs": 1, "totalPairs": 2, "byMetric": {"ssim": {"metric": "ssim", "ranking": [],
+      "pairs": [{"a": "svgf[a=0]", "b": "svgf[a=1]", "diff": 0.003, "ci95": [0.001, 0.005], "resolved": true}],
+      "resolvedPairs": 1, "totalPairs": 1}}}}})"));
   const json data = reportData(test::typed(run), test::freshDir("report_ablation_paired"), nullptr);
   int seen = 0;
   for (const json& r : data["ablation"]["rows"]) {
@@ -432,12 +438,17 @@ TEST(Report, AblationDeltasAreTheRunsPairedDifferences) {
       // (it was "no interval").
       EXPECT_EQ(r["judged"]["relMseCorrected"]["verdict"], "better");
       EXPECT_EQ(r["paired"]["relMseCorrected"], r["paired"]["relMse"]);
+      // 1 - SSIM's is SSIM's, negated (SSIM higher is better, 1 - SSIM lower: the same verdict).
+      EXPECT_DOUBLE_EQ(r["paired"]["dssim"]["diff"].get<double>(), 0.003);
+      EXPECT_EQ(r["paired"]["dssim"]["ci95"], json({0.001, 0.005}));
+      EXPECT_EQ(r["judged"]["dssim"]["verdict"], "worse");
+      EXPECT_EQ(r["judged"]["ssim"]["verdict"], "worse");
     }
     if (r["parameter"] == "b") {
       ++seen;
       EXPECT_FALSE(r["paired"]["relMse"]["resolved"].get<bool>());  // drawn as a tie
       EXPECT_EQ(r["judged"]["relMse"]["verdict"], "tie");
-      EXPECT_FALSE(r["paired"].contains("ssim")) << "no paired difference on ssim in this run";
+      EXPECT_FALSE(r["paired"].contains("ldrFlip")) << "no paired difference on it in this run";
     }
   }
   EXPECT_EQ(seen, 2);
