@@ -180,6 +180,15 @@ void printOverallRanking(std::ostream& out, const RunResults& results) {
         << tiedText(m) << "\n";
   }
   if (!o.excluded.empty()) out << "  not ranked overall: " << o.excluded << "\n";
+  // The noisy input at rank 1 (tied: a method resolved better than it would rank it lower) is no
+  // finding about denoising but about the intervals: said, lest a rank column be copied as one.
+  for (const RankedMethod& m : o.ranking)
+    if (m.label == "passthrough" && m.rank == 1 && o.ranking.size() > 1)
+      out << "  passthrough, the noisy input itself, "
+          << (m.tiedWith.empty() ? "ranks first: every method is resolved worse than no denoising"
+                                 : "shares rank 1: no method is resolved better than no denoising")
+          << " on these scenes and frames (its interval " << intervalText(m.ci) << ")"
+          << (m.tiedWith.empty() ? "" : "; more frames or scenes narrow the intervals") << "\n";
   // Ranks 1, 2, 3 beside overlapping intervals read as an error without the first part; "3="
   // above "4=" with a lower score without the second.
   if (!o.ranking.empty())
