@@ -450,6 +450,12 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
 
 HistorySummary writeHistory(const HistoryOptions& o) {
   requirePageDirectory(o.out, "history");
+  // A run's directory holds its own page where `arena report` wrote it in place (index.html,
+  // style.css, ...): the dashboard's files have the same names and would replace it.
+  if (std::error_code ec; fs::exists(o.out / "results.json", ec))
+    throw Error("history: --out " + o.out.string() +
+                " holds a run (results.json): the dashboard's index.html would replace the run's "
+                "own page there; choose a directory of its own, e.g. report/history");
   const fs::path web = o.webDir.empty() ? ReportOptions::defaultWebDir() : o.webDir;
   const fs::path modules =
       o.nodeModulesDir.empty() ? ReportOptions::defaultNodeModulesDir() : o.nodeModulesDir;

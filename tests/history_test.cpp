@@ -598,6 +598,16 @@ TEST(History, WritesTheDashboard) {
        {"index.html", "history.js", "shared.js", "style.css", "history-data.js", "vega.min.js"})
     EXPECT_TRUE(fs::exists(o.out / f)) << f;
   EXPECT_NE(readText(o.out / "index.html").find("history.js"), std::string::npos);
+  // Into a run's directory (where `arena report` may have written the run's own page): refused,
+  // nothing written.
+  HistoryOptions intoRun = o;
+  intoRun.out = inputs[1];
+  EXPECT_EQ(test::errorOf([&] { writeHistory(intoRun); }),
+            "history: --out " + inputs[1].string() +
+                " holds a run (results.json): the dashboard's index.html would replace the run's "
+                "own page there; choose a directory of its own, e.g. report/history");
+  EXPECT_FALSE(fs::exists(inputs[1] / "index.html"));
+  EXPECT_FALSE(fs::exists(inputs[1] / "history-data.js"));
 }
 
 }  // namespace
