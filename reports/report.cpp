@@ -1319,6 +1319,15 @@ ReportSummary writeReport(const ReportOptions& o) {
   if (const std::string note = unfinishedRunNote(o.run);
       !note.empty() && fs::is_directory(o.run) && !fs::exists(o.run / "results.json"))
     throw Error("report: " + note);
+  // Another run's directory holds that run's page and images (a report written in place): this
+  // page would replace its index.html and mix the two runs' images.
+  if (std::error_code ec; fs::exists(o.out / "results.json", ec) &&
+                          !(fs::exists(o.run, ec) && fs::equivalent(o.run, o.out, ec)))
+    throw Error("report: --out " + o.out.string() +
+                " holds another run (results.json): this "
+                "page would replace that run's own page and mix its images with " +
+                o.run.string() + "'s; choose a directory of its own, or the run's own (" +
+                o.run.string() + ")");
   const RunResults results = loadResults(o.run);
   // Its images are partly another run's than its numbers: a page would show them side by side.
   if (const std::string note = unfinishedRunNote(o.run); !note.empty())

@@ -1020,6 +1020,15 @@ TEST(Report, APageInItsRunDirectoryCountsTheImagesInPlace) {
   EXPECT_TRUE(s.imagesInPlace);
   EXPECT_TRUE(fs::exists(o.out / "index.html"));
   EXPECT_TRUE(fs::exists(o.out / "images/switch/reference_0005.png"));
+  // Another run's page into this run's directory: refused, this run's page left as it was.
+  ReportOptions other = o;
+  other.run = writeFixtureRun("report_in_place_other", fixtureRun());
+  const std::string page = readText(o.out / "data.js");
+  EXPECT_NE(test::errorOf([&] {
+              writeReport(other);
+            }).find("report: --out " + o.out.string() + " holds another run (results.json)"),
+            std::string::npos);
+  EXPECT_EQ(readText(o.out / "data.js"), page);
 }
 
 // A run's results.json given where its directory is expected: the directory is named.
