@@ -418,8 +418,8 @@ std::string figureWithInterval(const json& e, const char* name) {
   return o.str();
 }
 
-// The event-window figures with their 95% intervals, per scripted event and camera cut, methods in
-// the order of their rank (lag energy, old-view leak) with ties (metrics/ghosting_intervals.hpp).
+}  // namespace
+
 void printEventTables(std::ostream& out, const RunResults& results) {
   if (!results.statistics) return;
   for (const auto& [name, scene] : results.statistics->scenes)
@@ -475,6 +475,8 @@ void printEventTables(std::ostream& out, const RunResults& results) {
             << " has fewer methods resolved better than it: its differences are less certain)\n";
     });
 }
+
+namespace {
 
 // One line per scene: the best method on relMSE (rank 1, first in the ranking) with its mean and
 // interval, and the methods not resolved from it -- the winner, or the tied group.

@@ -33,6 +33,10 @@ void printOverallRanking(std::ostream& out, const RunResults& results);
 void printOtherOverallScores(std::ostream& out, const RunResults& results);
 // The methods at rank 1 on each of those metrics ("dssim svgf; ldrFlip passthrough"), "" if none.
 std::string otherOverallFirstsText(const RunResults& results);
+// The event-window figures with their 95% intervals, per scripted event and camera cut, methods in
+// the order of their rank (lag energy, old-view leak) with ties (metrics/ghosting_intervals.hpp);
+// printed by `run`, `sweep` and `study --verbose`. Nothing for a run without events.
+void printEventTables(std::ostream& out, const RunResults& results);
 // A run of several input seeds (--seeds K): each pair's error split over them (pairs[].
 // biasVariance: bias2, variance, bias2Corrected, each mean with its interval), and that the
 // table's relMSE is the first seed's. Nothing for a run of one seed.

@@ -268,6 +268,9 @@ void finish(const std::string& out) {
         if (w.is_string()) std::cout << "warning: " << name << ": " << w.get<std::string>() << "\n";
   printOverallRanking(std::cout, results);
   printOtherOverallScores(std::cout, results);
+  // The scripted events' and camera cuts' figures (lag, response, old-view leak) with intervals:
+  // an anti-lag ablation's main result, which a run printed nowhere (results.json, the report).
+  printEventTables(std::cout, results);
   // The scenes whose reference is too noisy to separate the methods well: said here, not only in
   // results.json and the report (the ranking above is read first).
   std::vector<std::string> missed, unknown;

@@ -297,6 +297,23 @@ TEST(CliContract, ARunPrintsItsScenesWarnings) {
       << r.output;
 }
 
+// A scripted event's figures (lag energy, response, ...) with their intervals are printed by the
+// run (an anti-lag sweep's main result was only in results.json and the report).
+TEST(CliContract, ARunPrintsItsEventsFigures) {
+  fs::path dir = test::freshDir("event_figures");
+  contract::CliResult r = contract::arenaCli(
+      "run --scenes light_switch --denoisers passthrough --resolution 16x8 --ref-spp 1 "
+      "--frames 16 --warmup 1 --flip none --keep-frames none --cache " +
+      (dir / "cache").string() + " --out " + (dir / "run").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  const size_t table = r.output.find(" at frame 12: ranked on lagEnergy (");
+  ASSERT_NE(table, std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("\nlight_switch: light_", table - 40), std::string::npos) << r.output;
+  for (const char* label : {"passthrough", "temporal"})
+    EXPECT_NE(r.output.find(std::string(label) + " ", table), std::string::npos) << label;
+  EXPECT_NE(r.output.find("lagEnergy ", table + 40), std::string::npos) << r.output;
+}
+
 // A shard whose slice of the pairs is empty (more shards than pairs) ran all it was given: not a
 // run that measured nothing for want of inputs.
 TEST(CliContract, AShardWithNoPairsIsNoFailure) {
