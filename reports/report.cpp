@@ -510,11 +510,16 @@ json pairedDifference(const RunResults& results, const std::string& scene,
   return pairedIn(results.statistics ? results.statistics->ranking(scene, ranked) : nullptr, a, b);
 }
 
-// The event-window figures the statistics rank on `scene` (metrics/ghosting_intervals), named as
-// results.db names them: "ghosting@<frame>.<figure>", "cut@<frame>.<figure>" (all lower is better).
-std::vector<std::pair<std::string, const SceneRanking*>> eventFigures(const RunResults& results,
-                                                                      const std::string& scene) {
-  std::vector<std::pair<std::string, const SceneRanking*>> out;
+// An event-window figure the statistics rank on a scene (metrics/ghosting_intervals), named as
+// results.db names it: "ghosting@<frame>.<figure>", "cut@<frame>.<figure>" (all lower is better).
+struct EventFigure {
+  std::string name, figure;
+  int frame = -1;
+  bool cut = false;
+  const SceneRanking* ranking = nullptr;
+};
+std::vector<EventFigure> eventFigures(const RunResults& results, const std::string& scene) {
+  std::vector<EventFigure> out;
   if (!results.statistics) return out;
   auto st = results.statistics->scenes.find(scene);
   if (st == results.statistics->scenes.end()) return out;
@@ -522,8 +527,62 @@ std::vector<std::pair<std::string, const SceneRanking*>> eventFigures(const RunR
     for (const auto& [figure, ranking] : e.byFigure)
       out.push_back(
           {std::string(cut ? "cut@" : "ghosting@") + std::to_string(e.eventFrame) + "." + figure,
-           &ranking});
+           figure, e.eventFrame, cut, &ranking});
   });
+  return out;
+}
+
+// Where a method never settled within an event's window, its response is the window's length and
+// its peak excess and ghost energy are read against frames still lagging: bounds, not
+// measurements (the printout's "never settled" note). The note for such a figure, else "".
+std::string unsettledNote(const PairResult& pair, const EventFigure& f) {
+  if (f.cut ||
+      (f.figure != "responseFrames" && f.figure != "peakExcess" && f.figure != "ghostEnergy"))
+    return "";
+  for (const json& e : pair.part("ghosting").is_array() ? pair.part("ghosting") : json::array())
+    if (e.value("eventFrame", -1) == f.frame && e.value("settled", json()).is_boolean() &&
+        !e["settled"].get<bool>())
+      return pair.label + " never settled within the window: its " + f.figure +
+             (f.figure == "responseFrames"
+                  ? " is the window's length, a lower bound"
+                  : " is read against frames still lagging, a lower bound");
+  return "";
+}
+
+// The reason a ranking's `excluded` ("a: why; b: why") gives for `label`, or "" where it does not
+// name it: the reason runs to the next "; <label>: " of the run's labels (a reason may hold "; ").
+std::string exclusionReason(const std::string& excluded, const std::string& label,
+                            const RunResults& results) {
+  size_t at = 0;
+  for (;; at += label.size()) {
+    at = excluded.find(label + ": ", at);
+    if (at == std::string::npos) return "";
+    if (at == 0 || excluded.compare(at - 2, 2, "; ") == 0) break;
+  }
+  const size_t from = at + label.size() + 2;
+  size_t to = excluded.size();
+  for (const PairResult& p : results.pairs)
+    if (const size_t next = excluded.find("; " + p.label + ": ", from); next < to) to = next;
+  return excluded.substr(from, to - from);
+}
+
+// Why an event's figure ranks nobody on a scene (every method left out: a changed region too small
+// to resample, no per-tile data): "ghosting@9.lagEnergy on moving_light_shadow: <reason>", each
+// distinct reason once.
+std::vector<std::string> unrankedFigures(const RunResults& results, const std::string& scene) {
+  std::vector<std::string> out;
+  for (const EventFigure& f : eventFigures(results, scene)) {
+    if (!f.ranking->ranking.empty() || f.ranking->excluded.empty()) continue;
+    std::vector<std::string> reasons;
+    for (const PairResult& p : results.pairs)
+      if (const std::string why = exclusionReason(f.ranking->excluded, p.label, results);
+          p.scene == scene && !why.empty() &&
+          std::find(reasons.begin(), reasons.end(), why) == reasons.end())
+        reasons.push_back(why);
+    std::string text;
+    for (const std::string& why : reasons) text += (text.empty() ? "" : " / ") + why;
+    out.push_back(f.name + " on " + scene + ": " + (text.empty() ? f.ranking->excluded : text));
+  }
   return out;
 }
 
@@ -591,6 +650,7 @@ json ablationData(const RunResults& results) {
   struct Changes {
     std::vector<double> delta, relative;
     size_t intervals = 0, better = 0, worse = 0;
+    json lastPaired;  // a single match's paired difference (the row's, when it is the only one)
   };
   json rows = json::array();
   for (auto g = sweep["grid"].begin(); g != sweep["grid"].end(); ++g) {
@@ -606,6 +666,7 @@ json ablationData(const RunResults& results) {
       std::map<std::string, std::map<std::string, Changes>> changes;  // scope -> metric
       std::map<std::string, std::map<std::string, json>> paired;  // scene -> metric -> difference
       std::map<std::string, json> byMatch;                        // scene -> its matches
+      std::map<std::string, std::map<std::string, std::string>> notes;  // scene -> metric -> bound
       std::map<std::string, size_t> matched;
       for (const PairResult* p : pairs) {
         if (p->params.value(name, json()) != values[vi]) continue;
@@ -627,12 +688,18 @@ json ablationData(const RunResults& results) {
                         {"relative", json::object()},
                         {"paired", json::object()},
                         {"judged", json::object()}};
-          auto record = [&](const std::string& m, double delta, double b, const json& d,
-                            bool lower) {
+          auto record = [&](const std::string& m, double delta, double b, const json& d, bool lower,
+                            const std::string& note = "") {
             if (!std::isfinite(delta) || !std::isfinite(b)) return;
-            const double relative = delta / std::max(std::abs(b), 1e-12);
+            // Relative to a base of 0 (a response of 0 frames, a flicker of 0) there is no
+            // relative change: none, rather than the change over 1e-12 (+1.9e15 %).
+            const double relative = std::abs(b) > 1e-12 ? delta / std::abs(b) : kUndefined;
             match["delta"][m] = delta;
-            match["relative"][m] = relative;
+            match["relative"][m] = std::isfinite(relative) ? json(relative) : json(nullptr);
+            if (!note.empty()) {
+              match["notes"][m] = note;
+              notes[scene][m] = note;
+            }
             const bool resolved = d.is_object() && d["resolved"].get<bool>() && delta != 0;
             match["judged"][m] = !d.is_object()         ? "no interval"
                                  : !resolved            ? "tie"
@@ -645,7 +712,8 @@ json ablationData(const RunResults& results) {
             for (const std::string& scope : {scene, std::string()}) {
               Changes& c = changes[scope][m];
               c.delta.push_back(delta);
-              c.relative.push_back(relative);
+              if (std::isfinite(relative)) c.relative.push_back(relative);
+              if (d.is_object()) c.lastPaired = d;
               if (!d.is_object()) continue;
               ++c.intervals;
               if (d["resolved"].get<bool>() && delta != 0)
@@ -664,12 +732,16 @@ json ablationData(const RunResults& results) {
                                                  : p->summary.at(m).mean - b;
             record(m, delta, b, d, lowerIsBetter[m]);
           }
-          for (const auto& [figure, ranking] : eventFigures(results, scene)) {
-            const json d = pairedIn(ranking, p->label, q->label);
+          for (const EventFigure& f : eventFigures(results, scene)) {
+            const json d = pairedIn(f.ranking, p->label, q->label);
             if (!d.is_object()) continue;  // a method the event's ranking leaves out (named there)
-            if (std::find(figures.begin(), figures.end(), figure) == figures.end())
-              figures.push_back(figure);
-            record(figure, d["diff"].get<double>(), rankedValue(*ranking, q->label), d, true);
+            if (std::find(figures.begin(), figures.end(), f.name) == figures.end())
+              figures.push_back(f.name);
+            std::string note = unsettledNote(*p, f);
+            if (const std::string other = unsettledNote(*q, f); !other.empty())
+              note += (note.empty() ? "" : "; ") + other;
+            record(f.name, d["diff"].get<double>(), rankedValue(*f.ranking, q->label), d, true,
+                   note.empty() ? "" : note + ": the difference is bounded, not measured");
           }
           byMatch[scene].push_back(std::move(match));
           break;
@@ -679,14 +751,19 @@ json ablationData(const RunResults& results) {
       if (changes.size() == 2) changes.erase("");
       for (const auto& [scope, byMetric] : changes) {
         json d = json::object(), r = json::object(), verdicts = json::object();
+        json single = json::object();  // metrics matched once over all scenes: that interval
         for (const auto& [m, c] : byMetric) {
           const size_t n = c.delta.size();
           d[m] = std::accumulate(c.delta.begin(), c.delta.end(), 0.0) / double(n);
-          r[m] = std::accumulate(c.relative.begin(), c.relative.end(), 0.0) / double(n);
+          r[m] = c.relative.empty()
+                     ? json(nullptr)
+                     : json(std::accumulate(c.relative.begin(), c.relative.end(), 0.0) /
+                            double(c.relative.size()));
           verdicts[m] = {{"verdict", ablationVerdict(n, c.intervals, c.better, c.worse)},
                          {"matches", n},
                          {"intervals", c.intervals},
                          {"resolved", c.better + c.worse}};
+          if (scope.empty() && n == 1 && c.lastPaired.is_object()) single[m] = c.lastPaired;
         }
         json row = {{"parameter", name},
                     {"value", valueText(values[vi])},
@@ -701,14 +778,23 @@ json ablationData(const RunResults& results) {
           if (paired.count(scope)) row["paired"] = paired[scope];
         }
         if (!scope.empty() && matched[scope] > 1) row["byMatch"] = byMatch[scope];
+        if (scope.empty() && !single.empty()) row["paired"] = single;
+        if (!scope.empty() && notes.count(scope)) row["notes"] = notes[scope];
         rows.push_back(row);
       }
     }
   }
+  // The events whose figures rank nobody (so have no column here), with the statistics' reason.
+  json unranked = json::array();
+  std::set<std::string> scenes;
+  for (const PairResult* p : pairs) scenes.insert(p->scene);
+  for (const std::string& scene : scenes)
+    for (const std::string& line : unrankedFigures(results, scene)) unranked.push_back(line);
   json out = {{"denoiser", denoiser},
               {"grid", sweep["grid"]},
               {"fixed", sweep.value("fixed", json::object())},
               {"figures", figures},
+              {"unrankedFigures", unranked},
               {"rows", rows}};
   if (sweep.contains("footprintNote") && sweep["footprintNote"].is_string())
     out["footprintNote"] = sweep["footprintNote"];
@@ -862,6 +948,7 @@ std::string csvField(const std::string& text) {
 // A number as CSV writes it: every digit a double holds; empty where it is not finite.
 std::string csvNumber(double v) {
   if (!std::isfinite(v)) return std::string();
+  if (v == 0) return "0";  // -0 too: a sign without a magnitude is no information
   char buf[40];
   std::snprintf(buf, sizeof buf, "%.17g", v);
   return std::string(buf);
@@ -876,12 +963,13 @@ std::string ablationCsv(const json& ablation) {
   };
   std::string csv =
       "parameter,value,versus,given,scene,matched,metric,delta,relative,verdict,matches,intervals,"
-      "resolved,ci95Lo,ci95Hi\n";
+      "resolved,ci95Lo,ci95Hi,note\n";
   // One line: a row's (given empty) or one of its matches' (matched 1, its own paired difference).
   auto line = [&](const json& row, const std::string& given, const std::string& scene,
                   const json& matched, const std::string& m, const json& delta,
                   const json& relative, const std::string& verdict, const json& matches,
-                  const json& intervals, const json& resolved, const json& ci) {
+                  const json& intervals, const json& resolved, const json& ci,
+                  const std::string& note) {
     csv +=
         csvField(row["parameter"].get<std::string>()) + "," +
         csvField(row["value"].get<std::string>()) + "," +
@@ -890,7 +978,7 @@ std::string ablationCsv(const json& ablation) {
         "," + csvField(verdict) + "," + number(matches) + "," + number(intervals) + "," +
         number(resolved) + "," +
         (ci.is_array() && ci.size() == 2 ? number(ci[0]) + "," + number(ci[1]) : std::string(",")) +
-        "\n";
+        "," + csvField(note) + "\n";
   };
   for (const json& row : ablation["rows"]) {
     const std::string scene =
@@ -903,7 +991,7 @@ std::string ablationCsv(const json& ablation) {
       line(row, row.value("given", ""), scene, row["matched"], m, d.value(),
            row["relative"].value(m, json()), judged.value("verdict", ""),
            judged.value("matches", json()), judged.value("intervals", json()),
-           judged.value("resolved", json()), ci);
+           judged.value("resolved", json()), ci, row.value("notes", json::object()).value(m, ""));
       for (const json& match : row.value("byMatch", json::array())) {
         if (!match["delta"].contains(m)) continue;
         const json paired = match["paired"].value(m, json());
@@ -911,7 +999,8 @@ std::string ablationCsv(const json& ablation) {
         line(row, match["given"].get<std::string>(), scene, 1, m, match["delta"][m],
              match["relative"].value(m, json()), verdict, 1, paired.is_object() ? 1 : 0,
              verdict == "better" || verdict == "worse" ? 1 : 0,
-             paired.is_object() ? paired.value("ci95", json()) : json());
+             paired.is_object() ? paired.value("ci95", json()) : json(),
+             match.value("notes", json::object()).value(m, ""));
       }
     }
   }
@@ -933,50 +1022,91 @@ std::string sweepPointsCsv(const RunResults& results) {
   std::string csv = "label,point";
   for (auto g = grid.begin(); g != grid.end(); ++g) csv += "," + csvField(g.key());
   for (auto f = fixed.begin(); f != fixed.end(); ++f) csv += "," + csvField(f.key());
-  csv += ",scene,metric,mean,ci95Lo,ci95Hi,rank,frames\n";
+  csv += ",scene,metric,mean,ci95Lo,ci95Hi,rank,frames,note\n";
   // A sweep recorded without its labels (an older run): the swept denoiser's pairs are its points.
   const json points = sweep.value("labels", json());
+  auto isPoint = [&](const std::string& label, const std::string& denoiser) {
+    return points.is_array() ? std::find(points.begin(), points.end(), json(label)) != points.end()
+                             : denoiser == sweep.value("denoiser", "");
+  };
+  // The columns before the scene: the label, whether it is a grid point, its parameters.
+  auto head = [&](const std::string& label, bool point, const json& params) {
+    std::string out = csvField(label) + "," + (point ? "true" : "false");
+    for (auto g = grid.begin(); g != grid.end(); ++g)
+      out += "," + (point && params.contains(g.key()) ? csvField(valueText(params[g.key()])) : "");
+    for (auto f = fixed.begin(); f != fixed.end(); ++f)
+      out += "," + (point ? csvField(valueText(f.value())) : "");
+    return out;
+  };
+  auto line = [&](const std::string& front, const std::string& scene, const std::string& metric,
+                  double mean, Interval ci, int rank, int frames, const std::string& note) {
+    csv += front + "," + csvField(scene) + "," + csvField(metric) + "," + number(mean) + "," +
+           (ci.valid() ? number(ci.lo) + "," + number(ci.hi) : std::string(",")) + "," +
+           (rank > 0 ? std::to_string(rank) : "") + "," +
+           (frames > 0 ? std::to_string(frames) : "") + "," + csvField(note) + "\n";
+  };
+  auto rankedIn = [](const SceneRanking* r, const std::string& label) -> const RankedMethod* {
+    if (!r) return nullptr;
+    for (const RankedMethod& m : r->ranking)
+      if (m.label == label) return &m;
+    return nullptr;
+  };
   for (const std::string& label : labels)
     for (const PairResult& p : results.pairs) {
       if (p.label != label || !p.ok()) continue;
-      const bool point = points.is_array()
-                             ? std::find(points.begin(), points.end(), json(label)) != points.end()
-                             : p.denoiser == sweep.value("denoiser", "");
-      std::string head = csvField(label) + "," + (point ? "true" : "false");
-      for (auto g = grid.begin(); g != grid.end(); ++g)
-        head += "," +
-                (point && p.params.contains(g.key()) ? csvField(valueText(p.params[g.key()])) : "");
-      for (auto f = fixed.begin(); f != fixed.end(); ++f)
-        head += "," + (point ? csvField(valueText(f.value())) : "");
-      head += "," + csvField(p.scene) + ",";
-      auto line = [&](const std::string& metric, double mean, Interval ci, int rank, int frames) {
-        csv += head + csvField(metric) + "," + number(mean) + "," +
-               (ci.valid() ? number(ci.lo) + "," + number(ci.hi) : std::string(",")) + "," +
-               (rank > 0 ? std::to_string(rank) : "") + "," +
-               (frames > 0 ? std::to_string(frames) : "") + "\n";
-      };
-      auto ranked = [&](const SceneRanking* r) -> const RankedMethod* {
-        if (!r) return nullptr;
-        for (const RankedMethod& m : r->ranking)
-          if (m.label == label) return &m;
-        return nullptr;
-      };
+      const std::string front = head(label, isPoint(label, p.denoiser), p.params);
       for (const MetricDefinition* m : metricCatalog()) {
         auto s = p.summary.find(m->name);
         if (s == p.summary.end()) continue;
         if (m->name == "ms") {
-          line("ms (median)", timingOf(p, "msMedian"), {}, 0, s->second.frames);
+          line(front, p.scene, "ms (median)", timingOf(p, "msMedian"), {}, 0, s->second.frames, "");
           continue;
         }
-        if (!s->second.present()) continue;  // its reason is in results.json and the report
-        const RankedMethod* r =
-            ranked(results.statistics ? results.statistics->ranking(p.scene, m->name) : nullptr);
-        line(m->name, r ? r->value : s->second.mean, r ? r->ci : s->second.ci95, r ? r->rank : 0,
-             s->second.frames);
+        if (!s->second.present()) {
+          line(front, p.scene, m->name, kUndefined, {}, 0, s->second.frames, s->second.absent);
+          continue;
+        }
+        // relMseCorrected ranks as relMSE (the floor cancels in a paired difference), 1 - SSIM
+        // as SSIM (reversed): the rank is theirs; the interval the metric's own.
+        const std::string rankedOn = m->name == "relMseCorrected" ? "relMse"
+                                     : m->name == "dssim"         ? "ssim"
+                                                                  : m->name;
+        const SceneRanking* ranking =
+            results.statistics ? results.statistics->ranking(p.scene, rankedOn) : nullptr;
+        const RankedMethod* r = rankedIn(ranking, label);
+        const bool own = rankedOn == m->name;
+        line(front, p.scene, m->name, own && r ? r->value : s->second.mean,
+             own && r ? r->ci : s->second.ci95, r ? r->rank : 0, s->second.frames,
+             own ? "" : "ranked as " + rankedOn);
       }
-      for (const auto& [figure, ranking] : eventFigures(results, p.scene))
-        if (const RankedMethod* r = ranked(ranking)) line(figure, r->value, r->ci, r->rank, 0);
+      for (const EventFigure& f : eventFigures(results, p.scene)) {
+        if (const RankedMethod* r = rankedIn(f.ranking, label)) {
+          line(front, p.scene, f.name, r->value, r->ci, r->rank, 0, unsettledNote(p, f));
+        } else if (const std::string why = exclusionReason(f.ranking->excluded, label, results);
+                   !why.empty()) {
+          // Left out of the event's ranking: no value, the statistics' reason.
+          line(front, p.scene, f.name, kUndefined, {}, 0, 0, "not ranked: " + why);
+        }
+      }
     }
+  // The overall scores (geometric mean over the scenes of each method's value over the baseline's),
+  // relMSE's and the other metrics' that declare one, as scene "overall".
+  if (results.statistics) {
+    auto overallLines = [&](const std::string& metric, const OverallRanking& o) {
+      for (const std::string& label : labels)
+        for (const RankedMethod& m : o.ranking) {
+          if (m.label != label) continue;
+          const PairResult* any = nullptr;  // its parameters are the same on every scene
+          for (const PairResult& p : results.pairs)
+            if (p.label == label) any = &p;
+          line(head(label, any && isPoint(label, any->denoiser), any ? any->params : json()),
+               "overall", metric, m.value, m.label == o.baseline ? Interval{} : m.ci, m.rank, 0,
+               o.normalisation);
+        }
+    };
+    if (results.statistics->overall) overallLines("relMse", *results.statistics->overall);
+    for (const auto& [metric, o] : results.statistics->overallByMetric) overallLines(metric, o);
+  }
   return csv;
 }
 

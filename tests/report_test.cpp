@@ -455,12 +455,12 @@ TEST(Report, AblationDeltasAreTheRunsPairedDifferences) {
   // The same rows as CSV, one line per metric, the paired interval where one match has it.
   const std::string csv = ablationCsv(data["ablation"]);
   EXPECT_EQ(csv.rfind("parameter,value,versus,given,scene,matched,metric,delta,relative,verdict,"
-                      "matches,intervals,resolved,ci95Lo,ci95Hi\n",
+                      "matches,intervals,resolved,ci95Lo,ci95Hi,note\n",
                       0),
             0u)
       << csv;
   EXPECT_NE(csv.find("\na,1,0,b=true,static,1,relMse,-0.0123"), std::string::npos) << csv;
-  EXPECT_NE(csv.find(",better,1,1,1,-0.02,-0.0040000000000000001\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find(",better,1,1,1,-0.02,-0.0040000000000000001,\n"), std::string::npos) << csv;
   EXPECT_EQ(ablationCsv(nullptr), "");
 }
 
@@ -541,11 +541,11 @@ TEST(Report, AblationJudgesEveryMatchedIntervalTogether) {
   json ablation = {{"rows", json::array({row})}};
   const std::string csv = ablationCsv(ablation);
   EXPECT_NE(csv.find("\na,1,0,,static,2,relMse,"), std::string::npos) << csv;
-  EXPECT_NE(csv.find(",partly better,2,2,1,,\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find(",partly better,2,2,1,,,\n"), std::string::npos) << csv;
   EXPECT_NE(csv.find("\na,1,0,b=true,static,1,relMse,-0.0123"), std::string::npos) << csv;
-  EXPECT_NE(csv.find(",better,1,1,1,-0.02,-0.0040000000000000001\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find(",better,1,1,1,-0.02,-0.0040000000000000001,\n"), std::string::npos) << csv;
   EXPECT_NE(csv.find("\na,1,0,b=false,static,1,relMse,-0.01"), std::string::npos) << csv;
-  EXPECT_NE(csv.find(",tie,1,1,0,-0.02,0.001\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find(",tie,1,1,0,-0.02,0.001,\n"), std::string::npos) << csv;
   EXPECT_EQ(row["judged"]["ssim"]["verdict"],
             "no interval");  // the statistics rank only relMSE here
   EXPECT_FALSE(row.contains("paired")) << "one interval per match: no single interval for the row";
@@ -593,14 +593,80 @@ TEST(Report, AblationCarriesTheEventFiguresPairedDifferences) {
   EXPECT_EQ(seen, 1);
   EXPECT_NE(
       ablationCsv(data["ablation"])
-          .find("\na,1,0,b=true,static,1,ghosting@12.lagEnergy,-1.5,-0.75,better,1,1,1,-2,-1\n"),
+          .find("\na,1,0,b=true,static,1,ghosting@12.lagEnergy,-1.5,-0.75,better,1,1,1,-2,-1,\n"),
       std::string::npos)
       << ablationCsv(data["ablation"]);
   // The points themselves, for a plot: the event figure's value, interval and rank per point.
   const std::string points = sweepPointsCsv(test::typed(run));
   EXPECT_NE(
       points.find("\nsvgf[a=1],true,1,true,static,ghosting@12.lagEnergy,0.5,0.40000000000000002,"
-                  "0.59999999999999998,1,\n"),
+                  "0.59999999999999998,1,,\n"),
+      std::string::npos)
+      << points;
+}
+
+// What an event figure cannot say is said: a response of 0 frames has no relative change (it read
+// +1.9e15 %), a method that never settled has bounds, not measurements, and an event whose figures
+// rank nobody is named with the reason (it had no column and no word).
+TEST(Report, AblationFiguresSayWhatTheyCannotMeasure) {
+  json run = fixtureRun();
+  const json response = json::parse(R"({"metric": "responseFrames",
+    "ranking": [{"label": "svgf[a=0]", "rank": 1, "mean": 0, "ci95": [0, 0], "tiedWith": []},
+                {"label": "svgf[a=1]", "rank": 2, "mean": 12, "ci95": [12, 12], "tiedWith": []}],
+    "pairs": [{"a": "svgf[a=0]", "b": "svgf[a=1]", "diff": -12, "ci95": [-12, -12], "resolved": true}],
+    "resolvedPairs": 1, "totalPairs": 1})");
+  const json nobody = json::parse(R"({"metric": "lagEnergy", "ranking": [], "pairs": [],
+    "resolvedPairs": 0, "totalPairs": 0,
+    "excluded": "svgf[a=0]: the changed region spreads over 1.1 effective tiles of 16, fewer than 4"})");
+  run["statistics"] = test::statisticsBlock(
+      {{"scenes",
+        {{"static",
+          {{"metric", "relMse"},
+           {"ranking", json::array()},
+           {"pairs", json::array()},
+           {"resolvedPairs", 0},
+           {"totalPairs", 0},
+           {"byMetric", json::object()},
+           {"events", json::array({{{"eventFrame", 3},
+                                    {"kind", "light_off"},
+                                    {"what", "lamp"},
+                                    {"byFigure", {{"lagEnergy", nobody}}}},
+                                   {{"eventFrame", 12},
+                                    {"kind", "light_switch"},
+                                    {"what", "lamp"},
+                                    {"byFigure", {{"responseFrames", response}}}}})}}}}}});
+  for (json& p : run["pairs"])
+    if (p["label"] == "svgf[a=1]")
+      p["ghosting"] = json::array({{{"eventFrame", 12}, {"settled", false}}});
+  const json data = reportData(test::typed(run), test::freshDir("report_ablation_bounds"), nullptr);
+  EXPECT_EQ(data["ablation"]["unrankedFigures"],
+            json({"ghosting@3.lagEnergy on static: the changed region spreads over 1.1 effective "
+                  "tiles of 16, fewer than 4"}));
+  int seen = 0;
+  for (const json& r : data["ablation"]["rows"]) {
+    if (r["parameter"] != "a") continue;
+    ++seen;
+    EXPECT_DOUBLE_EQ(r["delta"]["ghosting@12.responseFrames"].get<double>(), 12);
+    EXPECT_TRUE(r["relative"]["ghosting@12.responseFrames"].is_null()) << r.dump();
+    EXPECT_EQ(r["notes"]["ghosting@12.responseFrames"],
+              "svgf[a=1] never settled within the window: its responseFrames is the window's "
+              "length, a lower bound: the difference is bounded, not measured");
+  }
+  EXPECT_EQ(seen, 1);
+  const std::string csv = ablationCsv(data["ablation"]);
+  EXPECT_NE(csv.find(",static,1,ghosting@12.responseFrames,12,,worse,1,1,1,12,12,\"svgf[a=1] never "
+                     "settled"),
+            std::string::npos)
+      << csv;
+  const std::string points = sweepPointsCsv(test::typed(run));
+  EXPECT_NE(points.find(
+                "\nsvgf[a=1],true,1,true,static,ghosting@12.responseFrames,12,12,12,2,,\"svgf[a=1] "
+                "never settled within the window"),
+            std::string::npos)
+      << points;
+  EXPECT_NE(
+      points.find("\nsvgf[a=0],true,0,true,static,ghosting@3.lagEnergy,,,,,,\"not ranked: the "
+                  "changed region spreads over 1.1 effective tiles of 16, fewer than 4\"\n"),
       std::string::npos)
       << points;
 }
@@ -612,34 +678,47 @@ TEST(Report, SweepPointsAreOneLinePerContenderSceneAndMetric) {
   json run = fixtureRun();
   run["sweep"]["labels"] = {"svgf[a=0]", "svgf[a=1]", "svgf[a=1,b=false]"};
   run["sweep"]["fixed"] = {{"sigmaL", "8"}};
-  for (json& p : run["pairs"])
+  for (json& p : run["pairs"]) {
     if (p["label"] == "svgf[a=1]") p["summary"]["ssim"]["ci95"] = {0.85, 0.95};
+    if (p["label"] == "svgf[a=1]") p["summary"]["relMseCorrected"] = summaryOf(0.039);
+    if (p["label"] == "svgf[a=0]")
+      p["summary"]["tRmae"] = {{"frames", 4}, {"absent", "no frame after the warm-up"}};
+  }
   run["statistics"] =
       test::statisticsBlock(json::parse(R"({"scenes": {"static": {"metric": "relMse",
     "ranking": [{"label": "svgf[a=1]", "rank": 1, "mean": 0.04, "ci95": [0.03, 0.05], "tiedWith": []},
                 {"label": "svgf[a=0]", "rank": 2, "mean": 0.05, "ci95": [0.045, 0.055], "tiedWith": []}],
     "pairs": [], "resolvedPairs": 0, "totalPairs": 0, "byMetric": {}}}})"));
   const std::string csv = sweepPointsCsv(test::typed(run));
-  EXPECT_EQ(csv.rfind("label,point,a,b,sigmaL,scene,metric,mean,ci95Lo,ci95Hi,rank,frames\n", 0),
-            0u)
+  EXPECT_EQ(
+      csv.rfind("label,point,a,b,sigmaL,scene,metric,mean,ci95Lo,ci95Hi,rank,frames,note\n", 0), 0u)
       << csv;
   EXPECT_LT(csv.find("\nsvgf[a=0],true,0,true,8,static,relMse,0.050000000000000003,"
-                     "0.044999999999999998,0.055,2,4\n"),
+                     "0.044999999999999998,0.055,2,4,\n"),
             csv.find("\nsvgf[a=1],true,1,true,8,static,relMse,0.040000000000000001,"
-                     "0.029999999999999999,0.050000000000000003,1,4\n"))
+                     "0.029999999999999999,0.050000000000000003,1,4,\n"))
       << csv;
   EXPECT_NE(csv.find("\nsvgf[a=1],true,1,true,8,static,relMse,"), std::string::npos) << csv;
   EXPECT_NE(csv.find("\nsvgf[a=1],true,1,true,8,static,ssim,0.90000000000000002,"
-                     "0.84999999999999998,0.94999999999999996,,4\n"),
+                     "0.84999999999999998,0.94999999999999996,,4,\n"),
             std::string::npos)
       << csv;
-  EXPECT_NE(csv.find("\nsvgf[a=1],true,1,true,8,static,ms (median),5,,,,4\n"), std::string::npos)
+  EXPECT_NE(csv.find("\nsvgf[a=1],true,1,true,8,static,ms (median),5,,,,4,\n"), std::string::npos)
       << csv;
-  EXPECT_NE(csv.find("\npassthrough,false,,,,static,relMse,0.5,,,,4\n"), std::string::npos) << csv;
-  EXPECT_NE(csv.find("\npassthrough,false,,,,switch,relMse,0.59999999999999998,,,,4\n"),
+  EXPECT_NE(csv.find("\npassthrough,false,,,,static,relMse,0.5,,,,4,\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\npassthrough,false,,,,switch,relMse,0.59999999999999998,,,,4,\n"),
             std::string::npos)
       << csv;
   EXPECT_EQ(csv.find("svgf[a=0],true,0,true,8,switch,"), std::string::npos) << "it failed there";
+  // relMseCorrected takes relMSE's rank (the floor cancels in the paired differences), its own
+  // interval; a summary without a mean says why, with no number.
+  EXPECT_NE(
+      csv.find("\nsvgf[a=1],true,1,true,8,static,relMseCorrected,0.039,,,1,4,ranked as relMse\n"),
+      std::string::npos)
+      << csv;
+  EXPECT_NE(csv.find("\nsvgf[a=0],true,0,true,8,static,tRmae,,,,,4,no frame after the warm-up\n"),
+            std::string::npos)
+      << csv;
   run.erase("sweep");
   EXPECT_EQ(sweepPointsCsv(test::typed(run)), "");
 }

@@ -341,6 +341,9 @@
               'Every row, every scene and every metric is also in ablation.csv beside this page. Δ = metric with the value − metric with the first value, other grid parameters held equal; relative change in brackets (where several differences are matched, the mean of their relative changes, which can differ in sign from the mean Δ: over all scenes Δ is weighted by each scene\'s scale, the bracket is not); time is the median frame time, as everywhere on this page, measured under this machine\'s load (no interval: a difference in time between values that cannot change the work is load). Per scene, a ranked metric\'s Δ is the run\'s paired difference with its 95% interval; where several settings of the other parameters match, and over all scenes, Δ is the mean and the count says how many of the matched paired differences are resolved, and each match follows on its own line ("given" the other parameters\' settings) with its paired interval: an effect under one setting only shows there. Green or red only when every matched difference is resolved that way ("partly worse" or "partly better": resolved under some settings, not under the others; "tie": under none; "mixed": resolved both ways; no colour: a metric without paired intervals). Columns named ghosting@frame.figure or cut@frame.figure are the event windows\' figures (lag, response, ghosting; lower is better), paired as the metrics are.'
         }));
     if (AB.footprintNote) box.append(el('p', { class: 'note footprint-note', text: AB.footprintNote }));
+    const unranked = (AB.unrankedFigures || []).filter((line) => A.state.scene === undefined || line.includes(` on ${A.state.scene}: `));
+    if (unranked.length)
+      box.append(el('p', { class: 'note unranked-figures', text: `Event figures that rank no method here (no column): ${unranked.join('; ')}.` }));
     if (!rows.length) {
       box.append(el('p', { class: 'empty', text: 'No grid parameter has two values with matching pairs.' }));
       return;
@@ -348,28 +351,32 @@
     const names = A.D.metrics.map((m) => m.name).concat(AB.figures || [])
         .filter((name) => rows.some((r) => r.delta[name] !== undefined));
     const classOf = { better: 'better', worse: 'worse', tie: 'tie', mixed: 'tie', 'partly better': 'tie', 'partly worse': 'tie' };
-    const pairedCell = (d, relative, p, verdict) => el('td', {
+    // A figure bounded rather than measured (a method that never settled): marked, the reason on hover.
+    const bound = (note) => (note ? ' (bound)' : '');
+    const pairedCell = (d, relative, p, verdict, note) => el('td', {
       class: classOf[verdict] || null,
       'data-paired': 'true',
       'data-verdict': verdict,
-      text: `${fmt(d)} (${pct(relative)}) ${A.interval(p.ci95)}${p.resolved ? '' : ' tie'}`
+      title: note || null,
+      text: `${fmt(d)} (${pct(relative)}) ${A.interval(p.ci95)}${p.resolved ? '' : ' tie'}${bound(note)}`
     });
     const cells = (r) => names.map((name) => {
       const d = r.delta[name];
       if (d === undefined) return el('td', { text: '–' });
       const j = r.judged[name];
       const p = r.paired && r.paired[name];
-      if (p && j.matches === 1) return pairedCell(d, r.relative[name], p, j.verdict);
-      const said = j.verdict === 'no interval' ?
-          ' no interval' :
-          ` ${j.resolved}/${j.matches} resolved${['mixed', 'partly better', 'partly worse'].includes(j.verdict) ? ', ' + j.verdict : ''}`;
-      return el('td', {class: classOf[j.verdict] || null, 'data-verdict': j.verdict, text: `${fmt(d)} (${pct(r.relative[name])})` + said});
+      const note = r.notes && r.notes[name];
+      if (p && j.matches === 1) return pairedCell(d, r.relative[name], p, j.verdict, note);
+      // The verdict in words too, not by colour alone.
+      const said = j.verdict === 'no interval' ? ' no interval' : ` ${j.resolved}/${j.matches} resolved, ${j.verdict}`;
+      return el('td', {class: classOf[j.verdict] || null, 'data-verdict': j.verdict, title: note || null, text: `${fmt(d)} (${pct(r.relative[name])})` + said + bound(note)});
     });
     const matchCells = (m) => names.map((name) => {
       const d = m.delta[name];
       if (d === undefined) return el('td', { text: '–' });
       const p = m.paired[name];
-      if (p) return pairedCell(d, m.relative[name], p, m.judged[name]);
+      const note = m.notes && m.notes[name];
+      if (p) return pairedCell(d, m.relative[name], p, m.judged[name], note);
       return el('td', { 'data-verdict': m.judged[name], text: `${fmt(d)} (${pct(m.relative[name])}) no interval` });
     });
     const body = [];

@@ -249,7 +249,8 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
   // (rank with ties, label, score, interval), digit for digit.
   const pageOverall = await page.locator('#rankings table.ranking-table').nth(1).locator('tbody tr').evaluateAll(
     (rows) => rows.map((r) => [...r.querySelectorAll('td')].slice(0, 4).map((td) => td.textContent).join(' | ')));
-  const printedOverall = tinyRuns().printed.split('\n\noverall: ')[1].split('\n').slice(1)
+  // The overall block ends at the first blank line (the event tables follow).
+  const printedOverall = tinyRuns().printed.split('\n\noverall: ')[1].split('\n\n')[0].split('\n').slice(1)
     .filter((l) => /^\s+\d/.test(l))
     .map((l) => { const m = l.trim().match(/^(\d+=?)\s+(\S+(?: \(\+paths\))?)\s+(\S+)\s+(\[[^\]]*\]|–|\(1 by definition\))/); return m.slice(1, 5).join(' | '); });
   assert.ok(printedOverall.length >= 3, `the run printed its overall ranking: ${tinyRuns().printed.slice(-800)}`);
