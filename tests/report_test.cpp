@@ -556,6 +556,24 @@ TEST(Report, AblationJudgesEveryMatchedIntervalTogether) {
             (json{{"verdict", "mixed"}, {"matches", 2}, {"intervals", 2}, {"resolved", 2}}));
 }
 
+// A scripted event of the fixture's scene "static" with its figures' rankings (statistics JSON).
+json event(int frame, const json& byFigure) {
+  return {
+      {"eventFrame", frame}, {"kind", "light_switch"}, {"what", "lamp"}, {"byFigure", byFigure}};
+}
+// Statistics that rank nothing on "static" but its events.
+json staticSceneEvents(const json& events) {
+  return test::statisticsBlock({{"scenes",
+                                 {{"static",
+                                   {{"metric", "relMse"},
+                                    {"ranking", json::array()},
+                                    {"pairs", json::array()},
+                                    {"resolvedPairs", 0},
+                                    {"totalPairs", 0},
+                                    {"byMetric", json::object()},
+                                    {"events", events}}}}}});
+}
+
 // An ablation of an anti-lag term is about lag: the event figures the statistics rank (per
 // scripted event and camera cut) are changes of the row too, named as results.db names them,
 // with their paired intervals.
@@ -566,19 +584,7 @@ TEST(Report, AblationCarriesTheEventFiguresPairedDifferences) {
                 {"label": "svgf[a=0]", "rank": 2, "mean": 2.0, "ci95": [1.5, 2.5], "tiedWith": []}],
     "pairs": [{"a": "svgf[a=0]", "b": "svgf[a=1]", "diff": 1.5, "ci95": [1.0, 2.0], "resolved": true}],
     "resolvedPairs": 1, "totalPairs": 1})");
-  run["statistics"] = test::statisticsBlock(
-      {{"scenes",
-        {{"static",
-          {{"metric", "relMse"},
-           {"ranking", json::array()},
-           {"pairs", json::array()},
-           {"resolvedPairs", 0},
-           {"totalPairs", 0},
-           {"byMetric", json::object()},
-           {"events", json::array({{{"eventFrame", 12},
-                                    {"kind", "light_switch"},
-                                    {"what", "lamp"},
-                                    {"byFigure", {{"lagEnergy", ranking}}}}})}}}}}});
+  run["statistics"] = staticSceneEvents(json::array({event(12, {{"lagEnergy", ranking}})}));
   const json data = reportData(test::typed(run), test::freshDir("report_ablation_events"), nullptr);
   EXPECT_EQ(data["ablation"]["figures"], json({"ghosting@12.lagEnergy"}));
   int seen = 0;
@@ -618,23 +624,8 @@ TEST(Report, AblationFiguresSayWhatTheyCannotMeasure) {
   const json nobody = json::parse(R"({"metric": "lagEnergy", "ranking": [], "pairs": [],
     "resolvedPairs": 0, "totalPairs": 0,
     "excluded": "svgf[a=0]: the changed region spreads over 1.1 effective tiles of 16, fewer than 4"})");
-  run["statistics"] = test::statisticsBlock(
-      {{"scenes",
-        {{"static",
-          {{"metric", "relMse"},
-           {"ranking", json::array()},
-           {"pairs", json::array()},
-           {"resolvedPairs", 0},
-           {"totalPairs", 0},
-           {"byMetric", json::object()},
-           {"events", json::array({{{"eventFrame", 3},
-                                    {"kind", "light_off"},
-                                    {"what", "lamp"},
-                                    {"byFigure", {{"lagEnergy", nobody}}}},
-                                   {{"eventFrame", 12},
-                                    {"kind", "light_switch"},
-                                    {"what", "lamp"},
-                                    {"byFigure", {{"responseFrames", response}}}}})}}}}}});
+  run["statistics"] = staticSceneEvents(
+      json::array({event(3, {{"lagEnergy", nobody}}), event(12, {{"responseFrames", response}})}));
   for (json& p : run["pairs"])
     if (p["label"] == "svgf[a=1]")
       p["ghosting"] = json::array({{{"eventFrame", 12}, {"settled", false}}});
