@@ -164,8 +164,7 @@ RunConfig configFrom(const MatrixOptions& o) {
   for (const std::filesystem::path& capture : c.captures)
     if (isCapture(capture))  // else the run names what is wrong with it
       if (const std::string w = shortSequenceWarning(
-              capture.string(), readCaptureDescription(capture).info.frames, c.warmup,
-              "lower --warmup; a capture's frames are what it holds");
+              capture.string(), readCaptureDescription(capture).info.frames, c.warmup, true);
           !w.empty())
         std::cerr << "arena: warning: " << w << "\n";
   // Progress on stderr, as the study's: stdout holds the results table alone.

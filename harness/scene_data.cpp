@@ -7,6 +7,7 @@
 #include "core/error.hpp"
 #include "core/stage_clock.hpp"
 #include "harness/run_matrix.hpp"
+#include "harness/scene_selection.hpp"
 #include "metrics/capture_checks.hpp"
 #include "reports/image_files.hpp"
 
@@ -112,14 +113,19 @@ json sceneRecord(const RunConfig& config, const SceneData& data, const std::stri
   // A run's --max-bounces, which the scene's sequence was rendered under (absent: the scene's own
   // path length): a command that must find the sequence again (`arena refine`) repeats it.
   if (scene && config.render.maxBounces > 0) entry["maxBounces"] = config.render.maxBounces;
+  auto warn = [&](const std::string& warning) {
+    if (!entry.contains("warnings") || !entry["warnings"].is_array())
+      entry["warnings"] = json::array();
+    entry["warnings"].push_back(warning);
+  };
+  // Few frames (or none) after the warm-up: said before the work, and kept with the results (the
+  // report of a 1-frame run showed confident ranks without a word).
+  if (const std::string few = shortSequenceText(info.frames, config.warmup, scene == nullptr);
+      !few.empty())
+    warn(few);
   // Events the scene has on frames a shorter sequence (--frames) does not reach: not measured,
   // said.
   if (scene) {
-    auto warn = [&](const std::string& warning) {
-      if (!entry.contains("warnings") || !entry["warnings"].is_array())
-        entry["warnings"] = json::array();
-      entry["warnings"].push_back(warning);
-    };
     std::string dropped;
     for (const SceneEvent& e : scene->events)
       if (e.frame >= info.frames)

@@ -70,21 +70,32 @@ void requireFitsInMemory(const Scene& scene, const RenderSettings& settings, boo
   }
 }
 
-std::string shortSequenceWarning(const std::string& source, int frames, int warmup,
-                                 const std::string& remedy) {
+std::string shortSequenceText(int frames, int warmup, bool capture) {
   if (frames > warmup + kFewSummarisedFrames) return "";
+  // What the user can change: a scene's frames, a capture's warm-up only (its frames are what it
+  // holds); a warm-up of 0 cannot be lowered.
+  const std::string remedy =
+      capture ? (warmup > 0 ? "lower --warmup; a capture's frames are what it holds"
+                            : "a capture's frames are what it holds: capture more")
+              : (warmup > 0 ? "render more frames with --frames or lower --warmup"
+                            : "render more frames with --frames");
   if (frames > warmup) {
     const int n = frames - warmup;
-    return source + ": only " + std::to_string(n) + (n == 1 ? " frame follows" : " frames follow") +
+    return "only " + std::to_string(n) + (n == 1 ? " frame follows" : " frames follow") +
            " the warm-up of " + std::to_string(warmup) +
            ": the intervals resample so few frames that they hardly cover how a method varies "
            "from frame to frame, and differences resolved on them are fragile (" +
            remedy + "; " + std::to_string(kFewSummarisedFrames + 1) + " or more frames after it)";
   }
-  return source + ": the sequence has " + std::to_string(frames) +
+  return "the sequence has " + std::to_string(frames) +
          " frames and the warm-up excludes the first " + std::to_string(warmup) +
          ": no frame is left to summarise, every summary of this sequence will be absent (" +
          remedy + ")";
+}
+
+std::string shortSequenceWarning(const std::string& source, int frames, int warmup, bool capture) {
+  if (frames > warmup) return "";  // few frames: said with the results (shortSequenceText)
+  return source + ": " + shortSequenceText(frames, warmup, capture);
 }
 
 std::string tinyImageWarning(const std::string& source, int width, int height) {
@@ -107,8 +118,8 @@ std::vector<std::string> shortSequenceWarnings(const std::vector<Scene>& scenes,
         !w.empty())
       out.push_back(std::move(w));
   for (const Scene& scene : scenes)
-    if (std::string w = shortSequenceWarning(scene.file, settings.resolvedFrames(scene), warmup,
-                                             "render more frames with --frames or lower --warmup");
+    if (std::string w =
+            shortSequenceWarning(scene.file, settings.resolvedFrames(scene), warmup, false);
         !w.empty())
       out.push_back(std::move(w));
   return out;

@@ -19,7 +19,7 @@ void requireFitsInMemory(const Scene& scene, const RenderSettings& settings, boo
 void requireRenderable(const Scene& scene, const RenderSettings& settings, bool wholeSequence);
 
 // One line per scene whose sequence (as `settings` render it) has no frame after the warm-up (every
-// summary of its pairs will be absent, metrics.md W) or few (shortSequenceWarning). Said before any
+// summary of its pairs will be absent, metrics.md W). Said before any
 // work, so that a --frames or
 // --warmup slip costs a second, not a run. Also one per scene rendered smaller than 16 pixels on a
 // side (tinyImageWarning): it runs, as a smoke test, but measures little.
@@ -30,10 +30,14 @@ std::vector<std::string> shortSequenceWarnings(const std::vector<Scene>& scenes,
 // kFewSummarisedFrames are left after the warm-up. With 1 to kFewSummarisedFrames left, the line
 // says the intervals hardly cover the frames' variation (statistics.md: frames are resampled in
 // blocks; one frame gives no frame-to-frame variation at all, and a trial's sweep resolved more
-// differences on 1 frame than on 8). `remedy` says what the user can change.
+// differences on 1 frame than on 8). It says what the user can change (a scene's frames; a
+// capture's warm-up only; a warm-up of 0 is not to be lowered); the run keeps it with the scene's
+// results (scenes.<scene>.warnings, printed after the table, shown by the report).
+// shortSequenceWarning: the pre-flight line with the source, only where no frame is left (a slip
+// that would cost the run); empty otherwise.
 inline constexpr int kFewSummarisedFrames = 7;
-std::string shortSequenceWarning(const std::string& source, int frames, int warmup,
-                                 const std::string& remedy);
+std::string shortSequenceText(int frames, int warmup, bool capture);
+std::string shortSequenceWarning(const std::string& source, int frames, int warmup, bool capture);
 
 // The items of a comma-separated list. An empty item ("a,,b", a leading or trailing comma, the
 // empty list) is refused, never skipped: an error "<what> '<list>': an empty entry (a comma too

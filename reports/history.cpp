@@ -456,6 +456,10 @@ HistorySummary writeHistory(const HistoryOptions& o) {
     throw Error("history: --out " + o.out.string() +
                 " holds a run (results.json): the dashboard's index.html would replace the run's "
                 "own page there; choose a directory of its own, e.g. report/history");
+  if (std::error_code ec; fs::exists(o.out / "data.js", ec))
+    throw Error("history: --out " + o.out.string() +
+                " holds a run's report (data.js): the dashboard's index.html would replace it; "
+                "choose a directory of its own, e.g. report/history");
   const fs::path web = o.webDir.empty() ? ReportOptions::defaultWebDir() : o.webDir;
   const fs::path modules =
       o.nodeModulesDir.empty() ? ReportOptions::defaultNodeModulesDir() : o.nodeModulesDir;

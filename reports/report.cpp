@@ -1458,6 +1458,11 @@ ReportSummary writeReport(const ReportOptions& o) {
                 "page would replace that run's own page and mix its images with " +
                 o.run.string() + "'s; choose a directory of its own, or the run's own (" +
                 o.run.string() + ")");
+  if (std::error_code ec; fs::exists(o.out / "history-data.js", ec))
+    throw Error("report: --out " + o.out.string() +
+                " holds a history dashboard (history-data.js): this page's index.html would "
+                "replace it; choose a directory of its own, e.g. report/" +
+                folderName(o.run));
   const RunResults results = loadResults(o.run);
   // Its images are partly another run's than its numbers: a page would show them side by side.
   if (const std::string note = unfinishedRunNote(o.run); !note.empty())

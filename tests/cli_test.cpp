@@ -249,19 +249,26 @@ TEST(CliContract, ARunSaysWhenAScenesReferenceMissesTheGoal) {
       << r.output;
   EXPECT_EQ(tinyImageWarning("s", 16, 16), "");
   EXPECT_EQ(tinyImageWarning("s", 64, 12).find("SSIM"), std::string::npos);
-  // Few frames after the warm-up: said (a trial's sweep resolved more on 1 frame than on 8); the
-  // run above summarises 4.
-  EXPECT_NE(r.output.find("only 4 frames follow the warm-up of 2: the intervals resample so few "
-                          "frames"),
+  // Few frames after the warm-up: said with the results (a trial's sweep resolved more on 1 frame
+  // than on 8); the run above summarises 4.
+  EXPECT_NE(r.output.find("warning: cornell_static: only 4 frames follow the warm-up of 2: the "
+                          "intervals resample so few frames"),
             std::string::npos)
       << r.output;
-  EXPECT_EQ(shortSequenceWarning("s", 16, 8, "more"), "");
-  EXPECT_EQ(
-      shortSequenceWarning("s", 9, 8, "more").rfind("s: only 1 frame follows the warm-up of 8", 0),
-      0u);
-  EXPECT_NE(shortSequenceWarning("s", 15, 8, "more").find("(more; 8 or more frames after it)"),
+  EXPECT_NE(readText(dir / "run" / "results.json").find("only 4 frames follow the warm-up of 2"),
             std::string::npos);
-  EXPECT_NE(shortSequenceWarning("s", 8, 8, "more").find("no frame is left to summarise"),
+  EXPECT_EQ(shortSequenceText(16, 8, false), "");
+  EXPECT_EQ(shortSequenceText(9, 8, false).rfind("only 1 frame follows the warm-up of 8", 0), 0u);
+  EXPECT_NE(shortSequenceText(15, 8, false)
+                .find("(render more frames with --frames or lower --warmup; 8 or more frames "
+                      "after it)"),
+            std::string::npos);
+  // Before the work, only a sequence with no frame left is said (with its source).
+  EXPECT_EQ(shortSequenceWarning("s", 9, 8, false), "");
+  EXPECT_EQ(shortSequenceWarning("s", 8, 8, true).rfind("s: the sequence has 8 frames", 0), 0u);
+  // A warm-up of 0 is not to be lowered (it was advised).
+  EXPECT_EQ(shortSequenceText(4, 0, false).find("--warmup"), std::string::npos);
+  EXPECT_NE(shortSequenceText(4, 0, true).find("a capture's frames are what it holds"),
             std::string::npos);
   const std::string printed =
       "arena refine cornell_static --resolution 16x8 --frames 6 --ref-spp 4 --max-bounces 2 "

@@ -12,6 +12,7 @@
 #include "core/error.hpp"
 #include "metrics/results.hpp"
 #include "metrics/statistics.hpp"
+#include "reports/report.hpp"
 #include "tests/test_util.hpp"
 
 namespace arena {
@@ -608,6 +609,26 @@ TEST(History, WritesTheDashboard) {
                 "own page there; choose a directory of its own, e.g. report/history");
   EXPECT_FALSE(fs::exists(inputs[1] / "index.html"));
   EXPECT_FALSE(fs::exists(inputs[1] / "history-data.js"));
+  // Into a run's report (data.js beside its index.html): refused too.
+  const fs::path page = dir / "page";
+  fs::create_directories(page);
+  std::ofstream(page / "data.js") << "window.ARENA_DATA = {};\n";
+  std::ofstream(page / "index.html") << "<title>report</title>\n";
+  HistoryOptions intoReport = o;
+  intoReport.out = page;
+  EXPECT_NE(test::errorOf([&] { writeHistory(intoReport); }).find("holds a run's report (data.js)"),
+            std::string::npos);
+  EXPECT_EQ(readText(page / "index.html"), "<title>report</title>\n");
+  // ... and a report into this dashboard's folder.
+  ReportOptions report;
+  report.run = inputs[0];
+  report.out = o.out;
+  report.nodeModulesDir = o.nodeModulesDir;
+  EXPECT_NE(test::errorOf([&] {
+              writeReport(report);
+            }).find("holds a history dashboard (history-data.js)"),
+            std::string::npos);
+  EXPECT_NE(readText(o.out / "index.html").find("history.js"), std::string::npos);
 }
 
 }  // namespace

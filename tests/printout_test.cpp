@@ -529,9 +529,13 @@ TEST(StudySummary, AWarningAboutASceneIsStoredAndPrintedOncePerScene) {
   const json results = runMatrix(c);
   ASSERT_EQ(results["pairs"].size(), 4u);
   const json sceneWarnings = results["scenes"]["cornell_static"]["warnings"];
-  ASSERT_EQ(sceneWarnings.size(), 1u) << sceneWarnings;
+  // The capped references, and the two frames after the warm-up (kept with the results too).
+  ASSERT_EQ(sceneWarnings.size(), 2u) << sceneWarnings;
   const std::string warning = sceneWarnings[0];
   EXPECT_NE(warning.find("stopped at the sample cap"), std::string::npos) << warning;
+  EXPECT_EQ(sceneWarnings[1].get<std::string>().rfind("only 2 frames follow the warm-up of 1", 0),
+            0u)
+      << sceneWarnings;
   for (const json& p : results["pairs"])
     for (const json& w : p.value("warnings", json::array()))
       EXPECT_EQ(w.get<std::string>().find("sample cap"), std::string::npos) << p["label"] << ": " << w;
