@@ -53,13 +53,19 @@ std::string intervalText(const Interval& ci) {
 // A scene's pairs whose outputs were bit-identical (pairs[].outputChecksum), "asvgf = svgf" per
 // group: a tie between them measures one output twice.
 std::string identicalOutputsText(const RunResults& results, const std::string& scene) {
+  // Groups in the order of their first member in the run (a sweep's grid order), not by checksum.
+  std::vector<std::string> order;
   std::map<std::string, std::vector<std::string>> byChecksum;
   for (const PairResult& p : results.pairs)
     if (p.scene == scene && p.ok() && p.detail.contains("outputChecksum") &&
-        p.detail["outputChecksum"].is_string())
-      byChecksum[p.detail["outputChecksum"].get<std::string>()].push_back(p.label);
+        p.detail["outputChecksum"].is_string()) {
+      const std::string checksum = p.detail["outputChecksum"].get<std::string>();
+      if (!byChecksum.count(checksum)) order.push_back(checksum);
+      byChecksum[checksum].push_back(p.label);
+    }
   std::string text;
-  for (const auto& [checksum, labels] : byChecksum) {
+  for (const std::string& checksum : order) {
+    const std::vector<std::string>& labels = byChecksum[checksum];
     if (labels.size() < 2) continue;
     if (!text.empty()) text += "; ";
     for (size_t k = 0; k < labels.size(); ++k) text.append(k ? " = " : "").append(labels[k]);
@@ -68,8 +74,13 @@ std::string identicalOutputsText(const RunResults& results, const std::string& s
 }
 
 std::string tiedText(const RankedMethod& m) {
+  // A large sweep ties a method with a hundred others: the first ten, and how many more.
+  constexpr size_t kNamed = 10;
   std::string s;
-  for (const std::string& t : m.tiedWith) s += (s.empty() ? "" : ", ") + t;
+  for (size_t k = 0; k < m.tiedWith.size() && k < kNamed; ++k)
+    s += (s.empty() ? "" : ", ") + m.tiedWith[k];
+  if (m.tiedWith.size() > kNamed)
+    s += " and " + std::to_string(m.tiedWith.size() - kNamed) + " more (results.json, the report)";
   return s.empty() ? "" : "tied with " + s;
 }
 

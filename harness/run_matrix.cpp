@@ -271,16 +271,8 @@ void warnOfIdenticalSweepPoints(json& results, const ProgressFn& say) {
           " (every frame): the parameters that differ between them changed nothing here";
       (*p)["warnings"].push_back(warning);
     }
-    // Said once per group (each point's record names the others): a group of k points said per
-    // point was k lines of k - 1 labels each, hundreds of lines in a large grid.
-    if (say) {
-      std::string members;
-      for (const json* q : group)
-        members += (members.empty() ? "" : ", ") + (*q)["label"].get<std::string>();
-      say("  warning: on " + key.first + " the outputs of " + std::to_string(group.size()) +
-          " points are bit-identical (every frame): " + members +
-          "; the parameters that differ between them changed nothing here");
-    }
+    // Not said here: the run's printout names each scene's identical outputs after its table
+    // (once per group; said here too, a large grid printed them twice, hundreds of lines).
   }
 }
 

@@ -402,6 +402,33 @@ TEST(StudySummary, AMethodThatReadExtraPathsIsMarkedInTheRankings) {
 // a method of the same output bits says so, the best that read extra paths is marked, the speed
 // order gives extra paths' tracing time beside the time it orders (CPU only: the GPU model prices
 // none), and a ranking that lists a method above a lower mean says why.
+// A large sweep: a method tied with a hundred others names ten and counts the rest (lines of 2,800
+// characters); identical outputs are grouped in the run's order, not the checksums'.
+TEST(StudySummary, LargeSweepsPrintReadableTiesAndGroups) {
+  RankedMethod m;
+  for (const char* name :
+       {"p0", "p1", "p2", "p3", "p4", "p5", "p6", "p7", "p8", "p9", "p10", "p11"})
+    m.tiedWith.push_back(name);
+  EXPECT_EQ(
+      cli::tiedText(m),
+      "tied with p0, p1, p2, p3, p4, p5, p6, p7, p8, p9 and 2 more (results.json, the report)");
+  m.tiedWith.resize(10);
+  EXPECT_EQ(cli::tiedText(m).find("more"), std::string::npos);
+  json results = worstDefaultStudy();
+  const std::string scene = results["scenes"].begin().key();
+  std::vector<std::string> order;
+  for (json& p : results["pairs"])
+    if (p["scene"] == scene) {
+      order.push_back(p["label"]);
+      // Checksums sorting against the run's order: z for the first two, a for the next two.
+      p["outputChecksum"] = order.size() <= 2 ? "z" : order.size() <= 4 ? "a" : p["label"];
+    }
+  ASSERT_GE(order.size(), 4u);
+  std::ostringstream expected;
+  expected << order[0] << " = " << order[1] << "; " << order[2] << " = " << order[3];
+  EXPECT_EQ(cli::identicalOutputsText(test::typed(results), scene), expected.str());
+}
+
 TEST(StudySummary, IdenticalOutputsExtraPathsAndRanksAboveALowerMeanAreSaid) {
   json results = worstDefaultStudy();
   const std::string scene = results["scenes"].begin().key();

@@ -179,11 +179,10 @@ TEST(Sweep, PointsWithIdenticalOutputsAreWarnedOf) {
   const json run = runMatrix(c);
   EXPECT_EQ(identicalTo(run, "svgf[iterations=1,sigmaL=2]"), std::vector<std::string>{same});
   EXPECT_EQ(identicalTo(run, "svgf[iterations=5,sigmaL=8]").size(), 1u);
-  EXPECT_EQ(std::count(said.begin(), said.end(),
-                       "  warning: on cornell_static the outputs of 2 points are bit-identical "
-                       "(every frame): svgf[iterations=1,sigmaL=2], svgf[iterations=5,sigmaL=2]; "
-                       "the parameters that differ between them changed nothing here"),
-            1);
+  // Not said during the run: its printout names them after the table (identicalOutputsText).
+  EXPECT_TRUE(std::none_of(said.begin(), said.end(), [](const std::string& line) {
+    return line.find("bit-identical") != std::string::npos;
+  }));
   EXPECT_NE(pairOf(run, "cornell_static", "svgf[iterations=1,sigmaL=2]")["outputChecksum"],
             pairOf(run, "cornell_static", "svgf[iterations=1,sigmaL=8]")["outputChecksum"]);
   // The grid holds iterations, and iterations=5 ran one pass of five per signal: said on that
