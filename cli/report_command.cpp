@@ -122,6 +122,10 @@ void addReportCommand(CLI::App& app) {
       std::cout << "history: " << s.index.string() << " (" << s.runs << " runs, "
                 << s.failingComparisons << " of " << s.comparisons
                 << " comparison(s) failing `arena compare`'s gate (" << s.failing << " row(s))";
+      if (s.notComparable > 0)
+        std::cout << ", " << s.notComparable
+                  << " of them not comparable (other settings or data compare refuses: it exits 2 "
+                     "there, could not judge, not 1 for a regression; the page says why)";
       // Changes beyond the tolerance that the gate did not resolve are not passes: said, and
       // those it could not judge at all (a database's runs keep no tiles) apart from those within
       // noise.

@@ -348,7 +348,7 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
   json changes = json::array();
   json gated = json::object();  // the gate's tolerance per metric (0 included), from one run on
   for (const Tolerance& t : tolerances) gated[t.metric] = t.relative;
-  size_t failing = 0, unresolved = 0, notJudged = 0;
+  size_t failing = 0, unresolved = 0, notJudged = 0, notComparableRuns = 0;
   std::set<size_t> failingRuns;  // the comparisons (run i against run i - 1) that fail
   // A comparison the gate cannot make (other settings, data it refuses): one row for the whole run,
   // which fails the gate there, saying why.
@@ -360,6 +360,7 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
     json change = comparisonJson({row})[0];
     change["run"] = run;
     ++failing;
+    ++notComparableRuns;
     failingRuns.insert(run);
     changes.push_back(change);
   };
@@ -442,6 +443,7 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
           {"failingComparisons", failingRuns.size()},
           {"unresolved", unresolved},
           {"notJudged", notJudged},
+          {"notComparable", notComparableRuns},
           {"correction", correctionName(correction)},
           {"confidence", bootstrap.confidence},
           {"warnings", historyWarnings},
@@ -484,6 +486,7 @@ HistorySummary writeHistory(const HistoryOptions& o) {
   summary.failingComparisons = data["failingComparisons"].get<size_t>();
   summary.unresolved = data["unresolved"].get<size_t>();
   summary.notJudged = data["notJudged"].get<size_t>();
+  summary.notComparable = data["notComparable"].get<size_t>();
   summary.warnings = std::move(warnings);
   for (const json& w : data["warnings"]) summary.warnings.push_back(w.get<std::string>());
   for (const json& a : data["absent"])

@@ -27,7 +27,8 @@ std::vector<RunResults> loadHistory(const std::vector<std::filesystem::path>& in
 // index i and `fails` (failsGate: the gate's own rule, not restated here); `failing` counts those
 // rows, `failingComparisons` the comparisons (of `comparisons`) with one; `unresolved` the changes
 // beyond the tolerance within noise, `notJudged` those the gate could not judge (runs read from
-// results.db keep no tiles); `correction` and `confidence` say how the rows were judged. Empty
+// results.db keep no tiles), `notComparable` the failing comparisons compare refuses (exit 2: other
+// settings, data it refuses); `correction` and `confidence` say how the rows were judged. Empty
 // `tolerances`: compare's defaults.
 // A gated metric neither run of a pair computed is skipped for that pair (runs over months differ
 // in what they computed); one the caller named that no run computed is an Error. `bootstrap` is
@@ -57,6 +58,9 @@ struct HistorySummary {
   size_t comparisons = 0, failingComparisons = 0;  // run i against run i - 1; those that fail
   size_t unresolved = 0;                           // changes beyond the tolerance within noise
   size_t notJudged = 0;  // changes beyond the tolerance with no tiles to judge them (results.db)
+  // Of the failing comparisons, those `arena compare` refuses (other settings, data it refuses):
+  // it exits 2 there, "could not judge", not the 1 of a regression.
+  size_t notComparable = 0;
   std::vector<std::string> warnings;         // runs given twice; comparisons of too many rows
   std::vector<std::string> absentSummaries;  // "<run>: <scene>: <metric> absent in N pair(s): <why>"
 };

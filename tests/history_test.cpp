@@ -263,6 +263,9 @@ TEST(History, ARunTheGateRefusesIsMarkedNotComparable) {
       ++refused;
   EXPECT_EQ(refused, 2) << data["changes"];  // runs 1 (against 0) and 2 (against 1)
   EXPECT_EQ(data["failing"], 2);
+  // Counted apart too: compare exits 2 there ("could not judge"), not 1 (a regression).
+  EXPECT_EQ(data["notComparable"], 2);
+  EXPECT_EQ(historyData(unedited, {})["notComparable"], 0);
   EXPECT_TRUE(data["series"]["s"].contains("svgf"));
 }
 
