@@ -549,6 +549,18 @@ std::string unsettledNote(const PairResult& pair, const EventFigure& f) {
   return "";
 }
 
+// A method's own value of an event figure (its pairs[].ghosting or .cuts entry), NaN where none:
+// what the ablation and points.csv show, without an interval, where the figure's ranking left the
+// method out for want of one (a changed region too small to resample).
+double pointFigure(const PairResult& pair, const EventFigure& f) {
+  const json& entries = pair.part(f.cut ? "cuts" : "ghosting");
+  if (!entries.is_array()) return kUndefined;
+  for (const json& e : entries)
+    if (e.value("eventFrame", -1) == f.frame && e.contains(f.figure) && e[f.figure].is_number())
+      return e[f.figure].get<double>();
+  return kUndefined;
+}
+
 // The reason a ranking's `excluded` ("a: why; b: why") gives for `label`, or "" where it does not
 // name it: the reason runs to the next "; <label>: " of the run's labels (a reason may hold "; ").
 std::string exclusionReason(const std::string& excluded, const std::string& label,
@@ -734,14 +746,24 @@ json ablationData(const RunResults& results) {
           }
           for (const EventFigure& f : eventFigures(results, scene)) {
             const json d = pairedIn(f.ranking, p->label, q->label);
-            if (!d.is_object()) continue;  // a method the event's ranking leaves out (named there)
-            if (std::find(figures.begin(), figures.end(), f.name) == figures.end())
-              figures.push_back(f.name);
             std::string note = unsettledNote(*p, f);
             if (const std::string other = unsettledNote(*q, f); !other.empty())
               note += (note.empty() ? "" : "; ") + other;
-            record(f.name, d["diff"].get<double>(), rankedValue(*f.ranking, q->label), d, true,
-                   note.empty() ? "" : note + ": the difference is bounded, not measured");
+            // Left out of the figure's ranking (no interval could be drawn): the two methods'
+            // own values, their difference without an interval, the reason in the note.
+            const double a = d.is_object() ? kUndefined : pointFigure(*p, f),
+                         b = d.is_object() ? rankedValue(*f.ranking, q->label) : pointFigure(*q, f);
+            if (!d.is_object() && !(std::isfinite(a) && std::isfinite(b))) continue;
+            if (!d.is_object()) {
+              const std::string why = exclusionReason(f.ranking->excluded, p->label, results);
+              note += (note.empty() ? "" : "; ") + std::string("not ranked, so no interval") +
+                      (why.empty() ? "" : ": " + why);
+            } else if (!note.empty()) {
+              note += ": the difference is bounded, not measured";
+            }
+            if (std::find(figures.begin(), figures.end(), f.name) == figures.end())
+              figures.push_back(f.name);
+            record(f.name, d.is_object() ? d["diff"].get<double>() : a - b, b, d, true, note);
           }
           byMatch[scene].push_back(std::move(match));
           break;
@@ -1084,8 +1106,9 @@ std::string sweepPointsCsv(const RunResults& results) {
           line(front, p.scene, f.name, r->value, r->ci, r->rank, 0, unsettledNote(p, f));
         } else if (const std::string why = exclusionReason(f.ranking->excluded, label, results);
                    !why.empty()) {
-          // Left out of the event's ranking: no value, the statistics' reason.
-          line(front, p.scene, f.name, kUndefined, {}, 0, 0, "not ranked: " + why);
+          // Left out of the event's ranking: its own value where it has one, no interval, no
+          // rank, the statistics' reason.
+          line(front, p.scene, f.name, pointFigure(p, f), {}, 0, 0, "not ranked: " + why);
         }
       }
     }

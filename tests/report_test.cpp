@@ -623,12 +623,16 @@ TEST(Report, AblationFiguresSayWhatTheyCannotMeasure) {
     "resolvedPairs": 1, "totalPairs": 1})");
   const json nobody = json::parse(R"({"metric": "lagEnergy", "ranking": [], "pairs": [],
     "resolvedPairs": 0, "totalPairs": 0,
-    "excluded": "svgf[a=0]: the changed region spreads over 1.1 effective tiles of 16, fewer than 4"})");
+    "excluded": "svgf[a=0]: the changed region spreads over 1.1 effective tiles of 16, fewer than 4; svgf[a=1]: the changed region spreads over 1.1 effective tiles of 16, fewer than 4"})");
   run["statistics"] = staticSceneEvents(
       json::array({event(3, {{"lagEnergy", nobody}}), event(12, {{"responseFrames", response}})}));
-  for (json& p : run["pairs"])
+  for (json& p : run["pairs"]) {
     if (p["label"] == "svgf[a=1]")
-      p["ghosting"] = json::array({{{"eventFrame", 12}, {"settled", false}}});
+      p["ghosting"] = json::array(
+          {{{"eventFrame", 3}, {"lagEnergy", 0.5}}, {{"eventFrame", 12}, {"settled", false}}});
+    if (p["label"] == "svgf[a=0]")
+      p["ghosting"] = json::array({{{"eventFrame", 3}, {"lagEnergy", 2.0}}});
+  }
   const json data = reportData(test::typed(run), test::freshDir("report_ablation_bounds"), nullptr);
   EXPECT_EQ(data["ablation"]["unrankedFigures"],
             json({"ghosting@3.lagEnergy on static: the changed region spreads over 1.1 effective "
@@ -642,6 +646,13 @@ TEST(Report, AblationFiguresSayWhatTheyCannotMeasure) {
     EXPECT_EQ(r["notes"]["ghosting@12.responseFrames"],
               "svgf[a=1] never settled within the window: its responseFrames is the window's "
               "length, a lower bound: the difference is bounded, not measured");
+    // Ranked for nobody (no interval could be drawn): the methods' own values' change, no
+    // interval, the reason.
+    EXPECT_DOUBLE_EQ(r["delta"]["ghosting@3.lagEnergy"].get<double>(), -1.5);
+    EXPECT_EQ(r["judged"]["ghosting@3.lagEnergy"]["verdict"], "no interval");
+    EXPECT_EQ(r["notes"]["ghosting@3.lagEnergy"],
+              "not ranked, so no interval: the changed region spreads over 1.1 effective tiles of "
+              "16, fewer than 4");
   }
   EXPECT_EQ(seen, 1);
   const std::string csv = ablationCsv(data["ablation"]);
@@ -656,7 +667,7 @@ TEST(Report, AblationFiguresSayWhatTheyCannotMeasure) {
             std::string::npos)
       << points;
   EXPECT_NE(
-      points.find("\nsvgf[a=0],true,0,true,static,ghosting@3.lagEnergy,,,,,,\"not ranked: the "
+      points.find("\nsvgf[a=0],true,0,true,static,ghosting@3.lagEnergy,2,,,,,\"not ranked: the "
                   "changed region spreads over 1.1 effective tiles of 16, fewer than 4\"\n"),
       std::string::npos)
       << points;

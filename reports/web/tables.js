@@ -343,7 +343,7 @@
     if (AB.footprintNote) box.append(el('p', { class: 'note footprint-note', text: AB.footprintNote }));
     const unranked = (AB.unrankedFigures || []).filter((line) => A.state.scene === undefined || line.includes(` on ${A.state.scene}: `));
     if (unranked.length)
-      box.append(el('p', { class: 'note unranked-figures', text: `Event figures that rank no method here (no column): ${unranked.join('; ')}.` }));
+      box.append(el('p', { class: 'note unranked-figures', text: `Event figures that rank no method here, so their changes have no interval: ${unranked.join('; ')}.` }));
     if (!rows.length) {
       box.append(el('p', { class: 'empty', text: 'No grid parameter has two values with matching pairs.' }));
       return;
