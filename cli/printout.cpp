@@ -73,6 +73,34 @@ std::string identicalOutputsText(const RunResults& results, const std::string& s
   return text;
 }
 
+std::vector<std::string> otherAbsentSummaryLines(const RunResults& results) {
+  const std::vector<std::string> relMse = absentSummaryLines(results, {"relMse"});
+  std::vector<std::string> out;
+  for (const std::string& line : absentSummaryLines(results, {})) {
+    const size_t colon = line.find(": "), reason = line.find(" pair(s): ");
+    if (colon == std::string::npos || reason == std::string::npos) continue;
+    const std::string scene = line.substr(0, colon), why = line.substr(reason + 10);
+    const bool said = line.compare(colon + 2, 7, "relMse ") == 0 ||
+                      why.rfind("the scene has no reference", 0) == 0 ||
+                      std::any_of(relMse.begin(), relMse.end(), [&](const std::string& r) {
+                        return r.rfind(scene + ": ", 0) == 0 && r.size() >= why.size() &&
+                               r.compare(r.size() - why.size(), why.size(), why) == 0;
+                      });
+    if (!said) out.push_back(line);
+  }
+  return out;
+}
+
+PairWarningCount countPairWarnings(const RunResults& results) {
+  PairWarningCount c;
+  for (const PairResult& p : results.pairs) {
+    const size_t n = p.part("warnings").is_array() ? p.part("warnings").size() : 0;
+    c.warnings += n;
+    c.pairs += n > 0;
+  }
+  return c;
+}
+
 std::string tiedText(const RankedMethod& m) {
   // A large sweep ties a method with a hundred others: the first ten, and how many more.
   constexpr size_t kNamed = 10;
@@ -562,12 +590,8 @@ void printStudySummary(std::ostream& out, const RunResults& results, const Study
   const std::vector<std::string> warnings = sceneWarningLines(results);
   if (!warnings.empty()) out << "\nwarnings\n";
   for (const std::string& line : warnings) out << "  " << line << "\n";
-  size_t pairWarnings = 0, pairsWarned = 0;
-  for (const PairResult& p : results.pairs) {
-    const size_t n = p.part("warnings").is_array() ? p.part("warnings").size() : 0;
-    pairWarnings += n;
-    pairsWarned += n > 0;
-  }
+  const PairWarningCount counted = countPairWarnings(results);
+  const size_t pairWarnings = counted.warnings, pairsWarned = counted.pairs;
   const size_t absent = absentSummaryLines(results, {"relMse"}).size();
   if (pairWarnings > 0 || absent > 0) {
     out << "\n";

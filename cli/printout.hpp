@@ -19,6 +19,16 @@ std::string figureText(double value);
 std::string intervalText(const Interval& interval);
 // "tied with a, b" from a ranking entry's tiedWith, or "".
 std::string tiedText(const RankedMethod& rankedMethod);
+// The absent summaries of metrics other than relMSE whose reason is not one already said (relMSE's
+// own on that scene, as no frame after the warm-up; a scene without a reference): a metric that
+// gave no value on a pair (not finite on every frame) was printed nowhere. One line per scene,
+// metric and reason, as absentSummaryLines.
+std::vector<std::string> otherAbsentSummaryLines(const RunResults& results);
+// The pairs' own warnings (pairs[].warnings): how many, on how many pairs.
+struct PairWarningCount {
+  size_t warnings = 0, pairs = 0;
+};
+PairWarningCount countPairWarnings(const RunResults& results);
 // A scene's pairs whose outputs were bit-identical on every frame (pairs[].outputChecksum), each
 // group "asvgf = svgf", groups separated by "; "; "" when none.
 std::string identicalOutputsText(const RunResults& results, const std::string& scene);

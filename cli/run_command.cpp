@@ -259,6 +259,10 @@ void finish(const std::string& out) {
       std::cout << name << ": identical outputs (bit for bit, every frame): " << same << "\n";
   printSeedSplit(std::cout, results);
   for (const std::string& line : absentSummaryLines(results, {"relMse"})) std::cout << line << "\n";
+  for (const std::string& line : otherAbsentSummaryLines(results)) std::cout << line << "\n";
+  if (const PairWarningCount w = countPairWarnings(results); w.warnings > 0)
+    std::cout << w.warnings << " warning(s) on " << w.pairs
+              << " pair(s): results.json pairs[].warnings, and the report beside each pair\n";
   // What concerns a scene rather than a method (events beyond the frames rendered, an unflagged
   // camera jump, references at their cap): in results.json and the report, and said here too.
   for (const auto& [name, scene] : results.scenes.items())

@@ -429,6 +429,36 @@ TEST(StudySummary, LargeSweepsPrintReadableTiesAndGroups) {
   EXPECT_EQ(cli::identicalOutputsText(test::typed(results), scene), expected.str());
 }
 
+// A metric with no value on a pair (not finite on every frame: a new metric's bug) is printed by
+// the run (only relMSE's absences were); an absence already said (relMSE's own reason on that
+// scene) is not repeated.
+TEST(StudySummary, OtherMetricsAbsentSummariesArePrintedOnce) {
+  json results = worstDefaultStudy();
+  const std::string scene = results["scenes"].begin().key();
+  EXPECT_TRUE(cli::otherAbsentSummaryLines(test::typed(results)).empty());
+  int warned = 0;
+  for (json& p : results["pairs"]) {
+    p["warnings"] = json::array();
+    if (p["scene"] != scene) continue;
+    p["summary"]["lumMae"] = {
+        {"frames", 8}, {"nonFinite", 8}, {"absent", "its value is not finite on 8 of 8 frames"}};
+    if (warned++ < 2) p["warnings"] = json::array({"one", "two"});
+  }
+  const std::vector<std::string> lines = cli::otherAbsentSummaryLines(test::typed(results));
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_EQ(lines[0].rfind(scene + ": lumMae absent in ", 0), 0u) << lines[0];
+  EXPECT_NE(lines[0].find("pair(s): its value is not finite on 8 of 8 frames"), std::string::npos);
+  // The same reason as relMSE's on that scene: said once, with relMSE's line.
+  for (json& p : results["pairs"])
+    if (p["scene"] == scene)
+      p["summary"]["relMse"] = {
+          {"frames", 8}, {"nonFinite", 8}, {"absent", "its value is not finite on 8 of 8 frames"}};
+  EXPECT_TRUE(cli::otherAbsentSummaryLines(test::typed(results)).empty());
+  const cli::PairWarningCount w = cli::countPairWarnings(test::typed(results));
+  EXPECT_EQ(w.warnings, 4u);
+  EXPECT_EQ(w.pairs, 2u);
+}
+
 TEST(StudySummary, IdenticalOutputsExtraPathsAndRanksAboveALowerMeanAreSaid) {
   json results = worstDefaultStudy();
   const std::string scene = results["scenes"].begin().key();
