@@ -8,7 +8,8 @@
 
 namespace arena {
 
-// The families, each declared in the file that computes it. Registering a metric is one line here.
+// The families, each defined in the file that computes it. Registering a family is two lines here:
+// its declaration and its entry in metricFamilies().
 MetricFamily linearErrorFamily();      // error.cpp
 MetricFamily flipFamily();             // flip.cpp
 MetricFamily displayErrorFamily();     // error.cpp

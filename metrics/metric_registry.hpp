@@ -7,8 +7,9 @@
 // A metric family is one computation that yields one or more metrics (linearError gives relMSE,
 // its corrected form, MSE and RMSE at once). A family sees one output frame at a time through a
 // FrameView (and the frames before it through FrameView::previous) and records values with the
-// per-tile sums behind them (metrics/tiles.hpp) into a FrameRecorder. Adding a metric is one file
-// with its family function plus one line in metric_registry.cpp's list.
+// per-tile sums behind them (metrics/tiles.hpp) into a FrameRecorder. Adding a metric's code is one
+// file with its family function plus its declaration and entry in metric_registry.cpp; with its
+// definition in docs/metrics.md and its tests, docs/extending.md lists the five places.
 #include <functional>
 #include <map>
 #include <memory>

@@ -126,6 +126,32 @@ TEST(DenoiserVariants, ConstantSignalStaysConstantOverFrames) {
   }
 }
 
+// Every built-in (and the worked example) counts what a GPU would move in its passes
+// (denoisers/common/gpu_traffic.hpp): without it a run has no predicted GPU time for it, and a
+// developer who added a denoiser without the gpu:: lines got none, unwarned. passthrough copies its
+// input and counts nothing by design (docs/gpu-cost.md).
+TEST(DenoiserVariants, EveryBuiltInCountsItsGpuTraffic) {
+  const int w = 24, h = 16;
+  LayerSet frame = planeFrame(w, h, 3);
+  const Image& signal = frame.get("diffuse");
+  for (const DenoiserInfo* info : contractSubjects()) {
+    if (!info->origin.empty() || info->name == "passthrough") continue;
+    auto denoiser = create(*info);
+    denoiser->setup(w, h);
+    size_t dispatches = 0;
+    for (int t = 0; t < 2; ++t) {  // a second frame: the passes that need a history run too
+      Image output(w, h, 3);
+      denoiser->clearPassStats();
+      denoiser->denoise(test::stillCameraContext(t, w, h), {signal, frame, nullptr}, output);
+      for (const PassStats& pass : denoiser->lastPasses())
+        dispatches += pass.traffic.dispatches.size();
+    }
+    EXPECT_GT(dispatches, 0u) << info->name
+                              << ": no pass recorded GPU traffic (gpu::dispatch, gpu::read, "
+                                 "gpu::write in each ScopedPass; docs/extending.md)";
+  }
+}
+
 TEST(DenoiserVariants, TinyAndOddSizesRun) {
   struct Size {
     int w, h;

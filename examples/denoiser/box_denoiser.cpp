@@ -12,6 +12,7 @@
 #include <cmath>
 
 #include "denoisers/common/footprint.hpp"
+#include "denoisers/common/gpu_traffic.hpp"
 #include "denoisers/denoiser.hpp"
 #include "denoisers/param_table.hpp"
 
@@ -42,7 +43,14 @@ class BoxDenoiser final : public Denoiser {
   void denoise(const FrameContext& ctx, const DenoiserInputs& in, Image& output) override {
     const int r = radius_, w = ctx.width, h = ctx.height;
     const Image& meshId = in.frame.get("meshId");
-    ScopedPass pass(this, "box", double((2 * r + 1) * (2 * r + 1)));  // timed; taps per pixel
+    const double taps = double((2 * r + 1) * (2 * r + 1));
+    ScopedPass pass(this, "box", taps);  // timed; taps per pixel
+    // What a GPU would move for this pass (docs/gpu-cost.md): one dispatch of a thread per pixel,
+    // each reading the window's signal and mesh ids and writing its output. Without these lines
+    // the run has no predicted GPU time for the denoiser (the speed chart's GPU axis).
+    gpu::dispatch(w, h);
+    gpu::read({gpu_buffers::kSignal, gpu_buffers::kMeshId}, w, h, taps);
+    gpu::write(gpu_buffers::kRadiance, w, h);
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
         const float id = meshId.at(x, y);
