@@ -179,6 +179,18 @@ TEST(CliContract, ShardsParamsAndSweepsAreStrict) {
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("--shard '0/1junk'"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir / "run" / "results.json"));
+  // Identical outputs where the scaled footprint rounds the grid's steps together (8 lines): the
+  // likely cause is said with the remedy.
+  r = contract::arenaCli(
+      "sweep --denoiser svgf --grid 'iterations=[1,5]' --warmup 1 --flip none --keep-frames none" +
+      common);
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("cornell_static: identical outputs (bit for bit, every frame): "
+                          "svgf[iterations=1] = svgf[iterations=5] (under the scaled footprint a "
+                          "small image can round radii and steps to the same pixels: "
+                          "footprint=native keeps them apart)"),
+            std::string::npos)
+      << r.output;
 }
 
 TEST(CliContract, EveryOptionShowsItsDefault) {
