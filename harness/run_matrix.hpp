@@ -88,9 +88,10 @@ inline constexpr size_t kManyContenders = 100;
 // A sweep's points whose outputs on a scene are bit-identical (every frame; `outputChecksum`) each
 // get a warning naming the others: the grid's change did nothing there (a filter stage skipped at
 // this resolution, a parameter another one overrides), and their tie is no measurement. Earlier
-// such warnings are replaced (a merge sees every shard's points). Each is also said to `say`. A
-// sweep whose scaled footprint skipped passes at this resolution gets `sweep.footprintNote` (one
-// note; where the grid holds `iterations`, each point skipping passes is warned of instead).
+// such warnings are replaced (a merge sees every shard's points); the run's printout names them
+// after its table (cli: identicalOutputsText), not `say`. A sweep whose scaled footprint skipped
+// passes at this resolution gets `sweep.footprintNote`, said to `say` (one note; where the grid
+// holds `iterations`, each point skipping passes is warned of instead, each said).
 void warnOfIdenticalSweepPoints(nlohmann::json& results, const ProgressFn& say);
 // "label on scene: error" for every failed pair; of a committed run, or of the document runMatrix
 // returns.
