@@ -74,19 +74,14 @@ std::string identicalOutputsText(const RunResults& results, const std::string& s
 }
 
 std::vector<std::string> otherAbsentSummaryLines(const RunResults& results) {
-  const std::vector<std::string> relMse = absentSummaryLines(results, {"relMse"});
+  const std::vector<AbsentSummary> relMse = absentSummaries(results, {"relMse"});
   std::vector<std::string> out;
-  for (const std::string& line : absentSummaryLines(results, {})) {
-    const size_t colon = line.find(": "), reason = line.find(" pair(s): ");
-    if (colon == std::string::npos || reason == std::string::npos) continue;
-    const std::string scene = line.substr(0, colon), why = line.substr(reason + 10);
-    const bool said = line.compare(colon + 2, 7, "relMse ") == 0 ||
-                      why.rfind("the scene has no reference", 0) == 0 ||
-                      std::any_of(relMse.begin(), relMse.end(), [&](const std::string& r) {
-                        return r.rfind(scene + ": ", 0) == 0 && r.size() >= why.size() &&
-                               r.compare(r.size() - why.size(), why.size(), why) == 0;
+  for (const AbsentSummary& a : absentSummaries(results, {})) {
+    const bool said = a.metric == "relMse" || a.why.rfind("the scene has no reference", 0) == 0 ||
+                      std::any_of(relMse.begin(), relMse.end(), [&](const AbsentSummary& r) {
+                        return r.scene == a.scene && r.why == a.why;
                       });
-    if (!said) out.push_back(line);
+    if (!said) out.push_back(absentSummaryText(a));
   }
   return out;
 }

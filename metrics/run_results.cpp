@@ -442,7 +442,8 @@ std::string contenderKind(const std::string& origin) {
   return "stored output";
 }
 
-std::vector<std::string> absentSummaryLines(const RunResults& results, const std::vector<std::string>& metrics) {
+std::vector<AbsentSummary> absentSummaries(const RunResults& results,
+                                           const std::vector<std::string>& metrics) {
   std::map<std::tuple<std::string, std::string, std::string>, int> count;
   for (const PairResult& p : results.pairs) {
     if (!p.ok()) continue;
@@ -465,11 +466,23 @@ std::vector<std::string> absentSummaryLines(const RunResults& results, const std
                      : s.absent}];
       }
   }
-  std::vector<std::string> lines;
+  std::vector<AbsentSummary> out;
   for (const auto& [key, n] : count) {
     const auto& [scene, metric, why] = key;
-    lines.push_back(scene + ": " + metric + " absent in " + std::to_string(n) + " pair(s): " + why);
+    out.push_back({scene, metric, why, n});
   }
+  return out;
+}
+
+std::string absentSummaryText(const AbsentSummary& a) {
+  return a.scene + ": " + a.metric + " absent in " + std::to_string(a.pairs) + " pair(s): " + a.why;
+}
+
+std::vector<std::string> absentSummaryLines(const RunResults& results,
+                                            const std::vector<std::string>& metrics) {
+  std::vector<std::string> lines;
+  for (const AbsentSummary& a : absentSummaries(results, metrics))
+    lines.push_back(absentSummaryText(a));
   return lines;
 }
 

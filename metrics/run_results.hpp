@@ -98,8 +98,17 @@ std::map<std::string, std::string> contenderOrigins(const RunResults& results);
 // output" (a capture's outputs folder).
 std::string contenderKind(const std::string& origin);
 
-// "<scene>: <metric> absent in N pair(s): <reason>". `metrics` empty: every metric the pairs'
-// summaries name. For printouts that show means and must say why one is missing.
+// The absent summaries, one per scene, metric and reason, with how many pairs have it. `metrics`
+// empty: every metric the pairs' summaries name.
+struct AbsentSummary {
+  std::string scene, metric, why;
+  int pairs = 0;
+};
+std::vector<AbsentSummary> absentSummaries(const RunResults& results,
+                                           const std::vector<std::string>& metrics = {});
+// One as "<scene>: <metric> absent in N pair(s): <reason>"; all of them so, for printouts that show
+// means and must say why one is missing.
+std::string absentSummaryText(const AbsentSummary& absent);
 std::vector<std::string> absentSummaryLines(const RunResults& results,
                                             const std::vector<std::string>& metrics = {});
 
