@@ -413,14 +413,14 @@ std::map<std::string, SceneRanking> rankFigures(const std::vector<std::string>& 
     std::vector<std::string> kept;
     std::vector<double> values;
     std::vector<std::vector<double>> replicates;
-    std::string excluded;
+    std::vector<std::pair<std::string, std::string>> excluded;  // label, why
     double widen = 1.0;  // the largest of the methods' (they share the region, so the same)
     for (size_t i = 0; i < labels.size(); ++i) {
       const double v = points[i].count(f) ? points[i].at(f) : kUndefined;
       std::string why = reps[i].absent.count(f) ? reps[i].absent.at(f) : "";
       if (why.empty() && !std::isfinite(v)) why = "no value";
       if (!why.empty()) {
-        excluded += (excluded.empty() ? "" : "; ") + labels[i] + ": " + why;
+        excluded.push_back({labels[i], why});
         continue;
       }
       kept.push_back(labels[i]);
@@ -431,7 +431,7 @@ std::map<std::string, SceneRanking> rankFigures(const std::vector<std::string>& 
     // The same interval kind as the pair's own figures (addFigureIntervals).
     SceneRanking r = rankReplicates(f, true, kept, values, replicates, cfg.confidence, widen);
     for (RankedMethod& m : r.ranking) m.ci = clipped(m.ci, f);  // as the pair's own figure
-    r.excluded = excluded;
+    for (const auto& [label, why] : excluded) r.leaveOut(label, why);
     r.replicates.clear();  // the figure's replicates serve no overall score
     byFigure[f] = std::move(r);
   }

@@ -54,6 +54,21 @@ SceneRanking::Pair readPair(JsonReader& p, const char* diffKey) {
   return x;
 }
 
+// "excluded" and "leftOut" (absent in results written before it was stored: the text alone). The
+// text must be the list joined: one edited without the other would give two reasons.
+void readLeftOut(JsonReader& r, LeftOutMethods& out) {
+  const std::string text = r.has("excluded") ? r.string("excluded") : "";
+  for (JsonReader& l : r.optionalArray("leftOut")) {
+    out.leaveOut(l.string("label"), l.string("why"));
+    l.rejectUnread();
+  }
+  if (out.leftOut.empty())
+    out.excluded = text;
+  else if (out.excluded != text)
+    r.fail("excluded",
+           "expected \"" + out.excluded + "\" (the leftOut entries joined), got \"" + text + "\"");
+}
+
 // The members of a ranking block; the caller rejects what is left unread (a scene's block holds
 // byMetric, events and cuts beside them).
 SceneRanking readSceneRankingMembers(JsonReader& r) {
@@ -70,7 +85,7 @@ SceneRanking readSceneRankingMembers(JsonReader& r) {
   if (r.integer("totalPairs") != int(s.pairs.size()))
     r.fail("totalPairs", "expected " + std::to_string(s.pairs.size()) +
                              " (the pairs listed), got " + r.node().at("totalPairs").dump());
-  if (r.has("excluded")) s.excluded = r.string("excluded");
+  readLeftOut(r, s);
   return s;
 }
 
@@ -85,7 +100,7 @@ OverallRanking readOverall(JsonReader r) {
   o.normalisation = r.string("normalisation");
   o.baseline = r.string("baseline");
   o.ranking = readRanking(r, "score");
-  if (r.has("excluded")) o.excluded = r.string("excluded");
+  readLeftOut(r, o);
   // Absent in results written before they were stored.
   for (JsonReader& p : r.optionalArray("pairs")) o.pairs.push_back(readPair(p, "logRatio"));
   r.rejectUnread();
@@ -259,8 +274,7 @@ RunStatistics analyseRun(const json& results, const BootstrapConfig& cfg) {
     const auto& documents = pairsOfScene[scene];  // in the order of pairs
     for (const MetricDefinition* m : rankedMetrics) {
       std::vector<std::pair<std::string, const MetricTiles*>> methods;
-      std::string notFinite;
-      std::vector<std::pair<std::string, std::string>> notFiniteLabels;  // label, why
+      std::vector<std::pair<std::string, std::string>> notFinite;  // label, why
       bool any = false;
       for (size_t k = 0; k < pairs.size(); ++k) {
         const auto& [label, tiles] = pairs[k];
@@ -273,16 +287,14 @@ RunStatistics analyseRun(const json& results, const BootstrapConfig& cfg) {
             documents[k].second->value("summary", json::object()).value(m->name, json::object());
         if (summary.value("nonFinite", 0) > 0) {
           const std::string why = summary.value("absent", std::string("not finite"));
-          notFinite += (notFinite.empty() ? "" : "; ") + label + ": " + why;
-          notFiniteLabels.push_back({label, why});
+          notFinite.push_back({label, why});
           continue;
         }
         methods.push_back({label, it == tiles.end() ? nullptr : &it->second});
       }
       if (!any) continue;
       SceneRanking r = rankScene(m->name, m->lowerIsBetter(), methods, scene, cfg);
-      if (!notFinite.empty()) r.excluded += (r.excluded.empty() ? "" : "; ") + notFinite;
-      r.leftOut.insert(r.leftOut.end(), notFiniteLabels.begin(), notFiniteLabels.end());
+      for (const auto& [label, why] : notFinite) r.leaveOut(label, why);
       if (m->name == out.rankedOn) {
         st.emplace();
         st->ranking = r;

@@ -451,6 +451,38 @@ json rankingJson(const std::vector<RankedMethod>& ranking, const char* valueName
 
 }  // namespace
 
+void LeftOutMethods::leaveOut(const std::string& label, const std::string& why) {
+  excluded += (excluded.empty() ? "" : "; ") + label + ": " + why;
+  leftOut.push_back({label, why});
+}
+
+std::string LeftOutMethods::reasonFor(const std::string& label,
+                                      const std::vector<std::string>& labels) const {
+  if (!leftOut.empty()) {
+    for (const auto& [l, why] : leftOut)
+      if (l == label) return why;
+    return "";
+  }
+  size_t at = 0;
+  for (;; at += label.size()) {
+    at = excluded.find(label + ": ", at);
+    if (at == std::string::npos) return "";
+    if (at == 0 || (at >= 2 && excluded.compare(at - 2, 2, "; ") == 0)) break;
+  }
+  const size_t from = at + label.size() + 2;
+  size_t to = excluded.size();
+  for (const std::string& other : labels)
+    if (const size_t next = excluded.find("; " + other + ": ", from); next < to) to = next;
+  return excluded.substr(from, to - from);
+}
+
+void LeftOutMethods::writeTo(json& j) const {
+  if (!excluded.empty()) j["excluded"] = excluded;
+  if (leftOut.empty()) return;
+  json& list = j["leftOut"] = json::array();
+  for (const auto& [label, why] : leftOut) list.push_back({{"label", label}, {"why", why}});
+}
+
 SceneRanking rankScene(const std::string& metric, bool lowerIsBetter,
                        const std::vector<std::pair<std::string, const MetricTiles*>>& methods,
                        const std::string& seedName, const BootstrapConfig& cfg) {
@@ -486,9 +518,7 @@ SceneRanking rankScene(const std::string& metric, bool lowerIsBetter,
   }
   SceneRanking out = rankReplicates(metric, lowerIsBetter, labels, means, reps, cfg.confidence);
   out.scene = seedName;
-  for (const auto& [label, why] : excluded)
-    out.excluded += (out.excluded.empty() ? "" : "; ") + label + ": " + why;
-  out.leftOut = std::move(excluded);
+  for (const auto& [label, why] : excluded) out.leaveOut(label, why);
   return out;
 }
 
@@ -540,7 +570,7 @@ json SceneRanking::toJson() const {
             {"pairs", p},
             {"resolvedPairs", resolvedPairs},
             {"totalPairs", int(pairs.size())}};
-  if (!excluded.empty()) j["excluded"] = excluded;
+  writeTo(j);
   return j;
 }
 
@@ -591,14 +621,13 @@ OverallRanking rankOverall(const std::vector<const SceneRanking*>& scenes,
     if (why.empty())
       kept.push_back(label);
     else
-      out.excluded += (out.excluded.empty() ? "" : "; ") + label + ": " + why;
+      out.leaveOut(label, why);
   }
   // An overall score is a method's error relative to another's: with one method there is nothing
   // to compare, and its score against itself (1, interval [1, 1]) would read as a result.
   if (kept.size() == 1)
-    out.excluded +=
-        (out.excluded.empty() ? "" : "; ") + kept.front() +
-        ": the only method ranked on every scene (an overall score compares two or more)";
+    out.leaveOut(kept.front(),
+                 "the only method ranked on every scene (an overall score compares two or more)");
   if (kept.size() < 2) return out;
   out.baseline = kept.front();
   for (auto it = preferredBaselines.rbegin(); it != preferredBaselines.rend(); ++it)
@@ -663,7 +692,7 @@ json OverallRanking::toJson() const {
             {"baseline", baseline},
             {"ranking", rankingJson(ranking, "score")}};
   if (!pairs.empty()) j["pairs"] = p;
-  if (!excluded.empty()) j["excluded"] = excluded;
+  writeTo(j);
   return j;
 }
 

@@ -160,7 +160,19 @@ struct RankedMethod {
   // extraPathsPerPixel); NaN: none.
   double extraPathsPerPixel = kUndefined;
 };
-struct SceneRanking {
+// The methods a ranking left out, each with its reason: `leftOut` (results: "leftOut", [{label,
+// why}]) and the same joined for reading ("excluded": "a: why; b: why"). Results written before
+// "leftOut" was stored hold only the text; reasonFor reads it from there.
+struct LeftOutMethods {
+  std::string excluded;
+  std::vector<std::pair<std::string, std::string>> leftOut;
+  void leaveOut(const std::string& label, const std::string& why);
+  // The reason given for `label`, "" where it is not left out. From text alone, a reason runs to
+  // the next "; <label>: " of `labels` (the run's labels: a reason may hold "; ").
+  std::string reasonFor(const std::string& label, const std::vector<std::string>& labels) const;
+  void writeTo(nlohmann::json& j) const;  // "excluded" and "leftOut", where any
+};
+struct SceneRanking : LeftOutMethods {
   std::string metric;
   std::vector<RankedMethod> ranking;  // best first
   struct Pair {
@@ -170,9 +182,6 @@ struct SceneRanking {
   std::vector<Pair> pairs;
   int resolvedPairs = 0;
   std::map<std::string, std::vector<double>> replicates;  // per label, for the overall ranking
-  std::string excluded;                                   // methods left out, and why
-  // Their labels and each one's reason (in memory: the overall ranking names them too).
-  std::vector<std::pair<std::string, std::string>> leftOut;
   std::string scene;  // the scene ranked (rankScene's seed name), for the overall ranking's reasons
   nlohmann::json toJson() const;
 };
@@ -191,14 +200,13 @@ SceneRanking rankReplicates(const std::string& metric, bool lowerIsBetter,
 // value on that scene, so no scene dominates by its scale. (The ordering does not depend on which
 // baseline: the geometric mean of ratios is the ratio of geometric means.) Differences are the
 // mean over scenes of log ratios, with intervals from the scenes' replicates.
-struct OverallRanking {
+struct OverallRanking : LeftOutMethods {
   std::string normalisation, baseline;
   std::vector<RankedMethod> ranking;  // value = score
   // Every pair of ranked methods: diff = log(score_a / score_b), the mean over scenes of the log
   // ratios, with its interval on the same scale (resolved: excludes 0); the ties above read from
   // these. Results written before they were stored have none.
   std::vector<SceneRanking::Pair> pairs;
-  std::string excluded;
   nlohmann::json toJson() const;
 };
 // The baseline is the first of `preferredBaselines` ranked on every scene (else the first such

@@ -561,21 +561,13 @@ double pointFigure(const PairResult& pair, const EventFigure& f) {
   return kUndefined;
 }
 
-// The reason a ranking's `excluded` ("a: why; b: why") gives for `label`, or "" where it does not
-// name it: the reason runs to the next "; <label>: " of the run's labels (a reason may hold "; ").
-std::string exclusionReason(const std::string& excluded, const std::string& label,
+// The reason `ranking` gives for leaving `label` out, "" where it does not (the run's labels read
+// a reason from results that stored only its text).
+std::string exclusionReason(const SceneRanking& ranking, const std::string& label,
                             const RunResults& results) {
-  size_t at = 0;
-  for (;; at += label.size()) {
-    at = excluded.find(label + ": ", at);
-    if (at == std::string::npos) return "";
-    if (at == 0 || excluded.compare(at - 2, 2, "; ") == 0) break;
-  }
-  const size_t from = at + label.size() + 2;
-  size_t to = excluded.size();
-  for (const PairResult& p : results.pairs)
-    if (const size_t next = excluded.find("; " + p.label + ": ", from); next < to) to = next;
-  return excluded.substr(from, to - from);
+  std::vector<std::string> labels;
+  for (const PairResult& p : results.pairs) labels.push_back(p.label);
+  return ranking.reasonFor(label, labels);
 }
 
 // Why an event's figure ranks nobody on a scene (every method left out: a changed region too small
@@ -587,7 +579,7 @@ std::vector<std::string> unrankedFigures(const RunResults& results, const std::s
     if (!f.ranking->ranking.empty() || f.ranking->excluded.empty()) continue;
     std::vector<std::string> reasons;
     for (const PairResult& p : results.pairs)
-      if (const std::string why = exclusionReason(f.ranking->excluded, p.label, results);
+      if (const std::string why = exclusionReason(*f.ranking, p.label, results);
           p.scene == scene && !why.empty() &&
           std::find(reasons.begin(), reasons.end(), why) == reasons.end())
         reasons.push_back(why);
@@ -755,7 +747,7 @@ json ablationData(const RunResults& results) {
                          b = d.is_object() ? rankedValue(*f.ranking, q->label) : pointFigure(*q, f);
             if (!d.is_object() && !(std::isfinite(a) && std::isfinite(b))) continue;
             if (!d.is_object()) {
-              const std::string why = exclusionReason(f.ranking->excluded, p->label, results);
+              const std::string why = exclusionReason(*f.ranking, p->label, results);
               note += (note.empty() ? "" : "; ") + std::string("not ranked, so no interval") +
                       (why.empty() ? "" : ": " + why);
             } else if (!note.empty()) {
@@ -1104,7 +1096,7 @@ std::string sweepPointsCsv(const RunResults& results) {
       for (const EventFigure& f : eventFigures(results, p.scene)) {
         if (const RankedMethod* r = rankedIn(f.ranking, label)) {
           line(front, p.scene, f.name, r->value, r->ci, r->rank, 0, unsettledNote(p, f));
-        } else if (const std::string why = exclusionReason(f.ranking->excluded, label, results);
+        } else if (const std::string why = exclusionReason(*f.ranking, label, results);
                    !why.empty()) {
           // Left out of the event's ranking: its own value where it has one, no interval, no
           // rank, the statistics' reason.

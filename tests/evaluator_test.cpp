@@ -135,7 +135,9 @@ TEST(Evaluation, RunResultsAreBitIdenticalToTheHarnessBeforeTheStage) {
   // tiles (its intervals, now the crossed bootstrap's, were the only numbers to move) and the
   // scenes recorded their content checksums (scenes.<s>.content, new). Recorded again when
   // passthrough's output became the frame's colour layer itself rather than its remodulated
-  // signals (only passthrough's values moved, by rounding: 4e-9 relative at most).
+  // signals (only passthrough's values moved, by rounding: 4e-9 relative at most). Recorded again
+  // when a ranking stored the methods it left out as a list beside its text (leftOut: only the
+  // two events' hashes moved, no number).
   const std::string file = std::string(ARENA_TEST_DATA) + "/evaluation_golden.json";
   const json now = test::goldenPart(
       withoutNewMetrics(runMatrix(test::goldenRunConfig(test::freshDir("golden_run"), test::freshDir("golden_cache")))));

@@ -42,6 +42,9 @@ RunStatistics everyPart() {
   scene.ranking = ranking("relMse", 0);
   scene.ranking.excluded = "asvgf: no relMse data";
   scene.byMetric["ssim"] = ranking("ssim", 0.5);
+  // A label and a reason holding the text's own separators: only the stored list keeps them apart.
+  scene.byMetric["ssim"].leaveOut("ext: a; b", "no ssim data; its process failed");
+  scene.byMetric["ssim"].leaveOut("asvgf", "no ssim data");
   scene.events.push_back({12, "light_off", "lamp", {{"lagEnergy", ranking("lagEnergy", 1)}}});
   scene.cuts.push_back({20, "camera_cut", "", {{"oldViewLeak", ranking("oldViewLeak", 2)}}});
   s.scenes["cornell_static"].ranking = ranking("relMse", 3);
@@ -75,6 +78,14 @@ TEST(RunStatistics, EveryPartRoundTripsByteForByte) {
   EXPECT_TRUE(relMse.pairs[0].d.resolved());
   EXPECT_FALSE(relMse.pairs[2].d.resolved());
   EXPECT_EQ(relMse.excluded, "asvgf: no relMse data");
+  // Written before the list was stored: the reason is read from the text.
+  EXPECT_TRUE(relMse.leftOut.empty());
+  EXPECT_EQ(relMse.reasonFor("asvgf", {"svgf", "asvgf"}), "no relMse data");
+  EXPECT_EQ(relMse.reasonFor("svgf", {"svgf", "asvgf"}), "");
+  EXPECT_EQ(ssim->excluded, "ext: a; b: no ssim data; its process failed; asvgf: no ssim data");
+  EXPECT_EQ(ssim->reasonFor("ext: a; b", {}), "no ssim data; its process failed");
+  EXPECT_EQ(ssim->reasonFor("asvgf", {}), "no ssim data");
+  EXPECT_EQ(ssim->reasonFor("b", {}), "");
   const EventStatistics& event = read.scenes.at("light_switch").events.at(0);
   EXPECT_EQ(event.eventFrame, 12);
   EXPECT_EQ(event.what, "lamp");
@@ -136,6 +147,24 @@ TEST(RunStatistics, EveryMisshapenPartIsNamedByItsPath) {
             scene + ".resolvedPairs: expected 1 (the pairs marked resolved), got 0");
   EXPECT_EQ(errorWith([](json& d) { d["scenes"]["light_switch"]["byMetric"]["ssim"]["ranking"][0]["ci95"] = {1}; }),
             scene + ".byMetric.ssim.ranking[0].ci95: expected [low, high] (or null), got [1]");
+  // The text edited without its list (or the list without its text) would give two reasons.
+  EXPECT_EQ(errorWith([](json& d) {
+              d["scenes"]["light_switch"]["byMetric"]["ssim"]["excluded"] = "asvgf: no ssim data";
+            }),
+            scene +
+                ".byMetric.ssim.excluded: expected \"ext: a; b: no ssim data; its process failed; "
+                "asvgf: no " +
+                "ssim data\" (the leftOut entries joined), got \"asvgf: no ssim data\"");
+  EXPECT_EQ(errorWith([](json& d) {
+              d["scenes"]["light_switch"]["byMetric"]["ssim"]["leftOut"][1]["why"] = 3;
+            }),
+            scene + ".byMetric.ssim.leftOut[1].why: expected a string, got a number");
+  EXPECT_EQ(errorWith([](json& d) {
+              d["scenes"]["light_switch"]["byMetric"]["ssim"]["leftOut"][0]["reason"] = "x";
+            }),
+            scene +
+                ".byMetric.ssim.leftOut[0].reason: unknown field (check the spelling; unknown "
+                "fields are errors)");
   EXPECT_EQ(errorWith([](json& d) { d["scenes"]["light_switch"]["events"][0]["whatt"] = "lamp"; }),
             scene + ".events[0].whatt: unknown field (check the spelling; unknown fields are errors)");
   EXPECT_EQ(errorWith([](json& d) { d["scenes"]["light_switch"]["cuts"][0]["byFigure"]["oldViewLeak"]["pairs"] = 1; }),
