@@ -582,6 +582,13 @@ void printStudySummary(std::ostream& out, const RunResults& results, const Study
     out << "\nreference quality goal (noise floor <= " << kReferenceQualityGoal
         << " x the best corrected relMSE) missed on " << missed.size() << " scene(s)\n";
   for (const std::string& line : missed) out << "  " << line << "\n";
+  if (const std::vector<std::string> between = segmentQualityLines(results.scenes);
+      !between.empty()) {
+    out << "\nreference quality goal missed between events (met for the whole scene) on "
+        << between.size()
+        << " scene(s): the event figures there carry more of the reference's noise\n";
+    for (const std::string& line : between) out << "  " << line << "\n";
+  }
   const std::vector<std::string> warnings = sceneWarningLines(results);
   if (!warnings.empty()) out << "\nwarnings\n";
   for (const std::string& line : warnings) out << "  " << line << "\n";

@@ -304,6 +304,14 @@ void finish(const std::string& out) {
               << "); their rankings hold more ties and the overall score reads nearer 1:\n";
     for (const std::string& line : missed) std::cout << "  " << line << "\n";
   }
+  if (const std::vector<std::string> between = segmentQualityLines(results.scenes);
+      !between.empty()) {
+    std::cout
+        << "\nreference quality: " << between.size()
+        << " scene(s) meet the goal as a whole but not between their events; the event figures "
+           "there carry more of the reference's noise:\n";
+    for (const std::string& line : between) std::cout << "  " << line << "\n";
+  }
   // A reference whose quality cannot be judged (a capture's without its variance) is said too: a
   // 4-spp reference scored as if converged otherwise passes without a word.
   for (const std::string& line : unknown) std::cout << "reference quality: " << line << "\n";

@@ -244,7 +244,12 @@ void addReferenceQuality(json& results, int warmup, const std::map<std::string, 
          {"cappedReferences", capped},
          {"references", references},
          {"verdict", verdict}};
-    if (!segments.empty()) q["segments"] = segments;
+    if (!segments.empty()) {
+      q["segments"] = segments;
+      // False where the verdict names a segment above the goal (a scene that meets it as a whole):
+      // the readers say that verdict too, not only a missed goal's.
+      q["segmentsMeet"] = segmentNote.empty();
+    }
     scene["referenceQuality"] = q;
   }
 }
@@ -345,6 +350,16 @@ std::vector<std::string> referenceQualityLines(const json& scenes) {
   if (!scenes.is_object()) return lines;
   for (const auto& [name, scene] : scenes.items())
     if (scene.contains("referenceQuality")) lines.push_back(scene["referenceQuality"].value("verdict", ""));
+  return lines;
+}
+
+std::vector<std::string> segmentQualityLines(const json& scenes) {
+  std::vector<std::string> lines;
+  if (!scenes.is_object()) return lines;
+  for (const auto& [name, scene] : scenes.items())
+    if (const json q = scene.value("referenceQuality", json::object());
+        q.value("meets", false) && !q.value("segmentsMeet", true))
+      lines.push_back(q.value("verdict", name));
   return lines;
 }
 

@@ -81,5 +81,9 @@ std::vector<ReferenceRefinement> planReferenceRefinement(
 std::string refinementNote(const ReferenceRefinement& plan, double budget);
 // One line per scene for a printed summary (the verdicts above, aligned), from results.scenes.
 std::vector<std::string> referenceQualityLines(const nlohmann::json& scenes);
+// The verdicts of the scenes that meet the goal as a whole but not between their events
+// (referenceQuality.segmentsMeet false): the lag and ghosting figures measured there carry more of
+// the reference's noise than the scene's verdict says.
+std::vector<std::string> segmentQualityLines(const nlohmann::json& scenes);
 
 }  // namespace arena

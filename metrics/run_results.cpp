@@ -207,7 +207,7 @@ struct ShapeReader {
       const json& q = member(sc, path, "referenceQuality", &json::is_object, "an object");
       onlyKnown(q, at,
                 {"floor", "bestCorrectedRelMse", "bestLabel", "ratio", "goal", "meets",
-                 "cappedReferences", "references", "verdict", "segments"});
+                 "cappedReferences", "references", "verdict", "segments", "segmentsMeet"});
       // The ratio between the scene's events: {from, to, ratio} each.
       if (q.contains("segments")) {
         arrayOf(q, at, "segments", isObject, "an object (from, to, ratio)");
@@ -223,6 +223,7 @@ struct ShapeReader {
       for (const char* k : {"floor", "bestCorrectedRelMse", "ratio", "goal"}) optionalFinite(q, at, k);
       optionalText(q, at, "bestLabel");
       optionalFlag(q, at, "meets");
+      optionalFlag(q, at, "segmentsMeet");
       for (const char* k : {"cappedReferences", "references"}) optionalCount(q, at, k);
     }
     if (sc.contains("assets")) {

@@ -39,7 +39,8 @@ std::string sentence(const std::string& subject) {
 }
 
 // The results of a default study at its worst for the printout: every shipped scene, every
-// built-in denoiser, ties, two scenes missing the reference goal, a capped-reference warning on
+// built-in denoiser, ties, two scenes missing the reference goal and one missing it between its
+// events only, a capped-reference warning on
 // every scene, asset fallbacks on two, and warnings on every pair.
 json worstDefaultStudy() {
   std::vector<std::string> scenes;  // the suite's scene files (loading them would need the extracted assets)
@@ -62,6 +63,11 @@ json worstDefaultStudy() {
         {"referenceQuality",
          {{"meets", !missed}, {"verdict", sentence(name) + (missed ? " goal NOT MET" : " goal met")}}},
         {"warnings", {sentence(name + " capped references")}}};
+    if (i == 2)
+      results["scenes"][name]["referenceQuality"] = {
+          {"meets", true},
+          {"segmentsMeet", false},
+          {"verdict", sentence(name) + " segment NOT MET"}};
     if (i >= scenes.size() - 2)
       results["scenes"][name]["assets"] = {{"warnings", {"fallback a", "fallback b", "fallback c"}}};
     json ranking = json::array();
@@ -136,6 +142,10 @@ TEST(StudySummary, TheDefaultStudyFitsOnOneScreen) {
   }
   EXPECT_EQ(occurrences(text, "goal NOT MET"), 2u);
   EXPECT_EQ(occurrences(text, "goal met"), 0u);
+  EXPECT_EQ(occurrences(text, "segment NOT MET"), 1u);
+  EXPECT_NE(text.find("goal missed between events (met for the whole scene) on 1 scene(s)"),
+            std::string::npos)
+      << text;
   EXPECT_EQ(occurrences(text, "a floor"), 0u) << "the pairs' own warnings are counted, not listed";
   EXPECT_EQ(occurrences(text, "report/index.html"), 1u);
   // The full tables are longer: they are what --verbose adds.

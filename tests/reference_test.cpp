@@ -766,6 +766,9 @@ TEST(Reference, QualityVerdictNamesASegmentAboveTheGoal) {
                 ": met for the scene's mean, not between its events (frames 4-7 0.2 > 0.1"),
             std::string::npos)
       << q["verdict"];
+  // Marked for the readers, which say it as they say a missed goal.
+  EXPECT_FALSE(q["segmentsMeet"].get<bool>());
+  EXPECT_EQ(segmentQualityLines(results["scenes"]), std::vector<std::string>{q["verdict"]});
   // An event beyond the frames (a sequence shorter than the scene's script) bounds nothing.
   results["scenes"]["switch"]["events"].push_back(
       {{"frame", 30}, {"kind", "light_on"}, {"what", "lamp"}});
@@ -782,6 +785,8 @@ TEST(Reference, QualityVerdictNamesASegmentAboveTheGoal) {
   EXPECT_NEAR(before["segments"][0]["ratio"].get<double>(), 0.2, 1e-12);
   EXPECT_EQ(before["verdict"].get<std::string>().find("between its events"), std::string::npos)
       << before["verdict"];
+  EXPECT_TRUE(before["segmentsMeet"].get<bool>());
+  EXPECT_TRUE(segmentQualityLines(results["scenes"]).empty());
   // Without events there is one segment, the scene's: nothing more is said.
   results["scenes"]["switch"].erase("events");
   addReferenceQuality(results, 1);

@@ -295,9 +295,10 @@
     table.replaceChildren(head, el('tbody', {}, rows));
 
     const warnings = pairs.filter((p) => p.warnings && p.warnings.length);
-    // Reference quality (results: scenes.<scene>.referenceQuality): said plainly when the goal is missed.
+    // Reference quality (results: scenes.<scene>.referenceQuality): said plainly when the goal is
+    // missed, for the scene or between its events (segmentsMeet false: its event figures there).
     const quality = scene && scene.referenceQuality;
-    const qualityNote = quality && quality.meets === false
+    const qualityNote = quality && (quality.meets === false || quality.segmentsMeet === false)
       ? [el('p', { class: 'reference-quality warnings', text: `Reference quality: ${quality.verdict}` })] : [];
     // A warning about the scene (results: scenes.<scene>.warnings) is listed once, before the pairs' own.
     const sceneWarnings = (scene && scene.warnings) || [];

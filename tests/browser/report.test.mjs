@@ -589,6 +589,40 @@ test('a mark above a better mean is said under the summary table', async () => {
   await page.close();
 });
 
+// Long labels (a control such as "reengine[disocclusionRays=off]") wrap inside their columns: the
+// scene's and the overall ranking stand side by side without overlapping (a study's did at 1400 px)
+// and the summary table fits. A scene that meets the reference goal as a whole but not between its
+// events says so above its warnings, as a missed goal does.
+test('long labels stay in their tables; a segment\'s reference verdict is said', async () => {
+  const dir = path.join(work, 'synthetic-long');
+  fs.mkdirSync(dir, { recursive: true });
+  const results = JSON.parse(JSON.stringify(syntheticRun(2, 10, 20)).replaceAll('denoiser_', 'reengine[disocclusionRays=off]_'));
+  results.scenes.scene_0.referenceQuality = {
+    floor: 1e-4, bestCorrectedRelMse: 0.01, bestLabel: 'reengine[disocclusionRays=off]_0', ratio: 0.01, goal: 0.1, meets: true,
+    segmentsMeet: false, segments: [{ from: 8, to: 49, ratio: 0.01 }, { from: 50, to: 99, ratio: 0.2 }],
+    verdict: 'scene_0: reference noise floor 1e-4 / best corrected relMSE 0.01 = 0.01 <= 0.1: met for the scene\'s mean, not between its events (frames 50-99 0.2 > 0.1: the figures measured there carry more of the reference\'s noise)' };
+  fs.writeFileSync(path.join(dir, 'results.json'), JSON.stringify(results));
+  const out = path.join(work, 'synthetic-long-report');
+  arena('report', dir, '--out', out);
+  const { page, problems } = await openReport(out);
+  const boxes = await page.$$eval('#rankings .ranking', (ds) => ds.map((d) => {
+    const t = d.querySelector('table').getBoundingClientRect(), b = d.getBoundingClientRect();
+    return { scroll: d.scrollWidth, client: d.clientWidth, left: b.left, right: b.right, tableRight: t.right };
+  }));
+  assert.ok(boxes.length >= 2, JSON.stringify(boxes));
+  for (const b of boxes) assert.ok(b.scroll <= b.client && b.tableRight <= b.right + 0.5, `a ranking table past its box: ${JSON.stringify(boxes)}`);
+  const f = await page.$eval('#summary-wrap', (w) => ({ scroll: w.scrollWidth, client: w.clientWidth }));
+  assert.ok(f.scroll <= f.client, `summary table fits 1400 px: ${f.scroll} > ${f.client}`);
+  const events = await page.$$eval('#ghosting-body .table-wrap', (ws) => ws.map((w) => [w.scrollWidth, w.clientWidth]));
+  assert.ok(events.length >= 2 && events.every(([s, c]) => s <= c), `event tables fit 1400 px: ${JSON.stringify(events)}`);
+  assert.match(await page.locator('#warnings p.reference-quality').innerText(), /met for the scene's mean, not between its events \(frames 50-99/);
+  await page.selectOption('#scene-select', 'scene_1');
+  await page.waitForFunction(() => document.getElementById('scene-purpose').textContent.startsWith('scene_1'));
+  assert.equal(await page.locator('#warnings p.reference-quality').count(), 0, 'scene_1 has no verdict to say');
+  assert.deepEqual(problems, []);
+  await page.close();
+});
+
 // A sweep of svgf over a 2x2 grid: each parameter's change is matched under both values of the
 // other. Green or red only where every matched paired difference is resolved that way.
 test('a sweep\'s ablation colours a change only where every matched interval resolves it', async () => {
