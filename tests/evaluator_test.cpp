@@ -137,7 +137,8 @@ TEST(Evaluation, RunResultsAreBitIdenticalToTheHarnessBeforeTheStage) {
   // passthrough's output became the frame's colour layer itself rather than its remodulated
   // signals (only passthrough's values moved, by rounding: 4e-9 relative at most). Recorded again
   // when a ranking stored the methods it left out as a list beside its text (leftOut: only the
-  // two events' hashes moved, no number).
+  // two events' hashes moved, no number), and when the reference verdict marked whether its
+  // segments between events meet the goal (referenceQuality.segmentsMeet, new; no number moved).
   const std::string file = std::string(ARENA_TEST_DATA) + "/evaluation_golden.json";
   const json now = test::goldenPart(
       withoutNewMetrics(runMatrix(test::goldenRunConfig(test::freshDir("golden_run"), test::freshDir("golden_cache")))));
