@@ -12,6 +12,7 @@
 #include "core/text.hpp"
 #include "harness/gpu_cost.hpp"
 #include "harness/reference_quality.hpp"
+#include "metrics/metric_registry.hpp"
 
 namespace arena::cli {
 
@@ -308,7 +309,10 @@ std::string otherOverallFirstsText(const RunResults& results) {
     for (const RankedMethod& m : o.ranking)
       if (m.rank == 1) firsts += (firsts.empty() ? "" : ", ") + m.label;
     if (firsts.empty()) continue;
-    text += (text.empty() ? "" : "; ") + name + " " + firsts;
+    // A temporal metric is named for what it measures: "tRmae" alone does not say flicker.
+    const MetricDefinition* m = findMetric(name);
+    const bool temporal = m && m->chart == ReportChart::Temporal;
+    text += (text.empty() ? "" : "; ") + name + (temporal ? " (flicker) " : " ") + firsts;
   }
   return text;
 }

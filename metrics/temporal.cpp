@@ -116,13 +116,29 @@ namespace arena {
 MetricFamily temporalFlickerFamily() {
   MetricFamily f;
   f.metrics = {
-      {.name = "tRmae", .ranked = true, .gatedByDefault = true, .reportColumn = true, .chart = ReportChart::Temporal,
-       .title = "tRMAE", .description = "temporal relative MAE vs the reference's frame difference (no /3)"},
-      {.name = "tPsnr", .unit = "dB", .better = Better::Higher, .reads = MetricInput::Display,
-       .transform = FrameTransform::Psnr, .chart = ReportChart::Temporal, .title = "tPSNR (dB)",
+      {.name = "tRmae",
+       .ranked = true,
+       .gatedByDefault = true,
+       .overall = true,
+       .reportColumn = true,
+       .chart = ReportChart::Temporal,
+       .title = "tRMAE",
+       .description = "temporal relative MAE vs the reference's frame difference (no /3)"},
+      {.name = "tPsnr",
+       .unit = "dB",
+       .better = Better::Higher,
+       .reads = MetricInput::Display,
+       .transform = FrameTransform::Psnr,
+       .chart = ReportChart::Temporal,
+       .title = "tPSNR (dB)",
        .description = "temporal PSNR of display frame differences, dB"},
-      {.name = "warpedFlicker", .transform = FrameTransform::Sqrt, .ranked = true, .reportColumn = true,
-       .chart = ReportChart::Temporal, .title = "warped flicker", .description = "motion-compensated flicker of the error e = d - r"},
+      {.name = "warpedFlicker",
+       .transform = FrameTransform::Sqrt,
+       .ranked = true,
+       .reportColumn = true,
+       .chart = ReportChart::Temporal,
+       .title = "warped flicker",
+       .description = "motion-compensated flicker of the error e = d - r"},
   };
   f.measure = [](const FrameView& v, const MetricOptions&, FrameRecorder& out) {
     const FrameView* p = v.previous(1);

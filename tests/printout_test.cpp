@@ -101,10 +101,10 @@ json worstDefaultStudy() {
   for (size_t k = 0; k < labels.size(); ++k)
     overall.push_back({{"label", labels[k]}, {"rank", int(k) + 1}, {"score", 0.1 * double(k + 1)},
                        {"ci95", {0.1 * double(k), 0.1 * double(k + 2)}}, {"tiedWith", json::array()}});
-  // The other metrics' overall scores (1 - SSIM and both FLIPs, as the default study has them), in
-  // the reverse order.
+  // The other metrics' overall scores (1 - SSIM, both FLIPs and tRMAE, as the default study has
+  // them), in the reverse order.
   json byMetric = json::object();
-  for (const char* metric : {"dssim", "ldrFlip", "hdrFlip"}) {
+  for (const char* metric : {"dssim", "ldrFlip", "hdrFlip", "tRmae"}) {
     json ranking = json::array();
     for (size_t k = 0; k < labels.size(); ++k)
       ranking.push_back({{"label", labels[labels.size() - 1 - k]},
@@ -564,7 +564,11 @@ TEST(StudySummary, TheOtherMetricsOverallScoresArePrintedBesideRelMses) {
                         "rank 1 overall on the other metrics: dssim " + dssimFirst + "; hdrFlip "),
             1u)
       << summary.str();
-  EXPECT_NE(summary.str().find("; ldrFlip " + ldrFirsts + " (--verbose"), std::string::npos)
+  // A temporal metric is named for what it measures.
+  const std::string tRmaeFirst = byMetric["tRmae"]["ranking"][0]["label"];
+  EXPECT_NE(summary.str().find("; ldrFlip " + ldrFirsts + "; tRmae (flicker) " + tRmaeFirst +
+                               " (--verbose"),
+            std::string::npos)
       << summary.str();
   std::ostringstream tables;
   cli::printStudyTables(tables, test::typed(results));

@@ -126,8 +126,9 @@
         el('tbody', {}, rows)));
   }
 
-  // The overall scores on the other metrics that declare one (1 − SSIM, the FLIPs), folded under
-  // the relMSE ranking: does the choice hold on them?
+  // The overall scores on the other metrics that declare one (1 − SSIM, the FLIPs, tRMAE's
+  // flicker), folded under the relMSE ranking: does the choice hold on them? The fold's title
+  // names each one's rank 1, so a different winner shows without opening it.
   function otherOverallRankings(byMetric) {
     const titleOf = (name) => (A.D.metrics.find((m) => m.name === name) || {}).title || name;
     const tables = Object.entries(byMetric)
@@ -135,7 +136,10 @@
       .filter(Boolean);
     if (!tables.length) return null;
     return el('details', { class: 'other-overall' },
-      el('summary', { text: `Overall rankings on the other metrics (${Object.keys(byMetric).map(titleOf).join(', ')})` }),
+      el('summary', { text: `Overall rankings on the other metrics (rank 1: ${Object.entries(byMetric).map(([name, o]) => {
+        const firsts = (o.ranking || []).filter((r) => r.rank === 1).map((r) => r.label);
+        return `${titleOf(name)} ${firsts.length ? firsts.join(', ') : 'none'}`;
+      }).join('; ')})` }),
       ...tables);
   }
 
