@@ -329,6 +329,7 @@ void printSpeedOrder(std::ostream& out, const RunResults& results) {
   std::vector<std::string> labels;
   std::set<std::string> unmodelled;  // CPU-timed methods the cost model does not price
   std::string device;
+  std::string otherDevices;  // the devices priced after the first (the report's Time menu)
   for (const PairResult& p : results.pairs) {
     const json& t = p.timing();
     if (p.ok() && p.clock() == "cpu" && !t.contains("gpuPredicted")) unmodelled.insert(p.label);
@@ -339,6 +340,9 @@ void printSpeedOrder(std::ostream& out, const RunResults& results) {
     if (devices.empty() || !devices[0].value("msMedian", json()).is_number() || !t.value("msMedian", json()).is_number())
       continue;
     device = devices[0].value("device", "");
+    otherDevices.clear();
+    for (size_t k = 1; k < devices.size(); ++k)
+      otherDevices += (otherDevices.empty() ? "" : ", ") + devices[k].value("device", "?");
     const std::string& label = p.label;
     if (!counts.count(label)) labels.push_back(label);
     sums[label].first += t["msMedian"].get<double>();
@@ -358,7 +362,9 @@ void printSpeedOrder(std::ostream& out, const RunResults& results) {
     cpu.push_back(sums[l].first / counts[l]);
     gpu.push_back(sums[l].second / counts[l]);
   }
-  // onCpu: the CPU line, whose extra paths' tracing time (CPU ms too) is given beside the time.
+  // onCpu: the CPU line, whose extra paths' tracing time (CPU ms too) is given beside the time. The
+  // model's times have two significant digits: it is within about 2x of measured and published
+  // timings (docs/gpu-cost.md), and four digits would read as a measurement.
   auto order = [&](const std::vector<double>& ms, bool onCpu) {
     std::vector<size_t> idx(labels.size());
     for (size_t i = 0; i < idx.size(); ++i) idx[i] = i;
@@ -366,7 +372,9 @@ void printSpeedOrder(std::ostream& out, const RunResults& results) {
     // Two times that print alike are not ordered by the print ("20.89 < 20.89").
     std::string text, previous;
     for (size_t i : idx) {
-      const std::string figure = figureText(ms[i]);
+      char twoDigits[32];
+      std::snprintf(twoDigits, sizeof twoDigits, "%.2g", ms[i]);
+      const std::string figure = onCpu ? figureText(ms[i]) : std::string(twoDigits);
       text += (text.empty() ? "" : figure == previous ? " = " : " < ") + labels[i] + " " + figure;
       if (traced.count(labels[i]))
         text +=
@@ -390,7 +398,12 @@ void printSpeedOrder(std::ostream& out, const RunResults& results) {
          "close times may swap between runs; the report charts each axis)\n"
       << "  CPU measured here" << (where.empty() ? "" : " (" + where + ")") << ": "
       << order(cpu, true) << "\n"
-      << "  GPU predicted, " << device << " 1080p (a model): " << order(gpu, false) << "\n"
+      << "  GPU predicted, " << device
+      << " 1080p (a model, 2 digits: it misses its validation goal, so read an order of magnitude "
+         "and an order of methods, not a budget; docs/gpu-cost.md"
+      << (otherDevices.empty() ? std::string()
+                               : "; also priced: " + otherDevices + ", in the report")
+      << "): " << order(gpu, false) << "\n"
       << "  rank correlation of the two orders (Spearman): "
       << (labels.size() < 3
               ? "not given for " + std::to_string(labels.size()) + " methods (it can only be +-1)"

@@ -137,11 +137,16 @@ constexpr const char* kDatabaseSchema = R"(
              CREATE TABLE IF NOT EXISTS metrics (run_id INTEGER, name TEXT, unit TEXT, better TEXT,
                needs_reference INTEGER, reads TEXT, transform TEXT, ranked INTEGER, meaning TEXT);
              CREATE TABLE IF NOT EXISTS scenes (run_id INTEGER, scene TEXT, width INTEGER,
-               height INTEGER, frames INTEGER);)";
+               height INTEGER, frames INTEGER);
+             CREATE TABLE IF NOT EXISTS gpu_predicted (run_id INTEGER, scene TEXT, label TEXT,
+               device TEXT, width INTEGER, height INTEGER, ms_median REAL, ms_mean REAL, ms_p5 REAL,
+               ms_p95 REAL, persistent_mib REAL, working_set_mib REAL);)";
 // Tables added to the schema after databases were written without them: such a database is still
 // this schema (the append creates the table), and its earlier runs simply lack the rows (scenes,
-// 2026-12-06: each scene's size and length, which the gate compares, as results.json has them).
-const std::set<std::string> kTablesAddedLater = {"scenes"};
+// 2026-12-06: each scene's size and length, which the gate compares, as results.json has them;
+// gpu_predicted, 2026-12-07: the cost model's time per device and memory per pair, as
+// pairs[].timing.gpuPredicted has them).
+const std::set<std::string> kTablesAddedLater = {"scenes", "gpu_predicted"};
 
 // An open database; every error names `name` (the path the user knows) and SQLite's reason, with
 // the operating system's reason where SQLite had one (a full disk, a read-only directory).
@@ -289,6 +294,30 @@ void appendToDatabase(const fs::path& dbPath, const RunResults& r, const std::st
       ++column;
     }
     sceneRow.step();
+  }
+  // The cost model's predicted GPU time, one row per pair and device, with the pair's memory.
+  Statement gpu(db, "INSERT INTO gpu_predicted VALUES (?,?,?,?,?,?,?,?,?,?,?,?)");
+  for (const PairResult& p : r.pairs) {
+    const json& g = p.ok() ? p.timing().value("gpuPredicted", json()) : json();
+    if (!g.is_object()) continue;
+    const json resolution = g.value("resolution", json::array());
+    const json memory = g.value("memory", json::object());
+    auto number = [](const json& j, const char* k) {
+      return j.is_object() && j.contains(k) && j[k].is_number() ? j[k].get<double>() : kUndefined;
+    };
+    for (const json& d : g.value("devices", json::array())) {
+      gpu.integer(1, runId).text(2, p.scene).text(3, p.label).text(4, d.value("device", ""));
+      if (resolution.size() == 2 && resolution[0].is_number_integer() &&
+          resolution[1].is_number_integer())
+        gpu.integer(5, resolution[0].get<long long>()).integer(6, resolution[1].get<long long>());
+      gpu.real(7, number(d, "msMedian"))
+          .real(8, number(d, "msMean"))
+          .real(9, number(d, "msP5"))
+          .real(10, number(d, "msP95"))
+          .real(11, number(memory, "persistentMiB"))
+          .real(12, number(memory, "workingSetMiB"))
+          .step();
+    }
   }
   Statement pair(db, "INSERT INTO pairs VALUES (?,?,?,?,?,?,?)");
   Statement frame(db, "INSERT INTO frame_metrics VALUES (?,?,?,?,?,?)");

@@ -631,6 +631,20 @@ TEST(StudySummary, AWarningAboutASceneIsStoredAndPrintedOncePerScene) {
   }
   EXPECT_GT(titan["temporal"], 0.0);
   EXPECT_GT(titan["svgf"], titan["temporal"]);
+  // results.db holds them too, a row per pair and device (README: every number).
+  int devices = 0;
+  for (const json& p : results["pairs"])
+    if (p["timing"].contains("gpuPredicted"))
+      devices += int(p["timing"]["gpuPredicted"]["devices"].size());
+  EXPECT_GT(devices, 0);
+  EXPECT_EQ(test::countRows(c.out / "results.db", "gpu_predicted"), devices);
+  EXPECT_DOUBLE_EQ(test::queryNumber(c.out / "results.db",
+                                     "SELECT ms_median FROM gpu_predicted WHERE label = 'svgf' AND "
+                                     "device = 'TITAN RTX' AND width = 1920 AND height = 1080"),
+                   titan["svgf"]);
+  EXPECT_GT(test::queryNumber(c.out / "results.db",
+                              "SELECT working_set_mib FROM gpu_predicted WHERE label = 'svgf'"),
+            0.0);
   // At this tiny size the scaled footprint skips à-trous iterations a 1080p frame runs: the
   // prediction prices them as that frame's and records how many (the report says so under the
   // GPU axis).
@@ -642,7 +656,16 @@ TEST(StudySummary, AWarningAboutASceneIsStoredAndPrintedOncePerScene) {
       EXPECT_FALSE(p["timing"]["gpuPredicted"].contains("skippedHere"));
     }
   }
-  EXPECT_NE(out.str().find("GPU predicted, TITAN RTX 1080p (a model):"), std::string::npos) << out.str();
+  // A model's times, with two digits and what they are for.
+  EXPECT_NE(
+      out.str().find("GPU predicted, TITAN RTX 1080p (a model, 2 digits: it misses its validation "
+                     "goal, so read an order of magnitude and an order of methods, not a budget"),
+      std::string::npos)
+      << out.str();
+  char temporal[32];
+  std::snprintf(temporal, sizeof temporal, "%.2g", titan["temporal"]);
+  EXPECT_NE(out.str().find("): temporal " + std::string(temporal) + " < "), std::string::npos)
+      << out.str();
 }
 
 }  // namespace

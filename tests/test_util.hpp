@@ -36,6 +36,8 @@ nlohmann::json statisticsBlock(const nlohmann::json& parts);
 
 // SELECT COUNT(*) FROM table in the SQLite database db; -1 when it cannot be read.
 int countRows(const std::filesystem::path& db, const char* table);
+// The first column of the first row `sql` selects from `db`; NaN for no row or NULL.
+double queryNumber(const std::filesystem::path& db, const std::string& sql);
 
 // This test process's directory, <temp>/arena_test_<pid>: removed with everything in it when the
 // process exits normally (ARENA_KEEP_TEST_DIRS=1 keeps it for a post-mortem).
