@@ -554,6 +554,33 @@ void printSceneWinners(std::ostream& out, const RunResults& results) {
         << (tied.empty() ? "" : "; " + tied) << (same.empty() ? "" : "; identical outputs: " + same)
         << "\n";
   }
+  // A denoiser not resolved better than the noisy input on a scene did not show that it denoises
+  // there (the winners above do not say it, and a tie below rank 1 is easy to miss).
+  std::string tiedWithInput, worseThanInput;
+  for (const auto& [name, scene] : scenes) {
+    const std::vector<RankedMethod>& ranking = scene.ranking.ranking;
+    const auto input = std::find_if(ranking.begin(), ranking.end(),
+                                    [](const RankedMethod& m) { return m.label == "passthrough"; });
+    if (input == ranking.end()) continue;
+    std::string tied, worse;
+    for (const RankedMethod& m : ranking) {
+      if (m.label == input->label) continue;
+      const bool isTied = std::find(input->tiedWith.begin(), input->tiedWith.end(), m.label) !=
+                          input->tiedWith.end();
+      if (isTied)
+        tied += (tied.empty() ? "" : ", ") + m.label;
+      else if (m.rank > input->rank)
+        worse += (worse.empty() ? "" : ", ") + m.label;
+    }
+    if (!tied.empty()) tiedWithInput += (tiedWithInput.empty() ? "" : "; ") + name + ": " + tied;
+    if (!worse.empty())
+      worseThanInput += (worseThanInput.empty() ? "" : "; ") + name + ": " + worse;
+  }
+  if (!tiedWithInput.empty())
+    out << "  not resolved from the noisy input (passthrough, no denoising) on relMSE: "
+        << tiedWithInput << "\n";
+  if (!worseThanInput.empty())
+    out << "  resolved WORSE than the noisy input on relMSE: " << worseThanInput << "\n";
 }
 
 // The warnings that concern a scene, once per scene: results.scenes.<scene>.warnings (capped

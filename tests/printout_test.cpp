@@ -154,6 +154,59 @@ TEST(StudySummary, TheDefaultStudyFitsOnOneScreen) {
   EXPECT_GT(lineCount(tables.str()), 100u);
 }
 
+// A denoiser not resolved from the noisy input on a scene is named, and one resolved worse than it
+// apart: the scene's winner line does not show either (a report reader found svgf and reblur
+// tied with passthrough on light_switch only in the full tables).
+TEST(StudySummary, DenoisersNotResolvedFromTheNoisyInputAreNamed) {
+  json results = worstDefaultStudy();
+  json& scenes = results["statistics"]["scenes"];
+  const std::string first = scenes.begin().key(), second = std::next(scenes.begin()).key();
+  // Everywhere but the first scene passthrough is last and resolved from every method.
+  for (auto it = scenes.begin(); it != scenes.end(); ++it) {
+    json& ranking = it.value()["ranking"];
+    const size_t n = ranking.size();
+    for (size_t k = 0; k < n; ++k) {
+      ranking[k]["rank"] = int(k) + 1;
+      ranking[k]["tiedWith"] = json::array();
+    }
+    for (size_t k = 0; k < n; ++k)
+      if (ranking[k]["label"] == "passthrough" && k + 1 != n) std::swap(ranking[k], ranking[n - 1]);
+    ranking[n - 1]["rank"] = int(n);
+    if (it.key() != first) continue;
+    // On the first: passthrough ranks 2, tied with the methods at 1 and 3; the rest are worse.
+    std::swap(ranking[1], ranking[n - 1]);
+    ranking[1]["rank"] = 2;
+    ranking[n - 1]["rank"] = int(n);
+    ranking[1]["tiedWith"] = {ranking[0]["label"], ranking[2]["label"]};
+    ranking[0]["tiedWith"] = {"passthrough"};
+    ranking[2]["tiedWith"] = {"passthrough"};
+  }
+  const json& r = scenes[first]["ranking"];
+  std::string worse;
+  for (size_t k = 3; k < r.size(); ++k)
+    worse += (k > 3 ? ", " : "") + r[k]["label"].get<std::string>();
+  std::ostringstream out;
+  cli::printStudySummary(out, test::typed(results), {"r.json", "r.db", "index.html", 1});
+  const std::string text = out.str();
+  EXPECT_NE(text.find("not resolved from the noisy input (passthrough, no denoising) on relMSE: " +
+                      first + ": " + r[0]["label"].get<std::string>() + ", " +
+                      r[2]["label"].get<std::string>() + "\n"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(
+      text.find("resolved WORSE than the noisy input on relMSE: " + first + ": " + worse + "\n"),
+      std::string::npos)
+      << text;
+  // The other scenes, where every method is resolved better, are not named.
+  for (const char* head :
+       {"not resolved from the noisy input", "resolved WORSE than the noisy input"}) {
+    const size_t at = text.find(head);
+    ASSERT_NE(at, std::string::npos);
+    const std::string line = text.substr(at, text.find('\n', at) - at);
+    EXPECT_EQ(line.find(second), std::string::npos) << line;
+  }
+}
+
 // The overall ranking says which contenders are not built in, and where each came from.
 TEST(StudySummary, TheOverallRankingNamesTheContendersNotBuiltIn) {
   json results = worstDefaultStudy();
