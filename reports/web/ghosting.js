@@ -152,13 +152,22 @@
 
   const valueOf = (c, e) => (c.at ? c.at(e) : e[c.key]);
 
-  // `first`: column key -> the labels marked best in it (absent: none marked).
+  // `first`: column key -> the labels marked best in it (absent: none marked). The noisy input
+  // (passthrough) is never marked: it keeps no history, so it has no lag and a jump ratio of 1 by
+  // construction, which is no finding about denoising; a note says so where it ranked first.
+  const NOISY_INPUT = 'passthrough';
   function figureTable(cls, columns, rows, first) {
-    return el('div', { class: 'table-wrap' }, el('table', { class: `data ${cls}` },
+    const unmarked = columns.filter((c) => first[c.key] && first[c.key].has(NOISY_INPUT)).map((c) => c.title);
+    const table = el('table', { class: `data ${cls}` },
       el('thead', {}, el('tr', {}, el('th', { class: 'first', text: 'denoiser / setting' }), columns.map((c) => el('th', { text: c.title })))),
       el('tbody', {}, rows.map(([label, e]) => el('tr', { 'data-label': label }, el('td', { class: 'first', text: label }),
-        columns.map((c) => el('td', { class: first[c.key] && first[c.key].has(label) ? 'best' : null }, A.fmt(valueOf(c, e)), ciSpan(e, c.key)))))),
-    ));
+        columns.map((c) => el('td', { class: label !== NOISY_INPUT && first[c.key] && first[c.key].has(label) ? 'best' : null }, A.fmt(valueOf(c, e)), ciSpan(e, c.key)))))));
+    if (!unmarked.length) return el('div', { class: 'table-wrap' }, table);
+    return el('div', { class: 'table-wrap' }, table, el('p', {
+      class: 'note input-unmarked',
+      text: `${NOISY_INPUT}, the noisy input, ranks first on ${unmarked.join(', ')} but is not marked: it keeps no ` +
+        'history, so it has no lag and no jump by construction; its error is its E_ss or relMSE here and its scene ranking.'
+    }));
   }
 
   // The statistics' rank-1 labels of every ranked column of one event or cut.
