@@ -354,13 +354,24 @@ std::vector<std::string> EvaluationScene::warnings() const {
   std::vector<std::string> out;
   int capped = 0;
   for (bool c : input_.referenceCapped) capped += c;
-  if (capped > 0) {
-    std::vector<int> frames;  // the frames they serve
-    for (int t = 0; t < int(input_.referenceOfFrame.size()); ++t) {
-      const int r = input_.referenceOfFrame[size_t(t)];
-      if (r >= 0 && r < int(input_.referenceCapped.size()) && input_.referenceCapped[size_t(r)])
-        frames.push_back(t);
+  // The first frame whose reference a figure reads: the summaries' frames from the warm-up on, the
+  // temporal metrics' lags before them, an event's window before it, a cut's last old view.
+  int firstRead = options_.warmup - kMaxMetricHistory;
+  for (const SequenceEvent& e : input_.events)
+    firstRead = std::min(firstRead,
+                         e.frame - (e.kind == EventKind::CameraCut ? 1 : GhostingConfig{}.before));
+  std::vector<int> frames;  // the frames the capped references serve
+  bool read = false;        // ... some of them read by a figure
+  for (int t = 0; capped > 0 && t < int(input_.referenceOfFrame.size()); ++t) {
+    const int r = input_.referenceOfFrame[size_t(t)];
+    if (r >= 0 && r < int(input_.referenceCapped.size()) && input_.referenceCapped[size_t(r)]) {
+      frames.push_back(t);
+      read = read || t >= firstRead;
     }
+  }
+  // Capped references that only warm-up frames no figure reads use (the study's refinement leaves
+  // those) change no number: not said (sequence.json and scenes.<s>.referenceCapped keep them).
+  if (capped > 0 && (read || frames.empty())) {
     out.push_back(
         std::to_string(capped) + " of " + std::to_string(input_.referenceCapped.size()) +
         " reference(s) stopped at the sample cap above their target relMSE (" +
