@@ -1,6 +1,6 @@
 #pragma once
 // The one display transform used everywhere an image is shown or a display-referred metric (PSNR,
-// SSIM, LDR-FLIP, tPSNR) is computed: exposure -> ACES filmic curve (Narkowicz 2015 fit) -> clamp
+// SSIM, LDR-FLIP, tPSNR) is computed: exposure -> ACES filmic curve (Narkowicz 2016 fit) -> clamp
 // to [0, 1] -> sRGB encoding. The exposure comes from the *reference* so every method of a scene is
 // shown and measured through the same transform; by default each frame's own reference
 // (docs/metrics.md, "Display exposure": an ideal auto-exposure), or the first one's.
@@ -29,7 +29,7 @@ const char* exposureModeName(ExposureMode mode);
 std::vector<DisplayTransform> displayTransforms(const std::vector<const Image*>& referencesRgb,
                                                 ExposureMode mode);
 
-float acesFilmic(float x);       // Narkowicz 2015, input already exposed
+float acesFilmic(float x);       // Narkowicz 2016, input already exposed
 float srgbEncode(float linear);  // IEC 61966-2-1
 
 }  // namespace arena

@@ -137,6 +137,13 @@ std::vector<std::string> settingsDifferences(const RunResults& baseline, const R
   const bool contentDecides = capturesRecordContent(baseline) && capturesRecordContent(candidate);
   for (json* s : {&a, &b}) {
     if (contentDecides) s->erase("captures");
+    // The display transform's citation was corrected (Narkowicz's fit was published in 2016): the
+    // same curve, so runs recorded before compare as equal.
+    if (s->contains("display") && (*s)["display"].is_string()) {
+      std::string text = (*s)["display"];
+      if (const size_t at = text.find("Narkowicz 2015"); at != std::string::npos)
+        (*s)["display"] = text.replace(at, 14, "Narkowicz 2016");
+    }
     if (s->contains("render") && (*s)["render"].is_object()) (*s)["render"].erase("inputSeed");
     s->erase("plan");
     if (s->contains("ghosting") && (*s)["ghosting"].is_object())

@@ -119,13 +119,15 @@ json evaluationSettings(const EvaluationOptions& options) {
           {"flip", options.metrics.flip},
           {"relMseEpsilon", kRelMseEpsilon},
           {"exposure", exposureModeName(exposure)},
-          {"display", std::string(exposure == ExposureMode::PerFrame ? "exposure from each frame's own reference"
-                                                                     : "exposure from the scene's first reference") +
-                          " (mean luminance -> 0.18), ACES filmic (Narkowicz 2015), clamp, sRGB"},
+          {"display", std::string(exposure == ExposureMode::PerFrame
+                                      ? "exposure from each frame's own reference"
+                                      : "exposure from the scene's first reference") +
+                          " (mean luminance -> 0.18), ACES filmic (Narkowicz 2016), clamp, sRGB"},
           {"ghosting", GhostingConfig{}.toJson()},
-          {"oldViewLeak", "least-squares coefficient of d - r onto r(cut - 1) - r over pixels and "
-                          "channels (linear RGB), per frame cut..cut+5; 0 = nothing of the old "
-                          "view, 1 = all of it"},
+          {"oldViewLeak",
+           "least-squares coefficient of d - r onto r(cut - 1) - r over pixels and "
+           "channels (linear RGB), per frame cut..cut+5; 0 = nothing of the old "
+           "view, 1 = all of it"},
           {"tRmae", "Noisebase's form without its extra division by 3"},
           {"flipPixelsPerDegree", 67}};
 }

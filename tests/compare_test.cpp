@@ -32,6 +32,15 @@ TEST(CompareContract, RunsOfOtherSettingsAreRefusedUnlessAllowed) {
   json older = ra.toJson();
   older["settings"]["ghosting"].erase("lagAfterUnsettled");
   EXPECT_TRUE(settingsDifferences(RunResults::fromJson(older, "older"), ra).empty());
+  // Nor does a run that cited the display curve's fit under the wrong year (the same curve); any
+  // other change to the display transform is one.
+  std::string display = ra.toJson()["settings"]["display"];
+  ASSERT_NE(display.find("Narkowicz 2016"), std::string::npos) << display;
+  json cited = ra.toJson();
+  cited["settings"]["display"] = display.replace(display.find("2016"), 4, "2015");
+  EXPECT_TRUE(settingsDifferences(RunResults::fromJson(cited, "cited"), ra).empty());
+  cited["settings"]["display"] = "exposure 1, ACES filmic (Narkowicz 2015), clamp, sRGB";
+  EXPECT_EQ(settingsDifferences(RunResults::fromJson(cited, "cited"), ra).size(), 1u);
   // A scene whose file (or assets) changed between the runs is another sequence under one name;
   // a run from before the content was recorded compares as before.
   json edited = ra.toJson();
