@@ -366,21 +366,30 @@ json speedData(const RunResults& results, const std::vector<std::string>& scenes
   // The 1080p predictions are priced from the run's own passes: à-trous iterations its footprint
   // skipped at this resolution run at 1080p and are priced as that frame runs them, but their
   // data-dependent taps are this sequence's; the page says which methods have how many.
-  std::map<std::string, int> skipped;
+  // The fewest and most per label: a run's scenes of other sizes skip more or fewer.
+  std::map<std::string, std::pair<int, int>> skipped;
   for (const PairResult& pair : results.pairs)
     if (const json& timing = pair.timing();
-        timing.contains("gpuPredicted") && timing["gpuPredicted"].is_object())
-      if (const int n = timing["gpuPredicted"].value("skippedHere", 0); n > 0)
-        skipped[pair.label] = std::max(skipped[pair.label], n);
+        timing.contains("gpuPredicted") && timing["gpuPredicted"].is_object()) {
+      const int n = timing["gpuPredicted"].value("skippedHere", 0);
+      auto [it, first] = skipped.try_emplace(pair.label, n, n);
+      if (!first) it->second = {std::min(it->second.first, n), std::max(it->second.second, n)};
+    }
+  std::erase_if(skipped, [](const auto& s) { return s.second.second == 0; });
   if (!skipped.empty()) {
     std::string list;
+    bool ranges = false;
+    for (const auto& [label, n] : skipped) ranges = ranges || n.first != n.second;
     for (const auto& [label, n] : skipped)
-      list += (list.empty() ? "" : ", ") + label + " " + std::to_string(n);
+      list += (list.empty() ? "" : ", ") + label + " " +
+              (n.first == n.second ? std::to_string(n.first)
+                                   : std::to_string(n.first) + "-" + std::to_string(n.second));
     out["gpuSkipped"] =
         "At this run's resolution the footprint skipped passes (à-trous steps below half a pixel, "
         "mip levels of a scaled chain) that a 1080p frame runs; the prediction prices them as "
         "that frame would run them: " +
-        list + " per frame (`arena bench gpu-model` times a 1080p frame's own passes). ";
+        list + " per frame (" + (ranges ? "a range: fewer on the larger scenes; " : "") +
+        "`arena bench gpu-model` times a 1080p frame's own passes). ";
   }
   return out;
 }

@@ -335,6 +335,26 @@ TEST(Report, EachTimeAxisHasItsOwnPointsAndFront) {
                 .find("as that frame would run them: svgf[a=1] 4 per frame"),
             std::string::npos)
       << data["speed"].value("gpuSkipped", "");
+  // On scenes of other sizes the same method skips other counts: the range, not the largest.
+  EXPECT_EQ(data["speed"].value("gpuSkipped", "").find("a range"), std::string::npos);
+  json sized = run;
+  json predicted;
+  for (json& pair : sized["pairs"])
+    if (pair["label"] == "svgf[a=0]" && pair["scene"] == "static") {
+      pair["timing"]["gpuPredicted"]["skippedHere"] = 4;
+      predicted = pair["timing"]["gpuPredicted"];
+    }
+  for (json& pair : sized["pairs"])
+    if (pair["label"] == "svgf[a=0]" && pair["scene"] == "switch") {
+      pair["timing"]["gpuPredicted"] = predicted;
+      pair["timing"]["gpuPredicted"]["skippedHere"] = 2;
+    }
+  const std::string ranged =
+      reportData(test::typed(sized), dir, nullptr)["speed"].value("gpuSkipped", "");
+  EXPECT_NE(
+      ranged.find("as that frame would run them: svgf[a=0] 2-4, svgf[a=1] 4 per frame (a range"),
+      std::string::npos)
+      << ranged;
   const json& clocks = data["speed"]["clocks"];
   ASSERT_EQ(clocks.size(), 2u);
   EXPECT_EQ(clocks[0]["key"], "cpu");

@@ -75,8 +75,25 @@
   function otherClocks(scene) {
     const rows = (clockView().otherClocks || []).filter((r) => scene === null || r.scene === scene);
     if (!rows.length) return [];
-    const text = rows.map((r) => `${r.label}${scene === null ? ` on ${r.scene}` : ''}: ` +
-      (r.ms === null ? 'no time' : `${Number(r.ms).toPrecision(3)} ms`) + ` (${r.source})`);
+    const one = (r) => (r.ms === null ? 'no time' : `${Number(r.ms).toPrecision(3)} ms`);
+    if (scene !== null)
+      return [` · timed on another clock, not on this axis: ${rows.map((r) => `${r.label}: ${one(r)} (${r.source})`).join('; ')}`];
+    // All scenes: a contender with the same reason on several scenes is named once, with how many
+    // and the range of its times (passthrough on every scene read as twelve sentences).
+    const groups = new Map();
+    for (const r of rows) {
+      const key = `${r.label}\u0000${r.source}`;
+      if (!groups.has(key)) groups.set(key, { label: r.label, source: r.source, rows: [] });
+      groups.get(key).rows.push(r);
+    }
+    const text = [...groups.values()].map((g) => {
+      if (g.rows.length === 1) return `${g.label} on ${g.rows[0].scene}: ${one(g.rows[0])} (${g.source})`;
+      const ms = g.rows.map((r) => r.ms).filter((v) => v !== null).map(Number);
+      const range = !ms.length ? 'no time'
+        : Math.min(...ms) === Math.max(...ms) ? `${Math.min(...ms).toPrecision(3)} ms`
+          : `${Math.min(...ms).toPrecision(3)}–${Math.max(...ms).toPrecision(3)} ms`;
+      return `${g.label} on ${g.rows.length} scenes: ${range} (${g.source})`;
+    });
     return [` · timed on another clock, not on this axis: ${text.join('; ')}`];
   }
 

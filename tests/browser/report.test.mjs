@@ -198,6 +198,11 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
   assert.match(await page.locator('#speed-front').innerText(), /passthrough: .*no GPU traffic counted/);
   assert.ok((await page.locator('#speed-chart svg.marks').textContent()).includes('predicted GPU ms'), 'the time axis says it is predicted');
   await shot(page.locator('#speed'), 'speed-gpu.png');
+  // All scenes: passthrough, unpriced on both scenes, is named once with its count.
+  await page.selectOption('#speed-scene', '__all__');
+  await page.waitForFunction(() => /passthrough on 2 scenes: /.test(document.getElementById('speed-front').innerText));
+  assert.doesNotMatch(await page.locator('#speed-front').innerText(), /passthrough on light_switch/);
+  await page.selectOption('#speed-scene', 'light_switch');
   await page.selectOption('#speed-clock', 'cpu');
   await page.waitForFunction((k) => document.querySelector('#speed-chart g.points_marks')?.querySelectorAll('path').length === k, okHere);
 
