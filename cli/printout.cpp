@@ -301,6 +301,23 @@ void printOtherOverallScores(std::ostream& out, const RunResults& results) {
          "report's rankings)\n";
 }
 
+// Two significant digits, never in exponent form, trailing zeros dropped (as %g): 0.34, 4.2, 7,
+// 120.
+std::string twoDigitsText(double v) {
+  if (!std::isfinite(v) || v <= 0) return figureText(v);
+  const double step = std::pow(10.0, std::floor(std::log10(v)) - 1);
+  const double rounded = std::round(v / step) * step;
+  char text[32];
+  std::snprintf(text, sizeof text, "%.*f", std::max(0, -int(std::floor(std::log10(step) + 1e-9))),
+                rounded);
+  std::string out = text;
+  if (out.find('.') != std::string::npos) {
+    out.erase(out.find_last_not_of('0') + 1);
+    if (out.back() == '.') out.pop_back();
+  }
+  return out;
+}
+
 std::string otherOverallFirstsText(const RunResults& results) {
   if (!results.statistics) return "";
   std::string text;
@@ -372,9 +389,7 @@ void printSpeedOrder(std::ostream& out, const RunResults& results) {
     // Two times that print alike are not ordered by the print ("20.89 < 20.89").
     std::string text, previous;
     for (size_t i : idx) {
-      char twoDigits[32];
-      std::snprintf(twoDigits, sizeof twoDigits, "%.2g", ms[i]);
-      const std::string figure = onCpu ? figureText(ms[i]) : std::string(twoDigits);
+      const std::string figure = onCpu ? figureText(ms[i]) : twoDigitsText(ms[i]);
       text += (text.empty() ? "" : figure == previous ? " = " : " < ") + labels[i] + " " + figure;
       if (traced.count(labels[i]))
         text +=

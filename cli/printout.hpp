@@ -15,6 +15,8 @@ namespace arena::cli {
 // 4 significant digits, trailing zeros dropped; 2 decimals in exponent form below 1e-3 or from 1e5
 // ("1.23e-4"); "0" for zero and "–" for a missing value (the report's fmt).
 std::string figureText(double value);
+// Two significant digits, never in exponent form (a model's figures: 0.34, 4.2, 7, 120).
+std::string twoDigitsText(double value);
 // "[lo, hi]" of an interval, "–" when there is none (the report's interval).
 std::string intervalText(const Interval& interval);
 // "tied with a, b" from a ranking entry's tiedWith, or "".

@@ -154,6 +154,17 @@ TEST(StudySummary, TheDefaultStudyFitsOnOneScreen) {
   EXPECT_GT(lineCount(tables.str()), 100u);
 }
 
+// The cost model's times are printed with two significant digits, never in exponent form.
+TEST(StudySummary, ModelTimesHaveTwoDigits) {
+  EXPECT_EQ(cli::twoDigitsText(0.3412), "0.34");
+  EXPECT_EQ(cli::twoDigitsText(4.237), "4.2");
+  EXPECT_EQ(cli::twoDigitsText(7.009), "7");
+  EXPECT_EQ(cli::twoDigitsText(9.96), "10");
+  EXPECT_EQ(cli::twoDigitsText(123.4), "120");
+  EXPECT_EQ(cli::twoDigitsText(1234.0), "1200");
+  EXPECT_EQ(cli::twoDigitsText(0.04561), "0.046");
+}
+
 // A denoiser not resolved from the noisy input on a scene is named, and one resolved worse than it
 // apart: the scene's winner line does not show either (a report reader found svgf and reblur
 // tied with passthrough on light_switch only in the full tables).
