@@ -132,6 +132,10 @@ struct DenoiserInfo {
   // Its output is its input signal unchanged (passthrough): on a capture of the colour alone it
   // runs on the colour, the same image its remodulated signals give where the parts exist.
   bool identity = false;
+  // false: each frame is filtered alone, with no state carried between frames (passthrough, a
+  // spatial filter). An event's lag and a cut's jump are then nothing it can show: the run records
+  // it (pairs[].keepsHistory false) and the report marks none of those figures best for it.
+  bool keepsHistory = true;
 };
 
 class DenoiserRegistry {

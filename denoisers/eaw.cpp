@@ -108,12 +108,15 @@ const ParamTable<EawSettings>& eawParams() {
 }  // namespace
 
 DenoiserInfo eawInfo() {
-  return {"eaw",
-          "Edge-avoiding à-trous wavelet filter, colour/normal/position stopping, spatial only "
-          "(Dammertz et al. 2010)",
-          eawParams().schema(), [](const ParamSet& params, SignalKind) {
-            return std::make_unique<EdgeAvoidingAtrous>(eawParams().settings(params, "eaw"));
-          }};
+  DenoiserInfo info{
+      "eaw",
+      "Edge-avoiding à-trous wavelet filter, colour/normal/position stopping, "
+      "spatial only (Dammertz et al. 2010)",
+      eawParams().schema(), [](const ParamSet& params, SignalKind) {
+        return std::make_unique<EdgeAvoidingAtrous>(eawParams().settings(params, "eaw"));
+      }};
+  info.keepsHistory = false;  // spatial only: reset() has nothing to drop
+  return info;
 }
 
 }  // namespace arena

@@ -23,6 +23,7 @@ DenoiserInfo passthroughInfo() {
   DenoiserInfo info{"passthrough", "The noisy 1-spp input, unfiltered (baseline)", ParamSchema{},
                     [](const ParamSet&, SignalKind) { return std::make_unique<Passthrough>(); }};
   info.identity = true;
+  info.keepsHistory = false;
   return info;
 }
 

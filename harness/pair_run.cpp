@@ -302,6 +302,8 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
   pair["timing"] = timing;
   pair["outputChecksum"] = checksumHex(outputChecksum);
   if (run) pair["readsLowres"] = run->readsLowres();  // compare judges the buffer's settings by it
+  // A denoiser that carries nothing between frames: its event and cut figures are by construction.
+  if (run && !run->info().keepsHistory) pair["keepsHistory"] = false;
   pair["sanitizedInputs"] = {{"total", totalNonFinite(sanitized)}, {"channels", sanitized}};
   if (!processEnds.empty()) pair["processEnds"] = processEnds;
   if (!equalsInput.empty() && int(equalsInput.size()) == info.frames)

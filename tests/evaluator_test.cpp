@@ -139,7 +139,8 @@ TEST(Evaluation, RunResultsAreBitIdenticalToTheHarnessBeforeTheStage) {
   // when a ranking stored the methods it left out as a list beside its text (leftOut: only the
   // two events' hashes moved, no number), and when the reference verdict marked whether its
   // segments between events meet the goal (referenceQuality.segmentsMeet, new; no number moved),
-  // and when settings.display cited Narkowicz's curve under its year, 2016 (the text only).
+  // and when settings.display cited Narkowicz's curve under its year, 2016 (the text only), and
+  // when pairs of a denoiser without history recorded it (passthrough's keepsHistory, new).
   const std::string file = std::string(ARENA_TEST_DATA) + "/evaluation_golden.json";
   const json now = test::goldenPart(
       withoutNewMetrics(runMatrix(test::goldenRunConfig(test::freshDir("golden_run"), test::freshDir("golden_cache")))));

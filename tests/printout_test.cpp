@@ -695,6 +695,11 @@ TEST(StudySummary, AWarningAboutASceneIsStoredAndPrintedOncePerScene) {
   }
   EXPECT_GT(titan["temporal"], 0.0);
   EXPECT_GT(titan["svgf"], titan["temporal"]);
+  // The methods that carry nothing between frames are recorded as such (the report marks none of
+  // their event figures best); the others say nothing.
+  for (const json& p : results["pairs"])
+    EXPECT_EQ(p.value("keepsHistory", true), p["label"] != "passthrough" && p["label"] != "eaw")
+        << p["label"];
   // results.db holds them too, a row per pair and device (README: every number).
   int devices = 0;
   for (const json& p : results["pairs"])

@@ -83,10 +83,12 @@ const ParamTable<BoxSettings>& boxParams() {
 }  // namespace
 
 DenoiserInfo exampleBoxInfo() {
-  return {"box", "Box filter within each mesh (the worked example of docs/extending.md)", boxParams().schema(),
-          [](const ParamSet& params, SignalKind) {
-            return std::make_unique<BoxDenoiser>(boxParams().settings(params, "box"));
-          }};
+  DenoiserInfo info{"box", "Box filter within each mesh (the worked example of docs/extending.md)",
+                    boxParams().schema(), [](const ParamSet& params, SignalKind) {
+                      return std::make_unique<BoxDenoiser>(boxParams().settings(params, "box"));
+                    }};
+  info.keepsHistory = false;  // each frame alone: its event figures (no lag) are by construction
+  return info;
 }
 
 }  // namespace arena

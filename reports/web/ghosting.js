@@ -152,21 +152,27 @@
 
   const valueOf = (c, e) => (c.at ? c.at(e) : e[c.key]);
 
-  // `first`: column key -> the labels marked best in it (absent: none marked). The noisy input
-  // (passthrough) is never marked: it keeps no history, so it has no lag and a jump ratio of 1 by
-  // construction, which is no finding about denoising; a note says so where it ranked first.
-  const NOISY_INPUT = 'passthrough';
+  // `first`: column key -> the labels marked best in it (absent: none marked). A method that keeps
+  // no history (pairs[].keepsHistory false: passthrough, the noisy input, and a spatial filter such
+  // as eaw) is never marked: it has no lag and no jump by construction, which is no finding about
+  // its denoising; a note names the columns where such a method ranked first.
   function figureTable(cls, columns, rows, first) {
-    const unmarked = columns.filter((c) => first[c.key] && first[c.key].has(NOISY_INPUT)).map((c) => c.title);
+    const stateless = new Set(A.pairsOf(A.state.scene).filter((p) => p.keepsHistory === false).map((p) => p.label));
+    const unmarked = new Map();  // label -> the columns it ranked first on
+    for (const c of columns)
+      for (const label of first[c.key] || [])
+        if (stateless.has(label)) unmarked.set(label, [...(unmarked.get(label) || []), c.title]);
     const table = el('table', { class: `data ${cls}` },
       el('thead', {}, el('tr', {}, el('th', { class: 'first', text: 'denoiser / setting' }), columns.map((c) => el('th', { text: c.title })))),
       el('tbody', {}, rows.map(([label, e]) => el('tr', { 'data-label': label }, el('td', { class: 'first', text: label }),
-        columns.map((c) => el('td', { class: label !== NOISY_INPUT && first[c.key] && first[c.key].has(label) ? 'best' : null }, A.fmt(valueOf(c, e)), ciSpan(e, c.key)))))));
-    if (!unmarked.length) return el('div', { class: 'table-wrap' }, table);
+        columns.map((c) => el('td', { class: !stateless.has(label) && first[c.key] && first[c.key].has(label) ? 'best' : null }, A.fmt(valueOf(c, e)), ciSpan(e, c.key)))))));
+    if (!unmarked.size) return el('div', { class: 'table-wrap' }, table);
+    const names = [...unmarked.keys()];
     return el('div', { class: 'table-wrap' }, table, el('p', {
       class: 'note input-unmarked',
-      text: `${NOISY_INPUT}, the noisy input, ranks first on ${unmarked.join(', ')} but is not marked: it keeps no ` +
-        'history, so it has no lag and no jump by construction; its error is its E_ss or relMSE here and its scene ranking.'
+      text: `Not marked, though ranked first: ${names.map((l) => `${l} on ${unmarked.get(l).join(', ')}`).join('; ')}. ` +
+        `${names.length > 1 ? 'They keep' : 'It keeps'} no history between frames, so ${names.length > 1 ? 'they have' : 'it has'} ` +
+        'no lag and no jump by construction; the error is in E_ss or relMSE here and in the scene ranking.'
     }));
   }
 
