@@ -598,6 +598,43 @@ void printSceneWinners(std::ostream& out, const RunResults& results) {
     out << "  resolved WORSE than the noisy input on relMSE: " << worseThanInput << "\n";
 }
 
+// The methods still lagging at the end of a scripted event's window, per event: the headline
+// scores average lag away (a method first on flicker may never settle after a light goes off).
+void printUnsettled(std::ostream& out, const RunResults& results) {
+  struct Event {
+    std::string scene, kind;
+    int frame = 0, window = 0;
+    std::vector<std::string> labels;
+  };
+  std::vector<Event> events;
+  for (const PairResult& p : results.pairs) {
+    if (!p.ok()) continue;
+    for (const json& g : p.part("ghosting").is_array() ? p.part("ghosting") : json::array()) {
+      if (!g.is_object() || !g.value("settled", json()).is_boolean() || g["settled"].get<bool>())
+        continue;
+      const int frame = g.value("eventFrame", -1);
+      auto it = std::find_if(events.begin(), events.end(), [&](const Event& e) {
+        return e.scene == p.scene && e.frame == frame;
+      });
+      if (it == events.end()) {
+        events.push_back(
+            {p.scene, g.value("kind", ""), frame, g.value("windowEnd", frame) - frame + 1, {}});
+        it = events.end() - 1;
+      }
+      it->labels.push_back(p.label);
+    }
+  }
+  if (events.empty()) return;
+  out << "\nnever settled after a scripted event (still lagging where its window ends; --verbose: "
+         "the event figures)\n";
+  for (const Event& e : events) {
+    std::string labels;
+    for (const std::string& l : e.labels) labels += (labels.empty() ? "" : ", ") + l;
+    out << "  " << e.scene << " @" << e.frame << " " << e.kind << " (" << e.window
+        << " frames from it): " << labels << "\n";
+  }
+}
+
 // The warnings that concern a scene, once per scene: results.scenes.<scene>.warnings (capped
 // references, non-finite inputs) and the asset loader's fallbacks.
 std::vector<std::string> sceneWarningLines(const RunResults& results) {
@@ -632,6 +669,7 @@ void printStudySummary(std::ostream& out, const RunResults& results, const Study
     out << "  rank 1 overall on the other metrics: " << firsts << " (--verbose: their table)\n";
   printSpeedOrder(out, results);
   printSceneWinners(out, results);
+  printUnsettled(out, results);
   // docs/references.md: said plainly, once, where a scene's references are too noisy to rank it.
   std::vector<std::string> missed;
   for (const auto& [name, scene] : results.scenes.items())
