@@ -102,6 +102,17 @@
       });
       renders.push(A.embedChart(`ghost${k}`, holder, spec));
       body.append(ghostTable(withEvent, k));
+      // The reference between this event and the next too noisy for the goal (referenceQuality.
+      // segments; the scene's verdict is under the summary table): said where its figures are.
+      const quality = scene.referenceQuality || {};
+      const segment = (quality.segments || []).find((s) => s.from === g0.eventFrame);
+      if (quality.segmentsMeet === false && segment && segment.ratio > (quality.goal || 0.1))
+        body.append(el('p', {
+          class: 'note warnings segment-quality',
+          text: `The reference's noise in frames ${segment.from}-${segment.to} is ${A.fmt(segment.ratio)} of the best ` +
+            `method's error there (goal ${A.fmt(quality.goal || 0.1)}): these figures partly measure the reference, ` +
+            'and small differences between methods here are not theirs (the scene\'s verdict is under the summary table).'
+        }));
       // Methods still off from an earlier change: no lag figure, and why (their 0 read as best).
       const unsettled = withEvent.filter((p) => p.ghosting[k].lagAbsent);
       if (unsettled.length)

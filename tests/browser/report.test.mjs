@@ -632,6 +632,8 @@ test('long labels stay in their tables; a segment\'s reference verdict is said',
   const events = await page.$$eval('#ghosting-body .table-wrap', (ws) => ws.map((w) => [w.scrollWidth, w.clientWidth]));
   assert.ok(events.length >= 2 && events.every(([s, c]) => s <= c), `event tables fit 1400 px: ${JSON.stringify(events)}`);
   assert.match(await page.locator('#warnings p.reference-quality').innerText(), /met for the scene's mean, not between its events \(frames 50-99/);
+  // ... and under the event's own figures, which that segment holds.
+  assert.match(await page.locator('#ghosting-body p.segment-quality').innerText(), /The reference's noise in frames 50-99 is 0\.2 of the best method's error there/);
   await page.selectOption('#scene-select', 'scene_1');
   await page.waitForFunction(() => document.getElementById('scene-purpose').textContent.startsWith('scene_1'));
   assert.equal(await page.locator('#warnings p.reference-quality').count(), 0, 'scene_1 has no verdict to say');
