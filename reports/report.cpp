@@ -60,10 +60,13 @@ struct ErrorAxis {
   bool complement;      // value = 1 - source
   const char* overall;  // the registered metric whose overall score (statistics) is the all-scenes value
 };
-const ErrorAxis kErrorAxes[] = {{"relMse", "relMSE", "relMse", false, "relMse"},
-                                {"hdrFlip", "HDR-FLIP", "hdrFlip", false, "hdrFlip"},
-                                {"ldrFlip", "LDR-FLIP", "ldrFlip", false, "ldrFlip"},
-                                {"dssim", "1 − SSIM", "ssim", true, "dssim"}};
+const ErrorAxis kErrorAxes[] = {
+    {"relMse", "relMSE", "relMse", false, "relMse"},
+    {"hdrFlip", "HDR-FLIP", "hdrFlip", false, "hdrFlip"},
+    {"ldrFlip", "LDR-FLIP", "ldrFlip", false, "ldrFlip"},
+    {"dssim", "1 − SSIM", "ssim", true, "dssim"},
+    // Flicker against time: what a 60 fps title weighs beside the error.
+    {"tRmae", "tRMAE (flicker)", "tRmae", false, "tRmae"}};
 
 // The mean of the reference's own relMSE over frames t >= W (metrics.md's sequence summary), the
 // floor below which a method's raw relMSE cannot be ranked.

@@ -188,6 +188,9 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
   // with the order by time on that axis.
   const clocks = await page.$$eval('#speed-clock option', (o) => o.map((x) => x.value));
   assert.deepEqual(clocks.slice(0, 2), ['cpu', 'gpu:TITAN RTX']);
+  // Flicker is an error axis too (its overall score on the all-scenes chart, as the others').
+  const errorAxes = await page.$$eval('#speed-metric option', (o) => o.map((x) => x.value));
+  assert.ok(errorAxes.includes('tRmae'), errorAxes.join(', '));
   const predicted = results.pairs.filter((p) => p.scene === 'light_switch' && p.status === 'ok' && p.timing &&
     p.timing.gpuPredicted && p.timing.gpuPredicted.devices.find((d) => d.device === 'TITAN RTX').msMedian > 0).length;
   assert.ok(predicted >= 3, `pairs with a predicted GPU time: ${predicted}`);
