@@ -177,9 +177,18 @@
       el('thead', {}, el('tr', {}, el('th', { class: 'first', text: 'denoiser / setting' }), columns.map((c) => el('th', { text: c.title })))),
       el('tbody', {}, rows.map(([label, e]) => el('tr', { 'data-label': label }, el('td', { class: 'first', text: label }),
         columns.map((c) => el('td', { class: !stateless.has(label) && first[c.key] && first[c.key].has(label) ? 'best' : null }, A.fmt(valueOf(c, e)), ciSpan(e, c.key)))))));
-    if (!unmarked.size) return el('div', { class: 'table-wrap' }, table);
+    // Why cells have no interval, said once when one reason covers them all (a changed region too
+    // small to resample left every cell of moving_light_shadow's table "no interval", the reason
+    // only in each cell's tooltip).
+    const reasons = new Set();
+    for (const [, e] of rows)
+      for (const c of columns)
+        if (!Array.isArray((e.ci95 || {})[c.key]) && (e.ci95Absent || {})[c.key]) reasons.add(e.ci95Absent[c.key]);
+    const noInterval = reasons.size === 1
+      ? [el('p', { class: 'note no-interval', text: `No interval in the cells marked so: ${[...reasons][0]}.` })] : [];
+    if (!unmarked.size) return el('div', { class: 'table-wrap' }, table, ...noInterval);
     const names = [...unmarked.keys()];
-    return el('div', { class: 'table-wrap' }, table, el('p', {
+    return el('div', { class: 'table-wrap' }, table, ...noInterval, el('p', {
       class: 'note input-unmarked',
       text: `Not marked, though ranked first: ${names.map((l) => `${l} on ${unmarked.get(l).join(', ')}`).join('; ')}. ` +
         `${names.length > 1 ? 'They keep' : 'It keeps'} no history between frames, so ${names.length > 1 ? 'they have' : 'it has'} ` +

@@ -558,6 +558,8 @@ test('10 denoisers x 10 scenes x 100 frames stays light', async () => {
   assert.equal(await page.locator('#ghosting-body table.cut-table tbody tr').count(), 10);
   assert.match(await page.locator('#ghosting-body table.cut-table tbody tr[data-label="denoiser_2"]').innerText(), /\[2\.9, 3\.1\]/);
   assert.equal(await page.locator('#ghosting-body table.cut-table span.ci[title="the figure itself is undefined for this event"]').count(), 10);
+  // One reason for every such cell: said once under the table, not only in the tooltips.
+  assert.match(await page.locator('#ghosting-body .table-wrap:has(table.cut-table) p.no-interval').innerText(), /No interval in the cells marked so: the figure itself is undefined for this event/);
   // The ratios rank each method's jump: the absolute relMSE at the cut and in the steady state
   // stand beside them, unranked, and a note says what the ratios are.
   const cutHead = await page.$$eval('#ghosting-body table.cut-table thead th', (th) => th.map((h) => h.textContent));
