@@ -143,7 +143,10 @@
           mark: { type: 'line', color: '#b5651d', strokeDash: [1, 3], strokeWidth: 1.5 },
           encoding: { x, y, order: { field: 'ms', type: 'quantitative' } } },
         { name: 'points', mark: { type: 'point', filled: true, size: small ? 70 : 110, strokeWidth: 2, cursor: 'pointer' },
+          // A shape beside the colour: methods that cluster (the study's 8-25 ms CPU group) are told
+          // apart without hovering, where pastel colours alone were not.
           encoding: { x, y, tooltip, color,
+                      shape: { field: 'label', type: 'nominal', scale: { domain: A.colorScale.domain }, title: 'denoiser / setting', legend: small ? null : {} },
                       fillOpacity: { condition: { test: 'datum.complete', value: 1 }, value: 0 },
                       strokeWidth: { condition: { test: 'datum.selected', value: 4 }, value: 2 } } },
         // The front's members are named on the chart; the others by the legend and the tooltip

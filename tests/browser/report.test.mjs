@@ -170,6 +170,9 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
   await page.waitForFunction((k) => document.querySelector('#speed-chart g.points_marks')?.querySelectorAll('path').length === k, okHere);
   assert.equal(await speedPoints(page), okHere);
   assert.ok((await page.locator('#speed-front b').count()) >= 1, 'the Pareto front names its members');
+  // Each method has a shape as well as a colour (a cluster is told apart without hovering).
+  const shapes = new Set(await page.$$eval('#speed-chart g.points_marks path', (ps) => ps.map((p) => p.getAttribute('d'))));
+  assert.ok(shapes.size >= Math.min(okHere, 4), `point shapes: ${shapes.size} for ${okHere} points`);
 
   // Small multiples: one panel per scene, each with its points.
   await page.selectOption('#speed-layout', 'multiples');
