@@ -500,6 +500,7 @@ void printEventTables(std::ostream& out, const RunResults& results) {
           << " pairs resolved)\n";
       std::string steadyAbsent;  // the window's reason, the same for every method
       std::string neverSettled;  // methods whose E_ss is taken from frames still lagging
+      std::string stateless;     // methods at rank 1 that keep no history: first by construction
       // A pair the ranking leaves out (its figure undefined: a cut with no old view, a lag after an
       // event it never settled from) keeps its row, unranked ("-"), with its other figures.
       std::vector<RankedMethod> rows = ranking.ranking;
@@ -519,6 +520,9 @@ void printEventTables(std::ostream& out, const RunResults& results) {
             for (const json& x : p.part(cut ? "cuts" : "ghosting"))
               if (x.value("eventFrame", -1) == frame) e = &x;
         if (!e) continue;
+        for (const PairResult& p : results.pairs)
+          if (p.scene == name && p.label == m.label && m.rank == 1 && !p.keepsHistory())
+            stateless += (stateless.empty() ? "" : ", ") + m.label;
         out << "  " << std::left << std::setw(4) << rankText(m) << paddedText(m.label, column);
         for (const char* f : cut ? std::vector<const char*>{"oldViewLeak", "atCut"}
                                  : std::vector<const char*>{"lagEnergy", "responseFrames", "peakExcess", "chromaLagEnergy"})
@@ -536,6 +540,10 @@ void printEventTables(std::ostream& out, const RunResults& results) {
             << " (E_ss is then a median of frames still lagging: their peakExcess and ghostEnergy "
                "read low, lower bounds)\n";
       if (!ranking.excluded.empty()) out << "  not ranked: " << ranking.excluded << "\n";
+      if (!stateless.empty())
+        out << "  " << stateless
+            << " at rank 1 keep(s) no history between frames: no lag and no jump by construction, "
+               "not a finding about denoising (their error is in the scene's ranking)\n";
       if (ranksAboveALowerValue(ranking.ranking))
         out << "  (a method above one with a lower " << rankedOn
             << " has fewer methods resolved better than it: its differences are less certain)\n";

@@ -332,6 +332,11 @@ const json& PairResult::part(const std::string& key) const {
   return detail.contains(key) ? detail.at(key) : none;
 }
 
+bool PairResult::keepsHistory() const {
+  const json& k = part("keepsHistory");
+  return k.is_boolean() ? k.get<bool>() : denoiser != "passthrough";
+}
+
 const json& PairResult::timing() const {
   static const json none = json::object();
   return part("timing").is_object() ? part("timing") : none;

@@ -63,6 +63,9 @@ struct PairResult {
   const nlohmann::json& part(const std::string& key) const;
   // The pair's timing object (an empty object when it has none).
   const nlohmann::json& timing() const;
+  // Whether its denoiser carries state between frames (keepsHistory false: passthrough, a spatial
+  // filter; results written before it was recorded: false for passthrough alone).
+  bool keepsHistory() const;
   // The clock its times were taken on: "cpu" (measured here; also where timing says none),
   // "process" (an external process's own report), "capture" (a capture's device), "none".
   std::string clock() const;

@@ -930,10 +930,8 @@ json pairData(const PairResult& pair) {
   p["summary"] = summary;
   // Outputs of the same bits (a sweep's points a parameter did not reach): the rankings say so.
   if (pair.detail.contains("outputChecksum")) p["outputChecksum"] = pair.detail["outputChecksum"];
-  // No state between frames (results written before it was recorded: passthrough only, by name).
-  if (const json& k = pair.part("keepsHistory");
-      (k.is_boolean() && !k.get<bool>()) || (k.is_null() && pair.denoiser == "passthrough"))
-    p["keepsHistory"] = false;
+  // No state between frames (PairResult::keepsHistory: older results, passthrough by name).
+  if (!pair.keepsHistory()) p["keepsHistory"] = false;
   const json& timing = pair.timing();
   p["timing"] = {{"msMedian", timing.value("msMedian", kNaN)},
                  {"msP5", timing.value("msP5", kNaN)},

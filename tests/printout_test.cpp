@@ -357,6 +357,21 @@ TEST(StudySummary, MethodsThatNeverSettledAreNamedBesideTheirEventFigures) {
             1u)
       << text;
   EXPECT_EQ(text.find("never settled within the window: " + labels[0] + ", "), std::string::npos);
+  EXPECT_EQ(text.find("keep(s) no history"), std::string::npos) << "nobody ranked: nothing said";
+  // A method without history at rank 1 on the event's figure is said to be first by construction.
+  json& lag = results["statistics"]["scenes"][scene]["events"][0]["byFigure"]["lagEnergy"];
+  lag["ranking"] = json::array({{{"label", labels[1]},
+                                 {"rank", 1},
+                                 {"mean", 0.0},
+                                 {"ci95", {0.0, 0.0}},
+                                 {"tiedWith", json::array()}}});
+  for (json& p : results["pairs"])
+    if (p["scene"] == scene && p["label"] == labels[1]) p["keepsHistory"] = false;
+  std::ostringstream first;
+  cli::printStudyTables(first, test::typed(results));
+  EXPECT_NE(first.str().find("  " + labels[1] + " at rank 1 keep(s) no history between frames"),
+            std::string::npos)
+      << first.str();
 }
 
 // Nothing is called best without something to be best among, and the order of two times is no

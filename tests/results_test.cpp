@@ -121,6 +121,21 @@ TEST(RunResults, ARunRoundTripsByteForByte) {
 }
 
 // A reader asks a pair for a mean and gets it, or the reason there is none; never a number made up.
+// A pair says whether its denoiser carries state between frames; results written before it was
+// recorded know it of passthrough alone.
+TEST(RunResults, APairSaysWhetherItsDenoiserKeepsHistory) {
+  PairResult p;
+  p.denoiser = "svgf";
+  EXPECT_TRUE(p.keepsHistory());
+  p.detail["keepsHistory"] = false;
+  EXPECT_FALSE(p.keepsHistory());
+  p.detail.erase("keepsHistory");
+  p.denoiser = "passthrough";
+  EXPECT_FALSE(p.keepsHistory());
+  p.detail["keepsHistory"] = true;  // what a run recorded wins
+  EXPECT_TRUE(p.keepsHistory());
+}
+
 TEST(RunResults, AMeanOrWhyThereIsNone) {
   RunConfig cfg = contract::tinyRun("why_no_mean");
   json doc = runMatrix(cfg);
