@@ -326,8 +326,15 @@ bool nonNegative(const std::string& f) {
   return f != "signedBias";
 }
 
+// The response is a whole number of frames: its interval is the whole numbers inside the
+// percentile interval (which interpolation and the small-sample widening leave fractional, "2
+// [0.877, 3.12]"), so [1, 3]: the same values, no coverage lost. One holding none keeps its ends.
 Interval clipped(Interval iv, const std::string& f) {
   if (iv.valid() && nonNegative(f)) iv.lo = std::max(iv.lo, 0.0), iv.hi = std::max(iv.hi, 0.0);
+  if (iv.valid() && f == "responseFrames") {
+    const double lo = std::ceil(iv.lo - 1e-9), hi = std::floor(iv.hi + 1e-9);
+    if (lo <= hi) iv.lo = lo, iv.hi = hi;
+  }
   return iv;
 }
 

@@ -140,7 +140,9 @@ TEST(Evaluation, RunResultsAreBitIdenticalToTheHarnessBeforeTheStage) {
   // two events' hashes moved, no number), and when the reference verdict marked whether its
   // segments between events meet the goal (referenceQuality.segmentsMeet, new; no number moved),
   // and when settings.display cited Narkowicz's curve under its year, 2016 (the text only), and
-  // when pairs of a denoiser without history recorded it (passthrough's keepsHistory, new).
+  // when pairs of a denoiser without history recorded it (passthrough's keepsHistory, new), and
+  // when the response's interval became the whole numbers inside it (two upper bounds, 3.37 -> 3
+  // and 1.12 -> 1, and the event ranking's hash moved; no other number).
   const std::string file = std::string(ARENA_TEST_DATA) + "/evaluation_golden.json";
   const json now = test::goldenPart(
       withoutNewMetrics(runMatrix(test::goldenRunConfig(test::freshDir("golden_run"), test::freshDir("golden_cache")))));

@@ -639,6 +639,11 @@ TEST(EventIntervalsEndToEnd, IntervalsRankingsAndShardsMergedEqualOneRun) {
           p["label"].get<std::string>() + "'";
       // A bound is NULL exactly where results.json's is null ("never"), settled or not.
       const json ci = g["ci95"].value("responseFrames", json());
+      // A response is a whole number of frames, and so are its interval's bounds.
+      for (const json& bound : ci.is_array() ? ci : json::array())
+        if (bound.is_number())
+          EXPECT_EQ(bound.get<double>(), std::round(bound.get<double>()))
+              << p["label"] << " " << ci;
       if (ci.is_array())
         for (const char* column : {"ci_lo", "ci_hi"}) {
           const bool null = ci[std::string(column) == "ci_lo" ? 0 : 1].is_null();
