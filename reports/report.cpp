@@ -577,6 +577,7 @@ double pointFigure(const PairResult& pair, const EventFigure& f) {
 // a reason from results that stored only its text).
 std::string exclusionReason(const SceneRanking& ranking, const std::string& label,
                             const RunResults& results) {
+  if (!ranking.leftOut.empty()) return ranking.reasonFor(label, {});  // the list needs no labels
   std::vector<std::string> labels;
   for (const PairResult& p : results.pairs) labels.push_back(p.label);
   return ranking.reasonFor(label, labels);
