@@ -515,14 +515,14 @@ void printEventTables(std::ostream& out, const RunResults& results) {
       const size_t column = labelColumn(rows, 22);
       for (const RankedMethod& m : rows) {
         const json* e = nullptr;
+        const PairResult* pair = nullptr;
         for (const PairResult& p : results.pairs)
           if (p.scene == name && m.label == p.label && p.part(cut ? "cuts" : "ghosting").is_array())
             for (const json& x : p.part(cut ? "cuts" : "ghosting"))
-              if (x.value("eventFrame", -1) == frame) e = &x;
+              if (x.value("eventFrame", -1) == frame) e = &x, pair = &p;
         if (!e) continue;
-        for (const PairResult& p : results.pairs)
-          if (p.scene == name && p.label == m.label && m.rank == 1 && !p.keepsHistory())
-            stateless += (stateless.empty() ? "" : ", ") + m.label;
+        if (m.rank == 1 && !pair->keepsHistory())
+          stateless += (stateless.empty() ? "" : ", ") + m.label;
         out << "  " << std::left << std::setw(4) << rankText(m) << paddedText(m.label, column);
         for (const char* f : cut ? std::vector<const char*>{"oldViewLeak", "atCut"}
                                  : std::vector<const char*>{"lagEnergy", "responseFrames", "peakExcess", "chromaLagEnergy"})
