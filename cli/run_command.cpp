@@ -28,6 +28,7 @@
 #include "harness/scene_selection.hpp"
 #include "harness/sweep.hpp"
 #include "metrics/compare.hpp"
+#include "metrics/ghosting_intervals.hpp"
 #include "metrics/results.hpp"
 
 namespace arena::cli {
@@ -491,7 +492,9 @@ void addRunCommands(CLI::App& app) {
     // One value per --metric, or a comma-separated list: never the positional runs after it.
     cmd->add_option(
            "--metric", *metrics,
-           "Metric(s) to gate on, repeatable or comma-separated (`arena metrics` lists them)")
+           "Metric(s) to gate on, repeatable or comma-separated (`arena metrics` lists them); "
+           "event figures as ghosting.FIGURE or cut.FIGURE (e.g. ghosting.lagEnergy), a row per "
+           "event")
         ->default_str(gated)
         ->delimiter(',')
         ->allow_extra_args(false);
@@ -560,7 +563,7 @@ void addRunCommands(CLI::App& app) {
         if (const std::string note = unfinishedRunNote(*dir); !note.empty())
           warn(note + "; compared on the earlier run's numbers, which are whole");
       // Numbers measured under other settings differ for that reason alone: refused unless asked.
-      const std::vector<std::string> differ = settingsDifferences(baseline, candidate);
+      const std::vector<std::string> differ = settingsDifferences(baseline, candidate, tols);
       const auto lines = [](const std::vector<std::string>& items) {  // one indented line each
         std::string text;
         for (const std::string& item : items) text += "\n  " + item;
@@ -797,7 +800,14 @@ void addRunCommands(CLI::App& app) {
                   << "; floor: " << m.value("floor", std::string("none"))
                   << (roles.empty() ? "" : "; " + roles) << "\n";
       }
-      std::cout << "(definitions: docs/metrics.md)\n";
+      // The event-window figures are not summaries of a pair but one figure per event: `compare`
+      // gates them where named.
+      std::string figures;
+      for (const std::string& f : gatedEventFigureNames())
+        figures += (figures.empty() ? "" : ", ") + f;
+      std::cout << "\nevent figures, one per scripted event or camera cut (lower is better; ranked "
+                   "per event; gated by `arena compare --metric` only where named):\n  "
+                << figures << "\n(definitions: docs/metrics.md)\n";
     });
   }
 }

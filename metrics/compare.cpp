@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <map>
 #include <optional>
 #include <set>
@@ -11,6 +12,7 @@
 
 #include "core/error.hpp"
 #include "core/text.hpp"
+#include "metrics/ghosting_intervals.hpp"
 #include "metrics/results.hpp"
 
 namespace arena {
@@ -82,6 +84,50 @@ void collectDifferences(const json& a, const json& b, const std::string& path, s
   if (a != b) out.push_back(path + ": " + a.dump() + " vs " + b.dump());
 }
 
+// What a row's change and interval say against its tolerance (the rule the summaries' and the
+// event figures' rows share). `worse`: the change in the worse direction; `unjudgeable`: no
+// interval where one was due (fails the gate when worse beyond tolerance); `noTilesKept`: a run
+// read from results.db (not judged).
+void judge(ComparisonRow& row, double worse, bool resolvedWorse, bool resolvedBetter,
+           bool unjudgeable, bool noTilesKept, bool noteEvenWithNote) {
+  if (worse > row.tolerance && resolvedWorse) {
+    row.verdict = "regressed";
+  } else if (worse > row.tolerance && unjudgeable) {
+    row.verdict = "unverified";
+    row.note +=
+        ": the gate cannot tell this change from noise (rerun both with their tiles and "
+        "frames)";
+  } else if (std::abs(worse) > row.tolerance && noTilesKept) {
+    row.verdict = "not judged";
+    row.note +=
+        ": the gate cannot tell this change from noise without them (judge the run "
+        "directories, which keep them)";
+  } else if (worse > row.tolerance) {
+    row.verdict = "unresolved";
+  } else if (-worse > row.tolerance) {
+    row.verdict = resolvedBetter ? "improved" : "unresolved";
+  }
+  if (row.verdict == "unresolved" && (row.note.empty() || noteEvenWithNote))
+    row.note += (row.note.empty() ? "" : "; ") +
+                std::string(worse > 0 ? "worse beyond tolerance but within noise"
+                                      : "better beyond tolerance but within noise");
+}
+
+// Whether a row's p-value must be drawn more finely under Holm: the rows resolved alone, and every
+// row whose replicates all lie on one side (its p-value at the plan's floor): Holm's thresholds
+// rise as rows are rejected, so a row left at the floor would stop the procedure before a later
+// one.
+bool needsSharperP(const ComparisonRow& row, int replicates) {
+  return row.verdict == "regressed" || row.verdict == "improved" ||
+         row.pValue <= 2.0 / double(replicates + 1) * (1 + 1e-9);
+}
+
+// "12 frames" for a response figure, "never settled (counted as 40 frames)" for one that did not.
+std::string responseText(double frames, bool never) {
+  return never ? "never settled (counted as " + shortestText(frames) + " frames, its window)"
+               : shortestText(frames) + " frames";
+}
+
 }  // namespace
 
 std::vector<std::string> jsonDifferences(const json& a, const json& b, const std::string& path) {
@@ -112,7 +158,12 @@ std::vector<std::string> referenceDifferences(const RunResults& baseline,
   return out;
 }
 
-std::vector<std::string> settingsDifferences(const RunResults& baseline, const RunResults& candidate) {
+std::vector<std::string> settingsDifferences(const RunResults& baseline,
+                                             const RunResults& candidate,
+                                             const std::vector<Tolerance>& gated) {
+  const bool gatesLag = std::any_of(gated.begin(), gated.end(), [](const Tolerance& t) {
+    return t.metric == "ghosting.lagEnergy" || t.metric == "ghosting.chromaLagEnergy";
+  });
   std::vector<std::string> out;
   json a = baseline.settings.measurement(), b = candidate.settings.measurement();
   // Another --input-seed is another noise realisation of the same measurement, which the gate's
@@ -121,8 +172,8 @@ std::vector<std::string> settingsDifferences(const RunResults& baseline, const R
   // level (changes' root-mean-square z 0.99) but on light_switch's relMSE (1.67).
   // Nor does a shard's plan (which run it is a slice of): the pairs are compared one by one.
   // Nor does the rule for lag energy after an unsettled event (settings.ghosting.
-  // lagAfterUnsettled): the gate compares the pairs' summaries, never the event figures it changed
-  // (merge, which ranks those, still refuses to mix it).
+  // lagAfterUnsettled), unless the gate judges the lag figures it changed (`gated`: --metric
+  // ghosting.lagEnergy or ghosting.chromaLagEnergy); merge, which ranks those, refuses to mix it.
   // Captures named by other paths (a folder moved, given relative once and absolute once) are the
   // same sequences when every capture of both runs records its content: the scenes' checksums,
   // compared below, decide. Without them (older runs) the paths are all there is.
@@ -146,7 +197,7 @@ std::vector<std::string> settingsDifferences(const RunResults& baseline, const R
     }
     if (s->contains("render") && (*s)["render"].is_object()) (*s)["render"].erase("inputSeed");
     s->erase("plan");
-    if (s->contains("ghosting") && (*s)["ghosting"].is_object())
+    if (s->contains("ghosting") && (*s)["ghosting"].is_object() && !gatesLag)
       (*s)["ghosting"].erase("lagAfterUnsettled");
   }
   // A low-resolution buffer rendered in one run only (a contender there reads it) changes none of
@@ -235,7 +286,14 @@ std::vector<Tolerance> gateTolerances(std::vector<Tolerance> tolerances, double 
       if (m->gatedByDefault) tolerances.push_back({m->name, relative, true});
   for (Tolerance& t : tolerances) {
     if (t.metric == "flip") t.metric = "ldrFlip";
-    requireMetric(t.metric, "--metric");
+    if (!isGatedEventFigure(t.metric)) try {
+        requireMetric(t.metric, "--metric");
+      } catch (const Error& e) {
+        std::string figures;
+        for (const std::string& f : gatedEventFigureNames())
+          figures += (figures.empty() ? "" : ", ") + f;
+        throw Error(std::string(e.what()) + "; the event figures: " + figures);
+      }
     if (!std::isfinite(t.relative) || t.relative < 0)
       throw Error("--tolerance of " + t.metric + " must be finite and non-negative");
   }
@@ -284,8 +342,7 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
   // replicates can (the row, its scene, the baseline's and candidate's tiles).
   struct Sharper {
     size_t row;
-    std::string scene;
-    std::pair<MetricTiles, MetricTiles> tiles;
+    std::function<double(int replicates)> pValue;
   };
   std::vector<Sharper> sharper;
   // Metrics that keep per-tile data in either run: one of them without tiles somewhere is data
@@ -365,6 +422,7 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
     ++comparedPairs;
     const std::string candidateLabel = c.label != label ? c.label : "";
     for (const Tolerance& t : tolerances) {
+      if (isGatedEventFigure(t.metric)) continue;  // below, event by event
       ComparisonRow row{scene, label,      t.metric, kUndefined, kUndefined,     kUndefined,
                         {},    t.relative, "ok",     "",         candidateLabel, byRequest};
       const SummaryMean bm = b.mean(t.metric), cm = c.mean(t.metric);
@@ -467,36 +525,97 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
         unjudgeable = true;
       }
       const double worse = lowerIsBetter ? row.change : -row.change;
-      if (worse > t.relative && resolvedWorse) {
-        row.verdict = "regressed";
-      } else if (worse > t.relative && unjudgeable) {
-        row.verdict = "unverified";
-        row.note +=
-            ": the gate cannot tell this change from noise (rerun both with their tiles and "
-            "frames)";
-      } else if (std::abs(worse) > t.relative && noTilesKept) {
-        row.verdict = "not judged";
-        row.note +=
-            ": the gate cannot tell this change from noise without them (judge the run "
-            "directories, which keep them)";
-      } else if (worse > t.relative) {
-        row.verdict = "unresolved";
-      } else if (-worse > t.relative) {
-        row.verdict = resolvedBetter ? "improved" : "unresolved";
-      }
-      if (row.verdict == "unresolved" &&
-          (row.note.empty() || (sharedFrames && row.changeCi.valid())))
-        row.note += (row.note.empty() ? "" : "; ") +
-                    std::string(worse > 0 ? "worse beyond tolerance but within noise"
-                                          : "better beyond tolerance but within noise");
-      // The rows resolved alone, and every row whose replicates all lie on one side (its p-value
-      // at the plan's floor): Holm's thresholds rise as rows are rejected, so a row left at the
-      // floor would stop the procedure before a later one.
-      if (correction == Correction::Holm && pairedTiles &&
-          (row.verdict == "regressed" || row.verdict == "improved" ||
-           row.pValue <= 2.0 / double(cfg.replicates + 1) * (1 + 1e-9)))
-        sharper.push_back({rows.size(), scene, std::move(*pairedTiles)});
+      judge(row, worse, resolvedWorse, resolvedBetter, unjudgeable, noTilesKept,
+            sharedFrames && row.changeCi.valid());
+      if (correction == Correction::Holm && pairedTiles && needsSharperP(row, cfg.replicates))
+        sharper.push_back({rows.size(), [&cfg, scene, tiles = std::move(*pairedTiles)](int n) {
+                             return pairedChangePValue(tiles.second, tiles.first, scene, cfg, n);
+                           }});
       rows.push_back(row);
+    }
+    // Event figures (`--metric ghosting.lagEnergy`, `cut.oldViewLeak`): a row per event or cut of
+    // the pairs, matched by frame.
+    for (const Tolerance& t : tolerances) {
+      if (!isGatedEventFigure(t.metric)) continue;
+      const size_t dot = t.metric.find('.');
+      const std::string kind = t.metric.substr(0, dot), figure = t.metric.substr(dot + 1);
+      const bool cut = kind == "cut";
+      std::map<int, const json*> baseEvents, candEvents;
+      for (const auto& [pair, into] : {std::pair{&b, &baseEvents}, std::pair{&c, &candEvents}})
+        if (const json& list = pair->part(cut ? "cuts" : "ghosting"); list.is_array())
+          for (const json& e : list) (*into)[e.value("eventFrame", -1)] = &e;
+      std::set<int> frames;
+      for (const auto* events : {&baseEvents, &candEvents})
+        for (const auto& [frame, e] : *events) frames.insert(frame);
+      for (const int frame : frames) {
+        ComparisonRow row{
+            scene,      label,          kind + "@" + std::to_string(frame) + "." + figure,
+            kUndefined, kUndefined,     kUndefined,
+            {},         t.relative,     "ok",
+            "",         candidateLabel, byRequest};
+        const std::string what =
+            std::string(cut ? "camera cut" : "event") + " at frame " + std::to_string(frame);
+        if (!candEvents.count(frame) || !baseEvents.count(frame)) {
+          const bool inBaseline = baseEvents.count(frame) > 0;
+          row.verdict = inBaseline ? "missing" : "new";
+          row.note = std::string("the ") + (inBaseline ? "candidate" : "baseline") +
+                     "'s pair has no " + what;
+          rows.push_back(row);
+          continue;
+        }
+        const json &be = *baseEvents.at(frame), &ce = *candEvents.at(frame);
+        const EventFigureChange d = eventFigureChange(be, ce, cut, figure, scene, cfg);
+        for (const auto& [which, run, pair, disagrees] :
+             {std::tuple{"baseline", &base, &b, &d.baselineDisagrees},
+              std::tuple{"candidate", &cand, &c, &d.candidateDisagrees}})
+          if (!disagrees->empty())
+            throw Error((run->source.empty() ? "" : run->source + ": ") + which + " run, " +
+                        pair->label + " on " + scene + ": " + *disagrees +
+                        "; the results were edited or damaged, and the gate will not judge them");
+        if (!d.baselineAbsent.empty() || !d.candidateAbsent.empty()) {
+          row.verdict = d.candidateAbsent.empty()  ? "new"
+                        : d.baselineAbsent.empty() ? "missing"
+                                                   : "absent";
+          row.note = row.verdict == "new"       ? "absent in the baseline: " + d.baselineAbsent
+                     : row.verdict == "missing" ? d.candidateAbsent
+                     : d.baselineAbsent == d.candidateAbsent
+                         ? "in both runs: " + d.baselineAbsent
+                         : "baseline: " + d.baselineAbsent + "; candidate: " + d.candidateAbsent;
+          if (row.verdict == "new") row.candidate = d.candidate;
+          if (row.verdict == "missing") row.baseline = d.baseline;
+          rows.push_back(row);
+          continue;
+        }
+        row.baseline = d.baseline;
+        row.candidate = d.candidate;
+        row.change = d.change;
+        row.changeCi = d.changeCi;
+        row.pValue = d.pValue;
+        if (d.baselineNever || d.candidateNever)
+          row.note = "baseline " + responseText(d.baseline, d.baselineNever) + ", candidate " +
+                     responseText(d.candidate, d.candidateNever);
+        if (d.baseline == 0 && d.candidate != 0)
+          row.note += (row.note.empty() ? "" : "; ") +
+                      std::string(
+                          "the baseline's figure is 0, so any rise is beyond a relative "
+                          "tolerance; the difference ") +
+                      shortestText(d.candidate - d.baseline) +
+                      (d.difference.valid() ? " [" + shortestText(d.difference.lo) + ", " +
+                                                  shortestText(d.difference.hi) + "]"
+                                            : std::string());
+        const bool unjudgeable = !d.difference.valid();
+        if (unjudgeable)
+          row.note += (row.note.empty() ? "" : "; ") + ("no interval: " + d.noInterval);
+        judge(row, row.change, unjudgeable ? false : d.difference.lo > 0,
+              unjudgeable ? false : d.difference.hi < 0, unjudgeable, false, !unjudgeable);
+        if (correction == Correction::Holm && !unjudgeable && needsSharperP(row, cfg.replicates))
+          sharper.push_back({rows.size(), [&cfg, &be, &ce, cut, figure, scene](int n) {
+                               BootstrapConfig more = cfg;
+                               more.replicates = n;
+                               return eventFigureChange(be, ce, cut, figure, scene, more).pValue;
+                             }});
+        rows.push_back(row);
+      }
     }
   }
   for (const PairResult& c : cand.pairs)
@@ -515,9 +634,7 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
     const int needed =
         int(std::min(std::ceil(4.0 * double(family) / alpha), double(kMaxGateReplicates)));
     if (needed > cfg.replicates)
-      for (const Sharper& x : sharper)
-        rows[x.row].pValue =
-            pairedChangePValue(x.tiles.second, x.tiles.first, x.scene, cfg, needed);
+      for (const Sharper& x : sharper) rows[x.row].pValue = x.pValue(needed);
     std::vector<double> pValues;
     for (const ComparisonRow& r : rows) pValues.push_back(r.pValue);
     const std::vector<bool> kept = holmRejections(pValues, alpha);
@@ -541,13 +658,18 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
   // neither run computed (FLIP switched off in both).
   if (comparedPairs > 0)
     for (const Tolerance& t : tolerances)
-      if (!t.optional && std::none_of(rows.begin(), rows.end(),
-                                      [&](const ComparisonRow& r) { return r.metric == t.metric; }))
-        throw Error("compare: --metric " + t.metric + ": neither run computed it on the " +
-                    std::to_string(comparedPairs) +
-                    " pair(s) both ran (nothing to gate on; `arena metrics` says what each metric "
-                    "needs, e.g. "
-                    "FLIP's --flip setting)");
+      if (!t.optional && std::none_of(rows.begin(), rows.end(), [&](const ComparisonRow& r) {
+            return r.metric == t.metric || gatedEventFigureOf(r.metric) == t.metric;
+          }))
+        throw Error(
+            "compare: --metric " + t.metric + ": neither run computed it on the " +
+            std::to_string(comparedPairs) + " pair(s) both ran (nothing to gate on; " +
+            (isGatedEventFigure(t.metric)
+                 ? std::string(
+                       "an event figure is measured on scenes with scripted events or camera "
+                       "cuts, and kept in run directories, not in results.db)")
+                 : std::string("`arena metrics` says what each metric needs, e.g. FLIP's --flip "
+                               "setting)")));
   // A gate that held nothing to anything (every figure absent, no pair both runs ran, a baseline
   // whose pairs all failed) has checked nothing: it fails, saying so, rather than pass on no data.
   const bool judged = std::any_of(rows.begin(), rows.end(), [](const ComparisonRow& r) {

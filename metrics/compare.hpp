@@ -10,9 +10,10 @@
 // tests are corrected together (Holm): a row regresses only when it stays resolved among all the
 // rows the gate judged, so that noise alone fails the gate about 1 - confidence of the time, where
 // the rows' intervals hold their level (docs/statistics.md: on light_switch's relMSE they do not).
-// The command exits 1 on a regression and on anything it cannot
-// compare (a pair or metric the baseline had and the candidate lacks, no scene in common), so it
-// can gate a merge in CI.
+// Named with --metric, the figures ranked around scripted events and camera cuts are judged the
+// same way, a row per event (metrics/ghosting_intervals.hpp, eventFigureChange). The command exits
+// 1 on a regression and on anything it cannot compare (a pair or metric the baseline had and the
+// candidate lacks, no scene in common), so it can gate a merge in CI.
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -23,7 +24,9 @@
 namespace arena {
 
 struct Tolerance {
-  std::string metric;  // a name from metricCatalog() (aliases: flip = ldrFlip)
+  // A name from metricCatalog() (aliases: flip = ldrFlip) or an event figure
+  // (gatedEventFigureNames(): ghosting.lagEnergy, cut.recovery1, ...).
+  std::string metric;
   double relative = 0.02;
   // Skipped where neither run computed it (the defaults: FLIP may be switched off; a history,
   // whose runs may differ in what they computed). Otherwise, when no pair both runs ran has it,
@@ -80,7 +83,8 @@ const char* correctionName(Correction c);
 // non-negative; the alias flip read as ldrFlip), or when empty the defaults: every metric gated
 // by default, at `relative` (optional).
 std::vector<Tolerance> gateTolerances(std::vector<Tolerance> tolerances, double relative = 0.02);
-// Defaults when `tolerances` is empty: relMse, ldrFlip, hdrFlip, ssim, tRmae at 2%.
+// Defaults when `tolerances` is empty: relMse, ldrFlip, hdrFlip, ssim, tRmae at 2% (no event
+// figure).
 // A row "regressed" or "improved" by its own interval that does not survive `correction` at
 // level 1 - cfg.confidence reads "unresolved", its note saying so.
 // `matches` pairs a baseline label with a candidate label on every scene (`--match`: the same
@@ -98,8 +102,11 @@ std::map<std::string, std::string> checkLabelMatches(const std::vector<std::stri
                                                      const RunResults& candidate);
 // What two runs' settings differ in, one line each ("settings.warmup: 8 vs 2",
 // "scenes.cornell_static.width: 16 vs 32"): every field under "settings" except the shard, and the
-// resolution and frame count of each scene both runs have. Empty when they match.
-std::vector<std::string> settingsDifferences(const RunResults& baseline, const RunResults& candidate);
+// resolution and frame count of each scene both runs have. Empty when they match. `gated`: the
+// gate's tolerances (the rule for lag after an unsettled event counts where they judge lag).
+std::vector<std::string> settingsDifferences(const RunResults& baseline,
+                                             const RunResults& candidate,
+                                             const std::vector<Tolerance>& gated = {});
 // The scenes both runs measured against references of other sample counts (a refinement between
 // them): "scenes.light_switch.referenceSpp: [64,64] vs [256,64]". Part of each change there is the
 // reference's, not the denoiser's; `compare` warns of it. Empty when they match or are not

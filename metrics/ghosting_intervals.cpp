@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <set>
 
 #include "core/error.hpp"
+#include "core/text.hpp"
 
 namespace arena {
 
@@ -86,6 +88,7 @@ void resample(FigureReplicates& r, int tiles, const std::string& seedName,
   for (int k = 0; k < tiles; ++k) identity[size_t(k)] = k;
   std::map<std::string, double> point;
   if (!figuresOf(identity, point)) throw Error("event intervals: the full data gives no figures");
+  r.point = point;
   for (const std::string& f : r.figures)
     if (!r.absent.count(f) && !std::isfinite(point.count(f) ? point[f] : kUndefined))
       r.absent[f] = "the figure itself is undefined for this event";
@@ -410,6 +413,46 @@ std::map<std::string, double> pointFigures(const json& j, bool cut, const Ghosti
   return out;
 }
 
+// A pair's stored event or cut (eventFrame, its tiles) resampled with its scene's seed: every
+// method of the scene, and the same scene in another run, draws the same tiles.
+FigureReplicates storedReplicates(const json& e, bool cut, const std::string& scene,
+                                  const BootstrapConfig& cfg, const GhostingConfig& gc) {
+  const int frame = e.value("eventFrame", -1);
+  FigureReplicates r;
+  if (!e.contains("tiles")) {
+    r = allAbsent(cut ? cutFigureNames(gc) : ghostingFigureNames(),
+                  "no per-tile data stored (an older run)");
+  } else if (cut) {
+    // The segment's last frame: the steady frames' last, or where there are none (null; an older
+    // run wrote them as an empty range, [first, last] with first > last), segmentEnd.
+    const json steady = e.value("steadyFrames", json());
+    const int segmentEnd = steady.is_array() && steady.size() == 2 ? steady.at(1).get<int>()
+                                                                   : e.value("segmentEnd", frame);
+    r = cutReplicates(frame, segmentEnd, CutTiles::fromJson(e["tiles"]), cutSeedName(scene, frame),
+                      cfg, gc);
+  } else {
+    r = ghostingReplicates(frame, EventTiles::fromJson(e["tiles"]), eventSeedName(scene, frame),
+                           cfg, gc);
+  }
+  // Lag figures the evaluation left undefined (a method still lagging from the event before): the
+  // ranking excludes it with the evaluation's reason.
+  if (!cut && e.contains("lagAbsent") && e["lagAbsent"].is_string())
+    for (const char* f : {"lagEnergy", "chromaLagEnergy"})
+      r.absent[f] = e["lagAbsent"].get<std::string>();
+  return r;
+}
+
+// The tiles' frames and count of a stored event or cut ("" when it has none): two runs' draws are
+// the same tiles only where these agree.
+std::string tileShape(const json& e, bool cut) {
+  if (!e.contains("tiles")) return "";
+  const MetricTiles m =
+      cut ? CutTiles::fromJson(e["tiles"]).relMse : EventTiles::fromJson(e["tiles"]).bias;
+  if (m.frames.empty()) return "";
+  return "frames " + std::to_string(m.frames.front()) + ".." + std::to_string(m.frames.back()) +
+         ", " + std::to_string(m.tileCount()) + " tiles";
+}
+
 std::map<std::string, SceneRanking> rankFigures(const std::vector<std::string>& ranked,
                                                 const std::vector<std::string>& labels,
                                                 const std::vector<std::map<std::string, double>>& points,
@@ -477,34 +520,117 @@ SceneEvents rankSceneEvents(std::vector<std::pair<std::string, const json*>> pai
           }
           labels.push_back(label);
           points.push_back(pointFigures(e, cut, gc));
-          if (!e.contains("tiles")) {
-            reps.push_back(allAbsent(cut ? cutFigureNames(gc) : ghostingFigureNames(),
-                                     "no per-tile data stored (an older run)"));
-          } else if (cut) {
-            // The segment's last frame: the steady frames' last, or where there are none (null;
-            // an older run wrote them as an empty range, [first, last] with first > last),
-            // segmentEnd.
-            const json steady = e.value("steadyFrames", json());
-            const int segmentEnd = steady.is_array() && steady.size() == 2
-                                       ? steady.at(1).get<int>()
-                                       : e.value("segmentEnd", frame);
-            reps.push_back(cutReplicates(frame, segmentEnd, CutTiles::fromJson(e["tiles"]),
-                                         cutSeedName(scene, frame), cfg, gc));
-          } else {
-            reps.push_back(ghostingReplicates(frame, EventTiles::fromJson(e["tiles"]),
-                                              eventSeedName(scene, frame), cfg, gc));
-          }
-          // Lag figures the evaluation left undefined (a method still lagging from the event
-          // before): the ranking excludes it with the evaluation's reason.
-          if (!cut && e.contains("lagAbsent") && e["lagAbsent"].is_string())
-            for (const char* f : {"lagEnergy", "chromaLagEnergy"})
-              reps.back().absent[f] = e["lagAbsent"].get<std::string>();
+          reps.push_back(storedReplicates(e, cut, scene, cfg, gc));
         }
       event.byFigure =
           rankFigures(cut ? cutFigureNames(gc) : kRankedEventFigures, labels, points, reps, cfg);
       (cut ? out.cuts : out.events).push_back(std::move(event));
     }
   }
+  return out;
+}
+
+std::map<std::string, double> storedFigures(const json& e, bool cut) {
+  return pointFigures(e, cut, GhostingConfig{});
+}
+
+std::vector<std::string> gatedEventFigureNames(const GhostingConfig& gc) {
+  std::vector<std::string> out;
+  for (const std::string& f : kRankedEventFigures) out.push_back("ghosting." + f);
+  for (const std::string& f : cutFigureNames(gc)) out.push_back("cut." + f);
+  return out;
+}
+
+bool isGatedEventFigure(const std::string& name) {
+  const std::vector<std::string> names = gatedEventFigureNames();
+  return std::find(names.begin(), names.end(), name) != names.end();
+}
+
+std::string gatedEventFigureOf(const std::string& rowMetric) {
+  const size_t at = rowMetric.find('@'), dot = rowMetric.find('.');
+  if (at == std::string::npos || dot == std::string::npos || dot < at) return "";
+  const std::string name = rowMetric.substr(0, at) + rowMetric.substr(dot);
+  return isGatedEventFigure(name) ? name : "";
+}
+
+EventFigureChange eventFigureChange(const json& baseEvent, const json& candEvent, bool cut,
+                                    const std::string& figure, const std::string& scene,
+                                    const BootstrapConfig& cfg) {
+  const GhostingConfig gc;
+  EventFigureChange out;
+  const json* events[2] = {&baseEvent, &candEvent};
+  FigureReplicates reps[2];
+  for (int k = 0; k < 2; ++k) {
+    const json& e = *events[k];
+    reps[k] = storedReplicates(e, cut, scene, cfg, gc);
+    const std::map<std::string, double> point = pointFigures(e, cut, gc);
+    double& value = k == 0 ? out.baseline : out.candidate;
+    std::string& absent = k == 0 ? out.baselineAbsent : out.candidateAbsent;
+    value = point.count(figure) ? point.at(figure) : kUndefined;
+    // The evaluation's own reason first (a method still lagging from the event before), then the
+    // figure's.
+    if (!cut && (figure == "lagEnergy" || figure == "chromaLagEnergy") &&
+        e.value("lagAbsent", json()).is_string())
+      absent = e["lagAbsent"].get<std::string>();
+    else if (!std::isfinite(value))
+      absent = e.value("settled", json(false)).is_null()
+                   ? "no figures for this event (its changed region is empty)"
+               : e.value("ci95Absent", json::object()).value(figure, json()).is_string()
+                   ? e["ci95Absent"][figure].get<std::string>()  // the run's reason
+                   : "the figure is undefined for this event";
+    if (!absent.empty()) value = kUndefined;
+    if (!cut && figure == "responseFrames")
+      (k == 0 ? out.baselineNever : out.candidateNever) =
+          e.value("settled", json()).is_boolean() && !e["settled"].get<bool>();
+  }
+  if (!out.baselineAbsent.empty() || !out.candidateAbsent.empty()) return out;
+  // The stored figure against its tiles' (float32 sums against the run's doubles: within 1e-3 of
+  // the figure's size; a response may cross its threshold a frame apart).
+  for (int k = 0; k < 2; ++k) {
+    const double stored = k == 0 ? out.baseline : out.candidate;
+    const auto it = reps[k].point.find(figure);
+    if (it == reps[k].point.end() || !std::isfinite(it->second)) continue;
+    const double fromTiles = it->second;
+    const bool agree = figure == "responseFrames"
+                           ? std::abs(fromTiles - stored) <= 1
+                           : std::abs(fromTiles - stored) <=
+                                 1e-3 * std::max(std::abs(stored), std::abs(fromTiles)) + 1e-6;
+    if (!agree)
+      (k == 0 ? out.baselineDisagrees : out.candidateDisagrees) =
+          std::string(cut ? "cuts" : "ghosting") + "[frame " +
+          std::to_string((k == 0 ? baseEvent : candEvent).value("eventFrame", -1)) + "]." + figure +
+          " " + shortestText(stored) + " disagrees with its per-tile data (" +
+          shortestText(fromTiles) + ")";
+  }
+  if (!out.baselineDisagrees.empty() || !out.candidateDisagrees.empty()) return out;
+  const double scale = std::abs(out.baseline);
+  out.change = scale > 0           ? (out.candidate - out.baseline) / scale
+               : out.candidate > 0 ? std::numeric_limits<double>::infinity()
+               : out.candidate < 0 ? -std::numeric_limits<double>::infinity()
+                                   : 0.0;
+  for (int k = 0; k < 2; ++k)
+    if (reps[k].absent.count(figure)) {
+      out.noInterval =
+          std::string(k == 0 ? "baseline" : "candidate") + ": " + reps[k].absent.at(figure);
+      return out;
+    }
+  const std::string shapes[2] = {tileShape(baseEvent, cut), tileShape(candEvent, cut)};
+  if (shapes[0] != shapes[1]) {
+    out.noInterval = "the runs' tiles of this event differ (" + shapes[0] + " vs " + shapes[1] +
+                     "): their draws are not paired";
+    return out;
+  }
+  const std::vector<double>&b = reps[0].replicates.at(figure), &c = reps[1].replicates.at(figure);
+  std::vector<double> differences(b.size());
+  for (size_t i = 0; i < b.size(); ++i) differences[i] = c[i] - b[i];
+  out.difference =
+      widenedInterval(differences, cfg.confidence, std::max(reps[0].widen, reps[1].widen));
+  if (!out.difference.valid()) {
+    out.noInterval = "fewer than 20 replicates define the figure in both runs";
+    return out;
+  }
+  out.pValue = changePValue(differences);
+  if (scale > 0) out.changeCi = {out.difference.lo / scale, out.difference.hi / scale};
   return out;
 }
 

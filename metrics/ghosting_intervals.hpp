@@ -92,6 +92,8 @@ struct FigureReplicates {
   // where a t interval with G - 1 degrees of freedom is due: with 16 tiles a 95% interval would
   // cover about 92% (tests/ghosting_intervals_test.cpp), widened it covers about 95%.
   double widen = 1.0;
+  // The figures of the identity draw (every tile once): the stored figures, from the tiles' sums.
+  std::map<std::string, double> point;
 };
 // The widening factor above for `blocks` (>= 2) and a two-sided confidence level.
 double smallSampleWidening(double blocks, double confidence);
@@ -129,5 +131,49 @@ struct SceneEvents {
 };
 SceneEvents rankSceneEvents(std::vector<std::pair<std::string, const nlohmann::json*>> pairs,
                             const std::string& scene, const BootstrapConfig& cfg = {});
+
+// Event figures a gate can judge between two runs (`arena compare --metric ghosting.lagEnergy`):
+// "ghosting.<figure>" for the figures ranked between methods (lagEnergy, responseFrames,
+// peakExcess, ghostEnergy, absSignedBias, chromaLagEnergy) and "cut.<figure>" for a cut's (atCut,
+// recovery1.., oldViewLeak); lower is better for all. A row judges one event: metric
+// "ghosting@<frame>.<figure>" or "cut@<frame>.<figure>", as results.db names its rankings.
+std::vector<std::string> gatedEventFigureNames(const GhostingConfig& gc = {});
+bool isGatedEventFigure(const std::string& name);
+// "ghosting@12.lagEnergy" -> "ghosting.lagEnergy"; "" for any other name.
+std::string gatedEventFigureOf(const std::string& rowMetric);
+
+// A pair's stored event's (or cut's) figures by name, as the ranking and the gate read them
+// (responseFrames never settled: the window's frames from the event; absSignedBias from
+// signedBias; NaN where the run has none).
+std::map<std::string, double> storedFigures(const nlohmann::json& e, bool cut);
+
+// One figure of one event (or cut) as two runs measured it on one scene: the pairs' stored events
+// (`baseEvent`, `candEvent`, matched by frame). Both runs resample the event with the scene's seed,
+// so a replicate draws the same tiles in both where their windows and tile grids agree: the
+// change's interval is paired, as the summaries' are, and widened as the figures' own intervals
+// are. Relative to the baseline's figure (the difference's interval divided by it, not each
+// replicate's ratio: a figure of 0 in one replicate, a method that settled at once, would be a
+// division by 0); where the baseline's figure is 0, a rise is beyond any relative tolerance
+// (change +infinity) and resolved by the difference's interval alone.
+struct EventFigureChange {
+  double baseline = kUndefined, candidate = kUndefined;  // never settled: the window's frames
+  std::string baselineAbsent, candidateAbsent;           // why a run has no figure
+  bool baselineNever = false, candidateNever = false;    // responseFrames: never settled
+  double change = kUndefined;                            // (candidate - baseline) / |baseline|
+  Interval changeCi;                                     // the same scale (none from a baseline 0)
+  Interval difference;                                   // candidate - baseline
+  double pValue = kUndefined;                            // of "no change", from the differences
+  std::string noInterval;                                // why there is no interval
+  // Where a run's stored figure disagrees with its own tiles' (a hand-edited or damaged record:
+  // the change would come from the one and the interval from the other), what differs; the
+  // caller names the run and refuses.
+  std::string baselineDisagrees, candidateDisagrees;
+};
+// `figure` without its prefix ("lagEnergy"); cfg.replicates may exceed the figures' own 1000 (a
+// corrected gate's p-values), the first of them drawn as the run drew its own.
+EventFigureChange eventFigureChange(const nlohmann::json& baseEvent,
+                                    const nlohmann::json& candEvent, bool cut,
+                                    const std::string& figure, const std::string& scene,
+                                    const BootstrapConfig& cfg = {});
 
 }  // namespace arena

@@ -336,7 +336,14 @@ double relativeChange(double x, double base) {
   return (x - base) / std::max(std::abs(base), 1e-12);
 }
 
-// 2 (min(#{c <= 0}, #{c >= 0}) + 1) / (R + 1) over the finite replicates, at most 1.
+std::vector<double> difference(const std::vector<double>& a, const std::vector<double>& b) {
+  std::vector<double> d(a.size());
+  for (size_t i = 0; i < a.size(); ++i) d[i] = a[i] - b[i];
+  return d;
+}
+
+}  // namespace
+
 double changePValue(const std::vector<double>& changes) {
   size_t finite = 0, atMost = 0, atLeast = 0;
   for (double c : changes) {
@@ -348,14 +355,6 @@ double changePValue(const std::vector<double>& changes) {
   if (finite == 0) return kUndefined;
   return std::min(1.0, 2 * double(std::min(atMost, atLeast) + 1) / double(finite + 1));
 }
-
-std::vector<double> difference(const std::vector<double>& a, const std::vector<double>& b) {
-  std::vector<double> d(a.size());
-  for (size_t i = 0; i < a.size(); ++i) d[i] = a[i] - b[i];
-  return d;
-}
-
-}  // namespace
 
 PairedDifference pairedDifference(const MetricTiles& a, const MetricTiles& b,
                                   const std::string& seedName, const BootstrapConfig& cfg) {

@@ -112,6 +112,10 @@ struct PairedDifference {
 PairedDifference pairedDifference(const MetricTiles& a, const MetricTiles& b,
                                   const std::string& seedName, const BootstrapConfig& cfg = {});
 
+// 2 (min(#{c <= 0}, #{c >= 0}) + 1) / (R + 1) over the finite replicates of a change, at most 1;
+// NaN without any.
+double changePValue(const std::vector<double>& changes);
+
 // (a - b) / |b| on the frames both have, with its interval: the percentile interval of each
 // replicate's own relative change, so it keeps to the metric's range (a relMSE cannot fall by more
 // than 100%), which pairedDifference's interval divided by b's point value did not. Its sign in

@@ -11,6 +11,7 @@
 #include "core/atomic_file.hpp"
 #include "core/env_info.hpp"
 #include "core/error.hpp"
+#include "metrics/ghosting_intervals.hpp"
 #include "metrics/results.hpp"
 #include "reports/report.hpp"
 
@@ -266,13 +267,31 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
   // --flip none), an error as in `arena compare`, not a page of "nothing compared".
   tolerances = gateTolerances(std::move(tolerances));
   for (Tolerance& t : tolerances) {
+    // An event figure (--metric ghosting.lagEnergy) is kept with each pair's events in a run
+    // directory; results.db ranks them but keeps none per pair.
+    const bool event = isGatedEventFigure(t.metric);
+    const bool cut = event && t.metric.rfind("cut.", 0) == 0;
     const bool computed = std::any_of(runs.begin(), runs.end(), [&](const RunResults& r) {
-      return std::any_of(r.pairs.begin(), r.pairs.end(),
-                         [&](const PairResult& p) { return p.mean(t.metric).computed && p.ok(); });
+      return std::any_of(r.pairs.begin(), r.pairs.end(), [&](const PairResult& p) {
+        if (!p.ok()) return false;
+        if (!event) return p.mean(t.metric).computed;
+        const json& events = p.part(cut ? "cuts" : "ghosting");
+        return events.is_array() && !events.empty();
+      });
     });
+    const bool fromDatabase =
+        std::any_of(runs.begin(), runs.end(), [](const RunResults& r) { return !r.keepsTiles; });
     if (!t.optional && !computed)
-      throw Error("history: --metric " + t.metric + ": no run computed it (nothing to gate on; " +
-                  "`arena metrics` says what each metric needs, e.g. FLIP's --flip setting)");
+      throw Error(
+          "history: --metric " + t.metric + ": no run computed it (nothing to gate on; " +
+          (event ? std::string("an event figure is measured on scenes with scripted events or "
+                               "camera cuts, and kept in run directories") +
+                       (fromDatabase ? ": results.db keeps none, give `arena history` the run "
+                                       "directories (their results.json)"
+                                     : "") +
+                       ")"
+                 : std::string("`arena metrics` says what each metric needs, e.g. FLIP's --flip "
+                               "setting)")));
     t.optional = true;
   }
   json runList = json::array();
@@ -328,6 +347,31 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
         if (std::find(aliases.begin(), aliases.end(), p.label) == aliases.end())
           aliases.push_back(p.label);
       }
+      // The gated event figures, one series per event ("ghosting@12.lagEnergy", as the gate's
+      // rows and results.db name them), with the run's own interval.
+      for (const Tolerance& t : tolerances) {
+        if (!isGatedEventFigure(t.metric)) continue;
+        const size_t dot = t.metric.find('.');
+        const std::string kind = t.metric.substr(0, dot), figure = t.metric.substr(dot + 1);
+        const json& events = p.part(kind == "cut" ? "cuts" : "ghosting");
+        if (!events.is_array()) continue;
+        for (const json& e : events) {
+          const double v = storedFigures(e, kind == "cut").at(figure);
+          if (!std::isfinite(v)) continue;
+          const std::string metric =
+              kind + "@" + std::to_string(e.value("eventFrame", -1)) + "." + figure;
+          if (std::find(metrics.begin(), metrics.end(), metric) == metrics.end())
+            metrics.push_back(metric);
+          json& s = series[p.scene][label][metric];
+          if (s.is_null()) s = {{"value", json(runs.size(), nullptr)}};
+          s["value"][i] = v;
+          const json ci = e.value("ci95", json::object()).value(figure, json());
+          if (ci.is_array() && ci.size() == 2 && ci[0].is_number() && ci[1].is_number()) {
+            if (!s.contains("ci95")) s["ci95"] = json(runs.size(), nullptr);
+            s["ci95"][i] = ci;
+          }
+        }
+      }
       for (const auto& [metric, summary] : p.summary) {
         const SummaryMean mean = p.mean(metric);
         if (!mean.present()) continue;
@@ -377,7 +421,8 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
     const bool bothKnown =
         !runs[i - 1].settings.measurement().empty() && !runs[i].settings.measurement().empty();
     if (const std::vector<std::string> differ =
-            bothKnown ? settingsDifferences(runs[i - 1], runs[i]) : std::vector<std::string>{};
+            bothKnown ? settingsDifferences(runs[i - 1], runs[i], tolerances)
+                      : std::vector<std::string>{};
         !differ.empty()) {
       std::string list;
       for (const std::string& d : differ) list += (list.empty() ? "" : "; ") + d;
@@ -421,8 +466,10 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
       unresolved += row.verdict == "unresolved";
       // Only a change in the worse direction could fail the gate: an improvement it could not
       // judge is no warning (24 of a trial's 50 "NOT JUDGED" were improvements).
-      if (row.verdict == "not judged")
-        notJudged += (findMetric(row.metric)->lowerIsBetter() ? row.change : -row.change) > 0;
+      if (row.verdict == "not judged") {
+        const MetricDefinition* m = findMetric(row.metric);  // event figures: lower is better
+        notJudged += (!m || m->lowerIsBetter() ? row.change : -row.change) > 0;
+      }
       changes.push_back(change);
     }
   }
@@ -433,6 +480,18 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
                             {"lowerIsBetter", m->lowerIsBetter()},
                             {"meaning", m->description},
                             {"tolerance", gated.contains(m->name) ? gated[m->name] : json(nullptr)}});
+  // Then the event figures, in the order met (events by frame within a scene's pairs).
+  for (const std::string& name : metrics)
+    if (const std::string figure = gatedEventFigureOf(name); !figure.empty())
+      metricList.push_back(
+          {{"name", name},
+           {"lowerIsBetter", true},
+           {"meaning", figure.substr(figure.find('.') + 1) + " of the " +
+                           (figure.rfind("cut.", 0) == 0 ? "camera cut" : "scripted event") +
+                           " at frame " +
+                           name.substr(name.find('@') + 1, name.find('.') - name.find('@') - 1) +
+                           " (docs/metrics.md, \"Ghosting and lag\")"},
+           {"tolerance", gated.contains(figure) ? gated[figure] : json(nullptr)}});
   return {{"generator", "arena history"},
           {"runs", runList},
           {"metrics", metricList},

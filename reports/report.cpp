@@ -15,6 +15,7 @@
 #include "core/text.hpp"
 #include "metrics/compare.hpp"
 #include "metrics/error_maps.hpp"
+#include "metrics/ghosting_intervals.hpp"
 #include "metrics/results.hpp"
 #include "reports/image_files.hpp"
 #include "reports/pareto.hpp"
@@ -1232,6 +1233,8 @@ json reportData(const RunResults& results, const fs::path& runDir, const RunResu
     // the side that exists, so "regressed" from a failed pair is not read as a change of +0%.
     for (json& row : table) {
       if (row["metric"] == "*") continue;  // a whole pair: compare's own note says what is missing
+      // An event's figure: compare's row holds its figures and says why one is missing.
+      if (!gatedEventFigureOf(row["metric"]).empty()) continue;
       const PairResult* b = baseline->find(row["scene"], row["label"]);
       const PairResult* c = results.find(row["scene"], row["candidateLabel"]);
       const std::string metric = row["metric"];
@@ -1251,23 +1254,23 @@ json reportData(const RunResults& results, const fs::path& runDir, const RunResu
         row["note"] = "the baseline: " + bm.absent;
       }
     }
-    data["regression"] = {{"baseline",
-                           {{"name", baseline->name},
-                            {"created", baseline->created},
-                            {"commit", baseline->environment.value("git_commit", "")},
-                            {"revision", baseline->environment.value("revision", "")}}},
-                          {"rows", table},
-                          {"anyRegression", anyRegression(rows)},
-                          {"sameRun", sameRun},
-                          {"gate", sameRun ? "could not judge" : gateOutcomeName(outcome)},
-                          {"exitCode", sameRun ? 2 : gateExitCode(outcome)},
-                          {"confidence", gate.bootstrap.confidence},
-                          {"correction", correctionName(gate.correction)},
-                          {"rowsJudgedTogether", std::count_if(rows.begin(), rows.end(),
-                                                               [](const ComparisonRow& r) {
-                                                                 return std::isfinite(r.pValue);
-                                                               })},
-                          {"settingsDiffer", settingsDifferences(*baseline, results)}};
+    data["regression"] = {
+        {"baseline",
+         {{"name", baseline->name},
+          {"created", baseline->created},
+          {"commit", baseline->environment.value("git_commit", "")},
+          {"revision", baseline->environment.value("revision", "")}}},
+        {"rows", table},
+        {"anyRegression", anyRegression(rows)},
+        {"sameRun", sameRun},
+        {"gate", sameRun ? "could not judge" : gateOutcomeName(outcome)},
+        {"exitCode", sameRun ? 2 : gateExitCode(outcome)},
+        {"confidence", gate.bootstrap.confidence},
+        {"correction", correctionName(gate.correction)},
+        {"rowsJudgedTogether",
+         std::count_if(rows.begin(), rows.end(),
+                       [](const ComparisonRow& r) { return std::isfinite(r.pValue); })},
+        {"settingsDiffer", settingsDifferences(*baseline, results, gate.tolerances)}};
   }
   return data;
 }

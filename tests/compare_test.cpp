@@ -28,10 +28,19 @@ TEST(CompareContract, RunsOfOtherSettingsAreRefusedUnlessAllowed) {
   const RunResults ra = loadResults(a.out), rb = loadResults(b.out);
   EXPECT_TRUE(settingsDifferences(ra, ra).empty());
   // A run from before the lag rule was recorded (settings.ghosting.lagAfterUnsettled) gates as
-  // before: the rule changes event figures, never the summaries a gate compares.
+  // before: the rule changes event figures, never the summaries a gate compares; a gate that judges
+  // the lag figures it changed refuses the two (the other event figures do not depend on it).
   json older = ra.toJson();
   older["settings"]["ghosting"].erase("lagAfterUnsettled");
-  EXPECT_TRUE(settingsDifferences(RunResults::fromJson(older, "older"), ra).empty());
+  const RunResults olderRun = RunResults::fromJson(older, "older");
+  EXPECT_TRUE(settingsDifferences(olderRun, ra).empty());
+  EXPECT_TRUE(settingsDifferences(olderRun, ra, {{"ghosting.responseFrames", 0.02}}).empty());
+  for (const char* lag : {"ghosting.lagEnergy", "ghosting.chromaLagEnergy"}) {
+    const std::vector<std::string> rule = settingsDifferences(olderRun, ra, {{lag, 0.02}});
+    ASSERT_EQ(rule.size(), 1u) << lag;
+    EXPECT_EQ(rule[0].rfind("settings.ghosting.lagAfterUnsettled: \"absent\" vs ", 0), 0u)
+        << rule[0];
+  }
   // Nor does a run that cited the display curve's fit under the wrong year (the same curve); any
   // other change to the display transform is one.
   std::string display = ra.toJson()["settings"]["display"];
