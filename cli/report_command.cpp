@@ -136,10 +136,11 @@ void addReportCommand(CLI::App& app) {
     }
     if (s.notJudged > 0)
       std::cerr << "arena: warning: " << s.notJudged
-                << " change(s) in the worse direction beyond the tolerance were NOT JUDGED: runs "
-                   "read from results.db "
-                   "keep no per-tile data, so the gate cannot tell them from noise; give `arena "
-                   "history` the run directories (their results.json) to judge them\n";
+                << " change(s) in the worse direction beyond the tolerance were NOT JUDGED: the "
+                   "gate cannot tell them from noise (runs read from results.db keep no per-tile "
+                   "data: give `arena history` the run directories, their results.json, to judge "
+                   "them; an event whose changed region lies within fewer than 4 effective tiles "
+                   "has no interval at all; each row's note on the page says which)\n";
     for (const std::string& line : s.absentSummaries) std::cout << "absent: " << line << "\n";
     for (const std::string& line : s.warnings) std::cerr << "arena: warning: " << line << "\n";
   });

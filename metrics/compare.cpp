@@ -89,7 +89,10 @@ void collectDifferences(const json& a, const json& b, const std::string& path, s
 // interval where one was due (fails the gate when worse beyond tolerance); `noTilesKept`: a run
 // read from results.db (not judged).
 void judge(ComparisonRow& row, double worse, bool resolvedWorse, bool resolvedBetter,
-           bool unjudgeable, bool noTilesKept, bool noteEvenWithNote) {
+           bool unjudgeable, bool noTilesKept, bool noteEvenWithNote,
+           const std::string& notJudgedNote =
+               ": the gate cannot tell this change from noise without them (judge the run "
+               "directories, which keep them)") {
   if (worse > row.tolerance && resolvedWorse) {
     row.verdict = "regressed";
   } else if (worse > row.tolerance && unjudgeable) {
@@ -99,9 +102,7 @@ void judge(ComparisonRow& row, double worse, bool resolvedWorse, bool resolvedBe
         "frames)";
   } else if (std::abs(worse) > row.tolerance && noTilesKept) {
     row.verdict = "not judged";
-    row.note +=
-        ": the gate cannot tell this change from noise without them (judge the run "
-        "directories, which keep them)";
+    row.note += notJudgedNote;
   } else if (worse > row.tolerance) {
     row.verdict = "unresolved";
   } else if (-worse > row.tolerance) {
@@ -603,12 +604,19 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
                       (d.difference.valid() ? " [" + shortestText(d.difference.lo) + ", " +
                                                   shortestText(d.difference.hi) + "]"
                                             : std::string());
-        const bool unjudgeable = !d.difference.valid();
-        if (unjudgeable)
+        // Without an interval: data missing or unpaired (rerun both) fails the gate where worse,
+        // as for the summaries; an event no interval can judge at all (its changed region within
+        // fewer than 4 effective tiles: moving_light_shadow's sits in one) is not judged, listed
+        // apart, as failing it on noise would make the figure ungateable.
+        const bool noInterval = !d.difference.valid();
+        if (noInterval)
           row.note += (row.note.empty() ? "" : "; ") + ("no interval: " + d.noInterval);
-        judge(row, row.change, unjudgeable ? false : d.difference.lo > 0,
-              unjudgeable ? false : d.difference.hi < 0, unjudgeable, false, !unjudgeable);
-        if (correction == Correction::Holm && !unjudgeable && needsSharperP(row, cfg.replicates))
+        judge(row, row.change, !noInterval && d.difference.lo > 0,
+              !noInterval && d.difference.hi < 0, noInterval && !d.noIntervalByDesign,
+              noInterval && d.noIntervalByDesign, !noInterval,
+              ": no interval can judge this event's figure, whatever is rerun; not judged (it does "
+              "not fail the gate: check it by eye, or across --seeds)");
+        if (correction == Correction::Holm && !noInterval && needsSharperP(row, cfg.replicates))
           sharper.push_back({rows.size(), [&cfg, &be, &ce, cut, figure, scene](int n) {
                                BootstrapConfig more = cfg;
                                more.replicates = n;

@@ -43,14 +43,15 @@ struct ComparisonRow {
   // "ok", "improved", "regressed", "unresolved" (beyond tolerance, within noise), "unverified"
   // (worse beyond tolerance with no interval to judge it: no tiles in a run directory, too few
   // frames; fails the gate, as passing it would judge from no data), "not judged" (beyond
-  // tolerance, either way, on a run read from results.db, which keeps no tiles by design: the
-  // gate's verdict is unknown; `arena history` counts and lists these apart, and they do not fail
-  // it), "missing" (the
-  // candidate lacks what the baseline had: fails the gate), "failed" (the candidate's pair failed),
-  // "new" (only the candidate has it, or only its pair ran; a candidate pair that failed is
-  // "failed" whether or not the baseline had it), "absent" (neither run has a summary of it: the
-  // note gives both reasons; does not fail the gate on its own), "nothing compared" (one row,
-  // scene "*": no figure was measured by both runs, so the gate fails rather than pass on nothing).
+  // tolerance, either way, on a run read from results.db, which keeps no tiles by design, or on an
+  // event figure no interval can judge, its changed region within fewer than 4 effective tiles:
+  // the gate's verdict is unknown; `arena history` counts and lists these apart, and they do not
+  // fail it), "missing" (the candidate lacks what the baseline had: fails the gate), "failed" (the
+  // candidate's pair failed), "new" (only the candidate has it, or only its pair ran; a candidate
+  // pair that failed is "failed" whether or not the baseline had it), "absent" (neither run has a
+  // summary of it: the note gives both reasons; does not fail the gate on its own), "nothing
+  // compared" (one row, scene "*": no figure was measured by both runs, so the gate fails rather
+  // than pass on nothing).
   std::string verdict;
   std::string note;
   // The candidate's label where it differs from the baseline's (`label`): a pair matched by what it

@@ -612,6 +612,7 @@ EventFigureChange eventFigureChange(const json& baseEvent, const json& candEvent
     if (reps[k].absent.count(figure)) {
       out.noInterval =
           std::string(k == 0 ? "baseline" : "candidate") + ": " + reps[k].absent.at(figure);
+      out.noIntervalByDesign = events[k]->contains("tiles");
       return out;
     }
   const std::string shapes[2] = {tileShape(baseEvent, cut), tileShape(candEvent, cut)};
@@ -627,6 +628,7 @@ EventFigureChange eventFigureChange(const json& baseEvent, const json& candEvent
       widenedInterval(differences, cfg.confidence, std::max(reps[0].widen, reps[1].widen));
   if (!out.difference.valid()) {
     out.noInterval = "fewer than 20 replicates define the figure in both runs";
+    out.noIntervalByDesign = true;
     return out;
   }
   out.pValue = changePValue(differences);

@@ -164,6 +164,10 @@ struct EventFigureChange {
   Interval difference;                                   // candidate - baseline
   double pValue = kUndefined;                            // of "no change", from the differences
   std::string noInterval;                                // why there is no interval
+  // No interval by the event's design, whatever is rerun: a run's own tiles cannot give one (the
+  // changed region spreads over too few tiles, the figure is undefined under the draws). Else the
+  // data is missing or unpaired (an older run without tiles, another tile grid).
+  bool noIntervalByDesign = false;
   // Where a run's stored figure disagrees with its own tiles' (a hand-edited or damaged record:
   // the change would come from the one and the interval from the other), what differs; the
   // caller names the run and refuses.

@@ -31,7 +31,7 @@ constexpr double kPixels = 50;
 // `regionSeed`, the noise from `noiseSeed`: two runs of one scene share the region and differ in
 // their noise.
 json storedEvent(unsigned regionSeed, unsigned noiseSeed, double decay, double amplitude = 0.8,
-                 int tiles = 16, double noise = 0.04) {
+                 int tiles = 16, double noise = 0.04, int regionTiles = -1) {
   std::mt19937_64 region(regionSeed), rng(noiseSeed);
   std::normal_distribution<double> n(0.0, 1.0);
   std::vector<double> a(size_t(tiles), 0.0);
@@ -40,11 +40,13 @@ json storedEvent(unsigned regionSeed, unsigned noiseSeed, double decay, double a
   for (int t = 0; t < kFrames; ++t) {
     TileSums bias, curve;
     for (size_t k = 0; k < a.size(); ++k) {
+      // Tiles beyond `regionTiles` hold none of the changed region.
+      const double pixels = regionTiles < 0 || int(k) < regionTiles ? kPixels : 0.0;
       const double lag = t < kT0 ? 0.0 : a[k] * std::pow(decay, t - kT0);
-      bias.sum.push_back(kPixels * (lag + noise * n(rng)));
-      bias.count.push_back(kPixels);
-      curve.sum.push_back(kPixels * (0.01 + 0.5 * lag) * std::exp(0.3 * n(rng) - 0.045));
-      curve.count.push_back(kPixels);
+      bias.sum.push_back(pixels * (lag + noise * n(rng)));
+      bias.count.push_back(pixels);
+      curve.sum.push_back(pixels * (0.01 + 0.5 * lag) * std::exp(0.3 * n(rng) - 0.045));
+      curve.count.push_back(pixels);
     }
     e.bias.add(t, std::move(bias));
     e.curve.add(t, std::move(curve));
@@ -191,6 +193,28 @@ TEST(EventGateContract, WhatCannotBeJudgedSaysWhy) {
             std::string::npos)
       << rows[0].note;
   EXPECT_EQ(gateOutcome(rows), GateOutcome::CouldNotJudge);
+  // A candidate from before events kept their tiles: no interval for want of data, unverified.
+  json older = slow;
+  older.erase("tiles");
+  rows = compareRuns(runWith({fast}, "a"), runWith({older}, "b"), {{"ghosting.lagEnergy", 0.02}});
+  EXPECT_EQ(rows[0].verdict, "unverified") << rows[0].note;
+  EXPECT_NE(rows[0].note.find("no per-tile data stored (an older run)"), std::string::npos)
+      << rows[0].note;
+  // A changed region inside one tile (moving_light_shadow's lamp): no rerun gives an interval, so
+  // a worse change is not judged, said, and does not fail the gate (failing it on noise would make
+  // the figure ungateable).
+  rows = compareRuns(runWith({storedEvent(5, 50, 0.6, 0.8, 16, 0.04, 1)}, "a"),
+                     runWith({storedEvent(5, 51, 0.85, 0.8, 16, 0.04, 1)}, "b"),
+                     {{"ghosting.lagEnergy", 0.02}});
+  EXPECT_EQ(rows[0].verdict, "not judged") << rows[0].note;
+  EXPECT_GT(rows[0].change, 0.02);
+  EXPECT_NE(rows[0].note.find("the changed region spreads over 1.0 effective tiles of 16"),
+            std::string::npos)
+      << rows[0].note;
+  EXPECT_NE(rows[0].note.find("no interval can judge this event's figure"), std::string::npos)
+      << rows[0].note;
+  EXPECT_FALSE(failsGate(rows[0]));
+  EXPECT_EQ(gateOutcome(rows), GateOutcome::Pass);
   // A figure edited by hand away from its tiles is refused: the change would come from the one,
   // the interval from the other.
   json edited = slow;

@@ -27,8 +27,9 @@
 
   // Changes beyond the tolerance that the gate could not judge (runs read from results.db keep no
   // tiles): neither a failure nor a pass, listed apart.
-  // Changes the gate could not judge (runs read from results.db keep no tiles): only those in the
-  // worse direction could fail it, and only those are listed to check by hand.
+  // Changes the gate could not judge (runs read from results.db keep no tiles; an event's figure
+  // no interval can judge): only those in the worse direction could fail it, and only those are
+  // listed to check by hand.
   const lowerIsBetter = Object.fromEntries((H.metrics || []).map((m) => [m.name, m.lowerIsBetter]));
   const worse = (c) => (lowerIsBetter[c.metric] === false ? -(c.change ?? 0) : (c.change ?? 0)) > 0;
   const notJudged = H.changes.filter((c) => c.verdict === 'not judged' && worse(c));
@@ -84,8 +85,9 @@
       // Largest changes first: what a reader must check by hand, or judge from the run directories.
       const sorted = [...notJudged].sort((a, b) => Math.abs(b.change ?? 0) - Math.abs(a.change ?? 0));
       parts.push(el('p', { class: 'failures not-judged', text:
-        `${notJudged.length} change(s) beyond the tolerance were NOT JUDGED: these runs were read from results.db, which keeps no per-tile data, ` +
-        'so the gate cannot tell them from noise; whether `arena compare` would fail them is unknown. Give `arena history` the run directories (their results.json) to judge them.' }));
+        `${notJudged.length} change(s) beyond the tolerance were NOT JUDGED: the gate cannot tell them from noise, and whether \`arena compare\` would fail them is unknown. ` +
+        'Runs read from results.db keep no per-tile data: give `arena history` the run directories (their results.json) to judge them. ' +
+        'An event whose changed region lies within fewer than 4 effective tiles has no interval at all (each row\'s note says which).' }));
       parts.push(changeTable(sorted, 'not-judged-table'));
     }
     box.replaceChildren(...parts);
