@@ -556,11 +556,22 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
             "",         candidateLabel, byRequest};
         const std::string what =
             std::string(cut ? "camera cut" : "event") + " at frame " + std::to_string(frame);
-        if (!candEvents.count(frame) || !baseEvents.count(frame)) {
+        if ((!candEvents.count(frame) || !baseEvents.count(frame)) && base.keepsTiles &&
+            cand.keepsTiles) {
           const bool inBaseline = baseEvents.count(frame) > 0;
           row.verdict = inBaseline ? "missing" : "new";
           row.note = std::string("the ") + (inBaseline ? "candidate" : "baseline") +
                      "'s pair has no " + what;
+          rows.push_back(row);
+          continue;
+        }
+        // A run read from results.db keeps no pair's events (a history mixing it with run
+        // directories): nothing lost, nothing to judge.
+        if (!base.keepsTiles || !cand.keepsTiles) {
+          row.verdict = "not judged";
+          row.note = std::string("the ") + (base.keepsTiles ? "candidate" : "baseline") +
+                     " run was read from results.db, which keeps no pair's events (judge the run "
+                     "directories, which keep them)";
           rows.push_back(row);
           continue;
         }

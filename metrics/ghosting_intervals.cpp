@@ -232,6 +232,7 @@ FigureReplicates ghostingReplicates(int t0, const EventTiles& tiles, const std::
                                  " effective tiles of " + std::to_string(tiles.bias.tileCount()) +
                                  ", fewer than 4: too few spatial blocks to resample");
     a.effectiveTiles = r.effectiveTiles;
+    a.tooFewTiles = true;
     return a;
   }
   const std::string noColour = colourMismatch(tiles);
@@ -283,6 +284,7 @@ FigureReplicates cutReplicates(int cut, int segmentEnd, const CutTiles& tiles,
     FigureReplicates a =
         allAbsent(r.figures, "the frame spreads over fewer than 4 effective tiles");
     a.effectiveTiles = r.effectiveTiles;
+    a.tooFewTiles = r.effectiveTiles > 0;
     return a;
   }
   std::vector<double> rows, leak;
@@ -442,6 +444,22 @@ FigureReplicates storedReplicates(const json& e, bool cut, const std::string& sc
   return r;
 }
 
+// Why a stored event or cut has no value of `figure`: the run's own reason where it wrote one.
+std::string absentReason(const json& e, bool cut, const std::string& figure) {
+  const auto text = [&](const json& j, const std::string& key) {
+    return j.is_object() && j.contains(key) && j[key].is_string() ? j[key].get<std::string>()
+                                                                  : std::string();
+  };
+  if (!cut && e.value("settled", json(false)).is_null())
+    return "no figures for this event (its changed region is empty)";
+  std::string why = cut && figure == "oldViewLeak" ? text(e, "oldViewLeakAbsent")
+                    : cut                          ? text(e, "absent")
+                                                   : "";
+  if (why.empty()) why = text(e.value("ci95Absent", json()), figure);
+  return why.empty() ? "the figure is undefined for this " + std::string(cut ? "cut" : "event")
+                     : why;
+}
+
 // The tiles' frames and count of a stored event or cut ("" when it has none): two runs' draws are
 // the same tiles only where these agree.
 std::string tileShape(const json& e, bool cut) {
@@ -573,11 +591,7 @@ EventFigureChange eventFigureChange(const json& baseEvent, const json& candEvent
         e.value("lagAbsent", json()).is_string())
       absent = e["lagAbsent"].get<std::string>();
     else if (!std::isfinite(value))
-      absent = e.value("settled", json(false)).is_null()
-                   ? "no figures for this event (its changed region is empty)"
-               : e.value("ci95Absent", json::object()).value(figure, json()).is_string()
-                   ? e["ci95Absent"][figure].get<std::string>()  // the run's reason
-                   : "the figure is undefined for this event";
+      absent = absentReason(e, cut, figure);
     if (!absent.empty()) value = kUndefined;
     if (!cut && figure == "responseFrames")
       (k == 0 ? out.baselineNever : out.candidateNever) =
@@ -612,7 +626,7 @@ EventFigureChange eventFigureChange(const json& baseEvent, const json& candEvent
     if (reps[k].absent.count(figure)) {
       out.noInterval =
           std::string(k == 0 ? "baseline" : "candidate") + ": " + reps[k].absent.at(figure);
-      out.noIntervalByDesign = events[k]->contains("tiles");
+      out.noIntervalByDesign = reps[k].tooFewTiles;
       return out;
     }
   const std::string shapes[2] = {tileShape(baseEvent, cut), tileShape(candEvent, cut)};
@@ -628,7 +642,6 @@ EventFigureChange eventFigureChange(const json& baseEvent, const json& candEvent
       widenedInterval(differences, cfg.confidence, std::max(reps[0].widen, reps[1].widen));
   if (!out.difference.valid()) {
     out.noInterval = "fewer than 20 replicates define the figure in both runs";
-    out.noIntervalByDesign = true;
     return out;
   }
   out.pValue = changePValue(differences);

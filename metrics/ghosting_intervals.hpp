@@ -85,6 +85,9 @@ struct FigureReplicates {
   // responseFrames: "never settled" enters as this value (one more than any settled response).
   std::map<std::string, double> neverSettled;
   double effectiveTiles = 0;
+  // The data spreads over fewer than kMinEffectiveTiles effective tiles (but some): no interval
+  // for any figure, whatever is rerun (the event's region, not missing data).
+  bool tooFewTiles = false;
   // Small-sample widening of the percentile intervals (about the replicates' median) with
   // G = effectiveTiles blocks:
   // sqrt(G / (G - 1)) t_{G-1} / z. The bootstrap's spread over G blocks is (G - 1) / G of the
@@ -164,9 +167,9 @@ struct EventFigureChange {
   Interval difference;                                   // candidate - baseline
   double pValue = kUndefined;                            // of "no change", from the differences
   std::string noInterval;                                // why there is no interval
-  // No interval by the event's design, whatever is rerun: a run's own tiles cannot give one (the
-  // changed region spreads over too few tiles, the figure is undefined under the draws). Else the
-  // data is missing or unpaired (an older run without tiles, another tile grid).
+  // No interval by the event's design, whatever is rerun: a run's changed region spreads over
+  // fewer than kMinEffectiveTiles effective tiles. Any other reason is data missing, damaged or
+  // unpaired (an older run without tiles, another tile grid, too few defined replicates).
   bool noIntervalByDesign = false;
   // Where a run's stored figure disagrees with its own tiles' (a hand-edited or damaged record:
   // the change would come from the one and the interval from the other), what differs; the

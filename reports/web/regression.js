@@ -28,6 +28,7 @@
       unverified: 0,
       missing: 1,
       unresolved: 2,
+      'not judged': 2,
       new: 3,
       improved: 4,
       absent: 5,
@@ -122,7 +123,7 @@
                   A.fmt(100 * (R.confidence ?? 0.95))}% interval of that change excludes zero${
                   (R.correction ?? 'holm') === 'holm' ?
                       `, and it stays resolved among the ${R.rowsJudgedTogether ?? 'many'} rows judged together (Holm's correction: among many rows, some intervals exclude zero by noise alone; such a row is unresolved, and its note says so)` :
-                      ' (each row alone: --correction none)'} (beyond tolerance within the noise: unresolved; with no interval to judge it: unverified, where the gate could not judge and fails, exit 2).`
+                      ' (each row alone: --correction none)'} (beyond tolerance within the noise: unresolved; with no interval to judge it: unverified, where the gate could not judge and fails, exit 2; not judged where no interval can exist, an event whose changed region lies within fewer than 4 effective tiles, which does not fail it).`
             }),
             el('div', {class: 'controls'}, el('label', {}, 'Show ', filter)), tableBox]
             .filter(Boolean));
