@@ -137,10 +137,21 @@ void addReportCommand(CLI::App& app) {
     if (s.notJudged > 0)
       std::cerr << "arena: warning: " << s.notJudged
                 << " change(s) in the worse direction beyond the tolerance were NOT JUDGED: the "
-                   "gate cannot tell them from noise (runs read from results.db keep no per-tile "
-                   "data: give `arena history` the run directories, their results.json, to judge "
-                   "them; an event whose changed region lies within fewer than 4 effective tiles "
-                   "has no interval at all; each row's note on the page says which)\n";
+                   "gate cannot tell them from noise ("
+                << (s.notJudgedFromDatabase > 0
+                        ? std::to_string(s.notJudgedFromDatabase) +
+                              " against runs read from results.db, which keep no per-tile data: "
+                              "give `arena history` the run directories, their results.json, to "
+                              "judge them"
+                        : std::string())
+                << (s.notJudgedFromDatabase > 0 && s.notJudgedFromDatabase < s.notJudged ? "; "
+                                                                                         : "")
+                << (s.notJudgedFromDatabase < s.notJudged
+                        ? std::to_string(s.notJudged - s.notJudgedFromDatabase) +
+                              " of events no interval can judge, their changed region within "
+                              "fewer than 4 effective tiles"
+                        : std::string())
+                << "; each row's note on the page says why)\n";
     for (const std::string& line : s.absentSummaries) std::cout << "absent: " << line << "\n";
     for (const std::string& line : s.warnings) std::cerr << "arena: warning: " << line << "\n";
   });

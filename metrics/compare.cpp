@@ -403,7 +403,7 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
           note +=
               "; the candidate ran " + b.denoiser + " as " + others.front() +
               (others.size() > 1 ? " (and " + std::to_string(others.size() - 1) + " more)" : "") +
-              ": `--match '" + label + "=" + others.front() + "'` compares them";
+              ": `arena compare --match '" + label + "=" + others.front() + "'` compares them";
       }
       rows.push_back(pairRow(b, "missing", note));
       continue;
@@ -601,6 +601,17 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
         row.baseline = d.baseline;
         row.candidate = d.candidate;
         row.change = d.change;
+        // Never settled in either run: both responses are cut at the window's end, so no change
+        // can show there (an "ok" of +0% would claim a check that was not made).
+        if (d.baselineNever && d.candidateNever) {
+          row.verdict = "not judged";
+          row.note = "neither run settled within the window (both counted as its " +
+                     shortestText(d.baseline) +
+                     " frames from the event): the response is cut off there, and no change can "
+                     "show; a longer sequence after the event measures it";
+          rows.push_back(row);
+          continue;
+        }
         row.changeCi = d.changeCi;
         row.pValue = d.pValue;
         if (d.baselineNever || d.candidateNever)

@@ -644,6 +644,13 @@ EventFigureChange eventFigureChange(const json& baseEvent, const json& candEvent
     out.noInterval = "fewer than 20 replicates define the figure in both runs";
     return out;
   }
+  // A response's difference is a whole number of frames in every replicate: the whole numbers
+  // inside the interval, as the figure's own interval (clipped).
+  if (figure == "responseFrames") {
+    const double lo = std::ceil(out.difference.lo - 1e-9),
+                 hi = std::floor(out.difference.hi + 1e-9);
+    if (lo <= hi) out.difference = {lo, hi};
+  }
   out.pValue = changePValue(differences);
   if (scale > 0) out.changeCi = {out.difference.lo / scale, out.difference.hi / scale};
   return out;

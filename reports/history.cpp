@@ -392,7 +392,8 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
   json changes = json::array();
   json gated = json::object();  // the gate's tolerance per metric (0 included), from one run on
   for (const Tolerance& t : tolerances) gated[t.metric] = t.relative;
-  size_t failing = 0, unresolved = 0, notJudged = 0, notComparableRuns = 0;
+  size_t failing = 0, unresolved = 0, notJudged = 0, notJudgedFromDatabase = 0,
+         notComparableRuns = 0;
   std::set<size_t> failingRuns;  // the comparisons (run i against run i - 1) that fail
   // A comparison the gate cannot make (other settings, data it refuses): one row for the whole run,
   // which fails the gate there, saying why.
@@ -468,7 +469,9 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
       // judge is no warning (24 of a trial's 50 "NOT JUDGED" were improvements).
       if (row.verdict == "not judged") {
         const MetricDefinition* m = findMetric(row.metric);  // event figures: lower is better
-        notJudged += (!m || m->lowerIsBetter() ? row.change : -row.change) > 0;
+        const bool worse = (!m || m->lowerIsBetter() ? row.change : -row.change) > 0;
+        notJudged += worse;
+        notJudgedFromDatabase += worse && (!runs[i - 1].keepsTiles || !runs[i].keepsTiles);
       }
       changes.push_back(change);
     }
@@ -502,6 +505,7 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
           {"failingComparisons", failingRuns.size()},
           {"unresolved", unresolved},
           {"notJudged", notJudged},
+          {"notJudgedFromDatabase", notJudgedFromDatabase},
           {"notComparable", notComparableRuns},
           {"correction", correctionName(correction)},
           {"confidence", bootstrap.confidence},
@@ -545,6 +549,7 @@ HistorySummary writeHistory(const HistoryOptions& o) {
   summary.failingComparisons = data["failingComparisons"].get<size_t>();
   summary.unresolved = data["unresolved"].get<size_t>();
   summary.notJudged = data["notJudged"].get<size_t>();
+  summary.notJudgedFromDatabase = data["notJudgedFromDatabase"].get<size_t>();
   summary.notComparable = data["notComparable"].get<size_t>();
   summary.warnings = std::move(warnings);
   for (const json& w : data["warnings"]) summary.warnings.push_back(w.get<std::string>());

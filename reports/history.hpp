@@ -57,7 +57,10 @@ struct HistorySummary {
   size_t runs = 0, failing = 0;                    // failing: rows that fail the gate
   size_t comparisons = 0, failingComparisons = 0;  // run i against run i - 1; those that fail
   size_t unresolved = 0;                           // changes beyond the tolerance within noise
-  size_t notJudged = 0;  // changes beyond the tolerance with no tiles to judge them (results.db)
+  // Changes in the worse direction beyond the tolerance the gate could not judge: against runs read
+  // from results.db (no tiles), and of events no interval can judge.
+  size_t notJudged = 0;
+  size_t notJudgedFromDatabase = 0;
   // Of the failing comparisons, those `arena compare` refuses (other settings, data it refuses):
   // it exits 2 there, "could not judge", not the 1 of a regression.
   size_t notComparable = 0;

@@ -109,6 +109,15 @@ TEST(EventGate, ALongerLagRegressesAndAShorterOneImproves) {
   rows = compareRuns(runWith({slow}, "a"), runWith({fast}, "b"), kLag);
   EXPECT_EQ(rowOf(rows, "ghosting@5.lagEnergy").verdict, "improved");
   EXPECT_EQ(gateOutcome(rows), GateOutcome::Pass);
+  // A response is a whole number of frames: so are its difference's interval ends.
+  const ComparisonRow& response = rowOf(
+      compareRuns(runWith({fast}, "a"), runWith({slow}, "b"), kLag), "ghosting@5.responseFrames");
+  ASSERT_TRUE(response.changeCi.valid());
+  for (const double end : {response.changeCi.lo, response.changeCi.hi}) {
+    const double frames = end * response.baseline;
+    EXPECT_NEAR(frames, std::round(frames), 1e-9)
+        << response.changeCi.lo << " " << response.changeCi.hi;
+  }
   // The same stored event on both sides: no change, nothing resolved.
   rows = compareRuns(runWith({fast}, "a"), runWith({fast}, "b"), kLag);
   EXPECT_EQ(rowOf(rows, "ghosting@5.lagEnergy").verdict, "ok");
@@ -230,6 +239,18 @@ TEST(EventGateContract, WhatCannotBeJudgedSaysWhy) {
   EXPECT_EQ(rows[0].verdict, "unverified") << rows[0].note;
   EXPECT_NE(rows[0].note.find("no per-tile data stored (an older run)"), std::string::npos)
       << rows[0].note;
+  // Neither run settled within the window: both responses are cut off at its frame count, so no
+  // change can show; not judged, said (it read "ok, +0.0% [+0.0%, +0.0%]").
+  const json never = storedEvent(6, 60, 0.99, 3.0), neverAgain = storedEvent(6, 61, 0.99, 3.0);
+  ASSERT_FALSE(never["settled"].get<bool>()) << never["response"];
+  rows = compareRuns(runWith({never}, "a"), runWith({neverAgain}, "b"),
+                     {{"ghosting.responseFrames", 0.02}});
+  EXPECT_EQ(rows[0].verdict, "not judged") << rows[0].note;
+  EXPECT_NE(rows[0].note.find("neither run settled within the window (both counted as its 31 "
+                              "frames from the event)"),
+            std::string::npos)
+      << rows[0].note;
+  EXPECT_FALSE(std::isfinite(rows[0].pValue));  // outside the rows judged together
   // A changed region inside one tile (moving_light_shadow's lamp): no rerun gives an interval, so
   // a worse change is not judged, said, and does not fail the gate (failing it on noise would make
   // the figure ungateable).

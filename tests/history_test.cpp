@@ -328,6 +328,7 @@ TEST(History, CountsWhatItCouldNotResolveAndRefusesAMetricNoRunComputed) {
   EXPECT_EQ(data["comparisons"], 3);
   EXPECT_EQ(data["unresolved"], 0) << data["changes"].dump();
   EXPECT_EQ(data["notJudged"], 1) << data["changes"].dump();
+  EXPECT_EQ(data["notJudgedFromDatabase"], 1);  // the printout's warning names results.db then
   EXPECT_EQ(data["correction"], "holm");
   EXPECT_EQ(data["confidence"], 0.95);
   EXPECT_EQ(changedRuns(data, "svgf", "relMse"), std::vector<int>{2});

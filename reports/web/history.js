@@ -86,8 +86,11 @@
       const sorted = [...notJudged].sort((a, b) => Math.abs(b.change ?? 0) - Math.abs(a.change ?? 0));
       parts.push(el('p', { class: 'failures not-judged', text:
         `${notJudged.length} change(s) beyond the tolerance were NOT JUDGED: the gate cannot tell them from noise, and whether \`arena compare\` would fail them is unknown. ` +
-        'Runs read from results.db keep no per-tile data: give `arena history` the run directories (their results.json) to judge them. ' +
-        'An event whose changed region lies within fewer than 4 effective tiles has no interval at all (each row\'s note says which).' }));
+        (notJudged.some((c) => (c.note || '').includes('results.db'))
+          ? 'Runs read from results.db keep no per-tile data: give `arena history` the run directories (their results.json) to judge them. ' : '') +
+        (notJudged.some((c) => !(c.note || '').includes('results.db'))
+          ? 'An event whose changed region lies within fewer than 4 effective tiles has no interval at all. ' : '') +
+        'Each row\'s note says why.' }));
       parts.push(changeTable(sorted, 'not-judged-table'));
     }
     box.replaceChildren(...parts);
