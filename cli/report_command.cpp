@@ -54,9 +54,7 @@ void addReportCommand(CLI::App& app) {
     o->run = *run;
     o->baseline = *baseline;
     o->out = *out;
-    const double t = parseTolerance(*gateTolerance);
-    for (const std::string& m : *gateMetrics) o->gate.tolerances.push_back({m, t});
-    o->gate.tolerances = gateTolerances(std::move(o->gate.tolerances), t);
+    o->gate.tolerances = parseGate(*gateMetrics, *gateTolerance);
     o->gate.bootstrap.confidence = parseConfidence(*gateConfidence);
     o->gate.correction = parseCorrection(*gateCorrection);
     if (!gateOnly->empty())
@@ -107,9 +105,7 @@ void addReportCommand(CLI::App& app) {
     HistoryOptions h;
     h.inputs.assign(inputs->begin(), inputs->end());
     h.out = *histOut;
-    const double t = parseTolerance(*tol);
-    for (const std::string& m : *metrics) h.tolerances.push_back({m, t});
-    h.tolerances = gateTolerances(std::move(h.tolerances), t);
+    h.tolerances = parseGate(*metrics, *tol);
     h.bootstrap.confidence = parseConfidence(*confidence);
     h.correction = parseCorrection(*correction);
     if (!only->empty()) h.contenders = splitList(*only, "--denoisers", "labels or denoiser names");

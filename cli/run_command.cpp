@@ -503,7 +503,10 @@ void addRunCommands(CLI::App& app) {
                     "Gate only these contenders (labels or denoiser names, comma-separated): the "
                     "ones a change can move, not the baselines it cannot")
         ->default_str("every pair");
-    cmd->add_option("--tolerance", *tol, "Allowed relative change in the worse direction, e.g. 2%")->default_val("2%");
+    cmd->add_option("--tolerance", *tol,
+                    "Allowed relative change in the worse direction, e.g. 2%; a metric's own as "
+                    "METRIC=VALUE, comma-separated (2%,ghosting.lagEnergy=10%)")
+        ->default_val("2%");
     cmd->add_option("--confidence", *confidence,
                     "A change regresses only when its paired bootstrap interval at this level excludes zero")
         ->default_val("95%");
@@ -528,12 +531,9 @@ void addRunCommands(CLI::App& app) {
                   "Compare runs whose settings differ (resolution, warm-up, references, ...): warn and go on "
                   "instead of refusing");
     cmd->callback([=] {
-      std::vector<Tolerance> tols;
-      double t = parseTolerance(*tol);
+      const std::vector<Tolerance> tols = parseGate(*metrics, *tol);
       BootstrapConfig bc;
       bc.confidence = parseConfidence(*confidence);
-      for (auto& m : *metrics) tols.push_back({m, t});
-      tols = gateTolerances(std::move(tols), t);
       RunResults baseline = loadResults(*a), candidate = loadResults(*b);
       // The same run on both sides (a CI step that copied the candidate into the baseline) would
       // pass every row by construction: the gate cannot judge it (exit 2), rather than pass.

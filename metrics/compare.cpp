@@ -273,6 +273,56 @@ double parseTolerance(const std::string& text) {
   return v;
 }
 
+std::vector<Tolerance> parseGate(const std::vector<std::string>& metrics,
+                                 const std::string& toleranceText) {
+  double all = 0.02;
+  bool allGiven = false;
+  std::vector<std::pair<std::string, double>> own;  // METRIC=VALUE, in order
+  size_t from = 0;
+  while (from <= toleranceText.size()) {
+    const size_t comma = std::min(toleranceText.find(',', from), toleranceText.size());
+    const std::string item = toleranceText.substr(from, comma - from);
+    from = comma + 1;
+    if (item.empty())
+      throw Error("--tolerance '" + toleranceText +
+                  "': an empty item (expected e.g. 2% or 2%,ghosting.lagEnergy=10%)");
+    if (const size_t eq = item.find('='); eq != std::string::npos) {
+      std::string metric = item.substr(0, eq);
+      if (metric == "flip") metric = "ldrFlip";
+      try {
+        own.push_back({metric, parseTolerance(item.substr(eq + 1))});
+      } catch (const Error& e) {
+        throw Error("--tolerance " + item + ": " + e.what());
+      }
+    } else {
+      if (allGiven)
+        throw Error("--tolerance '" + toleranceText + "': two values for every metric (" +
+                    shortestText(all * 100) + "% and " + item +
+                    "); one metric's own is written METRIC=VALUE");
+      all = parseTolerance(item);
+      allGiven = true;
+    }
+  }
+  std::vector<Tolerance> tolerances;
+  for (const std::string& m : metrics) tolerances.push_back({m, all});
+  tolerances = gateTolerances(std::move(tolerances), all);
+  for (const auto& [metric, value] : own) {
+    const auto it = std::find_if(tolerances.begin(), tolerances.end(),
+                                 [&](const Tolerance& t) { return t.metric == metric; });
+    if (it == tolerances.end() && !isGatedEventFigure(metric))
+      requireMetric(metric, "--tolerance " + metric + "=" + shortestText(value * 100) + "%");
+    if (it == tolerances.end()) {
+      std::string gated;
+      for (const Tolerance& t : tolerances) gated += (gated.empty() ? "" : ", ") + t.metric;
+      throw Error("--tolerance " + metric + "=" + shortestText(value * 100) + "%: " + metric +
+                  " is not among the metrics the gate judges (" + gated +
+                  "); name it with --metric");
+    }
+    it->relative = value;
+  }
+  return tolerances;
+}
+
 double parseConfidence(const std::string& text) {
   const double v =
       parseFraction(text, "--confidence", "a level in (0, 1) or a percentage, e.g. 95% or 0.95");

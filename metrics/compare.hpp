@@ -119,6 +119,11 @@ std::vector<std::string> jsonDifferences(const nlohmann::json& a, const nlohmann
                                          const std::string& path);
 // "2%" -> 0.02, "0.02" -> 0.02; negative, NaN or infinite values are errors.
 double parseTolerance(const std::string& text);
+// The gate of `--metric` (`metrics`, empty: the defaults) and `--tolerance`: one value for every
+// metric ("2%"), and/or per metric, comma-separated ("2%,ghosting.lagEnergy=10%"; a metric's own
+// must be one the gate judges). Errors name the item.
+std::vector<Tolerance> parseGate(const std::vector<std::string>& metrics,
+                                 const std::string& toleranceText);
 // "95%" or "0.95" -> 0.95; must lie in (0, 1).
 double parseConfidence(const std::string& text);
 // Whether a row fails the gate: "regressed", "unverified", "missing", "failed", "nothing

@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <random>
+#include <tuple>
 
 #include "core/error.hpp"
 #include "metrics/compare.hpp"
@@ -319,6 +320,38 @@ TEST(EventGateContract, WhatCannotBeJudgedSaysWhy) {
   EXPECT_NE(why.find("disagrees with its per-tile data"), std::string::npos) << why;
 }
 
+// `--tolerance` per metric: one value for all, METRIC=VALUE for one (a response moves by whole
+// frames, a lag energy by tens of percent from noise alone).
+TEST(EventGateContract, ToleranceMayBeGivenPerMetric) {
+  std::vector<Tolerance> gate =
+      parseGate({"relMse", "ghosting.lagEnergy"}, "2%,ghosting.lagEnergy=10%");
+  ASSERT_EQ(gate.size(), 2u);
+  EXPECT_EQ(gate[0].metric, "relMse");
+  EXPECT_DOUBLE_EQ(gate[0].relative, 0.02);
+  EXPECT_DOUBLE_EQ(gate[1].relative, 0.10);
+  // Without a value for all, 2%; the defaults take their own too (flip is ldrFlip).
+  gate = parseGate({}, "flip=5%");
+  for (const Tolerance& t : gate) EXPECT_DOUBLE_EQ(t.relative, t.metric == "ldrFlip" ? 0.05 : 0.02);
+  gate = parseGate({}, "3%");
+  for (const Tolerance& t : gate) EXPECT_DOUBLE_EQ(t.relative, 0.03);
+  // Mistakes name the item.
+  for (const auto& [metrics, text, expected] :
+       std::vector<std::tuple<std::vector<std::string>, std::string, std::string>>{
+           {{}, "2%,3%", "--tolerance '2%,3%': two values for every metric"},
+           {{"ssim"},
+            "relMse=5%",
+            "--tolerance relMse=5%: relMse is not among the metrics the "
+            "gate judges (ssim); name it with --metric"},
+           {{}, "2%,,1%", "--tolerance '2%,,1%': an empty item"},
+           {{"ghosting.lagEnergy"},
+            "ghosting.lagEnergy=lots",
+            "--tolerance ghosting.lagEnergy=lots: --tolerance 'lots': expected"},
+           {{}, "ghosting.lag=5%", "unknown metric 'ghosting.lag'"}}) {
+    const std::string why = test::errorOf([&] { parseGate(metrics, text); });
+    EXPECT_NE(why.find(expected), std::string::npos) << text << ": " << why;
+  }
+}
+
 // The dashboard (`arena history --metric ghosting.lagEnergy`) flags what the gate fails, and draws
 // the event's figure run by run with the run's own interval; runs read from results.db keep no
 // event figures, which it says rather than gating nothing.
@@ -378,6 +411,11 @@ TEST(EventGateEndToEnd, ASlowerTemporalFilterFailsTheLagGate) {
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_NE(r.output.find("ghosting@12.lagEnergy"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("regressed"), std::string::npos) << r.output;
+  // The lag's own tolerance, wider than the change: the gate passes it.
+  r = contract::arenaCli("compare " + (dir / "fast").string() + " " + (dir / "slow").string() +
+                         " --metric ghosting.lagEnergy --tolerance 2%,ghosting.lagEnergy=1000%" +
+                         " --match 'temporal[alphaMin=0.5]=temporal[alphaMin=0.05]'");
+  EXPECT_EQ(r.status, 0) << r.output;
   r = contract::arenaCli("compare " + (dir / "fast").string() + " " +
                          (dir / "fast_again").string() + gate);
   EXPECT_EQ(r.status, 0) << r.output;
