@@ -571,6 +571,17 @@ std::string gatedEventFigureOf(const std::string& rowMetric) {
   return isGatedEventFigure(name) ? name : "";
 }
 
+std::string storedFigureAbsence(const json& e, bool cut, const std::string& figure) {
+  // The evaluation's own reason first (a method still lagging from the event before), then the
+  // figure's.
+  if (!cut && (figure == "lagEnergy" || figure == "chromaLagEnergy") &&
+      e.value("lagAbsent", json()).is_string())
+    return e["lagAbsent"].get<std::string>();
+  const std::map<std::string, double> point = pointFigures(e, cut, GhostingConfig{});
+  const auto it = point.find(figure);
+  return it != point.end() && std::isfinite(it->second) ? "" : absentReason(e, cut, figure);
+}
+
 EventFigureChange eventFigureChange(const json& baseEvent, const json& candEvent, bool cut,
                                     const std::string& figure, const std::string& scene,
                                     const BootstrapConfig& cfg) {
@@ -585,13 +596,7 @@ EventFigureChange eventFigureChange(const json& baseEvent, const json& candEvent
     double& value = k == 0 ? out.baseline : out.candidate;
     std::string& absent = k == 0 ? out.baselineAbsent : out.candidateAbsent;
     value = point.count(figure) ? point.at(figure) : kUndefined;
-    // The evaluation's own reason first (a method still lagging from the event before), then the
-    // figure's.
-    if (!cut && (figure == "lagEnergy" || figure == "chromaLagEnergy") &&
-        e.value("lagAbsent", json()).is_string())
-      absent = e["lagAbsent"].get<std::string>();
-    else if (!std::isfinite(value))
-      absent = absentReason(e, cut, figure);
+    absent = storedFigureAbsence(e, cut, figure);
     if (!absent.empty()) value = kUndefined;
     if (!cut && figure == "responseFrames")
       (k == 0 ? out.baselineNever : out.candidateNever) =

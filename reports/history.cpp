@@ -356,10 +356,17 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
         const json& events = p.part(kind == "cut" ? "cuts" : "ghosting");
         if (!events.is_array()) continue;
         for (const json& e : events) {
-          const double v = storedFigures(e, kind == "cut").at(figure);
-          if (!std::isfinite(v)) continue;
           const std::string metric =
               kind + "@" + std::to_string(e.value("eventFrame", -1)) + "." + figure;
+          // Without a value (a lag measured after an unsettled event: the worst laggers), a gap
+          // in the series, and the reason said beside the summaries' absences.
+          if (const std::string why = storedFigureAbsence(e, kind == "cut", figure); !why.empty()) {
+            absent.push_back(
+                {{"run", i},
+                 {"line", p.scene + ": " + metric + " absent for " + label + ": " + why}});
+            continue;
+          }
+          const double v = storedFigures(e, kind == "cut").at(figure);
           if (std::find(metrics.begin(), metrics.end(), metric) == metrics.end())
             metrics.push_back(metric);
           json& s = series[p.scene][label][metric];

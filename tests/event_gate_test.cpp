@@ -374,6 +374,20 @@ TEST(EventGate, TheDashboardFlagsAndDrawsAnEventsFigure) {
   EXPECT_EQ(data["changes"][0]["metric"], "ghosting@5.lagEnergy");
   EXPECT_EQ(data["changes"][0]["verdict"], "regressed");
   EXPECT_EQ(data["failing"], 1);
+  // A figure a run has no value for is a gap in its series, its reason said with the summaries'
+  // absences (the worst laggers' lag energy after an unsettled event is such a figure).
+  json lagging = slow;
+  lagging["lagEnergy"] = nullptr;
+  lagging["lagAbsent"] = "the method never settled after the event at frame 1";
+  const json gap =
+      historyData({runWith({fast}, "a"), runWith({lagging}, "b")}, {{"ghosting.lagEnergy", 0.02}});
+  EXPECT_EQ(gap["series"]["s"]["temporal"]["ghosting@5.lagEnergy"]["value"],
+            json({fast["lagEnergy"], nullptr}));
+  ASSERT_EQ(gap["absent"].size(), 1u) << gap["absent"].dump();
+  EXPECT_EQ(gap["absent"][0]["run"], 1);
+  EXPECT_EQ(gap["absent"][0]["line"],
+            "s: ghosting@5.lagEnergy absent for temporal: the method never settled after the "
+            "event at frame 1");
   // Runs from results.db: no pair keeps its events.
   RunResults a = runWith({}, "a"), b = runWith({}, "b");
   a.keepsTiles = b.keepsTiles = false;
