@@ -396,6 +396,7 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
     std::function<double(int replicates)> pValue;
   };
   std::vector<Sharper> sharper;
+  EventReplicateCache resampled;  // each event's replicates, once for all its figures
   // Metrics that keep per-tile data in either run: one of them without tiles somewhere is data
   // missing; the others (ms, referenceRelMse, ...) never have tiles and are never judged by them.
   std::set<std::string> tiled;
@@ -626,7 +627,7 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
           continue;
         }
         const json &be = *baseEvents.at(frame), &ce = *candEvents.at(frame);
-        const EventFigureChange d = eventFigureChange(be, ce, cut, figure, scene, cfg);
+        const EventFigureChange d = eventFigureChange(be, ce, cut, figure, scene, cfg, &resampled);
         for (const auto& [which, run, pair, disagrees] :
              {std::tuple{"baseline", &base, &b, &d.baselineDisagrees},
               std::tuple{"candidate", &cand, &c, &d.candidateDisagrees}})

@@ -584,14 +584,21 @@ std::string storedFigureAbsence(const json& e, bool cut, const std::string& figu
 
 EventFigureChange eventFigureChange(const json& baseEvent, const json& candEvent, bool cut,
                                     const std::string& figure, const std::string& scene,
-                                    const BootstrapConfig& cfg) {
+                                    const BootstrapConfig& cfg, EventReplicateCache* cache) {
   const GhostingConfig gc;
   EventFigureChange out;
   const json* events[2] = {&baseEvent, &candEvent};
   FigureReplicates reps[2];
   for (int k = 0; k < 2; ++k) {
     const json& e = *events[k];
-    reps[k] = storedReplicates(e, cut, scene, cfg, gc);
+    if (!cache) {
+      reps[k] = storedReplicates(e, cut, scene, cfg, gc);
+    } else {
+      auto it = cache->byEvent.find(&e);
+      if (it == cache->byEvent.end())
+        it = cache->byEvent.emplace(&e, storedReplicates(e, cut, scene, cfg, gc)).first;
+      reps[k] = it->second;
+    }
     const std::map<std::string, double> point = pointFigures(e, cut, gc);
     double& value = k == 0 ? out.baseline : out.candidate;
     std::string& absent = k == 0 ? out.baselineAbsent : out.candidateAbsent;

@@ -180,10 +180,17 @@ struct EventFigureChange {
   std::string baselineDisagrees, candidateDisagrees;
 };
 // `figure` without its prefix ("lagEnergy"); cfg.replicates may exceed the figures' own 1000 (a
-// corrected gate's p-values), the first of them drawn as the run drew its own.
+// corrected gate's p-values), the first of them drawn as the run drew its own. `cache`: the
+// events' replicates at cfg, reused (one cache per cfg).
+// The replicates of stored events, kept across the figures of one gate (each event is resampled
+// once, not once per figure): keyed by the event's JSON, which must outlive the cache.
+struct EventReplicateCache {
+  std::map<const nlohmann::json*, FigureReplicates> byEvent;
+};
 EventFigureChange eventFigureChange(const nlohmann::json& baseEvent,
                                     const nlohmann::json& candEvent, bool cut,
                                     const std::string& figure, const std::string& scene,
-                                    const BootstrapConfig& cfg = {});
+                                    const BootstrapConfig& cfg = {},
+                                    EventReplicateCache* cache = nullptr);
 
 }  // namespace arena

@@ -110,6 +110,21 @@ TEST(EventGate, ALongerLagRegressesAndAShorterOneImproves) {
   rows = compareRuns(runWith({slow}, "a"), runWith({fast}, "b"), kLag);
   EXPECT_EQ(rowOf(rows, "ghosting@5.lagEnergy").verdict, "improved");
   EXPECT_EQ(gateOutcome(rows), GateOutcome::Pass);
+  // Each event resampled once for all its figures (a gate's cache) gives what resampling it per
+  // figure gives.
+  EventReplicateCache cache;
+  for (const std::string& name : gatedEventFigureNames()) {
+    if (name.rfind("ghosting.", 0) != 0) continue;
+    const std::string figure = name.substr(9);
+    const EventFigureChange once = eventFigureChange(fast, slow, false, figure, "s", {}, &cache),
+                            each = eventFigureChange(fast, slow, false, figure, "s");
+    const auto same = [](double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); };
+    EXPECT_TRUE(same(once.difference.lo, each.difference.lo)) << figure;
+    EXPECT_TRUE(same(once.difference.hi, each.difference.hi)) << figure;
+    EXPECT_TRUE(same(once.pValue, each.pValue)) << figure;
+    EXPECT_EQ(once.noInterval, each.noInterval) << figure;
+  }
+  EXPECT_EQ(cache.byEvent.size(), 2u);
   // A response is a whole number of frames: so are its difference's interval ends.
   const ComparisonRow& response = rowOf(
       compareRuns(runWith({fast}, "a"), runWith({slow}, "b"), kLag), "ghosting@5.responseFrames");
