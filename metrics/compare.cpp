@@ -729,9 +729,20 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
       char p[32], first[32];
       std::snprintf(p, sizeof p, "%.2g", r.pValue);
       std::snprintf(first, sizeof first, "%.2g", alpha / double(family));
+      char level[32];
+      std::snprintf(level, sizeof level, "%.2g", alpha);
+      // Its interval's end can sit just past zero while the finer p-value, drawn from more
+      // replicates, lies above alpha itself: "resolved alone" beside "p 0.056" read as a
+      // contradiction, so the note says which measure resolved it.
+      const bool pAboveAlpha = r.pValue > alpha;
       r.note += (r.note.empty() ? "" : "; ") + std::string(worse ? "worse" : "better") +
-                " beyond tolerance and resolved alone, but not among the " +
-                std::to_string(family) + " rows judged together: Holm, p " + p +
+                " beyond tolerance and " +
+                (pAboveAlpha ? "its interval alone ends just short of zero, but"
+                             : "resolved alone, but") +
+                " not among the " + std::to_string(family) + " rows judged together: Holm, p " + p +
+                (pAboveAlpha ? " (from " + std::to_string(std::max(needed, cfg.replicates)) +
+                                   " replicates, above " + level + " itself)"
+                             : std::string()) +
                 " against thresholds from " + first + "; --correction none judges each alone";
     }
   }
