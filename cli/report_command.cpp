@@ -144,7 +144,7 @@ void addReportCommand(CLI::App& app) {
                                                                                          : "")
                 << (s.notJudgedFromDatabase < s.notJudged
                         ? std::to_string(s.notJudged - s.notJudgedFromDatabase) +
-                              " of events no interval can judge, their changed region within "
+                              " on events no interval can judge, their changed region within "
                               "fewer than 4 effective tiles"
                         : std::string())
                 << "; each row's note on the page says why)\n";

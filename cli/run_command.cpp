@@ -629,6 +629,18 @@ void addRunCommands(CLI::App& app) {
                           : std::string(
                                 " (each row alone: no correction for the rows judged together)"))
                   << "\n";
+        // The tolerances, where a metric has its own (the table's rows do not show them).
+        std::map<double, std::vector<std::string>> byTolerance;
+        for (const Tolerance& t : tols) byTolerance[t.relative].push_back(t.metric);
+        if (byTolerance.size() > 1) {
+          std::cout << "tolerances:";
+          for (const auto& [value, names] : byTolerance) {
+            std::cout << " " << shortestText(value * 100) << "% (";
+            for (size_t k = 0; k < names.size(); ++k) std::cout << (k ? ", " : "") << names[k];
+            std::cout << ")";
+          }
+          std::cout << "\n";
+        }
         // Columns as wide as their longest entry (a sweep's labels carry their parameters).
         // A pair matched by what it ran under another label shows both ("svgf = svgf[sigmaL=4]").
         // One matched by --match shows where it went ("svgf -> svgf[sigmaL=8]").

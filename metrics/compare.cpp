@@ -84,6 +84,19 @@ void collectDifferences(const json& a, const json& b, const std::string& path, s
   if (a != b) out.push_back(path + ": " + a.dump() + " vs " + b.dump());
 }
 
+// A name the gate can judge: a registered metric or an event figure; an Error listing both.
+void requireGateMetric(const std::string& name, const std::string& what) {
+  if (isGatedEventFigure(name)) return;
+  try {
+    requireMetric(name, what);
+  } catch (const Error& e) {
+    std::string figures;
+    for (const std::string& f : gatedEventFigureNames())
+      figures += (figures.empty() ? "" : ", ") + f;
+    throw Error(std::string(e.what()) + "; the event figures: " + figures);
+  }
+}
+
 // What a row's change and interval say against its tolerance (the rule the summaries' and the
 // event figures' rows share). `worse`: the change in the worse direction; `unjudgeable`: no
 // interval where one was due (fails the gate when worse beyond tolerance); `noTilesKept`: a run
@@ -289,6 +302,9 @@ std::vector<Tolerance> parseGate(const std::vector<std::string>& metrics,
     if (const size_t eq = item.find('='); eq != std::string::npos) {
       std::string metric = item.substr(0, eq);
       if (metric == "flip") metric = "ldrFlip";
+      if (std::any_of(own.begin(), own.end(), [&](const auto& o) { return o.first == metric; }))
+        throw Error("--tolerance '" + toleranceText + "': " + metric +
+                    "'s own given twice (which is meant?)");
       try {
         own.push_back({metric, parseTolerance(item.substr(eq + 1))});
       } catch (const Error& e) {
@@ -309,8 +325,8 @@ std::vector<Tolerance> parseGate(const std::vector<std::string>& metrics,
   for (const auto& [metric, value] : own) {
     const auto it = std::find_if(tolerances.begin(), tolerances.end(),
                                  [&](const Tolerance& t) { return t.metric == metric; });
-    if (it == tolerances.end() && !isGatedEventFigure(metric))
-      requireMetric(metric, "--tolerance " + metric + "=" + shortestText(value * 100) + "%");
+    if (it == tolerances.end())
+      requireGateMetric(metric, "--tolerance " + metric + "=" + shortestText(value * 100) + "%");
     if (it == tolerances.end()) {
       std::string gated;
       for (const Tolerance& t : tolerances) gated += (gated.empty() ? "" : ", ") + t.metric;
@@ -337,14 +353,7 @@ std::vector<Tolerance> gateTolerances(std::vector<Tolerance> tolerances, double 
       if (m->gatedByDefault) tolerances.push_back({m->name, relative, true});
   for (Tolerance& t : tolerances) {
     if (t.metric == "flip") t.metric = "ldrFlip";
-    if (!isGatedEventFigure(t.metric)) try {
-        requireMetric(t.metric, "--metric");
-      } catch (const Error& e) {
-        std::string figures;
-        for (const std::string& f : gatedEventFigureNames())
-          figures += (figures.empty() ? "" : ", ") + f;
-        throw Error(std::string(e.what()) + "; the event figures: " + figures);
-      }
+    requireGateMetric(t.metric, "--metric");
     if (!std::isfinite(t.relative) || t.relative < 0)
       throw Error("--tolerance of " + t.metric + " must be finite and non-negative");
   }
@@ -668,6 +677,19 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
         if (d.baselineNever || d.candidateNever)
           row.note = "baseline " + responseText(d.baseline, d.baselineNever) + ", candidate " +
                      responseText(d.candidate, d.candidateNever);
+        // A lag summed within a window the method never settled in is cut off at its end.
+        if (figure == "lagEnergy" || figure == "chromaLagEnergy") {
+          const auto never = [](const json& e) {
+            return e.value("settled", json()).is_boolean() && !e["settled"].get<bool>();
+          };
+          if (never(be) || never(ce))
+            row.note += (row.note.empty() ? "" : "; ") +
+                        std::string(never(be) && never(ce) ? "neither run"
+                                    : never(be)            ? "the baseline"
+                                                           : "the candidate") +
+                        " settled within the window: its lag is cut off at the window's end (a "
+                        "lower bound)";
+        }
         if (d.baseline == 0 && d.candidate != 0)
           row.note += (row.note.empty() ? "" : "; ") +
                       std::string(

@@ -126,14 +126,23 @@ TEST(EventGate, ALongerLagRegressesAndAShorterOneImproves) {
   }
   EXPECT_EQ(cache.byEvent.size(), 2u);
   // A response is a whole number of frames: so are its difference's interval ends.
-  const ComparisonRow& response = rowOf(
-      compareRuns(runWith({fast}, "a"), runWith({slow}, "b"), kLag), "ghosting@5.responseFrames");
+  const auto responseRows = compareRuns(runWith({fast}, "a"), runWith({slow}, "b"), kLag);
+  const ComparisonRow& response = rowOf(responseRows, "ghosting@5.responseFrames");
   ASSERT_TRUE(response.changeCi.valid());
   for (const double end : {response.changeCi.lo, response.changeCi.hi}) {
     const double frames = end * response.baseline;
     EXPECT_NEAR(frames, std::round(frames), 1e-9)
         << response.changeCi.lo << " " << response.changeCi.hi;
   }
+  // A lag summed within a window the method never settled in is a lower bound, said.
+  const json lingering = storedEvent(1, 12, 0.99, 3.0);
+  ASSERT_FALSE(lingering["settled"].get<bool>());
+  const auto boundRows = compareRuns(runWith({fast}, "a"), runWith({lingering}, "b"), kLag);
+  const ComparisonRow& bound = rowOf(boundRows, "ghosting@5.lagEnergy");
+  EXPECT_NE(bound.note.find("the candidate settled within the window: its lag is cut off at the "
+                            "window's end (a lower bound)"),
+            std::string::npos)
+      << bound.note;
   // The same stored event on both sides: no change, nothing resolved.
   rows = compareRuns(runWith({fast}, "a"), runWith({fast}, "b"), kLag);
   EXPECT_EQ(rowOf(rows, "ghosting@5.lagEnergy").verdict, "ok");
@@ -361,7 +370,11 @@ TEST(EventGateContract, ToleranceMayBeGivenPerMetric) {
            {{"ghosting.lagEnergy"},
             "ghosting.lagEnergy=lots",
             "--tolerance ghosting.lagEnergy=lots: --tolerance 'lots': expected"},
-           {{}, "ghosting.lag=5%", "unknown metric 'ghosting.lag'"}}) {
+           {{}, "ghosting.lag=5%", "unknown metric 'ghosting.lag'"},
+           {{}, "ghosting.lag=5%", "the event figures: ghosting.lagEnergy"},
+           {{"ghosting.responseFrames"},
+            "ghosting.responseFrames=20%,ghosting.responseFrames=5%",
+            "ghosting.responseFrames's own given twice"}}) {
     const std::string why = test::errorOf([&] { parseGate(metrics, text); });
     EXPECT_NE(why.find(expected), std::string::npos) << text << ": " << why;
   }
