@@ -636,6 +636,16 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
           continue;
         }
         const json &be = *baseEvents.at(frame), &ce = *candEvents.at(frame);
+        // A damaged tile record names its run, pair and event.
+        for (const auto& [which, run, pair, e] :
+             {std::tuple{"baseline", &base, &b, &be}, std::tuple{"candidate", &cand, &c, &ce}})
+          try {
+            resampled.of(*e, cut, scene, cfg);
+          } catch (const Error& x) {
+            throw Error((run->source.empty() ? "" : run->source + ": ") + which + " run, " +
+                        pair->label + " on " + scene + ", " + (cut ? "cuts" : "ghosting") +
+                        "[frame " + std::to_string(frame) + "].tiles: " + x.what());
+          }
         const EventFigureChange d = eventFigureChange(be, ce, cut, figure, scene, cfg, &resampled);
         for (const auto& [which, run, pair, disagrees] :
              {std::tuple{"baseline", &base, &b, &d.baselineDisagrees},

@@ -582,6 +582,14 @@ std::string storedFigureAbsence(const json& e, bool cut, const std::string& figu
   return it != point.end() && std::isfinite(it->second) ? "" : absentReason(e, cut, figure);
 }
 
+const FigureReplicates& EventReplicateCache::of(const json& e, bool cut, const std::string& scene,
+                                                const BootstrapConfig& cfg) {
+  auto it = byEvent.find(&e);
+  if (it == byEvent.end())
+    it = byEvent.emplace(&e, storedReplicates(e, cut, scene, cfg, GhostingConfig{})).first;
+  return it->second;
+}
+
 EventFigureChange eventFigureChange(const json& baseEvent, const json& candEvent, bool cut,
                                     const std::string& figure, const std::string& scene,
                                     const BootstrapConfig& cfg, EventReplicateCache* cache) {
@@ -591,14 +599,7 @@ EventFigureChange eventFigureChange(const json& baseEvent, const json& candEvent
   FigureReplicates reps[2];
   for (int k = 0; k < 2; ++k) {
     const json& e = *events[k];
-    if (!cache) {
-      reps[k] = storedReplicates(e, cut, scene, cfg, gc);
-    } else {
-      auto it = cache->byEvent.find(&e);
-      if (it == cache->byEvent.end())
-        it = cache->byEvent.emplace(&e, storedReplicates(e, cut, scene, cfg, gc)).first;
-      reps[k] = it->second;
-    }
+    reps[k] = cache ? cache->of(e, cut, scene, cfg) : storedReplicates(e, cut, scene, cfg, gc);
     const std::map<std::string, double> point = pointFigures(e, cut, gc);
     double& value = k == 0 ? out.baseline : out.candidate;
     std::string& absent = k == 0 ? out.baselineAbsent : out.candidateAbsent;

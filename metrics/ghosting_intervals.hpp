@@ -186,6 +186,10 @@ struct EventFigureChange {
 // once, not once per figure): keyed by the event's JSON, which must outlive the cache.
 struct EventReplicateCache {
   std::map<const nlohmann::json*, FigureReplicates> byEvent;
+  // The replicates of the stored event `e` at cfg, resampled on first use (a damaged tile record
+  // is an Error then).
+  const FigureReplicates& of(const nlohmann::json& e, bool cut, const std::string& scene,
+                             const BootstrapConfig& cfg);
 };
 EventFigureChange eventFigureChange(const nlohmann::json& baseEvent,
                                     const nlohmann::json& candEvent, bool cut,

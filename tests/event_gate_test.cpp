@@ -331,6 +331,14 @@ TEST(EventGateContract, WhatCannotBeJudgedSaysWhy) {
       compareRuns(runWith({fast}, "a"), runWith({damaged}, "b"), {{"ghosting.peakExcess", 0.02}});
   EXPECT_EQ(rows[0].verdict, "missing");
   EXPECT_EQ(rows[0].note, "the figure is undefined for this event");
+  // A damaged tile record names its run, pair and event.
+  json broken = slow;
+  broken["tiles"]["bias"]["sum"] = "not base64!";
+  why = test::errorOf([&] {
+    compareRuns(runWith({fast}, "a"), runWith({broken}, "b"), {{"ghosting.lagEnergy", 0.02}});
+  });
+  EXPECT_NE(why.find("candidate run, temporal on s, ghosting[frame 5].tiles: "), std::string::npos)
+      << why;
   // A figure edited by hand away from its tiles is refused: the change would come from the one,
   // the interval from the other.
   json edited = slow;
