@@ -301,6 +301,17 @@ void printOtherOverallScores(std::ostream& out, const RunResults& results) {
          "report's rankings)\n";
 }
 
+std::string changePercentText(double change) {
+  if (!std::isfinite(change)) return "-";
+  const double p = change * 100;
+  char text[32];
+  if (p != 0 && std::abs(p) < 0.05)
+    std::snprintf(text, sizeof text, "%+.2g%%", p);
+  else
+    std::snprintf(text, sizeof text, "%+.1f%%", p == 0 ? 0.0 : p);
+  return text;
+}
+
 // Two significant digits, never in exponent form, trailing zeros dropped (as %g): 0.34, 4.2, 7,
 // 120.
 std::string twoDigitsText(double v) {

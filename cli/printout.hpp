@@ -17,6 +17,10 @@ namespace arena::cli {
 std::string figureText(double value);
 // Two significant digits, never in exponent form (a model's figures: 0.34, 4.2, 7, 120).
 std::string twoDigitsText(double value);
+// A relative change as a signed percentage with one decimal ("+4.1%", "-14.5%"); one that rounds
+// to 0.0% but is not zero keeps two significant digits ("-0.031%": an interval [-14.5%, -0.0%]
+// excludes zero, and read as if it touched it); "-" for a missing value. The report's A.pct.
+std::string changePercentText(double change);
 // "[lo, hi]" of an interval, "–" when there is none (the report's interval).
 std::string intervalText(const Interval& interval);
 // "tied with a, b" from a ranking entry's tiedWith, or "".

@@ -660,11 +660,7 @@ void addRunCommands(CLI::App& app) {
                   << std::setw(12) << "candidate" << std::setw(9) << "change" << std::setw(22)
                   << "interval"
                   << "  verdict\n";
-        auto pct = [](double v) {
-          char buf[32];
-          std::snprintf(buf, sizeof buf, "%+.1f%%", v * 100);
-          return std::string(std::isfinite(v) ? buf : "-");
-        };
+        const auto pct = [](double v) { return changePercentText(v); };
         auto figure = [](double v) {  // a missing value is "-", not "nan"
           std::ostringstream o;
           o << std::setprecision(4) << v;

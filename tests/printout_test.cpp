@@ -185,6 +185,18 @@ TEST(StudySummary, MethodsThatNeverSettleAfterAnEventAreNamed) {
   EXPECT_EQ(none.str().find("never settled"), std::string::npos);
 }
 
+// A change that rounds to 0.0% but is not zero keeps its sign and two digits: an interval end at
+// -0.03% read "-0.0%", as if it touched zero.
+TEST(ComparePrintout, ChangesNearZeroKeepTheirSign) {
+  EXPECT_EQ(cli::changePercentText(0.041), "+4.1%");
+  EXPECT_EQ(cli::changePercentText(-0.145), "-14.5%");
+  EXPECT_EQ(cli::changePercentText(-0.00031), "-0.031%");
+  EXPECT_EQ(cli::changePercentText(0.0000042), "+0.00042%");
+  EXPECT_EQ(cli::changePercentText(0.0), "+0.0%");
+  EXPECT_EQ(cli::changePercentText(-0.0), "+0.0%");
+  EXPECT_EQ(cli::changePercentText(kUndefined), "-");
+}
+
 // The cost model's times are printed with two significant digits, never in exponent form.
 TEST(StudySummary, ModelTimesHaveTwoDigits) {
   EXPECT_EQ(cli::twoDigitsText(0.3412), "0.34");

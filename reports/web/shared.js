@@ -32,7 +32,13 @@
     if (a < 1e-3 || a >= 1e5) return v.toExponential(2);
     return Number(v.toPrecision(4)).toString();
   };
-  A.pct = (v) => (v === null || v === undefined ? '–' : (v >= 0 ? '+' : '') + (100 * v).toFixed(1) + '%');
+  // A change that rounds to 0.0% but is not zero keeps two significant digits (-0.031%): an
+  // interval [-14.5%, -0.0%] excludes zero, and read as if it touched it.
+  A.pct = (v) => {
+    if (v === null || v === undefined) return '–';
+    const p = 100 * v;
+    return (p >= 0 ? '+' : '') + (p !== 0 && Math.abs(p) < 0.05 ? p.toPrecision(2) : p.toFixed(1)) + '%';
+  };
   // "[lo, hi]" of a 95% interval, or '' when there is none.
   A.interval = (ci) => (Array.isArray(ci) && ci.length === 2 ? `[${A.fmt(ci[0])}, ${A.fmt(ci[1])}]` : '');
 
