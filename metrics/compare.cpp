@@ -673,7 +673,8 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
         row.change = d.change;
         // Never settled in either run: both responses are cut at the window's end, so no change
         // can show there (an "ok" of +0% would claim a check that was not made).
-        if (d.baselineNever && d.candidateNever) {
+        const bool response = figure == "responseFrames";
+        if (response && d.baselineNever && d.candidateNever) {
           row.verdict = "not judged";
           row.note = "neither run settled within the window (both counted as its " +
                      shortestText(d.baseline) +
@@ -684,22 +685,17 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
         }
         row.changeCi = d.changeCi;
         row.pValue = d.pValue;
-        if (d.baselineNever || d.candidateNever)
+        if (response && (d.baselineNever || d.candidateNever))
           row.note = "baseline " + responseText(d.baseline, d.baselineNever) + ", candidate " +
                      responseText(d.candidate, d.candidateNever);
         // A lag summed within a window the method never settled in is cut off at its end.
-        if (figure == "lagEnergy" || figure == "chromaLagEnergy") {
-          const auto never = [](const json& e) {
-            return e.value("settled", json()).is_boolean() && !e["settled"].get<bool>();
-          };
-          if (never(be) || never(ce))
-            row.note += (row.note.empty() ? "" : "; ") +
-                        std::string(never(be) && never(ce) ? "neither run"
-                                    : never(be)            ? "the baseline"
-                                                           : "the candidate") +
-                        " settled within the window: its lag is cut off at the window's end (a "
-                        "lower bound)";
-        }
+        if ((figure == "lagEnergy" || figure == "chromaLagEnergy") &&
+            (d.baselineNever || d.candidateNever))
+          row.note += (row.note.empty() ? "" : "; ") +
+                      std::string(d.baselineNever && d.candidateNever ? "neither run settled"
+                                  : d.baselineNever                   ? "the baseline never settled"
+                                                    : "the candidate never settled") +
+                      " within the window: its lag is cut off at the window's end (a lower bound)";
         if (d.baseline == 0 && d.candidate != 0)
           row.note += (row.note.empty() ? "" : "; ") +
                       std::string(

@@ -606,7 +606,7 @@ EventFigureChange eventFigureChange(const json& baseEvent, const json& candEvent
     value = point.count(figure) ? point.at(figure) : kUndefined;
     absent = storedFigureAbsence(e, cut, figure);
     if (!absent.empty()) value = kUndefined;
-    if (!cut && figure == "responseFrames")
+    if (!cut)
       (k == 0 ? out.baselineNever : out.candidateNever) =
           e.value("settled", json()).is_boolean() && !e["settled"].get<bool>();
   }

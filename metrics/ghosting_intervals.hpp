@@ -164,7 +164,7 @@ std::string storedFigureAbsence(const nlohmann::json& e, bool cut, const std::st
 struct EventFigureChange {
   double baseline = kUndefined, candidate = kUndefined;  // never settled: the window's frames
   std::string baselineAbsent, candidateAbsent;           // why a run has no figure
-  bool baselineNever = false, candidateNever = false;    // responseFrames: never settled
+  bool baselineNever = false, candidateNever = false;    // never settled in the event's window
   double change = kUndefined;                            // (candidate - baseline) / |baseline|
   Interval changeCi;                                     // the same scale (none from a baseline 0)
   Interval difference;                                   // candidate - baseline
