@@ -571,15 +571,13 @@ std::string gatedEventFigureOf(const std::string& rowMetric) {
   return isGatedEventFigure(name) ? name : "";
 }
 
-std::string storedFigureAbsence(const json& e, bool cut, const std::string& figure) {
+std::string storedFigureAbsence(const json& e, bool cut, const std::string& figure, double value) {
   // The evaluation's own reason first (a method still lagging from the event before), then the
   // figure's.
   if (!cut && (figure == "lagEnergy" || figure == "chromaLagEnergy") &&
       e.value("lagAbsent", json()).is_string())
     return e["lagAbsent"].get<std::string>();
-  const std::map<std::string, double> point = pointFigures(e, cut, GhostingConfig{});
-  const auto it = point.find(figure);
-  return it != point.end() && std::isfinite(it->second) ? "" : absentReason(e, cut, figure);
+  return std::isfinite(value) ? "" : absentReason(e, cut, figure);
 }
 
 const FigureReplicates& EventReplicateCache::of(const json& e, bool cut, const std::string& scene,
@@ -604,7 +602,7 @@ EventFigureChange eventFigureChange(const json& baseEvent, const json& candEvent
     double& value = k == 0 ? out.baseline : out.candidate;
     std::string& absent = k == 0 ? out.baselineAbsent : out.candidateAbsent;
     value = point.count(figure) ? point.at(figure) : kUndefined;
-    absent = storedFigureAbsence(e, cut, figure);
+    absent = storedFigureAbsence(e, cut, figure, value);
     if (!absent.empty()) value = kUndefined;
     if (!cut)
       (k == 0 ? out.baselineNever : out.candidateNever) =

@@ -150,8 +150,10 @@ std::string gatedEventFigureOf(const std::string& rowMetric);
 // signedBias; NaN where the run has none).
 std::map<std::string, double> storedFigures(const nlohmann::json& e, bool cut);
 // Why a stored event or cut has no value of `figure` (the run's own reason where it wrote one:
-// lagAbsent, ci95Absent, a cut's absent); "" where it has one.
-std::string storedFigureAbsence(const nlohmann::json& e, bool cut, const std::string& figure);
+// lagAbsent, ci95Absent, a cut's absent); "" where it has one. `value`: the figure as
+// storedFigures reads it.
+std::string storedFigureAbsence(const nlohmann::json& e, bool cut, const std::string& figure,
+                                double value);
 
 // One figure of one event (or cut) as two runs measured it on one scene: the pairs' stored events
 // (`baseEvent`, `candEvent`, matched by frame). Both runs resample the event with the scene's seed,

@@ -360,13 +360,14 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
               kind + "@" + std::to_string(e.value("eventFrame", -1)) + "." + figure;
           // Without a value (a lag measured after an unsettled event: the worst laggers), a gap
           // in the series, and the reason said beside the summaries' absences.
-          if (const std::string why = storedFigureAbsence(e, kind == "cut", figure); !why.empty()) {
+          const double v = storedFigures(e, kind == "cut").at(figure);
+          if (const std::string why = storedFigureAbsence(e, kind == "cut", figure, v);
+              !why.empty()) {
             absent.push_back(
                 {{"run", i},
                  {"line", p.scene + ": " + metric + " absent for " + label + ": " + why}});
             continue;
           }
-          const double v = storedFigures(e, kind == "cut").at(figure);
           if (std::find(metrics.begin(), metrics.end(), metric) == metrics.end())
             metrics.push_back(metric);
           json& s = series[p.scene][label][metric];
