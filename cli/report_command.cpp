@@ -36,6 +36,11 @@ void addReportCommand(CLI::App& app) {
                   "With --baseline: gate only these contenders (labels or denoiser names, "
                   "comma-separated), as for `arena compare`")
       ->default_str("all");
+  auto gateMatches = std::make_shared<std::vector<std::string>>();
+  cmd->add_option("--match", *gateMatches,
+                  "With --baseline: BASELINE=CANDIDATE, a contender relabelled between the runs, "
+                  "as for `arena compare` (repeatable)")
+      ->allow_extra_args(false);
   cmd->add_option("--tolerance", *gateTolerance, "With --baseline: as for `arena compare`")
       ->default_val("2%");
   cmd->add_option("--confidence", *gateConfidence, "With --baseline: as for `arena compare`")
@@ -47,7 +52,7 @@ void addReportCommand(CLI::App& app) {
     // The gate's options judge the regression view, which only a baseline makes.
     if (baseline->empty())
       for (const char* option :
-           {"--metric", "--tolerance", "--confidence", "--correction", "--denoisers"})
+           {"--metric", "--tolerance", "--confidence", "--correction", "--denoisers", "--match"})
         if (cmd->count(option) > 0)
           throw Error(std::string("report: ") + option +
                       " judges the regression view against a baseline: give --baseline RUN too");
@@ -57,6 +62,7 @@ void addReportCommand(CLI::App& app) {
     o->gate.tolerances = parseGate(*gateMetrics, *gateTolerance);
     o->gate.bootstrap.confidence = parseConfidence(*gateConfidence);
     o->gate.correction = parseCorrection(*gateCorrection);
+    o->gate.matches = *gateMatches;
     if (!gateOnly->empty())
       o->gate.contenders = splitList(*gateOnly, "--denoisers", "labels or denoiser names");
     ReportSummary s = writeReport(*o);
@@ -85,6 +91,13 @@ void addReportCommand(CLI::App& app) {
           "(default: its defaults)")
       ->delimiter(',')
       ->allow_extra_args(false);
+  auto histMatches = std::make_shared<std::vector<std::string>>();
+  hist->add_option("--match", *histMatches,
+                   "BASELINE=CANDIDATE: a contender relabelled between runs (a parameter added to "
+                   "the command, e.g. 'svgf=svgf[sigmaL=8]') stays one series, and a run with the "
+                   "first label is compared with the next run's second, as `arena compare --match` "
+                   "(repeatable)")
+      ->allow_extra_args(false);
   hist->add_option("--tolerance", *tol, "Allowed relative change, as for `arena compare`")
       ->default_val("2%");
   auto confidence = std::make_shared<std::string>("95%");
@@ -109,6 +122,7 @@ void addReportCommand(CLI::App& app) {
     h.bootstrap.confidence = parseConfidence(*confidence);
     h.correction = parseCorrection(*correction);
     if (!only->empty()) h.contenders = splitList(*only, "--denoisers", "labels or denoiser names");
+    h.matches = *histMatches;
     const HistorySummary s = writeHistory(h);
     if (s.runs == 1) {  // "0 of 0 comparison(s) failing" read as a pass
       std::cout << "history: " << s.index.string()
@@ -148,6 +162,12 @@ void addReportCommand(CLI::App& app) {
                               "fewer than 4 effective tiles"
                         : std::string())
                 << "; each row's note on the page says why)\n";
+    for (const auto& [assignment, at] : s.matches) {
+      std::string runs;
+      for (const size_t i : at) runs += (runs.empty() ? "" : ", ") + std::to_string(i);
+      std::cout << "match: " << assignment << ": compared at run" << (at.size() > 1 ? "s " : " ")
+                << runs << " (against the run before; 0 the oldest), one series on the page\n";
+    }
     for (const std::string& line : s.absentSummaries) std::cout << "absent: " << line << "\n";
     for (const std::string& line : s.warnings) std::cerr << "arena: warning: " << line << "\n";
   });

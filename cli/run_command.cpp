@@ -545,13 +545,9 @@ void addRunCommands(CLI::App& app) {
       const std::map<std::string, std::string> matches =
           checkLabelMatches(*matchLabels, baseline, candidate);
       if (!only->empty()) {
-        std::vector<std::string> chosen =
-            splitList(*only, "--denoisers", "labels or denoiser names");
-        // A pair matched by --match is one contender: naming either of its labels keeps both.
-        for (const auto& [from, to] : matches)
-          for (const std::string& name : std::vector<std::string>(chosen))
-            if (name == from || name == to) chosen.push_back(name == from ? to : from);
-        keepContenders(baseline, candidate, chosen);
+        keepContenders(baseline, candidate,
+                       withMatchedLabels(
+                           splitList(*only, "--denoisers", "labels or denoiser names"), matches));
       }
       std::vector<std::string> warnings;  // said on stderr, and in the JSON
       const auto warn = [&](const std::string& text) {

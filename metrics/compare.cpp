@@ -463,7 +463,8 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
           note +=
               "; the candidate ran " + b.denoiser + " as " + others.front() +
               (others.size() > 1 ? " (and " + std::to_string(others.size() - 1) + " more)" : "") +
-              ": `arena compare --match '" + label + "=" + others.front() + "'` compares them";
+              ": `--match '" + label + "=" + others.front() +
+              "'` compares them (arena compare, report --baseline, history)";
       }
       rows.push_back(pairRow(b, "missing", note));
       continue;
@@ -884,13 +885,7 @@ bool isContender(const PairResult& p, const std::vector<std::string>& names) {
          std::find(names.begin(), names.end(), p.denoiser) != names.end();
 }
 
-namespace {
-
-// The label of `labels` that `typed` names: itself, or the one that differs from it only in how a
-// number is written ("svgf[sigmaL=8.0]" for "svgf[sigmaL=8]", as a run writes it): the same name,
-// the same keys in any order, each value the same text, number or float. Empty when none,
-// or when more than one would.
-std::string labelTyped(const std::set<std::string>& labels, const std::string& typed) {
+std::string labelAsWritten(const std::set<std::string>& labels, const std::string& typed) {
   if (labels.count(typed)) return typed;
   // name, then key=value texts; false when the text has no brackets or does not close them.
   const auto parts = [](const std::string& label, std::vector<std::string>& out) {
@@ -945,7 +940,27 @@ std::string labelTyped(const std::set<std::string>& labels, const std::string& t
   return found;
 }
 
-}  // namespace
+std::vector<std::string> withMatchedLabels(std::vector<std::string> names,
+                                           const std::map<std::string, std::string>& matches) {
+  for (const auto& [from, to] : matches)
+    for (const std::string& name : std::vector<std::string>(names))
+      if (name == from || name == to) names.push_back(name == from ? to : from);
+  return names;
+}
+
+std::pair<std::string, std::string> splitLabelMatch(const std::string& a) {
+  // A label may hold '=' itself (svgf[sigmaL=8]): the first '=' outside brackets splits.
+  size_t split = std::string::npos;
+  int depth = 0;
+  for (size_t i = 0; i < a.size() && split == std::string::npos; ++i) {
+    depth += a[i] == '[' ? 1 : a[i] == ']' ? -1 : 0;
+    if (a[i] == '=' && depth == 0) split = i;
+  }
+  if (split == std::string::npos || split == 0 || split + 1 == a.size())
+    throw Error("--match " + a +
+                ": expected BASELINE=CANDIDATE, two labels (e.g. 'svgf=svgf[sigmaL=8]')");
+  return {a.substr(0, split), a.substr(split + 1)};
+}
 
 std::map<std::string, std::string> checkLabelMatches(const std::vector<std::string>& assignments,
                                                      const RunResults& baseline,
@@ -964,20 +979,10 @@ std::map<std::string, std::string> checkLabelMatches(const std::vector<std::stri
   std::map<std::string, std::string> matches;
   std::set<std::string> matched;
   for (const std::string& a : assignments) {
-    // A label may hold '=' itself (svgf[sigmaL=8]): the first '=' outside brackets splits.
-    size_t split = std::string::npos;
-    int depth = 0;
-    for (size_t i = 0; i < a.size() && split == std::string::npos; ++i) {
-      depth += a[i] == '[' ? 1 : a[i] == ']' ? -1 : 0;
-      if (a[i] == '=' && depth == 0) split = i;
-    }
-    if (split == std::string::npos || split == 0 || split + 1 == a.size())
-      throw Error("--match " + a +
-                  ": expected BASELINE=CANDIDATE, two labels (e.g. 'svgf=svgf[sigmaL=8]')");
     // As the runs write them: a number typed another way names the label it reads as.
-    std::string from = a.substr(0, split), to = a.substr(split + 1);
-    if (const std::string label = labelTyped(base, from); !label.empty()) from = label;
-    if (const std::string label = labelTyped(cand, to); !label.empty()) to = label;
+    auto [from, to] = splitLabelMatch(a);
+    if (const std::string label = labelAsWritten(base, from); !label.empty()) from = label;
+    if (const std::string label = labelAsWritten(cand, to); !label.empty()) to = label;
     if (!base.count(from))
       throw Error("--match " + a + ": the baseline has no pair labelled " + from +
                   " (its labels: " + listed(base) + ")");

@@ -14,8 +14,11 @@
 // same way, a row per event (metrics/ghosting_intervals.hpp, eventFigureChange). The command exits
 // 1 on a regression and on anything it cannot compare (a pair or metric the baseline had and the
 // candidate lacks, no scene in common), so it can gate a merge in CI.
+#include <map>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "metrics/run_results.hpp"
@@ -101,6 +104,18 @@ std::vector<ComparisonRow> compareRuns(const RunResults& baseline, const RunResu
 std::map<std::string, std::string> checkLabelMatches(const std::vector<std::string>& assignments,
                                                      const RunResults& baseline,
                                                      const RunResults& candidate);
+// `--denoisers` names with each --match partner of a name added: a matched pair is one contender,
+// and naming either of its labels keeps both.
+std::vector<std::string> withMatchedLabels(std::vector<std::string> names,
+                                           const std::map<std::string, std::string>& matches);
+// One `--match` assignment split at its first '=' outside brackets (a label may hold '=' itself,
+// svgf[sigmaL=8]) into (baseline label, candidate label); an Error names it when it is not two.
+std::pair<std::string, std::string> splitLabelMatch(const std::string& assignment);
+// The label of `labels` that `typed` names: itself, or the one that differs from it only in how a
+// number is written ("svgf[sigmaL=8.0]" for "svgf[sigmaL=8]", as a run writes it): the same name,
+// the same keys in any order, each value the same text, number or float. Empty when none,
+// or when more than one would.
+std::string labelAsWritten(const std::set<std::string>& labels, const std::string& typed);
 // What two runs' settings differ in, one line each ("settings.warmup: 8 vs 2",
 // "scenes.cornell_static.width: 16 vs 32"): every field under "settings" except the shard, and the
 // resolution and frame count of each scene both runs have. Empty when they match. `gated`: the

@@ -182,6 +182,72 @@ std::vector<RunResults> runsFromDatabase(const fs::path& file) {
   return out;
 }
 
+// One `--match A=B` of a history: the labels as the runs wrote them.
+struct LabelMatch {
+  std::string assignment, from, to;
+};
+
+std::set<std::string> labelsOf(const RunResults& run) {
+  std::set<std::string> labels;
+  for (const PairResult& p : run.pairs) labels.insert(p.label);
+  return labels;
+}
+
+// A history's --match assignments read and checked against its runs: each label one some run
+// has, each matched once, and each match met at least once where the gate would use it (a run with
+// the first label and not the second followed by one with the second and not the first); Errors
+// name the assignment and where its labels are.
+std::vector<LabelMatch> historyMatches(const std::vector<std::string>& assignments,
+                                       const std::vector<RunResults>& runs) {
+  std::set<std::string> all;
+  std::vector<std::set<std::string>> byRun;
+  for (const RunResults& r : runs) {
+    byRun.push_back(labelsOf(r));
+    all.insert(byRun.back().begin(), byRun.back().end());
+  }
+  const auto listed = [](const std::set<std::string>& labels) {
+    std::string list;
+    for (const std::string& l : labels) list += (list.empty() ? "" : ", ") + l;
+    return list;
+  };
+  const auto where = [&](const std::string& label) {  // "runs 0, 1" (0 the oldest)
+    std::string list;
+    for (size_t i = 0; i < byRun.size(); ++i)
+      if (byRun[i].count(label)) list += (list.empty() ? "" : ", ") + std::to_string(i);
+    return list;
+  };
+  std::vector<LabelMatch> matches;
+  std::set<std::string> froms, tos;
+  for (const std::string& a : assignments) {
+    auto [from, to] = splitLabelMatch(a);
+    if (const std::string label = labelAsWritten(all, from); !label.empty()) from = label;
+    if (const std::string label = labelAsWritten(all, to); !label.empty()) to = label;
+    for (const std::string* label : {&from, &to})
+      if (!all.count(*label))
+        throw Error("history: --match " + a + ": no run has a pair labelled " + *label +
+                    " (their labels: " + listed(all) + ")");
+    if (from == to)
+      throw Error("history: --match " + a + ": matches " + from +
+                  " with itself; a label is matched with itself already");
+    if (!froms.insert(from).second)
+      throw Error("history: --match " + a + ": " + from + " is matched twice");
+    if (!tos.insert(to).second)
+      throw Error("history: --match " + a + ": " + to + " is matched twice");
+    bool met = false;
+    for (size_t i = 1; i < runs.size() && !met; ++i)
+      met = byRun[i - 1].count(from) && !byRun[i - 1].count(to) && byRun[i].count(to) &&
+            !byRun[i].count(from);
+    if (!met)
+      throw Error("history: --match " + a + ": no run with a pair labelled " + from +
+                  " and none labelled " + to + " is followed by one with " + to +
+                  " in its place (the history compares each run with the one before; " + from +
+                  " is in runs " + where(from) + ", " + to + " in runs " + where(to) +
+                  ", 0 the oldest)");
+    matches.push_back({a, from, to});
+  }
+  return matches;
+}
+
 }  // namespace
 
 std::vector<RunResults> loadHistory(const std::vector<fs::path>& inputs,
@@ -249,7 +315,16 @@ std::vector<RunResults> loadHistory(const std::vector<fs::path>& inputs,
 
 json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances,
                  const BootstrapConfig& bootstrap, Correction correction,
-                 const std::vector<std::string>& contenders) {
+                 std::vector<std::string> contenders,
+                 const std::vector<std::string>& matchAssignments) {
+  // --match: a contender relabelled on purpose between two runs (a parameter changed in the
+  // command CI runs) is one series, and its two labels are compared where one follows the other.
+  const std::vector<LabelMatch> labelMatches = historyMatches(matchAssignments, runs);
+  {
+    std::map<std::string, std::string> pairs;
+    for (const LabelMatch& m : labelMatches) pairs[m.from] = m.to;
+    contenders = withMatchedLabels(std::move(contenders), pairs);
+  }
   // --denoisers: only the named contenders' pairs; a name no run has is a mistake.
   if (!contenders.empty()) {
     for (const std::string& name : contenders)
@@ -312,7 +387,15 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
   // series' label.
   std::map<std::string, std::map<std::string, std::pair<std::string, json>>>
       ran;  // scene -> label -> (denoiser, params)
+  // scene -> label -> the series its values last went to (a --match target joins its match's).
+  std::map<std::string, std::map<std::string, std::string>> seriesOfLabel;
   auto seriesLabel = [&](const RunResults& run, const PairResult& p) {
+    // --match A=B: B's values join A's series in a run without A.
+    for (const LabelMatch& m : labelMatches)
+      if (m.to == p.label && std::none_of(run.pairs.begin(), run.pairs.end(),
+                                          [&](const PairResult& q) { return q.label == m.from; }))
+        if (auto it = seriesOfLabel[p.scene].find(m.from); it != seriesOfLabel[p.scene].end())
+          return it->second;
     auto& labels = ran[p.scene];
     if (labels.count(p.label) || p.params.empty()) return p.label;
     std::string match;
@@ -342,6 +425,7 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
       const std::string label = seriesLabel(runs[i], p);
       ran[p.scene].emplace(label, std::make_pair(p.denoiser, p.params));
       seriesOf[i][{p.scene, p.label}] = label;
+      seriesOfLabel[p.scene][p.label] = label;
       if (label != p.label) {
         json& aliases = series[p.scene][label]["aliases"];
         if (std::find(aliases.begin(), aliases.end(), p.label) == aliases.end())
@@ -418,6 +502,7 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
     changes.push_back(change);
   };
   size_t comparisons = 0;
+  json matchedAt = json::object();  // --match assignment -> the comparisons (runs) it paired
   json historyWarnings = json::array();
   bool tooManyRows = false;
   for (size_t i = 1; i < runs.size(); ++i) {
@@ -440,9 +525,17 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
     }
     // A run the gate refuses to judge (a summary that disagrees with its tiles) fails the gate
     // there, saying why; the dashboard of the other runs is still built.
+    // The --match pairs this comparison meets: the first label before, the second in its place.
+    std::map<std::string, std::string> matched;
+    const std::set<std::string> before = labelsOf(runs[i - 1]), now = labelsOf(runs[i]);
+    for (const LabelMatch& m : labelMatches)
+      if (before.count(m.from) && !before.count(m.to) && now.count(m.to) && !now.count(m.from)) {
+        matched[m.from] = m.to;
+        matchedAt[m.assignment].push_back(i);
+      }
     std::vector<ComparisonRow> rows;
     try {
-      rows = compareRuns(runs[i - 1], runs[i], tolerances, bootstrap, correction);
+      rows = compareRuns(runs[i - 1], runs[i], tolerances, bootstrap, correction, matched);
     } catch (const Error& e) {
       notComparable(i, std::string("arena compare refuses these runs: ") + e.what());
       continue;
@@ -518,6 +611,7 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
           {"correction", correctionName(correction)},
           {"confidence", bootstrap.confidence},
           {"warnings", historyWarnings},
+          {"matches", matchedAt},
           {"absent", absent}};
 }
 
@@ -543,7 +637,7 @@ HistorySummary writeHistory(const HistoryOptions& o) {
   checkPageAssets(web, modules, files);
   std::vector<std::string> warnings;
   const json data = historyData(loadHistory(o.inputs, &warnings), o.tolerances, o.bootstrap,
-                                o.correction, o.contenders);
+                                o.correction, o.contenders, o.matches);
   copyPageAssets(web, modules, files, o.out);
   writeTextAtomically(o.out / "history-data.js",
                       "// Generated by `arena history`; read by history.js.\n"
@@ -561,6 +655,8 @@ HistorySummary writeHistory(const HistoryOptions& o) {
   summary.notComparable = data["notComparable"].get<size_t>();
   summary.warnings = std::move(warnings);
   for (const json& w : data["warnings"]) summary.warnings.push_back(w.get<std::string>());
+  for (const auto& [assignment, at] : data["matches"].items())
+    summary.matches.push_back({assignment, at.get<std::vector<size_t>>()});
   for (const json& a : data["absent"])
     summary.absentSummaries.push_back(data["runs"][a["run"].get<size_t>()]["name"].get<std::string>() +
                                       ": " + a["line"].get<std::string>());

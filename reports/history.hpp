@@ -36,10 +36,16 @@ std::vector<RunResults> loadHistory(const std::vector<std::filesystem::path>& in
 // gate it stands for.
 // `contenders` (--denoisers): only those pairs are gated, and a comparison whose earlier run has
 // none of them (before they existed) is not made.
+// `matches` (--match BASELINE=CANDIDATE, repeatable): a contender relabelled on purpose between
+// runs (`--param svgf.sigmaL=8` added to the command CI runs) stays one series, and where a run
+// with the first label and not the second is followed by one with the second and not the first, the
+// two are compared as `arena compare --match` compares them (naming either label in `contenders`
+// keeps both). A label no run has, one matched twice, or a match never met is an Error.
 nlohmann::json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances,
                            const BootstrapConfig& bootstrap = {},
                            Correction correction = Correction::Holm,
-                           const std::vector<std::string>& contenders = {});
+                           std::vector<std::string> contenders = {},
+                           const std::vector<std::string>& matches = {});
 
 struct HistoryOptions {
   std::vector<std::filesystem::path> inputs;
@@ -50,6 +56,7 @@ struct HistoryOptions {
   // The gate's --denoisers: only pairs of these labels or denoiser names (empty: every pair). Runs
   // over months differ in what they ran: a name no run has is an Error, one some runs lack is not.
   std::vector<std::string> contenders;
+  std::vector<std::string> matches;              // --match BASELINE=CANDIDATE assignments
   std::filesystem::path webDir, nodeModulesDir;  // empty: the report's defaults
 };
 struct HistorySummary {
@@ -66,6 +73,8 @@ struct HistorySummary {
   size_t notComparable = 0;
   std::vector<std::string> warnings;         // runs given twice; comparisons of too many rows
   std::vector<std::string> absentSummaries;  // "<run>: <scene>: <metric> absent in N pair(s): <why>"
+  // Each --match assignment and the comparisons (run i against run i - 1) whose pairs it matched.
+  std::vector<std::pair<std::string, std::vector<size_t>>> matches;
 };
 HistorySummary writeHistory(const HistoryOptions& options);
 

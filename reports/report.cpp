@@ -1221,10 +1221,14 @@ json reportData(const RunResults& results, const fs::path& runDir, const RunResu
                {"regression", nullptr}};
   if (baseline) {
     // The gate's --denoisers: only those contenders' rows, as `arena compare` judges them.
+    // --match: a contender relabelled between the runs compared by the pair of labels named.
+    const std::map<std::string, std::string> matches =
+        checkLabelMatches(gate.matches, *baseline, results);
     RunResults gatedBaseline = *baseline, gatedResults = results;
-    if (!gate.contenders.empty()) keepContenders(gatedBaseline, gatedResults, gate.contenders);
-    const std::vector<ComparisonRow> rows =
-        compareRuns(gatedBaseline, gatedResults, gate.tolerances, gate.bootstrap, gate.correction);
+    if (!gate.contenders.empty())
+      keepContenders(gatedBaseline, gatedResults, withMatchedLabels(gate.contenders, matches));
+    const std::vector<ComparisonRow> rows = compareRuns(
+        gatedBaseline, gatedResults, gate.tolerances, gate.bootstrap, gate.correction, matches);
     // The run against itself: compare refuses it (every change zero by construction).
     const bool sameRun = sameRunRecord(*baseline, results);
     const GateOutcome outcome = gateOutcome(rows);

@@ -22,6 +22,7 @@ struct RegressionGate {
   BootstrapConfig bootstrap;
   Correction correction = Correction::Holm;
   std::vector<std::string> contenders;  // --denoisers: only these (empty: every pair)
+  std::vector<std::string> matches;     // --match BASELINE=CANDIDATE assignments
 };
 
 struct ReportOptions {

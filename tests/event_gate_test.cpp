@@ -7,7 +7,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <random>
+#include <set>
 #include <tuple>
 
 #include "core/error.hpp"
@@ -483,6 +486,42 @@ TEST(EventGateEndToEnd, ASlowerTemporalFilterFailsTheLagGate) {
       EXPECT_TRUE(row["fails"].get<bool>());
     }
   EXPECT_TRUE(found) << r.output;
+  // The dashboard of the three runs in order, the parameter changed at the last: without --match
+  // the pair reads missing there; with it, the lag's regression is what fails it.
+  const std::string history = "history " + (dir / "fast").string() + " " +
+                              (dir / "fast_again").string() + " " + (dir / "slow").string() +
+                              " --metric ghosting.lagEnergy --out " + (dir / "history").string();
+  r = contract::arenaCli(history);
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("1 of 2 comparison(s) failing"), std::string::npos) << r.output;
+  const auto page = [&] {
+    std::ifstream in(dir / "history" / "history-data.js");
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    return json::parse(text.substr(text.find('{'), text.rfind('}') - text.find('{') + 1));
+  };
+  std::set<std::string> verdicts;
+  const json split = page();
+  for (const json& c : split["changes"])
+    if (c["run"] == 2 && c["fails"].get<bool>()) verdicts.insert(c["verdict"].get<std::string>());
+  EXPECT_EQ(verdicts, (std::set<std::string>{"missing", "nothing compared"}));
+  r = contract::arenaCli(history + " --match 'temporal[alphaMin=0.5]=temporal[alphaMin=0.05]'");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("1 of 2 comparison(s) failing"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("match: temporal[alphaMin=0.5]=temporal[alphaMin=0.05]: compared at "
+                          "run 2 (against the run before; 0 the oldest), one series on the page"),
+            std::string::npos)
+      << r.output;
+  const json joined = page();
+  verdicts.clear();
+  for (const json& c : joined["changes"])
+    if (c["run"] == 2 && c["fails"].get<bool>()) {
+      verdicts.insert(c["verdict"].get<std::string>());
+      EXPECT_EQ(c["metric"], "ghosting@12.lagEnergy") << c;
+      EXPECT_EQ(c["candidateLabel"], "temporal[alphaMin=0.05]") << c;
+    }
+  EXPECT_EQ(verdicts, std::set<std::string>{"regressed"});
+  for (const auto& [scene, series] : joined["series"].items())
+    EXPECT_EQ(series.size(), 1u) << scene << ": " << series.dump().substr(0, 200);
 }
 
 }  // namespace

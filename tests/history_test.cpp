@@ -235,6 +235,118 @@ TEST(History, ARelabelledContenderStaysOneSeries) {
   EXPECT_TRUE(historyData(runs, {})["series"]["s"].contains("svgf[iterations=2]"));
 }
 
+// A contender relabelled on purpose (a parameter added to the command CI runs, from run 2 on):
+// without --match its series splits and the change reads missing, failing the gate at run 2 for
+// good; with it, one series, and run 2's pair is compared with run 1's as `arena compare --match`
+// compares them.
+TEST(History, MatchJoinsARelabelledContenderAndComparesIt) {
+  std::vector<RunResults> runs;
+  for (int i = 0; i < 4; ++i) {
+    json r = historyRun(i, 2);  // the new parameter makes relMSE 10% worse
+    if (i >= 2)
+      for (json& p : r["pairs"])
+        if (p["label"] == "svgf") p["label"] = "svgf[sigmaL=8]", p["params"] = {{"sigmaL", 8}};
+    runs.push_back(test::typed(r));
+  }
+  const std::vector<Tolerance> tolerances = {{"relMse", 0.02}};
+  const json split = historyData(runs, tolerances);
+  EXPECT_TRUE(split["series"]["s"].contains("svgf[sigmaL=8]"));
+  bool missing = false;
+  for (const json& c : split["changes"])
+    missing |= c["run"] == 2 && c["label"] == "svgf" && c["verdict"] == "missing";
+  EXPECT_TRUE(missing) << split["changes"].dump();
+  EXPECT_TRUE(split["matches"].empty());
+
+  // Typed as a user would type it: the number another way.
+  const json data =
+      historyData(runs, tolerances, {}, Correction::Holm, {}, {"svgf=svgf[sigmaL=8.0]"});
+  const json& series = data["series"]["s"];
+  EXPECT_FALSE(series.contains("svgf[sigmaL=8]")) << series.dump().substr(0, 300);
+  ASSERT_TRUE(series.contains("svgf"));
+  EXPECT_EQ(series["svgf"]["aliases"], json::array({"svgf[sigmaL=8]"}));
+  for (const json& v : series["svgf"]["relMse"]["value"]) EXPECT_TRUE(v.is_number()) << v;
+  EXPECT_EQ(data["matches"], json({{"svgf=svgf[sigmaL=8.0]", {2}}}));
+  // Run 2's row is compare's own on the two runs with the match: the same verdict and change.
+  const std::vector<ComparisonRow> expected =
+      compareRuns(runs[1], runs[2], tolerances, {}, Correction::Holm, {{"svgf", "svgf[sigmaL=8]"}});
+  const auto svgfRow = std::find_if(expected.begin(), expected.end(), [](const ComparisonRow& r) {
+    return r.label == "svgf" && r.metric == "relMse";
+  });
+  ASSERT_NE(svgfRow, expected.end());
+  ASSERT_NE(svgfRow->verdict, "ok");  // a 10.6% rise is beyond the 2% tolerance
+  bool seen = false;
+  for (const json& c : data["changes"]) {
+    EXPECT_NE(c["verdict"], "missing") << c;
+    EXPECT_NE(c["verdict"], "new") << c;
+    if (c["run"] == 2 && c["metric"] == "relMse" && c["label"] == "svgf") {
+      seen = true;
+      EXPECT_EQ(c["candidateLabel"], "svgf[sigmaL=8]") << c;
+      EXPECT_EQ(c["verdict"], svgfRow->verdict) << c;
+      EXPECT_NEAR(c["change"].get<double>(), svgfRow->change, 1e-12) << c;
+    }
+  }
+  EXPECT_TRUE(seen) << data["changes"].dump();
+  // Naming either label with --denoisers keeps the contender on both sides of the change.
+  for (const char* name : {"svgf[sigmaL=8]", "svgf"}) {
+    const json only =
+        historyData(runs, tolerances, {}, Correction::Holm, {name}, {"svgf=svgf[sigmaL=8]"});
+    EXPECT_EQ(only["comparisons"], 3) << name;
+    EXPECT_EQ(only["series"]["s"].size(), 1u) << name << only["series"].dump().substr(0, 300);
+    EXPECT_EQ(only["matches"], json({{"svgf=svgf[sigmaL=8]", {2}}})) << name;
+  }
+}
+
+// --match on a history: each label one some run has, each once, and met where the gate would use
+// it.
+TEST(History, MatchThatCannotApplyIsRefusedNamingIt) {
+  std::vector<RunResults> runs;
+  for (int i = 0; i < 4; ++i) {
+    json r = historyRun(i, 99);
+    if (i >= 2)
+      for (json& p : r["pairs"])
+        if (p["label"] == "svgf") p["label"] = "svgf[sigmaL=8]", p["params"] = {{"sigmaL", 8}};
+    runs.push_back(test::typed(r));
+  }
+  const auto error = [&](std::vector<RunResults> rs, const std::vector<std::string>& m) {
+    return test::errorOf([&] { historyData(std::move(rs), {}, {}, Correction::Holm, {}, m); });
+  };
+  const auto has = [](const std::string& e, const std::string& part) {
+    return e.find(part) != std::string::npos;
+  };
+  std::string e = error(runs, {"svgf=reblur"});
+  EXPECT_TRUE(has(e,
+                  "history: --match svgf=reblur: no run has a pair labelled reblur (their "
+                  "labels: passthrough, svgf, svgf[sigmaL=8])"))
+      << e;
+  e = error(runs, {"svgf"});
+  EXPECT_TRUE(has(e, "--match svgf: expected BASELINE=CANDIDATE")) << e;
+  e = error(runs, {"svgf=svgf"});
+  EXPECT_TRUE(has(e, "history: --match svgf=svgf: matches svgf with itself")) << e;
+  e = error(runs, {"svgf=svgf[sigmaL=8]", "passthrough=svgf[sigmaL=8]"});
+  EXPECT_TRUE(
+      has(e, "history: --match passthrough=svgf[sigmaL=8]: svgf[sigmaL=8] is matched twice"))
+      << e;
+  // The wrong way round: svgf[sigmaL=8] never comes before svgf.
+  e = error(runs, {"svgf[sigmaL=8]=svgf"});
+  EXPECT_TRUE(has(e,
+                  "no run with a pair labelled svgf[sigmaL=8] and none labelled svgf is "
+                  "followed by one with svgf in its place"))
+      << e;
+  EXPECT_TRUE(has(e, "svgf[sigmaL=8] is in runs 2, 3, svgf in runs 0, 1, 0 the oldest")) << e;
+  // Not adjacent: a run between them has neither (each run is compared with the one before).
+  std::vector<RunResults> gap = runs;
+  std::erase_if(gap[2].pairs, [](const PairResult& p) { return p.label == "svgf[sigmaL=8]"; });
+  e = error(gap, {"svgf=svgf[sigmaL=8]"});
+  EXPECT_TRUE(has(e, "svgf is in runs 0, 1, svgf[sigmaL=8] in runs 3, 0 the oldest")) << e;
+  // Both labels in one run: compared by their labels already, never by the match.
+  std::vector<RunResults> both = runs;
+  both[1].pairs.push_back(both[2].pairs[1]);
+  both[1].pairs.back().label = "svgf[sigmaL=8]";
+  std::erase_if(both[2].pairs, [](const PairResult& p) { return p.label == "svgf[sigmaL=8]"; });
+  e = error(both, {"svgf=svgf[sigmaL=8]"});
+  EXPECT_TRUE(has(e, "svgf is in runs 0, 1, svgf[sigmaL=8] in runs 1, 3")) << e;
+}
+
 // A run the gate refuses to judge (its summary disagrees with its per-tile data) fails the gate at
 // that run, saying why; the dashboard is still built from the others.
 TEST(History, ARunTheGateRefusesIsMarkedNotComparable) {

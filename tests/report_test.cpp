@@ -866,6 +866,31 @@ TEST(Report, BaselineGivesCompareVerdicts) {
       EXPECT_EQ(r["note"], "") << r;
     }
   EXPECT_TRUE(found);
+  // Another label and other parameters (an ablation): compared only when asked, with --match.
+  json base3 = base;
+  for (json& p : base3["pairs"])
+    if (p["label"] == "svgf[a=0]") p["label"] = "svgf-before", p["params"] = {{"a", 5}};
+  const RunResults base3Run = test::typed(base3);
+  RegressionGate matched;
+  matched.matches = {"svgf-before=svgf[a=0]"};
+  for (const bool ask : {false, true}) {
+    const json view = reportData(test::typed(cand), test::freshDir("report_regression_match"),
+                                 &base3Run, ask ? matched : RegressionGate{});
+    std::string verdict;
+    for (const json& r : view["regression"]["rows"])
+      if (r["scene"] == "static" && r["label"] == "svgf-before" &&
+          (r["metric"] == "relMse" || r["metric"] == "*"))
+        verdict =
+            r["verdict"].get<std::string>() + (ask ? " " + r.value("candidateLabel", "") : "");
+    EXPECT_EQ(verdict, ask ? "regressed svgf[a=0]" : "missing") << view["regression"].dump();
+  }
+  matched.matches = {"svgf-before=svgf[a=9]"};
+  const std::string e = test::errorOf([&] {
+    reportData(test::typed(cand), test::freshDir("report_regression_match"), &base3Run, matched);
+  });
+  EXPECT_NE(e.find("--match svgf-before=svgf[a=9]: the candidate has no pair labelled svgf[a=9]"),
+            std::string::npos)
+      << e;
   // A pair only this run has keeps compare's own note (a whole pair: metric "*").
   json more = cand;
   json extra = more["pairs"][1];

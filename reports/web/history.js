@@ -63,7 +63,7 @@
       el('tbody', {}, rows.map((f) => {
         const tr = el('tr', { class: 'flag', 'data-run': String(f.run), 'data-scene': f.scene, 'data-label': f.label, 'data-metric': f.metric },
           el('td', { class: 'first', text: `#${f.run}` }), el('td', { class: 'first', text: H.runs[f.run].revision || H.runs[f.run].commit || '–' }),
-          el('td', { class: 'first', text: f.scene }), el('td', { class: 'first', text: f.label }), el('td', { class: 'first', text: f.metric }),
+          el('td', { class: 'first', text: f.scene }), el('td', { class: 'first', text: f.candidateLabel && f.candidateLabel !== f.label ? `${f.label} → ${f.candidateLabel}` : f.label }), el('td', { class: 'first', text: f.metric }),
           el('td', { text: fmt(f.baseline) }), el('td', { text: fmt(f.candidate) }), el('td', { class: f.fails ? 'verdict-regressed' : null, text: pct(f.change) }),
           // The paired interval of the change, as compare prints it (none: no tiles to resample).
           el('td', { text: Array.isArray(f.changeCi95) ? `[${pct(f.changeCi95[0])}, ${pct(f.changeCi95[1])}]` : '–' }),
@@ -109,7 +109,9 @@
     const labels = Object.keys(H.series[scene] || {});
     state.label = label && labels.includes(label) ? label : labels[0] || null;
     $('history-scene').value = scene;
-    $('history-label').replaceChildren(...labels.map((l) => el('option', { value: l, text: l })));
+    // A series that joins labels (--match, or a label written otherwise) names them all.
+    const aliases = (l) => (H.series[scene][l].aliases || []);
+    $('history-label').replaceChildren(...labels.map((l) => el('option', { value: l, text: aliases(l).length ? `${l} (also ${aliases(l).join(', ')})` : l })));
     $('history-label').value = state.label;
     return renderCharts();
   }

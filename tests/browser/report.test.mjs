@@ -858,6 +858,38 @@ test('history dashboard: 50 runs, the regressing one is marked, and the page sta
   await db.close();
 });
 
+test('history --match: a contender relabelled from run 40 on stays one series, named both ways', async () => {
+  const dir = path.join(work, 'history-relabelled');
+  const runs = historyRuns(dir, tinyRuns().schema);
+  for (const run of runs.slice(40)) {  // a parameter added to the command CI runs
+    const file = path.join(run, 'results.json');
+    const r = JSON.parse(fs.readFileSync(file, 'utf8'));
+    for (const p of r.pairs) if (p.label === 'temporal') Object.assign(p, { label: 'temporal[alphaMin=0.1]', params: { alphaMin: 0.1 } });
+    fs.writeFileSync(file, JSON.stringify(r));
+  }
+  const out = path.join(work, 'history-match');
+  // Without --match the pairs read missing at run 40 (the gate fails there for good).
+  assert.match(arena('history', ...runs, '--out', out), /2 of 49 comparison\(s\) failing/);
+  const said = arena('history', ...runs, '--out', out, '--match', 'temporal=temporal[alphaMin=0.1]');
+  assert.match(said, /1 of 49 comparison\(s\) failing `arena compare`'s gate \(1 row\(s\)\)/);
+  assert.match(said, /match: temporal=temporal\[alphaMin=0\.1\]: compared at run 40 /);
+  const page = await context.newPage();
+  const problems = [];
+  page.on('pageerror', (e) => problems.push(`page error: ${e.message}`));
+  await page.goto(pathToFileURL(path.join(out, 'index.html')).href);
+  await page.waitForSelector('body[data-ready]', { timeout: 30000 });
+  const options = await page.$$eval('#history-label option', (os) => os.map((o) => [o.value, o.textContent]));
+  assert.deepEqual(options.map((o) => o[0]).sort(), ['passthrough', 'svgf', 'temporal']);
+  assert.deepEqual(options.find((o) => o[0] === 'temporal'), ['temporal', 'temporal (also temporal[alphaMin=0.1])']);
+  await page.selectOption('#history-label', 'temporal');
+  await page.waitForFunction(() => document.querySelectorAll('#history-charts .chart[data-metric="relMse"] g.values_marks').length === 1);
+  // One line through all 50 runs, the relabelled ones included.
+  const points = await page.$$eval('#history-charts .chart[data-metric="relMse"] g.points_marks path', (ps) => ps.length);
+  assert.equal(points, 50);
+  assert.deepEqual(problems, []);
+  await page.close();
+});
+
 test('a capture: its validation on the page, a file: contender named with its own clock', async () => {
   // Our own sequence exported as a capture, eaw's outputs stored in it as a contender that "ran
   // elsewhere" with a recorded device time (docs/captures.md).
