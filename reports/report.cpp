@@ -1516,15 +1516,26 @@ ReportSummary writeReport(const ReportOptions& o) {
   for (const char* f : kWebFiles) files.push_back({f, f});
   checkPageAssets(o.webDir, o.nodeModulesDir, files);
   json data = reportData(results, o.run, o.baseline.empty() ? nullptr : &baseline, o.gate);
+  std::error_code ec;
+  // The page's copy of the run's images (not the run's own, for a page written in place).
+  const bool imagesInPlace = fs::exists(o.out / "images", ec) && fs::exists(o.run / "images", ec) &&
+                             fs::equivalent(o.run / "images", o.out / "images", ec);
+  const bool earlierPage = fs::exists(o.out / "data.js", ec) || fs::exists(o.out / "app.js", ec);
+  if (!imagesInPlace && !earlierPage && fs::exists(o.out / "images", ec))
+    throw Error("report: --out " + o.out.string() +
+                " holds an images folder that is no earlier report's (no data.js or app.js beside "
+                "it): the page's copies of the run's images go there, and it would mix them with "
+                "what it holds; choose a directory of its own");
   fs::create_directories(o.out);
   const DirectoryLock lock(o.out, DirectoryLock::Mode::Exclusive, DirectoryLock::IfHeld::Refuse,
                            "writing a report");
   // An earlier page here stops being one before anything is written: its data.js goes (a page
   // without it is incomplete, so a killed report never shows old data over new tiles), its tiles
-  // too, and the temporaries of a killed write.
-  std::error_code ec;
+  // and its copies of its run's images too (another run's would stay beside this one's, in every
+  // copy of the folder), and the temporaries of a killed write.
   fs::remove(o.out / "data.js", ec);
   fs::remove_all(o.out / "tiles", ec);
+  if (!imagesInPlace) fs::remove_all(o.out / "images", ec);
   removeStaleTemporariesBelow(o.out);
   for (size_t i = 0; i < data["scenes"].size(); ++i) {
     json& scene = data["scenes"][i];

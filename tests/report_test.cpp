@@ -229,9 +229,31 @@ TEST(Report, GeneratorWritesEverySectionAndKeepsTheFailedPair) {
   // tiles beside the old data.js).
   fs::create_directories(o.out / "tiles");
   std::ofstream(o.out / "tiles" / "s9_f99.js") << "stale";
+  // The page's copies of an earlier run's images go too: the folder holds this run's alone.
+  fs::create_directories(o.out / "images" / "another_scene" / "svgf");
+  std::ofstream(o.out / "images" / "another_scene" / "svgf" / "frame_0003.png") << "png";
   writeReport(o);
   EXPECT_FALSE(fs::exists(o.out / "tiles" / "s9_f99.js"));
+  EXPECT_FALSE(fs::exists(o.out / "images" / "another_scene"));
+  EXPECT_TRUE(fs::exists(o.out / "images/static/svgf[a=0]/flip_0002.png"));
   EXPECT_TRUE(fs::exists(o.out / "data.js"));
+  // A folder of images that is no page's is not the report's to empty: refused, nothing written.
+  ReportOptions mine = o;
+  mine.out = test::freshDir("report_fixture_own_images");
+  fs::create_directories(mine.out / "images");
+  std::ofstream(mine.out / "images" / "holiday.png") << "png";
+  const std::string e = test::errorOf([&] { writeReport(mine); });
+  EXPECT_NE(e.find("holds an images folder that is no earlier report's"), std::string::npos) << e;
+  EXPECT_TRUE(fs::exists(mine.out / "images" / "holiday.png"));
+  EXPECT_EQ(std::distance(fs::directory_iterator(mine.out), fs::directory_iterator()), 1);
+  // Written in place (into the run's own folder), the run's images are never removed.
+  ReportOptions inPlace = o;
+  inPlace.out = inPlace.run;
+  const ReportSummary placed = writeReport(inPlace);
+  EXPECT_TRUE(placed.imagesInPlace);
+  EXPECT_TRUE(fs::exists(inPlace.run / "images/static/svgf[a=0]/flip_0002.png"));
+  writeReport(inPlace);
+  EXPECT_TRUE(fs::exists(inPlace.run / "images/static/svgf[a=0]/flip_0002.png"));
 }
 
 TEST(Report, DataHasFrontNoiseFloorViewerAndAblation) {
