@@ -942,9 +942,17 @@ std::string labelAsWritten(const std::set<std::string>& labels, const std::strin
 
 std::vector<std::string> withMatchedLabels(std::vector<std::string> names,
                                            const std::map<std::string, std::string>& matches) {
-  for (const auto& [from, to] : matches)
-    for (const std::string& name : std::vector<std::string>(names))
-      if (name == from || name == to) names.push_back(name == from ? to : from);
+  // Until nothing is added: a chain (A=B, B=C over a history) is one contender.
+  for (bool added = true; added;) {
+    added = false;
+    for (const auto& [from, to] : matches)
+      for (const auto& [have, partner] : {std::pair{from, to}, std::pair{to, from}})
+        if (std::find(names.begin(), names.end(), have) != names.end() &&
+            std::find(names.begin(), names.end(), partner) == names.end()) {
+          names.push_back(partner);
+          added = true;
+        }
+  }
   return names;
 }
 
@@ -952,10 +960,18 @@ std::pair<std::string, std::string> splitLabelMatch(const std::string& a) {
   // A label may hold '=' itself (svgf[sigmaL=8]): the first '=' outside brackets splits.
   size_t split = std::string::npos;
   int depth = 0;
-  for (size_t i = 0; i < a.size() && split == std::string::npos; ++i) {
+  bool balanced = true;  // every ']' closes an earlier '[', and every '[' is closed
+  for (size_t i = 0; i < a.size(); ++i) {
     depth += a[i] == '[' ? 1 : a[i] == ']' ? -1 : 0;
-    if (a[i] == '=' && depth == 0) split = i;
+    balanced = balanced && depth >= 0;
+    if (a[i] == '=' && depth == 0 && split == std::string::npos) split = i;
   }
+  balanced = balanced && depth == 0;
+  if (!balanced)
+    throw Error(
+        "--match " + a +
+        ": its brackets do not pair up; expected BASELINE=CANDIDATE, two labels as the runs "
+        "write them (e.g. 'svgf=svgf[sigmaL=8]')");
   if (split == std::string::npos || split == 0 || split + 1 == a.size())
     throw Error("--match " + a +
                 ": expected BASELINE=CANDIDATE, two labels (e.g. 'svgf=svgf[sigmaL=8]')");

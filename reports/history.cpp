@@ -193,29 +193,21 @@ std::set<std::string> labelsOf(const RunResults& run) {
   return labels;
 }
 
-// A history's --match assignments read and checked against its runs: each label one some run
-// has, each matched once, and each match met at least once where the gate would use it (a run with
-// the first label and not the second followed by one with the second and not the first); Errors
-// name the assignment and where its labels are.
+std::string listed(const std::set<std::string>& labels) {
+  std::string list;
+  for (const std::string& l : labels) list += (list.empty() ? "" : ", ") + l;
+  return list;
+}
+
+// A history's --match assignments read: each label as the runs wrote it (a number typed otherwise
+// names the same label), one some run has, and each matched once; Errors name the assignment.
 std::vector<LabelMatch> historyMatches(const std::vector<std::string>& assignments,
                                        const std::vector<RunResults>& runs) {
   std::set<std::string> all;
-  std::vector<std::set<std::string>> byRun;
   for (const RunResults& r : runs) {
-    byRun.push_back(labelsOf(r));
-    all.insert(byRun.back().begin(), byRun.back().end());
+    const std::set<std::string> labels = labelsOf(r);
+    all.insert(labels.begin(), labels.end());
   }
-  const auto listed = [](const std::set<std::string>& labels) {
-    std::string list;
-    for (const std::string& l : labels) list += (list.empty() ? "" : ", ") + l;
-    return list;
-  };
-  const auto where = [&](const std::string& label) {  // "runs 0, 1" (0 the oldest)
-    std::string list;
-    for (size_t i = 0; i < byRun.size(); ++i)
-      if (byRun[i].count(label)) list += (list.empty() ? "" : ", ") + std::to_string(i);
-    return list;
-  };
   std::vector<LabelMatch> matches;
   std::set<std::string> froms, tos;
   for (const std::string& a : assignments) {
@@ -233,19 +225,60 @@ std::vector<LabelMatch> historyMatches(const std::vector<std::string>& assignmen
       throw Error("history: --match " + a + ": " + from + " is matched twice");
     if (!tos.insert(to).second)
       throw Error("history: --match " + a + ": " + to + " is matched twice");
-    bool met = false;
-    for (size_t i = 1; i < runs.size() && !met; ++i)
-      met = byRun[i - 1].count(from) && !byRun[i - 1].count(to) && byRun[i].count(to) &&
-            !byRun[i].count(from);
-    if (!met)
-      throw Error("history: --match " + a + ": no run with a pair labelled " + from +
-                  " and none labelled " + to + " is followed by one with " + to +
-                  " in its place (the history compares each run with the one before; " + from +
-                  " is in runs " + where(from) + ", " + to + " in runs " + where(to) +
-                  ", 0 the oldest)");
     matches.push_back({a, from, to});
   }
   return matches;
+}
+
+// The matches checked against the runs the gate reads (after --denoisers): the labels a chain of
+// matches joins (A=B, B=C) are one series, so no run may hold two of them (its two contenders would
+// be one point); and each match is met where the gate uses it, a run with its first label followed
+// by one with its second. Errors name the assignment and the runs each label is in.
+void requireMatchesMet(const std::vector<LabelMatch>& matches, const std::vector<RunResults>& runs,
+                       bool filtered) {
+  std::vector<std::set<std::string>> byRun;
+  for (const RunResults& r : runs) byRun.push_back(labelsOf(r));
+  const auto where = [&](const std::string& label) {  // "0, 1" (0 the oldest), or "none"
+    std::string list;
+    for (size_t i = 0; i < byRun.size(); ++i)
+      if (byRun[i].count(label)) list += (list.empty() ? "" : ", ") + std::to_string(i);
+    return list.empty() ? std::string("none") : list;
+  };
+  for (const LabelMatch& m : matches) {
+    // The labels joined with this match's, through the others.
+    std::set<std::string> joined = {m.from, m.to};
+    for (bool grew = true; grew;) {
+      grew = false;
+      for (const LabelMatch& o : matches)
+        if ((joined.count(o.from) || joined.count(o.to)) &&
+            !(joined.count(o.from) && joined.count(o.to))) {
+          joined.insert({o.from, o.to});
+          grew = true;
+        }
+    }
+    for (size_t i = 0; i < byRun.size(); ++i) {
+      std::set<std::string> both;
+      for (const std::string& label : joined)
+        if (byRun[i].count(label)) both.insert(label);
+      if (both.size() > 1)
+        throw Error("history: --match " + m.assignment + ": run " + std::to_string(i) + " (" +
+                    runs[i].source + ") has pairs labelled " + listed(both) +
+                    ": a run's two contenders cannot be one series (compare that run's pairs by "
+                    "their labels, or leave it out of the history)");
+    }
+    if (filtered && where(m.from) == "none" && where(m.to) == "none")
+      throw Error("history: --match " + m.assignment +
+                  ": --denoisers keeps neither label; name one of them with --denoisers");
+    bool met = false;
+    for (size_t i = 1; i < runs.size() && !met; ++i)
+      met = byRun[i - 1].count(m.from) && byRun[i].count(m.to);
+    if (!met)
+      throw Error("history: --match " + m.assignment + ": no run with a pair labelled " + m.from +
+                  " is followed by one with " + m.to +
+                  " (the history compares each run with the one before; " + m.from +
+                  " is in runs " + where(m.from) + ", " + m.to + " in runs " + where(m.to) +
+                  ", 0 the oldest)");
+  }
 }
 
 }  // namespace
@@ -320,23 +353,32 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
   // --match: a contender relabelled on purpose between two runs (a parameter changed in the
   // command CI runs) is one series, and its two labels are compared where one follows the other.
   const std::vector<LabelMatch> labelMatches = historyMatches(matchAssignments, runs);
-  {
-    std::map<std::string, std::string> pairs;
-    for (const LabelMatch& m : labelMatches) pairs[m.from] = m.to;
-    contenders = withMatchedLabels(std::move(contenders), pairs);
-  }
   // --denoisers: only the named contenders' pairs; a name no run has is a mistake.
   if (!contenders.empty()) {
-    for (const std::string& name : contenders)
+    std::set<std::string> all;
+    for (const RunResults& r : runs) {
+      const std::set<std::string> labels = labelsOf(r);
+      all.insert(labels.begin(), labels.end());
+    }
+    for (std::string& name : contenders) {
+      // A label typed otherwise than the runs wrote it names theirs, as with --match.
+      if (const std::string label = labelAsWritten(all, name); !label.empty()) name = label;
       if (std::none_of(runs.begin(), runs.end(), [&](const RunResults& r) {
             return std::any_of(r.pairs.begin(), r.pairs.end(),
                                [&](const PairResult& p) { return isContender(p, {name}); });
           }))
         throw Error("history: --denoisers " + name +
-                    ": no run has a pair of that label or denoiser");
+                    ": no run has a pair of that label or denoiser (their labels: " + listed(all) +
+                    ")");
+    }
+    // A matched pair of labels is one contender: naming either keeps both (a chain's all).
+    std::map<std::string, std::string> pairs;
+    for (const LabelMatch& m : labelMatches) pairs[m.from] = m.to;
+    contenders = withMatchedLabels(std::move(contenders), pairs);
     for (RunResults& r : runs)
       std::erase_if(r.pairs, [&](const PairResult& p) { return !isContender(p, contenders); });
   }
+  requireMatchesMet(labelMatches, runs, !contenders.empty());
   // Runs over months differ in what they computed: a gated metric is compared where both have it.
   // One the caller named that no run computed at all is a mistake (`--metric ldrFlip` on runs of
   // --flip none), an error as in `arena compare`, not a page of "nothing compared".
@@ -531,7 +573,7 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
     for (const LabelMatch& m : labelMatches)
       if (before.count(m.from) && !before.count(m.to) && now.count(m.to) && !now.count(m.from)) {
         matched[m.from] = m.to;
-        matchedAt[m.assignment].push_back(i);
+        matchedAt[m.from + "=" + m.to].push_back(i);
       }
     std::vector<ComparisonRow> rows;
     try {
@@ -557,6 +599,7 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
       if (row.verdict == "ok") continue;
       json change = comparisonJson({row})[0];
       change["run"] = i;
+      change["pairLabel"] = row.label;  // the labels compared, where --match paired two
       // The row names the baseline's label (or the candidate's, for a new pair): the series.
       for (const size_t r : {i - 1, i})
         if (auto it = seriesOf[r].find({row.scene, row.label}); it != seriesOf[r].end()) {

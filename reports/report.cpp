@@ -1281,6 +1281,9 @@ json reportData(const RunResults& results, const fs::path& runDir, const RunResu
 
 namespace {
 
+// Marks a page's copies of its run's images: the next report into the folder replaces them.
+constexpr const char* kCopiedImagesMark = ".arena-report-copies";
+
 // Copies the run's display images (PNGs only: a keep-all run's EXR frames are not for the page)
 // and counts them; a page written into the run directory finds them in place and only counts.
 void copyImages(const fs::path& runDir, const fs::path& out, ReportSummary& summary) {
@@ -1288,6 +1291,13 @@ void copyImages(const fs::path& runDir, const fs::path& out, ReportSummary& summ
   if (!fs::exists(from)) return;
   std::error_code ec;
   summary.imagesInPlace = fs::exists(out / "images") && fs::equivalent(from, out / "images", ec);
+  if (!summary.imagesInPlace) {
+    fs::create_directories(out / "images");
+    writeTextAtomically(out / "images" / kCopiedImagesMark,
+                        "Copies of " + runDir.string() +
+                            "'s images, made by `arena report`: the next report written here "
+                            "replaces this folder.\n");
+  }
   for (const auto& e : fs::recursive_directory_iterator(from)) {
     if (!e.is_regular_file() || e.path().extension() != ".png") continue;
     ++summary.images;
@@ -1520,22 +1530,25 @@ ReportSummary writeReport(const ReportOptions& o) {
   // The page's copy of the run's images (not the run's own, for a page written in place).
   const bool imagesInPlace = fs::exists(o.out / "images", ec) && fs::exists(o.run / "images", ec) &&
                              fs::equivalent(o.run / "images", o.out / "images", ec);
-  const bool earlierPage = fs::exists(o.out / "data.js", ec) || fs::exists(o.out / "app.js", ec);
+  const bool earlierPage =
+      fs::exists(o.out / "data.js", ec) || fs::exists(o.out / "images" / kCopiedImagesMark, ec);
   if (!imagesInPlace && !earlierPage && fs::exists(o.out / "images", ec))
-    throw Error("report: --out " + o.out.string() +
-                " holds an images folder that is no earlier report's (no data.js or app.js beside "
-                "it): the page's copies of the run's images go there, and it would mix them with "
-                "what it holds; choose a directory of its own");
+    throw Error(
+        "report: --out " + o.out.string() +
+        " holds an images folder that is no earlier report's (neither a data.js beside it "
+        "nor the mark of a report's copies in it): the page's copies of the run's images go "
+        "there, and it would mix them with what it holds; choose a directory of its own");
   fs::create_directories(o.out);
   const DirectoryLock lock(o.out, DirectoryLock::Mode::Exclusive, DirectoryLock::IfHeld::Refuse,
                            "writing a report");
-  // An earlier page here stops being one before anything is written: its data.js goes (a page
-  // without it is incomplete, so a killed report never shows old data over new tiles), its tiles
-  // and its copies of its run's images too (another run's would stay beside this one's, in every
-  // copy of the folder), and the temporaries of a killed write.
+  // An earlier page here stops being one before anything is written: its copies of its run's
+  // images go first (another run's would stay beside this one's, in every copy of the folder; a
+  // removal cut short leaves the data.js that says whose folder it is), then its data.js (a page
+  // without it is incomplete, so a killed report never shows old data over new tiles), its tiles,
+  // and the temporaries of a killed write.
+  if (!imagesInPlace) fs::remove_all(o.out / "images", ec);
   fs::remove(o.out / "data.js", ec);
   fs::remove_all(o.out / "tiles", ec);
-  if (!imagesInPlace) fs::remove_all(o.out / "images", ec);
   removeStaleTemporariesBelow(o.out);
   for (size_t i = 0; i < data["scenes"].size(); ++i) {
     json& scene = data["scenes"][i];

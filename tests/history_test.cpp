@@ -265,7 +265,8 @@ TEST(History, MatchJoinsARelabelledContenderAndComparesIt) {
   ASSERT_TRUE(series.contains("svgf"));
   EXPECT_EQ(series["svgf"]["aliases"], json::array({"svgf[sigmaL=8]"}));
   for (const json& v : series["svgf"]["relMse"]["value"]) EXPECT_TRUE(v.is_number()) << v;
-  EXPECT_EQ(data["matches"], json({{"svgf=svgf[sigmaL=8.0]", {2}}}));
+  // Said with the labels as the runs wrote them.
+  EXPECT_EQ(data["matches"], json({{"svgf=svgf[sigmaL=8]", {2}}}));
   // Run 2's row is compare's own on the two runs with the match: the same verdict and change.
   const std::vector<ComparisonRow> expected =
       compareRuns(runs[1], runs[2], tolerances, {}, Correction::Holm, {{"svgf", "svgf[sigmaL=8]"}});
@@ -281,6 +282,8 @@ TEST(History, MatchJoinsARelabelledContenderAndComparesIt) {
     if (c["run"] == 2 && c["metric"] == "relMse" && c["label"] == "svgf") {
       seen = true;
       EXPECT_EQ(c["candidateLabel"], "svgf[sigmaL=8]") << c;
+      EXPECT_EQ(c["pairLabel"], "svgf") << c;
+      EXPECT_TRUE(c["matchedByRequest"].get<bool>()) << c;
       EXPECT_EQ(c["verdict"], svgfRow->verdict) << c;
       EXPECT_NEAR(c["change"].get<double>(), svgfRow->change, 1e-12) << c;
     }
@@ -329,8 +332,8 @@ TEST(History, MatchThatCannotApplyIsRefusedNamingIt) {
   // The wrong way round: svgf[sigmaL=8] never comes before svgf.
   e = error(runs, {"svgf[sigmaL=8]=svgf"});
   EXPECT_TRUE(has(e,
-                  "no run with a pair labelled svgf[sigmaL=8] and none labelled svgf is "
-                  "followed by one with svgf in its place"))
+                  "no run with a pair labelled svgf[sigmaL=8] is followed by one with svgf "
+                  "(the history compares each run with the one before"))
       << e;
   EXPECT_TRUE(has(e, "svgf[sigmaL=8] is in runs 2, 3, svgf in runs 0, 1, 0 the oldest")) << e;
   // Not adjacent: a run between them has neither (each run is compared with the one before).
@@ -338,13 +341,89 @@ TEST(History, MatchThatCannotApplyIsRefusedNamingIt) {
   std::erase_if(gap[2].pairs, [](const PairResult& p) { return p.label == "svgf[sigmaL=8]"; });
   e = error(gap, {"svgf=svgf[sigmaL=8]"});
   EXPECT_TRUE(has(e, "svgf is in runs 0, 1, svgf[sigmaL=8] in runs 3, 0 the oldest")) << e;
-  // Both labels in one run: compared by their labels already, never by the match.
+  // Both labels in one run (a sweep that ran both): its two contenders cannot be one series.
   std::vector<RunResults> both = runs;
   both[1].pairs.push_back(both[2].pairs[1]);
   both[1].pairs.back().label = "svgf[sigmaL=8]";
-  std::erase_if(both[2].pairs, [](const PairResult& p) { return p.label == "svgf[sigmaL=8]"; });
   e = error(both, {"svgf=svgf[sigmaL=8]"});
-  EXPECT_TRUE(has(e, "svgf is in runs 0, 1, svgf[sigmaL=8] in runs 1, 3")) << e;
+  EXPECT_TRUE(has(e, "history: --match svgf=svgf[sigmaL=8]: run 1 (")) << e;
+  EXPECT_TRUE(has(e,
+                  ") has pairs labelled svgf, svgf[sigmaL=8]: a run's two contenders cannot be "
+                  "one series"))
+      << e;
+  // So with a chain: run 1 holding the first and the last label of A=B, B=C.
+  std::vector<RunResults> chain = runs;
+  for (int i : {1, 3}) chain[i].pairs.push_back(chain[i].pairs[1]);
+  chain[1].pairs.back().label = "svgf[sigmaL=9]";
+  chain[3].pairs.back().label = "svgf[sigmaL=9]";
+  std::erase_if(chain[3].pairs, [](const PairResult& p) { return p.label == "svgf[sigmaL=8]"; });
+  e = error(chain, {"svgf=svgf[sigmaL=8]", "svgf[sigmaL=8]=svgf[sigmaL=9]"});
+  EXPECT_TRUE(has(e, "run 1 (")) << e;
+  EXPECT_TRUE(has(e, "has pairs labelled svgf, svgf[sigmaL=9]")) << e;
+  // --denoisers that keeps neither label: said, not a dashboard without the match.
+  e = error(runs, {"svgf=svgf[sigmaL=8]"});
+  EXPECT_EQ(e, "(no error)");
+  e = test::errorOf([&] {
+    historyData(runs, {}, {}, Correction::Holm, {"passthrough"}, {"svgf=svgf[sigmaL=8]"});
+  });
+  EXPECT_TRUE(has(e, "history: --match svgf=svgf[sigmaL=8]: --denoisers keeps neither label")) << e;
+  // Brackets that do not pair up are no assignment (an extra ']' read as part of a label).
+  e = error(runs, {"svgf[sigmaL=8]]=svgf"});
+  EXPECT_TRUE(has(e, "--match svgf[sigmaL=8]]=svgf: its brackets do not pair up")) << e;
+  e = error(runs, {"svgf[sigmaL=8=svgf"});
+  EXPECT_TRUE(has(e, "its brackets do not pair up")) << e;
+  // --denoisers typed otherwise names the runs' label; one no run has lists theirs.
+  e = test::errorOf([&] { historyData(runs, {}, {}, Correction::Holm, {"svgf[sigmaL=8.0]"}); });
+  EXPECT_EQ(e, "(no error)");
+  e = test::errorOf([&] { historyData(runs, {}, {}, Correction::Holm, {"svgf[sigmaL=7]"}); });
+  EXPECT_TRUE(has(e,
+                  "history: --denoisers svgf[sigmaL=7]: no run has a pair of that label or "
+                  "denoiser (their labels: passthrough, svgf, svgf[sigmaL=8])"))
+      << e;
+}
+
+// A chain of relabellings (A from run 0, B from run 2, C from run 4) is one series, each change
+// compared where it happened; --denoisers naming any of the three keeps all; a flag row of a
+// later run compares one label with itself and says so (no arrow: matchedByRequest false).
+TEST(History, AChainOfMatchesIsOneSeries) {
+  std::vector<RunResults> runs;
+  for (int i = 0; i < 6; ++i) {
+    json r = historyRun(i, 5);  // svgf's relMSE jumps at run 5, after the last relabelling
+    for (json& p : r["pairs"])
+      if (p["label"] == "svgf" && i >= 2)
+        p["label"] = i >= 4 ? "svgf[sigmaL=9]" : "svgf[sigmaL=8]",
+        p["params"] = {{"sigmaL", i >= 4 ? 9 : 8}};
+    runs.push_back(test::typed(r));
+  }
+  const std::vector<std::string> chain = {"svgf=svgf[sigmaL=8]", "svgf[sigmaL=8]=svgf[sigmaL=9]"};
+  for (const std::vector<std::string> contenders :
+       {std::vector<std::string>{}, {"svgf"}, {"svgf[sigmaL=8]"}, {"svgf[sigmaL=9]"}}) {
+    const json data =
+        historyData(runs, {{"relMse", 0.02}}, {}, Correction::Holm, contenders, chain);
+    const std::string which = contenders.empty() ? "all" : contenders[0];
+    ASSERT_TRUE(data["series"]["s"].contains("svgf")) << which;
+    EXPECT_EQ(data["series"]["s"].size(), contenders.empty() ? 2u : 1u)
+        << which << data["series"].dump().substr(0, 300);
+    EXPECT_EQ(data["series"]["s"]["svgf"]["aliases"],
+              json::array({"svgf[sigmaL=8]", "svgf[sigmaL=9]"}))
+        << which;
+    for (const json& v : data["series"]["s"]["svgf"]["relMse"]["value"])
+      EXPECT_TRUE(v.is_number()) << which << v;
+    EXPECT_EQ(data["matches"],
+              json({{"svgf=svgf[sigmaL=8]", {2}}, {"svgf[sigmaL=8]=svgf[sigmaL=9]", {4}}}))
+        << which;
+    bool jump = false;
+    for (const json& c : data["changes"]) {
+      EXPECT_NE(c["verdict"], "missing") << which << c;
+      if (c["run"] == 5 && c["metric"] == "relMse") {
+        jump = true;
+        EXPECT_EQ(c["label"], "svgf") << c;  // the series
+        EXPECT_EQ(c["pairLabel"], "svgf[sigmaL=9]") << c;
+        EXPECT_FALSE(c["matchedByRequest"].get<bool>()) << c;
+      }
+    }
+    EXPECT_TRUE(jump) << which << data["changes"].dump();
+  }
 }
 
 // A run the gate refuses to judge (its summary disagrees with its per-tile data) fails the gate at

@@ -245,7 +245,20 @@ TEST(Report, GeneratorWritesEverySectionAndKeepsTheFailedPair) {
   const std::string e = test::errorOf([&] { writeReport(mine); });
   EXPECT_NE(e.find("holds an images folder that is no earlier report's"), std::string::npos) << e;
   EXPECT_TRUE(fs::exists(mine.out / "images" / "holiday.png"));
+  // Nor is it where a page's other files lie beside it (an app.js of the user's own): only a
+  // data.js, or the mark a report leaves in its copies, says the folder is a page's.
+  std::ofstream(mine.out / "app.js") << "// mine";
+  EXPECT_NE(test::errorOf([&] { writeReport(mine); }).find("no earlier report's"),
+            std::string::npos);
+  EXPECT_TRUE(fs::exists(mine.out / "images" / "holiday.png"));
+  fs::remove(mine.out / "app.js");
   EXPECT_EQ(std::distance(fs::directory_iterator(mine.out), fs::directory_iterator()), 1);
+  // A page cut short after its data.js went keeps the mark in its copies: written again, the
+  // report replaces them.
+  fs::remove(o.out / "data.js");
+  std::ofstream(o.out / "images" / "another.png") << "png";
+  writeReport(o);
+  EXPECT_FALSE(fs::exists(o.out / "images" / "another.png"));
   // Written in place (into the run's own folder), the run's images are never removed.
   ReportOptions inPlace = o;
   inPlace.out = inPlace.run;

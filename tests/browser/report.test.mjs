@@ -744,7 +744,8 @@ test('an older run\'s ghosting table: smallest values marked, rows labelled, nev
 
 // A synthetic history of 50 runs (one per commit): 2 scenes x 3 denoisers, values wobbling by
 // ±0.5% (under compare's 2% tolerance); at run 30 svgf's relMSE on scene_b rises 15% and stays.
-function historyRuns(dir, schema) {
+// `worse(scene, label, i)` may make more changes (a factor on relMSE).
+function historyRuns(dir, schema, worse = () => 1) {
   const runs = [];
   for (let i = 0; i < 50; ++i) {
     const wobble = (k) => 1 + 0.005 * Math.sin(1.7 * i + k);
@@ -752,7 +753,7 @@ function historyRuns(dir, schema) {
     for (const [si, scene] of ['scene_a', 'scene_b'].entries())
       for (const [li, label] of ['passthrough', 'temporal', 'svgf'].entries()) {
         const k = 3 * si + li;
-        const regress = label === 'svgf' && scene === 'scene_b' && i >= 30 ? 1.15 : 1;
+        const regress = (label === 'svgf' && scene === 'scene_b' && i >= 30 ? 1.15 : 1) * worse(scene, label, i);
         const st = (v) => ({ mean: v, median: v, p5: 0.8 * v, p95: 1.2 * v, frames: 8, ci95: [0.998 * v, 1.002 * v] });
         // Per-frame tile sums (results schema: pair.tiles.<metric>), which compare's paired interval
         // reads: 8 frames x 16 tiles of 100 pixels, varying over tiles and frames around the mean
@@ -860,7 +861,8 @@ test('history dashboard: 50 runs, the regressing one is marked, and the page sta
 
 test('history --match: a contender relabelled from run 40 on stays one series, named both ways', async () => {
   const dir = path.join(work, 'history-relabelled');
-  const runs = historyRuns(dir, tinyRuns().schema);
+  // The new parameter makes temporal 15% worse on scene_a: the gate must see it across the change.
+  const runs = historyRuns(dir, tinyRuns().schema, (scene, label, i) => (scene === 'scene_a' && label === 'temporal' && i >= 40 ? 1.15 : 1));
   for (const run of runs.slice(40)) {  // a parameter added to the command CI runs
     const file = path.join(run, 'results.json');
     const r = JSON.parse(fs.readFileSync(file, 'utf8'));
@@ -871,7 +873,7 @@ test('history --match: a contender relabelled from run 40 on stays one series, n
   // Without --match the pairs read missing at run 40 (the gate fails there for good).
   assert.match(arena('history', ...runs, '--out', out), /2 of 49 comparison\(s\) failing/);
   const said = arena('history', ...runs, '--out', out, '--match', 'temporal=temporal[alphaMin=0.1]');
-  assert.match(said, /1 of 49 comparison\(s\) failing `arena compare`'s gate \(1 row\(s\)\)/);
+  assert.match(said, /2 of 49 comparison\(s\) failing `arena compare`'s gate \(2 row\(s\)\)/);
   assert.match(said, /match: temporal=temporal\[alphaMin=0\.1\]: compared at run 40 /);
   const page = await context.newPage();
   const problems = [];
@@ -881,6 +883,9 @@ test('history --match: a contender relabelled from run 40 on stays one series, n
   const options = await page.$$eval('#history-label option', (os) => os.map((o) => [o.value, o.textContent]));
   assert.deepEqual(options.map((o) => o[0]).sort(), ['passthrough', 'svgf', 'temporal']);
   assert.deepEqual(options.find((o) => o[0] === 'temporal'), ['temporal', 'temporal (also temporal[alphaMin=0.1])']);
+  // svgf's flag at run 30 by its own label; temporal's at 40 names the two labels compared.
+  assert.deepEqual(await page.$$eval('#flags tr.flag', (rs) => rs.map((r) => [r.dataset.run, r.dataset.label, r.cells[3].textContent])),
+                   [['30', 'svgf', 'svgf'], ['40', 'temporal', 'temporal → temporal[alphaMin=0.1]']]);
   await page.selectOption('#history-label', 'temporal');
   await page.waitForFunction(() => document.querySelectorAll('#history-charts .chart[data-metric="relMse"] g.values_marks').length === 1);
   // One line through all 50 runs, the relabelled ones included.
