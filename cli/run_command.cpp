@@ -546,8 +546,7 @@ void addRunCommands(CLI::App& app) {
           checkLabelMatches(*matchLabels, baseline, candidate);
       if (!only->empty()) {
         keepContenders(baseline, candidate,
-                       withMatchedLabels(
-                           splitList(*only, "--denoisers", "labels or denoiser names"), matches));
+                       splitList(*only, "--denoisers", "labels or denoiser names"), matches);
       }
       std::vector<std::string> warnings;  // said on stderr, and in the JSON
       const auto warn = [&](const std::string& text) {

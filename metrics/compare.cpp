@@ -1018,22 +1018,25 @@ std::map<std::string, std::string> checkLabelMatches(const std::vector<std::stri
   return matches;
 }
 
-void keepContenders(RunResults& baseline, RunResults& candidate,
-                    const std::vector<std::string>& names) {
-  for (const std::string& name : names) {
+void keepContenders(RunResults& baseline, RunResults& candidate, std::vector<std::string> names,
+                    const std::map<std::string, std::string>& matches) {
+  std::set<std::string> all;
+  for (const RunResults* run : {&baseline, &candidate})
+    for (const PairResult& p : run->pairs) all.insert(p.label);
+  for (std::string& name : names) {
+    // A label typed otherwise than the runs wrote it (sigmaL=8.0) names theirs, as with --match.
+    if (const std::string label = labelAsWritten(all, name); !label.empty()) name = label;
     const auto has = [&](const RunResults& run) {
       return std::any_of(run.pairs.begin(), run.pairs.end(),
                          [&](const PairResult& p) { return isContender(p, {name}); });
     };
     if (has(baseline) || has(candidate)) continue;
-    std::set<std::string> labels;
-    for (const RunResults* run : {&baseline, &candidate})
-      for (const PairResult& p : run->pairs) labels.insert(p.label);
     std::string list;
-    for (const std::string& l : labels) list += (list.empty() ? "" : ", ") + l;
+    for (const std::string& l : all) list += (list.empty() ? "" : ", ") + l;
     throw Error("compare: --denoisers " + name +
                 ": neither run has a pair of that label or denoiser (their labels: " + list + ")");
   }
+  names = withMatchedLabels(std::move(names), matches);
   for (RunResults* run : {&baseline, &candidate})
     std::erase_if(run->pairs, [&](const PairResult& p) { return !isContender(p, names); });
 }

@@ -160,9 +160,11 @@ const char* gateOutcomeName(GateOutcome outcome);  // "pass", "regressed", "coul
 int gateExitCode(GateOutcome outcome);             // 0, 1, 2
 // Keeps the pairs of `baseline` and `candidate` whose label or denoiser is among `names` (`arena
 // compare --denoisers`): a contender one run lacks is then `missing` or `new`, as without the
-// option; a name neither run has is an Error listing the labels they have.
-void keepContenders(RunResults& baseline, RunResults& candidate,
-                    const std::vector<std::string>& names);
+// option; a name neither run has is an Error listing the labels they have. A label typed otherwise
+// than the runs wrote it names theirs (labelAsWritten); naming either label of a `matches` pair
+// keeps both.
+void keepContenders(RunResults& baseline, RunResults& candidate, std::vector<std::string> names,
+                    const std::map<std::string, std::string>& matches = {});
 // Whether `a` and `b` are one run read twice (a copy, a directory and the database it appended
 // to): the same name, creation time and build commit, and the same pairs with the same means of
 // every summary. Two runs made in the same second under one name differ in their numbers.

@@ -1226,7 +1226,7 @@ json reportData(const RunResults& results, const fs::path& runDir, const RunResu
         checkLabelMatches(gate.matches, *baseline, results);
     RunResults gatedBaseline = *baseline, gatedResults = results;
     if (!gate.contenders.empty())
-      keepContenders(gatedBaseline, gatedResults, withMatchedLabels(gate.contenders, matches));
+      keepContenders(gatedBaseline, gatedResults, gate.contenders, matches);
     const std::vector<ComparisonRow> rows = compareRuns(
         gatedBaseline, gatedResults, gate.tolerances, gate.bootstrap, gate.correction, matches);
     // The run against itself: compare refuses it (every change zero by construction).

@@ -396,7 +396,7 @@ TEST(History, AChainOfMatchesIsOneSeries) {
     runs.push_back(test::typed(r));
   }
   const std::vector<std::string> chain = {"svgf=svgf[sigmaL=8]", "svgf[sigmaL=8]=svgf[sigmaL=9]"};
-  for (const std::vector<std::string> contenders :
+  for (const std::vector<std::string>& contenders :
        {std::vector<std::string>{}, {"svgf"}, {"svgf[sigmaL=8]"}, {"svgf[sigmaL=9]"}}) {
     const json data =
         historyData(runs, {{"relMse", 0.02}}, {}, Correction::Holm, contenders, chain);

@@ -635,6 +635,13 @@ TEST(CompareGate, PairsOfOtherLabelsAreComparedWhenAskedTo) {
     EXPECT_EQ(r.matchedByRequest, r.label == "svgf") << r.label;
     EXPECT_EQ(r.candidateLabel, r.label == "svgf" ? "svgf[sigmaL=8]" : "") << r.label;
   }
+  // --denoisers naming one label of the match, typed otherwise, keeps both.
+  RunResults keptA = a, keptB = b;
+  keepContenders(keptA, keptB, {"svgf[sigmaL=8.0]"}, matches);
+  ASSERT_EQ(keptA.pairs.size(), 1u);
+  EXPECT_EQ(keptA.pairs[0].label, "svgf");
+  ASSERT_EQ(keptB.pairs.size(), 1u);
+  EXPECT_EQ(keptB.pairs[0].label, "svgf[sigmaL=8]");
   // A number typed otherwise than the run wrote it names the same label.
   EXPECT_EQ(checkLabelMatches({"svgf=svgf[sigmaL=8.0]"}, a, b), matches);
   EXPECT_EQ(checkLabelMatches({"svgf=svgf[sigmaL=8e0]"}, a, b), matches);
