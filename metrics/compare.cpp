@@ -1039,6 +1039,12 @@ void keepContenders(RunResults& baseline, RunResults& candidate, std::vector<std
   names = withMatchedLabels(std::move(names), matches);
   for (RunResults* run : {&baseline, &candidate})
     std::erase_if(run->pairs, [&](const PairResult& p) { return !isContender(p, names); });
+  // A --match whose pairs the names dropped would be asked for and do nothing.
+  for (const auto& [from, to] : matches)
+    if (std::none_of(baseline.pairs.begin(), baseline.pairs.end(),
+                     [&](const PairResult& p) { return p.label == from; }))
+      throw Error("compare: --match " + from + "=" + to +
+                  ": --denoisers keeps neither label; name one of them with --denoisers");
 }
 
 }  // namespace arena

@@ -642,6 +642,13 @@ TEST(CompareGate, PairsOfOtherLabelsAreComparedWhenAskedTo) {
   EXPECT_EQ(keptA.pairs[0].label, "svgf");
   ASSERT_EQ(keptB.pairs.size(), 1u);
   EXPECT_EQ(keptB.pairs[0].label, "svgf[sigmaL=8]");
+  // Names that keep neither label of a match: the match would be asked for and do nothing.
+  RunResults droppedA = a, droppedB = b;
+  const std::string dropped =
+      test::errorOf([&] { keepContenders(droppedA, droppedB, {"eaw"}, matches); });
+  EXPECT_NE(dropped.find("compare: --match svgf=svgf[sigmaL=8]: --denoisers keeps neither label"),
+            std::string::npos)
+      << dropped;
   // A number typed otherwise than the run wrote it names the same label.
   EXPECT_EQ(checkLabelMatches({"svgf=svgf[sigmaL=8.0]"}, a, b), matches);
   EXPECT_EQ(checkLabelMatches({"svgf=svgf[sigmaL=8e0]"}, a, b), matches);

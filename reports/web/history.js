@@ -63,7 +63,7 @@
       el('tbody', {}, rows.map((f) => {
         const tr = el('tr', { class: 'flag', 'data-run': String(f.run), 'data-scene': f.scene, 'data-label': f.label, 'data-metric': f.metric },
           el('td', { class: 'first', text: `#${f.run}` }), el('td', { class: 'first', text: H.runs[f.run].revision || H.runs[f.run].commit || '–' }),
-          el('td', { class: 'first', text: f.scene }), el('td', { class: 'first', text: f.matchedByRequest ? `${f.pairLabel} → ${f.candidateLabel}` : f.label }), el('td', { class: 'first', text: f.metric }),
+          el('td', { class: 'first', text: f.scene }), el('td', { class: 'first', text: f.matchedByRequest ? `${f.pairLabel} → ${f.candidateLabel}` : f.pairLabel || f.label }), el('td', { class: 'first', text: f.metric }),
           el('td', { text: fmt(f.baseline) }), el('td', { text: fmt(f.candidate) }), el('td', { class: f.fails ? 'verdict-regressed' : null, text: pct(f.change) }),
           // The paired interval of the change, as compare prints it (none: no tiles to resample).
           el('td', { text: Array.isArray(f.changeCi95) ? `[${pct(f.changeCi95[0])}, ${pct(f.changeCi95[1])}]` : '–' }),
