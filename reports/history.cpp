@@ -544,7 +544,8 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
     changes.push_back(change);
   };
   size_t comparisons = 0;
-  json matchedAt = json::object();  // --match assignment -> the comparisons (runs) it paired
+  json matchedAt =
+      json::object();  // "A=B" (--match, the runs' labels) -> the comparisons it paired
   json historyWarnings = json::array();
   bool tooManyRows = false;
   for (size_t i = 1; i < runs.size(); ++i) {
@@ -565,16 +566,14 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
       notComparable(i, "run with other settings (arena compare refuses them): " + list);
       continue;
     }
-    // A run the gate refuses to judge (a summary that disagrees with its tiles) fails the gate
-    // there, saying why; the dashboard of the other runs is still built.
     // The --match pairs this comparison meets: the first label before, the second in its place.
     std::map<std::string, std::string> matched;
     const std::set<std::string> before = labelsOf(runs[i - 1]), now = labelsOf(runs[i]);
     for (const LabelMatch& m : labelMatches)
-      if (before.count(m.from) && !before.count(m.to) && now.count(m.to) && !now.count(m.from)) {
+      if (before.count(m.from) && !before.count(m.to) && now.count(m.to) && !now.count(m.from))
         matched[m.from] = m.to;
-        matchedAt[m.from + "=" + m.to].push_back(i);
-      }
+    // A run the gate refuses to judge (a summary that disagrees with its tiles) fails the gate
+    // there, saying why; the dashboard of the other runs is still built.
     std::vector<ComparisonRow> rows;
     try {
       rows = compareRuns(runs[i - 1], runs[i], tolerances, bootstrap, correction, matched);
@@ -582,6 +581,7 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
       notComparable(i, std::string("arena compare refuses these runs: ") + e.what());
       continue;
     }
+    for (const auto& [from, to] : matched) matchedAt[from + "=" + to].push_back(i);
     // As `arena compare` warns: beyond this many rows the correction can resolve none.
     if (correction == Correction::Holm)
       if (const size_t family =
