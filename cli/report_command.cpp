@@ -2,6 +2,7 @@
 #include <iostream>
 
 #include "cli/commands.hpp"
+#include "core/error.hpp"
 #include "harness/scene_selection.hpp"
 #include "metrics/compare.hpp"
 #include "metrics/metric_registry.hpp"
