@@ -305,7 +305,9 @@ CaptureValidation validate(const fs::path& dir) {
   return validateCapture(seq, readSequenceForEvaluation(seq));
 }
 
-const CaptureCheck& checkNamed(const CaptureValidation& v, const std::string& name) {
+// A copy: callers pass the validation of one call (`checkNamed(validate(dir), ...)`), gone at the
+// end of their statement; a reference into it dangled (AddressSanitizer: heap-use-after-free).
+CaptureCheck checkNamed(const CaptureValidation& v, const std::string& name) {
   for (const CaptureCheck& c : v.checks)
     if (c.name == name) return c;
   throw Error("no check " + name);

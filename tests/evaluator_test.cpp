@@ -452,7 +452,8 @@ TEST(Evaluation, AnOutputThatIsTheReferenceIsWarnedOf) {
   PairEvaluation near(scene);  // one value off on every frame: a measurement, however good
   ref.at(0, 0, 0) = 0.50001f;
   for (int t = 0; t < 5; ++t) near.add(t, ref);
-  for (const json& w : near.finish()["warnings"])
+  const json nearResults = near.finish();  // held: a loop over a temporary's member dangles
+  for (const json& w : nearResults["warnings"])
     EXPECT_EQ(w.get<std::string>().find("equals its reference"), std::string::npos) << w;
 }
 

@@ -444,8 +444,8 @@ TEST(History, ARunTheGateRefusesIsMarkedNotComparable) {
     runs.push_back(test::typed(r));
   }
   const std::vector<RunResults> unedited = {runs[0], runs[2]};  // their tiles agree: judged
-  for (const json& c : historyData(unedited, {})["changes"])
-    EXPECT_NE(c["verdict"], "not comparable") << c;
+  const json judged = historyData(unedited, {});  // held: a loop over a temporary's member dangles
+  for (const json& c : judged["changes"]) EXPECT_NE(c["verdict"], "not comparable") << c;
   const json data = historyData(runs, {});
   int refused = 0;
   for (const json& c : data["changes"])
