@@ -499,8 +499,9 @@ std::string figureWithInterval(const json& e, const char* name) {
 
 void printEventTables(std::ostream& out, const RunResults& results) {
   if (!results.statistics) return;
-  for (const auto& [name, scene] : results.statistics->scenes)
-    scene.forEachEvent([&](const EventStatistics& ev, bool cut) {
+  for (const auto& entry : results.statistics->scenes) {
+    const std::string& name = entry.first;  // read by the lambdas below
+    entry.second.forEachEvent([&](const EventStatistics& ev, bool cut) {
       const int frame = ev.eventFrame;
       const char* rankedOn = cut ? "oldViewLeak" : "lagEnergy";
       const auto figure = ev.byFigure.find(rankedOn);
@@ -559,6 +560,7 @@ void printEventTables(std::ostream& out, const RunResults& results) {
         out << "  (a method above one with a lower " << rankedOn
             << " has fewer methods resolved better than it: its differences are less certain)\n";
     });
+  }
 }
 
 namespace {

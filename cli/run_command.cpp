@@ -255,7 +255,9 @@ void finish(const std::string& out) {
     }
   }
   // A tie between two methods whose outputs are the same bits measures one output twice.
-  for (const auto& [name, scene] : results.scenes.items())
+  for (const auto& item : results.scenes.items()) {
+    const std::string& name = item.key();  // read by the lambda below
+    const json& scene = item.value();
     if (const std::string same = identicalOutputsText(results, name); !same.empty()) {
       // Under the scaled footprint a small image rounds radii and steps given at footprintHeight
       // lines to the same pixels (radius 1, 2 and 4 all 1 pixel at 36 lines): the likely cause.
@@ -272,6 +274,7 @@ void finish(const std::string& out) {
                            : "")
                 << "\n";
     }
+  }
   printSeedSplit(std::cout, results);
   for (const std::string& line : absentSummaryLines(results, {"relMse"})) std::cout << line << "\n";
   for (const std::string& line : otherAbsentSummaryLines(results)) std::cout << line << "\n";

@@ -91,7 +91,7 @@ std::string ParamSet::text(const Value& v) {
 
 nlohmann::json ParamSet::toJson() const {
   nlohmann::json j = nlohmann::json::object();
-  for (const auto& [k, v] : values_) std::visit([&](const auto& x) { j[k] = x; }, v);
+  for (const auto& [k, v] : values_) std::visit([&j, &key = k](const auto& x) { j[key] = x; }, v);
   return j;
 }
 
@@ -127,7 +127,9 @@ ParamSet ParamSchema::resolve(const std::map<std::string, std::string>& override
       case ParamSpec::Type::Choice: out.set(s.name, s.choices[size_t(s.defaultValue)]); break;
     }
   }
-  for (const auto& [name, text] : overrides) {
+  for (const auto& override : overrides) {
+    const std::string &name = override.first,
+                      &text = override.second;  // the lambda below reads them
     const ParamSpec* s = find(name);
     if (!s) {
       std::string valid;

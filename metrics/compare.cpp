@@ -324,7 +324,7 @@ std::vector<Tolerance> parseGate(const std::vector<std::string>& metrics,
   tolerances = gateTolerances(std::move(tolerances), all);
   for (const auto& [metric, value] : own) {
     const auto it = std::find_if(tolerances.begin(), tolerances.end(),
-                                 [&](const Tolerance& t) { return t.metric == metric; });
+                                 [&name = metric](const Tolerance& t) { return t.metric == name; });
     if (it == tolerances.end())
       requireGateMetric(metric, "--tolerance " + metric + "=" + shortestText(value * 100) + "%");
     if (it == tolerances.end()) {
@@ -1042,7 +1042,7 @@ void keepContenders(RunResults& baseline, RunResults& candidate, std::vector<std
   // A --match whose pairs the names dropped would be asked for and do nothing.
   for (const auto& [from, to] : matches)
     if (std::none_of(baseline.pairs.begin(), baseline.pairs.end(),
-                     [&](const PairResult& p) { return p.label == from; }))
+                     [&label = from](const PairResult& p) { return p.label == label; }))
       throw Error("compare: --match " + from + "=" + to +
                   ": --denoisers keeps neither label; name one of them with --denoisers");
 }

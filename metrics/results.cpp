@@ -387,7 +387,9 @@ void appendToDatabase(const fs::path& dbPath, const RunResults& r, const std::st
         paired.integer(1, runId).text(2, scene).text(3, metric).text(4, x.a).text(5, x.b).real(6, x.d.diff)
             .real(7, x.d.ci.lo).real(8, x.d.ci.hi).integer(9, x.d.resolved()).step();
     };
-    for (const auto& [name, scene] : statistics.scenes) {
+    for (const auto& entry : statistics.scenes) {
+      const std::string& name = entry.first;  // read by the lambda below
+      const auto& scene = entry.second;
       addScene(name, scene.ranking, scene.ranking.metric);
       for (const auto& [metric, ranking] : scene.byMetric) addScene(name, ranking, ranking.metric);
       // Event-window figures (metrics/ghosting_intervals): metric "ghosting@<frame>.<figure>" or

@@ -445,7 +445,9 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
     for (const auto& [label, what] : labels)
       if (what.first == p.denoiser && what.second == p.params &&
           std::none_of(run.pairs.begin(), run.pairs.end(),
-                       [&](const PairResult& q) { return q.scene == p.scene && q.label == label; }))
+                       [&p, &name = label](const PairResult& q) {
+                         return q.scene == p.scene && q.label == name;
+                       }))
         match = label, ++matches;
     if (matches != 1) return p.label;
     // Another pair of the run that ran the same (two labels for one contender): no alias, or the

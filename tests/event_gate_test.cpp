@@ -386,7 +386,7 @@ TEST(EventGateContract, ToleranceMayBeGivenPerMetric) {
            {{"ghosting.responseFrames"},
             "ghosting.responseFrames=20%,ghosting.responseFrames=5%",
             "ghosting.responseFrames's own given twice"}}) {
-    const std::string why = test::errorOf([&] { parseGate(metrics, text); });
+    const std::string why = test::errorOf([&m = metrics, &t = text] { parseGate(m, t); });
     EXPECT_NE(why.find(expected), std::string::npos) << text << ": " << why;
   }
 }

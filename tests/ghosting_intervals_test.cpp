@@ -606,7 +606,9 @@ TEST(EventIntervalsEndToEnd, IntervalsRankingsAndShardsMergedEqualOneRun) {
   }
   const fs::path refused = test::freshDir("event_ci_merged_other_definition");
   fs::remove_all(refused);
-  const std::string e = test::errorOf([&] { mergeRuns({dir0, dir1}, refused); });
+  const std::string e = test::errorOf([&d0 = dir0, &d1 = dir1, &refused] {
+    mergeRuns({d0, d1}, refused);
+  });
   EXPECT_NE(e.find("settings.ghosting differ from this build's"), std::string::npos) << e;
   EXPECT_FALSE(fs::exists(refused)) << "nothing written";
   // results.db: the figures' rankings and paired differences, named by event and figure.
@@ -640,10 +642,12 @@ TEST(EventIntervalsEndToEnd, IntervalsRankingsAndShardsMergedEqualOneRun) {
       // A bound is NULL exactly where results.json's is null ("never"), settled or not.
       const json ci = g["ci95"].value("responseFrames", json());
       // A response is a whole number of frames, and so are its interval's bounds.
-      for (const json& bound : ci.is_array() ? ci : json::array())
-        if (bound.is_number())
+      for (const json& bound : ci.is_array() ? ci : json::array()) {
+        if (bound.is_number()) {
           EXPECT_EQ(bound.get<double>(), std::round(bound.get<double>()))
               << p["label"] << " " << ci;
+        }
+      }
       if (ci.is_array())
         for (const char* column : {"ci_lo", "ci_hi"}) {
           const bool null = ci[std::string(column) == "ci_lo" ? 0 : 1].is_null();
