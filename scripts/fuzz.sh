@@ -19,10 +19,11 @@ seconds="${1:-600}"
 shift || true
 # Debian 12's clang is 14; its libFuzzer and sanitizer runtimes are in libclang-rt-14-dev.
 bash scripts/install_packages.sh clang libclang-rt-14-dev ccache
-if [ ! -f build-fuzz/CMakeCache.txt ]; then
-  CC=clang CXX=clang++ cmake -S . -B build-fuzz -DARENA_FUZZ=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-    -DCMAKE_CXX_COMPILER_LAUNCHER=ccache
-fi
+# File by file, without unity batches: a fuzzer compiles its own instrumented copy of the files it
+# fuzzes and takes the rest from the libraries, whose unity objects would bring those files again
+# (every symbol defined twice at link).
+CC=clang CXX=clang++ cmake -S . -B build-fuzz -DARENA_FUZZ=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DARENA_UNITY_BUILD=OFF -DARENA_PCH=OFF -DCMAKE_CXX_COMPILER_LAUNCHER=ccache > /dev/null
 nice -n 19 cmake --build build-fuzz -j2 --target "${target}_fuzzer"
 mkdir -p "build-fuzz/corpus-$target" build-fuzz/artifacts build-fuzz/seeds-capture
 export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1}"
