@@ -956,6 +956,12 @@ std::vector<std::string> withMatchedLabels(std::vector<std::string> names,
   return names;
 }
 
+std::string labelList(const std::set<std::string>& labels) {
+  std::string list;
+  for (const std::string& l : labels) list += (list.empty() ? "" : ", ") + l;
+  return list;
+}
+
 std::pair<std::string, std::string> splitLabelMatch(const std::string& a) {
   // A label may hold '=' itself (svgf[sigmaL=8]): the first '=' outside brackets splits.
   size_t split = std::string::npos;
@@ -986,11 +992,6 @@ std::map<std::string, std::string> checkLabelMatches(const std::vector<std::stri
     for (const PairResult& p : run.pairs) labels.insert(p.label);
     return labels;
   };
-  const auto listed = [](const std::set<std::string>& labels) {
-    std::string list;
-    for (const std::string& l : labels) list += (list.empty() ? "" : ", ") + l;
-    return list;
-  };
   const std::set<std::string> base = labelsOf(baseline), cand = labelsOf(candidate);
   std::map<std::string, std::string> matches;
   std::set<std::string> matched;
@@ -1001,10 +1002,10 @@ std::map<std::string, std::string> checkLabelMatches(const std::vector<std::stri
     if (const std::string label = labelAsWritten(cand, to); !label.empty()) to = label;
     if (!base.count(from))
       throw Error("--match " + a + ": the baseline has no pair labelled " + from +
-                  " (its labels: " + listed(base) + ")");
+                  " (its labels: " + labelList(base) + ")");
     if (!cand.count(to))
       throw Error("--match " + a + ": the candidate has no pair labelled " + to +
-                  " (its labels: " + listed(cand) + ")");
+                  " (its labels: " + labelList(cand) + ")");
     if (matches.count(from)) throw Error("--match " + a + ": " + from + " is matched twice");
     if (!matched.insert(to).second) throw Error("--match " + a + ": " + to + " is matched twice");
     if (to != from && base.count(to))
@@ -1031,10 +1032,9 @@ void keepContenders(RunResults& baseline, RunResults& candidate, std::vector<std
                          [&](const PairResult& p) { return isContender(p, {name}); });
     };
     if (has(baseline) || has(candidate)) continue;
-    std::string list;
-    for (const std::string& l : all) list += (list.empty() ? "" : ", ") + l;
     throw Error("compare: --denoisers " + name +
-                ": neither run has a pair of that label or denoiser (their labels: " + list + ")");
+                ": neither run has a pair of that label or denoiser (their labels: " +
+                labelList(all) + ")");
   }
   names = withMatchedLabels(std::move(names), matches);
   for (RunResults* run : {&baseline, &candidate})

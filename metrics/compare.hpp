@@ -108,6 +108,8 @@ std::map<std::string, std::string> checkLabelMatches(const std::vector<std::stri
 // and naming either of its labels keeps both.
 std::vector<std::string> withMatchedLabels(std::vector<std::string> names,
                                            const std::map<std::string, std::string>& matches);
+// Labels as one line for a message: "a, b, c" (a set: sorted, each once).
+std::string labelList(const std::set<std::string>& labels);
 // One `--match` assignment split at its first '=' outside brackets (a label may hold '=' itself,
 // svgf[sigmaL=8]) into (baseline label, candidate label); an Error names it when it is not two.
 std::pair<std::string, std::string> splitLabelMatch(const std::string& assignment);

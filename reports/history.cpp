@@ -193,21 +193,20 @@ std::set<std::string> labelsOf(const RunResults& run) {
   return labels;
 }
 
-std::string listed(const std::set<std::string>& labels) {
-  std::string list;
-  for (const std::string& l : labels) list += (list.empty() ? "" : ", ") + l;
-  return list;
-}
-
-// A history's --match assignments read: each label as the runs wrote it (a number typed otherwise
-// names the same label), one some run has, and each matched once; Errors name the assignment.
-std::vector<LabelMatch> historyMatches(const std::vector<std::string>& assignments,
-                                       const std::vector<RunResults>& runs) {
+// Every label any of the runs has.
+std::set<std::string> labelsOf(const std::vector<RunResults>& runs) {
   std::set<std::string> all;
   for (const RunResults& r : runs) {
     const std::set<std::string> labels = labelsOf(r);
     all.insert(labels.begin(), labels.end());
   }
+  return all;
+}
+
+// A history's --match assignments read: each label as the runs wrote it (a number typed otherwise
+// names the same label), one some run has, and each matched once; Errors name the assignment.
+std::vector<LabelMatch> historyMatches(const std::vector<std::string>& assignments,
+                                       const std::set<std::string>& all) {
   std::vector<LabelMatch> matches;
   std::set<std::string> froms, tos;
   for (const std::string& a : assignments) {
@@ -217,7 +216,7 @@ std::vector<LabelMatch> historyMatches(const std::vector<std::string>& assignmen
     for (const std::string* label : {&from, &to})
       if (!all.count(*label))
         throw Error("history: --match " + a + ": no run has a pair labelled " + *label +
-                    " (their labels: " + listed(all) + ")");
+                    " (their labels: " + labelList(all) + ")");
     if (from == to)
       throw Error("history: --match " + a + ": matches " + from +
                   " with itself; a label is matched with itself already");
@@ -262,7 +261,7 @@ void requireMatchesMet(const std::vector<LabelMatch>& matches, const std::vector
         if (byRun[i].count(label)) both.insert(label);
       if (both.size() > 1)
         throw Error("history: --match " + m.assignment + ": run " + std::to_string(i) + " (" +
-                    runs[i].source + ") has pairs labelled " + listed(both) +
+                    runs[i].source + ") has pairs labelled " + labelList(both) +
                     ": a run's two contenders cannot be one series (compare that run's pairs by "
                     "their labels, or leave it out of the history)");
     }
@@ -352,14 +351,10 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
                  const std::vector<std::string>& matchAssignments) {
   // --match: a contender relabelled on purpose between two runs (a parameter changed in the
   // command CI runs) is one series, and its two labels are compared where one follows the other.
-  const std::vector<LabelMatch> labelMatches = historyMatches(matchAssignments, runs);
+  const std::set<std::string> all = labelsOf(runs);
+  const std::vector<LabelMatch> labelMatches = historyMatches(matchAssignments, all);
   // --denoisers: only the named contenders' pairs; a name no run has is a mistake.
   if (!contenders.empty()) {
-    std::set<std::string> all;
-    for (const RunResults& r : runs) {
-      const std::set<std::string> labels = labelsOf(r);
-      all.insert(labels.begin(), labels.end());
-    }
     for (std::string& name : contenders) {
       // A label typed otherwise than the runs wrote it names theirs, as with --match.
       if (const std::string label = labelAsWritten(all, name); !label.empty()) name = label;
@@ -367,9 +362,9 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
             return std::any_of(r.pairs.begin(), r.pairs.end(),
                                [&](const PairResult& p) { return isContender(p, {name}); });
           }))
-        throw Error("history: --denoisers " + name +
-                    ": no run has a pair of that label or denoiser (their labels: " + listed(all) +
-                    ")");
+        throw Error(
+            "history: --denoisers " + name +
+            ": no run has a pair of that label or denoiser (their labels: " + labelList(all) + ")");
     }
     // A matched pair of labels is one contender: naming either keeps both (a chain's all).
     std::map<std::string, std::string> pairs;
