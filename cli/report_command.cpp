@@ -49,11 +49,15 @@ void addReportCommand(CLI::App& app) {
   cmd->add_option("--correction", *gateCorrection, "With --baseline: as for `arena compare`")
       ->check(CLI::IsMember({"holm", "none"}))
       ->default_val("holm");
+  auto gateAllowMismatch = std::make_shared<bool>(false);
+  cmd->add_flag("--allow-settings-mismatch", *gateAllowMismatch,
+                "With --baseline: judge runs whose settings differ, warning of them, as for `arena "
+                "compare`");
   cmd->callback([=] {
     // The gate's options judge the regression view, which only a baseline makes.
     if (baseline->empty())
-      for (const char* option :
-           {"--metric", "--tolerance", "--confidence", "--correction", "--denoisers", "--match"})
+      for (const char* option : {"--metric", "--tolerance", "--confidence", "--correction",
+                                 "--denoisers", "--match", "--allow-settings-mismatch"})
         if (cmd->count(option) > 0)
           throw Error(std::string("report: ") + option +
                       " judges the regression view against a baseline: give --baseline RUN too");
@@ -64,6 +68,7 @@ void addReportCommand(CLI::App& app) {
     o->gate.bootstrap.confidence = parseConfidence(*gateConfidence);
     o->gate.correction = parseCorrection(*gateCorrection);
     o->gate.matches = *gateMatches;
+    o->gate.allowSettingsMismatch = *gateAllowMismatch;
     if (!gateOnly->empty())
       o->gate.contenders = splitList(*gateOnly, "--denoisers", "labels or denoiser names");
     ReportSummary s = writeReport(*o);
@@ -115,15 +120,22 @@ void addReportCommand(CLI::App& app) {
                    "How each comparison's rows are counted together, as for `arena compare`")
       ->check(CLI::IsMember({"holm", "none"}))
       ->default_val("holm");
+  auto histAllowMismatch = std::make_shared<bool>(false);
+  hist->add_flag("--allow-settings-mismatch", *histAllowMismatch,
+                 "Compare consecutive runs whose settings differ (a warm-up changed in the command "
+                 "CI runs), warning of them, instead of marking them not comparable, as for `arena "
+                 "compare`");
   hist->callback([=] {
     HistoryOptions h;
     h.inputs.assign(inputs->begin(), inputs->end());
     h.out = *histOut;
-    h.tolerances = parseGate(*metrics, *tol);
-    h.bootstrap.confidence = parseConfidence(*confidence);
-    h.correction = parseCorrection(*correction);
-    if (!only->empty()) h.contenders = splitList(*only, "--denoisers", "labels or denoiser names");
-    h.matches = *histMatches;
+    h.gate.tolerances = parseGate(*metrics, *tol);
+    h.gate.bootstrap.confidence = parseConfidence(*confidence);
+    h.gate.correction = parseCorrection(*correction);
+    if (!only->empty())
+      h.gate.contenders = splitList(*only, "--denoisers", "labels or denoiser names");
+    h.gate.matches = *histMatches;
+    h.gate.allowSettingsMismatch = *histAllowMismatch;
     const HistorySummary s = writeHistory(h);
     if (s.runs == 1) {  // "0 of 0 comparison(s) failing" read as a pass
       std::cout << "history: " << s.index.string()

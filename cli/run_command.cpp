@@ -28,6 +28,7 @@
 #include "harness/scene_selection.hpp"
 #include "harness/sweep.hpp"
 #include "metrics/compare.hpp"
+#include "metrics/gate.hpp"
 #include "metrics/ghosting_intervals.hpp"
 #include "metrics/results.hpp"
 
@@ -534,23 +535,24 @@ void addRunCommands(CLI::App& app) {
                   "Compare runs whose settings differ (resolution, warm-up, references, ...): warn and go on "
                   "instead of refusing");
     cmd->callback([=] {
-      const std::vector<Tolerance> tols = parseGate(*metrics, *tol);
-      BootstrapConfig bc;
-      bc.confidence = parseConfidence(*confidence);
-      RunResults baseline = loadResults(*a), candidate = loadResults(*b);
-      // The same run on both sides (a CI step that copied the candidate into the baseline) would
-      // pass every row by construction: the gate cannot judge it (exit 2), rather than pass.
-      if (sameRunRecord(baseline, candidate))
-        throw Error("compare: " + *a + " and " + *b + " hold the same run (name " + baseline.name +
-                    ", created " + baseline.created +
-                    "): every change would be zero by construction, and the gate would pass having "
-                    "checked nothing (was the candidate copied into the baseline?)");
+      Gate gate;
+      gate.tolerances = parseGate(*metrics, *tol);
+      gate.bootstrap.confidence = parseConfidence(*confidence);
+      gate.correction = parseCorrection(*correction);
+      gate.matches = *matchLabels;
+      gate.allowSettingsMismatch = *allowMismatch;
+      if (!only->empty())
+        gate.contenders = splitList(*only, "--denoisers", "labels or denoiser names");
+      const RunResults baseline = loadResults(*a), candidate = loadResults(*b);
       const std::map<std::string, std::string> matches =
-          checkLabelMatches(*matchLabels, baseline, candidate);
-      if (!only->empty()) {
-        keepContenders(baseline, candidate,
-                       splitList(*only, "--denoisers", "labels or denoiser names"), matches);
-      }
+          checkLabelMatches(gate.matches, baseline, candidate);
+      // The judgement `report --baseline` and `history` make too (metrics/gate.hpp). What it cannot
+      // judge (the same run twice, other settings, data compareRuns refuses) exits 2.
+      const GateJudgement judged = judgeRuns(baseline, candidate, gate, matches);
+      const GateSides sides{"the baseline " + *a, "the candidate " + *b};
+      if (judged.refusal == GateRefusal::Data) throw Error(judged.refusalDetail);
+      if (judged.refusal != GateRefusal::None)
+        throw Error("compare: " + refusalText(judged, sides, /*multiLine=*/true));
       std::vector<std::string> warnings;  // said on stderr, and in the JSON
       const auto warn = [&](const std::string& text) {
         std::cerr << "arena: warning: " << text << "\n";
@@ -560,49 +562,14 @@ void addRunCommands(CLI::App& app) {
       for (const std::string* dir : {a.get(), b.get()})
         if (const std::string note = unfinishedRunNote(*dir); !note.empty())
           warn(note + "; compared on the earlier run's numbers, which are whole");
-      // Numbers measured under other settings differ for that reason alone: refused unless asked.
-      const std::vector<std::string> differ = settingsDifferences(baseline, candidate, tols);
-      const auto lines = [](const std::vector<std::string>& items) {  // one indented line each
-        std::string text;
-        for (const std::string& item : items) text += "\n  " + item;
-        return text;
-      };
-      if (!differ.empty()) {
-        const std::string list = lines(differ);
-        if (!*allowMismatch)
-          throw Error("compare: " + *a + " and " + *b + " were run with different settings (baseline vs candidate):" +
-                      list + "\ntheir numbers are not comparable; pass --allow-settings-mismatch to compare anyway");
-        warn("comparing runs with different settings (baseline vs candidate):" + list);
-      }
-      // (Runs of other settings render other references anyway: said above.)
-      if (const std::vector<std::string> refs = referenceDifferences(baseline, candidate);
-          !refs.empty() && differ.empty())
-        warn(
-            "the runs measured these scenes against other references (refined between them, or a "
-            "capture's references rendered again?); part of each change there is the reference's, "
-            "not the denoiser's "
-            "(run both on one cache state to compare the denoisers alone):" +
-            lines(refs));
-      // A candidate older than its baseline: the arguments are likely swapped, which turns every
-      // regression into an improvement.
-      if (!baseline.created.empty() && !candidate.created.empty() &&
-          candidate.created < baseline.created)
-        warn("the candidate " + *b + " (created " + candidate.created +
-             ") is older than the baseline " + *a + " (created " + baseline.created +
-             "): are the arguments swapped? (arena compare BASELINE CANDIDATE)");
-      const Correction corrected = parseCorrection(*correction);
-      auto rows = compareRuns(baseline, candidate, tols, bc, corrected, matches);
-      // The rows with an interval: the family the correction judges together.
-      const size_t family =
-          size_t(std::count_if(rows.begin(), rows.end(),
-                               [](const ComparisonRow& r) { return std::isfinite(r.pValue); }));
-      if (corrected == Correction::Holm && family > holmResolvableRows(bc.confidence))
-        warn(std::to_string(family) + " rows judged together: more than " +
-             std::to_string(holmResolvableRows(bc.confidence)) +
-             ", beyond which the correction can resolve no row at this confidence (its smallest "
-             "threshold lies below what its replicates can show); narrow the gate with --metric or "
-             "--denoisers, or judge each row alone with --correction none");
-      const GateOutcome outcome = gateOutcome(rows);
+      for (const std::string& text : gateWarningTexts(judged, sides, /*multiLine=*/true))
+        warn(text);
+      const Correction corrected = gate.correction;
+      const BootstrapConfig& bc = gate.bootstrap;
+      const std::vector<Tolerance> tols = gateTolerances(gate.tolerances);
+      const std::vector<ComparisonRow>& rows = judged.rows;
+      const size_t family = judged.rowsJudgedTogether;  // the rows the correction judges together
+      const GateOutcome outcome = judged.outcome;
       if (*asJson) {
         const auto runJson = [](const std::string& path, const RunResults& r) {
           return json{{"path", path},

@@ -217,15 +217,17 @@ std::vector<std::string> settingsDifferences(const RunResults& baseline,
   // A low-resolution buffer rendered in one run only (a contender there reads it) changes none of
   // the frames both runs measure (its paths are its own): not a difference when no pair the two
   // runs have in common read it in either (each pair records readsLowres; a pair that does not
-  // say, from an older run, might have). Rendered in both at other settings, it is one.
+  // say, from an older run, might have). Rendered in both at other settings, it is one. A pair
+  // that failed in either run has no numbers to compare (and records nothing of what it read).
   auto lowres = [](const json& s) {
     return s.contains("render") && s["render"].contains("lowresFactor");
   };
   auto commonPairsReadNoLowres = [&] {
     std::set<std::string> inBaseline, common;
-    for (const PairResult& p : baseline.pairs) inBaseline.insert(key(p));
+    for (const PairResult& p : baseline.pairs)
+      if (p.ok()) inBaseline.insert(key(p));
     for (const PairResult& p : candidate.pairs)
-      if (inBaseline.count(key(p))) common.insert(key(p));
+      if (p.ok() && inBaseline.count(key(p))) common.insert(key(p));
     for (const RunResults* run : {&baseline, &candidate})
       for (const PairResult& p : run->pairs) {
         if (!common.count(key(p))) continue;

@@ -22,6 +22,12 @@ using nlohmann::json;
 
 namespace {
 
+// A run as the gate's messages name it: "the run nightly of 2026-12-01T10:00:00Z".
+std::string runDescription(const RunResults& r) {
+  return "the run " + (r.name.empty() ? std::string("(unnamed)") : r.name) +
+         (r.created.empty() ? std::string() : " of " + r.created);
+}
+
 // A results database opened read-only; rows come back as JSON objects keyed by column name, so
 // columns a newer schema adds (e.g. interval bounds) are read when present and not required.
 class ReadOnlyDatabase {
@@ -345,14 +351,15 @@ std::vector<RunResults> loadHistory(const std::vector<fs::path>& inputs,
   return distinct;
 }
 
-json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances,
-                 const BootstrapConfig& bootstrap, Correction correction,
-                 std::vector<std::string> contenders,
-                 const std::vector<std::string>& matchAssignments) {
+json historyData(std::vector<RunResults> runs, const Gate& gate) {
+  std::vector<Tolerance> tolerances = gate.tolerances;
+  std::vector<std::string> contenders = gate.contenders;
+  const BootstrapConfig& bootstrap = gate.bootstrap;
+  const Correction correction = gate.correction;
   // --match: a contender relabelled on purpose between two runs (a parameter changed in the
   // command CI runs) is one series, and its two labels are compared where one follows the other.
   const std::set<std::string> all = labelsOf(runs);
-  const std::vector<LabelMatch> labelMatches = historyMatches(matchAssignments, all);
+  const std::vector<LabelMatch> labelMatches = historyMatches(gate.matches, all);
   // --denoisers: only the named contenders' pairs; a name no run has is a mistake.
   if (!contenders.empty()) {
     for (std::string& name : contenders) {
@@ -544,54 +551,48 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
   json matchedAt =
       json::object();  // "A=B" (--match, the runs' labels) -> the comparisons it paired
   json historyWarnings = json::array();
-  bool tooManyRows = false;
+  struct WarningAt {
+    size_t index;        // in historyWarnings
+    size_t comparisons;  // how many comparisons it concerns
+  };
+  std::map<GateWarning, WarningAt> warned;
+  // Each comparison's gate: the tolerances as read above, the runs already cut to --denoisers and
+  // the --match pairs those two runs meet.
+  Gate step = gate;
+  step.tolerances = tolerances;
+  step.contenders.clear();
+  step.matches.clear();
   for (size_t i = 1; i < runs.size(); ++i) {
     // Before the contenders named with --denoisers existed (the previous run has none of them),
     // there is nothing of theirs to gate: no comparison, rather than "nothing compared".
     if (!contenders.empty() && runs[i - 1].pairs.empty()) continue;
     ++comparisons;
-    // Runs measured under other settings: `arena compare` refuses them (exit 2) unless told to
-    // compare anyway, so the gate fails there, saying why, and compares nothing.
-    const bool bothKnown =
-        !runs[i - 1].settings.measurement().empty() && !runs[i].settings.measurement().empty();
-    if (const std::vector<std::string> differ =
-            bothKnown ? settingsDifferences(runs[i - 1], runs[i], tolerances)
-                      : std::vector<std::string>{};
-        !differ.empty()) {
-      std::string list;
-      for (const std::string& d : differ) list += (list.empty() ? "" : "; ") + d;
-      notComparable(i, "run with other settings (arena compare refuses them): " + list);
-      continue;
-    }
     // The --match pairs this comparison meets: the first label before, the second in its place.
     std::map<std::string, std::string> matched;
     const std::set<std::string> before = labelsOf(runs[i - 1]), now = labelsOf(runs[i]);
     for (const LabelMatch& m : labelMatches)
       if (before.count(m.from) && !before.count(m.to) && now.count(m.to) && !now.count(m.from))
         matched[m.from] = m.to;
-    // A run the gate refuses to judge (a summary that disagrees with its tiles) fails the gate
+    // The judgement `arena compare previous current` makes (metrics/gate.hpp), on the runs as
+    // --denoisers left them. What it refuses (other settings, data it refuses) fails the gate
     // there, saying why; the dashboard of the other runs is still built.
-    std::vector<ComparisonRow> rows;
-    try {
-      rows = compareRuns(runs[i - 1], runs[i], tolerances, bootstrap, correction, matched);
-    } catch (const Error& e) {
-      notComparable(i, std::string("arena compare refuses these runs: ") + e.what());
+    const GateJudgement judged = judgeRuns(runs[i - 1], runs[i], step, matched);
+    const GateSides sides{runDescription(runs[i - 1]), runDescription(runs[i])};
+    // Its warnings, each kind once (with how many comparisons it concerns): a history of a hundred
+    // runs would otherwise say one thing a hundred times.
+    for (GateNotice& notice : gateWarnings(judged, sides, /*multiLine=*/false)) {
+      auto [at, first] = warned.try_emplace(notice.kind, WarningAt{historyWarnings.size(), 0});
+      ++at->second.comparisons;
+      if (first)
+        historyWarnings.push_back("comparing " + sides.candidate +
+                                  " with the run before: " + notice.text);
+    }
+    if (judged.refusal != GateRefusal::None) {
+      notComparable(i, refusalText(judged, sides, /*multiLine=*/false));
       continue;
     }
+    const std::vector<ComparisonRow>& rows = judged.rows;
     for (const auto& [from, to] : matched) matchedAt[from + "=" + to].push_back(i);
-    // As `arena compare` warns: beyond this many rows the correction can resolve none.
-    if (correction == Correction::Holm)
-      if (const size_t family =
-              size_t(std::count_if(rows.begin(), rows.end(),
-                                   [](const ComparisonRow& r) { return std::isfinite(r.pValue); }));
-          family > holmResolvableRows(bootstrap.confidence) && !tooManyRows) {
-        tooManyRows = true;
-        historyWarnings.push_back(
-            std::to_string(family) + " rows judged together in a comparison: more than " +
-            std::to_string(holmResolvableRows(bootstrap.confidence)) +
-            ", beyond which the correction can resolve no row at this confidence; narrow "
-            "the gate with --metric or --denoisers, or use --correction none");
-      }
     for (const ComparisonRow& row : rows) {
       if (row.verdict == "ok") continue;
       json change = comparisonJson({row})[0];
@@ -617,6 +618,11 @@ json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances
       changes.push_back(change);
     }
   }
+  for (const auto& [kind, at] : warned)
+    if (at.comparisons > 1)
+      historyWarnings[at.index] = historyWarnings[at.index].get<std::string>() + " (and " +
+                                  std::to_string(at.comparisons - 1) +
+                                  " more comparison(s) of the history)";
   json metricList = json::array();
   for (const MetricDefinition* m : metricCatalog())
     if (std::find(metrics.begin(), metrics.end(), m->name) != metrics.end())
@@ -676,8 +682,7 @@ HistorySummary writeHistory(const HistoryOptions& o) {
                                        {"history.js", "history.js"}};
   checkPageAssets(web, modules, files);
   std::vector<std::string> warnings;
-  const json data = historyData(loadHistory(o.inputs, &warnings), o.tolerances, o.bootstrap,
-                                o.correction, o.contenders, o.matches);
+  const json data = historyData(loadHistory(o.inputs, &warnings), o.gate);
   copyPageAssets(web, modules, files, o.out);
   writeTextAtomically(o.out / "history-data.js",
                       "// Generated by `arena history`; read by history.js.\n"

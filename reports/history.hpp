@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "metrics/compare.hpp"
+#include "metrics/gate.hpp"
 
 namespace arena {
 
@@ -23,40 +24,33 @@ std::vector<RunResults> loadHistory(const std::vector<std::filesystem::path>& in
 
 // The dashboard's data: runs [{name, created, commit}], per scene x label x metric the values (and
 // intervals where the runs have them) per run, the tolerance of each gated metric, and `changes`:
-// every row of compareRuns(run i-1, run i, tolerances) whose verdict is not "ok", with the run
-// index i and `fails` (failsGate: the gate's own rule, not restated here); `failing` counts those
-// rows, `failingComparisons` the comparisons (of `comparisons`) with one; `unresolved` the changes
-// beyond the tolerance within noise, `notJudged` those the gate could not judge (runs read from
-// results.db keep no tiles), `notComparable` the failing comparisons compare refuses (exit 2: other
-// settings, data it refuses); `correction` and `confidence` say how the rows were judged. Empty
-// `tolerances`: compare's defaults.
-// A gated metric neither run of a pair computed is skipped for that pair (runs over months differ
-// in what they computed); one the caller named that no run computed is an Error. `bootstrap` is
-// compare's --confidence (and seed), `correction` its --correction: the dashboard judges as the
-// gate it stands for.
-// `contenders` (--denoisers): only those pairs are gated, and a comparison whose earlier run has
-// none of them (before they existed) is not made.
-// `matches` (--match BASELINE=CANDIDATE, repeatable): a contender relabelled on purpose between
-// runs (`--param svgf.sigmaL=8` added to the command CI runs) stays one series, and where a run
-// with the first label and not the second is followed by one with the second and not the first, the
-// two are compared as `arena compare --match` compares them (naming either label in `contenders`
-// keeps both). A label no run has, one matched twice, or a match never met is an Error.
-nlohmann::json historyData(std::vector<RunResults> runs, std::vector<Tolerance> tolerances,
-                           const BootstrapConfig& bootstrap = {},
-                           Correction correction = Correction::Holm,
-                           std::vector<std::string> contenders = {},
-                           const std::vector<std::string>& matches = {});
+// every row of the gate's judgement of run i against run i-1 (judgeRuns, metrics/gate.hpp: what
+// `arena compare` decides) whose verdict is not "ok", with the run index i and `fails` (failsGate:
+// the gate's own rule, not restated here); `failing` counts those rows, `failingComparisons` the
+// comparisons (of `comparisons`) with one; `unresolved` the changes beyond the tolerance within
+// noise, `notJudged` those the gate could not judge (runs read from results.db keep no tiles),
+// `notComparable` the failing comparisons compare refuses (exit 2: other settings, data it
+// refuses); `correction` and `confidence` say how the rows were judged; `warnings` the judgements'
+// warnings, each kind once (gateWarnings). Empty `gate.tolerances`: compare's defaults. A gated
+// metric neither run of a pair computed is skipped for that pair (runs over months differ in what
+// they computed); one the caller named that no run computed is an Error. `gate` holds compare's
+// options, so the dashboard judges as the gate it stands for
+// (--allow-settings-mismatch: runs of other settings compared, and warned of, not "not
+// comparable"). `gate.contenders` (--denoisers): only those pairs are gated, and a comparison whose
+// earlier run has none of them (before they existed) is not made. `gate.matches` (--match
+// BASELINE=CANDIDATE, repeatable): a contender relabelled on purpose between runs (`--param
+// svgf.sigmaL=8` added to the command CI runs) stays one series, and where a run with the first
+// label and not the second is followed by one with the second and not the first, the two are
+// compared as `arena compare --match` compares them (naming either label in --denoisers keeps
+// both). A label no run has, one matched twice, or a match never met is an Error.
+nlohmann::json historyData(std::vector<RunResults> runs, const Gate& gate = {});
 
 struct HistoryOptions {
   std::vector<std::filesystem::path> inputs;
   std::filesystem::path out;
-  std::vector<Tolerance> tolerances;
-  BootstrapConfig bootstrap;                     // the gate's --confidence
-  Correction correction = Correction::Holm;      // the gate's --correction
-  // The gate's --denoisers: only pairs of these labels or denoiser names (empty: every pair). Runs
-  // over months differ in what they ran: a name no run has is an Error, one some runs lack is not.
-  std::vector<std::string> contenders;
-  std::vector<std::string> matches;              // --match BASELINE=CANDIDATE assignments
+  // The gate's options, as `arena compare` takes them. Its --denoisers: runs over months differ
+  // in what they ran, so a name no run has is an Error, one some runs lack is not.
+  Gate gate;
   std::filesystem::path webDir, nodeModulesDir;  // empty: the report's defaults
 };
 struct HistorySummary {

@@ -1142,7 +1142,7 @@ std::string sweepPointsCsv(const RunResults& results) {
 }
 
 json reportData(const RunResults& results, const fs::path& runDir, const RunResults* baseline,
-                const RegressionGate& gate) {
+                const Gate& gate) {
   const int warmup = results.settings.warmup();
   // Scenes and labels in run order (results.json keeps scenes in an object, sorted by name).
   std::vector<std::string> sceneNames, labels;
@@ -1224,14 +1224,12 @@ json reportData(const RunResults& results, const fs::path& runDir, const RunResu
     // --match: a contender relabelled between the runs compared by the pair of labels named.
     const std::map<std::string, std::string> matches =
         checkLabelMatches(gate.matches, *baseline, results);
-    RunResults gatedBaseline = *baseline, gatedResults = results;
-    if (!gate.contenders.empty())
-      keepContenders(gatedBaseline, gatedResults, gate.contenders, matches);
-    const std::vector<ComparisonRow> rows = compareRuns(
-        gatedBaseline, gatedResults, gate.tolerances, gate.bootstrap, gate.correction, matches);
-    // The run against itself: compare refuses it (every change zero by construction).
-    const bool sameRun = sameRunRecord(*baseline, results);
-    const GateOutcome outcome = gateOutcome(rows);
+    // The judgement `arena compare` makes (metrics/gate.hpp); where it would refuse the runs (the
+    // same run, other settings), the rows are still shown beside why.
+    const GateJudgement judged =
+        judgeRuns(*baseline, results, gate, matches, /*rowsWhenRefused=*/true);
+    const std::vector<ComparisonRow>& rows = judged.rows;
+    const GateSides sides{"the baseline", "this run"};
     json table = comparisonJson(rows);
     // compareRuns leaves the numbers at 0 when one side has no result; say why instead, and keep
     // the side that exists, so "regressed" from a failed pair is not read as a change of +0%.
@@ -1258,23 +1256,23 @@ json reportData(const RunResults& results, const fs::path& runDir, const RunResu
         row["note"] = "the baseline: " + bm.absent;
       }
     }
-    data["regression"] = {
-        {"baseline",
-         {{"name", baseline->name},
-          {"created", baseline->created},
-          {"commit", baseline->environment.value("git_commit", "")},
-          {"revision", baseline->environment.value("revision", "")}}},
-        {"rows", table},
-        {"anyRegression", anyRegression(rows)},
-        {"sameRun", sameRun},
-        {"gate", sameRun ? "could not judge" : gateOutcomeName(outcome)},
-        {"exitCode", sameRun ? 2 : gateExitCode(outcome)},
-        {"confidence", gate.bootstrap.confidence},
-        {"correction", correctionName(gate.correction)},
-        {"rowsJudgedTogether",
-         std::count_if(rows.begin(), rows.end(),
-                       [](const ComparisonRow& r) { return std::isfinite(r.pValue); })},
-        {"settingsDiffer", settingsDifferences(*baseline, results, gate.tolerances)}};
+    data["regression"] = {{"baseline",
+                           {{"name", baseline->name},
+                            {"created", baseline->created},
+                            {"commit", baseline->environment.value("git_commit", "")},
+                            {"revision", baseline->environment.value("revision", "")}}},
+                          {"rows", table},
+                          {"anyRegression", anyRegression(rows)},
+                          {"sameRun", judged.refusal == GateRefusal::SameRun},
+                          {"refused", refusalText(judged, sides, /*multiLine=*/false)},
+                          {"warnings", gateWarningTexts(judged, sides, /*multiLine=*/false)},
+                          {"gate", gateOutcomeName(judged.outcome)},
+                          {"exitCode", gateExitCode(judged.outcome)},
+                          {"confidence", gate.bootstrap.confidence},
+                          {"correction", correctionName(gate.correction)},
+                          {"rowsJudgedTogether", judged.rowsJudgedTogether},
+                          {"settingsDiffer", judged.settingsDiffer},
+                          {"allowSettingsMismatch", gate.allowSettingsMismatch}};
   }
   return data;
 }

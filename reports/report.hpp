@@ -12,23 +12,15 @@
 #include <vector>
 
 #include "metrics/compare.hpp"
+#include "metrics/gate.hpp"
 #include "metrics/run_results.hpp"
 
 namespace arena {
 
-// The regression view's gate, as `arena compare`'s options (empty tolerances: its defaults).
-struct RegressionGate {
-  std::vector<Tolerance> tolerances;
-  BootstrapConfig bootstrap;
-  Correction correction = Correction::Holm;
-  std::vector<std::string> contenders;  // --denoisers: only these (empty: every pair)
-  std::vector<std::string> matches;     // --match BASELINE=CANDIDATE assignments
-};
-
 struct ReportOptions {
   std::filesystem::path run;       // the run directory to report
   std::filesystem::path baseline;  // optional: a run to compare against (regression view)
-  RegressionGate gate;
+  Gate gate;                       // the regression view's: `arena compare`'s options
   std::filesystem::path out;       // where index.html and its files go
   // The page's static files and the npm packages with the browser builds; the defaults are the
   // source tree's, tests point them elsewhere.
@@ -58,7 +50,7 @@ struct ReportSummary {
 // that exist are offered to the viewer); `baseline` may be null, and is judged with `gate`. Pure
 // apart from those look-ups.
 nlohmann::json reportData(const RunResults& results, const std::filesystem::path& runDir,
-                          const RunResults* baseline, const RegressionGate& gate = {});
+                          const RunResults* baseline, const Gate& gate = {});
 
 // A sweep's ablation (reportData's "ablation") as CSV, one line per row and metric, for a paper's
 // table: parameter, value, versus, given (the other grid parameters' settings where the row is one

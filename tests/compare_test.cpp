@@ -119,6 +119,14 @@ TEST(CompareContract, RunsOfOtherSettingsAreRefusedUnlessAllowed) {
                                         "settings.render.lowresSpp: \"absent\" vs 4"}))
         << reads;
   }
+  // A pair that failed in either run has no numbers to compare, and records nothing of what it
+  // read: no difference (the browser test's baseline read "differ" beside its failed pair).
+  RunResults failed = withLowres;
+  failed.pairs[0].status = "failed";
+  failed.pairs[0].error = "injected";
+  failed.pairs[0].detail.erase("readsLowres");
+  EXPECT_TRUE(settingsDifferences(ra, failed).empty());
+  EXPECT_TRUE(settingsDifferences(failed, ra).empty());
   settings["render"]["lowresFactor"] = 4;
   otherLowres.settings = RunSettings::fromJson(settings, "test");
   EXPECT_EQ(settingsDifferences(withLowres, otherLowres),
@@ -154,7 +162,7 @@ TEST(CompareContract, ACiStepTellsARegressionFromWhatTheGateCouldNotJudge) {
   r = contract::arenaCli("compare --metric relMse,dssim " + B + " " + A);
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("is older than the baseline"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("are the arguments swapped?"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("are the two swapped?"), std::string::npos) << r.output;
   // Only the contenders named; a name neither run has is refused with the labels they have.
   r = contract::arenaCli("compare " + A + " " + B + " --metric relMse --denoisers eaw --json");
   ASSERT_EQ(r.status, 0) << r.output;

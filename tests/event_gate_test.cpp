@@ -399,7 +399,7 @@ TEST(EventGate, TheDashboardFlagsAndDrawsAnEventsFigure) {
   json fastWithCi = fast;
   fastWithCi["ci95"] = {{"lagEnergy", {1.0, 2.0}}};
   const json data = historyData({runWith({fastWithCi}, "a"), runWith({slow}, "b")},
-                                {{"ghosting.lagEnergy", 0.02}});
+                                {{{"ghosting.lagEnergy", 0.02}}});
   const json& s = data["series"]["s"]["temporal"]["ghosting@5.lagEnergy"];
   ASSERT_TRUE(s.is_object()) << data["series"].dump();
   EXPECT_EQ(s["value"], json({fast["lagEnergy"], slow["lagEnergy"]}));
@@ -418,8 +418,8 @@ TEST(EventGate, TheDashboardFlagsAndDrawsAnEventsFigure) {
   json lagging = slow;
   lagging["lagEnergy"] = nullptr;
   lagging["lagAbsent"] = "the method never settled after the event at frame 1";
-  const json gap =
-      historyData({runWith({fast}, "a"), runWith({lagging}, "b")}, {{"ghosting.lagEnergy", 0.02}});
+  const json gap = historyData({runWith({fast}, "a"), runWith({lagging}, "b")},
+                               {{{"ghosting.lagEnergy", 0.02}}});
   EXPECT_EQ(gap["series"]["s"]["temporal"]["ghosting@5.lagEnergy"]["value"],
             json({fast["lagEnergy"], nullptr}));
   ASSERT_EQ(gap["absent"].size(), 1u) << gap["absent"].dump();
@@ -431,7 +431,7 @@ TEST(EventGate, TheDashboardFlagsAndDrawsAnEventsFigure) {
   RunResults a = runWith({}, "a"), b = runWith({}, "b");
   a.keepsTiles = b.keepsTiles = false;
   const std::string why = test::errorOf([&] {
-    historyData({a, b}, {{"ghosting.lagEnergy", 0.02}});
+    historyData({a, b}, {{{"ghosting.lagEnergy", 0.02}}});
   });
   EXPECT_NE(why.find("--metric ghosting.lagEnergy: no run computed it"), std::string::npos) << why;
   EXPECT_NE(why.find("results.db keeps none, give `arena history` the run directories"),

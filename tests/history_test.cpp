@@ -50,7 +50,7 @@ json historyRun(int i, int jump) {
           {"name", "run" + std::to_string(i)},
           {"created", created},
           {"environment", {{"git_commit", "abc" + std::to_string(i)}}},
-          {"settings", json::object()},
+          {"settings", {{"warmup", 2}}},
           {"scenes", json::object()},
           {"pairs", pairs}};
 }
@@ -68,7 +68,7 @@ TEST(History, MarksWhatCompareSaysRunByRun) {
   std::vector<RunResults> runs;
   for (int i = 0; i < 8; ++i) runs.push_back(test::typed(historyRun(i, 5)));
   const std::vector<Tolerance> tolerances = {{"relMse", 0.02}, {"ssim", 0.02}};
-  const json data = historyData(runs, tolerances);
+  const json data = historyData(runs, {tolerances});
   ASSERT_EQ(data["runs"].size(), 8u);
   EXPECT_EQ(data["runs"][5]["commit"], "abc5");
   // The 10% jump at run 5 is the only change beyond the 2% tolerance (the wobble is 0.5%).
@@ -107,7 +107,7 @@ TEST(History, MarksWhatCompareSaysRunByRun) {
     }
     both.push_back(test::typed(r));
   }
-  const json all = historyData(both, tolerances);
+  const json all = historyData(both, {tolerances});
   size_t failingRows = 0;
   std::set<int> failingRuns;
   for (const json& c : all["changes"])
@@ -125,10 +125,10 @@ TEST(History, MarksWhatCompareSaysRunByRun) {
   BootstrapConfig strict;
   strict.confidence = 0.99999;
   ASSERT_EQ(holmResolvableRows(strict.confidence), 0u);
-  const json unresolvable = historyData(both, tolerances, strict);
+  const json unresolvable = historyData(both, {tolerances, strict});
   ASSERT_EQ(unresolvable["warnings"].size(), 1u) << unresolvable["warnings"].dump();
   EXPECT_NE(unresolvable["warnings"][0].get<std::string>().find(
-                "rows judged together in a comparison: more than 0, beyond which the correction "
+                "rows judged together: more than 0, beyond which the correction "
                 "can resolve no row"),
             std::string::npos);
   // Series per scene x label x metric, one slot per run; gated metrics carry their tolerance.
@@ -147,7 +147,7 @@ TEST(History, MarksWhatCompareSaysRunByRun) {
   // gate it would apply.
   for (const size_t count : {size_t(8), size_t(1)}) {
     const std::vector<RunResults> some(runs.begin(), runs.begin() + long(count));
-    const json zero = historyData(some, {{"relMse", 0.0}});
+    const json zero = historyData(some, {{{"relMse", 0.0}}});
     bool seen = false;
     for (const json& m : zero["metrics"])
       if (m["name"] == "relMse") {
@@ -163,18 +163,17 @@ TEST(History, MarksWhatCompareSaysRunByRun) {
   for (json& p : moved["pairs"]) p["scene"] = "elsewhere";
   std::vector<RunResults> withMove = runs;
   withMove.push_back(test::typed(moved));
-  const json movedData = historyData(withMove, tolerances);
+  const json movedData = historyData(withMove, {tolerances});
   EXPECT_FALSE(changedRuns(movedData, "svgf", "*").empty());
   EXPECT_GT(movedData["failing"].get<size_t>(), failing);
   // A run measured under other settings: not comparable, as arena compare refuses it; the gate
   // fails there and compares nothing.
   json last = historyRun(7, 5), otherWarmup = historyRun(8, 5);
-  last["settings"] = {{"warmup", 1}};
-  otherWarmup["settings"] = {{"warmup", 2}};
+  otherWarmup["settings"] = {{"warmup", 3}};
   std::vector<RunResults> withOther(runs.begin(), runs.begin() + 7);
   withOther.push_back(test::typed(last));
   withOther.push_back(test::typed(otherWarmup));
-  const json otherData = historyData(withOther, tolerances);
+  const json otherData = historyData(withOther, {tolerances});
   int notComparable = 0;
   for (const json& c : otherData["changes"])
     if (c["run"] == 8) {
@@ -184,6 +183,31 @@ TEST(History, MarksWhatCompareSaysRunByRun) {
       ++notComparable;
     }
   EXPECT_EQ(notComparable, 1);
+  // --allow-settings-mismatch (a warm-up changed on purpose in the command CI runs): compared, as
+  // `arena compare --allow-settings-mismatch` compares them, and said once.
+  Gate allowing{tolerances};
+  allowing.allowSettingsMismatch = true;
+  const json allowed = historyData(withOther, allowing);
+  for (const json& c : allowed["changes"]) EXPECT_NE(c["verdict"], "not comparable") << c;
+  EXPECT_EQ(allowed["notComparable"], 0);
+  ASSERT_EQ(allowed["warnings"].size(), 1u) << allowed["warnings"];
+  EXPECT_NE(allowed["warnings"][0].get<std::string>().find(
+                "comparing runs with different settings (baseline vs candidate): settings.warmup: "
+                "2 vs 3"),
+            std::string::npos)
+      << allowed["warnings"];
+  // A run that records no settings (older than the record) cannot be checked: compared, and said.
+  json unrecorded = historyRun(8, 5);
+  unrecorded["settings"] = json::object();
+  std::vector<RunResults> withUnrecorded(runs.begin(), runs.begin() + 8);
+  withUnrecorded.push_back(test::typed(unrecorded));
+  const json unchecked = historyData(withUnrecorded, {tolerances});
+  EXPECT_EQ(unchecked["notComparable"], 0);
+  ASSERT_EQ(unchecked["warnings"].size(), 1u) << unchecked["warnings"];
+  EXPECT_NE(unchecked["warnings"][0].get<std::string>().find(
+                "the run run8 of 2025-01-01T00:08:00Z records no settings"),
+            std::string::npos)
+      << unchecked["warnings"];
 }
 
 // A run read from results.db keeps the settings it recorded: beside a run directory of the same
@@ -249,7 +273,7 @@ TEST(History, MatchJoinsARelabelledContenderAndComparesIt) {
     runs.push_back(test::typed(r));
   }
   const std::vector<Tolerance> tolerances = {{"relMse", 0.02}};
-  const json split = historyData(runs, tolerances);
+  const json split = historyData(runs, {tolerances});
   EXPECT_TRUE(split["series"]["s"].contains("svgf[sigmaL=8]"));
   bool missing = false;
   for (const json& c : split["changes"])
@@ -259,7 +283,7 @@ TEST(History, MatchJoinsARelabelledContenderAndComparesIt) {
 
   // Typed as a user would type it: the number another way.
   const json data =
-      historyData(runs, tolerances, {}, Correction::Holm, {}, {"svgf=svgf[sigmaL=8.0]"});
+      historyData(runs, {tolerances, {}, Correction::Holm, {}, {"svgf=svgf[sigmaL=8.0]"}});
   const json& series = data["series"]["s"];
   EXPECT_FALSE(series.contains("svgf[sigmaL=8]")) << series.dump().substr(0, 300);
   ASSERT_TRUE(series.contains("svgf"));
@@ -292,7 +316,7 @@ TEST(History, MatchJoinsARelabelledContenderAndComparesIt) {
   // Naming either label with --denoisers keeps the contender on both sides of the change.
   for (const char* name : {"svgf[sigmaL=8]", "svgf"}) {
     const json only =
-        historyData(runs, tolerances, {}, Correction::Holm, {name}, {"svgf=svgf[sigmaL=8]"});
+        historyData(runs, {tolerances, {}, Correction::Holm, {name}, {"svgf=svgf[sigmaL=8]"}});
     EXPECT_EQ(only["comparisons"], 3) << name;
     EXPECT_EQ(only["series"]["s"].size(), 1u) << name << only["series"].dump().substr(0, 300);
     EXPECT_EQ(only["matches"], json({{"svgf=svgf[sigmaL=8]", {2}}})) << name;
@@ -311,7 +335,7 @@ TEST(History, MatchThatCannotApplyIsRefusedNamingIt) {
     runs.push_back(test::typed(r));
   }
   const auto error = [&](std::vector<RunResults> rs, const std::vector<std::string>& m) {
-    return test::errorOf([&] { historyData(std::move(rs), {}, {}, Correction::Holm, {}, m); });
+    return test::errorOf([&] { historyData(std::move(rs), {{}, {}, Correction::Holm, {}, m}); });
   };
   const auto has = [](const std::string& e, const std::string& part) {
     return e.find(part) != std::string::npos;
@@ -364,7 +388,7 @@ TEST(History, MatchThatCannotApplyIsRefusedNamingIt) {
   e = error(runs, {"svgf=svgf[sigmaL=8]"});
   EXPECT_EQ(e, "(no error)");
   e = test::errorOf([&] {
-    historyData(runs, {}, {}, Correction::Holm, {"passthrough"}, {"svgf=svgf[sigmaL=8]"});
+    historyData(runs, {{}, {}, Correction::Holm, {"passthrough"}, {"svgf=svgf[sigmaL=8]"}});
   });
   EXPECT_TRUE(has(e, "history: --match svgf=svgf[sigmaL=8]: --denoisers keeps neither label")) << e;
   // Brackets that do not pair up are no assignment (an extra ']' read as part of a label).
@@ -373,9 +397,9 @@ TEST(History, MatchThatCannotApplyIsRefusedNamingIt) {
   e = error(runs, {"svgf[sigmaL=8=svgf"});
   EXPECT_TRUE(has(e, "its brackets do not pair up")) << e;
   // --denoisers typed otherwise names the runs' label; one no run has lists theirs.
-  e = test::errorOf([&] { historyData(runs, {}, {}, Correction::Holm, {"svgf[sigmaL=8.0]"}); });
+  e = test::errorOf([&] { historyData(runs, {{}, {}, Correction::Holm, {"svgf[sigmaL=8.0]"}}); });
   EXPECT_EQ(e, "(no error)");
-  e = test::errorOf([&] { historyData(runs, {}, {}, Correction::Holm, {"svgf[sigmaL=7]"}); });
+  e = test::errorOf([&] { historyData(runs, {{}, {}, Correction::Holm, {"svgf[sigmaL=7]"}}); });
   EXPECT_TRUE(has(e,
                   "history: --denoisers svgf[sigmaL=7]: no run has a pair of that label or "
                   "denoiser (their labels: passthrough, svgf, svgf[sigmaL=8])"))
@@ -399,7 +423,7 @@ TEST(History, AChainOfMatchesIsOneSeries) {
   for (const std::vector<std::string>& contenders :
        {std::vector<std::string>{}, {"svgf"}, {"svgf[sigmaL=8]"}, {"svgf[sigmaL=9]"}}) {
     const json data =
-        historyData(runs, {{"relMse", 0.02}}, {}, Correction::Holm, contenders, chain);
+        historyData(runs, {{{"relMse", 0.02}}, {}, Correction::Holm, contenders, chain});
     const std::string which = contenders.empty() ? "all" : contenders[0];
     ASSERT_TRUE(data["series"]["s"].contains("svgf")) << which;
     EXPECT_EQ(data["series"]["s"].size(), contenders.empty() ? 2u : 1u)
@@ -498,9 +522,15 @@ TEST(History, RunsFromADatabaseKeepTheirScenesSizes) {
     if (c["verdict"] == "not comparable")
       why.push_back(std::to_string(c["run"].get<int>()) + " " + c["note"].get<std::string>());
   ASSERT_EQ(why.size(), 2u) << data["changes"].dump();
-  EXPECT_NE(why[0].find("2 run with other settings"), std::string::npos) << why[0];
+  EXPECT_NE(why[0].find("2 the run run1 of 2025-01-01T00:01:00Z and the run run2 of "
+                        "2025-01-01T00:02:00Z were run with different settings"),
+            std::string::npos)
+      << why[0];
   EXPECT_NE(why[0].find("scenes.s.width: 64 vs 96"), std::string::npos) << why[0];
-  EXPECT_NE(why[1].find("3 run with other settings"), std::string::npos) << why[1];
+  EXPECT_NE(why[1].find("3 the run run2 of 2025-01-01T00:02:00Z and the run run3 of "
+                        "2025-01-01T00:03:00Z were run with different settings"),
+            std::string::npos)
+      << why[1];
   EXPECT_NE(why[1].find("scenes.s.width: 96 vs 64"), std::string::npos) << why[1];
   EXPECT_NE(why[1].find("scenes.s.frames: 16 vs 12"), std::string::npos) << why[1];
 }
@@ -513,7 +543,7 @@ TEST(History, RunsFromADatabaseKeepTheirScenesSizes) {
 TEST(History, CountsWhatItCouldNotResolveAndRefusesAMetricNoRunComputed) {
   const fs::path dir = test::freshDir("history_unresolved");
   for (int i = 0; i < 4; ++i) appendToDatabase(dir / "results.db", test::typed(historyRun(i, 2)));
-  const json data = historyData(loadHistory({dir / "results.db"}), {{"relMse", 0.02}});
+  const json data = historyData(loadHistory({dir / "results.db"}), {{{"relMse", 0.02}}});
   EXPECT_EQ(data["failing"], 0);
   EXPECT_EQ(data["failingComparisons"], 0);
   EXPECT_EQ(data["comparisons"], 3);
@@ -524,7 +554,7 @@ TEST(History, CountsWhatItCouldNotResolveAndRefusesAMetricNoRunComputed) {
   EXPECT_EQ(data["confidence"], 0.95);
   EXPECT_EQ(changedRuns(data, "svgf", "relMse"), std::vector<int>{2});
   const std::string e = test::errorOf([&] {
-    historyData(loadHistory({dir / "results.db"}), {{"ldrFlip", 0.02}});
+    historyData(loadHistory({dir / "results.db"}), {{{"ldrFlip", 0.02}}});
   });
   EXPECT_NE(e.find("history: --metric ldrFlip: no run computed it"), std::string::npos) << e;
   // An improvement the gate could not judge is listed as a change but not counted: it could never
@@ -536,7 +566,7 @@ TEST(History, CountsWhatItCouldNotResolveAndRefusesAMetricNoRunComputed) {
     if (i >= 2) r["pairs"][1]["summary"]["relMse"] = stat(relMse / 1.21);  // 10% better, not worse
     appendToDatabase(better / "results.db", test::typed(r));
   }
-  const json improved = historyData(loadHistory({better / "results.db"}), {{"relMse", 0.02}});
+  const json improved = historyData(loadHistory({better / "results.db"}), {{{"relMse", 0.02}}});
   EXPECT_EQ(improved["notJudged"], 0) << improved["changes"].dump();
   bool listed = false;
   for (const json& c : improved["changes"]) listed |= c["verdict"] == "not judged";
@@ -552,13 +582,14 @@ TEST(History, GatesOnlyTheNamedContenderFromWhenItExists) {
     if (i < 2) r["pairs"].erase(1);  // svgf first ran in run 2
     runs.push_back(test::typed(r));
   }
-  const json data = historyData(runs, {{"relMse", 0.02}}, {}, Correction::Holm, {"svgf"});
+  const json data = historyData(runs, {{{"relMse", 0.02}}, {}, Correction::Holm, {"svgf"}});
   EXPECT_EQ(data["comparisons"], 2) << data["changes"].dump();  // 3 against 2, 4 against 3
   EXPECT_EQ(data["failingComparisons"], 0) << data["changes"].dump();
   EXPECT_FALSE(data["series"]["s"].contains("passthrough"));
   EXPECT_TRUE(data["series"]["s"].contains("svgf"));
-  const std::string e =
-      test::errorOf([&] { historyData(runs, {}, {}, Correction::Holm, {"reblur"}); });
+  const std::string e = test::errorOf([&] {
+    historyData(runs, {{}, {}, Correction::Holm, {"reblur"}});
+  });
   EXPECT_NE(e.find("history: --denoisers reblur: no run has a pair of that label or denoiser"),
             std::string::npos)
       << e;
@@ -604,7 +635,7 @@ TEST(History, ReadsRunDirectoriesAndDatabasesInTimeOrder) {
     }
   EXPECT_TRUE(found);
   // The jump at run 3 is marked whichever container held the runs.
-  const json data = historyData(runs, {{"relMse", 0.02}});
+  const json data = historyData(runs, {{{"relMse", 0.02}}});
   EXPECT_EQ(changedRuns(data, "svgf", "relMse"), std::vector<int>{3}) << data["changes"].dump();
 }
 

@@ -853,7 +853,7 @@ TEST(Report, BaselineGivesCompareVerdicts) {
   EXPECT_EQ(data["regression"]["exitCode"], 1);
   EXPECT_EQ(data["regression"]["correction"], "holm");
   // The gate's options reach the view: a tolerance of 25% passes the +20% change.
-  RegressionGate loose;
+  Gate loose;
   loose.tolerances = gateTolerances({{"relMse", 0.25}});
   loose.correction = Correction::None;
   const json passed =
@@ -870,7 +870,7 @@ TEST(Report, BaselineGivesCompareVerdicts) {
   EXPECT_EQ(passed["regression"]["gate"], "regressed");
   EXPECT_EQ(passed["regression"]["correction"], "none");
   // The gate's --denoisers: only that contender's rows.
-  RegressionGate one;
+  Gate one;
   one.contenders = {"passthrough"};
   const json only =
       reportData(test::typed(cand), test::freshDir("report_regression_one"), &baseRun, one);
@@ -882,6 +882,34 @@ TEST(Report, BaselineGivesCompareVerdicts) {
   EXPECT_TRUE(itself["regression"]["sameRun"].get<bool>());
   EXPECT_EQ(itself["regression"]["gate"], "could not judge");
   EXPECT_EQ(itself["regression"]["exitCode"], 2);
+  // A baseline measured under other settings: compare refuses it (exit 2) unless told to compare
+  // anyway, and the view's verdict says the same (it read "regressed", exit 1, beside a note that
+  // compare would refuse); its rows are still shown. Allowed, it is judged, and warned of.
+  json otherWarmup = base;
+  otherWarmup["settings"]["warmup"] = 4;
+  const RunResults otherRun = test::typed(otherWarmup);
+  const json refused = reportData(test::typed(cand), test::freshDir("report_regression_other"),
+                                  &otherRun)["regression"];
+  EXPECT_EQ(refused["gate"], "could not judge") << refused.dump();
+  EXPECT_EQ(refused["exitCode"], 2);
+  EXPECT_NE(refused["refused"].get<std::string>().find(
+                "the baseline and this run were run with different settings (baseline vs "
+                "candidate): settings.warmup: 4 vs 2; their numbers are not comparable"),
+            std::string::npos)
+      << refused["refused"];
+  EXPECT_FALSE(refused["rows"].empty());
+  EXPECT_TRUE(refused["warnings"].empty()) << refused["warnings"];
+  Gate allowing;
+  allowing.allowSettingsMismatch = true;
+  const json allowed = reportData(test::typed(cand), test::freshDir("report_regression_allowed"),
+                                  &otherRun, allowing)["regression"];
+  EXPECT_EQ(allowed["gate"], "regressed") << allowed.dump();
+  EXPECT_EQ(allowed["refused"], "");
+  ASSERT_EQ(allowed["warnings"].size(), 1u) << allowed["warnings"];
+  EXPECT_NE(allowed["warnings"][0].get<std::string>().find(
+                "comparing runs with different settings (baseline vs candidate): settings.warmup"),
+            std::string::npos)
+      << allowed["warnings"];
   // The same contender under another label (a sweep's grid point against a plain run's default):
   // compare matches it by denoiser and parameters, and the page shows the candidate's figures
   // (it said "this run: not measured" beside compare's verdict).
@@ -906,11 +934,11 @@ TEST(Report, BaselineGivesCompareVerdicts) {
   for (json& p : base3["pairs"])
     if (p["label"] == "svgf[a=0]") p["label"] = "svgf-before", p["params"] = {{"a", 5}};
   const RunResults base3Run = test::typed(base3);
-  RegressionGate matched;
+  Gate matched;
   matched.matches = {"svgf-before=svgf[a=0]"};
   for (const bool ask : {false, true}) {
     const json view = reportData(test::typed(cand), test::freshDir("report_regression_match"),
-                                 &base3Run, ask ? matched : RegressionGate{});
+                                 &base3Run, ask ? matched : Gate{});
     std::string verdict;
     for (const json& r : view["regression"]["rows"])
       if (r["scene"] == "static" && r["label"] == "svgf-before" &&

@@ -54,6 +54,9 @@
         (H.correction === 'holm'
           ? ', and it stays resolved among all the rows of its comparison judged together (Holm\'s step-down correction: with many rows, some would be resolved by noise alone).'
           : ' (each row alone, no correction for the many rows of a comparison).');
+    // What the verdicts rest on besides their rows, as `arena compare` warns of it (runs compared
+    // across other settings, other references, ...): each kind once.
+    $('history-warnings').replaceChildren(...(H.warnings || []).map((w) => el('li', { text: w })));
   }
 
   function changeTable(rows, cls) {

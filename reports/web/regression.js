@@ -91,30 +91,23 @@
                    b.commit ? `, commit ${b.commit})` :
                        b.created ? ')' :
                                    ''}. `,
-               R.sameRun ? el('b', {
+               // Where compare would refuse the runs (the same run, other settings, data it
+               // refuses), the gate's own sentence says why; the rows below are still shown.
+               R.refused ? el('b', {
                  class: 'worse',
-                 text: '`arena compare` would refuse these runs (exit 2): the baseline is this run itself, so every change is zero by construction.'
+                 text: `\`arena compare\` would refuse these runs (exit 2): ${R.refused}.`
                }) :
-               (R.settingsDiffer || []).length ? el('b', {
-                 class: 'worse',
-                 text: '`arena compare` would refuse these runs (exit 2): their settings differ.'
-               }) :
-                                                 el('b', {
-                                                   class: R.anyRegression ? 'worse' : 'best',
-                                                   text: R.gate === 'could not judge' ?
-                                                       '`arena compare` could not judge these runs (exit 2).' :
-                                                       R.anyRegression ?
-                                                       '`arena compare` would fail (exit 1).' :
-                                                       '`arena compare` would pass.'
-                                                 })),
-            (R.settingsDiffer || []).length ? el('p', {
-              class: 'warnings',
-              text:
-                  `The runs' settings differ (baseline vs this run), so their numbers are not comparable: ${
-                      R.settingsDiffer.join(
-                          '; ')}. \`arena compare\` refuses this without --allow-settings-mismatch.`
-            }) :
-                                              null,
+                           el('b', {
+                             class: R.anyRegression ? 'worse' : 'best',
+                             text: R.gate === 'could not judge' ?
+                                 '`arena compare` could not judge these runs (exit 2).' :
+                                 R.anyRegression ? '`arena compare` would fail (exit 1).' :
+                                                   '`arena compare` would pass.'
+                           })),
+            // What the verdict rests on besides its rows, as compare warns of it.
+            (R.warnings || []).length ?
+                el('ul', {class: 'warnings'}, ...R.warnings.map((w) => el('li', {text: w}))) :
+                null,
             el('p', {
               class: 'note',
               text: `Verdicts: ${

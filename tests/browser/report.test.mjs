@@ -9,7 +9,7 @@
 // reports/node_modules.
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
-import { execFileSync } from 'node:child_process';
+import { execFileSync, spawnSync } from 'node:child_process';
 import { createRequire } from 'node:module';
 import fs from 'node:fs';
 import os from 'node:os';
@@ -460,6 +460,36 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
   await page.screenshot({ path: path.join(ARTIFACTS, 'report.png'), fullPage: true });
   assert.deepEqual(problems, []);
   await page.close();
+
+  // (6) A baseline measured under another warm-up: `arena compare` refuses it (exit 2), and so
+  // does the view, with its sentence; given --allow-settings-mismatch, both judge and warn.
+  const otherBase = path.join(work, 'base-other-warmup');
+  fs.cpSync(base, otherBase, { recursive: true });
+  const baseFile = path.join(otherBase, 'results.json');
+  const edited = JSON.parse(fs.readFileSync(baseFile, 'utf8'));
+  edited.settings.warmup = 3;
+  fs.writeFileSync(baseFile, JSON.stringify(edited));
+  for (const allow of [false, true]) {
+    const dir = path.join(work, allow ? 'report-settings-allowed' : 'report-settings-refused');
+    arena('report', run, '--baseline', otherBase, '--out', dir, ...(allow ? ['--allow-settings-mismatch'] : []));
+    const { page: view, problems: viewProblems } = await openReport(dir);
+    const text = await view.locator('#regression-body').innerText();
+    const compare = spawnSync(ARENA, ['compare', otherBase, run, ...(allow ? ['--allow-settings-mismatch'] : [])], { encoding: 'utf8' });
+    if (allow) {
+      assert.doesNotMatch(text, /would refuse/);
+      assert.match(text, /comparing runs with different settings \(baseline vs candidate\): settings\.warmup: 3 vs 4/);
+      assert.notEqual(compare.status, 2, compare.stderr);
+      assert.match(compare.stderr, /warning: comparing runs with different settings/);
+    } else {
+      assert.match(text, /`arena compare` would refuse these runs \(exit 2\): the baseline and this run were run with different settings \(baseline vs candidate\): settings\.warmup: 3 vs 4; their numbers/);
+      assert.ok((await view.locator('#regression-body table tbody tr').count()) >= 1, 'the rows are still shown');
+      assert.equal(compare.status, 2, compare.stdout + compare.stderr);
+      assert.match(compare.stderr, /were run with different settings/);
+    }
+    assert.equal(await view.evaluate(() => window.Arena.D.regression.exitCode), allow ? compare.status : 2);
+    assert.deepEqual(viewProblems, []);
+    await view.close();
+  }
 });
 
 // 10 denoisers x 10 scenes x 100 frames, synthetic (no images): the page must build quickly and
@@ -891,6 +921,37 @@ test('history --match: a contender relabelled from run 40 on stays one series, n
   // One line through all 50 runs, the relabelled ones included.
   const points = await page.$$eval('#history-charts .chart[data-metric="relMse"] g.points_marks path', (ps) => ps.length);
   assert.equal(points, 50);
+  assert.deepEqual(problems, []);
+  await page.close();
+});
+
+test('history --allow-settings-mismatch: a warm-up changed at run 25 is compared there, and the page says so', async () => {
+  const dir = path.join(work, 'history-warmup');
+  const runs = historyRuns(dir, tinyRuns().schema);
+  for (const run of runs.slice(25)) {  // the command CI runs changed its warm-up
+    const file = path.join(run, 'results.json');
+    const r = JSON.parse(fs.readFileSync(file, 'utf8'));
+    r.settings.warmup = 3;
+    fs.writeFileSync(file, JSON.stringify(r));
+  }
+  const out = path.join(work, 'history-allowed');
+  // As `arena compare` refuses runs 24 and 25 (exit 2), the dashboard marks them not comparable.
+  assert.match(arena('history', ...runs, '--out', out), /2 of 49 comparison\(s\) failing .*, 1 of them not comparable/);
+  assert.equal(spawnSync(ARENA, ['compare', runs[24], runs[25]]).status, 2);
+  // Asked to compare anyway, as compare is: judged, and warned of once.
+  const said = spawnSync(ARENA, ['history', ...runs, '--out', out, '--allow-settings-mismatch'], { encoding: 'utf8' });
+  assert.equal(said.status, 0, said.stderr);
+  assert.match(said.stdout, /1 of 49 comparison\(s\) failing `arena compare`'s gate \(1 row\(s\)\)\)/);
+  assert.match(said.stderr, /warning: comparing the run ci-25 of 2025-01-01T00:25:00Z with the run before: comparing runs with different settings \(baseline vs candidate\): settings\.warmup: 2 vs 3/);
+  assert.equal(spawnSync(ARENA, ['compare', runs[24], runs[25], '--allow-settings-mismatch']).status, 0);
+  const page = await context.newPage();
+  const problems = [];
+  page.on('pageerror', (e) => problems.push(`page error: ${e.message}`));
+  await page.goto(pathToFileURL(path.join(out, 'index.html')).href);
+  await page.waitForSelector('body[data-ready]', { timeout: 30000 });
+  assert.deepEqual(await page.$$eval('#history-warnings li', (ls) => ls.map((l) => l.textContent)),
+                   ['comparing the run ci-25 of 2025-01-01T00:25:00Z with the run before: comparing runs with different settings (baseline vs candidate): settings.warmup: 2 vs 3']);
+  assert.deepEqual(await page.$$eval('#flags tr.flag', (rs) => rs.map((r) => r.dataset.run)), ['30']);
   assert.deepEqual(problems, []);
   await page.close();
 });

@@ -1,0 +1,139 @@
+#include "metrics/gate.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include "core/error.hpp"
+
+namespace arena {
+
+namespace {
+
+// Items as a message's tail: one to an indented line, or "; "-separated after a space.
+std::string itemList(const std::vector<std::string>& items, bool multiLine) {
+  std::string text;
+  for (const std::string& item : items)
+    text += multiLine ? "\n  " + item : (text.empty() ? " " : "; ") + item;
+  return text;
+}
+
+}  // namespace
+
+GateJudgement judgeRuns(RunResults baseline, RunResults candidate, const Gate& gate,
+                        const std::map<std::string, std::string>& matches, bool rowsWhenRefused) {
+  GateJudgement j;
+  j.runName = baseline.name;
+  j.baselineCreated = baseline.created;
+  j.candidateCreated = candidate.created;
+  // The same run on both sides (a CI step that copied the candidate into the baseline) would pass
+  // every row by construction.
+  if (sameRunRecord(baseline, candidate)) j.refusal = GateRefusal::SameRun;
+  if (!gate.contenders.empty()) keepContenders(baseline, candidate, gate.contenders, matches);
+  const std::vector<Tolerance> tolerances = gateTolerances(gate.tolerances);
+  // Numbers measured under other settings differ for that reason alone: refused unless asked. A
+  // run that records none (older than the record) cannot be checked: compared, and said.
+  if (baseline.settings.measurement().empty()) j.unrecordedSettings.push_back("baseline");
+  if (candidate.settings.measurement().empty()) j.unrecordedSettings.push_back("candidate");
+  if (j.unrecordedSettings.empty()) {
+    j.settingsDiffer = settingsDifferences(baseline, candidate, tolerances);
+    if (!j.settingsDiffer.empty() && !gate.allowSettingsMismatch && j.refusal == GateRefusal::None)
+      j.refusal = GateRefusal::OtherSettings;
+    // (Runs of other settings render other references anyway: said with the settings.)
+    if (j.settingsDiffer.empty()) j.referencesDiffer = referenceDifferences(baseline, candidate);
+  }
+  // A candidate older than its baseline: the arguments are likely swapped, which turns every
+  // regression into an improvement.
+  j.candidateOlder = !baseline.created.empty() && !candidate.created.empty() &&
+                     candidate.created < baseline.created;
+  if (j.refusal != GateRefusal::None && !rowsWhenRefused) {
+    j.outcome = GateOutcome::CouldNotJudge;
+    return j;
+  }
+  try {
+    j.rows = compareRuns(baseline, candidate, tolerances, gate.bootstrap, gate.correction, matches);
+  } catch (const Error& e) {
+    // A summary that disagrees with its tiles, a metric the caller named that neither run measured:
+    // what `arena compare` refuses (exit 2).
+    if (j.refusal == GateRefusal::None) {
+      j.refusal = GateRefusal::Data;
+      j.refusalDetail = e.what();
+    }
+    j.rows.clear();
+  }
+  j.rowsJudgedTogether =
+      size_t(std::count_if(j.rows.begin(), j.rows.end(),
+                           [](const ComparisonRow& r) { return std::isfinite(r.pValue); }));
+  j.resolvableRows = holmResolvableRows(gate.bootstrap.confidence);
+  j.beyondCorrection =
+      gate.correction == Correction::Holm && j.rowsJudgedTogether > j.resolvableRows;
+  j.outcome = j.refusal != GateRefusal::None ? GateOutcome::CouldNotJudge : gateOutcome(j.rows);
+  return j;
+}
+
+std::string refusalText(const GateJudgement& j, const GateSides& sides, bool multiLine) {
+  switch (j.refusal) {
+    case GateRefusal::None:
+      return "";
+    case GateRefusal::SameRun:
+      return sides.baseline + " and " + sides.candidate + " hold the same run (name " + j.runName +
+             ", created " + j.baselineCreated +
+             "): every change would be zero by construction, and the gate would pass having "
+             "checked nothing (was the candidate copied into the baseline?)";
+    case GateRefusal::OtherSettings:
+      return sides.baseline + " and " + sides.candidate +
+             " were run with different settings (baseline vs candidate):" +
+             itemList(j.settingsDiffer, multiLine) + (multiLine ? "\n" : "; ") +
+             "their numbers are not comparable; pass --allow-settings-mismatch to compare anyway";
+    case GateRefusal::Data:
+      return "arena compare refuses these runs: " + j.refusalDetail;
+  }
+  return "";
+}
+
+std::vector<GateNotice> gateWarnings(const GateJudgement& j, const GateSides& sides,
+                                     bool multiLine) {
+  std::vector<GateNotice> out;
+  if (!j.settingsDiffer.empty() && j.refusal != GateRefusal::OtherSettings)
+    out.push_back({GateWarning::SettingsAllowed,
+                   "comparing runs with different settings (baseline vs candidate):" +
+                       itemList(j.settingsDiffer, multiLine)});
+  for (const std::string& side : j.unrecordedSettings)
+    out.push_back({GateWarning::SettingsUnrecorded,
+                   (side == "baseline" ? sides.baseline : sides.candidate) +
+                       " records no settings (a run older than the record): whether the runs "
+                       "were measured alike (resolution, warm-up, references, ...) is not "
+                       "checked"});
+  if (!j.referencesDiffer.empty())
+    out.push_back(
+        {GateWarning::OtherReferences,
+         "the runs measured these scenes against other references (refined between them, or a "
+         "capture's references rendered again?); part of each change there is the reference's, not "
+         "the denoiser's (run both on one cache state to compare the denoisers alone):" +
+             itemList(j.referencesDiffer, multiLine)});
+  if (j.candidateOlder)
+    out.push_back(
+        {GateWarning::CandidateOlder,
+         sides.candidate + " (created " + j.candidateCreated + ") is older than " + sides.baseline +
+             " (created " + j.baselineCreated +
+             "): are the two swapped? (the baseline is the earlier run: arena compare BASELINE "
+             "CANDIDATE, arena report CANDIDATE --baseline BASELINE)"});
+  if (j.beyondCorrection)
+    out.push_back(
+        {GateWarning::BeyondCorrection,
+         std::to_string(j.rowsJudgedTogether) + " rows judged together: more than " +
+             std::to_string(j.resolvableRows) +
+             ", beyond which the correction can resolve no row at this confidence (its "
+             "smallest threshold lies below what its replicates can show); narrow the gate "
+             "with --metric or --denoisers, or judge each row alone with --correction none"});
+  return out;
+}
+
+std::vector<std::string> gateWarningTexts(const GateJudgement& j, const GateSides& sides,
+                                          bool multiLine) {
+  std::vector<std::string> texts;
+  for (GateNotice& n : gateWarnings(j, sides, multiLine)) texts.push_back(std::move(n.text));
+  return texts;
+}
+
+}  // namespace arena

@@ -1,0 +1,150 @@
+// metrics/gate: one judgement of a candidate run against a baseline, which `arena compare` (its
+// exit code), `arena report --baseline` (the regression view's verdict) and `arena history` (each
+// run against the one before) show alike, case by case: a pass, a regression, the same run twice,
+// runs of other settings refused and allowed, a run that records no settings.
+#include "metrics/gate.hpp"
+
+#include <gtest/gtest.h>
+
+#include "core/error.hpp"
+#include "metrics/results.hpp"
+#include "metrics/tiles.hpp"
+#include "reports/history.hpp"
+#include "reports/report.hpp"
+#include "tests/contract_fixture.hpp"
+#include "tests/test_util.hpp"
+
+namespace arena {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+// A run of one pair (svgf on "s") whose relMSE is `relMse`, with the per-tile data the gate's
+// paired interval resamples (8 frames x 16 tiles around the mean, the mean the summary's).
+json gateRun(const std::string& name, const std::string& created, double relMse,
+             const json& settings = {{"warmup", 2}}) {
+  MetricTiles tiles;
+  for (int f = 2; f < 10; ++f) {
+    TileSums t;
+    for (int k = 0; k < 16; ++k)
+      t.sum.push_back(relMse * (1 + 0.01 * ((f + k) % 4 - 1.5))), t.count.push_back(1);
+    tiles.add(f, std::move(t));
+  }
+  const json stat = {
+      {"mean", relMse}, {"median", relMse}, {"p5", relMse}, {"p95", relMse}, {"frames", 8}};
+  return {{"schema", kResultsSchemaVersion},
+          {"kind", "arena-run"},
+          {"name", name},
+          {"created", created},
+          {"environment", {{"git_commit", "abc"}}},
+          {"settings", settings},
+          {"scenes", json::object()},
+          {"pairs",
+           {{{"scene", "s"},
+             {"denoiser", "svgf"},
+             {"label", "svgf"},
+             {"params", json::object()},
+             {"status", "ok"},
+             {"frames", json::array()},
+             {"summary", {{"relMse", stat}}},
+             {"tiles", {{"relMse", tiles.toJson()}}}}}}};
+}
+
+struct GateCase {
+  const char* what;
+  json baseline, candidate;
+  bool allowSettingsMismatch;
+  GateOutcome expected;
+  GateRefusal refusal;
+  const char* warning;  // a text one of the judgement's warnings holds ("": none)
+};
+
+TEST(Gate, CompareReportAndHistoryJudgeEveryCaseAlike) {
+  const json before = gateRun("before", "2025-01-01T00:00:00Z", 0.05);
+  const std::vector<GateCase> cases = {
+      {"within tolerance", before, gateRun("after", "2025-01-01T00:01:00Z", 0.0505), false,
+       GateOutcome::Pass, GateRefusal::None, ""},
+      {"20% worse", before, gateRun("after", "2025-01-01T00:01:00Z", 0.06), false,
+       GateOutcome::Regressed, GateRefusal::None, ""},
+      {"the same run twice", before, before, false, GateOutcome::CouldNotJudge,
+       GateRefusal::SameRun, ""},
+      {"another warm-up", before, gateRun("after", "2025-01-01T00:01:00Z", 0.06, {{"warmup", 3}}),
+       false, GateOutcome::CouldNotJudge, GateRefusal::OtherSettings, ""},
+      {"another warm-up, allowed", before,
+       gateRun("after", "2025-01-01T00:01:00Z", 0.06, {{"warmup", 3}}), true,
+       GateOutcome::Regressed, GateRefusal::None,
+       "comparing runs with different settings (baseline vs candidate): settings.warmup: 2 vs 3"},
+      {"a candidate that records no settings", before,
+       gateRun("after", "2025-01-01T00:01:00Z", 0.0505, json::object()), false, GateOutcome::Pass,
+       GateRefusal::None, "records no settings"},
+      {"the runs swapped", gateRun("after", "2025-01-01T00:01:00Z", 0.0505), before, false,
+       GateOutcome::Pass, GateRefusal::None, "are the two swapped?"},
+  };
+  for (const GateCase& c : cases) {
+    SCOPED_TRACE(c.what);
+    Gate gate;
+    gate.tolerances = {{"relMse", 0.02}};
+    gate.allowSettingsMismatch = c.allowSettingsMismatch;
+    const RunResults baseline = test::typed(c.baseline), candidate = test::typed(c.candidate);
+    const GateJudgement j = judgeRuns(baseline, candidate, gate, {});
+    EXPECT_EQ(gateOutcomeName(j.outcome), std::string(gateOutcomeName(c.expected)));
+    EXPECT_EQ(int(j.refusal), int(c.refusal));
+    EXPECT_EQ(refusalText(j, {}, false).empty(), c.refusal == GateRefusal::None);
+    const std::vector<std::string> warnings = gateWarningTexts(j, {}, false);
+    if (*c.warning) {
+      ASSERT_EQ(warnings.size(), 1u);
+      EXPECT_NE(warnings[0].find(c.warning), std::string::npos) << warnings[0];
+    } else {
+      EXPECT_TRUE(warnings.empty()) << warnings[0];
+    }
+    // `arena compare` on the two runs' directories exits with the judgement's code.
+    const fs::path dir = test::freshDir("gate_case");
+    saveResults(dir / "baseline", c.baseline);
+    saveResults(dir / "candidate", c.candidate);
+    const contract::CliResult r = contract::arenaCli(
+        "compare --metric relMse " + (dir / "baseline").string() + " " +
+        (c.refusal == GateRefusal::SameRun ? dir / "baseline" : dir / "candidate").string() +
+        (c.allowSettingsMismatch ? " --allow-settings-mismatch" : "") + " 2>&1");
+    EXPECT_EQ(r.status, gateExitCode(c.expected)) << r.output;
+    // (Its lists one item to an indented line, where a page's run on after a space.)
+    std::string oneLine;
+    for (size_t k = 0; k < r.output.size(); ++k)
+      if (r.output.compare(k, 3, "\n  ") == 0)
+        oneLine += ' ', k += 2;
+      else
+        oneLine += r.output[k];
+    if (*c.warning) {
+      EXPECT_NE(oneLine.find(c.warning), std::string::npos) << r.output;
+    }
+    // The report's regression view gives the same verdict and exit code, and the same warnings.
+    const json view = reportData(candidate, dir / "candidate", &baseline, gate)["regression"];
+    EXPECT_EQ(view["gate"], gateOutcomeName(c.expected)) << view.dump();
+    EXPECT_EQ(view["exitCode"], gateExitCode(c.expected));
+    EXPECT_EQ(view["refused"].get<std::string>().empty(), c.refusal == GateRefusal::None);
+    EXPECT_EQ(view["warnings"].size(), warnings.size()) << view["warnings"];
+    // The dashboard of the two fails its one comparison exactly where compare does not pass, and
+    // marks it not comparable exactly where compare refuses the runs.
+    if (c.candidate["created"] < c.baseline["created"]) continue;  // a history orders them itself
+    const json history = historyData({baseline, candidate}, gate);
+    EXPECT_EQ(history["failingComparisons"], c.expected == GateOutcome::Pass ? 0 : 1);
+    EXPECT_EQ(history["notComparable"], c.refusal == GateRefusal::None ? 0 : 1);
+    EXPECT_EQ(history["warnings"].size(), warnings.size()) << history["warnings"];
+  }
+}
+
+// Mistakes in the options are errors, before any judgement (they are not the runs' fault).
+TEST(Gate, AMistakenOptionIsAnErrorNotARefusal) {
+  const RunResults a = test::typed(gateRun("a", "2025-01-01T00:00:00Z", 0.05)),
+                   b = test::typed(gateRun("b", "2025-01-01T00:01:00Z", 0.05));
+  Gate gate;
+  gate.contenders = {"reblur"};
+  EXPECT_NE(test::errorOf([&] { judgeRuns(a, b, gate, {}); }).find("reblur"), std::string::npos);
+  gate.contenders.clear();
+  gate.tolerances = {{"noSuchMetric", 0.02}};
+  EXPECT_NE(test::errorOf([&] { judgeRuns(a, b, gate, {}); }).find("noSuchMetric"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace arena
