@@ -261,15 +261,24 @@ void requireMatchesMet(const std::vector<LabelMatch>& matches, const std::vector
           grew = true;
         }
     }
+    // The assignments that join them, as typed, for the message: a clash through a chain (A=B,
+    // B=C, and a run with A and C) is the chain's, not A=B's alone.
+    std::string chain;
+    size_t links = 0;
+    for (const LabelMatch& o : matches)
+      if (joined.count(o.from)) chain += (links++ ? " and --match " : "--match ") + o.assignment;
     for (size_t i = 0; i < byRun.size(); ++i) {
       std::set<std::string> both;
       for (const std::string& label : joined)
         if (byRun[i].count(label)) both.insert(label);
       if (both.size() > 1)
-        throw Error("history: --match " + m.assignment + ": run " + std::to_string(i) + " (" +
-                    runs[i].source + ") has pairs labelled " + labelList(both) +
-                    ": a run's two contenders cannot be one series (compare that run's pairs by "
-                    "their labels, or leave it out of the history)");
+        throw Error(
+            "history: " + chain +
+            (links > 1 ? ": together they make " + labelList(joined) + " one series, but" : ":") +
+            " run " + std::to_string(i) + " (" + runs[i].source + ") has pairs labelled " +
+            labelList(both) +
+            ": a run's two contenders cannot be one series (compare that run's pairs by "
+            "their labels, or leave it out of the history)");
     }
     if (filtered && where(m.from) == "none" && where(m.to) == "none")
       throw Error("history: --match " + m.assignment +
