@@ -690,6 +690,7 @@ HistorySummary writeHistory(const HistoryOptions& o) {
                                        {"shared.js", "shared.js"},
                                        {"history.js", "history.js"}};
   checkPageAssets(web, modules, files);
+  requireOwnPageFiles(o.out, files, "history-data.js", "history");
   std::vector<std::string> warnings;
   const json data = historyData(loadHistory(o.inputs, &warnings), o.gate);
   copyPageAssets(web, modules, files, o.out);

@@ -85,6 +85,12 @@ void checkPageAssets(const std::filesystem::path& webDir,
 // Refuses an empty --out and one that exists and is not a directory (before any work); `command`
 // ("report", "history") begins the message.
 void requirePageDirectory(const std::filesystem::path& out, const std::string& command);
+// Refuses an --out that holds files the page would replace which no Denoise Arena page wrote (a
+// website's folder, say): an index.html that is no report's or dashboard's, a `dataFile`
+// (data.js, history-data.js) that its generator did not write, or any other of the page's files
+// (`files`' targets, the charting libraries) where no page's index.html is. Before any work.
+void requireOwnPageFiles(const std::filesystem::path& out, const std::vector<PageFile>& files,
+                         const std::string& dataFile, const std::string& command);
 void copyPageAssets(const std::filesystem::path& webDir,
                     const std::filesystem::path& nodeModulesDir, const std::vector<PageFile>& files,
                     const std::filesystem::path& out);

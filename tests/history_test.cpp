@@ -860,6 +860,18 @@ TEST(History, WritesTheDashboard) {
             }).find("holds a history dashboard (history-data.js)"),
             std::string::npos);
   EXPECT_NE(readText(o.out / "index.html").find("history.js"), std::string::npos);
+  // Written again into its own folder: fine. Into a website's (an index.html no arena page
+  // wrote): refused, nothing written.
+  writeHistory(o);
+  HistoryOptions intoSite = o;
+  intoSite.out = dir / "site";
+  fs::create_directories(intoSite.out);
+  std::ofstream(intoSite.out / "index.html") << "<title>our renderer</title>\n";
+  EXPECT_NE(test::errorOf([&] { writeHistory(intoSite); })
+                .find("history: --out " + intoSite.out.string() +
+                      " holds an index.html that is no Denoise Arena report's or dashboard's"),
+            std::string::npos);
+  EXPECT_EQ(std::distance(fs::directory_iterator(intoSite.out), fs::directory_iterator()), 1);
 }
 
 }  // namespace

@@ -245,14 +245,36 @@ TEST(Report, GeneratorWritesEverySectionAndKeepsTheFailedPair) {
   const std::string e = test::errorOf([&] { writeReport(mine); });
   EXPECT_NE(e.find("holds an images folder that is no earlier report's"), std::string::npos) << e;
   EXPECT_TRUE(fs::exists(mine.out / "images" / "holiday.png"));
-  // Nor is it where a page's other files lie beside it (an app.js of the user's own): only a
-  // data.js, or the mark a report leaves in its copies, says the folder is a page's.
+  // Nor is it where a page's other files lie beside it (an app.js of the user's own), which the
+  // page would replace: only a page's own index.html says the folder is a page's.
   std::ofstream(mine.out / "app.js") << "// mine";
-  EXPECT_NE(test::errorOf([&] { writeReport(mine); }).find("no earlier report's"),
+  EXPECT_NE(test::errorOf([&] { writeReport(mine); })
+                .find("holds app.js that no Denoise Arena page's index.html is beside: the page "
+                      "would replace it"),
             std::string::npos);
   EXPECT_TRUE(fs::exists(mine.out / "images" / "holiday.png"));
   fs::remove(mine.out / "app.js");
   EXPECT_EQ(std::distance(fs::directory_iterator(mine.out), fs::directory_iterator()), 1);
+  // A website's folder: its index.html, or a data.js `arena report` did not write (which it
+  // removed, taking the images beside it for an earlier page's), refused, and nothing touched.
+  ReportOptions site = o;
+  site.out = test::freshDir("report_fixture_website");
+  std::ofstream(site.out / "index.html") << "<!doctype html><title>My renderer</title>";
+  EXPECT_NE(test::errorOf([&] {
+              writeReport(site);
+            }).find("holds an index.html that is no Denoise Arena report's or dashboard's"),
+            std::string::npos);
+  fs::remove(site.out / "index.html");
+  std::ofstream(site.out / "data.js") << "var points = [1, 2, 3];";
+  fs::create_directories(site.out / "images");
+  std::ofstream(site.out / "images" / "logo.png") << "png";
+  EXPECT_NE(test::errorOf([&] {
+              writeReport(site);
+            }).find("holds a data.js that `arena` did not write: the page would replace it"),
+            std::string::npos);
+  EXPECT_TRUE(fs::exists(site.out / "images" / "logo.png"));
+  EXPECT_EQ(readText(site.out / "data.js"), "var points = [1, 2, 3];");
+  EXPECT_EQ(std::distance(fs::directory_iterator(site.out), fs::directory_iterator()), 2);
   // A page cut short after its data.js went keeps the mark in its copies: written again, the
   // report replaces them.
   fs::remove(o.out / "data.js");
