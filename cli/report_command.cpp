@@ -69,7 +69,9 @@ void addReportCommand(CLI::App& app) {
     o->gate.correction = parseCorrection(*gateCorrection);
     o->gate.matches = *gateMatches;
     o->gate.allowSettingsMismatch = *gateAllowMismatch;
-    if (!gateOnly->empty())
+    // Given, even empty (an unset variable in a CI script): a list that names no contender is an
+    // error, not every pair gated.
+    if (cmd->count("--denoisers") > 0)
       o->gate.contenders = splitList(*gateOnly, "--denoisers", "labels or denoiser names");
     ReportSummary s = writeReport(*o);
     std::cout << "report: " << s.index.string() << " (" << s.pairs << " pairs";
@@ -79,6 +81,22 @@ void addReportCommand(CLI::App& app) {
     if (!s.noAblation.empty()) std::cout << "no ablation: " << s.noAblation << "\n";
     if (!s.points.empty()) std::cout << "points: " << s.points.string() << "\n";
     for (const std::string& line : s.absentSummaries) std::cout << "absent: " << line << "\n";
+    // The regression view's verdict, for a CI log: compare's, which this command does not exit
+    // with (`arena compare` is the gate).
+    if (s.judged) {
+      for (const std::string& w : s.gateWarnings) std::cerr << "arena: warning: " << w << "\n";
+      std::cout << "regression view against " << *baseline
+                << ": the gate (`arena compare` with these options) would "
+                << (s.gateExitCode == 0   ? std::string("pass")
+                    : s.gateExitCode == 1 ? std::string("FAIL")
+                                          : std::string("NOT JUDGE"))
+                << " (exit " << s.gateExitCode << ")";
+      if (!s.refused.empty())
+        std::cout << ": " << s.refused;
+      else
+        std::cout << " (" << (s.verdicts.empty() ? "no rows" : s.verdicts) << ")";
+      std::cout << "\n";
+    }
   });
 
   auto* hist = app.add_subcommand(
@@ -132,7 +150,7 @@ void addReportCommand(CLI::App& app) {
     h.gate.tolerances = parseGate(*metrics, *tol);
     h.gate.bootstrap.confidence = parseConfidence(*confidence);
     h.gate.correction = parseCorrection(*correction);
-    if (!only->empty())
+    if (hist->count("--denoisers") > 0)  // given empty: an error, not every pair gated
       h.gate.contenders = splitList(*only, "--denoisers", "labels or denoiser names");
     h.gate.matches = *histMatches;
     h.gate.allowSettingsMismatch = *histAllowMismatch;
@@ -155,6 +173,11 @@ void addReportCommand(CLI::App& app) {
       if (s.unresolved > 0)
         std::cout << "; " << s.unresolved
                   << " change(s) beyond the tolerance within noise (orange on the page)";
+      // Not silently fewer: the runs before the contenders named existed are not compared.
+      if (s.notMadeBeforeContenders > 0)
+        std::cout << "; " << s.notMadeBeforeContenders
+                  << " comparison(s) not made: the earlier run has none of the --denoisers "
+                     "contenders";
       std::cout << ")\n";
     }
     if (s.notJudged > 0)

@@ -541,7 +541,7 @@ void addRunCommands(CLI::App& app) {
       gate.correction = parseCorrection(*correction);
       gate.matches = *matchLabels;
       gate.allowSettingsMismatch = *allowMismatch;
-      if (!only->empty())
+      if (cmd->count("--denoisers") > 0)  // given empty: an error, not every pair gated
         gate.contenders = splitList(*only, "--denoisers", "labels or denoiser names");
       const RunResults baseline = loadResults(*a), candidate = loadResults(*b);
       const std::map<std::string, std::string> matches =

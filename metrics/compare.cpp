@@ -546,8 +546,9 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
           double size = std::abs(mean);
           for (double v : tiles->frameValues()) size = std::max(size, std::abs(v));
           const double fromTiles = tiles->mean();
+          const std::string& source = (std::string(which) == "baseline" ? base : cand).source;
           if (std::isfinite(fromTiles) && !(std::abs(fromTiles - mean) <= 1e-4 * size + 1e-12))
-            throw Error(std::string(which) + " run, " +
+            throw Error((source.empty() ? std::string() : source + ": ") + which + " run, " +
                         (std::string(which) == "baseline" ? label : c.label) + " on " + scene +
                         ": summary." + t.metric + ".mean " + std::to_string(mean) +
                         " disagrees with its per-tile data (" + std::to_string(fromTiles) +
@@ -580,6 +581,21 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
           unjudgeable = true;
         }
       } else if (!base.keepsTiles || !cand.keepsTiles) {
+        // Summaries of other frames (a warm-up or length changed, compared with
+        // --allow-settings-mismatch) differ for that alone, and results.db keeps no per-frame
+        // tiles to take the frames both have: no change is given, rather than a window's (the
+        // same input read -2.7% across warm-up 2 and 3).
+        const int bf = b.summary.at(t.metric).frames, cf = c.summary.at(t.metric).frames;
+        if (bf != cf) {
+          row.change = kUndefined;
+          row.verdict = "not judged";
+          row.note = "the runs summarise other frames (baseline " + std::to_string(bf) +
+                     ", candidate " + std::to_string(cf) +
+                     ") and results.db keeps no per-frame tiles to compare the frames both have "
+                     "(judge the run directories)";
+          rows.push_back(row);
+          continue;
+        }
         row.note = "no tile data for a paired interval (results.db keeps none)";
         noTilesKept = true;
       } else if (!tiled.count(t.metric)) {
@@ -785,7 +801,7 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
             return r.metric == t.metric || gatedEventFigureOf(r.metric) == t.metric;
           }))
         throw Error(
-            "compare: --metric " + t.metric + ": neither run computed it on the " +
+            "--metric " + t.metric + ": neither run computed it on the " +
             std::to_string(comparedPairs) + " pair(s) both ran (nothing to gate on; " +
             (isGatedEventFigure(t.metric)
                  ? std::string(
@@ -893,11 +909,16 @@ std::string labelAsWritten(const std::set<std::string>& labels, const std::strin
   const auto parts = [](const std::string& label, std::vector<std::string>& out) {
     const size_t open = label.find('[');
     if (open == std::string::npos || label.back() != ']') return false;
-    out = {label.substr(0, open)};
+    out = {trimmed(label.substr(0, open))};
     std::string inner = label.substr(open + 1, label.size() - open - 2);
     for (size_t start = 0;;) {
       const size_t comma = inner.find(',', start);
-      out.push_back(inner.substr(start, comma - start));
+      // Spaces around a key or a value are the writer's layout ("svgf[ sigmaL = 8 ]").
+      std::string item = inner.substr(start, comma - start);
+      const size_t eq = item.find('=');
+      out.push_back(eq == std::string::npos
+                        ? trimmed(item)
+                        : trimmed(item.substr(0, eq)) + "=" + trimmed(item.substr(eq + 1)));
       if (comma == std::string::npos) return true;
       start = comma + 1;
     }
@@ -983,7 +1004,12 @@ std::pair<std::string, std::string> splitLabelMatch(const std::string& a) {
   if (split == std::string::npos || split == 0 || split + 1 == a.size())
     throw Error("--match " + a +
                 ": expected BASELINE=CANDIDATE, two labels (e.g. 'svgf=svgf[sigmaL=8]')");
-  return {a.substr(0, split), a.substr(split + 1)};
+  // Spaces around a label are the writer's layout (' svgf = svgf[sigmaL=8] '), not the label's.
+  const std::string from = trimmed(a.substr(0, split)), to = trimmed(a.substr(split + 1));
+  if (from.empty() || to.empty())
+    throw Error("--match " + a +
+                ": expected BASELINE=CANDIDATE, two labels (e.g. 'svgf=svgf[sigmaL=8]')");
+  return {from, to};
 }
 
 std::map<std::string, std::string> checkLabelMatches(const std::vector<std::string>& assignments,
@@ -1008,6 +1034,8 @@ std::map<std::string, std::string> checkLabelMatches(const std::vector<std::stri
     if (!cand.count(to))
       throw Error("--match " + a + ": the candidate has no pair labelled " + to +
                   " (its labels: " + labelList(cand) + ")");
+    if (auto it = matches.find(from); it != matches.end() && it->second == to)
+      continue;  // the same match given twice (a CI script's list and its default): one match
     if (matches.count(from)) throw Error("--match " + a + ": " + from + " is matched twice");
     if (!matched.insert(to).second) throw Error("--match " + a + ": " + to + " is matched twice");
     if (to != from && base.count(to))
@@ -1034,7 +1062,7 @@ void keepContenders(RunResults& baseline, RunResults& candidate, std::vector<std
                          [&](const PairResult& p) { return isContender(p, {name}); });
     };
     if (has(baseline) || has(candidate)) continue;
-    throw Error("compare: --denoisers " + name +
+    throw Error("--denoisers " + name +
                 ": neither run has a pair of that label or denoiser (their labels: " +
                 labelList(all) + ")");
   }
@@ -1045,8 +1073,9 @@ void keepContenders(RunResults& baseline, RunResults& candidate, std::vector<std
   for (const auto& [from, to] : matches)
     if (std::none_of(baseline.pairs.begin(), baseline.pairs.end(),
                      [&label = from](const PairResult& p) { return p.label == label; }))
-      throw Error("compare: --match " + from + "=" + to +
-                  ": --denoisers keeps neither label; name one of them with --denoisers");
+      throw Error("--match " + from + "=" + to +
+                  ": --denoisers keeps neither label; name one of them with --denoisers, or leave "
+                  "this --match out");
 }
 
 }  // namespace arena

@@ -86,7 +86,8 @@ std::string refusalText(const GateJudgement& j, const GateSides& sides, bool mul
              itemList(j.settingsDiffer, multiLine) + (multiLine ? "\n" : "; ") +
              "their numbers are not comparable; pass --allow-settings-mismatch to compare anyway";
     case GateRefusal::Data:
-      return "arena compare refuses these runs: " + j.refusalDetail;
+      return sides.baseline + " and " + sides.candidate +
+             ": arena compare refuses to judge them: " + j.refusalDetail;
   }
   return "";
 }

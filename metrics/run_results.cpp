@@ -31,8 +31,11 @@ struct ShapeReader {
   }
   const json& member(const json& obj, const std::string& path, const char* key,
                      bool (json::*is)() const noexcept, const char* expected) const {
-    static const json missing;
-    const json& v = obj.contains(key) ? obj.at(key) : missing;
+    // An absent field is said so ("got null" read as if the file held a null there).
+    if (!obj.contains(key))
+      throw Error(file + ": " + path + "." + key + ": expected " + expected +
+                  ", got nothing (the field is absent)");
+    const json& v = obj.at(key);
     if (!(v.*is)()) fail(path + "." + key, expected, v);
     return v;
   }
@@ -251,7 +254,14 @@ struct ShapeReader {
     m.p95 = number(s, path, "p95");
     if (s.contains("ci95")) {
       const std::optional<Interval> ci = Interval::fromJson(s.at("ci95"));
-      if (!ci) fail(path + ".ci95", "[low, high] (or null)", s.at("ci95"));
+      if (!ci) {
+        const json& v = s.at("ci95");
+        if (v.is_array() && v.size() == 2 && v[0].is_number() && v[1].is_number())
+          throw Error(file + ": " + path +
+                      ".ci95: expected [low, high] with low <= high (or null), got " + v.dump() +
+                      ": its ends are swapped (the results were edited or damaged)");
+        fail(path + ".ci95", "[low, high] (or null)", v);
+      }
       m.ci95 = *ci;
     }
     for (auto it = s.begin(); it != s.end(); ++it)
@@ -276,7 +286,9 @@ struct ShapeReader {
     for (auto it = p.begin(); it != p.end(); ++it)
       if (!kTypedPairKeys.count(it.key())) r.detail[it.key()] = it.value();
     if (!r.ok()) {
-      if (!p.contains("error")) fail(path + ".error", "a string (the failure)", json());
+      if (!p.contains("error"))
+        throw Error(file + ": " + path +
+                    ".error: expected a string (the failure), got nothing (the field is absent)");
       return r;
     }
     member(p, path, "params", &json::is_object, "an object");

@@ -226,6 +226,9 @@ std::vector<LabelMatch> historyMatches(const std::vector<std::string>& assignmen
     if (from == to)
       throw Error("history: --match " + a + ": matches " + from +
                   " with itself; a label is matched with itself already");
+    bool again = false;  // the same match given twice: one match
+    for (const LabelMatch& m : matches) again = again || (m.from == from && m.to == to);
+    if (again) continue;
     if (!froms.insert(from).second)
       throw Error("history: --match " + a + ": " + from + " is matched twice");
     if (!tos.insert(to).second)
@@ -282,7 +285,8 @@ void requireMatchesMet(const std::vector<LabelMatch>& matches, const std::vector
     }
     if (filtered && where(m.from) == "none" && where(m.to) == "none")
       throw Error("history: --match " + m.assignment +
-                  ": --denoisers keeps neither label; name one of them with --denoisers");
+                  ": --denoisers keeps neither label; name one of them with --denoisers, or "
+                  "leave this --match out");
     bool met = false;
     for (size_t i = 1; i < runs.size() && !met; ++i)
       met = byRun[i - 1].count(m.from) && byRun[i].count(m.to);
@@ -557,6 +561,9 @@ json historyData(std::vector<RunResults> runs, const Gate& gate) {
     changes.push_back(change);
   };
   size_t comparisons = 0;
+  // Comparisons not made: their earlier run has none of the --denoisers contenders (before they
+  // existed; `arena compare --denoisers` would find nothing to compare there and not judge).
+  size_t beforeContenders = 0;
   json matchedAt =
       json::object();  // "A=B" (--match, the runs' labels) -> the comparisons it paired
   json historyWarnings = json::array();
@@ -564,7 +571,9 @@ json historyData(std::vector<RunResults> runs, const Gate& gate) {
     size_t index;        // in historyWarnings
     size_t comparisons;  // how many comparisons it concerns
   };
-  std::map<GateWarning, WarningAt> warned;
+  // Said once per kind (a run that records no settings, rows beyond the correction), or once per
+  // distinct text where the text is the news (which settings differ, which references).
+  std::map<std::pair<GateWarning, std::string>, WarningAt> warned;
   // Each comparison's gate: the tolerances as read above, the runs already cut to --denoisers and
   // the --match pairs those two runs meet.
   Gate step = gate;
@@ -574,7 +583,10 @@ json historyData(std::vector<RunResults> runs, const Gate& gate) {
   for (size_t i = 1; i < runs.size(); ++i) {
     // Before the contenders named with --denoisers existed (the previous run has none of them),
     // there is nothing of theirs to gate: no comparison, rather than "nothing compared".
-    if (!contenders.empty() && runs[i - 1].pairs.empty()) continue;
+    if (!contenders.empty() && runs[i - 1].pairs.empty()) {
+      ++beforeContenders;
+      continue;
+    }
     ++comparisons;
     // The --match pairs this comparison meets: the first label before, the second in its place.
     std::map<std::string, std::string> matched;
@@ -587,10 +599,13 @@ json historyData(std::vector<RunResults> runs, const Gate& gate) {
     // there, saying why; the dashboard of the other runs is still built.
     const GateJudgement judged = judgeRuns(runs[i - 1], runs[i], step, matched);
     const GateSides sides{runDescription(runs[i - 1]), runDescription(runs[i])};
-    // Its warnings, each kind once (with how many comparisons it concerns): a history of a hundred
+    // Its warnings, each once (with how many comparisons it concerns): a history of a hundred
     // runs would otherwise say one thing a hundred times.
     for (GateNotice& notice : gateWarnings(judged, sides, /*multiLine=*/false)) {
-      auto [at, first] = warned.try_emplace(notice.kind, WarningAt{historyWarnings.size(), 0});
+      const bool byText = notice.kind == GateWarning::SettingsAllowed ||
+                          notice.kind == GateWarning::OtherReferences;
+      auto [at, first] = warned.try_emplace({notice.kind, byText ? notice.text : std::string()},
+                                            WarningAt{historyWarnings.size(), 0});
       ++at->second.comparisons;
       if (first)
         historyWarnings.push_back("comparing " + sides.candidate +
@@ -627,7 +642,7 @@ json historyData(std::vector<RunResults> runs, const Gate& gate) {
       changes.push_back(change);
     }
   }
-  for (const auto& [kind, at] : warned)
+  for (const auto& [key, at] : warned)
     if (at.comparisons > 1)
       historyWarnings[at.index] = historyWarnings[at.index].get<std::string>() + " (and " +
                                   std::to_string(at.comparisons - 1) +
@@ -658,6 +673,7 @@ json historyData(std::vector<RunResults> runs, const Gate& gate) {
           {"changes", changes},
           {"failing", failing},
           {"comparisons", comparisons},
+          {"notMadeBeforeContenders", beforeContenders},
           {"failingComparisons", failingRuns.size()},
           {"unresolved", unresolved},
           {"notJudged", notJudged},
@@ -703,6 +719,7 @@ HistorySummary writeHistory(const HistoryOptions& o) {
   summary.runs = data["runs"].size();
   summary.failing = data["failing"].get<size_t>();
   summary.comparisons = data["comparisons"].get<size_t>();
+  summary.notMadeBeforeContenders = data["notMadeBeforeContenders"].get<size_t>();
   summary.failingComparisons = data["failingComparisons"].get<size_t>();
   summary.unresolved = data["unresolved"].get<size_t>();
   summary.notJudged = data["notJudged"].get<size_t>();

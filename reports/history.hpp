@@ -37,7 +37,8 @@ std::vector<RunResults> loadHistory(const std::vector<std::filesystem::path>& in
 // options, so the dashboard judges as the gate it stands for
 // (--allow-settings-mismatch: runs of other settings compared, and warned of, not "not
 // comparable"). `gate.contenders` (--denoisers): only those pairs are gated, and a comparison whose
-// earlier run has none of them (before they existed) is not made. `gate.matches` (--match
+// earlier run has none of them (before they existed) is not made (counted in
+// `notMadeBeforeContenders`). `gate.matches` (--match
 // BASELINE=CANDIDATE, repeatable): a contender relabelled on purpose between runs (`--param
 // svgf.sigmaL=8` added to the command CI runs) stays one series, and where a run with the first
 // label and not the second is followed by one with the second and not the first, the two are
@@ -57,6 +58,8 @@ struct HistorySummary {
   std::filesystem::path index;
   size_t runs = 0, failing = 0;                    // failing: rows that fail the gate
   size_t comparisons = 0, failingComparisons = 0;  // run i against run i - 1; those that fail
+  // Comparisons not made: the earlier run has none of the --denoisers contenders (not yet).
+  size_t notMadeBeforeContenders = 0;
   size_t unresolved = 0;                           // changes beyond the tolerance within noise
   // Changes in the worse direction beyond the tolerance the gate could not judge: against runs read
   // from results.db (no tiles), and of events no interval can judge.

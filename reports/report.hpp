@@ -44,6 +44,12 @@ struct ReportSummary {
   std::filesystem::path ablation;  // <out>/ablation.csv for a sweep (ablationCsv), else empty
   std::filesystem::path points;    // <out>/points.csv for a sweep (sweepPointsCsv), else empty
   std::string noAblation;          // a sweep without ablation rows: why (the printout says it)
+  // With a baseline, the regression view's judgement for the printout (a CI log): compare's
+  // verdict and exit code, why it would refuse the runs, its warnings, the rows' verdicts counted.
+  bool judged = false;
+  std::string gate, refused, verdicts;
+  int gateExitCode = 0;
+  std::vector<std::string> gateWarnings;
 };
 
 // The document embedded as data.js. `runDir` is where the run's images are looked up (only images

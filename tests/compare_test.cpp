@@ -169,6 +169,17 @@ TEST(CompareContract, ACiStepTellsARegressionFromWhatTheGateCouldNotJudge) {
   const json only = json::parse(r.output.substr(r.output.find('{')));
   ASSERT_EQ(only["rows"].size(), 1u) << only.dump();
   EXPECT_EQ(only["rows"][0]["label"], "eaw");
+  // Given empty (an unset variable in a CI script): refused, not every pair gated.
+  const std::string emptyListPage = (test::freshDir("gate_empty_list") / "page").string();
+  for (const std::string& args :
+       {"compare " + A + " " + B, "report " + B + " --baseline " + A + " --out " + emptyListPage,
+        "history " + A + " " + B + " --out " + emptyListPage}) {
+    r = contract::arenaCli(args + " --denoisers ''");
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_NE(r.output.find("--denoisers '': empty; expected labels or denoiser names"),
+              std::string::npos)
+        << r.output;
+  }
   r = contract::arenaCli("compare " + A + " " + B + " --denoisers svgf");
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("--denoisers svgf: neither run has a pair of that label or denoiser "

@@ -196,6 +196,20 @@ TEST(History, MarksWhatCompareSaysRunByRun) {
                 "2 vs 3"),
             std::string::npos)
       << allowed["warnings"];
+  // Another setting changed later: said too (one warning per kind hid it), each text once.
+  json otherFlip = historyRun(9, 5), sameAgain = historyRun(10, 5);
+  otherFlip["settings"] = sameAgain["settings"] = {{"warmup", 3}, {"flip", "ldr"}};
+  std::vector<RunResults> twice = withOther;
+  twice.push_back(test::typed(otherFlip));
+  twice.push_back(test::typed(sameAgain));
+  const json later = historyData(twice, allowing);
+  ASSERT_EQ(later["warnings"].size(), 2u) << later["warnings"];
+  EXPECT_NE(later["warnings"][1].get<std::string>().find(
+                "comparing the run run9 of 2025-01-01T00:09:00Z with the run before: comparing "
+                "runs with different settings (baseline vs candidate): settings.flip: \"absent\" "
+                "vs \"ldr\""),
+            std::string::npos)
+      << later["warnings"];
   // A run that records no settings (older than the record) cannot be checked: compared, and said.
   json unrecorded = historyRun(8, 5);
   unrecorded["settings"] = json::object();
@@ -504,6 +518,27 @@ TEST(History, RunsFromADatabaseAreJudgedOnTheSettingsTheyRecorded) {
   };
   EXPECT_EQ(notComparable(historyData(loadHistory({dir / "results.db", dir / "same"}), {})), 0);
   EXPECT_EQ(notComparable(historyData(loadHistory({dir / "results.db", dir / "other"}), {})), 1);
+  // Compared anyway (--allow-settings-mismatch), the summaries cover other frames (warm-up 2 and
+  // 3) and the database keeps no per-frame tiles to take the frames both have: no change is given
+  // (the same input read -2.7% across the two windows), and the row says why.
+  other["pairs"][1]["summary"]["relMse"]["frames"] = 3;
+  appendToDatabase(dir / "other.db", test::typed(other));
+  Gate allowing{{{"relMse", 0.02}}};
+  allowing.allowSettingsMismatch = true;
+  const json windows = historyData(loadHistory({dir / "results.db", dir / "other.db"}), allowing);
+  bool said = false;
+  for (const json& c : windows["changes"])
+    if (c["label"] == "svgf" && c["metric"] == "relMse") {
+      said = true;
+      EXPECT_EQ(c["verdict"], "not judged") << c;
+      EXPECT_TRUE(c["change"].is_null()) << c;
+      EXPECT_NE(c["note"].get<std::string>().find(
+                    "the runs summarise other frames (baseline 4, candidate 3) and results.db "
+                    "keeps no per-frame tiles"),
+                std::string::npos)
+          << c;
+    }
+  EXPECT_TRUE(said) << windows["changes"].dump();
 }
 
 // A scene's resolution and frame count are part of what the gate compares; a database keeps them
@@ -589,6 +624,7 @@ TEST(History, GatesOnlyTheNamedContenderFromWhenItExists) {
   }
   const json data = historyData(runs, {{{"relMse", 0.02}}, {}, Correction::Holm, {"svgf"}});
   EXPECT_EQ(data["comparisons"], 2) << data["changes"].dump();  // 3 against 2, 4 against 3
+  EXPECT_EQ(data["notMadeBeforeContenders"], 2);                // 1 against 0, 2 against 1: said
   EXPECT_EQ(data["failingComparisons"], 0) << data["changes"].dump();
   EXPECT_FALSE(data["series"]["s"].contains("passthrough"));
   EXPECT_TRUE(data["series"]["s"].contains("svgf"));

@@ -35,7 +35,8 @@ TEST(ResultsContract, ResultsOfTheWrongShapeAreErrorsNamingThePath) {
     ADD_FAILURE() << "accepted a results.json without pairs";
   } catch (const Error& e) {
     EXPECT_NE(
-        std::string(e.what()).find("results.json: $.pairs: expected an array of pairs, got null"),
+        std::string(e.what()).find(
+            "results.json: $.pairs: expected an array of pairs, got nothing (the field is absent)"),
         std::string::npos)
         << e.what();
   }
@@ -175,6 +176,12 @@ TEST(RunResults, EveryMisshapenPartIsNamedByItsPath) {
     edit(d);
     return test::errorOf([&] { RunResults::fromJson(d, "r.json"); });
   };
+  EXPECT_NE(errorWith([](json& d) {
+              d["pairs"][0]["summary"]["relMse"]["ci95"] = {0.2, 0.1};
+            })
+                .find("r.json: $.pairs[0].summary.relMse.ci95: expected [low, high] with low <= "
+                      "high (or null), got [0.2,0.1]: its ends are swapped"),
+            std::string::npos);
   EXPECT_NE(errorWith([](json& d) { d["pairs"][0]["summary"]["relMse"]["ci95"] = {1}; })
                 .find("r.json: $.pairs[0].summary.relMse.ci95: expected [low, high] (or null), got an array"),
             std::string::npos);
@@ -192,9 +199,11 @@ TEST(RunResults, EveryMisshapenPartIsNamedByItsPath) {
   EXPECT_NE(errorWith([](json& d) { d["pairs"][0]["denoiser"] = 3; })
                 .find("$.pairs[0].denoiser: expected a string, got a number"),
             std::string::npos);
-  EXPECT_NE(errorWith([](json& d) { d["pairs"][0]["status"] = "failed"; })
-                .find("$.pairs[0].error: expected a string (the failure), got null"),
-            std::string::npos);
+  EXPECT_NE(
+      errorWith([](json& d) { d["pairs"][0]["status"] = "failed"; })
+          .find("$.pairs[0].error: expected a string (the failure), got nothing (the field is "
+                "absent)"),
+      std::string::npos);
   EXPECT_NE(errorWith([](json& d) { d["statistics"] = 1; }).find("$.statistics: expected an object"),
             std::string::npos);
   EXPECT_NE(errorWith([](json& d) { d["schema"] = 1; }).find("r.json: results schema version 1"), std::string::npos);

@@ -589,6 +589,11 @@ TEST(CompareGate, AMatchNamesParametersInAnyOrder) {
   EXPECT_EQ(checkLabelMatches({"svgf=svgf[iterations=3,sigmaL=8]"}, a, b), matches);
   EXPECT_EQ(checkLabelMatches({"svgf=svgf[sigmaL=8,iterations=3]"}, a, b), matches);
   EXPECT_EQ(checkLabelMatches({"svgf=svgf[sigmaL=8.0,iterations=3]"}, a, b), matches);
+  // Spaces are the writer's layout, and the same match given twice is one.
+  EXPECT_EQ(checkLabelMatches({" svgf = svgf[ sigmaL = 8 , iterations=3 ] "}, a, b), matches);
+  EXPECT_EQ(checkLabelMatches(
+                {"svgf=svgf[sigmaL=8,iterations=3]", "svgf=svgf[sigmaL=8,iterations=3]"}, a, b),
+            matches);
   // A value that differs, or a key given twice, is still no label of the run.
   for (const char* wrong : {"svgf=svgf[sigmaL=8,iterations=4]", "svgf=svgf[sigmaL=8,sigmaL=8]"})
     EXPECT_THROW(checkLabelMatches({wrong}, a, b), Error) << wrong;
@@ -646,7 +651,7 @@ TEST(CompareGate, PairsOfOtherLabelsAreComparedWhenAskedTo) {
   RunResults droppedA = a, droppedB = b;
   const std::string dropped =
       test::errorOf([&] { keepContenders(droppedA, droppedB, {"eaw"}, matches); });
-  EXPECT_NE(dropped.find("compare: --match svgf=svgf[sigmaL=8]: --denoisers keeps neither label"),
+  EXPECT_NE(dropped.find("--match svgf=svgf[sigmaL=8]: --denoisers keeps neither label"),
             std::string::npos)
       << dropped;
   // A number typed otherwise than the run wrote it names the same label.
