@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <utility>
 
 #include "core/error.hpp"
@@ -20,16 +21,26 @@ std::string itemList(const std::vector<std::string>& items, bool multiLine) {
 
 }  // namespace
 
-GateJudgement judgeRuns(RunResults baseline, RunResults candidate, const Gate& gate,
-                        const std::map<std::string, std::string>& matches, bool rowsWhenRefused) {
+GateJudgement judgeRuns(const RunResults& baselineRun, const RunResults& candidateRun,
+                        const Gate& gate, const std::map<std::string, std::string>& matches,
+                        bool rowsWhenRefused) {
   GateJudgement j;
-  j.runName = baseline.name;
-  j.baselineCreated = baseline.created;
-  j.candidateCreated = candidate.created;
+  j.runName = baselineRun.name;
+  j.baselineCreated = baselineRun.created;
+  j.candidateCreated = candidateRun.created;
   // The same run on both sides (a CI step that copied the candidate into the baseline) would pass
   // every row by construction.
-  if (sameRunRecord(baseline, candidate)) j.refusal = GateRefusal::SameRun;
-  if (!gate.contenders.empty()) keepContenders(baseline, candidate, gate.contenders, matches);
+  if (sameRunRecord(baselineRun, candidateRun)) j.refusal = GateRefusal::SameRun;
+  // --denoisers: copies cut to the contenders named (a history's loop, which cut its runs once,
+  // copies nothing: a run's tiles may be megabytes).
+  std::optional<RunResults> keptBaseline, keptCandidate;
+  if (!gate.contenders.empty()) {
+    keptBaseline = baselineRun;
+    keptCandidate = candidateRun;
+    keepContenders(*keptBaseline, *keptCandidate, gate.contenders, matches);
+  }
+  const RunResults& baseline = keptBaseline ? *keptBaseline : baselineRun;
+  const RunResults& candidate = keptCandidate ? *keptCandidate : candidateRun;
   const std::vector<Tolerance> tolerances = gateTolerances(gate.tolerances);
   // Numbers measured under other settings differ for that reason alone: refused unless asked. A
   // run that records none (older than the record) cannot be checked: compared, and said.

@@ -59,7 +59,7 @@ struct GateJudgement {
 // A run that records no settings (an older record) is compared, and said (gateWarnings): whether
 // the two were measured alike cannot be checked. `rowsWhenRefused`: compute the rows even where the
 // gate refuses the runs for their settings or as one run (they cost a bootstrap each).
-GateJudgement judgeRuns(RunResults baseline, RunResults candidate, const Gate& gate,
+GateJudgement judgeRuns(const RunResults& baseline, const RunResults& candidate, const Gate& gate,
                         const std::map<std::string, std::string>& matches,
                         bool rowsWhenRefused = false);
 
