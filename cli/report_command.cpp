@@ -182,8 +182,8 @@ void addReportCommand(CLI::App& app) {
     }
     if (s.notJudged > 0)
       std::cerr << "arena: warning: " << s.notJudged
-                << " change(s) in the worse direction beyond the tolerance were NOT JUDGED: the "
-                   "gate cannot tell them from noise ("
+                << " change(s) in the worse direction beyond the tolerance (or of a size not "
+                   "known) were NOT JUDGED: the gate cannot tell them from noise ("
                 << (s.notJudgedFromDatabase > 0
                         ? std::to_string(s.notJudgedFromDatabase) +
                               " against runs read from results.db, which keep no per-tile data: "

@@ -550,9 +550,6 @@ void addRunCommands(CLI::App& app) {
       // judge (the same run twice, other settings, data compareRuns refuses) exits 2.
       const GateJudgement judged = judgeRuns(baseline, candidate, gate, matches);
       const GateSides sides{"the baseline " + *a, "the candidate " + *b};
-      if (judged.refusal == GateRefusal::Data) throw Error(judged.refusalDetail);
-      if (judged.refusal != GateRefusal::None)
-        throw Error("compare: " + refusalText(judged, sides, /*multiLine=*/true));
       std::vector<std::string> warnings;  // said on stderr, and in the JSON
       const auto warn = [&](const std::string& text) {
         std::cerr << "arena: warning: " << text << "\n";
@@ -562,8 +559,13 @@ void addRunCommands(CLI::App& app) {
       for (const std::string* dir : {a.get(), b.get()})
         if (const std::string note = unfinishedRunNote(*dir); !note.empty())
           warn(note + "; compared on the earlier run's numbers, which are whole");
+      // What it warns of is said before a refusal too (a run that records no settings beside a
+      // resolution that differs).
       for (const std::string& text : gateWarningTexts(judged, sides, /*multiLine=*/true))
         warn(text);
+      if (judged.refusal == GateRefusal::Data) throw Error(judged.refusalDetail);
+      if (judged.refusal != GateRefusal::None)
+        throw Error("compare: " + refusalText(judged, sides, /*multiLine=*/true));
       const Correction corrected = gate.correction;
       const BootstrapConfig& bc = gate.bootstrap;
       const std::vector<Tolerance> tols = gateTolerances(gate.tolerances);

@@ -800,7 +800,7 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
       if (!t.optional && std::none_of(rows.begin(), rows.end(), [&](const ComparisonRow& r) {
             return r.metric == t.metric || gatedEventFigureOf(r.metric) == t.metric;
           }))
-        throw Error(
+        throw UnmeasuredMetric(
             "--metric " + t.metric + ": neither run computed it on the " +
             std::to_string(comparedPairs) + " pair(s) both ran (nothing to gate on; " +
             (isGatedEventFigure(t.metric)

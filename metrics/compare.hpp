@@ -21,10 +21,18 @@
 #include <utility>
 #include <vector>
 
+#include "core/error.hpp"
 #include "metrics/run_results.hpp"
 #include "metrics/statistics.hpp"
 
 namespace arena {
+
+// compareRuns' Error for a gated metric the caller named that neither run computed: a mistake in
+// the options, not in the runs (the gate's judgement lets it through, metrics/gate.hpp).
+class UnmeasuredMetric : public Error {
+ public:
+  using Error::Error;
+};
 
 struct Tolerance {
   // A name from metricCatalog() (aliases: flip = ldrFlip) or an event figure
@@ -93,6 +101,9 @@ std::vector<Tolerance> gateTolerances(std::vector<Tolerance> tolerances, double 
 // level 1 - cfg.confidence reads "unresolved", its note saying so.
 // `matches` pairs a baseline label with a candidate label on every scene (`--match`: the same
 // denoiser with another parameter, a renamed contender), checked by checkLabelMatches.
+// Errors: UnmeasuredMetric for a metric the caller named that neither run computed (a mistake in
+// the options), an Error naming the run for results it refuses to judge (damaged tiles, a summary
+// that disagrees with them).
 std::vector<ComparisonRow> compareRuns(const RunResults& baseline, const RunResults& candidate,
                                        std::vector<Tolerance> tolerances,
                                        const BootstrapConfig& cfg = {},

@@ -43,16 +43,18 @@ GateJudgement judgeRuns(const RunResults& baselineRun, const RunResults& candida
   const RunResults& candidate = keptCandidate ? *keptCandidate : candidateRun;
   const std::vector<Tolerance> tolerances = gateTolerances(gate.tolerances);
   // Numbers measured under other settings differ for that reason alone: refused unless asked. A
-  // run that records none (older than the record) cannot be checked: compared, and said.
+  // run that records none (older than the record) cannot have them checked: compared, and said;
+  // the scenes' sizes, lengths and contents, which are not settings, are checked all the same.
   if (baseline.settings.measurement().empty()) j.unrecordedSettings.push_back("baseline");
   if (candidate.settings.measurement().empty()) j.unrecordedSettings.push_back("candidate");
-  if (j.unrecordedSettings.empty()) {
-    j.settingsDiffer = settingsDifferences(baseline, candidate, tolerances);
-    if (!j.settingsDiffer.empty() && !gate.allowSettingsMismatch && j.refusal == GateRefusal::None)
-      j.refusal = GateRefusal::OtherSettings;
-    // (Runs of other settings render other references anyway: said with the settings.)
-    if (j.settingsDiffer.empty()) j.referencesDiffer = referenceDifferences(baseline, candidate);
-  }
+  j.settingsDiffer = settingsDifferences(baseline, candidate, tolerances);
+  if (!j.unrecordedSettings.empty())
+    std::erase_if(j.settingsDiffer,
+                  [](const std::string& d) { return d.rfind("settings.", 0) == 0; });
+  if (!j.settingsDiffer.empty() && !gate.allowSettingsMismatch && j.refusal == GateRefusal::None)
+    j.refusal = GateRefusal::OtherSettings;
+  // (Runs of other settings render other references anyway: said with the settings.)
+  if (j.settingsDiffer.empty()) j.referencesDiffer = referenceDifferences(baseline, candidate);
   // A candidate older than its baseline: the arguments are likely swapped, which turns every
   // regression into an improvement.
   j.candidateOlder = !baseline.created.empty() && !candidate.created.empty() &&
@@ -63,9 +65,11 @@ GateJudgement judgeRuns(const RunResults& baselineRun, const RunResults& candida
   }
   try {
     j.rows = compareRuns(baseline, candidate, tolerances, gate.bootstrap, gate.correction, matches);
+  } catch (const UnmeasuredMetric&) {
+    throw;  // a mistake in the options (--metric), said as such by every command
   } catch (const Error& e) {
-    // A summary that disagrees with its tiles, a metric the caller named that neither run measured:
-    // what `arena compare` refuses (exit 2).
+    // Results it refuses to judge (damaged tiles, a summary that disagrees with them): what `arena
+    // compare` refuses (exit 2), and a history marks not comparable.
     if (j.refusal == GateRefusal::None) {
       j.refusal = GateRefusal::Data;
       j.refusalDetail = e.what();
@@ -110,12 +114,17 @@ std::vector<GateNotice> gateWarnings(const GateJudgement& j, const GateSides& si
     out.push_back({GateWarning::SettingsAllowed,
                    "comparing runs with different settings (baseline vs candidate):" +
                        itemList(j.settingsDiffer, multiLine)});
-  for (const std::string& side : j.unrecordedSettings)
-    out.push_back({GateWarning::SettingsUnrecorded,
-                   (side == "baseline" ? sides.baseline : sides.candidate) +
-                       " records no settings (a run older than the record): whether the runs "
-                       "were measured alike (resolution, warm-up, references, ...) is not "
-                       "checked"});
+  if (!j.unrecordedSettings.empty()) {
+    const bool both = j.unrecordedSettings.size() == 2;
+    out.push_back(
+        {GateWarning::SettingsUnrecorded,
+         (both ? sides.baseline + " and " + sides.candidate + " record"
+               : (j.unrecordedSettings[0] == "baseline" ? sides.baseline : sides.candidate) +
+                     " records") +
+             " no settings (a run older than the record): whether the runs were measured under "
+             "the same settings (warm-up, samples, FLIP, ...) is not checked; the scenes' sizes, "
+             "lengths and contents are"});
+  }
   if (!j.referencesDiffer.empty())
     out.push_back(
         {GateWarning::OtherReferences,

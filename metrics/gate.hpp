@@ -22,7 +22,9 @@ struct Gate {
   BootstrapConfig bootstrap;                 // --confidence
   Correction correction = Correction::Holm;  // --correction
   std::vector<std::string> contenders;       // --denoisers: only these (empty: every pair)
-  std::vector<std::string> matches;          // --match BASELINE=CANDIDATE assignments, as typed
+  // --match BASELINE=CANDIDATE assignments as typed: the commands resolve them against the runs
+  // (checkLabelMatches; a history per comparison) and give judgeRuns the pairs of labels.
+  std::vector<std::string> matches;
   bool allowSettingsMismatch = false;        // --allow-settings-mismatch: warn instead of refusing
 };
 
@@ -36,7 +38,8 @@ enum class GateRefusal {
 
 struct GateJudgement {
   // compareRuns' rows. Under a refusal, empty unless judgeRuns was asked for them anyway (a page
-  // shows what moved beside why the gate would not judge it).
+  // shows what moved beside why the gate would not judge it); always empty under GateRefusal::Data
+  // (compareRuns gave none).
   std::vector<ComparisonRow> rows;
   GateOutcome outcome = GateOutcome::Pass;  // CouldNotJudge under any refusal
   GateRefusal refusal = GateRefusal::None;
@@ -54,11 +57,12 @@ struct GateJudgement {
 
 // The gate on `candidate` against `baseline`: `gate.contenders` kept (keepContenders), `matches`
 // (checkLabelMatches of gate.matches, or history's own per comparison) pairing relabelled
-// contenders. Mistakes in the options (a name no run has, a metric neither run measured where the
-// caller named it) are Errors, as before any judgement; what the gate cannot judge is a refusal.
-// A run that records no settings (an older record) is compared, and said (gateWarnings): whether
-// the two were measured alike cannot be checked. `rowsWhenRefused`: compute the rows even where the
-// gate refuses the runs for their settings or as one run (they cost a bootstrap each).
+// contenders. Mistakes in the options (a name no run has; a metric neither run measured where the
+// caller named it, UnmeasuredMetric) are Errors, as before any judgement; what the gate cannot
+// judge is a refusal. A run that records no settings (an older record) is compared, and said
+// (gateWarnings): its settings cannot be checked; its scenes' sizes and contents are.
+// `rowsWhenRefused`: compute the rows even where the gate refuses the runs for their settings or as
+// one run (they cost a bootstrap each).
 GateJudgement judgeRuns(const RunResults& baseline, const RunResults& candidate, const Gate& gate,
                         const std::map<std::string, std::string>& matches,
                         bool rowsWhenRefused = false);
@@ -71,7 +75,7 @@ struct GateSides {
 // items one to an indented line (a terminal) rather than "; "-separated (a page, a JSON note).
 std::string refusalText(const GateJudgement& j, const GateSides& sides, bool multiLine);
 // What the reader of the verdict should know besides its rows (the same rule for every command),
-// one message each, with its kind (a history says each kind once, not at every comparison).
+// one message each, with its kind (a history says each once, not at every comparison).
 enum class GateWarning {
   SettingsAllowed,     // settings differ, and --allow-settings-mismatch compared them
   SettingsUnrecorded,  // a run records no settings: not checked

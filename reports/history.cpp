@@ -11,6 +11,7 @@
 #include "core/atomic_file.hpp"
 #include "core/env_info.hpp"
 #include "core/error.hpp"
+#include "core/text.hpp"
 #include "metrics/ghosting_intervals.hpp"
 #include "metrics/results.hpp"
 #include "reports/report.hpp"
@@ -178,6 +179,17 @@ std::vector<RunResults> runsFromDatabase(const fs::path& file) {
     summary.p95 = number("p95");
     if (s.contains("frames") && s["frames"].is_number_integer()) summary.frames = s["frames"].get<int>();
     summary.ci95 = intervalOf(s);
+    // Checked as a results.json's summaries are (metrics/run_results): an edited or damaged row
+    // names its run, pair and metric rather than reach the dashboard.
+    const std::string where = runs[id].source + ": summaries, " + textOf(s, "label") + " on " +
+                              textOf(s, "scene") + ", " + textOf(s, "metric");
+    if (summary.frames < 0)
+      throw Error(where + ": frames " + std::to_string(summary.frames) +
+                  ": expected a count of frames (0 or more)");
+    if (summary.ci95.lo > summary.ci95.hi)
+      throw Error(where + ": the interval [" + shortestText(summary.ci95.lo) + ", " +
+                  shortestText(summary.ci95.hi) +
+                  "] has its ends swapped (the database was edited or damaged)");
     // An absent summary keeps its reason (summaries.absent), so the dashboard can say it.
     summary.absent = textOf(s, "absent");
     runs[id].pairs[it->second].summary[textOf(s, "metric")] = summary;
@@ -635,7 +647,9 @@ json historyData(std::vector<RunResults> runs, const Gate& gate) {
       // judge is no warning (24 of a trial's 50 "NOT JUDGED" were improvements).
       if (row.verdict == "not judged") {
         const MetricDefinition* m = findMetric(row.metric);  // event figures: lower is better
-        const bool worse = (!m || m->lowerIsBetter() ? row.change : -row.change) > 0;
+        // A change of unknown size (no change given: runs from results.db that summarise other
+        // frames, or keep no pair's events) may be worse: counted, not passed over.
+        const bool worse = !((!m || m->lowerIsBetter() ? row.change : -row.change) <= 0);
         notJudged += worse;
         notJudgedFromDatabase += worse && (!runs[i - 1].keepsTiles || !runs[i].keepsTiles);
       }
@@ -706,7 +720,7 @@ HistorySummary writeHistory(const HistoryOptions& o) {
                                        {"shared.js", "shared.js"},
                                        {"history.js", "history.js"}};
   checkPageAssets(web, modules, files);
-  requireOwnPageFiles(o.out, files, "history-data.js", "history");
+  requireOwnPageFiles(o.out, files, "history-data.js", {}, "history");
   std::vector<std::string> warnings;
   const json data = historyData(loadHistory(o.inputs, &warnings), o.gate);
   copyPageAssets(web, modules, files, o.out);

@@ -31,10 +31,11 @@ std::vector<RunResults> loadHistory(const std::vector<std::filesystem::path>& in
 // noise, `notJudged` those the gate could not judge (runs read from results.db keep no tiles),
 // `notComparable` the failing comparisons compare refuses (exit 2: other settings, data it
 // refuses); `correction` and `confidence` say how the rows were judged; `warnings` the judgements'
-// warnings, each kind once (gateWarnings). Empty `gate.tolerances`: compare's defaults. A gated
-// metric neither run of a pair computed is skipped for that pair (runs over months differ in what
-// they computed); one the caller named that no run computed is an Error. `gate` holds compare's
-// options, so the dashboard judges as the gate it stands for
+// warnings, each said once (gateWarnings: which settings or references differ, once per text; the
+// rest once per kind, with how many comparisons it concerns). Empty `gate.tolerances`: compare's
+// defaults. A gated metric neither run of a pair computed is skipped for that pair (runs over
+// months differ in what they computed); one the caller named that no run computed is an Error.
+// `gate` holds compare's options, so the dashboard judges as the gate it stands for
 // (--allow-settings-mismatch: runs of other settings compared, and warned of, not "not
 // comparable"). `gate.contenders` (--denoisers): only those pairs are gated, and a comparison whose
 // earlier run has none of them (before they existed) is not made (counted in

@@ -94,9 +94,11 @@ void requirePageDirectory(const std::filesystem::path& out, const std::string& c
 // Refuses an --out that holds files the page would replace which no Denoise Arena page wrote (a
 // website's folder, say): an index.html that is no report's or dashboard's, a `dataFile`
 // (data.js, history-data.js) that its generator did not write, or any other of the page's files
-// (`files`' targets, the charting libraries) where no page's index.html is. Before any work.
+// (`files`' targets, the charting libraries, `outputs`: what else it writes or removes, such as
+// report's tiles/) where no page's index.html is. Before any work.
 void requireOwnPageFiles(const std::filesystem::path& out, const std::vector<PageFile>& files,
-                         const std::string& dataFile, const std::string& command);
+                         const std::string& dataFile, const std::vector<std::string>& outputs,
+                         const std::string& command);
 void copyPageAssets(const std::filesystem::path& webDir,
                     const std::filesystem::path& nodeModulesDir, const std::vector<PageFile>& files,
                     const std::filesystem::path& out);

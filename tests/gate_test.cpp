@@ -23,7 +23,7 @@ using nlohmann::json;
 // A run of one pair (svgf on "s") whose relMSE is `relMse`, with the per-tile data the gate's
 // paired interval resamples (8 frames x 16 tiles around the mean, the mean the summary's).
 json gateRun(const std::string& name, const std::string& created, double relMse,
-             const json& settings = {{"warmup", 2}}) {
+             const json& settings = {{"warmup", 2}}, int width = 64) {
   MetricTiles tiles;
   for (int f = 2; f < 10; ++f) {
     TileSums t;
@@ -39,7 +39,7 @@ json gateRun(const std::string& name, const std::string& created, double relMse,
           {"created", created},
           {"environment", {{"git_commit", "abc"}}},
           {"settings", settings},
-          {"scenes", json::object()},
+          {"scenes", {{"s", {{"width", width}, {"height", 36}, {"frames", 10}}}}},
           {"pairs",
            {{{"scene", "s"},
              {"denoiser", "svgf"},
@@ -62,6 +62,8 @@ struct GateCase {
 
 TEST(Gate, CompareReportAndHistoryJudgeEveryCaseAlike) {
   const json before = gateRun("before", "2025-01-01T00:00:00Z", 0.05);
+  json tampered = gateRun("after", "2025-01-01T00:01:00Z", 0.05);
+  tampered["pairs"][0]["summary"]["relMse"]["mean"] = 0.04;  // its tiles still say 0.05
   const std::vector<GateCase> cases = {
       {"within tolerance", before, gateRun("after", "2025-01-01T00:01:00Z", 0.0505), false,
        GateOutcome::Pass, GateRefusal::None, ""},
@@ -80,6 +82,12 @@ TEST(Gate, CompareReportAndHistoryJudgeEveryCaseAlike) {
        GateRefusal::None, "records no settings"},
       {"the runs swapped", gateRun("after", "2025-01-01T00:01:00Z", 0.0505), before, false,
        GateOutcome::Pass, GateRefusal::None, "are the two swapped?"},
+      // A run that records no settings still has its scenes' sizes checked.
+      {"no settings, and another resolution", before,
+       gateRun("after", "2025-01-01T00:01:00Z", 0.0505, json::object(), 96), false,
+       GateOutcome::CouldNotJudge, GateRefusal::OtherSettings, "records no settings"},
+      {"a summary edited away from its tiles", before, tampered, false, GateOutcome::CouldNotJudge,
+       GateRefusal::Data, ""},
   };
   for (const GateCase& c : cases) {
     SCOPED_TRACE(c.what);
@@ -143,6 +151,15 @@ TEST(Gate, AMistakenOptionIsAnErrorNotARefusal) {
   gate.contenders.clear();
   gate.tolerances = {{"noSuchMetric", 0.02}};
   EXPECT_NE(test::errorOf([&] { judgeRuns(a, b, gate, {}); }).find("noSuchMetric"),
+            std::string::npos);
+  // A metric named that neither run computed: the options' mistake, not a refusal of the runs
+  // (`report --baseline --metric ldrFlip` on runs without FLIP wrote a page that "could not
+  // judge").
+  gate.tolerances = {{"ldrFlip", 0.02}};
+  EXPECT_THROW(judgeRuns(a, b, gate, {}), UnmeasuredMetric);
+  EXPECT_NE(test::errorOf([&] {
+              reportData(b, test::freshDir("gate_unmeasured"), &a, gate);
+            }).find("--metric ldrFlip: neither run computed it"),
             std::string::npos);
 }
 

@@ -211,16 +211,23 @@ TEST(History, MarksWhatCompareSaysRunByRun) {
             std::string::npos)
       << later["warnings"];
   // A run that records no settings (older than the record) cannot be checked: compared, and said.
-  json unrecorded = historyRun(8, 5);
-  unrecorded["settings"] = json::object();
+  // Two such runs: said once, with the number of comparisons it concerns (7 against 8 and 8
+  // against 9, each counted once though both of the second's runs record none).
+  json unrecorded = historyRun(8, 5), unrecordedToo = historyRun(9, 5);
+  unrecorded["settings"] = unrecordedToo["settings"] = json::object();
   std::vector<RunResults> withUnrecorded(runs.begin(), runs.begin() + 8);
   withUnrecorded.push_back(test::typed(unrecorded));
+  withUnrecorded.push_back(test::typed(unrecordedToo));
   const json unchecked = historyData(withUnrecorded, {tolerances});
   EXPECT_EQ(unchecked["notComparable"], 0);
   ASSERT_EQ(unchecked["warnings"].size(), 1u) << unchecked["warnings"];
   EXPECT_NE(unchecked["warnings"][0].get<std::string>().find(
                 "the run run8 of 2025-01-01T00:08:00Z records no settings"),
             std::string::npos)
+      << unchecked["warnings"];
+  EXPECT_NE(
+      unchecked["warnings"][0].get<std::string>().find("(and 1 more comparison(s) of the history)"),
+      std::string::npos)
       << unchecked["warnings"];
 }
 
@@ -539,6 +546,20 @@ TEST(History, RunsFromADatabaseAreJudgedOnTheSettingsTheyRecorded) {
           << c;
     }
   EXPECT_TRUE(said) << windows["changes"].dump();
+  // The database's rows are checked as a results.json's summaries are: an interval whose ends
+  // were swapped names its run, pair and metric.
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open((dir / "other.db").string().c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db,
+                         "UPDATE summaries SET ci_lo = 0.5, ci_hi = 0.001 WHERE label = 'svgf' "
+                         "AND metric = 'relMse'",
+                         nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+  EXPECT_NE(test::errorOf([&] { loadHistory({dir / "other.db"}); })
+                .find(": summaries, svgf on s, relMse: the interval [0.5, 0.001] has its ends "
+                      "swapped"),
+            std::string::npos);
 }
 
 // A scene's resolution and frame count are part of what the gate compares; a database keeps them

@@ -275,6 +275,26 @@ TEST(Report, GeneratorWritesEverySectionAndKeepsTheFailedPair) {
   EXPECT_TRUE(fs::exists(site.out / "images" / "logo.png"));
   EXPECT_EQ(readText(site.out / "data.js"), "var points = [1, 2, 3];");
   EXPECT_EQ(std::distance(fs::directory_iterator(site.out), fs::directory_iterator()), 2);
+  // So is a folder of what else the page writes or removes (its crops' tiles/, a sweep's tables)
+  // with no page beside it: they were removed.
+  for (const char* own : {"tiles/mine.txt", "ablation.csv", "points.csv"}) {
+    ReportOptions other = o;
+    other.out = test::freshDir("report_fixture_own_outputs");
+    fs::create_directories((other.out / own).parent_path());
+    std::ofstream(other.out / own) << "mine";
+    EXPECT_NE(test::errorOf([&] { writeReport(other); }).find("no Denoise Arena page's index.html"),
+              std::string::npos)
+        << own;
+    EXPECT_EQ(readText(other.out / own), "mine") << own;
+  }
+  // A page's file that is a link is replaced, not written through to what it points at.
+  const fs::path outside = test::freshDir("report_fixture_link_target") / "theirs.css";
+  std::ofstream(outside) << "theirs";
+  fs::remove(o.out / "style.css");
+  fs::create_symlink(outside, o.out / "style.css");
+  writeReport(o);
+  EXPECT_EQ(readText(outside), "theirs");
+  EXPECT_FALSE(fs::is_symlink(o.out / "style.css"));
   // A page cut short after its data.js went keeps the mark in its copies: written again, the
   // report replaces them.
   fs::remove(o.out / "data.js");

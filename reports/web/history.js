@@ -31,7 +31,9 @@
   // no interval can judge): only those in the worse direction could fail it, and only those are
   // listed to check by hand.
   const lowerIsBetter = Object.fromEntries((H.metrics || []).map((m) => [m.name, m.lowerIsBetter]));
-  const worse = (c) => (lowerIsBetter[c.metric] === false ? -(c.change ?? 0) : (c.change ?? 0)) > 0;
+  // A change of unknown size (none given: runs read from results.db that summarise other frames,
+  // or keep no pair's events) may be worse.
+  const worse = (c) => c.change == null || (lowerIsBetter[c.metric] === false ? -c.change : c.change) > 0;
   const notJudged = H.changes.filter((c) => c.verdict === 'not judged' && worse(c));
   const others = H.changes.length - flags.length - notJudged.length;
 
@@ -44,7 +46,9 @@
       : n
       ? `${n} runs, ${runText(0)} → ${runText(n - 1)} · ${failing} of ${comparisons} comparison(s) fail the gate (${flags.length} row(s))` +
         (notJudged.length ? `, ${notJudged.length} change(s) beyond the tolerance not judged` : '') +
-        `, ${others} other change(s) (improvements, changes within noise, new pairs)`
+        `, ${others} other change(s) (improvements, changes within noise, new pairs)` +
+        // With --denoisers, the comparisons before the contenders named existed are not made.
+        (H.notMadeBeforeContenders ? ` · ${H.notMadeBeforeContenders} comparison(s) not made: the earlier run has none of the contenders named with --denoisers` : '')
       : 'No runs.';
     // How the rows were judged: the gate's own options (arena compare --correction, --confidence).
     if (H.correction)
@@ -55,7 +59,7 @@
           ? ', and it stays resolved among all the rows of its comparison judged together (Holm\'s step-down correction: with many rows, some would be resolved by noise alone).'
           : ' (each row alone, no correction for the many rows of a comparison).');
     // What the verdicts rest on besides their rows, as `arena compare` warns of it (runs compared
-    // across other settings, other references, ...): each kind once.
+    // across other settings, other references, ...): each said once.
     $('history-warnings').replaceChildren(...(H.warnings || []).map((w) => el('li', { text: w })));
   }
 
