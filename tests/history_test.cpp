@@ -546,6 +546,10 @@ TEST(History, RunsFromADatabaseAreJudgedOnTheSettingsTheyRecorded) {
           << c;
     }
   EXPECT_TRUE(said) << windows["changes"].dump();
+  // A change of unknown size may be worse: counted among those not judged (the printout's warning
+  // and the page's list), not passed over.
+  EXPECT_EQ(windows["notJudged"], 1) << windows["changes"].dump();
+  EXPECT_EQ(windows["notJudgedFromDatabase"], 1);
   // The database's rows are checked as a results.json's summaries are: an interval whose ends
   // were swapped names its run, pair and metric.
   sqlite3* db = nullptr;
