@@ -85,16 +85,18 @@ void addReportCommand(CLI::App& app) {
     // with (`arena compare` is the gate).
     if (s.judged) {
       for (const std::string& w : s.gateWarnings) std::cerr << "arena: warning: " << w << "\n";
-      std::cout << "regression view against " << *baseline
-                << ": the gate (`arena compare` with these options) would "
-                << (s.gateExitCode == 0   ? std::string("pass")
-                    : s.gateExitCode == 1 ? std::string("FAIL")
-                                          : std::string("NOT JUDGE"))
-                << " (exit " << s.gateExitCode << ")";
+      // In compare's own words: its last line where it judges, an error where it refuses.
+      std::cout << "regression view against " << *baseline << " (as `arena compare " << *baseline
+                << " " << *run << "` with these options): ";
       if (!s.refused.empty())
-        std::cout << ": " << s.refused;
+        std::cout << "refused (exit 2): " << s.refused;
       else
-        std::cout << " (" << (s.verdicts.empty() ? "no rows" : s.verdicts) << ")";
+        std::cout << "gate: "
+                  << (s.gateExitCode == 0   ? "pass"
+                      : s.gateExitCode == 1 ? "FAIL"
+                                            : "COULD NOT JUDGE")
+                  << " (exit " << s.gateExitCode << "; "
+                  << (s.verdicts.empty() ? "no rows" : s.verdicts) << ")";
       std::cout << "\n";
     }
   });

@@ -1034,14 +1034,17 @@ std::map<std::string, std::string> checkLabelMatches(const std::vector<std::stri
     if (!cand.count(to))
       throw Error("--match " + a + ": the candidate has no pair labelled " + to +
                   " (its labels: " + labelList(cand) + ")");
+    if (from == to)  // as history says it: nothing for the option to do
+      throw Error("--match " + a + ": matches " + from +
+                  " with itself; a label is matched with itself already");
     if (auto it = matches.find(from); it != matches.end() && it->second == to)
       continue;  // the same match given twice (a CI script's list and its default): one match
     if (matches.count(from)) throw Error("--match " + a + ": " + from + " is matched twice");
     if (!matched.insert(to).second) throw Error("--match " + a + ": " + to + " is matched twice");
-    if (to != from && base.count(to))
+    if (base.count(to))
       throw Error("--match " + a + ": the baseline has a pair labelled " + to +
                   " too, which is compared with the candidate's by its label");
-    if (to != from && cand.count(from))
+    if (cand.count(from))
       throw Error("--match " + a + ": the candidate has a pair labelled " + from +
                   " too, which is compared with the baseline's by its label");
     matches[from] = to;

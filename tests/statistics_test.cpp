@@ -683,6 +683,9 @@ TEST(CompareGate, PairsOfOtherLabelsAreComparedWhenAskedTo) {
   EXPECT_NE(refused("svgf=eaw").find("the baseline has a pair labelled eaw too"),
             std::string::npos);
   EXPECT_THROW(checkLabelMatches({"svgf=svgf[sigmaL=8]", "svgf=eaw"}, a, b), Error);
+  // A label with itself: nothing for the option to do, refused as history refuses it (compare
+  // accepted it).
+  EXPECT_NE(refused("eaw=eaw").find("matches eaw with itself"), std::string::npos);
   // The candidate's own pair of that label would vanish from the gate (a failed one with it).
   json both = cand;
   both["pairs"].push_back(base["pairs"][0]);

@@ -473,8 +473,8 @@ test('report of a real tiny run: charts, selection, tables, A/B viewer, crops, f
     const dir = path.join(work, allow ? 'report-settings-allowed' : 'report-settings-refused');
     const printed = arena('report', run, '--baseline', otherBase, '--out', dir, ...(allow ? ['--allow-settings-mismatch'] : []));
     // The printout says the verdict too (a CI log), though report itself is no gate (exit 0).
-    assert.match(printed, allow ? /regression view against .*: the gate \(`arena compare` with these options\) would (pass \(exit 0\)|FAIL \(exit 1\)) \(\d+ /
-                                : /regression view against .*would NOT JUDGE \(exit 2\): the baseline and this run were run with different settings/);
+    assert.match(printed, allow ? /regression view against .* \(as `arena compare .*` with these options\): gate: (pass \(exit 0|FAIL \(exit 1); \d+ /
+                                : /regression view against .*: refused \(exit 2\): the baseline and this run were run with different settings/);
     const { page: view, problems: viewProblems } = await openReport(dir);
     const text = await view.locator('#regression-body').innerText();
     const compare = spawnSync(ARENA, ['compare', otherBase, run, ...(allow ? ['--allow-settings-mismatch'] : [])], { encoding: 'utf8' });
