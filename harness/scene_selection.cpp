@@ -127,10 +127,17 @@ std::vector<std::string> shortSequenceWarnings(const std::vector<Scene>& scenes,
 
 std::vector<std::string> splitList(const std::string& list, const std::string& what,
                                    const std::string& expected) {
+  // At commas outside brackets: a sweep's label holds its own ("svgf[edge.normal=true,sigmaL=2]").
   std::vector<std::string> out;
   size_t start = 0;
-  for (size_t comma; (comma = list.find(',', start)) != std::string::npos; start = comma + 1)
-    out.push_back(list.substr(start, comma - start));
+  int depth = 0;
+  for (size_t i = 0; i < list.size(); ++i) {
+    depth += list[i] == '[' ? 1 : list[i] == ']' && depth > 0 ? -1 : 0;
+    if (list[i] == ',' && depth == 0) {
+      out.push_back(list.substr(start, i - start));
+      start = i + 1;
+    }
+  }
   out.push_back(list.substr(start));
   // Spaces around an entry are the writer's layout ("[2, 4]"), not part of a name or a value.
   for (std::string& item : out) item = trimmed(item);

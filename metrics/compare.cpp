@@ -457,11 +457,36 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
       } else {
         // The same denoiser under another label only the candidate has (another parameter):
         // what would compare them, said.
+        // (Not one that ran what another baseline pair ran: it is compared with that one.)
         std::vector<std::string> others;
-        for (const auto& [k, c] : candPairs)
-          if (c->scene == scene && c->denoiser == b.denoiser && !baselineKeys.count(k))
-            others.push_back(c->label);
-        if (!others.empty())
+        for (const auto& [k, c] : candPairs) {
+          if (c->scene != scene || c->denoiser != b.denoiser || baselineKeys.count(k)) continue;
+          bool ranByAnother = false;
+          for (const PairResult& o : base.pairs)
+            ranByAnother =
+                ranByAnother || (o.scene == scene && o.denoiser == c->denoiser &&
+                                 !o.params.empty() && sameParameters(c->params, o.params));
+          if (!ranByAnother) others.push_back(c->label);
+        }
+        // Several of the baseline's configurations of it lack their label (a sweep's points
+        // against one plain run): a --match pairs one label with one, and naming one of them
+        // would read as if it were the candidate's under another name.
+        int missingOfDenoiser = 0;
+        for (const PairResult& o : base.pairs) {
+          if (o.scene != scene || o.denoiser != b.denoiser || candPairs.count(key(o))) continue;
+          bool ranThere = false;  // matched by what it ran, as above
+          for (const auto& [k, c] : candPairs)
+            ranThere = ranThere || (c->scene == scene && c->denoiser == o.denoiser &&
+                                    !o.params.empty() && sameParameters(c->params, o.params));
+          missingOfDenoiser += !ranThere;
+        }
+        if (!others.empty() && missingOfDenoiser > 1)
+          note +=
+              "; the candidate ran " + b.denoiser + " only as " + others.front() +
+              (others.size() > 1 ? " (and " + std::to_string(others.size() - 1) + " more)" : "") +
+              ", another configuration than this one and " + std::to_string(missingOfDenoiser - 1) +
+              " more of the baseline's";
+        else if (!others.empty())
           note +=
               "; the candidate ran " + b.denoiser + " as " + others.front() +
               (others.size() > 1 ? " (and " + std::to_string(others.size() - 1) + " more)" : "") +
@@ -1070,8 +1095,27 @@ void keepContenders(RunResults& baseline, RunResults& candidate, std::vector<std
                 labelList(all) + ")");
   }
   names = withMatchedLabels(std::move(names), matches);
-  for (RunResults* run : {&baseline, &candidate})
-    std::erase_if(run->pairs, [&](const PairResult& p) { return !isContender(p, names); });
+  // A pair the other run ran with the same denoiser and parameters under another label (a sweep's
+  // point against a plain run's --param) is the one compareRuns pairs with it by what it ran:
+  // naming either keeps both (naming one read the other "new", and the gate "nothing compared").
+  const auto ranTheSame = [](const PairResult& p, const PairResult& q) {
+    return p.scene == q.scene && p.denoiser == q.denoiser && !p.params.empty() &&
+           sameParameters(p.params, q.params);
+  };
+  std::vector<bool> keepBaseline, keepCandidate;
+  for (const PairResult& p : baseline.pairs) keepBaseline.push_back(isContender(p, names));
+  for (const PairResult& p : candidate.pairs) keepCandidate.push_back(isContender(p, names));
+  for (size_t i = 0; i < baseline.pairs.size(); ++i)
+    for (size_t k = 0; k < candidate.pairs.size(); ++k)
+      if (keepBaseline[i] != keepCandidate[k] && ranTheSame(baseline.pairs[i], candidate.pairs[k]))
+        keepBaseline[i] = keepCandidate[k] = true;
+  for (auto [run, keep] :
+       {std::pair{&baseline, &keepBaseline}, std::pair{&candidate, &keepCandidate}}) {
+    std::vector<PairResult> kept;
+    for (size_t i = 0; i < run->pairs.size(); ++i)
+      if ((*keep)[i]) kept.push_back(std::move(run->pairs[i]));
+    run->pairs = std::move(kept);
+  }
   // A --match whose pairs the names dropped would be asked for and do nothing.
   for (const auto& [from, to] : matches)
     if (std::none_of(baseline.pairs.begin(), baseline.pairs.end(),

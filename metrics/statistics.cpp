@@ -336,9 +336,29 @@ double relativeChange(double x, double base) {
   return (x - base) / std::max(std::abs(base), 1e-12);
 }
 
-std::vector<double> difference(const std::vector<double>& a, const std::vector<double>& b) {
+// Whether two replicate values are one number but for rounding: within kRoundingResolution of the
+// larger (or of `floor`, for values near 0 whose difference is itself relative, as log ratios
+// are). The tile sums are float32 (about seven significant digits), and two outputs alike but for
+// rounding (a switch that moves the filter's weights by an ulp) differ there by rounding alone: a
+// replicate that draws only such tiles must count as no difference, or an interval's end lands
+// within rounding of zero and its sign decides "resolved" (a sweep's edge.id read "better" at
+// [-1.07e-3, -1.28e-11], "tie" at [-8.6e-4, +1.6e-10]).
+bool sameButForRounding(double a, double b, double floor = 0) {
+  return std::abs(a - b) <=
+         std::max(kRoundingResolution * std::max(std::abs(a), std::abs(b)), floor);
+}
+
+// A replicate's relative change, 0 where the two values differ by rounding alone.
+double replicateChange(double x, double base) {
+  return sameButForRounding(x, base) ? 0.0 : relativeChange(x, base);
+}
+
+// a - b replicate by replicate, 0 where the two differ by rounding alone (`floor`: as above).
+std::vector<double> difference(const std::vector<double>& a, const std::vector<double>& b,
+                               double floor = 0) {
   std::vector<double> d(a.size());
-  for (size_t i = 0; i < a.size(); ++i) d[i] = a[i] - b[i];
+  for (size_t i = 0; i < a.size(); ++i)
+    d[i] = sameButForRounding(a[i], b[i], floor) ? 0.0 : a[i] - b[i];
   return d;
 }
 
@@ -376,7 +396,7 @@ PairedChange pairedRelativeChange(const MetricTiles& a, const MetricTiles& b,
   out.b = means[1];
   out.change = relativeChange(out.a, out.b);
   std::vector<double> changes(reps[0].size());
-  for (size_t i = 0; i < changes.size(); ++i) changes[i] = relativeChange(reps[0][i], reps[1][i]);
+  for (size_t i = 0; i < changes.size(); ++i) changes[i] = replicateChange(reps[0][i], reps[1][i]);
   out.ci = percentileInterval(changes, cfg.confidence);
   out.pValue = changePValue(changes);
   return out;
@@ -391,7 +411,7 @@ double pairedChangePValue(const MetricTiles& a, const MetricTiles& b, const std:
     const std::string seed = batch == 1 ? seedName : seedName + "#" + std::to_string(batch);
     const auto reps = pairedReplicates({&a, &b}, frames, seed, cfg, nullptr);
     for (size_t i = 0; i < reps[0].size(); ++i)
-      changes.push_back(relativeChange(reps[0][i], reps[1][i]));
+      changes.push_back(replicateChange(reps[0][i], reps[1][i]));
   }
   return changePValue(changes);
 }
@@ -663,7 +683,9 @@ OverallRanking rankOverall(const std::vector<const SceneRanking*>& scenes,
   }
   for (size_t i = 0; i < n; ++i)
     for (size_t j = i + 1; j < n; ++j) {
-      const Interval ci = percentileInterval(difference(logReps[i], logReps[j]), confidence);
+      // Log ratios: a difference is itself relative, so rounding's floor is absolute.
+      const Interval ci =
+          percentileInterval(difference(logReps[i], logReps[j], kRoundingResolution), confidence);
       resolved[i][j] = resolved[j][i] = ci.valid() && !ci.containsZero();
       SceneRanking::Pair pair;
       pair.a = kept[i];

@@ -103,6 +103,12 @@ Interval widenedInterval(const std::vector<double>& replicates, double confidenc
 Interval meanInterval(const MetricTiles& m, const std::string& seedName,
                       const BootstrapConfig& cfg = {});
 
+// How near two replicate values count as one number: a difference within this fraction of the
+// larger is rounding (the tile sums are float32, about seven significant digits), and counts as
+// none, so that two outputs alike but for rounding tie rather than be "resolved" by the sign of a
+// rounding error (pairedDifference, pairedRelativeChange, the overall ranking's log ratios).
+constexpr double kRoundingResolution = 1e-6;
+
 // a - b on the frames both have, with its interval.
 struct PairedDifference {
   double diff = kUndefined;

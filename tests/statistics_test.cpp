@@ -14,6 +14,7 @@
 #include "core/exr_io.hpp"
 #include "core/sequence.hpp"
 #include "harness/run_matrix.hpp"
+#include "harness/scene_selection.hpp"
 #include "metrics/compare.hpp"
 #include "metrics/error.hpp"
 #include "metrics/results.hpp"
@@ -131,6 +132,42 @@ TEST(Bootstrap, IdenticalMethodsAreTiedAndAClearWinnerIsResolved) {
   SceneRanking again =
       rankScene("relMse", true, {{"a", &a}, {"copy", &a}, {"worse", &worse}}, "scene");
   EXPECT_EQ(again.ranking[0].ci.lo, r.ranking[0].ci.lo);
+}
+
+// Two outputs alike but for rounding on 14 of 16 tiles (float32 tile sums one part in 10^9 apart,
+// every one the same way) and really different on 2: about one bootstrap replicate in eight draws
+// neither real tile, so an interval's end lies at that replicate's rounding, whose sign decided
+// "resolved" (a sweep's edge.id read "better" at [-1.07e-3, -1.28e-11]). Rounding is no
+// difference: the end is 0, a tie, in the paired difference, the relative change, its p-value and
+// the scene's ranking; a difference on every tile is still resolved.
+TEST(Bootstrap, ADifferenceOfRoundingAloneIsATie) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> content(0.02, 0.06);
+  MetricTiles a, b, far;
+  for (int f = 0; f < 12; ++f) {
+    TileSums ta, tb, tf;
+    for (int k = 0; k < 16; ++k) {
+      const double v = content(rng);
+      ta.sum.push_back(v), ta.count.push_back(1);
+      tb.sum.push_back(k < 2 ? 0.8 * v : v * (1 - 1e-9)), tb.count.push_back(1);
+      tf.sum.push_back(0.8 * v), tf.count.push_back(1);
+    }
+    a.add(f, std::move(ta));
+    b.add(f, std::move(tb));
+    far.add(f, std::move(tf));
+  }
+  const PairedDifference d = pairedDifference(b, a, "rounding");
+  ASSERT_TRUE(d.ci.valid());
+  EXPECT_LT(d.ci.lo, 0);
+  EXPECT_EQ(d.ci.hi, 0) << "the end a replicate of rounding alone gives";
+  EXPECT_FALSE(d.resolved());
+  const PairedChange c = pairedRelativeChange(b, a, "rounding");
+  EXPECT_TRUE(c.ci.containsZero()) << c.ci.lo << " " << c.ci.hi;
+  EXPECT_GT(c.pValue, 0.05);
+  const SceneRanking r = rankScene("relMse", true, {{"a", &a}, {"b", &b}}, "scene");
+  EXPECT_EQ(r.resolvedPairs, 0);
+  EXPECT_TRUE(pairedDifference(far, a, "rounding").resolved());
+  EXPECT_TRUE(pairedRelativeChange(far, a, "rounding").ci.hi < 0);
 }
 
 MetricTiles constantSeries(double value, int frames = 12) {
@@ -597,6 +634,47 @@ TEST(CompareGate, AMatchNamesParametersInAnyOrder) {
   // A value that differs, or a key given twice, is still no label of the run.
   for (const char* wrong : {"svgf=svgf[sigmaL=8,iterations=4]", "svgf=svgf[sigmaL=8,sigmaL=8]"})
     EXPECT_THROW(checkLabelMatches({wrong}, a, b), Error) << wrong;
+}
+
+// A sweep's points against a plain run of one of them (`run --param svgf.sigmaL=2`): the point
+// that ran the same is compared by what it ran, and naming either label with --denoisers keeps
+// both (naming the plain run's read the sweep's "new", and the gate "nothing compared"); the other
+// points are missing, and their note suggests no --match (the plain run's label is another
+// configuration than theirs, not theirs renamed).
+TEST(CompareGate, ASweepsPointMeetsThePlainRunThatRanTheSame) {
+  std::mt19937_64 rng(17);
+  const auto shared = sharedContent(20, 16, rng);
+  json sweep = syntheticJson(
+      {{"svgf[edge.normal=true,sigmaL=2]", syntheticSeries(20, 16, 0.0, rng, shared)},
+       {"svgf[edge.normal=false,sigmaL=2]", syntheticSeries(20, 16, 0.0, rng, shared)}});
+  json plain = syntheticJson({{"svgf[sigmaL=2]", syntheticSeries(20, 16, 0.0, rng, shared)}});
+  for (json* r : {&sweep, &plain})
+    for (json& p : (*r)["pairs"]) {
+      p["denoiser"] = "svgf";
+      const bool normal = p["label"] != "svgf[edge.normal=false,sigmaL=2]";
+      p["params"] = {{"edge.normal", normal}, {"sigmaL", 2}};
+    }
+  const RunResults a = test::typed(sweep), b = test::typed(plain);
+  for (const std::string& name : {"svgf[sigmaL=2]", "svgf[edge.normal=true,sigmaL=2]"}) {
+    RunResults keptA = a, keptB = b;
+    keepContenders(keptA, keptB, {name});
+    ASSERT_EQ(keptA.pairs.size(), 1u) << name;
+    EXPECT_EQ(keptA.pairs[0].label, "svgf[edge.normal=true,sigmaL=2]");
+    ASSERT_EQ(keptB.pairs.size(), 1u) << name;
+    const std::vector<ComparisonRow> rows = compareRuns(keptA, keptB, {{"relMse", 0.02}});
+    ASSERT_EQ(rows.size(), 1u) << name;
+    EXPECT_EQ(rows[0].candidateLabel, "svgf[sigmaL=2]");
+    EXPECT_NE(rows[0].verdict, "new");
+  }
+  const std::vector<ComparisonRow> rows = compareRuns(a, b, {{"relMse", 0.02}});
+  const auto missing = std::find_if(rows.begin(), rows.end(),
+                                    [](const ComparisonRow& r) { return r.verdict == "missing"; });
+  ASSERT_NE(missing, rows.end());
+  EXPECT_EQ(missing->label, "svgf[edge.normal=false,sigmaL=2]");
+  EXPECT_EQ(missing->note.find("--match"), std::string::npos) << missing->note;
+  // A label list splits at commas outside brackets: a sweep's label holds its own.
+  EXPECT_EQ(splitList("svgf[edge.normal=true,sigmaL=2], eaw", "--denoisers", "labels"),
+            (std::vector<std::string>{"svgf[edge.normal=true,sigmaL=2]", "eaw"}));
 }
 
 // A parameter changed between two runs (a researcher's ablation): the pairs' labels differ, so
