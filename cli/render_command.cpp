@@ -46,9 +46,11 @@ void addRenderCommand(CLI::App& app) {
   auto previews = std::make_shared<bool>(false);
   auto shardText = std::make_shared<std::string>("0/1");
   cmd->add_flag("--previews", *previews, "Also write preview PNGs (noisy frame and reference, first and last frame)");
-  cmd->add_option("--shard", *shardText,
-                  "Render only the deterministic slice i/n of the work (frames x reference replicates); a render "
-                  "without --shard afterwards merges the slices exactly");
+  cmd->add_option(
+      "--shard", *shardText,
+      "Render only the deterministic slice i/n of the work (frames x reference replicates), i from "
+      "0 to n-1; a render "
+      "without --shard afterwards merges the slices exactly");
   cmd->add_option("scenes", *names, "Scene names or files, comma-separated, or 'all'")->default_val("all");
   addRenderOptions(cmd, *opt);
   cmd->callback([opt, names, previews, shardText] {

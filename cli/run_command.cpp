@@ -67,7 +67,9 @@ void addMatrixOptions(CLI::App* cmd, MatrixOptions& o) {
       ->default_str("none");
   cmd->add_option("--param", o.params, "DENOISER.NAME=VALUE, repeatable (e.g. svgf.sigmaL=8)")
       ->default_str("none: registry defaults");
-  cmd->add_option("--shard", o.shard, "Run only the deterministic slice i/n of the pairs (see `arena merge`)")
+  cmd->add_option(
+         "--shard", o.shard,
+         "Run only the deterministic slice i/n of the pairs, i from 0 to n-1 (see `arena merge`)")
       ->default_val("0/1");
   cmd->add_option("--flip", o.flip, "FLIP metrics: none, ldr, or all (LDR and HDR)")
       ->check(CLI::IsMember({"none", "ldr", "all"}))

@@ -636,6 +636,26 @@ std::string ablationVerdict(size_t matches, size_t intervals, size_t better, siz
 // several settings of the other parameters on a scene, `byMatch` lists each match ("given" those
 // settings) with its own paired difference: an effect that holds under one setting only (an
 // interaction) shows there.
+// The caveats the run recorded on a scene's results, in a line: its reference short of the goal
+// (scenes.<s>.referenceQuality), and too few frames after the warm-up (its warning's first
+// clause). Empty when there are none.
+std::string sceneCaveat(const RunResults& results, const std::string& scene) {
+  if (!results.scenes.is_object() || !results.scenes.contains(scene)) return "";
+  const json& info = results.scenes[scene];
+  std::vector<std::string> parts;
+  if (const json& q = info.value("referenceQuality", json());
+      q.is_object() && q.value("meets", true) == false && q.value("ratio", json()).is_number())
+    parts.push_back("reference goal not met (noise floor / best corrected relMSE " +
+                    shortestText(std::round(q["ratio"].get<double>() * 1000) / 1000) + ", goal " +
+                    shortestText(q.value("goal", 0.1)) + ")");
+  for (const json& w : info.value("warnings", json::array()))
+    if (w.is_string() && w.get<std::string>().rfind("only ", 0) == 0)
+      parts.push_back(w.get<std::string>().substr(0, w.get<std::string>().find(':')));
+  std::string line;
+  for (const std::string& p : parts) line += (line.empty() ? "" : "; ") + p;
+  return line;
+}
+
 json ablationData(const RunResults& results) {
   if (!results.sweep.is_object()) return nullptr;
   const json& sweep = results.sweep;
@@ -671,6 +691,16 @@ json ablationData(const RunResults& results) {
     size_t intervals = 0, better = 0, worse = 0;
     json lastPaired;  // a single match's paired difference (the row's, when it is the only one)
   };
+  // The all-scenes rows name the scenes whose own rows carry a caveat.
+  std::string caveatOfAllScenes;
+  {
+    std::set<std::string> scenesOfPairs, withCaveat;
+    for (const PairResult* p : pairs) scenesOfPairs.insert(p->scene);
+    for (const std::string& s : scenesOfPairs)
+      if (!sceneCaveat(results, s).empty()) withCaveat.insert(s);
+    if (!withCaveat.empty())
+      caveatOfAllScenes = "caveats on " + labelList(withCaveat) + " (their rows say which)";
+  }
   json rows = json::array();
   for (auto g = sweep["grid"].begin(); g != sweep["grid"].end(); ++g) {
     const std::string name = g.key();
@@ -809,6 +839,12 @@ json ablationData(const RunResults& results) {
         if (!scope.empty() && matched[scope] > 1) row["byMatch"] = byMatch[scope];
         if (scope.empty() && !single.empty()) row["paired"] = single;
         if (!scope.empty() && notes.count(scope)) row["notes"] = notes[scope];
+        // What the run said of the scene's results travels with its rows (a table copied into a
+        // paper lost it): a reference short of its goal, too few frames after the warm-up.
+        if (const std::string caveat =
+                scope.empty() ? caveatOfAllScenes : sceneCaveat(results, scope);
+            !caveat.empty())
+          row["caveat"] = caveat;
         rows.push_back(row);
       }
     }
@@ -1019,10 +1055,17 @@ std::string ablationCsv(const json& ablation) {
       const json judged = row["judged"].value(m, json::object());
       const json ci =
           row.value("paired", json::object()).value(m, json::object()).value("ci95", json());
+      // The scene's caveat (a reference short of its goal, too few frames) beside the metric's
+      // note.
+      const auto noted = [&row](const std::string& note) {
+        const std::string caveat = row.value("caveat", "");
+        return caveat.empty() ? note : note.empty() ? caveat : caveat + "; " + note;
+      };
       line(row, row.value("given", ""), scene, row["matched"], m, d.value(),
            row["relative"].value(m, json()), judged.value("verdict", ""),
            judged.value("matches", json()), judged.value("intervals", json()),
-           judged.value("resolved", json()), ci, row.value("notes", json::object()).value(m, ""));
+           judged.value("resolved", json()), ci,
+           noted(row.value("notes", json::object()).value(m, "")));
       for (const json& match : row.value("byMatch", json::array())) {
         if (!match["delta"].contains(m)) continue;
         const json paired = match["paired"].value(m, json());
@@ -1031,7 +1074,7 @@ std::string ablationCsv(const json& ablation) {
              match["relative"].value(m, json()), verdict, 1, paired.is_object() ? 1 : 0,
              verdict == "better" || verdict == "worse" ? 1 : 0,
              paired.is_object() ? paired.value("ci95", json()) : json(),
-             match.value("notes", json::object()).value(m, ""));
+             noted(match.value("notes", json::object()).value(m, "")));
       }
     }
   }

@@ -559,6 +559,32 @@ TEST(Report, AblationDeltasAreTheRunsPairedDifferences) {
   EXPECT_NE(csv.find("\na,1,0,b=true,static,1,relMse,-0.0123"), std::string::npos) << csv;
   EXPECT_NE(csv.find(",better,1,1,1,-0.02,-0.0040000000000000001,\n"), std::string::npos) << csv;
   EXPECT_EQ(ablationCsv(nullptr), "");
+  // What the run said of a scene's results travels with its rows, in the CSV's note too (a table
+  // copied into a paper lost it): too few frames after the warm-up, a reference short of its goal.
+  run["scenes"]["static"]["warnings"] = {
+      "only 2 frames follow the warm-up of 8: the intervals resample so few frames that they "
+      "hardly cover how a method varies"};
+  const json caveated =
+      reportData(test::typed(run), test::freshDir("report_ablation_caveat"), nullptr)["ablation"];
+  bool sceneRow = false;  // (one scene with matches: no all-scenes row, whose caveat names them)
+  for (const json& r : caveated["rows"]) {
+    if (r["scene"] == "static") {
+      sceneRow = true;
+      EXPECT_EQ(r.value("caveat", ""), "only 2 frames follow the warm-up of 8") << r;
+    }
+    if (r["scene"].is_null()) {
+      EXPECT_EQ(r.value("caveat", ""), "caveats on static (their rows say which)") << r;
+    }
+    if (r["scene"] == "switch") {
+      EXPECT_FALSE(r.contains("caveat")) << r;
+    }
+  }
+  EXPECT_TRUE(sceneRow);
+  EXPECT_NE(ablationCsv(caveated).find(",static,1,relMse,-0.0123"), std::string::npos);
+  EXPECT_NE(ablationCsv(caveated).find(",-0.02,-0.0040000000000000001,only 2 frames follow the "
+                                       "warm-up of 8\n"),
+            std::string::npos)
+      << ablationCsv(caveated);
 }
 
 // Time in the ablation is the median frame time, as in the summary table and the speed chart: a

@@ -349,6 +349,11 @@
     const unranked = (AB.unrankedFigures || []).filter((line) => A.state.scene === undefined || line.includes(` on ${A.state.scene}: `));
     if (unranked.length)
       box.append(el('p', { class: 'note unranked-figures', text: `Event figures that rank no method here, so their changes have no interval: ${unranked.join('; ')}.` }));
+    // What the run said of these scenes' results (a reference short of its goal, too few frames after
+    // the warm-up): with the table, as ablation.csv carries it in each row's note.
+    const caveats = [...new Set(rows.map((r) => r.caveat).filter(Boolean))];
+    if (caveats.length)
+      box.append(el('p', { class: 'note warnings ablation-caveat', text: `Caveats on these rows: ${caveats.join('; ')}.` }));
     if (!rows.length) {
       box.append(el('p', { class: 'empty', text: 'No grid parameter has two values with matching pairs.' }));
       return;
