@@ -143,6 +143,15 @@ TEST(CliContract, ShardsParamsAndSweepsAreStrict) {
   r = contract::arenaCli("sweep --denoiser svgf --grid 'sigmaL=[]'" + common);
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("--grid 'sigmaL=[]': no values"), std::string::npos) << r.output;
+  // An axis of one value ablates nothing: said when the sweep starts, not only by the report.
+  r = contract::arenaCli(
+      "sweep --denoiser svgf --grid 'sigmaL=[4]' --grid 'sigmaZ=[1,2]' --scenes cornell_static "
+      "--resolution 8x8 --frames 2 --ref-spp 1 --no-baselines --cache " +
+      (dir / "cache").string() + " --out " + (dir / "one").string());
+  EXPECT_NE(r.status, 2) << r.output;  // it runs (1 here: 2 frames leave nothing to summarise)
+  EXPECT_NE(r.output.find("warning: --grid sigmaL: one value (4): it fixes the parameter"),
+            std::string::npos)
+      << r.output;
   // A scene or denoiser left out between commas is refused, not skipped.
   r = contract::arenaCli("run --denoisers passthrough --scenes cornell_static,,camera_cut --out " +
                          (dir / "run").string());
