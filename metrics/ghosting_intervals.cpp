@@ -647,8 +647,8 @@ EventFigureChange eventFigureChange(const json& baseEvent, const json& candEvent
     return out;
   }
   const std::vector<double>&b = reps[0].replicates.at(figure), &c = reps[1].replicates.at(figure);
-  std::vector<double> differences(b.size());
-  for (size_t i = 0; i < b.size(); ++i) differences[i] = c[i] - b[i];
+  // (A difference of rounding alone is none, as in every paired difference: statistics.hpp.)
+  const std::vector<double> differences = replicateDifferences(c, b);
   out.difference =
       widenedInterval(differences, cfg.confidence, std::max(reps[0].widen, reps[1].widen));
   if (!out.difference.valid()) {

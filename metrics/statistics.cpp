@@ -353,16 +353,15 @@ double replicateChange(double x, double base) {
   return sameButForRounding(x, base) ? 0.0 : relativeChange(x, base);
 }
 
-// a - b replicate by replicate, 0 where the two differ by rounding alone (`floor`: as above).
-std::vector<double> difference(const std::vector<double>& a, const std::vector<double>& b,
-                               double floor = 0) {
+}  // namespace
+
+std::vector<double> replicateDifferences(const std::vector<double>& a, const std::vector<double>& b,
+                                         double floor) {
   std::vector<double> d(a.size());
   for (size_t i = 0; i < a.size(); ++i)
     d[i] = sameButForRounding(a[i], b[i], floor) ? 0.0 : a[i] - b[i];
   return d;
 }
-
-}  // namespace
 
 double changePValue(const std::vector<double>& changes) {
   size_t finite = 0, atMost = 0, atLeast = 0;
@@ -382,7 +381,8 @@ PairedDifference pairedDifference(const MetricTiles& a, const MetricTiles& b,
   if (frames.empty()) return {};
   std::vector<double> means;
   auto reps = pairedReplicates({&a, &b}, frames, seedName, cfg, &means);
-  return {means[0] - means[1], percentileInterval(difference(reps[0], reps[1]), cfg.confidence)};
+  return {means[0] - means[1],
+          percentileInterval(replicateDifferences(reps[0], reps[1]), cfg.confidence)};
 }
 
 PairedChange pairedRelativeChange(const MetricTiles& a, const MetricTiles& b,
@@ -560,10 +560,11 @@ SceneRanking rankReplicates(const std::string& metric, bool lowerIsBetter,
   }
   for (size_t i = 0; i < n; ++i)
     for (size_t j = i + 1; j < n; ++j) {
-      SceneRanking::Pair p{labels[i],
-                           labels[j],
-                           {values[i] - values[j],
-                            widenedInterval(difference(reps[i], reps[j]), confidence, widen)}};
+      SceneRanking::Pair p{
+          labels[i],
+          labels[j],
+          {values[i] - values[j],
+           widenedInterval(replicateDifferences(reps[i], reps[j]), confidence, widen)}};
       const bool r = p.d.resolved();
       resolved[i][j] = resolved[j][i] = r;
       better[i][j] = lowerIsBetter ? p.d.diff < 0 : p.d.diff > 0;
@@ -684,8 +685,8 @@ OverallRanking rankOverall(const std::vector<const SceneRanking*>& scenes,
   for (size_t i = 0; i < n; ++i)
     for (size_t j = i + 1; j < n; ++j) {
       // Log ratios: a difference is itself relative, so rounding's floor is absolute.
-      const Interval ci =
-          percentileInterval(difference(logReps[i], logReps[j], kRoundingResolution), confidence);
+      const Interval ci = percentileInterval(
+          replicateDifferences(logReps[i], logReps[j], kRoundingResolution), confidence);
       resolved[i][j] = resolved[j][i] = ci.valid() && !ci.containsZero();
       SceneRanking::Pair pair;
       pair.a = kept[i];

@@ -108,6 +108,11 @@ Interval meanInterval(const MetricTiles& m, const std::string& seedName,
 // none, so that two outputs alike but for rounding tie rather than be "resolved" by the sign of a
 // rounding error (pairedDifference, pairedRelativeChange, the overall ranking's log ratios).
 constexpr double kRoundingResolution = 1e-6;
+// a - b replicate by replicate, 0 where the two differ by rounding alone (within
+// kRoundingResolution of the larger, or within `floor` for values near 0 whose difference is itself
+// relative, as log ratios are).
+std::vector<double> replicateDifferences(const std::vector<double>& a, const std::vector<double>& b,
+                                         double floor = 0);
 
 // a - b on the frames both have, with its interval.
 struct PairedDifference {

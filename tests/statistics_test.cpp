@@ -168,6 +168,11 @@ TEST(Bootstrap, ADifferenceOfRoundingAloneIsATie) {
   EXPECT_EQ(r.resolvedPairs, 0);
   EXPECT_TRUE(pairedDifference(far, a, "rounding").resolved());
   EXPECT_TRUE(pairedRelativeChange(far, a, "rounding").ci.hi < 0);
+  // The shared rule (event figures' changes use it too): within a millionth of the larger is none;
+  // near 0, a floor (log ratios).
+  EXPECT_EQ(replicateDifferences({1.0, 1.0, 0.0, 1e-9}, {1.0 - 1e-9, 0.999, 1e-9, 0.0}),
+            (std::vector<double>{0.0, 1.0 - 0.999, -1e-9, 1e-9}));
+  EXPECT_EQ(replicateDifferences({1e-9}, {0.0}, kRoundingResolution), std::vector<double>{0.0});
 }
 
 MetricTiles constantSeries(double value, int frames = 12) {
