@@ -53,6 +53,14 @@ bool sameParameters(const json& a, const json& b) {
   return true;
 }
 
+// Whether `baseline` and `candidate` ran one configuration (the same scene, denoiser and resolved
+// parameters) whatever their labels: how compareRuns matches a pair without its label in the
+// candidate (a baseline pair that records no parameters is matched by label alone).
+bool ranTheSame(const PairResult& baseline, const PairResult& candidate) {
+  return baseline.scene == candidate.scene && baseline.denoiser == candidate.denoiser &&
+         !baseline.params.empty() && sameParameters(candidate.params, baseline.params);
+}
+
 // A row about a whole pair (metric "*"): missing, failed or new; no numbers to compare.
 ComparisonRow pairRow(const PairResult& p, const std::string& verdict, const std::string& note) {
   ComparisonRow row;
@@ -440,12 +448,10 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
     // resolved parameters, where exactly one candidate pair of the scene ran that.
     if (it == candPairs.end() && requested == matches.end() && b.ok() && !b.params.empty()) {
       auto same = candPairs.end();
-      int ranTheSame = 0;
+      int ranOne = 0;
       for (auto c = candPairs.begin(); c != candPairs.end(); ++c)
-        if (c->second->scene == scene && c->second->denoiser == b.denoiser &&
-            sameParameters(c->second->params, b.params) && !baselineKeys.count(c->first))
-          same = c, ++ranTheSame;
-      if (ranTheSame == 1) {
+        if (ranTheSame(b, *c->second) && !baselineKeys.count(c->first)) same = c, ++ranOne;
+      if (ranOne == 1) {
         it = same;
         baseKeys.insert(it->first);  // not "new" below
       }
@@ -462,10 +468,7 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
         for (const auto& [k, c] : candPairs) {
           if (c->scene != scene || c->denoiser != b.denoiser || baselineKeys.count(k)) continue;
           bool ranByAnother = false;
-          for (const PairResult& o : base.pairs)
-            ranByAnother =
-                ranByAnother || (o.scene == scene && o.denoiser == c->denoiser &&
-                                 !o.params.empty() && sameParameters(c->params, o.params));
+          for (const PairResult& o : base.pairs) ranByAnother = ranByAnother || ranTheSame(o, *c);
           if (!ranByAnother) others.push_back(c->label);
         }
         // Several of the baseline's configurations of it lack their label (a sweep's points
@@ -475,9 +478,7 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
         for (const PairResult& o : base.pairs) {
           if (o.scene != scene || o.denoiser != b.denoiser || candPairs.count(key(o))) continue;
           bool ranThere = false;  // matched by what it ran, as above
-          for (const auto& [k, c] : candPairs)
-            ranThere = ranThere || (c->scene == scene && c->denoiser == o.denoiser &&
-                                    !o.params.empty() && sameParameters(c->params, o.params));
+          for (const auto& [k, c] : candPairs) ranThere = ranThere || ranTheSame(o, *c);
           missingOfDenoiser += !ranThere;
         }
         if (!others.empty() && missingOfDenoiser > 1)
@@ -1098,10 +1099,6 @@ void keepContenders(RunResults& baseline, RunResults& candidate, std::vector<std
   // A pair the other run ran with the same denoiser and parameters under another label (a sweep's
   // point against a plain run's --param) is the one compareRuns pairs with it by what it ran:
   // naming either keeps both (naming one read the other "new", and the gate "nothing compared").
-  const auto ranTheSame = [](const PairResult& p, const PairResult& q) {
-    return p.scene == q.scene && p.denoiser == q.denoiser && !p.params.empty() &&
-           sameParameters(p.params, q.params);
-  };
   std::vector<bool> keepBaseline, keepCandidate;
   for (const PairResult& p : baseline.pairs) keepBaseline.push_back(isContender(p, names));
   for (const PairResult& p : candidate.pairs) keepCandidate.push_back(isContender(p, names));
