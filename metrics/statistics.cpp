@@ -281,8 +281,14 @@ Interval widenedInterval(const std::vector<double>& replicates, double confidenc
   std::vector<double> finite;
   for (double v : replicates)
     if (std::isfinite(v)) finite.push_back(v);
-  std::nth_element(finite.begin(), finite.begin() + long(finite.size() / 2), finite.end());
-  const double m = finite[finite.size() / 2];
+  // The median as the mean of the two middle values where their count is even, so that the
+  // replicates of b - a give exactly the negated interval of a - b's (one middle value, the upper,
+  // put the two intervals of one pair a few units of the fourth digit apart).
+  const size_t half = finite.size() / 2;
+  std::nth_element(finite.begin(), finite.begin() + long(half), finite.end());
+  double m = finite[half];
+  if (finite.size() % 2 == 0)
+    m = 0.5 * (m + *std::max_element(finite.begin(), finite.begin() + long(half)));
   return {m - widen * (m - q.lo), m + widen * (q.hi - m)};
 }
 

@@ -140,6 +140,31 @@ TEST(Bootstrap, IdenticalMethodsAreTiedAndAClearWinnerIsResolved) {
 // "resolved" (a sweep's edge.id read "better" at [-1.07e-3, -1.28e-11]). Rounding is no
 // difference: the end is 0, a tie, in the paired difference, the relative change, its p-value and
 // the scene's ranking; a difference on every tile is still resolved.
+TEST(Bootstrap, AWidenedIntervalOfBMinusAIsTheNegatedIntervalOfAMinusB) {
+  // An even count of replicates (the event figures draw 1000): the widening's centre must not
+  // depend on which way the difference is taken.
+  std::mt19937_64 rng(5);
+  std::lognormal_distribution<double> skewed(0.0, 1.0);
+  std::vector<double> d(1000);
+  for (double& x : d) x = skewed(rng);
+  std::vector<double> negated(d.size());
+  for (size_t i = 0; i < d.size(); ++i) negated[i] = -d[i];
+  for (double widen : {1.0, 1.3}) {
+    const Interval forward = widenedInterval(d, 0.95, widen);
+    const Interval backward = widenedInterval(negated, 0.95, widen);
+    ASSERT_TRUE(forward.valid() && backward.valid());
+    EXPECT_NEAR(forward.lo, -backward.hi, 1e-12 * std::abs(forward.lo)) << widen;
+    EXPECT_NEAR(forward.hi, -backward.lo, 1e-12 * std::abs(forward.hi)) << widen;
+  }
+  // Widened about the median: the two middle values' mean where there are two.
+  const Interval w = widenedInterval(
+      {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19}, 0.5, 2.0);
+  const Interval plain = percentileInterval(
+      {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19}, 0.5);
+  EXPECT_DOUBLE_EQ(w.lo, 9.5 - 2 * (9.5 - plain.lo));
+  EXPECT_DOUBLE_EQ(w.hi, 9.5 + 2 * (plain.hi - 9.5));
+}
+
 TEST(Bootstrap, ADifferenceOfRoundingAloneIsATie) {
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> content(0.02, 0.06);
