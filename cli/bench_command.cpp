@@ -35,11 +35,11 @@ void addBenchCommand(CLI::App& app) {
   tracer->add_option("--scene", o->scene, "Scene file");
   tracer->add_flag("--embree", o->embree, "Also run Embree's pathtracer tutorial (embree-tools) for comparison");
   tracer->add_option("--json", o->json, "Write results to this JSON file")
-      ->check(writableFile())
+      ->check(writableFile("bench tracer"))
       ->default_str("(none)");
   tracer->callback([o] {
     const nlohmann::json out = benchTracer({o->scene, o->size, o->frames, o->warmup, o->embree}, printLine);
-    if (!o->json.empty()) writeTextAtomically(o->json, out.dump(2));
+    if (!o->json.empty()) writeMarkedJson(o->json, "bench tracer", out);
   });
 
   auto* denoise = bench->add_subcommand("denoise", "Denoiser cost at 1280x720: ms/frame and bilateral units (BU)");
@@ -62,7 +62,7 @@ void addBenchCommand(CLI::App& app) {
       ->check(CLI::Range(1, 1000))
       ->default_val(3);
   denoise->add_option("--json", d->json, "Write results to this JSON file")
-      ->check(writableFile())
+      ->check(writableFile("bench denoise"))
       ->default_str("(none)");
   denoise
       ->add_option("--lowres-factor", d->lowresFactor,
@@ -88,7 +88,7 @@ void addBenchCommand(CLI::App& app) {
     for (std::string& n : b.denoisers) n = DenoiserRegistry::resolve(n);  // loads external ones
     b.params = parseParamAssignments(d->params);
     const nlohmann::json out = benchDenoise(b, printLine);
-    if (!d->json.empty()) writeTextAtomically(d->json, out.dump(2));
+    if (!d->json.empty()) writeMarkedJson(d->json, "bench denoise", out);
     // A contender that failed was reported with its error and the others timed; the exit status
     // says the bench is not whole (1, as a run with a failed pair).
     int failed = 0;
@@ -125,7 +125,7 @@ void addBenchCommand(CLI::App& app) {
       ->check(CLI::Range(2, 100))
       ->default_val(5);
   gpuModel->add_option("--json", g->json, "Write results to this JSON file")
-      ->check(writableFile())
+      ->check(writableFile("bench gpu-model"))
       ->default_str("(none)");
   gpuModel->callback([g] {
     GpuModelBench b;
@@ -138,7 +138,7 @@ void addBenchCommand(CLI::App& app) {
                       : splitList(g->denoisers, "--denoisers",
                                   "built-in names (`arena denoisers`), comma-separated, or 'all'");
     const nlohmann::json out = benchGpuModel(b, printLine);
-    if (!g->json.empty()) writeTextAtomically(g->json, out.dump(2));
+    if (!g->json.empty()) writeMarkedJson(g->json, "bench gpu-model", out);
   });
 
   auto* gpuMeasured = bench->add_subcommand(
@@ -154,11 +154,11 @@ void addBenchCommand(CLI::App& app) {
                           "Specification to price with (TITAN RTX, RTX 4080, PS5, H200); default: the one "
                           "the file's device names");
   gpuMeasured->add_option("--json", gm->json, "Write results to this JSON file")
-      ->check(writableFile())
+      ->check(writableFile("bench gpu-measured"))
       ->default_str("(none)");
   gpuMeasured->callback([gm] {
     const nlohmann::json out = benchGpuMeasured(gm->file, gm->device, printLine);
-    if (!gm->json.empty()) writeTextAtomically(gm->json, out.dump(2));
+    if (!gm->json.empty()) writeMarkedJson(gm->json, "bench gpu-measured", out);
   });
 
   auto* rank = bench->add_subcommand(
@@ -172,11 +172,11 @@ void addBenchCommand(CLI::App& app) {
   rank->add_option("runA", ro->runA, "Run directory A (its results.json)")->required();
   rank->add_option("runB", ro->runB, "Run directory B, the same scenes")->required();
   rank->add_option("--json", ro->json, "Write results to this JSON file")
-      ->check(writableFile())
+      ->check(writableFile("bench rank-agreement"))
       ->default_str("(none)");
   rank->callback([ro] {
     const nlohmann::json out = benchRankAgreement(ro->runA, ro->runB, printLine);
-    if (!ro->json.empty()) writeTextAtomically(ro->json, out.dump(2));
+    if (!ro->json.empty()) writeMarkedJson(ro->json, "bench rank-agreement", out);
   });
 }
 

@@ -52,7 +52,7 @@ void addBenchReferenceCommand(CLI::App* bench) {
       ->check(CLI::Range(0, 100000));
   cmd->add_option("--scenes-dir", o->scenesDir, "Directory of scene files");
   cmd->add_option("--json", o->json, "Write results to this JSON file")
-      ->check(writableFile())
+      ->check(writableFile("bench reference"))
       ->default_str("(none)");
   cmd->callback([o] {
     RenderOptions ro;
@@ -68,7 +68,7 @@ void addBenchReferenceCommand(CLI::App* bench) {
     b.replicates = o->replicates;
     b.repeats = o->repeats;
     const nlohmann::json out = benchReference(b, [](const std::string& line) { std::cout << line << std::endl; });
-    if (!o->json.empty()) writeTextAtomically(o->json, out.dump(2));
+    if (!o->json.empty()) writeMarkedJson(o->json, "bench reference", out);
   });
 }
 

@@ -5,10 +5,13 @@
 #include <malloc.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <exception>
 #include <filesystem>
 #include <iostream>
 #include <new>
+#include <regex>
 #include <thread>
 #include <typeinfo>
 
@@ -97,8 +100,27 @@ int main(int argc, char** argv) {
       what = option + " given " + what.substr(at + twice.size()) + " times; give it once" +
              (list ? " (a list is one comma-separated value, e.g. " + option + " a,b)" : "");
     }
-    std::cerr << "arena: error: " << what << "\n(`arena "
-              << (given.empty() ? std::string() : given.front()->get_name() + " ")
+    // CLI11's range check of a whole-number option reads a value it cannot convert as out of range
+    // ("--frames: Value 2.5 not in range 2 to 100"): a number inside the range was not whole.
+    static const std::regex range(R"(^(--[\w-]+): Value (\S+) not in range (-?\d+) to (-?\d+)$)");
+    if (std::smatch m; std::regex_match(what, m, range)) {
+      char* end = nullptr;
+      const std::string text = m[2];
+      const double v = std::strtod(text.c_str(), &end);
+      if (end && *end == '\0' && !text.empty() && std::isfinite(v) && v >= std::stod(m[3]) &&
+          v <= std::stod(m[4]))
+        what = std::string(m[1]) + ": " + text +
+               " is not a whole number written in digits; expected one from " + std::string(m[3]) +
+               " to " + std::string(m[4]);
+    }
+    // The innermost subcommand given lists its options (`arena bench --help` lists only benches).
+    std::string command;
+    for (const CLI::App* sub = given.empty() ? nullptr : given.front(); sub;) {
+      command += sub->get_name() + " ";
+      const std::vector<CLI::App*> inner = sub->get_subcommands();
+      sub = inner.empty() ? nullptr : inner.front();
+    }
+    std::cerr << "arena: error: " << what << "\n(`arena " << command
               << "--help` lists the options)\n";
     return 2;
   } catch (const arena::Error& e) {

@@ -53,23 +53,29 @@ std::string intervalText(const Interval& ci) {
 
 // A scene's pairs whose outputs were bit-identical (pairs[].outputChecksum), "asvgf = svgf" per
 // group: a tie between them measures one output twice.
-std::string identicalOutputsText(const RunResults& results, const std::string& scene) {
+std::vector<std::vector<const PairResult*>> identicalOutputGroups(const RunResults& results,
+                                                                  const std::string& scene) {
   // Groups in the order of their first member in the run (a sweep's grid order), not by checksum.
   std::vector<std::string> order;
-  std::map<std::string, std::vector<std::string>> byChecksum;
+  std::map<std::string, std::vector<const PairResult*>> byChecksum;
   for (const PairResult& p : results.pairs)
     if (p.scene == scene && p.ok() && p.detail.contains("outputChecksum") &&
         p.detail["outputChecksum"].is_string()) {
       const std::string checksum = p.detail["outputChecksum"].get<std::string>();
       if (!byChecksum.count(checksum)) order.push_back(checksum);
-      byChecksum[checksum].push_back(p.label);
+      byChecksum[checksum].push_back(&p);
     }
+  std::vector<std::vector<const PairResult*>> groups;
+  for (const std::string& checksum : order)
+    if (byChecksum[checksum].size() >= 2) groups.push_back(byChecksum[checksum]);
+  return groups;
+}
+
+std::string identicalOutputsText(const RunResults& results, const std::string& scene) {
   std::string text;
-  for (const std::string& checksum : order) {
-    const std::vector<std::string>& labels = byChecksum[checksum];
-    if (labels.size() < 2) continue;
+  for (const std::vector<const PairResult*>& group : identicalOutputGroups(results, scene)) {
     if (!text.empty()) text += "; ";
-    for (size_t k = 0; k < labels.size(); ++k) text.append(k ? " = " : "").append(labels[k]);
+    for (size_t k = 0; k < group.size(); ++k) text.append(k ? " = " : "").append(group[k]->label);
   }
   return text;
 }
@@ -397,11 +403,17 @@ void printSpeedOrder(std::ostream& out, const RunResults& results) {
     std::vector<size_t> idx(labels.size());
     for (size_t i = 0; i < idx.size(); ++i) idx[i] = i;
     std::stable_sort(idx.begin(), idx.end(), [&](size_t a, size_t b) { return ms[a] < ms[b]; });
-    // Two times that print alike are not ordered by the print ("20.89 < 20.89").
+    // Two times that print alike are not ordered by the print ("20.89 < 20.89"); predicted times
+    // less than 10% apart are not ordered by the model (" ≈ ").
     std::string text, previous;
+    double previousMs = 0;
     for (size_t i : idx) {
       const std::string figure = onCpu ? figureText(ms[i]) : twoDigitsText(ms[i]);
-      text += (text.empty() ? "" : figure == previous ? " = " : " < ") + labels[i] + " " + figure;
+      const std::string separator = !onCpu ? predictedOrderSeparator(previousMs, ms[i])
+                                    : figure == previous ? " = "
+                                                         : " < ";
+      text += (text.empty() ? "" : separator) + labels[i] + " " + figure;
+      previousMs = ms[i];
       if (traced.count(labels[i]))
         text +=
             onCpu ? " (+paths: " + figureText(tracing[labels[i]] / traced[labels[i]]) + " tracing)"
@@ -426,7 +438,8 @@ void printSpeedOrder(std::ostream& out, const RunResults& results) {
       << order(cpu, true) << "\n"
       << "  GPU predicted, " << device
       << " 1080p (a model, 2 digits: it misses its validation goal, so read an order of magnitude "
-         "and an order of methods, not a budget; docs/gpu-cost.md"
+         "and an order of methods, not a budget; ≈: less than 10% apart, not ordered by it; "
+         "docs/gpu-cost.md"
       << (otherDevices.empty() ? std::string()
                                : "; also priced: " + otherDevices + ", in the report")
       << "): " << order(gpu, false) << "\n"

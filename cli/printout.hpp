@@ -38,6 +38,9 @@ PairWarningCount countPairWarnings(const RunResults& results);
 // A scene's pairs whose outputs were bit-identical on every frame (pairs[].outputChecksum), each
 // group "asvgf = svgf", groups separated by "; "; "" when none.
 std::string identicalOutputsText(const RunResults& results, const std::string& scene);
+// The groups of identicalOutputsText, each two or more pairs.
+std::vector<std::vector<const PairResult*>> identicalOutputGroups(const RunResults& results,
+                                                                  const std::string& scene);
 // The scenes' image sizes, each once: "256x144" or "256x144, 512x288" ("" when none is recorded).
 std::string sceneSizesText(const RunResults& results);
 // The run's overall ranking (statistics.overall): rank ("=" when tied), label, score, interval,

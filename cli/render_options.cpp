@@ -1,8 +1,12 @@
 #include "cli/render_options.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
+#include <fstream>
 
+#include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "harness/scene_selection.hpp"
 
@@ -48,25 +52,62 @@ CLI::Validator finiteRange(double lo, double hi) {
       "FLOAT in " + range);
 }
 
-CLI::Validator writableFile() {
+CLI::Validator writableFile(const std::string& writer) {
   return CLI::Validator(
-      [](std::string& text) -> std::string {
+      [writer](std::string& text) -> std::string {
         namespace fs = std::filesystem;
         std::error_code ec;
+        if (text.empty()) return "an empty file name; expected the JSON file to write";
+        if (text == "-")
+          return "'-' would be a file of that name (standard output is not written here); expected "
+                 "a file name";
         const fs::path path = text;
-        if (fs::is_directory(path, ec)) return text + " is a directory; expected a file name";
+        const fs::file_status target = fs::status(path, ec);  // through a link
+        if (fs::is_directory(target)) return text + " is a directory; expected a file name";
+        if (fs::exists(target) && !fs::is_regular_file(target))
+          return text +
+                 " is not a regular file (a device, a pipe or a socket); expected a file to write";
+        if (fs::is_regular_file(target)) {
+          // Replaced only where this writer wrote it: anything else is somebody's data.
+          const std::string mark = "\"arenaBench\": \"" + writer + "\"";
+          const auto size = fs::file_size(path, ec);
+          nlohmann::json earlier;
+          if (!ec && size < (16u << 20)) {
+            std::ifstream in(path);
+            earlier = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+          }
+          if (!earlier.is_object() || earlier.value("arenaBench", std::string()) != writer)
+            return text + " exists and is not a file `arena " + writer + "` wrote (no " + mark +
+                   " in it); name a new file, or remove this one to replace it";
+        }
         // Missing folders are created when it is written; one that exists as a file cannot be.
+        fs::path existing = ".";
         for (fs::path folder = path.parent_path(); !folder.empty(); folder = folder.parent_path()) {
           if (fs::exists(folder, ec)) {
             if (!fs::is_directory(folder, ec))
               return text + ": " + folder.string() + " is not a directory";
+            existing = folder;
             break;
           }
           if (folder == folder.parent_path()) break;
         }
+        // A folder that takes no file (read-only, /proc) is found now, not after the work.
+        const fs::path probe = temporaryPathFor(existing / "probe");
+        {
+          std::ofstream out(probe);
+          if (!out)
+            return text + ": cannot create a file in " + existing.string() + " (" +
+                   std::strerror(errno) + ")";
+        }
+        fs::remove(probe, ec);
         return "";
       },
       "FILE");
+}
+
+void writeMarkedJson(const std::string& path, const std::string& writer, nlohmann::json out) {
+  out["arenaBench"] = writer;
+  writeTextAtomically(path, out.dump(2));
 }
 
 CLI::Validator lowresFactorCheck(int max) {

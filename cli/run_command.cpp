@@ -276,14 +276,21 @@ void finish(const std::string& out) {
     const json& scene = item.value();
     if (const std::string same = identicalOutputsText(results, name); !same.empty()) {
       // Under the scaled footprint a small image rounds radii and steps given at footprintHeight
-      // lines to the same pixels (radius 1, 2 and 4 all 1 pixel at 36 lines): the likely cause.
+      // lines to the same pixels (radius 1, 2 and 4 all 1 pixel at 36 lines): the likely cause
+      // where one denoiser's settings gave one output, not where two denoisers compute alike (eaw
+      // and a plugin of it).
       const double height = scene.is_object() ? scene.value("height", 0.0) : 0.0;
-      const bool scaled =
-          std::any_of(results.pairs.begin(), results.pairs.end(), [&](const PairResult& p) {
-            const json reference = p.params.value("footprintHeight", json());
-            return p.scene == name && p.params.value("footprint", json()) == "scaled" &&
-                   reference.is_number() && height > 0 && height < reference.get<double>();
-          });
+      auto shrunk = [&](const PairResult* p) {
+        const json reference = p->params.value("footprintHeight", json());
+        return p->params.value("footprint", json()) == "scaled" && reference.is_number() &&
+               height > 0 && height < reference.get<double>();
+      };
+      bool scaled = false;
+      for (const std::vector<const PairResult*>& group : identicalOutputGroups(results, name))
+        for (size_t i = 0; i < group.size(); ++i)
+          for (size_t j = i + 1; j < group.size(); ++j)
+            scaled = scaled || (group[i]->denoiser == group[j]->denoiser && shrunk(group[i]) &&
+                                shrunk(group[j]));
       std::cout << name << ": identical outputs (bit for bit, every frame): " << same
                 << (scaled ? " (under the scaled footprint a small image can round radii and "
                              "steps to the same pixels: footprint=native keeps them apart)"

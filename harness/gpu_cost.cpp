@@ -8,6 +8,7 @@
 #include <numeric>
 
 #include "core/error.hpp"
+#include "core/printed.hpp"
 #include "metrics/summary.hpp"
 
 namespace arena {
@@ -113,20 +114,33 @@ PassTraffic repeatPass(const PassTraffic& traffic, int copies) {
   return out;
 }
 
-double predictFrameMs(const std::vector<PassStats>& passes, const GpuDevice& device,
-                      const GpuCostModel& model, double pixelFactor) {
-  // Passes in the order they first ran, each with its signals' traffic merged.
-  std::vector<std::pair<std::string, PassTraffic>> merged;
+std::string predictedOrderSeparator(double previousMs, double ms) {
+  return ms <= previousMs * (1 + kGpuOrderTolerance) ? " ≈ " : " < ";
+}
+
+std::vector<MergedPass> mergedPasses(const std::vector<PassStats>& passes) {
+  std::vector<MergedPass> merged;
   for (const PassStats& p : passes) {
     const size_t slash = p.name.find('/');
     const std::string name = slash == std::string::npos ? p.name : p.name.substr(slash + 1);
-    auto it = std::find_if(merged.begin(), merged.end(), [&](const auto& m) { return m.first == name; });
-    if (it == merged.end()) merged.push_back({name, p.traffic});
-    else it->second = mergeSignals(it->second, p.traffic);
+    auto it = std::find_if(merged.begin(), merged.end(),
+                           [&](const MergedPass& m) { return m.name == name; });
+    if (it == merged.end()) {
+      merged.push_back({name, p.traffic, p.milliseconds});
+    } else {
+      it->traffic = mergeSignals(it->traffic, p.traffic);
+      it->cpuMs += p.milliseconds;
+    }
   }
+  return merged;
+}
+
+double predictFrameMs(const std::vector<PassStats>& passes, const GpuDevice& device,
+                      const GpuCostModel& model, double pixelFactor) {
   double ms = 0;
-  for (const auto& [name, traffic] : merged)
-    if (!traffic.empty()) ms += predictPass(scaleTraffic(traffic, pixelFactor), device, model).totalMs();
+  for (const MergedPass& p : mergedPasses(passes))
+    if (!p.traffic.empty())
+      ms += predictPass(scaleTraffic(p.traffic, pixelFactor), device, model).totalMs();
   return ms;
 }
 
@@ -197,9 +211,9 @@ nlohmann::json GpuFrameCost::summary(int warmup) const {
       {"resolution", {1920, 1080}},
       {"memory", {{"persistentMiB", persistent / kMiB}, {"workingSetMiB", working / kMiB}}},
       {"model",
-       "max(bytes / bandwidth, k x fetch cycles / texel rate) + c x threads / 1920x1080; k = " +
-           std::to_string(m.fetchEfficiency).substr(0, 5) +
-           ", c = " + std::to_string(m.dispatchMs).substr(0, 5) + " ms (docs/gpu-cost.md)"},
+       "max(bytes / bandwidth, k x fetch cycles / texel rate) + c x threads / 1920x1080; " +
+           printed("k = %.3f, c = %.3f ms", m.fetchEfficiency, m.dispatchMs) +
+           " (docs/gpu-cost.md)"},
       {"devices", devices}};
   if (skipped > 0) out["skippedHere"] = skipped;
   return out;

@@ -67,6 +67,16 @@ PassTraffic repeatPass(const PassTraffic& traffic, int copies);
 // fit never saw.
 GpuCostModel boxAtrousModel(FixedCost fixed = FixedCost::PerThread);
 
+// A frame's passes as a GPU would dispatch them: in the order they first ran (over every signal's
+// instance), each pass's signals merged into one dispatch (mergeSignals), "signal/pass" names
+// read as "pass". A pass only one signal runs (hybrid's specular median) is there too.
+struct MergedPass {
+  std::string name;
+  PassTraffic traffic;
+  double cpuMs = 0;  // the instances' measured times of the pass, summed
+};
+std::vector<MergedPass> mergedPasses(const std::vector<PassStats>& passes);
+
 // One frame of a denoiser priced: `passes` as a run reports them (each signal's instance its own
 // list, or one list with "signal/pass" names), every pass's signals merged into one dispatch
 // (mergeSignals: the G-buffer read once), scaled by `pixelFactor`, priced and summed.
@@ -111,6 +121,13 @@ struct FitPoint {
 // log grid 0.05..20, c on 0..0.5 ms), for the fixed term's form given.
 GpuCostModel fitModel(const std::vector<FitPoint>& points, const GpuDevice& device,
                       FixedCost fixed = FixedCost::PerDispatch);
+
+// Predicted times of two methods less than 10% apart are not ordered by the model: within its
+// error (single passes off by 2-6x on the measured set, docs/gpu-cost.md) the order of two such
+// totals is no finding. predictedOrderSeparator gives " < " between two times of an ascending
+// order, or " ≈ " where the second is within that tolerance of the first.
+inline constexpr double kGpuOrderTolerance = 0.10;
+std::string predictedOrderSeparator(double previousMs, double ms);
 
 // Spearman's rank correlation (ties get their mean rank); NaN (JSON null) where it is undefined:
 // fewer than 2 values, or every value of one side tied. spearmanText says which, or "%.2f".

@@ -33,8 +33,18 @@ MeasuredSet readMeasuredSet(const std::string& path) {
   for (JsonReader row : root.requiredArray("rows")) {
     MeasuredKernel k;
     k.kernel = row.string("kernel");
-    k.width = row.integerIn("width", 1, 65536);
-    k.height = row.integerIn("height", 1, 65536);
+    k.width = row.integerIn("width", 1, 16384);
+    k.height = row.integerIn("height", 1, 16384);
+    // The count runs the kernel on images of the row's size: at most 8K's pixels.
+    if (double(k.width) * double(k.height) > 7680.0 * 4320.0)
+      row.fail("height", "at most 7680x4320's pixels for the count (" + std::to_string(k.width) +
+                             "x" + std::to_string(k.height) + " given)");
+    // A kernel the model cannot count is named with its row before anything is printed.
+    try {
+      measuredKernelTraffic(k.kernel, 8, 8);
+    } catch (const Error& e) {
+      row.fail("kernel", e.what());
+    }
     k.medianMs = row.number("medianMs");
     if (!(k.medianMs > 0) || !std::isfinite(k.medianMs)) row.fail("medianMs", "a positive time in ms");
     // The spread, where the row gives it, must be a spread around the median: a p5 above it or a
@@ -131,6 +141,15 @@ nlohmann::json benchGpuMeasured(const std::string& path, const std::string& devi
   else
     for (const GpuDevice& d : gpuDevices())
       if (set.device.find(d.name) != std::string::npos) device = &d;
+  // A set timed on a GPU the model knows, priced on another's specification, judges nothing.
+  if (device && !deviceName.empty())
+    for (const GpuDevice& d : gpuDevices())
+      if (&d != device && set.device.find(d.name) != std::string::npos)
+        throw Error(path + ": its times were measured on '" + set.device + "', which is the " +
+                    d.name + "; priced on the " + device->name +
+                    "'s specification they would judge the model on "
+                    "another GPU's times (leave --device out to price on the " +
+                    d.name + ")");
   if (!device) {
     std::string known;
     for (const GpuDevice& d : gpuDevices()) known += (known.empty() ? "" : ", ") + d.name;
@@ -140,6 +159,10 @@ nlohmann::json benchGpuMeasured(const std::string& path, const std::string& devi
   progress(printed("measured set %s: %zu kernels timed on '%s', priced on %s (%.0f GB/s, %.1f Gtexel/s)",
                    path.c_str(), set.rows.size(), set.device.c_str(), device->name.c_str(), device->bandwidthGBs,
                    device->texelRateGTs));
+  if (set.device.find(device->name) == std::string::npos)
+    progress("warning: the set's GPU is not the " + device->name +
+             " whose specification prices it (--device): the ratios below are as good as that "
+             "specification is the GPU's");
   const GpuCostModel forms[2] = {boxAtrousModel(FixedCost::PerDispatch), boxAtrousModel(FixedCost::PerThread)};
   progress(printed("model: the box/à-trous fit (k = %.3f, c = %.3f ms, scaled to this device by texel rate: "
                    "%.4f ms), never fitted on this set",

@@ -200,6 +200,18 @@ TEST(CliContract, ShardsParamsAndSweepsAreStrict) {
                           "footprint=native keeps them apart)"),
             std::string::npos)
       << r.output;
+  // Two denoisers that compute alike (eaw and a plugin of it) are identical for that reason: the
+  // footprint's rounding is not offered as the cause.
+  r = contract::arenaCli("run --denoisers eaw,plugin:" ARENA_EXAMPLES_BINARY_DIR
+                         "/libarena_eaw_plugin.so --warmup 1 --flip none --keep-frames none" +
+                         common);
+  EXPECT_EQ(r.status, 0) << r.output;
+  const size_t same =
+      r.output.find("cornell_static: identical outputs (bit for bit, every frame): eaw = ");
+  ASSERT_NE(same, std::string::npos) << r.output;
+  EXPECT_EQ(r.output.substr(same, r.output.find('\n', same) - same).find("scaled footprint"),
+            std::string::npos)
+      << r.output;
 }
 
 TEST(CliContract, EveryOptionShowsItsDefault) {
@@ -531,6 +543,48 @@ TEST(CliContract, UsageErrorsExitTwoAndOptionsAreStrict) {
               std::string::npos)
         << r.output;
   }
+  // Nor a --json that is not a file to write, or a file the bench did not write (a run's
+  // results.json and /dev/full were replaced): before the work, the file untouched.
+  std::ofstream(dir / "results.json") << "{\"pairs\": []}";
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {"''", "an empty file name"},
+      {"-", "'-' would be a file of that name"},
+      {"/dev/null", "/dev/null is not a regular file"},
+      {(dir / "results.json").string(),
+       "exists and is not a file `arena bench tracer` wrote (no "
+       "\"arenaBench\": \"bench tracer\" in it)"}};
+  for (const auto& [target, why] : refused) {
+    contract::CliResult r = contract::arenaCli("bench tracer --frames 1 --size 8 --json " + target);
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_EQ(r.output.find("arena tracer:"), std::string::npos)
+        << "timed before refusing: " << r.output;
+    EXPECT_NE(r.output.find(why), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("(`arena bench tracer --help` lists the options)"), std::string::npos)
+        << r.output;
+  }
+  EXPECT_EQ(readText(dir / "results.json"), "{\"pairs\": []}");
+  // Its own file it replaces; another bench's it does not.
+  const std::string own = (dir / "own" / "tracer.json").string();
+  for (int k = 0; k < 2; ++k)
+    EXPECT_EQ(
+        contract::arenaCli("bench tracer --frames 1 --warmup 0 --size 8 --json " + own).status, 0);
+  EXPECT_EQ(parseJsonFile(own)["arenaBench"], "bench tracer");
+  EXPECT_NE(contract::arenaCli("bench rank-agreement a b --json " + own)
+                .output.find("is not a file `arena bench rank-agreement` wrote"),
+            std::string::npos);
+  // A whole-number option given a fraction says so rather than "not in range".
+  EXPECT_NE(
+      contract::arenaCli("bench gpu-model --frames 2.5")
+          .output.find(
+              "--frames: 2.5 is not a whole number written in digits; expected one from 2 to 100"),
+      std::string::npos);
+  // gpu-model prices built-ins, each once.
+  EXPECT_NE(contract::arenaCli("bench gpu-model --denoisers plugin:x.so")
+                .output.find("the model prices the built-ins only"),
+            std::string::npos);
+  EXPECT_NE(
+      contract::arenaCli("bench gpu-model --denoisers svgf,svgf").output.find("names svgf twice"),
+      std::string::npos);
   // An empty denoiser list is not "only the baselines".
   for (const std::string& list : {std::string("''"), std::string("svgf,"), std::string(",")}) {
     contract::CliResult r = contract::arenaCli("run --scenes cornell_static --resolution 8x8 --frames 2 --ref-spp 1 --cache " +

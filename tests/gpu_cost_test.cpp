@@ -128,6 +128,45 @@ TEST(GpuCostModel, AFrameIsItsPassesMergedAcrossSignalsAndScaledTo1080p) {
   EXPECT_TRUE(external.summary(0).is_null());
 }
 
+// `arena bench gpu-model`'s per-pass table is these merged passes: a pass only one signal runs
+// (hybrid's specular median) is a row priced as the frame prices it, so the rows add up to the
+// frame (the table left such a pass out, and its total read hybrid 0.18 ms low on an RTX 4080).
+TEST(GpuCostModel, APassOneSignalRunsIsAPassOfTheFrame) {
+  PassTraffic filter, median;
+  {
+    TrafficScope scope(&filter);
+    gpu::dispatch(480, 270);
+    gpu::read(gpu_buffers::kRadiance, 480, 270, 9);
+    gpu::write(gpu_buffers::kRadiance, 480, 270);
+  }
+  {
+    TrafficScope scope(&median);
+    gpu::dispatch(480, 270);
+    gpu::read(gpu_buffers::kRadiance, 480, 270, 9);
+    gpu::write(gpu_buffers::kRadiance, 480, 270);
+  }
+  const std::vector<PassStats> diffuse = {{"filter", 1.0, 9.0, 0.0, filter}};
+  const std::vector<PassStats> specular = {{"median", 0.5, 9.0, 0.0, median},
+                                           {"filter", 2.0, 9.0, 0.0, filter}};
+  std::vector<PassStats> both = diffuse;
+  both.insert(both.end(), specular.begin(), specular.end());
+  const std::vector<MergedPass> merged = mergedPasses(both);
+  ASSERT_EQ(merged.size(), 2u);
+  EXPECT_EQ(merged[0].name, "filter");  // in the order they first ran
+  EXPECT_EQ(merged[1].name, "median");
+  EXPECT_DOUBLE_EQ(merged[0].cpuMs, 3.0);
+  EXPECT_DOUBLE_EQ(merged[1].cpuMs, 0.5);
+  const GpuDevice& device = gpuDevice("RTX 4080");
+  double rows = 0;
+  for (const MergedPass& p : merged)
+    rows += predictPass(p.traffic, device, boxAtrousModel()).totalMs();
+  EXPECT_NEAR(rows, predictFrameMs(both, device, boxAtrousModel()), 1e-12);
+  EXPECT_GT(rows, predictFrameMs(diffuse, device, boxAtrousModel()) + 1e-6);
+  // Predicted totals less than 10% apart are not ordered.
+  EXPECT_EQ(predictedOrderSeparator(4.825, 4.921), " ≈ ");
+  EXPECT_EQ(predictedOrderSeparator(4.0, 4.5), " < ");
+}
+
 // The stored model is the bench's fit of the box/à-trous experiment: the counted à-trous iteration
 // (docs/gpu-cost.md: 38 B read, 10 B written, 46 fetches and 91 fetch cycles per pixel, one
 // full-screen dispatch) fitted on the six published points gives it back, in both forms.
@@ -240,6 +279,38 @@ TEST(GpuMeasured, BadFilesAndKernelsAreErrorsNamingWhatIsWrong) {
   const std::string unknownDevice = file("unknown_device.json", R"({"device": "Some GPU", "rows": [)" + row + "]}");
   EXPECT_NE(errorOf([&] { benchGpuMeasured(unknownDevice, "", [](const std::string&) {}); }).find("Some GPU"),
             std::string::npos);
+  // Priced on a named specification it runs, and says the GPU is not that one.
+  std::string printedText;
+  benchGpuMeasured(unknownDevice, "H200",
+                   [&](const std::string& line) { printedText += line + "\n"; });
+  EXPECT_NE(printedText.find("warning: the set's GPU is not the H200"), std::string::npos)
+      << printedText;
+  // A set timed on a GPU the model knows is not priced on another's specification.
+  const std::string h200 = file("h200.json", R"({"device": "NVIDIA H200", "rows": [)" + row + "]}");
+  EXPECT_NE(errorOf([&] {
+              benchGpuMeasured(h200, "RTX 4080", [](const std::string&) {});
+            }).find("which is the H200; priced on the RTX 4080's specification"),
+            std::string::npos)
+      << errorOf([&] { benchGpuMeasured(h200, "RTX 4080", [](const std::string&) {}); });
+  // A kernel the model cannot count and a size it cannot hold are the file's errors, with the row.
+  EXPECT_NE(
+      errorOf([&] {
+        readMeasuredSet(file(
+            "kernel.json",
+            R"({"device": "X", "rows": [{"kernel": "foo-9x9", "width": 8, "height": 8, "medianMs": 0.01}]})"));
+      })
+          .find("kernel.json: $.rows[0].kernel: measured kernel 'foo-9x9' is not one the model can "
+                "count"),
+      std::string::npos)
+      << errorOf([&] { readMeasuredSet((dir / "kernel.json").string()); });
+  EXPECT_NE(
+      errorOf([&] {
+        readMeasuredSet(file(
+            "huge.json",
+            R"({"device": "X", "rows": [{"kernel": "box-3x3", "width": 16384, "height": 16384, "medianMs": 0.01}]})"));
+      }).find("$.rows[0].height: at most 7680x4320's pixels"),
+      std::string::npos)
+      << errorOf([&] { readMeasuredSet((dir / "huge.json").string()); });
 }
 
 // Measured times made by the per-thread model itself: that form fits them exactly, the other not,

@@ -441,7 +441,8 @@ TEST(StudySummary, TheSpeedOrdersSayWhatTheirTimesAre) {
     p["timing"] = {{"msMedian", k < 3 ? cpu[k] : 5.0}, {"clock", "cpu"}};
     if (k < 3)
       p["timing"]["gpuPredicted"] = {
-          {"devices", json::array({{{"device", "H200"}, {"msMedian", 0.1 * double(k + 1)}}})}};
+          {"devices", json::array({{{"device", "H200"},
+                                    {"msMedian", k == 1 ? 0.105 : 0.1 * double(k + 1)}}})}};
   }
   ASSERT_GE(labels.size(), 4u);
   std::ostringstream out;
@@ -451,6 +452,12 @@ TEST(StudySummary, TheSpeedOrdersSayWhatTheirTimesAre) {
                       " 1 = " + labels[1] + " 1 < " + labels[2] + " 2\n"),
             std::string::npos)
       << text;
+  // Predicted times less than 10% apart are not ordered by the model.
+  const size_t gpu = text.find("  GPU predicted, H200 1080p");
+  ASSERT_NE(gpu, std::string::npos) << text;
+  const std::string gpuLine = text.substr(gpu, text.find('\n', gpu) - gpu);
+  EXPECT_NE(gpuLine.find(labels[0] + " 0.1 ≈ " + labels[1] + " 0.1"), std::string::npos) << gpuLine;
+  EXPECT_NE(gpuLine.find(" < " + labels[2] + " 0.3"), std::string::npos) << gpuLine;
   const size_t unpriced = text.find("  not in these orders (no predicted GPU time): ");
   ASSERT_NE(unpriced, std::string::npos) << text;
   const std::string line = text.substr(unpriced, text.find('\n', unpriced) - unpriced);
