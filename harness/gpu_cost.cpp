@@ -214,7 +214,9 @@ nlohmann::json GpuFrameCost::summary(int warmup) const {
        "max(bytes / bandwidth, k x fetch cycles / texel rate) + c x threads / 1920x1080; " +
            printed("k = %.3f, c = %.3f ms", m.fetchEfficiency, m.dispatchMs) +
            " (docs/gpu-cost.md)"},
-      {"devices", devices}};
+      {"devices", devices},
+      // How its times are read: two less than this apart (relative) are not ordered by the model.
+      {"orderTolerance", kGpuOrderTolerance}};
   if (skipped > 0) out["skippedHere"] = skipped;
   return out;
 }

@@ -100,7 +100,8 @@ class GpuFrameCost {
   GpuFrameCost(int width, int height);
   void add(const std::vector<PassStats>& passes);
   // {"resolution", "model", "devices": [{device, msMedian, msP5, msP95, msMean}], "memory":
-  // {persistentMiB, workingSetMiB}} over the frames after `warmup` (memory: the last frame's
+  // {persistentMiB, workingSetMiB}, "orderTolerance" (kGpuOrderTolerance: the report orders the
+  // times with it)} over the frames after `warmup` (memory: the last frame's
   // buffers at 1920x1080, every signal's instance summed); null when no pass counted any traffic
   // (an external denoiser: nothing to price).
   nlohmann::json summary(int warmup) const;

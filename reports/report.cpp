@@ -158,6 +158,7 @@ json speedScope(std::vector<json> points, bool needsComplete) {
 // a capture. A pair is on an axis only when it has that time; each axis has its own Pareto front.
 struct SpeedClock {
   std::string key, title;
+  double orderTolerance = 0;  // times less than this apart (relative) are not ordered: the model's
 };
 
 std::vector<SpeedClock> speedClocks(const RunResults& results, const std::vector<std::string>& scenes) {
@@ -181,10 +182,13 @@ std::vector<SpeedClock> speedClocks(const RunResults& results, const std::vector
   std::vector<SpeedClock> clocks = {{"cpu", "CPU ms measured here (" + where + ")"}};
   std::vector<std::string> devices, captureDevices;
   bool processClock = false;
+  double orderTolerance = 0;  // as the run's predictions say how to read them
   for (const PairResult& pair : results.pairs) {
     processClock |= pair.ok() && pair.clock() == "process";
     const json& timing = pair.timing();
     if (timing.contains("gpuPredicted") && timing["gpuPredicted"].is_object()) {
+      if (const json t = timing["gpuPredicted"].value("orderTolerance", json()); t.is_number())
+        orderTolerance = std::max(orderTolerance, t.get<double>());
       for (const json& d : timing["gpuPredicted"].value("devices", json::array())) {
         const std::string name = d.value("device", "");
         if (!name.empty() && std::find(devices.begin(), devices.end(), name) == devices.end()) devices.push_back(name);
@@ -196,7 +200,10 @@ std::vector<SpeedClock> speedClocks(const RunResults& results, const std::vector
     }
   }
   for (const std::string& d : devices)
-    clocks.push_back({"gpu:" + d, "GPU ms predicted at 1920x1080 on " + d + " (a model: counted traffic, docs/gpu-cost.md)"});
+    clocks.push_back(
+        {"gpu:" + d,
+         "GPU ms predicted at 1920x1080 on " + d + " (a model: counted traffic, docs/gpu-cost.md)",
+         orderTolerance});
   if (processClock)
     clocks.push_back({"process",
                       "ms the external processes reported for their own work (each its own clock, "
@@ -366,6 +373,7 @@ json speedData(const RunResults& results, const std::vector<std::string>& scenes
   json out = {{"clocks", json::array()}, {"views", json::object()}};
   for (const SpeedClock& c : speedClocks(results, scenes)) {
     out["clocks"].push_back({{"key", c.key}, {"title", c.title}});
+    if (c.orderTolerance > 0) out["clocks"].back()["orderTolerance"] = c.orderTolerance;
     out["views"][c.key] = speedView(results, scenes, labels, c.key);
   }
   // The 1080p predictions are priced from the run's own passes: à-trous iterations its footprint

@@ -240,7 +240,11 @@
     const title = (all ? `All scenes: ${data.normalisation}` : `${state.speedScene}: ${axis.title}`) +
       (state.speedClock === 'cpu' ? '' : ` · ${clock().title}`);
     // The order of the methods by time on this axis (does it change between clocks?).
-    const order = [...d.drawn].sort((a, b) => a.ms - b.ms).map((p) => p.label).join(' < ');
+    // On a model's axis, times less than its orderTolerance apart are not ordered by it (≈).
+    const tolerance = clock().orderTolerance || 0;
+    const order = [...d.drawn].sort((a, b) => a.ms - b.ms)
+                      .map((p, i, all) => (i === 0 ? '' : p.ms <= all[i - 1].ms * (1 + tolerance) && tolerance > 0 ? ' ≈ ' : ' < ') + p.label)
+                      .join('');
     $('speed-front')
         .replaceChildren(
             'Pareto front of the means (fastest first; a step along it need not be resolved: the rankings say which differences are): ',
@@ -252,7 +256,7 @@
                     d.frontEqualPaths.map((p) => p.name).join(' → ') :
                 '',
             d.hidden.length ? ` · not drawn (0 on a log axis): ${d.hidden.join(', ')}` : '',
-            ` · by time on this axis (medians, no interval): ${order}`,
+            ` · by time on this axis (medians, no interval${tolerance > 0 ? `; ≈: less than ${Math.round(tolerance * 100)}% apart, which the model does not order` : ''}): ${order}`,
             ...otherClocks(all ? null : state.speedScene),
         );
     const view = await A.embedChart('speed', chart, chartSpec(d, axis, yTitle, logError, false, title, all));
