@@ -364,8 +364,12 @@ void printSpeedOrder(std::ostream& out, const RunResults& results) {
   std::set<std::string> unmodelled;  // CPU-timed methods the cost model does not price
   std::string device;
   std::string otherDevices;  // the devices priced after the first (the report's Time menu)
+  double tolerance = 0;      // as the run's predictions say how to order them (the report's too)
   for (const PairResult& p : results.pairs) {
     const json& t = p.timing();
+    if (t.contains("gpuPredicted") && t["gpuPredicted"].is_object())
+      if (const json o = t["gpuPredicted"].value("orderTolerance", json()); o.is_number())
+        tolerance = std::max(tolerance, o.get<double>());
     if (p.ok() && p.clock() == "cpu" && !t.contains("gpuPredicted")) unmodelled.insert(p.label);
     if (!p.ok() || p.clock() != "cpu" || !t.contains("gpuPredicted") ||
         !t["gpuPredicted"].is_object())
@@ -404,16 +408,16 @@ void printSpeedOrder(std::ostream& out, const RunResults& results) {
     for (size_t i = 0; i < idx.size(); ++i) idx[i] = i;
     std::stable_sort(idx.begin(), idx.end(), [&](size_t a, size_t b) { return ms[a] < ms[b]; });
     // Two times that print alike are not ordered by the print ("20.89 < 20.89"); predicted times
-    // less than 10% apart are not ordered by the model (" ≈ ").
+    // within the run's tolerance of their group's first are not ordered by the model (" ≈ ").
+    std::vector<double> ascending;
+    for (size_t i : idx) ascending.push_back(ms[i]);
+    const std::vector<std::string> grouped = orderSeparators(ascending, tolerance);
     std::string text, previous;
-    double previousMs = 0;
-    for (size_t i : idx) {
+    for (size_t k = 0; k < idx.size(); ++k) {
+      const size_t i = idx[k];
       const std::string figure = onCpu ? figureText(ms[i]) : twoDigitsText(ms[i]);
-      const std::string separator = !onCpu ? predictedOrderSeparator(previousMs, ms[i])
-                                    : figure == previous ? " = "
-                                                         : " < ";
+      const std::string separator = !onCpu ? grouped[k] : figure == previous ? " = " : " < ";
       text += (text.empty() ? "" : separator) + labels[i] + " " + figure;
-      previousMs = ms[i];
       if (traced.count(labels[i]))
         text +=
             onCpu ? " (+paths: " + figureText(tracing[labels[i]] / traced[labels[i]]) + " tracing)"
@@ -438,8 +442,11 @@ void printSpeedOrder(std::ostream& out, const RunResults& results) {
       << order(cpu, true) << "\n"
       << "  GPU predicted, " << device
       << " 1080p (a model, 2 digits: it misses its validation goal, so read an order of magnitude "
-         "and an order of methods, not a budget; ≈: less than 10% apart, not ordered by it; "
-         "docs/gpu-cost.md"
+         "and an order of methods, not a budget; "
+      << (tolerance > 0 ? "≈: less than " + figureText(100 * tolerance) +
+                              "% above the first of its group, not ordered by it; "
+                        : std::string())
+      << "docs/gpu-cost.md"
       << (otherDevices.empty() ? std::string()
                                : "; also priced: " + otherDevices + ", in the report")
       << "): " << order(gpu, false) << "\n"

@@ -61,24 +61,38 @@ CLI::Validator writableFile(const std::string& writer) {
         if (text == "-")
           return "'-' would be a file of that name (standard output is not written here); expected "
                  "a file name";
+        if (text.back() == '/') return text + " ends in a folder separator; expected a file name";
         const fs::path path = text;
-        const fs::file_status target = fs::status(path, ec);  // through a link
-        if (fs::is_directory(target)) return text + " is a directory; expected a file name";
-        if (fs::exists(target) && !fs::is_regular_file(target))
+        // A link would be replaced by the file, not written through: named as what it is.
+        if (fs::is_symlink(fs::symlink_status(path, ec)))
+          return text + " is a symbolic link (the file would replace it); name the file itself";
+        const fs::file_status status = fs::status(path, ec);
+        if (fs::is_directory(status)) return text + " is a directory; expected a file name";
+        if (fs::exists(status) && !fs::is_regular_file(status))
           return text +
                  " is not a regular file (a device, a pipe or a socket); expected a file to write";
-        if (fs::is_regular_file(target)) {
+        if (fs::is_regular_file(status)) {
           // Replaced only where this writer wrote it: anything else is somebody's data.
-          const std::string mark = "\"arenaBench\": \"" + writer + "\"";
+          const std::string refuse =
+              text + " exists and is not a file `arena " + writer + "` wrote (";
+          const std::string remedy = "); name a new file, or remove this one to replace it";
           const auto size = fs::file_size(path, ec);
-          nlohmann::json earlier;
-          if (!ec && size < (16u << 20)) {
-            std::ifstream in(path);
-            earlier = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
-          }
-          if (!earlier.is_object() || earlier.value("arenaBench", std::string()) != writer)
-            return text + " exists and is not a file `arena " + writer + "` wrote (no " + mark +
-                   " in it); name a new file, or remove this one to replace it";
+          if (ec || size >= (16u << 20))
+            return refuse + "a bench's JSON is smaller than its " + std::to_string(size >> 20) +
+                   " MiB" + remedy;
+          std::ifstream in(path);
+          if (!in)
+            return text + ": cannot be read (" + std::strerror(errno) +
+                   "); expected a file to write";
+          const nlohmann::json earlier =
+              nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+          const bool marked = earlier.is_object() && earlier.contains("arenaBench") &&
+                              earlier["arenaBench"].is_string() &&
+                              earlier["arenaBench"].get<std::string>() == writer;
+          // Files of builds before the mark (2026-12-07) have none: removed once by hand.
+          if (!marked)
+            return refuse + "no \"arenaBench\": \"" + writer +
+                   "\" in it; a bench's JSON of a build before that mark has none either" + remedy;
         }
         // Missing folders are created when it is written; one that exists as a file cannot be.
         fs::path existing = ".";

@@ -114,8 +114,15 @@ PassTraffic repeatPass(const PassTraffic& traffic, int copies) {
   return out;
 }
 
-std::string predictedOrderSeparator(double previousMs, double ms) {
-  return ms <= previousMs * (1 + kGpuOrderTolerance) ? " ≈ " : " < ";
+std::vector<std::string> orderSeparators(const std::vector<double>& ascendingMs, double tolerance) {
+  std::vector<std::string> out;
+  double groupStart = 0;
+  for (size_t i = 0; i < ascendingMs.size(); ++i) {
+    const bool joins = i > 0 && tolerance > 0 && ascendingMs[i] < groupStart * (1 + tolerance);
+    out.push_back(i == 0 ? "" : joins ? " ≈ " : " < ");
+    if (!joins) groupStart = ascendingMs[i];
+  }
+  return out;
 }
 
 std::vector<MergedPass> mergedPasses(const std::vector<PassStats>& passes) {

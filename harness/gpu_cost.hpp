@@ -125,10 +125,13 @@ GpuCostModel fitModel(const std::vector<FitPoint>& points, const GpuDevice& devi
 
 // Predicted times of two methods less than 10% apart are not ordered by the model: within its
 // error (single passes off by 2-6x on the measured set, docs/gpu-cost.md) the order of two such
-// totals is no finding. predictedOrderSeparator gives " < " between two times of an ascending
-// order, or " ≈ " where the second is within that tolerance of the first.
+// totals is no finding. A run records it (GpuFrameCost's "orderTolerance") for whoever orders its
+// times.
 inline constexpr double kGpuOrderTolerance = 0.10;
-std::string predictedOrderSeparator(double previousMs, double ms);
+// The separators of an ascending order of times: " ≈ " joins a time less than `tolerance`
+// (relative) above the first, fastest, of its group; " < " starts the next group (so 5.5 ≈ 5.9
+// < 6.3: the ends of a group are less than the tolerance apart). The first separator is "".
+std::vector<std::string> orderSeparators(const std::vector<double>& ascendingMs, double tolerance);
 
 // Spearman's rank correlation (ties get their mean rank); NaN (JSON null) where it is undefined:
 // fewer than 2 values, or every value of one side tied. spearmanText says which, or "%.2f".

@@ -484,9 +484,10 @@ json benchGpuModel(const GpuModelBench& b, const ProgressFn& progress) {
   std::sort(byGpu.begin(), byGpu.end());
   std::string cpuOrder, gpuOrder;
   for (const auto& [ms, name] : byCpu) cpuOrder += (cpuOrder.empty() ? "" : " < ") + name;
-  for (size_t i = 0; i < byGpu.size(); ++i)
-    gpuOrder += (i == 0 ? "" : predictedOrderSeparator(byGpu[i - 1].first, byGpu[i].first)) +
-                byGpu[i].second;
+  std::vector<double> ascending;
+  for (const auto& [ms, name] : byGpu) ascending.push_back(ms);
+  const std::vector<std::string> separators = orderSeparators(ascending, kGpuOrderTolerance);
+  for (size_t i = 0; i < byGpu.size(); ++i) gpuOrder += separators[i] + byGpu[i].second;
   const double orderRho = spearman(cpuTotals, gpuTotals);
   std::string unpricedText;
   for (const std::string& name : unpriced)
@@ -497,7 +498,7 @@ json benchGpuModel(const GpuModelBench& b, const ProgressFn& progress) {
       "and an order of methods, not a budget; docs/gpu-cost.md)");
   progress("order by CPU ms here:        " + cpuOrder);
   progress("order by predicted GPU ms:   " + gpuOrder +
-           " (≈: less than 10% apart, which the model does not order)");
+           " (≈: less than 10% above the first of its group, which the model does not order)");
   if (!unpriced.empty())
     progress("not in either order: " + unpricedText +
              " (no pass counted any traffic: no predicted time)");

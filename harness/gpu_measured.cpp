@@ -37,13 +37,17 @@ MeasuredSet readMeasuredSet(const std::string& path) {
     k.height = row.integerIn("height", 1, 16384);
     // The count runs the kernel on images of the row's size: at most 8K's pixels.
     if (double(k.width) * double(k.height) > 7680.0 * 4320.0)
-      row.fail("height", "at most 7680x4320's pixels for the count (" + std::to_string(k.width) +
-                             "x" + std::to_string(k.height) + " given)");
-    // A kernel the model cannot count is named with its row before anything is printed.
+      row.fail(k.width > 7680 ? "width" : "height", "at most 7680x4320's pixels for the count (" +
+                                                        std::to_string(k.width) + "x" +
+                                                        std::to_string(k.height) + " given)");
+    // A kernel the model cannot count is named with its row before anything is printed (a box
+    // too wide for an int among them).
     try {
       measuredKernelTraffic(k.kernel, 8, 8);
-    } catch (const Error& e) {
-      row.fail("kernel", e.what());
+    } catch (const std::exception& e) {
+      row.fail("kernel", dynamic_cast<const Error*>(&e)
+                             ? std::string(e.what())
+                             : "measured kernel '" + k.kernel + "': a size the count cannot hold");
     }
     k.medianMs = row.number("medianMs");
     if (!(k.medianMs > 0) || !std::isfinite(k.medianMs)) row.fail("medianMs", "a positive time in ms");

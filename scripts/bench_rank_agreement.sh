@@ -10,7 +10,14 @@ scenes="${1:-moving_object,thin_grid,cornell_static}"
 large="${2:-640x360}"
 shift 2 || shift $#
 ARENA_TARGETS=arena bash scripts/setup.sh
+# The bench replaces its JSON only where it wrote it (an older build's has no mark): said before
+# the two runs, not after them.
+json="runs/rank-agreement-$large.json"
+if [ -e "$json" ] && ! grep -q '"arenaBench": "bench rank-agreement"' "$json"; then
+  echo "$json exists and is not a file \`arena bench rank-agreement\` wrote; remove it to replace it" >&2
+  exit 2
+fi
 build/arena run --scenes "$scenes" --denoisers all --flip none --keep-frames none --out runs/rank-quick "$@"
 build/arena run --scenes "$scenes" --denoisers all --flip none --keep-frames none --resolution "$large" \
   --out "runs/rank-$large" "$@"
-build/arena bench rank-agreement runs/rank-quick "runs/rank-$large" --json "runs/rank-agreement-$large.json"
+build/arena bench rank-agreement runs/rank-quick "runs/rank-$large" --json "$json"

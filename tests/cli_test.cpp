@@ -552,7 +552,12 @@ TEST(CliContract, UsageErrorsExitTwoAndOptionsAreStrict) {
       {"/dev/null", "/dev/null is not a regular file"},
       {(dir / "results.json").string(),
        "exists and is not a file `arena bench tracer` wrote (no "
-       "\"arenaBench\": \"bench tracer\" in it)"}};
+       "\"arenaBench\": \"bench tracer\" in it;"},
+      {(dir / "marked.json").string(), "exists and is not a file `arena bench tracer` wrote"},
+      {(dir / "link.json").string(), "is a symbolic link (the file would replace it)"},
+      {(dir / "folder/").string(), "ends in a folder separator; expected a file name"}};
+  std::ofstream(dir / "marked.json") << "{\"arenaBench\": null}";  // a mark of another kind
+  fs::create_symlink(dir / "results.json", dir / "link.json");
   for (const auto& [target, why] : refused) {
     contract::CliResult r = contract::arenaCli("bench tracer --frames 1 --size 8 --json " + target);
     EXPECT_EQ(r.status, 2) << r.output;

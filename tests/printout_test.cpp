@@ -441,8 +441,9 @@ TEST(StudySummary, TheSpeedOrdersSayWhatTheirTimesAre) {
     p["timing"] = {{"msMedian", k < 3 ? cpu[k] : 5.0}, {"clock", "cpu"}};
     if (k < 3)
       p["timing"]["gpuPredicted"] = {
-          {"devices", json::array({{{"device", "H200"},
-                                    {"msMedian", k == 1 ? 0.105 : 0.1 * double(k + 1)}}})}};
+          {"devices",
+           json::array({{{"device", "H200"}, {"msMedian", k == 1 ? 0.105 : 0.1 * double(k + 1)}}})},
+          {"orderTolerance", 0.1}};
   }
   ASSERT_GE(labels.size(), 4u);
   std::ostringstream out;
@@ -458,6 +459,17 @@ TEST(StudySummary, TheSpeedOrdersSayWhatTheirTimesAre) {
   const std::string gpuLine = text.substr(gpu, text.find('\n', gpu) - gpu);
   EXPECT_NE(gpuLine.find(labels[0] + " 0.1 ≈ " + labels[1] + " 0.1"), std::string::npos) << gpuLine;
   EXPECT_NE(gpuLine.find(" < " + labels[2] + " 0.3"), std::string::npos) << gpuLine;
+  EXPECT_NE(gpuLine.find("≈: less than 10% above the first of its group"), std::string::npos)
+      << gpuLine;
+  // A run whose predictions record no tolerance (before 2026-12-07) is ordered as its report is:
+  // every time.
+  for (json& p : results["pairs"])
+    if (p["timing"].contains("gpuPredicted")) p["timing"]["gpuPredicted"].erase("orderTolerance");
+  std::ostringstream older;
+  cli::printStudySummary(older, test::typed(results), {"r.json", "r.db", "index.html", 1});
+  EXPECT_NE(older.str().find(labels[0] + " 0.1 < " + labels[1] + " 0.1"), std::string::npos)
+      << older.str();
+  EXPECT_EQ(older.str().find("≈"), std::string::npos) << older.str();
   const size_t unpriced = text.find("  not in these orders (no predicted GPU time): ");
   ASSERT_NE(unpriced, std::string::npos) << text;
   const std::string line = text.substr(unpriced, text.find('\n', unpriced) - unpriced);

@@ -134,12 +134,6 @@ TEST(Bootstrap, IdenticalMethodsAreTiedAndAClearWinnerIsResolved) {
   EXPECT_EQ(again.ranking[0].ci.lo, r.ranking[0].ci.lo);
 }
 
-// Two outputs alike but for rounding on 14 of 16 tiles (float32 tile sums one part in 10^9 apart,
-// every one the same way) and really different on 2: about one bootstrap replicate in eight draws
-// neither real tile, so an interval's end lies at that replicate's rounding, whose sign decided
-// "resolved" (a sweep's edge.id read "better" at [-1.07e-3, -1.28e-11]). Rounding is no
-// difference: the end is 0, a tie, in the paired difference, the relative change, its p-value and
-// the scene's ranking; a difference on every tile is still resolved.
 TEST(Bootstrap, AWidenedIntervalOfBMinusAIsTheNegatedIntervalOfAMinusB) {
   // An even count of replicates (the event figures draw 1000): the widening's centre must not
   // depend on which way the difference is taken.
@@ -165,6 +159,12 @@ TEST(Bootstrap, AWidenedIntervalOfBMinusAIsTheNegatedIntervalOfAMinusB) {
   EXPECT_DOUBLE_EQ(w.hi, 9.5 + 2 * (plain.hi - 9.5));
 }
 
+// Two outputs alike but for rounding on 14 of 16 tiles (float32 tile sums one part in 10^9 apart,
+// every one the same way) and really different on 2: about one bootstrap replicate in eight draws
+// neither real tile, so an interval's end lies at that replicate's rounding, whose sign decided
+// "resolved" (a sweep's edge.id read "better" at [-1.07e-3, -1.28e-11]). Rounding is no
+// difference: the end is 0, a tie, in the paired difference, the relative change, its p-value and
+// the scene's ranking; a difference on every tile is still resolved.
 TEST(Bootstrap, ADifferenceOfRoundingAloneIsATie) {
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> content(0.02, 0.06);

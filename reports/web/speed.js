@@ -240,11 +240,15 @@
     const title = (all ? `All scenes: ${data.normalisation}` : `${state.speedScene}: ${axis.title}`) +
       (state.speedClock === 'cpu' ? '' : ` · ${clock().title}`);
     // The order of the methods by time on this axis (does it change between clocks?).
-    // On a model's axis, times less than its orderTolerance apart are not ordered by it (≈).
+    // On a model's axis, a time less than its orderTolerance above the first (fastest) of its group
+    // is not ordered by it (≈), as the study's summary and `arena bench gpu-model` print it.
     const tolerance = clock().orderTolerance || 0;
-    const order = [...d.drawn].sort((a, b) => a.ms - b.ms)
-                      .map((p, i, all) => (i === 0 ? '' : p.ms <= all[i - 1].ms * (1 + tolerance) && tolerance > 0 ? ' ≈ ' : ' < ') + p.label)
-                      .join('');
+    let groupStart = 0;
+    const order = [...d.drawn].sort((a, b) => a.ms - b.ms).map((p, i) => {
+      const joins = i > 0 && tolerance > 0 && p.ms < groupStart * (1 + tolerance);
+      if (!joins) groupStart = p.ms;
+      return (i === 0 ? '' : joins ? ' ≈ ' : ' < ') + p.label;
+    }).join('');
     $('speed-front')
         .replaceChildren(
             'Pareto front of the means (fastest first; a step along it need not be resolved: the rankings say which differences are): ',
@@ -256,7 +260,7 @@
                     d.frontEqualPaths.map((p) => p.name).join(' → ') :
                 '',
             d.hidden.length ? ` · not drawn (0 on a log axis): ${d.hidden.join(', ')}` : '',
-            ` · by time on this axis (medians, no interval${tolerance > 0 ? `; ≈: less than ${Math.round(tolerance * 100)}% apart, which the model does not order` : ''}): ${order}`,
+            ` · by time on this axis (medians, no interval${tolerance > 0 ? `; ≈: less than ${Math.round(tolerance * 100)}% above the first of its group, which the model does not order` : ''}): ${order}`,
             ...otherClocks(all ? null : state.speedScene),
         );
     const view = await A.embedChart('speed', chart, chartSpec(d, axis, yTitle, logError, false, title, all));
