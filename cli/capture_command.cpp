@@ -56,6 +56,12 @@ CheckStatus printValidation(const std::filesystem::path& dir) {
   std::cout << ")\n";
   printChecks(v);
   std::cout << "verdict: " << checkStatusName(v.status()) << "\n";
+  // The checks judge the references against the input; whether they are clean enough to rank
+  // methods depends on the methods' errors, which only a run measures.
+  if (!input.references.empty())
+    std::cout << "(whether the references are clean enough to rank methods, their noise floor "
+                 "against the best method's error, is judged by `arena run`'s reference-quality "
+                 "verdict, not here: validate runs no denoiser)\n";
   const CaptureValidation outputs = validateCaptureOutputs(sequence.capture(), input.references);
   if (outputs.checks.size() > 1 ||
       outputs.status() != CheckStatus::Pass) {  // more than "none undeclared"

@@ -251,7 +251,9 @@ void finish(const std::string& out) {
     if (!scene.is_object() || scene.value("hasReference", true)) continue;
     std::cout << name
               << " has no reference: the output's own temporal stability (mean after the "
-                 "warm-up with its 95% interval; lower is steadier; docs/metrics.md)\n";
+                 "warm-up with its 95% interval; lower is steadier; docs/metrics.md). Steadier is "
+                 "not better on its own: an output that loses detail (blurred, or flat) is the "
+                 "steadiest, and without a reference nothing here measures what it lost\n";
     std::cout << "  " << paddedText("", labelWidth) << std::right << std::setw(28)
               << "stabilityFine" << std::setw(28) << "stabilityCoarse"
               << "\n";

@@ -396,13 +396,23 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
       out.dir = dir / "outputs" / name;
       if (o.has("milliseconds")) {
         out.milliseconds = o.numbers("milliseconds", size_t(n));
+        // A timer that read 0 measured nothing: a time of 0 would be the fastest of all.
         for (size_t t = 0; t < out.milliseconds.size(); ++t)
-          if (!(out.milliseconds[t] >= 0) || !std::isfinite(out.milliseconds[t]))
+          if (!(out.milliseconds[t] > 0) || !std::isfinite(out.milliseconds[t]))
             throw Error(file.string() + ": outputs." + name + ".milliseconds[" + std::to_string(t) +
-                        "]: expected a finite time >= 0");
+                        "]: expected a positive finite time, got " +
+                        shortestText(out.milliseconds[t]) +
+                        " (leave \"milliseconds\" out where the frames were not timed)");
         out.device = o.string("device");
-      } else {
-        out.device = o.string("device", "");
+        if (out.device.find_first_not_of(" \t") == std::string::npos)
+          throw Error(
+              file.string() + ": outputs." + name +
+              ".device: expected what measured the times (\"RTX 4080, GPU timestamps\"), got an "
+              "empty name");
+      } else if (o.has("device")) {
+        throw Error(file.string() + ": outputs." + name +
+                    ".device: names what measured \"milliseconds\", which the output does not give "
+                    "(give both, or neither)");
       }
       o.rejectUnread();
       // A declared folder that is not there fails its `file:` pair (readCaptureOutput), not the
@@ -805,9 +815,23 @@ void exportCapture(const Sequence& sequence, const fs::path& out, const std::map
       if (!fs::exists(src))
         throw Error(src.string() + ": output frame " + std::to_string(t) + " of '" + name +
                     "' is missing (`arena run --keep-frames all` writes every frame)");
+      // A run's output frame names its scene: another scene's output would be scored against
+      // these references.
+      const ExrAttributes attributes = readExrAttributes(src);
+      if (const auto scene = attributes.find("arena.scene");
+          scene != attributes.end() && scene->second != info.scene)
+        throw Error(src.string() + ": an output of scene '" + scene->second +
+                    "' (its arena.scene), not of '" + info.scene +
+                    "', the scene exported: it would be scored against another scene's references");
       // Read as the capture's reader will: a frame it would refuse is never exported.
       writer.output(name, t, readOutputFrame(src, name, info.width, info.height));
     }
+    // Frames beyond the sequence's: the output of a longer run, of which only the first are taken.
+    if (const fs::path beyond = from / numberedFileName("frame", info.frames, 4);
+        fs::exists(beyond))
+      throw Error(beyond.string() + ": the output of '" + name + "' holds more frames than the " +
+                  std::to_string(info.frames) +
+                  " exported: an output of another run (export with that run's --frames)");
     doc["outputs"][name] = json::object();
   }
   writer.commit(doc);

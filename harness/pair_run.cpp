@@ -124,7 +124,8 @@ void writeFrameImages(const fs::path& imageDir, int t, const FrameImages& images
 }
 
 // Every output frame as an EXR (colour, and the two signals a split denoiser filtered).
-void writeOutputExr(const fs::path& imageDir, const DenoisedFrame& f, const DenoiserRequest& req, const ParamSet& params) {
+void writeOutputExr(const fs::path& imageDir, const DenoisedFrame& f, const DenoiserRequest& req,
+                    const ParamSet& params, const std::string& scene) {
   LayerSet out;
   out.set("color", f.color);
   std::vector<LayerSpec> specs = {{"color", {"R", "G", "B"}}, {"color", {"R", "G", "B"}, false, true}};
@@ -134,7 +135,11 @@ void writeOutputExr(const fs::path& imageDir, const DenoisedFrame& f, const Deno
     out.set(signal, image);
     specs.push_back({signal, {"R", "G", "B"}});
   }
-  writeExr(Sequence::framePath(imageDir, f.frame), out, specs, {{"arena.denoiser", req.name}, {"arena.params", params.toJson().dump()}});
+  // The scene says whose frames these denoise (`arena export --output` refuses another scene's).
+  writeExr(Sequence::framePath(imageDir, f.frame), out, specs,
+           {{"arena.denoiser", req.name},
+            {"arena.params", params.toJson().dump()},
+            {"arena.scene", scene}});
 }
 
 // Reads the stored outputs of a denoiser that ran elsewhere (a capture's outputs/NAME) as the
@@ -230,7 +235,7 @@ json runPair(const RunConfig& cfg, const SceneData& sd, const DenoiserRequest& r
     if (keepsImagesOf(cfg, sd, keepAll, f.frame)) {
       StageTimer images(Stage::Report);
       if (!screening) writeFrameImages(imageDir, f.frame, evaluation.lastImages());
-      if (keepAll) writeOutputExr(imageDir, f, req, params);
+      if (keepAll) writeOutputExr(imageDir, f, req, params, info.scene);
     }
   };
   std::vector<std::string> processEnds;  // an external process that ended badly after its frames

@@ -39,6 +39,28 @@ std::unique_ptr<SceneData> prepareScene(const fs::path& dir, const EvaluationOpt
     if (validation) *validation = checks.toJson();
     if (checks.status() == CheckStatus::Fail)
       throw Error("capture " + dir.string() + " refused by its validation: " + checks.failures());
+    // The validation fails an input equal to its reference on every frame; on every frame the run
+    // scores (after the warm-up) the input would score a perfect 0 and every method be measured
+    // against its own input: nothing to rank.
+    if (!input.references.empty()) {
+      int scored = 0, equal = 0;
+      for (int t = std::max(options.warmup, 0); t < int(input.frames.size()); ++t) {
+        const Image& color = input.frames[size_t(t)].get("color");
+        const Image& reference =
+            input.references[size_t(input.referenceOfFrame[size_t(t)])].get("color");
+        const std::span<const float> a = color.raw(), b = reference.raw();
+        const bool signal = std::any_of(b.begin(), b.end(), [](float v) { return v != 0; });
+        if (!signal) continue;
+        ++scored;
+        equal += a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin());
+      }
+      if (scored > 0 && equal == scored)
+        throw Error("capture " + dir.string() + ": every frame the run scores (from frame " +
+                    std::to_string(options.warmup) +
+                    ", after the warm-up) equals its reference value for value: the input itself "
+                    "would score a perfect 0 and every method be measured against its own input "
+                    "(a reference must be rendered apart from the input; reference.equalsInput)");
+    }
   } else if (!input.references.empty() &&
              std::all_of(input.references.begin(), input.references.end(), [](const LayerSet& r) {
                const Image& c = r.get("color");

@@ -203,9 +203,11 @@ struct Brightness {
     const double mean = sumD / double(n), variance = std::max(0.0, sumD2 / double(n) - mean * mean);
     return variance > 0 ? mean / std::sqrt(variance / double(n - 1)) : (mean != 0 ? 1e9 : 0.0);
   }
-  // "the input's mean luminance is 4x its reference's, 38 standard errors from equal"
+  // "the input's mean luminance is 4x its reference's, 38 standard errors from equal"; a darker
+  // input says the factor the check's value is ("0.25x its reference's (4x darker)").
   std::string text() const {
-    return "the input's mean luminance is " + number(ratio()) + "x its reference's, " +
+    return "the input's mean luminance is " + number(ratio()) + "x its reference's" +
+           (ratio() < 1 ? " (" + number(factor()) + "x darker)" : std::string()) + ", " +
            number(std::abs(z())) + " standard errors from equal";
   }
 };
@@ -631,19 +633,22 @@ CaptureValidation validateCaptureOutputs(const CaptureDescription& capture,
     v.checks.push_back(check(
         "output." + name, double(bad.size()), 0, 0, "frames",
         bad.empty() ? "" : "frame(s) " + frameList(bad) + " cannot be scored; first: " + first));
+    // On every frame it is no denoiser's output: a run fails its pair (on every frame scored).
     if (!equalsReference.empty())
       v.checks.push_back(check(
-          "output." + name + ".equalsReference", double(equalsReference.size()), 0, kSoft, "frames",
+          "output." + name + ".equalsReference", double(equalsReference.size()), 0,
+          double(capture.info.frames) - 1, "frames",
           "frame(s) " + frameList(equalsReference) +
               " equal their reference value for value: a perfect score there (is the "
-              "reference wired in as the output?)"));
+              "reference wired in as the output?); fails when every frame does, as a run fails "
+              "the pair when every frame it scores does"));
     if (referenceLight > 0) {  // a black output is the extreme case: a ratio of 0
       const double ratio = std::max(outputLight, 0.0) / referenceLight;
       const bool againstReference = capture.info.hasReference;
       // Fails brighter than 2x the references (an exposure or an encoding: no denoiser adds that
       // much light) and black; darker is a warning, since a denoiser that clamps fireflies loses
-      // light (hybrid keeps 0.31x of hard_light's), and so is anything against the noisy inputs,
-      // whose mean over a short sequence is itself uncertain.
+      // light (hybrid keeps about 0.3x of hard_light's), and so is anything against the noisy
+      // inputs, whose mean over a short sequence is itself uncertain.
       const bool failable = ratio == 0 || (againstReference && ratio > 1);
       v.checks.push_back(check(
           "output." + name + (againstReference ? ".brightnessVsReference" : ".brightnessVsInput"),
@@ -651,6 +656,8 @@ CaptureValidation validateCaptureOutputs(const CaptureDescription& capture,
           failable ? 2 : kSoft, "x",
           "mean luminance " + number(ratio) + "x the " +
               (againstReference ? "references'" : "noisy inputs' (there are no references)") +
+              (ratio > 0 && ratio < 1 ? " (" + number(1 / ratio) + "x darker, the value)"
+                                      : std::string()) +
               " over its frames: outputs are linear radiance at the input's exposure; another "
               "exposure, a tone map or display encoding (sRGB, gamma) would be scored as the "
               "denoiser's error" +
@@ -846,6 +853,13 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
     if (m.worstFrameShare > 0.05)
       detail += "; worst at frame " + std::to_string(m.worstFrame) + " (" +
                 number(m.worstFrameShare * 100) + "% off)";
+    // One frame off where the others fit: that frame's vectors or its camera, and a frame missing
+    // before it (the rest renumbered: its camera two steps from the one before, its vectors one,
+    // read as vectors "scaled by 1/2") as likely as a slip of the vectors.
+    if (m.worstFrameShare > 0.5 && m.offShare < 0.5 * m.worstFrameShare)
+      detail += "; the other frames fit: frame " + std::to_string(m.worstFrame) +
+                "'s vectors or camera are off, or a frame is missing before it (its camera then "
+                "steps twice as far as its vectors)";
     if (!isGiven("meshId") && !moving.empty()) detail += "; no meshId, so moving objects count too";
     v.checks.push_back(check("motion.consistency", m.offShare, 0.05, 0.25, "share of pixels off by more than 1 px", detail));
   }

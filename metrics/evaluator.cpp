@@ -415,6 +415,9 @@ struct PairEvaluation::State {
   // Frames whose output equals the reference value for value while the input does not: a perfect
   // score no denoiser computes from its input (a stored output wired to the reference).
   std::vector<int> equalsReference;
+  // Frames after the warm-up with a signal whose input differs from the reference (where an output
+  // equal to the reference is no denoiser's), and how many of them the output equals.
+  int comparableScored = 0, equalScored = 0;
   State(const EvaluationScene& s, EvaluationScope sc)
       : scene(s),
         scope(sc),
@@ -478,6 +481,10 @@ void PairEvaluation::add(int t, const Image& output, const FrameFacts& facts) {
       signal = signal || r->raw()[i] != 0.0f;
     }
     if (same && signal && scene.noisyRelMse_[size_t(t)] != 0) s.equalsReference.push_back(t);
+    if (signal && scene.noisyRelMse_[size_t(t)] != 0 && t >= scene.options().warmup) {
+      ++s.comparableScored;
+      s.equalScored += same;
+    }
     v.error = &kept->error;
     v.noisyRelMse = scene.noisyRelMse_[size_t(t)];
     v.referenceRelMse = scene.referenceRelMse_[size_t(t)];
@@ -645,6 +652,13 @@ json PairEvaluation::finish() {
       j["tiles"] = s.cutTiles[k].toJson();
       cuts.push_back(j);
     }
+  // An output that is its reference on every frame scored is no measurement of a denoiser: its
+  // perfect score would rank first (a stored output wired to the reference). The pair fails.
+  if (s.comparableScored > 0 && s.equalScored == s.comparableScored)
+    throw Error("the output equals its reference value for value on every frame scored (" +
+                frameRanges(s.equalsReference) +
+                ") while the input does not: a perfect score no denoiser computes from its input; "
+                "is the reference wired in as the output?");
   json warnings = json::array();
   if (!s.equalsReference.empty())
     warnings.push_back(

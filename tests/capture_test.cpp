@@ -134,6 +134,35 @@ TEST(Capture, ARequiredLayerUnderOtherChannelNamesIsRefusedNamingThem) {
       << bare;
 }
 
+// A stored output's times: each positive (a timer that read 0 measured nothing, and would be the
+// fastest of all), with the thing that measured them named; a device without times says nothing.
+TEST(Capture, AStoredOutputsTimesArePositiveAndSayWhatMeasuredThem) {
+  auto refused = [](const std::string& name, const json& output) {
+    const fs::path dir = copyCapture(exportedCornell(), name, [&](json& d) {
+      d["outputs"] = {{"gpu", output}};
+    });
+    return test::errorOf([&] { readCaptureDescription(dir); });
+  };
+  std::vector<double> ms(10, 1.25);
+  ms[4] = 0;
+  std::string e = refused("ms_zero", {{"milliseconds", ms}, {"device", "RTX 4080"}});
+  EXPECT_NE(e.find("outputs.gpu.milliseconds[4]: expected a positive finite time, got 0"),
+            std::string::npos)
+      << e;
+  ms[4] = 1.25;
+  e = refused("device_empty", {{"milliseconds", ms}, {"device", " "}});
+  EXPECT_NE(e.find("outputs.gpu.device: expected what measured the times"), std::string::npos) << e;
+  e = refused("device_alone", {{"device", "RTX 4080"}});
+  EXPECT_NE(e.find("outputs.gpu.device: names what measured \"milliseconds\", which the output "
+                   "does not give"),
+            std::string::npos)
+      << e;
+  const fs::path fine = copyCapture(exportedCornell(), "ms_fine", [&](json& d) {
+    d["outputs"] = {{"gpu", {{"milliseconds", ms}, {"device", "RTX 4080"}}}};
+  });
+  EXPECT_EQ(readCaptureDescription(fine).outputs.at("gpu").device, "RTX 4080");
+}
+
 json pairOf(const json& results, const std::string& label) {
   for (const json& p : results["pairs"])
     if (p["label"] == label) return p;
@@ -416,6 +445,21 @@ TEST(CaptureValidation, MotionVectorSlipsAreRefusedAndNamed) {
     EXPECT_EQ(r["pairs"][0]["status"], "failed");
     EXPECT_NE(r["pairs"][0]["error"].get<std::string>().find("motion.consistency"), std::string::npos);
     EXPECT_EQ(r["scenes"][std::string("slip_") + slip.name]["validation"]["status"], "fail");
+  }
+  // Vectors half the cameras' step on one frame alone: what a frame dropped and the rest renumbered
+  // looks like (frame 3's camera two steps from frame 2's, its vectors one step): the missing
+  // frame is offered beside the slip.
+  {
+    const fs::path dir = writeSynthetic("one_frame_halved");
+    editFrames(dir, [&](int t, LayerSet& f) {
+      if (t != 3) return;
+      for (float& v : f.get("motion").raw()) v *= 0.5f;
+    });
+    const CaptureCheck& c = checkNamed(validate(dir), "motion.consistency");
+    EXPECT_NE(c.detail.find("worst at frame 3 (100% off); the other frames fit: frame 3's vectors "
+                            "or camera are off, or a frame is missing before it"),
+              std::string::npos)
+        << c.detail;
   }
   // Cameras given as camera-to-world matrices (Blender's own convention) where capture.json wants
   // world-to-camera: the vectors are right, the cameras inverted; the check names that reading
@@ -1219,6 +1263,30 @@ TEST(CaptureValidation, BlackNegativeOrRepeatedColourIsRefusedNamingTheFrames) {
     if (k == 1) ref = readCaptureFrame(oc, k).get("color");
   });
   EXPECT_EQ(checkNamed(validate(oneCopied), "reference.equalsInput").status, CheckStatus::Warn);
+  // Copied on every frame a run scores but the warm-up's: validate, which knows no warm-up, warns;
+  // a run with a warm-up of 2 refuses the capture (the input would score a perfect 0 there).
+  const fs::path lateCopied = writeSynthetic("reference_copied_after_warmup");
+  const CaptureDescription lc = readCaptureDescription(lateCopied);
+  editReferences(lateCopied, [&](int k, Image& ref) {
+    if (k >= 2) ref = readCaptureFrame(lc, k).get("color");
+  });
+  EXPECT_EQ(checkNamed(validate(lateCopied), "reference.equalsInput").status, CheckStatus::Warn);
+  RunConfig late =
+      captureRun(test::freshDir("reference_copied_run"), {{"eaw", {}, ""}}, {lateCopied});
+  late.warmup = 2;
+  const json lateRun = runMatrix(late);
+  ASSERT_FALSE(lateRun["pairs"].empty());
+  for (const json& pair : lateRun["pairs"]) {  // eaw and the baselines
+    EXPECT_EQ(pair["status"], "failed");
+    EXPECT_NE(pair.value("error", "")
+                  .find("every frame the run scores (from frame 2, after the "
+                        "warm-up) equals its reference value for value"),
+              std::string::npos)
+        << pair.value("error", "");
+  }
+  late.warmup = 1;  // frame 1 is scored too, and differs: measured
+  late.out = test::freshDir("reference_copied_run_1");
+  for (const json& pair : runMatrix(late)["pairs"]) EXPECT_EQ(pair["status"], "ok");
   // A filtered reference's tiny negative values (a negative filter lobe) are not negative radiance.
   const fs::path lobes = writeSynthetic("reference_lobes");
   editReferences(lobes, [](int, Image& img) {
@@ -1304,7 +1372,7 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
         {"good", json::object()},   {"short", json::object()},  {"small", json::object()},
         {"nan", json::object()},    {"oracle", json::object()}, {"copied", json::object()},
         {"bright", json::object()}, {"absent", json::object()}, {"black", json::object()},
-        {"warm", json::object()},   {"dark", json::object()}};
+        {"warm", json::object()},   {"dark", json::object()},   {"partoracle", json::object()}};
   });
   const CaptureDescription base = readCaptureDescription(exportedCornell());
   const int w = base.info.width, h = base.info.height;
@@ -1326,6 +1394,10 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
     write("nan", t, bad);
     write("oracle", t,
           readCaptureReference(base, base.info.referenceOfFrame[size_t(t)]).get("color"));
+    Image part = readCaptureReference(base, base.info.referenceOfFrame[size_t(t)]).get("color");
+    if (t == base.info.frames - 1)
+      for (float& v : part.raw()) v *= 1.05f;  // the reference but on its last frame
+    write("partoracle", t, part);
     write("copied", t, readCaptureFrame(base, t).get("color"));  // the noisy input itself
     Image bright = readCaptureReference(base, base.info.referenceOfFrame[size_t(t)]).get("color");
     Image warm = bright;
@@ -1370,11 +1442,15 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
       << absent.detail;
   EXPECT_EQ(forgotten.status, CheckStatus::Warn);
   EXPECT_NE(forgotten.detail.find("forgotten"), std::string::npos) << forgotten.detail;
-  // An output that is the reference scores perfectly: readable, so a warning, not a failure.
+  // An output that is the reference on some frames scores perfectly there: a warning; on every
+  // frame it is no denoiser's output (a run fails its pair), and fails.
   EXPECT_EQ(checkNamed(v, "output.oracle").status, CheckStatus::Pass);
   const CaptureCheck& oracle = checkNamed(v, "output.oracle.equalsReference");
-  EXPECT_EQ(oracle.status, CheckStatus::Warn);
+  EXPECT_EQ(oracle.status, CheckStatus::Fail);
   EXPECT_EQ(oracle.value, double(base.info.frames));
+  const CaptureCheck& partOracle = checkNamed(v, "output.partoracle.equalsReference");
+  EXPECT_EQ(partOracle.status, CheckStatus::Warn);
+  EXPECT_EQ(partOracle.value, double(base.info.frames - 1));
   EXPECT_THROW(checkNamed(v, "output.good.equalsReference"), Error);
   // An output at another exposure is said before it is scored as a poor denoiser.
   const CaptureCheck& bright = checkNamed(v, "output.bright.brightnessVsReference");
@@ -1385,7 +1461,7 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
   EXPECT_EQ(checkNamed(v, "output.oracle.brightnessVsReference").status, CheckStatus::Pass);
   EXPECT_EQ(checkNamed(v, "output.warm.brightnessVsReference").status, CheckStatus::Warn);
   // Darker is a warning: a denoiser that clamps fireflies loses light (failing it failed a stored
-  // copy of hybrid's output on hard_light, 0.31x).
+  // copy of hybrid's output on hard_light, about 0.3x).
   const CaptureCheck& dark = checkNamed(v, "output.dark.brightnessVsReference");
   EXPECT_EQ(dark.status, CheckStatus::Warn) << dark.detail;
   EXPECT_NE(dark.detail.find("a denoiser that clamps fireflies loses light too"), std::string::npos)
@@ -1423,9 +1499,9 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
       << copy["warnings"];
   EXPECT_FALSE(pairOf(copied, "passthrough").contains("equalsInputEveryFrame"));
   // A run scores both, each with its warning: a denoiser that clamps fireflies loses light (hybrid
-  // keeps 0.31x of hard_light's), so a run cannot tell a slip from a bias by the factor; validate
-  // fails only the brighter side beyond 2x (tried: failing a run's pair beyond 2x failed a stored
-  // copy of hybrid's own output while the built-in ranked first).
+  // keeps about 0.3x of hard_light's), so a run cannot tell a slip from a bias by the factor;
+  // validate fails only the brighter side beyond 2x (tried: failing a run's pair beyond 2x failed a
+  // stored copy of hybrid's own output while the built-in ranked first).
   const json lit = runMatrix(captureRun(test::freshDir("outputs_bright_run"),
                                         {{"file:bright", {}, ""}, {"file:warm", {}, ""}}, {dir}));
   const json& brighter = pairOf(lit, "file:bright");
@@ -1442,8 +1518,9 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
       << warmer["warnings"];
   EXPECT_FALSE(copy.contains("brightnessVsReference"));  // a noisy input averages to its reference
   // The reference wired in as the output: a perfect score, said while the run goes, not only kept.
-  RunConfig wired = captureRun(test::freshDir("outputs_oracle_run"),
-                               {{"file:oracle", {}, ""}, {"eaw", {}, ""}}, {dir});
+  RunConfig wired =
+      captureRun(test::freshDir("outputs_oracle_run"),
+                 {{"file:oracle", {}, ""}, {"file:partoracle", {}, ""}, {"eaw", {}, ""}}, {dir});
   std::vector<std::string> said;
   wired.progress = [&](const std::string& line) { said.push_back(line); };
   const json wiredRun = runMatrix(wired);
@@ -1460,6 +1537,14 @@ TEST(CaptureValidation, StoredOutputsAreCheckedLikeARunReadsThem) {
                                  0) == 0;
                 }),
             said.end());
+  // The reference on every frame scored: the pair fails, saying why; the other is scored, warned.
+  const json& wiredPair = pairOf(wiredRun, "file:oracle");
+  EXPECT_EQ(wiredPair["status"], "failed");
+  EXPECT_NE(wiredPair.value("error", "")
+                .find("the output equals its reference value for value on every frame scored"),
+            std::string::npos)
+      << wiredPair.value("error", "");
+  EXPECT_EQ(pairOf(wiredRun, "file:partoracle")["status"], "ok");
   EXPECT_NE(copy["summary"]["ms"].value("absent", "").find("not recorded in the capture"),
             std::string::npos)
       << copy["summary"]["ms"];
@@ -2151,6 +2236,35 @@ TEST(CaptureContract, AnExportNeverLeavesAHalfWrittenFolder) {
           nan ? "frame_0002.exr: 1 non-finite colour values in the output of 'odd'"
               : "frame_0000.exr: " + std::to_string(info.width / 2) + "x" +
                     std::to_string(info.height) + ", expected";
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(out));
+  }
+  // Another scene's output (a run's frames name their scene), and an output of more frames than
+  // the sequence's (a longer run): refused, naming the file.
+  for (const bool otherScene : {true, false}) {
+    const fs::path frames = test::freshDir(otherScene ? "other_scene_outputs" : "longer_outputs");
+    for (int t = 0; t < info.frames + (otherScene ? 0 : 2); ++t) {
+      LayerSet l;
+      l.set("color", Image(info.width, info.height, 3, 0.5f));
+      writeExr(
+          frames / numberedFileName("frame", t, 4), l, {{"color", {"R", "G", "B"}, false}},
+          otherScene ? ExrAttributes{{"arena.scene", "camera_pan_occluder"}} : ExrAttributes{});
+    }
+    try {
+      exportCapture(Sequence::open(cornellSequence()), out, {{"odd", frames}});
+      ADD_FAILURE() << (otherScene ? "exported another scene's output"
+                                   : "exported a longer output");
+    } catch (const Error& e) {
+      const std::string expected =
+          otherScene
+              ? "frame_0000.exr: an output of scene 'camera_pan_occluder' (its arena.scene), "
+                "not of '" +
+                    info.scene + "'"
+              : numberedFileName("frame", info.frames, 4) +
+                    ": the output of 'odd' holds more "
+                    "frames than the " +
+                    std::to_string(info.frames) + " exported";
       EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
     }
     EXPECT_FALSE(fs::exists(out));

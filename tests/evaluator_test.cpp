@@ -434,7 +434,8 @@ TEST(Evaluation, CappedReferencesAreNamedWithTheFramesTheyServe) {
 }
 
 // An output that is the reference value for value, where the input is not, scores a perfect 0 no
-// denoiser computes: the pair says so (a stored output wired to the reference). Where the input is
+// denoiser computes: the pair says so (a stored output wired to the reference), and fails where
+// that is every frame scored. Where the input is
 // the reference too, there is nothing to say; one NaN pixel of the input leaves its error finite
 // (it is measured as the denoisers read it: the NaN as 0).
 TEST(Evaluation, AnOutputThatIsTheReferenceIsWarnedOf) {
@@ -445,17 +446,24 @@ TEST(Evaluation, AnOutputThatIsTheReferenceIsWarnedOf) {
   EXPECT_TRUE(std::isfinite(scene.describe()["noisyRelMse"][2].get<double>()))
       << scene.describe()["noisyRelMse"];
   PairEvaluation pair(scene);
-  Image ref(8, 6, 3);
+  Image ref(8, 6, 3), off(8, 6, 3);
   ref.fill(0.5f);
-  for (int t = 0; t < 5; ++t) pair.add(t, ref);
+  off.fill(0.45f);
+  for (int t = 0; t < 5; ++t) pair.add(t, t == 4 ? off : ref);  // measured on frame 4
   const json r = pair.finish();
   ASSERT_FALSE(r["warnings"].empty());
   EXPECT_EQ(r["warnings"][0],
-            "the output equals its reference value for value on frames 1-2, 4 while the input does "
-            "not: a "
-            "perfect score there that no denoiser computes from its input (is the reference wired "
-            "in as the "
-            "output?)");
+            "the output equals its reference value for value on frames 1-2 while the input does "
+            "not: a perfect score there that no denoiser computes from its input (is the reference "
+            "wired in as the output?)");
+  // On every frame scored where the input differs: no measurement of a denoiser, the pair fails.
+  PairEvaluation wired(scene);
+  for (int t = 0; t < 5; ++t) wired.add(t, ref);
+  EXPECT_NE(test::errorOf([&] { wired.finish(); })
+                .find("the output equals its reference value for value on every frame scored "
+                      "(frames 1-2, 4) while the input does not"),
+            std::string::npos)
+      << test::errorOf([&] { wired.finish(); });
   PairEvaluation near(scene);  // one value off on every frame: a measurement, however good
   ref.at(0, 0, 0) = 0.50001f;
   for (int t = 0; t < 5; ++t) near.add(t, ref);
