@@ -109,11 +109,17 @@ void addBenchCommand(CLI::App& app) {
     std::string denoisers = "all", scene = defaultScenesDir() + "/cornell_static.json", json,
                 resolution = "1920x1080", device = "TITAN RTX";
     int frames = 5;
+    std::vector<std::string> params;
   };
   auto g = std::make_shared<GpuModelOptions>();
   gpuModel->add_option("--denoisers", g->denoisers, "Comma-separated built-ins for the per-denoiser and memory tables, or 'all'")
       ->default_val("all");
   gpuModel->add_option("--scene", g->scene, "Scene file whose frames feed the denoisers");
+  gpuModel
+      ->add_option("--param", g->params,
+                   "DENOISER.NAME=VALUE for the per-denoiser and memory tables, repeatable (a "
+                   "variant: reengine.disocclusionRays=off)")
+      ->default_str("none: registry defaults");
   gpuModel->add_option("--resolution", g->resolution, "WIDTHxHEIGHT of the per-denoiser and memory tables")
       ->default_val("1920x1080");
   gpuModel
@@ -137,6 +143,7 @@ void addBenchCommand(CLI::App& app) {
                       ? DenoiserRegistry::instance().names()
                       : splitList(g->denoisers, "--denoisers",
                                   "built-in names (`arena denoisers`), comma-separated, or 'all'");
+    b.params = parseParamAssignments(g->params);
     const nlohmann::json out = benchGpuModel(b, printLine);
     if (!g->json.empty()) writeMarkedJson(g->json, "bench gpu-model", out);
   });

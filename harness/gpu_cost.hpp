@@ -6,9 +6,9 @@
 // a counted fetch cycle really costs) and c (fixed ms per dispatch) are the only fitted
 // constants, fitted on one published set (the CEDEC 2021 box-filter vs à-trous experiment) and
 // judged on the sets they never saw. `arena bench gpu-model` prints the validation tables.
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
+#include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -142,6 +142,8 @@ std::string spearmanText(double rho, size_t values);
 struct GpuModelBench {
   std::string sceneFile;
   std::vector<std::string> denoisers;  // the per-denoiser table and the memory table
+  // Their parameters where not the defaults (denoiser -> name -> value), as --param gives them.
+  std::map<std::string, std::map<std::string, std::string>> params;
   std::string device = "TITAN RTX";
   int width = 1920, height = 1080, frames = 5;  // the last counted: h >= 4 by then
 };

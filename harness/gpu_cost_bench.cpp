@@ -226,8 +226,16 @@ json benchGpuModel(const GpuModelBench& b, const ProgressFn& progress) {
     if (std::find(b.denoisers.begin(), b.denoisers.begin() + long(i), name) !=
         b.denoisers.begin() + long(i))
       throw Error("bench gpu-model: --denoisers names " + name + " twice");
-    DenoiserRegistry::instance().find(name);
+    const DenoiserInfo& info = DenoiserRegistry::instance().find(name);
+    const auto given = b.params.find(name);
+    if (given != b.params.end())
+      info.schema.resolve(given->second, name);  // names and values checked now
   }
+  for (const auto& [name, values] : b.params)
+    if (std::find(b.denoisers.begin(), b.denoisers.end(), name) == b.denoisers.end())
+      throw Error("bench gpu-model: --param " + name + "." +
+                  (values.empty() ? "" : values.begin()->first) + ": " + name +
+                  " is not among the denoisers priced");
   // Below 960x540 the per-thread fixed term prices a pass low (the measured set: 0.48x at
   // 480x270, 0.24x at 240x135; a dispatch's own 4-6 us is missing).
   if (double(b.width) * double(b.height) < 960.0 * 540.0)
@@ -404,13 +412,22 @@ json benchGpuModel(const GpuModelBench& b, const ProgressFn& progress) {
   const double pixels = double(b.width) * double(b.height);
   std::vector<json> memoryRows;
   for (const std::string& name : b.denoisers) {
-    const DenoiserRun run = runDenoiser(name, {}, {}, frames);
+    const auto given = b.params.find(name);
+    const DenoiserRun run = runDenoiser(
+        name, given == b.params.end() ? std::map<std::string, std::string>{} : given->second, {},
+        frames);
     std::vector<PassStats> both = run.diffuse.passes;
     both.insert(both.end(), run.specular.passes.begin(), run.specular.passes.end());
     json passes = json::array();
     double gpuMs = 0;
     const double cpuMs = run.diffuse.cpuMs + run.specular.cpuMs;
-    progress(printed("%s", name.c_str()));
+    std::string variant;  // the parameters given, as a sweep's label writes them
+    if (given != b.params.end())
+      for (const auto& [key, value] : given->second)
+        variant += (variant.empty() ? "[" : ",") + key + "=" + value;
+    if (!variant.empty()) variant += "]";
+    const std::string label = name + variant;
+    progress(label);
     for (const MergedPass& pass : mergedPasses(both)) {
       const PassTraffic& t = pass.traffic;
       const double ms = t.empty() ? 0.0 : predictPass(t, device, model).totalMs();
@@ -455,12 +472,14 @@ json benchGpuModel(const GpuModelBench& b, const ProgressFn& progress) {
                          {"gpuWorkingSetMiB", (md.persistent + md.transient + ms.persistent + ms.transient) / kMiB},
                          {"cpuSetupMiB", (run.diffuse.setupBytes + run.specular.setupBytes) / kMiB},
                          {"cpuHeldMiB", (run.diffuse.heldBytes + run.specular.heldBytes) / kMiB}};
-    memoryRows.push_back({{"name", name}, {"memory", memory}});
-    out["denoisers"].push_back({{"name", name},
-                                {"predictedMs", gpuMs},
-                                {"cpuMs", cpuMs},
-                                {"passes", passes},
-                                {"memory", memory}});
+    memoryRows.push_back({{"name", label}, {"memory", memory}});
+    out["denoisers"].push_back(
+        {{"name", label},
+         {"params", given == b.params.end() ? json::object() : json(given->second)},
+         {"predictedMs", gpuMs},
+         {"cpuMs", cpuMs},
+         {"passes", passes},
+         {"memory", memory}});
   }
 
   // Does the order of the methods change between CPU time here and predicted GPU time?
@@ -497,8 +516,11 @@ json benchGpuModel(const GpuModelBench& b, const ProgressFn& progress) {
       "GPU ms above are the model's (it misses its validation goal: read an order of magnitude "
       "and an order of methods, not a budget; docs/gpu-cost.md)");
   progress("order by CPU ms here:        " + cpuOrder);
-  progress("order by predicted GPU ms:   " + gpuOrder +
-           " (≈: less than 10% above the first of its group, which the model does not order)");
+  progress(
+      "order by predicted GPU ms:   " + gpuOrder +
+      (gpuOrder.find("≈") == std::string::npos
+           ? std::string()
+           : " (≈: less than 10% above the first of its group, which the model does not order)"));
   if (!unpriced.empty())
     progress("not in either order: " + unpricedText +
              " (no pass counted any traffic: no predicted time)");

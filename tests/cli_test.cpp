@@ -590,6 +590,14 @@ TEST(CliContract, UsageErrorsExitTwoAndOptionsAreStrict) {
   EXPECT_NE(
       contract::arenaCli("bench gpu-model --denoisers svgf,svgf").output.find("names svgf twice"),
       std::string::npos);
+  // A variant priced by --param: its names and values checked before the work, and only for a
+  // denoiser priced.
+  EXPECT_NE(contract::arenaCli("bench gpu-model --denoisers svgf --param svgf.iterationz=3")
+                .output.find("svgf: unknown parameter 'iterationz'"),
+            std::string::npos);
+  EXPECT_NE(contract::arenaCli("bench gpu-model --denoisers svgf --param eaw.sigmaL=1")
+                .output.find("--param eaw.sigmaL: eaw is not among the denoisers priced"),
+            std::string::npos);
   // An empty denoiser list is not "only the baselines".
   for (const std::string& list : {std::string("''"), std::string("svgf,"), std::string(",")}) {
     contract::CliResult r = contract::arenaCli("run --scenes cornell_static --resolution 8x8 --frames 2 --ref-spp 1 --cache " +
