@@ -44,6 +44,10 @@ std::string ParamSpec::problem() const {
     return "'" + name + "': its default is not one of its choices";
   if (type != Type::Int && type != Type::Float) return "";
   const std::string range = "[" + formatNumber(min) + ", " + formatNumber(max) + "]";
+  if (!std::isfinite(min) || !std::isfinite(max))
+    return "'" + name + "': its range " + range +
+           " is not finite (a range bounds what a run or a sweep may pass: give the largest value "
+           "that makes sense)";
   if (!(min <= max)) return "'" + name + "': its range " + range + " is inverted (min > max)";
   if (!(defaultValue >= min && defaultValue <= max))
     return "'" + name + "': its default " + formatNumber(defaultValue) +
@@ -177,6 +181,10 @@ ParamSet ParamSchema::resolve(const std::map<std::string, std::string>& override
         if (s->type == ParamSpec::Type::Int && v != std::floor(v)) bad("an integer");
         if (v < s->min || v > s->max)
           bad("a value in [" + formatNumber(s->min) + ", " + formatNumber(s->max) + "]");
+        // Read as a float, a value beyond its range would be an infinity nobody wrote.
+        if (s->type == ParamSpec::Type::Float && floats_ && !std::isfinite(float(v)))
+          bad("a number within a float's range (about 3.4e38 in magnitude), which this parameter "
+              "is read as");
         if (s->type == ParamSpec::Type::Int) out.set(name, int(v));
         else
           out.set(name, floats_ ? asReadFloat(v) : v);

@@ -398,7 +398,8 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
           const double wall =
               std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
                   .count();
-          if (const std::string fault = outputFault(outImage, c.name, kind, int(input), c.origin);
+          if (const std::string fault =
+                  outputFault(outImage, signal, c.name, kind, int(input), c.origin);
               !fault.empty())
             throw Error(fault);
           // An external process's own compute time; the wall clock (transfer included) otherwise.

@@ -45,10 +45,17 @@ void markUnwritten(Image& output) {
               std::bit_cast<float>(kUnwrittenBits));
 }
 
-std::string outputFault(const Image& output, const std::string& denoiser, SignalKind kind,
-                        int frame, const std::string& origin) {
-  if (nonFiniteValues(output) == 0) return "";
+std::string outputFault(const Image& output, const Image& input, const std::string& denoiser,
+                        SignalKind kind, int frame, const std::string& origin) {
   const std::string name = origin.empty() ? denoiser : denoiser + " (" + origin + ")";
+  if (output.width() != input.width() || output.height() != input.height() ||
+      output.channels() != 3)
+    return name + " returned a " + std::to_string(output.width()) + "x" +
+           std::to_string(output.height()) + "x" + std::to_string(output.channels()) +
+           " output on the " + signalName(kind) + " signal at frame " + std::to_string(frame) +
+           "; expected " + std::to_string(input.width()) + "x" + std::to_string(input.height()) +
+           "x3, the signal's size (write into the output image given, or one of its size)";
+  if (nonFiniteValues(output) == 0) return "";
   size_t n = 0;
   for (int c = 0; c < output.channels(); ++c)
     for (const float v : output.planeSpan(c)) n += std::bit_cast<uint32_t>(v) == kUnwrittenBits;
@@ -306,7 +313,8 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
       if (const std::string wrong = implausibleTime(reported, d.lastPasses(), wall);
           !wrong.empty() && out.implausibleTime.empty())
         out.implausibleTime = std::string(signalName(kind)) + ": " + wrong;
-      if (const std::string fault = outputFault(result, request_.name, kind, t, info_.origin);
+      if (const std::string fault =
+              outputFault(result, in.signal, request_.name, kind, t, info_.origin);
           !fault.empty())
         throw Error(fault);
       out.outputIsInput =

@@ -128,8 +128,10 @@ std::string sanitizedWarning(const NonFiniteCounts& counts);
 // finite output: the marker is a NaN). `origin` (DenoiserInfo::origin: the plugin library or the
 // manifest; empty for a built-in) follows the name in brackets, as the denoiser's other errors say.
 void markUnwritten(Image& output);
-std::string outputFault(const Image& output, const std::string& name, SignalKind kind, int frame,
-                        const std::string& origin = "");
+// An output of another size than the signal it was given (`input`) is a fault too, named with both
+// sizes (the remodulation's later error named neither).
+std::string outputFault(const Image& output, const Image& input, const std::string& name,
+                        SignalKind kind, int frame, const std::string& origin = "");
 
 // The error for a denoiser (its label) that cannot run without the low-resolution buffer, where
 // none is rendered (--lowres-factor 0): `arena run` and `arena bench denoise` refuse it up front.

@@ -311,7 +311,7 @@ class Server {
     denoiser_->denoise(ctx, in, output_);
     const double ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    if (const std::string fault = outputFault(output_, info_.name, kind_, t, info_.origin);
+    if (const std::string fault = outputFault(output_, signal_, info_.name, kind_, t, info_.origin);
         !fault.empty())
       throw Error(fault);
     json passes = json::array();

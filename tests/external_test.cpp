@@ -1057,6 +1057,21 @@ TEST(Plugin, ADemodulatedPluginReturningItsInputsIsSaidToFilterNothing) {
   EXPECT_FALSE(zeros["pairs"][0].contains("equalsInputEveryFrame"));
 }
 
+// A denoiser that returns an image of another size (one that replaces the output it was given) is
+// named with both sizes where the harness meets it, not by the remodulation's later "differ in
+// size" that named neither.
+TEST(DenoiseRun, AnOutputOfAnotherSizeIsAFaultNamingBothSizes) {
+  const Image signal(8, 6, 3, 0.5f), half(4, 3, 3, 0.5f), grey(8, 6, 1, 0.5f);
+  EXPECT_EQ(
+      outputFault(half, signal, "halfsize", SignalKind::Diffuse, 2),
+      "halfsize returned a 4x3x3 output on the diffuse signal at frame 2; expected 8x6x3, the "
+      "signal's size (write into the output image given, or one of its size)");
+  EXPECT_NE(
+      outputFault(grey, signal, "grey", SignalKind::Specular, 0).find("returned a 8x6x1 output"),
+      std::string::npos);
+  EXPECT_EQ(outputFault(signal, signal, "fine", SignalKind::Diffuse, 0), "");
+}
+
 // A plugin's error buffer is read only within its size and as valid text; a pass report it makes
 // with a NaN time fails the pair; an int parameter it declares as 2.5 is refused at load.
 TEST(Plugin, FaultsOfAPluginFailItsPairNamingThem) {

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -163,6 +164,21 @@ TEST(ParamTable, SelfCheckNamesADeclarationWrongInItself) {
             "'radius': its default 9 lies outside its range [1, 8]");
   EXPECT_EQ(problemOf(ParamTable<ToyInt>().real("sigma", &ToyInt::sigma, 4, 8, 0, "s")),
             "'sigma': its range [8, 0] is inverted (min > max)");
+  // An unbounded range lets a run pass a value the filter cannot use (1e39 read as a float: inf).
+  EXPECT_NE(problemOf(ParamTable<ToyInt>().real("sigma", &ToyInt::sigma, 4, 0,
+                                                std::numeric_limits<double>::infinity(), "s"))
+                .find("'sigma': its range [0, inf] is not finite"),
+            std::string::npos);
+  // A float member's value beyond a float's range is refused, not read as an infinity.
+  ParamSchema wide = ParamTable<ToyInt>().real("sigma", &ToyInt::sigma, 4, 0, 1e300, "s").schema();
+  wide.readsFloatsAsFloat();  // as the registry makes every built-in's
+  try {
+    wide.resolve({{"sigma", "1e39"}}, "toy");
+    ADD_FAILURE() << "1e39 read as a float";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("a number within a float's range"), std::string::npos)
+        << e.what();
+  }
   EXPECT_EQ(problemOf(ParamTable<ToyInt>().integer("the radius", &ToyInt::radius, 2, 1, 8, "r")),
             "'the radius': a name must be non-empty without '=', ',', '[', ']' or spaces");
   EXPECT_EQ(problemOf(ParamTable<ToyInt>().integer("", &ToyInt::radius, 2, 1, 8, "r")),
