@@ -242,17 +242,31 @@ namespace arena {
 MetricFamily linearErrorFamily() {
   MetricFamily f;
   f.metrics = {
-      {.name = "relMse", .floor = FloorRule::ReferenceNoise, .ranked = true, .gatedByDefault = true, .overall = true,
-       .reportColumn = true, .chart = ReportChart::Error, .title = "relMSE",
+      {.name = "relMse",
+       .floor = FloorRule::ReferenceNoise,
+       .ranked = true,
+       .gatedByDefault = true,
+       .overall = true,
+       .reportColumn = true,
+       .chart = ReportChart::Error,
+       .title = "relMSE",
        .description = "relative MSE vs the reference, eps 0.01 (raw)"},
-      {.name = "relMseCorrected", .reportColumn = true, .chart = ReportChart::Error,
-       .title = "relMSE (reference-corrected)", .description = "relMSE minus the reference's own noise term"},
+      {.name = "relMseCorrected",
+       .reportColumn = true,
+       .chart = ReportChart::Error,
+       .title = "relMSE (reference-corrected)",
+       .description = "relMSE minus the reference's own noise term"},
       {.name = "mse", .description = "MSE, linear"},
       {.name = "rmse", .transform = FrameTransform::Sqrt, .description = "RMSE, linear"},
-      {.name = "effectiveSpp", .unit = "spp", .better = Better::Higher,
+      {.name = "effectiveSpp",
+       .unit = "spp",
+       .better = Better::Higher,
+       .frameScalar = true,
        .description = "samples plain accumulation would need for the same relMSE"},
       {.name = "referenceRelMse",
-       .description = "the reference's own estimated relMSE (the same for every method: context, not a score)"},
+       .frameScalar = true,
+       .description = "the reference's own estimated relMSE (the same for every method: context, "
+                      "not a score)"},
   };
   f.measure = [](const FrameView& v, const MetricOptions&, FrameRecorder& out) {
     ErrorTiles et;

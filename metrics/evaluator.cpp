@@ -80,8 +80,11 @@ class FrameValues : public FrameRecorder {
     family_ = nullptr;
   }
   void put(const std::string& metric, double value, TileSums tiles) override {
-    requireMetric(metric, "a metric family");  // registered, so its transform and direction are known
+    // Its own first: a misspelt name is then said with the family's names, not only as unknown.
     if (family_) requireOwnMetric(*family_, metric);
+    // Registered, so its transform and direction are known.
+    const MetricDefinition& m = requireMetric(metric, "a metric family");
+    requireTilesWhereDeclared(m, value, tiles);
     values[metric] = {value, std::move(tiles)};
   }
   void note(const std::string& key, double value) override { notes[key] = value; }
@@ -560,6 +563,19 @@ FrameImages PairEvaluation::lastImages() const {
 
 std::vector<double> PairEvaluation::values(const std::string& metric) const { return state_->series.values(metric); }
 
+void markUnrecorded(json& summary, const std::vector<const MetricFamily*>& families,
+                    const MetricOptions& options, bool hasReference) {
+  for (const MetricFamily* f : families)
+    for (const MetricDefinition& m : f->metrics)
+      if (m.reads != MetricInput::Run && !m.frameScalar && !summary.contains(m.name) &&
+          (hasReference || !m.needsReference) && (!m.computedUnder || m.computedUnder(options)))
+        summary[m.name] = {{"frames", 0},
+                           {"absent",
+                            "no frame recorded a value of it: its family ran and never "
+                            "put it (undefined on every frame, or a family that does "
+                            "not record what it declares)"}};
+}
+
 json PairEvaluation::finish() {
   State& s = *state_;
   const EvaluationScene& scene = s.scene;
@@ -569,6 +585,7 @@ json PairEvaluation::finish() {
                 std::to_string(scene.frames()) + " frames arrived");
   const size_t pixels = size_t(scene.frame(0).get("color").width()) * size_t(scene.frame(0).get("color").height());
   json summary = s.series.summaries(scene.name());
+  markUnrecorded(summary, s.families, scene.options().metrics, scene.hasReference());
   const GhostingConfig gc;
   const bool full = s.scope == EvaluationScope::Full;
   json ghosting = json::array();

@@ -784,11 +784,27 @@ namespace arena {
 MetricFamily flipFamily() {
   MetricFamily f;
   f.metrics = {
-      {.name = "ldrFlip", .reads = MetricInput::Display, .floor = FloorRule::ReferenceNoise,
-       .floorWarningFactor = 2, .ranked = true, .gatedByDefault = true, .overall = true,
-       .reportColumn = true, .chart = ReportChart::Error, .title = "LDR-FLIP", .description = "mean LDR-FLIP of the display image, 67 ppd"},
-      {.name = "hdrFlip", .floor = FloorRule::ReferenceNoise, .floorWarningFactor = 2, .ranked = true, .gatedByDefault = true,
-       .overall = true, .reportColumn = true, .chart = ReportChart::Error, .title = "HDR-FLIP",
+      {.name = "ldrFlip",
+       .reads = MetricInput::Display,
+       .floor = FloorRule::ReferenceNoise,
+       .floorWarningFactor = 2,
+       .ranked = true,
+       .gatedByDefault = true,
+       .overall = true,
+       .reportColumn = true,
+       .chart = ReportChart::Error,
+       .title = "LDR-FLIP",
+       .description = "mean LDR-FLIP of the display image, 67 ppd"},
+      {.name = "hdrFlip",
+       .computedUnder = [](const MetricOptions& o) { return o.flip == "all"; },
+       .floor = FloorRule::ReferenceNoise,
+       .floorWarningFactor = 2,
+       .ranked = true,
+       .gatedByDefault = true,
+       .overall = true,
+       .reportColumn = true,
+       .chart = ReportChart::Error,
+       .title = "HDR-FLIP",
        .description = "mean HDR-FLIP of the linear image, 67 ppd"},
   };
   f.enabled = [](const MetricOptions& o) { return o.flip != "none"; };

@@ -43,10 +43,28 @@ void requireOwnMetric(const MetricFamily& family, const std::string& metric) {
   if (std::any_of(family.metrics.begin(), family.metrics.end(),
                   [&](const MetricDefinition& m) { return m.name == metric; }))
     return;
-  std::string own;
-  for (const MetricDefinition& m : family.metrics) own += (own.empty() ? "" : ", ") + m.name;
-  throw Error("the metric family of " + own + " put '" + metric +
-              "', which it does not declare (a family puts only its own metrics)");
+  std::string own, meant;
+  const auto lower = [](std::string t) {
+    for (char& c : t) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return t;
+  };
+  for (const MetricDefinition& m : family.metrics) {
+    own += (own.empty() ? "" : ", ") + m.name;
+    if (lower(m.name) == lower(metric)) meant = m.name;  // a slip of case: logLumMAE for logLumMae
+  }
+  throw Error("the metric family of " + own + " put '" + metric + "', which it does not declare" +
+              (meant.empty() ? std::string() : " (did you mean '" + meant + "'?)") +
+              " (a family puts only its own metrics)");
+}
+
+void requireTilesWhereDeclared(const MetricDefinition& m, double value, const TileSums& tiles) {
+  // Its interval resamples tiles; without them it would resample frames only, an interval several
+  // times too narrow (a contributor's trial: 8x), and nothing would say so.
+  if (tiles.empty() && m.reads != MetricInput::Run && !m.frameScalar && std::isfinite(value))
+    throw Error(
+        "the metric family of " + m.name + " put it without its tile sums: a metric that " +
+        "reads images records them (put(name, value, tiles), docs/extending.md), which its " +
+        "interval resamples (a frame's scalar derived from others declares frameScalar)");
 }
 
 const std::vector<MetricFamily>& metricFamilies() {

@@ -42,12 +42,22 @@ enum class FloorRule {
 // (flicker) over time, or none.
 enum class ReportChart { None, Error, Temporal };
 
+struct MetricOptions;
+
 struct MetricDefinition {
   std::string name;
   std::string unit;  // "" for dimensionless
   Better better = Better::Lower;
   bool needsReference = true;
   MetricInput reads = MetricInput::Linear;
+  // A frame's scalar derived from the images (effectiveSpp from relMSE), recorded without tile
+  // sums: its interval resamples frames only. Every other metric of the images is put with its
+  // tile sums (the evaluation refuses one without: its interval would be several times too narrow).
+  bool frameScalar = false;
+  // Whether its family computes it under these options, where that is narrower than the family's
+  // own `enabled` (hdrFlip: only under --flip all); empty: whenever the family runs. A metric of
+  // the images its family ran for and never put on any frame is recorded absent, with the reason.
+  std::function<bool(const MetricOptions&)> computedUnder;
   FrameTransform transform = FrameTransform::Mean;  // how a frame's tile sums become its value
   FloorRule floor = FloorRule::None;
   // > 0: a summary within this factor of the floor is flagged (the reference's noise, not the
@@ -195,6 +205,9 @@ void checkFamilies(const std::vector<MetricFamily>& families);
 // An Error unless `family` declares `metric`: a family puts only its own metrics (one that put
 // another's would silently replace that family's values).
 void requireOwnMetric(const MetricFamily& family, const std::string& metric);
+// An Error unless a value of `m` comes with its tile sums where `m` is a metric of the images
+// (not a run fact, not a frameScalar): without them its interval would resample frames only.
+void requireTilesWhereDeclared(const MetricDefinition& m, double value, const TileSums& tiles);
 // Every metric, in registration order.
 std::vector<const MetricDefinition*> metricCatalog();
 // The declaration of `name`, or null.

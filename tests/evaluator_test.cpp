@@ -204,6 +204,40 @@ TEST(MetricRegistry, ARegistrySlipIsAnErrorNamingTheMetric) {
   EXPECT_EQ(test::errorOf([&] { requireOwnMetric(family({"mae"}), "relMse"); }),
             "the metric family of mae put 'relMse', which it does not declare (a family puts "
             "only its own metrics)");
+  EXPECT_NE(test::errorOf([&] {
+              requireOwnMetric(family({"logLumMae"}), "logLumMAE");
+            }).find("put 'logLumMAE', which it does not declare (did you mean 'logLumMae'?)"),
+            std::string::npos);
+  // A metric of the images is put with its tile sums (a scalar's interval resamples frames only:
+  // 8x too narrow in a trial); a run fact, a declared frame scalar and an undefined value are not.
+  MetricFamily four = family({"image", "fact", "scalar"});
+  four.metrics[1].reads = MetricInput::Run;
+  four.metrics[2].frameScalar = true;
+  EXPECT_NE(test::errorOf([&] {
+              requireTilesWhereDeclared(four.metrics[0], 0.5, TileSums{});
+            }).find("the metric family of image put it without its tile sums"),
+            std::string::npos);
+  EXPECT_NO_THROW(requireTilesWhereDeclared(four.metrics[0], std::nan(""), TileSums{}));
+  EXPECT_NO_THROW(requireTilesWhereDeclared(four.metrics[1], 0.5, TileSums{}));
+  EXPECT_NO_THROW(requireTilesWhereDeclared(four.metrics[2], 0.5, TileSums{}));
+  // A metric of the images its family never put is absent with the reason, not missing; a run fact,
+  // a metric that needs the reference a scene lacks, and one the options do not compute are not.
+  MetricFamily declared = family({"image", "fact", "withref", "hdr"});
+  declared.metrics[1].reads = MetricInput::Run;
+  declared.metrics[2].needsReference = true;
+  declared.metrics[3].computedUnder = [](const MetricOptions& o) { return o.flip == "all"; };
+  for (MetricDefinition& m : declared.metrics)
+    if (m.name != "withref") m.needsReference = false;
+  json summary = {{"fact", {{"mean", 1.0}}}};
+  markUnrecorded(summary, {&declared}, MetricOptions{"ldr"}, false);
+  EXPECT_EQ(summary["image"].value("absent", ""),
+            "no frame recorded a value of it: its family ran and never put it (undefined on every "
+            "frame, or a family that does not record what it declares)");
+  EXPECT_FALSE(summary.contains("withref"));
+  EXPECT_FALSE(summary.contains("hdr"));
+  EXPECT_EQ(summary["fact"], json({{"mean", 1.0}}));
+  markUnrecorded(summary, {&declared}, MetricOptions{"all"}, true);
+  EXPECT_TRUE(summary.contains("withref") && summary.contains("hdr"));
   // The registry itself passes.
   EXPECT_NO_THROW(checkFamilies(metricFamilies()));
 }

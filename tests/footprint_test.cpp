@@ -26,13 +26,27 @@ namespace {
 
 using Params = std::map<std::string, std::string>;
 
-// Every registered built-in variant that filters in space: all but the two baselines, which read
-// one pixel (issue 34: a variant added without a footprint parameter fails both tests below).
+bool hasFootprint(const std::string& name) {
+  return DenoiserRegistry::instance().find(name).schema.find("footprint") != nullptr;
+}
+
+// Every registered built-in variant that takes the footprint policy (docs/extending.md: every one
+// that reads neighbouring pixels; Footprint.AVariantWithoutAFootprintReadsOnePixel checks the
+// others read one: issue 34's variant added without a footprint parameter fails there).
 std::vector<std::string> spatialVariants() {
   std::vector<std::string> names;
   for (const std::string& name : DenoiserRegistry::instance().names())
-    if (name != "passthrough" && name != "temporal" &&
-        DenoiserRegistry::instance().find(name).origin.empty())
+    if (DenoiserRegistry::instance().find(name).origin.empty() && hasFootprint(name))
+      names.push_back(name);
+  return names;
+}
+
+// The built-ins without a footprint parameter (the one-pixel baselines, a contributor's per-pixel
+// variant).
+std::vector<std::string> onePixelVariants() {
+  std::vector<std::string> names;
+  for (const std::string& name : DenoiserRegistry::instance().names())
+    if (DenoiserRegistry::instance().find(name).origin.empty() && !hasFootprint(name))
       names.push_back(name);
   return names;
 }
@@ -125,6 +139,34 @@ double impulseRadius(const std::string& name, const std::string& policy, int w, 
   return energyRadius90(output, cx, cy);
 }
 
+// A built-in without the footprint policy must read one pixel: its response to an impulse on a
+// plane, with its defaults, stays on the impulse's pixel over a few frames (passthrough and
+// temporal do). One that spreads it reads neighbours, and takes the policy (docs/extending.md).
+TEST(Footprint, AVariantWithoutAFootprintReadsOnePixel) {
+  const std::vector<std::string> names = onePixelVariants();
+  EXPECT_NE(std::find(names.begin(), names.end(), "temporal"), names.end());
+  const int w = 32, h = 18, cx = w / 2, cy = h / 2;
+  for (const std::string& name : names) {
+    auto denoiser = test::createDenoiser(name, {});
+    denoiser->setup(w, h);
+    const LayerSet frame = test::planeFrame(w, h, 2.56f / float(w));
+    Image signal(w, h, 3), output(w, h, 3);
+    for (int c = 0; c < 3; ++c) signal.at(cx, cy, c) = 1.0f;
+    int spread = 0;
+    for (int t = 0; t < 3; ++t) {
+      denoiser->denoise(test::stillCameraContext(t, w, h), {signal, frame, nullptr}, output);
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+          for (int c = 0; c < 3; ++c) spread += (x != cx || y != cy) && output.at(x, y, c) != 0.0f;
+    }
+    EXPECT_EQ(spread, 0)
+        << name
+        << " spreads an impulse to neighbouring pixels but has no footprint "
+           "parameter: a filter that reads neighbours takes the footprint policy "
+           "(.include(footprintParams(), &Settings::footprint), docs/extending.md)";
+  }
+}
+
 TEST(Footprint, ImpulseRadiiKeepTheirRatioToSvgfAcrossResolutions) {
   const std::vector<std::string> names = spatialVariants();
   ASSERT_GE(names.size(), 7u);  // eaw, svgf, asvgf, slgf, reblur, hybrid, reengine
@@ -135,6 +177,14 @@ TEST(Footprint, ImpulseRadiiKeepTheirRatioToSvgfAcrossResolutions) {
       large[name] = impulseRadius(name, policy, 1280, 720);
     }
     for (const std::string& name : names) {
+      // The policy on a filter that does not spread an impulse scales nothing (a ratio of 0 / 0).
+      if (small[name] == 0 && large[name] == 0) {
+        ADD_FAILURE() << name
+                      << " takes the footprint policy but its impulse response stays on one "
+                      << "pixel (data-dependent terms this test turns off for the built-ins, or a "
+                      << "one-pixel filter, which needs no footprint parameter)";
+        continue;
+      }
       const double ratioSmall = small[name] / small["svgf"];
       const double ratioLarge = large[name] / large["svgf"];
       std::printf(

@@ -107,7 +107,8 @@ TEST(DenoiserVariants, ConstantSignalStaysConstantOverFrames) {
   LayerSet frame = planeFrame(w, h, 3);
   Image signal(w, h, 3);
   for (int c = 0; c < 3; ++c) std::fill_n(signal.plane(c), w * h, 0.7f + 0.3f * float(c));
-  for (const DenoiserInfo* info : contractSubjects()) {
+  // Each subject in a function of its own: one that fails stops itself, not the later ones.
+  const auto check = [&](const DenoiserInfo* info) {
     const std::string& name = info->name;
     auto denoiser = create(*info);
     denoiser->setup(w, h);
@@ -115,6 +116,10 @@ TEST(DenoiserVariants, ConstantSignalStaysConstantOverFrames) {
       Image output(w, h, 3, -1.0f);
       denoiser->clearPassStats();
       denoiser->denoise(test::stillCameraContext(t, w, h), {signal, frame, nullptr}, output);
+      ASSERT_TRUE(output.sameShape(signal))
+          << name << " returned a " << output.width() << "x" << output.height() << "x"
+          << output.channels() << " output at frame " << t << "; expected " << w << "x" << h
+          << "x3";
       for (size_t i = 0; i < output.raw().size(); ++i)
         ASSERT_NEAR(output.raw()[i], signal.raw()[i], 1e-5f) << name << " frame " << t;
       ASSERT_FALSE(denoiser->lastPasses().empty()) << name;
@@ -123,7 +128,8 @@ TEST(DenoiserVariants, ConstantSignalStaysConstantOverFrames) {
         EXPECT_GE(pass.milliseconds, 0.0) << name;
       }
     }
-  }
+  };
+  for (const DenoiserInfo* info : contractSubjects()) check(info);
 }
 
 // Every built-in (and the worked example) counts what a GPU would move in its passes
@@ -152,11 +158,34 @@ TEST(DenoiserVariants, EveryBuiltInCountsItsGpuTraffic) {
   }
 }
 
+// The worked example prices the window a 1080p frame runs (its radius of 8 pixels at 1080 lines:
+// 17 x 17 taps), not the window this small image runs (radius 1 at 36 lines: 3 x 3), as a built-in
+// whose window the scaled footprint shrinks should (docs/gpu-cost.md, section 7).
+TEST(DenoiserVariants, TheWorkedExampleCountsThe1080pWindowsTaps) {
+  const int w = 64, h = 36;
+  LayerSet frame = planeFrame(w, h, 3);
+  const DenoiserInfo info = exampleBoxInfo();
+  auto denoiser = create(info);
+  denoiser->setup(w, h);
+  Image output(w, h, 3);
+  denoiser->clearPassStats();
+  denoiser->denoise(test::stillCameraContext(0, w, h), {frame.get("diffuse"), frame, nullptr},
+                    output);
+  ASSERT_EQ(denoiser->lastPasses().size(), 1u);
+  const PassStats& pass = denoiser->lastPasses()[0];
+  EXPECT_DOUBLE_EQ(pass.tapsPerPixel, 9.0);  // what this image runs
+  double fetches = 0;
+  for (const BufferTraffic& b : pass.traffic.buffers)
+    if (!b.write) fetches = std::max(fetches, b.fetches / double(w * h));
+  EXPECT_DOUBLE_EQ(fetches, 17.0 * 17.0);  // what a 1080p frame runs, per buffer read
+}
+
 TEST(DenoiserVariants, TinyAndOddSizesRun) {
   struct Size {
     int w, h;
   };
-  for (const DenoiserInfo* info : contractSubjects()) {
+  // Each subject in a function of its own: one that fails stops itself, not the later ones.
+  const auto check = [&](const DenoiserInfo* info) {
     const std::string& name = info->name;
     for (Size size : {Size{1, 1}, Size{1, 7}, Size{7, 1}, Size{17, 13}}) {
       LayerSet frame = planeFrame(size.w, size.h);
@@ -192,7 +221,8 @@ TEST(DenoiserVariants, TinyAndOddSizesRun) {
         EXPECT_NEAR(output.at(0, 0, 0), 0.25f, 1e-6f) << name << " after reset";
       }
     }
-  }
+  };
+  for (const DenoiserInfo* info : contractSubjects()) check(info);
 }
 
 TEST(DenoiserVariants, SchemaRejectsUnknownAndOutOfRangeParameters) {

@@ -35,8 +35,8 @@ class BoxDenoiser final : public Denoiser {
   // No buffers (the filter keeps no history); the radius in this image's pixels, at least one
   // where the setting is, so that the filter never vanishes (as the first à-trous step).
   void setup(int, int height) override {
-    const float r = float(settings_.radius) * settings_.footprint.scale(height);
-    radius_ = settings_.radius == 0 ? 0 : std::max(1, int(std::lround(r)));
+    radius_ = radiusAt(height);
+    radius1080_ = radiusAt(1080);  // the window a 1080p frame runs, which the GPU count prices
   }
   void reset() override {}
 
@@ -47,9 +47,12 @@ class BoxDenoiser final : public Denoiser {
     ScopedPass pass(this, "box", taps);  // timed; taps per pixel
     // What a GPU would move for this pass (docs/gpu-cost.md): one dispatch of a thread per pixel,
     // each reading the window's signal and mesh ids and writing its output. Without these lines
-    // the run has no predicted GPU time for the denoiser (the speed chart's GPU axis).
+    // the run has no predicted GPU time for the denoiser (the speed chart's GPU axis). The taps are
+    // the 1080p window's, which the prediction prices (a small image's shrunk window would
+    // underprice it: gpu-cost.md, section 7).
+    const double taps1080 = double((2 * radius1080_ + 1) * (2 * radius1080_ + 1));
     gpu::dispatch(w, h);
-    gpu::read({gpu_buffers::kSignal, gpu_buffers::kMeshId}, w, h, taps);
+    gpu::read({gpu_buffers::kSignal, gpu_buffers::kMeshId}, w, h, taps1080);
     gpu::write(gpu_buffers::kRadiance, w, h);
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
@@ -66,8 +69,15 @@ class BoxDenoiser final : public Denoiser {
   }
 
  private:
+  // The radius in pixels of an image `height` lines high: at least one where the setting is.
+  int radiusAt(int height) const {
+    const float r = float(settings_.radius) * settings_.footprint.scale(height);
+    return settings_.radius == 0 ? 0 : std::max(1, int(std::lround(r)));
+  }
+
   BoxSettings settings_;
-  int radius_ = 0;  // this image's pixels (setup)
+  int radius_ = 0;      // this image's pixels (setup)
+  int radius1080_ = 0;  // a 1080-line image's
 };
 
 const ParamTable<BoxSettings>& boxParams() {
