@@ -396,23 +396,24 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
       out.dir = dir / "outputs" / name;
       if (o.has("milliseconds")) {
         out.milliseconds = o.numbers("milliseconds", size_t(n));
-        // A timer that read 0 measured nothing: a time of 0 would be the fastest of all.
-        for (size_t t = 0; t < out.milliseconds.size(); ++t)
+        // A timer that read 0 measured nothing: a time of 0 would be the fastest of all. Such
+        // times fail this output's pair and its validation, not the capture.
+        for (size_t t = 0; t < out.milliseconds.size() && out.timingProblem.empty(); ++t)
           if (!(out.milliseconds[t] > 0) || !std::isfinite(out.milliseconds[t]))
-            throw Error(file.string() + ": outputs." + name + ".milliseconds[" + std::to_string(t) +
-                        "]: expected a positive finite time, got " +
-                        shortestText(out.milliseconds[t]) +
-                        " (leave \"milliseconds\" out where the frames were not timed)");
+            out.timingProblem = file.string() + ": outputs." + name + ".milliseconds[" +
+                                std::to_string(t) + "]: expected a positive finite time, got " +
+                                shortestText(out.milliseconds[t]) +
+                                " (leave \"milliseconds\" out where the frames were not timed)";
         out.device = o.string("device");
-        if (out.device.find_first_not_of(" \t") == std::string::npos)
-          throw Error(
-              file.string() + ": outputs." + name +
-              ".device: expected what measured the times (\"RTX 4080, GPU timestamps\"), got an "
-              "empty name");
+        if (out.timingProblem.empty() && out.device.find_first_not_of(" \t") == std::string::npos)
+          out.timingProblem = file.string() + ": outputs." + name +
+                              ".device: expected what measured the times (\"RTX 4080, GPU "
+                              "timestamps\"), got an empty name";
       } else if (o.has("device")) {
-        throw Error(file.string() + ": outputs." + name +
-                    ".device: names what measured \"milliseconds\", which the output does not give "
-                    "(give both, or neither)");
+        out.device = o.string("device");
+        out.timingProblem = file.string() + ": outputs." + name +
+                            ".device: names what measured \"milliseconds\", which the output "
+                            "does not give (give both, or neither)";
       }
       o.rejectUnread();
       // A declared folder that is not there fails its `file:` pair (readCaptureOutput), not the

@@ -28,6 +28,9 @@ struct CaptureOutput {
   std::filesystem::path dir;
   std::vector<double> milliseconds;  // per frame; empty: not recorded
   std::string device;                // what measured milliseconds (e.g. "RTX 4080, GPU timestamps")
+  // What is wrong with the times as given (a time of 0 or below, no device, a device without
+  // times), or "": it fails this output's `file:` pair and its validation, not the capture.
+  std::string timingProblem;
 };
 
 struct CaptureDescription {

@@ -148,6 +148,7 @@ void runCapturedOutput(const Sequence& sequence, const std::string& name,
                        const std::function<void(const DenoisedFrame&)>& onFrame) {
   const CaptureDescription& capture = sequence.capture();
   const CaptureOutput& output = capture.output(name);
+  if (!output.timingProblem.empty()) throw Error(output.timingProblem);  // this pair's fault
   DenoisedFrame f;
   for (int t = 0; t < sequence.info().frames; ++t) {
     f.frame = t;

@@ -207,7 +207,7 @@ struct Brightness {
   // input says the factor the check's value is ("0.25x its reference's (4x darker)").
   std::string text() const {
     return "the input's mean luminance is " + number(ratio()) + "x its reference's" +
-           (ratio() < 1 ? " (" + number(factor()) + "x darker)" : std::string()) + ", " +
+           (ratio() < 0.99 ? " (" + number(factor()) + "x darker)" : std::string()) + ", " +
            number(std::abs(z())) + " standard errors from equal";
   }
 };
@@ -633,6 +633,8 @@ CaptureValidation validateCaptureOutputs(const CaptureDescription& capture,
     v.checks.push_back(check(
         "output." + name, double(bad.size()), 0, 0, "frames",
         bad.empty() ? "" : "frame(s) " + frameList(bad) + " cannot be scored; first: " + first));
+    if (!output.timingProblem.empty())
+      v.checks.push_back(check("output." + name + ".timing", 1, 0, 0, "", output.timingProblem));
     // On every frame it is no denoiser's output: a run fails its pair (on every frame scored).
     if (!equalsReference.empty())
       v.checks.push_back(check(
@@ -656,8 +658,8 @@ CaptureValidation validateCaptureOutputs(const CaptureDescription& capture,
           failable ? 2 : kSoft, "x",
           "mean luminance " + number(ratio) + "x the " +
               (againstReference ? "references'" : "noisy inputs' (there are no references)") +
-              (ratio > 0 && ratio < 1 ? " (" + number(1 / ratio) + "x darker, the value)"
-                                      : std::string()) +
+              (ratio > 0 && ratio < 0.99 ? " (" + number(1 / ratio) + "x darker, the value)"
+                                         : std::string()) +
               " over its frames: outputs are linear radiance at the input's exposure; another "
               "exposure, a tone map or display encoding (sRGB, gamma) would be scored as the "
               "denoiser's error" +
@@ -857,9 +859,9 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
     // before it (the rest renumbered: its camera two steps from the one before, its vectors one,
     // read as vectors "scaled by 1/2") as likely as a slip of the vectors.
     if (m.worstFrameShare > 0.5 && m.offShare < 0.5 * m.worstFrameShare)
-      detail += "; the other frames fit: frame " + std::to_string(m.worstFrame) +
-                "'s vectors or camera are off, or a frame is missing before it (its camera then "
-                "steps twice as far as its vectors)";
+      detail += "; most frames fit: where frame " + std::to_string(m.worstFrame) +
+                " is off alone, its vectors or camera are, or a frame is missing before it (its "
+                "camera then steps twice as far as its vectors)";
     if (!isGiven("meshId") && !moving.empty()) detail += "; no meshId, so moving objects count too";
     v.checks.push_back(check("motion.consistency", m.offShare, 0.05, 0.25, "share of pixels off by more than 1 px", detail));
   }

@@ -673,7 +673,9 @@ json PairEvaluation::finish() {
   // perfect score would rank first (a stored output wired to the reference). The pair fails.
   if (s.comparableScored > 0 && s.equalScored == s.comparableScored)
     throw Error("the output equals its reference value for value on every frame scored (" +
-                frameRanges(s.equalsReference) +
+                frameRanges(std::vector<int>(
+                    std::lower_bound(s.equalsReference.begin(), s.equalsReference.end(), warmup),
+                    s.equalsReference.end())) +
                 ") while the input does not: a perfect score no denoiser computes from its input; "
                 "is the reference wired in as the output?");
   json warnings = json::array();

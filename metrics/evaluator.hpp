@@ -24,8 +24,6 @@
 
 namespace arena {
 
-// How a pair's warning that its output equals the reference (a perfect score no denoiser computes
-// from its input) begins: the run also prints it, not only results.json.
 // A metric of the images (not a run fact, not a frame scalar) whose family ran on the pair and
 // never put it on any frame, given these options and a reference or none: recorded in `summary`
 // absent, with the reason (it vanished from the results, the printout and the report's columns
@@ -33,6 +31,8 @@ namespace arena {
 void markUnrecorded(nlohmann::json& summary, const std::vector<const MetricFamily*>& families,
                     const MetricOptions& options, bool hasReference);
 
+// How a pair's warning that its output equals the reference (a perfect score no denoiser computes
+// from its input) begins: the run also prints it, not only results.json.
 inline constexpr const char* kEqualsReferenceWarning =
     "the output equals its reference value for value on ";
 

@@ -62,7 +62,7 @@ void requireTilesWhereDeclared(const MetricDefinition& m, double value, const Ti
   // times too narrow (a contributor's trial: 8x), and nothing would say so.
   if (tiles.empty() && m.reads != MetricInput::Run && !m.frameScalar && std::isfinite(value))
     throw Error(
-        "the metric family of " + m.name + " put it without its tile sums: a metric that " +
+        "the family that puts " + m.name + " put it without its tile sums: a metric that " +
         "reads images records them (put(name, value, tiles), docs/extending.md), which its " +
         "interval resamples (a frame's scalar derived from others declares frameScalar)");
 }

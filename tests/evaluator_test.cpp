@@ -215,7 +215,7 @@ TEST(MetricRegistry, ARegistrySlipIsAnErrorNamingTheMetric) {
   four.metrics[2].frameScalar = true;
   EXPECT_NE(test::errorOf([&] {
               requireTilesWhereDeclared(four.metrics[0], 0.5, TileSums{});
-            }).find("the metric family of image put it without its tile sums"),
+            }).find("the family that puts image put it without its tile sums"),
             std::string::npos);
   EXPECT_NO_THROW(requireTilesWhereDeclared(four.metrics[0], std::nan(""), TileSums{}));
   EXPECT_NO_THROW(requireTilesWhereDeclared(four.metrics[1], 0.5, TileSums{}));
