@@ -49,15 +49,11 @@ std::unique_ptr<SceneData> prepareScene(const fs::path& dir, const EvaluationOpt
         const Image& color = input.frames[size_t(t)].get("color");
         const Image& reference =
             input.references[size_t(input.referenceOfFrame[size_t(t)])].get("color");
-        const std::span<const float> a = color.raw(), b = reference.raw();
-        const bool signal = std::any_of(b.begin(), b.end(), [](float v) { return v != 0; });
-        if (!signal) continue;
+        const std::span<const float> b = reference.raw();
+        if (std::none_of(b.begin(), b.end(), [](float v) { return v != 0; }))
+          continue;  // no signal
         ++scored;
-        // As the denoisers read the input: a NaN as 0 (a reference that is the input with its
-        // NaNs zeroed is the input).
-        equal += a.size() == b.size() &&
-                 std::equal(a.begin(), a.end(), b.begin(),
-                            [](float x, float y) { return (std::isnan(x) ? 0.0f : x) == y; });
+        equal += inputEqualsReference(color, reference);  // as the denoisers read it: a NaN as 0
       }
       if (scored > 0 && equal == scored)
         throw Error("capture " + dir.string() + ": every frame the run scores (from frame " +

@@ -594,6 +594,13 @@ PositionConsistency checkPositions(const std::vector<LayerSet>& frames,
   return out;
 }
 
+bool inputEqualsReference(const Image& input, const Image& reference) {
+  const std::span<const float> a = input.raw(), b = reference.raw();
+  return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](float x, float y) {
+           return (std::isfinite(x) ? x : 0.0f) == y;
+         });
+}
+
 CaptureValidation validateCaptureOutputs(const CaptureDescription& capture,
                                          const std::vector<LayerSet>& references) {
   CaptureValidation v;
@@ -995,7 +1002,8 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
       const Image& color = input.frames[t].get("color");
       if (!hasSignal(color)) continue;
       ++signalFrames;
-      if (sameValues(color, input.references[size_t(input.referenceOfFrame[t])].get("color")))
+      if (inputEqualsReference(color,
+                               input.references[size_t(input.referenceOfFrame[t])].get("color")))
         equal.push_back(int(t));
     }
     // An independent half equal to the mean gives a noise floor of exactly 0.

@@ -99,6 +99,10 @@ PositionConsistency checkPositions(const std::vector<LayerSet>& frames,
 CaptureValidation validateCaptureOutputs(const CaptureDescription& capture,
                                          const std::vector<LayerSet>& references);
 
+// Whether an input colour equals a reference value for value as the denoisers read the input (a
+// NaN or Inf as 0): the input then scores a perfect 0 against it.
+bool inputEqualsReference(const Image& input, const Image& reference);
+
 // Every check of a sequence read for evaluation (frames, references) and its description.
 CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInput& input);
 

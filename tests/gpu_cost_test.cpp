@@ -1,14 +1,16 @@
 // The cost model's arithmetic (harness/gpu_cost.hpp) and the measured set's reading and counting.
 // No timings here: the model's validation against published numbers is `arena bench gpu-model`,
 // against timings measured on a GPU `arena bench gpu-measured` (docs/gpu-cost.md).
+#include "harness/gpu_cost.hpp"
+
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <fstream>
 
 #include "core/error.hpp"
 #include "denoisers/common/gpu_traffic.hpp"
-#include "harness/gpu_cost.hpp"
 #include "test_util.hpp"
 
 namespace arena {
@@ -306,41 +308,22 @@ TEST(GpuMeasured, BadFilesAndKernelsAreErrorsNamingWhatIsWrong) {
             std::string::npos)
       << errorOf([&] { benchGpuMeasured(h200, "RTX 4080", [](const std::string&) {}); });
   // A kernel the model cannot count and a size it cannot hold are the file's errors, with the row.
-  EXPECT_NE(
-      errorOf([&] {
-        readMeasuredSet(file(
-            "kernel.json",
-            R"({"device": "X", "rows": [{"kernel": "foo-9x9", "width": 8, "height": 8, "medianMs": 0.01}]})"));
-      })
-          .find("kernel.json: $.rows[0].kernel: measured kernel 'foo-9x9' is not one the model can "
-                "count"),
-      std::string::npos)
-      << errorOf([&] { readMeasuredSet((dir / "kernel.json").string()); });
-  EXPECT_NE(
-      errorOf([&] {
-        readMeasuredSet(file(
-            "huge.json",
-            R"({"device": "X", "rows": [{"kernel": "box-3x3", "width": 4096, "height": 16384, "medianMs": 0.01}]})"));
-      }).find("$.rows[0].height: at most 7680x4320's pixels"),
-      std::string::npos)
-      << errorOf([&] { readMeasuredSet((dir / "huge.json").string()); });
-  EXPECT_NE(
-      errorOf([&] {
-        readMeasuredSet(file(
-            "wide.json",
-            R"({"device": "X", "rows": [{"kernel": "box-3x3", "width": 16384, "height": 4096, "medianMs": 0.01}]})"));
-      }).find("$.rows[0].width: at most 7680x4320's pixels"),
-      std::string::npos);
-  EXPECT_NE(
-      errorOf([&] {
-        readMeasuredSet(file(
-            "box.json",
-            R"({"device": "X", "rows": [{"kernel": "box-99999999999x99999999999", "width": 8, "height": 8, "medianMs": 0.01}]})"));
-      })
-          .find("$.rows[0].kernel: measured kernel 'box-99999999999x99999999999': a size the count "
-                "cannot hold"),
-      std::string::npos)
-      << errorOf([&] { readMeasuredSet((dir / "box.json").string()); });
+  const std::vector<std::array<std::string, 3>> rows = {
+      {"kernel.json", R"("foo-9x9", "width": 8, "height": 8)",
+       "kernel.json: $.rows[0].kernel: measured kernel 'foo-9x9' is not one the model can count"},
+      {"huge.json", R"("box-3x3", "width": 4096, "height": 16384)",
+       "$.rows[0].height: at most 7680x4320's pixels"},
+      {"wide.json", R"("box-3x3", "width": 16384, "height": 4096)",
+       "$.rows[0].width: at most 7680x4320's pixels"},
+      {"box.json", R"("box-99999999999x99999999999", "width": 8, "height": 8)",
+       "$.rows[0].kernel: measured kernel 'box-99999999999x99999999999': a size the count cannot "
+       "hold"}};
+  for (const auto& [name, row, expected] : rows) {
+    const std::string path =
+        file(name, R"({"device": "X", "rows": [{"kernel": )" + row + R"(, "medianMs": 0.01}]})");
+    const std::string error = errorOf([&] { readMeasuredSet(path); });
+    EXPECT_NE(error.find(expected), std::string::npos) << error;
+  }
 }
 
 // Measured times made by the per-thread model itself: that form fits them exactly, the other not,
