@@ -13,6 +13,7 @@
 #include "core/error.hpp"
 #include "core/printed.hpp"
 #include "denoisers/denoiser.hpp"
+#include "harness/denoise_run.hpp"
 #include "harness/gpu_cost.hpp"
 #include "tracer/scene.hpp"
 #include "tracer/scene_state.hpp"
@@ -421,12 +422,9 @@ json benchGpuModel(const GpuModelBench& b, const ProgressFn& progress) {
     json passes = json::array();
     double gpuMs = 0;
     const double cpuMs = run.diffuse.cpuMs + run.specular.cpuMs;
-    std::string variant;  // the parameters given, as a sweep's label writes them
-    if (given != b.params.end())
-      for (const auto& [key, value] : given->second)
-        variant += (variant.empty() ? "[" : ",") + key + "=" + value;
-    if (!variant.empty()) variant += "]";
-    const std::string label = name + variant;
+    // Labelled as a run labels the same setting (its values as the schema reads them).
+    const std::string label = defaultLabel(
+        {name, given == b.params.end() ? std::map<std::string, std::string>{} : given->second, ""});
     progress(label);
     for (const MergedPass& pass : mergedPasses(both)) {
       const PassTraffic& t = pass.traffic;
