@@ -44,17 +44,31 @@ std::unique_ptr<SceneData> prepareScene(const fs::path& dir, const EvaluationOpt
     // scores (after the warm-up) the input would score a perfect 0 and every method be measured
     // against its own input: nothing to rank.
     if (!input.references.empty()) {
-      int scored = 0, equal = 0;
+      int scored = 0, equal = 0, black = 0;
       for (int t = std::max(options.warmup, 0); t < int(input.frames.size()); ++t) {
         const Image& color = input.frames[size_t(t)].get("color");
         const Image& reference =
             input.references[size_t(input.referenceOfFrame[size_t(t)])].get("color");
         const std::span<const float> b = reference.raw();
-        if (std::none_of(b.begin(), b.end(), [](float v) { return v != 0; }))
-          continue;  // no signal
+        if (std::none_of(b.begin(), b.end(), [](float v) { return v != 0; })) {
+          ++black;  // no signal
+          continue;
+        }
         ++scored;
         equal += inputEqualsReference(color, reference);  // as the denoisers read it: a NaN as 0
       }
+      // The validation fails references black in every frame and only warns of some: black in
+      // every frame the run scores, the relative errors would rank the outputs by their own
+      // brightness alone (the darkest first), with nothing to measure against.
+      if (scored == 0 && black > 0)
+        throw Error(
+            "capture " + dir.string() +
+            ": the reference of every frame the run scores (from frame " +
+            std::to_string(std::max(options.warmup, 0)) +
+            ", after the warm-up) is black, holding no nonzero value: nothing to measure the "
+            "outputs against, and relative errors would rank them by their brightness alone "
+            "(reference.blackFrames; a shorter --warmup, or references rendered for the "
+            "frames after it)");
       if (scored > 0 && equal == scored)
         throw Error("capture " + dir.string() + ": every frame the run scores (from frame " +
                     std::to_string(std::max(options.warmup, 0)) +

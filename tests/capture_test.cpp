@@ -1316,6 +1316,35 @@ TEST(CaptureValidation, BlackNegativeOrRepeatedColourIsRefusedNamingTheFrames) {
   late.warmup = 1;  // frame 1 is scored too, and differs: measured
   late.out = test::freshDir("reference_copied_run_1");
   for (const json& pair : runMatrix(late)["pairs"]) EXPECT_EQ(pair["status"], "ok");
+  // A fade to black held from frame 2, in the input and its references alike: validate warns
+  // (not every frame is black); a run with a warm-up of 2 refuses the capture (every output
+  // would be measured against black: nothing to measure), and one with a warm-up of 1 measures.
+  const fs::path lateBlack = writeSynthetic("reference_black_after_warmup");
+  editFrames(lateBlack, [](int t, LayerSet& f) {
+    if (t >= 2) f.get("color").fill(0.0f);
+  });
+  editReferences(lateBlack, [](int k, Image& ref) {
+    if (k >= 2) ref.fill(0.0f);
+  });
+  const CaptureValidation lateBlackV = validate(lateBlack);
+  EXPECT_EQ(checkNamed(lateBlackV, "reference.blackFrames").status, CheckStatus::Warn);
+  EXPECT_NE(lateBlackV.status(), CheckStatus::Fail) << lateBlackV.failures();
+  RunConfig black =
+      captureRun(test::freshDir("reference_black_run"), {{"eaw", {}, ""}}, {lateBlack});
+  black.warmup = 2;
+  const json blackRun = runMatrix(black);
+  ASSERT_FALSE(blackRun["pairs"].empty());
+  for (const json& pair : blackRun["pairs"]) {
+    EXPECT_EQ(pair["status"], "failed");
+    EXPECT_NE(pair.value("error", "")
+                  .find("the reference of every frame the run scores (from frame 2, after the "
+                        "warm-up) is black"),
+              std::string::npos)
+        << pair.value("error", "");
+  }
+  black.warmup = 1;
+  black.out = test::freshDir("reference_black_run_1");
+  for (const json& pair : runMatrix(black)["pairs"]) EXPECT_EQ(pair["status"], "ok");
   // A filtered reference's tiny negative values (a negative filter lobe) are not negative radiance.
   const fs::path lobes = writeSynthetic("reference_lobes");
   editReferences(lobes, [](int, Image& img) {
