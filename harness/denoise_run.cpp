@@ -17,6 +17,20 @@ namespace arena {
 
 namespace {
 
+// A denoiser's error that a layer is missing, where the frame holds it but the denoiser did not
+// declare it (so was not handed it): says so. Empty for any other error.
+std::string undeclaredRead(const std::string& message, const LayerSet& frame,
+                           const LayerSet& handed, const std::string& denoiser) {
+  for (const auto& [name, image] : frame.all())
+    if (!handed.has(name) && message.find("missing channel '" + name + "'") != std::string::npos)
+      return message + ": " + denoiser + " reads layer '" + name +
+             "', which the frame holds but it does not declare (requiredChannels()); a denoiser is "
+             "handed only the layers it declares, as a plugin is sent them, so that every "
+             "contender "
+             "reads the same information (docs/extending.md)";
+  return {};
+}
+
 // The unwritten-value marker (markUnwritten).
 constexpr uint32_t kUnwrittenBits = 0x7fc0dea1u;
 
@@ -162,16 +176,20 @@ std::string unknownLayerProblem(const std::string& denoiser, const std::string& 
 }
 
 std::string lackingInputs(const DenoiserRequest& request, const Sequence& sequence) {
-  return DenoiseRun(request, sequence, false).lacking_;
+  return DenoiseRun(DenoiserRegistry::instance().find(request.name), request, sequence, false)
+      .lacking_;
 }
 
 DenoiseRun::DenoiseRun(const DenoiserRequest& request, const Sequence& sequence)
-    : DenoiseRun(request, sequence, true) {}
+    : DenoiseRun(DenoiserRegistry::instance().find(request.name), request, sequence, true) {}
 
-DenoiseRun::DenoiseRun(const DenoiserRequest& request, const Sequence& sequence, bool setUp)
-    : sequence_(sequence),
-      request_(request),
-      info_(DenoiserRegistry::instance().find(request.name)) {
+DenoiseRun::DenoiseRun(const DenoiserInfo& info, const DenoiserRequest& request,
+                       const Sequence& sequence)
+    : DenoiseRun(info, request, sequence, true) {}
+
+DenoiseRun::DenoiseRun(const DenoiserInfo& info, const DenoiserRequest& request,
+                       const Sequence& sequence, bool setUp)
+    : sequence_(sequence), request_(request), info_(info) {
   params_ = info_.schema.resolve(request.params, request.name);
   // A denoiser whose output is its input (passthrough) runs on the colour: its output is then the
   // noisy input itself, bit for bit (remodulated signals differ from an engine's colour by
@@ -253,20 +271,28 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
     out.specular = Image(w, h, 3);
   }
   out.color = Image(w, h, 3);
-  LayerSet sanitizedFrame;
+  // What a denoiser is handed of a frame: the layers it declares (its signals and
+  // requiredChannels()) and no other, as a plugin or a process is sent, so that every contender
+  // reads the same information and an undeclared read (an oracle layer, say) fails instead of
+  // ranking unlabelled. The frame is shared with the evaluation (and other pairs): its planes are
+  // borrowed, and copied only when a layer the denoiser reads holds a NaN/Inf to sanitise.
+  LayerSet frame;
   for (int t = 0; t < info.frames; ++t) {
     const LayerSet& cached = frameOf(t);
     for (const std::string& c : readLayers_) cached.get(c, sequence_.dir().string() + " frame " + std::to_string(t));
     out.sanitized.clear();
-    // The frame is shared with the evaluation (and other pairs): a sanitised copy only when the
-    // layers the denoiser reads hold a NaN/Inf, else the frame itself.
-    const LayerSet* frameForDenoiser = &cached;
-    if (countNonFinite(cached, channels::frameLayers(), "", out.sanitized, readLayers_) > 0) {
-      sanitizedFrame = cached;
-      for (const std::string& name : readLayers_) replaceNonFinite(sanitizedFrame.get(name));
-      frameForDenoiser = &sanitizedFrame;
+    const bool sanitize =
+        countNonFinite(cached, channels::frameLayers(), "", out.sanitized, readLayers_) > 0;
+    for (const std::string& name : readLayers_) {
+      const Image& layer = cached.get(name);
+      if (sanitize) {
+        frame.set(name, layer);
+        replaceNonFinite(frame.get(name));
+      } else {
+        frame.set(name, Image::borrow(const_cast<float*>(layer.raw().data()), layer.width(),
+                                      layer.height(), layer.channels()));
+      }
     }
-    const LayerSet& frame = *frameForDenoiser;
     LayerSet gradients;
     if (needsGradients_ && t > 0) {
       gradients = sequence_.gradients(t);
@@ -304,7 +330,14 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
       d.clearPassStats();
       markUnwritten(result);
       auto start = std::chrono::steady_clock::now();
-      d.denoise(ctx, in, result);
+      try {
+        d.denoise(ctx, in, result);
+      } catch (const Error& e) {
+        if (const std::string named = undeclaredRead(e.what(), cached, frame, request_.name);
+            !named.empty())
+          throw Error(named);
+        throw;
+      }
       const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
       const std::optional<double> reported = d.reportedMilliseconds();
       out.wallMilliseconds += wall;

@@ -68,6 +68,9 @@ class DenoiseRun {
   // Resolves parameters (errors list the valid names), checks the sequence has every channel the
   // denoiser declares (else the error lackingInputs gives), creates and sets up both instances.
   DenoiseRun(const DenoiserRequest& request, const Sequence& sequence);
+  // The same for a denoiser not in the registry (`info` outlives the run): the harness's own rules
+  // tested on a denoiser made to break them.
+  DenoiseRun(const DenoiserInfo& info, const DenoiserRequest& request, const Sequence& sequence);
   const ParamSet& params() const { return params_; }
   const DenoiserInfo& info() const { return info_; }
   // What the instances filter: the registered mode, or the colour where a capture has no parts
@@ -90,7 +93,8 @@ class DenoiseRun {
   friend std::string lackingInputs(const DenoiserRequest& request, const Sequence& sequence);
   // setUp false: only what the denoiser would read is worked out (lacking_); the instances are
   // created but not set up, and nothing is refused.
-  DenoiseRun(const DenoiserRequest& request, const Sequence& sequence, bool setUp);
+  DenoiseRun(const DenoiserInfo& info, const DenoiserRequest& request, const Sequence& sequence,
+             bool setUp);
   std::string lacking_;  // what the sequence lacks of what the denoiser reads, or ""
   const Sequence& sequence_;
   DenoiserRequest request_;

@@ -1,8 +1,12 @@
 // End-to-end claims of the framework on real (tiny) rendered sequences: SVGF against the noisy
 // input, temporal accumulation converging, and the id edge-stopping ablation on the coplanar poster.
+#include "harness/denoise_run.hpp"
+
 #include <gtest/gtest.h>
 
-#include "harness/denoise_run.hpp"
+#include <set>
+
+#include "core/error.hpp"
 #include "metrics/error.hpp"
 #include "tests/test_util.hpp"
 
@@ -37,6 +41,63 @@ double meanFrom(const std::vector<double>& v, size_t from) {
 Sequence tinySequence(const std::string& scene, int w, int h, int frames, int spp) {
   static auto cache = test::freshDir("integration_cache");
   return Sequence::open(renderSequence(test::shippedScene(scene), test::tinySettings(w, h, frames, spp), cache, nullptr));
+}
+
+// A denoiser made to look: it declares depth, records the layers it is handed and, told to,
+// reads the normal it did not declare.
+class Peeker final : public Denoiser {
+ public:
+  Peeker(std::vector<std::set<std::string>>* seen, bool readsNormal)
+      : seen_(seen), readsNormal_(readsNormal) {}
+  std::vector<std::string> requiredChannels() const override { return {"depth"}; }
+  void setup(int, int) override {}
+  void reset() override {}
+  void denoise(const FrameContext&, const DenoiserInputs& in, Image& output) override {
+    std::set<std::string> names;
+    for (const auto& [name, image] : in.frame.all()) names.insert(name);
+    seen_->push_back(names);
+    if (readsNormal_) static_cast<void>(in.frame.get("normal", "peeker"));
+    output = in.signal;
+  }
+
+ private:
+  std::vector<std::set<std::string>>* seen_;
+  bool readsNormal_;
+};
+
+// Every contender reads the same information: a denoiser is handed the layers it declares and its
+// signal, as a plugin is sent them, and no other (the frame holds normals, positions, albedo and an
+// oracle hit distance too); one that reads a layer it did not declare fails, named.
+TEST(DenoiseRun, ADenoiserIsHandedOnlyTheLayersItDeclares) {
+  Sequence seq = tinySequence("cornell_static", 32, 18, 2, 4);
+  std::vector<std::set<std::string>> seen;
+  bool readsNormal = false;
+  const DenoiserInfo info{"peeker", "test", ParamSchema{}, [&](const ParamSet&, SignalKind) {
+                            return std::make_unique<Peeker>(&seen, readsNormal);
+                          }};
+  std::vector<LayerSet> frames;
+  for (int t = 0; t < seq.info().frames; ++t) frames.push_back(seq.frame(t));
+  ASSERT_TRUE(frames[0].has("normal") && frames[0].has("albedo"));
+  const auto frameOf = [&](int t) -> const LayerSet& { return frames[size_t(t)]; };
+  {
+    DenoiseRun run(info, {"peeker", {}, "peeker"}, seq);
+    run.run(frameOf, [](const DenoisedFrame&) {});
+  }
+  ASSERT_EQ(seen.size(), 4u);  // two frames, two signals
+  EXPECT_EQ(seen[0], (std::set<std::string>{"diffuse", "specular", "depth"}));
+  EXPECT_EQ(seen[3], seen[0]);
+  readsNormal = true;
+  DenoiseRun peeking(info, {"peeker", {}, "peeker"}, seq);
+  try {
+    peeking.run(frameOf, [](const DenoisedFrame&) {});
+    ADD_FAILURE() << "an undeclared read ran";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("peeker: missing channel 'normal': peeker reads layer "
+                                         "'normal', which the frame holds but it does not declare "
+                                         "(requiredChannels())"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(Integration, SvgfIsTenTimesBetterThanTheNoisyInputOnTheStaticCornellBox) {
