@@ -322,7 +322,9 @@ void ReEngine::temporalFilter() {
     gpu::read({kSignal, kRecord, kMask, kHistoryLength}, width_, height_);
     if (useVirtual_) gpu::read(kVirtualRecord, width_, height_);
     if (roughness_) gpu::read(kRoughness, width_, height_);
-    if (moments) gpu::read({kRadiance, kSecondMoments}, width_, height_);
+    // Pass 1's mean, and the noise statistics' mean and second moments (seven channels: two
+    // buffers) for the clamp's sigma.
+    if (moments) gpu::read({kRadiance, kSecondMoments, kExtraChannels}, width_, height_);
     gpu::read({kRadianceHistory, kMomentsHistory}, width_, height_, taps);
     if (s_.lumaRejection) {
       gpu::read(kOneFrameHistory, width_, height_, taps);
@@ -540,6 +542,7 @@ void ReEngine::deflicker() {
     using namespace gpu_buffers;
     gpu::dispatch(width_, height_);
     gpu::read({kRadiance, kMeshId}, width_, height_, 9);
+    if (s_.deflickerEdgeAware) gpu::read(kNormal, width_, height_, 9);  // sameSurface3x3
     gpu::read({kMask, kRecord}, width_, height_);
     gpu::read(kStabilizerHistory, width_, height_, surface_.readTapsPerPixel());
     gpu::write(kRadiance, width_, height_);
@@ -655,6 +658,13 @@ void ReEngine::storeHistory() {
   // The second propagation's result is the history; with lowresFeedback the disocclusion rays'
   // blend enters it too, so the next frame starts from the better estimate.
   if (s_.lowresFeedback && raysPerPixel_ > 0) {
+    if (gpu::recording()) {  // a blend, not a buffer swap: the propagated and upscaled values
+      using namespace gpu_buffers;
+      gpu::dispatch(width_, height_);
+      gpu::read(kRadiance, width_, height_, 2);
+      gpu::read(kConfidence, width_, height_);  // the blend's weight
+      gpu::write(kRadianceHistory, width_, height_);
+    }
     for (size_t i = 0; i < colorHistory_.pixelCount(); ++i) {
       const float w = lowWeight_.plane(0)[i];
       for (int c = 0; c < 3; ++c)

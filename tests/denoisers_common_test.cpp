@@ -17,6 +17,7 @@
 #include "denoisers/common/atrous.hpp"
 #include "denoisers/common/edge_stopping.hpp"
 #include "denoisers/common/gbuffer.hpp"
+#include "denoisers/common/gpu_traffic.hpp"
 #include "denoisers/common/history_clamp.hpp"
 #include "denoisers/common/median.hpp"
 #include "denoisers/common/poisson_blur.hpp"
@@ -603,6 +604,35 @@ TEST(DenoiserBlocksPoisson, MatchesThePerPixelGatherWithEveryTerm) {
     sparseBlur(in, guide, settings.weights, disk.data(), kPoissonTaps, settings.radius,
                &sparseScale, skipping, true);
     EXPECT_TRUE(samePixels(dense, skipping));
+    // Its GPU count: the centre for every pixel, the taps for the pixels that gather only (their
+    // share here about a tenth), as data-dependent taps are counted where they happen.
+    PassTraffic sparse, full;
+    {
+      TrafficScope scope(&sparse);
+      sparseBlur(in, guide, settings.weights, disk.data(), kPoissonTaps, settings.radius,
+                 &sparseScale, dense, true);
+    }
+    {
+      TrafficScope scope(&full);
+      sparseBlur(in, guide, settings.weights, disk.data(), kPoissonTaps, settings.radius,
+                 &radiusScale, dense, false);
+    }
+    const double gathering =
+        double(std::count_if(sparseScale.raw().begin(), sparseScale.raw().end(),
+                             [](float v) { return v != 0.0f; })) /
+        double(w * h);
+    ASSERT_GT(gathering, 0.02);
+    ASSERT_LT(gathering, 0.2);
+    const auto radianceFetches = [](const PassTraffic& t) {
+      for (const BufferTraffic& b : t.buffers)
+        if (!b.write && b.name == gpu_buffers::kRadiance.name) return b.fetches;
+      return -1.0;
+    };
+    const double pixels = double(w) * double(h);
+    EXPECT_NEAR(radianceFetches(sparse), pixels * (1.0 + kPoissonTaps * gathering), 1e-6 * pixels);
+    EXPECT_NEAR(radianceFetches(full), pixels * (1.0 + kPoissonTaps), 1e-6 * pixels);
+    sparseBlur(in, guide, settings.weights, disk.data(), kPoissonTaps, settings.radius,
+               &sparseScale, dense, false);
     int changed = 0;
     for (int i = 0; i < w * h; ++i)
       for (int c = 0; c < 4; ++c) {

@@ -99,7 +99,17 @@ void sparseBlur(const Image& in, const SurfaceGuide& guide, const SurfaceWeightS
   const SurfaceWeights checked(weights, guide);  // throws where a guide is missing
   if (gpu::recording()) {  // the centre and every tap: the signal and the guides the weight uses
     using namespace gpu_buffers;
-    const double fetches = tapCount + 1;
+    // A pixel whose scale is 0 passes through: its taps are not fetched (on a GPU its lanes idle
+    // through the tap loop), so the taps count for the share of pixels that gather, as data-
+    // dependent taps are counted where they happen (a history fix over a few young pixels).
+    double gathering = 1.0;
+    if (radiusScale) {
+      const std::span<const float> scale = radiusScale->raw();
+      gathering =
+          double(std::count_if(scale.begin(), scale.end(), [](float v) { return v != 0.0f; })) /
+          double(scale.size());
+    }
+    const double fetches = 1.0 + tapCount * gathering;
     gpu::dispatch(w, h);
     gpu::read(kRadiance, w, h, fetches);
     if (channels > 4) gpu::read(kExtraChannels, w, h, fetches);
