@@ -119,9 +119,11 @@ namespace {
 // The width of a ranking's label column: `minimum`, or the longest label and two spaces where a
 // label is longer (a sweep's labels carry their parameters), so the columns after it stay aligned.
 // A ranked method's label, marked "(+paths)" when it read paths beyond the frame's own 1-spp ones
-// (reengine's disocclusion rays, asvgf's gradient samples): not on equal terms with the others.
+// (reengine's disocclusion rays, asvgf's gradient samples) and "(oracle)" when it read a layer no
+// real-time engine has: not on equal terms with the others.
 std::string rankedLabel(const RankedMethod& m) {
-  return m.extraPathsPerPixel > 0 ? m.label + " (+paths)" : m.label;
+  return m.label + (m.extraPathsPerPixel > 0 ? " (+paths)" : "") +
+         (m.oracleLayers.empty() ? "" : " (oracle)");
 }
 
 // A rank as every table prints it: "3", "3=" when tied with others, "-" when not ranked.
@@ -250,6 +252,10 @@ void printOverallRanking(std::ostream& out, const RunResults& results) {
                   [](const RankedMethod& m) { return m.extraPathsPerPixel > 0; }))
     out << "  (+paths): read paths beyond the frame's 1-spp ones (results.json: "
            "statistics.extraPaths; their tracing time is each pair's tracingMs)\n";
+  if (std::any_of(o.ranking.begin(), o.ranking.end(),
+                  [](const RankedMethod& m) { return !m.oracleLayers.empty(); }))
+    out << "  (oracle): read a layer no real-time engine has, not ranked on equal terms "
+           "(results.json: statistics.oracle)\n";
   // The contenders that are not built in, with where each came from (a process's manifest, a
   // plugin's library, a capture's stored output): a reader of the ranking should know.
   const std::map<std::string, std::string> origins = contenderOrigins(results);

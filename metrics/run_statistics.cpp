@@ -22,7 +22,8 @@ Interval readInterval(JsonReader& r, const std::string& key) {
   return *interval;
 }
 
-// A ranking list: entries {label, rank, <valueName>, ci95, tiedWith, extraPathsPerPixel?}.
+// A ranking list: entries {label, rank, <valueName>, ci95, tiedWith, extraPathsPerPixel?,
+// oracleLayers?}.
 std::vector<RankedMethod> readRanking(JsonReader& r, const char* valueName) {
   std::vector<RankedMethod> out;
   for (JsonReader& e : r.requiredArray("ranking")) {
@@ -33,6 +34,7 @@ std::vector<RankedMethod> readRanking(JsonReader& r, const char* valueName) {
     m.ci = readInterval(e, "ci95");
     m.tiedWith = e.strings("tiedWith");
     if (e.has("extraPathsPerPixel")) m.extraPathsPerPixel = e.number("extraPathsPerPixel");
+    if (e.has("oracleLayers")) m.oracleLayers = e.strings("oracleLayers");
     e.rejectUnread();
     out.push_back(std::move(m));
   }
@@ -175,6 +177,14 @@ RunStatistics RunStatistics::fromJson(const json& j, const std::string& file, co
     perPixel.rejectUnread();
     extra->rejectUnread();
   }
+  if (auto oracle = r.optionalChild("oracle")) {
+    s.oracleMeaning = oracle->string("meaning");
+    JsonReader layers = oracle->child("layers");
+    for (const std::string& label : layers.memberNames())
+      s.oracleLayers[label] = layers.strings(label);
+    layers.rejectUnread();
+    oracle->rejectUnread();
+  }
   r.rejectUnread();
   return s;
 }
@@ -199,6 +209,7 @@ json RunStatistics::toJson() const {
   for (const auto& [m, o] : overallByMetric) out["overallByMetric"][m] = o.toJson();
   if (!extraPathsPerPixel.empty())
     out["extraPaths"] = {{"meaning", extraPathsMeaning}, {"perPixel", extraPathsPerPixel}};
+  if (!oracleLayers.empty()) out["oracle"] = {{"meaning", oracleMeaning}, {"layers", oracleLayers}};
   return out;
 }
 
@@ -215,23 +226,27 @@ const SceneRanking* RunStatistics::ranking(const std::string& scene, const std::
 namespace {
 
 // Issue 34, section 2: every ranking entry of a method that read paths beyond the frame's own
-// 1-spp ones (reengine's disocclusion rays, asvgf's gradient samples) says so, with the paths.
-void markExtraPaths(std::vector<RankedMethod>& ranking, const std::map<std::string, double>& extra) {
-  for (RankedMethod& m : ranking)
-    if (auto it = extra.find(m.label); it != extra.end()) m.extraPathsPerPixel = it->second;
+// 1-spp ones (reengine's disocclusion rays, asvgf's gradient samples) says so, with the paths;
+// and one that read an oracle layer (data no real-time engine has) names it.
+void markReadsBeyond(std::vector<RankedMethod>& ranking, const RunStatistics& s) {
+  for (RankedMethod& m : ranking) {
+    if (auto it = s.extraPathsPerPixel.find(m.label); it != s.extraPathsPerPixel.end())
+      m.extraPathsPerPixel = it->second;
+    if (auto it = s.oracleLayers.find(m.label); it != s.oracleLayers.end())
+      m.oracleLayers = it->second;
+  }
 }
 
-void markExtraPaths(RunStatistics& s) {
-  const auto& extra = s.extraPathsPerPixel;
+void markReadsBeyond(RunStatistics& s) {
   for (auto& [name, scene] : s.scenes) {
-    markExtraPaths(scene.ranking.ranking, extra);
-    for (auto& [m, r] : scene.byMetric) markExtraPaths(r.ranking, extra);
+    markReadsBeyond(scene.ranking.ranking, s);
+    for (auto& [m, r] : scene.byMetric) markReadsBeyond(r.ranking, s);
     scene.forEachEvent([&](EventStatistics& e, bool) {
-      for (auto& [f, r] : e.byFigure) markExtraPaths(r.ranking, extra);
+      for (auto& [f, r] : e.byFigure) markReadsBeyond(r.ranking, s);
     });
   }
-  if (s.overall) markExtraPaths(s.overall->ranking, extra);
-  for (auto& [m, o] : s.overallByMetric) markExtraPaths(o.ranking, extra);
+  if (s.overall) markReadsBeyond(s.overall->ranking, s);
+  for (auto& [m, o] : s.overallByMetric) markReadsBeyond(o.ranking, s);
 }
 
 }  // namespace
@@ -351,8 +366,20 @@ RunStatistics analyseRun(const json& results, const BootstrapConfig& cfg) {
   }
   for (const auto& [label, sn] : sums)
     if (sn.first > 0) out.extraPathsPerPixel[label] = sn.first / sn.second;
+  // The oracle layers each label read, on any of its scenes.
+  for (const json& p : results["pairs"]) {
+    if (p.value("status", "") != "ok" || !p.contains("oracleLayers")) continue;
+    std::vector<std::string>& layers = out.oracleLayers[p.value("label", "")];
+    for (const json& l : p["oracleLayers"])
+      if (std::find(layers.begin(), layers.end(), l.get<std::string>()) == layers.end())
+        layers.push_back(l.get<std::string>());
+  }
+  if (!out.oracleLayers.empty())
+    out.oracleMeaning =
+        "layers no real-time engine has (e.g. the noise-free mirror ray's hit distance) that "
+        "these labels read: not ranked on equal terms with the others";
+  if (!out.extraPathsPerPixel.empty() || !out.oracleLayers.empty()) markReadsBeyond(out);
   if (!out.extraPathsPerPixel.empty()) {
-    markExtraPaths(out);
     out.extraPathsMeaning =
         "paths per pixel per frame read beyond the frame's own 1-spp paths (reengine: "
         "low-resolution disocclusion rays; asvgf: re-shaded gradient samples); their equivalent "

@@ -63,6 +63,11 @@ struct RunStatistics {
   // carries its figure too (RankedMethod::extraPathsPerPixel).
   std::map<std::string, double> extraPathsPerPixel;
   std::string extraPathsMeaning;
+  // The oracle layers each label read on any scene (pairs[].oracleLayers; only labels that read
+  // any), and what that means. Every ranking entry of such a label names them too
+  // (RankedMethod::oracleLayers).
+  std::map<std::string, std::vector<std::string>> oracleLayers;
+  std::string oracleMeaning;
 
   // `file`: the name errors give; the block's JSON path is `path`.
   static RunStatistics fromJson(const nlohmann::json& j, const std::string& file,

@@ -469,6 +469,7 @@ json rankingJson(const std::vector<RankedMethod>& ranking, const char* valueName
                   {"ci95", m.ci.toJson()},
                   {"tiedWith", m.tiedWith}};
     if (std::isfinite(m.extraPathsPerPixel)) entry["extraPathsPerPixel"] = m.extraPathsPerPixel;
+    if (!m.oracleLayers.empty()) entry["oracleLayers"] = m.oracleLayers;
     out.push_back(std::move(entry));
   }
   return out;

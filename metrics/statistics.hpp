@@ -174,6 +174,8 @@ struct RankedMethod {
   // Paths per pixel per frame the method read beyond the frame's own 1-spp paths (RunStatistics::
   // extraPathsPerPixel); NaN: none.
   double extraPathsPerPixel = kUndefined;
+  // The oracle layers it read (RunStatistics::oracleLayers): data no real-time engine has.
+  std::vector<std::string> oracleLayers;
 };
 // The methods a ranking left out, each with its reason: `leftOut` (results: "leftOut", [{label,
 // why}]) and the same joined for reading ("excluded": "a: why; b: why"). Results written before

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <set>
 
+#include "cli/printout.hpp"
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/sequence.hpp"
@@ -510,6 +511,28 @@ TEST(RunMatrix, OracleDataIsNamedInThePairThatReadsIt) {
       << oracle["warnings"];
   const json& plain = pairOf(r, "cornell_static", "reblur");
   EXPECT_FALSE(plain.contains("oracleLayers"));
+  // ...and in every ranking it stands in, as a method that read extra paths is (+paths): the
+  // statistics name the layers per label, the ranking entries carry them, the printout marks it.
+  EXPECT_EQ(r["statistics"]["oracle"]["layers"]["reblur[hitDistance=mirror]"],
+            json({"specHitDistMirror"}));
+  EXPECT_FALSE(r["statistics"]["oracle"]["layers"].contains("reblur"));
+  int marked = 0;
+  for (const json& e : r["statistics"]["scenes"]["cornell_static"]["ranking"]) {
+    EXPECT_EQ(e.contains("oracleLayers"), e["label"] == "reblur[hitDistance=mirror]") << e.dump();
+    marked += e.contains("oracleLayers");
+  }
+  EXPECT_EQ(marked, 1);
+  const RunResults results = RunResults::fromJson(r, "results.json");  // read back as stored
+  ASSERT_TRUE(results.statistics.has_value());
+  EXPECT_EQ(results.statistics->oracleLayers.at("reblur[hitDistance=mirror]"),
+            std::vector<std::string>{"specHitDistMirror"});
+  EXPECT_EQ(results.statistics->toJson()["oracle"], r["statistics"]["oracle"]);
+  std::ostringstream printed;
+  cli::printOverallRanking(printed, results);
+  EXPECT_NE(printed.str().find("reblur[hitDistance=mirror] (oracle)"), std::string::npos)
+      << printed.str();
+  EXPECT_NE(printed.str().find("(oracle): read a layer no real-time engine has"),
+            std::string::npos);
 }
 
 TEST(RunMatrix, AFailingPairIsReportedAndTheOthersKept) {

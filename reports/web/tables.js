@@ -51,6 +51,22 @@
     );
   };
 
+  // A ranking's label cell: marked "(+paths)" where the method read paths beyond the frame's own,
+  // "(oracle)" where it read a layer no real-time engine has; the title says what.
+  function readsBeyond(r) {
+    const marks = [], titles = [];
+    if (r.extraPathsPerPixel > 0) {
+      marks.push('(+paths)');
+      titles.push(`reads ${fmt(r.extraPathsPerPixel)} paths per pixel per frame beyond the frame's 1-spp ones`);
+    }
+    if ((r.oracleLayers || []).length) {
+      marks.push('(oracle)');
+      titles.push(`reads ${r.oracleLayers.join(', ')}: data no real-time engine has, not ranked on equal terms`);
+    }
+    if (!marks.length) return {class: 'first', text: r.label};
+    return {class: 'first', title: titles.join('; '), text: `${r.label} ${marks.join(' ')}`};
+  }
+
   // Tie groups of a ranking: labels connected through tiedWith share a group (index by label).
   function tieGroups(ranking) {
     const group = {};
@@ -88,12 +104,9 @@
             'data-tied': tied ? 'true' : null
           },
           el('td', {class: 'rank', text: `${r.rank}${tied ? '=' : ''}`}),
-          // A method that read paths beyond the frame's own is marked, as on the speed chart.
-          el('td', r.extraPathsPerPixel > 0 ? {
-            class: 'first',
-            title: `reads ${fmt(r.extraPathsPerPixel)} paths per pixel per frame beyond the frame's 1-spp ones`,
-            text: `${r.label} (+paths)`
-          } : {class: 'first', text: r.label}),
+          // A method that read paths beyond the frame's own is marked, as on the speed chart, and
+          // one that read an oracle layer (data no real-time engine has) too.
+          el('td', readsBeyond(r)),
           el('td', {text: fmt(r[valueKey])}),
           el('td',
              R.baseline && r.label === R.baseline ? {
