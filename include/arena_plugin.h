@@ -1,11 +1,13 @@
 /* arena_plugin.h -- the C binding of Denoise Arena's one denoiser interface.
  *
- * It mirrors denoisers/denoiser.hpp field for field: a registry entry (name, description, typed
- * parameter schema, required channels, which signal an instance filters), then per instance
- * set-up (allocation, not timed), reset (history cleared) and a per-frame call with the shared
- * frame context (NRD's CommonSettings), planar float image views and a place to report each
- * pass's time (PassStats). One interface, two bindings: a plugin is timed exactly like a built-in
- * (the harness's wall clock around `denoise`, in ms and bilateral units).
+ * It mirrors denoisers/denoiser.hpp: a registry entry (name, description, typed parameter schema,
+ * required channels, which signal an instance filters), then per instance set-up (allocation, not
+ * timed), reset (history cleared) and a per-frame call with the shared frame context (NRD's
+ * CommonSettings), planar float image views and a place to report each pass's time (PassStats).
+ * One interface, two bindings: a plugin is timed exactly like a built-in (the harness's wall clock
+ * around `denoise`, in ms and bilateral units). Version 1 does not carry what only some built-ins
+ * read or report: gradient samples and the low-resolution buffer (needsGradients, wantsLowres),
+ * the rays a pass traced (setRays) and a pass's GPU traffic (docs/external-denoisers.md).
  *
  * A plugin is a shared library exporting one C function, `arena_plugin`, returning a pointer to a
  * static ArenaPlugin whose first field is the ABI version it was compiled against. The harness
