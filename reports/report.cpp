@@ -620,10 +620,17 @@ double rankedValue(const SceneRanking& ranking, const std::string& label) {
   return kUndefined;
 }
 
-// What several matched paired differences show together: "better" or "worse" when every one is
-// resolved that way, "mixed" when resolved both ways, "partly better" or "partly worse" when some
-// are resolved one way and the rest not, "tie" when none is, "no interval" when some has none.
-std::string ablationVerdict(size_t matches, size_t intervals, size_t better, size_t worse) {
+// What several matched paired differences show together: "identical outputs" when every match's
+// two outputs are the same bits (no difference to find: their tie is no finding), "not judged" when
+// none can show a change (responses neither method settled in), else over the others: "better"
+// or "worse" when every one is resolved that way, "mixed" when resolved both ways, "partly better"
+// or "partly worse" when some are resolved one way and the rest not, "tie" when none is, "no
+// interval" when some has none.
+std::string ablationVerdict(size_t matches, size_t intervals, size_t better, size_t worse,
+                            size_t identical, size_t unjudged) {
+  if (identical == matches) return "identical outputs";
+  if (unjudged == matches) return "not judged";
+  matches -= unjudged;
   if (intervals < matches) return "no interval";
   if (better == matches) return "better";
   if (worse == matches) return "worse";
@@ -696,7 +703,7 @@ json ablationData(const RunResults& results) {
   // relative, and how many of them carry a paired difference, resolved each way.
   struct Changes {
     std::vector<double> delta, relative;
-    size_t intervals = 0, better = 0, worse = 0;
+    size_t intervals = 0, better = 0, worse = 0, identical = 0, unjudged = 0;
     json lastPaired;  // a single match's paired difference (the row's, when it is the only one)
   };
   // The all-scenes rows name the scenes whose own rows carry a caveat.
@@ -745,12 +752,28 @@ json ablationData(const RunResults& results) {
                         {"relative", json::object()},
                         {"paired", json::object()},
                         {"judged", json::object()}};
+          // The two outputs the same bits on every frame (the run's checksums): every measured
+          // difference is 0 with nothing to resolve, a tie that is no finding.
+          const std::string pSum = p->detail.value("outputChecksum", json()).is_string()
+                                       ? p->detail["outputChecksum"].get<std::string>()
+                                       : "",
+                            qSum = q->detail.value("outputChecksum", json()).is_string()
+                                       ? q->detail["outputChecksum"].get<std::string>()
+                                       : "";
+          const bool identical = !pSum.empty() && pSum == qSum;
+          if (identical) match["identicalOutputs"] = true;
+          // `unjudged`: no change can show (a response neither method settled in).
           auto record = [&](const std::string& m, double delta, double b, const json& d, bool lower,
-                            const std::string& note = "") {
+                            std::string note = "", bool unjudged = false) {
             if (!std::isfinite(delta) || !std::isfinite(b)) return;
             // Relative to a base of 0 (a response of 0 frames, a flicker of 0) there is no
             // relative change: none, rather than the change over 1e-12 (+1.9e15 %).
             const double relative = std::abs(b) > 1e-12 ? delta / std::abs(b) : kUndefined;
+            const bool same = identical && delta == 0;
+            if (same)
+              note =
+                  "identical outputs (bit for bit, every frame): no difference to find, so "
+                  "this tie is no finding";
             match["delta"][m] = delta;
             match["relative"][m] = std::isfinite(relative) ? json(relative) : json(nullptr);
             if (!note.empty()) {
@@ -758,7 +781,9 @@ json ablationData(const RunResults& results) {
               notes[scene][m] = note;
             }
             const bool resolved = d.is_object() && d["resolved"].get<bool>() && delta != 0;
-            match["judged"][m] = !d.is_object()         ? "no interval"
+            match["judged"][m] = same                   ? "identical outputs"
+                                 : unjudged             ? "not judged"
+                                 : !d.is_object()       ? "no interval"
                                  : !resolved            ? "tie"
                                  : (delta < 0) == lower ? "better"
                                                         : "worse";
@@ -771,7 +796,9 @@ json ablationData(const RunResults& results) {
               c.delta.push_back(delta);
               if (std::isfinite(relative)) c.relative.push_back(relative);
               if (d.is_object()) c.lastPaired = d;
-              if (!d.is_object()) continue;
+              c.identical += same;
+              c.unjudged += unjudged && !same;
+              if (!d.is_object() || (unjudged && !same)) continue;
               ++c.intervals;
               if (d["resolved"].get<bool>() && delta != 0)
                 ++((delta < 0) == lower ? c.better : c.worse);
@@ -792,8 +819,12 @@ json ablationData(const RunResults& results) {
           for (const EventFigure& f : eventFigures(results, scene)) {
             const json d = pairedIn(f.ranking, p->label, q->label);
             std::string note = unsettledNote(*p, f);
-            if (const std::string other = unsettledNote(*q, f); !other.empty())
-              note += (note.empty() ? "" : "; ") + other;
+            const bool pUnsettled = !note.empty();
+            const std::string other = unsettledNote(*q, f);
+            if (!other.empty()) note += (note.empty() ? "" : "; ") + other;
+            // Neither settled: both responses are cut at the window's end, no change can show
+            // (compare's "not judged").
+            const bool unjudged = f.figure == "responseFrames" && pUnsettled && !other.empty();
             // Left out of the figure's ranking (no interval could be drawn): the two methods'
             // own values, their difference without an interval, the reason in the note.
             const double a = d.is_object() ? kUndefined : pointFigure(*p, f),
@@ -803,12 +834,17 @@ json ablationData(const RunResults& results) {
               const std::string why = exclusionReason(*f.ranking, p->label, results);
               note += (note.empty() ? "" : "; ") + std::string("not ranked, so no interval") +
                       (why.empty() ? "" : ": " + why);
+            } else if (unjudged) {
+              note +=
+                  ": both are cut off at the window's end, so no change can show (not judged; "
+                  "a longer sequence after the event measures it)";
             } else if (!note.empty()) {
               note += ": the difference is bounded, not measured";
             }
             if (std::find(figures.begin(), figures.end(), f.name) == figures.end())
               figures.push_back(f.name);
-            record(f.name, d.is_object() ? d["diff"].get<double>() : a - b, b, d, true, note);
+            record(f.name, d.is_object() ? d["diff"].get<double>() : a - b, b, d, true, note,
+                   unjudged);
           }
           byMatch[scene].push_back(std::move(match));
           break;
@@ -826,7 +862,8 @@ json ablationData(const RunResults& results) {
                      ? json(nullptr)
                      : json(std::accumulate(c.relative.begin(), c.relative.end(), 0.0) /
                             double(c.relative.size()));
-          verdicts[m] = {{"verdict", ablationVerdict(n, c.intervals, c.better, c.worse)},
+          verdicts[m] = {{"verdict", ablationVerdict(n, c.intervals, c.better, c.worse, c.identical,
+                                                     c.unjudged)},
                          {"matches", n},
                          {"intervals", c.intervals},
                          {"resolved", c.better + c.worse}};

@@ -747,14 +747,23 @@ TEST(Report, AblationFiguresSayWhatTheyCannotMeasure) {
   const json nobody = json::parse(R"({"metric": "lagEnergy", "ranking": [], "pairs": [],
     "resolvedPairs": 0, "totalPairs": 0,
     "excluded": "svgf[a=0]: the changed region spreads over 1.1 effective tiles of 16, fewer than 4; svgf[a=1]: the changed region spreads over 1.1 effective tiles of 16, fewer than 4"})");
+  // Neither settled after the event at 20: both responses are the window's length.
+  const json neither = json::parse(R"({"metric": "responseFrames",
+    "ranking": [{"label": "svgf[a=0]", "rank": 1, "mean": 10, "ci95": [10, 10], "tiedWith": ["svgf[a=1]"]},
+                {"label": "svgf[a=1]", "rank": 1, "mean": 10, "ci95": [10, 10], "tiedWith": ["svgf[a=0]"]}],
+    "pairs": [{"a": "svgf[a=0]", "b": "svgf[a=1]", "diff": 0, "ci95": [0, 0], "resolved": false}],
+    "resolvedPairs": 0, "totalPairs": 1})");
   run["statistics"] = staticSceneEvents(
-      json::array({event(3, {{"lagEnergy", nobody}}), event(12, {{"responseFrames", response}})}));
+      json::array({event(3, {{"lagEnergy", nobody}}), event(12, {{"responseFrames", response}}),
+                   event(20, {{"responseFrames", neither}})}));
   for (json& p : run["pairs"]) {
     if (p["label"] == "svgf[a=1]")
-      p["ghosting"] = json::array(
-          {{{"eventFrame", 3}, {"lagEnergy", 0.5}}, {{"eventFrame", 12}, {"settled", false}}});
+      p["ghosting"] = json::array({{{"eventFrame", 3}, {"lagEnergy", 0.5}},
+                                   {{"eventFrame", 12}, {"settled", false}},
+                                   {{"eventFrame", 20}, {"settled", false}}});
     if (p["label"] == "svgf[a=0]")
-      p["ghosting"] = json::array({{{"eventFrame", 3}, {"lagEnergy", 2.0}}});
+      p["ghosting"] = json::array(
+          {{{"eventFrame", 3}, {"lagEnergy", 2.0}}, {{"eventFrame", 20}, {"settled", false}}});
   }
   const json data = reportData(test::typed(run), test::freshDir("report_ablation_bounds"), nullptr);
   EXPECT_EQ(data["ablation"]["unrankedFigures"],
@@ -776,6 +785,11 @@ TEST(Report, AblationFiguresSayWhatTheyCannotMeasure) {
     EXPECT_EQ(r["notes"]["ghosting@3.lagEnergy"],
               "not ranked, so no interval: the changed region spreads over 1.1 effective tiles of "
               "16, fewer than 4");
+    // Neither settled: no change can show, so not judged (as compare says), not a tie at [0, 0].
+    EXPECT_EQ(r["judged"]["ghosting@20.responseFrames"]["verdict"], "not judged") << r.dump();
+    EXPECT_NE(r["notes"]["ghosting@20.responseFrames"].get<std::string>().find(
+                  "both are cut off at the window's end, so no change can show (not judged"),
+              std::string::npos);
   }
   EXPECT_EQ(seen, 1);
   const std::string csv = ablationCsv(data["ablation"]);
@@ -794,6 +808,42 @@ TEST(Report, AblationFiguresSayWhatTheyCannotMeasure) {
                   "changed region spreads over 1.1 effective tiles of 16, fewer than 4\"\n"),
       std::string::npos)
       << points;
+}
+
+// Two grid points whose outputs are the same bits on a scene (their checksums): every difference is
+// 0 with nothing to resolve, which the ablation says ("identical outputs", with a note) rather
+// than reading as a tie a paper would copy.
+TEST(Report, AblationSaysWhereTwoPointsGaveIdenticalOutputs) {
+  json run = fixtureRun();
+  double relMse = 0;
+  for (const json& p : run["pairs"])
+    if (p["label"] == "svgf[a=1]" && p["scene"] == "static")
+      relMse = p["summary"]["relMse"]["mean"].get<double>();
+  for (json& p : run["pairs"])
+    if (p["scene"] == "static" &&
+        (p["label"] == "svgf[a=1]" || p["label"] == "svgf[a=1,b=false]")) {
+      p["outputChecksum"] = "0x5eed";
+      p["summary"]["relMse"]["mean"] = relMse;
+    }
+  run["statistics"] =
+      test::statisticsBlock(json::parse(R"({"scenes": {"static": {"metric": "relMse", "ranking": [],
+    "pairs": [{"a": "svgf[a=1,b=false]", "b": "svgf[a=1]", "diff": 0, "ci95": [0, 0], "resolved": false}],
+    "resolvedPairs": 0, "totalPairs": 1, "byMetric": {}}}})"));
+  const json data =
+      reportData(test::typed(run), test::freshDir("report_ablation_identical"), nullptr);
+  int seen = 0;
+  for (const json& r : data["ablation"]["rows"]) {
+    if (r["scene"] != "static" || r["parameter"] != "b") continue;
+    ++seen;
+    EXPECT_EQ(r["judged"]["relMse"]["verdict"], "identical outputs") << r.dump();
+    EXPECT_NE(r["notes"]["relMse"].get<std::string>().find("identical outputs (bit for bit"),
+              std::string::npos);
+  }
+  EXPECT_EQ(seen, 1);
+  EXPECT_NE(ablationCsv(data["ablation"])
+                .find(",relMse,0,0,identical outputs,1,1,0,0,0,\"identical outputs (bit for bit"),
+            std::string::npos)
+      << ablationCsv(data["ablation"]);
 }
 
 // A sweep's points as CSV: the grid's points first in the grid's order, a column per grid and

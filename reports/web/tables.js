@@ -356,7 +356,7 @@
         el('h3', {text: `Ablation of ${AB.denoiser} (sweep)`}), el('p', {
           class: 'note',
           text:
-              'Every row, every scene and every metric is also in ablation.csv beside this page. Δ = metric with the value − metric with the first value, other grid parameters held equal; relative change in brackets (where several differences are matched, the mean of their relative changes, which can differ in sign from the mean Δ: over all scenes Δ is weighted by each scene\'s scale, the bracket is not); time is the median frame time, as everywhere on this page, measured under this machine\'s load (no interval: a difference in time between values that cannot change the work is load). Per scene, a ranked metric\'s Δ is the run\'s paired difference with its 95% interval; where several settings of the other parameters match, and over all scenes, Δ is the mean and the count says how many of the matched paired differences are resolved, and each match follows on its own line ("given" the other parameters\' settings) with its paired interval: an effect under one setting only shows there. Green or red only when every matched difference is resolved that way ("partly worse" or "partly better": resolved under some settings, not under the others; "tie": under none; "mixed": resolved both ways; no colour: a metric without paired intervals). Columns named ghosting@frame.figure or cut@frame.figure are the event windows\' figures (lag, response, ghosting; lower is better), paired as the metrics are.'
+              'Every row, every scene and every metric is also in ablation.csv beside this page. Δ = metric with the value − metric with the first value, other grid parameters held equal; relative change in brackets (where several differences are matched, the mean of their relative changes, which can differ in sign from the mean Δ: over all scenes Δ is weighted by each scene\'s scale, the bracket is not); time is the median frame time, as everywhere on this page, measured under this machine\'s load (no interval: a difference in time between values that cannot change the work is load). Per scene, a ranked metric\'s Δ is the run\'s paired difference with its 95% interval; where several settings of the other parameters match, and over all scenes, Δ is the mean and the count says how many of the matched paired differences are resolved, and each match follows on its own line ("given" the other parameters\' settings) with its paired interval: an effect under one setting only shows there. Green or red only when every matched difference is resolved that way ("partly worse" or "partly better": resolved under some settings, not under the others; "tie": under none; "identical outputs": the two points\' outputs are the same bits, so no difference exists to find; "not judged": a response neither point settled in, cut off at the window\'s end; "mixed": resolved both ways; no colour: a metric without paired intervals). Columns named ghosting@frame.figure or cut@frame.figure are the event windows\' figures (lag, response, ghosting; lower is better), paired as the metrics are.'
         }));
     if (AB.footprintNote) box.append(el('p', { class: 'note footprint-note', text: AB.footprintNote }));
     const unranked = (AB.unrankedFigures || []).filter((line) => A.state.scene === undefined || line.includes(` on ${A.state.scene}: `));
@@ -373,15 +373,19 @@
     }
     const names = A.D.metrics.map((m) => m.name).concat(AB.figures || [])
         .filter((name) => rows.some((r) => r.delta[name] !== undefined));
-    const classOf = { better: 'better', worse: 'worse', tie: 'tie', mixed: 'tie', 'partly better': 'tie', 'partly worse': 'tie' };
+    const classOf = { better: 'better', worse: 'worse', tie: 'tie', mixed: 'tie', 'partly better': 'tie', 'partly worse': 'tie', 'identical outputs': 'tie' };
+    // A paired cell's word after its interval: a tie, or why there is nothing to resolve.
+    const unresolvedWord = (p, verdict) =>
+        verdict === 'identical outputs' || verdict === 'not judged' ? ` ${verdict}` : p.resolved ? '' : ' tie';
     // A figure bounded rather than measured (a method that never settled): marked, the reason on hover.
-    const bound = (note) => (note ? ' (bound)' : '');
+    const bound = (note, verdict) =>
+        (note && verdict !== 'identical outputs' && verdict !== 'not judged' ? ' (bound)' : '');
     const pairedCell = (d, relative, p, verdict, note) => el('td', {
       class: classOf[verdict] || null,
       'data-paired': 'true',
       'data-verdict': verdict,
       title: note || null,
-      text: `${fmt(d)} (${pct(relative)}) ${A.interval(p.ci95)}${p.resolved ? '' : ' tie'}${bound(note)}`
+      text: `${fmt(d)} (${pct(relative)}) ${A.interval(p.ci95)}${unresolvedWord(p, verdict)}${bound(note, verdict)}`
     });
     const cells = (r) => names.map((name) => {
       const d = r.delta[name];
@@ -392,7 +396,7 @@
       if (p && j.matches === 1) return pairedCell(d, r.relative[name], p, j.verdict, note);
       // The verdict in words too, not by colour alone.
       const said = j.verdict === 'no interval' ? ' no interval' : ` ${j.resolved}/${j.matches} resolved, ${j.verdict}`;
-      return el('td', {class: classOf[j.verdict] || null, 'data-verdict': j.verdict, title: note || null, text: `${fmt(d)} (${pct(r.relative[name])})` + said + bound(note)});
+      return el('td', {class: classOf[j.verdict] || null, 'data-verdict': j.verdict, title: note || null, text: `${fmt(d)} (${pct(r.relative[name])})` + said + bound(note, j.verdict)});
     });
     const matchCells = (m) => names.map((name) => {
       const d = m.delta[name];
