@@ -287,16 +287,28 @@ void finish(const std::string& out) {
         return p->params.value("footprint", json()) == "scaled" && reference.is_number() &&
                height > 0 && height < reference.get<double>();
       };
-      bool scaled = false;
+      // The parameters that differ within such groups: the footprint is a likely cause only where
+      // one of them is a radius or a step, which a parameter's schema does not say, so the hint
+      // names them and says both readings (normalPower=[32,128] is no radius, and native keeps
+      // it identical).
+      std::set<std::string> differing;
       for (const std::vector<const PairResult*>& group : identicalOutputGroups(results, name))
         for (size_t i = 0; i < group.size(); ++i)
-          for (size_t j = i + 1; j < group.size(); ++j)
-            scaled = scaled || (group[i]->denoiser == group[j]->denoiser && shrunk(group[i]) &&
-                                shrunk(group[j]));
+          for (size_t j = i + 1; j < group.size(); ++j) {
+            if (group[i]->denoiser != group[j]->denoiser || !shrunk(group[i]) || !shrunk(group[j]))
+              continue;
+            for (auto v = group[i]->params.begin(); v != group[i]->params.end(); ++v)
+              if (group[j]->params.value(v.key(), json()) != v.value()) differing.insert(v.key());
+          }
+      std::string names;
+      for (const std::string& n : differing) names += (names.empty() ? "" : ", ") + n;
       std::cout << name << ": identical outputs (bit for bit, every frame): " << same
-                << (scaled ? " (under the scaled footprint a small image can round radii and "
-                             "steps to the same pixels: footprint=native keeps them apart)"
-                           : "")
+                << (names.empty()
+                        ? ""
+                        : " (they differ in " + names +
+                              ": where that is a radius or a step, the scaled footprint can round "
+                              "it to the same pixels at this size, and footprint=native keeps them "
+                              "apart; where not, it changed nothing here)")
                 << "\n";
     }
   }
@@ -473,8 +485,11 @@ void addRunCommands(CLI::App& app) {
       auto assignments = parseParamAssignments(o->params);
       for (auto& [other, kv] : assignments)
         if (other != *denoiser)
-          throw Error("--param " + other + "." + kv.begin()->first + ": this sweep runs only " + *denoiser +
-                      "; --param must name " + *denoiser + ".NAME");
+          throw Error("--param " + other + "." + kv.begin()->first + ": a sweep's --param sets " +
+                      *denoiser + "'s fixed parameters (--param " + *denoiser +
+                      ".NAME=VALUE); the baselines beside it run at their defaults, as in every "
+                      "sweep, so that its overall score is normalised by the same temporal "
+                      "baseline (--no-baselines leaves them out)");
       c = sweepRun(std::move(c), *denoiser, assignments[*denoiser], *grids, *maxPoints);
       // An axis of one value ablates nothing (the report says "no ablation" afterwards): said now.
       for (const auto& [name, values] : c.annotations["sweep"]["grid"].items())

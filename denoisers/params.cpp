@@ -185,6 +185,10 @@ ParamSet ParamSchema::resolve(const std::map<std::string, std::string>& override
         if (s->type == ParamSpec::Type::Float && floats_ && !std::isfinite(float(v)))
           bad("a number within a float's range (about 3.4e38 in magnitude), which this parameter "
               "is read as");
+        // ...and one too small for a float would be a 0 nobody wrote (1e-300 ran as 0 unwarned).
+        if (s->type == ParamSpec::Type::Float && floats_ && v != 0 && float(v) == 0.0f)
+          bad("0 or a number at least about 1.4e-45 in magnitude (the smallest a float holds), "
+              "which this parameter is read as");
         if (s->type == ParamSpec::Type::Int) out.set(name, int(v));
         else
           out.set(name, floats_ ? asReadFloat(v) : v);

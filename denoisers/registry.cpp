@@ -1,6 +1,7 @@
 #include <algorithm>
 
 #include "core/error.hpp"
+#include "core/text.hpp"
 #include "denoisers/denoiser.hpp"
 #include "denoisers/external/loader.hpp"
 #include "denoisers/variants.hpp"
@@ -69,8 +70,11 @@ const DenoiserInfo& DenoiserRegistry::find(const std::string& name) const {
     if (i.name == name) return i;
   std::string known;
   for (const DenoiserInfo& i : infos_) known += (known.empty() ? "" : ", ") + i.name;
+  const std::string likely = closestName(name, names());
   // A denoiser of one's own is not registered by its name alone: say how it is named.
-  throw Error("unknown denoiser '" + name + "'; registered: " + known +
+  throw Error("unknown denoiser '" + name + "'" +
+              (likely.empty() ? "" : " (did you mean '" + likely + "'?)") +
+              "; registered: " + known +
               " (an external one is named ext:MANIFEST.json or plugin:LIBRARY.so, or by its name "
               "once its manifest's folder is on ARENA_DENOISER_PATH; docs/external-denoisers.md)");
 }

@@ -214,7 +214,8 @@ MetricTiles MetricTiles::fromJson(const json& j) {
 
 json Interval::toJson() const {
   if (!valid()) return nullptr;
-  return json::array({lo, hi});
+  // + 0.0 writes a -0 (a difference of 0 negated) as 0: "[-0, 0]" read as a sign where none is.
+  return json::array({lo + 0.0, hi + 0.0});
 }
 
 std::optional<Interval> Interval::fromJson(const json& j) {

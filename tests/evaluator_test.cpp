@@ -155,7 +155,8 @@ TEST(Evaluation, RunResultsAreBitIdenticalToTheHarnessBeforeTheStage) {
   // middle replicates (1000, an even count) rather than the upper one, so that b - a's interval is
   // a - b's negated (every event-window interval moved, by 7.3e-4 of itself at most; the two
   // event rankings' hashes moved; no verdict of the default study moved, 8352 fields compared
-  // after `arena merge runs/study` with both builds).
+  // after `arena merge runs/study` with both builds), and when intervals wrote a -0 as 0 (a
+  // difference of 0 negated read "[-0, 0]": only light_switch's events hash moved, no number).
   const std::string file = std::string(ARENA_TEST_DATA) + "/evaluation_golden.json";
   const json now = test::goldenPart(
       withoutNewMetrics(runMatrix(test::goldenRunConfig(test::freshDir("golden_run"), test::freshDir("golden_cache")))));

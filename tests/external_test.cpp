@@ -192,6 +192,10 @@ TEST(ExternalManifest, TheProgramGivenForItsManifestIsNamedAsSuch) {
   EXPECT_NE(unknown.find("an external one is named ext:MANIFEST.json or plugin:LIBRARY.so"),
             std::string::npos)
       << unknown;
+  const std::string slip = errorOf([] { DenoiserRegistry::instance().find("svfg"); });
+  EXPECT_NE(slip.find("unknown denoiser 'svfg' (did you mean 'svgf'?); registered: "),
+            std::string::npos)
+      << slip;
 }
 
 TEST(ExternalManifest, ParametersUseTheTypedSchemaAndAreRecorded) {

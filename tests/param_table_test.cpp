@@ -179,6 +179,17 @@ TEST(ParamTable, SelfCheckNamesADeclarationWrongInItself) {
     EXPECT_NE(std::string(e.what()).find("a number within a float's range"), std::string::npos)
         << e.what();
   }
+  // ...and one too small for a float, not read as a 0 nobody wrote; a float's smallest is kept.
+  try {
+    wide.resolve({{"sigma", "1e-300"}}, "toy");
+    ADD_FAILURE() << "1e-300 read as 0";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("0 or a number at least about 1.4e-45 in magnitude"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_NO_THROW(wide.resolve({{"sigma", "1.5e-45"}}, "toy"));
+  EXPECT_NO_THROW(wide.resolve({{"sigma", "0"}}, "toy"));
   EXPECT_EQ(problemOf(ParamTable<ToyInt>().integer("the radius", &ToyInt::radius, 2, 1, 8, "r")),
             "'the radius': a name must be non-empty without '=', ',', '[', ']' or spaces");
   EXPECT_EQ(problemOf(ParamTable<ToyInt>().integer("", &ToyInt::radius, 2, 1, 8, "r")),
