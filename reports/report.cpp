@@ -640,6 +640,39 @@ std::string ablationVerdict(size_t matches, size_t intervals, size_t better, siz
   return "tie";
 }
 
+// A tie whose per-frame differences (`a` - `b`, frames after the warm-up) hold one sign on every
+// frame: said, since the interval also resamples the image's tiles, and an effect held in a few
+// of them (an edge term's, at its edges) is judged across the image's regions. Empty otherwise, and
+// under 8 frames. No p-value: a sequence's frames are correlated (a history carries over), so
+// counting signs is no test.
+std::string oneSignNote(const PairResult& a, const PairResult& b, const std::string& metric,
+                        int warmup) {
+  const json &fa = a.part("frames"), &fb = b.part("frames");
+  if (!fa.is_array() || !fb.is_array()) return "";
+  std::map<int, double> other;
+  for (const json& f : fb)
+    if (f.is_object() && f.contains(metric) && f[metric].is_number())
+      other[f.value("frame", -1)] = f[metric].get<double>();
+  int n = 0, above = 0, below = 0;
+  for (const json& f : fa) {
+    if (!f.is_object() || !f.contains(metric) || !f[metric].is_number()) continue;
+    const int t = f.value("frame", -1);
+    const auto it = other.find(t);
+    if (t < warmup || it == other.end()) continue;
+    const double d = f[metric].get<double>() - it->second;
+    ++n;
+    above += d > 0;
+    below += d < 0;
+  }
+  if (n < 8 || (above != n && below != n)) return "";
+  return "a tie, yet the difference is " + std::string(above == n ? "positive" : "negative") +
+         " on all " + std::to_string(n) +
+         " frames after the warm-up: the interval also resamples the image's tiles, so an effect "
+         "held in a few of them (an edge term's, say) is judged across the image's regions, and "
+         "'tie' means not resolved there, not no effect (frames are correlated: this count is no "
+         "test)";
+}
+
 // The ablation of a sweep: for each grid parameter and each of its values after the first, the
 // change of every metric against the pair that differs only in that parameter (set to the first
 // value). Per scene, a ranked metric's change is the run's paired difference (statistics: the same
@@ -814,7 +847,9 @@ json ablationData(const RunResults& results) {
             const double delta = time            ? timingOf(*p, "msMedian") - b
                                  : d.is_object() ? d["diff"].get<double>()
                                                  : p->summary.at(m).mean - b;
-            record(m, delta, b, d, lowerIsBetter[m]);
+            const bool tie = d.is_object() && !(d["resolved"].get<bool>() && delta != 0);
+            record(m, delta, b, d, lowerIsBetter[m],
+                   tie && !identical ? oneSignNote(*p, *q, m, results.settings.warmup()) : "");
           }
           for (const EventFigure& f : eventFigures(results, scene)) {
             const json d = pairedIn(f.ranking, p->label, q->label);

@@ -846,6 +846,48 @@ TEST(Report, AblationSaysWhereTwoPointsGaveIdenticalOutputs) {
       << ablationCsv(data["ablation"]);
 }
 
+// A tie whose per-frame differences hold one sign on every frame after the warm-up is said so (a
+// local effect, an edge term's, can read as a tie because the interval resamples tiles); a tie
+// whose differences change sign is not, nor one over fewer than 8 frames.
+TEST(Report, AblationSaysWhereATieHoldsOneSignOnEveryFrame) {
+  const auto withFrames = [](int frames, bool flip) {
+    json run = fixtureRun();
+    for (json& p : run["pairs"]) {
+      if (p["scene"] != "static") continue;
+      const bool off = p["label"] == "svgf[a=1,b=false]";
+      if (!off && p["label"] != "svgf[a=1]") continue;
+      json perFrame = json::array();
+      for (int t = 0; t < frames; ++t)
+        perFrame.push_back(
+            {{"frame", t}, {"relMse", 0.1 + (off ? (flip && t == 5 ? -1e-4 : 1e-4) : 0.0)}});
+      p["frames"] = perFrame;
+    }
+    run["statistics"] = test::statisticsBlock(
+        json::parse(R"({"scenes": {"static": {"metric": "relMse", "ranking": [],
+      "pairs": [{"a": "svgf[a=1,b=false]", "b": "svgf[a=1]", "diff": 1e-4, "ci95": [-1e-5, 2e-4], "resolved": false}],
+      "resolvedPairs": 0, "totalPairs": 1, "byMetric": {}}}})"));
+    return reportData(test::typed(run), test::freshDir("report_ablation_one_sign"), nullptr);
+  };
+  const auto noteOf = [](const json& data) {
+    for (const json& r : data["ablation"]["rows"])
+      if (r["scene"] == "static" && r["parameter"] == "b")
+        return r.value("notes", json::object()).value("relMse", std::string());
+    return std::string("no row");
+  };
+  const json data = withFrames(12, false);  // 10 frames after the warm-up of 2
+  EXPECT_EQ(noteOf(data).rfind("a tie, yet the difference is positive on all 10 frames after the "
+                               "warm-up: the interval also resamples the image's tiles",
+                               0),
+            0u)
+      << noteOf(data);
+  EXPECT_NE(ablationCsv(data["ablation"])
+                .find(",tie,1,1,0,-1.0000000000000001e-05,0.00020000000000000001,\"a tie, yet"),
+            std::string::npos)
+      << ablationCsv(data["ablation"]);
+  EXPECT_EQ(noteOf(withFrames(12, true)), "");  // frame 5 the other way
+  EXPECT_EQ(noteOf(withFrames(9, false)), "");  // 7 frames after the warm-up
+}
+
 // A sweep's points as CSV: the grid's points first in the grid's order, a column per grid and
 // fixed parameter (empty for a contender that is no point), the statistics' interval and rank
 // where the metric is ranked, the summary's own interval where not, the median time.

@@ -378,8 +378,10 @@
     const unresolvedWord = (p, verdict) =>
         verdict === 'identical outputs' || verdict === 'not judged' ? ` ${verdict}` : p.resolved ? '' : ' tie';
     // A figure bounded rather than measured (a method that never settled): marked, the reason on hover.
+    // ...and a tie whose per-frame differences hold one sign on every frame, the reason on hover.
     const bound = (note, verdict) =>
-        (note && verdict !== 'identical outputs' && verdict !== 'not judged' ? ' (bound)' : '');
+        (note && note.includes('lower bound') && verdict !== 'not judged' ? ' (bound)' :
+         note && note.startsWith('a tie, yet') ? ' (one sign every frame)' : '');
     const pairedCell = (d, relative, p, verdict, note) => el('td', {
       class: classOf[verdict] || null,
       'data-paired': 'true',
