@@ -737,12 +737,14 @@ json ablationData(const RunResults& results) {
   struct Changes {
     std::vector<double> delta, relative;
     size_t intervals = 0, better = 0, worse = 0, identical = 0, unjudged = 0;
+    std::set<std::string> scenes;  // the scenes whose matches it holds
     json lastPaired;  // a single match's paired difference (the row's, when it is the only one)
   };
   // The all-scenes rows name the scenes whose own rows carry a caveat.
   std::string caveatOfAllScenes;
+  std::set<std::string> withCaveat;
   {
-    std::set<std::string> scenesOfPairs, withCaveat;
+    std::set<std::string> scenesOfPairs;
     for (const PairResult* p : pairs) scenesOfPairs.insert(p->scene);
     for (const std::string& s : scenesOfPairs)
       if (!sceneCaveat(results, s).empty()) withCaveat.insert(s);
@@ -827,6 +829,7 @@ json ablationData(const RunResults& results) {
             for (const std::string& scope : {scene, std::string()}) {
               Changes& c = changes[scope][m];
               c.delta.push_back(delta);
+              c.scenes.insert(scene);
               if (std::isfinite(relative)) c.relative.push_back(relative);
               if (d.is_object()) c.lastPaired = d;
               c.identical += same;
@@ -925,6 +928,20 @@ json ablationData(const RunResults& results) {
                 scope.empty() ? caveatOfAllScenes : sceneCaveat(results, scope);
             !caveat.empty())
           row["caveat"] = caveat;
+        // Over all scenes, each metric's line names only the caveated scenes it holds a change
+        // of (an event's figure exists on its scene alone): ablation.csv's note per line.
+        if (scope.empty() && !withCaveat.empty()) {
+          json byMetricCaveat = json::object();
+          for (const auto& [m, c] : byMetric) {
+            std::set<std::string> named;
+            for (const std::string& sc : c.scenes)
+              if (withCaveat.count(sc)) named.insert(sc);
+            byMetricCaveat[m] = named.empty()
+                                    ? std::string()
+                                    : "caveats on " + labelList(named) + " (their rows say which)";
+          }
+          row["caveatByMetric"] = byMetricCaveat;
+        }
         rows.push_back(row);
       }
     }
@@ -1137,8 +1154,10 @@ std::string ablationCsv(const json& ablation) {
           row.value("paired", json::object()).value(m, json::object()).value("ci95", json());
       // The scene's caveat (a reference short of its goal, too few frames) beside the metric's
       // note.
-      const auto noted = [&row](const std::string& note) {
-        const std::string caveat = row.value("caveat", "");
+      const auto noted = [&row, &m](const std::string& note) {
+        const std::string caveat = row.contains("caveatByMetric")
+                                       ? row["caveatByMetric"].value(m, std::string())
+                                       : row.value("caveat", "");
         return caveat.empty() ? note : note.empty() ? caveat : caveat + "; " + note;
       };
       line(row, row.value("given", ""), scene, row["matched"], m, d.value(),

@@ -587,6 +587,41 @@ TEST(Report, AblationDeltasAreTheRunsPairedDifferences) {
       << ablationCsv(caveated);
 }
 
+// Over all scenes, each metric's CSV line names only the caveated scenes it holds a change of: an
+// event's figure (or any metric) measured on an uncaveated scene alone carries no caveat (every
+// line named every caveated scene).
+TEST(Report, AnAllScenesLineNamesTheCaveatsOfItsOwnScenes) {
+  json run = fixtureRun();
+  for (json& p : run["pairs"])
+    if (p["scene"] == "switch" && p["label"] == "svgf[a=0]")
+      p = okPair("switch", "svgf", "svgf[a=0]", {{"a", 0}, {"b", true}}, 0.07, 4.0);
+  run["pairs"].push_back(okPair("switch", "svgf", "svgf[a=1]", {{"a", 1}, {"b", true}}, 0.05, 5.0));
+  for (json& p : run["pairs"])
+    if (p["scene"] == "switch") p["summary"].erase("ldrFlip");  // measured on static alone
+  run["scenes"]["switch"]["warnings"] = {
+      "only 2 frames follow the warm-up of 8: the intervals resample so few frames that they "
+      "hardly cover how a method varies"};
+  const json ablation = reportData(test::typed(run), test::freshDir("report_ablation_all_caveats"),
+                                   nullptr)["ablation"];
+  int seen = 0;
+  for (const json& r : ablation["rows"])
+    if (r["scene"].is_null() && r["parameter"] == "a") {
+      ++seen;
+      EXPECT_EQ(r["caveat"], "caveats on switch (their rows say which)");
+      EXPECT_EQ(r["caveatByMetric"]["relMse"], "caveats on switch (their rows say which)");
+      EXPECT_EQ(r["caveatByMetric"]["ldrFlip"], "") << r.dump();
+    }
+  EXPECT_EQ(seen, 1);
+  const std::string csv = ablationCsv(ablation);
+  EXPECT_NE(csv.find(",all scenes,2,relMse,"), std::string::npos) << csv;
+  const size_t ldr = csv.find(",all scenes,2,ldrFlip,");
+  ASSERT_NE(ldr, std::string::npos) << csv;
+  EXPECT_EQ(csv.substr(ldr, csv.find('\n', ldr) - ldr).find("caveats"), std::string::npos) << csv;
+  const size_t rel = csv.find(",all scenes,2,relMse,");
+  EXPECT_NE(csv.substr(rel, csv.find('\n', rel) - rel).find("caveats on switch"),
+            std::string::npos);
+}
+
 // Time in the ablation is the median frame time, as in the summary table and the speed chart: a
 // few slow frames move the mean (a grid point read +93% slower by it). A one-scene sweep has no
 // "all scenes" row repeating its scene's.
