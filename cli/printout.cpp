@@ -212,6 +212,11 @@ void printOverallRanking(std::ostream& out, const RunResults& results) {
     out << "\noverall: none\n";
   else
     out << "\noverall: " << o.normalisation << " (lower is better)\n";
+  // A shard ranks its slice of the pairs: said, lest its ranks be read as the run's.
+  if (const std::string shard = results.settings.shard();
+      !shard.empty() && shard != "merged" && shard != "0/1")
+    out << "  (shard " << shard << ": these ranks and scores are of this slice of the pairs alone; "
+        << "`arena merge` of every shard gives the run's)\n";
   const size_t column = labelColumn(o.ranking, 26);
   for (const RankedMethod& m : o.ranking) {
     out << "  " << std::left << std::setw(4) << rankText(m) << paddedText(rankedLabel(m), column)

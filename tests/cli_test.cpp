@@ -366,6 +366,17 @@ TEST(CliContract, AShardWithNoPairsIsNoFailure) {
   contract::CliResult r = contract::tinyCliRun(dir, "run", "--shard 3/4");
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_EQ(r.output.find("no pair ran"), std::string::npos) << r.output;
+  // A shard that ran pairs ranks its slice: the printout says so above its ranks.
+  r = contract::arenaCli(
+      "run --scenes cornell_static --denoisers passthrough,temporal,eaw --no-baselines "
+      "--resolution 8x8 --ref-spp 1 --flip none --keep-frames none --frames 10 --warmup 1 "
+      "--cache " +
+      (dir / "cache").string() + " --out " + (dir / "s0").string() + " --shard 0/2");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("(shard 0/2: these ranks and scores are of this slice of the pairs "
+                          "alone; `arena merge` of every shard gives the run's)"),
+            std::string::npos)
+      << r.output;
 }
 
 // Runs that differ in one parameter: --match compares the two labels, and --denoisers naming
