@@ -126,6 +126,24 @@ std::string rankedLabel(const RankedMethod& m) {
          (m.oracleLayers.empty() ? "" : " (oracle)");
 }
 
+}  // namespace
+
+std::string markedLabel(const RunResults& results, const std::string& label) {
+  RankedMethod m;
+  m.label = label;
+  if (results.statistics) {
+    if (auto it = results.statistics->extraPathsPerPixel.find(label);
+        it != results.statistics->extraPathsPerPixel.end())
+      m.extraPathsPerPixel = it->second;
+    if (auto it = results.statistics->oracleLayers.find(label);
+        it != results.statistics->oracleLayers.end())
+      m.oracleLayers = it->second;
+  }
+  return rankedLabel(m);
+}
+
+namespace {
+
 // A rank as every table prints it: "3", "3=" when tied with others, "-" when not ranked.
 std::string rankText(const RankedMethod& m) {
   if (m.rank <= 0) return "-";
@@ -289,7 +307,8 @@ void printOtherOverallScores(std::ostream& out, const RunResults& results) {
     for (const RankedMethod& m : o->ranking)
       if (std::find(rows.begin(), rows.end(), m.label) == rows.end()) rows.push_back(m.label);
   size_t column = 26;
-  for (const std::string& label : rows) column = std::max(column, displayWidth(label) + 2);
+  for (const std::string& label : rows)
+    column = std::max(column, displayWidth(markedLabel(results, label)) + 2);
   constexpr size_t kCell = 14;
   out << "\noverall on the other metrics (rank and score, each the relMSE one's normalisation on "
          "that metric; lower is better)\n"
@@ -297,7 +316,7 @@ void printOtherOverallScores(std::ostream& out, const RunResults& results) {
   for (const auto& [name, o] : metrics) out << rightAligned(name, kCell);
   out << "\n";
   for (const std::string& label : rows) {
-    out << "  " << paddedText(label, column);
+    out << "  " << paddedText(markedLabel(results, label), column);
     for (const auto& [name, o] : metrics) {
       const auto it = std::find_if(o->ranking.begin(), o->ranking.end(),
                                    [&](const RankedMethod& m) { return m.label == label; });

@@ -25,6 +25,9 @@ std::string changePercentText(double change);
 std::string intervalText(const Interval& interval);
 // "tied with a, b" from a ranking entry's tiedWith, or "".
 std::string tiedText(const RankedMethod& rankedMethod);
+// A label as the rankings print it: "(+paths)" where it read paths beyond the frame's 1-spp ones,
+// "(oracle)" where it read a layer no real-time engine has (the run's statistics say which).
+std::string markedLabel(const RunResults& results, const std::string& label);
 // The absent summaries of metrics other than relMSE whose reason is not one already said (relMSE's
 // own on that scene, as no frame after the warm-up; a scene without a reference): a metric that
 // gave no value on a pair (not finite on every frame) was printed nowhere. One line per scene,

@@ -203,7 +203,7 @@ void finish(const std::string& out) {
   size_t sceneWidth = 22, labelWidth = 34;  // as wide as the longest entry
   for (const PairResult& p : results.pairs) {
     sceneWidth = std::max(sceneWidth, displayWidth(p.scene) + 2);
-    labelWidth = std::max(labelWidth, displayWidth(p.label) + 2);
+    labelWidth = std::max(labelWidth, displayWidth(markedLabel(results, p.label)) + 2);
   }
   // Each pair's rank on its scene, with ties: a mean alone reads as an order the intervals may
   // not support. "3=": two methods resolved better, tied with another (statistics.scenes).
@@ -222,7 +222,8 @@ void finish(const std::string& out) {
             << "%; mean relMSE after the warm-up; median ms a frame on this machine's CPU"
             << (sizeText.empty() ? "" : " at " + sizeText) << ", unless marked)\n";
   for (const PairResult& p : results.pairs) {
-    std::cout << paddedText(p.scene, sceneWidth) << paddedText(p.label, labelWidth);
+    std::cout << paddedText(p.scene, sceneWidth)
+              << paddedText(markedLabel(results, p.label), labelWidth);
     if (p.ok()) {
       const auto rank = ranks.find({p.scene, p.label});
       std::cout << std::right << std::setw(6) << (rank == ranks.end() ? "-" : rank->second);
@@ -485,11 +486,15 @@ void addRunCommands(CLI::App& app) {
       auto assignments = parseParamAssignments(o->params);
       for (auto& [other, kv] : assignments)
         if (other != *denoiser)
-          throw Error("--param " + other + "." + kv.begin()->first + ": a sweep's --param sets " +
-                      *denoiser + "'s fixed parameters (--param " + *denoiser +
-                      ".NAME=VALUE); the baselines beside it run at their defaults, as in every "
-                      "sweep, so that its overall score is normalised by the same temporal "
-                      "baseline (--no-baselines leaves them out)");
+          throw Error(
+              "--param " + other + "." + kv.begin()->first + ": this sweep runs only " + *denoiser +
+              " and the baselines; a sweep's --param sets " + *denoiser +
+              "'s fixed parameters (--param " + *denoiser + ".NAME=VALUE)" +
+              (other == "passthrough" || other == "temporal"
+                   ? "; the baselines run at their defaults, as in every sweep, so that its "
+                     "overall score is normalised by the same temporal baseline "
+                     "(--no-baselines leaves them out)"
+                   : ""));
       c = sweepRun(std::move(c), *denoiser, assignments[*denoiser], *grids, *maxPoints);
       // An axis of one value ablates nothing (the report says "no ablation" afterwards): said now.
       for (const auto& [name, values] : c.annotations["sweep"]["grid"].items())

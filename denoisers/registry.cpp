@@ -70,6 +70,15 @@ const DenoiserInfo& DenoiserRegistry::find(const std::string& name) const {
     if (i.name == name) return i;
   std::string known;
   for (const DenoiserInfo& i : infos_) known += (known.empty() ? "" : ", ") + i.name;
+  // A label (svgf[sigmaL=2]) names a result, not a denoiser: say how a variant is asked for.
+  if (const size_t bracket = name.find('[');
+      bracket != std::string::npos && bracket > 0 && name.back() == ']')
+    throw Error("'" + name +
+                "' is a label (a denoiser and its settings, as results name them), not a "
+                "denoiser: run " +
+                name.substr(0, bracket) + " with --param " + name.substr(0, bracket) +
+                ".NAME=VALUE, or compare settings side by side with arena sweep --denoiser " +
+                name.substr(0, bracket) + " --grid 'NAME=[A,B]'");
   const std::string likely = closestName(name, names());
   // A denoiser of one's own is not registered by its name alone: say how it is named.
   throw Error("unknown denoiser '" + name + "'" +

@@ -276,7 +276,7 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
   // reads the same information and an undeclared read (an oracle layer, say) fails instead of
   // ranking unlabelled. The frame is shared with the evaluation (and other pairs): its planes are
   // borrowed, and copied only when a layer the denoiser reads holds a NaN/Inf to sanitise.
-  LayerSet frame;
+  LayerSet frame, sanitized;  // `sanitized` owns the copies, its buffers reused frame to frame
   for (int t = 0; t < info.frames; ++t) {
     const LayerSet& cached = frameOf(t);
     for (const std::string& c : readLayers_) cached.get(c, sequence_.dir().string() + " frame " + std::to_string(t));
@@ -285,13 +285,17 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
         countNonFinite(cached, channels::frameLayers(), "", out.sanitized, readLayers_) > 0;
     for (const std::string& name : readLayers_) {
       const Image& layer = cached.get(name);
+      const Image* source = &layer;
       if (sanitize) {
-        frame.set(name, layer);
-        replaceNonFinite(frame.get(name));
-      } else {
-        frame.set(name, Image::borrow(const_cast<float*>(layer.raw().data()), layer.width(),
-                                      layer.height(), layer.channels()));
+        if (sanitized.has(name))
+          sanitized.get(name) = layer;  // an owning copy: storage reused
+        else
+          sanitized.set(name, layer);
+        replaceNonFinite(sanitized.get(name));
+        source = &sanitized.get(name);
       }
+      frame.set(name, Image::borrow(const_cast<float*>(source->raw().data()), source->width(),
+                                    source->height(), source->channels()));
     }
     LayerSet gradients;
     if (needsGradients_ && t > 0) {

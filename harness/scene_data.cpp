@@ -49,9 +49,8 @@ std::unique_ptr<SceneData> prepareScene(const fs::path& dir, const EvaluationOpt
         const Image& color = input.frames[size_t(t)].get("color");
         const Image& reference =
             input.references[size_t(input.referenceOfFrame[size_t(t)])].get("color");
-        const std::span<const float> b = reference.raw();
-        if (std::none_of(b.begin(), b.end(), [](float v) { return v != 0; })) {
-          ++black;  // no signal
+        if (!hasSignal(reference)) {  // validate's predicate: no nonzero finite value
+          ++black;
           continue;
         }
         ++scored;
@@ -65,7 +64,8 @@ std::unique_ptr<SceneData> prepareScene(const fs::path& dir, const EvaluationOpt
             "capture " + dir.string() +
             ": the reference of every frame the run scores (from frame " +
             std::to_string(std::max(options.warmup, 0)) +
-            ", after the warm-up) is black, holding no nonzero value: nothing to measure the "
+            ", after the warm-up) is black, holding no nonzero finite value: nothing to measure "
+            "the "
             "outputs against, and relative errors would rank them by their brightness alone "
             "(reference.blackFrames; a shorter --warmup, or references rendered for the "
             "frames after it)");

@@ -273,13 +273,6 @@ long negativeValues(const Image& c) {
   return n;
 }
 
-// Whether an image holds any nonzero finite value.
-bool hasSignal(const Image& image) {
-  for (float x : image.raw())
-    if (std::isfinite(x) && x != 0.0f) return true;
-  return false;
-}
-
 // Whether two images hold the same values bit for bit.
 bool sameValues(const Image& a, const Image& b) {
   const std::span<const float> x = a.raw(), y = b.raw();
@@ -592,6 +585,12 @@ PositionConsistency checkPositions(const std::vector<LayerSet>& frames,
   std::nth_element(ratios.begin(), ratios.begin() + long(ratios.size() / 2), ratios.end());
   out.medianDepthRatio = ratios[ratios.size() / 2];
   return out;
+}
+
+bool hasSignal(const Image& image) {
+  for (float x : image.raw())
+    if (std::isfinite(x) && x != 0.0f) return true;
+  return false;
 }
 
 bool inputEqualsReference(const Image& input, const Image& reference) {

@@ -103,6 +103,10 @@ CaptureValidation validateCaptureOutputs(const CaptureDescription& capture,
 // NaN or Inf as 0): the input then scores a perfect 0 against it.
 bool inputEqualsReference(const Image& input, const Image& reference);
 
+// Whether an image holds any nonzero finite value: a reference without one is black (validate's
+// reference.blackFrames, a run's refusal).
+bool hasSignal(const Image& image);
+
 // Every check of a sequence read for evaluation (frames, references) and its description.
 CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInput& input);
 

@@ -368,7 +368,9 @@ RunStatistics analyseRun(const json& results, const BootstrapConfig& cfg) {
     if (sn.first > 0) out.extraPathsPerPixel[label] = sn.first / sn.second;
   // The oracle layers each label read, on any of its scenes.
   for (const json& p : results["pairs"]) {
-    if (p.value("status", "") != "ok" || !p.contains("oracleLayers")) continue;
+    if (p.value("status", "") != "ok" || !p.contains("oracleLayers") ||
+        !p["oracleLayers"].is_array() || p["oracleLayers"].empty())
+      continue;
     std::vector<std::string>& layers = out.oracleLayers[p.value("label", "")];
     for (const json& l : p["oracleLayers"])
       if (std::find(layers.begin(), layers.end(), l.get<std::string>()) == layers.end())

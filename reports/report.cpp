@@ -628,8 +628,7 @@ double rankedValue(const SceneRanking& ranking, const std::string& label) {
 // interval" when some has none.
 std::string ablationVerdict(size_t matches, size_t intervals, size_t better, size_t worse,
                             size_t identical, size_t unjudged) {
-  if (identical == matches) return "identical outputs";
-  if (unjudged == matches) return "not judged";
+  if (identical + unjudged == matches) return identical > 0 ? "identical outputs" : "not judged";
   matches -= unjudged;
   if (intervals < matches) return "no interval";
   if (better == matches) return "better";
@@ -767,6 +766,8 @@ json ablationData(const RunResults& results) {
       std::map<std::string, json> byMatch;                        // scene -> its matches
       std::map<std::string, std::map<std::string, std::string>> notes;  // scene -> metric -> bound
       std::map<std::string, size_t> matched;
+      // scope -> "label (layers)" of each compared point that read oracle data.
+      std::map<std::string, std::set<std::string>> oracles;
       for (const PairResult* p : pairs) {
         if (p->params.value(name, json()) != values[vi]) continue;
         json want = p->params;
@@ -776,6 +777,15 @@ json ablationData(const RunResults& results) {
           const std::string& scene = p->scene;
           ++matched[scene];
           ++matched[""];
+          for (const PairResult* x : {p, q})
+            if (const json& layers = x->part("oracleLayers");
+                layers.is_array() && !layers.empty()) {
+              std::string named;
+              for (const json& l : layers)
+                named += (named.empty() ? "" : ", ") + l.get<std::string>();
+              for (const std::string& scope : {scene, std::string()})
+                oracles[scope].insert(x->label + " (" + named + ")");
+            }
           // The other grid parameters' settings under which the two differ only in this one.
           std::string given;
           for (auto other = sweep["grid"].begin(); other != sweep["grid"].end(); ++other)
@@ -921,24 +931,37 @@ json ablationData(const RunResults& results) {
         }
         if (!scope.empty() && matched[scope] > 1) row["byMatch"] = byMatch[scope];
         if (scope.empty() && !single.empty()) row["paired"] = single;
-        if (!scope.empty() && notes.count(scope)) row["notes"] = notes[scope];
+        // A match's note is its own (byMatch): on a row of several matches it would speak for one
+        // of them beside a verdict of all ("partly worse" beside "a tie, yet ...").
+        if (!scope.empty() && matched[scope] == 1 && notes.count(scope))
+          row["notes"] = notes[scope];
         // What the run said of the scene's results travels with its rows (a table copied into a
         // paper lost it): a reference short of its goal, too few frames after the warm-up.
-        if (const std::string caveat =
-                scope.empty() ? caveatOfAllScenes : sceneCaveat(results, scope);
+        // A compared point that read oracle data is not on equal terms: said with the row.
+        std::string oracle;
+        if (oracles.count(scope))
+          oracle = "oracle data read by " + labelList(oracles[scope]) +
+                   ", which a real-time engine would not have";
+        const std::string sceneWords =
+            scope.empty() ? caveatOfAllScenes : sceneCaveat(results, scope);
+        if (const std::string caveat = sceneWords.empty() ? oracle
+                                       : oracle.empty()   ? sceneWords
+                                                          : sceneWords + "; " + oracle;
             !caveat.empty())
           row["caveat"] = caveat;
         // Over all scenes, each metric's line names only the caveated scenes it holds a change
         // of (an event's figure exists on its scene alone): ablation.csv's note per line.
-        if (scope.empty() && !withCaveat.empty()) {
+        if (scope.empty() && (!withCaveat.empty() || !oracle.empty())) {
           json byMetricCaveat = json::object();
           for (const auto& [m, c] : byMetric) {
             std::set<std::string> named;
             for (const std::string& sc : c.scenes)
               if (withCaveat.count(sc)) named.insert(sc);
-            byMetricCaveat[m] = named.empty()
+            std::string words = named.empty()
                                     ? std::string()
                                     : "caveats on " + labelList(named) + " (their rows say which)";
+            if (!oracle.empty()) words += (words.empty() ? "" : "; ") + oracle;
+            byMetricCaveat[m] = words;
           }
           row["caveatByMetric"] = byMetricCaveat;
         }

@@ -122,9 +122,15 @@ TEST(CliContract, ShardsParamsAndSweepsAreStrict) {
       contract::arenaCli("sweep --denoiser svgf --grid 'sigmaL=[2,4]' --param eaw.sigmaL=3" + common);
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(
-      r.output.find("--param eaw.sigmaL: a sweep's --param sets svgf's fixed parameters "
-                    "(--param svgf.NAME=VALUE); the baselines beside it run at their defaults"),
+      r.output.find("--param eaw.sigmaL: this sweep runs only svgf and the baselines; a "
+                    "sweep's --param sets svgf's fixed parameters (--param svgf.NAME=VALUE)\n"),
       std::string::npos)
+      << r.output;
+  r = contract::arenaCli(
+      "sweep --denoiser svgf --grid 'sigmaL=[2,4]' --param temporal.alphaMin=0.1" + common);
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("; the baselines run at their defaults, as in every sweep"),
+            std::string::npos)
       << r.output;
   r = contract::arenaCli("sweep --denoiser svgf --grid 'sigmaL=[2,4]' --grid 'sigmaL=[8]'" + common);
   EXPECT_EQ(r.status, 2) << r.output;

@@ -196,6 +196,14 @@ TEST(ExternalManifest, TheProgramGivenForItsManifestIsNamedAsSuch) {
   EXPECT_NE(slip.find("unknown denoiser 'svfg' (did you mean 'svgf'?); registered: "),
             std::string::npos)
       << slip;
+  const std::string label =
+      errorOf([] { DenoiserRegistry::instance().find("reblur[hitDistance=mirror]"); });
+  EXPECT_EQ(
+      label.rfind("'reblur[hitDistance=mirror]' is a label (a denoiser and its settings, as "
+                  "results name them), not a denoiser: run reblur with --param reblur.NAME=VALUE",
+                  0),
+      0u)
+      << label;
 }
 
 TEST(ExternalManifest, ParametersUseTheTypedSchemaAndAreRecorded) {

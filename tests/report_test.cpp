@@ -923,6 +923,32 @@ TEST(Report, AblationSaysWhereATieHoldsOneSignOnEveryFrame) {
   EXPECT_EQ(noteOf(withFrames(9, false)), "");  // 7 frames after the warm-up
 }
 
+// A compared grid point that read oracle data (a layer no real-time engine has) is named with the
+// rows that compare it, in ablation.csv's note too: its "better" is not on equal terms.
+TEST(Report, AnAblationRowNamesAPointThatReadOracleData) {
+  json run = fixtureRun();
+  for (json& p : run["pairs"])
+    if (p["label"] == "svgf[a=1,b=false]") p["oracleLayers"] = {"specHitDistMirror"};
+  const json ablation =
+      reportData(test::typed(run), test::freshDir("report_ablation_oracle"), nullptr)["ablation"];
+  int seen = 0;
+  for (const json& r : ablation["rows"]) {
+    if (r["parameter"] == "b") {
+      ++seen;
+      EXPECT_EQ(r.value("caveat", ""),
+                "oracle data read by svgf[a=1,b=false] (specHitDistMirror), which a real-time "
+                "engine would not have")
+          << r.dump();
+    }
+    if (r["parameter"] == "a") EXPECT_FALSE(r.contains("caveat")) << r.dump();
+  }
+  EXPECT_EQ(seen, 1);
+  EXPECT_NE(
+      ablationCsv(ablation).find(",\"oracle data read by svgf[a=1,b=false] (specHitDistMirror)"),
+      std::string::npos)
+      << ablationCsv(ablation);
+}
+
 // A sweep's points as CSV: the grid's points first in the grid's order, a column per grid and
 // fixed parameter (empty for a contender that is no point), the statistics' interval and rank
 // where the metric is ranked, the summary's own interval where not, the median time.

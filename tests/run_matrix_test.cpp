@@ -533,6 +533,10 @@ TEST(RunMatrix, OracleDataIsNamedInThePairThatReadsIt) {
       << printed.str();
   EXPECT_NE(printed.str().find("(oracle): read a layer no real-time engine has"),
             std::string::npos);
+  // The other tables that list a label mark it too (markedLabel).
+  EXPECT_EQ(cli::markedLabel(results, "reblur[hitDistance=mirror]"),
+            "reblur[hitDistance=mirror] (oracle)");
+  EXPECT_EQ(cli::markedLabel(results, "reblur"), "reblur");
 }
 
 TEST(RunMatrix, AFailingPairIsReportedAndTheOthersKept) {

@@ -729,7 +729,7 @@ test('a sweep\'s ablation colours a change only where every matched interval res
   let c = await cell('a', 'scene_0', 'Δ relMse');  // resolved under b=true only: no colour
   assert.match(c.verdict, /^partly (better|worse)$/);
   assert.equal(c.cls, 'tie');
-  assert.match(c.text, /1\/2 resolved, partly (better|worse)/);
+  assert.match(c.text, /1\/2 resolved, partly (better|worse)$/);
   // Its matches, each with its own paired interval: resolved given b=true, a tie given b=false.
   const matches = await page.$$eval('#ablation table tbody tr', (trs) => {
     const out = [];
