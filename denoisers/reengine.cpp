@@ -661,8 +661,9 @@ void ReEngine::storeHistory() {
     if (gpu::recording()) {  // a blend, not a buffer swap: the propagated and upscaled values
       using namespace gpu_buffers;
       gpu::dispatch(width_, height_);
-      gpu::read(kRadiance, width_, height_, 2);
-      gpu::read(kConfidence, width_, height_);  // the blend's weight
+      gpu::read({kRadiance, kUpscaled}, width_, height_);  // propagated, upscaled: two images
+      // The blend's weight: the upscaling's confidence and how young the history is.
+      gpu::read({kConfidence, kHistoryLength}, width_, height_);
       gpu::write(kRadianceHistory, width_, height_);
     }
     for (size_t i = 0; i < colorHistory_.pixelCount(); ++i) {

@@ -60,6 +60,7 @@ inline constexpr GpuBuffer kGradients{"gradient samples (input)", GpuFormat::RG1
 inline constexpr GpuBuffer kLowres{"low-res radiance (input)", GpuFormat::RGBA16Float};
 inline constexpr GpuBuffer kColor{"color (input)", GpuFormat::RGBA16Float};
 inline constexpr GpuBuffer kLowresDirection{"low-res direction (input)", GpuFormat::RGBA16Float};
+inline constexpr GpuBuffer kUpscaled{"upscaled radiance", GpuFormat::RGBA16Float};
 inline constexpr GpuBuffer kRadiance{"radiance", GpuFormat::RGBA16Float};
 inline constexpr GpuBuffer kRadianceHistory{"radiance history", GpuFormat::RGBA16Float, true};
 inline constexpr GpuBuffer kFastHistory{"fast history", GpuFormat::RGBA16Float, true};

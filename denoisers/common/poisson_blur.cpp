@@ -99,26 +99,29 @@ void sparseBlur(const Image& in, const SurfaceGuide& guide, const SurfaceWeightS
   const SurfaceWeights checked(weights, guide);  // throws where a guide is missing
   if (gpu::recording()) {  // the centre and every tap: the signal and the guides the weight uses
     using namespace gpu_buffers;
-    // A pixel whose scale is 0 passes through: its taps are not fetched (on a GPU its lanes idle
-    // through the tap loop), so the taps count for the share of pixels that gather, as data-
-    // dependent taps are counted where they happen (a history fix over a few young pixels).
+    // A pixel that does not gather (its radius scale not above 0, or a sky pixel) passes through:
+    // a shader reads its scale, meshId and signal and exits, so the taps and the guides count for
+    // the share of pixels that gather, as data-dependent taps are counted where they happen (a
+    // history fix over a few young pixels). Without a scale every surface pixel gathers.
     double gathering = 1.0;
-    if (radiusScale) {
-      const std::span<const float> scale = radiusScale->raw();
-      gathering =
-          double(std::count_if(scale.begin(), scale.end(), [](float v) { return v != 0.0f; })) /
-          double(scale.size());
+    if (radiusScale || g.meshId) {
+      const size_t pixels = size_t(w) * size_t(h);
+      const float* scale = radiusScale ? radiusScale->plane(0) : nullptr;
+      size_t n = 0;
+      for (size_t i = 0; i < pixels; ++i)
+        n += (!scale || scale[i] > 0.0f) && (!g.meshId || g.meshId[i] >= 0.0f);
+      gathering = double(n) / double(pixels);
     }
-    const double fetches = 1.0 + tapCount * gathering;
+    const double fetches = 1.0 + tapCount * gathering, guides = gathering * (1.0 + tapCount);
     gpu::dispatch(w, h);
     gpu::read(kRadiance, w, h, fetches);
     if (channels > 4) gpu::read(kExtraChannels, w, h, fetches);
     if (g.meshId) gpu::read(kMeshId, w, h, fetches);
     gpu::read(kDepth, w, h, 1);
-    if (weights.planeDistance) gpu::read(kPosition, w, h, fetches);
-    if (weights.normal) gpu::read(kNormal, w, h, fetches);
-    if (weights.hitDistance && guide.hitDistance) gpu::read(kHitDistance, w, h, fetches);
-    if (weights.roughness && guide.roughness) gpu::read(kRoughness, w, h, fetches);
+    if (weights.planeDistance) gpu::read(kPosition, w, h, guides);
+    if (weights.normal) gpu::read(kNormal, w, h, guides);
+    if (weights.hitDistance && guide.hitDistance) gpu::read(kHitDistance, w, h, guides);
+    if (weights.roughness && guide.roughness) gpu::read(kRoughness, w, h, guides);
     if (radiusScale) gpu::read(kHistoryLength, w, h, 1);  // the radius follows the history
     gpu::write(kRadiance, w, h);
     if (channels > 4) gpu::write(kExtraChannels, w, h);
