@@ -256,6 +256,8 @@ json speedPoint(const PairResult& pair, const ErrorAxis& axis, const std::string
   if (const auto found = pair.summary.find("extraRaysPerPixel");
       found != pair.summary.end() && std::isfinite(found->second.mean))
     v["extraRaysPerPixel"] = found->second.mean;
+  if (const json& oracle = pair.part("oracleLayers"); oracle.is_array() && !oracle.empty())
+    v["oracleLayers"] = oracle;  // named "(oracle)" on the chart, as in the rankings
   return v;
 }
 
@@ -354,6 +356,7 @@ json speedView(const RunResults& results, const std::vector<std::string>& scenes
                     {"complete", n == covered}};
       if (nTracing == n) point["tracingMs"] = tracing / k;  // the mean like its time's
       if (std::isfinite(r.extraPathsPerPixel)) point["extraRaysPerPixel"] = r.extraPathsPerPixel;
+      if (!r.oracleLayers.empty()) point["oracleLayers"] = r.oracleLayers;
       points.push_back(std::move(point));
     }
     if (points.empty()) continue;
@@ -1234,12 +1237,17 @@ std::string sweepPointsCsv(const RunResults& results) {
       out += "," + (point ? csvField(valueText(f.value())) : "");
     return out;
   };
+  // A point that read oracle data says so on each of its lines, before the line's own note.
+  std::string oracleWords;
   auto line = [&](const std::string& front, const std::string& scene, const std::string& metric,
                   double mean, Interval ci, int rank, int frames, const std::string& note) {
+    const std::string noted = oracleWords.empty() ? note
+                              : note.empty()      ? oracleWords
+                                                  : oracleWords + "; " + note;
     csv += front + "," + csvField(scene) + "," + csvField(metric) + "," + number(mean) + "," +
            (ci.valid() ? number(ci.lo) + "," + number(ci.hi) : std::string(",")) + "," +
            (rank > 0 ? std::to_string(rank) : "") + "," +
-           (frames > 0 ? std::to_string(frames) : "") + "," + csvField(note) + "\n";
+           (frames > 0 ? std::to_string(frames) : "") + "," + csvField(noted) + "\n";
   };
   auto rankedIn = [](const SceneRanking* r, const std::string& label) -> const RankedMethod* {
     if (!r) return nullptr;
@@ -1251,6 +1259,13 @@ std::string sweepPointsCsv(const RunResults& results) {
     for (const PairResult& p : results.pairs) {
       if (p.label != label || !p.ok()) continue;
       const std::string front = head(label, isPoint(label, p.denoiser), p.params);
+      oracleWords.clear();
+      if (const json& layers = p.part("oracleLayers"); layers.is_array() && !layers.empty()) {
+        for (const json& l : layers)
+          oracleWords += (oracleWords.empty() ? "" : ", ") + l.get<std::string>();
+        oracleWords =
+            "reads oracle data (" + oracleWords + "), which a real-time engine would not have";
+      }
       for (const MetricDefinition* m : metricCatalog()) {
         auto s = p.summary.find(m->name);
         if (s == p.summary.end()) continue;

@@ -947,6 +947,19 @@ TEST(Report, AnAblationRowNamesAPointThatReadOracleData) {
       ablationCsv(ablation).find(",\"oracle data read by svgf[a=1,b=false] (specHitDistMirror)"),
       std::string::npos)
       << ablationCsv(ablation);
+  // points.csv: each of the point's lines says it, and no other point's.
+  const std::string points = sweepPointsCsv(test::typed(run));
+  size_t lines = 0, oracleLines = 0;
+  for (size_t at = points.find('\n'); at != std::string::npos && at + 1 < points.size();
+       at = points.find('\n', at + 1)) {
+    const std::string l = points.substr(at + 1, points.find('\n', at + 1) - at - 1);
+    const bool oracle = l.find("reads oracle data (specHitDistMirror)") != std::string::npos;
+    EXPECT_EQ(oracle, l.rfind("\"svgf[a=1,b=false]\",", 0) == 0) << l;
+    ++lines;
+    oracleLines += oracle;
+  }
+  EXPECT_GT(oracleLines, 0u);
+  EXPECT_LT(oracleLines, lines);
 }
 
 // A sweep's points as CSV: the grid's points first in the grid's order, a column per grid and

@@ -537,6 +537,15 @@ TEST(RunMatrix, OracleDataIsNamedInThePairThatReadsIt) {
   EXPECT_EQ(cli::markedLabel(results, "reblur[hitDistance=mirror]"),
             "reblur[hitDistance=mirror] (oracle)");
   EXPECT_EQ(cli::markedLabel(results, "reblur"), "reblur");
+  // The report's speed chart names its point "(oracle)" from the point's oracleLayers.
+  const json data = reportData(test::typed(r), c.out, nullptr);
+  int points = 0;
+  for (const json& p :
+       data["speed"]["views"]["cpu"]["scenes"]["cornell_static"]["relMse"]["points"]) {
+    ++points;
+    EXPECT_EQ(p.contains("oracleLayers"), p["label"] == "reblur[hitDistance=mirror]") << p.dump();
+  }
+  EXPECT_EQ(points, 2);
 }
 
 TEST(RunMatrix, AFailingPairIsReportedAndTheOthersKept) {

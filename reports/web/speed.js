@@ -47,8 +47,9 @@
       onFront: data.front.includes(p.label),
       selected: p.label === A.state.selected,
       paramText: Object.keys(p.params || {}).length ? Object.entries(p.params).map(([k, v]) => `${k}=${JSON.stringify(v)}`).join(', ') : '(defaults)',
-      // Methods that read paths beyond the frame's own (issue 34) are marked wherever they are named.
-      name: p.extraPaths ? `${p.label} (+paths)` : p.label,
+      // Methods that read paths beyond the frame's own (issue 34), or oracle data, are marked
+      // wherever they are named.
+      name: p.label + (p.extraPaths ? ' (+paths)' : '') + ((p.oracleLayers || []).length ? ' (oracle)' : ''),
       msLo: p.msLo ?? null,
       msHi: p.msHi ?? null,
     }));
