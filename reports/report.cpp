@@ -574,6 +574,14 @@ std::string unsettledNote(const PairResult& pair, const EventFigure& f) {
   return "";
 }
 
+// The oracle layers a pair read, joined ("specHitDistMirror"), or "" where it read none.
+std::string oracleLayersText(const PairResult& pair) {
+  std::string text;
+  if (const json& layers = pair.part("oracleLayers"); layers.is_array())
+    for (const json& l : layers) text += (text.empty() ? "" : ", ") + l.get<std::string>();
+  return text;
+}
+
 // A method's own value of an event figure (its pairs[].ghosting or .cuts entry), NaN where none:
 // what the ablation and points.csv show, without an interval, where the figure's ranking left the
 // method out for want of one (a changed region too small to resample).
@@ -781,14 +789,9 @@ json ablationData(const RunResults& results) {
           ++matched[scene];
           ++matched[""];
           for (const PairResult* x : {p, q})
-            if (const json& layers = x->part("oracleLayers");
-                layers.is_array() && !layers.empty()) {
-              std::string named;
-              for (const json& l : layers)
-                named += (named.empty() ? "" : ", ") + l.get<std::string>();
+            if (const std::string named = oracleLayersText(*x); !named.empty())
               for (const std::string& scope : {scene, std::string()})
                 oracles[scope].insert(x->label + " (" + named + ")");
-            }
           // The other grid parameters' settings under which the two differ only in this one.
           std::string given;
           for (auto other = sweep["grid"].begin(); other != sweep["grid"].end(); ++other)
@@ -1259,13 +1262,10 @@ std::string sweepPointsCsv(const RunResults& results) {
     for (const PairResult& p : results.pairs) {
       if (p.label != label || !p.ok()) continue;
       const std::string front = head(label, isPoint(label, p.denoiser), p.params);
-      oracleWords.clear();
-      if (const json& layers = p.part("oracleLayers"); layers.is_array() && !layers.empty()) {
-        for (const json& l : layers)
-          oracleWords += (oracleWords.empty() ? "" : ", ") + l.get<std::string>();
-        oracleWords =
-            "reads oracle data (" + oracleWords + "), which a real-time engine would not have";
-      }
+      const std::string oracle = oracleLayersText(p);
+      oracleWords = oracle.empty() ? std::string()
+                                   : "reads oracle data (" + oracle +
+                                         "), which a real-time engine would not have";
       for (const MetricDefinition* m : metricCatalog()) {
         auto s = p.summary.find(m->name);
         if (s == p.summary.end()) continue;
