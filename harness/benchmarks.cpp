@@ -312,6 +312,8 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
     std::vector<SignalKind> kinds;
     std::vector<std::unique_ptr<Denoiser>> instances;
     std::vector<LayerSet> staged;  // per instance: its inputs, copied in before each timed call
+    // ...and the low-resolution buffer and gradient samples it reads, staged the same way.
+    std::vector<LayerSet> stagedLowres, stagedGradients;
     std::vector<double> total;
     std::vector<double>
         wall;               // the harness's clock around the calls, where a process reports its own
@@ -387,10 +389,25 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
             else
               staged.get(name) = frame.get(name);
           }
+          // The low-resolution buffer and the gradient samples too: a run reads them just
+          // decoded (warm), and a contender reading them cold here was timed against one whose
+          // inputs were all staged.
+          const auto stage = [](LayerSet& into, const LayerSet& from) {
+            for (const auto& [name, image] : from.all()) {
+              if (!into.has(name))
+                into.set(name, image);
+              else
+                into.get(name) = image;
+            }
+          };
+          c.stagedLowres.resize(c.instances.size());
+          c.stagedGradients.resize(c.instances.size());
           const bool low = c.instances[k]->wantsLowres() && !inputLowres.empty();
-          const LowresInputs lowInputs{low ? inputLowres[input] : frame, b.lowresFactor,
+          if (low) stage(c.stagedLowres[k], inputLowres[input]);
+          if (grads) stage(c.stagedGradients[k], gradients);
+          const LowresInputs lowInputs{low ? c.stagedLowres[k] : frame, b.lowresFactor,
                                        b.lowresSpp};
-          DenoiserInputs in{signal, staged, grads ? &gradients : nullptr,
+          DenoiserInputs in{signal, staged, grads ? &c.stagedGradients[k] : nullptr,
                             low ? &lowInputs : nullptr};
           c.instances[k]->clearPassStats();
           auto t0 = std::chrono::steady_clock::now();
