@@ -36,6 +36,13 @@ const Image& LayerSet::get(const std::string& name, const std::string& context) 
   return it->second;
 }
 
+void LayerSet::copyIn(const std::string& name, const Image& image) {
+  if (const auto it = layers_.find(name); it != layers_.end() && it->second.sameShape(image))
+    it->second = image;  // copy-assignment keeps the storage
+  else
+    set(name, image);
+}
+
 Image& LayerSet::get(const std::string& name, const std::string& context) {
   return const_cast<Image&>(static_cast<const LayerSet*>(this)->get(name, context));
 }

@@ -28,6 +28,9 @@ struct LayerSpec {
 class LayerSet {
  public:
   void set(const std::string& name, Image image);
+  // An owning copy of `image` as layer `name`, into the layer's own storage where it has one: a
+  // copy made every frame (a staged or sanitised input) allocates once.
+  void copyIn(const std::string& name, const Image& image);
   bool has(const std::string& name) const { return layers_.count(name) != 0; }
   // Throws an error naming the layer (and `context`, e.g. the file) when it is missing.
   const Image& get(const std::string& name, const std::string& context = "") const;

@@ -344,6 +344,8 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
       progress(printed("%s failed in setup; the others go on: %s", name.c_str(), e.what()));
     }
     c.staged.resize(c.instances.size());
+    c.stagedLowres.resize(c.instances.size());
+    c.stagedGradients.resize(c.instances.size());
     contenders.push_back(std::move(c));
   }
   Image outImage(w, h, 3), signal;
@@ -383,25 +385,14 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
           markUnwritten(outImage);
           signal = frame.get(signalName(kind));
           LayerSet& staged = c.staged[k];  // the instance's own: only what it declared
-          for (const std::string& name : c.instances[k]->requiredChannels()) {
-            if (!staged.has(name))
-              staged.set(name, frame.get(name));
-            else
-              staged.get(name) = frame.get(name);
-          }
+          for (const std::string& name : c.instances[k]->requiredChannels())
+            staged.copyIn(name, frame.get(name));
           // The low-resolution buffer and the gradient samples too: a run reads them just
           // decoded (warm), and a contender reading them cold here was timed against one whose
           // inputs were all staged.
           const auto stage = [](LayerSet& into, const LayerSet& from) {
-            for (const auto& [name, image] : from.all()) {
-              if (!into.has(name))
-                into.set(name, image);
-              else
-                into.get(name) = image;
-            }
+            for (const auto& [name, image] : from.all()) into.copyIn(name, image);
           };
-          c.stagedLowres.resize(c.instances.size());
-          c.stagedGradients.resize(c.instances.size());
           const bool low = c.instances[k]->wantsLowres() && !inputLowres.empty();
           if (low) stage(c.stagedLowres[k], inputLowres[input]);
           if (grads) stage(c.stagedGradients[k], gradients);

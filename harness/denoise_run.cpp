@@ -287,10 +287,7 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
       const Image& layer = cached.get(name);
       const Image* source = &layer;
       if (sanitize) {
-        if (sanitized.has(name))
-          sanitized.get(name) = layer;  // an owning copy: storage reused
-        else
-          sanitized.set(name, layer);
+        sanitized.copyIn(name, layer);
         replaceNonFinite(sanitized.get(name));
         source = &sanitized.get(name);
       }
