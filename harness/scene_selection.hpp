@@ -3,6 +3,7 @@
 #include <string>
 #include <vector>
 
+#include "metrics/statistics.hpp"
 #include "tracer/render.hpp"
 #include "tracer/scene.hpp"
 
@@ -34,8 +35,8 @@ std::vector<std::string> shortSequenceWarnings(const std::vector<Scene>& scenes,
 // capture's warm-up only; a warm-up of 0 is not to be lowered); the run keeps it with the scene's
 // results (scenes.<scene>.warnings, printed after the table, shown by the report).
 // shortSequenceWarning: the pre-flight line with the source, only where no frame is left (a slip
-// that would cost the run); empty otherwise.
-inline constexpr int kFewSummarisedFrames = 7;
+// that would cost the run); empty otherwise. (kFewSummarisedFrames: metrics/statistics.hpp, which
+// the gate reads too.)
 std::string shortSequenceText(int frames, int warmup, bool capture);
 std::string shortSequenceWarning(const std::string& source, int frames, int warmup, bool capture);
 

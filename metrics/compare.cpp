@@ -548,6 +548,7 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
       // lists their changes as not judged, docs/ci-dashboard.md), nor do some metrics (ms).
       bool resolvedWorse = false, resolvedBetter = false, unjudgeable = false, noTilesKept = false;
       bool sharedFrames = false;  // the runs summarise other frames: compared on those both have
+      int fewFrames = 0;  // the paired frames, where kFewSummarisedFrames or fewer: not judged
       std::optional<std::pair<MetricTiles, MetricTiles>> pairedTiles;  // baseline's, candidate's
       const json &bt = b.part("tiles"), &ct = c.part("tiles");
       if (bt.is_object() && ct.is_object() && bt.contains(t.metric) && ct.contains(t.metric)) {
@@ -599,6 +600,7 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
         if (d.ci.valid()) {
           row.changeCi = d.ci;
           row.pValue = d.pValue;
+          if (int(d.frames.size()) <= kFewSummarisedFrames) fewFrames = int(d.frames.size());
           const bool above = d.ci.lo > 0, below = d.ci.hi < 0;
           resolvedWorse = lowerIsBetter ? above : below;
           resolvedBetter = lowerIsBetter ? below : above;
@@ -633,6 +635,22 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
       const double worse = lowerIsBetter ? row.change : -row.change;
       judge(row, worse, resolvedWorse, resolvedBetter, unjudgeable, noTilesKept,
             sharedFrames && row.changeCi.valid());
+      // Resolved on too few frames: the interval is too narrow to hold its level (statistics.hpp),
+      // so neither verdict stands, and the row stays outside the rows judged together. The gate
+      // does not fail on it, and says why (a gate on 1 frame failed 6 of 8 reruns of noise alone).
+      if (fewFrames > 0) {
+        row.fewFrames = true;
+        row.pValue = kUndefined;
+        if (row.verdict == "regressed" || row.verdict == "improved") {
+          row.note += (row.note.empty() ? "" : "; ") + std::string(worse > 0 ? "worse" : "better") +
+                      " beyond tolerance, resolved on only " + std::to_string(fewFrames) +
+                      (fewFrames == 1 ? " frame" : " frames") +
+                      " after the warm-up, too few for its interval to hold its level; not judged "
+                      "(" +
+                      std::to_string(kFewSummarisedFrames + 1) + " or more frames judge it)";
+          row.verdict = "not judged";
+        }
+      }
       if (correction == Correction::Holm && pairedTiles && needsSharperP(row, cfg.replicates))
         sharper.push_back({rows.size(), [&cfg, scene, tiles = std::move(*pairedTiles)](int n) {
                              return pairedChangePValue(tiles.second, tiles.first, scene, cfg, n);

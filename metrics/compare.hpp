@@ -55,7 +55,8 @@ struct ComparisonRow {
   // (worse beyond tolerance with no interval to judge it: no tiles in a run directory, too few
   // frames; fails the gate, as passing it would judge from no data), "not judged" (beyond
   // tolerance, either way, on a run read from results.db, which keeps no tiles by design, or on an
-  // event figure no interval can judge, its changed region within fewer than 4 effective tiles:
+  // event figure no interval can judge, its changed region within fewer than 4 effective tiles,
+  // or resolved on kFewSummarisedFrames or fewer frames after the warm-up (fewFrames below):
   // the gate's verdict is unknown; `arena history` counts and lists these apart, and they do not
   // fail it), "missing" (the candidate lacks what the baseline had: fails the gate), "failed" (the
   // candidate's pair failed), "new" (only the candidate has it, or only its pair ran; a candidate
@@ -71,8 +72,12 @@ struct ComparisonRow {
   // Matched because `--match` asked (the labels name different configurations, "svgf ->
   // svgf[sigmaL=8]"), not because both ran the same.
   bool matchedByRequest = false;
-  // The two-sided p-value of "no change" (PairedChange::pValue); NaN without an interval.
+  // The two-sided p-value of "no change" (PairedChange::pValue); NaN without an interval, and on
+  // few frames.
   double pValue = kUndefined;
+  // The paired interval rests on kFewSummarisedFrames or fewer frames after the warm-up
+  // (statistics.hpp): too narrow to judge by, so a resolved change is "not judged".
+  bool fewFrames = false;
 };
 
 // How the gate counts the rows it judges together (`--correction`): Holm's step-down correction

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <set>
 #include <utility>
 
 #include "core/error.hpp"
@@ -147,6 +148,22 @@ std::vector<GateNotice> gateWarnings(const GateJudgement& j, const GateSides& si
              ", beyond which the correction can resolve no row at this confidence (its "
              "smallest threshold lies below what its replicates can show); narrow the gate "
              "with --metric or --denoisers, or judge each row alone with --correction none"});
+  std::set<std::string> fewScenes;
+  for (const ComparisonRow& r : j.rows)
+    if (r.fewFrames) fewScenes.insert(r.scene);
+  if (!fewScenes.empty()) {
+    std::string scenes;
+    for (const std::string& scene : fewScenes) scenes += (scenes.empty() ? "" : ", ") + scene;
+    out.push_back(
+        {GateWarning::FewFrames,
+         "the runs share " + std::to_string(kFewSummarisedFrames) +
+             " or fewer frames after the warm-up on " +
+             (fewScenes.size() == 1 ? "scene " : "scenes ") + scenes +
+             ": too few for the intervals to hold their level (noise alone fails such a gate), so "
+             "a change resolved there is not judged; run " +
+             std::to_string(kFewSummarisedFrames + 1) +
+             " or more frames after the warm-up to gate it"});
+  }
   return out;
 }
 

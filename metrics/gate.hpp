@@ -82,6 +82,7 @@ enum class GateWarning {
   OtherReferences,     // the scenes were measured against other references
   CandidateOlder,      // created before its baseline: the arguments swapped?
   BeyondCorrection,    // more rows than the correction can resolve any of
+  FewFrames,           // intervals on 7 or fewer frames after the warm-up: too narrow to judge by
 };
 struct GateNotice {
   GateWarning kind;

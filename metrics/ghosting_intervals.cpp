@@ -649,8 +649,8 @@ EventFigureChange eventFigureChange(const json& baseEvent, const json& candEvent
   const std::vector<double>&b = reps[0].replicates.at(figure), &c = reps[1].replicates.at(figure);
   // (A difference of rounding alone is none, as in every paired difference: statistics.hpp.)
   const std::vector<double> differences = replicateDifferences(c, b);
-  out.difference =
-      widenedInterval(differences, cfg.confidence, std::max(reps[0].widen, reps[1].widen));
+  const double widen = std::max(reps[0].widen, reps[1].widen);
+  out.difference = widenedInterval(differences, cfg.confidence, widen);
   if (!out.difference.valid()) {
     out.noInterval = "fewer than 20 replicates define the figure in both runs";
     return out;
@@ -662,7 +662,15 @@ EventFigureChange eventFigureChange(const json& baseEvent, const json& candEvent
                  hi = std::floor(out.difference.hi + 1e-9);
     if (lo <= hi) out.difference = {lo, hi};
   }
-  out.pValue = changePValue(differences);
+  // A figure that cannot be negative cannot fall by more than its baseline: the difference's
+  // lower end is cut at -baseline (the change's at -100%), as the figure's own interval is cut at
+  // 0 ("+38.7% [-17897.0%, +5442.4%]" on a lag energy before).
+  if (nonNegative(figure) && out.baseline >= 0) {
+    out.difference.lo = std::max(out.difference.lo, -out.baseline);
+    out.difference.hi = std::max(out.difference.hi, -out.baseline);
+  }
+  // The p-value counts the widened replicates, as the interval does.
+  out.pValue = changePValue(widenedReplicates(differences, widen));
   if (scale > 0) out.changeCi = {out.difference.lo / scale, out.difference.hi / scale};
   return out;
 }

@@ -276,21 +276,37 @@ Interval percentileInterval(std::vector<double> v, double confidence) {
   return {quantile(tail), quantile(1 - tail)};
 }
 
-Interval widenedInterval(const std::vector<double>& replicates, double confidence, double widen) {
-  const Interval q = percentileInterval(replicates, confidence);
-  if (!q.valid() || widen == 1.0) return q;
+namespace {
+// The median of the finite replicates, the mean of the two middle values where their count is
+// even, so that the replicates of b - a give exactly the negated interval of a - b's (one middle
+// value, the upper, put the two intervals of one pair a few units of the fourth digit apart).
+double finiteMedian(const std::vector<double>& replicates) {
   std::vector<double> finite;
   for (double v : replicates)
     if (std::isfinite(v)) finite.push_back(v);
-  // The median as the mean of the two middle values where their count is even, so that the
-  // replicates of b - a give exactly the negated interval of a - b's (one middle value, the upper,
-  // put the two intervals of one pair a few units of the fourth digit apart).
+  if (finite.empty()) return kUndefined;
   const size_t half = finite.size() / 2;
   std::nth_element(finite.begin(), finite.begin() + long(half), finite.end());
   double m = finite[half];
   if (finite.size() % 2 == 0)
     m = 0.5 * (m + *std::max_element(finite.begin(), finite.begin() + long(half)));
+  return m;
+}
+}  // namespace
+
+Interval widenedInterval(const std::vector<double>& replicates, double confidence, double widen) {
+  const Interval q = percentileInterval(replicates, confidence);
+  if (!q.valid() || widen == 1.0) return q;
+  const double m = finiteMedian(replicates);
   return {m - widen * (m - q.lo), m + widen * (q.hi - m)};
+}
+
+std::vector<double> widenedReplicates(std::vector<double> replicates, double widen) {
+  if (widen == 1.0) return replicates;
+  const double m = finiteMedian(replicates);
+  for (double& v : replicates)
+    if (std::isfinite(v)) v = m + widen * (v - m);
+  return replicates;
 }
 
 Interval meanInterval(const MetricTiles& m, const std::string& seedName,

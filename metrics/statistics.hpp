@@ -8,9 +8,10 @@
 // tiles (metrics/tiles.hpp) are resampled with replacement, because filter footprints correlate
 // neighbouring pixels. A replicate's value is the summary recomputed from the chosen frames and
 // tiles; intervals are the percentile interval of the replicates. The crossed bootstrap counts
-// frame-to-frame and tile-to-tile variation both, so it is conservative (intervals too wide rather
-// than too narrow) when content varies between tiles: a "tie" means "not resolved by this
-// sequence", never "equal".
+// frame-to-frame and tile-to-tile variation both, which errs wide where content varies between
+// tiles; it errs narrow where few frames follow the warm-up (kFewSummarisedFrames) and where one
+// error is common to every tile (a light switched: docs/statistics.md measures both). A "tie"
+// means "not resolved by this sequence", never "equal".
 //
 // Every pair of a scene is resampled with the same plan (the same frames and tiles in replicate b),
 // so differences are paired: content that is hard for every method cancels, and so does the
@@ -99,9 +100,19 @@ Interval percentileInterval(std::vector<double> replicates, double confidence);
 // The percentile interval with both half-widths scaled by `widen` about the replicates' median
 // (a small-sample correction of the spread, metrics/ghosting_intervals.hpp); widen 1 = plain.
 Interval widenedInterval(const std::vector<double>& replicates, double confidence, double widen);
+// The replicates themselves scaled by `widen` about their median (NaN kept): what a p-value of a
+// widened interval counts, so that the test and the interval say the same (an interval holding 0
+// with p < 0.05 let a corrected gate fail on what its own interval called noise).
+std::vector<double> widenedReplicates(std::vector<double> replicates, double widen);
 // The interval of one metric's summary mean.
 Interval meanInterval(const MetricTiles& m, const std::string& seedName,
                       const BootstrapConfig& cfg = {});
+
+// At most this many frames after the warm-up, the frames' variation is hardly sampled (one frame:
+// not at all, only its tiles) and the intervals are too narrow: the run keeps a warning with the
+// scene's results (harness/scene_selection.hpp), and the gate does not judge a difference resolved
+// on so few (metrics/compare.hpp): noise alone failed 6 of 8 reruns of a gate at one frame.
+inline constexpr int kFewSummarisedFrames = 7;
 
 // How near two replicate values count as one number: a difference within this fraction of the
 // larger is rounding (the tile sums are float32, about seven significant digits), and counts as

@@ -185,6 +185,46 @@ TEST(EventGate, NoiseAloneRarelyFailsTheGateAndAClearLagDoes) {
   EXPECT_GE(seen, 90);
 }
 
+// Few tiles widen an event figure's interval (the small-sample correction): its p-value must count
+// the widened replicates, or a corrected gate calls significant what its own interval holds as
+// noise ("[-0.14%, +7.43%] p 0.030"); and a lag energy cannot fall by more than 100%, where the
+// difference's interval over the baseline read "[-17897.0%, +5442.4%]".
+TEST(EventGate, AWidenedFigureChangeKeepsItsRangeAndItsPValueAgrees) {
+  // A lag a little longer, six tiles (widened by about 1.2): borderline rows, where the plain
+  // replicates gave p < 0.05 to 23 of 44 intervals holding 0.
+  int holdingZero = 0, resolved = 0;
+  for (unsigned trial = 0; trial < 60; ++trial) {
+    const EventFigureChange c = eventFigureChange(storedEvent(trial, 100 + trial, 0.7, 0.8, 6),
+                                                  storedEvent(trial, 300 + trial, 0.75, 0.8, 6),
+                                                  false, "lagEnergy", "s", BootstrapConfig{});
+    ASSERT_TRUE(c.difference.valid() && std::isfinite(c.pValue)) << c.noInterval;
+    if (c.difference.containsZero()) {
+      ++holdingZero;
+      EXPECT_GE(c.pValue, 0.05) << trial << ": [" << c.difference.lo << ", " << c.difference.hi
+                                << "]";
+    } else {
+      ++resolved;
+      EXPECT_LT(c.pValue, 0.06) << trial;
+    }
+  }
+  EXPECT_GT(holdingZero, 20);
+  EXPECT_GT(resolved, 5);
+  // Noise as large as the lag on five tiles: the difference over the baseline reached far below
+  // -100% in 32 of 60 trials.
+  int cut = 0;
+  for (unsigned trial = 0; trial < 60; ++trial) {
+    const EventFigureChange c =
+        eventFigureChange(storedEvent(trial, 100 + trial, 0.7, 0.8, 5, 0.2),
+                          storedEvent(trial, 300 + trial, 0.72, 0.8, 5, 0.2), false, "lagEnergy",
+                          "s", BootstrapConfig{});
+    ASSERT_TRUE(c.changeCi.valid()) << c.noInterval;
+    EXPECT_GE(c.changeCi.lo, -1.0) << trial;
+    EXPECT_GE(c.difference.lo, -c.baseline) << trial;
+    cut += c.difference.lo == -c.baseline;
+  }
+  EXPECT_GT(cut, 10);
+}
+
 // Thirteen rows judged together: Holm's smallest threshold, 0.05 / 13, lies below what 1000
 // replicates can show, so the resolved row is resampled more finely (4 m / alpha replicates) and
 // stays regressed; the twelve rows of noise stay unresolved or ok.

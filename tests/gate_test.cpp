@@ -23,23 +23,23 @@ using nlohmann::json;
 // A run of one pair (svgf on "s") whose relMSE is `relMse`, with the per-tile data the gate's
 // paired interval resamples (8 frames x 16 tiles around the mean, the mean the summary's).
 json gateRun(const std::string& name, const std::string& created, double relMse,
-             const json& settings = {{"warmup", 2}}, int width = 64) {
+             const json& settings = {{"warmup", 2}}, int width = 64, int frames = 8) {
   MetricTiles tiles;
-  for (int f = 2; f < 10; ++f) {
+  for (int f = 2; f < 2 + frames; ++f) {
     TileSums t;
     for (int k = 0; k < 16; ++k)
       t.sum.push_back(relMse * (1 + 0.01 * ((f + k) % 4 - 1.5))), t.count.push_back(1);
     tiles.add(f, std::move(t));
   }
   const json stat = {
-      {"mean", relMse}, {"median", relMse}, {"p5", relMse}, {"p95", relMse}, {"frames", 8}};
+      {"mean", relMse}, {"median", relMse}, {"p5", relMse}, {"p95", relMse}, {"frames", frames}};
   return {{"schema", kResultsSchemaVersion},
           {"kind", "arena-run"},
           {"name", name},
           {"created", created},
           {"environment", {{"git_commit", "abc"}}},
           {"settings", settings},
-          {"scenes", {{"s", {{"width", width}, {"height", 36}, {"frames", 10}}}}},
+          {"scenes", {{"s", {{"width", width}, {"height", 36}, {"frames", 2 + frames}}}}},
           {"pairs",
            {{{"scene", "s"},
              {"denoiser", "svgf"},
@@ -139,6 +139,40 @@ TEST(Gate, CompareReportAndHistoryJudgeEveryCaseAlike) {
     EXPECT_EQ(history["notComparable"], c.refusal == GateRefusal::None ? 0 : 1);
     EXPECT_EQ(history["warnings"].size(), warnings.size()) << history["warnings"];
   }
+}
+
+// A difference resolved on 7 or fewer frames after the warm-up is not judged: its interval is too
+// narrow to hold its level (a statistician's trial: a gate on 1 frame at 32x18 failed 6 of 8
+// reruns of noise alone, with no warning). It does not fail the gate, says so, and stays outside
+// the rows judged together; on 8 frames the same change regresses.
+TEST(Gate, ADifferenceResolvedOnFewFramesIsNotJudged) {
+  const json settings = {{"warmup", 2}};
+  for (const auto& [candidate, word] : {std::pair{0.06, "worse"}, std::pair{0.04, "better"}}) {
+    const RunResults a = test::typed(gateRun("a", "2025-01-01T00:00:00Z", 0.05, settings, 64, 3)),
+                     b = test::typed(
+                         gateRun("b", "2025-01-01T00:01:00Z", candidate, settings, 64, 3));
+    const GateJudgement j = judgeRuns(a, b, Gate{}, {});
+    EXPECT_EQ(j.outcome, GateOutcome::Pass);
+    ASSERT_EQ(j.rows.size(), 1u);
+    const ComparisonRow& r = j.rows[0];
+    EXPECT_EQ(r.verdict, "not judged") << r.note;
+    EXPECT_TRUE(r.changeCi.valid() && !r.changeCi.containsZero());
+    EXPECT_FALSE(std::isfinite(r.pValue));
+    EXPECT_NE(r.note.find(std::string(word) +
+                          " beyond tolerance, resolved on only 3 frames after the warm-up"),
+              std::string::npos)
+        << r.note;
+    const std::vector<std::string> warnings = gateWarningTexts(j, {"a", "b"}, false);
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_NE(warnings[0].find("7 or fewer frames after the warm-up on scene s"), std::string::npos)
+        << warnings[0];
+  }
+  const GateJudgement eight =
+      judgeRuns(test::typed(gateRun("a", "2025-01-01T00:00:00Z", 0.05)),
+                test::typed(gateRun("b", "2025-01-01T00:01:00Z", 0.06)), Gate{}, {});
+  EXPECT_EQ(eight.outcome, GateOutcome::Regressed);
+  EXPECT_TRUE(std::isfinite(eight.rows.at(0).pValue));
+  EXPECT_TRUE(gateWarningTexts(eight, {"a", "b"}, false).empty());
 }
 
 // Mistakes in the options are errors, before any judgement (they are not the runs' fault).

@@ -159,6 +159,28 @@ TEST(Bootstrap, AWidenedIntervalOfBMinusAIsTheNegatedIntervalOfAMinusB) {
   EXPECT_DOUBLE_EQ(w.hi, 9.5 + 2 * (plain.hi - 9.5));
 }
 
+// A p-value and an interval of one widened set of replicates agree: the event figures' changes
+// were tested on the plain replicates while their interval was widened, so a corrected gate read
+// "[-0.14%, +7.43%] p 0.030" and let more noise through than its level.
+TEST(Bootstrap, AWidenedIntervalHoldingZeroHasAPValueAboveItsLevel) {
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  std::vector<double> d(1000);
+  for (double& x : d) x = 2.2 + noise(rng);  // plain: p about 0.03, interval clear of 0
+  const double widen = 1.3;
+  ASSERT_LT(changePValue(d), 0.05);
+  ASSERT_GT(percentileInterval(d, 0.95).lo, 0.0);
+  const Interval w = widenedInterval(d, 0.95, widen);
+  ASSERT_TRUE(w.containsZero());
+  const std::vector<double> widened = widenedReplicates(d, widen);
+  EXPECT_GE(changePValue(widened), 0.05);
+  // The same interval, from the widened replicates' own percentiles.
+  const Interval again = percentileInterval(widened, 0.95);
+  EXPECT_NEAR(again.lo, w.lo, 1e-12);
+  EXPECT_NEAR(again.hi, w.hi, 1e-12);
+  EXPECT_EQ(widenedReplicates(d, 1.0), d);
+}
+
 // Two outputs alike but for rounding on 14 of 16 tiles (float32 tile sums one part in 10^9 apart,
 // every one the same way) and really different on 2: about one bootstrap replicate in eight draws
 // neither real tile, so an interval's end lies at that replicate's rounding, whose sign decided
