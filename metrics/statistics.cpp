@@ -312,6 +312,9 @@ std::vector<double> widenedReplicates(std::vector<double> replicates, double wid
 Interval meanInterval(const MetricTiles& m, const std::string& seedName,
                       const BootstrapConfig& cfg) {
   if (m.empty()) return {};
+  // One frame of a value per frame (a time, a sample count): nothing varies in any replicate, and
+  // an interval of zero width would claim a certainty nothing measured. None, as without data.
+  if (m.tileCount() <= 1 && m.frames.size() < 2) return {};
   const ResamplingPlan plan(int(m.frames.size()), std::max(cfg.grid.count(), m.tileCount()),
                             seedName, cfg);
   if (m.tileCount() != 1 && m.tileCount() != cfg.grid.count())

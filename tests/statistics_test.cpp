@@ -358,6 +358,14 @@ TEST(Summaries, NoDataIsAbsentNeverPerfect) {
   ASSERT_TRUE(s["ms"]["ci95"].is_array());
   EXPECT_LE(s["ms"]["ci95"][0].get<double>(), s["ms"]["mean"].get<double>());
   EXPECT_GE(s["ms"]["ci95"][1].get<double>(), s["ms"]["mean"].get<double>());
+
+  // One frame after the warm-up of a value per frame: a mean, and no interval (it read [v, v], a
+  // certainty from nothing that varied).
+  PairSeries one(3, 2);
+  for (int t = 0; t < 3; ++t) one.record("ms", t, 10.0 + t, {}, FrameTransform::Mean);
+  s = one.summaries("scene");
+  EXPECT_DOUBLE_EQ(s["ms"]["mean"].get<double>(), 12.0);
+  EXPECT_TRUE(s["ms"]["ci95"].is_null()) << s["ms"];
 }
 
 // A results document with one scene and the given labels' relMSE tile data.
