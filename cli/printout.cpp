@@ -653,9 +653,15 @@ void printSceneWinners(std::ostream& out, const RunResults& results) {
       if (m.label == input->label) continue;
       const bool isTied = std::find(input->tiedWith.begin(), input->tiedWith.end(), m.label) !=
                           input->tiedWith.end();
+      // Worse by the pair's own difference (relMSE: lower is better), not by rank: ranks need not
+      // be transitive, so a method resolved better than the input can rank below it.
+      bool resolvedWorse = m.rank > input->rank;
+      for (const SceneRanking::Pair& p : scene.ranking.pairs)
+        if ((p.a == m.label && p.b == input->label) || (p.b == m.label && p.a == input->label))
+          resolvedWorse = p.d.resolved() && (p.a == m.label ? p.d.diff > 0 : p.d.diff < 0);
       if (isTied)
         tied += (tied.empty() ? "" : ", ") + m.label;
-      else if (m.rank > input->rank)
+      else if (resolvedWorse)
         worse += (worse.empty() ? "" : ", ") + m.label;
     }
     if (!tied.empty()) tiedWithInput += (tiedWithInput.empty() ? "" : "; ") + name + ": " + tied;
