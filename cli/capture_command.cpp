@@ -123,10 +123,21 @@ void addCaptureCommands(CLI::App& app) {
     auto name = std::make_shared<std::string>();
     blender->add_option("source", *source, "The folder render_capture.py wrote")->required()->check(CLI::ExistingDirectory);
     blender->add_option("--out", *out, "The capture folder to write (must not exist)")->required();
+    auto viewLayer = std::make_shared<std::string>();
     blender->add_option("--name", *name, "The capture's name (default: the source folder's)");
+    blender->add_option(
+        "--view-layer", *viewLayer,
+        "The view layer to read, where the files hold several (default: the only one)");
     blender->callback([=] {
-      importBlender(*source, *out, {*name});
-      std::cout << "capture: " << *out << "\n";
+      importBlender(*source, *out, {*name, *viewLayer});
+      const CaptureDescription written = readCaptureDescription(*out);
+      std::cout << "capture: " << *out << " (view layer '"
+                << written.source.value("viewLayer", std::string()) << "')\n";
+      if (const double share = written.source.value("normalsRenormalised", 0.0); share > 0)
+        std::cout << "  normals renormalised on " << std::setprecision(3) << 100 * share
+                  << std::setprecision(6)
+                  << "% of the surface pixels (Cycles averages a pixel's samples: over an edge, "
+                     "two normals' mean is shorter than 1)\n";
       if (printValidation(*out) == CheckStatus::Fail) throw CLI::RuntimeError(1);
     });
   }

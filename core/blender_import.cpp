@@ -1,7 +1,10 @@
 #include "core/blender_import.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <set>
+#include <vector>
 
 #include "core/atomic_file.hpp"
 #include "core/capture.hpp"
@@ -18,26 +21,71 @@ namespace {
 
 std::string frameFile(int t) { return numberedFileName("frame", t, 4); }
 
-// The view layer's prefix ("ViewLayer.") of a Blender multilayer EXR: the one holding Combined.R.
-std::string layerPrefix(const fs::path& file) {
-  const std::string suffix = "Combined.R";
-  for (const std::string& c : readExrHeader(file).channels)
-    if (c.size() >= suffix.size() && c.compare(c.size() - suffix.size(), suffix.size(), suffix) == 0)
-      return c.substr(0, c.size() - suffix.size());
-  throw Error(file.string() + ": no Combined pass (channel '<view layer>.Combined.R'); is it a Blender multilayer EXR?");
+// The view layer to read ("ViewLayer"): the one named, or the only one holding Combined. A file of
+// several view layers was read as whichever sorted first (a user's "AAA_fg" override layer was
+// imported in place of "ViewLayer", silently).
+std::string viewLayer(const fs::path& file, const ExrHeader& header, const std::string& wanted) {
+  const std::string suffix = ".Combined.R";
+  std::vector<std::string> layers;
+  for (const std::string& c : header.channels)
+    if (c.size() > suffix.size() && c.compare(c.size() - suffix.size(), suffix.size(), suffix) == 0)
+      layers.push_back(c.substr(0, c.size() - suffix.size()));
+  if (layers.empty())
+    throw Error(
+        file.string() +
+        ": no Combined pass (channel '<view layer>.Combined.R'); is it a Blender multilayer "
+        "EXR?");
+  std::string names;
+  for (const std::string& l : layers) names += (names.empty() ? "'" : ", '") + l + "'";
+  if (!wanted.empty()) {
+    if (std::find(layers.begin(), layers.end(), wanted) != layers.end()) return wanted;
+    throw Error(file.string() + ": no view layer '" + wanted + "' (--view-layer); it holds " +
+                names);
+  }
+  if (layers.size() > 1)
+    throw Error(file.string() + ": " + std::to_string(layers.size()) + " view layers (" + names +
+                "); name the one to import with --view-layer");
+  return layers[0];
 }
 
-// Blender's passes of one file, by pass name ("Combined", "DiffDir", ...).
-LayerSet readPasses(const fs::path& file, const std::vector<std::pair<std::string, std::vector<std::string>>>& passes) {
-  const std::string prefix = layerPrefix(file);
+struct BlenderPass {
+  const char* name;  // in the file: "<view layer>.<name>.<channel>"
+  std::vector<std::string> channels;
+  const char* where;  // where Blender's interface enables it
+};
+
+// Blender's passes of one file, by pass name ("Combined", "DiffDir", ...). Every pass missing is
+// named at once, with where Blender enables it (EEVEE's files lack five: they were met one error at
+// a time).
+LayerSet readPasses(const fs::path& file, const std::vector<BlenderPass>& passes,
+                    const std::string& wantedLayer, std::string* layerRead = nullptr) {
+  const ExrHeader header = readExrHeader(file);
+  const std::string layer = viewLayer(file, header, wantedLayer);
+  if (layerRead) *layerRead = layer;
+  const std::set<std::string> held(header.channels.begin(), header.channels.end());
   std::vector<LayerSpec> specs;
-  for (const auto& [pass, suffixes] : passes) specs.push_back({prefix + pass, suffixes, false});
-  LayerSet read = readExr(file, specs).layers;  // names the file and the missing channel
-  LayerSet out;
-  for (const auto& [pass, suffixes] : passes) {
-    Image img = read.get(prefix + pass);
-    out.set(pass, std::move(img));
+  std::string missing;
+  int missingCount = 0;
+  for (const BlenderPass& pass : passes) {
+    const std::string name = layer + "." + pass.name;
+    bool complete = true;
+    for (const std::string& c : pass.channels) complete = complete && held.count(name + "." + c);
+    if (!complete) {
+      missing += (missing.empty() ? "" : ", ") + std::string(pass.name) + " (" + pass.where + ")";
+      ++missingCount;
+    }
+    specs.push_back({name, pass.channels, false});
   }
+  if (missingCount > 0)
+    throw Error(file.string() + ": view layer '" + layer + "' lacks " +
+                (missingCount == 1 ? "a pass" : std::to_string(missingCount) + " passes") +
+                " the capture needs: " + missing +
+                "; enable them in View Layer Properties > Passes and render with Cycles (EEVEE has "
+                "no indirect light, Vector or index passes), or render with "
+                "scripts/blender/render_capture.py, which sets them");
+  LayerSet read = readExr(file, specs).layers;
+  LayerSet out;
+  for (const BlenderPass& pass : passes) out.set(pass.name, read.get(layer + "." + pass.name));
   return out;
 }
 
@@ -53,14 +101,56 @@ Image sum(const Image& a, const Image& b) {
   return out;
 }
 
-const std::vector<std::pair<std::string, std::vector<std::string>>>& framePasses() {
-  static const std::vector<std::pair<std::string, std::vector<std::string>>> passes = {
-      {"Combined", {"R", "G", "B", "A"}}, {"DiffDir", {"R", "G", "B"}}, {"DiffInd", {"R", "G", "B"}},
-      {"DiffCol", {"R", "G", "B"}},       {"GlossDir", {"R", "G", "B"}}, {"GlossInd", {"R", "G", "B"}},
-      {"GlossCol", {"R", "G", "B"}},      {"Emit", {"R", "G", "B"}},     {"Env", {"R", "G", "B"}},
-      {"Normal", {"X", "Y", "Z"}},        {"Depth", {"Z"}},              {"Vector", {"X", "Y", "Z", "W"}},
-      {"IndexOB", {"X"}},                 {"IndexMA", {"X"}},            {"roughness", {"X"}}};
+const std::vector<BlenderPass>& framePasses() {
+  static const std::vector<BlenderPass> passes = {
+      {"Combined", {"R", "G", "B", "A"}, "Combined"},
+      {"DiffDir", {"R", "G", "B"}, "Light > Diffuse > Direct"},
+      {"DiffInd", {"R", "G", "B"}, "Light > Diffuse > Indirect"},
+      {"DiffCol", {"R", "G", "B"}, "Light > Diffuse > Color"},
+      {"GlossDir", {"R", "G", "B"}, "Light > Glossy > Direct"},
+      {"GlossInd", {"R", "G", "B"}, "Light > Glossy > Indirect"},
+      {"GlossCol", {"R", "G", "B"}, "Light > Glossy > Color"},
+      {"Emit", {"R", "G", "B"}, "Light > Other > Emission"},
+      {"Env", {"R", "G", "B"}, "Light > Other > Environment"},
+      {"Normal", {"X", "Y", "Z"}, "Data > Normal"},
+      {"Depth", {"Z"}, "Data > Z"},
+      {"Vector", {"X", "Y", "Z", "W"}, "Data > Vector, which needs motion blur off"},
+      {"IndexOB", {"X"}, "Data > Indexes > Object Index"},
+      {"IndexMA", {"X"}, "Data > Indexes > Material Index"},
+      {"roughness",
+       {"X"},
+       "Shader AOV > a Value AOV named 'roughness', which every material writes"}};
   return passes;
+}
+
+// The frame file t of a folder, or an Error saying what the folder holds (frames numbered from 1,
+// Blender's default, or a folder renamed).
+fs::path existingFrame(const fs::path& dir, int t, int frames) {
+  const fs::path file = dir / frameFile(t);
+  if (fs::exists(file)) return file;
+  throw Error(file.string() + ": file does not exist; frames are " + frameFile(0) + " to " +
+              frameFile(frames - 1) + " (numbered from 0, four digits: Blender's frame_start 0, " +
+              "as scripts/blender/render_capture.py renders them)" + exrFilesHeld(dir));
+}
+
+// A frame file beyond the `frames` cameras.json declares: a capture cut short silently otherwise.
+void refuseFramesBeyond(const fs::path& dir, int frames, const fs::path& camerasFile) {
+  std::error_code ec;
+  std::vector<std::string> beyond;
+  for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
+    const std::string n = e.path().filename().string();
+    int t = -1;
+    char rest = 0;
+    if (std::sscanf(n.c_str(), "frame_%d.ex%c", &t, &rest) == 2 && n == frameFile(t) && t >= frames)
+      beyond.push_back(n);
+  }
+  if (beyond.empty()) return;
+  std::sort(beyond.begin(), beyond.end());
+  throw Error(
+      dir.string() + ": holds " + beyond.front() +
+      (beyond.size() > 1 ? " and " + std::to_string(beyond.size() - 1) + " more" : "") +
+      " beyond the " + std::to_string(frames) + " frames " + camerasFile.string() +
+      " declares ($.frames); render cameras.json with the frames, or remove the extra files");
 }
 
 }  // namespace
@@ -143,11 +233,22 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
   // referenceSpp counts both halves' samples together.
   const int referenceSamples = halves.size() == 2 ? referenceSpp : std::max(1, referenceSpp / 2);
 
+  // Frames numbered from 1 are named as such first (their last one is also "beyond").
+  existingFrame(source / "noisy", 0, frames);
+  for (const std::string& half : halves) existingFrame(source / half, 0, frames);
+  refuseFramesBeyond(source / "noisy", frames, camerasFile);
+  for (const std::string& half : halves) refuseFramesBeyond(source / half, frames, camerasFile);
   CaptureWriter writer(out);
   double emissionResidual = 0, combinedTotal = 0;
+  // Surface pixels, and those whose normal was not of unit length (beyond 1%): Cycles averages a
+  // pixel's samples, so at more than 1 spp a pixel over an edge holds the mean of two normals,
+  // shorter than 1 (0.027 of a frame's pixels at 4 spp, 0.13 at 16: refused as not unit length).
+  // Renormalised, as a G-buffer holds one surface's normal per pixel; the share is recorded.
+  double surfacePixels = 0, renormalised = 0;
+  std::string layer = options.viewLayer;  // frame 0's, then the same in every file
   for (int t = 0; t < frames; ++t) {
-    const fs::path file = source / "noisy" / frameFile(t);
-    const LayerSet passes = readPasses(file, framePasses());
+    const fs::path file = existingFrame(source / "noisy", t, frames);
+    const LayerSet passes = readPasses(file, framePasses(), layer, &layer);
     if (passes.width() != width || passes.height() != height)
       throw Error(file.string() + ": " + std::to_string(passes.width()) + "x" + std::to_string(passes.height()) +
                   ", expected " + std::to_string(width) + "x" + std::to_string(height) + " (cameras.json)");
@@ -178,13 +279,24 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
       meshId.raw()[i] = background ? -1.0f : passes.get("IndexOB").raw()[i];
       materialId.raw()[i] = background ? -1.0f : passes.get("IndexMA").raw()[i];
     }
+    Image normal = passes.get("Normal");
+    for (size_t i = 0; i < normal.pixelCount(); ++i) {
+      if (depth.raw()[i] == 0) continue;  // the background: no surface, no normal
+      surfacePixels += 1;
+      float* n[3] = {&normal.plane(0)[i], &normal.plane(1)[i], &normal.plane(2)[i]};
+      const float length = std::sqrt(*n[0] * *n[0] + *n[1] * *n[1] + *n[2] * *n[2]);
+      // A zero or non-finite normal is kept as written: the validation names it.
+      if (!(length > 0) || !std::isfinite(length)) continue;
+      renormalised += std::abs(length - 1.0f) > 0.01f;
+      for (float* c : n) *c /= length;
+    }
     f.set("color", color);
     f.set("diffuse", diffuse);
     f.set("specular", specular);
     f.set("albedo", albedo);
     f.set("specAlbedo", specAlbedo);
     f.set("emission", std::move(emission));
-    f.set("normal", passes.get("Normal"));
+    f.set("normal", std::move(normal));
     f.set("depth", std::move(depth));
     f.set("motion", std::move(motion));
     f.set("roughness", passes.get("roughness"));
@@ -196,9 +308,8 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
     // first half for the noise floor), or the one folder there is (no noise floor).
     std::vector<Image> read;
     for (const std::string& half : halves) {
-      const fs::path halfFile = source / half / frameFile(t);
-      read.push_back(
-          rgb(readPasses(halfFile, {{"Combined", {"R", "G", "B", "A"}}}).get("Combined")));
+      const fs::path halfFile = existingFrame(source / half, t, frames);
+      read.push_back(rgb(readPasses(halfFile, {framePasses()[0]}, layer).get("Combined")));
       if (read.back().width() != width || read.back().height() != height)
         throw Error(halfFile.string() + ": " + std::to_string(read.back().width()) + "x" +
                     std::to_string(read.back().height()) + ", expected " + std::to_string(width) +
@@ -240,7 +351,10 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
         {"importer", "arena import blender"},
         // How much of the colour is neither the two lobes nor Emit + Env (transmission, volumes):
         // it is kept in `emission`, so the colour stays exact.
-        {"emissionBeyondEmitEnv", combinedTotal > 0 ? emissionResidual / combinedTotal : 0.0}}}};
+        {"emissionBeyondEmitEnv", combinedTotal > 0 ? emissionResidual / combinedTotal : 0.0},
+        {"viewLayer", layer},
+        // The share of surface pixels whose normal was renormalised (above).
+        {"normalsRenormalised", surfacePixels > 0 ? renormalised / surfacePixels : 0.0}}}};
   if (halves.empty()) description.erase("reference");
   try {
     writer.commit(description);

@@ -7,7 +7,9 @@
 //   specular    = GlossDir + GlossInd      specAlbedo = GlossCol   by their colour pass, so these
 //   emission    = Combined - albedo * diffuse - specAlbedo * specular     remodulate exactly)
 //                 (Emit + Env and whatever other lobes -- transmission, volumes -- add)
-//   normal      = Normal (world space)     depth      = Depth.Z (view depth; background -> 0)
+//   normal      = Normal (world space; renormalised: at more than 1 spp Cycles averages a pixel's
+//                 normals, shorter than 1 over an edge)
+//   depth       = Depth.Z (view depth; background -> 0)
 //   motion      = (Vector.X, -Vector.Y): Cycles' Vector.XY is the previous frame's raster position
 //                 minus this one's with y up; ours is the same offset with y down
 //   roughness   = the 'roughness' AOV the script's materials write
@@ -24,6 +26,8 @@ namespace arena {
 
 struct BlenderImportOptions {
   std::string name;  // the capture's name (default: the source folder's name)
+  // The view layer to read (--view-layer); empty: the file's only one (several are refused).
+  std::string viewLayer;
 };
 
 // Reads SOURCE (noisy/, reference_a/, reference_b/, cameras.json) and writes the capture to `out`.

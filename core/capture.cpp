@@ -21,12 +21,6 @@ namespace arena {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-namespace {
-
-// What a folder holds of EXR files, for an error about a frame file that is not there: frames
-// numbered from 1 (Blender's default) or with another width of number are the usual slip, and
-// the first names say which. "; the folder holds a, b, c, ..." or "; the folder holds no .exr
-// file".
 std::string exrFilesHeld(const fs::path& dir) {
   std::vector<std::string> exrs;
   std::error_code ec;
@@ -39,6 +33,8 @@ std::string exrFilesHeld(const fs::path& dir) {
   if (exrs.size() > 3) held += ", ... (" + std::to_string(exrs.size()) + " in all)";
   return "; the folder holds " + held;
 }
+
+namespace {
 
 // The frame layers a capture may carry (every frame layer except the viewer-facing R,G,B copy).
 std::vector<LayerSpec> captureFrameSpecs() {

@@ -70,6 +70,11 @@ bool isCapture(const std::filesystem::path& dir);
 // A capture's name or a denoiser output's key: one folder name (non-empty, no spaces or slashes,
 // not . or ..).
 bool isPlainName(const std::string& name);
+// What a folder holds of EXR files, for an error about a frame file that is not there: frames
+// numbered from 1 (Blender's default) or with another width of number are the usual slip, and
+// the first names say which. "; the folder holds a, b, c, ..." or "; the folder holds no .exr
+// file" (a folder that is not there: the same).
+std::string exrFilesHeld(const std::filesystem::path& dir);
 // Parses and checks capture.json and the first frame's and references' channel lists; every
 // error names the file and the field or channel and what was expected.
 CaptureDescription readCaptureDescription(const std::filesystem::path& dir);

@@ -16,6 +16,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <set>
@@ -2569,6 +2570,125 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
   EXPECT_FALSE(readCaptureDescription(work / "none_capture").info.hasReference);
   EXPECT_EQ(checkNamed(validate(work / "none_capture"), "reference.present").status,
             CheckStatus::Warn);
+
+  // What a Blender user trips on (a technical artist's trial). Each case edits a copy of the
+  // render's files: every channel of a file read, changed, written back.
+  const auto editFrames =
+      [&](const fs::path& dir, const std::string& folder,
+          const std::function<void(int, LayerSet&, std::vector<LayerSpec>&)>& edit) {
+        for (int t = 0; t < 5; ++t) {
+          const fs::path file = dir / folder / numberedFileName("frame", t, 4);
+          std::map<std::string, std::vector<std::string>> byLayer;
+          for (const std::string& c : readExrHeader(file).channels)
+            byLayer[c.substr(0, c.rfind('.'))].push_back(c.substr(c.rfind('.') + 1));
+          std::vector<LayerSpec> specs;
+          for (const auto& [layer, suffixes] : byLayer) specs.push_back({layer, suffixes, false});
+          LayerSet passes = readExr(file, specs).layers;
+          edit(t, passes, specs);
+          writeExr(file, passes, specs);
+        }
+      };
+  const auto copied = [&](const char* name) {
+    const fs::path dir = work / name;
+    fs::copy(work / "render", dir, fs::copy_options::recursive);
+    return dir;
+  };
+  // A second view layer (an override layer sorting first): it was imported in place of the scene's
+  // own, silently. Refused, naming both; --view-layer picks one, recorded in capture.json.
+  const fs::path twoLayers = copied("two_layers");
+  for (const char* folder : {"noisy", "reference_a", "reference_b"})
+    editFrames(twoLayers, folder, [](int, LayerSet& passes, std::vector<LayerSpec>& specs) {
+      for (LayerSpec spec : std::vector<LayerSpec>(specs)) {
+        const std::string copy = "AAA_fg" + spec.name.substr(spec.name.find('.'));
+        Image image = passes.get(spec.name);
+        for (float& v : image.raw()) v *= 0.5f;
+        passes.set(copy, std::move(image));
+        spec.name = copy;
+        specs.push_back(spec);
+      }
+    });
+  EXPECT_NE(
+      test::errorOf([&] { importBlender(twoLayers, work / "two_capture", {"two"}); })
+          .find("frame_0000.exr: 2 view layers ('AAA_fg', 'ViewLayer'); name the one to import "
+                "with --view-layer"),
+      std::string::npos);
+  EXPECT_NE(test::errorOf([&] {
+              importBlender(twoLayers, work / "two_capture", {"two", "Main"});
+            }).find("no view layer 'Main' (--view-layer); it holds 'AAA_fg', 'ViewLayer'"),
+            std::string::npos);
+  EXPECT_FALSE(fs::exists(work / "two_capture"));
+  importBlender(twoLayers, work / "two_capture", {"two", "ViewLayer"});
+  EXPECT_EQ(readCaptureDescription(work / "two_capture").source["viewLayer"], "ViewLayer");
+  {
+    const auto chosen = readSequenceForEvaluation(Sequence::open(work / "two_capture"))
+                            .frames[2]
+                            .get("color")
+                            .raw();
+    const auto own = input.frames[2].get("color").raw();
+    EXPECT_TRUE(std::equal(chosen.begin(), chosen.end(), own.begin(), own.end()));
+  }
+  // Passes missing (as EEVEE's files lack them): all named at once, with where Blender enables
+  // them.
+  const fs::path lacking = copied("lacking");
+  editFrames(lacking, "noisy", [](int, LayerSet&, std::vector<LayerSpec>& specs) {
+    std::erase_if(specs, [](const LayerSpec& l) {
+      return l.name == "ViewLayer.DiffInd" || l.name == "ViewLayer.IndexOB";
+    });
+  });
+  const std::string lacks =
+      test::errorOf([&] { importBlender(lacking, work / "lacking_capture", {"l"}); });
+  EXPECT_NE(
+      lacks.find("frame_0000.exr: view layer 'ViewLayer' lacks 2 passes the capture needs: "
+                 "DiffInd (Light > Diffuse > Indirect), IndexOB (Data > Indexes > Object Index); "
+                 "enable them in View Layer Properties > Passes and render with Cycles"),
+      std::string::npos)
+      << lacks;
+  // More than 1 spp: Cycles averages a pixel's normals, shorter than 1 over an edge (a capture at
+  // 4 spp was refused as "normals must be unit length"). Renormalised, and the share recorded.
+  const fs::path averaged = copied("averaged_normals");
+  editFrames(averaged, "noisy", [](int t, LayerSet& passes, std::vector<LayerSpec>&) {
+    if (t != 1) return;
+    Image& n = passes.get("ViewLayer.Normal");
+    for (size_t i = 0; i < n.pixelCount(); i += 4)
+      for (int c = 0; c < 3; ++c) n.plane(c)[i] *= 0.7f;
+  });
+  importBlender(averaged, work / "averaged_capture", {"averaged"});
+  EXPECT_GT(
+      readCaptureDescription(work / "averaged_capture").source["normalsRenormalised"].get<double>(),
+      0.03);
+  const EvaluationInput renormalised =
+      readSequenceForEvaluation(Sequence::open(work / "averaged_capture"));
+  const LayerSet& f1 = renormalised.frames[1];
+  double worstLength = 0;
+  for (size_t i = 0; i < f1.get("normal").pixelCount(); ++i) {
+    if (f1.get("depth").raw()[i] == 0) continue;
+    const Image& n = f1.get("normal");
+    worstLength = std::max(
+        worstLength,
+        std::abs(std::hypot(double(n.plane(0)[i]), double(n.plane(1)[i]), double(n.plane(2)[i])) -
+                 1.0));
+  }
+  EXPECT_LT(worstLength, 1e-3);  // stored as half floats
+  EXPECT_EQ(checkNamed(validate(work / "averaged_capture"), "normal.unitLength").status,
+            CheckStatus::Pass);
+  // A frame beyond those cameras.json declares was dropped silently; frames numbered from 1
+  // (Blender's default) are named as such.
+  const fs::path extra = copied("extra_frame");
+  fs::copy_file(extra / "noisy" / "frame_0004.exr", extra / "noisy" / "frame_0005.exr");
+  EXPECT_NE(test::errorOf([&] { importBlender(extra, work / "extra_capture", {"extra"}); })
+                .find("noisy: holds frame_0005.exr beyond the 5 frames " +
+                      (extra / "cameras.json").string() + " declares ($.frames)"),
+            std::string::npos);
+  const fs::path fromOne = copied("from_one");
+  for (int t = 4; t >= 0; --t)
+    fs::rename(fromOne / "noisy" / numberedFileName("frame", t, 4),
+               fromOne / "noisy" / numberedFileName("frame", t + 1, 4));
+  EXPECT_NE(test::errorOf([&] { importBlender(fromOne, work / "one_capture2", {"one2"}); })
+                .find("noisy/frame_0000.exr: file does not exist; frames are frame_0000.exr to "
+                      "frame_0004.exr (numbered from 0, four digits: Blender's frame_start 0, as "
+                      "scripts/blender/render_capture.py renders them); the folder holds "
+                      "frame_0001.exr, frame_0002.exr, frame_0003.exr, ... (5 in all)"),
+            std::string::npos);
 }
 
 }  // namespace
