@@ -206,6 +206,24 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
         }
       }
     }
+    // Cameras a capture cannot hold, said in Blender's words (the capture's reader named the
+    // converted matrix, and advised a jitter for a lens shift).
+    const std::string where = camerasFile.string() + ": $.cameras[" + std::to_string(t) + "]";
+    for (int c = 0; c < 3; ++c) {
+      const double length = std::sqrt(m[0][c] * m[0][c] + m[1][c] * m[1][c] + m[2][c] * m[2][c]);
+      if (std::abs(length - 1) > 1e-4)
+        throw Error(where + ".cameraToWorld: the camera object is scaled (its " + "XYZ"[c] +
+                    " axis has length " + std::to_string(length) +
+                    "); clear its scale to 1 (Object > Apply > Scale, or of a parent)");
+    }
+    if (std::abs(p[3][2]) < 1e-9 && std::abs(p[3][3] - 1) < 1e-9)
+      throw Error(where +
+                  ".projection: an orthographic camera; a capture needs a perspective one "
+                  "(Camera > Lens > Type: Perspective)");
+    if (std::abs(p[0][2]) > 1e-6 || std::abs(p[1][2]) > 1e-6)
+      throw Error(where + ".projection: a lens shift (P[0][2] = " + std::to_string(p[0][2]) +
+                  ", P[1][2] = " + std::to_string(p[1][2]) +
+                  "); a capture needs a centred projection: set the camera's Shift X and Y to 0");
     std::vector<double> view(16, 0.0), projection(16, 0.0);
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 3; ++c) view[size_t(c * 4 + r)] = m[c][r];  // (R^T)[r][c] = R[c][r]

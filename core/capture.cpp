@@ -225,6 +225,12 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
     if (dir.filename() == "capture.json" && fs::is_regular_file(dir))
       throw Error(dir.string() + ": give the capture's folder, " + dir.parent_path().string() +
                   ", not its capture.json");
+    // What scripts/blender/render_capture.py writes is a render to import, not a capture.
+    if (fs::exists(dir / "cameras.json") && fs::is_directory(dir / "noisy"))
+      throw Error(dir.string() +
+                  ": not a capture (no capture.json) but a Blender render; import it "
+                  "first: arena import blender " +
+                  dir.string() + " --out CAPTURE");
     throw Error(dir.string() + ": not a capture (no capture.json; docs/captures.md)");
   }
   const json doc = parseJsonFile(file.string());

@@ -115,17 +115,23 @@ void addReferenceQuality(json& results, int warmup, const std::map<std::string, 
     json q;
     if (floorFrames == 0 || bestLabel.empty() || !(best > 0)) {
       const bool hasReference = scene.value("hasReference", true);
-      q["verdict"] = name + ": reference quality unknown (" +
-                     (!hasReference        ? std::string("no reference")
-                      : noFrameAfterWarmup ? "no frame after the warm-up of " +
-                                                 std::to_string(warmup) + " to measure it on"
-                      : floorFrames == 0 && scene.value("source", "") == "capture"
-                          ? "no reference noise floor: the capture's references give no colorVar "
-                            "or colorHalf, so how "
-                            "noisy they are, and how much of each error is theirs, is not known"
-                      : floorFrames == 0 ? "no reference noise floor"
-                                         : "no real denoiser's corrected relMSE") +
-                     ")";
+      q["verdict"] =
+          name + ": reference quality unknown (" +
+          (!hasReference ? std::string("no reference")
+           // Nothing measured at all (a capture refused before any pair ran): not a
+           // missing noise floor, which it said of a capture holding colorHalf.
+           : frame == 0 && scene.value("validation", json::object()).value("status", "") == "fail"
+               ? "the capture was refused: its validation failed, and nothing was measured"
+           : frame == 0 ? "nothing was measured on it"
+           : noFrameAfterWarmup
+               ? "no frame after the warm-up of " + std::to_string(warmup) + " to measure it on"
+           : floorFrames == 0 && scene.value("source", "") == "capture"
+               ? "no reference noise floor: the capture's references give no colorVar "
+                 "or colorHalf, so how "
+                 "noisy they are, and how much of each error is theirs, is not known"
+           : floorFrames == 0 ? "no reference noise floor"
+                              : "no real denoiser's corrected relMSE") +
+          ")";
       scene["referenceQuality"] = q;
       continue;
     }

@@ -869,6 +869,14 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
                 " is off alone, its vectors or camera are, or a frame is missing before it (its "
                 "camera then steps twice as far as its vectors)";
     if (!isGiven("meshId") && !moving.empty()) detail += "; no meshId, so moving objects count too";
+    // Blender's Vector pass with motion blur on is not the frame-to-frame motion (a technical
+    // artist's capture failed with 99% of its pixels off and no hint).
+    if (m.offShare > 0.25 && m.explanation.empty() && sequence.isCapture() &&
+        sequence.capture().source.is_object() &&
+        sequence.capture().source.value("importer", "") == "arena import blender")
+      detail +=
+          "; from Blender: was motion blur on? With it, Cycles' Vector pass does not hold "
+          "the motion from one frame to the next (Render Properties > Motion Blur: off)";
     v.checks.push_back(check("motion.consistency", m.offShare, 0.05, 0.25, "share of pixels off by more than 1 px", detail));
   }
 
@@ -948,6 +956,23 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
           "emission "
           "layer given: a visible light or sky there is lost to every denoiser that remodulates "
           "the parts (they are given no emission); give the emission layer"));
+  }
+
+  // 4a. Light the importer kept in emission beyond what was emitted (Blender: Combined minus the
+  // two lobes, minus Emit and Env): volumes and transmission, lobes a capture has no signal for.
+  // A denoiser of diffuse and specular adds emission back unfiltered, noise and all (a trial's
+  // volume put 12% of the colour there, and nothing said so).
+  if (sequence.isCapture()) {
+    const nlohmann::json& source = sequence.capture().source;
+    if (source.is_object() && source.contains("emissionBeyondEmitEnv") &&
+        source["emissionBeyondEmitEnv"].is_number())
+      v.checks.push_back(check(
+          "emission.beyondEmitEnv", source["emissionBeyondEmitEnv"].get<double>(), 0.02, kSoft,
+          "share of the colour",
+          "the colour's light in emission that is neither emitted nor the sky (volumes, "
+          "transmission: lobes a capture has no signal for): a denoiser of diffuse and specular "
+          "adds it back unfiltered, its noise included (capture.json "
+          "source.emissionBeyondEmitEnv)"));
   }
 
   // 4b. Signal: a colour layer black in every frame holds no measurement (every method would

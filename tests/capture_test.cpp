@@ -2462,8 +2462,8 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
   const CheckStatus lateAfter =
       checkNamed(validate(work / "late_capture"), "reference.alignment.after").status;
   EXPECT_EQ(lateAfter, CheckStatus::Fail);
-  // A camera whose matrix is scaled (a scaled camera object): the capture's reader refuses the
-  // view it becomes, and the error says which field of cameras.json that is.
+  // A camera whose matrix is scaled (a scaled camera object): refused in Blender's words, naming
+  // cameras.json's field (the capture's reader named the view it would become).
   const fs::path scaled = work / "scaled_camera";
   fs::copy(work / "render", scaled, fs::copy_options::recursive);
   json scaledCams = parseJsonFile((scaled / "cameras.json").string());
@@ -2473,12 +2473,38 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
   std::ofstream(scaled / "cameras.json") << scaledCams.dump();
   const std::string scaledError =
       test::errorOf([&] { importBlender(scaled, work / "scaled_capture", {"scaled"}); });
-  EXPECT_NE(scaledError.find("cameras[2].view"), std::string::npos) << scaledError;
-  EXPECT_NE(scaledError.find("(capture.json is written from " + (scaled / "cameras.json").string() +
-                             ": its cameras[i].view is the inverse of cameras[i].cameraToWorld"),
-            std::string::npos)
+  EXPECT_NE(
+      scaledError.find((scaled / "cameras.json").string() +
+                       ": $.cameras[2].cameraToWorld: the camera object is scaled (its X axis "
+                       "has length 2.000000); clear its scale to 1"),
+      std::string::npos)
       << scaledError;
   EXPECT_FALSE(fs::exists(work / "scaled_capture"));
+  // A lens shift and an orthographic camera: said so (the shift was advised a "jitter", the
+  // orthographic camera read "P[3][2] = 0, expected -1").
+  for (const auto& [what, expected] :
+       {std::pair{"shift",
+                  "$.cameras[1].projection: a lens shift (P[0][2] = 0.200000, P[1][2] = "
+                  "0.000000); a capture needs a centred projection: set the camera's "
+                  "Shift X and Y to 0"},
+        std::pair{"ortho",
+                  "$.cameras[1].projection: an orthographic camera; a capture needs a "
+                  "perspective one"}}) {
+    json cams = parseJsonFile((work / "render" / "cameras.json").string());
+    json& projection = cams["cameras"][1]["projection"];
+    if (std::string(what) == "shift") {
+      projection[0][2] = 0.2;
+    } else {
+      projection[2][2] = -0.1, projection[2][3] = 0, projection[3][2] = 0, projection[3][3] = 1;
+    }
+    const fs::path dir = work / (std::string("camera_") + what);
+    fs::copy(work / "render", dir, fs::copy_options::recursive);
+    std::ofstream(dir / "cameras.json") << cams.dump();
+    const std::string error =
+        test::errorOf([&] { importBlender(dir, work / "camera_capture", {"c"}); });
+    EXPECT_NE(error.find(expected), std::string::npos) << error;
+    EXPECT_FALSE(fs::exists(work / "camera_capture"));
+  }
   // Read without our y negation, the same vectors are refused as "y flipped".
   std::vector<LayerSet> raw = input.frames;
   for (LayerSet& f : raw)
@@ -2620,10 +2646,9 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
   importBlender(twoLayers, work / "two_capture", {"two", "ViewLayer"});
   EXPECT_EQ(readCaptureDescription(work / "two_capture").source["viewLayer"], "ViewLayer");
   {
-    const auto chosen = readSequenceForEvaluation(Sequence::open(work / "two_capture"))
-                            .frames[2]
-                            .get("color")
-                            .raw();
+    // (Held: a span into a temporary's image dangles.)
+    const EvaluationInput two = readSequenceForEvaluation(Sequence::open(work / "two_capture"));
+    const auto chosen = two.frames[2].get("color").raw();
     const auto own = input.frames[2].get("color").raw();
     EXPECT_TRUE(std::equal(chosen.begin(), chosen.end(), own.begin(), own.end()));
   }
@@ -2671,6 +2696,42 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
   EXPECT_LT(worstLength, 1e-3);  // stored as half floats
   EXPECT_EQ(checkNamed(validate(work / "averaged_capture"), "normal.unitLength").status,
             CheckStatus::Pass);
+  // Light kept in emission beyond Emit and Env (a volume's, transmission's) reaches every output
+  // unfiltered: a warning above 2% of the colour.
+  EXPECT_EQ(checkNamed(v, "emission.beyondEmitEnv").status, CheckStatus::Pass)
+      << checkNamed(v, "emission.beyondEmitEnv").value;
+  const fs::path foggy = work / "foggy_capture";
+  fs::copy(work / "capture", foggy, fs::copy_options::recursive);
+  json foggyDoc = parseJsonFile((foggy / "capture.json").string());
+  foggyDoc["source"]["emissionBeyondEmitEnv"] = 0.12;
+  std::ofstream(foggy / "capture.json") << foggyDoc.dump();
+  EXPECT_EQ(checkNamed(validate(foggy), "emission.beyondEmitEnv").status, CheckStatus::Warn);
+  // The render folder given where a capture is wanted: said what to do with it.
+  EXPECT_NE(
+      test::errorOf([&] { readCaptureDescription(work / "render"); })
+          .find("not a capture (no capture.json) but a Blender render; import it first: arena "
+                "import blender " +
+                (work / "render").string() + " --out CAPTURE"),
+      std::string::npos);
+  // Motion blur on: Cycles' Vector pass holds no frame-to-frame motion (here: zero); the failure
+  // says what to look at, and a run on the refused capture says it was refused (it read "no
+  // reference noise floor" of a capture with colorHalf).
+  const fs::path blurred = copied("motion_blur");
+  editFrames(blurred, "noisy", [](int, LayerSet& passes, std::vector<LayerSpec>&) {
+    for (float& v : passes.get("ViewLayer.Vector").raw()) v = 0;
+  });
+  importBlender(blurred, work / "blurred_capture", {"blurred"});
+  const CaptureCheck blur = checkNamed(validate(work / "blurred_capture"), "motion.consistency");
+  EXPECT_EQ(blur.status, CheckStatus::Fail);
+  EXPECT_NE(blur.detail.find("from Blender: was motion blur on?"), std::string::npos)
+      << blur.detail;
+  RunConfig blurredRun = captureRun(work / "blurred_run", {}, {work / "blurred_capture"});
+  blurredRun.denoisers = {{"eaw", {}, ""}};
+  blurredRun.warmup = 1;
+  const json br = runMatrix(blurredRun);
+  EXPECT_EQ(br["scenes"]["blurred"]["referenceQuality"]["verdict"],
+            "blurred: reference quality unknown (the capture was refused: its validation failed, "
+            "and nothing was measured)");
   // A frame beyond those cameras.json declares was dropped silently; frames numbered from 1
   // (Blender's default) are named as such.
   const fs::path extra = copied("extra_frame");
