@@ -582,6 +582,12 @@ std::string oracleLayersText(const PairResult& pair) {
   return text;
 }
 
+// The run's checksum of a pair's outputs (every frame's bits), or "" where it recorded none.
+std::string outputChecksumOf(const PairResult& pair) {
+  const json& sum = pair.detail.value("outputChecksum", json());
+  return sum.is_string() ? sum.get<std::string>() : "";
+}
+
 // A method's own value of an event figure (its pairs[].ghosting or .cuts entry), NaN where none:
 // what the ablation and points.csv show, without an interval, where the figure's ranking left the
 // method out for want of one (a changed region too small to resample).
@@ -779,6 +785,11 @@ json ablationData(const RunResults& results) {
       std::map<std::string, size_t> matched;
       // scope -> "label (layers)" of each compared point that read oracle data.
       std::map<std::string, std::set<std::string>> oracles;
+      // Matches whose two outputs are those of a match already counted, bit for bit (another
+      // grid parameter without effect there): counted once, or one comparison measured twice read
+      // "matches 2, resolved 2" (a statistician's audit).
+      std::map<std::string, std::set<std::pair<std::string, std::string>>> outputsSeen;
+      std::map<std::string, size_t> repeated;
       for (const PairResult* p : pairs) {
         if (p->params.value(name, json()) != values[vi]) continue;
         json want = p->params;
@@ -786,6 +797,12 @@ json ablationData(const RunResults& results) {
         for (const PairResult* q : pairs) {
           if (q->scene != p->scene || q->params != want) continue;
           const std::string& scene = p->scene;
+          const std::string pSum = outputChecksumOf(*p), qSum = outputChecksumOf(*q);
+          if (!pSum.empty() && !qSum.empty() && !outputsSeen[scene].insert({pSum, qSum}).second) {
+            ++repeated[scene];
+            ++repeated[""];
+            break;
+          }
           ++matched[scene];
           ++matched[""];
           for (const PairResult* x : {p, q})
@@ -805,12 +822,6 @@ json ablationData(const RunResults& results) {
                         {"judged", json::object()}};
           // The two outputs the same bits on every frame (the run's checksums): every measured
           // difference is 0 with nothing to resolve, a tie that is no finding.
-          const std::string pSum = p->detail.value("outputChecksum", json()).is_string()
-                                       ? p->detail["outputChecksum"].get<std::string>()
-                                       : "",
-                            qSum = q->detail.value("outputChecksum", json()).is_string()
-                                       ? q->detail["outputChecksum"].get<std::string>()
-                                       : "";
           const bool identical = !pSum.empty() && pSum == qSum;
           if (identical) match["identicalOutputs"] = true;
           // `unjudged`: no change can show (a response neither method settled in).
@@ -948,8 +959,12 @@ json ablationData(const RunResults& results) {
         if (oracles.count(scope))
           oracle = "oracle data read by " + labelList(oracles[scope]) +
                    ", which a real-time engine would not have";
-        const std::string sceneWords =
-            scope.empty() ? caveatOfAllScenes : sceneCaveat(results, scope);
+        std::string sceneWords = scope.empty() ? caveatOfAllScenes : sceneCaveat(results, scope);
+        if (repeated.count(scope))
+          sceneWords += (sceneWords.empty() ? "" : "; ") + std::to_string(repeated[scope]) +
+                        (repeated[scope] == 1 ? " further match gave" : " further matches gave") +
+                        " the two outputs of a match counted, bit for bit (another parameter "
+                        "without effect there): counted once";
         if (const std::string caveat = sceneWords.empty() ? oracle
                                        : oracle.empty()   ? sceneWords
                                                           : sceneWords + "; " + oracle;

@@ -881,6 +881,35 @@ TEST(Report, AblationSaysWhereTwoPointsGaveIdenticalOutputs) {
       << ablationCsv(data["ablation"]);
 }
 
+// A grid parameter without effect (b here: its two values give the same bits) makes the other's
+// matches repeat one comparison: counted once, and said, not "matches 2, resolved 2" for one
+// comparison measured twice (a statistician's audit).
+TEST(Report, AblationCountsAMatchThatRepeatsAnothersOutputsOnce) {
+  json run = fixtureRun();
+  run["pairs"].push_back(
+      okPair("static", "svgf", "svgf[a=0,b=false]", {{"a", 0}, {"b", false}}, 0.05, 4.0));
+  for (json& p : run["pairs"])
+    if (p["scene"] == "static" && p["denoiser"] == "svgf") {
+      p["outputChecksum"] = p["params"]["a"] == 0 ? "0xa0" : "0xa1";
+      p["summary"]["relMse"] = summaryOf(p["params"]["a"] == 0 ? 0.05 : 0.04);
+    }
+  const json data = reportData(test::typed(run), test::freshDir("report_ablation_repeat"), nullptr);
+  int seen = 0;
+  for (const json& r : data["ablation"]["rows"]) {
+    if (r["scene"] != "static" || r["parameter"] != "a") continue;
+    ++seen;
+    EXPECT_EQ(r["matched"], 1) << r.dump();
+    EXPECT_EQ(r["judged"]["relMse"]["matches"], 1) << r.dump();
+    EXPECT_NE(r.value("caveat", "")
+                  .find("1 further match gave the two outputs of a match counted, "
+                        "bit for bit (another parameter without effect there): "
+                        "counted once"),
+              std::string::npos)
+        << r.dump();
+  }
+  EXPECT_EQ(seen, 1);
+}
+
 // A tie whose per-frame differences hold one sign on every frame after the warm-up is said so (a
 // local effect, an edge term's, can read as a tie because the interval resamples tiles); a tie
 // whose differences change sign is not, nor one over fewer than 8 frames.
