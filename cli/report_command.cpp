@@ -192,10 +192,19 @@ void addReportCommand(CLI::App& app) {
                               "give `arena history` the run directories, their results.json, to "
                               "judge them"
                         : std::string())
-                << (s.notJudgedFromDatabase > 0 && s.notJudgedFromDatabase < s.notJudged ? "; "
-                                                                                         : "")
-                << (s.notJudgedFromDatabase < s.notJudged
-                        ? std::to_string(s.notJudged - s.notJudgedFromDatabase) +
+                << (s.notJudgedFromDatabase > 0 && s.notJudgedFewFrames > 0 ? "; " : "")
+                << (s.notJudgedFewFrames > 0
+                        ? std::to_string(s.notJudgedFewFrames) +
+                              " resolved on 7 or fewer frames after the warm-up, too few for "
+                              "their intervals to hold their level"
+                        : std::string())
+                << (s.notJudgedFromDatabase + s.notJudgedFewFrames > 0 &&
+                            s.notJudgedFromDatabase + s.notJudgedFewFrames < s.notJudged
+                        ? "; "
+                        : "")
+                << (s.notJudgedFromDatabase + s.notJudgedFewFrames < s.notJudged
+                        ? std::to_string(s.notJudged - s.notJudgedFromDatabase -
+                                         s.notJudgedFewFrames) +
                               " on events no interval can judge, their changed region within "
                               "fewer than 4 effective tiles"
                         : std::string())

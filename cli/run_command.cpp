@@ -654,7 +654,9 @@ void addRunCommands(CLI::App& app) {
       } else {
         std::cout << "regressed = worse by more than the tolerance AND the paired "
                   << bc.confidence * 100 << "% interval of the change excludes zero"
-                  << (corrected == Correction::Holm
+                  << (corrected == Correction::Holm && family == 0
+                          ? std::string(" (no row has an interval to judge together)")
+                      : corrected == Correction::Holm
                           ? " AND it stays resolved among the " + std::to_string(family) +
                                 " rows judged together (Holm)"
                           : std::string(

@@ -645,8 +645,7 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
           row.note += (row.note.empty() ? "" : "; ") + std::string(worse > 0 ? "worse" : "better") +
                       " beyond tolerance, resolved on only " + std::to_string(fewFrames) +
                       (fewFrames == 1 ? " frame" : " frames") +
-                      " after the warm-up, too few for its interval to hold its level; not judged "
-                      "(" +
+                      " after the warm-up, too few for its interval to hold its level (" +
                       std::to_string(kFewSummarisedFrames + 1) + " or more frames judge it)";
           row.verdict = "not judged";
         }
@@ -906,7 +905,13 @@ GateOutcome gateOutcome(const std::vector<ComparisonRow>& rows) {
         return r.verdict == "regressed" || r.verdict == "missing" || r.verdict == "failed";
       }))
     return GateOutcome::Regressed;
-  return anyRegression(rows) ? GateOutcome::CouldNotJudge : GateOutcome::Pass;
+  // Intervals on too few frames (ComparisonRow::fewFrames) cannot tell a change from noise either
+  // way: the gate cannot pass such runs, whatever their rows read (a +303% change on one frame
+  // passed as "not judged", exit 0), as it cannot pass a change it has no interval for. Said of
+  // the runs, not of a row, so the outcome does not flip with the noise.
+  const bool fewFrames =
+      std::any_of(rows.begin(), rows.end(), [](const ComparisonRow& r) { return r.fewFrames; });
+  return anyRegression(rows) || fewFrames ? GateOutcome::CouldNotJudge : GateOutcome::Pass;
 }
 
 const char* gateOutcomeName(GateOutcome outcome) {

@@ -555,6 +555,7 @@ json historyData(std::vector<RunResults> runs, const Gate& gate) {
   json changes = json::array();
   json gated = json::object();  // the gate's tolerance per metric (0 included), from one run on
   for (const Tolerance& t : tolerances) gated[t.metric] = t.relative;
+  size_t notJudgedFewFrames = 0;
   size_t failing = 0, unresolved = 0, notJudged = 0, notJudgedFromDatabase = 0,
          notComparableRuns = 0;
   std::set<size_t> failingRuns;  // the comparisons (run i against run i - 1) that fail
@@ -628,6 +629,9 @@ json historyData(std::vector<RunResults> runs, const Gate& gate) {
       continue;
     }
     const std::vector<ComparisonRow>& rows = judged.rows;
+    // A comparison the gate cannot pass though no row fails it (runs of too few frames after the
+    // warm-up: compare exits 2) fails here too; its warning says why.
+    if (judged.outcome != GateOutcome::Pass) failingRuns.insert(i);
     for (const auto& [from, to] : matched) matchedAt[from + "=" + to].push_back(i);
     for (const ComparisonRow& row : rows) {
       if (row.verdict == "ok") continue;
@@ -651,7 +655,9 @@ json historyData(std::vector<RunResults> runs, const Gate& gate) {
         // frames, or keep no pair's events) may be worse: counted, not passed over.
         const bool worse = !((!m || m->lowerIsBetter() ? row.change : -row.change) <= 0);
         notJudged += worse;
-        notJudgedFromDatabase += worse && (!runs[i - 1].keepsTiles || !runs[i].keepsTiles);
+        const bool fromDatabase = !runs[i - 1].keepsTiles || !runs[i].keepsTiles;
+        notJudgedFromDatabase += worse && fromDatabase;
+        notJudgedFewFrames += worse && !fromDatabase && row.fewFrames;
       }
       changes.push_back(change);
     }
@@ -692,6 +698,7 @@ json historyData(std::vector<RunResults> runs, const Gate& gate) {
           {"unresolved", unresolved},
           {"notJudged", notJudged},
           {"notJudgedFromDatabase", notJudgedFromDatabase},
+          {"notJudgedFewFrames", notJudgedFewFrames},
           {"notComparable", notComparableRuns},
           {"correction", correctionName(correction)},
           {"confidence", bootstrap.confidence},
@@ -738,6 +745,7 @@ HistorySummary writeHistory(const HistoryOptions& o) {
   summary.unresolved = data["unresolved"].get<size_t>();
   summary.notJudged = data["notJudged"].get<size_t>();
   summary.notJudgedFromDatabase = data["notJudgedFromDatabase"].get<size_t>();
+  summary.notJudgedFewFrames = data["notJudgedFewFrames"].get<size_t>();
   summary.notComparable = data["notComparable"].get<size_t>();
   summary.warnings = std::move(warnings);
   for (const json& w : data["warnings"]) summary.warnings.push_back(w.get<std::string>());

@@ -63,9 +63,10 @@ struct HistorySummary {
   size_t notMadeBeforeContenders = 0;
   size_t unresolved = 0;                           // changes beyond the tolerance within noise
   // Changes in the worse direction beyond the tolerance the gate could not judge: against runs read
-  // from results.db (no tiles), and of events no interval can judge.
+  // from results.db (no tiles), resolved on too few frames, and of events no interval can judge.
   size_t notJudged = 0;
   size_t notJudgedFromDatabase = 0;
+  size_t notJudgedFewFrames = 0;  // resolved on 7 or fewer frames after the warm-up
   // Of the failing comparisons, those `arena compare` refuses (other settings, data it refuses):
   // it exits 2 there, "could not judge", not the 1 of a regression.
   size_t notComparable = 0;

@@ -391,9 +391,9 @@ TEST(CliContract, MatchedLabelsAreComparedAndGatedByEitherName) {
   fs::path dir = test::freshDir("match_labels");
   const std::string common =
       "run --scenes cornell_static --denoisers temporal --no-baselines "
-      "--resolution 8x8 --ref-spp 1 --flip none --keep-frames none --frames 5 "
+      "--resolution 8x8 --ref-spp 1 --flip none --keep-frames none --frames 10 "
       "--warmup 1 --cache " +
-      (dir / "cache").string();
+      (dir / "cache").string();  // 8 or more frames after the warm-up: a gate that can judge
   ASSERT_EQ(contract::arenaCli(common + " --out " + (dir / "a").string()).status, 0);
   ASSERT_EQ(
       contract::arenaCli(common + " --param temporal.alphaMin=0.5 --out " + (dir / "b").string())

@@ -23,6 +23,8 @@ TEST(CompareContract, RunsOfOtherSettingsAreRefusedUnlessAllowed) {
   RunConfig a = contract::tinyRun("settings_a"), b = contract::tinyRun("settings_b");
   b.cache = a.cache;
   b.warmup = 2;
+  // 8 frames or more after the warm-up, so that the gate can judge them (a pass or a fail).
+  a.render = b.render = test::tinySettings(16, 8, 10, 2);
   runMatrix(a);
   runMatrix(b);
   const RunResults ra = loadResults(a.out), rb = loadResults(b.out);
@@ -82,6 +84,7 @@ TEST(CompareContract, RunsOfOtherSettingsAreRefusedUnlessAllowed) {
   // A pair the candidate lacks has no figures: "-", not "nan".
   RunConfig d = contract::tinyRun("settings_d");
   d.cache = a.cache;
+  d.render = a.render;
   d.denoisers = {{"eaw", {}, ""}};
   runMatrix(d);
   r = contract::arenaCli("compare " + a.out.string() + " " + d.out.string());
@@ -90,7 +93,7 @@ TEST(CompareContract, RunsOfOtherSettingsAreRefusedUnlessAllowed) {
   EXPECT_EQ(r.output.find("nan"), std::string::npos) << r.output;
   // Another resolution shows per scene.
   RunConfig c = contract::tinyRun("settings_c");
-  c.render = test::tinySettings(8, 8, 3, 2);
+  c.render = test::tinySettings(8, 8, 10, 2);
   runMatrix(c);
   const std::vector<std::string> resolution = settingsDifferences(ra, loadResults(c.out));
   EXPECT_NE(std::find(resolution.begin(), resolution.end(), "scenes.cornell_static.width: 16 vs 8"),
@@ -139,6 +142,7 @@ TEST(CompareContract, RunsOfOtherSettingsAreRefusedUnlessAllowed) {
 TEST(CompareContract, ACiStepTellsARegressionFromWhatTheGateCouldNotJudge) {
   RunConfig a = contract::tinyRun("gate_a"), b = contract::tinyRun("gate_b");
   b.cache = a.cache;
+  a.render = b.render = test::tinySettings(16, 8, 10, 2);  // 8 or more frames after the warm-up
   a.denoisers = b.denoisers = {{"passthrough", {}, ""}, {"eaw", {}, ""}};
   b.revision = "mydn-4f2a9c1";  // the team's own commit of what b measured
   runMatrix(a);

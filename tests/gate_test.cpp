@@ -88,6 +88,11 @@ TEST(Gate, CompareReportAndHistoryJudgeEveryCaseAlike) {
        GateOutcome::CouldNotJudge, GateRefusal::OtherSettings, "records no settings"},
       {"a summary edited away from its tiles", before, tampered, false, GateOutcome::CouldNotJudge,
        GateRefusal::Data, ""},
+      // Intervals on 3 frames after the warm-up: too narrow to judge by, either way.
+      {"20% worse on 3 frames",
+       gateRun("before", "2025-01-01T00:00:00Z", 0.05, {{"warmup", 2}}, 64, 3),
+       gateRun("after", "2025-01-01T00:01:00Z", 0.06, {{"warmup", 2}}, 64, 3), false,
+       GateOutcome::CouldNotJudge, GateRefusal::None, "7 or fewer frames after the warm-up"},
   };
   for (const GateCase& c : cases) {
     SCOPED_TRACE(c.what);
@@ -144,7 +149,8 @@ TEST(Gate, CompareReportAndHistoryJudgeEveryCaseAlike) {
 // A difference resolved on 7 or fewer frames after the warm-up is not judged: its interval is too
 // narrow to hold its level (a statistician's trial: a gate on 1 frame at 32x18 failed 6 of 8
 // reruns of noise alone, with no warning). It does not fail the gate, says so, and stays outside
-// the rows judged together; on 8 frames the same change regresses.
+// the rows judged together, and the gate cannot judge the runs; on 8 frames the same change
+// regresses.
 TEST(Gate, ADifferenceResolvedOnFewFramesIsNotJudged) {
   const json settings = {{"warmup", 2}};
   for (const auto& [candidate, word] : {std::pair{0.06, "worse"}, std::pair{0.04, "better"}}) {
@@ -152,7 +158,9 @@ TEST(Gate, ADifferenceResolvedOnFewFramesIsNotJudged) {
                      b = test::typed(
                          gateRun("b", "2025-01-01T00:01:00Z", candidate, settings, 64, 3));
     const GateJudgement j = judgeRuns(a, b, Gate{}, {});
-    EXPECT_EQ(j.outcome, GateOutcome::Pass);
+    // The gate cannot pass such runs (a +303% change passed as "not judged", exit 0): could not
+    // judge, exit 2, whatever the rows read.
+    EXPECT_EQ(j.outcome, GateOutcome::CouldNotJudge);
     ASSERT_EQ(j.rows.size(), 1u);
     const ComparisonRow& r = j.rows[0];
     EXPECT_EQ(r.verdict, "not judged") << r.note;
