@@ -79,10 +79,11 @@ LayerSet readPasses(const fs::path& file, const std::vector<BlenderPass>& passes
   if (missingCount > 0)
     throw Error(file.string() + ": view layer '" + layer + "' lacks " +
                 (missingCount == 1 ? "a pass" : std::to_string(missingCount) + " passes") +
-                " the capture needs: " + missing +
-                "; enable them in View Layer Properties > Passes and render with Cycles (EEVEE has "
-                "no indirect light, Vector or index passes), or render with "
-                "scripts/blender/render_capture.py, which sets them");
+                " the capture needs: " + missing + "; enable " +
+                (missingCount == 1 ? "it" : "them") +
+                " in View Layer Properties > Passes and render with Cycles (EEVEE has no indirect "
+                "light, Vector or index passes; scripts/blender/render_capture.py shows every "
+                "setting)");
   LayerSet read = readExr(file, specs).layers;
   LayerSet out;
   for (const BlenderPass& pass : passes) out.set(pass.name, read.get(layer + "." + pass.name));
@@ -128,9 +129,16 @@ const std::vector<BlenderPass>& framePasses() {
 fs::path existingFrame(const fs::path& dir, int t, int frames) {
   const fs::path file = dir / frameFile(t);
   if (fs::exists(file)) return file;
+  // Numbered from 1: Blender's own frame numbers written as the file names.
+  const bool fromOne = t == 0 && fs::exists(dir / frameFile(1)) && !fs::exists(dir / frameFile(0));
   throw Error(file.string() + ": file does not exist; frames are " + frameFile(0) + " to " +
-              frameFile(frames - 1) + " (numbered from 0, four digits: Blender's frame_start 0, " +
-              "as scripts/blender/render_capture.py renders them)" + exrFilesHeld(dir));
+              frameFile(frames - 1) + " (numbered from 0, four digits" +
+              (fromOne
+                   ? "; this folder is numbered from 1, Blender's frame numbers: name the files "
+                     "from 0 whatever the scene's first frame, as "
+                     "scripts/blender/render_capture.py writes frame f as f - frame_start"
+                   : std::string()) +
+              ")" + exrFilesHeld(dir));
 }
 
 // A frame file beyond the `frames` cameras.json declares: a capture cut short silently otherwise.
@@ -214,7 +222,9 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
       if (std::abs(length - 1) > 1e-4)
         throw Error(where + ".cameraToWorld: the camera object is scaled (its " + "XYZ"[c] +
                     " axis has length " + std::to_string(length) +
-                    "); clear its scale to 1 (Object > Apply > Scale, or of a parent)");
+                    "); clear the scale of the camera and of its parents to 1 (Object > Clear > "
+                    "Scale, Alt+S: "
+                    "applying it does nothing to a camera)");
     }
     if (std::abs(p[3][2]) < 1e-9 && std::abs(p[3][3] - 1) < 1e-9)
       throw Error(where +

@@ -21,6 +21,12 @@ namespace arena {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
+std::string blenderRenderText(const fs::path& dir) {
+  if (!fs::exists(dir / "cameras.json") || !fs::is_directory(dir / "noisy")) return "";
+  return "a Blender render (cameras.json, noisy/); import it first: arena import blender " +
+         dir.string() + " --out CAPTURE";
+}
+
 std::string exrFilesHeld(const fs::path& dir) {
   std::vector<std::string> exrs;
   std::error_code ec;
@@ -225,12 +231,8 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
     if (dir.filename() == "capture.json" && fs::is_regular_file(dir))
       throw Error(dir.string() + ": give the capture's folder, " + dir.parent_path().string() +
                   ", not its capture.json");
-    // What scripts/blender/render_capture.py writes is a render to import, not a capture.
-    if (fs::exists(dir / "cameras.json") && fs::is_directory(dir / "noisy"))
-      throw Error(dir.string() +
-                  ": not a capture (no capture.json) but a Blender render; import it "
-                  "first: arena import blender " +
-                  dir.string() + " --out CAPTURE");
+    if (const std::string render = blenderRenderText(dir); !render.empty())
+      throw Error(dir.string() + ": not a capture (no capture.json) but " + render);
     throw Error(dir.string() + ": not a capture (no capture.json; docs/captures.md)");
   }
   const json doc = parseJsonFile(file.string());

@@ -237,11 +237,14 @@ Sequence Sequence::open(const fs::path& dir) {
     return s;
   }
   fs::path file = dir / "sequence.json";
-  if (!fs::exists(file))
+  if (!fs::exists(file)) {
+    if (const std::string render = blenderRenderText(dir); !render.empty())
+      throw Error(dir.string() + ": not a capture (no capture.json) but " + render);
     throw Error(
         dir.string() +
         ": neither a capture (no capture.json, docs/captures.md) nor a rendered sequence (no "
         "sequence.json)");
+  }
   Sequence s;
   s.dir_ = dir;
   s.info_ = SequenceInfo::fromJson(parseJsonFile(file.string()), file.string());

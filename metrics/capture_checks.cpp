@@ -970,9 +970,9 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
           "emission.beyondEmitEnv", source["emissionBeyondEmitEnv"].get<double>(), 0.02, kSoft,
           "share of the colour",
           "the colour's light in emission that is neither emitted nor the sky (volumes, "
-          "transmission: lobes a capture has no signal for): a denoiser of diffuse and specular "
-          "adds it back unfiltered, its noise included (capture.json "
-          "source.emissionBeyondEmitEnv)"));
+          "transmission: lobes a capture has no signal for; from Blender also a transparent film, "
+          "Film > Transparent): a denoiser of diffuse and specular adds it back unfiltered, its "
+          "noise included (capture.json source.emissionBeyondEmitEnv)"));
   }
 
   // 4b. Signal: a colour layer black in every frame holds no measurement (every method would

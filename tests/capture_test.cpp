@@ -2473,11 +2473,12 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
   std::ofstream(scaled / "cameras.json") << scaledCams.dump();
   const std::string scaledError =
       test::errorOf([&] { importBlender(scaled, work / "scaled_capture", {"scaled"}); });
-  EXPECT_NE(
-      scaledError.find((scaled / "cameras.json").string() +
-                       ": $.cameras[2].cameraToWorld: the camera object is scaled (its X axis "
-                       "has length 2.000000); clear its scale to 1"),
-      std::string::npos)
+  EXPECT_NE(scaledError.find(
+                (scaled / "cameras.json").string() +
+                ": $.cameras[2].cameraToWorld: the camera object is scaled (its X axis "
+                "has length 2.000000); clear the scale of the camera and of its parents to 1 "
+                "(Object > Clear > Scale"),
+            std::string::npos)
       << scaledError;
   EXPECT_FALSE(fs::exists(work / "scaled_capture"));
   // A lens shift and an orthographic camera: said so (the shift was advised a "jitter", the
@@ -2707,12 +2708,13 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
   std::ofstream(foggy / "capture.json") << foggyDoc.dump();
   EXPECT_EQ(checkNamed(validate(foggy), "emission.beyondEmitEnv").status, CheckStatus::Warn);
   // The render folder given where a capture is wanted: said what to do with it.
-  EXPECT_NE(
-      test::errorOf([&] { readCaptureDescription(work / "render"); })
-          .find("not a capture (no capture.json) but a Blender render; import it first: arena "
-                "import blender " +
-                (work / "render").string() + " --out CAPTURE"),
-      std::string::npos);
+  for (const std::string& error : {test::errorOf([&] { readCaptureDescription(work / "render"); }),
+                                   test::errorOf([&] { Sequence::open(work / "render"); })})
+    EXPECT_NE(error.find("not a capture (no capture.json) but a Blender render (cameras.json, "
+                         "noisy/); import it first: arena import blender " +
+                         (work / "render").string() + " --out CAPTURE"),
+              std::string::npos)
+        << error;
   // Motion blur on: Cycles' Vector pass holds no frame-to-frame motion (here: zero); the failure
   // says what to look at, and a run on the refused capture says it was refused (it read "no
   // reference noise floor" of a capture with colorHalf).
@@ -2746,9 +2748,11 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
                fromOne / "noisy" / numberedFileName("frame", t + 1, 4));
   EXPECT_NE(test::errorOf([&] { importBlender(fromOne, work / "one_capture2", {"one2"}); })
                 .find("noisy/frame_0000.exr: file does not exist; frames are frame_0000.exr to "
-                      "frame_0004.exr (numbered from 0, four digits: Blender's frame_start 0, as "
-                      "scripts/blender/render_capture.py renders them); the folder holds "
-                      "frame_0001.exr, frame_0002.exr, frame_0003.exr, ... (5 in all)"),
+                      "frame_0004.exr (numbered from 0, four digits; this folder is numbered from "
+                      "1, Blender's frame numbers: name the files from 0 whatever the scene's "
+                      "first frame, as scripts/blender/render_capture.py writes frame f as f - "
+                      "frame_start); the folder holds frame_0001.exr, frame_0002.exr, "
+                      "frame_0003.exr, ... (5 in all)"),
             std::string::npos);
 }
 
