@@ -275,9 +275,9 @@ RunStatistics analyseRun(const json& results, const BootstrapConfig& cfg) {
     pairsOfScene[p.value("scene", "")].push_back({p.value("label", ""), &p});
   }
   RunStatistics out;
-  out.method = "crossed bootstrap: moving blocks of round(n^(1/3)) frames x " +
-               std::to_string(cfg.grid.cols) + "x" + std::to_string(cfg.grid.rows) + " image tiles, " +
-               std::to_string(cfg.replicates) +
+  out.method = "crossed bootstrap: circular blocks of round(n^(1/3)) frames x " +
+               std::to_string(cfg.grid.cols) + "x" + std::to_string(cfg.grid.rows) +
+               " image tiles, " + std::to_string(cfg.replicates) +
                " replicates, percentile intervals; one plan per scene, so differences are paired";
   out.confidence = cfg.confidence;
   out.replicates = cfg.replicates;

@@ -233,12 +233,17 @@ ResamplingPlan::ResamplingPlan(int frames, int tiles, const std::string& seedNam
   // Integer draws by rejection-free modulo of 64-bit values: the bias (< 2^-50) is irrelevant here,
   // and unlike std::uniform_int_distribution the sequence is the same in every standard library.
   auto draw = [&](int n) { return int(rng() % uint64_t(n)); };
-  const int starts = frames - blockLength_ + 1;
+  // Circular blocks (Politis and Romano 1992): a block may start at any frame and wraps from the
+  // last to the first, so every frame is drawn equally often. Blocks that stopped at the end drew
+  // the first and last frames a third as often as the others (block length 3): the replicates'
+  // mean left the point estimate, 2.9% below it on a temporal filter still converging, and the
+  // percentile interval with it (a statistician's audit).
   for (int b = 0; b < cfg.replicates; ++b) {
     std::vector<int> rows;
     while (int(rows.size()) < frames) {
-      const int s = draw(starts);
-      for (int k = 0; k < blockLength_ && int(rows.size()) < frames; ++k) rows.push_back(s + k);
+      const int s = draw(frames);
+      for (int k = 0; k < blockLength_ && int(rows.size()) < frames; ++k)
+        rows.push_back((s + k) % frames);
     }
     std::vector<int> picks(static_cast<size_t>(tiles));
     for (int& p : picks) p = draw(tiles);

@@ -2,9 +2,11 @@
 // Uncertainty of every summary (docs/metrics.md, "Uncertainty"): 95% intervals, paired
 // differences between methods and ranks with ties.
 //
-// Method: a crossed ("pigeonhole", Owen 2007) bootstrap. Frames are resampled in moving blocks of
-// consecutive frames (block length round(n^(1/3)), the usual rate for the moving-block bootstrap,
-// Künsch 1989), because errors persist through a denoiser's history; independently, the image's
+// Method: a crossed ("pigeonhole", Owen 2007) bootstrap. Frames are resampled in circular blocks
+// of consecutive frames (block length round(n^(1/3)), the usual rate for the moving-block
+// bootstrap, Künsch 1989; wrapping from the last frame to the first, Politis and Romano 1992, so
+// that every frame is drawn equally often), because errors persist through a denoiser's history;
+// independently, the image's
 // tiles (metrics/tiles.hpp) are resampled with replacement, because filter footprints correlate
 // neighbouring pixels. A replicate's value is the summary recomputed from the chosen frames and
 // tiles; intervals are the percentile interval of the replicates. The crossed bootstrap counts

@@ -156,7 +156,10 @@ TEST(Evaluation, RunResultsAreBitIdenticalToTheHarnessBeforeTheStage) {
   // a - b's negated (every event-window interval moved, by 7.3e-4 of itself at most; the two
   // event rankings' hashes moved; no verdict of the default study moved, 8352 fields compared
   // after `arena merge runs/study` with both builds), and when intervals wrote a -0 as 0 (a
-  // difference of 0 negated read "[-0, 0]": only light_switch's events hash moved, no number).
+  // difference of 0 negated read "[-0, 0]": only light_switch's events hash moved, no number),
+  // and when frames were resampled in circular blocks, every frame drawn equally often (every
+  // interval and paired difference moved, 505 values and hashes, and statistics.method's text; no
+  // rank, tie or resolved difference moved).
   const std::string file = std::string(ARENA_TEST_DATA) + "/evaluation_golden.json";
   const json now = test::goldenPart(
       withoutNewMetrics(runMatrix(test::goldenRunConfig(test::freshDir("golden_run"), test::freshDir("golden_cache")))));
