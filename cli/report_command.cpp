@@ -194,8 +194,9 @@ void addReportCommand(CLI::App& app) {
                         : std::string())
                 << (s.notJudgedFromDatabase > 0 && s.notJudgedFewFrames > 0 ? "; " : "")
                 << (s.notJudgedFewFrames > 0
-                        ? std::to_string(s.notJudgedFewFrames) +
-                              " resolved on 7 or fewer frames after the warm-up, too few for "
+                        ? std::to_string(s.notJudgedFewFrames) + " resolved on " +
+                              std::to_string(kFewSummarisedFrames) +
+                              " or fewer frames after the warm-up, too few for "
                               "their intervals to hold their level"
                         : std::string())
                 << (s.notJudgedFromDatabase + s.notJudgedFewFrames > 0 &&

@@ -24,7 +24,8 @@ std::string frameFile(int t) { return numberedFileName("frame", t, 4); }
 // The view layer to read ("ViewLayer"): the one named, or the only one holding Combined. A file of
 // several view layers was read as whichever sorted first (a user's "AAA_fg" override layer was
 // imported in place of "ViewLayer", silently).
-std::string viewLayer(const fs::path& file, const ExrHeader& header, const std::string& wanted) {
+std::string viewLayer(const fs::path& file, const ExrHeader& header, const std::string& wanted,
+                      const std::string& wantedFrom) {
   const std::string suffix = ".Combined.R";
   std::vector<std::string> layers;
   for (const std::string& c : header.channels)
@@ -39,7 +40,7 @@ std::string viewLayer(const fs::path& file, const ExrHeader& header, const std::
   for (const std::string& l : layers) names += (names.empty() ? "'" : ", '") + l + "'";
   if (!wanted.empty()) {
     if (std::find(layers.begin(), layers.end(), wanted) != layers.end()) return wanted;
-    throw Error(file.string() + ": no view layer '" + wanted + "' (--view-layer); it holds " +
+    throw Error(file.string() + ": no view layer '" + wanted + "' (" + wantedFrom + "); it holds " +
                 names);
   }
   if (layers.size() > 1)
@@ -56,11 +57,13 @@ struct BlenderPass {
 
 // Blender's passes of one file, by pass name ("Combined", "DiffDir", ...). Every pass missing is
 // named at once, with where Blender enables it (EEVEE's files lack five: they were met one error at
-// a time).
+// a time); a pass only partly there names the channels it lacks. `wantedFrom`: where the layer's
+// name came from (the option, or the first frame), for the error where a file lacks it.
 LayerSet readPasses(const fs::path& file, const std::vector<BlenderPass>& passes,
-                    const std::string& wantedLayer, std::string* layerRead = nullptr) {
+                    const std::string& wantedLayer, const std::string& wantedFrom,
+                    std::string* layerRead = nullptr) {
   const ExrHeader header = readExrHeader(file);
-  const std::string layer = viewLayer(file, header, wantedLayer);
+  const std::string layer = viewLayer(file, header, wantedLayer, wantedFrom);
   if (layerRead) *layerRead = layer;
   const std::set<std::string> held(header.channels.begin(), header.channels.end());
   std::vector<LayerSpec> specs;
@@ -68,10 +71,17 @@ LayerSet readPasses(const fs::path& file, const std::vector<BlenderPass>& passes
   int missingCount = 0;
   for (const BlenderPass& pass : passes) {
     const std::string name = layer + "." + pass.name;
-    bool complete = true;
-    for (const std::string& c : pass.channels) complete = complete && held.count(name + "." + c);
-    if (!complete) {
-      missing += (missing.empty() ? "" : ", ") + std::string(pass.name) + " (" + pass.where + ")";
+    std::string lacking;
+    size_t lacked = 0;
+    for (const std::string& c : pass.channels)
+      if (!held.count(name + "." + c)) lacking += (lacked++ ? ", " : "") + c;
+    if (lacked > 0) {
+      missing +=
+          (missing.empty() ? "" : ", ") + std::string(pass.name) + " (" +
+          (lacked == pass.channels.size()
+               ? std::string(pass.where)
+               : "its channel" + std::string(lacked > 1 ? "s " : " ") + lacking + " missing") +
+          ")";
       ++missingCount;
     }
     specs.push_back({name, pass.channels, false});
@@ -90,7 +100,7 @@ LayerSet readPasses(const fs::path& file, const std::vector<BlenderPass>& passes
   return out;
 }
 
-Image rgb(const Image& rgba) {  // Combined has RGBA; the capture's colour is RGB
+Image rgb(const Image& rgba) {  // the capture's colour: Combined's R, G and B
   Image out(rgba.width(), rgba.height(), 3);
   for (int c = 0; c < 3; ++c) std::copy(rgba.plane(c), rgba.plane(c) + rgba.pixelCount(), out.plane(c));
   return out;
@@ -104,7 +114,7 @@ Image sum(const Image& a, const Image& b) {
 
 const std::vector<BlenderPass>& framePasses() {
   static const std::vector<BlenderPass> passes = {
-      {"Combined", {"R", "G", "B", "A"}, "Combined"},
+      {"Combined", {"R", "G", "B"}, "Combined"},  // (its alpha, where written, is not read)
       {"DiffDir", {"R", "G", "B"}, "Light > Diffuse > Direct"},
       {"DiffInd", {"R", "G", "B"}, "Light > Diffuse > Indirect"},
       {"DiffCol", {"R", "G", "B"}, "Light > Diffuse > Color"},
@@ -274,9 +284,11 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
   // Renormalised, as a G-buffer holds one surface's normal per pixel; the share is recorded.
   double surfacePixels = 0, renormalised = 0;
   std::string layer = options.viewLayer;  // frame 0's, then the same in every file
+  std::string layerFrom = "--view-layer";
   for (int t = 0; t < frames; ++t) {
     const fs::path file = existingFrame(source / "noisy", t, frames);
-    const LayerSet passes = readPasses(file, framePasses(), layer, &layer);
+    const LayerSet passes = readPasses(file, framePasses(), layer, layerFrom, &layer);
+    if (t == 0 && options.viewLayer.empty()) layerFrom = "the one " + file.string() + " holds";
     if (passes.width() != width || passes.height() != height)
       throw Error(file.string() + ": " + std::to_string(passes.width()) + "x" + std::to_string(passes.height()) +
                   ", expected " + std::to_string(width) + "x" + std::to_string(height) + " (cameras.json)");
@@ -337,7 +349,8 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
     std::vector<Image> read;
     for (const std::string& half : halves) {
       const fs::path halfFile = existingFrame(source / half, t, frames);
-      read.push_back(rgb(readPasses(halfFile, {framePasses()[0]}, layer).get("Combined")));
+      read.push_back(
+          rgb(readPasses(halfFile, {framePasses()[0]}, layer, layerFrom).get("Combined")));
       if (read.back().width() != width || read.back().height() != height)
         throw Error(halfFile.string() + ": " + std::to_string(read.back().width()) + "x" +
                     std::to_string(read.back().height()) + ", expected " + std::to_string(width) +

@@ -23,7 +23,9 @@ using nlohmann::json;
 
 std::string blenderRenderText(const fs::path& dir) {
   if (!fs::exists(dir / "cameras.json") || !fs::is_directory(dir / "noisy")) return "";
-  return "a Blender render (cameras.json, noisy/); import it first: arena import blender " +
+  return dir.string() +
+         ": not a capture (no capture.json) but a Blender render (cameras.json, noisy/); import it "
+         "first: arena import blender " +
          dir.string() + " --out CAPTURE";
 }
 
@@ -231,8 +233,7 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
     if (dir.filename() == "capture.json" && fs::is_regular_file(dir))
       throw Error(dir.string() + ": give the capture's folder, " + dir.parent_path().string() +
                   ", not its capture.json");
-    if (const std::string render = blenderRenderText(dir); !render.empty())
-      throw Error(dir.string() + ": not a capture (no capture.json) but " + render);
+    if (const std::string render = blenderRenderText(dir); !render.empty()) throw Error(render);
     throw Error(dir.string() + ": not a capture (no capture.json; docs/captures.md)");
   }
   const json doc = parseJsonFile(file.string());

@@ -71,7 +71,8 @@ bool isCapture(const std::filesystem::path& dir);
 // not . or ..).
 bool isPlainName(const std::string& name);
 // Where `dir` is what Blender's render script writes (cameras.json and noisy/), not a capture:
-// "a Blender render (...); import it first: arena import blender DIR --out CAPTURE"; else "".
+// "DIR: not a capture (...) but a Blender render (...); import it first: arena import blender DIR
+// --out CAPTURE"; else "".
 std::string blenderRenderText(const std::filesystem::path& dir);
 // What a folder holds of EXR files, for an error about a frame file that is not there: frames
 // numbered from 1 (Blender's default) or with another width of number are the usual slip, and

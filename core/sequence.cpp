@@ -238,8 +238,7 @@ Sequence Sequence::open(const fs::path& dir) {
   }
   fs::path file = dir / "sequence.json";
   if (!fs::exists(file)) {
-    if (const std::string render = blenderRenderText(dir); !render.empty())
-      throw Error(dir.string() + ": not a capture (no capture.json) but " + render);
+    if (const std::string render = blenderRenderText(dir); !render.empty()) throw Error(render);
     throw Error(
         dir.string() +
         ": neither a capture (no capture.json, docs/captures.md) nor a rendered sequence (no "

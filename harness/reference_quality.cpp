@@ -120,7 +120,8 @@ void addReferenceQuality(json& results, int warmup, const std::map<std::string, 
           (!hasReference ? std::string("no reference")
            // Nothing measured at all (a capture refused before any pair ran): not a
            // missing noise floor, which it said of a capture holding colorHalf.
-           : frame == 0 && scene.value("validation", json::object()).value("status", "") == "fail"
+           : frame == 0 && scene.contains("validation") && scene["validation"].is_object() &&
+                   scene["validation"].value("status", "") == "fail"
                ? "the capture was refused: its validation failed, and nothing was measured"
            : frame == 0 ? "nothing was measured on it"
            : noFrameAfterWarmup

@@ -975,6 +975,19 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
           "noise included (capture.json source.emissionBeyondEmitEnv)"));
   }
 
+  // The share of surface normals the Blender importer renormalised: averaging over edges at more
+  // than 1 spp explains a few percent to a sixth (0.027 at 4 spp, 0.15 at 16); most of the frame
+  // means a pass that is no unit normal at all, which the renormalising would otherwise hide.
+  if (sequence.isCapture() && sequence.capture().source.is_object() &&
+      sequence.capture().source.contains("normalsRenormalised") &&
+      sequence.capture().source["normalsRenormalised"].is_number())
+    v.checks.push_back(check(
+        "normal.renormalised", sequence.capture().source["normalsRenormalised"].get<double>(), 0.5,
+        kSoft, "share of surface pixels",
+        "normals the importer renormalised (more than 1% off unit length); an edge's average at "
+        "more than 1 spp explains a few percent, most of the frame a Normal pass that holds no "
+        "unit normals (capture.json source.normalsRenormalised)"));
+
   // 4b. Signal: a colour layer black in every frame holds no measurement (every method would
   // score a flawless, flicker-free black, or tie at relMSE 1); a few black frames (a fade) warn.
   {

@@ -160,7 +160,8 @@ std::vector<GateNotice> gateWarnings(const GateJudgement& j, const GateSides& si
              " or fewer frames after the warm-up on " +
              (fewScenes.size() == 1 ? "scene " : "scenes ") + scenes +
              ": too few for the intervals to hold their level (noise alone fails such a gate), so "
-             "a change resolved there is not judged and the gate cannot pass the runs (could "
+             "a summary metric's change resolved there is not judged and the gate cannot pass the "
+             "runs (could "
              "not judge, exit 2, unless a row fails it); run " +
              std::to_string(kFewSummarisedFrames + 1) +
              " or more frames after the warm-up to gate them"});

@@ -2669,6 +2669,43 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
                  "enable them in View Layer Properties > Passes and render with Cycles"),
       std::string::npos)
       << lacks;
+  // A pass only partly there names the channels it lacks; Combined's alpha is not read (an RGB
+  // output imports). A reference half whose view layer is not the frames' says where the name
+  // came from (it named --view-layer, which was not given).
+  const auto keepChannels = [](std::vector<std::string> kept) {
+    return [kept](int, LayerSet& passes, std::vector<LayerSpec>& specs) {
+      for (LayerSpec& l : specs) {
+        if (l.name != "ViewLayer.Combined") continue;
+        const Image& all = passes.get(l.name);
+        Image fewer(all.width(), all.height(), int(kept.size()));
+        for (int c = 0; c < int(kept.size()); ++c)
+          std::copy(all.plane(c), all.plane(c) + all.pixelCount(), fewer.plane(c));
+        passes.set(l.name, std::move(fewer));
+        l = {l.name, kept, false};
+      }
+    };
+  };
+  const fs::path noAlpha = copied("no_alpha");
+  editFrames(noAlpha, "noisy", keepChannels({"R", "G", "B"}));
+  importBlender(noAlpha, work / "no_alpha_capture", {"no_alpha"});
+  editFrames(noAlpha, "noisy", keepChannels({"R", "G"}));
+  EXPECT_NE(test::errorOf([&] {
+              importBlender(noAlpha, work / "no_blue_capture", {"nb"});
+            }).find("lacks a pass the capture needs: Combined (its channel B missing)"),
+            std::string::npos);
+  const fs::path otherLayer = copied("other_layer");
+  editFrames(otherLayer, "reference_b", [](int, LayerSet& passes, std::vector<LayerSpec>& specs) {
+    for (LayerSpec& l : specs) {
+      const std::string renamed = "Other" + l.name.substr(l.name.find('.'));
+      passes.set(renamed, Image(passes.get(l.name)));
+      l.name = renamed;
+    }
+  });
+  EXPECT_NE(
+      test::errorOf([&] { importBlender(otherLayer, work / "other_capture", {"o"}); })
+          .find("reference_b/frame_0000.exr: no view layer 'ViewLayer' (the one " +
+                (otherLayer / "noisy" / "frame_0000.exr").string() + " holds); it holds 'Other'"),
+      std::string::npos);
   // More than 1 spp: Cycles averages a pixel's normals, shorter than 1 over an edge (a capture at
   // 4 spp was refused as "normals must be unit length"). Renormalised, and the share recorded.
   const fs::path averaged = copied("averaged_normals");
@@ -2697,6 +2734,17 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
   EXPECT_LT(worstLength, 1e-3);  // stored as half floats
   EXPECT_EQ(checkNamed(validate(work / "averaged_capture"), "normal.unitLength").status,
             CheckStatus::Pass);
+  // A quarter of the pixels renormalised passes (edges at more than 1 spp); a pass of no unit
+  // normals at all, renormalised everywhere, warns (the renormalising would hide it).
+  EXPECT_EQ(checkNamed(validate(work / "averaged_capture"), "normal.renormalised").status,
+            CheckStatus::Pass);
+  const fs::path unnormal = copied("unnormal");
+  editFrames(unnormal, "noisy", [](int, LayerSet& passes, std::vector<LayerSpec>&) {
+    for (float& v : passes.get("ViewLayer.Normal").raw()) v *= 3.0f;
+  });
+  importBlender(unnormal, work / "unnormal_capture", {"unnormal"});
+  EXPECT_EQ(checkNamed(validate(work / "unnormal_capture"), "normal.renormalised").status,
+            CheckStatus::Warn);
   // Light kept in emission beyond Emit and Env (a volume's, transmission's) reaches every output
   // unfiltered: a warning above 2% of the colour.
   EXPECT_EQ(checkNamed(v, "emission.beyondEmitEnv").status, CheckStatus::Pass)

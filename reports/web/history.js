@@ -84,7 +84,12 @@
   function renderFlags() {
     const box = $('flags');
     const parts = [];
+    // Comparisons that fail though no row does: runs sharing too few frames after the warm-up,
+    // which `arena compare` cannot judge (exit 2); the warnings above name them.
+    const failingWithoutRows = (H.failingComparisons ?? 0) - new Set(flags.map((f) => f.run)).size;
     if (flags.length) parts.push(changeTable(flags, 'flags-table'));
+    if (failingWithoutRows > 0) parts.push(el('p', { class: 'failures', text: `${failingWithoutRows} comparison(s) the gate cannot pass though no row fails it: their runs share 7 or fewer frames after the warm-up, too few for the intervals to judge by (\`arena compare\` could not judge them, exit 2; the warnings above say which).` }));
+    if (flags.length || failingWithoutRows > 0) { /* said above */ }
     else if (notJudged.length) parts.push(el('p', { class: 'empty', text: 'No run failed the gate where it could judge; the changes below were not judged.' }));
     else if (H.runs.length < 2) parts.push(el('p', { class: 'empty', text: 'One run: nothing was compared, so nothing could fail the gate.' }));
     else parts.push(el('p', { class: 'empty', text: 'No run would have failed the gate.' }));

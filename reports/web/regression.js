@@ -98,7 +98,9 @@
                  text: `\`arena compare\` would refuse these runs (exit 2): ${R.refused}.`
                }) :
                            el('b', {
-                             class: R.anyRegression ? 'worse' : 'best',
+                             // Could not judge is no pass, though no row fails (runs of too
+                             // few frames after the warm-up).
+                             class: R.anyRegression || R.gate === 'could not judge' ? 'worse' : 'best',
                              text: R.gate === 'could not judge' ?
                                  '`arena compare` could not judge these runs (exit 2).' :
                                  R.anyRegression ? '`arena compare` would fail (exit 1).' :
@@ -116,7 +118,7 @@
                   A.fmt(100 * (R.confidence ?? 0.95))}% interval of that change excludes zero${
                   (R.correction ?? 'holm') === 'holm' ?
                       `, and it stays resolved among the ${R.rowsJudgedTogether ?? 'many'} rows judged together (Holm's correction: among many rows, some intervals exclude zero by noise alone; such a row is unresolved, and its note says so)` :
-                      ' (each row alone: --correction none)'} (beyond tolerance within the noise: unresolved; with no interval to judge it: unverified, where the gate could not judge and fails, exit 2; not judged where no interval can exist, an event whose changed region lies within fewer than 4 effective tiles, which does not fail it).`
+                      ' (each row alone: --correction none)'} (beyond tolerance within the noise: unresolved; with no interval to judge it: unverified, where the gate could not judge and fails, exit 2; not judged where no interval can exist, an event whose changed region lies within fewer than 4 effective tiles, which does not fail it, or where a change was resolved on 7 or fewer frames after the warm-up, too few for its interval to hold its level, where the gate cannot pass the runs, exit 2).`
             }),
             el('div', {class: 'controls'}, el('label', {}, 'Show ', filter)), tableBox]
             .filter(Boolean));
