@@ -907,6 +907,22 @@ test('history dashboard: 50 runs, the regressing one is marked, and the page sta
   assert.doesNotMatch(await db.locator('#flags').innerText(), /No run would have failed/);
   assert.match(await db.locator('#history-info').innerText(), /0 of 49 comparison\(s\) fail the gate \(0 row\(s\)\), 1 change\(s\) beyond the tolerance not judged/);
   await db.close();
+
+  // A comparison the gate cannot pass though no row fails it (runs sharing 7 or fewer frames after
+  // the warm-up: compare exits 2): said, never "no run would have failed the gate".
+  const fewOut = path.join(work, 'history-few-frames');
+  fs.cpSync(out, fewOut, { recursive: true });
+  const fewFile = path.join(fewOut, 'history-data.js');
+  const few = JSON.parse(fs.readFileSync(fewFile, 'utf8').replace(/^[^]*?window\.ARENA_HISTORY = /, '').replace(/;\s*$/, ''));
+  few.changes = few.changes.filter((c) => !c.fails);
+  Object.assign(few, { failing: 0, failingComparisons: 1, notJudged: 0 });
+  fs.writeFileSync(fewFile, `window.ARENA_HISTORY = ${JSON.stringify(few)};\n`);
+  const fp = await context.newPage();
+  await fp.goto(pathToFileURL(path.join(fewOut, 'index.html')).href);
+  await fp.waitForSelector('body[data-ready]', { timeout: 30000 });
+  assert.match(await fp.locator('#flags').innerText(), /1 comparison\(s\) the gate cannot pass though no row fails it/);
+  assert.doesNotMatch(await fp.locator('#flags').innerText(), /No run would have failed|No run failed the gate where it could judge/);
+  await fp.close();
 });
 
 test('history --match: a contender relabelled from run 40 on stays one series, named both ways', async () => {
