@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <optional>
 #include <set>
 #include <span>
 
@@ -958,32 +959,32 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
           "the parts (they are given no emission); give the emission layer"));
   }
 
-  // 4a. Light the importer kept in emission beyond what was emitted (Blender: Combined minus the
-  // two lobes, minus Emit and Env): volumes and transmission, lobes a capture has no signal for.
-  // A denoiser of diffuse and specular adds emission back unfiltered, noise and all (a trial's
-  // volume put 12% of the colour there, and nothing said so).
-  if (sequence.isCapture()) {
+  // 4a. The importer's own figures, where capture.json's source records them (arena import
+  // blender): each a share the import could not help but compute, checked here.
+  const auto sourceFigure = [&](const char* key) -> std::optional<double> {
+    if (!sequence.isCapture()) return std::nullopt;
     const nlohmann::json& source = sequence.capture().source;
-    if (source.is_object() && source.contains("emissionBeyondEmitEnv") &&
-        source["emissionBeyondEmitEnv"].is_number())
-      v.checks.push_back(check(
-          "emission.beyondEmitEnv", source["emissionBeyondEmitEnv"].get<double>(), 0.02, kSoft,
-          "share of the colour",
-          "the colour's light in emission that is neither emitted nor the sky (volumes, "
-          "transmission: lobes a capture has no signal for; from Blender also a transparent film, "
-          "Film > Transparent): a denoiser of diffuse and specular adds it back unfiltered, its "
-          "noise included (capture.json source.emissionBeyondEmitEnv)"));
-  }
-
-  // The share of surface normals the Blender importer renormalised: averaging over edges at more
-  // than 1 spp explains a few percent to a sixth (0.027 at 4 spp, 0.15 at 16); most of the frame
-  // means a pass that is no unit normal at all, which the renormalising would otherwise hide.
-  if (sequence.isCapture() && sequence.capture().source.is_object() &&
-      sequence.capture().source.contains("normalsRenormalised") &&
-      sequence.capture().source["normalsRenormalised"].is_number())
+    if (!source.is_object() || !source.contains(key) || !source[key].is_number())
+      return std::nullopt;
+    return source[key].get<double>();
+  };
+  // Light kept in emission beyond what was emitted (Blender: Combined minus the two lobes, minus
+  // Emit and Env): volumes and transmission, lobes a capture has no signal for. A denoiser of
+  // diffuse and specular adds emission back unfiltered, noise and all (a trial's volume put 12% of
+  // the colour there, and nothing said so).
+  if (const auto share = sourceFigure("emissionBeyondEmitEnv"))
     v.checks.push_back(check(
-        "normal.renormalised", sequence.capture().source["normalsRenormalised"].get<double>(), 0.5,
-        kSoft, "share of surface pixels",
+        "emission.beyondEmitEnv", *share, 0.02, kSoft, "share of the colour",
+        "the colour's light in emission that is neither emitted nor the sky (volumes, "
+        "transmission: lobes a capture has no signal for; from Blender also a transparent film, "
+        "Film > Transparent): a denoiser of diffuse and specular adds it back unfiltered, its "
+        "noise included (capture.json source.emissionBeyondEmitEnv)"));
+  // The surface normals the importer renormalised: averaging over edges at more than 1 spp
+  // explains a few percent to a sixth (0.027 at 4 spp, 0.15 at 16); most of the frame means a pass
+  // that is no unit normal at all, which the renormalising would otherwise hide.
+  if (const auto share = sourceFigure("normalsRenormalised"))
+    v.checks.push_back(check(
+        "normal.renormalised", *share, 0.5, kSoft, "share of surface pixels",
         "normals the importer renormalised (more than 1% off unit length); an edge's average at "
         "more than 1 spp explains a few percent, most of the frame a Normal pass that holds no "
         "unit normals (capture.json source.normalsRenormalised)"));
