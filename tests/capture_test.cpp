@@ -2547,23 +2547,36 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
   EXPECT_EQ(r["scenes"]["blender_room"]["validation"]["status"],
             v.status() == CheckStatus::Warn ? "warn" : "pass");
 
+  // Copies of the render whose files a case edits: every channel of a file read, changed, written
+  // back.
+  const auto editFrames =
+      [&](const fs::path& dir, const std::string& folder,
+          const std::function<void(int, LayerSet&, std::vector<LayerSpec>&)>& edit) {
+        for (int t = 0; t < 5; ++t) {
+          const fs::path file = dir / folder / numberedFileName("frame", t, 4);
+          std::map<std::string, std::vector<std::string>> byLayer;
+          for (const std::string& c : readExrHeader(file).channels)
+            byLayer[c.substr(0, c.rfind('.'))].push_back(c.substr(c.rfind('.') + 1));
+          std::vector<LayerSpec> specs;
+          for (const auto& [layer, suffixes] : byLayer) specs.push_back({layer, suffixes, false});
+          LayerSet passes = readExr(file, specs).layers;
+          edit(t, passes, specs);
+          writeExr(file, passes, specs);
+        }
+      };
+  const auto copied = [&](const char* name) {
+    const fs::path dir = work / name;
+    fs::copy(work / "render", dir, fs::copy_options::recursive);
+    return dir;
+  };
   // A NaN or negative depth is imported as written, so the validation names it (it became sky);
   // a clip end at or below the clip start is refused naming the field (it made every pixel sky).
-  const fs::path bad = work / "bad_depth";
-  fs::copy(work / "render", bad, fs::copy_options::recursive);
-  const fs::path frame = bad / "noisy" / "frame_0002.exr";
-  std::map<std::string, std::vector<std::string>> byLayer;  // "ViewLayer.Depth" -> {"Z"}
-  for (const std::string& c : readExrHeader(frame).channels)
-    byLayer[c.substr(0, c.rfind('.'))].push_back(c.substr(c.rfind('.') + 1));
-  std::vector<LayerSpec> specs;
-  for (const auto& [layer, suffixes] : byLayer) specs.push_back({layer, suffixes, false});
-  LayerSet passes = readExr(frame, specs).layers;
-  for (const LayerSpec& spec : specs)
-    if (spec.name.size() > 6 && spec.name.compare(spec.name.size() - 6, 6, ".Depth") == 0) {
-      passes.get(spec.name).at(3, 3) = std::numeric_limits<float>::quiet_NaN();
-      passes.get(spec.name).at(5, 5) = -2.0f;
-    }
-  writeExr(frame, passes, specs);
+  const fs::path bad = copied("bad_depth");
+  editFrames(bad, "noisy", [](int t, LayerSet& passes, std::vector<LayerSpec>&) {
+    if (t != 2) return;
+    passes.get("ViewLayer.Depth").at(3, 3) = std::numeric_limits<float>::quiet_NaN();
+    passes.get("ViewLayer.Depth").at(5, 5) = -2.0f;
+  });
   importBlender(bad, work / "bad_capture", {"bad_depth"});
   const CaptureValidation badV = validate(work / "bad_capture");
   EXPECT_EQ(checkNamed(badV, "nonFinite.depth").status, CheckStatus::Fail);
@@ -2598,28 +2611,7 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
   EXPECT_EQ(checkNamed(validate(work / "none_capture"), "reference.present").status,
             CheckStatus::Warn);
 
-  // What a Blender user trips on (a technical artist's trial). Each case edits a copy of the
-  // render's files: every channel of a file read, changed, written back.
-  const auto editFrames =
-      [&](const fs::path& dir, const std::string& folder,
-          const std::function<void(int, LayerSet&, std::vector<LayerSpec>&)>& edit) {
-        for (int t = 0; t < 5; ++t) {
-          const fs::path file = dir / folder / numberedFileName("frame", t, 4);
-          std::map<std::string, std::vector<std::string>> byLayer;
-          for (const std::string& c : readExrHeader(file).channels)
-            byLayer[c.substr(0, c.rfind('.'))].push_back(c.substr(c.rfind('.') + 1));
-          std::vector<LayerSpec> specs;
-          for (const auto& [layer, suffixes] : byLayer) specs.push_back({layer, suffixes, false});
-          LayerSet passes = readExr(file, specs).layers;
-          edit(t, passes, specs);
-          writeExr(file, passes, specs);
-        }
-      };
-  const auto copied = [&](const char* name) {
-    const fs::path dir = work / name;
-    fs::copy(work / "render", dir, fs::copy_options::recursive);
-    return dir;
-  };
+  // What a Blender user trips on (a technical artist's trial), each case on its own copy.
   // A second view layer (an override layer sorting first): it was imported in place of the scene's
   // own, silently. Refused, naming both; --view-layer picks one, recorded in capture.json.
   const fs::path twoLayers = copied("two_layers");
