@@ -626,6 +626,13 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
         }
         row.note = "no tile data for a paired interval (results.db keeps none)";
         noTilesKept = true;
+        // Summarised on too few frames, a change within tolerance is no more a pass than one
+        // resolved there from tiles (below): the runs' tiles would have been too few to judge by
+        // (runs read from results.db on one frame passed the gate where their directories could
+        // not).
+        if (const MetricDefinition* m = findMetric(t.metric);
+            m && recordedWithTiles(*m) && bf > 0 && bf <= kFewSummarisedFrames)
+          fewFrames = bf;
       } else if (!tiled.count(t.metric)) {
         row.note = "no paired interval (" + t.metric + " keeps no per-tile data)";
       } else {

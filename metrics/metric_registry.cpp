@@ -57,10 +57,14 @@ void requireOwnMetric(const MetricFamily& family, const std::string& metric) {
               " (a family puts only its own metrics)");
 }
 
+bool recordedWithTiles(const MetricDefinition& m) {
+  return m.reads != MetricInput::Run && !m.frameScalar;
+}
+
 void requireTilesWhereDeclared(const MetricDefinition& m, double value, const TileSums& tiles) {
   // Its interval resamples tiles; without them it would resample frames only, an interval several
   // times too narrow (a contributor's trial: 8x), and nothing would say so.
-  if (tiles.empty() && m.reads != MetricInput::Run && !m.frameScalar && std::isfinite(value))
+  if (tiles.empty() && recordedWithTiles(m) && std::isfinite(value))
     throw Error(
         "the family that puts " + m.name + " put it without its tile sums: a metric that " +
         "reads images records them (put(name, value, tiles), docs/extending.md), which its " +

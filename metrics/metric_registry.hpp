@@ -205,8 +205,11 @@ void checkFamilies(const std::vector<MetricFamily>& families);
 // An Error unless `family` declares `metric`: a family puts only its own metrics (one that put
 // another's would silently replace that family's values).
 void requireOwnMetric(const MetricFamily& family, const std::string& metric);
-// An Error unless a value of `m` comes with its tile sums where `m` is a metric of the images
-// (not a run fact, not a frameScalar): without them its interval would resample frames only.
+// Whether a run records `m` with its tile sums: a metric of the images (not a run fact, not a
+// frameScalar), whose interval resamples tiles.
+bool recordedWithTiles(const MetricDefinition& m);
+// An Error unless a value of `m` comes with its tile sums where recordedWithTiles(m): without
+// them its interval would resample frames only.
 void requireTilesWhereDeclared(const MetricDefinition& m, double value, const TileSums& tiles);
 // Every metric, in registration order.
 std::vector<const MetricDefinition*> metricCatalog();

@@ -183,6 +183,34 @@ TEST(Gate, ADifferenceResolvedOnFewFramesIsNotJudged) {
   EXPECT_TRUE(gateWarningTexts(eight, {"a", "b"}, false).empty());
 }
 
+// Runs read from results.db keep no tiles, so a change within tolerance there is "ok" on the
+// summaries alone. On 7 or fewer frames after the warm-up they are held as runs with tiles are:
+// the gate cannot pass them (runs of one frame passed from results.db where their directories
+// could not judge them).
+TEST(Gate, RunsFromTheDatabaseOnFewFramesCannotPass) {
+  auto fromDatabase = [](const char* name, const char* created, double relMse, int frames) {
+    json run = gateRun(name, created, relMse, {{"warmup", 2}}, 64, frames);
+    run["pairs"][0].erase("tiles");
+    RunResults r = test::typed(run);
+    r.keepsTiles = false;
+    return r;
+  };
+  for (const int frames : {1, 7, 8}) {
+    const GateJudgement j =
+        judgeRuns(fromDatabase("a", "2025-01-01T00:00:00Z", 0.05, frames),
+                  fromDatabase("b", "2025-01-01T00:01:00Z", 0.0505, frames), Gate{}, {});
+    ASSERT_EQ(j.rows.size(), 1u);
+    EXPECT_EQ(j.rows[0].verdict, "ok") << frames;
+    EXPECT_EQ(j.rows[0].fewFrames, frames <= kFewSummarisedFrames) << frames;
+    EXPECT_EQ(j.outcome,
+              frames <= kFewSummarisedFrames ? GateOutcome::CouldNotJudge : GateOutcome::Pass)
+        << frames;
+    EXPECT_EQ(gateWarningTexts(j, {"a", "b"}, false).size(),
+              frames <= kFewSummarisedFrames ? 1u : 0u)
+        << frames;
+  }
+}
+
 // Mistakes in the options are errors, before any judgement (they are not the runs' fault).
 TEST(Gate, AMistakenOptionIsAnErrorNotARefusal) {
   const RunResults a = test::typed(gateRun("a", "2025-01-01T00:00:00Z", 0.05)),
