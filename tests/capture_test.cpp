@@ -2620,7 +2620,7 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
       for (LayerSpec spec : std::vector<LayerSpec>(specs)) {
         const std::string copy = "AAA_fg" + spec.name.substr(spec.name.find('.'));
         Image image = passes.get(spec.name);
-        for (float& v : image.raw()) v *= 0.5f;
+        for (float& x : image.raw()) x *= 0.5f;
         passes.set(copy, std::move(image));
         spec.name = copy;
         specs.push_back(spec);
@@ -2732,7 +2732,7 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
             CheckStatus::Pass);
   const fs::path unnormal = copied("unnormal");
   editFrames(unnormal, "noisy", [](int, LayerSet& passes, std::vector<LayerSpec>&) {
-    for (float& v : passes.get("ViewLayer.Normal").raw()) v *= 3.0f;
+    for (float& x : passes.get("ViewLayer.Normal").raw()) x *= 3.0f;
   });
   importBlender(unnormal, work / "unnormal_capture", {"unnormal"});
   EXPECT_EQ(checkNamed(validate(work / "unnormal_capture"), "normal.renormalised").status,
@@ -2760,7 +2760,7 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
   // reference noise floor" of a capture with colorHalf).
   const fs::path blurred = copied("motion_blur");
   editFrames(blurred, "noisy", [](int, LayerSet& passes, std::vector<LayerSpec>&) {
-    for (float& v : passes.get("ViewLayer.Vector").raw()) v = 0;
+    for (float& x : passes.get("ViewLayer.Vector").raw()) x = 0;
   });
   importBlender(blurred, work / "blurred_capture", {"blurred"});
   const CaptureCheck blur = checkNamed(validate(work / "blurred_capture"), "motion.consistency");

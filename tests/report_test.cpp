@@ -969,7 +969,9 @@ TEST(Report, AnAblationRowNamesAPointThatReadOracleData) {
                 "engine would not have")
           << r.dump();
     }
-    if (r["parameter"] == "a") EXPECT_FALSE(r.contains("caveat")) << r.dump();
+    if (r["parameter"] == "a") {
+      EXPECT_FALSE(r.contains("caveat")) << r.dump();
+    }
   }
   EXPECT_EQ(seen, 1);
   EXPECT_NE(

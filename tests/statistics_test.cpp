@@ -742,7 +742,7 @@ TEST(CompareGate, ASweepsPointMeetsThePlainRunThatRanTheSame) {
       p["params"] = {{"edge.normal", normal}, {"sigmaL", 2}};
     }
   const RunResults a = test::typed(sweep), b = test::typed(plain);
-  for (const std::string& name : {"svgf[sigmaL=2]", "svgf[edge.normal=true,sigmaL=2]"}) {
+  for (const std::string name : {"svgf[sigmaL=2]", "svgf[edge.normal=true,sigmaL=2]"}) {
     RunResults keptA = a, keptB = b;
     keepContenders(keptA, keptB, {name});
     ASSERT_EQ(keptA.pairs.size(), 1u) << name;
