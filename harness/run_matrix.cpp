@@ -497,11 +497,21 @@ json runMatrix(const RunConfig& cfg) {
       json pair;
       const fs::path images = cfg.out / "images" / source.name / safeName(r->label);
       // Under --denoisers all, a built-in (a plugin or process the user named fails instead) that
-      // the capture lacks the inputs for is not run there. A denoiser that cannot even be created
-      // here fails its pair below, with its own error.
+      // the capture lacks the inputs for is not run there, nor a stored output (file:NAME, which
+      // 'all' takes from the captures) on a sequence that does not store it: a scene rendered here
+      // or another capture (a run of scenes beside a capture with outputs failed a pair per scene,
+      // exit 1). A denoiser that cannot even be created here fails its pair below, with its own
+      // error; a file:NAME the user named fails where it is not stored.
       std::string lacking;
-      if (cfg.everyDenoiser && sd && !source.scene && capturedOutputName(r->name).empty() &&
-          DenoiserRegistry::instance().find(r->name).origin.empty()) {
+      const std::string storedOutput = capturedOutputName(r->name);
+      if (cfg.everyDenoiser && sd && !storedOutput.empty()) {
+        if (source.scene)
+          lacking = "a scene rendered here stores no denoiser outputs (" + r->name +
+                    " is an output stored in a capture's outputs/ folder)";
+        else if (!sd->sequence.capture().outputs.count(storedOutput))
+          lacking = "the capture stores no output '" + storedOutput + "' (another capture does)";
+      } else if (cfg.everyDenoiser && sd && !source.scene &&
+                 DenoiserRegistry::instance().find(r->name).origin.empty()) {
         try {
           lacking = lackingInputs(*r, sd->sequence);
         } catch (const std::exception&) {

@@ -1921,6 +1921,10 @@ TEST(CaptureContract, BadDescriptionsAreErrorsNamingTheFieldOrFile) {
   expectError(copyCapture(good, "v2", [](json& d) { d["version"] = 2; }), "version 2");
   expectError(copyCapture(good, "noframes", [](json& d) { d.erase("frames"); }), "frames");
   expectError(copyCapture(good, "typo", [](json& d) { d["frameRat"] = 30; }), "frameRat");
+  // Neither frameRate nor deltaTime: both are named (it named frameRate alone).
+  expectError(copyCapture(good, "norate", [](json& d) { d.erase("frameRate"); }),
+              "frameRate: missing; expected a number (frames per second; or give deltaTime, a "
+              "list of per-frame seconds)");
   expectError(copyCapture(good, "kind_typo",
                           [](json& d) {
                             d["events"] = {{{"frame", 2}, {"kind", "light_of"}}};
@@ -2252,6 +2256,49 @@ TEST(CaptureContract, ADenoiserNeedingALayerTheCaptureLacksFailsThatPairOnly) {
       << merged["scenes"]["no_mesh_id"]["notRun"];
   // The study runs every denoiser there is: it skips the same way.
   EXPECT_TRUE(studyRun({}, RenderSettings{}).everyDenoiser);
+}
+
+// Under --denoisers all (and in the study), a stored output runs only on the capture that stores
+// it: a rendered scene or another capture of the run does not run it and says why (a docs audit's
+// run of cornell_static beside a capture with outputs failed file:NAME on the scene, exit 1).
+TEST(CaptureContract, EveryDenoiserRunsAStoredOutputOnlyWhereItIsStored) {
+  const fs::path stored = copyCapture(exportedCornell(), "with_outputs", [](json& d) {
+    d["outputs"] = {{"copied", json::object()}};
+  });
+  const CaptureDescription base = readCaptureDescription(stored);
+  fs::create_directories(stored / "outputs" / "copied");
+  for (int t = 0; t < base.info.frames; ++t) {
+    LayerSet l;
+    l.set("color", readCaptureFrame(base, t).get("color"));
+    writeExr(stored / "outputs" / "copied" / numberedFileName("frame", t, 4), l,
+             {{"color", {"R", "G", "B"}, false}});
+  }
+  // Beside the scene rendered here, a capture without outputs (named apart from the scene).
+  const fs::path other = copyCapture(exportedCornell(), "without_outputs");
+  RunConfig cfg =
+      captureRun(test::freshDir("stored_where_stored"), {{"file:copied", {}, ""}}, {stored, other});
+  cfg.scenes = {test::shippedScene("cornell_static")};
+  cfg.baselines = false;
+  cfg.everyDenoiser = true;
+  const json r = runMatrix(cfg);
+  ASSERT_EQ(r["pairs"].size(), 1u) << r["pairs"].dump().substr(0, 400);
+  EXPECT_EQ(r["pairs"][0]["scene"], "with_outputs");
+  EXPECT_EQ(r["pairs"][0]["status"], "ok");
+  const json& onScene = r["scenes"]["cornell_static"]["notRun"];
+  ASSERT_EQ(onScene.size(), 1u) << r["scenes"]["cornell_static"].dump().substr(0, 400);
+  EXPECT_EQ(onScene[0]["label"], "file:copied");
+  EXPECT_NE(onScene[0]["reason"].get<std::string>().find("a scene rendered here stores no denoiser "
+                                                         "outputs"),
+            std::string::npos)
+      << onScene;
+  const json& onOther = r["scenes"]["without_outputs"]["notRun"];
+  ASSERT_EQ(onOther.size(), 1u);
+  EXPECT_EQ(onOther[0]["reason"], "the capture stores no output 'copied' (another capture does)");
+  // Named by the user, it still fails where it is not stored (a misspelt scene list is theirs).
+  cfg.everyDenoiser = false;
+  cfg.out = test::freshDir("stored_where_named");
+  const json named = runMatrix(cfg);
+  EXPECT_EQ(named["pairs"].size(), 3u);
 }
 
 TEST(CaptureContract, AFileContenderOnARenderedSceneOrAnUnknownOutputIsAnError) {
