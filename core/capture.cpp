@@ -266,7 +266,15 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
     c.deltaTime = dt;
     if (root.has("frameRate")) root.fail("frameRate", "either frameRate or deltaTime, not both");
   } else {
-    const double rate = root.number("frameRate");
+    double rate = 0;
+    try {
+      rate = root.number("frameRate");
+    } catch (const Error& e) {
+      // Neither given: the message names both ways of saying it.
+      if (root.has("frameRate")) throw;
+      throw Error(std::string(e.what()) +
+                  " (frames per second; or give deltaTime, a list of per-frame seconds)");
+    }
     if (!(rate > 0) || !std::isfinite(rate)) root.fail("frameRate", "a positive number of frames per second");
     c.deltaTime.assign(size_t(n), 1.0 / rate);
   }
