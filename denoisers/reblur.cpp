@@ -1,4 +1,4 @@
-// `reblur`: recurrent blur (Zhadan, GTC 2020 "Fast Denoising with Self Stabilizing Recurrent
+// `reblur`: recurrent blur (Zhdan, GTC 2020 "Fast Denoising with Self Stabilizing Recurrent
 // Blurs"; NVIDIA NRD's REBLUR; the CEDEC 2021 talk p. "3.4" and p. "4.1.2"). Per frame:
 //   1. pre-blur: an 8-tap Poisson disk rotated every frame (geometry weights only),
 //   2. temporal accumulation with an accumulated-frame counter N (max 30) and a fast history
@@ -576,7 +576,7 @@ const ParamTable<ReblurSettings>& reblurParams() {
 DenoiserInfo reblurInfo() {
   return {"reblur",
           "Recurrent blur: Poisson pre-blur, accumulation with a frame counter, history fix, "
-          "shrinking blur + post-blur fed back as history, anti-lag stabilisation (Zhadan 2020; "
+          "shrinking blur + post-blur fed back as history, anti-lag stabilisation (Zhdan 2020; "
           "NRD REBLUR)",
           reblurParams().schema(), [](const ParamSet& params, SignalKind kind) {
             ReblurSettings s = reblurParams().settings(params, "reblur");

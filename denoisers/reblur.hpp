@@ -1,5 +1,5 @@
 #pragma once
-// ReBLUR, recurrent blur (Zhadan, "Fast Denoising with Self Stabilizing Recurrent Blurs", GTC
+// ReBLUR, recurrent blur (Zhdan, "Fast Denoising with Self Stabilizing Recurrent Blurs", GTC
 // 2020; NVIDIA NRD's REBLUR). The pipeline is in reblur.cpp, top to bottom; this header exposes
 // the class so tests can look at every pass's output.
 #include <string>

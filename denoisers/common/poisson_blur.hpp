@@ -1,5 +1,5 @@
 #pragma once
-// Poisson-disk blur (ReBLUR, Zhadan GTC 2020 / NRD; the CEDEC 2021 talk p. "4.1.2"): a fixed set
+// Poisson-disk blur (ReBLUR, Zhdan GTC 2020 / NRD; the CEDEC 2021 talk p. "4.1.2"): a fixed set
 // of 8 taps inside a disk of a given radius, rotated by a per-frame angle so that temporal
 // accumulation sees different taps every frame ("サンプル点に回転のようなランダマイズ処理を
 // 適用することで有効なサンプル数を増やす"). The weights are NRD's kind -- geometry only, no
