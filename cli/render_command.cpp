@@ -9,6 +9,7 @@
 #include "cli/render_options.hpp"
 #include "core/display.hpp"
 #include "core/error.hpp"
+#include "core/json_reader.hpp"
 #include "core/sequence.hpp"
 #include "harness/run_matrix.hpp"
 #include "harness/scene_selection.hpp"
@@ -31,7 +32,7 @@ void addScenesCommand(CLI::App& app) {
                      {"frames", s.frames}, {"file", file}});
     }
     if (*json) {
-      std::cout << out.dump(2) << "\n";
+      std::cout << jsonText(out, 2) << "\n";
       return;
     }
     for (auto& s : out)

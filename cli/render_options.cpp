@@ -8,6 +8,7 @@
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/json_reader.hpp"
 #include "harness/scene_selection.hpp"
 
 namespace arena::cli {
@@ -121,7 +122,7 @@ CLI::Validator writableFile(const std::string& writer) {
 
 void writeMarkedJson(const std::string& path, const std::string& writer, nlohmann::json out) {
   out["arenaBench"] = writer;
-  writeTextAtomically(path, out.dump(2));
+  writeTextAtomically(path, jsonText(out, 2));
 }
 
 CLI::Validator lowresFactorCheck(int max) {

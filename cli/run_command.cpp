@@ -20,6 +20,7 @@
 #include "core/atomic_file.hpp"
 #include "core/capture.hpp"
 #include "core/error.hpp"
+#include "core/json_reader.hpp"
 #include "core/text.hpp"
 #include "denoisers/external/loader.hpp"
 #include "denoisers/external/plugin_denoiser.hpp"
@@ -650,7 +651,7 @@ void addRunCommands(CLI::App& app) {
             {"confidence", bc.confidence},       {"correction", *correction},
             {"rowsJudgedTogether", family},      {"warnings", warnings},
             {"rows", comparisonJson(rows)}};
-        std::cout << out.dump(2) << "\n";
+        std::cout << jsonText(out, 2) << "\n";
       } else {
         std::cout << "regressed = worse by more than the tolerance AND the paired "
                   << bc.confidence * 100 << "% interval of the change excludes zero"
@@ -746,7 +747,7 @@ void addRunCommands(CLI::App& app) {
         if (!info.origin.empty()) out.back()["origin"] = info.origin;
       }
       if (*asJson) {
-        std::cout << out.dump(2) << "\n";
+        std::cout << jsonText(out, 2) << "\n";
         return;
       }
       for (auto& d : out) {
@@ -817,7 +818,7 @@ void addRunCommands(CLI::App& app) {
     cmd->callback([asJson] {
       const json catalog = metricCatalogJson();
       if (*asJson) {
-        std::cout << catalog.dump(2) << "\n";
+        std::cout << jsonText(catalog, 2) << "\n";
         return;
       }
       for (const json& m : catalog) {

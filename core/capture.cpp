@@ -573,7 +573,7 @@ CaptureContent captureContent(const CaptureDescription& c) {
   const json reference = described.contains("reference") ? described["reference"] : json();
   for (const char* k : {"reference", "outputs", "source", "purpose"}) described.erase(k);
   Hasher inputs;
-  inputs.add(described.dump());
+  inputs.add(jsonText(described));
   for (int t = 0; t < c.info.frames; ++t) {
     addFileBytes(inputs, captureFramePath(c.dir, t));
     if (t > 0 && c.info.hasGradients) addFileBytes(inputs, captureGradientPath(c.dir, t));
@@ -582,7 +582,7 @@ CaptureContent captureContent(const CaptureDescription& c) {
   content.inputs = inputs.hex().substr(0, 12);
   if (c.info.hasReference) {
     Hasher references;
-    references.add(reference.dump());
+    references.add(jsonText(reference));
     for (int r = 0; r < int(c.info.referenceSpp.size()); ++r)
       addFileBytes(references, captureReferencePath(c.dir, r));
     content.references = references.hex().substr(0, 12);
@@ -768,7 +768,7 @@ void CaptureWriter::output(const std::string& name, int t, const Image& color) {
 void CaptureWriter::commit(const json& description) {
   writeAtomically(tmp_ / "capture.json", [&](const fs::path& p) {
     std::ofstream f(p);
-    f << description.dump(1) << "\n";
+    f << jsonText(description, 1) << "\n";
     if (!f) throw Error(p.string() + ": could not write");
   });
   // Read back as any user of it would: a capture its own reader refuses is never committed (the

@@ -341,4 +341,8 @@ void JsonReader::rejectUnread() const {
   }
 }
 
+std::string jsonText(const nlohmann::json& j, int indent) {
+  return j.dump(indent, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
 }  // namespace arena

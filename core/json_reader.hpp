@@ -81,5 +81,9 @@ constexpr int kMaxJsonDepth = 64;
 // Error.
 nlohmann::json parseJsonText(const std::string& text, const std::string& file);
 nlohmann::json parseJsonFile(const std::string& file);
+// The text of `j` as dump(indent) writes it, a byte that is not UTF-8 in any string written as
+// U+FFFD: a file name, EXR channel or process message of another encoding, quoted in a result,
+// must not stop the writing of what was measured (dump() throws on it).
+std::string jsonText(const nlohmann::json& j, int indent = -1);
 
 }  // namespace arena

@@ -79,7 +79,7 @@ class Wire {
     }
   }
   void writeLine(const json& header) {
-    const std::string line = header.dump() + "\n";
+    const std::string line = jsonText(header) + "\n";
     write(line.data(), line.size());
   }
 

@@ -10,6 +10,7 @@
 #include "core/capture.hpp"
 #include "core/error.hpp"
 #include "core/hash.hpp"
+#include "core/json_reader.hpp"
 #include "core/stage_clock.hpp"
 #include "harness/gpu_cost.hpp"
 #include "harness/run_matrix.hpp"
@@ -138,7 +139,7 @@ void writeOutputExr(const fs::path& imageDir, const DenoisedFrame& f, const Deno
   // The scene says whose frames these denoise (`arena export --output` refuses another scene's).
   writeExr(Sequence::framePath(imageDir, f.frame), out, specs,
            {{"arena.denoiser", req.name},
-            {"arena.params", params.toJson().dump()},
+            {"arena.params", jsonText(params.toJson())},
             {"arena.scene", scene}});
 }
 

@@ -113,8 +113,7 @@ void saveResults(const fs::path& runDir, const json& results) {
   if (ec) throw Error(runDir.string() + ": cannot create run directory: " + ec.message());
   // Strings from outside (an external denoiser's messages) are made valid UTF-8 where they enter;
   // should one slip through, a replacement character costs less than the whole run.
-  writeTextAtomically(runDir / "results.json",
-                      results.dump(1, ' ', false, json::error_handler_t::replace));
+  writeTextAtomically(runDir / "results.json", jsonText(results, 1));
 }
 
 namespace {
@@ -270,8 +269,12 @@ void appendToDatabase(const fs::path& dbPath, const RunResults& r, const std::st
   db.exec(kDatabaseSchema);
   db.exec("BEGIN");
   Statement run(db, "INSERT INTO runs (name, created, git_commit, schema, environment, settings) VALUES (?,?,?,?,?,?)");
-  run.text(1, r.name).text(2, r.created).text(3, r.environment.value("git_commit", ""))
-      .integer(4, kResultsSchemaVersion).text(5, r.environment.dump()).text(6, r.settings.toJson().dump())
+  run.text(1, r.name)
+      .text(2, r.created)
+      .text(3, r.environment.value("git_commit", ""))
+      .integer(4, kResultsSchemaVersion)
+      .text(5, jsonText(r.environment))
+      .text(6, jsonText(r.settings.toJson()))
       .step();
   const long long runId = sqlite3_last_insert_rowid(db.db);
   // The registry as this arena knew it, so a dashboard reads each metric's direction and unit from
@@ -323,8 +326,14 @@ void appendToDatabase(const fs::path& dbPath, const RunResults& r, const std::st
   Statement frame(db, "INSERT INTO frame_metrics VALUES (?,?,?,?,?,?)");
   Statement summary(db, "INSERT INTO summaries VALUES (?,?,?,?,?,?,?,?,?,?,?,?)");
   for (const PairResult& p : r.pairs) {
-    pair.integer(1, runId).text(2, p.scene).text(3, p.denoiser).text(4, p.label).text(5, p.params.dump())
-        .text(6, p.status).text(7, p.error).step();
+    pair.integer(1, runId)
+        .text(2, p.scene)
+        .text(3, p.denoiser)
+        .text(4, p.label)
+        .text(5, jsonText(p.params))
+        .text(6, p.status)
+        .text(7, p.error)
+        .step();
     if (!p.ok()) continue;
     for (const json& f : p.part("frames"))
       for (auto it = f.begin(); it != f.end(); ++it)
@@ -364,7 +373,7 @@ void appendToDatabase(const fs::path& dbPath, const RunResults& r, const std::st
             .real(6, known && response->second.never ? kUndefined : m.value)
             .real(7, bound(m.ci.lo))
             .real(8, bound(m.ci.hi))
-            .text(9, json(m.tiedWith).dump())
+            .text(9, jsonText(json(m.tiedWith)))
             .step();
       }
     };
@@ -525,7 +534,7 @@ void commitResults(const fs::path& runDir, const json& results) {
     fs::remove(fs::path(dbTmp.string() + "-journal"), ignored);
   };
   try {
-    writeFileBytes(jsonTmp, run.toJson().dump(1));
+    writeFileBytes(jsonTmp, jsonText(run.toJson(), 1));
     std::error_code ec;
     if (fs::exists(dbPath)) {
       fs::copy_file(dbPath, dbTmp, ec);

@@ -2301,6 +2301,22 @@ TEST(CaptureContract, EveryDenoiserRunsAStoredOutputOnlyWhereItIsStored) {
   EXPECT_EQ(named["pairs"].size(), 3u);
 }
 
+// A byte that is not UTF-8 in a name the results quote (a stray file's, here in the validation's
+// files.unexpected) is written as U+FFFD: it ended a finished run with "invalid UTF-8 byte",
+// exit 3, every pair's results lost (a bad-input trial).
+TEST(CaptureContract, ANameNotInUtf8DoesNotStopTheResults) {
+  const fs::path dir = copyCapture(exportedCornell(), "odd_bytes");
+  std::ofstream(dir / "note\xff.txt") << "a stray file";
+  RunConfig cfg = captureRun(test::freshDir("odd_bytes_run"), {{"passthrough", {}, ""}}, {dir});
+  cfg.baselines = false;
+  const json r = runMatrix(cfg);
+  ASSERT_EQ(pairOf(r, "passthrough")["status"], "ok");
+  const json saved = parseJsonFile((cfg.out / "results.json").string());
+  EXPECT_NE(saved["scenes"]["odd_bytes"]["validation"].dump().find("note\xEF\xBF\xBD.txt"),
+            std::string::npos)
+      << saved["scenes"]["odd_bytes"]["validation"].dump();
+}
+
 TEST(CaptureContract, AFileContenderOnARenderedSceneOrAnUnknownOutputIsAnError) {
   RunConfig cfg =
       captureRun(test::freshDir("file_bad"), {{"file:nothing", {}, ""}}, {exportedCornell()});
