@@ -412,9 +412,10 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
         // A timer that read 0 measured nothing: a time of 0 would be the fastest of all. Such
         // times fail this output's pair and its validation, not the capture.
         for (size_t t = 0; t < out.milliseconds.size() && out.timingProblem.empty(); ++t)
-          if (!(out.milliseconds[t] > 0) || !std::isfinite(out.milliseconds[t]))
+          if (!(out.milliseconds[t] > 0) || !(out.milliseconds[t] <= kMaxFrameMilliseconds))
             out.timingProblem = file.string() + ": outputs." + name + ".milliseconds[" +
-                                std::to_string(t) + "]: expected a positive finite time, got " +
+                                std::to_string(t) +
+                                "]: expected a positive time of at most 1e9 ms, got " +
                                 shortestText(out.milliseconds[t]) +
                                 " (leave \"milliseconds\" out where the frames were not timed)";
         out.device = o.string("device");

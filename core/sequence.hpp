@@ -18,6 +18,11 @@
 
 namespace arena {
 
+// A frame's time above this (1e9 ms, 11.6 days) is no measurement but a timer's garbage: refused
+// where a time enters (a stored output's milliseconds, a process's or plugin's report), as a
+// 1e308 ms summed into a run's mean time made it inf and stopped the whole run.
+inline constexpr double kMaxFrameMilliseconds = 1e9;
+
 namespace channels {
 // Per-frame layers (noise-free G-buffer of the primary hit through the pixel centre + 1-spp signals).
 const std::vector<LayerSpec>& frameLayers();

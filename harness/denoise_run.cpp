@@ -341,6 +341,20 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
       }
       const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
       const std::optional<double> reported = d.reportedMilliseconds();
+      // A reported time beyond any frame's is the denoiser's fault, not a number to average.
+      const std::string name =
+          info_.origin.empty() ? request_.name : request_.name + " (" + info_.origin + ")";
+      if (reported && !(*reported <= kMaxFrameMilliseconds))
+        throw Error(name + " reported a time of " + shortestText(*reported) + " ms on the " +
+                    signalName(kind) + " signal at frame " + std::to_string(t) +
+                    " (computeMs), in a call of " + shortestText(wall) +
+                    " ms; expected at most 1e9 ms");
+      for (const PassStats& p : d.lastPasses())
+        if (!(p.milliseconds <= kMaxFrameMilliseconds))
+          throw Error(name + " reported its pass '" + p.name + "' at " +
+                      shortestText(p.milliseconds) + " ms on the " + signalName(kind) +
+                      " signal at frame " + std::to_string(t) + ", in a call of " +
+                      shortestText(wall) + " ms; expected at most 1e9 ms");
       out.wallMilliseconds += wall;
       out.milliseconds += reported.value_or(wall);
       out.selfTimed = reported.has_value();

@@ -327,7 +327,13 @@ TEST(Capture, AStoredOutputsTimesArePositiveAndSayWhatMeasuredThem) {
   std::vector<double> ms(10, 1.25);
   ms[4] = 0;
   std::string e = problem("ms_zero", {{"milliseconds", ms}, {"device", "RTX 4080"}});
-  EXPECT_NE(e.find("outputs.gpu.milliseconds[4]: expected a positive finite time, got 0"),
+  EXPECT_NE(
+      e.find("outputs.gpu.milliseconds[4]: expected a positive time of at most 1e9 ms, got 0"),
+      std::string::npos)
+      << e;
+  ms[4] = 1e308;  // summed into the mean time, it stopped the whole run (a bad-input trial)
+  e = problem("ms_absurd", {{"milliseconds", ms}, {"device", "RTX 4080"}});
+  EXPECT_NE(e.find("milliseconds[4]: expected a positive time of at most 1e9 ms, got 1e+308"),
             std::string::npos)
       << e;
   ms[4] = 1.25;

@@ -10,7 +10,8 @@
   error      answers {"type": "error"} with a message
   garbage    answers a line that is not JSON
   nul        answers a line holding a NUL byte, and writes one to stderr
-  slow-report  answers correctly but reports a computeMs of 2e12 (more than the exchange took)
+  slow-report  answers correctly but reports a computeMs of 2e5 (more than the exchange took)
+  absurd-time  answers correctly but reports a computeMs of 1e308 (beyond any frame's time)
   no-ready   hangs before answering the setup
   bad-bytes  writes bytes that are not UTF-8 (a cut character, 0xff) to stderr and exits
   error-code answers {"type": "error"} whose message is a number
@@ -130,7 +131,9 @@ def main():
             if mode == "pass-without-taps":
                 result["passes"] = [{"name": "blur", "ms": 0.0005}]
             if mode == "slow-report":
-                result["computeMs"] = 2e12
+                result["computeMs"] = 2e5
+            if mode == "absurd-time":
+                result["computeMs"] = 1e308
         answer((json.dumps(result) + "\n").encode() + signal_bytes)
     if mode == "goodbye":
         answer(b"all done, goodbye\n")
