@@ -572,13 +572,17 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
           // size (a corrected relMSE near 0 is a difference of two larger terms).
           double size = std::abs(mean);
           for (double v : tiles->frameValues()) size = std::max(size, std::abs(v));
+          // Tiles of no finite value under a summary's mean (a summary is absent where a frame's
+          // value is not finite) are damaged too: NaN sums made the gate pass a real regression.
           const double fromTiles = tiles->mean();
           const std::string& source = (std::string(which) == "baseline" ? base : cand).source;
-          if (std::isfinite(fromTiles) && !(std::abs(fromTiles - mean) <= 1e-4 * size + 1e-12))
+          if (!(std::abs(fromTiles - mean) <= 1e-4 * size + 1e-12))
             throw Error((source.empty() ? std::string() : source + ": ") + which + " run, " +
                         (std::string(which) == "baseline" ? label : c.label) + " on " + scene +
                         ": summary." + t.metric + ".mean " + std::to_string(mean) +
-                        " disagrees with its per-tile data (" + std::to_string(fromTiles) +
+                        " disagrees with its per-tile data (" +
+                        (std::isfinite(fromTiles) ? std::to_string(fromTiles)
+                                                  : std::string("no finite value")) +
                         "); the results were edited or damaged, and the gate will not judge them");
         }
         const PairedChange d = pairedRelativeChange(candTiles, baseTiles, scene, cfg);

@@ -329,6 +329,16 @@ TEST(RunMatrix, CompareGatesARegressionAndPassesAnIdenticalRerun) {
   EXPECT_NE(e.find("candidate run, svgf on cornell_static: summary.relMse.mean"), std::string::npos)
       << e;
   EXPECT_NE(e.find("disagrees with its per-tile data"), std::string::npos) << e;
+  // So are tiles of no finite value under it: NaN sums with the baseline's mean passed a real
+  // regression as "ok, no interval" (a bad-input trial).
+  MetricTiles nan = MetricTiles::fromJson(worse["pairs"][0]["tiles"]["relMse"]);
+  for (TileSums& row : nan.rows) std::fill(row.sum.begin(), row.sum.end(), std::nan(""));
+  edited["pairs"][0]["tiles"]["relMse"] = nan.toJson();
+  const std::string nanError = test::errorOf([&] {
+    compareRuns(test::typed(base), test::typed(edited), {{"relMse", 0.02}});
+  });
+  EXPECT_NE(nanError.find("disagrees with its per-tile data (no finite value)"), std::string::npos)
+      << nanError;
   // A slice of a run (a shard) against a whole run is refused as a settings difference: the
   // pairs it lacks read as "new" and a regression in them passed.
   RunResults shard = test::typed(base);
