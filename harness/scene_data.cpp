@@ -35,47 +35,46 @@ std::unique_ptr<SceneData> prepareScene(const fs::path& dir, const EvaluationOpt
   StageTimer timer(Stage::Loading);
   Sequence sequence = Sequence::open(dir);
   EvaluationInput input = readSequenceForEvaluation(sequence);
+  // The frames the run scores (after the warm-up): those whose reference is black, and those whose
+  // input equals its reference value for value (as the denoisers read it: a NaN as 0).
+  int scored = 0, equal = 0, black = 0;
+  if (!input.references.empty())
+    for (int t = std::max(options.warmup, 0); t < int(input.frames.size()); ++t) {
+      const Image& color = input.frames[size_t(t)].get("color");
+      const Image& reference =
+          input.references[size_t(input.referenceOfFrame[size_t(t)])].get("color");
+      if (!hasSignal(reference)) {  // validate's predicate: no nonzero finite value
+        ++black;
+        continue;
+      }
+      ++scored;
+      equal += inputEqualsReference(color, reference);
+    }
+  const std::string fromFrame =
+      "(from frame " + std::to_string(std::max(options.warmup, 0)) + ", after the warm-up)";
   if (sequence.isCapture()) {
     const CaptureValidation checks = validateCapture(sequence, input);
     if (validation) *validation = checks.toJson();
     if (checks.status() == CheckStatus::Fail)
       throw Error("capture " + dir.string() + " refused by its validation: " + checks.failures());
-    // The validation fails an input equal to its reference on every frame; on every frame the run
-    // scores (after the warm-up) the input would score a perfect 0 and every method be measured
-    // against its own input: nothing to rank.
-    if (!input.references.empty()) {
-      int scored = 0, equal = 0, black = 0;
-      for (int t = std::max(options.warmup, 0); t < int(input.frames.size()); ++t) {
-        const Image& color = input.frames[size_t(t)].get("color");
-        const Image& reference =
-            input.references[size_t(input.referenceOfFrame[size_t(t)])].get("color");
-        if (!hasSignal(reference)) {  // validate's predicate: no nonzero finite value
-          ++black;
-          continue;
-        }
-        ++scored;
-        equal += inputEqualsReference(color, reference);  // as the denoisers read it: a NaN as 0
-      }
-      // The validation fails references black in every frame and only warns of some: black in
-      // every frame the run scores, the relative errors would rank the outputs by their own
-      // brightness alone (the darkest first), with nothing to measure against.
-      if (scored == 0 && black > 0)
-        throw Error(
-            "capture " + dir.string() +
-            ": the reference of every frame the run scores (from frame " +
-            std::to_string(std::max(options.warmup, 0)) +
-            ", after the warm-up) is black, holding no nonzero finite value: nothing to measure "
-            "the "
-            "outputs against, and relative errors would rank them by their brightness alone "
-            "(reference.blackFrames; a shorter --warmup, or references rendered for the "
-            "frames after it)");
-      if (scored > 0 && equal == scored)
-        throw Error("capture " + dir.string() + ": every frame the run scores (from frame " +
-                    std::to_string(std::max(options.warmup, 0)) +
-                    ", after the warm-up) equals its reference value for value: the input itself "
-                    "would score a perfect 0 and every method be measured against its own input "
-                    "(a reference must be rendered apart from the input; reference.equalsInput)");
-    }
+    // The validation fails references black in every frame and only warns of some: black in
+    // every frame the run scores, the relative errors would rank the outputs by their own
+    // brightness alone (the darkest first), with nothing to measure against.
+    if (scored == 0 && black > 0)
+      throw Error("capture " + dir.string() + ": the reference of every frame the run scores " +
+                  fromFrame +
+                  " is black, holding no nonzero finite value: nothing to measure the outputs "
+                  "against, and relative errors would rank them by their brightness alone "
+                  "(reference.blackFrames; a shorter --warmup, or references rendered for the "
+                  "frames after it)");
+    // The validation fails an input equal to its reference on every frame; on every frame the
+    // run scores the input would score a perfect 0 and every method be measured against its own
+    // input: nothing to rank.
+    if (scored > 0 && equal == scored)
+      throw Error("capture " + dir.string() + ": every frame the run scores " + fromFrame +
+                  " equals its reference value for value: the input itself would score a perfect "
+                  "0 and every method be measured against its own input (a reference must be "
+                  "rendered apart from the input; reference.equalsInput)");
   } else if (!input.references.empty() &&
              std::all_of(input.references.begin(), input.references.end(), [](const LayerSet& r) {
                const Image& c = r.get("color");
@@ -89,6 +88,14 @@ std::unique_ptr<SceneData> prepareScene(const fs::path& dir, const EvaluationOpt
     throw Error("scene " + sequence.info().scene + " (" + dir.string() +
                 "): its reference is black in every frame, so no light reaches the camera (a light "
                 "facing away, or hidden?); every method would score a perfect 0 on nothing");
+  } else if (scored > 0 && equal == scored) {
+    // A rendered input with no noise (a scene of nothing but emitters and the sky in view): the
+    // input scored a perfect 0 beside every method, ranked first with them (a bad-input trial).
+    throw Error("scene " + sequence.info().scene + " (" + dir.string() +
+                "): every frame the run scores " + fromFrame +
+                " equals its reference value for value, so the 1-spp input holds no noise "
+                "(nothing in view but light sources or the sky?): the input would score a perfect "
+                "0 beside every method, and nothing would be measured");
   }
   EvaluationScene evaluation(std::move(input), options);
   std::vector<int> chosen = chooseFrames(sequence.info(), options.warmup);

@@ -13,6 +13,7 @@
 #include "cli/printout.hpp"
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/json_reader.hpp"
 #include "core/sequence.hpp"
 #include "harness/reference_quality.hpp"
 #include "harness/scene_selection.hpp"
@@ -670,6 +671,24 @@ TEST(RunMatrixContract, ASceneWithABlackReferenceIsRefused) {
             std::string::npos)
       << unlit["error"];
   EXPECT_EQ(pairOf(r, "cornell_static", "passthrough")["status"], "ok");
+}
+
+// A scene with nothing in view but its light (cornell_static without its objects) renders an
+// input with no noise, equal to its reference: the input scored a perfect 0 beside every method
+// (a bad-input trial). Its pairs fail, naming why.
+TEST(RunMatrixContract, ASceneWhoseInputEqualsItsReferenceIsRefused) {
+  json scene = parseJsonFile(ARENA_SOURCE_DIR "/scenes/cornell_static.json");
+  scene["objects"] = json::array();
+  RunConfig c = contract::tinyRun("noiseless_input");
+  c.scenes = {
+      loadScene(contract::writeScene(test::freshDir("noiseless_scene"), "bare", scene).string())};
+  const json r = runMatrix(c);
+  const json& bare = pairOf(r, "bare", "passthrough");
+  EXPECT_EQ(bare["status"], "failed");
+  EXPECT_NE(bare["error"].get<std::string>().find(
+                "equals its reference value for value, so the 1-spp input holds no noise"),
+            std::string::npos)
+      << bare["error"];
 }
 
 // light_switch's light goes off at frame 12 and back at 24: a 14-frame sequence measures the first
