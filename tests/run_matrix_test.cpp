@@ -653,42 +653,32 @@ TEST(RunMatrixContract, TwoSceneFilesWithOneStemCannotShareARun) {
   }
 }
 
-// A scene whose light reaches the camera nowhere (below the floor) renders black references:
-// every method would score a perfect 0 on nothing. Its pairs fail, naming why; the others rank.
-TEST(RunMatrixContract, ASceneWithABlackReferenceIsRefused) {
-  json scene = contract::minimalScene();
-  scene["lights"][0]["keys"][0]["translate"] = {0, -5, 0};
-  RunConfig c = contract::tinyRun("black_reference");
-  c.scenes = {
-      loadScene(
-          contract::writeScene(test::freshDir("black_reference_scene"), "unlit", scene).string()),
-      test::shippedScene("cornell_static")};
+// Scenes that would score every method a perfect 0 on nothing: their pairs fail, naming why; the
+// others rank.
+TEST(RunMatrixContract, ScenesThatMeasureNothingAreRefused) {
+  // A light that reaches the camera nowhere (below the floor) renders black references; nothing
+  // in view but the light (cornell_static without its objects) renders an input with no noise,
+  // equal to its reference (the input scored a perfect 0 beside every method: a bad-input trial).
+  json unlit = contract::minimalScene();
+  unlit["lights"][0]["keys"][0]["translate"] = {0, -5, 0};
+  json bare = parseJsonFile(ARENA_SOURCE_DIR "/scenes/cornell_static.json");
+  bare["objects"] = json::array();
+  const fs::path dir = test::freshDir("scenes_measuring_nothing");
+  RunConfig c = contract::tinyRun("measuring_nothing");
+  c.scenes = {loadScene(contract::writeScene(dir, "unlit", unlit).string()),
+              loadScene(contract::writeScene(dir, "bare", bare).string()),
+              test::shippedScene("cornell_static")};
   const json r = runMatrix(c);
-  const json& unlit = pairOf(r, "unlit", "passthrough");
-  EXPECT_EQ(unlit["status"], "failed");
-  EXPECT_NE(unlit["error"].get<std::string>().find(
-                "its reference is black in every frame, so no light reaches the camera"),
-            std::string::npos)
-      << unlit["error"];
+  for (const auto& [scene, why] :
+       {std::pair{"unlit", "its reference is black in every frame, so no light reaches the camera"},
+        std::pair{"bare",
+                  "equals its reference value for value, so the 1-spp input holds no "
+                  "noise"}}) {
+    const json& pair = pairOf(r, scene, "passthrough");
+    EXPECT_EQ(pair["status"], "failed") << scene;
+    EXPECT_NE(pair["error"].get<std::string>().find(why), std::string::npos) << pair["error"];
+  }
   EXPECT_EQ(pairOf(r, "cornell_static", "passthrough")["status"], "ok");
-}
-
-// A scene with nothing in view but its light (cornell_static without its objects) renders an
-// input with no noise, equal to its reference: the input scored a perfect 0 beside every method
-// (a bad-input trial). Its pairs fail, naming why.
-TEST(RunMatrixContract, ASceneWhoseInputEqualsItsReferenceIsRefused) {
-  json scene = parseJsonFile(ARENA_SOURCE_DIR "/scenes/cornell_static.json");
-  scene["objects"] = json::array();
-  RunConfig c = contract::tinyRun("noiseless_input");
-  c.scenes = {
-      loadScene(contract::writeScene(test::freshDir("noiseless_scene"), "bare", scene).string())};
-  const json r = runMatrix(c);
-  const json& bare = pairOf(r, "bare", "passthrough");
-  EXPECT_EQ(bare["status"], "failed");
-  EXPECT_NE(bare["error"].get<std::string>().find(
-                "equals its reference value for value, so the 1-spp input holds no noise"),
-            std::string::npos)
-      << bare["error"];
 }
 
 // light_switch's light goes off at frame 12 and back at 24: a 14-frame sequence measures the first
