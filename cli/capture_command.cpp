@@ -99,8 +99,9 @@ void addCaptureCommands(CLI::App& app) {
           throw Error("--output '" + o + "': expected NAME=DIR");
         stored[o.substr(0, eq)] = o.substr(eq + 1);
         if (!isPlainName(o.substr(0, eq)))
-          throw Error("--output '" + o +
-                      "': NAME must be a folder name without spaces or slashes, not . or ..");
+          throw Error("--output " + quotedName(o) +
+                      ": NAME must be a folder name without spaces, slashes or control characters, "
+                      "not . or ..");
         if (!std::filesystem::is_directory(o.substr(eq + 1)))
           throw Error("--output '" + o + "': " + o.substr(eq + 1) + " is not a folder");
       }

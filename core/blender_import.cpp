@@ -180,8 +180,10 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
   const std::string name =
       options.name.empty() ? folderName(source) : options.name;  // "render/": render
   if (!isPlainName(name))
-    throw Error(std::string(options.name.empty() ? "the source folder's name" : "--name") + " '" +
-                name + "' cannot name a capture (expected no spaces or slashes, not . or ..)" +
+    throw Error(std::string(options.name.empty() ? "the source folder's name" : "--name") + " " +
+                quotedName(name) +
+                " cannot name a capture (expected no spaces, slashes or control characters, not . "
+                "or ..)" +
                 (options.name.empty() ? "; give one with --name" : ""));
   const json doc = parseJsonFile(camerasFile.string());
   JsonReader root(doc, camerasFile.string());

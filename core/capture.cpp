@@ -92,8 +92,17 @@ const std::vector<LayerSpec>& referenceSpecs() {
 }  // namespace
 
 bool isPlainName(const std::string& name) {
+  // A control character (a newline split the run's unfinished mark over two lines; a NUL cut the
+  // folder's name) or a byte that is not UTF-8 would name folders and results no one can read.
   return !name.empty() && name != "." && name != ".." &&
-         name.find_first_of("/\\ \t") == std::string::npos;
+         name.find_first_of("/\\ \t") == std::string::npos &&
+         std::none_of(name.begin(), name.end(),
+                      [](char c) { return (unsigned char)c < 0x20 || c == 0x7f; }) &&
+         validUtf8(name) == name;
+}
+
+std::string quotedName(const std::string& name) {
+  return jsonText(json(name));
 }
 
 // The same names as the cache's (core/sequence.cpp): a capture folder reads like a sequence folder.
@@ -250,9 +259,9 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
   SequenceInfo& info = c.info;
   info.scene = root.string("name");
   if (!isPlainName(info.scene))
-    throw Error(file.string() + ": name '" + info.scene +
-                "': expected a non-empty name without spaces or slashes, not . or .. (it names the "
-                "capture's folders in a run)");
+    throw Error(file.string() + ": name " + quotedName(info.scene) +
+                ": expected a non-empty name without spaces, slashes or control characters, not . "
+                "or .. (it names the capture's folders in a run)");
   info.purpose = root.string("purpose", "capture");
   info.width = root.integerIn("width", 1, 16384);
   info.height = root.integerIn("height", 1, 16384);
@@ -402,8 +411,9 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
     for (const std::string& name : outputs->memberNames()) {
       JsonReader o = outputs->child(name);
       if (!isPlainName(name))
-        throw Error(file.string() + ": outputs: key '" + name +
-                    "': expected a folder name in outputs/ without spaces or slashes, not . or ..");
+        throw Error(file.string() + ": outputs: key " + quotedName(name) +
+                    ": expected a folder name in outputs/ without spaces, slashes or control "
+                    "characters, not . or ..");
       CaptureOutput out;
       out.name = name;
       out.dir = dir / "outputs" / name;

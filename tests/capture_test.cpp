@@ -2078,7 +2078,14 @@ TEST(CaptureContract, BadValuesAndNamesAreErrorsNamingThem) {
                           [](json& d) {
                             d["outputs"] = {{"..", json::object()}};
                           }),
-              "outputs: key '..'");
+              "outputs: key \"..\"");
+  // A control character or a byte that is not UTF-8 names no folder anyone can read (a newline
+  // split the run's unfinished mark over two lines; a NUL cut the folder's name).
+  expectError(copyCapture(good, "newline", [](json& d) { d["name"] = "a\nb"; }),
+              "name \"a\\nb\": expected a non-empty name without spaces, slashes or control "
+              "characters");
+  expectError(copyCapture(good, "nul", [](json& d) { d["name"] = std::string("a\0b", 3); }),
+              "name \"a\\u0000b\"");
   // A negative variance in a reference: the file, the channel and the pixel.
   const fs::path negative = copyCapture(exportedCornell(), "negative_var");
   const CaptureDescription c = readCaptureDescription(negative);
@@ -2198,7 +2205,7 @@ TEST(CaptureContract, AWriterNeverCommitsAnInvalidCapture) {
   std::ofstream(root / "my render" / "cameras.json") << "{}";
   const std::string spaced =
       test::errorOf([&] { importBlender(root / "my render", root / "out", {}); });
-  EXPECT_NE(spaced.find("'my render' cannot name a capture"), std::string::npos) << spaced;
+  EXPECT_NE(spaced.find("\"my render\" cannot name a capture"), std::string::npos) << spaced;
   EXPECT_NE(spaced.find("--name"), std::string::npos) << spaced;
   fs::create_directories(root / "render");
   std::ofstream(root / "render" / "cameras.json") << "{}";
