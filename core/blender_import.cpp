@@ -303,7 +303,11 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
     const Image emitEnv = sum(passes.get("Emit"), passes.get("Env"));
     for (size_t i = 0; i < emission.raw().size(); ++i) {
       emission.raw()[i] = color.raw()[i] - albedo.raw()[i] * diffuse.raw()[i] - specAlbedo.raw()[i] * specular.raw()[i];
-      emissionResidual += std::abs(double(emission.raw()[i]) - emitEnv.raw()[i]);
+      // Over the values that are finite (a NaN or Inf pixel, which the validation names, made the
+      // share NaN and passed the check, or null and dropped it: a bad-input trial).
+      const double residual = std::abs(double(emission.raw()[i]) - emitEnv.raw()[i]);
+      if (!std::isfinite(residual) || !std::isfinite(color.raw()[i])) continue;
+      emissionResidual += residual;
       combinedTotal += std::abs(double(color.raw()[i]));
     }
     const Image& depthPass = passes.get("Depth");

@@ -961,20 +961,37 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
 
   // 4a. The importer's own figures, where capture.json's source records them (arena import
   // blender): each a share the import could not help but compute, checked here.
+  // A figure the importer wrote is a share in [0, 1]: one edited to anything else (a string, -5,
+  // null) is no figure to pass on (it passed at -5, or dropped its check), so it fails its check.
   const auto sourceFigure = [&](const char* key) -> std::optional<double> {
     if (!sequence.isCapture()) return std::nullopt;
     const nlohmann::json& source = sequence.capture().source;
-    if (!source.is_object() || !source.contains(key) || !source[key].is_number())
-      return std::nullopt;
-    return source[key].get<double>();
+    if (!source.is_object() || !source.contains(key)) return std::nullopt;
+    const nlohmann::json& value = source[key];
+    if (!value.is_number() || !(value.get<double>() >= 0 && value.get<double>() <= 1))
+      return std::numeric_limits<double>::quiet_NaN();
+    return value.get<double>();
   };
   // Light kept in emission beyond what was emitted (Blender: Combined minus the two lobes, minus
   // Emit and Env): volumes and transmission, lobes a capture has no signal for. A denoiser of
   // diffuse and specular adds emission back unfiltered, noise and all (a trial's volume put 12% of
   // the colour there, and nothing said so).
+  // A figure that is no share fails its check, naming the field (check() passes a NaN).
+  const auto figureCheck = [](const char* name, double share, double warnAbove, const char* unit,
+                              const char* key, std::string detail) {
+    if (std::isnan(share)) {
+      CaptureCheck c = check(name, share, warnAbove, kSoft, unit,
+                             std::string("capture.json source.") + key +
+                                 " is not a share in [0, 1] (the importer writes one): edited or "
+                                 "damaged, so nothing says what it measured");
+      c.status = CheckStatus::Fail;
+      return c;
+    }
+    return check(name, share, warnAbove, kSoft, unit, std::move(detail));
+  };
   if (const auto share = sourceFigure("emissionBeyondEmitEnv"))
-    v.checks.push_back(check(
-        "emission.beyondEmitEnv", *share, 0.02, kSoft, "share of the colour",
+    v.checks.push_back(figureCheck(
+        "emission.beyondEmitEnv", *share, 0.02, "share of the colour", "emissionBeyondEmitEnv",
         "the colour's light in emission that is neither emitted nor the sky (volumes, "
         "transmission: lobes a capture has no signal for; from Blender also a transparent film, "
         "Film > Transparent): a denoiser of diffuse and specular adds it back unfiltered, its "
@@ -983,8 +1000,8 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
   // explains a few percent to a sixth (0.027 at 4 spp, 0.15 at 16); most of the frame means a pass
   // that is no unit normal at all, which the renormalising would otherwise hide.
   if (const auto share = sourceFigure("normalsRenormalised"))
-    v.checks.push_back(check(
-        "normal.renormalised", *share, 0.5, kSoft, "share of surface pixels",
+    v.checks.push_back(figureCheck(
+        "normal.renormalised", *share, 0.5, "share of surface pixels", "normalsRenormalised",
         "normals the importer renormalised (more than 1% off unit length); an edge's average at "
         "more than 1 spp explains a few percent, most of the frame a Normal pass that holds no "
         "unit normals (capture.json source.normalsRenormalised)"));

@@ -2823,6 +2823,25 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
   foggyDoc["source"]["emissionBeyondEmitEnv"] = 0.12;
   std::ofstream(foggy / "capture.json") << foggyDoc.dump();
   EXPECT_EQ(checkNamed(validate(foggy), "emission.beyondEmitEnv").status, CheckStatus::Warn);
+  // A figure that is no share (edited) fails its check, naming the field (-5 passed); a NaN pixel
+  // in Combined leaves the share of the finite pixels (it wrote NaN, which passed).
+  foggyDoc["source"]["emissionBeyondEmitEnv"] = -5;
+  std::ofstream(foggy / "capture.json") << foggyDoc.dump();
+  const CaptureCheck& edited = checkNamed(validate(foggy), "emission.beyondEmitEnv");
+  EXPECT_EQ(edited.status, CheckStatus::Fail);
+  EXPECT_NE(edited.detail.find("source.emissionBeyondEmitEnv is not a share in [0, 1]"),
+            std::string::npos)
+      << edited.detail;
+  const fs::path nanPixel = copied("nan_pixel");
+  editFrames(nanPixel, "noisy", [](int t, LayerSet& passes, std::vector<LayerSpec>&) {
+    if (t == 0) passes.get("ViewLayer.Combined").raw()[0] = std::nanf("");
+  });
+  importBlender(nanPixel, work / "nan_pixel_capture", {"nan_pixel"});
+  const double share =
+      parseJsonFile(
+          (work / "nan_pixel_capture" / "capture.json").string())["source"]["emissionBeyondEmitEnv"]
+          .get<double>();
+  EXPECT_NEAR(share, checkNamed(v, "emission.beyondEmitEnv").value, 1e-3);
   // The render folder given where a capture is wanted: said what to do with it.
   for (const std::string& error : {test::errorOf([&] { readCaptureDescription(work / "render"); }),
                                    test::errorOf([&] { Sequence::open(work / "render"); })})
