@@ -18,6 +18,7 @@
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/hash.hpp"
+#include "core/json_reader.hpp"
 
 namespace arena {
 
@@ -120,7 +121,21 @@ static void checkExrAttributeSizes(const fs::path& path) {
   if (!in) throw Error(path.string() + ": cannot open (" + std::strerror(errno) + ")");
   in.seekg(0, std::ios::end);
   const std::streamoff fileSize = in.tellg();
-  in.seekg(4);  // after the magic number: the version field, whose bit 12 marks a multi-part file
+  // Not an OpenEXR file at all (random bytes, a PNG renamed): said so, before a header of garbage
+  // is read as attributes with names of control bytes (a bad-input trial).
+  unsigned char magic[4] = {0, 0, 0, 0};
+  in.seekg(0);
+  if (!in.read(reinterpret_cast<char*>(magic), 4) || magic[0] != 0x76 || magic[1] != 0x2f ||
+      magic[2] != 0x31 || magic[3] != 0x01) {
+    char found[32];
+    std::snprintf(found, sizeof found, "%02x %02x %02x %02x", magic[0], magic[1], magic[2],
+                  magic[3]);
+    throw Error(path.string() + ": not an OpenEXR file (its first bytes are " +
+                (fileSize < 4 ? "fewer than 4: " + std::to_string(fileSize) + " byte(s)"
+                              : std::string(found)) +
+                "; an OpenEXR file starts 76 2f 31 01)");
+  }
+  // After the magic number: the version field, whose bit 12 marks a multi-part file.
   uint32_t version = 0;
   if (!in.read(reinterpret_cast<char*>(&version), 4)) return;  // OpenEXR will say what is wrong
   const bool multiPart = (version & 0x1000u) != 0;
@@ -148,8 +163,9 @@ static void checkExrAttributeSizes(const fs::path& path) {
       if (!in.read(reinterpret_cast<char*>(&size), 4)) return;
       const std::streamoff at = in.tellg();
       if (size < 0 || std::streamoff(size) > fileSize - at)
-        throw Error(path.string() + ": header attribute '" + name + "' (" + type + ") declares " +
-                    std::to_string(size) + " bytes, but " + std::to_string(fileSize - at) +
+        throw Error(path.string() + ": header attribute " + jsonText(nlohmann::json(name)) + " (" +
+                    jsonText(nlohmann::json(type)) + ") declares " + std::to_string(size) +
+                    " bytes, but " + std::to_string(fileSize - at) +
                     " remain in the file (a damaged header)");
       in.seekg(size, std::ios::cur);
     }

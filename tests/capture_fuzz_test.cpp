@@ -92,9 +92,25 @@ TEST(CaptureFuzz, AnExrAttributeLargerThanItsFileIsRefusedNamingIt) {
   const int32_t huge = 0x7fffffff;
   std::memcpy(&frame[at + key.size()], &huge, 4);
   const std::string message = openError(dir / "seed", dir, CaptureFile::Frame, frame);
-  EXPECT_NE(message.find("frame_0001.exr: header attribute 'compression' (compression) declares 2147483647 bytes"),
+  EXPECT_NE(message.find("frame_0001.exr: header attribute \"compression\" (\"compression\") "
+                         "declares 2147483647 bytes"),
             std::string::npos)
       << message;
+}
+
+// Bytes that are no OpenEXR file (random, or another format renamed) are said to be none, naming
+// the bytes found, where their garbage was read as header attributes named in control bytes.
+TEST(CaptureFuzz, AFileThatIsNoOpenExrIsSaidToBeNone) {
+  const fs::path dir = test::freshDir("capture_fuzz_magic");
+  fuzz::writeSeedCapture(dir / "seed");
+  const std::string png = std::string("\x89PNG\r\n\x1a\n", 8) + std::string(200, '\x1b');
+  const std::string message = openError(dir / "seed", dir, CaptureFile::Frame, png);
+  EXPECT_NE(message.find("frame_0001.exr: not an OpenEXR file (its first bytes are 89 50 4e 47; "
+                         "an OpenEXR file starts 76 2f 31 01)"),
+            std::string::npos)
+      << message;
+  EXPECT_NE(openError(dir / "seed", dir, CaptureFile::Frame, "v/").find("fewer than 4: 2 byte(s)"),
+            std::string::npos);
 }
 
 TEST(CaptureFuzz, RandomMutationsOfEachFileOpenOrAreRejectedNamingAnError) {
