@@ -461,7 +461,8 @@ MotionConsistency checkMotion(const std::vector<LayerSet>& frames,
         const glm::vec2 nx = next ? pn - pixel : glm::vec2(0);
         const glm::vec2 m(motion.at(x, y, 0), motion.at(x, y, 1));
         if (!std::isfinite(m.x) || !std::isfinite(m.y)) continue;  // counted by the non-finite check
-        const float err = glm::length(m - e);
+        // In double: a vector of 1e30 px squared overflows a float, and the mean read "inf px".
+        const double err = glm::length(glm::dvec2(m - e));
         out.depthWithinUnit = out.depthWithinUnit && z <= 1.0f;
         const float cosine =
             glm::dot(glm::normalize(cam.rayDirection(pixel.x, pixel.y)), cam.forward);

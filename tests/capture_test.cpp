@@ -464,6 +464,17 @@ TEST(CaptureValidation, MotionVectorSlipsAreRefusedAndNamed) {
     EXPECT_NE(r["pairs"][0]["error"].get<std::string>().find("motion.consistency"), std::string::npos);
     EXPECT_EQ(r["scenes"][std::string("slip_") + slip.name]["validation"]["status"], "fail");
   }
+  // A few vectors of 1e30 px: the share off decides, and the mean error is a number (its squares
+  // overflowed a float and the detail read "mean error inf px").
+  {
+    const fs::path dir = writeSynthetic("slip_huge");
+    editFrames(dir, [&](int t, LayerSet& f) {
+      if (t == 1) f.get("motion").at(2, 2, 0) = 1e30f;
+    });
+    const CaptureCheck& c = checkNamed(validate(dir), "motion.consistency");
+    EXPECT_EQ(c.detail.find("inf"), std::string::npos) << c.detail;
+    EXPECT_NE(c.detail.find("mean error "), std::string::npos) << c.detail;
+  }
   // Vectors half the cameras' step on one frame alone: what a frame dropped and the rest renumbered
   // looks like (frame 3's camera two steps from frame 2's, its vectors one step): the missing
   // frame is offered beside the slip.
