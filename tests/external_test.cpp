@@ -616,6 +616,53 @@ TEST(ExternalFaults, AHangIsKilledAfterTheTimeout) {
 
 // A wrapper script's background job shares the process's output: when the process exits, the job
 // is ended with it (it neither outlives the pair nor holds the output open until the timeout).
+// Arena ended by a signal (SIGTERM here; Ctrl-C's SIGINT alike, where a shell's background job
+// does not ignore it) ends its external processes and what they started: each runs in a group of
+// its own, which a terminal's Ctrl-C does not reach, and a hung one outlived arena (a bad-input
+// trial).
+TEST(ExternalFaults, ASignalThatEndsArenaEndsItsProcesses) {
+  const fs::path dir = test::freshDir("external_signalled");
+  const fs::path pidFile = dir / "sleep.pid", arenaPid = dir / "arena.pid";
+  const json m = {{"name", "wrapped-hang"},
+                  {"command",
+                   {"/bin/sh", "-c",
+                    "sleep 300 & echo $! > '" + pidFile.string() + "'; exec /usr/bin/python3 '" +
+                        std::string(ARENA_TEST_DATA) + "/external/faulty_denoiser.py' hang"}},
+                  {"signals", "demodulated"},
+                  {"channels", {"meshId"}},
+                  {"timeoutSeconds", 120}};
+  const fs::path manifest = writeManifest("signalled-hang", m);
+  std::thread arena([&] {
+    test::runCommand("sh -c '" + std::string(ARENA_BINARY) +
+                     " run --scenes cornell_static --no-baselines --resolution 8x8 --frames 3 "
+                     "--ref-spp 4 --cache " +
+                     (dir / "cache").string() + " --out " + (dir / "run").string() +
+                     " --denoisers ext:" + manifest.string() + " & echo $! > " + arenaPid.string() +
+                     "; wait'");
+  });
+  int sleeper = 0, pid = 0;
+  for (int wait = 0; wait < 600 && sleeper == 0; ++wait) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    std::ifstream(pidFile) >> sleeper;
+  }
+  std::ifstream(arenaPid) >> pid;
+  ASSERT_GT(pid, 0);
+  ASSERT_GT(sleeper, 0) << "the process never started";
+  ::kill(pid, SIGTERM);
+  arena.join();
+  char state = 'X';
+  for (int wait = 0; wait < 100; ++wait) {
+    std::string stat;
+    std::getline(std::ifstream("/proc/" + std::to_string(sleeper) + "/stat"), stat);
+    const size_t close = stat.rfind(')');
+    state = close != std::string::npos && close + 2 < stat.size() ? stat[close + 2] : 'X';
+    if (state == 'X' || state == 'Z') break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  EXPECT_TRUE(state == 'X' || state == 'Z') << "the process's background job outlived arena";
+  if (state != 'X' && state != 'Z') ::kill(sleeper, SIGKILL);
+}
+
 TEST(ExternalFaults, NothingTheProcessStartedOutlivesIt) {
   const fs::path dir = test::freshDir("external_leftovers");
   for (const std::string mode : {"exit", "passthrough", "hang"}) {

@@ -9,8 +9,11 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <cstring>
+#include <iterator>
+#include <mutex>
 #include <thread>
 
 #include "core/text.hpp"
@@ -28,6 +31,52 @@ constexpr long long kEndedCheckMs = 100;  // how often a wait checks whether the
 
 void setNonBlocking(int fd) {
   fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) | O_NONBLOCK);
+}
+
+// The process groups of the external processes alive. A signal that ends arena (Ctrl-C, SIGTERM,
+// a closed terminal) ends them first: each runs in a group of its own, which a terminal's Ctrl-C
+// does not reach, so a hung one outlived arena (a bad-input trial). Fixed slots of atomics, as a
+// signal handler reads them; a process beyond them is only not covered.
+constexpr int kGroupSlots = 64;
+std::atomic<pid_t> liveGroups[kGroupSlots];
+constexpr int kEndingSignals[] = {SIGINT, SIGTERM, SIGHUP};
+struct sigaction previousActions[std::size(kEndingSignals)];
+
+void endGroupsAndResignal(int signal) {
+  for (std::atomic<pid_t>& group : liveGroups)
+    if (const pid_t p = group.load(); p > 0) ::kill(-p, SIGKILL);
+  // Then the signal as before: blocked while this handler runs, it is delivered on its return
+  // under the disposition that was there (the default ends arena).
+  for (size_t k = 0; k < std::size(kEndingSignals); ++k)
+    if (kEndingSignals[k] == signal) sigaction(signal, &previousActions[k], nullptr);
+  raise(signal);
+}
+
+void registerGroup(pid_t group) {
+  static std::once_flag installed;
+  std::call_once(installed, [] {
+    for (size_t k = 0; k < std::size(kEndingSignals); ++k) {
+      sigaction(kEndingSignals[k], nullptr, &previousActions[k]);
+      // A signal arena ignores (a background job's SIGINT, nohup's SIGHUP) ends nothing.
+      if (!(previousActions[k].sa_flags & SA_SIGINFO) && previousActions[k].sa_handler == SIG_IGN)
+        continue;
+      struct sigaction action {};
+      action.sa_handler = endGroupsAndResignal;
+      sigemptyset(&action.sa_mask);
+      sigaction(kEndingSignals[k], &action, nullptr);
+    }
+  });
+  for (std::atomic<pid_t>& slot : liveGroups) {
+    pid_t empty = 0;
+    if (slot.compare_exchange_strong(empty, group)) return;
+  }
+}
+
+void unregisterGroup(pid_t group) {
+  for (std::atomic<pid_t>& slot : liveGroups) {
+    pid_t same = group;
+    if (slot.compare_exchange_strong(same, 0)) return;
+  }
 }
 
 std::string describeStatus(int status) {
@@ -88,6 +137,7 @@ Subprocess::Subprocess(const std::vector<std::string>& argv,
                 std::strerror(rc));
   }
   for (int fd : {stdin_, stdout_, stderr_}) setNonBlocking(fd);
+  registerGroup(pid_);
 }
 
 Subprocess::~Subprocess() {
@@ -228,6 +278,7 @@ bool Subprocess::ended() {
   while (::waitid(P_PID, id_t(pid_), &info, WEXITED | WNOHANG | WNOWAIT) < 0) {
     if (errno == EINTR) continue;
     reaped_ = true;  // ECHILD: nothing left to reap (status unknown)
+    unregisterGroup(pid_);
     return true;
   }
   return info.si_pid == pid_;
@@ -236,6 +287,7 @@ bool Subprocess::ended() {
 void Subprocess::reap() {
   if (reaped_) return;
   ::kill(-pid_, SIGKILL);
+  unregisterGroup(pid_);  // once reaped, its group's id may name another's
   while (::waitpid(pid_, &status_, 0) < 0 && errno == EINTR) {
   }
   reaped_ = true;
