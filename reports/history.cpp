@@ -134,10 +134,15 @@ std::vector<RunResults> runsFromDatabase(const fs::path& file) {
                   run.created + "\"");
     run.keepsTiles = false;
     // The settings the run recorded (its gate compares them); a database row without them (or
-    // with an unreadable record) leaves them unknown, and the history does not judge them.
-    if (const json settings = json::parse(textOf(r, "settings"), nullptr, false);
-        settings.is_object())
-      try {
+    // with a record of another shape) leaves them unknown, and the history does not judge them.
+    // A record that is no JSON at all was damaged: said, not read as "no settings".
+    const std::string settingsText = textOf(r, "settings");
+    const json settings = json::parse(settingsText, nullptr, false);
+    if (!settingsText.empty() && settings.is_discarded())
+      throw Error(run.source + ": runs.settings: expected the run's settings as JSON, got " +
+                  jsonText(json(utf8Excerpt(settingsText, 60, false))) +
+                  " (the database was edited or damaged)");
+    if (settings.is_object()) try {
         run.settings = RunSettings::fromJson(settings, run.source, "$.settings");
       } catch (const Error&) {
       }
@@ -165,7 +170,9 @@ std::vector<RunResults> runsFromDatabase(const fs::path& file) {
     pair.label = textOf(p, "label");
     pair.status = textOf(p, "status");
     pair.error = textOf(p, "error");
-    pairIndex[{id, pair.scene + "\n" + pair.label}] = pairs.size();
+    if (!pairIndex.emplace(std::pair{id, pair.scene + "\n" + pair.label}, pairs.size()).second)
+      throw Error(runs[id].source + ": pairs: " + pair.label + " on " + pair.scene +
+                  " is listed twice (the database was edited or damaged)");
     pairs.push_back(std::move(pair));
   }
   for (const json& s : db.rows("SELECT * FROM summaries")) {
@@ -187,13 +194,18 @@ std::vector<RunResults> runsFromDatabase(const fs::path& file) {
     if (summary.frames < 0)
       throw Error(where + ": frames " + std::to_string(summary.frames) +
                   ": expected a count of frames (0 or more)");
+    if (summary.frames == 0 && (std::isfinite(summary.mean) || summary.ci95.valid()))
+      throw Error(where + ": a summary of 0 frames holds a value (mean " +
+                  shortestText(summary.mean) +
+                  "): a run writes none there (the database was edited or damaged)");
     if (summary.ci95.lo > summary.ci95.hi)
       throw Error(where + ": the interval [" + shortestText(summary.ci95.lo) + ", " +
                   shortestText(summary.ci95.hi) +
                   "] has its ends swapped (the database was edited or damaged)");
     // An absent summary keeps its reason (summaries.absent), so the dashboard can say it.
     summary.absent = textOf(s, "absent");
-    runs[id].pairs[it->second].summary[textOf(s, "metric")] = summary;
+    if (!runs[id].pairs[it->second].summary.emplace(textOf(s, "metric"), summary).second)
+      throw Error(where + ": listed twice (the database was edited or damaged)");
   }
   std::vector<RunResults> out;
   if (order.empty()) throw Error(file.string() + ": holds no runs (nothing to chart or gate)");

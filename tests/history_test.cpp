@@ -565,6 +565,29 @@ TEST(History, RunsFromADatabaseAreJudgedOnTheSettingsTheyRecorded) {
                 .find(": summaries, svgf on s, relMse: the interval [0.5, 0.001] has its ends "
                       "swapped"),
             std::string::npos);
+  // So are a summary of 0 frames that holds a value (a perfect 0 from no frame, charted), a pair or
+  // summary listed twice, and settings that are no JSON (read as "no settings": a bad-input
+  // trial). Each edit on a fresh copy of the database.
+  const std::vector<std::pair<std::string, std::string>> damages = {
+      {"UPDATE summaries SET frames = 0, mean = 0, ci_lo = 0, ci_hi = 0 WHERE label = 'svgf' AND "
+       "metric = 'relMse'",
+       ": summaries, svgf on s, relMse: a summary of 0 frames holds a value (mean 0)"},
+      {"INSERT INTO pairs SELECT * FROM pairs WHERE label = 'svgf'",
+       ": pairs: svgf on s is listed twice"},
+      {"INSERT INTO summaries SELECT * FROM summaries WHERE label = 'svgf' AND metric = 'relMse'",
+       ": summaries, svgf on s, relMse: listed twice"},
+      {"UPDATE runs SET settings = '{garbage'",
+       ": runs.settings: expected the run's settings as JSON, got \"{garbage\""}};
+  for (const auto& [sql, error] : damages) {
+    const fs::path copy = dir / "damaged.db";
+    fs::remove(copy);
+    appendToDatabase(copy, test::typed(historyRun(0, 2)));
+    ASSERT_EQ(sqlite3_open(copy.string().c_str(), &db), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr), SQLITE_OK) << sql;
+    sqlite3_close(db);
+    const std::string e = test::errorOf([&] { loadHistory({copy}); });
+    EXPECT_NE(e.find(error), std::string::npos) << sql << "\n" << e;
+  }
 }
 
 // A scene's resolution and frame count are part of what the gate compares; a database keeps them
