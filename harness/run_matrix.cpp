@@ -369,19 +369,25 @@ json runMatrix(const RunConfig& cfg) {
   const bool keepAll = cfg.keepFrames == "all" || (cfg.keepFrames == "auto" && sources.size() == 1 &&
                                                    denoisers.size() == (cfg.baselines ? 3u : 1u) && !cfg.denoisers.empty());
   // A run written into the cache mixes its results with sequences (and a later cache clean-up
-  // with the run), as does a cache inside the run: the two stay apart.
+  // with the run), as does a cache inside the run: the two stay apart. So do a run and a capture
+  // it reads (a run into its capture's folder wrote its results and images among the capture's
+  // files, which its validation then warned of; a bad-input trial).
+  auto resolved = [](const fs::path& p) {
+    std::error_code ec;
+    fs::path r = fs::weakly_canonical(fs::absolute(p, ec), ec).lexically_normal();
+    return r.has_filename() ? r : r.parent_path();  // "dir/" as "dir"
+  };
+  auto inside = [](const fs::path& inner, const fs::path& outer) {
+    return std::mismatch(outer.begin(), outer.end(), inner.begin(), inner.end()).first ==
+           outer.end();
+  };
+  for (const fs::path& capture : cfg.captures)
+    if (inside(resolved(cfg.out), resolved(capture)))
+      throw Error("--out " + cfg.out.string() + " lies in the capture " + capture.string() +
+                  " the run reads; expected a directory outside it");
   if (!cfg.scenes.empty()) {
     if (cfg.cache.empty())
       throw Error("--cache: an empty directory name; expected the sequence cache, e.g. cache");
-    auto resolved = [](const fs::path& p) {
-      std::error_code ec;
-      fs::path r = fs::weakly_canonical(fs::absolute(p, ec), ec).lexically_normal();
-      return r.has_filename() ? r : r.parent_path();  // "dir/" as "dir"
-    };
-    auto inside = [](const fs::path& inner, const fs::path& outer) {
-      return std::mismatch(outer.begin(), outer.end(), inner.begin(), inner.end()).first ==
-             outer.end();
-    };
     const fs::path out = resolved(cfg.out), cache = resolved(cfg.cache);
     if (inside(out, cache))
       throw Error("--out " + cfg.out.string() + " lies in the sequence cache " +

@@ -2325,6 +2325,21 @@ TEST(CaptureContract, EveryDenoiserRunsAStoredOutputOnlyWhereItIsStored) {
   EXPECT_EQ(named["pairs"].size(), 3u);
 }
 
+// A run into the folder of a capture it reads (or below it) is refused before any work: its results
+// and images landed among the capture's files (a bad-input trial).
+TEST(CaptureContract, ARunIntoItsCapturesFolderIsRefused) {
+  const fs::path dir = copyCapture(exportedCornell(), "run_into");
+  for (const fs::path& out : {dir, dir / "runs" / "mine"}) {
+    const std::string e = test::errorOf([&] {
+      runMatrix(captureRun(out, {{"passthrough", {}, ""}}, {dir}));
+    });
+    EXPECT_NE(e.find("lies in the capture " + dir.string() + " the run reads"), std::string::npos)
+        << e;
+  }
+  EXPECT_FALSE(fs::exists(dir / "results.json"));
+  EXPECT_EQ(validate(dir).status(), CheckStatus::Pass);
+}
+
 // A byte that is not UTF-8 in a name the results quote (a stray file's, here in the validation's
 // files.unexpected) is written as U+FFFD: it ended a finished run with "invalid UTF-8 byte",
 // exit 3, every pair's results lost (a bad-input trial).

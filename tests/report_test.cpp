@@ -1483,6 +1483,20 @@ TEST(Report, APageInItsRunDirectoryCountsTheImagesInPlace) {
             }).find("report: --out " + o.out.string() + " holds another run (results.json)"),
             std::string::npos);
   EXPECT_EQ(readText(o.out / "data.js"), page);
+  // A page below a run directory (its images/) or in a capture: refused, naming it (the next report
+  // of the run copied images/images/...; a bad-input trial).
+  ReportOptions below = o;
+  below.out = o.run / "images";
+  EXPECT_NE(test::errorOf([&] { writeReport(below); })
+                .find("report: --out " + below.out.string() + " lies in the run directory " +
+                      fs::weakly_canonical(o.run).string()),
+            std::string::npos);
+  const fs::path capture = test::freshDir("report_in_capture");
+  std::ofstream(capture / "capture.json") << "{}";
+  below.out = capture / "page";
+  EXPECT_NE(test::errorOf([&] { writeReport(below); }).find(" lies in the capture "),
+            std::string::npos);
+  EXPECT_FALSE(fs::exists(capture / "page"));
 }
 
 // A run's results.json given where its directory is expected: the directory is named.
