@@ -1673,21 +1673,21 @@ void requirePageDirectory(const fs::path& out, const std::string& command) {
   if (std::error_code ec; fs::exists(out, ec) && !fs::is_directory(out, ec))
     throw Error(command + ": --out " + out.string() +
                 ": exists and is not a directory; expected a directory for the page");
-  // Not among a capture's files, nor below a run directory (its own is --out itself, checked by
-  // the caller): a page in a run's images/ was copied into itself by the next report of the run
-  // (images/images/...), and one in a capture sat among its frames (a bad-input trial).
+  // Not among a capture's files, nor in a run directory's images/ (a page in it was copied into
+  // itself by the next report of the run: images/images/...; one in a capture sat among its
+  // frames; a bad-input trial). A folder of its own in a run directory (RUN/report) is fine.
   std::error_code ec;
-  const fs::path resolved = fs::weakly_canonical(fs::absolute(out, ec), ec).lexically_normal();
-  for (fs::path dir = resolved.has_filename() ? resolved : resolved.parent_path(); !dir.empty();
-       dir = dir.parent_path()) {
+  fs::path resolved = fs::weakly_canonical(fs::absolute(out, ec), ec).lexically_normal();
+  if (!resolved.has_filename()) resolved = resolved.parent_path();
+  for (fs::path dir = resolved; !dir.empty(); dir = dir.parent_path()) {
     if (fs::exists(dir / "capture.json", ec))
       throw Error(command + ": --out " + out.string() + " lies in the capture " + dir.string() +
                   "; expected a directory outside it");
-    if (dir != resolved && fs::exists(dir / "results.json", ec))
-      throw Error(command + ": --out " + out.string() + " lies in the run directory " +
-                  dir.string() +
-                  ", whose files and images are that run's; expected the run "
-                  "directory itself (a report of that run) or a directory outside it");
+    if (dir != resolved && fs::exists(dir / "results.json", ec) &&
+        *resolved.lexically_relative(dir).begin() == "images")
+      throw Error(command + ": --out " + out.string() + " lies in the images of the run " +
+                  dir.string() + ", which a report of that run copies; expected a directory of "
+                  "its own");
     if (dir == dir.parent_path()) break;
   }
 }

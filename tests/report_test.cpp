@@ -1483,12 +1483,12 @@ TEST(Report, APageInItsRunDirectoryCountsTheImagesInPlace) {
             }).find("report: --out " + o.out.string() + " holds another run (results.json)"),
             std::string::npos);
   EXPECT_EQ(readText(o.out / "data.js"), page);
-  // A page below a run directory (its images/) or in a capture: refused, naming it (the next report
+  // A page in a run directory's images/ or in a capture: refused, naming it (the next report
   // of the run copied images/images/...; a bad-input trial).
   ReportOptions below = o;
   below.out = o.run / "images";
   EXPECT_NE(test::errorOf([&] { writeReport(below); })
-                .find("report: --out " + below.out.string() + " lies in the run directory " +
+                .find("report: --out " + below.out.string() + " lies in the images of the run " +
                       fs::weakly_canonical(o.run).string()),
             std::string::npos);
   const fs::path capture = test::freshDir("report_in_capture");
