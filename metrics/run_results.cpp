@@ -295,11 +295,20 @@ struct ShapeReader {
     member(p, path, "summary", &json::is_object, "an object");
     // The numbers readers take as numbers (printouts, compare, report, history).
     const json& frames = member(p, path, "frames", &json::is_array, "an array of per-frame metrics");
+    // One record per frame, in order: a frame listed twice or out of order is an edit the charts
+    // would draw as data (a bad-input trial).
+    long long previous = -1;
     for (size_t f = 0; f < frames.size(); ++f) {
       const std::string at = path + ".frames[" + std::to_string(f) + "]";
       if (!frames[f].is_object()) fail(at, "an object", frames[f]);
-      member(frames[f], at, "frame", &json::is_number_integer, "an integer");
+      const json& frame = member(frames[f], at, "frame", &json::is_number_integer, "an integer");
+      if (frame.get<long long>() <= previous)
+        fail(at + ".frame",
+             "a frame after " + std::to_string(previous) + " (one record per frame, in order)",
+             frame);
+      previous = frame.get<long long>();
     }
+
     if (p.contains("timing")) timing(member(p, path, "timing", &json::is_object, "an object"), path + ".timing");
     for (const char* k : {"ghosting", "cuts"})
       if (p.contains(k)) events(p, path, k);

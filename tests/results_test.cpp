@@ -204,6 +204,11 @@ TEST(RunResults, EveryMisshapenPartIsNamedByItsPath) {
           .find("$.pairs[0].error: expected a string (the failure), got nothing (the field is "
                 "absent)"),
       std::string::npos);
+  // A frame's record listed twice (the charts drew both; a bad-input trial).
+  EXPECT_NE(errorWith([](json& d) { d["pairs"][0]["frames"][2]["frame"] = 1; })
+                .find("$.pairs[0].frames[2].frame: expected a frame after 1 (one record per "
+                      "frame, in order), got a number"),
+            std::string::npos);
   EXPECT_NE(errorWith([](json& d) { d["statistics"] = 1; }).find("$.statistics: expected an object"),
             std::string::npos);
   EXPECT_NE(errorWith([](json& d) { d["schema"] = 1; }).find("r.json: results schema version 1"), std::string::npos);
