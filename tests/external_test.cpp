@@ -143,6 +143,15 @@ TEST(ExternalManifest, EveryMistakeNamesTheFileAndTheField) {
        {{"parameters",
          {{{"name", "k"}, {"type", "float"}, {"default", 0.5}, {"min", 1}, {"max", 0.25}}}}},
        "$.parameters[0].min: must not exceed max (1 > 0.25)"},
+      {"int range",  // whole numbers beyond an int: the field named (it blamed the default)
+       {{"parameters",
+         {{{"name", "k"}, {"type", "int"}, {"default", 0}, {"min", -3e9}, {"max", 3e9}}}}},
+       "$.parameters[0].min: an int parameter's min must be a whole number from -2147483648 to "
+       "2147483647, got -3e+09"},
+      {"int fraction",
+       {{"parameters",
+         {{{"name", "k"}, {"type", "int"}, {"default", 0.5}, {"min", 0}, {"max", 4}}}}},
+       "$.parameters[0].default: an int parameter's default must be a whole number"},
       {"param type",
        {{"parameters", {{{"name", "k"}, {"type", "double"}, {"default", 1}}}}},
        "$.parameters[0].type: expected one of bool, int, float, choice"},

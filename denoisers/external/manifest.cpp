@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <sstream>
 
@@ -94,8 +96,16 @@ ParamSpec readParamSpec(JsonReader& p) {
       p.fail("default", text.str());
     }
     if (type == "int") {
-      if (def != double(int(def)) || min != double(int(min)) || max != double(int(max)))
-        p.fail("default", "an int parameter needs integer default, min and max");
+      // Each named: a whole number within a 32-bit int (3e9 was blamed on the default, and a
+      // cast of it to int is undefined).
+      for (const auto& [field, value] :
+           {std::pair{"default", def}, std::pair{"min", min}, std::pair{"max", max}})
+        if (value != std::floor(value) || value < double(INT32_MIN) || value > double(INT32_MAX)) {
+          std::ostringstream text;
+          text << "an int parameter's " << field << " must be a whole number from " << INT32_MIN
+               << " to " << INT32_MAX << ", got " << value;
+          p.fail(field, text.str());
+        }
       spec = ParamSpec::integer(name, int(def), int(min), int(max), meaning);
     } else {
       spec = ParamSpec::real(name, def, min, max, meaning);
