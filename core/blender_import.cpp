@@ -151,6 +151,90 @@ fs::path existingFrame(const fs::path& dir, int t, int frames) {
               ")" + exrFilesHeld(dir));
 }
 
+// The Cycles settings of each render (cameras.json's optional "renders": noisy, reference_a,
+// reference_b; scripts/blender/render_capture.py writes them). What shapes the light must be the
+// same in every render: a reference of other bounces, clamps, exposure, film or pixel filter is
+// another image, and passed every check where its overall brightness agreed (a reference without
+// bounces was not caught). Cycles' denoiser in any render is refused. What the checks cannot see
+// but a capture should not have (a fixed seed for the noisy frames, adaptive sampling, another
+// pixel filter than Box 1 px) is returned as deviations, recorded and warned of.
+struct RenderSettingsRead {
+  json renders = json::object();
+  std::vector<std::string> deviations;
+};
+
+RenderSettingsRead readRenderSettings(JsonReader& root, const std::vector<std::string>& halves,
+                                      const std::string& file) {
+  RenderSettingsRead out;
+  std::optional<JsonReader> renders = root.optionalChild("renders");
+  if (!renders) return out;
+  static const char* const kTransport[] = {
+      "maxBounces",    "diffuseBounces",     "glossyBounces", "transmissionBounces",
+      "volumeBounces", "transparentBounces", "clampDirect",   "clampIndirect",
+      "exposure",      "filmTransparent",    "motionBlur",    "filter",
+      "filterWidth"};
+  std::vector<std::string> names = {"noisy"};
+  names.insert(names.end(), halves.begin(), halves.end());
+  for (const std::string& name : names) {
+    JsonReader r = renders->child(name);
+    json settings = {{"samples", r.integerIn("samples", 1, 1000000000)},
+                     {"seed", r.integer("seed")},
+                     {"animatedSeed", r.boolean("animatedSeed", false)},
+                     {"adaptiveSampling", r.boolean("adaptiveSampling", false)},
+                     {"denoising", r.boolean("denoising", false)},
+                     {"filmTransparent", r.boolean("filmTransparent", false)},
+                     {"motionBlur", r.boolean("motionBlur", false)},
+                     {"filter", r.string("filter")},
+                     {"filterWidth", r.number("filterWidth")},
+                     {"exposure", r.number("exposure")},
+                     {"clampDirect", r.number("clampDirect")},
+                     {"clampIndirect", r.number("clampIndirect")}};
+    for (const char* k : {"maxBounces", "diffuseBounces", "glossyBounces", "transmissionBounces",
+                          "volumeBounces", "transparentBounces"})
+      settings[k] = r.integerIn(k, 0, 1024);
+    r.rejectUnread();
+    if (settings["denoising"].get<bool>())
+      throw Error(file + ": $.renders." + name + ".denoising: Cycles' denoiser was on for the " +
+                  name +
+                  " frames; a capture holds what the path tracer gave (Render Properties > "
+                  "Sampling > Render > Denoise: off)");
+    out.renders[name] = settings;
+  }
+  // A folder left out since (one reference half removed: the other is the reference) leaves its
+  // entry unread.
+  for (const char* half : {"reference_a", "reference_b"})
+    if (renders->has(half)) renders->value(half);
+  renders->rejectUnread();
+  const json& noisy = out.renders["noisy"];
+  for (const std::string& half : halves)
+    for (const char* k : kTransport)
+      if (out.renders[half][k] != noisy[k])
+        throw Error(file + ": $.renders." + half + "." + k + ": " + out.renders[half][k].dump() +
+                    ", where the noisy frames' is " + noisy[k].dump() +
+                    ": a reference must render the same light (bounces, clamps, exposure, film, "
+                    "pixel filter) with more samples, or it is the reference of another image");
+  if (!noisy["animatedSeed"].get<bool>())
+    out.deviations.push_back(
+        "the noisy frames' seed is not animated (every frame the same noise pattern: a temporal "
+        "filter's history cannot average it away; Sampling > Advanced > Seed, the clock icon)");
+  for (const auto& [name, settings] : out.renders.items()) {
+    if (settings["adaptiveSampling"].get<bool>())
+      out.deviations.push_back("adaptive sampling was on for the " + name +
+                               " frames (their noise is not of the samples per pixel recorded)");
+    if (name == "noisy" && (settings["filter"] != "BOX" || settings["filterWidth"] != 1.0))
+      out.deviations.push_back("the pixel filter is " + settings["filter"].get<std::string>() +
+                               " of " + shortestText(settings["filterWidth"].get<double>()) +
+                               " px, not Box of 1 px (each pixel's samples spread over its "
+                               "neighbours: noise correlated between pixels)");
+  }
+  if (halves.size() == 2 &&
+      out.renders["reference_a"]["seed"] == out.renders["reference_b"]["seed"])
+    out.deviations.push_back(
+        "the two reference halves share their seed: they are one render twice, and the noise "
+        "floor they give is none");
+  return out;
+}
+
 // A frame file beyond the `frames` cameras.json declares: a capture cut short silently otherwise.
 void refuseFramesBeyond(const fs::path& dir, int frames, const fs::path& camerasFile) {
   std::error_code ec;
@@ -263,13 +347,13 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
     e.rejectUnread();
     events.push_back(ev);
   }
-  root.rejectUnread();
-
   // The reference folders there are: both halves (the script's), one (a render of the reference
   // alone: no noise floor), or none (a capture without a reference: the metrics that need none).
   std::vector<std::string> halves;
   for (const char* half : {"reference_a", "reference_b"})
     if (fs::is_directory(source / half)) halves.push_back(half);
+  const RenderSettingsRead renders = readRenderSettings(root, halves, camerasFile.string());
+  root.rejectUnread();
   // referenceSpp counts both halves' samples together.
   const int referenceSamples = halves.size() == 2 ? referenceSpp : std::max(1, referenceSpp / 2);
 
@@ -403,6 +487,10 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
         // The share of surface pixels whose normal was renormalised (above).
         {"normalsRenormalised", surfacePixels > 0 ? renormalised / surfacePixels : 0.0}}}};
   if (halves.empty()) description.erase("reference");
+  if (!renders.renders.empty()) {
+    description["source"]["renders"] = renders.renders;
+    description["source"]["renderDeviations"] = renders.deviations;
+  }
   try {
     writer.commit(description);
   } catch (const Error& e) {

@@ -1007,6 +1007,30 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
         "more than 1 spp explains a few percent, most of the frame a Normal pass that holds no "
         "unit normals (capture.json source.normalsRenormalised)"));
 
+  // The renders' Cycles settings the importer read (cameras.json "renders"): those a capture
+  // should not have and no other check sees (a fixed seed for the noisy frames, adaptive
+  // sampling, another pixel filter), each said.
+  if (sequence.isCapture() && sequence.capture().source.is_object() &&
+      sequence.capture().source.contains("renderDeviations")) {
+    const nlohmann::json& deviations = sequence.capture().source["renderDeviations"];
+    std::string said;
+    bool read = deviations.is_array();
+    for (const nlohmann::json& d : read ? deviations : nlohmann::json::array()) {
+      read = read && d.is_string();
+      if (d.is_string()) said += (said.empty() ? "" : "; ") + d.get<std::string>();
+    }
+    CaptureCheck c = check(
+        "render.settings", read ? double(deviations.size()) : 0, 0, kSoft, "settings",
+        read ? (said.empty() ? "the renders' Cycles settings (capture.json source.renders): the "
+                               "same light in every render, an animated seed, Box 1 px, no "
+                               "adaptive sampling"
+                             : said)
+             : "capture.json source.renderDeviations is no list of texts (the importer writes "
+               "one): edited or damaged");
+    if (!read) c.status = CheckStatus::Fail;
+    v.checks.push_back(c);
+  }
+
   // 4b. Signal: a colour layer black in every frame holds no measurement (every method would
   // score a flawless, flicker-free black, or tie at relMSE 1); a few black frames (a fade) warn.
   {

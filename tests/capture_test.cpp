@@ -2868,6 +2868,39 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
           (work / "nan_pixel_capture" / "capture.json").string())["source"]["emissionBeyondEmitEnv"]
           .get<double>();
   EXPECT_NEAR(share, checkNamed(v, "emission.beyondEmitEnv").value, 1e-3);
+  // Each render's Cycles settings (cameras.json "renders", which the script writes): a reference
+  // of other light than the noisy frames is refused naming the setting (one without bounces
+  // passed every check); Cycles' denoiser is refused; a fixed seed for the noisy frames warns.
+  EXPECT_EQ(checkNamed(v, "render.settings").status, CheckStatus::Pass)
+      << checkNamed(v, "render.settings").detail;
+  const auto withRenders = [&](const char* name, const std::function<void(json&)>& edit) {
+    const fs::path dir = copied(name);
+    json described = parseJsonFile((dir / "cameras.json").string());
+    edit(described["renders"]);
+    std::ofstream(dir / "cameras.json") << described.dump();
+    return dir;
+  };
+  const fs::path unbounced =
+      withRenders("unbounced", [](json& renders) { renders["reference_a"]["maxBounces"] = 0; });
+  EXPECT_NE(
+      test::errorOf([&] { importBlender(unbounced, work / "unbounced_capture", {"unbounced"}); })
+          .find("$.renders.reference_a.maxBounces: 0, where the noisy frames' is 4: a "
+                "reference must render the same light"),
+      std::string::npos);
+  EXPECT_FALSE(fs::exists(work / "unbounced_capture"));
+  const fs::path denoised =
+      withRenders("denoised", [](json& renders) { renders["noisy"]["denoising"] = true; });
+  EXPECT_NE(test::errorOf([&] {
+              importBlender(denoised, work / "denoised_capture", {"denoised"});
+            }).find("$.renders.noisy.denoising: Cycles' denoiser was on"),
+            std::string::npos);
+  const fs::path fixedSeed =
+      withRenders("fixed_seed", [](json& renders) { renders["noisy"]["animatedSeed"] = false; });
+  importBlender(fixedSeed, work / "fixed_seed_capture", {"fixed_seed"});
+  const CaptureCheck& seeded = checkNamed(validate(work / "fixed_seed_capture"), "render.settings");
+  EXPECT_EQ(seeded.status, CheckStatus::Warn);
+  EXPECT_NE(seeded.detail.find("the noisy frames' seed is not animated"), std::string::npos)
+      << seeded.detail;
   // The render folder given where a capture is wanted: said what to do with it.
   for (const std::string& error : {test::errorOf([&] { readCaptureDescription(work / "render"); }),
                                    test::errorOf([&] { Sequence::open(work / "render"); })})

@@ -4,7 +4,8 @@
 #   OUT/reference_a/, reference_b/  the same frames at --reference-spp / 2 samples each, two
 #                                 independent seeds: their mean is the reference, their difference
 #                                 its noise floor (only Combined is read)
-#   OUT/cameras.json              per frame: camera-to-world matrix, projection matrix, sensor facts
+#   OUT/cameras.json              per frame: camera-to-world matrix, projection matrix, sensor facts;
+#                                 each render's Cycles settings (renders)
 # Run by Blender, not Python:
 #   blender -b --factory-startup --python scripts/blender/render_capture.py -- OUT [options]
 # Options: --frames N (6) --width W (96) --height H (54) --spp N (1) --reference-spp N (256)
@@ -151,6 +152,21 @@ def render(scene, folder, samples, animated_seed, seed):
         bpy.ops.render.render(write_still=True)
 
 
+def settings(scene):
+    """The Cycles settings of the render just made, as cameras.json's "renders" records them:
+    `arena import blender` refuses a reference that renders other light than the noisy frames."""
+    c = scene.cycles
+    return {"samples": c.samples, "seed": c.seed, "animatedSeed": c.use_animated_seed,
+            "adaptiveSampling": c.use_adaptive_sampling, "denoising": c.use_denoising,
+            "filmTransparent": scene.render.film_transparent,
+            "motionBlur": scene.render.use_motion_blur, "filter": c.pixel_filter_type,
+            "filterWidth": c.filter_width, "exposure": c.film_exposure,
+            "clampDirect": c.sample_clamp_direct, "clampIndirect": c.sample_clamp_indirect,
+            "maxBounces": c.max_bounces, "diffuseBounces": c.diffuse_bounces,
+            "glossyBounces": c.glossy_bounces, "transmissionBounces": c.transmission_bounces,
+            "volumeBounces": c.volume_bounces, "transparentBounces": c.transparent_max_bounces}
+
+
 def cameras(scene, cam):
     out = []
     depsgraph = bpy.context.evaluated_depsgraph_get()
@@ -167,16 +183,21 @@ def main():
     args = parse()
     scene, cam = build_scene(args)
     os.makedirs(args.out, exist_ok=True)
+    renders = {}
     render(scene, os.path.join(args.out, "noisy"), args.spp, True, args.seed)
+    renders["noisy"] = settings(scene)
     half = max(1, args.reference_spp // 2)
     render(scene, os.path.join(args.out, "reference_a"), half, False, args.seed + 1)
+    renders["reference_a"] = settings(scene)
     render(scene, os.path.join(args.out, "reference_b"), half, False, args.seed + 2)
+    renders["reference_b"] = settings(scene)
     info = {"producer": "Blender %s (Cycles), scripts/blender/render_capture.py" % bpy.app.version_string,
             "width": args.width, "height": args.height, "frames": args.frames,
             "fps": scene.render.fps / scene.render.fps_base,
             "spp": args.spp, "referenceSpp": 2 * half, "clipStart": cam.data.clip_start,
             "clipEnd": cam.data.clip_end, "cameras": cameras(scene, cam),
-            "events": [{"frame": 2, "kind": "object_moves", "what": "cube", "passIndex": 3}]}
+            "events": [{"frame": 2, "kind": "object_moves", "what": "cube", "passIndex": 3}],
+            "renders": renders}
     with open(os.path.join(args.out, "cameras.json"), "w") as f:
         json.dump(info, f, indent=1)
 
