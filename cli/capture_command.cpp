@@ -100,7 +100,8 @@ void addCaptureCommands(CLI::App& app) {
         stored[o.substr(0, eq)] = o.substr(eq + 1);
         if (!isPlainName(o.substr(0, eq)))
           throw Error("--output " + quotedName(o) +
-                      ": NAME must be a folder name without spaces, slashes or control characters, "
+                      ": NAME must be a folder name in UTF-8 without spaces, slashes, commas or "
+                      "control characters, "
                       "not . or ..");
         if (!std::filesystem::is_directory(o.substr(eq + 1)))
           throw Error("--output '" + o + "': " + o.substr(eq + 1) + " is not a folder");

@@ -266,7 +266,8 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
   if (!isPlainName(name))
     throw Error(std::string(options.name.empty() ? "the source folder's name" : "--name") + " " +
                 quotedName(name) +
-                " cannot name a capture (expected no spaces, slashes or control characters, not . "
+                " cannot name a capture (expected UTF-8 with no spaces, slashes, commas or control "
+                "characters, not . "
                 "or ..)" +
                 (options.name.empty() ? "; give one with --name" : ""));
   const json doc = parseJsonFile(camerasFile.string());

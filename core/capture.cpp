@@ -93,12 +93,26 @@ const std::vector<LayerSpec>& referenceSpecs() {
 
 bool isPlainName(const std::string& name) {
   // A control character (a newline split the run's unfinished mark over two lines; a NUL cut the
-  // folder's name) or a byte that is not UTF-8 would name folders and results no one can read.
-  return !name.empty() && name != "." && name != ".." &&
-         name.find_first_of("/\\ \t") == std::string::npos &&
-         std::none_of(name.begin(), name.end(),
-                      [](char c) { return (unsigned char)c < 0x20 || c == 0x7f; }) &&
-         validUtf8(name) == name;
+  // folder's name), a space of any kind, or a byte that is not UTF-8 would name folders and
+  // results no one can read or type; a comma, one no list of names (--scenes, --denoisers) can
+  // hold.
+  if (name.empty() || name == "." || name == ".." || validUtf8(name) != name ||
+      name.find_first_of("/\\,") != std::string::npos)
+    return false;
+  for (size_t i = 0; i < name.size();) {
+    const auto byte = [&](size_t k) { return uint32_t((unsigned char)name[i + k]); };
+    const uint32_t lead = byte(0);
+    const size_t length = lead < 0x80 ? 1 : lead < 0xe0 ? 2 : lead < 0xf0 ? 3 : 4;
+    uint32_t c = length == 1 ? lead : lead & (0x7fu >> length);
+    for (size_t k = 1; k < length; ++k) c = (c << 6) | (byte(k) & 0x3f);
+    i += length;
+    const bool control = c < 0x20 || (c >= 0x7f && c <= 0x9f);
+    const bool space = c == 0x20 || c == 0xa0 || c == 0x1680 || (c >= 0x2000 && c <= 0x200b) ||
+                       c == 0x2028 || c == 0x2029 || c == 0x202f || c == 0x205f || c == 0x3000 ||
+                       c == 0xfeff;
+    if (control || space) return false;
+  }
+  return true;
 }
 
 std::string quotedName(const std::string& name) {
@@ -260,7 +274,8 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
   info.scene = root.string("name");
   if (!isPlainName(info.scene))
     throw Error(file.string() + ": name " + quotedName(info.scene) +
-                ": expected a non-empty name without spaces, slashes or control characters, not . "
+                ": expected a non-empty name in UTF-8 without spaces, slashes, commas or control "
+                "characters, not . "
                 "or .. (it names the capture's folders in a run)");
   info.purpose = root.string("purpose", "capture");
   info.width = root.integerIn("width", 1, 16384);
@@ -412,7 +427,8 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
       JsonReader o = outputs->child(name);
       if (!isPlainName(name))
         throw Error(file.string() + ": outputs: key " + quotedName(name) +
-                    ": expected a folder name in outputs/ without spaces, slashes or control "
+                    ": expected a folder name in outputs/ in UTF-8 without spaces, slashes, commas "
+                    "or control "
                     "characters, not . or ..");
       CaptureOutput out;
       out.name = name;

@@ -67,8 +67,8 @@ std::filesystem::path captureGradientPath(const std::filesystem::path& dir, int 
 std::filesystem::path captureOutputPath(const CaptureOutput& output, int t);
 
 bool isCapture(const std::filesystem::path& dir);
-// A capture's name or a denoiser output's key: one folder name (non-empty, UTF-8, no spaces,
-// slashes or control characters, not . or ..).
+// A capture's name, a scene file's or a denoiser output's key: one folder name (non-empty, UTF-8,
+// no spaces, slashes or control characters, not . or ..).
 bool isPlainName(const std::string& name);
 // `name` quoted as JSON writes it ("a\nb"), for messages about a name isPlainName refused.
 std::string quotedName(const std::string& name);

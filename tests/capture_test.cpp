@@ -2093,8 +2093,8 @@ TEST(CaptureContract, BadValuesAndNamesAreErrorsNamingThem) {
   // A control character or a byte that is not UTF-8 names no folder anyone can read (a newline
   // split the run's unfinished mark over two lines; a NUL cut the folder's name).
   expectError(copyCapture(good, "newline", [](json& d) { d["name"] = "a\nb"; }),
-              "name \"a\\nb\": expected a non-empty name without spaces, slashes or control "
-              "characters");
+              "name \"a\\nb\": expected a non-empty name in UTF-8 without spaces, slashes, "
+              "commas or control characters");
   expectError(copyCapture(good, "nul", [](json& d) { d["name"] = std::string("a\0b", 3); }),
               "name \"a\\u0000b\"");
   // A negative variance in a reference: the file, the channel and the pixel.

@@ -340,6 +340,17 @@ TEST(SceneContract, DeeplyNestedJsonIsRejectedBeforeAnyRecursiveWalk) {
           << e.what();
     }
   }
+  // A file's name that cannot name the scene's folders: refused, quoted (a newline wrote images/a
+  // and b/; a byte that is not UTF-8 stopped the render with a library's message; ".." wrote into
+  // the run's root: a bad-input trial).
+  for (const std::string name : {"a\nb", "caf\xe9", "..", "a b", "a,b"})
+    EXPECT_NE(contract::sceneError(contract::minimalScene(), "scenes/" + name + ".json")
+                  .find("cannot name a scene"),
+              std::string::npos)
+        << name;
+  EXPECT_NE(contract::sceneError(contract::minimalScene(), "scenes/a\nb.json")
+                .find("the file's name \"a\\nb\" cannot name a scene"),
+            std::string::npos);
   // Brackets inside strings are text, not nesting.
   json s = contract::minimalScene();
   s["purpose"] = std::string(1000, '[');

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "core/atomic_file.hpp"
+#include "core/capture.hpp"
 #include "core/error.hpp"
 #include "core/hash.hpp"
 #include "core/json_reader.hpp"
@@ -261,6 +262,12 @@ Scene parseScene(const std::string& text, const std::string& path) {
   Scene scene;
   scene.file = path;
   scene.name = fs::path(path).stem().string();
+  // The file's name names the scene's folders in the cache and in a run ("..", a newline or a byte
+  // that is not UTF-8 wrote outside the run or stopped it: a bad-input trial).
+  if (!isPlainName(scene.name))
+    throw Error(path + ": the file's name " + quotedName(scene.name) +
+                " cannot name a scene (it names the scene's folders: UTF-8 without spaces, "
+                "slashes, commas or control characters, not . or ..); rename the file");
   scene.purpose = root.string("purpose");
   auto res = root.numbers("resolution", 2);
   // Range first: converting 1e39 to int is undefined.
@@ -350,7 +357,7 @@ Scene parseScene(const std::string& text, const std::string& path) {
 
   const fs::path sceneDir = fs::path(path).parent_path();
   Hasher hasher;
-  hasher.add(doc.dump());
+  hasher.add(jsonText(doc));
   // Objects and lights share one namespace: events name them ("what"), and asset materials are
   // named "<object>/<material>"; a second use of a name would make either ambiguous.
   std::map<std::string, std::string> namedAt;  // name -> the JSON path that first used it

@@ -11,6 +11,7 @@
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/hash.hpp"
+#include "core/json_reader.hpp"
 #include "core/sequence.hpp"
 #include "core/stage_clock.hpp"
 
@@ -40,7 +41,7 @@ std::string formatSeconds(double s) {
 std::string sequenceHash(const Scene& scene, const RenderSettings& settings) {
   json px = settings.pixelSettings(scene);
   px.erase("preset");  // a name; the values it stands for are hashed
-  return Hasher().add(scene.contentHash).add(px.dump()).hex();
+  return Hasher().add(scene.contentHash).add(jsonText(px)).hex();
 }
 
 fs::path sequenceDir(const Scene& scene, const RenderSettings& settings, const fs::path& cacheRoot) {
@@ -307,11 +308,11 @@ fs::path refineSequence(const Scene& scene, const RenderSettings& settings,
   } catch (...) {
     // A reference that fails (e.g. its sums are gone) leaves the ones before it refined on disk:
     // sequence.json records them before the error goes on, so that nothing describes them wrongly.
-    if (refined > 0) writeTextAtomically(dir / "sequence.json", info.toJson().dump(1));
+    if (refined > 0) writeTextAtomically(dir / "sequence.json", jsonText(info.toJson(), 1));
     throw;
   }
   info.settings["refineTargetRelMse"] = targetRelMse;
-  writeTextAtomically(dir / "sequence.json", info.toJson().dump(1));
+  writeTextAtomically(dir / "sequence.json", jsonText(info.toJson(), 1));
   return dir;
 }
 
@@ -549,7 +550,7 @@ fs::path renderSequence(const Scene& scene, const RenderSettings& settings,
     } catch (const nlohmann::json::exception&) {
     }
   }
-  const std::string infoText = info.toJson().dump(1);
+  const std::string infoText = jsonText(info.toJson(), 1);
   if (existing != infoText) writeTextAtomically(infoPath, infoText);
   return dir;
 }

@@ -175,7 +175,7 @@ void ExternalProcessDenoiser::setup(int width, int height) {
                                 {"height", height},
                                 {"planes", planeNames_},
                                 {"params", params_}};
-  const std::string line = setup.dump() + "\n";
+  const std::string line = jsonText(setup) + "\n";
   try {
     process_->write(line.data(), line.size(), deadline());
   } catch (const Error& e) {
@@ -209,7 +209,7 @@ void ExternalProcessDenoiser::denoise(const FrameContext& ctx, const DenoiserInp
                                  {"previousCamera", cameraToJson(ctx.previousCamera)},
                                  {"bytes", planeBytes * planes.size()}};
   pendingReset_ = false;
-  const std::string line = header.dump() + "\n";
+  const std::string line = jsonText(header) + "\n";
   const auto sendBy = deadline();
   try {
     process_->write(line.data(), line.size(), sendBy);
