@@ -462,7 +462,7 @@ MotionConsistency checkMotion(const std::vector<LayerSet>& frames,
         const glm::vec2 m(motion.at(x, y, 0), motion.at(x, y, 1));
         if (!std::isfinite(m.x) || !std::isfinite(m.y)) continue;  // counted by the non-finite check
         // In double: a vector of 1e30 px squared overflows a float, and the mean read "inf px".
-        const double err = glm::length(glm::dvec2(m - e));
+        const double err = glm::length(glm::dvec2(m) - glm::dvec2(e));
         out.depthWithinUnit = out.depthWithinUnit && z <= 1.0f;
         const float cosine =
             glm::dot(glm::normalize(cam.rayDirection(pixel.x, pixel.y)), cam.forward);
@@ -969,7 +969,11 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
     const nlohmann::json& source = sequence.capture().source;
     if (!source.is_object() || !source.contains(key)) return std::nullopt;
     const nlohmann::json& value = source[key];
-    if (!value.is_number() || !(value.get<double>() >= 0 && value.get<double>() <= 1))
+    // emissionBeyondEmitEnv is a sum over Combined's and may pass 1 (a transparent film's bright
+    // sky is in Env, not in Combined): finite and not negative; the other a share of pixels.
+    const double most =
+        std::string(key) == "emissionBeyondEmitEnv" ? std::numeric_limits<double>::max() : 1.0;
+    if (!value.is_number() || !(value.get<double>() >= 0 && value.get<double>() <= most))
       return std::numeric_limits<double>::quiet_NaN();
     return value.get<double>();
   };
@@ -983,7 +987,8 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
     if (std::isnan(share)) {
       CaptureCheck c = check(name, share, warnAbove, kSoft, unit,
                              std::string("capture.json source.") + key +
-                                 " is not a share in [0, 1] (the importer writes one): edited or "
+                                 " is no figure the importer writes (a finite share, 0 or "
+                                 "more): edited or "
                                  "damaged, so nothing says what it measured");
       c.status = CheckStatus::Fail;
       return c;

@@ -570,11 +570,17 @@ std::vector<ComparisonRow> compareRuns(const RunResults& base, const RunResults&
                                                  std::tuple{"candidate", &candTiles, cm.mean}}) {
           // Float32 tile sums against the double summary: agreed within 1e-4 of the frames' own
           // size (a corrected relMSE near 0 is a difference of two larger terms).
+          // Tiles of no finite value under a summary's mean, or of an infinite one on any frame (a
+          // summary is absent where a frame's value is infinite; NaN is a frame it leaves
+          // undefined), are damaged too: NaN sums, or one Inf that made the allowance infinite,
+          // let the gate pass a real regression.
           double size = std::abs(mean);
-          for (double v : tiles->frameValues()) size = std::max(size, std::abs(v));
-          // Tiles of no finite value under a summary's mean (a summary is absent where a frame's
-          // value is not finite) are damaged too: NaN sums made the gate pass a real regression.
-          const double fromTiles = tiles->mean();
+          bool infinite = false;
+          for (double v : tiles->frameValues()) {
+            infinite = infinite || std::isinf(v);
+            if (std::isfinite(v)) size = std::max(size, std::abs(v));
+          }
+          const double fromTiles = infinite ? kUndefined : tiles->mean();
           const std::string& source = (std::string(which) == "baseline" ? base : cand).source;
           if (!(std::abs(fromTiles - mean) <= 1e-4 * size + 1e-12))
             throw Error((source.empty() ? std::string() : source + ": ") + which + " run, " +

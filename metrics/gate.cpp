@@ -149,8 +149,9 @@ std::vector<GateNotice> gateWarnings(const GateJudgement& j, const GateSides& si
              "smallest threshold lies below what its replicates can show); narrow the gate "
              "with --metric or --denoisers, or judge each row alone with --correction none"});
   std::set<std::string> fewScenes;
+  bool summariesOnly = false;  // a row of runs read from results.db (no interval to be narrow)
   for (const ComparisonRow& r : j.rows)
-    if (r.fewFrames) fewScenes.insert(r.scene);
+    if (r.fewFrames) fewScenes.insert(r.scene), summariesOnly |= !r.changeCi.valid();
   if (!fewScenes.empty()) {
     std::string scenes;
     for (const std::string& scene : fewScenes) scenes += (scenes.empty() ? "" : ", ") + scene;
@@ -159,10 +160,14 @@ std::vector<GateNotice> gateWarnings(const GateJudgement& j, const GateSides& si
          "the runs share " + std::to_string(kFewSummarisedFrames) +
              " or fewer frames after the warm-up on " +
              (fewScenes.size() == 1 ? "scene " : "scenes ") + scenes +
-             ": too few for the intervals to hold their level (noise alone fails such a gate), so "
-             "a summary metric's change resolved there is not judged and the gate cannot pass the "
-             "runs (could "
-             "not judge, exit 2, unless a row fails it); run " +
+             (summariesOnly
+                  ? ": too few for a change within its tolerance there to be told from noise, "
+                    "and results.db keeps no tiles to tell it, so the gate cannot pass the runs "
+                    "(could not judge, exit 2, unless a row fails it); run "
+                  : ": too few for the intervals to hold their level (noise alone fails such a "
+                    "gate), so a summary metric's change resolved there is not judged and the "
+                    "gate cannot pass the runs (could not judge, exit 2, unless a row fails it); "
+                    "run ") +
              std::to_string(kFewSummarisedFrames + 1) +
              " or more frames after the warm-up to gate them"});
   }

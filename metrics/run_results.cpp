@@ -304,7 +304,9 @@ struct ShapeReader {
       const json& frame = member(frames[f], at, "frame", &json::is_number_integer, "an integer");
       if (frame.get<long long>() <= previous)
         fail(at + ".frame",
-             "a frame after " + std::to_string(previous) + " (one record per frame, in order)",
+             (previous < 0 ? std::string("a frame number of 0 or more")
+                           : "a frame after " + std::to_string(previous)) +
+                 " (one record per frame, in order), not " + frame.dump(),
              frame);
       previous = frame.get<long long>();
     }

@@ -195,8 +195,10 @@ std::vector<RunResults> runsFromDatabase(const fs::path& file) {
       throw Error(where + ": frames " + std::to_string(summary.frames) +
                   ": expected a count of frames (0 or more)");
     if (summary.frames == 0 && (std::isfinite(summary.mean) || summary.ci95.valid()))
-      throw Error(where + ": a summary of 0 frames holds a value (mean " +
-                  shortestText(summary.mean) +
+      throw Error(where + ": a summary of 0 frames holds a value (" +
+                  (std::isfinite(summary.mean) ? "mean " + shortestText(summary.mean)
+                                               : "interval [" + shortestText(summary.ci95.lo) +
+                                                     ", " + shortestText(summary.ci95.hi) + "]") +
                   "): a run writes none there (the database was edited or damaged)");
     if (summary.ci95.lo > summary.ci95.hi)
       throw Error(where + ": the interval [" + shortestText(summary.ci95.lo) + ", " +

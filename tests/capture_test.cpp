@@ -2855,7 +2855,7 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
   std::ofstream(foggy / "capture.json") << foggyDoc.dump();
   const CaptureCheck& edited = checkNamed(validate(foggy), "emission.beyondEmitEnv");
   EXPECT_EQ(edited.status, CheckStatus::Fail);
-  EXPECT_NE(edited.detail.find("source.emissionBeyondEmitEnv is not a share in [0, 1]"),
+  EXPECT_NE(edited.detail.find("source.emissionBeyondEmitEnv is no figure the importer writes"),
             std::string::npos)
       << edited.detail;
   const fs::path nanPixel = copied("nan_pixel");

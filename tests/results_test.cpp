@@ -207,7 +207,7 @@ TEST(RunResults, EveryMisshapenPartIsNamedByItsPath) {
   // A frame's record listed twice (the charts drew both; a bad-input trial).
   EXPECT_NE(errorWith([](json& d) { d["pairs"][0]["frames"][2]["frame"] = 1; })
                 .find("$.pairs[0].frames[2].frame: expected a frame after 1 (one record per "
-                      "frame, in order), got a number"),
+                      "frame, in order), not 1, got a number"),
             std::string::npos);
   EXPECT_NE(errorWith([](json& d) { d["statistics"] = 1; }).find("$.statistics: expected an object"),
             std::string::npos);

@@ -340,6 +340,16 @@ TEST(RunMatrix, CompareGatesARegressionAndPassesAnIdenticalRerun) {
   });
   EXPECT_NE(nanError.find("disagrees with its per-tile data (no finite value)"), std::string::npos)
       << nanError;
+  // One Inf in one tile, the mean edited by half: the same (the Inf made the allowance infinite).
+  MetricTiles inf = MetricTiles::fromJson(worse["pairs"][0]["tiles"]["relMse"]);
+  inf.rows[0].sum[0] = std::numeric_limits<double>::infinity();
+  edited = worse;
+  edited["pairs"][0]["tiles"]["relMse"] = inf.toJson();
+  edited["pairs"][0]["summary"]["relMse"]["mean"] = 1.5 * mean(worse["pairs"][0], "relMse");
+  EXPECT_NE(test::errorOf([&] {
+              compareRuns(test::typed(base), test::typed(edited), {{"relMse", 0.02}});
+            }).find("disagrees with its per-tile data (no finite value)"),
+            std::string::npos);
   // A slice of a run (a shard) against a whole run is refused as a settings difference: the
   // pairs it lacks read as "new" and a regression in them passed.
   RunResults shard = test::typed(base);

@@ -103,7 +103,7 @@ ParamSpec readParamSpec(JsonReader& p) {
         if (value != std::floor(value) || value < double(INT32_MIN) || value > double(INT32_MAX)) {
           std::ostringstream text;
           text << "an int parameter's " << field << " must be a whole number from " << INT32_MIN
-               << " to " << INT32_MAX << ", got " << value;
+               << " to " << INT32_MAX << ", got " << shortestText(value);
           p.fail(field, text.str());
         }
       spec = ParamSpec::integer(name, int(def), int(min), int(max), meaning);
