@@ -412,6 +412,14 @@ json benchDenoise(const DenoiseBench& b, const ProgressFn& progress) {
             throw Error(fault);
           // An external process's own compute time; the wall clock (transfer included) otherwise.
           const std::optional<double> reported = c.instances[k]->reportedMilliseconds();
+          // A time or count no measurement gives fails the contender, as it fails a run's pair.
+          if (const std::string fault =
+                  reportedFault(c.origin.empty() ? c.name : c.name + " (" + c.origin + ")",
+                                std::string("the ") + signalName(kind) + " signal of input " +
+                                    std::to_string(input),
+                                reported, c.instances[k]->lastPasses(), wall);
+              !fault.empty())
+            throw Error(fault);
           c.reported = c.reported || reported.has_value();
           frameMs += reported.value_or(wall);
           frameWall += wall;

@@ -36,6 +36,28 @@ constexpr uint32_t kUnwrittenBits = 0x7fc0dea1u;
 
 }  // namespace
 
+std::string reportedFault(const std::string& name, const std::string& where,
+                          const std::optional<double>& reported,
+                          const std::vector<PassStats>& passes, double wall) {
+  const std::string call = ", in a call of " + shortestText(wall) + " ms";
+  if (reported && !(*reported <= kMaxFrameMilliseconds))
+    return name + " reported a time of " + shortestText(*reported) + " ms on " + where +
+           " (computeMs)" + call + "; expected at most 1e9 ms";
+  for (const PassStats& p : passes) {
+    if (!(p.milliseconds <= kMaxFrameMilliseconds))
+      return name + " reported its pass '" + p.name + "' at " + shortestText(p.milliseconds) +
+             " ms on " + where + call + "; expected at most 1e9 ms";
+    for (const auto& [what, value] :
+         {std::pair{"taps", p.tapsPerPixel}, std::pair{"rays", p.raysPerPixel}}) {
+      if (std::isnan(value) && std::string(what) == "taps") continue;  // a process may not say
+      if (!(value >= 0 && value <= 1e9))
+        return name + " reported its pass '" + p.name + "' at " + shortestText(value) + " " + what +
+               " per pixel on " + where + "; expected 0 to 1e9";
+    }
+  }
+  return "";
+}
+
 std::string implausibleTime(const std::optional<double>& reported,
                             const std::vector<PassStats>& passes, double wall) {
   const double limit = wall * 1.01 + 0.05;
@@ -341,20 +363,14 @@ void DenoiseRun::run(const std::function<const LayerSet&(int)>& frameOf,
       }
       const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
       const std::optional<double> reported = d.reportedMilliseconds();
-      // A reported time beyond any frame's is the denoiser's fault, not a number to average.
-      const std::string name =
-          info_.origin.empty() ? request_.name : request_.name + " (" + info_.origin + ")";
-      if (reported && !(*reported <= kMaxFrameMilliseconds))
-        throw Error(name + " reported a time of " + shortestText(*reported) + " ms on the " +
-                    signalName(kind) + " signal at frame " + std::to_string(t) +
-                    " (computeMs), in a call of " + shortestText(wall) +
-                    " ms; expected at most 1e9 ms");
-      for (const PassStats& p : d.lastPasses())
-        if (!(p.milliseconds <= kMaxFrameMilliseconds))
-          throw Error(name + " reported its pass '" + p.name + "' at " +
-                      shortestText(p.milliseconds) + " ms on the " + signalName(kind) +
-                      " signal at frame " + std::to_string(t) + ", in a call of " +
-                      shortestText(wall) + " ms; expected at most 1e9 ms");
+      // A reported time or count beyond any frame's is the denoiser's fault, not a number to
+      // average.
+      if (const std::string fault = reportedFault(
+              info_.origin.empty() ? request_.name : request_.name + " (" + info_.origin + ")",
+              std::string("the ") + signalName(kind) + " signal at frame " + std::to_string(t),
+              reported, d.lastPasses(), wall);
+          !fault.empty())
+        throw Error(fault);
       out.wallMilliseconds += wall;
       out.milliseconds += reported.value_or(wall);
       out.selfTimed = reported.has_value();

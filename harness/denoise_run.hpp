@@ -49,6 +49,15 @@ struct DenoisedFrame {
   bool outputIsInput = false;
 };
 
+// A report no measurement gives, or "": a time above kMaxFrameMilliseconds (a process's computeMs,
+// a pass's ms), or taps or rays per pixel of a pass beyond 1e9 or not finite. The pair (or the
+// bench's contender) fails naming it: summed into a summary, one of 1e308 made it inf, and the
+// whole run stopped without results (a bad-input trial). `name` is the denoiser as messages name
+// it, `where` "the diffuse signal at frame 3".
+std::string reportedFault(const std::string& name, const std::string& where,
+                          const std::optional<double>& reported,
+                          const std::vector<PassStats>& passes, double wall);
+
 // What is wrong with a call's own report of its time (a process's computeMs, the sum of its
 // reported passes), or "": no work inside a call can take longer than the call, the harness's
 // wall clock `wall` around it (1% and 0.05 ms allowed for two clocks' reading).

@@ -798,6 +798,28 @@ TEST(ExternalFaults, ATimeBeyondAnyFramesFailsItsPairOnly) {
             std::string::npos)
       << r["pairs"][0]["error"];
   EXPECT_EQ(r["pairs"][1]["status"], "ok");
+  // Taps per pixel alike (summed over the two signals, 1e308 made the run's record inf).
+  const json taps = runMatrix(tinyRun("huge_taps", {{faulty("huge-taps"), {}, ""}}));
+  EXPECT_NE(taps["pairs"][0]
+                .value("error", "")
+                .find("reported its pass 'blur' at 1e+308 taps per "
+                      "pixel"),
+            std::string::npos)
+      << taps["pairs"][0].dump().substr(0, 300);
+  // And the bench, which timed it as inf ms/frame with status ok.
+  const fs::path manifest = writeManifest(
+      "bench-absurd-time",
+      {{"name", "absurd"},
+       {"command",
+        {"/usr/bin/python3", std::string(ARENA_TEST_DATA) + "/external/faulty_denoiser.py",
+         "absurd-time"}},
+       {"signals", "demodulated"},
+       {"channels", {"meshId"}}});
+  const contract::CliResult bench =
+      contract::arenaCli("bench denoise --denoisers eaw,ext:" + manifest.string() +
+                         " --resolution 16x8 --frames 3 --warmup 1 --inputs 1");
+  EXPECT_NE(bench.output.find("reported a time of 1e+308 ms"), std::string::npos) << bench.output;
+  EXPECT_EQ(bench.status, 1) << bench.output;
 }
 
 // A process's reported time longer than the exchange that carried it is warned of, in the results

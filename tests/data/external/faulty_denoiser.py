@@ -12,6 +12,7 @@
   nul        answers a line holding a NUL byte, and writes one to stderr
   slow-report  answers correctly but reports a computeMs of 2e5 (more than the exchange took)
   absurd-time  answers correctly but reports a computeMs of 1e308 (beyond any frame's time)
+  huge-taps  answers correctly but reports a pass of 1e308 taps per pixel
   no-ready   hangs before answering the setup
   bad-bytes  writes bytes that are not UTF-8 (a cut character, 0xff) to stderr and exits
   error-code answers {"type": "error"} whose message is a number
@@ -134,6 +135,8 @@ def main():
                 result["computeMs"] = 2e5
             if mode == "absurd-time":
                 result["computeMs"] = 1e308
+            if mode == "huge-taps":
+                result["passes"] = [{"name": "blur", "ms": 0.0005, "tapsPerPixel": 1e308}]
         answer((json.dumps(result) + "\n").encode() + signal_bytes)
     if mode == "goodbye":
         answer(b"all done, goodbye\n")
