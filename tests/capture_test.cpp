@@ -2322,7 +2322,9 @@ TEST(CaptureContract, EveryDenoiserRunsAStoredOutputOnlyWhereItIsStored) {
   cfg.everyDenoiser = false;
   cfg.out = test::freshDir("stored_where_named");
   const json named = runMatrix(cfg);
-  EXPECT_EQ(named["pairs"].size(), 3u);
+  ASSERT_EQ(named["pairs"].size(), 3u);
+  for (const json& pair : named["pairs"])
+    EXPECT_EQ(pair["status"], pair["scene"] == "with_outputs" ? "ok" : "failed") << pair["scene"];
 }
 
 // A run into the folder of a capture it reads (or below it) is refused before any work: its results

@@ -39,10 +39,12 @@ void setNonBlocking(int fd) {
 // signal handler reads them; a process beyond them is only not covered.
 constexpr int kGroupSlots = 64;
 std::atomic<pid_t> liveGroups[kGroupSlots];
-constexpr int kEndingSignals[] = {SIGINT, SIGTERM, SIGHUP};
+constexpr int kEndingSignals[] = {SIGINT, SIGTERM, SIGHUP, SIGQUIT};
+static_assert(std::atomic<pid_t>::is_always_lock_free, "the signal handler reads the groups");
 struct sigaction previousActions[std::size(kEndingSignals)];
 
 void endGroupsAndResignal(int signal) {
+  const int savedErrno = errno;  // a previous handler the signal returns to may read it
   for (std::atomic<pid_t>& group : liveGroups)
     if (const pid_t p = group.load(); p > 0) ::kill(-p, SIGKILL);
   // Then the signal as before: blocked while this handler runs, it is delivered on its return
@@ -50,6 +52,7 @@ void endGroupsAndResignal(int signal) {
   for (size_t k = 0; k < std::size(kEndingSignals); ++k)
     if (kEndingSignals[k] == signal) sigaction(signal, &previousActions[k], nullptr);
   raise(signal);
+  errno = savedErrno;
 }
 
 void registerGroup(pid_t group) {
@@ -118,7 +121,15 @@ Subprocess::Subprocess(const std::vector<std::string>& argv,
   std::vector<char*> args;
   for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
+  // The ending signals wait from the spawn to the group's registration: one in between would end
+  // arena and leave the child unnamed to the handler (the child starts with an empty mask).
+  sigset_t ending, before;
+  sigemptyset(&ending);
+  for (const int signal : kEndingSignals) sigaddset(&ending, signal);
+  pthread_sigmask(SIG_BLOCK, &ending, &before);
   const int rc = posix_spawnp(&pid_, args[0], &actions, &attr, args.data(), environ);
+  if (rc == 0) registerGroup(pid_);
+  pthread_sigmask(SIG_SETMASK, &before, nullptr);
   posix_spawn_file_actions_destroy(&actions);
   posix_spawnattr_destroy(&attr);
   ::close(in[1]);
@@ -137,7 +148,6 @@ Subprocess::Subprocess(const std::vector<std::string>& argv,
                 std::strerror(rc));
   }
   for (int fd : {stdin_, stdout_, stderr_}) setNonBlocking(fd);
-  registerGroup(pid_);
 }
 
 Subprocess::~Subprocess() {
