@@ -381,10 +381,20 @@ json runMatrix(const RunConfig& cfg) {
     return std::mismatch(outer.begin(), outer.end(), inner.begin(), inner.end()).first ==
            outer.end();
   };
-  for (const fs::path& capture : cfg.captures)
+  for (const fs::path& capture : cfg.captures) {
     if (inside(resolved(cfg.out), resolved(capture)))
       throw Error("--out " + cfg.out.string() + " lies in the capture " + capture.string() +
                   " the run reads; expected a directory outside it");
+    // The run replaces what its images/ holds: a capture there had its stored outputs
+    // overwritten, then removed (a re-trial).
+    if (inside(resolved(capture), resolved(cfg.out) / "images"))
+      throw Error("the capture " + capture.string() + " lies in " + cfg.out.string() +
+                  "/images, which the run replaces; keep captures outside a run's images");
+  }
+  if (std::error_code ec; fs::exists(cfg.out / "capture.json", ec))
+    throw Error("--out " + cfg.out.string() +
+                " is a capture (capture.json): a run there would write among its files; expected "
+                "a directory of its own");
   if (!cfg.scenes.empty()) {
     if (cfg.cache.empty())
       throw Error("--cache: an empty directory name; expected the sequence cache, e.g. cache");

@@ -99,8 +99,9 @@ PositionConsistency checkPositions(const std::vector<LayerSet>& frames,
 CaptureValidation validateCaptureOutputs(const CaptureDescription& capture,
                                          const std::vector<LayerSet>& references);
 
-// Whether an input colour equals a reference value for value as the denoisers read the input (a
-// NaN or Inf as 0): the input then scores a perfect 0 against it.
+// Whether an input colour equals a reference value for value on its finite values (at least one;
+// a NaN or Inf, which the denoisers read as 0, is not compared): the input then scores a perfect 0
+// against it, or nearly.
 bool inputEqualsReference(const Image& input, const Image& reference);
 
 // Whether an image holds any nonzero finite value: a reference without one is black (validate's

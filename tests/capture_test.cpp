@@ -1269,6 +1269,14 @@ TEST(CaptureValidation, BlackNegativeOrRepeatedColourIsRefusedNamingTheFrames) {
   EXPECT_EQ(eq.status, CheckStatus::Fail);
   EXPECT_EQ(eq.value, 6.0);
   EXPECT_NE(eq.detail.find("frame(s) 0, 1, 2, 3, 4, 5 "), std::string::npos) << eq.detail;
+  // The same with one NaN pixel in each input frame: equal on every finite value is equal (the NaN,
+  // read as 0, hid it and the input ranked at a near-perfect score: a re-trial).
+  const fs::path nanned = writeSynthetic("reference_is_input_but_a_nan");
+  editReferences(nanned, [&](int k, Image& ref) { ref = readCaptureFrame(c, k).get("color"); });
+  editFrames(nanned, [](int, LayerSet& f) {
+    f.get("color").at(1, 1, 0) = std::numeric_limits<float>::quiet_NaN();
+  });
+  EXPECT_EQ(checkNamed(validate(nanned), "reference.equalsInput").status, CheckStatus::Fail);
 
   // A fade: frame 3 black in the input and its reference alike. Both are said (warnings); the
   // frames are not "equal to the input" (nothing to score), so the capture is not refused.
@@ -2338,6 +2346,21 @@ TEST(CaptureContract, ARunIntoItsCapturesFolderIsRefused) {
     EXPECT_NE(e.find("lies in the capture " + dir.string() + " the run reads"), std::string::npos)
         << e;
   }
+  // Nor into another capture, nor with the capture inside the run's images/ (which a run replaces:
+  // a capture's stored outputs there were overwritten, then removed).
+  const fs::path other = copyCapture(exportedCornell(), "run_into_other");
+  EXPECT_NE(test::errorOf([&] {
+              runMatrix(captureRun(other, {{"passthrough", {}, ""}}, {dir}));
+            }).find(" is a capture (capture.json)"),
+            std::string::npos);
+  const fs::path holder = test::freshDir("run_holding_capture");
+  fs::create_directories(holder / "images");
+  fs::copy(dir, holder / "images" / "run_into", fs::copy_options::recursive);
+  EXPECT_NE(
+      test::errorOf([&] {
+        runMatrix(captureRun(holder, {{"passthrough", {}, ""}}, {holder / "images" / "run_into"}));
+      }).find("/images, which the run replaces"),
+      std::string::npos);
   EXPECT_FALSE(fs::exists(dir / "results.json"));
   EXPECT_EQ(validate(dir).status(), CheckStatus::Pass);
 }
