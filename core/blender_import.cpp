@@ -164,26 +164,34 @@ struct RenderSettingsRead {
 };
 
 RenderSettingsRead readRenderSettings(JsonReader& root, const std::vector<std::string>& halves,
-                                      const std::string& file) {
+                                      const std::string& file, int spp, int referenceSpp) {
   RenderSettingsRead out;
   std::optional<JsonReader> renders = root.optionalChild("renders");
   if (!renders) return out;
   static const char* const kTransport[] = {
-      "maxBounces",    "diffuseBounces",     "glossyBounces", "transmissionBounces",
-      "volumeBounces", "transparentBounces", "clampDirect",   "clampIndirect",
-      "exposure",      "filmTransparent",    "motionBlur",    "filter",
-      "filterWidth"};
+      "maxBounces",    "diffuseBounces",     "glossyBounces",      "transmissionBounces",
+      "volumeBounces", "transparentBounces", "clampDirect",        "clampIndirect",
+      "exposure",      "filmTransparent",    "motionBlur",         "filter",
+      "filterWidth",   "blurGlossy",         "causticsReflective", "causticsRefractive"};
   std::vector<std::string> names = {"noisy"};
   names.insert(names.end(), halves.begin(), halves.end());
   for (const std::string& name : names) {
     JsonReader r = renders->child(name);
+    // Every setting given (a switch left out is no "off": it was not recorded).
+    const auto flag = [&r](const char* key) {
+      if (!r.has(key)) r.value(key);  // an error naming the missing field
+      return r.boolean(key, false);
+    };
     json settings = {{"samples", r.integerIn("samples", 1, 1000000000)},
                      {"seed", r.integer("seed")},
-                     {"animatedSeed", r.boolean("animatedSeed", false)},
-                     {"adaptiveSampling", r.boolean("adaptiveSampling", false)},
-                     {"denoising", r.boolean("denoising", false)},
-                     {"filmTransparent", r.boolean("filmTransparent", false)},
-                     {"motionBlur", r.boolean("motionBlur", false)},
+                     {"animatedSeed", flag("animatedSeed")},
+                     {"adaptiveSampling", flag("adaptiveSampling")},
+                     {"denoising", flag("denoising")},
+                     {"filmTransparent", flag("filmTransparent")},
+                     {"motionBlur", flag("motionBlur")},
+                     {"causticsReflective", flag("causticsReflective")},
+                     {"causticsRefractive", flag("causticsRefractive")},
+                     {"blurGlossy", r.number("blurGlossy")},
                      {"filter", r.string("filter")},
                      {"filterWidth", r.number("filterWidth")},
                      {"exposure", r.number("exposure")},
@@ -198,6 +206,15 @@ RenderSettingsRead readRenderSettings(JsonReader& root, const std::vector<std::s
                   name +
                   " frames; a capture holds what the path tracer gave (Render Properties > "
                   "Sampling > Render > Denoise: off)");
+    // The samples cameras.json declares (the noise floor and the recorded samples rest on them).
+    const int declared = name == "noisy" ? spp : std::max(1, referenceSpp / 2);
+    if (settings["samples"].get<int>() != declared)
+      throw Error(file + ": $.renders." + name + ".samples: " +
+                  std::to_string(settings["samples"].get<int>()) + ", where cameras.json's " +
+                  (name == "noisy"
+                       ? "spp declares " + std::to_string(spp)
+                       : "referenceSpp declares " + std::to_string(declared) + " for each half") +
+                  ": the samples recorded would not be those rendered");
     out.renders[name] = settings;
   }
   // A folder left out since (one reference half removed: the other is the reference) leaves its
@@ -227,6 +244,12 @@ RenderSettingsRead readRenderSettings(JsonReader& root, const std::vector<std::s
                                " px, not Box of 1 px (each pixel's samples spread over its "
                                "neighbours: noise correlated between pixels)");
   }
+  for (const std::string& half : halves)
+    if (out.renders[half]["seed"] == noisy["seed"] &&
+        out.renders[half]["animatedSeed"] == noisy["animatedSeed"])
+      out.deviations.push_back("the " + half +
+                               " frames share the noisy frames' seed: the input's noise is part "
+                               "of its reference, which flatters every method that keeps it");
   if (halves.size() == 2 &&
       out.renders["reference_a"]["seed"] == out.renders["reference_b"]["seed"])
     out.deviations.push_back(
@@ -353,7 +376,8 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
   std::vector<std::string> halves;
   for (const char* half : {"reference_a", "reference_b"})
     if (fs::is_directory(source / half)) halves.push_back(half);
-  const RenderSettingsRead renders = readRenderSettings(root, halves, camerasFile.string());
+  const RenderSettingsRead renders =
+      readRenderSettings(root, halves, camerasFile.string(), spp, referenceSpp);
   root.rejectUnread();
   // referenceSpp counts both halves' samples together.
   const int referenceSamples = halves.size() == 2 ? referenceSpp : std::max(1, referenceSpp / 2);

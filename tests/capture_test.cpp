@@ -2913,6 +2913,12 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
                 "reference must render the same light"),
       std::string::npos);
   EXPECT_FALSE(fs::exists(work / "unbounced_capture"));
+  const fs::path resampled =
+      withRenders("resampled", [](json& renders) { renders["noisy"]["samples"] = 4; });
+  EXPECT_NE(test::errorOf([&] {
+              importBlender(resampled, work / "resampled_capture", {"resampled"});
+            }).find("$.renders.noisy.samples: 4, where cameras.json's spp declares 1"),
+            std::string::npos);
   const fs::path denoised =
       withRenders("denoised", [](json& renders) { renders["noisy"]["denoising"] = true; });
   EXPECT_NE(test::errorOf([&] {

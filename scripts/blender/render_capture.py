@@ -162,6 +162,8 @@ def settings(scene):
             "motionBlur": scene.render.use_motion_blur, "filter": c.pixel_filter_type,
             "filterWidth": c.filter_width, "exposure": c.film_exposure,
             "clampDirect": c.sample_clamp_direct, "clampIndirect": c.sample_clamp_indirect,
+            "blurGlossy": c.blur_glossy, "causticsReflective": c.caustics_reflective,
+            "causticsRefractive": c.caustics_refractive,
             "maxBounces": c.max_bounces, "diffuseBounces": c.diffuse_bounces,
             "glossyBounces": c.glossy_bounces, "transmissionBounces": c.transmission_bounces,
             "volumeBounces": c.volume_bounces, "transparentBounces": c.transparent_max_bounces}
