@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cctype>
 #include <cerrno>
@@ -306,6 +307,16 @@ DirectoryLock::~DirectoryLock() {
   if (it == heldLocks().end() || --it->second.holders > 0) return;
   ::close(it->second.fd);  // releases the flock
   heldLocks().erase(it);
+}
+
+fs::path resolvedPath(const fs::path& path) {
+  std::error_code ec;
+  fs::path r = fs::weakly_canonical(fs::absolute(path, ec), ec).lexically_normal();
+  return r.has_filename() ? r : r.parent_path();  // "dir/" as "dir"
+}
+
+bool liesIn(const fs::path& inner, const fs::path& outer) {
+  return std::mismatch(outer.begin(), outer.end(), inner.begin(), inner.end()).first == outer.end();
 }
 
 }  // namespace arena

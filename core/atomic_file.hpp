@@ -40,6 +40,10 @@ std::string osError(const std::filesystem::path& path, const std::string& what, 
 
 // The name of the folder `dir` names, a trailing slash or "." included ("runs/today/" -> "today").
 std::string folderName(const std::filesystem::path& dir);
+// `path` absolute, its links resolved and "dir/" read as "dir": what two paths are compared as.
+std::filesystem::path resolvedPath(const std::filesystem::path& path);
+// Whether `inner` is `outer` or lies below it (both resolvedPath'd by the caller).
+bool liesIn(const std::filesystem::path& inner, const std::filesystem::path& outer);
 
 // An advisory lock on a directory between arena processes (flock(2) on DIR/.arena.lock, released
 // when the lock is destroyed or the process dies, so a killed process never leaves it held).

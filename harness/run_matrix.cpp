@@ -372,22 +372,13 @@ json runMatrix(const RunConfig& cfg) {
   // with the run), as does a cache inside the run: the two stay apart. So do a run and a capture
   // it reads (a run into its capture's folder wrote its results and images among the capture's
   // files, which its validation then warned of; a bad-input trial).
-  auto resolved = [](const fs::path& p) {
-    std::error_code ec;
-    fs::path r = fs::weakly_canonical(fs::absolute(p, ec), ec).lexically_normal();
-    return r.has_filename() ? r : r.parent_path();  // "dir/" as "dir"
-  };
-  auto inside = [](const fs::path& inner, const fs::path& outer) {
-    return std::mismatch(outer.begin(), outer.end(), inner.begin(), inner.end()).first ==
-           outer.end();
-  };
   for (const fs::path& capture : cfg.captures) {
-    if (inside(resolved(cfg.out), resolved(capture)))
+    if (liesIn(resolvedPath(cfg.out), resolvedPath(capture)))
       throw Error("--out " + cfg.out.string() + " lies in the capture " + capture.string() +
                   " the run reads; expected a directory outside it");
     // The run replaces what its images/ holds: a capture there had its stored outputs
     // overwritten, then removed (a re-trial).
-    if (inside(resolved(capture), resolved(cfg.out) / "images"))
+    if (liesIn(resolvedPath(capture), resolvedPath(cfg.out) / "images"))
       throw Error("the capture " + capture.string() + " lies in " + cfg.out.string() +
                   "/images, which the run replaces; keep captures outside a run's images");
   }
@@ -398,11 +389,11 @@ json runMatrix(const RunConfig& cfg) {
   if (!cfg.scenes.empty()) {
     if (cfg.cache.empty())
       throw Error("--cache: an empty directory name; expected the sequence cache, e.g. cache");
-    const fs::path out = resolved(cfg.out), cache = resolved(cfg.cache);
-    if (inside(out, cache))
+    const fs::path out = resolvedPath(cfg.out), cache = resolvedPath(cfg.cache);
+    if (liesIn(out, cache))
       throw Error("--out " + cfg.out.string() + " lies in the sequence cache " +
                   cfg.cache.string() + "; expected a directory outside it");
-    if (inside(cache, out))
+    if (liesIn(cache, out))
       throw Error("--cache " + cfg.cache.string() + " lies in the run directory " +
                   cfg.out.string() + "; expected the sequence cache outside it");
   }

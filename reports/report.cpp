@@ -1677,8 +1677,7 @@ void requirePageDirectory(const fs::path& out, const std::string& command) {
   // itself by the next report of the run: images/images/...; one in a capture sat among its
   // frames; a bad-input trial). A folder of its own in a run directory (RUN/report) is fine.
   std::error_code ec;
-  fs::path resolved = fs::weakly_canonical(fs::absolute(out, ec), ec).lexically_normal();
-  if (!resolved.has_filename()) resolved = resolved.parent_path();
+  const fs::path resolved = resolvedPath(out);
   for (fs::path dir = resolved; !dir.empty(); dir = dir.parent_path()) {
     if (fs::exists(dir / "capture.json", ec))
       throw Error(command + ": --out " + out.string() + " lies in the capture " + dir.string() +
