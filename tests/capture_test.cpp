@@ -2905,26 +2905,27 @@ TEST(CaptureBlender, ARenderedSequenceImportsValidatesAndRunsEveryDenoiserItHasT
     std::ofstream(dir / "cameras.json") << described.dump();
     return dir;
   };
-  const fs::path unbounced =
-      withRenders("unbounced", [](json& renders) { renders["reference_a"]["maxBounces"] = 0; });
-  EXPECT_NE(
-      test::errorOf([&] { importBlender(unbounced, work / "unbounced_capture", {"unbounced"}); })
-          .find("$.renders.reference_a.maxBounces: 0, where the noisy frames' is 4: a "
-                "reference must render the same light"),
-      std::string::npos);
-  EXPECT_FALSE(fs::exists(work / "unbounced_capture"));
-  const fs::path resampled =
-      withRenders("resampled", [](json& renders) { renders["noisy"]["samples"] = 4; });
-  EXPECT_NE(test::errorOf([&] {
-              importBlender(resampled, work / "resampled_capture", {"resampled"});
-            }).find("$.renders.noisy.samples: 4, where cameras.json's spp declares 1"),
-            std::string::npos);
-  const fs::path denoised =
-      withRenders("denoised", [](json& renders) { renders["noisy"]["denoising"] = true; });
-  EXPECT_NE(test::errorOf([&] {
-              importBlender(denoised, work / "denoised_capture", {"denoised"});
-            }).find("$.renders.noisy.denoising: Cycles' denoiser was on"),
-            std::string::npos);
+  struct Refused {
+    const char* name;
+    std::function<void(json&)> edit;
+    const char* error;
+  };
+  for (const Refused& refused :
+       {Refused{"unbounced", [](json& renders) { renders["reference_a"]["maxBounces"] = 0; },
+                "$.renders.reference_a.maxBounces: 0, where the noisy frames' is 4: a reference "
+                "must render the same light"},
+        Refused{"resampled", [](json& renders) { renders["noisy"]["samples"] = 4; },
+                "$.renders.noisy.samples: 4, where cameras.json's spp declares 1"},
+        Refused{"denoised", [](json& renders) { renders["noisy"]["denoising"] = true; },
+                "$.renders.noisy.denoising: Cycles' denoiser was on"}}) {
+    const fs::path dir = withRenders(refused.name, refused.edit),
+                   capture = work / (std::string(refused.name) + "_c");
+    EXPECT_NE(
+        test::errorOf([&] { importBlender(dir, capture, {refused.name}); }).find(refused.error),
+        std::string::npos)
+        << refused.name;
+    EXPECT_FALSE(fs::exists(capture)) << refused.name;
+  }
   const fs::path fixedSeed =
       withRenders("fixed_seed", [](json& renders) { renders["noisy"]["animatedSeed"] = false; });
   importBlender(fixedSeed, work / "fixed_seed_capture", {"fixed_seed"});
