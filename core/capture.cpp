@@ -275,8 +275,7 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
   if (!isPlainName(info.scene))
     throw Error(file.string() + ": name " + quotedName(info.scene) +
                 ": expected a non-empty name in UTF-8 without spaces, slashes, commas or control "
-                "characters, not . "
-                "or .. (it names the capture's folders in a run)");
+                "characters, not . or .. (it names the capture's folders in a run)");
   info.purpose = root.string("purpose", "capture");
   info.width = root.integerIn("width", 1, 16384);
   info.height = root.integerIn("height", 1, 16384);
@@ -428,8 +427,7 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
       if (!isPlainName(name))
         throw Error(file.string() + ": outputs: key " + quotedName(name) +
                     ": expected a folder name in outputs/ in UTF-8 without spaces, slashes, commas "
-                    "or control "
-                    "characters, not . or ..");
+                    "or control characters, not . or ..");
       CaptureOutput out;
       out.name = name;
       out.dir = dir / "outputs" / name;

@@ -36,7 +36,7 @@ std::unique_ptr<SceneData> prepareScene(const fs::path& dir, const EvaluationOpt
   Sequence sequence = Sequence::open(dir);
   EvaluationInput input = readSequenceForEvaluation(sequence);
   // The frames the run scores (after the warm-up): those whose reference is black, and those whose
-  // input equals its reference value for value (as the denoisers read it: a NaN as 0).
+  // input equals its reference on every finite value (inputEqualsReference).
   int scored = 0, equal = 0, black = 0;
   if (!input.references.empty())
     for (int t = std::max(options.warmup, 0); t < int(input.frames.size()); ++t) {

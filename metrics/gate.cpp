@@ -151,7 +151,10 @@ std::vector<GateNotice> gateWarnings(const GateJudgement& j, const GateSides& si
   std::set<std::string> fewScenes;
   bool summariesOnly = false;  // a row of runs read from results.db (no interval to be narrow)
   for (const ComparisonRow& r : j.rows)
-    if (r.fewFrames) fewScenes.insert(r.scene), summariesOnly |= !r.changeCi.valid();
+    if (r.fewFrames) {
+      fewScenes.insert(r.scene);
+      summariesOnly |= !r.changeCi.valid();
+    }
   if (!fewScenes.empty()) {
     std::string scenes;
     for (const std::string& scene : fewScenes) scenes += (scenes.empty() ? "" : ", ") + scene;
