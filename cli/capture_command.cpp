@@ -10,6 +10,7 @@
 #include "core/blender_import.hpp"
 #include "core/capture.hpp"
 #include "core/error.hpp"
+#include "core/json_reader.hpp"
 #include "harness/scene_selection.hpp"
 #include "metrics/capture_checks.hpp"
 #include "metrics/evaluator.hpp"
@@ -99,7 +100,7 @@ void addCaptureCommands(CLI::App& app) {
           throw Error("--output '" + o + "': expected NAME=DIR");
         stored[o.substr(0, eq)] = o.substr(eq + 1);
         if (!isPlainName(o.substr(0, eq)))
-          throw Error("--output " + quotedName(o) +
+          throw Error("--output " + quotedText(o) +
                       ": NAME must be a folder name in UTF-8 without spaces, slashes, commas or "
                       "control characters, "
                       "not . or ..");

@@ -288,7 +288,7 @@ void importBlender(const fs::path& source, const fs::path& out, const BlenderImp
       options.name.empty() ? folderName(source) : options.name;  // "render/": render
   if (!isPlainName(name))
     throw Error(std::string(options.name.empty() ? "the source folder's name" : "--name") + " " +
-                quotedName(name) +
+                quotedText(name) +
                 " cannot name a capture (expected UTF-8 with no spaces, slashes, commas or control "
                 "characters, not . "
                 "or ..)" +

@@ -115,10 +115,6 @@ bool isPlainName(const std::string& name) {
   return true;
 }
 
-std::string quotedName(const std::string& name) {
-  return jsonText(json(name));
-}
-
 // The same names as the cache's (core/sequence.cpp): a capture folder reads like a sequence folder.
 fs::path captureFramePath(const fs::path& dir, int t) { return Sequence::framePath(dir, t); }
 fs::path captureReferencePath(const fs::path& dir, int r) { return Sequence::referencePath(dir, r); }
@@ -273,7 +269,7 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
   SequenceInfo& info = c.info;
   info.scene = root.string("name");
   if (!isPlainName(info.scene))
-    throw Error(file.string() + ": name " + quotedName(info.scene) +
+    throw Error(file.string() + ": name " + quotedText(info.scene) +
                 ": expected a non-empty name in UTF-8 without spaces, slashes, commas or control "
                 "characters, not . or .. (it names the capture's folders in a run)");
   info.purpose = root.string("purpose", "capture");
@@ -425,7 +421,7 @@ CaptureDescription readCaptureDescription(const fs::path& dir) {
     for (const std::string& name : outputs->memberNames()) {
       JsonReader o = outputs->child(name);
       if (!isPlainName(name))
-        throw Error(file.string() + ": outputs: key " + quotedName(name) +
+        throw Error(file.string() + ": outputs: key " + quotedText(name) +
                     ": expected a folder name in outputs/ in UTF-8 without spaces, slashes, commas "
                     "or control characters, not . or ..");
       CaptureOutput out;

@@ -70,8 +70,6 @@ bool isCapture(const std::filesystem::path& dir);
 // A capture's name, a scene file's or a denoiser output's key: one folder name (non-empty, UTF-8,
 // no spaces, slashes or control characters, not . or ..).
 bool isPlainName(const std::string& name);
-// `name` quoted as JSON writes it ("a\nb"), for messages about a name isPlainName refused.
-std::string quotedName(const std::string& name);
 // Where `dir` is what Blender's render script writes (cameras.json and noisy/), not a capture:
 // "DIR: not a capture (...) but a Blender render (...); import it first: arena import blender DIR
 // --out CAPTURE"; else "".

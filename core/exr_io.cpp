@@ -163,10 +163,9 @@ static void checkExrAttributeSizes(const fs::path& path) {
       if (!in.read(reinterpret_cast<char*>(&size), 4)) return;
       const std::streamoff at = in.tellg();
       if (size < 0 || std::streamoff(size) > fileSize - at)
-        throw Error(path.string() + ": header attribute " + jsonText(nlohmann::json(name)) + " (" +
-                    jsonText(nlohmann::json(type)) + ") declares " + std::to_string(size) +
-                    " bytes, but " + std::to_string(fileSize - at) +
-                    " remain in the file (a damaged header)");
+        throw Error(path.string() + ": header attribute " + quotedText(name) + " (" +
+                    quotedText(type) + ") declares " + std::to_string(size) + " bytes, but " +
+                    std::to_string(fileSize - at) + " remain in the file (a damaged header)");
       in.seekg(size, std::ios::cur);
     }
     if (!ended) return;  // truncated or damaged: OpenEXR says what is wrong

@@ -345,4 +345,8 @@ std::string jsonText(const nlohmann::json& j, int indent) {
   return j.dump(indent, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
+std::string quotedText(const std::string& text) {
+  return jsonText(nlohmann::json(text));
+}
+
 }  // namespace arena

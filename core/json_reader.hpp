@@ -85,5 +85,8 @@ nlohmann::json parseJsonFile(const std::string& file);
 // U+FFFD: a file name, EXR channel or process message of another encoding, quoted in a result,
 // must not stop the writing of what was measured (dump() throws on it).
 std::string jsonText(const nlohmann::json& j, int indent = -1);
+// `text` quoted as JSON writes a string ("a\nb", U+FFFD for a byte that is not UTF-8): a name or
+// file's bytes in a message that a terminal shows as written.
+std::string quotedText(const std::string& text);
 
 }  // namespace arena

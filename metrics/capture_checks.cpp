@@ -40,6 +40,17 @@ CaptureCheck check(std::string name, double value, double warnAbove, double fail
   return c;
 }
 
+// A check failed because the importer's record it reads (capture.json `source.FIELD`) is not what
+// the importer writes: edited or damaged, nothing to pass on.
+CaptureCheck damagedSourceCheck(const std::string& name, double warnAbove, const std::string& unit,
+                                const std::string& field, const std::string& expected) {
+  CaptureCheck c = check(name, std::numeric_limits<double>::quiet_NaN(), warnAbove, kSoft, unit,
+                         "capture.json source." + field + " is no " + expected +
+                             ": edited or damaged, so nothing says what it measured");
+  c.status = CheckStatus::Fail;
+  return c;
+}
+
 // How far, in pixels, the picture of frame b's camera lies from frame a's: the turn of its axes
 // and the change of its field of view at the focal length in pixels, plus its move seen at
 // `nearDepth` (the nearest surfaces move most; without a depth, any move beyond rounding counts
@@ -991,15 +1002,9 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
   // A figure that is no share fails its check, naming the field (check() passes a NaN).
   const auto figureCheck = [](const char* name, double share, double warnAbove, const char* unit,
                               const char* key, std::string detail) {
-    if (std::isnan(share)) {
-      CaptureCheck c = check(name, share, warnAbove, kSoft, unit,
-                             std::string("capture.json source.") + key +
-                                 " is no figure the importer writes (a finite share, 0 or "
-                                 "more): edited or "
-                                 "damaged, so nothing says what it measured");
-      c.status = CheckStatus::Fail;
-      return c;
-    }
+    if (std::isnan(share))
+      return damagedSourceCheck(name, warnAbove, unit, key,
+                                "figure the importer writes (a finite share, 0 or more)");
     return check(name, share, warnAbove, kSoft, unit, std::move(detail));
   };
   if (const auto share = sourceFigure("emissionBeyondEmitEnv"))
@@ -1031,16 +1036,14 @@ CaptureValidation validateCapture(const Sequence& sequence, const EvaluationInpu
       read = read && d.is_string();
       if (d.is_string()) said += (said.empty() ? "" : "; ") + d.get<std::string>();
     }
-    CaptureCheck c = check(
-        "render.settings", read ? double(deviations.size()) : 0, 0, kSoft, "settings",
-        read ? (said.empty() ? "the renders' Cycles settings (capture.json source.renders): the "
-                               "same light in every render, an animated seed, Box 1 px, no "
-                               "adaptive sampling"
-                             : said)
-             : "capture.json source.renderDeviations is no list of texts (the importer writes "
-               "one): edited or damaged");
-    if (!read) c.status = CheckStatus::Fail;
-    v.checks.push_back(c);
+    v.checks.push_back(
+        read ? check("render.settings", double(deviations.size()), 0, kSoft, "settings",
+                     said.empty() ? "the renders' Cycles settings (capture.json source.renders): "
+                                    "the same light in every render, an animated seed, Box 1 "
+                                    "px, no adaptive sampling"
+                                  : said)
+             : damagedSourceCheck("render.settings", 0, "settings", "renderDeviations",
+                                  "list of texts (the importer writes one)"));
   }
 
   // 4b. Signal: a colour layer black in every frame holds no measurement (every method would

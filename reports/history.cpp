@@ -140,7 +140,7 @@ std::vector<RunResults> runsFromDatabase(const fs::path& file) {
     const json settings = json::parse(settingsText, nullptr, false);
     if (!settingsText.empty() && settings.is_discarded())
       throw Error(run.source + ": runs.settings: expected the run's settings as JSON, got " +
-                  jsonText(json(utf8Excerpt(settingsText, 60, false))) +
+                  quotedText(utf8Excerpt(settingsText, 60, false)) +
                   " (the database was edited or damaged)");
     if (settings.is_object()) try {
         run.settings = RunSettings::fromJson(settings, run.source, "$.settings");

@@ -265,7 +265,7 @@ Scene parseScene(const std::string& text, const std::string& path) {
   // The file's name names the scene's folders in the cache and in a run ("..", a newline or a byte
   // that is not UTF-8 wrote outside the run or stopped it: a bad-input trial).
   if (!isPlainName(scene.name))
-    throw Error(path + ": the file's name " + quotedName(scene.name) +
+    throw Error(path + ": the file's name " + quotedText(scene.name) +
                 " cannot name a scene (it names the scene's folders: UTF-8 without spaces, "
                 "slashes, commas or control characters, not . or ..); rename the file");
   scene.purpose = root.string("purpose");
